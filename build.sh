@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Set up and build hsnc on Debian 12: install the Debian packages it needs
+# (only those missing), configure with CMake and build. Idempotent; quick when
+# everything is already there. Usage: ./build.sh [BUILD_DIR] (default: build)
+set -euo pipefail
+cd "$(dirname "$0")"
+build_dir=${1:-build}
+
+packages=(
+  build-essential cmake pkg-config
+  libginac-dev libcln-dev        # symbolic derivation of the segment formulas
+  libeigen3-dev                  # linear algebra (modal analysis) at run time
+  libtomlplusplus-dev            # the model file
+  libcli11-dev                   # command line parsing
+  llvm-14-dev libclang-cpp14-dev libclang-14-dev  # compiling kernels in-process
+  libgtest-dev libbenchmark-dev  # tests and benchmarks
+  gnuplot-nox                    # plots
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "build.sh: installing missing Debian packages: ${missing[*]}" >&2
+  sudo_cmd=()
+  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+  "${sudo_cmd[@]}" apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
+fi
+
+if [ ! -f "$build_dir/CMakeCache.txt" ]; then
+  cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release >&2
+fi
+cmake --build "$build_dir" -j"$(nproc)" >&2

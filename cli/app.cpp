@@ -1,0 +1,41 @@
+#include <iostream>
+
+#include "commands.h"
+#include "error.h"
+
+namespace hsnc::cli {
+
+int run(int argc, const char* const* argv) {
+    CLI::App app{
+        "hsnc: exact response of piecewise-linear mechanical systems with intermittent\n"
+        "contacts and Coulomb friction (hybrid symbolic-numeric method)."};
+    app.set_version_flag("--version", std::string("hsnc ") + HSNC_VERSION);
+    app.require_subcommand(1);
+    int exit_code = 0;
+    add_check(app, exit_code);
+    add_simulate(app, exit_code);
+    add_inspect(app, exit_code);
+    add_generate(app, exit_code);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::Success& e) {
+        return app.exit(e);  // --help, --version
+    } catch (const CLI::ParseError& e) {
+        // Bad flags are bad input: one message, exit code 2 (interface.md section 3).
+        std::cerr << "hsnc: " << e.what() << "\n";
+        if (e.get_name() == "RequiredError" || e.get_name() == "CallForHelp") std::cerr << "Run with --help for usage.\n";
+        return 2;
+    } catch (const InputError& e) {
+        std::cerr << "hsnc: " << e.what() << "\n";
+        return 2;
+    } catch (const RunError& e) {
+        std::cerr << "hsnc: " << e.what() << "\n";
+        return 1;
+    } catch (const std::exception& e) {
+        std::cerr << "hsnc: internal error: " << e.what() << "\n";
+        return 1;
+    }
+    return exit_code;
+}
+
+}  // namespace hsnc::cli

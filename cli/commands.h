@@ -1,0 +1,18 @@
+// hsnc -- the subcommands of the `hsnc` program (interface.md section 3).
+// Each add_* registers one CLI11 subcommand whose callback sets `exit_code`.
+// Callbacks throw InputError (exit 2) or RunError (exit 1); run() maps them.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace hsnc::cli {
+
+void add_check(CLI::App& app, int& exit_code);
+void add_simulate(CLI::App& app, int& exit_code);
+void add_inspect(CLI::App& app, int& exit_code);
+void add_generate(CLI::App& app, int& exit_code);
+
+/// Parse argv, run the chosen subcommand, return the process exit code.
+int run(int argc, const char* const* argv);
+
+}  // namespace hsnc::cli

@@ -1,0 +1,40 @@
+// hsnc -- the linear system of one configuration, assembled from a Model.
+//
+// In configuration `cfg` every mass obeys, apart from friction,
+//     M x'' = A(x, v, t),
+//     A(x, v, t) = -K x - C v + f_const + sum_h F_h sin(omega_h t + phase_h),
+// with K = K(cfg) (springs + closed contacts), C = alpha*M + beta*K(cfg), and
+// f_const = loads + contact preload (a closed contact [a, b] with gap d adds
+// +k*d on a and -k*d on b; paper Eq. 5-6). A_i is the force "from everything
+// but friction" of interface.md section 2. Stuck masses are not removed here:
+// these are the full n x n matrices.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "configuration.h"
+#include "model.h"
+
+namespace hsnc {
+
+/// Diagonal of M.
+Eigen::VectorXd mass_vector(const Model& model);
+
+/// K(cfg): springs plus the contacts closed in cfg (stuck flags are ignored).
+Eigen::MatrixXd stiffness_matrix(const Model& model, const Configuration& cfg);
+
+/// C = alpha*M + beta*K(cfg).
+Eigen::MatrixXd damping_matrix(const Model& model, const Configuration& cfg);
+
+/// Loads plus the preload of the contacts closed in cfg.
+Eigen::VectorXd constant_force(const Model& model, const Configuration& cfg);
+
+/// Sum of the forcing harmonics at time t, and its time derivative.
+Eigen::VectorXd forcing(const Model& model, double t);
+Eigen::VectorXd forcing_rate(const Model& model, double t);
+
+/// Gap function G_c = x[a] - x[b] - d of contact c (ground at 0), and its rate.
+double gap(const Model& model, int c, const double* x);
+double gap_rate(const Model& model, int c, const double* v);
+
+}  // namespace hsnc

@@ -1,0 +1,82 @@
+#include "configuration.h"
+
+#include <sstream>
+
+#include "error.h"
+
+namespace hsnc {
+namespace {
+
+std::vector<std::string> split_names(const std::string& list) {
+    std::vector<std::string> out;
+    std::string cur;
+    std::istringstream in(list);
+    while (std::getline(in, cur, ','))
+        if (!cur.empty()) out.push_back(cur);
+    return out;
+}
+
+}  // namespace
+
+Configuration Configuration::all_open(const Model& model) {
+    return Configuration{std::vector<char>(model.contacts.size(), 0),
+                         std::vector<char>(model.masses.size(), 0)};
+}
+
+Configuration Configuration::parse(const Model& model, const std::string& spec) {
+    Configuration cfg = all_open(model);
+    std::istringstream in(spec);
+    std::string part;
+    bool seen_closed = false, seen_stuck = false;
+    while (in >> part) {
+        const auto eq = part.find('=');
+        const std::string key = part.substr(0, eq);
+        if (eq == std::string::npos || (key != "closed" && key != "stuck"))
+            throw InputError("--config: '" + part + "': expected closed=NAMES or stuck=NAMES");
+        bool& seen = key == "closed" ? seen_closed : seen_stuck;
+        if (seen) throw InputError("--config: '" + key + "=' given twice");
+        seen = true;
+        for (const std::string& name : split_names(part.substr(eq + 1))) {
+            if (key == "closed") {
+                const int c = model.contact_index(name);
+                if (c < 0) throw InputError("--config: closed=" + name + ": no contact named '" + name + "'");
+                cfg.closed[c] = 1;
+            } else {
+                const int i = model.mass_index(name);
+                if (i < 0) throw InputError("--config: stuck=" + name + ": no mass named '" + name + "'");
+                if (!model.masses[i].has_friction)
+                    throw InputError("--config: stuck=" + name + ": mass '" + name +
+                                     "' has no friction (no mu_k) and cannot stick");
+                cfg.stuck[i] = 1;
+            }
+        }
+    }
+    return cfg;
+}
+
+std::string Configuration::spec(const Model& model) const {
+    std::string closed_part = "closed=", stuck_part = "stuck=";
+    bool first = true;
+    for (std::size_t c = 0; c < closed.size(); ++c)
+        if (closed[c]) {
+            closed_part += (first ? "" : ",") + model.contacts[c].name;
+            first = false;
+        }
+    first = true;
+    for (std::size_t i = 0; i < stuck.size(); ++i)
+        if (stuck[i]) {
+            stuck_part += (first ? "" : ",") + model.masses[i].name;
+            first = false;
+        }
+    return closed_part + " " + stuck_part;
+}
+
+std::string Configuration::key() const {
+    std::string k = "c";
+    for (char c : closed) k += c ? '1' : '0';
+    k += "_s";
+    for (char s : stuck) k += s ? '1' : '0';
+    return k;
+}
+
+}  // namespace hsnc

@@ -1,0 +1,81 @@
+// hsnc -- the closed-form solution of one configuration, as the engine sees it.
+//
+// Between two switches the system is linear with constant forces (paper,
+// "PWLDFE standard formulation", Eq. 9). A SegmentSolver holds the solution of
+// one configuration: `setup` fixes it from the state at the segment start, then
+// `eval` gives the exact state and every switch function at any later time.
+// Three implementations give the same answers to rounding: ahead-of-time
+// generated kernels, kernels compiled in-process (JIT), and the generic
+// Eigen-based solver.
+//
+// Switch functions of a configuration, in this order (switch_functions()):
+//   1. every contact c, in model order:       gap      g = G_c = x[a] - x[b] - gap_c
+//   2. every mass i with friction, in order:
+//        sliding:                             velocity g = v_i
+//        stuck:                               release_pos g =  A_i - mu_s*N_i
+//                                             release_neg g = -A_i - mu_s*N_i
+// where A_i is the force on mass i from everything but friction (assembly.h)
+// and N_i = m_i*g. The stuck-mass release condition |A_i| > mu_s*N_i is written
+// as two smooth functions so that root finding never meets a kink.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "configuration.h"
+#include "model.h"
+
+namespace hsnc {
+
+enum class SwitchKind : std::uint8_t {
+    gap,          ///< contact gap function G_c; element = contact index
+    velocity,     ///< velocity of a sliding friction mass; element = mass index
+    release_pos,  ///< A_i - mu_s*N_i of a stuck mass; element = mass index
+    release_neg,  ///< -A_i - mu_s*N_i of a stuck mass; element = mass index
+};
+
+struct SwitchFunction {
+    SwitchKind kind;
+    int element;
+    bool operator==(const SwitchFunction& o) const { return kind == o.kind && element == o.element; }
+};
+
+/// The switch functions of `cfg`, in the documented order.
+std::vector<SwitchFunction> switch_functions(const Model& model, const Configuration& cfg);
+
+/// Where SegmentSolver::eval writes. Every pointer is required and points to
+/// n_dof (x, v, a) or n_switch (the rest) doubles.
+struct SegmentEval {
+    double* x;      ///< positions of all masses (stuck ones at their fixed x)
+    double* v;      ///< velocities (0 for stuck masses)
+    double* a;      ///< accelerations (0 for stuck masses)
+    double* g;      ///< switch function values
+    double* dg;     ///< their first time derivatives
+    double* bound;  ///< B_f >= |g_f''(s)| for every s in [tau, tau + max_step()]
+    double* scale;  ///< magnitude of the terms summed into g_f (sum of |terms|):
+                    ///  g_f is known to about 1e-16*scale_f, no better
+};
+
+class SegmentSolver {
+public:
+    virtual ~SegmentSolver() = default;
+
+    virtual const Configuration& configuration() const = 0;
+    virtual const std::vector<SwitchFunction>& switches() const = 0;
+
+    /// Start a segment at absolute time t0 from the full state (x0, v0 of all
+    /// masses; stuck masses must have v0 = 0). sgn[i] in {-1, 0, +1} is the
+    /// direction of motion of each sliding friction mass, which fixes the sign
+    /// of its kinetic friction force -mu_k*N_i*sgn[i]; it is 0 for masses that
+    /// are stuck or have no friction.
+    virtual void setup(double t0, const double* x0, const double* v0, const signed char* sgn) = 0;
+
+    /// Evaluate at tau = t - t0 >= 0 (time measured from the segment start).
+    virtual void eval(double tau, const SegmentEval& out) const = 0;
+
+    /// The longest step over which `bound` is valid: +infinity unless the
+    /// segment has secular (resonant, growing) terms.
+    virtual double max_step() const = 0;
+};
+
+}  // namespace hsnc

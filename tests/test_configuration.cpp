@@ -1,0 +1,71 @@
+#include <gtest/gtest.h>
+
+#include "assembly.h"
+#include "configuration.h"
+#include "error.h"
+#include "segment.h"
+
+namespace hsnc {
+namespace {
+
+// Paper Fig. 4 topology with unit-ish numbers, built in code.
+Model two_mass() {
+    Model m;
+    m.name = "two";
+    m.masses = {{"m1", 1.0, true, 0.6, 0.75}, {"m2", 2.0, true, 0.6, 0.75}};
+    m.springs = {{kGround, 0, 5.0}, {0, 1, 10.0}, {1, kGround, 40.0}};
+    m.contacts = {{"c1", 0, 1, 0.2, 100.0}};
+    m.load = {0.0, 1.0};
+    m.x0 = {0.0, 0.0};
+    m.v0 = {0.0, 0.0};
+    return m;
+}
+
+TEST(Configuration, SpecRoundTrips) {
+    const Model m = two_mass();
+    const Configuration c = Configuration::parse(m, "closed=c1 stuck=m2");
+    EXPECT_TRUE(c.closed[0]);
+    EXPECT_FALSE(c.stuck[0]);
+    EXPECT_TRUE(c.stuck[1]);
+    EXPECT_EQ(c.spec(m), "closed=c1 stuck=m2");
+    EXPECT_EQ(Configuration::parse(m, c.spec(m)), c);
+    EXPECT_EQ(c.key(), "c1_s01");
+    EXPECT_EQ(Configuration::parse(m, ""), Configuration::all_open(m));
+}
+
+TEST(Configuration, UnknownNamesAreInputErrors) {
+    const Model m = two_mass();
+    try {
+        Configuration::parse(m, "closed=c9");
+        FAIL();
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("no contact named 'c9'"), std::string::npos);
+    }
+    EXPECT_THROW(Configuration::parse(m, "stuck=m3"), InputError);
+    EXPECT_THROW(Configuration::parse(m, "open=c1"), InputError);
+}
+
+TEST(Assembly, ClosedContactAddsStiffnessAndPreload) {
+    const Model m = two_mass();
+    const Configuration c = Configuration::parse(m, "closed=c1");
+    const Eigen::MatrixXd K = stiffness_matrix(m, c);
+    EXPECT_DOUBLE_EQ(K(0, 0), 5.0 + 10.0 + 100.0);
+    EXPECT_DOUBLE_EQ(K(0, 1), -110.0);
+    EXPECT_DOUBLE_EQ(K(1, 1), 10.0 + 40.0 + 100.0);
+    const Eigen::VectorXd f = constant_force(m, c);
+    EXPECT_DOUBLE_EQ(f(0), 100.0 * 0.2);        // +k*d on a
+    EXPECT_DOUBLE_EQ(f(1), 1.0 - 100.0 * 0.2);  // load - k*d on b
+}
+
+TEST(Segment, SwitchFunctionOrder) {
+    const Model m = two_mass();
+    const auto sf = switch_functions(m, Configuration::parse(m, "stuck=m2"));
+    ASSERT_EQ(sf.size(), 4u);
+    EXPECT_EQ(sf[0], (SwitchFunction{SwitchKind::gap, 0}));
+    EXPECT_EQ(sf[1], (SwitchFunction{SwitchKind::velocity, 0}));
+    EXPECT_EQ(sf[2], (SwitchFunction{SwitchKind::release_pos, 1}));
+    EXPECT_EQ(sf[3], (SwitchFunction{SwitchKind::release_neg, 1}));
+}
+
+}  // namespace
+}  // namespace hsnc
