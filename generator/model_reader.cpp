@@ -346,10 +346,7 @@ private:
         for (const auto& [name, node] : entries) define_parameter(name, node);
 
         for (const auto& [name, value] : model_.parameters)
-            if (name == "g") {
-                model_.g = value;
-                if (!(value > 0.0)) fail(nullptr, "parameters.g", "gravity g must be > 0, got " + std::to_string(value));
-            }
+            if (name == "g") model_.g = value;
     }
 
     /// Evaluate parameter `name` (from the file, or from --set) with the
@@ -361,8 +358,15 @@ private:
         for (const char* reserved : kParserConstants)
             if (name == reserved) fail(node, key, "'" + name + "' is a constant of the expression parser and cannot be a parameter");
         double value = kDefaultGravity;
-        if (const auto o = set_.find(name); o != set_.end()) value = override_value(o->second);
+        const auto o = set_.find(name);
+        if (o != set_.end()) value = override_value(o->second);
         else if (node) value = number(*node, key);
+        // The normal force of friction is m*g (interface.md section 2).
+        if (name == "g" && !(value > 0.0)) {
+            const std::string reason = "gravity g must be > 0 (friction's normal force is m*g), got " + show(value);
+            if (o != set_.end()) throw InputError(o->second.flag + " '" + o->second.raw + "': " + reason);
+            fail(node, key, reason);
+        }
         model_.parameters.emplace_back(name, value);
         symbols_[name] = GiNaC::numeric(value);
     }
