@@ -5,10 +5,14 @@
 // key and the reason.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <random>
 #include <string>
 
 #include "error.h"
@@ -196,6 +200,37 @@ amplitude = { a = "exp(1)" }
     EXPECT_DOUBLE_EQ(m.forcing[0].omega, 4.0 * M_PI);
     EXPECT_DOUBLE_EQ(m.forcing[0].phase, -M_PI / 4.0);
     EXPECT_DOUBLE_EQ(m.forcing[0].amplitude[0], std::exp(1.0));
+}
+
+TEST(ModelReader, ExpressionStringsRoundLikeTomlLiterals) {
+    // `k = 0.1` and `k = "0.1"` (and --set k=0.1) must give the same double.
+    // The first values were one ulp off at GiNaC's default 17 digits.
+    std::vector<std::string> decimals = {"-7.856e-05", "-5.146e-15", "4.546e-17", "-3.928e-05", "-4.91e-06",
+                                         "1.455e-11", "0.1", "0.3", "175.5151", "17.5515", "9.81"};
+    std::mt19937_64 rng(20240601);
+    std::uniform_real_distribution<double> mantissa(-1000.0, 1000.0);
+    std::uniform_int_distribution<int> exponent(-20, 20);
+    for (int i = 0; i < 2000; ++i) {
+        char text[40];
+        std::snprintf(text, sizeof text, i % 2 ? "%.4g" : "%.17g", mantissa(rng) * std::pow(10.0, exponent(rng)));
+        decimals.push_back(text);
+    }
+    for (std::size_t first = 0; first < decimals.size(); first += 100) {
+        std::string doc = "name = \"t\"\n[[mass]]\nname = \"a\"\nm = 1\n[parameters]\n";
+        const std::size_t last = std::min(decimals.size(), first + 100);
+        for (std::size_t i = first; i < last; ++i) {
+            doc += "p" + std::to_string(i) + " = " + decimals[i] + "\n";
+            doc += "q" + std::to_string(i) + " = \"" + decimals[i] + "\"\n";
+        }
+        const Model m = parse_model(doc, "t.toml");
+        ASSERT_EQ(m.parameters.size(), 1 + 2 * (last - first));
+        for (std::size_t i = first; i < last; ++i) {
+            const double literal = m.parameters[1 + 2 * (i - first)].second;
+            const double expression = m.parameters[2 + 2 * (i - first)].second;
+            EXPECT_EQ(literal, std::strtod(decimals[i].c_str(), nullptr)) << decimals[i];
+            EXPECT_EQ(expression, literal) << decimals[i];
+        }
+    }
 }
 
 TEST(ModelReader, ParametersFollowFileOrderNotKeyOrder) {
