@@ -346,7 +346,6 @@ private:
     void read_parameters(const toml::table& root) {
         // toml++ keeps a table's keys sorted by name; file order is source order.
         std::vector<std::pair<std::string, const toml::node*>> entries;
-        std::vector<std::size_t> lines;
         if (const toml::table* params = optional_table(root, "", "parameters")) {
             for (auto&& [k, v] : *params) entries.emplace_back(std::string(k.str()), &v);
             std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) {
