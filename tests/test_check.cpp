@@ -1,0 +1,211 @@
+// Tests of `hsnc check` (cli/check.cpp): the built binary is run as a user
+// would run it, and its output and exit code are checked. Natural frequencies
+// are compared with closed forms computed here, not with earlier output.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "model_reader.h"
+
+namespace hsnc {
+namespace {
+
+struct CliRun {
+    int exit_code = -1;
+    std::string out, err;
+};
+
+std::string slurp(const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+/// Run `hsnc ARGS`, capturing stdout and stderr.
+CliRun run_hsnc(const std::string& args) {
+    // One pair of files per test, so that `ctest -j` cannot mix them up.
+    const std::string stem = ::testing::TempDir() + "hsnc_" +
+                             ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    const std::string out = stem + ".out", err = stem + ".err";
+    const std::string command = std::string("'") + HSNC_BINARY + "' " + args + " >'" + out + "' 2>'" + err + "'";
+    const int status = std::system(command.c_str());
+    CliRun r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
+}
+
+std::string model_path(const std::string& file) { return std::string(HSNC_SOURCE_DIR) + "/models/" + file; }
+
+std::string write_temp(const std::string& name, const std::string& text) {
+    const std::string path = ::testing::TempDir() + name;
+    std::ofstream(path) << text;
+    return path;
+}
+
+/// One row of the frequency table: omega_n (0 for a rigid-body mode), f, xi.
+struct Mode {
+    double omega = 0, f = 0, xi = 0;
+    bool rigid = false;
+};
+
+/// The rows after the "mode  omega_n" header, up to the next line that does not start with a mode number.
+std::vector<Mode> modes_of(const std::string& out) {
+    std::vector<Mode> modes;
+    std::istringstream in(out);
+    std::string line;
+    bool in_table = false;
+    while (std::getline(in, line)) {
+        if (line.find("mode  omega_n") != std::string::npos) {
+            in_table = true;
+            continue;
+        }
+        if (!in_table) continue;
+        std::istringstream row(line);
+        int number = 0;
+        if (!(row >> number) || number != static_cast<int>(modes.size()) + 1) break;
+        Mode m;
+        if (line.find("0 (rigid-body mode)") != std::string::npos) {
+            m.rigid = true;
+        } else {
+            row >> m.omega >> m.f >> m.xi;
+        }
+        modes.push_back(m);
+    }
+    return modes;
+}
+
+void expect_relative(double actual, double expected, double tolerance = 1e-10) {
+    EXPECT_NEAR(actual, expected, tolerance * std::abs(expected)) << "expected " << expected;
+}
+
+TEST(Check, SeedScenarioFrequenciesMatchTheCharacteristicPolynomial) {
+    // M = diag(1, 2), K = [[k1+k2, -k2], [-k2, k2+k3]] = [[15, -10], [-10, 50]]:
+    // det(K - lambda M) = 2 (lambda^2 - 40 lambda + 325), lambda = 20 -+ sqrt(75).
+    const double w1 = std::sqrt(20.0 - std::sqrt(75.0)), w2 = std::sqrt(20.0 + std::sqrt(75.0));
+    for (const auto& [file, beta] : {std::pair<const char*, double>{"seed-scenario-1.toml", 0.1},
+                                     std::pair<const char*, double>{"seed-scenario-2.toml", 0.0}}) {
+        SCOPED_TRACE(file);
+        const CliRun r = run_hsnc("check '" + model_path(file) + "'");
+        EXPECT_EQ(r.exit_code, 0);
+        EXPECT_EQ(r.err, "");
+        const auto modes = modes_of(r.out);
+        ASSERT_EQ(modes.size(), 2u) << r.out;
+        expect_relative(modes[0].omega, w1);
+        expect_relative(modes[1].omega, w2);
+        expect_relative(modes[0].f, w1 / (2.0 * M_PI));
+        expect_relative(modes[1].f, w2 / (2.0 * M_PI));
+        // C = beta*K: xi = beta*omega/2.
+        EXPECT_NEAR(modes[0].xi, beta * w1 / 2.0, 1e-10);
+        EXPECT_NEAR(modes[1].xi, beta * w2 / 2.0, 1e-10);
+    }
+}
+
+TEST(Check, SeedScenarioSummary) {
+    const CliRun r = run_hsnc("check '" + model_path("seed-scenario-1.toml") + "'");
+    EXPECT_EQ(r.exit_code, 0);
+    EXPECT_NE(r.out.find("model: seed-scenario-1\n"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("source: " + model_path("seed-scenario-1.toml") + "\n"), std::string::npos);
+    EXPECT_NE(r.out.find("degrees of freedom: 2\n  1  m1  m = 1\n  2  m2  m = 2\n"), std::string::npos);
+    EXPECT_NE(r.out.find("contact1  between m1 and m2  gap = 0.2  k = 100\n"), std::string::npos);
+    EXPECT_NE(r.out.find("  m1  mu_k = 0.6  mu_s = 0.75\n  m2  mu_k = 0.6  mu_s = 0.75\n"), std::string::npos);
+    ASSERT_GE(r.out.size(), 3u);
+    EXPECT_EQ(r.out.substr(r.out.size() - 3), "ok\n");
+}
+
+TEST(Check, OneDofModelsGiveSqrtKOverM) {
+    for (const char* file : {"bilinear-1dof.toml", "coulomb-1dof.toml"}) {
+        SCOPED_TRACE(file);
+        // All contacts open: only the springs count.
+        const Model model = read_model(model_path(file));
+        ASSERT_EQ(model.dof(), 1u);
+        double k = 0;
+        for (const Spring& s : model.springs) k += s.k;
+        const CliRun r = run_hsnc("check '" + model_path(file) + "'");
+        EXPECT_EQ(r.exit_code, 0);
+        const auto modes = modes_of(r.out);
+        ASSERT_EQ(modes.size(), 1u) << r.out;
+        expect_relative(modes[0].omega, std::sqrt(k / model.masses[0].m));
+    }
+}
+
+TEST(Check, ChainFrequenciesMatchTheFixedFixedChain) {
+    // n equal masses m between n+1 equal springs k, both ends to ground:
+    // omega_j = 2 sqrt(k/m) sin(j pi / (2 (n+1))).
+    const Model model = read_model(model_path("chain-8.toml"));
+    const double k = model.springs[0].k, m = model.masses[0].m;
+    const CliRun r = run_hsnc("check '" + model_path("chain-8.toml") + "'");
+    EXPECT_EQ(r.exit_code, 0);
+    const auto modes = modes_of(r.out);
+    ASSERT_EQ(modes.size(), 8u) << r.out;
+    for (int j = 1; j <= 8; ++j) {
+        const double w = 2.0 * std::sqrt(k / m) * std::sin(j * M_PI / 18.0);
+        expect_relative(modes[j - 1].omega, w);
+        EXPECT_NEAR(modes[j - 1].xi, 0.5 * (model.alpha / w + model.beta * w), 1e-10);
+    }
+}
+
+TEST(Check, RigidBodyModeIsNamed) {
+    // Two masses joined by one spring, nothing to ground: omega = 0 and
+    // sqrt(k (1/m1 + 1/m2)).
+    const std::string path = write_temp("hsnc_free_pair.toml", R"toml(name = "free-pair"
+[[mass]]
+name = "a"
+m = 1
+[[mass]]
+name = "b"
+m = 3
+[[spring]]
+between = ["a", "b"]
+k = 12
+)toml");
+    const CliRun r = run_hsnc("check '" + path + "'");
+    EXPECT_EQ(r.exit_code, 0);
+    const auto modes = modes_of(r.out);
+    ASSERT_EQ(modes.size(), 2u) << r.out;
+    EXPECT_TRUE(modes[0].rigid);
+    EXPECT_FALSE(modes[1].rigid);
+    expect_relative(modes[1].omega, std::sqrt(12.0 * (1.0 + 1.0 / 3.0)));
+    EXPECT_NE(r.out.find("1 rigid-body mode(s)"), std::string::npos) << r.out;
+}
+
+TEST(Check, BadModelGivesExitCode2AndOneMessage) {
+    const std::string path = write_temp("hsnc_bad.toml", "name = \"bad\"\n[[mass]]\nname = \"m1\"\nm = -1\n");
+    const CliRun r = run_hsnc("check '" + path + "'");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_EQ(r.out, "");  // nothing printed on stdout
+    EXPECT_EQ(r.err, "hsnc: " + path + ":4: key 'mass[1].m': mass must be > 0, got -1\n");
+}
+
+TEST(Check, MissingFileGivesExitCode2) {
+    const CliRun r = run_hsnc("check /nonexistent/model.toml");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(r.err, "hsnc: cannot read model file '/nonexistent/model.toml': No such file or directory\n");
+}
+
+TEST(Check, MissingArgumentGivesExitCode2) {
+    const CliRun r = run_hsnc("check");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("MODEL is required"), std::string::npos) << r.err;
+}
+
+TEST(Check, HelpWorks) {
+    const CliRun r = run_hsnc("check --help");
+    EXPECT_EQ(r.exit_code, 0);
+    EXPECT_NE(r.out.find("Usage:"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("MODEL"), std::string::npos);
+    EXPECT_NE(r.out.find("natural frequencies"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace hsnc
