@@ -13,8 +13,8 @@ CsvFile::CsvFile(std::string path) : path_(std::move(path)) {
     tmp_ = path_ + ".tmp." + std::to_string(::getpid());
     file_ = std::fopen(tmp_.c_str(), "w");
     if (!file_) throw InputError("cannot write '" + path_ + "': " + std::strerror(errno));
-    static thread_local char buffer[1 << 16];
-    std::setvbuf(file_, buffer, _IOFBF, sizeof buffer);
+    buffer_.resize(1 << 16);
+    std::setvbuf(file_, buffer_.data(), _IOFBF, buffer_.size());
 }
 
 CsvFile::~CsvFile() {

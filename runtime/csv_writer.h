@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "engine.h"
 #include "model.h"
@@ -28,6 +29,7 @@ public:
 
 private:
     std::string path_, tmp_;
+    std::vector<char> buffer_;  // stdio buffer of this file (declared before file_: outlives it)
     std::FILE* file_ = nullptr;
     bool first_in_row_ = true;
 };

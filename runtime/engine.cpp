@@ -4,6 +4,9 @@
 #include <cmath>
 #include <deque>
 #include <limits>
+#include <map>
+#include <cstdio>
+#include <cstdlib>
 #include <set>
 #include <sstream>
 
@@ -124,6 +127,10 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
 
     std::vector<Transition> transitions;
     std::string why;
+    // Rounding level each switch function had at the last event, by (kind,
+    // element): a value that should be 0 after a switch comes back as ~1e-17
+    // from the previous segment, whatever the new segment's own terms are.
+    std::map<std::pair<int, int>, double> inherited;
     std::size_t progress_counter = 0;
     while (true) {
         visited.insert(cfg);
@@ -136,14 +143,26 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         const double tau_end = t_end - t;
         SegmentEval out = buf.view();
 
-        std::vector<double> side(nsw);
-        for (std::size_t f = 0; f < nsw; ++f) side[f] = side_of(sw[f], cfg, sgn);
+        std::vector<double> side(nsw), floor(nsw, 0.0);
+        for (std::size_t f = 0; f < nsw; ++f) {
+            side[f] = side_of(sw[f], cfg, sgn);
+            const auto it = inherited.find({static_cast<int>(sw[f].kind), sw[f].element});
+            if (it != inherited.end()) floor[f] = it->second;
+        }
+        // Rounding level of g_f at the point last evaluated: its terms (scale), the
+        // rounding of the time itself (|g'| * ulp-ish of t + tau, which also covers
+        // the rounding of each omega*tau), and what it inherited from the last event.
+        double tau_now = 0.0;
+        auto noise = [&](std::size_t f) {
+            return std::max(noise_of(buf.scale[f] + std::fabs(buf.dg[f]) * (std::fabs(t) + tau_now)), floor[f]);
+        };
         // A velocity function that starts at 0 (a release, a reversal, a stop
         // that slides on) is not watched for a stop until it has left 0.
         std::vector<char> armed(nsw, 0);
 
         auto eval = [&](double tau) {
             S.eval(tau, out);
+            tau_now = tau;
             ++sum.evaluations;
         };
 
@@ -153,7 +172,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         eval(0.0);
         for (std::size_t f = 0; f < nsw; ++f)
             if (sw[f].kind == SwitchKind::velocity)
-                armed[f] = side[f] * buf.g[f] > noise_of(buf.scale[f]);
+                armed[f] = side[f] * buf.g[f] > noise(f);
         for (std::size_t iter = 0;; ++iter) {
             if (iter > 10'000'000) return finish(RunStatus::failure, "switch search does not converge at t = " + time_text(t + tau));
             // Which functions have switched at tau, and where is each one's zero?
@@ -164,9 +183,9 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 if (!std::isfinite(h) || !std::isfinite(hd) || !std::isfinite(buf.bound[f]))
                     return finish(RunStatus::failure, "non-finite switch function in configuration '" +
                                                           cfg.spec(model_) + "' at t = " + time_text(t + tau));
-                const double noise = noise_of(buf.scale[f]);
+                const double eps_f = noise(f);
                 const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
-                if (stop ? h > noise : h >= -noise) continue;
+                if (stop ? h > eps_f : h >= -eps_f) continue;
                 // Move to the zero by one Newton step (the function is monotone
                 // there), never before the last point known to be on the safe side.
                 double r = tau;
@@ -190,11 +209,14 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 for (std::size_t f = 0; f < nsw; ++f) {
                     if (root[f] <= tau_star + tol) continue;
                     const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
-                    const double noise = noise_of(buf.scale[f]);
+                    const double eps_f = noise(f);
                     const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
-                    if (stop ? h <= noise : (h < -noise || (h <= noise && hd < 0)))
+                    if (stop ? h <= eps_f : (h < -eps_f || (h <= eps_f && hd < 0)))
                         found.switched.push_back(sw[f]);
                 }
+                inherited.clear();
+                for (std::size_t f = 0; f < nsw; ++f)
+                    inherited[{static_cast<int>(sw[f].kind), sw[f].element}] = noise(f);
                 break;
             }
             if (tau >= tau_end) break;
@@ -202,11 +224,10 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             double step = std::min(max_step, tau_end - tau);
             for (std::size_t f = 0; f < nsw; ++f) {
                 const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
-                const double noise = noise_of(buf.scale[f]);
                 const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
                 // Contacts and releases switch only when certainly negative (level
                 // -2*noise); armed velocities stop at zero.
-                const double level = stop ? 0.0 : -2 * noise;
+                const double level = stop ? 0.0 : -2 * noise(f);
                 step = std::min(step, safe_step(h - level, hd, buf.bound[f]));
             }
             const double floor_step = 4 * kEps * (std::fabs(t) + std::fabs(tau)) + 1e-300;
@@ -215,19 +236,23 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             tau = std::min(tau + step, tau_end);
             eval(tau);
             for (std::size_t f = 0; f < nsw; ++f)
-                if (sw[f].kind == SwitchKind::velocity && !armed[f] && side[f] * buf.g[f] > 2 * noise_of(buf.scale[f]))
+                if (sw[f].kind == SwitchKind::velocity && !armed[f] && side[f] * buf.g[f] > 2 * noise(f))
                     armed[f] = 1;
         }
 
         // ---- dense output up to the event (or t_end) from the closed form ----
         const double t_seg_end = found.any ? t + found.tau : t_end;
         if (!samples_done) {
-            std::vector<double> xs(n), vs(n);
             while (true) {
                 const double tk = sample_time(k_next);
                 if (found.any ? tk >= t_seg_end : tk > t_end) break;
-                eval(tk - t);
-                observer.on_sample(tk, buf.x.data(), buf.v.data());
+                if (tk == t) {
+                    // The segment's start state itself, not its modal round trip.
+                    observer.on_sample(tk, x.data(), v.data());
+                } else {
+                    eval(tk - t);
+                    observer.on_sample(tk, buf.x.data(), buf.v.data());
+                }
                 if (tk >= t_end) {
                     samples_done = true;
                     break;

@@ -36,19 +36,19 @@ private:
     std::size_t n_;
 };
 
-struct Run {
+struct Outcome {
     RunSummary summary;
     std::vector<Recorded> events, samples;
 };
 
-Run simulate(const Model& model, double t_end, double dt = 0.0) {
+Outcome simulate(const Model& model, double t_end, double dt = 0.0) {
     GenericSolverProvider provider(model);
     Engine engine(model, provider);
     Recorder rec(model.dof());
     EngineOptions opt;
     opt.t_end = t_end;
     opt.dt = dt;
-    Run r;
+    Outcome r;
     r.summary = engine.run(opt, rec);
     r.events = rec.events;
     r.samples = rec.samples;
@@ -77,7 +77,7 @@ k = 100
 x = { m1 = 0.2 }
 )");
     const double omega = 10, xe = 0.1 * 9.81 / (omega * omega);
-    const Run r = simulate(m, 5.0);
+    const Outcome r = simulate(m, 5.0);
     ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
     ASSERT_EQ(r.events.size(), 10u);
     for (int k = 1; k <= 10; ++k) {
@@ -111,7 +111,7 @@ k = 12
 v = { m1 = 1.0 }
 )");
     const double T = kPi / 2 + kPi / 4;
-    const Run r = simulate(m, 1000 * T + 0.1);
+    const Outcome r = simulate(m, 1000 * T + 0.1);
     ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
     ASSERT_EQ(r.events.size(), 2000u);
     double worst = 0;
@@ -140,7 +140,7 @@ mu_s = 0.4
 v = { m1 = 3.0 }
 )");
     const double a = 0.3 * 9.81, ts = 3.0 / a;
-    const Run r = simulate(m, 2.0);
+    const Outcome r = simulate(m, 2.0);
     ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
     ASSERT_EQ(r.events.size(), 1u);
     EXPECT_EQ(r.events[0].kind, EventKind::stick);
@@ -164,7 +164,7 @@ omega = 3.0
 amplitude = { m1 = 20.0 }
 )");
     const double expected = std::asin(0.5 * 1.5 * 9.81 / 20.0) / 3.0;
-    const Run r = simulate(m, 0.5);
+    const Outcome r = simulate(m, 0.5);
     ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
     ASSERT_GE(r.events.size(), 1u);
     EXPECT_EQ(r.events[0].kind, EventKind::release);
@@ -197,7 +197,7 @@ k = %.17g
 v = { m1 = %.17g }
 )", k, d, kc, A * omega);
     const Model m = model_from(toml);
-    const Run r = simulate(m, 1.0);
+    const Outcome r = simulate(m, 1.0);
     ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
     ASSERT_EQ(r.events.size(), 2u) << "eps = " << eps;
     const double t_in = std::asin(d / A) / omega;
@@ -233,7 +233,7 @@ k = 5
 [initial]
 v = { m1 = 2.0 }
 )");
-    const Run r = simulate(m, 3.0);
+    const Outcome r = simulate(m, 3.0);
     ASSERT_EQ(r.summary.status, RunStatus::ok);
     EXPECT_EQ(r.events.size(), 0u);
 }
@@ -260,7 +260,7 @@ amplitude = { m1 = %.17g }
 v = { m1 = %.17g }
 )", F, v0);
     const Model m = model_from(toml);
-    const Run r = simulate(m, 1.0);
+    const Outcome r = simulate(m, 1.0);
     ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
     ASSERT_EQ(r.events.size(), 2u);
     EXPECT_EQ(r.events[0].kind, EventKind::stick);
@@ -288,7 +288,7 @@ amplitude = { m1 = %.17g }
 [initial]
 v = { m1 = %.17g }
 )", F, v0);
-    const Run r = simulate(model_from(toml), 1.0);
+    const Outcome r = simulate(model_from(toml), 1.0);
     ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
     EXPECT_EQ(r.events.size(), 0u);
 }
@@ -307,7 +307,7 @@ k = 100
 [initial]
 x = { m1 = 0.2 }
 )");
-    const Run r = simulate(m, 1.05, 0.1);
+    const Outcome r = simulate(m, 1.05, 0.1);
     ASSERT_EQ(r.samples.size(), 12u);
     for (std::size_t k = 0; k < 11; ++k) EXPECT_DOUBLE_EQ(r.samples[k].t, 0.1 * static_cast<double>(k));
     EXPECT_EQ(r.samples.back().t, 1.05);
@@ -323,7 +323,7 @@ class AgainstBaseline : public ::testing::TestWithParam<std::pair<const char*, d
 TEST_P(AgainstBaseline, SameEventsAndState) {
     const auto [file, t_end] = GetParam();
     const Model m = read_model(std::string(HSNC_SOURCE_DIR) + "/models/" + file);
-    const Run exact = simulate(m, t_end);
+    const Outcome exact = simulate(m, t_end);
     ASSERT_EQ(exact.summary.status, RunStatus::ok) << exact.summary.message;
     Recorder rec(m.dof());
     EngineOptions eo;
