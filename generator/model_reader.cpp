@@ -1,15 +1,548 @@
+// hsnc -- reading a model file: TOML (toml++) in, a validated Model out.
+//
+// The reader walks the document once, in a fixed order: parameters first
+// (each one evaluated with only the earlier ones in scope), then masses,
+// because every later table refers to them by name, then the rest. Every
+// table is checked against the keys it may hold, so a typo is an error and
+// never a silently ignored key (interface.md section 1).
 #include "model_reader.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include <ginac/ginac.h>
+#include <toml++/toml.h>
 
 #include "error.h"
 
 namespace hsnc {
 
-Model read_model(const std::string& path, const ModelOverrides&) {
-    throw InputError(path + ": model reader not implemented yet");
+bool is_valid_name(const std::string& name) {
+    auto alpha = [](char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_'; };
+    auto digit = [](char c) { return c >= '0' && c <= '9'; };
+    if (name.empty() || !alpha(name[0])) return false;
+    return std::all_of(name.begin() + 1, name.end(), [&](char c) { return alpha(c) || digit(c); });
 }
 
-Model parse_model(const std::string&, const std::string& source, const ModelOverrides&) {
-    throw InputError(source + ": model reader not implemented yet");
+namespace {
+
+constexpr double kDefaultGravity = 9.81;
+
+// Names the GiNaC parser resolves itself before looking at the symbol table;
+// a parameter of that name could never be referred to.
+const char* const kParserConstants[] = {"Pi", "Euler", "Catalan", "I"};
+
+std::string type_name(const toml::node& node) {
+    std::ostringstream out;
+    out << node.type();
+    return out.str();
+}
+
+std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
+
+/// Why an expression could not be turned into a real, finite double.
+struct ExpressionError {
+    std::string reason;
+    std::string unknown_symbol;  ///< set when the cause is a name not in scope
+};
+
+/// Evaluate `text` with GiNaC's parser in strict mode (unknown names are
+/// errors) over `symbols`, whose entries are already numbers; the result must
+/// be a real, finite number. Throws ExpressionError.
+double evaluate_expression(const std::string& text, const GiNaC::symtab& symbols) {
+    GiNaC::ex value;
+    try {
+        GiNaC::parser reader(symbols, /*strict=*/true);
+        value = reader(text).evalf();
+    } catch (const GiNaC::parse_error& e) {
+        // GiNaC: "GiNaC: parse error at line 0, column 0: REASON\n[where]";
+        // the position is always 0 for a one-line string, so keep REASON.
+        std::string reason = first_line(e.what());
+        const std::string marker = "column 0: ";
+        if (const auto at = reason.find(marker); at != std::string::npos) reason = reason.substr(at + marker.size());
+        throw ExpressionError{"expression '" + text + "' does not parse: " + reason, ""};
+    } catch (const std::invalid_argument& e) {
+        // Strict mode: 'find_or_insert_symbol: symbol "x" not found'.
+        const std::string what = e.what();
+        const auto open = what.find('"'), close = what.rfind('"');
+        if (what.find("not found") != std::string::npos && open != std::string::npos && close > open) {
+            const std::string name = what.substr(open + 1, close - open - 1);
+            throw ExpressionError{"expression '" + text + "': unknown parameter '" + name + "'", name};
+        }
+        throw ExpressionError{"expression '" + text + "' cannot be evaluated: " + first_line(what), ""};
+    } catch (const std::exception& e) {
+        // pole_error ("power::eval(): division by zero"), domain_error, ...
+        throw ExpressionError{"expression '" + text + "' cannot be evaluated: " + first_line(e.what()), ""};
+    }
+    if (!GiNaC::is_a<GiNaC::numeric>(value)) {
+        std::ostringstream shown;
+        shown << value;
+        throw ExpressionError{"expression '" + text + "' does not evaluate to a number (got " + shown.str() + ")", ""};
+    }
+    const GiNaC::numeric& number = GiNaC::ex_to<GiNaC::numeric>(value);
+    if (!number.is_real()) {
+        std::ostringstream shown;
+        shown << number;
+        throw ExpressionError{"expression '" + text + "' is not a real number (it is " + shown.str() + ")", ""};
+    }
+    const double result = number.to_double();
+    if (!std::isfinite(result)) throw ExpressionError{"expression '" + text + "' is not a finite double", ""};
+    return result;
+}
+
+/// Split a flag value "NAME=VALUE" (at the first '='). Throws InputError.
+std::pair<std::string, std::string> split_assignment(const std::string& flag, const std::string& raw) {
+    const auto eq = raw.find('=');
+    if (eq == std::string::npos) throw InputError(flag + " '" + raw + "': expected NAME=VALUE");
+    std::string name = raw.substr(0, eq), value = raw.substr(eq + 1);
+    if (!is_valid_name(name))
+        throw InputError(flag + " '" + raw + "': '" + name + "' is not a valid name ([A-Za-z_][A-Za-z0-9_]*)");
+    if (value.find_first_not_of(" \t") == std::string::npos)
+        throw InputError(flag + " '" + raw + "': expected NAME=VALUE, VALUE is empty");
+    return {name, value};
+}
+
+/// One override flag, split, and the raw text for messages.
+struct Override {
+    std::string flag;   ///< "--set", "--x0", "--v0"
+    std::string raw;    ///< "NAME=VALUE" as given
+    std::string value;  ///< VALUE
+};
+
+/// Split a list of override flags into NAME -> Override; a name given twice is an error.
+std::map<std::string, Override> collect_overrides(const std::string& flag, const std::vector<std::string>& raws) {
+    std::map<std::string, Override> out;
+    for (const std::string& raw : raws) {
+        auto [name, value] = split_assignment(flag, raw);
+        if (out.count(name))
+            throw InputError(flag + " '" + raw + "': '" + name + "' is already set by " + flag + " '" +
+                             out.at(name).raw + "'");
+        out.emplace(name, Override{flag, raw, value});
+    }
+    return out;
+}
+
+/// Reads one parsed TOML document into a Model. One instance per document.
+class Reader {
+public:
+    Reader(std::string source, const ModelOverrides& overrides) : source_(std::move(source)) {
+        set_ = collect_overrides("--set", overrides.set);
+        x0_ = collect_overrides("--x0", overrides.x0);
+        v0_ = collect_overrides("--v0", overrides.v0);
+    }
+
+    Model read(const toml::table& root) {
+        model_.source = source_;
+        check_keys(root, "", {"name", "description", "parameters", "mass", "spring", "damping", "contact",
+                              "forcing", "load", "initial", "simulate"});
+        model_.name = required_string(root, "", "name");
+        if (model_.name.empty()) fail(root.get("name"), "name", "must not be empty");
+        if (const toml::node* d = root.get("description")) model_.description = string_value(*d, "description");
+
+        read_parameters(root);
+        read_masses(root);
+        read_springs(root);
+        read_damping(root);
+        read_contacts(root);
+        read_forcing(root);
+        read_load(root);
+        read_initial(root);
+        read_simulate(root);
+        return std::move(model_);
+    }
+
+private:
+    // ---- messages: "FILE:LINE: key 'KEY': reason" ----
+
+    [[noreturn]] void fail(const toml::node* where, const std::string& key, const std::string& reason) const {
+        fail_at(where ? where->source().begin.line : 0, key, reason);
+    }
+    [[noreturn]] void fail_at(std::size_t line, const std::string& key, const std::string& reason) const {
+        std::string message = source_;
+        if (line > 0) message += ":" + std::to_string(line);
+        message += ": key '" + key + "': " + reason;
+        throw InputError(message);
+    }
+    /// The line of a table's own header, or 0 for the document root (line 1
+    /// there would point at whatever happens to be first in the file).
+    std::size_t table_line(const toml::table& table, const std::string& path) const {
+        return path.empty() ? 0 : table.source().begin.line;
+    }
+    static std::string join(const std::string& path, const std::string& key) {
+        return path.empty() ? key : path + "." + key;
+    }
+
+    // ---- structure ----
+
+    /// Every key of `table` must be one of `allowed`.
+    void check_keys(const toml::table& table, const std::string& path, std::initializer_list<const char*> allowed) const {
+        for (auto&& [key, node] : table) {
+            const std::string name(key.str());
+            if (std::find(allowed.begin(), allowed.end(), name) != allowed.end()) continue;
+            std::string expected;
+            for (const char* a : allowed) expected += (expected.empty() ? "" : ", ") + std::string(a);
+            fail_at(key.source().begin.line ? key.source().begin.line : node.source().begin.line, join(path, name),
+                    "unknown key (expected one of: " + expected + ")");
+        }
+    }
+
+    const toml::table* optional_table(const toml::table& parent, const std::string& path, const char* key) const {
+        const toml::node* node = parent.get(key);
+        if (!node) return nullptr;
+        if (!node->is_table()) fail(node, join(path, key), "expected a table, got " + type_name(*node));
+        return node->as_table();
+    }
+
+    /// The tables of an array of tables ([[key]]); empty when absent.
+    std::vector<const toml::table*> table_array(const toml::table& root, const char* key) const {
+        std::vector<const toml::table*> out;
+        const toml::node* node = root.get(key);
+        if (!node) return out;
+        const toml::array* array = node->as_array();
+        if (!array)
+            fail(node, key, std::string("expected an array of tables [[") + key + "]], got " + type_name(*node));
+        for (const toml::node& item : *array) {
+            if (!item.is_table())
+                fail(&item, key, std::string("expected an array of tables [[") + key + "]], got an element of type " +
+                                     type_name(item));
+            out.push_back(item.as_table());
+        }
+        return out;
+    }
+
+    std::string string_value(const toml::node& node, const std::string& key) const {
+        if (!node.is_string()) fail(&node, key, "expected a string, got " + type_name(node));
+        return node.as_string()->get();
+    }
+
+    std::string required_string(const toml::table& table, const std::string& path, const char* key) const {
+        const toml::node* node = table.get(key);
+        if (!node) fail_at(table_line(table, path), join(path, key), "required key is missing");
+        return string_value(*node, join(path, key));
+    }
+
+    // ---- numbers and expressions ----
+
+    /// A TOML integer, a finite float, or an expression string over the parameters.
+    double number(const toml::node& node, const std::string& key) const {
+        if (const auto* i = node.as_integer()) return static_cast<double>(i->get());
+        if (const auto* f = node.as_floating_point()) {
+            if (!std::isfinite(f->get())) fail(&node, key, "must be finite, got " + std::string(std::isnan(f->get()) ? "nan" : "inf"));
+            return f->get();
+        }
+        if (const auto* s = node.as_string()) {
+            try {
+                return evaluate_expression(s->get(), symbols_);
+            } catch (const ExpressionError& e) {
+                fail(&node, key, explain(e));
+            }
+        }
+        fail(&node, key, "expected a number or an expression string, got " + type_name(node));
+    }
+
+    /// An expression error, with a hint when the unknown name is a later parameter.
+    std::string explain(const ExpressionError& e) const {
+        if (!e.unknown_symbol.empty() &&
+            std::find(parameter_names_.begin(), parameter_names_.end(), e.unknown_symbol) != parameter_names_.end())
+            return e.reason + " (it is defined later; a parameter may use only earlier parameters)";
+        return e.reason;
+    }
+
+    double override_value(const Override& o) const {
+        try {
+            return evaluate_expression(o.value, symbols_);
+        } catch (const ExpressionError& e) {
+            throw InputError(o.flag + " '" + o.raw + "': " + explain(e));
+        }
+    }
+
+    std::optional<double> optional_number(const toml::table& table, const std::string& path, const char* key) const {
+        const toml::node* node = table.get(key);
+        if (!node) return std::nullopt;
+        return number(*node, join(path, key));
+    }
+
+    double required_number(const toml::table& table, const std::string& path, const char* key) const {
+        const toml::node* node = table.get(key);
+        if (!node) fail_at(table_line(table, path), join(path, key), "required key is missing");
+        return number(*node, join(path, key));
+    }
+
+    // ---- names and bodies ----
+
+    /// A name for a mass or contact: valid syntax, not reserved, not taken.
+    void check_new_name(const toml::node* where, const std::string& key, const std::string& name) const {
+        if (!is_valid_name(name)) fail(where, key, "'" + name + "' is not a valid name ([A-Za-z_][A-Za-z0-9_]*)");
+        if (name == "ground") fail(where, key, "'ground' is reserved for the fixed ground");
+        if (const auto taken = element_names_.find(name); taken != element_names_.end())
+            fail(where, key, "name '" + name + "' is already used by " + taken->second);
+    }
+
+    /// Mass name -> index; `kGround` for "ground".
+    int body(const toml::node& node, const std::string& key) const {
+        const std::string name = string_value(node, key);
+        if (name == "ground") return kGround;
+        const int i = model_.mass_index(name);
+        if (i < 0) fail(&node, key, "unknown body '" + name + "' (expected 'ground' or a mass name)");
+        return i;
+    }
+
+    /// `between = [a, b]`: two distinct bodies.
+    std::pair<int, int> between(const toml::table& table, const std::string& path) const {
+        const std::string key = join(path, "between");
+        const toml::node* node = table.get("between");
+        if (!node) fail_at(table_line(table, path), key, "required key is missing");
+        const toml::array* pair = node->as_array();
+        if (!pair || pair->size() != 2)
+            fail(node, key, "expected a list of two body names, e.g. [\"ground\", \"m1\"]");
+        const int a = body(*pair->get(0), key), b = body(*pair->get(1), key);
+        if (a == b)
+            fail(node, key, "connects '" + (a == kGround ? std::string("ground") : model_.masses[a].name) +
+                                "' to itself");
+        return {a, b};
+    }
+
+    /// A table mass-name -> number (load, amplitude, initial x and v): one entry per mass, 0 when absent.
+    std::vector<double> per_mass(const toml::node& node, const std::string& key) const {
+        if (!node.is_table()) fail(&node, key, "expected a table of mass names, e.g. { m1 = 1.0 }, got " + type_name(node));
+        std::vector<double> values(model_.dof(), 0.0);
+        for (auto&& [k, v] : *node.as_table()) {
+            const std::string name(k.str());
+            const int i = model_.mass_index(name);
+            if (i < 0) fail_at(k.source().begin.line, join(key, name), "unknown mass '" + name + "'");
+            values[i] = number(v, join(key, name));
+        }
+        return values;
+    }
+
+    // ---- sections, in the order they are read ----
+
+    void read_parameters(const toml::table& root) {
+        // toml++ keeps a table's keys sorted by name; file order is source order.
+        std::vector<std::pair<std::string, const toml::node*>> entries;
+        std::vector<std::size_t> lines;
+        if (const toml::table* params = optional_table(root, "", "parameters")) {
+            for (auto&& [k, v] : *params) entries.emplace_back(std::string(k.str()), &v);
+            std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) {
+                const auto pa = a.second->source().begin, pb = b.second->source().begin;
+                return pa.line != pb.line ? pa.line < pb.line : pa.column < pb.column;
+            });
+        }
+        for (const auto& [name, node] : entries) parameter_names_.push_back(name);
+        const bool implicit_g = std::find(parameter_names_.begin(), parameter_names_.end(), "g") == parameter_names_.end();
+        if (implicit_g) parameter_names_.insert(parameter_names_.begin(), "g");
+
+        for (const auto& [name, o] : set_)
+            if (std::find(parameter_names_.begin(), parameter_names_.end(), name) == parameter_names_.end())
+                throw InputError("--set '" + o.raw + "': no parameter named '" + name + "'");
+
+        if (implicit_g) define_parameter("g", nullptr);
+        for (const auto& [name, node] : entries) define_parameter(name, node);
+
+        for (const auto& [name, value] : model_.parameters)
+            if (name == "g") {
+                model_.g = value;
+                if (!(value > 0.0)) fail(nullptr, "parameters.g", "gravity g must be > 0, got " + std::to_string(value));
+            }
+    }
+
+    /// Evaluate parameter `name` (from the file, or from --set) with the
+    /// parameters before it in scope, then bring it into scope.
+    void define_parameter(const std::string& name, const toml::node* node) {
+        const std::string key = "parameters." + name;
+        if (!is_valid_name(name)) fail(node, key, "'" + name + "' is not a valid name ([A-Za-z_][A-Za-z0-9_]*)");
+        if (name == "ground") fail(node, key, "'ground' is reserved for the fixed ground");
+        for (const char* reserved : kParserConstants)
+            if (name == reserved) fail(node, key, "'" + name + "' is a constant of the expression parser and cannot be a parameter");
+        double value = kDefaultGravity;
+        if (const auto o = set_.find(name); o != set_.end()) value = override_value(o->second);
+        else if (node) value = number(*node, key);
+        model_.parameters.emplace_back(name, value);
+        symbols_[name] = GiNaC::numeric(value);
+    }
+
+    void read_masses(const toml::table& root) {
+        const auto tables = table_array(root, "mass");
+        if (tables.empty()) fail(root.get("mass"), "mass", "no masses: give at least one [[mass]] table");
+        for (std::size_t i = 0; i < tables.size(); ++i) {
+            const toml::table& t = *tables[i];
+            const std::string path = "mass[" + std::to_string(i + 1) + "]";
+            check_keys(t, path, {"name", "m", "mu_k", "mu_s"});
+            Mass mass;
+            mass.name = required_string(t, path, "name");
+            check_new_name(t.get("name"), path + ".name", mass.name);
+            mass.m = required_number(t, path, "m");
+            if (!(mass.m > 0.0)) fail(t.get("m"), path + ".m", "mass must be > 0, got " + show(mass.m));
+            const auto mu_k = optional_number(t, path, "mu_k");
+            const auto mu_s = optional_number(t, path, "mu_s");
+            if (mu_s && !mu_k)
+                fail(t.get("mu_s"), path + ".mu_s", "mu_s given without mu_k (a mass has friction exactly when it has mu_k)");
+            if (mu_k) {
+                if (*mu_k < 0.0) fail(t.get("mu_k"), path + ".mu_k", "must be >= 0, got " + show(*mu_k));
+                mass.has_friction = true;
+                mass.mu_k = *mu_k;
+                mass.mu_s = mu_s.value_or(*mu_k);
+                if (mass.mu_s < mass.mu_k)
+                    fail(t.get("mu_s"), path + ".mu_s",
+                         "static coefficient must be >= mu_k = " + show(mass.mu_k) + ", got " + show(mass.mu_s));
+            }
+            element_names_.emplace(mass.name, path);
+            model_.masses.push_back(mass);
+        }
+    }
+
+    void read_springs(const toml::table& root) {
+        const auto tables = table_array(root, "spring");
+        for (std::size_t i = 0; i < tables.size(); ++i) {
+            const toml::table& t = *tables[i];
+            const std::string path = "spring[" + std::to_string(i + 1) + "]";
+            check_keys(t, path, {"between", "k"});
+            Spring spring;
+            std::tie(spring.a, spring.b) = between(t, path);
+            spring.k = required_number(t, path, "k");
+            if (spring.k < 0.0) fail(t.get("k"), path + ".k", "spring stiffness must be >= 0, got " + show(spring.k));
+            model_.springs.push_back(spring);
+        }
+    }
+
+    void read_damping(const toml::table& root) {
+        const toml::table* t = optional_table(root, "", "damping");
+        if (!t) return;
+        check_keys(*t, "damping", {"alpha", "beta"});
+        model_.alpha = optional_number(*t, "damping", "alpha").value_or(0.0);
+        model_.beta = optional_number(*t, "damping", "beta").value_or(0.0);
+        if (model_.alpha < 0.0) fail(t->get("alpha"), "damping.alpha", "must be >= 0, got " + show(model_.alpha));
+        if (model_.beta < 0.0) fail(t->get("beta"), "damping.beta", "must be >= 0, got " + show(model_.beta));
+    }
+
+    void read_contacts(const toml::table& root) {
+        const auto tables = table_array(root, "contact");
+        for (std::size_t i = 0; i < tables.size(); ++i) {
+            const toml::table& t = *tables[i];
+            const std::string path = "contact[" + std::to_string(i + 1) + "]";
+            check_keys(t, path, {"name", "between", "gap", "k"});
+            Contact contact;
+            if (t.get("name")) {
+                contact.name = required_string(t, path, "name");
+                check_new_name(t.get("name"), path + ".name", contact.name);
+            } else {
+                contact.name = "contact" + std::to_string(i + 1);
+                check_new_name(&t, path + ".name", contact.name);  // the default may clash with a mass
+            }
+            std::tie(contact.a, contact.b) = between(t, path);
+            contact.gap = required_number(t, path, "gap");
+            contact.k = required_number(t, path, "k");
+            if (!(contact.k > 0.0)) fail(t.get("k"), path + ".k", "contact stiffness must be > 0, got " + show(contact.k));
+            element_names_.emplace(contact.name, path);
+            model_.contacts.push_back(contact);
+        }
+    }
+
+    void read_forcing(const toml::table& root) {
+        const auto tables = table_array(root, "forcing");
+        for (std::size_t i = 0; i < tables.size(); ++i) {
+            const toml::table& t = *tables[i];
+            const std::string path = "forcing[" + std::to_string(i + 1) + "]";
+            check_keys(t, path, {"omega", "phase", "amplitude"});
+            Harmonic h;
+            h.omega = required_number(t, path, "omega");
+            if (!(h.omega > 0.0))
+                fail(t.get("omega"), path + ".omega",
+                     "must be > 0, got " + show(h.omega) + " (a constant force belongs in [load])");
+            h.phase = optional_number(t, path, "phase").value_or(0.0);
+            const toml::node* amplitude = t.get("amplitude");
+            if (!amplitude) fail_at(table_line(t, path), path + ".amplitude", "required key is missing");
+            h.amplitude = per_mass(*amplitude, path + ".amplitude");
+            model_.forcing.push_back(h);
+        }
+    }
+
+    void read_load(const toml::table& root) {
+        model_.load.assign(model_.dof(), 0.0);
+        if (const toml::node* load = root.get("load")) model_.load = per_mass(*load, "load");
+    }
+
+    void read_initial(const toml::table& root) {
+        model_.x0.assign(model_.dof(), 0.0);
+        model_.v0.assign(model_.dof(), 0.0);
+        if (const toml::table* t = optional_table(root, "", "initial")) {
+            check_keys(*t, "initial", {"t0", "x", "v"});
+            model_.t0 = optional_number(*t, "initial", "t0").value_or(0.0);
+            if (const toml::node* x = t->get("x")) model_.x0 = per_mass(*x, "initial.x");
+            if (const toml::node* v = t->get("v")) model_.v0 = per_mass(*v, "initial.v");
+        }
+        apply_state_overrides(x0_, model_.x0);
+        apply_state_overrides(v0_, model_.v0);
+    }
+
+    void apply_state_overrides(const std::map<std::string, Override>& overrides, std::vector<double>& state) const {
+        for (const auto& [name, o] : overrides) {
+            const int i = model_.mass_index(name);
+            if (i < 0) throw InputError(o.flag + " '" + o.raw + "': no mass named '" + name + "'");
+            state[i] = override_value(o);
+        }
+    }
+
+    void read_simulate(const toml::table& root) {
+        const toml::table* t = optional_table(root, "", "simulate");
+        if (!t) return;
+        check_keys(*t, "simulate", {"t_end"});
+        model_.t_end = optional_number(*t, "simulate", "t_end");
+        if (model_.t_end && !(*model_.t_end > model_.t0))
+            fail(t->get("t_end"), "simulate.t_end",
+                 "must be > t0 = " + show(model_.t0) + ", got " + show(*model_.t_end));
+    }
+
+    static std::string show(double value) {
+        std::ostringstream out;
+        out << value;
+        return out.str();
+    }
+
+    std::string source_;
+    std::map<std::string, Override> set_, x0_, v0_;
+    std::vector<std::string> parameter_names_;     ///< all parameters, file order (implicit g first)
+    GiNaC::symtab symbols_;                        ///< parameters evaluated so far, as numbers
+    std::map<std::string, std::string> element_names_;  ///< mass/contact name -> who took it
+    Model model_;
+};
+
+}  // namespace
+
+Model parse_model(const std::string& toml_text, const std::string& source, const ModelOverrides& overrides) {
+    Reader reader(source, overrides);  // flags are checked before the file
+    toml::table root;
+    try {
+        root = toml::parse(std::string_view(toml_text), std::string_view(source));
+    } catch (const toml::parse_error& e) {
+        std::string message = source;
+        if (e.source().begin.line > 0)
+            message += ":" + std::to_string(e.source().begin.line);
+        message += ": TOML syntax error: " + std::string(e.description());
+        if (e.source().begin.column > 0) message += " (column " + std::to_string(e.source().begin.column) + ")";
+        throw InputError(message);
+    }
+    return reader.read(root);
+}
+
+Model read_model(const std::string& path, const ModelOverrides& overrides) {
+    std::FILE* file = std::fopen(path.c_str(), "rb");
+    if (!file) throw InputError("cannot read model file '" + path + "': " + std::strerror(errno));
+    std::string text;
+    char buffer[8192];
+    std::size_t got = 0;
+    while ((got = std::fread(buffer, 1, sizeof buffer, file)) > 0) text.append(buffer, got);
+    const bool failed = std::ferror(file);
+    const int error = errno;  // e.g. EISDIR when path is a directory
+    std::fclose(file);
+    if (failed) throw InputError("cannot read model file '" + path + "': " + std::strerror(error));
+    return parse_model(text, path, overrides);
 }
 
 }  // namespace hsnc

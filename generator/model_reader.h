@@ -5,6 +5,27 @@
 // check that makes a model physically meaningful happens here; a Model that
 // leaves this reader is valid. Every failure throws InputError with a message
 // "FILE:LINE: key 'KEY': reason" (LINE where toml++ gives one).
+//
+// Decisions where interface.md is silent (each one is tested in
+// tests/test_model_reader.cpp):
+//  - KEY is the TOML path; tables of an array are numbered from 1 as they
+//    appear in the file: "mass[2].m", "forcing[1].amplitude.m1".
+//  - Masses and contacts share one name space (a contact may not be named like
+//    a mass), so the `element` column of the events CSV is never ambiguous.
+//    Parameters have their own name space: a mass "m1" whose value is the
+//    parameter "m1" is the paper's Table 1 notation and is allowed.
+//  - `ground` is reserved for masses, contacts and parameters; so are the
+//    constants GiNaC's parser knows by name (Pi, Euler, Catalan, I), which a
+//    parameter could not shadow.
+//  - `g` is a parameter. When [parameters] does not define it, it is an
+//    implicit first parameter g = 9.81 that every expression may use (and
+//    --set g=... may override); it then comes first in Model::parameters.
+//    When the file defines g it is an ordinary parameter in file order.
+//  - Forcing omega must be > 0: omega < 0 is meaningless, and omega = 0 is a
+//    constant force, which [load] states directly.
+//  - [simulate].t_end must be > t0.
+//  - A flag naming the same parameter or mass twice is an error, not
+//    "last one wins": a repeated override is most likely a slip.
 #pragma once
 
 #include <string>
@@ -24,11 +45,16 @@ struct ModelOverrides {
     std::vector<std::string> v0;   ///< initial velocity overrides
 };
 
-/// Read and validate the model file at `path`.
+/// Read and validate the model file at `path`; Model::source is `path`.
+/// A missing or unreadable file is an InputError
+/// "cannot read model file 'PATH': REASON".
 Model read_model(const std::string& path, const ModelOverrides& overrides = {});
 
-/// Same, from TOML text; `source` names it in messages.
+/// Same, from TOML text; `source` names it in messages and is Model::source.
 Model parse_model(const std::string& toml_text, const std::string& source,
                   const ModelOverrides& overrides = {});
+
+/// True when `name` matches [A-Za-z_][A-Za-z0-9_]* (interface.md section 1).
+bool is_valid_name(const std::string& name);
 
 }  // namespace hsnc

@@ -82,3 +82,27 @@ double gap_rate(const Model& model, int c, const double* v) {
 }
 
 }  // namespace hsnc
+
+namespace hsnc {
+
+double force_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* x,
+                     const double* v) {
+    const double m = model.masses[i].m;
+    double f = model.load[i] - model.alpha * m * v[i];
+    for (const Harmonic& h : model.forcing) f += h.amplitude[i] * std::sin(h.omega * t + h.phase);
+    // A spring (or closed contact) of stiffness k stretched by s = x[a] - x[b] - d pulls a with
+    // -k*s - beta*k*s' and pushes b with the opposite (C = alpha*M + beta*K(cfg)).
+    auto add = [&](int a, int b, double k, double d) {
+        if (a != i && b != i) return;
+        const double s = position(x, a) - position(x, b) - d;
+        const double sd = position(v, a) - position(v, b);
+        const double fa = -k * s - model.beta * k * sd;
+        f += a == i ? fa : -fa;
+    };
+    for (const Spring& s : model.springs) add(s.a, s.b, s.k, 0.0);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k, model.contacts[c].gap);
+    return f;
+}
+
+}  // namespace hsnc

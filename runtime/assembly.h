@@ -38,3 +38,13 @@ double gap(const Model& model, int c, const double* x);
 double gap_rate(const Model& model, int c, const double* v);
 
 }  // namespace hsnc
+
+namespace hsnc {
+
+/// A_i: force on mass i from everything but friction (springs, closed contacts,
+/// Rayleigh dampers, forcing, loads) at time t and state (x, v), in cfg.
+/// Sparse: loops over the elements touching i, no allocation.
+double force_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* x,
+                     const double* v);
+
+}  // namespace hsnc

@@ -1,0 +1,278 @@
+#include "engine.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "transitions.h"
+
+namespace hsnc {
+namespace {
+
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Rounding level of a switch function whose summed terms have magnitude `scale`.
+double noise_of(double scale) { return 16 * kEps * scale; }
+
+// Largest s >= 0 such that h + hd*s - B*s^2/2 > 0 for every smaller s: no
+// function with h(0) = h > 0, h'(0) = hd and |h''| <= B can reach zero
+// before it. Written without cancellation in both signs of hd.
+double safe_step(double h, double hd, double B) {
+    if (!(B > 0)) return hd >= 0 ? kInf : h / -hd;
+    const double root = std::sqrt(hd * hd + 2 * B * h);
+    return hd >= 0 ? (hd + root) / B : 2 * h / (root - hd);
+}
+
+std::string time_text(double t) {
+    std::ostringstream s;
+    s.precision(17);
+    s << t;
+    return s.str();
+}
+
+// Working storage for one segment's evaluations (sized for the largest switch list).
+struct Buffers {
+    std::vector<double> x, v, a, g, dg, bound, scale;
+    Buffers(std::size_t n, std::size_t nsw) : x(n), v(n), a(n), g(nsw), dg(nsw), bound(nsw), scale(nsw) {}
+    SegmentEval view() { return {x.data(), v.data(), a.data(), g.data(), dg.data(), bound.data(), scale.data()}; }
+};
+
+// Side on which switch function f is watched in the current configuration:
+// h = side*g > 0 until it switches.
+double side_of(const SwitchFunction& f, const Configuration& cfg, const std::vector<signed char>& sgn) {
+    switch (f.kind) {
+        case SwitchKind::gap: return cfg.closed[f.element] ? 1.0 : -1.0;
+        case SwitchKind::velocity: return sgn[f.element] >= 0 ? 1.0 : -1.0;
+        default: return -1.0;  // release functions are negative while stuck
+    }
+}
+
+// The earliest switch of one segment.
+struct Found {
+    bool any = false;
+    double tau = 0.0;
+    std::vector<SwitchFunction> switched;
+};
+
+}  // namespace
+
+const char* event_kind_name(EventKind kind) {
+    switch (kind) {
+        case EventKind::contact_close: return "contact_close";
+        case EventKind::contact_open: return "contact_open";
+        case EventKind::stick: return "stick";
+        case EventKind::release: return "release";
+        case EventKind::reversal: return "reversal";
+    }
+    return "?";
+}
+
+const char* run_status_name(RunStatus status) {
+    switch (status) {
+        case RunStatus::ok: return "ok";
+        case RunStatus::chattering: return "chattering";
+        case RunStatus::zeno: return "zeno";
+        case RunStatus::max_events: return "max_events";
+        case RunStatus::stopped: return "stopped";
+        case RunStatus::failure: return "failure";
+    }
+    return "?";
+}
+
+Engine::Engine(const Model& model, SolverProvider& provider) : model_(model), provider_(provider) {}
+
+RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
+    const std::size_t n = model_.dof();
+    RunSummary sum;
+    std::vector<double> x = model_.x0, v = model_.v0;
+    double t = model_.t0;
+    const double t_end = options.t_end;
+    std::vector<signed char> sgn;
+    Configuration cfg = entered_configuration(model_, t, x.data(), v.data(), sgn);
+    for (std::size_t i = 0; i < n; ++i)
+        if (cfg.stuck[i]) v[i] = 0.0;
+
+    Buffers buf(n, model_.contacts.size() + 2 * n);
+    std::set<Configuration> visited;
+    std::deque<double> recent;  // times of the latest events (Zeno guard)
+    std::size_t same_instant = 0;
+    double last_event_t = -kInf;
+
+    // Trajectory samples at t0 + k*dt (never accumulated), and t_end.
+    const double dt = options.dt > 0 ? options.dt : (t_end - model_.t0);
+    std::size_t k_next = 0;
+    auto sample_time = [&](std::size_t k) {
+        const double tk = model_.t0 + static_cast<double>(k) * dt;
+        return tk < t_end - 1e-9 * dt ? tk : t_end;
+    };
+    bool samples_done = !options.samples;
+
+    auto finish = [&](RunStatus status, const std::string& message) {
+        sum.status = status;
+        sum.message = message;
+        sum.t = t;
+        sum.x = x;
+        sum.v = v;
+        sum.configuration = cfg;
+        sum.configurations = visited.size();
+        return sum;
+    };
+
+    std::vector<Transition> transitions;
+    std::string why;
+    std::size_t progress_counter = 0;
+    while (true) {
+        visited.insert(cfg);
+        SegmentSolver& S = provider_.solver(cfg);
+        S.setup(t, x.data(), v.data(), sgn.data());
+        ++sum.segments;
+        const std::vector<SwitchFunction>& sw = S.switches();
+        const std::size_t nsw = sw.size();
+        const double max_step = S.max_step();
+        const double tau_end = t_end - t;
+        SegmentEval out = buf.view();
+
+        std::vector<double> side(nsw);
+        for (std::size_t f = 0; f < nsw; ++f) side[f] = side_of(sw[f], cfg, sgn);
+        // A velocity function that starts at 0 (a release, a reversal, a stop
+        // that slides on) is not watched for a stop until it has left 0.
+        std::vector<char> armed(nsw, 0);
+
+        auto eval = [&](double tau) {
+            S.eval(tau, out);
+            ++sum.evaluations;
+        };
+
+        // ---- find the earliest switch in (0, tau_end] ----
+        Found found;
+        double tau = 0.0, prev_tau = 0.0;
+        eval(0.0);
+        for (std::size_t f = 0; f < nsw; ++f)
+            if (sw[f].kind == SwitchKind::velocity)
+                armed[f] = side[f] * buf.g[f] > noise_of(buf.scale[f]);
+        for (std::size_t iter = 0;; ++iter) {
+            if (iter > 10'000'000) return finish(RunStatus::failure, "switch search does not converge at t = " + time_text(t + tau));
+            // Which functions have switched at tau, and where is each one's zero?
+            double tau_star = kInf;
+            std::vector<double> root(nsw, kInf);
+            for (std::size_t f = 0; f < nsw; ++f) {
+                const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
+                if (!std::isfinite(h) || !std::isfinite(hd) || !std::isfinite(buf.bound[f]))
+                    return finish(RunStatus::failure, "non-finite switch function in configuration '" +
+                                                          cfg.spec(model_) + "' at t = " + time_text(t + tau));
+                const double noise = noise_of(buf.scale[f]);
+                const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                if (stop ? h > noise : h >= -noise) continue;
+                // Move to the zero by one Newton step (the function is monotone
+                // there), never before the last point known to be on the safe side.
+                double r = tau;
+                if (hd < 0 && std::fabs(hd) > 0) r = tau - h / hd;
+                if (stop && h <= 0 && hd >= 0) r = tau;  // touched zero and turned back
+                r = std::min(std::max(r, prev_tau), std::max(tau, prev_tau));
+                if (stop && hd < 0 && h > 0) r = tau + h / -hd;  // tiny forward step onto v = 0
+                root[f] = r;
+                tau_star = std::min(tau_star, r);
+            }
+            if (tau_star < kInf) {
+                // Every function whose zero lies at this instant (to rounding) switches now.
+                const double tol = 4 * kEps * (std::fabs(t) + std::fabs(tau_star)) + 1e-300;
+                found.any = true;
+                found.tau = std::min(tau_star, tau_end);
+                for (std::size_t f = 0; f < nsw; ++f)
+                    if (root[f] <= tau_star + tol) found.switched.push_back(sw[f]);
+                // Others within rounding of zero and heading across at the event instant.
+                const double t_ev = t + found.tau;
+                eval(t_ev - t);
+                for (std::size_t f = 0; f < nsw; ++f) {
+                    if (root[f] <= tau_star + tol) continue;
+                    const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
+                    const double noise = noise_of(buf.scale[f]);
+                    const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                    if (stop ? h <= noise : (h < -noise || (h <= noise && hd < 0)))
+                        found.switched.push_back(sw[f]);
+                }
+                break;
+            }
+            if (tau >= tau_end) break;
+            // Safe step: no function can reach its trigger level inside it.
+            double step = std::min(max_step, tau_end - tau);
+            for (std::size_t f = 0; f < nsw; ++f) {
+                const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
+                const double noise = noise_of(buf.scale[f]);
+                const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                // Contacts and releases switch only when certainly negative (level
+                // -2*noise); armed velocities stop at zero.
+                const double level = stop ? 0.0 : -2 * noise;
+                step = std::min(step, safe_step(h - level, hd, buf.bound[f]));
+            }
+            const double floor_step = 4 * kEps * (std::fabs(t) + std::fabs(tau)) + 1e-300;
+            step = std::max(step, floor_step);
+            prev_tau = tau;
+            tau = std::min(tau + step, tau_end);
+            eval(tau);
+            for (std::size_t f = 0; f < nsw; ++f)
+                if (sw[f].kind == SwitchKind::velocity && !armed[f] && side[f] * buf.g[f] > 2 * noise_of(buf.scale[f]))
+                    armed[f] = 1;
+        }
+
+        // ---- dense output up to the event (or t_end) from the closed form ----
+        const double t_seg_end = found.any ? t + found.tau : t_end;
+        if (!samples_done) {
+            std::vector<double> xs(n), vs(n);
+            while (true) {
+                const double tk = sample_time(k_next);
+                if (found.any ? tk >= t_seg_end : tk > t_end) break;
+                eval(tk - t);
+                observer.on_sample(tk, buf.x.data(), buf.v.data());
+                if (tk >= t_end) {
+                    samples_done = true;
+                    break;
+                }
+                ++k_next;
+            }
+        }
+
+        // ---- advance to the event instant: the state at the representable time ----
+        const double t_next = t_seg_end;
+        eval(t_next - t);
+        x = buf.x;
+        v = buf.v;
+        for (std::size_t i = 0; i < n; ++i)
+            if (cfg.stuck[i]) v[i] = 0.0;
+        t = t_next;
+        if (!found.any) break;
+
+        transitions.clear();
+        if (!apply_switches(model_, t, x.data(), v.data(), cfg, sgn, found.switched, transitions, why))
+            return finish(RunStatus::chattering, why);
+        for (const Transition& tr : transitions) {
+            observer.on_event(t, tr.kind, tr.element, x.data(), v.data());
+            ++sum.events;
+            recent.push_back(t);
+            if (recent.size() > options.zeno_events) recent.pop_front();
+        }
+        // Chattering: switches that keep firing at one instant.
+        same_instant = t == last_event_t ? same_instant + 1 : 0;
+        last_event_t = t;
+        if (same_instant > 4 * (nsw + 2))
+            return finish(RunStatus::chattering, "configuration keeps switching at t = " + time_text(t) +
+                                                     " (now '" + cfg.spec(model_) + "')");
+        // Zeno: many switches within a vanishing time span.
+        if (recent.size() >= options.zeno_events &&
+            recent.back() - recent.front() <= options.zeno_span * std::max(1.0, std::fabs(t)))
+            return finish(RunStatus::zeno, std::to_string(recent.size()) + " switches between t = " +
+                                               time_text(recent.front()) + " and " + time_text(recent.back()) +
+                                               " (accumulating switches, configuration '" + cfg.spec(model_) + "')");
+        if (options.max_events && sum.events >= options.max_events)
+            return finish(RunStatus::max_events, "stopped after " + std::to_string(sum.events) + " events");
+        if ((++progress_counter & 255) == 0 && !observer.on_progress(t))
+            return finish(RunStatus::stopped, "stopped at t = " + time_text(t));
+    }
+    return finish(RunStatus::ok, "");
+}
+
+}  // namespace hsnc

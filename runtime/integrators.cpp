@@ -1,0 +1,414 @@
+#include "integrators.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "assembly.h"
+#include "error.h"
+#include "transitions.h"
+
+namespace hsnc {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Accelerations with friction -mu_k*N*dir for the sliding friction masses; a
+// stuck mass does not move. dir[i] is the friction direction of mass i.
+void accelerations(const Model& model, const Configuration& cfg, const std::vector<signed char>& dir, double t,
+                   const double* x, const double* v, double* a) {
+    for (std::size_t i = 0; i < model.dof(); ++i) {
+        if (cfg.stuck[i]) {
+            a[i] = 0.0;
+            continue;
+        }
+        const Mass& m = model.masses[i];
+        double f = force_on_mass(model, cfg, static_cast<int>(i), t, x, v);
+        if (m.has_friction) f -= m.mu_k * model.normal_force(i) * dir[i];
+        a[i] = f / m.m;
+    }
+}
+
+// Cubic Hermite interpolation of (x, v) between two step ends from x, v, a.
+struct Hermite {
+    double t0, h;
+    const std::vector<double>*x0, *v0, *a0, *x1, *v1, *a1;
+    void at(double t, std::vector<double>& x, std::vector<double>& v) const {
+        const double s = (t - t0) / h;
+        const double h00 = 2 * s * s * s - 3 * s * s + 1, h10 = s * s * s - 2 * s * s + s;
+        const double h01 = -2 * s * s * s + 3 * s * s, h11 = s * s * s - s * s;
+        const double d00 = (6 * s * s - 6 * s) / h, d10 = 3 * s * s - 4 * s + 1;
+        const double d01 = (-6 * s * s + 6 * s) / h, d11 = 3 * s * s - 2 * s;
+        for (std::size_t i = 0; i < x.size(); ++i) {
+            x[i] = h00 * (*x0)[i] + h10 * h * (*v0)[i] + h01 * (*x1)[i] + h11 * h * (*v1)[i];
+            v[i] = d00 * (*x0)[i] + d10 * (*v0)[i] + d01 * (*x1)[i] + d11 * (*v1)[i];
+        }
+    }
+};
+
+// Samples at t0 + k*dt (and t_end) that fall in [from, to) -- or [from, to] at the end.
+struct Sampler {
+    const Model& model;
+    const EngineOptions& opt;
+    Observer& obs;
+    std::size_t k = 0;
+    bool done;
+    double dt;
+    Sampler(const Model& m, const EngineOptions& o, Observer& ob)
+        : model(m), opt(o), obs(ob), done(!o.samples), dt(o.dt > 0 ? o.dt : o.t_end - m.t0) {}
+    double time(std::size_t j) const {
+        const double tk = model.t0 + static_cast<double>(j) * dt;
+        return tk < opt.t_end - 1e-9 * dt ? tk : opt.t_end;
+    }
+    void emit(double from, double to, bool last, const Hermite& H) {
+        std::vector<double> x(model.dof()), v(model.dof());
+        while (!done) {
+            const double tk = time(k);
+            if (last ? tk > to : tk >= to) return;
+            if (tk >= from) {
+                H.at(tk, x, v);
+                obs.on_sample(tk, x.data(), v.data());
+            }
+            if (tk >= opt.t_end) done = true;
+            ++k;
+        }
+    }
+};
+
+RunSummary finish(RunSummary s, RunStatus status, std::string message, double t, const std::vector<double>& x,
+                  const std::vector<double>& v, const Configuration& cfg) {
+    s.status = status;
+    s.message = std::move(message);
+    s.t = t;
+    s.x = x;
+    s.v = v;
+    s.configuration = cfg;
+    return s;
+}
+
+// ---------------------------------------------------------------- ab4 ----
+RunSummary run_ab4(const Model& model, const IntegratorOptions& io, const EngineOptions& eo, Observer& obs) {
+    const std::size_t n = model.dof();
+    const double h = io.h;
+    std::vector<double> x = model.x0, v = model.v0;
+    double t = model.t0;
+    std::vector<signed char> dir;
+    Configuration cfg = entered_configuration(model, t, x.data(), v.data(), dir);
+    for (std::size_t i = 0; i < n; ++i)
+        if (cfg.stuck[i]) v[i] = 0.0;
+    RunSummary sum;
+    Sampler sampler(model, eo, obs);
+
+    // Contacts from the state (closed while G >= 0); friction along v, or along
+    // the decided direction while v is exactly 0.
+    auto rhs = [&](double tt, const std::vector<double>& xx, const std::vector<double>& vv, std::vector<double>& a) {
+        Configuration c = cfg;
+        for (std::size_t k = 0; k < model.contacts.size(); ++k) c.closed[k] = gap(model, static_cast<int>(k), xx.data()) >= 0;
+        std::vector<signed char> d = dir;
+        for (std::size_t i = 0; i < n; ++i)
+            if (vv[i] != 0.0) d[i] = vv[i] > 0 ? 1 : -1;
+        accelerations(model, c, d, tt, xx.data(), vv.data(), a.data());
+    };
+
+    std::array<std::vector<double>, 4> fv, fa;  // history of v and a, newest first
+    int history = 0;
+    std::vector<double> a(n), xn(n), vn(n), an(n), k1x, k1v, tmpx(n), tmpv(n), ta(n);
+    rhs(t, x, v, a);
+    const auto steps = static_cast<std::size_t>(std::ceil((eo.t_end - model.t0) / h - 1e-9));
+    for (std::size_t step = 1; step <= steps; ++step) {
+        const double t1 = std::min(model.t0 + static_cast<double>(step) * h, eo.t_end);
+        const double hs = t1 - t;
+        if (history < 3 || hs != h) {
+            // RK4 step (start of the multistep history, or the shorter last step).
+            std::vector<double> ax1 = a, av1(n), ax2(n), av2(n), ax3(n), av3(n), ax4(n), av4(n);
+            auto stage = [&](double c, const std::vector<double>& dx, const std::vector<double>& dv,
+                             std::vector<double>& outx, std::vector<double>& outv) {
+                for (std::size_t i = 0; i < n; ++i) {
+                    tmpx[i] = x[i] + c * hs * dx[i];
+                    tmpv[i] = v[i] + c * hs * dv[i];
+                    if (cfg.stuck[i]) tmpv[i] = 0.0;
+                }
+                rhs(t + c * hs, tmpx, tmpv, ta);
+                outx = tmpv;
+                outv = ta;
+            };
+            std::vector<double> dx1 = v, dv1 = a, dx2, dv2, dx3, dv3, dx4, dv4;
+            stage(0.5, dx1, dv1, dx2, dv2);
+            stage(0.5, dx2, dv2, dx3, dv3);
+            stage(1.0, dx3, dv3, dx4, dv4);
+            for (std::size_t i = 0; i < n; ++i) {
+                xn[i] = x[i] + hs / 6 * (dx1[i] + 2 * dx2[i] + 2 * dx3[i] + dx4[i]);
+                vn[i] = v[i] + hs / 6 * (dv1[i] + 2 * dv2[i] + 2 * dv3[i] + dv4[i]);
+            }
+        } else {
+            // y_{n+1} = y_n + h/24 (55 f_n - 59 f_{n-1} + 37 f_{n-2} - 9 f_{n-3})
+            for (std::size_t i = 0; i < n; ++i) {
+                xn[i] = x[i] + h / 24 * (55 * v[i] - 59 * fv[0][i] + 37 * fv[1][i] - 9 * fv[2][i]);
+                vn[i] = v[i] + h / 24 * (55 * a[i] - 59 * fa[0][i] + 37 * fa[1][i] - 9 * fa[2][i]);
+            }
+        }
+        for (std::size_t i = 0; i < n; ++i)
+            if (cfg.stuck[i]) vn[i] = 0.0;
+        rhs(t1, xn, vn, an);
+        // Samples inside the step from the Hermite cubic through both ends.
+        Hermite H{t, hs, &x, &v, &a, &xn, &vn, &an};
+        sampler.emit(t, t1, step == steps, H);
+
+        // Step-end decisions: contacts by G, friction by the stick rule.
+        bool restart = false;
+        for (std::size_t c = 0; c < model.contacts.size(); ++c) {
+            const bool closed = gap(model, static_cast<int>(c), xn.data()) >= 0;
+            if (closed != static_cast<bool>(cfg.closed[c])) {
+                cfg.closed[c] = closed;
+                obs.on_event(t1, closed ? EventKind::contact_close : EventKind::contact_open, static_cast<int>(c),
+                             xn.data(), vn.data());
+                ++sum.events;
+            }
+        }
+        for (std::size_t i = 0; i < n; ++i) {
+            const Mass& m = model.masses[i];
+            if (!m.has_friction) continue;
+            const double A = force_on_mass(model, cfg, static_cast<int>(i), t1, xn.data(), vn.data());
+            const double limit = m.mu_s * model.normal_force(i);
+            const int ii = static_cast<int>(i);
+            if (cfg.stuck[i]) {
+                if (std::fabs(A) > limit) {
+                    cfg.stuck[i] = 0;
+                    dir[i] = A > 0 ? 1 : -1;
+                    obs.on_event(t1, EventKind::release, ii, xn.data(), vn.data());
+                    ++sum.events;
+                    restart = true;
+                }
+            } else if (v[i] * vn[i] <= 0 && !(v[i] == 0 && vn[i] * dir[i] > 0)) {
+                if (std::fabs(A) < limit) {
+                    cfg.stuck[i] = 1;
+                    vn[i] = 0.0;
+                    obs.on_event(t1, EventKind::stick, ii, xn.data(), vn.data());
+                    ++sum.events;
+                    restart = true;
+                } else {
+                    const signed char d = A > 0 ? 1 : -1;
+                    if (d != dir[i]) {
+                        obs.on_event(t1, EventKind::reversal, ii, xn.data(), vn.data());
+                        ++sum.events;
+                    }
+                    dir[i] = d;
+                }
+            } else if (vn[i] != 0.0) {
+                dir[i] = vn[i] > 0 ? 1 : -1;
+            }
+        }
+        if (restart) rhs(t1, xn, vn, an);
+        // Shift the history.
+        fv[2] = fv[1], fv[1] = fv[0], fv[0] = v;
+        fa[2] = fa[1], fa[1] = fa[0], fa[0] = a;
+        history = restart ? 0 : history + 1;
+        x.swap(xn), v.swap(vn), a.swap(an);
+        t = t1;
+        ++sum.segments;
+        if ((step & 0xffff) == 0 && !obs.on_progress(t)) return finish(sum, RunStatus::stopped, "stopped", t, x, v, cfg);
+        if (eo.max_events && sum.events >= eo.max_events)
+            return finish(sum, RunStatus::max_events, "stopped after max events", t, x, v, cfg);
+    }
+    sum.configurations = 0;
+    return finish(sum, RunStatus::ok, "", t, x, v, cfg);
+}
+
+// ---------------------------------------------------------------- rk45 ----
+// Dormand & Prince (1980), "A family of embedded Runge-Kutta formulae",
+// J. Comp. Appl. Math. 6(1): the 5(4) pair with the 5th-order solution propagated.
+constexpr double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
+constexpr double a21 = 1.0 / 5;
+constexpr double a31 = 3.0 / 40, a32 = 9.0 / 40;
+constexpr double a41 = 44.0 / 45, a42 = -56.0 / 15, a43 = 32.0 / 9;
+constexpr double a51 = 19372.0 / 6561, a52 = -25360.0 / 2187, a53 = 64448.0 / 6561, a54 = -212.0 / 729;
+constexpr double a61 = 9017.0 / 3168, a62 = -355.0 / 33, a63 = 46732.0 / 5247, a64 = 49.0 / 176,
+                 a65 = -5103.0 / 18656;
+constexpr double b1 = 35.0 / 384, b3 = 500.0 / 1113, b4 = 125.0 / 192, b5 = -2187.0 / 6784, b6 = 11.0 / 84;
+constexpr double e1 = 71.0 / 57600, e3 = -71.0 / 16695, e4 = 71.0 / 1920, e5 = -17253.0 / 339200,
+                 e6 = 22.0 / 525, e7 = -1.0 / 40;
+
+RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const EngineOptions& eo, Observer& obs) {
+    const std::size_t n = model.dof(), m2 = 2 * n;
+    std::vector<double> x = model.x0, v = model.v0;
+    double t = model.t0;
+    std::vector<signed char> dir;
+    Configuration cfg = entered_configuration(model, t, x.data(), v.data(), dir);
+    for (std::size_t i = 0; i < n; ++i)
+        if (cfg.stuck[i]) v[i] = 0.0;
+    RunSummary sum;
+    Sampler sampler(model, eo, obs);
+
+    // y = (x, v); f(y) = (v, a) in the current configuration.
+    auto f = [&](double tt, const std::vector<double>& y, std::vector<double>& dy) {
+        accelerations(model, cfg, dir, tt, y.data(), y.data() + n, dy.data() + n);
+        for (std::size_t i = 0; i < n; ++i) dy[i] = cfg.stuck[i] ? 0.0 : y[n + i];
+    };
+    // Switch functions with their watched side (as in the engine).
+    auto switch_values = [&](double tt, const std::vector<double>& xx, const std::vector<double>& vv,
+                             const std::vector<SwitchFunction>& sw, std::vector<double>& h) {
+        for (std::size_t k = 0; k < sw.size(); ++k) {
+            const SwitchFunction& s = sw[k];
+            switch (s.kind) {
+                case SwitchKind::gap: {
+                    const double G = gap(model, s.element, xx.data());
+                    h[k] = cfg.closed[s.element] ? G : -G;
+                    break;
+                }
+                case SwitchKind::velocity: h[k] = dir[s.element] * vv[s.element]; break;
+                default: {
+                    const double A = force_on_mass(model, cfg, s.element, tt, xx.data(), vv.data());
+                    const double lim = model.masses[s.element].mu_s * model.normal_force(s.element);
+                    h[k] = s.kind == SwitchKind::release_pos ? lim - A : lim + A;
+                }
+            }
+        }
+    };
+
+    std::vector<double> y(m2), y1(m2), k1(m2), k2(m2), k3(m2), k4(m2), k5(m2), k6(m2), k7(m2), tmp(m2), err(m2);
+    std::vector<double> xa(n), va(n), aa(n), xb(n), vb(n), ab(n), xi(n), vi(n);
+    double h = std::min(1e-3, (eo.t_end - t) / 10);
+    std::string why;
+    std::vector<Transition> tr;
+    std::size_t steps = 0;
+    while (t < eo.t_end) {
+        const std::vector<SwitchFunction> sw = switch_functions(model, cfg);
+        std::vector<double> h0(sw.size()), h1(sw.size());
+        std::copy(x.begin(), x.end(), y.begin());
+        std::copy(v.begin(), v.end(), y.begin() + n);
+        switch_values(t, x, v, sw, h0);
+        // Functions that start at zero (just switched) are watched once they leave it.
+        std::vector<char> armed(sw.size());
+        for (std::size_t k = 0; k < sw.size(); ++k) armed[k] = h0[k] > 0;
+        f(t, y, k1);
+        bool switched = false;
+        while (!switched && t < eo.t_end) {
+            h = std::min(h, eo.t_end - t);
+            auto combo = [&](std::initializer_list<std::pair<double, const std::vector<double>*>> terms) {
+                for (std::size_t i = 0; i < m2; ++i) {
+                    double s = y[i];
+                    for (const auto& [c, k] : terms) s += h * c * (*k)[i];
+                    tmp[i] = s;
+                }
+            };
+            combo({{a21, &k1}});
+            f(t + c2 * h, tmp, k2);
+            combo({{a31, &k1}, {a32, &k2}});
+            f(t + c3 * h, tmp, k3);
+            combo({{a41, &k1}, {a42, &k2}, {a43, &k3}});
+            f(t + c4 * h, tmp, k4);
+            combo({{a51, &k1}, {a52, &k2}, {a53, &k3}, {a54, &k4}});
+            f(t + c5 * h, tmp, k5);
+            combo({{a61, &k1}, {a62, &k2}, {a63, &k3}, {a64, &k4}, {a65, &k5}});
+            f(t + h, tmp, k6);
+            combo({{b1, &k1}, {b3, &k3}, {b4, &k4}, {b5, &k5}, {b6, &k6}});
+            y1 = tmp;
+            f(t + h, y1, k7);
+            double enorm = 0;
+            for (std::size_t i = 0; i < m2; ++i) {
+                const double e = h * (e1 * k1[i] + e3 * k3[i] + e4 * k4[i] + e5 * k5[i] + e6 * k6[i] + e7 * k7[i]);
+                const double sc = io.atol + io.rtol * std::max(std::fabs(y[i]), std::fabs(y1[i]));
+                enorm = std::max(enorm, std::fabs(e) / sc);
+            }
+            if (!std::isfinite(enorm)) return finish(sum, RunStatus::failure, "rk45: non-finite state", t, x, v, cfg);
+            const double factor = std::min(5.0, std::max(0.2, 0.9 * std::pow(std::max(enorm, 1e-300), -0.2)));
+            if (enorm > 1) {
+                h *= factor;
+                if (h < 1e-15 * std::max(1.0, std::fabs(t)))
+                    return finish(sum, RunStatus::failure, "rk45: step size underflow at t = " + std::to_string(t), t, x, v, cfg);
+                continue;
+            }
+            ++steps;
+            const double t1 = t + h;
+            for (std::size_t i = 0; i < n; ++i) {
+                xa[i] = y[i], va[i] = y[n + i], aa[i] = k1[n + i];
+                xb[i] = y1[i], vb[i] = y1[n + i], ab[i] = k7[n + i];
+            }
+            Hermite H{t, h, &xa, &va, &aa, &xb, &vb, &ab};
+            switch_values(t1, xb, vb, sw, h1);
+            // Earliest sign change, located by bisection on the interpolant.
+            double t_root = kInf;
+            std::vector<std::size_t> hit;
+            for (std::size_t k = 0; k < sw.size(); ++k) {
+                const bool crossed = armed[k] ? h1[k] <= 0 : h1[k] < 0;
+                if (!crossed) {
+                    if (h1[k] > 0) armed[k] = 1;
+                    continue;
+                }
+                double lo = t, hi = t1;
+                std::vector<double> hv(sw.size());
+                for (int it = 0; it < 200 && hi - lo > 4e-16 * std::max(1.0, std::fabs(hi)); ++it) {
+                    const double mid = 0.5 * (lo + hi);
+                    H.at(mid, xi, vi);
+                    switch_values(mid, xi, vi, sw, hv);
+                    (hv[k] <= 0 ? hi : lo) = mid;
+                }
+                if (hi < t_root - 1e-15 * std::max(1.0, std::fabs(hi))) {
+                    t_root = hi;
+                    hit.assign(1, k);
+                } else if (std::fabs(hi - t_root) <= 1e-15 * std::max(1.0, std::fabs(hi))) {
+                    hit.push_back(k);
+                }
+            }
+            if (t_root < kInf) {
+                sampler.emit(t, t_root, false, H);
+                H.at(t_root, x, v);
+                t = t_root;
+                std::vector<SwitchFunction> s;
+                for (std::size_t k : hit) s.push_back(sw[k]);
+                tr.clear();
+                if (!apply_switches(model, t, x.data(), v.data(), cfg, dir, s, tr, why))
+                    return finish(sum, RunStatus::chattering, why, t, x, v, cfg);
+                for (const Transition& e : tr) {
+                    obs.on_event(t, e.kind, e.element, x.data(), v.data());
+                    ++sum.events;
+                }
+                for (std::size_t i = 0; i < n; ++i)
+                    if (cfg.stuck[i]) v[i] = 0.0;
+                switched = true;
+                ++sum.segments;
+            } else {
+                sampler.emit(t, t1, t1 >= eo.t_end, H);
+                t = t1;
+                y.swap(y1);
+                k1.swap(k7);
+                std::copy(y.begin(), y.begin() + n, x.begin());
+                std::copy(y.begin() + n, y.end(), v.begin());
+            }
+            h *= factor;
+            if ((steps & 0xffff) == 0 && !obs.on_progress(t)) return finish(sum, RunStatus::stopped, "stopped", t, x, v, cfg);
+            if (eo.max_events && sum.events >= eo.max_events)
+                return finish(sum, RunStatus::max_events, "stopped after max events", t, x, v, cfg);
+        }
+    }
+    sum.evaluations = steps;
+    return finish(sum, RunStatus::ok, "", t, x, v, cfg);
+}
+
+}  // namespace
+
+Method parse_method(const std::string& name) {
+    if (name == "hsnc") return Method::hsnc;
+    if (name == "ab4") return Method::ab4;
+    if (name == "rk45") return Method::rk45;
+    throw InputError("--method '" + name + "': expected hsnc, ab4 or rk45");
+}
+
+void validate(Method method, const IntegratorOptions& o) {
+    if (method == Method::ab4 && !(o.h > 0 && std::isfinite(o.h)))
+        throw InputError("--method ab4: needs --h H with H > 0 (the fixed step)");
+    if (method == Method::rk45 && !(o.rtol > 0 && o.atol > 0))
+        throw InputError("--method rk45: --rtol and --atol must be > 0");
+}
+
+RunSummary integrate(const Model& model, Method method, const IntegratorOptions& options,
+                     const EngineOptions& engine_options, Observer& observer) {
+    validate(method, options);
+    if (method == Method::ab4) return run_ab4(model, options, engine_options, observer);
+    if (method == Method::rk45) return run_rk45(model, options, engine_options, observer);
+    throw InputError("integrate: method hsnc is the engine, not an integrator");
+}
+
+}  // namespace hsnc

@@ -1,0 +1,35 @@
+// hsnc -- where the engine's segment solvers come from (--kernels).
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+
+#include "engine.h"
+
+namespace hsnc {
+
+enum class KernelMode {
+    automatic,  ///< ahead-of-time kernels when the model has them, else generic
+    aot,        ///< ahead-of-time kernels only (error when the model has none)
+    generic,    ///< the Eigen-based generic solver
+};
+
+/// "auto", "aot", "generic"; InputError otherwise.
+KernelMode parse_kernel_mode(const std::string& name);
+
+/// The generic (Eigen) solver for every configuration, created on first use and cached.
+class GenericSolverProvider : public SolverProvider {
+public:
+    explicit GenericSolverProvider(const Model& model) : model_(model) {}
+    SegmentSolver& solver(const Configuration& cfg) override;
+    std::string describe() const override;
+
+private:
+    const Model& model_;
+    std::map<Configuration, std::unique_ptr<SegmentSolver>> cache_;
+};
+
+std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode);
+
+}  // namespace hsnc

@@ -1,0 +1,38 @@
+// hsnc -- what happens at a switch (interface.md section 2): contact changes
+// first, then the friction decisions (stick, release, reversal) with the
+// forces of the configuration that results, repeated until nothing changes.
+// Shared by the HSNC engine and the event-locating baseline integrator, so
+// every method applies exactly the same physics.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "configuration.h"
+#include "engine.h"
+#include "model.h"
+#include "segment.h"
+
+namespace hsnc {
+
+struct Transition {
+    EventKind kind;
+    int element;
+};
+
+/// Apply the switch functions that reached zero at instant t with state
+/// (x, v): update cfg and sgn (friction direction of sliding masses); a mass
+/// that stops gets v_i = 0 exactly. Appends the resulting events to `out`.
+/// Returns false (and says why) when the decisions at this instant do not
+/// settle (chattering).
+bool apply_switches(const Model& model, double t, const double* x, double* v, Configuration& cfg,
+                    std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
+                    std::vector<Transition>& out, std::string& why);
+
+/// The configuration the motion enters at (t, x, v) (interface.md: "At t0 ...").
+/// Contacts by G (a tie G = 0 by G'; G = G' = 0 counts as closed, x[a]-x[b] >= gap);
+/// friction masses with v_i = 0 stuck or sliding by A_i.
+Configuration entered_configuration(const Model& model, double t, const double* x, const double* v,
+                                    std::vector<signed char>& sgn);
+
+}  // namespace hsnc

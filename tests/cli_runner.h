@@ -1,0 +1,58 @@
+// Running the built `hsnc` binary from tests, as a user would.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace hsnc::testing {
+
+struct CliRun {
+    int exit_code = -1;
+    std::string out, err;
+};
+
+inline std::string slurp(const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+/// A fresh path in the test's temporary directory (unique per process and call,
+/// so `ctest -j` runs never share files).
+inline std::string temp_path(const std::string& name) {
+    static int counter = 0;
+    return ::testing::TempDir() + "hsnc_" + std::to_string(::getpid()) + "_" + std::to_string(++counter) + "_" + name;
+}
+
+/// Run `hsnc ARGS` (ARGS already shell-quoted), capturing stdout and stderr.
+inline CliRun run_hsnc(const std::string& args) {
+    const std::string out = temp_path("stdout"), err = temp_path("stderr");
+    const std::string command = std::string("'") + HSNC_BINARY + "' " + args + " >'" + out + "' 2>'" + err + "'";
+    const int status = std::system(command.c_str());
+    CliRun r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    std::remove(out.c_str());
+    std::remove(err.c_str());
+    return r;
+}
+
+inline std::string model_path(const std::string& file) { return std::string(HSNC_SOURCE_DIR) + "/models/" + file; }
+
+inline std::string write_temp(const std::string& name, const std::string& text) {
+    const std::string path = temp_path(name);
+    std::ofstream(path) << text;
+    return path;
+}
+
+inline bool file_exists(const std::string& path) { return std::ifstream(path).good(); }
+
+}  // namespace hsnc::testing
