@@ -16,6 +16,9 @@
 #include "assembly.h"
 #include "derivation.h"
 #include "emitter.h"
+#include "generic_solver.h"
+#include "kernel_set.h"
+#include "model_reader.h"
 #include "kernel_solver.h"
 #include "model_hash.h"
 #include "sample_models.h"
@@ -285,6 +288,59 @@ TEST(Kernel, ResonanceGrowsSecularly) {
         const double expected = 0.7 / 8.0 * std::sin(2 * t) * std::cos(0.4) - 0.7 * t * std::cos(2 * t + 0.4) / 4.0;
         EXPECT_NEAR(o.x[0] - xst, expected, 1e-12 * (1 + t));
     }
+}
+
+TEST(Kernel, AgreesWithGenericSolverOnBundledModels) {
+    // The AOT kernels of models/*.toml against the Eigen generic solver.
+    int compared = 0;
+    for (const char* name : {"bilinear-1dof", "coulomb-1dof", "seed-scenario-1", "seed-scenario-2", "chain-8"}) {
+        const Model m = read_model(std::string(HSNC_SOURCE_DIR) + "/models/" + name + ".toml");
+        for (const Configuration& cfg : configurations_to_generate(m, nullptr)) {
+            const hsnc_kernel* kp = find_aot_kernel(aot_registry(), m.name.c_str(), model_hash(m), cfg.key().c_str());
+            ASSERT_NE(kp, nullptr) << name << " " << cfg.key();
+            KernelSolver k(*kp);
+            GenericSolver gs(m, cfg);
+            ASSERT_EQ(k.switches(), gs.switches());
+            const Start st = start_of(m, cfg);
+            k.setup(st.t0, st.x0.data(), st.v0.data(), st.sgn.data());
+            gs.setup(st.t0, st.x0.data(), st.v0.data(), st.sgn.data());
+            // Gershgorin bound on the highest natural frequency: rounding in x of size
+            // eps*|x| shows in v as eps*omega_max*|x|.
+            const Eigen::MatrixXd K = stiffness_matrix(m, cfg);
+            const Eigen::VectorXd M = mass_vector(m);
+            double omega_max = 0;
+            for (std::size_t i = 0; i < m.dof(); ++i)
+                omega_max = std::max(omega_max, std::sqrt(K.row(i).cwiseAbs().sum() / M(i)));
+            for (double t : {0.0, 0.01, 0.3, 1.7}) {
+                KernelOut a = run(k, m.dof(), t), b(m.dof(), gs.switches().size());
+                gs.eval(t, b.view());
+                // Reference sizes: the largest state component, or the term magnitudes the
+                // solvers report for gaps (x) and velocities (v) when the state is ~0.
+                double xs = 1e-300, vs = 1e-300;
+                for (std::size_t i = 0; i < m.dof(); ++i) {
+                    xs = std::max(xs, std::fabs(b.x[i]));
+                    vs = std::max(vs, std::fabs(b.v[i]));
+                }
+                for (std::size_t f = 0; f < a.g.size(); ++f) {
+                    if (k.switches()[f].kind == SwitchKind::gap) xs = std::max(xs, b.scale[f]);
+                    if (k.switches()[f].kind == SwitchKind::velocity) vs = std::max(vs, b.scale[f]);
+                }
+                vs = std::max(vs, omega_max * xs);
+                const std::string where = std::string(name) + " " + cfg.key() + " tau=" + std::to_string(t);
+                for (std::size_t i = 0; i < m.dof(); ++i) {
+                    EXPECT_NEAR(a.x[i], b.x[i], 1e-12 * xs) << where;
+                    EXPECT_NEAR(a.v[i], b.v[i], 1e-12 * vs) << where;
+                }
+                for (std::size_t f = 0; f < a.g.size(); ++f) {
+                    EXPECT_NEAR(a.g[f], b.g[f], 1e-12 * std::max(a.scale[f], b.scale[f])) << where << " g" << f;
+                    EXPECT_NEAR(a.dg[f], b.dg[f], 1e-12 * (std::fabs(b.dg[f]) + std::max(a.scale[f], b.scale[f]) * 1e3))
+                        << where << " dg" << f;
+                }
+                ++compared;
+            }
+        }
+    }
+    EXPECT_GT(compared, 100);
 }
 
 TEST(Emitter, DeterministicAndSelfContained) {
