@@ -101,7 +101,7 @@ Derivation derive(const Model& model, const Configuration& cfg);
 struct SegmentInputs {
     GiNaC::ex t0;
     std::vector<GiNaC::ex> x0, v0;  ///< all masses
-    std::vector<int> sgn;           ///< all masses, {-1, 0, +1}
+    std::vector<GiNaC::ex> sgn;     ///< all masses, {-1, 0, +1} (or symbols)
 };
 
 /// The segment solution written in the textbook forms (cos/sin, cosh/sinh,

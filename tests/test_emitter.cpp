@@ -62,7 +62,7 @@ SegmentInputs inputs_of(const Start& s) {
     for (std::size_t i = 0; i < s.x0.size(); ++i) {
         in.x0.push_back(exact(s.x0[i]));
         in.v0.push_back(exact(s.v0[i]));
-        in.sgn.push_back(s.sgn[i]);
+        in.sgn.push_back(static_cast<int>(s.sgn[i]));
     }
     return in;
 }
