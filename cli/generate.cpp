@@ -1,15 +1,44 @@
+// hsnc generate MODEL -o DIR -- write the specialised C++ kernels of a model
+// (interface.md section 3): one translation unit per configuration
+// (generator/emitter.h), all of them while there are at most 64
+// configurations, else the 64 nearest to the initial one (said on stderr),
+// plus registry.cpp defining hsnc::aot_registry() (runtime/aot_registry.h).
+// The files include "kernel_abi.h" and "aot_registry.h" from runtime/.
+#include <iostream>
+
 #include "commands.h"
+#include "emitter.h"
 #include "error.h"
+#include "kernel_set.h"
+#include "model_reader.h"
 
 namespace hsnc::cli {
 
-// Not yet implemented: registered so that --help lists it.
 void add_generate(CLI::App& app, int& exit_code) {
-    auto* sub = app.add_subcommand("generate", "(not implemented yet)");
-    sub->allow_extras();
-    sub->callback([&exit_code] {
-        exit_code = 1;
-        throw RunError("generate: not implemented yet");
+    auto* sub = app.add_subcommand("generate", "write the specialised C++ kernels of a model");
+    auto model_path = std::make_shared<std::string>();
+    auto out_dir = std::make_shared<std::string>();
+    sub->add_option("MODEL", *model_path, "model file (TOML)")->required();
+    sub->add_option("-o,--out-dir", *out_dir,
+                    "directory for <model>_<configuration key>.cpp and registry.cpp (created if needed)")
+        ->required();
+    sub->footer(
+        "Every configuration is generated while there are at most 64 (2^(contacts + friction masses));\n"
+        "beyond that, the 64 nearest to the initial configuration. Compile the files with runtime/ on\n"
+        "the include path (kernel_abi.h, aot_registry.h).");
+    sub->callback([&exit_code, model_path, out_dir] {
+        const Model model = read_model(*model_path);
+        const KernelSet set = generate_kernel_set(model);
+        if (!set.note.empty()) std::cerr << "hsnc generate: " << set.note << "\n";
+        try {
+            for (const GeneratedFile& f : set.kernels) write_if_changed(*out_dir, f.name, f.text);
+            write_if_changed(*out_dir, "registry.cpp", emit_registry(set.symbols));
+        } catch (const RunError& e) {
+            throw InputError(std::string("generate: -o ") + *out_dir + ": " + e.what());  // a bad output path
+        }
+        std::cout << "wrote " << set.kernels.size() << " kernels and registry.cpp of model '" << model.name
+                  << "' to " << *out_dir << "\n";
+        exit_code = 0;
     });
 }
 

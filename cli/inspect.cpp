@@ -1,15 +1,254 @@
+// hsnc inspect MODEL [--config SPEC] [--format text|latex|cpp] -- the segment
+// formulas of one configuration (interface.md section 3): the reduced matrices
+// (paper Eq. 7-9), modal frequencies and damping ratios, the static offset,
+// x_i(tau) in terms of tau = t - t0 and the segment's initial state, and the
+// switch functions. --format cpp prints the generated kernel.
+//
+// Expressions come from the derivation's textbook closed forms
+// (generator/derivation.h) with numbers rounded to 6 significant digits for
+// reading; the matrices and modal values are printed with 17.
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
 #include "commands.h"
+#include "derivation.h"
+#include "emitter.h"
 #include "error.h"
+#include "model_hash.h"
+#include "model_reader.h"
 
 namespace hsnc::cli {
+namespace {
 
-// Not yet implemented: registered so that --help lists it.
+using GiNaC::ex;
+using GiNaC::numeric;
+
+// Replace every non-integer number by a symbol named after its value with 6
+// significant digits ("0.173913"), times -1 when negative: GiNaC would print
+// the float with all its digits.
+struct RoundNumbers : GiNaC::map_function {
+    ex operator()(const ex& e) override {
+        if (GiNaC::is_a<numeric>(e)) {
+            const numeric& n = GiNaC::ex_to<numeric>(e);
+            if (n.is_integer() || !n.is_real()) return e;
+            const double v = n.to_double();
+            char buf[32];
+            std::snprintf(buf, sizeof buf, "%.6g", std::fabs(v));
+            const ex shown = GiNaC::symbol(buf);
+            return v < 0 ? -shown : shown;
+        }
+        return e.map(*this);
+    }
+};
+
+enum class Format { text, latex };
+
+struct Printer {
+    Format fmt;
+    std::ostream& out;
+
+    std::string expr(const ex& e) const {
+        RoundNumbers round;
+        std::ostringstream s;
+        const ex r = round(e.evalf());
+        if (fmt == Format::latex)
+            s << GiNaC::latex << r;
+        else
+            s << r;
+        return s.str();
+    }
+    std::string num(const numeric& v) const { return format_number(v.to_double()); }
+    static std::string format_number(double v) {
+        char buf[40];
+        std::snprintf(buf, sizeof buf, "%.17g", v);
+        return buf;
+    }
+    void heading(const std::string& h, const std::string& latex_h) const {
+        if (fmt == Format::latex)
+            out << "\n\\paragraph{" << latex_h << "}\n";
+        else
+            out << "\n" << h << "\n";
+    }
+    void line(const std::string& text_form, const std::string& latex_form) const {
+        if (fmt == Format::latex)
+            out << latex_form << "\n";
+        else
+            out << "  " << text_form << "\n";
+    }
+};
+
+std::string latex_name(const std::string& name) {  // m_1 style would mislead; escape underscores
+    std::string s;
+    for (char c : name) s += c == '_' ? std::string("\\_") : std::string(1, c);
+    return s;
+}
+
+void print_matrix(const Printer& p, const std::string& name, const Derivation& d, const GiNaC::matrix* full,
+                  const std::vector<numeric>* diag) {
+    const std::size_t nf = d.n_free();
+    auto entry = [&](std::size_t r, std::size_t s) -> numeric {
+        if (diag) return r == s ? (*diag)[r] : numeric(0);
+        return GiNaC::ex_to<numeric>((*full)(d.free_dofs[r], d.free_dofs[s]));
+    };
+    std::string text = name + " = [", latex = "\\[ " + name + " = \\begin{bmatrix} ";
+    for (std::size_t r = 0; r < nf; ++r) {
+        for (std::size_t s = 0; s < nf; ++s) {
+            text += (s ? ", " : "") + p.num(entry(r, s));
+            latex += (s ? " & " : "") + p.num(entry(r, s));
+        }
+        text += r + 1 < nf ? "; " : "";
+        latex += r + 1 < nf ? " \\\\ " : "";
+    }
+    p.line(text + "]", latex + " \\end{bmatrix} \\]");
+}
+
+void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostream& out) {
+    const Derivation d = derive(model, cfg);
+    const Printer p{fmt, out};
+    const std::size_t n = model.dof(), nf = d.n_free();
+    char hash[32];
+    std::snprintf(hash, sizeof hash, "0x%016llx", static_cast<unsigned long long>(model_hash(model)));
+    std::string fr, st;
+    for (int i : d.free_dofs) fr += (fr.empty() ? "" : ", ") + model.masses[i].name;
+    for (int i : d.stuck_dofs) st += (st.empty() ? "" : ", ") + model.masses[i].name;
+    if (fmt == Format::latex) {
+        out << "% hsnc inspect: model " << model.name << " (hash " << hash << "), configuration "
+            << cfg.spec(model) << "\n";
+        out << "\\paragraph{Model " << latex_name(model.name) << ", configuration \\texttt{" << latex_name(cfg.spec(model))
+            << "}} Free masses: " << latex_name(fr.empty() ? "none" : fr)
+            << "; stuck masses: " << latex_name(st.empty() ? "none" : st) << ".\n";
+    } else {
+        out << "model " << model.name << " (hash " << hash << ")\n";
+        out << "configuration " << cfg.spec(model) << " (key " << cfg.key() << ")\n";
+        out << "free masses: " << (fr.empty() ? "none" : fr) << "; stuck masses: " << (st.empty() ? "none" : st)
+            << " (held at their x0)\n";
+    }
+
+    // Symbols of the segment start, created in a fixed order.
+    GiNaC::symbol tau("tau", "\\tau"), t0("t0", "t_0");
+    SegmentInputs in;
+    in.t0 = t0;
+    std::vector<GiNaC::symbol> syms;
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::string& nm = model.masses[i].name;
+        in.x0.push_back(GiNaC::symbol("x0_" + nm, "x_{0," + latex_name(nm) + "}"));
+        in.v0.push_back(GiNaC::symbol("v0_" + nm, "v_{0," + latex_name(nm) + "}"));
+        const bool sliding_friction = model.masses[i].has_friction && !cfg.stuck[i];
+        in.sgn.push_back(sliding_friction ? ex(GiNaC::symbol("sgn_" + nm, "s_{" + latex_name(nm) + "}")) : ex(0));
+    }
+
+    if (nf > 0) {
+        p.heading("Reduced system of the free masses: M x'' + C x' + K x = f + sum_h F_h sin(Omega_h t + phase_h)",
+                  "Reduced system of the free masses: $M \\ddot x + C \\dot x + K x = f + \\sum_h F_h \\sin(\\Omega_h t + \\varphi_h)$");
+        std::vector<numeric> mdiag;
+        for (int i : d.free_dofs) mdiag.push_back(exact(model.masses[i].m));
+        print_matrix(p, "M", d, nullptr, &mdiag);
+        print_matrix(p, "K", d, &d.K, nullptr);
+        print_matrix(p, "C", d, &d.C, nullptr);
+        for (std::size_t r = 0; r < nf; ++r) {
+            const int i = d.free_dofs[r];
+            ex f = d.f_const[i] - d.mu_k_n[i] * in.sgn[i];
+            for (int s : d.stuck_dofs) f -= d.K(i, s) * in.x0[s];
+            const std::string nm = model.masses[i].name;
+            p.line("f_" + nm + " = " + p.expr(f), "\\[ f_{" + latex_name(nm) + "} = " + p.expr(f) + " \\]");
+        }
+        p.heading("Modes (x = V q; q'' + c q' + lambda q = p + ...; c = alpha + beta lambda, xi = c/(2 omega))",
+                  "Modes ($x = V q$, $\\ddot q + c \\dot q + \\lambda q = p + \\dots$, $c = \\alpha + \\beta\\lambda$, "
+                  "$\\xi = c/(2\\omega)$)");
+        for (std::size_t j = 0; j < d.modes.size(); ++j) {
+            const Mode& m = d.modes[j];
+            std::string shape, lshape;
+            for (std::size_t r = 0; r < nf; ++r) {
+                shape += (r ? ", " : "") + Printer::format_number(m.v[r].to_double());
+                lshape += (r ? ", " : "") + Printer::format_number(m.v[r].to_double());
+            }
+            const std::string J = std::to_string(j + 1);
+            p.line("mode " + J + ": lambda = " + p.num(m.lambda) + ", omega = " + p.num(m.omega) +
+                       ", c = " + p.num(m.c) + ", xi = " + p.num(m.xi) + ", " + regime_name(m.regime) +
+                       ", V = [" + shape + "]",
+                   "\\[ \\lambda_{" + J + "} = " + p.num(m.lambda) + ",\\ \\omega_{" + J + "} = " + p.num(m.omega) +
+                       ",\\ c_{" + J + "} = " + p.num(m.c) + ",\\ \\xi_{" + J + "} = " + p.num(m.xi) +
+                       "\\ \\text{(" + regime_name(m.regime) + ")},\\ V_{" + J + "} = (" + lshape + ") \\]");
+        }
+        // Static offset x_st = V diag(1/lambda) V^T f over the elastic modes.
+        p.heading("Static offset (elastic modes): x_st = sum_j V_j p_j / lambda_j",
+                  "Static offset (elastic modes): $x_{\\mathrm{st}} = \\sum_j V_j p_j / \\lambda_j$");
+        for (std::size_t r = 0; r < nf; ++r) {
+            ex xst = 0;
+            for (const Mode& m : d.modes) {
+                if (m.lambda.is_zero()) continue;
+                ex pj = 0;
+                for (std::size_t s = 0; s < nf; ++s) {
+                    const int i = d.free_dofs[s];
+                    ex f = d.f_const[i] - d.mu_k_n[i] * in.sgn[i];
+                    for (int k : d.stuck_dofs) f -= d.K(i, k) * in.x0[k];
+                    pj += m.v[s] * f;
+                }
+                xst += m.v[r] * pj / m.lambda;
+            }
+            const std::string nm = model.masses[d.free_dofs[r]].name;
+            p.line("x_st_" + nm + " = " + p.expr(xst),
+                   "\\[ x_{\\mathrm{st}," + latex_name(nm) + "} = " + p.expr(xst) + " \\]");
+        }
+    }
+    for (std::size_t h = 0; h < d.harmonics.size(); ++h)
+        p.line("harmonic " + std::to_string(h + 1) + ": Omega = " + p.num(d.harmonics[h].omega) + ", phase = " +
+                   p.num(d.harmonics[h].phase),
+               "\\[ \\Omega_{" + std::to_string(h + 1) + "} = " + p.num(d.harmonics[h].omega) + " \\]");
+
+    const SymbolicSegment s = symbolic_segment(d, in, tau);
+    p.heading("Response, tau = t - t0 (x0_*, v0_* the state at t0; sgn_* the sliding directions)",
+              "Response, $\\tau = t - t_0$ ($x_0$, $v_0$ the state at $t_0$; $s$ the sliding directions)");
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::string nm = model.masses[i].name;
+        p.line("x_" + nm + "(tau) = " + p.expr(s.x[i]),
+               "\\[ x_{" + latex_name(nm) + "}(\\tau) = " + p.expr(s.x[i]) + " \\]");
+    }
+    p.heading("Switch functions (runtime/segment.h order)", "Switch functions");
+    for (std::size_t f = 0; f < d.switches.size(); ++f) {
+        const SwitchFunction& sf = d.switches[f];
+        std::string what;
+        switch (sf.kind) {
+            case SwitchKind::gap: what = "gap of " + model.contacts[sf.element].name; break;
+            case SwitchKind::velocity: what = "velocity of " + model.masses[sf.element].name; break;
+            case SwitchKind::release_pos: what = "A - mu_s N of " + model.masses[sf.element].name; break;
+            case SwitchKind::release_neg: what = "-A - mu_s N of " + model.masses[sf.element].name; break;
+        }
+        const std::string F = std::to_string(f + 1);
+        p.line("g_" + F + " (" + what + ") = " + p.expr(s.g[f]),
+               "\\[ g_{" + F + "}(\\tau) = " + p.expr(s.g[f]) + " \\quad \\text{(" + latex_name(what) + ")} \\]");
+    }
+}
+
+}  // namespace
+
 void add_inspect(CLI::App& app, int& exit_code) {
-    auto* sub = app.add_subcommand("inspect", "(not implemented yet)");
-    sub->allow_extras();
-    sub->callback([&exit_code] {
-        exit_code = 1;
-        throw RunError("inspect: not implemented yet");
+    auto* sub = app.add_subcommand("inspect", "the segment formulas of one configuration");
+    struct Options {
+        std::string model, config, format = "text";
+        bool symbolic = false;
+    };
+    auto o = std::make_shared<Options>();
+    sub->add_option("MODEL", o->model, "model file (TOML)")->required();
+    sub->add_option("--config", o->config, "configuration, e.g. \"closed=c1 stuck=m2\" (default: all open, none stuck)");
+    sub->add_option("--format", o->format, "text (default), latex, or cpp (the generated kernel)")
+        ->check(CLI::IsMember({"text", "latex", "cpp"}));
+    sub->add_flag("--symbolic", o->symbolic,
+                  "keep the model's parameters as symbols (free system of at most 2 DOF); "
+                  "not implemented yet: numbers are printed");
+    sub->callback([&exit_code, o] {
+        const Model model = read_model(o->model);
+        const Configuration cfg = Configuration::parse(model, o->config);
+        if (o->symbolic)
+            std::cerr << "hsnc inspect: --symbolic is not implemented yet; printing numbers\n";
+        if (o->format == "cpp") {
+            std::cout << emit_kernel(derive(model, cfg));
+        } else {
+            inspect(model, cfg, o->format == "latex" ? Format::latex : Format::text, std::cout);
+        }
+        exit_code = 0;
     });
 }
 

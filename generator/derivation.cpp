@@ -1,0 +1,403 @@
+#include "derivation.h"
+
+#include <cln/cln.h>
+
+#include <algorithm>
+#include <limits>
+#include <numeric>
+
+#include "assembly.h"
+#include "error.h"
+
+namespace hsnc {
+
+using GiNaC::ex;
+using GiNaC::numeric;
+
+const char* regime_name(Regime r) {
+    switch (r) {
+        case Regime::undamped: return "undamped";
+        case Regime::underdamped: return "underdamped";
+        case Regime::critical: return "critically damped";
+        case Regime::overdamped: return "overdamped";
+        case Regime::rigid: return "rigid body";
+        case Regime::rigid_damped: return "rigid body, damped";
+    }
+    return "?";
+}
+
+numeric exact(double v) { return numeric(cln::rational(cln::cl_DF(v))); }
+
+int Derivation::free_index(int mass) const {
+    const auto it = std::find(free_dofs.begin(), free_dofs.end(), mass);
+    return it == free_dofs.end() ? -1 : static_cast<int>(it - free_dofs.begin());
+}
+
+namespace {
+
+const numeric kZero(0), kOne(1), kTwo(2);
+
+// Floating components of the free masses: connected through springs or closed
+// contacts of positive stiffness, with no such link to ground or a stuck mass.
+// Each has one rigid-body mode (lambda = 0).
+std::vector<std::vector<int>> floating_components(const Model& model, const Configuration& cfg,
+                                                  const std::vector<int>& free_index) {
+    const std::size_t n = model.dof();
+    std::vector<int> parent(n);
+    std::iota(parent.begin(), parent.end(), 0);
+    auto find = [&](int i) {
+        while (parent[i] != i) i = parent[i] = parent[parent[i]];
+        return i;
+    };
+    std::vector<char> anchored(n, 0);
+    auto link = [&](int a, int b, double k) {
+        if (k <= 0) return;
+        const bool fa = a != kGround && free_index[a] >= 0, fb = b != kGround && free_index[b] >= 0;
+        if (fa && fb) {
+            parent[find(a)] = find(b);
+        } else if (fa) {
+            anchored[a] = 1;  // to ground or to a stuck mass
+        } else if (fb) {
+            anchored[b] = 1;
+        }
+    };
+    for (const Spring& s : model.springs) link(s.a, s.b, s.k);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c]) link(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    std::vector<char> root_anchored(n, 0);
+    for (std::size_t i = 0; i < n; ++i)
+        if (free_index[i] >= 0 && anchored[i]) root_anchored[find(static_cast<int>(i))] = 1;
+    std::vector<std::vector<int>> comps;
+    std::vector<int> comp_of_root(n, -1);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (free_index[i] < 0) continue;
+        const int r = find(static_cast<int>(i));
+        if (root_anchored[r]) continue;
+        if (comp_of_root[r] < 0) {
+            comp_of_root[r] = static_cast<int>(comps.size());
+            comps.emplace_back();
+        }
+        comps[comp_of_root[r]].push_back(static_cast<int>(i));
+    }
+    return comps;
+}
+
+// Cyclic Jacobi eigenvalue algorithm for a symmetric matrix (Golub & Van Loan,
+// Matrix Computations, 4th ed., Alg. 8.5.3), on GiNaC floats at the current
+// Digits. On return a is (nearly) diagonal and a = V^T a_in V.
+void jacobi_eigen(std::vector<std::vector<numeric>>& a, std::vector<std::vector<numeric>>& vec) {
+    const std::size_t n = a.size();
+    vec.assign(n, std::vector<numeric>(n, kZero));
+    for (std::size_t i = 0; i < n; ++i) vec[i][i] = kOne;
+    numeric norm2 = kZero;
+    for (auto& row : a)
+        for (auto& e : row) norm2 += e * e;
+    const numeric tol2 = norm2 * numeric(1, 10).power(2 * (kDerivationDigits - 4));
+    for (int sweep = 0; sweep < 100; ++sweep) {
+        numeric off2 = kZero;
+        for (std::size_t p = 0; p < n; ++p)
+            for (std::size_t q = p + 1; q < n; ++q) off2 += a[p][q] * a[p][q];
+        if (off2 <= tol2) return;
+        for (std::size_t p = 0; p < n; ++p)
+            for (std::size_t q = p + 1; q < n; ++q) {
+                if (a[p][q].is_zero()) continue;
+                // Zero a[p][q]: tan of the rotation angle, smaller root (Eq. 8.5.x).
+                const numeric theta = (a[q][q] - a[p][p]) / (kTwo * a[p][q]);
+                const numeric t = (theta >= kZero ? kOne : -kOne) / (abs(theta) + sqrt(theta * theta + kOne));
+                const numeric c = kOne / sqrt(t * t + kOne), s = t * c;
+                for (std::size_t k = 0; k < n; ++k) {  // a <- a J
+                    const numeric akp = a[k][p], akq = a[k][q];
+                    a[k][p] = c * akp - s * akq;
+                    a[k][q] = s * akp + c * akq;
+                }
+                for (std::size_t k = 0; k < n; ++k) {  // a <- J^T a
+                    const numeric apk = a[p][k], aqk = a[q][k];
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+                for (std::size_t k = 0; k < n; ++k) {  // V <- V J
+                    const numeric vkp = vec[k][p], vkq = vec[k][q];
+                    vec[k][p] = c * vkp - s * vkq;
+                    vec[k][q] = s * vkp + c * vkq;
+                }
+            }
+    }
+    throw RunError("derivation::jacobi_eigen(): no convergence after 100 sweeps");
+}
+
+numeric to_float(const numeric& x) { return GiNaC::ex_to<numeric>(x.evalf()); }
+
+}  // namespace
+
+Derivation derive(const Model& model, const Configuration& cfg) {
+    GiNaC::Digits = kDerivationDigits;
+    Derivation d;
+    d.model = &model;
+    d.cfg = cfg;
+    d.switches = switch_functions(model, cfg);
+    const std::size_t n = model.dof();
+    std::vector<int> free_index(n, -1);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (cfg.stuck[i]) {
+            d.stuck_dofs.push_back(static_cast<int>(i));
+        } else {
+            free_index[i] = static_cast<int>(d.free_dofs.size());
+            d.free_dofs.push_back(static_cast<int>(i));
+        }
+    }
+
+    // Full K(cfg), C = alpha M + beta K(cfg), constant forces, as exact rationals.
+    const Eigen::MatrixXd K = stiffness_matrix(model, cfg);
+    const Eigen::VectorXd f0 = constant_force(model, cfg);
+    d.K = GiNaC::matrix(n, n);
+    d.C = GiNaC::matrix(n, n);
+    const numeric alpha = exact(model.alpha), beta = exact(model.beta);
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = 0; j < n; ++j) {
+            const numeric kij = exact(K(i, j));
+            d.K(i, j) = kij;
+            d.C(i, j) = beta * kij + (i == j ? alpha * exact(model.masses[i].m) : kZero);
+        }
+    d.f_const.resize(n);
+    d.mu_k_n.assign(n, kZero);
+    for (std::size_t i = 0; i < n; ++i) {
+        d.f_const[i] = exact(f0(i));
+        if (model.masses[i].has_friction && !cfg.stuck[i])
+            d.mu_k_n[i] = exact(model.masses[i].mu_k) * exact(model.masses[i].m) * exact(model.g);
+    }
+    // A harmonic with Omega = 0 is the constant force F sin(phase).
+    for (const Harmonic& h : model.forcing) {
+        if (h.omega != 0.0) continue;
+        const numeric s = GiNaC::sin(exact(h.phase));
+        for (std::size_t i = 0; i < n; ++i) d.f_const[i] += exact(h.amplitude[i]) * s;
+    }
+
+    // Modal decomposition of Kt = M^-1/2 K_FF M^-1/2.
+    const std::size_t nf = d.free_dofs.size();
+    std::vector<numeric> sqm(nf);
+    for (std::size_t r = 0; r < nf; ++r) sqm[r] = to_float(sqrt(exact(model.masses[d.free_dofs[r]].m)));
+    std::vector<std::vector<numeric>> kt(nf, std::vector<numeric>(nf));
+    for (std::size_t r = 0; r < nf; ++r)
+        for (std::size_t s = 0; s < nf; ++s)
+            kt[r][s] = GiNaC::ex_to<numeric>(d.K(d.free_dofs[r], d.free_dofs[s])) / (sqm[r] * sqm[s]);
+    std::vector<std::vector<numeric>> phi;
+    jacobi_eigen(kt, phi);
+    std::vector<std::size_t> order(nf);
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return kt[p][p] < kt[q][q]; });
+
+    // Rigid-body modes replace the smallest eigenpairs: lambda = 0, shape sqrt(m) on the component.
+    const auto comps = floating_components(model, cfg, free_index);
+    std::vector<numeric> lambda(nf);
+    std::vector<std::vector<numeric>> shape(nf, std::vector<numeric>(nf, kZero));  // shape[j][r] = Phi_rj
+    for (std::size_t j = 0; j < nf; ++j) {
+        if (j < comps.size()) {
+            numeric m_total = kZero;
+            for (int i : comps[j]) m_total += exact(model.masses[i].m);
+            const numeric inv = to_float(kOne / sqrt(m_total));
+            for (int i : comps[j]) shape[j][free_index[i]] = sqm[free_index[i]] * inv;
+            lambda[j] = kZero;
+        } else {
+            lambda[j] = kt[order[j]][order[j]];
+            for (std::size_t r = 0; r < nf; ++r) shape[j][r] = phi[r][order[j]];
+            if (lambda[j] <= kZero)
+                throw RunError("derivation::derive(): eigenvalue " + std::to_string(lambda[j].to_double()) +
+                               " <= 0 in a mode not detected as rigid (configuration " + cfg.spec(model) + ")");
+        }
+        // Deterministic sign: the largest component is positive.
+        std::size_t big = 0;
+        for (std::size_t r = 1; r < nf; ++r)
+            if (abs(shape[j][r]) > abs(shape[j][big]) + numeric(1, 1000000)) big = r;
+        if (shape[j][big] < kZero)
+            for (auto& e : shape[j]) e = -e;
+    }
+
+    const numeric critical_tol = numeric(1, 100000000) * numeric(1, 100000000) * numeric(1, 10000);  // 1e-20
+    for (std::size_t j = 0; j < nf; ++j) {
+        Mode m;
+        m.lambda = lambda[j];
+        m.c = alpha + beta * lambda[j];
+        m.v.resize(nf);
+        m.w.resize(nf);
+        for (std::size_t r = 0; r < nf; ++r) {
+            m.v[r] = shape[j][r] / sqm[r];
+            m.w[r] = shape[j][r] * sqm[r];
+        }
+        if (m.lambda.is_zero()) {
+            m.omega = kZero;
+            m.xi = kZero;
+            if (m.c.is_zero()) {
+                m.regime = Regime::rigid;
+                m.sigma = m.kappa = m.omega_d = m.gamma = m.r1 = kZero;
+            } else {
+                // u = A + B (1 - e^{-c tau})/c as the overdamped form with lambda = 0.
+                m.regime = Regime::rigid_damped;
+                m.sigma = m.gamma = m.c / kTwo;
+                m.kappa = -m.sigma * m.sigma;
+                m.r1 = kZero;
+                m.omega_d = kZero;
+            }
+        } else {
+            m.omega = to_float(sqrt(m.lambda));
+            m.sigma = m.c / kTwo;
+            m.xi = m.sigma / m.omega;
+            m.kappa = m.lambda - m.sigma * m.sigma;
+            if (m.c.is_zero()) {
+                m.regime = Regime::undamped;
+                m.omega_d = m.omega;
+            } else if (abs(m.xi - kOne) <= critical_tol) {
+                m.regime = Regime::critical;
+                m.kappa = kZero;
+            } else if (m.xi < kOne) {
+                m.regime = Regime::underdamped;
+                m.omega_d = to_float(sqrt(m.kappa));
+            } else {
+                m.regime = Regime::overdamped;
+                m.gamma = to_float(sqrt(-m.kappa));
+                m.r1 = -m.lambda / (m.sigma + m.gamma);  // = -sigma + gamma without cancellation
+            }
+        }
+        d.modes.push_back(std::move(m));
+    }
+
+    // Forcing harmonics: modal amplitudes and particular solutions.
+    d.max_step = std::numeric_limits<double>::infinity();
+    for (const Harmonic& h : model.forcing) {
+        if (h.omega == 0.0) continue;
+        HarmonicData hd;
+        hd.omega = exact(h.omega);
+        hd.phase = exact(h.phase);
+        for (double a : h.amplitude) hd.amplitude.push_back(exact(a));
+        hd.xs.assign(nf, kZero);
+        hd.xc.assign(nf, kZero);
+        const numeric& W = hd.omega;
+        for (const Mode& m : d.modes) {
+            ModalHarmonic mh;
+            mh.P = kZero;
+            for (std::size_t r = 0; r < nf; ++r) mh.P += m.v[r] * hd.amplitude[d.free_dofs[r]];
+            mh.resonant = m.regime == Regime::undamped &&
+                          abs(W - m.omega) <= exact(kResonanceBand) * m.omega;
+            if (mh.resonant) {
+                d.max_step = std::min(d.max_step, 2 * 3.14159265358979323846 / h.omega);
+            } else {
+                // u_p = P [(lambda - W^2) sin - c W cos] / ((lambda - W^2)^2 + (c W)^2)
+                const numeric det = m.lambda - W * W, den = det * det + m.c * m.c * W * W;
+                mh.a_s = det / den;
+                mh.a_c = -m.c * W / den;
+                for (std::size_t r = 0; r < nf; ++r) {
+                    hd.xs[r] += m.v[r] * mh.P * mh.a_s;
+                    hd.xc[r] += m.v[r] * mh.P * mh.a_c;
+                }
+            }
+            hd.modal.push_back(mh);
+        }
+        d.harmonics.push_back(std::move(hd));
+    }
+    return d;
+}
+
+SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, const GiNaC::symbol& tau) {
+    GiNaC::Digits = kDerivationDigits;
+    const Model& model = *d.model;
+    const std::size_t n = model.dof(), nf = d.n_free();
+    SymbolicSegment out;
+
+    // Constant force on the free masses (paper Eq. 7-9).
+    std::vector<ex> f(nf);
+    for (std::size_t r = 0; r < nf; ++r) {
+        const int i = d.free_dofs[r];
+        f[r] = d.f_const[i] - d.mu_k_n[i] * in.sgn[i];
+        for (int s : d.stuck_dofs) f[r] -= d.K(i, s) * in.x0[s];
+    }
+    std::vector<ex> theta;
+    for (const HarmonicData& h : d.harmonics) theta.push_back(h.omega * in.t0 + h.phase);
+
+    for (std::size_t j = 0; j < d.modes.size(); ++j) {
+        const Mode& m = d.modes[j];
+        ex p = 0, u0 = 0, du0 = 0;
+        for (std::size_t r = 0; r < nf; ++r) {
+            p += m.v[r] * f[r];
+            u0 += m.w[r] * in.x0[d.free_dofs[r]];
+            du0 += m.w[r] * in.v0[d.free_dofs[r]];
+        }
+        // Particular solution.
+        ex up;
+        if (m.regime == Regime::rigid) {
+            up = p * GiNaC::pow(tau, 2) / 2;
+        } else if (m.regime == Regime::rigid_damped) {
+            up = p * tau / m.c;
+        } else {
+            up = p / m.lambda;
+        }
+        for (std::size_t h = 0; h < d.harmonics.size(); ++h) {
+            const HarmonicData& hd = d.harmonics[h];
+            const ModalHarmonic& mh = hd.modal[j];
+            const ex arg = hd.omega * tau + theta[h];
+            const numeric det = m.lambda - hd.omega * hd.omega;
+            // At (or within rounding of) exact resonance the textbook form is singular.
+            if (mh.resonant && abs(det) <= m.lambda * numeric(1, 1000000000).power(3)) {
+                up += -mh.P * tau * GiNaC::cos(arg) / (2 * m.omega);  // exact resonance
+            } else {
+                const numeric den = det * det + m.c * m.c * hd.omega * hd.omega;
+                up += mh.P * (det * GiNaC::sin(arg) - m.c * hd.omega * GiNaC::cos(arg)) / den;
+            }
+        }
+        const ex A = u0 - up.subs(tau == 0);
+        const ex B = du0 - up.diff(tau).subs(tau == 0);  // u_h'(0)
+        ex uh;
+        switch (m.regime) {
+            case Regime::undamped:
+            case Regime::underdamped:
+                uh = GiNaC::exp(-m.sigma * tau) *
+                     (A * GiNaC::cos(m.omega_d * tau) + (B + m.sigma * A) / m.omega_d * GiNaC::sin(m.omega_d * tau));
+                break;
+            case Regime::critical:
+                uh = GiNaC::exp(-m.sigma * tau) * (A + (B + m.sigma * A) * tau);
+                break;
+            case Regime::overdamped:
+                uh = GiNaC::exp(-m.sigma * tau) *
+                     (A * GiNaC::cosh(m.gamma * tau) + (B + m.sigma * A) / m.gamma * GiNaC::sinh(m.gamma * tau));
+                break;
+            case Regime::rigid:
+                uh = A + B * tau;
+                break;
+            case Regime::rigid_damped:
+                uh = A + B * (1 - GiNaC::exp(-m.c * tau)) / m.c;
+                break;
+        }
+        out.u.push_back(uh + up);
+    }
+
+    out.x.assign(n, 0);
+    for (int s : d.stuck_dofs) out.x[s] = in.x0[s];
+    for (std::size_t r = 0; r < nf; ++r)
+        for (std::size_t j = 0; j < d.modes.size(); ++j) out.x[d.free_dofs[r]] += d.modes[j].v[r] * out.u[j];
+    for (std::size_t i = 0; i < n; ++i) {
+        out.v.push_back(out.x[i].diff(tau));
+        out.a.push_back(out.v[i].diff(tau));
+    }
+    auto pos = [&](int body) { return body == kGround ? ex(0) : out.x[body]; };
+    for (const SwitchFunction& sf : d.switches) {
+        ex g;
+        if (sf.kind == SwitchKind::gap) {
+            const Contact& c = model.contacts[sf.element];
+            g = pos(c.a) - pos(c.b) - exact(c.gap);
+        } else if (sf.kind == SwitchKind::velocity) {
+            g = out.v[sf.element];
+        } else {
+            // A_i = -K x - C v + f_const + forcing (interface.md section 2).
+            const int i = sf.element;
+            ex A = d.f_const[i];
+            for (std::size_t k = 0; k < n; ++k) A -= d.K(i, k) * out.x[k] + d.C(i, k) * out.v[k];
+            for (std::size_t h = 0; h < d.harmonics.size(); ++h)
+                A += d.harmonics[h].amplitude[i] * GiNaC::sin(d.harmonics[h].omega * tau + theta[h]);
+            const numeric mu_s_n = exact(model.masses[i].mu_s) * exact(model.masses[i].m) * exact(model.g);
+            g = (sf.kind == SwitchKind::release_pos ? A : -A) - mu_s_n;
+        }
+        out.g.push_back(g);
+        out.dg.push_back(g.diff(tau));
+    }
+    return out;
+}
+
+}  // namespace hsnc

@@ -1,0 +1,121 @@
+// hsnc -- Derivation: the closed-form solution of one configuration, derived
+// with GiNaC at high precision (generator side; the runtime never sees GiNaC).
+//
+// For configuration cfg with free masses F and stuck masses S (paper Eq. 7-9):
+//     M_FF x_F'' + C_FF x_F' + K_FF x_F = f(t),
+//     f = loads_F + preload_F - K_FS x_S - mu_k N sgn + sum_h F_h,F sin(Omega_h t + phase_h),
+// with K = K(cfg) (closed contact springs added), C = alpha M + beta K(cfg); the
+// stuck coupling -K_FS x_S is the constant force of Eq. 7 and C_FS v_S = 0.
+// Modal analysis: Kt = M^-1/2 K M^-1/2 = Phi diag(lambda) Phi^T (Jacobi
+// rotations at Digits = 40), x_F = V u with V = M^-1/2 Phi, u = W x_F with
+// W = Phi^T M^1/2. Rayleigh damping is diagonal in these coordinates:
+//     u_j'' + c_j u_j' + lambda_j u_j = p_j + sum_h P_jh sin(Omega_h t + phase_h),
+//     c_j = alpha + beta lambda_j,  p_j = sum_i V_ij f_i,  P_jh = sum_i V_ij F_hi.
+// Rigid-body modes (floating components of the free masses) are detected from
+// the graph of springs: lambda = 0 exactly and a uniform shape.
+//
+// Each mode's homogeneous part is written u_h = A eC(tau) + B eS(tau) with
+// eC = e^{-sigma tau} C, eS = e^{-sigma tau} S, C' = -kappa S, S' = C, so that
+// d/dtau maps (A, B) to (B - sigma A, -kappa A - sigma B) in every regime
+// (kappa = omega_d^2 underdamped, 0 critical, -gamma^2 overdamped).
+#pragma once
+
+#include <ginac/ginac.h>
+
+#include <string>
+#include <vector>
+
+#include "configuration.h"
+#include "model.h"
+#include "segment.h"
+
+namespace hsnc {
+
+/// Working precision of the derivation (decimal digits).
+inline constexpr int kDerivationDigits = 40;
+
+enum class Regime {
+    undamped,      ///< c = 0, lambda > 0: cos / sin
+    underdamped,   ///< 0 < xi < 1: e^{-sigma tau} (cos, sin)(omega_d tau)
+    critical,      ///< xi = 1: e^{-sigma tau} (1, tau)
+    overdamped,    ///< xi > 1: e^{r1 tau} with expm1(-2 gamma tau)
+    rigid,         ///< lambda = 0, c = 0: polynomial in tau
+    rigid_damped,  ///< lambda = 0, c > 0: drift + expm1(-c tau)
+};
+
+const char* regime_name(Regime r);
+
+struct Mode {
+    Regime regime = Regime::undamped;
+    GiNaC::numeric lambda, c;        ///< u'' + c u' + lambda u = ...
+    GiNaC::numeric omega, xi;        ///< sqrt(lambda), c / (2 omega) (0 for rigid modes)
+    GiNaC::numeric sigma, kappa;     ///< e^{-sigma tau}; C' = -kappa S
+    GiNaC::numeric omega_d, gamma;   ///< sqrt(kappa) (under/undamped), sqrt(-kappa) (overdamped)
+    GiNaC::numeric r1;               ///< slow root -lambda/(sigma + gamma) (overdamped, rigid_damped)
+    std::vector<GiNaC::numeric> v;   ///< column j of V over the free masses
+    std::vector<GiNaC::numeric> w;   ///< row j of W over the free masses
+};
+
+/// The response of one mode to one forcing harmonic.
+struct ModalHarmonic {
+    GiNaC::numeric P;          ///< modal amplitude P_jh
+    bool resonant = false;     ///< c = 0 and |Omega - omega| <= kResonanceBand omega: sinc form
+    GiNaC::numeric a_s, a_c;   ///< non-resonant particular: P (a_s sin + a_c cos)(Omega tau + theta)
+};
+
+struct HarmonicData {
+    GiNaC::numeric omega, phase;
+    std::vector<GiNaC::numeric> amplitude;  ///< F_hi, all masses
+    std::vector<ModalHarmonic> modal;       ///< one per mode
+    std::vector<GiNaC::numeric> xs, xc;     ///< non-resonant particular in x: xs sin + xc cos (free masses)
+};
+
+/// Relative band |Omega - omega| / omega inside which an undamped mode uses the
+/// resonance-stable (sinc) form of its forced response.
+inline constexpr double kResonanceBand = 1e-2;
+
+struct Derivation {
+    const Model* model = nullptr;
+    Configuration cfg;
+    std::vector<int> free_dofs;   ///< mass indices of the free masses, in order
+    std::vector<int> stuck_dofs;  ///< mass indices of the stuck masses
+    GiNaC::matrix K, C;           ///< full n x n K(cfg), C (exact rationals)
+    std::vector<GiNaC::numeric> f_const;  ///< loads + preload, all masses (exact)
+    std::vector<GiNaC::numeric> mu_k_n;   ///< mu_k N_i of free friction masses, else 0
+    std::vector<Mode> modes;               ///< ascending lambda
+    std::vector<HarmonicData> harmonics;   ///< Omega > 0 harmonics (Omega = 0 ones fold into f_const)
+    std::vector<SwitchFunction> switches;
+    double max_step = 0;  ///< +inf unless resonant (secular) terms: then one forcing period
+
+    std::size_t n_free() const { return free_dofs.size(); }
+    /// Index into free_dofs of mass i, or -1 when stuck.
+    int free_index(int mass) const;
+};
+
+/// Derive configuration `cfg` of `model`. Throws InputError on a singular
+/// setup (e.g. a mass without stiffness that must not float is fine; none
+/// are rejected today), RunError when the eigen-solver does not converge.
+Derivation derive(const Model& model, const Configuration& cfg);
+
+/// Inputs of one segment as GiNaC expressions: numbers or symbols.
+struct SegmentInputs {
+    GiNaC::ex t0;
+    std::vector<GiNaC::ex> x0, v0;  ///< all masses
+    std::vector<GiNaC::ex> sgn;     ///< all masses, {-1, 0, +1} (or symbols)
+};
+
+/// The segment solution written in the textbook forms (cos/sin, cosh/sinh,
+/// exp, the secular resonance term), independent of the emitter's
+/// overflow-safe forms; derivatives by GiNaC diff.
+struct SymbolicSegment {
+    std::vector<GiNaC::ex> u;          ///< modal coordinates
+    std::vector<GiNaC::ex> x, v, a;    ///< all masses
+    std::vector<GiNaC::ex> g, dg;      ///< switch functions, as in switch_functions()
+};
+
+SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, const GiNaC::symbol& tau);
+
+/// High-precision number from a double, exactly (no rounding on the way in).
+GiNaC::numeric exact(double v);
+
+}  // namespace hsnc

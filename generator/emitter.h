@@ -1,0 +1,33 @@
+// hsnc -- the C++ emitter: one translation unit per configuration.
+//
+// The emitted unit includes only "kernel_abi.h", calls only __builtin_ math
+// (no <cmath>, so it compiles fast in-process too), folds every parameter as a
+// 17-significant-digit constant that round-trips, names quantities after the
+// maths (q_1, omega_d_1, ...), computes each per-mode exponential and
+// trigonometric factor once, and exports one extern "C" hsnc_kernel object.
+// The text is printed from the Derivation's own ordered structures, never from
+// GiNaC's term order, so the same model gives the same bytes in every run.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "derivation.h"
+
+namespace hsnc {
+
+/// C identifier of the kernel object: "hsnc_kernel_<model>_<key>", with every
+/// character of the model name outside [A-Za-z0-9_] written as '_'.
+std::string kernel_symbol(const Model& model, const Configuration& cfg);
+
+/// The kernel translation unit of derivation `d`.
+std::string emit_kernel(const Derivation& d);
+
+/// A registry source defining `const AotRegistry& hsnc::<function>()` over the
+/// kernel objects named in `symbols` (runtime/aot_registry.h), in that order.
+std::string emit_registry(const std::vector<std::string>& symbols, const std::string& function = "aot_registry");
+
+/// 17 significant digits, always a C double literal ("2.0", "1.5e-07").
+std::string format_double(double v);
+
+}  // namespace hsnc

@@ -1,0 +1,70 @@
+/* hsnc -- the kernel ABI: the one header a generated kernel includes.
+ *
+ * A kernel is the closed-form solution of one configuration of one model
+ * (runtime/segment.h), specialised and emitted as C++ by the generator
+ * (generator/emitter.h). It exports one `hsnc_kernel` object with C linkage.
+ * This header is C-compatible and includes nothing, so an emitted kernel
+ * compiles alone, fast, in-process or ahead of time.
+ *
+ * setup/eval have exactly the semantics of SegmentSolver::setup/eval:
+ *   setup(coef, t0, x0, v0, sgn)  fixes the segment from the full state at
+ *       absolute time t0; sgn[i] in {-1, 0, +1} is the direction of motion of
+ *       each sliding friction mass (0 for stuck or frictionless masses).
+ *       Writes n_coef doubles into coef (the caller owns them).
+ *   eval(coef, tau, x, v, a, g, dg, bound, scale)  at tau = t - t0 >= 0:
+ *       x, v, a: n_dof doubles (stuck masses at their fixed x, v = a = 0);
+ *       g, dg: the n_switch switch functions and their first derivatives, in
+ *       the order of `switches` (= switch_functions() of runtime/segment.h);
+ *       bound[f] >= |g_f''(s)| for every s in [tau, tau + max_step];
+ *       scale[f] = sum of |terms| summed into g_f.
+ * Neither allocates, throws or touches global state.
+ */
+#ifndef HSNC_KERNEL_ABI_H
+#define HSNC_KERNEL_ABI_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Bumped whenever the layout or the meaning of hsnc_kernel changes. */
+#define HSNC_KERNEL_ABI_VERSION 1
+
+/** Switch-function kinds; same values as hsnc::SwitchKind (runtime/segment.h). */
+enum {
+    HSNC_SWITCH_GAP = 0,         /**< contact gap G_c; element = contact index */
+    HSNC_SWITCH_VELOCITY = 1,    /**< v_i of a sliding friction mass */
+    HSNC_SWITCH_RELEASE_POS = 2, /**<  A_i - mu_s*N_i of a stuck mass */
+    HSNC_SWITCH_RELEASE_NEG = 3  /**< -A_i - mu_s*N_i of a stuck mass */
+};
+
+typedef struct hsnc_switch {
+    int kind;    /**< HSNC_SWITCH_* */
+    int element; /**< contact index (gap) or mass index (the others) */
+} hsnc_switch;
+
+typedef void (*hsnc_setup_fn)(double* coef, double t0, const double* x0, const double* v0,
+                              const signed char* sgn);
+typedef void (*hsnc_eval_fn)(const double* coef, double tau, double* x, double* v, double* a,
+                             double* g, double* dg, double* bound, double* scale);
+
+typedef struct hsnc_kernel {
+    int abi_version;                /**< HSNC_KERNEL_ABI_VERSION of the emitter */
+    const char* model_name;         /**< Model::name */
+    unsigned long long model_hash;  /**< model_hash() of the model it was generated from */
+    const char* config_spec;        /**< Configuration::spec(), "closed=c1 stuck=m2" */
+    const char* config_key;         /**< Configuration::key(), "c1_s01" */
+    const char* generator_version;  /**< HSNC_VERSION of the generator */
+    int n_dof;                      /**< masses of the model (x0, v0, x, v, a sizes) */
+    int n_switch;                   /**< switch functions (g, dg, bound, scale sizes) */
+    const hsnc_switch* switches;    /**< n_switch entries */
+    int n_coef;                     /**< doubles that setup writes and eval reads */
+    double max_step;                /**< validity of `bound`; +inf unless secular terms */
+    hsnc_setup_fn setup;
+    hsnc_eval_fn eval;
+} hsnc_kernel;
+
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+
+#endif /* HSNC_KERNEL_ABI_H */

@@ -1,0 +1,37 @@
+// hsnc -- KernelSolver: a SegmentSolver backed by a generated kernel
+// (runtime/kernel_abi.h), ahead-of-time compiled or JIT-compiled.
+#pragma once
+
+#include <vector>
+
+#include "kernel_abi.h"
+#include "segment.h"
+
+namespace hsnc {
+
+/// Parse a Configuration::key() ("c01_s10") back into flags.
+/// Throws RunError when the text is not a key.
+Configuration configuration_from_key(const char* key);
+
+class KernelSolver : public SegmentSolver {
+public:
+    /// Wraps `kernel`, which must outlive the solver. Throws RunError when the
+    /// kernel was built for another ABI version.
+    explicit KernelSolver(const hsnc_kernel& kernel);
+
+    const Configuration& configuration() const override { return cfg_; }
+    const std::vector<SwitchFunction>& switches() const override { return switches_; }
+    void setup(double t0, const double* x0, const double* v0, const signed char* sgn) override;
+    void eval(double tau, const SegmentEval& out) const override;
+    double max_step() const override { return kernel_.max_step; }
+
+    const hsnc_kernel& kernel() const { return kernel_; }
+
+private:
+    const hsnc_kernel& kernel_;
+    Configuration cfg_;
+    std::vector<SwitchFunction> switches_;
+    std::vector<double> coef_;  // written by setup, read by eval
+};
+
+}  // namespace hsnc

@@ -1,0 +1,50 @@
+#include "model_hash.h"
+
+#include <cstdio>
+
+namespace hsnc {
+namespace {
+
+// %.17g round-trips every finite double (max_digits10 = 17).
+std::string num(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v == 0.0 ? 0.0 : v);  // -0 and +0 hash alike
+    return buf;
+}
+
+}  // namespace
+
+std::string model_canonical_text(const Model& model) {
+    std::string t = "hsnc-model-v1\nname " + model.name + "\ng " + num(model.g) + "\n";
+    for (const Mass& m : model.masses)
+        t += "mass " + m.name + " " + num(m.m) + " " + (m.has_friction ? "friction " : "nofriction ") +
+             num(m.mu_k) + " " + num(m.mu_s) + "\n";
+    for (const Spring& s : model.springs)
+        t += "spring " + std::to_string(s.a) + " " + std::to_string(s.b) + " " + num(s.k) + "\n";
+    for (const Contact& c : model.contacts)
+        t += "contact " + c.name + " " + std::to_string(c.a) + " " + std::to_string(c.b) + " " +
+             num(c.gap) + " " + num(c.k) + "\n";
+    t += "damping " + num(model.alpha) + " " + num(model.beta) + "\n";
+    for (const Harmonic& h : model.forcing) {
+        t += "forcing " + num(h.omega) + " " + num(h.phase);
+        for (double a : h.amplitude) t += " " + num(a);
+        t += "\n";
+    }
+    t += "load";
+    for (double l : model.load) t += " " + num(l);
+    t += "\n";
+    return t;
+}
+
+std::uint64_t fnv1a64(const std::string& bytes) {
+    std::uint64_t h = 14695981039346656037ull;  // FNV offset basis
+    for (unsigned char c : bytes) {
+        h ^= c;
+        h *= 1099511628211ull;  // FNV prime
+    }
+    return h;
+}
+
+std::uint64_t model_hash(const Model& model) { return fnv1a64(model_canonical_text(model)); }
+
+}  // namespace hsnc
