@@ -119,7 +119,7 @@ int simulate(const SimulateOptions& o) {
     RunSummary sum;
     std::string detail;
     if (method == Method::hsnc) {
-        std::unique_ptr<SolverProvider> provider = make_solver_provider(model, mode);
+        std::unique_ptr<SolverProvider> provider = make_solver_provider(model, mode, &aot_registry());
         Engine engine(model, *provider);
         sum = engine.run(eopt, obs);
         detail = provider->describe();

@@ -1,7 +1,11 @@
 #include "solver_provider.h"
 
+#include <algorithm>
+
 #include "error.h"
 #include "generic_solver.h"
+#include "kernel_solver.h"
+#include "model_hash.h"
 
 namespace hsnc {
 
@@ -22,10 +26,44 @@ std::string GenericSolverProvider::describe() const {
     return "generic solver for " + std::to_string(cache_.size()) + " configurations";
 }
 
-std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode) {
-    if (mode == KernelMode::aot)
-        throw InputError("--kernels aot: no ahead-of-time kernels for model '" + model.name + "'");
-    return std::make_unique<GenericSolverProvider>(model);
+AotSolverProvider::AotSolverProvider(const Model& model, const AotRegistry& registry, bool fallback)
+    : model_(model), registry_(registry), fallback_(fallback), hash_(model_hash(model)) {}
+
+SegmentSolver& AotSolverProvider::solver(const Configuration& cfg) {
+    auto it = cache_.find(cfg);
+    if (it != cache_.end()) return *it->second;
+    std::unique_ptr<SegmentSolver> s;
+    if (const hsnc_kernel* k = find_aot_kernel(registry_, model_.name.c_str(), hash_, cfg.key().c_str())) {
+        s = std::make_unique<KernelSolver>(*k);
+        ++aot_;
+    } else if (fallback_) {
+        s = std::make_unique<GenericSolver>(model_, cfg);
+        ++generic_;
+    } else {
+        throw RunError("--kernels aot: no ahead-of-time kernel for configuration '" + cfg.spec(model_) +
+                       "' of model '" + model_.name + "' (generate it with hsnc generate, or use --kernels auto)");
+    }
+    return *cache_.emplace(cfg, std::move(s)).first->second;
+}
+
+std::string AotSolverProvider::describe() const {
+    return std::to_string(aot_) + " ahead-of-time kernels, generic solver for " + std::to_string(generic_) +
+           " configurations";
+}
+
+std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
+                                                     const AotRegistry* registry) {
+    if (mode == KernelMode::generic) return std::make_unique<GenericSolverProvider>(model);
+    const std::uint64_t hash = model_hash(model);
+    const bool has_kernels =
+        registry && std::any_of(registry->kernels, registry->kernels + registry->count, [&](const hsnc_kernel* k) {
+            return k->model_hash == hash && model.name == k->model_name;
+        });
+    if (mode == KernelMode::aot && !has_kernels)
+        throw InputError("--kernels aot: no ahead-of-time kernels for model '" + model.name +
+                         "' (bundled models only, and only as generated: a --set or an edited file changes the model)");
+    if (!has_kernels) return std::make_unique<GenericSolverProvider>(model);
+    return std::make_unique<AotSolverProvider>(model, *registry, mode == KernelMode::automatic);
 }
 
 }  // namespace hsnc

@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "aot_registry.h"
 #include "engine.h"
 
 namespace hsnc {
@@ -30,6 +31,26 @@ private:
     std::map<Configuration, std::unique_ptr<SegmentSolver>> cache_;
 };
 
-std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode);
+/// Ahead-of-time kernels where the registry has one for (model, configuration);
+/// otherwise the generic solver (mode automatic) or a RunError naming the
+/// configuration (mode aot).
+class AotSolverProvider : public SolverProvider {
+public:
+    AotSolverProvider(const Model& model, const AotRegistry& registry, bool fallback);
+    SegmentSolver& solver(const Configuration& cfg) override;
+    std::string describe() const override;
+
+private:
+    const Model& model_;
+    const AotRegistry& registry_;
+    bool fallback_;
+    std::uint64_t hash_;
+    std::size_t aot_ = 0, generic_ = 0;
+    std::map<Configuration, std::unique_ptr<SegmentSolver>> cache_;
+};
+
+/// The provider for `mode`; `registry` (may be null) lists the AOT kernels linked in.
+std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
+                                                     const AotRegistry* registry);
 
 }  // namespace hsnc
