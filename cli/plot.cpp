@@ -23,11 +23,14 @@ void plot_trajectory(const Model& model, const std::string& csv, const std::stri
                          "set datafile separator ','\n"
                          "set key autotitle columnhead outside right\n"
                          "set grid\nset xlabel 't [s]'\nset ylabel 'x'\n"
-                         "set title " + quoted(model.name + ": positions (hsnc)") + "\n"
-                         "plot ";
+                         "set multiplot layout 2,1 title " + quoted(model.name + ": positions (hsnc)") + "\n";
+    // Top: the whole run; bottom: its first seconds, where single oscillations show.
+    std::string curves;
     for (std::size_t i = 0; i < model.dof(); ++i)
-        script += (i ? ", " : "") + quoted(csv) + " using 1:" + std::to_string(i + 2) + " with lines lw 1";
-    script += "\n";
+        curves += (i ? ", " : "") + quoted(csv) + " using 1:" + std::to_string(i + 2) + " with lines lw 1";
+    script += "plot " + curves + "\n";
+    script += "set title 'first 5 s'\nset xrange [" + std::to_string(model.t0) + ":" + std::to_string(model.t0 + 5) +
+              "]\nplot " + curves + "\nunset multiplot\n";
     std::FILE* gp = ::popen("gnuplot 2>&1", "w");
     if (!gp) throw RunError("--plot: cannot start gnuplot (install the Debian package gnuplot-nox)");
     std::fputs(script.c_str(), gp);

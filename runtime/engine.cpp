@@ -250,7 +250,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     // The segment's start state itself, not its modal round trip.
                     observer.on_sample(tk, x.data(), v.data());
                 } else {
-                    eval(tk - t);
+                    S.eval(tk - t, out);  // dense output: not counted as a search evaluation
                     observer.on_sample(tk, buf.x.data(), buf.v.data());
                 }
                 if (tk >= t_end) {
