@@ -103,12 +103,12 @@ RunSummary run_ab4(const Model& model, const IntegratorOptions& io, const Engine
 
     // Contacts from the state (closed while G >= 0); friction along v, or along
     // the decided direction while v is exactly 0.
+    Configuration c = cfg;             // per-evaluation copies, reused (no allocation per step)
+    std::vector<signed char> d = dir;
     auto rhs = [&](double tt, const std::vector<double>& xx, const std::vector<double>& vv, std::vector<double>& a) {
-        Configuration c = cfg;
+        c.stuck = cfg.stuck;
         for (std::size_t k = 0; k < model.contacts.size(); ++k) c.closed[k] = gap(model, static_cast<int>(k), xx.data()) >= 0;
-        std::vector<signed char> d = dir;
-        for (std::size_t i = 0; i < n; ++i)
-            if (vv[i] != 0.0) d[i] = vv[i] > 0 ? 1 : -1;
+        for (std::size_t i = 0; i < n; ++i) d[i] = vv[i] != 0.0 ? (vv[i] > 0 ? 1 : -1) : dir[i];
         accelerations(model, c, d, tt, xx.data(), vv.data(), a.data());
     };
 
@@ -120,17 +120,18 @@ RunSummary run_ab4(const Model& model, const IntegratorOptions& io, const Engine
     for (std::size_t step = 1; step <= steps; ++step) {
         const double t1 = std::min(model.t0 + static_cast<double>(step) * h, eo.t_end);
         const double hs = t1 - t;
-        if (history < 3 || hs != h) {
+        // Step ends are t0 + step*h (no drift); only the last step may be shorter.
+        const bool short_step = hs < h * (1 - 1e-9);
+        if (history < 3 || short_step) {
             // RK4 step (start of the multistep history, or the shorter last step).
-            std::vector<double> ax1 = a, av1(n), ax2(n), av2(n), ax3(n), av3(n), ax4(n), av4(n);
-            auto stage = [&](double c, const std::vector<double>& dx, const std::vector<double>& dv,
+            auto stage = [&](double frac, const std::vector<double>& dx, const std::vector<double>& dv,
                              std::vector<double>& outx, std::vector<double>& outv) {
                 for (std::size_t i = 0; i < n; ++i) {
-                    tmpx[i] = x[i] + c * hs * dx[i];
-                    tmpv[i] = v[i] + c * hs * dv[i];
+                    tmpx[i] = x[i] + frac * hs * dx[i];
+                    tmpv[i] = v[i] + frac * hs * dv[i];
                     if (cfg.stuck[i]) tmpv[i] = 0.0;
                 }
-                rhs(t + c * hs, tmpx, tmpv, ta);
+                rhs(t + frac * hs, tmpx, tmpv, ta);
                 outx = tmpv;
                 outv = ta;
             };
