@@ -12,45 +12,17 @@
 #include <string>
 #include <vector>
 
+#include "cli_runner.h"
 #include "model_reader.h"
 
 namespace hsnc {
 namespace {
 
-struct CliRun {
-    int exit_code = -1;
-    std::string out, err;
-};
-
-std::string slurp(const std::string& path) {
-    std::ifstream in(path);
-    std::stringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
-/// Run `hsnc ARGS`, capturing stdout and stderr.
-CliRun run_hsnc(const std::string& args) {
-    // One pair of files per test, so that `ctest -j` cannot mix them up.
-    const std::string stem = ::testing::TempDir() + "hsnc_" +
-                             ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    const std::string out = stem + ".out", err = stem + ".err";
-    const std::string command = std::string("'") + HSNC_BINARY + "' " + args + " >'" + out + "' 2>'" + err + "'";
-    const int status = std::system(command.c_str());
-    CliRun r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    return r;
-}
-
-std::string model_path(const std::string& file) { return std::string(HSNC_SOURCE_DIR) + "/models/" + file; }
-
-std::string write_temp(const std::string& name, const std::string& text) {
-    const std::string path = ::testing::TempDir() + name;
-    std::ofstream(path) << text;
-    return path;
-}
+using testing::CliRun;
+using testing::model_path;
+using testing::run_hsnc;
+using testing::slurp;
+using testing::write_temp;
 
 /// One row of the frequency table: omega_n (0 for a rigid-body mode), f, xi.
 struct Mode {

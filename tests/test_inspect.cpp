@@ -10,23 +10,11 @@
 #include <sstream>
 #include <string>
 
+#include "cli_runner.h"
+
 namespace {
 
-struct Result {
-    int status;
-    std::string out;
-};
-
-Result run_hsnc(const std::string& args) {
-    const std::string cmd = std::string(HSNC_BINARY) + " " + args + " 2>/dev/null";
-    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-    std::string out;
-    std::array<char, 4096> buf;
-    std::size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), pipe.get())) > 0) out.append(buf.data(), n);
-    const int status = pclose(pipe.release());
-    return {WEXITSTATUS(status), out};
-}
+using hsnc::testing::run_hsnc;
 
 const std::string kSeed1 = std::string(HSNC_SOURCE_DIR) + "/models/seed-scenario-1.toml";
 
@@ -39,8 +27,8 @@ double number_after(const std::string& text, const std::string& key) {
 
 TEST(Inspect, SeedScenario1ClosedContactStuckM2) {
     // One free DOF m1: K = k1 + k2 + k* = 5 + 10 + 100, M = 1, C = beta K.
-    const Result r = run_hsnc("inspect " + kSeed1 + " --config \"closed=contact1 stuck=m2\"");
-    ASSERT_EQ(r.status, 0);
+    const auto r = run_hsnc("inspect " + kSeed1 + " --config \"closed=contact1 stuck=m2\"");
+    ASSERT_EQ(r.exit_code, 0);
     const double k = 5.0 + 10.0 + 100.0, beta = 0.1, omega = std::sqrt(k), c = beta * k, xi = c / (2 * omega);
     EXPECT_NE(r.out.find("M = [1]"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("K = [115]"), std::string::npos) << r.out;
@@ -56,8 +44,8 @@ TEST(Inspect, SeedScenario1ClosedContactStuckM2) {
 }
 
 TEST(Inspect, LatexIsBalancedAndHasNoCTokens) {
-    const Result r = run_hsnc("inspect " + kSeed1 + " --config \"closed=contact1 stuck=m2\" --format latex");
-    ASSERT_EQ(r.status, 0);
+    const auto r = run_hsnc("inspect " + kSeed1 + " --config \"closed=contact1 stuck=m2\" --format latex");
+    ASSERT_EQ(r.exit_code, 0);
     int depth = 0;
     bool never_negative = true;
     for (char ch : r.out) {
@@ -72,14 +60,14 @@ TEST(Inspect, LatexIsBalancedAndHasNoCTokens) {
 }
 
 TEST(Inspect, CppFormatIsTheKernel) {
-    const Result r = run_hsnc("inspect " + kSeed1 + " --config \"closed=contact1 stuck=m2\" --format cpp");
-    ASSERT_EQ(r.status, 0);
+    const auto r = run_hsnc("inspect " + kSeed1 + " --config \"closed=contact1 stuck=m2\" --format cpp");
+    ASSERT_EQ(r.exit_code, 0);
     EXPECT_NE(r.out.find("extern \"C\" const hsnc_kernel hsnc_kernel_seed_scenario_1_c1_s01"), std::string::npos);
 }
 
 TEST(Inspect, BadConfigIsInputError) {
-    EXPECT_EQ(run_hsnc("inspect " + kSeed1 + " --config closed=nope").status, 2);
-    EXPECT_EQ(run_hsnc("inspect " + kSeed1 + " --format pdf").status, 2);
+    EXPECT_EQ(run_hsnc("inspect " + kSeed1 + " --config closed=nope").exit_code, 2);
+    EXPECT_EQ(run_hsnc("inspect " + kSeed1 + " --format pdf").exit_code, 2);
 }
 
 std::string slurp(const std::filesystem::path& p) {
@@ -93,8 +81,8 @@ TEST(Generate, TwoProcessesWriteIdenticalBytes) {
     namespace fs = std::filesystem;
     const fs::path base = fs::temp_directory_path() / ("hsnc_generate_test_" + std::to_string(::getpid()));
     fs::remove_all(base);
-    ASSERT_EQ(run_hsnc("generate " + kSeed1 + " -o " + (base / "a").string()).status, 0);
-    ASSERT_EQ(run_hsnc("generate " + kSeed1 + " -o " + (base / "b").string()).status, 0);
+    ASSERT_EQ(run_hsnc("generate " + kSeed1 + " -o " + (base / "a").string()).exit_code, 0);
+    ASSERT_EQ(run_hsnc("generate " + kSeed1 + " -o " + (base / "b").string()).exit_code, 0);
     int files = 0;
     for (const auto& e : fs::directory_iterator(base / "a")) {
         EXPECT_EQ(slurp(e.path()), slurp(base / "b" / e.path().filename())) << e.path();
