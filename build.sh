@@ -14,7 +14,7 @@ packages=(
   libcli11-dev                   # command line parsing
   llvm-14-dev libclang-cpp14-dev libclang-14-dev  # compiling kernels in-process
   libgtest-dev libbenchmark-dev  # tests and benchmarks
-  gnuplot-nox                    # plots
+  gnuplot-nox fonts-dejavu-core   # plots (pngcairo needs a font)
 )
 missing=()
 for p in "${packages[@]}"; do

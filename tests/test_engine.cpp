@@ -293,6 +293,37 @@ v = { m1 = %.17g }
     EXPECT_EQ(r.events.size(), 0u);
 }
 
+
+// The Zeno guard: switches accumulating within a small span stop the run with
+// a named status and a message saying where. Exercised here with a span wide
+// enough that the Coulomb decay's first reversals (0.31, 0.63, 0.94 s) count.
+TEST(EngineGuards, AccumulatingSwitchesStopWithZenoStatus) {
+    const Model m = model_from(R"(
+name = "coulomb"
+[[mass]]
+name = "m1"
+m = 1
+mu_k = 0.1
+[[spring]]
+between = ["ground", "m1"]
+k = 100
+[initial]
+x = { m1 = 0.2 }
+)");
+    GenericSolverProvider provider(m);
+    Engine engine(m, provider);
+    Recorder rec(m.dof());
+    EngineOptions opt;
+    opt.t_end = 5.0;
+    opt.zeno_events = 3;
+    opt.zeno_span = 1.0;
+    const RunSummary s = engine.run(opt, rec);
+    EXPECT_EQ(s.status, RunStatus::zeno);
+    EXPECT_EQ(s.events, 3u);
+    EXPECT_NEAR(s.t, 3 * kPi / 10, 1e-13);
+    EXPECT_NE(s.message.find("3 switches between t = 0.314"), std::string::npos) << s.message;
+}
+
 // Samples: on the grid t0 + k dt, plus t_end, never twice at one time.
 TEST(EngineOutput, SamplesOnTheGridAndAtTEnd) {
     const Model m = model_from(R"(
