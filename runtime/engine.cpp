@@ -95,9 +95,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     double t = model_.t0;
     const double t_end = options.t_end;
     std::vector<signed char> sgn;
-    Configuration cfg = entered_configuration(model_, t, x.data(), v.data(), sgn);
-    for (std::size_t i = 0; i < n; ++i)
-        if (cfg.stuck[i]) v[i] = 0.0;
+    Configuration cfg = entered_configuration(model_, t, x.data(), v.data(), sgn);  // stuck only where v = 0
 
     Buffers buf(n, model_.contacts.size() + 2 * n);
     std::set<Configuration> visited;

@@ -95,9 +95,7 @@ RunSummary run_ab4(const Model& model, const IntegratorOptions& io, const Engine
     std::vector<double> x = model.x0, v = model.v0;
     double t = model.t0;
     std::vector<signed char> dir;
-    Configuration cfg = entered_configuration(model, t, x.data(), v.data(), dir);
-    for (std::size_t i = 0; i < n; ++i)
-        if (cfg.stuck[i]) v[i] = 0.0;
+    Configuration cfg = entered_configuration(model, t, x.data(), v.data(), dir);  // stuck only where v = 0
     RunSummary sum;
     Sampler sampler(model, eo, obs);
 
@@ -236,9 +234,7 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
     std::vector<double> x = model.x0, v = model.v0;
     double t = model.t0;
     std::vector<signed char> dir;
-    Configuration cfg = entered_configuration(model, t, x.data(), v.data(), dir);
-    for (std::size_t i = 0; i < n; ++i)
-        if (cfg.stuck[i]) v[i] = 0.0;
+    Configuration cfg = entered_configuration(model, t, x.data(), v.data(), dir);  // stuck only where v = 0
     RunSummary sum;
     Sampler sampler(model, eo, obs);
 

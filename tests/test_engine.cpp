@@ -59,12 +59,8 @@ Model model_from(const std::string& toml) { return parse_model(toml, "test.toml"
 
 constexpr double kPi = 3.14159265358979323846;
 
-// Coulomb-damped free decay: m x'' + k x = -mu m g sign(x'). Each half-cycle is
-// pi/omega long and centred on -+x_e = mu g / omega^2, so the extreme drops by
-// 2 x_e per half-cycle (4 mu g / omega^2 per cycle); the mass sticks at the
-// first extreme with |x| <= mu_s g / omega^2.
-TEST(EngineClosedForm, CoulombFreeDecay) {
-    const Model m = model_from(R"(
+// m x'' + k x = -mu m g sign(x'), omega = 10, released from x = 0.2.
+constexpr const char* kCoulomb = R"(
 name = "coulomb"
 [[mass]]
 name = "m1"
@@ -75,7 +71,14 @@ between = ["ground", "m1"]
 k = 100
 [initial]
 x = { m1 = 0.2 }
-)");
+)";
+
+// Coulomb-damped free decay: m x'' + k x = -mu m g sign(x'). Each half-cycle is
+// pi/omega long and centred on -+x_e = mu g / omega^2, so the extreme drops by
+// 2 x_e per half-cycle (4 mu g / omega^2 per cycle); the mass sticks at the
+// first extreme with |x| <= mu_s g / omega^2.
+TEST(EngineClosedForm, CoulombFreeDecay) {
+    const Model m = model_from(kCoulomb);
     const double omega = 10, xe = 0.1 * 9.81 / (omega * omega);
     const Outcome r = simulate(m, 5.0);
     ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
@@ -298,18 +301,7 @@ v = { m1 = %.17g }
 // a named status and a message saying where. Exercised here with a span wide
 // enough that the Coulomb decay's first reversals (0.31, 0.63, 0.94 s) count.
 TEST(EngineGuards, AccumulatingSwitchesStopWithZenoStatus) {
-    const Model m = model_from(R"(
-name = "coulomb"
-[[mass]]
-name = "m1"
-m = 1
-mu_k = 0.1
-[[spring]]
-between = ["ground", "m1"]
-k = 100
-[initial]
-x = { m1 = 0.2 }
-)");
+    const Model m = model_from(kCoulomb);
     GenericSolverProvider provider(m);
     Engine engine(m, provider);
     Recorder rec(m.dof());
