@@ -98,6 +98,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     Configuration cfg = entered_configuration(model_, t, x.data(), v.data(), sgn);  // stuck only where v = 0
 
     Buffers buf(n, model_.contacts.size() + 2 * n);
+    Buffers dense(n, model_.contacts.size() + 2 * n);  // trajectory samples, so buf keeps the event state
     std::set<Configuration> visited;
     std::deque<double> recent;  // times of the latest events (Zeno guard)
     std::size_t same_instant = 0;
@@ -248,8 +249,8 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     // The segment's start state itself, not its modal round trip.
                     observer.on_sample(tk, x.data(), v.data());
                 } else {
-                    S.eval(tk - t, out);  // dense output: not counted as a search evaluation
-                    observer.on_sample(tk, buf.x.data(), buf.v.data());
+                    S.eval(tk - t, dense.view());  // dense output: not a search evaluation
+                    observer.on_sample(tk, dense.x.data(), dense.v.data());
                 }
                 if (tk >= t_end) {
                     samples_done = true;
@@ -261,7 +262,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
 
         // ---- advance to the event instant: the state at the representable time ----
         const double t_next = t_seg_end;
-        eval(t_next - t);
+        if (!found.any) eval(t_next - t);  // an event's instant was evaluated last in the search
         x = buf.x;
         v = buf.v;
         for (std::size_t i = 0; i < n; ++i)
