@@ -74,6 +74,10 @@ void Jit::add(const std::string& name, const std::string& source) {
     // kernel_abi.h and calls only __builtin_ math. -ffp-contract=off keeps
     // a*b+c two roundings, as the ahead-of-time kernels and the generic solver
     // compute it, so all three agree to the last bit wherever they can.
+    // -O2, measured (2-core AMD EPYC, seed-scenario-2 to t = 30000 s, 420k
+    // segments): its kernels step as fast as the ahead-of-time ones (0.60 s);
+    // -O0 compiles in 11 instead of 18 ms per kernel but steps 23% slower,
+    // -O1 and -O3 compile no faster and step no faster than -O2.
     const std::vector<const char*> args = {
         "-triple", triple.c_str(), "-x", "c++", "-std=c++17", "-O2", "-ffp-contract=off",
         "-nostdsysteminc", "-nobuiltininc", "-I", dir.c_str(), "-w", path.c_str()};
