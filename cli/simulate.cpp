@@ -12,7 +12,10 @@
 #include "csv_writer.h"
 #include "engine.h"
 #include "error.h"
+#include "derivation.h"
+#include "emitter.h"
 #include "integrators.h"
+#include "jit_solver_provider.h"
 #include "model_reader.h"
 #include "plot.h"
 #include "solver_provider.h"
@@ -119,7 +122,13 @@ int simulate(const SimulateOptions& o) {
     RunSummary sum;
     std::string detail;
     if (method == Method::hsnc) {
-        std::unique_ptr<SolverProvider> provider = make_solver_provider(model, mode, &aot_registry());
+        std::unique_ptr<SolverProvider> provider;
+        if (mode == KernelMode::jit)
+            provider = std::make_unique<JitSolverProvider>(model, [&model](const Configuration& cfg) {
+                return JitKernelSource{kernel_symbol(model, cfg), emit_kernel(derive(model, cfg))};
+            });
+        else
+            provider = make_solver_provider(model, mode, &aot_registry());
         Engine engine(model, *provider);
         sum = engine.run(eopt, obs);
         detail = provider->describe();
@@ -174,7 +183,8 @@ void add_simulate(CLI::App& app, int& exit_code) {
     sub->add_option("--rtol", o->rtol, "relative tolerance of --method rk45 (default 1e-10)");
     sub->add_option("--atol", o->atol, "absolute tolerance of --method rk45 (default 1e-12)");
     sub->add_option("--kernels", o->kernels,
-                    "auto (default: ahead-of-time kernels when the model has them, else generic), aot, generic");
+                    "auto (default: ahead-of-time kernels when the model has them, else generic), aot, generic, "
+                    "jit (compile a kernel in-process for each configuration the run enters)");
     sub->add_option("--max-events", o->max_events, "stop after this many switch events (0: no limit)");
     sub->add_flag("--quiet", o->quiet, "no progress or statistics on stderr");
     sub->callback([o, &exit_code] { exit_code = simulate(*o); });

@@ -1,6 +1,7 @@
 #include "solver_provider.h"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "error.h"
 #include "generic_solver.h"
@@ -13,7 +14,8 @@ KernelMode parse_kernel_mode(const std::string& name) {
     if (name == "auto") return KernelMode::automatic;
     if (name == "aot") return KernelMode::aot;
     if (name == "generic") return KernelMode::generic;
-    throw InputError("--kernels '" + name + "': expected auto, aot or generic");
+    if (name == "jit") return KernelMode::jit;
+    throw InputError("--kernels '" + name + "': expected auto, aot, generic or jit");
 }
 
 SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
@@ -54,6 +56,8 @@ std::string AotSolverProvider::describe() const {
 std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
                                                      const AotRegistry* registry) {
     if (mode == KernelMode::generic) return std::make_unique<GenericSolverProvider>(model);
+    if (mode == KernelMode::jit)
+        throw std::logic_error("make_solver_provider(): --kernels jit is built with JitSolverProvider");
     const std::uint64_t hash = model_hash(model);
     const bool has_kernels =
         registry && std::any_of(registry->kernels, registry->kernels + registry->count, [&](const hsnc_kernel* k) {

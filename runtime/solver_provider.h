@@ -14,9 +14,11 @@ enum class KernelMode {
     automatic,  ///< ahead-of-time kernels when the model has them, else generic
     aot,        ///< ahead-of-time kernels only (error when the model has none)
     generic,    ///< the Eigen-based generic solver
+    jit,        ///< a kernel compiled in-process per configuration visited
+                ///  (runtime/jit_solver_provider.h; opt-in, built by the command line)
 };
 
-/// "auto", "aot", "generic"; InputError otherwise.
+/// "auto", "aot", "generic", "jit"; InputError otherwise.
 KernelMode parse_kernel_mode(const std::string& name);
 
 /// The generic (Eigen) solver for every configuration, created on first use and cached.
@@ -49,7 +51,8 @@ private:
     std::map<Configuration, std::unique_ptr<SegmentSolver>> cache_;
 };
 
-/// The provider for `mode`; `registry` (may be null) lists the AOT kernels linked in.
+/// The provider for `mode` (not jit: that one needs the generator, see
+/// JitSolverProvider); `registry` (may be null) lists the AOT kernels linked in.
 std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
                                                      const AotRegistry* registry);
 
