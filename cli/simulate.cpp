@@ -1,4 +1,5 @@
 // `hsnc simulate MODEL [options]` (interface.md sections 3 and 4).
+#include <dlfcn.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -81,6 +82,21 @@ private:
     std::size_t counts_[5] = {};
 };
 
+// LLVM and Clang are loaded only for --kernels jit: libhsnc_jit.so, from
+// beside the executable (both are built into the same directory).
+std::unique_ptr<SolverProvider> load_jit_provider(const Model& model, JitSolverProvider::SourceFn source) {
+    char exe[4096];
+    const ssize_t len = ::readlink("/proc/self/exe", exe, sizeof exe - 1);
+    std::string dir = len > 0 ? std::string(exe, static_cast<std::size_t>(len)) : std::string(".");
+    dir = dir.substr(0, dir.find_last_of('/') + 1);
+    const std::string path = dir + HSNC_JIT_MODULE;
+    void* module = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);  // kept loaded: kernels live in it
+    if (!module) throw RunError(std::string("--kernels jit: cannot load the JIT module: ") + ::dlerror());
+    auto factory = reinterpret_cast<JitProviderFactory>(::dlsym(module, kJitProviderFactorySymbol));
+    if (!factory) throw RunError("--kernels jit: " + path + " has no " + kJitProviderFactorySymbol);
+    return std::unique_ptr<SolverProvider>(factory(model, std::move(source)));
+}
+
 std::string number_text(double v) {
     std::ostringstream s;
     s.precision(17);
@@ -124,7 +140,7 @@ int simulate(const SimulateOptions& o) {
     if (method == Method::hsnc) {
         std::unique_ptr<SolverProvider> provider;
         if (mode == KernelMode::jit)
-            provider = std::make_unique<JitSolverProvider>(model, [&model](const Configuration& cfg) {
+            provider = load_jit_provider(model, [&model](const Configuration& cfg) {
                 return JitKernelSource{kernel_symbol(model, cfg), emit_kernel(derive(model, cfg))};
             });
         else

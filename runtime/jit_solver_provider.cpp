@@ -55,3 +55,8 @@ std::string JitSolverProvider::describe() const {
 }
 
 }  // namespace hsnc
+
+extern "C" __attribute__((visibility("default"))) hsnc::SolverProvider* hsnc_jit_create_provider(
+    const hsnc::Model& model, hsnc::JitSolverProvider::SourceFn source) {
+    return new hsnc::JitSolverProvider(model, std::move(source));
+}

@@ -56,4 +56,9 @@ private:
     double emit_seconds_ = 0, compile_seconds_ = 0;
 };
 
+/// The entry point `hsnc` looks up after dlopen()ing libhsnc_jit.so; returns a
+/// new JitSolverProvider (the caller owns it). Exceptions propagate.
+using JitProviderFactory = SolverProvider* (*)(const Model& model, JitSolverProvider::SourceFn source);
+inline constexpr const char* kJitProviderFactorySymbol = "hsnc_jit_create_provider";
+
 }  // namespace hsnc
