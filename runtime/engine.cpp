@@ -124,6 +124,12 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         return sum;
     };
 
+    // Per-segment working arrays, sized once for the largest switch list.
+    const std::size_t max_switches = model_.contacts.size() + 2 * n;
+    std::vector<double> side(max_switches), floor(max_switches), root(max_switches);
+    std::vector<char> armed(max_switches);
+    Found found;
+    found.switched.reserve(max_switches);
     std::vector<Transition> transitions;
     std::string why;
     // Rounding level each switch function had at the last event, by (kind,
@@ -142,8 +148,8 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         const double tau_end = t_end - t;
         SegmentEval out = buf.view();
 
-        std::vector<double> side(nsw), floor(nsw, 0.0);
         for (std::size_t f = 0; f < nsw; ++f) {
+            floor[f] = 0.0;
             side[f] = side_of(sw[f], cfg, sgn);
             const auto it = inherited.find({static_cast<int>(sw[f].kind), sw[f].element});
             if (it != inherited.end()) floor[f] = it->second;
@@ -157,7 +163,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         };
         // A velocity function that starts at 0 (a release, a reversal, a stop
         // that slides on) is not watched for a stop until it has left 0.
-        std::vector<char> armed(nsw, 0);
+        std::fill(armed.begin(), armed.end(), 0);
 
         auto eval = [&](double tau) {
             S.eval(tau, out);
@@ -166,7 +172,9 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         };
 
         // ---- find the earliest switch in (0, tau_end] ----
-        Found found;
+        found.any = false;
+        found.tau = 0.0;
+        found.switched.clear();
         double tau = 0.0, prev_tau = 0.0;
         eval(0.0);
         for (std::size_t f = 0; f < nsw; ++f)
@@ -176,7 +184,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             if (iter > 10'000'000) return finish(RunStatus::failure, "switch search does not converge at t = " + time_text(t + tau));
             // Which functions have switched at tau, and where is each one's zero?
             double tau_star = kInf;
-            std::vector<double> root(nsw, kInf);
+            std::fill(root.begin(), root.begin() + static_cast<std::ptrdiff_t>(nsw), kInf);
             for (std::size_t f = 0; f < nsw; ++f) {
                 const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
                 if (!std::isfinite(h) || !std::isfinite(hd) || !std::isfinite(buf.bound[f]))
