@@ -28,7 +28,9 @@ out="$here/docs/extremes.md"
     echo
     echo "| case | quantity | achieved | bound | verdict |"
     echo "| --- | --- | ---: | ---: | --- |"
-    awk -F '\t' '{ printf "| %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5 }' "$rows"
+    # A '|' inside a cell (|E - E0|) is escaped for markdown.
+    awk -F '\t' '{ for (i = 1; i <= 5; ++i) gsub(/\|/, "\\|", $i);
+                   printf "| %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5 }' "$rows"
     echo
     if [ "$status" -eq 0 ]; then echo "All tests of the table passed."
     else echo "**Some tests of the table failed (exit status $status).**"; fi
