@@ -13,7 +13,7 @@ tests="$build/hsnc_tests"
 [ -x "$tests" ] || { echo "extremes_table.sh: no test binary at $tests (build first)" >&2; exit 2; }
 rows=$(mktemp)
 trap 'rm -f "$rows"' EXIT
-filter='Extremes/*:CoulombExtreme.*:Grazing.*:Simultaneous.*:LongRun.*:LargeT0.*:LargeForcing.*:LargeModel.*:EnergyBalance.*'
+filter='Extremes/*:Refusal.*:CoulombExtreme.*:Grazing.*:Simultaneous.*:LongRun.*:LargeT0.*:LargeForcing.*:LargeModel.*:EnergyBalance.*'
 status=0
 HSNC_EXTREMES_TABLE="$rows" "$tests" --gtest_filter="$filter" --gtest_brief=1 >/dev/null 2>&1 || status=$?
 out="$here/docs/extremes.md"

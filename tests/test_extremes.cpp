@@ -589,6 +589,57 @@ v = { m1 = 2.0 }
 }
 
 // ---------------------------------------------------------------------------
+// 7b. Beyond double range: clear refusals, not wrong numbers.
+
+Model bilinear_mk(const std::string& m, const std::string& k) {
+    return model_from(R"(
+name = "ovf"
+[[mass]]
+name = "m1"
+m = )" + m + R"(
+[[spring]]
+between = ["m1", "ground"]
+k = )" + k + R"(
+[[contact]]
+between = ["m1", "ground"]
+gap = 0
+k = 12
+[initial]
+v = { m1 = 1.0 }
+)");
+}
+
+TEST(Refusal, OverflowingStiffnessOverMassIsAFailureWithAMessage) {
+    // k/m = 1e400 overflows: the run stops at t0 with status failure.
+    const Model m = bilinear_mk("1e-200", "1e200");
+    const Outcome o = simulate(m, 1.0);
+    EXPECT_EQ(o.summary.status, RunStatus::failure);
+    EXPECT_EQ(o.events.size(), 0u);
+    EXPECT_NE(o.summary.message.find("non-finite switch function in configuration 'closed=contact1"),
+              std::string::npos)
+        << o.summary.message;
+}
+
+TEST(Refusal, TinyPeriodIsReportedAsZeno) {
+    // w = 1e150 rad/s: the contact really switches every ~2e-150 s; 1000
+    // switches within 1e-9 s is the Zeno guard's refusal, with where it was.
+    for (const auto& [mass, k] : {std::pair<const char*, const char*>{"1e-300", "1"}, {"1", "1e300"}}) {
+        const Outcome o = simulate(bilinear_mk(mass, k), 1.0);
+        EXPECT_EQ(o.summary.status, RunStatus::zeno) << mass << " " << k;
+        EXPECT_EQ(o.events.size(), 1000u);
+        EXPECT_NE(o.summary.message.find("1000 switches between t = "), std::string::npos) << o.summary.message;
+        // The times are right: 1000 switches = 500 periods pi/w_open + pi/w_closed.
+        // Measured: 6.4e-17 (m = 1e-300) and 1.2e-16 (k = 1e300) relative.
+        const LD mm = static_cast<LD>(std::stod(mass)), kk = static_cast<LD>(std::stod(k));
+        const LD T = kPiL / std::sqrt(kk / mm) + kPiL / std::sqrt((kk + 12) / mm);
+        const LD last = o.events.back().t;
+        measured(std::string("w = 1e150 (m = ") + mass + ", k = " + k + "), Zeno refusal",
+                 "rel. error of the 1000th switch time", static_cast<double>(std::fabs(last - 500 * T) / (500 * T)),
+                 1e-13);
+    }
+}
+
+// ---------------------------------------------------------------------------
 // 8. Simultaneous switches: two equal masses, each with a spring to ground
 // (k = 4) and a stop to ground (kc = 12, gap 0, on opposite sides), coupled by
 // k12 = 1.5, launched antisymmetrically (v = +1, -1). In the antisymmetric mode
