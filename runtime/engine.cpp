@@ -93,6 +93,16 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     RunSummary sum;
     std::vector<double> x = model_.x0, v = model_.v0;
     double t = model_.t0;
+    // The segment start is the double-double t + t_lo: t is the representable
+    // time that events and the forcing phase use, t_lo (|t_lo| <= ulp(t)/2)
+    // the rounding of the last event's instant t + tau. Without it, a switch
+    // that resets the state to its switching surface (a velocity reset to 0
+    // at a stop or reversal) would restart the motion at the rounded time,
+    // and since the rounding of t + tau repeats while tau does (Coulomb
+    // half-cycles all last pi/omega), the event times would drift by up to
+    // ulp(t)/2 per event, linearly (measured in tests/test_extremes.cpp:
+    // 170 ulp of t after 2000 reversals, before t_lo was kept).
+    double t_lo = 0.0;
     const double t_end = options.t_end;
     std::vector<signed char> sgn;
     Configuration cfg = entered_configuration(model_, t, x.data(), v.data(), sgn);  // stuck only where v = 0
@@ -145,7 +155,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         const std::vector<SwitchFunction>& sw = S.switches();
         const std::size_t nsw = sw.size();
         const double max_step = S.max_step();
-        const double tau_end = t_end - t;
+        const double tau_end = (t_end - t) - t_lo;
         SegmentEval out = buf.view();
 
         for (std::size_t f = 0; f < nsw; ++f) {
@@ -211,8 +221,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 for (std::size_t f = 0; f < nsw; ++f)
                     if (root[f] <= tau_star + tol) found.switched.push_back(sw[f]);
                 // Others within rounding of zero and heading across at the event instant.
-                const double t_ev = t + found.tau;
-                eval(t_ev - t);
+                eval(found.tau);
                 for (std::size_t f = 0; f < nsw; ++f) {
                     if (root[f] <= tau_star + tol) continue;
                     const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
@@ -257,7 +266,8 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     // The segment's start state itself, not its modal round trip.
                     observer.on_sample(tk, x.data(), v.data());
                 } else {
-                    S.eval(tk - t, dense.view());  // dense output: not a search evaluation
+                    // dense output: not a search evaluation, and buf keeps the event state
+                    S.eval(std::max(0.0, (tk - t) - t_lo), dense.view());
                     observer.on_sample(tk, dense.x.data(), dense.v.data());
                 }
                 if (tk >= t_end) {
@@ -268,15 +278,23 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             }
         }
 
-        // ---- advance to the event instant: the state at the representable time ----
-        const double t_next = t_seg_end;
-        if (!found.any) eval(t_next - t);  // an event's instant was evaluated last in the search
+        // ---- advance to the event instant: the state at tau, the time as t + t_lo ----
+        if (!found.any) eval(tau_end);  // an event's instant was evaluated last in the search
         x = buf.x;
         v = buf.v;
         for (std::size_t i = 0; i < n; ++i)
             if (cfg.stuck[i]) v[i] = 0.0;
-        t = t_next;
-        if (!found.any) break;
+        if (!found.any) {
+            t = t_end;
+            break;
+        }
+        {
+            // (t, t_lo) += found.tau, the sum kept exactly (Knuth's TwoSum).
+            const double a = t, b = t_lo + found.tau;
+            const double s = a + b, bb = s - a;
+            t_lo = (a - (s - bb)) + (b - bb);
+            t = s;
+        }
 
         transitions.clear();
         if (!apply_switches(model_, t, x.data(), v.data(), cfg, sgn, found.switched, transitions, why))
