@@ -136,13 +136,13 @@ done
 pa=$p4; [ "$pa" = never ] && pa=300
 pb=$p6; [ "$pb" = never ] && pb=300
 gnuplot <<EOF
-set terminal pngcairo size 1000,900 noenhanced font ',10'
+set terminal pngcairo size 920,800 noenhanced font ',10'
 set output '$out/fig6.png'
 set datafile separator ','
-set multiplot layout 3,1 title 'Fig. 6: scenario 2, HSNC vs Adams-Bashforth 4 (h = 1e-4, 1e-6); top two panels: 120..132 s of the 300 s run'
+set multiplot layout 3,1 title 'Fig. 6: scenario 2, HSNC vs Adams-Bashforth 4 (h = 1e-4, 1e-6); top two panels: 120..130 s of the 300 s run'
 set grid
 set key outside right
-set xrange [120:132]
+set xrange [120:130]
 set ylabel 'x1 [m]'
 plot '$csv/s2_hsnc.csv' u 1:2 w l lw 3 lc rgb 'black' t 'hsnc', \
      '$csv/s2_ab4_1e-4.csv' u 1:2 w l lw 1.5 lc rgb '#d62728' t 'ab4 h=1e-4', \
@@ -157,6 +157,7 @@ set format y '1e%T'
 set yrange [1e-8:10]
 set xlabel 't [s]'
 set ylabel 'max |x_ab4 - x_hsnc| per 1 s [m]'
+set key inside bottom right
 set arrow 1 from $pa, graph 0 to $pa, graph 1 nohead front lc rgb '#d62728' dt 2
 set arrow 2 from $pb, graph 0 to $pb, graph 1 nohead front lc rgb '#1f77b4' dt 2
 plot '$csv/s2_err_ab4_1e-4_env.csv' u 1:2 w l lw 1.5 lc rgb '#d62728' t sprintf('ab4 1e-4, parts %s', '$p4'), \
@@ -170,7 +171,7 @@ say ""
 say "## Fig. 7: phase portrait of scenario 2 from hsnc, 0..300 s, samples every 2e-3 s"
 "$hsnc" simulate "$s2" --t-end 300 --dt 2e-3 --quiet --out "$csv/s2_hsnc_fine.csv" >/dev/null
 gnuplot <<EOF
-set terminal pngcairo size 1000,480 noenhanced font ',10'
+set terminal pngcairo size 900,430 noenhanced font ',10'
 set output '$out/fig7.png'
 set datafile separator ','
 set multiplot layout 1,2 title 'Fig. 7: phase portrait of scenario 2 (hsnc, 0..300 s)'
@@ -178,10 +179,10 @@ set grid
 unset key
 set xlabel 'x1 [m]'
 set ylabel 'v1 [m/s]'
-plot '$csv/s2_hsnc_fine.csv' u 2:4 w l lw 1 lc rgb '#1f77b4'
+plot '$csv/s2_hsnc_fine.csv' u 2:4 w l lw 0.7 lc rgb '#1f77b4'
 set xlabel 'x2 [m]'
 set ylabel 'v2 [m/s]'
-plot '$csv/s2_hsnc_fine.csv' u 3:5 w l lw 1 lc rgb '#d62728'
+plot '$csv/s2_hsnc_fine.csv' u 3:5 w l lw 0.7 lc rgb '#d62728'
 unset multiplot
 EOF
 say "written: $out/fig7.png"
