@@ -106,3 +106,24 @@ double force_on_mass(const Model& model, const Configuration& cfg, int i, double
 }
 
 }  // namespace hsnc
+
+namespace hsnc {
+
+double force_rate_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* v,
+                          const double* a) {
+    double f = -model.alpha * model.masses[i].m * a[i];
+    for (const Harmonic& h : model.forcing) f += h.amplitude[i] * h.omega * std::cos(h.omega * t + h.phase);
+    auto add = [&](int p, int q, double k) {
+        if (p != i && q != i) return;
+        const double sd = position(v, p) - position(v, q);
+        const double sdd = position(a, p) - position(a, q);
+        const double fa = -k * sd - model.beta * k * sdd;
+        f += p == i ? fa : -fa;
+    };
+    for (const Spring& s : model.springs) add(s.a, s.b, s.k);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    return f;
+}
+
+}  // namespace hsnc

@@ -47,4 +47,8 @@ namespace hsnc {
 double force_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* x,
                      const double* v);
 
+/// dA_i/dt at (t, v, a): the time derivative of force_on_mass.
+double force_rate_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* v,
+                          const double* a);
+
 }  // namespace hsnc

@@ -297,7 +297,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         }
 
         transitions.clear();
-        if (!apply_switches(model_, t, x.data(), v.data(), cfg, sgn, found.switched, transitions, why))
+        if (!apply_switches(model_, t, x.data(), v.data(), buf.a.data(), cfg, sgn, found.switched, transitions, why))
             return finish(RunStatus::chattering, why);
         for (const Transition& tr : transitions) {
             observer.on_event(t, tr.kind, tr.element, x.data(), v.data());

@@ -356,7 +356,7 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
                 std::vector<SwitchFunction> s;
                 for (std::size_t k : hit) s.push_back(sw[k]);
                 tr.clear();
-                if (!apply_switches(model, t, x.data(), v.data(), cfg, dir, s, tr, why))
+                if (!apply_switches(model, t, x.data(), v.data(), nullptr, cfg, dir, s, tr, why))
                     return finish(sum, RunStatus::chattering, why, t, x, v, cfg);
                 for (const Transition& e : tr) {
                     obs.on_event(t, e.kind, e.element, x.data(), v.data());

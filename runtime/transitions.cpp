@@ -1,6 +1,7 @@
 #include "transitions.h"
 
 #include <cmath>
+#include <algorithm>
 #include <limits>
 
 #include "assembly.h"
@@ -12,19 +13,28 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 
 // Stick rule at v_i = 0 (interface.md): stuck if |A_i| < mu_s*N_i, else slide
 // in the direction of A_i. Returns 0 for stuck, else the direction. A tie
-// |A_i| = mu_s*N_i (to rounding) counts as stuck: the mass only leaves when
-// the force strictly exceeds the static limit, as the release rule says.
+// (|A_i| = mu_s*N_i to rounding) is decided by the first derivative, as the
+// contract says: stuck if |A_i| is not increasing with the mass held (a_i = 0,
+// the others' accelerations from `a`, or 0 when a is null), else sliding.
 signed char stick_rule(const Model& model, const Configuration& cfg, int i, double t, const double* x,
-                       const double* v) {
+                       const double* v, const double* a) {
     const double A = force_on_mass(model, cfg, i, t, x, v);
     const double limit = model.masses[i].mu_s * model.normal_force(i);
-    if (std::fabs(A) <= limit) return 0;
-    return A > 0 ? 1 : -1;
+    const double dir = A > 0 ? 1 : -1;
+    if (std::fabs(std::fabs(A) - limit) <= 16 * kEps * std::max(std::fabs(A), limit)) {
+        std::vector<double> held(model.dof(), 0.0);
+        if (a) held.assign(a, a + model.dof());
+        held[i] = 0.0;
+        const double rate = dir * force_rate_on_mass(model, cfg, i, t, v, held.data());
+        return rate > 0 ? static_cast<signed char>(dir) : 0;
+    }
+    if (std::fabs(A) < limit) return 0;
+    return static_cast<signed char>(dir);
 }
 
 }  // namespace
 
-bool apply_switches(const Model& model, double t, const double* x, double* v, Configuration& cfg,
+bool apply_switches(const Model& model, double t, const double* x, double* v, const double* a, Configuration& cfg,
                     std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
                     std::vector<Transition>& out, std::string& why) {
     const int n = static_cast<int>(model.dof());
@@ -55,7 +65,7 @@ bool apply_switches(const Model& model, double t, const double* x, double* v, Co
         for (int i = 0; i < n; ++i) {
             if (!deciding[i]) continue;
             deciding[i] = 0;
-            const signed char dir = stick_rule(model, cfg, i, t, x, v);
+            const signed char dir = stick_rule(model, cfg, i, t, x, v, a);
             if (dir == 0) {
                 cfg.stuck[i] = 1;
                 sgn[i] = 0;
@@ -68,7 +78,7 @@ bool apply_switches(const Model& model, double t, const double* x, double* v, Co
         }
         for (int i = 0; i < n; ++i) {
             if (!cfg.stuck[i]) continue;
-            const signed char dir = stick_rule(model, cfg, i, t, x, v);
+            const signed char dir = stick_rule(model, cfg, i, t, x, v, a);
             if (dir == 0) continue;
             cfg.stuck[i] = 0;
             sgn[i] = dir;
@@ -104,7 +114,7 @@ Configuration entered_configuration(const Model& model, double t, const double* 
         if (v[i] != 0.0) {
             sgn[i] = v[i] > 0 ? 1 : -1;
         } else {
-            const signed char dir = stick_rule(model, cfg, i, t, x, v);
+            const signed char dir = stick_rule(model, cfg, i, t, x, v, nullptr);
             cfg.stuck[i] = dir == 0;
             sgn[i] = dir;
         }

@@ -21,11 +21,12 @@ struct Transition {
 };
 
 /// Apply the switch functions that reached zero at instant t with state
-/// (x, v): update cfg and sgn (friction direction of sliding masses); a mass
+/// (x, v) and accelerations a just before it (may be null: taken as 0; used
+/// only to break a tie |A_i| = mu_s*N_i): update cfg and sgn (friction direction of sliding masses); a mass
 /// that stops gets v_i = 0 exactly. Appends the resulting events to `out`.
 /// Returns false (and says why) when the decisions at this instant do not
 /// settle (chattering).
-bool apply_switches(const Model& model, double t, const double* x, double* v, Configuration& cfg,
+bool apply_switches(const Model& model, double t, const double* x, double* v, const double* a, Configuration& cfg,
                     std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
                     std::vector<Transition>& out, std::string& why);
 

@@ -316,6 +316,39 @@ TEST(EngineGuards, AccumulatingSwitchesStopWithZenoStatus) {
     EXPECT_NE(s.message.find("3 switches between t = 0.314"), std::string::npos) << s.message;
 }
 
+
+// A tie |A| = mu_s N at t0 (k x0 = 4 = mu_s m g with g = 8) is decided by the
+// derivative of |A| with the mass held: not increasing -> stuck for good;
+// increasing (forcing sin t adds A' = 1) -> slides from t0 on.
+TEST(EngineTies, StaticLimitExactlyReachedAtT0) {
+    const char* base = R"(
+name = "tie"
+[parameters]
+g = 8
+[[mass]]
+name = "m1"
+m = 1
+mu_k = 0.25
+mu_s = 0.5
+[[spring]]
+between = ["ground", "m1"]
+k = 1
+[initial]
+x = { m1 = -4.0 }
+)";
+    const Outcome held = simulate(model_from(base), 1.0, 0.5);
+    ASSERT_EQ(held.summary.status, RunStatus::ok);
+    EXPECT_EQ(held.events.size(), 0u);
+    EXPECT_EQ(held.summary.x[0], -4.0);
+    EXPECT_EQ(held.summary.v[0], 0.0);
+    const Outcome pushed = simulate(model_from(std::string(base) + "[[forcing]]\nomega = 1\namplitude = { m1 = 1.0 }\n"), 0.5, 0.5);
+    ASSERT_EQ(pushed.summary.status, RunStatus::ok);
+    EXPECT_EQ(pushed.events.size(), 0u);
+    // Sliding from t0: x'' = -x + sin t - mu_k g = 2 + sin t + (-4 - x), so it accelerates at once.
+    EXPECT_GT(pushed.summary.v[0], 0.5);
+    EXPECT_GT(pushed.summary.x[0], -4.0);
+}
+
 // Samples: on the grid t0 + k dt, plus t_end, never twice at one time.
 TEST(EngineOutput, SamplesOnTheGridAndAtTEnd) {
     const Model m = model_from(R"(
