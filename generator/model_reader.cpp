@@ -274,10 +274,13 @@ private:
         fail(&node, key, "expected a number or an expression string, got " + type_name(node));
     }
 
-    /// A float literal as text that reads back to the same double.
+    /// A float literal as the shortest text that reads back to the same double.
     static std::string literal_text(double v) {
         char buf[40];
-        std::snprintf(buf, sizeof buf, "%.17g", v);
+        for (int digits = 1; digits <= 17; ++digits) {
+            std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+            if (std::strtod(buf, nullptr) == v) break;
+        }
         return buf;
     }
 

@@ -1,7 +1,6 @@
 #include "symbolic_derivation.h"
 
 #include <cctype>
-#include <map>
 
 #include "derivation.h"
 #include "segment.h"

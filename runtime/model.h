@@ -82,8 +82,8 @@ struct Model {
     /// file has none; a --set override replaces the file's text), for the
     /// symbolic view of `hsnc inspect --symbolic`. Empty when built in code.
     std::vector<std::pair<std::string, std::string>> parameter_expressions;
-    /// Source text of every numeric field the file gave (a number literal is
-    /// kept as written in 17 significant digits), keyed by the path the
+    /// Source text of every numeric field the file gave (a number literal as the
+    /// shortest text that reads back to the same double), keyed by the path the
     /// reader's messages use: "mass[1].m", "mass[1].mu_k", "mass[1].mu_s",
     /// "spring[2].k", "contact[1].gap", "contact[1].k", "damping.alpha",
     /// "damping.beta", "forcing[1].omega", "forcing[1].phase",
