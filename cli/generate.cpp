@@ -1,8 +1,9 @@
 // hsnc generate MODEL -o DIR -- write the specialised C++ kernels of a model
 // (interface.md section 3): one translation unit per configuration
 // (generator/emitter.h), all of them while there are at most 64
-// configurations, else the 64 nearest to the initial one (said on stderr),
-// plus registry.cpp defining hsnc::aot_registry() (runtime/aot_registry.h).
+// configurations, else those of the model's default run plus the initial one
+// and its neighbours (said on stderr), plus <model>.manifest listing them and
+// registry.cpp defining hsnc::aot_registry() (runtime/aot_registry.h).
 // The files include "kernel_abi.h" and "aot_registry.h" from runtime/.
 #include <iostream>
 
@@ -20,23 +21,27 @@ void add_generate(CLI::App& app, int& exit_code) {
     auto out_dir = std::make_shared<std::string>();
     sub->add_option("MODEL", *model_path, "model file (TOML)")->required();
     sub->add_option("-o,--out-dir", *out_dir,
-                    "directory for <model>_<configuration key>.cpp and registry.cpp (created if needed)")
+                    "directory for <model>_<configuration key>.cpp, <model>.manifest and registry.cpp (created if needed)")
         ->required();
     sub->footer(
         "Every configuration is generated while there are at most 64 (2^(contacts + friction masses));\n"
-        "beyond that, the 64 nearest to the initial configuration. Compile the files with runtime/ on\n"
-        "the include path (kernel_abi.h, aot_registry.h).");
+        "beyond that, those the model's default run ([simulate].t_end, generic solver) visits, plus the\n"
+        "initial configuration and its single-switch neighbours (at most 128). <model>.manifest lists the\n"
+        "configurations generated. Compile the files with runtime/ on the include path (kernel_abi.h,\n"
+        "aot_registry.h).");
     sub->callback([&exit_code, model_path, out_dir] {
         const Model model = read_model(*model_path);
         const KernelSet set = generate_kernel_set(model);
         if (!set.note.empty()) std::cerr << "hsnc generate: " << set.note << "\n";
         try {
             for (const GeneratedFile& f : set.kernels) write_if_changed(*out_dir, f.name, f.text);
+            write_if_changed(*out_dir, model.name + ".manifest", set.manifest);
             write_if_changed(*out_dir, "registry.cpp", emit_registry(set.symbols));
         } catch (const RunError& e) {
             throw InputError(std::string("generate: -o ") + *out_dir + ": " + e.what());  // a bad output path
         }
-        std::cout << "wrote " << set.kernels.size() << " kernels and registry.cpp of model '" << model.name
+        std::cout << "wrote " << set.kernels.size() << " kernels, " << model.name
+                  << ".manifest and registry.cpp of model '" << model.name
                   << "' to " << *out_dir << "\n";
         exit_code = 0;
     });

@@ -6,7 +6,10 @@
 //
 // Expressions come from the derivation's textbook closed forms
 // (generator/derivation.h) with numbers rounded to 6 significant digits for
-// reading; the matrices and modal values are printed with 17.
+// reading; the matrices and modal values are printed with 17. --symbolic keeps
+// the parameters as symbols (generator/symbolic_derivation.h) where the free
+// system has at most 2 DOF, printed in sorted term order
+// (generator/expression_printer.h).
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -17,7 +20,9 @@
 #include "emitter.h"
 #include "error.h"
 #include "model_hash.h"
+#include "expression_printer.h"
 #include "model_reader.h"
+#include "symbolic_derivation.h"
 
 namespace hsnc::cli {
 namespace {
@@ -222,6 +227,110 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
     }
 }
 
+
+/// The --symbolic view: the formulas of generator/symbolic_derivation.h.
+void inspect_symbolic(const Model& model, const Configuration& cfg, const SymbolicDerivation& d, Format fmt,
+                      std::ostream& out) {
+    const Printer p{fmt, out};
+    const ExpressionFormat ef = fmt == Format::latex ? ExpressionFormat::latex : ExpressionFormat::text;
+    auto E = [&](const ex& e) { return print_sorted(e, ef); };
+    auto S = [&](const ex& e) {  // a symbol's name in the output format
+        std::ostringstream s;
+        if (fmt == Format::latex)
+            s << GiNaC::latex << e;
+        else
+            s << e;
+        return s.str();
+    };
+    auto eq = [&](const std::string& text_lhs, const std::string& latex_lhs, const ex& rhs) {
+        p.line(text_lhs + " = " + E(rhs), "\\[ " + latex_lhs + " = " + E(rhs) + " \\]");
+    };
+    std::string fr, st, params;
+    for (int i : d.free_dofs) fr += (fr.empty() ? "" : ", ") + model.masses[i].name;
+    for (int i : d.stuck_dofs) st += (st.empty() ? "" : ", ") + model.masses[i].name;
+    for (const auto& [name, text] : model.parameter_expressions) params += (params.empty() ? "" : ", ") + name;
+    if (fmt == Format::latex) {
+        out << "% hsnc inspect --symbolic: model " << model.name << ", configuration " << cfg.spec(model) << "\n";
+        out << "\\paragraph{Model " << latex_name(model.name) << ", configuration \\texttt{" << latex_name(cfg.spec(model))
+            << "}, symbolic} Free masses: " << latex_name(fr) << "; stuck masses: " << latex_name(st.empty() ? "none" : st)
+            << ". Parameters (symbols): " << latex_name(params) << ".\n";
+    } else {
+        out << "model " << model.name << " (symbolic: parameters " << params << ")\n";
+        out << "configuration " << cfg.spec(model) << " (key " << cfg.key() << ")\n";
+        out << "free masses: " << fr << "; stuck masses: " << (st.empty() ? "none" : st) << " (held at their x0)\n";
+    }
+    const std::size_t nf = d.free_dofs.size();
+    p.heading("Reduced system of the free masses: M x'' + C x' + K x = f + sum_h F_h sin(Omega_h t + phase_h)",
+              "Reduced system of the free masses: $M \\ddot x + C \\dot x + K x = f + \\sum_h F_h \\sin(\\Omega_h t + "
+              "\\varphi_h)$");
+    for (const auto& [name, mat] : {std::pair<std::string, const GiNaC::matrix*>{"M", &d.M}, {"K", &d.K}, {"C", &d.C}}) {
+        std::string text = name + " = [", latex = "\\[ " + name + " = \\begin{bmatrix} ";
+        for (std::size_t r = 0; r < nf; ++r) {
+            for (std::size_t c = 0; c < nf; ++c) {
+                text += (c ? ", " : "") + print_sorted((*mat)(r, c), ExpressionFormat::text);
+                latex += (c ? " & " : "") + print_sorted((*mat)(r, c), ExpressionFormat::latex);
+            }
+            text += r + 1 < nf ? "; " : "";
+            latex += r + 1 < nf ? " \\\\ " : "";
+        }
+        p.line(text + "]", latex + " \\end{bmatrix} \\]");
+    }
+    for (std::size_t r = 0; r < nf; ++r) {
+        const std::string nm = model.masses[d.free_dofs[r]].name;
+        eq("f_" + nm, "f_{" + latex_name(nm) + "}", d.f[r]);
+    }
+    for (std::size_t h = 0; h < d.harmonics.size(); ++h) {
+        const std::string H = std::to_string(h + 1);
+        eq("Omega_" + H, "\\Omega_{" + H + "}", d.harmonics[h].omega);
+        eq("phase_" + H, "\\varphi_{" + H + "}", d.harmonics[h].phase);
+        for (std::size_t r = 0; r < nf; ++r) {
+            const std::string nm = model.masses[d.free_dofs[r]].name;
+            eq("F_" + H + "_" + nm, "F_{" + H + "," + latex_name(nm) + "}", d.harmonics[h].amplitude[r]);
+        }
+    }
+    p.heading("Modes: det(K - lambda M) = 0; omega = sqrt(lambda), c = alpha + beta lambda, xi = c/(2 omega)",
+              "Modes: $\\det(K - \\lambda M) = 0$, $\\omega = \\sqrt{\\lambda}$, $c = \\alpha + \\beta\\lambda$, "
+              "$\\xi = c/(2\\omega)$");
+    for (std::size_t j = 0; j < d.lambda.size(); ++j) {
+        const std::string J = std::to_string(j + 1);
+        eq("lambda_" + J, "\\lambda_{" + J + "}", d.lambda[j]);
+        eq("omega_" + J, "\\omega_{" + J + "}", d.omega[j]);
+        eq("c_" + J, "c_{" + J + "}", d.c[j]);
+        eq("xi_" + J, "\\xi_{" + J + "}", d.xi[j]);
+        if (nf > 1)
+            for (std::size_t r = 0; r < nf; ++r) {
+                const std::string nm = model.masses[d.free_dofs[r]].name;
+                eq("V_" + nm + "_" + J, "V_{" + latex_name(nm) + "," + J + "}", d.shapes[j][r]);
+            }
+    }
+    p.heading("Static offset: x_st = K^-1 f", "Static offset: $x_{\\mathrm{st}} = K^{-1} f$");
+    for (std::size_t r = 0; r < nf; ++r) {
+        const std::string nm = model.masses[d.free_dofs[r]].name;
+        eq("x_st_" + nm, "x_{\\mathrm{st}," + latex_name(nm) + "}", d.x_static[r]);
+    }
+    p.heading("Response (assumes every mode underdamped or undamped, 0 <= c_j < 2 omega_j, and no forcing at "
+              "resonance: which regime holds depends on the parameter values)",
+              "Response (assumes every mode underdamped or undamped, $0 \\le c_j < 2\\omega_j$, and no forcing at "
+              "resonance: which regime holds depends on the parameter values)");
+    for (const Definition& def : d.definitions) p.line(S(def.name) + " = " + E(def.value),
+                                                       "\\[ " + S(def.name) + " = " + E(def.value) + " \\]");
+    for (std::size_t j = 0; j < d.q.size(); ++j) {
+        const std::string J = std::to_string(j + 1);
+        eq("q_" + J + "(t)", "q_{" + J + "}(t)", d.q[j]);
+    }
+    for (std::size_t i = 0; i < d.x.size(); ++i) {
+        const std::string nm = model.masses[i].name;
+        eq("x_" + nm + "(t)", "x_{" + latex_name(nm) + "}(t)", d.x[i]);
+    }
+    p.heading("Switch functions (runtime/segment.h order; x_*, v_* at time t)", "Switch functions");
+    for (std::size_t f = 0; f < d.switches.size(); ++f) {
+        const std::string F = std::to_string(f + 1);
+        const std::string& what = d.switches[f].first;
+        p.line("g_" + F + " (" + what + ") = " + E(d.switches[f].second),
+               "\\[ g_{" + F + "} = " + E(d.switches[f].second) + " \\quad \\text{(" + latex_name(what) + ")} \\]");
+    }
+}
+
 }  // namespace
 
 void add_inspect(CLI::App& app, int& exit_code) {
@@ -236,17 +345,28 @@ void add_inspect(CLI::App& app, int& exit_code) {
     sub->add_option("--format", o->format, "text (default), latex, or cpp (the generated kernel)")
         ->check(CLI::IsMember({"text", "latex", "cpp"}));
     sub->add_flag("--symbolic", o->symbolic,
-                  "keep the model's parameters as symbols (free system of at most 2 DOF); "
-                  "not implemented yet: numbers are printed");
+                  "keep the model's parameters as symbols; only where the configuration has at most 2 free DOF "
+                  "(closed-form eigenvalues), else said on stderr and numbers are printed");
     sub->callback([&exit_code, o] {
         const Model model = read_model(o->model);
         const Configuration cfg = Configuration::parse(model, o->config);
-        if (o->symbolic)
-            std::cerr << "hsnc inspect: --symbolic is not implemented yet; printing numbers\n";
+        const Format fmt = o->format == "latex" ? Format::latex : Format::text;
+        if (o->symbolic && o->format != "cpp") {
+            SymbolicDerivation sd;
+            std::string why;
+            if (derive_symbolic(model, cfg, sd, why)) {
+                inspect_symbolic(model, cfg, sd, fmt, std::cout);
+                exit_code = 0;
+                return;
+            }
+            std::cerr << "hsnc inspect: --symbolic: " << why << "; printing numbers\n";
+        } else if (o->symbolic) {
+            std::cerr << "hsnc inspect: --symbolic does not apply to --format cpp (the kernel holds numbers)\n";
+        }
         if (o->format == "cpp") {
             std::cout << emit_kernel(derive(model, cfg));
         } else {
-            inspect(model, cfg, o->format == "latex" ? Format::latex : Format::text, std::cout);
+            inspect(model, cfg, fmt, std::cout);
         }
         exit_code = 0;
     });

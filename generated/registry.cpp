@@ -3,10 +3,13 @@
 
 extern "C" const hsnc_kernel hsnc_kernel_bilinear_1dof_c0_s0;
 extern "C" const hsnc_kernel hsnc_kernel_bilinear_1dof_c1_s0;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11111111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s11111111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s11111111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c001_s11111111;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s00000000;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s00000001;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s00000011;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s00000111;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s00001111;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s00011111;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s00111111;
 extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s01111111;
 extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s10111111;
 extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11011111;
@@ -15,58 +18,21 @@ extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11110111;
 extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11111011;
 extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11111101;
 extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11111110;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c110_s11111111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c101_s11111111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s01111111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s10111111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s11011111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s11101111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s11110111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s11111011;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s11111101;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s11111110;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c011_s11111111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s01111111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s10111111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s11011111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s11101111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s11110111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s11111011;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s11111101;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s11111110;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c001_s01111111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c001_s10111111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c001_s11011111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c001_s11101111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c001_s11110111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c001_s11111011;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c001_s11111101;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c001_s11111110;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s00111111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s01011111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s01101111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s01110111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s01111011;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s01111101;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s01111110;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s10011111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s10101111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s10110111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s10111011;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s10111101;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s10111110;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11001111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11010111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11011011;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11011101;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11011110;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11100111;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11101011;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11101101;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11101110;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11110011;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11110101;
-extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11110110;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c000_s11111111;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c001_s00000000;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c001_s11111111;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s00000000;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s00000001;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s00000011;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s00010000;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c010_s11111111;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s00000000;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s00000011;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s00000111;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s00001111;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s00011111;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c100_s11111111;
+extern "C" const hsnc_kernel hsnc_kernel_chain_8_c110_s00000000;
 extern "C" const hsnc_kernel hsnc_kernel_coulomb_1dof_c_s0;
 extern "C" const hsnc_kernel hsnc_kernel_coulomb_1dof_c_s1;
 extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_1_c0_s00;
@@ -92,10 +58,13 @@ namespace {
 const hsnc_kernel* const kernels[] = {
     &hsnc_kernel_bilinear_1dof_c0_s0,
     &hsnc_kernel_bilinear_1dof_c1_s0,
-    &hsnc_kernel_chain_8_c000_s11111111,
-    &hsnc_kernel_chain_8_c100_s11111111,
-    &hsnc_kernel_chain_8_c010_s11111111,
-    &hsnc_kernel_chain_8_c001_s11111111,
+    &hsnc_kernel_chain_8_c000_s00000000,
+    &hsnc_kernel_chain_8_c000_s00000001,
+    &hsnc_kernel_chain_8_c000_s00000011,
+    &hsnc_kernel_chain_8_c000_s00000111,
+    &hsnc_kernel_chain_8_c000_s00001111,
+    &hsnc_kernel_chain_8_c000_s00011111,
+    &hsnc_kernel_chain_8_c000_s00111111,
     &hsnc_kernel_chain_8_c000_s01111111,
     &hsnc_kernel_chain_8_c000_s10111111,
     &hsnc_kernel_chain_8_c000_s11011111,
@@ -104,58 +73,21 @@ const hsnc_kernel* const kernels[] = {
     &hsnc_kernel_chain_8_c000_s11111011,
     &hsnc_kernel_chain_8_c000_s11111101,
     &hsnc_kernel_chain_8_c000_s11111110,
-    &hsnc_kernel_chain_8_c110_s11111111,
-    &hsnc_kernel_chain_8_c101_s11111111,
-    &hsnc_kernel_chain_8_c100_s01111111,
-    &hsnc_kernel_chain_8_c100_s10111111,
-    &hsnc_kernel_chain_8_c100_s11011111,
-    &hsnc_kernel_chain_8_c100_s11101111,
-    &hsnc_kernel_chain_8_c100_s11110111,
-    &hsnc_kernel_chain_8_c100_s11111011,
-    &hsnc_kernel_chain_8_c100_s11111101,
-    &hsnc_kernel_chain_8_c100_s11111110,
-    &hsnc_kernel_chain_8_c011_s11111111,
-    &hsnc_kernel_chain_8_c010_s01111111,
-    &hsnc_kernel_chain_8_c010_s10111111,
-    &hsnc_kernel_chain_8_c010_s11011111,
-    &hsnc_kernel_chain_8_c010_s11101111,
-    &hsnc_kernel_chain_8_c010_s11110111,
-    &hsnc_kernel_chain_8_c010_s11111011,
-    &hsnc_kernel_chain_8_c010_s11111101,
-    &hsnc_kernel_chain_8_c010_s11111110,
-    &hsnc_kernel_chain_8_c001_s01111111,
-    &hsnc_kernel_chain_8_c001_s10111111,
-    &hsnc_kernel_chain_8_c001_s11011111,
-    &hsnc_kernel_chain_8_c001_s11101111,
-    &hsnc_kernel_chain_8_c001_s11110111,
-    &hsnc_kernel_chain_8_c001_s11111011,
-    &hsnc_kernel_chain_8_c001_s11111101,
-    &hsnc_kernel_chain_8_c001_s11111110,
-    &hsnc_kernel_chain_8_c000_s00111111,
-    &hsnc_kernel_chain_8_c000_s01011111,
-    &hsnc_kernel_chain_8_c000_s01101111,
-    &hsnc_kernel_chain_8_c000_s01110111,
-    &hsnc_kernel_chain_8_c000_s01111011,
-    &hsnc_kernel_chain_8_c000_s01111101,
-    &hsnc_kernel_chain_8_c000_s01111110,
-    &hsnc_kernel_chain_8_c000_s10011111,
-    &hsnc_kernel_chain_8_c000_s10101111,
-    &hsnc_kernel_chain_8_c000_s10110111,
-    &hsnc_kernel_chain_8_c000_s10111011,
-    &hsnc_kernel_chain_8_c000_s10111101,
-    &hsnc_kernel_chain_8_c000_s10111110,
-    &hsnc_kernel_chain_8_c000_s11001111,
-    &hsnc_kernel_chain_8_c000_s11010111,
-    &hsnc_kernel_chain_8_c000_s11011011,
-    &hsnc_kernel_chain_8_c000_s11011101,
-    &hsnc_kernel_chain_8_c000_s11011110,
-    &hsnc_kernel_chain_8_c000_s11100111,
-    &hsnc_kernel_chain_8_c000_s11101011,
-    &hsnc_kernel_chain_8_c000_s11101101,
-    &hsnc_kernel_chain_8_c000_s11101110,
-    &hsnc_kernel_chain_8_c000_s11110011,
-    &hsnc_kernel_chain_8_c000_s11110101,
-    &hsnc_kernel_chain_8_c000_s11110110,
+    &hsnc_kernel_chain_8_c000_s11111111,
+    &hsnc_kernel_chain_8_c001_s00000000,
+    &hsnc_kernel_chain_8_c001_s11111111,
+    &hsnc_kernel_chain_8_c010_s00000000,
+    &hsnc_kernel_chain_8_c010_s00000001,
+    &hsnc_kernel_chain_8_c010_s00000011,
+    &hsnc_kernel_chain_8_c010_s00010000,
+    &hsnc_kernel_chain_8_c010_s11111111,
+    &hsnc_kernel_chain_8_c100_s00000000,
+    &hsnc_kernel_chain_8_c100_s00000011,
+    &hsnc_kernel_chain_8_c100_s00000111,
+    &hsnc_kernel_chain_8_c100_s00001111,
+    &hsnc_kernel_chain_8_c100_s00011111,
+    &hsnc_kernel_chain_8_c100_s11111111,
+    &hsnc_kernel_chain_8_c110_s00000000,
     &hsnc_kernel_coulomb_1dof_c_s0,
     &hsnc_kernel_coulomb_1dof_c_s1,
     &hsnc_kernel_seed_scenario_1_c0_s00,
@@ -181,7 +113,7 @@ const hsnc_kernel* const kernels[] = {
 const AotRegistry& aot_registry();
 
 const AotRegistry& aot_registry() {
-    static const AotRegistry registry{kernels, 84};
+    static const AotRegistry registry{kernels, 50};
     return registry;
 }
 

@@ -1,6 +1,7 @@
 #include "kernel_set.h"
 
-#include <deque>
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -11,69 +12,120 @@
 #include "emitter.h"
 #include "error.h"
 #include "sample_models.h"
+#include "solver_provider.h"
+#include "transitions.h"
 
 namespace hsnc {
 
-Configuration initial_configuration(const Model& model) {
-    Configuration cfg = Configuration::all_open(model);
-    for (std::size_t c = 0; c < model.contacts.size(); ++c) {
-        const double g = gap(model, static_cast<int>(c), model.x0.data());
-        const double dg = gap_rate(model, static_cast<int>(c), model.v0.data());
-        cfg.closed[c] = g > 0 || (g == 0 && dg > 0);
+namespace {
+
+/// Records every configuration the engine asks a solver for, and hands the
+/// request on to the generic solver.
+class RecordingProvider : public SolverProvider {
+public:
+    explicit RecordingProvider(const Model& model) : generic_(model) {}
+    SegmentSolver& solver(const Configuration& cfg) override {
+        visited.insert(cfg);
+        return generic_.solver(cfg);
     }
-    for (std::size_t i = 0; i < model.dof(); ++i) cfg.stuck[i] = model.masses[i].has_friction && model.v0[i] == 0.0;
-    return cfg;
+    std::set<Configuration> visited;
+
+private:
+    GenericSolverProvider generic_;
+};
+
+class NullObserver : public Observer {
+public:
+    void on_sample(double, const double*, const double*) override {}
+    void on_event(double, EventKind, int, const double*, const double*) override {}
+};
+
+std::size_t switch_bits(const Model& model) {
+    std::size_t bits = model.contacts.size();
+    for (const Mass& m : model.masses) bits += m.has_friction ? 1 : 0;
+    return bits;
+}
+
+}  // namespace
+
+Configuration initial_configuration(const Model& model) {
+    std::vector<signed char> sgn;
+    return entered_configuration(model, model.t0, model.x0.data(), model.v0.data(), sgn);
 }
 
 std::vector<Configuration> configurations_to_generate(const Model& model, std::string* note) {
-    std::size_t bits = model.contacts.size();
-    for (const Mass& m : model.masses) bits += m.has_friction ? 1 : 0;
+    const std::size_t bits = switch_bits(model);
     if (bits < 7) {  // 2^bits <= 64
         if (note) note->clear();
         return all_configurations(model);
     }
-    std::vector<Configuration> out;
-    std::set<Configuration> seen;
-    std::deque<Configuration> queue{initial_configuration(model)};
-    seen.insert(queue.front());
-    while (!queue.empty() && out.size() < kMaxGeneratedConfigurations) {
-        const Configuration cfg = queue.front();
-        queue.pop_front();
-        out.push_back(cfg);
-        auto visit = [&](Configuration next) {
-            if (seen.insert(next).second) queue.push_back(std::move(next));
-        };
-        for (std::size_t c = 0; c < cfg.closed.size(); ++c) {
-            Configuration next = cfg;
-            next.closed[c] = !next.closed[c];
-            visit(next);
-        }
-        for (std::size_t i = 0; i < cfg.stuck.size(); ++i) {
-            if (!model.masses[i].has_friction) continue;
-            Configuration next = cfg;
-            next.stuck[i] = !next.stuck[i];
-            visit(next);
-        }
+    // The configurations of the model's own default run (generic solver, to
+    // [simulate].t_end), then the initial one and its single-flip neighbours.
+    const Configuration initial = initial_configuration(model);
+    RecordingProvider recorder(model);
+    std::string run_note = "no [simulate].t_end: no run";
+    if (model.t_end) {
+        EngineOptions options;
+        options.t_end = *model.t_end;
+        options.samples = false;
+        NullObserver observer;
+        const RunSummary summary = Engine(model, recorder).run(options, observer);
+        char t_end[32];
+        std::snprintf(t_end, sizeof t_end, "%.17g", *model.t_end);
+        run_note = std::string("default run to t_end = ") + t_end + " (" + run_status_name(summary.status) +
+                   ", " + std::to_string(summary.events) + " switch events)";
+    }
+    std::set<Configuration> chosen = recorder.visited;
+    const std::size_t visited = chosen.size();
+    chosen.insert(initial);
+    auto add_neighbour = [&](Configuration next) {
+        if (chosen.size() < kMaxManifestConfigurations) chosen.insert(std::move(next));
+    };
+    for (std::size_t c = 0; c < initial.closed.size(); ++c) {
+        Configuration next = initial;
+        next.closed[c] = !next.closed[c];
+        add_neighbour(next);
+    }
+    for (std::size_t i = 0; i < initial.stuck.size(); ++i) {
+        if (!model.masses[i].has_friction) continue;
+        Configuration next = initial;
+        next.stuck[i] = !next.stuck[i];
+        add_neighbour(next);
     }
     if (note) {
         std::ostringstream s;
         s << "model '" << model.name << "' has 2^" << bits << " configurations, more than "
-          << kMaxGeneratedConfigurations << ": generated the " << out.size()
-          << " nearest to the initial configuration (one switch at a time, breadth first); "
-             "the others are solved by the generic solver at run time";
+          << kMaxGeneratedConfigurations << ": generated the " << chosen.size() << " listed in its manifest ("
+          << visited << " visited by its " << run_note << ", plus the initial configuration and its single-switch "
+          << "neighbours, at most " << kMaxManifestConfigurations
+          << " in all); the others are solved by the generic solver at run time";
         *note = s.str();
     }
+    return {chosen.begin(), chosen.end()};
+}
+
+std::string manifest_text(const Model& model, const std::vector<Configuration>& configurations, const std::string& note) {
+    std::vector<std::string> specs;
+    for (const Configuration& cfg : configurations) specs.push_back(cfg.spec(model));
+    std::sort(specs.begin(), specs.end());
+    std::string out = "# hsnc manifest: the configurations of model '" + model.name + "' with generated kernels\n";
+    out += "# generator version " + std::string(HSNC_VERSION) + "; one configuration spec per line, sorted\n";
+    out += "# " + (note.empty() ? "all " + std::to_string(configurations.size()) + " configurations" : note) + "\n";
+    for (const std::string& s : specs) out += s + "\n";
     return out;
 }
 
 KernelSet generate_kernel_set(const Model& model) {
     KernelSet set;
+    std::vector<Configuration> configurations;
     for (const Configuration& cfg : configurations_to_generate(model, &set.note)) {
         const Derivation d = derive(model, cfg);
         const std::string sym = kernel_symbol(model, cfg);
         set.kernels.push_back({sym.substr(std::string("hsnc_kernel_").size()) + ".cpp", emit_kernel(d)});
         set.symbols.push_back(sym);
+        configurations.push_back(cfg);
     }
+    set.manifest = manifest_text(model, configurations, set.note);
     return set;
 }
 

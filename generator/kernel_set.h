@@ -12,9 +12,12 @@
 
 namespace hsnc {
 
-/// Most configurations generated for one model; beyond it only those near the
-/// initial configuration are (see configurations_to_generate).
+/// Most configurations for which every one is generated; beyond it only those
+/// listed in the model's manifest are (see configurations_to_generate).
 inline constexpr std::size_t kMaxGeneratedConfigurations = 64;
+/// Most configurations in a manifest (the visited ones always are; initial
+/// neighbours fill up to this).
+inline constexpr std::size_t kMaxManifestConfigurations = 128;
 
 struct GeneratedFile {
     std::string name;  ///< file name, no directory
@@ -25,16 +28,24 @@ struct KernelSet {
     std::vector<GeneratedFile> kernels;  ///< one per configuration
     std::vector<std::string> symbols;    ///< kernel object names, same order
     std::string note;                    ///< "" or why not every configuration was generated
+    std::string manifest;                ///< <model>.manifest: the configurations, one spec per line
 };
 
-/// The configuration the model starts in: contacts closed where G(x0) > 0 (or
-/// G = 0 and rising), friction masses with v0 = 0 stuck.
+/// The configuration the model starts in (runtime/transitions.h
+/// entered_configuration at t0, x0, v0: the stick rule decides by A_i).
 Configuration initial_configuration(const Model& model);
 
 /// All configurations when there are at most kMaxGeneratedConfigurations;
-/// else those reached from the initial one by flipping one contact or one
-/// friction mass at a time (breadth first), up to that many. `note` says which.
+/// else every configuration the model's default run visits (the engine with
+/// the generic solver from t0 to [simulate].t_end), plus the initial one and
+/// its single-switch neighbours while fewer than kMaxManifestConfigurations.
+/// Sorted (Configuration::operator<). `note` says which.
 std::vector<Configuration> configurations_to_generate(const Model& model, std::string* note);
+
+/// The manifest of a kernel set: a comment header saying how the list was
+/// made (`note`, or "all N configurations"), then one configuration spec per
+/// line, sorted.
+std::string manifest_text(const Model& model, const std::vector<Configuration>& configurations, const std::string& note);
 
 KernelSet generate_kernel_set(const Model& model);
 

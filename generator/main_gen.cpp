@@ -2,7 +2,9 @@
 //   hsnc_gen --samples FILE        every kernel of generator/sample_models.h, with
 //                                  hsnc::sample_registry(), in one source FILE
 //   hsnc_gen DIR [MODEL.toml ...]  DIR/<model file stem>.cpp with every kernel of
-//                                  each model, and DIR/registry.cpp (hsnc::aot_registry)
+//                                  each model, DIR/<stem>.manifest (the configurations
+//                                  generated, generator/kernel_set.h), and DIR/registry.cpp
+//                                  (hsnc::aot_registry)
 #include <filesystem>
 #include <iostream>
 #include <string>
@@ -40,7 +42,9 @@ int main(int argc, char** argv) {
         for (std::size_t k = 1; k < args.size(); ++k) {
             const KernelSet set = generate_kernel_set(read_model(args[k]));
             if (!set.note.empty()) std::cerr << "hsnc_gen: " << set.note << "\n";
-            write_if_changed(args[0], fs::path(args[k]).stem().string() + ".cpp", combined_source(set));
+            const std::string stem = fs::path(args[k]).stem().string();
+            write_if_changed(args[0], stem + ".cpp", combined_source(set));
+            write_if_changed(args[0], stem + ".manifest", set.manifest);
             symbols.insert(symbols.end(), set.symbols.begin(), set.symbols.end());
         }
         write_if_changed(args[0], "registry.cpp", emit_registry(symbols));

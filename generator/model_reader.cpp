@@ -250,13 +250,21 @@ private:
     // ---- numbers and expressions ----
 
     /// A TOML integer, a finite float, or an expression string over the parameters.
-    double number(const toml::node& node, const std::string& key) const {
-        if (const auto* i = node.as_integer()) return static_cast<double>(i->get());
+    /// The source text is recorded in Model::field_expressions (parameters in
+    /// Model::parameter_expressions) under `key`.
+    double number(const toml::node& node, const std::string& key) {
+        const bool is_parameter = key.rfind("parameters.", 0) == 0;
+        if (const auto* i = node.as_integer()) {
+            if (!is_parameter) model_.field_expressions[key] = std::to_string(i->get());
+            return static_cast<double>(i->get());
+        }
         if (const auto* f = node.as_floating_point()) {
             if (!std::isfinite(f->get())) fail(&node, key, "must be finite, got " + std::string(std::isnan(f->get()) ? "nan" : "inf"));
+            if (!is_parameter) model_.field_expressions[key] = literal_text(f->get());
             return f->get();
         }
         if (const auto* s = node.as_string()) {
+            if (!is_parameter) model_.field_expressions[key] = s->get();
             try {
                 return evaluate_expression(s->get(), symbols_);
             } catch (const ExpressionError& e) {
@@ -264,6 +272,24 @@ private:
             }
         }
         fail(&node, key, "expected a number or an expression string, got " + type_name(node));
+    }
+
+    /// A float literal as the shortest text that reads back to the same double.
+    static std::string literal_text(double v) {
+        char buf[40];
+        for (int digits = 1; digits <= 17; ++digits) {
+            std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+            if (std::strtod(buf, nullptr) == v) break;
+        }
+        return buf;
+    }
+
+    /// The source text of parameter node (for Model::parameter_expressions).
+    static std::string source_text(const toml::node& node) {
+        if (const auto* i = node.as_integer()) return std::to_string(i->get());
+        if (const auto* f = node.as_floating_point()) return literal_text(f->get());
+        if (const auto* s = node.as_string()) return s->get();
+        return "";
     }
 
     /// An expression error, with a hint when the unknown name is a later parameter.
@@ -282,13 +308,13 @@ private:
         }
     }
 
-    std::optional<double> optional_number(const toml::table& table, const std::string& path, const char* key) const {
+    std::optional<double> optional_number(const toml::table& table, const std::string& path, const char* key) {
         const toml::node* node = table.get(key);
         if (!node) return std::nullopt;
         return number(*node, join(path, key));
     }
 
-    double required_number(const toml::table& table, const std::string& path, const char* key) const {
+    double required_number(const toml::table& table, const std::string& path, const char* key) {
         const toml::node* node = table.get(key);
         if (!node) fail_at(table_line(table, path), join(path, key), "required key is missing");
         return number(*node, join(path, key));
@@ -329,7 +355,7 @@ private:
     }
 
     /// A table mass-name -> number (load, amplitude, initial x and v): one entry per mass, 0 when absent.
-    std::vector<double> per_mass(const toml::node& node, const std::string& key) const {
+    std::vector<double> per_mass(const toml::node& node, const std::string& key) {
         if (!node.is_table()) fail(&node, key, "expected a table of mass names, e.g. { m1 = 1.0 }, got " + type_name(node));
         std::vector<double> values(model_.dof(), 0.0);
         for (auto&& [k, v] : *node.as_table()) {
@@ -377,9 +403,15 @@ private:
         for (const char* reserved : kParserConstants)
             if (name == reserved) fail(node, key, "'" + name + "' is a constant of the expression parser and cannot be a parameter");
         double value = kDefaultGravity;
+        std::string text = "9.81";
         const auto o = set_.find(name);
-        if (o != set_.end()) value = override_value(o->second);
-        else if (node) value = number(*node, key);
+        if (o != set_.end()) {
+            value = override_value(o->second);
+            text = o->second.value;
+        } else if (node) {
+            value = number(*node, key);
+            text = source_text(*node);
+        }
         // The normal force of friction is m*g (interface.md section 2).
         if (name == "g" && !(value > 0.0)) {
             const std::string reason = "gravity g must be > 0 (friction's normal force is m*g), got " + show(value);
@@ -387,6 +419,7 @@ private:
             fail(node, key, reason);
         }
         model_.parameters.emplace_back(name, value);
+        model_.parameter_expressions.emplace_back(name, text);
         symbols_[name] = GiNaC::numeric(value);
     }
 
@@ -500,15 +533,17 @@ private:
             if (const toml::node* x = t->get("x")) model_.x0 = per_mass(*x, "initial.x");
             if (const toml::node* v = t->get("v")) model_.v0 = per_mass(*v, "initial.v");
         }
-        apply_state_overrides(x0_, model_.x0);
-        apply_state_overrides(v0_, model_.v0);
+        apply_state_overrides(x0_, model_.x0, "initial.x");
+        apply_state_overrides(v0_, model_.v0, "initial.v");
     }
 
-    void apply_state_overrides(const std::map<std::string, Override>& overrides, std::vector<double>& state) const {
+    void apply_state_overrides(const std::map<std::string, Override>& overrides, std::vector<double>& state,
+                               const std::string& path) {
         for (const auto& [name, o] : overrides) {
             const int i = model_.mass_index(name);
             if (i < 0) throw InputError(o.flag + " '" + o.raw + "': no mass named '" + name + "'");
             state[i] = override_value(o);
+            model_.field_expressions[path + "." + name] = o.value;
         }
     }
 

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstddef>
+#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -76,6 +77,20 @@ struct Model {
     std::vector<double> v0;  ///< initial velocities, one per mass
 
     std::optional<double> t_end;  ///< [simulate].t_end
+
+    /// Source text of every parameter in file order (implicit g first when the
+    /// file has none; a --set override replaces the file's text), for the
+    /// symbolic view of `hsnc inspect --symbolic`. Empty when built in code.
+    std::vector<std::pair<std::string, std::string>> parameter_expressions;
+    /// Source text of every numeric field the file gave (a number literal as the
+    /// shortest text that reads back to the same double), keyed by the path the
+    /// reader's messages use: "mass[1].m", "mass[1].mu_k", "mass[1].mu_s",
+    /// "spring[2].k", "contact[1].gap", "contact[1].k", "damping.alpha",
+    /// "damping.beta", "forcing[1].omega", "forcing[1].phase",
+    /// "forcing[1].amplitude.m1", "load.m2", "initial.t0", "initial.x.m1",
+    /// "initial.v.m1", "simulate.t_end" (indices from 1, in file order). A field
+    /// left out (its default applies) has no entry.
+    std::map<std::string, std::string> field_expressions;
 
     std::size_t dof() const { return masses.size(); }
 

@@ -88,7 +88,7 @@ TEST(Generate, TwoProcessesWriteIdenticalBytes) {
         EXPECT_EQ(slurp(e.path()), slurp(base / "b" / e.path().filename())) << e.path();
         ++files;
     }
-    EXPECT_EQ(files, 8 + 1);  // 2^(1 contact + 2 friction masses) kernels and the registry
+    EXPECT_EQ(files, 8 + 2);  // 2^(1 contact + 2 friction masses) kernels, the manifest and the registry
     fs::remove_all(base);
 }
 
