@@ -141,15 +141,26 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     Found found;
     found.switched.reserve(max_switches);
     std::vector<Transition> transitions;
+    SegmentSolver* current = nullptr;  // solver of current_cfg
+    Configuration current_cfg;
     std::string why;
     // Rounding level each switch function had at the last event, by (kind,
     // element): a value that should be 0 after a switch comes back as ~1e-17
     // from the previous segment, whatever the new segment's own terms are.
-    std::map<std::pair<int, int>, double> inherited;
+    // Flat table indexed by kind * stride + element; 0 where nothing was inherited.
+    const std::size_t stride = std::max(model_.contacts.size(), n);
+    std::vector<double> inherited(4 * stride, 0.0);
+    auto slot = [stride](const SwitchFunction& f) {
+        return static_cast<std::size_t>(f.kind) * stride + static_cast<std::size_t>(f.element);
+    };
     std::size_t progress_counter = 0;
     while (true) {
-        visited.insert(cfg);
-        SegmentSolver& S = provider_.solver(cfg);
+        if (!current || cfg != current_cfg) {  // a reversal keeps the configuration: no lookup
+            visited.insert(cfg);
+            current = &provider_.solver(cfg);
+            current_cfg = cfg;
+        }
+        SegmentSolver& S = *current;
         S.setup(t, x.data(), v.data(), sgn.data());
         ++sum.segments;
         const std::vector<SwitchFunction>& sw = S.switches();
@@ -159,10 +170,8 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         SegmentEval out = buf.view();
 
         for (std::size_t f = 0; f < nsw; ++f) {
-            floor[f] = 0.0;
             side[f] = side_of(sw[f], cfg, sgn);
-            const auto it = inherited.find({static_cast<int>(sw[f].kind), sw[f].element});
-            if (it != inherited.end()) floor[f] = it->second;
+            floor[f] = inherited[slot(sw[f])];
         }
         // Rounding level of g_f at the point last evaluated: its terms (scale), the
         // rounding of the time itself (|g'| * ulp-ish of t + tau, which also covers
@@ -230,9 +239,9 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     if (stop ? h <= eps_f : (h < -eps_f || (h <= eps_f && hd < 0)))
                         found.switched.push_back(sw[f]);
                 }
-                inherited.clear();
+                std::fill(inherited.begin(), inherited.end(), 0.0);
                 for (std::size_t f = 0; f < nsw; ++f)
-                    inherited[{static_cast<int>(sw[f].kind), sw[f].element}] = noise(f);
+                    inherited[slot(sw[f])] = noise(f);
                 break;
             }
             if (tau >= tau_end) break;
