@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "engine_runner.h"
 #include "engine.h"
 #include "integrators.h"
 #include "model_reader.h"
@@ -14,46 +15,10 @@
 namespace hsnc {
 namespace {
 
-struct Recorded {
-    double t;
-    EventKind kind;
-    int element;
-    std::vector<double> x, v;
-};
-
-class Recorder : public Observer {
-public:
-    explicit Recorder(std::size_t n) : n_(n) {}
-    void on_sample(double t, const double* x, const double* v) override {
-        samples.push_back({t, EventKind::stick, -1, {x, x + n_}, {v, v + n_}});
-    }
-    void on_event(double t, EventKind kind, int element, const double* x, const double* v) override {
-        events.push_back({t, kind, element, {x, x + n_}, {v, v + n_}});
-    }
-    std::vector<Recorded> samples, events;
-
-private:
-    std::size_t n_;
-};
-
-struct Outcome {
-    RunSummary summary;
-    std::vector<Recorded> events, samples;
-};
-
-Outcome simulate(const Model& model, double t_end, double dt = 0.0) {
-    GenericSolverProvider provider(model);
-    Engine engine(model, provider);
-    Recorder rec(model.dof());
-    EngineOptions opt;
-    opt.t_end = t_end;
-    opt.dt = dt;
-    Outcome r;
-    r.summary = engine.run(opt, rec);
-    r.events = rec.events;
-    r.samples = rec.samples;
-    return r;
-}
+using testing::Outcome;
+using testing::Recorded;
+using testing::Recorder;
+using testing::simulate;
 
 Model model_from(const std::string& toml) { return parse_model(toml, "test.toml"); }
 
@@ -381,13 +346,9 @@ TEST_P(AgainstBaseline, SameEventsAndState) {
     const Model m = read_model(std::string(HSNC_SOURCE_DIR) + "/models/" + file);
     const Outcome exact = simulate(m, t_end);
     ASSERT_EQ(exact.summary.status, RunStatus::ok) << exact.summary.message;
-    Recorder rec(m.dof());
-    EngineOptions eo;
-    eo.t_end = t_end;
-    IntegratorOptions io;
-    io.rtol = 1e-12;
-    io.atol = 1e-14;
-    const RunSummary base = integrate(m, Method::rk45, io, eo, rec);
+    const Outcome rk = testing::baseline(m, t_end, 1e-12, 1e-14);
+    const RunSummary& base = rk.summary;
+    const auto& rec = rk;
     ASSERT_EQ(base.status, RunStatus::ok) << base.message;
     ASSERT_EQ(rec.events.size(), exact.events.size());
     ASSERT_GT(exact.events.size(), 3u);

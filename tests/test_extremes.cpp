@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "engine_runner.h"
 #include "engine.h"
 #include "integrators.h"
 #include "model_reader.h"
@@ -55,80 +56,25 @@ void measured(const std::string& name, const std::string& quantity, double achie
 // ---------------------------------------------------------------------------
 // Driving the engine.
 
-struct Recorded {
-    double t;
-    EventKind kind;
-    int element;
-    std::vector<double> x, v;
-};
+using testing::canonical_order;
+using testing::Outcome;
+using testing::Recorded;
+using testing::Recorder;
 
-class Recorder : public Observer {
-public:
-    explicit Recorder(std::size_t n) : n_(n) {}
-    void on_sample(double t, const double* x, const double* v) override {
-        samples.push_back({t, EventKind::stick, -1, {x, x + n_}, {v, v + n_}});
-    }
-    void on_event(double t, EventKind kind, int element, const double* x, const double* v) override {
-        events.push_back({t, kind, element, {x, x + n_}, {v, v + n_}});
-    }
-    std::vector<Recorded> samples, events;
-
-private:
-    std::size_t n_;
-};
-
-void canonical_order(std::vector<Recorded>& ev);
-
-struct Outcome {
-    RunSummary summary;
-    std::vector<Recorded> events, samples;
-};
-
+// The engine and the baseline, with each instant's rows in canonical order.
 Outcome simulate(const Model& model, double t_end, double dt = 0.0) {
-    GenericSolverProvider provider(model);
-    Engine engine(model, provider);
-    Recorder rec(model.dof());
-    EngineOptions opt;
-    opt.t_end = t_end;
-    opt.dt = dt;
-    Outcome r;
-    r.summary = engine.run(opt, rec);
-    canonical_order(rec.events);
-    r.events = std::move(rec.events);
-    r.samples = std::move(rec.samples);
+    Outcome r = testing::simulate(model, t_end, dt);
+    canonical_order(r.events);
     return r;
 }
 
 Outcome baseline(const Model& model, double t_end, double rtol, double atol) {
-    Recorder rec(model.dof());
-    EngineOptions eo;
-    eo.t_end = t_end;
-    IntegratorOptions io;
-    io.rtol = rtol;
-    io.atol = atol;
-    Outcome r;
-    r.summary = integrate(model, Method::rk45, io, eo, rec);
-    canonical_order(rec.events);
-    r.events = std::move(rec.events);
-    r.samples = std::move(rec.samples);
+    Outcome r = testing::baseline(model, t_end, rtol, atol);
+    canonical_order(r.events);
     return r;
 }
 
 Model model_from(const std::string& toml) { return parse_model(toml, "extremes.toml"); }
-
-// Rows of one instant may come in any order (interface.md section 2): sort
-// each run of rows with the same time by (kind, element).
-void canonical_order(std::vector<Recorded>& ev) {
-    for (std::size_t i = 0; i < ev.size();) {
-        std::size_t j = i + 1;
-        while (j < ev.size() && ev[j].t == ev[i].t) ++j;
-        std::sort(ev.begin() + static_cast<std::ptrdiff_t>(i), ev.begin() + static_cast<std::ptrdiff_t>(j),
-                  [](const Recorded& a, const Recorded& b) {
-                      return a.kind != b.kind ? a.kind < b.kind : a.element < b.element;
-                  });
-        i = j;
-    }
-}
 
 std::string num(LD v) {
     char buf[64];

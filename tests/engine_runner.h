@@ -1,0 +1,86 @@
+// Driving the engine (and the rk45 baseline) from tests: record every event
+// and sample, in the order the run reports them.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+#include "engine.h"
+#include "integrators.h"
+#include "solver_provider.h"
+
+namespace hsnc::testing {
+
+struct Recorded {
+    double t;
+    EventKind kind;
+    int element;  ///< -1 for samples
+    std::vector<double> x, v;
+};
+
+class Recorder : public Observer {
+public:
+    explicit Recorder(std::size_t n) : n_(n) {}
+    void on_sample(double t, const double* x, const double* v) override {
+        samples.push_back({t, EventKind::stick, -1, {x, x + n_}, {v, v + n_}});
+    }
+    void on_event(double t, EventKind kind, int element, const double* x, const double* v) override {
+        events.push_back({t, kind, element, {x, x + n_}, {v, v + n_}});
+    }
+    std::vector<Recorded> samples, events;
+
+private:
+    std::size_t n_;
+};
+
+struct Outcome {
+    RunSummary summary;
+    std::vector<Recorded> events, samples;
+};
+
+/// The HSNC engine with the generic solver from the model's initial state.
+inline Outcome simulate(const Model& model, double t_end, double dt = 0.0) {
+    GenericSolverProvider provider(model);
+    Engine engine(model, provider);
+    Recorder rec(model.dof());
+    EngineOptions opt;
+    opt.t_end = t_end;
+    opt.dt = dt;
+    Outcome r;
+    r.summary = engine.run(opt, rec);
+    r.events = std::move(rec.events);
+    r.samples = std::move(rec.samples);
+    return r;
+}
+
+/// The rk45 baseline (Dormand-Prince with event location) at the given tolerances.
+inline Outcome baseline(const Model& model, double t_end, double rtol, double atol) {
+    Recorder rec(model.dof());
+    EngineOptions eo;
+    eo.t_end = t_end;
+    IntegratorOptions io;
+    io.rtol = rtol;
+    io.atol = atol;
+    Outcome r;
+    r.summary = integrate(model, Method::rk45, io, eo, rec);
+    r.events = std::move(rec.events);
+    r.samples = std::move(rec.samples);
+    return r;
+}
+
+/// Rows of one instant may come in any order (interface.md section 2): sort
+/// each run of rows with the same time by (kind, element).
+inline void canonical_order(std::vector<Recorded>& ev) {
+    for (std::size_t i = 0; i < ev.size();) {
+        std::size_t j = i + 1;
+        while (j < ev.size() && ev[j].t == ev[i].t) ++j;
+        std::sort(ev.begin() + static_cast<std::ptrdiff_t>(i), ev.begin() + static_cast<std::ptrdiff_t>(j),
+                  [](const Recorded& a, const Recorded& b) {
+                      return a.kind != b.kind ? a.kind < b.kind : a.element < b.element;
+                  });
+        i = j;
+    }
+}
+
+}  // namespace hsnc::testing
