@@ -30,8 +30,13 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double f_1 = -0.98100000000000009*sgn[0];  // m1
     // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
     const double p_1 = f_1;
-    const double q0_1 = x0[0];
-    const double dq0_1 = v0[0];
+    const double q0u_1 = x0[0];
+    const double dq0u_1 = v0[0];
+    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(1.0)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(1.0)*dq0u_1);
+    const double q0_1 = q0u_1 + (rx_1);
+    const double dq0_1 = dq0u_1 + (rv_1);
     // Mode 1 (undamped): particular solution q_p at tau = 0, then
     // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
     const double A_1 = q0_1 - (0.01*p_1);

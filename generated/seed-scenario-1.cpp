@@ -38,11 +38,20 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double f_2 = -11.772*sgn[1];  // m2
     // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
     const double p_1 = 0.88807383397711526*f_1 + 0.32505758367186816*f_2;
-    const double q0_1 = 0.88807383397711526*x0[0] + 0.65011516734373631*x0[1];
-    const double dq0_1 = 0.88807383397711526*v0[0] + 0.65011516734373631*v0[1];
+    const double q0u_1 = 0.88807383397711526*x0[0] + 0.65011516734373631*x0[1];
+    const double dq0u_1 = 0.88807383397711526*v0[0] + 0.65011516734373631*v0[1];
     const double p_2 = -0.45970084338098305*f_1 + 0.62796303019955435*f_2;
-    const double q0_2 = -0.45970084338098305*x0[0] + 1.2559260603991087*x0[1];
-    const double dq0_2 = -0.45970084338098305*v0[0] + 1.2559260603991087*v0[1];
+    const double q0u_2 = -0.45970084338098305*x0[0] + 1.2559260603991087*x0[1];
+    const double dq0u_2 = -0.45970084338098305*v0[0] + 1.2559260603991087*v0[1];
+    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(0.88807383397711526)*q0u_1 - static_cast<long double>(-0.45970084338098305)*q0u_2);
+    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(0.88807383397711526)*dq0u_1 - static_cast<long double>(-0.45970084338098305)*dq0u_2);
+    const double rx_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(0.32505758367186816)*q0u_1 - static_cast<long double>(0.62796303019955435)*q0u_2);
+    const double rv_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(0.32505758367186816)*dq0u_1 - static_cast<long double>(0.62796303019955435)*dq0u_2);
+    const double q0_1 = q0u_1 + (0.88807383397711526*rx_1 + 0.65011516734373631*rx_2);
+    const double dq0_1 = dq0u_1 + (0.88807383397711526*rv_1 + 0.65011516734373631*rv_2);
+    const double q0_2 = q0u_2 + (-0.45970084338098305*rx_1 + 1.2559260603991087*rx_2);
+    const double dq0_2 = dq0u_2 + (-0.45970084338098305*rv_1 + 1.2559260603991087*rv_2);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
@@ -204,11 +213,20 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double f_2 = -20.0 - 11.772*sgn[1];  // m2
     // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
     const double p_1 = 0.6127686665676223*f_1 + 0.55879985740555538*f_2;
-    const double q0_1 = 0.6127686665676223*x0[0] + 1.1175997148111108*x0[1];
-    const double dq0_1 = 0.6127686665676223*v0[0] + 1.1175997148111108*v0[1];
+    const double q0u_1 = 0.6127686665676223*x0[0] + 1.1175997148111108*x0[1];
+    const double dq0u_1 = 0.6127686665676223*v0[0] + 1.1175997148111108*v0[1];
     const double p_2 = 0.79026233699508808*f_1 - 0.43329287942860423*f_2;
-    const double q0_2 = 0.79026233699508808*x0[0] - 0.86658575885720845*x0[1];
-    const double dq0_2 = 0.79026233699508808*v0[0] - 0.86658575885720845*v0[1];
+    const double q0u_2 = 0.79026233699508808*x0[0] - 0.86658575885720845*x0[1];
+    const double dq0u_2 = 0.79026233699508808*v0[0] - 0.86658575885720845*v0[1];
+    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(0.6127686665676223)*q0u_1 - static_cast<long double>(0.79026233699508808)*q0u_2);
+    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(0.6127686665676223)*dq0u_1 - static_cast<long double>(0.79026233699508808)*dq0u_2);
+    const double rx_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(0.55879985740555538)*q0u_1 - static_cast<long double>(-0.43329287942860423)*q0u_2);
+    const double rv_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(0.55879985740555538)*dq0u_1 - static_cast<long double>(-0.43329287942860423)*dq0u_2);
+    const double q0_1 = q0u_1 + (0.6127686665676223*rx_1 + 1.1175997148111108*rx_2);
+    const double dq0_1 = dq0u_1 + (0.6127686665676223*rv_1 + 1.1175997148111108*rv_2);
+    const double q0_2 = q0u_2 + (0.79026233699508808*rx_1 - 0.86658575885720845*rx_2);
+    const double dq0_2 = dq0u_2 + (0.79026233699508808*rv_1 - 0.86658575885720845*rv_2);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
@@ -363,8 +381,13 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double f_1 = 10.0*x0[0] - 11.772*sgn[1];  // m2
     // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
     const double p_1 = 0.70710678118654757*f_1;
-    const double q0_1 = 1.4142135623730951*x0[1];
-    const double dq0_1 = 1.4142135623730951*v0[1];
+    const double q0u_1 = 1.4142135623730951*x0[1];
+    const double dq0u_1 = 1.4142135623730951*v0[1];
+    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(0.70710678118654757)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(0.70710678118654757)*dq0u_1);
+    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
+    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
@@ -501,8 +524,13 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double f_1 = -20.0 + 110.0*x0[0] - 11.772*sgn[1];  // m2
     // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
     const double p_1 = 0.70710678118654757*f_1;
-    const double q0_1 = 1.4142135623730951*x0[1];
-    const double dq0_1 = 1.4142135623730951*v0[1];
+    const double q0u_1 = 1.4142135623730951*x0[1];
+    const double dq0u_1 = 1.4142135623730951*v0[1];
+    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(0.70710678118654757)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(0.70710678118654757)*dq0u_1);
+    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
+    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
@@ -639,8 +667,13 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double f_1 = 10.0*x0[1] - 5.8860000000000001*sgn[0];  // m1
     // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
     const double p_1 = f_1;
-    const double q0_1 = x0[0];
-    const double dq0_1 = v0[0];
+    const double q0u_1 = x0[0];
+    const double dq0u_1 = v0[0];
+    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(1.0)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(1.0)*dq0u_1);
+    const double q0_1 = q0u_1 + (rx_1);
+    const double dq0_1 = dq0u_1 + (rv_1);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
@@ -777,8 +810,13 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double f_1 = 20.0 + 110.0*x0[1] - 5.8860000000000001*sgn[0];  // m1
     // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
     const double p_1 = f_1;
-    const double q0_1 = x0[0];
-    const double dq0_1 = v0[0];
+    const double q0u_1 = x0[0];
+    const double dq0u_1 = v0[0];
+    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(1.0)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(1.0)*dq0u_1);
+    const double q0_1 = q0u_1 + (rx_1);
+    const double dq0_1 = dq0u_1 + (rv_1);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);

@@ -198,8 +198,34 @@ std::string emit_kernel(const Derivation& d) {
                 dq.add(d.modes[j].w[r], "v0[" + i + "]");
             }
             s.line(1, "const double p_" + idx(j) + " = " + p.str() + ";");
-            s.line(1, "const double q0_" + idx(j) + " = " + q.str() + ";");
-            s.line(1, "const double dq0_" + idx(j) + " = " + dq.str() + ";");
+            s.line(1, "const double q0u_" + idx(j) + " = " + q.str() + ";");
+            s.line(1, "const double dq0u_" + idx(j) + " = " + dq.str() + ";");
+        }
+        // V and W are inverse only to rounding, so x0 -> W x0 -> V W x0 is the
+        // fixed matrix I + E (E ~ eps) of the configuration: applied at every
+        // segment start it is a bias (a steady energy gain), not noise. One
+        // refinement against the residual, accumulated in long double, removes it
+        // (as GenericSolver::setup does).
+        s.line(1, "// One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.");
+        for (std::size_t r = 0; r < nf; ++r) {
+            const std::string i = std::to_string(d.free_dofs[r]);
+            std::string rx = "static_cast<long double>(x0[" + i + "])", rv = "static_cast<long double>(v0[" + i + "])";
+            for (std::size_t j = 0; j < nm; ++j) {
+                const std::string c = "static_cast<long double>(" + format_double(dbl(d.modes[j].v[r])) + ")";
+                rx += " - " + c + "*q0u_" + idx(j);
+                rv += " - " + c + "*dq0u_" + idx(j);
+            }
+            s.line(1, "const double rx_" + idx(r) + " = static_cast<double>(" + rx + ");");
+            s.line(1, "const double rv_" + idx(r) + " = static_cast<double>(" + rv + ");");
+        }
+        for (std::size_t j = 0; j < nm; ++j) {
+            Lin q, dq;
+            for (std::size_t r = 0; r < nf; ++r) {
+                q.add(d.modes[j].w[r], "rx_" + idx(r));
+                dq.add(d.modes[j].w[r], "rv_" + idx(r));
+            }
+            s.line(1, "const double q0_" + idx(j) + " = q0u_" + idx(j) + " + (" + q.str() + ");");
+            s.line(1, "const double dq0_" + idx(j) + " = dq0u_" + idx(j) + " + (" + dq.str() + ");");
         }
     }
     if (nh > 0) {
