@@ -237,7 +237,9 @@ double check_consistency(const GenericSolver& s, const Model& m, const Physics& 
     const Eigen::VectorXd res = ph.m.cwiseProduct(a) - ph.force(t0 + tau, x, v);
     const Eigen::VectorXd size = ph.m.cwiseProduct(a.cwiseAbs()) + ph.force_size(t0 + tau, x, v);
     for (std::size_t i = 0; i < n; ++i)
-        if (!ph.cfg.stuck[i]) EXPECT_LE(std::abs(res(i)), 1e-12 * size(i)) << what << " residual[" << i << "]";
+        if (!ph.cfg.stuck[i]) {
+            EXPECT_LE(std::abs(res(i)), 1e-12 * size(i)) << what << " residual[" << i << "]";
+        }
     // Switch function values from their definitions (segment.h).
     for (std::size_t f = 0; f < ns; ++f) {
         const SwitchFunction& sf = s.switches()[f];
@@ -312,7 +314,9 @@ TEST(GenericSolver, RandomisedConsistencyAndRk4) {
                 for (int k = 0; k < nf; ++k)
                     EXPECT_NEAR(L(j, k), j == k ? md.lambda(j) : 0.0, 1e-12 * kscale) << what;
             for (int j = 0; j < nf; ++j)
-                if (md.rigid[j]) EXPECT_EQ(md.lambda(j), 0.0) << what;
+                if (md.rigid[j]) {
+                    EXPECT_EQ(md.lambda(j), 0.0) << what;
+                }
         }
         for (char c : cs.cfg.stuck) stuck += c;
         for (char c : cs.cfg.closed) closed += c;
