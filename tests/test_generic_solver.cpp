@@ -213,7 +213,9 @@ double check_consistency(const GenericSolver& s, const Model& m, const Physics& 
                          double window, const std::string& what) {
     const std::size_t n = m.dof(), ns = s.switches().size();
     const double rate = fastest_rate(s, m);
-    const double h = 1e-3 / rate;
+    // A power of two, so that tau +- h and tau +- 2h are exact and the
+    // differences are not polluted by the rounding of the abscissae.
+    const double h = std::exp2(std::floor(std::log2(1e-3 / rate)));
     const Out o = eval_at(s, n, tau);
     // v, a against central differences of x, v.
     double xscale = 0, vscale = 0, ascale = 0;
@@ -235,7 +237,24 @@ double check_consistency(const GenericSolver& s, const Model& m, const Physics& 
     const Eigen::VectorXd res = ph.m.cwiseProduct(a) - ph.force(t0 + tau, x, v);
     const Eigen::VectorXd size = ph.m.cwiseProduct(a.cwiseAbs()) + ph.force_size(t0 + tau, x, v);
     for (std::size_t i = 0; i < n; ++i)
-        if (!ph.cfg.stuck[i]) EXPECT_LE(std::abs(res(i)), 1e-12 * size(i)) << what << " residual[" << i << "]";
+        if (!ph.cfg.stuck[i]) {
+            EXPECT_LE(std::abs(res(i)), 1e-12 * size(i)) << what << " residual[" << i << "]";
+        }
+    // Switch function values from their definitions (segment.h).
+    for (std::size_t f = 0; f < ns; ++f) {
+        const SwitchFunction& sf = s.switches()[f];
+        double expect = 0.0;
+        if (sf.kind == SwitchKind::gap) {
+            expect = gap(m, sf.element, o.x.data());
+        } else if (sf.kind == SwitchKind::velocity) {
+            expect = o.v[sf.element];
+        } else {
+            const Eigen::VectorXd A = -ph.K * x - ph.C * v + ph.f + forcing(m, t0 + tau);
+            const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
+            expect = sg * A(sf.element) - m.masses[sf.element].mu_s * m.normal_force(sf.element);
+        }
+        EXPECT_NEAR(o.g[f], expect, 1e-13 * o.scale[f]) << what << " g[" << f << "]";
+    }
     // dg against central differences of g; |g''| over [tau, tau + window] below bound(tau).
     double worst = 0.0;
     for (std::size_t f = 0; f < ns; ++f) {
@@ -276,6 +295,28 @@ TEST(GenericSolver, RandomisedConsistencyAndRk4) {
         for (int j = 0; j < s.modes().lambda.size(); ++j) {
             ++regimes[static_cast<int>(s.regime(j))];
             for (std::size_t h = 0; h < m.forcing.size(); ++h) coupled += s.coupled(j, static_cast<int>(h));
+        }
+        {
+            // Phi^T M_F Phi = I, Phi^T K_F Phi = diag(lambda); structural rigid modes exact.
+            const ModalDecomposition& md = s.modes();
+            const Eigen::MatrixXd K = stiffness_matrix(m, cs.cfg);
+            const int nf = static_cast<int>(md.free.size());
+            Eigen::MatrixXd KF(nf, nf), MF = Eigen::MatrixXd::Zero(nf, nf);
+            for (int r = 0; r < nf; ++r) {
+                MF(r, r) = m.masses[md.free[r]].m;
+                for (int c = 0; c < nf; ++c) KF(r, c) = K(md.free[r], md.free[c]);
+            }
+            const double kscale = nf == 0 ? 1.0 : std::max(1.0, KF.cwiseAbs().maxCoeff());
+            EXPECT_TRUE((md.phi.transpose() * MF * md.phi).isApprox(Eigen::MatrixXd::Identity(nf, nf), 1e-13) ||
+                        nf == 0) << what;
+            const Eigen::MatrixXd L = md.phi.transpose() * KF * md.phi;
+            for (int j = 0; j < nf; ++j)
+                for (int k = 0; k < nf; ++k)
+                    EXPECT_NEAR(L(j, k), j == k ? md.lambda(j) : 0.0, 1e-12 * kscale) << what;
+            for (int j = 0; j < nf; ++j)
+                if (md.rigid[j]) {
+                    EXPECT_EQ(md.lambda(j), 0.0) << what;
+                }
         }
         for (char c : cs.cfg.stuck) stuck += c;
         for (char c : cs.cfg.closed) closed += c;
@@ -329,6 +370,313 @@ TEST(GenericSolver, RandomisedConsistencyAndRk4) {
     EXPECT_GT(regimes[3], 5);
     EXPECT_GT(stuck, 10);
     EXPECT_GT(closed, 10);
+}
+
+// ---------------------------------------------------------------------------
+// One degree of freedom, written independently in long double:
+// m x'' + c x' + k x = F0 + P sin(W t + th), underdamped or undamped off resonance.
+long double sdof_ld(long double m, long double k, long double c, long double F0, long double P, long double W,
+                    long double th, long double x0, long double v0, long double t) {
+    const long double lam = k / m, cc = c / m, p = P / m, sig = cc / 2;
+    const long double wd = std::sqrt(lam - sig * sig);
+    const long double det = lam - W * W, D = det * det + cc * W * cc * W;
+    const long double a = -p * cc * W / D, b = p * det / D;  // x_p = a cos + b sin
+    const long double xs = F0 / k;
+    const long double A = x0 - xs - (a * std::cos(th) + b * std::sin(th));
+    const long double Ad = v0 - W * (-a * std::sin(th) + b * std::cos(th));
+    const long double B = (Ad + sig * A) / wd;
+    return xs + a * std::cos(W * t + th) + b * std::sin(W * t + th) +
+           std::exp(-sig * t) * (A * std::cos(wd * t) + B * std::sin(wd * t));
+}
+
+// One mass m on a spring k to ground, Rayleigh alpha, one harmonic, a load, an
+// open contact to ground (a gap function) and friction with mu_k = 0 (a
+// velocity function that never adds force).
+Model sdof(double m, double k, double alpha, double P, double W, double phase, double load, double x0,
+           double v0) {
+    Model md;
+    md.name = "sdof";
+    md.masses = {{"m1", m, true, 0.0, 0.1}};
+    md.springs = {{kGround, 0, k}};
+    md.contacts = {{"c1", 0, kGround, 50.0, 10.0}};
+    md.alpha = alpha;
+    if (P != 0.0) md.forcing = {{W, phase, {P}}};
+    md.load = {load};
+    md.x0 = {x0};
+    md.v0 = {v0};
+    return md;
+}
+
+TEST(GenericSolver, DampingRatiosAroundCriticalAreContinuous) {
+    const double m = 1.5, k = 6.0, w = 2.0;  // omega = sqrt(k/m) = 2
+    const double xis[] = {0.0, 1e-12, 1 - 1e-9, 1.0, 1 + 1e-9, 1e3};
+    const GenericSolver::Regime expect[] = {
+        GenericSolver::Regime::underdamped, GenericSolver::Regime::underdamped, GenericSolver::Regime::underdamped,
+        GenericSolver::Regime::critical,    GenericSolver::Regime::overdamped,  GenericSolver::Regime::overdamped};
+    const signed char sgn[] = {1};
+    const double taus[] = {0.0, 0.05, 0.7, 2.0, 6.0, 15.0};
+    std::vector<std::vector<double>> xs;
+    for (int r = 0; r < 6; ++r) {
+        const Model md = sdof(m, k, 2.0 * xis[r] * w, 0.8, 3.0, 0.4, 0.5, 0.3, -1.0);
+        const Configuration cfg = Configuration::all_open(md);
+        GenericSolver s(md, cfg);
+        ASSERT_EQ(s.regime(0), expect[r]) << "xi = " << xis[r];
+        s.setup(0.0, md.x0.data(), md.v0.data(), sgn);
+        std::vector<double> row;
+        for (double t : taus) row.push_back(eval_at(s, 1, t).x[0]);
+        xs.push_back(row);
+        // No inf/nan up to 1e3 periods, and the ODE holds there.
+        const Physics ph(md, cfg, {1}, md.x0.data());
+        const double far = 1e3 * 2 * kPi / w;
+        const Out o = eval_at(s, 1, far);
+        for (double v : {o.x[0], o.v[0], o.a[0], o.g[0], o.dg[0], o.bound[0], o.scale[0], o.g[1], o.bound[1]})
+            EXPECT_TRUE(std::isfinite(v)) << "xi = " << xis[r];
+        check_consistency(s, md, ph, 0.0, 0.3, 2 * kPi / w, "xi = " + std::to_string(xis[r]));
+        check_consistency(s, md, ph, 0.0, far, 2 * kPi / w, "xi = " + std::to_string(xis[r]) + " far");
+        if (r <= 2) {
+            // Underdamped: the long-double closed form (xi = 0: undamped).
+            for (std::size_t i = 0; i < std::size(taus); ++i)
+                EXPECT_NEAR(xs[r][i],
+                            static_cast<double>(sdof_ld(m, k, m * 2.0L * xis[r] * w, 0.5, 0.8, 3.0, 0.4, 0.3, -1.0,
+                                                        taus[i])),
+                            1e-13)
+                    << "xi = " << xis[r] << " tau = " << taus[i];
+        }
+        if (r == 5) {
+            // xi = 1e3: two real roots, long double; far out the slow root still matters.
+            const long double sig = 1e3L * w, g = std::sqrt(sig * sig - 4.0L);
+            const long double r1 = -sig + g, r2 = -sig - g, c = m * 2 * sig;
+            const long double W = 3.0, th = 0.4, lam = 4.0, p = 0.8L / m;
+            const long double det = lam - W * W, D = det * det + (2 * sig * W) * (2 * sig * W);
+            const long double a = -p * 2 * sig * W / D, b = p * det / D, xs0 = 0.5L / k;
+            const long double u0 = 0.3L - xs0 - (a * std::cos(th) + b * std::sin(th));
+            const long double ud0 = -1.0L - W * (-a * std::sin(th) + b * std::cos(th));
+            const long double U1 = (r2 * u0 - ud0) / (r2 - r1), U2 = (ud0 - r1 * u0) / (r2 - r1);
+            (void)c;
+            for (double t : {0.7, 6.0, far}) {
+                const long double x = xs0 + a * std::cos(W * t + th) + b * std::sin(W * t + th) +
+                                      U1 * std::exp(r1 * t) + U2 * std::exp(r2 * t);
+                EXPECT_NEAR(eval_at(s, 1, t).x[0], static_cast<double>(x), 1e-12) << "xi = 1e3, tau = " << t;
+            }
+        }
+    }
+    // Critical damping in closed form: x = xs + xp + e^{-w t}(A + (A' + w A) t).
+    {
+        const double c = 2.0 * w, lam = 4.0, W = 3.0, th = 0.4, p = 0.8 / m;
+        const double det = lam - W * W, D = det * det + c * W * c * W, a = -p * c * W / D, b = p * det / D;
+        const double xs0 = 0.5 / k, A = 0.3 - xs0 - (a * std::cos(th) + b * std::sin(th));
+        const double Ad = -1.0 - W * (-a * std::sin(th) + b * std::cos(th));
+        for (std::size_t i = 0; i < std::size(taus); ++i) {
+            const double t = taus[i];
+            const double x = xs0 + a * std::cos(W * t + th) + b * std::sin(W * t + th) +
+                             std::exp(-w * t) * (A + (Ad + w * A) * t);
+            EXPECT_NEAR(xs[3][i], x, 1e-14) << "critical, tau = " << t;
+        }
+    }
+    // Continuity across xi = 1: the three solutions differ by O(1e-9).
+    for (std::size_t i = 0; i < std::size(taus); ++i) {
+        EXPECT_NEAR(xs[2][i], xs[3][i], 1e-8) << "tau = " << taus[i];
+        EXPECT_NEAR(xs[4][i], xs[3][i], 1e-8) << "tau = " << taus[i];
+    }
+}
+
+TEST(GenericSolver, ExactAndNearResonance) {
+    const double m = 1.0, w = 3.0, P = 2.0, th = 0.4;
+    const signed char sgn[] = {1};
+    // Exact undamped resonance from rest: y = P/(2w) [-t cos(w t + th) + cos(th) sin(w t)/w].
+    auto exact = [&](double t) { return P / (2 * w) * (-t * std::cos(w * t + th) + std::cos(th) * std::sin(w * t) / w); };
+    const double T = 2 * kPi / w;
+    for (double detune : {0.0, 1e-10, -1e-10}) {
+        const Model md = sdof(m, w * w, 0.0, P, w * (1 + detune), th, 0.0, 0.0, 0.0);
+        GenericSolver s(md, Configuration::all_open(md));
+        ASSERT_TRUE(s.coupled(0, 0));
+        EXPECT_NEAR(s.max_step(), T / (1 + detune), 1e-12);
+        s.setup(0.0, md.x0.data(), md.v0.data(), sgn);
+        for (int k = 1; k <= 40; ++k) {
+            const double t = 5 * T * k / 40;
+            // The detuned forcing itself differs from the resonant one by |detune| w t
+            // (relative, 3e-9 after 5 periods): that is the physical difference.
+            const double tol = 1e-13 + 2 * std::abs(detune) * w * t;
+            EXPECT_NEAR(eval_at(s, 1, t).x[0], exact(t), tol * P * t / (2 * w)) << "detune " << detune << " t " << t;
+        }
+        // Linear growth: the envelope after 20 periods is P t/(2 w).
+        const double t20 = 20 * T;
+        EXPECT_NEAR(std::abs(eval_at(s, 1, t20).x[0]), P * t20 / (2 * w) * std::cos(th), 1e-6 * P * t20);
+        const Physics ph(md, Configuration::all_open(md), {1}, md.x0.data());
+        check_consistency(s, md, ph, 0.0, 0.0, s.max_step(), "resonance");
+        check_consistency(s, md, ph, 0.0, 10 * T, s.max_step(), "resonance later");
+    }
+    // A lightly damped and a detuned sweep against the long-double closed form,
+    // crossing the coupled/standard threshold; with initial motion and a load.
+    for (double xi : {0.0, 1e-6, 1e-3, 2e-2})
+        for (double ratio : {0.9, 0.95, 0.97, 0.99, 0.999, 1.0, 1.001, 1.03, 1.05, 1.2, 2.0}) {
+            if (xi == 0.0 && ratio == 1.0) continue;
+            const double W = w * ratio;
+            const Model md = sdof(m, w * w, 2 * xi * w, P, W, th, 0.3, 0.2, -0.5);
+            GenericSolver s(md, Configuration::all_open(md));
+            s.setup(0.0, md.x0.data(), md.v0.data(), sgn);
+            for (int k = 1; k <= 20; ++k) {
+                const double t = 6 * T * k / 20;
+                const double ref = static_cast<double>(
+                    sdof_ld(m, w * w, 2.0L * xi * w * m, 0.3, P, W, th, 0.2, -0.5, t));
+                EXPECT_NEAR(eval_at(s, 1, t).x[0], ref, 1e-13 * (1 + P * t))
+                    << "xi " << xi << " ratio " << ratio << " t " << t << (s.coupled(0, 0) ? " coupled" : "");
+            }
+            const Physics ph(md, Configuration::all_open(md), {1}, md.x0.data());
+            check_consistency(s, md, ph, 0.0, 3 * T, std::min(s.max_step(), 2 * T), "sweep");
+        }
+    // xi = 1e-12 at exact resonance behaves as the undamped secular response.
+    const Model md = sdof(m, w * w, 2e-12 * w, P, w, th, 0.0, 0.0, 0.0);
+    GenericSolver s(md, Configuration::all_open(md));
+    s.setup(0.0, md.x0.data(), md.v0.data(), sgn);
+    for (int k = 1; k <= 10; ++k) {
+        const double t = 5 * T * k / 10;
+        EXPECT_NEAR(eval_at(s, 1, t).x[0], exact(t), 1e-9 * P * t / (2 * w));
+    }
+}
+
+TEST(GenericSolver, FreeMassWithFriction) {
+    // No springs: x = x0 + v0 t - mu g t^2/2 (alpha = 0); with alpha > 0,
+    // v = (v0 + mu g/alpha) e^{-alpha t} - mu g/alpha.
+    for (double alpha : {0.0, 1e-12, 0.7}) {
+        Model md;
+        md.name = "slider";
+        md.masses = {{"m1", 2.0, true, 0.3, 0.4}};
+        md.alpha = alpha;
+        md.load = {0.0};
+        md.x0 = {0.5};
+        md.v0 = {3.0};
+        const signed char sgn[] = {1};
+        GenericSolver s(md, Configuration::all_open(md));
+        EXPECT_EQ(s.regime(0), GenericSolver::Regime::rigid);
+        s.setup(4.0, md.x0.data(), md.v0.data(), sgn);
+        const double mg = 0.3 * 9.81;
+        for (double t : {0.0, 0.1, 0.5, 1.0, 1.01}) {
+            const Out o = eval_at(s, 1, t);
+            double x, v, a;
+            if (alpha == 0.7) {
+                const double e = std::exp(-alpha * t);
+                v = (3.0 + mg / alpha) * e - mg / alpha;
+                x = 0.5 + (3.0 + mg / alpha) * (1 - e) / alpha - mg / alpha * t;
+                a = -alpha * v - mg;
+            } else {
+                x = 0.5 + 3.0 * t - mg * t * t / 2;
+                v = 3.0 - mg * t;
+                a = -mg;
+            }
+            // alpha = 1e-12 is compared with the undamped form: the physical
+            // difference is about alpha (v0 + mu g) (1 + t^2).
+            const double tol = 4e-13 + (alpha < 1e-6 ? alpha * (3.0 + mg) * (1 + t * t) : 0.0);
+            EXPECT_NEAR(o.x[0], x, tol) << "alpha " << alpha << " t " << t;
+            EXPECT_NEAR(o.v[0], v, tol) << "alpha " << alpha << " t " << t;
+            EXPECT_NEAR(o.a[0], a, tol) << "alpha " << alpha << " t " << t;
+            EXPECT_EQ(o.g[0], o.v[0]);  // velocity switch function
+            EXPECT_EQ(o.dg[0], o.a[0]);
+            EXPECT_GE(o.bound[0], alpha * std::abs(a) * (1 - 1e-12));  // |v''| = alpha |a|, decreasing
+        }
+    }
+}
+
+TEST(GenericSolver, TwoMassesWithoutGround) {
+    // m1 -- k -- m2, nothing to ground: one rigid mode (lambda = 0 exactly,
+    // phi = 1/sqrt(M)) and one elastic mode lambda = k (1/m1 + 1/m2).
+    Model md;
+    md.name = "pair";
+    md.masses = {{"m1", 1.0, false, 0, 0}, {"m2", 3.0, false, 0, 0}};
+    md.springs = {{0, 1, 12.0}};
+    md.beta = 0.05;
+    md.load = {0.6, 0.0};
+    md.x0 = {0.2, -0.1};
+    md.v0 = {1.0, -0.5};
+    GenericSolver s(md, Configuration::all_open(md));
+    ASSERT_EQ(s.modes().lambda.size(), 2);
+    EXPECT_TRUE(s.modes().rigid[0]);
+    EXPECT_EQ(s.modes().lambda(0), 0.0);
+    EXPECT_EQ(s.modes().phi(0, 0), 0.5);
+    EXPECT_EQ(s.modes().phi(1, 0), 0.5);
+    const double lam = 12.0 * (1.0 + 1.0 / 3.0);
+    EXPECT_NEAR(s.modes().lambda(1), lam, 1e-14 * lam);
+    s.setup(0.0, md.x0.data(), md.v0.data(), nullptr);
+    // Centre of mass moves uniformly accelerated by the load; the relative
+    // coordinate d = x1 - x2 obeys d'' + beta lam d' + lam d = F/m1.
+    const double M = 4.0, xc0 = (0.2 - 0.3) / M, vc0 = (1.0 - 1.5) / M;
+    const double c = 0.05 * lam, sig = c / 2, wd = std::sqrt(lam - sig * sig), ds = 0.6 / (1.0 * lam);
+    const double A = 0.3 - ds, B = (1.5 + sig * A) / wd;
+    for (double t : {0.0, 0.3, 1.7, 5.0, 20.0}) {
+        const Out o = eval_at(s, 2, t);
+        EXPECT_NEAR((1.0 * o.x[0] + 3.0 * o.x[1]) / M, xc0 + vc0 * t + 0.6 * t * t / (2 * M), 1e-13 * (1 + t * t));
+        const double d = ds + std::exp(-sig * t) * (A * std::cos(wd * t) + B * std::sin(wd * t));
+        EXPECT_NEAR(o.x[0] - o.x[1], d, 1e-13) << "t " << t;
+    }
+}
+
+TEST(GenericSolver, StuckMassCouplingIsAConstantForce) {
+    // ground -k1- m1 -k12- m2 (stuck) -k23- m3: the free masses see the
+    // constant force -K[F,S] x_S = (k12 x2, k23 x2) (paper Eq. 7).
+    Model md;
+    md.name = "chain";
+    md.masses = {{"m1", 1.0, false, 0, 0}, {"m2", 2.0, true, 0.2, 0.3}, {"m3", 0.5, false, 0, 0}};
+    const double k1 = 10, k12 = 20, k23 = 5;
+    md.springs = {{kGround, 0, k1}, {0, 1, k12}, {1, 2, k23}};
+    md.alpha = 3.0;
+    md.beta = 0.01;
+    md.load = {0.0, 0.7, 0.0};
+    md.x0 = {0.1, 0.4, -0.2};
+    md.v0 = {0.5, 0.0, 0.0};
+    const Configuration cfg = Configuration::parse(md, "stuck=m2");
+    GenericSolver s(md, cfg);
+    const signed char sgn[] = {0, 0, 0};
+    s.setup(0.0, md.x0.data(), md.v0.data(), sgn);
+    ASSERT_EQ(s.switches().size(), 2u);  // release_pos, release_neg of m2
+    // At tau = 0: accelerations and the release functions by hand.
+    const Out o = eval_at(s, 3, 0.0);
+    const double x1 = 0.1, x2 = 0.4, x3 = -0.2, v1 = 0.5;
+    const double c11 = 3.0 * 1.0 + 0.01 * (k1 + k12), c21 = -0.01 * k12;
+    EXPECT_NEAR(o.a[0], (-(k1 + k12) * x1 + k12 * x2 - c11 * v1) / 1.0, 1e-13);
+    EXPECT_NEAR(o.a[2], (-k23 * x3 + k23 * x2) / 0.5, 1e-13);
+    EXPECT_EQ(o.x[1], x2);
+    EXPECT_EQ(o.v[1], 0.0);
+    EXPECT_EQ(o.a[1], 0.0);
+    const double A0 = -k12 * (x2 - x1) - k23 * (x2 - x3) - c21 * v1 + 0.7, N = 2.0 * 9.81;
+    EXPECT_NEAR(o.g[0], A0 - 0.3 * N, 1e-13);
+    EXPECT_NEAR(o.g[1], -A0 - 0.3 * N, 1e-13);
+    // Long after: the free masses rest where the constant force holds them.
+    const Out late = eval_at(s, 3, 60.0);
+    const double x1s = k12 * x2 / (k1 + k12), x3s = x2;
+    EXPECT_NEAR(late.x[0], x1s, 1e-12);
+    EXPECT_NEAR(late.x[2], x3s, 1e-12);
+    EXPECT_NEAR(late.g[0], -k12 * (x2 - x1s) + 0.7 - 0.3 * N, 1e-11);
+}
+
+TEST(GenericSolver, LargeT0OnlyShiftsThePhase) {
+    // The same motion from t0 = 1e6 with phase ph, and from t0 = 0 with phase
+    // ph + W*1e6 (reduced in long double): time is measured from the segment start.
+    const double W = 1.25, t0 = 1e6;  // W*t0 exact in double
+    const long double two_pi = 6.283185307179586476925286766559L;
+    const double shifted = static_cast<double>(std::fmod(1.25e6L + 0.3L, two_pi));
+    auto make = [&](double phase) {
+        Model md;
+        md.name = "t0";
+        md.masses = {{"m1", 1.0, false, 0, 0}, {"m2", 2.0, false, 0, 0}};
+        md.springs = {{kGround, 0, 4.0}, {0, 1, 3.0}};
+        md.alpha = 0.05;
+        md.forcing = {{W, phase, {1.0, -0.5}}};
+        md.load = {0.1, 0.0};
+        md.x0 = {0.2, 0.0};
+        md.v0 = {0.0, 0.3};
+        return md;
+    };
+    const Model a = make(0.3), b = make(shifted);
+    GenericSolver sa(a, Configuration::all_open(a)), sb(b, Configuration::all_open(b));
+    sa.setup(t0, a.x0.data(), a.v0.data(), nullptr);
+    sb.setup(0.0, b.x0.data(), b.v0.data(), nullptr);
+    for (double t : {0.0, 0.5, 3.0, 17.0, 40.0}) {
+        const Out oa = eval_at(sa, 2, t), ob = eval_at(sb, 2, t);
+        for (int i = 0; i < 2; ++i) {
+            EXPECT_NEAR(oa.x[i], ob.x[i], 1e-13) << "t " << t;
+            EXPECT_NEAR(oa.v[i], ob.v[i], 1e-13) << "t " << t;
+        }
+    }
 }
 
 }  // namespace
