@@ -13,7 +13,8 @@
 // function can change sign inside a step, however close two roots are. Near a
 // root this is a Newton step taken from the safe side (quadratic convergence).
 // A contact or release function switches when it is certainly negative
-// (h < -noise, noise = 16*eps*scale); it is then moved back to its zero by one
+// (h < -noise, noise = 16*eps*(scale + |g'|*|t|), at least the level it had at
+// the last event); it is then moved back to its zero by one
 // Newton step. A function that only touches zero within rounding changes
 // nothing. A sliding velocity that reaches zero, crossing or touching, is a stop
 // (h <= noise), and the stick rule decides.
