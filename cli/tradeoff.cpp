@@ -15,7 +15,8 @@
 //          atol = 1e-2*rtol; the sweep stops after a run that exceeds --budget.
 // Wall time: of the run alone (solver setup and recording the samples included,
 // model reading not); the median of as many runs as fit in about 0.2 s (an odd
-// number, at most 51; one run when the first takes over 0.1 s) -- column `runs`.
+// number, at most 51; one run when the first takes over 0.1 s), or --runs N;
+// column `runs`.
 #include <unistd.h>
 
 #include <algorithm>
@@ -71,6 +72,7 @@ struct TradeoffOptions {
     std::string methods;
     bool quick = false;
     double budget = 20.0;
+    int runs = 0;  ///< timed runs per setting; 0: as many as fit in about 0.2 s
 };
 
 std::string num(double v, int digits = 3) {
@@ -188,7 +190,8 @@ struct Measured {
     RunErrors errors;
 };
 
-Measured measure(const Model& model, const Point& p, const EngineOptions& eopt, const RecordedRun& reference) {
+Measured measure(const Model& model, const Point& p, const EngineOptions& eopt, const RecordedRun& reference,
+                 int runs) {
     Measured m{&p, "", NAN, 0, {}};
     RecordedRun rec;
     const std::size_t rows = reference.t.size() + 2;
@@ -201,7 +204,7 @@ Measured measure(const Model& model, const Point& p, const EngineOptions& eopt, 
     m.status = run_status_name(sum.status);
     m.errors = compare_runs(reference, rec);
     // Repeat to about 0.2 s of run time in all (odd count, at most 51): the median.
-    const int total = std::min(51, 1 + 2 * static_cast<int>(0.1 / std::max(walls[0], 1e-9)));
+    const int total = runs > 0 ? runs : std::min(51, 1 + 2 * static_cast<int>(0.1 / std::max(walls[0], 1e-9)));
     RecordedRun scratch;
     for (int r = 1; r < total; ++r) {
         scratch.t.clear();
@@ -293,6 +296,7 @@ int tradeoff(const TradeoffOptions& o) {
         throw InputError("--reference-out and --reference-events: give both (the reference trajectory and its events)");
     if (o.reference_digits < 17 || o.reference_digits > 1000)
         throw InputError("--reference-digits " + std::to_string(o.reference_digits) + ": must be in 17..1000");
+    if (o.runs < 0 || o.runs > 1001) throw InputError("--runs " + std::to_string(o.runs) + ": must be in 0..1001");
     if (!(o.budget > 0)) throw InputError("--budget " + num(o.budget) + ": must be > 0 (seconds)");
     if (!o.plot.empty() && o.csv.empty()) throw InputError("--plot: needs --csv (the table it draws)");
     const auto methods = chosen_methods(o.methods);
@@ -328,7 +332,7 @@ int tradeoff(const TradeoffOptions& o) {
                      num(seconds_since(start)).c_str(), reference.t.size(), reference.events.size());
     }
     {
-        // The runs sample at t0 + k*dt and t_end: the reference must share those times.
+        // The runs sample at t0 + k*dt and t_end: the reference must have a row at each.
         RecordedRun grid;
         grid.dof = model.dof();
         for (std::size_t k = 0;; ++k) {
@@ -339,9 +343,10 @@ int tradeoff(const TradeoffOptions& o) {
             if (last) break;
         }
         const RunErrors e = compare_runs(reference, grid);
-        if (e.sample_times < 2)
-            throw InputError("--dt " + num(eopt.dt, 17) + ": the reference shares " + std::to_string(e.sample_times) +
-                             " sample times with the grid t0 + k*dt; sample it on that grid (or give its --dt)");
+        if (e.sample_times != grid.t.size())
+            throw InputError("--reference-out '" + o.reference_out + "': has " + std::to_string(e.sample_times) +
+                             " of the " + std::to_string(grid.t.size()) + " sample times t0 + k*dt (dt = " +
+                             num(eopt.dt, 17) + ") and t_end; sample the reference on that grid, or give its --dt");
     }
 
     // The CSV is opened before the runs, so a path that cannot be written fails first.
@@ -371,7 +376,7 @@ int tradeoff(const TradeoffOptions& o) {
                 continue;
             }
         }
-        Measured r = measure(model, p, eopt, reference);
+        Measured r = measure(model, p, eopt, reference, o.runs);
         std::fprintf(stderr, "tradeoff: %s\n", describe(r).c_str());
         last_wall = r.wall;
         last_parameter = p.parameter;
@@ -459,6 +464,9 @@ void add_tradeoff(CLI::App& app, int& exit_code) {
     sub->add_flag("--quick", o->quick, "fewer settings per method (about half)");
     sub->add_option("--budget", o->budget,
                     "seconds: skip a setting predicted to take longer; stop an adaptive sweep after one did (default 20)");
+    sub->add_option("--runs", o->runs,
+                    "timed runs per setting, the median reported (default 0: as many as fit in about 0.2 s, "
+                    "odd, at most 51)");
     sub->callback([o, &exit_code] { exit_code = tradeoff(*o); });
 }
 

@@ -1,0 +1,229 @@
+// `hsnc tradeoff` against exact references built here from closed forms:
+// the Coulomb oscillator (models/coulomb-1dof.toml: half-cycles of pi/omega
+// about the friction offsets, then stuck) and a frictionless oscillator
+// (x = x0 cos(omega t)). hsnc must come out at rounding level, ab4 with its
+// textbook order where the motion is smooth; the event matching and the error
+// paths (exit 2, nothing written) are checked too.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <sstream>
+#include <vector>
+
+#include "cli_runner.h"
+#include "work_precision.h"
+
+namespace hsnc {
+namespace {
+
+using testing::file_exists;
+using testing::model_path;
+using testing::run_hsnc;
+using testing::slurp;
+using testing::temp_path;
+using testing::write_temp;
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::string g17(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+// The sample grid of a run: t0 + k*dt, and t_end (runtime's sampler rule).
+std::vector<double> grid(double t_end, double dt) {
+    std::vector<double> t;
+    for (std::size_t k = 0;; ++k) {
+        const double tk = static_cast<double>(k) * dt;
+        if (!(tk < t_end - 1e-9 * dt)) break;
+        t.push_back(tk);
+    }
+    t.push_back(t_end);
+    return t;
+}
+
+struct Reference {
+    std::string trajectory, events;
+};
+
+// models/coulomb-1dof.toml: m = 1, k = 100 (omega = 10), mu_s = mu_k = 0.1,
+// g = 9.81, x0 = 0.2 at rest. Half-cycle n runs from t_n = n*pi/omega about the
+// centre c_n = sign(X_n)*a, a = mu*g/omega^2: x = c_n + (X_n - c_n) cos(omega (t - t_n)),
+// and the next extreme is X_{n+1} = 2 c_n - X_n. A reversal at each t_n while
+// |X_n| > a; at X_10 = 0.0038 (|X| < a) the mass sticks for good.
+Reference coulomb_reference(double t_end, double dt) {
+    const double w = 10.0, a = 0.1 * 9.81 / (w * w);
+    std::vector<double> t_n{0.0}, X{0.2};
+    while (std::fabs(X.back()) > a) {
+        const double c = X.back() > 0 ? a : -a;
+        X.push_back(2 * c - X.back());
+        t_n.push_back(static_cast<double>(t_n.size()) * kPi / w);
+    }
+    std::string traj = "t,x_m1,v_m1\n", events = "t,kind,element,x_m1,v_m1\n";
+    for (double t : grid(t_end, dt)) {
+        std::size_t n = 0;
+        while (n + 1 < t_n.size() && t >= t_n[n + 1]) ++n;
+        double x = X[n], v = 0.0;
+        if (n + 1 < t_n.size()) {  // sliding
+            const double c = X[n] > 0 ? a : -a;
+            x = c + (X[n] - c) * std::cos(w * (t - t_n[n]));
+            v = -(X[n] - c) * w * std::sin(w * (t - t_n[n]));
+        }
+        traj += g17(t) + "," + g17(x) + "," + g17(v) + "\n";
+    }
+    for (std::size_t n = 1; n < t_n.size(); ++n)
+        if (t_n[n] <= t_end)
+            events += g17(t_n[n]) + (n + 1 < t_n.size() ? ",reversal" : ",stick") + ",m1," + g17(X[n]) + ",0\n";
+    return {write_temp("coulomb_ref.csv", traj), write_temp("coulomb_ref_events.csv", events)};
+}
+
+std::vector<std::string> fields(const std::string& line) {
+    std::vector<std::string> out;
+    std::istringstream in(line);
+    for (std::string f; std::getline(in, f, ',');) out.push_back(f);
+    return out;
+}
+
+// The tradeoff CSV: header check, then rows keyed by "method setting".
+std::map<std::string, std::vector<std::string>> read_tradeoff(const std::string& path) {
+    std::istringstream in(slurp(path));
+    std::string line;
+    std::getline(in, line);
+    EXPECT_EQ(line,
+              "method,setting,parameter,wall_seconds,runs,status,max_position_error,sample_times,events,"
+              "reference_events,matched_events,max_event_time_error,time_ratio_to_hsnc");
+    std::map<std::string, std::vector<std::string>> rows;
+    while (std::getline(in, line)) {
+        const auto f = fields(line);
+        EXPECT_EQ(f.size(), 13u) << line;
+        if (f.size() == 13u) rows[f[0] + " " + f[1]] = f;
+    }
+    return rows;
+}
+
+enum Col { kParameter = 2, kWall = 3, kStatus = 5, kXErr = 6, kSamples = 7, kEvents = 8, kRefEvents = 9,
+           kMatched = 10, kTErr = 11 };
+
+TEST(Tradeoff, CoulombOscillatorAgainstItsClosedForm) {
+    const Reference ref = coulomb_reference(4.0, 0.004);
+    const std::string csv = temp_path("tradeoff.csv");
+    const auto r = run_hsnc("tradeoff '" + model_path("coulomb-1dof.toml") + "' --t-end 4 --reference-out '" +
+                            ref.trajectory + "' --reference-events '" + ref.events + "' --methods hsnc,ab4 "
+                            "--runs 1 --budget 0.2 --csv '" + csv + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto rows = read_tradeoff(csv);
+    ASSERT_TRUE(rows.count("hsnc kernels=aot")) << slurp(csv);
+    ASSERT_TRUE(rows.count("ab4 h=1e-03") && rows.count("ab4 h=1e-04")) << slurp(csv);
+    // Progress on stderr, one line per run.
+    EXPECT_NE(r.err.find("tradeoff: ab4 h=1e-03: "), std::string::npos) << r.err;
+    for (const char* key : {"hsnc kernels=aot", "hsnc kernels=generic"}) {
+        const auto& h = rows.at(key);
+        EXPECT_EQ(h[kStatus], "ok");
+        EXPECT_EQ(h[kSamples], "1001");
+        EXPECT_EQ(h[kRefEvents], "10");  // 9 reversals, then the stick at t = pi
+        EXPECT_EQ(h[kMatched], "10");
+        EXPECT_LT(std::stod(h[kXErr]), 1e-15) << key;  // x ~ 0.2: a few units of rounding
+        EXPECT_LT(std::stod(h[kTErr]), 1e-14) << key;  // t up to pi
+    }
+    // ab4 reports events at step ends: every one found, each within about a step.
+    for (const char* key : {"ab4 h=1e-03", "ab4 h=1e-04"}) {
+        const auto& a = rows.at(key);
+        EXPECT_EQ(a[kMatched], "10") << key;
+        EXPECT_LT(std::stod(a[kTErr]), 2 * std::stod(a[kParameter])) << key;
+        EXPECT_GT(std::stod(a[kXErr]), 1e-8) << key;  // far from hsnc: the friction jump inside a step
+    }
+    EXPECT_LT(std::stod(rows.at("ab4 h=1e-04")[kXErr]), std::stod(rows.at("ab4 h=1e-03")[kXErr]));
+    // The summary line of each baseline on stdout, as time ratios to hsnc.
+    EXPECT_NE(r.out.find("ab4:  error<=0.01: "), std::string::npos) << r.out;
+}
+
+TEST(Tradeoff, Ab4IsFourthOrderOnASmoothMotion) {
+    // No friction, no contact: x = 0.2 cos(10 t), no events.
+    const std::string model = write_temp("oscillator.toml",
+                                         "name = \"oscillator\"\n[[mass]]\nname = \"m1\"\nm = 1\n"
+                                         "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 100\n"
+                                         "[initial]\nx = { m1 = 0.2 }\n");
+    std::string traj = "t,x_m1,v_m1\n";
+    for (double t : grid(2.0, 0.002))
+        traj += g17(t) + "," + g17(0.2 * std::cos(10 * t)) + "," + g17(-2 * std::sin(10 * t)) + "\n";
+    const std::string tr = write_temp("osc_ref.csv", traj), ev = write_temp("osc_ref_events.csv", "t,kind,element,x_m1,v_m1\n");
+    const std::string csv = temp_path("tradeoff.csv");
+    const auto r = run_hsnc("tradeoff '" + model + "' --t-end 2 --reference-out '" + tr + "' --reference-events '" + ev +
+                            "' --methods ab4,hsnc --runs 1 --budget 0.05 --csv '" + csv + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto rows = read_tradeoff(csv);
+    ASSERT_TRUE(rows.count("ab4 h=1e-03") && rows.count("ab4 h=3.2e-04")) << slurp(csv);
+    const auto& a = rows.at("ab4 h=1e-03");
+    const auto& b = rows.at("ab4 h=3.2e-04");
+    const double order = std::log(std::stod(a[kXErr]) / std::stod(b[kXErr])) /
+                         std::log(std::stod(a[kParameter]) / std::stod(b[kParameter]));
+    EXPECT_GT(order, 3.6) << a[kXErr] << " " << b[kXErr];
+    EXPECT_LT(order, 4.4) << a[kXErr] << " " << b[kXErr];
+    EXPECT_EQ(a[kEvents], "0");
+    EXPECT_EQ(a[kMatched], "0");
+    EXPECT_EQ(a[kTErr], "nan");  // no event to match
+    // hsnc (generic solver: this model has no AOT kernels) at rounding level.
+    ASSERT_TRUE(rows.count("hsnc kernels=generic")) << slurp(csv);
+    EXPECT_LT(std::stod(rows.at("hsnc kernels=generic")[kXErr]), 1e-15);
+}
+
+TEST(Tradeoff, EventsOfOneInstantMatchInAnyOrderAndMatchingStopsAtAMismatch) {
+    cli::RecordedRun ref, run;
+    ref.dof = run.dof = 1;
+    ref.t = run.t = {0.0, 1.0};
+    ref.x = {0.0, 1.0};
+    run.x = {0.0, 1.5};
+    ref.events = {{0.5, EventKind::contact_close, 0}, {0.5, EventKind::release, 0}, {0.7, EventKind::stick, 0},
+                  {0.9, EventKind::release, 0}};
+    run.events = {{0.5 + 1e-3, EventKind::release, 0}, {0.5 + 1e-3, EventKind::contact_close, 0},
+                  {0.7 - 2e-3, EventKind::stick, 0}, {0.8, EventKind::reversal, 0}, {0.9, EventKind::release, 0}};
+    const cli::RunErrors e = cli::compare_runs(ref, run);
+    EXPECT_EQ(e.sample_times, 2u);
+    EXPECT_DOUBLE_EQ(e.max_position_error, 0.5);
+    EXPECT_EQ(e.events, 5u);
+    EXPECT_EQ(e.reference_events, 4u);
+    EXPECT_EQ(e.matched_events, 3u);  // the extra reversal ends the matched prefix
+    EXPECT_NEAR(e.max_event_time_error, 2e-3, 1e-15);
+}
+
+TEST(Tradeoff, BadInputExitsTwoAndWritesNothing) {
+    const Reference ref = coulomb_reference(1.0, 0.001);
+    const std::string m = "'" + model_path("coulomb-1dof.toml") + "'";
+    const std::string refs = " --reference-out '" + ref.trajectory + "' --reference-events '" + ref.events + "'";
+    const std::string csv = temp_path("never.csv");
+    const std::string png = temp_path("never.png");
+    const std::string out = " --csv '" + csv + "' --plot '" + png + "' --runs 1";
+    struct Case {
+        std::string args, message;
+    };
+    const Case cases[] = {
+        {"--t-end 1 --reference-out '" + ref.trajectory + "'" + out, "--reference-out and --reference-events"},
+        {"--t-end 1" + refs + " --methods hsnc,euler" + out, "--methods: unknown method 'euler'"},
+        {"--t-end 1" + refs + " --budget 0" + out, "--budget"},
+        {"--t-end 1" + refs + " --dt 0" + out, "--dt"},
+        {"--t-end 1" + refs + " --dt 0.00037" + out, "sample times t0 + k*dt"},  // not the reference's grid
+        {"--t-end 2" + refs + out, "ends at t = 1"},                   // reference too short
+        {"--t-end 1" + refs + " --plot '" + png + "'", "--plot: needs --csv"},
+        {"--t-end 1 --reference-out '" + ref.events + "' --reference-events '" + ref.events + "'" + out,
+         ref.events + ":1: header"},
+        {"--t-end 1 --bogus" + refs + out, "bogus"},
+    };
+    for (const Case& c : cases) {
+        const auto r = run_hsnc("tradeoff " + m + " " + c.args);
+        EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.err;
+        EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << "\n" << r.err;
+        EXPECT_FALSE(file_exists(csv)) << c.args;
+        EXPECT_FALSE(file_exists(png)) << c.args;
+    }
+    // A model whose masses differ from the reference's columns.
+    const auto r = run_hsnc("tradeoff '" + model_path("seed-scenario-1.toml") + "' --t-end 1" + refs + out);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find(ref.trajectory + ":1: header 't,x_m1,v_m1' does not match"), std::string::npos) << r.err;
+    EXPECT_FALSE(file_exists(csv));
+}
+
+}  // namespace
+}  // namespace hsnc
