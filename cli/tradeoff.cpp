@@ -242,7 +242,8 @@ std::string quoted(const std::string& s) {
 }
 
 // Log-log: wall time against position error (left) and event-time error
-// (right), one curve per method, each point labelled with its setting. Runs
+// (right), one curve per method, each point labelled with its setting (and on
+// the right, the matched count when the run did not match every event). Runs
 // that did not reach t_end (status not ok) are left out; an error of exactly 0
 // is drawn at 1e-17.
 void plot_tradeoff(const Model& model, const std::vector<const MethodEntry*>& methods, const std::string& csv,
@@ -264,9 +265,16 @@ void plot_tradeoff(const Model& model, const std::vector<const MethodEntry*>& me
             const std::string sel = "(strcol(1) eq " + quoted(m->name) + " && strcol(6) eq 'ok'";
             const std::string y = "($" + std::string(panel[0]) + " > 1e-17 ? $" + panel[0] + " : 1e-17)";
             const std::string using_xy = sel + " ? $4 : NaN):" + y;
-            script += std::string(first ? "" : ", ") + quoted(csv) + " skip 1 using " + using_xy +
-                      " with linespoints lw 2 pt 7 title " + quoted(m->name) + ", " + quoted(csv) + " skip 1 using " +
-                      using_xy + ":(word(strcol(2), 1)) with labels offset 0,0.8 font ',8' notitle";
+            // Labels: the setting; on the event panel also "(matched/total)" when not all matched.
+            std::string label = "(word(strcol(2), 1)";
+            if (panel[0] == std::string("12"))
+                label += " . (column(11) < column(10) ? sprintf(' (%d/%d)', column(11), column(10)) : '')";
+            label += ")";
+            // hsnc's points are kernel kinds, not a sweep: points, no line.
+            const char* style = m->sweep == Sweep::kernels ? "points pt 7 ps 1.5" : "linespoints lw 2 pt 7";
+            script += std::string(first ? "" : ", ") + quoted(csv) + " skip 1 using " + using_xy + " with " + style +
+                      " title " + quoted(m->name) + ", " + quoted(csv) + " skip 1 using " + using_xy + ":" + label +
+                      " with labels offset 0,0.8 font ',8' notitle";
             first = false;
         }
         script += "\n";
