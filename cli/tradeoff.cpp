@@ -7,8 +7,9 @@
 // Methods and what is swept (kMethods; adding a method is one line there):
 //  hsnc  : no knob trades accuracy for speed -- every switch is refined to
 //          machine precision and segments are closed forms -- so one point per
-//          kernel kind: ahead-of-time kernels (when the model has them) and the
-//          generic solver.
+//          kernel kind: `auto` (the default of `hsnc simulate`: ahead-of-time
+//          kernels, the generic solver for a configuration without one), when
+//          the model has AOT kernels, and `generic`.
 //  ab4   : the fixed step h = 10^(-3 - k/2), 1e-3 .. 1e-6; a step whose run is
 //          predicted (time proportional to 1/h) to exceed --budget is skipped.
 //  rk45 (and any adaptive method: cvode) : rtol = 10^-k, 1e-4 .. 1e-13, with
@@ -35,7 +36,7 @@
 #include "model_hash.h"
 #include "model_reader.h"
 #include "solver_provider.h"
-#include "work_precision.h"
+#include "tradeoff.h"
 
 namespace hsnc::cli {
 namespace {
@@ -59,20 +60,6 @@ constexpr MethodEntry kMethods[] = {
     {"ab4", Sweep::step},
     {"rk45", Sweep::tolerance},
     {"cvode", Sweep::tolerance},
-};
-
-struct TradeoffOptions {
-    std::string model;
-    double t_end = NAN;
-    ModelOverrides overrides;
-    double dt = NAN;
-    std::string reference_out, reference_events;
-    int reference_digits = 40;
-    std::string csv, plot;
-    std::string methods;
-    bool quick = false;
-    double budget = 20.0;
-    int runs = 0;  ///< timed runs per setting; 0: as many as fit in about 0.2 s
 };
 
 std::string num(double v, int digits = 3) {
@@ -143,7 +130,7 @@ std::vector<Point> points_of(const MethodEntry& m, const Model& model, bool quic
         const AotRegistry& reg = aot_registry();
         for (std::size_t i = 0; i < reg.count; ++i)
             has_aot = has_aot || (reg.kernels[i]->model_hash == hash && model.name == reg.kernels[i]->model_name);
-        if (has_aot) pts.push_back({&m, "kernels=aot", NAN, KernelMode::aot, {}});
+        if (has_aot) pts.push_back({&m, "kernels=auto", NAN, KernelMode::automatic, {}});
         if (!has_aot || !quick) pts.push_back({&m, "kernels=generic", NAN, KernelMode::generic, {}});
         break;
     }
@@ -291,7 +278,9 @@ void plot_tradeoff(const Model& model, const std::vector<const MethodEntry*>& me
     }
 }
 
-int tradeoff(const TradeoffOptions& o) {
+}  // namespace
+
+int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
     const Model model = read_model(o.model, o.overrides);
     const double t_end = std::isnan(o.t_end) ? model.t_end.value_or(NAN) : o.t_end;
     if (std::isnan(t_end))
@@ -328,7 +317,7 @@ int tradeoff(const TradeoffOptions& o) {
                      o.reference_out.c_str(), o.reference_events.c_str(), reference.t.size(), reference.events.size(),
                      num(t_end, 6).c_str());
     } else {
-        const ReferenceRunner runner = reference_runner(o.reference_digits);
+        const ReferenceRunner runner = in_process ? in_process : reference_runner(o.reference_digits);
         RecordingObserver obs(reference, model.dof());
         const auto start = std::chrono::steady_clock::now();
         const RunSummary sum = runner(model, eopt, obs);
@@ -384,14 +373,18 @@ int tradeoff(const TradeoffOptions& o) {
                 continue;
             }
         }
+        // On a terminal, say what is running (a slow setting takes seconds), then overwrite it.
+        const bool tty = ::isatty(2) != 0;
+        if (tty) std::fprintf(stderr, "tradeoff: running %s %s ...", m->name, p.setting.c_str());
         Measured r = measure(model, p, eopt, reference, o.runs);
+        if (tty) std::fprintf(stderr, "\r\033[K");
         std::fprintf(stderr, "tradeoff: %s\n", describe(r).c_str());
         last_wall = r.wall;
         last_parameter = p.parameter;
         results.push_back(std::move(r));
     }
 
-    // hsnc's first point (AOT kernels when the model has them) is the base of the ratios.
+    // hsnc's first point (kernels=auto when the model has AOT kernels) is the base of the ratios.
     const Measured* base = nullptr;
     for (const auto& r : results)
         if (!base && r.point->method->sweep == Sweep::kernels && r.status == "ok") base = &r;
@@ -448,8 +441,6 @@ int tradeoff(const TradeoffOptions& o) {
     }
     return 0;
 }
-
-}  // namespace
 
 void add_tradeoff(CLI::App& app, int& exit_code) {
     auto o = std::make_shared<TradeoffOptions>();

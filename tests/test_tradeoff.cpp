@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cli_runner.h"
+#include "tradeoff.h"
 #include "work_precision.h"
 
 namespace hsnc {
@@ -54,29 +55,41 @@ struct Reference {
 // centre c_n = sign(X_n)*a, a = mu*g/omega^2: x = c_n + (X_n - c_n) cos(omega (t - t_n)),
 // and the next extreme is X_{n+1} = 2 c_n - X_n. A reversal at each t_n while
 // |X_n| > a; at X_10 = 0.0038 (|X| < a) the mass sticks for good.
-Reference coulomb_reference(double t_end, double dt) {
-    const double w = 10.0, a = 0.1 * 9.81 / (w * w);
+struct CoulombExact {
+    double w = 10.0, a = 0.1 * 9.81 / (10.0 * 10.0);
     std::vector<double> t_n{0.0}, X{0.2};
-    while (std::fabs(X.back()) > a) {
-        const double c = X.back() > 0 ? a : -a;
-        X.push_back(2 * c - X.back());
-        t_n.push_back(static_cast<double>(t_n.size()) * kPi / w);
+    CoulombExact() {
+        while (std::fabs(X.back()) > a) {
+            const double c = X.back() > 0 ? a : -a;
+            X.push_back(2 * c - X.back());
+            t_n.push_back(static_cast<double>(t_n.size()) * kPi / w);
+        }
     }
-    std::string traj = "t,x_m1,v_m1\n", events = "t,kind,element,x_m1,v_m1\n";
-    for (double t : grid(t_end, dt)) {
+    void state(double t, double& x, double& v) const {
         std::size_t n = 0;
         while (n + 1 < t_n.size() && t >= t_n[n + 1]) ++n;
-        double x = X[n], v = 0.0;
+        x = X[n];
+        v = 0.0;
         if (n + 1 < t_n.size()) {  // sliding
             const double c = X[n] > 0 ? a : -a;
             x = c + (X[n] - c) * std::cos(w * (t - t_n[n]));
             v = -(X[n] - c) * w * std::sin(w * (t - t_n[n]));
         }
+    }
+    bool stick(std::size_t n) const { return n + 1 == t_n.size(); }  // the last extreme: stuck
+};
+
+Reference coulomb_reference(double t_end, double dt) {
+    const CoulombExact exact;
+    std::string traj = "t,x_m1,v_m1\n", events = "t,kind,element,x_m1,v_m1\n";
+    for (double t : grid(t_end, dt)) {
+        double x, v;
+        exact.state(t, x, v);
         traj += g17(t) + "," + g17(x) + "," + g17(v) + "\n";
     }
-    for (std::size_t n = 1; n < t_n.size(); ++n)
-        if (t_n[n] <= t_end)
-            events += g17(t_n[n]) + (n + 1 < t_n.size() ? ",reversal" : ",stick") + ",m1," + g17(X[n]) + ",0\n";
+    for (std::size_t n = 1; n < exact.t_n.size(); ++n)
+        if (exact.t_n[n] <= t_end)
+            events += g17(exact.t_n[n]) + (exact.stick(n) ? ",stick" : ",reversal") + ",m1," + g17(exact.X[n]) + ",0\n";
     return {write_temp("coulomb_ref.csv", traj), write_temp("coulomb_ref_events.csv", events)};
 }
 
@@ -115,11 +128,11 @@ TEST(Tradeoff, CoulombOscillatorAgainstItsClosedForm) {
                             "--runs 1 --budget 0.2 --csv '" + csv + "'");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const auto rows = read_tradeoff(csv);
-    ASSERT_TRUE(rows.count("hsnc kernels=aot")) << slurp(csv);
+    ASSERT_TRUE(rows.count("hsnc kernels=auto")) << slurp(csv);
     ASSERT_TRUE(rows.count("ab4 h=1e-03") && rows.count("ab4 h=1e-04")) << slurp(csv);
     // Progress on stderr, one line per run.
     EXPECT_NE(r.err.find("tradeoff: ab4 h=1e-03: "), std::string::npos) << r.err;
-    for (const char* key : {"hsnc kernels=aot", "hsnc kernels=generic"}) {
+    for (const char* key : {"hsnc kernels=auto", "hsnc kernels=generic"}) {
         const auto& h = rows.at(key);
         EXPECT_EQ(h[kStatus], "ok");
         EXPECT_EQ(h[kSamples], "1001");
@@ -168,6 +181,41 @@ TEST(Tradeoff, Ab4IsFourthOrderOnASmoothMotion) {
     // hsnc (generic solver: this model has no AOT kernels) at rounding level.
     ASSERT_TRUE(rows.count("hsnc kernels=generic")) << slurp(csv);
     EXPECT_LT(std::stod(rows.at("hsnc kernels=generic")[kXErr]), 1e-15);
+}
+
+TEST(Tradeoff, InProcessReferenceIsSampledOnTheRunsGrid) {
+    // The in-process path (the mp engine once merged) with the closed form as the runner.
+    const CoulombExact exact;
+    const cli::ReferenceRunner runner = [&exact](const Model&, const EngineOptions& o, Observer& obs) {
+        for (double t : grid(o.t_end, o.dt)) {
+            double x, v;
+            exact.state(t, x, v);
+            obs.on_sample(t, &x, &v);
+        }
+        for (std::size_t n = 1; n < exact.t_n.size(); ++n) {
+            const double x = exact.X[n], v = 0.0;
+            if (exact.t_n[n] <= o.t_end)
+                obs.on_event(exact.t_n[n], exact.stick(n) ? EventKind::stick : EventKind::reversal, 0, &x, &v);
+        }
+        RunSummary s;
+        s.t = o.t_end;
+        return s;
+    };
+    cli::TradeoffOptions o;
+    o.model = model_path("coulomb-1dof.toml");
+    o.t_end = 4;
+    o.dt = 0.01;
+    o.methods = "hsnc";
+    o.runs = 1;
+    o.csv = temp_path("tradeoff.csv");
+    ASSERT_EQ(cli::tradeoff(o, runner), 0);
+    const auto rows = read_tradeoff(o.csv);
+    ASSERT_TRUE(rows.count("hsnc kernels=generic")) << slurp(o.csv);
+    const auto& h = rows.at("hsnc kernels=generic");
+    EXPECT_EQ(h[kSamples], "401");
+    EXPECT_EQ(h[kMatched], "10");
+    EXPECT_LT(std::stod(h[kXErr]), 1e-15);
+    EXPECT_LT(std::stod(h[kTErr]), 1e-14);
 }
 
 TEST(Tradeoff, EventsOfOneInstantMatchInAnyOrderAndMatchingStopsAtAMismatch) {
