@@ -308,7 +308,7 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
     if (!o.reference_out.empty()) {
         reference = read_reference(model, o.reference_out, o.reference_events);
         const double last = reference.t.back();
-        if (last < t_end * (1 - 1e-12) - 1e-300)
+        if (last < t_end - 1e-12 * std::fabs(t_end))
             throw InputError("--reference-out '" + o.reference_out + "': ends at t = " + num(last, 17) +
                              ", before the end time " + num(t_end, 17));
         while (!reference.events.empty() && reference.events.back().t > t_end) reference.events.pop_back();
@@ -340,10 +340,12 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
             if (last) break;
         }
         const RunErrors e = compare_runs(reference, grid);
-        if (e.sample_times != grid.t.size())
-            throw InputError("--reference-out '" + o.reference_out + "': has " + std::to_string(e.sample_times) +
-                             " of the " + std::to_string(grid.t.size()) + " sample times t0 + k*dt (dt = " +
-                             num(eopt.dt, 17) + ") and t_end; sample the reference on that grid, or give its --dt");
+        const std::string has = std::to_string(e.sample_times) + " of the " + std::to_string(grid.t.size()) +
+                                " sample times t0 + k*dt (dt = " + num(eopt.dt, 17) + ") and t_end";
+        if (e.sample_times != grid.t.size() && !o.reference_out.empty())
+            throw InputError("--reference-out '" + o.reference_out + "': has " + has +
+                             "; sample the reference on that grid, or give its --dt");
+        if (e.sample_times != grid.t.size()) throw RunError("tradeoff: the reference run gave " + has);
     }
 
     // The CSV is opened before the runs, so a path that cannot be written fails first.
