@@ -239,16 +239,18 @@ void plot_tradeoff(const Model& model, const std::vector<const MethodEntry*>& me
     std::string script = "set terminal pngcairo size 1600,700 noenhanced font ',11'\n"
                          "set output " + quoted(tmp) + "\n"
                          "set datafile separator ','\n"
-                         "set logscale xy\nset grid\nset format y '%.0e'\nset format x '%.0e'\n"
+                         "set logscale xy\nset grid\nset yrange [1e-18:*]\nset format y '%.0e'\nset format x '%.0e'\n"
                          "set key top right\nset xlabel 'wall time [s]'\n"
                          "set multiplot layout 1,2 title " +
-                         quoted(model.name + ": work-precision against " + reference_label) + "\n";
+                         quoted(model.name + ": work-precision, reference " + reference_label) + "\n";
     const char* panels[2][2] = {{"7", "max |x - x_ref| over the sample times [m] (0 drawn at 1e-17)"},
                                 {"12", "max |t_event - t_event_ref| over the matched events [s] (0 drawn at 1e-17)"}};
     for (const auto& panel : panels) {
         script += std::string("set ylabel ") + quoted(panel[1]) + "\nplot ";
         bool first = true;
+        int curve = 0;  // one line type per method, the same on both panels
         for (const MethodEntry* m : methods) {
+            ++curve;
             const std::string sel = "(strcol(1) eq " + quoted(m->name) + " && strcol(6) eq 'ok'";
             const std::string y = "($" + std::string(panel[0]) + " > 1e-17 ? $" + panel[0] + " : 1e-17)";
             const std::string using_xy = sel + " ? $4 : NaN):" + y;
@@ -260,8 +262,18 @@ void plot_tradeoff(const Model& model, const std::vector<const MethodEntry*>& me
             // hsnc's points are kernel kinds, not a sweep: points, no line.
             const char* style = m->sweep == Sweep::kernels ? "points pt 7 ps 1.5" : "linespoints lw 2 pt 7";
             script += std::string(first ? "" : ", ") + quoted(csv) + " skip 1 using " + using_xy + " with " + style +
-                      " title " + quoted(m->name) + ", " + quoted(csv) + " skip 1 using " + using_xy + ":" + label +
-                      " with labels offset 0,0.8 font ',8' notitle";
+                      " lt " + std::to_string(curve) + " title " + quoted(m->name);
+            if (m->sweep == Sweep::kernels) {
+                // Kernel kinds cost about the same: label the generic point below, the others above.
+                const std::string generic = sel + " && strcol(2) eq 'kernels=generic'";
+                const std::string other = sel + " && strcol(2) ne 'kernels=generic'";
+                script += ", " + quoted(csv) + " skip 1 using " + other + " ? $4 : NaN):" + y + ":" + label +
+                          " with labels offset 0,0.8 font ',8' notitle, " + quoted(csv) + " skip 1 using " + generic +
+                          " ? $4 : NaN):" + y + ":" + label + " with labels offset 0,-0.8 font ',8' notitle";
+            } else {
+                script += ", " + quoted(csv) + " skip 1 using " + using_xy + ":" + label +
+                          " with labels offset 0,0.8 font ',8' notitle";
+            }
             first = false;
         }
         script += "\n";
@@ -312,7 +324,7 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
             throw InputError("--reference-out '" + o.reference_out + "': ends at t = " + num(last, 17) +
                              ", before the end time " + num(t_end, 17));
         while (!reference.events.empty() && reference.events.back().t > t_end) reference.events.pop_back();
-        reference_label = "the reference read from " + o.reference_out;
+        reference_label = o.reference_out.substr(o.reference_out.find_last_of('/') + 1);
         std::fprintf(stderr, "tradeoff: reference from %s and %s: %zu samples, %zu events up to t = %s\n",
                      o.reference_out.c_str(), o.reference_events.c_str(), reference.t.size(), reference.events.size(),
                      num(t_end, 6).c_str());
@@ -324,7 +336,7 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
         if (sum.status != RunStatus::ok)
             throw RunError(std::string("tradeoff: the reference run: ") + run_status_name(sum.status) + ": " +
                            sum.message);
-        reference_label = "the " + std::to_string(o.reference_digits) + "-digit reference";
+        reference_label = std::to_string(o.reference_digits) + "-digit engine";
         std::fprintf(stderr, "tradeoff: reference (%d digits): %s s, %zu samples, %zu events\n", o.reference_digits,
                      num(seconds_since(start)).c_str(), reference.t.size(), reference.events.size());
     }
