@@ -331,6 +331,7 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
     } else {
         const ReferenceRunner runner = in_process ? in_process : reference_runner(o.reference_digits);
         RecordingObserver obs(reference, model.dof());
+        std::fprintf(stderr, "tradeoff: computing the reference (%d digits) ...\n", o.reference_digits);
         const auto start = std::chrono::steady_clock::now();
         const RunSummary sum = runner(model, eopt, obs);
         if (sum.status != RunStatus::ok)

@@ -153,6 +153,39 @@ TEST(Tradeoff, CoulombOscillatorAgainstItsClosedForm) {
     EXPECT_NE(r.out.find("ab4:  error<=0.01: "), std::string::npos) << r.out;
 }
 
+TEST(Tradeoff, TheBenchScriptsClosedFormAgreesWithHsnc) {
+    // bench/coulomb_exact.sh writes the reference of the committed Coulomb figure.
+    const std::string tr = temp_path("exact.csv"), ev = temp_path("exact_events.csv"), csv = temp_path("t.csv");
+    const std::string script = std::string(HSNC_SOURCE_DIR) + "/bench/coulomb_exact.sh";
+    ASSERT_EQ(std::system(("sh '" + script + "' 4 0.004 '" + tr + "' '" + ev + "'").c_str()), 0);
+    const auto r = run_hsnc("tradeoff '" + model_path("coulomb-1dof.toml") + "' --t-end 4 --reference-out '" + tr +
+                            "' --reference-events '" + ev + "' --methods ab4,hsnc --budget 0.001 --runs 1 --csv '" + csv +
+                            "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto rows = read_tradeoff(csv);
+    ASSERT_EQ(rows.size(), 3u) << slurp(csv);  // ab4 h = 1e-3 (then the budget stops the sweep), hsnc x 2
+    const auto& h = rows.at("hsnc kernels=generic");
+    EXPECT_LT(std::stod(h[kXErr]), 1e-15);
+    EXPECT_EQ(h[kMatched], "10");
+    EXPECT_LT(std::stod(h[kTErr]), 1e-14);
+    EXPECT_EQ(rows.at("ab4 h=1e-03")[kMatched], "10");
+    EXPECT_NE(r.out.find("ab4:  error<=0.01: "), std::string::npos) << r.out;
+}
+
+TEST(Tradeoff, WithoutHsncThereIsNoRatio) {
+    const Reference ref = coulomb_reference(1.0, 0.001);
+    const std::string csv = temp_path("t.csv");
+    const auto r = run_hsnc("tradeoff '" + model_path("coulomb-1dof.toml") + "' --t-end 1 --reference-out '" +
+                            ref.trajectory + "' --reference-events '" + ref.events +
+                            "' --methods rk45 --quick --runs 1 --csv '" + csv + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto rows = read_tradeoff(csv);
+    ASSERT_EQ(rows.size(), 4u);  // --quick: rtol 1e-4, 1e-7, 1e-10, 1e-13
+    EXPECT_EQ(rows.at("rk45 rtol=1e-07 atol=1e-09")[12], "nan");
+    EXPECT_NE(r.out.find("rk45:  error<=0.01: "), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("x hsnc"), std::string::npos) << r.out;
+}
+
 TEST(Tradeoff, Ab4IsFourthOrderOnASmoothMotion) {
     // No friction, no contact: x = 0.2 cos(10 t), no events.
     const std::string model = write_temp("oscillator.toml",
