@@ -172,13 +172,14 @@ TEST(Tradeoff, TheBenchScriptsClosedFormAgreesWithHsnc) {
     EXPECT_NE(r.out.find("ab4:  error<=0.01: "), std::string::npos) << r.out;
 }
 
-TEST(Tradeoff, WithoutHsncThereIsNoRatio) {
+TEST(Tradeoff, WithoutHsncThereIsNoRatioAndThePlotIsDrawn) {
     const Reference ref = coulomb_reference(1.0, 0.001);
-    const std::string csv = temp_path("t.csv");
+    const std::string csv = temp_path("t.csv"), png = temp_path("t.png");
     const auto r = run_hsnc("tradeoff '" + model_path("coulomb-1dof.toml") + "' --t-end 1 --reference-out '" +
                             ref.trajectory + "' --reference-events '" + ref.events +
-                            "' --methods rk45 --quick --runs 1 --csv '" + csv + "'");
+                            "' --methods rk45 --quick --runs 1 --csv '" + csv + "' --plot '" + png + "'");
     ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(slurp(png).substr(0, 4), "\x89PNG");
     const auto rows = read_tradeoff(csv);
     ASSERT_EQ(rows.size(), 4u);  // --quick: rtol 1e-4, 1e-7, 1e-10, 1e-13
     EXPECT_EQ(rows.at("rk45 rtol=1e-07 atol=1e-09")[12], "nan");
@@ -291,6 +292,7 @@ TEST(Tradeoff, BadInputExitsTwoAndWritesNothing) {
         {"--t-end 1 --reference-out '" + ref.events + "' --reference-events '" + ref.events + "'" + out,
          ref.events + ":1: header"},
         {"--t-end 1 --bogus" + refs + out, "bogus"},
+        {"--t-end 1" + refs + " --csv /nonexistent-dir/x.csv", "cannot write '/nonexistent-dir/x.csv'"},
     };
     for (const Case& c : cases) {
         const auto r = run_hsnc("tradeoff " + m + " " + c.args);
