@@ -287,12 +287,15 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                         const cl_F hr = h_of(probe, f), hdr = hd_of(probe, f);
                         if (cln::zerop(hr)) break;
                         if (cln::minusp(hr)) hi = r; else lo = r;
-                        cl_F next = cln::minusp(hdr) ? r - hr / hdr : (lo + hi) * mp.half;
-                        if (!(next > lo && next < hi)) next = (lo + hi) * mp.half;
-                        if (cln::abs(next - r) <= mp.I(4) * mp.eps * (cln::abs(t) + cln::abs(r))) {
-                            r = next;
+                        // Converged when the Newton correction is below the time's own rounding
+                        // (checked before the bracket test: it may round onto a bracket end).
+                        if (cln::minusp(hdr) &&
+                            cln::abs(hr / hdr) <= mp.I(4) * mp.eps * (cln::abs(t) + cln::abs(r))) {
+                            r = r - hr / hdr;
                             break;
                         }
+                        cl_F next = cln::minusp(hdr) ? r - hr / hdr : (lo + hi) * mp.half;
+                        if (!(next > lo && next < hi)) next = (lo + hi) * mp.half;
                         r = next;
                     }
                     if (stop && cln::minusp(h) && !cln::minusp(hd)) r = tau;  // touched zero and turned back
