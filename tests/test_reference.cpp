@@ -4,11 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include <cln/float.h>
 #include <cln/real.h>
+#include <cln/rational.h>
 
 #include "aot_registry.h"
 #include "cli_runner.h"
@@ -138,6 +140,79 @@ v = { m1 = 2.0 }
     EXPECT_LT(relative_difference(r.events[0].x[0], x), 1e-36);
     EXPECT_LT(relative_difference(r.x[0], x), 1e-36);  // and it stays there
     EXPECT_TRUE(cln::zerop(r.v[0]));
+}
+
+
+// One regime of the closed forms at a time: a 1-DOF oscillator (m = 1, k = 4 unless
+// said) starts at x = 0 with v = 1 and first reaches an open contact's gap d at
+// the first root of x(t) = d, x(t) the textbook solution of that regime,
+// evaluated here at full precision (bisection on a bracket found by scanning).
+using Solution = std::function<cl_F(const cl_F&)>;
+void expect_first_contact(const std::string& name, const std::string& body, double d, const Solution& x) {
+    const Model m = model_from("name = \"" + name + "\"\n" + body + R"(
+[[mass]]
+name = "m1"
+m = 1
+[[contact]]
+between = ["m1", "ground"]
+gap = )" + std::to_string(d) + R"(
+k = 1000
+[initial]
+v = { m1 = 1.0 }
+)");
+    const PreciseRun r = run_at(m, 40, 5.0, 1);
+    ASSERT_EQ(r.events.size(), 1u) << name << ": " << r.summary.message;
+    ASSERT_EQ(r.events[0].kind, EventKind::contact_close) << name;
+    const cl_F one = cln::cl_float(1, cln::float_format(40)), dd = F(d, one);
+    double h = 1e-3, a = 0;
+    while (cln::double_approx(x(F(a + h, one))) < d) a += h;
+    cl_F lo = F(a, one), hi = F(a + h, one);
+    for (int k = 0; k < 250; ++k) {
+        const cl_F mid = (lo + hi) / F(2.0, one);
+        (x(mid) < dd ? lo : hi) = mid;
+    }
+    EXPECT_LT(relative_difference(r.events[0].t, lo), 1e-36) << name << " t = " << cln::double_approx(lo);
+}
+
+const cl_F& prec40() {
+    static const cl_F one = cln::cl_float(1, cln::float_format(40));
+    return one;
+}
+
+TEST(ReferenceClosedForm, RegimesFirstContactAt40Digits) {
+    const cl_F one = prec40(), two = F(2.0, one), four = F(4.0, one);
+    const std::string spring = "[[spring]]\nbetween = [\"m1\", \"ground\"]\nk = 4\n";
+    // undamped: x = sin(2t)/2
+    expect_first_contact("undamped", spring, 0.3, [&](const cl_F& t) -> cl_F { return cln::sin(two * t) / two; });
+    // underdamped, c = beta k = 0.4: x = e^{-0.2 t} sin(wd t)/wd, wd = sqrt(4 - 0.04)
+    expect_first_contact("underdamped", spring + "[damping]\nbeta = 0.1\n", 0.3, [&](const cl_F& t) -> cl_F {
+        const cl_F s = F(0.1, one) * four / two, wd = cln::sqrt(F(4.0, one) - s * s);
+        return cln::exp(-s * t) * cln::sin(wd * t) / wd;
+    });
+    // critical, c = 4 = 2 omega: x = t e^{-2t}
+    expect_first_contact("critical", spring + "[damping]\nbeta = 1\n", 0.05,
+                         [&](const cl_F& t) -> cl_F { return t * cln::exp(-two * t); });
+    // overdamped, c = 8: x = e^{-4t} sinh(g t)/g, g = sqrt(12)
+    expect_first_contact("overdamped", spring + "[damping]\nbeta = 2\n", 0.05, [&](const cl_F& t) -> cl_F {
+        const cl_F g = cln::sqrt(F(12.0, one));
+        return cln::exp(-four * t) * cln::sinh(g * t) / g;
+    });
+    // exact undamped resonance, x'' + x = sin t from rest... with v0 = 1:
+    // x = sin t + (sin t - t cos t)/2
+    expect_first_contact("resonance",
+                         "[[spring]]\nbetween = [\"m1\", \"ground\"]\nk = 1\n[[forcing]]\nomega = 1\namplitude = { m1 = 1 }\n",
+                         1.7, [&](const cl_F& t) -> cl_F { return cln::sin(t) + (cln::sin(t) - t * cln::cos(t)) / two; });
+    // near resonance, forced at 1.01: x = sin t + (sin(W t) - W sin t)/(1 - W^2)
+    expect_first_contact(
+        "near-resonance",
+        "[[spring]]\nbetween = [\"m1\", \"ground\"]\nk = 1\n[[forcing]]\nomega = 1.01\namplitude = { m1 = 1 }\n",
+        1.7, [&](const cl_F& t) -> cl_F {
+            const cl_F W = F(1.01, one);
+            return cln::sin(t) + (cln::sin(W * t) - W * cln::sin(t)) / (one - W * W);
+        });
+    // rigid body with forcing (no spring): x'' = sin(2t), x = t + (t - sin(2t)/2)/2
+    expect_first_contact("rigid-forced", "[[forcing]]\nomega = 2\namplitude = { m1 = 1 }\n", 1.0,
+                         [&](const cl_F& t) -> cl_F { return t + (t - cln::sin(two * t) / two) / two; });
 }
 
 // N and 2N digits agree to at least N - 5 digits (event times and end state)
