@@ -93,9 +93,9 @@ int main(int argc, char** argv) {
             const double r = rel_at(k);
             if (r > 1e-6 && m.parted == m.same) m.parted = k;
             if (m.parted == m.same) m.max_rel = std::max(m.max_rel, r);
-            if (k + 1 == next_mark) {
+            if (k + 1 == next_mark) {  // 10, 100, 1000, 2000, 3000, ...
                 m.at.push_back({k + 1, m.max_rel});
-                next_mark *= 10;
+                next_mark = next_mark < 1000 ? next_mark * 10 : next_mark + 1000;
             }
         }
         return m;
