@@ -50,9 +50,9 @@ double seconds_since(std::chrono::steady_clock::time_point s) {
 
 // Largest relative time difference over the first `upto` events; count of the prefix with equal kinds/elements.
 struct Match {
-    std::size_t same = 0;      // events with equal kind and element, from the start
-    double max_rel = 0;        // over the matched prefix
-    std::size_t parted = 0;    // first event whose time differs by more than 1e-6 relative (or = same)
+    std::size_t same = 0;    // events with equal kind and element, from the start
+    double max_rel = 0;      // over the matched prefix
+    std::size_t parted = 0;  // first event whose time differs by more than 1e-6 relative (or = same)
     std::vector<std::pair<std::size_t, double>> at;  // max_rel over the first k events, k = 10, 100, 1000...
 };
 
@@ -103,11 +103,14 @@ int main(int argc, char** argv) {
     const std::size_t n_ref = std::min(lo.events.size(), hi.events.size());
     const Match ref = compare(
         n_ref,
-        [&](std::size_t k) { return lo.events[k].kind == hi.events[k].kind && lo.events[k].element == hi.events[k].element; },
+        [&](std::size_t k) {
+            return lo.events[k].kind == hi.events[k].kind && lo.events[k].element == hi.events[k].element;
+        },
         [&](std::size_t k) { return reference::relative_difference(lo.events[k].t, hi.events[k].t); });
-    std::printf("N vs 2N: events %zu vs %zu, same sequence for %zu, agree (< 1e-6) for %zu; max relative event-time "
-                "difference over those %.3e\n",
-                lo.events.size(), hi.events.size(), ref.same, ref.parted, ref.max_rel);
+    std::printf(
+        "N vs 2N: events %zu vs %zu, same sequence for %zu, agree (< 1e-6) for %zu; max relative event-time "
+        "difference over those %.3e\n",
+        lo.events.size(), hi.events.size(), ref.same, ref.parted, ref.max_rel);
     for (auto& [k, r] : ref.at) std::printf("  first %zu events: max relative time difference %.3e\n", k, r);
     if (ref.parted == n_ref && lo.events.size() == hi.events.size()) {
         double dx = 0;
@@ -125,14 +128,15 @@ int main(int argc, char** argv) {
     const RunSummary ds = engine.run(opt, dbl);
     const std::size_t n_dbl = std::min(dbl.t.size(), hi.events.size());
     const Match dm = compare(
-        n_dbl, [&](std::size_t k) { return dbl.kind[k] == hi.events[k].kind && dbl.element[k] == hi.events[k].element; },
+        n_dbl,
+        [&](std::size_t k) { return dbl.kind[k] == hi.events[k].kind && dbl.element[k] == hi.events[k].element; },
         [&](std::size_t k) {
             return reference::relative_difference(cln::cl_float(dbl.t[k], hi.events[k].t), hi.events[k].t);
         });
-    std::printf("double engine (%s): status %s, %zu events; same sequence as the %d-digit run for %zu, agrees "
-                "(< 1e-6) for %zu; max relative event-time error over those %.3e\n",
-                provider->describe().c_str(), run_status_name(ds.status), dbl.t.size(), 2 * N, dm.same, dm.parted,
-                dm.max_rel);
+    std::printf(
+        "double engine (%s): status %s, %zu events; same sequence as the %d-digit run for %zu, agrees "
+        "(< 1e-6) for %zu; max relative event-time error over those %.3e\n",
+        provider->describe().c_str(), run_status_name(ds.status), dbl.t.size(), 2 * N, dm.same, dm.parted, dm.max_rel);
     for (auto& [k, r] : dm.at) std::printf("  first %zu events: max relative time error %.3e\n", k, r);
     if (dm.parted < n_dbl)
         std::printf("  parts at event %zu, t = %.6f\n", dm.parted, cln::double_approx(hi.events[dm.parted].t));

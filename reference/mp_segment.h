@@ -48,10 +48,10 @@ struct MpModel {
         int a, b;
         cl_F k, gap;
     };
-    std::vector<Link> springs, contacts;  ///< gap = 0 for springs
-    std::vector<cl_F> h_omega, h_phase;   ///< harmonics with omega != 0, folded to omega > 0
-    std::vector<std::vector<cl_F>> h_amp; ///< [h][i]
-    std::vector<cl_F> f_const;            ///< loads + omega = 0 harmonics
+    std::vector<Link> springs, contacts;   ///< gap = 0 for springs
+    std::vector<cl_F> h_omega, h_phase;    ///< harmonics with omega != 0, folded to omega > 0
+    std::vector<std::vector<cl_F>> h_amp;  ///< [h][i]
+    std::vector<cl_F> f_const;             ///< loads + omega = 0 harmonics
     cl_F t0;
     std::vector<cl_F> x0, v0;
 
@@ -108,9 +108,9 @@ private:
     std::vector<cl_F> f_const_;
     std::vector<Regime> regime_;
     std::vector<cl_F> lambda_, omega_, c_, sigma_, omega_d_, gamma_, r1_;
-    std::vector<std::vector<cl_F>> P_, pa_, pb_;   // [j][h]
-    std::vector<std::vector<char>> secular_;       // [j][h]: exact undamped resonance
-    std::vector<std::vector<cl_F>> W_, Z_, D_;     // switch functions as modal combinations
+    std::vector<std::vector<cl_F>> P_, pa_, pb_;  // [j][h]
+    std::vector<std::vector<char>> secular_;      // [j][h]: exact undamped resonance
+    std::vector<std::vector<cl_F>> W_, Z_, D_;    // switch functions as modal combinations
     std::vector<cl_F> bound_sin_;
     bool has_max_step_ = false;
     cl_F max_step_;

@@ -130,8 +130,7 @@ Configuration entered_configuration(const Model& model, const MpModel& mp, const
     for (std::size_t c = 0; c < mp.contacts.size(); ++c) {
         const auto& k = mp.contacts[c];
         const cl_F G = mp.gap(static_cast<int>(c), x);
-        const cl_F noise =
-            noise_of(mp, cln::abs(mp.body(x, k.a)) + cln::abs(mp.body(x, k.b)) + cln::abs(k.gap));
+        const cl_F noise = noise_of(mp, cln::abs(mp.body(x, k.a)) + cln::abs(mp.body(x, k.b)) + cln::abs(k.gap));
         if (cln::abs(G) > noise)
             cfg.closed[c] = cln::plusp(G);
         else
@@ -239,9 +238,14 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         const cl_F tau_end = t_end - t;
         for (std::size_t f = 0; f < nsw; ++f) {
             switch (sw[f].kind) {
-                case SwitchKind::gap: side[f] = cfg.closed[sw[f].element] ? mp.one : -mp.one; break;
-                case SwitchKind::velocity: side[f] = sgn[sw[f].element] >= 0 ? mp.one : -mp.one; break;
-                default: side[f] = -mp.one;  // release functions are negative while stuck
+                case SwitchKind::gap:
+                    side[f] = cfg.closed[sw[f].element] ? mp.one : -mp.one;
+                    break;
+                case SwitchKind::velocity:
+                    side[f] = sgn[sw[f].element] >= 0 ? mp.one : -mp.one;
+                    break;
+                default:
+                    side[f] = -mp.one;  // release functions are negative while stuck
             }
             floor[f] = inherited[slot(sw[f])];
         }
@@ -286,11 +290,13 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                         ++sum.evaluations;
                         const cl_F hr = h_of(probe, f), hdr = hd_of(probe, f);
                         if (cln::zerop(hr)) break;
-                        if (cln::minusp(hr)) hi = r; else lo = r;
+                        if (cln::minusp(hr))
+                            hi = r;
+                        else
+                            lo = r;
                         // Converged when the Newton correction is below the time's own rounding
                         // (checked before the bracket test: it may round onto a bracket end).
-                        if (cln::minusp(hdr) &&
-                            cln::abs(hr / hdr) <= mp.I(4) * mp.eps * (cln::abs(t) + cln::abs(r))) {
+                        if (cln::minusp(hdr) && cln::abs(hr / hdr) <= mp.I(4) * mp.eps * (cln::abs(t) + cln::abs(r))) {
                             r = r - hr / hdr;
                             break;
                         }
@@ -316,8 +322,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                     if (has_root[f] && root[f] <= tau_star + tol) continue;
                     const cl_F h = h_of(buf, f), hd = hd_of(buf, f), eps_f = noise(buf, f);
                     const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
-                    if (stop ? h <= eps_f : (h < -eps_f || (h <= eps_f && cln::minusp(hd))))
-                        switched.push_back(sw[f]);
+                    if (stop ? h <= eps_f : (h < -eps_f || (h <= eps_f && cln::minusp(hd)))) switched.push_back(sw[f]);
                 }
                 std::fill(inherited.begin(), inherited.end(), mp.zero);
                 for (std::size_t f = 0; f < nsw; ++f) inherited[slot(sw[f])] = noise(buf, f);
@@ -395,8 +400,8 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         last_event_t = t;
         have_last = true;
         if (same_instant > 4 * (nsw + 2))
-            return finish(RunStatus::chattering, "configuration keeps switching at t = " + time_text(t) + " (now '" +
-                                                     cfg.spec(model) + "')");
+            return finish(RunStatus::chattering,
+                          "configuration keeps switching at t = " + time_text(t) + " (now '" + cfg.spec(model) + "')");
         if (recent.size() >= options.zeno_events &&
             cln::double_approx(recent.back() - recent.front()) <=
                 options.zeno_span * std::max(1.0, std::fabs(cln::double_approx(t))))

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include <cln/float.h>
-#include <cln/real.h>
 #include <cln/rational.h>
+#include <cln/real.h>
 
 #include "aot_registry.h"
 #include "cli_runner.h"
@@ -88,7 +88,6 @@ TEST(ReferenceClosedForm, CoulombDecayAt40Digits) {
     std::printf("coulomb 40 digits: max rel error reversal times %.2e, extremes %.2e\n", worst_t, worst_x);
 }
 
-
 // Bilinear oscillator: x'' + 4x = 0 open (x < 0), x'' + 16x = 0 closed (x >= 0),
 // from x = 0, v = 1: closed for pi/4, open for pi/2, so the contact opens at
 // pi/4 + 3k pi/4 and closes at 3pi/4 + 3k pi/4, always with |v| = 1.
@@ -141,7 +140,6 @@ v = { m1 = 2.0 }
     EXPECT_LT(relative_difference(r.x[0], x), 1e-36);  // and it stays there
     EXPECT_TRUE(cln::zerop(r.v[0]));
 }
-
 
 // One regime of the closed forms at a time: a 1-DOF oscillator (m = 1, k = 4 unless
 // said) starts at x = 0 with v = 1 and first reaches an open contact's gap d at
@@ -199,14 +197,15 @@ TEST(ReferenceClosedForm, RegimesFirstContactAt40Digits) {
     });
     // exact undamped resonance, x'' + x = sin t from rest... with v0 = 1:
     // x = sin t + (sin t - t cos t)/2
-    expect_first_contact("resonance",
-                         "[[spring]]\nbetween = [\"m1\", \"ground\"]\nk = 1\n[[forcing]]\nomega = 1\namplitude = { m1 = 1 }\n",
-                         1.7, [&](const cl_F& t) -> cl_F { return cln::sin(t) + (cln::sin(t) - t * cln::cos(t)) / two; });
+    expect_first_contact(
+        "resonance",
+        "[[spring]]\nbetween = [\"m1\", \"ground\"]\nk = 1\n[[forcing]]\nomega = 1\namplitude = { m1 = 1 }\n", 1.7,
+        [&](const cl_F& t) -> cl_F { return cln::sin(t) + (cln::sin(t) - t * cln::cos(t)) / two; });
     // near resonance, forced at 1.01: x = sin t + (sin(W t) - W sin t)/(1 - W^2)
     expect_first_contact(
         "near-resonance",
-        "[[spring]]\nbetween = [\"m1\", \"ground\"]\nk = 1\n[[forcing]]\nomega = 1.01\namplitude = { m1 = 1 }\n",
-        1.7, [&](const cl_F& t) -> cl_F {
+        "[[spring]]\nbetween = [\"m1\", \"ground\"]\nk = 1\n[[forcing]]\nomega = 1.01\namplitude = { m1 = 1 }\n", 1.7,
+        [&](const cl_F& t) -> cl_F {
             const cl_F W = F(1.01, one);
             return cln::sin(t) + (cln::sin(W * t) - W * cln::sin(t)) / (one - W * W);
         });
@@ -285,7 +284,8 @@ TEST(ReferenceApi, DigitsOutsideTheRangeAreAnInputError) {
 // rounding on a non-chaotic model); bad values exit 2 naming the flag, writing nothing.
 TEST(ReferenceCli, PrecisionMpRunsTheReference) {
     const std::string ev = temp_path("events.csv");
-    const auto r = run_hsnc("simulate '" + model_path("coulomb-1dof.toml") + "' --precision mp:30 --events '" + ev + "'");
+    const auto r =
+        run_hsnc("simulate '" + model_path("coulomb-1dof.toml") + "' --precision mp:30 --events '" + ev + "'");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_NE(r.out.find("events=10 "), std::string::npos) << r.out;
     EXPECT_NE(r.err.find("reference engine at 30 digits"), std::string::npos) << r.err;
@@ -302,21 +302,22 @@ struct BadPrecision {
 class ReferenceCliBad : public ::testing::TestWithParam<BadPrecision> {};
 TEST_P(ReferenceCliBad, ExitTwoWithOneMessageAndNoFile) {
     const std::string ev = temp_path("events.csv");
-    const auto r = run_hsnc("simulate '" + model_path("coulomb-1dof.toml") + "' " + GetParam().args + " --events '" +
-                            ev + "'");
+    const auto r =
+        run_hsnc("simulate '" + model_path("coulomb-1dof.toml") + "' " + GetParam().args + " --events '" + ev + "'");
     EXPECT_EQ(r.exit_code, 2);
     EXPECT_NE(r.err.find(GetParam().message), std::string::npos) << r.err;
     EXPECT_FALSE(file_exists(ev));
 }
 INSTANTIATE_TEST_SUITE_P(
     Flags, ReferenceCliBad,
-    ::testing::Values(BadPrecision{"--precision mp:19", "--precision mp:19: expected double, or mp:N with N in 20..100"},
-                      BadPrecision{"--precision mp:101", "--precision mp:101: expected double"},
-                      BadPrecision{"--precision mp:3x", "--precision mp:3x: expected double"},
-                      BadPrecision{"--precision quad", "--precision quad: expected double"},
-                      BadPrecision{"--precision long-double", "--precision long-double: not offered"},
-                      BadPrecision{"--precision mp:30 --method rk45", "only with --method hsnc (not rk45)"},
-                      BadPrecision{"--precision mp:30 --kernels generic", "--kernels applies to double precision only"}));
+    ::testing::Values(
+        BadPrecision{"--precision mp:19", "--precision mp:19: expected double, or mp:N with N in 20..100"},
+        BadPrecision{"--precision mp:101", "--precision mp:101: expected double"},
+        BadPrecision{"--precision mp:3x", "--precision mp:3x: expected double"},
+        BadPrecision{"--precision quad", "--precision quad: expected double"},
+        BadPrecision{"--precision long-double", "--precision long-double: not offered"},
+        BadPrecision{"--precision mp:30 --method rk45", "only with --method hsnc (not rk45)"},
+        BadPrecision{"--precision mp:30 --kernels generic", "--kernels applies to double precision only"}));
 
 }  // namespace
 }  // namespace hsnc
