@@ -171,7 +171,8 @@ int simulate(const SimulateOptions& o) {
     std::string detail;
     if (digits > 0) {
         sum = reference::simulate(model, digits, eopt, obs);
-        detail = "reference engine at " + std::to_string(digits) + " digits (CLN)";
+        detail = "reference engine at " + std::to_string(digits) + " digits (CLN, " +
+                 std::to_string(reference::carried_bits(digits)) + " bits)";
     } else if (method == Method::hsnc) {
         std::unique_ptr<SolverProvider> provider;
         if (mode == KernelMode::jit)

@@ -416,6 +416,10 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
     return finish(RunStatus::ok, "");
 }
 
+int carried_bits(int digits) {
+    return static_cast<int>(cln::float_digits(cln::cl_float(1, cln::float_format(static_cast<unsigned long>(digits)))));
+}
+
 RunSummary simulate(const Model& model, int digits, const EngineOptions& options, Observer& observer) {
     if (digits < kMinDigits || digits > kMaxDigits)
         throw InputError("reference::simulate(): digits " + std::to_string(digits) + " outside " +

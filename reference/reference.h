@@ -23,6 +23,9 @@ namespace hsnc::reference {
 inline constexpr int kMinDigits = 20;
 inline constexpr int kMaxDigits = 100;
 
+/// Bits of mantissa the reference carries for `digits` (CLN rounds up to whole 64-bit words: 50 -> 192).
+int carried_bits(int digits);
+
 /// Runs `model` from its initial state with every quantity at `digits` decimal digits (CLN), reporting samples and
 /// events to `observer` rounded to double; returns the summary (x, v rounded to double).
 /// Throws InputError when digits is outside [kMinDigits, kMaxDigits] (the CLI's range), RunError when the modal
