@@ -7,7 +7,9 @@
 // element), the largest relative event-time difference over the matched
 // prefix, the end-state difference, and the double engine's event-time error
 // against the 2N-digit run, with where it parts (first event off by > 1e-6).
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -59,8 +61,8 @@ struct Match {
 }  // namespace
 
 int main(int argc, char** argv) {
-    if (argc != 4) {
-        std::fprintf(stderr, "usage: hsnc_reference_check MODEL T_END N\n");
+    if (argc != 4 && argc != 5) {
+        std::fprintf(stderr, "usage: hsnc_reference_check MODEL T_END N [KERNELS: auto|aot|generic]\n");
         return 2;
     }
     const Model model = read_model(argv[1]);
@@ -123,7 +125,8 @@ int main(int argc, char** argv) {
 
     // The double engine against the 2N-digit reference.
     Events dbl;
-    auto provider = make_solver_provider(model, KernelMode::automatic, &aot_registry());
+    const KernelMode mode = argc == 5 ? parse_kernel_mode(argv[4]) : KernelMode::automatic;
+    auto provider = make_solver_provider(model, mode, &aot_registry());
     Engine engine(model, *provider);
     const RunSummary ds = engine.run(opt, dbl);
     const std::size_t n_dbl = std::min(dbl.t.size(), hi.events.size());
@@ -138,6 +141,23 @@ int main(int argc, char** argv) {
         "(< 1e-6) for %zu; max relative event-time error over those %.3e\n",
         provider->describe().c_str(), run_status_name(ds.status), dbl.t.size(), 2 * N, dm.same, dm.parted, dm.max_rel);
     for (auto& [k, r] : dm.at) std::printf("  first %zu events: max relative time error %.3e\n", k, r);
+    // Error in ulps of the event time, by kind: contact switches against friction switches.
+    std::vector<double> contact_ulps, friction_ulps;
+    for (std::size_t k = 0; k < dm.parted; ++k) {
+        const double truth = cln::double_approx(hi.events[k].t);
+        const double ulp = std::nextafter(std::abs(truth), INFINITY) - std::abs(truth);
+        const double err = std::abs(cln::double_approx(cln::cl_float(dbl.t[k], hi.events[k].t) - hi.events[k].t)) / ulp;
+        const bool contact = dbl.kind[k] == EventKind::contact_close || dbl.kind[k] == EventKind::contact_open;
+        (contact ? contact_ulps : friction_ulps).push_back(err);
+    }
+    auto report = [](const char* what, std::vector<double> u) {
+        if (u.empty()) return;
+        std::sort(u.begin(), u.end());
+        std::printf("  %s events: %zu, error median %.3g ulp, 90%% %.3g ulp, max %.3g ulp\n", what, u.size(),
+                    u[u.size() / 2], u[u.size() * 9 / 10], u.back());
+    };
+    report("contact", contact_ulps);
+    report("friction", friction_ulps);
     if (dm.parted < n_dbl)
         std::printf("  parts at event %zu, t = %.6f\n", dm.parted, cln::double_approx(hi.events[dm.parted].t));
     return 0;
