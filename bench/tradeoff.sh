@@ -13,9 +13,9 @@
 #   MODELS  space-separated subset of the models below (default: all)
 #   REFDIR  reference CSVs <model>.csv and <model>-events.csv (the contract's
 #           format, sampled at t0 + k*(t_end-t0)/1000); default: the reference is
-#           computed in process at 40 digits (hsnc::reference; needs that engine in
-#           the build). Figures for the docs must come from a true reference:
-#           never commit ones made against hsnc's own double-precision output.
+#           computed in process at 40 digits (hsnc::reference, the CLN engine).
+#           Figures for the docs must come from a true reference: never commit
+#           ones made against hsnc's own double-precision output.
 #
 # Horizons:
 #   seed-scenario-1  2 s   the paper's horizon (Figs. 5-6).

@@ -303,8 +303,8 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
         throw InputError("--dt " + num(o.dt, 17) + ": must be > 0");
     if (o.reference_out.empty() != o.reference_events.empty())
         throw InputError("--reference-out and --reference-events: give both (the reference trajectory and its events)");
-    if (o.reference_digits < 17 || o.reference_digits > 1000)
-        throw InputError("--reference-digits " + std::to_string(o.reference_digits) + ": must be in 17..1000");
+    const ReferenceRunner runner = o.reference_out.empty() && !in_process ? reference_runner(o.reference_digits)
+                                                                           : in_process;
     if (o.runs < 0 || o.runs > 1001) throw InputError("--runs " + std::to_string(o.runs) + ": must be in 0..1001");
     if (!(o.budget > 0)) throw InputError("--budget " + num(o.budget) + ": must be > 0 (seconds)");
     if (!o.plot.empty() && o.csv.empty()) throw InputError("--plot: needs --csv (the table it draws)");
@@ -329,7 +329,6 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
                      o.reference_out.c_str(), o.reference_events.c_str(), reference.t.size(), reference.events.size(),
                      num(t_end, 6).c_str());
     } else {
-        const ReferenceRunner runner = in_process ? in_process : reference_runner(o.reference_digits);
         RecordingObserver obs(reference, model.dof());
         std::fprintf(stderr, "tradeoff: computing the reference (%d digits) ...\n", o.reference_digits);
         const auto start = std::chrono::steady_clock::now();

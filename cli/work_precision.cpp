@@ -10,6 +10,7 @@
 
 #include "csv_writer.h"
 #include "error.h"
+#include "reference.h"
 
 namespace hsnc::cli {
 
@@ -167,14 +168,12 @@ RunErrors compare_runs(const RecordedRun& reference, const RecordedRun& run) {
 }
 
 ReferenceRunner reference_runner(int digits) {
-    // MERGE(mpref): replace the throw below by
-    //   return [digits](const Model& m, const EngineOptions& o, Observer& obs) {
-    //       return hsnc::reference::simulate(m, digits, o, obs); };
-    // (and #include "reference.h" above).
-    (void)digits;
-    throw RunError(
-        "tradeoff: the mp reference is not in this build yet; give a reference with "
-        "--reference-out FILE --reference-events FILE");
+    if (digits < reference::kMinDigits || digits > reference::kMaxDigits)
+        throw InputError("--reference-digits " + std::to_string(digits) + ": must be in " +
+                         std::to_string(reference::kMinDigits) + ".." + std::to_string(reference::kMaxDigits));
+    return [digits](const Model& model, const EngineOptions& options, Observer& observer) {
+        return reference::simulate(model, digits, options, observer);
+    };
 }
 
 }  // namespace hsnc::cli

@@ -70,7 +70,7 @@ RunErrors compare_runs(const RecordedRun& reference, const RecordedRun& run);
 using ReferenceRunner = std::function<RunSummary(const Model&, const EngineOptions&, Observer&)>;
 
 /// The in-process reference at `digits` significant digits (hsnc::reference,
-/// the CLN engine). Throws RunError in a build that does not have it.
+/// the CLN engine). InputError naming --reference-digits when out of its range.
 ReferenceRunner reference_runner(int digits);
 
 }  // namespace hsnc::cli

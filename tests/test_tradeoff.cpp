@@ -252,6 +252,34 @@ TEST(Tradeoff, InProcessReferenceIsSampledOnTheRunsGrid) {
     EXPECT_LT(std::stod(h[kTErr]), 1e-14);
 }
 
+TEST(Tradeoff, TheMpReferenceAgreesWithTheClosedForm) {
+    // Default reference: the 40-digit engine in process. hsnc against it at
+    // rounding level, and ab4's error the same against it as against the exact
+    // closed form (the two references differ by rounding only).
+    const std::string csv_mp = temp_path("mp.csv"), csv_exact = temp_path("exact.csv");
+    const std::string common =
+        "tradeoff '" + model_path("coulomb-1dof.toml") + "' --t-end 4 --methods hsnc,ab4 --runs 1 --budget 0.001 ";
+    const auto r = run_hsnc(common + "--csv '" + csv_mp + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("tradeoff: reference (40 digits): "), std::string::npos) << r.err;
+    const Reference ref = coulomb_reference(4.0, 0.004);
+    const auto r2 = run_hsnc(common + "--reference-out '" + ref.trajectory + "' --reference-events '" + ref.events +
+                             "' --csv '" + csv_exact + "'");
+    ASSERT_EQ(r2.exit_code, 0) << r2.err;
+    const auto mp = read_tradeoff(csv_mp), exact = read_tradeoff(csv_exact);
+    ASSERT_TRUE(mp.count("hsnc kernels=auto") && mp.count("ab4 h=1e-03")) << slurp(csv_mp);
+    EXPECT_LT(std::stod(mp.at("hsnc kernels=auto")[kXErr]), 1e-15);
+    EXPECT_LT(std::stod(mp.at("hsnc kernels=auto")[kTErr]), 1e-14);
+    EXPECT_EQ(mp.at("hsnc kernels=auto")[kMatched], "10");
+    const double a = std::stod(mp.at("ab4 h=1e-03")[kXErr]), b = std::stod(exact.at("ab4 h=1e-03")[kXErr]);
+    EXPECT_NEAR(a, b, 1e-15) << a << " " << b;
+    EXPECT_NEAR(std::stod(mp.at("ab4 h=1e-03")[kTErr]), std::stod(exact.at("ab4 h=1e-03")[kTErr]), 1e-14);
+    // Its digits are checked like every flag.
+    const auto bad = run_hsnc(common + "--reference-digits 5");
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_NE(bad.err.find("--reference-digits 5: must be in "), std::string::npos) << bad.err;
+}
+
 TEST(Tradeoff, EventsOfOneInstantMatchInAnyOrderAndMatchingStopsAtAMismatch) {
     cli::RecordedRun ref, run;
     ref.dof = run.dof = 1;
