@@ -239,7 +239,7 @@ void plot_tradeoff(const Model& model, const std::vector<const MethodEntry*>& me
     std::string script = "set terminal pngcairo size 1600,700 noenhanced font ',11'\n"
                          "set output " + quoted(tmp) + "\n"
                          "set datafile separator ','\n"
-                         "set logscale xy\nset grid\nset yrange [1e-18:*]\nset format y '%.0e'\nset format x '%.0e'\n"
+                         "set logscale xy\nset grid\nset yrange [1e-18:*]\nset offsets graph 0.04, graph 0.04, 0, 0\nset format y '%.0e'\nset format x '%.0e'\n"
                          "set key top right\nset xlabel 'wall time [s]'\n"
                          "set multiplot layout 1,2 title " +
                          quoted(model.name + ": work-precision, reference " + reference_label) + "\n";
