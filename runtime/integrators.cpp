@@ -531,8 +531,12 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
     std::vector<int> found, rootdir;
     std::vector<char> armed;
     long steps = 0;
+    auto counted = [&] {  // the summary with CVODE's steps as its evaluations
+        sum.evaluations = static_cast<std::size_t>(steps);
+        return sum;
+    };
     auto fail = [&](const std::string& what) {
-        return finish(sum, RunStatus::failure, "cvode: " + what + (p.error.empty() ? "" : " (" + p.error + ")"), t, x, v,
+        return finish(counted(), RunStatus::failure, "cvode: " + what + (p.error.empty() ? "" : " (" + p.error + ")"), t, x, v,
                       cfg);
     };
     while (t < eo.t_end) {
@@ -588,7 +592,7 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
                 for (std::size_t k : hit) s.push_back(p.sw[k]);
                 tr.clear();
                 if (!apply_switches(model, t, x.data(), v.data(), nullptr, cfg, p.dir, s, tr, why))
-                    return finish(sum, RunStatus::chattering, why, t, x, v, cfg);
+                    return finish(counted(), RunStatus::chattering, why, t, x, v, cfg);
                 for (const Transition& e : tr) {
                     obs.on_event(t, e.kind, e.element, x.data(), v.data());
                     ++sum.events;
@@ -608,13 +612,13 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
                 std::copy(y + n, y + 2 * n, v.begin());
                 if (last) break;
             }
-            if ((steps & 0xffff) == 0 && !obs.on_progress(t)) return finish(sum, RunStatus::stopped, "stopped", t, x, v, cfg);
+            if ((steps & 0xffff) == 0 && !obs.on_progress(t))
+                return finish(counted(), RunStatus::stopped, "stopped", t, x, v, cfg);
             if (eo.max_events && sum.events >= eo.max_events)
-                return finish(sum, RunStatus::max_events, "stopped after max events", t, x, v, cfg);
+                return finish(counted(), RunStatus::max_events, "stopped after max events", t, x, v, cfg);
         }
     }
-    sum.evaluations = static_cast<std::size_t>(steps);
-    return finish(sum, RunStatus::ok, "", t, x, v, cfg);
+    return finish(counted(), RunStatus::ok, "", t, x, v, cfg);
 }
 
 }  // namespace
