@@ -531,6 +531,8 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
     std::vector<int> found, rootdir;
     std::vector<char> armed;
     long steps = 0;
+    std::size_t same_instant = 0;
+    double last_switch_t = -kInf;
     auto counted = [&] {  // the summary with CVODE's steps as its evaluations
         sum.evaluations = static_cast<std::size_t>(steps);
         return sum;
@@ -599,6 +601,12 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
                 }
                 for (std::size_t i = 0; i < n; ++i)
                     if (cfg.stuck[i]) v[i] = 0.0;
+                // Restarts that keep switching at one instant (as the engine guards).
+                same_instant = t == last_switch_t ? same_instant + 1 : 0;
+                last_switch_t = t;
+                if (same_instant > 4 * (ns + 2))
+                    return finish(counted(), RunStatus::chattering,
+                                  "cvode: configuration keeps switching at t = " + std::to_string(t), t, x, v, cfg);
                 switched = true;
                 ++sum.segments;
             } else {
