@@ -214,6 +214,9 @@ int main(int argc, char** argv) {
     const std::string scenario2 = models + "seed-scenario-2.toml";
     const int preps = quick ? 5 : 21;
     const ProcessTimes quiet = process_times({HSNC_BINARY, "simulate", scenario2, "--t-end", "300", "--quiet"}, preps);
+    // The same process stopped at once: start-up, command line, model file and exit.
+    const ProcessTimes startup =
+        process_times({HSNC_BINARY, "simulate", scenario2, "--t-end", "0.001", "--quiet"}, preps);
     const std::string out = "/tmp/hsnc_bench_" + std::to_string(::getpid());
     const ProcessTimes files = process_times({HSNC_BINARY, "simulate", scenario2, "--t-end", "300", "--dt", "0.01", "--out",
                                               out + ".csv", "--events", out + "-events.csv"},
@@ -223,6 +226,9 @@ int main(int argc, char** argv) {
     std::printf("\nwhole process, hsnc simulate seed-scenario-2 --t-end 300 (median of %d spawns):\n", preps);
     std::printf("  %-38s wall %7.2f ms (%5.2f%% of cvode)  cpu %7.2f ms (%5.2f%% of cvode)\n", "--quiet",
                 1e3 * quiet.wall, 100 * quiet.wall / cvode_scenario2, 1e3 * quiet.cpu, 100 * quiet.cpu / cvode_scenario2);
+    std::printf("  %-38s wall %7.2f ms (%5.2f%% of cvode)  cpu %7.2f ms (%5.2f%% of cvode)\n",
+                "--t-end 0.001 --quiet (start-up alone)", 1e3 * startup.wall, 100 * startup.wall / cvode_scenario2,
+                1e3 * startup.cpu, 100 * startup.cpu / cvode_scenario2);
     std::printf("  %-38s wall %7.2f ms (%5.2f%% of cvode)  cpu %7.2f ms (%5.2f%% of cvode)\n",
                 "--dt 0.01 --out F --events F", 1e3 * files.wall, 100 * files.wall / cvode_scenario2, 1e3 * files.cpu,
                 100 * files.cpu / cvode_scenario2);
