@@ -5,10 +5,21 @@
 //
 // Engine times are medians of repeated runs (the machines are noisy); ab4
 // and rk45 run once, CVODE (the --method cvode baseline: Adams, fixed-point
-// corrector, root finding) three times (median). ab4 at h = 1e-6 over 300 s would take about a minute,
-// so it is timed over a shorter horizon and its cost per simulated second is
-// scaled to the full horizon (its cost is proportional to the horizon: fixed
-// step). That scaling is printed with the figure.
+// corrector, root finding) three times (median), and once with the Newton
+// corrector. ab4 at h = 1e-6 over 300 s would take about a minute, so it is
+// timed over a shorter horizon and its cost per simulated second is scaled to
+// the full horizon (its cost is proportional to the horizon: fixed step).
+// That scaling is printed with the figure.
+//
+// The whole process: `hsnc simulate` on scenario 2 to 300 s is spawned
+// (posix_spawn, no shell, stdout and stderr to /dev/null) 21 times after 2
+// warm-up runs; the bench prints the median wall time from spawn to exit and
+// the median CPU time of the child (user + system, from wait4), and their
+// ratio to CVODE's in-process time on the same run measured above; the same
+// with --t-end 0.001 (start-up, command line, model file, exit) and with the
+// README's trajectory and event files. The wall time includes fork/exec and
+// the kernel's process set-up; the CPU time is what the process itself costs
+// when other work competes for the two cores.
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
