@@ -163,7 +163,11 @@ TEST(Tradeoff, TheBenchScriptsClosedFormAgreesWithHsnc) {
                             "'");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const auto rows = read_tradeoff(csv);
-    ASSERT_EQ(rows.size(), 3u) << slurp(csv);  // ab4 h = 1e-3 (then the budget stops the sweep), hsnc x 2
+    // ab4 h = 1e-3, then h = 3.2e-4 only when the first run was fast enough that
+    // the next is predicted within --budget (about 0.3 ms against 0.32 ms here:
+    // it goes either way with the machine's load), and hsnc x 2.
+    ASSERT_GE(rows.size(), 3u) << slurp(csv);
+    ASSERT_LE(rows.size(), 4u) << slurp(csv);
     const auto& h = rows.at("hsnc kernels=generic");
     EXPECT_LT(std::stod(h[kXErr]), 1e-15);
     EXPECT_EQ(h[kMatched], "10");
