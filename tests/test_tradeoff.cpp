@@ -159,21 +159,19 @@ TEST(Tradeoff, TheBenchScriptsClosedFormAgreesWithHsnc) {
     const std::string script = std::string(HSNC_SOURCE_DIR) + "/bench/coulomb_exact.sh";
     ASSERT_EQ(std::system(("sh '" + script + "' 4 0.004 '" + tr + "' '" + ev + "'").c_str()), 0);
     const auto r = run_hsnc("tradeoff '" + model_path("coulomb-1dof.toml") + "' --t-end 4 --reference-out '" + tr +
-                            "' --reference-events '" + ev + "' --methods ab4,hsnc --budget 0.001 --runs 1 --csv '" + csv +
-                            "'");
+                            "' --reference-events '" + ev + "' --methods hsnc --runs 1 --csv '" + csv + "'");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const auto rows = read_tradeoff(csv);
-    // ab4 h = 1e-3, then h = 3.2e-4 only when the first run was fast enough that
-    // the next is predicted within --budget (about 0.3 ms against 0.32 ms here:
-    // it goes either way with the machine's load), and hsnc x 2.
-    ASSERT_GE(rows.size(), 3u) << slurp(csv);
-    ASSERT_LE(rows.size(), 4u) << slurp(csv);
-    const auto& h = rows.at("hsnc kernels=generic");
-    EXPECT_LT(std::stod(h[kXErr]), 1e-15);
-    EXPECT_EQ(h[kMatched], "10");
-    EXPECT_LT(std::stod(h[kTErr]), 1e-14);
-    EXPECT_EQ(rows.at("ab4 h=1e-03")[kMatched], "10");
-    EXPECT_NE(r.out.find("ab4:  error<=0.01: "), std::string::npos) << r.out;
+    // hsnc with its ahead-of-time kernels and with the generic solver; ab4's
+    // matching against a closed-form reference is tested above (its step sweep
+    // depends on --budget, i.e. on the machine's speed, so it is left out here).
+    ASSERT_EQ(rows.size(), 2u) << slurp(csv);
+    for (const char* name : {"hsnc kernels=auto", "hsnc kernels=generic"}) {
+        const auto& h = rows.at(name);
+        EXPECT_LT(std::stod(h[kXErr]), 1e-15) << name;
+        EXPECT_EQ(h[kMatched], "10") << name;
+        EXPECT_LT(std::stod(h[kTErr]), 1e-14) << name;
+    }
 }
 
 TEST(Tradeoff, WithoutHsncThereIsNoRatioAndThePlotIsDrawn) {
