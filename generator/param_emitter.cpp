@@ -455,22 +455,53 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
         for (int k = 0; k < NS_STUCK; ++k) fi -= st.K[i][stuck_dof[k]] * x0[stuck_dof[k]];
         f[r] = fi - st.mu_k_n[i] * sgn[i];
     }
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0, refined once
-    // against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    double q0[NF1], dq0[NF1], rx[NF1], rv[NF1];
+    // Modal forces p = V^T f.
     for (int j = 0; j < NF; ++j) {
-        double p = 0.0, q = 0.0, dq = 0.0;
-        for (int r = 0; r < NF; ++r) {
-            p += st.V[r][j] * f[r];
-            q += st.W[j][r] * x0[free_dof[r]];
-            dq += st.W[j][r] * v0[free_dof[r]];
-        }
+        double p = 0.0;
+        for (int r = 0; r < NF; ++r) p += st.V[r][j] * f[r];
         sg.p[j] = p;
+    }
+    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
+    for (int h = 0; h < NH; ++h) {
+        sg.theta[h] = st.Omega[h] * t0 + st.phase[h];
+        sg.s_theta[h] = __builtin_sin(sg.theta[h]);
+        sg.c_theta[h] = __builtin_cos(sg.theta[h]);
+    }
+    // Static offset x_st = V (p / lambda) over the elastic modes.
+    for (int r = 0; r < NF; ++r) {
+        double x = 0.0;
+        for (int j = 0; j < NF; ++j)
+            if (st.lambda[j] != 0.0) x += st.V[r][j] / st.lambda[j] * sg.p[j];
+        sg.x_st[r] = x;
+    }
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0) with
+    // x_p = x_st + sum_h (xs sin + xc cos), exactly what eval adds back at tau = 0 (long double
+    // sums); its modal coordinates q = W xh, refined once against the residuals xh - V q
+    // (long double): removes the bias of V W = I + E.
+    double xh[NF1], vh[NF1], q0[NF1], dq0[NF1], rx[NF1], rv[NF1];
+    for (int r = 0; r < NF; ++r) {
+        long double ex = static_cast<long double>(x0[free_dof[r]]) - sg.x_st[r];
+        long double ev = v0[free_dof[r]];
+        for (int h = 0; h < NH; ++h) {
+            const double W = st.Omega[h];
+            ex -= static_cast<long double>(st.xs[h][r]) * sg.s_theta[h] + static_cast<long double>(st.xc[h][r]) * sg.c_theta[h];
+            ev -= static_cast<long double>(W * st.xs[h][r]) * sg.c_theta[h] -
+                  static_cast<long double>(W * st.xc[h][r]) * sg.s_theta[h];
+        }
+        xh[r] = static_cast<double>(ex);
+        vh[r] = static_cast<double>(ev);
+    }
+    for (int j = 0; j < NF; ++j) {
+        double q = 0.0, dq = 0.0;
+        for (int r = 0; r < NF; ++r) {
+            q += st.W[j][r] * xh[r];
+            dq += st.W[j][r] * vh[r];
+        }
         q0[j] = q;
         dq0[j] = dq;
     }
     for (int r = 0; r < NF; ++r) {
-        long double ex = x0[free_dof[r]], ev = v0[free_dof[r]];
+        long double ex = xh[r], ev = vh[r];
         for (int j = 0; j < NF; ++j) {
             ex -= static_cast<long double>(st.V[r][j]) * q0[j];
             ev -= static_cast<long double>(st.V[r][j]) * dq0[j];
@@ -487,41 +518,48 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
         q0[j] += q;
         dq0[j] += dq;
     }
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    for (int h = 0; h < NH; ++h) {
-        sg.theta[h] = st.Omega[h] * t0 + st.phase[h];
-        sg.s_theta[h] = __builtin_sin(sg.theta[h]);
-        sg.c_theta[h] = __builtin_cos(sg.theta[h]);
-    }
-    // Per mode: particular solution q_p at tau = 0 (static p/lambda, drift p/c or
-    // p tau^2/2 of rigid modes, the non-resonant harmonics), then A = q(0) - q_p(0),
-    // B = q_h'(0) + sigma A and the derivative pairs (A, B) -> (B - sigma A, -kappa A - sigma B).
-    for (int j = 0; j < NF; ++j) {
-        const int rg = st.regime[j];
-        double up = 0.0, dup = 0.0;
-        if (rg == R_RIGID_DAMPED) dup = sg.p[j] / st.c[j];
-        else if (rg != R_RIGID) up = sg.p[j] / st.lambda[j];
-        for (int h = 0; h < NH; ++h) {
-            if (st.resonant[j][h]) continue;  // the resonance-stable form starts at rest
-            const double W = st.Omega[h];
-            up += st.Pas[j][h] * sg.s_theta[h] + st.Pac[j][h] * sg.c_theta[h];
-            dup += W * st.Pas[j][h] * sg.c_theta[h] - W * st.Pac[j][h] * sg.s_theta[h];
+    // One more refinement, against what eval will return at tau = 0: x(0) and v(0) summed
+    // exactly as eval sums them, the residuals x0 - x(0), v0 - v(0) mapped back with W.
+    // x(0) is a sum of terms larger than x itself (static offset, forcing response), so
+    // without this its rounding depends on x0 only through its leading bits, and a state
+    // restarted again and again moves the same way (tests/test_restart_drift.cpp).
+    for (int r = 0; r < NF; ++r) {
+        double xx = sg.x_st[r], vv = 0.0;
+        for (int j = 0; j < NF; ++j) {
+            xx += st.V[r][j] * q0[j];
+            // eval's q'(0) = q_h'(0) + p/c (damped rigid mode) = (q'(0) - p/c) + p/c
+            const double pc = st.regime[j] == R_RIGID_DAMPED ? sg.p[j] / st.c[j] : 0.0;
+            vv += st.V[r][j] * ((dq0[j] - pc) + pc);
         }
+        for (int h = 0; h < NH; ++h) {
+            const double W = st.Omega[h];
+            xx += st.xs[h][r] * sg.s_theta[h] + st.xc[h][r] * sg.c_theta[h];
+            vv += W * st.xs[h][r] * sg.c_theta[h] - W * st.xc[h][r] * sg.s_theta[h];
+        }
+        rx[r] = static_cast<double>(static_cast<long double>(x0[free_dof[r]]) - xx);
+        rv[r] = static_cast<double>(static_cast<long double>(v0[free_dof[r]]) - vv);
+    }
+    for (int j = 0; j < NF; ++j) {
+        double q = 0.0, dq = 0.0;
+        for (int r = 0; r < NF; ++r) {
+            q += st.W[j][r] * rx[r];
+            dq += st.W[j][r] * rv[r];
+        }
+        q0[j] += q;
+        dq0[j] += dq;
+    }
+    // Per mode: A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less the drift p/c of a damped
+    // rigid-body mode) and the derivative pairs (A, B) -> (B - sigma A, -kappa A - sigma B).
+    for (int j = 0; j < NF; ++j) {
         const double s = st.sigma[j], k = st.kappa[j];
-        const double A = q0[j] - up, B = dq0[j] - dup + s * A;
+        const double dup = st.regime[j] == R_RIGID_DAMPED ? sg.p[j] / st.c[j] : 0.0;
+        const double A = q0[j], B = dq0[j] - dup + s * A;
         sg.A[j] = A;
         sg.B[j] = B;
         sg.A1[j] = B - s * A;
         sg.B1[j] = -k * A - s * B;
         sg.A2[j] = sg.B1[j] - s * sg.A1[j];
         sg.B2[j] = -k * sg.A1[j] - s * sg.B1[j];
-    }
-    // Static offset x_st = V (p / lambda) over the elastic modes; stuck masses rest.
-    for (int r = 0; r < NF; ++r) {
-        double x = 0.0;
-        for (int j = 0; j < NF; ++j)
-            if (st.lambda[j] != 0.0) x += st.V[r][j] / st.lambda[j] * sg.p[j];
-        sg.x_st[r] = x;
     }
     for (int i = 0; i < N; ++i) sg.x_fix[i] = x0[i];
 }

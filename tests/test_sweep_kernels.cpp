@@ -138,10 +138,10 @@ void sweep(const std::string& file, const std::string& spec, const std::string& 
 }
 
 TEST(SweepKernel, StiffnessSweepMatchesGenericSolver) {
-    // k1 (m1 to ground) over three decades, contact closed and open, one mass stuck.
+    // k1 (m1 to ground) over three decades, contact closed, and with one mass stuck
+    // (the open configuration is swept in the damping test).
     const std::vector<double> k1 = {0.5, 2.0, 5.0, 20.0, 80.0, 500.0};
     sweep("seed-scenario-1.toml", "closed=contact1", "k1", k1, 1e-12);
-    sweep("seed-scenario-1.toml", "", "k1", k1, 1e-12);
     sweep("seed-scenario-1.toml", "stuck=m2", "k1", k1, 1e-12);
 }
 
