@@ -423,7 +423,8 @@ const char* const kModes = R"(    // ---- Modal decomposition of Kt = M_F^-1/2 K
         for (int j = 0; j < NF; ++j) {
             const double c = st.c[j], w = st.omega[j], aa = __builtin_fabs(al[j]), bb = __builtin_fabs(be[j]);
             st.Hb[f][j] = aa * (c + w) + bb * (c * (c + w) + st.lambda[j]);
-            st.rigid_al[f][j] = st.regime[j] == R_RIGID ? aa : 0.0;
+            // rigid-body modes: |q_p''| <= |p|, |q_p^(3)| <= c |p|
+            st.rigid_al[f][j] = st.regime[j] == R_RIGID || st.regime[j] == R_RIGID_DAMPED ? aa + bb * c : 0.0;
             for (int h = 0; h < NH; ++h) {
                 if (!st.resonant[j][h] || (aa == 0.0 && bb == 0.0)) continue;
                 // |y''| <= Q ((h^2 + wbar^2) s + 2 wbar + omega),
@@ -527,9 +528,7 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
         double xx = sg.x_st[r], vv = 0.0;
         for (int j = 0; j < NF; ++j) {
             xx += st.V[r][j] * q0[j];
-            // eval's q'(0) = q_h'(0) + p/c (damped rigid mode) = (q'(0) - p/c) + p/c
-            const double pc = st.regime[j] == R_RIGID_DAMPED ? sg.p[j] / st.c[j] : 0.0;
-            vv += st.V[r][j] * ((dq0[j] - pc) + pc);
+            vv += st.V[r][j] * dq0[j];
         }
         for (int h = 0; h < NH; ++h) {
             const double W = st.Omega[h];
@@ -548,12 +547,11 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
         q0[j] += q;
         dq0[j] += dq;
     }
-    // Per mode: A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less the drift p/c of a damped
-    // rigid-body mode) and the derivative pairs (A, B) -> (B - sigma A, -kappa A - sigma B).
+    // Per mode: A = q_h(0), B = q_h'(0) + sigma A (every particular part starts at q_p(0) =
+    // q_p'(0) = 0 or is in x_p) and the derivative pairs (A, B) -> (B - sigma A, -kappa A - sigma B).
     for (int j = 0; j < NF; ++j) {
         const double s = st.sigma[j], k = st.kappa[j];
-        const double dup = st.regime[j] == R_RIGID_DAMPED ? sg.p[j] / st.c[j] : 0.0;
-        const double A = q0[j], B = dq0[j] - dup + s * A;
+        const double A = q0[j], B = dq0[j] + s * A;
         sg.A[j] = A;
         sg.B[j] = B;
         sg.A1[j] = B - s * A;
@@ -562,6 +560,19 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
         sg.B2[j] = -k * sg.A1[j] - s * sg.B1[j];
     }
     for (int i = 0; i < N; ++i) sg.x_fix[i] = x0[i];
+}
+
+// phi2(x) = (e^x - 1 - x)/x^2, phi2(0) = 1/2; Taylor series where the subtraction cancels.
+double phi2(double x) {
+    if (__builtin_fabs(x) < 0.5) {
+        double term = 0.5, sum = 0.5;  // x^k/(k+2)!
+        for (int k = 1; k < 20; ++k) {
+            term *= x / (k + 2);
+            sum += term;
+        }
+        return sum;
+    }
+    return (__builtin_expm1(x) - x) / (x * x);
 }
 
 // eval: state, switch functions, bounds and term magnitudes at tau.
@@ -620,19 +631,15 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
         rE[j] = __builtin_sqrt(dqh * dqh + lam * qh * qh);
         double mag = __builtin_fabs(sg.A[j] * eC) + __builtin_fabs(sg.B[j] * eS);
         double dmag = __builtin_fabs(sg.A1[j] * eC) + __builtin_fabs(sg.B1[j] * eS);
-        if (st.regime[j] == R_RIGID) {  // q_p = p tau^2/2
-            const double p = sg.p[j];
-            qq += 0.5 * p * tau * tau;
-            dd += p * tau;
-            aa += p;
-            mag += __builtin_fabs(0.5 * p * tau * tau);
-            dmag += __builtin_fabs(p * tau);
-        } else if (st.regime[j] == R_RIGID_DAMPED) {  // q_p = (p/c) tau
-            const double pc = sg.p[j] / st.c[j];
-            qq += pc * tau;
-            dd += pc;
-            mag += __builtin_fabs(pc * tau);
-            dmag += __builtin_fabs(pc);
+        if (st.regime[j] == R_RIGID || st.regime[j] == R_RIGID_DAMPED) {
+            // q_p = p tau^2 phi2(-c tau) from rest (p tau^2/2 at c = 0): q_p' = p eS, q_p'' = p e^{-c tau}.
+            // One form for every c >= 0: no p/c drift that cancels as c -> 0.
+            const double p = sg.p[j], x = -st.c[j] * tau, qp = p * tau * tau * phi2(x), dqp = p * eS;
+            qq += qp;
+            dd += dqp;
+            aa += p * (x == 0.0 ? 1.0 : __builtin_exp(x));
+            mag += __builtin_fabs(qp);
+            dmag += __builtin_fabs(dqp);
         }
         for (int h = 0; h < NH; ++h) {
             if (!st.resonant[j][h]) continue;
