@@ -180,44 +180,36 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_8 = q0u_8 + (-0.16122984176531685*rx_1 + 0.30301298511469577*rx_2 - 0.40824829046386302*rx_3 + 0.46424282688001262*rx_4 - 0.46424282688001262*rx_5 + 0.40824829046386302*rx_6 - 0.30301298511469577*rx_7 + 0.16122984176531685*rx_8);
     const double dq0_8 = dq0u_8 + (-0.16122984176531685*rv_1 + 0.30301298511469577*rv_2 - 0.40824829046386302*rv_3 + 0.46424282688001262*rv_4 - 0.46424282688001262*rv_5 + 0.40824829046386302*rv_6 - 0.30301298511469577*rv_7 + 0.16122984176531685*rv_8);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
-    const double dqe_5 = dq0_5;
-    const double dqe_6 = dq0_6;
-    const double dqe_7 = dq0_7;
-    const double dqe_8 = dq0_8;
     const double xe_1 = x_st_1 + 0.16122984176531685*q0_1 + 0.30301298511469577*q0_2 + 0.40824829046386302*q0_3 + 0.46424282688001262*q0_4 + 0.46424282688001262*q0_5 + 0.40824829046386302*q0_6 - 0.30301298511469577*q0_7 - 0.16122984176531685*q0_8 + 5.4322450949382057*s_theta_1 - 2.7752849247341715*c_theta_1;
-    const double ve_1 = 0.16122984176531685*dqe_1 + 0.30301298511469577*dqe_2 + 0.40824829046386302*dqe_3 + 0.46424282688001262*dqe_4 + 0.46424282688001262*dqe_5 + 0.40824829046386302*dqe_6 - 0.30301298511469577*dqe_7 - 0.16122984176531685*dqe_8 + 36.939266645579799*c_theta_1 + 18.871937488192366*s_theta_1;
+    const double ve_1 = 0.16122984176531685*dq0_1 + 0.30301298511469577*dq0_2 + 0.40824829046386302*dq0_3 + 0.46424282688001262*dq0_4 + 0.46424282688001262*dq0_5 + 0.40824829046386302*dq0_6 - 0.30301298511469577*dq0_7 - 0.16122984176531685*dq0_8 + 36.939266645579799*c_theta_1 + 18.871937488192366*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.30301298511469577*q0_1 + 0.46424282688001262*q0_2 + 0.40824829046386302*q0_3 + 0.16122984176531685*q0_4 - 0.16122984176531685*q0_5 - 0.40824829046386302*q0_6 + 0.46424282688001262*q0_7 + 0.30301298511469577*q0_8 + 7.9608163225931179*s_theta_1 - 4.2500177557933831*c_theta_1;
-    const double ve_2 = 0.30301298511469577*dqe_1 + 0.46424282688001262*dqe_2 + 0.40824829046386302*dqe_3 + 0.16122984176531685*dqe_4 - 0.16122984176531685*dqe_5 - 0.40824829046386302*dqe_6 + 0.46424282688001262*dqe_7 + 0.30301298511469577*dqe_8 + 54.1335509936332*c_theta_1 + 28.900120739395003*s_theta_1;
+    const double ve_2 = 0.30301298511469577*dq0_1 + 0.46424282688001262*dq0_2 + 0.40824829046386302*dq0_3 + 0.16122984176531685*dq0_4 - 0.16122984176531685*dq0_5 - 0.40824829046386302*dq0_6 + 0.46424282688001262*dq0_7 + 0.30301298511469577*dq0_8 + 54.1335509936332*c_theta_1 + 28.900120739395003*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.40824829046386302*q0_1 + 0.40824829046386302*q0_2 + 1.5600606477973395e-58*q0_3 - 0.40824829046386302*q0_4 - 0.40824829046386302*q0_5 - 1.365920598290747e-57*q0_6 - 0.40824829046386302*q0_7 - 0.40824829046386302*q0_8 + 6.820847033886845*s_theta_1 - 3.7362426286193795*c_theta_1;
-    const double ve_3 = 0.40824829046386302*dqe_1 + 0.40824829046386302*dqe_2 + 1.5600606477973395e-58*dqe_3 - 0.40824829046386302*dqe_4 - 0.40824829046386302*dqe_5 - 1.365920598290747e-57*dqe_6 - 0.40824829046386302*dqe_7 - 0.40824829046386302*dqe_8 + 46.381759830430546*c_theta_1 + 25.406449874611781*s_theta_1;
+    const double ve_3 = 0.40824829046386302*dq0_1 + 0.40824829046386302*dq0_2 + 1.5600606477973395e-58*dq0_3 - 0.40824829046386302*dq0_4 - 0.40824829046386302*dq0_5 - 1.365920598290747e-57*dq0_6 - 0.40824829046386302*dq0_7 - 0.40824829046386302*dq0_8 + 46.381759830430546*c_theta_1 + 25.406449874611781*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.46424282688001262*q0_1 + 0.16122984176531685*q0_2 - 0.40824829046386302*q0_3 - 0.30301298511469577*q0_4 + 0.30301298511469577*q0_5 + 0.40824829046386302*q0_6 + 0.16122984176531685*q0_7 + 0.46424282688001262*q0_8 + 2.5379412098402612*s_theta_1 - 1.474866573785532*c_theta_1;
-    const double ve_4 = 0.46424282688001262*dqe_1 + 0.16122984176531685*dqe_2 - 0.40824829046386302*dqe_3 - 0.30301298511469577*dqe_4 + 0.30301298511469577*dqe_5 + 0.40824829046386302*dqe_6 + 0.16122984176531685*dqe_7 + 0.46424282688001262*dqe_8 + 17.258000226913776*c_theta_1 + 10.029092701741618*s_theta_1;
+    const double ve_4 = 0.46424282688001262*dq0_1 + 0.16122984176531685*dq0_2 - 0.40824829046386302*dq0_3 - 0.30301298511469577*dq0_4 + 0.30301298511469577*dq0_5 + 0.40824829046386302*dq0_6 + 0.16122984176531685*dq0_7 + 0.46424282688001262*dq0_8 + 17.258000226913776*c_theta_1 + 10.029092701741618*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double xe_5 = x_st_5 + 0.46424282688001262*q0_1 - 0.16122984176531685*q0_2 - 0.40824829046386302*q0_3 + 0.30301298511469577*q0_4 + 0.30301298511469577*q0_5 - 0.40824829046386302*q0_6 + 0.16122984176531685*q0_7 - 0.46424282688001262*q0_8 - 2.914158833538139*s_theta_1 + 1.4759146451578564*c_theta_1;
-    const double ve_5 = 0.46424282688001262*dqe_1 - 0.16122984176531685*dqe_2 - 0.40824829046386302*dqe_3 + 0.30301298511469577*dqe_4 + 0.30301298511469577*dqe_5 - 0.40824829046386302*dqe_6 + 0.16122984176531685*dqe_7 - 0.46424282688001262*dqe_8 - 19.816280068059346*c_theta_1 - 10.036219587073424*s_theta_1;
+    const double ve_5 = 0.46424282688001262*dq0_1 - 0.16122984176531685*dq0_2 - 0.40824829046386302*dq0_3 + 0.30301298511469577*dq0_4 + 0.30301298511469577*dq0_5 - 0.40824829046386302*dq0_6 + 0.16122984176531685*dq0_7 - 0.46424282688001262*dq0_8 - 19.816280068059346*c_theta_1 - 10.036219587073424*s_theta_1;
     const double ex_5 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_5));
     const double ev_5 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_5));
     const double xe_6 = x_st_6 + 0.40824829046386302*q0_1 - 0.40824829046386302*q0_2 - 5.2827801884580765e-58*q0_3 + 0.40824829046386302*q0_4 - 0.40824829046386302*q0_5 + 4.1352412481901592e-58*q0_6 - 0.40824829046386302*q0_7 + 0.40824829046386302*q0_8 - 7.0231084520638074*s_theta_1 + 3.7357029647221411*c_theta_1;
-    const double ve_6 = 0.40824829046386302*dqe_1 - 0.40824829046386302*dqe_2 - 5.2827801884580765e-58*dqe_3 + 0.40824829046386302*dqe_4 - 0.40824829046386302*dqe_5 + 4.1352412481901592e-58*dqe_6 - 0.40824829046386302*dqe_7 + 0.40824829046386302*dqe_8 - 47.75713747403389*c_theta_1 - 25.402780160110559*s_theta_1;
+    const double ve_6 = 0.40824829046386302*dq0_1 - 0.40824829046386302*dq0_2 - 5.2827801884580765e-58*dq0_3 + 0.40824829046386302*dq0_4 - 0.40824829046386302*dq0_5 + 4.1352412481901592e-58*dq0_6 - 0.40824829046386302*dq0_7 + 0.40824829046386302*dq0_8 - 47.75713747403389*c_theta_1 - 25.402780160110559*s_theta_1;
     const double ex_6 = static_cast<double>(static_cast<long double>(x0[5]) - static_cast<long double>(xe_6));
     const double ev_6 = static_cast<double>(static_cast<long double>(v0[5]) - static_cast<long double>(ve_6));
     const double xe_7 = x_st_7 + 0.30301298511469577*q0_1 - 0.46424282688001262*q0_2 + 0.40824829046386302*q0_3 - 0.16122984176531685*q0_4 - 0.16122984176531685*q0_5 + 0.40824829046386302*q0_6 + 0.46424282688001262*q0_7 - 0.30301298511469577*q0_8 - 7.8955962895118823*s_theta_1 + 4.2475468358484374*c_theta_1;
-    const double ve_7 = 0.30301298511469577*dqe_1 - 0.46424282688001262*dqe_2 + 0.40824829046386302*dqe_3 - 0.16122984176531685*dqe_4 - 0.16122984176531685*dqe_5 + 0.40824829046386302*dqe_6 + 0.46424282688001262*dqe_7 - 0.30301298511469577*dqe_8 - 53.690054768680795*c_theta_1 - 28.883318483769372*s_theta_1;
+    const double ve_7 = 0.30301298511469577*dq0_1 - 0.46424282688001262*dq0_2 + 0.40824829046386302*dq0_3 - 0.16122984176531685*dq0_4 - 0.16122984176531685*dq0_5 + 0.40824829046386302*dq0_6 + 0.46424282688001262*dq0_7 - 0.30301298511469577*dq0_8 - 53.690054768680795*c_theta_1 - 28.883318483769372*s_theta_1;
     const double ex_7 = static_cast<double>(static_cast<long double>(x0[6]) - static_cast<long double>(xe_7));
     const double ev_7 = static_cast<double>(static_cast<long double>(v0[6]) - static_cast<long double>(ve_7));
     const double xe_8 = x_st_8 + 0.16122984176531685*q0_1 - 0.30301298511469577*q0_2 + 0.40824829046386302*q0_3 - 0.46424282688001262*q0_4 + 0.46424282688001262*q0_5 - 0.40824829046386302*q0_6 - 0.30301298511469577*q0_7 + 0.16122984176531685*q0_8 - 5.1296934586532332*s_theta_1 + 2.772216510852437*c_theta_1;
-    const double ve_8 = 0.16122984176531685*dqe_1 - 0.30301298511469577*dqe_2 + 0.40824829046386302*dqe_3 - 0.46424282688001262*dqe_4 + 0.46424282688001262*dqe_5 - 0.40824829046386302*dqe_6 - 0.30301298511469577*dqe_7 + 0.16122984176531685*dqe_8 - 34.881915518841986*c_theta_1 - 18.851072273796571*s_theta_1;
+    const double ve_8 = 0.16122984176531685*dq0_1 - 0.30301298511469577*dq0_2 + 0.40824829046386302*dq0_3 - 0.46424282688001262*dq0_4 + 0.46424282688001262*dq0_5 - 0.40824829046386302*dq0_6 - 0.30301298511469577*dq0_7 + 0.16122984176531685*dq0_8 - 34.881915518841986*c_theta_1 - 18.851072273796571*s_theta_1;
     const double ex_8 = static_cast<double>(static_cast<long double>(x0[7]) - static_cast<long double>(xe_8));
     const double ev_8 = static_cast<double>(static_cast<long double>(v0[7]) - static_cast<long double>(ve_8));
     const double qh0_1 = q0_1 + (0.16122984176531685*ex_1 + 0.30301298511469577*ex_2 + 0.40824829046386302*ex_3 + 0.46424282688001262*ex_4 + 0.46424282688001262*ex_5 + 0.40824829046386302*ex_6 + 0.30301298511469577*ex_7 + 0.16122984176531685*ex_8);
@@ -236,8 +228,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_7 = dq0_7 + (-0.30301298511469577*ev_1 + 0.46424282688001262*ev_2 - 0.40824829046386302*ev_3 + 0.16122984176531685*ev_4 + 0.16122984176531685*ev_5 - 0.40824829046386302*ev_6 + 0.46424282688001262*ev_7 - 0.30301298511469577*ev_8);
     const double qh0_8 = q0_8 + (-0.16122984176531685*ex_1 + 0.30301298511469577*ex_2 - 0.40824829046386302*ex_3 + 0.46424282688001262*ex_4 - 0.46424282688001262*ex_5 + 0.40824829046386302*ex_6 - 0.30301298511469577*ex_7 + 0.16122984176531685*ex_8);
     const double dqh0_8 = dq0_8 + (-0.16122984176531685*ev_1 + 0.30301298511469577*ev_2 - 0.40824829046386302*ev_3 + 0.46424282688001262*ev_4 - 0.46424282688001262*ev_5 + 0.40824829046386302*ev_6 - 0.30301298511469577*ev_7 + 0.16122984176531685*ev_8);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
@@ -248,8 +240,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
@@ -260,8 +252,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
@@ -272,8 +264,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
@@ -284,8 +276,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
-    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
@@ -296,8 +288,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
-    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
@@ -308,8 +300,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
-    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
@@ -320,8 +312,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
-    // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
@@ -748,39 +740,32 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_7 = q0u_7 + (-0.19134171618254489*rx_1 + 0.35355339059327379*rx_2 - 0.46193976625564337*rx_3 + 0.5*rx_4 - 0.46193976625564337*rx_5 + 0.35355339059327379*rx_6 - 0.19134171618254489*rx_7);
     const double dq0_7 = dq0u_7 + (-0.19134171618254489*rv_1 + 0.35355339059327379*rv_2 - 0.46193976625564337*rv_3 + 0.5*rv_4 - 0.46193976625564337*rv_5 + 0.35355339059327379*rv_6 - 0.19134171618254489*rv_7);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
-    const double dqe_5 = dq0_5;
-    const double dqe_6 = dq0_6;
-    const double dqe_7 = dq0_7;
     const double xe_1 = x_st_1 + 0.19134171618254489*q0_1 + 0.35355339059327379*q0_2 - 0.46193976625564337*q0_3 + 0.5*q0_4 + 0.46193976625564337*q0_5 - 0.35355339059327379*q0_6 - 0.19134171618254489*q0_7 + 0.59160325420102255*s_theta_1 - 0.012692071416714652*c_theta_1;
-    const double ve_1 = 0.19134171618254489*dqe_1 + 0.35355339059327379*dqe_2 - 0.46193976625564337*dqe_3 + 0.5*dqe_4 + 0.46193976625564337*dqe_5 - 0.35355339059327379*dqe_6 - 0.19134171618254489*dqe_7 + 4.0229021285669528*c_theta_1 + 0.086306085633659629*s_theta_1;
+    const double ve_1 = 0.19134171618254489*dq0_1 + 0.35355339059327379*dq0_2 - 0.46193976625564337*dq0_3 + 0.5*dq0_4 + 0.46193976625564337*dq0_5 - 0.35355339059327379*dq0_6 - 0.19134171618254489*dq0_7 + 4.0229021285669528*c_theta_1 + 0.086306085633659629*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.35355339059327379*q0_1 + 0.5*q0_2 - 0.35355339059327379*q0_3 + 2.0855037903472589e-58*q0_4 - 0.35355339059327379*q0_5 + 0.5*q0_6 + 0.35355339059327379*q0_7 + 0.50969690018813596*s_theta_1 - 0.016420815916699767*c_theta_1;
-    const double ve_2 = 0.35355339059327379*dqe_1 + 0.5*dqe_2 - 0.35355339059327379*dqe_3 + 2.0855037903472589e-58*dqe_4 - 0.35355339059327379*dqe_5 + 0.5*dqe_6 + 0.35355339059327379*dqe_7 + 3.4659389212793243*c_theta_1 + 0.11166154823355841*s_theta_1;
+    const double ve_2 = 0.35355339059327379*dq0_1 + 0.5*dq0_2 - 0.35355339059327379*dq0_3 + 2.0855037903472589e-58*dq0_4 - 0.35355339059327379*dq0_5 + 0.5*dq0_6 + 0.35355339059327379*dq0_7 + 3.4659389212793243*c_theta_1 + 0.11166154823355841*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.46193976625564337*q0_1 + 0.35355339059327379*q0_2 + 0.19134171618254489*q0_3 - 0.5*q0_4 - 0.19134171618254489*q0_5 - 0.35355339059327379*q0_6 - 0.46193976625564337*q0_7 + 0.19215992871625784*s_theta_1 - 0.011062243253186475*c_theta_1;
-    const double ve_3 = 0.46193976625564337*dqe_1 + 0.35355339059327379*dqe_2 + 0.19134171618254489*dqe_3 - 0.5*dqe_4 - 0.19134171618254489*dqe_5 - 0.35355339059327379*dqe_6 - 0.46193976625564337*dqe_7 + 1.3066875152705533*c_theta_1 + 0.075223254121668026*s_theta_1;
+    const double ve_3 = 0.46193976625564337*dq0_1 + 0.35355339059327379*dq0_2 + 0.19134171618254489*dq0_3 - 0.5*dq0_4 - 0.19134171618254489*dq0_5 - 0.35355339059327379*dq0_6 - 0.46193976625564337*dq0_7 + 1.3066875152705533*c_theta_1 + 0.075223254121668026*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.5*q0_1 - 7.3437970285880317e-59*q0_2 + 0.5*q0_3 + 1.0549047967703056e-58*q0_4 + 0.5*q0_5 - 1.4803777341981851e-57*q0_6 + 0.5*q0_7 - 0.21419744221551246*s_theta_1 - 2.516244818201235e-05*c_theta_1;
-    const double ve_4 = 0.5*dqe_1 - 7.3437970285880317e-59*dqe_2 + 0.5*dqe_3 + 1.0549047967703056e-58*dqe_4 + 0.5*dqe_5 - 1.4803777341981851e-57*dqe_6 + 0.5*dqe_7 - 1.4565426070654848*c_theta_1 + 0.00017110464763768398*s_theta_1;
+    const double ve_4 = 0.5*dq0_1 - 7.3437970285880317e-59*dq0_2 + 0.5*dq0_3 + 1.0549047967703056e-58*dq0_4 + 0.5*dq0_5 - 1.4803777341981851e-57*dq0_6 + 0.5*dq0_7 - 1.4565426070654848*c_theta_1 + 0.00017110464763768398*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double xe_5 = x_st_5 + 0.46193976625564337*q0_1 - 0.35355339059327379*q0_2 + 0.19134171618254489*q0_3 + 0.5*q0_4 - 0.19134171618254489*q0_5 + 0.35355339059327379*q0_6 - 0.46193976625564337*q0_7 - 0.52151197747065892*s_theta_1 + 0.010395499310148194*c_theta_1;
-    const double ve_5 = 0.46193976625564337*dqe_1 - 0.35355339059327379*dqe_2 + 0.19134171618254489*dqe_3 + 0.5*dqe_4 - 0.19134171618254489*dqe_5 + 0.35355339059327379*dqe_6 - 0.46193976625564337*dqe_7 - 3.5462814468004806*c_theta_1 - 0.070689395309007724*s_theta_1;
+    const double ve_5 = 0.46193976625564337*dq0_1 - 0.35355339059327379*dq0_2 + 0.19134171618254489*dq0_3 + 0.5*dq0_4 - 0.19134171618254489*dq0_5 + 0.35355339059327379*dq0_6 - 0.46193976625564337*dq0_7 - 3.5462814468004806*c_theta_1 - 0.070689395309007724*s_theta_1;
     const double ex_5 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_5));
     const double ev_5 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_5));
     const double xe_6 = x_st_6 + 0.35355339059327379*q0_1 - 0.5*q0_2 - 0.35355339059327379*q0_3 - 9.0020083153901388e-59*q0_4 - 0.35355339059327379*q0_5 - 0.5*q0_6 + 0.35355339059327379*q0_7 - 0.58771505433047289*s_theta_1 + 0.014480246939561649*c_theta_1;
-    const double ve_6 = 0.35355339059327379*dqe_1 - 0.5*dqe_2 - 0.35355339059327379*dqe_3 - 9.0020083153901388e-59*dqe_4 - 0.35355339059327379*dqe_5 - 0.5*dqe_6 + 0.35355339059327379*dqe_7 - 3.9964623694472157*c_theta_1 - 0.098465679189019217*s_theta_1;
+    const double ve_6 = 0.35355339059327379*dq0_1 - 0.5*dq0_2 - 0.35355339059327379*dq0_3 - 9.0020083153901388e-59*dq0_4 - 0.35355339059327379*dq0_5 - 0.5*dq0_6 + 0.35355339059327379*dq0_7 - 3.9964623694472157*c_theta_1 - 0.098465679189019217*s_theta_1;
     const double ex_6 = static_cast<double>(static_cast<long double>(x0[5]) - static_cast<long double>(xe_6));
     const double ev_6 = static_cast<double>(static_cast<long double>(v0[5]) - static_cast<long double>(ve_6));
     const double xe_7 = x_st_7 + 0.19134171618254489*q0_1 - 0.35355339059327379*q0_2 - 0.46193976625564337*q0_3 - 0.5*q0_4 + 0.46193976625564337*q0_5 + 0.35355339059327379*q0_6 - 0.19134171618254489*q0_7 - 0.38220700704374883*s_theta_1 + 0.010146218088134125*c_theta_1;
-    const double ve_7 = 0.19134171618254489*dqe_1 - 0.35355339059327379*dqe_2 - 0.46193976625564337*dqe_3 - 0.5*dqe_4 + 0.46193976625564337*dqe_5 + 0.35355339059327379*dqe_6 - 0.19134171618254489*dqe_7 - 2.5990076478974919*c_theta_1 - 0.068994282999312054*s_theta_1;
+    const double ve_7 = 0.19134171618254489*dq0_1 - 0.35355339059327379*dq0_2 - 0.46193976625564337*dq0_3 - 0.5*dq0_4 + 0.46193976625564337*dq0_5 + 0.35355339059327379*dq0_6 - 0.19134171618254489*dq0_7 - 2.5990076478974919*c_theta_1 - 0.068994282999312054*s_theta_1;
     const double ex_7 = static_cast<double>(static_cast<long double>(x0[6]) - static_cast<long double>(xe_7));
     const double ev_7 = static_cast<double>(static_cast<long double>(v0[6]) - static_cast<long double>(ve_7));
     const double qh0_1 = q0_1 + (0.19134171618254489*ex_1 + 0.35355339059327379*ex_2 + 0.46193976625564337*ex_3 + 0.5*ex_4 + 0.46193976625564337*ex_5 + 0.35355339059327379*ex_6 + 0.19134171618254489*ex_7);
@@ -797,8 +782,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_6 = dq0_6 + (-0.35355339059327379*ev_1 + 0.5*ev_2 - 0.35355339059327379*ev_3 - 1.4803777341981851e-57*ev_4 + 0.35355339059327379*ev_5 - 0.5*ev_6 + 0.35355339059327379*ev_7);
     const double qh0_7 = q0_7 + (-0.19134171618254489*ex_1 + 0.35355339059327379*ex_2 - 0.46193976625564337*ex_3 + 0.5*ex_4 - 0.46193976625564337*ex_5 + 0.35355339059327379*ex_6 - 0.19134171618254489*ex_7);
     const double dqh0_7 = dq0_7 + (-0.19134171618254489*ev_1 + 0.35355339059327379*ev_2 - 0.46193976625564337*ev_3 + 0.5*ev_4 - 0.46193976625564337*ev_5 + 0.35355339059327379*ev_6 - 0.19134171618254489*ev_7);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[9] = A_1;
@@ -809,8 +794,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[12] = B1_1;
     coef[13] = B1_1 - sigma_1*A1_1;
     coef[14] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[15] = A_2;
@@ -821,8 +806,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[18] = B1_2;
     coef[19] = B1_2 - sigma_2*A1_2;
     coef[20] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[21] = A_3;
@@ -833,8 +818,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[24] = B1_3;
     coef[25] = B1_3 - sigma_3*A1_3;
     coef[26] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[27] = A_4;
@@ -845,8 +830,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[30] = B1_4;
     coef[31] = B1_4 - sigma_4*A1_4;
     coef[32] = -kappa_4*A1_4 - sigma_4*B1_4;
-    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[33] = A_5;
@@ -857,8 +842,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[36] = B1_5;
     coef[37] = B1_5 - sigma_5*A1_5;
     coef[38] = -kappa_5*A1_5 - sigma_5*B1_5;
-    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[39] = A_6;
@@ -869,8 +854,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[42] = B1_6;
     coef[43] = B1_6 - sigma_6*A1_6;
     coef[44] = -kappa_6*A1_6 - sigma_6*B1_6;
-    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[45] = A_7;
@@ -1272,34 +1257,28 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_6 = q0u_6 + (0.23192061392432986*rx_1 - 0.41790650594127499*rx_2 + 0.52112088916960242*rx_3 - 0.52112088916960242*rx_4 + 0.41790650594127499*rx_5 - 0.23192061392432986*rx_6);
     const double dq0_6 = dq0u_6 + (0.23192061392432986*rv_1 - 0.41790650594127499*rv_2 + 0.52112088916960242*rv_3 - 0.52112088916960242*rv_4 + 0.41790650594127499*rv_5 - 0.23192061392432986*rv_6);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
-    const double dqe_5 = dq0_5;
-    const double dqe_6 = dq0_6;
     const double xe_1 = x_st_1 + 0.23192061392432986*q0_1 + 0.41790650594127499*q0_2 + 0.52112088916960242*q0_3 + 0.52112088916960242*q0_4 - 0.41790650594127499*q0_5 + 0.23192061392432986*q0_6 + 0.3446837043168765*s_theta_1 - 0.0048794187606921637*c_theta_1;
-    const double ve_1 = 0.23192061392432986*dqe_1 + 0.41790650594127499*dqe_2 + 0.52112088916960242*dqe_3 + 0.52112088916960242*dqe_4 - 0.41790650594127499*dqe_5 + 0.23192061392432986*dqe_6 + 2.3438491893547604*c_theta_1 + 0.033180047572706713*s_theta_1;
+    const double ve_1 = 0.23192061392432986*dq0_1 + 0.41790650594127499*dq0_2 + 0.52112088916960242*dq0_3 + 0.52112088916960242*dq0_4 - 0.41790650594127499*dq0_5 + 0.23192061392432986*dq0_6 + 2.3438491893547604*c_theta_1 + 0.033180047572706713*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.41790650594127499*q0_1 + 0.52112088916960242*q0_2 + 0.23192061392432986*q0_3 - 0.23192061392432986*q0_4 + 0.52112088916960242*q0_5 - 0.41790650594127499*q0_6 + 0.13000803100599684*s_theta_1 - 0.0051320025646349483*c_theta_1;
-    const double ve_2 = 0.41790650594127499*dqe_1 + 0.52112088916960242*dqe_2 + 0.23192061392432986*dqe_3 - 0.23192061392432986*dqe_4 + 0.52112088916960242*dqe_5 - 0.41790650594127499*dqe_6 + 0.88405461084077852*c_theta_1 + 0.03489761743951765*s_theta_1;
+    const double ve_2 = 0.41790650594127499*dq0_1 + 0.52112088916960242*dq0_2 + 0.23192061392432986*dq0_3 - 0.23192061392432986*dq0_4 + 0.52112088916960242*dq0_5 - 0.41790650594127499*dq0_6 + 0.88405461084077852*c_theta_1 + 0.03489761743951765*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.52112088916960242*q0_1 + 0.23192061392432986*q0_2 - 0.41790650594127499*q0_3 - 0.41790650594127499*q0_4 - 0.23192061392432986*q0_5 + 0.52112088916960242*q0_6 - 0.14476701208356585*s_theta_1 - 0.0026303996032748544*c_theta_1;
-    const double ve_3 = 0.52112088916960242*dqe_1 + 0.23192061392432986*dqe_2 - 0.41790650594127499*dqe_3 - 0.41790650594127499*dqe_4 - 0.23192061392432986*dqe_5 + 0.52112088916960242*dqe_6 - 0.98441568216824771*c_theta_1 + 0.017886717302269008*s_theta_1;
+    const double ve_3 = 0.52112088916960242*dq0_1 + 0.23192061392432986*dq0_2 - 0.41790650594127499*dq0_3 - 0.41790650594127499*dq0_4 - 0.23192061392432986*dq0_5 + 0.52112088916960242*dq0_6 - 0.98441568216824771*c_theta_1 + 0.017886717302269008*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.52112088916960242*q0_1 - 0.23192061392432986*q0_2 - 0.41790650594127499*q0_3 + 0.41790650594127499*q0_4 - 0.23192061392432986*q0_5 - 0.52112088916960242*q0_6 - 0.35259551933780509*s_theta_1 + 0.00066299877636578246*c_theta_1;
-    const double ve_4 = 0.52112088916960242*dqe_1 - 0.23192061392432986*dqe_2 - 0.41790650594127499*dqe_3 + 0.41790650594127499*dqe_4 - 0.23192061392432986*dqe_5 - 0.52112088916960242*dqe_6 - 2.3976495314970747*c_theta_1 - 0.0045083916792873205*s_theta_1;
+    const double ve_4 = 0.52112088916960242*dq0_1 - 0.23192061392432986*dq0_2 - 0.41790650594127499*dq0_3 + 0.41790650594127499*dq0_4 - 0.23192061392432986*dq0_5 - 0.52112088916960242*dq0_6 - 2.3976495314970747*c_theta_1 - 0.0045083916792873205*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double xe_5 = x_st_5 + 0.41790650594127499*q0_1 - 0.52112088916960242*q0_2 + 0.23192061392432986*q0_3 + 0.23192061392432986*q0_4 + 0.52112088916960242*q0_5 + 0.41790650594127499*q0_6 - 0.3973893175516533*s_theta_1 + 0.002615978604778137*c_theta_1;
-    const double ve_5 = 0.41790650594127499*dqe_1 - 0.52112088916960242*dqe_2 + 0.23192061392432986*dqe_3 + 0.23192061392432986*dqe_4 + 0.52112088916960242*dqe_5 + 0.41790650594127499*dqe_6 - 2.7022473593512424*c_theta_1 - 0.017788654512491332*s_theta_1;
+    const double ve_5 = 0.41790650594127499*dq0_1 - 0.52112088916960242*dq0_2 + 0.23192061392432986*dq0_3 + 0.23192061392432986*dq0_4 + 0.52112088916960242*dq0_5 + 0.41790650594127499*dq0_6 - 2.7022473593512424*c_theta_1 - 0.017788654512491332*s_theta_1;
     const double ex_5 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_5));
     const double ev_5 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_5));
     const double xe_6 = x_st_6 + 0.23192061392432986*q0_1 - 0.41790650594127499*q0_2 + 0.52112088916960242*q0_3 - 0.52112088916960242*q0_4 - 0.41790650594127499*q0_5 - 0.23192061392432986*q0_6 - 0.25844192737378496*s_theta_1 + 0.0021941604139389969*c_theta_1;
-    const double ve_6 = 0.23192061392432986*dqe_1 - 0.41790650594127499*dqe_2 + 0.52112088916960242*dqe_3 - 0.52112088916960242*dqe_4 - 0.41790650594127499*dqe_5 - 0.23192061392432986*dqe_6 - 1.7574051061417377*c_theta_1 - 0.014920290814785178*s_theta_1;
+    const double ve_6 = 0.23192061392432986*dq0_1 - 0.41790650594127499*dq0_2 + 0.52112088916960242*dq0_3 - 0.52112088916960242*dq0_4 - 0.41790650594127499*dq0_5 - 0.23192061392432986*dq0_6 - 1.7574051061417377*c_theta_1 - 0.014920290814785178*s_theta_1;
     const double ex_6 = static_cast<double>(static_cast<long double>(x0[5]) - static_cast<long double>(xe_6));
     const double ev_6 = static_cast<double>(static_cast<long double>(v0[5]) - static_cast<long double>(ve_6));
     const double qh0_1 = q0_1 + (0.23192061392432986*ex_1 + 0.41790650594127499*ex_2 + 0.52112088916960242*ex_3 + 0.52112088916960242*ex_4 + 0.41790650594127499*ex_5 + 0.23192061392432986*ex_6);
@@ -1314,8 +1293,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_5 = dq0_5 + (-0.41790650594127499*ev_1 + 0.52112088916960242*ev_2 - 0.23192061392432986*ev_3 - 0.23192061392432986*ev_4 + 0.52112088916960242*ev_5 - 0.41790650594127499*ev_6);
     const double qh0_6 = q0_6 + (0.23192061392432986*ex_1 - 0.41790650594127499*ex_2 + 0.52112088916960242*ex_3 - 0.52112088916960242*ex_4 + 0.41790650594127499*ex_5 - 0.23192061392432986*ex_6);
     const double dqh0_6 = dq0_6 + (0.23192061392432986*ev_1 - 0.41790650594127499*ev_2 + 0.52112088916960242*ev_3 - 0.52112088916960242*ev_4 + 0.41790650594127499*ev_5 - 0.23192061392432986*ev_6);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[8] = A_1;
@@ -1326,8 +1305,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[11] = B1_1;
     coef[12] = B1_1 - sigma_1*A1_1;
     coef[13] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[14] = A_2;
@@ -1338,8 +1317,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[17] = B1_2;
     coef[18] = B1_2 - sigma_2*A1_2;
     coef[19] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[20] = A_3;
@@ -1350,8 +1329,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[23] = B1_3;
     coef[24] = B1_3 - sigma_3*A1_3;
     coef[25] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[26] = A_4;
@@ -1362,8 +1341,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[29] = B1_4;
     coef[30] = B1_4 - sigma_4*A1_4;
     coef[31] = -kappa_4*A1_4 - sigma_4*B1_4;
-    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[32] = A_5;
@@ -1374,8 +1353,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[35] = B1_5;
     coef[36] = B1_5 - sigma_5*A1_5;
     coef[37] = -kappa_5*A1_5 - sigma_5*B1_5;
-    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[38] = A_6;
@@ -1752,29 +1731,24 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_5 = q0u_5 + (0.28867513459481287*rx_1 - 0.5*rx_2 + 0.57735026918962573*rx_3 - 0.5*rx_4 + 0.28867513459481287*rx_5);
     const double dq0_5 = dq0u_5 + (0.28867513459481287*rv_1 - 0.5*rv_2 + 0.57735026918962573*rv_3 - 0.5*rv_4 + 0.28867513459481287*rv_5);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
-    const double dqe_5 = dq0_5;
     const double xe_1 = x_st_1 + 0.28867513459481287*q0_1 + 0.5*q0_2 + 0.57735026918962573*q0_3 + 0.5*q0_4 + 0.28867513459481287*q0_5 + 0.15091160268135109*s_theta_1 - 0.0043321609057087795*c_theta_1;
-    const double ve_1 = 0.28867513459481287*dqe_1 + 0.5*dqe_2 + 0.57735026918962573*dqe_3 + 0.5*dqe_4 + 0.28867513459481287*dqe_5 + 1.0261988982331873*c_theta_1 + 0.029458694158819701*s_theta_1;
+    const double ve_1 = 0.28867513459481287*dq0_1 + 0.5*dq0_2 + 0.57735026918962573*dq0_3 + 0.5*dq0_4 + 0.28867513459481287*dq0_5 + 1.0261988982331873*c_theta_1 + 0.029458694158819701*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.5*q0_1 + 0.5*q0_2 - 3.6690583686936528e-58*q0_3 - 0.5*q0_4 - 0.5*q0_5 - 0.1679394888562373*s_theta_1 - 0.004858697668626788*c_theta_1;
-    const double ve_2 = 0.5*dqe_1 + 0.5*dqe_2 - 3.6690583686936528e-58*dqe_3 - 0.5*dqe_4 - 0.5*dqe_5 - 1.1419885242224137*c_theta_1 + 0.033039144146662154*s_theta_1;
+    const double ve_2 = 0.5*dq0_1 + 0.5*dq0_2 - 3.6690583686936528e-58*dq0_3 - 0.5*dq0_4 - 0.5*dq0_5 - 1.1419885242224137*c_theta_1 + 0.033039144146662154*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.57735026918962573*q0_1 - 2.5798761838202722e-58*q0_2 - 0.57735026918962573*q0_3 + 3.7693469402644246e-58*q0_4 + 0.57735026918962573*q0_5 - 0.40912278865961443*s_theta_1 - 0.0036310408263125708*c_theta_1;
-    const double ve_3 = 0.57735026918962573*dqe_1 - 2.5798761838202722e-58*dqe_2 - 0.57735026918962573*dqe_3 + 3.7693469402644246e-58*dqe_4 + 0.57735026918962573*dqe_5 - 2.782034962885378*c_theta_1 + 0.024691077618925479*s_theta_1;
+    const double ve_3 = 0.57735026918962573*dq0_1 - 2.5798761838202722e-58*dq0_2 - 0.57735026918962573*dq0_3 + 3.7693469402644246e-58*dq0_4 + 0.57735026918962573*dq0_5 - 2.782034962885378*c_theta_1 + 0.024691077618925479*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.5*q0_1 - 0.5*q0_2 + 5.7483664979691044e-58*q0_3 + 0.5*q0_4 - 0.5*q0_5 - 0.46112114295586143*s_theta_1 - 0.0019240265132127391*c_theta_1;
-    const double ve_4 = 0.5*dqe_1 - 0.5*dqe_2 + 5.7483664979691044e-58*dqe_3 + 0.5*dqe_4 - 0.5*dqe_5 - 3.1356237720998577*c_theta_1 + 0.013083380289846626*s_theta_1;
+    const double ve_4 = 0.5*dq0_1 - 0.5*dq0_2 + 5.7483664979691044e-58*dq0_3 + 0.5*dq0_4 - 0.5*dq0_5 - 3.1356237720998577*c_theta_1 + 0.013083380289846626*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double xe_5 = x_st_5 + 0.28867513459481287*q0_1 - 0.5*q0_2 + 0.57735026918962573*q0_3 - 0.5*q0_4 + 0.28867513459481287*q0_5 - 0.29989603628311096*s_theta_1 - 0.00067942686211789976*c_theta_1;
-    const double ve_5 = 0.28867513459481287*dqe_1 - 0.5*dqe_2 + 0.57735026918962573*dqe_3 - 0.5*dqe_4 + 0.28867513459481287*dqe_5 - 2.0392930467251547*c_theta_1 + 0.0046201026624017186*s_theta_1;
+    const double ve_5 = 0.28867513459481287*dq0_1 - 0.5*dq0_2 + 0.57735026918962573*dq0_3 - 0.5*dq0_4 + 0.28867513459481287*dq0_5 - 2.0392930467251547*c_theta_1 + 0.0046201026624017186*s_theta_1;
     const double ex_5 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_5));
     const double ev_5 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_5));
     const double qh0_1 = q0_1 + (0.28867513459481287*ex_1 + 0.5*ex_2 + 0.57735026918962573*ex_3 + 0.5*ex_4 + 0.28867513459481287*ex_5);
@@ -1787,8 +1761,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_4 = dq0_4 + (0.5*ev_1 - 0.5*ev_2 + 3.7693469402644246e-58*ev_3 + 0.5*ev_4 - 0.5*ev_5);
     const double qh0_5 = q0_5 + (0.28867513459481287*ex_1 - 0.5*ex_2 + 0.57735026918962573*ex_3 - 0.5*ex_4 + 0.28867513459481287*ex_5);
     const double dqh0_5 = dq0_5 + (0.28867513459481287*ev_1 - 0.5*ev_2 + 0.57735026918962573*ev_3 - 0.5*ev_4 + 0.28867513459481287*ev_5);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[7] = A_1;
@@ -1799,8 +1773,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[10] = B1_1;
     coef[11] = B1_1 - sigma_1*A1_1;
     coef[12] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[13] = A_2;
@@ -1811,8 +1785,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[16] = B1_2;
     coef[17] = B1_2 - sigma_2*A1_2;
     coef[18] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[19] = A_3;
@@ -1823,8 +1797,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[22] = B1_3;
     coef[23] = B1_3 - sigma_3*A1_3;
     coef[24] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[25] = A_4;
@@ -1835,8 +1809,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[28] = B1_4;
     coef[29] = B1_4 - sigma_4*A1_4;
     coef[30] = -kappa_4*A1_4 - sigma_4*B1_4;
-    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[31] = A_5;
@@ -2188,24 +2162,20 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_4 = q0u_4 + (-0.37174803446018451*rx_1 + 0.60150095500754563*rx_2 - 0.60150095500754563*rx_3 + 0.37174803446018451*rx_4);
     const double dq0_4 = dq0u_4 + (-0.37174803446018451*rv_1 + 0.60150095500754563*rv_2 - 0.60150095500754563*rv_3 + 0.37174803446018451*rv_4);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
     const double xe_1 = x_st_1 + 0.37174803446018451*q0_1 + 0.60150095500754563*q0_2 + 0.60150095500754563*q0_3 - 0.37174803446018451*q0_4 - 0.44447952138707153*s_theta_1 - 0.02412417784816211*c_theta_1;
-    const double ve_1 = 0.37174803446018451*dqe_1 + 0.60150095500754563*dqe_2 + 0.60150095500754563*dqe_3 - 0.37174803446018451*dqe_4 - 3.0224607454320864*c_theta_1 + 0.16404440936750234*s_theta_1;
+    const double ve_1 = 0.37174803446018451*dq0_1 + 0.60150095500754563*dq0_2 + 0.60150095500754563*dq0_3 - 0.37174803446018451*dq0_4 - 3.0224607454320864*c_theta_1 + 0.16404440936750234*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.60150095500754563*q0_1 + 0.37174803446018451*q0_2 - 0.37174803446018451*q0_3 + 0.60150095500754563*q0_4 - 1.0833607841246189*s_theta_1 - 0.037036862087828859*c_theta_1;
-    const double ve_2 = 0.60150095500754563*dqe_1 + 0.37174803446018451*dqe_2 - 0.37174803446018451*dqe_3 + 0.60150095500754563*dqe_4 - 7.3668533320474081*c_theta_1 + 0.25185066219723623*s_theta_1;
+    const double ve_2 = 0.60150095500754563*dq0_1 + 0.37174803446018451*dq0_2 - 0.37174803446018451*dq0_3 + 0.60150095500754563*dq0_4 - 7.3668533320474081*c_theta_1 + 0.25185066219723623*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.60150095500754563*q0_1 - 0.37174803446018451*q0_2 - 0.37174803446018451*q0_3 - 0.60150095500754563*q0_4 - 1.2211982238042633*s_theta_1 - 0.036000620962889897*c_theta_1;
-    const double ve_3 = 0.60150095500754563*dqe_1 - 0.37174803446018451*dqe_2 - 0.37174803446018451*dqe_3 - 0.60150095500754563*dqe_4 - 8.3041479218689904*c_theta_1 + 0.2448042225476513*s_theta_1;
+    const double ve_3 = 0.60150095500754563*dq0_1 - 0.37174803446018451*dq0_2 - 0.37174803446018451*dq0_3 - 0.60150095500754563*dq0_4 - 8.3041479218689904*c_theta_1 + 0.2448042225476513*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.37174803446018451*q0_1 - 0.60150095500754563*q0_2 + 0.60150095500754563*q0_3 + 0.37174803446018451*q0_4 - 0.79426022084075776*s_theta_1 - 0.021898758794071153*c_theta_1;
-    const double ve_4 = 0.37174803446018451*dqe_1 - 0.60150095500754563*dqe_2 + 0.60150095500754563*dqe_3 + 0.37174803446018451*dqe_4 - 5.4009695017171522*c_theta_1 + 0.14891155979968385*s_theta_1;
+    const double ve_4 = 0.37174803446018451*dq0_1 - 0.60150095500754563*dq0_2 + 0.60150095500754563*dq0_3 + 0.37174803446018451*dq0_4 - 5.4009695017171522*c_theta_1 + 0.14891155979968385*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double qh0_1 = q0_1 + (0.37174803446018451*ex_1 + 0.60150095500754563*ex_2 + 0.60150095500754563*ex_3 + 0.37174803446018451*ex_4);
@@ -2216,8 +2186,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_3 = dq0_3 + (0.60150095500754563*ev_1 - 0.37174803446018451*ev_2 - 0.37174803446018451*ev_3 + 0.60150095500754563*ev_4);
     const double qh0_4 = q0_4 + (-0.37174803446018451*ex_1 + 0.60150095500754563*ex_2 - 0.60150095500754563*ex_3 + 0.37174803446018451*ex_4);
     const double dqh0_4 = dq0_4 + (-0.37174803446018451*ev_1 + 0.60150095500754563*ev_2 - 0.60150095500754563*ev_3 + 0.37174803446018451*ev_4);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[6] = A_1;
@@ -2228,8 +2198,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[9] = B1_1;
     coef[10] = B1_1 - sigma_1*A1_1;
     coef[11] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[12] = A_2;
@@ -2240,8 +2210,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[15] = B1_2;
     coef[16] = B1_2 - sigma_2*A1_2;
     coef[17] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[18] = A_3;
@@ -2252,8 +2222,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[21] = B1_3;
     coef[22] = B1_3 - sigma_3*A1_3;
     coef[23] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[24] = A_4;
@@ -2580,19 +2550,16 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_3 = q0u_3 + (-0.5*rx_1 + 0.70710678118654757*rx_2 - 0.5*rx_3);
     const double dq0_3 = dq0u_3 + (-0.5*rv_1 + 0.70710678118654757*rv_2 - 0.5*rv_3);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
     const double xe_1 = x_st_1 + 0.5*q0_1 + 0.70710678118654757*q0_2 - 0.5*q0_3 + 0.97381026124477144*s_theta_1 - 0.022838289504848779*c_theta_1;
-    const double ve_1 = 0.5*dqe_1 + 0.70710678118654757*dqe_2 - 0.5*dqe_3 + 6.6219097764644452*c_theta_1 + 0.1553003686329717*s_theta_1;
+    const double ve_1 = 0.5*dq0_1 + 0.70710678118654757*dq0_2 - 0.5*dq0_3 + 6.6219097764644452*c_theta_1 + 0.1553003686329717*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.70710678118654757*q0_1 + 5.1766325731969706e-59*q0_2 + 0.70710678118654757*q0_3 + 1.0974119545186087*s_theta_1 - 0.030901062856261416*c_theta_1;
-    const double ve_2 = 0.70710678118654757*dqe_1 + 5.1766325731969706e-59*dqe_2 + 0.70710678118654757*dqe_3 + 7.4624012907265396*c_theta_1 + 0.21012722742257761*s_theta_1;
+    const double ve_2 = 0.70710678118654757*dq0_1 + 5.1766325731969706e-59*dq0_2 + 0.70710678118654757*dq0_3 + 7.4624012907265396*c_theta_1 + 0.21012722742257761*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.5*q0_1 - 0.70710678118654757*q0_2 - 0.5*q0_3 + 0.71367190618691678*s_theta_1 - 0.021457742563334669*c_theta_1;
-    const double ve_3 = 0.5*dqe_1 - 0.70710678118654757*dqe_2 - 0.5*dqe_3 + 4.8529689620710341*c_theta_1 + 0.14591264943067575*s_theta_1;
+    const double ve_3 = 0.5*dq0_1 - 0.70710678118654757*dq0_2 - 0.5*dq0_3 + 4.8529689620710341*c_theta_1 + 0.14591264943067575*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double qh0_1 = q0_1 + (0.5*ex_1 + 0.70710678118654757*ex_2 + 0.5*ex_3);
@@ -2601,8 +2568,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_2 = dq0_2 + (0.70710678118654757*ev_1 + 5.1766325731969706e-59*ev_2 - 0.70710678118654757*ev_3);
     const double qh0_3 = q0_3 + (-0.5*ex_1 + 0.70710678118654757*ex_2 - 0.5*ex_3);
     const double dqh0_3 = dq0_3 + (-0.5*ev_1 + 0.70710678118654757*ev_2 - 0.5*ev_3);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[5] = A_1;
@@ -2613,8 +2580,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[8] = B1_1;
     coef[9] = B1_1 - sigma_1*A1_1;
     coef[10] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[11] = A_2;
@@ -2625,8 +2592,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[14] = B1_2;
     coef[15] = B1_2 - sigma_2*A1_2;
     coef[16] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[17] = A_3;
@@ -2928,22 +2895,20 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_2 = q0u_2 + (0.70710678118654757*rx_1 - 0.70710678118654757*rx_2);
     const double dq0_2 = dq0u_2 + (0.70710678118654757*rv_1 - 0.70710678118654757*rv_2);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
     const double xe_1 = x_st_1 + 0.70710678118654757*q0_1 + 0.70710678118654757*q0_2 + 0.45080763896446202*s_theta_1 - 0.00365273404359088*c_theta_1;
-    const double ve_1 = 0.70710678118654757*dqe_1 + 0.70710678118654757*dqe_2 + 3.0654919449583415*c_theta_1 + 0.024838591496417983*s_theta_1;
+    const double ve_1 = 0.70710678118654757*dq0_1 + 0.70710678118654757*dq0_2 + 3.0654919449583415*c_theta_1 + 0.024838591496417983*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.70710678118654757*q0_1 - 0.70710678118654757*q0_2 + 0.2931816540996241*s_theta_1 - 0.0029346711554140491*c_theta_1;
-    const double ve_2 = 0.70710678118654757*dqe_1 - 0.70710678118654757*dqe_2 + 1.9936352478774437*c_theta_1 + 0.019955763856815533*s_theta_1;
+    const double ve_2 = 0.70710678118654757*dq0_1 - 0.70710678118654757*dq0_2 + 1.9936352478774437*c_theta_1 + 0.019955763856815533*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double qh0_1 = q0_1 + (0.70710678118654757*ex_1 + 0.70710678118654757*ex_2);
     const double dqh0_1 = dq0_1 + (0.70710678118654757*ev_1 + 0.70710678118654757*ev_2);
     const double qh0_2 = q0_2 + (0.70710678118654757*ex_1 - 0.70710678118654757*ex_2);
     const double dqh0_2 = dq0_2 + (0.70710678118654757*ev_1 - 0.70710678118654757*ev_2);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[4] = A_1;
@@ -2954,8 +2919,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[7] = B1_1;
     coef[8] = B1_1 - sigma_1*A1_1;
     coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[10] = A_2;
@@ -3232,15 +3197,14 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
     const double xe_1 = x_st_1 + q0_1 + 0.2601383550578546*s_theta_1 - 0.0013805469415141087*c_theta_1;
-    const double ve_1 = dqe_1 + 1.7689408143934111*c_theta_1 + 0.0093877192022959396*s_theta_1;
+    const double ve_1 = dq0_1 + 1.7689408143934111*c_theta_1 + 0.0093877192022959396*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
@@ -3510,15 +3474,14 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
     const double xe_1 = x_st_1 + q0_1;
-    const double ve_1 = dqe_1;
+    const double ve_1 = dq0_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_1));
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
@@ -3788,15 +3751,14 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
     const double xe_1 = x_st_1 + q0_1;
-    const double ve_1 = dqe_1;
+    const double ve_1 = dq0_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_1));
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
@@ -4066,15 +4028,14 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
     const double xe_1 = x_st_1 + q0_1;
-    const double ve_1 = dqe_1;
+    const double ve_1 = dq0_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_1));
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
@@ -4344,15 +4305,14 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
     const double xe_1 = x_st_1 + q0_1;
-    const double ve_1 = dqe_1;
+    const double ve_1 = dq0_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_1));
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
@@ -4622,15 +4582,14 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
     const double xe_1 = x_st_1 + q0_1;
-    const double ve_1 = dqe_1;
+    const double ve_1 = dq0_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[5]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[5]) - static_cast<long double>(ve_1));
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
@@ -4900,15 +4859,14 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
     const double xe_1 = x_st_1 + q0_1;
-    const double ve_1 = dqe_1;
+    const double ve_1 = dq0_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[6]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[6]) - static_cast<long double>(ve_1));
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
@@ -5178,15 +5136,14 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
     const double xe_1 = x_st_1 + q0_1;
-    const double ve_1 = dqe_1;
+    const double ve_1 = dq0_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[7]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[7]) - static_cast<long double>(ve_1));
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
@@ -5808,44 +5765,36 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_8 = q0u_8 + (-9.8503756273555532e-08*rx_1 + 9.9488793836291071e-07*rx_2 - 9.9498644211918418e-06*rx_3 + 9.9498742715674676e-05*rx_4 - 0.00099498743700712224*rx_5 + 0.0099498743710562595*rx_6 - 0.0994987437106611*rx_7 + 0.99498743710662074*rx_8);
     const double dq0_8 = dq0u_8 + (-9.8503756273555532e-08*rv_1 + 9.9488793836291071e-07*rv_2 - 9.9498644211918418e-06*rv_3 + 9.9498742715674676e-05*rv_4 - 0.00099498743700712224*rv_5 + 0.0099498743710562595*rv_6 - 0.0994987437106611*rv_7 + 0.99498743710662074*rv_8);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
-    const double dqe_5 = dq0_5;
-    const double dqe_6 = dq0_6;
-    const double dqe_7 = dq0_7;
-    const double dqe_8 = dq0_8;
     const double xe_1 = x_st_1 + 0.18833201326479529*q0_1 + 0.34911713609451595*q0_2 - 0.45850526062492686*q0_3 + 0.49961463891709895*q0_4 + 0.46504979853202533*q0_5 - 0.35847221306899663*q0_6 - 0.19501993222880004*q0_7 - 9.8503756273555532e-08*q0_8 + 0.62788675909370573*s_theta_1 - 0.01460330866252257*c_theta_1;
-    const double ve_1 = 0.18833201326479529*dqe_1 + 0.34911713609451595*dqe_2 - 0.45850526062492686*dqe_3 + 0.49961463891709895*dqe_4 + 0.46504979853202533*dqe_5 - 0.35847221306899663*dqe_6 - 0.19501993222880004*dqe_7 - 9.8503756273555532e-08*dqe_8 + 4.2696299618371985*c_theta_1 + 0.099302498905153483*s_theta_1;
+    const double ve_1 = 0.18833201326479529*dq0_1 + 0.34911713609451595*dq0_2 - 0.45850526062492686*dq0_3 + 0.49961463891709895*dq0_4 + 0.46504979853202533*dq0_5 - 0.35847221306899663*dq0_6 - 0.19501993222880004*dq0_7 - 9.8503756273555532e-08*dq0_8 + 4.2696299618371985*c_theta_1 + 0.099302498905153483*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.34861316932722469*q0_1 + 0.49774405692120882*q0_2 - 0.36024939157022118*q0_3 + 0.012432334991177766*q0_4 - 0.34558306279296103*q0_5 + 0.50207836299755648*q0_6 + 0.35954859061125133*q0_7 + 9.9488793836291071e-07*q0_8 + 0.56549238301830651*s_theta_1 - 0.019253165547552308*c_theta_1;
-    const double ve_2 = 0.34861316932722469*dqe_1 + 0.49774405692120882*dqe_2 - 0.36024939157022118*dqe_3 + 0.012432334991177766*dqe_4 - 0.34558306279296103*dqe_5 + 0.50207836299755648*dqe_6 + 0.35954859061125133*dqe_7 + 9.9488793836291071e-07*dqe_8 + 3.845348204524484*c_theta_1 + 0.13092152572335569*s_theta_1;
+    const double ve_2 = 0.34861316932722469*dq0_1 + 0.49774405692120882*dq0_2 - 0.36024939157022118*dq0_3 + 0.012432334991177766*dq0_4 - 0.34558306279296103*dq0_5 + 0.50207836299755648*dq0_6 + 0.35954859061125133*dq0_7 + 9.9488793836291071e-07*dq0_8 + 3.845348204524484*c_theta_1 + 0.13092152572335569*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.45697060800278039*q0_1 + 0.36052762374709446*q0_2 + 0.17545589288194963*q0_3 - 0.49930527457647861*q0_4 - 0.20824363784482885*q0_5 - 0.34474179738984678*q0_6 - 0.46786199749554103*q0_7 - 9.9498644211918418e-06*q0_8 + 0.24167641926746683*s_theta_1 - 0.013342455644392464*c_theta_1;
-    const double ve_3 = 0.45697060800278039*dqe_1 + 0.36052762374709446*dqe_2 + 0.17545589288194963*dqe_3 - 0.49930527457647861*dqe_4 - 0.20824363784482885*dqe_5 - 0.34474179738984678*dqe_6 - 0.46786199749554103*dqe_7 - 9.9498644211918418e-06*dqe_8 + 1.6433996510187745*c_theta_1 + 0.090728698381868755*s_theta_1;
+    const double ve_3 = 0.45697060800278039*dq0_1 + 0.36052762374709446*dq0_2 + 0.17545589288194963*dq0_3 - 0.49930527457647861*dq0_4 - 0.20824363784482885*dq0_5 - 0.34474179738984678*dq0_6 - 0.46786199749554103*dq0_7 - 9.9498644211918418e-06*dq0_8 + 1.6433996510187745*c_theta_1 + 0.090728698381868755*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.49726517702302375*q0_1 + 0.016268185741837055*q0_2 + 0.49810577858742161*q0_3 - 0.02485697180696729*q0_4 + 0.50033095087017365*q0_5 - 0.019230903752466458*q0_6 + 0.50302540312150001*q0_7 + 9.9498742715674676e-05*q0_8 - 0.19384918966264625*s_theta_1 - 0.00055370152745226153*c_theta_1;
-    const double ve_4 = 0.49726517702302375*dqe_1 + 0.016268185741837055*dqe_2 + 0.49810577858742161*dqe_3 - 0.02485697180696729*dqe_4 + 0.50033095087017365*dqe_5 - 0.019230903752466458*dqe_6 + 0.50302540312150001*dqe_7 + 9.9498742715674676e-05*dqe_8 - 1.3181744897059944*c_theta_1 + 0.0037651703866753783*s_theta_1;
+    const double ve_4 = 0.49726517702302375*dq0_1 + 0.016268185741837055*dq0_2 + 0.49810577858742161*dq0_3 - 0.02485697180696729*dq0_4 + 0.50033095087017365*dq0_5 - 0.019230903752466458*dq0_6 + 0.50302540312150001*dq0_7 + 9.9498742715674676e-05*dq0_8 - 1.3181744897059944*c_theta_1 + 0.0037651703866753783*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double xe_5 = x_st_5 + 0.46349525625963106*q0_1 - 0.33733370992071171*q0_2 + 0.21590778183174125*q0_3 + 0.4986867374554681*q0_4 - 0.16355719500710081*q0_5 + 0.37167671820934001*q0_6 - 0.45954102570827188*q0_7 - 0.00099498743700712224*q0_8 - 0.53973924229696479*s_theta_1 + 0.011922688386434968*c_theta_1;
-    const double ve_5 = 0.46349525625963106*dqe_1 - 0.33733370992071171*dqe_2 + 0.21590778183174125*dqe_3 + 0.4986867374554681*dqe_4 - 0.16355719500710081*dqe_5 + 0.37167671820934001*dqe_6 - 0.45954102570827188*dqe_7 - 0.00099498743700712224*dqe_8 - 3.6702268476193605*c_theta_1 - 0.08107428102775778*s_theta_1;
+    const double ve_5 = 0.46349525625963106*dq0_1 - 0.33733370992071171*dq0_2 + 0.21590778183174125*dq0_3 + 0.4986867374554681*dq0_4 - 0.16355719500710081*dq0_5 + 0.37167671820934001*dq0_6 - 0.45954102570827188*dq0_7 - 0.00099498743700712224*dq0_8 - 3.6702268476193605*c_theta_1 - 0.08107428102775778*s_theta_1;
     const double ex_5 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_5));
     const double ev_5 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_5));
     const double xe_6 = x_st_6 + 0.36069066092377022*q0_1 - 0.49721235018628984*q0_2 - 0.3284661828843134*q0_3 + 0.037266217038736081*q0_4 - 0.37878999639433353*q0_5 - 0.50134176949663634*q0_6 + 0.34420762702646962*q0_7 + 0.0099498743710562595*q0_8 - 0.63609420890299684*s_theta_1 + 0.017303562528414623*c_theta_1;
-    const double ve_6 = 0.36069066092377022*dqe_1 - 0.49721235018628984*dqe_2 - 0.3284661828843134*dqe_3 + 0.037266217038736081*dqe_4 - 0.37878999639433353*dqe_5 - 0.50134176949663634*dqe_6 + 0.34420762702646962*dqe_7 + 0.0099498743710562595*dqe_8 - 4.3254406205403786*c_theta_1 - 0.11766422519321942*s_theta_1;
+    const double ve_6 = 0.36069066092377022*dq0_1 - 0.49721235018628984*dq0_2 - 0.3284661828843134*dq0_3 + 0.037266217038736081*dq0_4 - 0.37878999639433353*dq0_5 - 0.50134176949663634*dq0_6 + 0.34420762702646962*dq0_7 + 0.0099498743710562595*dq0_8 - 4.3254406205403786*c_theta_1 - 0.11766422519321942*s_theta_1;
     const double ex_6 = static_cast<double>(static_cast<long double>(x0[5]) - static_cast<long double>(xe_6));
     const double ev_6 = static_cast<double>(static_cast<long double>(v0[5]) - static_cast<long double>(ve_6));
     const double xe_7 = x_st_7 + 0.204163482536805*q0_1 - 0.3715529838165203*q0_2 - 0.47398495716052058*q0_3 - 0.49775941055591266*q0_4 + 0.44503975348255381*q0_5 + 0.33050561490979996*q0_6 - 0.17505752922207354*q0_7 - 0.0994987437106611*q0_8 - 0.43837629090835439*s_theta_1 + 0.012818333425504987*c_theta_1;
-    const double ve_7 = 0.204163482536805*dqe_1 - 0.3715529838165203*dqe_2 - 0.47398495716052058*dqe_3 - 0.49775941055591266*dqe_4 + 0.44503975348255381*dqe_5 + 0.33050561490979996*dqe_6 - 0.17505752922207354*dqe_7 - 0.0994987437106611*dqe_8 - 2.9809587781768099*c_theta_1 - 0.087164667293433903*s_theta_1;
+    const double ve_7 = 0.204163482536805*dq0_1 - 0.3715529838165203*dq0_2 - 0.47398495716052058*dq0_3 - 0.49775941055591266*dq0_4 + 0.44503975348255381*dq0_5 + 0.33050561490979996*dq0_6 - 0.17505752922207354*dq0_7 - 0.0994987437106611*dq0_8 - 2.9809587781768099*c_theta_1 - 0.087164667293433903*s_theta_1;
     const double ex_7 = static_cast<double>(static_cast<long double>(x0[6]) - static_cast<long double>(xe_7));
     const double ev_7 = static_cast<double>(static_cast<long double>(v0[6]) - static_cast<long double>(ve_7));
     const double xe_8 = x_st_8 + 0.017227450151526071*q0_1 - 0.032518993267292483*q0_2 - 0.043945667304242139*q0_3 - 0.049652386808411546*q0_4 + 0.04807659417675559*q0_5 + 0.038433594063038472*q0_6 - 0.02146273019284526*q0_7 + 0.99498743710662074*q0_8 - 0.03799513124126877*s_theta_1 + 0.0011206601693201769*c_theta_1;
-    const double ve_8 = 0.017227450151526071*dqe_1 - 0.032518993267292483*dqe_2 - 0.043945667304242139*dqe_3 - 0.049652386808411546*dqe_4 + 0.04807659417675559*dqe_5 + 0.038433594063038472*dqe_6 - 0.02146273019284526*dqe_7 + 0.99498743710662074*dqe_8 - 0.2583668924406276*c_theta_1 - 0.0076204891513772027*s_theta_1;
+    const double ve_8 = 0.017227450151526071*dq0_1 - 0.032518993267292483*dq0_2 - 0.043945667304242139*dq0_3 - 0.049652386808411546*dq0_4 + 0.04807659417675559*dq0_5 + 0.038433594063038472*dq0_6 - 0.02146273019284526*dq0_7 + 0.99498743710662074*dq0_8 - 0.2583668924406276*c_theta_1 - 0.0076204891513772027*s_theta_1;
     const double ex_8 = static_cast<double>(static_cast<long double>(x0[7]) - static_cast<long double>(xe_8));
     const double ev_8 = static_cast<double>(static_cast<long double>(v0[7]) - static_cast<long double>(ve_8));
     const double qh0_1 = q0_1 + (0.18833201326479529*ex_1 + 0.34861316932722469*ex_2 + 0.45697060800278039*ex_3 + 0.49726517702302375*ex_4 + 0.46349525625963106*ex_5 + 0.36069066092377022*ex_6 + 0.204163482536805*ex_7 + 0.017227450151526071*ex_8);
@@ -5864,8 +5813,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_7 = dq0_7 + (-0.19501993222880004*ev_1 + 0.35954859061125133*ev_2 - 0.46786199749554103*ev_3 + 0.50302540312150001*ev_4 - 0.45954102570827188*ev_5 + 0.34420762702646962*ev_6 - 0.17505752922207354*ev_7 - 0.02146273019284526*ev_8);
     const double qh0_8 = q0_8 + (-9.8503756273555532e-08*ex_1 + 9.9488793836291071e-07*ex_2 - 9.9498644211918418e-06*ex_3 + 9.9498742715674676e-05*ex_4 - 0.00099498743700712224*ex_5 + 0.0099498743710562595*ex_6 - 0.0994987437106611*ex_7 + 0.99498743710662074*ex_8);
     const double dqh0_8 = dq0_8 + (-9.8503756273555532e-08*ev_1 + 9.9488793836291071e-07*ev_2 - 9.9498644211918418e-06*ev_3 + 9.9498742715674676e-05*ev_4 - 0.00099498743700712224*ev_5 + 0.0099498743710562595*ev_6 - 0.0994987437106611*ev_7 + 0.99498743710662074*ev_8);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
@@ -5876,8 +5825,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
@@ -5888,8 +5837,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
@@ -5900,8 +5849,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
@@ -5912,8 +5861,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
-    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
@@ -5924,8 +5873,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
-    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
@@ -5936,8 +5885,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
-    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
@@ -5948,8 +5897,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
-    // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
@@ -6620,44 +6569,36 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_8 = q0u_8 + (3.6235058980809498e-06*rx_1 - 7.6266171318004641e-05*rx_2 + 0.0016015978049290199*rx_3 - 0.033633554099140955*rx_4 + 0.70630463199228721*rx_5 - 0.706304624149241*rx_6 + 0.03363338117864878*rx_7 - 0.0015979660833513988*rx_8);
     const double dq0_8 = dq0u_8 + (3.6235058980809498e-06*rv_1 - 7.6266171318004641e-05*rv_2 + 0.0016015978049290199*rv_3 - 0.033633554099140955*rv_4 + 0.70630463199228721*rv_5 - 0.706304624149241*rv_6 + 0.03363338117864878*rv_7 - 0.0015979660833513988*rv_8);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
-    const double dqe_5 = dq0_5;
-    const double dqe_6 = dq0_6;
-    const double dqe_7 = dq0_7;
-    const double dqe_8 = dq0_8;
     const double xe_1 = x_st_1 + 0.15717825132194799*q0_1 + 0.36322657521114149*q0_2 + 0.36473292126194989*q0_3 + 0.50634797565850331*q0_4 + 0.55335140224461599*q0_5 + 0.17094037076839277*q0_6 + 0.34427415140897727*q0_7 + 3.6235058980809498e-06*q0_8 + 1.0897430817010003*s_theta_1 - 0.048105942850637712*c_theta_1;
-    const double ve_1 = 0.15717825132194799*dqe_1 + 0.36322657521114149*dqe_2 + 0.36473292126194989*dqe_3 + 0.50634797565850331*dqe_4 + 0.55335140224461599*dqe_5 + 0.17094037076839277*dqe_6 + 0.34427415140897727*dqe_7 + 3.6235058980809498e-06*dqe_8 + 7.4102529555668015*c_theta_1 + 0.32712041138433645*s_theta_1;
+    const double ve_1 = 0.15717825132194799*dq0_1 + 0.36322657521114149*dq0_2 + 0.36473292126194989*dq0_3 + 0.50634797565850331*dq0_4 + 0.55335140224461599*dq0_5 + 0.17094037076839277*dq0_6 + 0.34427415140897727*dq0_7 + 3.6235058980809498e-06*dq0_8 + 7.4102529555668015*c_theta_1 + 0.32712041138433645*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.29493263754908033*q0_1 + 0.53687274426850917*q0_2 + 0.30226052892075128*q0_3 + 0.17107978444842306*q0_4 - 0.37805558974511716*q0_5 - 0.19462346326358335*q0_6 - 0.56863727328834412*q0_7 - 7.6266171318004641e-05*q0_8 + 1.2757455029588916*s_theta_1 - 0.069412928890520614*c_theta_1;
-    const double ve_2 = 0.29493263754908033*dqe_1 + 0.53687274426850917*dqe_2 + 0.30226052892075128*dqe_3 + 0.17107978444842306*dqe_4 - 0.37805558974511716*dqe_5 - 0.19462346326358335*dqe_6 - 0.56863727328834412*dqe_7 - 7.6266171318004641e-05*dqe_8 + 8.6750694201204617*c_theta_1 + 0.47200791645554019*s_theta_1;
+    const double ve_2 = 0.29493263754908033*dq0_1 + 0.53687274426850917*dq0_2 + 0.30226052892075128*dq0_3 + 0.17107978444842306*dq0_4 - 0.37805558974511716*dq0_5 - 0.19462346326358335*dq0_6 - 0.56863727328834412*dq0_7 - 7.6266171318004641e-05*dq0_8 + 8.6750694201204617*c_theta_1 + 0.47200791645554019*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.39623966725182097*q0_1 + 0.43030661649117891*q0_2 - 0.11424435272980782*q0_3 - 0.44854525094363579*q0_4 - 0.2950597843725678*q0_5 + 0.050647381044973176*q0_6 + 0.59494346701943712*q0_7 + 0.0016015978049290199*q0_8 + 0.87205944930814261*s_theta_1 - 0.054883421912713316*c_theta_1;
-    const double ve_3 = 0.39623966725182097*dqe_1 + 0.43030661649117891*dqe_2 - 0.11424435272980782*dqe_3 - 0.44854525094363579*dqe_4 - 0.2950597843725678*dqe_5 + 0.050647381044973176*dqe_6 + 0.59494346701943712*dqe_7 + 0.0016015978049290199*dqe_8 + 5.93000425529537*c_theta_1 + 0.37320726900645051*s_theta_1;
+    const double ve_3 = 0.39623966725182097*dq0_1 + 0.43030661649117891*dq0_2 - 0.11424435272980782*dq0_3 - 0.44854525094363579*dq0_4 - 0.2950597843725678*dq0_5 + 0.050647381044973176*dq0_6 + 0.59494346701943712*dq0_7 + 0.0016015978049290199*dq0_8 + 5.93000425529537*c_theta_1 + 0.37320726900645051*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.44857996156221225*q0_1 + 0.099148708562208476*q0_2 - 0.39693681523689694*q0_3 - 0.3226297629923382*q0_4 + 0.57964358670066951*q0_5 + 0.13695909375336082*q0_6 - 0.41403025914791469*q0_7 - 0.033633554099140955*q0_8 + 0.065302725171548545*s_theta_1 - 0.012419379511756439*c_theta_1;
-    const double ve_4 = 0.44857996156221225*dqe_1 + 0.099148708562208476*dqe_2 - 0.39693681523689694*dqe_3 - 0.3226297629923382*dqe_4 + 0.57964358670066951*dqe_5 + 0.13695909375336082*dqe_6 - 0.41403025914791469*dqe_7 - 0.033633554099140955*dqe_8 + 0.4440585311665301*c_theta_1 + 0.084451780679943786*s_theta_1;
+    const double ve_4 = 0.44857996156221225*dq0_1 + 0.099148708562208476*dq0_2 - 0.39693681523689694*dq0_3 - 0.3226297629923382*dq0_4 + 0.57964358670066951*dq0_5 + 0.13695909375336082*dq0_6 - 0.41403025914791469*dq0_7 - 0.033633554099140955*dq0_8 + 0.4440585311665301*c_theta_1 + 0.084451780679943786*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double xe_5 = x_st_5 + 0.44548538123606851*q0_1 - 0.28375831058727008*q0_2 - 0.21470410442208987*q0_3 + 0.33953833680006956*q0_4 - 0.10095890668556758*q0_5 - 0.20658159969620318*q0_6 + 0.088909900005658599*q0_7 + 0.70630463199228721*q0_8 - 0.77161291287969436*s_theta_1 + 0.035978735988979729*c_theta_1;
-    const double ve_5 = 0.44548538123606851*dqe_1 - 0.28375831058727008*dqe_2 - 0.21470410442208987*dqe_3 + 0.33953833680006956*dqe_4 - 0.10095890668556758*dqe_5 - 0.20658159969620318*dqe_6 + 0.088909900005658599*dqe_7 + 0.70630463199228721*dqe_8 - 5.2469678075819211*c_theta_1 - 0.24465540472506214*s_theta_1;
+    const double ve_5 = 0.44548538123606851*dq0_1 - 0.28375831058727008*dq0_2 - 0.21470410442208987*dq0_3 + 0.33953833680006956*dq0_4 - 0.10095890668556758*dq0_5 - 0.20658159969620318*dq0_6 + 0.088909900005658599*dq0_7 + 0.70630463199228721*dq0_8 - 5.2469678075819211*c_theta_1 - 0.24465540472506214*s_theta_1;
     const double ex_5 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_5));
     const double ev_5 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_5));
     const double xe_6 = x_st_6 + 0.44019928749784271*q0_1 - 0.3051041129145845*q0_2 - 0.17527575113448723*q0_3 + 0.34843026770597668*q0_4 - 0.13820513181035829*q0_5 - 0.17887022284969076*q0_6 + 0.10511607871282862*q0_7 - 0.706304624149241*q0_8 - 0.81527064139899574*s_theta_1 + 0.038660503288540024*c_theta_1;
-    const double ve_6 = 0.44019928749784271*dqe_1 - 0.3051041129145845*dqe_2 - 0.17527575113448723*dqe_3 + 0.34843026770597668*dqe_4 - 0.13820513181035829*dqe_5 - 0.17887022284969076*dqe_6 + 0.10511607871282862*dqe_7 - 0.706304624149241*dqe_8 - 5.5438403615131708*c_theta_1 - 0.26289142236207214*s_theta_1;
+    const double ve_6 = 0.44019928749784271*dq0_1 - 0.3051041129145845*dq0_2 - 0.17527575113448723*dq0_3 + 0.34843026770597668*dq0_4 - 0.13820513181035829*dq0_5 - 0.17887022284969076*dq0_6 + 0.10511607871282862*dq0_7 - 0.706304624149241*dq0_8 - 5.5438403615131708*c_theta_1 - 0.26289142236207214*s_theta_1;
     const double ex_6 = static_cast<double>(static_cast<long double>(x0[5]) - static_cast<long double>(xe_6));
     const double ev_6 = static_cast<double>(static_cast<long double>(v0[5]) - static_cast<long double>(ve_6));
     const double xe_7 = x_st_7 + 0.32765305354058549*q0_1 - 0.38066363869499076*q0_2 + 0.46373356738419502*q0_3 - 0.13289489738000893*q0_4 - 0.17708012199450504*q0_5 + 0.68734733223073397*q0_6 - 0.10046823554089551*q0_7 + 0.03363338117864878*q0_8 - 0.91864599561884841*s_theta_1 + 0.047893235948505315*c_theta_1;
-    const double ve_7 = 0.32765305354058549*dqe_1 - 0.38066363869499076*dqe_2 + 0.46373356738419502*dqe_3 - 0.13289489738000893*dqe_4 - 0.17708012199450504*dqe_5 + 0.68734733223073397*dqe_6 - 0.10046823554089551*dqe_7 + 0.03363338117864878*dqe_8 - 6.2467927702081694*c_theta_1 - 0.32567400444983613*s_theta_1;
+    const double ve_7 = 0.32765305354058549*dq0_1 - 0.38066363869499076*dq0_2 + 0.46373356738419502*dq0_3 - 0.13289489738000893*dq0_4 - 0.17708012199450504*dq0_5 + 0.68734733223073397*dq0_6 - 0.10046823554089551*dq0_7 + 0.03363338117864878*dq0_8 - 6.2467927702081694*c_theta_1 - 0.32567400444983613*s_theta_1;
     const double ex_7 = static_cast<double>(static_cast<long double>(x0[6]) - static_cast<long double>(xe_7));
     const double ev_7 = static_cast<double>(static_cast<long double>(v0[6]) - static_cast<long double>(ve_7));
     const double xe_8 = x_st_8 + 0.17461592051586902*q0_1 - 0.25754175689991915*q0_2 + 0.55957984101724623*q0_3 - 0.39333146508609779*q0_4 + 0.25918816299309216*q0_5 - 0.60370628416503103*q0_6 + 0.060827205952185069*q0_7 - 0.0015979660833513988*q0_8 - 0.59738902866398091*s_theta_1 + 0.032287027859846065*c_theta_1;
-    const double ve_8 = 0.17461592051586902*dqe_1 - 0.25754175689991915*dqe_2 + 0.55957984101724623*dqe_3 - 0.39333146508609779*dqe_4 + 0.25918816299309216*dqe_5 - 0.60370628416503103*dqe_6 + 0.060827205952185069*dqe_7 - 0.0015979660833513988*dqe_8 - 4.0622453949150703*c_theta_1 - 0.21955178944695325*s_theta_1;
+    const double ve_8 = 0.17461592051586902*dq0_1 - 0.25754175689991915*dq0_2 + 0.55957984101724623*dq0_3 - 0.39333146508609779*dq0_4 + 0.25918816299309216*dq0_5 - 0.60370628416503103*dq0_6 + 0.060827205952185069*dq0_7 - 0.0015979660833513988*dq0_8 - 4.0622453949150703*c_theta_1 - 0.21955178944695325*s_theta_1;
     const double ex_8 = static_cast<double>(static_cast<long double>(x0[7]) - static_cast<long double>(xe_8));
     const double ev_8 = static_cast<double>(static_cast<long double>(v0[7]) - static_cast<long double>(ve_8));
     const double qh0_1 = q0_1 + (0.15717825132194799*ex_1 + 0.29493263754908033*ex_2 + 0.39623966725182097*ex_3 + 0.44857996156221225*ex_4 + 0.44548538123606851*ex_5 + 0.44019928749784271*ex_6 + 0.32765305354058549*ex_7 + 0.17461592051586902*ex_8);
@@ -6676,8 +6617,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_7 = dq0_7 + (0.34427415140897727*ev_1 - 0.56863727328834412*ev_2 + 0.59494346701943712*ev_3 - 0.41403025914791469*ev_4 + 0.088909900005658599*ev_5 + 0.10511607871282862*ev_6 - 0.10046823554089551*ev_7 + 0.060827205952185069*ev_8);
     const double qh0_8 = q0_8 + (3.6235058980809498e-06*ex_1 - 7.6266171318004641e-05*ex_2 + 0.0016015978049290199*ex_3 - 0.033633554099140955*ex_4 + 0.70630463199228721*ex_5 - 0.706304624149241*ex_6 + 0.03363338117864878*ex_7 - 0.0015979660833513988*ex_8);
     const double dqh0_8 = dq0_8 + (3.6235058980809498e-06*ev_1 - 7.6266171318004641e-05*ev_2 + 0.0016015978049290199*ev_3 - 0.033633554099140955*ev_4 + 0.70630463199228721*ev_5 - 0.706304624149241*ev_6 + 0.03363338117864878*ev_7 - 0.0015979660833513988*ev_8);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
@@ -6688,8 +6629,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
@@ -6700,8 +6641,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
@@ -6712,8 +6653,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
@@ -6724,8 +6665,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
-    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
@@ -6736,8 +6677,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
-    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
@@ -6748,8 +6689,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
-    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
@@ -6760,8 +6701,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
-    // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
@@ -7188,39 +7129,32 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_7 = q0u_7 + (3.6235656511060938e-06*rx_1 - 7.6267234666962098e-05*rx_2 + 0.0016016160363883712*rx_3 - 0.033633850879604008*rx_4 + 0.70630905670258981*rx_5 - 0.70630559784406499*rx_6 + 0.033557591470408731*rx_7);
     const double dq0_7 = dq0u_7 + (3.6235656511060938e-06*rv_1 - 7.6267234666962098e-05*rv_2 + 0.0016016160363883712*rv_3 - 0.033633850879604008*rv_4 + 0.70630905670258981*rv_5 - 0.70630559784406499*rv_6 + 0.033557591470408731*rv_7);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
-    const double dqe_5 = dq0_5;
-    const double dqe_6 = dq0_6;
-    const double dqe_7 = dq0_7;
     const double xe_1 = x_st_1 + 0.19043136251490667*q0_1 + 0.38587126961491891*q0_2 + 0.56097347178924506*q0_3 - 0.33898896567507947*q0_4 + 0.51332465560256402*q0_5 + 0.34890156562148933*q0_6 + 3.6235656511060938e-06*q0_7 + 0.58277405893896583*s_theta_1 - 0.011677202387739064*c_theta_1;
-    const double ve_1 = 0.19043136251490667*dqe_1 + 0.38587126961491891*dqe_2 + 0.56097347178924506*dqe_3 - 0.33898896567507947*dqe_4 + 0.51332465560256402*dqe_5 + 0.34890156562148933*dqe_6 + 3.6235656511060938e-06*dqe_7 + 3.9628636007849676*c_theta_1 + 0.079404976236625638*s_theta_1;
+    const double ve_1 = 0.19043136251490667*dq0_1 + 0.38587126961491891*dq0_2 + 0.56097347178924506*dq0_3 - 0.33898896567507947*dq0_4 + 0.51332465560256402*dq0_5 + 0.34890156562148933*dq0_6 + 3.6235656511060938e-06*dq0_7 + 3.9628636007849676*c_theta_1 + 0.079404976236625638*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.34958681179430789*q0_1 + 0.53880781762094765*q0_2 + 0.29312755167544402*q0_3 + 0.092974505437432381*q0_4 - 0.40282309764005475*q0_5 - 0.57501367172307072*q0_6 - 7.6267234666962098e-05*q0_7 + 0.49611806580895762*s_theta_1 - 0.014886231494196081*c_theta_1;
-    const double ve_2 = 0.34958681179430789*dqe_1 + 0.53880781762094765*dqe_2 + 0.29312755167544402*dqe_3 + 0.092974505437432381*dqe_4 - 0.40282309764005475*dqe_5 - 0.57501367172307072*dqe_6 - 7.6267234666962098e-05*dqe_7 + 3.3736028475009117*c_theta_1 + 0.10122637416053334*s_theta_1;
+    const double ve_2 = 0.34958681179430789*dq0_1 + 0.53880781762094765*dq0_2 + 0.29312755167544402*dq0_3 + 0.092974505437432381*dq0_4 - 0.40282309764005475*dq0_5 - 0.57501367172307072*dq0_6 - 7.6267234666962098e-05*dq0_7 + 3.3736028475009117*c_theta_1 + 0.10122637416053334*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.45132710293188849*q0_1 + 0.36648809784762304*q0_2 - 0.40780444353344686*q0_3 + 0.31348884756910944*q0_4 - 0.19721584177235119*q0_5 + 0.59876034033609971*q0_6 + 0.0016016160363883712*q0_7 + 0.18010567327133883*s_theta_1 - 0.0097573348302507721*c_theta_1;
-    const double ve_3 = 0.45132710293188849*dqe_1 + 0.36648809784762304*dqe_2 - 0.40780444353344686*dqe_3 + 0.31348884756910944*dqe_4 - 0.19721584177235119*dqe_5 + 0.59876034033609971*dqe_6 + 0.0016016160363883712*dqe_7 + 1.224718578245104*c_theta_1 + 0.066349876845705244*s_theta_1;
+    const double ve_3 = 0.45132710293188849*dq0_1 + 0.36648809784762304*dq0_2 - 0.40780444353344686*dq0_3 + 0.31348884756910944*dq0_4 - 0.19721584177235119*dq0_5 + 0.59876034033609971*dq0_6 + 0.0016016160363883712*dq0_7 + 1.224718578245104*c_theta_1 + 0.066349876845705244*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.47894269567046022*q0_1 - 0.027065514592291499*q0_2 - 0.5062191221449942*q0_3 - 0.17895509334490262*q0_4 + 0.55758499231892111*q0_5 - 0.4117843701989588*q0_6 - 0.033633850879604008*q0_7 - 0.21915717733612264*s_theta_1 + 0.00041134873228898061*c_theta_1;
-    const double ve_4 = 0.47894269567046022*dqe_1 - 0.027065514592291499*dqe_2 - 0.5062191221449942*dqe_3 - 0.17895509334490262*dqe_4 + 0.55758499231892111*dqe_5 - 0.4117843701989588*dqe_6 - 0.033633850879604008*dqe_7 - 1.4902688058856339*c_theta_1 - 0.002797171379565068*s_theta_1;
+    const double ve_4 = 0.47894269567046022*dq0_1 - 0.027065514592291499*dq0_2 - 0.5062191221449942*dq0_3 - 0.17895509334490262*dq0_4 + 0.55758499231892111*dq0_5 - 0.4117843701989588*dq0_6 - 0.033633850879604008*dq0_7 - 1.4902688058856339*c_theta_1 - 0.002797171379565068*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double xe_5 = x_st_5 + 0.4278980824600469*q0_1 - 0.40428078157039343*q0_2 + 0.14328788553584712*q0_3 - 0.26440683315569746*q0_4 - 0.24033982860521644*q0_5 + 0.079888499328756898*q0_6 + 0.70630905670258981*q0_7 - 0.51708514009775142*s_theta_1 + 0.0097472322611653495*c_theta_1;
-    const double ve_5 = 0.4278980824600469*dqe_1 - 0.40428078157039343*dqe_2 + 0.14328788553584712*dqe_3 - 0.26440683315569746*dqe_4 - 0.24033982860521644*dqe_5 + 0.079888499328756898*dqe_6 + 0.70630905670258981*dqe_7 - 3.5161789526647094*c_theta_1 - 0.066281179375924371*s_theta_1;
+    const double ve_5 = 0.4278980824600469*dq0_1 - 0.40428078157039343*dq0_2 + 0.14328788553584712*dq0_3 - 0.26440683315569746*dq0_4 - 0.24033982860521644*dq0_5 + 0.079888499328756898*dq0_6 + 0.70630905670258981*dq0_7 - 3.5161789526647094*c_theta_1 - 0.066281179375924371*s_theta_1;
     const double ex_5 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_5));
     const double ev_5 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_5));
     const double xe_6 = x_st_6 + 0.41686886473692464*q0_1 - 0.41638691566846076*q0_2 + 0.18308824804593041*q0_3 - 0.21750857951468502*q0_4 - 0.25203459480667589*q0_5 + 0.098091604191195461*q0_6 - 0.70630559784406499*q0_7 - 0.52243618819180926*s_theta_1 + 0.010048386958084332*c_theta_1;
-    const double ve_6 = 0.41686886473692464*dqe_1 - 0.41638691566846076*dqe_2 + 0.18308824804593041*dqe_3 - 0.21750857951468502*dqe_4 - 0.25203459480667589*dqe_5 + 0.098091604191195461*dqe_6 - 0.70630559784406499*dqe_7 - 3.5525660797043028*c_theta_1 - 0.068329031314973449*s_theta_1;
+    const double ve_6 = 0.41686886473692464*dq0_1 - 0.41638691566846076*dq0_2 + 0.18308824804593041*dq0_3 - 0.21750857951468502*dq0_4 - 0.25203459480667589*dq0_5 + 0.098091604191195461*dq0_6 - 0.70630559784406499*dq0_7 - 3.5525660797043028*c_theta_1 - 0.068329031314973449*s_theta_1;
     const double ex_6 = static_cast<double>(static_cast<long double>(x0[5]) - static_cast<long double>(xe_6));
     const double ev_6 = static_cast<double>(static_cast<long double>(v0[5]) - static_cast<long double>(ve_6));
     const double xe_7 = x_st_7 + 0.22708209584463351*q0_1 - 0.29819862026029847*q0_2 + 0.35038552180811638*q0_3 + 0.7930454488382066*q0_4 + 0.32117217790394204*q0_5 - 0.059519131387043137*q0_6 + 0.033557591470408731*q0_7 - 0.33975789523013328*s_theta_1 + 0.0071829658840466097*c_theta_1;
-    const double ve_7 = 0.22708209584463351*dqe_1 - 0.29819862026029847*dqe_2 + 0.35038552180811638*dqe_3 + 0.7930454488382066*dqe_4 + 0.32117217790394204*dqe_5 - 0.059519131387043137*dqe_6 + 0.033557591470408731*dqe_7 - 2.3103536875649064*c_theta_1 - 0.048844168011516947*s_theta_1;
+    const double ve_7 = 0.22708209584463351*dq0_1 - 0.29819862026029847*dq0_2 + 0.35038552180811638*dq0_3 + 0.7930454488382066*dq0_4 + 0.32117217790394204*dq0_5 - 0.059519131387043137*dq0_6 + 0.033557591470408731*dq0_7 - 2.3103536875649064*c_theta_1 - 0.048844168011516947*s_theta_1;
     const double ex_7 = static_cast<double>(static_cast<long double>(x0[6]) - static_cast<long double>(xe_7));
     const double ev_7 = static_cast<double>(static_cast<long double>(v0[6]) - static_cast<long double>(ve_7));
     const double qh0_1 = q0_1 + (0.19043136251490667*ex_1 + 0.34958681179430789*ex_2 + 0.45132710293188849*ex_3 + 0.47894269567046022*ex_4 + 0.4278980824600469*ex_5 + 0.41686886473692464*ex_6 + 0.22708209584463351*ex_7);
@@ -7237,8 +7171,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_6 = dq0_6 + (0.34890156562148933*ev_1 - 0.57501367172307072*ev_2 + 0.59876034033609971*ev_3 - 0.4117843701989588*ev_4 + 0.079888499328756898*ev_5 + 0.098091604191195461*ev_6 - 0.059519131387043137*ev_7);
     const double qh0_7 = q0_7 + (3.6235656511060938e-06*ex_1 - 7.6267234666962098e-05*ex_2 + 0.0016016160363883712*ex_3 - 0.033633850879604008*ex_4 + 0.70630905670258981*ex_5 - 0.70630559784406499*ex_6 + 0.033557591470408731*ex_7);
     const double dqh0_7 = dq0_7 + (3.6235656511060938e-06*ev_1 - 7.6267234666962098e-05*ev_2 + 0.0016016160363883712*ev_3 - 0.033633850879604008*ev_4 + 0.70630905670258981*ev_5 - 0.70630559784406499*ev_6 + 0.033557591470408731*ev_7);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[9] = A_1;
@@ -7249,8 +7183,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[12] = B1_1;
     coef[13] = B1_1 - sigma_1*A1_1;
     coef[14] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[15] = A_2;
@@ -7261,8 +7195,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[18] = B1_2;
     coef[19] = B1_2 - sigma_2*A1_2;
     coef[20] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[21] = A_3;
@@ -7273,8 +7207,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[24] = B1_3;
     coef[25] = B1_3 - sigma_3*A1_3;
     coef[26] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[27] = A_4;
@@ -7285,8 +7219,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[30] = B1_4;
     coef[31] = B1_4 - sigma_4*A1_4;
     coef[32] = -kappa_4*A1_4 - sigma_4*B1_4;
-    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[33] = A_5;
@@ -7297,8 +7231,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[36] = B1_5;
     coef[37] = B1_5 - sigma_5*A1_5;
     coef[38] = -kappa_5*A1_5 - sigma_5*B1_5;
-    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[39] = A_6;
@@ -7309,8 +7243,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[42] = B1_6;
     coef[43] = B1_6 - sigma_6*A1_6;
     coef[44] = -kappa_6*A1_6 - sigma_6*B1_6;
-    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[45] = A_7;
@@ -7712,34 +7646,28 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_6 = q0u_6 + (3.6459675486191742e-06*rx_1 - 7.6652319973633226e-05*rx_2 + 0.0016078818584643933*rx_3 - 0.033727234591057705*rx_4 + 0.70746885654494163*rx_5 - 0.70593746146021352*rx_6);
     const double dq0_6 = dq0u_6 + (3.6459675486191742e-06*rv_1 - 7.6652319973633226e-05*rv_2 + 0.0016078818584643933*rv_3 - 0.033727234591057705*rv_4 + 0.70746885654494163*rv_5 - 0.70593746146021352*rv_6);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
-    const double dqe_5 = dq0_5;
-    const double dqe_6 = dq0_6;
     const double xe_1 = x_st_1 + 0.25359517361372547*q0_1 - 0.40150235452664823*q0_2 + 0.5700329676270175*q0_3 + 0.56969736786554714*q0_4 + 0.35354302719964958*q0_5 + 3.6459675486191742e-06*q0_6 + 0.28520422732718304*s_theta_1 - 0.0049326429992242781*c_theta_1;
-    const double ve_1 = 0.25359517361372547*dqe_1 - 0.40150235452664823*dqe_2 + 0.5700329676270175*dqe_3 + 0.56969736786554714*dqe_4 + 0.35354302719964958*dqe_5 + 3.6459675486191742e-06*dqe_6 + 1.9393887458248447*c_theta_1 + 0.033541972394725089*s_theta_1;
+    const double ve_1 = 0.25359517361372547*dq0_1 - 0.40150235452664823*dq0_2 + 0.5700329676270175*dq0_3 + 0.56969736786554714*dq0_4 + 0.35354302719964958*dq0_5 + 3.6459675486191742e-06*dq0_6 + 1.9393887458248447*c_theta_1 + 0.033541972394725089*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.44667739317953531*q0_1 - 0.49628295791040333*q0_2 + 0.22137792725285663*q0_3 - 0.40965777889932597*q0_4 - 0.58082255788403858*q0_5 - 7.6652319973633226e-05*q0_6 + 0.038551950282310954*s_theta_1 - 0.0053882420115772944*c_theta_1;
-    const double ve_2 = 0.44667739317953531*dqe_1 - 0.49628295791040333*dqe_2 + 0.22137792725285663*dqe_3 - 0.40965777889932597*dqe_4 - 0.58082255788403858*dqe_5 - 7.6652319973633226e-05*dqe_6 + 0.2621532619197145*c_theta_1 + 0.0366400456787256*s_theta_1;
+    const double ve_2 = 0.44667739317953531*dq0_1 - 0.49628295791040333*dq0_2 + 0.22137792725285663*dq0_3 - 0.40965777889932597*dq0_4 - 0.58082255788403858*dq0_5 - 7.6652319973633226e-05*dq0_6 + 0.2621532619197145*c_theta_1 + 0.0366400456787256*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.53317332333556522*q0_1 - 0.21193557811678815*q0_2 - 0.48405866533571912*q0_3 - 0.27512079918402266*q0_4 + 0.6006685334669094*q0_5 + 0.0016078818584643933*q0_6 - 0.22591056523483019*s_theta_1 - 0.0032393324545873115*c_theta_1;
-    const double ve_3 = 0.53317332333556522*dqe_1 - 0.21193557811678815*dqe_2 - 0.48405866533571912*dqe_3 - 0.27512079918402266*dqe_4 + 0.6006685334669094*dqe_5 + 0.0016078818584643933*dqe_6 - 1.5361918435968454*c_theta_1 + 0.022027460691193719*s_theta_1;
+    const double ve_3 = 0.53317332333556522*dq0_1 - 0.21193557811678815*dq0_2 - 0.48405866533571912*dq0_3 - 0.27512079918402266*dq0_4 + 0.6006685334669094*dq0_5 + 0.0016078818584643933*dq0_6 - 1.5361918435968454*c_theta_1 + 0.022027460691193719*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.49244328008358529*q0_1 + 0.23431683390534463*q0_2 - 0.40936688593870285*q0_3 + 0.60749154447384679*q0_4 - 0.40599321051658449*q0_5 - 0.033727234591057705*q0_6 - 0.38590478941023737*s_theta_1 - 0.00025498612987742063*c_theta_1;
-    const double ve_4 = 0.49244328008358529*dqe_1 + 0.23431683390534463*dqe_2 - 0.40936688593870285*dqe_3 + 0.60749154447384679*dqe_4 - 0.40599321051658449*dqe_5 - 0.033727234591057705*dqe_6 - 2.624152567989614*c_theta_1 + 0.0017339056831664602*s_theta_1;
+    const double ve_4 = 0.49244328008358529*dq0_1 + 0.23431683390534463*dq0_2 - 0.40936688593870285*dq0_3 + 0.60749154447384679*dq0_4 - 0.40599321051658449*dq0_5 - 0.033727234591057705*dq0_6 - 2.624152567989614*c_theta_1 + 0.0017339056831664602*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double xe_5 = x_st_5 + 0.33420627818462112*q0_1 + 0.50156638627441996*q0_2 + 0.32507699613099345*q0_3 - 0.16171400267170732*q0_4 + 0.066322460199700464*q0_5 + 0.70746885654494163*q0_6 - 0.36745973848398666*s_theta_1 + 0.0017157417323442295*c_theta_1;
-    const double ve_5 = 0.33420627818462112*dqe_1 + 0.50156638627441996*dqe_2 + 0.32507699613099345*dqe_3 - 0.16171400267170732*dqe_4 + 0.066322460199700464*dqe_5 + 0.70746885654494163*dqe_6 - 2.4987262216911095*c_theta_1 - 0.01166704377994076*s_theta_1;
+    const double ve_5 = 0.33420627818462112*dq0_1 + 0.50156638627441996*dq0_2 + 0.32507699613099345*dq0_3 - 0.16171400267170732*dq0_4 + 0.066322460199700464*dq0_5 + 0.70746885654494163*dq0_6 - 2.4987262216911095*c_theta_1 - 0.01166704377994076*s_theta_1;
     const double ex_5 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_5));
     const double ev_5 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_5));
     const double xe_6 = x_st_6 + 0.31257124171614259*q0_1 + 0.49102869288235668*q0_2 + 0.34421670055397652*q0_3 - 0.19166784765149933*q0_4 + 0.087296284925294509*q0_5 - 0.70593746146021352*q0_6 - 0.35033703485308371*s_theta_1 + 0.001724827886726133*c_theta_1;
-    const double ve_6 = 0.31257124171614259*dqe_1 + 0.49102869288235668*dqe_2 + 0.34421670055397652*dqe_3 - 0.19166784765149933*dqe_4 + 0.087296284925294509*dqe_5 - 0.70593746146021352*dqe_6 - 2.3822918370009694*c_theta_1 - 0.011728829629737704*s_theta_1;
+    const double ve_6 = 0.31257124171614259*dq0_1 + 0.49102869288235668*dq0_2 + 0.34421670055397652*dq0_3 - 0.19166784765149933*dq0_4 + 0.087296284925294509*dq0_5 - 0.70593746146021352*dq0_6 - 2.3822918370009694*c_theta_1 - 0.011728829629737704*s_theta_1;
     const double ex_6 = static_cast<double>(static_cast<long double>(x0[5]) - static_cast<long double>(xe_6));
     const double ev_6 = static_cast<double>(static_cast<long double>(v0[5]) - static_cast<long double>(ve_6));
     const double qh0_1 = q0_1 + (0.25359517361372547*ex_1 + 0.44667739317953531*ex_2 + 0.53317332333556522*ex_3 + 0.49244328008358529*ex_4 + 0.33420627818462112*ex_5 + 0.31257124171614259*ex_6);
@@ -7754,8 +7682,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_5 = dq0_5 + (0.35354302719964958*ev_1 - 0.58082255788403858*ev_2 + 0.6006685334669094*ev_3 - 0.40599321051658449*ev_4 + 0.066322460199700464*ev_5 + 0.087296284925294509*ev_6);
     const double qh0_6 = q0_6 + (3.6459675486191742e-06*ex_1 - 7.6652319973633226e-05*ex_2 + 0.0016078818584643933*ex_3 - 0.033727234591057705*ex_4 + 0.70746885654494163*ex_5 - 0.70593746146021352*ex_6);
     const double dqh0_6 = dq0_6 + (3.6459675486191742e-06*ev_1 - 7.6652319973633226e-05*ev_2 + 0.0016078818584643933*ev_3 - 0.033727234591057705*ev_4 + 0.70746885654494163*ev_5 - 0.70593746146021352*ev_6);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[8] = A_1;
@@ -7766,8 +7694,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[11] = B1_1;
     coef[12] = B1_1 - sigma_1*A1_1;
     coef[13] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[14] = A_2;
@@ -7778,8 +7706,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[17] = B1_2;
     coef[18] = B1_2 - sigma_2*A1_2;
     coef[19] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[20] = A_3;
@@ -7790,8 +7718,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[23] = B1_3;
     coef[24] = B1_3 - sigma_3*A1_3;
     coef[25] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[26] = A_4;
@@ -7802,8 +7730,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[29] = B1_4;
     coef[30] = B1_4 - sigma_4*A1_4;
     coef[31] = -kappa_4*A1_4 - sigma_4*B1_4;
-    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[32] = A_5;
@@ -7814,8 +7742,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[35] = B1_5;
     coef[36] = B1_5 - sigma_5*A1_5;
     coef[37] = -kappa_5*A1_5 - sigma_5*B1_5;
-    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[38] = A_6;
@@ -8228,39 +8156,32 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_7 = q0u_7 + (-0.70593747576578181*rx_4 + 0.70746886298994682*rx_5 - 0.033727061282787268*rx_6 + 0.0016042276568910725*rx_7);
     const double dq0_7 = dq0u_7 + (-0.70593747576578181*rv_4 + 0.70746886298994682*rv_5 - 0.033727061282787268*rv_6 + 0.0016042276568910725*rv_7);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
-    const double dqe_5 = dq0_5;
-    const double dqe_6 = dq0_6;
-    const double dqe_7 = dq0_7;
     const double xe_1 = x_st_1 + 0.5*q0_2 + 0.70710678118654757*q0_4 - 0.5*q0_6 + 0.97381026124477144*s_theta_1 - 0.022838289504848779*c_theta_1;
-    const double ve_1 = 0.5*dqe_2 + 0.70710678118654757*dqe_4 - 0.5*dqe_6 + 6.6219097764644452*c_theta_1 + 0.1553003686329717*s_theta_1;
+    const double ve_1 = 0.5*dq0_2 + 0.70710678118654757*dq0_4 - 0.5*dq0_6 + 6.6219097764644452*c_theta_1 + 0.1553003686329717*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.70710678118654757*q0_2 + 5.1766325731969706e-59*q0_4 + 0.70710678118654757*q0_6 + 1.0974119545186087*s_theta_1 - 0.030901062856261416*c_theta_1;
-    const double ve_2 = 0.70710678118654757*dqe_2 + 5.1766325731969706e-59*dqe_4 + 0.70710678118654757*dqe_6 + 7.4624012907265396*c_theta_1 + 0.21012722742257761*s_theta_1;
+    const double ve_2 = 0.70710678118654757*dq0_2 + 5.1766325731969706e-59*dq0_4 + 0.70710678118654757*dq0_6 + 7.4624012907265396*c_theta_1 + 0.21012722742257761*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.5*q0_2 - 0.70710678118654757*q0_4 - 0.5*q0_6 + 0.71367190618691678*s_theta_1 - 0.021457742563334669*c_theta_1;
-    const double ve_3 = 0.5*dqe_2 - 0.70710678118654757*dqe_4 - 0.5*dqe_6 + 4.8529689620710341*c_theta_1 + 0.14591264943067575*s_theta_1;
+    const double ve_3 = 0.5*dq0_2 - 0.70710678118654757*dq0_4 - 0.5*dq0_6 + 4.8529689620710341*c_theta_1 + 0.14591264943067575*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.50269468252200089*q0_1 - 0.46180922522187207*q0_3 - 0.18889832178586227*q0_5 - 0.70593747576578181*q0_7;
-    const double ve_4 = 0.50269468252200089*dqe_1 - 0.46180922522187207*dqe_3 - 0.18889832178586227*dqe_5 - 0.70593747576578181*dqe_7;
+    const double ve_4 = 0.50269468252200089*dq0_1 - 0.46180922522187207*dq0_3 - 0.18889832178586227*dq0_5 - 0.70593747576578181*dq0_7;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_4));
     const double xe_5 = x_st_5 + 0.52822638606103978*q0_1 - 0.44403352996578316*q0_3 - 0.15263982846796956*q0_5 + 0.70746886298994682*q0_7;
-    const double ve_5 = 0.52822638606103978*dqe_1 - 0.44403352996578316*dqe_3 - 0.15263982846796956*dqe_5 + 0.70746886298994682*dqe_7;
+    const double ve_5 = 0.52822638606103978*dq0_1 - 0.44403352996578316*dq0_3 - 0.15263982846796956*dq0_5 + 0.70746886298994682*dq0_7;
     const double ex_5 = static_cast<double>(static_cast<long double>(x0[5]) - static_cast<long double>(xe_5));
     const double ev_5 = static_cast<double>(static_cast<long double>(v0[5]) - static_cast<long double>(ve_5));
     const double xe_6 = x_st_6 + 0.57596169626212967*q0_1 + 0.38353896534347609*q0_3 + 0.72112999649115506*q0_5 - 0.033727061282787268*q0_7;
-    const double ve_6 = 0.57596169626212967*dqe_1 + 0.38353896534347609*dqe_3 + 0.72112999649115506*dqe_5 - 0.033727061282787268*dqe_7;
+    const double ve_6 = 0.57596169626212967*dq0_1 + 0.38353896534347609*dq0_3 + 0.72112999649115506*dq0_5 - 0.033727061282787268*dq0_7;
     const double ex_6 = static_cast<double>(static_cast<long double>(x0[6]) - static_cast<long double>(xe_6));
     const double ev_6 = static_cast<double>(static_cast<long double>(v0[6]) - static_cast<long double>(ve_6));
     const double xe_7 = x_st_7 + 0.36951734150354626*q0_1 + 0.66517991989337444*q0_3 - 0.64883744879008054*q0_5 + 0.0016042276568910725*q0_7;
-    const double ve_7 = 0.36951734150354626*dqe_1 + 0.66517991989337444*dqe_3 - 0.64883744879008054*dqe_5 + 0.0016042276568910725*dqe_7;
+    const double ve_7 = 0.36951734150354626*dq0_1 + 0.66517991989337444*dq0_3 - 0.64883744879008054*dq0_5 + 0.0016042276568910725*dq0_7;
     const double ex_7 = static_cast<double>(static_cast<long double>(x0[7]) - static_cast<long double>(xe_7));
     const double ev_7 = static_cast<double>(static_cast<long double>(v0[7]) - static_cast<long double>(ve_7));
     const double qh0_1 = q0_1 + (0.50269468252200089*ex_4 + 0.52822638606103978*ex_5 + 0.57596169626212967*ex_6 + 0.36951734150354626*ex_7);
@@ -8277,8 +8198,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_6 = dq0_6 + (-0.5*ev_1 + 0.70710678118654757*ev_2 - 0.5*ev_3);
     const double qh0_7 = q0_7 + (-0.70593747576578181*ex_4 + 0.70746886298994682*ex_5 - 0.033727061282787268*ex_6 + 0.0016042276568910725*ex_7);
     const double dqh0_7 = dq0_7 + (-0.70593747576578181*ev_4 + 0.70746886298994682*ev_5 - 0.033727061282787268*ev_6 + 0.0016042276568910725*ev_7);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[9] = A_1;
@@ -8289,8 +8210,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[12] = B1_1;
     coef[13] = B1_1 - sigma_1*A1_1;
     coef[14] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[15] = A_2;
@@ -8301,8 +8222,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[18] = B1_2;
     coef[19] = B1_2 - sigma_2*A1_2;
     coef[20] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[21] = A_3;
@@ -8313,8 +8234,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[24] = B1_3;
     coef[25] = B1_3 - sigma_3*A1_3;
     coef[26] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[27] = A_4;
@@ -8325,8 +8246,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[30] = B1_4;
     coef[31] = B1_4 - sigma_4*A1_4;
     coef[32] = -kappa_4*A1_4 - sigma_4*B1_4;
-    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[33] = A_5;
@@ -8337,8 +8258,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[36] = B1_5;
     coef[37] = B1_5 - sigma_5*A1_5;
     coef[38] = -kappa_5*A1_5 - sigma_5*B1_5;
-    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[39] = A_6;
@@ -8349,8 +8270,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[42] = B1_6;
     coef[43] = B1_6 - sigma_6*A1_6;
     coef[44] = -kappa_6*A1_6 - sigma_6*B1_6;
-    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[45] = A_7;
@@ -9014,44 +8935,36 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_8 = q0u_8 + (0.033557591470402277*rx_1 - 0.70630559784395019*rx_2 + 0.7063090567025152*rx_3 - 0.033633850880484692*rx_4 + 0.0016016160550201795*rx_5 - 7.6267625941484944e-05*rx_6 + 3.6317823954159418e-06*rx_7 - 1.7255118790902426e-07*rx_8);
     const double dq0_8 = dq0u_8 + (0.033557591470402277*rv_1 - 0.70630559784395019*rv_2 + 0.7063090567025152*rv_3 - 0.033633850880484692*rv_4 + 0.0016016160550201795*rv_5 - 7.6267625941484944e-05*rv_6 + 3.6317823954159418e-06*rv_7 - 1.7255118790902426e-07*rv_8);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
-    const double dqe_5 = dq0_5;
-    const double dqe_6 = dq0_6;
-    const double dqe_7 = dq0_7;
-    const double dqe_8 = dq0_8;
     const double xe_1 = x_st_1 + 0.19372350904161664*q0_1 - 0.28020934109810303*q0_2 - 0.28402946550096314*q0_3 + 0.51600471133952652*q0_4 + 0.7127936831875068*q0_5 + 0.16132189670832656*q0_6 + 0.042363034756029191*q0_7 + 0.033557591470402277*q0_8 + 3.560673211804299*s_theta_1 - 1.2167861856792128*c_theta_1;
-    const double ve_1 = 0.19372350904161664*dqe_1 - 0.28020934109810303*dqe_2 - 0.28402946550096314*dqe_3 + 0.51600471133952652*dqe_4 + 0.7127936831875068*dqe_5 + 0.16132189670832656*dqe_6 + 0.042363034756029191*dqe_7 + 0.033557591470402277*dqe_8 + 24.212577840269233*c_theta_1 + 8.2741460626186463*s_theta_1;
+    const double ve_1 = 0.19372350904161664*dq0_1 - 0.28020934109810303*dq0_2 - 0.28402946550096314*dq0_3 + 0.51600471133952652*dq0_4 + 0.7127936831875068*dq0_5 + 0.16132189670832656*dq0_6 + 0.042363034756029191*dq0_7 + 0.033557591470402277*dq0_8 + 24.212577840269233*c_theta_1 + 8.2741460626186463*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.36184454286459244*q0_1 - 0.42854365029957597*q0_2 - 0.2486228204188613*q0_3 + 0.012402151750919506*q0_4 - 0.29769333290291616*q0_5 - 0.17455959592222609*q0_6 - 0.074106516966252228*q0_7 - 0.70630559784395019*q0_8 + 5.0784990221213837*s_theta_1 - 1.8591422423672472*c_theta_1;
-    const double ve_2 = 0.36184454286459244*dqe_1 - 0.42854365029957597*dqe_2 - 0.2486228204188613*dqe_3 + 0.012402151750919506*dqe_4 - 0.29769333290291616*dqe_5 - 0.17455959592222609*dqe_6 - 0.074106516966252228*dqe_7 - 0.70630559784395019*dqe_8 + 34.533793350425405*c_theta_1 + 12.64216724809728*s_theta_1;
+    const double ve_2 = 0.36184454286459244*dq0_1 - 0.42854365029957597*dq0_2 - 0.2486228204188613*dq0_3 + 0.012402151750919506*dq0_4 - 0.29769333290291616*dq0_5 - 0.17455959592222609*dq0_6 - 0.074106516966252228*dq0_7 - 0.70630559784395019*dq0_8 + 34.533793350425405*c_theta_1 + 12.64216724809728*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.37278087953492001*q0_1 - 0.42369352696283247*q0_2 - 0.21998442254994174*q0_3 - 0.035607737148128753*q0_4 - 0.32412704169048023*q0_5 - 0.15618493691093555*q0_6 - 0.059435651764184194*q0_7 + 0.7063090567025152*q0_8 + 5.0035017249129927*s_theta_1 - 1.8380346440469437*c_theta_1;
-    const double ve_3 = 0.37278087953492001*dqe_1 - 0.42369352696283247*dqe_2 - 0.21998442254994174*dqe_3 - 0.035607737148128753*dqe_4 - 0.32412704169048023*dqe_5 - 0.15618493691093555*dqe_6 - 0.059435651764184194*dqe_7 + 0.7063090567025152*dqe_8 + 34.023811729408351*c_theta_1 + 12.498635579519217*s_theta_1;
+    const double ve_3 = 0.37278087953492001*dq0_1 - 0.42369352696283247*dq0_2 - 0.21998442254994174*dq0_3 - 0.035607737148128753*dq0_4 - 0.32412704169048023*dq0_5 - 0.15618493691093555*dq0_6 - 0.059435651764184194*dq0_7 + 0.7063090567025152*dq0_8 + 34.023811729408351*c_theta_1 + 12.498635579519217*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.44381390754479338*q0_1 - 0.17093911979768703*q0_2 + 0.34244527213368176*q0_3 - 0.49335687122107258*q0_4 + 0.1687256535962611*q0_5 + 0.52730729520014696*q0_6 + 0.32478716157974158*q0_7 - 0.033633850880484692*q0_8 + 1.8703514884352055*s_theta_1 - 0.74129126888198704*c_theta_1;
-    const double ve_4 = 0.44381390754479338*dqe_1 - 0.17093911979768703*dqe_2 + 0.34244527213368176*dqe_3 - 0.49335687122107258*dqe_4 + 0.1687256535962611*dqe_5 + 0.52730729520014696*dqe_6 + 0.32478716157974158*dqe_7 - 0.033633850880484692*dqe_8 + 12.718390121359397*c_theta_1 + 5.0407806283975116*s_theta_1;
+    const double ve_4 = 0.44381390754479338*dq0_1 - 0.17093911979768703*dq0_2 + 0.34244527213368176*dq0_3 - 0.49335687122107258*dq0_4 + 0.1687256535962611*dq0_5 + 0.52730729520014696*dq0_6 + 0.32478716157974158*dq0_7 - 0.033633850880484692*dq0_8 + 12.718390121359397*c_theta_1 + 5.0407806283975116*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double xe_5 = x_st_5 + 0.45619254391259334*q0_1 + 0.16226443223664938*q0_2 + 0.51974103141731198*q0_3 + 0.023749925291413836*q0_4 + 0.25365994391727953*q0_5 - 0.41439196712461374*q0_6 - 0.50872112545075554*q0_7 + 0.0016016160550201795*q0_8 - 2.1254570708525611*s_theta_1 + 0.70370190533582622*c_theta_1;
-    const double ve_5 = 0.45619254391259334*dqe_1 + 0.16226443223664938*dqe_2 + 0.51974103141731198*dqe_3 + 0.023749925291413836*dqe_4 + 0.25365994391727953*dqe_5 - 0.41439196712461374*dqe_6 - 0.50872112545075554*dqe_7 + 0.0016016160550201795*dqe_8 - 14.453108081797415*c_theta_1 - 4.7851729562836178*s_theta_1;
+    const double ve_5 = 0.45619254391259334*dq0_1 + 0.16226443223664938*dq0_2 + 0.51974103141731198*dq0_3 + 0.023749925291413836*dq0_4 + 0.25365994391727953*dq0_5 - 0.41439196712461374*dq0_6 - 0.50872112545075554*dq0_7 + 0.0016016160550201795*dq0_8 - 14.453108081797415*c_theta_1 - 4.7851729562836178*s_theta_1;
     const double ex_5 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_5));
     const double ev_5 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_5));
     const double xe_6 = x_st_6 + 0.40828082957266476*q0_1 + 0.41910141100459025*q0_2 + 0.11250569885260811*q0_3 + 0.49392769968651906*q0_4 - 0.27466496802876206*q0_5 - 0.078911288144302746*q0_6 + 0.56512903378777435*q0_7 - 7.6267625941484944e-05*q0_8 - 5.1405388124723608*s_theta_1 + 1.8170782257299229*c_theta_1;
-    const double ve_6 = 0.40828082957266476*dqe_1 + 0.41910141100459025*dqe_2 + 0.11250569885260811*dqe_3 + 0.49392769968651906*dqe_4 - 0.27466496802876206*dqe_5 - 0.078911288144302746*dqe_6 + 0.56512903378777435*dqe_7 - 7.6267625941484944e-05*dqe_8 - 34.95566392481205*c_theta_1 - 12.356131934963475*s_theta_1;
+    const double ve_6 = 0.40828082957266476*dq0_1 + 0.41910141100459025*dq0_2 + 0.11250569885260811*dq0_3 + 0.49392769968651906*dq0_4 - 0.27466496802876206*dq0_5 - 0.078911288144302746*dq0_6 + 0.56512903378777435*dq0_7 - 7.6267625941484944e-05*dq0_8 - 34.95566392481205*c_theta_1 - 12.356131934963475*s_theta_1;
     const double ex_6 = static_cast<double>(static_cast<long double>(x0[5]) - static_cast<long double>(xe_6));
     const double ev_6 = static_cast<double>(static_cast<long double>(v0[5]) - static_cast<long double>(ve_6));
     const double xe_7 = x_st_7 + 0.30641077082170903*q0_1 + 0.47869652864270185*q0_2 - 0.42126010757162874*q0_3 - 0.011878393596300867*q0_4 - 0.13894802700113898*q0_5 + 0.49977853183304155*q0_6 - 0.47987056944794448*q0_7 + 3.6317823954159418e-06*q0_8 - 5.7840145569120942*s_theta_1 + 2.0751829813711287*c_theta_1;
-    const double ve_7 = 0.30641077082170903*dqe_1 + 0.47869652864270185*dqe_2 - 0.42126010757162874*dqe_3 - 0.011878393596300867*dqe_4 - 0.13894802700113898*dqe_5 + 0.49977853183304155*dqe_6 - 0.47987056944794448*dqe_7 + 3.6317823954159418e-06*dqe_8 - 39.331298987002242*c_theta_1 - 14.111244273323674*s_theta_1;
+    const double ve_7 = 0.30641077082170903*dq0_1 + 0.47869652864270185*dq0_2 - 0.42126010757162874*dq0_3 - 0.011878393596300867*dq0_4 - 0.13894802700113898*dq0_5 + 0.49977853183304155*dq0_6 - 0.47987056944794448*dq0_7 + 3.6317823954159418e-06*dq0_8 - 39.331298987002242*c_theta_1 - 14.111244273323674*s_theta_1;
     const double ex_7 = static_cast<double>(static_cast<long double>(x0[6]) - static_cast<long double>(xe_7));
     const double ev_7 = static_cast<double>(static_cast<long double>(v0[6]) - static_cast<long double>(ve_7));
     const double xe_8 = x_st_8 + 0.16404550214245203*q0_1 + 0.3130025116068168*q0_2 - 0.48125221566093579*q0_3 - 0.49421319638199701*q0_4 + 0.3326956467986415*q0_5 - 0.46187790630158815*q0_6 + 0.27431829809484126*q0_7 - 1.7255118790902426e-07*q0_8 - 3.7591043305914651*s_theta_1 + 1.3567843543283389*c_theta_1;
-    const double ve_8 = 0.16404550214245203*dqe_1 + 0.3130025116068168*dqe_2 - 0.48125221566093579*dqe_3 - 0.49421319638199701*dqe_4 + 0.3326956467986415*dqe_5 - 0.46187790630158815*dqe_6 + 0.27431829809484126*dqe_7 - 1.7255118790902426e-07*dqe_8 - 25.561909448021961*c_theta_1 - 9.2261336094327042*s_theta_1;
+    const double ve_8 = 0.16404550214245203*dq0_1 + 0.3130025116068168*dq0_2 - 0.48125221566093579*dq0_3 - 0.49421319638199701*dq0_4 + 0.3326956467986415*dq0_5 - 0.46187790630158815*dq0_6 + 0.27431829809484126*dq0_7 - 1.7255118790902426e-07*dq0_8 - 25.561909448021961*c_theta_1 - 9.2261336094327042*s_theta_1;
     const double ex_8 = static_cast<double>(static_cast<long double>(x0[7]) - static_cast<long double>(xe_8));
     const double ev_8 = static_cast<double>(static_cast<long double>(v0[7]) - static_cast<long double>(ve_8));
     const double qh0_1 = q0_1 + (0.19372350904161664*ex_1 + 0.36184454286459244*ex_2 + 0.37278087953492001*ex_3 + 0.44381390754479338*ex_4 + 0.45619254391259334*ex_5 + 0.40828082957266476*ex_6 + 0.30641077082170903*ex_7 + 0.16404550214245203*ex_8);
@@ -9070,8 +8983,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_7 = dq0_7 + (0.042363034756029191*ev_1 - 0.074106516966252228*ev_2 - 0.059435651764184194*ev_3 + 0.32478716157974158*ev_4 - 0.50872112545075554*ev_5 + 0.56512903378777435*ev_6 - 0.47987056944794448*ev_7 + 0.27431829809484126*ev_8);
     const double qh0_8 = q0_8 + (0.033557591470402277*ex_1 - 0.70630559784395019*ex_2 + 0.7063090567025152*ex_3 - 0.033633850880484692*ex_4 + 0.0016016160550201795*ex_5 - 7.6267625941484944e-05*ex_6 + 3.6317823954159418e-06*ex_7 - 1.7255118790902426e-07*ex_8);
     const double dqh0_8 = dq0_8 + (0.033557591470402277*ev_1 - 0.70630559784395019*ev_2 + 0.7063090567025152*ev_3 - 0.033633850880484692*ev_4 + 0.0016016160550201795*ev_5 - 7.6267625941484944e-05*ev_6 + 3.6317823954159418e-06*ev_7 - 1.7255118790902426e-07*ev_8);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
@@ -9082,8 +8995,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
@@ -9094,8 +9007,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
@@ -9106,8 +9019,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
@@ -9118,8 +9031,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
-    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
@@ -9130,8 +9043,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
-    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
@@ -9142,8 +9055,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
-    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
@@ -9154,8 +9067,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
-    // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
@@ -9564,34 +9477,28 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_6 = q0u_6 + (0.033557591472812565*rx_1 - 0.70630559788540681*rx_2 + 0.70630905672618716*rx_3 - 0.033633850490783018*rx_4 + 0.0016016078197819729*rx_5 - 7.6094683486602324e-05*rx_6);
     const double dq0_6 = dq0u_6 + (0.033557591472812565*rv_1 - 0.70630559788540681*rv_2 + 0.70630905672618716*rv_3 - 0.033633850490783018*rv_4 + 0.0016016078197819729*rv_5 - 7.6094683486602324e-05*rv_6);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
-    const double dqe_5 = dq0_5;
-    const double dqe_6 = dq0_6;
     const double xe_1 = x_st_1 + 0.26689233302016613*q0_1 - 0.32322153495902672*q0_2 + 0.58791675412455591*q0_3 + 0.6845449333826723*q0_4 - 0.094458109064740406*q0_5 + 0.033557591472812565*q0_6 + 0.18984731294346066*s_theta_1 - 0.0032037447311752281*c_theta_1;
-    const double ve_1 = 0.26689233302016613*dqe_1 - 0.32322153495902672*dqe_2 + 0.58791675412455591*dqe_3 + 0.6845449333826723*dqe_4 - 0.094458109064740406*dqe_5 + 0.033557591472812565*dqe_6 + 1.2909617280155326*c_theta_1 + 0.02178546417199155*s_theta_1;
+    const double ve_1 = 0.26689233302016613*dq0_1 - 0.32322153495902672*dq0_2 + 0.58791675412455591*dq0_3 + 0.6845449333826723*dq0_4 - 0.094458109064740406*dq0_5 + 0.033557591472812565*dq0_6 + 1.2909617280155326*c_theta_1 + 0.02178546417199155*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.47812139738736548*q0_1 - 0.38071363751915011*q0_2 + 0.01872156117725246*q0_3 - 0.3284175741658667*q0_4 + 0.13921515035771775*q0_5 - 0.70630559788540681*q0_6 - 0.10807486125673747*s_theta_1 - 0.0030094692967634843*c_theta_1;
-    const double ve_2 = 0.47812139738736548*dqe_1 - 0.38071363751915011*dqe_2 + 0.01872156117725246*dqe_3 - 0.3284175741658667*dqe_4 + 0.13921515035771775*dqe_5 - 0.70630559788540681*dqe_6 - 0.73490905654581484*c_theta_1 + 0.020464391217991693*s_theta_1;
+    const double ve_2 = 0.47812139738736548*dq0_1 - 0.38071363751915011*dq0_2 + 0.01872156117725246*dq0_3 - 0.3284175741658667*dq0_4 + 0.13921515035771775*dq0_5 - 0.70630559788540681*dq0_6 - 0.73490905654581484*c_theta_1 + 0.020464391217991693*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.48825882473744059*q0_1 - 0.35748607481768213*q0_2 - 0.0363731795333328*q0_3 - 0.34646899247328022*q0_4 + 0.11649365574661009*q0_5 + 0.70630905672618716*q0_6 - 0.13061491685988394*s_theta_1 - 0.0028941115773813914*c_theta_1;
-    const double ve_3 = 0.48825882473744059*dqe_1 - 0.35748607481768213*dqe_2 - 0.0363731795333328*dqe_3 - 0.34646899247328022*dqe_4 + 0.11649365574661009*dqe_5 + 0.70630905672618716*dqe_6 - 0.88818143464721078*c_theta_1 + 0.01967995872619346*s_theta_1;
+    const double ve_3 = 0.48825882473744059*dq0_1 - 0.35748607481768213*dq0_2 - 0.0363731795333328*dq0_3 - 0.34646899247328022*dq0_4 + 0.11649365574661009*dq0_5 + 0.70630905672618716*dq0_6 - 0.88818143464721078*c_theta_1 + 0.01967995872619346*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.49793889248740725*q0_1 + 0.19191638050233892*q0_2 - 0.57082723210373476*q0_3 + 0.31412550520408278*q0_4 - 0.53812188620565149*q0_5 - 0.033633850490783018*q0_6 - 0.31815200716836423*s_theta_1 - 0.0006699477302355032*c_theta_1;
-    const double ve_4 = 0.49793889248740725*dqe_1 + 0.19191638050233892*dqe_2 - 0.57082723210373476*dqe_3 + 0.31412550520408278*dqe_4 - 0.53812188620565149*dqe_5 - 0.033633850490783018*dqe_6 - 2.1634336487448769*c_theta_1 + 0.0045556445656014218*s_theta_1;
+    const double ve_4 = 0.49793889248740725*dq0_1 + 0.19191638050233892*dq0_2 - 0.57082723210373476*dq0_3 + 0.31412550520408278*dq0_4 - 0.53812188620565149*dq0_5 - 0.033633850490783018*dq0_6 - 2.1634336487448769*c_theta_1 + 0.0045556445656014218*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double xe_5 = x_st_5 + 0.40376844481925944*q0_1 + 0.58353903050894473*q0_2 + 0.018195815352948074*q0_3 + 0.19576400384241474*q0_4 + 0.67660627014278962*q0_5 + 0.0016016078197819729*q0_6 - 0.35857681672110286*s_theta_1 + 0.000931131463052785*c_theta_1;
-    const double ve_5 = 0.40376844481925944*dqe_1 + 0.58353903050894473*dqe_2 + 0.018195815352948074*dqe_3 + 0.19576400384241474*dqe_4 + 0.67660627014278962*dqe_5 + 0.0016016078197819729*dqe_6 - 2.4383223537034993*c_theta_1 - 0.0063316939487589379*s_theta_1;
+    const double ve_5 = 0.40376844481925944*dq0_1 + 0.58353903050894473*dq0_2 + 0.018195815352948074*dq0_3 + 0.19576400384241474*dq0_4 + 0.67660627014278962*dq0_5 + 0.0016016078197819729*dq0_6 - 2.4383223537034993*c_theta_1 - 0.0063316939487589379*s_theta_1;
     const double ex_5 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_5));
     const double ev_5 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_5));
     const double xe_6 = x_st_6 + 0.22538774216463048*q0_1 + 0.49541797971478269*q0_2 + 0.57140665779267852*q0_3 - 0.40804532860153792*q0_4 - 0.45908041398377708*q0_5 - 7.6094683486602324e-05*q0_6 - 0.23320201115118561*s_theta_1 + 0.0010502723056677354*c_theta_1;
-    const double ve_6 = 0.22538774216463048*dqe_1 + 0.49541797971478269*dqe_2 + 0.57140665779267852*dqe_3 - 0.40804532860153792*dqe_4 - 0.45908041398377708*dqe_5 - 7.6094683486602324e-05*dqe_6 - 1.5857736758280621*c_theta_1 - 0.0071418516785405999*s_theta_1;
+    const double ve_6 = 0.22538774216463048*dq0_1 + 0.49541797971478269*dq0_2 + 0.57140665779267852*dq0_3 - 0.40804532860153792*dq0_4 - 0.45908041398377708*dq0_5 - 7.6094683486602324e-05*dq0_6 - 1.5857736758280621*c_theta_1 - 0.0071418516785405999*s_theta_1;
     const double ex_6 = static_cast<double>(static_cast<long double>(x0[5]) - static_cast<long double>(xe_6));
     const double ev_6 = static_cast<double>(static_cast<long double>(v0[5]) - static_cast<long double>(ve_6));
     const double qh0_1 = q0_1 + (0.26689233302016613*ex_1 + 0.47812139738736548*ex_2 + 0.48825882473744059*ex_3 + 0.49793889248740725*ex_4 + 0.40376844481925944*ex_5 + 0.22538774216463048*ex_6);
@@ -9606,8 +9513,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_5 = dq0_5 + (-0.094458109064740406*ev_1 + 0.13921515035771775*ev_2 + 0.11649365574661009*ev_3 - 0.53812188620565149*ev_4 + 0.67660627014278962*ev_5 - 0.45908041398377708*ev_6);
     const double qh0_6 = q0_6 + (0.033557591472812565*ex_1 - 0.70630559788540681*ex_2 + 0.70630905672618716*ex_3 - 0.033633850490783018*ex_4 + 0.0016016078197819729*ex_5 - 7.6094683486602324e-05*ex_6);
     const double dqh0_6 = dq0_6 + (0.033557591472812565*ev_1 - 0.70630559788540681*ev_2 + 0.70630905672618716*ev_3 - 0.033633850490783018*ev_4 + 0.0016016078197819729*ev_5 - 7.6094683486602324e-05*ev_6);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[8] = A_1;
@@ -9618,8 +9525,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[11] = B1_1;
     coef[12] = B1_1 - sigma_1*A1_1;
     coef[13] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[14] = A_2;
@@ -9630,8 +9537,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[17] = B1_2;
     coef[18] = B1_2 - sigma_2*A1_2;
     coef[19] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[20] = A_3;
@@ -9642,8 +9549,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[23] = B1_3;
     coef[24] = B1_3 - sigma_3*A1_3;
     coef[25] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[26] = A_4;
@@ -9654,8 +9561,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[29] = B1_4;
     coef[30] = B1_4 - sigma_4*A1_4;
     coef[31] = -kappa_4*A1_4 - sigma_4*B1_4;
-    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[32] = A_5;
@@ -9666,8 +9573,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[35] = B1_5;
     coef[36] = B1_5 - sigma_5*A1_5;
     coef[37] = -kappa_5*A1_5 - sigma_5*B1_5;
-    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[38] = A_6;
@@ -10044,29 +9951,24 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_5 = q0u_5 + (0.033557592338143025*rx_1 - 0.70630561201796638*rx_2 + 0.706309063033425*rx_3 - 0.033633678826402627*rx_4 + 0.0015979843054959924*rx_5);
     const double dq0_5 = dq0u_5 + (0.033557592338143025*rv_1 - 0.70630561201796638*rv_2 + 0.706309063033425*rv_3 - 0.033633678826402627*rv_4 + 0.0015979843054959924*rv_5);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
-    const double dqe_5 = dq0_5;
     const double xe_1 = x_st_1 + 0.31392101709287462*q0_1 - 0.38658604347883557*q0_2 + 0.84469915351503455*q0_3 + 0.19329266427416747*q0_4 + 0.033557592338143025*q0_5 + 0.030179008515597315*s_theta_1 - 0.003899020649528062*c_theta_1;
-    const double ve_1 = 0.31392101709287462*dqe_1 - 0.38658604347883557*dqe_2 + 0.84469915351503455*dqe_3 + 0.19329266427416747*dqe_4 + 0.033557592338143025*dqe_5 + 0.20521725790606174*c_theta_1 + 0.02651334041679082*s_theta_1;
+    const double ve_1 = 0.31392101709287462*dq0_1 - 0.38658604347883557*dq0_2 + 0.84469915351503455*dq0_3 + 0.19329266427416747*dq0_4 + 0.033557592338143025*dq0_5 + 0.20521725790606174*c_theta_1 + 0.02651334041679082*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.54196278749940208*q0_1 - 0.30070312766131391*q0_2 - 0.26016485042534676*q0_3 - 0.22203738202308262*q0_4 - 0.70630561201796638*q0_5 - 0.35358039927820195*s_theta_1 - 0.0045467000836811877*c_theta_1;
-    const double ve_2 = 0.54196278749940208*dqe_1 - 0.30070312766131391*dqe_2 - 0.26016485042534676*dqe_3 - 0.22203738202308262*dqe_4 - 0.70630561201796638*dqe_5 - 2.4043467150917732*c_theta_1 + 0.030917560569032075*s_theta_1;
+    const double ve_2 = 0.54196278749940208*dq0_1 - 0.30070312766131391*dq0_2 - 0.26016485042534676*dq0_3 - 0.22203738202308262*dq0_4 - 0.70630561201796638*dq0_5 - 2.4043467150917732*c_theta_1 + 0.030917560569032075*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.54921526278040744*q0_1 - 0.25948590569099916*q0_2 - 0.3060197863998369*q0_3 - 0.19623724846576263*q0_4 + 0.706309063033425*q0_5 - 0.3736034924230599*s_theta_1 - 0.0045087067165319626*c_theta_1;
-    const double ve_3 = 0.54921526278040744*dqe_1 - 0.25948590569099916*dqe_2 - 0.3060197863998369*dqe_3 - 0.19623724846576263*dqe_4 + 0.706309063033425*dqe_5 - 2.5405037484768074*c_theta_1 + 0.030659205672417346*s_theta_1;
+    const double ve_3 = 0.54921526278040744*dq0_1 - 0.25948590569099916*dq0_2 - 0.3060197863998369*dq0_3 - 0.19623724846576263*dq0_4 + 0.706309063033425*dq0_5 - 2.5405037484768074*c_theta_1 + 0.030659205672417346*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.47874389180340393*q0_1 + 0.51103613267593673*q0_2 - 0.1041313167780359*q0_3 + 0.70545857544949286*q0_4 - 0.033633678826402627*q0_5 - 0.42109376656209263*s_theta_1 - 0.00310145119340645*c_theta_1;
-    const double ve_4 = 0.47874389180340393*dqe_1 + 0.51103613267593673*dqe_2 - 0.1041313167780359*dqe_3 + 0.70545857544949286*dqe_4 - 0.033633678826402627*dqe_5 - 2.8634376126222296*c_theta_1 + 0.021089868115163859*s_theta_1;
+    const double ve_4 = 0.47874389180340393*dq0_1 + 0.51103613267593673*dq0_2 - 0.1041313167780359*dq0_3 + 0.70545857544949286*dq0_4 - 0.033633678826402627*dq0_5 - 2.8634376126222296*c_theta_1 + 0.021089868115163859*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double xe_5 = x_st_5 + 0.27730274644011699*q0_1 + 0.65699162540281109*q0_2 + 0.33809192515055947*q0_3 - 0.6141306762908757*q0_4 + 0.0015979843054959924*q0_5 - 0.27386538717689385*s_theta_1 - 0.0014948155829566279*c_theta_1;
-    const double ve_5 = 0.27730274644011699*dqe_1 + 0.65699162540281109*dqe_2 + 0.33809192515055947*dqe_3 - 0.6141306762908757*dqe_4 + 0.0015979843054959924*dqe_5 - 1.8622846328028781*c_theta_1 + 0.010164745964105069*s_theta_1;
+    const double ve_5 = 0.27730274644011699*dq0_1 + 0.65699162540281109*dq0_2 + 0.33809192515055947*dq0_3 - 0.6141306762908757*dq0_4 + 0.0015979843054959924*dq0_5 - 1.8622846328028781*c_theta_1 + 0.010164745964105069*s_theta_1;
     const double ex_5 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_5));
     const double ev_5 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_5));
     const double qh0_1 = q0_1 + (0.31392101709287462*ex_1 + 0.54196278749940208*ex_2 + 0.54921526278040744*ex_3 + 0.47874389180340393*ex_4 + 0.27730274644011699*ex_5);
@@ -10079,8 +9981,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_4 = dq0_4 + (0.19329266427416747*ev_1 - 0.22203738202308262*ev_2 - 0.19623724846576263*ev_3 + 0.70545857544949286*ev_4 - 0.6141306762908757*ev_5);
     const double qh0_5 = q0_5 + (0.033557592338143025*ex_1 - 0.70630561201796638*ex_2 + 0.706309063033425*ex_3 - 0.033633678826402627*ex_4 + 0.0015979843054959924*ex_5);
     const double dqh0_5 = dq0_5 + (0.033557592338143025*ev_1 - 0.70630561201796638*ev_2 + 0.706309063033425*ev_3 - 0.033633678826402627*ev_4 + 0.0015979843054959924*ev_5);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[7] = A_1;
@@ -10091,8 +9993,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[10] = B1_1;
     coef[11] = B1_1 - sigma_1*A1_1;
     coef[12] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[13] = A_2;
@@ -10103,8 +10005,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[16] = B1_2;
     coef[17] = B1_2 - sigma_2*A1_2;
     coef[18] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[19] = A_3;
@@ -10115,8 +10017,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[22] = B1_3;
     coef[23] = B1_3 - sigma_3*A1_3;
     coef[24] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[25] = A_4;
@@ -10127,8 +10029,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[28] = B1_4;
     coef[29] = B1_4 - sigma_4*A1_4;
     coef[30] = -kappa_4*A1_4 - sigma_4*B1_4;
-    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[31] = A_5;
@@ -10480,24 +10382,20 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_4 = q0u_4 + (-0.03355788806692038*rx_1 + 0.70631003684535587*rx_2 - 0.70631003684535587*rx_3 + 0.03355788806692038*rx_4);
     const double dq0_4 = dq0u_4 + (-0.03355788806692038*rv_1 + 0.70631003684535587*rv_2 - 0.70631003684535587*rv_3 + 0.03355788806692038*rv_4);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
     const double xe_1 = x_st_1 + 0.37174803446018451*q0_1 + 0.70631003684535587*q0_2 + 0.60150095500754563*q0_3 - 0.03355788806692038*q0_4 - 0.48543586376452019*s_theta_1 - 0.023730359389328808*c_theta_1;
-    const double ve_1 = 0.37174803446018451*dqe_1 + 0.70631003684535587*dqe_2 + 0.60150095500754563*dqe_3 - 0.03355788806692038*dqe_4 - 3.3009638735987372*c_theta_1 + 0.1613664438474359*s_theta_1;
+    const double ve_1 = 0.37174803446018451*dq0_1 + 0.70631003684535587*dq0_2 + 0.60150095500754563*dq0_3 - 0.03355788806692038*dq0_4 - 3.3009638735987372*c_theta_1 + 0.1613664438474359*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.60150095500754563*q0_1 + 0.03355788806692038*q0_2 - 0.37174803446018451*q0_3 + 0.70631003684535587*q0_4 - 1.1463368191927137*s_theta_1 - 0.036551412060095233*c_theta_1;
-    const double ve_2 = 0.60150095500754563*dqe_1 + 0.03355788806692038*dqe_2 - 0.37174803446018451*dqe_3 + 0.70631003684535587*dqe_4 - 7.7950903705104526*c_theta_1 + 0.24854960200864756*s_theta_1;
+    const double ve_2 = 0.60150095500754563*dq0_1 + 0.03355788806692038*dq0_2 - 0.37174803446018451*dq0_3 + 0.70631003684535587*dq0_4 - 7.7950903705104526*c_theta_1 + 0.24854960200864756*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.60150095500754563*q0_1 - 0.03355788806692038*q0_2 - 0.37174803446018451*q0_3 - 0.70631003684535587*q0_4 - 1.1582221887361683*s_theta_1 - 0.036486070990623516*c_theta_1;
-    const double ve_3 = 0.60150095500754563*dqe_1 - 0.03355788806692038*dqe_2 - 0.37174803446018451*dqe_3 - 0.70631003684535587*dqe_4 - 7.8759108834059441*c_theta_1 + 0.24810528273623991*s_theta_1;
+    const double ve_3 = 0.60150095500754563*dq0_1 - 0.03355788806692038*dq0_2 - 0.37174803446018451*dq0_3 - 0.70631003684535587*dq0_4 - 7.8759108834059441*c_theta_1 + 0.24810528273623991*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.37174803446018451*q0_1 - 0.70631003684535587*q0_2 + 0.60150095500754563*q0_3 + 0.03355788806692038*q0_4 - 0.75330387846330904*s_theta_1 - 0.022292577252904455*c_theta_1;
-    const double ve_4 = 0.37174803446018451*dqe_1 - 0.70631003684535587*dqe_2 + 0.60150095500754563*dqe_3 + 0.03355788806692038*dqe_4 - 5.1224663735505009*c_theta_1 + 0.15158952531975028*s_theta_1;
+    const double ve_4 = 0.37174803446018451*dq0_1 - 0.70631003684535587*dq0_2 + 0.60150095500754563*dq0_3 + 0.03355788806692038*dq0_4 - 5.1224663735505009*c_theta_1 + 0.15158952531975028*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double qh0_1 = q0_1 + (0.37174803446018451*ex_1 + 0.60150095500754563*ex_2 + 0.60150095500754563*ex_3 + 0.37174803446018451*ex_4);
@@ -10508,8 +10406,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_3 = dq0_3 + (0.60150095500754563*ev_1 - 0.37174803446018451*ev_2 - 0.37174803446018451*ev_3 + 0.60150095500754563*ev_4);
     const double qh0_4 = q0_4 + (-0.03355788806692038*ex_1 + 0.70631003684535587*ex_2 - 0.70631003684535587*ex_3 + 0.03355788806692038*ex_4);
     const double dqh0_4 = dq0_4 + (-0.03355788806692038*ev_1 + 0.70631003684535587*ev_2 - 0.70631003684535587*ev_3 + 0.03355788806692038*ev_4);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[6] = A_1;
@@ -10520,8 +10418,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[9] = B1_1;
     coef[10] = B1_1 - sigma_1*A1_1;
     coef[11] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[12] = A_2;
@@ -10532,8 +10430,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[15] = B1_2;
     coef[16] = B1_2 - sigma_2*A1_2;
     coef[17] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[18] = A_3;
@@ -10544,8 +10442,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[21] = B1_3;
     coef[22] = B1_3 - sigma_3*A1_3;
     coef[23] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[24] = A_4;
@@ -10872,19 +10770,16 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_3 = q0u_3 + (-0.03365089018646162*rx_1 + 0.70746986340841567*rx_2 - 0.70594193101028946*rx_3);
     const double dq0_3 = dq0u_3 + (-0.03365089018646162*rv_1 + 0.70746986340841567*rv_2 - 0.70594193101028946*rv_3);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
     const double xe_1 = x_st_1 + 0.46435770273611859*q0_1 + 0.88500821549819142*q0_2 - 0.03365089018646162*q0_3 + 0.68311406848487388*s_theta_1 - 0.011666850300724486*c_theta_1;
-    const double ve_1 = 0.46435770273611859*dqe_1 + 0.88500821549819142*dqe_2 - 0.03365089018646162*dqe_3 + 4.6451756656971419*c_theta_1 + 0.079334582044926508*s_theta_1;
+    const double ve_1 = 0.46435770273611859*dq0_1 + 0.88500821549819142*dq0_2 - 0.03365089018646162*dq0_3 + 4.6451756656971419*c_theta_1 + 0.079334582044926508*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.63654017500940374*q0_1 - 0.30708793198019907*q0_2 + 0.70746986340841567*q0_3 + 0.65040183444562971*s_theta_1 - 0.014576104460672541*c_theta_1;
-    const double ve_2 = 0.63654017500940374*dqe_1 - 0.30708793198019907*dqe_2 + 0.70746986340841567*dqe_3 + 4.4227324742302816*c_theta_1 + 0.09911751033257328*s_theta_1;
+    const double ve_2 = 0.63654017500940374*dq0_1 - 0.30708793198019907*dq0_2 + 0.70746986340841567*dq0_3 + 4.4227324742302816*c_theta_1 + 0.09911751033257328*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.61578285905717789*q0_1 - 0.34993922405588002*q0_2 - 0.70594193101028946*q0_3 + 0.62009194178146243*s_theta_1 - 0.014054499785452595*c_theta_1;
-    const double ve_3 = 0.61578285905717789*dqe_1 - 0.34993922405588002*dqe_2 - 0.70594193101028946*dqe_3 + 4.216625204113944*c_theta_1 + 0.095570598541077648*s_theta_1;
+    const double ve_3 = 0.61578285905717789*dq0_1 - 0.34993922405588002*dq0_2 - 0.70594193101028946*dq0_3 + 4.216625204113944*c_theta_1 + 0.095570598541077648*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double qh0_1 = q0_1 + (0.46435770273611859*ex_1 + 0.63654017500940374*ex_2 + 0.61578285905717789*ex_3);
@@ -10893,8 +10788,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_2 = dq0_2 + (0.88500821549819142*ev_1 - 0.30708793198019907*ev_2 - 0.34993922405588002*ev_3);
     const double qh0_3 = q0_3 + (-0.03365089018646162*ex_1 + 0.70746986340841567*ex_2 - 0.70594193101028946*ex_3);
     const double dqh0_3 = dq0_3 + (-0.03365089018646162*ev_1 + 0.70746986340841567*ev_2 - 0.70594193101028946*ev_3);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[5] = A_1;
@@ -10905,8 +10800,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[8] = B1_1;
     coef[9] = B1_1 - sigma_1*A1_1;
     coef[10] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[11] = A_2;
@@ -10917,8 +10812,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[14] = B1_2;
     coef[15] = B1_2 - sigma_2*A1_2;
     coef[16] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[17] = A_3;
@@ -11554,44 +11449,36 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_8 = q0u_8 + (0.023650020034497805*rx_1 - 0.49833523427885656*rx_2 + 0.4994126060731548*rx_3 - 0.047428950843709357*rx_4 + 0.49997417228151997*rx_5 - 0.49890043736424677*rx_6 + 0.023730290418033831*rx_7 - 0.0011261933839037054*rx_8);
     const double dq0_8 = dq0u_8 + (0.023650020034497805*rv_1 - 0.49833523427885656*rv_2 + 0.4994126060731548*rv_3 - 0.047428950843709357*rv_4 + 0.49997417228151997*rv_5 - 0.49890043736424677*rv_6 + 0.023730290418033831*rv_7 - 0.0011261933839037054*rv_8);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
-    const double dqe_3 = dq0_3;
-    const double dqe_4 = dq0_4;
-    const double dqe_5 = dq0_5;
-    const double dqe_6 = dq0_6;
-    const double dqe_7 = dq0_7;
-    const double dqe_8 = dq0_8;
     const double xe_1 = x_st_1 + 0.18905485538342653*q0_1 + 0.32580382289818*q0_2 + 0.2103720466050957*q0_3 + 0.75787380531462267*q0_4 + 0.4832797792710643*q0_5 + 0.069249774430946084*q0_6 - 0.023808152119436685*q0_7 + 0.023650020034497805*q0_8 + 0.77031673718603433*s_theta_1 - 0.029153831951507433*c_theta_1;
-    const double ve_1 = 0.18905485538342653*dqe_1 + 0.32580382289818*dqe_2 + 0.2103720466050957*dqe_3 + 0.75787380531462267*dqe_4 + 0.4832797792710643*dqe_5 + 0.069249774430946084*dqe_6 - 0.023808152119436685*dqe_7 + 0.023650020034497805*dqe_8 + 5.2381538128650336*c_theta_1 + 0.19824605727025055*s_theta_1;
+    const double ve_1 = 0.18905485538342653*dq0_1 + 0.32580382289818*dq0_2 + 0.2103720466050957*dq0_3 + 0.75787380531462267*dq0_4 + 0.4832797792710643*dq0_5 + 0.069249774430946084*dq0_6 - 0.023808152119436685*dq0_7 + 0.023650020034497805*dq0_8 + 5.2381538128650336*c_theta_1 + 0.19824605727025055*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.35271600546162885*q0_1 + 0.47833112683847107*q0_2 + 0.15254194273140592*q0_3 - 0.084922030070538737*q0_4 - 0.33309366850145289*q0_5 - 0.080508394129974264*q0_6 + 0.50053866769726374*q0_7 - 0.49833523427885656*q0_8 + 0.78453680121927571*s_theta_1 - 0.041208572557345328*c_theta_1;
-    const double ve_2 = 0.35271600546162885*dqe_1 + 0.47833112683847107*dqe_2 + 0.15254194273140592*dqe_3 - 0.084922030070538737*dqe_4 - 0.33309366850145289*dqe_5 - 0.080508394129974264*dqe_6 + 0.50053866769726374*dqe_7 - 0.49833523427885656*dqe_8 + 5.3348502482910751*c_theta_1 + 0.28021829338994825*s_theta_1;
+    const double ve_2 = 0.35271600546162885*dq0_1 + 0.47833112683847107*dq0_2 + 0.15254194273140592*dq0_3 - 0.084922030070538737*dq0_4 - 0.33309366850145289*dq0_5 - 0.080508394129974264*dq0_6 + 0.50053866769726374*dq0_7 - 0.49833523427885656*dq0_8 + 5.3348502482910751*c_theta_1 + 0.28021829338994825*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double xe_3 = x_st_3 + 0.36328733298655408*q0_1 + 0.46907023493329769*q0_2 + 0.12960512663793575*q0_3 - 0.14523439437905206*q0_4 - 0.32587603839468693*q0_5 - 0.070976025173977289*q0_6 - 0.49945887776228332*q0_7 + 0.4994126060731548*q0_8 + 0.75286215550178626*s_theta_1 - 0.040363113160810427*c_theta_1;
-    const double ve_3 = 0.36328733298655408*dqe_1 + 0.46907023493329769*dqe_2 + 0.12960512663793575*dqe_3 - 0.14523439437905206*dqe_4 - 0.32587603839468693*dqe_5 - 0.070976025173977289*dqe_6 - 0.49945887776228332*dqe_7 + 0.4994126060731548*dqe_8 + 5.1194626574121465*c_theta_1 + 0.27446916949351091*s_theta_1;
+    const double ve_3 = 0.36328733298655408*dq0_1 + 0.46907023493329769*dq0_2 + 0.12960512663793575*dq0_3 - 0.14523439437905206*dq0_4 - 0.32587603839468693*dq0_5 - 0.070976025173977289*dq0_6 - 0.49945887776228332*dq0_7 + 0.4994126060731548*dq0_8 + 5.1194626574121465*c_theta_1 + 0.27446916949351091*s_theta_1;
     const double ex_3 = static_cast<double>(static_cast<long double>(x0[2]) - static_cast<long double>(xe_3));
     const double ev_3 = static_cast<double>(static_cast<long double>(v0[2]) - static_cast<long double>(ve_3));
     const double xe_4 = x_st_4 + 0.43077545573237408*q0_1 + 0.11772865064670132*q0_2 - 0.28793270446148483*q0_3 - 0.50192766407976597*q0_4 + 0.62987536330052285*q0_5 + 0.25834738219367481*q0_6 + 2.7036489936867782e-05*q0_7 - 0.047428950843709357*q0_8 + 0.056443447098189242*s_theta_1 - 0.010192071883147207*c_theta_1;
-    const double ve_4 = 0.43077545573237408*dqe_1 + 0.11772865064670132*dqe_2 - 0.28793270446148483*dqe_3 - 0.50192766407976597*dqe_4 + 0.62987536330052285*dqe_5 + 0.25834738219367481*dqe_6 + 2.7036489936867782e-05*dqe_7 - 0.047428950843709357*dqe_8 + 0.38381544026768682*c_theta_1 + 0.069306088805401012*s_theta_1;
+    const double ve_4 = 0.43077545573237408*dq0_1 + 0.11772865064670132*dq0_2 - 0.28793270446148483*dq0_3 - 0.50192766407976597*dq0_4 + 0.62987536330052285*dq0_5 + 0.25834738219367481*dq0_6 + 2.7036489936867782e-05*dq0_7 - 0.047428950843709357*dq0_8 + 0.38381544026768682*c_theta_1 + 0.069306088805401012*s_theta_1;
     const double ex_4 = static_cast<double>(static_cast<long double>(x0[3]) - static_cast<long double>(xe_4));
     const double ev_4 = static_cast<double>(static_cast<long double>(v0[3]) - static_cast<long double>(ve_4));
     const double xe_5 = x_st_5 + 0.44040214480379331*q0_1 - 0.29622610553028472*q0_2 - 0.33838673438124683*q0_3 + 0.20147689264632229*q0_4 - 0.10825653751591977*q0_5 - 0.22937344222877612*q0_6 + 0.49889046705219037*q0_7 + 0.49997417228151997*q0_8 - 0.66604426410594586*s_theta_1 + 0.024857181130858646*c_theta_1;
-    const double ve_5 = 0.44040214480379331*dqe_1 - 0.29622610553028472*dqe_2 - 0.33838673438124683*dqe_3 + 0.20147689264632229*dqe_4 - 0.10825653751591977*dqe_5 - 0.22937344222877612*dqe_6 + 0.49889046705219037*dqe_7 + 0.49997417228151997*dqe_8 - 4.529100995920432*c_theta_1 - 0.16902883168983879*s_theta_1;
+    const double ve_5 = 0.44040214480379331*dq0_1 - 0.29622610553028472*dq0_2 - 0.33838673438124683*dq0_3 + 0.20147689264632229*dq0_4 - 0.10825653751591977*dq0_5 - 0.22937344222877612*dq0_6 + 0.49889046705219037*dq0_7 + 0.49997417228151997*dq0_8 - 4.529100995920432*c_theta_1 - 0.16902883168983879*s_theta_1;
     const double ex_5 = static_cast<double>(static_cast<long double>(x0[4]) - static_cast<long double>(xe_5));
     const double ev_5 = static_cast<double>(static_cast<long double>(v0[4]) - static_cast<long double>(ve_5));
     const double xe_6 = x_st_6 + 0.43589961805796529*q0_1 - 0.31953600939024529*q0_2 - 0.30375461320089514*q0_3 + 0.22673822738225771*q0_4 - 0.14889331544913598*q0_5 - 0.20776516878119625*q0_6 - 0.49997394105718318*q0_7 - 0.49890043736424677*q0_8 - 0.70373411572584199*s_theta_1 + 0.026821055175622537*c_theta_1;
-    const double ve_6 = 0.43589961805796529*dqe_1 - 0.31953600939024529*dqe_2 - 0.30375461320089514*dqe_3 + 0.22673822738225771*dqe_4 - 0.14889331544913598*dqe_5 - 0.20776516878119625*dqe_6 - 0.49997394105718318*dqe_7 - 0.49890043736424677*dqe_8 - 4.7853919869357258*c_theta_1 - 0.18238317519423325*s_theta_1;
+    const double ve_6 = 0.43589961805796529*dq0_1 - 0.31953600939024529*dq0_2 - 0.30375461320089514*dq0_3 + 0.22673822738225771*dq0_4 - 0.14889331544913598*dq0_5 - 0.20776516878119625*dq0_6 - 0.49997394105718318*dq0_7 - 0.49890043736424677*dq0_8 - 4.7853919869357258*c_theta_1 - 0.18238317519423325*s_theta_1;
     const double ex_6 = static_cast<double>(static_cast<long double>(x0[5]) - static_cast<long double>(xe_6));
     const double ev_6 = static_cast<double>(static_cast<long double>(v0[5]) - static_cast<long double>(ve_6));
     const double xe_7 = x_st_7 + 0.32782211656824256*q0_1 - 0.40600192633122911*q0_2 + 0.46445378428905021*q0_3 + 0.025729757148253041*q0_4 - 0.19548865592385925*q0_5 + 0.6869997807403786*q0_6 + 0.023835216490554985*q0_7 + 0.023730290418033831*q0_8 - 0.79300148683548666*s_theta_1 + 0.033958443968618995*c_theta_1;
-    const double ve_7 = 0.32782211656824256*dqe_1 - 0.40600192633122911*dqe_2 + 0.46445378428905021*dqe_3 + 0.025729757148253041*dqe_4 - 0.19548865592385925*dqe_5 + 0.6869997807403786*dqe_6 + 0.023835216490554985*dqe_7 + 0.023730290418033831*dqe_8 - 5.3924101104813094*c_theta_1 - 0.23091741898660917*s_theta_1;
+    const double ve_7 = 0.32782211656824256*dq0_1 - 0.40600192633122911*dq0_2 + 0.46445378428905021*dq0_3 + 0.025729757148253041*dq0_4 - 0.19548865592385925*dq0_5 + 0.6869997807403786*dq0_6 + 0.023835216490554985*dq0_7 + 0.023730290418033831*dq0_8 - 5.3924101104813094*c_theta_1 - 0.23091741898660917*s_theta_1;
     const double ex_7 = static_cast<double>(static_cast<long double>(x0[6]) - static_cast<long double>(xe_7));
     const double ev_7 = static_cast<double>(static_cast<long double>(v0[6]) - static_cast<long double>(ve_7));
     const double xe_8 = x_st_8 + 0.17571179611819501*q0_1 - 0.27653851543599978*q0_2 + 0.6405326391208509*q0_3 - 0.22962132374332606*q0_4 + 0.28363107263465637*q0_5 - 0.59092695071740398*q0_6 - 0.0011337235195384709*q0_7 - 0.0011261933839037054*q0_8 - 0.51569244648566093*s_theta_1 + 0.023068606449467566*c_theta_1;
-    const double ve_8 = 0.17571179611819501*dqe_1 - 0.27653851543599978*dqe_2 + 0.6405326391208509*dqe_3 - 0.22962132374332606*dqe_4 + 0.28363107263465637*dqe_5 - 0.59092695071740398*dqe_6 - 0.0011337235195384709*dqe_7 - 0.0011261933839037054*dqe_8 - 3.5067086361024944*c_theta_1 - 0.15686652385637945*s_theta_1;
+    const double ve_8 = 0.17571179611819501*dq0_1 - 0.27653851543599978*dq0_2 + 0.6405326391208509*dq0_3 - 0.22962132374332606*dq0_4 + 0.28363107263465637*dq0_5 - 0.59092695071740398*dq0_6 - 0.0011337235195384709*dq0_7 - 0.0011261933839037054*dq0_8 - 3.5067086361024944*c_theta_1 - 0.15686652385637945*s_theta_1;
     const double ex_8 = static_cast<double>(static_cast<long double>(x0[7]) - static_cast<long double>(xe_8));
     const double ev_8 = static_cast<double>(static_cast<long double>(v0[7]) - static_cast<long double>(ve_8));
     const double qh0_1 = q0_1 + (0.18905485538342653*ex_1 + 0.35271600546162885*ex_2 + 0.36328733298655408*ex_3 + 0.43077545573237408*ex_4 + 0.44040214480379331*ex_5 + 0.43589961805796529*ex_6 + 0.32782211656824256*ex_7 + 0.17571179611819501*ex_8);
@@ -11610,8 +11497,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double dqh0_7 = dq0_7 + (-0.023808152119436685*ev_1 + 0.50053866769726374*ev_2 - 0.49945887776228332*ev_3 + 2.7036489936867782e-05*ev_4 + 0.49889046705219037*ev_5 - 0.49997394105718318*ev_6 + 0.023835216490554985*ev_7 - 0.0011337235195384709*ev_8);
     const double qh0_8 = q0_8 + (0.023650020034497805*ex_1 - 0.49833523427885656*ex_2 + 0.4994126060731548*ex_3 - 0.047428950843709357*ex_4 + 0.49997417228151997*ex_5 - 0.49890043736424677*ex_6 + 0.023730290418033831*ex_7 - 0.0011261933839037054*ex_8);
     const double dqh0_8 = dq0_8 + (0.023650020034497805*ev_1 - 0.49833523427885656*ev_2 + 0.4994126060731548*ev_3 - 0.047428950843709357*ev_4 + 0.49997417228151997*ev_5 - 0.49890043736424677*ev_6 + 0.023730290418033831*ev_7 - 0.0011261933839037054*ev_8);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
@@ -11622,8 +11509,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
@@ -11634,8 +11521,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
-    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
@@ -11646,8 +11533,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
-    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
@@ -11658,8 +11545,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
-    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
@@ -11670,8 +11557,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
-    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
@@ -11682,8 +11569,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
-    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
@@ -11694,8 +11581,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
-    // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;

@@ -46,15 +46,14 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
     const double xe_1 = x_st_1 + q0_1;
-    const double ve_1 = dqe_1;
+    const double ve_1 = dq0_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
-    // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1;
     coef[1] = A_1;

@@ -71,22 +71,20 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_2 = q0u_2 + (-0.45970084338098305*rx_1 + 1.2559260603991087*rx_2);
     const double dq0_2 = dq0u_2 + (-0.45970084338098305*rv_1 + 1.2559260603991087*rv_2);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
     const double xe_1 = x_st_1 + 0.88807383397711526*q0_1 - 0.45970084338098305*q0_2 - 0.73072581908970025*s_theta_1 - 0.0076388658185612014*c_theta_1;
-    const double ve_1 = 0.88807383397711526*dqe_1 - 0.45970084338098305*dqe_2 - 128.25341521011063*c_theta_1 + 1.3407362980313511*s_theta_1;
+    const double ve_1 = 0.88807383397711526*dq0_1 - 0.45970084338098305*dq0_2 - 128.25341521011063*c_theta_1 + 1.3407362980313511*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.32505758367186816*q0_1 + 0.62796303019955435*q0_2 + 0.24367804547490879*s_theta_1 + 0.0055583100824806502*c_theta_1;
-    const double ve_2 = 0.32505758367186816*dqe_1 + 0.62796303019955435*dqe_2 + 42.769176519333158*c_theta_1 - 0.97556734995759953*s_theta_1;
+    const double ve_2 = 0.32505758367186816*dq0_1 + 0.62796303019955435*dq0_2 + 42.769176519333158*c_theta_1 - 0.97556734995759953*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double qh0_1 = q0_1 + (0.88807383397711526*ex_1 + 0.65011516734373631*ex_2);
     const double dqh0_1 = dq0_1 + (0.88807383397711526*ev_1 + 0.65011516734373631*ev_2);
     const double qh0_2 = q0_2 + (-0.45970084338098305*ex_1 + 1.2559260603991087*ex_2);
     const double dqh0_2 = dq0_2 + (-0.45970084338098305*ev_1 + 1.2559260603991087*ev_2);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[4] = A_1;
@@ -97,8 +95,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[7] = B1_1;
     coef[8] = B1_1 - sigma_1*A1_1;
     coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[10] = A_2;
@@ -274,22 +272,20 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_2 = q0u_2 + (0.79026233699508808*rx_1 - 0.86658575885720845*rx_2);
     const double dq0_2 = dq0u_2 + (0.79026233699508808*rv_1 - 0.86658575885720845*rv_2);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
-    const double dqe_2 = dq0_2;
     const double xe_1 = x_st_1 + 0.6127686665676223*q0_1 + 0.79026233699508808*q0_2 - 0.72773816497394384*s_theta_1 - 0.06320081663878023*c_theta_1;
-    const double ve_1 = 0.6127686665676223*dqe_1 + 0.79026233699508808*dqe_2 - 127.72903679921824*c_theta_1 + 11.092697652437176*s_theta_1;
+    const double ve_1 = 0.6127686665676223*dq0_1 + 0.79026233699508808*dq0_2 - 127.72903679921824*c_theta_1 + 11.092697652437176*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double xe_2 = x_st_2 + 0.55879985740555538*q0_1 - 0.43329287942860423*q0_2 + 0.24194593481455143*s_theta_1 + 0.033337329577655686*c_theta_1;
-    const double ve_2 = 0.55879985740555538*dqe_1 - 0.43329287942860423*dqe_2 + 42.465164943569469*c_theta_1 - 5.8512047345551954*s_theta_1;
+    const double ve_2 = 0.55879985740555538*dq0_1 - 0.43329287942860423*dq0_2 + 42.465164943569469*c_theta_1 - 5.8512047345551954*s_theta_1;
     const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
     const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
     const double qh0_1 = q0_1 + (0.6127686665676223*ex_1 + 1.1175997148111108*ex_2);
     const double dqh0_1 = dq0_1 + (0.6127686665676223*ev_1 + 1.1175997148111108*ev_2);
     const double qh0_2 = q0_2 + (0.79026233699508808*ex_1 - 0.86658575885720845*ex_2);
     const double dqh0_2 = dq0_2 + (0.79026233699508808*ev_1 - 0.86658575885720845*ev_2);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[4] = A_1;
@@ -300,8 +296,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     coef[7] = B1_1;
     coef[8] = B1_1 - sigma_1*A1_1;
     coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
-    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[10] = A_2;
@@ -459,15 +455,14 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
     const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
     const double xe_1 = x_st_1 + 0.70710678118654757*q0_1 + 0.24361085541406602*s_theta_1 + 0.0034727598429402139*c_theta_1;
-    const double ve_1 = 0.70710678118654757*dqe_1 + 42.757383649085334*c_theta_1 - 0.60952179110963589*s_theta_1;
+    const double ve_1 = 0.70710678118654757*dq0_1 + 42.757383649085334*c_theta_1 - 0.60952179110963589*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_1));
     const double qh0_1 = q0_1 + (1.4142135623730951*ex_1);
     const double dqh0_1 = dq0_1 + (1.4142135623730951*ev_1);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
@@ -618,15 +613,14 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
     const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
     const double xe_1 = x_st_1 + 0.70710678118654757*q0_1 + 0.24360980929693524*s_theta_1 + 0.010435185731304798*c_theta_1;
-    const double ve_1 = 0.70710678118654757*dqe_1 + 42.757200039732517*c_theta_1 - 1.8315326671485346*s_theta_1;
+    const double ve_1 = 0.70710678118654757*dq0_1 + 42.757200039732517*c_theta_1 - 1.8315326671485346*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_1));
     const double qh0_1 = q0_1 + (1.4142135623730951*ex_1);
     const double dqh0_1 = dq0_1 + (1.4142135623730951*ev_1);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
@@ -777,15 +771,14 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
     const double xe_1 = x_st_1 + q0_1 - 0.7306902574434726*s_theta_1 - 0.0062477207570832737*c_theta_1;
-    const double ve_1 = dqe_1 - 128.24717360421684*c_theta_1 + 1.0965693334515465*s_theta_1;
+    const double ve_1 = dq0_1 - 128.24717360421684*c_theta_1 + 1.0965693334515465*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
@@ -936,15 +929,14 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
-    const double dqe_1 = dq0_1;
     const double xe_1 = x_st_1 + q0_1 - 0.72996736260496498*s_theta_1 - 0.048007721356019183*c_theta_1;
-    const double ve_1 = dqe_1 - 128.12029464434667*c_theta_1 + 8.4260800145738415*s_theta_1;
+    const double ve_1 = dq0_1 - 128.12029464434667*c_theta_1 + 8.4260800145738415*s_theta_1;
     const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
     const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
-    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (q_h'(0) = q'(0) less
-    // the drift p/c of a damped rigid-body mode) and the derivative pairs, consistent to rounding.
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
