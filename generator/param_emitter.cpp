@@ -884,6 +884,7 @@ std::string emit_sweep_kernel(const Derivation& d, const std::vector<std::string
     std::vector<std::string> structure;
     k.line(1, "// Model fields (written with the parameters where they use a kept one).");
     k.line(1, "const double g = " + fields.g() + ";");
+    k.line(1, "(void)g;  // unused without friction");
     for (std::size_t i = 0; i < n; ++i) {
         const Mass& ms = model.masses[i];
         const std::string p = "mass[" + idx(i) + "]", I = std::to_string(i);

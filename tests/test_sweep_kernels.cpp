@@ -394,6 +394,11 @@ TEST(SweepKernel, GenerateFlagWritesSweepKernelsTwiceTheSame) {
     EXPECT_NE(m1.find("# sweep kernels: parameters given at run time (configure): "), std::string::npos) << m1;
     EXPECT_EQ(m1, testing::slurp(d2 + "/coulomb-1dof.manifest"));
     EXPECT_EQ(testing::slurp(d1 + "/registry.cpp"), testing::slurp(d2 + "/registry.cpp"));
+    for (const char* kernel : {"/coulomb_1dof_c_s0.cpp", "/coulomb_1dof_c_s1.cpp"}) {
+        const std::string k1 = testing::slurp(d1 + kernel);
+        EXPECT_NE(k1.find("// parameters given to configure(), in this order: g, m, k, mu\n"), std::string::npos) << kernel;
+        EXPECT_EQ(k1, testing::slurp(d2 + kernel)) << kernel;
+    }
     const std::string bad = testing::temp_path("sweep_bad");
     const auto r = testing::run_hsnc("generate '" + model_path("coulomb-1dof.toml") + "' -o '" + bad + "' --params zzz");
     EXPECT_EQ(r.exit_code, 2);
