@@ -24,8 +24,8 @@ constexpr double omega_d_1 = 2.0;
 // Coefficient block (7 doubles):
 //  0:x_st_1 1:A_1 2:B_1 3:A1_1 4:B1_1 5:A2_1
 //  6:B2_1
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 0.0;  // m1
     // Modal forces p = V^T f.
@@ -147,8 +147,8 @@ constexpr double omega_d_1 = 4.0;
 // Coefficient block (7 doubles):
 //  0:x_st_1 1:A_1 2:B_1 3:A1_1 4:B1_1 5:A2_1
 //  6:B2_1
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 0.0;  // m1
     // Modal forces p = V^T f.

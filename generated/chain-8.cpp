@@ -57,6 +57,17 @@ constexpr double kappa_8 = 387.92707844590308;
 constexpr double omega_d_8 = 19.69586450110538;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (58 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:x_st_5 7:x_st_6 8:x_st_7 9:x_st_8 10:A_1 11:B_1
@@ -68,8 +79,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  42:A1_6 43:B1_6 44:A2_6 45:B2_6 46:A_7 47:B_7
 //  48:A1_7 49:B1_7 50:A2_7 51:B2_7 52:A_8 53:B_8
 //  54:A1_8 55:B1_8 56:A2_8 57:B2_8
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = -0.49050000000000005*sgn[1];  // m2
@@ -88,8 +99,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_6 = 0.40824829046386302*f_1 - 0.40824829046386302*f_2 - 1.365920598290747e-57*f_3 + 0.40824829046386302*f_4 - 0.40824829046386302*f_5 + 4.1352412481901592e-58*f_6 + 0.40824829046386302*f_7 - 0.40824829046386302*f_8;
     const double p_7 = -0.30301298511469577*f_1 + 0.46424282688001262*f_2 - 0.40824829046386302*f_3 + 0.16122984176531685*f_4 + 0.16122984176531685*f_5 - 0.40824829046386302*f_6 + 0.46424282688001262*f_7 - 0.30301298511469577*f_8;
     const double p_8 = -0.16122984176531685*f_1 + 0.30301298511469577*f_2 - 0.40824829046386302*f_3 + 0.46424282688001262*f_4 - 0.46424282688001262*f_5 + 0.40824829046386302*f_6 - 0.30301298511469577*f_7 + 0.16122984176531685*f_8;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -630,6 +641,17 @@ constexpr double kappa_7 = 384.76462934158582;
 constexpr double omega_d_7 = 19.615418153625626;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (52 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:x_st_5 7:x_st_6 8:x_st_7 9:A_1 10:B_1 11:A1_1
@@ -640,8 +662,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  36:B1_5 37:A2_5 38:B2_5 39:A_6 40:B_6 41:A1_6
 //  42:B1_6 43:A2_6 44:B2_6 45:A_7 46:B_7 47:A1_7
 //  48:B1_7 49:A2_7 50:B2_7 51:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = -0.49050000000000005*sgn[1];  // m2
@@ -658,8 +680,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_5 = 0.46193976625564337*f_1 - 0.35355339059327379*f_2 - 0.19134171618254489*f_3 + 0.5*f_4 - 0.19134171618254489*f_5 - 0.35355339059327379*f_6 + 0.46193976625564337*f_7;
     const double p_6 = -0.35355339059327379*f_1 + 0.5*f_2 - 0.35355339059327379*f_3 - 1.4803777341981851e-57*f_4 + 0.35355339059327379*f_5 - 0.5*f_6 + 0.35355339059327379*f_7;
     const double p_7 = -0.19134171618254489*f_1 + 0.35355339059327379*f_2 - 0.46193976625564337*f_3 + 0.5*f_4 - 0.46193976625564337*f_5 + 0.35355339059327379*f_6 - 0.19134171618254489*f_7;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -1160,6 +1182,17 @@ constexpr double kappa_6 = 380.18273840502411;
 constexpr double omega_d_6 = 19.498275267444146;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (46 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:x_st_5 7:x_st_6 8:A_1 9:B_1 10:A1_1 11:B1_1
@@ -1169,8 +1202,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  30:A2_4 31:B2_4 32:A_5 33:B_5 34:A1_5 35:B1_5
 //  36:A2_5 37:B2_5 38:A_6 39:B_6 40:A1_6 41:B1_6
 //  42:A2_6 43:B2_6 44:x_stuck_6 45:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = -0.49050000000000005*sgn[1];  // m2
@@ -1185,8 +1218,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_4 = 0.52112088916960242*f_1 - 0.23192061392432986*f_2 - 0.41790650594127499*f_3 + 0.41790650594127499*f_4 + 0.23192061392432986*f_5 - 0.52112088916960242*f_6;
     const double p_5 = -0.41790650594127499*f_1 + 0.52112088916960242*f_2 - 0.23192061392432986*f_3 - 0.23192061392432986*f_4 + 0.52112088916960242*f_5 - 0.41790650594127499*f_6;
     const double p_6 = 0.23192061392432986*f_1 - 0.41790650594127499*f_2 + 0.52112088916960242*f_3 - 0.52112088916960242*f_4 + 0.41790650594127499*f_5 - 0.23192061392432986*f_6;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -1647,6 +1680,17 @@ constexpr double kappa_5 = 373.19440960446502;
 constexpr double omega_d_5 = 19.318240334059027;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (40 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:x_st_5 7:A_1 8:B_1 9:A1_1 10:B1_1 11:A2_1
@@ -1655,8 +1699,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  24:B2_3 25:A_4 26:B_4 27:A1_4 28:B1_4 29:A2_4
 //  30:B2_4 31:A_5 32:B_5 33:A1_5 34:B1_5 35:A2_5
 //  36:B2_5 37:x_stuck_5 38:x_stuck_6 39:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = -0.49050000000000005*sgn[1];  // m2
@@ -1669,8 +1713,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_3 = 0.57735026918962573*f_1 - 3.6690583686936528e-58*f_2 - 0.57735026918962573*f_3 + 5.7483664979691044e-58*f_4 + 0.57735026918962573*f_5;
     const double p_4 = 0.5*f_1 - 0.5*f_2 + 3.7693469402644246e-58*f_3 + 0.5*f_4 - 0.5*f_5;
     const double p_5 = 0.28867513459481287*f_1 - 0.5*f_2 + 0.57735026918962573*f_3 - 0.5*f_4 + 0.28867513459481287*f_5;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -2091,6 +2135,17 @@ constexpr double kappa_4 = 361.79330850178025;
 constexpr double omega_d_4 = 19.020865082897263;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (34 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:A_1 7:B_1 8:A1_1 9:B1_1 10:A2_1 11:B2_1
@@ -2098,8 +2153,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  18:A_3 19:B_3 20:A1_3 21:B1_3 22:A2_3 23:B2_3
 //  24:A_4 25:B_4 26:A1_4 27:B1_4 28:A2_4 29:B2_4
 //  30:x_stuck_4 31:x_stuck_5 32:x_stuck_6 33:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = -0.49050000000000005*sgn[1];  // m2
@@ -2110,8 +2165,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_2 = 0.60150095500754563*f_1 + 0.37174803446018451*f_2 - 0.37174803446018451*f_3 - 0.60150095500754563*f_4;
     const double p_3 = 0.60150095500754563*f_1 - 0.37174803446018451*f_2 - 0.37174803446018451*f_3 + 0.60150095500754563*f_4;
     const double p_4 = -0.37174803446018451*f_1 + 0.60150095500754563*f_2 - 0.60150095500754563*f_3 + 0.37174803446018451*f_4;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -2492,14 +2547,25 @@ constexpr double kappa_3 = 341.41226359662238;
 constexpr double omega_d_3 = 18.477344603503568;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (28 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:A_1
 //  6:B_1 7:A1_1 8:B1_1 9:A2_1 10:B2_1 11:A_2
 //  12:B_2 13:A1_2 14:B1_2 15:A2_2 16:B2_2 17:A_3
 //  18:B_3 19:A1_3 20:B1_3 21:A2_3 22:B2_3 23:x_stuck_3
 //  24:x_stuck_4 25:x_stuck_5 26:x_stuck_6 27:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = -0.49050000000000005*sgn[1];  // m2
@@ -2508,8 +2574,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_1 = 0.5*f_1 + 0.70710678118654757*f_2 + 0.5*f_3;
     const double p_2 = 0.70710678118654757*f_1 + 5.1766325731969706e-59*f_2 - 0.70710678118654757*f_3;
     const double p_3 = -0.5*f_1 + 0.70710678118654757*f_2 - 0.5*f_3;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -2850,21 +2916,32 @@ constexpr double kappa_2 = 299.99277499999999;
 constexpr double omega_d_2 = 17.320299506648261;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (22 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:A_1 5:B_1
 //  6:A1_1 7:B1_1 8:A2_1 9:B2_1 10:A_2 11:B_2
 //  12:A1_2 13:B1_2 14:A2_2 15:B2_2 16:x_stuck_2 17:x_stuck_3
 //  18:x_stuck_4 19:x_stuck_5 20:x_stuck_6 21:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = 100.0*x0[2] - 0.49050000000000005*sgn[1];  // m2
     // Modal forces p = V^T f.
     const double p_1 = 0.70710678118654757*f_1 + 0.70710678118654757*f_2;
     const double p_2 = 0.70710678118654757*f_1 - 0.70710678118654757*f_2;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -3165,18 +3242,29 @@ constexpr double kappa_1 = 199.99639999999999;
 constexpr double omega_d_1 = 14.142008343937576;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_1 10:x_stuck_2 11:x_stuck_3
 //  12:x_stuck_4 13:x_stuck_5 14:x_stuck_6 15:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 100.0*x0[1] - 0.49050000000000005*sgn[0];  // m1
     // Modal forces p = V^T f.
     const double p_1 = f_1;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -3442,18 +3530,29 @@ constexpr double kappa_1 = 199.99639999999999;
 constexpr double omega_d_1 = 14.142008343937576;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0 10:x_stuck_2 11:x_stuck_3
 //  12:x_stuck_4 13:x_stuck_5 14:x_stuck_6 15:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 100.0*x0[0] + 100.0*x0[2] - 0.49050000000000005*sgn[1];  // m2
     // Modal forces p = V^T f.
     const double p_1 = f_1;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -3719,18 +3818,29 @@ constexpr double kappa_1 = 199.99639999999999;
 constexpr double omega_d_1 = 14.142008343937576;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0 10:x_stuck_1 11:x_stuck_3
 //  12:x_stuck_4 13:x_stuck_5 14:x_stuck_6 15:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 100.0*x0[1] + 100.0*x0[3] - 0.49050000000000005*sgn[2];  // m3
     // Modal forces p = V^T f.
     const double p_1 = f_1;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -3996,18 +4106,29 @@ constexpr double kappa_1 = 199.99639999999999;
 constexpr double omega_d_1 = 14.142008343937576;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0 10:x_stuck_1 11:x_stuck_2
 //  12:x_stuck_4 13:x_stuck_5 14:x_stuck_6 15:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 100.0*x0[2] + 100.0*x0[4] - 0.49050000000000005*sgn[3];  // m4
     // Modal forces p = V^T f.
     const double p_1 = f_1;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -4273,18 +4394,29 @@ constexpr double kappa_1 = 199.99639999999999;
 constexpr double omega_d_1 = 14.142008343937576;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0 10:x_stuck_1 11:x_stuck_2
 //  12:x_stuck_3 13:x_stuck_5 14:x_stuck_6 15:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 100.0*x0[3] + 100.0*x0[5] - 0.49050000000000005*sgn[4];  // m5
     // Modal forces p = V^T f.
     const double p_1 = f_1;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -4550,18 +4682,29 @@ constexpr double kappa_1 = 199.99639999999999;
 constexpr double omega_d_1 = 14.142008343937576;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0 10:x_stuck_1 11:x_stuck_2
 //  12:x_stuck_3 13:x_stuck_4 14:x_stuck_6 15:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 100.0*x0[4] + 100.0*x0[6] - 0.49050000000000005*sgn[5];  // m6
     // Modal forces p = V^T f.
     const double p_1 = f_1;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -4827,18 +4970,29 @@ constexpr double kappa_1 = 199.99639999999999;
 constexpr double omega_d_1 = 14.142008343937576;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0 10:x_stuck_1 11:x_stuck_2
 //  12:x_stuck_3 13:x_stuck_4 14:x_stuck_5 15:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 100.0*x0[5] + 100.0*x0[7] - 0.49050000000000005*sgn[6];  // m7
     // Modal forces p = V^T f.
     const double p_1 = f_1;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -5104,18 +5258,29 @@ constexpr double kappa_1 = 199.99639999999999;
 constexpr double omega_d_1 = 14.142008343937576;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0 10:x_stuck_1 11:x_stuck_2
 //  12:x_stuck_3 13:x_stuck_4 14:x_stuck_5 15:x_stuck_6
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 100.0*x0[6] - 0.49050000000000005*sgn[7];  // m8
     // Modal forces p = V^T f.
     const double p_1 = f_1;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -5376,13 +5541,24 @@ namespace k_chain_8_c000_s11111111 {
 // Modal constants.
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_stuck_0 3:x_stuck_1 4:x_stuck_2 5:x_stuck_3
 //  6:x_stuck_4 7:x_stuck_5 8:x_stuck_6 9:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -5642,6 +5818,17 @@ constexpr double kappa_8 = 1209.90234375;
 constexpr double omega_d_8 = 34.783650523629632;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (58 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:x_st_5 7:x_st_6 8:x_st_7 9:x_st_8 10:A_1 11:B_1
@@ -5653,8 +5840,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  42:A1_6 43:B1_6 44:A2_6 45:B2_6 46:A_7 47:B_7
 //  48:A1_7 49:B1_7 50:A2_7 51:B2_7 52:A_8 53:B_8
 //  54:A1_8 55:B1_8 56:A2_8 57:B2_8
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = -0.49050000000000005*sgn[1];  // m2
@@ -5673,8 +5860,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_6 = -0.35847221306899663*f_1 + 0.50207836299755648*f_2 - 0.34474179738984678*f_3 - 0.019230903752466458*f_4 + 0.37167671820934001*f_5 - 0.50134176949663634*f_6 + 0.33050561490979996*f_7 + 0.038433594063038472*f_8;
     const double p_7 = -0.19501993222880004*f_1 + 0.35954859061125133*f_2 - 0.46786199749554103*f_3 + 0.50302540312150001*f_4 - 0.45954102570827188*f_5 + 0.34420762702646962*f_6 - 0.17505752922207354*f_7 - 0.02146273019284526*f_8;
     const double p_8 = -9.8503756273555532e-08*f_1 + 9.9488793836291071e-07*f_2 - 9.9498644211918418e-06*f_3 + 9.9498742715674676e-05*f_4 - 0.00099498743700712224*f_5 + 0.0099498743710562595*f_6 - 0.0994987437106611*f_7 + 0.99498743710662074*f_8;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -6180,13 +6367,24 @@ namespace k_chain_8_c001_s11111111 {
 // Modal constants.
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_stuck_0 3:x_stuck_1 4:x_stuck_2 5:x_stuck_3
 //  6:x_stuck_4 7:x_stuck_5 8:x_stuck_6 9:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -6446,6 +6644,17 @@ constexpr double kappa_8 = 2304.4182733039002;
 constexpr double omega_d_8 = 48.004356815854749;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (58 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:x_st_5 7:x_st_6 8:x_st_7 9:x_st_8 10:A_1 11:B_1
@@ -6457,8 +6666,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  42:A1_6 43:B1_6 44:A2_6 45:B2_6 46:A_7 47:B_7
 //  48:A1_7 49:B1_7 50:A2_7 51:B2_7 52:A_8 53:B_8
 //  54:A1_8 55:B1_8 56:A2_8 57:B2_8
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = -0.49050000000000005*sgn[1];  // m2
@@ -6477,8 +6686,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_6 = 0.17094037076839277*f_1 - 0.19462346326358335*f_2 + 0.050647381044973176*f_3 + 0.13695909375336082*f_4 - 0.20658159969620318*f_5 - 0.17887022284969076*f_6 + 0.68734733223073397*f_7 - 0.60370628416503103*f_8;
     const double p_7 = 0.34427415140897727*f_1 - 0.56863727328834412*f_2 + 0.59494346701943712*f_3 - 0.41403025914791469*f_4 + 0.088909900005658599*f_5 + 0.10511607871282862*f_6 - 0.10046823554089551*f_7 + 0.060827205952185069*f_8;
     const double p_8 = 3.6235058980809498e-06*f_1 - 7.6266171318004641e-05*f_2 + 0.0016015978049290199*f_3 - 0.033633554099140955*f_4 + 0.70630463199228721*f_5 - 0.706304624149241*f_6 + 0.03363338117864878*f_7 - 0.0015979660833513988*f_8;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -7019,6 +7228,17 @@ constexpr double kappa_7 = 2304.4129124794281;
 constexpr double omega_d_7 = 48.004300978968836;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (52 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:x_st_5 7:x_st_6 8:x_st_7 9:A_1 10:B_1 11:A1_1
@@ -7029,8 +7249,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  36:B1_5 37:A2_5 38:B2_5 39:A_6 40:B_6 41:A1_6
 //  42:B1_6 43:A2_6 44:B2_6 45:A_7 46:B_7 47:A1_7
 //  48:B1_7 49:A2_7 50:B2_7 51:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = -0.49050000000000005*sgn[1];  // m2
@@ -7047,8 +7267,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_5 = 0.51332465560256402*f_1 - 0.40282309764005475*f_2 - 0.19721584177235119*f_3 + 0.55758499231892111*f_4 - 0.24033982860521644*f_5 - 0.25203459480667589*f_6 + 0.32117217790394204*f_7;
     const double p_6 = 0.34890156562148933*f_1 - 0.57501367172307072*f_2 + 0.59876034033609971*f_3 - 0.4117843701989588*f_4 + 0.079888499328756898*f_5 + 0.098091604191195461*f_6 - 0.059519131387043137*f_7;
     const double p_7 = 3.6235656511060938e-06*f_1 - 7.6267234666962098e-05*f_2 + 0.0016016160363883712*f_3 - 0.033633850879604008*f_4 + 0.70630905670258981*f_5 - 0.70630559784406499*f_6 + 0.033557591470408731*f_7;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -7549,6 +7769,17 @@ constexpr double kappa_6 = 2302.0433143820833;
 constexpr double omega_d_6 = 47.979613528894575;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (46 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:x_st_5 7:x_st_6 8:A_1 9:B_1 10:A1_1 11:B1_1
@@ -7558,8 +7789,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  30:A2_4 31:B2_4 32:A_5 33:B_5 34:A1_5 35:B1_5
 //  36:A2_5 37:B2_5 38:A_6 39:B_6 40:A1_6 41:B1_6
 //  42:A2_6 43:B2_6 44:x_stuck_6 45:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = -0.49050000000000005*sgn[1];  // m2
@@ -7574,8 +7805,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_4 = 0.56969736786554714*f_1 - 0.40965777889932597*f_2 - 0.27512079918402266*f_3 + 0.60749154447384679*f_4 - 0.16171400267170732*f_5 - 0.19166784765149933*f_6;
     const double p_5 = 0.35354302719964958*f_1 - 0.58082255788403858*f_2 + 0.6006685334669094*f_3 - 0.40599321051658449*f_4 + 0.066322460199700464*f_5 + 0.087296284925294509*f_6;
     const double p_6 = 3.6459675486191742e-06*f_1 - 7.6652319973633226e-05*f_2 + 0.0016078818584643933*f_3 - 0.033727234591057705*f_4 + 0.70746885654494163*f_5 - 0.70593746146021352*f_6;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -8046,6 +8277,17 @@ constexpr double kappa_7 = 2302.0433020889063;
 constexpr double omega_d_7 = 47.979613400786242;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (52 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:x_st_5 7:x_st_6 8:x_st_7 9:A_1 10:B_1 11:A1_1
@@ -8056,8 +8298,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  36:B1_5 37:A2_5 38:B2_5 39:A_6 40:B_6 41:A1_6
 //  42:B1_6 43:A2_6 44:B2_6 45:A_7 46:B_7 47:A1_7
 //  48:B1_7 49:A2_7 50:B2_7 51:x_stuck_3
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = -0.49050000000000005*sgn[1];  // m2
@@ -8074,8 +8316,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_5 = -0.18889832178586227*f_4 - 0.15263982846796956*f_5 + 0.72112999649115506*f_6 - 0.64883744879008054*f_7;
     const double p_6 = -0.5*f_1 + 0.70710678118654757*f_2 - 0.5*f_3;
     const double p_7 = -0.70593747576578181*f_4 + 0.70746886298994682*f_5 - 0.033727061282787268*f_6 + 0.0016042276568910725*f_7;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -8546,13 +8788,24 @@ namespace k_chain_8_c010_s11111111 {
 // Modal constants.
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_stuck_0 3:x_stuck_1 4:x_stuck_2 5:x_stuck_3
 //  6:x_stuck_4 7:x_stuck_5 8:x_stuck_6 9:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -8812,6 +9065,17 @@ constexpr double kappa_8 = 2304.4129124794908;
 constexpr double omega_d_8 = 48.004300978969482;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (58 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:x_st_5 7:x_st_6 8:x_st_7 9:x_st_8 10:A_1 11:B_1
@@ -8823,8 +9087,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  42:A1_6 43:B1_6 44:A2_6 45:B2_6 46:A_7 47:B_7
 //  48:A1_7 49:B1_7 50:A2_7 51:B2_7 52:A_8 53:B_8
 //  54:A1_8 55:B1_8 56:A2_8 57:B2_8
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = 50.0 - 0.49050000000000005*sgn[1];  // m2
@@ -8843,8 +9107,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_6 = 0.16132189670832656*f_1 - 0.17455959592222609*f_2 - 0.15618493691093555*f_3 + 0.52730729520014696*f_4 - 0.41439196712461374*f_5 - 0.078911288144302746*f_6 + 0.49977853183304155*f_7 - 0.46187790630158815*f_8;
     const double p_7 = 0.042363034756029191*f_1 - 0.074106516966252228*f_2 - 0.059435651764184194*f_3 + 0.32478716157974158*f_4 - 0.50872112545075554*f_5 + 0.56512903378777435*f_6 - 0.47987056944794448*f_7 + 0.27431829809484126*f_8;
     const double p_8 = 0.033557591470402277*f_1 - 0.70630559784395019*f_2 + 0.7063090567025152*f_3 - 0.033633850880484692*f_4 + 0.0016016160550201795*f_5 - 7.6267625941484944e-05*f_6 + 3.6317823954159418e-06*f_7 - 1.7255118790902426e-07*f_8;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -9380,6 +9644,17 @@ constexpr double kappa_6 = 2304.4129124518627;
 constexpr double omega_d_6 = 48.004300978681719;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (46 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:x_st_5 7:x_st_6 8:A_1 9:B_1 10:A1_1 11:B1_1
@@ -9389,8 +9664,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  30:A2_4 31:B2_4 32:A_5 33:B_5 34:A1_5 35:B1_5
 //  36:A2_5 37:B2_5 38:A_6 39:B_6 40:A1_6 41:B1_6
 //  42:A2_6 43:B2_6 44:x_stuck_6 45:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = 50.0 - 0.49050000000000005*sgn[1];  // m2
@@ -9405,8 +9680,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_4 = 0.6845449333826723*f_1 - 0.3284175741658667*f_2 - 0.34646899247328022*f_3 + 0.31412550520408278*f_4 + 0.19576400384241474*f_5 - 0.40804532860153792*f_6;
     const double p_5 = -0.094458109064740406*f_1 + 0.13921515035771775*f_2 + 0.11649365574661009*f_3 - 0.53812188620565149*f_4 + 0.67660627014278962*f_5 - 0.45908041398377708*f_6;
     const double p_6 = 0.033557591472812565*f_1 - 0.70630559788540681*f_2 + 0.70630905672618716*f_3 - 0.033633850490783018*f_4 + 0.0016016078197819729*f_5 - 7.6094683486602324e-05*f_6;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -9867,6 +10142,17 @@ constexpr double kappa_5 = 2304.4129002956156;
 constexpr double omega_d_5 = 48.004300852065491;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (40 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:x_st_5 7:A_1 8:B_1 9:A1_1 10:B1_1 11:A2_1
@@ -9875,8 +10161,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  24:B2_3 25:A_4 26:B_4 27:A1_4 28:B1_4 29:A2_4
 //  30:B2_4 31:A_5 32:B_5 33:A1_5 34:B1_5 35:A2_5
 //  36:B2_5 37:x_stuck_5 38:x_stuck_6 39:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = 50.0 - 0.49050000000000005*sgn[1];  // m2
@@ -9889,8 +10175,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_3 = 0.84469915351503455*f_1 - 0.26016485042534676*f_2 - 0.3060197863998369*f_3 - 0.1041313167780359*f_4 + 0.33809192515055947*f_5;
     const double p_4 = 0.19329266427416747*f_1 - 0.22203738202308262*f_2 - 0.19623724846576263*f_3 + 0.70545857544949286*f_4 - 0.6141306762908757*f_5;
     const double p_5 = 0.033557592338143025*f_1 - 0.70630561201796638*f_2 + 0.706309063033425*f_3 - 0.033633678826402627*f_4 + 0.0015979843054959924*f_5;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -10311,6 +10597,17 @@ constexpr double kappa_4 = 2304.4075393626272;
 constexpr double omega_d_4 = 48.004245013984203;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (34 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:A_1 7:B_1 8:A1_1 9:B1_1 10:A2_1 11:B2_1
@@ -10318,8 +10615,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  18:A_3 19:B_3 20:A1_3 21:B1_3 22:A2_3 23:B2_3
 //  24:A_4 25:B_4 26:A1_4 27:B1_4 28:A2_4 29:B2_4
 //  30:x_stuck_4 31:x_stuck_5 32:x_stuck_6 33:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = 50.0 - 0.49050000000000005*sgn[1];  // m2
@@ -10330,8 +10627,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_2 = 0.70631003684535587*f_1 + 0.03355788806692038*f_2 - 0.03355788806692038*f_3 - 0.70631003684535587*f_4;
     const double p_3 = 0.60150095500754563*f_1 - 0.37174803446018451*f_2 - 0.37174803446018451*f_3 + 0.60150095500754563*f_4;
     const double p_4 = -0.03355788806692038*f_1 + 0.70631003684535587*f_2 - 0.70631003684535587*f_3 + 0.03355788806692038*f_4;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -10712,14 +11009,25 @@ constexpr double kappa_3 = 2302.037905293706;
 constexpr double omega_d_3 = 47.979557160250096;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (28 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:A_1
 //  6:B_1 7:A1_1 8:B1_1 9:A2_1 10:B2_1 11:A_2
 //  12:B_2 13:A1_2 14:B1_2 15:A2_2 16:B2_2 17:A_3
 //  18:B_3 19:A1_3 20:B1_3 21:A2_3 22:B2_3 23:x_stuck_3
 //  24:x_stuck_4 25:x_stuck_5 26:x_stuck_6 27:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = 50.0 - 0.49050000000000005*sgn[1];  // m2
@@ -10728,8 +11036,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_1 = 0.46435770273611859*f_1 + 0.63654017500940374*f_2 + 0.61578285905717789*f_3;
     const double p_2 = 0.88500821549819142*f_1 - 0.30708793198019907*f_2 - 0.34993922405588002*f_3;
     const double p_3 = -0.03365089018646162*f_1 + 0.70746986340841567*f_2 - 0.70594193101028946*f_3;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -11060,13 +11368,24 @@ namespace k_chain_8_c100_s11111111 {
 // Modal constants.
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_stuck_0 3:x_stuck_1 4:x_stuck_2 5:x_stuck_3
 //  6:x_stuck_4 7:x_stuck_5 8:x_stuck_6 9:x_stuck_7
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -11326,6 +11645,17 @@ constexpr double kappa_8 = 2306.7796294162927;
 constexpr double omega_d_8 = 48.028945745417865;
 constexpr double Omega_1 = 6.7999999999999998;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (58 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:x_st_3 5:x_st_4
 //  6:x_st_5 7:x_st_6 8:x_st_7 9:x_st_8 10:A_1 11:B_1
@@ -11337,8 +11667,8 @@ constexpr double Omega_1 = 6.7999999999999998;
 //  42:A1_6 43:B1_6 44:A2_6 45:B2_6 46:A_7 47:B_7
 //  48:A1_7 49:B1_7 50:A2_7 51:B2_7 52:A_8 53:B_8
 //  54:A1_8 55:B1_8 56:A2_8 57:B2_8
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.49050000000000005*sgn[0];  // m1
     const double f_2 = 50.0 - 0.49050000000000005*sgn[1];  // m2
@@ -11357,8 +11687,8 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
     const double p_6 = 0.069249774430946084*f_1 - 0.080508394129974264*f_2 - 0.070976025173977289*f_3 + 0.25834738219367481*f_4 - 0.22937344222877612*f_5 - 0.20776516878119625*f_6 + 0.6869997807403786*f_7 - 0.59092695071740398*f_8;
     const double p_7 = -0.023808152119436685*f_1 + 0.50053866769726374*f_2 - 0.49945887776228332*f_3 + 2.7036489936867782e-05*f_4 + 0.49889046705219037*f_5 - 0.49997394105718318*f_6 + 0.023835216490554985*f_7 - 0.0011337235195384709*f_8;
     const double p_8 = 0.023650020034497805*f_1 - 0.49833523427885656*f_2 + 0.4994126060731548*f_3 - 0.047428950843709357*f_4 + 0.49997417228151997*f_5 - 0.49890043736424677*f_6 + 0.023730290418033831*f_7 - 0.0011261933839037054*f_8;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;

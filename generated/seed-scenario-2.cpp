@@ -27,20 +27,31 @@ constexpr double kappa_2 = 28.660254037844386;
 constexpr double omega_d_2 = 5.3535272519941826;
 constexpr double Omega_1 = 17.551500000000001;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:A_1 5:B_1
 //  6:A1_1 7:B1_1 8:A2_1 9:B2_1 10:A_2 11:B_2
 //  12:A1_2 13:B1_2 14:A2_2 15:B2_2
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -5.8860000000000001*sgn[0];  // m1
     const double f_2 = -11.772*sgn[1];  // m2
     // Modal forces p = V^T f.
     const double p_1 = 0.88807383397711526*f_1 + 0.32505758367186816*f_2;
     const double p_2 = -0.45970084338098305*f_1 + 0.62796303019955435*f_2;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -226,20 +237,31 @@ constexpr double kappa_2 = 175.31189202104505;
 constexpr double omega_d_2 = 13.240539717890847;
 constexpr double Omega_1 = 17.551500000000001;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:A_1 5:B_1
 //  6:A1_1 7:B1_1 8:A2_1 9:B2_1 10:A_2 11:B_2
 //  12:A1_2 13:B1_2 14:A2_2 15:B2_2
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 20.0 - 5.8860000000000001*sgn[0];  // m1
     const double f_2 = -20.0 - 11.772*sgn[1];  // m2
     // Modal forces p = V^T f.
     const double p_1 = 0.6127686665676223*f_1 + 0.55879985740555538*f_2;
     const double p_2 = 0.79026233699508808*f_1 - 0.43329287942860423*f_2;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -420,17 +442,28 @@ constexpr double kappa_1 = 25.0;
 constexpr double omega_d_1 = 5.0;
 constexpr double Omega_1 = 17.551500000000001;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 10.0*x0[0] - 11.772*sgn[1];  // m2
     // Modal forces p = V^T f.
     const double p_1 = 0.70710678118654757*f_1;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -577,17 +610,28 @@ constexpr double kappa_1 = 75.0;
 constexpr double omega_d_1 = 8.6602540378443873;
 constexpr double Omega_1 = 17.551500000000001;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -20.0 + 110.0*x0[0] - 11.772*sgn[1];  // m2
     // Modal forces p = V^T f.
     const double p_1 = 0.70710678118654757*f_1;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -734,17 +778,28 @@ constexpr double kappa_1 = 15.0;
 constexpr double omega_d_1 = 3.872983346207417;
 constexpr double Omega_1 = 17.551500000000001;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_1
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 10.0*x0[1] - 5.8860000000000001*sgn[0];  // m1
     // Modal forces p = V^T f.
     const double p_1 = f_1;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -891,17 +946,28 @@ constexpr double kappa_1 = 115.0;
 constexpr double omega_d_1 = 10.723805294763608;
 constexpr double Omega_1 = 17.551500000000001;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_1
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 20.0 + 110.0*x0[1] - 5.8860000000000001*sgn[0];  // m1
     // Modal forces p = V^T f.
     const double p_1 = f_1;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -1043,12 +1109,23 @@ namespace k_seed_scenario_2_c0_s11 {
 // Modal constants.
 constexpr double Omega_1 = 17.551500000000001;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (4 doubles):
 //  0:theta_1 1:c_theta_1 2:x_stuck_0 3:x_stuck_1
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
@@ -1150,12 +1227,23 @@ namespace k_seed_scenario_2_c1_s11 {
 // Modal constants.
 constexpr double Omega_1 = 17.551500000000001;
 
+// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
+// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
+double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
 // Coefficient block (4 doubles):
 //  0:theta_1 1:c_theta_1 2:x_stuck_0 3:x_stuck_1
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)x0; (void)v0; (void)sgn;
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
-    const double theta_1 = Omega_1*t0;
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
+    const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;

@@ -86,6 +86,7 @@ public:
         out_ << std::string(static_cast<std::size_t>(4 * indent), ' ') << text << "\n";
     }
     void blank() { out_ << "\n"; }
+    void raw(const char* text) { out_ << text; }
     std::string str() const { return out_.str(); }
 
 private:
@@ -93,6 +94,25 @@ private:
 };
 
 std::string idx(std::size_t k) { return std::to_string(k + 1); }  // 1-based names: q_1, ...
+
+}  // namespace
+
+// The forcing phase at the segment start, as GenericSolver computes it
+// (runtime/generic_solver.cpp, reduced_phase): emitted into every kernel with
+// forcing, folded or sweep.
+const char* const kPhaseFunctionSource =
+    "// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and\n"
+    "// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.\n"
+    "double hsnc_phase(double omega, double t0, double t0_lo, double phase) {\n"
+    "    const double hi = omega * t0;\n"
+    "    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;\n"
+    "    const double n = __builtin_nearbyint(hi / 6.283185307179586);\n"
+    "    double r = __builtin_fma(-n, 6.283185307179586, hi);\n"
+    "    r = __builtin_fma(-n, 2.4492935982947064e-16, r);\n"
+    "    return __builtin_remainder(r + lo + phase, 6.283185307179586);\n"
+    "}\n";
+
+namespace {
 
 std::string body_name(const Model& m, int b) { return b == kGround ? "ground" : m.masses[b].name; }
 
@@ -111,10 +131,11 @@ using SlotFn = std::function<std::string(const std::string&)>;
 
 void emit_setup_phases(const Derivation& d, Code& s, const SlotFn& slot) {
     if (d.harmonics.empty()) return;
-    s.line(1, "// Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.");
+    s.line(1, "// Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.");
     for (std::size_t h = 0; h < d.harmonics.size(); ++h) {
         const std::string H = idx(h);
-        s.line(1, "const double theta_" + H + " = " + Lin().add(1.0, "Omega_" + H + "*t0").add_const(dbl(d.harmonics[h].phase)).str() + ";");
+        s.line(1, "const double theta_" + H + " = hsnc_phase(Omega_" + H + ", t0, t0_lo, " +
+                      format_double(dbl(d.harmonics[h].phase)) + ");");
         s.line(1, "const double s_theta_" + H + " = __builtin_sin(theta_" + H + ");");
         s.line(1, "const double c_theta_" + H + " = __builtin_cos(theta_" + H + ");");
         s.line(1, slot("theta_" + H) + " = theta_" + H + ";");
@@ -336,6 +357,10 @@ std::string emit_kernel(const Derivation& d) {
     for (std::size_t h = 0; h < nh; ++h)
         c.line(0, "constexpr double Omega_" + idx(h) + " = " + format_double(dbl(d.harmonics[h].omega)) + ";");
     c.blank();
+    if (nh > 0) {
+        c.raw(kPhaseFunctionSource);
+        c.blank();
+    }
     if (std::any_of(d.modes.begin(), d.modes.end(), [](const Mode& m) { return m.regime == Regime::rigid_damped; })) {
         c.line(0, "// phi2(x) = (e^x - 1 - x)/x^2, phi2(0) = 1/2; Taylor series where the subtraction cancels.");
         c.line(0, "double phi2(double x) {");
@@ -354,8 +379,8 @@ std::string emit_kernel(const Derivation& d) {
 
     // ================= setup =================
     Code s;
-    s.line(0, "void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {");
-    s.line(1, "(void)t0; (void)x0; (void)v0; (void)sgn;");
+    s.line(0, "void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {");
+    s.line(1, "(void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;");
     if (nf > 0) {
         s.line(1, "// Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).");
         for (std::size_t r = 0; r < nf; ++r) {

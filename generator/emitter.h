@@ -23,6 +23,11 @@ std::string kernel_symbol(const Model& model, const Configuration& cfg);
 /// The kernel translation unit of derivation `d`.
 std::string emit_kernel(const Derivation& d);
 
+/// C++ source of `double hsnc_phase(omega, t0, t0_lo, phase)`: the forcing
+/// phase at a segment start, computed as GenericSolver does; every emitted
+/// kernel with forcing (folded or sweep) contains it.
+extern const char* const kPhaseFunctionSource;
+
 /// A registry source defining `const AotRegistry& hsnc::<function>()` over the
 /// kernel objects named in `symbols` (runtime/aot_registry.h), in that order.
 std::string emit_registry(const std::vector<std::string>& symbols, const std::string& function = "aot_registry");

@@ -445,7 +445,7 @@ const char* const kModes = R"(    // ---- Modal decomposition of Kt = M_F^-1/2 K
 )";
 
 const char* const kSetup = R"(// setup: the segment from (t0, x0, v0, sgn), as the folded kernels do it.
-void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
+void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
     const State& st = reinterpret_cast<const Block*>(coef)->st;
     Segment& sg = reinterpret_cast<Block*>(coef)->sg;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
@@ -462,9 +462,9 @@ void setup(double* coef, double t0, const double* x0, const double* v0, const si
         for (int r = 0; r < NF; ++r) p += st.V[r][j] * f[r];
         sg.p[j] = p;
     }
-    // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
+    // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
     for (int h = 0; h < NH; ++h) {
-        sg.theta[h] = st.Omega[h] * t0 + st.phase[h];
+        sg.theta[h] = hsnc_phase(st.Omega[h], t0, t0_lo, st.phase[h]);
         sg.s_theta[h] = __builtin_sin(sg.theta[h]);
         sg.c_theta[h] = __builtin_cos(sg.theta[h]);
     }
@@ -865,6 +865,7 @@ std::string emit_sweep_kernel(const Derivation& d, const std::vector<std::string
     c.line(0, "constexpr int n_coef = static_cast<int>((sizeof(Block) + sizeof(double) - 1) / sizeof(double));");
     c.blank();
     std::string out = c.str() + kJacobi + "\n";
+    if (nh > 0) out += std::string(kPhaseFunctionSource) + "\n";
 
     // ---- configure: the model-specific part ----
     Code k;

@@ -45,12 +45,13 @@ cplx expm1c(cplx w) {
     return {std::expm1(x) * std::cos(y) - 2.0 * s * s, std::exp(x) * std::sin(y)};
 }
 
-// Omega*t0 + phase reduced to [-pi, pi] with the rounding error of the
-// product kept (fma) and 2*pi in two parts (Cody-Waite), so a large t0 costs
-// no phase accuracy beyond that of t0 itself.
-double reduced_phase(double omega, double t0, double phase) {
+// Omega*(t0 + t0_lo) + phase reduced to [-pi, pi] with the rounding error of
+// the product kept (fma) and 2*pi in two parts (Cody-Waite), so a large t0
+// costs no phase accuracy beyond that of t0 + t0_lo itself. The emitted
+// kernels do the same (generator/emitter.cpp, hsnc_phase).
+double reduced_phase(double omega, double t0, double t0_lo, double phase) {
     const double hi = omega * t0;
-    const double lo = std::fma(omega, t0, -hi);
+    const double lo = std::fma(omega, t0, -hi) + omega * t0_lo;
     const double n = std::nearbyint(hi / kTwoPi);
     double r = std::fma(-n, kTwoPi, hi);
     r = std::fma(-n, kTwoPiLo, r);
@@ -251,10 +252,10 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     xmag_ = vmag_ = Eigen::VectorXd::Zero(n_);
 }
 
-void GenericSolver::setup(double t0, const double* x0, const double* v0, const signed char* sgn) {
+void GenericSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
     for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
     for (int h = 0; h < nh_; ++h) {
-        theta_(h) = reduced_phase(h_omega_(h), t0, h_phase_(h));
+        theta_(h) = reduced_phase(h_omega_(h), t0, t0_lo, h_phase_(h));
         e_theta_(h) = cplx(std::cos(theta_(h)), std::sin(theta_(h)));
     }
     // Constant force on the free masses (paper Eq. 7-9): loads and preloads,

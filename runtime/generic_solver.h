@@ -48,7 +48,8 @@ public:
 
     const Configuration& configuration() const override { return cfg_; }
     const std::vector<SwitchFunction>& switches() const override { return switches_; }
-    void setup(double t0, const double* x0, const double* v0, const signed char* sgn) override;
+    using SegmentSolver::setup;
+    void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override;
     void eval(double tau, const SegmentEval& out) const override;
     double max_step() const override { return max_step_; }
 

@@ -7,8 +7,10 @@
  * compiles alone, fast, in-process or ahead of time.
  *
  * setup/eval have exactly the semantics of SegmentSolver::setup/eval:
- *   setup(coef, t0, x0, v0, sgn)  fixes the segment from the full state at
- *       absolute time t0; sgn[i] in {-1, 0, +1} is the direction of motion of
+ *   setup(coef, t0, t0_lo, x0, v0, sgn)  fixes the segment from the full
+ *       state at absolute time t0 + t0_lo (t0_lo: the rounding of the start
+ *       instant, |t0_lo| <= ulp(t0)/2, used for the forcing phase);
+ *       sgn[i] in {-1, 0, +1} is the direction of motion of
  *       each sliding friction mass (0 for stuck or frictionless masses).
  *       Writes n_coef doubles into coef (the caller owns them).
  *   eval(coef, tau, x, v, a, g, dg, bound, scale)  at tau = t - t0 >= 0:
@@ -41,7 +43,7 @@ extern "C" {
 #endif
 
 /** Bumped whenever the layout or the meaning of hsnc_kernel changes. */
-#define HSNC_KERNEL_ABI_VERSION 2
+#define HSNC_KERNEL_ABI_VERSION 3
 
 /** Switch-function kinds; same values as hsnc::SwitchKind (runtime/segment.h). */
 enum {
@@ -65,7 +67,7 @@ typedef struct hsnc_switch {
     int element; /**< contact index (gap) or mass index (the others) */
 } hsnc_switch;
 
-typedef void (*hsnc_setup_fn)(double* coef, double t0, const double* x0, const double* v0,
+typedef void (*hsnc_setup_fn)(double* coef, double t0, double t0_lo, const double* x0, const double* v0,
                               const signed char* sgn);
 typedef void (*hsnc_eval_fn)(const double* coef, double tau, double* x, double* v, double* a,
                              double* g, double* dg, double* bound, double* scale);

@@ -60,11 +60,11 @@ void KernelSolver::configure(const std::vector<double>& params) {
     configured_ = true;
 }
 
-void KernelSolver::setup(double t0, const double* x0, const double* v0, const signed char* sgn) {
+void KernelSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
     if (!configured_)
         throw RunError("KernelSolver: sweep kernel '" + std::string(kernel_.config_key) + "' of model '" +
                        kernel_.model_name + "' used before a successful configure()");
-    kernel_.setup(coef_.data(), t0, x0, v0, sgn);
+    kernel_.setup(coef_.data(), t0, t0_lo, x0, v0, sgn);
 }
 
 void KernelSolver::eval(double tau, const SegmentEval& out) const {

@@ -63,12 +63,20 @@ public:
     virtual const Configuration& configuration() const = 0;
     virtual const std::vector<SwitchFunction>& switches() const = 0;
 
-    /// Start a segment at absolute time t0 from the full state (x0, v0 of all
-    /// masses; stuck masses must have v0 = 0). sgn[i] in {-1, 0, +1} is the
+    /// Start a segment at absolute time t0 + t0_lo from the full state (x0, v0
+    /// of all masses; stuck masses must have v0 = 0). t0_lo is the rounding of
+    /// the start instant (|t0_lo| <= ulp(t0)/2; the engine keeps event instants
+    /// as t + t_lo): the forcing phase is taken at t0 + t0_lo, so the state and
+    /// the forcing refer to one instant. sgn[i] in {-1, 0, +1} is the
     /// direction of motion of each sliding friction mass, which fixes the sign
     /// of its kinetic friction force -mu_k*N_i*sgn[i]; it is 0 for masses that
     /// are stuck or have no friction.
-    virtual void setup(double t0, const double* x0, const double* v0, const signed char* sgn) = 0;
+    virtual void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) = 0;
+
+    /// A segment starting at the representable instant t0 (t0_lo = 0).
+    void setup(double t0, const double* x0, const double* v0, const signed char* sgn) {
+        setup(t0, 0.0, x0, v0, sgn);
+    }
 
     /// Evaluate at tau = t - t0 >= 0 (time measured from the segment start).
     virtual void eval(double tau, const SegmentEval& out) const = 0;

@@ -290,6 +290,43 @@ TEST(Kernel, ResonanceGrowsSecularly) {
     }
 }
 
+// The segment start is the double-double t0 + t0_lo (the engine keeps event
+// instants so): the forcing phase must be taken there, in the kernels and in
+// the generic solver alike. Starting at (1.0, 0.25) is starting at 1.25.
+TEST(Kernel, ForcingPhaseIsTakenAtT0PlusT0Lo) {
+    const Model m = read_model(std::string(HSNC_SOURCE_DIR) + "/models/seed-scenario-1.toml");
+    const Configuration cfg = Configuration::all_open(m);
+    const hsnc_kernel* kp = find_aot_kernel(aot_registry(), m.name.c_str(), model_hash(m), cfg.key().c_str());
+    ASSERT_NE(kp, nullptr);
+    KernelSolver ka(*kp), kb(*kp), kc(*kp);
+    GenericSolver ga(m, cfg), gb(m, cfg);
+    const Start st = start_of(m, cfg);
+    const double* x0 = st.x0.data();
+    const double* v0 = st.v0.data();
+    const signed char* sgn = st.sgn.data();
+    ka.setup(1.0, 0.25, x0, v0, sgn);
+    kb.setup(1.25, 0.0, x0, v0, sgn);
+    kc.setup(1.0, 0.0, x0, v0, sgn);  // t0_lo ignored: a different segment
+    ga.setup(1.0, 0.25, x0, v0, sgn);
+    gb.setup(1.25, x0, v0, sgn);
+    const std::size_t n = m.dof();
+    for (double tau : {1e-3, 0.01, 0.05}) {
+        const KernelOut a = run(ka, n, tau), b = run(kb, n, tau), c = run(kc, n, tau);
+        KernelOut g(n, ga.switches().size()), h(n, gb.switches().size());
+        ga.eval(tau, g.view());
+        gb.eval(tau, h.view());
+        double apart = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            EXPECT_NEAR(a.x[i], b.x[i], 1e-14 * (1 + std::fabs(b.x[i]))) << "tau=" << tau;
+            EXPECT_NEAR(a.v[i], b.v[i], 1e-14 * (1 + std::fabs(b.v[i]))) << "tau=" << tau;
+            EXPECT_NEAR(g.x[i], h.x[i], 1e-14 * (1 + std::fabs(h.x[i]))) << "tau=" << tau;
+            EXPECT_NEAR(g.x[i], a.x[i], 1e-13 * (1 + std::fabs(a.x[i]))) << "tau=" << tau;
+            apart = std::max(apart, std::fabs(c.x[i] - b.x[i]));
+        }
+        EXPECT_GT(apart, 1e-6) << "tau=" << tau;  // a quarter second of forcing phase shows
+    }
+}
+
 TEST(Kernel, AgreesWithGenericSolverOnBundledModels) {
     // The AOT kernels of models/*.toml against the Eigen generic solver.
     int compared = 0;

@@ -3,6 +3,7 @@
 // digits, and the double engine against it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <string>
@@ -245,8 +246,8 @@ TEST(ReferenceAgreement, Scenario1At30And60Digits) { expect_agreement(bundled("s
 TEST(ReferenceAgreement, Scenario2At30And60Digits) { expect_agreement(bundled("seed-scenario-2.toml"), 5.0, 30); }
 
 // The double engine (ahead-of-time kernels, as `hsnc simulate` runs it) against
-// the reference on scenario 1: same switch sequence, event times within 1e-12
-// relative over the first 1000 switches (measured: 2.0e-13, bench/reference_check).
+// the reference on scenario 1: same switch sequence, event times within 1e-13
+// relative over the first 1000 switches (bench/reference_check.sh).
 TEST(ReferenceAgreement, DoubleEngineOnScenario1First1000Switches) {
     const Model m = bundled("seed-scenario-1.toml");
     const PreciseRun ref = run_at(m, 30, 20.0, 1000);
@@ -261,14 +262,34 @@ TEST(ReferenceAgreement, DoubleEngineOnScenario1First1000Switches) {
     engine.run(opt, rec);
     ASSERT_EQ(rec.events.size(), 1000u);
     double worst = 0;
+    std::vector<double> contact_ulps, friction_ulps;  // |error| in units of ulp(t)
     for (std::size_t k = 0; k < 1000; ++k) {
         ASSERT_EQ(rec.events[k].kind, ref.events[k].kind) << k;
         ASSERT_EQ(rec.events[k].element, ref.events[k].element) << k;
         worst = std::max(worst, relative_difference(cln::cl_float(rec.events[k].t, ref.events[k].t), ref.events[k].t));
+        const double truth = cln::double_approx(ref.events[k].t);
+        const double ulp = std::nextafter(truth, INFINITY) - truth;
+        const double err =
+            std::fabs(cln::double_approx(cln::cl_float(rec.events[k].t, ref.events[k].t) - ref.events[k].t)) / ulp;
+        const bool contact =
+            rec.events[k].kind == EventKind::contact_close || rec.events[k].kind == EventKind::contact_open;
+        (contact ? contact_ulps : friction_ulps).push_back(err);
     }
-    EXPECT_LT(worst, 1e-12);
-    std::printf("double engine vs reference, scenario 1, first 1000 switches: max relative event-time error %.2e\n",
-                worst);
+    auto median = [](std::vector<double> u) {
+        std::sort(u.begin(), u.end());
+        return u[u.size() / 2];
+    };
+    // The maximum is one ill-conditioned contact (crossed at 8 m/s instead of
+    // the usual 70-140) and moves with any rounding: measured 9e-15 to 4.2e-14.
+    EXPECT_LT(worst, 1e-13);
+    // Typical events within an ulp or so of the truth: measured medians 1.3 ulp
+    // (contacts) and 0.31 ulp (friction); 14 ulp and 0.82 ulp when the solvers
+    // took the forcing phase at t instead of the segment start t + t_lo.
+    EXPECT_LT(median(contact_ulps), 4.0);
+    EXPECT_LT(median(friction_ulps), 0.6);
+    std::printf("double engine vs reference, scenario 1, first 1000 switches: max relative event-time error %.2e, "
+                "median %.2f ulp (contacts), %.2f ulp (friction)\n",
+                worst, median(contact_ulps), median(friction_ulps));
 }
 
 
@@ -297,9 +318,10 @@ TEST(ReferenceAgreement, SamplesMatchTheDoubleEngineOnScenario1) {
     }
     EXPECT_EQ(ref.samples.back().t, 0.5);
     EXPECT_EQ(ref.samples.front().x[0], 0.2);  // the initial state itself
-    // Measured 4.6e-13: the double engine's own error (velocities reach 90 m/s under a
-    // 22500 N forcing at 175 rad/s, so 1e-15 s of phase is 1e-11 m/s).
-    EXPECT_LT(worst, 1e-12);
+    // Measured 2.7e-14 (2.4e-13 with the forcing phase taken at t instead of
+    // t + t_lo: velocities reach 90 m/s under a 22500 N forcing at 175 rad/s,
+    // so 1e-15 s of phase is 1e-11 m/s).
+    EXPECT_LT(worst, 1e-13);
     std::printf("samples, scenario 1 to 0.5 s: max scaled difference double vs reference %.2e\n", worst);
 }
 
