@@ -144,8 +144,6 @@ for h in 1e-4 1e-6; do
 done
 errdiff "$csv/s2_ref.csv" "$csv/s2_hsnc.csv" >"$csv/s2_err_hsnc_ref.csv"
 envelope "$csv/s2_err_hsnc_ref.csv" >"$csv/s2_err_hsnc_ref_env.csv"
-errdiff "$csv/s2_ref.csv" "$csv/s2_ab4_1e-6.csv" >"$csv/s2_err_ab4_ref.csv"
-envelope "$csv/s2_err_ab4_ref.csv" >"$csv/s2_err_ab4_ref_env.csv"
 pa=$p4; [ "$pa" = never ] && pa=300
 pb=$p6; [ "$pb" = never ] && pb=300
 gnuplot <<EOF
@@ -175,7 +173,6 @@ set arrow 1 from $pa, graph 0 to $pa, graph 1 nohead front lc rgb '#d62728' dt 2
 set arrow 2 from $pb, graph 0 to $pb, graph 1 nohead front lc rgb '#1f77b4' dt 2
 plot '$csv/s2_err_ab4_1e-4_env.csv' u 1:2 w l lw 1.5 lc rgb '#d62728' t sprintf('ab4 1e-4 vs hsnc, parts %s', '$p4'), \
      '$csv/s2_err_ab4_1e-6_env.csv' u 1:2 w l lw 1.5 lc rgb '#1f77b4' t sprintf('ab4 1e-6 vs hsnc, parts %s', '$p6'), \
-     '$csv/s2_err_ab4_ref_env.csv' u 1:2 w l lw 1.5 dt 3 lc rgb '#9467bd' t 'ab4 1e-6 vs 50-digit reference', \
      '$csv/s2_err_hsnc_ref_env.csv' u 1:2 w l lw 2 lc rgb 'black' t 'hsnc (double) vs 50-digit reference', \
      1e-2 w l lc rgb 'gray40' dt 2 t '1e-2'
 unset multiplot
