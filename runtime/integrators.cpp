@@ -118,6 +118,30 @@ RunSummary finish(RunSummary s, RunStatus status, std::string message, double t,
 }
 
 // ---------------------------------------------------------------- ab4 ----
+// The instant in (lo, hi] where a watched function h, positive at lo and
+// <= 0 at hi, first reaches 0, by bisection to about 4 ulp (rk45 and cvode
+// locate sign changes their steps report this way).
+template <class H>
+double bisect_fall(double lo, double hi, H&& h) {
+    for (int it = 0; it < 200 && hi - lo > 4e-16 * std::max(1.0, std::fabs(hi)); ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (h(mid) <= 0 ? hi : lo) = mid;
+    }
+    return hi;
+}
+
+// Keep the earliest root: function k at `root` replaces the roots found so far
+// when earlier, and joins them when at the same instant (to 1e-15 relative).
+void keep_earliest(double root, std::size_t k, double& t_root, std::vector<std::size_t>& hit) {
+    const double tol = 1e-15 * std::max(1.0, std::fabs(root));
+    if (root < t_root - tol) {
+        t_root = root;
+        hit.assign(1, k);
+    } else if (std::fabs(root - t_root) <= tol) {
+        hit.push_back(k);
+    }
+}
+
 RunSummary run_ab4(const Model& model, const IntegratorOptions& io, const EngineOptions& eo, Observer& obs) {
     const std::size_t n = model.dof();
     const double h = io.h;
@@ -347,20 +371,13 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
                     if (h1[k] > 0) armed[k] = 1;
                     continue;
                 }
-                double lo = t, hi = t1;
                 std::vector<double> hv(sw.size());
-                for (int it = 0; it < 200 && hi - lo > 4e-16 * std::max(1.0, std::fabs(hi)); ++it) {
-                    const double mid = 0.5 * (lo + hi);
+                const double r = bisect_fall(t, t1, [&](double mid) {
                     H.at(mid, xi, vi);
                     switch_values(mid, xi, vi, sw, hv);
-                    (hv[k] <= 0 ? hi : lo) = mid;
-                }
-                if (hi < t_root - 1e-15 * std::max(1.0, std::fabs(hi))) {
-                    t_root = hi;
-                    hit.assign(1, k);
-                } else if (std::fabs(hi - t_root) <= 1e-15 * std::max(1.0, std::fabs(hi))) {
-                    hit.push_back(k);
-                }
+                    return hv[k];
+                });
+                keep_earliest(r, k, t_root, hit);
             }
             if (t_root < kInf) {
                 sampler.emit(t, t_root, false, H);
@@ -572,19 +589,12 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
             }
             for (std::size_t k = 0; k < ns; ++k) {
                 if (armed[k] || found[k] != 0 || !(h[k] < 0)) continue;
-                double lo = t, hi = tret;
-                for (int it = 0; it < 200 && hi - lo > 4e-16 * std::max(1.0, std::fabs(hi)); ++it) {
-                    const double mid = 0.5 * (lo + hi);
+                const double r = bisect_fall(t, tret, [&](double mid) {
                     interp.at(mid, xi, vi);
                     watched_values(model, cfg, p.dir, mid, xi.data(), vi.data(), p.sw, hv.data());
-                    (hv[k] <= 0 ? hi : lo) = mid;
-                }
-                if (hi < t_root - 1e-15 * std::max(1.0, std::fabs(hi))) {
-                    t_root = hi;
-                    hit.assign(1, k);
-                } else if (std::fabs(hi - t_root) <= 1e-15 * std::max(1.0, std::fabs(hi))) {
-                    hit.push_back(k);
-                }
+                    return hv[k];
+                });
+                keep_earliest(r, k, t_root, hit);
             }
             if (t_root < kInf) {
                 sampler.emit(t, t_root, false, interp);
