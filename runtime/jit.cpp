@@ -1,25 +1,37 @@
 // hsnc -- Jit (jit.h): Clang CompilerInstance -> LLVM IR (EmitLLVMOnlyAction)
-// -> ORC LLJIT, after LLVM's KaleidoscopeJIT (create, add, lookup; Expected
-// and Error handled here and nowhere else).
+// -> object file (orc::SimpleCompiler, with the TargetMachine the LLJIT itself
+// would use) -> ORC LLJIT (addObjectFile), after LLVM's KaleidoscopeJIT
+// (create, add, lookup; Expected and Error handled here and nowhere else).
+// Producing the object ourselves, rather than handing the IR to the LLJIT,
+// is what lets a persistent cache skip Clang and LLVM's code generation
+// altogether on a hit (runtime/kernel_cache.h).
 #include "jit.h"
 
 #include <clang/Basic/Diagnostic.h>
 #include <clang/Basic/DiagnosticOptions.h>
+#include <clang/Basic/Version.h>
 #include <clang/CodeGen/CodeGenAction.h>
 #include <clang/Frontend/CompilerInstance.h>
 #include <clang/Frontend/CompilerInvocation.h>
 #include <clang/Frontend/TextDiagnosticPrinter.h>
 #include <clang/Lex/PreprocessorOptions.h>
+#include <llvm/ADT/StringExtras.h>
+#include <llvm/Config/llvm-config.h>
+#include <llvm/ExecutionEngine/Orc/CompileUtils.h>
 #include <llvm/ExecutionEngine/Orc/ExecutionUtils.h>
+#include <llvm/ExecutionEngine/Orc/JITTargetMachineBuilder.h>
 #include <llvm/ExecutionEngine/Orc/LLJIT.h>
 #include <llvm/ExecutionEngine/Orc/ThreadSafeModule.h>
 #include <llvm/IR/LLVMContext.h>
 #include <llvm/IR/Module.h>
+#include <llvm/Object/ObjectFile.h>
 #include <llvm/Support/Error.h>
 #include <llvm/Support/Host.h>
 #include <llvm/Support/MemoryBuffer.h>
+#include <llvm/Support/SHA1.h>
 #include <llvm/Support/TargetSelect.h>
 #include <llvm/Support/raw_ostream.h>
+#include <llvm/Target/TargetMachine.h>
 
 #include <mutex>
 #include <vector>
@@ -45,15 +57,39 @@ void initialize_llvm() {
     if (!ok) throw RunError("Jit::Jit(): LLVM cannot generate code for this host (" + llvm::sys::getProcessTriple() + ")");
 }
 
+// cc1 arguments after the triple. No system or builtin include paths: a
+// kernel includes only kernel_abi.h and calls only __builtin_ math.
+// -ffp-contract=off keeps a*b+c two roundings, as the ahead-of-time kernels
+// and the generic solver compute it, so all three agree to the last bit
+// wherever they can. -O2, measured (2-core AMD EPYC, seed-scenario-2 to
+// t = 30000 s, 420k segments): its kernels step as fast as the ahead-of-time
+// ones (0.60 s); -O0 compiles in 11 instead of 18 ms per kernel but steps 23%
+// slower, -O1 and -O3 compile no faster and step no faster than -O2.
+const std::vector<const char*>& compile_flags() {
+    static const std::vector<const char*> flags = {"-x", "c++", "-std=c++17", "-O2", "-ffp-contract=off",
+                                                   "-nostdsysteminc", "-nobuiltininc", "-w"};
+    return flags;
+}
+
 }  // namespace
 
 struct Jit::Impl {
     std::unique_ptr<llvm::orc::LLJIT> lljit;
+    std::unique_ptr<llvm::TargetMachine> machine;  // the LLJIT's own target, for compile()
+    std::string target;                            // triple, CPU, features: part of the cache key
 };
 
 Jit::Jit() : impl_(std::make_unique<Impl>()) {
     initialize_llvm();
-    auto jit = llvm::orc::LLJITBuilder().create();
+    auto builder = llvm::orc::JITTargetMachineBuilder::detectHost();
+    if (!builder) throw RunError("Jit::Jit(): cannot describe this host to LLVM: " + error_text(builder.takeError()));
+    auto machine = builder->createTargetMachine();
+    if (!machine) throw RunError("Jit::Jit(): cannot create an LLVM target machine: " + error_text(machine.takeError()));
+    impl_->machine = std::move(*machine);
+    impl_->target = builder->getTargetTriple().str() + " " + builder->getCPU() + " " +
+                    builder->getFeatures().getString() + " O" +
+                    std::to_string(static_cast<int>(impl_->machine->getOptLevel()));
+    auto jit = llvm::orc::LLJITBuilder().setJITTargetMachineBuilder(*builder).create();
     if (!jit) throw RunError("Jit::Jit(): cannot create the LLVM JIT: " + error_text(jit.takeError()));
     impl_->lljit = std::move(*jit);
     // Kernels call libm (__builtin_exp, sin, cos lower to exp, sin, cos):
@@ -66,21 +102,15 @@ Jit::Jit() : impl_(std::make_unique<Impl>()) {
 
 Jit::~Jit() = default;
 
-void Jit::add(const std::string& name, const std::string& source) {
+void Jit::add(const std::string& name, const std::string& source) { add_object(name, compile(name, source)); }
+
+std::string Jit::compile(const std::string& name, const std::string& source) {
     const std::string dir = kVirtualDir;
     const std::string path = dir + "/" + name;
-    const std::string triple = llvm::sys::getProcessTriple();
-    // cc1 arguments. No system or builtin include paths: a kernel includes only
-    // kernel_abi.h and calls only __builtin_ math. -ffp-contract=off keeps
-    // a*b+c two roundings, as the ahead-of-time kernels and the generic solver
-    // compute it, so all three agree to the last bit wherever they can.
-    // -O2, measured (2-core AMD EPYC, seed-scenario-2 to t = 30000 s, 420k
-    // segments): its kernels step as fast as the ahead-of-time ones (0.60 s);
-    // -O0 compiles in 11 instead of 18 ms per kernel but steps 23% slower,
-    // -O1 and -O3 compile no faster and step no faster than -O2.
-    const std::vector<const char*> args = {
-        "-triple", triple.c_str(), "-x", "c++", "-std=c++17", "-O2", "-ffp-contract=off",
-        "-nostdsysteminc", "-nobuiltininc", "-I", dir.c_str(), "-w", path.c_str()};
+    const std::string triple = impl_->machine->getTargetTriple().str();
+    std::vector<const char*> args = {"-triple", triple.c_str()};
+    args.insert(args.end(), compile_flags().begin(), compile_flags().end());
+    args.insert(args.end(), {"-I", dir.c_str(), path.c_str()});
 
     std::string diagnostics;
     llvm::raw_string_ostream diag_stream(diagnostics);
@@ -93,7 +123,7 @@ void Jit::add(const std::string& name, const std::string& source) {
     const bool parsed = clang::CompilerInvocation::CreateFromArgs(*invocation, args, arg_diags);
     if (!parsed) {
         diag_stream.flush();
-        throw RunError("Jit::add(): cannot set up Clang for " + name + ": " + diagnostics);
+        throw RunError("Jit::compile(): cannot set up Clang for " + name + ": " + diagnostics);
     }
     // Both files live in memory; the source manager takes ownership of the buffers.
     clang::PreprocessorOptions& pp = invocation->getPreprocessorOpts();
@@ -111,11 +141,43 @@ void Jit::add(const std::string& name, const std::string& source) {
     const bool compiled = compiler.ExecuteAction(action);
     std::unique_ptr<llvm::Module> module = compiled ? action.takeModule() : nullptr;
     diag_stream.flush();
-    if (!module) throw RunError("Jit::add(): Clang cannot compile " + name + ":\n" + diagnostics);
+    if (!module) throw RunError("Jit::compile(): Clang cannot compile " + name + ":\n" + diagnostics);
 
-    llvm::orc::ThreadSafeModule tsm(std::move(module), std::move(context));
-    if (llvm::Error err = impl_->lljit->addIRModule(std::move(tsm)))
-        throw RunError("Jit::add(): cannot add " + name + " to the JIT: " + error_text(std::move(err)));
+    // Machine code, as the LLJIT's IR layer would make it (same target machine).
+    module->setDataLayout(impl_->machine->createDataLayout());
+    llvm::orc::SimpleCompiler codegen(*impl_->machine);
+    auto object = codegen(*module);
+    if (!object) throw RunError("Jit::compile(): cannot generate code for " + name + ": " + error_text(object.takeError()));
+    return (*object)->getBuffer().str();
+}
+
+void Jit::add_object(const std::string& name, const std::string& object) {
+    // Check that it parses as an object file for this host before the JIT
+    // owns it: a bad object found only at lookup would leave its symbols
+    // failed in the JIT, so that a recompiled one could not be added.
+    auto buffer = llvm::MemoryBuffer::getMemBufferCopy(object, name + ".o");
+    auto parsed = llvm::object::ObjectFile::createObjectFile(buffer->getMemBufferRef());
+    if (!parsed) throw RunError("Jit::add_object(): " + name + " is not an object file: " + error_text(parsed.takeError()));
+    if ((*parsed)->getArch() != impl_->machine->getTargetTriple().getArch())
+        throw RunError("Jit::add_object(): " + name + " is an object file for another architecture");
+    if (llvm::Error err = impl_->lljit->addObjectFile(std::move(buffer)))
+        throw RunError("Jit::add_object(): cannot add " + name + " to the JIT: " + error_text(std::move(err)));
+}
+
+std::string Jit::cache_key(const std::string& source) const {
+    llvm::SHA1 sha;
+    auto part = [&sha](llvm::StringRef text) {
+        sha.update(text);
+        sha.update(llvm::StringRef("\0", 1));  // "ab"+"c" differs from "a"+"bc"
+    };
+    part("hsnc-jit-object 1");
+    part(clang::getClangFullVersion());
+    part(LLVM_VERSION_STRING);
+    part(impl_->target);
+    for (const char* flag : compile_flags()) part(flag);
+    part(kKernelAbiHeaderText);
+    part(source);
+    return llvm::toHex(sha.final(), /*LowerCase=*/true);
 }
 
 void* Jit::lookup(const std::string& symbol) {

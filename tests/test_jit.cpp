@@ -123,7 +123,7 @@ TEST(Jit, SyntaxErrorGivesClangsDiagnostic) {
         FAIL() << "a syntax error compiled";
     } catch (const RunError& e) {
         const std::string what = e.what();
-        EXPECT_NE(what.find("Jit::add(): Clang cannot compile broken.cpp"), std::string::npos) << what;
+        EXPECT_NE(what.find("Jit::compile(): Clang cannot compile broken.cpp"), std::string::npos) << what;
         EXPECT_NE(what.find("broken.cpp:1:"), std::string::npos) << what;
         EXPECT_NE(what.find("error: expected ';'"), std::string::npos) << what;
     }

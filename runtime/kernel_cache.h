@@ -1,0 +1,86 @@
+// hsnc -- KernelCache: compiled kernels (object code) kept on disk between
+// runs, so that a configuration's kernel is compiled once per machine, not
+// once per run (--kernels jit; runtime/jit_solver_provider.h).
+//
+// Plain file operations, no LLVM: `hsnc cache --stats|--clear` uses it without
+// loading the JIT. One file per kernel, DIR/<key>.hsncobj, where key is the
+// hex digest the JIT computes from the kernel source, the compiler's version,
+// its flags and the target (Jit::cache_key). Each file repeats its key inside a
+// fixed header:
+//
+//   offset  size  field
+//        0     8  magic "HSNCKOBJ"
+//        8     4  format version (kCacheFormatVersion), host byte order
+//       12     4  key length K
+//       16     8  payload length P
+//       24     8  FNV-1a 64 checksum of the payload
+//       32     K  key
+//     32+K     P  payload (the object file)
+//
+// so a truncated, corrupt or foreign file (another key, another format, not
+// ours at all) is told apart from a good one, and never loaded. Writes go to a
+// temporary name in the same directory (pid and a random suffix) and are
+// renamed into place (rename(2) is atomic within a file system), so two
+// processes filling one cache at once each leave a whole file: a reader sees
+// either no entry or a complete one.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace hsnc {
+
+inline constexpr std::uint32_t kCacheFormatVersion = 1;
+inline constexpr const char* kCacheFileExtension = ".hsncobj";
+
+/// The cache directory when none is given: $XDG_CACHE_HOME/hsnc when that is
+/// set and absolute, else $HOME/.cache/hsnc; "" when neither can be named.
+std::string default_cache_dir();
+
+/// FNV-1a, 64 bits (the payload checksum).
+std::uint64_t fnv1a64(const void* data, std::size_t size, std::uint64_t h = 0xcbf29ce484222325ULL);
+
+class KernelCache {
+public:
+    /// A cache in `dir` (created on the first store). Touches nothing yet.
+    explicit KernelCache(std::string dir) : dir_(std::move(dir)) {}
+
+    const std::string& dir() const { return dir_; }
+    std::string path_of(const std::string& key) const;
+
+    enum class Status {
+        hit,   ///< a whole entry with this key: `payload` holds it
+        miss,  ///< no entry
+        bad,   ///< a file that is not a whole entry with this key: `problem` says why
+    };
+    struct Entry {
+        Status status = Status::miss;
+        std::string payload;
+        std::string problem;
+    };
+
+    /// The entry stored under `key`. Never throws on file contents.
+    Entry load(const std::string& key) const;
+
+    /// Store `payload` under `key` (temporary file, then rename). Returns ""
+    /// on success, else what went wrong ("cannot create directory ...: ...").
+    std::string store(const std::string& key, const std::string& payload) const;
+
+    struct Stats {
+        std::size_t entries = 0;      ///< whole hsnc entries (header checks out)
+        std::size_t damaged = 0;      ///< *.hsncobj files that are not (truncated, corrupt)
+        std::uint64_t bytes = 0;      ///< file sizes of both
+        std::int64_t oldest = 0, newest = 0;  ///< modification times (s since epoch) of entries
+    };
+    /// What `dir` holds (all zero when it does not exist). Throws nothing.
+    static Stats stats(const std::string& dir);
+
+    /// Remove every *.hsncobj file of `dir` (ours by name; other files stay).
+    /// Returns how many were removed; `problem` gets the first failure.
+    static std::size_t clear(const std::string& dir, std::string& problem);
+
+private:
+    std::string dir_;
+};
+
+}  // namespace hsnc
