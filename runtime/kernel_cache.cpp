@@ -85,7 +85,7 @@ KernelCache::Entry KernelCache::load(const std::string& key) const {
     const std::string path = path_of(key);
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0) {
-        if (errno != ENOENT) {
+        if (errno != ENOENT && errno != ENOTDIR) {  // no file, or no directory: a miss
             e.status = Status::bad;
             e.problem = "cannot read: " + errno_text();
         }
