@@ -1,0 +1,204 @@
+// hsnc JIT benchmark, all in one run:
+//   1. per configuration kernel: derive+emit, cold compile (Clang + LLVM code
+//      generation + JIT link, the persistent cache empty) and warm (a cache
+//      hit: read, check, JIT link), medians over the configurations a run of
+//      each model visits;
+//   2. one long simulation of each model under ahead-of-time kernels, JIT
+//      kernels and the generic solver (medians of repeated runs after a
+//      warm-up, kernels already built), with the ratios.
+//
+//   build/hsnc_jit_bench [--quick]
+//
+// The cache lives in a fresh temporary directory, removed at the end.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <unistd.h>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "aot_registry.h"
+#include "derivation.h"
+#include "emitter.h"
+#include "engine.h"
+#include "jit_solver_provider.h"
+#include "model_reader.h"
+#include "solver_provider.h"
+
+namespace {
+
+using namespace hsnc;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+class Counter : public Observer {
+public:
+    void on_sample(double, const double*, const double*) override {}
+    void on_event(double, EventKind, int, const double*, const double*) override { ++events; }
+    std::size_t events = 0;
+};
+
+// The generic solver, remembering the configurations the engine asks for.
+class Recorder : public SolverProvider {
+public:
+    explicit Recorder(const Model& m) : inner_(m) {}
+    SegmentSolver& solver(const Configuration& cfg) override {
+        if (std::find(seen.begin(), seen.end(), cfg) == seen.end()) seen.push_back(cfg);
+        return inner_.solver(cfg);
+    }
+    std::vector<Configuration> seen;
+
+private:
+    GenericSolverProvider inner_;
+};
+
+RunSummary run(const Model& m, SolverProvider& p, double t_end) {
+    EngineOptions eo;
+    eo.t_end = t_end;
+    eo.samples = false;
+    Counter c;
+    Engine engine(m, p);
+    return engine.run(eo, c);
+}
+
+// A chain of 12 unit masses with friction on each, contacts m3-m4, m8-m9 and
+// m12 to ground, forced at m1 (as tests/test_jit.cpp).
+std::string chain12() {
+    std::string t = "name = \"chain-12\"\n[damping]\nalpha = 0.02\nbeta = 0.0005\n";
+    for (int i = 1; i <= 12; ++i)
+        t += "[[mass]]\nname = \"m" + std::to_string(i) + "\"\nm = 1\nmu_k = 1.0\nmu_s = 1.5\n";
+    for (int i = 0; i <= 12; ++i)
+        t += "[[spring]]\nbetween = [\"" + (i == 0 ? std::string("ground") : "m" + std::to_string(i)) + "\", \"" +
+             (i == 12 ? std::string("ground") : "m" + std::to_string(i + 1)) + "\"]\nk = 100\n";
+    t += "[[contact]]\nbetween = [\"m3\", \"m4\"]\ngap = 0.02\nk = 1000\n";
+    t += "[[contact]]\nbetween = [\"m8\", \"m9\"]\ngap = 0.02\nk = 1000\n";
+    t += "[[contact]]\nbetween = [\"m12\", \"ground\"]\ngap = 0.02\nk = 1000\n";
+    t += "[[forcing]]\nomega = 5.0\namplitude = { m1 = 60.0 }\n";
+    return t;
+}
+
+struct Case {
+    std::string name;
+    Model model;
+    double t_end;      // the long run
+    double visit_end;  // the run whose configurations are compiled
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+    const std::size_t max_configs = quick ? 4 : 12;
+    const int reps = quick ? 3 : 7;
+    const std::string models = HSNC_SOURCE_DIR "/models/";
+    std::vector<Case> cases = {
+        {"seed-scenario-1", read_model(models + "seed-scenario-1.toml"), 2.0, 2.0},
+        {"seed-scenario-2", read_model(models + "seed-scenario-2.toml"), 300.0, 300.0},
+        {"chain-8", read_model(models + "chain-8.toml"), 20.0, 20.0},
+        {"chain-12", parse_model(chain12(), "chain-12"), 4.0, 4.0},
+    };
+    const std::string cache_dir =
+        (std::filesystem::temp_directory_path() / ("hsnc-jit-bench-" + std::to_string(::getpid()))).string();
+
+    std::printf("1. Kernel build latency per configuration (median [max] over the configurations compiled)\n");
+    std::printf("%-16s %5s %5s %14s %18s %18s %8s\n", "model", "dof", "cfgs", "derive+emit_ms", "cold_compile_ms",
+                "cache_hit_ms", "obj_kB");
+    for (const Case& c : cases) {
+        Recorder rec(c.model);
+        run(c.model, rec, c.visit_end);
+        std::vector<Configuration> cfgs = rec.seen;
+        if (cfgs.size() > max_configs) cfgs.resize(max_configs);
+
+        std::vector<double> emit, cold, warm;
+        std::map<Configuration, JitKernelSource> sources;
+        for (const Configuration& cfg : cfgs) {
+            const auto start = Clock::now();
+            sources[cfg] = JitKernelSource{kernel_symbol(c.model, cfg), emit_kernel(derive(c.model, cfg))};
+            emit.push_back(1e3 * seconds_since(start));
+        }
+        auto from_sources = [&sources](const Configuration& cfg) { return sources.at(cfg); };
+        std::filesystem::remove_all(cache_dir);
+        JitOptions jo;
+        jo.cache_dir = cache_dir;
+        {
+            JitSolverProvider jit(c.model, from_sources, jo);  // cold: empty cache
+            for (const Configuration& cfg : cfgs) {
+                const auto start = Clock::now();
+                jit.solver(cfg);
+                cold.push_back(1e3 * seconds_since(start));
+            }
+        }
+        {
+            JitSolverProvider jit(c.model, from_sources, jo);  // warm: every kernel a cache hit
+            for (const Configuration& cfg : cfgs) {
+                const auto start = Clock::now();
+                jit.solver(cfg);
+                warm.push_back(1e3 * seconds_since(start));
+            }
+            if (jit.cache_hits() != cfgs.size()) std::printf("  (!) only %zu of %zu hits\n", jit.cache_hits(), cfgs.size());
+        }
+        const KernelCache::Stats st = KernelCache::stats(cache_dir);
+        std::printf("%-16s %5zu %5zu %14.2f %11.1f [%4.0f] %11.2f [%4.1f] %8.1f\n", c.name.c_str(), c.model.dof(),
+                    cfgs.size(), median(emit), median(cold), *std::max_element(cold.begin(), cold.end()),
+                    median(warm), *std::max_element(warm.begin(), warm.end()),
+                    st.entries ? 1e-3 * static_cast<double>(st.bytes) / static_cast<double>(st.entries) : 0.0);
+    }
+
+    std::printf("\n2. One long simulation, kernels built beforehand (median of %d runs after a warm-up)\n", reps);
+    std::printf("%-16s %7s %9s %11s %11s %11s %9s %9s %9s\n", "model", "t_end", "switches", "aot_ms", "jit_ms",
+                "generic_ms", "gen/aot", "gen/jit", "jit/aot");
+    for (const Case& c : cases) {
+        auto time_it = [&](SolverProvider& p, RunSummary& s) {
+            s = run(c.model, p, c.t_end);  // warm-up: every solver built
+            std::vector<double> t;
+            for (int r = 0; r < reps; ++r) {
+                const auto start = Clock::now();
+                s = run(c.model, p, c.t_end);
+                t.push_back(1e3 * seconds_since(start));
+            }
+            return median(t);
+        };
+        RunSummary sa, sj, sg;
+        double aot = -1;
+        std::string aot_note;
+        if (has_aot_kernels(c.model, &aot_registry())) {
+            auto p = make_solver_provider(c.model, KernelMode::automatic, &aot_registry());
+            aot = time_it(*p, sa);
+            aot_note = p->describe();
+        }
+        JitOptions jo;
+        jo.cache_dir = cache_dir;
+        JitSolverProvider jit(c.model,
+                              [&c](const Configuration& cfg) {
+                                  return JitKernelSource{kernel_symbol(c.model, cfg), emit_kernel(derive(c.model, cfg))};
+                              },
+                              jo);
+        const double j = time_it(jit, sj);
+        GenericSolverProvider gen(c.model);
+        const double g = time_it(gen, sg);
+        if (aot > 0)
+            std::printf("%-16s %7g %9zu %11.3f %11.3f %11.3f %9.2f %9.2f %9.2f\n", c.name.c_str(), c.t_end, sg.events,
+                        aot, j, g, g / aot, g / j, j / aot);
+        else
+            std::printf("%-16s %7g %9zu %11s %11.3f %11.3f %9s %9.2f %9s\n", c.name.c_str(), c.t_end, sg.events, "-", j,
+                        g, "-", g / j, "-");
+        if (sj.events != sg.events || (aot > 0 && sa.events != sg.events))
+            std::printf("%-16s switches: aot %zu, jit %zu, generic %zu (rounding-level differences)\n", "",
+                        sa.events, sj.events, sg.events);
+        if (!aot_note.empty() && aot_note.find(" 0 configurations") == std::string::npos &&
+            aot_note.find("generic solver for 0") == std::string::npos)
+            std::printf("%-16s aot: %s\n", "", aot_note.c_str());
+    }
+    std::filesystem::remove_all(cache_dir);
+    return 0;
+}
