@@ -5,7 +5,9 @@
 //      each model visits;
 //   2. one long simulation of each model under ahead-of-time kernels, JIT
 //      kernels and the generic solver (medians of repeated runs after a
-//      warm-up, kernels already built), with the ratios.
+//      warm-up, kernels already built), with the ratios;
+//   3. one SegmentSolver::eval alone (what the engine calls 7-8 times per
+//      switch), in nanoseconds, the same three ways.
 //
 //   build/hsnc_jit_bench [--quick]
 //
@@ -20,10 +22,14 @@
 #include <string>
 #include <vector>
 
+#include <cmath>
+
 #include "aot_registry.h"
 #include "derivation.h"
 #include "emitter.h"
 #include "engine.h"
+#include "generic_solver.h"
+#include "kernel_solver.h"
 #include "jit_solver_provider.h"
 #include "model_reader.h"
 #include "solver_provider.h"
@@ -198,6 +204,71 @@ int main(int argc, char** argv) {
         if (!aot_note.empty() && aot_note.find(" 0 configurations") == std::string::npos &&
             aot_note.find("generic solver for 0") == std::string::npos)
             std::printf("%-16s aot: %s\n", "", aot_note.c_str());
+    }
+
+    std::printf("\n3. One SegmentSolver::eval (ns, median over the configurations of section 1; %s)\n",
+                "taus spread over two mean segment lengths");
+    std::printf("%-16s %5s %9s %9s %11s %9s %9s\n", "model", "cfgs", "aot_ns", "jit_ns", "generic_ns", "gen/aot",
+                "gen/jit");
+    const int n_eval = quick ? 20000 : 100000;
+    volatile double sink = 0;
+    for (const Case& c : cases) {
+        Recorder rec(c.model);
+        const RunSummary visit = run(c.model, rec, c.visit_end);
+        std::vector<Configuration> cfgs = rec.seen;
+        if (cfgs.size() > max_configs) cfgs.resize(max_configs);
+        // Evaluate where the engine does: within a segment's usual length.
+        const double span = 2 * (c.visit_end - c.model.t0) / static_cast<double>(std::max<std::size_t>(visit.segments, 1));
+        JitOptions jo;
+        jo.cache_dir = cache_dir;
+        JitSolverProvider jit(c.model,
+                              [&c](const Configuration& cfg) {
+                                  return JitKernelSource{kernel_symbol(c.model, cfg), emit_kernel(derive(c.model, cfg))};
+                              },
+                              jo);
+        auto aot = has_aot_kernels(c.model, &aot_registry())
+                       ? make_solver_provider(c.model, KernelMode::automatic, &aot_registry())
+                       : nullptr;
+        GenericSolverProvider gen(c.model);
+        const std::size_t n = c.model.dof(), nf = 64;
+        std::vector<double> x(n), v(n), a(n), g(nf), dg(nf), bound(nf), scale(nf);
+        const SegmentEval out{x.data(), v.data(), a.data(), g.data(), dg.data(), bound.data(), scale.data()};
+        auto ns_per_eval = [&](SegmentSolver& s, const Configuration& cfg) {
+            std::vector<double> x0 = c.model.x0, v0 = c.model.v0;
+            std::vector<signed char> sgn(n, 0);
+            for (std::size_t i = 0; i < n; ++i) {
+                if (cfg.stuck[i]) v0[i] = 0;
+                if (c.model.masses[i].has_friction && !cfg.stuck[i]) sgn[i] = 1;
+            }
+            // Mid-run, so that the forcing phases are as large as the engine sees them.
+            s.setup(0.5 * (c.model.t0 + c.visit_end), x0.data(), v0.data(), sgn.data());
+            std::vector<double> t;
+            for (int r = 0; r < 4; ++r) {  // the first one warms up
+                const auto start = Clock::now();
+                for (int k = 0; k < n_eval; ++k) {
+                    s.eval(span * k / n_eval, out);
+                    sink = sink + g[0];
+                }
+                if (r > 0) t.push_back(1e9 * seconds_since(start) / n_eval);
+            }
+            return median(t);
+        };
+        std::vector<double> ta, tj, tg;
+        for (const Configuration& cfg : cfgs) {
+            if (aot) {
+                SegmentSolver& s = aot->solver(cfg);
+                if (dynamic_cast<KernelSolver*>(&s)) ta.push_back(ns_per_eval(s, cfg));
+            }
+            tj.push_back(ns_per_eval(jit.solver(cfg), cfg));
+            tg.push_back(ns_per_eval(gen.solver(cfg), cfg));
+        }
+        const double ma = median(ta), mj = median(tj), mg = median(tg);
+        if (!ta.empty())
+            std::printf("%-16s %5zu %9.1f %9.1f %11.1f %9.2f %9.2f\n", c.name.c_str(), cfgs.size(), ma, mj, mg,
+                        mg / ma, mg / mj);
+        else
+            std::printf("%-16s %5zu %9s %9.1f %11.1f %9s %9.2f\n", c.name.c_str(), cfgs.size(), "-", mj, mg, "-",
+                        mg / mj);
     }
     std::filesystem::remove_all(cache_dir);
     return 0;
