@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <unistd.h>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -105,7 +106,7 @@ struct Case {
 int main(int argc, char** argv) {
     const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
     const std::size_t max_configs = quick ? 4 : 12;
-    const int reps = quick ? 3 : 7;
+    const int reps = quick ? 3 : 11;
     const std::string models = HSNC_SOURCE_DIR "/models/";
     std::vector<Case> cases = {
         {"seed-scenario-1", read_model(models + "seed-scenario-1.toml"), 2.0, 2.0},
@@ -164,24 +165,11 @@ int main(int argc, char** argv) {
     std::printf("%-16s %7s %9s %11s %11s %11s %9s %9s %9s\n", "model", "t_end", "switches", "aot_ms", "jit_ms",
                 "generic_ms", "gen/aot", "gen/jit", "jit/aot");
     for (const Case& c : cases) {
-        auto time_it = [&](SolverProvider& p, RunSummary& s) {
-            s = run(c.model, p, c.t_end);  // warm-up: every solver built
-            std::vector<double> t;
-            for (int r = 0; r < reps; ++r) {
-                const auto start = Clock::now();
-                s = run(c.model, p, c.t_end);
-                t.push_back(1e3 * seconds_since(start));
-            }
-            return median(t);
-        };
         RunSummary sa, sj, sg;
-        double aot = -1;
+        std::unique_ptr<SolverProvider> aot_p;
         std::string aot_note;
-        if (has_aot_kernels(c.model, &aot_registry())) {
-            auto p = make_solver_provider(c.model, KernelMode::automatic, &aot_registry());
-            aot = time_it(*p, sa);
-            aot_note = p->describe();
-        }
+        if (has_aot_kernels(c.model, &aot_registry()))
+            aot_p = make_solver_provider(c.model, KernelMode::automatic, &aot_registry());
         JitOptions jo;
         jo.cache_dir = cache_dir;
         JitSolverProvider jit(c.model,
@@ -189,9 +177,25 @@ int main(int argc, char** argv) {
                                   return JitKernelSource{kernel_symbol(c.model, cfg), emit_kernel(derive(c.model, cfg))};
                               },
                               jo);
-        const double j = time_it(jit, sj);
         GenericSolverProvider gen(c.model);
-        const double g = time_it(gen, sg);
+        // Warm-up (every solver built), then the three in turn in each
+        // repetition, so that a noisy neighbour slows all three alike.
+        if (aot_p) sa = run(c.model, *aot_p, c.t_end);
+        sj = run(c.model, jit, c.t_end);
+        sg = run(c.model, gen, c.t_end);
+        std::vector<double> ta, tj, tg;
+        auto time_one = [&](SolverProvider& p, RunSummary& s, std::vector<double>& t) {
+            const auto start = Clock::now();
+            s = run(c.model, p, c.t_end);
+            t.push_back(1e3 * seconds_since(start));
+        };
+        for (int r = 0; r < reps; ++r) {
+            if (aot_p) time_one(*aot_p, sa, ta);
+            time_one(jit, sj, tj);
+            time_one(gen, sg, tg);
+        }
+        const double aot = aot_p ? median(ta) : -1, j = median(tj), g = median(tg);
+        if (aot_p) aot_note = aot_p->describe();
         if (aot > 0)
             std::printf("%-16s %7g %9zu %11.3f %11.3f %11.3f %9.2f %9.2f %9.2f\n", c.name.c_str(), c.t_end, sg.events,
                         aot, j, g, g / aot, g / j, j / aot);
