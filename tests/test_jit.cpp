@@ -135,6 +135,25 @@ TEST(Jit, UnknownSymbolIsARunError) {
     EXPECT_THROW(jit.lookup("two"), RunError);
 }
 
+TEST(Jit, CompiledObjectsAreDeterministicAndReloadable) {
+    const std::string source = "extern \"C\" double thrice(double x) { return 3 * x; }\n";
+    Jit a, b;
+    const std::string object = a.compile("thrice.cpp", source);
+    EXPECT_EQ(b.compile("thrice.cpp", source), object) << "the cache relies on equal source -> equal object";
+    EXPECT_EQ(object.substr(0, 4), std::string("\x7f" "ELF")) << "a relocatable ELF object";
+    // Keys: equal for equal source, different for any other source; SHA-1 hex.
+    EXPECT_EQ(a.cache_key(source), b.cache_key(source));
+    EXPECT_NE(a.cache_key(source), a.cache_key(source + " "));
+    EXPECT_EQ(a.cache_key(source).size(), 40u);
+    // Garbage, or a cut object, is refused before the JIT owns it, and the JIT
+    // still takes the real object afterwards.
+    EXPECT_THROW(b.add_object("thrice", "not an object file at all"), RunError);
+    EXPECT_THROW(b.add_object("thrice", object.substr(0, object.size() / 3)), RunError);
+    b.add_object("thrice", object);
+    auto* thrice = reinterpret_cast<double (*)(double)>(b.lookup("thrice"));
+    EXPECT_EQ(thrice(1.5), 4.5);
+}
+
 TEST(JitSolverProvider, Chain12AgreesWithGenericSolver) {
     const Model model = parse_model(chain12_toml(), "chain-12-test.toml");
     const double t_end = 4.0;
