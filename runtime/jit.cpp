@@ -1,4 +1,5 @@
-// hsnc -- Jit (jit.h): Clang CompilerInstance -> LLVM IR (EmitLLVMOnlyAction)
+// hsnc -- Jit (jit.h): Clang CompilerInstance -> LLVM IR (EmitLLVMOnlyAction,
+// in libhsnc_jit_clang.so: runtime/jit_frontend.h, loaded on the first compile)
 // -> object file (orc::SimpleCompiler, with the TargetMachine the LLJIT itself
 // would use) -> ORC LLJIT (addObjectFile), after LLVM's KaleidoscopeJIT
 // (create, add, lookup; Expected and Error handled here and nowhere else).
@@ -7,14 +8,8 @@
 // altogether on a hit (runtime/kernel_cache.h).
 #include "jit.h"
 
-#include <clang/Basic/Diagnostic.h>
-#include <clang/Basic/DiagnosticOptions.h>
-#include <clang/Basic/Version.h>
-#include <clang/CodeGen/CodeGenAction.h>
-#include <clang/Frontend/CompilerInstance.h>
-#include <clang/Frontend/CompilerInvocation.h>
-#include <clang/Frontend/TextDiagnosticPrinter.h>
-#include <clang/Lex/PreprocessorOptions.h>
+#include <clang/Basic/Version.inc>  // CLANG_VERSION_STRING only: nothing of Clang is linked here
+#include <dlfcn.h>
 #include <llvm/ADT/StringExtras.h>
 #include <llvm/Config/llvm-config.h>
 #include <llvm/ExecutionEngine/Orc/CompileUtils.h>
@@ -37,14 +32,11 @@
 #include <vector>
 
 #include "error.h"
+#include "jit_frontend.h"
 #include "kernel_abi_text.h"  // generated at build time: kKernelAbiHeaderText
 
 namespace hsnc {
 namespace {
-
-// The virtual directory that holds the embedded kernel_abi.h and the source
-// being compiled; it exists only inside Clang's source manager.
-constexpr const char* kVirtualDir = "/hsnc-jit";
 
 std::string error_text(llvm::Error err) { return llvm::toString(std::move(err)); }
 
@@ -57,18 +49,30 @@ void initialize_llvm() {
     if (!ok) throw RunError("Jit::Jit(): LLVM cannot generate code for this host (" + llvm::sys::getProcessTriple() + ")");
 }
 
-// cc1 arguments after the triple. No system or builtin include paths: a
-// kernel includes only kernel_abi.h and calls only __builtin_ math.
-// -ffp-contract=off keeps a*b+c two roundings, as the ahead-of-time kernels
-// and the generic solver compute it, so all three agree to the last bit
-// wherever they can. -O2, measured (2-core AMD EPYC, seed-scenario-2 to
-// t = 30000 s, 420k segments): its kernels step as fast as the ahead-of-time
-// ones (0.60 s); -O0 compiles in 11 instead of 18 ms per kernel but steps 23%
-// slower, -O1 and -O3 compile no faster and step no faster than -O2.
-const std::vector<const char*>& compile_flags() {
-    static const std::vector<const char*> flags = {"-x", "c++", "-std=c++17", "-O2", "-ffp-contract=off",
-                                                   "-nostdsysteminc", "-nobuiltininc", "-w"};
-    return flags;
+// The Clang front end, from libhsnc_jit_clang.so beside this library, loaded
+// once per process on the first compile.
+JitFrontendFn frontend() {
+    static std::once_flag once;
+    static JitFrontendFn fn = nullptr;
+    static std::string problem;
+    std::call_once(once, [] {
+        Dl_info self;
+        if (!::dladdr(reinterpret_cast<void*>(&frontend), &self) || !self.dli_fname) {
+            problem = "cannot locate libhsnc_jit";
+            return;
+        }
+        std::string path = self.dli_fname;
+        path = path.substr(0, path.find_last_of('/') + 1) + HSNC_JIT_FRONTEND_MODULE;
+        void* module = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);  // kept loaded
+        if (!module) {
+            problem = std::string("cannot load the Clang front end: ") + ::dlerror();
+            return;
+        }
+        fn = reinterpret_cast<JitFrontendFn>(::dlsym(module, kJitFrontendSymbol));
+        if (!fn) problem = path + " has no " + kJitFrontendSymbol;
+    });
+    if (!fn) throw RunError("Jit::compile(): " + problem);
+    return fn;
 }
 
 }  // namespace
@@ -105,43 +109,11 @@ Jit::~Jit() = default;
 void Jit::add(const std::string& name, const std::string& source) { add_object(name, compile(name, source)); }
 
 std::string Jit::compile(const std::string& name, const std::string& source) {
-    const std::string dir = kVirtualDir;
-    const std::string path = dir + "/" + name;
     const std::string triple = impl_->machine->getTargetTriple().str();
-    std::vector<const char*> args = {"-triple", triple.c_str()};
-    args.insert(args.end(), compile_flags().begin(), compile_flags().end());
-    args.insert(args.end(), {"-I", dir.c_str(), path.c_str()});
-
-    std::string diagnostics;
-    llvm::raw_string_ostream diag_stream(diagnostics);
-    llvm::IntrusiveRefCntPtr<clang::DiagnosticOptions> diag_opts(new clang::DiagnosticOptions());
-    clang::TextDiagnosticPrinter printer(diag_stream, diag_opts.get());
-    clang::DiagnosticsEngine arg_diags(llvm::IntrusiveRefCntPtr<clang::DiagnosticIDs>(new clang::DiagnosticIDs()),
-                                       diag_opts, &printer, /*ShouldOwnClient=*/false);
-
-    auto invocation = std::make_shared<clang::CompilerInvocation>();
-    const bool parsed = clang::CompilerInvocation::CreateFromArgs(*invocation, args, arg_diags);
-    if (!parsed) {
-        diag_stream.flush();
-        throw RunError("Jit::compile(): cannot set up Clang for " + name + ": " + diagnostics);
-    }
-    // Both files live in memory; the source manager takes ownership of the buffers.
-    clang::PreprocessorOptions& pp = invocation->getPreprocessorOpts();
-    pp.addRemappedFile(path, llvm::MemoryBuffer::getMemBufferCopy(source, path).release());
-    pp.addRemappedFile(dir + "/kernel_abi.h",
-                       llvm::MemoryBuffer::getMemBuffer(kKernelAbiHeaderText, dir + "/kernel_abi.h").release());
-
-    clang::CompilerInstance compiler;
-    compiler.setInvocation(std::move(invocation));
-    compiler.createDiagnostics(&printer, /*ShouldOwnClient=*/false);
-    compiler.setVerboseOutputStream(diag_stream);  // "1 error generated." goes with the diagnostics
-
     auto context = std::make_unique<llvm::LLVMContext>();
-    clang::EmitLLVMOnlyAction action(context.get());
-    const bool compiled = compiler.ExecuteAction(action);
-    std::unique_ptr<llvm::Module> module = compiled ? action.takeModule() : nullptr;
-    diag_stream.flush();
-    if (!module) throw RunError("Jit::compile(): Clang cannot compile " + name + ":\n" + diagnostics);
+    std::string error;
+    std::unique_ptr<llvm::Module> module(frontend()(context.get(), triple, name, source, error));
+    if (!module) throw RunError("Jit::compile(): " + error);
 
     // Machine code, as the LLJIT's IR layer would make it (same target machine).
     module->setDataLayout(impl_->machine->createDataLayout());
@@ -171,10 +143,10 @@ std::string Jit::cache_key(const std::string& source) const {
         sha.update(llvm::StringRef("\0", 1));  // "ab"+"c" differs from "a"+"bc"
     };
     part("hsnc-jit-object 1");
-    part(clang::getClangFullVersion());
+    part("clang " CLANG_VERSION_STRING);
     part(LLVM_VERSION_STRING);
     part(impl_->target);
-    for (const char* flag : compile_flags()) part(flag);
+    for (const char* flag : jit_compile_flags()) part(flag);
     part(kKernelAbiHeaderText);
     part(source);
     return llvm::toHex(sha.final(), /*LowerCase=*/true);
