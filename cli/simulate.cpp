@@ -20,6 +20,7 @@
 #include "kernel_cache.h"
 #include "model_reader.h"
 #include "plot.h"
+#include "reference.h"
 #include "solver_provider.h"
 
 namespace hsnc::cli {
@@ -39,6 +40,7 @@ struct SimulateOptions {
     bool no_cache = false;
     std::size_t max_events = 0;
     bool quiet = false;
+    std::string precision = "double";
 };
 
 // Wraps the CSV observer: counts event kinds, draws a progress bar on a terminal.
@@ -105,6 +107,35 @@ std::unique_ptr<SolverProvider> load_jit_provider(const Model& model, JitSolverP
     return std::unique_ptr<SolverProvider>(factory(model, std::move(source), options));
 }
 
+// --precision: 0 for double, else the decimal digits of the reference engine (mp:N).
+int parse_precision(const SimulateOptions& o, Method method) {
+    if (o.precision == "double") return 0;
+    if (o.precision == "long-double")
+        throw InputError("--precision long-double: not offered; use mp:N (N in " +
+                         std::to_string(reference::kMinDigits) + ".." + std::to_string(reference::kMaxDigits) +
+                         ") for a high-precision reference run");
+    const std::string prefix = "mp:";
+    std::size_t used = 0;
+    int digits = 0;
+    bool ok = o.precision.compare(0, prefix.size(), prefix) == 0 && o.precision.size() > prefix.size();
+    if (ok) {
+        try {
+            digits = std::stoi(o.precision.substr(prefix.size()), &used);
+        } catch (const std::exception&) {
+            ok = false;
+        }
+        ok = ok && used == o.precision.size() - prefix.size();
+    }
+    if (!ok || digits < reference::kMinDigits || digits > reference::kMaxDigits)
+        throw InputError("--precision " + o.precision + ": expected double, or mp:N with N in " +
+                         std::to_string(reference::kMinDigits) + ".." + std::to_string(reference::kMaxDigits));
+    if (method != Method::hsnc)
+        throw InputError("--precision " + o.precision + ": only with --method hsnc (not " + o.method + ")");
+    if (o.kernels != "auto")
+        throw InputError("--precision " + o.precision + ": --kernels applies to double precision only");
+    return digits;
+}
+
 std::string number_text(double v) {
     std::ostringstream s;
     s.precision(17);
@@ -129,6 +160,7 @@ int simulate(const SimulateOptions& o) {
     iopt.atol = o.atol;
     validate(method, iopt);
     const KernelMode mode = parse_kernel_mode(o.kernels);
+    const int digits = parse_precision(o, method);
 
     std::unique_ptr<CsvFile> traj, events;
     if (!o.out.empty()) traj = std::make_unique<CsvFile>(o.out);
@@ -145,7 +177,11 @@ int simulate(const SimulateOptions& o) {
 
     RunSummary sum;
     std::string detail;
-    if (method == Method::hsnc) {
+    if (digits > 0) {
+        sum = reference::simulate(model, digits, eopt, obs);
+        detail = "reference engine at " + std::to_string(digits) + " digits (CLN, " +
+                 std::to_string(reference::carried_bits(digits)) + " bits)";
+    } else if (method == Method::hsnc) {
         std::unique_ptr<SolverProvider> provider;
         // auto: the ahead-of-time kernels when the model has them, else the
         // JIT, else (no libhsnc_jit.so) the generic solver, with a note.
@@ -226,6 +262,10 @@ void add_simulate(CLI::App& app, int& exit_code) {
     auto* no_cache = sub->add_flag("--no-cache", o->no_cache, "compile every kernel (jit); read and write no cache");
     no_cache->excludes(sub->get_option("--cache-dir"));
     sub->add_option("--max-events", o->max_events, "stop after this many switch events (0: no limit)");
+    sub->add_option("--precision", o->precision,
+                    "double (default); mp:N: the high-precision reference engine, every quantity at N decimal "
+                    "digits (N in 20..100, CLN) from the model's double values taken exactly; output still "
+                    "rounded to 17 digits. long-double is not offered");
     sub->add_flag("--quiet", o->quiet, "no progress or statistics on stderr");
     sub->callback([o, &exit_code] { exit_code = simulate(*o); });
 }

@@ -1,0 +1,601 @@
+#include "mp_segment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <cln/integer.h>
+#include <cln/rational.h>
+#include <cln/real.h>
+
+#include "error.h"
+
+namespace hsnc::reference {
+namespace {
+
+using cln::cl_I;
+using cln::cl_RA;
+
+bool is_zero(const cl_F& x) { return cln::zerop(x); }
+cl_F sq(const cl_F& x) { return x * x; }
+
+// phi_1(x) = (e^x - 1)/x and phi_2(x) = (e^x - 1 - x)/x^2, by their Taylor
+// series where the subtraction would cancel (|x| < 1/2), summed until the term
+// drops below the format's roundoff.
+cl_F phi1(const MpModel& mp, const cl_F& x) {
+    if (cln::abs(x) < mp.half) {
+        cl_F term = mp.one, sum = mp.one;  // x^k/(k+1)!
+        for (long k = 1; k < 2000; ++k) {
+            term = term * x / cl_I(k + 1);
+            sum = sum + term;
+            if (cln::abs(term) <= mp.eps * cln::abs(sum)) break;
+        }
+        return sum;
+    }
+    return (cln::exp(x) - mp.one) / x;
+}
+cl_F phi2(const MpModel& mp, const cl_F& x) {
+    if (cln::abs(x) < mp.half) {
+        cl_F term = mp.half, sum = mp.half;  // x^k/(k+2)!
+        for (long k = 1; k < 2000; ++k) {
+            term = term * x / cl_I(k + 2);
+            sum = sum + term;
+            if (cln::abs(term) <= mp.eps * cln::abs(sum)) break;
+        }
+        return sum;
+    }
+    return (cln::exp(x) - mp.one - x) / (x * x);
+}
+
+struct CosSin {
+    cl_F c, s;
+};
+CosSin cos_sin_of(const cl_F& x) {
+    const cln::cos_sin_t cs = cln::cos_sin(x);
+    return {cln::the<cl_F>(cs.cos), cln::the<cl_F>(cs.sin)};
+}
+
+// Cyclic Jacobi for the symmetric matrix A (n x n): A = V diag(d) V^T.
+// Rotations as in Golub & Van Loan 8.5.2 (the smaller rotation angle); sweeps
+// until every off-diagonal entry is below eps * the Frobenius norm.
+bool jacobi(const MpModel& mp, std::vector<std::vector<cl_F>> A, std::vector<cl_F>& d,
+            std::vector<std::vector<cl_F>>& V) {
+    const std::size_t n = A.size();
+    V.assign(n, std::vector<cl_F>(n, mp.zero));
+    for (std::size_t i = 0; i < n; ++i) V[i][i] = mp.one;
+    cl_F norm = mp.zero;
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = 0; j < n; ++j) norm = norm + sq(A[i][j]);
+    const cl_F tol = sq(mp.eps) * norm;  // off-diagonal squared
+    bool converged = n <= 1;
+    for (int sweep = 0; sweep < 100 && !converged; ++sweep) {
+        cl_F off = mp.zero;
+        for (std::size_t p = 0; p < n; ++p)
+            for (std::size_t q = p + 1; q < n; ++q) off = off + sq(A[p][q]);
+        if (off <= tol) {
+            converged = true;
+            break;
+        }
+        for (std::size_t p = 0; p < n; ++p)
+            for (std::size_t q = p + 1; q < n; ++q) {
+                if (is_zero(A[p][q])) continue;
+                // theta = (a_qq - a_pp)/(2 a_pq), t = sgn(theta)/(|theta| + sqrt(theta^2 + 1)).
+                const cl_F theta = (A[q][q] - A[p][p]) / (mp.two * A[p][q]);
+                cl_F t = mp.one / (cln::abs(theta) + cln::sqrt(sq(theta) + mp.one));
+                if (cln::minusp(theta)) t = -t;
+                const cl_F c = mp.one / cln::sqrt(sq(t) + mp.one), s = t * c;
+                for (std::size_t k = 0; k < n; ++k) {  // A <- A J (columns p, q)
+                    const cl_F akp = A[k][p], akq = A[k][q];
+                    A[k][p] = c * akp - s * akq;
+                    A[k][q] = s * akp + c * akq;
+                }
+                for (std::size_t k = 0; k < n; ++k) {  // A <- J^T A (rows p, q)
+                    const cl_F apk = A[p][k], aqk = A[q][k];
+                    A[p][k] = c * apk - s * aqk;
+                    A[q][k] = s * apk + c * aqk;
+                }
+                A[p][q] = A[q][p] = mp.zero;
+                for (std::size_t k = 0; k < n; ++k) {  // V <- V J
+                    const cl_F vkp = V[k][p], vkq = V[k][q];
+                    V[k][p] = c * vkp - s * vkq;
+                    V[k][q] = s * vkp + c * vkq;
+                }
+            }
+    }
+    d.resize(n, mp.zero);
+    for (std::size_t i = 0; i < n; ++i) d[i] = A[i][i];
+    return converged;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- MpModel
+
+MpModel::MpModel(const Model& model, int digits)
+    : format(cln::float_format(static_cast<unsigned long>(digits))),
+      zero(cln::cl_float(0, format)),
+      one(cln::cl_float(1, format)),
+      two(cln::cl_float(2, format)),
+      half(cln::cl_float(cl_RA(1) / 2, format)),
+      eps(cln::cl_float(cln::expt(cl_RA(2), 1 - static_cast<long>(cln::float_digits(one))), format)),
+      pi(cln::pi(format)) {
+    n = static_cast<int>(model.dof());
+    g = F(model.g);
+    alpha = F(model.alpha);
+    beta = F(model.beta);
+    for (const Mass& ms : model.masses) {
+        m.push_back(F(ms.m));
+        normal.push_back(F(ms.m) * g);  // N_i = m_i g, at this precision
+        mu_k.push_back(F(ms.mu_k));
+        mu_s.push_back(F(ms.mu_s));
+    }
+    for (const Spring& s : model.springs) springs.push_back({s.a, s.b, F(s.k), zero});
+    for (const Contact& c : model.contacts) contacts.push_back({c.a, c.b, F(c.k), F(c.gap)});
+    f_const.assign(static_cast<std::size_t>(n), zero);
+    for (int i = 0; i < n; ++i)
+        if (static_cast<std::size_t>(i) < model.load.size()) f_const[i] = F(model.load[i]);
+    for (const Harmonic& h : model.forcing) {
+        if (h.omega == 0.0) {  // a constant force amplitude*sin(phase)
+            const cl_F s = cln::sin(F(h.phase));
+            for (int i = 0; i < n; ++i) f_const[i] = f_const[i] + F(h.amplitude[i]) * s;
+            continue;
+        }
+        // sin(-|W| t + ph) = sin(|W| t + pi - ph)
+        h_omega.push_back(F(std::fabs(h.omega)));
+        h_phase.push_back(h.omega > 0 ? F(h.phase) : pi - F(h.phase));
+        std::vector<cl_F> amp;
+        for (int i = 0; i < n; ++i) amp.push_back(F(h.amplitude[i]));
+        h_amp.push_back(amp);
+    }
+    t0 = F(model.t0);
+    for (int i = 0; i < n; ++i) {
+        x0.push_back(F(model.x0[i]));
+        v0.push_back(F(model.v0[i]));
+    }
+}
+
+cl_F MpModel::F(double d) const { return cln::cl_float(d, format); }
+cl_F MpModel::I(long i) const { return cln::cl_float(cl_I(i), format); }
+
+cl_F MpModel::gap(int c, const std::vector<cl_F>& x) const {
+    const Link& k = contacts[static_cast<std::size_t>(c)];
+    return body(x, k.a) - body(x, k.b) - k.gap;
+}
+cl_F MpModel::gap_rate(int c, const std::vector<cl_F>& v) const {
+    const Link& k = contacts[static_cast<std::size_t>(c)];
+    return body(v, k.a) - body(v, k.b);
+}
+
+cl_F MpModel::force_on_mass(const Configuration& cfg, int i, const cl_F& t, const std::vector<cl_F>& x,
+                            const std::vector<cl_F>& v) const {
+    // A_i = sum over links touching i of -k (y_i - y_other) - beta k (v_i - v_other) [+ k gap for contacts]
+    //       - alpha m_i v_i + f_i + sum_h F_hi sin(Omega_h t + phase_h).
+    cl_F A = f_const[i] - alpha * m[i] * v[i];
+    auto link = [&](const Link& k, bool contact) {
+        if (k.a != i && k.b != i) return;
+        const cl_F dx = body(x, k.a) - body(x, k.b) - (contact ? k.gap : zero);
+        const cl_F dv = body(v, k.a) - body(v, k.b);
+        const cl_F f = -(k.k * dx) - beta * k.k * dv;  // on a
+        A = k.a == i ? A + f : A - f;
+        if (k.a == i && k.b == i) A = A - f;  // a link from a mass to itself does nothing
+    };
+    for (const Link& s : springs) link(s, false);
+    for (std::size_t c = 0; c < contacts.size(); ++c)
+        if (cfg.closed[c]) link(contacts[c], true);
+    for (std::size_t h = 0; h < h_omega.size(); ++h) A = A + h_amp[h][i] * cln::sin(h_omega[h] * t + h_phase[h]);
+    return A;
+}
+
+cl_F MpModel::force_rate_on_mass(const Configuration& cfg, int i, const cl_F& t, const std::vector<cl_F>& v,
+                                 const std::vector<cl_F>& a) const {
+    cl_F dA = -(alpha * m[i] * a[i]);
+    auto link = [&](const Link& k) {
+        if (k.a != i && k.b != i) return;
+        const cl_F f = -(k.k * (body(v, k.a) - body(v, k.b))) - beta * k.k * (body(a, k.a) - body(a, k.b));
+        dA = k.a == i ? dA + f : dA - f;
+        if (k.a == i && k.b == i) dA = dA - f;
+    };
+    for (const Link& s : springs) link(s);
+    for (std::size_t c = 0; c < contacts.size(); ++c)
+        if (cfg.closed[c]) link(contacts[c]);
+    for (std::size_t h = 0; h < h_omega.size(); ++h)
+        dA = dA + h_amp[h][i] * h_omega[h] * cln::cos(h_omega[h] * t + h_phase[h]);
+    return dA;
+}
+
+// ---------------------------------------------------------------- MpSegment
+
+MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration& cfg)
+    : mp_(mp), cfg_(cfg), switches_(switch_functions(model, cfg)), max_step_(mp.zero) {
+    n_ = mp.n;
+    nh_ = static_cast<int>(mp.h_omega.size());
+    const cl_F& Z0 = mp.zero;
+    // K(cfg), C = alpha M + beta K, constant force with contact preloads (assembly.h).
+    K_.assign(n_, std::vector<cl_F>(n_, Z0));
+    f_const_ = mp.f_const;
+    auto add = [&](const MpModel::Link& k, bool contact) {
+        if (k.a != kGround) K_[k.a][k.a] = K_[k.a][k.a] + k.k;
+        if (k.b != kGround) K_[k.b][k.b] = K_[k.b][k.b] + k.k;
+        if (k.a != kGround && k.b != kGround) {
+            K_[k.a][k.b] = K_[k.a][k.b] - k.k;
+            K_[k.b][k.a] = K_[k.b][k.a] - k.k;
+        }
+        if (contact) {  // -k (x_a - x_b - d): +k d on a, -k d on b
+            if (k.a != kGround) f_const_[k.a] = f_const_[k.a] + k.k * k.gap;
+            if (k.b != kGround) f_const_[k.b] = f_const_[k.b] - k.k * k.gap;
+        }
+    };
+    for (const auto& s : mp.springs) add(s, false);
+    for (std::size_t c = 0; c < mp.contacts.size(); ++c)
+        if (cfg.closed[c]) add(mp.contacts[c], true);
+    C_ = K_;
+    for (int i = 0; i < n_; ++i)
+        for (int k = 0; k < n_; ++k) C_[i][k] = mp.beta * K_[i][k] + (i == k ? mp.alpha * mp.m[i] : Z0);
+
+    // Free masses, and the structural count of rigid-body modes (modal.h).
+    slot_.assign(n_, -1);
+    for (int i = 0; i < n_; ++i)
+        if (!cfg.stuck[i]) {
+            slot_[i] = static_cast<int>(free_.size());
+            free_.push_back(i);
+        }
+    nf_ = static_cast<int>(free_.size());
+    std::vector<int> comp(nf_);
+    for (int r = 0; r < nf_; ++r) comp[r] = r;
+    auto root = [&](int r) {
+        while (comp[r] != r) r = comp[r] = comp[comp[r]];
+        return r;
+    };
+    std::vector<char> anchored(nf_, 0);
+    auto link = [&](const MpModel::Link& k) {
+        if (!cln::plusp(k.k)) return;
+        const int a = k.a == kGround ? -1 : slot_[k.a], b = k.b == kGround ? -1 : slot_[k.b];
+        if (a >= 0 && b >= 0) comp[root(a)] = root(b);
+    };
+    for (const auto& s : mp.springs) link(s);
+    for (std::size_t c = 0; c < mp.contacts.size(); ++c)
+        if (cfg.closed[c]) link(mp.contacts[c]);
+    auto anchor = [&](const MpModel::Link& k) {
+        if (!cln::plusp(k.k)) return;
+        const int a = k.a == kGround ? -1 : slot_[k.a], b = k.b == kGround ? -1 : slot_[k.b];
+        if (a >= 0 && b < 0) anchored[root(a)] = 1;
+        if (b >= 0 && a < 0) anchored[root(b)] = 1;
+    };
+    for (const auto& s : mp.springs) anchor(s);
+    for (std::size_t c = 0; c < mp.contacts.size(); ++c)
+        if (cfg.closed[c]) anchor(mp.contacts[c]);
+    int n_rigid = 0;
+    for (int r = 0; r < nf_; ++r)
+        if (root(r) == r && !anchored[r]) ++n_rigid;
+
+    // A = M^-1/2 K_F M^-1/2 = V diag(lambda) V^T, Phi = M^-1/2 V (M-orthonormal).
+    std::vector<cl_F> rsqm(nf_);
+    for (int r = 0; r < nf_; ++r) rsqm[r] = mp.one / cln::sqrt(mp.m[free_[r]]);
+    std::vector<std::vector<cl_F>> A(nf_, std::vector<cl_F>(nf_, Z0)), V;
+    for (int r = 0; r < nf_; ++r)
+        for (int s = 0; s < nf_; ++s) A[r][s] = rsqm[r] * K_[free_[r]][free_[s]] * rsqm[s];
+    std::vector<cl_F> d;
+    if (!jacobi(mp, A, d, V))
+        throw RunError("reference::MpSegment(): Jacobi eigen-solver did not converge in configuration '" +
+                       cfg.spec(model) + "'");
+    std::vector<int> order(nf_);
+    for (int j = 0; j < nf_; ++j) order[j] = j;
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return d[a] < d[b]; });
+    phi_.assign(nf_, std::vector<cl_F>(nf_, Z0));
+    lambda_.assign(nf_, Z0);
+    for (int j = 0; j < nf_; ++j) {
+        lambda_[j] = j < n_rigid ? Z0 : d[order[j]];  // structural zeros, exactly
+        if (cln::minusp(lambda_[j])) lambda_[j] = Z0;
+        for (int r = 0; r < nf_; ++r) phi_[r][j] = rsqm[r] * V[r][order[j]];
+    }
+
+    // Regimes.
+    regime_.assign(nf_, Regime::rigid);
+    omega_.assign(nf_, Z0);
+    c_.assign(nf_, Z0);
+    sigma_.assign(nf_, Z0);
+    omega_d_.assign(nf_, Z0);
+    gamma_.assign(nf_, Z0);
+    r1_.assign(nf_, Z0);
+    for (int j = 0; j < nf_; ++j) {
+        const cl_F& lam = lambda_[j];
+        omega_[j] = cln::sqrt(lam);
+        c_[j] = mp.alpha + mp.beta * lam;
+        sigma_[j] = c_[j] * mp.half;
+        const cl_F &w = omega_[j], &s = sigma_[j];
+        if (is_zero(lam)) {
+            regime_[j] = Regime::rigid;
+        } else if (s < w) {
+            regime_[j] = Regime::underdamped;
+            omega_d_[j] = cln::sqrt((w - s) * (w + s));
+        } else if (s > w) {
+            regime_[j] = Regime::overdamped;
+            gamma_[j] = cln::sqrt((s - w) * (s + w));
+            r1_[j] = -(lam / (s + gamma_[j]));  // -sigma + gamma without cancellation
+        } else {
+            regime_[j] = Regime::critical;
+        }
+    }
+
+    // Modal forcing and particular solutions.
+    P_.assign(nf_, std::vector<cl_F>(nh_, Z0));
+    pa_ = pb_ = P_;
+    secular_.assign(nf_, std::vector<char>(nh_, 0));
+    for (int j = 0; j < nf_; ++j)
+        for (int h = 0; h < nh_; ++h) {
+            cl_F P = Z0;
+            for (int r = 0; r < nf_; ++r) P = P + phi_[r][j] * mp.h_amp[h][free_[r]];
+            P_[j][h] = P;
+            const cl_F& W = mp.h_omega[h];
+            const cl_F det = lambda_[j] - W * W, cw = c_[j] * W;
+            const cl_F D = det * det + cw * cw;
+            if (is_zero(D)) {
+                secular_[j][h] = 1;  // exact undamped resonance
+                const cl_F period = mp.two * mp.pi / W;
+                max_step_ = has_max_step_ ? cln::min(max_step_, period) : period;
+                has_max_step_ = true;
+            } else {
+                pa_[j][h] = -(P * cw) / D;
+                pb_[j][h] = P * det / D;
+            }
+        }
+
+    // Switch functions as modal combinations g = W q + Z q' + D sin + const (for the bounds).
+    const int ns = static_cast<int>(switches_.size());
+    W_.assign(ns, std::vector<cl_F>(nf_, Z0));
+    Z_ = W_;
+    D_.assign(ns, std::vector<cl_F>(nh_, Z0));
+    for (int f = 0; f < ns; ++f) {
+        const SwitchFunction& sf = switches_[f];
+        if (sf.kind == SwitchKind::gap) {
+            const auto& ct = mp.contacts[sf.element];
+            for (int j = 0; j < nf_; ++j) {
+                cl_F w = Z0;
+                if (ct.a != kGround && slot_[ct.a] >= 0) w = w + phi_[slot_[ct.a]][j];
+                if (ct.b != kGround && slot_[ct.b] >= 0) w = w - phi_[slot_[ct.b]][j];
+                W_[f][j] = w;
+            }
+        } else if (sf.kind == SwitchKind::velocity) {
+            for (int j = 0; j < nf_; ++j) Z_[f][j] = phi_[slot_[sf.element]][j];
+        } else {
+            const bool pos = sf.kind == SwitchKind::release_pos;
+            const int i = sf.element;
+            for (int j = 0; j < nf_; ++j) {
+                cl_F kw = Z0, cz = Z0;
+                for (int r = 0; r < nf_; ++r) {
+                    kw = kw + K_[i][free_[r]] * phi_[r][j];
+                    cz = cz + C_[i][free_[r]] * phi_[r][j];
+                }
+                W_[f][j] = pos ? -kw : kw;
+                Z_[f][j] = pos ? -cz : cz;
+            }
+            for (int h = 0; h < nh_; ++h) D_[f][h] = pos ? mp.h_amp[h][i] : -mp.h_amp[h][i];
+        }
+    }
+    // The standard particular parts of harmonic h add up in g_f to one sinusoid
+    // A cos + B sin; its second derivative has amplitude Omega^2 sqrt(A^2 + B^2).
+    bound_sin_.assign(ns, Z0);
+    for (int f = 0; f < ns; ++f)
+        for (int h = 0; h < nh_; ++h) {
+            const cl_F& W = mp.h_omega[h];
+            cl_F A = Z0, B = D_[f][h];
+            for (int j = 0; j < nf_; ++j) {
+                if (secular_[j][h]) continue;
+                A = A + W_[f][j] * pa_[j][h] + Z_[f][j] * W * pb_[j][h];
+                B = B + W_[f][j] * pb_[j][h] - Z_[f][j] * W * pa_[j][h];
+            }
+            bound_sin_[f] = bound_sin_[f] + W * W * cln::sqrt(A * A + B * B);
+        }
+    x_fix_.assign(n_, Z0);
+    theta_.assign(nh_, Z0);
+    p_.assign(nf_, Z0);
+    u0_.assign(nf_, Z0);
+    ud0_.assign(nf_, Z0);
+}
+
+void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::vector<cl_F>& v0,
+                      const std::vector<signed char>& sgn) {
+    const MpModel& mp = mp_;
+    x_fix_ = x0;
+    for (int h = 0; h < nh_; ++h) theta_[h] = mp.h_omega[h] * t0 + mp.h_phase[h];
+    // Constant force on the free masses: loads, preloads, the stuck masses as
+    // supports (-K_FS x_S), kinetic friction -mu_k N_i sgn_i.
+    std::vector<cl_F> force(nf_, mp.zero);
+    for (int r = 0; r < nf_; ++r) {
+        const int i = free_[r];
+        cl_F f = f_const_[i];
+        for (int s = 0; s < n_; ++s)
+            if (cfg_.stuck[s]) f = f - K_[i][s] * x0[s];
+        if (sgn[i] > 0) f = f - mp.mu_k[i] * mp.normal[i];
+        if (sgn[i] < 0) f = f + mp.mu_k[i] * mp.normal[i];
+        force[r] = f;
+    }
+    for (int j = 0; j < nf_; ++j) {
+        // q0 = Phi^T M_F x0, qd0 = Phi^T M_F v0, p = Phi^T f.
+        cl_F q0 = mp.zero, qd0 = mp.zero, p = mp.zero;
+        for (int r = 0; r < nf_; ++r) {
+            const int i = free_[r];
+            q0 = q0 + phi_[r][j] * mp.m[i] * x0[i];
+            qd0 = qd0 + phi_[r][j] * mp.m[i] * v0[i];
+            p = p + phi_[r][j] * force[r];
+        }
+        p_[j] = p;
+        cl_F qp0 = mp.zero, qpd0 = mp.zero;  // particular parts at tau = 0
+        for (int h = 0; h < nh_; ++h) {
+            const CosSin cs = cos_sin_of(theta_[h]);
+            const cl_F& W = mp.h_omega[h];
+            if (secular_[j][h]) {  // q_p = -P tau cos(W tau + theta)/(2W)
+                qpd0 = qpd0 - P_[j][h] * cs.c / (mp.two * W);
+                continue;
+            }
+            qp0 = qp0 + pa_[j][h] * cs.c + pb_[j][h] * cs.s;
+            qpd0 = qpd0 + W * (pb_[j][h] * cs.c - pa_[j][h] * cs.s);
+        }
+        u0_[j] = regime_[j] == Regime::rigid ? q0 - qp0 : q0 - p / lambda_[j] - qp0;
+        ud0_[j] = qd0 - qpd0;
+    }
+}
+
+void MpSegment::eval(const cl_F& tau, MpEval& out) const {
+    const MpModel& mp = mp_;
+    const cl_F& Z0 = mp.zero;
+    std::vector<CosSin> hcs(nh_);
+    for (int h = 0; h < nh_; ++h) hcs[h] = cos_sin_of(mp.h_omega[h] * tau + theta_[h]);
+    std::vector<cl_F> q(nf_), qd(nf_), qdd(nf_), mag(nf_), dmag(nf_), b2(nf_), b3(nf_);
+    for (int j = 0; j < nf_; ++j) {
+        const cl_F &lam = lambda_[j], &c = c_[j], &sig = sigma_[j], &w = omega_[j], &p = p_[j];
+        const cl_F &u0 = u0_[j], &ud0 = ud0_[j];
+        cl_F qj, qdj, qddj, m, dm, bb2, bb3;
+        if (regime_[j] == Regime::rigid) {
+            // q = u0 + u0' tau phi1(-c tau) + p tau^2 phi2(-c tau); q'' = (p - c u0') e^{-c tau}.
+            const cl_F x = -(c * tau), e = cln::exp(x), f1 = phi1(mp, x), f2 = phi2(mp, x);
+            const cl_F t1 = ud0 * tau * f1, t2 = p * tau * tau * f2;
+            qj = u0 + t1 + t2;
+            qdj = ud0 * e + p * tau * f1;
+            qddj = (p - c * ud0) * e;
+            m = cln::abs(u0) + cln::abs(t1) + cln::abs(t2);
+            dm = cln::abs(ud0 * e) + cln::abs(p * tau * f1);
+            bb2 = cln::abs(qddj);  // decays from here on (c >= 0)
+            bb3 = c * bb2;
+        } else {
+            // u = EC u0 + ES (u0' + sigma u0), u' = EC u0' - ES (lambda u0 + sigma u0').
+            cl_F EC, ES;
+            if (regime_[j] == Regime::underdamped) {
+                const cl_F ed = is_zero(sig) ? mp.one : cln::exp(-(sig * tau));
+                const CosSin cs = cos_sin_of(omega_d_[j] * tau);
+                EC = ed * cs.c;
+                ES = ed * cs.s / omega_d_[j];
+            } else if (regime_[j] == Regime::overdamped) {
+                // e^{-sigma tau} cosh(gamma tau) = e^{r1 tau}(1 + e^{-2 gamma tau})/2,
+                // e^{-sigma tau} sinh(gamma tau)/gamma = e^{r1 tau} tau phi1(-2 gamma tau).
+                const cl_F e1 = cln::exp(r1_[j] * tau), x = -(mp.two * gamma_[j] * tau);
+                EC = e1 * (mp.one + cln::exp(x)) * mp.half;
+                ES = e1 * tau * phi1(mp, x);
+            } else {
+                const cl_F ed = cln::exp(-(sig * tau));
+                EC = ed;
+                ES = ed * tau;
+            }
+            const cl_F v0 = ud0 + sig * u0, a0 = lam * u0 + sig * ud0;
+            const cl_F u = EC * u0 + ES * v0, ud = EC * ud0 - ES * a0;
+            const cl_F stat = p / lam;
+            qj = stat + u;
+            qdj = ud;
+            qddj = -(c * ud) - lam * u;
+            m = cln::abs(stat) + cln::abs(EC * u0) + cln::abs(ES * v0);
+            dm = cln::abs(EC * ud0) + cln::abs(ES * a0);
+            // E = (u'^2 + lambda u^2)/2 never grows (dE/dt = -c u'^2), so from here on
+            // |u''| <= (c + omega) sqrt(2E), |u'''| <= (c (c + omega) + lambda) sqrt(2E).
+            const cl_F e2 = cln::sqrt(ud * ud + lam * u * u);
+            bb2 = (c + w) * e2;
+            bb3 = (c * (c + w) + lam) * e2;
+        }
+        for (int h = 0; h < nh_; ++h) {
+            const cl_F& W = mp.h_omega[h];
+            const CosSin& cs = hcs[h];
+            if (secular_[j][h]) {
+                // q_p = A tau cos(phi), A = -P/(2W); q_p'' = -2AW sin - A W^2 tau cos.
+                const cl_F A = -(P_[j][h] / (mp.two * W));
+                const cl_F qp = A * tau * cs.c, qpd = A * cs.c - A * W * tau * cs.s;
+                qj = qj + qp;
+                qdj = qdj + qpd;
+                qddj = qddj - mp.two * A * W * cs.s - A * W * W * tau * cs.c;
+                m = m + cln::abs(qp);
+                dm = dm + cln::abs(qpd);
+                const cl_F s_end = tau + max_step_;
+                bb2 = bb2 + cln::abs(A) * (mp.two * W + W * W * s_end);
+                bb3 = bb3 + cln::abs(A) * (mp.I(3) * W * W + W * W * W * s_end);
+                continue;
+            }
+            const cl_F qp = pa_[j][h] * cs.c + pb_[j][h] * cs.s;
+            const cl_F qpd = W * (pb_[j][h] * cs.c - pa_[j][h] * cs.s);
+            qj = qj + qp;
+            qdj = qdj + qpd;
+            qddj = qddj - W * W * qp;
+            m = m + cln::abs(qp);
+            dm = dm + cln::abs(qpd);
+        }
+        q[j] = qj;
+        qd[j] = qdj;
+        qdd[j] = qddj;
+        mag[j] = m;
+        dmag[j] = dm;
+        b2[j] = bb2;
+        b3[j] = bb3;
+    }
+
+    // x_F = Phi q (likewise v, a); stuck masses fixed.
+    out.x.assign(n_, Z0);
+    out.v.assign(n_, Z0);
+    out.a.assign(n_, Z0);
+    std::vector<cl_F> xm(n_, Z0), vm(n_, Z0);
+    for (int i = 0; i < n_; ++i) {
+        out.x[i] = x_fix_[i];
+        xm[i] = cln::abs(x_fix_[i]);
+    }
+    for (int r = 0; r < nf_; ++r) {
+        cl_F x = Z0, v = Z0, a = Z0, xmr = Z0, vmr = Z0;
+        for (int j = 0; j < nf_; ++j) {
+            const cl_F& ph = phi_[r][j];
+            x = x + ph * q[j];
+            v = v + ph * qd[j];
+            a = a + ph * qdd[j];
+            xmr = xmr + cln::abs(ph) * mag[j];
+            vmr = vmr + cln::abs(ph) * dmag[j];
+        }
+        const int i = free_[r];
+        out.x[i] = x;
+        out.v[i] = v;
+        out.a[i] = a;
+        xm[i] = xmr;
+        vm[i] = vmr;
+    }
+
+    const std::size_t ns = switches_.size();
+    out.g.resize(ns, Z0);
+    out.dg.resize(ns, Z0);
+    out.bound.resize(ns, Z0);
+    out.scale.resize(ns, Z0);
+    auto bmag = [&](const std::vector<cl_F>& mv, int b) { return b == kGround ? Z0 : mv[b]; };
+    for (std::size_t f = 0; f < ns; ++f) {
+        const SwitchFunction& sf = switches_[f];
+        const int e = sf.element;
+        cl_F g, dg, scale;
+        if (sf.kind == SwitchKind::gap) {
+            const auto& ct = mp.contacts[e];
+            g = mp.body(out.x, ct.a) - mp.body(out.x, ct.b) - ct.gap;
+            dg = mp.body(out.v, ct.a) - mp.body(out.v, ct.b);
+            scale = bmag(xm, ct.a) + bmag(xm, ct.b) + cln::abs(ct.gap);
+        } else if (sf.kind == SwitchKind::velocity) {
+            g = out.v[e];
+            dg = out.a[e];
+            scale = vm[e];
+        } else {
+            // A_i = -(K x)_i - (C v)_i + f_i + F_i(t), with the full K(cfg), C(cfg).
+            cl_F A = f_const_[e], dA = Z0, m = cln::abs(f_const_[e]);
+            for (int k = 0; k < n_; ++k) {
+                A = A - K_[e][k] * out.x[k] - C_[e][k] * out.v[k];
+                dA = dA - K_[e][k] * out.v[k] - C_[e][k] * out.a[k];
+                m = m + cln::abs(K_[e][k]) * xm[k] + cln::abs(C_[e][k]) * vm[k];
+            }
+            for (int h = 0; h < nh_; ++h) {
+                A = A + mp.h_amp[h][e] * hcs[h].s;
+                dA = dA + mp.h_amp[h][e] * mp.h_omega[h] * hcs[h].c;
+                m = m + cln::abs(mp.h_amp[h][e] * hcs[h].s);
+            }
+            const cl_F mu_n = mp.mu_s[e] * mp.normal[e];
+            const bool pos = sf.kind == SwitchKind::release_pos;
+            g = (pos ? A : -A) - mu_n;
+            dg = pos ? dA : -dA;
+            scale = m + mu_n;
+        }
+        cl_F B = bound_sin_[f];
+        for (int j = 0; j < nf_; ++j) B = B + cln::abs(W_[f][j]) * b2[j] + cln::abs(Z_[f][j]) * b3[j];
+        out.g[f] = g;
+        out.dg[f] = dg;
+        out.bound[f] = B;
+        out.scale[f] = scale;
+    }
+}
+
+}  // namespace hsnc::reference

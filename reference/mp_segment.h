@@ -1,0 +1,121 @@
+// hsnc -- one configuration's closed-form solution at N digits (CLN), the
+// reference engine's SegmentSolver counterpart (runtime/segment.h has the
+// switch functions and their order; runtime/generic_solver.h the same maths in
+// double). Clarity over speed: plain vectors of cl_F, no tricks beyond what
+// the regimes need.
+//
+// Modal analysis (paper Eq. 11): K_F phi = lambda M_F phi of the free masses,
+// solved as the symmetric problem M^-1/2 K_F M^-1/2 v = lambda v by cyclic
+// Jacobi rotations (Golub & Van Loan, Matrix Computations, 8.5) to the working
+// precision. Rigid-body modes are counted structurally (a connected component
+// of free masses with no spring or closed contact to the ground or a stuck
+// mass has one) and their eigenvalues set to 0 exactly.
+//
+// Per mode j, q'' + c q' + lambda q = p + sum_h P_h sin(Omega_h tau + theta_h),
+// c = alpha + beta*lambda:
+//   q = p/lambda + sum_h q_p,h + u, with the homogeneous u under-, critically
+//   or over-damped, or undamped (sigma = 0); rigid modes (lambda = 0):
+//   q = u0 + u0' tau phi1(-c tau) + p tau^2 phi2(-c tau);
+//   particular q_p = a cos + b sin, a = -P c Omega/D, b = P (lambda - Omega^2)/D,
+//   D = (lambda - Omega^2)^2 + (c Omega)^2; at exact undamped resonance (D = 0)
+//   the secular q_p = -P tau cos(Omega tau + theta)/(2 Omega). Near resonance
+//   the standard form loses about log10(lambda/sqrt(D)) digits to
+//   cancellation, which the working precision absorbs.
+#pragma once
+
+#include <vector>
+
+#include <cln/float.h>
+
+#include "configuration.h"
+#include "model.h"
+#include "segment.h"
+
+namespace hsnc::reference {
+
+using cln::cl_F;
+
+/// The model's values converted exactly to cl_F at one precision.
+struct MpModel {
+    cln::float_format_t format;
+    cl_F zero, one, two, half;
+    cl_F eps;  ///< 2^(1-bits): the unit roundoff of the format
+    cl_F pi;
+    int n = 0;
+    cl_F g, alpha, beta;
+    std::vector<cl_F> m, normal, mu_k, mu_s;
+    struct Link {
+        int a, b;
+        cl_F k, gap;
+    };
+    std::vector<Link> springs, contacts;   ///< gap = 0 for springs
+    std::vector<cl_F> h_omega, h_phase;    ///< harmonics with omega != 0, folded to omega > 0
+    std::vector<std::vector<cl_F>> h_amp;  ///< [h][i]
+    std::vector<cl_F> f_const;             ///< loads + omega = 0 harmonics
+    cl_F t0;
+    std::vector<cl_F> x0, v0;
+
+    MpModel(const Model& model, int digits);
+    /// The double `d` exactly, in this format.
+    cl_F F(double d) const;
+    cl_F I(long i) const;
+
+    /// A_i (assembly.h force_on_mass) in cfg at (t, x, v), and dA_i/dt given the accelerations a.
+    cl_F force_on_mass(const Configuration& cfg, int i, const cl_F& t, const std::vector<cl_F>& x,
+                       const std::vector<cl_F>& v) const;
+    cl_F force_rate_on_mass(const Configuration& cfg, int i, const cl_F& t, const std::vector<cl_F>& v,
+                            const std::vector<cl_F>& a) const;
+    /// G_c = x[a] - x[b] - gap and its rate.
+    cl_F gap(int c, const std::vector<cl_F>& x) const;
+    cl_F gap_rate(int c, const std::vector<cl_F>& v) const;
+    cl_F body(const std::vector<cl_F>& y, int b) const { return b == kGround ? zero : y[static_cast<std::size_t>(b)]; }
+};
+
+/// What MpSegment::eval writes (each vector sized by the segment).
+struct MpEval {
+    std::vector<cl_F> x, v, a, g, dg, bound, scale;
+};
+
+class MpSegment {
+public:
+    enum class Regime { rigid, underdamped, critical, overdamped };
+
+    /// Analyse cfg (throws RunError when Jacobi does not converge).
+    MpSegment(const Model& model, const MpModel& mp, const Configuration& cfg);
+
+    const Configuration& configuration() const { return cfg_; }
+    const std::vector<SwitchFunction>& switches() const { return switches_; }
+    /// Start at absolute time t0 (see SegmentSolver::setup).
+    void setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::vector<cl_F>& v0,
+               const std::vector<signed char>& sgn);
+    /// State, switch functions, rates, bounds B_f >= |g_f''| over [tau, tau + max_step] and term scales at tau >= 0.
+    void eval(const cl_F& tau, MpEval& out) const;
+    /// Bounds hold for steps up to max_step() (only with a secular resonance term); has_max_step() false: unlimited.
+    bool has_max_step() const { return has_max_step_; }
+    const cl_F& max_step() const { return max_step_; }
+
+    // For tests.
+    const std::vector<cl_F>& lambda() const { return lambda_; }
+    Regime regime(int j) const { return regime_[static_cast<std::size_t>(j)]; }
+
+private:
+    const MpModel& mp_;
+    Configuration cfg_;
+    std::vector<SwitchFunction> switches_;
+    int n_ = 0, nf_ = 0, nh_ = 0;
+    std::vector<int> free_, slot_;
+    std::vector<std::vector<cl_F>> K_, C_, phi_;  // full n x n; phi nf x nf (rows: free masses)
+    std::vector<cl_F> f_const_;
+    std::vector<Regime> regime_;
+    std::vector<cl_F> lambda_, omega_, c_, sigma_, omega_d_, gamma_, r1_;
+    std::vector<std::vector<cl_F>> P_, pa_, pb_;  // [j][h]
+    std::vector<std::vector<char>> secular_;      // [j][h]: exact undamped resonance
+    std::vector<std::vector<cl_F>> W_, Z_, D_;    // switch functions as modal combinations
+    std::vector<cl_F> bound_sin_;
+    bool has_max_step_ = false;
+    cl_F max_step_;
+    // setup
+    std::vector<cl_F> x_fix_, theta_, p_, u0_, ud0_;
+};
+
+}  // namespace hsnc::reference

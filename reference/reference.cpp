@@ -1,0 +1,430 @@
+// The reference engine: runtime/engine.cpp's switch search and
+// runtime/transitions.cpp's physics, written again on cl_F (see
+// reference.h). The search is the same guaranteed one (README "How switches
+// are found"): each switch function is watched on the side its configuration
+// fixes, every step is bounded by the smallest positive root of
+// h + h' s - B s^2/2 (B >= |g''| from the segment), so no sign change is
+// stepped over; a contact or release function switches when certainly negative
+// (below its rounding level), a sliding velocity when it reaches zero; the
+// root is then refined by Newton iterations (safeguarded by the bracket) to
+// the working precision.
+#include "reference_engine.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+
+#include <cln/integer.h>
+#include <cln/rational.h>
+
+#include "error.h"
+#include "mp_segment.h"
+
+namespace hsnc::reference {
+namespace {
+
+std::string time_text(const cl_F& t) {
+    std::ostringstream s;
+    s.precision(17);
+    s << cln::double_approx(t);
+    return s.str();
+}
+
+std::vector<double> to_double(const std::vector<cl_F>& y) {
+    std::vector<double> d(y.size());
+    for (std::size_t i = 0; i < y.size(); ++i) d[i] = cln::double_approx(y[i]);
+    return d;
+}
+
+// Rounding level of a quantity of magnitude `scale` at this precision. 64 ulps:
+// the terms of a switch function pass through a few dozen operations (modal
+// projection, closed form, back-projection).
+cl_F noise_of(const MpModel& mp, const cl_F& scale) { return mp.I(64) * mp.eps * scale; }
+
+// Stick rule at v_i = 0 (interface.md): 0 = stuck if |A_i| < mu_s N_i, else the
+// direction of A_i; a tie (to rounding) by the rate of |A_i| with mass i held.
+signed char stick_rule(const MpModel& mp, const Configuration& cfg, int i, const cl_F& t, const std::vector<cl_F>& x,
+                       const std::vector<cl_F>& v, const std::vector<cl_F>* a) {
+    const cl_F A = mp.force_on_mass(cfg, i, t, x, v);
+    const cl_F limit = mp.mu_s[i] * mp.normal[i];
+    const signed char dir = cln::plusp(A) ? 1 : -1;
+    const cl_F absA = cln::abs(A);
+    if (cln::abs(absA - limit) <= noise_of(mp, cln::max(absA, limit))) {
+        std::vector<cl_F> held = a ? *a : std::vector<cl_F>(v.size(), mp.zero);
+        held[static_cast<std::size_t>(i)] = mp.zero;
+        cl_F rate = mp.force_rate_on_mass(cfg, i, t, v, held);
+        if (dir < 0) rate = -rate;
+        return cln::plusp(rate) ? dir : 0;
+    }
+    return absA < limit ? 0 : dir;
+}
+
+struct Transition {
+    EventKind kind;
+    int element;
+};
+
+// runtime/transitions.cpp apply_switches, on cl_F: contacts first, then the
+// friction decisions with the forces of the resulting configuration, repeated
+// until nothing changes.
+bool apply_switches(const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x, std::vector<cl_F>& v,
+                    const std::vector<cl_F>& a, Configuration& cfg, std::vector<signed char>& sgn,
+                    const std::vector<SwitchFunction>& switched, std::vector<Transition>& out, std::string& why) {
+    const int n = mp.n;
+    for (const SwitchFunction& f : switched) {
+        if (f.kind != SwitchKind::gap) continue;
+        cfg.closed[f.element] = !cfg.closed[f.element];
+        out.push_back({cfg.closed[f.element] ? EventKind::contact_close : EventKind::contact_open, f.element});
+    }
+    std::vector<char> deciding(n, 0);
+    for (const SwitchFunction& f : switched) {
+        const int i = f.element;
+        if (f.kind == SwitchKind::velocity) {
+            v[i] = mp.zero;
+            deciding[i] = 1;
+        } else if (f.kind == SwitchKind::release_pos || f.kind == SwitchKind::release_neg) {
+            cfg.stuck[i] = 0;
+            sgn[i] = f.kind == SwitchKind::release_pos ? 1 : -1;
+            out.push_back({EventKind::release, i});
+        }
+    }
+    for (int round = 0; round < 2 * n + 4; ++round) {
+        bool changed = false;
+        for (int i = 0; i < n; ++i) {
+            if (!deciding[i]) continue;
+            deciding[i] = 0;
+            const signed char dir = stick_rule(mp, cfg, i, t, x, v, &a);
+            if (dir == 0) {
+                cfg.stuck[i] = 1;
+                sgn[i] = 0;
+                out.push_back({EventKind::stick, i});
+            } else {
+                if (dir != sgn[i]) out.push_back({EventKind::reversal, i});
+                sgn[i] = dir;
+            }
+            changed = true;
+        }
+        for (int i = 0; i < n; ++i) {
+            if (!cfg.stuck[i]) continue;
+            const signed char dir = stick_rule(mp, cfg, i, t, x, v, &a);
+            if (dir == 0) continue;
+            cfg.stuck[i] = 0;
+            sgn[i] = dir;
+            out.push_back({EventKind::release, i});
+            changed = true;
+        }
+        if (!changed) return true;
+    }
+    why = "friction decisions at t = " + time_text(t) + " do not settle";
+    return false;
+}
+
+// The configuration entered at (t, x, v) (interface.md "At t0 ...").
+Configuration entered_configuration(const Model& model, const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x,
+                                    const std::vector<cl_F>& v, std::vector<signed char>& sgn) {
+    Configuration cfg = Configuration::all_open(model);
+    for (std::size_t c = 0; c < mp.contacts.size(); ++c) {
+        const auto& k = mp.contacts[c];
+        const cl_F G = mp.gap(static_cast<int>(c), x);
+        const cl_F noise = noise_of(mp, cln::abs(mp.body(x, k.a)) + cln::abs(mp.body(x, k.b)) + cln::abs(k.gap));
+        if (cln::abs(G) > noise)
+            cfg.closed[c] = cln::plusp(G);
+        else
+            cfg.closed[c] = !cln::minusp(mp.gap_rate(static_cast<int>(c), v));
+    }
+    sgn.assign(static_cast<std::size_t>(mp.n), 0);
+    for (int i = 0; i < mp.n; ++i) {
+        if (!model.masses[i].has_friction) continue;
+        if (!cln::zerop(v[i])) {
+            sgn[i] = cln::plusp(v[i]) ? 1 : -1;
+        } else {
+            const signed char dir = stick_rule(mp, cfg, i, t, x, v, nullptr);
+            cfg.stuck[i] = dir == 0;
+            sgn[i] = dir;
+        }
+    }
+    return cfg;
+}
+
+// Largest s >= 0 with h + hd s - B s^2/2 > 0 before it (h > 0); `unbounded` when none.
+bool safe_step(const MpModel& mp, const cl_F& h, const cl_F& hd, const cl_F& B, cl_F& step) {
+    if (!cln::plusp(B)) {
+        if (!cln::minusp(hd)) return false;
+        step = h / -hd;
+        return true;
+    }
+    const cl_F root = cln::sqrt(hd * hd + mp.two * B * h);
+    step = !cln::minusp(hd) ? (hd + root) / B : mp.two * h / (root - hd);
+    return true;
+}
+
+}  // namespace
+
+double relative_difference(const cl_F& a, const cl_F& b, double floor) {
+    // Bring both to the lower precision (CLN's float contagion does it for a - b).
+    const cl_F d = cln::abs(a - b);
+    const double den = std::max({std::fabs(cln::double_approx(a)), std::fabs(cln::double_approx(b)), floor});
+    if (cln::zerop(d)) return 0.0;
+    return den > 0 ? cln::double_approx(d / cln::cl_float(den, d)) : cln::double_approx(d);
+}
+
+PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions& options, Observer& observer) {
+    if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
+    const MpModel mp(model, digits);
+    const std::size_t n = model.dof();
+    PreciseRun run;
+    RunSummary& sum = run.summary;
+    std::vector<cl_F> x = mp.x0, v = mp.v0;
+    cl_F t = mp.t0;
+    const cl_F t_end = mp.F(options.t_end);
+    std::vector<signed char> sgn;
+    Configuration cfg = entered_configuration(model, mp, t, x, v, sgn);
+
+    std::map<Configuration, std::unique_ptr<MpSegment>> segments;
+    std::deque<cl_F> recent;
+    std::size_t same_instant = 0;
+    bool have_last = false;
+    cl_F last_event_t = mp.zero;
+
+    const double dt = options.dt > 0 ? options.dt : (options.t_end - model.t0);
+    std::size_t k_next = 0;
+    auto sample_time = [&](std::size_t k) {  // as the double engine: t0 + k*dt in double, and t_end
+        const double tk = model.t0 + static_cast<double>(k) * dt;
+        return tk < options.t_end - 1e-9 * dt ? tk : options.t_end;
+    };
+    bool samples_done = !options.samples;
+
+    auto finish = [&](RunStatus status, const std::string& message) {
+        sum.status = status;
+        sum.message = message;
+        sum.t = cln::double_approx(t);
+        sum.x = to_double(x);
+        sum.v = to_double(v);
+        sum.configuration = cfg;
+        sum.configurations = segments.size();
+        run.t = t;
+        run.x = x;
+        run.v = v;
+        return run;
+    };
+
+    const std::size_t max_switches = model.contacts.size() + 2 * n;
+    const std::size_t stride = std::max(model.contacts.size(), n);
+    std::vector<cl_F> inherited(4 * stride, mp.zero);
+    auto slot = [stride](const SwitchFunction& f) {
+        return static_cast<std::size_t>(f.kind) * stride + static_cast<std::size_t>(f.element);
+    };
+    std::vector<cl_F> side(max_switches, mp.one), floor(max_switches, mp.zero);
+    std::vector<char> armed(max_switches), has_root(max_switches);
+    std::vector<cl_F> root(max_switches, mp.zero);
+    MpEval buf, dense, probe;
+    std::vector<SwitchFunction> switched;
+    std::vector<Transition> transitions;
+    std::string why;
+    std::size_t progress_counter = 0;
+
+    while (true) {
+        auto it = segments.find(cfg);
+        if (it == segments.end()) it = segments.emplace(cfg, std::make_unique<MpSegment>(model, mp, cfg)).first;
+        MpSegment& S = *it->second;
+        S.setup(t, x, v, sgn);
+        ++sum.segments;
+        const std::vector<SwitchFunction>& sw = S.switches();
+        const std::size_t nsw = sw.size();
+        const cl_F tau_end = t_end - t;
+        for (std::size_t f = 0; f < nsw; ++f) {
+            switch (sw[f].kind) {
+                case SwitchKind::gap:
+                    side[f] = cfg.closed[sw[f].element] ? mp.one : -mp.one;
+                    break;
+                case SwitchKind::velocity:
+                    side[f] = sgn[sw[f].element] >= 0 ? mp.one : -mp.one;
+                    break;
+                default:
+                    side[f] = -mp.one;  // release functions are negative while stuck
+            }
+            floor[f] = inherited[slot(sw[f])];
+        }
+        cl_F tau_now = mp.zero;
+        auto noise = [&](const MpEval& e, std::size_t f) {
+            return cln::max(noise_of(mp, e.scale[f] + cln::abs(e.dg[f]) * (cln::abs(t) + tau_now)), floor[f]);
+        };
+        auto eval = [&](const cl_F& tau) {
+            S.eval(tau, buf);
+            tau_now = tau;
+            ++sum.evaluations;
+        };
+        auto h_of = [&](const MpEval& e, std::size_t f) { return side[f] * e.g[f]; };
+        auto hd_of = [&](const MpEval& e, std::size_t f) { return side[f] * e.dg[f]; };
+
+        // ---- find the earliest switch in (0, tau_end] ----
+        bool found = false;
+        cl_F found_tau = mp.zero;
+        switched.clear();
+        cl_F tau = mp.zero, prev_tau = mp.zero;
+        eval(tau);
+        for (std::size_t f = 0; f < nsw; ++f)
+            armed[f] = sw[f].kind == SwitchKind::velocity && h_of(buf, f) > noise(buf, f);
+        for (std::size_t iter = 0;; ++iter) {
+            if (iter > 10'000'000)
+                return finish(RunStatus::failure, "switch search does not converge at t = " + time_text(t + tau));
+            bool any = false;
+            cl_F tau_star = mp.zero;
+            for (std::size_t f = 0; f < nsw; ++f) {
+                has_root[f] = 0;
+                const cl_F h = h_of(buf, f), hd = hd_of(buf, f), eps_f = noise(buf, f);
+                const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                if (stop ? h > eps_f : h >= -eps_f) continue;
+                // The zero, by Newton iterations inside [prev_tau, tau] (the function is on its
+                // safe side at prev_tau); a stop by forward Newton steps onto v = 0.
+                cl_F lo = prev_tau, hi = tau, r = tau;
+                if (stop && !cln::minusp(h)) {
+                    if (cln::minusp(hd)) r = tau + h / -hd;  // tiny forward step
+                } else {
+                    for (int k = 0; k < 60; ++k) {
+                        S.eval(r, probe);
+                        ++sum.evaluations;
+                        const cl_F hr = h_of(probe, f), hdr = hd_of(probe, f);
+                        if (cln::zerop(hr)) break;
+                        if (cln::minusp(hr))
+                            hi = r;
+                        else
+                            lo = r;
+                        // Converged when the Newton correction is below the time's own rounding
+                        // (checked before the bracket test: it may round onto a bracket end).
+                        if (cln::minusp(hdr) && cln::abs(hr / hdr) <= mp.I(4) * mp.eps * (cln::abs(t) + cln::abs(r))) {
+                            r = r - hr / hdr;
+                            break;
+                        }
+                        cl_F next = cln::minusp(hdr) ? r - hr / hdr : (lo + hi) * mp.half;
+                        if (!(next > lo && next < hi)) next = (lo + hi) * mp.half;
+                        r = next;
+                    }
+                    if (stop && cln::minusp(h) && !cln::minusp(hd)) r = tau;  // touched zero and turned back
+                }
+                has_root[f] = 1;
+                root[f] = r;
+                tau_star = any ? cln::min(tau_star, r) : r;
+                any = true;
+            }
+            if (any) {
+                const cl_F tol = mp.I(64) * mp.eps * (cln::abs(t) + cln::abs(tau_star));
+                found = true;
+                found_tau = cln::min(tau_star, tau_end);
+                for (std::size_t f = 0; f < nsw; ++f)
+                    if (has_root[f] && root[f] <= tau_star + tol) switched.push_back(sw[f]);
+                eval(found_tau);
+                for (std::size_t f = 0; f < nsw; ++f) {
+                    if (has_root[f] && root[f] <= tau_star + tol) continue;
+                    const cl_F h = h_of(buf, f), hd = hd_of(buf, f), eps_f = noise(buf, f);
+                    const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                    if (stop ? h <= eps_f : (h < -eps_f || (h <= eps_f && cln::minusp(hd)))) switched.push_back(sw[f]);
+                }
+                std::fill(inherited.begin(), inherited.end(), mp.zero);
+                for (std::size_t f = 0; f < nsw; ++f) inherited[slot(sw[f])] = noise(buf, f);
+                break;
+            }
+            if (tau >= tau_end) break;
+            // Safe step: no function reaches its trigger level inside it.
+            cl_F step = tau_end - tau;
+            if (S.has_max_step()) step = cln::min(step, S.max_step());
+            for (std::size_t f = 0; f < nsw; ++f) {
+                const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                const cl_F level = stop ? mp.zero : -(mp.two * noise(buf, f));
+                cl_F s;
+                if (safe_step(mp, h_of(buf, f) - level, hd_of(buf, f), buf.bound[f], s)) step = cln::min(step, s);
+            }
+            step = cln::max(step, mp.I(4) * mp.eps * (cln::abs(t) + cln::abs(tau)));
+            prev_tau = tau;
+            tau = cln::min(tau + step, tau_end);
+            eval(tau);
+            for (std::size_t f = 0; f < nsw; ++f)
+                if (sw[f].kind == SwitchKind::velocity && !armed[f] && h_of(buf, f) > mp.two * noise(buf, f))
+                    armed[f] = 1;
+        }
+
+        // ---- samples up to the event (or t_end), from the closed form ----
+        const cl_F t_seg_end = found ? t + found_tau : t_end;
+        if (!samples_done) {
+            while (true) {
+                const double tkd = sample_time(k_next);
+                const cl_F tk = mp.F(tkd);
+                if (found ? tk >= t_seg_end : tk > t_end) break;
+                if (tk == t) {
+                    const std::vector<double> xd = to_double(x), vd = to_double(v);
+                    observer.on_sample(tkd, xd.data(), vd.data());
+                } else {
+                    S.eval(cln::max(mp.zero, tk - t), dense);
+                    const std::vector<double> xd = to_double(dense.x), vd = to_double(dense.v);
+                    observer.on_sample(tkd, xd.data(), vd.data());
+                }
+                if (tkd >= options.t_end) {
+                    samples_done = true;
+                    break;
+                }
+                ++k_next;
+            }
+        }
+
+        // ---- advance to the event instant ----
+        if (!found) eval(tau_end);
+        x = buf.x;
+        v = buf.v;
+        for (std::size_t i = 0; i < n; ++i)
+            if (cfg.stuck[i]) v[i] = mp.zero;
+        if (!found) {
+            t = t_end;
+            break;
+        }
+        t = t + found_tau;
+
+        transitions.clear();
+        if (!apply_switches(mp, t, x, v, buf.a, cfg, sgn, switched, transitions, why))
+            return finish(RunStatus::chattering, why);
+        if (!transitions.empty()) {
+            const double td = cln::double_approx(t);
+            const std::vector<double> xd = to_double(x), vd = to_double(v);
+            for (const Transition& tr : transitions) {
+                observer.on_event(td, tr.kind, tr.element, xd.data(), vd.data());
+                run.events.push_back({t, tr.kind, tr.element, x, v});
+                ++sum.events;
+                recent.push_back(t);
+                if (recent.size() > options.zeno_events) recent.pop_front();
+            }
+        }
+        same_instant = have_last && t == last_event_t ? same_instant + 1 : 0;
+        last_event_t = t;
+        have_last = true;
+        if (same_instant > 4 * (nsw + 2))
+            return finish(RunStatus::chattering,
+                          "configuration keeps switching at t = " + time_text(t) + " (now '" + cfg.spec(model) + "')");
+        if (recent.size() >= options.zeno_events &&
+            cln::double_approx(recent.back() - recent.front()) <=
+                options.zeno_span * std::max(1.0, std::fabs(cln::double_approx(t))))
+            return finish(RunStatus::zeno, std::to_string(recent.size()) + " switches between t = " +
+                                               time_text(recent.front()) + " and " + time_text(recent.back()) +
+                                               " (accumulating switches, configuration '" + cfg.spec(model) + "')");
+        if (options.max_events && sum.events >= options.max_events)
+            return finish(RunStatus::max_events, "stopped after " + std::to_string(sum.events) + " events");
+        if ((++progress_counter & 15) == 0 && !observer.on_progress(cln::double_approx(t)))
+            return finish(RunStatus::stopped, "stopped at t = " + time_text(t));
+    }
+    return finish(RunStatus::ok, "");
+}
+
+int carried_bits(int digits) {
+    return static_cast<int>(cln::float_digits(cln::cl_float(1, cln::float_format(static_cast<unsigned long>(digits)))));
+}
+
+RunSummary simulate(const Model& model, int digits, const EngineOptions& options, Observer& observer) {
+    if (digits < kMinDigits || digits > kMaxDigits)
+        throw InputError("reference::simulate(): digits " + std::to_string(digits) + " outside " +
+                         std::to_string(kMinDigits) + ".." + std::to_string(kMaxDigits));
+    return simulate_precise(model, digits, options, observer).summary;
+}
+
+}  // namespace hsnc::reference

@@ -1,0 +1,37 @@
+// hsnc -- the reference engine's results at full precision (CLN floats), for
+// comparing runs at N and 2N digits and the double engine against them.
+#pragma once
+
+#include <vector>
+
+#include <cln/float.h>
+
+#include "reference.h"
+
+namespace hsnc::reference {
+
+/// One switch event at full precision (the state at the switch instant).
+struct PreciseEvent {
+    cln::cl_F t;
+    EventKind kind;
+    int element;
+    std::vector<cln::cl_F> x, v;
+};
+
+/// A run at full precision: the summary (rounded to double) plus every event
+/// and the final state at the run's precision.
+struct PreciseRun {
+    RunSummary summary;
+    std::vector<PreciseEvent> events;
+    cln::cl_F t;
+    std::vector<cln::cl_F> x, v;
+};
+
+/// As simulate(), and also keeps every event and the end state at full precision.
+/// `digits` may be any value >= 17 here (tests and measurements compare N with 2N).
+PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions& options, Observer& observer);
+
+/// |a - b| / max(|a|, |b|, floor) at the lower of the two precisions, rounded to double.
+double relative_difference(const cln::cl_F& a, const cln::cl_F& b, double floor = 0.0);
+
+}  // namespace hsnc::reference

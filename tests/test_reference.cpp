@@ -1,0 +1,358 @@
+// The high-precision reference engine (reference/reference.h) against closed
+// forms evaluated independently at full precision, against itself at N and 2N
+// digits, and the double engine against it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <cln/float.h>
+#include <cln/rational.h>
+#include <cln/real.h>
+
+#include "aot_registry.h"
+#include "cli_runner.h"
+#include "engine_runner.h"
+#include "error.h"
+#include "model_reader.h"
+#include "reference_engine.h"
+#include "solver_provider.h"
+
+namespace hsnc {
+namespace {
+
+using cln::cl_F;
+using reference::PreciseRun;
+using reference::relative_difference;
+using reference::simulate_precise;
+using testing::file_exists;
+using testing::model_path;
+using testing::Recorder;
+using testing::run_hsnc;
+using testing::slurp;
+using testing::temp_path;
+
+Model model_from(const std::string& toml) { return parse_model(toml, "test.toml"); }
+Model bundled(const std::string& name) { return read_model(std::string(HSNC_SOURCE_DIR) + "/models/" + name); }
+
+PreciseRun run_at(const Model& m, int digits, double t_end, std::size_t max_events = 0) {
+    Recorder rec(m.dof());
+    EngineOptions opt;
+    opt.t_end = t_end;
+    opt.samples = false;
+    opt.max_events = max_events;
+    return simulate_precise(m, digits, opt, rec);
+}
+
+// Exact conversion of a double at the precision of `like`.
+cl_F F(double d, const cl_F& like) { return cln::cl_float(d, like); }
+
+// m x'' + k x = -mu m g sign(x'), omega = 10, released from x = 0.2: half-cycles
+// of pi/omega centred on -+x_e = mu g/omega^2; the extreme drops by 2 x_e each.
+constexpr const char* kCoulomb = R"(
+name = "coulomb"
+[[mass]]
+name = "m1"
+m = 1
+mu_k = 0.1
+[[spring]]
+between = ["ground", "m1"]
+k = 100
+[initial]
+x = { m1 = 0.2 }
+)";
+
+TEST(ReferenceClosedForm, CoulombDecayAt40Digits) {
+    const Model m = model_from(kCoulomb);
+    const PreciseRun r = run_at(m, 40, 5.0);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    ASSERT_EQ(r.events.size(), 10u);
+    const cl_F one = cln::cl_float(1, cln::float_format(40));
+    const cl_F pi = cln::pi(one), omega = F(10.0, one);
+    const cl_F xe = F(0.1, one) * F(9.81, one) / (omega * omega);  // the model's doubles, exactly
+    double worst_t = 0, worst_x = 0;
+    for (int k = 1; k <= 10; ++k) {
+        const auto& e = r.events[static_cast<std::size_t>(k - 1)];
+        EXPECT_EQ(e.kind, k < 10 ? EventKind::reversal : EventKind::stick) << k;
+        const cl_F t = pi * F(k, one) / omega;
+        cl_F x = F(0.2, one) - F(2.0 * k, one) * xe;
+        if (k % 2) x = -x;
+        worst_t = std::max(worst_t, relative_difference(e.t, t));
+        worst_x = std::max(worst_x, relative_difference(e.x[0], x));
+        EXPECT_TRUE(cln::zerop(e.v[0]));
+    }
+    EXPECT_LT(worst_t, 1e-36);
+    EXPECT_LT(worst_x, 1e-35);
+    std::printf("coulomb 40 digits: max rel error reversal times %.2e, extremes %.2e\n", worst_t, worst_x);
+}
+
+// Bilinear oscillator: x'' + 4x = 0 open (x < 0), x'' + 16x = 0 closed (x >= 0),
+// from x = 0, v = 1: closed for pi/4, open for pi/2, so the contact opens at
+// pi/4 + 3k pi/4 and closes at 3pi/4 + 3k pi/4, always with |v| = 1.
+TEST(ReferenceClosedForm, BilinearPeriodAt40Digits) {
+    const Model m = bundled("bilinear-1dof.toml");
+    const PreciseRun r = run_at(m, 40, 10.0);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    ASSERT_EQ(r.events.size(), 8u);
+    const cl_F one = cln::cl_float(1, cln::float_format(40));
+    const cl_F pi = cln::pi(one);
+    double worst_t = 0, worst_v = 0;
+    for (std::size_t k = 0; k < r.events.size(); ++k) {
+        const auto& e = r.events[k];
+        const bool opens = k % 2 == 0;
+        EXPECT_EQ(e.kind, opens ? EventKind::contact_open : EventKind::contact_close) << k;
+        const cl_F t = pi * F((opens ? 1.0 : 3.0) + 3.0 * static_cast<double>(k / 2), one) / F(4.0, one);
+        worst_t = std::max(worst_t, relative_difference(e.t, t));
+        worst_v = std::max(worst_v, relative_difference(e.v[0], F(opens ? -1.0 : 1.0, one)));
+    }
+    EXPECT_LT(worst_t, 1e-36);
+    EXPECT_LT(worst_v, 1e-36);
+}
+
+// A free mass sliding against friction with Rayleigh mass damping (a rigid-body
+// mode, the phi-function closed form): v' = -alpha v - mu g stops at
+// t* = ln(1 + alpha v0/(mu g))/alpha, at x* = x0 + (v0 - mu g t*)/alpha, and sticks.
+TEST(ReferenceClosedForm, DampedFreeMassSlidesToRest) {
+    const Model m = model_from(R"(
+name = "slider"
+[[mass]]
+name = "m1"
+m = 2
+mu_k = 0.5
+[damping]
+alpha = 0.3
+[initial]
+x = { m1 = 0.1 }
+v = { m1 = 2.0 }
+)");
+    const PreciseRun r = run_at(m, 40, 2.0);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    ASSERT_EQ(r.events.size(), 1u);
+    EXPECT_EQ(r.events[0].kind, EventKind::stick);
+    const cl_F one = cln::cl_float(1, cln::float_format(40));
+    const cl_F a0 = F(0.5, one) * F(9.81, one), alpha = F(0.3, one), v0 = F(2.0, one);
+    const cl_F t = cln::ln(one + alpha * v0 / a0) / alpha;
+    const cl_F x = F(0.1, one) + (v0 - a0 * t) / alpha;
+    EXPECT_LT(relative_difference(r.events[0].t, t), 1e-36);
+    EXPECT_LT(relative_difference(r.events[0].x[0], x), 1e-36);
+    EXPECT_LT(relative_difference(r.x[0], x), 1e-36);  // and it stays there
+    EXPECT_TRUE(cln::zerop(r.v[0]));
+}
+
+// One regime of the closed forms at a time: a 1-DOF oscillator (m = 1, k = 4 unless
+// said) starts at x = 0 with v = 1 and first reaches an open contact's gap d at
+// the first root of x(t) = d, x(t) the textbook solution of that regime,
+// evaluated here at full precision (bisection on a bracket found by scanning).
+using Solution = std::function<cl_F(const cl_F&)>;
+void expect_first_contact(const std::string& name, const std::string& body, double d, const Solution& x) {
+    const Model m = model_from("name = \"" + name + "\"\n" + body + R"(
+[[mass]]
+name = "m1"
+m = 1
+[[contact]]
+between = ["m1", "ground"]
+gap = )" + std::to_string(d) + R"(
+k = 1000
+[initial]
+v = { m1 = 1.0 }
+)");
+    const PreciseRun r = run_at(m, 40, 5.0, 1);
+    ASSERT_EQ(r.events.size(), 1u) << name << ": " << r.summary.message;
+    ASSERT_EQ(r.events[0].kind, EventKind::contact_close) << name;
+    const cl_F one = cln::cl_float(1, cln::float_format(40)), dd = F(d, one);
+    double h = 1e-3, a = 0;
+    while (cln::double_approx(x(F(a + h, one))) < d) a += h;
+    cl_F lo = F(a, one), hi = F(a + h, one);
+    for (int k = 0; k < 250; ++k) {
+        const cl_F mid = (lo + hi) / F(2.0, one);
+        (x(mid) < dd ? lo : hi) = mid;
+    }
+    EXPECT_LT(relative_difference(r.events[0].t, lo), 1e-36) << name << " t = " << cln::double_approx(lo);
+}
+
+const cl_F& prec40() {
+    static const cl_F one = cln::cl_float(1, cln::float_format(40));
+    return one;
+}
+
+TEST(ReferenceClosedForm, RegimesFirstContactAt40Digits) {
+    const cl_F one = prec40(), two = F(2.0, one), four = F(4.0, one);
+    const std::string spring = "[[spring]]\nbetween = [\"m1\", \"ground\"]\nk = 4\n";
+    // undamped: x = sin(2t)/2
+    expect_first_contact("undamped", spring, 0.3, [&](const cl_F& t) -> cl_F { return cln::sin(two * t) / two; });
+    // underdamped, c = beta k = 0.4: x = e^{-0.2 t} sin(wd t)/wd, wd = sqrt(4 - 0.04)
+    expect_first_contact("underdamped", spring + "[damping]\nbeta = 0.1\n", 0.3, [&](const cl_F& t) -> cl_F {
+        const cl_F s = F(0.1, one) * four / two, wd = cln::sqrt(F(4.0, one) - s * s);
+        return cln::exp(-s * t) * cln::sin(wd * t) / wd;
+    });
+    // critical, c = 4 = 2 omega: x = t e^{-2t}
+    expect_first_contact("critical", spring + "[damping]\nbeta = 1\n", 0.05,
+                         [&](const cl_F& t) -> cl_F { return t * cln::exp(-two * t); });
+    // overdamped, c = 8: x = e^{-4t} sinh(g t)/g, g = sqrt(12)
+    expect_first_contact("overdamped", spring + "[damping]\nbeta = 2\n", 0.05, [&](const cl_F& t) -> cl_F {
+        const cl_F g = cln::sqrt(F(12.0, one));
+        return cln::exp(-four * t) * cln::sinh(g * t) / g;
+    });
+    // exact undamped resonance, x'' + x = sin t from rest... with v0 = 1:
+    // x = sin t + (sin t - t cos t)/2
+    expect_first_contact(
+        "resonance",
+        "[[spring]]\nbetween = [\"m1\", \"ground\"]\nk = 1\n[[forcing]]\nomega = 1\namplitude = { m1 = 1 }\n", 1.7,
+        [&](const cl_F& t) -> cl_F { return cln::sin(t) + (cln::sin(t) - t * cln::cos(t)) / two; });
+    // near resonance, forced at 1.01: x = sin t + (sin(W t) - W sin t)/(1 - W^2)
+    expect_first_contact(
+        "near-resonance",
+        "[[spring]]\nbetween = [\"m1\", \"ground\"]\nk = 1\n[[forcing]]\nomega = 1.01\namplitude = { m1 = 1 }\n", 1.7,
+        [&](const cl_F& t) -> cl_F {
+            const cl_F W = F(1.01, one);
+            return cln::sin(t) + (cln::sin(W * t) - W * cln::sin(t)) / (one - W * W);
+        });
+    // rigid body with forcing (no spring): x'' = sin(2t), x = t + (t - sin(2t)/2)/2
+    expect_first_contact("rigid-forced", "[[forcing]]\nomega = 2\namplitude = { m1 = 1 }\n", 1.0,
+                         [&](const cl_F& t) -> cl_F { return t + (t - cln::sin(two * t) / two) / two; });
+}
+
+// N and 2N digits agree to at least N - 5 digits (event times and end state)
+// on both seed scenarios over a horizon where the motion is not yet chaotic.
+void expect_agreement(const Model& m, double t_end, int N) {
+    const PreciseRun lo = run_at(m, N, t_end), hi = run_at(m, 2 * N, t_end);
+    ASSERT_EQ(lo.summary.status, RunStatus::ok) << lo.summary.message;
+    ASSERT_EQ(hi.summary.status, RunStatus::ok) << hi.summary.message;
+    ASSERT_EQ(lo.events.size(), hi.events.size());
+    ASSERT_GT(lo.events.size(), 20u);
+    const double tol = std::pow(10.0, -(N - 5));
+    double worst = 0;
+    for (std::size_t k = 0; k < lo.events.size(); ++k) {
+        ASSERT_EQ(lo.events[k].kind, hi.events[k].kind) << k;
+        ASSERT_EQ(lo.events[k].element, hi.events[k].element) << k;
+        worst = std::max(worst, relative_difference(lo.events[k].t, hi.events[k].t));
+    }
+    EXPECT_LT(worst, tol);
+    // CLN rounds N digits up to whole 64-bit words: hold it to 5 digits of what it carries, too.
+    const double carried = std::ldexp(1.0, -static_cast<int>(cln::float_digits(lo.t)));
+    EXPECT_LT(worst, 1e5 * carried);
+    for (std::size_t i = 0; i < m.dof(); ++i) {
+        EXPECT_LT(relative_difference(lo.x[i], hi.x[i], 1.0), tol) << i;
+        EXPECT_LT(relative_difference(lo.v[i], hi.v[i], 1.0), tol) << i;
+    }
+    std::printf("%s to %g s: %zu events, %d vs %d digits agree to %.2e (event times)\n", m.name.c_str(), t_end,
+                lo.events.size(), N, 2 * N, worst);
+}
+
+TEST(ReferenceAgreement, Scenario1At30And60Digits) { expect_agreement(bundled("seed-scenario-1.toml"), 0.5, 30); }
+TEST(ReferenceAgreement, Scenario2At30And60Digits) { expect_agreement(bundled("seed-scenario-2.toml"), 5.0, 30); }
+
+// The double engine (ahead-of-time kernels, as `hsnc simulate` runs it) against
+// the reference on scenario 1: same switch sequence, event times within 1e-12
+// relative over the first 1000 switches (measured: 2.0e-13, bench/reference_check).
+TEST(ReferenceAgreement, DoubleEngineOnScenario1First1000Switches) {
+    const Model m = bundled("seed-scenario-1.toml");
+    const PreciseRun ref = run_at(m, 30, 20.0, 1000);
+    ASSERT_EQ(ref.events.size(), 1000u);
+    auto provider = make_solver_provider(m, KernelMode::automatic, &aot_registry());
+    Engine engine(m, *provider);
+    Recorder rec(m.dof());
+    EngineOptions opt;
+    opt.t_end = 20.0;
+    opt.samples = false;
+    opt.max_events = 1000;
+    engine.run(opt, rec);
+    ASSERT_EQ(rec.events.size(), 1000u);
+    double worst = 0;
+    for (std::size_t k = 0; k < 1000; ++k) {
+        ASSERT_EQ(rec.events[k].kind, ref.events[k].kind) << k;
+        ASSERT_EQ(rec.events[k].element, ref.events[k].element) << k;
+        worst = std::max(worst, relative_difference(cln::cl_float(rec.events[k].t, ref.events[k].t), ref.events[k].t));
+    }
+    EXPECT_LT(worst, 1e-12);
+    std::printf("double engine vs reference, scenario 1, first 1000 switches: max relative event-time error %.2e\n",
+                worst);
+}
+
+
+// Trajectory samples (dense output from the closed form) on the t0 + k dt grid
+// and at t_end, at the times the double engine writes them, and agreeing with its values.
+TEST(ReferenceAgreement, SamplesMatchTheDoubleEngineOnScenario1) {
+    const Model m = bundled("seed-scenario-1.toml");
+    EngineOptions opt;
+    opt.t_end = 0.5;
+    opt.dt = 0.0075;  // t_end off the grid: a last row at t_end
+    Recorder ref(m.dof()), dbl(m.dof());
+    reference::simulate_precise(m, 30, opt, ref);
+    auto provider = make_solver_provider(m, KernelMode::automatic, &aot_registry());
+    Engine(m, *provider).run(opt, dbl);
+    ASSERT_EQ(ref.samples.size(), 68u);  // 0, 0.0075, ..., 0.495, and 0.5
+    ASSERT_EQ(ref.samples.size(), dbl.samples.size());
+    double worst = 0;
+    for (std::size_t k = 0; k < ref.samples.size(); ++k) {
+        ASSERT_EQ(ref.samples[k].t, dbl.samples[k].t) << k;
+        for (std::size_t i = 0; i < m.dof(); ++i) {
+            worst = std::max(worst, std::fabs(ref.samples[k].x[i] - dbl.samples[k].x[i]) /
+                                        std::max(1.0, std::fabs(ref.samples[k].x[i])));
+            worst = std::max(worst, std::fabs(ref.samples[k].v[i] - dbl.samples[k].v[i]) /
+                                        std::max(1.0, std::fabs(ref.samples[k].v[i])));
+        }
+    }
+    EXPECT_EQ(ref.samples.back().t, 0.5);
+    EXPECT_EQ(ref.samples.front().x[0], 0.2);  // the initial state itself
+    // Measured 4.6e-13: the double engine's own error (velocities reach 90 m/s under a
+    // 22500 N forcing at 175 rad/s, so 1e-15 s of phase is 1e-11 m/s).
+    EXPECT_LT(worst, 1e-12);
+    std::printf("samples, scenario 1 to 0.5 s: max scaled difference double vs reference %.2e\n", worst);
+}
+
+TEST(ReferenceApi, DigitsOutsideTheRangeAreAnInputError) {
+    const Model m = model_from(kCoulomb);
+    Recorder rec(1);
+    EngineOptions opt;
+    opt.t_end = 1.0;
+    EXPECT_THROW(reference::simulate(m, 19, opt, rec), InputError);
+    EXPECT_THROW(reference::simulate(m, 101, opt, rec), InputError);
+    const RunSummary s = reference::simulate(m, 20, opt, rec);
+    EXPECT_EQ(s.status, RunStatus::ok);
+    EXPECT_EQ(s.events, 3u);  // reversals at pi/10, 2pi/10, 3pi/10
+}
+
+// The CLI: --precision mp:N runs the reference (same rows as the double run to
+// rounding on a non-chaotic model); bad values exit 2 naming the flag, writing nothing.
+TEST(ReferenceCli, PrecisionMpRunsTheReference) {
+    const std::string ev = temp_path("events.csv");
+    const auto r =
+        run_hsnc("simulate '" + model_path("coulomb-1dof.toml") + "' --precision mp:30 --events '" + ev + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("events=10 "), std::string::npos) << r.out;
+    EXPECT_NE(r.err.find("reference engine at 30 digits"), std::string::npos) << r.err;
+    const std::string text = slurp(ev);
+    EXPECT_EQ(text.substr(0, text.find('\n')), "t,kind,element,x_m1,v_m1");
+    // first reversal at pi/10, printed with 17 digits
+    EXPECT_NE(text.find("\n0.31415926535897931,reversal,m1,"), std::string::npos) << text;
+}
+
+struct BadPrecision {
+    const char* args;
+    const char* message;
+};
+class ReferenceCliBad : public ::testing::TestWithParam<BadPrecision> {};
+TEST_P(ReferenceCliBad, ExitTwoWithOneMessageAndNoFile) {
+    const std::string ev = temp_path("events.csv");
+    const auto r =
+        run_hsnc("simulate '" + model_path("coulomb-1dof.toml") + "' " + GetParam().args + " --events '" + ev + "'");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find(GetParam().message), std::string::npos) << r.err;
+    EXPECT_FALSE(file_exists(ev));
+}
+INSTANTIATE_TEST_SUITE_P(
+    Flags, ReferenceCliBad,
+    ::testing::Values(
+        BadPrecision{"--precision mp:19", "--precision mp:19: expected double, or mp:N with N in 20..100"},
+        BadPrecision{"--precision mp:101", "--precision mp:101: expected double"},
+        BadPrecision{"--precision mp:3x", "--precision mp:3x: expected double"},
+        BadPrecision{"--precision quad", "--precision quad: expected double"},
+        BadPrecision{"--precision long-double", "--precision long-double: not offered"},
+        BadPrecision{"--precision mp:30 --method rk45", "only with --method hsnc (not rk45)"},
+        BadPrecision{"--precision mp:30 --kernels generic", "--kernels applies to double precision only"}));
+
+}  // namespace
+}  // namespace hsnc
