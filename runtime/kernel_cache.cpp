@@ -150,10 +150,9 @@ std::string KernelCache::store(const std::string& key, const std::string& payloa
     if (fd < 0) return "cannot write in " + dir_ + ": " + errno_text();
     const bool ok = write_all(fd, header, sizeof header) && write_all(fd, key.data(), key.size()) &&
                     write_all(fd, payload.data(), payload.size());
-    const int saved = errno;
-    if (::close(fd) != 0 || !ok) {
-        errno = ok ? errno : saved;
-        const std::string why = "cannot write " + tmp + ": " + errno_text();
+    std::string why = ok ? "" : "cannot write " + tmp + ": " + errno_text();
+    if (::close(fd) != 0 && ok) why = "cannot write " + tmp + ": " + errno_text();  // e.g. a full disk on NFS
+    if (!why.empty()) {
         ::unlink(tmp.c_str());
         return why;
     }

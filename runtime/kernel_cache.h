@@ -22,7 +22,9 @@
 // temporary name in the same directory (pid and a random suffix) and are
 // renamed into place (rename(2) is atomic within a file system), so two
 // processes filling one cache at once each leave a whole file: a reader sees
-// either no entry or a complete one.
+// either no entry or a complete one. No fsync (it would cost milliseconds per
+// kernel): a file that a crash of the machine leaves cut short fails its
+// header check and is rebuilt.
 #pragma once
 
 #include <cstdint>
