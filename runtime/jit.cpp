@@ -8,10 +8,7 @@
 // altogether on a hit (runtime/kernel_cache.h).
 #include "jit.h"
 
-#include <clang/Basic/Version.inc>  // CLANG_VERSION_STRING only: nothing of Clang is linked here
 #include <dlfcn.h>
-#include <llvm/ADT/StringExtras.h>
-#include <llvm/Config/llvm-config.h>
 #include <llvm/ExecutionEngine/Orc/CompileUtils.h>
 #include <llvm/ExecutionEngine/Orc/ExecutionUtils.h>
 #include <llvm/ExecutionEngine/Orc/JITTargetMachineBuilder.h>
@@ -23,7 +20,6 @@
 #include <llvm/Support/Error.h>
 #include <llvm/Support/Host.h>
 #include <llvm/Support/MemoryBuffer.h>
-#include <llvm/Support/SHA1.h>
 #include <llvm/Support/TargetSelect.h>
 #include <llvm/Support/raw_ostream.h>
 #include <llvm/Target/TargetMachine.h>
@@ -33,7 +29,7 @@
 
 #include "error.h"
 #include "jit_frontend.h"
-#include "kernel_abi_text.h"  // generated at build time: kKernelAbiHeaderText
+#include "kernel_cache.h"
 
 namespace hsnc {
 namespace {
@@ -80,7 +76,6 @@ JitFrontendFn frontend() {
 struct Jit::Impl {
     std::unique_ptr<llvm::orc::LLJIT> lljit;
     std::unique_ptr<llvm::TargetMachine> machine;  // the LLJIT's own target, for compile()
-    std::string target;                            // triple, CPU, features: part of the cache key
 };
 
 Jit::Jit() : impl_(std::make_unique<Impl>()) {
@@ -90,9 +85,6 @@ Jit::Jit() : impl_(std::make_unique<Impl>()) {
     auto machine = builder->createTargetMachine();
     if (!machine) throw RunError("Jit::Jit(): cannot create an LLVM target machine: " + error_text(machine.takeError()));
     impl_->machine = std::move(*machine);
-    impl_->target = builder->getTargetTriple().str() + " " + builder->getCPU() + " " +
-                    builder->getFeatures().getString() + " O" +
-                    std::to_string(static_cast<int>(impl_->machine->getOptLevel()));
     auto jit = llvm::orc::LLJITBuilder().setJITTargetMachineBuilder(*builder).create();
     if (!jit) throw RunError("Jit::Jit(): cannot create the LLVM JIT: " + error_text(jit.takeError()));
     impl_->lljit = std::move(*jit);
@@ -136,21 +128,7 @@ void Jit::add_object(const std::string& name, const std::string& object) {
         throw RunError("Jit::add_object(): cannot add " + name + " to the JIT: " + error_text(std::move(err)));
 }
 
-std::string Jit::cache_key(const std::string& source) const {
-    llvm::SHA1 sha;
-    auto part = [&sha](llvm::StringRef text) {
-        sha.update(text);
-        sha.update(llvm::StringRef("\0", 1));  // "ab"+"c" differs from "a"+"bc"
-    };
-    part("hsnc-jit-object 1");
-    part("clang " CLANG_VERSION_STRING);
-    part(LLVM_VERSION_STRING);
-    part(impl_->target);
-    for (const char* flag : jit_compile_flags()) part(flag);
-    part(kKernelAbiHeaderText);
-    part(source);
-    return llvm::toHex(sha.final(), /*LowerCase=*/true);
-}
+std::string Jit::cache_key(const std::string& source) const { return jit_cache_key(source); }
 
 void* Jit::lookup(const std::string& symbol) {
     auto sym = impl_->lljit->lookup(symbol);

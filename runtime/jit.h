@@ -37,10 +37,8 @@ public:
     /// object file for this host; the JIT is then unchanged.
     void add_object(const std::string& name, const std::string& object);
 
-    /// The key of compile(source)'s result in a persistent cache: SHA-1 (hex)
-    /// of the source, the embedded kernel_abi.h, the compiler's version and
-    /// flags, and the target (triple, CPU, its features). Equal keys mean
-    /// compile() would produce the same object.
+    /// The key of compile(source)'s result in a persistent cache:
+    /// jit_cache_key(source) (runtime/kernel_cache.h).
     std::string cache_key(const std::string& source) const;
 
     /// Address of the (unmangled, C-linkage) symbol `symbol` of an added

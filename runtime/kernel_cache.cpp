@@ -1,5 +1,6 @@
 #include "kernel_cache.h"
 
+#include <cpuid.h>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -10,6 +11,9 @@
 #include <cstring>
 #include <filesystem>
 #include <random>
+
+#include "jit_frontend.h"     // jit_compile_flags
+#include "kernel_abi_text.h"  // generated at build time: kKernelAbiHeaderText
 
 namespace hsnc {
 namespace {
@@ -67,6 +71,62 @@ std::uint64_t fnv1a64(const void* data, std::size_t size, std::uint64_t h) {
     const auto* p = static_cast<const unsigned char*>(data);
     for (std::size_t i = 0; i < size; ++i) h = (h ^ p[i]) * 0x100000001b3ULL;
     return h;
+}
+
+std::string host_cpu_identity() {
+    unsigned a = 0, b = 0, c = 0, d = 0;
+    char text[256];
+    std::size_t n = 0;
+    auto word = [&](unsigned w) { n += std::snprintf(text + n, sizeof text - n, " %08x", w); };
+    if (!__get_cpuid(0, &a, &b, &c, &d)) return "no-cpuid";
+    const unsigned max_leaf = a;
+    char vendor[13] = {};
+    std::memcpy(vendor, &b, 4);
+    std::memcpy(vendor + 4, &d, 4);
+    std::memcpy(vendor + 8, &c, 4);
+    n += std::snprintf(text + n, sizeof text - n, "%s", vendor);
+    __get_cpuid(1, &a, &b, &c, &d);
+    word(a);  // family, model, stepping (not ebx: it holds this core's APIC id)
+    word(c);
+    word(d);
+    const bool osxsave = (c >> 27) & 1;
+    if (max_leaf >= 7 && __get_cpuid_count(7, 0, &a, &b, &c, &d)) {
+        word(b);
+        word(c);
+        word(d);
+    }
+    if (__get_cpuid(0x80000001, &a, &b, &c, &d)) {
+        word(c);
+        word(d);
+    }
+    if (osxsave) {  // the register state the OS saves: AVX, AVX-512 usable or not
+        unsigned lo = 0, hi = 0;
+        __asm__ volatile("xgetbv" : "=a"(lo), "=d"(hi) : "c"(0));
+        word(lo);
+    }
+    return std::string(text, n);
+}
+
+std::string jit_cache_key(const std::string& source) {
+    __extension__ typedef unsigned __int128 u128;  // GCC and Clang on 64-bit hosts
+    // FNV-1a 128: offset basis and prime 2^88 + 2^8 + 0x3b (Fowler, Noll, Vo).
+    u128 h = (static_cast<u128>(0x6c62272e07bb0142ULL) << 64) | 0x62b821756295c58dULL;
+    const u128 prime = (static_cast<u128>(1) << 88) | 0x13b;
+    auto part = [&](const char* p, std::size_t size) {
+        for (std::size_t i = 0; i < size; ++i) h = (h ^ static_cast<unsigned char>(p[i])) * prime;
+        h = (h ^ 0xff) * prime;  // a separator: "ab"+"c" differs from "a"+"bc"
+    };
+    auto text = [&](const std::string& t) { part(t.data(), t.size()); };
+    text("hsnc-jit-object 2");
+    text("clang " HSNC_CLANG_VERSION);
+    for (const char* flag : jit_compile_flags()) text(flag);
+    text(host_cpu_identity());
+    text(kKernelAbiHeaderText);
+    text(source);
+    char hex[33];
+    std::snprintf(hex, sizeof hex, "%016llx%016llx", static_cast<unsigned long long>(h >> 64),
+                  static_cast<unsigned long long>(h));
+    return hex;
 }
 
 std::string default_cache_dir() {

@@ -39,6 +39,18 @@ inline constexpr const char* kCacheFileExtension = ".hsncobj";
 /// set and absolute, else $HOME/.cache/hsnc; "" when neither can be named.
 std::string default_cache_dir();
 
+/// The key of the JIT's object for `source`: FNV-1a-128 (hex) of the source,
+/// the embedded kernel_abi.h, Clang's version, the compile flags
+/// (runtime/jit_frontend.h) and this host's CPU as CPUID describes it (vendor,
+/// family/model/stepping, feature words, the OS-enabled register state), which
+/// is everything LLVM's host detection bases the target on. Equal keys mean
+/// the JIT would produce the same object; computed without LLVM, so that a
+/// run whose kernels are all cached need not load it (runtime/object_loader.h).
+std::string jit_cache_key(const std::string& source);
+
+/// The host part of jit_cache_key, e.g. "GenuineIntel 000906ea 7ffafbff ...".
+std::string host_cpu_identity();
+
 /// FNV-1a, 64 bits (the payload checksum).
 std::uint64_t fnv1a64(const void* data, std::size_t size, std::uint64_t h = 0xcbf29ce484222325ULL);
 
