@@ -7,7 +7,10 @@
 //   3. per configuration kernel: derive+emit, cold compile (Clang + LLVM code
 //      generation + JIT link, the persistent cache empty) and warm (a cache
 //      hit: read, check, JIT link), medians over the configurations a run of
-//      each model visits.
+//      each model visits, and a hit the way `hsnc simulate` takes it, without
+//      LLVM (CachedKernelProvider, runtime/object_loader.h);
+//   4. the whole `hsnc simulate` process on a model without ahead-of-time
+//      kernels: every kernel cached, none cached, the generic solver.
 //
 //   build/hsnc_jit_bench [--quick]
 //
@@ -15,6 +18,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <unistd.h>
@@ -28,6 +32,7 @@
 #include "aot_registry.h"
 #include "derivation.h"
 #include "emitter.h"
+#include "cached_kernel_provider.h"
 #include "engine.h"
 #include "generic_solver.h"
 #include "kernel_solver.h"
@@ -236,8 +241,8 @@ int main(int argc, char** argv) {
     // the same runs before it agree with `hsnc simulate`), so the run times
     // are measured first.
     std::printf("\n3. Kernel build latency per configuration (median [max] over the configurations compiled)\n");
-    std::printf("%-16s %5s %5s %14s %18s %18s %8s\n", "model", "dof", "cfgs", "derive+emit_ms", "cold_compile_ms",
-                "cache_hit_ms", "obj_kB");
+    std::printf("%-16s %5s %5s %14s %18s %18s %18s %8s\n", "model", "dof", "cfgs", "derive+emit_ms", "cold_compile_ms",
+                "hit_llvm_ms", "hit_bare_ms", "obj_kB");
     for (const Case& c : cases) {
         Recorder rec(c.model);
         run(c.model, rec, c.visit_end);
@@ -272,13 +277,47 @@ int main(int argc, char** argv) {
             }
             if (jit.cache_hits() != cfgs.size()) std::printf("  (!) only %zu of %zu hits\n", jit.cache_hits(), cfgs.size());
         }
+        std::vector<double> bare;  // a hit as `hsnc simulate` takes it: no LLVM (CachedKernelProvider)
+        {
+            CachedKernelProvider cached(c.model, from_sources, jo, [](JitSolverProvider::SourceFn, const JitOptions&) {
+                return std::unique_ptr<JitSolverProvider>();  // never asked: every kernel is cached
+            });
+            for (const Configuration& cfg : cfgs) {
+                const auto start = Clock::now();
+                cached.solver(cfg);
+                bare.push_back(1e3 * seconds_since(start));
+            }
+        }
         const KernelCache::Stats st = KernelCache::stats(cache_dir);
-        std::printf("%-16s %5zu %5zu %14.2f %11.1f [%4.0f] %11.2f [%4.1f] %8.1f\n", c.name.c_str(), c.model.dof(),
-                    cfgs.size(), median(emit), median(cold), *std::max_element(cold.begin(), cold.end()),
-                    median(warm), *std::max_element(warm.begin(), warm.end()),
+        std::printf("%-16s %5zu %5zu %14.2f %11.1f [%4.0f] %11.2f [%4.1f] %11.2f [%4.1f] %8.1f\n", c.name.c_str(),
+                    c.model.dof(), cfgs.size(), median(emit), median(cold), *std::max_element(cold.begin(), cold.end()),
+                    median(warm), *std::max_element(warm.begin(), warm.end()), median(bare),
+                    *std::max_element(bare.begin(), bare.end()),
                     st.entries ? 1e-3 * static_cast<double>(st.bytes) / static_cast<double>(st.entries) : 0.0);
     }
 
+    // 4. The whole `hsnc simulate` process on a model without ahead-of-time
+    // kernels (scenario 2 with mu_k = 0.31, to 300 s): every kernel cached,
+    // none (compiled, LLVM and Clang loaded), and the generic solver.
+    std::filesystem::remove_all(cache_dir);
+    const std::string run_cmd = std::string("'") + HSNC_BINARY + "' simulate '" + models +
+                                "seed-scenario-2.toml' --set mu_k=0.31 --t-end 300 --quiet >/dev/null ";
+    auto process_ms = [&](const std::string& flags) {
+        std::vector<double> t;
+        for (int r = 0; r < reps; ++r) {
+            const auto start = Clock::now();
+            if (std::system((run_cmd + flags).c_str()) != 0) return -1.0;
+            t.push_back(1e3 * seconds_since(start));
+        }
+        return median(t);
+    };
+    if (std::system((run_cmd + "--cache-dir '" + cache_dir + "'").c_str()) != 0) std::printf("(!) hsnc failed\n");
+    const double warm_p = process_ms("--cache-dir '" + cache_dir + "'");
+    const double cold_p = process_ms("--no-cache");
+    const double gen_p = process_ms("--kernels generic");
+    std::printf("\n4. hsnc simulate seed-scenario-2 --set mu_k=0.31 --t-end 300, whole process (median of %d)\n", reps);
+    std::printf("   kernels cached: %.1f ms   compiled (--no-cache): %.1f ms   --kernels generic: %.1f ms\n", warm_p,
+                cold_p, gen_p);
     std::filesystem::remove_all(cache_dir);
     return 0;
 }
