@@ -82,6 +82,11 @@ Jit::Jit() : impl_(std::make_unique<Impl>()) {
     initialize_llvm();
     auto builder = llvm::orc::JITTargetMachineBuilder::detectHost();
     if (!builder) throw RunError("Jit::Jit(): cannot describe this host to LLVM: " + error_text(builder.takeError()));
+    // The large code model: every address in the object is an absolute 64-bit
+    // relocation, wherever the code lands, which is what lets a cached object
+    // be mapped without LLVM (runtime/object_loader.h). LLVM 14's JIT default
+    // on x86-64, stated here because the loader depends on it.
+    builder->setCodeModel(llvm::CodeModel::Large);
     auto machine = builder->createTargetMachine();
     if (!machine) throw RunError("Jit::Jit(): cannot create an LLVM target machine: " + error_text(machine.takeError()));
     impl_->machine = std::move(*machine);

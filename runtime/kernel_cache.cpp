@@ -1,6 +1,8 @@
 #include "kernel_cache.h"
 
+#if defined(__x86_64__)
 #include <cpuid.h>
+#endif
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -74,6 +76,9 @@ std::uint64_t fnv1a64(const void* data, std::size_t size, std::uint64_t h) {
 }
 
 std::string host_cpu_identity() {
+#if !defined(__x86_64__)
+    return "not-x86-64";  // the JIT's objects are then only ever loaded by LLVM
+#else
     unsigned a = 0, b = 0, c = 0, d = 0;
     char text[256];
     std::size_t n = 0;
@@ -105,6 +110,7 @@ std::string host_cpu_identity() {
         word(lo);
     }
     return std::string(text, n);
+#endif
 }
 
 std::string jit_cache_key(const std::string& source) {
