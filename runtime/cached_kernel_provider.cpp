@@ -40,7 +40,8 @@ SegmentSolver& CachedKernelProvider::solver(const Configuration& cfg) {
     if (entry.status == KernelCache::Status::hit) {
         std::string why;
         std::unique_ptr<LoadedObject> object = LoadedObject::load(entry.payload, why);
-        const auto* kernel = object ? static_cast<const hsnc_kernel*>(object->symbol(unit.symbol)) : nullptr;
+        const auto* kernel =
+            object ? static_cast<const hsnc_kernel*>(object->symbol(unit.symbol, sizeof(hsnc_kernel))) : nullptr;
         // The kernel says what it was built for: it must be this model and configuration.
         if (kernel && kernel->abi_version == HSNC_KERNEL_ABI_VERSION && kernel->model_hash == hash_ &&
             std::strcmp(kernel->config_key, cfg.key().c_str()) == 0) {

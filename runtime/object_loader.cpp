@@ -106,10 +106,11 @@ std::unique_ptr<LoadedObject> LoadedObject::load(const std::string& elf, std::st
         } else if (s.st_shndx == SHN_ABS) {
             address[k] = s.st_value;
         } else if (s.st_shndx < sh.size() && placed[s.st_shndx]) {
-            if (s.st_value > sh[s.st_shndx].sh_size) return fail("a symbol outside its section");
+            if (s.st_value > sh[s.st_shndx].sh_size || s.st_size > sh[s.st_shndx].sh_size - s.st_value)
+                return fail("a symbol outside its section");
             address[k] = reinterpret_cast<std::uint64_t>(mem + offset[s.st_shndx] + s.st_value);
             if (ELF64_ST_BIND(s.st_info) == STB_GLOBAL && type != STT_SECTION && name_of(s, name))
-                obj->globals_.emplace_back(name, mem + offset[s.st_shndx] + s.st_value);
+                obj->globals_.push_back({name, mem + offset[s.st_shndx] + s.st_value, s.st_size});
         } else {
             continue;  // a symbol of a section that is not loaded: relocations must not use it
         }
@@ -150,9 +151,9 @@ std::unique_ptr<LoadedObject> LoadedObject::load(const std::string& elf, std::st
     return obj;
 }
 
-void* LoadedObject::symbol(const std::string& name) const {
-    for (const auto& g : globals_)
-        if (g.first == name) return g.second;
+void* LoadedObject::symbol(const std::string& name, std::size_t min_size) const {
+    for (const Global& g : globals_)
+        if (g.name == name) return g.size >= min_size ? g.address : nullptr;
     return nullptr;
 }
 

@@ -27,14 +27,20 @@ public:
     LoadedObject(const LoadedObject&) = delete;
     LoadedObject& operator=(const LoadedObject&) = delete;
 
-    /// Address of the defined global symbol `name`, or null.
-    void* symbol(const std::string& name) const;
+    /// Address of the defined global symbol `name` when the object gives it
+    /// at least `min_size` bytes (its ELF st_size), else null.
+    void* symbol(const std::string& name, std::size_t min_size = 0) const;
 
 private:
     LoadedObject() = default;
     void* base_ = nullptr;
     std::size_t size_ = 0;
-    std::vector<std::pair<std::string, void*>> globals_;
+    struct Global {
+        std::string name;
+        void* address;
+        std::size_t size;
+    };
+    std::vector<Global> globals_;
 };
 
 }  // namespace hsnc
