@@ -4,6 +4,7 @@
 #include <cpuid.h>
 #endif
 #include <fcntl.h>
+#include <link.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -12,6 +13,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <initializer_list>
 #include <random>
 
 #include "jit_frontend.h"     // jit_compile_flags
@@ -66,6 +68,7 @@ bool write_all(int fd, const char* data, std::size_t size) {
 }
 
 bool has_extension(const std::filesystem::path& p) { return p.extension() == kCacheFileExtension; }
+bool is_index(const std::filesystem::path& p) { return p.extension() == kCacheIndexExtension; }
 
 }  // namespace
 
@@ -113,26 +116,78 @@ std::string host_cpu_identity() {
 #endif
 }
 
-std::string jit_cache_key(const std::string& source) {
+namespace {
+
+// FNV-1a 128 (Fowler, Noll, Vo) of the parts, each followed by a separator
+// byte ("ab"+"c" differs from "a"+"bc"), in hex.
+std::string fnv1a128_hex(std::initializer_list<std::string> parts) {
     __extension__ typedef unsigned __int128 u128;  // GCC and Clang on 64-bit hosts
-    // FNV-1a 128: offset basis and prime 2^88 + 2^8 + 0x3b (Fowler, Noll, Vo).
+    // Offset basis and prime 2^88 + 2^8 + 0x3b.
     u128 h = (static_cast<u128>(0x6c62272e07bb0142ULL) << 64) | 0x62b821756295c58dULL;
     const u128 prime = (static_cast<u128>(1) << 88) | 0x13b;
-    auto part = [&](const char* p, std::size_t size) {
-        for (std::size_t i = 0; i < size; ++i) h = (h ^ static_cast<unsigned char>(p[i])) * prime;
-        h = (h ^ 0xff) * prime;  // a separator: "ab"+"c" differs from "a"+"bc"
-    };
-    auto text = [&](const std::string& t) { part(t.data(), t.size()); };
-    text("hsnc-jit-object 2");
-    text("clang " HSNC_CLANG_VERSION);
-    for (const char* flag : jit_compile_flags()) text(flag);
-    text(host_cpu_identity());
-    text(kKernelAbiHeaderText);
-    text(source);
+    for (const std::string& t : parts) {
+        for (unsigned char c : t) h = (h ^ c) * prime;
+        h = (h ^ 0xff) * prime;
+    }
     char hex[33];
     std::snprintf(hex, sizeof hex, "%016llx%016llx", static_cast<unsigned long long>(h >> 64),
                   static_cast<unsigned long long>(h));
     return hex;
+}
+
+std::string compiler_identity() {
+    std::string id = "clang " HSNC_CLANG_VERSION;
+    for (const char* flag : jit_compile_flags()) id += std::string(" ") + flag;
+    return id;
+}
+
+}  // namespace
+
+std::string jit_cache_key(const std::string& source) {
+    static const std::string cpu = host_cpu_identity();
+    return fnv1a128_hex({"hsnc-jit-object 2", compiler_identity(), cpu, kKernelAbiHeaderText, source});
+}
+
+std::string executable_build_id() {
+    std::string id;
+    // The first object dl_iterate_phdr reports is the executable itself.
+    ::dl_iterate_phdr(
+        [](dl_phdr_info* info, std::size_t, void* out) {
+            for (int i = 0; i < info->dlpi_phnum; ++i) {
+                const ElfW(Phdr)& ph = info->dlpi_phdr[i];
+                if (ph.p_type != PT_NOTE) continue;
+                const char* p = reinterpret_cast<const char*>(info->dlpi_addr + ph.p_vaddr);
+                const char* end = p + ph.p_memsz;
+                while (end - p >= static_cast<std::ptrdiff_t>(sizeof(ElfW(Nhdr)))) {
+                    ElfW(Nhdr) nh;
+                    std::memcpy(&nh, p, sizeof nh);
+                    const char* name = p + sizeof nh;
+                    const char* desc = name + ((nh.n_namesz + 3) & ~3u);
+                    const char* next = desc + ((nh.n_descsz + 3) & ~3u);
+                    if (next > end) break;
+                    if (nh.n_type == NT_GNU_BUILD_ID && nh.n_namesz == 4 && std::memcmp(name, "GNU", 4) == 0) {
+                        auto* s = static_cast<std::string*>(out);
+                        for (unsigned k = 0; k < nh.n_descsz; ++k) {
+                            char byte[3];
+                            std::snprintf(byte, sizeof byte, "%02x", static_cast<unsigned char>(desc[k]));
+                            *s += byte;
+                        }
+                        return 1;
+                    }
+                    p = next;
+                }
+            }
+            return 1;  // only the executable
+        },
+        &id);
+    return id;
+}
+
+std::string jit_index_key(const std::string& model_text, const std::string& config_key) {
+    static const std::string build_id = executable_build_id(), cpu = host_cpu_identity();
+    if (build_id.empty()) return "";
+    return fnv1a128_hex({"hsnc-jit-index 1", build_id, compiler_identity(), cpu,
+                         kKernelAbiHeaderText, model_text, config_key});
 }
 
 std::string default_cache_dir() {
@@ -144,11 +199,11 @@ std::string default_cache_dir() {
     return "";
 }
 
-std::string KernelCache::path_of(const std::string& key) const { return dir_ + "/" + key + kCacheFileExtension; }
+std::string KernelCache::path_of(const std::string& key, const char* ext) const { return dir_ + "/" + key + ext; }
 
-KernelCache::Entry KernelCache::load(const std::string& key) const {
+KernelCache::Entry KernelCache::load(const std::string& key, const char* ext) const {
     Entry e;
-    const std::string path = path_of(key);
+    const std::string path = path_of(key, ext);
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0) {
         if (errno != ENOENT && errno != ENOTDIR) {  // no file, or no directory: a miss
@@ -192,7 +247,7 @@ KernelCache::Entry KernelCache::load(const std::string& key) const {
     return e;
 }
 
-std::string KernelCache::store(const std::string& key, const std::string& payload) const {
+std::string KernelCache::store(const std::string& key, const std::string& payload, const char* ext) const {
     std::error_code ec;
     std::filesystem::create_directories(dir_, ec);
     if (ec) return "cannot create directory " + dir_ + ": " + ec.message();
@@ -211,7 +266,7 @@ std::string KernelCache::store(const std::string& key, const std::string& payloa
     std::random_device rd;
     char suffix[40];
     std::snprintf(suffix, sizeof suffix, ".%ld.%08x%08x.tmp", static_cast<long>(::getpid()), rd(), rd());
-    const std::string tmp = dir_ + "/." + key + kCacheFileExtension + suffix;
+    const std::string tmp = dir_ + "/." + key + ext + suffix;
     const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd < 0) return "cannot write in " + dir_ + ": " + errno_text();
     const bool ok = write_all(fd, header, sizeof header) && write_all(fd, key.data(), key.size()) &&
@@ -222,7 +277,7 @@ std::string KernelCache::store(const std::string& key, const std::string& payloa
         ::unlink(tmp.c_str());
         return why;
     }
-    if (::rename(tmp.c_str(), path_of(key).c_str()) != 0) {
+    if (::rename(tmp.c_str(), path_of(key, ext).c_str()) != 0) {
         const std::string why = "cannot rename " + tmp + " into place: " + errno_text();
         ::unlink(tmp.c_str());
         return why;
@@ -266,10 +321,12 @@ std::size_t KernelCache::clear(const std::string& dir, std::string& problem) {
     for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
         const std::filesystem::path& p = it->path();
         const std::string name = p.filename().string();
-        // Entries (<key>.hsncobj) and temporary files a killed writer left
-        // (.<key>.hsncobj.<pid>.<random>.tmp); nothing else.
-        const bool ours = has_extension(p) || (name[0] == '.' && name.find(kCacheFileExtension) != std::string::npos &&
-                                               p.extension() == ".tmp");
+        // Entries (<key>.hsncobj, <key>.hsncidx) and temporary files a killed
+        // writer left (.<key>.hsncobj.<pid>.<random>.tmp); nothing else.
+        const bool temporary = name[0] == '.' && p.extension() == ".tmp" &&
+                               (name.find(kCacheFileExtension) != std::string::npos ||
+                                name.find(kCacheIndexExtension) != std::string::npos);
+        const bool ours = has_extension(p) || is_index(p) || temporary;
         if (!ours || it->is_directory()) continue;
         if (::unlink(p.c_str()) == 0)
             ++removed;

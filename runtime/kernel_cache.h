@@ -34,6 +34,8 @@ namespace hsnc {
 
 inline constexpr std::uint32_t kCacheFormatVersion = 1;
 inline constexpr const char* kCacheFileExtension = ".hsncobj";
+/// Index entries: same format, the payload is the key of a .hsncobj entry.
+inline constexpr const char* kCacheIndexExtension = ".hsncidx";
 
 /// The cache directory when none is given: $XDG_CACHE_HOME/hsnc when that is
 /// set and absolute, else $HOME/.cache/hsnc; "" when neither can be named.
@@ -48,6 +50,17 @@ std::string default_cache_dir();
 /// run whose kernels are all cached need not load it (runtime/object_loader.h).
 std::string jit_cache_key(const std::string& source);
 
+/// The key under which the command line finds a kernel without deriving it:
+/// FNV-1a-128 of this executable's GNU build ID (it fixes the generator and
+/// emitter code), Clang's version, the flags, the CPU, kernel_abi.h, the
+/// model's canonical text (model_hash.h: every number a kernel depends on) and
+/// the configuration key. "" when the executable has no build ID. Its entry
+/// (kCacheIndexExtension) holds the jit_cache_key of the kernel's source.
+std::string jit_index_key(const std::string& model_text, const std::string& config_key);
+
+/// This executable's GNU build ID in hex, "" when it has none.
+std::string executable_build_id();
+
 /// The host part of jit_cache_key, e.g. "GenuineIntel 000906ea 7ffafbff ...".
 std::string host_cpu_identity();
 
@@ -60,7 +73,7 @@ public:
     explicit KernelCache(std::string dir) : dir_(std::move(dir)) {}
 
     const std::string& dir() const { return dir_; }
-    std::string path_of(const std::string& key) const;
+    std::string path_of(const std::string& key, const char* ext = kCacheFileExtension) const;
 
     enum class Status {
         hit,   ///< a whole entry with this key: `payload` holds it
@@ -74,11 +87,11 @@ public:
     };
 
     /// The entry stored under `key`. Never throws on file contents.
-    Entry load(const std::string& key) const;
+    Entry load(const std::string& key, const char* ext = kCacheFileExtension) const;
 
     /// Store `payload` under `key` (temporary file, then rename). Returns ""
     /// on success, else what went wrong ("cannot create directory ...: ...").
-    std::string store(const std::string& key, const std::string& payload) const;
+    std::string store(const std::string& key, const std::string& payload, const char* ext = kCacheFileExtension) const;
 
     struct Stats {
         std::size_t entries = 0;      ///< whole hsnc entries (header checks out)
@@ -89,7 +102,8 @@ public:
     /// What `dir` holds (all zero when it does not exist). Throws nothing.
     static Stats stats(const std::string& dir);
 
-    /// Remove every *.hsncobj file of `dir` (ours by name; other files stay).
+    /// Remove every *.hsncobj and *.hsncidx file of `dir` (ours by name;
+    /// other files stay).
     /// Returns how many were removed; `problem` gets the first failure.
     static std::size_t clear(const std::string& dir, std::string& problem);
 

@@ -38,9 +38,11 @@ std::size_t count_of(const std::string& err, const std::string& what) {
     return std::stoul(m[1]);
 }
 
-std::vector<fs::path> entries(const std::string& dir) {
+// The files of `dir` with extension `ext` ("" for all), sorted.
+std::vector<fs::path> entries(const std::string& dir, const std::string& ext = ".hsncobj") {
     std::vector<fs::path> files;
-    for (const auto& e : fs::directory_iterator(dir)) files.push_back(e.path());
+    for (const auto& e : fs::directory_iterator(dir))
+        if (ext.empty() || e.path().extension() == ext) files.push_back(e.path());
     std::sort(files.begin(), files.end());
     return files;
 }
@@ -73,7 +75,7 @@ TEST_F(CacheDir, StoreThenLoadGivesThePayloadBack) {
     const KernelCache::Entry e = cache.load("k1");
     ASSERT_EQ(e.status, KernelCache::Status::hit) << e.problem;
     EXPECT_EQ(e.payload, payload);
-    EXPECT_EQ(entries(dir + "/a/b").size(), 1u) << "no temporary file left behind";
+    EXPECT_EQ(entries(dir + "/a/b", "").size(), 1u) << "no temporary file left behind";
 }
 
 TEST_F(CacheDir, DamagedEntriesAreToldApartAndNeverLoaded) {
@@ -133,6 +135,23 @@ TEST_F(CacheDir, SecondRunHitsTheCacheForEveryKernel) {
     EXPECT_NE(first.out.find("status=ok method=hsnc t=50 events=587 "), std::string::npos) << first.out;
 
     EXPECT_NE(second.err.find("(LLVM not loaded)"), std::string::npos) << second.err;
+    // Found by the index (this executable, the model's numbers, the
+    // configuration): nothing derived or emitted.
+    EXPECT_NE(second.err.find("3 cache hits (3 by index,"), std::string::npos) << second.err;
+    EXPECT_NE(second.err.find("(derive+emit 0.000 s,"), std::string::npos) << second.err;
+    EXPECT_EQ(entries(dir, ".hsncidx").size(), 3u);
+    // A damaged index is only slower: the kernels are found by their source,
+    // silently, and the index is written again.
+    for (const fs::path& p : entries(dir, ".hsncidx")) std::ofstream(p) << "garbage";
+    const CliRun by_source = run_hsnc(jit_run_args("--cache-dir '" + dir + "'"));
+    ASSERT_EQ(by_source.exit_code, 0) << by_source.err;
+    EXPECT_EQ(by_source.out, first.out);
+    EXPECT_EQ(count_of(by_source.err, "cache hits"), 3u) << by_source.err;
+    EXPECT_EQ(by_source.err.find("warning"), std::string::npos) << by_source.err;
+    EXPECT_NE(by_source.err.find("3 cache hits (0 by index,"), std::string::npos) << by_source.err;
+    const CliRun by_index = run_hsnc(jit_run_args("--cache-dir '" + dir + "'"));
+    EXPECT_NE(by_index.err.find("3 cache hits (3 by index,"), std::string::npos) << by_index.err;
+    EXPECT_EQ(by_index.out, first.out);
     // All hits: neither LLVM nor Clang is loaded (the dynamic loader's own account).
     const CliRun traced = run_hsnc(jit_run_args("--quiet --cache-dir '" + dir + "'"), "LD_DEBUG=files");
     EXPECT_NE(traced.err.find("libm.so"), std::string::npos) << "the trace should list what is loaded";
@@ -189,7 +208,8 @@ TEST_F(CacheDir, TwoProcessesFillingOneCacheAtOnceLeaveItWhole) {
     EXPECT_NE(text1.find("status=ok method=hsnc t=50 events=587 "), std::string::npos) << text1;
     EXPECT_EQ(text1, text2);
 
-    EXPECT_EQ(entries(dir).size(), 3u) << "three entries and no temporary files";
+    EXPECT_EQ(entries(dir).size(), 3u);
+    EXPECT_EQ(entries(dir, "").size(), 6u) << "three entries, their index entries, and no temporary files";
     const CliRun third = run_hsnc(jit_run_args("--cache-dir '" + dir + "'"));
     ASSERT_EQ(third.exit_code, 0) << third.err;
     EXPECT_EQ(count_of(third.err, "cache hits"), 3u) << third.err;
@@ -281,8 +301,8 @@ TEST_F(CacheDir, CacheStatsAndClear) {
 
     const CliRun clear = run_hsnc("cache --clear --cache-dir '" + dir + "'");
     ASSERT_EQ(clear.exit_code, 0) << clear.err;
-    EXPECT_EQ(clear.out, "cache: " + dir + "\nremoved: 3 files\n");
-    EXPECT_EQ(entries(dir).size(), 1u) << "notes.txt stays";
+    EXPECT_EQ(clear.out, "cache: " + dir + "\nremoved: 6 files\n") << "3 kernels and their index entries";
+    EXPECT_EQ(entries(dir, "").size(), 1u) << "notes.txt stays";
     EXPECT_TRUE(fs::exists(dir + "/notes.txt"));
 
     // The default directory is the one simulate uses.
