@@ -52,7 +52,8 @@ void add_cache(CLI::App& app, int& exit_code) {
     auto* sub = app.add_subcommand("cache", "the persistent cache of compiled kernels (--kernels jit)");
     sub->add_option("--cache-dir", o->dir, "the cache (default $XDG_CACHE_HOME/hsnc, else ~/.cache/hsnc)");
     auto* stats = sub->add_flag("--stats", o->stats, "directory, entries, damaged entries, bytes, oldest and newest");
-    auto* clear = sub->add_flag("--clear", o->clear, "remove the cached kernels and their index (only hsnc's *.hsncobj and *.hsncidx files)");
+    auto* clear = sub->add_flag("--clear", o->clear,
+                                "remove the cached kernels and their index (only hsnc's *.hsncobj and *.hsncidx files)");
     stats->excludes(clear);
     sub->callback([o, &exit_code] {
         if (!o->stats && !o->clear) throw InputError("cache: give --stats or --clear");
