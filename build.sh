@@ -12,6 +12,7 @@ packages=(
   libeigen3-dev                  # linear algebra (modal analysis) at run time
   libtomlplusplus-dev            # the model file
   libcli11-dev                   # command line parsing
+  libsundials-dev                # the CVODE baseline (--method cvode)
   llvm-14-dev libclang-cpp14-dev libclang-14-dev  # compiling kernels in-process
   libgtest-dev libbenchmark-dev  # tests and benchmarks
   gnuplot-nox fonts-dejavu-core   # plots (pngcairo needs a font)

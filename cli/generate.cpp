@@ -12,6 +12,7 @@
 #include "error.h"
 #include "kernel_set.h"
 #include "model_reader.h"
+#include "param_emitter.h"
 
 namespace hsnc::cli {
 
@@ -19,19 +20,25 @@ void add_generate(CLI::App& app, int& exit_code) {
     auto* sub = app.add_subcommand("generate", "write the specialised C++ kernels of a model");
     auto model_path = std::make_shared<std::string>();
     auto out_dir = std::make_shared<std::string>();
+    auto params = std::make_shared<std::string>();
     sub->add_option("MODEL", *model_path, "model file (TOML)")->required();
     sub->add_option("-o,--out-dir", *out_dir,
                     "directory for <model>_<configuration key>.cpp, <model>.manifest and registry.cpp (created if needed)")
         ->required();
+    CLI::Option* params_opt = sub->add_option("--params", *params,
+                    "emit sweep kernels: these parameters (NAME,NAME,... or all) become run-time arguments of the "
+                    "kernels' configure(); what the model computes from them follows them");
     sub->footer(
         "Every configuration is generated while there are at most 64 (2^(contacts + friction masses));\n"
         "beyond that, those the model's default run ([simulate].t_end, generic solver) visits, plus the\n"
         "initial configuration and its single-switch neighbours (at most 128). <model>.manifest lists the\n"
         "configurations generated. Compile the files with runtime/ on the include path (kernel_abi.h,\n"
         "aot_registry.h).");
-    sub->callback([&exit_code, model_path, out_dir] {
+    sub->callback([&exit_code, model_path, out_dir, params, params_opt] {
         const Model model = read_model(*model_path);
-        const KernelSet set = generate_kernel_set(model);
+        const std::vector<std::string> kept = 
+            params_opt->count() == 0 ? std::vector<std::string>{} : kept_parameters(model, *params);
+        const KernelSet set = generate_kernel_set(model, kept);
         if (!set.note.empty()) std::cerr << "hsnc generate: " << set.note << "\n";
         try {
             for (const GeneratedFile& f : set.kernels) write_if_changed(*out_dir, f.name, f.text);
@@ -40,7 +47,7 @@ void add_generate(CLI::App& app, int& exit_code) {
         } catch (const RunError& e) {
             throw InputError(std::string("generate: -o ") + *out_dir + ": " + e.what());  // a bad output path
         }
-        std::cout << "wrote " << set.kernels.size() << " kernels, " << model.name
+        std::cout << "wrote " << set.kernels.size() << (kept.empty() ? "" : " sweep") << " kernels, " << model.name
                   << ".manifest and registry.cpp of model '" << model.name
                   << "' to " << *out_dir << "\n";
         exit_code = 0;

@@ -268,10 +268,11 @@ void add_simulate(CLI::App& app, int& exit_code) {
     sub->add_option("--plot", o->plot, "draw x(t) of every mass from --out into this PNG (gnuplot)");
     sub->add_option("--method", o->method,
                     "hsnc (exact, default); ab4 (fixed-step Adams-Bashforth 4, needs --h); "
-                    "rk45 (adaptive Dormand-Prince with event location, --rtol/--atol)");
+                    "rk45 (adaptive Dormand-Prince with event location, --rtol/--atol); "
+                    "cvode (SUNDIALS CVODE, Adams with root finding, --rtol/--atol)");
     sub->add_option("--h", o->h, "step of --method ab4");
-    sub->add_option("--rtol", o->rtol, "relative tolerance of --method rk45 (default 1e-10)");
-    sub->add_option("--atol", o->atol, "absolute tolerance of --method rk45 (default 1e-12)");
+    sub->add_option("--rtol", o->rtol, "relative tolerance of --method rk45/cvode (default 1e-10)");
+    sub->add_option("--atol", o->atol, "absolute tolerance of --method rk45/cvode (default 1e-12)");
     sub->add_option("--kernels", o->kernels,
                     "auto (default: ahead-of-time kernels when the model has them, else jit), aot, generic, "
                     "jit (compile a kernel in-process for each configuration the run enters)");

@@ -22,33 +22,48 @@ constexpr double kappa_1 = 100.0;
 constexpr double omega_d_1 = 10.0;
 
 // Coefficient block (7 doubles):
-//  0:A_1 1:B_1 2:A1_1 3:B1_1 4:A2_1 5:B2_1
-//  6:x_st_1
+//  0:x_st_1 1:A_1 2:B_1 3:A1_1 4:B1_1 5:A2_1
+//  6:B2_1
 void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
     (void)t0; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.98100000000000009*sgn[0];  // m1
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
+    // Modal forces p = V^T f.
     const double p_1 = f_1;
-    const double q0u_1 = x0[0];
-    const double dq0u_1 = v0[0];
-    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(1.0)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(1.0)*dq0u_1);
+    // Static offset x_st = V (p / lambda) over the elastic modes.
+    const double x_st_1 = 0.01*p_1;  // m1
+    coef[0] = x_st_1;
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
+    // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1));
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]));
+    // Its modal coordinates q = W xh, q' = W vh.
+    const double q0u_1 = xh_1;
+    const double dq0u_1 = vh_1;
+    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(1.0)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(1.0)*dq0u_1);
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
-    // Mode 1 (undamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_1 = q0_1 - (0.01*p_1);
-    const double B_1 = dq0_1;
-    coef[0] = A_1;
-    coef[1] = B_1;
-    coef[2] = B_1 - sigma_1*A_1;
-    coef[3] = -kappa_1*A_1 - sigma_1*B_1;
-    coef[4] = coef[3] - sigma_1*coef[2];
-    coef[5] = -kappa_1*coef[2] - sigma_1*coef[3];
-    // Static offset x_st = V (p / lambda) over the elastic modes.
-    coef[6] = 0.01*p_1;  // m1
+    // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
+    const double xe_1 = x_st_1 + q0_1;
+    const double ve_1 = dq0_1;
+    const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
+    const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
+    const double qh0_1 = q0_1 + (ex_1);
+    const double dqh0_1 = dq0_1 + (ev_1);
+    // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_1 = qh0_1;
+    const double B_1 = dqh0_1;
+    coef[1] = A_1;
+    coef[2] = B_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
+    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    coef[3] = A1_1;
+    coef[4] = B1_1;
+    coef[5] = B1_1 - sigma_1*A1_1;
+    coef[6] = -kappa_1*A1_1 - sigma_1*B1_1;
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
@@ -58,21 +73,21 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.10000000000000001;
-    const double qh_1 = coef[0]*eC_1 + coef[1]*eS_1;
-    const double dqh_1 = coef[2]*eC_1 + coef[3]*eS_1;
-    const double ddqh_1 = coef[4]*eC_1 + coef[5]*eS_1;
+    const double qh_1 = coef[1]*eC_1 + coef[2]*eS_1;
+    const double dqh_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double ddqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
     const double q_1 = qh_1;
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[0]*eC_1) + __builtin_fabs(coef[1]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[2]*eC_1) + __builtin_fabs(coef[3]*eS_1);
+    const double mq_1 = __builtin_fabs(coef[1]*eC_1) + __builtin_fabs(coef[2]*eS_1);  // magnitude of the terms of q
+    const double mdq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
-    x[0] = coef[6] + q_1;  // m1
+    x[0] = coef[0] + q_1;  // m1
     v[0] = dq_1;
     a[0] = ddq_1;
-    const double mx_0 = __builtin_fabs(coef[6]) + mq_1;
+    const double mx_0 = __builtin_fabs(coef[0]) + mq_1;
     const double mv_0 = mdq_1;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)

@@ -28,59 +28,85 @@ constexpr double omega_d_2 = 5.1581710551376592;
 constexpr double Omega_1 = 175.51509999999999;
 
 // Coefficient block (16 doubles):
-//  0:theta_1 1:c_theta_1 2:A_1 3:B_1 4:A1_1 5:B1_1
-//  6:A2_1 7:B2_1 8:A_2 9:B_2 10:A1_2 11:B1_2
-//  12:A2_2 13:B2_2 14:x_st_1 15:x_st_2
+//  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:A_1 5:B_1
+//  6:A1_1 7:B1_1 8:A2_1 9:B2_1 10:A_2 11:B_2
+//  12:A1_2 13:B1_2 14:A2_2 15:B2_2
 void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
     (void)t0; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -5.8860000000000001*sgn[0];  // m1
     const double f_2 = -11.772*sgn[1];  // m2
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
+    // Modal forces p = V^T f.
     const double p_1 = 0.88807383397711526*f_1 + 0.32505758367186816*f_2;
-    const double q0u_1 = 0.88807383397711526*x0[0] + 0.65011516734373631*x0[1];
-    const double dq0u_1 = 0.88807383397711526*v0[0] + 0.65011516734373631*v0[1];
     const double p_2 = -0.45970084338098305*f_1 + 0.62796303019955435*f_2;
-    const double q0u_2 = -0.45970084338098305*x0[0] + 1.2559260603991087*x0[1];
-    const double dq0u_2 = -0.45970084338098305*v0[0] + 1.2559260603991087*v0[1];
-    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(0.88807383397711526)*q0u_1 - static_cast<long double>(-0.45970084338098305)*q0u_2);
-    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(0.88807383397711526)*dq0u_1 - static_cast<long double>(-0.45970084338098305)*dq0u_2);
-    const double rx_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(0.32505758367186816)*q0u_1 - static_cast<long double>(0.62796303019955435)*q0u_2);
-    const double rv_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(0.32505758367186816)*dq0u_1 - static_cast<long double>(0.62796303019955435)*dq0u_2);
-    const double q0_1 = q0u_1 + (0.88807383397711526*rx_1 + 0.65011516734373631*rx_2);
-    const double dq0_1 = dq0u_1 + (0.88807383397711526*rv_1 + 0.65011516734373631*rv_2);
-    const double q0_2 = q0u_2 + (-0.45970084338098305*rx_1 + 1.2559260603991087*rx_2);
-    const double dq0_2 = dq0u_2 + (-0.45970084338098305*rv_1 + 1.2559260603991087*rv_2);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
     coef[1] = c_theta_1;
-    // Mode 1 (underdamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_1 = q0_1 - (0.088185397039521191*p_1 - 0.49051968643314314*s_theta_1 - 0.0031703351653060968*c_theta_1);
-    const double B_1 = dq0_1 - (-86.093611816281751*c_theta_1 + 0.55644169357221607*s_theta_1) + sigma_1*A_1;
-    coef[2] = A_1;
-    coef[3] = B_1;
-    coef[4] = B_1 - sigma_1*A_1;
-    coef[5] = -kappa_1*A_1 - sigma_1*B_1;
-    coef[6] = coef[5] - sigma_1*coef[4];
-    coef[7] = -kappa_1*coef[4] - sigma_1*coef[5];
-    // Mode 2 (underdamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_2 = q0_2 - (0.034891526037401886*p_2 + 0.64195688297485198*s_theta_1 + 0.010492419543633317*c_theta_1);
-    const double B_2 = dq0_2 - (112.67312651101943*c_theta_1 - 1.8415780654427558*s_theta_1) + sigma_2*A_2;
-    coef[8] = A_2;
-    coef[9] = B_2;
-    coef[10] = B_2 - sigma_2*A_2;
-    coef[11] = -kappa_2*A_2 - sigma_2*B_2;
-    coef[12] = coef[11] - sigma_2*coef[10];
-    coef[13] = -kappa_2*coef[10] - sigma_2*coef[11];
     // Static offset x_st = V (p / lambda) over the elastic modes.
-    coef[14] = 0.078315143649681729*p_1 - 0.016039663946243177*p_2;  // m1
-    coef[15] = 0.028665332076811073*p_1 + 0.021910588418733539*p_2;  // m2
+    const double x_st_1 = 0.078315143649681729*p_1 - 0.016039663946243177*p_2;  // m1
+    coef[2] = x_st_1;
+    const double x_st_2 = 0.028665332076811073*p_1 + 0.021910588418733539*p_2;  // m2
+    coef[3] = x_st_2;
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
+    // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.73072581908970025)*s_theta_1 - static_cast<long double>(-0.0076388658185612014)*c_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-128.25341521011063)*c_theta_1 - static_cast<long double>(1.3407362980313511)*s_theta_1);
+    const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) - static_cast<long double>(0.24367804547490879)*s_theta_1 - static_cast<long double>(0.0055583100824806502)*c_theta_1);
+    const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.769176519333158)*c_theta_1 - static_cast<long double>(-0.97556734995759953)*s_theta_1);
+    // Its modal coordinates q = W xh, q' = W vh.
+    const double q0u_1 = 0.88807383397711526*xh_1 + 0.65011516734373631*xh_2;
+    const double dq0u_1 = 0.88807383397711526*vh_1 + 0.65011516734373631*vh_2;
+    const double q0u_2 = -0.45970084338098305*xh_1 + 1.2559260603991087*xh_2;
+    const double dq0u_2 = -0.45970084338098305*vh_1 + 1.2559260603991087*vh_2;
+    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.88807383397711526)*q0u_1 - static_cast<long double>(-0.45970084338098305)*q0u_2);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.88807383397711526)*dq0u_1 - static_cast<long double>(-0.45970084338098305)*dq0u_2);
+    const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.32505758367186816)*q0u_1 - static_cast<long double>(0.62796303019955435)*q0u_2);
+    const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.32505758367186816)*dq0u_1 - static_cast<long double>(0.62796303019955435)*dq0u_2);
+    const double q0_1 = q0u_1 + (0.88807383397711526*rx_1 + 0.65011516734373631*rx_2);
+    const double dq0_1 = dq0u_1 + (0.88807383397711526*rv_1 + 0.65011516734373631*rv_2);
+    const double q0_2 = q0u_2 + (-0.45970084338098305*rx_1 + 1.2559260603991087*rx_2);
+    const double dq0_2 = dq0u_2 + (-0.45970084338098305*rv_1 + 1.2559260603991087*rv_2);
+    // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
+    const double xe_1 = x_st_1 + 0.88807383397711526*q0_1 - 0.45970084338098305*q0_2 - 0.73072581908970025*s_theta_1 - 0.0076388658185612014*c_theta_1;
+    const double ve_1 = 0.88807383397711526*dq0_1 - 0.45970084338098305*dq0_2 - 128.25341521011063*c_theta_1 + 1.3407362980313511*s_theta_1;
+    const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
+    const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
+    const double xe_2 = x_st_2 + 0.32505758367186816*q0_1 + 0.62796303019955435*q0_2 + 0.24367804547490879*s_theta_1 + 0.0055583100824806502*c_theta_1;
+    const double ve_2 = 0.32505758367186816*dq0_1 + 0.62796303019955435*dq0_2 + 42.769176519333158*c_theta_1 - 0.97556734995759953*s_theta_1;
+    const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
+    const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
+    const double qh0_1 = q0_1 + (0.88807383397711526*ex_1 + 0.65011516734373631*ex_2);
+    const double dqh0_1 = dq0_1 + (0.88807383397711526*ev_1 + 0.65011516734373631*ev_2);
+    const double qh0_2 = q0_2 + (-0.45970084338098305*ex_1 + 1.2559260603991087*ex_2);
+    const double dqh0_2 = dq0_2 + (-0.45970084338098305*ev_1 + 1.2559260603991087*ev_2);
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_1 = qh0_1;
+    const double B_1 = dqh0_1 + sigma_1*A_1;
+    coef[4] = A_1;
+    coef[5] = B_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
+    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    coef[6] = A1_1;
+    coef[7] = B1_1;
+    coef[8] = B1_1 - sigma_1*A1_1;
+    coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_2 = qh0_2;
+    const double B_2 = dqh0_2 + sigma_2*A_2;
+    coef[10] = A_2;
+    coef[11] = B_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
+    const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
+    coef[12] = A1_2;
+    coef[13] = B1_2;
+    coef[14] = B1_2 - sigma_2*A1_2;
+    coef[15] = -kappa_2*A1_2 - sigma_2*B1_2;
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
@@ -95,41 +121,41 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double e_1 = __builtin_exp(-sigma_1*tau);
     const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
     const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.30126124591441988;
-    const double qh_1 = coef[2]*eC_1 + coef[3]*eS_1;
-    const double dqh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double ddqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double qh_1 = coef[4]*eC_1 + coef[5]*eS_1;
+    const double dqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double ddqh_1 = coef[8]*eC_1 + coef[9]*eS_1;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
     const double q_1 = qh_1;
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[2]*eC_1) + __builtin_fabs(coef[3]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
+    const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);  // magnitude of the terms of q
+    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
     const double eC_2 = e_2*__builtin_cos(omega_d_2*tau);
     const double eS_2 = e_2*__builtin_sin(omega_d_2*tau)*0.19386716518522135;
-    const double qh_2 = coef[8]*eC_2 + coef[9]*eS_2;
-    const double dqh_2 = coef[10]*eC_2 + coef[11]*eS_2;
-    const double ddqh_2 = coef[12]*eC_2 + coef[13]*eS_2;
+    const double qh_2 = coef[10]*eC_2 + coef[11]*eS_2;
+    const double dqh_2 = coef[12]*eC_2 + coef[13]*eS_2;
+    const double ddqh_2 = coef[14]*eC_2 + coef[15]*eS_2;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_2 = __builtin_sqrt(dqh_2*dqh_2 + lambda_2*qh_2*qh_2);
     const double q_2 = qh_2;
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
-    const double mq_2 = __builtin_fabs(coef[8]*eC_2) + __builtin_fabs(coef[9]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);
+    const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);  // magnitude of the terms of q
+    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
-    x[0] = coef[14] + 0.88807383397711526*q_1 - 0.45970084338098305*q_2 - 0.73072581908970025*sin_1 - 0.0076388658185612014*cos_1;  // m1
+    x[0] = coef[2] + 0.88807383397711526*q_1 - 0.45970084338098305*q_2 - 0.73072581908970025*sin_1 - 0.0076388658185612014*cos_1;  // m1
     v[0] = 0.88807383397711526*dq_1 - 0.45970084338098305*dq_2 - 128.25341521011063*cos_1 + 1.3407362980313511*sin_1;
     a[0] = 0.88807383397711526*ddq_1 - 0.45970084338098305*ddq_2 + 22510.410995944087*sin_1 + 235.31946542260235*cos_1;
-    const double mx_0 = __builtin_fabs(coef[14]) + 0.88807383397711526*mq_1 + 0.45970084338098305*mq_2 + 0.73836468490826146;
+    const double mx_0 = __builtin_fabs(coef[2]) + 0.88807383397711526*mq_1 + 0.45970084338098305*mq_2 + 0.73836468490826146;
     const double mv_0 = 0.88807383397711526*mdq_1 + 0.45970084338098305*mdq_2 + 129.59415150814201;
-    x[1] = coef[15] + 0.32505758367186816*q_1 + 0.62796303019955435*q_2 + 0.24367804547490879*sin_1 + 0.0055583100824806502*cos_1;  // m2
+    x[1] = coef[3] + 0.32505758367186816*q_1 + 0.62796303019955435*q_2 + 0.24367804547490879*sin_1 + 0.0055583100824806502*cos_1;  // m2
     v[1] = 0.32505758367186816*dq_1 + 0.62796303019955435*dq_2 + 42.769176519333158*cos_1 - 0.97556734995759953*sin_1;
     a[1] = 0.32505758367186816*ddq_1 + 0.62796303019955435*ddq_2 - 7506.6362937084104*sin_1 - 171.22680098454305*cos_1;
-    const double mx_1 = __builtin_fabs(coef[15]) + 0.32505758367186816*mq_1 + 0.62796303019955435*mq_2 + 0.24923635555738943;
+    const double mx_1 = __builtin_fabs(coef[3]) + 0.32505758367186816*mq_1 + 0.62796303019955435*mq_2 + 0.24923635555738943;
     const double mv_1 = 0.32505758367186816*mdq_1 + 0.62796303019955435*mdq_2 + 43.744743869290758;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -203,59 +229,85 @@ constexpr double omega_d_2 = 9.9235197037668375;
 constexpr double Omega_1 = 175.51509999999999;
 
 // Coefficient block (16 doubles):
-//  0:theta_1 1:c_theta_1 2:A_1 3:B_1 4:A1_1 5:B1_1
-//  6:A2_1 7:B2_1 8:A_2 9:B_2 10:A1_2 11:B1_2
-//  12:A2_2 13:B2_2 14:x_st_1 15:x_st_2
+//  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:A_1 5:B_1
+//  6:A1_1 7:B1_1 8:A2_1 9:B2_1 10:A_2 11:B_2
+//  12:A1_2 13:B1_2 14:A2_2 15:B2_2
 void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
     (void)t0; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 20.0 - 5.8860000000000001*sgn[0];  // m1
     const double f_2 = -20.0 - 11.772*sgn[1];  // m2
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
+    // Modal forces p = V^T f.
     const double p_1 = 0.6127686665676223*f_1 + 0.55879985740555538*f_2;
-    const double q0u_1 = 0.6127686665676223*x0[0] + 1.1175997148111108*x0[1];
-    const double dq0u_1 = 0.6127686665676223*v0[0] + 1.1175997148111108*v0[1];
     const double p_2 = 0.79026233699508808*f_1 - 0.43329287942860423*f_2;
-    const double q0u_2 = 0.79026233699508808*x0[0] - 0.86658575885720845*x0[1];
-    const double dq0u_2 = 0.79026233699508808*v0[0] - 0.86658575885720845*v0[1];
-    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(0.6127686665676223)*q0u_1 - static_cast<long double>(0.79026233699508808)*q0u_2);
-    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(0.6127686665676223)*dq0u_1 - static_cast<long double>(0.79026233699508808)*dq0u_2);
-    const double rx_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(0.55879985740555538)*q0u_1 - static_cast<long double>(-0.43329287942860423)*q0u_2);
-    const double rv_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(0.55879985740555538)*dq0u_1 - static_cast<long double>(-0.43329287942860423)*dq0u_2);
-    const double q0_1 = q0u_1 + (0.6127686665676223*rx_1 + 1.1175997148111108*rx_2);
-    const double dq0_1 = dq0u_1 + (0.6127686665676223*rv_1 + 1.1175997148111108*rv_2);
-    const double q0_2 = q0u_2 + (0.79026233699508808*rx_1 - 0.86658575885720845*rx_2);
-    const double dq0_2 = dq0u_2 + (0.79026233699508808*rv_1 - 0.86658575885720845*rv_2);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
     coef[1] = c_theta_1;
-    // Mode 1 (underdamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_1 = q0_1 - (0.068082288163512639*p_1 - 0.17553643721300169*s_theta_1 - 0.0014696901091781568*c_theta_1);
-    const double B_1 = dq0_1 - (-30.80929533108371*c_theta_1 + 0.25795280648141511*s_theta_1) + sigma_1*A_1;
-    coef[2] = A_1;
-    coef[3] = B_1;
-    coef[4] = B_1 - sigma_1*A_1;
-    coef[5] = -kappa_1*A_1 - sigma_1*B_1;
-    coef[6] = coef[5] - sigma_1*coef[4];
-    coef[7] = -kappa_1*coef[4] - sigma_1*coef[5];
-    // Mode 2 (underdamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_2 = q0_2 - (0.0057041196034776495*p_2 - 0.78477096449651051*s_theta_1 - 0.07883488010728612*c_theta_1);
-    const double B_2 = dq0_2 - (-137.73915431070148*c_theta_1 + 13.836711865518334*s_theta_1) + sigma_2*A_2;
-    coef[8] = A_2;
-    coef[9] = B_2;
-    coef[10] = B_2 - sigma_2*A_2;
-    coef[11] = -kappa_2*A_2 - sigma_2*B_2;
-    coef[12] = coef[11] - sigma_2*coef[10];
-    coef[13] = -kappa_2*coef[10] - sigma_2*coef[11];
     // Static offset x_st = V (p / lambda) over the elastic modes.
-    coef[14] = 0.041718692934828258*p_1 + 0.0045077508883437419*p_2;  // m1
-    coef[15] = 0.038044372917614797*p_1 - 0.002471554407595979*p_2;  // m2
+    const double x_st_1 = 0.041718692934828258*p_1 + 0.0045077508883437419*p_2;  // m1
+    coef[2] = x_st_1;
+    const double x_st_2 = 0.038044372917614797*p_1 - 0.002471554407595979*p_2;  // m2
+    coef[3] = x_st_2;
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
+    // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.72773816497394384)*s_theta_1 - static_cast<long double>(-0.06320081663878023)*c_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-127.72903679921824)*c_theta_1 - static_cast<long double>(11.092697652437176)*s_theta_1);
+    const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) - static_cast<long double>(0.24194593481455143)*s_theta_1 - static_cast<long double>(0.033337329577655686)*c_theta_1);
+    const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.465164943569469)*c_theta_1 - static_cast<long double>(-5.8512047345551954)*s_theta_1);
+    // Its modal coordinates q = W xh, q' = W vh.
+    const double q0u_1 = 0.6127686665676223*xh_1 + 1.1175997148111108*xh_2;
+    const double dq0u_1 = 0.6127686665676223*vh_1 + 1.1175997148111108*vh_2;
+    const double q0u_2 = 0.79026233699508808*xh_1 - 0.86658575885720845*xh_2;
+    const double dq0u_2 = 0.79026233699508808*vh_1 - 0.86658575885720845*vh_2;
+    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.6127686665676223)*q0u_1 - static_cast<long double>(0.79026233699508808)*q0u_2);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.6127686665676223)*dq0u_1 - static_cast<long double>(0.79026233699508808)*dq0u_2);
+    const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.55879985740555538)*q0u_1 - static_cast<long double>(-0.43329287942860423)*q0u_2);
+    const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.55879985740555538)*dq0u_1 - static_cast<long double>(-0.43329287942860423)*dq0u_2);
+    const double q0_1 = q0u_1 + (0.6127686665676223*rx_1 + 1.1175997148111108*rx_2);
+    const double dq0_1 = dq0u_1 + (0.6127686665676223*rv_1 + 1.1175997148111108*rv_2);
+    const double q0_2 = q0u_2 + (0.79026233699508808*rx_1 - 0.86658575885720845*rx_2);
+    const double dq0_2 = dq0u_2 + (0.79026233699508808*rv_1 - 0.86658575885720845*rv_2);
+    // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
+    const double xe_1 = x_st_1 + 0.6127686665676223*q0_1 + 0.79026233699508808*q0_2 - 0.72773816497394384*s_theta_1 - 0.06320081663878023*c_theta_1;
+    const double ve_1 = 0.6127686665676223*dq0_1 + 0.79026233699508808*dq0_2 - 127.72903679921824*c_theta_1 + 11.092697652437176*s_theta_1;
+    const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
+    const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
+    const double xe_2 = x_st_2 + 0.55879985740555538*q0_1 - 0.43329287942860423*q0_2 + 0.24194593481455143*s_theta_1 + 0.033337329577655686*c_theta_1;
+    const double ve_2 = 0.55879985740555538*dq0_1 - 0.43329287942860423*dq0_2 + 42.465164943569469*c_theta_1 - 5.8512047345551954*s_theta_1;
+    const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
+    const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
+    const double qh0_1 = q0_1 + (0.6127686665676223*ex_1 + 1.1175997148111108*ex_2);
+    const double dqh0_1 = dq0_1 + (0.6127686665676223*ev_1 + 1.1175997148111108*ev_2);
+    const double qh0_2 = q0_2 + (0.79026233699508808*ex_1 - 0.86658575885720845*ex_2);
+    const double dqh0_2 = dq0_2 + (0.79026233699508808*ev_1 - 0.86658575885720845*ev_2);
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_1 = qh0_1;
+    const double B_1 = dqh0_1 + sigma_1*A_1;
+    coef[4] = A_1;
+    coef[5] = B_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
+    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    coef[6] = A1_1;
+    coef[7] = B1_1;
+    coef[8] = B1_1 - sigma_1*A1_1;
+    coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
+    // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_2 = qh0_2;
+    const double B_2 = dqh0_2 + sigma_2*A_2;
+    coef[10] = A_2;
+    coef[11] = B_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
+    const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
+    coef[12] = A1_2;
+    coef[13] = B1_2;
+    coef[14] = B1_2 - sigma_2*A1_2;
+    coef[15] = -kappa_2*A1_2 - sigma_2*B1_2;
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
@@ -270,41 +322,41 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double e_1 = __builtin_exp(-sigma_1*tau);
     const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
     const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.26585256870030743;
-    const double qh_1 = coef[2]*eC_1 + coef[3]*eS_1;
-    const double dqh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double ddqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double qh_1 = coef[4]*eC_1 + coef[5]*eS_1;
+    const double dqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double ddqh_1 = coef[8]*eC_1 + coef[9]*eS_1;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
     const double q_1 = qh_1;
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[2]*eC_1) + __builtin_fabs(coef[3]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
+    const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);  // magnitude of the terms of q
+    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
     const double eC_2 = e_2*__builtin_cos(omega_d_2*tau);
     const double eS_2 = e_2*__builtin_sin(omega_d_2*tau)*0.10077069727794395;
-    const double qh_2 = coef[8]*eC_2 + coef[9]*eS_2;
-    const double dqh_2 = coef[10]*eC_2 + coef[11]*eS_2;
-    const double ddqh_2 = coef[12]*eC_2 + coef[13]*eS_2;
+    const double qh_2 = coef[10]*eC_2 + coef[11]*eS_2;
+    const double dqh_2 = coef[12]*eC_2 + coef[13]*eS_2;
+    const double ddqh_2 = coef[14]*eC_2 + coef[15]*eS_2;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_2 = __builtin_sqrt(dqh_2*dqh_2 + lambda_2*qh_2*qh_2);
     const double q_2 = qh_2;
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
-    const double mq_2 = __builtin_fabs(coef[8]*eC_2) + __builtin_fabs(coef[9]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);
+    const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);  // magnitude of the terms of q
+    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
-    x[0] = coef[14] + 0.6127686665676223*q_1 + 0.79026233699508808*q_2 - 0.72773816497394384*sin_1 - 0.06320081663878023*cos_1;  // m1
+    x[0] = coef[2] + 0.6127686665676223*q_1 + 0.79026233699508808*q_2 - 0.72773816497394384*sin_1 - 0.06320081663878023*cos_1;  // m1
     v[0] = 0.6127686665676223*dq_1 + 0.79026233699508808*dq_2 - 127.72903679921824*cos_1 + 11.092697652437176*sin_1;
     a[0] = 0.6127686665676223*ddq_1 + 0.79026233699508808*ddq_2 + 22418.374666718468*sin_1 + 1946.9359377372759*cos_1;
-    const double mx_0 = __builtin_fabs(coef[14]) + 0.6127686665676223*mq_1 + 0.79026233699508808*mq_2 + 0.79093898161272402;
+    const double mx_0 = __builtin_fabs(coef[2]) + 0.6127686665676223*mq_1 + 0.79026233699508808*mq_2 + 0.79093898161272402;
     const double mv_0 = 0.6127686665676223*mdq_1 + 0.79026233699508808*mdq_2 + 138.8217344516554;
-    x[1] = coef[15] + 0.55879985740555538*q_1 - 0.43329287942860423*q_2 + 0.24194593481455143*sin_1 + 0.033337329577655686*cos_1;  // m2
+    x[1] = coef[3] + 0.55879985740555538*q_1 - 0.43329287942860423*q_2 + 0.24194593481455143*sin_1 + 0.033337329577655686*cos_1;  // m2
     v[1] = 0.55879985740555538*dq_1 - 0.43329287942860423*dq_2 + 42.465164943569469*cos_1 - 5.8512047345551954*sin_1;
     a[1] = 0.55879985740555538*ddq_1 - 0.43329287942860423*ddq_2 - 7453.2776715870896*sin_1 - 1026.9747841059284*cos_1;
-    const double mx_1 = __builtin_fabs(coef[15]) + 0.55879985740555538*mq_1 + 0.43329287942860423*mq_2 + 0.27528326439220713;
+    const double mx_1 = __builtin_fabs(coef[3]) + 0.55879985740555538*mq_1 + 0.43329287942860423*mq_2 + 0.27528326439220713;
     const double mv_1 = 0.55879985740555538*mdq_1 + 0.43329287942860423*mdq_2 + 48.316369678124673;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -373,39 +425,54 @@ constexpr double omega_d_1 = 4.8412291827592711;
 constexpr double Omega_1 = 175.51509999999999;
 
 // Coefficient block (10 doubles):
-//  0:theta_1 1:c_theta_1 2:A_1 3:B_1 4:A1_1 5:B1_1
-//  6:A2_1 7:B2_1 8:x_st_1 9:x_stuck_0
+//  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
+//  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0
 void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
     (void)t0; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 10.0*x0[0] - 11.772*sgn[1];  // m2
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
+    // Modal forces p = V^T f.
     const double p_1 = 0.70710678118654757*f_1;
-    const double q0u_1 = 1.4142135623730951*x0[1];
-    const double dq0u_1 = 1.4142135623730951*v0[1];
-    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(0.70710678118654757)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(0.70710678118654757)*dq0u_1);
-    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
-    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
     coef[1] = c_theta_1;
-    // Mode 1 (underdamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_1 = q0_1 - (0.040000000000000001*p_1 + 0.34451777566788333*s_theta_1 + 0.0049112240687507105*c_theta_1);
-    const double B_1 = dq0_1 - (60.468071848126101*c_theta_1 - 0.86199398354918777*s_theta_1) + sigma_1*A_1;
-    coef[2] = A_1;
-    coef[3] = B_1;
-    coef[4] = B_1 - sigma_1*A_1;
-    coef[5] = -kappa_1*A_1 - sigma_1*B_1;
-    coef[6] = coef[5] - sigma_1*coef[4];
-    coef[7] = -kappa_1*coef[4] - sigma_1*coef[5];
     // Static offset x_st = V (p / lambda) over the elastic modes.
-    coef[8] = 0.028284271247461901*p_1;  // m2
+    const double x_st_1 = 0.028284271247461901*p_1;  // m2
+    coef[2] = x_st_1;
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
+    // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) - static_cast<long double>(0.24361085541406602)*s_theta_1 - static_cast<long double>(0.0034727598429402139)*c_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.757383649085334)*c_theta_1 - static_cast<long double>(-0.60952179110963589)*s_theta_1);
+    // Its modal coordinates q = W xh, q' = W vh.
+    const double q0u_1 = 1.4142135623730951*xh_1;
+    const double dq0u_1 = 1.4142135623730951*vh_1;
+    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.70710678118654757)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.70710678118654757)*dq0u_1);
+    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
+    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
+    // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
+    const double xe_1 = x_st_1 + 0.70710678118654757*q0_1 + 0.24361085541406602*s_theta_1 + 0.0034727598429402139*c_theta_1;
+    const double ve_1 = 0.70710678118654757*dq0_1 + 42.757383649085334*c_theta_1 - 0.60952179110963589*s_theta_1;
+    const double ex_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_1));
+    const double ev_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_1));
+    const double qh0_1 = q0_1 + (1.4142135623730951*ex_1);
+    const double dqh0_1 = dq0_1 + (1.4142135623730951*ev_1);
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_1 = qh0_1;
+    const double B_1 = dqh0_1 + sigma_1*A_1;
+    coef[3] = A_1;
+    coef[4] = B_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
+    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    coef[5] = A1_1;
+    coef[6] = B1_1;
+    coef[7] = B1_1 - sigma_1*A1_1;
+    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
     coef[9] = x0[0];  // m1 is stuck
 }
 
@@ -421,26 +488,26 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double e_1 = __builtin_exp(-sigma_1*tau);
     const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
     const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.2065591117977289;
-    const double qh_1 = coef[2]*eC_1 + coef[3]*eS_1;
-    const double dqh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double ddqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
     const double q_1 = qh_1;
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[2]*eC_1) + __builtin_fabs(coef[3]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
     a[0] = 0.0;
     const double mx_0 = __builtin_fabs(coef[9]);
     const double mv_0 = 0.0;
-    x[1] = coef[8] + 0.70710678118654757*q_1 + 0.24361085541406602*sin_1 + 0.0034727598429402139*cos_1;  // m2
+    x[1] = coef[2] + 0.70710678118654757*q_1 + 0.24361085541406602*sin_1 + 0.0034727598429402139*cos_1;  // m2
     v[1] = 0.70710678118654757*dq_1 + 42.757383649085334*cos_1 - 0.60952179110963589*sin_1;
     a[1] = 0.70710678118654757*ddq_1 - 7504.5664669075768*sin_1 - 106.98027811878684*cos_1;
-    const double mx_1 = __builtin_fabs(coef[8]) + 0.70710678118654757*mq_1 + 0.24708361525700623;
+    const double mx_1 = __builtin_fabs(coef[2]) + 0.70710678118654757*mq_1 + 0.24708361525700623;
     const double mv_1 = 0.70710678118654757*mdq_1 + 43.366905440194969;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -516,39 +583,54 @@ constexpr double omega_d_1 = 7.8062474979979974;
 constexpr double Omega_1 = 175.51509999999999;
 
 // Coefficient block (10 doubles):
-//  0:theta_1 1:c_theta_1 2:A_1 3:B_1 4:A1_1 5:B1_1
-//  6:A2_1 7:B2_1 8:x_st_1 9:x_stuck_0
+//  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
+//  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0
 void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
     (void)t0; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -20.0 + 110.0*x0[0] - 11.772*sgn[1];  // m2
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
+    // Modal forces p = V^T f.
     const double p_1 = 0.70710678118654757*f_1;
-    const double q0u_1 = 1.4142135623730951*x0[1];
-    const double dq0u_1 = 1.4142135623730951*v0[1];
-    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(0.70710678118654757)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(0.70710678118654757)*dq0u_1);
-    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
-    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
     coef[1] = c_theta_1;
-    // Mode 1 (underdamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_1 = q0_1 - (0.013333333333333334*p_1 + 0.34451629623484914*s_theta_1 + 0.014757581187093449*c_theta_1);
-    const double B_1 = dq0_1 - (60.467812185289162*c_theta_1 - 2.5901783378108254*s_theta_1) + sigma_1*A_1;
-    coef[2] = A_1;
-    coef[3] = B_1;
-    coef[4] = B_1 - sigma_1*A_1;
-    coef[5] = -kappa_1*A_1 - sigma_1*B_1;
-    coef[6] = coef[5] - sigma_1*coef[4];
-    coef[7] = -kappa_1*coef[4] - sigma_1*coef[5];
     // Static offset x_st = V (p / lambda) over the elastic modes.
-    coef[8] = 0.0094280904158206332*p_1;  // m2
+    const double x_st_1 = 0.0094280904158206332*p_1;  // m2
+    coef[2] = x_st_1;
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
+    // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) - static_cast<long double>(0.24360980929693524)*s_theta_1 - static_cast<long double>(0.010435185731304798)*c_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.757200039732517)*c_theta_1 - static_cast<long double>(-1.8315326671485346)*s_theta_1);
+    // Its modal coordinates q = W xh, q' = W vh.
+    const double q0u_1 = 1.4142135623730951*xh_1;
+    const double dq0u_1 = 1.4142135623730951*vh_1;
+    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.70710678118654757)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.70710678118654757)*dq0u_1);
+    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
+    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
+    // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
+    const double xe_1 = x_st_1 + 0.70710678118654757*q0_1 + 0.24360980929693524*s_theta_1 + 0.010435185731304798*c_theta_1;
+    const double ve_1 = 0.70710678118654757*dq0_1 + 42.757200039732517*c_theta_1 - 1.8315326671485346*s_theta_1;
+    const double ex_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_1));
+    const double ev_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_1));
+    const double qh0_1 = q0_1 + (1.4142135623730951*ex_1);
+    const double dqh0_1 = dq0_1 + (1.4142135623730951*ev_1);
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_1 = qh0_1;
+    const double B_1 = dqh0_1 + sigma_1*A_1;
+    coef[3] = A_1;
+    coef[4] = B_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
+    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    coef[5] = A1_1;
+    coef[6] = B1_1;
+    coef[7] = B1_1 - sigma_1*A1_1;
+    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
     coef[9] = x0[0];  // m1 is stuck
 }
 
@@ -564,26 +646,26 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double e_1 = __builtin_exp(-sigma_1*tau);
     const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
     const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.12810252304406972;
-    const double qh_1 = coef[2]*eC_1 + coef[3]*eS_1;
-    const double dqh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double ddqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
     const double q_1 = qh_1;
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[2]*eC_1) + __builtin_fabs(coef[3]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
     a[0] = 0.0;
     const double mx_0 = __builtin_fabs(coef[9]);
     const double mv_0 = 0.0;
-    x[1] = coef[8] + 0.70710678118654757*q_1 + 0.24360980929693524*sin_1 + 0.010435185731304798*cos_1;  // m2
+    x[1] = coef[2] + 0.70710678118654757*q_1 + 0.24360980929693524*sin_1 + 0.010435185731304798*cos_1;  // m2
     v[1] = 0.70710678118654757*dq_1 + 42.757200039732517*cos_1 - 1.8315326671485346*sin_1;
     a[1] = 0.70710678118654757*ddq_1 - 7504.5342406936552*sin_1 - 321.46163922784172*cos_1;
-    const double mx_1 = __builtin_fabs(coef[8]) + 0.70710678118654757*mq_1 + 0.25404499502824002;
+    const double mx_1 = __builtin_fabs(coef[2]) + 0.70710678118654757*mq_1 + 0.25404499502824002;
     const double mv_1 = 0.70710678118654757*mdq_1 + 44.588732706881046;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -659,39 +741,54 @@ constexpr double omega_d_1 = 3.799671038392666;
 constexpr double Omega_1 = 175.51509999999999;
 
 // Coefficient block (10 doubles):
-//  0:theta_1 1:c_theta_1 2:A_1 3:B_1 4:A1_1 5:B1_1
-//  6:A2_1 7:B2_1 8:x_st_1 9:x_stuck_1
+//  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
+//  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_1
 void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
     (void)t0; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 10.0*x0[1] - 5.8860000000000001*sgn[0];  // m1
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
+    // Modal forces p = V^T f.
     const double p_1 = f_1;
-    const double q0u_1 = x0[0];
-    const double dq0u_1 = v0[0];
-    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(1.0)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(1.0)*dq0u_1);
-    const double q0_1 = q0u_1 + (rx_1);
-    const double dq0_1 = dq0u_1 + (rv_1);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
     coef[1] = c_theta_1;
-    // Mode 1 (underdamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_1 = q0_1 - (0.066666666666666666*p_1 - 0.7306902574434726*s_theta_1 - 0.0062477207570832737*c_theta_1);
-    const double B_1 = dq0_1 - (-128.24717360421681*c_theta_1 + 1.0965693334515463*s_theta_1) + sigma_1*A_1;
-    coef[2] = A_1;
-    coef[3] = B_1;
-    coef[4] = B_1 - sigma_1*A_1;
-    coef[5] = -kappa_1*A_1 - sigma_1*B_1;
-    coef[6] = coef[5] - sigma_1*coef[4];
-    coef[7] = -kappa_1*coef[4] - sigma_1*coef[5];
     // Static offset x_st = V (p / lambda) over the elastic modes.
-    coef[8] = 0.066666666666666666*p_1;  // m1
+    const double x_st_1 = 0.066666666666666666*p_1;  // m1
+    coef[2] = x_st_1;
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
+    // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.7306902574434726)*s_theta_1 - static_cast<long double>(-0.0062477207570832737)*c_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-128.24717360421684)*c_theta_1 - static_cast<long double>(1.0965693334515465)*s_theta_1);
+    // Its modal coordinates q = W xh, q' = W vh.
+    const double q0u_1 = xh_1;
+    const double dq0u_1 = vh_1;
+    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(1.0)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(1.0)*dq0u_1);
+    const double q0_1 = q0u_1 + (rx_1);
+    const double dq0_1 = dq0u_1 + (rv_1);
+    // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
+    const double xe_1 = x_st_1 + q0_1 - 0.7306902574434726*s_theta_1 - 0.0062477207570832737*c_theta_1;
+    const double ve_1 = dq0_1 - 128.24717360421684*c_theta_1 + 1.0965693334515465*s_theta_1;
+    const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
+    const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
+    const double qh0_1 = q0_1 + (ex_1);
+    const double dqh0_1 = dq0_1 + (ev_1);
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_1 = qh0_1;
+    const double B_1 = dqh0_1 + sigma_1*A_1;
+    coef[3] = A_1;
+    coef[4] = B_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
+    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    coef[5] = A1_1;
+    coef[6] = B1_1;
+    coef[7] = B1_1 - sigma_1*A1_1;
+    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
     coef[9] = x0[1];  // m2 is stuck
 }
 
@@ -707,21 +804,21 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double e_1 = __builtin_exp(-sigma_1*tau);
     const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
     const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.2631806779839076;
-    const double qh_1 = coef[2]*eC_1 + coef[3]*eS_1;
-    const double dqh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double ddqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
     const double q_1 = qh_1;
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[2]*eC_1) + __builtin_fabs(coef[3]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
-    x[0] = coef[8] + q_1 - 0.7306902574434726*sin_1 - 0.0062477207570832737*cos_1;  // m1
+    x[0] = coef[2] + q_1 - 0.7306902574434726*sin_1 - 0.0062477207570832737*cos_1;  // m1
     v[0] = dq_1 - 128.24717360421684*cos_1 + 1.0965693334515465*sin_1;
     a[0] = ddq_1 + 22509.315499861474*sin_1 + 192.46447621768149*cos_1;
-    const double mx_0 = __builtin_fabs(coef[8]) + mq_1 + 0.73693797820055584;
+    const double mx_0 = __builtin_fabs(coef[2]) + mq_1 + 0.73693797820055584;
     const double mv_0 = mdq_1 + 129.34374293766837;
     x[1] = coef[9];  // m2 (stuck)
     v[1] = 0.0;
@@ -802,39 +899,54 @@ constexpr double omega_d_1 = 9.0519334951158363;
 constexpr double Omega_1 = 175.51509999999999;
 
 // Coefficient block (10 doubles):
-//  0:theta_1 1:c_theta_1 2:A_1 3:B_1 4:A1_1 5:B1_1
-//  6:A2_1 7:B2_1 8:x_st_1 9:x_stuck_1
+//  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
+//  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_1
 void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
     (void)t0; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 20.0 + 110.0*x0[1] - 5.8860000000000001*sgn[0];  // m1
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
+    // Modal forces p = V^T f.
     const double p_1 = f_1;
-    const double q0u_1 = x0[0];
-    const double dq0u_1 = v0[0];
-    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(1.0)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(1.0)*dq0u_1);
-    const double q0_1 = q0u_1 + (rx_1);
-    const double dq0_1 = dq0u_1 + (rv_1);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
     coef[1] = c_theta_1;
-    // Mode 1 (underdamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_1 = q0_1 - (0.0086956521739130436*p_1 - 0.72996736260496498*s_theta_1 - 0.048007721356019183*c_theta_1);
-    const double B_1 = dq0_1 - (-128.1202946443467*c_theta_1 + 8.4260800145738415*s_theta_1) + sigma_1*A_1;
-    coef[2] = A_1;
-    coef[3] = B_1;
-    coef[4] = B_1 - sigma_1*A_1;
-    coef[5] = -kappa_1*A_1 - sigma_1*B_1;
-    coef[6] = coef[5] - sigma_1*coef[4];
-    coef[7] = -kappa_1*coef[4] - sigma_1*coef[5];
     // Static offset x_st = V (p / lambda) over the elastic modes.
-    coef[8] = 0.0086956521739130436*p_1;  // m1
+    const double x_st_1 = 0.0086956521739130436*p_1;  // m1
+    coef[2] = x_st_1;
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
+    // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.72996736260496498)*s_theta_1 - static_cast<long double>(-0.048007721356019183)*c_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-128.12029464434667)*c_theta_1 - static_cast<long double>(8.4260800145738415)*s_theta_1);
+    // Its modal coordinates q = W xh, q' = W vh.
+    const double q0u_1 = xh_1;
+    const double dq0u_1 = vh_1;
+    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(1.0)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(1.0)*dq0u_1);
+    const double q0_1 = q0u_1 + (rx_1);
+    const double dq0_1 = dq0u_1 + (rv_1);
+    // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
+    const double xe_1 = x_st_1 + q0_1 - 0.72996736260496498*s_theta_1 - 0.048007721356019183*c_theta_1;
+    const double ve_1 = dq0_1 - 128.12029464434667*c_theta_1 + 8.4260800145738415*s_theta_1;
+    const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
+    const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
+    const double qh0_1 = q0_1 + (ex_1);
+    const double dqh0_1 = dq0_1 + (ev_1);
+    // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_1 = qh0_1;
+    const double B_1 = dqh0_1 + sigma_1*A_1;
+    coef[3] = A_1;
+    coef[4] = B_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
+    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    coef[5] = A1_1;
+    coef[6] = B1_1;
+    coef[7] = B1_1 - sigma_1*A1_1;
+    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
     coef[9] = x0[1];  // m2 is stuck
 }
 
@@ -850,21 +962,21 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double e_1 = __builtin_exp(-sigma_1*tau);
     const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
     const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.11047363533322149;
-    const double qh_1 = coef[2]*eC_1 + coef[3]*eS_1;
-    const double dqh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double ddqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
     const double q_1 = qh_1;
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[2]*eC_1) + __builtin_fabs(coef[3]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
-    x[0] = coef[8] + q_1 - 0.72996736260496498*sin_1 - 0.048007721356019183*cos_1;  // m1
+    x[0] = coef[2] + q_1 - 0.72996736260496498*sin_1 - 0.048007721356019183*cos_1;  // m1
     v[0] = dq_1 - 128.12029464434667*cos_1 + 8.4260800145738415*sin_1;
     a[0] = ddq_1 + 22487.04632653197*sin_1 + 1478.9042763659293*cos_1;
-    const double mx_0 = __builtin_fabs(coef[8]) + mq_1 + 0.77797508396098414;
+    const double mx_0 = __builtin_fabs(coef[2]) + mq_1 + 0.77797508396098414;
     const double mv_0 = mdq_1 + 136.54637465892051;
     x[1] = coef[9];  // m2 (stuck)
     v[1] = 0.0;

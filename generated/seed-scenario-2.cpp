@@ -28,59 +28,85 @@ constexpr double omega_d_2 = 5.3535272519941826;
 constexpr double Omega_1 = 17.551500000000001;
 
 // Coefficient block (16 doubles):
-//  0:theta_1 1:c_theta_1 2:A_1 3:B_1 4:A1_1 5:B1_1
-//  6:A2_1 7:B2_1 8:A_2 9:B_2 10:A1_2 11:B1_2
-//  12:A2_2 13:B2_2 14:x_st_1 15:x_st_2
+//  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:A_1 5:B_1
+//  6:A1_1 7:B1_1 8:A2_1 9:B2_1 10:A_2 11:B_2
+//  12:A1_2 13:B1_2 14:A2_2 15:B2_2
 void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
     (void)t0; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -5.8860000000000001*sgn[0];  // m1
     const double f_2 = -11.772*sgn[1];  // m2
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
+    // Modal forces p = V^T f.
     const double p_1 = 0.88807383397711526*f_1 + 0.32505758367186816*f_2;
-    const double q0u_1 = 0.88807383397711526*x0[0] + 0.65011516734373631*x0[1];
-    const double dq0u_1 = 0.88807383397711526*v0[0] + 0.65011516734373631*v0[1];
     const double p_2 = -0.45970084338098305*f_1 + 0.62796303019955435*f_2;
-    const double q0u_2 = -0.45970084338098305*x0[0] + 1.2559260603991087*x0[1];
-    const double dq0u_2 = -0.45970084338098305*v0[0] + 1.2559260603991087*v0[1];
-    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(0.88807383397711526)*q0u_1 - static_cast<long double>(-0.45970084338098305)*q0u_2);
-    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(0.88807383397711526)*dq0u_1 - static_cast<long double>(-0.45970084338098305)*dq0u_2);
-    const double rx_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(0.32505758367186816)*q0u_1 - static_cast<long double>(0.62796303019955435)*q0u_2);
-    const double rv_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(0.32505758367186816)*dq0u_1 - static_cast<long double>(0.62796303019955435)*dq0u_2);
-    const double q0_1 = q0u_1 + (0.88807383397711526*rx_1 + 0.65011516734373631*rx_2);
-    const double dq0_1 = dq0u_1 + (0.88807383397711526*rv_1 + 0.65011516734373631*rv_2);
-    const double q0_2 = q0u_2 + (-0.45970084338098305*rx_1 + 1.2559260603991087*rx_2);
-    const double dq0_2 = dq0u_2 + (-0.45970084338098305*rv_1 + 1.2559260603991087*rv_2);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
     coef[1] = c_theta_1;
-    // Mode 1 (undamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_1 = q0_1 - (0.088185397039521191*p_1 - 0.83775646605450493*s_theta_1);
-    const double B_1 = dq0_1 - (-14.703882613955644*c_theta_1);
-    coef[2] = A_1;
-    coef[3] = B_1;
-    coef[4] = B_1 - sigma_1*A_1;
-    coef[5] = -kappa_1*A_1 - sigma_1*B_1;
-    coef[6] = coef[5] - sigma_1*coef[4];
-    coef[7] = -kappa_1*coef[4] - sigma_1*coef[5];
-    // Mode 2 (undamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_2 = q0_2 - (0.034891526037401886*p_2 + 0.033065153622716024*s_theta_1);
-    const double B_2 = dq0_2 - (0.58034304380910029*c_theta_1);
-    coef[8] = A_2;
-    coef[9] = B_2;
-    coef[10] = B_2 - sigma_2*A_2;
-    coef[11] = -kappa_2*A_2 - sigma_2*B_2;
-    coef[12] = coef[11] - sigma_2*coef[10];
-    coef[13] = -kappa_2*coef[10] - sigma_2*coef[11];
     // Static offset x_st = V (p / lambda) over the elastic modes.
-    coef[14] = 0.078315143649681729*p_1 - 0.016039663946243177*p_2;  // m1
-    coef[15] = 0.028665332076811073*p_1 + 0.021910588418733539*p_2;  // m2
+    const double x_st_1 = 0.078315143649681729*p_1 - 0.016039663946243177*p_2;  // m1
+    coef[2] = x_st_1;
+    const double x_st_2 = 0.028665332076811073*p_1 + 0.021910588418733539*p_2;  // m2
+    coef[3] = x_st_2;
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
+    // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.75918967575502749)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-13.324917594014366)*c_theta_1);
+    const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) - static_cast<long double>(-0.25155539849822628)*s_theta_1);
+    const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(-4.4151745767416184)*c_theta_1);
+    // Its modal coordinates q = W xh, q' = W vh.
+    const double q0u_1 = 0.88807383397711526*xh_1 + 0.65011516734373631*xh_2;
+    const double dq0u_1 = 0.88807383397711526*vh_1 + 0.65011516734373631*vh_2;
+    const double q0u_2 = -0.45970084338098305*xh_1 + 1.2559260603991087*xh_2;
+    const double dq0u_2 = -0.45970084338098305*vh_1 + 1.2559260603991087*vh_2;
+    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.88807383397711526)*q0u_1 - static_cast<long double>(-0.45970084338098305)*q0u_2);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.88807383397711526)*dq0u_1 - static_cast<long double>(-0.45970084338098305)*dq0u_2);
+    const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.32505758367186816)*q0u_1 - static_cast<long double>(0.62796303019955435)*q0u_2);
+    const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.32505758367186816)*dq0u_1 - static_cast<long double>(0.62796303019955435)*dq0u_2);
+    const double q0_1 = q0u_1 + (0.88807383397711526*rx_1 + 0.65011516734373631*rx_2);
+    const double dq0_1 = dq0u_1 + (0.88807383397711526*rv_1 + 0.65011516734373631*rv_2);
+    const double q0_2 = q0u_2 + (-0.45970084338098305*rx_1 + 1.2559260603991087*rx_2);
+    const double dq0_2 = dq0u_2 + (-0.45970084338098305*rv_1 + 1.2559260603991087*rv_2);
+    // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
+    const double xe_1 = x_st_1 + 0.88807383397711526*q0_1 - 0.45970084338098305*q0_2 - 0.75918967575502749*s_theta_1;
+    const double ve_1 = 0.88807383397711526*dq0_1 - 0.45970084338098305*dq0_2 - 13.324917594014366*c_theta_1;
+    const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
+    const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
+    const double xe_2 = x_st_2 + 0.32505758367186816*q0_1 + 0.62796303019955435*q0_2 - 0.25155539849822628*s_theta_1;
+    const double ve_2 = 0.32505758367186816*dq0_1 + 0.62796303019955435*dq0_2 - 4.4151745767416184*c_theta_1;
+    const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
+    const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
+    const double qh0_1 = q0_1 + (0.88807383397711526*ex_1 + 0.65011516734373631*ex_2);
+    const double dqh0_1 = dq0_1 + (0.88807383397711526*ev_1 + 0.65011516734373631*ev_2);
+    const double qh0_2 = q0_2 + (-0.45970084338098305*ex_1 + 1.2559260603991087*ex_2);
+    const double dqh0_2 = dq0_2 + (-0.45970084338098305*ev_1 + 1.2559260603991087*ev_2);
+    // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_1 = qh0_1;
+    const double B_1 = dqh0_1;
+    coef[4] = A_1;
+    coef[5] = B_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
+    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    coef[6] = A1_1;
+    coef[7] = B1_1;
+    coef[8] = B1_1 - sigma_1*A1_1;
+    coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
+    // Mode 2 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_2 = qh0_2;
+    const double B_2 = dqh0_2;
+    coef[10] = A_2;
+    coef[11] = B_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
+    const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
+    coef[12] = A1_2;
+    coef[13] = B1_2;
+    coef[14] = B1_2 - sigma_2*A1_2;
+    coef[15] = -kappa_2*A1_2 - sigma_2*B1_2;
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
@@ -94,40 +120,40 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.29696026171782847;
-    const double qh_1 = coef[2]*eC_1 + coef[3]*eS_1;
-    const double dqh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double ddqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double qh_1 = coef[4]*eC_1 + coef[5]*eS_1;
+    const double dqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double ddqh_1 = coef[8]*eC_1 + coef[9]*eS_1;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
     const double q_1 = qh_1;
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[2]*eC_1) + __builtin_fabs(coef[3]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
+    const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);  // magnitude of the terms of q
+    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
     // Mode 2 (undamped).
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_2 = __builtin_cos(omega_d_2*tau);
     const double eS_2 = __builtin_sin(omega_d_2*tau)*0.18679273550489561;
-    const double qh_2 = coef[8]*eC_2 + coef[9]*eS_2;
-    const double dqh_2 = coef[10]*eC_2 + coef[11]*eS_2;
-    const double ddqh_2 = coef[12]*eC_2 + coef[13]*eS_2;
+    const double qh_2 = coef[10]*eC_2 + coef[11]*eS_2;
+    const double dqh_2 = coef[12]*eC_2 + coef[13]*eS_2;
+    const double ddqh_2 = coef[14]*eC_2 + coef[15]*eS_2;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_2 = __builtin_sqrt(dqh_2*dqh_2 + lambda_2*qh_2*qh_2);
     const double q_2 = qh_2;
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
-    const double mq_2 = __builtin_fabs(coef[8]*eC_2) + __builtin_fabs(coef[9]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);
+    const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);  // magnitude of the terms of q
+    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
-    x[0] = coef[14] + 0.88807383397711526*q_1 - 0.45970084338098305*q_2 - 0.75918967575502749*sin_1;  // m1
+    x[0] = coef[2] + 0.88807383397711526*q_1 - 0.45970084338098305*q_2 - 0.75918967575502749*sin_1;  // m1
     v[0] = 0.88807383397711526*dq_1 - 0.45970084338098305*dq_2 - 13.324917594014366*cos_1;
     a[0] = 0.88807383397711526*ddq_1 - 0.45970084338098305*ddq_2 + 233.87229115134318*sin_1;
-    const double mx_0 = __builtin_fabs(coef[14]) + 0.88807383397711526*mq_1 + 0.45970084338098305*mq_2 + 0.75918967575502749;
+    const double mx_0 = __builtin_fabs(coef[2]) + 0.88807383397711526*mq_1 + 0.45970084338098305*mq_2 + 0.75918967575502749;
     const double mv_0 = 0.88807383397711526*mdq_1 + 0.45970084338098305*mdq_2 + 13.324917594014366;
-    x[1] = coef[15] + 0.32505758367186816*q_1 + 0.62796303019955435*q_2 - 0.25155539849822628*sin_1;  // m2
+    x[1] = coef[3] + 0.32505758367186816*q_1 + 0.62796303019955435*q_2 - 0.25155539849822628*sin_1;  // m2
     v[1] = 0.32505758367186816*dq_1 + 0.62796303019955435*dq_2 - 4.4151745767416184*cos_1;
     a[1] = 0.32505758367186816*ddq_1 + 0.62796303019955435*ddq_2 + 77.492936583680532*sin_1;
-    const double mx_1 = __builtin_fabs(coef[15]) + 0.32505758367186816*mq_1 + 0.62796303019955435*mq_2 + 0.25155539849822628;
+    const double mx_1 = __builtin_fabs(coef[3]) + 0.32505758367186816*mq_1 + 0.62796303019955435*mq_2 + 0.25155539849822628;
     const double mv_1 = 0.32505758367186816*mdq_1 + 0.62796303019955435*mdq_2 + 4.4151745767416184;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -201,59 +227,85 @@ constexpr double omega_d_2 = 13.240539717890847;
 constexpr double Omega_1 = 17.551500000000001;
 
 // Coefficient block (16 doubles):
-//  0:theta_1 1:c_theta_1 2:A_1 3:B_1 4:A1_1 5:B1_1
-//  6:A2_1 7:B2_1 8:A_2 9:B_2 10:A1_2 11:B1_2
-//  12:A2_2 13:B2_2 14:x_st_1 15:x_st_2
+//  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:A_1 5:B_1
+//  6:A1_1 7:B1_1 8:A2_1 9:B2_1 10:A_2 11:B_2
+//  12:A1_2 13:B1_2 14:A2_2 15:B2_2
 void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
     (void)t0; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 20.0 - 5.8860000000000001*sgn[0];  // m1
     const double f_2 = -20.0 - 11.772*sgn[1];  // m2
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
+    // Modal forces p = V^T f.
     const double p_1 = 0.6127686665676223*f_1 + 0.55879985740555538*f_2;
-    const double q0u_1 = 0.6127686665676223*x0[0] + 1.1175997148111108*x0[1];
-    const double dq0u_1 = 0.6127686665676223*v0[0] + 1.1175997148111108*v0[1];
     const double p_2 = 0.79026233699508808*f_1 - 0.43329287942860423*f_2;
-    const double q0u_2 = 0.79026233699508808*x0[0] - 0.86658575885720845*x0[1];
-    const double dq0u_2 = 0.79026233699508808*v0[0] - 0.86658575885720845*v0[1];
-    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(0.6127686665676223)*q0u_1 - static_cast<long double>(0.79026233699508808)*q0u_2);
-    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(0.6127686665676223)*dq0u_1 - static_cast<long double>(0.79026233699508808)*dq0u_2);
-    const double rx_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(0.55879985740555538)*q0u_1 - static_cast<long double>(-0.43329287942860423)*q0u_2);
-    const double rv_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(0.55879985740555538)*dq0u_1 - static_cast<long double>(-0.43329287942860423)*dq0u_2);
-    const double q0_1 = q0u_1 + (0.6127686665676223*rx_1 + 1.1175997148111108*rx_2);
-    const double dq0_1 = dq0u_1 + (0.6127686665676223*rv_1 + 1.1175997148111108*rv_2);
-    const double q0_2 = q0u_2 + (0.79026233699508808*rx_1 - 0.86658575885720845*rx_2);
-    const double dq0_2 = dq0u_2 + (0.79026233699508808*rv_1 - 0.86658575885720845*rv_2);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
     coef[1] = c_theta_1;
-    // Mode 1 (undamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_1 = q0_1 - (0.068082288163512639*p_1 - 0.75568450143883159*s_theta_1);
-    const double B_1 = dq0_1 - (-13.263396527003653*c_theta_1);
-    coef[2] = A_1;
-    coef[3] = B_1;
-    coef[4] = B_1 - sigma_1*A_1;
-    coef[5] = -kappa_1*A_1 - sigma_1*B_1;
-    coef[6] = coef[5] - sigma_1*coef[4];
-    coef[7] = -kappa_1*coef[4] - sigma_1*coef[5];
-    // Mode 2 (undamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_2 = q0_2 - (0.0057041196034776495*p_2 - 0.84987436435583397*s_theta_1);
-    const double B_2 = dq0_2 - (-14.916569905991421*c_theta_1);
-    coef[8] = A_2;
-    coef[9] = B_2;
-    coef[10] = B_2 - sigma_2*A_2;
-    coef[11] = -kappa_2*A_2 - sigma_2*B_2;
-    coef[12] = coef[11] - sigma_2*coef[10];
-    coef[13] = -kappa_2*coef[10] - sigma_2*coef[11];
     // Static offset x_st = V (p / lambda) over the elastic modes.
-    coef[14] = 0.041718692934828258*p_1 + 0.0045077508883437419*p_2;  // m1
-    coef[15] = 0.038044372917614797*p_1 - 0.002471554407595979*p_2;  // m2
+    const double x_st_1 = 0.041718692934828258*p_1 + 0.0045077508883437419*p_2;  // m1
+    coef[2] = x_st_1;
+    const double x_st_2 = 0.038044372917614797*p_1 - 0.002471554407595979*p_2;  // m2
+    coef[3] = x_st_2;
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
+    // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-1.1346834856205477)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-19.915397197869044)*c_theta_1);
+    const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) - static_cast<long double>(-0.054031881163313256)*s_theta_1);
+    const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(-0.94834056223789265)*c_theta_1);
+    // Its modal coordinates q = W xh, q' = W vh.
+    const double q0u_1 = 0.6127686665676223*xh_1 + 1.1175997148111108*xh_2;
+    const double dq0u_1 = 0.6127686665676223*vh_1 + 1.1175997148111108*vh_2;
+    const double q0u_2 = 0.79026233699508808*xh_1 - 0.86658575885720845*xh_2;
+    const double dq0u_2 = 0.79026233699508808*vh_1 - 0.86658575885720845*vh_2;
+    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.6127686665676223)*q0u_1 - static_cast<long double>(0.79026233699508808)*q0u_2);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.6127686665676223)*dq0u_1 - static_cast<long double>(0.79026233699508808)*dq0u_2);
+    const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.55879985740555538)*q0u_1 - static_cast<long double>(-0.43329287942860423)*q0u_2);
+    const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.55879985740555538)*dq0u_1 - static_cast<long double>(-0.43329287942860423)*dq0u_2);
+    const double q0_1 = q0u_1 + (0.6127686665676223*rx_1 + 1.1175997148111108*rx_2);
+    const double dq0_1 = dq0u_1 + (0.6127686665676223*rv_1 + 1.1175997148111108*rv_2);
+    const double q0_2 = q0u_2 + (0.79026233699508808*rx_1 - 0.86658575885720845*rx_2);
+    const double dq0_2 = dq0u_2 + (0.79026233699508808*rv_1 - 0.86658575885720845*rv_2);
+    // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
+    const double xe_1 = x_st_1 + 0.6127686665676223*q0_1 + 0.79026233699508808*q0_2 - 1.1346834856205477*s_theta_1;
+    const double ve_1 = 0.6127686665676223*dq0_1 + 0.79026233699508808*dq0_2 - 19.915397197869044*c_theta_1;
+    const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
+    const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
+    const double xe_2 = x_st_2 + 0.55879985740555538*q0_1 - 0.43329287942860423*q0_2 - 0.054031881163313256*s_theta_1;
+    const double ve_2 = 0.55879985740555538*dq0_1 - 0.43329287942860423*dq0_2 - 0.94834056223789265*c_theta_1;
+    const double ex_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_2));
+    const double ev_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_2));
+    const double qh0_1 = q0_1 + (0.6127686665676223*ex_1 + 1.1175997148111108*ex_2);
+    const double dqh0_1 = dq0_1 + (0.6127686665676223*ev_1 + 1.1175997148111108*ev_2);
+    const double qh0_2 = q0_2 + (0.79026233699508808*ex_1 - 0.86658575885720845*ex_2);
+    const double dqh0_2 = dq0_2 + (0.79026233699508808*ev_1 - 0.86658575885720845*ev_2);
+    // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_1 = qh0_1;
+    const double B_1 = dqh0_1;
+    coef[4] = A_1;
+    coef[5] = B_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
+    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    coef[6] = A1_1;
+    coef[7] = B1_1;
+    coef[8] = B1_1 - sigma_1*A1_1;
+    coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
+    // Mode 2 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_2 = qh0_2;
+    const double B_2 = dqh0_2;
+    coef[10] = A_2;
+    coef[11] = B_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
+    const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
+    coef[12] = A1_2;
+    coef[13] = B1_2;
+    coef[14] = B1_2 - sigma_2*A1_2;
+    coef[15] = -kappa_2*A1_2 - sigma_2*B1_2;
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
@@ -267,40 +319,40 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.26092582885470084;
-    const double qh_1 = coef[2]*eC_1 + coef[3]*eS_1;
-    const double dqh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double ddqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double qh_1 = coef[4]*eC_1 + coef[5]*eS_1;
+    const double dqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double ddqh_1 = coef[8]*eC_1 + coef[9]*eS_1;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
     const double q_1 = qh_1;
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[2]*eC_1) + __builtin_fabs(coef[3]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
+    const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);  // magnitude of the terms of q
+    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
     // Mode 2 (undamped).
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_2 = __builtin_cos(omega_d_2*tau);
     const double eS_2 = __builtin_sin(omega_d_2*tau)*0.075525622165445616;
-    const double qh_2 = coef[8]*eC_2 + coef[9]*eS_2;
-    const double dqh_2 = coef[10]*eC_2 + coef[11]*eS_2;
-    const double ddqh_2 = coef[12]*eC_2 + coef[13]*eS_2;
+    const double qh_2 = coef[10]*eC_2 + coef[11]*eS_2;
+    const double dqh_2 = coef[12]*eC_2 + coef[13]*eS_2;
+    const double ddqh_2 = coef[14]*eC_2 + coef[15]*eS_2;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_2 = __builtin_sqrt(dqh_2*dqh_2 + lambda_2*qh_2*qh_2);
     const double q_2 = qh_2;
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
-    const double mq_2 = __builtin_fabs(coef[8]*eC_2) + __builtin_fabs(coef[9]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);
+    const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);  // magnitude of the terms of q
+    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
-    x[0] = coef[14] + 0.6127686665676223*q_1 + 0.79026233699508808*q_2 - 1.1346834856205477*sin_1;  // m1
+    x[0] = coef[2] + 0.6127686665676223*q_1 + 0.79026233699508808*q_2 - 1.1346834856205477*sin_1;  // m1
     v[0] = 0.6127686665676223*dq_1 + 0.79026233699508808*dq_2 - 19.915397197869044*cos_1;
     a[0] = 0.6127686665676223*ddq_1 + 0.79026233699508808*ddq_2 + 349.54509391839855*sin_1;
-    const double mx_0 = __builtin_fabs(coef[14]) + 0.6127686665676223*mq_1 + 0.79026233699508808*mq_2 + 1.1346834856205477;
+    const double mx_0 = __builtin_fabs(coef[2]) + 0.6127686665676223*mq_1 + 0.79026233699508808*mq_2 + 1.1346834856205477;
     const double mv_0 = 0.6127686665676223*mdq_1 + 0.79026233699508808*mdq_2 + 19.915397197869044;
-    x[1] = coef[15] + 0.55879985740555538*q_1 - 0.43329287942860423*q_2 - 0.054031881163313256*sin_1;  // m2
+    x[1] = coef[3] + 0.55879985740555538*q_1 - 0.43329287942860423*q_2 - 0.054031881163313256*sin_1;  // m2
     v[1] = 0.55879985740555538*dq_1 - 0.43329287942860423*dq_2 - 0.94834056223789265*cos_1;
     a[1] = 0.55879985740555538*ddq_1 - 0.43329287942860423*ddq_2 + 16.644799378118375*sin_1;
-    const double mx_1 = __builtin_fabs(coef[15]) + 0.55879985740555538*mq_1 + 0.43329287942860423*mq_2 + 0.054031881163313256;
+    const double mx_1 = __builtin_fabs(coef[3]) + 0.55879985740555538*mq_1 + 0.43329287942860423*mq_2 + 0.054031881163313256;
     const double mv_1 = 0.55879985740555538*mdq_1 + 0.43329287942860423*mdq_2 + 0.94834056223789265;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -369,39 +421,54 @@ constexpr double omega_d_1 = 5.0;
 constexpr double Omega_1 = 17.551500000000001;
 
 // Coefficient block (10 doubles):
-//  0:theta_1 1:c_theta_1 2:A_1 3:B_1 4:A1_1 5:B1_1
-//  6:A2_1 7:B2_1 8:x_st_1 9:x_stuck_0
+//  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
+//  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0
 void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
     (void)t0; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 10.0*x0[0] - 11.772*sgn[1];  // m2
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
+    // Modal forces p = V^T f.
     const double p_1 = 0.70710678118654757*f_1;
-    const double q0u_1 = 1.4142135623730951*x0[1];
-    const double dq0u_1 = 1.4142135623730951*v0[1];
-    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(0.70710678118654757)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(0.70710678118654757)*dq0u_1);
-    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
-    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
     coef[1] = c_theta_1;
-    // Mode 1 (undamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_1 = q0_1 - (0.040000000000000001*p_1 - 0.37471855338037613*s_theta_1);
-    const double B_1 = dq0_1 - (-6.576872689655672*c_theta_1);
-    coef[2] = A_1;
-    coef[3] = B_1;
-    coef[4] = B_1 - sigma_1*A_1;
-    coef[5] = -kappa_1*A_1 - sigma_1*B_1;
-    coef[6] = coef[5] - sigma_1*coef[4];
-    coef[7] = -kappa_1*coef[4] - sigma_1*coef[5];
     // Static offset x_st = V (p / lambda) over the elastic modes.
-    coef[8] = 0.028284271247461901*p_1;  // m2
+    const double x_st_1 = 0.028284271247461901*p_1;  // m2
+    coef[2] = x_st_1;
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
+    // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.26496603013167724)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(-4.6505512778561338)*c_theta_1);
+    // Its modal coordinates q = W xh, q' = W vh.
+    const double q0u_1 = 1.4142135623730951*xh_1;
+    const double dq0u_1 = 1.4142135623730951*vh_1;
+    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.70710678118654757)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.70710678118654757)*dq0u_1);
+    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
+    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
+    // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
+    const double xe_1 = x_st_1 + 0.70710678118654757*q0_1 - 0.26496603013167724*s_theta_1;
+    const double ve_1 = 0.70710678118654757*dq0_1 - 4.6505512778561338*c_theta_1;
+    const double ex_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_1));
+    const double ev_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_1));
+    const double qh0_1 = q0_1 + (1.4142135623730951*ex_1);
+    const double dqh0_1 = dq0_1 + (1.4142135623730951*ev_1);
+    // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_1 = qh0_1;
+    const double B_1 = dqh0_1;
+    coef[3] = A_1;
+    coef[4] = B_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
+    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    coef[5] = A1_1;
+    coef[6] = B1_1;
+    coef[7] = B1_1 - sigma_1*A1_1;
+    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
     coef[9] = x0[0];  // m1 is stuck
 }
 
@@ -416,26 +483,26 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.20000000000000001;
-    const double qh_1 = coef[2]*eC_1 + coef[3]*eS_1;
-    const double dqh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double ddqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
     const double q_1 = qh_1;
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[2]*eC_1) + __builtin_fabs(coef[3]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
     a[0] = 0.0;
     const double mx_0 = __builtin_fabs(coef[9]);
     const double mv_0 = 0.0;
-    x[1] = coef[8] + 0.70710678118654757*q_1 - 0.26496603013167724*sin_1;  // m2
+    x[1] = coef[2] + 0.70710678118654757*q_1 - 0.26496603013167724*sin_1;  // m2
     v[1] = 0.70710678118654757*dq_1 - 4.6505512778561338*cos_1;
     a[1] = 0.70710678118654757*ddq_1 + 81.624150753291929*sin_1;
-    const double mx_1 = __builtin_fabs(coef[8]) + 0.70710678118654757*mq_1 + 0.26496603013167724;
+    const double mx_1 = __builtin_fabs(coef[2]) + 0.70710678118654757*mq_1 + 0.26496603013167724;
     const double mv_1 = 0.70710678118654757*mdq_1 + 4.6505512778561338;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -511,39 +578,54 @@ constexpr double omega_d_1 = 8.6602540378443873;
 constexpr double Omega_1 = 17.551500000000001;
 
 // Coefficient block (10 doubles):
-//  0:theta_1 1:c_theta_1 2:A_1 3:B_1 4:A1_1 5:B1_1
-//  6:A2_1 7:B2_1 8:x_st_1 9:x_stuck_0
+//  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
+//  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0
 void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
     (void)t0; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -20.0 + 110.0*x0[0] - 11.772*sgn[1];  // m2
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
+    // Modal forces p = V^T f.
     const double p_1 = 0.70710678118654757*f_1;
-    const double q0u_1 = 1.4142135623730951*x0[1];
-    const double dq0u_1 = 1.4142135623730951*v0[1];
-    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(0.70710678118654757)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(0.70710678118654757)*dq0u_1);
-    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
-    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
     coef[1] = c_theta_1;
-    // Mode 1 (undamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_1 = q0_1 - (0.013333333333333334*p_1 - 0.45511123077083621*s_theta_1);
-    const double B_1 = dq0_1 - (-7.9878847668743322*c_theta_1);
-    coef[2] = A_1;
-    coef[3] = B_1;
-    coef[4] = B_1 - sigma_1*A_1;
-    coef[5] = -kappa_1*A_1 - sigma_1*B_1;
-    coef[6] = coef[5] - sigma_1*coef[4];
-    coef[7] = -kappa_1*coef[4] - sigma_1*coef[5];
     // Static offset x_st = V (p / lambda) over the elastic modes.
-    coef[8] = 0.0094280904158206332*p_1;  // m2
+    const double x_st_1 = 0.0094280904158206332*p_1;  // m2
+    coef[2] = x_st_1;
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
+    // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.32181223747221399)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(-5.6482874859935643)*c_theta_1);
+    // Its modal coordinates q = W xh, q' = W vh.
+    const double q0u_1 = 1.4142135623730951*xh_1;
+    const double dq0u_1 = 1.4142135623730951*vh_1;
+    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.70710678118654757)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.70710678118654757)*dq0u_1);
+    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
+    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
+    // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
+    const double xe_1 = x_st_1 + 0.70710678118654757*q0_1 - 0.32181223747221399*s_theta_1;
+    const double ve_1 = 0.70710678118654757*dq0_1 - 5.6482874859935643*c_theta_1;
+    const double ex_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(xe_1));
+    const double ev_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(ve_1));
+    const double qh0_1 = q0_1 + (1.4142135623730951*ex_1);
+    const double dqh0_1 = dq0_1 + (1.4142135623730951*ev_1);
+    // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_1 = qh0_1;
+    const double B_1 = dqh0_1;
+    coef[3] = A_1;
+    coef[4] = B_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
+    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    coef[5] = A1_1;
+    coef[6] = B1_1;
+    coef[7] = B1_1 - sigma_1*A1_1;
+    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
     coef[9] = x0[0];  // m1 is stuck
 }
 
@@ -558,26 +640,26 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.11547005383792514;
-    const double qh_1 = coef[2]*eC_1 + coef[3]*eS_1;
-    const double dqh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double ddqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
     const double q_1 = qh_1;
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[2]*eC_1) + __builtin_fabs(coef[3]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
     a[0] = 0.0;
     const double mx_0 = __builtin_fabs(coef[9]);
     const double mv_0 = 0.0;
-    x[1] = coef[8] + 0.70710678118654757*q_1 - 0.32181223747221399*sin_1;  // m2
+    x[1] = coef[2] + 0.70710678118654757*q_1 - 0.32181223747221399*sin_1;  // m2
     v[1] = 0.70710678118654757*dq_1 - 5.6482874859935643*cos_1;
     a[1] = 0.70710678118654757*ddq_1 + 99.135917810416046*sin_1;
-    const double mx_1 = __builtin_fabs(coef[8]) + 0.70710678118654757*mq_1 + 0.32181223747221399;
+    const double mx_1 = __builtin_fabs(coef[2]) + 0.70710678118654757*mq_1 + 0.32181223747221399;
     const double mv_1 = 0.70710678118654757*mdq_1 + 5.6482874859935643;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -653,39 +735,54 @@ constexpr double omega_d_1 = 3.872983346207417;
 constexpr double Omega_1 = 17.551500000000001;
 
 // Coefficient block (10 doubles):
-//  0:theta_1 1:c_theta_1 2:A_1 3:B_1 4:A1_1 5:B1_1
-//  6:A2_1 7:B2_1 8:x_st_1 9:x_stuck_1
+//  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
+//  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_1
 void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
     (void)t0; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 10.0*x0[1] - 5.8860000000000001*sgn[0];  // m1
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
+    // Modal forces p = V^T f.
     const double p_1 = f_1;
-    const double q0u_1 = x0[0];
-    const double dq0u_1 = v0[0];
-    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(1.0)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(1.0)*dq0u_1);
-    const double q0_1 = q0u_1 + (rx_1);
-    const double dq0_1 = dq0u_1 + (rv_1);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
     coef[1] = c_theta_1;
-    // Mode 1 (undamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_1 = q0_1 - (0.066666666666666666*p_1 - 0.76777356846487577*s_theta_1);
-    const double B_1 = dq0_1 - (-13.475577786911268*c_theta_1);
-    coef[2] = A_1;
-    coef[3] = B_1;
-    coef[4] = B_1 - sigma_1*A_1;
-    coef[5] = -kappa_1*A_1 - sigma_1*B_1;
-    coef[6] = coef[5] - sigma_1*coef[4];
-    coef[7] = -kappa_1*coef[4] - sigma_1*coef[5];
     // Static offset x_st = V (p / lambda) over the elastic modes.
-    coef[8] = 0.066666666666666666*p_1;  // m1
+    const double x_st_1 = 0.066666666666666666*p_1;  // m1
+    coef[2] = x_st_1;
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
+    // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.76777356846487577)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-13.475577786911268)*c_theta_1);
+    // Its modal coordinates q = W xh, q' = W vh.
+    const double q0u_1 = xh_1;
+    const double dq0u_1 = vh_1;
+    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(1.0)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(1.0)*dq0u_1);
+    const double q0_1 = q0u_1 + (rx_1);
+    const double dq0_1 = dq0u_1 + (rv_1);
+    // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
+    const double xe_1 = x_st_1 + q0_1 - 0.76777356846487577*s_theta_1;
+    const double ve_1 = dq0_1 - 13.475577786911268*c_theta_1;
+    const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
+    const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
+    const double qh0_1 = q0_1 + (ex_1);
+    const double dqh0_1 = dq0_1 + (ev_1);
+    // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_1 = qh0_1;
+    const double B_1 = dqh0_1;
+    coef[3] = A_1;
+    coef[4] = B_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
+    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    coef[5] = A1_1;
+    coef[6] = B1_1;
+    coef[7] = B1_1 - sigma_1*A1_1;
+    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
     coef[9] = x0[1];  // m2 is stuck
 }
 
@@ -700,21 +797,21 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.2581988897471611;
-    const double qh_1 = coef[2]*eC_1 + coef[3]*eS_1;
-    const double dqh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double ddqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
     const double q_1 = qh_1;
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[2]*eC_1) + __builtin_fabs(coef[3]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
-    x[0] = coef[8] + q_1 - 0.76777356846487577*sin_1;  // m1
+    x[0] = coef[2] + q_1 - 0.76777356846487577*sin_1;  // m1
     v[0] = dq_1 - 13.475577786911268*cos_1;
     a[0] = ddq_1 + 236.51660352697314*sin_1;
-    const double mx_0 = __builtin_fabs(coef[8]) + mq_1 + 0.76777356846487577;
+    const double mx_0 = __builtin_fabs(coef[2]) + mq_1 + 0.76777356846487577;
     const double mv_0 = mdq_1 + 13.475577786911268;
     x[1] = coef[9];  // m2 (stuck)
     v[1] = 0.0;
@@ -795,39 +892,54 @@ constexpr double omega_d_1 = 10.723805294763608;
 constexpr double Omega_1 = 17.551500000000001;
 
 // Coefficient block (10 doubles):
-//  0:theta_1 1:c_theta_1 2:A_1 3:B_1 4:A1_1 5:B1_1
-//  6:A2_1 7:B2_1 8:x_st_1 9:x_stuck_1
+//  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
+//  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_1
 void setup(double* coef, double t0, const double* x0, const double* v0, const signed char* sgn) {
     (void)t0; (void)x0; (void)v0; (void)sgn;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 20.0 + 110.0*x0[1] - 5.8860000000000001*sgn[0];  // m1
-    // Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.
+    // Modal forces p = V^T f.
     const double p_1 = f_1;
-    const double q0u_1 = x0[0];
-    const double dq0u_1 = v0[0];
-    // One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(1.0)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(1.0)*dq0u_1);
-    const double q0_1 = q0u_1 + (rx_1);
-    const double dq0_1 = dq0u_1 + (rv_1);
     // Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.
     const double theta_1 = Omega_1*t0;
     const double s_theta_1 = __builtin_sin(theta_1);
     const double c_theta_1 = __builtin_cos(theta_1);
     coef[0] = theta_1;
     coef[1] = c_theta_1;
-    // Mode 1 (undamped): particular solution q_p at tau = 0, then
-    // A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.
-    const double A_1 = q0_1 - (0.0086956521739130436*p_1 - 1.1654700606416992*s_theta_1);
-    const double B_1 = dq0_1 - (-20.455747769352783*c_theta_1);
-    coef[2] = A_1;
-    coef[3] = B_1;
-    coef[4] = B_1 - sigma_1*A_1;
-    coef[5] = -kappa_1*A_1 - sigma_1*B_1;
-    coef[6] = coef[5] - sigma_1*coef[4];
-    coef[7] = -kappa_1*coef[4] - sigma_1*coef[5];
     // Static offset x_st = V (p / lambda) over the elastic modes.
-    coef[8] = 0.0086956521739130436*p_1;  // m1
+    const double x_st_1 = 0.0086956521739130436*p_1;  // m1
+    coef[2] = x_st_1;
+    // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
+    // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-1.1654700606416992)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-20.455747769352786)*c_theta_1);
+    // Its modal coordinates q = W xh, q' = W vh.
+    const double q0u_1 = xh_1;
+    const double dq0u_1 = vh_1;
+    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(1.0)*q0u_1);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(1.0)*dq0u_1);
+    const double q0_1 = q0u_1 + (rx_1);
+    const double dq0_1 = dq0u_1 + (rv_1);
+    // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
+    const double xe_1 = x_st_1 + q0_1 - 1.1654700606416992*s_theta_1;
+    const double ve_1 = dq0_1 - 20.455747769352786*c_theta_1;
+    const double ex_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(xe_1));
+    const double ev_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(ve_1));
+    const double qh0_1 = q0_1 + (ex_1);
+    const double dqh0_1 = dq0_1 + (ev_1);
+    // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    const double A_1 = qh0_1;
+    const double B_1 = dqh0_1;
+    coef[3] = A_1;
+    coef[4] = B_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
+    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    coef[5] = A1_1;
+    coef[6] = B1_1;
+    coef[7] = B1_1 - sigma_1*A1_1;
+    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
     coef[9] = x0[1];  // m2 is stuck
 }
 
@@ -842,21 +954,21 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.093250480824031381;
-    const double qh_1 = coef[2]*eC_1 + coef[3]*eS_1;
-    const double dqh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double ddqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
     // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
     const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
     const double q_1 = qh_1;
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[2]*eC_1) + __builtin_fabs(coef[3]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
-    x[0] = coef[8] + q_1 - 1.1654700606416992*sin_1;  // m1
+    x[0] = coef[2] + q_1 - 1.1654700606416992*sin_1;  // m1
     v[0] = dq_1 - 20.455747769352786*cos_1;
     a[0] = ddq_1 + 359.02905697379543*sin_1;
-    const double mx_0 = __builtin_fabs(coef[8]) + mq_1 + 1.1654700606416992;
+    const double mx_0 = __builtin_fabs(coef[2]) + mq_1 + 1.1654700606416992;
     const double mv_0 = mdq_1 + 20.455747769352786;
     x[1] = coef[9];  // m2 (stuck)
     v[1] = 0.0;

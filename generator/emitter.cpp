@@ -1,8 +1,10 @@
 #include "emitter.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -94,6 +96,168 @@ std::string idx(std::size_t k) { return std::to_string(k + 1); }  // 1-based nam
 
 std::string body_name(const Model& m, int b) { return b == kGround ? "ground" : m.masses[b].name; }
 
+
+// ---- setup, in blocks ----
+// The homogeneous initial state is taken from the physical residual
+// x0 - x_p(0), where x_p(0) = x_st + sum_h (xs_h sin theta_h + xc_h cos theta_h)
+// is computed with exactly the constants eval adds back at tau = 0. Taking it
+// as q(0) - q_p(0) in modal coordinates instead (modal constants P a_s, 1/lambda)
+// made setup subtract a slightly different particular part than eval adds: a
+// fixed offset per restart, so a state restarted at the same place walked
+// away linearly (seed-scenario-1, contact closed: 4.1e-12 of |x| over 2000
+// restarts, 1505 of 1509 moves the same way; tests/test_restart_drift.cpp).
+
+using SlotFn = std::function<std::string(const std::string&)>;
+
+void emit_setup_phases(const Derivation& d, Code& s, const SlotFn& slot) {
+    if (d.harmonics.empty()) return;
+    s.line(1, "// Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.");
+    for (std::size_t h = 0; h < d.harmonics.size(); ++h) {
+        const std::string H = idx(h);
+        s.line(1, "const double theta_" + H + " = " + Lin().add(1.0, "Omega_" + H + "*t0").add_const(dbl(d.harmonics[h].phase)).str() + ";");
+        s.line(1, "const double s_theta_" + H + " = __builtin_sin(theta_" + H + ");");
+        s.line(1, "const double c_theta_" + H + " = __builtin_cos(theta_" + H + ");");
+        s.line(1, slot("theta_" + H) + " = theta_" + H + ";");
+        s.line(1, slot("c_theta_" + H) + " = c_theta_" + H + ";");
+    }
+}
+
+void emit_setup_static_offset(const Derivation& d, Code& s, const SlotFn& slot) {
+    const Model& model = *d.model;
+    s.line(1, "// Static offset x_st = V (p / lambda) over the elastic modes.");
+    for (std::size_t r = 0; r < d.n_free(); ++r) {
+        Lin l;
+        for (std::size_t j = 0; j < d.modes.size(); ++j)
+            if (!d.modes[j].lambda.is_zero()) l.add(d.modes[j].v[r] / d.modes[j].lambda, "p_" + idx(j));
+        s.line(1, "const double x_st_" + idx(r) + " = " + l.str() + ";  // " + model.masses[d.free_dofs[r]].name);
+        s.line(1, slot("x_st_" + idx(r)) + " = x_st_" + idx(r) + ";");
+    }
+}
+
+void emit_setup_homogeneous_state(const Derivation& d, Code& s) {
+    const std::size_t nf = d.n_free(), nm = d.modes.size(), nh = d.harmonics.size();
+    auto ld = [](const std::string& e) { return "static_cast<long double>(" + e + ")"; };
+    s.line(1, "// Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with");
+    s.line(1, "// x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).");
+    for (std::size_t r = 0; r < nf; ++r) {
+        const std::string i = std::to_string(d.free_dofs[r]), R = idx(r);
+        std::string xh = ld("x0[" + i + "]") + " - " + ld("x_st_" + R), vh = ld("v0[" + i + "]");
+        for (std::size_t h = 0; h < nh; ++h) {
+            const HarmonicData& hd = d.harmonics[h];
+            const double W = dbl(hd.omega), xs = dbl(hd.xs[r]), xc = dbl(hd.xc[r]);
+            const std::string H = idx(h);
+            if (xs != 0.0) xh += " - " + ld(format_double(xs)) + "*s_theta_" + H;
+            if (xc != 0.0) xh += " - " + ld(format_double(xc)) + "*c_theta_" + H;
+            if (W * xs != 0.0) vh += " - " + ld(format_double(W * xs)) + "*c_theta_" + H;
+            if (-W * xc != 0.0) vh += " - " + ld(format_double(-W * xc)) + "*s_theta_" + H;
+        }
+        s.line(1, "const double xh_" + R + " = static_cast<double>(" + xh + ");");
+        s.line(1, "const double vh_" + R + " = static_cast<double>(" + vh + ");");
+    }
+    s.line(1, "// Its modal coordinates q = W xh, q' = W vh.");
+    for (std::size_t j = 0; j < nm; ++j) {
+        Lin q, dq;
+        for (std::size_t r = 0; r < nf; ++r) {
+            q.add(d.modes[j].w[r], "xh_" + idx(r));
+            dq.add(d.modes[j].w[r], "vh_" + idx(r));
+        }
+        s.line(1, "const double q0u_" + idx(j) + " = " + q.str() + ";");
+        s.line(1, "const double dq0u_" + idx(j) + " = " + dq.str() + ";");
+    }
+    // V and W are inverse only to rounding, so xh -> W xh -> V W xh is the
+    // fixed matrix I + E (E ~ eps) of the configuration: applied at every
+    // segment start it is a bias (a steady energy gain), not noise. One
+    // refinement against the residual, accumulated in long double, removes it
+    // (as GenericSolver::setup does).
+    s.line(1, "// One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.");
+    for (std::size_t r = 0; r < nf; ++r) {
+        std::string rx = ld("xh_" + idx(r)), rv = ld("vh_" + idx(r));
+        for (std::size_t j = 0; j < nm; ++j) {
+            const std::string c = ld(format_double(dbl(d.modes[j].v[r])));
+            rx += " - " + c + "*q0u_" + idx(j);
+            rv += " - " + c + "*dq0u_" + idx(j);
+        }
+        s.line(1, "const double rx_" + idx(r) + " = static_cast<double>(" + rx + ");");
+        s.line(1, "const double rv_" + idx(r) + " = static_cast<double>(" + rv + ");");
+    }
+    for (std::size_t j = 0; j < nm; ++j) {
+        Lin q, dq;
+        for (std::size_t r = 0; r < nf; ++r) {
+            q.add(d.modes[j].w[r], "rx_" + idx(r));
+            dq.add(d.modes[j].w[r], "rv_" + idx(r));
+        }
+        s.line(1, "const double q0_" + idx(j) + " = q0u_" + idx(j) + " + (" + q.str() + ");");
+        s.line(1, "const double dq0_" + idx(j) + " = dq0u_" + idx(j) + " + (" + dq.str() + ");");
+    }
+}
+
+// A second refinement, against what eval returns at tau = 0: x(0) and v(0)
+// written with eval's constants in eval's order, the residuals x0 - x(0),
+// v0 - v(0) (long double) mapped back with W. x(0) is a sum of terms larger
+// than x (static offset, forcing response), so without it its rounding
+// depends on x0 only through the leading bits and a state restarted again and
+// again kept moving the same way (chain-8, contacts closed: 112 of 123 moves
+// of x[0] one way; tests/test_restart_drift.cpp).
+void emit_setup_output_refinement(const Derivation& d, Code& s) {
+    const std::size_t nf = d.n_free(), nm = d.modes.size(), nh = d.harmonics.size();
+    s.line(1, "// Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).");
+    for (std::size_t r = 0; r < nf; ++r) {
+        Lin x, v;
+        x.add(1.0, "x_st_" + idx(r));
+        for (std::size_t j = 0; j < nm; ++j) {
+            x.add(d.modes[j].v[r], "q0_" + idx(j));
+            v.add(d.modes[j].v[r], "dq0_" + idx(j));
+        }
+        for (std::size_t h = 0; h < nh; ++h) {
+            const HarmonicData& hd = d.harmonics[h];
+            const double W = dbl(hd.omega), xs = dbl(hd.xs[r]), xc = dbl(hd.xc[r]);
+            const std::string H = idx(h);
+            x.add(xs, "s_theta_" + H).add(xc, "c_theta_" + H);
+            v.add(W * xs, "c_theta_" + H).add(-W * xc, "s_theta_" + H);
+        }
+        const std::string i = std::to_string(d.free_dofs[r]), R = idx(r);
+        s.line(1, "const double xe_" + R + " = " + x.str() + ";");
+        s.line(1, "const double ve_" + R + " = " + v.str() + ";");
+        s.line(1, "const double ex_" + R + " = static_cast<double>(static_cast<long double>(x0[" + i +
+                      "]) - static_cast<long double>(xe_" + R + "));");
+        s.line(1, "const double ev_" + R + " = static_cast<double>(static_cast<long double>(v0[" + i +
+                      "]) - static_cast<long double>(ve_" + R + "));");
+    }
+    for (std::size_t j = 0; j < nm; ++j) {
+        Lin q, dq;
+        for (std::size_t r = 0; r < nf; ++r) {
+            q.add(d.modes[j].w[r], "ex_" + idx(r));
+            dq.add(d.modes[j].w[r], "ev_" + idx(r));
+        }
+        s.line(1, "const double qh0_" + idx(j) + " = q0_" + idx(j) + " + (" + q.str() + ");");
+        s.line(1, "const double dqh0_" + idx(j) + " = dq0_" + idx(j) + " + (" + dq.str() + ");");
+    }
+}
+
+void emit_setup_modes(const Derivation& d, Code& s, const SlotFn& slot) {
+    for (std::size_t j = 0; j < d.modes.size(); ++j) {
+        const Mode& m = d.modes[j];
+        const std::string J = idx(j);
+        s.line(1, "// Mode " + J + " (" + regime_name(m.regime) + "): A = q_h(0), B = q_h'(0) + sigma A (the particular");
+        s.line(1, "// parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.");
+        if (m.regime == Regime::rigid) {
+            s.line(1, slot("p_" + J) + " = p_" + J + ";  // q_p = p tau^2 / 2");
+        } else if (m.regime == Regime::rigid_damped) {
+            s.line(1, slot("p_" + J) + " = p_" + J + ";  // q_p = p tau^2 phi2(-c tau)");
+        }
+        s.line(1, "const double A_" + J + " = qh0_" + J + ";");
+        s.line(1, "const double B_" + J + " = dqh0_" + J + (m.sigma.is_zero() ? "" : " + sigma_" + J + "*A_" + J) + ";");
+        s.line(1, slot("A_" + J) + " = A_" + J + ";");
+        s.line(1, slot("B_" + J) + " = B_" + J + ";");
+        s.line(1, "const double A1_" + J + " = B_" + J + " - sigma_" + J + "*A_" + J + ";");
+        s.line(1, "const double B1_" + J + " = -kappa_" + J + "*A_" + J + " - sigma_" + J + "*B_" + J + ";");
+        s.line(1, slot("A1_" + J) + " = A1_" + J + ";");
+        s.line(1, slot("B1_" + J) + " = B1_" + J + ";");
+        s.line(1, slot("A2_" + J) + " = B1_" + J + " - sigma_" + J + "*A1_" + J + ";");
+        s.line(1, slot("B2_" + J) + " = -kappa_" + J + "*A1_" + J + " - sigma_" + J + "*B1_" + J + ";");
+    }
+}
+
 }  // namespace
 
 std::string emit_kernel(const Derivation& d) {
@@ -172,6 +336,21 @@ std::string emit_kernel(const Derivation& d) {
     for (std::size_t h = 0; h < nh; ++h)
         c.line(0, "constexpr double Omega_" + idx(h) + " = " + format_double(dbl(d.harmonics[h].omega)) + ";");
     c.blank();
+    if (std::any_of(d.modes.begin(), d.modes.end(), [](const Mode& m) { return m.regime == Regime::rigid_damped; })) {
+        c.line(0, "// phi2(x) = (e^x - 1 - x)/x^2, phi2(0) = 1/2; Taylor series where the subtraction cancels.");
+        c.line(0, "double phi2(double x) {");
+        c.line(1, "if (__builtin_fabs(x) < 0.5) {");
+        c.line(2, "double term = 0.5, sum = 0.5;  // x^k/(k+2)!");
+        c.line(2, "for (int k = 1; k < 20; ++k) {");
+        c.line(3, "term *= x / (k + 2);");
+        c.line(3, "sum += term;");
+        c.line(2, "}");
+        c.line(2, "return sum;");
+        c.line(1, "}");
+        c.line(1, "return (__builtin_expm1(x) - x) / (x * x);");
+        c.line(0, "}");
+        c.blank();
+    }
 
     // ================= setup =================
     Code s;
@@ -188,99 +367,18 @@ std::string emit_kernel(const Derivation& d) {
             l.add(-dbl(d.mu_k_n[i]), "sgn[" + std::to_string(i) + "]");
             s.line(1, "const double f_" + idx(r) + " = " + l.str() + ";  // " + model.masses[i].name);
         }
-        s.line(1, "// Modal forces p = V^T f, modal initial state q = W x0, q' = W v0.");
+        s.line(1, "// Modal forces p = V^T f.");
         for (std::size_t j = 0; j < nm; ++j) {
-            Lin p, q, dq;
-            for (std::size_t r = 0; r < nf; ++r) {
-                const std::string i = std::to_string(d.free_dofs[r]);
-                p.add(d.modes[j].v[r], "f_" + idx(r));
-                q.add(d.modes[j].w[r], "x0[" + i + "]");
-                dq.add(d.modes[j].w[r], "v0[" + i + "]");
-            }
+            Lin p;
+            for (std::size_t r = 0; r < nf; ++r) p.add(d.modes[j].v[r], "f_" + idx(r));
             s.line(1, "const double p_" + idx(j) + " = " + p.str() + ";");
-            s.line(1, "const double q0u_" + idx(j) + " = " + q.str() + ";");
-            s.line(1, "const double dq0u_" + idx(j) + " = " + dq.str() + ";");
-        }
-        // V and W are inverse only to rounding, so x0 -> W x0 -> V W x0 is the
-        // fixed matrix I + E (E ~ eps) of the configuration: applied at every
-        // segment start it is a bias (a steady energy gain), not noise. One
-        // refinement against the residual, accumulated in long double, removes it
-        // (as GenericSolver::setup does).
-        s.line(1, "// One refinement of q against the residuals r = x0 - V q (long double): removes the bias of V W = I + E.");
-        for (std::size_t r = 0; r < nf; ++r) {
-            const std::string i = std::to_string(d.free_dofs[r]);
-            std::string rx = "static_cast<long double>(x0[" + i + "])", rv = "static_cast<long double>(v0[" + i + "])";
-            for (std::size_t j = 0; j < nm; ++j) {
-                const std::string c = "static_cast<long double>(" + format_double(dbl(d.modes[j].v[r])) + ")";
-                rx += " - " + c + "*q0u_" + idx(j);
-                rv += " - " + c + "*dq0u_" + idx(j);
-            }
-            s.line(1, "const double rx_" + idx(r) + " = static_cast<double>(" + rx + ");");
-            s.line(1, "const double rv_" + idx(r) + " = static_cast<double>(" + rv + ");");
-        }
-        for (std::size_t j = 0; j < nm; ++j) {
-            Lin q, dq;
-            for (std::size_t r = 0; r < nf; ++r) {
-                q.add(d.modes[j].w[r], "rx_" + idx(r));
-                dq.add(d.modes[j].w[r], "rv_" + idx(r));
-            }
-            s.line(1, "const double q0_" + idx(j) + " = q0u_" + idx(j) + " + (" + q.str() + ");");
-            s.line(1, "const double dq0_" + idx(j) + " = dq0u_" + idx(j) + " + (" + dq.str() + ");");
         }
     }
-    if (nh > 0) {
-        s.line(1, "// Forcing phases at the segment start: theta_h = Omega_h t0 + phase_h.");
-        for (std::size_t h = 0; h < nh; ++h) {
-            const std::string H = idx(h);
-            s.line(1, "const double theta_" + H + " = " + Lin().add(1.0, "Omega_" + H + "*t0").add_const(dbl(d.harmonics[h].phase)).str() + ";");
-            s.line(1, "const double s_theta_" + H + " = __builtin_sin(theta_" + H + ");");
-            s.line(1, "const double c_theta_" + H + " = __builtin_cos(theta_" + H + ");");
-            s.line(1, slot("theta_" + H) + " = theta_" + H + ";");
-            s.line(1, slot("c_theta_" + H) + " = c_theta_" + H + ";");
-        }
-    }
-    for (std::size_t j = 0; j < nm; ++j) {
-        const Mode& m = d.modes[j];
-        const std::string J = idx(j);
-        s.line(1, "// Mode " + J + " (" + regime_name(m.regime) + "): particular solution q_p at tau = 0, then");
-        s.line(1, "// A = q(0) - q_p(0), B = q_h'(0) + sigma A and the derivative pairs.");
-        Lin up, dup;
-        if (m.regime == Regime::rigid) {
-            s.line(1, slot("p_" + J) + " = p_" + J + ";  // q_p = p tau^2 / 2");
-        } else if (m.regime == Regime::rigid_damped) {
-            s.line(1, slot("p_" + J) + " = p_" + J + ";  // q_p = (p/c) tau (drift)");
-            dup.add(1.0 / dbl(m.c), "p_" + J);
-        } else {
-            up.add(1.0 / dbl(m.lambda), "p_" + J);  // static offset p/lambda
-        }
-        for (std::size_t h = 0; h < nh; ++h) {
-            const ModalHarmonic& mh = d.harmonics[h].modal[j];
-            if (mh.resonant) continue;  // the sinc form starts at rest
-            const numeric W = d.harmonics[h].omega;
-            up.add(mh.P * mh.a_s, "s_theta_" + idx(h)).add(mh.P * mh.a_c, "c_theta_" + idx(h));
-            dup.add(mh.P * W * mh.a_s, "c_theta_" + idx(h)).add(-(mh.P * W * mh.a_c), "s_theta_" + idx(h));
-        }
-        s.line(1, "const double A_" + J + " = q0_" + J + (up.empty() ? "" : " - (" + up.str() + ")") + ";");
-        s.line(1, "const double B_" + J + " = dq0_" + J + (dup.empty() ? "" : " - (" + dup.str() + ")") +
-                      (m.sigma.is_zero() ? "" : " + sigma_" + J + "*A_" + J) + ";");
-        s.line(1, slot("A_" + J) + " = A_" + J + ";");
-        s.line(1, slot("B_" + J) + " = B_" + J + ";");
-        s.line(1, slot("A1_" + J) + " = B_" + J + " - sigma_" + J + "*A_" + J + ";");
-        s.line(1, slot("B1_" + J) + " = -kappa_" + J + "*A_" + J + " - sigma_" + J + "*B_" + J + ";");
-        const std::string a1 = "coef[" + std::to_string(coef.size() - 2) + "]",
-                          b1 = "coef[" + std::to_string(coef.size() - 1) + "]";
-        s.line(1, slot("A2_" + J) + " = " + b1 + " - sigma_" + J + "*" + a1 + ";");
-        s.line(1, slot("B2_" + J) + " = -kappa_" + J + "*" + a1 + " - sigma_" + J + "*" + b1 + ";");
-    }
-    if (nf > 0) {
-        s.line(1, "// Static offset x_st = V (p / lambda) over the elastic modes.");
-        for (std::size_t r = 0; r < nf; ++r) {
-            Lin l;
-            for (std::size_t j = 0; j < nm; ++j)
-                if (!d.modes[j].lambda.is_zero()) l.add(d.modes[j].v[r] / d.modes[j].lambda, "p_" + idx(j));
-            s.line(1, slot("x_st_" + idx(r)) + " = " + l.str() + ";  // " + model.masses[d.free_dofs[r]].name);
-        }
-    }
+    emit_setup_phases(d, s, slot);
+    if (nf > 0) emit_setup_static_offset(d, s, slot);
+    if (nf > 0) emit_setup_homogeneous_state(d, s);
+    if (nf > 0) emit_setup_output_refinement(d, s);
+    emit_setup_modes(d, s, slot);
     for (int st : d.stuck_dofs)
         s.line(1, slot("x_stuck_" + std::to_string(st)) + " = x0[" + std::to_string(st) + "];  // " +
                       model.masses[st].name + " is stuck");
@@ -366,12 +464,16 @@ std::string emit_kernel(const Derivation& d) {
             mag += " + __builtin_fabs(0.5*" + p + "*tau*tau)";
             dmag += " + __builtin_fabs(" + p + "*tau)";
         } else if (m.regime == Regime::rigid_damped) {
+            // One form for every c > 0, exact as c -> 0: the split (p/c) tau + (q'(0) - p/c) eS
+            // lost eps |p/c| (6e-10 at alpha = 1e-6; tests/test_sweep_kernels.cpp, floating pair).
             const std::string p = coef_of("p_" + J);
-            e.line(1, "// particular q_p = (p/c) tau");
-            q += " + " + format_double(1.0 / dbl(m.c)) + "*" + p + "*tau";
-            dq += " + " + format_double(1.0 / dbl(m.c)) + "*" + p;
-            mag += " + __builtin_fabs(" + format_double(1.0 / dbl(m.c)) + "*" + p + "*tau)";
-            dmag += " + __builtin_fabs(" + format_double(1.0 / dbl(m.c)) + "*" + p + ")";
+            e.line(1, "// particular q_p = p tau^2 phi2(-c tau) from rest: q_p' = p eS, q_p'' = p e^{-c tau}");
+            e.line(1, "const double qp_" + J + " = " + p + "*tau*tau*phi2(-c_" + J + "*tau);");
+            q += " + qp_" + J;
+            dq += " + " + p + "*eS_" + J;
+            ddq += " + " + p + "*(1.0 + m_" + J + ")";
+            mag += " + __builtin_fabs(qp_" + J + ")";
+            dmag += " + __builtin_fabs(" + p + "*eS_" + J + ")";
         }
         for (std::size_t h = 0; h < nh; ++h) {
             const ModalHarmonic& mh = d.harmonics[h].modal[j];
@@ -586,8 +688,8 @@ std::string emit_kernel(const Derivation& d) {
             const Mode& m = d.modes[j];
             const numeric H = abs(al[j]) * (m.c + m.omega) + abs(be[j]) * (m.c * (m.c + m.omega) + m.lambda);
             b.add(H, "r_" + idx(j));
-            if (m.regime == Regime::rigid && !al[j].is_zero())
-                b.add(abs(al[j]), "__builtin_fabs(" + coef_of("p_" + idx(j)) + ")");
+            if (m.regime == Regime::rigid || m.regime == Regime::rigid_damped)  // |q_p''| <= |p|, |q_p'''| <= c |p|
+                b.add(abs(al[j]) + abs(be[j]) * m.c, "__builtin_fabs(" + coef_of("p_" + idx(j)) + ")");
             for (std::size_t h = 0; h < nh; ++h) {
                 const ModalHarmonic& mh = d.harmonics[h].modal[j];
                 if (!mh.resonant || (al[j].is_zero() && be[j].is_zero())) continue;

@@ -10,6 +10,7 @@
 #include "assembly.h"
 #include "derivation.h"
 #include "emitter.h"
+#include "param_emitter.h"
 #include "error.h"
 #include "sample_models.h"
 #include "solver_provider.h"
@@ -115,17 +116,24 @@ std::string manifest_text(const Model& model, const std::vector<Configuration>& 
     return out;
 }
 
-KernelSet generate_kernel_set(const Model& model) {
+KernelSet generate_kernel_set(const Model& model, const std::vector<std::string>& kept) {
     KernelSet set;
     std::vector<Configuration> configurations;
     for (const Configuration& cfg : configurations_to_generate(model, &set.note)) {
         const Derivation d = derive(model, cfg);
-        const std::string sym = kernel_symbol(model, cfg);
-        set.kernels.push_back({sym.substr(std::string("hsnc_kernel_").size()) + ".cpp", emit_kernel(d)});
+        const std::string sym = kept.empty() ? kernel_symbol(model, cfg) : sweep_kernel_symbol(model, cfg);
+        const std::string file = kernel_symbol(model, cfg).substr(std::string("hsnc_kernel_").size()) + ".cpp";
+        set.kernels.push_back({file, kept.empty() ? emit_kernel(d) : emit_sweep_kernel(d, kept)});
         set.symbols.push_back(sym);
         configurations.push_back(cfg);
     }
     set.manifest = manifest_text(model, configurations, set.note);
+    if (!kept.empty()) {  // a comment line after the header, so readers of the list skip it
+        std::string names;
+        for (const std::string& k : kept) names += (names.empty() ? "" : ", ") + k;
+        const std::size_t at = set.manifest.find('\n', set.manifest.find('\n', set.manifest.find('\n') + 1) + 1) + 1;
+        set.manifest.insert(at, "# sweep kernels: parameters given at run time (configure): " + names + "\n");
+    }
     return set;
 }
 

@@ -47,7 +47,11 @@ std::vector<Configuration> configurations_to_generate(const Model& model, std::s
 /// line, sorted.
 std::string manifest_text(const Model& model, const std::vector<Configuration>& configurations, const std::string& note);
 
-KernelSet generate_kernel_set(const Model& model);
+/// The kernels of `model`: folded (emitter.h) when `kept` is empty, else
+/// sweep kernels keeping those parameters as run-time arguments
+/// (param_emitter.h; `kept` as kept_parameters() returns it). The manifest
+/// then says so in a comment line.
+KernelSet generate_kernel_set(const Model& model, const std::vector<std::string>& kept = {});
 
 /// All kernels of a set in one translation unit (the AOT build compiles one
 /// file per model): the kernel sources one after the other.

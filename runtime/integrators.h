@@ -16,6 +16,10 @@
 //         accepted steps, located by bisection on cubic Hermite interpolation,
 //         then the same transitions as hsnc. Like CVODE, it sees only sign
 //         changes: two roots inside one step are missed.
+//  cvode: SUNDIALS CVODE, Adams (orders 1-12) with CVODE's root finding on the
+//         same switch functions and the same transitions as rk45 and hsnc; the
+//         restart after a switch is one-sided as in rk45 (integrators.cpp).
+//         --rtol/--atol as rk45. SUNDIALS is linked statically (start-up).
 #pragma once
 
 #include <string>
@@ -25,15 +29,16 @@
 
 namespace hsnc {
 
-enum class Method { hsnc, ab4, rk45 };
+enum class Method { hsnc, ab4, rk45, cvode };
 
-/// "hsnc", "ab4", "rk45"; InputError otherwise.
+/// "hsnc", "ab4", "rk45", "cvode"; InputError otherwise.
 Method parse_method(const std::string& name);
 
 struct IntegratorOptions {
     double h = 0.0;       ///< ab4 step (required for ab4)
-    double rtol = 1e-10;  ///< rk45 tolerances
+    double rtol = 1e-10;  ///< rk45 and cvode tolerances
     double atol = 1e-12;
+    bool cvode_newton = false;  ///< cvode corrector: Newton (dense DQ Jacobian) instead of fixed-point
 };
 
 /// InputError when the options do not fit the method (e.g. ab4 without --h).

@@ -18,6 +18,20 @@
  *       bound[f] >= |g_f''(s)| for every s in [tau, tau + max_step];
  *       scale[f] = sum of |terms| summed into g_f.
  * Neither allocates, throws or touches global state.
+ *
+ * Sweep kernels (`hsnc generate --params k1,m2`) keep some model parameters
+ * as run-time arguments: n_param > 0, param_names[] names them (in the
+ * model's parameter order) and configure must be called before setup:
+ *   configure(coef, params, max_step)  computes everything that depends on the
+ *       parameters (matrices, modes and their regimes, forcing responses) into
+ *       the first doubles of coef (the same n_coef block setup and eval use;
+ *       setup never overwrites that part) and writes the validity of `bound`
+ *       to *max_step (it replaces the field max_step, which is then NaN).
+ *       Returns HSNC_CONFIGURE_OK, or a HSNC_CONFIGURE_* code when the values
+ *       are not a valid model or change what the kernel was generated for;
+ *       coef is then not usable.
+ * Folded kernels (every parameter a constant) have n_param = 0 and
+ * configure = 0 (a null pointer).
  */
 #ifndef HSNC_KERNEL_ABI_H
 #define HSNC_KERNEL_ABI_H
@@ -27,7 +41,7 @@ extern "C" {
 #endif
 
 /** Bumped whenever the layout or the meaning of hsnc_kernel changes. */
-#define HSNC_KERNEL_ABI_VERSION 1
+#define HSNC_KERNEL_ABI_VERSION 2
 
 /** Switch-function kinds; same values as hsnc::SwitchKind (runtime/segment.h). */
 enum {
@@ -35,6 +49,15 @@ enum {
     HSNC_SWITCH_VELOCITY = 1,    /**< v_i of a sliding friction mass */
     HSNC_SWITCH_RELEASE_POS = 2, /**<  A_i - mu_s*N_i of a stuck mass */
     HSNC_SWITCH_RELEASE_NEG = 3  /**< -A_i - mu_s*N_i of a stuck mass */
+};
+
+/** Results of hsnc_configure_fn. */
+enum {
+    HSNC_CONFIGURE_OK = 0,
+    HSNC_CONFIGURE_INVALID = 1,    /**< not a valid model: m <= 0, k < 0, mu_s < mu_k, damping < 0, omega <= 0, ... */
+    HSNC_CONFIGURE_STRUCTURE = 2,  /**< a spring or contact stiffness moved between zero and positive: the
+                                        rigid-body modes the kernel was generated for no longer hold */
+    HSNC_CONFIGURE_EIGEN = 3       /**< the eigen-solver did not converge, or a mode is not positive */
 };
 
 typedef struct hsnc_switch {
@@ -46,6 +69,8 @@ typedef void (*hsnc_setup_fn)(double* coef, double t0, const double* x0, const d
                               const signed char* sgn);
 typedef void (*hsnc_eval_fn)(const double* coef, double tau, double* x, double* v, double* a,
                              double* g, double* dg, double* bound, double* scale);
+
+typedef int (*hsnc_configure_fn)(double* coef, const double* params, double* max_step);
 
 typedef struct hsnc_kernel {
     int abi_version;                /**< HSNC_KERNEL_ABI_VERSION of the emitter */
@@ -61,6 +86,11 @@ typedef struct hsnc_kernel {
     double max_step;                /**< validity of `bound`; +inf unless secular terms */
     hsnc_setup_fn setup;
     hsnc_eval_fn eval;
+    /* ABI version 2: sweep kernels. Folded kernels leave these zero (an
+       aggregate initialiser that stops at `eval` value-initialises them). */
+    int n_param;                    /**< parameters given to configure (0: folded kernel) */
+    const char* const* param_names; /**< n_param names, model parameter order */
+    hsnc_configure_fn configure;    /**< null for folded kernels */
 } hsnc_kernel;
 
 #ifdef __cplusplus

@@ -27,9 +27,43 @@ KernelSolver::KernelSolver(const hsnc_kernel& kernel)
     switches_.reserve(static_cast<std::size_t>(kernel.n_switch));
     for (int f = 0; f < kernel.n_switch; ++f)
         switches_.push_back({static_cast<SwitchKind>(kernel.switches[f].kind), kernel.switches[f].element});
+    max_step_ = kernel.max_step;
+    configured_ = kernel.n_param == 0;
+}
+
+KernelSolver::KernelSolver(const hsnc_kernel& kernel, const std::vector<double>& params) : KernelSolver(kernel) {
+    configure(params);
+}
+
+void KernelSolver::configure(const std::vector<double>& params) {
+    const std::string what = "KernelSolver: kernel '" + std::string(kernel_.config_key) + "' of model '" +
+                             kernel_.model_name + "'";
+    if (kernel_.n_param == 0 || !kernel_.configure)
+        throw RunError(what + " folds every parameter; it takes no parameter values");
+    if (params.size() != static_cast<std::size_t>(kernel_.n_param))
+        throw RunError(what + " takes " + std::to_string(kernel_.n_param) + " parameter values, got " +
+                       std::to_string(params.size()));
+    double max_step = 0.0;
+    const int rc = kernel_.configure(coef_.data(), params.data(), &max_step);
+    if (rc != HSNC_CONFIGURE_OK) {
+        configured_ = false;
+        std::string values;
+        for (int p = 0; p < kernel_.n_param; ++p)
+            values += (p ? ", " : "") + std::string(kernel_.param_names[p]) + " = " + std::to_string(params[p]);
+        const char* why = rc == HSNC_CONFIGURE_INVALID     ? "the values are not a valid model"
+                          : rc == HSNC_CONFIGURE_STRUCTURE ? "a stiffness moved between zero and positive, which "
+                                                             "changes the rigid-body modes the kernel was generated for"
+                                                           : "the eigen-solver failed";
+        throw RunError(what + ": configure(" + values + "): " + why);
+    }
+    max_step_ = max_step;
+    configured_ = true;
 }
 
 void KernelSolver::setup(double t0, const double* x0, const double* v0, const signed char* sgn) {
+    if (!configured_)
+        throw RunError("KernelSolver: sweep kernel '" + std::string(kernel_.config_key) + "' of model '" +
+                       kernel_.model_name + "' used before a successful configure()");
     kernel_.setup(coef_.data(), t0, x0, v0, sgn);
 }
 

@@ -111,7 +111,7 @@ JitSolverProvider::SourceFn emitter_of(const Model& model) {
 TEST(Jit, CompilesAndRunsAFunction) {
     Jit jit;
     jit.add("twice.cpp", "#include \"kernel_abi.h\"\n"
-                         "extern \"C\" double twice(double x) { return 2 * x + HSNC_KERNEL_ABI_VERSION - 1; }\n");
+                         "extern \"C\" double twice(double x) { return 2 * x + 0 * HSNC_KERNEL_ABI_VERSION; }\n");
     auto* twice = reinterpret_cast<double (*)(double)>(jit.lookup("twice"));
     EXPECT_EQ(twice(1.25), 2.5);
 }

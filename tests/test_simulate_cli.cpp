@@ -114,7 +114,10 @@ INSTANTIATE_TEST_SUITE_P(
                       BadFlag{"--dt 0", "--dt"}, BadFlag{"--method euler", "--method 'euler'"},
                       BadFlag{"--method ab4", "needs --h"}, BadFlag{"--set k", "--set"},
                       BadFlag{"--set nope=1", "nope"}, BadFlag{"--x0 m9=1", "m9"},
-                      BadFlag{"--kernels fast", "--kernels 'fast'"}, BadFlag{"--frobnicate", "frobnicate"}));
+                      BadFlag{"--kernels fast", "--kernels 'fast'"}, BadFlag{"--frobnicate", "frobnicate"},
+                      BadFlag{"--method cvode --rtol 0", "--method cvode"},
+                      BadFlag{"--method cvode --atol -1e-9", "--method cvode"},
+                      BadFlag{"--method cvode --rtol abc", "--rtol"}));
 
 TEST(SimulateCli, MissingModelIsBadInput) {
     const auto r = run_hsnc("simulate /nonexistent/model.toml --t-end 1");
@@ -123,7 +126,7 @@ TEST(SimulateCli, MissingModelIsBadInput) {
 }
 
 TEST(SimulateCli, BaselinesRunThroughTheSameOutput) {
-    for (const char* method : {"--method ab4 --h 1e-4", "--method rk45 --rtol 1e-10"}) {
+    for (const char* method : {"--method ab4 --h 1e-4", "--method rk45 --rtol 1e-10", "--method cvode --rtol 1e-10"}) {
         const std::string ev = temp_path("events.csv");
         const auto r = run_hsnc("simulate '" + model_path("coulomb-1dof.toml") + "' --t-end 5 --events '" + ev +
                                 "' --quiet " + method);
