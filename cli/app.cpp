@@ -16,6 +16,7 @@ int run(int argc, const char* const* argv) {
     add_simulate(app, exit_code);
     add_inspect(app, exit_code);
     add_generate(app, exit_code);
+    add_cache(app, exit_code);
     add_tradeoff(app, exit_code);
     try {
         app.parse(argc, argv);

@@ -11,6 +11,7 @@ void add_check(CLI::App& app, int& exit_code);
 void add_simulate(CLI::App& app, int& exit_code);
 void add_inspect(CLI::App& app, int& exit_code);
 void add_generate(CLI::App& app, int& exit_code);
+void add_cache(CLI::App& app, int& exit_code);
 void add_tradeoff(CLI::App& app, int& exit_code);
 
 /// Parse argv, run the chosen subcommand, return the process exit code.

@@ -2,7 +2,9 @@
 #include <dlfcn.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -16,7 +18,9 @@
 #include "derivation.h"
 #include "emitter.h"
 #include "integrators.h"
+#include "cached_kernel_provider.h"
 #include "jit_solver_provider.h"
+#include "kernel_cache.h"
 #include "model_reader.h"
 #include "plot.h"
 #include "reference.h"
@@ -35,6 +39,8 @@ struct SimulateOptions {
     double h = NAN;
     double rtol = 1e-10, atol = 1e-12;
     std::string kernels = "auto";
+    std::string cache_dir;
+    bool no_cache = false;
     std::size_t max_events = 0;
     bool quiet = false;
     std::string precision = "double";
@@ -84,19 +90,28 @@ private:
     std::size_t counts_[5] = {};
 };
 
-// LLVM and Clang are loaded only for --kernels jit: libhsnc_jit.so, from
-// beside the executable (both are built into the same directory).
-std::unique_ptr<SolverProvider> load_jit_provider(const Model& model, JitSolverProvider::SourceFn source) {
+// LLVM and Clang are loaded only when a kernel has to be compiled (or loaded
+// without the cache): libhsnc_jit.so, from beside the executable (both are
+// built into the same directory). Throws JitUnavailable when it cannot be loaded.
+struct JitUnavailable : RunError {
+    using RunError::RunError;
+};
+std::string jit_module_path() {
     char exe[4096];
     const ssize_t len = ::readlink("/proc/self/exe", exe, sizeof exe - 1);
     std::string dir = len > 0 ? std::string(exe, static_cast<std::size_t>(len)) : std::string(".");
-    dir = dir.substr(0, dir.find_last_of('/') + 1);
-    const std::string path = dir + HSNC_JIT_MODULE;
+    return dir.substr(0, dir.find_last_of('/') + 1) + HSNC_JIT_MODULE;
+}
+std::unique_ptr<JitSolverProvider> load_jit_provider(const Model& model, JitSolverProvider::SourceFn source,
+                                                     const JitOptions& options) {
+    const std::string path = jit_module_path();
     void* module = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);  // kept loaded: kernels live in it
-    if (!module) throw RunError(std::string("--kernels jit: cannot load the JIT module: ") + ::dlerror());
+    if (!module) throw JitUnavailable(std::string("cannot load the JIT module: ") + ::dlerror());
     auto factory = reinterpret_cast<JitProviderFactory>(::dlsym(module, kJitProviderFactorySymbol));
-    if (!factory) throw RunError("--kernels jit: " + path + " has no " + kJitProviderFactorySymbol);
-    return std::unique_ptr<SolverProvider>(factory(model, std::move(source)));
+    if (!factory) throw JitUnavailable(path + " has no " + kJitProviderFactorySymbol);
+    // The factory makes a JitSolverProvider (jit_solver_provider.cpp).
+    return std::unique_ptr<JitSolverProvider>(
+        static_cast<JitSolverProvider*>(factory(model, std::move(source), options)));
 }
 
 // --precision: 0 for double, else the decimal digits of the reference engine (mp:N).
@@ -175,12 +190,35 @@ int simulate(const SimulateOptions& o) {
                  std::to_string(reference::carried_bits(digits)) + " bits)";
     } else if (method == Method::hsnc) {
         std::unique_ptr<SolverProvider> provider;
-        if (mode == KernelMode::jit)
-            provider = load_jit_provider(model, [&model](const Configuration& cfg) {
+        // auto: the ahead-of-time kernels when the model has them, else the
+        // JIT, else (no libhsnc_jit.so) the generic solver, with a note.
+        if (mode == KernelMode::jit || (mode == KernelMode::automatic && !has_aot_kernels(model, &aot_registry()))) {
+            JitOptions jopt;
+            jopt.cache_dir = o.no_cache ? "" : o.cache_dir.empty() ? default_cache_dir() : o.cache_dir;
+            JitSolverProvider::SourceFn source = [&model](const Configuration& cfg) {
                 return JitKernelSource{kernel_symbol(model, cfg), emit_kernel(derive(model, cfg))};
-            });
-        else
-            provider = make_solver_provider(model, mode, &aot_registry());
+            };
+            try {
+                const std::string module = jit_module_path();
+                if (::access(module.c_str(), R_OK) != 0)
+                    throw JitUnavailable("cannot load the JIT module: " + module + ": " + std::strerror(errno));
+                if (jopt.cache_dir.empty())
+                    provider = load_jit_provider(model, source, jopt);
+                else  // cached kernels without LLVM; the JIT only for the others
+                    provider = std::make_unique<CachedKernelProvider>(
+                        model, source, jopt, [&model](JitSolverProvider::SourceFn s, const JitOptions& opt) {
+                            try {
+                                return load_jit_provider(model, std::move(s), opt);
+                            } catch (const JitUnavailable& e) {
+                                throw RunError(std::string("cannot compile a kernel: ") + e.what());
+                            }
+                        });
+            } catch (const JitUnavailable& e) {
+                if (mode == KernelMode::jit) throw RunError(std::string("--kernels jit: ") + e.what());
+                if (!o.quiet) std::fprintf(stderr, "hsnc: note: %s; using the generic solver\n", e.what());
+            }
+        }
+        if (!provider) provider = make_solver_provider(model, mode, &aot_registry());
         Engine engine(model, *provider);
         sum = engine.run(eopt, obs);
         detail = provider->describe();
@@ -236,8 +274,12 @@ void add_simulate(CLI::App& app, int& exit_code) {
     sub->add_option("--rtol", o->rtol, "relative tolerance of --method rk45/cvode (default 1e-10)");
     sub->add_option("--atol", o->atol, "absolute tolerance of --method rk45/cvode (default 1e-12)");
     sub->add_option("--kernels", o->kernels,
-                    "auto (default: ahead-of-time kernels when the model has them, else generic), aot, generic, "
+                    "auto (default: ahead-of-time kernels when the model has them, else jit), aot, generic, "
                     "jit (compile a kernel in-process for each configuration the run enters)");
+    sub->add_option("--cache-dir", o->cache_dir,
+                    "keep compiled kernels (jit) in DIR (default $XDG_CACHE_HOME/hsnc, else ~/.cache/hsnc)");
+    auto* no_cache = sub->add_flag("--no-cache", o->no_cache, "compile every kernel (jit); read and write no cache");
+    no_cache->excludes(sub->get_option("--cache-dir"));
     sub->add_option("--max-events", o->max_events, "stop after this many switch events (0: no limit)");
     sub->add_option("--precision", o->precision,
                     "double (default); mp:N: the high-precision reference engine, every quantity at N decimal "

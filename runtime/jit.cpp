@@ -1,38 +1,38 @@
-// hsnc -- Jit (jit.h): Clang CompilerInstance -> LLVM IR (EmitLLVMOnlyAction)
-// -> ORC LLJIT, after LLVM's KaleidoscopeJIT (create, add, lookup; Expected
-// and Error handled here and nowhere else).
+// hsnc -- Jit (jit.h): Clang CompilerInstance -> LLVM IR (EmitLLVMOnlyAction,
+// in libhsnc_jit_clang.so: runtime/jit_frontend.h, loaded on the first compile)
+// -> object file (orc::SimpleCompiler, with the TargetMachine the LLJIT itself
+// would use) -> ORC LLJIT (addObjectFile), after LLVM's KaleidoscopeJIT
+// (create, add, lookup; Expected and Error handled here and nowhere else).
+// Producing the object ourselves, rather than handing the IR to the LLJIT,
+// is what lets a persistent cache skip Clang and LLVM's code generation
+// altogether on a hit (runtime/kernel_cache.h).
 #include "jit.h"
 
-#include <clang/Basic/Diagnostic.h>
-#include <clang/Basic/DiagnosticOptions.h>
-#include <clang/CodeGen/CodeGenAction.h>
-#include <clang/Frontend/CompilerInstance.h>
-#include <clang/Frontend/CompilerInvocation.h>
-#include <clang/Frontend/TextDiagnosticPrinter.h>
-#include <clang/Lex/PreprocessorOptions.h>
+#include <dlfcn.h>
+#include <llvm/ExecutionEngine/Orc/CompileUtils.h>
 #include <llvm/ExecutionEngine/Orc/ExecutionUtils.h>
+#include <llvm/ExecutionEngine/Orc/JITTargetMachineBuilder.h>
 #include <llvm/ExecutionEngine/Orc/LLJIT.h>
 #include <llvm/ExecutionEngine/Orc/ThreadSafeModule.h>
 #include <llvm/IR/LLVMContext.h>
 #include <llvm/IR/Module.h>
+#include <llvm/Object/ObjectFile.h>
 #include <llvm/Support/Error.h>
 #include <llvm/Support/Host.h>
 #include <llvm/Support/MemoryBuffer.h>
 #include <llvm/Support/TargetSelect.h>
 #include <llvm/Support/raw_ostream.h>
+#include <llvm/Target/TargetMachine.h>
 
 #include <mutex>
 #include <vector>
 
 #include "error.h"
-#include "kernel_abi_text.h"  // generated at build time: kKernelAbiHeaderText
+#include "jit_frontend.h"
+#include "kernel_cache.h"
 
 namespace hsnc {
 namespace {
-
-// The virtual directory that holds the embedded kernel_abi.h and the source
-// being compiled; it exists only inside Clang's source manager.
-constexpr const char* kVirtualDir = "/hsnc-jit";
 
 std::string error_text(llvm::Error err) { return llvm::toString(std::move(err)); }
 
@@ -45,15 +45,52 @@ void initialize_llvm() {
     if (!ok) throw RunError("Jit::Jit(): LLVM cannot generate code for this host (" + llvm::sys::getProcessTriple() + ")");
 }
 
+// The Clang front end, from libhsnc_jit_clang.so beside this library, loaded
+// once per process on the first compile.
+JitFrontendFn frontend() {
+    static std::once_flag once;
+    static JitFrontendFn fn = nullptr;
+    static std::string problem;
+    std::call_once(once, [] {
+        Dl_info self;
+        if (!::dladdr(reinterpret_cast<void*>(&frontend), &self) || !self.dli_fname) {
+            problem = "cannot locate libhsnc_jit";
+            return;
+        }
+        std::string path = self.dli_fname;
+        path = path.substr(0, path.find_last_of('/') + 1) + HSNC_JIT_FRONTEND_MODULE;
+        void* module = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);  // kept loaded
+        if (!module) {
+            problem = std::string("cannot load the Clang front end: ") + ::dlerror();
+            return;
+        }
+        fn = reinterpret_cast<JitFrontendFn>(::dlsym(module, kJitFrontendSymbol));
+        if (!fn) problem = path + " has no " + kJitFrontendSymbol;
+    });
+    if (!fn) throw RunError("Jit::compile(): " + problem);
+    return fn;
+}
+
 }  // namespace
 
 struct Jit::Impl {
     std::unique_ptr<llvm::orc::LLJIT> lljit;
+    std::unique_ptr<llvm::TargetMachine> machine;  // the LLJIT's own target, for compile()
 };
 
 Jit::Jit() : impl_(std::make_unique<Impl>()) {
     initialize_llvm();
-    auto jit = llvm::orc::LLJITBuilder().create();
+    auto builder = llvm::orc::JITTargetMachineBuilder::detectHost();
+    if (!builder) throw RunError("Jit::Jit(): cannot describe this host to LLVM: " + error_text(builder.takeError()));
+    // The large code model: every address in the object is an absolute 64-bit
+    // relocation, wherever the code lands, which is what lets a cached object
+    // be mapped without LLVM (runtime/object_loader.h). LLVM 14's JIT default
+    // on x86-64, stated here because the loader depends on it.
+    builder->setCodeModel(llvm::CodeModel::Large);
+    auto machine = builder->createTargetMachine();
+    if (!machine) throw RunError("Jit::Jit(): cannot create an LLVM target machine: " + error_text(machine.takeError()));
+    impl_->machine = std::move(*machine);
+    auto jit = llvm::orc::LLJITBuilder().setJITTargetMachineBuilder(*builder).create();
     if (!jit) throw RunError("Jit::Jit(): cannot create the LLVM JIT: " + error_text(jit.takeError()));
     impl_->lljit = std::move(*jit);
     // Kernels call libm (__builtin_exp, sin, cos lower to exp, sin, cos):
@@ -66,57 +103,37 @@ Jit::Jit() : impl_(std::make_unique<Impl>()) {
 
 Jit::~Jit() = default;
 
-void Jit::add(const std::string& name, const std::string& source) {
-    const std::string dir = kVirtualDir;
-    const std::string path = dir + "/" + name;
-    const std::string triple = llvm::sys::getProcessTriple();
-    // cc1 arguments. No system or builtin include paths: a kernel includes only
-    // kernel_abi.h and calls only __builtin_ math. -ffp-contract=off keeps
-    // a*b+c two roundings, as the ahead-of-time kernels and the generic solver
-    // compute it, so all three agree to the last bit wherever they can.
-    // -O2, measured (2-core AMD EPYC, seed-scenario-2 to t = 30000 s, 420k
-    // segments): its kernels step as fast as the ahead-of-time ones (0.60 s);
-    // -O0 compiles in 11 instead of 18 ms per kernel but steps 23% slower,
-    // -O1 and -O3 compile no faster and step no faster than -O2.
-    const std::vector<const char*> args = {
-        "-triple", triple.c_str(), "-x", "c++", "-std=c++17", "-O2", "-ffp-contract=off",
-        "-nostdsysteminc", "-nobuiltininc", "-I", dir.c_str(), "-w", path.c_str()};
+void Jit::add(const std::string& name, const std::string& source) { add_object(name, compile(name, source)); }
 
-    std::string diagnostics;
-    llvm::raw_string_ostream diag_stream(diagnostics);
-    llvm::IntrusiveRefCntPtr<clang::DiagnosticOptions> diag_opts(new clang::DiagnosticOptions());
-    clang::TextDiagnosticPrinter printer(diag_stream, diag_opts.get());
-    clang::DiagnosticsEngine arg_diags(llvm::IntrusiveRefCntPtr<clang::DiagnosticIDs>(new clang::DiagnosticIDs()),
-                                       diag_opts, &printer, /*ShouldOwnClient=*/false);
-
-    auto invocation = std::make_shared<clang::CompilerInvocation>();
-    const bool parsed = clang::CompilerInvocation::CreateFromArgs(*invocation, args, arg_diags);
-    if (!parsed) {
-        diag_stream.flush();
-        throw RunError("Jit::add(): cannot set up Clang for " + name + ": " + diagnostics);
-    }
-    // Both files live in memory; the source manager takes ownership of the buffers.
-    clang::PreprocessorOptions& pp = invocation->getPreprocessorOpts();
-    pp.addRemappedFile(path, llvm::MemoryBuffer::getMemBufferCopy(source, path).release());
-    pp.addRemappedFile(dir + "/kernel_abi.h",
-                       llvm::MemoryBuffer::getMemBuffer(kKernelAbiHeaderText, dir + "/kernel_abi.h").release());
-
-    clang::CompilerInstance compiler;
-    compiler.setInvocation(std::move(invocation));
-    compiler.createDiagnostics(&printer, /*ShouldOwnClient=*/false);
-    compiler.setVerboseOutputStream(diag_stream);  // "1 error generated." goes with the diagnostics
-
+std::string Jit::compile(const std::string& name, const std::string& source) {
+    const std::string triple = impl_->machine->getTargetTriple().str();
     auto context = std::make_unique<llvm::LLVMContext>();
-    clang::EmitLLVMOnlyAction action(context.get());
-    const bool compiled = compiler.ExecuteAction(action);
-    std::unique_ptr<llvm::Module> module = compiled ? action.takeModule() : nullptr;
-    diag_stream.flush();
-    if (!module) throw RunError("Jit::add(): Clang cannot compile " + name + ":\n" + diagnostics);
+    std::string error;
+    std::unique_ptr<llvm::Module> module(frontend()(context.get(), triple, name, source, error));
+    if (!module) throw RunError("Jit::compile(): " + error);
 
-    llvm::orc::ThreadSafeModule tsm(std::move(module), std::move(context));
-    if (llvm::Error err = impl_->lljit->addIRModule(std::move(tsm)))
-        throw RunError("Jit::add(): cannot add " + name + " to the JIT: " + error_text(std::move(err)));
+    // Machine code, as the LLJIT's IR layer would make it (same target machine).
+    module->setDataLayout(impl_->machine->createDataLayout());
+    llvm::orc::SimpleCompiler codegen(*impl_->machine);
+    auto object = codegen(*module);
+    if (!object) throw RunError("Jit::compile(): cannot generate code for " + name + ": " + error_text(object.takeError()));
+    return (*object)->getBuffer().str();
 }
+
+void Jit::add_object(const std::string& name, const std::string& object) {
+    // Check that it parses as an object file for this host before the JIT
+    // owns it: a bad object found only at lookup would leave its symbols
+    // failed in the JIT, so that a recompiled one could not be added.
+    auto buffer = llvm::MemoryBuffer::getMemBufferCopy(object, name + ".o");
+    auto parsed = llvm::object::ObjectFile::createObjectFile(buffer->getMemBufferRef());
+    if (!parsed) throw RunError("Jit::add_object(): " + name + " is not an object file: " + error_text(parsed.takeError()));
+    if ((*parsed)->getArch() != impl_->machine->getTargetTriple().getArch())
+        throw RunError("Jit::add_object(): " + name + " is an object file for another architecture");
+    if (llvm::Error err = impl_->lljit->addObjectFile(std::move(buffer)))
+        throw RunError("Jit::add_object(): cannot add " + name + " to the JIT: " + error_text(std::move(err)));
+}
+
+std::string Jit::cache_key(const std::string& source) const { return jit_cache_key(source); }
 
 void* Jit::lookup(const std::string& symbol) {
     auto sym = impl_->lljit->lookup(symbol);

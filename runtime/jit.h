@@ -24,10 +24,22 @@ public:
     Jit& operator=(const Jit&) = delete;
 
     /// Compile `source` (C++17, -O2) under the name `name` (used in
-    /// diagnostics) and add it to the JIT. Throws RunError with Clang's
-    /// diagnostics when it does not compile. Code is generated lazily, on the
-    /// first lookup of one of its symbols.
+    /// diagnostics) and add it to the JIT: add_object(name, compile(name, source)).
     void add(const std::string& name, const std::string& source);
+
+    /// Compile `source` to an object file for this host (the bytes of a
+    /// relocatable ELF object, what the JIT would generate itself). Throws
+    /// RunError with Clang's diagnostics when it does not compile.
+    std::string compile(const std::string& name, const std::string& source);
+
+    /// Add an object file made by compile() (here or in an earlier process:
+    /// a cached one) to the JIT. Throws RunError when `object` is not an
+    /// object file for this host; the JIT is then unchanged.
+    void add_object(const std::string& name, const std::string& object);
+
+    /// The key of compile(source)'s result in a persistent cache:
+    /// jit_cache_key(source) (runtime/kernel_cache.h).
+    std::string cache_key(const std::string& source) const;
 
     /// Address of the (unmangled, C-linkage) symbol `symbol` of an added
     /// source; generates machine code on first use. Throws RunError when

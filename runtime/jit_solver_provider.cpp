@@ -17,10 +17,22 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 }  // namespace
 
-JitSolverProvider::JitSolverProvider(const Model& model, SourceFn source)
-    : model_(model), source_(std::move(source)), hash_(model_hash(model)), jit_(std::make_unique<Jit>()) {}
+JitSolverProvider::JitSolverProvider(const Model& model, SourceFn source, JitOptions options)
+    : model_(model),
+      source_(std::move(source)),
+      options_(std::move(options)),
+      cache_dir_(options_.cache_dir),
+      hash_(model_hash(model)),
+      jit_(std::make_unique<Jit>()) {}
 
 JitSolverProvider::~JitSolverProvider() = default;
+
+void JitSolverProvider::warn(const std::string& text) const {
+    if (options_.warn)
+        options_.warn(text);
+    else
+        std::fprintf(stderr, "hsnc: warning: %s\n", text.c_str());
+}
 
 SegmentSolver& JitSolverProvider::solver(const Configuration& cfg) {
     auto it = cache_.find(cfg);
@@ -30,11 +42,46 @@ SegmentSolver& JitSolverProvider::solver(const Configuration& cfg) {
     const JitKernelSource unit = source_(cfg);
     emit_seconds_ += seconds_since(start);
 
+    // The persistent cache first: a hit skips Clang and code generation.
     start = std::chrono::steady_clock::now();
-    jit_->add(unit.symbol + ".cpp", unit.source);
+    const std::string name = unit.symbol + ".cpp";
+    std::string key;
+    bool loaded = false;
+    if (!cache_dir_.empty()) {
+        key = jit_->cache_key(unit.source);
+        const KernelCache cache(cache_dir_);
+        KernelCache::Entry entry = cache.load(key);
+        if (entry.status == KernelCache::Status::hit) {
+            try {
+                jit_->add_object(name, entry.payload);
+                loaded = true;
+            } catch (const RunError& e) {
+                entry.status = KernelCache::Status::bad;
+                entry.problem = e.what();
+            }
+        }
+        if (entry.status == KernelCache::Status::bad) {
+            ++rebuilt_;
+            warn("kernel cache entry " + cache.path_of(key) + " is unusable (" + entry.problem +
+                 "); recompiling it");
+        }
+    }
+    if (loaded) {
+        ++hits_;
+    } else {
+        const std::string object = jit_->compile(name, unit.source);
+        jit_->add_object(name, object);
+        ++compiled_;
+        if (!cache_dir_.empty()) {
+            const std::string problem = KernelCache(cache_dir_).store(key, object);
+            if (!problem.empty()) {
+                warn("kernel cache: " + problem + "; running without the cache");
+                cache_dir_.clear();
+            }
+        }
+    }
     const auto* kernel = static_cast<const hsnc_kernel*>(jit_->lookup(unit.symbol));
-    compile_seconds_ += seconds_since(start);
-    ++compiled_;
+    (loaded ? load_seconds_ : compile_seconds_) += seconds_since(start);
 
     // The kernel says what it was built for: it must be this model and configuration.
     if (kernel->abi_version == HSNC_KERNEL_ABI_VERSION &&
@@ -45,18 +92,21 @@ SegmentSolver& JitSolverProvider::solver(const Configuration& cfg) {
 }
 
 std::string JitSolverProvider::describe() const {
-    char text[200];
+    auto per_kernel = [](double seconds, std::size_t n) { return n ? 1e3 * seconds / static_cast<double>(n) : 0.0; };
+    char text[600];
     std::snprintf(text, sizeof text,
                   "JIT: %zu configurations visited, %zu kernels compiled (derive+emit %.3f s, compile %.3f s, "
-                  "%.1f ms per kernel)",
-                  cache_.size(), compiled_, emit_seconds_, compile_seconds_,
-                  compiled_ ? 1e3 * compile_seconds_ / static_cast<double>(compiled_) : 0.0);
+                  "%.1f ms per kernel), %zu cache hits (load %.3f s, %.2f ms per kernel), %s%s",
+                  cache_.size(), compiled_, emit_seconds_, compile_seconds_, per_kernel(compile_seconds_, compiled_),
+                  hits_, load_seconds_, per_kernel(load_seconds_, hits_),
+                  options_.cache_dir.empty() ? "no cache" : "cache ",
+                  options_.cache_dir.empty() ? "" : (cache_dir_.empty() ? "unwritable" : cache_dir_.c_str()));
     return text;
 }
 
 }  // namespace hsnc
 
 extern "C" __attribute__((visibility("default"))) hsnc::SolverProvider* hsnc_jit_create_provider(
-    const hsnc::Model& model, hsnc::JitSolverProvider::SourceFn source) {
-    return new hsnc::JitSolverProvider(model, std::move(source));
+    const hsnc::Model& model, hsnc::JitSolverProvider::SourceFn source, const hsnc::JitOptions& options) {
+    return new hsnc::JitSolverProvider(model, std::move(source), options);
 }

@@ -53,16 +53,19 @@ std::string AotSolverProvider::describe() const {
            " configurations";
 }
 
+bool has_aot_kernels(const Model& model, const AotRegistry* registry) {
+    const std::uint64_t hash = model_hash(model);
+    return registry && std::any_of(registry->kernels, registry->kernels + registry->count, [&](const hsnc_kernel* k) {
+               return k->model_hash == hash && model.name == k->model_name;
+           });
+}
+
 std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
                                                      const AotRegistry* registry) {
     if (mode == KernelMode::generic) return std::make_unique<GenericSolverProvider>(model);
     if (mode == KernelMode::jit)
         throw std::logic_error("make_solver_provider(): --kernels jit is built with JitSolverProvider");
-    const std::uint64_t hash = model_hash(model);
-    const bool has_kernels =
-        registry && std::any_of(registry->kernels, registry->kernels + registry->count, [&](const hsnc_kernel* k) {
-            return k->model_hash == hash && model.name == k->model_name;
-        });
+    const bool has_kernels = has_aot_kernels(model, registry);
     if (mode == KernelMode::aot && !has_kernels)
         throw InputError("--kernels aot: no ahead-of-time kernels for model '" + model.name +
                          "' (bundled models only, and only as generated: a --set or an edited file changes the model)");

@@ -11,7 +11,8 @@
 namespace hsnc {
 
 enum class KernelMode {
-    automatic,  ///< ahead-of-time kernels when the model has them, else generic
+    automatic,  ///< ahead-of-time kernels when the model has them, else jit
+                ///  (the command line; generic when the JIT cannot be loaded)
     aot,        ///< ahead-of-time kernels only (error when the model has none)
     generic,    ///< the Eigen-based generic solver
     jit,        ///< a kernel compiled in-process per configuration visited
@@ -51,8 +52,11 @@ private:
     std::map<Configuration, std::unique_ptr<SegmentSolver>> cache_;
 };
 
+/// Whether `registry` (may be null) holds ahead-of-time kernels of `model` as it is.
+bool has_aot_kernels(const Model& model, const AotRegistry* registry);
+
 /// The provider for `mode` (not jit: that one needs the generator, see
-/// JitSolverProvider); `registry` (may be null) lists the AOT kernels linked in.
+/// JitSolverProvider; automatic without kernels gives the generic solver); `registry` (may be null) lists the AOT kernels linked in.
 std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
                                                      const AotRegistry* registry);
 

@@ -32,9 +32,12 @@ inline std::string temp_path(const std::string& name) {
 }
 
 /// Run `hsnc ARGS` (ARGS already shell-quoted), capturing stdout and stderr.
-inline CliRun run_hsnc(const std::string& args) {
+/// `env` (e.g. "HOME=/x") is set for the process. The persistent kernel cache
+/// defaults to the build tree's test-cache/ (XDG_CACHE_HOME), never the user's.
+inline CliRun run_hsnc(const std::string& args, const std::string& env = "") {
     const std::string out = temp_path("stdout"), err = temp_path("stderr");
-    const std::string command = std::string("'") + HSNC_BINARY + "' " + args + " >'" + out + "' 2>'" + err + "'";
+    const std::string command = std::string("XDG_CACHE_HOME='") + HSNC_TEST_CACHE_HOME + "' " + env + " '" +
+                                HSNC_BINARY + "' " + args + " >'" + out + "' 2>'" + err + "'";
     const int status = std::system(command.c_str());
     CliRun r;
     r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

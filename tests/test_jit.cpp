@@ -123,7 +123,7 @@ TEST(Jit, SyntaxErrorGivesClangsDiagnostic) {
         FAIL() << "a syntax error compiled";
     } catch (const RunError& e) {
         const std::string what = e.what();
-        EXPECT_NE(what.find("Jit::add(): Clang cannot compile broken.cpp"), std::string::npos) << what;
+        EXPECT_NE(what.find("Jit::compile(): Clang cannot compile broken.cpp"), std::string::npos) << what;
         EXPECT_NE(what.find("broken.cpp:1:"), std::string::npos) << what;
         EXPECT_NE(what.find("error: expected ';'"), std::string::npos) << what;
     }
@@ -133,6 +133,25 @@ TEST(Jit, UnknownSymbolIsARunError) {
     Jit jit;
     jit.add("one.cpp", "extern \"C\" int one() { return 1; }\n");
     EXPECT_THROW(jit.lookup("two"), RunError);
+}
+
+TEST(Jit, CompiledObjectsAreDeterministicAndReloadable) {
+    const std::string source = "extern \"C\" double thrice(double x) { return 3 * x; }\n";
+    Jit a, b;
+    const std::string object = a.compile("thrice.cpp", source);
+    EXPECT_EQ(b.compile("thrice.cpp", source), object) << "the cache relies on equal source -> equal object";
+    EXPECT_EQ(object.substr(0, 4), std::string("\x7f" "ELF")) << "a relocatable ELF object";
+    // Keys: equal for equal source, different for any other source; 128-bit hex.
+    EXPECT_EQ(a.cache_key(source), b.cache_key(source));
+    EXPECT_NE(a.cache_key(source), a.cache_key(source + " "));
+    EXPECT_EQ(a.cache_key(source).size(), 32u);
+    // Garbage, or a cut object, is refused before the JIT owns it, and the JIT
+    // still takes the real object afterwards.
+    EXPECT_THROW(b.add_object("thrice", "not an object file at all"), RunError);
+    EXPECT_THROW(b.add_object("thrice", object.substr(0, object.size() / 3)), RunError);
+    b.add_object("thrice", object);
+    auto* thrice = reinterpret_cast<double (*)(double)>(b.lookup("thrice"));
+    EXPECT_EQ(thrice(1.5), 4.5);
 }
 
 TEST(JitSolverProvider, Chain12AgreesWithGenericSolver) {

@@ -1,0 +1,72 @@
+// hsnc -- CachedKernelProvider: JIT kernels (--kernels jit, or auto without
+// ahead-of-time kernels) taken from the persistent cache without loading LLVM.
+//
+// For each configuration the run enters: look its kernel up by the index key
+// (jit_index_key: this executable's build ID, the model's numbers and the
+// configuration), which needs no derivation; else emit the kernel source
+// (callback) and look it up by its key (jit_cache_key). When the cache holds a
+// whole entry, map its object with LoadedObject (runtime/object_loader.h) and
+// record the index entry for the next run. Only when a
+// kernel is missing, damaged or not loadable that way does it ask `make_jit`
+// for a JitSolverProvider (which loads libhsnc_jit.so, that is LLVM) and hand
+// that configuration to it: it warns about damage, compiles, rewrites the
+// entry. So a run whose kernels are all cached never loads LLVM or Clang.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "engine.h"
+#include "jit_solver_provider.h"
+#include "object_loader.h"
+
+namespace hsnc {
+
+class CachedKernelProvider : public SolverProvider {
+public:
+    /// Creates the JIT on the first kernel the cache cannot serve; throws
+    /// RunError when it cannot (the run stops with that message).
+    using JitFactory =
+        std::function<std::unique_ptr<JitSolverProvider>(JitSolverProvider::SourceFn source, const JitOptions& options)>;
+
+    /// `model` must outlive the provider; options.cache_dir must not be empty.
+    CachedKernelProvider(const Model& model, JitSolverProvider::SourceFn source, JitOptions options,
+                         JitFactory make_jit);
+    ~CachedKernelProvider() override;
+
+    SegmentSolver& solver(const Configuration& cfg) override;
+
+    /// The JIT's line (JitSolverProvider::describe) with this provider's cache
+    /// hits added: "JIT: 5 configurations visited, 1 kernels compiled (...), 4
+    /// cache hits (3 by index, load ...), cache DIR".
+    std::string describe() const override;
+
+    std::size_t configurations() const { return all_.size(); }
+    std::size_t cache_hits() const { return hits_ + (jit_ ? jit_->cache_hits() : 0); }
+    std::size_t kernels_compiled() const { return jit_ ? jit_->kernels_compiled() : 0; }
+    /// Whether the JIT (LLVM) had to be loaded.
+    bool jit_loaded() const { return jit_ != nullptr; }
+
+private:
+    const Model& model_;
+    JitSolverProvider::SourceFn source_;
+    JitOptions options_;
+    JitFactory make_jit_;
+    std::uint64_t hash_;
+    std::string model_text_;  // model_canonical_text: what the index key covers
+    std::map<Configuration, std::unique_ptr<LoadedObject>> objects_;  // the code: outlives solvers_
+    std::map<Configuration, std::unique_ptr<SegmentSolver>> solvers_;
+    std::map<Configuration, SegmentSolver*> all_;
+    std::map<Configuration, JitKernelSource> emitted_;  // handed to the JIT, not emitted twice
+    std::unique_ptr<JitSolverProvider> jit_;            // declared last: destroyed first
+    /// The kernel in the object stored under `key`, mapped without LLVM, or null.
+    SegmentSolver* load_object(const Configuration& cfg, const std::string& key, const std::string& symbol);
+    void record_index(const std::string& index, const std::string& key, const std::string& symbol) const;
+
+    std::size_t hits_ = 0, index_hits_ = 0;
+    double emit_seconds_ = 0, load_seconds_ = 0;
+};
+
+}  // namespace hsnc
