@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -26,9 +27,15 @@ inline std::string slurp(const std::string& path) {
 
 /// A fresh path in the test's temporary directory (unique per process and call,
 /// so `ctest -j` runs never share files).
+/// A fresh path in the test temp directory. Process ids come back (pid_max is
+/// 32768 here), so a file an earlier run left under the same name is removed:
+/// a "no file written" check must never see a stale one.
 inline std::string temp_path(const std::string& name) {
     static int counter = 0;
-    return ::testing::TempDir() + "hsnc_" + std::to_string(::getpid()) + "_" + std::to_string(++counter) + "_" + name;
+    const std::string path =
+        ::testing::TempDir() + "hsnc_" + std::to_string(::getpid()) + "_" + std::to_string(++counter) + "_" + name;
+    std::remove(path.c_str());
+    return path;
 }
 
 /// Run `hsnc ARGS` (ARGS already shell-quoted), capturing stdout and stderr.

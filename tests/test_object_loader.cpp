@@ -42,8 +42,8 @@ void expect_same_kernel(const hsnc_kernel& a, const hsnc_kernel& b, const Model&
     const std::size_t n = model.dof(), m = static_cast<std::size_t>(a.n_switch);
     std::vector<double> ca(static_cast<std::size_t>(a.n_coef)), cb(ca.size());
     std::vector<signed char> sgn(n, 1);
-    a.setup(ca.data(), 3.25, model.x0.data(), model.v0.data(), sgn.data());
-    b.setup(cb.data(), 3.25, model.x0.data(), model.v0.data(), sgn.data());
+    a.setup(ca.data(), 3.25, 1e-16, model.x0.data(), model.v0.data(), sgn.data());
+    b.setup(cb.data(), 3.25, 1e-16, model.x0.data(), model.v0.data(), sgn.data());
     EXPECT_EQ(0, std::memcmp(ca.data(), cb.data(), ca.size() * sizeof(double)));
     std::vector<double> oa(3 * n + 4 * m), ob(oa.size());
     for (double tau : {0.0, 1e-9, 1e-3, 0.0171, 0.25, 1.0, 7.5}) {
