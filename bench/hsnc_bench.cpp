@@ -243,7 +243,12 @@ int main(int argc, char** argv) {
     std::printf("  %-38s wall %7.2f ms (%5.2f%% of cvode)  cpu %7.2f ms (%5.2f%% of cvode)\n",
                 "--dt 0.01 --out F --events F", 1e3 * files.wall, 100 * files.wall / cvode_scenario2, 1e3 * files.cpu,
                 100 * files.cpu / cvode_scenario2);
-    std::printf("  cvode (in-process, rtol 1e-12) on the same run: %.4g s; target: the process <= 1%% of it\n",
-                cvode_scenario2);
+    // The issue states its target against a CVODE figure quoted for these
+    // machines (0.6 s, 140 us per switch); this build's CVODE is measured above.
+    constexpr double kQuotedCvode = 0.6;
+    std::printf("  cvode (in-process, rtol 1e-12) on the same run: %.4g s; the process (--quiet, wall) is %.0fx faster\n",
+                cvode_scenario2, cvode_scenario2 / quiet.wall);
+    std::printf("  against the issue's quoted CVODE figure (%.1f s): %.0fx faster; target: at least 100x\n",
+                kQuotedCvode, kQuotedCvode / quiet.wall);
     return 0;
 }
