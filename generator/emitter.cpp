@@ -750,7 +750,16 @@ std::string emit_kernel(const Derivation& d) {
         out += "{" + std::to_string(static_cast<int>(sf.kind)) + ", " + std::to_string(sf.element) + "}, ";
     if (d.switches.empty()) out += "{0, -1}";  // C++ needs one element; n_switch = 0
     out += "};\n\n}  // namespace " + ns + "\n}  // namespace\n\n";
-    out += "extern \"C\" const hsnc_kernel " + sym + ";\n";
+    out += emit_kernel_object(d, sym, ns, {std::to_string(coef.size()), format_double(d.max_step)});
+    return out;
+}
+
+std::string emit_kernel_object(const Derivation& d, const std::string& sym, const std::string& ns,
+                               const std::vector<std::string>& rest) {
+    const Model& model = *d.model;
+    char hash[32];
+    std::snprintf(hash, sizeof hash, "0x%016llx", static_cast<unsigned long long>(model_hash(model)));
+    std::string out = "extern \"C\" const hsnc_kernel " + sym + ";\n";
     out += "extern \"C\" const hsnc_kernel " + sym + " = {\n";
     out += "    HSNC_KERNEL_ABI_VERSION,\n";
     out += "    \"" + model.name + "\",\n";
@@ -758,13 +767,15 @@ std::string emit_kernel(const Derivation& d) {
     out += "    \"" + d.cfg.spec(model) + "\",\n";
     out += "    \"" + d.cfg.key() + "\",\n";
     out += "    \"" HSNC_VERSION "\",\n";
-    out += "    " + std::to_string(n) + ",\n";
+    out += "    " + std::to_string(model.dof()) + ",\n";
     out += "    " + std::to_string(d.switches.size()) + ",\n";
     out += "    " + ns + "::switches,\n";
-    out += "    " + std::to_string(coef.size()) + ",\n";
-    out += "    " + format_double(d.max_step) + ",\n";
-    out += "    " + ns + "::setup,\n";
-    out += "    " + ns + "::eval,\n";
+    for (std::size_t k = 0; k < rest.size(); ++k) {
+        const std::size_t comment = rest[k].find("  //");  // "value  // why": the comma goes after the value
+        out += comment == std::string::npos ? "    " + rest[k] + ",\n"
+                                            : "    " + rest[k].substr(0, comment) + "," + rest[k].substr(comment) + "\n";
+        if (k == 1) out += "    " + ns + "::setup,\n    " + ns + "::eval,\n";
+    }
     out += "};\n";
     return out;
 }

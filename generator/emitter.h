@@ -23,6 +23,14 @@ std::string kernel_symbol(const Model& model, const Configuration& cfg);
 /// The kernel translation unit of derivation `d`.
 std::string emit_kernel(const Derivation& d);
 
+/// The `extern "C" const hsnc_kernel SYM = {...}` object closing an emitted
+/// kernel: the identity fields from `d` (ABI, model, hash, configuration,
+/// generator version, sizes, NS::switches), then `rest` -- n_coef and max_step,
+/// followed by NS::setup and NS::eval, then any further fields (sweep kernels:
+/// n_param, param_names, configure) -- one per line.
+std::string emit_kernel_object(const Derivation& d, const std::string& sym, const std::string& ns,
+                               const std::vector<std::string>& rest);
+
 /// C++ source of `double hsnc_phase(omega, t0, t0_lo, phase)`: the forcing
 /// phase at a segment start, computed as GenericSolver does; every emitted
 /// kernel with forcing (folded or sweep) contains it.

@@ -974,25 +974,9 @@ std::string emit_sweep_kernel(const Derivation& d, const std::vector<std::string
     }
     out += k.str() + kModes + "\n" + kSetup + "\n";
     out += "}  // namespace " + ns_name + "\n}  // namespace\n\n";
-    out += "extern \"C\" const hsnc_kernel " + sym + ";\n";
-    out += "extern \"C\" const hsnc_kernel " + sym + " = {\n";
-    out += "    HSNC_KERNEL_ABI_VERSION,\n";
-    out += "    \"" + model.name + "\",\n";
-    out += "    " + std::string(hash) + "ull,\n";
-    out += "    \"" + d.cfg.spec(model) + "\",\n";
-    out += "    \"" + d.cfg.key() + "\",\n";
-    out += "    \"" HSNC_VERSION "\",\n";
-    out += "    " + std::to_string(n) + ",\n";
-    out += "    " + std::to_string(ns) + ",\n";
-    out += "    " + ns_name + "::switches,\n";
-    out += "    " + ns_name + "::n_coef,\n";
-    out += "    __builtin_nan(\"\"),  // max_step: configure() gives it\n";
-    out += "    " + ns_name + "::setup,\n";
-    out += "    " + ns_name + "::eval,\n";
-    out += "    " + std::to_string(kept.size()) + ",\n";
-    out += "    " + ns_name + "::param_names,\n";
-    out += "    " + ns_name + "::configure,\n";
-    out += "};\n";
+    out += emit_kernel_object(d, sym, ns_name,
+                              {ns_name + "::n_coef", "__builtin_nan(\"\")  // max_step: configure() gives it",
+                               std::to_string(kept.size()), ns_name + "::param_names", ns_name + "::configure"});
     return out;
 }
 
