@@ -11,8 +11,8 @@
 namespace hsnc {
 
 enum class KernelMode {
-    automatic,  ///< ahead-of-time kernels when the model has them, else jit
-                ///  (the command line; generic when the JIT cannot be loaded)
+    automatic,  ///< ahead-of-time kernels when the model has them, else the
+                ///  generic solver (never the JIT: hsnc::simulate, api/hsnc/simulate.h)
     aot,        ///< ahead-of-time kernels only (error when the model has none)
     generic,    ///< the Eigen-based generic solver
     jit,        ///< a kernel compiled in-process per configuration visited
