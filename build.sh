@@ -14,7 +14,7 @@ packages=(
   libcli11-dev                   # command line parsing
   libsundials-dev                # the CVODE baseline (--method cvode)
   llvm-14-dev libclang-cpp14-dev libclang-14-dev  # compiling kernels in-process
-  libgtest-dev libbenchmark-dev  # tests and benchmarks
+  libgtest-dev                   # tests
   gnuplot-nox fonts-dejavu-core   # plots (pngcairo needs a font)
 )
 missing=()

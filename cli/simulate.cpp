@@ -1,12 +1,10 @@
 // `hsnc simulate MODEL [options]` (interface.md sections 3 and 4).
-#include <dlfcn.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <chrono>
-#include <cstring>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -15,16 +13,9 @@
 #include "csv_writer.h"
 #include "engine.h"
 #include "error.h"
-#include "derivation.h"
-#include "emitter.h"
-#include "integrators.h"
-#include "cached_kernel_provider.h"
-#include "jit_solver_provider.h"
-#include "kernel_cache.h"
+#include "hsnc/simulate.h"
 #include "model_reader.h"
 #include "plot.h"
-#include "reference.h"
-#include "solver_provider.h"
 
 namespace hsnc::cli {
 namespace {
@@ -90,57 +81,36 @@ private:
     std::size_t counts_[5] = {};
 };
 
-// LLVM and Clang are loaded only when a kernel has to be compiled (or loaded
-// without the cache): libhsnc_jit.so, from beside the executable (both are
-// built into the same directory). Throws JitUnavailable when it cannot be loaded.
-struct JitUnavailable : RunError {
-    using RunError::RunError;
-};
-std::string jit_module_path() {
-    char exe[4096];
-    const ssize_t len = ::readlink("/proc/self/exe", exe, sizeof exe - 1);
-    std::string dir = len > 0 ? std::string(exe, static_cast<std::size_t>(len)) : std::string(".");
-    return dir.substr(0, dir.find_last_of('/') + 1) + HSNC_JIT_MODULE;
-}
-std::unique_ptr<JitSolverProvider> load_jit_provider(const Model& model, JitSolverProvider::SourceFn source,
-                                                     const JitOptions& options) {
-    const std::string path = jit_module_path();
-    void* module = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);  // kept loaded: kernels live in it
-    if (!module) throw JitUnavailable(std::string("cannot load the JIT module: ") + ::dlerror());
-    auto factory = reinterpret_cast<JitProviderFactory>(::dlsym(module, kJitProviderFactorySymbol));
-    if (!factory) throw JitUnavailable(path + " has no " + kJitProviderFactorySymbol);
-    // The factory makes a JitSolverProvider (jit_solver_provider.cpp).
-    return std::unique_ptr<JitSolverProvider>(
-        static_cast<JitSolverProvider*>(factory(model, std::move(source), options)));
-}
-
-// --precision: 0 for double, else the decimal digits of the reference engine (mp:N).
-int parse_precision(const SimulateOptions& o, Method method) {
-    if (o.precision == "double") return 0;
-    if (o.precision == "long-double")
-        throw InputError("--precision long-double: not offered; use mp:N (N in " +
-                         std::to_string(reference::kMinDigits) + ".." + std::to_string(reference::kMaxDigits) +
-                         ") for a high-precision reference run");
-    const std::string prefix = "mp:";
-    std::size_t used = 0;
-    int digits = 0;
-    bool ok = o.precision.compare(0, prefix.size(), prefix) == 0 && o.precision.size() > prefix.size();
-    if (ok) {
-        try {
-            digits = std::stoi(o.precision.substr(prefix.size()), &used);
-        } catch (const std::exception&) {
-            ok = false;
-        }
-        ok = ok && used == o.precision.size() - prefix.size();
+// The library names the option (hsnc::OptionError); the command line puts
+// back the flag and the text the user gave for it.
+std::string flag_value(double v) {
+    if (std::isnan(v)) return "";
+    for (int digits = 1;; ++digits) {  // the shortest text that reads back as v
+        char text[32];
+        std::snprintf(text, sizeof text, "%.*g", digits, v);
+        if (std::strtod(text, nullptr) == v || digits >= 17) return text;
     }
-    if (!ok || digits < reference::kMinDigits || digits > reference::kMaxDigits)
-        throw InputError("--precision " + o.precision + ": expected double, or mp:N with N in " +
-                         std::to_string(reference::kMinDigits) + ".." + std::to_string(reference::kMaxDigits));
-    if (method != Method::hsnc)
-        throw InputError("--precision " + o.precision + ": only with --method hsnc (not " + o.method + ")");
-    if (o.kernels != "auto")
-        throw InputError("--precision " + o.precision + ": --kernels applies to double precision only");
-    return digits;
+}
+InputError flagged(const OptionError& e, const SimulateOptions& o, bool quoted = false) {
+    struct Flag {
+        const char* option;
+        const char* flag;
+        std::string value;
+    };
+    const Flag flags[] = {{"t_end", "--t-end", flag_value(o.t_end)},
+                          {"dt", "--dt", flag_value(o.dt)},
+                          {"method", "--method", o.method},
+                          {"integrator.h", "--h", flag_value(o.h)},
+                          {"integrator.rtol", "--rtol", flag_value(o.rtol)},
+                          {"integrator.atol", "--atol", flag_value(o.atol)},
+                          {"kernels", "--kernels", o.kernels},
+                          {"precision_digits", "--precision", o.precision}};
+    for (const Flag& f : flags)
+        if (e.option() == f.option) {
+            const std::string value = quoted ? "'" + f.value + "'" : f.value;
+            return InputError(std::string(f.flag) + (f.value.empty() ? "" : " " + value) + ": " + e.reason());
+        }
+    return InputError(e.what());
 }
 
 std::string number_text(double v) {
@@ -152,22 +122,29 @@ std::string number_text(double v) {
 
 int simulate(const SimulateOptions& o) {
     const Model model = read_model(o.model, o.overrides);
-    const double t_end = std::isnan(o.t_end) ? model.t_end.value_or(NAN) : o.t_end;
-    if (std::isnan(t_end))
-        throw InputError("--t-end: no end time: give --t-end or [simulate].t_end in " + o.model);
-    if (!(t_end > model.t0) || !std::isfinite(t_end))
-        throw InputError("--t-end " + number_text(t_end) + ": must be finite and after t0 = " + number_text(model.t0));
-    if (!std::isnan(o.dt) && !(o.dt > 0 && std::isfinite(o.dt)))
-        throw InputError("--dt " + number_text(o.dt) + ": must be > 0");
+    hsnc::SimulateOptions run;
+    try {
+        run.method = method_from_name(o.method);
+        run.kernels = kernel_choice_from_name(o.kernels);
+        run.precision_digits = precision_digits_from_name(o.precision);
+    } catch (const OptionError& e) {
+        throw flagged(e, o, e.option() != "precision_digits");
+    }
+    run.t_end = o.t_end;
+    run.dt = o.dt;
+    run.max_events = o.max_events;
+    run.integrator.h = o.h;
+    run.integrator.rtol = o.rtol;
+    run.integrator.atol = o.atol;
+    run.cache_dir = o.cache_dir;
+    run.use_cache = !o.no_cache;
+    try {
+        check_simulate_options(model, run);
+    } catch (const OptionError& e) {
+        throw flagged(e, o);
+    }
+    const double t_end = std::isnan(o.t_end) ? *model.t_end : o.t_end;
     if (!o.plot.empty() && o.out.empty()) throw InputError("--plot: needs --out (the trajectory it draws)");
-    Method method = parse_method(o.method);
-    IntegratorOptions iopt;
-    iopt.h = o.h;
-    iopt.rtol = o.rtol;
-    iopt.atol = o.atol;
-    validate(method, iopt);
-    const KernelMode mode = parse_kernel_mode(o.kernels);
-    const int digits = parse_precision(o, method);
 
     std::unique_ptr<CsvFile> traj, events;
     if (!o.out.empty()) traj = std::make_unique<CsvFile>(o.out);
@@ -175,56 +152,9 @@ int simulate(const SimulateOptions& o) {
     CsvObserver csv(model, traj.get(), events.get());
     RunObserver obs(csv, model.t0, t_end, !o.quiet && ::isatty(2));
 
-    EngineOptions eopt;
-    eopt.t_end = t_end;
-    // Default sampling: 1000 intervals over the run.
-    eopt.dt = std::isnan(o.dt) ? (t_end - model.t0) / 1000 : o.dt;
-    eopt.samples = traj != nullptr;
-    eopt.max_events = o.max_events;
-
-    RunSummary sum;
-    std::string detail;
-    if (digits > 0) {
-        sum = reference::simulate(model, digits, eopt, obs);
-        detail = "reference engine at " + std::to_string(digits) + " digits (CLN, " +
-                 std::to_string(reference::carried_bits(digits)) + " bits)";
-    } else if (method == Method::hsnc) {
-        std::unique_ptr<SolverProvider> provider;
-        // auto: the ahead-of-time kernels when the model has them, else the
-        // JIT, else (no libhsnc_jit.so) the generic solver, with a note.
-        if (mode == KernelMode::jit || (mode == KernelMode::automatic && !has_aot_kernels(model, &aot_registry()))) {
-            JitOptions jopt;
-            jopt.cache_dir = o.no_cache ? "" : o.cache_dir.empty() ? default_cache_dir() : o.cache_dir;
-            JitSolverProvider::SourceFn source = [&model](const Configuration& cfg) {
-                return JitKernelSource{kernel_symbol(model, cfg), emit_kernel(derive(model, cfg))};
-            };
-            try {
-                const std::string module = jit_module_path();
-                if (::access(module.c_str(), R_OK) != 0)
-                    throw JitUnavailable("cannot load the JIT module: " + module + ": " + std::strerror(errno));
-                if (jopt.cache_dir.empty())
-                    provider = load_jit_provider(model, source, jopt);
-                else  // cached kernels without LLVM; the JIT only for the others
-                    provider = std::make_unique<CachedKernelProvider>(
-                        model, source, jopt, [&model](JitSolverProvider::SourceFn s, const JitOptions& opt) {
-                            try {
-                                return load_jit_provider(model, std::move(s), opt);
-                            } catch (const JitUnavailable& e) {
-                                throw RunError(std::string("cannot compile a kernel: ") + e.what());
-                            }
-                        });
-            } catch (const JitUnavailable& e) {
-                if (mode == KernelMode::jit) throw RunError(std::string("--kernels jit: ") + e.what());
-                if (!o.quiet) std::fprintf(stderr, "hsnc: note: %s; using the generic solver\n", e.what());
-            }
-        }
-        if (!provider) provider = make_solver_provider(model, mode, &aot_registry());
-        Engine engine(model, *provider);
-        sum = engine.run(eopt, obs);
-        detail = provider->describe();
-    } else {
-        sum = integrate(model, method, iopt, eopt, obs);
-    }
+    run.samples = traj != nullptr;
+    const SimulateSummary sum = hsnc::simulate(model, run, obs);
+    const std::string& detail = sum.solver_detail;
     obs.clear();
     if (sum.status != RunStatus::ok && sum.status != RunStatus::max_events)
         throw RunError(std::string("simulate: ") + run_status_name(sum.status) + ": " + sum.message);
@@ -274,8 +204,9 @@ void add_simulate(CLI::App& app, int& exit_code) {
     sub->add_option("--rtol", o->rtol, "relative tolerance of --method rk45/cvode (default 1e-10)");
     sub->add_option("--atol", o->atol, "absolute tolerance of --method rk45/cvode (default 1e-12)");
     sub->add_option("--kernels", o->kernels,
-                    "auto (default: ahead-of-time kernels when the model has them, else jit), aot, generic, "
-                    "jit (compile a kernel in-process for each configuration the run enters)");
+                    "auto (default: ahead-of-time kernels when the model has them, else the generic solver; "
+                    "never compiles), aot, generic, jit (a kernel compiled in-process, or taken from the cache, "
+                    "for each configuration the run enters)");
     sub->add_option("--cache-dir", o->cache_dir,
                     "keep compiled kernels (jit) in DIR (default $XDG_CACHE_HOME/hsnc, else ~/.cache/hsnc)");
     auto* no_cache = sub->add_flag("--no-cache", o->no_cache, "compile every kernel (jit); read and write no cache");

@@ -34,6 +34,8 @@ public:
     /// `model` must outlive the provider; options.cache_dir must not be empty.
     CachedKernelProvider(const Model& model, JitSolverProvider::SourceFn source, JitOptions options,
                          JitFactory make_jit);
+    CachedKernelProvider(const Model&& model, JitSolverProvider::SourceFn source, JitOptions options,
+                         JitFactory make_jit) = delete;  ///< would dangle
     ~CachedKernelProvider() override;
 
     SegmentSolver& solver(const Configuration& cfg) override;

@@ -88,9 +88,12 @@ struct RunSummary {
     std::size_t configurations = 0;   ///< distinct configurations visited
 };
 
+/// Keeps references to `model` and `provider`: both must outlive it.
 class Engine {
 public:
     Engine(const Model& model, SolverProvider& provider);
+    /// A temporary Model would dangle (`Engine e(read_model(path), p)`): refused at compile time.
+    Engine(const Model&& model, SolverProvider& provider) = delete;
 
     /// Run from the model's initial state (x0, v0 at t0) to options.t_end.
     RunSummary run(const EngineOptions& options, Observer& observer);

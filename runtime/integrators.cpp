@@ -6,11 +6,13 @@
 #include <limits>
 #include <vector>
 
+#if HSNC_WITH_CVODE
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
+#endif
 
 #include "assembly.h"
 #include "error.h"
@@ -415,6 +417,7 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
 }
 
 // --------------------------------------------------------------- cvode ----
+#if HSNC_WITH_CVODE
 // SUNDIALS CVODE (Hindmarsh et al., ACM TOMS 31(3), 2005): variable-order
 // Adams-Moulton (orders 1-12) inside each configuration, with CVODE's own root
 // finding on the watched switch functions (the same ones rk45 watches, side >
@@ -638,6 +641,11 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
     }
     return finish(counted(), RunStatus::ok, "", t, x, v, cfg);
 }
+#else  // built with HSNC_WITH_CVODE=OFF
+RunSummary run_cvode(const Model&, const IntegratorOptions&, const EngineOptions&, Observer&) {
+    throw InputError("integrate(): method cvode: this build has no SUNDIALS CVODE (HSNC_WITH_CVODE=OFF)");
+}
+#endif  // HSNC_WITH_CVODE
 
 }  // namespace
 

@@ -42,6 +42,7 @@ public:
     /// `model` must outlive the provider. Throws RunError when LLVM cannot
     /// target the host.
     JitSolverProvider(const Model& model, SourceFn source, JitOptions options = {});
+    JitSolverProvider(const Model&& model, SourceFn source, JitOptions options = {}) = delete;  ///< would dangle
     ~JitSolverProvider() override;
 
     /// The kernel of `cfg`, on first use emitted, then loaded from the

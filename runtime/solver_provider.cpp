@@ -42,8 +42,9 @@ SegmentSolver& AotSolverProvider::solver(const Configuration& cfg) {
         s = std::make_unique<GenericSolver>(model_, cfg);
         ++generic_;
     } else {
-        throw RunError("--kernels aot: no ahead-of-time kernel for configuration '" + cfg.spec(model_) +
-                       "' of model '" + model_.name + "' (generate it with hsnc generate, or use --kernels auto)");
+        throw RunError("AotSolverProvider::solver(): no ahead-of-time kernel for configuration '" +
+                       cfg.spec(model_) + "' of model '" + model_.name +
+                       "' (generate it with hsnc generate, or choose the kernels auto)");
     }
     return *cache_.emplace(cfg, std::move(s)).first->second;
 }

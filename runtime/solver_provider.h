@@ -11,8 +11,8 @@
 namespace hsnc {
 
 enum class KernelMode {
-    automatic,  ///< ahead-of-time kernels when the model has them, else jit
-                ///  (the command line; generic when the JIT cannot be loaded)
+    automatic,  ///< ahead-of-time kernels when the model has them, else the
+                ///  generic solver (never the JIT: hsnc::simulate, api/hsnc/simulate.h)
     aot,        ///< ahead-of-time kernels only (error when the model has none)
     generic,    ///< the Eigen-based generic solver
     jit,        ///< a kernel compiled in-process per configuration visited
@@ -26,6 +26,7 @@ KernelMode parse_kernel_mode(const std::string& name);
 class GenericSolverProvider : public SolverProvider {
 public:
     explicit GenericSolverProvider(const Model& model) : model_(model) {}
+    explicit GenericSolverProvider(const Model&& model) = delete;  ///< would dangle: `model` must outlive it
     SegmentSolver& solver(const Configuration& cfg) override;
     std::string describe() const override;
 
@@ -40,6 +41,7 @@ private:
 class AotSolverProvider : public SolverProvider {
 public:
     AotSolverProvider(const Model& model, const AotRegistry& registry, bool fallback);
+    AotSolverProvider(const Model&& model, const AotRegistry& registry, bool fallback) = delete;  ///< would dangle
     SegmentSolver& solver(const Configuration& cfg) override;
     std::string describe() const override;
 
@@ -59,5 +61,8 @@ bool has_aot_kernels(const Model& model, const AotRegistry* registry);
 /// JitSolverProvider; automatic without kernels gives the generic solver); `registry` (may be null) lists the AOT kernels linked in.
 std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
                                                      const AotRegistry* registry);
+/// The provider keeps a reference to `model`: a temporary would dangle.
+std::unique_ptr<SolverProvider> make_solver_provider(const Model&& model, KernelMode mode,
+                                                     const AotRegistry* registry) = delete;
 
 }  // namespace hsnc

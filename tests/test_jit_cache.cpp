@@ -252,7 +252,10 @@ TEST_F(CacheDir, DefaultDirectoryFollowsXdgThenHome) {
 
 // ---- --kernels auto -----------------------------------------------------------
 
-TEST_F(CacheDir, AutoUsesAotKernelsElseJitElseGeneric) {
+// auto: the ahead-of-time kernels when the model has them, else the generic
+// solver; it never compiles, never touches the cache and does not need
+// libhsnc_jit.so. Only --kernels jit loads the JIT module.
+TEST_F(CacheDir, AutoUsesAotKernelsElseGenericAndNeverTheJit) {
     const CliRun bundled = run_hsnc("simulate '" + model_path("seed-scenario-2.toml") + "' --t-end 5 --cache-dir '" +
                                     dir + "'");
     ASSERT_EQ(bundled.exit_code, 0) << bundled.err;
@@ -260,20 +263,29 @@ TEST_F(CacheDir, AutoUsesAotKernelsElseJitElseGeneric) {
     EXPECT_FALSE(fs::exists(dir));
 
     const std::string edited = "simulate '" + model_path("seed-scenario-2.toml") + "' --set mu_k=0.31 --t-end 5";
-    const CliRun jit = run_hsnc(edited + " --cache-dir '" + dir + "'");
-    ASSERT_EQ(jit.exit_code, 0) << jit.err;
-    EXPECT_NE(jit.err.find("JIT: "), std::string::npos) << jit.err;
+    const CliRun generic = run_hsnc(edited + " --cache-dir '" + dir + "'");
+    ASSERT_EQ(generic.exit_code, 0) << generic.err;
+    EXPECT_NE(generic.err.find(", generic solver for 2 configurations, "), std::string::npos) << generic.err;
+    EXPECT_EQ(generic.err.find("JIT"), std::string::npos) << generic.err;
+    EXPECT_FALSE(fs::exists(dir)) << "auto never compiles, so it never makes a cache";
 
-    // An hsnc without libhsnc_jit.so beside it: the generic solver, with a note.
+    const CliRun jit = run_hsnc(edited + " --kernels jit --cache-dir '" + dir + "'");
+    ASSERT_EQ(jit.exit_code, 0) << jit.err;
+    EXPECT_NE(jit.err.find("JIT: 2 configurations visited"), std::string::npos) << jit.err;
+    const auto events = [](const std::string& out) { return out.substr(out.find(" events="), out.find(" x_") - out.find(" events=")); };
+    EXPECT_EQ(events(jit.out), events(generic.out)) << "the same switches of each kind";
+
+    // An hsnc without libhsnc_jit.so beside it: auto runs as before, without
+    // a word about the JIT; --kernels jit is a failure that says why.
     fs::create_directories(dir + "/bin");
     fs::copy_file(HSNC_BINARY, dir + "/bin/hsnc");
-    const std::string lone = "'" + dir + "/bin/hsnc' " + edited + " --cache-dir '" + dir + "' 2>&1 >/dev/null";
-    const std::string text = shell_output(lone);
-    EXPECT_NE(text.find("hsnc: note: cannot load the JIT module: "), std::string::npos) << text;
-    EXPECT_NE(text.find("; using the generic solver"), std::string::npos) << text;
-    EXPECT_NE(text.find(", generic solver for 2 configurations, "), std::string::npos) << text;
-    EXPECT_NE(jit.err.find("JIT: 2 configurations visited"), std::string::npos) << jit.err;
-    EXPECT_EQ(shell_output("'" + dir + "/bin/hsnc' " + edited + " --quiet 2>&1 >/dev/null"), "") << "--quiet: no note";
+    const std::string lone = "'" + dir + "/bin/hsnc' " + edited;
+    EXPECT_EQ(shell_output(lone + " --quiet"), generic.out);
+    EXPECT_EQ(shell_output(lone + " 2>&1 >/dev/null | grep -c -e note -e JIT; true"), "0\n");
+    const std::string failed = shell_output(lone + " --kernels jit --cache-dir '" + dir + "' 2>&1; echo exit=$?");
+    EXPECT_NE(failed.find("hsnc: hsnc::simulate(): kernels = jit: cannot load the JIT module: "), std::string::npos)
+        << failed;
+    EXPECT_NE(failed.find("exit=1"), std::string::npos) << failed;
 }
 
 // ---- hsnc cache ------------------------------------------------------------------

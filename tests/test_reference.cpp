@@ -373,8 +373,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadPrecision{"--precision mp:3x", "--precision mp:3x: expected double"},
         BadPrecision{"--precision quad", "--precision quad: expected double"},
         BadPrecision{"--precision long-double", "--precision long-double: not offered"},
-        BadPrecision{"--precision mp:30 --method rk45", "only with --method hsnc (not rk45)"},
-        BadPrecision{"--precision mp:30 --kernels generic", "--kernels applies to double precision only"}));
+        BadPrecision{"--precision mp:30 --method rk45", "--precision mp:30: only with method hsnc (not rk45)"},
+        BadPrecision{"--precision mp:30 --kernels generic", "--kernels generic: applies to double precision only"}));
 
 }  // namespace
 }  // namespace hsnc

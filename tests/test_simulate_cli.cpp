@@ -112,11 +112,11 @@ INSTANTIATE_TEST_SUITE_P(
     Cases, SimulateBadFlags,
     ::testing::Values(BadFlag{"--t-end -1", "--t-end"}, BadFlag{"--t-end abc", "--t-end"},
                       BadFlag{"--dt 0", "--dt"}, BadFlag{"--method euler", "--method 'euler'"},
-                      BadFlag{"--method ab4", "needs --h"}, BadFlag{"--set k", "--set"},
+                      BadFlag{"--method ab4", "--h: method ab4 needs a fixed step"}, BadFlag{"--set k", "--set"},
                       BadFlag{"--set nope=1", "nope"}, BadFlag{"--x0 m9=1", "m9"},
                       BadFlag{"--kernels fast", "--kernels 'fast'"}, BadFlag{"--frobnicate", "frobnicate"},
-                      BadFlag{"--method cvode --rtol 0", "--method cvode"},
-                      BadFlag{"--method cvode --atol -1e-9", "--method cvode"},
+                      BadFlag{"--method cvode --rtol 0", "--rtol 0: must be finite and > 0 for method cvode"},
+                      BadFlag{"--method cvode --atol -1e-9", "--atol -1e-09: must be finite and > 0 for method cvode"},
                       BadFlag{"--method cvode --rtol abc", "--rtol"}));
 
 TEST(SimulateCli, MissingModelIsBadInput) {

@@ -1,0 +1,253 @@
+#include "hsnc/simulate.h"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <sstream>
+#include <utility>
+
+#include "aot_registry.h"
+#include "cached_kernel_provider.h"
+#include "derivation.h"
+#include "emitter.h"
+#include "jit_module.h"
+#include "jit_solver_provider.h"
+#include "kernel_cache.h"
+#include "reference.h"
+#include "solver_provider.h"
+
+namespace hsnc {
+namespace {
+
+constexpr const char* kSimulate = "hsnc::simulate";
+
+std::string number_text(double v) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v;
+    return s.str();
+}
+
+class NullObserver : public Observer {
+public:
+    void on_sample(double, const double*, const double*) override {}
+    void on_event(double, EventKind, int, const double*, const double*) override {}
+};
+
+std::string digits_range() {
+    return std::to_string(reference::kMinDigits) + ".." + std::to_string(reference::kMaxDigits);
+}
+
+double end_time(const Model& model, const SimulateOptions& o) {
+    return std::isnan(o.t_end) ? model.t_end.value_or(NAN) : o.t_end;
+}
+
+// Options that do not fit, each named by its field; nothing has run yet.
+void check_options(const Model& model, const SimulateOptions& o) {
+    const double t_end = end_time(model, o);
+    if (std::isnan(t_end))
+        throw OptionError(kSimulate, "t_end", "NaN",
+                          "no end time: none given and the model has no [simulate].t_end (" + model.source + ")");
+    if (!(t_end > model.t0) || !std::isfinite(t_end))
+        throw OptionError(kSimulate, "t_end", number_text(t_end),
+                          "must be finite and after t0 = " + number_text(model.t0));
+    if (!std::isnan(o.dt) && !(o.dt > 0 && std::isfinite(o.dt)))
+        throw OptionError(kSimulate, "dt", number_text(o.dt), "must be > 0");
+    if (o.method == Method::cvode && !HSNC_WITH_CVODE)
+        throw OptionError(kSimulate, "method", "cvode", "not available: this build has no SUNDIALS CVODE");
+    const IntegratorOptions& i = o.integrator;
+    if (o.method == Method::ab4 && !(i.h > 0 && std::isfinite(i.h)))
+        throw OptionError(kSimulate, "integrator.h", number_text(i.h),
+                          "method ab4 needs a fixed step h > 0");
+    if (o.method == Method::rk45 || o.method == Method::cvode) {
+        const std::string why = std::string("must be finite and > 0 for method ") + method_name(o.method);
+        if (!(i.rtol > 0 && std::isfinite(i.rtol)))
+            throw OptionError(kSimulate, "integrator.rtol", number_text(i.rtol), why);
+        if (!(i.atol > 0 && std::isfinite(i.atol)))
+            throw OptionError(kSimulate, "integrator.atol", number_text(i.atol), why);
+    }
+    if (o.precision_digits != 0) {
+        const std::string digits = std::to_string(o.precision_digits);
+        if (o.precision_digits < reference::kMinDigits || o.precision_digits > reference::kMaxDigits)
+            throw OptionError(kSimulate, "precision_digits", digits,
+                              "expected 0 (double), or N in " + digits_range() + " decimal digits");
+        if (o.method != Method::hsnc)
+            throw OptionError(kSimulate, "precision_digits", digits,
+                              std::string("only with method hsnc (not ") + method_name(o.method) + ")");
+        if (o.kernels != KernelChoice::automatic)
+            throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels),
+                              "applies to double precision only");
+    }
+    if (o.method != Method::hsnc && o.kernels != KernelChoice::automatic)
+        throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels),
+                          std::string("applies to method hsnc only (not ") + method_name(o.method) + ")");
+    if (o.precision_digits == 0 && o.method == Method::hsnc && o.kernels == KernelChoice::aot &&
+        !has_aot_kernels(model, &aot_registry()))
+        throw OptionError(kSimulate, "kernels", "aot",
+                          "no ahead-of-time kernels for model '" + model.name +
+                              "' (bundled models only, and only as generated: an override or an edited file "
+                              "changes the model)");
+}
+
+// KernelChoice::jit: kernels from the persistent cache without LLVM, the JIT
+// module (LLVM) loaded only for a kernel the cache cannot give; no cache: the
+// JIT module for every kernel. RunError (a JitUnavailable) when it is needed
+// and cannot be loaded.
+std::unique_ptr<SolverProvider> make_jit_provider(const Model& model, const SimulateOptions& o) {
+    JitOptions jopt;
+    jopt.cache_dir = !o.use_cache ? "" : o.cache_dir.empty() ? default_cache_dir() : o.cache_dir;
+    jopt.warn = o.warn;
+    JitSolverProvider::SourceFn source = [&model](const Configuration& cfg) {
+        return JitKernelSource{kernel_symbol(model, cfg), emit_kernel(derive(model, cfg))};
+    };
+    // Checked up front even when every kernel may come from the cache: asking
+    // for the JIT is asking for the module, and a missing one says so at once.
+    const std::string module = api::jit_module_path();
+    if (module.empty()) throw api::JitUnavailable("hsnc::simulate(): kernels = jit: this hsnc was built without the JIT");
+    if (::access(module.c_str(), R_OK) != 0)
+        throw api::JitUnavailable("hsnc::simulate(): kernels = jit: cannot load the JIT module: " + module + ": " +
+                                  std::strerror(errno));
+    if (jopt.cache_dir.empty()) {
+        try {
+            return api::load_jit_provider(model, source, jopt);
+        } catch (const api::JitUnavailable& e) {
+            throw api::JitUnavailable(std::string("hsnc::simulate(): kernels = jit: ") + e.what());
+        }
+    }
+    return std::make_unique<CachedKernelProvider>(
+        model, source, jopt, [&model](JitSolverProvider::SourceFn s, const JitOptions& opt) {
+            try {
+                return api::load_jit_provider(model, std::move(s), opt);
+            } catch (const api::JitUnavailable& e) {
+                throw RunError(std::string("hsnc::simulate(): cannot compile a kernel: ") + e.what());
+            }
+        });
+}
+
+}  // namespace
+
+OptionError::OptionError(const std::string& function, std::string option, const std::string& value,
+                         std::string reason)
+    : InputError(function + "(): " + option + " = " + value + ": " + reason),
+      option_(std::move(option)),
+      reason_(std::move(reason)) {}
+
+void check_simulate_options(const Model& model, const SimulateOptions& options) { check_options(model, options); }
+
+SimulateSummary simulate(const Model& model, const SimulateOptions& o, Observer& observer) {
+    check_options(model, o);
+    const double t_end = end_time(model, o);
+
+    EngineOptions eopt;
+    eopt.t_end = t_end;
+    eopt.dt = std::isnan(o.dt) ? (t_end - model.t0) / 1000 : o.dt;
+    eopt.samples = o.samples;
+    eopt.max_events = o.max_events;
+
+    SimulateSummary s;
+    if (o.precision_digits > 0) {
+        static_cast<RunSummary&>(s) = reference::simulate(model, o.precision_digits, eopt, observer);
+        s.solver = SolverKind::reference;
+        s.solver_detail = "reference engine at " + std::to_string(o.precision_digits) + " digits (CLN, " +
+                          std::to_string(reference::carried_bits(o.precision_digits)) + " bits)";
+    } else if (o.method != Method::hsnc) {
+        static_cast<RunSummary&>(s) = integrate(model, o.method, o.integrator, eopt, observer);
+        s.solver = SolverKind::integrator;
+        s.solver_detail = method_name(o.method);
+    } else {
+        std::unique_ptr<SolverProvider> provider;
+        if (o.kernels == KernelChoice::jit) {
+            provider = make_jit_provider(model, o);
+            s.solver = SolverKind::jit;
+        } else {
+            const KernelMode mode = o.kernels == KernelChoice::generic ? KernelMode::generic
+                                    : o.kernels == KernelChoice::aot   ? KernelMode::aot
+                                                                       : KernelMode::automatic;
+            provider = make_solver_provider(model, mode, &aot_registry());
+            s.solver = dynamic_cast<AotSolverProvider*>(provider.get()) ? SolverKind::aot : SolverKind::generic;
+        }
+        Engine engine(model, *provider);
+        static_cast<RunSummary&>(s) = engine.run(eopt, observer);
+        s.solver_detail = provider->describe();
+    }
+    return s;
+}
+
+SimulateSummary simulate(const Model& model, const SimulateOptions& options) {
+    NullObserver none;
+    SimulateOptions o = options;
+    o.samples = false;
+    return simulate(model, o, none);
+}
+
+Method method_from_name(const std::string& name) {
+    for (Method m : {Method::hsnc, Method::ab4, Method::rk45, Method::cvode})
+        if (name == method_name(m)) return m;
+    throw OptionError("hsnc::method_from_name", "method", "'" + name + "'", "expected hsnc, ab4, rk45 or cvode");
+}
+
+const char* method_name(Method method) {
+    switch (method) {
+    case Method::hsnc: return "hsnc";
+    case Method::ab4: return "ab4";
+    case Method::rk45: return "rk45";
+    case Method::cvode: return "cvode";
+    }
+    return "?";
+}
+
+KernelChoice kernel_choice_from_name(const std::string& name) {
+    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::aot, KernelChoice::jit, KernelChoice::generic})
+        if (name == kernel_choice_name(k)) return k;
+    throw OptionError("hsnc::kernel_choice_from_name", "kernels", "'" + name + "'",
+                      "expected auto, aot, generic or jit");
+}
+
+const char* kernel_choice_name(KernelChoice choice) {
+    switch (choice) {
+    case KernelChoice::automatic: return "auto";
+    case KernelChoice::aot: return "aot";
+    case KernelChoice::jit: return "jit";
+    case KernelChoice::generic: return "generic";
+    }
+    return "?";
+}
+
+int precision_digits_from_name(const std::string& name) {
+    constexpr const char* kFunction = "hsnc::precision_digits_from_name";
+    if (name == "double") return 0;
+    if (name == "long-double")
+        throw OptionError(kFunction, "precision_digits", name,
+                          "not offered; use mp:N (N in " + digits_range() + ") for a high-precision reference run");
+    const std::string prefix = "mp:";
+    std::size_t used = 0;
+    int digits = 0;
+    bool ok = name.compare(0, prefix.size(), prefix) == 0 && name.size() > prefix.size();
+    if (ok) {
+        try {
+            digits = std::stoi(name.substr(prefix.size()), &used);
+        } catch (const std::exception&) {
+            ok = false;
+        }
+        ok = ok && used == name.size() - prefix.size();
+    }
+    if (!ok || digits < reference::kMinDigits || digits > reference::kMaxDigits)
+        throw OptionError(kFunction, "precision_digits", name, "expected double, or mp:N with N in " + digits_range());
+    return digits;
+}
+
+const char* solver_kind_name(SolverKind kind) {
+    switch (kind) {
+    case SolverKind::aot: return "aot";
+    case SolverKind::jit: return "jit";
+    case SolverKind::generic: return "generic";
+    case SolverKind::reference: return "reference";
+    case SolverKind::integrator: return "integrator";
+    }
+    return "?";
+}
+
+}  // namespace hsnc
