@@ -433,27 +433,31 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         std::fill(leaving.begin(), leaving.end(), 0);
         std::fill(leaves_now.begin(), leaves_now.end(), 0);
         {
-            bool have_taylor = false;
-            Taylor T;
+            // The first derivatives (Taylor order 2) decide almost every function at zero (the ones
+            // that just switched); the full expansion only when h' vanishes too.
+            Taylor T1, T;
+            bool have_t1 = false, have_t = false;
             std::vector<cl_F> d, m;
-            for (std::size_t f = 0; f < nsw; ++f) {
-                if (cln::abs(h_of(buf, f)) > noise(buf, f)) continue;
-                if (!have_taylor) {
-                    T = taylor(mp, cfg, sgn, t, x, v, tie_order(mp) + 1);
-                    have_taylor = true;
-                }
+            auto series = [&](std::size_t f, const Taylor& X) {
                 const int e = sw[f].element;
+                d.clear(), m.clear();
                 if (sw[f].kind == SwitchKind::gap) {
-                    gap_series(mp, e, T, d, m);
+                    gap_series(mp, e, X, d, m);
                 } else if (sw[f].kind == SwitchKind::velocity) {
-                    d.clear(), m.clear();
-                    for (std::size_t k = 0; k + 1 < T.x.size(); ++k) d.push_back(T.x[k + 1][e]), m.push_back(T.xm[k + 1][e]);
+                    for (std::size_t k = 0; k + 1 < X.x.size(); ++k) d.push_back(X.x[k + 1][e]), m.push_back(X.xm[k + 1][e]);
                 } else {
-                    force_series(mp, cfg, e, t, T, d, m);
+                    force_series(mp, cfg, e, t, X, d, m);
                     if (sw[f].kind == SwitchKind::release_neg)
                         for (cl_F& dk : d) dk = -dk;
                 }
-                if (d.size() > 1 && cln::abs(d[1]) > noise_of(mp, m[1])) continue;  // h' decides: the bound works
+            };
+            for (std::size_t f = 0; f < nsw; ++f) {
+                if (cln::abs(h_of(buf, f)) > noise(buf, f)) continue;
+                if (!have_t1) T1 = taylor(mp, cfg, sgn, t, x, v, 2), have_t1 = true;
+                series(f, T1);
+                if (cln::abs(d[1]) > noise_of(mp, m[1])) continue;  // h' decides: the bound works
+                if (!have_t) T = taylor(mp, cfg, sgn, t, x, v, tie_order(mp) + 1), have_t = true;
+                series(f, T);
                 int order = 0;
                 const int dir = first_nonzero_sign(mp, d, m, &order) * (cln::plusp(side[f]) ? 1 : -1);
                 if (dir < 0) {
