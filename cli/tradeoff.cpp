@@ -1,8 +1,10 @@
 // `hsnc tradeoff MODEL [options]`: work-precision of hsnc and the numerical
 // baselines on one model. Runs (or reads) a reference, then every method over
 // its accuracy settings; measures wall time and the error against the
-// reference (cli/work_precision.h); writes a CSV, a log-log plot, and a
-// summary of the time ratios to hsnc at fixed accuracies.
+// reference, in metres and relative to the response's magnitude max |x_ref|
+// (cli/work_precision.h); writes a CSV, a log-log plot (diverged runs pinned at
+// the top), and a summary of the time ratios to hsnc at fixed relative
+// accuracies. Every flag and output path is checked before any work.
 //
 // Methods and what is swept (kMethods; adding a method is one line there):
 //  hsnc  : no knob trades accuracy for speed -- every switch is refined to
@@ -18,12 +20,15 @@
 // model reading not); the median of as many runs as fit in about 0.2 s (an odd
 // number, at most 51; one run when the first takes over 0.1 s), or --runs N;
 // column `runs`.
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -215,7 +220,9 @@ std::string describe(const Measured& m) {
     s << m.point->method->name << " " << m.point->setting << ": " << num(m.wall) << " s";
     if (m.runs > 1) s << " (median of " << m.runs << ")";
     if (m.status != "ok") s << ", status " << m.status;
-    s << ", position error " << num(m.errors.max_position_error, 2) << ", events " << m.errors.matched_events << " of "
+    if (m.errors.diverged) s << ", DIVERGED";
+    s << ", position error " << num(m.errors.max_position_error, 2) << " m ("
+      << num(m.errors.relative_position_error, 2) << " relative), events " << m.errors.matched_events << " of "
       << m.errors.reference_events << " matched (" << m.errors.events << " found)";
     if (m.errors.matched_events) s << ", event-time error " << num(m.errors.max_event_time_error, 2);
     return s.str();
@@ -228,36 +235,52 @@ std::string quoted(const std::string& s) {
     return q + "'";
 }
 
-// Log-log: wall time against position error (left) and event-time error
-// (right), one curve per method, each point labelled with its setting (and on
-// the right, the matched count when the run did not match every event). Runs
-// that did not reach t_end (status not ok) are left out; an error of exactly 0
-// is drawn at 1e-17.
+// Log-log: wall time against the relative position error (left) and the
+// event-time error (right), one curve per method, each point labelled with its
+// setting (and on the right, the matched count when the run did not match
+// every event). Runs that did not reach t_end (status not ok) are left out; an
+// error of exactly 0 is drawn at 1e-17. Diverged runs (column `diverged`) are
+// pinned at kDivergedRatio on the left, labelled with method and setting, so
+// that a 1e100 does not squash the axis, and left out on the right.
 void plot_tradeoff(const Model& model, const std::vector<const MethodEntry*>& methods, const std::string& csv,
-                   const std::string& png, const std::string& reference_label) {
+                   const std::string& png, const std::string& reference_label, double magnitude, bool any_diverged,
+                   bool any_matched, double min_wall, double max_wall) {
     const std::string tmp = png + ".tmp." + std::to_string(::getpid()) + ".png";
+    const std::string top = num(kDivergedRatio);
     std::string script = "set terminal pngcairo size 1600,700 noenhanced font ',11'\n"
                          "set output " + quoted(tmp) + "\n"
                          "set datafile separator ','\n"
-                         "set logscale xy\nset grid\nset yrange [1e-18:*]\nset offsets graph 0.04, graph 0.04, 0, 0\nset format y '%.0e'\nset format x '%.0e'\n"
-                         "set key top right\nset xlabel 'wall time [s]'\n"
+                         "set logscale xy\nset grid\nset offsets graph 0.04, graph 0.04, 0, 0\nset format y '%.0e'\nset format x '%.0e'\n"
+                         "set key below horizontal\nset bmargin 7\nset xlabel 'wall time [s]'\n"
                          "set multiplot layout 1,2 title " +
                          quoted(model.name + ": work-precision, reference " + reference_label) + "\n";
-    const char* panels[2][2] = {{"7", "max |x - x_ref| over the sample times [m] (0 drawn at 1e-17)"},
-                                {"12", "max |t_event - t_event_ref| over the matched events [s] (0 drawn at 1e-17)"}};
+    const std::string left_label =
+        "max |x - x_ref| / max |x_ref|  (max |x_ref| = " + num(magnitude, 3) + " m; 0 drawn at 1e-17)";
+    const std::string panels[2][2] = {{"15", left_label},
+                                      {"12", "max |t_event - t_event_ref| over the matched events [s]  (0 drawn at 1e-17)"}};
     for (const auto& panel : panels) {
-        script += std::string("set ylabel ") + quoted(panel[1]) + "\nplot ";
+        const bool left = panel[0] == "15";
+        if (!left && !any_matched) {
+            // No event to compare (none in the reference, or none matched): gnuplot
+            // refuses a plot whose points are all undefined, so say so instead.
+            script += "set yrange [1e-18:1]\nset xrange [" + num(min_wall / 2, 17) + ":" + num(max_wall * 2, 17) +
+                      "]\nset ylabel " + quoted(panel[1]) +
+                      "\nset label 1 'no event matched: nothing to compare' at graph 0.5, graph 0.5 center\n"
+                      "plot 1e-30 notitle\n";
+            continue;
+        }
+        script += std::string(left ? "set yrange [1e-18:" + num(10 * kDivergedRatio) + "]\n" : "set yrange [1e-18:*]\n");
+        script += "set ylabel " + quoted(panel[1]) + "\nplot ";
         bool first = true;
         int curve = 0;  // one line type per method, the same on both panels
         for (const MethodEntry* m : methods) {
             ++curve;
-            const std::string sel = "(strcol(1) eq " + quoted(m->name) + " && strcol(6) eq 'ok'";
-            const std::string y = "($" + std::string(panel[0]) + " > 1e-17 ? $" + panel[0] + " : 1e-17)";
+            const std::string sel = "(strcol(1) eq " + quoted(m->name) + " && strcol(6) eq 'ok' && strcol(16) ne '1'";
+            const std::string y = "($" + panel[0] + " > 1e-17 ? $" + panel[0] + " : 1e-17)";
             const std::string using_xy = sel + " ? $4 : NaN):" + y;
             // Labels: the setting; on the event panel also "(matched/total)" when not all matched.
             std::string label = "(word(strcol(2), 1)";
-            if (panel[0] == std::string("12"))
-                label += " . (column(11) < column(10) ? sprintf(' (%d/%d)', column(11), column(10)) : '')";
+            if (!left) label += " . (column(11) < column(10) ? sprintf(' (%d/%d)', column(11), column(10)) : '')";
             label += ")";
             // hsnc's points are kernel kinds, not a sweep: points, no line.
             const char* style = m->sweep == Sweep::kernels ? "points pt 7 ps 1.5" : "linespoints lw 2 pt 7";
@@ -276,6 +299,14 @@ void plot_tradeoff(const Model& model, const std::vector<const MethodEntry*>& me
             }
             first = false;
         }
+        if (left && any_diverged) {
+            // Every diverged run, whatever its method, pinned at the top.
+            const std::string dsel = "(strcol(16) eq '1' ? $4 : NaN):(" + top + ")";
+            script += ", " + quoted(csv) + " skip 1 using " + dsel + " with points pt 6 ps 1.5 lc rgb 'black' title " +
+                      quoted("diverged (error > " + top + " x max |x_ref|): pinned at " + top + ", not on the right") +
+                      ", " + quoted(csv) + " skip 1 using " + dsel +
+                      ":(strcol(1) . ' ' . word(strcol(2), 1)) with labels offset 0,-0.9 font ',8' notitle";
+        }
         script += "\n";
     }
     script += "unset multiplot\n";
@@ -288,6 +319,20 @@ void plot_tradeoff(const Model& model, const std::vector<const MethodEntry*>& me
         throw RunError("--plot: gnuplot failed (exit status " + std::to_string(status) +
                        "); is the Debian package gnuplot-nox installed?");
     }
+}
+
+// An output file that cannot be written is bad input, found before any work:
+// a directory, or a directory we cannot create a file in (probed with a
+// temporary file beside it, removed at once).
+void check_output_path(const char* flag, const std::string& path) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+        throw InputError(std::string(flag) + " '" + path + "': is a directory");
+    const std::string probe = path + ".probe." + std::to_string(::getpid());
+    std::FILE* f = std::fopen(probe.c_str(), "w");
+    if (!f) throw InputError(std::string(flag) + " '" + path + "': cannot write it (" + std::strerror(errno) + ")");
+    std::fclose(f);
+    std::remove(probe.c_str());
 }
 
 }  // namespace
@@ -309,6 +354,11 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
     if (!(o.budget > 0)) throw InputError("--budget " + num(o.budget) + ": must be > 0 (seconds)");
     if (!o.plot.empty() && o.csv.empty()) throw InputError("--plot: needs --csv (the table it draws)");
     const auto methods = chosen_methods(o.methods);
+    // Every output path before any work (the reference alone can take minutes).
+    if (!o.csv.empty()) check_output_path("--csv", o.csv);
+    if (!o.plot.empty()) check_output_path("--plot", o.plot);
+    std::unique_ptr<CsvFile> csv;  // opened now, committed at the end; removed on any error before
+    if (!o.csv.empty()) csv = std::make_unique<CsvFile>(o.csv);
 
     EngineOptions eopt;
     eopt.t_end = t_end;
@@ -360,10 +410,6 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
         if (e.sample_times != grid.t.size()) throw RunError("tradeoff: the reference run gave " + has);
     }
 
-    // The CSV is opened before the runs, so a path that cannot be written fails first.
-    std::unique_ptr<CsvFile> csv;
-    if (!o.csv.empty()) csv = std::make_unique<CsvFile>(o.csv);
-
     std::vector<Point> points;
     for (const MethodEntry* m : methods)
         for (const Point& p : points_of(*m, model, o.quick)) points.push_back(p);
@@ -405,7 +451,8 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
 
     if (csv) {
         csv->text("method,setting,parameter,wall_seconds,runs,status,max_position_error,sample_times,events,"
-                  "reference_events,matched_events,max_event_time_error,time_ratio_to_hsnc");
+                  "reference_events,matched_events,max_event_time_error,time_ratio_to_hsnc,response_magnitude,"
+                  "relative_position_error,diverged");
         csv->end_row();
         for (const auto& r : results) {
             csv->text(r.point->method->name);
@@ -421,18 +468,36 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
             csv->number(static_cast<double>(r.errors.matched_events));
             csv->number(r.errors.max_event_time_error);
             csv->number(base ? r.wall / base->wall : NAN);
+            csv->number(r.errors.response_magnitude);
+            csv->number(r.errors.relative_position_error);
+            csv->number(r.errors.diverged ? 1 : 0);
             csv->end_row();
         }
         csv->commit();
     }
-    if (!o.plot.empty()) plot_tradeoff(model, methods, o.csv, o.plot, reference_label);
+    double magnitude = NAN;  // the same for every run: the reference's, over the common sample grid
+    for (const auto& r : results)
+        if (std::isnan(magnitude) && r.errors.sample_times) magnitude = r.errors.response_magnitude;
+    const bool any_diverged =
+        std::any_of(results.begin(), results.end(), [](const Measured& r) { return r.errors.diverged; });
+    const bool any_matched = std::any_of(results.begin(), results.end(), [](const Measured& r) {
+        return r.status == "ok" && !r.errors.diverged && r.errors.matched_events > 0;
+    });
+    double min_wall = INFINITY, max_wall = 0;
+    for (const auto& r : results) min_wall = std::min(min_wall, r.wall), max_wall = std::max(max_wall, r.wall);
+    if (!o.plot.empty() && !results.empty())
+        plot_tradeoff(model, methods, o.csv, o.plot, reference_label, magnitude, any_diverged, any_matched, min_wall,
+                      max_wall);
 
-    // Summary (stdout): hsnc's point, then for each baseline the cheapest run
-    // that reaches each accuracy, as a time ratio to hsnc.
+    // Summary (stdout): the response's magnitude, hsnc's point, then for each
+    // baseline the cheapest run that reaches each relative accuracy, as a time
+    // ratio to hsnc. Diverged runs reach nothing.
+    std::cout << "response magnitude max |x_ref| = " << num(magnitude) << " m; errors relative to it\n";
     if (base)
         std::cout << "hsnc " << base->point->setting << ": " << num(base->wall) << " s, position error "
-                  << num(base->errors.max_position_error, 2) << ", events " << base->errors.matched_events << " of "
-                  << base->errors.reference_events << " matched\n";
+                  << num(base->errors.relative_position_error, 2) << " relative (" << num(base->errors.max_position_error, 2)
+                  << " m), events " << base->errors.matched_events << " of " << base->errors.reference_events
+                  << " matched\n";
     for (const MethodEntry* m : methods) {
         if (m->sweep == Sweep::kernels) continue;
         std::ostringstream line;
@@ -440,10 +505,10 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
         for (double level : {1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12}) {
             const Measured* best = nullptr;
             for (const auto& r : results)
-                if (r.point->method == m && r.status == "ok" && r.errors.max_position_error <= level &&
-                    (!best || r.wall < best->wall))
+                if (r.point->method == m && r.status == "ok" && !r.errors.diverged &&
+                    r.errors.relative_position_error <= level && (!best || r.wall < best->wall))
                     best = &r;
-            line << "  error<=" << num(level, 1) << ": ";
+            line << "  relative error<=" << num(level, 1) << ": ";
             if (!best)
                 line << "not reached";
             else if (base)
@@ -451,6 +516,9 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
             else
                 line << num(best->wall) << " s (" << best->point->setting << ")";
         }
+        const std::size_t diverged = static_cast<std::size_t>(std::count_if(
+            results.begin(), results.end(), [m](const Measured& r) { return r.point->method == m && r.errors.diverged; }));
+        if (diverged) line << "  (" << diverged << " diverged)";
         std::cout << line.str() << "\n";
     }
     return 0;
@@ -471,7 +539,9 @@ void add_tradeoff(CLI::App& app, int& exit_code) {
     sub->add_option("--reference-events", o->reference_events, "reference events CSV (contract format)");
     sub->add_option("--reference-digits", o->reference_digits,
                     "digits of the in-process reference when no reference CSVs are given (default 40)");
-    sub->add_option("--csv", o->csv, "write one row per run: setting, wall time, errors, time ratio to hsnc");
+    sub->add_option("--csv", o->csv,
+                    "write one row per run: setting, wall time, errors (absolute and relative to max |x_ref|), "
+                    "time ratio to hsnc, diverged");
     sub->add_option("--plot", o->plot, "draw the work-precision plot from --csv into this PNG (gnuplot)");
     sub->add_option("--methods", o->methods, "comma-separated methods to measure (default: all this build has)");
     sub->add_flag("--quick", o->quick, "fewer settings per method (about half)");

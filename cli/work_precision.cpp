@@ -132,7 +132,7 @@ RunErrors compare_runs(const RecordedRun& reference, const RecordedRun& run) {
     RunErrors e;
     const std::size_t n = reference.dof;
     // Common sample times: both sorted; equal up to rounding of t0 + k*dt.
-    double max_x = 0.0;
+    double max_x = 0.0, magnitude = 0.0;
     bool non_finite = false;
     for (std::size_t i = 0, j = 0; i < reference.t.size() && j < run.t.size();) {
         const double a = reference.t[i], b = run.t[j];
@@ -142,6 +142,7 @@ RunErrors compare_runs(const RecordedRun& reference, const RecordedRun& run) {
                 const double d = std::fabs(run.x[j * n + m] - reference.x[i * n + m]);
                 if (std::isnan(d)) non_finite = true;
                 max_x = std::max(max_x, d);
+                magnitude = std::max(magnitude, std::fabs(reference.x[i * n + m]));
             }
             ++e.sample_times;
             ++i;
@@ -152,7 +153,12 @@ RunErrors compare_runs(const RecordedRun& reference, const RecordedRun& run) {
             ++j;
         }
     }
-    if (e.sample_times) e.max_position_error = non_finite ? INFINITY : max_x;
+    if (e.sample_times) {
+        e.max_position_error = non_finite ? INFINITY : max_x;
+        e.response_magnitude = magnitude;
+        if (magnitude > 0) e.relative_position_error = e.max_position_error / magnitude;
+        e.diverged = !std::isfinite(e.max_position_error) || e.relative_position_error > kDivergedRatio;
+    }
 
     const auto ref = canonical(reference.events), got = canonical(run.events);
     e.events = got.size();

@@ -6,6 +6,14 @@
 //  - position error: max over the common sample times and all masses of
 //    |x_run - x_ref|. Sample times are common when they agree to rounding
 //    (both runs sample at t0 + k*dt); positions are never interpolated.
+//  - relative position error: the position error divided by the response's
+//    magnitude, max over the same sample times and masses of |x_ref| (an
+//    error in metres means nothing without the size of the motion: the seed
+//    scenarios move by metres, a damper by 3e-4 m).
+//  - diverged: the position error is not finite or exceeds kDivergedRatio
+//    times the response's magnitude (a blown-up run, e.g. ab4 beyond its
+//    stability limit at 1e100 m): reported, kept out of the accuracy summary
+//    and pinned at the top of the plot.
 //  - event-time error: events of both lists are put in canonical order (by
 //    time, and by (kind, element) among rows of one instant, whose order the
 //    contract leaves free) and matched in order by (kind, element); matching
@@ -53,8 +61,14 @@ private:
 /// file and line otherwise.
 RecordedRun read_reference(const Model& model, const std::string& trajectory_csv, const std::string& events_csv);
 
+/// A run whose position error exceeds this many times the response's magnitude has diverged.
+inline constexpr double kDivergedRatio = 10.0;
+
 struct RunErrors {
     double max_position_error = std::numeric_limits<double>::quiet_NaN();
+    double response_magnitude = std::numeric_limits<double>::quiet_NaN();  ///< max |x_ref| over the compared times
+    double relative_position_error = std::numeric_limits<double>::quiet_NaN();  ///< NaN when the magnitude is 0
+    bool diverged = false;
     std::size_t sample_times = 0;  ///< common sample times compared
     std::size_t events = 0;        ///< events of the run
     std::size_t reference_events = 0;

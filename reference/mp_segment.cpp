@@ -598,4 +598,61 @@ void MpSegment::eval(const cl_F& tau, MpEval& out) const {
     }
 }
 
+cl_F MpSegment::derivative_bound(std::size_t f, int k, const cl_F& horizon) const {
+    const MpModel& mp = mp_;
+    // Bounds on |q_j^(i)| for i = k and k + 1 (the Z terms carry q').
+    auto mode_bound = [&](int j, int i) {
+        const cl_F &lam = lambda_[j], &c = c_[j];
+        cl_F b = mp.zero;
+        if (regime_[j] == Regime::rigid) {
+            // q'' = (p - c u0') e^{-c tau}, so q^(i) = (-c)^(i-2) q''(0) e^{-c tau}.
+            cl_F ci = mp.one;
+            for (int r = 2; r < i; ++r) ci = ci * c;
+            b = ci * cln::abs(p_[j] - c * ud0_[j]);
+        } else {
+            // u^(r+2) = -c u^(r+1) - lambda u^(r); |u^(i)| <= sqrt(u^(i)(0)^2 + lambda u^(i-1)(0)^2).
+            cl_F a0 = u0_[j], a1 = ud0_[j];
+            for (int r = 1; r < i; ++r) {
+                const cl_F a2 = -(c * a1) - lam * a0;
+                a0 = a1;
+                a1 = a2;
+            }
+            b = cln::sqrt(a1 * a1 + lam * a0 * a0);
+        }
+        for (int h = 0; h < nh_; ++h) {
+            if (!secular_[j][h]) continue;
+            const cl_F& W = mp.h_omega[h];
+            cl_F Wi1 = mp.one;  // W^(i-1)
+            for (int r = 1; r < i; ++r) Wi1 = Wi1 * W;
+            b = b + cln::abs(P_[j][h] / (mp.two * W)) * (horizon * Wi1 * W + mp.I(i) * Wi1);
+        }
+        return b;
+    };
+    cl_F B = mp.zero;
+    for (int j = 0; j < nf_; ++j) {
+        if (!is_zero(W_[f][j])) B = B + cln::abs(W_[f][j]) * mode_bound(j, k);
+        if (!is_zero(Z_[f][j])) B = B + cln::abs(Z_[f][j]) * mode_bound(j, k + 1);
+    }
+    for (int h = 0; h < nh_; ++h) {  // the standard particular parts and direct forcing, one sinusoid a harmonic
+        const cl_F& W = mp.h_omega[h];
+        cl_F A = mp.zero, Bs = D_[f][h];
+        for (int j = 0; j < nf_; ++j) {
+            if (secular_[j][h]) continue;
+            A = A + W_[f][j] * pa_[j][h] + Z_[f][j] * W * pb_[j][h];
+            Bs = Bs + W_[f][j] * pb_[j][h] - Z_[f][j] * W * pa_[j][h];
+        }
+        cl_F Wk = mp.one;
+        for (int r = 0; r < k; ++r) Wk = Wk * W;
+        B = B + Wk * cln::sqrt(A * A + Bs * Bs);
+    }
+    return B;
+}
+
+cl_F MpSegment::fastest_rate() const {
+    cl_F r = mp_.zero;
+    for (int j = 0; j < nf_; ++j) r = cln::max(r, cln::max(omega_[j], cln::abs(c_[j])));
+    for (const cl_F& W : mp_.h_omega) r = cln::max(r, W);
+    return r;
+}
+
 }  // namespace hsnc::reference

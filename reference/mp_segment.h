@@ -94,6 +94,18 @@ public:
     bool has_max_step() const { return has_max_step_; }
     const cl_F& max_step() const { return max_step_; }
 
+    /// A bound on |g_f^(k)(tau)| for 0 <= tau <= horizon after setup(), k >= 2 (ties at a segment start,
+    /// reference.cpp): per mode the homogeneous part's k-th derivative cannot exceed what its energy
+    /// E_(k-1) = (u^(k)^2 + lambda u^(k-1)^2)/2 allows (E_(k-1) never grows: u^(k-1) solves the same damped
+    /// equation), a rigid-body mode's |u^(k)| <= c^(k-2) |u''(0)|; each harmonic adds one sinusoid of amplitude
+    /// Omega^k sqrt(A^2 + B^2), a secular term |A| (horizon Omega^k + k Omega^(k-1)).
+    cl_F derivative_bound(std::size_t f, int k, const cl_F& horizon) const;
+
+    /// The fastest rate of the segment's motion [1/s]: the largest of the modal frequencies sqrt(lambda_j), the modal
+    /// damping rates c_j and the forcing frequencies (0 for a segment that cannot move). It sets how many search steps
+    /// a segment may legitimately take (reference.cpp).
+    cl_F fastest_rate() const;
+
     // For tests.
     const std::vector<cl_F>& lambda() const { return lambda_; }
     Regime regime(int j) const { return regime_[static_cast<std::size_t>(j)]; }

@@ -45,10 +45,131 @@ std::vector<double> to_double(const std::vector<cl_F>& y) {
 // projection, closed form, back-projection).
 cl_F noise_of(const MpModel& mp, const cl_F& scale) { return mp.I(64) * mp.eps * scale; }
 
+// ---- ties: the first non-zero time derivative (interface.md "Ties and touches") ----
+//
+// Derivatives of the motion at one instant, in one configuration, by the
+// equation of motion itself: for a free mass
+//     m_i x_i^(k+2) = A_i^(k) - [k = 0] mu_k N_i sgn_i,
+//     A_i^(k) = [k = 0] f_i - (K x^(k))_i - (C x^(k+1))_i + sum_h F_hi Omega_h^k sin(Omega_h t + phase_h + k pi/2)
+// (K, C of the configuration, contact preloads in f_i), and x_i^(k) = 0 for k >= 1 for a stuck one. Each
+// derivative carries the magnitude of its terms, so "zero" means "within the rounding of its terms". The
+// motion's state together with the forcing harmonics is a linear system of dimension 2n + 2H + 1, so a
+// function whose first kTieOrder(n, H) derivatives all vanish vanishes identically (Cayley-Hamilton).
+struct Taylor {
+    std::vector<std::vector<cl_F>> x, xm;  ///< x^(k)_i and the magnitude of its terms, k = 0..order
+};
+
+int tie_order(const MpModel& mp) { return 2 * mp.n + 2 * static_cast<int>(mp.h_omega.size()) + 2; }
+
+// The k-th derivative of A_i (k >= 0) from x^(k), x^(k+1), with the magnitude of its terms.
+void force_derivative(const MpModel& mp, const Configuration& cfg, int i, const cl_F& t, const Taylor& T, int k,
+                      cl_F& value, cl_F& magnitude) {
+    const std::vector<cl_F>&xk = T.x[static_cast<std::size_t>(k)], &xk1 = T.x[static_cast<std::size_t>(k) + 1];
+    const std::vector<cl_F>&mk = T.xm[static_cast<std::size_t>(k)], &mk1 = T.xm[static_cast<std::size_t>(k) + 1];
+    value = k == 0 ? mp.f_const[i] : mp.zero;
+    magnitude = cln::abs(value);
+    value = value - mp.alpha * mp.m[i] * xk1[i];
+    magnitude = magnitude + cln::abs(mp.alpha * mp.m[i]) * mk1[i];
+    auto link = [&](const MpModel::Link& l, bool contact) {
+        if (l.a == l.b || (l.a != i && l.b != i)) return;
+        cl_F f = -(l.k * (mp.body(xk, l.a) - mp.body(xk, l.b))) - mp.beta * l.k * (mp.body(xk1, l.a) - mp.body(xk1, l.b));
+        cl_F fm = l.k * (mp.body(mk, l.a) + mp.body(mk, l.b)) + cln::abs(mp.beta) * l.k * (mp.body(mk1, l.a) + mp.body(mk1, l.b));
+        if (contact && k == 0) {
+            f = f + l.k * l.gap;
+            fm = fm + cln::abs(l.k * l.gap);
+        }
+        value = l.a == i ? value + f : value - f;
+        magnitude = magnitude + fm;
+    };
+    for (const auto& l : mp.springs) link(l, false);
+    for (std::size_t c = 0; c < mp.contacts.size(); ++c)
+        if (cfg.closed[c]) link(mp.contacts[c], true);
+    for (std::size_t h = 0; h < mp.h_omega.size(); ++h) {
+        const cl_F& W = mp.h_omega[h];
+        const cl_F arg = W * t + mp.h_phase[h];
+        // d^k/dt^k sin(arg) = W^k sin(arg + k pi/2)
+        cl_F d = (k % 2 == 0) ? cln::sin(arg) : cln::cos(arg);
+        if (k % 4 == 2 || k % 4 == 3) d = -d;
+        cl_F Wk = mp.one;
+        for (int j = 0; j < k; ++j) Wk = Wk * W;
+        value = value + mp.h_amp[h][i] * Wk * d;
+        magnitude = magnitude + cln::abs(mp.h_amp[h][i]) * Wk;
+    }
+}
+
+Taylor taylor(const MpModel& mp, const Configuration& cfg, const std::vector<signed char>& sgn, const cl_F& t,
+              const std::vector<cl_F>& x, const std::vector<cl_F>& v, int order) {
+    const int n = mp.n;
+    Taylor T;
+    T.x.assign(static_cast<std::size_t>(order) + 1, std::vector<cl_F>(static_cast<std::size_t>(n), mp.zero));
+    T.xm = T.x;
+    for (int i = 0; i < n; ++i) {
+        T.x[0][i] = x[i];
+        T.xm[0][i] = cln::abs(x[i]);
+        if (order >= 1 && !cfg.stuck[i]) {
+            T.x[1][i] = v[i];
+            T.xm[1][i] = cln::abs(v[i]);
+        }
+    }
+    for (int k = 0; k + 2 <= order; ++k)
+        for (int i = 0; i < n; ++i) {
+            if (cfg.stuck[i]) continue;
+            cl_F A, m;
+            force_derivative(mp, cfg, i, t, T, k, A, m);
+            if (k == 0 && sgn[i] != 0) {
+                const cl_F fr = mp.mu_k[i] * mp.normal[i];
+                A = sgn[i] > 0 ? A - fr : A + fr;
+                m = m + fr;
+            }
+            T.x[k + 2][i] = A / mp.m[i];
+            T.xm[k + 2][i] = m / mp.m[i];
+        }
+    return T;
+}
+
+// The sign of the first derivative of order >= 1 that is not zero to rounding; 0 when none is. `order`
+// (when given) receives its order.
+int first_nonzero_sign(const MpModel& mp, const std::vector<cl_F>& d, const std::vector<cl_F>& magnitude,
+                       int* order = nullptr) {
+    for (std::size_t k = 1; k < d.size(); ++k)
+        if (cln::abs(d[k]) > noise_of(mp, magnitude[k])) {
+            if (order) *order = static_cast<int>(k);
+            return cln::plusp(d[k]) ? 1 : -1;
+        }
+    return 0;
+}
+
+// Derivatives 0..order of G_c, from a Taylor expansion of order `order`.
+void gap_series(const MpModel& mp, int c, const Taylor& T, std::vector<cl_F>& d, std::vector<cl_F>& m) {
+    const auto& l = mp.contacts[static_cast<std::size_t>(c)];
+    d.clear();
+    m.clear();
+    for (std::size_t k = 0; k < T.x.size(); ++k) {
+        d.push_back(mp.body(T.x[k], l.a) - mp.body(T.x[k], l.b) - (k == 0 ? l.gap : mp.zero));
+        m.push_back(mp.body(T.xm[k], l.a) + mp.body(T.xm[k], l.b) + (k == 0 ? cln::abs(l.gap) : mp.zero));
+    }
+}
+
+// Derivatives 0..order-1 of A_i, from a Taylor expansion of order `order`.
+void force_series(const MpModel& mp, const Configuration& cfg, int i, const cl_F& t, const Taylor& T,
+                  std::vector<cl_F>& d, std::vector<cl_F>& m) {
+    d.clear();
+    m.clear();
+    for (std::size_t k = 0; k + 1 < T.x.size(); ++k) {
+        cl_F A, mag;
+        force_derivative(mp, cfg, i, t, T, static_cast<int>(k), A, mag);
+        d.push_back(A);
+        m.push_back(mag);
+    }
+}
+
 // Stick rule at v_i = 0 (interface.md): 0 = stuck if |A_i| < mu_s N_i, else the
-// direction of A_i; a tie (to rounding) by the rate of |A_i| with mass i held.
-signed char stick_rule(const MpModel& mp, const Configuration& cfg, int i, const cl_F& t, const std::vector<cl_F>& x,
-                       const std::vector<cl_F>& v, const std::vector<cl_F>* a) {
+// direction of A_i; a tie (to rounding) by the first non-zero derivative of
+// |A_i| with mass i held: stuck unless |A_i| is increasing. `a` (the
+// accelerations just before, for the rate) is used when the rate decides.
+signed char stick_rule(const MpModel& mp, const Configuration& cfg, const std::vector<signed char>& sgn, int i,
+                       const cl_F& t, const std::vector<cl_F>& x, const std::vector<cl_F>& v,
+                       const std::vector<cl_F>* a) {
     const cl_F A = mp.force_on_mass(cfg, i, t, x, v);
     const cl_F limit = mp.mu_s[i] * mp.normal[i];
     const signed char dir = cln::plusp(A) ? 1 : -1;
@@ -57,6 +178,23 @@ signed char stick_rule(const MpModel& mp, const Configuration& cfg, int i, const
         std::vector<cl_F> held = a ? *a : std::vector<cl_F>(v.size(), mp.zero);
         held[static_cast<std::size_t>(i)] = mp.zero;
         cl_F rate = mp.force_rate_on_mass(cfg, i, t, v, held);
+        // The held motion's derivatives, for the rate's rounding level and the higher orders.
+        Configuration hold = cfg;
+        hold.stuck[i] = 1;
+        std::vector<signed char> s = sgn;
+        s[static_cast<std::size_t>(i)] = 0;
+        const Taylor T = taylor(mp, hold, s, t, x, v, tie_order(mp) + 1);
+        std::vector<cl_F> d, m;
+        force_series(mp, hold, i, t, T, d, m);
+        if (cln::abs(rate) <= noise_of(mp, m[1])) {
+            if (cln::zerop(limit) && cln::abs(A) <= noise_of(mp, m[0])) {
+                // |A| = 0 = mu_s N: |A| increases as soon as A does not vanish; it slides along A.
+                const int s0 = first_nonzero_sign(mp, d, m);
+                return static_cast<signed char>(s0);
+            }
+            const int s1 = first_nonzero_sign(mp, d, m);  // |A| - mu_s N has the derivatives dir * A^(k)
+            return s1 * dir > 0 ? dir : 0;
+        }
         if (dir < 0) rate = -rate;
         return cln::plusp(rate) ? dir : 0;
     }
@@ -97,7 +235,7 @@ bool apply_switches(const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x
         for (int i = 0; i < n; ++i) {
             if (!deciding[i]) continue;
             deciding[i] = 0;
-            const signed char dir = stick_rule(mp, cfg, i, t, x, v, &a);
+            const signed char dir = stick_rule(mp, cfg, sgn, i, t, x, v, &a);
             if (dir == 0) {
                 cfg.stuck[i] = 1;
                 sgn[i] = 0;
@@ -110,7 +248,7 @@ bool apply_switches(const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x
         }
         for (int i = 0; i < n; ++i) {
             if (!cfg.stuck[i]) continue;
-            const signed char dir = stick_rule(mp, cfg, i, t, x, v, &a);
+            const signed char dir = stick_rule(mp, cfg, sgn, i, t, x, v, &a);
             if (dir == 0) continue;
             cfg.stuck[i] = 0;
             sgn[i] = dir;
@@ -123,29 +261,34 @@ bool apply_switches(const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x
     return false;
 }
 
-// The configuration entered at (t, x, v) (interface.md "At t0 ...").
+// The configuration entered at (t, x, v) (interface.md "At t0 ..."): a contact
+// with G = 0 (to rounding) by the first non-zero derivative of G (closed if
+// increasing), computed with the contacts decided so far; closed when G
+// vanishes identically (at rest on the boundary, as the double engine).
 Configuration entered_configuration(const Model& model, const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x,
                                     const std::vector<cl_F>& v, std::vector<signed char>& sgn) {
     Configuration cfg = Configuration::all_open(model);
+    sgn.assign(static_cast<std::size_t>(mp.n), 0);
+    for (int i = 0; i < mp.n; ++i)  // the friction directions of the masses already sliding
+        if (model.masses[i].has_friction && !cln::zerop(v[i])) sgn[i] = cln::plusp(v[i]) ? 1 : -1;
+    std::vector<cl_F> d, m;
     for (std::size_t c = 0; c < mp.contacts.size(); ++c) {
         const auto& k = mp.contacts[c];
         const cl_F G = mp.gap(static_cast<int>(c), x);
         const cl_F noise = noise_of(mp, cln::abs(mp.body(x, k.a)) + cln::abs(mp.body(x, k.b)) + cln::abs(k.gap));
-        if (cln::abs(G) > noise)
+        if (cln::abs(G) > noise) {
             cfg.closed[c] = cln::plusp(G);
-        else
-            cfg.closed[c] = !cln::minusp(mp.gap_rate(static_cast<int>(c), v));
-    }
-    sgn.assign(static_cast<std::size_t>(mp.n), 0);
-    for (int i = 0; i < mp.n; ++i) {
-        if (!model.masses[i].has_friction) continue;
-        if (!cln::zerop(v[i])) {
-            sgn[i] = cln::plusp(v[i]) ? 1 : -1;
-        } else {
-            const signed char dir = stick_rule(mp, cfg, i, t, x, v, nullptr);
-            cfg.stuck[i] = dir == 0;
-            sgn[i] = dir;
+            continue;
         }
+        const Taylor T = taylor(mp, cfg, sgn, t, x, v, tie_order(mp));
+        gap_series(mp, static_cast<int>(c), T, d, m);
+        cfg.closed[c] = first_nonzero_sign(mp, d, m) >= 0;
+    }
+    for (int i = 0; i < mp.n; ++i) {
+        if (!model.masses[i].has_friction || !cln::zerop(v[i])) continue;
+        const signed char dir = stick_rule(mp, cfg, sgn, i, t, x, v, nullptr);
+        cfg.stuck[i] = dir == 0;
+        sgn[i] = dir;
     }
     return cfg;
 }
@@ -172,7 +315,14 @@ double relative_difference(const cl_F& a, const cl_F& b, double floor) {
     return den > 0 ? cln::double_approx(d / cln::cl_float(den, d)) : cln::double_approx(d);
 }
 
-PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions& options, Observer& observer) {
+std::size_t search_step_limit(double span, double fastest_rate, const SearchLimits& limits) {
+    const double periods = std::fabs(span) * fastest_rate / (2 * 3.141592653589793);
+    const double n = static_cast<double>(limits.base_steps) + static_cast<double>(limits.steps_per_period) * periods;
+    return n >= 1e18 ? static_cast<std::size_t>(1e18) : static_cast<std::size_t>(n);
+}
+
+PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions& options, Observer& observer,
+                            const SearchLimits& limits) {
     if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
     const MpModel mp(model, digits);
     const std::size_t n = model.dof();
@@ -219,8 +369,8 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         return static_cast<std::size_t>(f.kind) * stride + static_cast<std::size_t>(f.element);
     };
     std::vector<cl_F> side(max_switches, mp.one), floor(max_switches, mp.zero);
-    std::vector<char> armed(max_switches), has_root(max_switches);
-    std::vector<cl_F> root(max_switches, mp.zero);
+    std::vector<char> armed(max_switches), has_root(max_switches), leaving(max_switches), leaves_now(max_switches);
+    std::vector<cl_F> root(max_switches, mp.zero), clear_until(max_switches, mp.zero);
     MpEval buf, dense, probe;
     std::vector<SwitchFunction> switched;
     std::vector<Transition> transitions;
@@ -269,13 +419,80 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         eval(tau);
         for (std::size_t f = 0; f < nsw; ++f)
             armed[f] = sw[f].kind == SwitchKind::velocity && h_of(buf, f) > noise(buf, f);
+        // Ties at the segment start: a function at zero whose first derivative vanishes too. Its
+        // direction is its first non-zero derivative, of order m (interface.md "Ties and touches"). One
+        // that heads across (into the side its configuration forbids) switches now, at this instant.
+        // One that heads into its side is `leaving` zero: the guaranteed bound h + h' s - B s^2/2 is
+        // useless for it (h = h' = 0 while h grows like s^m: the step would shrink with s^(m/2), the
+        // search crawl on for ever). Taylor's theorem with the bound B' >= |h^(m+1)| of the segment
+        // (MpSegment::derivative_bound) gives instead h(s) >= s^m/m! (|h^(m)(0)| - B' s/(m+1)) > 0
+        // for s < (m+1)|h^(m)(0)|/B', so it is left out of the bound up to half that (`clear_until`);
+        // from there, once above its rounding band (h > 2 noise), the bound takes over. A function
+        // with no non-zero derivative (identically zero to rounding) stays leaving, with steps of at
+        // most tau (tau doubles).
+        std::fill(leaving.begin(), leaving.end(), 0);
+        std::fill(leaves_now.begin(), leaves_now.end(), 0);
+        {
+            // The first derivatives (Taylor order 2) decide almost every function at zero (the ones
+            // that just switched); the full expansion only when h' vanishes too.
+            Taylor T1, T;
+            bool have_t1 = false, have_t = false;
+            std::vector<cl_F> d, m;
+            auto series = [&](std::size_t f, const Taylor& X) {
+                const int e = sw[f].element;
+                d.clear(), m.clear();
+                if (sw[f].kind == SwitchKind::gap) {
+                    gap_series(mp, e, X, d, m);
+                } else if (sw[f].kind == SwitchKind::velocity) {
+                    for (std::size_t k = 0; k + 1 < X.x.size(); ++k) d.push_back(X.x[k + 1][e]), m.push_back(X.xm[k + 1][e]);
+                } else {
+                    force_series(mp, cfg, e, t, X, d, m);
+                    if (sw[f].kind == SwitchKind::release_neg)
+                        for (cl_F& dk : d) dk = -dk;
+                }
+            };
+            for (std::size_t f = 0; f < nsw; ++f) {
+                if (cln::abs(h_of(buf, f)) > noise(buf, f)) continue;
+                if (!have_t1) T1 = taylor(mp, cfg, sgn, t, x, v, 2), have_t1 = true;
+                series(f, T1);
+                if (cln::abs(d[1]) > noise_of(mp, m[1])) continue;  // h' decides: the bound works
+                if (!have_t) T = taylor(mp, cfg, sgn, t, x, v, tie_order(mp) + 1), have_t = true;
+                series(f, T);
+                int order = 0;
+                const int dir = first_nonzero_sign(mp, d, m, &order) * (cln::plusp(side[f]) ? 1 : -1);
+                if (dir < 0) {
+                    leaves_now[f] = 1;
+                    continue;
+                }
+                leaving[f] = 1;
+                clear_until[f] = mp.zero;
+                if (dir > 0) {
+                    const cl_F Bn = S.derivative_bound(f, order + 1, tau_end);
+                    const cl_F dm = cln::abs(d[static_cast<std::size_t>(order)]);
+                    clear_until[f] = cln::plusp(Bn) ? cln::min(tau_end, mp.I(order + 1) * dm / (mp.two * Bn)) : tau_end;
+                }
+            }
+        }
+        // Every loop is bounded: a legitimate search takes a few steps per period of the segment's
+        // fastest motion (and a few dozen Newton-like steps onto each root); far more is a stall.
+        const std::size_t max_iter = search_step_limit(options.t_end - cln::double_approx(t),
+                                                       cln::double_approx(S.fastest_rate()), limits);
         for (std::size_t iter = 0;; ++iter) {
-            if (iter > 10'000'000)
-                return finish(RunStatus::failure, "switch search does not converge at t = " + time_text(t + tau));
+            if (iter > max_iter)
+                return finish(RunStatus::failure, "switch search stalls at t = " + time_text(t + tau) + " (more than " +
+                                                      std::to_string(max_iter) + " steps in configuration '" +
+                                                      cfg.spec(model) + "')");
             bool any = false;
             cl_F tau_star = mp.zero;
             for (std::size_t f = 0; f < nsw; ++f) {
                 has_root[f] = 0;
+                if (iter == 0 && leaves_now[f]) {  // the motion leaves this contact's configuration now
+                    has_root[f] = 1;
+                    root[f] = mp.zero;
+                    tau_star = mp.zero;
+                    any = true;
+                    continue;
+                }
                 const cl_F h = h_of(buf, f), hd = hd_of(buf, f), eps_f = noise(buf, f);
                 const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
                 if (stop ? h > eps_f : h >= -eps_f) continue;
@@ -333,18 +550,26 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
             cl_F step = tau_end - tau;
             if (S.has_max_step()) step = cln::min(step, S.max_step());
             for (std::size_t f = 0; f < nsw; ++f) {
+                if (leaving[f]) continue;
                 const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
                 const cl_F level = stop ? mp.zero : -(mp.two * noise(buf, f));
                 cl_F s;
                 if (safe_step(mp, h_of(buf, f) - level, hd_of(buf, f), buf.bound[f], s)) step = cln::min(step, s);
             }
-            step = cln::max(step, mp.I(4) * mp.eps * (cln::abs(t) + cln::abs(tau)));
+            // The smallest step: the time's own rounding; at t = tau = 0, that of the run's span.
+            cl_F floor_step = mp.I(4) * mp.eps * (cln::abs(t) + cln::abs(tau));
+            if (cln::zerop(floor_step)) floor_step = mp.I(4) * mp.eps * cln::abs(t_end - mp.t0);
+            for (std::size_t f = 0; f < nsw; ++f)
+                if (leaving[f]) step = cln::min(step, tau < clear_until[f] ? clear_until[f] - tau : cln::max(tau, floor_step));
+            step = cln::max(step, floor_step);
             prev_tau = tau;
             tau = cln::min(tau + step, tau_end);
             eval(tau);
-            for (std::size_t f = 0; f < nsw; ++f)
+            for (std::size_t f = 0; f < nsw; ++f) {
                 if (sw[f].kind == SwitchKind::velocity && !armed[f] && h_of(buf, f) > mp.two * noise(buf, f))
                     armed[f] = 1;
+                if (leaving[f] && tau >= clear_until[f] && h_of(buf, f) > mp.two * noise(buf, f)) leaving[f] = 0;
+            }
         }
 
         // ---- samples up to the event (or t_end), from the closed form ----

@@ -20,6 +20,9 @@
 //         same switch functions and the same transitions as rk45 and hsnc; the
 //         restart after a switch is one-sided as in rk45 (integrators.cpp).
 //         --rtol/--atol as rk45. SUNDIALS is linked statically (start-up).
+//  rk45 and cvode: while a mass is stuck under harmonic forcing, the step is at
+//         most 1/32 of the shortest forcing period (the state of a stuck mass
+//         does not follow the forcing that releases it; integrators.cpp).
 #pragma once
 
 #include <string>

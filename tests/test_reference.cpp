@@ -2,6 +2,9 @@
 // forms evaluated independently at full precision, against itself at N and 2N
 // digits, and the double engine against it.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -375,6 +378,189 @@ INSTANTIATE_TEST_SUITE_P(
         BadPrecision{"--precision long-double", "--precision long-double: not offered"},
         BadPrecision{"--precision mp:30 --method rk45", "--precision mp:30: only with method hsnc (not rk45)"},
         BadPrecision{"--precision mp:30 --kernels generic", "--kernels generic: applies to double precision only"}));
+
+
+// ---- Ties at t0 (interface.md "Ties and touches") ----------------------------
+//
+// A contact with gap 0 at rest, x0 = v0 = 0, under F sin(Omega t): G = G' = G'' = 0
+// at t0 and G''' = F Omega/m, so the motion enters the contact closed when F > 0
+// and open when F < 0. The reference used to search for ever there (its step
+// bound shrinks with G ~ t^3); these runs go through a child process that an
+// alarm ends, so a hang fails the test instead of stalling the suite.
+
+// Runs `fn` in a child process that SIGALRM ends after `seconds`; returns what fn
+// returned, or "killed by signal N" when the child did not finish.
+std::string run_bounded(unsigned seconds, const std::function<std::string()>& fn) {
+    int fd[2];
+    if (pipe(fd) != 0) return "pipe failed";
+    const pid_t pid = fork();
+    if (pid == 0) {
+        close(fd[0]);
+        alarm(seconds);
+        const std::string out = fn();
+        std::size_t done = 0;
+        while (done < out.size()) {
+            const ssize_t w = write(fd[1], out.data() + done, out.size() - done);
+            if (w <= 0) break;
+            done += static_cast<std::size_t>(w);
+        }
+        _exit(0);
+    }
+    close(fd[1]);
+    std::string text;
+    char chunk[256];
+    for (ssize_t r; (r = read(fd[0], chunk, sizeof chunk)) > 0;) text.append(chunk, static_cast<std::size_t>(r));
+    close(fd[0]);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    if (WIFSIGNALED(status)) return "killed by signal " + std::to_string(WTERMSIG(status));
+    return text;
+}
+
+std::string zero_gap_model(double amplitude) {
+    return R"(
+name = "zero-gap-at-rest"
+[[mass]]
+name = "m1"
+m = 1
+[[spring]]
+between = ["ground", "m1"]
+k = 100
+[[contact]]
+between = ["m1", "ground"]
+gap = 0
+k = 1000
+[[forcing]]
+omega = 10
+amplitude = { m1 = )" + std::to_string(amplitude) + " }\n";
+}
+
+// Status, events and end configuration of a reference run, as one line.
+std::string outcome_line(const Model& m, int digits, double t_end) {
+    const PreciseRun r = run_at(m, digits, t_end);
+    return std::string(run_status_name(r.summary.status)) + " events=" + std::to_string(r.events.size()) + " '" +
+           r.summary.configuration.spec(m) + "' " + r.summary.message;
+}
+
+// The first root in (0, 5] of x(t) (x != 0 just after 0): scan, then bisection at full precision.
+cl_F first_root(const Solution& x, const cl_F& one) {
+    const double h = 1e-3;
+    const bool positive = cln::plusp(x(F(h / 2, one)));
+    double a = h / 2;
+    while (a < 5 && cln::plusp(x(F(a + h, one))) == positive) a += h;
+    cl_F lo = F(a, one), hi = F(a + h, one);
+    for (int k = 0; k < 250; ++k) {
+        const cl_F mid = (lo + hi) / F(2.0, one);
+        (cln::plusp(x(mid)) == positive ? lo : hi) = mid;
+    }
+    return lo;
+}
+
+TEST(ReferenceTies, ZeroGapAtRestUnderSineForcingEntersClosedAndTerminates) {
+    const Model m = model_from(zero_gap_model(1.0));
+    // The issue's case: it did not finish even at --t-end 1e-6 (now a few milliseconds).
+    EXPECT_EQ(run_bounded(60, [&] { return outcome_line(m, 30, 1e-6); }), "ok events=0 'closed=contact1 stuck=' ");
+    ASSERT_EQ(run_bounded(60, [&] { return outcome_line(m, 40, 1.0); }).substr(0, 9), "ok events");
+    // Closed from t0 (K = 1100): x = F/(K - Omega^2) (sin Omega t - (Omega/omega) sin omega t), so the contact
+    // opens at its first root, with no row at t0.
+    const PreciseRun r = run_at(m, 40, 1.0);
+    ASSERT_GE(r.events.size(), 1u);
+    EXPECT_EQ(r.events[0].kind, EventKind::contact_open);
+    const cl_F one = prec40(), W = F(10.0, one), w = cln::sqrt(F(1100.0, one));
+    const cl_F t1 = first_root([&](const cl_F& t) -> cl_F { return cln::sin(W * t) - W / w * cln::sin(w * t); }, one);
+    EXPECT_LT(relative_difference(r.events[0].t, t1), 1e-36) << cln::double_approx(t1);
+}
+
+TEST(ReferenceTies, ZeroGapAtRestUnderNegativeSineForcingEntersOpen) {
+    const Model m = model_from(zero_gap_model(-1.0));
+    ASSERT_EQ(run_bounded(60, [&] { return outcome_line(m, 40, 1e-6); }), "ok events=0 'closed= stuck=' ");
+    // Open from t0 at exact resonance (k/m = Omega^2): x = F/(2 Omega^2) (sin Omega t - Omega t cos Omega t) < 0
+    // until Omega t = 4.4934..., the first positive root of tan u = u: the first row is that contact_close.
+    const PreciseRun r = run_at(m, 40, 1.0);
+    ASSERT_GE(r.events.size(), 1u);
+    EXPECT_EQ(r.events[0].kind, EventKind::contact_close);
+    const cl_F one = prec40(), W = F(10.0, one);
+    const cl_F t1 = first_root([&](const cl_F& t) -> cl_F { return cln::sin(W * t) - W * t * cln::cos(W * t); }, one);
+    EXPECT_LT(relative_difference(r.events[0].t, t1), 1e-36) << cln::double_approx(t1);
+}
+
+// G = G' = 0, G'' = -f/m < 0 (a constant load pulls the mass off a zero gap): open
+// from t0, and x = -(f/k)(1 - cos omega t) only touches 0 (at t = 2 pi/omega):
+// no row at all.
+TEST(ReferenceTies, ZeroGapAtRestUnderALoadEntersOpenAndOnlyTouches) {
+    const Model m = model_from(R"(
+name = "zero-gap-load"
+[[mass]]
+name = "m1"
+m = 1
+[[spring]]
+between = ["ground", "m1"]
+k = 100
+[[contact]]
+between = ["m1", "ground"]
+gap = 0
+k = 1000
+[load]
+m1 = -1
+)");
+    ASSERT_EQ(run_bounded(60, [&] { return outcome_line(m, 40, 1.0); }), "ok events=0 'closed= stuck=' ");
+    const PreciseRun r = run_at(m, 40, 1.0);
+    const cl_F one = prec40(), w = F(10.0, one), t = F(1.0, one);
+    EXPECT_LT(relative_difference(r.x[0], -(one - cln::cos(w * t)) / F(100.0, one)), 1e-35);
+    EXPECT_LT(relative_difference(r.v[0], -(w * cln::sin(w * t)) / F(100.0, one)), 1e-35);
+}
+
+// |A| = mu_s N at t0 with v = 0 and A' = A'' = 0, A''' = 6 > 0 (two harmonics whose
+// rates cancel): |A| is increasing, so the mass slides from t0 (no release row),
+// and v(t) = (1/9) cos(omega t) + (2/9) cos t - (1/3) cos 2t, omega^2 = 10, the
+// closed form of m x'' + k x = -mu_k N + 2 sin t - sin 2t from x0 = -0.5, v0 = 0.
+TEST(ReferenceTies, FrictionTieDecidedByTheThirdDerivativeSlides) {
+    const Model m = model_from(R"(
+name = "friction-tie"
+[parameters]
+g = 10
+[[mass]]
+name = "m1"
+m = 1
+mu_k = 0.5
+[[spring]]
+between = ["ground", "m1"]
+k = 10
+[[forcing]]
+omega = 1
+amplitude = { m1 = 2 }
+[[forcing]]
+omega = 2
+amplitude = { m1 = -1 }
+[initial]
+x = { m1 = -0.5 }
+)");
+    ASSERT_EQ(run_bounded(60, [&] { return outcome_line(m, 40, 0.01); }), "ok events=0 'closed= stuck=' ");
+    const PreciseRun r = run_at(m, 40, 0.01);
+    const cl_F one = prec40(), w = cln::sqrt(F(10.0, one)), t = F(0.01, one);
+    const cl_F v = (cln::cos(w * t) + F(2.0, one) * cln::cos(t) - F(3.0, one) * cln::cos(F(2.0, one) * t)) / F(9.0, one);
+    EXPECT_GT(cln::double_approx(r.v[0]), 0.0);
+    EXPECT_LT(relative_difference(r.v[0], v), 1e-20);  // v ~ t^4/4 = 2.5e-9: cancels 8 of the 38 digits
+}
+
+// Every loop of the reference is bounded: a search that takes more steps than the
+// limit ends the run with a named failure and a message saying where.
+TEST(ReferenceTies, SearchStepLimitEndsTheRunWithAFailure) {
+    const Model m = bundled("bilinear-1dof.toml");
+    Recorder rec(m.dof());
+    EngineOptions opt;
+    opt.t_end = 10.0;
+    opt.samples = false;
+    reference::SearchLimits limits;
+    limits.base_steps = 5;
+    limits.steps_per_period = 0;
+    const PreciseRun r = simulate_precise(m, 30, opt, rec, limits);
+    EXPECT_EQ(r.summary.status, RunStatus::failure);
+    EXPECT_NE(r.summary.message.find("switch search stalls at t = "), std::string::npos) << r.summary.message;
+    EXPECT_NE(r.summary.message.find("more than 5 steps"), std::string::npos) << r.summary.message;
+    // The default limit: 100000 steps plus 1000 per period of the fastest motion (10 s at 4 rad/s: 6.37 periods).
+    EXPECT_EQ(reference::search_step_limit(10.0, 4.0, {}), 100'000u + 6'366u);
+}
 
 }  // namespace
 }  // namespace hsnc

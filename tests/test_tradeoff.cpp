@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cli_runner.h"
+#include "error.h"
 #include "tradeoff.h"
 #include "work_precision.h"
 
@@ -107,18 +108,19 @@ std::map<std::string, std::vector<std::string>> read_tradeoff(const std::string&
     std::getline(in, line);
     EXPECT_EQ(line,
               "method,setting,parameter,wall_seconds,runs,status,max_position_error,sample_times,events,"
-              "reference_events,matched_events,max_event_time_error,time_ratio_to_hsnc");
+              "reference_events,matched_events,max_event_time_error,time_ratio_to_hsnc,response_magnitude,"
+              "relative_position_error,diverged");
     std::map<std::string, std::vector<std::string>> rows;
     while (std::getline(in, line)) {
         const auto f = fields(line);
-        EXPECT_EQ(f.size(), 13u) << line;
-        if (f.size() == 13u) rows[f[0] + " " + f[1]] = f;
+        EXPECT_EQ(f.size(), 16u) << line;
+        if (f.size() == 16u) rows[f[0] + " " + f[1]] = f;
     }
     return rows;
 }
 
 enum Col { kParameter = 2, kWall = 3, kStatus = 5, kXErr = 6, kSamples = 7, kEvents = 8, kRefEvents = 9,
-           kMatched = 10, kTErr = 11 };
+           kMatched = 10, kTErr = 11, kMagnitude = 13, kRelErr = 14, kDiverged = 15 };
 
 TEST(Tradeoff, CoulombOscillatorAgainstItsClosedForm) {
     const Reference ref = coulomb_reference(4.0, 0.004);
@@ -150,7 +152,7 @@ TEST(Tradeoff, CoulombOscillatorAgainstItsClosedForm) {
     }
     EXPECT_LT(std::stod(rows.at("ab4 h=1e-04")[kXErr]), std::stod(rows.at("ab4 h=1e-03")[kXErr]));
     // The summary line of each baseline on stdout, as time ratios to hsnc.
-    EXPECT_NE(r.out.find("ab4:  error<=0.01: "), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("ab4:  relative error<=0.01: "), std::string::npos) << r.out;
 }
 
 TEST(Tradeoff, TheBenchScriptsClosedFormAgreesWithHsnc) {
@@ -185,7 +187,7 @@ TEST(Tradeoff, WithoutHsncThereIsNoRatioAndThePlotIsDrawn) {
     const auto rows = read_tradeoff(csv);
     ASSERT_EQ(rows.size(), 4u);  // --quick: rtol 1e-4, 1e-7, 1e-10, 1e-13
     EXPECT_EQ(rows.at("rk45 rtol=1e-07 atol=1e-09")[12], "nan");
-    EXPECT_NE(r.out.find("rk45:  error<=0.01: "), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("rk45:  relative error<=0.01: "), std::string::npos) << r.out;
     EXPECT_EQ(r.out.find("x hsnc"), std::string::npos) << r.out;
 }
 
@@ -322,7 +324,7 @@ TEST(Tradeoff, BadInputExitsTwoAndWritesNothing) {
         {"--t-end 1 --reference-out '" + ref.events + "' --reference-events '" + ref.events + "'" + out,
          ref.events + ":1: header"},
         {"--t-end 1 --bogus" + refs + out, "bogus"},
-        {"--t-end 1" + refs + " --csv /nonexistent-dir/x.csv", "cannot write '/nonexistent-dir/x.csv'"},
+        {"--t-end 1" + refs + " --csv /nonexistent-dir/x.csv", "--csv '/nonexistent-dir/x.csv': cannot write it"},
     };
     for (const Case& c : cases) {
         const auto r = run_hsnc("tradeoff " + m + " " + c.args);
@@ -336,6 +338,100 @@ TEST(Tradeoff, BadInputExitsTwoAndWritesNothing) {
     EXPECT_EQ(r.exit_code, 2) << r.err;
     EXPECT_NE(r.err.find(ref.trajectory + ":1: header 't,x_m1,v_m1' does not match"), std::string::npos) << r.err;
     EXPECT_FALSE(file_exists(csv));
+}
+
+
+// Errors relative to the response: a stiff oscillator moving by 3e-4 m
+// (x = 3e-4 cos(1000 t), m = 1, k = 1e6), where an absolute 1e-4 m would be a
+// third of the motion. ab4 at h = 1e-3 (h omega = 1, outside its stability
+// region) blows up: marked diverged, left out of the summary, pinned in the plot.
+TEST(Tradeoff, ErrorsAreRelativeToTheResponseAndDivergedRunsAreMarked) {
+    const std::string model = write_temp("stiff.toml",
+                                         "name = \"stiff\"\n[[mass]]\nname = \"m1\"\nm = 1\n"
+                                         "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 1e6\n"
+                                         "[initial]\nx = { m1 = 3e-4 }\n");
+    std::string traj = "t,x_m1,v_m1\n";
+    for (double t : grid(0.05, 5e-5))
+        traj += g17(t) + "," + g17(3e-4 * std::cos(1000 * t)) + "," + g17(-0.3 * std::sin(1000 * t)) + "\n";
+    const std::string tr = write_temp("stiff_ref.csv", traj), ev = write_temp("stiff_ref_events.csv", "t,kind,element,x_m1,v_m1\n");
+    const std::string csv = temp_path("tradeoff.csv"), png = temp_path("tradeoff.png");
+    const auto r = run_hsnc("tradeoff '" + model + "' --t-end 0.05 --dt 5e-5 --reference-out '" + tr +
+                            "' --reference-events '" + ev + "' --methods hsnc,ab4 --quick --runs 1 --csv '" + csv +
+                            "' --plot '" + png + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(slurp(png).substr(0, 4), "\x89PNG");
+    const auto rows = read_tradeoff(csv);
+    ASSERT_TRUE(rows.count("hsnc kernels=generic") && rows.count("ab4 h=1e-03") && rows.count("ab4 h=1e-04"))
+        << slurp(csv);
+    for (const auto& [key, row] : rows) {
+        // The magnitude is max |x_ref| = x(0) = 3e-4; the relative error is the absolute one over it.
+        EXPECT_EQ(std::stod(row[kMagnitude]), 3e-4) << key;
+        if (std::isfinite(std::stod(row[kXErr])))
+            EXPECT_DOUBLE_EQ(std::stod(row[kRelErr]), std::stod(row[kXErr]) / 3e-4) << key;
+    }
+    const auto& blown = rows.at("ab4 h=1e-03");
+    EXPECT_EQ(blown[kDiverged], "1");
+    EXPECT_GT(std::stod(blown[kRelErr]), cli::kDivergedRatio);
+    EXPECT_EQ(rows.at("ab4 h=1e-04")[kDiverged], "0");
+    EXPECT_LT(std::stod(rows.at("ab4 h=1e-04")[kRelErr]), 1.0);
+    EXPECT_EQ(rows.at("hsnc kernels=generic")[kDiverged], "0");
+    EXPECT_LT(std::stod(rows.at("hsnc kernels=generic")[kRelErr]), 1e-12);
+    // The summary speaks of relative errors and counts the diverged run; stderr flags it.
+    EXPECT_NE(r.out.find("response magnitude max |x_ref| = 0.0003 m; errors relative to it"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("ab4:  relative error<=0.01: "), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("(1 diverged)"), std::string::npos) << r.out;
+    EXPECT_NE(r.err.find("tradeoff: ab4 h=1e-03: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(", DIVERGED, "), std::string::npos) << r.err;
+}
+
+// Every output path is checked before any work: the reference (minutes for a
+// long run at many digits) is not even started.
+TEST(Tradeoff, OutputPathsAreCheckedBeforeTheReference) {
+    bool reference_ran = false;
+    const cli::ReferenceRunner runner = [&reference_ran](const Model&, const EngineOptions& o, Observer&) {
+        reference_ran = true;
+        RunSummary s;
+        s.t = o.t_end;
+        return s;
+    };
+    const std::string dir = temp_path("a-directory");
+    ASSERT_EQ(std::system(("mkdir '" + dir + "'").c_str()), 0);
+    struct Case {
+        std::string csv, plot, message;
+    };
+    const std::string good_csv = temp_path("t.csv");
+    const Case cases[] = {
+        {"/nonexistent-dir/x.csv", "", "--csv '/nonexistent-dir/x.csv': cannot write it (No such file or directory)"},
+        {dir, "", "--csv '" + dir + "': is a directory"},
+        {good_csv, "/nonexistent-dir/x.png", "--plot '/nonexistent-dir/x.png': cannot write it"},
+        {good_csv, dir, "--plot '" + dir + "': is a directory"},
+    };
+    for (const Case& c : cases) {
+        cli::TradeoffOptions o;
+        o.model = model_path("coulomb-1dof.toml");
+        o.t_end = 1;
+        o.methods = "hsnc";
+        o.runs = 1;
+        o.csv = c.csv;
+        o.plot = c.plot;
+        reference_ran = false;
+        try {
+            cli::tradeoff(o, runner);
+            ADD_FAILURE() << "no InputError for --csv " << c.csv << " --plot " << c.plot;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << e.what();
+        }
+        EXPECT_FALSE(reference_ran) << c.message;
+        EXPECT_FALSE(file_exists(good_csv));
+    }
+    // From the command line: exit 2, one message, nothing written, and no reference computed.
+    const auto r = run_hsnc("tradeoff '" + model_path("coulomb-1dof.toml") + "' --t-end 1 --csv '" + good_csv +
+                            "' --plot /nonexistent-dir/x.png");
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("--plot '/nonexistent-dir/x.png': cannot write it"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("computing the reference"), std::string::npos) << r.err;
+    EXPECT_FALSE(file_exists(good_csv));
+    std::system(("rmdir '" + dir + "'").c_str());
 }
 
 }  // namespace
