@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #include <vector>
 
 #include <cvode/cvode.h>
@@ -658,9 +659,23 @@ void validate(Method method, const IntegratorOptions& o) {
                          ": --rtol and --atol must be finite and > 0");
 }
 
+void validate(Method method, const IntegratorOptions& o, double t0, double t_end) {
+    validate(method, o);
+    if (method != Method::ab4) return;
+    // A step longer than the run, or so short that it never ends (or that
+    // t + h rounds to t), would be a run that silently does nothing.
+    const double span = t_end - t0, h = o.h;
+    std::ostringstream text;  // as given, not with 17 digits
+    text << h;
+    if (h > span) throw InputError("--h " + text.str() + ": longer than the run (t_end - t0)");
+    if (span / h > kMaxSteps) throw InputError("--h " + text.str() + ": more than 1e12 steps over the run");
+    const double t_max = std::max(std::abs(t0), std::abs(t_end));
+    if (t_max + h == t_max) throw InputError("--h " + text.str() + ": below the rounding of t (t + h == t)");
+}
+
 RunSummary integrate(const Model& model, Method method, const IntegratorOptions& options,
                      const EngineOptions& engine_options, Observer& observer) {
-    validate(method, options);
+    validate(method, options, model.t0, engine_options.t_end);
     if (method == Method::ab4) return run_ab4(model, options, engine_options, observer);
     if (method == Method::rk45) return run_rk45(model, options, engine_options, observer);
     if (method == Method::cvode) return run_cvode(model, options, engine_options, observer);

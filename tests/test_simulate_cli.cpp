@@ -179,11 +179,5 @@ TEST(SimulateCli, PlotWritesAPng) {
     EXPECT_EQ(bytes.substr(1, 3), "PNG");
 }
 
-TEST(SimulateCli, PlotNeedsTheTrajectory) {
-    const auto r = run_hsnc("simulate '" + model_path("bilinear-1dof.toml") + "' --plot x.png");
-    EXPECT_EQ(r.exit_code, 2);
-    EXPECT_NE(r.err.find("--plot: needs --out"), std::string::npos) << r.err;
-}
-
 }  // namespace
 }  // namespace hsnc
