@@ -161,13 +161,13 @@ int simulate(const SimulateOptions& o) {
         throw InputError("--t-end " + number_text(t_end) + ": must be finite and after t0 = " + number_text(model.t0));
     if (!std::isnan(o.dt) && !(o.dt > 0 && std::isfinite(o.dt)))
         throw InputError("--dt " + number_text(o.dt) + ": must be > 0");
-    if (!(o.rtol > 0) || !(o.atol > 0)) throw InputError("--rtol, --atol: must be > 0");
     Method method = parse_method(o.method);
     IntegratorOptions iopt;
     iopt.h = o.h;
     iopt.rtol = o.rtol;
     iopt.atol = o.atol;
     validate(method, iopt, model.t0, t_end);
+    if (!(o.rtol > 0) || !(o.atol > 0)) throw InputError("--rtol, --atol: must be > 0");  // also when unused
     const KernelMode mode = parse_kernel_mode(o.kernels);
     const int digits = parse_precision(o, method);
 
