@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -62,13 +63,22 @@ void check_options(const Model& model, const SimulateOptions& o) {
     if (o.method == Method::ab4 && !(i.h > 0 && std::isfinite(i.h)))
         throw OptionError(kSimulate, "integrator.h", number_text(i.h),
                           "method ab4 needs a fixed step h > 0");
-    if (o.method == Method::rk45 || o.method == Method::cvode) {
-        const std::string why = std::string("must be finite and > 0 for method ") + method_name(o.method);
-        if (!(i.rtol > 0 && std::isfinite(i.rtol)))
-            throw OptionError(kSimulate, "integrator.rtol", number_text(i.rtol), why);
-        if (!(i.atol > 0 && std::isfinite(i.atol)))
-            throw OptionError(kSimulate, "integrator.atol", number_text(i.atol), why);
+    if (o.method == Method::ab4) {
+        // A step longer than the run, or so short that it never ends (or that
+        // t + h rounds to t), would be a run that silently does nothing.
+        const double span = t_end - model.t0, t_max = std::max(std::fabs(model.t0), std::fabs(t_end));
+        if (i.h > span) throw OptionError(kSimulate, "integrator.h", number_text(i.h), "longer than the run (t_end - t0)");
+        if (span / i.h > kMaxSteps)
+            throw OptionError(kSimulate, "integrator.h", number_text(i.h), "more than 1e12 steps over the run");
+        if (t_max + i.h == t_max)
+            throw OptionError(kSimulate, "integrator.h", number_text(i.h), "below the rounding of t (t + h == t)");
     }
+    // Tolerances are checked whatever the method (a bad one is a mistake even where it is unused).
+    const std::string why = "must be finite and > 0";
+    if (!(i.rtol > 0 && std::isfinite(i.rtol)))
+        throw OptionError(kSimulate, "integrator.rtol", number_text(i.rtol), why);
+    if (!(i.atol > 0 && std::isfinite(i.atol)))
+        throw OptionError(kSimulate, "integrator.atol", number_text(i.atol), why);
     if (o.precision_digits != 0) {
         const std::string digits = std::to_string(o.precision_digits);
         if (o.precision_digits < reference::kMinDigits || o.precision_digits > reference::kMaxDigits)

@@ -1,9 +1,22 @@
+#include <cmath>
+#include <cstdlib>
 #include <iostream>
 
 #include "commands.h"
 #include "error.h"
 
 namespace hsnc::cli {
+
+CLI::Validator finite_number() {
+    return CLI::Validator(
+        [](std::string& text) {
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            if (end != text.c_str() && std::isfinite(v)) return std::string();
+            return "must be a finite number, not '" + text + "'";
+        },
+        "");
+}
 
 int run(int argc, const char* const* argv) {
     CLI::App app{

@@ -14,6 +14,10 @@ void add_generate(CLI::App& app, int& exit_code);
 void add_cache(CLI::App& app, int& exit_code);
 void add_tradeoff(CLI::App& app, int& exit_code);
 
+/// A CLI11 check that a number flag is finite: "nan" and "inf" are refused
+/// at parse time (exit code 2, the flag named), not taken as "not given".
+CLI::Validator finite_number();
+
 /// Parse argv, run the chosen subcommand, return the process exit code.
 int run(int argc, const char* const* argv);
 

@@ -15,7 +15,7 @@
 #include "error.h"
 #include "hsnc/simulate.h"
 #include "model_reader.h"
-#include "plot.h"
+#include "simulate_outputs.h"
 
 namespace hsnc::cli {
 namespace {
@@ -25,7 +25,7 @@ struct SimulateOptions {
     double t_end = NAN;
     ModelOverrides overrides;
     double dt = NAN;
-    std::string out, events, plot;
+    OutputRequest outputs;  // --out, --events, --plot, --allow-large-output
     std::string method = "hsnc";
     double h = NAN;
     double rtol = 1e-10, atol = 1e-12;
@@ -62,8 +62,10 @@ public:
         drawn_ = true;
         return true;
     }
+    ~RunObserver() override { clear(); }  // also when the run stops on an error
     void clear() {
         if (drawn_) std::fprintf(stderr, "\r%60s\r", "");
+        drawn_ = false;
     }
     double seconds() const {
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
@@ -144,23 +146,20 @@ int simulate(const SimulateOptions& o) {
         throw flagged(e, o);
     }
     const double t_end = std::isnan(o.t_end) ? *model.t_end : o.t_end;
-    if (!o.plot.empty() && o.out.empty()) throw InputError("--plot: needs --out (the trajectory it draws)");
+    // Default sampling: 1000 intervals over the run (as the library does).
+    const double dt = std::isnan(o.dt) ? (t_end - model.t0) / 1000 : o.dt;
+    // Every output path checked before anything is written or run.
+    SimulateOutputs outputs(model, o.outputs, t_end, dt);
+    outputs.open();
+    RunObserver obs(outputs, model.t0, t_end, !o.quiet && ::isatty(2));
 
-    std::unique_ptr<CsvFile> traj, events;
-    if (!o.out.empty()) traj = std::make_unique<CsvFile>(o.out);
-    if (!o.events.empty()) events = std::make_unique<CsvFile>(o.events);
-    CsvObserver csv(model, traj.get(), events.get());
-    RunObserver obs(csv, model.t0, t_end, !o.quiet && ::isatty(2));
-
-    run.samples = traj != nullptr;
+    run.samples = outputs.samples();
     const SimulateSummary sum = hsnc::simulate(model, run, obs);
     const std::string& detail = sum.solver_detail;
     obs.clear();
     if (sum.status != RunStatus::ok && sum.status != RunStatus::max_events)
         throw RunError(std::string("simulate: ") + run_status_name(sum.status) + ": " + sum.message);
-    if (traj) traj->commit();
-    if (events) events->commit();
-    if (!o.plot.empty()) plot_trajectory(model, o.out, o.plot);
+    outputs.commit();
 
     // The summary line (stdout): status, switch events, end state.
     std::ostringstream line;
@@ -188,21 +187,31 @@ void add_simulate(CLI::App& app, int& exit_code) {
     auto o = std::make_shared<SimulateOptions>();
     auto* sub = app.add_subcommand("simulate", "run a simulation from the model's initial state");
     sub->add_option("MODEL", o->model, "model file (TOML)")->required();
-    sub->add_option("--t-end", o->t_end, "end time (default [simulate].t_end)");
+    sub->add_option("--t-end", o->t_end, "end time (default [simulate].t_end)")->check(finite_number());
     sub->add_option("--set", o->overrides.set, "override a parameter, NAME=VALUE (repeatable)");
     sub->add_option("--x0", o->overrides.x0, "override an initial position, NAME=VALUE (repeatable)");
     sub->add_option("--v0", o->overrides.v0, "override an initial velocity, NAME=VALUE (repeatable)");
-    sub->add_option("--dt", o->dt, "trajectory rows at t0, t0+DT, ... and t_end (default: (t_end-t0)/1000)");
-    sub->add_option("--out", o->out, "trajectory CSV (default: none)");
-    sub->add_option("--events", o->events, "switch-event CSV (default: none)");
-    sub->add_option("--plot", o->plot, "draw x(t) of every mass from --out into this PNG (gnuplot)");
+    sub->add_option("--dt", o->dt, "trajectory rows at t0, t0+DT, ... and t_end (default: (t_end-t0)/1000)")
+        ->check(finite_number());
+    sub->add_option("--out", o->outputs.out,
+                    "trajectory CSV (default: none). A device or FIFO (/dev/null, /dev/stdout) is written "
+                    "directly; a directory is refused");
+    sub->add_option("--events", o->outputs.events, "switch-event CSV (default: none)");
+    sub->add_option("--plot", o->outputs.plot,
+                    "draw x(t) of every mass into this PNG (gnuplot): the whole run with the switch events as "
+                    "ticks, and a zoom (last 5 forcing periods, else the first 10%) with the events marked");
+    sub->add_flag("--allow-large-output", o->outputs.allow_large_output,
+                  "write a trajectory of more than 1e7 rows or about 1 GB (refused without it)");
     sub->add_option("--method", o->method,
                     "hsnc (exact, default); ab4 (fixed-step Adams-Bashforth 4, needs --h); "
                     "rk45 (adaptive Dormand-Prince with event location, --rtol/--atol); "
                     "cvode (SUNDIALS CVODE, Adams with root finding, --rtol/--atol)");
-    sub->add_option("--h", o->h, "step of --method ab4");
-    sub->add_option("--rtol", o->rtol, "relative tolerance of --method rk45/cvode (default 1e-10)");
-    sub->add_option("--atol", o->atol, "absolute tolerance of --method rk45/cvode (default 1e-12)");
+    sub->add_option("--h", o->h, "step of --method ab4 (at most t_end - t0, at least 1e-12 of it)")
+        ->check(finite_number());
+    sub->add_option("--rtol", o->rtol, "relative tolerance of --method rk45/cvode (default 1e-10)")
+        ->check(finite_number());
+    sub->add_option("--atol", o->atol, "absolute tolerance of --method rk45/cvode (default 1e-12)")
+        ->check(finite_number());
     sub->add_option("--kernels", o->kernels,
                     "auto (default: ahead-of-time kernels when the model has them, else the generic solver; "
                     "never compiles), aot, generic, jit (a kernel compiled in-process, or taken from the cache, "

@@ -1,56 +1,34 @@
 #include "csv_writer.h"
 
-#include <cerrno>
 #include <charconv>
 #include <cstring>
-#include <unistd.h>
 
 #include "error.h"
 
 namespace hsnc {
 
-CsvFile::CsvFile(std::string path) : path_(std::move(path)) {
-    tmp_ = path_ + ".tmp." + std::to_string(::getpid());
-    file_ = std::fopen(tmp_.c_str(), "w");
-    if (!file_) throw InputError("cannot write '" + path_ + "': " + std::strerror(errno));
-    buffer_.resize(1 << 16);
-    std::setvbuf(file_, buffer_.data(), _IOFBF, buffer_.size());
-}
+CsvFile::CsvFile(const std::string& path) : CsvFile(check_output("", path)) {}
 
-CsvFile::~CsvFile() {
-    if (file_) {
-        std::fclose(file_);
-        std::remove(tmp_.c_str());
-    }
-}
+CsvFile::CsvFile(const OutputTarget& target) : file_(target) {}
 
 void CsvFile::text(const char* s) {
-    if (!first_in_row_) std::fputc(',', file_);
-    std::fputs(s, file_);
+    if (!first_in_row_) file_.put(',');
+    file_.write(s, std::strlen(s));
     first_in_row_ = false;
 }
 
 void CsvFile::number(double value) {
     char buf[40];
     // 17 significant digits always round-trip a double (max_digits10).
-    const auto res = std::to_chars(buf, buf + sizeof buf - 1, value, std::chars_format::general, 17);
-    *res.ptr = '\0';
-    text(buf);
+    const auto res = std::to_chars(buf, buf + sizeof buf, value, std::chars_format::general, 17);
+    if (!first_in_row_) file_.put(',');
+    file_.write(buf, static_cast<std::size_t>(res.ptr - buf));
+    first_in_row_ = false;
 }
 
 void CsvFile::end_row() {
-    std::fputc('\n', file_);
+    file_.put('\n');
     first_in_row_ = true;
-}
-
-void CsvFile::commit() {
-    const bool failed = std::ferror(file_) != 0;
-    const bool closed = std::fclose(file_) == 0;
-    file_ = nullptr;
-    if (failed || !closed || std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-        std::remove(tmp_.c_str());
-        throw RunError("cannot write '" + path_ + "': " + std::strerror(errno));
-    }
 }
 
 std::string trajectory_header(const Model& model) {

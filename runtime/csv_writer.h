@@ -1,23 +1,26 @@
 // hsnc -- the trajectory and events CSV files (interface.md section 4).
-// Numbers with 17 significant digits (they round-trip). A file is written
-// under a temporary name and renamed into place by commit(), so a run that
-// fails never leaves half a file under the name the user gave.
+// Numbers with 17 significant digits (they round-trip). Written through an
+// OutputFile (output_file.h): a regular file under a temporary name renamed
+// into place by commit(), so a run that fails never leaves half a file under
+// the name the user gave; a device or FIFO directly; the first write error
+// stops the run (RunError naming the file).
 #pragma once
 
-#include <cstdio>
 #include <string>
 #include <vector>
 
 #include "engine.h"
 #include "model.h"
+#include "output_file.h"
 
 namespace hsnc {
 
 class CsvFile {
 public:
-    /// Opens "<path>.tmp.<pid>"; throws InputError when it cannot be created.
-    explicit CsvFile(std::string path);
-    ~CsvFile();  ///< removes the temporary file unless committed
+    /// Checks `path` (check_output, InputError) and opens it.
+    explicit CsvFile(const std::string& path);
+    /// Opens a target checked before the run.
+    explicit CsvFile(const OutputTarget& target);
     CsvFile(const CsvFile&) = delete;
     CsvFile& operator=(const CsvFile&) = delete;
 
@@ -25,12 +28,11 @@ public:
     void number(double value);  ///< 17 significant digits, shortest exact form
     void end_row();
     /// Flush, close and rename into place. Throws RunError on I/O failure.
-    void commit();
+    void commit() { file_.commit(); }
+    const OutputFile& file() const { return file_; }
 
 private:
-    std::string path_, tmp_;
-    std::vector<char> buffer_;  // stdio buffer of this file (declared before file_: outlives it)
-    std::FILE* file_ = nullptr;
+    OutputFile file_;  // removes its temporary file unless committed
     bool first_in_row_ = true;
 };
 

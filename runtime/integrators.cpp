@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #include <vector>
 
 #if HSNC_WITH_CVODE
@@ -680,16 +681,30 @@ Method parse_method(const std::string& name) {
 
 void validate(Method method, const IntegratorOptions& o) {
     if (method == Method::ab4 && !(o.h > 0 && std::isfinite(o.h)))
-        throw InputError("--method ab4: needs --h H with H > 0 (the fixed step)");
+        throw InputError("hsnc::integrate(): method ab4 needs a fixed step h > 0");
     if ((method == Method::rk45 || method == Method::cvode) &&
         !(o.rtol > 0 && o.atol > 0 && std::isfinite(o.rtol) && std::isfinite(o.atol)))
-        throw InputError(std::string("--method ") + (method == Method::rk45 ? "rk45" : "cvode") +
-                         ": --rtol and --atol must be finite and > 0");
+        throw InputError(std::string("hsnc::integrate(): method ") + (method == Method::rk45 ? "rk45" : "cvode") +
+                         ": rtol and atol must be finite and > 0");
+}
+
+void validate(Method method, const IntegratorOptions& o, double t0, double t_end) {
+    validate(method, o);
+    if (method != Method::ab4) return;
+    // A step longer than the run, or so short that it never ends (or that
+    // t + h rounds to t), would be a run that silently does nothing.
+    const double span = t_end - t0, h = o.h;
+    std::ostringstream text;  // as given, not with 17 digits
+    text << h;
+    if (h > span) throw InputError("hsnc::integrate(): h = " + text.str() + ": longer than the run (t_end - t0)");
+    if (span / h > kMaxSteps) throw InputError("hsnc::integrate(): h = " + text.str() + ": more than 1e12 steps over the run");
+    const double t_max = std::max(std::abs(t0), std::abs(t_end));
+    if (t_max + h == t_max) throw InputError("hsnc::integrate(): h = " + text.str() + ": below the rounding of t (t + h == t)");
 }
 
 RunSummary integrate(const Model& model, Method method, const IntegratorOptions& options,
                      const EngineOptions& engine_options, Observer& observer) {
-    validate(method, options);
+    validate(method, options, model.t0, engine_options.t_end);
     if (method == Method::ab4) return run_ab4(model, options, engine_options, observer);
     if (method == Method::rk45) return run_rk45(model, options, engine_options, observer);
     if (method == Method::cvode) return run_cvode(model, options, engine_options, observer);

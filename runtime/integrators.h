@@ -46,6 +46,10 @@ struct IntegratorOptions {
 
 /// InputError when the options do not fit the method (e.g. ab4 without --h).
 void validate(Method method, const IntegratorOptions& options);
+/// The same, and for ab4 the step against the run from t0 to t_end: at most
+/// the run, at most kMaxSteps steps, and large enough that t + h != t.
+void validate(Method method, const IntegratorOptions& options, double t0, double t_end);
+inline constexpr double kMaxSteps = 1e12;
 
 /// Run a baseline from the model's initial state; reports through `observer`
 /// like Engine::run (samples at the same times, events as described above).
