@@ -87,8 +87,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     x[0] = coef[0] + q_1;  // m1
     v[0] = dq_1;
     a[0] = ddq_1;
-    const double x_st_abs_0 = __builtin_fabs(coef[0]);
-    const double mx_0 = x_st_abs_0 + mq_1;
+    const double mx_0 = __builtin_fabs(coef[0]) + mq_1;
     const double mv_0 = mdq_1;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)

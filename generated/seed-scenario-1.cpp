@@ -148,14 +148,12 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     x[0] = coef[2] + 0.88807383397711526*q_1 - 0.45970084338098305*q_2 - 0.73072581908970025*sin_1 - 0.0076388658185612014*cos_1;  // m1
     v[0] = 0.88807383397711526*dq_1 - 0.45970084338098305*dq_2 - 128.25341521011063*cos_1 + 1.3407362980313511*sin_1;
     a[0] = 0.88807383397711526*ddq_1 - 0.45970084338098305*ddq_2 + 22510.410995944087*sin_1 + 235.31946542260235*cos_1;
-    const double x_st_abs_0 = __builtin_fabs(coef[2]);
-    const double mx_0 = x_st_abs_0 + 0.88807383397711526*mq_1 + 0.45970084338098305*mq_2 + 0.73836468490826146;
+    const double mx_0 = __builtin_fabs(coef[2]) + 0.88807383397711526*mq_1 + 0.45970084338098305*mq_2 + 0.73836468490826146;
     const double mv_0 = 0.88807383397711526*mdq_1 + 0.45970084338098305*mdq_2 + 129.59415150814201;
     x[1] = coef[3] + 0.32505758367186816*q_1 + 0.62796303019955435*q_2 + 0.24367804547490879*sin_1 + 0.0055583100824806502*cos_1;  // m2
     v[1] = 0.32505758367186816*dq_1 + 0.62796303019955435*dq_2 + 42.769176519333158*cos_1 - 0.97556734995759953*sin_1;
     a[1] = 0.32505758367186816*ddq_1 + 0.62796303019955435*ddq_2 - 7506.6362937084104*sin_1 - 171.22680098454305*cos_1;
-    const double x_st_abs_1 = __builtin_fabs(coef[3]);
-    const double mx_1 = x_st_abs_1 + 0.32505758367186816*mq_1 + 0.62796303019955435*mq_2 + 0.24923635555738943;
+    const double mx_1 = __builtin_fabs(coef[3]) + 0.32505758367186816*mq_1 + 0.62796303019955435*mq_2 + 0.24923635555738943;
     const double mv_1 = 0.32505758367186816*mdq_1 + 0.62796303019955435*mdq_2 + 43.744743869290758;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -349,14 +347,12 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     x[0] = coef[2] + 0.6127686665676223*q_1 + 0.79026233699508808*q_2 - 0.72773816497394384*sin_1 - 0.06320081663878023*cos_1;  // m1
     v[0] = 0.6127686665676223*dq_1 + 0.79026233699508808*dq_2 - 127.72903679921824*cos_1 + 11.092697652437176*sin_1;
     a[0] = 0.6127686665676223*ddq_1 + 0.79026233699508808*ddq_2 + 22418.374666718468*sin_1 + 1946.9359377372759*cos_1;
-    const double x_st_abs_0 = __builtin_fabs(coef[2]);
-    const double mx_0 = x_st_abs_0 + 0.6127686665676223*mq_1 + 0.79026233699508808*mq_2 + 0.79093898161272402;
+    const double mx_0 = __builtin_fabs(coef[2]) + 0.6127686665676223*mq_1 + 0.79026233699508808*mq_2 + 0.79093898161272402;
     const double mv_0 = 0.6127686665676223*mdq_1 + 0.79026233699508808*mdq_2 + 138.8217344516554;
     x[1] = coef[3] + 0.55879985740555538*q_1 - 0.43329287942860423*q_2 + 0.24194593481455143*sin_1 + 0.033337329577655686*cos_1;  // m2
     v[1] = 0.55879985740555538*dq_1 - 0.43329287942860423*dq_2 + 42.465164943569469*cos_1 - 5.8512047345551954*sin_1;
     a[1] = 0.55879985740555538*ddq_1 - 0.43329287942860423*ddq_2 - 7453.2776715870896*sin_1 - 1026.9747841059284*cos_1;
-    const double x_st_abs_1 = __builtin_fabs(coef[3]);
-    const double mx_1 = x_st_abs_1 + 0.55879985740555538*mq_1 + 0.43329287942860423*mq_2 + 0.27528326439220713;
+    const double mx_1 = __builtin_fabs(coef[3]) + 0.55879985740555538*mq_1 + 0.43329287942860423*mq_2 + 0.27528326439220713;
     const double mv_1 = 0.55879985740555538*mdq_1 + 0.43329287942860423*mdq_2 + 48.316369678124673;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -507,8 +503,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     x[1] = coef[2] + 0.70710678118654757*q_1 + 0.24361085541406602*sin_1 + 0.0034727598429402139*cos_1;  // m2
     v[1] = 0.70710678118654757*dq_1 + 42.757383649085334*cos_1 - 0.60952179110963589*sin_1;
     a[1] = 0.70710678118654757*ddq_1 - 7504.5664669075768*sin_1 - 106.98027811878684*cos_1;
-    const double x_st_abs_1 = __builtin_fabs(coef[2]);
-    const double mx_1 = x_st_abs_1 + 0.70710678118654757*mq_1 + 0.24708361525700623;
+    const double mx_1 = __builtin_fabs(coef[2]) + 0.70710678118654757*mq_1 + 0.24708361525700623;
     const double mv_1 = 0.70710678118654757*mdq_1 + 43.366905440194969;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -666,8 +661,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     x[1] = coef[2] + 0.70710678118654757*q_1 + 0.24360980929693524*sin_1 + 0.010435185731304798*cos_1;  // m2
     v[1] = 0.70710678118654757*dq_1 + 42.757200039732517*cos_1 - 1.8315326671485346*sin_1;
     a[1] = 0.70710678118654757*ddq_1 - 7504.5342406936552*sin_1 - 321.46163922784172*cos_1;
-    const double x_st_abs_1 = __builtin_fabs(coef[2]);
-    const double mx_1 = x_st_abs_1 + 0.70710678118654757*mq_1 + 0.25404499502824002;
+    const double mx_1 = __builtin_fabs(coef[2]) + 0.70710678118654757*mq_1 + 0.25404499502824002;
     const double mv_1 = 0.70710678118654757*mdq_1 + 44.588732706881046;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -820,8 +814,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     x[0] = coef[2] + q_1 - 0.7306902574434726*sin_1 - 0.0062477207570832737*cos_1;  // m1
     v[0] = dq_1 - 128.24717360421684*cos_1 + 1.0965693334515465*sin_1;
     a[0] = ddq_1 + 22509.315499861474*sin_1 + 192.46447621768149*cos_1;
-    const double x_st_abs_0 = __builtin_fabs(coef[2]);
-    const double mx_0 = x_st_abs_0 + mq_1 + 0.73693797820055584;
+    const double mx_0 = __builtin_fabs(coef[2]) + mq_1 + 0.73693797820055584;
     const double mv_0 = mdq_1 + 129.34374293766837;
     x[1] = coef[9];  // m2 (stuck)
     v[1] = 0.0;
@@ -979,8 +972,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     x[0] = coef[2] + q_1 - 0.72996736260496498*sin_1 - 0.048007721356019183*cos_1;  // m1
     v[0] = dq_1 - 128.12029464434667*cos_1 + 8.4260800145738415*sin_1;
     a[0] = ddq_1 + 22487.04632653197*sin_1 + 1478.9042763659293*cos_1;
-    const double x_st_abs_0 = __builtin_fabs(coef[2]);
-    const double mx_0 = x_st_abs_0 + mq_1 + 0.77797508396098414;
+    const double mx_0 = __builtin_fabs(coef[2]) + mq_1 + 0.77797508396098414;
     const double mv_0 = mdq_1 + 136.54637465892051;
     x[1] = coef[9];  // m2 (stuck)
     v[1] = 0.0;

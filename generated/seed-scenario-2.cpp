@@ -146,14 +146,12 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     x[0] = coef[2] + 0.88807383397711526*q_1 - 0.45970084338098305*q_2 - 0.75918967575502749*sin_1;  // m1
     v[0] = 0.88807383397711526*dq_1 - 0.45970084338098305*dq_2 - 13.324917594014366*cos_1;
     a[0] = 0.88807383397711526*ddq_1 - 0.45970084338098305*ddq_2 + 233.87229115134318*sin_1;
-    const double x_st_abs_0 = __builtin_fabs(coef[2]);
-    const double mx_0 = x_st_abs_0 + 0.88807383397711526*mq_1 + 0.45970084338098305*mq_2 + 0.75918967575502749;
+    const double mx_0 = __builtin_fabs(coef[2]) + 0.88807383397711526*mq_1 + 0.45970084338098305*mq_2 + 0.75918967575502749;
     const double mv_0 = 0.88807383397711526*mdq_1 + 0.45970084338098305*mdq_2 + 13.324917594014366;
     x[1] = coef[3] + 0.32505758367186816*q_1 + 0.62796303019955435*q_2 - 0.25155539849822628*sin_1;  // m2
     v[1] = 0.32505758367186816*dq_1 + 0.62796303019955435*dq_2 - 4.4151745767416184*cos_1;
     a[1] = 0.32505758367186816*ddq_1 + 0.62796303019955435*ddq_2 + 77.492936583680532*sin_1;
-    const double x_st_abs_1 = __builtin_fabs(coef[3]);
-    const double mx_1 = x_st_abs_1 + 0.32505758367186816*mq_1 + 0.62796303019955435*mq_2 + 0.25155539849822628;
+    const double mx_1 = __builtin_fabs(coef[3]) + 0.32505758367186816*mq_1 + 0.62796303019955435*mq_2 + 0.25155539849822628;
     const double mv_1 = 0.32505758367186816*mdq_1 + 0.62796303019955435*mdq_2 + 4.4151745767416184;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -345,14 +343,12 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     x[0] = coef[2] + 0.6127686665676223*q_1 + 0.79026233699508808*q_2 - 1.1346834856205477*sin_1;  // m1
     v[0] = 0.6127686665676223*dq_1 + 0.79026233699508808*dq_2 - 19.915397197869044*cos_1;
     a[0] = 0.6127686665676223*ddq_1 + 0.79026233699508808*ddq_2 + 349.54509391839855*sin_1;
-    const double x_st_abs_0 = __builtin_fabs(coef[2]);
-    const double mx_0 = x_st_abs_0 + 0.6127686665676223*mq_1 + 0.79026233699508808*mq_2 + 1.1346834856205477;
+    const double mx_0 = __builtin_fabs(coef[2]) + 0.6127686665676223*mq_1 + 0.79026233699508808*mq_2 + 1.1346834856205477;
     const double mv_0 = 0.6127686665676223*mdq_1 + 0.79026233699508808*mdq_2 + 19.915397197869044;
     x[1] = coef[3] + 0.55879985740555538*q_1 - 0.43329287942860423*q_2 - 0.054031881163313256*sin_1;  // m2
     v[1] = 0.55879985740555538*dq_1 - 0.43329287942860423*dq_2 - 0.94834056223789265*cos_1;
     a[1] = 0.55879985740555538*ddq_1 - 0.43329287942860423*ddq_2 + 16.644799378118375*sin_1;
-    const double x_st_abs_1 = __builtin_fabs(coef[3]);
-    const double mx_1 = x_st_abs_1 + 0.55879985740555538*mq_1 + 0.43329287942860423*mq_2 + 0.054031881163313256;
+    const double mx_1 = __builtin_fabs(coef[3]) + 0.55879985740555538*mq_1 + 0.43329287942860423*mq_2 + 0.054031881163313256;
     const double mv_1 = 0.55879985740555538*mdq_1 + 0.43329287942860423*mdq_2 + 0.94834056223789265;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -502,8 +498,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     x[1] = coef[2] + 0.70710678118654757*q_1 - 0.26496603013167724*sin_1;  // m2
     v[1] = 0.70710678118654757*dq_1 - 4.6505512778561338*cos_1;
     a[1] = 0.70710678118654757*ddq_1 + 81.624150753291929*sin_1;
-    const double x_st_abs_1 = __builtin_fabs(coef[2]);
-    const double mx_1 = x_st_abs_1 + 0.70710678118654757*mq_1 + 0.26496603013167724;
+    const double mx_1 = __builtin_fabs(coef[2]) + 0.70710678118654757*mq_1 + 0.26496603013167724;
     const double mv_1 = 0.70710678118654757*mdq_1 + 4.6505512778561338;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -660,8 +655,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     x[1] = coef[2] + 0.70710678118654757*q_1 - 0.32181223747221399*sin_1;  // m2
     v[1] = 0.70710678118654757*dq_1 - 5.6482874859935643*cos_1;
     a[1] = 0.70710678118654757*ddq_1 + 99.135917810416046*sin_1;
-    const double x_st_abs_1 = __builtin_fabs(coef[2]);
-    const double mx_1 = x_st_abs_1 + 0.70710678118654757*mq_1 + 0.32181223747221399;
+    const double mx_1 = __builtin_fabs(coef[2]) + 0.70710678118654757*mq_1 + 0.32181223747221399;
     const double mv_1 = 0.70710678118654757*mdq_1 + 5.6482874859935643;
     // Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and term magnitudes.
     // bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + lambda_j)) sqrt(2 E_j)
@@ -813,8 +807,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     x[0] = coef[2] + q_1 - 0.76777356846487577*sin_1;  // m1
     v[0] = dq_1 - 13.475577786911268*cos_1;
     a[0] = ddq_1 + 236.51660352697314*sin_1;
-    const double x_st_abs_0 = __builtin_fabs(coef[2]);
-    const double mx_0 = x_st_abs_0 + mq_1 + 0.76777356846487577;
+    const double mx_0 = __builtin_fabs(coef[2]) + mq_1 + 0.76777356846487577;
     const double mv_0 = mdq_1 + 13.475577786911268;
     x[1] = coef[9];  // m2 (stuck)
     v[1] = 0.0;
@@ -971,8 +964,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     x[0] = coef[2] + q_1 - 1.1654700606416992*sin_1;  // m1
     v[0] = dq_1 - 20.455747769352786*cos_1;
     a[0] = ddq_1 + 359.02905697379543*sin_1;
-    const double x_st_abs_0 = __builtin_fabs(coef[2]);
-    const double mx_0 = x_st_abs_0 + mq_1 + 1.1654700606416992;
+    const double mx_0 = __builtin_fabs(coef[2]) + mq_1 + 1.1654700606416992;
     const double mv_0 = mdq_1 + 20.455747769352786;
     x[1] = coef[9];  // m2 (stuck)
     v[1] = 0.0;

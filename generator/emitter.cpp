@@ -83,17 +83,17 @@ std::string konst(const Program& p, std::uint32_t k) {
     return v < 0 ? "(" + format_double(v) + ")" : format_double(v);
 }
 
-/// c_0 r_0 + c_1 r_1 + ... with signs folded ("1.5 - 2.0*x + y"); "0.0" when empty.
-std::string sum_text(const Program& p, const ProgramBody& b, const ProgramInstr& in) {
-    const bool ld = in.op == ProgramOp::lincomb_ld;
+/// c_0 r_0 + c_1 r_1 + ... with signs folded ("1.5 - 2.0*x + y"), terms given
+/// as (c, register name; "" for the constant); "0.0" when empty.
+std::string sum_text(const std::vector<std::pair<double, std::string>>& terms, bool ld) {
     auto cast = [&](const std::string& e) { return ld ? "static_cast<long double>(" + e + ")" : e; };
-    if (in.count == 0) return "0.0";
+    if (terms.empty()) return "0.0";
     std::string s;
-    for (std::uint32_t k = 0; k < in.count; ++k) {
-        const ProgramTerm& t = p.terms[in.first + k];
-        double c = t.c;
+    for (std::size_t k = 0; k < terms.size(); ++k) {
+        double c = terms[k].first;
+        const std::string& name = terms[k].second;
         if (k == 0) {
-            if (c < 0 && t.reg != 0) {
+            if (c < 0 && !name.empty()) {
                 s += "-";
                 c = -c;
             }
@@ -101,14 +101,28 @@ std::string sum_text(const Program& p, const ProgramBody& b, const ProgramInstr&
             s += c < 0 ? " - " : " + ";
             c = std::fabs(c);
         }
-        if (t.reg == 0)
+        if (name.empty())
             s += cast(format_double(c));
         else if (c == 1.0)
-            s += cast(b.names[t.reg]);
+            s += cast(name);
         else
-            s += cast(format_double(c)) + "*" + b.names[t.reg];
+            s += cast(format_double(c)) + "*" + name;
     }
     return ld ? "static_cast<double>(" + s + ")" : s;
+}
+
+std::vector<std::pair<double, std::string>> named_terms(const Program& p, const ProgramBody& b, std::uint32_t first,
+                                                        std::uint32_t count) {
+    std::vector<std::pair<double, std::string>> out;
+    for (std::uint32_t k = 0; k < count; ++k) {
+        const ProgramTerm& t = p.terms[first + k];
+        out.push_back({t.c, t.reg == 0 ? std::string() : b.names[t.reg]});
+    }
+    return out;
+}
+
+std::string sum_text(const Program& p, const ProgramBody& b, const ProgramInstr& in) {
+    return sum_text(named_terms(p, b, in.first, in.count), in.op == ProgramOp::lincomb_ld);
 }
 
 class BodyPrinter {
@@ -184,7 +198,31 @@ private:
                 break;
             }
             case ProgramOp::resonant: resonant(in); break;
+            case ProgramOp::mass_state: mass_state(in); break;
         }
+    }
+
+    // Five sums; the interpreter adds term k of all five before term k + 1,
+    // each sum still in this order.
+    void mass_state(const ProgramInstr& in) {
+        using Terms = std::vector<std::pair<double, std::string>>;
+        Terms rows[5];
+        rows[0].push_back({1.0, n(in.a)});
+        rows[3].push_back({1.0, "__builtin_fabs(" + n(in.a) + ")"});
+        const std::uint32_t offset[5] = {kModeQ, kModeDQ, kModeDDQ, kModeMQ, kModeMDQ};
+        for (std::uint32_t k = 0; k < in.count; ++k) {
+            const ProgramTerm& t = p_.terms[in.first + k];
+            for (int row = 0; row < 5; ++row)
+                rows[row].push_back({row < 3 ? t.c : std::fabs(t.c), n(t.reg + offset[row])});
+        }
+        std::uint32_t first = in.first + in.count;
+        for (int row = 0; row < 5; ++row) {
+            const Terms tail = named_terms(p_, b_, first, in.tail[row]);
+            rows[row].insert(rows[row].end(), tail.begin(), tail.end());
+            first += in.tail[row];
+        }
+        const std::uint32_t dst[5] = {in.dst, in.b, in.c, in.d, in.d + 1};
+        for (int row = 0; row < 5; ++row) assign(dst[row], sum_text(rows[row], false), row == 0 ? in.note : "");
     }
 
     void mode(const ProgramInstr& in) {

@@ -480,41 +480,37 @@ Program lower(const Derivation& d) {
             continue;
         }
         const std::size_t rr = static_cast<std::size_t>(r);
-        const std::uint32_t xst = C("x_st_" + idx(rr));
-        Lin x, v, acc, lmx, lmv;
-        x.add(1.0, xst);
+        Lin modal, tx, tv, ta, tmx, tmv;
         double hx = 0.0, hv = 0.0;  // magnitudes of the harmonic terms
-        for (std::size_t j = 0; j < nm; ++j) {
-            x.add(d.modes[j].v[rr], mb[j] + kModeQ);
-            v.add(d.modes[j].v[rr], mb[j] + kModeDQ);
-            acc.add(d.modes[j].v[rr], mb[j] + kModeDDQ);
-            const double vv = std::fabs(dbl(d.modes[j].v[rr]));
-            lmx.add(vv, mb[j] + kModeMQ);
-            lmv.add(vv, mb[j] + kModeMDQ);
-        }
+        for (std::size_t j = 0; j < nm; ++j) modal.add(d.modes[j].v[rr], mb[j]);
         for (std::size_t h = 0; h < nh; ++h) {
             const HarmonicData& hd = d.harmonics[h];
             const double W = dbl(hd.omega), xs = dbl(hd.xs[rr]), xc = dbl(hd.xc[rr]);
-            x.add(xs, sin_h[h]).add(xc, cos_h[h]);
-            v.add(W * xs, cos_h[h]).add(-W * xc, sin_h[h]);
-            acc.add(-W * W * xs, sin_h[h]).add(-W * W * xc, cos_h[h]);
+            tx.add(xs, sin_h[h]).add(xc, cos_h[h]);
+            tv.add(W * xs, cos_h[h]).add(-W * xc, sin_h[h]);
+            ta.add(-W * W * xs, sin_h[h]).add(-W * W * xc, cos_h[h]);
             hx += std::fabs(xs) + std::fabs(xc);
             hv += W * (std::fabs(xs) + std::fabs(xc));
         }
-        with(e.lin(X(ii), x), comment, model.masses[i].name);
-        e.lin(Vr(ii), v);
-        e.lin(Ar(ii), acc);
-        const std::uint32_t axst = e.temp("x_st_abs_" + I);
-        e.unary(ProgramOp::abs, axst, xst);
-        Lin mxl;
-        mxl.add(1.0, axst);
-        mxl.terms.insert(mxl.terms.end(), lmx.terms.begin(), lmx.terms.end());
-        mxl.add(hx, ONE);
-        lmv.add(hv, ONE);
+        tmx.add(hx, ONE);
+        tmv.add(hv, ONE);
         mx[i] = e.temp("mx_" + I);
-        e.lin(mx[i], mxl);
         mv[i] = e.temp("mv_" + I);
-        e.lin(mv[i], lmv);
+        ProgramInstr in{ProgramOp::mass_state};
+        in.dst = X(ii);
+        in.b = Vr(ii);
+        in.c = Ar(ii);
+        in.d = mx[i];
+        in.a = C("x_st_" + idx(rr));
+        in.first = static_cast<std::uint32_t>(p.terms.size());
+        in.count = static_cast<std::uint32_t>(modal.terms.size());
+        p.terms.insert(p.terms.end(), modal.terms.begin(), modal.terms.end());
+        const Lin* tails[5] = {&tx, &tv, &ta, &tmx, &tmv};
+        for (int k = 0; k < 5; ++k) {
+            in.tail[k] = static_cast<std::uint32_t>(tails[k]->terms.size());
+            p.terms.insert(p.terms.end(), tails[k]->terms.begin(), tails[k]->terms.end());
+        }
+        with(e.emit(in), comment, model.masses[i].name);
     }
 
     // Switch functions.

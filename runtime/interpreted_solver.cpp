@@ -10,14 +10,112 @@ namespace hsnc {
 
 namespace {
 
+}  // namespace
+
+/// One instruction as the interpreter runs it: the operands of ProgramInstr
+/// without its comments, and `group`, the first of up to four independent
+/// linear combinations run in lockstep (each still summed in its own order:
+/// the same bits, more arithmetic in flight).
+struct InterpretedSolver::Exec {
+    ProgramOp op;
+    std::uint8_t regime;
+    std::uint8_t group;  ///< lincomb: how many lincombs from here form a group (1 = alone, 0 = inside one)
+    std::uint32_t dst, a, b, c, d, first, count;
+    std::uint32_t tail[5];  ///< mass_state
+};
+
+namespace {
+
+using Exec = InterpretedSolver::Exec;
+
+std::vector<Exec> compile(const ProgramBody& body, const std::vector<ProgramTerm>& terms) {
+    std::vector<Exec> out;
+    out.reserve(body.code.size());
+    for (const ProgramInstr& in : body.code)
+        out.push_back({in.op, in.regime, 1, in.dst, in.a, in.b, in.c, in.d, in.first, in.count,
+                       {in.tail[0], in.tail[1], in.tail[2], in.tail[3], in.tail[4]}});
+    // Groups of consecutive double lincombs, none reading what another writes.
+    for (std::size_t i = 0; i < out.size();) {
+        if (out[i].op != ProgramOp::lincomb || out[i].count == 0) {
+            ++i;
+            continue;
+        }
+        std::size_t j = i + 1;
+        while (j < out.size() && j - i < 4 && out[j].op == ProgramOp::lincomb && out[j].count > 0) {
+            bool independent = true;
+            for (std::size_t g = i; g < j && independent; ++g) {
+                independent = out[j].a != out[g].dst && out[j].dst != out[g].dst;
+                for (std::uint32_t k = 0; k < out[j].count && independent; ++k)
+                    independent = terms[out[j].first + k].reg != out[g].dst;
+            }
+            if (!independent) break;
+            ++j;
+        }
+        out[i].group = static_cast<std::uint8_t>(j - i);
+        for (std::size_t g = i + 1; g < j; ++g) out[g].group = 0;
+        i = j;
+    }
+    return out;
+}
+
+// G independent linear combinations, their terms interleaved: term k of each
+// is added to its own sum in the order of that sum.
+template <int G>
+void lincomb_group(const Exec* L, const ProgramTerm* T, double* r) {
+    const ProgramTerm* t[G];
+    double s[G];
+    std::uint32_t m = L[0].count;
+#pragma GCC unroll 4
+    for (int l = 0; l < G; ++l) {
+        t[l] = T + L[l].first;
+        m = L[l].count < m ? L[l].count : m;
+        s[l] = t[l][0].c * r[t[l][0].reg];
+    }
+    for (std::uint32_t k = 1; k < m; ++k) {
+#pragma GCC unroll 4
+        for (int l = 0; l < G; ++l) s[l] += t[l][k].c * r[t[l][k].reg];
+    }
+#pragma GCC unroll 4
+    for (int l = 0; l < G; ++l) {
+        for (std::uint32_t k = m; k < L[l].count; ++k) s[l] += t[l][k].c * r[t[l][k].reg];
+        r[L[l].dst] = L[l].a == kNoRegister ? s[l] : r[L[l].a] + s[l];
+    }
+}
+
+// Adds the tail terms [t, t + n) to s, left to right; a sum without terms so
+// far (started = false) starts from the first of them, as a printed sum does,
+// and is 0.0 when there are none at all.
+inline const ProgramTerm* finish_sum(double& s, bool started, const ProgramTerm* t, std::uint32_t n,
+                                     const double* r) {
+    std::uint32_t k = 0;
+    if (!started) {
+        if (n == 0) {
+            s = 0.0;
+            return t;
+        }
+        s = t[0].c * r[t[0].reg];
+        k = 1;
+    }
+    for (; k < n; ++k) s += t[k].c * r[t[k].reg];
+    return t + n;
+}
+
 // Each case computes what generator/emitter.cpp (BodyPrinter) prints for the
 // instruction, operation for operation: change both or neither.
-void execute(const Program& p, const ProgramBody& body, double* r) {
+void execute(const Program& p, const std::vector<Exec>& code, double* r) {
     const double* K = p.constants.data();
     const ProgramTerm* T = p.terms.data();
-    for (const ProgramInstr& in : body.code) {
+    for (std::size_t i = 0; i < code.size(); ++i) {
+        const Exec& in = code[i];
         switch (in.op) {
             case ProgramOp::lincomb: {
+                switch (in.group) {
+                    case 0: continue;  // run with its group
+                    case 2: lincomb_group<2>(&in, T, r); continue;
+                    case 3: lincomb_group<3>(&in, T, r); continue;
+                    case 4: lincomb_group<4>(&in, T, r); continue;
+                    default: break;
+                }
                 double s = 0.0;
                 if (in.count > 0) {
                     const ProgramTerm* t = T + in.first;
@@ -127,6 +225,42 @@ void execute(const Program& p, const ProgramBody& body, double* r) {
                 m[kModeMDQ] += __builtin_fabs(P * m[kModeES]);
                 break;
             }
+            case ProgramOp::mass_state: {
+                const ProgramTerm* t = T + in.first;
+                const double xst = r[in.a];
+                double sx = xst, sv = 0.0, sa = 0.0, smx = __builtin_fabs(xst), smv = 0.0;
+                const bool started = in.count > 0;
+                if (started) {
+                    const double c = t[0].c, ac = __builtin_fabs(c);
+                    const double* m = r + t[0].reg;
+                    sx += c * m[kModeQ];
+                    sv = c * m[kModeDQ];
+                    sa = c * m[kModeDDQ];
+                    smx += ac * m[kModeMQ];
+                    smv = ac * m[kModeMDQ];
+                    for (std::uint32_t k = 1; k < in.count; ++k) {
+                        const double ck = t[k].c, ak = __builtin_fabs(ck);
+                        const double* mk = r + t[k].reg;
+                        sx += ck * mk[kModeQ];
+                        sv += ck * mk[kModeDQ];
+                        sa += ck * mk[kModeDDQ];
+                        smx += ak * mk[kModeMQ];
+                        smv += ak * mk[kModeMDQ];
+                    }
+                }
+                const ProgramTerm* tl = t + in.count;
+                tl = finish_sum(sx, true, tl, in.tail[0], r);
+                tl = finish_sum(sv, started, tl, in.tail[1], r);
+                tl = finish_sum(sa, started, tl, in.tail[2], r);
+                tl = finish_sum(smx, true, tl, in.tail[3], r);
+                finish_sum(smv, started, tl, in.tail[4], r);
+                r[in.dst] = sx;
+                r[in.b] = sv;
+                r[in.c] = sa;
+                r[in.d] = smx;
+                r[in.d + 1] = smv;
+                break;
+            }
             case ProgramOp::resonant: {
                 const double* k = K + in.first;
                 double* m = r + in.c;
@@ -159,54 +293,46 @@ void execute(const Program& p, const ProgramBody& body, double* r) {
 void copy_out(const Program& p, const double* r, const SegmentEval& out) {
     const std::size_t n = static_cast<std::size_t>(p.n_dof), ns = p.n_switch();
     const double* o = r + p.eval_outputs();
-    double* dst[7] = {out.x, out.v, out.a, out.g, out.dg, out.bound, out.scale};
-    for (int k = 0; k < 7; ++k) {
-        const std::size_t len = k < 3 ? n : ns;
-        if (len) std::memcpy(dst[k], o, len * sizeof(double));
-        o += len;
-    }
+    for (std::size_t i = 0; i < n; ++i) out.x[i] = o[i], out.v[i] = o[n + i], out.a[i] = o[2 * n + i];
+    o += 3 * n;
+    for (std::size_t f = 0; f < ns; ++f)
+        out.g[f] = o[f], out.dg[f] = o[ns + f], out.bound[f] = o[2 * ns + f], out.scale[f] = o[3 * ns + f];
 }
 
 }  // namespace
 
-void run_setup(const Program& p, double* regs, double* coef, double t0, double t0_lo, const double* x0,
-               const double* v0, const signed char* sgn) {
-    const std::size_t n = static_cast<std::size_t>(p.n_dof);
-    regs[0] = 1.0;
-    regs[Program::kSetupT0] = t0;
-    regs[Program::kSetupT0Lo] = t0_lo;
-    for (std::size_t i = 0; i < n; ++i) {
-        regs[Program::kSetupX0 + i] = x0[i];
-        regs[p.setup_v0() + i] = v0[i];
-        regs[p.setup_sgn() + i] = sgn[i];
-    }
-    execute(p, p.setup, regs);
-    for (std::size_t k = 0; k < p.setup_coef.size(); ++k) coef[k] = regs[p.setup_coef[k]];
-}
-
-void run_eval(const Program& p, double* regs, const double* coef, double tau, const SegmentEval& out) {
-    regs[0] = 1.0;
-    regs[Program::kEvalTau] = tau;
-    if (p.n_coef) std::memcpy(regs + Program::kEvalCoef, coef, static_cast<std::size_t>(p.n_coef) * sizeof(double));
-    execute(p, p.eval, regs);
-    copy_out(p, regs, out);
-}
-
 InterpretedSolver::InterpretedSolver(Program program)
     : program_(std::move(program)),
+      setup_code_(compile(program_.setup, program_.terms)),
+      eval_code_(compile(program_.eval, program_.terms)),
       setup_regs_(program_.setup.registers(), 0.0),
       eval_regs_(program_.eval.registers(), 0.0) {
     eval_regs_[0] = 1.0;
 }
 
+InterpretedSolver::~InterpretedSolver() = default;
+
 void InterpretedSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    run_setup(program_, setup_regs_.data(), eval_regs_.data() + Program::kEvalCoef, t0, t0_lo, x0, v0, sgn);
+    const Program& p = program_;
+    const std::size_t n = static_cast<std::size_t>(p.n_dof);
+    double* r = setup_regs_.data();
+    r[0] = 1.0;
+    r[Program::kSetupT0] = t0;
+    r[Program::kSetupT0Lo] = t0_lo;
+    for (std::size_t i = 0; i < n; ++i) {
+        r[Program::kSetupX0 + i] = x0[i];
+        r[p.setup_v0() + i] = v0[i];
+        r[p.setup_sgn() + i] = sgn[i];
+    }
+    execute(p, setup_code_, r);
+    // The coefficient block goes straight into eval's registers.
+    for (std::size_t k = 0; k < p.setup_coef.size(); ++k) eval_regs_[Program::kEvalCoef + k] = r[p.setup_coef[k]];
 }
 
 void InterpretedSolver::eval(double tau, const SegmentEval& out) const {
     double* r = eval_regs_.data();
     r[Program::kEvalTau] = tau;
-    execute(program_, program_.eval, r);
+    execute(program_, eval_code_, r);
     copy_out(program_, r, out);
 }
 

@@ -21,19 +21,10 @@
 
 namespace hsnc {
 
-/// Run `p.setup` with the kernel ABI's setup semantics (runtime/kernel_abi.h):
-/// writes p.n_coef doubles to `coef`. `regs` is scratch of
-/// p.setup.registers() doubles.
-void run_setup(const Program& p, double* regs, double* coef, double t0, double t0_lo, const double* x0,
-               const double* v0, const signed char* sgn);
-
-/// Run `p.eval` with the kernel ABI's eval semantics. `regs` is scratch of
-/// p.eval.registers() doubles.
-void run_eval(const Program& p, double* regs, const double* coef, double tau, const SegmentEval& out);
-
 class InterpretedSolver : public SegmentSolver {
 public:
     explicit InterpretedSolver(Program program);
+    ~InterpretedSolver() override;
 
     const Configuration& configuration() const override { return program_.cfg; }
     const std::vector<SwitchFunction>& switches() const override { return program_.switches; }
@@ -43,9 +34,15 @@ public:
     double max_step() const override { return program_.max_step; }
 
     const Program& program() const { return program_; }
+    /// The coefficient block the last setup computed (program().n_coef
+    /// doubles): what a kernel's setup writes into `coef`.
+    const double* coefficients() const { return eval_regs_.data() + Program::kEvalCoef; }
+
+    struct Exec;  // an instruction as run (interpreted_solver.cpp)
 
 private:
     Program program_;
+    std::vector<Exec> setup_code_, eval_code_;
     std::vector<double> setup_regs_;
     // eval's register file; setup writes the coefficient block straight into it.
     mutable std::vector<double> eval_regs_;

@@ -58,6 +58,15 @@ enum class ProgramOp : std::uint8_t {
     /// q_p = p tau^2 phi2(-c tau) of a damped rigid mode: dst = q_p, p = r[a],
     /// tau = r[b], mode block at c, k[0] = c; added to the mode block.
     rigid_damped_particular,
+    /// The state of one free mass from its modes, five sums in lockstep:
+    ///   x = r[a] + sum_k c_k q_k + tail_x,        v = sum_k c_k q'_k + tail_v,
+    ///   acc = sum_k c_k q''_k + tail_a,           mx = |r[a]| + sum_k |c_k| mq_k + tail_mx,
+    ///   mv = sum_k |c_k| mdq_k + tail_mv,
+    /// where term k of [first, first + count) is (c_k = V_ik, mode block register)
+    /// and the tails (forcing terms, constants) follow in `terms`, tail[0..4]
+    /// terms each; each sum left to right, as printed. x, v, acc go to dst, b, c;
+    /// mx, mv to d, d+1.
+    mass_state,
     /// The resonant (sinc) response of an undamped mode to one harmonic, from
     /// rest: dst+0..6 = w, w', Cb, Sb, y, y', y''; theta = r[a], tau = r[b],
     /// mode block at c, cos(theta) = r[d]; constants ResonantConstant. Added to
@@ -116,13 +125,15 @@ struct ProgramTerm {
 };
 
 struct ProgramInstr {
+    explicit ProgramInstr(ProgramOp o) : op(o) {}
     ProgramOp op;
     std::uint8_t regime = 0;          ///< `mode`: the Regime (generator/derivation.h order)
     bool accumulates = false;         ///< `mode`: particular terms are added to its q, q', q''
     std::uint32_t dst = kNoRegister;  ///< first destination register
     std::uint32_t a = kNoRegister, b = kNoRegister, c = kNoRegister, d = kNoRegister;  ///< operands
     std::uint32_t first = 0;          ///< first term (lincomb) or constant (the others)
-    std::uint32_t count = 0;          ///< terms (lincomb)
+    std::uint32_t count = 0;          ///< terms (lincomb, mass_state)
+    std::uint32_t tail[5] = {};       ///< mass_state: terms of the tails of x, v, acc, mx, mv
     std::string comment;              ///< printed above the instruction (may be empty)
     std::string note;                 ///< printed after it, on its line (may be empty)
 };

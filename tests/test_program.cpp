@@ -103,13 +103,14 @@ Trace kernel_trace(const hsnc_kernel& k, const Start& s) {
 }
 
 Trace program_trace(const Program& p, const Start& s) {
-    std::vector<double> sregs(p.setup.registers()), eregs(p.eval.registers());
+    auto ip = std::make_shared<InterpretedSolver>(p);
     return trace(
         static_cast<std::size_t>(p.n_coef), static_cast<std::size_t>(p.n_dof), p.n_switch(), s,
         [&](double* coef, const Start& st) {
-            run_setup(p, sregs.data(), coef, st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data());
+            ip->setup(st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data());
+            if (p.n_coef) std::memcpy(coef, ip->coefficients(), static_cast<std::size_t>(p.n_coef) * sizeof(double));
         },
-        [&](const double* coef, double tau, const SegmentEval& o) { run_eval(p, eregs.data(), coef, tau, o); });
+        [&](const double*, double tau, const SegmentEval& o) { ip->eval(tau, o); });
 }
 
 /// memcmp equality, and where it fails the first differing double.
