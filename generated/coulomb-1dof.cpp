@@ -9,6 +9,8 @@
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
 // mode 1: undamped, lambda = 100.0, omega = 10.0, c = 0.0, xi = 0.0
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -25,7 +27,7 @@ constexpr double omega_d_1 = 10.0;
 //  0:x_st_1 1:A_1 2:B_1 3:A1_1 4:B1_1 5:A2_1
 //  6:B2_1
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -0.98100000000000009*sgn[0];  // m1
     // Modal forces p = V^T f.
@@ -41,8 +43,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double q0u_1 = xh_1;
     const double dq0u_1 = vh_1;
     // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(1.0)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(1.0)*dq0u_1);
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(q0u_1));
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(dq0u_1));
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
@@ -58,30 +60,28 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double B_1 = dqh0_1;
     coef[1] = A_1;
     coef[2] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
-    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    const double A1_1 = B_1;
+    const double B1_1 = -100.0*A_1;
     coef[3] = A1_1;
     coef[4] = B1_1;
-    coef[5] = B1_1 - sigma_1*A1_1;
-    coef[6] = -kappa_1*A1_1 - sigma_1*B1_1;
+    coef[5] = B1_1;
+    coef[6] = -100.0*A1_1;
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Mode 1 (undamped).
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.10000000000000001;
-    const double qh_1 = coef[1]*eC_1 + coef[2]*eS_1;
-    const double dqh_1 = coef[3]*eC_1 + coef[4]*eS_1;
-    const double ddqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
-    const double q_1 = qh_1;
-    const double dq_1 = dqh_1;
-    const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[1]*eC_1) + __builtin_fabs(coef[2]*eS_1);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_1 = coef[1]*eC_1 + coef[2]*eS_1;
+    const double dq_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double ddq_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
+    const double mq_1 = __builtin_fabs(coef[1]*eC_1) + __builtin_fabs(coef[2]*eS_1);
     const double mdq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[0] + q_1;  // m1
@@ -131,6 +131,8 @@ extern "C" const hsnc_kernel hsnc_kernel_coulomb_1dof_c_s0 = {
 // f = loads + preload - K_FS x_S - mu_k N sgn (paper Eq. 7-9). In modal coordinates
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -142,13 +144,13 @@ namespace k_coulomb_1dof_c_s1 {
 // Coefficient block (1 doubles):
 //  0:x_stuck_0
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     coef[0] = x0[0];  // m1 is stuck
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[0];  // m1 (stuck)
     v[0] = 0.0;

@@ -10,6 +10,8 @@
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
 // mode 1: underdamped, lambda = 11.339745962155613, omega = 3.3674539287354199, c = 1.1339745962155614, xi = 0.168372696436771
 // mode 2: underdamped, lambda = 28.660254037844386, omega = 5.3535272519941826, c = 2.8660254037844388, xi = 0.26767636259970917
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -27,23 +29,12 @@ constexpr double kappa_2 = 26.606728634059948;
 constexpr double omega_d_2 = 5.1581710551376592;
 constexpr double Omega_1 = 175.51509999999999;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:A_1 5:B_1
 //  6:A1_1 7:B1_1 8:A2_1 9:B2_1 10:A_2 11:B_2
 //  12:A1_2 13:B1_2 14:A2_2 15:B2_2
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -5.8860000000000001*sgn[0];  // m1
     const double f_2 = -11.772*sgn[1];  // m2
@@ -63,18 +54,18 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     coef[3] = x_st_2;
     // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
     // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
-    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.73072581908970025)*s_theta_1 - static_cast<long double>(-0.0076388658185612014)*c_theta_1);
-    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-128.25341521011063)*c_theta_1 - static_cast<long double>(1.3407362980313511)*s_theta_1);
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) + static_cast<long double>(0.73072581908970025)*s_theta_1 + static_cast<long double>(0.0076388658185612014)*c_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) + static_cast<long double>(128.25341521011063)*c_theta_1 - static_cast<long double>(1.3407362980313511)*s_theta_1);
     const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) - static_cast<long double>(0.24367804547490879)*s_theta_1 - static_cast<long double>(0.0055583100824806502)*c_theta_1);
-    const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.769176519333158)*c_theta_1 - static_cast<long double>(-0.97556734995759953)*s_theta_1);
+    const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.769176519333158)*c_theta_1 + static_cast<long double>(0.97556734995759953)*s_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
     const double q0u_1 = 0.88807383397711526*xh_1 + 0.65011516734373631*xh_2;
     const double dq0u_1 = 0.88807383397711526*vh_1 + 0.65011516734373631*vh_2;
     const double q0u_2 = -0.45970084338098305*xh_1 + 1.2559260603991087*xh_2;
     const double dq0u_2 = -0.45970084338098305*vh_1 + 1.2559260603991087*vh_2;
     // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.88807383397711526)*q0u_1 - static_cast<long double>(-0.45970084338098305)*q0u_2);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.88807383397711526)*dq0u_1 - static_cast<long double>(-0.45970084338098305)*dq0u_2);
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.88807383397711526)*q0u_1 + static_cast<long double>(0.45970084338098305)*q0u_2);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.88807383397711526)*dq0u_1 + static_cast<long double>(0.45970084338098305)*dq0u_2);
     const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.32505758367186816)*q0u_1 - static_cast<long double>(0.62796303019955435)*q0u_2);
     const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.32505758367186816)*dq0u_1 - static_cast<long double>(0.62796303019955435)*dq0u_2);
     const double q0_1 = q0u_1 + (0.88807383397711526*rx_1 + 0.65011516734373631*rx_2);
@@ -97,32 +88,32 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
     // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
-    const double B_1 = dqh0_1 + sigma_1*A_1;
+    const double B_1 = dqh0_1 + 0.5669872981077807*A_1;
     coef[4] = A_1;
     coef[5] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
-    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    const double A1_1 = B_1 - 0.5669872981077807*A_1;
+    const double B1_1 = -11.018271365940052*A_1 - 0.5669872981077807*B_1;
     coef[6] = A1_1;
     coef[7] = B1_1;
-    coef[8] = B1_1 - sigma_1*A1_1;
-    coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
+    coef[8] = B1_1 - 0.5669872981077807*A1_1;
+    coef[9] = -11.018271365940052*A1_1 - 0.5669872981077807*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
     // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
-    const double B_2 = dqh0_2 + sigma_2*A_2;
+    const double B_2 = dqh0_2 + 1.4330127018922194*A_2;
     coef[10] = A_2;
     coef[11] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
-    const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
+    const double A1_2 = B_2 - 1.4330127018922194*A_2;
+    const double B1_2 = -26.606728634059948*A_2 - 1.4330127018922194*B_2;
     coef[12] = A1_2;
     coef[13] = B1_2;
-    coef[14] = B1_2 - sigma_2*A1_2;
-    coef[15] = -kappa_2*A1_2 - sigma_2*B1_2;
+    coef[14] = B1_2 - 1.4330127018922194*A1_2;
+    coef[15] = -26.606728634059948*A1_2 - 1.4330127018922194*B1_2;
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -132,30 +123,26 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double e_1 = __builtin_exp(-sigma_1*tau);
     const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
     const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.30126124591441988;
-    const double qh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double dqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
-    const double ddqh_1 = coef[8]*eC_1 + coef[9]*eS_1;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
-    const double q_1 = qh_1;
-    const double dq_1 = dqh_1;
-    const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_1 = coef[4]*eC_1 + coef[5]*eS_1;
+    const double dq_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double ddq_1 = coef[8]*eC_1 + coef[9]*eS_1;
+    const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
+    const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
     const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
     const double eC_2 = e_2*__builtin_cos(omega_d_2*tau);
     const double eS_2 = e_2*__builtin_sin(omega_d_2*tau)*0.19386716518522135;
-    const double qh_2 = coef[10]*eC_2 + coef[11]*eS_2;
-    const double dqh_2 = coef[12]*eC_2 + coef[13]*eS_2;
-    const double ddqh_2 = coef[14]*eC_2 + coef[15]*eS_2;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_2 = __builtin_sqrt(dqh_2*dqh_2 + lambda_2*qh_2*qh_2);
-    const double q_2 = qh_2;
-    const double dq_2 = dqh_2;
-    const double ddq_2 = ddqh_2;
-    const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_2 = coef[10]*eC_2 + coef[11]*eS_2;
+    const double dq_2 = coef[12]*eC_2 + coef[13]*eS_2;
+    const double ddq_2 = coef[14]*eC_2 + coef[15]*eS_2;
+    const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
+    const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);
     const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.88807383397711526*q_1 - 0.45970084338098305*q_2 - 0.73072581908970025*sin_1 - 0.0076388658185612014*cos_1;  // m1
@@ -222,6 +209,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_1_c0_s00 = {
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
 // mode 1: underdamped, lambda = 14.688107978954948, omega = 3.8325067487161646, c = 1.4688107978954947, xi = 0.19162533743580826
 // mode 2: underdamped, lambda = 175.31189202104505, omega = 13.240539717890847, c = 17.531189202104507, xi = 0.66202698589454245
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -239,23 +228,12 @@ constexpr double kappa_2 = 98.476243311048648;
 constexpr double omega_d_2 = 9.9235197037668375;
 constexpr double Omega_1 = 175.51509999999999;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:A_1 5:B_1
 //  6:A1_1 7:B1_1 8:A2_1 9:B2_1 10:A_2 11:B_2
 //  12:A1_2 13:B1_2 14:A2_2 15:B2_2
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 20.0 - 5.8860000000000001*sgn[0];  // m1
     const double f_2 = -20.0 - 11.772*sgn[1];  // m2
@@ -275,10 +253,10 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     coef[3] = x_st_2;
     // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
     // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
-    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.72773816497394384)*s_theta_1 - static_cast<long double>(-0.06320081663878023)*c_theta_1);
-    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-127.72903679921824)*c_theta_1 - static_cast<long double>(11.092697652437176)*s_theta_1);
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) + static_cast<long double>(0.72773816497394384)*s_theta_1 + static_cast<long double>(0.06320081663878023)*c_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) + static_cast<long double>(127.72903679921824)*c_theta_1 - static_cast<long double>(11.092697652437176)*s_theta_1);
     const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) - static_cast<long double>(0.24194593481455143)*s_theta_1 - static_cast<long double>(0.033337329577655686)*c_theta_1);
-    const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.465164943569469)*c_theta_1 - static_cast<long double>(-5.8512047345551954)*s_theta_1);
+    const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.465164943569469)*c_theta_1 + static_cast<long double>(5.8512047345551954)*s_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
     const double q0u_1 = 0.6127686665676223*xh_1 + 1.1175997148111108*xh_2;
     const double dq0u_1 = 0.6127686665676223*vh_1 + 1.1175997148111108*vh_2;
@@ -287,8 +265,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
     const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.6127686665676223)*q0u_1 - static_cast<long double>(0.79026233699508808)*q0u_2);
     const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.6127686665676223)*dq0u_1 - static_cast<long double>(0.79026233699508808)*dq0u_2);
-    const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.55879985740555538)*q0u_1 - static_cast<long double>(-0.43329287942860423)*q0u_2);
-    const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.55879985740555538)*dq0u_1 - static_cast<long double>(-0.43329287942860423)*dq0u_2);
+    const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.55879985740555538)*q0u_1 + static_cast<long double>(0.43329287942860423)*q0u_2);
+    const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.55879985740555538)*dq0u_1 + static_cast<long double>(0.43329287942860423)*dq0u_2);
     const double q0_1 = q0u_1 + (0.6127686665676223*rx_1 + 1.1175997148111108*rx_2);
     const double dq0_1 = dq0u_1 + (0.6127686665676223*rv_1 + 1.1175997148111108*rv_2);
     const double q0_2 = q0u_2 + (0.79026233699508808*rx_1 - 0.86658575885720845*rx_2);
@@ -309,32 +287,32 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
     // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
-    const double B_1 = dqh0_1 + sigma_1*A_1;
+    const double B_1 = dqh0_1 + 0.73440539894774737*A_1;
     coef[4] = A_1;
     coef[5] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
-    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    const double A1_1 = B_1 - 0.73440539894774737*A_1;
+    const double B1_1 = -14.148756688951348*A_1 - 0.73440539894774737*B_1;
     coef[6] = A1_1;
     coef[7] = B1_1;
-    coef[8] = B1_1 - sigma_1*A1_1;
-    coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
+    coef[8] = B1_1 - 0.73440539894774737*A1_1;
+    coef[9] = -14.148756688951348*A1_1 - 0.73440539894774737*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
     // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
-    const double B_2 = dqh0_2 + sigma_2*A_2;
+    const double B_2 = dqh0_2 + 8.7655946010522534*A_2;
     coef[10] = A_2;
     coef[11] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
-    const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
+    const double A1_2 = B_2 - 8.7655946010522534*A_2;
+    const double B1_2 = -98.476243311048648*A_2 - 8.7655946010522534*B_2;
     coef[12] = A1_2;
     coef[13] = B1_2;
-    coef[14] = B1_2 - sigma_2*A1_2;
-    coef[15] = -kappa_2*A1_2 - sigma_2*B1_2;
+    coef[14] = B1_2 - 8.7655946010522534*A1_2;
+    coef[15] = -98.476243311048648*A1_2 - 8.7655946010522534*B1_2;
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -344,30 +322,26 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double e_1 = __builtin_exp(-sigma_1*tau);
     const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
     const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.26585256870030743;
-    const double qh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double dqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
-    const double ddqh_1 = coef[8]*eC_1 + coef[9]*eS_1;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
-    const double q_1 = qh_1;
-    const double dq_1 = dqh_1;
-    const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_1 = coef[4]*eC_1 + coef[5]*eS_1;
+    const double dq_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double ddq_1 = coef[8]*eC_1 + coef[9]*eS_1;
+    const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
+    const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
     const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
     const double eC_2 = e_2*__builtin_cos(omega_d_2*tau);
     const double eS_2 = e_2*__builtin_sin(omega_d_2*tau)*0.10077069727794395;
-    const double qh_2 = coef[10]*eC_2 + coef[11]*eS_2;
-    const double dqh_2 = coef[12]*eC_2 + coef[13]*eS_2;
-    const double ddqh_2 = coef[14]*eC_2 + coef[15]*eS_2;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_2 = __builtin_sqrt(dqh_2*dqh_2 + lambda_2*qh_2*qh_2);
-    const double q_2 = qh_2;
-    const double dq_2 = dqh_2;
-    const double ddq_2 = ddqh_2;
-    const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_2 = coef[10]*eC_2 + coef[11]*eS_2;
+    const double dq_2 = coef[12]*eC_2 + coef[13]*eS_2;
+    const double ddq_2 = coef[14]*eC_2 + coef[15]*eS_2;
+    const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
+    const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);
     const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.6127686665676223*q_1 + 0.79026233699508808*q_2 - 0.72773816497394384*sin_1 - 0.06320081663878023*cos_1;  // m1
@@ -433,6 +407,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_1_c1_s00 = {
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
 // mode 1: underdamped, lambda = 25.0, omega = 5.0, c = 2.5, xi = 0.25
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -446,22 +422,11 @@ constexpr double kappa_1 = 23.4375;
 constexpr double omega_d_1 = 4.8412291827592711;
 constexpr double Omega_1 = 175.51509999999999;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 10.0*x0[0] - 11.772*sgn[1];  // m2
     // Modal forces p = V^T f.
@@ -478,7 +443,7 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
     // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
     const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) - static_cast<long double>(0.24361085541406602)*s_theta_1 - static_cast<long double>(0.0034727598429402139)*c_theta_1);
-    const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.757383649085334)*c_theta_1 - static_cast<long double>(-0.60952179110963589)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.757383649085334)*c_theta_1 + static_cast<long double>(0.60952179110963589)*s_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
     const double q0u_1 = 1.4142135623730951*xh_1;
     const double dq0u_1 = 1.4142135623730951*vh_1;
@@ -497,21 +462,21 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
     // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
-    const double B_1 = dqh0_1 + sigma_1*A_1;
+    const double B_1 = dqh0_1 + 1.25*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
-    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    const double A1_1 = B_1 - 1.25*A_1;
+    const double B1_1 = -23.4375*A_1 - 1.25*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
-    coef[7] = B1_1 - sigma_1*A1_1;
-    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
+    coef[7] = B1_1 - 1.25*A1_1;
+    coef[8] = -23.4375*A1_1 - 1.25*B1_1;
     coef[9] = x0[0];  // m1 is stuck
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -521,15 +486,13 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double e_1 = __builtin_exp(-sigma_1*tau);
     const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
     const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.2065591117977289;
-    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
-    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
-    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
-    const double q_1 = qh_1;
-    const double dq_1 = dqh_1;
-    const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dq_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
+    const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
     const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
@@ -556,12 +519,12 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     g[1] = A_force_0 - 7.3574999999999999;
     dg[1] = dA_force_0;
     bound[1] = 693182404.84421217 + 83.968930265902529*r_1;
-    scale[1] = 15.0*mx_0 + 10.0*mx_1 + 1.0*mv_1 + 22507.357499999998;
+    scale[1] = 15.0*mx_0 + 10.0*mx_1 + mv_1 + 22507.357499999998;
     // g_2: -A - mu_s N of stuck m1, A = -K x - C v + f + sum_h F_h sin (force but friction)
     g[2] = -A_force_0 - 7.3574999999999999;
     dg[2] = -dA_force_0;
     bound[2] = 693182404.84421217 + 83.968930265902529*r_1;
-    scale[2] = 15.0*mx_0 + 10.0*mx_1 + 1.0*mv_1 + 22507.357499999998;
+    scale[2] = 15.0*mx_0 + 10.0*mx_1 + mv_1 + 22507.357499999998;
     // g_3: velocity of m2 (sliding)
     g[3] = v[1];
     dg[3] = a[1];
@@ -602,6 +565,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_1_c0_s10 = {
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
 // mode 1: underdamped, lambda = 75.0, omega = 8.6602540378443873, c = 7.5, xi = 0.43301270189221935
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -615,22 +580,11 @@ constexpr double kappa_1 = 60.9375;
 constexpr double omega_d_1 = 7.8062474979979974;
 constexpr double Omega_1 = 175.51509999999999;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -20.0 + 110.0*x0[0] - 11.772*sgn[1];  // m2
     // Modal forces p = V^T f.
@@ -647,7 +601,7 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
     // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
     const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) - static_cast<long double>(0.24360980929693524)*s_theta_1 - static_cast<long double>(0.010435185731304798)*c_theta_1);
-    const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.757200039732517)*c_theta_1 - static_cast<long double>(-1.8315326671485346)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.757200039732517)*c_theta_1 + static_cast<long double>(1.8315326671485346)*s_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
     const double q0u_1 = 1.4142135623730951*xh_1;
     const double dq0u_1 = 1.4142135623730951*vh_1;
@@ -666,21 +620,21 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
     // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
-    const double B_1 = dqh0_1 + sigma_1*A_1;
+    const double B_1 = dqh0_1 + 3.75*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
-    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    const double A1_1 = B_1 - 3.75*A_1;
+    const double B1_1 = -60.9375*A_1 - 3.75*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
-    coef[7] = B1_1 - sigma_1*A1_1;
-    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
+    coef[7] = B1_1 - 3.75*A1_1;
+    coef[8] = -60.9375*A1_1 - 3.75*B1_1;
     coef[9] = x0[0];  // m1 is stuck
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -690,15 +644,13 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double e_1 = __builtin_exp(-sigma_1*tau);
     const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
     const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.12810252304406972;
-    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
-    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
-    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
-    const double q_1 = qh_1;
-    const double dq_1 = dqh_1;
-    const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dq_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
+    const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
     const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
@@ -771,6 +723,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_1_c1_s10 = {
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
 // mode 1: underdamped, lambda = 15.0, omega = 3.872983346207417, c = 1.5, xi = 0.19364916731037085
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -784,22 +738,11 @@ constexpr double kappa_1 = 14.4375;
 constexpr double omega_d_1 = 3.799671038392666;
 constexpr double Omega_1 = 175.51509999999999;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_1
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 10.0*x0[1] - 5.8860000000000001*sgn[0];  // m1
     // Modal forces p = V^T f.
@@ -815,14 +758,14 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     coef[2] = x_st_1;
     // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
     // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
-    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.7306902574434726)*s_theta_1 - static_cast<long double>(-0.0062477207570832737)*c_theta_1);
-    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-128.24717360421684)*c_theta_1 - static_cast<long double>(1.0965693334515465)*s_theta_1);
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) + static_cast<long double>(0.7306902574434726)*s_theta_1 + static_cast<long double>(0.0062477207570832737)*c_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) + static_cast<long double>(128.24717360421684)*c_theta_1 - static_cast<long double>(1.0965693334515465)*s_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
     const double q0u_1 = xh_1;
     const double dq0u_1 = vh_1;
     // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(1.0)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(1.0)*dq0u_1);
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(q0u_1));
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(dq0u_1));
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
@@ -835,21 +778,21 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
     // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
-    const double B_1 = dqh0_1 + sigma_1*A_1;
+    const double B_1 = dqh0_1 + 0.75*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
-    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    const double A1_1 = B_1 - 0.75*A_1;
+    const double B1_1 = -14.4375*A_1 - 0.75*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
-    coef[7] = B1_1 - sigma_1*A1_1;
-    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
+    coef[7] = B1_1 - 0.75*A1_1;
+    coef[8] = -14.4375*A1_1 - 0.75*B1_1;
     coef[9] = x0[1];  // m2 is stuck
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -859,15 +802,13 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double e_1 = __builtin_exp(-sigma_1*tau);
     const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
     const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.2631806779839076;
-    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
-    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
-    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
-    const double q_1 = qh_1;
-    const double dq_1 = dqh_1;
-    const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dq_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
+    const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
     const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + q_1 - 0.7306902574434726*sin_1 - 0.0062477207570832737*cos_1;  // m1
@@ -899,12 +840,12 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     g[2] = A_force_1 - 14.715;
     dg[2] = dA_force_1;
     bound[2] = 462291465.78368044 + 76.789308481385291*r_1;
-    scale[2] = 10.0*mx_0 + 1.0*mv_0 + 50.0*mx_1 + 15014.715;
+    scale[2] = 10.0*mx_0 + mv_0 + 50.0*mx_1 + 15014.715;
     // g_3: -A - mu_s N of stuck m2, A = -K x - C v + f + sum_h F_h sin (force but friction)
     g[3] = -A_force_1 - 14.715;
     dg[3] = -dA_force_1;
     bound[3] = 462291465.78368044 + 76.789308481385291*r_1;
-    scale[3] = 10.0*mx_0 + 1.0*mv_0 + 50.0*mx_1 + 15014.715;
+    scale[3] = 10.0*mx_0 + mv_0 + 50.0*mx_1 + 15014.715;
 }
 
 const hsnc_switch switches[] = {{0, 0}, {1, 0}, {2, 1}, {3, 1}, };
@@ -940,6 +881,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_1_c0_s01 = {
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
 // mode 1: underdamped, lambda = 115.0, omega = 10.723805294763608, c = 11.5, xi = 0.53619026473818043
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -953,22 +896,11 @@ constexpr double kappa_1 = 81.9375;
 constexpr double omega_d_1 = 9.0519334951158363;
 constexpr double Omega_1 = 175.51509999999999;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_1
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 20.0 + 110.0*x0[1] - 5.8860000000000001*sgn[0];  // m1
     // Modal forces p = V^T f.
@@ -984,14 +916,14 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     coef[2] = x_st_1;
     // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
     // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
-    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.72996736260496498)*s_theta_1 - static_cast<long double>(-0.048007721356019183)*c_theta_1);
-    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-128.12029464434667)*c_theta_1 - static_cast<long double>(8.4260800145738415)*s_theta_1);
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) + static_cast<long double>(0.72996736260496498)*s_theta_1 + static_cast<long double>(0.048007721356019183)*c_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) + static_cast<long double>(128.12029464434667)*c_theta_1 - static_cast<long double>(8.4260800145738415)*s_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
     const double q0u_1 = xh_1;
     const double dq0u_1 = vh_1;
     // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(1.0)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(1.0)*dq0u_1);
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(q0u_1));
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(dq0u_1));
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
@@ -1004,21 +936,21 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
     // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
-    const double B_1 = dqh0_1 + sigma_1*A_1;
+    const double B_1 = dqh0_1 + 5.75*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
-    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    const double A1_1 = B_1 - 5.75*A_1;
+    const double B1_1 = -81.9375*A_1 - 5.75*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
-    coef[7] = B1_1 - sigma_1*A1_1;
-    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
+    coef[7] = B1_1 - 5.75*A1_1;
+    coef[8] = -81.9375*A1_1 - 5.75*B1_1;
     coef[9] = x0[1];  // m2 is stuck
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -1028,15 +960,13 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double e_1 = __builtin_exp(-sigma_1*tau);
     const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
     const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.11047363533322149;
-    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
-    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
-    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
-    const double q_1 = qh_1;
-    const double dq_1 = dqh_1;
-    const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dq_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
+    const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
     const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + q_1 - 0.72996736260496498*sin_1 - 0.048007721356019183*cos_1;  // m1
@@ -1108,6 +1038,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_1_c1_s01 = {
 // f = loads + preload - K_FS x_S - mu_k N sgn (paper Eq. 7-9). In modal coordinates
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -1117,21 +1049,10 @@ namespace k_seed_scenario_1_c0_s11 {
 // Modal constants.
 constexpr double Omega_1 = 175.51509999999999;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (4 doubles):
 //  0:theta_1 1:c_theta_1 2:x_stuck_0 3:x_stuck_1
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
     const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
@@ -1144,7 +1065,7 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -1226,6 +1147,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_1_c0_s11 = {
 // f = loads + preload - K_FS x_S - mu_k N sgn (paper Eq. 7-9). In modal coordinates
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -1235,21 +1158,10 @@ namespace k_seed_scenario_1_c1_s11 {
 // Modal constants.
 constexpr double Omega_1 = 175.51509999999999;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (4 doubles):
 //  0:theta_1 1:c_theta_1 2:x_stuck_0 3:x_stuck_1
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
     const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
@@ -1262,7 +1174,7 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);

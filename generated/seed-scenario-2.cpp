@@ -10,6 +10,8 @@
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
 // mode 1: undamped, lambda = 11.339745962155613, omega = 3.3674539287354199, c = 0.0, xi = 0.0
 // mode 2: undamped, lambda = 28.660254037844386, omega = 5.3535272519941826, c = 0.0, xi = 0.0
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -27,23 +29,12 @@ constexpr double kappa_2 = 28.660254037844386;
 constexpr double omega_d_2 = 5.3535272519941826;
 constexpr double Omega_1 = 17.551500000000001;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:A_1 5:B_1
 //  6:A1_1 7:B1_1 8:A2_1 9:B2_1 10:A_2 11:B_2
 //  12:A1_2 13:B1_2 14:A2_2 15:B2_2
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -5.8860000000000001*sgn[0];  // m1
     const double f_2 = -11.772*sgn[1];  // m2
@@ -63,18 +54,18 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     coef[3] = x_st_2;
     // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
     // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
-    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.75918967575502749)*s_theta_1);
-    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-13.324917594014366)*c_theta_1);
-    const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) - static_cast<long double>(-0.25155539849822628)*s_theta_1);
-    const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(-4.4151745767416184)*c_theta_1);
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) + static_cast<long double>(0.75918967575502749)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) + static_cast<long double>(13.324917594014366)*c_theta_1);
+    const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) + static_cast<long double>(0.25155539849822628)*s_theta_1);
+    const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) + static_cast<long double>(4.4151745767416184)*c_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
     const double q0u_1 = 0.88807383397711526*xh_1 + 0.65011516734373631*xh_2;
     const double dq0u_1 = 0.88807383397711526*vh_1 + 0.65011516734373631*vh_2;
     const double q0u_2 = -0.45970084338098305*xh_1 + 1.2559260603991087*xh_2;
     const double dq0u_2 = -0.45970084338098305*vh_1 + 1.2559260603991087*vh_2;
     // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.88807383397711526)*q0u_1 - static_cast<long double>(-0.45970084338098305)*q0u_2);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.88807383397711526)*dq0u_1 - static_cast<long double>(-0.45970084338098305)*dq0u_2);
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.88807383397711526)*q0u_1 + static_cast<long double>(0.45970084338098305)*q0u_2);
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.88807383397711526)*dq0u_1 + static_cast<long double>(0.45970084338098305)*dq0u_2);
     const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.32505758367186816)*q0u_1 - static_cast<long double>(0.62796303019955435)*q0u_2);
     const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.32505758367186816)*dq0u_1 - static_cast<long double>(0.62796303019955435)*dq0u_2);
     const double q0_1 = q0u_1 + (0.88807383397711526*rx_1 + 0.65011516734373631*rx_2);
@@ -100,29 +91,29 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double B_1 = dqh0_1;
     coef[4] = A_1;
     coef[5] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
-    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    const double A1_1 = B_1;
+    const double B1_1 = -11.339745962155613*A_1;
     coef[6] = A1_1;
     coef[7] = B1_1;
-    coef[8] = B1_1 - sigma_1*A1_1;
-    coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
+    coef[8] = B1_1;
+    coef[9] = -11.339745962155613*A1_1;
     // Mode 2 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
     // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2;
     coef[10] = A_2;
     coef[11] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
-    const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
+    const double A1_2 = B_2;
+    const double B1_2 = -28.660254037844386*A_2;
     coef[12] = A1_2;
     coef[13] = B1_2;
-    coef[14] = B1_2 - sigma_2*A1_2;
-    coef[15] = -kappa_2*A1_2 - sigma_2*B1_2;
+    coef[14] = B1_2;
+    coef[15] = -28.660254037844386*A1_2;
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -131,29 +122,25 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.29696026171782847;
-    const double qh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double dqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
-    const double ddqh_1 = coef[8]*eC_1 + coef[9]*eS_1;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
-    const double q_1 = qh_1;
-    const double dq_1 = dqh_1;
-    const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_1 = coef[4]*eC_1 + coef[5]*eS_1;
+    const double dq_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double ddq_1 = coef[8]*eC_1 + coef[9]*eS_1;
+    const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
+    const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
     const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
     // Mode 2 (undamped).
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_2 = __builtin_cos(omega_d_2*tau);
     const double eS_2 = __builtin_sin(omega_d_2*tau)*0.18679273550489561;
-    const double qh_2 = coef[10]*eC_2 + coef[11]*eS_2;
-    const double dqh_2 = coef[12]*eC_2 + coef[13]*eS_2;
-    const double ddqh_2 = coef[14]*eC_2 + coef[15]*eS_2;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_2 = __builtin_sqrt(dqh_2*dqh_2 + lambda_2*qh_2*qh_2);
-    const double q_2 = qh_2;
-    const double dq_2 = dqh_2;
-    const double ddq_2 = ddqh_2;
-    const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_2 = coef[10]*eC_2 + coef[11]*eS_2;
+    const double dq_2 = coef[12]*eC_2 + coef[13]*eS_2;
+    const double ddq_2 = coef[14]*eC_2 + coef[15]*eS_2;
+    const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
+    const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);
     const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.88807383397711526*q_1 - 0.45970084338098305*q_2 - 0.75918967575502749*sin_1;  // m1
@@ -220,6 +207,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_2_c0_s00 = {
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
 // mode 1: undamped, lambda = 14.688107978954948, omega = 3.8325067487161646, c = 0.0, xi = 0.0
 // mode 2: undamped, lambda = 175.31189202104505, omega = 13.240539717890847, c = 0.0, xi = 0.0
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -237,23 +226,12 @@ constexpr double kappa_2 = 175.31189202104505;
 constexpr double omega_d_2 = 13.240539717890847;
 constexpr double Omega_1 = 17.551500000000001;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (16 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:x_st_2 4:A_1 5:B_1
 //  6:A1_1 7:B1_1 8:A2_1 9:B2_1 10:A_2 11:B_2
 //  12:A1_2 13:B1_2 14:A2_2 15:B2_2
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 20.0 - 5.8860000000000001*sgn[0];  // m1
     const double f_2 = -20.0 - 11.772*sgn[1];  // m2
@@ -273,10 +251,10 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     coef[3] = x_st_2;
     // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
     // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
-    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-1.1346834856205477)*s_theta_1);
-    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-19.915397197869044)*c_theta_1);
-    const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) - static_cast<long double>(-0.054031881163313256)*s_theta_1);
-    const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(-0.94834056223789265)*c_theta_1);
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) + static_cast<long double>(1.1346834856205477)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) + static_cast<long double>(19.915397197869044)*c_theta_1);
+    const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) + static_cast<long double>(0.054031881163313256)*s_theta_1);
+    const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) + static_cast<long double>(0.94834056223789265)*c_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
     const double q0u_1 = 0.6127686665676223*xh_1 + 1.1175997148111108*xh_2;
     const double dq0u_1 = 0.6127686665676223*vh_1 + 1.1175997148111108*vh_2;
@@ -285,8 +263,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
     const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.6127686665676223)*q0u_1 - static_cast<long double>(0.79026233699508808)*q0u_2);
     const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.6127686665676223)*dq0u_1 - static_cast<long double>(0.79026233699508808)*dq0u_2);
-    const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.55879985740555538)*q0u_1 - static_cast<long double>(-0.43329287942860423)*q0u_2);
-    const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.55879985740555538)*dq0u_1 - static_cast<long double>(-0.43329287942860423)*dq0u_2);
+    const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.55879985740555538)*q0u_1 + static_cast<long double>(0.43329287942860423)*q0u_2);
+    const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.55879985740555538)*dq0u_1 + static_cast<long double>(0.43329287942860423)*dq0u_2);
     const double q0_1 = q0u_1 + (0.6127686665676223*rx_1 + 1.1175997148111108*rx_2);
     const double dq0_1 = dq0u_1 + (0.6127686665676223*rv_1 + 1.1175997148111108*rv_2);
     const double q0_2 = q0u_2 + (0.79026233699508808*rx_1 - 0.86658575885720845*rx_2);
@@ -310,29 +288,29 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double B_1 = dqh0_1;
     coef[4] = A_1;
     coef[5] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
-    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    const double A1_1 = B_1;
+    const double B1_1 = -14.688107978954948*A_1;
     coef[6] = A1_1;
     coef[7] = B1_1;
-    coef[8] = B1_1 - sigma_1*A1_1;
-    coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
+    coef[8] = B1_1;
+    coef[9] = -14.688107978954948*A1_1;
     // Mode 2 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
     // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2;
     coef[10] = A_2;
     coef[11] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
-    const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
+    const double A1_2 = B_2;
+    const double B1_2 = -175.31189202104505*A_2;
     coef[12] = A1_2;
     coef[13] = B1_2;
-    coef[14] = B1_2 - sigma_2*A1_2;
-    coef[15] = -kappa_2*A1_2 - sigma_2*B1_2;
+    coef[14] = B1_2;
+    coef[15] = -175.31189202104505*A1_2;
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -341,29 +319,25 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.26092582885470084;
-    const double qh_1 = coef[4]*eC_1 + coef[5]*eS_1;
-    const double dqh_1 = coef[6]*eC_1 + coef[7]*eS_1;
-    const double ddqh_1 = coef[8]*eC_1 + coef[9]*eS_1;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
-    const double q_1 = qh_1;
-    const double dq_1 = dqh_1;
-    const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_1 = coef[4]*eC_1 + coef[5]*eS_1;
+    const double dq_1 = coef[6]*eC_1 + coef[7]*eS_1;
+    const double ddq_1 = coef[8]*eC_1 + coef[9]*eS_1;
+    const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
+    const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
     const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
     // Mode 2 (undamped).
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_2 = __builtin_cos(omega_d_2*tau);
     const double eS_2 = __builtin_sin(omega_d_2*tau)*0.075525622165445616;
-    const double qh_2 = coef[10]*eC_2 + coef[11]*eS_2;
-    const double dqh_2 = coef[12]*eC_2 + coef[13]*eS_2;
-    const double ddqh_2 = coef[14]*eC_2 + coef[15]*eS_2;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_2 = __builtin_sqrt(dqh_2*dqh_2 + lambda_2*qh_2*qh_2);
-    const double q_2 = qh_2;
-    const double dq_2 = dqh_2;
-    const double ddq_2 = ddqh_2;
-    const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_2 = coef[10]*eC_2 + coef[11]*eS_2;
+    const double dq_2 = coef[12]*eC_2 + coef[13]*eS_2;
+    const double ddq_2 = coef[14]*eC_2 + coef[15]*eS_2;
+    const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
+    const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);
     const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.6127686665676223*q_1 + 0.79026233699508808*q_2 - 1.1346834856205477*sin_1;  // m1
@@ -429,6 +403,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_2_c1_s00 = {
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
 // mode 1: undamped, lambda = 25.0, omega = 5.0, c = 0.0, xi = 0.0
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -442,22 +418,11 @@ constexpr double kappa_1 = 25.0;
 constexpr double omega_d_1 = 5.0;
 constexpr double Omega_1 = 17.551500000000001;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 10.0*x0[0] - 11.772*sgn[1];  // m2
     // Modal forces p = V^T f.
@@ -473,8 +438,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     coef[2] = x_st_1;
     // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
     // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
-    const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.26496603013167724)*s_theta_1);
-    const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(-4.6505512778561338)*c_theta_1);
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) + static_cast<long double>(0.26496603013167724)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) + static_cast<long double>(4.6505512778561338)*c_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
     const double q0u_1 = 1.4142135623730951*xh_1;
     const double dq0u_1 = 1.4142135623730951*vh_1;
@@ -496,18 +461,18 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double B_1 = dqh0_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
-    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    const double A1_1 = B_1;
+    const double B1_1 = -25.0*A_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
-    coef[7] = B1_1 - sigma_1*A1_1;
-    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
+    coef[7] = B1_1;
+    coef[8] = -25.0*A1_1;
     coef[9] = x0[0];  // m1 is stuck
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -516,15 +481,13 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.20000000000000001;
-    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
-    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
-    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
-    const double q_1 = qh_1;
-    const double dq_1 = dqh_1;
-    const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dq_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
+    const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
     const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
@@ -597,6 +560,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_2_c0_s10 = {
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
 // mode 1: undamped, lambda = 75.0, omega = 8.6602540378443873, c = 0.0, xi = 0.0
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -610,22 +575,11 @@ constexpr double kappa_1 = 75.0;
 constexpr double omega_d_1 = 8.6602540378443873;
 constexpr double Omega_1 = 17.551500000000001;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_0
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = -20.0 + 110.0*x0[0] - 11.772*sgn[1];  // m2
     // Modal forces p = V^T f.
@@ -641,8 +595,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     coef[2] = x_st_1;
     // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
     // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
-    const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.32181223747221399)*s_theta_1);
-    const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(-5.6482874859935643)*c_theta_1);
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) + static_cast<long double>(0.32181223747221399)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) + static_cast<long double>(5.6482874859935643)*c_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
     const double q0u_1 = 1.4142135623730951*xh_1;
     const double dq0u_1 = 1.4142135623730951*vh_1;
@@ -664,18 +618,18 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double B_1 = dqh0_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
-    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    const double A1_1 = B_1;
+    const double B1_1 = -75.0*A_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
-    coef[7] = B1_1 - sigma_1*A1_1;
-    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
+    coef[7] = B1_1;
+    coef[8] = -75.0*A1_1;
     coef[9] = x0[0];  // m1 is stuck
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -684,15 +638,13 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.11547005383792514;
-    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
-    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
-    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
-    const double q_1 = qh_1;
-    const double dq_1 = dqh_1;
-    const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dq_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
+    const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
     const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
@@ -765,6 +717,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_2_c1_s10 = {
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
 // mode 1: undamped, lambda = 15.0, omega = 3.872983346207417, c = 0.0, xi = 0.0
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -778,22 +732,11 @@ constexpr double kappa_1 = 15.0;
 constexpr double omega_d_1 = 3.872983346207417;
 constexpr double Omega_1 = 17.551500000000001;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_1
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 10.0*x0[1] - 5.8860000000000001*sgn[0];  // m1
     // Modal forces p = V^T f.
@@ -809,14 +752,14 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     coef[2] = x_st_1;
     // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
     // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
-    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-0.76777356846487577)*s_theta_1);
-    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-13.475577786911268)*c_theta_1);
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) + static_cast<long double>(0.76777356846487577)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) + static_cast<long double>(13.475577786911268)*c_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
     const double q0u_1 = xh_1;
     const double dq0u_1 = vh_1;
     // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(1.0)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(1.0)*dq0u_1);
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(q0u_1));
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(dq0u_1));
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
@@ -832,18 +775,18 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double B_1 = dqh0_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
-    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    const double A1_1 = B_1;
+    const double B1_1 = -15.0*A_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
-    coef[7] = B1_1 - sigma_1*A1_1;
-    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
+    coef[7] = B1_1;
+    coef[8] = -15.0*A1_1;
     coef[9] = x0[1];  // m2 is stuck
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -852,15 +795,13 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.2581988897471611;
-    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
-    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
-    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
-    const double q_1 = qh_1;
-    const double dq_1 = dqh_1;
-    const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dq_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
+    const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
     const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + q_1 - 0.76777356846487577*sin_1;  // m1
@@ -933,6 +874,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_2_c0_s01 = {
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
 // mode 1: undamped, lambda = 115.0, omega = 10.723805294763608, c = 0.0, xi = 0.0
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -946,22 +889,11 @@ constexpr double kappa_1 = 115.0;
 constexpr double omega_d_1 = 10.723805294763608;
 constexpr double Omega_1 = 17.551500000000001;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (10 doubles):
 //  0:theta_1 1:c_theta_1 2:x_st_1 3:A_1 4:B_1 5:A1_1
 //  6:B1_1 7:A2_1 8:B2_1 9:x_stuck_1
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9).
     const double f_1 = 20.0 + 110.0*x0[1] - 5.8860000000000001*sgn[0];  // m1
     // Modal forces p = V^T f.
@@ -977,14 +909,14 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     coef[2] = x_st_1;
     // Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with
     // x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums).
-    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) - static_cast<long double>(-1.1654700606416992)*s_theta_1);
-    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) - static_cast<long double>(-20.455747769352786)*c_theta_1);
+    const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) + static_cast<long double>(1.1654700606416992)*s_theta_1);
+    const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) + static_cast<long double>(20.455747769352786)*c_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
     const double q0u_1 = xh_1;
     const double dq0u_1 = vh_1;
     // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(1.0)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(1.0)*dq0u_1);
+    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(q0u_1));
+    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(dq0u_1));
     const double q0_1 = q0u_1 + (rx_1);
     const double dq0_1 = dq0u_1 + (rv_1);
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
@@ -1000,18 +932,18 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double B_1 = dqh0_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
-    const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
+    const double A1_1 = B_1;
+    const double B1_1 = -115.0*A_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
-    coef[7] = B1_1 - sigma_1*A1_1;
-    coef[8] = -kappa_1*A1_1 - sigma_1*B1_1;
+    coef[7] = B1_1;
+    coef[8] = -115.0*A1_1;
     coef[9] = x0[1];  // m2 is stuck
 }
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -1020,15 +952,13 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     // eC = cos(omega tau), eS = sin(omega tau)/omega
     const double eC_1 = __builtin_cos(omega_d_1*tau);
     const double eS_1 = __builtin_sin(omega_d_1*tau)*0.093250480824031381;
-    const double qh_1 = coef[3]*eC_1 + coef[4]*eS_1;
-    const double dqh_1 = coef[5]*eC_1 + coef[6]*eS_1;
-    const double ddqh_1 = coef[7]*eC_1 + coef[8]*eS_1;
-    // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
-    const double r_1 = __builtin_sqrt(dqh_1*dqh_1 + lambda_1*qh_1*qh_1);
-    const double q_1 = qh_1;
-    const double dq_1 = dqh_1;
-    const double ddq_1 = ddqh_1;
-    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
+    // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
+    // never grows (c >= 0); the magnitudes of the terms.
+    const double q_1 = coef[3]*eC_1 + coef[4]*eS_1;
+    const double dq_1 = coef[5]*eC_1 + coef[6]*eS_1;
+    const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
+    const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
+    const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
     const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + q_1 - 1.1654700606416992*sin_1;  // m1
@@ -1100,6 +1030,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_2_c1_s01 = {
 // f = loads + preload - K_FS x_S - mu_k N sgn (paper Eq. 7-9). In modal coordinates
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -1109,21 +1041,10 @@ namespace k_seed_scenario_2_c0_s11 {
 // Modal constants.
 constexpr double Omega_1 = 17.551500000000001;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (4 doubles):
 //  0:theta_1 1:c_theta_1 2:x_stuck_0 3:x_stuck_1
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
     const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
@@ -1136,7 +1057,7 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
@@ -1218,6 +1139,8 @@ extern "C" const hsnc_kernel hsnc_kernel_seed_scenario_2_c0_s11 = {
 // f = loads + preload - K_FS x_S - mu_k N sgn (paper Eq. 7-9). In modal coordinates
 // x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).
 // Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).
+// The statements are the program of generator/lowering.cpp, printed in the order the
+// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.
 
 #include "kernel_abi.h"
 
@@ -1227,21 +1150,10 @@ namespace k_seed_scenario_2_c1_s11 {
 // Modal constants.
 constexpr double Omega_1 = 17.551500000000001;
 
-// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and
-// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.
-double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
-    const double hi = omega * t0;
-    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
-    const double n = __builtin_nearbyint(hi / 6.283185307179586);
-    double r = __builtin_fma(-n, 6.283185307179586, hi);
-    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
-    return __builtin_remainder(r + lo + phase, 6.283185307179586);
-}
-
 // Coefficient block (4 doubles):
 //  0:theta_1 1:c_theta_1 2:x_stuck_0 3:x_stuck_1
 void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn;
+    (void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;
     // Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.
     const double theta_1 = hsnc_phase(Omega_1, t0, t0_lo, 0.0);
     const double s_theta_1 = __builtin_sin(theta_1);
@@ -1254,7 +1166,7 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
 
 void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,
           double* bound, double* scale) {
-    (void)tau;
+    (void)tau; (void)coef;
     // Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);

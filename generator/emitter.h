@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "derivation.h"
+#include "program.h"
 
 namespace hsnc {
 
@@ -20,8 +21,11 @@ namespace hsnc {
 /// character of the model name outside [A-Za-z0-9_] written as '_'.
 std::string kernel_symbol(const Model& model, const Configuration& cfg);
 
-/// The kernel translation unit of derivation `d`.
+/// The kernel translation unit of derivation `d`: its program
+/// (generator/lowering.h) printed as C++.
 std::string emit_kernel(const Derivation& d);
+/// The same with the program given (lower(d) for the kernel of `d`).
+std::string emit_kernel(const Derivation& d, const Program& program);
 
 /// The `extern "C" const hsnc_kernel SYM = {...}` object closing an emitted
 /// kernel: the identity fields from `d` (ABI, model, hash, configuration,
@@ -32,8 +36,8 @@ std::string emit_kernel_object(const Derivation& d, const std::string& sym, cons
                                const std::vector<std::string>& rest);
 
 /// C++ source of `double hsnc_phase(omega, t0, t0_lo, phase)`: the forcing
-/// phase at a segment start, computed as GenericSolver does; every emitted
-/// kernel with forcing (folded or sweep) contains it.
+/// phase at a segment start, computed as GenericSolver does; sweep kernels
+/// with forcing contain it (folded ones call runtime/kernel_abi.h's).
 extern const char* const kPhaseFunctionSource;
 
 /// A registry source defining `const AotRegistry& hsnc::<function>()` over the

@@ -95,6 +95,39 @@ typedef struct hsnc_kernel {
     hsnc_configure_fn configure;    /**< null for folded kernels */
 } hsnc_kernel;
 
+/* ---- Helpers shared by the printed kernels and the interpreter ----
+ * The closed forms are straight-line code (runtime/program.h); what branches
+ * on data lives here, once, so that a kernel compiled by GCC (AOT), by Clang
+ * (JIT) and the interpreter (runtime/interpreted_solver.cpp) run the same
+ * code. Compiled with -ffp-contract=off everywhere: every fma below is
+ * written out. */
+
+/** Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding
+ *  kept (fma) and 2 pi in two parts (Cody-Waite), so a large t0 costs no
+ *  phase accuracy beyond its own. */
+static inline double hsnc_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = __builtin_nearbyint(hi / 6.283185307179586);
+    double r = __builtin_fma(-n, 6.283185307179586, hi);
+    r = __builtin_fma(-n, 2.4492935982947064e-16, r);
+    return __builtin_remainder(r + lo + phase, 6.283185307179586);
+}
+
+/** phi2(x) = (e^x - 1 - x)/x^2, phi2(0) = 1/2; its Taylor series where the
+ *  subtraction cancels (|x| < 0.5, 20 terms). */
+static inline double hsnc_phi2(double x) {
+    if (__builtin_fabs(x) < 0.5) {
+        double term = 0.5, sum = 0.5; /* x^k/(k+2)! */
+        for (int k = 1; k < 20; ++k) {
+            term *= x / (k + 2);
+            sum += term;
+        }
+        return sum;
+    }
+    return (__builtin_expm1(x) - x) / (x * x);
+}
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

@@ -1,0 +1,229 @@
+// hsnc program benchmark: the interpreter of a configuration's Program
+// (runtime/interpreted_solver.h) against the kernel printed from the same
+// program (ahead of time, JIT) and the generic Eigen solver, in one run:
+//   1. one SegmentSolver::eval, in nanoseconds, as bench/jit_bench.cpp section
+//      2 measures it (the same configurations, instants and setup);
+//   2. one long simulation per model (median of repeated runs after a
+//      warm-up, every solver built beforehand), with the switch counts.
+//
+//   build/hsnc_program_bench [--quick] [MODEL]   (MODEL: one of the cases only)
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "aot_registry.h"
+#include "derivation.h"
+#include "emitter.h"
+#include "engine.h"
+#include "generic_solver.h"
+#include "interpreted_solver.h"
+#include "jit_solver_provider.h"
+#include "kernel_solver.h"
+#include "lowering.h"
+#include "model_reader.h"
+#include "solver_provider.h"
+
+namespace {
+
+using namespace hsnc;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+class Counter : public Observer {
+public:
+    void on_sample(double, const double*, const double*) override {}
+    void on_event(double, EventKind, int, const double*, const double*) override { ++events; }
+    std::size_t events = 0;
+};
+
+// The generic solver, remembering the configurations the engine asks for.
+class Recorder : public SolverProvider {
+public:
+    explicit Recorder(const Model& m) : inner_(m) {}
+    SegmentSolver& solver(const Configuration& cfg) override {
+        if (std::find(seen.begin(), seen.end(), cfg) == seen.end()) seen.push_back(cfg);
+        return inner_.solver(cfg);
+    }
+    std::vector<Configuration> seen;
+
+private:
+    GenericSolverProvider inner_;
+};
+
+RunSummary run(const Model& m, SolverProvider& p, double t_end) {
+    EngineOptions eo;
+    eo.t_end = t_end;
+    eo.samples = false;
+    Counter c;
+    Engine engine(m, p);
+    return engine.run(eo, c);
+}
+
+// bench/jit_bench.cpp's 12-mass chain.
+std::string chain12() {
+    std::string t = "name = \"chain-12\"\n[damping]\nalpha = 0.02\nbeta = 0.0005\n";
+    for (int i = 1; i <= 12; ++i)
+        t += "[[mass]]\nname = \"m" + std::to_string(i) + "\"\nm = 1\nmu_k = 1.0\nmu_s = 1.5\n";
+    for (int i = 0; i <= 12; ++i)
+        t += "[[spring]]\nbetween = [\"" + (i == 0 ? std::string("ground") : "m" + std::to_string(i)) + "\", \"" +
+             (i == 12 ? std::string("ground") : "m" + std::to_string(i + 1)) + "\"]\nk = 100\n";
+    t += "[[contact]]\nbetween = [\"m3\", \"m4\"]\ngap = 0.02\nk = 1000\n";
+    t += "[[contact]]\nbetween = [\"m8\", \"m9\"]\ngap = 0.02\nk = 1000\n";
+    t += "[[contact]]\nbetween = [\"m12\", \"ground\"]\ngap = 0.02\nk = 1000\n";
+    t += "[[forcing]]\nomega = 5.0\namplitude = { m1 = 60.0 }\n";
+    return t;
+}
+
+struct Case {
+    std::string name;
+    Model model;
+    double t_end;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    bool quick = false;
+    std::string only;
+    for (int i = 1; i < argc; ++i) {
+        if (std::strcmp(argv[i], "--quick") == 0)
+            quick = true;
+        else
+            only = argv[i];
+    }
+    const std::size_t max_configs = quick ? 4 : 12;
+    const int reps = quick ? 3 : 7;
+    const std::string models = HSNC_SOURCE_DIR "/models/";
+    std::vector<Case> cases = {
+        {"seed-scenario-1", read_model(models + "seed-scenario-1.toml"), 2.0},
+        {"seed-scenario-2", read_model(models + "seed-scenario-2.toml"), 300.0},
+        {"chain-8", read_model(models + "chain-8.toml"), 20.0},
+        {"chain-12", parse_model(chain12(), "chain-12"), 4.0},
+    };
+    if (!only.empty())
+        cases.erase(std::remove_if(cases.begin(), cases.end(), [&](const Case& c) { return c.name != only; }),
+                    cases.end());
+    auto lowering = [](const Model& m) {
+        return [&m](const Configuration& cfg) { return lower(derive(m, cfg)); };
+    };
+    auto emitter = [](const Model& m) {
+        return [&m](const Configuration& cfg) {
+            return JitKernelSource{kernel_symbol(m, cfg), emit_kernel(derive(m, cfg))};
+        };
+    };
+
+    const int rounds = quick ? 15 : 51, burst = 2000;
+    std::printf("1. One SegmentSolver::eval (ns, median over the configurations a run visits, at most %zu;"
+                " taus spread over two mean segment lengths;\n   per configuration the four solvers in turn, %d rounds of %d evals, median over the rounds)\n",
+                max_configs, rounds, burst);
+    std::printf("%-16s %5s %8s %8s %9s %11s %11s %10s\n", "model", "cfgs", "aot_ns", "jit_ns", "interp_ns",
+                "generic_ns", "interp/gen", "interp/jit");
+    volatile double sink = 0;
+    for (const Case& c : cases) {
+        Recorder rec(c.model);
+        const RunSummary visit = run(c.model, rec, c.t_end);
+        std::vector<Configuration> cfgs = rec.seen;
+        if (cfgs.size() > max_configs) cfgs.resize(max_configs);
+        const double span = 2 * (c.t_end - c.model.t0) / static_cast<double>(std::max<std::size_t>(visit.segments, 1));
+        JitSolverProvider jit(c.model, emitter(c.model));  // no persistent cache
+        auto aot = has_aot_kernels(c.model, &aot_registry())
+                       ? make_solver_provider(c.model, KernelMode::automatic, &aot_registry())
+                       : nullptr;
+        GenericSolverProvider gen(c.model);
+        InterpretedSolverProvider interp(lowering(c.model));
+        const std::size_t n = c.model.dof(), nf = 64;
+        std::vector<double> x(n), v(n), a(n), g(nf), dg(nf), bound(nf), scale(nf);
+        const SegmentEval out{x.data(), v.data(), a.data(), g.data(), dg.data(), bound.data(), scale.data()};
+        // The solvers of one configuration in turn, in short bursts, so that a
+        // noisy neighbour (2 cores shared) slows all of them alike; per solver
+        // the median over the rounds.
+        auto time_config = [&](std::vector<SegmentSolver*> solvers, const Configuration& cfg) {
+            std::vector<double> x0 = c.model.x0, v0 = c.model.v0;
+            std::vector<signed char> sgn(n, 0);
+            for (std::size_t i = 0; i < n; ++i) {
+                if (cfg.stuck[i]) v0[i] = 0;
+                if (c.model.masses[i].has_friction && !cfg.stuck[i]) sgn[i] = 1;
+            }
+            std::vector<std::vector<double>> t(solvers.size());
+            for (SegmentSolver* s : solvers)  // mid-run, so that the forcing phases are as large as the engine sees them
+                if (s) s->setup(0.5 * (c.model.t0 + c.t_end), x0.data(), v0.data(), sgn.data());
+            for (int r = 0; r < rounds + 1; ++r)  // the first round warms up
+                for (std::size_t k = 0; k < solvers.size(); ++k) {
+                    if (!solvers[k]) continue;
+                    const auto start = Clock::now();
+                    for (int e = 0; e < burst; ++e) {
+                        solvers[k]->eval(span * e / burst, out);
+                        sink = sink + g[0];
+                    }
+                    if (r > 0) t[k].push_back(1e9 * seconds_since(start) / burst);
+                }
+            std::vector<double> med;
+            for (auto& tk : t) med.push_back(tk.empty() ? -1 : median(tk));
+            return med;
+        };
+        std::vector<double> ta, tj, ti, tg;
+        for (const Configuration& cfg : cfgs) {
+            SegmentSolver* a_s = nullptr;
+            if (aot) {
+                SegmentSolver& s = aot->solver(cfg);
+                if (dynamic_cast<KernelSolver*>(&s)) a_s = &s;
+            }
+            const std::vector<double> m = time_config({a_s, &jit.solver(cfg), &interp.solver(cfg), &gen.solver(cfg)}, cfg);
+            if (a_s) ta.push_back(m[0]);
+            tj.push_back(m[1]);
+            ti.push_back(m[2]);
+            tg.push_back(m[3]);
+        }
+        const double mi = median(ti), mj = median(tj), mg = median(tg);
+        char aot_text[32] = "-";
+        if (!ta.empty()) std::snprintf(aot_text, sizeof aot_text, "%.1f", median(ta));
+        std::printf("%-16s %5zu %8s %8.1f %9.1f %11.1f %11.2f %10.2f\n", c.name.c_str(), cfgs.size(), aot_text, mj, mi,
+                    mg, mi / mg, mi / mj);
+    }
+
+    std::printf("\n2. One long simulation, every solver built beforehand (median of %d runs after a warm-up)\n", reps);
+    std::printf("%-16s %7s %21s %9s %9s %10s %10s %11s %10s\n", "model", "t_end", "switches aot/jit/int/gen",
+                "aot_ms", "jit_ms", "interp_ms", "generic_ms", "interp/gen", "interp/jit");
+    for (const Case& c : cases) {
+        std::unique_ptr<SolverProvider> aot;
+        if (has_aot_kernels(c.model, &aot_registry()))
+            aot = make_solver_provider(c.model, KernelMode::automatic, &aot_registry());
+        JitSolverProvider jit(c.model, emitter(c.model));
+        InterpretedSolverProvider interp(lowering(c.model));
+        GenericSolverProvider gen(c.model);
+        SolverProvider* providers[4] = {aot.get(), &jit, &interp, &gen};
+        RunSummary s[4];
+        std::vector<double> t[4];
+        for (int p = 0; p < 4; ++p)
+            if (providers[p]) s[p] = run(c.model, *providers[p], c.t_end);  // warm-up: every solver built
+        for (int r = 0; r < reps; ++r)  // in turn, so that a noisy neighbour slows all alike
+            for (int p = 0; p < 4; ++p) {
+                if (!providers[p]) continue;
+                const auto start = Clock::now();
+                s[p] = run(c.model, *providers[p], c.t_end);
+                t[p].push_back(1e3 * seconds_since(start));
+            }
+        char sw[64], aot_ms[32] = "-";
+        if (aot) {
+            std::snprintf(sw, sizeof sw, "%zu/%zu/%zu/%zu", s[0].events, s[1].events, s[2].events, s[3].events);
+            std::snprintf(aot_ms, sizeof aot_ms, "%.3f", median(t[0]));
+        } else {
+            std::snprintf(sw, sizeof sw, "-/%zu/%zu/%zu", s[1].events, s[2].events, s[3].events);
+        }
+        const double mj = median(t[1]), mi = median(t[2]), mg = median(t[3]);
+        std::printf("%-16s %7g %21s %9s %9.3f %10.3f %10.3f %11.2f %10.2f\n", c.name.c_str(), c.t_end, sw, aot_ms, mj,
+                    mi, mg, mi / mg, mi / mj);
+    }
+    return sink == 12345.678 ? 1 : 0;
+}

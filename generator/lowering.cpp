@@ -1,0 +1,689 @@
+#include "lowering.h"
+
+#include <cmath>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "emitter.h"  // format_double, for comments
+
+namespace hsnc {
+
+using GiNaC::numeric;
+
+namespace {
+
+double dbl(const numeric& x) { return x.to_double(); }
+numeric num_sqrt(const numeric& x) { return GiNaC::ex_to<numeric>(GiNaC::sqrt(x).evalf()); }
+numeric entry(const GiNaC::matrix& m, int i, int k) { return GiNaC::ex_to<numeric>(m(i, k)); }
+std::string idx(std::size_t k) { return std::to_string(k + 1); }  // 1-based names: q_1, ...
+std::string body_name(const Model& m, int b) { return b == kGround ? "ground" : m.masses[b].name; }
+
+/// Terms of a linear combination in the order they are summed; exact zeros
+/// are left out (in the printed kernel and the interpreter alike).
+struct Lin {
+    std::vector<ProgramTerm> terms;
+    Lin& add(double c, std::uint32_t reg) {
+        if (c != 0.0) terms.push_back({c, reg});
+        return *this;
+    }
+    Lin& add(const numeric& c, std::uint32_t reg) { return add(dbl(c), reg); }
+};
+
+/// Appends registers and instructions to one body of a program.
+class Builder {
+public:
+    Builder(Program& p, ProgramBody& b) : p_(p), b_(b) {}
+
+    std::uint32_t reg(const std::string& name, RegisterKind kind) {
+        b_.names.push_back(name);
+        b_.kinds.push_back(kind);
+        return static_cast<std::uint32_t>(b_.names.size() - 1);
+    }
+    std::uint32_t temp(const std::string& name) { return reg(name, RegisterKind::temp); }
+
+    ProgramInstr& emit(ProgramInstr in) {
+        b_.code.push_back(std::move(in));
+        return b_.code.back();
+    }
+    ProgramInstr& lin(std::uint32_t dst, const Lin& l, std::uint32_t base = kNoRegister) {
+        ProgramInstr in{ProgramOp::lincomb};
+        in.dst = dst;
+        in.a = base;
+        in.first = static_cast<std::uint32_t>(p_.terms.size());
+        in.count = static_cast<std::uint32_t>(l.terms.size());
+        p_.terms.insert(p_.terms.end(), l.terms.begin(), l.terms.end());
+        return emit(std::move(in));
+    }
+    ProgramInstr& lin_ld(std::uint32_t dst, const Lin& l) {
+        ProgramInstr& in = lin(dst, l);
+        in.op = ProgramOp::lincomb_ld;
+        return in;
+    }
+    ProgramInstr& unary(ProgramOp op, std::uint32_t dst, std::uint32_t a) {
+        ProgramInstr in{op};
+        in.dst = dst;
+        in.a = a;
+        return emit(std::move(in));
+    }
+
+private:
+    Program& p_;
+    ProgramBody& b_;
+};
+
+std::uint32_t constant(Program& p, double v, const std::string& name = "") {
+    p.constants.push_back(v);
+    p.constant_names.push_back(name);
+    return static_cast<std::uint32_t>(p.constants.size() - 1);
+}
+
+ProgramInstr& with(ProgramInstr& in, const std::string& comment, const std::string& note = "") {
+    in.comment = comment;
+    in.note = note;
+    return in;
+}
+
+}  // namespace
+
+Program lower(const Derivation& d) {
+    const Model& model = *d.model;
+    const std::size_t n = model.dof(), nf = d.n_free(), nm = d.modes.size(), nh = d.harmonics.size();
+    Program p;
+    p.n_dof = static_cast<int>(n);
+    p.cfg = d.cfg;
+    p.switches = d.switches;
+    p.max_step = d.max_step;
+
+    // ---- constants: per mode (ModeConstant layout), per harmonic (Omega, phase) ----
+    std::vector<std::uint32_t> mode_k(nm), harm_k(nh);
+    for (std::size_t j = 0; j < nm; ++j) {
+        const Mode& m = d.modes[j];
+        const std::string J = idx(j);
+        double k[kModeConstants] = {};
+        std::string names[kModeConstants];
+        k[kModeLambda] = dbl(m.lambda), names[kModeLambda] = "lambda_" + J;
+        k[kModeSigma] = dbl(m.sigma), names[kModeSigma] = "sigma_" + J;
+        k[kModeKappa] = dbl(m.kappa), names[kModeKappa] = "kappa_" + J;
+        switch (m.regime) {
+            case Regime::undamped:
+            case Regime::underdamped:
+                k[kModeOmegaD] = dbl(m.omega_d), names[kModeOmegaD] = "omega_d_" + J;
+                k[kModeInvOmegaD] = 1.0 / dbl(m.omega_d);
+                break;
+            case Regime::overdamped:
+                k[kModeGamma] = dbl(m.gamma), names[kModeGamma] = "gamma_" + J;
+                k[kModeR1] = dbl(m.r1), names[kModeR1] = "r1_" + J;
+                k[kModeNegTwoGamma] = -2.0 * dbl(m.gamma);
+                k[kModeHalfInvGamma] = 0.5 / dbl(m.gamma);
+                break;
+            case Regime::rigid_damped:
+                k[kModeC] = dbl(m.c), names[kModeC] = "c_" + J;
+                k[kModeInvC] = 1.0 / dbl(m.c);
+                break;
+            default:
+                break;
+        }
+        mode_k[j] = static_cast<std::uint32_t>(p.constants.size());
+        for (std::uint32_t c = 0; c < kModeConstants; ++c) constant(p, k[c], names[c]);
+    }
+    for (std::size_t h = 0; h < nh; ++h) {
+        harm_k[h] = constant(p, dbl(d.harmonics[h].omega), "Omega_" + idx(h));
+        constant(p, dbl(d.harmonics[h].phase));
+    }
+
+    // ================= setup =================
+    Builder s(p, p.setup);
+    s.reg("1.0", RegisterKind::one);
+    s.reg("t0", RegisterKind::input);
+    s.reg("t0_lo", RegisterKind::input);
+    for (std::size_t i = 0; i < n; ++i) s.reg("x0[" + std::to_string(i) + "]", RegisterKind::input);
+    for (std::size_t i = 0; i < n; ++i) s.reg("v0[" + std::to_string(i) + "]", RegisterKind::input);
+    for (std::size_t i = 0; i < n; ++i) s.reg("sgn[" + std::to_string(i) + "]", RegisterKind::input);
+    const std::uint32_t ONE = 0;
+    auto x0 = [&](int i) { return Program::kSetupX0 + static_cast<std::uint32_t>(i); };
+    auto v0 = [&](int i) { return p.setup_v0() + static_cast<std::uint32_t>(i); };
+    auto sgn = [&](int i) { return p.setup_sgn() + static_cast<std::uint32_t>(i); };
+    // A coefficient slot: coef[k] = src at the end of setup, read by eval.
+    std::vector<std::uint32_t> slot_src;
+    auto slot = [&](const std::string& name, std::uint32_t src, const std::string& comment = "",
+                     const std::string& note = "") {
+        const std::uint32_t k = static_cast<std::uint32_t>(p.coef_names.size());
+        p.coef_names.push_back(name);
+        const std::uint32_t out = s.reg("coef[" + std::to_string(k) + "]", RegisterKind::output);
+        p.setup_coef.push_back(out);
+        with(s.unary(ProgramOp::copy, out, src), comment, note);
+        return k;
+    };
+    auto slot_lin = [&](const std::string& name, const Lin& l) {
+        const std::uint32_t k = static_cast<std::uint32_t>(p.coef_names.size());
+        p.coef_names.push_back(name);
+        const std::uint32_t out = s.reg("coef[" + std::to_string(k) + "]", RegisterKind::output);
+        p.setup_coef.push_back(out);
+        s.lin(out, l);
+        return k;
+    };
+    std::map<std::string, std::uint32_t> coef_of;  // slot name -> k
+
+    std::vector<std::uint32_t> f(nf), pj(nm);
+    if (nf > 0) {
+        for (std::size_t r = 0; r < nf; ++r) {
+            const int i = d.free_dofs[r];
+            Lin l;
+            l.add(d.f_const[i], ONE);
+            for (int st : d.stuck_dofs) l.add(-dbl(entry(d.K, i, st)), x0(st));
+            l.add(-dbl(d.mu_k_n[i]), sgn(i));
+            f[r] = s.temp("f_" + idx(r));
+            with(s.lin(f[r], l),
+                 r == 0 ? "Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9)." : "",
+                 model.masses[i].name);
+        }
+        for (std::size_t j = 0; j < nm; ++j) {
+            Lin l;
+            for (std::size_t r = 0; r < nf; ++r) l.add(d.modes[j].v[r], f[r]);
+            pj[j] = s.temp("p_" + idx(j));
+            with(s.lin(pj[j], l), j == 0 ? "Modal forces p = V^T f." : "");
+        }
+    }
+    // Forcing phases at the segment start.
+    std::vector<std::uint32_t> s_theta(nh), c_theta(nh);
+    for (std::size_t h = 0; h < nh; ++h) {
+        const std::string H = idx(h);
+        const std::uint32_t theta = s.temp("theta_" + H);
+        ProgramInstr in{ProgramOp::phase};
+        in.dst = theta;
+        in.a = Program::kSetupT0;
+        in.b = Program::kSetupT0Lo;
+        in.first = harm_k[h];
+        if (h == 0) in.comment = "Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.";
+        s.emit(in);
+        s_theta[h] = s.temp("s_theta_" + H);
+        s.unary(ProgramOp::sin, s_theta[h], theta);
+        c_theta[h] = s.temp("c_theta_" + H);
+        s.unary(ProgramOp::cos, c_theta[h], theta);
+        coef_of["theta_" + H] = slot("theta_" + H, theta);
+        coef_of["c_theta_" + H] = slot("c_theta_" + H, c_theta[h]);
+    }
+    std::vector<std::uint32_t> x_st(nf);
+    for (std::size_t r = 0; r < nf; ++r) {
+        Lin l;
+        for (std::size_t j = 0; j < nm; ++j)
+            if (!d.modes[j].lambda.is_zero()) l.add(d.modes[j].v[r] / d.modes[j].lambda, pj[j]);
+        x_st[r] = s.temp("x_st_" + idx(r));
+        with(s.lin(x_st[r], l), r == 0 ? "Static offset x_st = V (p / lambda) over the elastic modes." : "",
+             model.masses[d.free_dofs[r]].name);
+        coef_of["x_st_" + idx(r)] = slot("x_st_" + idx(r), x_st[r]);
+    }
+    std::vector<std::uint32_t> qh0(nm), dqh0(nm);
+    if (nf > 0) {
+        // The homogeneous initial state from the physical residual x0 - x_p(0), where
+        // x_p(0) = x_st + sum_h (xs_h sin theta_h + xc_h cos theta_h) uses exactly the
+        // constants eval adds back at tau = 0 (a modal q(0) - q_p(0) made setup subtract a
+        // slightly different particular part than eval adds: a drift per restart,
+        // tests/test_restart_drift.cpp).
+        std::vector<std::uint32_t> xh(nf), vh(nf);
+        for (std::size_t r = 0; r < nf; ++r) {
+            const int i = d.free_dofs[r];
+            Lin x, v;
+            x.add(1.0, x0(i)).add(-1.0, x_st[r]);
+            v.add(1.0, v0(i));
+            for (std::size_t h = 0; h < nh; ++h) {
+                const HarmonicData& hd = d.harmonics[h];
+                const double W = dbl(hd.omega), xs = dbl(hd.xs[r]), xc = dbl(hd.xc[r]);
+                x.add(-xs, s_theta[h]).add(-xc, c_theta[h]);
+                v.add(-(W * xs), c_theta[h]).add(W * xc, s_theta[h]);
+            }
+            xh[r] = s.temp("xh_" + idx(r));
+            with(s.lin_ld(xh[r], x),
+                 r == 0 ? "Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with\n"
+                          "x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums)."
+                        : "");
+            vh[r] = s.temp("vh_" + idx(r));
+            s.lin_ld(vh[r], v);
+        }
+        std::vector<std::uint32_t> q0u(nm), dq0u(nm);
+        for (std::size_t j = 0; j < nm; ++j) {
+            Lin q, dq;
+            for (std::size_t r = 0; r < nf; ++r) {
+                q.add(d.modes[j].w[r], xh[r]);
+                dq.add(d.modes[j].w[r], vh[r]);
+            }
+            q0u[j] = s.temp("q0u_" + idx(j));
+            with(s.lin(q0u[j], q), j == 0 ? "Its modal coordinates q = W xh, q' = W vh." : "");
+            dq0u[j] = s.temp("dq0u_" + idx(j));
+            s.lin(dq0u[j], dq);
+        }
+        // V and W are inverse only to rounding, so xh -> W xh -> V W xh is the fixed
+        // matrix I + E (E ~ eps): applied at every segment start it is a bias (a steady
+        // energy gain), not noise. One refinement against the residual removes it.
+        std::vector<std::uint32_t> rx(nf), rv(nf);
+        for (std::size_t r = 0; r < nf; ++r) {
+            Lin x, v;
+            x.add(1.0, xh[r]);
+            v.add(1.0, vh[r]);
+            for (std::size_t j = 0; j < nm; ++j) {
+                x.add(-dbl(d.modes[j].v[r]), q0u[j]);
+                v.add(-dbl(d.modes[j].v[r]), dq0u[j]);
+            }
+            rx[r] = s.temp("rx_" + idx(r));
+            with(s.lin_ld(rx[r], x),
+                 r == 0 ? "One refinement of q against the residuals r = xh - V q (long double): removes the bias of "
+                          "V W = I + E."
+                        : "");
+            rv[r] = s.temp("rv_" + idx(r));
+            s.lin_ld(rv[r], v);
+        }
+        std::vector<std::uint32_t> q0(nm), dq0(nm);
+        for (std::size_t j = 0; j < nm; ++j) {
+            Lin q, dq;
+            for (std::size_t r = 0; r < nf; ++r) {
+                q.add(d.modes[j].w[r], rx[r]);
+                dq.add(d.modes[j].w[r], rv[r]);
+            }
+            q0[j] = s.temp("q0_" + idx(j));
+            s.lin(q0[j], q, q0u[j]);
+            dq0[j] = s.temp("dq0_" + idx(j));
+            s.lin(dq0[j], dq, dq0u[j]);
+        }
+        // A second refinement, against what eval returns at tau = 0: x(0) and v(0) with
+        // eval's constants in eval's order, the residuals x0 - x(0), v0 - v(0) (long
+        // double) mapped back with W. x(0) is a sum of terms larger than x, so without it
+        // a state restarted again and again kept moving the same way
+        // (tests/test_restart_drift.cpp).
+        std::vector<std::uint32_t> ex(nf), ev(nf);
+        for (std::size_t r = 0; r < nf; ++r) {
+            const int i = d.free_dofs[r];
+            Lin x, v;
+            x.add(1.0, x_st[r]);
+            for (std::size_t j = 0; j < nm; ++j) {
+                x.add(d.modes[j].v[r], q0[j]);
+                v.add(d.modes[j].v[r], dq0[j]);
+            }
+            for (std::size_t h = 0; h < nh; ++h) {
+                const HarmonicData& hd = d.harmonics[h];
+                const double W = dbl(hd.omega), xs = dbl(hd.xs[r]), xc = dbl(hd.xc[r]);
+                x.add(xs, s_theta[h]).add(xc, c_theta[h]);
+                v.add(W * xs, c_theta[h]).add(-W * xc, s_theta[h]);
+            }
+            const std::uint32_t xe = s.temp("xe_" + idx(r)), ve = s.temp("ve_" + idx(r));
+            with(s.lin(xe, x),
+                 r == 0 ? "Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), "
+                          "v0 - v(0)."
+                        : "");
+            s.lin(ve, v);
+            ex[r] = s.temp("ex_" + idx(r));
+            s.lin_ld(ex[r], Lin().add(1.0, x0(i)).add(-1.0, xe));
+            ev[r] = s.temp("ev_" + idx(r));
+            s.lin_ld(ev[r], Lin().add(1.0, v0(i)).add(-1.0, ve));
+        }
+        for (std::size_t j = 0; j < nm; ++j) {
+            Lin q, dq;
+            for (std::size_t r = 0; r < nf; ++r) {
+                q.add(d.modes[j].w[r], ex[r]);
+                dq.add(d.modes[j].w[r], ev[r]);
+            }
+            qh0[j] = s.temp("qh0_" + idx(j));
+            s.lin(qh0[j], q, q0[j]);
+            dqh0[j] = s.temp("dqh0_" + idx(j));
+            s.lin(dqh0[j], dq, dq0[j]);
+        }
+    }
+    // Per mode: A = q_h(0), B = q_h'(0) + sigma A and the derivative pairs.
+    std::vector<std::uint32_t> mode_coef(nm);
+    for (std::size_t j = 0; j < nm; ++j) {
+        const Mode& m = d.modes[j];
+        const std::string J = idx(j);
+        const double sigma = dbl(m.sigma), kappa = dbl(m.kappa);
+        const std::string comment = "Mode " + J + " (" + regime_name(m.regime) +
+                                    "): A = q_h(0), B = q_h'(0) + sigma A (the particular\n"
+                                    "parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.";
+        bool commented = false;
+        if (m.regime == Regime::rigid || m.regime == Regime::rigid_damped) {
+            coef_of["p_" + J] = slot("p_" + J, pj[j], comment,
+                                     m.regime == Regime::rigid ? "q_p = p tau^2 / 2" : "q_p = p tau^2 phi2(-c tau)");
+            commented = true;
+        }
+        const std::uint32_t A = s.temp("A_" + J), B = s.temp("B_" + J);
+        with(s.unary(ProgramOp::copy, A, qh0[j]), commented ? "" : comment);
+        s.lin(B, Lin().add(1.0, dqh0[j]).add(sigma, A));
+        mode_coef[j] = slot("A_" + J, A);
+        slot("B_" + J, B);
+        const std::uint32_t A1 = s.temp("A1_" + J), B1 = s.temp("B1_" + J);
+        s.lin(A1, Lin().add(1.0, B).add(-sigma, A));
+        s.lin(B1, Lin().add(-kappa, A).add(-sigma, B));
+        slot("A1_" + J, A1);
+        slot("B1_" + J, B1);
+        slot_lin("A2_" + J, Lin().add(1.0, B1).add(-sigma, A1));
+        slot_lin("B2_" + J, Lin().add(-kappa, A1).add(-sigma, B1));
+    }
+    for (int st : d.stuck_dofs)
+        coef_of["x_stuck_" + std::to_string(st)] =
+            slot("x_stuck_" + std::to_string(st), x0(st), "", model.masses[st].name + " is stuck");
+    p.n_coef = static_cast<int>(p.coef_names.size());
+
+    // ================= eval =================
+    Builder e(p, p.eval);
+    e.reg("1.0", RegisterKind::one);
+    const std::uint32_t TAU = e.reg("tau", RegisterKind::input);
+    for (int k = 0; k < p.n_coef; ++k) e.reg("coef[" + std::to_string(k) + "]", RegisterKind::input);
+    auto C = [&](const std::string& name) { return Program::kEvalCoef + coef_of.at(name); };
+    const char* arrays[] = {"x", "v", "a", "g", "dg", "bound", "scale"};
+    std::uint32_t base[7];
+    for (int k = 0; k < 7; ++k) {
+        base[k] = static_cast<std::uint32_t>(p.eval.registers());
+        const std::size_t len = k < 3 ? n : d.switches.size();
+        for (std::size_t i = 0; i < len; ++i)
+            e.reg(std::string(arrays[k]) + "[" + std::to_string(i) + "]", RegisterKind::output);
+    }
+    auto X = [&](int i) { return base[0] + static_cast<std::uint32_t>(i); };
+    auto Vr = [&](int i) { return base[1] + static_cast<std::uint32_t>(i); };
+    auto Ar = [&](int i) { return base[2] + static_cast<std::uint32_t>(i); };
+    auto G = [&](std::size_t f, int k) { return base[k] + static_cast<std::uint32_t>(f); };
+
+    std::vector<std::uint32_t> sin_h(nh), cos_h(nh);
+    for (std::size_t h = 0; h < nh; ++h) {
+        const std::string H = idx(h);
+        const std::uint32_t r0 = e.temp("arg_" + H);
+        e.temp("sin_" + H);
+        e.temp("cos_" + H);
+        sin_h[h] = r0 + 1;
+        cos_h[h] = r0 + 2;
+        ProgramInstr in{ProgramOp::harmonic};
+        in.dst = r0;
+        in.a = C("theta_" + H);
+        in.b = TAU;
+        in.first = harm_k[h];
+        if (h == 0) in.comment = "Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.";
+        e.emit(in);
+    }
+    std::vector<std::uint32_t> mb(nm);  // mode blocks
+    for (std::size_t j = 0; j < nm; ++j) {
+        const Mode& m = d.modes[j];
+        const std::string J = idx(j);
+        const char* names[kModeRegisters] = {"eC_", "eS_", "q_", "dq_", "ddq_", "r_", "mq_", "mdq_", "e_", "m_"};
+        if (m.regime == Regime::rigid_damped) names[kModeAux] = "m_";
+        mb[j] = static_cast<std::uint32_t>(p.eval.registers());
+        for (const char* nm_ : names) e.temp(nm_ + J);
+        bool resonant = false;
+        for (std::size_t h = 0; h < nh; ++h) resonant |= d.harmonics[h].modal[j].resonant;
+        ProgramInstr in{ProgramOp::mode};
+        in.regime = static_cast<std::uint8_t>(m.regime);
+        in.accumulates = resonant || m.regime == Regime::rigid || m.regime == Regime::rigid_damped;
+        in.dst = mb[j];
+        in.a = Program::kEvalCoef + mode_coef[j];
+        in.b = TAU;
+        in.first = mode_k[j];
+        in.comment = "Mode " + J + " (" + regime_name(m.regime) + ").";
+        e.emit(in);
+        if (m.regime == Regime::rigid) {
+            ProgramInstr pi{ProgramOp::rigid_particular};
+            pi.a = C("p_" + J);
+            pi.b = TAU;
+            pi.c = mb[j];
+            pi.comment = "particular q_p = p tau^2/2";
+            e.emit(pi);
+        } else if (m.regime == Regime::rigid_damped) {
+            // One form for every c > 0, exact as c -> 0: the split (p/c) tau + (q'(0) - p/c) eS
+            // lost eps |p/c| (6e-10 at alpha = 1e-6; tests/test_sweep_kernels.cpp, floating pair).
+            ProgramInstr pi{ProgramOp::rigid_damped_particular};
+            pi.dst = e.temp("qp_" + J);
+            pi.a = C("p_" + J);
+            pi.b = TAU;
+            pi.c = mb[j];
+            pi.first = mode_k[j] + kModeC;
+            pi.comment = "particular q_p = p tau^2 phi2(-c tau) from rest: q_p' = p eS, q_p'' = p e^{-c tau}";
+            e.emit(pi);
+        }
+        for (std::size_t h = 0; h < nh; ++h) {
+            const ModalHarmonic& mh = d.harmonics[h].modal[j];
+            if (!mh.resonant) continue;
+            const std::string JH = J + "_" + idx(h), H = idx(h);
+            const numeric W = d.harmonics[h].omega;
+            const double Q = dbl(mh.P / (m.omega + W)), hw = dbl((W - m.omega) / 2), wb = dbl((W + m.omega) / 2);
+            ProgramInstr ri{ProgramOp::resonant};
+            ri.dst = static_cast<std::uint32_t>(p.eval.registers());
+            for (const char* nm_ : {"w_", "dw_", "Cb_", "Sb_", "y_", "dy_", "ddy_"}) e.temp(nm_ + JH);
+            ri.a = C("theta_" + H);
+            ri.b = TAU;
+            ri.c = mb[j];
+            ri.d = C("c_theta_" + H);
+            ri.first = static_cast<std::uint32_t>(p.constants.size());
+            const double k[kResConstants] = {hw, hw == 0.0 ? 0.0 : 1.0 / hw, wb, Q, hw * hw + wb * wb, 2 * wb,
+                                              dbl(m.lambda)};
+            for (double c : k) constant(p, c);
+            ri.comment = "Resonant response to harmonic " + H +
+                         " from rest, stable through Omega = omega:\n"
+                         "y = Q [-w cos(wbar tau + theta) + cos(theta) sin(omega tau)/omega], Q = P/(omega + Omega),\n"
+                         "w = sin(h tau)/h -> tau (h = (Omega - omega)/2, wbar = (Omega + omega)/2): the secular term.";
+            e.emit(ri);
+        }
+    }
+
+    // x, v, a of every mass and the magnitudes of their terms.
+    std::vector<std::uint32_t> mx(n), mv(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::string I = std::to_string(i);
+        const int ii = static_cast<int>(i);
+        const int r = d.free_index(ii);
+        const std::string comment =
+            i == 0 ? "Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest." : "";
+        if (r < 0) {
+            const std::uint32_t xs = C("x_stuck_" + I);
+            with(e.unary(ProgramOp::copy, X(ii), xs), comment, model.masses[i].name + " (stuck)");
+            e.lin(Vr(ii), Lin());
+            e.lin(Ar(ii), Lin());
+            mx[i] = e.temp("mx_" + I);
+            e.unary(ProgramOp::abs, mx[i], xs);
+            mv[i] = e.temp("mv_" + I);
+            e.lin(mv[i], Lin());
+            continue;
+        }
+        const std::size_t rr = static_cast<std::size_t>(r);
+        Lin modal, tx, tv, ta, tmx, tmv;
+        double hx = 0.0, hv = 0.0;  // magnitudes of the harmonic terms
+        for (std::size_t j = 0; j < nm; ++j) modal.add(d.modes[j].v[rr], mb[j]);
+        for (std::size_t h = 0; h < nh; ++h) {
+            const HarmonicData& hd = d.harmonics[h];
+            const double W = dbl(hd.omega), xs = dbl(hd.xs[rr]), xc = dbl(hd.xc[rr]);
+            tx.add(xs, sin_h[h]).add(xc, cos_h[h]);
+            tv.add(W * xs, cos_h[h]).add(-W * xc, sin_h[h]);
+            ta.add(-W * W * xs, sin_h[h]).add(-W * W * xc, cos_h[h]);
+            hx += std::fabs(xs) + std::fabs(xc);
+            hv += W * (std::fabs(xs) + std::fabs(xc));
+        }
+        tmx.add(hx, ONE);
+        tmv.add(hv, ONE);
+        mx[i] = e.temp("mx_" + I);
+        mv[i] = e.temp("mv_" + I);
+        ProgramInstr in{ProgramOp::mass_state};
+        in.dst = X(ii);
+        in.b = Vr(ii);
+        in.c = Ar(ii);
+        in.d = mx[i];
+        in.a = C("x_st_" + idx(rr));
+        in.first = static_cast<std::uint32_t>(p.terms.size());
+        in.count = static_cast<std::uint32_t>(modal.terms.size());
+        p.terms.insert(p.terms.end(), modal.terms.begin(), modal.terms.end());
+        const Lin* tails[5] = {&tx, &tv, &ta, &tmx, &tmv};
+        for (int k = 0; k < 5; ++k) {
+            in.tail[k] = static_cast<std::uint32_t>(tails[k]->terms.size());
+            p.terms.insert(p.terms.end(), tails[k]->terms.begin(), tails[k]->terms.end());
+        }
+        with(e.emit(in), comment, model.masses[i].name);
+    }
+
+    // Switch functions.
+    auto V = [&](int mass, std::size_t j) -> numeric {  // V_ij, 0 for stuck masses and ground
+        if (mass == kGround) return 0;
+        const int r = d.free_index(mass);
+        return r < 0 ? numeric(0) : d.modes[j].v[r];
+    };
+    std::uint32_t s_end = kNoRegister;
+    std::vector<std::uint32_t> abs_p(nm, kNoRegister);
+    for (std::size_t f = 0; f < d.switches.size(); ++f) {
+        const SwitchFunction& sf = d.switches[f];
+        const std::string F = std::to_string(f);
+        std::string comment = f == 0 ? "Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and "
+                                       "term magnitudes.\n"
+                                       "bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + "
+                                       "lambda_j)) sqrt(2 E_j)\n"
+                                       "      + sum_h R_h Omega_h^2 (+ rigid-body and secular terms), for g = "
+                                       "alpha.q + beta.q' + ...\n"
+                                     : "";
+        // g as a combination of the state: alpha (on q) and beta (on q') per mode, and the
+        // harmonic sinusoid Gs sin + Gc cos of the non-resonant particular parts.
+        std::vector<numeric> al(nm, 0), be(nm, 0);
+        std::vector<numeric> Gs(nh, 0), Gc(nh, 0);
+        Lin g, dg, sc;
+        if (sf.kind == SwitchKind::gap) {
+            const Contact& ct = model.contacts[sf.element];
+            comment += "g_" + F + ": gap of contact " + ct.name + " = x[" + body_name(model, ct.a) + "] - x[" +
+                       body_name(model, ct.b) + "] - " + format_double(ct.gap);
+            if (ct.a != kGround) {
+                g.add(1.0, X(ct.a));
+                dg.add(1.0, Vr(ct.a));
+                sc.add(1.0, mx[ct.a]);
+            }
+            if (ct.b != kGround) {
+                g.add(-1.0, X(ct.b));
+                dg.add(-1.0, Vr(ct.b));
+                sc.add(1.0, mx[ct.b]);
+            }
+            g.add(-ct.gap, ONE);
+            sc.add(std::fabs(ct.gap), ONE);
+            for (std::size_t j = 0; j < nm; ++j) al[j] = V(ct.a, j) - V(ct.b, j);
+            for (std::size_t h = 0; h < nh; ++h) {
+                auto xsb = [&](int b, bool sine) -> numeric {
+                    if (b == kGround || d.free_index(b) < 0) return 0;
+                    return sine ? d.harmonics[h].xs[d.free_index(b)] : d.harmonics[h].xc[d.free_index(b)];
+                };
+                Gs[h] = xsb(ct.a, true) - xsb(ct.b, true);
+                Gc[h] = xsb(ct.a, false) - xsb(ct.b, false);
+            }
+        } else if (sf.kind == SwitchKind::velocity) {
+            const int i = sf.element;
+            comment += "g_" + F + ": velocity of " + model.masses[i].name + " (sliding)";
+            g.add(1.0, Vr(i));
+            dg.add(1.0, Ar(i));
+            sc.add(1.0, mv[i]);
+            const int r = d.free_index(i);
+            for (std::size_t j = 0; j < nm; ++j) be[j] = d.modes[j].v[r];
+            for (std::size_t h = 0; h < nh; ++h) {
+                Gs[h] = -d.harmonics[h].omega * d.harmonics[h].xc[r];
+                Gc[h] = d.harmonics[h].omega * d.harmonics[h].xs[r];
+            }
+        } else {
+            const int i = sf.element;
+            const bool pos = sf.kind == SwitchKind::release_pos;
+            const Mass& ms = model.masses[i];
+            const double mu_s_n = dbl(exact(ms.mu_s) * exact(ms.m) * exact(model.g));
+            comment += std::string("g_") + F + ": " + (pos ? "A" : "-A") + " - mu_s N of stuck " + ms.name +
+                       ", A = -K x - C v + f + sum_h F_h sin (force but friction)";
+            Lin A, dA;
+            A.add(d.f_const[i], ONE);
+            double const_mag = std::fabs(dbl(d.f_const[i])) + mu_s_n;
+            for (std::size_t k = 0; k < n; ++k) {
+                const int kk = static_cast<int>(k);
+                const double Kik = dbl(entry(d.K, i, kk)), Cik = dbl(entry(d.C, i, kk));
+                A.add(-Kik, X(kk));
+                dA.add(-Kik, Vr(kk));
+                sc.add(std::fabs(Kik), mx[k]);
+                if (!d.cfg.stuck[k]) {
+                    A.add(-Cik, Vr(kk));
+                    dA.add(-Cik, Ar(kk));
+                    sc.add(std::fabs(Cik), mv[k]);
+                }
+            }
+            for (std::size_t h = 0; h < nh; ++h) {
+                const double F0 = dbl(d.harmonics[h].amplitude[i]), W = dbl(d.harmonics[h].omega);
+                A.add(F0, sin_h[h]);
+                dA.add(F0 * W, cos_h[h]);
+                const_mag += std::fabs(F0);
+            }
+            sc.add(const_mag, ONE);
+            const std::string I = std::to_string(i);
+            // release_pos comes first and computes A_i; release_neg reuses it.
+            std::uint32_t af = kNoRegister, daf = kNoRegister;
+            for (std::uint32_t r = 0; r < p.eval.registers(); ++r)
+                if (p.eval.names[r] == "A_force_" + I) af = r, daf = r + 1;
+            if (af == kNoRegister) {
+                af = e.temp("A_force_" + I);
+                daf = e.temp("dA_force_" + I);
+                with(e.lin(af, A), comment);
+                comment.clear();
+                e.lin(daf, dA);
+            }
+            const double sgn_f = pos ? 1.0 : -1.0;
+            g.add(sgn_f, af).add(-mu_s_n, ONE);
+            dg.add(sgn_f, daf);
+            for (std::size_t j = 0; j < nm; ++j)
+                for (std::size_t r = 0; r < nf; ++r) {
+                    const int k = d.free_dofs[r];
+                    al[j] -= entry(d.K, i, k) * d.modes[j].v[r];
+                    be[j] -= entry(d.C, i, k) * d.modes[j].v[r];
+                }
+            for (std::size_t h = 0; h < nh; ++h) {
+                const HarmonicData& hd = d.harmonics[h];
+                Gs[h] = hd.amplitude[i];
+                for (std::size_t r = 0; r < nf; ++r) {
+                    const int k = d.free_dofs[r];
+                    const numeric Kik = entry(d.K, i, k), Cik = entry(d.C, i, k);
+                    Gs[h] += -Kik * hd.xs[r] + Cik * hd.omega * hd.xc[r];
+                    Gc[h] += -Kik * hd.xc[r] - Cik * hd.omega * hd.xs[r];
+                }
+            }
+        }
+        with(e.lin(G(f, 3), g), comment);
+        e.lin(G(f, 4), dg);
+        // bound
+        numeric konst = 0;
+        for (std::size_t h = 0; h < nh; ++h) {
+            const numeric W = d.harmonics[h].omega;
+            konst += num_sqrt(Gs[h] * Gs[h] + Gc[h] * Gc[h]) * W * W;
+        }
+        Lin b;
+        b.add(konst, ONE);
+        for (std::size_t j = 0; j < nm; ++j) {
+            const Mode& m = d.modes[j];
+            const numeric H = abs(al[j]) * (m.c + m.omega) + abs(be[j]) * (m.c * (m.c + m.omega) + m.lambda);
+            b.add(H, mb[j] + kModeR);
+            if (m.regime == Regime::rigid || m.regime == Regime::rigid_damped) {  // |q_p''| <= |p|, |q_p'''| <= c |p|
+                const double cp = dbl(abs(al[j]) + abs(be[j]) * m.c);
+                if (cp != 0.0 && abs_p[j] == kNoRegister) {
+                    abs_p[j] = e.temp("p_abs_" + idx(j));
+                    e.unary(ProgramOp::abs, abs_p[j], C("p_" + idx(j)));
+                }
+                b.add(cp, abs_p[j]);
+            }
+            for (std::size_t h = 0; h < nh; ++h) {
+                const ModalHarmonic& mh = d.harmonics[h].modal[j];
+                if (!mh.resonant || (al[j].is_zero() && be[j].is_zero())) continue;
+                if (s_end == kNoRegister) {
+                    // Secular terms are bounded at the end of the step: computed first in eval.
+                    s_end = e.temp("s_end");
+                    ProgramInstr se{ProgramOp::lincomb};
+                    se.dst = s_end;
+                    se.first = static_cast<std::uint32_t>(p.terms.size());
+                    se.count = 2;
+                    p.terms.push_back({1.0, TAU});
+                    p.terms.push_back({d.max_step, ONE});
+                    se.comment = "Secular terms are bounded at the end of the step, s_end = tau + max_step.";
+                    p.eval.code.insert(p.eval.code.begin(), se);
+                }
+                const numeric W = d.harmonics[h].omega, Q = abs(mh.P / (m.omega + W));
+                const numeric hw = abs(W - m.omega) / 2, wb = (W + m.omega) / 2;
+                // |y''| <= Q ((h^2 + wbar^2) s + 2 wbar + omega), |y'''| <= Q (wbar^3 s + 3 wbar^2 + 3 h wbar + h^2 + omega^2)
+                const numeric slope = abs(al[j]) * Q * (hw * hw + wb * wb) + abs(be[j]) * Q * wb * wb * wb;
+                const numeric off = abs(al[j]) * Q * (2 * wb + m.omega) +
+                                    abs(be[j]) * Q * (3 * wb * wb + 3 * hw * wb + hw * hw + m.lambda);
+                b.add(slope, s_end).add(off, ONE);
+            }
+        }
+        e.lin(G(f, 5), b);
+        e.lin(G(f, 6), sc);
+    }
+    return p;
+}
+
+}  // namespace hsnc

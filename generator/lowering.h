@@ -1,0 +1,17 @@
+// hsnc -- lowering: a configuration's Derivation (40 digits) to the Program
+// (runtime/program.h) that both the emitter prints and the interpreter runs.
+//
+// Every constant is rounded once from the derivation's 40-digit value; every
+// sum is written in the order in which it is computed. The maths of each
+// block is in the comments of lowering.cpp and, printed, in each kernel.
+#pragma once
+
+#include "derivation.h"
+#include "program.h"
+
+namespace hsnc {
+
+/// The setup and eval programs of `d`.
+Program lower(const Derivation& d);
+
+}  // namespace hsnc

@@ -1,0 +1,348 @@
+// One closed form, printed and interpreted: the Program of a configuration
+// (runtime/program.h, generator/lowering.h) printed as C++ and compiled by GCC
+// ahead of time or by Clang in process, and run by the interpreter
+// (runtime/interpreted_solver.h), gives the same bits -- every output of
+// setup and eval compared with memcmp, whole runs compared as CSV bytes. The
+// generic (Eigen) solver is an independent implementation: it agrees to a
+// tolerance, not to the bit.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+#include <unistd.h>
+
+#include "aot_registry.h"
+#include "csv_writer.h"
+#include "derivation.h"
+#include "emitter.h"
+#include "engine.h"
+#include "generic_solver.h"
+#include "interpreted_solver.h"
+#include "jit.h"
+#include "jit_solver_provider.h"
+#include "kernel_set.h"
+#include "kernel_solver.h"
+#include "lowering.h"
+#include "model_hash.h"
+#include "model_reader.h"
+#include "random_model.h"
+#include "sample_models.h"
+#include "solver_provider.h"
+
+namespace hsnc {
+const AotRegistry& sample_registry();  // tests' build-time kernels (hsnc_gen --samples)
+
+namespace {
+
+const char* const kBundled[] = {"bilinear-1dof", "chain-8", "coulomb-1dof", "seed-scenario-1", "seed-scenario-2"};
+
+Model bundled(const std::string& stem) { return read_model(std::string(HSNC_SOURCE_DIR) + "/models/" + stem + ".toml"); }
+
+/// Everything setup and eval write, for one segment at a few instants.
+struct Trace {
+    std::vector<double> coef;
+    std::vector<double> out;  // x, v, a, g, dg, bound, scale at each tau, concatenated
+};
+
+const double kTaus[] = {0.0, 1e-9, 1e-3, 0.07, 0.4, 1.1, 2.5, 17.0};
+
+// A legal segment start for cfg: stuck masses at rest, sliding masses moving
+// as sgn says; t0 with a rounding part t0_lo (event instants are t + t_lo).
+struct Start {
+    double t0, t0_lo;
+    std::vector<double> x0, v0;
+    std::vector<signed char> sgn;
+};
+Start start_of(const Model& m, const Configuration& cfg, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Start s{m.t0 + 3.7 + u(rng), 1e-17 * u(rng), m.x0, m.v0, std::vector<signed char>(m.dof(), 0)};
+    for (std::size_t i = 0; i < m.dof(); ++i) {
+        s.x0[i] += 0.01 * u(rng);
+        s.v0[i] += 0.1 * u(rng);
+        if (cfg.stuck[i]) {
+            s.v0[i] = 0.0;
+        } else if (m.masses[i].has_friction) {
+            s.sgn[i] = s.v0[i] < 0 ? -1 : 1;
+        }
+    }
+    return s;
+}
+
+template <class Setup, class Eval>
+Trace trace(std::size_t n_coef, std::size_t n, std::size_t ns, const Start& s, Setup setup, Eval eval) {
+    Trace t;
+    t.coef.assign(n_coef, 0.0);
+    setup(t.coef.data(), s);
+    const std::size_t per = 3 * n + 4 * ns;
+    t.out.assign(per * (sizeof kTaus / sizeof kTaus[0]), 0.0);
+    double* o = t.out.data();
+    for (double tau : kTaus) {
+        eval(t.coef.data(), tau, SegmentEval{o, o + n, o + 2 * n, o + 3 * n, o + 3 * n + ns, o + 3 * n + 2 * ns,
+                                             o + 3 * n + 3 * ns});
+        o += per;
+    }
+    return t;
+}
+
+Trace kernel_trace(const hsnc_kernel& k, const Start& s) {
+    return trace(
+        static_cast<std::size_t>(k.n_coef), static_cast<std::size_t>(k.n_dof), static_cast<std::size_t>(k.n_switch),
+        s, [&](double* coef, const Start& st) { k.setup(coef, st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data()); },
+        [&](const double* coef, double tau, const SegmentEval& o) {
+            k.eval(coef, tau, o.x, o.v, o.a, o.g, o.dg, o.bound, o.scale);
+        });
+}
+
+Trace program_trace(const Program& p, const Start& s) {
+    auto ip = std::make_shared<InterpretedSolver>(p);
+    return trace(
+        static_cast<std::size_t>(p.n_coef), static_cast<std::size_t>(p.n_dof), p.n_switch(), s,
+        [&](double* coef, const Start& st) {
+            ip->setup(st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data());
+            if (p.n_coef) std::memcpy(coef, ip->coefficients(), static_cast<std::size_t>(p.n_coef) * sizeof(double));
+        },
+        [&](const double*, double tau, const SegmentEval& o) { ip->eval(tau, o); });
+}
+
+/// memcmp equality, and where it fails the first differing double.
+::testing::AssertionResult same_bits(const std::vector<double>& a, const std::vector<double>& b) {
+    if (a.size() != b.size()) return ::testing::AssertionFailure() << "sizes " << a.size() << " != " << b.size();
+    if (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0)
+        return ::testing::AssertionSuccess();
+    for (std::size_t i = 0; i < a.size(); ++i)
+        if (std::memcmp(&a[i], &b[i], sizeof(double)) != 0) {
+            char buf[128];
+            std::snprintf(buf, sizeof buf, "element %zu: %.17g != %.17g", i, a[i], b[i]);
+            return ::testing::AssertionFailure() << buf;
+        }
+    return ::testing::AssertionFailure() << "memcmp differs";
+}
+
+void expect_identical(const Trace& a, const Trace& b, const std::string& what) {
+    EXPECT_TRUE(same_bits(a.coef, b.coef)) << what << ": coefficient blocks";
+    EXPECT_TRUE(same_bits(a.out, b.out)) << what << ": eval outputs";
+}
+
+// glibc computes sincos with the code of sin and cos: a compiler that merges
+// sin(x) and cos(x) into one sincos call (GCC does, at -O2) changes no bit.
+// The printed kernels and the interpreter rely on it; called through
+// volatile pointers so that nothing here is merged.
+TEST(Program, LibmSincosEqualsSinAndCos) {
+    double (*volatile fsin)(double) = &::sin;
+    double (*volatile fcos)(double) = &::cos;
+    void (*volatile fsincos)(double, double*, double*) = &::sincos;
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int differ = 0;
+    for (int k = 0; k < 200000; ++k) {
+        const double x = u(rng) * std::pow(10.0, (k % 24) - 8);
+        double s, c;
+        fsincos(x, &s, &c);
+        const double s1 = fsin(x), c1 = fcos(x);
+        differ += std::memcmp(&s, &s1, sizeof s) != 0 || std::memcmp(&c, &c1, sizeof c) != 0;
+    }
+    EXPECT_EQ(differ, 0);
+}
+
+// Every configuration each bundled model has kernels for (its manifest): the
+// AOT kernel (GCC), the same kernel compiled by the JIT (Clang) and the
+// interpreter of the program it was printed from.
+TEST(Program, BundledModelsAotJitAndInterpreterAreBitIdentical) {
+    std::size_t checked = 0;
+    for (const char* stem : kBundled) {
+        const Model m = bundled(stem);
+        std::string note;
+        const std::vector<Configuration> cfgs = configurations_to_generate(m, &note);
+        Jit jit;
+        jit.add(std::string(stem) + ".cpp", combined_source(generate_kernel_set(m)));
+        for (const Configuration& cfg : cfgs) {
+            const std::string what = std::string(stem) + " " + cfg.spec(m);
+            const hsnc_kernel* aot = find_aot_kernel(aot_registry(), m.name.c_str(), model_hash(m), cfg.key().c_str());
+            ASSERT_NE(aot, nullptr) << what << ": no AOT kernel";
+            const auto* jk = static_cast<const hsnc_kernel*>(jit.lookup(kernel_symbol(m, cfg)));
+            const Program p = lower(derive(m, cfg));
+            ASSERT_EQ(p.n_coef, aot->n_coef) << what;
+            for (unsigned seed = 1; seed <= 3; ++seed) {
+                const Start s = start_of(m, cfg, seed);
+                const Trace ta = kernel_trace(*aot, s), tj = kernel_trace(*jk, s), ti = program_trace(p, s);
+                expect_identical(ta, ti, what + ": AOT vs interpreter");
+                expect_identical(tj, ti, what + ": JIT vs interpreter");
+                ++checked;
+            }
+        }
+    }
+    EXPECT_GE(checked, 3u * 50u);
+}
+
+// The sample catalogue (generator/sample_models.h) has every regime and
+// resonance (its kernels are compiled by GCC at build time): every
+// configuration of every sample, AOT against the interpreter.
+TEST(Program, SampleModelsEveryRegimeAotAndInterpreterAreBitIdentical) {
+    std::size_t checked = 0;
+    bool regimes[6] = {};
+    for (const Model& m : sample_models()) {
+        for (const Configuration& cfg : all_configurations(m)) {
+            const hsnc_kernel* k = find_aot_kernel(sample_registry(), m.name.c_str(), model_hash(m), cfg.key().c_str());
+            if (!k) continue;
+            const Program p = lower(derive(m, cfg));
+            for (const ProgramInstr& in : p.eval.code)
+                if (in.op == ProgramOp::mode) regimes[in.regime] = true;
+            const Start s = start_of(m, cfg, 11);
+            expect_identical(kernel_trace(*k, s), program_trace(p, s), m.name + " " + cfg.spec(m));
+            ++checked;
+        }
+    }
+    EXPECT_GE(checked, 20u);
+    for (int r = 0; r < 6; ++r) EXPECT_TRUE(regimes[r]) << "regime " << r << " not covered";
+}
+
+// Random models of 1 to 8 masses (tests/random_model.h), each in a random
+// configuration: the JIT-compiled kernel against the interpreter.
+TEST(Program, RandomModelsJitAndInterpreterAreBitIdentical) {
+    for (int n = 1; n <= 8; ++n) {
+        for (unsigned seed = 100 * n; seed < 100 * n + 3; ++seed) {
+            const testing::Drawn d = testing::draw(seed, n);
+            const Model& m = d.model;
+            const Derivation der = derive(m, d.cfg);
+            const Program p = lower(der);
+            Jit jit;
+            jit.add(m.name, emit_kernel(der, p));
+            const auto* k = static_cast<const hsnc_kernel*>(jit.lookup(kernel_symbol(m, d.cfg)));
+            const Start s = start_of(m, d.cfg, seed);
+            expect_identical(kernel_trace(*k, s), program_trace(p, s), m.name + " " + d.cfg.spec(m));
+        }
+    }
+}
+
+// ---- whole runs ----
+
+std::string slurp(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+struct RunFiles {
+    RunSummary summary;
+    std::string trajectory, events;
+};
+
+RunFiles run_to_csv(const Model& m, SolverProvider& provider, double t_end, double dt, const std::string& tag) {
+    const std::filesystem::path dir = std::filesystem::temp_directory_path();
+    const std::string base = (dir / ("hsnc_test_program_" + std::to_string(::getpid()) + "_" + tag)).string();
+    RunFiles r;
+    {
+        CsvFile traj(base + ".traj.csv"), ev(base + ".events.csv");
+        traj.text(trajectory_header(m).c_str());
+        traj.end_row();
+        ev.text(events_header(m).c_str());
+        ev.end_row();
+        CsvObserver obs(m, &traj, &ev);
+        Engine engine(m, provider);
+        EngineOptions opt;
+        opt.t_end = t_end;
+        opt.dt = dt;
+        r.summary = engine.run(opt, obs);
+        traj.commit();
+        ev.commit();
+    }
+    r.trajectory = slurp(base + ".traj.csv");
+    r.events = slurp(base + ".events.csv");
+    std::remove((base + ".traj.csv").c_str());
+    std::remove((base + ".events.csv").c_str());
+    return r;
+}
+
+InterpretedSolverProvider::ProgramFn lowering_of(const Model& m) {
+    return [&m](const Configuration& cfg) { return lower(derive(m, cfg)); };
+}
+JitSolverProvider::SourceFn emitter_of(const Model& m) {
+    return [&m](const Configuration& cfg) { return JitKernelSource{kernel_symbol(m, cfg), emit_kernel(derive(m, cfg))}; };
+}
+
+void expect_same_runs(const Model& m, double t_end, double dt, bool with_aot, std::size_t min_events) {
+    InterpretedSolverProvider interp(lowering_of(m));
+    const RunFiles ri = run_to_csv(m, interp, t_end, dt, "interp");
+    JitSolverProvider jit(m, emitter_of(m));
+    const RunFiles rj = run_to_csv(m, jit, t_end, dt, "jit");
+    ASSERT_EQ(ri.summary.status, RunStatus::ok) << m.name << ": " << ri.summary.message;
+    EXPECT_GE(ri.summary.events, min_events) << m.name;
+    EXPECT_EQ(ri.summary.events, rj.summary.events) << m.name;
+    EXPECT_TRUE(ri.events == rj.events) << m.name << ": events CSV, interpreter vs JIT";
+    EXPECT_TRUE(ri.trajectory == rj.trajectory) << m.name << ": trajectory CSV, interpreter vs JIT";
+    if (with_aot) {
+        AotSolverProvider aot(m, aot_registry(), /*fallback=*/false);
+        const RunFiles ra = run_to_csv(m, aot, t_end, dt, "aot");
+        EXPECT_EQ(ri.summary.events, ra.summary.events) << m.name;
+        EXPECT_TRUE(ri.events == ra.events) << m.name << ": events CSV, interpreter vs AOT";
+        EXPECT_TRUE(ri.trajectory == ra.trajectory) << m.name << ": trajectory CSV, interpreter vs AOT";
+    }
+}
+
+TEST(ProgramRun, SeedScenario1AotJitInterpreterWriteIdenticalCsv) {
+    expect_same_runs(bundled("seed-scenario-1"), 20.0, 0.01, true, 50);
+}
+
+// Chaotic: a single differing bit would show within the 300 s (issue 12: AOT
+// and JIT gave 4180 switches and the generic solver 4181).
+TEST(ProgramRun, SeedScenario2Over300sAotJitInterpreterWriteIdenticalCsv) {
+    expect_same_runs(bundled("seed-scenario-2"), 300.0, 0.05, true, 4000);
+}
+
+TEST(ProgramRun, Chain8AotJitInterpreterWriteIdenticalCsv) {
+    expect_same_runs(bundled("chain-8"), 10.0, 0.01, true, 20);
+}
+
+TEST(ProgramRun, RandomModelsJitInterpreterWriteIdenticalCsv) {
+    for (int n : {2, 3, 5, 8}) {
+        const testing::Drawn d = testing::draw(700 + n, n);
+        expect_same_runs(d.model, 5.0, 0.01, false, 1);
+    }
+}
+
+// The generic solver shares no code with the programs: an independent oracle,
+// held to agreement to rounding, not to the bit.
+TEST(Program, GenericSolverAgreesAsAnIndependentOracle) {
+    for (int n = 1; n <= 8; ++n) {
+        const testing::Drawn d = testing::draw(500 + n, n);
+        const Model& m = d.model;
+        InterpretedSolver ip(lower(derive(m, d.cfg)));
+        GenericSolver g(m, d.cfg);
+        const Start s = start_of(m, d.cfg, 3);
+        ip.setup(s.t0, s.t0_lo, s.x0.data(), s.v0.data(), s.sgn.data());
+        g.setup(s.t0, s.t0_lo, s.x0.data(), s.v0.data(), s.sgn.data());
+        const std::size_t ns = ip.switches().size();
+        ASSERT_EQ(ns, g.switches().size());
+        std::vector<double> a(3 * m.dof() + 4 * ns), b(a.size());
+        auto view = [&](std::vector<double>& o) {
+            const std::size_t k = m.dof();
+            return SegmentEval{o.data(), o.data() + k, o.data() + 2 * k, o.data() + 3 * k, o.data() + 3 * k + ns,
+                               o.data() + 3 * k + 2 * ns, o.data() + 3 * k + 3 * ns};
+        };
+        for (double tau : {0.0, 0.01, 0.3, 1.7}) {
+            ip.eval(tau, view(a));
+            g.eval(tau, view(b));
+            for (std::size_t i = 0; i < m.dof(); ++i) {
+                EXPECT_NEAR(a[i], b[i], 1e-12 * (1 + std::fabs(b[i]))) << m.name << " x" << i << " tau " << tau;
+                EXPECT_NEAR(a[m.dof() + i], b[m.dof() + i], 1e-11 * (1 + std::fabs(b[m.dof() + i]))) << m.name;
+            }
+            for (std::size_t f = 0; f < ns; ++f) {
+                const double scale = b[3 * m.dof() + 3 * ns + f];
+                EXPECT_NEAR(a[3 * m.dof() + f], b[3 * m.dof() + f], 1e-11 * (1 + scale)) << m.name << " g" << f;
+            }
+        }
+    }
+}
+
+}  // namespace
+}  // namespace hsnc
