@@ -233,6 +233,74 @@ TEST(ModelReader, ExpressionStringsRoundLikeTomlLiterals) {
     }
 }
 
+TEST(ModelReader, PiIsTheConstantUnlessAParameterIsNamedPi) {
+    // `pi` as well as GiNaC's own `Pi`; the text other readers parse says Pi.
+    const Model m = parse_model("name = \"t\"\n[parameters]\nw = \"2*pi\"\nv = \"Pi/2\"\n[[mass]]\nname = \"a\"\n"
+                                "m = 1\n[[forcing]]\nomega = \"pi*w\"\namplitude = { a = 1 }\n",
+                                "t.toml");
+    EXPECT_EQ(m.parameters[1].second, 2 * M_PI);
+    EXPECT_EQ(m.parameters[2].second, M_PI / 2);
+    EXPECT_EQ(m.parameter_expressions[1].second, "2*Pi");
+    EXPECT_DOUBLE_EQ(m.forcing[0].omega, 2 * M_PI * M_PI);
+    EXPECT_EQ(m.field_expressions.at("forcing[1].omega"), "Pi*w");
+    // A file that names a parameter pi keeps it: pi is then that parameter.
+    const Model own = parse_model("name = \"t\"\n[parameters]\npi = 3\nw = \"2*pi\"\n[[mass]]\nname = \"a\"\nm = 1\n",
+                                  "t.toml");
+    EXPECT_EQ(own.parameters[2].second, 6.0);
+    EXPECT_EQ(own.parameter_expressions[2].second, "2*pi");
+}
+
+TEST(ModelReader, SubnormalValuesAreAcceptedAsTheDoublesTheyAre) {
+    // A subnormal literal parameter used to end in "internal error: floating
+    // point underflow"; a subnormal expression used to read as 0.
+    const Model m = parse_model("name = \"t\"\n[parameters]\nk = 1e-310\nh = \"k/2\"\ns = \"1e-310\"\nt = \"3*2^(-1074)\"\n"
+                                "[[mass]]\nname = \"a\"\nm = 1\n[[spring]]\nbetween = [\"ground\", \"a\"]\nk = \"h\"\n",
+                                "t.toml");
+    EXPECT_EQ(m.parameters[1].second, 1e-310);
+    EXPECT_EQ(m.parameters[2].second, 1e-310 / 2);
+    EXPECT_EQ(m.parameters[3].second, 1e-310);
+    EXPECT_EQ(m.parameters[4].second, 3 * std::ldexp(1.0, -1074));
+    EXPECT_EQ(m.springs[0].k, 1e-310 / 2);
+}
+
+TEST(ModelReader, SinAndCosOfLargeArgumentsAreEvaluatedExactly) {
+    // At 40 digits sin(1e80) came out as 0 and cos(1e80) as 1. The argument is
+    // now known to 1e-40 absolutely, so the result is the correctly rounded
+    // sine of the double x, as the C library computes it.
+    for (const double x : {1e22, 1e80, 1e200, 1.5e300}) {
+        SCOPED_TRACE(x);
+        ModelOverrides o;
+        char set[64];
+        std::snprintf(set, sizeof set, "x=%.17g", x);
+        o.set = {set};
+        const Model m = parse_model("name = \"t\"\n[parameters]\nx = 1\ns = \"sin(x)\"\nc = \"cos(x)\"\n"
+                                    "t = \"tan(x)\"\n[[mass]]\nname = \"a\"\nm = 1\n",
+                                    "t.toml", o);
+        ASSERT_EQ(m.parameters[1].second, x);
+        EXPECT_DOUBLE_EQ(m.parameters[2].second, std::sin(x));
+        EXPECT_DOUBLE_EQ(m.parameters[3].second, std::cos(x));
+        EXPECT_DOUBLE_EQ(m.parameters[4].second, std::tan(x));
+    }
+    // 1e22 is a double exactly, and so is the literal in an expression.
+    EXPECT_DOUBLE_EQ(parse_model("name = \"t\"\n[parameters]\ns = \"sin(1e22)\"\n[[mass]]\nname = \"a\"\nm = 1\n",
+                                 "t.toml").parameters[1].second,
+                     std::sin(1e22));
+}
+
+TEST(ModelReader, ExpressionsNestedUpToTheLimitAreRead) {
+    std::string nested = "1";
+    // Each "-(" is two levels (a sign and a parenthesis), the innermost 1 one more.
+    for (int i = 0; i < 150; ++i) nested = "-(" + nested + ")";  // 301 levels
+    const std::string text = "name = \"t\"\n[parameters]\nk = \"" + nested + "\"\n[[mass]]\nname = \"a\"\nm = 1\n";
+    EXPECT_NE(error_of(text).find("more than 200 levels deep"), std::string::npos);
+    nested = "1";
+    for (int i = 0; i < 99; ++i) nested = "-(" + nested + ")";  // 199 levels
+    EXPECT_EQ(parse_model("name = \"t\"\n[parameters]\nk = \"" + nested + "\"\n[[mass]]\nname = \"a\"\nm = 1\n", "t.toml")
+                  .parameters[1]
+                  .second,
+              -1.0);
+}
+
 TEST(ModelReader, ParametersFollowFileOrderNotKeyOrder) {
     // toml++ sorts keys; "aa" uses "zz", which comes first in the file.
     const Model m = parse_model("name = \"t\"\n[parameters]\nzz = 3\naa = \"zz*2\"\n[[mass]]\nname = \"a\"\nm = \"aa\"\n",
@@ -706,6 +774,41 @@ TEST(ModelReaderErrors, ExpressionDividesByZero) {
 TEST(ModelReaderErrors, ExpressionOverflows) {
     expect_message(error_of("name = \"t\"\n[parameters]\nk = \"exp(1000)\"\n"),
                    {"test.toml:3: key 'parameters.k': expression 'exp(1000)' is not a finite double"});
+}
+
+TEST(ModelReaderErrors, ValueBelowTheSmallestDouble) {
+    expect_message(error_of("name = \"t\"\n[parameters]\nk = \"1e-400\"\n"),
+                   {"test.toml:3: key 'parameters.k': expression '1e-400' is 1.0E-400, not 0 but below the smallest "
+                    "positive double (4.9e-324)"});
+}
+
+TEST(ModelReaderErrors, FunctionOutsideTheAllowedList) {
+    expect_message(error_of("name = \"t\"\n[parameters]\nk = \"zeta(3)\"\n"),
+                   {"test.toml:3: key 'parameters.k': expression 'zeta(3)' does not parse: no function 'zeta' of 1 "
+                    "argument (a model expression may use sin, cos, tan, asin, acos, atan, atan2, sinh, cosh, tanh, "
+                    "asinh, acosh, atanh, exp, log, sqrt, abs, pow, factorial)"});
+    expect_message(error_of("name = \"t\"\n[parameters]\nk = \"sin(1, 2)\"\n"), {"no function 'sin' of 2 arguments"});
+}
+
+TEST(ModelReaderErrors, MessagesShowAnExcerptOfALongExpression) {
+    // 100 KB of expression: the message shows its first 80 characters.
+    std::string sum;
+    while (sum.size() < 100000) sum += "1+";
+    const std::string message = error_of("name = \"t\"\n[parameters]\nk = \"" + sum + "x\"\n");
+    expect_message(message, {"test.toml:3: key 'parameters.k': expression '", "...': unknown parameter 'x'"});
+    EXPECT_NE(message.find("'" + sum.substr(0, 80) + "...'"), std::string::npos) << message;
+    EXPECT_LT(message.size(), 200u);
+    // Cut between characters, never inside one: 100 two-byte characters.
+    std::string accents;
+    for (int i = 0; i < 100; ++i) accents += "\xc3\xa9";  // U+00E9
+    const std::string unicode = error_of("name = \"t\"\n[parameters]\nk = \"" + accents + "\"\n");
+    EXPECT_NE(unicode.find("expression '" + accents.substr(0, 160) + "...'"), std::string::npos) << unicode;
+    // A --set value too.
+    ModelOverrides o;
+    o.set = {"k=" + sum + "y"};
+    const std::string flag = error_of("name = \"t\"\n[parameters]\nk = 1\n", o);
+    EXPECT_LT(flag.size(), 300u) << flag;
+    EXPECT_NE(flag.find("unknown parameter 'y'"), std::string::npos) << flag;
 }
 
 // ------------------------------------------------------- types and finiteness
