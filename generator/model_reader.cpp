@@ -80,7 +80,8 @@ std::map<std::string, Override> collect_overrides(const std::string& flag, const
 /// Reads one parsed TOML document into a Model. One instance per document.
 class Reader {
 public:
-    Reader(std::string source, const ModelOverrides& overrides) : source_(std::move(source)) {
+    Reader(std::string source, const ModelOverrides& overrides)
+        : source_(std::move(source)), t_end_override_(overrides.t_end) {
         set_ = collect_overrides("--set", overrides.set);
         x0_ = collect_overrides("--x0", overrides.x0);
         v0_ = collect_overrides("--v0", overrides.v0);
@@ -103,6 +104,12 @@ public:
         read_load(root);
         read_initial(root);
         read_simulate(root);
+        if (t_end_override_) {
+            const double t_end = *t_end_override_;
+            if (!std::isfinite(t_end) || !(t_end > model_.t0))
+                throw InputError("--t-end " + show(t_end, 17) + ": must be finite and after t0 = " + show(model_.t0, 17));
+            model_.t_end = t_end;
+        }
         return std::move(model_);
     }
 
@@ -495,18 +502,20 @@ private:
         if (!t) return;
         check_keys(*t, "simulate", {"t_end"});
         model_.t_end = optional_number(*t, "simulate", "t_end");
-        if (model_.t_end && !(*model_.t_end > model_.t0))
+        if (model_.t_end && !t_end_override_ && !(*model_.t_end > model_.t0))
             fail(t->get("t_end"), "simulate.t_end",
                  "must be > t0 = " + show(model_.t0) + ", got " + show(*model_.t_end));
     }
 
-    static std::string show(double value) {
+    static std::string show(double value, int digits = 6) {
         std::ostringstream out;
+        out.precision(digits);
         out << value;
         return out.str();
     }
 
     std::string source_;
+    std::optional<double> t_end_override_;
     std::map<std::string, Override> set_, x0_, v0_;
     std::vector<std::string> parameter_names_;     ///< all parameters, file order (implicit g first)
     std::unordered_map<std::string, double> values_;  ///< parameters evaluated so far
@@ -517,6 +526,11 @@ private:
 };
 
 }  // namespace
+
+ModelOverrides with_t_end(ModelOverrides overrides, double t_end) {
+    if (!std::isnan(t_end)) overrides.t_end = t_end;
+    return overrides;
+}
 
 Model parse_model(const std::string& toml_text, const std::string& source, const ModelOverrides& overrides) {
     Reader reader(source, overrides);  // flags are checked before the file

@@ -301,6 +301,17 @@ TEST(ModelReader, ExpressionsNestedUpToTheLimitAreRead) {
               -1.0);
 }
 
+TEST(ModelReader, EndTimeOverrideReplacesTheFilesEndTime) {
+    // [simulate].t_end before t0 is no error when --t-end replaces it.
+    const std::string text = std::string(kTwoMasses) + "[initial]\nt0 = 5\n[simulate]\nt_end = 1\n";
+    const Model m = parse_model(text, "t.toml", with_t_end({}, 8.0));
+    ASSERT_TRUE(m.t_end.has_value());
+    EXPECT_EQ(*m.t_end, 8.0);
+    EXPECT_FALSE(with_t_end({}, NAN).t_end.has_value());
+    expect_message(error_of(text), {"test.toml:11: key 'simulate.t_end': must be > t0 = 5, got 1"});
+    expect_message(error_of(text, with_t_end({}, 4.0)), {"--t-end 4: must be finite and after t0 = 5"});
+}
+
 TEST(ModelReader, ParametersFollowFileOrderNotKeyOrder) {
     // toml++ sorts keys; "aa" uses "zz", which comes first in the file.
     const Model m = parse_model("name = \"t\"\n[parameters]\nzz = 3\naa = \"zz*2\"\n[[mass]]\nname = \"a\"\nm = \"aa\"\n",

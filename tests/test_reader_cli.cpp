@@ -1,0 +1,49 @@
+// Front-end defects of issue 11 around reading a model and its flags:
+// `--t-end` replacing an end time before t0.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "cli_runner.h"
+#include "model_reader.h"
+
+namespace hsnc {
+namespace {
+
+using testing::CliRun;
+using testing::run_hsnc;
+using testing::write_temp;
+
+const char* const kEndBeforeStart = R"toml(name = "end-before-start"
+[parameters]
+k = 100
+[[mass]]
+name = "m1"
+m = 1
+[[spring]]
+between = ["ground", "m1"]
+k = "k"
+[initial]
+t0 = 5
+x = { m1 = 0.1 }
+[simulate]
+t_end = 1
+)toml";
+
+TEST(ReaderCli, TEndFlagReplacesAnEndTimeBeforeT0) {
+    const std::string path = write_temp("end_before_start.toml", kEndBeforeStart);
+    const CliRun ok = run_hsnc("simulate '" + path + "' --t-end 6 --quiet");
+    EXPECT_EQ(ok.exit_code, 0) << ok.err;
+    EXPECT_EQ(ok.err, "");
+    // Without the flag the file's end time is used, and it is still an error.
+    const CliRun bad = run_hsnc("simulate '" + path + "' --quiet");
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_EQ(bad.err, "hsnc: " + path + ":14: key 'simulate.t_end': must be > t0 = 5, got 1\n");
+    // And the flag is checked in its turn.
+    const CliRun early = run_hsnc("simulate '" + path + "' --t-end 4 --quiet");
+    EXPECT_EQ(early.exit_code, 2);
+    EXPECT_EQ(early.err, "hsnc: --t-end 4: must be finite and after t0 = 5\n");
+}
+
+}  // namespace
+}  // namespace hsnc
