@@ -1,7 +1,8 @@
 // Front-end defects of issue 11 around reading a model and its flags:
-// `--t-end` replacing an end time before t0.
+// `--t-end` replacing an end time before t0, `generate -o ""`.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
 
 #include "cli_runner.h"
@@ -11,6 +12,7 @@ namespace hsnc {
 namespace {
 
 using testing::CliRun;
+using testing::model_path;
 using testing::run_hsnc;
 using testing::write_temp;
 
@@ -43,6 +45,21 @@ TEST(ReaderCli, TEndFlagReplacesAnEndTimeBeforeT0) {
     const CliRun early = run_hsnc("simulate '" + path + "' --t-end 4 --quiet");
     EXPECT_EQ(early.exit_code, 2);
     EXPECT_EQ(early.err, "hsnc: --t-end 4: must be finite and after t0 = 5\n");
+}
+
+TEST(ReaderCli, GenerateRefusesAnEmptyOutputDirectory) {
+    // Run from an empty directory, so that anything written there shows.
+    const std::string dir = testing::temp_path("generate_cwd");
+    std::filesystem::create_directories(dir);
+    const std::filesystem::path cwd = std::filesystem::current_path();
+    std::filesystem::current_path(dir);
+    const CliRun r = run_hsnc("generate '" + model_path("coulomb-1dof.toml") + "' -o ''");
+    std::filesystem::current_path(cwd);
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(r.err, "hsnc: generate: -o '': empty output directory (write -o . for the current directory)\n");
+    EXPECT_TRUE(std::filesystem::is_empty(dir));
+    std::filesystem::remove_all(dir);
 }
 
 }  // namespace
