@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -196,6 +197,7 @@ private:
         }
         if (const auto* f = node.as_floating_point()) {
             if (!std::isfinite(f->get())) fail(&node, key, "must be finite, got " + std::string(std::isnan(f->get()) ? "nan" : "inf"));
+            if (is_subnormal(f->get())) fail(&node, key, subnormal_reason(f->get()));
             if (!is_parameter) model_.field_expressions[key] = literal_text(f->get());
             return f->get();
         }
@@ -206,6 +208,7 @@ private:
             } catch (const ExpressionError& error) {
                 fail(&node, key, explain(error));
             }
+            if (is_subnormal(e.value)) fail(&node, key, subnormal_reason(e.value));
             (is_parameter ? parameter_text_ : model_.field_expressions[key]) = e.canonical_text;
             return e.value;
         }
@@ -248,11 +251,24 @@ private:
     }
 
     EvaluatedExpression override_value(const Override& o) const {
+        EvaluatedExpression e;
         try {
-            return evaluate_expression(o.value, scope());
-        } catch (const ExpressionError& e) {
-            throw InputError(o.flag + " '" + excerpt(o.raw) + "': " + explain(e));
+            e = evaluate_expression(o.value, scope());
+        } catch (const ExpressionError& error) {
+            throw InputError(o.flag + " '" + excerpt(o.raw) + "': " + explain(error));
         }
+        if (is_subnormal(e.value)) throw InputError(o.flag + " '" + excerpt(o.raw) + "': " + subnormal_reason(e.value));
+        return e;
+    }
+
+    // Subnormal doubles (0 < |v| < 2^-1022) are refused: the symbolic
+    // derivation's numbers (CLN's double-float) have none, and a value that
+    // small is no physical model's. The message says so instead of CLN's
+    // "floating point underflow".
+    static bool is_subnormal(double v) { return v != 0.0 && std::fabs(v) < DBL_MIN; }
+    static std::string subnormal_reason(double v) {
+        return "value " + show(v, 17) + " is a subnormal double (magnitude below 2.2250738585072014e-308), too " +
+               "small to compute with; write 0 or a magnitude of at least 2.2250738585072014e-308";
     }
 
     std::optional<double> optional_number(const toml::table& table, const std::string& path, const char* key) {
