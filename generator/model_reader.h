@@ -17,6 +17,12 @@
 //  - `ground` is reserved for masses, contacts and parameters; so are the
 //    constants GiNaC's parser knows by name (Pi, Euler, Catalan, I), which a
 //    parameter could not shadow.
+//  - `pi` is the constant Pi as well (GiNaC's parser knows only `Pi`), unless
+//    the file names a parameter pi, which then keeps that name; expressions
+//    are recorded with Pi. What an expression may contain and cost is in
+//    expression_evaluator.h (and README, "Model expressions").
+//  - A subnormal value (0 < |v| < 2.2e-308) is refused: the derivation's
+//    numbers (CLN) have none.
 //  - `g` is a parameter. When [parameters] does not define it, it is an
 //    implicit first parameter g = 9.81 that every expression may use (and
 //    --set g=... may override); it then comes first in Model::parameters.
