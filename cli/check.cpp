@@ -3,8 +3,10 @@
 // with every contact open and every mass sliding.
 //
 // Modes: the undamped generalised eigenproblem K phi = omega^2 M phi with
-// K = K(all open) (runtime/assembly.h), solved by Eigen's
-// GeneralizedSelfAdjointEigenSolver (M is diagonal and > 0, so it applies).
+// K = K(all open), from the engine's own modal analysis (runtime/modal.h), so
+// a rigid-body mode is what the engine takes for one: decided structurally (a
+// group of masses with no spring or contact of k > 0 to ground), never from
+// a small eigenvalue, which stiffness or mass ratios beyond 1e10 would give.
 // Damping ratio of Rayleigh damping C = alpha*M + beta*K for a mode of
 // frequency omega_n: xi = (alpha/omega_n + beta*omega_n)/2 (modal damping,
 // paper Eq. 12-13).
@@ -13,22 +15,15 @@
 #include <iostream>
 #include <sstream>
 
-#include <Eigen/Eigenvalues>
-
-#include "assembly.h"
 #include "commands.h"
 #include "configuration.h"
 #include "error.h"
+#include "modal.h"
 #include "model_reader.h"
 
 namespace hsnc::cli {
 namespace {
 
-// An eigenvalue omega^2 below kRigidTolerance * max_i(K_ii/M_ii) is taken as a
-// rigid-body mode (K singular: a mass or group of masses with no spring path
-// to ground). max_i K_ii/M_ii is a Rayleigh quotient, so it is <= the largest
-// eigenvalue and sets the scale of the rounding error of the solver.
-constexpr double kRigidTolerance = 1e-10;
 constexpr double kPi = 3.14159265358979323846;
 
 std::string body_name(const Model& model, int body) {
@@ -71,34 +66,23 @@ void print_summary(const Model& model, std::ostream& out) {
 }
 
 void print_modes(const Model& model, std::ostream& out) {
-    const Configuration open = Configuration::all_open(model);
-    const Eigen::MatrixXd K = stiffness_matrix(model, open);
-    const Eigen::VectorXd m = mass_vector(model);
-    const Eigen::MatrixXd M = m.asDiagonal();
-    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> solver(K, M, Eigen::EigenvaluesOnly);
-    if (solver.info() != Eigen::Success)
-        throw RunError("check::print_modes(): the eigenvalue solver did not converge for model '" + model.name + "'");
-    const double scale = (K.diagonal().array() / m.array()).maxCoeff();
-    const double threshold = kRigidTolerance * scale;
-
+    const ModalDecomposition modes = modal_analysis(model, Configuration::all_open(model));
     out << "natural frequencies (all contacts open, all masses sliding; eigenvalues of (K, M)):\n";
     out << "  mode  omega_n [rad/s]  f [Hz]  xi\n";
     int rigid = 0;
-    for (Eigen::Index j = 0; j < solver.eigenvalues().size(); ++j) {
-        const double lambda = solver.eigenvalues()(j);  // omega_n^2, ascending
+    for (Eigen::Index j = 0; j < modes.lambda.size(); ++j) {
         out << "  " << j + 1 << "  ";
-        if (lambda <= threshold) {
+        if (modes.rigid[static_cast<std::size_t>(j)]) {
             out << "0 (rigid-body mode)\n";
             ++rigid;
             continue;
         }
-        const double omega = std::sqrt(lambda);
+        const double omega = std::sqrt(modes.lambda(j));  // lambda = omega_n^2, ascending
         const double xi = 0.5 * (model.alpha / omega + model.beta * omega);
         out << num(omega) << "  " << num(omega / (2.0 * kPi)) << "  " << num(xi) << "\n";
     }
     if (rigid > 0)
-        out << "  note: " << rigid << " rigid-body mode(s): a mass or group of masses has no spring path to ground"
-            << " (eigenvalues <= " << kRigidTolerance << " * max(K_ii/M_ii) are taken as 0)\n";
+        out << "  note: " << rigid << " rigid-body mode(s): a mass or group of masses has no spring path to ground\n";
 }
 
 }  // namespace

@@ -35,8 +35,11 @@ void add_generate(CLI::App& app, int& exit_code) {
         "configurations generated. Compile the files with runtime/ on the include path (kernel_abi.h,\n"
         "aot_registry.h).");
     sub->callback([&exit_code, model_path, out_dir, params, params_opt] {
+        // An empty path would be taken as the current directory; say so instead.
+        if (out_dir->empty())
+            throw InputError("generate: -o '': empty output directory (write -o . for the current directory)");
         const Model model = read_model(*model_path);
-        const std::vector<std::string> kept = 
+        const std::vector<std::string> kept =
             params_opt->count() == 0 ? std::vector<std::string>{} : kept_parameters(model, *params);
         const KernelSet set = generate_kernel_set(model, kept);
         if (!set.note.empty()) std::cerr << "hsnc generate: " << set.note << "\n";

@@ -123,7 +123,7 @@ std::string number_text(double v) {
 }
 
 int simulate(const SimulateOptions& o) {
-    const Model model = read_model(o.model, o.overrides);
+    const Model model = read_model(o.model, with_t_end(o.overrides, o.t_end));
     hsnc::SimulateOptions run;
     try {
         run.method = method_from_name(o.method);

@@ -338,7 +338,7 @@ void check_output_path(const char* flag, const std::string& path) {
 }  // namespace
 
 int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
-    const Model model = read_model(o.model, o.overrides);
+    const Model model = read_model(o.model, with_t_end(o.overrides, o.t_end));
     const double t_end = std::isnan(o.t_end) ? model.t_end.value_or(NAN) : o.t_end;
     if (std::isnan(t_end))
         throw InputError("--t-end: no end time: give --t-end or [simulate].t_end in " + o.model);

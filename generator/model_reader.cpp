@@ -9,17 +9,19 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <map>
 #include <optional>
+#include <unordered_map>
 #include <sstream>
 
-#include <ginac/ginac.h>
 #include <toml++/toml.h>
 
 #include "error.h"
+#include "expression_evaluator.h"
 
 namespace hsnc {
 
@@ -44,87 +46,15 @@ std::string type_name(const toml::node& node) {
     return out.str();
 }
 
-std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
-
-/// Why an expression could not be turned into a real, finite double.
-struct ExpressionError {
-    std::string reason;
-    std::string unknown_symbol;  ///< set when the cause is a name not in scope
-};
-
-/// Sets GiNaC's working precision for a scope and restores it after.
-class DigitsGuard {
-public:
-    explicit DigitsGuard(long digits) : saved_(GiNaC::Digits) { GiNaC::Digits = digits; }
-    ~DigitsGuard() { GiNaC::Digits = saved_; }
-    DigitsGuard(const DigitsGuard&) = delete;
-    DigitsGuard& operator=(const DigitsGuard&) = delete;
-
-private:
-    long saved_;
-};
-
-// Decimal digits for evaluating expressions. At GiNaC's default of 17 the
-// parser rounds a literal such as "0.1" to 17 digits and to_double() rounds
-// again, which is one ulp off the TOML literal 0.1 for about 1 short decimal
-// in 10^4; at 40 digits none of 2*10^5 random ones was (measured), so
-// `k = 0.1` and `k = "0.1"` (or --set k=0.1) give the same double.
-constexpr long kEvaluationDigits = 40;
-
-/// Evaluate `text` with GiNaC's parser in strict mode (unknown names are
-/// errors) over `symbols`, whose entries are already numbers; the result must
-/// be a real, finite number. Throws ExpressionError.
-double evaluate_expression(const std::string& text, const GiNaC::symtab& symbols) {
-    const DigitsGuard precision(kEvaluationDigits);
-    GiNaC::ex value;
-    try {
-        GiNaC::parser reader(symbols, /*strict=*/true);
-        value = reader(text).evalf();
-    } catch (const GiNaC::parse_error& e) {
-        // GiNaC: "GiNaC: parse error at line 0, column 0: REASON\n[where]";
-        // the position is always 0 for a one-line string, so keep REASON.
-        std::string reason = first_line(e.what());
-        const std::string marker = "column 0: ";
-        if (const auto at = reason.find(marker); at != std::string::npos) reason = reason.substr(at + marker.size());
-        throw ExpressionError{"expression '" + text + "' does not parse: " + reason, ""};
-    } catch (const std::invalid_argument& e) {
-        // Strict mode: 'find_or_insert_symbol: symbol "x" not found'.
-        const std::string what = e.what();
-        const auto open = what.find('"'), close = what.rfind('"');
-        if (what.find("not found") != std::string::npos && open != std::string::npos && close > open) {
-            const std::string name = what.substr(open + 1, close - open - 1);
-            throw ExpressionError{"expression '" + text + "': unknown parameter '" + name + "'", name};
-        }
-        throw ExpressionError{"expression '" + text + "' cannot be evaluated: " + first_line(what), ""};
-    } catch (const std::exception& e) {
-        // pole_error ("power::eval(): division by zero"), domain_error, ...
-        throw ExpressionError{"expression '" + text + "' cannot be evaluated: " + first_line(e.what()), ""};
-    }
-    if (!GiNaC::is_a<GiNaC::numeric>(value)) {
-        std::ostringstream shown;
-        shown << value;
-        throw ExpressionError{"expression '" + text + "' does not evaluate to a number (got " + shown.str() + ")", ""};
-    }
-    const GiNaC::numeric& number = GiNaC::ex_to<GiNaC::numeric>(value);
-    if (!number.is_real()) {
-        std::ostringstream shown;
-        shown << number;
-        throw ExpressionError{"expression '" + text + "' is not a real number (it is " + shown.str() + ")", ""};
-    }
-    const double result = number.to_double();
-    if (!std::isfinite(result)) throw ExpressionError{"expression '" + text + "' is not a finite double", ""};
-    return result;
-}
-
 /// Split a flag value "NAME=VALUE" (at the first '='). Throws InputError.
 std::pair<std::string, std::string> split_assignment(const std::string& flag, const std::string& raw) {
     const auto eq = raw.find('=');
-    if (eq == std::string::npos) throw InputError(flag + " '" + raw + "': expected NAME=VALUE");
+    if (eq == std::string::npos) throw InputError(flag + " '" + excerpt(raw) + "': expected NAME=VALUE");
     std::string name = raw.substr(0, eq), value = raw.substr(eq + 1);
     if (!is_valid_name(name))
-        throw InputError(flag + " '" + raw + "': '" + name + "' is not a valid name ([A-Za-z_][A-Za-z0-9_]*)");
+        throw InputError(flag + " '" + excerpt(raw) + "': '" + excerpt(name) + "' is not a valid name ([A-Za-z_][A-Za-z0-9_]*)");
     if (value.find_first_not_of(" \t") == std::string::npos)
-        throw InputError(flag + " '" + raw + "': expected NAME=VALUE, VALUE is empty");
+        throw InputError(flag + " '" + excerpt(raw) + "': expected NAME=VALUE, VALUE is empty");
     return {name, value};
 }
 
@@ -141,8 +71,8 @@ std::map<std::string, Override> collect_overrides(const std::string& flag, const
     for (const std::string& raw : raws) {
         auto [name, value] = split_assignment(flag, raw);
         if (out.count(name))
-            throw InputError(flag + " '" + raw + "': '" + name + "' is already set by " + flag + " '" +
-                             out.at(name).raw + "'");
+            throw InputError(flag + " '" + excerpt(raw) + "': '" + excerpt(name) + "' is already set by " + flag +
+                             " '" + excerpt(out.at(name).raw) + "'");
         out.emplace(name, Override{flag, raw, value});
     }
     return out;
@@ -151,7 +81,8 @@ std::map<std::string, Override> collect_overrides(const std::string& flag, const
 /// Reads one parsed TOML document into a Model. One instance per document.
 class Reader {
 public:
-    Reader(std::string source, const ModelOverrides& overrides) : source_(std::move(source)) {
+    Reader(std::string source, const ModelOverrides& overrides)
+        : source_(std::move(source)), t_end_override_(overrides.t_end) {
         set_ = collect_overrides("--set", overrides.set);
         x0_ = collect_overrides("--x0", overrides.x0);
         v0_ = collect_overrides("--v0", overrides.v0);
@@ -174,6 +105,12 @@ public:
         read_load(root);
         read_initial(root);
         read_simulate(root);
+        if (t_end_override_) {
+            const double t_end = *t_end_override_;
+            if (!std::isfinite(t_end) || !(t_end > model_.t0))
+                throw InputError("--t-end " + show(t_end, 17) + ": must be finite and after t0 = " + show(model_.t0, 17));
+            model_.t_end = t_end;
+        }
         return std::move(model_);
     }
 
@@ -186,7 +123,7 @@ private:
     [[noreturn]] void fail_at(std::size_t line, const std::string& key, const std::string& reason) const {
         std::string message = source_;
         if (line > 0) message += ":" + std::to_string(line);
-        message += ": key '" + key + "': " + reason;
+        message += ": key '" + excerpt(key, 120) + "': " + reason;
         throw InputError(message);
     }
     /// The line of a table's own header, or 0 for the document root (line 1
@@ -260,16 +197,20 @@ private:
         }
         if (const auto* f = node.as_floating_point()) {
             if (!std::isfinite(f->get())) fail(&node, key, "must be finite, got " + std::string(std::isnan(f->get()) ? "nan" : "inf"));
+            if (is_subnormal(f->get())) fail(&node, key, subnormal_reason(f->get()));
             if (!is_parameter) model_.field_expressions[key] = literal_text(f->get());
             return f->get();
         }
         if (const auto* s = node.as_string()) {
-            if (!is_parameter) model_.field_expressions[key] = s->get();
+            EvaluatedExpression e;
             try {
-                return evaluate_expression(s->get(), symbols_);
-            } catch (const ExpressionError& e) {
-                fail(&node, key, explain(e));
+                e = evaluate_expression(s->get(), scope());
+            } catch (const ExpressionError& error) {
+                fail(&node, key, explain(error));
             }
+            if (is_subnormal(e.value)) fail(&node, key, subnormal_reason(e.value));
+            (is_parameter ? parameter_text_ : model_.field_expressions[key]) = e.canonical_text;
+            return e.value;
         }
         fail(&node, key, "expected a number or an expression string, got " + type_name(node));
     }
@@ -284,12 +225,21 @@ private:
         return buf;
     }
 
-    /// The source text of parameter node (for Model::parameter_expressions).
-    static std::string source_text(const toml::node& node) {
+    /// The source text of parameter node (for Model::parameter_expressions),
+    /// once number() has read it: an expression as evaluate_expression() wrote it.
+    std::string source_text(const toml::node& node) const {
         if (const auto* i = node.as_integer()) return std::to_string(i->get());
         if (const auto* f = node.as_floating_point()) return literal_text(f->get());
-        if (const auto* s = node.as_string()) return s->get();
-        return "";
+        return parameter_text_;
+    }
+
+    /// The names an expression may use now: the parameters so far, and pi
+    /// unless the file names a parameter so.
+    ExpressionScope scope() const {
+        ExpressionScope s;
+        s.parameters = &values_;
+        s.pi_is_constant = pi_is_constant_;
+        return s;
     }
 
     /// An expression error, with a hint when the unknown name is a later parameter.
@@ -300,12 +250,25 @@ private:
         return e.reason;
     }
 
-    double override_value(const Override& o) const {
+    EvaluatedExpression override_value(const Override& o) const {
+        EvaluatedExpression e;
         try {
-            return evaluate_expression(o.value, symbols_);
-        } catch (const ExpressionError& e) {
-            throw InputError(o.flag + " '" + o.raw + "': " + explain(e));
+            e = evaluate_expression(o.value, scope());
+        } catch (const ExpressionError& error) {
+            throw InputError(o.flag + " '" + excerpt(o.raw) + "': " + explain(error));
         }
+        if (is_subnormal(e.value)) throw InputError(o.flag + " '" + excerpt(o.raw) + "': " + subnormal_reason(e.value));
+        return e;
+    }
+
+    // Subnormal doubles (0 < |v| < 2^-1022) are refused: the symbolic
+    // derivation's numbers (CLN's double-float) have none, and a value that
+    // small is no physical model's. The message says so instead of CLN's
+    // "floating point underflow".
+    static bool is_subnormal(double v) { return v != 0.0 && std::fabs(v) < DBL_MIN; }
+    static std::string subnormal_reason(double v) {
+        return "value " + show(v, 17) + " is a subnormal double (magnitude below 2.2250738585072014e-308), too " +
+               "small to compute with; write 0 or a magnitude of at least 2.2250738585072014e-308";
     }
 
     std::optional<double> optional_number(const toml::table& table, const std::string& path, const char* key) {
@@ -324,10 +287,10 @@ private:
 
     /// A name for a mass or contact: valid syntax, not reserved, not taken.
     void check_new_name(const toml::node* where, const std::string& key, const std::string& name) const {
-        if (!is_valid_name(name)) fail(where, key, "'" + name + "' is not a valid name ([A-Za-z_][A-Za-z0-9_]*)");
+        if (!is_valid_name(name)) fail(where, key, "'" + excerpt(name) + "' is not a valid name ([A-Za-z_][A-Za-z0-9_]*)");
         if (name == "ground") fail(where, key, "'ground' is reserved for the fixed ground");
         if (const auto taken = element_names_.find(name); taken != element_names_.end())
-            fail(where, key, "name '" + name + "' is already used by " + taken->second);
+            fail(where, key, "name '" + excerpt(name) + "' is already used by " + taken->second);
     }
 
     /// Mass name -> index; `kGround` for "ground".
@@ -335,7 +298,7 @@ private:
         const std::string name = string_value(node, key);
         if (name == "ground") return kGround;
         const int i = model_.mass_index(name);
-        if (i < 0) fail(&node, key, "unknown body '" + name + "' (expected 'ground' or a mass name)");
+        if (i < 0) fail(&node, key, "unknown body '" + excerpt(name) + "' (expected 'ground' or a mass name)");
         return i;
     }
 
@@ -361,7 +324,7 @@ private:
         for (auto&& [k, v] : *node.as_table()) {
             const std::string name(k.str());
             const int i = model_.mass_index(name);
-            if (i < 0) fail_at(k.source().begin.line, join(key, name), "unknown mass '" + name + "'");
+            if (i < 0) fail_at(k.source().begin.line, join(key, name), "unknown mass '" + excerpt(name) + "'");
             values[i] = number(v, join(key, name));
         }
         return values;
@@ -382,10 +345,11 @@ private:
         for (const auto& [name, node] : entries) parameter_names_.push_back(name);
         const bool implicit_g = std::find(parameter_names_.begin(), parameter_names_.end(), "g") == parameter_names_.end();
         if (implicit_g) parameter_names_.insert(parameter_names_.begin(), "g");
+        pi_is_constant_ = std::find(parameter_names_.begin(), parameter_names_.end(), "pi") == parameter_names_.end();
 
         for (const auto& [name, o] : set_)
             if (std::find(parameter_names_.begin(), parameter_names_.end(), name) == parameter_names_.end())
-                throw InputError("--set '" + o.raw + "': no parameter named '" + name + "'");
+                throw InputError("--set '" + excerpt(o.raw) + "': no parameter named '" + excerpt(name) + "'");
 
         if (implicit_g) define_parameter("g", nullptr);
         for (const auto& [name, node] : entries) define_parameter(name, node);
@@ -398,7 +362,7 @@ private:
     /// parameters before it in scope, then bring it into scope.
     void define_parameter(const std::string& name, const toml::node* node) {
         const std::string key = "parameters." + name;
-        if (!is_valid_name(name)) fail(node, key, "'" + name + "' is not a valid name ([A-Za-z_][A-Za-z0-9_]*)");
+        if (!is_valid_name(name)) fail(node, key, "'" + excerpt(name) + "' is not a valid name ([A-Za-z_][A-Za-z0-9_]*)");
         if (name == "ground") fail(node, key, "'ground' is reserved for the fixed ground");
         for (const char* reserved : kParserConstants)
             if (name == reserved) fail(node, key, "'" + name + "' is a constant of the expression parser and cannot be a parameter");
@@ -406,8 +370,9 @@ private:
         std::string text = "9.81";
         const auto o = set_.find(name);
         if (o != set_.end()) {
-            value = override_value(o->second);
-            text = o->second.value;
+            const EvaluatedExpression e = override_value(o->second);
+            value = e.value;
+            text = e.canonical_text;
         } else if (node) {
             value = number(*node, key);
             text = source_text(*node);
@@ -415,12 +380,12 @@ private:
         // The normal force of friction is m*g (interface.md section 2).
         if (name == "g" && !(value > 0.0)) {
             const std::string reason = "gravity g must be > 0 (friction's normal force is m*g), got " + show(value);
-            if (o != set_.end()) throw InputError(o->second.flag + " '" + o->second.raw + "': " + reason);
+            if (o != set_.end()) throw InputError(o->second.flag + " '" + excerpt(o->second.raw) + "': " + reason);
             fail(node, key, reason);
         }
         model_.parameters.emplace_back(name, value);
         model_.parameter_expressions.emplace_back(name, text);
-        symbols_[name] = GiNaC::numeric(value);
+        values_[name] = value;
     }
 
     void read_masses(const toml::table& root) {
@@ -541,9 +506,10 @@ private:
                                const std::string& path) {
         for (const auto& [name, o] : overrides) {
             const int i = model_.mass_index(name);
-            if (i < 0) throw InputError(o.flag + " '" + o.raw + "': no mass named '" + name + "'");
-            state[i] = override_value(o);
-            model_.field_expressions[path + "." + name] = o.value;
+            if (i < 0) throw InputError(o.flag + " '" + excerpt(o.raw) + "': no mass named '" + excerpt(name) + "'");
+            const EvaluatedExpression e = override_value(o);
+            state[i] = e.value;
+            model_.field_expressions[path + "." + name] = e.canonical_text;
         }
     }
 
@@ -552,26 +518,35 @@ private:
         if (!t) return;
         check_keys(*t, "simulate", {"t_end"});
         model_.t_end = optional_number(*t, "simulate", "t_end");
-        if (model_.t_end && !(*model_.t_end > model_.t0))
+        if (model_.t_end && !t_end_override_ && !(*model_.t_end > model_.t0))
             fail(t->get("t_end"), "simulate.t_end",
                  "must be > t0 = " + show(model_.t0) + ", got " + show(*model_.t_end));
     }
 
-    static std::string show(double value) {
+    static std::string show(double value, int digits = 6) {
         std::ostringstream out;
+        out.precision(digits);
         out << value;
         return out.str();
     }
 
     std::string source_;
+    std::optional<double> t_end_override_;
     std::map<std::string, Override> set_, x0_, v0_;
     std::vector<std::string> parameter_names_;     ///< all parameters, file order (implicit g first)
-    GiNaC::symtab symbols_;                        ///< parameters evaluated so far, as numbers
+    std::unordered_map<std::string, double> values_;  ///< parameters evaluated so far
+    bool pi_is_constant_ = true;                   ///< no parameter is named pi
+    std::string parameter_text_;                   ///< the text of the expression number() read last for a parameter
     std::map<std::string, std::string> element_names_;  ///< mass/contact name -> who took it
     Model model_;
 };
 
 }  // namespace
+
+ModelOverrides with_t_end(ModelOverrides overrides, double t_end) {
+    if (!std::isnan(t_end)) overrides.t_end = t_end;
+    return overrides;
+}
 
 Model parse_model(const std::string& toml_text, const std::string& source, const ModelOverrides& overrides) {
     Reader reader(source, overrides);  // flags are checked before the file

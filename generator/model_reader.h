@@ -17,17 +17,26 @@
 //  - `ground` is reserved for masses, contacts and parameters; so are the
 //    constants GiNaC's parser knows by name (Pi, Euler, Catalan, I), which a
 //    parameter could not shadow.
+//  - `pi` is the constant Pi as well (GiNaC's parser knows only `Pi`), unless
+//    the file names a parameter pi, which then keeps that name; expressions
+//    are recorded with Pi. What an expression may contain and cost is in
+//    expression_evaluator.h (and README, "Model expressions").
+//  - A subnormal value (0 < |v| < 2.2e-308) is refused: the derivation's
+//    numbers (CLN) have none.
 //  - `g` is a parameter. When [parameters] does not define it, it is an
 //    implicit first parameter g = 9.81 that every expression may use (and
 //    --set g=... may override); it then comes first in Model::parameters.
 //    When the file defines g it is an ordinary parameter in file order.
 //  - Forcing omega must be > 0: omega < 0 is meaningless, and omega = 0 is a
 //    constant force, which [load] states directly.
-//  - [simulate].t_end must be > t0.
+//  - [simulate].t_end must be > t0, unless the caller replaces it
+//    (ModelOverrides::t_end, the --t-end flag): a default nobody uses is not
+//    an error. Model::t_end is then the override.
 //  - A flag naming the same parameter or mass twice is an error, not
 //    "last one wins": a repeated override is most likely a slip.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -43,7 +52,11 @@ struct ModelOverrides {
     std::vector<std::string> set;  ///< parameter overrides; later parameters see the new value
     std::vector<std::string> x0;   ///< initial position overrides
     std::vector<std::string> v0;   ///< initial velocity overrides
+    std::optional<double> t_end;   ///< --t-end: replaces [simulate].t_end, which is then not checked against t0
 };
+
+/// `overrides` with `t_end` from a --t-end flag (NaN: the flag was not given).
+ModelOverrides with_t_end(ModelOverrides overrides, double t_end);
 
 /// Read and validate the model file at `path`; Model::source is `path`.
 /// A missing or unreadable file is an InputError

@@ -23,7 +23,7 @@ std::vector<std::string> kept_parameters(const Model& model, const std::string& 
     std::vector<std::string> names;
     for (const auto& [name, text] : model.parameter_expressions) names.push_back(name);
     if (list == "all") return names;
-    std::set<std::string> asked;
+    std::vector<std::string> kept;  // in the order given: configure() takes them so
     std::size_t start = 0;
     while (true) {
         const std::size_t comma = list.find(',', start);
@@ -34,13 +34,12 @@ std::vector<std::string> kept_parameters(const Model& model, const std::string& 
             for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
             throw InputError(flag + ": unknown parameter '" + name + "' (the model has: " + known + ")");
         }
-        if (!asked.insert(name).second) throw InputError(flag + ": parameter '" + name + "' is named twice");
+        if (std::find(kept.begin(), kept.end(), name) != kept.end())
+            throw InputError(flag + ": parameter '" + name + "' is named twice");
+        kept.push_back(name);
         if (comma == std::string::npos) break;
         start = comma + 1;
     }
-    std::vector<std::string> kept;
-    for (const std::string& n : names)
-        if (asked.count(n)) kept.push_back(n);
     return kept;
 }
 

@@ -30,8 +30,9 @@
 
 namespace hsnc {
 
-/// The kept parameters of `--params LIST` in model parameter order: LIST is
-/// "all" or names separated by commas. Throws InputError naming the flag on
+/// The kept parameters of `--params LIST`, in the order LIST gives them (the
+/// order configure() takes them in): LIST is "all" (model parameter order) or
+/// names separated by commas. Throws InputError naming the flag on
 /// an empty list, an unknown or repeated name, or a model without source
 /// expressions.
 std::vector<std::string> kept_parameters(const Model& model, const std::string& list);

@@ -150,6 +150,42 @@ k = 12
     EXPECT_NE(r.out.find("1 rigid-body mode(s)"), std::string::npos) << r.out;
 }
 
+TEST(Check, StiffnessRatioAbove1e10IsNoRigidBodyMode) {
+    // m1 on a stiff spring k1 to ground, m2 hung from m1 on a soft k2: both
+    // are anchored, so no mode is rigid, however small lambda_1 is next to
+    // max K_ii/M_ii (the old eigenvalue threshold, 1e-10 of it, called it
+    // rigid). lambda = roots of lambda^2 - (k1 + 2 k2) lambda + k1 k2 (m = 1).
+    const double k1 = 1e12, k2 = 1.0;
+    const std::string path = write_temp("hsnc_stiff.toml", R"toml(name = "stiff"
+[[mass]]
+name = "m1"
+m = 1
+[[mass]]
+name = "m2"
+m = 1
+[[spring]]
+between = ["ground", "m1"]
+k = 1e12
+[[spring]]
+between = ["m1", "m2"]
+k = 1
+)toml");
+    const CliRun r = run_hsnc("check '" + path + "'");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const auto modes = modes_of(r.out);
+    ASSERT_EQ(modes.size(), 2u) << r.out;
+    EXPECT_FALSE(modes[0].rigid) << r.out;
+    EXPECT_FALSE(modes[1].rigid) << r.out;
+    EXPECT_EQ(r.out.find("rigid-body"), std::string::npos) << r.out;
+    const double sum = k1 + 2 * k2, product = k1 * k2;
+    const double big = 0.5 * (sum + std::sqrt(sum * sum - 4 * product)), small = product / big;
+    // A symmetric eigensolver's absolute error in lambda is a few eps * |K| =
+    // 1e-4 here, so lambda_1 ~ 1 has a relative error of that order.
+    const double tolerance = 8 * 2.22e-16 * k1;
+    EXPECT_NEAR(modes[0].omega * modes[0].omega, small, tolerance);
+    expect_relative(modes[1].omega, std::sqrt(big));
+}
+
 TEST(Check, BadModelGivesExitCode2AndOneMessage) {
     const std::string path = write_temp("hsnc_bad.toml", "name = \"bad\"\n[[mass]]\nname = \"m1\"\nm = -1\n");
     const CliRun r = run_hsnc("check '" + path + "'");

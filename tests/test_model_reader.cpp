@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -231,6 +232,72 @@ TEST(ModelReader, ExpressionStringsRoundLikeTomlLiterals) {
             EXPECT_EQ(expression, literal) << decimals[i];
         }
     }
+}
+
+TEST(ModelReader, PiIsTheConstantUnlessAParameterIsNamedPi) {
+    // `pi` as well as GiNaC's own `Pi`; the text other readers parse says Pi.
+    const Model m = parse_model("name = \"t\"\n[parameters]\nw = \"2*pi\"\nv = \"Pi/2\"\n[[mass]]\nname = \"a\"\n"
+                                "m = 1\n[[forcing]]\nomega = \"pi*w\"\namplitude = { a = 1 }\n",
+                                "t.toml");
+    EXPECT_EQ(m.parameters[1].second, 2 * M_PI);
+    EXPECT_EQ(m.parameters[2].second, M_PI / 2);
+    EXPECT_EQ(m.parameter_expressions[1].second, "2*Pi");
+    EXPECT_DOUBLE_EQ(m.forcing[0].omega, 2 * M_PI * M_PI);
+    EXPECT_EQ(m.field_expressions.at("forcing[1].omega"), "Pi*w");
+    // A file that names a parameter pi keeps it: pi is then that parameter.
+    const Model own = parse_model("name = \"t\"\n[parameters]\npi = 3\nw = \"2*pi\"\n[[mass]]\nname = \"a\"\nm = 1\n",
+                                  "t.toml");
+    EXPECT_EQ(own.parameters[2].second, 6.0);
+    EXPECT_EQ(own.parameter_expressions[2].second, "2*pi");
+}
+
+TEST(ModelReader, SinAndCosOfLargeArgumentsAreEvaluatedExactly) {
+    // At 40 digits sin(1e80) came out as 0 and cos(1e80) as 1. The argument is
+    // now known to 1e-40 absolutely, so the result is the correctly rounded
+    // sine of the double x, as the C library computes it.
+    for (const double x : {1e22, 1e80, 1e200, 1.5e300}) {
+        SCOPED_TRACE(x);
+        ModelOverrides o;
+        char set[64];
+        std::snprintf(set, sizeof set, "x=%.17g", x);
+        o.set = {set};
+        const Model m = parse_model("name = \"t\"\n[parameters]\nx = 1\ns = \"sin(x)\"\nc = \"cos(x)\"\n"
+                                    "t = \"tan(x)\"\n[[mass]]\nname = \"a\"\nm = 1\n",
+                                    "t.toml", o);
+        ASSERT_EQ(m.parameters[1].second, x);
+        EXPECT_DOUBLE_EQ(m.parameters[2].second, std::sin(x));
+        EXPECT_DOUBLE_EQ(m.parameters[3].second, std::cos(x));
+        EXPECT_DOUBLE_EQ(m.parameters[4].second, std::tan(x));
+    }
+    // 1e22 is a double exactly, and so is the literal in an expression.
+    EXPECT_DOUBLE_EQ(parse_model("name = \"t\"\n[parameters]\ns = \"sin(1e22)\"\n[[mass]]\nname = \"a\"\nm = 1\n",
+                                 "t.toml").parameters[1].second,
+                     std::sin(1e22));
+}
+
+TEST(ModelReader, ExpressionsNestedUpToTheLimitAreRead) {
+    std::string nested = "1";
+    // Each "-(" is two levels (a sign and a parenthesis), the innermost 1 one more.
+    for (int i = 0; i < 150; ++i) nested = "-(" + nested + ")";  // 301 levels
+    const std::string text = "name = \"t\"\n[parameters]\nk = \"" + nested + "\"\n[[mass]]\nname = \"a\"\nm = 1\n";
+    EXPECT_NE(error_of(text).find("more than 200 levels deep"), std::string::npos);
+    nested = "1";
+    for (int i = 0; i < 99; ++i) nested = "-(" + nested + ")";  // 199 levels
+    EXPECT_EQ(parse_model("name = \"t\"\n[parameters]\nk = \"" + nested + "\"\n[[mass]]\nname = \"a\"\nm = 1\n", "t.toml")
+                  .parameters[1]
+                  .second,
+              -1.0);
+}
+
+TEST(ModelReader, EndTimeOverrideReplacesTheFilesEndTime) {
+    // [simulate].t_end before t0 is no error when --t-end replaces it.
+    const std::string text = std::string(kTwoMasses) + "[initial]\nt0 = 5\n[simulate]\nt_end = 1\n";
+    const Model m = parse_model(text, "t.toml", with_t_end({}, 8.0));
+    ASSERT_TRUE(m.t_end.has_value());
+    EXPECT_EQ(*m.t_end, 8.0);
+    EXPECT_FALSE(with_t_end({}, NAN).t_end.has_value());
+    expect_message(error_of(text), {"test.toml:11: key 'simulate.t_end': must be > t0 = 5, got 1"});
+    expect_message(error_of(text, with_t_end({}, 4.0)), {"--t-end 4: must be finite and after t0 = 5"});
 }
 
 TEST(ModelReader, ParametersFollowFileOrderNotKeyOrder) {
@@ -706,6 +773,66 @@ TEST(ModelReaderErrors, ExpressionDividesByZero) {
 TEST(ModelReaderErrors, ExpressionOverflows) {
     expect_message(error_of("name = \"t\"\n[parameters]\nk = \"exp(1000)\"\n"),
                    {"test.toml:3: key 'parameters.k': expression 'exp(1000)' is not a finite double"});
+}
+
+TEST(ModelReaderErrors, SubnormalValuesAreRefusedByName) {
+    // A subnormal literal parameter used to end in "internal error: floating
+    // point underflow" (no file, line or key), and a subnormal expression
+    // used to read as 0. Both are refused like any out-of-range value; the
+    // expression's value is computed on the subnormal grid to say which.
+    const std::string reason = " is a subnormal double (magnitude below 2.2250738585072014e-308), too small to "
+                               "compute with; write 0 or a magnitude of at least 2.2250738585072014e-308";
+    expect_message(error_of("name = \"t\"\n[parameters]\nk = 1e-310\n"),
+                   {("test.toml:3: key 'parameters.k': value 9.9999999999999694e-311" + reason).c_str()});
+    expect_message(error_of("name = \"t\"\n[parameters]\nk = \"3*2^(-1074)\"\n"),
+                   {("test.toml:3: key 'parameters.k': value 1.4821969375237396e-323" + reason).c_str()});
+    expect_message(error_of(std::string(kTwoMasses) + "[[spring]]\nbetween = [\"m1\", \"m2\"]\nk = \"-1e-310\"\n"),
+                   {("test.toml:10: key 'spring[1].k': value -9.9999999999999694e-311" + reason).c_str()});
+    ModelOverrides o;
+    o.set = {"k=2^(-1030)"};
+    expect_message(error_of("name = \"t\"\n[parameters]\nk = 1\n", o),
+                   {("--set 'k=2^(-1030)': value 8.6916947597937554e-311" + reason).c_str()});
+    // The smallest normal double is accepted, from a literal and an expression.
+    const Model m = parse_model("name = \"t\"\n[parameters]\na = 2.2250738585072014e-308\nb = \"2^(-1022)\"\n"
+                                "[[mass]]\nname = \"m1\"\nm = 1\n",
+                                "t.toml");
+    EXPECT_EQ(m.parameters[1].second, DBL_MIN);
+    EXPECT_EQ(m.parameters[2].second, DBL_MIN);
+}
+
+TEST(ModelReaderErrors, ValueBelowTheSmallestDouble) {
+    expect_message(error_of("name = \"t\"\n[parameters]\nk = \"1e-400\"\n"),
+                   {"test.toml:3: key 'parameters.k': expression '1e-400' is 1.0E-400, not 0 but below the smallest "
+                    "positive double (4.9e-324)"});
+}
+
+TEST(ModelReaderErrors, FunctionOutsideTheAllowedList) {
+    expect_message(error_of("name = \"t\"\n[parameters]\nk = \"zeta(3)\"\n"),
+                   {"test.toml:3: key 'parameters.k': expression 'zeta(3)' does not parse: no function 'zeta' of 1 "
+                    "argument (a model expression may use sin, cos, tan, asin, acos, atan, atan2, sinh, cosh, tanh, "
+                    "asinh, acosh, atanh, exp, log, sqrt, abs, pow, factorial)"});
+    expect_message(error_of("name = \"t\"\n[parameters]\nk = \"sin(1, 2)\"\n"), {"no function 'sin' of 2 arguments"});
+}
+
+TEST(ModelReaderErrors, MessagesShowAnExcerptOfALongExpression) {
+    // 100 KB of expression: the message shows its first 80 characters.
+    std::string sum;
+    while (sum.size() < 100000) sum += "1+";
+    const std::string message = error_of("name = \"t\"\n[parameters]\nk = \"" + sum + "x\"\n");
+    expect_message(message, {"test.toml:3: key 'parameters.k': expression '", "...': unknown parameter 'x'"});
+    EXPECT_NE(message.find("'" + sum.substr(0, 80) + "...'"), std::string::npos) << message;
+    EXPECT_LT(message.size(), 200u);
+    // Cut between characters, never inside one: 100 two-byte characters.
+    std::string accents;
+    for (int i = 0; i < 100; ++i) accents += "\xc3\xa9";  // U+00E9
+    const std::string unicode = error_of("name = \"t\"\n[parameters]\nk = \"" + accents + "\"\n");
+    EXPECT_NE(unicode.find("expression '" + accents.substr(0, 160) + "...'"), std::string::npos) << unicode;
+    // A --set value too.
+    ModelOverrides o;
+    o.set = {"k=" + sum + "y"};
+    const std::string flag = error_of("name = \"t\"\n[parameters]\nk = 1\n", o);
+    EXPECT_LT(flag.size(), 300u) << flag;
+    EXPECT_NE(flag.find("unknown parameter 'y'"), std::string::npos) << flag;
 }
 
 // ------------------------------------------------------- types and finiteness
