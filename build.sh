@@ -16,6 +16,8 @@ packages=(
   llvm-14-dev libclang-cpp14-dev libclang-14-dev  # compiling kernels in-process
   libgtest-dev                   # tests
   gnuplot-nox fonts-dejavu-core   # plots (pngcairo needs a font)
+  python3-dev pybind11-dev python3-numpy  # the Python module (import hsnc)
+  python3-pytest python3-matplotlib       # its tests, examples/scenario2.py
 )
 missing=()
 for p in "${packages[@]}"; do
