@@ -16,6 +16,8 @@ packages=(
   llvm-14-dev libclang-cpp14-dev libclang-14-dev  # compiling kernels in-process
   libgtest-dev                   # tests
   gnuplot-nox fonts-dejavu-core   # plots (pngcairo needs a font)
+  python3-dev pybind11-dev python3-numpy  # the Python module (import hsnc)
+  python3-pytest python3-matplotlib       # its tests, examples/scenario2.py
 )
 missing=()
 for p in "${packages[@]}"; do
@@ -33,3 +35,13 @@ if [ ! -f "$build_dir/CMakeCache.txt" ]; then
   cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release >&2
 fi
 cmake --build "$build_dir" -j"$(nproc)" >&2
+
+# `import hsnc` in Debian's python3 from any directory: a .pth file in its
+# user site directory names the module built in BUILD_DIR/python (the last
+# checkout built with ./build.sh wins). HSNC_NO_PTH=1 skips it.
+if [ -f "$build_dir/python/hsnc/__init__.py" ] && [ -z "${HSNC_NO_PTH:-}" ]; then
+  site=$(/usr/bin/python3 -m site --user-site)
+  mkdir -p "$site"
+  (cd "$build_dir/python" && pwd) > "$site/hsnc.pth"
+  echo "build.sh: /usr/bin/python3 imports hsnc from $(cat "$site/hsnc.pth") ($site/hsnc.pth)" >&2
+fi

@@ -1,0 +1,155 @@
+"""hsnc: the exact response of piecewise-linear mechanical systems with
+contacts and Coulomb friction, from Python (interface.md section 7).
+
+    import hsnc
+    model = hsnc.Model.from_file("models/seed-scenario-2.toml", set={"F1": 2.0})
+    r = hsnc.simulate(model, t_end=60, dt=0.01)
+    r.t, r.x, r.v          # NumPy: (N,), (N, n_mass), (N, n_mass)
+    r.events               # record array: t, kind, element, x, v
+    r.summary["status"]    # "ok"
+
+The samples are those of `hsnc simulate --dt` (default (t_end - t0) / 1000)
+and equal its CSV numbers bit for bit. The run releases the GIL (other
+Python threads carry on, two runs may go in parallel) and stops on Ctrl-C
+with KeyboardInterrupt. Bad input raises InputError (a ValueError), a
+failure while running RunError (a RuntimeError), with the library's message.
+"""
+
+import math
+
+import numpy as np
+
+from . import _hsnc
+from ._hsnc import InputError, RunError
+
+__all__ = ["InputError", "Model", "Result", "RunError", "generate", "simulate"]
+
+
+class Model:
+    """A validated model. Read-only views: name, description, source,
+    masses, contacts, friction_masses (names, in model order), parameters
+    (a dict in file order, with their values after overrides), mass_values,
+    t0, t_end (None when the file has none), x0, v0 (NumPy), dof."""
+
+    def __init__(self, native, read):
+        self._native = native
+        self._read = read  # (function, argument, overrides) to read it again
+
+    @classmethod
+    def from_file(cls, path, *, set=None, x0=None, v0=None):
+        """Read and validate a model file. set, x0, v0: dicts {name: value}
+        overriding parameters and the initial state (as `hsnc simulate --set
+        --x0 --v0`); a value may be a number or an expression string."""
+        overrides = (dict(set or {}), dict(x0 or {}), dict(v0 or {}))
+        native = _hsnc.Model.from_file(str(path), set=overrides[0], x0=overrides[1], v0=overrides[2])
+        return cls(native, ("file", str(path), "", overrides))
+
+    @classmethod
+    def from_string(cls, text, *, source="<string>", set=None, x0=None, v0=None):
+        """Read a model from TOML text; `source` names it in messages."""
+        overrides = (dict(set or {}), dict(x0 or {}), dict(v0 or {}))
+        native = _hsnc.Model.from_string(text, source=source, set=overrides[0], x0=overrides[1], v0=overrides[2])
+        return cls(native, ("text", text, source, overrides))
+
+    def with_overrides(self, *, set=None, x0=None, v0=None):
+        """The same model read again with these overrides added to its own."""
+        kind, what, source, (s0, x00, v00) = self._read
+        s, x, v = dict(s0), dict(x00), dict(v00)
+        s.update(set or {})
+        x.update(x0 or {})
+        v.update(v0 or {})
+        if kind == "file":
+            return Model.from_file(what, set=s, x0=x, v0=v)
+        return Model.from_string(what, source=source, set=s, x0=x, v0=v)
+
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(self._native, name)
+
+    def __repr__(self):
+        return repr(self._native)
+
+
+class Result:
+    """One run: `t` (N,), `x` and `v` (N, n_mass) NumPy arrays, one row per
+    sample; `events`, a NumPy record array with fields t, kind, element, x,
+    v (x and v of length n_mass: the state at the switch); `summary`, a dict
+    (status, t, events, counts per kind, segments, evaluations,
+    configurations, solver, x and v at the end by mass name, ...); `masses`
+    names the columns of x and v."""
+
+    def __init__(self, t, x, v, events, summary, masses):
+        self.t = t
+        self.x = x
+        self.v = v
+        self.events = events
+        self.summary = summary
+        self.masses = masses
+
+    def __repr__(self):
+        return "<hsnc.Result status=%s t=%r: %d samples, %d events>" % (
+            self.summary["status"], self.summary["t"], len(self.t), len(self.events))
+
+
+def _events(raw, n):
+    kinds, elements = raw["event_kind"], raw["event_element"]
+    width = lambda names: max([1] + [len(s) for s in names])
+    dtype = np.dtype([("t", "f8"), ("kind", "U%d" % width(kinds)), ("element", "U%d" % width(elements)),
+                      ("x", "f8", (n,)), ("v", "f8", (n,))])
+    events = np.zeros(len(kinds), dtype=dtype)
+    events["t"] = raw["event_t"]
+    events["kind"] = kinds
+    events["element"] = elements
+    events["x"] = raw["event_x"]
+    events["v"] = raw["event_v"]
+    return events.view(np.recarray)
+
+
+def _number(name, value, default=math.nan):
+    if value is None:
+        return default
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise InputError("hsnc.simulate(): %s = %r: expected a number" % (name, value)) from None
+
+
+def simulate(model, t_end=None, dt=None, method="hsnc", kernels="auto", precision="double", x0=None, v0=None,
+             max_events=0, h=None, rtol=1e-10, atol=1e-12, cache_dir="", use_cache=True):
+    """Run `model` (a Model) from its initial state to `t_end` (default: the
+    model's [simulate].t_end) and return a Result.
+
+    dt: sample spacing (default (t_end - t0) / 1000); method: "hsnc" (exact),
+    "ab4" (needs h), "rk45", "cvode" (rtol, atol); kernels: "auto", "aot",
+    "generic", "jit" (cache_dir, use_cache); precision: "double" or "mp:N";
+    x0, v0: dicts {mass name: value} overriding the initial state (as
+    `hsnc simulate --x0 --v0`: the model is read again with them);
+    max_events: stop after that many switch events (0: no limit; the result
+    then has status "max_events")."""
+    if not isinstance(model, Model):
+        raise InputError("hsnc.simulate(): model = %r: expected an hsnc.Model" % (model,))
+    if x0 or v0:
+        model = model.with_overrides(x0=x0, v0=v0)
+    try:
+        max_events = int(max_events)
+    except (TypeError, ValueError):
+        raise InputError("hsnc.simulate(): max_events = %r: expected an integer >= 0" % (max_events,)) from None
+    if max_events < 0:
+        raise InputError("hsnc.simulate(): max_events = %d: expected an integer >= 0" % max_events)
+    raw = _hsnc._simulate(model._native, _number("t_end", t_end), _number("dt", dt), str(method), str(kernels), str(precision),
+                    max_events, _number("h", h), _number("rtol", rtol), _number("atol", atol), str(cache_dir),
+                    bool(use_cache))
+    masses = model.masses
+    return Result(raw["t"], raw["x"], raw["v"], _events(raw, len(masses)), raw["summary"], masses)
+
+
+def generate(model, directory):
+    """Write the specialised C++ kernels of `model` into `directory` (as
+    `hsnc generate MODEL -o DIR`; the directory is created if needed) and
+    return the names of the files written."""
+    return _hsnc._generate(model._native, str(directory))
+
+
+# Named as users see them: hsnc.InputError, not hsnc._hsnc.InputError.
+InputError.__module__ = RunError.__module__ = Result.__module__ = Model.__module__ = __name__

@@ -1,0 +1,309 @@
+// hsnc._hsnc -- the Python binding of the library facade (interface.md
+// section 7). hsnc/__init__.py wraps it: simulate() returns NumPy arrays, a
+// record array of the switch events and a summary dict.
+//
+// The engine runs with the GIL released, collecting samples and events in
+// C++ vectors; they become NumPy arrays only when the run has succeeded, so
+// an error or Ctrl-C never hands back half a result. Ctrl-C: the observer's
+// on_progress (and every 1024th sample) takes the GIL at most every 50 ms for
+// PyErr_CheckSignals(); when a handler raised (KeyboardInterrupt), the run
+// stops and that exception is raised here.
+//
+// Errors: hsnc::InputError (OptionError included) becomes hsnc.InputError
+// (a ValueError), hsnc::RunError and a run that ends in chattering, Zeno or
+// a solver failure become hsnc.RunError (a RuntimeError), with the message
+// the library gives the command line.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <Python.h>
+
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "emitter.h"
+#include "engine.h"
+#include "error.h"
+#include "hsnc/simulate.h"
+#include "kernel_set.h"
+#include "model_reader.h"
+
+namespace py = pybind11;
+
+namespace hsnc::python {
+namespace {
+
+constexpr EventKind kKinds[] = {EventKind::contact_close, EventKind::contact_open, EventKind::stick,
+                                EventKind::release, EventKind::reversal};
+
+// Collects a run; checks for signals with the GIL taken briefly.
+class Collector : public Observer {
+public:
+    explicit Collector(std::size_t n) : n_(n), last_check_(std::chrono::steady_clock::now()) {}
+
+    void on_sample(double t, const double* x, const double* v) override {
+        t_.push_back(t);
+        x_.insert(x_.end(), x, x + n_);
+        v_.insert(v_.end(), v, v + n_);
+        // A run with few switches calls on_progress rarely: samples check too.
+        if ((++samples_ & 1023) == 0) interrupted_ = interrupted_ || !check_signals();
+    }
+    void on_event(double t, EventKind kind, int element, const double* x, const double* v) override {
+        et_.push_back(t);
+        ekind_.push_back(static_cast<int>(kind));
+        eelement_.push_back(element);
+        ex_.insert(ex_.end(), x, x + n_);
+        ev_.insert(ev_.end(), v, v + n_);
+    }
+    bool on_progress(double) override { return !interrupted_ && check_signals(); }
+
+    bool interrupted() const { return interrupted_; }
+
+    std::size_t n_;
+    std::vector<double> t_, x_, v_;
+    std::vector<double> et_, ex_, ev_;
+    std::vector<int> ekind_, eelement_;
+
+private:
+    // False when a signal handler raised; the exception stays set on this thread.
+    bool check_signals() {
+        const auto now = std::chrono::steady_clock::now();
+        if (now - last_check_ < std::chrono::milliseconds(50)) return true;
+        last_check_ = now;
+        py::gil_scoped_acquire gil;
+        if (PyErr_CheckSignals() == 0) return true;
+        interrupted_ = true;
+        return false;
+    }
+
+    std::size_t samples_ = 0;
+    bool interrupted_ = false;
+    std::chrono::steady_clock::time_point last_check_;
+};
+
+py::array_t<double> matrix(const std::vector<double>& data, std::size_t rows, std::size_t cols) {
+    py::array_t<double> a({rows, cols});
+    if (!data.empty()) std::copy(data.begin(), data.end(), a.mutable_data());
+    return a;
+}
+
+py::array_t<double> vector(const std::vector<double>& data) {
+    py::array_t<double> a(data.size());
+    if (!data.empty()) std::copy(data.begin(), data.end(), a.mutable_data());
+    return a;
+}
+
+// NAME=VALUE texts for the reader: a number with 17 digits (it reads back
+// exactly), a string as given (an expression of the model's parameters).
+std::vector<std::string> override_texts(const py::dict& d) {
+    std::vector<std::string> out;
+    for (const auto& [key, value] : d) {
+        std::string text;
+        if (py::isinstance<py::str>(value)) {
+            text = value.cast<std::string>();
+        } else {
+            char number[64];
+            std::snprintf(number, sizeof number, "%.17g", value.cast<double>());
+            text = number;
+        }
+        out.push_back(key.cast<std::string>() + "=" + text);
+    }
+    return out;
+}
+
+ModelOverrides overrides(const py::dict& set, const py::dict& x0, const py::dict& v0) {
+    return ModelOverrides{override_texts(set), override_texts(x0), override_texts(v0)};
+}
+
+std::string element_name(const Model& model, EventKind kind, int element) {
+    const bool contact = kind == EventKind::contact_close || kind == EventKind::contact_open;
+    if (contact) return element >= 0 && element < static_cast<int>(model.contacts.size()) ? model.contacts[element].name : "?";
+    return element >= 0 && element < static_cast<int>(model.masses.size()) ? model.masses[element].name : "?";
+}
+
+py::dict run(const Model& model, double t_end, double dt, const std::string& method, const std::string& kernels,
+             const std::string& precision, std::size_t max_events, double h, double rtol, double atol,
+             const std::string& cache_dir, bool use_cache) {
+    SimulateOptions o;
+    o.method = method_from_name(method);
+    o.kernels = kernel_choice_from_name(kernels);
+    o.precision_digits = precision_digits_from_name(precision);
+    o.t_end = t_end;
+    o.dt = dt;
+    o.max_events = max_events;
+    o.integrator.h = h;
+    o.integrator.rtol = rtol;
+    o.integrator.atol = atol;
+    o.cache_dir = cache_dir;
+    o.use_cache = use_cache;
+    const std::size_t n = model.dof();
+    Collector c(n);
+    SimulateSummary s;
+    {
+        py::gil_scoped_release nogil;
+        s = simulate(model, o, c);
+    }
+    if (c.interrupted()) throw py::error_already_set();  // the handler's exception (KeyboardInterrupt)
+    if (s.status != RunStatus::ok && s.status != RunStatus::max_events)
+        throw RunError(std::string("simulate: ") + run_status_name(s.status) + ": " + s.message);
+
+    const std::size_t ne = c.et_.size();
+    py::list kinds, elements;
+    for (std::size_t i = 0; i < ne; ++i) {
+        const auto kind = static_cast<EventKind>(c.ekind_[i]);
+        kinds.append(event_kind_name(kind));
+        elements.append(element_name(model, kind, c.eelement_[i]));
+    }
+    py::dict counts;
+    for (EventKind k : kKinds) counts[event_kind_name(k)] = 0;
+    for (int k : c.ekind_) {
+        const char* name = event_kind_name(static_cast<EventKind>(k));
+        counts[name] = counts[name].cast<std::size_t>() + 1;
+    }
+    py::dict summary;
+    summary["status"] = run_status_name(s.status);
+    summary["message"] = s.message;
+    summary["method"] = method;
+    summary["t"] = s.t;
+    summary["events"] = s.events;
+    summary["counts"] = counts;
+    summary["segments"] = s.segments;
+    summary["evaluations"] = s.evaluations;
+    summary["configurations"] = s.configurations;
+    summary["configuration"] = s.configuration.spec(model);
+    summary["solver"] = solver_kind_name(s.solver);
+    summary["solver_detail"] = s.solver_detail;
+    py::dict x_end, v_end;
+    for (std::size_t i = 0; i < n; ++i) {
+        x_end[py::str(model.masses[i].name)] = s.x[i];
+        v_end[py::str(model.masses[i].name)] = s.v[i];
+    }
+    summary["x"] = x_end;
+    summary["v"] = v_end;
+
+    py::dict out;
+    out["t"] = vector(c.t_);
+    out["x"] = matrix(c.x_, c.t_.size(), n);
+    out["v"] = matrix(c.v_, c.t_.size(), n);
+    out["event_t"] = vector(c.et_);
+    out["event_kind"] = kinds;
+    out["event_element"] = elements;
+    out["event_x"] = matrix(c.ex_, ne, n);
+    out["event_v"] = matrix(c.ev_, ne, n);
+    out["summary"] = summary;
+    return out;
+}
+
+// The kernels of `model` into `dir`, as `hsnc generate MODEL -o DIR` writes them.
+std::vector<std::string> generate(const Model& model, const std::string& dir) {
+    std::vector<std::string> written;
+    KernelSet set;
+    {
+        py::gil_scoped_release nogil;
+        set = generate_kernel_set(model);
+        for (const GeneratedFile& f : set.kernels) {
+            write_if_changed(dir, f.name, f.text);
+            written.push_back(f.name);
+        }
+        write_if_changed(dir, model.name + ".manifest", set.manifest);
+        write_if_changed(dir, "registry.cpp", emit_registry(set.symbols));
+    }
+    written.push_back(model.name + ".manifest");
+    written.push_back("registry.cpp");
+    return written;
+}
+
+}  // namespace
+}  // namespace hsnc::python
+
+PYBIND11_MODULE(_hsnc, m) {
+    using namespace hsnc;
+    namespace hp = hsnc::python;
+    m.doc() = "hsnc: exact response of piecewise-linear systems with contacts and Coulomb friction (native part)";
+
+    // Python subclasses of ValueError / RuntimeError, so callers may catch either.
+    static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
+    static py::exception<RunError> run_error(m, "RunError", PyExc_RuntimeError);
+    py::register_exception_translator([](std::exception_ptr p) {
+        try {
+            if (p) std::rethrow_exception(p);
+        } catch (const InputError& e) {
+            PyErr_SetString(input_error.ptr(), e.what());
+        } catch (const RunError& e) {
+            PyErr_SetString(run_error.ptr(), e.what());
+        }
+    });
+
+    py::class_<Model>(m, "Model")
+        .def_static(
+            "from_file",
+            [](const std::string& path, const py::dict& set,
+               const py::dict& x0, const py::dict& v0) {
+                return read_model(path, hp::overrides(set, x0, v0));
+            },
+            py::arg("path"), py::kw_only(), py::arg("set") = py::dict(),
+            py::arg("x0") = py::dict(), py::arg("v0") = py::dict(),
+            "Read and validate a model file; set/x0/v0 override parameters and the initial state by name.")
+        .def_static(
+            "from_string",
+            [](const std::string& text, const std::string& source, const py::dict& set,
+               const py::dict& x0, const py::dict& v0) {
+                return parse_model(text, source, hp::overrides(set, x0, v0));
+            },
+            py::arg("text"), py::kw_only(), py::arg("source") = "<string>",
+            py::arg("set") = py::dict(), py::arg("x0") = py::dict(),
+            py::arg("v0") = py::dict(),
+            "Read a model from TOML text; `source` names it in messages.")
+        .def_readonly("name", &Model::name)
+        .def_readonly("description", &Model::description)
+        .def_readonly("source", &Model::source)
+        .def_property_readonly("masses",
+                               [](const Model& mo) {
+                                   std::vector<std::string> names;
+                                   for (const Mass& ms : mo.masses) names.push_back(ms.name);
+                                   return names;
+                               })
+        .def_property_readonly("contacts",
+                               [](const Model& mo) {
+                                   std::vector<std::string> names;
+                                   for (const Contact& c : mo.contacts) names.push_back(c.name);
+                                   return names;
+                               })
+        .def_property_readonly("friction_masses",
+                               [](const Model& mo) {
+                                   std::vector<std::string> names;
+                                   for (const Mass& ms : mo.masses)
+                                       if (ms.has_friction) names.push_back(ms.name);
+                                   return names;
+                               })
+        .def_property_readonly("parameters",
+                               [](const Model& mo) {
+                                   py::dict d;  // file order (dicts keep insertion order)
+                                   for (const auto& [name, value] : mo.parameters) d[py::str(name)] = value;
+                                   return d;
+                               })
+        .def_property_readonly("mass_values",
+                               [](const Model& mo) {
+                                   std::vector<double> v;
+                                   for (const Mass& ms : mo.masses) v.push_back(ms.m);
+                                   return hp::vector(v);
+                               })
+        .def_readonly("t0", &Model::t0)
+        .def_property_readonly("t_end", [](const Model& mo) { return mo.t_end; })
+        .def_property_readonly("x0", [](const Model& mo) { return hp::vector(mo.x0); })
+        .def_property_readonly("v0", [](const Model& mo) { return hp::vector(mo.v0); })
+        .def_property_readonly("dof", &Model::dof)
+        .def("__repr__", [](const Model& mo) {
+            return "<hsnc.Model '" + mo.name + "': " + std::to_string(mo.dof()) + " masses, " +
+                   std::to_string(mo.contacts.size()) + " contacts>";
+        });
+
+    m.def("_simulate", &hp::run, py::arg("model"), py::arg("t_end"), py::arg("dt"), py::arg("method"),
+          py::arg("kernels"), py::arg("precision"), py::arg("max_events"), py::arg("h"), py::arg("rtol"),
+          py::arg("atol"), py::arg("cache_dir"), py::arg("use_cache"));
+    m.def("_generate", &hp::generate, py::arg("model"), py::arg("dir"));
+}

@@ -1,0 +1,45 @@
+"""Shared helpers: the built `hsnc` executable and the source tree (ctest
+sets HSNC_BINARY and HSNC_SOURCE_DIR; run by hand they default to build/hsnc
+and this checkout)."""
+
+import csv
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+
+SOURCE_DIR = pathlib.Path(os.environ.get("HSNC_SOURCE_DIR", pathlib.Path(__file__).resolve().parents[2]))
+BINARY = pathlib.Path(os.environ.get("HSNC_BINARY", SOURCE_DIR / "build" / "hsnc"))
+
+
+def model_path(name):
+    return str(SOURCE_DIR / "models" / name)
+
+
+def run_cli(*args, check=True):
+    """Runs `hsnc ARGS...`; returns the CompletedProcess (text)."""
+    p = subprocess.run([str(BINARY), *map(str, args)], capture_output=True, text=True, timeout=120)
+    if check and p.returncode != 0:
+        raise AssertionError("hsnc %s: exit %d: %s" % (" ".join(map(str, args)), p.returncode, p.stderr))
+    return p
+
+
+def read_csv(path):
+    """Header and rows of a CSV, cells as text."""
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], rows[1:]
+
+
+def numbers(rows, columns):
+    """The cells of `columns` as floats: float(text) of a 17-digit number is that double exactly."""
+    return np.array([[float(r[c]) for c in columns] for r in rows], dtype=float).reshape(len(rows), len(columns))
+
+
+@pytest.fixture
+def cli():
+    if not BINARY.exists():
+        pytest.fail("no hsnc executable at %s (set HSNC_BINARY)" % BINARY)
+    return run_cli

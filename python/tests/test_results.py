@@ -1,0 +1,108 @@
+"""hsnc.simulate returns the numbers `hsnc simulate` writes: the same sample
+grid and the same doubles (bit for bit: the CSV's 17 digits round-trip), the
+same events and the same summary line."""
+
+import numpy as np
+import pytest
+
+import hsnc
+from conftest import model_path, numbers, read_csv
+
+
+def cli_run(cli, tmp_path, model, *flags):
+    out, events = tmp_path / "out.csv", tmp_path / "events.csv"
+    p = cli("simulate", model, "--out", out, "--events", events, "--quiet", *flags)
+    return read_csv(out), read_csv(events), p.stdout.strip()
+
+
+def assert_same_run(r, model, traj, events, line):
+    n = len(model.masses)
+    header, rows = traj
+    assert header == ["t"] + ["x_" + m for m in model.masses] + ["v_" + m for m in model.masses]
+    assert r.t.shape == (len(rows),) and r.x.shape == (len(rows), n) and r.v.shape == (len(rows), n)
+    assert r.t.dtype == np.float64
+    # Exact equality, element by element (NaN would fail too: there is none here).
+    assert np.array_equal(r.t, numbers(rows, [0])[:, 0])
+    assert np.array_equal(r.x, numbers(rows, range(1, 1 + n)))
+    assert np.array_equal(r.v, numbers(rows, range(1 + n, 1 + 2 * n)))
+
+    eheader, erows = events
+    assert eheader == ["t", "kind", "element"] + ["x_" + m for m in model.masses] + ["v_" + m for m in model.masses]
+    assert len(r.events) == len(erows) > 0
+    assert np.array_equal(r.events.t, numbers(erows, [0])[:, 0])
+    assert list(r.events.kind) == [row[1] for row in erows]
+    assert list(r.events.element) == [row[2] for row in erows]
+    assert r.events.x.shape == (len(erows), n)
+    assert np.array_equal(r.events.x, numbers(erows, range(3, 3 + n)))
+    assert np.array_equal(r.events.v, numbers(erows, range(3 + n, 3 + 2 * n)))
+
+    # The summary line: "status=ok method=hsnc t=... events=N contact_close=... x_m1=... v_m1=..."
+    fields = dict(item.split("=", 1) for item in line.split())
+    s = r.summary
+    assert s["status"] == fields["status"] and s["method"] == fields["method"]
+    assert s["t"] == float(fields["t"]) and s["events"] == int(fields["events"]) == len(erows)
+    for kind, count in s["counts"].items():
+        assert count == int(fields[kind]) == sum(1 for row in erows if row[1] == kind)
+    for name in model.masses:
+        assert s["x"][name] == float(fields["x_" + name]) and s["v"][name] == float(fields["v_" + name])
+    if s["status"] == "ok":  # the end state is the last sample
+        assert np.array_equal(r.x[-1], [s["x"][m] for m in model.masses])
+
+
+@pytest.mark.parametrize("flags", [
+    ("--t-end", "60", "--dt", "0.01"),   # a grid of its own
+    ("--t-end", "7.3",),                  # the default grid (t_end - t0) / 1000
+    ("--t-end", "5", "--dt", "0.3"),     # t_end off the grid: a last row at t_end
+])
+def test_scenario2_equals_cli_csv(cli, tmp_path, flags):
+    model = hsnc.Model.from_file(model_path("seed-scenario-2.toml"))
+    traj, events, line = cli_run(cli, tmp_path, model_path("seed-scenario-2.toml"), *flags)
+    t_end = float(flags[1])
+    dt = float(flags[3]) if len(flags) > 2 else None
+    r = hsnc.simulate(model, t_end=t_end, dt=dt)
+    assert r.summary["status"] == "ok" and r.t[0] == model.t0 and r.t[-1] == t_end
+    assert_same_run(r, model, traj, events, line)
+
+
+def test_overrides_and_baseline_equal_cli_csv(cli, tmp_path):
+    # --set/--x0/--v0 and a numerical baseline (rk45 with its tolerances).
+    path = model_path("seed-scenario-1.toml")
+    model = hsnc.Model.from_file(path, set={"F1": 2.5}, x0={"m1": 0.1}, v0={"m2": -0.5})
+    traj, events, line = cli_run(cli, tmp_path, path, "--set", "F1=2.5", "--x0", "m1=0.1", "--v0", "m2=-0.5",
+                                 "--t-end", "20", "--dt", "0.05", "--method", "rk45", "--rtol", "1e-9")
+    r = hsnc.simulate(model, t_end=20, dt=0.05, method="rk45", rtol=1e-9)
+    assert_same_run(r, model, traj, events, line)
+    assert r.summary["solver"] == "integrator"
+
+
+def test_x0_v0_at_simulate_equal_model_overrides():
+    path = model_path("seed-scenario-1.toml")
+    a = hsnc.simulate(hsnc.Model.from_file(path, set={"F1": 2.5}), t_end=5, x0={"m1": 0.1}, v0={"m2": -0.5})
+    b = hsnc.simulate(hsnc.Model.from_file(path, set={"F1": 2.5}, x0={"m1": 0.1}, v0={"m2": -0.5}), t_end=5)
+    c = hsnc.simulate(hsnc.Model.from_file(path, set={"F1": 2.5}), t_end=5)
+    assert a.x[0, 0] == 0.1 and a.v[0, 1] == -0.5
+    assert np.array_equal(a.x, b.x) and np.array_equal(a.events.t, b.events.t)
+    assert not np.array_equal(a.x, c.x)
+
+
+def test_max_events_stops_with_that_status(cli, tmp_path):
+    model = hsnc.Model.from_file(model_path("seed-scenario-2.toml"))
+    traj, events, line = cli_run(cli, tmp_path, model_path("seed-scenario-2.toml"), "--t-end", "60",
+                                 "--max-events", "25")
+    r = hsnc.simulate(model, t_end=60, max_events=25)
+    assert r.summary["status"] == "max_events" and len(r.events) == 25
+    assert r.t[-1] <= r.summary["t"] < 60 and r.summary["t"] == r.events.t[-1]
+    assert_same_run(r, model, traj, events, line)
+
+
+def test_generic_kernels_and_reference_precision_run():
+    model = hsnc.Model.from_file(model_path("bilinear-1dof.toml"))
+    aot = hsnc.simulate(model, t_end=3)
+    generic = hsnc.simulate(model, t_end=3, kernels="generic")
+    ref = hsnc.simulate(model, t_end=3, precision="mp:30")
+    assert (aot.summary["solver"], generic.summary["solver"], ref.summary["solver"]) == ("aot", "generic", "reference")
+    # Model header: period 3*pi/4; the contact closes and opens once per period.
+    assert list(aot.events.kind[:2]) == ["contact_open", "contact_close"]
+    assert abs(aot.events.t[1] - 3 * np.pi / 4) < 1e-12
+    assert np.allclose(generic.x, aot.x, rtol=0, atol=1e-12)
+    assert np.allclose(ref.x, aot.x, rtol=0, atol=1e-12)
