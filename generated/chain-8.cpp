@@ -240,96 +240,96 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_8 = q0_8 + (-0.16122984176531685*ex_1 + 0.30301298511469577*ex_2 - 0.40824829046386302*ex_3 + 0.46424282688001262*ex_4 - 0.46424282688001262*ex_5 + 0.40824829046386302*ex_6 - 0.30301298511469577*ex_7 + 0.16122984176531685*ex_8);
     const double dqh0_8 = dq0_8 + (-0.16122984176531685*ev_1 + 0.30301298511469577*ev_2 - 0.40824829046386302*ev_3 + 0.46424282688001262*ev_4 - 0.46424282688001262*ev_5 + 0.40824829046386302*ev_6 - 0.30301298511469577*ev_7 + 0.16122984176531685*ev_8);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
     coef[11] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[12] = A1_1;
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
     coef[17] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[18] = A1_2;
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
     coef[23] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[24] = A1_3;
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
     coef[29] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[30] = A1_4;
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
     coef[35] = B_5;
-    const double A1_5 = B_5 - sigma_5*A_5;
+    const double A1_5 = dqh0_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[36] = A1_5;
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
     coef[41] = B_6;
-    const double A1_6 = B_6 - sigma_6*A_6;
+    const double A1_6 = dqh0_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[42] = A1_6;
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
     coef[47] = B_7;
-    const double A1_7 = B_7 - sigma_7*A_7;
+    const double A1_7 = dqh0_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[48] = A1_7;
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
     // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
     coef[53] = B_8;
-    const double A1_8 = B_8 - sigma_8*A_8;
+    const double A1_8 = dqh0_8;
     const double B1_8 = -kappa_8*A_8 - sigma_8*B_8;
     coef[54] = A1_8;
     coef[55] = B1_8;
@@ -805,84 +805,84 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_7 = q0_7 + (-0.19134171618254489*ex_1 + 0.35355339059327379*ex_2 - 0.46193976625564337*ex_3 + 0.5*ex_4 - 0.46193976625564337*ex_5 + 0.35355339059327379*ex_6 - 0.19134171618254489*ex_7);
     const double dqh0_7 = dq0_7 + (-0.19134171618254489*ev_1 + 0.35355339059327379*ev_2 - 0.46193976625564337*ev_3 + 0.5*ev_4 - 0.46193976625564337*ev_5 + 0.35355339059327379*ev_6 - 0.19134171618254489*ev_7);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[9] = A_1;
     coef[10] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[11] = A1_1;
     coef[12] = B1_1;
     coef[13] = B1_1 - sigma_1*A1_1;
     coef[14] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[15] = A_2;
     coef[16] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[17] = A1_2;
     coef[18] = B1_2;
     coef[19] = B1_2 - sigma_2*A1_2;
     coef[20] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[21] = A_3;
     coef[22] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[23] = A1_3;
     coef[24] = B1_3;
     coef[25] = B1_3 - sigma_3*A1_3;
     coef[26] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[27] = A_4;
     coef[28] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[29] = A1_4;
     coef[30] = B1_4;
     coef[31] = B1_4 - sigma_4*A1_4;
     coef[32] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[33] = A_5;
     coef[34] = B_5;
-    const double A1_5 = B_5 - sigma_5*A_5;
+    const double A1_5 = dqh0_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[35] = A1_5;
     coef[36] = B1_5;
     coef[37] = B1_5 - sigma_5*A1_5;
     coef[38] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[39] = A_6;
     coef[40] = B_6;
-    const double A1_6 = B_6 - sigma_6*A_6;
+    const double A1_6 = dqh0_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[41] = A1_6;
     coef[42] = B1_6;
     coef[43] = B1_6 - sigma_6*A1_6;
     coef[44] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[45] = A_7;
     coef[46] = B_7;
-    const double A1_7 = B_7 - sigma_7*A_7;
+    const double A1_7 = dqh0_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[47] = A1_7;
     coef[48] = B1_7;
@@ -1327,72 +1327,72 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_6 = q0_6 + (0.23192061392432986*ex_1 - 0.41790650594127499*ex_2 + 0.52112088916960242*ex_3 - 0.52112088916960242*ex_4 + 0.41790650594127499*ex_5 - 0.23192061392432986*ex_6);
     const double dqh0_6 = dq0_6 + (0.23192061392432986*ev_1 - 0.41790650594127499*ev_2 + 0.52112088916960242*ev_3 - 0.52112088916960242*ev_4 + 0.41790650594127499*ev_5 - 0.23192061392432986*ev_6);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[8] = A_1;
     coef[9] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[10] = A1_1;
     coef[11] = B1_1;
     coef[12] = B1_1 - sigma_1*A1_1;
     coef[13] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[14] = A_2;
     coef[15] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[16] = A1_2;
     coef[17] = B1_2;
     coef[18] = B1_2 - sigma_2*A1_2;
     coef[19] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[20] = A_3;
     coef[21] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[22] = A1_3;
     coef[23] = B1_3;
     coef[24] = B1_3 - sigma_3*A1_3;
     coef[25] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[26] = A_4;
     coef[27] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[28] = A1_4;
     coef[29] = B1_4;
     coef[30] = B1_4 - sigma_4*A1_4;
     coef[31] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[32] = A_5;
     coef[33] = B_5;
-    const double A1_5 = B_5 - sigma_5*A_5;
+    const double A1_5 = dqh0_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[34] = A1_5;
     coef[35] = B1_5;
     coef[36] = B1_5 - sigma_5*A1_5;
     coef[37] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[38] = A_6;
     coef[39] = B_6;
-    const double A1_6 = B_6 - sigma_6*A_6;
+    const double A1_6 = dqh0_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[40] = A1_6;
     coef[41] = B1_6;
@@ -1806,60 +1806,60 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_5 = q0_5 + (0.28867513459481287*ex_1 - 0.5*ex_2 + 0.57735026918962573*ex_3 - 0.5*ex_4 + 0.28867513459481287*ex_5);
     const double dqh0_5 = dq0_5 + (0.28867513459481287*ev_1 - 0.5*ev_2 + 0.57735026918962573*ev_3 - 0.5*ev_4 + 0.28867513459481287*ev_5);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[7] = A_1;
     coef[8] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[9] = A1_1;
     coef[10] = B1_1;
     coef[11] = B1_1 - sigma_1*A1_1;
     coef[12] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[13] = A_2;
     coef[14] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[15] = A1_2;
     coef[16] = B1_2;
     coef[17] = B1_2 - sigma_2*A1_2;
     coef[18] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[19] = A_3;
     coef[20] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[21] = A1_3;
     coef[22] = B1_3;
     coef[23] = B1_3 - sigma_3*A1_3;
     coef[24] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[25] = A_4;
     coef[26] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[27] = A1_4;
     coef[28] = B1_4;
     coef[29] = B1_4 - sigma_4*A1_4;
     coef[30] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[31] = A_5;
     coef[32] = B_5;
-    const double A1_5 = B_5 - sigma_5*A_5;
+    const double A1_5 = dqh0_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[33] = A1_5;
     coef[34] = B1_5;
@@ -2242,48 +2242,48 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_4 = q0_4 + (-0.37174803446018451*ex_1 + 0.60150095500754563*ex_2 - 0.60150095500754563*ex_3 + 0.37174803446018451*ex_4);
     const double dqh0_4 = dq0_4 + (-0.37174803446018451*ev_1 + 0.60150095500754563*ev_2 - 0.60150095500754563*ev_3 + 0.37174803446018451*ev_4);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[6] = A_1;
     coef[7] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[8] = A1_1;
     coef[9] = B1_1;
     coef[10] = B1_1 - sigma_1*A1_1;
     coef[11] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[12] = A_2;
     coef[13] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[14] = A1_2;
     coef[15] = B1_2;
     coef[16] = B1_2 - sigma_2*A1_2;
     coef[17] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[18] = A_3;
     coef[19] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[20] = A1_3;
     coef[21] = B1_3;
     coef[22] = B1_3 - sigma_3*A1_3;
     coef[23] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[24] = A_4;
     coef[25] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[26] = A1_4;
     coef[27] = B1_4;
@@ -2635,36 +2635,36 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_3 = q0_3 + (-0.5*ex_1 + 0.70710678118654757*ex_2 - 0.5*ex_3);
     const double dqh0_3 = dq0_3 + (-0.5*ev_1 + 0.70710678118654757*ev_2 - 0.5*ev_3);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[5] = A_1;
     coef[6] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[7] = A1_1;
     coef[8] = B1_1;
     coef[9] = B1_1 - sigma_1*A1_1;
     coef[10] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[11] = A_2;
     coef[12] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[13] = A1_2;
     coef[14] = B1_2;
     coef[15] = B1_2 - sigma_2*A1_2;
     coef[16] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[17] = A_3;
     coef[18] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[19] = A1_3;
     coef[20] = B1_3;
@@ -2985,24 +2985,24 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_2 = q0_2 + (0.70710678118654757*ex_1 - 0.70710678118654757*ex_2);
     const double dqh0_2 = dq0_2 + (0.70710678118654757*ev_1 - 0.70710678118654757*ev_2);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[4] = A_1;
     coef[5] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[6] = A1_1;
     coef[7] = B1_1;
     coef[8] = B1_1 - sigma_1*A1_1;
     coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[10] = A_2;
     coef[11] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[12] = A1_2;
     coef[13] = B1_2;
@@ -3292,12 +3292,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -3580,12 +3580,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -3868,12 +3868,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -4156,12 +4156,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -4444,12 +4444,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -4732,12 +4732,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -5020,12 +5020,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -5308,12 +5308,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -6001,96 +6001,96 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_8 = q0_8 + (-9.8503756273555532e-08*ex_1 + 9.9488793836291071e-07*ex_2 - 9.9498644211918418e-06*ex_3 + 9.9498742715674676e-05*ex_4 - 0.00099498743700712224*ex_5 + 0.0099498743710562595*ex_6 - 0.0994987437106611*ex_7 + 0.99498743710662074*ex_8);
     const double dqh0_8 = dq0_8 + (-9.8503756273555532e-08*ev_1 + 9.9488793836291071e-07*ev_2 - 9.9498644211918418e-06*ev_3 + 9.9498742715674676e-05*ev_4 - 0.00099498743700712224*ev_5 + 0.0099498743710562595*ev_6 - 0.0994987437106611*ev_7 + 0.99498743710662074*ev_8);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
     coef[11] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[12] = A1_1;
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
     coef[17] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[18] = A1_2;
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
     coef[23] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[24] = A1_3;
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
     coef[29] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[30] = A1_4;
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
     coef[35] = B_5;
-    const double A1_5 = B_5 - sigma_5*A_5;
+    const double A1_5 = dqh0_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[36] = A1_5;
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
     coef[41] = B_6;
-    const double A1_6 = B_6 - sigma_6*A_6;
+    const double A1_6 = dqh0_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[42] = A1_6;
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
     coef[47] = B_7;
-    const double A1_7 = B_7 - sigma_7*A_7;
+    const double A1_7 = dqh0_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[48] = A1_7;
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
     // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
     coef[53] = B_8;
-    const double A1_8 = B_8 - sigma_8*A_8;
+    const double A1_8 = dqh0_8;
     const double B1_8 = -kappa_8*A_8 - sigma_8*B_8;
     coef[54] = A1_8;
     coef[55] = B1_8;
@@ -6827,96 +6827,96 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_8 = q0_8 + (3.6235058980809498e-06*ex_1 - 7.6266171318004641e-05*ex_2 + 0.0016015978049290199*ex_3 - 0.033633554099140955*ex_4 + 0.70630463199228721*ex_5 - 0.706304624149241*ex_6 + 0.03363338117864878*ex_7 - 0.0015979660833513988*ex_8);
     const double dqh0_8 = dq0_8 + (3.6235058980809498e-06*ev_1 - 7.6266171318004641e-05*ev_2 + 0.0016015978049290199*ev_3 - 0.033633554099140955*ev_4 + 0.70630463199228721*ev_5 - 0.706304624149241*ev_6 + 0.03363338117864878*ev_7 - 0.0015979660833513988*ev_8);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
     coef[11] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[12] = A1_1;
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
     coef[17] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[18] = A1_2;
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
     coef[23] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[24] = A1_3;
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
     coef[29] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[30] = A1_4;
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
     coef[35] = B_5;
-    const double A1_5 = B_5 - sigma_5*A_5;
+    const double A1_5 = dqh0_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[36] = A1_5;
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
     coef[41] = B_6;
-    const double A1_6 = B_6 - sigma_6*A_6;
+    const double A1_6 = dqh0_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[42] = A1_6;
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
     coef[47] = B_7;
-    const double A1_7 = B_7 - sigma_7*A_7;
+    const double A1_7 = dqh0_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[48] = A1_7;
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
     // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
     coef[53] = B_8;
-    const double A1_8 = B_8 - sigma_8*A_8;
+    const double A1_8 = dqh0_8;
     const double B1_8 = -kappa_8*A_8 - sigma_8*B_8;
     coef[54] = A1_8;
     coef[55] = B1_8;
@@ -7392,84 +7392,84 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_7 = q0_7 + (3.6235656511060938e-06*ex_1 - 7.6267234666962098e-05*ex_2 + 0.0016016160363883712*ex_3 - 0.033633850879604008*ex_4 + 0.70630905670258981*ex_5 - 0.70630559784406499*ex_6 + 0.033557591470408731*ex_7);
     const double dqh0_7 = dq0_7 + (3.6235656511060938e-06*ev_1 - 7.6267234666962098e-05*ev_2 + 0.0016016160363883712*ev_3 - 0.033633850879604008*ev_4 + 0.70630905670258981*ev_5 - 0.70630559784406499*ev_6 + 0.033557591470408731*ev_7);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[9] = A_1;
     coef[10] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[11] = A1_1;
     coef[12] = B1_1;
     coef[13] = B1_1 - sigma_1*A1_1;
     coef[14] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[15] = A_2;
     coef[16] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[17] = A1_2;
     coef[18] = B1_2;
     coef[19] = B1_2 - sigma_2*A1_2;
     coef[20] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[21] = A_3;
     coef[22] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[23] = A1_3;
     coef[24] = B1_3;
     coef[25] = B1_3 - sigma_3*A1_3;
     coef[26] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[27] = A_4;
     coef[28] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[29] = A1_4;
     coef[30] = B1_4;
     coef[31] = B1_4 - sigma_4*A1_4;
     coef[32] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[33] = A_5;
     coef[34] = B_5;
-    const double A1_5 = B_5 - sigma_5*A_5;
+    const double A1_5 = dqh0_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[35] = A1_5;
     coef[36] = B1_5;
     coef[37] = B1_5 - sigma_5*A1_5;
     coef[38] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[39] = A_6;
     coef[40] = B_6;
-    const double A1_6 = B_6 - sigma_6*A_6;
+    const double A1_6 = dqh0_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[41] = A1_6;
     coef[42] = B1_6;
     coef[43] = B1_6 - sigma_6*A1_6;
     coef[44] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[45] = A_7;
     coef[46] = B_7;
-    const double A1_7 = B_7 - sigma_7*A_7;
+    const double A1_7 = dqh0_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[47] = A1_7;
     coef[48] = B1_7;
@@ -7914,72 +7914,72 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_6 = q0_6 + (3.6459675486191742e-06*ex_1 - 7.6652319973633226e-05*ex_2 + 0.0016078818584643933*ex_3 - 0.033727234591057705*ex_4 + 0.70746885654494163*ex_5 - 0.70593746146021352*ex_6);
     const double dqh0_6 = dq0_6 + (3.6459675486191742e-06*ev_1 - 7.6652319973633226e-05*ev_2 + 0.0016078818584643933*ev_3 - 0.033727234591057705*ev_4 + 0.70746885654494163*ev_5 - 0.70593746146021352*ev_6);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[8] = A_1;
     coef[9] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[10] = A1_1;
     coef[11] = B1_1;
     coef[12] = B1_1 - sigma_1*A1_1;
     coef[13] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[14] = A_2;
     coef[15] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[16] = A1_2;
     coef[17] = B1_2;
     coef[18] = B1_2 - sigma_2*A1_2;
     coef[19] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[20] = A_3;
     coef[21] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[22] = A1_3;
     coef[23] = B1_3;
     coef[24] = B1_3 - sigma_3*A1_3;
     coef[25] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[26] = A_4;
     coef[27] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[28] = A1_4;
     coef[29] = B1_4;
     coef[30] = B1_4 - sigma_4*A1_4;
     coef[31] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[32] = A_5;
     coef[33] = B_5;
-    const double A1_5 = B_5 - sigma_5*A_5;
+    const double A1_5 = dqh0_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[34] = A1_5;
     coef[35] = B1_5;
     coef[36] = B1_5 - sigma_5*A1_5;
     coef[37] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[38] = A_6;
     coef[39] = B_6;
-    const double A1_6 = B_6 - sigma_6*A_6;
+    const double A1_6 = dqh0_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[40] = A1_6;
     coef[41] = B1_6;
@@ -8441,84 +8441,84 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_7 = q0_7 + (-0.70593747576578181*ex_4 + 0.70746886298994682*ex_5 - 0.033727061282787268*ex_6 + 0.0016042276568910725*ex_7);
     const double dqh0_7 = dq0_7 + (-0.70593747576578181*ev_4 + 0.70746886298994682*ev_5 - 0.033727061282787268*ev_6 + 0.0016042276568910725*ev_7);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[9] = A_1;
     coef[10] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[11] = A1_1;
     coef[12] = B1_1;
     coef[13] = B1_1 - sigma_1*A1_1;
     coef[14] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[15] = A_2;
     coef[16] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[17] = A1_2;
     coef[18] = B1_2;
     coef[19] = B1_2 - sigma_2*A1_2;
     coef[20] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[21] = A_3;
     coef[22] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[23] = A1_3;
     coef[24] = B1_3;
     coef[25] = B1_3 - sigma_3*A1_3;
     coef[26] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[27] = A_4;
     coef[28] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[29] = A1_4;
     coef[30] = B1_4;
     coef[31] = B1_4 - sigma_4*A1_4;
     coef[32] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[33] = A_5;
     coef[34] = B_5;
-    const double A1_5 = B_5 - sigma_5*A_5;
+    const double A1_5 = dqh0_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[35] = A1_5;
     coef[36] = B1_5;
     coef[37] = B1_5 - sigma_5*A1_5;
     coef[38] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[39] = A_6;
     coef[40] = B_6;
-    const double A1_6 = B_6 - sigma_6*A_6;
+    const double A1_6 = dqh0_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[41] = A1_6;
     coef[42] = B1_6;
     coef[43] = B1_6 - sigma_6*A1_6;
     coef[44] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[45] = A_7;
     coef[46] = B_7;
-    const double A1_7 = B_7 - sigma_7*A_7;
+    const double A1_7 = dqh0_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[47] = A1_7;
     coef[48] = B1_7;
@@ -9248,96 +9248,96 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_8 = q0_8 + (0.033557591470402277*ex_1 - 0.70630559784395019*ex_2 + 0.7063090567025152*ex_3 - 0.033633850880484692*ex_4 + 0.0016016160550201795*ex_5 - 7.6267625941484944e-05*ex_6 + 3.6317823954159418e-06*ex_7 - 1.7255118790902426e-07*ex_8);
     const double dqh0_8 = dq0_8 + (0.033557591470402277*ev_1 - 0.70630559784395019*ev_2 + 0.7063090567025152*ev_3 - 0.033633850880484692*ev_4 + 0.0016016160550201795*ev_5 - 7.6267625941484944e-05*ev_6 + 3.6317823954159418e-06*ev_7 - 1.7255118790902426e-07*ev_8);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
     coef[11] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[12] = A1_1;
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
     coef[17] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[18] = A1_2;
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
     coef[23] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[24] = A1_3;
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
     coef[29] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[30] = A1_4;
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
     coef[35] = B_5;
-    const double A1_5 = B_5 - sigma_5*A_5;
+    const double A1_5 = dqh0_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[36] = A1_5;
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
     coef[41] = B_6;
-    const double A1_6 = B_6 - sigma_6*A_6;
+    const double A1_6 = dqh0_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[42] = A1_6;
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
     coef[47] = B_7;
-    const double A1_7 = B_7 - sigma_7*A_7;
+    const double A1_7 = dqh0_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[48] = A1_7;
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
     // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
     coef[53] = B_8;
-    const double A1_8 = B_8 - sigma_8*A_8;
+    const double A1_8 = dqh0_8;
     const double B1_8 = -kappa_8*A_8 - sigma_8*B_8;
     coef[54] = A1_8;
     coef[55] = B1_8;
@@ -9789,72 +9789,72 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_6 = q0_6 + (0.033557591472812565*ex_1 - 0.70630559788540681*ex_2 + 0.70630905672618716*ex_3 - 0.033633850490783018*ex_4 + 0.0016016078197819729*ex_5 - 7.6094683486602324e-05*ex_6);
     const double dqh0_6 = dq0_6 + (0.033557591472812565*ev_1 - 0.70630559788540681*ev_2 + 0.70630905672618716*ev_3 - 0.033633850490783018*ev_4 + 0.0016016078197819729*ev_5 - 7.6094683486602324e-05*ev_6);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[8] = A_1;
     coef[9] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[10] = A1_1;
     coef[11] = B1_1;
     coef[12] = B1_1 - sigma_1*A1_1;
     coef[13] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[14] = A_2;
     coef[15] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[16] = A1_2;
     coef[17] = B1_2;
     coef[18] = B1_2 - sigma_2*A1_2;
     coef[19] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[20] = A_3;
     coef[21] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[22] = A1_3;
     coef[23] = B1_3;
     coef[24] = B1_3 - sigma_3*A1_3;
     coef[25] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[26] = A_4;
     coef[27] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[28] = A1_4;
     coef[29] = B1_4;
     coef[30] = B1_4 - sigma_4*A1_4;
     coef[31] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[32] = A_5;
     coef[33] = B_5;
-    const double A1_5 = B_5 - sigma_5*A_5;
+    const double A1_5 = dqh0_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[34] = A1_5;
     coef[35] = B1_5;
     coef[36] = B1_5 - sigma_5*A1_5;
     coef[37] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[38] = A_6;
     coef[39] = B_6;
-    const double A1_6 = B_6 - sigma_6*A_6;
+    const double A1_6 = dqh0_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[40] = A1_6;
     coef[41] = B1_6;
@@ -10268,60 +10268,60 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_5 = q0_5 + (0.033557592338143025*ex_1 - 0.70630561201796638*ex_2 + 0.706309063033425*ex_3 - 0.033633678826402627*ex_4 + 0.0015979843054959924*ex_5);
     const double dqh0_5 = dq0_5 + (0.033557592338143025*ev_1 - 0.70630561201796638*ev_2 + 0.706309063033425*ev_3 - 0.033633678826402627*ev_4 + 0.0015979843054959924*ev_5);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[7] = A_1;
     coef[8] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[9] = A1_1;
     coef[10] = B1_1;
     coef[11] = B1_1 - sigma_1*A1_1;
     coef[12] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[13] = A_2;
     coef[14] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[15] = A1_2;
     coef[16] = B1_2;
     coef[17] = B1_2 - sigma_2*A1_2;
     coef[18] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[19] = A_3;
     coef[20] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[21] = A1_3;
     coef[22] = B1_3;
     coef[23] = B1_3 - sigma_3*A1_3;
     coef[24] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[25] = A_4;
     coef[26] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[27] = A1_4;
     coef[28] = B1_4;
     coef[29] = B1_4 - sigma_4*A1_4;
     coef[30] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[31] = A_5;
     coef[32] = B_5;
-    const double A1_5 = B_5 - sigma_5*A_5;
+    const double A1_5 = dqh0_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[33] = A1_5;
     coef[34] = B1_5;
@@ -10704,48 +10704,48 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_4 = q0_4 + (-0.03355788806692038*ex_1 + 0.70631003684535587*ex_2 - 0.70631003684535587*ex_3 + 0.03355788806692038*ex_4);
     const double dqh0_4 = dq0_4 + (-0.03355788806692038*ev_1 + 0.70631003684535587*ev_2 - 0.70631003684535587*ev_3 + 0.03355788806692038*ev_4);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[6] = A_1;
     coef[7] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[8] = A1_1;
     coef[9] = B1_1;
     coef[10] = B1_1 - sigma_1*A1_1;
     coef[11] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[12] = A_2;
     coef[13] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[14] = A1_2;
     coef[15] = B1_2;
     coef[16] = B1_2 - sigma_2*A1_2;
     coef[17] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[18] = A_3;
     coef[19] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[20] = A1_3;
     coef[21] = B1_3;
     coef[22] = B1_3 - sigma_3*A1_3;
     coef[23] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[24] = A_4;
     coef[25] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[26] = A1_4;
     coef[27] = B1_4;
@@ -11097,36 +11097,36 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_3 = q0_3 + (-0.03365089018646162*ex_1 + 0.70746986340841567*ex_2 - 0.70594193101028946*ex_3);
     const double dqh0_3 = dq0_3 + (-0.03365089018646162*ev_1 + 0.70746986340841567*ev_2 - 0.70594193101028946*ev_3);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[5] = A_1;
     coef[6] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[7] = A1_1;
     coef[8] = B1_1;
     coef[9] = B1_1 - sigma_1*A1_1;
     coef[10] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[11] = A_2;
     coef[12] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[13] = A1_2;
     coef[14] = B1_2;
     coef[15] = B1_2 - sigma_2*A1_2;
     coef[16] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[17] = A_3;
     coef[18] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[19] = A1_3;
     coef[20] = B1_3;
@@ -11828,96 +11828,96 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_8 = q0_8 + (0.023650020034497805*ex_1 - 0.49833523427885656*ex_2 + 0.4994126060731548*ex_3 - 0.047428950843709357*ex_4 + 0.49997417228151997*ex_5 - 0.49890043736424677*ex_6 + 0.023730290418033831*ex_7 - 0.0011261933839037054*ex_8);
     const double dqh0_8 = dq0_8 + (0.023650020034497805*ev_1 - 0.49833523427885656*ev_2 + 0.4994126060731548*ev_3 - 0.047428950843709357*ev_4 + 0.49997417228151997*ev_5 - 0.49890043736424677*ev_6 + 0.023730290418033831*ev_7 - 0.0011261933839037054*ev_8);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
     coef[11] = B_1;
-    const double A1_1 = B_1 - sigma_1*A_1;
+    const double A1_1 = dqh0_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[12] = A1_1;
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
     coef[17] = B_2;
-    const double A1_2 = B_2 - sigma_2*A_2;
+    const double A1_2 = dqh0_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[18] = A1_2;
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
     coef[23] = B_3;
-    const double A1_3 = B_3 - sigma_3*A_3;
+    const double A1_3 = dqh0_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[24] = A1_3;
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
     coef[29] = B_4;
-    const double A1_4 = B_4 - sigma_4*A_4;
+    const double A1_4 = dqh0_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[30] = A1_4;
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
     coef[35] = B_5;
-    const double A1_5 = B_5 - sigma_5*A_5;
+    const double A1_5 = dqh0_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[36] = A1_5;
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
     coef[41] = B_6;
-    const double A1_6 = B_6 - sigma_6*A_6;
+    const double A1_6 = dqh0_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[42] = A1_6;
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
     coef[47] = B_7;
-    const double A1_7 = B_7 - sigma_7*A_7;
+    const double A1_7 = dqh0_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[48] = A1_7;
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
     // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
+    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
     coef[53] = B_8;
-    const double A1_8 = B_8 - sigma_8*A_8;
+    const double A1_8 = dqh0_8;
     const double B1_8 = -kappa_8*A_8 - sigma_8*B_8;
     coef[54] = A1_8;
     coef[55] = B1_8;

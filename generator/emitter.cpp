@@ -260,7 +260,7 @@ void emit_setup_modes(const Derivation& d, Code& s, const SlotFn& slot) {
         const Mode& m = d.modes[j];
         const std::string J = idx(j);
         s.line(1, "// Mode " + J + " (" + regime_name(m.regime) + "): A = q_h(0), B = q_h'(0) + sigma A (the particular");
-        s.line(1, "// parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.");
+        s.line(1, "// parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.");
         if (m.regime == Regime::rigid) {
             s.line(1, slot("p_" + J) + " = p_" + J + ";  // q_p = p tau^2 / 2");
         } else if (m.regime == Regime::rigid_damped) {
@@ -270,7 +270,10 @@ void emit_setup_modes(const Derivation& d, Code& s, const SlotFn& slot) {
         s.line(1, "const double B_" + J + " = dqh0_" + J + (m.sigma.is_zero() ? "" : " + sigma_" + J + "*A_" + J) + ";");
         s.line(1, slot("A_" + J) + " = A_" + J + ";");
         s.line(1, slot("B_" + J) + " = B_" + J + ";");
-        s.line(1, "const double A1_" + J + " = B_" + J + " - sigma_" + J + "*A_" + J + ";");
+        // A1 = q_h'(0) = B - sigma A, taken as q_h'(0) itself: B - sigma A cancels to
+        // eps |sigma A| while eval's scale of v counts only |A1| (a 1-mass model at rest
+        // got v(0) = -1e-16 against a scale of 8e-3 and stopped as chattering at t0).
+        s.line(1, "const double A1_" + J + " = dqh0_" + J + ";");
         s.line(1, "const double B1_" + J + " = -kappa_" + J + "*A_" + J + " - sigma_" + J + "*B_" + J + ";");
         s.line(1, slot("A1_" + J) + " = A1_" + J + ";");
         s.line(1, slot("B1_" + J) + " = B1_" + J + ";");
