@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -281,6 +283,81 @@ TEST(EngineGuards, AccumulatingSwitchesStopWithZenoStatus) {
     EXPECT_NE(s.message.find("3 switches between t = 0.314"), std::string::npos) << s.message;
 }
 
+
+// The Zeno guard measures on the run's own clock (issue 12). A bilinear
+// oscillator (k = w^2, a stop of 3k at gap 0, so the closed half-cycle is
+// pi/(2w) and the open one pi/w) switching regularly at 16 kHz from
+// t0 = 1e9: 1000 switches take 62.5 ms, which a span relative to |t| (1 s at
+// t = 1e9) took for an accumulation. It must run to t_end with every switch
+// of the closed form, while switches accumulating on the run's clock at the
+// same t0 are still refused as Zeno.
+Model bilinear_at(double t0, double w, double v0) {
+    char toml[512];
+    std::snprintf(toml, sizeof toml, R"(
+name = "bilinear_at"
+[[mass]]
+name = "m1"
+m = 1
+[[spring]]
+between = ["m1", "ground"]
+k = %.17g
+[[contact]]
+between = ["m1", "ground"]
+gap = 0
+k = %.17g
+[initial]
+t0 = %.17g
+v = { m1 = %.17g }
+)", w * w, 3 * w * w, t0, v0);
+    return model_from(toml);
+}
+
+TEST(EngineGuards, RegularSwitchingAtLargeT0IsNotZeno) {
+    const double T = 1.0 / 8000;                // period: open pi/w + closed pi/(2w)
+    const double w = 1.5 * kPi / T;             // 2 switches a period: 16 kHz
+    const double t0 = 1e9, span = 0.1 + T / 4;  // no switch near t_end
+    const Model m = bilinear_at(t0, w, -1.0);   // starts open (G' < 0)
+    const Outcome r = simulate(m, t0 + span);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    // Closes at t0 + pi/w + j T, opens at t0 + j T (j >= 1): 1600 switches in 0.1 s.
+    std::size_t expected = 0;
+    for (int j = 0; j < 2000; ++j) {
+        const long double close = static_cast<long double>(kPi) / w + j * static_cast<long double>(T);
+        const long double open = (j + 1) * static_cast<long double>(T);
+        expected += (close < span) + (open < span);
+    }
+    ASSERT_EQ(expected, 1600u);
+    ASSERT_EQ(r.events.size(), expected);
+    for (std::size_t k = 0; k < r.events.size(); ++k) {
+        const std::size_t j = k / 2;
+        const bool close = k % 2 == 0;
+        EXPECT_EQ(r.events[k].kind, close ? EventKind::contact_close : EventKind::contact_open) << k;
+        const double truth = t0 + (close ? kPi / w + static_cast<double>(j) * T : static_cast<double>(j + 1) * T);
+        // At t = 1e9 the engine knows a switch function only to its rounding
+        // level 16 eps (scale + |g'| |t|) (engine.h), i.e. a switch time to
+        // 16 eps |t| = 3.6e-6 s; twice that.
+        EXPECT_NEAR(r.events[k].t, truth, 32 * std::numeric_limits<double>::epsilon() * t0) << k;
+    }
+}
+
+TEST(EngineGuards, AccumulationAtLargeT0IsStillZeno) {
+    // The guard's span follows the run's clock at t0 = 1e9 too: the Coulomb
+    // decay's first three reversals (0.31, 0.63, 0.94 s after t0) within a
+    // span of 1 s (zeno_span = 1 of the 0.94 s covered) are an accumulation.
+    Model m = model_from(kCoulomb);
+    m.t0 = 1e9;
+    GenericSolverProvider provider(m);
+    Engine engine(m, provider);
+    Recorder rec(m.dof());
+    EngineOptions opt;
+    opt.t_end = 1e9 + 5.0;
+    opt.zeno_events = 3;
+    opt.zeno_span = 1.0;
+    const RunSummary s = engine.run(opt, rec);
+    EXPECT_EQ(s.status, RunStatus::zeno) << s.message;
+    EXPECT_EQ(s.events, 3u);
+    EXPECT_NEAR(s.t, 1e9 + 3 * kPi / 10, 1e-6);
+}
 
 // A tie |A| = mu_s N at t0 (k x0 = 4 = mu_s m g with g = 8) is decided by the
 // derivative of |A| with the mass held: not increasing -> stuck for good;
