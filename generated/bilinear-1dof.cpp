@@ -53,12 +53,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1;
     coef[1] = A_1;
     coef[2] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[3] = A1_1;
     coef[4] = B1_1;
@@ -176,12 +176,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1;
     coef[1] = A_1;
     coef[2] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[3] = A1_1;
     coef[4] = B1_1;

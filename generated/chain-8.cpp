@@ -240,96 +240,96 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_8 = q0_8 + (-0.16122984176531685*ex_1 + 0.30301298511469577*ex_2 - 0.40824829046386302*ex_3 + 0.46424282688001262*ex_4 - 0.46424282688001262*ex_5 + 0.40824829046386302*ex_6 - 0.30301298511469577*ex_7 + 0.16122984176531685*ex_8);
     const double dqh0_8 = dq0_8 + (-0.16122984176531685*ev_1 + 0.30301298511469577*ev_2 - 0.40824829046386302*ev_3 + 0.46424282688001262*ev_4 - 0.46424282688001262*ev_5 + 0.40824829046386302*ev_6 - 0.30301298511469577*ev_7 + 0.16122984176531685*ev_8);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
     coef[11] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[12] = A1_1;
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
     coef[17] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[18] = A1_2;
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
     coef[23] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[24] = A1_3;
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
     coef[29] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[30] = A1_4;
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
     coef[35] = B_5;
-    const double A1_5 = dqh0_5;
+    const double A1_5 = B_5 - sigma_5*A_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[36] = A1_5;
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
     coef[41] = B_6;
-    const double A1_6 = dqh0_6;
+    const double A1_6 = B_6 - sigma_6*A_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[42] = A1_6;
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
     coef[47] = B_7;
-    const double A1_7 = dqh0_7;
+    const double A1_7 = B_7 - sigma_7*A_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[48] = A1_7;
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
     // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
     coef[53] = B_8;
-    const double A1_8 = dqh0_8;
+    const double A1_8 = B_8 - sigma_8*A_8;
     const double B1_8 = -kappa_8*A_8 - sigma_8*B_8;
     coef[54] = A1_8;
     coef[55] = B1_8;
@@ -358,7 +358,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -373,7 +373,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -388,7 +388,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -403,7 +403,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -418,7 +418,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_5 = dqh_5;
     const double ddq_5 = ddqh_5;
     const double mq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);  // magnitude of the terms of q
-    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -433,7 +433,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_6 = dqh_6;
     const double ddq_6 = ddqh_6;
     const double mq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);  // magnitude of the terms of q
-    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -448,7 +448,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_7 = dqh_7;
     const double ddq_7 = ddqh_7;
     const double mq_7 = __builtin_fabs(coef[46]*eC_7) + __builtin_fabs(coef[47]*eS_7);  // magnitude of the terms of q
-    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_8 = __builtin_exp(-sigma_8*tau);
@@ -463,7 +463,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_8 = dqh_8;
     const double ddq_8 = ddqh_8;
     const double mq_8 = __builtin_fabs(coef[52]*eC_8) + __builtin_fabs(coef[53]*eS_8);  // magnitude of the terms of q
-    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8);
+    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8) + __builtin_fabs(sigma_8*coef[52]*eC_8);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.16122984176531685*q_1 + 0.30301298511469577*q_2 + 0.40824829046386302*q_3 + 0.46424282688001262*q_4 + 0.46424282688001262*q_5 + 0.40824829046386302*q_6 - 0.30301298511469577*q_7 - 0.16122984176531685*q_8 + 5.4322450949382057*sin_1 - 2.7752849247341715*cos_1;  // m1
     v[0] = 0.16122984176531685*dq_1 + 0.30301298511469577*dq_2 + 0.40824829046386302*dq_3 + 0.46424282688001262*dq_4 + 0.46424282688001262*dq_5 + 0.40824829046386302*dq_6 - 0.30301298511469577*dq_7 - 0.16122984176531685*dq_8 + 36.939266645579799*cos_1 + 18.871937488192366*sin_1;
@@ -805,84 +805,84 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_7 = q0_7 + (-0.19134171618254489*ex_1 + 0.35355339059327379*ex_2 - 0.46193976625564337*ex_3 + 0.5*ex_4 - 0.46193976625564337*ex_5 + 0.35355339059327379*ex_6 - 0.19134171618254489*ex_7);
     const double dqh0_7 = dq0_7 + (-0.19134171618254489*ev_1 + 0.35355339059327379*ev_2 - 0.46193976625564337*ev_3 + 0.5*ev_4 - 0.46193976625564337*ev_5 + 0.35355339059327379*ev_6 - 0.19134171618254489*ev_7);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[9] = A_1;
     coef[10] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[11] = A1_1;
     coef[12] = B1_1;
     coef[13] = B1_1 - sigma_1*A1_1;
     coef[14] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[15] = A_2;
     coef[16] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[17] = A1_2;
     coef[18] = B1_2;
     coef[19] = B1_2 - sigma_2*A1_2;
     coef[20] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[21] = A_3;
     coef[22] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[23] = A1_3;
     coef[24] = B1_3;
     coef[25] = B1_3 - sigma_3*A1_3;
     coef[26] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[27] = A_4;
     coef[28] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[29] = A1_4;
     coef[30] = B1_4;
     coef[31] = B1_4 - sigma_4*A1_4;
     coef[32] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[33] = A_5;
     coef[34] = B_5;
-    const double A1_5 = dqh0_5;
+    const double A1_5 = B_5 - sigma_5*A_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[35] = A1_5;
     coef[36] = B1_5;
     coef[37] = B1_5 - sigma_5*A1_5;
     coef[38] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[39] = A_6;
     coef[40] = B_6;
-    const double A1_6 = dqh0_6;
+    const double A1_6 = B_6 - sigma_6*A_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[41] = A1_6;
     coef[42] = B1_6;
     coef[43] = B1_6 - sigma_6*A1_6;
     coef[44] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[45] = A_7;
     coef[46] = B_7;
-    const double A1_7 = dqh0_7;
+    const double A1_7 = B_7 - sigma_7*A_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[47] = A1_7;
     coef[48] = B1_7;
@@ -912,7 +912,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[11]*eC_1) + __builtin_fabs(coef[12]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[11]*eC_1) + __builtin_fabs(coef[12]*eS_1) + __builtin_fabs(sigma_1*coef[9]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -927,7 +927,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[17]*eC_2) + __builtin_fabs(coef[18]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[17]*eC_2) + __builtin_fabs(coef[18]*eS_2) + __builtin_fabs(sigma_2*coef[15]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -942,7 +942,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[23]*eC_3) + __builtin_fabs(coef[24]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[23]*eC_3) + __builtin_fabs(coef[24]*eS_3) + __builtin_fabs(sigma_3*coef[21]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -957,7 +957,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[29]*eC_4) + __builtin_fabs(coef[30]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[29]*eC_4) + __builtin_fabs(coef[30]*eS_4) + __builtin_fabs(sigma_4*coef[27]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -972,7 +972,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_5 = dqh_5;
     const double ddq_5 = ddqh_5;
     const double mq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5);  // magnitude of the terms of q
-    const double mdq_5 = __builtin_fabs(coef[35]*eC_5) + __builtin_fabs(coef[36]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[35]*eC_5) + __builtin_fabs(coef[36]*eS_5) + __builtin_fabs(sigma_5*coef[33]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -987,7 +987,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_6 = dqh_6;
     const double ddq_6 = ddqh_6;
     const double mq_6 = __builtin_fabs(coef[39]*eC_6) + __builtin_fabs(coef[40]*eS_6);  // magnitude of the terms of q
-    const double mdq_6 = __builtin_fabs(coef[41]*eC_6) + __builtin_fabs(coef[42]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[41]*eC_6) + __builtin_fabs(coef[42]*eS_6) + __builtin_fabs(sigma_6*coef[39]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -1002,7 +1002,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_7 = dqh_7;
     const double ddq_7 = ddqh_7;
     const double mq_7 = __builtin_fabs(coef[45]*eC_7) + __builtin_fabs(coef[46]*eS_7);  // magnitude of the terms of q
-    const double mdq_7 = __builtin_fabs(coef[47]*eC_7) + __builtin_fabs(coef[48]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[47]*eC_7) + __builtin_fabs(coef[48]*eS_7) + __builtin_fabs(sigma_7*coef[45]*eC_7);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.19134171618254489*q_1 + 0.35355339059327379*q_2 - 0.46193976625564337*q_3 + 0.5*q_4 + 0.46193976625564337*q_5 - 0.35355339059327379*q_6 - 0.19134171618254489*q_7 + 0.59160325420102255*sin_1 - 0.012692071416714652*cos_1;  // m1
     v[0] = 0.19134171618254489*dq_1 + 0.35355339059327379*dq_2 - 0.46193976625564337*dq_3 + 0.5*dq_4 + 0.46193976625564337*dq_5 - 0.35355339059327379*dq_6 - 0.19134171618254489*dq_7 + 4.0229021285669528*cos_1 + 0.086306085633659629*sin_1;
@@ -1327,72 +1327,72 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_6 = q0_6 + (0.23192061392432986*ex_1 - 0.41790650594127499*ex_2 + 0.52112088916960242*ex_3 - 0.52112088916960242*ex_4 + 0.41790650594127499*ex_5 - 0.23192061392432986*ex_6);
     const double dqh0_6 = dq0_6 + (0.23192061392432986*ev_1 - 0.41790650594127499*ev_2 + 0.52112088916960242*ev_3 - 0.52112088916960242*ev_4 + 0.41790650594127499*ev_5 - 0.23192061392432986*ev_6);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[8] = A_1;
     coef[9] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[10] = A1_1;
     coef[11] = B1_1;
     coef[12] = B1_1 - sigma_1*A1_1;
     coef[13] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[14] = A_2;
     coef[15] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[16] = A1_2;
     coef[17] = B1_2;
     coef[18] = B1_2 - sigma_2*A1_2;
     coef[19] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[20] = A_3;
     coef[21] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[22] = A1_3;
     coef[23] = B1_3;
     coef[24] = B1_3 - sigma_3*A1_3;
     coef[25] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[26] = A_4;
     coef[27] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[28] = A1_4;
     coef[29] = B1_4;
     coef[30] = B1_4 - sigma_4*A1_4;
     coef[31] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[32] = A_5;
     coef[33] = B_5;
-    const double A1_5 = dqh0_5;
+    const double A1_5 = B_5 - sigma_5*A_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[34] = A1_5;
     coef[35] = B1_5;
     coef[36] = B1_5 - sigma_5*A1_5;
     coef[37] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[38] = A_6;
     coef[39] = B_6;
-    const double A1_6 = dqh0_6;
+    const double A1_6 = B_6 - sigma_6*A_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[40] = A1_6;
     coef[41] = B1_6;
@@ -1423,7 +1423,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1) + __builtin_fabs(sigma_1*coef[8]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -1438,7 +1438,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2) + __builtin_fabs(sigma_2*coef[14]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -1453,7 +1453,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3) + __builtin_fabs(sigma_3*coef[20]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -1468,7 +1468,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4) + __builtin_fabs(sigma_4*coef[26]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -1483,7 +1483,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_5 = dqh_5;
     const double ddq_5 = ddqh_5;
     const double mq_5 = __builtin_fabs(coef[32]*eC_5) + __builtin_fabs(coef[33]*eS_5);  // magnitude of the terms of q
-    const double mdq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5) + __builtin_fabs(sigma_5*coef[32]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -1498,7 +1498,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_6 = dqh_6;
     const double ddq_6 = ddqh_6;
     const double mq_6 = __builtin_fabs(coef[38]*eC_6) + __builtin_fabs(coef[39]*eS_6);  // magnitude of the terms of q
-    const double mdq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6) + __builtin_fabs(sigma_6*coef[38]*eC_6);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.23192061392432986*q_1 + 0.41790650594127499*q_2 + 0.52112088916960242*q_3 + 0.52112088916960242*q_4 - 0.41790650594127499*q_5 + 0.23192061392432986*q_6 + 0.3446837043168765*sin_1 - 0.0048794187606921637*cos_1;  // m1
     v[0] = 0.23192061392432986*dq_1 + 0.41790650594127499*dq_2 + 0.52112088916960242*dq_3 + 0.52112088916960242*dq_4 - 0.41790650594127499*dq_5 + 0.23192061392432986*dq_6 + 2.3438491893547604*cos_1 + 0.033180047572706713*sin_1;
@@ -1806,60 +1806,60 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_5 = q0_5 + (0.28867513459481287*ex_1 - 0.5*ex_2 + 0.57735026918962573*ex_3 - 0.5*ex_4 + 0.28867513459481287*ex_5);
     const double dqh0_5 = dq0_5 + (0.28867513459481287*ev_1 - 0.5*ev_2 + 0.57735026918962573*ev_3 - 0.5*ev_4 + 0.28867513459481287*ev_5);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[7] = A_1;
     coef[8] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[9] = A1_1;
     coef[10] = B1_1;
     coef[11] = B1_1 - sigma_1*A1_1;
     coef[12] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[13] = A_2;
     coef[14] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[15] = A1_2;
     coef[16] = B1_2;
     coef[17] = B1_2 - sigma_2*A1_2;
     coef[18] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[19] = A_3;
     coef[20] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[21] = A1_3;
     coef[22] = B1_3;
     coef[23] = B1_3 - sigma_3*A1_3;
     coef[24] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[25] = A_4;
     coef[26] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[27] = A1_4;
     coef[28] = B1_4;
     coef[29] = B1_4 - sigma_4*A1_4;
     coef[30] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[31] = A_5;
     coef[32] = B_5;
-    const double A1_5 = dqh0_5;
+    const double A1_5 = B_5 - sigma_5*A_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[33] = A1_5;
     coef[34] = B1_5;
@@ -1891,7 +1891,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[7]*eC_1) + __builtin_fabs(coef[8]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1) + __builtin_fabs(sigma_1*coef[7]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -1906,7 +1906,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[13]*eC_2) + __builtin_fabs(coef[14]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2) + __builtin_fabs(sigma_2*coef[13]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -1921,7 +1921,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[19]*eC_3) + __builtin_fabs(coef[20]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3) + __builtin_fabs(sigma_3*coef[19]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -1936,7 +1936,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[25]*eC_4) + __builtin_fabs(coef[26]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4) + __builtin_fabs(sigma_4*coef[25]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -1951,7 +1951,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_5 = dqh_5;
     const double ddq_5 = ddqh_5;
     const double mq_5 = __builtin_fabs(coef[31]*eC_5) + __builtin_fabs(coef[32]*eS_5);  // magnitude of the terms of q
-    const double mdq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5) + __builtin_fabs(sigma_5*coef[31]*eC_5);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.28867513459481287*q_1 + 0.5*q_2 + 0.57735026918962573*q_3 + 0.5*q_4 + 0.28867513459481287*q_5 + 0.15091160268135109*sin_1 - 0.0043321609057087795*cos_1;  // m1
     v[0] = 0.28867513459481287*dq_1 + 0.5*dq_2 + 0.57735026918962573*dq_3 + 0.5*dq_4 + 0.28867513459481287*dq_5 + 1.0261988982331873*cos_1 + 0.029458694158819701*sin_1;
@@ -2242,48 +2242,48 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_4 = q0_4 + (-0.37174803446018451*ex_1 + 0.60150095500754563*ex_2 - 0.60150095500754563*ex_3 + 0.37174803446018451*ex_4);
     const double dqh0_4 = dq0_4 + (-0.37174803446018451*ev_1 + 0.60150095500754563*ev_2 - 0.60150095500754563*ev_3 + 0.37174803446018451*ev_4);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[6] = A_1;
     coef[7] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[8] = A1_1;
     coef[9] = B1_1;
     coef[10] = B1_1 - sigma_1*A1_1;
     coef[11] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[12] = A_2;
     coef[13] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[14] = A1_2;
     coef[15] = B1_2;
     coef[16] = B1_2 - sigma_2*A1_2;
     coef[17] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[18] = A_3;
     coef[19] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[20] = A1_3;
     coef[21] = B1_3;
     coef[22] = B1_3 - sigma_3*A1_3;
     coef[23] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[24] = A_4;
     coef[25] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[26] = A1_4;
     coef[27] = B1_4;
@@ -2316,7 +2316,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1) + __builtin_fabs(sigma_1*coef[6]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -2331,7 +2331,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2) + __builtin_fabs(sigma_2*coef[12]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -2346,7 +2346,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[18]*eC_3) + __builtin_fabs(coef[19]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3) + __builtin_fabs(sigma_3*coef[18]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -2361,7 +2361,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[24]*eC_4) + __builtin_fabs(coef[25]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4) + __builtin_fabs(sigma_4*coef[24]*eC_4);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.37174803446018451*q_1 + 0.60150095500754563*q_2 + 0.60150095500754563*q_3 - 0.37174803446018451*q_4 - 0.44447952138707153*sin_1 - 0.02412417784816211*cos_1;  // m1
     v[0] = 0.37174803446018451*dq_1 + 0.60150095500754563*dq_2 + 0.60150095500754563*dq_3 - 0.37174803446018451*dq_4 - 3.0224607454320864*cos_1 + 0.16404440936750234*sin_1;
@@ -2635,36 +2635,36 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_3 = q0_3 + (-0.5*ex_1 + 0.70710678118654757*ex_2 - 0.5*ex_3);
     const double dqh0_3 = dq0_3 + (-0.5*ev_1 + 0.70710678118654757*ev_2 - 0.5*ev_3);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[5] = A_1;
     coef[6] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[7] = A1_1;
     coef[8] = B1_1;
     coef[9] = B1_1 - sigma_1*A1_1;
     coef[10] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[11] = A_2;
     coef[12] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[13] = A1_2;
     coef[14] = B1_2;
     coef[15] = B1_2 - sigma_2*A1_2;
     coef[16] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[17] = A_3;
     coef[18] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[19] = A1_3;
     coef[20] = B1_3;
@@ -2698,7 +2698,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[7]*eC_1) + __builtin_fabs(coef[8]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[7]*eC_1) + __builtin_fabs(coef[8]*eS_1) + __builtin_fabs(sigma_1*coef[5]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -2713,7 +2713,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[11]*eC_2) + __builtin_fabs(coef[12]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[13]*eC_2) + __builtin_fabs(coef[14]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[13]*eC_2) + __builtin_fabs(coef[14]*eS_2) + __builtin_fabs(sigma_2*coef[11]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -2728,7 +2728,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[17]*eC_3) + __builtin_fabs(coef[18]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[19]*eC_3) + __builtin_fabs(coef[20]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[19]*eC_3) + __builtin_fabs(coef[20]*eS_3) + __builtin_fabs(sigma_3*coef[17]*eC_3);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.5*q_1 + 0.70710678118654757*q_2 - 0.5*q_3 + 0.97381026124477144*sin_1 - 0.022838289504848779*cos_1;  // m1
     v[0] = 0.5*dq_1 + 0.70710678118654757*dq_2 - 0.5*dq_3 + 6.6219097764644452*cos_1 + 0.1553003686329717*sin_1;
@@ -2985,24 +2985,24 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_2 = q0_2 + (0.70710678118654757*ex_1 - 0.70710678118654757*ex_2);
     const double dqh0_2 = dq0_2 + (0.70710678118654757*ev_1 - 0.70710678118654757*ev_2);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[4] = A_1;
     coef[5] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[6] = A1_1;
     coef[7] = B1_1;
     coef[8] = B1_1 - sigma_1*A1_1;
     coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[10] = A_2;
     coef[11] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[12] = A1_2;
     coef[13] = B1_2;
@@ -3037,7 +3037,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1) + __builtin_fabs(sigma_1*coef[4]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -3052,7 +3052,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2) + __builtin_fabs(sigma_2*coef[10]*eC_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.70710678118654757*q_1 + 0.70710678118654757*q_2 + 0.45080763896446202*sin_1 - 0.00365273404359088*cos_1;  // m1
     v[0] = 0.70710678118654757*dq_1 + 0.70710678118654757*dq_2 + 3.0654919449583415*cos_1 + 0.024838591496417983*sin_1;
@@ -3292,12 +3292,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -3333,7 +3333,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + q_1 + 0.2601383550578546*sin_1 - 0.0013805469415141087*cos_1;  // m1
     v[0] = dq_1 + 1.7689408143934111*cos_1 + 0.0093877192022959396*sin_1;
@@ -3580,12 +3580,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -3621,7 +3621,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -3868,12 +3868,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -3909,7 +3909,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -4156,12 +4156,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -4197,7 +4197,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -4444,12 +4444,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -4485,7 +4485,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -4732,12 +4732,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -4773,7 +4773,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -5020,12 +5020,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -5061,7 +5061,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -5308,12 +5308,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -5349,7 +5349,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -6001,96 +6001,96 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_8 = q0_8 + (-9.8503756273555532e-08*ex_1 + 9.9488793836291071e-07*ex_2 - 9.9498644211918418e-06*ex_3 + 9.9498742715674676e-05*ex_4 - 0.00099498743700712224*ex_5 + 0.0099498743710562595*ex_6 - 0.0994987437106611*ex_7 + 0.99498743710662074*ex_8);
     const double dqh0_8 = dq0_8 + (-9.8503756273555532e-08*ev_1 + 9.9488793836291071e-07*ev_2 - 9.9498644211918418e-06*ev_3 + 9.9498742715674676e-05*ev_4 - 0.00099498743700712224*ev_5 + 0.0099498743710562595*ev_6 - 0.0994987437106611*ev_7 + 0.99498743710662074*ev_8);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
     coef[11] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[12] = A1_1;
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
     coef[17] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[18] = A1_2;
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
     coef[23] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[24] = A1_3;
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
     coef[29] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[30] = A1_4;
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
     coef[35] = B_5;
-    const double A1_5 = dqh0_5;
+    const double A1_5 = B_5 - sigma_5*A_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[36] = A1_5;
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
     coef[41] = B_6;
-    const double A1_6 = dqh0_6;
+    const double A1_6 = B_6 - sigma_6*A_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[42] = A1_6;
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
     coef[47] = B_7;
-    const double A1_7 = dqh0_7;
+    const double A1_7 = B_7 - sigma_7*A_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[48] = A1_7;
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
     // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
     coef[53] = B_8;
-    const double A1_8 = dqh0_8;
+    const double A1_8 = B_8 - sigma_8*A_8;
     const double B1_8 = -kappa_8*A_8 - sigma_8*B_8;
     coef[54] = A1_8;
     coef[55] = B1_8;
@@ -6119,7 +6119,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -6134,7 +6134,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -6149,7 +6149,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -6164,7 +6164,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -6179,7 +6179,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_5 = dqh_5;
     const double ddq_5 = ddqh_5;
     const double mq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);  // magnitude of the terms of q
-    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -6194,7 +6194,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_6 = dqh_6;
     const double ddq_6 = ddqh_6;
     const double mq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);  // magnitude of the terms of q
-    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -6209,7 +6209,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_7 = dqh_7;
     const double ddq_7 = ddqh_7;
     const double mq_7 = __builtin_fabs(coef[46]*eC_7) + __builtin_fabs(coef[47]*eS_7);  // magnitude of the terms of q
-    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_8 = __builtin_exp(-sigma_8*tau);
@@ -6224,7 +6224,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_8 = dqh_8;
     const double ddq_8 = ddqh_8;
     const double mq_8 = __builtin_fabs(coef[52]*eC_8) + __builtin_fabs(coef[53]*eS_8);  // magnitude of the terms of q
-    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8);
+    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8) + __builtin_fabs(sigma_8*coef[52]*eC_8);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.18833201326479529*q_1 + 0.34911713609451595*q_2 - 0.45850526062492686*q_3 + 0.49961463891709895*q_4 + 0.46504979853202533*q_5 - 0.35847221306899663*q_6 - 0.19501993222880004*q_7 - 9.8503756273555532e-08*q_8 + 0.62788675909370573*sin_1 - 0.01460330866252257*cos_1;  // m1
     v[0] = 0.18833201326479529*dq_1 + 0.34911713609451595*dq_2 - 0.45850526062492686*dq_3 + 0.49961463891709895*dq_4 + 0.46504979853202533*dq_5 - 0.35847221306899663*dq_6 - 0.19501993222880004*dq_7 - 9.8503756273555532e-08*dq_8 + 4.2696299618371985*cos_1 + 0.099302498905153483*sin_1;
@@ -6827,96 +6827,96 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_8 = q0_8 + (3.6235058980809498e-06*ex_1 - 7.6266171318004641e-05*ex_2 + 0.0016015978049290199*ex_3 - 0.033633554099140955*ex_4 + 0.70630463199228721*ex_5 - 0.706304624149241*ex_6 + 0.03363338117864878*ex_7 - 0.0015979660833513988*ex_8);
     const double dqh0_8 = dq0_8 + (3.6235058980809498e-06*ev_1 - 7.6266171318004641e-05*ev_2 + 0.0016015978049290199*ev_3 - 0.033633554099140955*ev_4 + 0.70630463199228721*ev_5 - 0.706304624149241*ev_6 + 0.03363338117864878*ev_7 - 0.0015979660833513988*ev_8);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
     coef[11] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[12] = A1_1;
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
     coef[17] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[18] = A1_2;
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
     coef[23] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[24] = A1_3;
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
     coef[29] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[30] = A1_4;
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
     coef[35] = B_5;
-    const double A1_5 = dqh0_5;
+    const double A1_5 = B_5 - sigma_5*A_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[36] = A1_5;
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
     coef[41] = B_6;
-    const double A1_6 = dqh0_6;
+    const double A1_6 = B_6 - sigma_6*A_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[42] = A1_6;
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
     coef[47] = B_7;
-    const double A1_7 = dqh0_7;
+    const double A1_7 = B_7 - sigma_7*A_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[48] = A1_7;
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
     // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
     coef[53] = B_8;
-    const double A1_8 = dqh0_8;
+    const double A1_8 = B_8 - sigma_8*A_8;
     const double B1_8 = -kappa_8*A_8 - sigma_8*B_8;
     coef[54] = A1_8;
     coef[55] = B1_8;
@@ -6945,7 +6945,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -6960,7 +6960,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -6975,7 +6975,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -6990,7 +6990,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -7005,7 +7005,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_5 = dqh_5;
     const double ddq_5 = ddqh_5;
     const double mq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);  // magnitude of the terms of q
-    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -7020,7 +7020,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_6 = dqh_6;
     const double ddq_6 = ddqh_6;
     const double mq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);  // magnitude of the terms of q
-    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -7035,7 +7035,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_7 = dqh_7;
     const double ddq_7 = ddqh_7;
     const double mq_7 = __builtin_fabs(coef[46]*eC_7) + __builtin_fabs(coef[47]*eS_7);  // magnitude of the terms of q
-    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_8 = __builtin_exp(-sigma_8*tau);
@@ -7050,7 +7050,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_8 = dqh_8;
     const double ddq_8 = ddqh_8;
     const double mq_8 = __builtin_fabs(coef[52]*eC_8) + __builtin_fabs(coef[53]*eS_8);  // magnitude of the terms of q
-    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8);
+    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8) + __builtin_fabs(sigma_8*coef[52]*eC_8);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.15717825132194799*q_1 + 0.36322657521114149*q_2 + 0.36473292126194989*q_3 + 0.50634797565850331*q_4 + 0.55335140224461599*q_5 + 0.17094037076839277*q_6 + 0.34427415140897727*q_7 + 3.6235058980809498e-06*q_8 + 1.0897430817010003*sin_1 - 0.048105942850637712*cos_1;  // m1
     v[0] = 0.15717825132194799*dq_1 + 0.36322657521114149*dq_2 + 0.36473292126194989*dq_3 + 0.50634797565850331*dq_4 + 0.55335140224461599*dq_5 + 0.17094037076839277*dq_6 + 0.34427415140897727*dq_7 + 3.6235058980809498e-06*dq_8 + 7.4102529555668015*cos_1 + 0.32712041138433645*sin_1;
@@ -7392,84 +7392,84 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_7 = q0_7 + (3.6235656511060938e-06*ex_1 - 7.6267234666962098e-05*ex_2 + 0.0016016160363883712*ex_3 - 0.033633850879604008*ex_4 + 0.70630905670258981*ex_5 - 0.70630559784406499*ex_6 + 0.033557591470408731*ex_7);
     const double dqh0_7 = dq0_7 + (3.6235656511060938e-06*ev_1 - 7.6267234666962098e-05*ev_2 + 0.0016016160363883712*ev_3 - 0.033633850879604008*ev_4 + 0.70630905670258981*ev_5 - 0.70630559784406499*ev_6 + 0.033557591470408731*ev_7);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[9] = A_1;
     coef[10] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[11] = A1_1;
     coef[12] = B1_1;
     coef[13] = B1_1 - sigma_1*A1_1;
     coef[14] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[15] = A_2;
     coef[16] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[17] = A1_2;
     coef[18] = B1_2;
     coef[19] = B1_2 - sigma_2*A1_2;
     coef[20] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[21] = A_3;
     coef[22] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[23] = A1_3;
     coef[24] = B1_3;
     coef[25] = B1_3 - sigma_3*A1_3;
     coef[26] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[27] = A_4;
     coef[28] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[29] = A1_4;
     coef[30] = B1_4;
     coef[31] = B1_4 - sigma_4*A1_4;
     coef[32] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[33] = A_5;
     coef[34] = B_5;
-    const double A1_5 = dqh0_5;
+    const double A1_5 = B_5 - sigma_5*A_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[35] = A1_5;
     coef[36] = B1_5;
     coef[37] = B1_5 - sigma_5*A1_5;
     coef[38] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[39] = A_6;
     coef[40] = B_6;
-    const double A1_6 = dqh0_6;
+    const double A1_6 = B_6 - sigma_6*A_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[41] = A1_6;
     coef[42] = B1_6;
     coef[43] = B1_6 - sigma_6*A1_6;
     coef[44] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[45] = A_7;
     coef[46] = B_7;
-    const double A1_7 = dqh0_7;
+    const double A1_7 = B_7 - sigma_7*A_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[47] = A1_7;
     coef[48] = B1_7;
@@ -7499,7 +7499,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[11]*eC_1) + __builtin_fabs(coef[12]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[11]*eC_1) + __builtin_fabs(coef[12]*eS_1) + __builtin_fabs(sigma_1*coef[9]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -7514,7 +7514,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[17]*eC_2) + __builtin_fabs(coef[18]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[17]*eC_2) + __builtin_fabs(coef[18]*eS_2) + __builtin_fabs(sigma_2*coef[15]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -7529,7 +7529,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[23]*eC_3) + __builtin_fabs(coef[24]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[23]*eC_3) + __builtin_fabs(coef[24]*eS_3) + __builtin_fabs(sigma_3*coef[21]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -7544,7 +7544,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[29]*eC_4) + __builtin_fabs(coef[30]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[29]*eC_4) + __builtin_fabs(coef[30]*eS_4) + __builtin_fabs(sigma_4*coef[27]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -7559,7 +7559,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_5 = dqh_5;
     const double ddq_5 = ddqh_5;
     const double mq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5);  // magnitude of the terms of q
-    const double mdq_5 = __builtin_fabs(coef[35]*eC_5) + __builtin_fabs(coef[36]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[35]*eC_5) + __builtin_fabs(coef[36]*eS_5) + __builtin_fabs(sigma_5*coef[33]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -7574,7 +7574,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_6 = dqh_6;
     const double ddq_6 = ddqh_6;
     const double mq_6 = __builtin_fabs(coef[39]*eC_6) + __builtin_fabs(coef[40]*eS_6);  // magnitude of the terms of q
-    const double mdq_6 = __builtin_fabs(coef[41]*eC_6) + __builtin_fabs(coef[42]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[41]*eC_6) + __builtin_fabs(coef[42]*eS_6) + __builtin_fabs(sigma_6*coef[39]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -7589,7 +7589,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_7 = dqh_7;
     const double ddq_7 = ddqh_7;
     const double mq_7 = __builtin_fabs(coef[45]*eC_7) + __builtin_fabs(coef[46]*eS_7);  // magnitude of the terms of q
-    const double mdq_7 = __builtin_fabs(coef[47]*eC_7) + __builtin_fabs(coef[48]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[47]*eC_7) + __builtin_fabs(coef[48]*eS_7) + __builtin_fabs(sigma_7*coef[45]*eC_7);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.19043136251490667*q_1 + 0.38587126961491891*q_2 + 0.56097347178924506*q_3 - 0.33898896567507947*q_4 + 0.51332465560256402*q_5 + 0.34890156562148933*q_6 + 3.6235656511060938e-06*q_7 + 0.58277405893896583*sin_1 - 0.011677202387739064*cos_1;  // m1
     v[0] = 0.19043136251490667*dq_1 + 0.38587126961491891*dq_2 + 0.56097347178924506*dq_3 - 0.33898896567507947*dq_4 + 0.51332465560256402*dq_5 + 0.34890156562148933*dq_6 + 3.6235656511060938e-06*dq_7 + 3.9628636007849676*cos_1 + 0.079404976236625638*sin_1;
@@ -7914,72 +7914,72 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_6 = q0_6 + (3.6459675486191742e-06*ex_1 - 7.6652319973633226e-05*ex_2 + 0.0016078818584643933*ex_3 - 0.033727234591057705*ex_4 + 0.70746885654494163*ex_5 - 0.70593746146021352*ex_6);
     const double dqh0_6 = dq0_6 + (3.6459675486191742e-06*ev_1 - 7.6652319973633226e-05*ev_2 + 0.0016078818584643933*ev_3 - 0.033727234591057705*ev_4 + 0.70746885654494163*ev_5 - 0.70593746146021352*ev_6);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[8] = A_1;
     coef[9] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[10] = A1_1;
     coef[11] = B1_1;
     coef[12] = B1_1 - sigma_1*A1_1;
     coef[13] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[14] = A_2;
     coef[15] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[16] = A1_2;
     coef[17] = B1_2;
     coef[18] = B1_2 - sigma_2*A1_2;
     coef[19] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[20] = A_3;
     coef[21] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[22] = A1_3;
     coef[23] = B1_3;
     coef[24] = B1_3 - sigma_3*A1_3;
     coef[25] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[26] = A_4;
     coef[27] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[28] = A1_4;
     coef[29] = B1_4;
     coef[30] = B1_4 - sigma_4*A1_4;
     coef[31] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[32] = A_5;
     coef[33] = B_5;
-    const double A1_5 = dqh0_5;
+    const double A1_5 = B_5 - sigma_5*A_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[34] = A1_5;
     coef[35] = B1_5;
     coef[36] = B1_5 - sigma_5*A1_5;
     coef[37] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[38] = A_6;
     coef[39] = B_6;
-    const double A1_6 = dqh0_6;
+    const double A1_6 = B_6 - sigma_6*A_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[40] = A1_6;
     coef[41] = B1_6;
@@ -8010,7 +8010,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1) + __builtin_fabs(sigma_1*coef[8]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -8025,7 +8025,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2) + __builtin_fabs(sigma_2*coef[14]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -8040,7 +8040,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3) + __builtin_fabs(sigma_3*coef[20]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -8055,7 +8055,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4) + __builtin_fabs(sigma_4*coef[26]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -8070,7 +8070,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_5 = dqh_5;
     const double ddq_5 = ddqh_5;
     const double mq_5 = __builtin_fabs(coef[32]*eC_5) + __builtin_fabs(coef[33]*eS_5);  // magnitude of the terms of q
-    const double mdq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5) + __builtin_fabs(sigma_5*coef[32]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -8085,7 +8085,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_6 = dqh_6;
     const double ddq_6 = ddqh_6;
     const double mq_6 = __builtin_fabs(coef[38]*eC_6) + __builtin_fabs(coef[39]*eS_6);  // magnitude of the terms of q
-    const double mdq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6) + __builtin_fabs(sigma_6*coef[38]*eC_6);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.25359517361372547*q_1 - 0.40150235452664823*q_2 + 0.5700329676270175*q_3 + 0.56969736786554714*q_4 + 0.35354302719964958*q_5 + 3.6459675486191742e-06*q_6 + 0.28520422732718304*sin_1 - 0.0049326429992242781*cos_1;  // m1
     v[0] = 0.25359517361372547*dq_1 - 0.40150235452664823*dq_2 + 0.5700329676270175*dq_3 + 0.56969736786554714*dq_4 + 0.35354302719964958*dq_5 + 3.6459675486191742e-06*dq_6 + 1.9393887458248447*cos_1 + 0.033541972394725089*sin_1;
@@ -8441,84 +8441,84 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_7 = q0_7 + (-0.70593747576578181*ex_4 + 0.70746886298994682*ex_5 - 0.033727061282787268*ex_6 + 0.0016042276568910725*ex_7);
     const double dqh0_7 = dq0_7 + (-0.70593747576578181*ev_4 + 0.70746886298994682*ev_5 - 0.033727061282787268*ev_6 + 0.0016042276568910725*ev_7);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[9] = A_1;
     coef[10] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[11] = A1_1;
     coef[12] = B1_1;
     coef[13] = B1_1 - sigma_1*A1_1;
     coef[14] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[15] = A_2;
     coef[16] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[17] = A1_2;
     coef[18] = B1_2;
     coef[19] = B1_2 - sigma_2*A1_2;
     coef[20] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[21] = A_3;
     coef[22] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[23] = A1_3;
     coef[24] = B1_3;
     coef[25] = B1_3 - sigma_3*A1_3;
     coef[26] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[27] = A_4;
     coef[28] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[29] = A1_4;
     coef[30] = B1_4;
     coef[31] = B1_4 - sigma_4*A1_4;
     coef[32] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[33] = A_5;
     coef[34] = B_5;
-    const double A1_5 = dqh0_5;
+    const double A1_5 = B_5 - sigma_5*A_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[35] = A1_5;
     coef[36] = B1_5;
     coef[37] = B1_5 - sigma_5*A1_5;
     coef[38] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[39] = A_6;
     coef[40] = B_6;
-    const double A1_6 = dqh0_6;
+    const double A1_6 = B_6 - sigma_6*A_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[41] = A1_6;
     coef[42] = B1_6;
     coef[43] = B1_6 - sigma_6*A1_6;
     coef[44] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[45] = A_7;
     coef[46] = B_7;
-    const double A1_7 = dqh0_7;
+    const double A1_7 = B_7 - sigma_7*A_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[47] = A1_7;
     coef[48] = B1_7;
@@ -8548,7 +8548,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[11]*eC_1) + __builtin_fabs(coef[12]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[11]*eC_1) + __builtin_fabs(coef[12]*eS_1) + __builtin_fabs(sigma_1*coef[9]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -8563,7 +8563,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[17]*eC_2) + __builtin_fabs(coef[18]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[17]*eC_2) + __builtin_fabs(coef[18]*eS_2) + __builtin_fabs(sigma_2*coef[15]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -8578,7 +8578,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[23]*eC_3) + __builtin_fabs(coef[24]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[23]*eC_3) + __builtin_fabs(coef[24]*eS_3) + __builtin_fabs(sigma_3*coef[21]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -8593,7 +8593,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[29]*eC_4) + __builtin_fabs(coef[30]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[29]*eC_4) + __builtin_fabs(coef[30]*eS_4) + __builtin_fabs(sigma_4*coef[27]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -8608,7 +8608,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_5 = dqh_5;
     const double ddq_5 = ddqh_5;
     const double mq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5);  // magnitude of the terms of q
-    const double mdq_5 = __builtin_fabs(coef[35]*eC_5) + __builtin_fabs(coef[36]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[35]*eC_5) + __builtin_fabs(coef[36]*eS_5) + __builtin_fabs(sigma_5*coef[33]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -8623,7 +8623,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_6 = dqh_6;
     const double ddq_6 = ddqh_6;
     const double mq_6 = __builtin_fabs(coef[39]*eC_6) + __builtin_fabs(coef[40]*eS_6);  // magnitude of the terms of q
-    const double mdq_6 = __builtin_fabs(coef[41]*eC_6) + __builtin_fabs(coef[42]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[41]*eC_6) + __builtin_fabs(coef[42]*eS_6) + __builtin_fabs(sigma_6*coef[39]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -8638,7 +8638,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_7 = dqh_7;
     const double ddq_7 = ddqh_7;
     const double mq_7 = __builtin_fabs(coef[45]*eC_7) + __builtin_fabs(coef[46]*eS_7);  // magnitude of the terms of q
-    const double mdq_7 = __builtin_fabs(coef[47]*eC_7) + __builtin_fabs(coef[48]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[47]*eC_7) + __builtin_fabs(coef[48]*eS_7) + __builtin_fabs(sigma_7*coef[45]*eC_7);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.5*q_2 + 0.70710678118654757*q_4 - 0.5*q_6 + 0.97381026124477144*sin_1 - 0.022838289504848779*cos_1;  // m1
     v[0] = 0.5*dq_2 + 0.70710678118654757*dq_4 - 0.5*dq_6 + 6.6219097764644452*cos_1 + 0.1553003686329717*sin_1;
@@ -9248,96 +9248,96 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_8 = q0_8 + (0.033557591470402277*ex_1 - 0.70630559784395019*ex_2 + 0.7063090567025152*ex_3 - 0.033633850880484692*ex_4 + 0.0016016160550201795*ex_5 - 7.6267625941484944e-05*ex_6 + 3.6317823954159418e-06*ex_7 - 1.7255118790902426e-07*ex_8);
     const double dqh0_8 = dq0_8 + (0.033557591470402277*ev_1 - 0.70630559784395019*ev_2 + 0.7063090567025152*ev_3 - 0.033633850880484692*ev_4 + 0.0016016160550201795*ev_5 - 7.6267625941484944e-05*ev_6 + 3.6317823954159418e-06*ev_7 - 1.7255118790902426e-07*ev_8);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
     coef[11] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[12] = A1_1;
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
     coef[17] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[18] = A1_2;
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
     coef[23] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[24] = A1_3;
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
     coef[29] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[30] = A1_4;
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
     coef[35] = B_5;
-    const double A1_5 = dqh0_5;
+    const double A1_5 = B_5 - sigma_5*A_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[36] = A1_5;
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
     coef[41] = B_6;
-    const double A1_6 = dqh0_6;
+    const double A1_6 = B_6 - sigma_6*A_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[42] = A1_6;
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
     coef[47] = B_7;
-    const double A1_7 = dqh0_7;
+    const double A1_7 = B_7 - sigma_7*A_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[48] = A1_7;
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
     // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
     coef[53] = B_8;
-    const double A1_8 = dqh0_8;
+    const double A1_8 = B_8 - sigma_8*A_8;
     const double B1_8 = -kappa_8*A_8 - sigma_8*B_8;
     coef[54] = A1_8;
     coef[55] = B1_8;
@@ -9366,7 +9366,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -9381,7 +9381,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -9396,7 +9396,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -9411,7 +9411,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -9426,7 +9426,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_5 = dqh_5;
     const double ddq_5 = ddqh_5;
     const double mq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);  // magnitude of the terms of q
-    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -9441,7 +9441,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_6 = dqh_6;
     const double ddq_6 = ddqh_6;
     const double mq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);  // magnitude of the terms of q
-    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -9456,7 +9456,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_7 = dqh_7;
     const double ddq_7 = ddqh_7;
     const double mq_7 = __builtin_fabs(coef[46]*eC_7) + __builtin_fabs(coef[47]*eS_7);  // magnitude of the terms of q
-    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_8 = __builtin_exp(-sigma_8*tau);
@@ -9471,7 +9471,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_8 = dqh_8;
     const double ddq_8 = ddqh_8;
     const double mq_8 = __builtin_fabs(coef[52]*eC_8) + __builtin_fabs(coef[53]*eS_8);  // magnitude of the terms of q
-    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8);
+    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8) + __builtin_fabs(sigma_8*coef[52]*eC_8);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.19372350904161664*q_1 - 0.28020934109810303*q_2 - 0.28402946550096314*q_3 + 0.51600471133952652*q_4 + 0.7127936831875068*q_5 + 0.16132189670832656*q_6 + 0.042363034756029191*q_7 + 0.033557591470402277*q_8 + 3.560673211804299*sin_1 - 1.2167861856792128*cos_1;  // m1
     v[0] = 0.19372350904161664*dq_1 - 0.28020934109810303*dq_2 - 0.28402946550096314*dq_3 + 0.51600471133952652*dq_4 + 0.7127936831875068*dq_5 + 0.16132189670832656*dq_6 + 0.042363034756029191*dq_7 + 0.033557591470402277*dq_8 + 24.212577840269233*cos_1 + 8.2741460626186463*sin_1;
@@ -9789,72 +9789,72 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_6 = q0_6 + (0.033557591472812565*ex_1 - 0.70630559788540681*ex_2 + 0.70630905672618716*ex_3 - 0.033633850490783018*ex_4 + 0.0016016078197819729*ex_5 - 7.6094683486602324e-05*ex_6);
     const double dqh0_6 = dq0_6 + (0.033557591472812565*ev_1 - 0.70630559788540681*ev_2 + 0.70630905672618716*ev_3 - 0.033633850490783018*ev_4 + 0.0016016078197819729*ev_5 - 7.6094683486602324e-05*ev_6);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[8] = A_1;
     coef[9] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[10] = A1_1;
     coef[11] = B1_1;
     coef[12] = B1_1 - sigma_1*A1_1;
     coef[13] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[14] = A_2;
     coef[15] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[16] = A1_2;
     coef[17] = B1_2;
     coef[18] = B1_2 - sigma_2*A1_2;
     coef[19] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[20] = A_3;
     coef[21] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[22] = A1_3;
     coef[23] = B1_3;
     coef[24] = B1_3 - sigma_3*A1_3;
     coef[25] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[26] = A_4;
     coef[27] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[28] = A1_4;
     coef[29] = B1_4;
     coef[30] = B1_4 - sigma_4*A1_4;
     coef[31] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[32] = A_5;
     coef[33] = B_5;
-    const double A1_5 = dqh0_5;
+    const double A1_5 = B_5 - sigma_5*A_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[34] = A1_5;
     coef[35] = B1_5;
     coef[36] = B1_5 - sigma_5*A1_5;
     coef[37] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[38] = A_6;
     coef[39] = B_6;
-    const double A1_6 = dqh0_6;
+    const double A1_6 = B_6 - sigma_6*A_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[40] = A1_6;
     coef[41] = B1_6;
@@ -9885,7 +9885,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1) + __builtin_fabs(sigma_1*coef[8]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -9900,7 +9900,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2) + __builtin_fabs(sigma_2*coef[14]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -9915,7 +9915,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3) + __builtin_fabs(sigma_3*coef[20]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -9930,7 +9930,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4) + __builtin_fabs(sigma_4*coef[26]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -9945,7 +9945,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_5 = dqh_5;
     const double ddq_5 = ddqh_5;
     const double mq_5 = __builtin_fabs(coef[32]*eC_5) + __builtin_fabs(coef[33]*eS_5);  // magnitude of the terms of q
-    const double mdq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5) + __builtin_fabs(sigma_5*coef[32]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -9960,7 +9960,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_6 = dqh_6;
     const double ddq_6 = ddqh_6;
     const double mq_6 = __builtin_fabs(coef[38]*eC_6) + __builtin_fabs(coef[39]*eS_6);  // magnitude of the terms of q
-    const double mdq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6) + __builtin_fabs(sigma_6*coef[38]*eC_6);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.26689233302016613*q_1 - 0.32322153495902672*q_2 + 0.58791675412455591*q_3 + 0.6845449333826723*q_4 - 0.094458109064740406*q_5 + 0.033557591472812565*q_6 + 0.18984731294346066*sin_1 - 0.0032037447311752281*cos_1;  // m1
     v[0] = 0.26689233302016613*dq_1 - 0.32322153495902672*dq_2 + 0.58791675412455591*dq_3 + 0.6845449333826723*dq_4 - 0.094458109064740406*dq_5 + 0.033557591472812565*dq_6 + 1.2909617280155326*cos_1 + 0.02178546417199155*sin_1;
@@ -10268,60 +10268,60 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_5 = q0_5 + (0.033557592338143025*ex_1 - 0.70630561201796638*ex_2 + 0.706309063033425*ex_3 - 0.033633678826402627*ex_4 + 0.0015979843054959924*ex_5);
     const double dqh0_5 = dq0_5 + (0.033557592338143025*ev_1 - 0.70630561201796638*ev_2 + 0.706309063033425*ev_3 - 0.033633678826402627*ev_4 + 0.0015979843054959924*ev_5);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[7] = A_1;
     coef[8] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[9] = A1_1;
     coef[10] = B1_1;
     coef[11] = B1_1 - sigma_1*A1_1;
     coef[12] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[13] = A_2;
     coef[14] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[15] = A1_2;
     coef[16] = B1_2;
     coef[17] = B1_2 - sigma_2*A1_2;
     coef[18] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[19] = A_3;
     coef[20] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[21] = A1_3;
     coef[22] = B1_3;
     coef[23] = B1_3 - sigma_3*A1_3;
     coef[24] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[25] = A_4;
     coef[26] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[27] = A1_4;
     coef[28] = B1_4;
     coef[29] = B1_4 - sigma_4*A1_4;
     coef[30] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[31] = A_5;
     coef[32] = B_5;
-    const double A1_5 = dqh0_5;
+    const double A1_5 = B_5 - sigma_5*A_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[33] = A1_5;
     coef[34] = B1_5;
@@ -10353,7 +10353,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[7]*eC_1) + __builtin_fabs(coef[8]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1) + __builtin_fabs(sigma_1*coef[7]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -10368,7 +10368,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[13]*eC_2) + __builtin_fabs(coef[14]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2) + __builtin_fabs(sigma_2*coef[13]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -10383,7 +10383,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[19]*eC_3) + __builtin_fabs(coef[20]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3) + __builtin_fabs(sigma_3*coef[19]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -10398,7 +10398,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[25]*eC_4) + __builtin_fabs(coef[26]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4) + __builtin_fabs(sigma_4*coef[25]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -10413,7 +10413,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_5 = dqh_5;
     const double ddq_5 = ddqh_5;
     const double mq_5 = __builtin_fabs(coef[31]*eC_5) + __builtin_fabs(coef[32]*eS_5);  // magnitude of the terms of q
-    const double mdq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5) + __builtin_fabs(sigma_5*coef[31]*eC_5);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.31392101709287462*q_1 - 0.38658604347883557*q_2 + 0.84469915351503455*q_3 + 0.19329266427416747*q_4 + 0.033557592338143025*q_5 + 0.030179008515597315*sin_1 - 0.003899020649528062*cos_1;  // m1
     v[0] = 0.31392101709287462*dq_1 - 0.38658604347883557*dq_2 + 0.84469915351503455*dq_3 + 0.19329266427416747*dq_4 + 0.033557592338143025*dq_5 + 0.20521725790606174*cos_1 + 0.02651334041679082*sin_1;
@@ -10704,48 +10704,48 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_4 = q0_4 + (-0.03355788806692038*ex_1 + 0.70631003684535587*ex_2 - 0.70631003684535587*ex_3 + 0.03355788806692038*ex_4);
     const double dqh0_4 = dq0_4 + (-0.03355788806692038*ev_1 + 0.70631003684535587*ev_2 - 0.70631003684535587*ev_3 + 0.03355788806692038*ev_4);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[6] = A_1;
     coef[7] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[8] = A1_1;
     coef[9] = B1_1;
     coef[10] = B1_1 - sigma_1*A1_1;
     coef[11] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[12] = A_2;
     coef[13] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[14] = A1_2;
     coef[15] = B1_2;
     coef[16] = B1_2 - sigma_2*A1_2;
     coef[17] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[18] = A_3;
     coef[19] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[20] = A1_3;
     coef[21] = B1_3;
     coef[22] = B1_3 - sigma_3*A1_3;
     coef[23] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[24] = A_4;
     coef[25] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[26] = A1_4;
     coef[27] = B1_4;
@@ -10778,7 +10778,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1) + __builtin_fabs(sigma_1*coef[6]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -10793,7 +10793,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2) + __builtin_fabs(sigma_2*coef[12]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -10808,7 +10808,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[18]*eC_3) + __builtin_fabs(coef[19]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3) + __builtin_fabs(sigma_3*coef[18]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -10823,7 +10823,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[24]*eC_4) + __builtin_fabs(coef[25]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4) + __builtin_fabs(sigma_4*coef[24]*eC_4);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.37174803446018451*q_1 + 0.70631003684535587*q_2 + 0.60150095500754563*q_3 - 0.03355788806692038*q_4 - 0.48543586376452019*sin_1 - 0.023730359389328808*cos_1;  // m1
     v[0] = 0.37174803446018451*dq_1 + 0.70631003684535587*dq_2 + 0.60150095500754563*dq_3 - 0.03355788806692038*dq_4 - 3.3009638735987372*cos_1 + 0.1613664438474359*sin_1;
@@ -11097,36 +11097,36 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_3 = q0_3 + (-0.03365089018646162*ex_1 + 0.70746986340841567*ex_2 - 0.70594193101028946*ex_3);
     const double dqh0_3 = dq0_3 + (-0.03365089018646162*ev_1 + 0.70746986340841567*ev_2 - 0.70594193101028946*ev_3);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[5] = A_1;
     coef[6] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[7] = A1_1;
     coef[8] = B1_1;
     coef[9] = B1_1 - sigma_1*A1_1;
     coef[10] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[11] = A_2;
     coef[12] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[13] = A1_2;
     coef[14] = B1_2;
     coef[15] = B1_2 - sigma_2*A1_2;
     coef[16] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[17] = A_3;
     coef[18] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[19] = A1_3;
     coef[20] = B1_3;
@@ -11160,7 +11160,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[7]*eC_1) + __builtin_fabs(coef[8]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[7]*eC_1) + __builtin_fabs(coef[8]*eS_1) + __builtin_fabs(sigma_1*coef[5]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -11175,7 +11175,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[11]*eC_2) + __builtin_fabs(coef[12]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[13]*eC_2) + __builtin_fabs(coef[14]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[13]*eC_2) + __builtin_fabs(coef[14]*eS_2) + __builtin_fabs(sigma_2*coef[11]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -11190,7 +11190,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[17]*eC_3) + __builtin_fabs(coef[18]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[19]*eC_3) + __builtin_fabs(coef[20]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[19]*eC_3) + __builtin_fabs(coef[20]*eS_3) + __builtin_fabs(sigma_3*coef[17]*eC_3);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.46435770273611859*q_1 + 0.88500821549819142*q_2 - 0.03365089018646162*q_3 + 0.68311406848487388*sin_1 - 0.011666850300724486*cos_1;  // m1
     v[0] = 0.46435770273611859*dq_1 + 0.88500821549819142*dq_2 - 0.03365089018646162*dq_3 + 4.6451756656971419*cos_1 + 0.079334582044926508*sin_1;
@@ -11828,96 +11828,96 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_8 = q0_8 + (0.023650020034497805*ex_1 - 0.49833523427885656*ex_2 + 0.4994126060731548*ex_3 - 0.047428950843709357*ex_4 + 0.49997417228151997*ex_5 - 0.49890043736424677*ex_6 + 0.023730290418033831*ex_7 - 0.0011261933839037054*ex_8);
     const double dqh0_8 = dq0_8 + (0.023650020034497805*ev_1 - 0.49833523427885656*ev_2 + 0.4994126060731548*ev_3 - 0.047428950843709357*ev_4 + 0.49997417228151997*ev_5 - 0.49890043736424677*ev_6 + 0.023730290418033831*ev_7 - 0.0011261933839037054*ev_8);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[10] = A_1;
     coef[11] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[12] = A1_1;
     coef[13] = B1_1;
     coef[14] = B1_1 - sigma_1*A1_1;
     coef[15] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[16] = A_2;
     coef[17] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[18] = A1_2;
     coef[19] = B1_2;
     coef[20] = B1_2 - sigma_2*A1_2;
     coef[21] = -kappa_2*A1_2 - sigma_2*B1_2;
     // Mode 3 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_3 = qh0_3;
     const double B_3 = dqh0_3 + sigma_3*A_3;
     coef[22] = A_3;
     coef[23] = B_3;
-    const double A1_3 = dqh0_3;
+    const double A1_3 = B_3 - sigma_3*A_3;
     const double B1_3 = -kappa_3*A_3 - sigma_3*B_3;
     coef[24] = A1_3;
     coef[25] = B1_3;
     coef[26] = B1_3 - sigma_3*A1_3;
     coef[27] = -kappa_3*A1_3 - sigma_3*B1_3;
     // Mode 4 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_4 = qh0_4;
     const double B_4 = dqh0_4 + sigma_4*A_4;
     coef[28] = A_4;
     coef[29] = B_4;
-    const double A1_4 = dqh0_4;
+    const double A1_4 = B_4 - sigma_4*A_4;
     const double B1_4 = -kappa_4*A_4 - sigma_4*B_4;
     coef[30] = A1_4;
     coef[31] = B1_4;
     coef[32] = B1_4 - sigma_4*A1_4;
     coef[33] = -kappa_4*A1_4 - sigma_4*B1_4;
     // Mode 5 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_5 = qh0_5;
     const double B_5 = dqh0_5 + sigma_5*A_5;
     coef[34] = A_5;
     coef[35] = B_5;
-    const double A1_5 = dqh0_5;
+    const double A1_5 = B_5 - sigma_5*A_5;
     const double B1_5 = -kappa_5*A_5 - sigma_5*B_5;
     coef[36] = A1_5;
     coef[37] = B1_5;
     coef[38] = B1_5 - sigma_5*A1_5;
     coef[39] = -kappa_5*A1_5 - sigma_5*B1_5;
     // Mode 6 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_6 = qh0_6;
     const double B_6 = dqh0_6 + sigma_6*A_6;
     coef[40] = A_6;
     coef[41] = B_6;
-    const double A1_6 = dqh0_6;
+    const double A1_6 = B_6 - sigma_6*A_6;
     const double B1_6 = -kappa_6*A_6 - sigma_6*B_6;
     coef[42] = A1_6;
     coef[43] = B1_6;
     coef[44] = B1_6 - sigma_6*A1_6;
     coef[45] = -kappa_6*A1_6 - sigma_6*B1_6;
     // Mode 7 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_7 = qh0_7;
     const double B_7 = dqh0_7 + sigma_7*A_7;
     coef[46] = A_7;
     coef[47] = B_7;
-    const double A1_7 = dqh0_7;
+    const double A1_7 = B_7 - sigma_7*A_7;
     const double B1_7 = -kappa_7*A_7 - sigma_7*B_7;
     coef[48] = A1_7;
     coef[49] = B1_7;
     coef[50] = B1_7 - sigma_7*A1_7;
     coef[51] = -kappa_7*A1_7 - sigma_7*B1_7;
     // Mode 8 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_8 = qh0_8;
     const double B_8 = dqh0_8 + sigma_8*A_8;
     coef[52] = A_8;
     coef[53] = B_8;
-    const double A1_8 = dqh0_8;
+    const double A1_8 = B_8 - sigma_8*A_8;
     const double B1_8 = -kappa_8*A_8 - sigma_8*B_8;
     coef[54] = A1_8;
     coef[55] = B1_8;
@@ -11946,7 +11946,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -11961,7 +11961,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -11976,7 +11976,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_3 = dqh_3;
     const double ddq_3 = ddqh_3;
     const double mq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);  // magnitude of the terms of q
-    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -11991,7 +11991,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_4 = dqh_4;
     const double ddq_4 = ddqh_4;
     const double mq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);  // magnitude of the terms of q
-    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -12006,7 +12006,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_5 = dqh_5;
     const double ddq_5 = ddqh_5;
     const double mq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);  // magnitude of the terms of q
-    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -12021,7 +12021,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_6 = dqh_6;
     const double ddq_6 = ddqh_6;
     const double mq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);  // magnitude of the terms of q
-    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -12036,7 +12036,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_7 = dqh_7;
     const double ddq_7 = ddqh_7;
     const double mq_7 = __builtin_fabs(coef[46]*eC_7) + __builtin_fabs(coef[47]*eS_7);  // magnitude of the terms of q
-    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_8 = __builtin_exp(-sigma_8*tau);
@@ -12051,7 +12051,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_8 = dqh_8;
     const double ddq_8 = ddqh_8;
     const double mq_8 = __builtin_fabs(coef[52]*eC_8) + __builtin_fabs(coef[53]*eS_8);  // magnitude of the terms of q
-    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8);
+    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8) + __builtin_fabs(sigma_8*coef[52]*eC_8);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.18905485538342653*q_1 + 0.32580382289818*q_2 + 0.2103720466050957*q_3 + 0.75787380531462267*q_4 + 0.4832797792710643*q_5 + 0.069249774430946084*q_6 - 0.023808152119436685*q_7 + 0.023650020034497805*q_8 + 0.77031673718603433*sin_1 - 0.029153831951507433*cos_1;  // m1
     v[0] = 0.18905485538342653*dq_1 + 0.32580382289818*dq_2 + 0.2103720466050957*dq_3 + 0.75787380531462267*dq_4 + 0.4832797792710643*dq_5 + 0.069249774430946084*dq_6 - 0.023808152119436685*dq_7 + 0.023650020034497805*dq_8 + 5.2381538128650336*cos_1 + 0.19824605727025055*sin_1;

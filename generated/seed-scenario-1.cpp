@@ -95,24 +95,24 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_2 = q0_2 + (-0.45970084338098305*ex_1 + 1.2559260603991087*ex_2);
     const double dqh0_2 = dq0_2 + (-0.45970084338098305*ev_1 + 1.2559260603991087*ev_2);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[4] = A_1;
     coef[5] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[6] = A1_1;
     coef[7] = B1_1;
     coef[8] = B1_1 - sigma_1*A1_1;
     coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[10] = A_2;
     coef[11] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[12] = A1_2;
     coef[13] = B1_2;
@@ -141,7 +141,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1) + __builtin_fabs(sigma_1*coef[4]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -156,7 +156,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2) + __builtin_fabs(sigma_2*coef[10]*eC_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.88807383397711526*q_1 - 0.45970084338098305*q_2 - 0.73072581908970025*sin_1 - 0.0076388658185612014*cos_1;  // m1
     v[0] = 0.88807383397711526*dq_1 - 0.45970084338098305*dq_2 - 128.25341521011063*cos_1 + 1.3407362980313511*sin_1;
@@ -307,24 +307,24 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_2 = q0_2 + (0.79026233699508808*ex_1 - 0.86658575885720845*ex_2);
     const double dqh0_2 = dq0_2 + (0.79026233699508808*ev_1 - 0.86658575885720845*ev_2);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[4] = A_1;
     coef[5] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[6] = A1_1;
     coef[7] = B1_1;
     coef[8] = B1_1 - sigma_1*A1_1;
     coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2 + sigma_2*A_2;
     coef[10] = A_2;
     coef[11] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[12] = A1_2;
     coef[13] = B1_2;
@@ -353,7 +353,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1) + __builtin_fabs(sigma_1*coef[4]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -368,7 +368,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_2 = dqh_2;
     const double ddq_2 = ddqh_2;
     const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);  // magnitude of the terms of q
-    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2) + __builtin_fabs(sigma_2*coef[10]*eC_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.6127686665676223*q_1 + 0.79026233699508808*q_2 - 0.72773816497394384*sin_1 - 0.06320081663878023*cos_1;  // m1
     v[0] = 0.6127686665676223*dq_1 + 0.79026233699508808*dq_2 - 127.72903679921824*cos_1 + 11.092697652437176*sin_1;
@@ -495,12 +495,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (1.4142135623730951*ex_1);
     const double dqh0_1 = dq0_1 + (1.4142135623730951*ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -530,7 +530,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -664,12 +664,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (1.4142135623730951*ex_1);
     const double dqh0_1 = dq0_1 + (1.4142135623730951*ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -699,7 +699,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -833,12 +833,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -868,7 +868,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + q_1 - 0.7306902574434726*sin_1 - 0.0062477207570832737*cos_1;  // m1
     v[0] = dq_1 - 128.24717360421684*cos_1 + 1.0965693334515465*sin_1;
@@ -1002,12 +1002,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (underdamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1 + sigma_1*A_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -1037,7 +1037,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double dq_1 = dqh_1;
     const double ddq_1 = ddqh_1;
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);  // magnitude of the terms of q
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + q_1 - 0.72996736260496498*sin_1 - 0.048007721356019183*cos_1;  // m1
     v[0] = dq_1 - 128.12029464434667*cos_1 + 8.4260800145738415*sin_1;

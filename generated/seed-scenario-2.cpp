@@ -95,24 +95,24 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_2 = q0_2 + (-0.45970084338098305*ex_1 + 1.2559260603991087*ex_2);
     const double dqh0_2 = dq0_2 + (-0.45970084338098305*ev_1 + 1.2559260603991087*ev_2);
     // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1;
     coef[4] = A_1;
     coef[5] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[6] = A1_1;
     coef[7] = B1_1;
     coef[8] = B1_1 - sigma_1*A1_1;
     coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2;
     coef[10] = A_2;
     coef[11] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[12] = A1_2;
     coef[13] = B1_2;
@@ -305,24 +305,24 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_2 = q0_2 + (0.79026233699508808*ex_1 - 0.86658575885720845*ex_2);
     const double dqh0_2 = dq0_2 + (0.79026233699508808*ev_1 - 0.86658575885720845*ev_2);
     // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1;
     coef[4] = A_1;
     coef[5] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[6] = A1_1;
     coef[7] = B1_1;
     coef[8] = B1_1 - sigma_1*A1_1;
     coef[9] = -kappa_1*A1_1 - sigma_1*B1_1;
     // Mode 2 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_2 = qh0_2;
     const double B_2 = dqh0_2;
     coef[10] = A_2;
     coef[11] = B_2;
-    const double A1_2 = dqh0_2;
+    const double A1_2 = B_2 - sigma_2*A_2;
     const double B1_2 = -kappa_2*A_2 - sigma_2*B_2;
     coef[12] = A1_2;
     coef[13] = B1_2;
@@ -491,12 +491,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (1.4142135623730951*ex_1);
     const double dqh0_1 = dq0_1 + (1.4142135623730951*ev_1);
     // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -659,12 +659,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (1.4142135623730951*ex_1);
     const double dqh0_1 = dq0_1 + (1.4142135623730951*ev_1);
     // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -827,12 +827,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
@@ -995,12 +995,12 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double qh0_1 = q0_1 + (ex_1);
     const double dqh0_1 = dq0_1 + (ev_1);
     // Mode 1 (undamped): A = q_h(0), B = q_h'(0) + sigma A (the particular
-    // parts start at rest or are in x_p) and the derivative pairs, A1 = q_h'(0) exactly.
+    // parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.
     const double A_1 = qh0_1;
     const double B_1 = dqh0_1;
     coef[3] = A_1;
     coef[4] = B_1;
-    const double A1_1 = dqh0_1;
+    const double A1_1 = B_1 - sigma_1*A_1;
     const double B1_1 = -kappa_1*A_1 - sigma_1*B_1;
     coef[5] = A1_1;
     coef[6] = B1_1;
