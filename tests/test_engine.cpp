@@ -391,6 +391,54 @@ x = { m1 = -4.0 }
     EXPECT_GT(pushed.summary.x[0], -4.0);
 }
 
+// Contact ties at t0 (interface.md "Ties and touches", "At t0"): a mass at
+// rest exactly on its stop's gap (G = 0, G' = 0) enters the configuration its
+// first non-zero derivative points to, and no row is written for it.
+constexpr const char* kOnTheGap = R"(
+name = "on_the_gap"
+[[mass]]
+name = "m1"
+m = 2
+[[spring]]
+between = ["ground", "m1"]
+k = 4
+[[contact]]
+between = ["m1", "ground"]
+gap = 0
+k = 100
+[damping]
+alpha = 0.5
+[initial]
+x = { m1 = 0.0 }
+)";
+
+// G'' = load/m = -0.5 < 0: G decreases into G < 0, so the contact starts
+// open; the damped motion x = -0.25 (1 - e^{-s t} (cos w_d t + s/w_d sin w_d t)),
+// s = alpha/2, w_d = sqrt(2 - s^2), stays below the gap: no row at all.
+TEST(EngineTies, ContactOnItsGapPulledAwayStartsOpen) {
+    const Outcome r = simulate(model_from(std::string(kOnTheGap) + "[load]\nm1 = -1.0\n"), 3.0);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    EXPECT_EQ(r.events.size(), 0u) << "first row: " << (r.events.empty() ? "" : event_kind_name(r.events[0].kind));
+    EXPECT_EQ(r.summary.configuration.closed[0], 0);
+    const double s = 0.25, wd = std::sqrt(2.0 - s * s), t = 3.0;
+    const double x = -0.25 * (1 - std::exp(-s * t) * (std::cos(wd * t) + s / wd * std::sin(wd * t)));
+    EXPECT_NEAR(r.summary.x[0], x, 1e-13);
+}
+
+// G'' = 0 (no load, sin forcing is 0 at t0), so G''' = F'(0)/m decides:
+// amplitude -1 pulls away (open, the first row a later close), +1 pushes in
+// (closed, the first row a later open); either way nothing at t0.
+TEST(EngineTies, ContactOnItsGapDecidedByTheThirdDerivative) {
+    for (double amp : {-1.0, 1.0}) {
+        const std::string forcing = "[[forcing]]\nomega = 1\namplitude = { m1 = " + std::to_string(amp) + " }\n";
+        const Outcome r = simulate(model_from(std::string(kOnTheGap) + forcing), 10.0);
+        ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+        ASSERT_FALSE(r.events.empty()) << amp;
+        EXPECT_EQ(r.events[0].kind, amp < 0 ? EventKind::contact_close : EventKind::contact_open) << amp;
+        EXPECT_GT(r.events[0].t, 0.5) << amp << ": no switch at t0";
+    }
+}
+
 // Samples: on the grid t0 + k dt, plus t_end, never twice at one time.
 TEST(EngineOutput, SamplesOnTheGridAndAtTEnd) {
     const Model m = model_from(R"(
