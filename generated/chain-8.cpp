@@ -347,7 +347,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[14]*eC_1 + coef[15]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -360,7 +360,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[20]*eC_2 + coef[21]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -373,7 +373,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[26]*eC_3 + coef[27]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -386,7 +386,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[32]*eC_4 + coef[33]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -399,7 +399,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_5 = coef[38]*eC_5 + coef[39]*eS_5;
     const double r_5 = __builtin_sqrt(dq_5*dq_5 + lambda_5*q_5*q_5);
     const double mq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);
-    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -412,7 +412,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_6 = coef[44]*eC_6 + coef[45]*eS_6;
     const double r_6 = __builtin_sqrt(dq_6*dq_6 + lambda_6*q_6*q_6);
     const double mq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);
-    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -425,7 +425,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_7 = coef[50]*eC_7 + coef[51]*eS_7;
     const double r_7 = __builtin_sqrt(dq_7*dq_7 + lambda_7*q_7*q_7);
     const double mq_7 = __builtin_fabs(coef[46]*eC_7) + __builtin_fabs(coef[47]*eS_7);
-    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_8 = __builtin_exp(-sigma_8*tau);
@@ -438,7 +438,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_8 = coef[56]*eC_8 + coef[57]*eS_8;
     const double r_8 = __builtin_sqrt(dq_8*dq_8 + lambda_8*q_8*q_8);
     const double mq_8 = __builtin_fabs(coef[52]*eC_8) + __builtin_fabs(coef[53]*eS_8);
-    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8);
+    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8) + __builtin_fabs(sigma_8*coef[52]*eC_8);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.16122984176531685*q_1 + 0.30301298511469577*q_2 + 0.40824829046386302*q_3 + 0.46424282688001262*q_4 + 0.46424282688001262*q_5 + 0.40824829046386302*q_6 - 0.30301298511469577*q_7 - 0.16122984176531685*q_8 + 5.4322450949382057*sin_1 - 2.7752849247341715*cos_1;  // m1
     v[0] = 0.16122984176531685*dq_1 + 0.30301298511469577*dq_2 + 0.40824829046386302*dq_3 + 0.46424282688001262*dq_4 + 0.46424282688001262*dq_5 + 0.40824829046386302*dq_6 - 0.30301298511469577*dq_7 - 0.16122984176531685*dq_8 + 36.939266645579799*cos_1 + 18.871937488192366*sin_1;
@@ -876,7 +876,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[13]*eC_1 + coef[14]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[11]*eC_1) + __builtin_fabs(coef[12]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[11]*eC_1) + __builtin_fabs(coef[12]*eS_1) + __builtin_fabs(sigma_1*coef[9]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -889,7 +889,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[19]*eC_2 + coef[20]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[17]*eC_2) + __builtin_fabs(coef[18]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[17]*eC_2) + __builtin_fabs(coef[18]*eS_2) + __builtin_fabs(sigma_2*coef[15]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -902,7 +902,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[25]*eC_3 + coef[26]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[23]*eC_3) + __builtin_fabs(coef[24]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[23]*eC_3) + __builtin_fabs(coef[24]*eS_3) + __builtin_fabs(sigma_3*coef[21]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -915,7 +915,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[31]*eC_4 + coef[32]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[29]*eC_4) + __builtin_fabs(coef[30]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[29]*eC_4) + __builtin_fabs(coef[30]*eS_4) + __builtin_fabs(sigma_4*coef[27]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -928,7 +928,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_5 = coef[37]*eC_5 + coef[38]*eS_5;
     const double r_5 = __builtin_sqrt(dq_5*dq_5 + lambda_5*q_5*q_5);
     const double mq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5);
-    const double mdq_5 = __builtin_fabs(coef[35]*eC_5) + __builtin_fabs(coef[36]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[35]*eC_5) + __builtin_fabs(coef[36]*eS_5) + __builtin_fabs(sigma_5*coef[33]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -941,7 +941,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_6 = coef[43]*eC_6 + coef[44]*eS_6;
     const double r_6 = __builtin_sqrt(dq_6*dq_6 + lambda_6*q_6*q_6);
     const double mq_6 = __builtin_fabs(coef[39]*eC_6) + __builtin_fabs(coef[40]*eS_6);
-    const double mdq_6 = __builtin_fabs(coef[41]*eC_6) + __builtin_fabs(coef[42]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[41]*eC_6) + __builtin_fabs(coef[42]*eS_6) + __builtin_fabs(sigma_6*coef[39]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -954,7 +954,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_7 = coef[49]*eC_7 + coef[50]*eS_7;
     const double r_7 = __builtin_sqrt(dq_7*dq_7 + lambda_7*q_7*q_7);
     const double mq_7 = __builtin_fabs(coef[45]*eC_7) + __builtin_fabs(coef[46]*eS_7);
-    const double mdq_7 = __builtin_fabs(coef[47]*eC_7) + __builtin_fabs(coef[48]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[47]*eC_7) + __builtin_fabs(coef[48]*eS_7) + __builtin_fabs(sigma_7*coef[45]*eC_7);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.19134171618254489*q_1 + 0.35355339059327379*q_2 - 0.46193976625564337*q_3 + 0.5*q_4 + 0.46193976625564337*q_5 - 0.35355339059327379*q_6 - 0.19134171618254489*q_7 + 0.59160325420102255*sin_1 - 0.012692071416714652*cos_1;  // m1
     v[0] = 0.19134171618254489*dq_1 + 0.35355339059327379*dq_2 - 0.46193976625564337*dq_3 + 0.5*dq_4 + 0.46193976625564337*dq_5 - 0.35355339059327379*dq_6 - 0.19134171618254489*dq_7 + 4.0229021285669528*cos_1 + 0.086306085633659629*sin_1;
@@ -1364,7 +1364,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[12]*eC_1 + coef[13]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1) + __builtin_fabs(sigma_1*coef[8]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -1377,7 +1377,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[18]*eC_2 + coef[19]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2) + __builtin_fabs(sigma_2*coef[14]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -1390,7 +1390,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[24]*eC_3 + coef[25]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3) + __builtin_fabs(sigma_3*coef[20]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -1403,7 +1403,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[30]*eC_4 + coef[31]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4) + __builtin_fabs(sigma_4*coef[26]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -1416,7 +1416,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_5 = coef[36]*eC_5 + coef[37]*eS_5;
     const double r_5 = __builtin_sqrt(dq_5*dq_5 + lambda_5*q_5*q_5);
     const double mq_5 = __builtin_fabs(coef[32]*eC_5) + __builtin_fabs(coef[33]*eS_5);
-    const double mdq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5) + __builtin_fabs(sigma_5*coef[32]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -1429,7 +1429,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_6 = coef[42]*eC_6 + coef[43]*eS_6;
     const double r_6 = __builtin_sqrt(dq_6*dq_6 + lambda_6*q_6*q_6);
     const double mq_6 = __builtin_fabs(coef[38]*eC_6) + __builtin_fabs(coef[39]*eS_6);
-    const double mdq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6) + __builtin_fabs(sigma_6*coef[38]*eC_6);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.23192061392432986*q_1 + 0.41790650594127499*q_2 + 0.52112088916960242*q_3 + 0.52112088916960242*q_4 - 0.41790650594127499*q_5 + 0.23192061392432986*q_6 + 0.3446837043168765*sin_1 - 0.0048794187606921637*cos_1;  // m1
     v[0] = 0.23192061392432986*dq_1 + 0.41790650594127499*dq_2 + 0.52112088916960242*dq_3 + 0.52112088916960242*dq_4 - 0.41790650594127499*dq_5 + 0.23192061392432986*dq_6 + 2.3438491893547604*cos_1 + 0.033180047572706713*sin_1;
@@ -1811,7 +1811,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[11]*eC_1 + coef[12]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[7]*eC_1) + __builtin_fabs(coef[8]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1) + __builtin_fabs(sigma_1*coef[7]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -1824,7 +1824,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[17]*eC_2 + coef[18]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[13]*eC_2) + __builtin_fabs(coef[14]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2) + __builtin_fabs(sigma_2*coef[13]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -1837,7 +1837,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[23]*eC_3 + coef[24]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[19]*eC_3) + __builtin_fabs(coef[20]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3) + __builtin_fabs(sigma_3*coef[19]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -1850,7 +1850,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[29]*eC_4 + coef[30]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[25]*eC_4) + __builtin_fabs(coef[26]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4) + __builtin_fabs(sigma_4*coef[25]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -1863,7 +1863,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_5 = coef[35]*eC_5 + coef[36]*eS_5;
     const double r_5 = __builtin_sqrt(dq_5*dq_5 + lambda_5*q_5*q_5);
     const double mq_5 = __builtin_fabs(coef[31]*eC_5) + __builtin_fabs(coef[32]*eS_5);
-    const double mdq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5) + __builtin_fabs(sigma_5*coef[31]*eC_5);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.28867513459481287*q_1 + 0.5*q_2 + 0.57735026918962573*q_3 + 0.5*q_4 + 0.28867513459481287*q_5 + 0.15091160268135109*sin_1 - 0.0043321609057087795*cos_1;  // m1
     v[0] = 0.28867513459481287*dq_1 + 0.5*dq_2 + 0.57735026918962573*dq_3 + 0.5*dq_4 + 0.28867513459481287*dq_5 + 1.0261988982331873*cos_1 + 0.029458694158819701*sin_1;
@@ -2217,7 +2217,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[10]*eC_1 + coef[11]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1) + __builtin_fabs(sigma_1*coef[6]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -2230,7 +2230,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[16]*eC_2 + coef[17]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2) + __builtin_fabs(sigma_2*coef[12]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -2243,7 +2243,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[22]*eC_3 + coef[23]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[18]*eC_3) + __builtin_fabs(coef[19]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3) + __builtin_fabs(sigma_3*coef[18]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -2256,7 +2256,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[28]*eC_4 + coef[29]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[24]*eC_4) + __builtin_fabs(coef[25]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4) + __builtin_fabs(sigma_4*coef[24]*eC_4);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.37174803446018451*q_1 + 0.60150095500754563*q_2 + 0.60150095500754563*q_3 - 0.37174803446018451*q_4 - 0.44447952138707153*sin_1 - 0.02412417784816211*cos_1;  // m1
     v[0] = 0.37174803446018451*dq_1 + 0.60150095500754563*dq_2 + 0.60150095500754563*dq_3 - 0.37174803446018451*dq_4 - 3.0224607454320864*cos_1 + 0.16404440936750234*sin_1;
@@ -2582,7 +2582,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[9]*eC_1 + coef[10]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[7]*eC_1) + __builtin_fabs(coef[8]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[7]*eC_1) + __builtin_fabs(coef[8]*eS_1) + __builtin_fabs(sigma_1*coef[5]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -2595,7 +2595,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[15]*eC_2 + coef[16]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[11]*eC_2) + __builtin_fabs(coef[12]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[13]*eC_2) + __builtin_fabs(coef[14]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[13]*eC_2) + __builtin_fabs(coef[14]*eS_2) + __builtin_fabs(sigma_2*coef[11]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -2608,7 +2608,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[21]*eC_3 + coef[22]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[17]*eC_3) + __builtin_fabs(coef[18]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[19]*eC_3) + __builtin_fabs(coef[20]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[19]*eC_3) + __builtin_fabs(coef[20]*eS_3) + __builtin_fabs(sigma_3*coef[17]*eC_3);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.5*q_1 + 0.70710678118654757*q_2 - 0.5*q_3 + 0.97381026124477144*sin_1 - 0.022838289504848779*cos_1;  // m1
     v[0] = 0.5*dq_1 + 0.70710678118654757*dq_2 - 0.5*dq_3 + 6.6219097764644452*cos_1 + 0.1553003686329717*sin_1;
@@ -2906,7 +2906,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[8]*eC_1 + coef[9]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1) + __builtin_fabs(sigma_1*coef[4]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -2919,7 +2919,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[14]*eC_2 + coef[15]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2) + __builtin_fabs(sigma_2*coef[10]*eC_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.70710678118654757*q_1 + 0.70710678118654757*q_2 + 0.45080763896446202*sin_1 - 0.00365273404359088*cos_1;  // m1
     v[0] = 0.70710678118654757*dq_1 + 0.70710678118654757*dq_2 + 3.0654919449583415*cos_1 + 0.024838591496417983*sin_1;
@@ -3189,7 +3189,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + q_1 + 0.2601383550578546*sin_1 - 0.0013805469415141087*cos_1;  // m1
     v[0] = dq_1 + 1.7689408143934111*cos_1 + 0.0093877192022959396*sin_1;
@@ -3466,7 +3466,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -3743,7 +3743,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -4020,7 +4020,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -4297,7 +4297,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -4574,7 +4574,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -4851,7 +4851,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -5128,7 +5128,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -5878,7 +5878,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[14]*eC_1 + coef[15]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -5891,7 +5891,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[20]*eC_2 + coef[21]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -5904,7 +5904,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[26]*eC_3 + coef[27]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -5917,7 +5917,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[32]*eC_4 + coef[33]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -5930,7 +5930,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_5 = coef[38]*eC_5 + coef[39]*eS_5;
     const double r_5 = __builtin_sqrt(dq_5*dq_5 + lambda_5*q_5*q_5);
     const double mq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);
-    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -5943,7 +5943,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_6 = coef[44]*eC_6 + coef[45]*eS_6;
     const double r_6 = __builtin_sqrt(dq_6*dq_6 + lambda_6*q_6*q_6);
     const double mq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);
-    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -5956,7 +5956,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_7 = coef[50]*eC_7 + coef[51]*eS_7;
     const double r_7 = __builtin_sqrt(dq_7*dq_7 + lambda_7*q_7*q_7);
     const double mq_7 = __builtin_fabs(coef[46]*eC_7) + __builtin_fabs(coef[47]*eS_7);
-    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_8 = __builtin_exp(-sigma_8*tau);
@@ -5969,7 +5969,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_8 = coef[56]*eC_8 + coef[57]*eS_8;
     const double r_8 = __builtin_sqrt(dq_8*dq_8 + lambda_8*q_8*q_8);
     const double mq_8 = __builtin_fabs(coef[52]*eC_8) + __builtin_fabs(coef[53]*eS_8);
-    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8);
+    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8) + __builtin_fabs(sigma_8*coef[52]*eC_8);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.18833201326479529*q_1 + 0.34911713609451595*q_2 - 0.45850526062492686*q_3 + 0.49961463891709895*q_4 + 0.46504979853202533*q_5 - 0.35847221306899663*q_6 - 0.19501993222880004*q_7 - 9.8503756273555532e-08*q_8 + 0.62788675909370573*sin_1 - 0.01460330866252257*cos_1;  // m1
     v[0] = 0.18833201326479529*dq_1 + 0.34911713609451595*dq_2 - 0.45850526062492686*dq_3 + 0.49961463891709895*dq_4 + 0.46504979853202533*dq_5 - 0.35847221306899663*dq_6 - 0.19501993222880004*dq_7 - 9.8503756273555532e-08*dq_8 + 4.2696299618371985*cos_1 + 0.099302498905153483*sin_1;
@@ -6670,7 +6670,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[14]*eC_1 + coef[15]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -6683,7 +6683,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[20]*eC_2 + coef[21]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -6696,7 +6696,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[26]*eC_3 + coef[27]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -6709,7 +6709,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[32]*eC_4 + coef[33]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -6722,7 +6722,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_5 = coef[38]*eC_5 + coef[39]*eS_5;
     const double r_5 = __builtin_sqrt(dq_5*dq_5 + lambda_5*q_5*q_5);
     const double mq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);
-    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -6735,7 +6735,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_6 = coef[44]*eC_6 + coef[45]*eS_6;
     const double r_6 = __builtin_sqrt(dq_6*dq_6 + lambda_6*q_6*q_6);
     const double mq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);
-    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -6748,7 +6748,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_7 = coef[50]*eC_7 + coef[51]*eS_7;
     const double r_7 = __builtin_sqrt(dq_7*dq_7 + lambda_7*q_7*q_7);
     const double mq_7 = __builtin_fabs(coef[46]*eC_7) + __builtin_fabs(coef[47]*eS_7);
-    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_8 = __builtin_exp(-sigma_8*tau);
@@ -6761,7 +6761,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_8 = coef[56]*eC_8 + coef[57]*eS_8;
     const double r_8 = __builtin_sqrt(dq_8*dq_8 + lambda_8*q_8*q_8);
     const double mq_8 = __builtin_fabs(coef[52]*eC_8) + __builtin_fabs(coef[53]*eS_8);
-    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8);
+    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8) + __builtin_fabs(sigma_8*coef[52]*eC_8);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.15717825132194799*q_1 + 0.36322657521114149*q_2 + 0.36473292126194989*q_3 + 0.50634797565850331*q_4 + 0.55335140224461599*q_5 + 0.17094037076839277*q_6 + 0.34427415140897727*q_7 + 3.6235058980809498e-06*q_8 + 1.0897430817010003*sin_1 - 0.048105942850637712*cos_1;  // m1
     v[0] = 0.15717825132194799*dq_1 + 0.36322657521114149*dq_2 + 0.36473292126194989*dq_3 + 0.50634797565850331*dq_4 + 0.55335140224461599*dq_5 + 0.17094037076839277*dq_6 + 0.34427415140897727*dq_7 + 3.6235058980809498e-06*dq_8 + 7.4102529555668015*cos_1 + 0.32712041138433645*sin_1;
@@ -7199,7 +7199,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[13]*eC_1 + coef[14]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[11]*eC_1) + __builtin_fabs(coef[12]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[11]*eC_1) + __builtin_fabs(coef[12]*eS_1) + __builtin_fabs(sigma_1*coef[9]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -7212,7 +7212,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[19]*eC_2 + coef[20]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[17]*eC_2) + __builtin_fabs(coef[18]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[17]*eC_2) + __builtin_fabs(coef[18]*eS_2) + __builtin_fabs(sigma_2*coef[15]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -7225,7 +7225,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[25]*eC_3 + coef[26]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[23]*eC_3) + __builtin_fabs(coef[24]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[23]*eC_3) + __builtin_fabs(coef[24]*eS_3) + __builtin_fabs(sigma_3*coef[21]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -7238,7 +7238,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[31]*eC_4 + coef[32]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[29]*eC_4) + __builtin_fabs(coef[30]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[29]*eC_4) + __builtin_fabs(coef[30]*eS_4) + __builtin_fabs(sigma_4*coef[27]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -7251,7 +7251,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_5 = coef[37]*eC_5 + coef[38]*eS_5;
     const double r_5 = __builtin_sqrt(dq_5*dq_5 + lambda_5*q_5*q_5);
     const double mq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5);
-    const double mdq_5 = __builtin_fabs(coef[35]*eC_5) + __builtin_fabs(coef[36]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[35]*eC_5) + __builtin_fabs(coef[36]*eS_5) + __builtin_fabs(sigma_5*coef[33]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -7264,7 +7264,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_6 = coef[43]*eC_6 + coef[44]*eS_6;
     const double r_6 = __builtin_sqrt(dq_6*dq_6 + lambda_6*q_6*q_6);
     const double mq_6 = __builtin_fabs(coef[39]*eC_6) + __builtin_fabs(coef[40]*eS_6);
-    const double mdq_6 = __builtin_fabs(coef[41]*eC_6) + __builtin_fabs(coef[42]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[41]*eC_6) + __builtin_fabs(coef[42]*eS_6) + __builtin_fabs(sigma_6*coef[39]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -7277,7 +7277,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_7 = coef[49]*eC_7 + coef[50]*eS_7;
     const double r_7 = __builtin_sqrt(dq_7*dq_7 + lambda_7*q_7*q_7);
     const double mq_7 = __builtin_fabs(coef[45]*eC_7) + __builtin_fabs(coef[46]*eS_7);
-    const double mdq_7 = __builtin_fabs(coef[47]*eC_7) + __builtin_fabs(coef[48]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[47]*eC_7) + __builtin_fabs(coef[48]*eS_7) + __builtin_fabs(sigma_7*coef[45]*eC_7);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.19043136251490667*q_1 + 0.38587126961491891*q_2 + 0.56097347178924506*q_3 - 0.33898896567507947*q_4 + 0.51332465560256402*q_5 + 0.34890156562148933*q_6 + 3.6235656511060938e-06*q_7 + 0.58277405893896583*sin_1 - 0.011677202387739064*cos_1;  // m1
     v[0] = 0.19043136251490667*dq_1 + 0.38587126961491891*dq_2 + 0.56097347178924506*dq_3 - 0.33898896567507947*dq_4 + 0.51332465560256402*dq_5 + 0.34890156562148933*dq_6 + 3.6235656511060938e-06*dq_7 + 3.9628636007849676*cos_1 + 0.079404976236625638*sin_1;
@@ -7687,7 +7687,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[12]*eC_1 + coef[13]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1) + __builtin_fabs(sigma_1*coef[8]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -7700,7 +7700,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[18]*eC_2 + coef[19]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2) + __builtin_fabs(sigma_2*coef[14]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -7713,7 +7713,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[24]*eC_3 + coef[25]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3) + __builtin_fabs(sigma_3*coef[20]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -7726,7 +7726,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[30]*eC_4 + coef[31]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4) + __builtin_fabs(sigma_4*coef[26]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -7739,7 +7739,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_5 = coef[36]*eC_5 + coef[37]*eS_5;
     const double r_5 = __builtin_sqrt(dq_5*dq_5 + lambda_5*q_5*q_5);
     const double mq_5 = __builtin_fabs(coef[32]*eC_5) + __builtin_fabs(coef[33]*eS_5);
-    const double mdq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5) + __builtin_fabs(sigma_5*coef[32]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -7752,7 +7752,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_6 = coef[42]*eC_6 + coef[43]*eS_6;
     const double r_6 = __builtin_sqrt(dq_6*dq_6 + lambda_6*q_6*q_6);
     const double mq_6 = __builtin_fabs(coef[38]*eC_6) + __builtin_fabs(coef[39]*eS_6);
-    const double mdq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6) + __builtin_fabs(sigma_6*coef[38]*eC_6);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.25359517361372547*q_1 - 0.40150235452664823*q_2 + 0.5700329676270175*q_3 + 0.56969736786554714*q_4 + 0.35354302719964958*q_5 + 3.6459675486191742e-06*q_6 + 0.28520422732718304*sin_1 - 0.0049326429992242781*cos_1;  // m1
     v[0] = 0.25359517361372547*dq_1 - 0.40150235452664823*dq_2 + 0.5700329676270175*dq_3 + 0.56969736786554714*dq_4 + 0.35354302719964958*dq_5 + 3.6459675486191742e-06*dq_6 + 1.9393887458248447*cos_1 + 0.033541972394725089*sin_1;
@@ -8204,7 +8204,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[13]*eC_1 + coef[14]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[11]*eC_1) + __builtin_fabs(coef[12]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[11]*eC_1) + __builtin_fabs(coef[12]*eS_1) + __builtin_fabs(sigma_1*coef[9]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -8217,7 +8217,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[19]*eC_2 + coef[20]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[17]*eC_2) + __builtin_fabs(coef[18]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[17]*eC_2) + __builtin_fabs(coef[18]*eS_2) + __builtin_fabs(sigma_2*coef[15]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -8230,7 +8230,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[25]*eC_3 + coef[26]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[23]*eC_3) + __builtin_fabs(coef[24]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[23]*eC_3) + __builtin_fabs(coef[24]*eS_3) + __builtin_fabs(sigma_3*coef[21]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -8243,7 +8243,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[31]*eC_4 + coef[32]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[29]*eC_4) + __builtin_fabs(coef[30]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[29]*eC_4) + __builtin_fabs(coef[30]*eS_4) + __builtin_fabs(sigma_4*coef[27]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -8256,7 +8256,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_5 = coef[37]*eC_5 + coef[38]*eS_5;
     const double r_5 = __builtin_sqrt(dq_5*dq_5 + lambda_5*q_5*q_5);
     const double mq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5);
-    const double mdq_5 = __builtin_fabs(coef[35]*eC_5) + __builtin_fabs(coef[36]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[35]*eC_5) + __builtin_fabs(coef[36]*eS_5) + __builtin_fabs(sigma_5*coef[33]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -8269,7 +8269,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_6 = coef[43]*eC_6 + coef[44]*eS_6;
     const double r_6 = __builtin_sqrt(dq_6*dq_6 + lambda_6*q_6*q_6);
     const double mq_6 = __builtin_fabs(coef[39]*eC_6) + __builtin_fabs(coef[40]*eS_6);
-    const double mdq_6 = __builtin_fabs(coef[41]*eC_6) + __builtin_fabs(coef[42]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[41]*eC_6) + __builtin_fabs(coef[42]*eS_6) + __builtin_fabs(sigma_6*coef[39]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -8282,7 +8282,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_7 = coef[49]*eC_7 + coef[50]*eS_7;
     const double r_7 = __builtin_sqrt(dq_7*dq_7 + lambda_7*q_7*q_7);
     const double mq_7 = __builtin_fabs(coef[45]*eC_7) + __builtin_fabs(coef[46]*eS_7);
-    const double mdq_7 = __builtin_fabs(coef[47]*eC_7) + __builtin_fabs(coef[48]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[47]*eC_7) + __builtin_fabs(coef[48]*eS_7) + __builtin_fabs(sigma_7*coef[45]*eC_7);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.5*q_2 + 0.70710678118654757*q_4 - 0.5*q_6 + 0.97381026124477144*sin_1 - 0.022838289504848779*cos_1;  // m1
     v[0] = 0.5*dq_2 + 0.70710678118654757*dq_4 - 0.5*dq_6 + 6.6219097764644452*cos_1 + 0.1553003686329717*sin_1;
@@ -8990,7 +8990,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[14]*eC_1 + coef[15]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -9003,7 +9003,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[20]*eC_2 + coef[21]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -9016,7 +9016,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[26]*eC_3 + coef[27]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -9029,7 +9029,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[32]*eC_4 + coef[33]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -9042,7 +9042,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_5 = coef[38]*eC_5 + coef[39]*eS_5;
     const double r_5 = __builtin_sqrt(dq_5*dq_5 + lambda_5*q_5*q_5);
     const double mq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);
-    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -9055,7 +9055,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_6 = coef[44]*eC_6 + coef[45]*eS_6;
     const double r_6 = __builtin_sqrt(dq_6*dq_6 + lambda_6*q_6*q_6);
     const double mq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);
-    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -9068,7 +9068,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_7 = coef[50]*eC_7 + coef[51]*eS_7;
     const double r_7 = __builtin_sqrt(dq_7*dq_7 + lambda_7*q_7*q_7);
     const double mq_7 = __builtin_fabs(coef[46]*eC_7) + __builtin_fabs(coef[47]*eS_7);
-    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_8 = __builtin_exp(-sigma_8*tau);
@@ -9081,7 +9081,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_8 = coef[56]*eC_8 + coef[57]*eS_8;
     const double r_8 = __builtin_sqrt(dq_8*dq_8 + lambda_8*q_8*q_8);
     const double mq_8 = __builtin_fabs(coef[52]*eC_8) + __builtin_fabs(coef[53]*eS_8);
-    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8);
+    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8) + __builtin_fabs(sigma_8*coef[52]*eC_8);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.19372350904161664*q_1 - 0.28020934109810303*q_2 - 0.28402946550096314*q_3 + 0.51600471133952652*q_4 + 0.7127936831875068*q_5 + 0.16132189670832656*q_6 + 0.042363034756029191*q_7 + 0.033557591470402277*q_8 + 3.560673211804299*sin_1 - 1.2167861856792128*cos_1;  // m1
     v[0] = 0.19372350904161664*dq_1 - 0.28020934109810303*dq_2 - 0.28402946550096314*dq_3 + 0.51600471133952652*dq_4 + 0.7127936831875068*dq_5 + 0.16132189670832656*dq_6 + 0.042363034756029191*dq_7 + 0.033557591470402277*dq_8 + 24.212577840269233*cos_1 + 8.2741460626186463*sin_1;
@@ -9484,7 +9484,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[12]*eC_1 + coef[13]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1) + __builtin_fabs(sigma_1*coef[8]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -9497,7 +9497,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[18]*eC_2 + coef[19]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2) + __builtin_fabs(sigma_2*coef[14]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -9510,7 +9510,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[24]*eC_3 + coef[25]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3) + __builtin_fabs(sigma_3*coef[20]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -9523,7 +9523,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[30]*eC_4 + coef[31]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4) + __builtin_fabs(sigma_4*coef[26]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -9536,7 +9536,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_5 = coef[36]*eC_5 + coef[37]*eS_5;
     const double r_5 = __builtin_sqrt(dq_5*dq_5 + lambda_5*q_5*q_5);
     const double mq_5 = __builtin_fabs(coef[32]*eC_5) + __builtin_fabs(coef[33]*eS_5);
-    const double mdq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5) + __builtin_fabs(sigma_5*coef[32]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -9549,7 +9549,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_6 = coef[42]*eC_6 + coef[43]*eS_6;
     const double r_6 = __builtin_sqrt(dq_6*dq_6 + lambda_6*q_6*q_6);
     const double mq_6 = __builtin_fabs(coef[38]*eC_6) + __builtin_fabs(coef[39]*eS_6);
-    const double mdq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6) + __builtin_fabs(sigma_6*coef[38]*eC_6);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.26689233302016613*q_1 - 0.32322153495902672*q_2 + 0.58791675412455591*q_3 + 0.6845449333826723*q_4 - 0.094458109064740406*q_5 + 0.033557591472812565*q_6 + 0.18984731294346066*sin_1 - 0.0032037447311752281*cos_1;  // m1
     v[0] = 0.26689233302016613*dq_1 - 0.32322153495902672*dq_2 + 0.58791675412455591*dq_3 + 0.6845449333826723*dq_4 - 0.094458109064740406*dq_5 + 0.033557591472812565*dq_6 + 1.2909617280155326*cos_1 + 0.02178546417199155*sin_1;
@@ -9931,7 +9931,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[11]*eC_1 + coef[12]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[7]*eC_1) + __builtin_fabs(coef[8]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[9]*eC_1) + __builtin_fabs(coef[10]*eS_1) + __builtin_fabs(sigma_1*coef[7]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -9944,7 +9944,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[17]*eC_2 + coef[18]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[13]*eC_2) + __builtin_fabs(coef[14]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[15]*eC_2) + __builtin_fabs(coef[16]*eS_2) + __builtin_fabs(sigma_2*coef[13]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -9957,7 +9957,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[23]*eC_3 + coef[24]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[19]*eC_3) + __builtin_fabs(coef[20]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[21]*eC_3) + __builtin_fabs(coef[22]*eS_3) + __builtin_fabs(sigma_3*coef[19]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -9970,7 +9970,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[29]*eC_4 + coef[30]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[25]*eC_4) + __builtin_fabs(coef[26]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[27]*eC_4) + __builtin_fabs(coef[28]*eS_4) + __builtin_fabs(sigma_4*coef[25]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -9983,7 +9983,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_5 = coef[35]*eC_5 + coef[36]*eS_5;
     const double r_5 = __builtin_sqrt(dq_5*dq_5 + lambda_5*q_5*q_5);
     const double mq_5 = __builtin_fabs(coef[31]*eC_5) + __builtin_fabs(coef[32]*eS_5);
-    const double mdq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[33]*eC_5) + __builtin_fabs(coef[34]*eS_5) + __builtin_fabs(sigma_5*coef[31]*eC_5);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.31392101709287462*q_1 - 0.38658604347883557*q_2 + 0.84469915351503455*q_3 + 0.19329266427416747*q_4 + 0.033557592338143025*q_5 + 0.030179008515597315*sin_1 - 0.003899020649528062*cos_1;  // m1
     v[0] = 0.31392101709287462*dq_1 - 0.38658604347883557*dq_2 + 0.84469915351503455*dq_3 + 0.19329266427416747*dq_4 + 0.033557592338143025*dq_5 + 0.20521725790606174*cos_1 + 0.02651334041679082*sin_1;
@@ -10337,7 +10337,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[10]*eC_1 + coef[11]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[8]*eC_1) + __builtin_fabs(coef[9]*eS_1) + __builtin_fabs(sigma_1*coef[6]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -10350,7 +10350,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[16]*eC_2 + coef[17]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[14]*eC_2) + __builtin_fabs(coef[15]*eS_2) + __builtin_fabs(sigma_2*coef[12]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -10363,7 +10363,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[22]*eC_3 + coef[23]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[18]*eC_3) + __builtin_fabs(coef[19]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[20]*eC_3) + __builtin_fabs(coef[21]*eS_3) + __builtin_fabs(sigma_3*coef[18]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -10376,7 +10376,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[28]*eC_4 + coef[29]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[24]*eC_4) + __builtin_fabs(coef[25]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[26]*eC_4) + __builtin_fabs(coef[27]*eS_4) + __builtin_fabs(sigma_4*coef[24]*eC_4);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.37174803446018451*q_1 + 0.70631003684535587*q_2 + 0.60150095500754563*q_3 - 0.03355788806692038*q_4 - 0.48543586376452019*sin_1 - 0.023730359389328808*cos_1;  // m1
     v[0] = 0.37174803446018451*dq_1 + 0.70631003684535587*dq_2 + 0.60150095500754563*dq_3 - 0.03355788806692038*dq_4 - 3.3009638735987372*cos_1 + 0.1613664438474359*sin_1;
@@ -10702,7 +10702,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[9]*eC_1 + coef[10]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[7]*eC_1) + __builtin_fabs(coef[8]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[7]*eC_1) + __builtin_fabs(coef[8]*eS_1) + __builtin_fabs(sigma_1*coef[5]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -10715,7 +10715,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[15]*eC_2 + coef[16]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[11]*eC_2) + __builtin_fabs(coef[12]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[13]*eC_2) + __builtin_fabs(coef[14]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[13]*eC_2) + __builtin_fabs(coef[14]*eS_2) + __builtin_fabs(sigma_2*coef[11]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -10728,7 +10728,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[21]*eC_3 + coef[22]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[17]*eC_3) + __builtin_fabs(coef[18]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[19]*eC_3) + __builtin_fabs(coef[20]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[19]*eC_3) + __builtin_fabs(coef[20]*eS_3) + __builtin_fabs(sigma_3*coef[17]*eC_3);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.46435770273611859*q_1 + 0.88500821549819142*q_2 - 0.03365089018646162*q_3 + 0.68311406848487388*sin_1 - 0.011666850300724486*cos_1;  // m1
     v[0] = 0.46435770273611859*dq_1 + 0.88500821549819142*dq_2 - 0.03365089018646162*dq_3 + 4.6451756656971419*cos_1 + 0.079334582044926508*sin_1;
@@ -11464,7 +11464,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[14]*eC_1 + coef[15]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[10]*eC_1) + __builtin_fabs(coef[11]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -11477,7 +11477,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[20]*eC_2 + coef[21]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[16]*eC_2) + __builtin_fabs(coef[17]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_3 = __builtin_exp(-sigma_3*tau);
@@ -11490,7 +11490,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_3 = coef[26]*eC_3 + coef[27]*eS_3;
     const double r_3 = __builtin_sqrt(dq_3*dq_3 + lambda_3*q_3*q_3);
     const double mq_3 = __builtin_fabs(coef[22]*eC_3) + __builtin_fabs(coef[23]*eS_3);
-    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3);
+    const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_4 = __builtin_exp(-sigma_4*tau);
@@ -11503,7 +11503,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_4 = coef[32]*eC_4 + coef[33]*eS_4;
     const double r_4 = __builtin_sqrt(dq_4*dq_4 + lambda_4*q_4*q_4);
     const double mq_4 = __builtin_fabs(coef[28]*eC_4) + __builtin_fabs(coef[29]*eS_4);
-    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4);
+    const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_5 = __builtin_exp(-sigma_5*tau);
@@ -11516,7 +11516,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_5 = coef[38]*eC_5 + coef[39]*eS_5;
     const double r_5 = __builtin_sqrt(dq_5*dq_5 + lambda_5*q_5*q_5);
     const double mq_5 = __builtin_fabs(coef[34]*eC_5) + __builtin_fabs(coef[35]*eS_5);
-    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5);
+    const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_6 = __builtin_exp(-sigma_6*tau);
@@ -11529,7 +11529,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_6 = coef[44]*eC_6 + coef[45]*eS_6;
     const double r_6 = __builtin_sqrt(dq_6*dq_6 + lambda_6*q_6*q_6);
     const double mq_6 = __builtin_fabs(coef[40]*eC_6) + __builtin_fabs(coef[41]*eS_6);
-    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6);
+    const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_7 = __builtin_exp(-sigma_7*tau);
@@ -11542,7 +11542,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_7 = coef[50]*eC_7 + coef[51]*eS_7;
     const double r_7 = __builtin_sqrt(dq_7*dq_7 + lambda_7*q_7*q_7);
     const double mq_7 = __builtin_fabs(coef[46]*eC_7) + __builtin_fabs(coef[47]*eS_7);
-    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7);
+    const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_8 = __builtin_exp(-sigma_8*tau);
@@ -11555,7 +11555,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_8 = coef[56]*eC_8 + coef[57]*eS_8;
     const double r_8 = __builtin_sqrt(dq_8*dq_8 + lambda_8*q_8*q_8);
     const double mq_8 = __builtin_fabs(coef[52]*eC_8) + __builtin_fabs(coef[53]*eS_8);
-    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8);
+    const double mdq_8 = __builtin_fabs(coef[54]*eC_8) + __builtin_fabs(coef[55]*eS_8) + __builtin_fabs(sigma_8*coef[52]*eC_8);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.18905485538342653*q_1 + 0.32580382289818*q_2 + 0.2103720466050957*q_3 + 0.75787380531462267*q_4 + 0.4832797792710643*q_5 + 0.069249774430946084*q_6 - 0.023808152119436685*q_7 + 0.023650020034497805*q_8 + 0.77031673718603433*sin_1 - 0.029153831951507433*cos_1;  // m1
     v[0] = 0.18905485538342653*dq_1 + 0.32580382289818*dq_2 + 0.2103720466050957*dq_3 + 0.75787380531462267*dq_4 + 0.4832797792710643*dq_5 + 0.069249774430946084*dq_6 - 0.023808152119436685*dq_7 + 0.023650020034497805*dq_8 + 5.2381538128650336*cos_1 + 0.19824605727025055*sin_1;

@@ -130,7 +130,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[8]*eC_1 + coef[9]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1) + __builtin_fabs(sigma_1*coef[4]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -143,7 +143,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[14]*eC_2 + coef[15]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2) + __builtin_fabs(sigma_2*coef[10]*eC_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.88807383397711526*q_1 - 0.45970084338098305*q_2 - 0.73072581908970025*sin_1 - 0.0076388658185612014*cos_1;  // m1
     v[0] = 0.88807383397711526*dq_1 - 0.45970084338098305*dq_2 - 128.25341521011063*cos_1 + 1.3407362980313511*sin_1;
@@ -329,7 +329,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[8]*eC_1 + coef[9]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[4]*eC_1) + __builtin_fabs(coef[5]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[6]*eC_1) + __builtin_fabs(coef[7]*eS_1) + __builtin_fabs(sigma_1*coef[4]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
     const double e_2 = __builtin_exp(-sigma_2*tau);
@@ -342,7 +342,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_2 = coef[14]*eC_2 + coef[15]*eS_2;
     const double r_2 = __builtin_sqrt(dq_2*dq_2 + lambda_2*q_2*q_2);
     const double mq_2 = __builtin_fabs(coef[10]*eC_2) + __builtin_fabs(coef[11]*eS_2);
-    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2);
+    const double mdq_2 = __builtin_fabs(coef[12]*eC_2) + __builtin_fabs(coef[13]*eS_2) + __builtin_fabs(sigma_2*coef[10]*eC_2);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + 0.6127686665676223*q_1 + 0.79026233699508808*q_2 - 0.72773816497394384*sin_1 - 0.06320081663878023*cos_1;  // m1
     v[0] = 0.6127686665676223*dq_1 + 0.79026233699508808*dq_2 - 127.72903679921824*cos_1 + 11.092697652437176*sin_1;
@@ -493,7 +493,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -651,7 +651,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[9];  // m1 (stuck)
     v[0] = 0.0;
@@ -809,7 +809,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + q_1 - 0.7306902574434726*sin_1 - 0.0062477207570832737*cos_1;  // m1
     v[0] = dq_1 - 128.24717360421684*cos_1 + 1.0965693334515465*sin_1;
@@ -967,7 +967,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double ddq_1 = coef[7]*eC_1 + coef[8]*eS_1;
     const double r_1 = __builtin_sqrt(dq_1*dq_1 + lambda_1*q_1*q_1);
     const double mq_1 = __builtin_fabs(coef[3]*eC_1) + __builtin_fabs(coef[4]*eS_1);
-    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1);
+    const double mdq_1 = __builtin_fabs(coef[5]*eC_1) + __builtin_fabs(coef[6]*eS_1) + __builtin_fabs(sigma_1*coef[3]*eC_1);
     // Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest.
     x[0] = coef[2] + q_1 - 0.72996736260496498*sin_1 - 0.048007721356019183*cos_1;  // m1
     v[0] = dq_1 - 128.12029464434667*cos_1 + 8.4260800145738415*sin_1;

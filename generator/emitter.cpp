@@ -278,8 +278,14 @@ private:
         assign(d + kModeR, "__builtin_sqrt(" + dq + "*" + dq + " + " + k(c + kModeLambda) + "*" + q + "*" + q + ")");
         assign(d + kModeMQ, "__builtin_fabs(" + A + "*" + eC + ") + __builtin_fabs(" + B + "*" + eS + ")", "",
                in.accumulates);
-        assign(d + kModeMDQ, "__builtin_fabs(" + A1 + "*" + eC + ") + __builtin_fabs(" + B1 + "*" + eS + ")", "",
-               in.accumulates);
+        // A1 = B - sigma A (setup) cancels to eps |sigma A|: that term counts in the
+        // magnitude of q', else v(0) = 0 comes back as -1e-16 against a stated level
+        // of 3e-17 and the engine takes it for a stop (a mass at rest against a stiff,
+        // damped contact stopped as chattering at t0).
+        std::string mdq = "__builtin_fabs(" + A1 + "*" + eC + ") + __builtin_fabs(" + B1 + "*" + eS + ")";
+        if (p_.constants[c + kModeSigma] != 0.0)
+            mdq += " + __builtin_fabs(" + k(c + kModeSigma) + "*" + A + "*" + eC + ")";
+        assign(d + kModeMDQ, mdq, "", in.accumulates);
     }
 
     void resonant(const ProgramInstr& in) {

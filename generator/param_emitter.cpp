@@ -629,7 +629,7 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
         // sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2 never grows (c >= 0).
         rE[j] = __builtin_sqrt(dqh * dqh + lam * qh * qh);
         double mag = __builtin_fabs(sg.A[j] * eC) + __builtin_fabs(sg.B[j] * eS);
-        double dmag = __builtin_fabs(sg.A1[j] * eC) + __builtin_fabs(sg.B1[j] * eS);
+        double dmag = __builtin_fabs(sg.A1[j] * eC) + __builtin_fabs(sg.B1[j] * eS) + __builtin_fabs(st.sigma[j] * sg.A[j] * eC);  // A1 = B - sigma A cancels to eps sigma A (emitter.cpp)
         if (st.regime[j] == R_RIGID || st.regime[j] == R_RIGID_DAMPED) {
             // q_p = p tau^2 phi2(-c tau) from rest (p tau^2/2 at c = 0): q_p' = p eS, q_p'' = p e^{-c tau}.
             // One form for every c >= 0: no p/c drift that cancels as c -> 0.

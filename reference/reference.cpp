@@ -629,7 +629,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                           "configuration keeps switching at t = " + time_text(t) + " (now '" + cfg.spec(model) + "')");
         if (recent.size() >= options.zeno_events &&
             cln::double_approx(recent.back() - recent.front()) <=
-                options.zeno_span * std::max(1.0, std::fabs(cln::double_approx(t))))
+                options.zeno_span * std::max(1.0, cln::double_approx(t - mp.t0)))  // the run's clock, as the engine
             return finish(RunStatus::zeno, std::to_string(recent.size()) + " switches between t = " +
                                                time_text(recent.front()) + " and " + time_text(recent.back()) +
                                                " (accumulating switches, configuration '" + cfg.spec(model) + "')");

@@ -324,9 +324,16 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         if (same_instant > 4 * (nsw + 2))
             return finish(RunStatus::chattering, "configuration keeps switching at t = " + time_text(t) +
                                                      " (now '" + cfg.spec(model_) + "')");
-        // Zeno: many switches within a vanishing time span.
+        // Zeno: many switches within a vanishing time span, measured on the
+        // run's own clock (time elapsed since t0), not relative to |t|: at
+        // t0 = 1e9 a span relative to |t| was 1 s and took 16000 regular
+        // switches of a 16 kHz oscillation for an accumulation. The second
+        // term is the time's own resolution (8 eps |t| per switch, twice the smallest step): switches
+        // that the engine can only separate by its smallest step pile up there.
         if (recent.size() >= options.zeno_events &&
-            recent.back() - recent.front() <= options.zeno_span * std::max(1.0, std::fabs(t)))
+            recent.back() - recent.front() <=
+                options.zeno_span * std::max(1.0, t - model_.t0) +
+                    static_cast<double>(options.zeno_events) * 8 * kEps * std::fabs(t))
             return finish(RunStatus::zeno, std::to_string(recent.size()) + " switches between t = " +
                                                time_text(recent.front()) + " and " + time_text(recent.back()) +
                                                " (accumulating switches, configuration '" + cfg.spec(model_) + "')");

@@ -61,8 +61,11 @@ struct EngineOptions {
     double dt = 0.0;                   ///< sample spacing; 0: samples only at t0 and t_end
     bool samples = true;               ///< call on_sample at all
     std::size_t max_events = 0;        ///< 0: unlimited
-    std::size_t zeno_events = 1000;    ///< this many switches ...
-    double zeno_span = 1e-9;           ///< ... within this relative time span is Zeno
+    /// Zeno: zeno_events switches within zeno_span * max(1, t - t0) seconds
+    /// (relative to the time the run has covered; plus the time's resolution,
+    /// 8 eps |t| per switch, twice the smallest step) stop the run with RunStatus::zeno.
+    std::size_t zeno_events = 1000;
+    double zeno_span = 1e-9;
 };
 
 /// Named outcomes of a run (documented; the CLI maps them to exit codes).

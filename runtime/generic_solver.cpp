@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "assembly.h"
 
@@ -529,6 +530,17 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
         out.scale[f] = scale;
         out.bound[f] = B;
     }
+}
+
+std::size_t GenericSolver::memory_bytes() const {
+    // Dense storage dominates: n x n (K, C), nf x nf (Phi twice, modal Phi),
+    // switches x nf (W, Z and their absolute values), mode x harmonic tables.
+    const auto d = [](const auto& m) { return static_cast<std::size_t>(m.size()) * sizeof(typename std::decay_t<decltype(m)>::Scalar); };
+    std::size_t b = sizeof(*this);
+    b += d(K_) + d(C_) + d(phi_) + d(phi_t_m_) + d(modal_.phi) + d(W_) + d(Z_) + d(absW_) + d(absZ_) + d(D_);
+    b += d(P_) + d(pa_) + d(pb_) + d(zp_) + d(zm_) + d(h_amp_) + d(coupled_);
+    b += 24 * static_cast<std::size_t>(n_ + nf_ + static_cast<int>(switches_.size()) + nh_) * sizeof(double);
+    return b;
 }
 
 }  // namespace hsnc

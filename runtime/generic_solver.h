@@ -53,6 +53,9 @@ public:
     void eval(double tau, const SegmentEval& out) const override;
     double max_step() const override { return max_step_; }
 
+    /// Estimated heap memory of this solver (its matrices and vectors), bytes.
+    std::size_t memory_bytes() const;
+
     /// The modal decomposition this solver uses (for inspection and tests).
     const ModalDecomposition& modes() const { return modal_; }
     /// Modal damping c_j = alpha + beta*lambda_j and the regime of mode j.

@@ -201,6 +201,8 @@ void execute(const Program& p, const std::vector<Exec>& code, double* r) {
                 o[kModeR] = __builtin_sqrt(dq * dq + k[kModeLambda] * q * q);
                 o[kModeMQ] = __builtin_fabs(A[0] * eC) + __builtin_fabs(A[1] * eS);
                 o[kModeMDQ] = __builtin_fabs(A[2] * eC) + __builtin_fabs(A[3] * eS);
+                // + |sigma A eC|: A1 = B - sigma A cancels (generator/emitter.cpp, mode()).
+                if (k[kModeSigma] != 0.0) o[kModeMDQ] = o[kModeMDQ] + __builtin_fabs(k[kModeSigma] * A[0] * eC);
                 break;
             }
             case ProgramOp::rigid_particular: {

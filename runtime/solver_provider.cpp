@@ -20,12 +20,34 @@ KernelMode parse_kernel_mode(const std::string& name) {
 
 SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
     auto it = cache_.find(cfg);
-    if (it == cache_.end()) it = cache_.emplace(cfg, std::make_unique<GenericSolver>(model_, cfg)).first;
-    return *it->second;
+    if (it != cache_.end()) {
+        lru_.splice(lru_.begin(), lru_, it->second.lru);  // most recently used
+        return *it->second.solver;
+    }
+    auto s = std::make_unique<GenericSolver>(model_, cfg);
+    ++built_;
+    seen_.insert(cfg);
+    const std::size_t bytes = s->memory_bytes();
+    lru_.push_front(cfg);
+    it = cache_.emplace(cfg, Entry{std::move(s), bytes, lru_.begin()}).first;
+    bytes_ += bytes;
+    // Drop the least recently used until within budget; never the one returned now.
+    while (bytes_ > max_bytes_ && lru_.size() > 1) {
+        const auto victim = cache_.find(lru_.back());
+        bytes_ -= victim->second.bytes;
+        cache_.erase(victim);
+        lru_.pop_back();
+        ++evicted_;
+    }
+    return *it->second.solver;
 }
 
 std::string GenericSolverProvider::describe() const {
-    return "generic solver for " + std::to_string(cache_.size()) + " configurations";
+    std::string text = "generic solver for " + std::to_string(seen_.size()) + " configurations";
+    if (evicted_ > 0)
+        text += " (" + std::to_string(cache_.size()) + " kept within " + std::to_string(max_bytes_ >> 20) +
+                " MB, " + std::to_string(built_ - seen_.size()) + " rebuilt)";
+    return text;
 }
 
 AotSolverProvider::AotSolverProvider(const Model& model, const AotRegistry& registry, bool fallback)

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -282,6 +284,81 @@ TEST(EngineGuards, AccumulatingSwitchesStopWithZenoStatus) {
 }
 
 
+// The Zeno guard measures on the run's own clock (issue 12). A bilinear
+// oscillator (k = w^2, a stop of 3k at gap 0, so the closed half-cycle is
+// pi/(2w) and the open one pi/w) switching regularly at 16 kHz from
+// t0 = 1e9: 1000 switches take 62.5 ms, which a span relative to |t| (1 s at
+// t = 1e9) took for an accumulation. It must run to t_end with every switch
+// of the closed form, while switches accumulating on the run's clock at the
+// same t0 are still refused as Zeno.
+Model bilinear_at(double t0, double w, double v0) {
+    char toml[512];
+    std::snprintf(toml, sizeof toml, R"(
+name = "bilinear_at"
+[[mass]]
+name = "m1"
+m = 1
+[[spring]]
+between = ["m1", "ground"]
+k = %.17g
+[[contact]]
+between = ["m1", "ground"]
+gap = 0
+k = %.17g
+[initial]
+t0 = %.17g
+v = { m1 = %.17g }
+)", w * w, 3 * w * w, t0, v0);
+    return model_from(toml);
+}
+
+TEST(EngineGuards, RegularSwitchingAtLargeT0IsNotZeno) {
+    const double T = 1.0 / 8000;                // period: open pi/w + closed pi/(2w)
+    const double w = 1.5 * kPi / T;             // 2 switches a period: 16 kHz
+    const double t0 = 1e9, span = 0.1 + T / 4;  // no switch near t_end
+    const Model m = bilinear_at(t0, w, -1.0);   // starts open (G' < 0)
+    const Outcome r = simulate(m, t0 + span);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    // Closes at t0 + pi/w + j T, opens at t0 + j T (j >= 1): 1600 switches in 0.1 s.
+    std::size_t expected = 0;
+    for (int j = 0; j < 2000; ++j) {
+        const long double close = static_cast<long double>(kPi) / w + j * static_cast<long double>(T);
+        const long double open = (j + 1) * static_cast<long double>(T);
+        expected += (close < span) + (open < span);
+    }
+    ASSERT_EQ(expected, 1600u);
+    ASSERT_EQ(r.events.size(), expected);
+    for (std::size_t k = 0; k < r.events.size(); ++k) {
+        const std::size_t j = k / 2;
+        const bool close = k % 2 == 0;
+        EXPECT_EQ(r.events[k].kind, close ? EventKind::contact_close : EventKind::contact_open) << k;
+        const double truth = t0 + (close ? kPi / w + static_cast<double>(j) * T : static_cast<double>(j + 1) * T);
+        // At t = 1e9 the engine knows a switch function only to its rounding
+        // level 16 eps (scale + |g'| |t|) (engine.h), i.e. a switch time to
+        // 16 eps |t| = 3.6e-6 s; twice that.
+        EXPECT_NEAR(r.events[k].t, truth, 32 * std::numeric_limits<double>::epsilon() * t0) << k;
+    }
+}
+
+TEST(EngineGuards, AccumulationAtLargeT0IsStillZeno) {
+    // The guard's span follows the run's clock at t0 = 1e9 too: the Coulomb
+    // decay's first three reversals (0.31, 0.63, 0.94 s after t0) within a
+    // span of 1 s (zeno_span = 1 of the 0.94 s covered) are an accumulation.
+    Model m = model_from(kCoulomb);
+    m.t0 = 1e9;
+    GenericSolverProvider provider(m);
+    Engine engine(m, provider);
+    Recorder rec(m.dof());
+    EngineOptions opt;
+    opt.t_end = 1e9 + 5.0;
+    opt.zeno_events = 3;
+    opt.zeno_span = 1.0;
+    const RunSummary s = engine.run(opt, rec);
+    EXPECT_EQ(s.status, RunStatus::zeno) << s.message;
+    EXPECT_EQ(s.events, 3u);
+    EXPECT_NEAR(s.t, 1e9 + 3 * kPi / 10, 1e-6);
+}
+
 // A tie |A| = mu_s N at t0 (k x0 = 4 = mu_s m g with g = 8) is decided by the
 // derivative of |A| with the mass held: not increasing -> stuck for good;
 // increasing (forcing sin t adds A' = 1) -> slides from t0 on.
@@ -312,6 +389,54 @@ x = { m1 = -4.0 }
     // Sliding from t0: x'' = -x + sin t - mu_k g = 2 + sin t + (-4 - x), so it accelerates at once.
     EXPECT_GT(pushed.summary.v[0], 0.5);
     EXPECT_GT(pushed.summary.x[0], -4.0);
+}
+
+// Contact ties at t0 (interface.md "Ties and touches", "At t0"): a mass at
+// rest exactly on its stop's gap (G = 0, G' = 0) enters the configuration its
+// first non-zero derivative points to, and no row is written for it.
+constexpr const char* kOnTheGap = R"(
+name = "on_the_gap"
+[[mass]]
+name = "m1"
+m = 2
+[[spring]]
+between = ["ground", "m1"]
+k = 4
+[[contact]]
+between = ["m1", "ground"]
+gap = 0
+k = 100
+[damping]
+alpha = 0.5
+[initial]
+x = { m1 = 0.0 }
+)";
+
+// G'' = load/m = -0.5 < 0: G decreases into G < 0, so the contact starts
+// open; the damped motion x = -0.25 (1 - e^{-s t} (cos w_d t + s/w_d sin w_d t)),
+// s = alpha/2, w_d = sqrt(2 - s^2), stays below the gap: no row at all.
+TEST(EngineTies, ContactOnItsGapPulledAwayStartsOpen) {
+    const Outcome r = simulate(model_from(std::string(kOnTheGap) + "[load]\nm1 = -1.0\n"), 3.0);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    EXPECT_EQ(r.events.size(), 0u) << "first row: " << (r.events.empty() ? "" : event_kind_name(r.events[0].kind));
+    EXPECT_EQ(r.summary.configuration.closed[0], 0);
+    const double s = 0.25, wd = std::sqrt(2.0 - s * s), t = 3.0;
+    const double x = -0.25 * (1 - std::exp(-s * t) * (std::cos(wd * t) + s / wd * std::sin(wd * t)));
+    EXPECT_NEAR(r.summary.x[0], x, 1e-13);
+}
+
+// G'' = 0 (no load, sin forcing is 0 at t0), so G''' = F'(0)/m decides:
+// amplitude -1 pulls away (open, the first row a later close), +1 pushes in
+// (closed, the first row a later open); either way nothing at t0.
+TEST(EngineTies, ContactOnItsGapDecidedByTheThirdDerivative) {
+    for (double amp : {-1.0, 1.0}) {
+        const std::string forcing = "[[forcing]]\nomega = 1\namplitude = { m1 = " + std::to_string(amp) + " }\n";
+        const Outcome r = simulate(model_from(std::string(kOnTheGap) + forcing), 10.0);
+        ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+        ASSERT_FALSE(r.events.empty()) << amp;
+        EXPECT_EQ(r.events[0].kind, amp < 0 ? EventKind::contact_close : EventKind::contact_open) << amp;
+        EXPECT_GT(r.events[0].t, 0.5) << amp << ": no switch at t0";
+    }
 }
 
 // Samples: on the grid t0 + k dt, plus t_end, never twice at one time.

@@ -21,6 +21,9 @@
 #include "configuration.h"
 #include "generic_solver.h"
 #include "segment.h"
+#include "engine_runner.h"
+#include "model_reader.h"
+#include "solver_provider.h"
 
 namespace hsnc {
 namespace {
@@ -677,6 +680,62 @@ TEST(GenericSolver, LargeT0OnlyShiftsThePhase) {
             EXPECT_NEAR(oa.v[i], ob.v[i], 1e-13) << "t " << t;
         }
     }
+}
+
+// The provider's cache is bounded by memory (issue 11: a 64-mass chain kept
+// 5.4 GB of configurations by t = 40 s). With a budget that holds a single
+// solver, every change of configuration evicts the previous one and a return
+// to it rebuilds it; the run must be the same, event for event and bit for
+// bit, as with an unbounded cache (a solver depends only on its configuration).
+TEST(GenericSolverProvider, BoundedCacheEvictsLeastRecentlyUsedAndRebuilds) {
+    const Model m = read_model(std::string(HSNC_SOURCE_DIR) + "/models/chain-8.toml");
+    auto run = [&](GenericSolverProvider& provider) {
+        Engine engine(m, provider);
+        testing::Recorder rec(m.dof());
+        EngineOptions opt;
+        opt.t_end = 5.0;
+        opt.samples = false;
+        const RunSummary s = engine.run(opt, rec);
+        EXPECT_EQ(s.status, RunStatus::ok) << s.message;
+        return rec.events;
+    };
+    GenericSolverProvider unbounded(m, std::numeric_limits<std::size_t>::max());
+    GenericSolverProvider one(m, 1);  // below any solver's size: keeps only the one in use
+    const auto a = run(unbounded), b = run(one);
+    EXPECT_EQ(unbounded.evicted(), 0u);
+    EXPECT_EQ(unbounded.built(), unbounded.cached());
+    ASSERT_GT(unbounded.cached(), 3u) << "the run should visit several configurations";
+    EXPECT_EQ(one.cached(), 1u);
+    EXPECT_GT(one.evicted(), 0u);
+    EXPECT_GT(one.built(), unbounded.built()) << "revisited configurations are rebuilt";
+    EXPECT_EQ(one.built(), one.evicted() + one.cached());
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t k = 0; k < a.size(); ++k) {
+        EXPECT_EQ(a[k].t, b[k].t) << k;
+        EXPECT_EQ(a[k].kind, b[k].kind) << k;
+        EXPECT_EQ(a[k].element, b[k].element) << k;
+        EXPECT_EQ(a[k].x, b[k].x) << k;
+    }
+    EXPECT_NE(one.describe().find("rebuilt"), std::string::npos) << one.describe();
+
+    // A budget of a few solvers: the kept ones stay within it (the one in use
+    // aside), and the least recently used go first.
+    GenericSolverProvider few(m, 3 * GenericSolver(m, Configuration::all_open(m)).memory_bytes());
+    Configuration c0 = Configuration::all_open(m), c1 = c0, c2 = c0, c3 = c0;
+    c1.closed[0] = 1;
+    c2.stuck[0] = 1;
+    c3.stuck[1] = 1;
+    SegmentSolver* s0 = &few.solver(c0);
+    few.solver(c1);
+    few.solver(c2);
+    EXPECT_EQ(&few.solver(c0), s0) << "c0 kept, and now the most recently used";
+    few.solver(c3);  // evicts c1, the least recently used
+    EXPECT_LE(few.cached_bytes(), 3 * GenericSolver(m, c0).memory_bytes() + GenericSolver(m, c3).memory_bytes());
+    const std::size_t built = few.built();
+    few.solver(c0);
+    EXPECT_EQ(few.built(), built) << "c0 was not evicted";
+    few.solver(c1);
+    EXPECT_EQ(few.built(), built + 1) << "c1 was evicted and is rebuilt";
 }
 
 }  // namespace
