@@ -1,7 +1,7 @@
 // hsnc -- the Model: one plain value describing a piecewise-linear mechanical
 // system with intermittent contacts and Coulomb friction.
 //
-// This is what the model file (../shared/spec/interface.md section 1) means,
+// This is what the model file (docs/interface.md section 1) means,
 // after every expression has been evaluated and every check has passed.
 // The generator and the runtime both read it; nothing here depends on GiNaC,
 // TOML or any other library, so the runtime can use it without them.
