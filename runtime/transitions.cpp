@@ -11,13 +11,67 @@ namespace {
 
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
+// Derivatives A_i^(k), k = 0..order, of the force on mass i at (t, x, v) in
+// cfg (friction directions sgn), with the magnitude of their terms (their
+// rounding level), from the equation of motion itself:
+//     m_j x_j^(k+2) = A_j^(k) - [k = 0] mu_k N_j sgn_j  (0 for a stuck mass),
+//     A_j^(k) = [k = 0] (load_j + contact preloads) - (K x^(k))_j - (C x^(k+1))_j
+//               + sum_h F_hj Omega_h^k sin(Omega_h t + phase_h + k pi/2).
+void force_series(const Model& model, const Configuration& cfg, const std::vector<signed char>& sgn, int i, double t,
+                  const double* x, const double* v, int order, std::vector<double>& d, std::vector<double>& mag) {
+    const int n = static_cast<int>(model.dof());
+    auto at = [](const std::vector<double>& y, int b) { return b == kGround ? 0.0 : y[b]; };
+    std::vector<std::vector<double>> X(order + 2, std::vector<double>(n, 0.0)), M = X;
+    for (int j = 0; j < n; ++j) {
+        X[0][j] = x[j], M[0][j] = std::fabs(x[j]);
+        if (!cfg.stuck[j]) X[1][j] = v[j], M[1][j] = std::fabs(v[j]);
+    }
+    auto deriv = [&](int j, int k, double& value, double& m) {
+        value = k == 0 ? model.load[j] : 0.0;
+        m = std::fabs(value);
+        value -= model.alpha * model.masses[j].m * X[k + 1][j];
+        m += std::fabs(model.alpha) * model.masses[j].m * M[k + 1][j];
+        auto link = [&](int a, int b, double kk, double gap) {
+            if (a == b || (a != j && b != j)) return;
+            double f = -kk * (at(X[k], a) - at(X[k], b)) - model.beta * kk * (at(X[k + 1], a) - at(X[k + 1], b));
+            double fm = kk * (at(M[k], a) + at(M[k], b)) + std::fabs(model.beta) * kk * (at(M[k + 1], a) + at(M[k + 1], b));
+            if (k == 0) f += kk * gap, fm += std::fabs(kk * gap);
+            value += a == j ? f : -f;
+            m += fm;
+        };
+        for (const Spring& s : model.springs) link(s.a, s.b, s.k, 0.0);
+        for (std::size_t c = 0; c < model.contacts.size(); ++c)
+            if (cfg.closed[c]) link(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k, model.contacts[c].gap);
+        for (const Harmonic& h : model.forcing) {
+            const double arg = h.omega * t + h.phase;
+            double s = (k % 2 == 0) ? std::sin(arg) : std::cos(arg);
+            if (k % 4 == 2 || k % 4 == 3) s = -s;
+            const double wk = std::pow(h.omega, k);
+            value += h.amplitude[j] * wk * s;
+            m += std::fabs(h.amplitude[j]) * wk;
+        }
+    };
+    for (int k = 0; k + 2 <= order + 1; ++k)
+        for (int j = 0; j < n; ++j) {
+            if (cfg.stuck[j]) continue;
+            double A, m;
+            deriv(j, k, A, m);
+            const double fr = k == 0 && model.masses[j].has_friction ? model.masses[j].mu_k * model.normal_force(j) : 0.0;
+            X[k + 2][j] = (A - fr * sgn[j]) / model.masses[j].m;
+            M[k + 2][j] = (m + fr * (sgn[j] != 0)) / model.masses[j].m;
+        }
+    d.assign(order + 1, 0.0);
+    mag.assign(order + 1, 0.0);
+    for (int k = 0; k <= order; ++k) deriv(i, k, d[k], mag[k]);
+}
+
 // Stick rule at v_i = 0 (interface.md): stuck if |A_i| < mu_s*N_i, else slide
 // in the direction of A_i. Returns 0 for stuck, else the direction. A tie
 // (|A_i| = mu_s*N_i to rounding) is decided by the first derivative, as the
 // contract says: stuck if |A_i| is not increasing with the mass held (a_i = 0,
 // the others' accelerations from `a`, or 0 when a is null), else sliding.
-signed char stick_rule(const Model& model, const Configuration& cfg, int i, double t, const double* x,
-                       const double* v, const double* a) {
+signed char stick_rule(const Model& model, const Configuration& cfg, const std::vector<signed char>& sgn, int i,
+                       double t, const double* x, const double* v, const double* a) {
     const double A = force_on_mass(model, cfg, i, t, x, v);
     const double limit = model.masses[i].mu_s * model.normal_force(i);
     const double dir = A > 0 ? 1 : -1;
@@ -26,6 +80,21 @@ signed char stick_rule(const Model& model, const Configuration& cfg, int i, doub
         if (a) held.assign(a, a + model.dof());
         held[i] = 0.0;
         const double rate = dir * force_rate_on_mass(model, cfg, i, t, v, held.data());
+        // The held motion's derivatives: the rate's rounding level, and the
+        // higher orders when the rate vanishes (the first non-zero derivative
+        // decides; none at all: |A_i| stays at the limit, not increasing).
+        Configuration hold = cfg;
+        hold.stuck[i] = 1;
+        std::vector<signed char> s = sgn;
+        s[i] = 0;
+        const int order = static_cast<int>(2 * model.dof() + 2 * model.forcing.size() + 2);
+        std::vector<double> d, mag;
+        force_series(model, hold, s, i, t, x, v, order, d, mag);
+        if (std::fabs(rate) <= 16 * kEps * mag[1]) {
+            for (int k = 2; k <= order; ++k)
+                if (std::fabs(d[k]) > 16 * kEps * mag[k]) return dir * d[k] > 0 ? static_cast<signed char>(dir) : 0;
+            return 0;
+        }
         return rate > 0 ? static_cast<signed char>(dir) : 0;
     }
     if (std::fabs(A) < limit) return 0;
@@ -49,9 +118,30 @@ std::vector<double> accelerations(const Model& model, const Configuration& cfg, 
     return a;
 }
 
+// Magnitude of the terms of dA_i/dt (force_rate_on_mass) at (t, v, a), its
+// rounding level: a[n..2n-1] holds the magnitudes of the accelerations' terms.
+double force_rate_magnitude(const Model& model, const Configuration& cfg, int i, const double* v,
+                            const std::vector<double>& a) {
+    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : std::fabs(y[b]); };
+    const double* amag = a.data() + model.dof();
+    double f = std::fabs(model.alpha) * model.masses[i].m * amag[i];
+    for (const Harmonic& h : model.forcing) f += std::fabs(h.amplitude[i] * h.omega);
+    auto add = [&](int p, int q, double k) {
+        if (p != i && q != i) return;
+        f += k * (body(v, p) + body(v, q)) + std::fabs(model.beta) * k * (body(amag, p) + body(amag, q));
+    };
+    for (const Spring& s : model.springs) add(s.a, s.b, s.k);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    return f;
+}
+
 // State a contact enters at (t, x, v) when G = 0 and G' = 0 there (to
 // rounding): closed if the first non-zero of G'', G''' is positive, open if
-// negative, closed when all are 0 (at rest on the boundary). -1: not tied.
+// negative. -1: not tied, or neither decides (G stays at 0, e.g. a mass stuck
+// exactly on the gap): a function that only touches 0 changes nothing
+// (interface.md "Ties and touches"), so the contact keeps its state (at t0
+// the provisional closed: at rest on the boundary).
 int tied_contact_state(const Model& model, const Configuration& cfg, int c, double t, const double* x,
                        const double* v, const std::vector<double>& a) {
     auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
@@ -69,8 +159,13 @@ int tied_contact_state(const Model& model, const Configuration& cfg, int c, doub
             return force_rate_on_mass(model, cfg, b, t, v, a.data()) / model.masses[b].m;
         };
         decide = jerk(k.a) - jerk(k.b);
+        auto jerk_level = [&](int b) {
+            if (b == kGround || cfg.stuck[b]) return 0.0;
+            return force_rate_magnitude(model, cfg, b, v, a) / model.masses[b].m;
+        };
+        if (std::fabs(decide) <= 16 * kEps * (jerk_level(k.a) + jerk_level(k.b))) return -1;
     }
-    return decide >= 0 ? 1 : 0;
+    return decide > 0 ? 1 : 0;
 }
 
 }  // namespace
@@ -79,9 +174,24 @@ bool apply_switches(const Model& model, double t, const double* x, double* v, co
                     std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
                     std::vector<Transition>& out, std::string& why) {
     const int n = static_cast<int>(model.dof());
-    // 1. Every contact change first.
+    // A stop sets its velocity to 0 exactly, before the contacts are judged.
+    for (const SwitchFunction& f : switched)
+        if (f.kind == SwitchKind::velocity) v[f.element] = 0.0;
+    // 1. Every contact change first. A switched contact with G = 0 and G' = 0
+    //    (to rounding; e.g. a touch at a friction stop, found "heading across"
+    //    only by the rounding of the stopping velocity) is a tie: step 4 decides
+    //    it by G'', G''' of the configuration the friction decisions give.
+    std::vector<char> tied(model.contacts.size(), 0);
+    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
     for (const SwitchFunction& f : switched) {
         if (f.kind != SwitchKind::gap) continue;
+        const Contact& k = model.contacts[f.element];
+        const double G = gap(model, f.element, x), Gd = gap_rate(model, f.element, v);
+        if (std::fabs(G) <= 16 * kEps * (std::fabs(body(x, k.a)) + std::fabs(body(x, k.b)) + std::fabs(k.gap)) &&
+            std::fabs(Gd) <= 16 * kEps * (std::fabs(body(v, k.a)) + std::fabs(body(v, k.b)))) {
+            tied[f.element] = 1;
+            continue;
+        }
         cfg.closed[f.element] = !cfg.closed[f.element];
         out.push_back({cfg.closed[f.element] ? EventKind::contact_close : EventKind::contact_open, f.element});
     }
@@ -106,7 +216,7 @@ bool apply_switches(const Model& model, double t, const double* x, double* v, co
         for (int i = 0; i < n; ++i) {
             if (!deciding[i]) continue;
             deciding[i] = 0;
-            const signed char dir = stick_rule(model, cfg, i, t, x, v, a);
+            const signed char dir = stick_rule(model, cfg, sgn, i, t, x, v, a);
             if (dir == 0) {
                 cfg.stuck[i] = 1;
                 sgn[i] = 0;
@@ -119,7 +229,7 @@ bool apply_switches(const Model& model, double t, const double* x, double* v, co
         }
         for (int i = 0; i < n; ++i) {
             if (!cfg.stuck[i]) continue;
-            const signed char dir = stick_rule(model, cfg, i, t, x, v, a);
+            const signed char dir = stick_rule(model, cfg, sgn, i, t, x, v, a);
             if (dir == 0) continue;
             cfg.stuck[i] = 0;
             sgn[i] = dir;
@@ -135,7 +245,7 @@ bool apply_switches(const Model& model, double t, const double* x, double* v, co
             const std::vector<double> acc = accelerations(model, cfg, sgn, t, x, v);
             for (std::size_t c = 0; c < model.contacts.size(); ++c) {
                 const SwitchFunction gf{SwitchKind::gap, static_cast<int>(c)};
-                if (std::find(switched.begin(), switched.end(), gf) != switched.end()) continue;
+                if (!tied[c] && std::find(switched.begin(), switched.end(), gf) != switched.end()) continue;
                 const int state = tied_contact_state(model, cfg, static_cast<int>(c), t, x, v, acc);
                 if (state < 0 || state == cfg.closed[c]) continue;
                 cfg.closed[c] = static_cast<char>(state);
@@ -161,7 +271,7 @@ void decide_friction(const Model& model, Configuration& cfg, std::vector<signed 
             cfg.stuck[i] = 0;
             sgn[i] = v[i] > 0 ? 1 : -1;
         } else {
-            const signed char dir = stick_rule(model, cfg, i, t, x, v, nullptr);
+            const signed char dir = stick_rule(model, cfg, sgn, i, t, x, v, nullptr);
             cfg.stuck[i] = dir == 0;
             sgn[i] = dir;
         }

@@ -439,6 +439,90 @@ TEST(EngineTies, ContactOnItsGapDecidedByTheThirdDerivative) {
     }
 }
 
+// A touch that coincides with a friction stop (issue 11 item 8): the Coulomb
+// oscillator x'' + x = 0.1 from x0 = 1 (m = k = g = 1, mu_k = 0.1) follows
+// x = 0.1 + 0.9 cos t and stops at t = pi on x = -0.8, exactly where the gap
+// G = -x - 0.8 of a stop below it touches 0 (G = G' = 0 there). With
+// mu_s = 0.9 the stick rule holds it (|A| = 0.8 < 0.9): G stays at 0, which
+// changes nothing (interface.md "Ties and touches"): one stick row, no contact
+// rows, the contact still open. With mu_s = 0.5 it reverses (G'' = -0.7 < 0,
+// the touch turns back): reversals at pi and 2 pi (x = 0.6), a stick at 3 pi
+// (x = -0.4), again no contact rows.
+TEST(EngineTies, TouchAtAFrictionStopWritesNoContactRows) {
+    auto model = [](double mu_s) {
+        return model_from(R"(
+name = "touch-at-stop"
+[parameters]
+g = 1
+[[mass]]
+name = "m1"
+m = 1
+mu_k = 0.1
+mu_s = )" + std::to_string(mu_s) + R"(
+[[spring]]
+between = ["ground", "m1"]
+k = 1
+[[contact]]
+between = ["ground", "m1"]
+gap = 0.8
+k = 1000
+[initial]
+x = { m1 = 1 }
+)");
+    };
+    const Outcome held = simulate(model(0.9), 12.0);
+    ASSERT_EQ(held.summary.status, RunStatus::ok) << held.summary.message;
+    ASSERT_EQ(held.events.size(), 1u) << "second row: " << event_kind_name(held.events[1].kind);
+    EXPECT_EQ(held.events[0].kind, EventKind::stick);
+    EXPECT_NEAR(held.events[0].t, kPi, 1e-12);
+    EXPECT_NEAR(held.summary.x[0], -0.8, 1e-14);
+    EXPECT_EQ(held.summary.configuration.closed[0], 0);
+    EXPECT_EQ(held.summary.configuration.stuck[0], 1);
+
+    const Outcome turned = simulate(model(0.5), 12.0);
+    ASSERT_EQ(turned.summary.status, RunStatus::ok) << turned.summary.message;
+    ASSERT_EQ(turned.events.size(), 3u);
+    const EventKind kinds[] = {EventKind::reversal, EventKind::reversal, EventKind::stick};
+    for (int e = 0; e < 3; ++e) {
+        EXPECT_EQ(turned.events[e].kind, kinds[e]) << e;
+        EXPECT_NEAR(turned.events[e].t, (e + 1) * kPi, 1e-12) << e;
+    }
+    EXPECT_NEAR(turned.summary.x[0], -0.4, 1e-14);
+    EXPECT_EQ(turned.summary.configuration.closed[0], 0);
+}
+
+// |A| = mu_s N at t0 with v = 0 and A', A'' = 0, A''' = 6 > 0 (two harmonics
+// whose rates cancel): |A| is increasing, so the mass slides from t0 with no
+// release row, v = (cos(w t) + 2 cos t - 3 cos 2t)/9, w^2 = 10 (the closed form
+// of x'' + 10 x = -5 + 2 sin t - sin 2t from x0 = -0.5, v0 = 0).
+TEST(EngineTies, FrictionTieDecidedByTheThirdDerivativeSlides) {
+    const Model m = model_from(R"(
+name = "friction-tie"
+[parameters]
+g = 10
+[[mass]]
+name = "m1"
+m = 1
+mu_k = 0.5
+[[spring]]
+between = ["ground", "m1"]
+k = 10
+[[forcing]]
+omega = 1
+amplitude = { m1 = 2 }
+[[forcing]]
+omega = 2
+amplitude = { m1 = -1 }
+[initial]
+x = { m1 = -0.5 }
+)");
+    const Outcome r = simulate(m, 0.5);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    EXPECT_EQ(r.events.size(), 0u) << "first row: " << (r.events.empty() ? "" : event_kind_name(r.events[0].kind));
+    const double t = 0.5, w = std::sqrt(10.0);
+    EXPECT_NEAR(r.summary.v[0], (std::cos(w * t) + 2 * std::cos(t) - 3 * std::cos(2 * t)) / 9, 1e-14);
+}
+
 // Samples: on the grid t0 + k dt, plus t_end, never twice at one time.
 TEST(EngineOutput, SamplesOnTheGridAndAtTEnd) {
     const Model m = model_from(R"(
