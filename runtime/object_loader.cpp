@@ -85,7 +85,7 @@ std::unique_ptr<LoadedObject> LoadedObject::load(const std::string& elf, std::st
     const std::size_t nsym = sh[symtab].sh_size / sizeof(Elf64_Sym);
     const Elf64_Shdr& strtab = sh[sh[symtab].sh_link];
     std::vector<Elf64_Sym> syms(nsym);
-    std::memcpy(syms.data(), data + sh[symtab].sh_offset, nsym * sizeof(Elf64_Sym));
+    if (nsym) std::memcpy(syms.data(), data + sh[symtab].sh_offset, nsym * sizeof(Elf64_Sym));  // data() may be null
     auto name_of = [&](const Elf64_Sym& s, std::string& name) {
         if (s.st_name >= strtab.sh_size) return false;
         const char* p = data + strtab.sh_offset + s.st_name;

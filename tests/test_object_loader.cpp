@@ -127,6 +127,31 @@ TEST(ObjectLoader, RefusesWhatItDoesNotSupportWithAReason) {
     EXPECT_EQ(refusal(missing), "undefined symbol 'hsnc_no_such_function' not found in this process");
 }
 
+// An empty symbol table (found by fuzz/fuzz_object_loader: a memcpy to the
+// null data() of an empty vector, which UBSan reports, so this test fails
+// without the fix in the sanitized suite, .ci/sanitize): refused, since the
+// relocations have no symbols.
+TEST(ObjectLoader, RefusesAnEmptySymbolTable) {
+    Jit jit;
+    const Model model = read_model(testing::model_path("seed-scenario-2.toml"));
+    std::string object = compile(jit, model, Configuration::all_open(model)).object;
+    Elf64_Ehdr eh;
+    std::memcpy(&eh, object.data(), sizeof eh);
+    bool emptied = false;
+    for (std::size_t i = 1; i < eh.e_shnum; ++i) {
+        Elf64_Shdr sh;
+        std::memcpy(&sh, object.data() + eh.e_shoff + i * sizeof sh, sizeof sh);
+        if (sh.sh_type != SHT_SYMTAB) continue;
+        sh.sh_size = 0;
+        std::memcpy(&object[eh.e_shoff + i * sizeof sh], &sh, sizeof sh);
+        emptied = true;
+    }
+    ASSERT_TRUE(emptied);
+    std::string why;
+    EXPECT_EQ(LoadedObject::load(object, why), nullptr);
+    EXPECT_EQ(why, "a relocation against an unusable symbol");
+}
+
 // Sections of no contents (SHT_NOBITS) cost no bytes in the file but their
 // size in memory: a few of them announcing 512 MB each must be refused, not
 // mapped (4096 sections of 1 GB each were once taken, terabytes of mapping).
