@@ -110,6 +110,7 @@ std::unique_ptr<SolverProvider> make_jit_provider(const Model& model, const Simu
     JitOptions jopt;
     jopt.cache_dir = !o.use_cache ? "" : o.cache_dir.empty() ? default_cache_dir() : o.cache_dir;
     jopt.warn = o.warn;
+    jopt.cache_max_bytes = o.cache_max_bytes;
     JitSolverProvider::SourceFn source = [&model](const Configuration& cfg) {
         return JitKernelSource{kernel_symbol(model, cfg), emit_kernel(derive(model, cfg))};
     };

@@ -15,6 +15,7 @@ namespace {
 struct CacheOptions {
     std::string dir;
     bool stats = false, clear = false;
+    std::uint64_t max_bytes = kDefaultCacheMaxBytes;
 };
 
 std::string utc_text(std::int64_t seconds) {
@@ -37,11 +38,16 @@ int cache(const CacheOptions& o) {
         return 0;
     }
     const KernelCache::Stats s = KernelCache::stats(dir);
-    std::cout << "cache: " << dir << "\n"
-              << "entries: " << s.entries << "\n"
+    const std::string distrust = KernelCache::trust_problem(dir);
+    std::cout << "cache: " << dir << "\n";
+    if (!distrust.empty()) std::cout << "refused: " << distrust << " (simulate does not use it)\n";
+    std::cout << "entries: " << s.entries << "\n"
               << "damaged: " << s.damaged << "\n"
-              << "bytes: " << s.bytes << "\n";
-    if (s.entries) std::cout << "oldest: " << utc_text(s.oldest) << "\nnewest: " << utc_text(s.newest) << "\n";
+              << "index entries: " << s.index_entries << " (" << s.index_damaged << " damaged)\n"
+              << "bytes: " << s.bytes << "\n"
+              << "max bytes: " << o.max_bytes << (o.max_bytes ? "" : " (no limit)") << "\n";
+    if (s.entries) std::cout << "oldest use: " << utc_text(s.oldest) << "\nnewest use: " << utc_text(s.newest) << "\n";
+    for (const std::string& p : s.problems) std::cout << "damaged: " << p << "\n";
     return 0;
 }
 
@@ -51,6 +57,9 @@ void add_cache(CLI::App& app, int& exit_code) {
     auto o = std::make_shared<CacheOptions>();
     auto* sub = app.add_subcommand("cache", "the persistent cache of compiled kernels (--kernels jit)");
     sub->add_option("--cache-dir", o->dir, "the cache (default $XDG_CACHE_HOME/hsnc, else ~/.cache/hsnc)");
+    sub->add_option_function<std::string>(
+        "--cache-max-size", [o](const std::string& t) { o->max_bytes = parse_byte_size(t, "--cache-max-size"); },
+        "the size limit --stats reports (give what simulate gets as --cache-max-size; default 256M)");
     auto* stats = sub->add_flag("--stats", o->stats, "directory, entries, damaged entries, bytes, oldest and newest");
     auto* clear = sub->add_flag("--clear", o->clear,
                                 "remove the cached kernels and their index (only hsnc's *.hsncobj and *.hsncidx files)");

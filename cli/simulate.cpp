@@ -14,6 +14,7 @@
 #include "engine.h"
 #include "error.h"
 #include "hsnc/simulate.h"
+#include "kernel_cache.h"
 #include "model_reader.h"
 #include "simulate_outputs.h"
 
@@ -32,6 +33,7 @@ struct SimulateOptions {
     std::string kernels = "auto";
     std::string cache_dir;
     bool no_cache = false;
+    std::uint64_t cache_max_bytes = kDefaultCacheMaxBytes;
     std::size_t max_events = 0;
     bool quiet = false;
     std::string precision = "double";
@@ -140,6 +142,7 @@ int simulate(const SimulateOptions& o) {
     run.integrator.atol = o.atol;
     run.cache_dir = o.cache_dir;
     run.use_cache = !o.no_cache;
+    run.cache_max_bytes = o.cache_max_bytes;
     try {
         check_simulate_options(model, run);
     } catch (const OptionError& e) {
@@ -220,6 +223,9 @@ void add_simulate(CLI::App& app, int& exit_code) {
                     "keep compiled kernels (jit) in DIR (default $XDG_CACHE_HOME/hsnc, else ~/.cache/hsnc)");
     auto* no_cache = sub->add_flag("--no-cache", o->no_cache, "compile every kernel (jit); read and write no cache");
     no_cache->excludes(sub->get_option("--cache-dir"));
+    sub->add_option_function<std::string>(
+        "--cache-max-size", [o](const std::string& t) { o->cache_max_bytes = parse_byte_size(t, "--cache-max-size"); },
+        "keep the cache under this size, evicting the least recently used kernels (default 256M; 0: no limit)");
     sub->add_option("--max-events", o->max_events, "stop after this many switch events (0: no limit)");
     sub->add_option("--precision", o->precision,
                     "double (default); mp:N: the high-precision reference engine, every quantity at N decimal "

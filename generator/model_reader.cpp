@@ -22,6 +22,7 @@
 
 #include "error.h"
 #include "expression_evaluator.h"
+#include "file_read.h"
 
 namespace hsnc {
 
@@ -565,17 +566,9 @@ Model parse_model(const std::string& toml_text, const std::string& source, const
 }
 
 Model read_model(const std::string& path, const ModelOverrides& overrides) {
-    std::FILE* file = std::fopen(path.c_str(), "rb");
-    if (!file) throw InputError("cannot read model file '" + path + "': " + std::strerror(errno));
-    std::string text;
-    char buffer[8192];
-    std::size_t got = 0;
-    while ((got = std::fread(buffer, 1, sizeof buffer, file)) > 0) text.append(buffer, got);
-    const bool failed = std::ferror(file);
-    const int error = errno;  // e.g. EISDIR when path is a directory
-    std::fclose(file);
-    if (failed) throw InputError("cannot read model file '" + path + "': " + std::strerror(error));
-    return parse_model(text, path, overrides);
+    const FileRead file = read_regular_file(path, kMaxModelFileBytes);  // never a FIFO or /dev/zero
+    if (file.status != FileRead::Status::ok) throw InputError("cannot read model file '" + path + "': " + file.problem);
+    return parse_model(file.bytes, path, overrides);
 }
 
 }  // namespace hsnc

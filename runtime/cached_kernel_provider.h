@@ -11,6 +11,9 @@
 // for a JitSolverProvider (which loads libhsnc_jit.so, that is LLVM) and hand
 // that configuration to it: it warns about damage, compiles, rewrites the
 // entry. So a run whose kernels are all cached never loads LLVM or Clang.
+//
+// A cache directory that others could write to (KernelCache::trust_problem)
+// is not used at all: one warning, and every kernel is compiled.
 #pragma once
 
 #include <functional>
@@ -20,9 +23,29 @@
 
 #include "engine.h"
 #include "jit_solver_provider.h"
+#include "kernel_cache.h"
 #include "object_loader.h"
 
 namespace hsnc {
+
+/// Why `kernel` (the address of a symbol in a cached object, or null) cannot
+/// serve configuration `cfg` of `model`: "" when it can, else e.g. "no such
+/// symbol", "built for another model", "built for configuration 'c1_s00'". Checks everything a
+/// kernel says about itself (ABI version, model hash, configuration key,
+/// masses, switch functions, a folded kernel). With `object` (the loader's
+/// mapping of that object), every pointer the kernel holds is first checked
+/// to lie inside the object, its functions inside its code, so that a wrong
+/// object is never read outside itself.
+std::string cached_kernel_problem(const void* kernel, const Model& model, const Configuration& cfg,
+                                  const LoadedObject* object);
+
+/// Why the cached object `payload` cannot be the kernel `symbol` of `cfg`:
+/// "" when the loader maps it and cached_kernel_problem finds nothing, else
+/// "not a loadable object: REASON" or "not the kernel SYMBOL (PROBLEM)". On
+/// x86-64 the loader takes every object the JIT makes, so a refusal is a
+/// wrong object; elsewhere (no loader) "" (LLVM alone decides).
+std::string cached_object_problem(const std::string& payload, const std::string& symbol, const Model& model,
+                                  const Configuration& cfg);
 
 class CachedKernelProvider : public SolverProvider {
 public:
@@ -54,7 +77,7 @@ public:
 private:
     const Model& model_;
     JitSolverProvider::SourceFn source_;
-    JitOptions options_;
+    JitOptions options_;  // cache_dir cleared when the directory is refused
     JitFactory make_jit_;
     std::uint64_t hash_;
     std::string model_text_;  // model_canonical_text: what the index key covers
@@ -66,6 +89,8 @@ private:
     /// The kernel in the object stored under `key`, mapped without LLVM, or null.
     SegmentSolver* load_object(const Configuration& cfg, const std::string& key, const std::string& symbol);
     void record_index(const std::string& index, const std::string& key, const std::string& symbol) const;
+    KernelCache cache() const { return KernelCache(options_.cache_dir, options_.cache_max_bytes); }
+    bool refused_ = false;  // the cache directory is not trustworthy: not used
 
     std::size_t hits_ = 0, index_hits_ = 0;
     double emit_seconds_ = 0, load_seconds_ = 0;

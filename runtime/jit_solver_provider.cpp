@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "cached_kernel_provider.h"  // cached_object_problem
 #include "error.h"
 #include "kernel_solver.h"
 #include "model_hash.h"
@@ -23,7 +24,13 @@ JitSolverProvider::JitSolverProvider(const Model& model, SourceFn source, JitOpt
       options_(std::move(options)),
       cache_dir_(options_.cache_dir),
       hash_(model_hash(model)),
-      jit_(std::make_unique<Jit>()) {}
+      jit_(std::make_unique<Jit>()) {
+    const std::string distrust = KernelCache::trust_problem(cache_dir_);
+    if (!cache_dir_.empty() && !distrust.empty()) {
+        warn("kernel cache " + distrust + "; running without the cache");
+        cache_dir_.clear();
+    }
+}
 
 JitSolverProvider::~JitSolverProvider() = default;
 
@@ -47,19 +54,26 @@ SegmentSolver& JitSolverProvider::solver(const Configuration& cfg) {
     const std::string name = unit.symbol + ".cpp";
     std::string key;
     bool loaded = false;
+    const hsnc_kernel* kernel = nullptr;
     if (!cache_dir_.empty()) {
         key = jit_->cache_key(unit.source);
-        const KernelCache cache(cache_dir_);
+        const KernelCache cache(cache_dir_, options_.cache_max_bytes);
         KernelCache::Entry entry = cache.load(key);
-        if (entry.status == KernelCache::Status::hit) {
+        // Whole, but is it this kernel? Checked before LLVM sees it: symbols a
+        // wrong object defined in the JIT could not be defined again.
+        if (entry.status == KernelCache::Status::hit) entry.problem = cached_object_problem(entry.payload, unit.symbol, model_, cfg);
+        if (entry.status == KernelCache::Status::hit && entry.problem.empty()) {
             try {
                 jit_->add_object(name, entry.payload);
-                loaded = true;
+                kernel = static_cast<const hsnc_kernel*>(jit_->lookup(unit.symbol));
+                const std::string problem = cached_kernel_problem(kernel, model_, cfg, nullptr);
+                if (!problem.empty()) entry.problem = "not the kernel " + unit.symbol + " (" + problem + ")";
+                loaded = entry.problem.empty();
             } catch (const RunError& e) {
-                entry.status = KernelCache::Status::bad;
                 entry.problem = e.what();
             }
         }
+        if (!entry.problem.empty()) entry.status = KernelCache::Status::bad;
         if (entry.status == KernelCache::Status::bad) {
             ++rebuilt_;
             warn("kernel cache entry " + cache.path_of(key) + " is unusable (" + entry.problem +
@@ -73,14 +87,14 @@ SegmentSolver& JitSolverProvider::solver(const Configuration& cfg) {
         jit_->add_object(name, object);
         ++compiled_;
         if (!cache_dir_.empty()) {
-            const std::string problem = KernelCache(cache_dir_).store(key, object);
+            const std::string problem = KernelCache(cache_dir_, options_.cache_max_bytes).store(key, object);
             if (!problem.empty()) {
                 warn("kernel cache: " + problem + "; running without the cache");
                 cache_dir_.clear();
             }
         }
     }
-    const auto* kernel = static_cast<const hsnc_kernel*>(jit_->lookup(unit.symbol));
+    if (!loaded) kernel = static_cast<const hsnc_kernel*>(jit_->lookup(unit.symbol));
     (loaded ? load_seconds_ : compile_seconds_) += seconds_since(start);
 
     // The kernel says what it was built for: it must be this model and configuration.

@@ -30,6 +30,9 @@ struct JitKernelSource {
 struct JitOptions {
     /// Directory of the persistent cache; "" for none (every kernel compiled).
     std::string cache_dir;
+    /// Its size limit: storing a kernel evicts the least recently used
+    /// entries beyond it (KernelCache::store); 0 for none.
+    std::uint64_t cache_max_bytes = kDefaultCacheMaxBytes;
     /// Receives one line per problem that does not stop the run (a damaged
     /// cache entry, an unwritable cache); default: "hsnc: warning: ..." on stderr.
     std::function<void(const std::string&)> warn;
@@ -47,9 +50,10 @@ public:
 
     /// The kernel of `cfg`, on first use emitted, then loaded from the
     /// persistent cache or compiled (and stored there). A cache entry that is
-    /// truncated, corrupt, foreign or not loadable is reported through
-    /// JitOptions::warn, recompiled and rewritten; a cache that cannot be
-    /// written is reported once and not used again. Throws RunError when the
+    /// truncated, corrupt, foreign, not loadable or not the kernel asked for
+    /// (cached_object_problem) is reported through JitOptions::warn,
+    /// recompiled and rewritten; a cache that cannot be written, or whose
+    /// directory others can write to, is reported once and not used. Throws RunError when the
     /// source does not compile (Clang's diagnostics in the message) or the
     /// kernel is not the one asked for.
     SegmentSolver& solver(const Configuration& cfg) override;

@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -15,9 +16,12 @@
 #include <filesystem>
 #include <initializer_list>
 #include <random>
-
+#include "error.h"
+#include "file_read.h"
 #include "jit_frontend.h"     // jit_compile_flags
+#include "kernel_abi.h"
 #include "kernel_abi_text.h"  // generated at build time: kKernelAbiHeaderText
+#include "object_loader.h"
 
 namespace hsnc {
 namespace {
@@ -45,17 +49,6 @@ std::string parse_header(const char* data, std::size_t size, Header& h) {
     return "";
 }
 
-bool read_all(int fd, std::string& out) {
-    char buf[65536];
-    for (;;) {
-        const ssize_t n = ::read(fd, buf, sizeof buf);
-        if (n < 0 && errno == EINTR) continue;
-        if (n < 0) return false;
-        if (n == 0) return true;
-        out.append(buf, static_cast<std::size_t>(n));
-    }
-}
-
 bool write_all(int fd, const char* data, std::size_t size) {
     while (size > 0) {
         const ssize_t n = ::write(fd, data, size);
@@ -69,6 +62,74 @@ bool write_all(int fd, const char* data, std::size_t size) {
 
 bool has_extension(const std::filesystem::path& p) { return p.extension() == kCacheFileExtension; }
 bool is_index(const std::filesystem::path& p) { return p.extension() == kCacheIndexExtension; }
+
+std::string octal_mode(mode_t mode) {
+    char text[8];
+    std::snprintf(text, sizeof text, "%04o", static_cast<unsigned>(mode & 07777));
+    return text;
+}
+
+// Why a file or directory with status `st` must not be trusted: "" when this
+// user owns it and neither group nor others can write it.
+std::string ownership_problem(const struct stat& st) {
+    if (st.st_uid != ::geteuid())
+        return "owned by uid " + std::to_string(st.st_uid) + ", not by this user (uid " +
+               std::to_string(::geteuid()) + ")";
+    if (st.st_mode & (S_IWGRP | S_IWOTH)) return "group- or world-writable (mode " + octal_mode(st.st_mode) + ")";
+    return "";
+}
+
+// Checks `data` as a whole entry of `key` (header, size, key, checksum); ""
+// or why not. On success `payload` holds the payload.
+std::string check_entry(const std::string& data, const std::string& key, std::string& payload) {
+    Header h;
+    std::string problem = parse_header(data.data(), data.size(), h);
+    if (!problem.empty()) {
+        if (data.size() < kHeaderSize) problem = "truncated (" + std::to_string(data.size()) + " bytes)";
+        return problem;
+    }
+    const std::uint64_t expected = kHeaderSize + h.key_size + h.payload_size;
+    if (data.size() != expected)
+        return (data.size() < expected ? "truncated (" : "too long (") + std::to_string(data.size()) +
+               " bytes, its header says " + std::to_string(expected) + ")";
+    const std::string stored_key = data.substr(kHeaderSize, h.key_size);
+    if (stored_key != key) return "holds the kernel of key " + stored_key + ", not " + key;
+    payload = data.substr(kHeaderSize + h.key_size);
+    if (fnv1a64(payload.data(), payload.size()) != h.checksum) {
+        payload.clear();
+        return "corrupt (checksum mismatch)";
+    }
+    return "";
+}
+
+// Why the payload of a whole .hsncobj entry is not a kernel object this
+// process can use: "" when the loader (runtime/object_loader.h) maps it and
+// it defines a kernel (an hsnc_kernel_* object of this ABI version). Only on
+// x86-64, where the loader takes what the JIT makes.
+std::string object_problem(const std::string& payload) {
+#if defined(__x86_64__)
+    std::string why;
+    const std::unique_ptr<LoadedObject> object = LoadedObject::load(payload, why);
+    if (!object) return "not a loadable object: " + why;
+    for (const std::string& name : object->symbol_names()) {
+        if (name.compare(0, 12, "hsnc_kernel_") != 0) continue;
+        const auto* k = static_cast<const hsnc_kernel*>(object->symbol(name, sizeof(hsnc_kernel)));
+        if (k && k->abi_version == HSNC_KERNEL_ABI_VERSION) return "";
+    }
+    return "defines no kernel of ABI version " + std::to_string(HSNC_KERNEL_ABI_VERSION);
+#else
+    (void)payload;
+    return "";
+#endif
+}
+
+// Why the payload of an index entry is not "<32 hex digits> <symbol>".
+std::string index_problem(const std::string& payload) {
+    const std::size_t space = payload.find(' ');
+    if (space != 32 || payload.find_first_not_of("0123456789abcdef") != 32 || space + 1 >= payload.size())
+        return "not an index entry (\"<key> <symbol>\")";
+    return "";
+}
 
 }  // namespace
 
@@ -204,53 +265,33 @@ std::string KernelCache::path_of(const std::string& key, const char* ext) const 
 KernelCache::Entry KernelCache::load(const std::string& key, const char* ext) const {
     Entry e;
     const std::string path = path_of(key, ext);
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) {
-        if (errno != ENOENT && errno != ENOTDIR) {  // no file, or no directory: a miss
-            e.status = Status::bad;
-            e.problem = "cannot read: " + errno_text();
-        }
-        return e;
-    }
-    std::string data;
-    const bool ok = read_all(fd, data);
-    ::close(fd);
+    // Never a FIFO, a device or an endless file; never one somebody else can write.
+    struct stat st;
+    const FileRead file = read_regular_file(path, kMaxCacheEntryBytes, &st);
+    if (file.status == FileRead::Status::missing) return e;  // no file, or no directory
     e.status = Status::bad;
-    if (!ok) {
-        e.problem = "cannot read: " + errno_text();
+    if (file.status != FileRead::Status::ok) {
+        e.problem = file.problem == "not a regular file" || file.problem.compare(0, 12, "larger than ") == 0
+                        ? file.problem
+                        : "cannot read: " + file.problem;
         return e;
     }
-    Header h;
-    e.problem = parse_header(data.data(), data.size(), h);
-    if (!e.problem.empty()) {
-        if (data.size() < kHeaderSize) e.problem = "truncated (" + std::to_string(data.size()) + " bytes)";
-        return e;
-    }
-    const std::uint64_t expected = kHeaderSize + h.key_size + h.payload_size;
-    if (data.size() != expected) {
-        e.problem = (data.size() < expected ? "truncated (" : "too long (") + std::to_string(data.size()) +
-                    " bytes, its header says " + std::to_string(expected) + ")";
-        return e;
-    }
-    const std::string stored_key = data.substr(kHeaderSize, h.key_size);
-    if (stored_key != key) {
-        e.problem = "holds the kernel of key " + stored_key + ", not " + key;
-        return e;
-    }
-    e.payload = data.substr(kHeaderSize + h.key_size);
-    if (fnv1a64(e.payload.data(), e.payload.size()) != h.checksum) {
-        e.payload.clear();
-        e.problem = "corrupt (checksum mismatch)";
-        return e;
-    }
+    e.problem = ownership_problem(st);
+    if (e.problem.empty()) e.problem = check_entry(file.bytes, key, e.payload);
+    if (!e.problem.empty()) return e;
     e.status = Status::hit;
+    ::utimensat(AT_FDCWD, path.c_str(), nullptr, 0);  // used now: the last to be evicted
     return e;
 }
 
 std::string KernelCache::store(const std::string& key, const std::string& payload, const char* ext) const {
+    // Its parents as any directory (~/.cache), the cache itself 0700.
     std::error_code ec;
-    std::filesystem::create_directories(dir_, ec);
+    const std::filesystem::path parent = std::filesystem::path(dir_).parent_path();
+    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
     if (ec) return "cannot create directory " + dir_ + ": " + ec.message();
+    if (::mkdir(dir_.c_str(), 0700) != 0 && errno != EEXIST)
+        return "cannot create directory " + dir_ + ": " + errno_text();
 
     char header[kHeaderSize];
     const std::uint32_t version = kCacheFormatVersion, key_size = static_cast<std::uint32_t>(key.size());
@@ -267,7 +308,7 @@ std::string KernelCache::store(const std::string& key, const std::string& payloa
     char suffix[40];
     std::snprintf(suffix, sizeof suffix, ".%ld.%08x%08x.tmp", static_cast<long>(::getpid()), rd(), rd());
     const std::string tmp = dir_ + "/." + key + ext + suffix;
-    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
     if (fd < 0) return "cannot write in " + dir_ + ": " + errno_text();
     const bool ok = write_all(fd, header, sizeof header) && write_all(fd, key.data(), key.size()) &&
                     write_all(fd, payload.data(), payload.size());
@@ -282,29 +323,93 @@ std::string KernelCache::store(const std::string& key, const std::string& payloa
         ::unlink(tmp.c_str());
         return why;
     }
+    if (max_bytes_ > 0) evict(dir_, max_bytes_, path_of(key, ext));
     return "";
+}
+
+std::size_t KernelCache::evict(const std::string& dir, std::uint64_t max_bytes, const std::string& keep) {
+    struct File {
+        struct timespec used;
+        std::uint64_t bytes;
+        std::string path;
+    };
+    std::vector<File> files;
+    std::uint64_t total = 0;
+    std::error_code ec;
+    for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+        const std::filesystem::path& p = it->path();
+        if ((!has_extension(p) && !is_index(p)) || p.filename().string()[0] == '.') continue;
+        struct stat st;
+        if (::lstat(p.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;
+        total += static_cast<std::uint64_t>(st.st_size);
+        if (p.string() != keep) files.push_back({st.st_mtim, static_cast<std::uint64_t>(st.st_size), p.string()});
+    }
+    if (total <= max_bytes) return 0;
+    std::sort(files.begin(), files.end(), [](const File& a, const File& b) {
+        return a.used.tv_sec != b.used.tv_sec ? a.used.tv_sec < b.used.tv_sec : a.used.tv_nsec < b.used.tv_nsec;
+    });
+    std::size_t removed = 0;
+    for (const File& f : files) {
+        if (total <= max_bytes) break;
+        // Another process may have removed it first: it is gone either way.
+        if (::unlink(f.path.c_str()) == 0 || errno == ENOENT) {
+            total -= f.bytes;
+            ++removed;
+        }
+    }
+    return removed;
+}
+
+std::string KernelCache::trust_problem(const std::string& dir) {
+    struct stat st;
+    if (::stat(dir.c_str(), &st) != 0) return "";  // created 0700 on the first store
+    if (!S_ISDIR(st.st_mode)) return "";           // store() says it cannot create it
+    const std::string problem = ownership_problem(st);
+    return problem.empty() ? "" : dir + " is " + problem;
+}
+
+std::uint64_t parse_byte_size(const std::string& text, const std::string& what) {
+    std::size_t digits = 0;
+    while (digits < text.size() && text[digits] >= '0' && text[digits] <= '9') ++digits;
+    const std::string suffix = text.substr(digits);
+    int shift = -1;
+    if (suffix.empty() || suffix == "B") shift = 0;
+    if (suffix == "k" || suffix == "K" || suffix == "KB" || suffix == "KiB") shift = 10;
+    if (suffix == "M" || suffix == "MB" || suffix == "MiB") shift = 20;
+    if (suffix == "G" || suffix == "GB" || suffix == "GiB") shift = 30;
+    if (digits == 0 || digits > 12 || shift < 0)
+        throw InputError(what + ": '" + text + "' is not a size (a number of bytes, or with K, M or G: 256M)");
+    return std::stoull(text.substr(0, digits)) << shift;
 }
 
 KernelCache::Stats KernelCache::stats(const std::string& dir) {
     Stats s;
     std::error_code ec;
-    for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-        const std::filesystem::path& p = it->path();
-        if (!has_extension(p) || p.filename().string()[0] == '.') continue;
+    std::vector<std::filesystem::path> paths;
+    for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+        paths.push_back(it->path());
+    std::sort(paths.begin(), paths.end());
+    for (const std::filesystem::path& p : paths) {
+        const bool object = has_extension(p);
+        if ((!object && !is_index(p)) || p.filename().string()[0] == '.') continue;
+        // What load() would make of it (without marking it used), and for
+        // kernels whether the object maps and defines a kernel.
         struct stat st;
-        if (::stat(p.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;
-        s.bytes += static_cast<std::uint64_t>(st.st_size);
-        // A whole entry: our header, and the size it announces.
-        char data[kHeaderSize];
-        Header h;
-        bool whole = false;
-        if (std::FILE* f = std::fopen(p.c_str(), "rb")) {
-            whole = std::fread(data, 1, sizeof data, f) == sizeof data && parse_header(data, sizeof data, h).empty() &&
-                    kHeaderSize + h.key_size + h.payload_size == static_cast<std::uint64_t>(st.st_size);
-            std::fclose(f);
+        const FileRead file = read_regular_file(p.string(), kMaxCacheEntryBytes, &st);
+        if (file.status == FileRead::Status::missing) continue;  // removed meanwhile
+        std::string problem = file.problem, payload;
+        struct stat link;
+        if (::lstat(p.c_str(), &link) == 0 && S_ISREG(link.st_mode)) s.bytes += static_cast<std::uint64_t>(link.st_size);
+        if (problem.empty()) problem = ownership_problem(st);
+        if (problem.empty()) problem = check_entry(file.bytes, p.stem().string(), payload);
+        if (problem.empty()) problem = object ? object_problem(payload) : index_problem(payload);
+        if (!problem.empty()) {
+            ++(object ? s.damaged : s.index_damaged);
+            s.problems.push_back(p.string() + ": " + problem);
+            continue;
         }
-        if (!whole) {
-            ++s.damaged;
+        if (!object) {
+            ++s.index_entries;
             continue;
         }
         const std::int64_t t = st.st_mtime;

@@ -25,10 +25,21 @@
 // either no entry or a complete one. No fsync (it would cost milliseconds per
 // kernel): a file that a crash of the machine leaves cut short fails its
 // header check and is rebuilt.
+//
+// The entries are machine code this process maps executable, so the cache is
+// trusted only when nobody else can write to it: the directory is created
+// 0700 (entries 0600), and a directory or entry that is not owned by this
+// user or is group- or world-writable is refused (trust_problem). Entries are
+// opened only when they are regular files of at most kMaxCacheEntryBytes
+// (runtime/file_read.h: a FIFO or a link to /dev/zero is refused, never read).
+// The cache keeps to a size limit (max_bytes, default kDefaultCacheMaxBytes):
+// a load that hits touches the entry (its mtime is its last use) and a store
+// evicts the least recently used files until the directory fits.
 #pragma once
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace hsnc {
 
@@ -36,6 +47,12 @@ inline constexpr std::uint32_t kCacheFormatVersion = 1;
 inline constexpr const char* kCacheFileExtension = ".hsncobj";
 /// Index entries: same format, the payload is the key of a .hsncobj entry.
 inline constexpr const char* kCacheIndexExtension = ".hsncidx";
+/// The size limit when none is given (`simulate --cache-max-size`).
+inline constexpr std::uint64_t kDefaultCacheMaxBytes = std::uint64_t{256} << 20;
+
+/// "256M", "1G", "64k", "1000" (bytes; K, M, G are powers of 1024) as bytes.
+/// Throws InputError "WHAT: 'TEXT' is not a size (...)" when it is none of these.
+std::uint64_t parse_byte_size(const std::string& text, const std::string& what);
 
 /// The cache directory when none is given: $XDG_CACHE_HOME/hsnc when that is
 /// set and absolute, else $HOME/.cache/hsnc; "" when neither can be named.
@@ -69,10 +86,18 @@ std::uint64_t fnv1a64(const void* data, std::size_t size, std::uint64_t h = 0xcb
 
 class KernelCache {
 public:
-    /// A cache in `dir` (created on the first store). Touches nothing yet.
-    explicit KernelCache(std::string dir) : dir_(std::move(dir)) {}
+    /// A cache in `dir` (created, 0700, on the first store) that store() keeps
+    /// to `max_bytes` (0: no limit). Touches nothing yet.
+    explicit KernelCache(std::string dir, std::uint64_t max_bytes = kDefaultCacheMaxBytes)
+        : dir_(std::move(dir)), max_bytes_(max_bytes) {}
 
     const std::string& dir() const { return dir_; }
+    std::uint64_t max_bytes() const { return max_bytes_; }
+
+    /// Why `dir` must not be used: "" when it is a directory owned by this
+    /// user that neither group nor others can write, or does not exist yet;
+    /// else e.g. "DIR is group- or world-writable (mode 0777)".
+    static std::string trust_problem(const std::string& dir);
     std::string path_of(const std::string& key, const char* ext = kCacheFileExtension) const;
 
     enum class Status {
@@ -86,20 +111,33 @@ public:
         std::string problem;
     };
 
-    /// The entry stored under `key`. Never throws on file contents.
+    /// The entry stored under `key`. Never throws on file contents. An entry
+    /// that is not a regular file, is larger than kMaxCacheEntryBytes, is not
+    /// owned by this user or is group/world-writable is `bad` (never read).
+    /// A hit marks the entry used now (its mtime; see store's eviction).
     Entry load(const std::string& key, const char* ext = kCacheFileExtension) const;
 
-    /// Store `payload` under `key` (temporary file, then rename). Returns ""
-    /// on success, else what went wrong ("cannot create directory ...: ...").
+    /// Store `payload` under `key` (temporary file, then rename), then evict
+    /// least recently used files (not this one) until the cache holds at most
+    /// max_bytes. Returns "" on success, else what went wrong ("cannot
+    /// create directory ...: ...").
     std::string store(const std::string& key, const std::string& payload, const char* ext = kCacheFileExtension) const;
 
+    /// Remove the least recently used entries and index entries (oldest
+    /// mtime first; never `keep`) until their sizes add up to at most
+    /// `max_bytes`. Returns how many were removed.
+    static std::size_t evict(const std::string& dir, std::uint64_t max_bytes, const std::string& keep = "");
+
     struct Stats {
-        std::size_t entries = 0;      ///< whole hsnc entries (header checks out)
-        std::size_t damaged = 0;      ///< *.hsncobj files that are not (truncated, corrupt)
-        std::uint64_t bytes = 0;      ///< file sizes of both
-        std::int64_t oldest = 0, newest = 0;  ///< modification times (s since epoch) of entries
+        std::size_t entries = 0;  ///< *.hsncobj that load: whole, our key, checksum, a loadable kernel object
+        std::size_t damaged = 0;  ///< *.hsncobj that do not (truncated, corrupt, foreign, not a file, not ours)
+        std::size_t index_entries = 0, index_damaged = 0;  ///< the same for *.hsncidx
+        std::uint64_t bytes = 0;                           ///< file sizes of all of them
+        std::int64_t oldest = 0, newest = 0;  ///< last use (mtime, s since epoch) of the good *.hsncobj
+        std::vector<std::string> problems;    ///< "FILE: why" of each damaged one
     };
-    /// What `dir` holds (all zero when it does not exist). Throws nothing.
+    /// What `dir` holds (all zero when it does not exist). Throws nothing;
+    /// changes nothing (no last-use update).
     static Stats stats(const std::string& dir);
 
     /// Remove every *.hsncobj and *.hsncidx file of `dir` (ours by name;
@@ -109,6 +147,7 @@ public:
 
 private:
     std::string dir_;
+    std::uint64_t max_bytes_;
 };
 
 }  // namespace hsnc

@@ -5,6 +5,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstring>
 
 namespace hsnc {
@@ -54,7 +55,7 @@ std::unique_ptr<LoadedObject> LoadedObject::load(const std::string& elf, std::st
             if (s.sh_type != SHT_PROGBITS && s.sh_type != SHT_NOBITS) return fail("an unexpected allocated section type");
             const std::size_t align = s.sh_addralign ? s.sh_addralign : 1;
             if (align > page || (align & (align - 1))) return fail("an unexpected section alignment");
-            if (s.sh_size > (std::size_t{1} << 30)) return fail("a section too large");
+            if (s.sh_size > kMaxMappedBytes || at > kMaxMappedBytes) return fail("sections too large");
             at = round_up(at, align);
             offset[i] = at;
             placed[i] = 1;
@@ -62,12 +63,14 @@ std::unique_ptr<LoadedObject> LoadedObject::load(const std::string& elf, std::st
         }
         if (pass == 0) code_end = at = round_up(at, page);
     }
+    if (at > kMaxMappedBytes) return fail("sections too large");
     const std::size_t total = round_up(std::max<std::size_t>(at, 1), page);
     void* base = ::mmap(nullptr, total, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (base == MAP_FAILED) return fail("cannot map memory");
     std::unique_ptr<LoadedObject> obj(new LoadedObject());
     obj->base_ = base;
     obj->size_ = total;
+    obj->code_size_ = code_end;
     char* mem = static_cast<char*>(base);
     for (std::size_t i = 0; i < sh.size(); ++i)
         if (placed[i] && sh[i].sh_type == SHT_PROGBITS) std::memcpy(mem + offset[i], data + sh[i].sh_offset, sh[i].sh_size);
@@ -82,7 +85,7 @@ std::unique_ptr<LoadedObject> LoadedObject::load(const std::string& elf, std::st
     const std::size_t nsym = sh[symtab].sh_size / sizeof(Elf64_Sym);
     const Elf64_Shdr& strtab = sh[sh[symtab].sh_link];
     std::vector<Elf64_Sym> syms(nsym);
-    std::memcpy(syms.data(), data + sh[symtab].sh_offset, nsym * sizeof(Elf64_Sym));
+    if (nsym) std::memcpy(syms.data(), data + sh[symtab].sh_offset, nsym * sizeof(Elf64_Sym));  // data() may be null
     auto name_of = [&](const Elf64_Sym& s, std::string& name) {
         if (s.st_name >= strtab.sh_size) return false;
         const char* p = data + strtab.sh_offset + s.st_name;
@@ -149,6 +152,28 @@ std::unique_ptr<LoadedObject> LoadedObject::load(const std::string& elf, std::st
         return fail("cannot protect the mapped pages");
     __builtin___clear_cache(mem, mem + code_end);
     return obj;
+}
+
+std::vector<std::string> LoadedObject::symbol_names() const {
+    std::vector<std::string> names;
+    for (const Global& g : globals_) names.push_back(g.name);
+    return names;
+}
+
+bool LoadedObject::contains(const void* p, std::size_t size) const {
+    const auto a = reinterpret_cast<std::uintptr_t>(p), b = reinterpret_cast<std::uintptr_t>(base_);
+    return a >= b && a - b <= size_ && size <= size_ - (a - b);
+}
+
+bool LoadedObject::contains_string(const char* p) const {
+    if (!contains(p, 1)) return false;
+    const std::size_t room = size_ - static_cast<std::size_t>(p - static_cast<const char*>(base_));
+    return ::strnlen(p, room) < room;
+}
+
+bool LoadedObject::contains_code(const void* p) const {
+    const auto a = reinterpret_cast<std::uintptr_t>(p), b = reinterpret_cast<std::uintptr_t>(base_);
+    return a >= b && a - b < code_size_;
 }
 
 void* LoadedObject::symbol(const std::string& name, std::size_t min_size) const {

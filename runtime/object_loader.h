@@ -30,11 +30,23 @@ public:
     /// Address of the defined global symbol `name` when the object gives it
     /// at least `min_size` bytes (its ELF st_size), else null.
     void* symbol(const std::string& name, std::size_t min_size = 0) const;
+    /// The names of the defined global symbols, in symbol table order.
+    std::vector<std::string> symbol_names() const;
+
+    /// Whether [p, p + size) lies inside the mapped object (code or data).
+    bool contains(const void* p, std::size_t size) const;
+    /// Whether `p` is a NUL-terminated string inside the mapped object.
+    bool contains_string(const char* p) const;
+    /// Whether `p` points into the object's code (read+execute pages).
+    bool contains_code(const void* p) const;
+
+    /// The largest object taken (sections laid out, page-rounded).
+    static constexpr std::size_t kMaxMappedBytes = std::size_t{64} << 20;
 
 private:
     LoadedObject() = default;
     void* base_ = nullptr;
-    std::size_t size_ = 0;
+    std::size_t size_ = 0, code_size_ = 0;
     struct Global {
         std::string name;
         void* address;

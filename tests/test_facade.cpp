@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "cached_kernel_provider.h"
+#include "kernel_cache.h"
 #include "cli_runner.h"
 #include "engine_runner.h"
 #include "hsnc/hsnc.h"
@@ -336,3 +337,8 @@ TEST(Facade, NamesParseOrSayWhat) {
 
 }  // namespace
 }  // namespace hsnc
+
+// The facade's default cache size is the cache's own (one default, not two).
+TEST(Facade, DefaultCacheSizeIsTheCachesDefault) {
+    EXPECT_EQ(hsnc::SimulateOptions{}.cache_max_bytes, hsnc::kDefaultCacheMaxBytes);
+}

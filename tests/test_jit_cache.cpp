@@ -5,20 +5,36 @@
 // filling one cache at once leave it whole; --no-cache writes nothing.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <chrono>
 #include <regex>
 #include <string>
 #include <vector>
 
 #include "cli_runner.h"
+#include "error.h"
 #include "kernel_cache.h"
 
 namespace hsnc {
 namespace {
 
 namespace fs = std::filesystem;
+
+// An address-space limit for `hsnc`: were a device read without end, the
+// process would stop at it instead of taking the machine's memory. Not under
+// AddressSanitizer, whose shadow memory needs terabytes of address space.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr const char* kMemoryLimit = "";
+#else
+constexpr const char* kMemoryLimit = " prlimit --as=8000000000";
+#endif
 using testing::CliRun;
 using testing::model_path;
 using testing::run_hsnc;
@@ -288,28 +304,303 @@ TEST_F(CacheDir, AutoUsesAotKernelsElseGenericAndNeverTheJit) {
     EXPECT_NE(failed.find("exit=1"), std::string::npos) << failed;
 }
 
+// ---- entries that are whole but wrong, or not files at all ------------------------
+
+// The kernel symbol each object entry holds, from the index entries ("<key> <symbol>").
+std::map<std::string, std::string> symbols_by_key(const std::string& dir) {
+    std::map<std::string, std::string> symbols;
+    for (const fs::path& p : entries(dir, ".hsncidx")) {
+        const KernelCache::Entry e = KernelCache(dir).load(p.stem().string(), kCacheIndexExtension);
+        const std::size_t space = e.payload.find(' ');
+        if (e.status == KernelCache::Status::hit && space != std::string::npos)
+            symbols[e.payload.substr(0, space)] = e.payload.substr(space + 1);
+    }
+    return symbols;
+}
+
+std::string payload_of(const std::string& dir, const std::string& key) {
+    const KernelCache::Entry e = KernelCache(dir).load(key);
+    EXPECT_EQ(e.status, KernelCache::Status::hit) << key << ": " << e.problem;
+    return e.payload;
+}
+
+// A whole entry (header, key, checksum all fine) whose object is not the
+// kernel of its key: the object of another configuration, the same
+// configuration of another model (same symbol, other numbers), bytes that are
+// no object. Each is rebuilt with a warning, and the next run hits them all.
+TEST_F(CacheDir, WholeEntriesWithAWrongObjectAreRebuilt) {
+    const CliRun first = run_hsnc(jit_run_args("--cache-dir '" + dir + "'"));
+    ASSERT_EQ(first.exit_code, 0) << first.err;
+    const std::map<std::string, std::string> symbol = symbols_by_key(dir);
+    ASSERT_EQ(symbol.size(), 3u);
+    const std::vector<std::string> keys = {symbol.begin()->first, std::next(symbol.begin())->first,
+                                           symbol.rbegin()->first};
+    // The kernels of a run with another friction coefficient: same symbols, another model hash.
+    const std::string other = dir + "/other";
+    ASSERT_EQ(run_hsnc("simulate '" + model_path("seed-scenario-2.toml") +
+                       "' --set mu_k=0.32 --t-end 50 --kernels jit --quiet --cache-dir '" + other + "'")
+                  .exit_code,
+              0);
+    std::string other_model;
+    for (const auto& [key, sym] : symbols_by_key(other))
+        if (sym == symbol.at(keys[1])) other_model = payload_of(other, key);
+    ASSERT_FALSE(other_model.empty());
+    fs::remove_all(other);
+
+    const KernelCache cache(dir);
+    ASSERT_EQ(cache.store(keys[0], payload_of(dir, keys[2])), "");  // another configuration's kernel
+    ASSERT_EQ(cache.store(keys[1], other_model), "");                 // another model's kernel
+    ASSERT_EQ(cache.store(keys[2], std::string(5000, '\x90')), "");   // no object at all
+    for (const fs::path& p : entries(dir, ".hsncidx")) fs::remove(p);  // through the source keys
+
+    const CliRun rebuilt = run_hsnc(jit_run_args("--cache-dir '" + dir + "'"));
+    ASSERT_EQ(rebuilt.exit_code, 0) << rebuilt.err;
+    EXPECT_EQ(rebuilt.out, first.out);
+    EXPECT_EQ(count_of(rebuilt.err, "kernels compiled"), 3u) << rebuilt.err;
+    const std::string unusable = "hsnc: warning: kernel cache entry ";
+    EXPECT_NE(rebuilt.err.find(unusable + cache.path_of(keys[0]) + " is unusable (not the kernel " + symbol.at(keys[0]) + " (no such symbol))"),
+              std::string::npos)
+        << rebuilt.err;
+    EXPECT_NE(rebuilt.err.find(unusable + cache.path_of(keys[1]) + " is unusable (not the kernel " + symbol.at(keys[1]) + " (built for another model))"),
+              std::string::npos)
+        << rebuilt.err;
+    EXPECT_NE(rebuilt.err.find(unusable + cache.path_of(keys[2]) + " is unusable (not a loadable object: not an ELF"),
+              std::string::npos)
+        << rebuilt.err;
+
+    const CliRun again = run_hsnc(jit_run_args("--cache-dir '" + dir + "' --quiet"));
+    ASSERT_EQ(again.exit_code, 0) << again.err;
+    EXPECT_EQ(again.err, "") << "rewritten: all hits, no warning";
+    EXPECT_EQ(again.out, first.out);
+}
+
+// A FIFO (open would wait for a writer) and a link to /dev/zero (read would
+// never end) in place of entries and index entries: refused unread, the
+// kernels rebuilt and the files replaced by whole entries. Bounded by
+// `timeout` and an address-space limit, so that the old behaviour fails the
+// test instead of hanging it or exhausting memory.
+TEST_F(CacheDir, FifoAndDeviceEntriesAreRebuiltNotRead) {
+    const CliRun first = run_hsnc(jit_run_args("--cache-dir '" + dir + "'"));
+    ASSERT_EQ(first.exit_code, 0) << first.err;
+    const std::vector<fs::path> objects = entries(dir), index = entries(dir, ".hsncidx");
+    ASSERT_EQ(objects.size(), 3u);
+    ASSERT_EQ(index.size(), 3u);
+    fs::remove(objects[0]);
+    ASSERT_EQ(::mkfifo(objects[0].c_str(), 0600), 0);
+    fs::remove(objects[1]);
+    fs::create_symlink("/dev/zero", objects[1]);
+    for (const fs::path& p : index) {
+        fs::remove(p);
+        ASSERT_EQ(::mkfifo(p.c_str(), 0600), 0);
+    }
+    const std::string bounded = std::string("timeout 60") + kMemoryLimit;
+    const CliRun rebuilt = run_hsnc(jit_run_args("--cache-dir '" + dir + "'"), bounded);
+    ASSERT_EQ(rebuilt.exit_code, 0) << rebuilt.err << " (124: it hung)";
+    EXPECT_EQ(rebuilt.out, first.out);
+    EXPECT_EQ(count_of(rebuilt.err, "kernels compiled"), 2u) << rebuilt.err;
+    for (int k : {0, 1})
+        EXPECT_NE(rebuilt.err.find("hsnc: warning: kernel cache entry " + objects[k].string() +
+                                   " is unusable (not a regular file); recompiling it"),
+                  std::string::npos)
+            << rebuilt.err;
+    for (const fs::path& p : entries(dir, "")) EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(p))) << p;
+    const CliRun again = run_hsnc(jit_run_args("--cache-dir '" + dir + "'"), bounded);
+    ASSERT_EQ(again.exit_code, 0) << again.err;
+    EXPECT_NE(again.err.find("3 cache hits (3 by index,"), std::string::npos) << "index entries rewritten: " << again.err;
+    EXPECT_EQ(again.err.find("warning"), std::string::npos) << again.err;
+}
+
+// Index entries damaged in every way the cache can see (not an entry, whole
+// but naming a key that does not exist, whole but naming another
+// configuration's object): each run still finds every kernel, and rewrites
+// them, so that the next run goes by the index again.
+TEST_F(CacheDir, DamagedIndexEntriesAreRewritten) {
+    ASSERT_EQ(run_hsnc(jit_run_args("--quiet --cache-dir '" + dir + "'")).exit_code, 0);
+    const std::vector<fs::path> index = entries(dir, ".hsncidx");
+    ASSERT_EQ(index.size(), 3u);
+    const KernelCache cache(dir);
+    const std::string other = KernelCache(dir).load(index[2].stem().string(), kCacheIndexExtension).payload;
+    std::ofstream(index[0]) << "garbage";
+    ASSERT_EQ(cache.store(index[1].stem().string(), std::string(32, 'f') + " hsnc_kernel_x", kCacheIndexExtension), "");
+    ASSERT_EQ(cache.store(index[2].stem().string(), other.substr(0, other.find(' ')) + " hsnc_kernel_y",
+                          kCacheIndexExtension),
+              "");
+    const CliRun by_source = run_hsnc(jit_run_args("--cache-dir '" + dir + "'"));
+    ASSERT_EQ(by_source.exit_code, 0) << by_source.err;
+    EXPECT_NE(by_source.err.find("3 cache hits (0 by index,"), std::string::npos) << by_source.err;
+    EXPECT_EQ(by_source.err.find("warning"), std::string::npos) << by_source.err;
+    const CliRun by_index = run_hsnc(jit_run_args("--cache-dir '" + dir + "'"));
+    EXPECT_NE(by_index.err.find("3 cache hits (3 by index,"), std::string::npos) << by_index.err;
+}
+
+// ---- trust: permissions, ownership; the size limit -----------------------------------
+
+mode_t mode_of(const std::string& path) {
+    struct stat st;
+    return ::stat(path.c_str(), &st) == 0 ? st.st_mode & 07777 : 0;
+}
+
+TEST_F(CacheDir, TheCacheIsCreatedPrivate) {
+    ASSERT_EQ(run_hsnc(jit_run_args("--quiet --cache-dir '" + dir + "/a/hsnc'"), "umask 000;").exit_code, 0);
+    EXPECT_EQ(mode_of(dir + "/a/hsnc"), 0700u);
+    for (const fs::path& p : entries(dir + "/a/hsnc", "")) EXPECT_EQ(mode_of(p.string()), 0600u) << p;
+    EXPECT_EQ(entries(dir + "/a/hsnc", "").size(), 6u);
+}
+
+// A directory others can write to could hold a planted kernel that passes
+// every header check: refused as a whole, with one warning; nothing read or written.
+TEST_F(CacheDir, ADirectoryOthersCanWriteIsRefused) {
+    ASSERT_EQ(run_hsnc(jit_run_args("--quiet --cache-dir '" + dir + "'")).exit_code, 0);
+    for (mode_t mode : {0777, 0720, 0702}) {
+        ASSERT_EQ(::chmod(dir.c_str(), mode), 0);
+        const std::vector<fs::path> before = entries(dir, "");
+        const CliRun r = run_hsnc(jit_run_args("--cache-dir '" + dir + "'"));
+        ASSERT_EQ(r.exit_code, 0) << r.err;
+        char octal[8];
+        std::snprintf(octal, sizeof octal, "%04o", static_cast<unsigned>(mode));
+        EXPECT_NE(r.err.find("hsnc: warning: kernel cache " + dir + " is group- or world-writable (mode " + octal +
+                             "); running without the cache\n"),
+                  std::string::npos)
+            << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 2) << "one warning, one statistics line: " << r.err;
+        EXPECT_EQ(count_of(r.err, "kernels compiled"), 3u) << "nothing read: " << r.err;
+        EXPECT_EQ(entries(dir, ""), before) << "nothing written";
+        const CliRun stats = run_hsnc("cache --stats --cache-dir '" + dir + "'");
+        EXPECT_NE(stats.out.find("refused: " + dir + " is group- or world-writable"), std::string::npos) << stats.out;
+    }
+}
+
+TEST_F(CacheDir, EntriesOthersCanWriteOrOwnAreRebuilt) {
+    ASSERT_EQ(run_hsnc(jit_run_args("--quiet --cache-dir '" + dir + "'")).exit_code, 0);
+    const std::vector<fs::path> objects = entries(dir);
+    ASSERT_EQ(objects.size(), 3u);
+    ASSERT_EQ(::chmod(objects[0].c_str(), 0666), 0);
+    const bool root = ::geteuid() == 0;
+    if (root) ASSERT_EQ(::chown(objects[1].c_str(), 4242, 4242), 0);
+    const CliRun r = run_hsnc(jit_run_args("--cache-dir '" + dir + "'"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("kernel cache entry " + objects[0].string() +
+                         " is unusable (group- or world-writable (mode 0666)); recompiling it"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(count_of(r.err, "kernels compiled"), root ? 2u : 1u) << r.err;
+    EXPECT_EQ(mode_of(objects[0].string()), 0600u) << "rewritten as our own file";
+    if (!root) GTEST_SKIP() << "ownership by another user is tested only as root (chown)";
+    EXPECT_NE(r.err.find("kernel cache entry " + objects[1].string() + " is unusable (owned by uid 4242, not by this user"),
+              std::string::npos)
+        << r.err;
+    struct stat st;
+    ASSERT_EQ(::stat(objects[1].c_str(), &st), 0);
+    EXPECT_EQ(st.st_uid, ::geteuid());
+    // A directory of another user is refused as a whole.
+    ASSERT_EQ(::chown(dir.c_str(), 4242, 4242), 0);
+    const CliRun foreign = run_hsnc(jit_run_args("--cache-dir '" + dir + "'"));
+    EXPECT_NE(foreign.err.find("hsnc: warning: kernel cache " + dir + " is owned by uid 4242, not by this user"),
+              std::string::npos)
+        << foreign.err;
+    EXPECT_EQ(count_of(foreign.err, "kernels compiled"), 3u) << foreign.err;
+}
+
+TEST_F(CacheDir, StoreEvictsTheLeastRecentlyUsedBeyondTheLimit) {
+    const KernelCache cache(dir, 3500);  // room for three entries of about 1000 bytes, not four
+    const std::string payload(1000, 'p');
+    for (const char* key : {"k1", "k2", "k3"}) ASSERT_EQ(cache.store(key, payload), "");
+    // Last uses 300, 200 and 100 s ago (file times are too coarse to order stores made now).
+    const auto now = std::chrono::system_clock::now();
+    auto set_used = [&](const char* key, int seconds_ago) {
+        const struct timespec t = {std::chrono::system_clock::to_time_t(now) - seconds_ago, 0};
+        const struct timespec times[2] = {t, t};
+        ASSERT_EQ(::utimensat(AT_FDCWD, cache.path_of(key).c_str(), times, 0), 0);
+    };
+    set_used("k1", 300);
+    set_used("k2", 200);
+    set_used("k3", 100);
+    ASSERT_EQ(cache.load("k1").status, KernelCache::Status::hit);  // k1: used now
+    ASSERT_EQ(cache.store("k4", payload), "");
+    EXPECT_EQ(cache.load("k2").status, KernelCache::Status::miss) << "least recently used: evicted";
+    for (const char* key : {"k1", "k3", "k4"}) EXPECT_EQ(cache.load(key).status, KernelCache::Status::hit) << key;
+    // A limit below one entry keeps only the one just stored; 0 is no limit.
+    ASSERT_EQ(KernelCache(dir, 10).store("k5", payload), "");
+    EXPECT_EQ(entries(dir, "").size(), 1u);
+    for (const char* key : {"k6", "k7", "k8", "k9"}) ASSERT_EQ(KernelCache(dir, 0).store(key, payload), "");
+    EXPECT_EQ(entries(dir, "").size(), 5u);
+    EXPECT_EQ(KernelCache::evict(dir, 2500), 3u);
+}
+
+TEST_F(CacheDir, SimulateKeepsTheCacheUnderItsSizeLimit) {
+    ASSERT_EQ(run_hsnc(jit_run_args("--quiet --cache-dir '" + dir + "'")).exit_code, 0);
+    std::uint64_t largest = 0, total = 0;
+    for (const fs::path& p : entries(dir, "")) {
+        largest = std::max<std::uint64_t>(largest, fs::file_size(p));
+        total += fs::file_size(p);
+    }
+    fs::remove_all(dir);
+    const std::uint64_t limit = total - largest / 2;  // not all of them
+    const CliRun r = run_hsnc(jit_run_args("--cache-dir '" + dir + "' --cache-max-size " + std::to_string(limit)));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::uint64_t kept = 0;
+    for (const fs::path& p : entries(dir, "")) kept += fs::file_size(p);
+    EXPECT_LE(kept, limit);
+    EXPECT_GT(kept, 0u);
+    const CliRun stats = run_hsnc("cache --stats --cache-max-size 64M --cache-dir '" + dir + "'");
+    EXPECT_NE(stats.out.find("\nbytes: " + std::to_string(kept) + "\nmax bytes: 67108864\n"), std::string::npos)
+        << stats.out;
+    const CliRun bad = run_hsnc(jit_run_args("--cache-dir '" + dir + "' --cache-max-size 12X"));
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_EQ(bad.err, "hsnc: --cache-max-size: '12X' is not a size (a number of bytes, or with K, M or G: 256M)\n");
+}
+
+TEST(ByteSize, ParsesBytesAndBinarySuffixes) {
+    EXPECT_EQ(parse_byte_size("0", "x"), 0u);
+    EXPECT_EQ(parse_byte_size("1000", "x"), 1000u);
+    EXPECT_EQ(parse_byte_size("64k", "x"), 65536u);
+    EXPECT_EQ(parse_byte_size("256M", "x"), 268435456u);
+    EXPECT_EQ(parse_byte_size("2G", "x"), 2147483648u);
+    for (const char* bad : {"", "M", "-1", "1.5G", "12X", "1e9", "9999999999999"}) {
+        try {
+            parse_byte_size(bad, "--opt");
+            ADD_FAILURE() << bad;
+        } catch (const InputError& e) {
+            EXPECT_EQ(std::string(e.what()), "--opt: '" + std::string(bad) + "' is not a size (a number of bytes, or with K, M or G: 256M)");
+        }
+    }
+}
+
 // ---- hsnc cache ------------------------------------------------------------------
 
 TEST_F(CacheDir, CacheStatsAndClear) {
     const CliRun empty = run_hsnc("cache --stats --cache-dir '" + dir + "'");
     ASSERT_EQ(empty.exit_code, 0) << empty.err;
-    EXPECT_EQ(empty.out, "cache: " + dir + "\nentries: 0\ndamaged: 0\nbytes: 0\n");
+    EXPECT_EQ(empty.out, "cache: " + dir +
+                             "\nentries: 0\ndamaged: 0\nindex entries: 0 (0 damaged)\nbytes: 0\nmax bytes: 268435456\n");
 
     ASSERT_EQ(run_hsnc(jit_run_args("--quiet --cache-dir '" + dir + "'")).exit_code, 0);
     std::ofstream(dir + "/notes.txt") << "not ours";
     std::uint64_t bytes = 0;
-    for (const fs::path& p : entries(dir))
-        if (p.extension() == ".hsncobj") bytes += fs::file_size(p);
+    for (const fs::path& p : entries(dir, ""))
+        if (p.extension() != ".txt") bytes += fs::file_size(p);
     const CliRun stats = run_hsnc("cache --stats --cache-dir '" + dir + "'");
     ASSERT_EQ(stats.exit_code, 0) << stats.err;
-    EXPECT_NE(stats.out.find("entries: 3\ndamaged: 0\nbytes: " + std::to_string(bytes) + "\noldest: "),
+    EXPECT_NE(stats.out.find("entries: 3\ndamaged: 0\nindex entries: 3 (0 damaged)\nbytes: " +
+                             std::to_string(bytes) + "\nmax bytes: 268435456\noldest use: "),
               std::string::npos)
         << stats.out;
-    EXPECT_NE(stats.out.find(" UTC\nnewest: "), std::string::npos) << stats.out;
+    EXPECT_NE(stats.out.find(" UTC\nnewest use: "), std::string::npos) << stats.out;
 
-    fs::resize_file(entries(dir)[0], 10);
+    // Damaged as load() sees it: cut short; whole but with bytes that are
+    // no object (header and checksum fine); an index entry that names nothing.
+    const std::vector<fs::path> objects = entries(dir);
+    fs::resize_file(objects[0], 10);
+    ASSERT_EQ(KernelCache(dir).store(objects[1].stem().string(), std::string(3000, 'x')), "");
+    std::ofstream(entries(dir, ".hsncidx")[0]) << "garbage";
     const CliRun damaged = run_hsnc("cache --stats --cache-dir '" + dir + "'");
-    EXPECT_NE(damaged.out.find("entries: 2\ndamaged: 1\n"), std::string::npos) << damaged.out;
+    EXPECT_NE(damaged.out.find("entries: 1\ndamaged: 2\nindex entries: 2 (1 damaged)\n"), std::string::npos)
+        << damaged.out;
+    EXPECT_NE(damaged.out.find("damaged: " + objects[0].string() + ": truncated (10 bytes)\n"), std::string::npos)
+        << damaged.out;
+    EXPECT_NE(damaged.out.find("damaged: " + objects[1].string() + ": not a loadable object: not an ELF file\n"),
+              std::string::npos)
+        << damaged.out;
 
     const CliRun clear = run_hsnc("cache --clear --cache-dir '" + dir + "'");
     ASSERT_EQ(clear.exit_code, 0) << clear.err;

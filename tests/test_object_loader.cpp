@@ -127,6 +127,61 @@ TEST(ObjectLoader, RefusesWhatItDoesNotSupportWithAReason) {
     EXPECT_EQ(refusal(missing), "undefined symbol 'hsnc_no_such_function' not found in this process");
 }
 
+// An empty symbol table (found by fuzz/fuzz_object_loader: a memcpy to the
+// null data() of an empty vector, which UBSan reports, so this test fails
+// without the fix in the sanitized suite, .ci/sanitize): refused, since the
+// relocations have no symbols.
+TEST(ObjectLoader, RefusesAnEmptySymbolTable) {
+    Jit jit;
+    const Model model = read_model(testing::model_path("seed-scenario-2.toml"));
+    std::string object = compile(jit, model, Configuration::all_open(model)).object;
+    Elf64_Ehdr eh;
+    std::memcpy(&eh, object.data(), sizeof eh);
+    bool emptied = false;
+    for (std::size_t i = 1; i < eh.e_shnum; ++i) {
+        Elf64_Shdr sh;
+        std::memcpy(&sh, object.data() + eh.e_shoff + i * sizeof sh, sizeof sh);
+        if (sh.sh_type != SHT_SYMTAB) continue;
+        sh.sh_size = 0;
+        std::memcpy(&object[eh.e_shoff + i * sizeof sh], &sh, sizeof sh);
+        emptied = true;
+    }
+    ASSERT_TRUE(emptied);
+    std::string why;
+    EXPECT_EQ(LoadedObject::load(object, why), nullptr);
+    EXPECT_EQ(why, "a relocation against an unusable symbol");
+}
+
+// Sections of no contents (SHT_NOBITS) cost no bytes in the file but their
+// size in memory: a few of them announcing 512 MB each must be refused, not
+// mapped (4096 sections of 1 GB each were once taken, terabytes of mapping).
+TEST(ObjectLoader, RefusesSectionsLargerThanAKernelEverIs) {
+    Jit jit;
+    const Model model = read_model(testing::model_path("seed-scenario-2.toml"));
+    const std::string object = compile(jit, model, Configuration::all_open(model)).object;
+    Elf64_Ehdr eh;
+    std::memcpy(&eh, object.data(), sizeof eh);
+    std::string big = object;
+    int changed = 0;
+    for (std::size_t i = 1; i < eh.e_shnum; ++i) {
+        Elf64_Shdr sh;
+        std::memcpy(&sh, big.data() + eh.e_shoff + i * sizeof sh, sizeof sh);
+        if (sh.sh_flags & SHF_ALLOC || sh.sh_type == SHT_SYMTAB || sh.sh_type == SHT_STRTAB ||
+            sh.sh_type == SHT_RELA)
+            continue;
+        sh.sh_type = SHT_NOBITS;
+        sh.sh_flags = SHF_ALLOC;
+        sh.sh_size = std::size_t{512} << 20;
+        sh.sh_addralign = 1;
+        std::memcpy(&big[eh.e_shoff + i * sizeof sh], &sh, sizeof sh);
+        ++changed;
+    }
+    ASSERT_GT(changed, 0) << "no section to enlarge";
+    std::string why;
+    EXPECT_EQ(LoadedObject::load(big, why), nullptr);
+    EXPECT_EQ(why, "sections too large");
+}
+
 // Damaged objects (the cache's checksum normally keeps them out): random
 // byte changes and cuts are refused or mapped, never a crash, and writes stay
 // inside the loader's own pages (every offset is checked against the file).

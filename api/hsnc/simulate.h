@@ -22,6 +22,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <string>
@@ -78,6 +79,9 @@ struct SimulateOptions {
     std::string cache_dir;
     /// KernelChoice::jit: false compiles every kernel and reads and writes no cache.
     bool use_cache = true;
+    /// KernelChoice::jit: the cache's size limit in bytes (storing a kernel
+    /// evicts the least recently used entries beyond it); 0: no limit.
+    std::uint64_t cache_max_bytes = std::uint64_t{256} << 20;
     /// Problems that do not stop the run (a damaged cache entry, an
     /// unwritable cache), one line each; empty: "hsnc: warning: ..." on stderr.
     std::function<void(const std::string&)> warn;
