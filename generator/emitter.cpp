@@ -16,16 +16,6 @@ namespace hsnc {
 
 using GiNaC::numeric;
 
-std::string format_double(double v) {
-    if (std::isinf(v)) return v > 0 ? "__builtin_inf()" : "(-__builtin_inf())";
-    if (v == 0.0) return "0.0";  // also -0
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    std::string s = buf;
-    if (s.find_first_of(".e") == std::string::npos) s += ".0";
-    return s;
-}
-
 std::string kernel_symbol(const Model& model, const Configuration& cfg) {
     std::string name;
     for (char ch : model.name)

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "derivation.h"
+#include "double_literal.h"  // format_double, used with the emitters
 #include "program.h"
 
 namespace hsnc {
@@ -44,7 +45,5 @@ extern const char* const kPhaseFunctionSource;
 /// kernel objects named in `symbols` (runtime/aot_registry.h), in that order.
 std::string emit_registry(const std::vector<std::string>& symbols, const std::string& function = "aot_registry");
 
-/// 17 significant digits, always a C double literal ("2.0", "1.5e-07").
-std::string format_double(double v);
 
 }  // namespace hsnc

@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "emitter.h"  // format_double, for comments
+#include "double_literal.h"  // format_double, for comments
 
 namespace hsnc {
 
