@@ -242,18 +242,28 @@ Program lower(const Derivation& d) {
             vh[r] = s.temp("vh_" + idx(r));
             s.lin_ld(vh[r], v);
         }
-        std::vector<std::uint32_t> q0u(nm), dq0u(nm);
-        for (std::size_t j = 0; j < nm; ++j) {
-            Lin q, dq;
-            for (std::size_t r = 0; r < nf; ++r) {
-                q.add(d.modes[j].w[r], xh[r]);
-                dq.add(d.modes[j].w[r], vh[r]);
+        // q = W x, q' = W v of one pair of physical vectors, each added to its base
+        // (q_base, dq_base; empty: none), into temporaries named prefix_j and dprefix_j.
+        auto to_modes = [&](const std::vector<std::uint32_t>& px, const std::vector<std::uint32_t>& pv,
+                            const std::string& prefix, std::vector<std::uint32_t>& q_out,
+                            std::vector<std::uint32_t>& dq_out, const std::vector<std::uint32_t>& q_base,
+                            const std::vector<std::uint32_t>& dq_base, const std::string& note) {
+            q_out.assign(nm, 0);
+            dq_out.assign(nm, 0);
+            for (std::size_t j = 0; j < nm; ++j) {
+                Lin q, dq;
+                for (std::size_t r = 0; r < nf; ++r) {
+                    q.add(d.modes[j].w[r], px[r]);
+                    dq.add(d.modes[j].w[r], pv[r]);
+                }
+                q_out[j] = s.temp(prefix + "_" + idx(j));
+                with(s.lin(q_out[j], q, q_base.empty() ? kNoRegister : q_base[j]), j == 0 ? note : "");
+                dq_out[j] = s.temp("d" + prefix + "_" + idx(j));
+                s.lin(dq_out[j], dq, dq_base.empty() ? kNoRegister : dq_base[j]);
             }
-            q0u[j] = s.temp("q0u_" + idx(j));
-            with(s.lin(q0u[j], q), j == 0 ? "Its modal coordinates q = W xh, q' = W vh." : "");
-            dq0u[j] = s.temp("dq0u_" + idx(j));
-            s.lin(dq0u[j], dq);
-        }
+        };
+        std::vector<std::uint32_t> q0u, dq0u;
+        to_modes(xh, vh, "q0u", q0u, dq0u, {}, {}, "Its modal coordinates q = W xh, q' = W vh.");
         // V and W are inverse only to rounding, so xh -> W xh -> V W xh is the fixed
         // matrix I + E (E ~ eps): applied at every segment start it is a bias (a steady
         // energy gain), not noise. One refinement against the residual removes it.
@@ -274,18 +284,8 @@ Program lower(const Derivation& d) {
             rv[r] = s.temp("rv_" + idx(r));
             s.lin_ld(rv[r], v);
         }
-        std::vector<std::uint32_t> q0(nm), dq0(nm);
-        for (std::size_t j = 0; j < nm; ++j) {
-            Lin q, dq;
-            for (std::size_t r = 0; r < nf; ++r) {
-                q.add(d.modes[j].w[r], rx[r]);
-                dq.add(d.modes[j].w[r], rv[r]);
-            }
-            q0[j] = s.temp("q0_" + idx(j));
-            s.lin(q0[j], q, q0u[j]);
-            dq0[j] = s.temp("dq0_" + idx(j));
-            s.lin(dq0[j], dq, dq0u[j]);
-        }
+        std::vector<std::uint32_t> q0, dq0;
+        to_modes(rx, rv, "q0", q0, dq0, q0u, dq0u, "");
         // A second refinement, against what eval returns at tau = 0: x(0) and v(0) with
         // eval's constants in eval's order, the residuals x0 - x(0), v0 - v(0) (long
         // double) mapped back with W. x(0) is a sum of terms larger than x, so without it
