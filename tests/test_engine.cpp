@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "tie_models.h"
 #include "engine_runner.h"
 #include "engine.h"
 #include "integrators.h"
@@ -496,26 +497,7 @@ x = { m1 = 1 }
 // release row, v = (cos(w t) + 2 cos t - 3 cos 2t)/9, w^2 = 10 (the closed form
 // of x'' + 10 x = -5 + 2 sin t - sin 2t from x0 = -0.5, v0 = 0).
 TEST(EngineTies, FrictionTieDecidedByTheThirdDerivativeSlides) {
-    const Model m = model_from(R"(
-name = "friction-tie"
-[parameters]
-g = 10
-[[mass]]
-name = "m1"
-m = 1
-mu_k = 0.5
-[[spring]]
-between = ["ground", "m1"]
-k = 10
-[[forcing]]
-omega = 1
-amplitude = { m1 = 2 }
-[[forcing]]
-omega = 2
-amplitude = { m1 = -1 }
-[initial]
-x = { m1 = -0.5 }
-)");
+    const Model m = model_from(hsnc::test::kFrictionTieModel);
     const Outcome r = simulate(m, 0.5);
     ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
     EXPECT_EQ(r.events.size(), 0u) << "first row: " << (r.events.empty() ? "" : event_kind_name(r.events[0].kind));

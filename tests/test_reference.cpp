@@ -16,6 +16,7 @@
 #include <cln/rational.h>
 #include <cln/real.h>
 
+#include "tie_models.h"
 #include "aot_registry.h"
 #include "cli_runner.h"
 #include "engine_runner.h"
@@ -515,26 +516,7 @@ m1 = -1
 // and v(t) = (1/9) cos(omega t) + (2/9) cos t - (1/3) cos 2t, omega^2 = 10, the
 // closed form of m x'' + k x = -mu_k N + 2 sin t - sin 2t from x0 = -0.5, v0 = 0.
 TEST(ReferenceTies, FrictionTieDecidedByTheThirdDerivativeSlides) {
-    const Model m = model_from(R"(
-name = "friction-tie"
-[parameters]
-g = 10
-[[mass]]
-name = "m1"
-m = 1
-mu_k = 0.5
-[[spring]]
-between = ["ground", "m1"]
-k = 10
-[[forcing]]
-omega = 1
-amplitude = { m1 = 2 }
-[[forcing]]
-omega = 2
-amplitude = { m1 = -1 }
-[initial]
-x = { m1 = -0.5 }
-)");
+    const Model m = model_from(hsnc::test::kFrictionTieModel);
     ASSERT_EQ(run_bounded(60, [&] { return outcome_line(m, 40, 0.01); }), "ok events=0 'closed= stuck=' ");
     const PreciseRun r = run_at(m, 40, 0.01);
     const cl_F one = prec40(), w = cln::sqrt(F(10.0, one)), t = F(0.01, one);
