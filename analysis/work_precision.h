@@ -26,8 +26,10 @@
 #include <string>
 #include <vector>
 
-#include "engine.h"
+#include "engine_options.h"
 #include "model.h"
+#include "observer.h"
+#include "run_summary.h"
 
 namespace hsnc::cli {
 

@@ -14,11 +14,12 @@
 #include "cached_kernel_provider.h"
 #include "derivation.h"
 #include "emitter.h"
+#include "engine.h"
 #include "jit_module.h"
 #include "jit_solver_provider.h"
 #include "kernel_cache.h"
+#include "kernel_mode.h"
 #include "reference.h"
-#include "solver_provider.h"
 
 namespace hsnc {
 namespace {

@@ -38,7 +38,7 @@
 #include "kernel_solver.h"
 #include "jit_solver_provider.h"
 #include "model_reader.h"
-#include "solver_provider.h"
+#include "kernel_mode.h"
 #include "bench_common.h"
 
 namespace {

@@ -25,7 +25,7 @@
 #include "kernel_solver.h"
 #include "lowering.h"
 #include "model_reader.h"
-#include "solver_provider.h"
+#include "kernel_mode.h"
 #include "bench_common.h"
 
 namespace {

@@ -38,9 +38,9 @@
 #include "engine.h"
 #include "error.h"
 #include "integrators.h"
+#include "kernel_mode.h"
 #include "model_hash.h"
 #include "model_reader.h"
-#include "solver_provider.h"
 #include "tradeoff.h"
 
 namespace hsnc::cli {

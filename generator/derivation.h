@@ -27,7 +27,7 @@
 
 #include "configuration.h"
 #include "model.h"
-#include "segment.h"
+#include "switch_function.h"
 
 namespace hsnc {
 

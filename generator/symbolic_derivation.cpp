@@ -3,7 +3,7 @@
 #include <cctype>
 
 #include "derivation.h"
-#include "segment.h"
+#include "switch_function.h"
 
 namespace hsnc {
 namespace {

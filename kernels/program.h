@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "configuration.h"
-#include "segment.h"
+#include "switch_function.h"
 
 namespace hsnc {
 

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "engine.h"
 #include "model.h"
+#include "observer.h"
 #include "output_file.h"
 
 namespace hsnc {

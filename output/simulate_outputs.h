@@ -8,8 +8,8 @@
 #include <string>
 
 #include "csv_writer.h"
-#include "engine.h"
 #include "model.h"
+#include "observer.h"
 #include "output_file.h"
 #include "plot.h"
 

@@ -20,10 +20,10 @@
 #include "assembly.h"
 #include "configuration.h"
 #include "generic_solver.h"
-#include "segment.h"
+#include "segment_solver.h"
 #include "engine_runner.h"
 #include "model_reader.h"
-#include "solver_provider.h"
+#include "kernel_mode.h"
 
 namespace hsnc {
 namespace {

@@ -15,8 +15,8 @@
 #include "error.h"
 #include "jit.h"
 #include "jit_solver_provider.h"
+#include "kernel_mode.h"
 #include "model_reader.h"
-#include "solver_provider.h"
 
 namespace hsnc {
 namespace {

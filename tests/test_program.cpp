@@ -28,6 +28,7 @@
 #include "interpreted_solver.h"
 #include "jit.h"
 #include "jit_solver_provider.h"
+#include "kernel_mode.h"
 #include "kernel_set.h"
 #include "kernel_solver.h"
 #include "lowering.h"
@@ -35,7 +36,6 @@
 #include "model_reader.h"
 #include "random_model.h"
 #include "sample_models.h"
-#include "solver_provider.h"
 
 namespace hsnc {
 const AotRegistry& sample_registry();  // tests' build-time kernels (hsnc_gen --samples)

@@ -27,8 +27,10 @@
 
 #include <string>
 
-#include "engine.h"
+#include "engine_options.h"
 #include "model.h"
+#include "observer.h"
+#include "run_summary.h"
 
 namespace hsnc {
 

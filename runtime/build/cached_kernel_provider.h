@@ -21,10 +21,10 @@
 #include <memory>
 #include <string>
 
-#include "engine.h"
 #include "jit_solver_provider.h"
 #include "kernel_cache.h"
 #include "object_loader.h"
+#include "solver_provider.h"
 
 namespace hsnc {
 

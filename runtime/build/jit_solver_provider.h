@@ -14,9 +14,9 @@
 #include <memory>
 #include <string>
 
-#include "engine.h"
 #include "jit.h"
 #include "kernel_cache.h"
+#include "solver_provider.h"
 
 namespace hsnc {
 

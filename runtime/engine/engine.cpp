@@ -63,29 +63,6 @@ struct Found {
 
 }  // namespace
 
-const char* event_kind_name(EventKind kind) {
-    switch (kind) {
-        case EventKind::contact_close: return "contact_close";
-        case EventKind::contact_open: return "contact_open";
-        case EventKind::stick: return "stick";
-        case EventKind::release: return "release";
-        case EventKind::reversal: return "reversal";
-    }
-    return "?";
-}
-
-const char* run_status_name(RunStatus status) {
-    switch (status) {
-        case RunStatus::ok: return "ok";
-        case RunStatus::chattering: return "chattering";
-        case RunStatus::zeno: return "zeno";
-        case RunStatus::max_events: return "max_events";
-        case RunStatus::stopped: return "stopped";
-        case RunStatus::failure: return "failure";
-    }
-    return "?";
-}
-
 Engine::Engine(const Model& model, SolverProvider& provider) : model_(model), provider_(provider) {}
 
 RunSummary Engine::run(const EngineOptions& options, Observer& observer) {

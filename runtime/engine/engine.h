@@ -20,76 +20,13 @@
 // (h <= noise), and the stick rule decides.
 #pragma once
 
-#include <cstddef>
-#include <functional>
-#include <string>
-#include <vector>
-
-#include "configuration.h"
+#include "engine_options.h"
 #include "model.h"
-#include "segment.h"
+#include "observer.h"
+#include "run_summary.h"
+#include "solver_provider.h"
 
 namespace hsnc {
-
-enum class EventKind { contact_close, contact_open, stick, release, reversal };
-
-/// The `kind` column of the events CSV.
-const char* event_kind_name(EventKind kind);
-
-/// Where a run reports what it produces. x and v hold all masses.
-class Observer {
-public:
-    virtual ~Observer() = default;
-    virtual void on_sample(double t, const double* x, const double* v) = 0;
-    virtual void on_event(double t, EventKind kind, int element, const double* x, const double* v) = 0;
-    /// Called now and then with the current time; return false to stop.
-    virtual bool on_progress(double /*t*/) { return true; }
-};
-
-/// Gives the segment solver of a configuration (ahead-of-time kernel, JIT
-/// kernel or generic), creating it the first time it is asked for.
-class SolverProvider {
-public:
-    virtual ~SolverProvider() = default;
-    virtual SegmentSolver& solver(const Configuration& cfg) = 0;
-    /// One line for the run statistics ("generic solver: 5 configurations").
-    virtual std::string describe() const { return ""; }
-};
-
-struct EngineOptions {
-    double t_end = 0.0;
-    double dt = 0.0;                   ///< sample spacing; 0: samples only at t0 and t_end
-    bool samples = true;               ///< call on_sample at all
-    std::size_t max_events = 0;        ///< 0: unlimited
-    /// Zeno: zeno_events switches within zeno_span * max(1, t - t0) seconds
-    /// (relative to the time the run has covered; plus the time's resolution,
-    /// 8 eps |t| per switch, twice the smallest step) stop the run with RunStatus::zeno.
-    std::size_t zeno_events = 1000;
-    double zeno_span = 1e-9;
-};
-
-/// Named outcomes of a run (documented; the CLI maps them to exit codes).
-enum class RunStatus {
-    ok,          ///< reached t_end
-    chattering,  ///< switches at one instant did not settle (a configuration cycle)
-    zeno,        ///< switches accumulate in time (Zeno); stopped where they do
-    max_events,  ///< EngineOptions::max_events reached
-    stopped,     ///< the observer asked to stop
-    failure,     ///< the solver gave non-finite values
-};
-const char* run_status_name(RunStatus status);
-
-struct RunSummary {
-    RunStatus status = RunStatus::ok;
-    std::string message;              ///< what happened and where, for non-ok status
-    double t = 0.0;                   ///< time reached
-    std::vector<double> x, v;         ///< state reached
-    Configuration configuration;      ///< configuration reached
-    std::size_t events = 0;           ///< switch events (rows of the events CSV)
-    std::size_t segments = 0;         ///< closed-form segments started
-    std::size_t evaluations = 0;      ///< segment evaluations made to find switches
-    std::size_t configurations = 0;   ///< distinct configurations visited
-};
 
 /// Keeps references to `model` and `provider`: both must outlive it.
 class Engine {

@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "configuration.h"
-#include "engine.h"
+#include "event_kind.h"
 #include "model.h"
-#include "segment.h"
+#include "switch_function.h"
 
 namespace hsnc {
 

@@ -29,7 +29,7 @@
 #include "configuration.h"
 #include "modal.h"
 #include "model.h"
-#include "segment.h"
+#include "segment_solver.h"
 
 namespace hsnc {
 

@@ -15,9 +15,9 @@
 #include <string>
 #include <vector>
 
-#include "engine.h"
 #include "program.h"
-#include "segment.h"
+#include "segment_solver.h"
+#include "solver_provider.h"
 
 namespace hsnc {
 

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "kernel_abi.h"
-#include "segment.h"
+#include "segment_solver.h"
 
 namespace hsnc {
 

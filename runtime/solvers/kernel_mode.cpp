@@ -1,4 +1,4 @@
-#include "solver_provider.h"
+#include "kernel_mode.h"
 
 #include <algorithm>
 #include <stdexcept>

@@ -3,45 +3,19 @@
 // Between two switches the system is linear with constant forces (paper,
 // "PWLDFE standard formulation", Eq. 9). A SegmentSolver holds the solution of
 // one configuration: `setup` fixes it from the state at the segment start, then
-// `eval` gives the exact state and every switch function at any later time.
+// `eval` gives the exact state and every switch function (switch_function.h,
+// in that order) at any later time.
 // Three implementations give the same answers to rounding: ahead-of-time
 // generated kernels, kernels compiled in-process (JIT), and the generic
 // Eigen-based solver.
-//
-// Switch functions of a configuration, in this order (switch_functions()):
-//   1. every contact c, in model order:       gap      g = G_c = x[a] - x[b] - gap_c
-//   2. every mass i with friction, in order:
-//        sliding:                             velocity g = v_i
-//        stuck:                               release_pos g =  A_i - mu_s*N_i
-//                                             release_neg g = -A_i - mu_s*N_i
-// where A_i is the force on mass i from everything but friction (assembly.h)
-// and N_i = m_i*g. The stuck-mass release condition |A_i| > mu_s*N_i is written
-// as two smooth functions so that root finding never meets a kink.
 #pragma once
 
-#include <cstdint>
 #include <vector>
 
 #include "configuration.h"
-#include "model.h"
+#include "switch_function.h"
 
 namespace hsnc {
-
-enum class SwitchKind : std::uint8_t {
-    gap,          ///< contact gap function G_c; element = contact index
-    velocity,     ///< velocity of a sliding friction mass; element = mass index
-    release_pos,  ///< A_i - mu_s*N_i of a stuck mass; element = mass index
-    release_neg,  ///< -A_i - mu_s*N_i of a stuck mass; element = mass index
-};
-
-struct SwitchFunction {
-    SwitchKind kind;
-    int element;
-    bool operator==(const SwitchFunction& o) const { return kind == o.kind && element == o.element; }
-};
-
-/// The switch functions of `cfg`, in the documented order.
-std::vector<SwitchFunction> switch_functions(const Model& model, const Configuration& cfg);
 
 /// Where SegmentSolver::eval writes. Every pointer is required and points to
 /// n_dof (x, v, a) or n_switch (the rest) doubles.

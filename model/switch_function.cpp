@@ -1,4 +1,4 @@
-#include "segment.h"
+#include "switch_function.h"
 
 namespace hsnc {
 
