@@ -2,7 +2,7 @@
 // ahead-of-time kernels) taken from the persistent cache without loading LLVM.
 //
 // For each configuration the run enters: look its kernel up by the index key
-// (jit_index_key: this executable's build ID, the model's numbers and the
+// (jit_index_key: the build ID of the object holding this code, the model's numbers and the
 // configuration), which needs no derivation; else emit the kernel source
 // (callback) and look it up by its key (jit_cache_key). When the cache holds a
 // whole entry, map its object with LoadedObject (runtime/object_loader.h) and

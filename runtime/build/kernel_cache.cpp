@@ -209,11 +209,31 @@ std::string jit_cache_key(const std::string& source) {
     return fnv1a128_hex({"hsnc-jit-object 2", compiler_identity(), cpu, kKernelAbiHeaderText, source});
 }
 
-std::string executable_build_id() {
-    std::string id;
-    // The first object dl_iterate_phdr reports is the executable itself.
+namespace {
+
+// An address inside the code of this file: the object that holds it (the
+// executable, or libhsnc.so in a program that links the library) is the one
+// whose build ID keys the index. Internal linkage, so no other object's
+// definition can stand in for it.
+void build_id_anchor() {}
+
+}  // namespace
+
+std::string module_build_id() {
+    struct Search {
+        ElfW(Addr) address;
+        std::string id;
+    } search{reinterpret_cast<ElfW(Addr)>(&build_id_anchor), ""};
     ::dl_iterate_phdr(
         [](dl_phdr_info* info, std::size_t, void* out) {
+            auto* s = static_cast<Search*>(out);
+            bool holds = false;  // does one of this object's loaded segments hold the anchor?
+            for (int i = 0; i < info->dlpi_phnum && !holds; ++i) {
+                const ElfW(Phdr)& ph = info->dlpi_phdr[i];
+                const ElfW(Addr) start = info->dlpi_addr + ph.p_vaddr;
+                holds = ph.p_type == PT_LOAD && s->address >= start && s->address - start < ph.p_memsz;
+            }
+            if (!holds) return 0;  // the next object
             for (int i = 0; i < info->dlpi_phnum; ++i) {
                 const ElfW(Phdr)& ph = info->dlpi_phdr[i];
                 if (ph.p_type != PT_NOTE) continue;
@@ -227,25 +247,24 @@ std::string executable_build_id() {
                     const char* next = desc + ((nh.n_descsz + 3) & ~3u);
                     if (next > end) break;
                     if (nh.n_type == NT_GNU_BUILD_ID && nh.n_namesz == 4 && std::memcmp(name, "GNU", 4) == 0) {
-                        auto* s = static_cast<std::string*>(out);
                         for (unsigned k = 0; k < nh.n_descsz; ++k) {
                             char byte[3];
                             std::snprintf(byte, sizeof byte, "%02x", static_cast<unsigned char>(desc[k]));
-                            *s += byte;
+                            s->id += byte;
                         }
                         return 1;
                     }
                     p = next;
                 }
             }
-            return 1;  // only the executable
+            return 1;  // the object holding this code has no build ID
         },
-        &id);
-    return id;
+        &search);
+    return search.id;
 }
 
 std::string jit_index_key(const std::string& model_text, const std::string& config_key) {
-    static const std::string build_id = executable_build_id(), cpu = host_cpu_identity();
+    static const std::string build_id = module_build_id(), cpu = host_cpu_identity();
     if (build_id.empty()) return "";
     return fnv1a128_hex({"hsnc-jit-index 1", build_id, compiler_identity(), cpu,
                          kKernelAbiHeaderText, model_text, config_key});

@@ -67,16 +67,20 @@ std::string default_cache_dir();
 /// run whose kernels are all cached need not load it (runtime/object_loader.h).
 std::string jit_cache_key(const std::string& source);
 
-/// The key under which the command line finds a kernel without deriving it:
-/// FNV-1a-128 of this executable's GNU build ID (it fixes the generator and
-/// emitter code), Clang's version, the flags, the CPU, kernel_abi.h, the
+/// The key under which a run finds a kernel without deriving it: FNV-1a-128
+/// of module_build_id() (it fixes the generator and emitter code), Clang's
+/// version, the flags, the CPU, kernel_abi.h, the
 /// model's canonical text (model_hash.h: every number a kernel depends on) and
-/// the configuration key. "" when the executable has no build ID. Its entry
+/// the configuration key. "" when that object has no build ID. Its entry
 /// (kCacheIndexExtension) holds the jit_cache_key of the kernel's source.
 std::string jit_index_key(const std::string& model_text, const std::string& config_key);
 
-/// This executable's GNU build ID in hex, "" when it has none.
-std::string executable_build_id();
+/// The GNU build ID, in hex, of the object this code is linked into: the
+/// executable (`hsnc`), or libhsnc.so in a program that links the library
+/// (found by the address of a function of this file among the loaded
+/// objects, not by taking the first one, which is the executable). "" when
+/// that object has none.
+std::string module_build_id();
 
 /// The host part of jit_cache_key, e.g. "GenuineIntel 000906ea 7ffafbff ...".
 std::string host_cpu_identity();
