@@ -10,9 +10,10 @@
 
 #include "csv_writer.h"
 #include "error.h"
+#include "hsnc/simulate.h"  // OptionError
 #include "reference.h"
 
-namespace hsnc::cli {
+namespace hsnc {
 
 void RecordingObserver::on_sample(double t, const double* x, const double* /*v*/) {
     run_.t.push_back(t);
@@ -38,8 +39,8 @@ struct CsvReader {
     std::string path;
     std::ifstream in;
     std::size_t line_no = 0;
-    explicit CsvReader(const std::string& p, const char* flag) : path(p), in(p) {
-        if (!in) throw InputError(std::string(flag) + " '" + p + "': cannot read the file");
+    explicit CsvReader(const std::string& p, const char* what) : path(p), in(p) {
+        if (!in) throw InputError(std::string(what) + " '" + p + "': cannot read the file");
     }
     bool next(std::string& line) {
         if (!std::getline(in, line)) return false;
@@ -90,7 +91,7 @@ RecordedRun read_reference(const Model& model, const std::string& trajectory_csv
     ref.dof = model.dof();
     const std::size_t n = model.dof();
     {
-        CsvReader r(trajectory_csv, "--reference-out");
+        CsvReader r(trajectory_csv, "reference trajectory");
         r.header(trajectory_header(model));
         for (std::string line; r.next(line);) {
             if (line.empty()) continue;
@@ -105,7 +106,7 @@ RecordedRun read_reference(const Model& model, const std::string& trajectory_csv
         if (ref.t.empty()) r.fail("no trajectory rows");
     }
     {
-        CsvReader r(events_csv, "--reference-events");
+        CsvReader r(events_csv, "reference events");
         r.header(events_header(model));
         for (std::string line; r.next(line);) {
             if (line.empty()) continue;
@@ -175,11 +176,12 @@ RunErrors compare_runs(const RecordedRun& reference, const RecordedRun& run) {
 
 ReferenceRunner reference_runner(int digits) {
     if (digits < reference::kMinDigits || digits > reference::kMaxDigits)
-        throw InputError("--reference-digits " + std::to_string(digits) + ": must be in " +
-                         std::to_string(reference::kMinDigits) + ".." + std::to_string(reference::kMaxDigits));
+        throw OptionError("hsnc::reference_runner", "digits", std::to_string(digits),
+                          "must be in " + std::to_string(reference::kMinDigits) + ".." +
+                              std::to_string(reference::kMaxDigits));
     return [digits](const Model& model, const EngineOptions& options, Observer& observer) {
         return reference::simulate(model, digits, options, observer);
     };
 }
 
-}  // namespace hsnc::cli
+}  // namespace hsnc

@@ -1,6 +1,6 @@
-// hsnc -- work-precision measurement (`hsnc tradeoff`): the error of a run
-// against a reference trajectory and event list, and where the reference
-// comes from.
+// hsnc -- work-precision measurement (hsnc::tradeoff, tradeoff.h): the error
+// of a run against a reference trajectory and event list, and where the
+// reference comes from.
 //
 // Errors (interface.md section 4 files, compared row by row):
 //  - position error: max over the common sample times and all masses of
@@ -31,7 +31,7 @@
 #include "observer.h"
 #include "run_summary.h"
 
-namespace hsnc::cli {
+namespace hsnc {
 
 struct EventRecord {
     double t;
@@ -86,7 +86,7 @@ RunErrors compare_runs(const RecordedRun& reference, const RecordedRun& run);
 using ReferenceRunner = std::function<RunSummary(const Model&, const EngineOptions&, Observer&)>;
 
 /// The in-process reference at `digits` significant digits (hsnc::reference,
-/// the CLN engine). InputError naming --reference-digits when out of its range.
+/// the CLN engine). OptionError (option "digits") when out of its range.
 ReferenceRunner reference_runner(int digits);
 
-}  // namespace hsnc::cli
+}  // namespace hsnc

@@ -1,12 +1,12 @@
-// hsnc -- `hsnc tradeoff`: work-precision of hsnc and the numerical baselines
-// on one model (cli/tradeoff.cpp says what is swept and measured).
+// hsnc -- `hsnc tradeoff`: the command line of the work-precision study
+// (hsnc::tradeoff, analysis/tradeoff.h says what is swept and measured).
 #pragma once
 
 #include <cmath>
 #include <string>
 
 #include "model_reader.h"
-#include "work_precision.h"
+#include "work_precision.h"  // ReferenceRunner
 
 namespace hsnc::cli {
 
