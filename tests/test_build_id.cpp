@@ -1,5 +1,5 @@
 // The index of the kernel cache is keyed by the GNU build ID of the object
-// that holds the generator and emitter code (runtime/build/kernel_cache.h,
+// that holds the generator and emitter code (runtime/jit/kernel_cache.h,
 // module_build_id): `hsnc` itself, or libhsnc.so when a user's program links
 // the library -- never the user's executable, whose build ID says nothing
 // about the code that derives the kernels. Build IDs are read independently

@@ -1,6 +1,6 @@
 // hsnc -- where the engine's segment solvers come from (--kernels): the
 // KernelMode, and the ahead-of-time and generic SolverProviders of each mode
-// (solver_provider.h; the JIT's and the cache's are in runtime/build/).
+// (solver_provider.h; the JIT's and the cache's are in runtime/jit/).
 #pragma once
 
 #include <list>

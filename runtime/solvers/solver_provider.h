@@ -1,6 +1,6 @@
 // hsnc -- SolverProvider: where the engine gets the segment solver of each
 // configuration it enters (kernel_mode.h: the ahead-of-time and generic
-// providers; build/: the JIT's and the cache's).
+// providers; runtime/jit/: the JIT's and the cache's).
 #pragma once
 
 #include <string>
