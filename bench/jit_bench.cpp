@@ -8,7 +8,7 @@
 //      generation + JIT link, the persistent cache empty) and warm (a cache
 //      hit: read, check, JIT link), medians over the configurations a run of
 //      each model visits, and a hit the way `hsnc simulate` takes it, without
-//      LLVM (CachedKernelProvider, runtime/object_loader.h);
+//      LLVM (CachedKernelProvider, runtime/jit/object_loader.h);
 //   4. the whole `hsnc simulate` process on a model without ahead-of-time
 //      kernels: every kernel cached, none cached, the generic solver.
 //

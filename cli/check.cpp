@@ -3,7 +3,7 @@
 // with every contact open and every mass sliding.
 //
 // Modes: the undamped generalised eigenproblem K phi = omega^2 M phi with
-// K = K(all open), from the engine's own modal analysis (runtime/modal.h), so
+// K = K(all open), from the engine's own modal analysis (model/modal.h), so
 // a rigid-body mode is what the engine takes for one: decided structurally (a
 // group of masses with no spring or contact of k > 0 to ground), never from
 // a small eigenvalue, which stiffness or mass ratios beyond 1e10 would give.

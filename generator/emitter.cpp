@@ -46,7 +46,7 @@ std::string idx(std::size_t k) { return std::to_string(k + 1); }  // 1-based nam
 }  // namespace
 
 // The forcing phase at the segment start, as GenericSolver computes it
-// (runtime/generic_solver.cpp, reduced_phase), printed into sweep kernels
+// (runtime/solvers/generic_solver.cpp, reduced_phase), printed into sweep kernels
 // (generator/param_emitter.cpp); folded kernels call kernel_abi.h's copy.
 const char* const kPhaseFunctionSource =
     "// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and\n"
@@ -62,9 +62,9 @@ const char* const kPhaseFunctionSource =
 
 namespace {
 
-// ---- the printer: a Program (runtime/program.h) as C++ ----
+// ---- the printer: a Program (kernels/program.h) as C++ ----
 // Every instruction prints as the statements that compute what the
-// interpreter (runtime/interpreted_solver.cpp) computes, in the same order.
+// interpreter (runtime/solvers/interpreted_solver.cpp) computes, in the same order.
 
 /// A constant: its name when it has one, else the literal (negative ones in parentheses).
 std::string konst(const Program& p, std::uint32_t k) {

@@ -38,11 +38,11 @@ std::string emit_kernel_object(const Derivation& d, const std::string& sym, cons
 
 /// C++ source of `double hsnc_phase(omega, t0, t0_lo, phase)`: the forcing
 /// phase at a segment start, computed as GenericSolver does; sweep kernels
-/// with forcing contain it (folded ones call runtime/kernel_abi.h's).
+/// with forcing contain it (folded ones call kernels/kernel_abi.h's).
 extern const char* const kPhaseFunctionSource;
 
 /// A registry source defining `const AotRegistry& hsnc::<function>()` over the
-/// kernel objects named in `symbols` (runtime/aot_registry.h), in that order.
+/// kernel objects named in `symbols` (kernels/aot_registry.h), in that order.
 std::string emit_registry(const std::vector<std::string>& symbols, const std::string& function = "aot_registry");
 
 

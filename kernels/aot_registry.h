@@ -3,7 +3,7 @@
 // `hsnc generate` and the build (library hsnc_kernels, from generated/) emit a
 // registry source that defines hsnc::aot_registry(): every compiled kernel,
 // in a fixed order. A kernel is used only when model name, model hash
-// (runtime/model_hash.h) and configuration key all match, so a model file
+// (model/model_hash.h) and configuration key all match, so a model file
 // edited after generation silently falls back to another solver instead of
 // running stale numbers.
 //

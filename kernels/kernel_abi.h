@@ -1,7 +1,7 @@
 /* hsnc -- the kernel ABI: the one header a generated kernel includes.
  *
  * A kernel is the closed-form solution of one configuration of one model
- * (runtime/segment.h), specialised and emitted as C++ by the generator
+ * (runtime/solvers/segment_solver.h), specialised and emitted as C++ by the generator
  * (generator/emitter.h). It exports one `hsnc_kernel` object with C linkage.
  * This header is C-compatible and includes nothing, so an emitted kernel
  * compiles alone, fast, in-process or ahead of time.
@@ -16,7 +16,7 @@
  *   eval(coef, tau, x, v, a, g, dg, bound, scale)  at tau = t - t0 >= 0:
  *       x, v, a: n_dof doubles (stuck masses at their fixed x, v = a = 0);
  *       g, dg: the n_switch switch functions and their first derivatives, in
- *       the order of `switches` (= switch_functions() of runtime/segment.h);
+ *       the order of `switches` (= switch_functions() of model/switch_function.h);
  *       bound[f] >= |g_f''(s)| for every s in [tau, tau + max_step];
  *       scale[f] = sum of |terms| summed into g_f.
  * Neither allocates, throws or touches global state.
@@ -45,7 +45,7 @@ extern "C" {
 /** Bumped whenever the layout or the meaning of hsnc_kernel changes. */
 #define HSNC_KERNEL_ABI_VERSION 3
 
-/** Switch-function kinds; same values as hsnc::SwitchKind (runtime/segment.h). */
+/** Switch-function kinds; same values as hsnc::SwitchKind (model/switch_function.h). */
 enum {
     HSNC_SWITCH_GAP = 0,         /**< contact gap G_c; element = contact index */
     HSNC_SWITCH_VELOCITY = 1,    /**< v_i of a sliding friction mass */
@@ -96,9 +96,9 @@ typedef struct hsnc_kernel {
 } hsnc_kernel;
 
 /* ---- Helpers shared by the printed kernels and the interpreter ----
- * The closed forms are straight-line code (runtime/program.h); what branches
+ * The closed forms are straight-line code (kernels/program.h); what branches
  * on data lives here, once, so that a kernel compiled by GCC (AOT), by Clang
- * (JIT) and the interpreter (runtime/interpreted_solver.cpp) run the same
+ * (JIT) and the interpreter (runtime/solvers/interpreted_solver.cpp) run the same
  * code. Compiled with -ffp-contract=off everywhere: every fma below is
  * written out. */
 

@@ -4,12 +4,12 @@
 // The generator lowers each configuration's derivation (generator/lowering.h,
 // constants from the 40-digit derivation rounded once to double) to one
 // Program. The emitter prints it as the C++ of a kernel (generator/emitter.h:
-// AOT and JIT kernels); the interpreter (runtime/interpreted_solver.h) runs it
+// AOT and JIT kernels); the interpreter (runtime/solvers/interpreted_solver.h) runs it
 // as the generic path. Both follow the order of operations written here, with
 // no contraction of a*b+c into an fma (-ffp-contract=off for every target and
 // for the JIT) and the same libm calls, so a printed kernel and the interpreter
 // give the same bits (tests/test_program.cpp). Anything that branches on data
-// (the phase reduction, phi2's series) is a helper of runtime/kernel_abi.h,
+// (the phase reduction, phi2's series) is a helper of kernels/kernel_abi.h,
 // which the printed kernels and the interpreter both call.
 //
 // Two programs: `setup` (inputs t0, t0_lo, x0, v0, sgn -> the coefficient

@@ -19,7 +19,7 @@ namespace hsnc {
 
 /// The largest model file read_model takes (the bundled ones are a few kB).
 inline constexpr std::size_t kMaxModelFileBytes = std::size_t{16} << 20;
-/// The largest kernel cache entry (runtime/kernel_cache.h) loaded; a kernel
+/// The largest kernel cache entry (runtime/jit/kernel_cache.h) loaded; a kernel
 /// object of 12 masses is about 60 kB.
 inline constexpr std::size_t kMaxCacheEntryBytes = std::size_t{16} << 20;
 

@@ -1,5 +1,5 @@
-// The reference engine: runtime/engine.cpp's switch search and
-// runtime/transitions.cpp's physics, written again on cl_F (see
+// The reference engine: runtime/engine/engine.cpp's switch search and
+// runtime/engine/transitions.cpp's physics, written again on cl_F (see
 // reference.h). The search is the same guaranteed one (README "How switches
 // are found"): each switch function is watched on the side its configuration
 // fixes, every step is bounded by the smallest positive root of
@@ -206,7 +206,7 @@ struct Transition {
     int element;
 };
 
-// runtime/transitions.cpp apply_switches, on cl_F: contacts first, then the
+// runtime/engine/transitions.cpp apply_switches, on cl_F: contacts first, then the
 // friction decisions with the forces of the resulting configuration, repeated
 // until nothing changes.
 bool apply_switches(const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x, std::vector<cl_F>& v,

@@ -1,4 +1,4 @@
-// Tests of the generic closed-form segment solver (runtime/generic_solver.h).
+// Tests of the generic closed-form segment solver (runtime/solvers/generic_solver.h).
 //
 // Three kinds: closed-form answers written here independently (free sliding
 // mass, critical damping, exact undamped resonance, rigid + elastic pair, stuck

@@ -1,7 +1,7 @@
 // One closed form, printed and interpreted: the Program of a configuration
-// (runtime/program.h, generator/lowering.h) printed as C++ and compiled by GCC
+// (kernels/program.h, generator/lowering.h) printed as C++ and compiled by GCC
 // ahead of time or by Clang in process, and run by the interpreter
-// (runtime/interpreted_solver.h), gives the same bits -- every output of
+// (runtime/solvers/interpreted_solver.h), gives the same bits -- every output of
 // setup and eval compared with memcmp, whole runs compared as CSV bytes. The
 // generic (Eigen) solver is an independent implementation: it agrees to a
 // tolerance, not to the bit.

@@ -5,7 +5,7 @@
 // (jit_index_key: the build ID of the object holding this code, the model's numbers and the
 // configuration), which needs no derivation; else emit the kernel source
 // (callback) and look it up by its key (jit_cache_key). When the cache holds a
-// whole entry, map its object with LoadedObject (runtime/object_loader.h) and
+// whole entry, map its object with LoadedObject (runtime/jit/object_loader.h) and
 // record the index entry for the next run. Only when a
 // kernel is missing, damaged or not loadable that way does it ask `make_jit`
 // for a JitSolverProvider (which loads libhsnc_jit.so, that is LLVM) and hand

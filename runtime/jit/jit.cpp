@@ -1,11 +1,11 @@
 // hsnc -- Jit (jit.h): Clang CompilerInstance -> LLVM IR (EmitLLVMOnlyAction,
-// in libhsnc_jit_clang.so: runtime/jit_frontend.h, loaded on the first compile)
+// in libhsnc_jit_clang.so: runtime/jit/jit_frontend.h, loaded on the first compile)
 // -> object file (orc::SimpleCompiler, with the TargetMachine the LLJIT itself
 // would use) -> ORC LLJIT (addObjectFile), after LLVM's KaleidoscopeJIT
 // (create, add, lookup; Expected and Error handled here and nowhere else).
 // Producing the object ourselves, rather than handing the IR to the LLJIT,
 // is what lets a persistent cache skip Clang and LLVM's code generation
-// altogether on a hit (runtime/kernel_cache.h).
+// altogether on a hit (runtime/jit/kernel_cache.h).
 #include "jit.h"
 
 #include <dlfcn.h>
@@ -84,7 +84,7 @@ Jit::Jit() : impl_(std::make_unique<Impl>()) {
     if (!builder) throw RunError("Jit::Jit(): cannot describe this host to LLVM: " + error_text(builder.takeError()));
     // The large code model: every address in the object is an absolute 64-bit
     // relocation, wherever the code lands, which is what lets a cached object
-    // be mapped without LLVM (runtime/object_loader.h). LLVM 14's JIT default
+    // be mapped without LLVM (runtime/jit/object_loader.h). LLVM 14's JIT default
     // on x86-64, stated here because the loader depends on it.
     builder->setCodeModel(llvm::CodeModel::Large);
     auto machine = builder->createTargetMachine();

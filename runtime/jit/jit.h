@@ -1,6 +1,6 @@
 // hsnc -- Jit: compile C++ source in-process and look up its symbols
 // (Clang 14 -> LLVM IR -> ORC LLJIT). Used to build the kernel of each
-// configuration a run visits (runtime/jit_solver_provider.h).
+// configuration a run visits (runtime/jit/jit_solver_provider.h).
 //
 // All LLVM and Clang headers stay inside jit.cpp; this header exposes none, so
 // only the hsnc_jit library links against LLVM. Every LLVM Error/Expected is
@@ -38,7 +38,7 @@ public:
     void add_object(const std::string& name, const std::string& object);
 
     /// The key of compile(source)'s result in a persistent cache:
-    /// jit_cache_key(source) (runtime/kernel_cache.h).
+    /// jit_cache_key(source) (runtime/jit/kernel_cache.h).
     std::string cache_key(const std::string& source) const;
 
     /// Address of the (unmangled, C-linkage) symbol `symbol` of an added

@@ -1,4 +1,4 @@
-// hsnc -- the Clang half of the JIT (runtime/jit.h): C++ source -> LLVM IR.
+// hsnc -- the Clang half of the JIT (runtime/jit/jit.h): C++ source -> LLVM IR.
 //
 // It lives in its own shared library, libhsnc_jit_clang.so, which Jit loads
 // on its first compile, so that a run whose kernels all come from the

@@ -1,6 +1,6 @@
-// hsnc -- JitSolverProvider: a kernel compiled in-process (runtime/jit.h) for
+// hsnc -- JitSolverProvider: a kernel compiled in-process (runtime/jit/jit.h) for
 // each configuration a run enters, the first time it enters it (--kernels jit),
-// or loaded from a persistent cache of compiled kernels (runtime/kernel_cache.h)
+// or loaded from a persistent cache of compiled kernels (runtime/jit/kernel_cache.h)
 // when an earlier run compiled the same source with the same compiler.
 //
 // The kernel source comes from a callback, so that the runtime needs neither

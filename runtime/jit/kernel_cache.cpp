@@ -103,7 +103,7 @@ std::string check_entry(const std::string& data, const std::string& key, std::st
 }
 
 // Why the payload of a whole .hsncobj entry is not a kernel object this
-// process can use: "" when the loader (runtime/object_loader.h) maps it and
+// process can use: "" when the loader (runtime/jit/object_loader.h) maps it and
 // it defines a kernel (an hsnc_kernel_* object of this ABI version). Only on
 // x86-64, where the loader takes what the JIT makes.
 std::string object_problem(const std::string& payload) {

@@ -1,6 +1,6 @@
 // hsnc -- KernelCache: compiled kernels (object code) kept on disk between
 // runs, so that a configuration's kernel is compiled once per machine, not
-// once per run (--kernels jit; runtime/jit_solver_provider.h).
+// once per run (--kernels jit; runtime/jit/jit_solver_provider.h).
 //
 // Plain file operations, no LLVM: `hsnc cache --stats|--clear` uses it without
 // loading the JIT. One file per kernel, DIR/<key>.hsncobj, where key is the
@@ -31,7 +31,7 @@
 // 0700 (entries 0600), and a directory or entry that is not owned by this
 // user or is group- or world-writable is refused (trust_problem). Entries are
 // opened only when they are regular files of at most kMaxCacheEntryBytes
-// (runtime/file_read.h: a FIFO or a link to /dev/zero is refused, never read).
+// (model/file_read.h: a FIFO or a link to /dev/zero is refused, never read).
 // The cache keeps to a size limit (max_bytes, default kDefaultCacheMaxBytes):
 // a load that hits touches the entry (its mtime is its last use) and a store
 // evicts the least recently used files until the directory fits.
@@ -60,11 +60,11 @@ std::string default_cache_dir();
 
 /// The key of the JIT's object for `source`: FNV-1a-128 (hex) of the source,
 /// the embedded kernel_abi.h, Clang's version, the compile flags
-/// (runtime/jit_frontend.h) and this host's CPU as CPUID describes it (vendor,
+/// (runtime/jit/jit_frontend.h) and this host's CPU as CPUID describes it (vendor,
 /// family/model/stepping, feature words, the OS-enabled register state), which
 /// is everything LLVM's host detection bases the target on. Equal keys mean
 /// the JIT would produce the same object; computed without LLVM, so that a
-/// run whose kernels are all cached need not load it (runtime/object_loader.h).
+/// run whose kernels are all cached need not load it (runtime/jit/object_loader.h).
 std::string jit_cache_key(const std::string& source);
 
 /// The key under which a run finds a kernel without deriving it: FNV-1a-128

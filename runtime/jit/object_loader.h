@@ -1,9 +1,9 @@
 // hsnc -- LoadedObject: a cached kernel's object file mapped into this process
 // without LLVM, so that a run whose kernels all come from the persistent cache
-// (runtime/kernel_cache.h) does not load libLLVM (about 13 ms of start-up).
+// (runtime/jit/kernel_cache.h) does not load libLLVM (about 13 ms of start-up).
 //
 // Deliberately minimal: it accepts exactly what the JIT produces for a kernel
-// (runtime/jit.cpp: an x86-64 ELF relocatable object, large code model, so
+// (runtime/jit/jit.cpp: an x86-64 ELF relocatable object, large code model, so
 // every relocation is R_X86_64_64, absolute 64-bit) and refuses anything else
 // with a reason; the caller then falls back to LLVM's own linker. Every offset,
 // index and size in the file is checked against the file before it is used.

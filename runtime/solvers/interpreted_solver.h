@@ -1,4 +1,4 @@
-// hsnc -- the interpreter of a configuration's Program (runtime/program.h),
+// hsnc -- the interpreter of a configuration's Program (kernels/program.h),
 // and the SegmentSolver and SolverProvider that run on it.
 //
 // It executes each instruction as the emitter prints it (generator/emitter.cpp):

@@ -21,7 +21,7 @@ enum class KernelMode {
     aot,        ///< ahead-of-time kernels only (error when the model has none)
     generic,    ///< the Eigen-based generic solver
     jit,        ///< a kernel compiled in-process per configuration visited
-                ///  (runtime/jit_solver_provider.h; opt-in, built by the command line)
+                ///  (runtime/jit/jit_solver_provider.h; opt-in, built by the command line)
 };
 
 /// "auto", "aot", "generic", "jit"; InputError otherwise.

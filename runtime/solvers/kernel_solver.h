@@ -1,5 +1,5 @@
 // hsnc -- KernelSolver: a SegmentSolver backed by a generated kernel
-// (runtime/kernel_abi.h), ahead-of-time compiled or JIT-compiled.
+// (kernels/kernel_abi.h), ahead-of-time compiled or JIT-compiled.
 #pragma once
 
 #include <vector>
@@ -18,7 +18,7 @@ public:
     /// Wraps `kernel`, which must outlive the solver. Throws RunError when the
     /// kernel was built for another ABI version.
     explicit KernelSolver(const hsnc_kernel& kernel);
-    /// A sweep kernel (kernel.n_param > 0, runtime/kernel_abi.h) configured
+    /// A sweep kernel (kernel.n_param > 0, kernels/kernel_abi.h) configured
     /// with `params` (kernel.param_names order). Throws RunError when the
     /// kernel is folded, the count differs or configure rejects the values.
     KernelSolver(const hsnc_kernel& kernel, const std::vector<double>& params);
