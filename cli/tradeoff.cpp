@@ -40,6 +40,7 @@
 #include "integrators.h"
 #include "model_hash.h"
 #include "model_reader.h"
+#include "sample_grid.h"
 #include "solver_provider.h"
 #include "tradeoff.h"
 
@@ -362,7 +363,7 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
 
     EngineOptions eopt;
     eopt.t_end = t_end;
-    eopt.dt = std::isnan(o.dt) ? (t_end - model.t0) / 1000 : o.dt;
+    eopt.dt = std::isnan(o.dt) ? SampleGrid::default_dt(model.t0, t_end) : o.dt;
 
     // The reference: read, or computed in process.
     RecordedRun reference;
@@ -394,12 +395,11 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
         // The runs sample at t0 + k*dt and t_end: the reference must have a row at each.
         RecordedRun grid;
         grid.dof = model.dof();
+        const SampleGrid times(model.t0, t_end, eopt.dt);
         for (std::size_t k = 0;; ++k) {
-            const double t = model.t0 + static_cast<double>(k) * eopt.dt;
-            const bool last = !(t < t_end - 1e-9 * eopt.dt);
-            grid.t.push_back(last ? t_end : t);
+            grid.t.push_back(times.time(k));
             grid.x.insert(grid.x.end(), model.dof(), 0.0);
-            if (last) break;
+            if (times.last(k)) break;
         }
         const RunErrors e = compare_runs(reference, grid);
         const std::string has = std::to_string(e.sample_times) + " of the " + std::to_string(grid.t.size()) +

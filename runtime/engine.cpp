@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "sample_grid.h"
 #include "transitions.h"
 
 namespace hsnc {
@@ -118,13 +119,9 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     std::size_t same_instant = 0;
     double last_event_t = -kInf;
 
-    // Trajectory samples at t0 + k*dt (never accumulated), and t_end.
-    const double dt = options.dt > 0 ? options.dt : (t_end - model_.t0);
+    // Trajectory samples at t0 + k*dt (never accumulated), and t_end (sample_grid.h).
+    const SampleGrid grid(model_.t0, t_end, options.dt);
     std::size_t k_next = 0;
-    auto sample_time = [&](std::size_t k) {
-        const double tk = model_.t0 + static_cast<double>(k) * dt;
-        return tk < t_end - 1e-9 * dt ? tk : t_end;
-    };
     bool samples_done = !options.samples;
 
     auto finish = [&](RunStatus status, const std::string& message) {
@@ -273,7 +270,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         const double t_seg_end = found.any ? t + found.tau : t_end;
         if (!samples_done) {
             while (true) {
-                const double tk = sample_time(k_next);
+                const double tk = grid.time(k_next);
                 if (found.any ? tk >= t_seg_end : tk > t_end) break;
                 if (tk == t) {
                     // The segment's start state itself, not its modal round trip.
@@ -283,7 +280,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     S.eval(std::max(0.0, (tk - t) - t_lo), dense.view());
                     observer.on_sample(tk, dense.x.data(), dense.v.data());
                 }
-                if (tk >= t_end) {
+                if (grid.last(k_next)) {
                     samples_done = true;
                     break;
                 }

@@ -65,42 +65,6 @@ void force_series(const Model& model, const Configuration& cfg, const std::vecto
     for (int k = 0; k <= order; ++k) deriv(i, k, d[k], mag[k]);
 }
 
-// Stick rule at v_i = 0 (interface.md): stuck if |A_i| < mu_s*N_i, else slide
-// in the direction of A_i. Returns 0 for stuck, else the direction. A tie
-// (|A_i| = mu_s*N_i to rounding) is decided by the first derivative, as the
-// contract says: stuck if |A_i| is not increasing with the mass held (a_i = 0,
-// the others' accelerations from `a`, or 0 when a is null), else sliding.
-signed char stick_rule(const Model& model, const Configuration& cfg, const std::vector<signed char>& sgn, int i,
-                       double t, const double* x, const double* v, const double* a) {
-    const double A = force_on_mass(model, cfg, i, t, x, v);
-    const double limit = model.masses[i].mu_s * model.normal_force(i);
-    const double dir = A > 0 ? 1 : -1;
-    if (std::fabs(std::fabs(A) - limit) <= 16 * kEps * std::max(std::fabs(A), limit)) {
-        std::vector<double> held(model.dof(), 0.0);
-        if (a) held.assign(a, a + model.dof());
-        held[i] = 0.0;
-        const double rate = dir * force_rate_on_mass(model, cfg, i, t, v, held.data());
-        // The held motion's derivatives: the rate's rounding level, and the
-        // higher orders when the rate vanishes (the first non-zero derivative
-        // decides; none at all: |A_i| stays at the limit, not increasing).
-        Configuration hold = cfg;
-        hold.stuck[i] = 1;
-        std::vector<signed char> s = sgn;
-        s[i] = 0;
-        const int order = static_cast<int>(2 * model.dof() + 2 * model.forcing.size() + 2);
-        std::vector<double> d, mag;
-        force_series(model, hold, s, i, t, x, v, order, d, mag);
-        if (std::fabs(rate) <= 16 * kEps * mag[1]) {
-            for (int k = 2; k <= order; ++k)
-                if (std::fabs(d[k]) > 16 * kEps * mag[k]) return dir * d[k] > 0 ? static_cast<signed char>(dir) : 0;
-            return 0;
-        }
-        return rate > 0 ? static_cast<signed char>(dir) : 0;
-    }
-    if (std::fabs(A) < limit) return 0;
-    return static_cast<signed char>(dir);
-}
-
 // Acceleration of every mass in cfg at (t, x, v): 0 when stuck, else
 // (A_i - mu_k N_i sgn_i)/m_i (sgn_i = 0 for masses without friction); entries n..2n-1
 // hold (|A_i| + mu_k N_i)/m_i, the magnitude of the terms (its rounding level).
@@ -136,193 +100,97 @@ double force_rate_magnitude(const Model& model, const Configuration& cfg, int i,
     return f;
 }
 
-// State a contact enters at (t, x, v) when G = 0 and G' = 0 there (to
-// rounding): closed if the first non-zero of G'', G''' is positive, open if
-// negative. -1: not tied, or neither decides (G stays at 0, e.g. a mass stuck
-// exactly on the gap): a function that only touches 0 changes nothing
-// (interface.md "Ties and touches"), so the contact keeps its state (at t0
-// the provisional closed: at rest on the boundary).
-int tied_contact_state(const Model& model, const Configuration& cfg, int c, double t, const double* x,
-                       const double* v, const std::vector<double>& a) {
-    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
-    const Contact& k = model.contacts[c];
-    const double G = gap(model, c, x);
-    if (std::fabs(G) > 16 * kEps * (std::fabs(body(x, k.a)) + std::fabs(body(x, k.b)) + std::fabs(k.gap))) return -1;
-    const double Gd = gap_rate(model, c, v);
-    if (std::fabs(Gd) > 16 * kEps * (std::fabs(body(v, k.a)) + std::fabs(body(v, k.b)))) return -1;
-    double decide = body(a.data(), k.a) - body(a.data(), k.b);  // G''
-    const double* amag = a.data() + model.dof();  // |A| + mu_k N over m: the rounding level of a
-    if (std::fabs(decide) <= 16 * kEps * (body(amag, k.a) + body(amag, k.b))) {
-        // G''' = A_a'/m_a - A_b'/m_b (friction forces are constant; stuck masses do not move).
-        auto jerk = [&](int b) {
-            if (b == kGround || cfg.stuck[b]) return 0.0;
-            return force_rate_on_mass(model, cfg, b, t, v, a.data()) / model.masses[b].m;
-        };
-        decide = jerk(k.a) - jerk(k.b);
-        auto jerk_level = [&](int b) {
-            if (b == kGround || cfg.stuck[b]) return 0.0;
-            return force_rate_magnitude(model, cfg, b, v, a) / model.masses[b].m;
-        };
-        if (std::fabs(decide) <= 16 * kEps * (jerk_level(k.a) + jerk_level(k.b))) return -1;
+// The double engine's arithmetic for the decision rules (transition_rules.h):
+// forces and their derivatives from the equation of motion at (t, x, v), zero
+// meaning within 16 ulps of the magnitude of the terms.
+class DoublePhysics {
+public:
+    using Scalar = double;
+    DoublePhysics(const Model& model, double t, const double* x, double* v, const double* a)
+        : model_(model), t_(t), x_(x), v_(v), a_(a), n_(static_cast<int>(model.dof())) {}
+
+    int sign(double y) const { return y > 0 ? 1 : y < 0 ? -1 : 0; }
+    bool negligible(double value, double magnitude) const { return std::fabs(value) <= 16 * kEps * magnitude; }
+    double abs(double y) const { return std::fabs(y); }
+    int dof() const { return n_; }
+    std::size_t contacts() const { return model_.contacts.size(); }
+    bool has_friction(int i) const { return model_.masses[i].has_friction; }
+    int velocity_sign(int i) const { return sign(v_[i]); }
+    void stop(int i) { v_[i] = 0.0; }
+    double force(const Configuration& cfg, int i) const { return force_on_mass(model_, cfg, i, t_, x_, v_); }
+    double static_limit(int i) const { return model_.masses[i].mu_s * model_.normal_force(i); }
+    double held_rate(const Configuration& cfg, int i) const {
+        std::vector<double> held(model_.dof(), 0.0);
+        if (a_) held.assign(a_, a_ + model_.dof());
+        held[i] = 0.0;
+        return force_rate_on_mass(model_, cfg, i, t_, v_, held.data());
     }
-    return decide > 0 ? 1 : 0;
-}
+    // Derivatives up to the order past which a linear motion with its forcing
+    // cannot keep them all zero (2n + 2H + 2).
+    rules::Series<double> held_series(const Configuration& hold, const std::vector<signed char>& sgn, int i) const {
+        rules::Series<double> s;
+        const int order = static_cast<int>(2 * model_.dof() + 2 * model_.forcing.size() + 2);
+        force_series(model_, hold, sgn, i, t_, x_, v_, order, s.d, s.mag);
+        return s;
+    }
+    rules::Series<double> gap_now(int c) const {
+        const Contact& k = model_.contacts[c];
+        return {{gap(model_, c, x_), gap_rate(model_, c, v_)},
+                {std::fabs(body(x_, k.a)) + std::fabs(body(x_, k.b)) + std::fabs(k.gap),
+                 std::fabs(body(v_, k.a)) + std::fabs(body(v_, k.b))}};
+    }
+    void prepare_ties(const Configuration& cfg, const std::vector<signed char>& sgn) {
+        cfg_ = cfg;
+        acc_ = accelerations(model_, cfg, sgn, t_, x_, v_);
+    }
+    // G, G', then G'' from the accelerations of the prepared configuration and
+    // G''' = A_a'/m_a - A_b'/m_b (friction forces are constant; stuck masses do not move).
+    rules::Series<double> tied_gap_series(int c) const {
+        const Contact& k = model_.contacts[c];
+        rules::Series<double> s = gap_now(c);
+        const double* amag = acc_.data() + model_.dof();  // |A| + mu_k N over m: the rounding level of a
+        s.d.push_back(body(acc_.data(), k.a) - body(acc_.data(), k.b));
+        s.mag.push_back(body(amag, k.a) + body(amag, k.b));
+        auto jerk = [&](int b, bool level) {
+            if (b == kGround || cfg_.stuck[b]) return 0.0;
+            return (level ? force_rate_magnitude(model_, cfg_, b, v_, acc_)
+                          : force_rate_on_mass(model_, cfg_, b, t_, v_, acc_.data())) /
+                   model_.masses[b].m;
+        };
+        s.d.push_back(jerk(k.a, false) - jerk(k.b, false));
+        s.mag.push_back(jerk(k.a, true) + jerk(k.b, true));
+        return s;
+    }
+
+private:
+    static double body(const double* y, int b) { return b == kGround ? 0.0 : y[b]; }
+    const Model& model_;
+    double t_;
+    const double* x_;
+    double* v_;
+    const double* a_;
+    int n_;
+    Configuration cfg_;
+    std::vector<double> acc_;
+};
 
 }  // namespace
 
 bool apply_switches(const Model& model, double t, const double* x, double* v, const double* a, Configuration& cfg,
                     std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
                     std::vector<Transition>& out, std::string& why) {
-    const int n = static_cast<int>(model.dof());
-    // A stop sets its velocity to 0 exactly, before the contacts are judged.
-    for (const SwitchFunction& f : switched)
-        if (f.kind == SwitchKind::velocity) v[f.element] = 0.0;
-    // 1. Every contact change first. A switched contact with G = 0 and G' = 0
-    //    (to rounding; e.g. a touch at a friction stop, found "heading across"
-    //    only by the rounding of the stopping velocity) is a tie: step 4 decides
-    //    it by G'', G''' of the configuration the friction decisions give.
-    std::vector<char> tied(model.contacts.size(), 0);
-    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
-    for (const SwitchFunction& f : switched) {
-        if (f.kind != SwitchKind::gap) continue;
-        const Contact& k = model.contacts[f.element];
-        const double G = gap(model, f.element, x), Gd = gap_rate(model, f.element, v);
-        if (std::fabs(G) <= 16 * kEps * (std::fabs(body(x, k.a)) + std::fabs(body(x, k.b)) + std::fabs(k.gap)) &&
-            std::fabs(Gd) <= 16 * kEps * (std::fabs(body(v, k.a)) + std::fabs(body(v, k.b)))) {
-            tied[f.element] = 1;
-            continue;
-        }
-        cfg.closed[f.element] = !cfg.closed[f.element];
-        out.push_back({cfg.closed[f.element] ? EventKind::contact_close : EventKind::contact_open, f.element});
-    }
-    // 2. Friction: masses whose velocity reached 0 are decided by the stick rule;
-    //    stuck masses whose release function switched start sliding along A_i.
-    std::vector<char> deciding(n, 0);
-    for (const SwitchFunction& f : switched) {
-        const int i = f.element;
-        if (f.kind == SwitchKind::velocity) {
-            v[i] = 0.0;
-            deciding[i] = 1;
-        } else if (f.kind == SwitchKind::release_pos || f.kind == SwitchKind::release_neg) {
-            cfg.stuck[i] = 0;
-            sgn[i] = f.kind == SwitchKind::release_pos ? 1 : -1;
-            out.push_back({EventKind::release, i});
-        }
-    }
-    // 3. Decide, then re-check every stuck mass against the forces of the new
-    //    configuration, until nothing changes.
-    for (int round = 0; round < 2 * n + 4; ++round) {
-        bool changed = false;
-        for (int i = 0; i < n; ++i) {
-            if (!deciding[i]) continue;
-            deciding[i] = 0;
-            const signed char dir = stick_rule(model, cfg, sgn, i, t, x, v, a);
-            if (dir == 0) {
-                cfg.stuck[i] = 1;
-                sgn[i] = 0;
-                out.push_back({EventKind::stick, i});
-            } else {
-                if (dir != sgn[i]) out.push_back({EventKind::reversal, i});
-                sgn[i] = dir;
-            }
-            changed = true;
-        }
-        for (int i = 0; i < n; ++i) {
-            if (!cfg.stuck[i]) continue;
-            const signed char dir = stick_rule(model, cfg, sgn, i, t, x, v, a);
-            if (dir == 0) continue;
-            cfg.stuck[i] = 0;
-            sgn[i] = dir;
-            out.push_back({EventKind::release, i});
-            changed = true;
-        }
-        if (!changed) {
-            // 4. Contacts at G = 0, G' = 0 at this instant (a touch, or a mass
-            //    stopped or released on its stop) enter the state the forces of
-            //    the configuration that results give them (interface.md: contacts
-            //    re-decided after the friction decisions, until settled).
-            //    Contacts the search found crossing keep their change.
-            const std::vector<double> acc = accelerations(model, cfg, sgn, t, x, v);
-            for (std::size_t c = 0; c < model.contacts.size(); ++c) {
-                const SwitchFunction gf{SwitchKind::gap, static_cast<int>(c)};
-                if (!tied[c] && std::find(switched.begin(), switched.end(), gf) != switched.end()) continue;
-                const int state = tied_contact_state(model, cfg, static_cast<int>(c), t, x, v, acc);
-                if (state < 0 || state == cfg.closed[c]) continue;
-                cfg.closed[c] = static_cast<char>(state);
-                out.push_back({state ? EventKind::contact_close : EventKind::contact_open, static_cast<int>(c)});
-                changed = true;
-            }
-            if (!changed) return true;
-        }
-    }
+    DoublePhysics p(model, t, x, v, a);
+    if (rules::apply_switches(p, cfg, sgn, switched, out)) return true;
     why = "friction decisions at t = " + std::to_string(t) + " do not settle";
     return false;
 }
 
-namespace {
-
-// Friction masses: sliding along v, or at rest stuck or sliding by the stick rule, in cfg.
-void decide_friction(const Model& model, Configuration& cfg, std::vector<signed char>& sgn, double t, const double* x,
-                     const double* v) {
-    const int n = static_cast<int>(model.dof());
-    for (int i = 0; i < n; ++i) {
-        if (!model.masses[i].has_friction) continue;
-        if (v[i] != 0.0) {
-            cfg.stuck[i] = 0;
-            sgn[i] = v[i] > 0 ? 1 : -1;
-        } else {
-            const signed char dir = stick_rule(model, cfg, sgn, i, t, x, v, nullptr);
-            cfg.stuck[i] = dir == 0;
-            sgn[i] = dir;
-        }
-    }
-}
-
-}  // namespace
-
 Configuration entered_configuration(const Model& model, double t, const double* x, const double* v,
                                     std::vector<signed char>& sgn) {
     Configuration cfg = Configuration::all_open(model);
-    const int n = static_cast<int>(model.dof());
-    sgn.assign(n, 0);
-    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
-    // Contacts with G = 0 and G' = 0 at t are decided below by G'', then G'''
-    // (the first non-zero derivative, interface.md "Ties and touches"), which
-    // need the accelerations of the configuration the friction decisions give.
-    std::vector<int> tied;
-    for (std::size_t c = 0; c < model.contacts.size(); ++c) {
-        const Contact& k = model.contacts[c];
-        const double G = gap(model, static_cast<int>(c), x);
-        const double noise = 16 * kEps * (std::fabs(body(x, k.a)) + std::fabs(body(x, k.b)) + std::fabs(k.gap));
-        if (std::fabs(G) > noise) {
-            cfg.closed[c] = G > 0;
-            continue;
-        }
-        const double Gd = gap_rate(model, static_cast<int>(c), v);
-        if (std::fabs(Gd) > 16 * kEps * (std::fabs(body(v, k.a)) + std::fabs(body(v, k.b)))) {
-            cfg.closed[c] = Gd > 0;
-        } else {
-            cfg.closed[c] = 1;  // provisionally: resting on the boundary (x[a]-x[b] >= gap)
-            tied.push_back(static_cast<int>(c));
-        }
-    }
-    decide_friction(model, cfg, sgn, t, x, v);
-    // A tied contact carries no spring force (G = 0) and no damper force
-    // (G' = 0), so its own state changes neither the accelerations nor the
-    // friction decisions; friction is still re-decided after any change.
-    for (int round = 0; round < 4 && !tied.empty(); ++round) {
-        const std::vector<double> a = accelerations(model, cfg, sgn, t, x, v);
-        bool changed = false;
-        for (int c : tied) {
-            const int state = tied_contact_state(model, cfg, c, t, x, v, a);
-            if (state >= 0 && state != cfg.closed[c]) {
-                cfg.closed[c] = static_cast<char>(state);
-                changed = true;
-            }
-        }
-        if (!changed) break;
-        decide_friction(model, cfg, sgn, t, x, v);
-    }
+    // Nothing stops at t0: v is only read.
+    DoublePhysics p(model, t, x, const_cast<double*>(v), nullptr);
+    rules::entered_configuration(p, cfg, sgn);
     return cfg;
 }
 

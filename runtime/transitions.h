@@ -2,7 +2,9 @@
 // first, then the friction decisions (stick, release, reversal) with the
 // forces of the configuration that results, repeated until nothing changes.
 // Shared by the HSNC engine and the event-locating baseline integrator, so
-// every method applies exactly the same physics.
+// every method applies exactly the same physics; the decision rules
+// themselves are runtime/transition_rules.h, which the CLN reference
+// instantiates too.
 #pragma once
 
 #include <string>
@@ -12,13 +14,10 @@
 #include "engine.h"
 #include "model.h"
 #include "segment.h"
+#include "transition_rules.h"  // Transition, and the rules this file instantiates for double
 
 namespace hsnc {
 
-struct Transition {
-    EventKind kind;
-    int element;
-};
 
 /// Apply the switch functions that reached zero at instant t with state
 /// (x, v) and accelerations a just before it (may be null: taken as 0; used
