@@ -85,7 +85,7 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
         s += "EOD\n";
     }
 
-    const double top = 1.0 - 40.0 / height, split = 1.0 - 520.0 / height;
+    const double top = 1.0 - 75.0 / height, split = 1.0 - 520.0 / height;
     s += "set multiplot title " + quoted(title) + "\n";
     s += "set lmargin at screen 0.09\nset rmargin at screen 0.80\nset grid\nset key outside right top\n";
     // The response curve.
@@ -97,7 +97,8 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
     for (std::size_t g = 0; g < keys.size(); ++g) {
         const bool down = keys[g].second == SweepDirection::down;
         for (std::size_t i = 0; i < n; ++i) {
-            const std::size_t colour = (has2 ? g / 2 * n + i : i) % 8;
+            // One colour per mass (and value of param2); a single curve's down sweep in the next colour.
+            const std::size_t colour = ((has2 ? g / 2 * n + i : i) + (n == 1 && down ? 1 : 0)) % 8;
             std::string name = r.masses[i] + (down ? " down" : " up");
             if (has2) name += " (" + r.param2 + " = " + num(keys[g].first) + ")";
             plot += (plot.empty() ? "" : ", ") + std::string("$curve") + std::to_string(g) + " using 1:" +
@@ -117,7 +118,7 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
         const double hi = split - static_cast<double>(i) * panel, lo = hi - panel;
         s += "set title " + quoted("bifurcation diagram: x_" + r.masses[i] +
                                    " at the end of every recorded forcing period") + "\n";
-        s += "set tmargin at screen " + num(hi - 30.0 / height) + "\nset bmargin at screen " + num(lo + 50.0 / height) +
+        s += "set tmargin at screen " + num(hi - 45.0 / height) + "\nset bmargin at screen " + num(lo + 50.0 / height) +
              "\n";
         s += "set ylabel " + quoted("x_" + r.masses[i] + " [m]") + "\n";
         std::string dots;
