@@ -95,9 +95,8 @@ std::string datablock(const char* name, const PlotRecorder::Series& s, std::size
     return out + "EOD\n";
 }
 
-// gnuplot with the script on stdin, the PNG read from its stdout, its
-// diagnostics from stderr: nothing of it reaches our stdout. Returns the
-// PNG bytes; throws RunError with the first lines of its diagnostics.
+}  // namespace
+
 std::string run_gnuplot(const std::string& script) {
     int in[2], out[2], err[2];
     if (::pipe2(in, O_CLOEXEC) != 0) throw RunError(std::string("--plot: pipe: ") + std::strerror(errno));
@@ -179,8 +178,6 @@ std::string run_gnuplot(const std::string& script) {
                                       : std::string("killed by a signal")) +
                    (png.empty() ? ", no image" : "") + ")" + msg);
 }
-
-}  // namespace
 
 void require_gnuplot() {
     const char* path = std::getenv("PATH");

@@ -35,6 +35,7 @@
 namespace py = pybind11;
 
 namespace hsnc::python {
+void bind_sweep(py::module_& m);  // sweep_binding.cpp
 namespace {
 
 constexpr EventKind kKinds[] = {EventKind::contact_close, EventKind::contact_open, EventKind::stick,
@@ -306,4 +307,5 @@ PYBIND11_MODULE(_hsnc, m) {
           py::arg("kernels"), py::arg("precision"), py::arg("max_events"), py::arg("h"), py::arg("rtol"),
           py::arg("atol"), py::arg("cache_dir"), py::arg("use_cache"));
     m.def("_generate", &hp::generate, py::arg("model"), py::arg("dir"));
+    hp::bind_sweep(m);
 }

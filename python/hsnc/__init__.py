@@ -22,7 +22,7 @@ import numpy as np
 from . import _hsnc
 from ._hsnc import InputError, RunError
 
-__all__ = ["InputError", "Model", "Result", "RunError", "generate", "simulate"]
+__all__ = ["InputError", "Model", "Result", "RunError", "generate", "simulate", "sweep"]
 
 
 class Model:
@@ -149,6 +149,45 @@ def generate(model, directory):
     `hsnc generate MODEL -o DIR`; the directory is created if needed) and
     return the names of the files written."""
     return _hsnc._generate(model._native, str(directory))
+
+
+def _override_texts(d):
+    return ["%s=%s" % (k, v if isinstance(v, str) else repr(float(v))) for k, v in d.items()]
+
+
+def sweep(model, param, start, stop, points, direction="up", max_periods=500, record_periods=16,
+          restart_each=False, param2=None, values2=None, threads=1, method="hsnc", rtol=1e-10, atol=1e-12):
+    """The response curve and bifurcation diagram of `model` (a Model) over
+    the parameter `param`, as `hsnc sweep --param PARAM --from START --to
+    STOP --points POINTS` (interface.md section 6): `points` values from
+    start to stop, swept "up", "down" or "both" with state continuation (or
+    every point from the initial state: restart_each), each point run to a
+    steady state on the stroboscopic map (at most max_periods forcing
+    periods) and recorded over record_periods periods. param2, values2: a
+    second parameter, one sweep per value. threads: independent sweeps and
+    points in parallel (the result does not depend on it).
+
+    Returns a dict: "param", "param2" (None without), "masses"; one entry
+    per point, in the order run: "value", "value2" (NaN without param2),
+    "direction" (str), "settled" (bool), "periods" (run before recording),
+    "multiple" (0 when not settled), "xmax", "xrms", "a1" (points x masses);
+    "diagram": a dict with "value", "value2", "direction", "t", "x", "v"
+    (x, v: rows x masses), one row per recorded period of every point."""
+    if not isinstance(model, Model):
+        raise InputError("hsnc.sweep(): model = %r: expected an hsnc.Model" % (model,))
+    kind, what, source, (s, x0, v0) = model._read
+    try:
+        points, max_periods, record_periods, threads = (int(points), int(max_periods), int(record_periods),
+                                                        int(threads))
+    except (TypeError, ValueError):
+        raise InputError("hsnc.sweep(): points, max_periods, record_periods, threads: expected integers") from None
+    if min(points, max_periods, record_periods, threads) < 0:
+        raise InputError("hsnc.sweep(): points, max_periods, record_periods, threads: expected integers >= 0")
+    values2 = [] if values2 is None else [float(v) for v in values2]
+    return _hsnc._sweep(kind, what, source, _override_texts(s), _override_texts(x0), _override_texts(v0),
+                        str(param), _number("start", start), _number("stop", stop), points, str(direction),
+                        max_periods, record_periods, bool(restart_each), "" if param2 is None else str(param2),
+                        values2, threads, str(method), _number("rtol", rtol), _number("atol", atol))
 
 
 # Named as users see them: hsnc.InputError, not hsnc._hsnc.InputError.
