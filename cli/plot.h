@@ -24,6 +24,11 @@ namespace hsnc::cli {
 /// Throws RunError when gnuplot is not on PATH (called before a run).
 void require_gnuplot();
 
+/// Renders a gnuplot script (terminal pngcairo, no `set output`: the PNG
+/// comes on gnuplot's stdout) and writes the PNG to `png`. Throws RunError
+/// when gnuplot fails (the first lines of its diagnostics in the message).
+void render_png(const std::string& script, const OutputTarget& png);
+
 class PlotRecorder : public Observer {
 public:
     /// Samples come every `dt` from t0 to t_end.
