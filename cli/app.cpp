@@ -32,6 +32,8 @@ int run(int argc, const char* const* argv) {
     add_cache(app, exit_code);
     add_tradeoff(app, exit_code);
     add_sweep(app, exit_code);
+    add_periodic(app, exit_code);
+    add_lyapunov(app, exit_code);
     try {
         app.parse(argc, argv);
     } catch (const CLI::Success& e) {

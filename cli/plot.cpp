@@ -369,11 +369,13 @@ std::string PlotRecorder::script() const {
     return s;
 }
 
-void PlotRecorder::draw(const OutputTarget& png) const {
-    const std::string bytes = run_gnuplot(script());
+void render_png(const std::string& script, const OutputTarget& png) {
+    const std::string bytes = run_gnuplot(script);
     OutputFile file(png);
     file.write(bytes.data(), bytes.size());
     file.commit();
 }
+
+void PlotRecorder::draw(const OutputTarget& png) const { render_png(script(), png); }
 
 }  // namespace hsnc::cli

@@ -28,6 +28,10 @@ void require_gnuplot();
 /// diagnostics from stderr: nothing of it reaches our stdout. Returns the
 /// PNG bytes; throws RunError with the first lines of its diagnostics.
 std::string run_gnuplot(const std::string& script);
+/// Renders a gnuplot script (terminal pngcairo, no `set output`: the PNG
+/// comes on gnuplot's stdout) and writes the PNG to `png`. Throws RunError
+/// when gnuplot fails (the first lines of its diagnostics in the message).
+void render_png(const std::string& script, const OutputTarget& png);
 
 class PlotRecorder : public Observer {
 public:

@@ -267,13 +267,15 @@ std::size_t search_step_limit(double span, double fastest_rate, const SearchLimi
 }
 
 PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions& options, Observer& observer,
-                            const SearchLimits& limits) {
+                            const SearchLimits& limits, const std::vector<double>* offset) {
     if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
     const MpModel mp(model, digits);
     const std::size_t n = model.dof();
     PreciseRun run;
     RunSummary& sum = run.summary;
     std::vector<cl_F> x = mp.x0, v = mp.v0;
+    if (offset && offset->size() == 2 * n)
+        for (std::size_t i = 0; i < n; ++i) x[i] = x[i] + mp.F((*offset)[i]), v[i] = v[i] + mp.F((*offset)[n + i]);
     cl_F t = mp.t0;
     const cl_F t_end = mp.F(options.t_end);
     std::vector<signed char> sgn;

@@ -155,6 +155,10 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         return static_cast<std::size_t>(f.kind) * stride + static_cast<std::size_t>(f.element);
     };
     std::size_t progress_counter = 0;
+    // Segment and switch records for observers that ask for them (the tangent dynamics).
+    const bool records = observer.wants_segments();
+    Configuration cfg_before;
+    std::vector<signed char> sgn_before;
     while (true) {
         if (!current || cfg != current_cfg) {  // a reversal keeps the configuration: no lookup
             visited.insert(cfg);
@@ -288,6 +292,13 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             }
         }
 
+        if (records) {
+            SegmentRecord rec;
+            rec.t = t, rec.t_lo = t_lo, rec.tau = found.any ? found.tau : tau_end;
+            rec.cfg = &cfg, rec.sgn = sgn.data(), rec.x = x.data(), rec.v = v.data();
+            observer.on_segment(rec);
+        }
+
         // ---- advance to the event instant: the state at tau, the time as t + t_lo ----
         if (!found.any) eval(tau_end);  // an event's instant was evaluated last in the search
         x = buf.x;
@@ -307,8 +318,16 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         }
 
         transitions.clear();
+        if (records) cfg_before = cfg, sgn_before = sgn;
         if (!apply_switches(model_, t, x.data(), v.data(), buf.a.data(), cfg, sgn, found.switched, transitions, why))
             return finish(RunStatus::chattering, why);
+        if (records) {
+            SwitchRecord rec;
+            rec.t = t, rec.t_lo = t_lo, rec.switched = &found.switched;
+            rec.before = &cfg_before, rec.sgn_before = sgn_before.data();
+            rec.after = &cfg, rec.sgn_after = sgn.data(), rec.x = x.data(), rec.v = v.data();
+            observer.on_switch(rec);
+        }
         for (const Transition& tr : transitions) {
             observer.on_event(t, tr.kind, tr.element, x.data(), v.data());
             ++sum.events;

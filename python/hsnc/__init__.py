@@ -22,7 +22,7 @@ import numpy as np
 from . import _hsnc
 from ._hsnc import InputError, RunError
 
-__all__ = ["InputError", "Model", "Result", "RunError", "generate", "simulate", "sweep"]
+__all__ = ["InputError", "Model", "Result", "RunError", "generate", "lyapunov", "periodic", "simulate", "sweep"]
 
 
 class Model:
@@ -106,13 +106,13 @@ def _events(raw, n):
     return events.view(np.recarray)
 
 
-def _number(name, value, default=math.nan):
+def _number(name, value, default=math.nan, function="hsnc.simulate"):
     if value is None:
         return default
     try:
         return float(value)
     except (TypeError, ValueError):
-        raise InputError("hsnc.simulate(): %s = %r: expected a number" % (name, value)) from None
+        raise InputError("%s(): %s = %r: expected a number" % (function, name, value)) from None
 
 
 def simulate(model, t_end=None, dt=None, method="hsnc", kernels="auto", precision="double", x0=None, v0=None,
@@ -188,6 +188,53 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
                         str(param), _number("start", start), _number("stop", stop), points, str(direction),
                         max_periods, record_periods, bool(restart_each), "" if param2 is None else str(param2),
                         values2, threads, str(method), _number("rtol", rtol), _number("atol", atol))
+def _integer(function, name, value):
+    try:
+        if isinstance(value, bool) or int(value) != value:
+            raise ValueError
+        return int(value)
+    except (TypeError, ValueError):
+        raise InputError("%s(): %s = %r: expected an integer" % (function, name, value)) from None
+
+
+def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_iterations=50, dt=None,
+             kernels="auto", x0=None, v0=None):
+    """A periodic orbit of the forced response and its stability (as
+    `hsnc periodic`): Newton shooting on the period map with the exact
+    monodromy matrix. Returns a dict: status ("ok" or "not_converged"),
+    message, period (harmonic * T), t (time of the state), iterations,
+    residual, x, v (the orbit's state at t, arrays), multipliers (complex
+    array, largest |mu| first), max_multiplier, stable, monodromy (2n x 2n
+    array, state (x, v)), events (switches a period) and orbit (dict of t, x,
+    v arrays: one period sampled every dt, default period/1000; empty when not
+    converged). period: default 2*pi/omega of the model's forcing;
+    transient: run this long first."""
+    if not isinstance(model, Model):
+        raise InputError("hsnc.periodic(): model = %r: expected an hsnc.Model" % (model,))
+    if x0 or v0:
+        model = model.with_overrides(x0=x0, v0=v0)
+    f = "hsnc.periodic"
+    return _hsnc._periodic(model._native, _number("period", period, function=f), _integer(f, "harmonic", harmonic),
+                           _number("transient", transient, 0.0, f), _number("tol", tol, 1e-10, f),
+                           _integer(f, "max_iterations", max_iterations), _number("dt", dt, function=f),
+                           str(kernels))
+
+
+def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=None, v0=None):
+    """The Lyapunov spectrum (as `hsnc lyapunov`), by the QR method on the
+    exact tangent dynamics, measured over t_end seconds after transient.
+    Returns a dict: exponents (array of 2n, 1/s, largest first, -inf for
+    directions a stick collapses), sum, t_start, t, collapsed, events,
+    grazing, rows_t and rows (the running estimates every row_interval,
+    default the forcing period, else 1 s; k x 2n). A run that stops early
+    raises RunError."""
+    if not isinstance(model, Model):
+        raise InputError("hsnc.lyapunov(): model = %r: expected an hsnc.Model" % (model,))
+    if x0 or v0:
+        model = model.with_overrides(x0=x0, v0=v0)
+    f = "hsnc.lyapunov"
+    return _hsnc._lyapunov(model._native, _number("t_end", t_end, function=f), _number("transient", transient, 0.0, f),
+                           _number("row_interval", row_interval, function=f), str(kernels))
 
 
 # Named as users see them: hsnc.InputError, not hsnc._hsnc.InputError.
