@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "assembly.h"
+#include "tie_series.h"
 
 namespace hsnc {
 namespace {
@@ -101,71 +102,30 @@ signed char stick_rule(const Model& model, const Configuration& cfg, const std::
     return static_cast<signed char>(dir);
 }
 
-// Acceleration of every mass in cfg at (t, x, v): 0 when stuck, else
-// (A_i - mu_k N_i sgn_i)/m_i (sgn_i = 0 for masses without friction); entries n..2n-1
-// hold (|A_i| + mu_k N_i)/m_i, the magnitude of the terms (its rounding level).
-std::vector<double> accelerations(const Model& model, const Configuration& cfg, const std::vector<signed char>& sgn,
-                                  double t, const double* x, const double* v) {
-    const int n = static_cast<int>(model.dof());
-    std::vector<double> a(2 * n, 0.0);  // accelerations, then the magnitudes of their terms
-    for (int i = 0; i < n; ++i) {
-        if (cfg.stuck[i]) continue;
-        const double A = force_on_mass(model, cfg, i, t, x, v);
-        const double friction = model.masses[i].has_friction ? model.masses[i].mu_k * model.normal_force(i) : 0.0;
-        a[i] = (A - friction * sgn[i]) / model.masses[i].m;
-        a[n + i] = (std::fabs(A) + friction) / model.masses[i].m;  // magnitude of its terms
-    }
-    return a;
-}
-
-// Magnitude of the terms of dA_i/dt (force_rate_on_mass) at (t, v, a), its
-// rounding level: a[n..2n-1] holds the magnitudes of the accelerations' terms.
-double force_rate_magnitude(const Model& model, const Configuration& cfg, int i, const double* v,
-                            const std::vector<double>& a) {
-    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : std::fabs(y[b]); };
-    const double* amag = a.data() + model.dof();
-    double f = std::fabs(model.alpha) * model.masses[i].m * amag[i];
-    for (const Harmonic& h : model.forcing) f += std::fabs(h.amplitude[i] * h.omega);
-    auto add = [&](int p, int q, double k) {
-        if (p != i && q != i) return;
-        f += k * (body(v, p) + body(v, q)) + std::fabs(model.beta) * k * (body(amag, p) + body(amag, q));
-    };
-    for (const Spring& s : model.springs) add(s.a, s.b, s.k);
-    for (std::size_t c = 0; c < model.contacts.size(); ++c)
-        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
-    return f;
-}
-
 // State a contact enters at (t, x, v) when G = 0 and G' = 0 there (to
-// rounding): closed if the first non-zero of G'', G''' is positive, open if
-// negative. -1: not tied, or neither decides (G stays at 0, e.g. a mass stuck
-// exactly on the gap): a function that only touches 0 changes nothing
-// (interface.md "Ties and touches"), so the contact keeps its state (at t0
-// the provisional closed: at rest on the boundary).
-int tied_contact_state(const Model& model, const Configuration& cfg, int c, double t, const double* x,
-                       const double* v, const std::vector<double>& a) {
+// rounding): closed if its first non-zero derivative (G'', G''', ...; the
+// series of tie_series.h, in cfg) is positive, open if negative. -1: not tied,
+// or no derivative decides (G stays at 0, e.g. a mass stuck exactly on the
+// gap): a function that only touches 0 changes nothing (interface.md "Ties
+// and touches"), so the contact keeps its state (at t0 the provisional
+// closed: at rest on the boundary). A tied contact carries no force (G = G' =
+// 0), and its own force enters G^(k) only through G^(k-2) and G^(k-1), so its
+// own state does not change the decision.
+int tied_contact_state(const Model& model, const Configuration& cfg, const std::vector<signed char>& sgn, int c,
+                       double t, const double* x, const double* v) {
     auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
     const Contact& k = model.contacts[c];
     const double G = gap(model, c, x);
     if (std::fabs(G) > 16 * kEps * (std::fabs(body(x, k.a)) + std::fabs(body(x, k.b)) + std::fabs(k.gap))) return -1;
     const double Gd = gap_rate(model, c, v);
     if (std::fabs(Gd) > 16 * kEps * (std::fabs(body(v, k.a)) + std::fabs(body(v, k.b)))) return -1;
-    double decide = body(a.data(), k.a) - body(a.data(), k.b);  // G''
-    const double* amag = a.data() + model.dof();  // |A| + mu_k N over m: the rounding level of a
-    if (std::fabs(decide) <= 16 * kEps * (body(amag, k.a) + body(amag, k.b))) {
-        // G''' = A_a'/m_a - A_b'/m_b (friction forces are constant; stuck masses do not move).
-        auto jerk = [&](int b) {
-            if (b == kGround || cfg.stuck[b]) return 0.0;
-            return force_rate_on_mass(model, cfg, b, t, v, a.data()) / model.masses[b].m;
-        };
-        decide = jerk(k.a) - jerk(k.b);
-        auto jerk_level = [&](int b) {
-            if (b == kGround || cfg.stuck[b]) return 0.0;
-            return force_rate_magnitude(model, cfg, b, v, a) / model.masses[b].m;
-        };
-        if (std::fabs(decide) <= 16 * kEps * (jerk_level(k.a) + jerk_level(k.b))) return -1;
-    }
-    return decide > 0 ? 1 : 0;
+    const int order = tie_order(model);
+    const MotionSeries s = motion_series(model, cfg, sgn.data(), t, 0.0, x, v, order + 1);
+    std::vector<double> d, mag;
+    switch_series(model, cfg, SwitchFunction{SwitchKind::gap, c}, t, 0.0, s, d, mag);
+    d[1] = 0.0;  // G' is zero to the rounding checked above
+    const int dir = first_nonzero_sign(d, mag, order);
+    return dir == 0 ? -1 : dir > 0 ? 1 : 0;
 }
 
 }  // namespace
@@ -180,7 +140,8 @@ bool apply_switches(const Model& model, double t, const double* x, double* v, co
     // 1. Every contact change first. A switched contact with G = 0 and G' = 0
     //    (to rounding; e.g. a touch at a friction stop, found "heading across"
     //    only by the rounding of the stopping velocity) is a tie: step 4 decides
-    //    it by G'', G''' of the configuration the friction decisions give.
+    //    it by its first non-zero derivative in the configuration the friction
+    //    decisions give.
     std::vector<char> tied(model.contacts.size(), 0);
     auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
     for (const SwitchFunction& f : switched) {
@@ -242,11 +203,10 @@ bool apply_switches(const Model& model, double t, const double* x, double* v, co
             //    the configuration that results give them (interface.md: contacts
             //    re-decided after the friction decisions, until settled).
             //    Contacts the search found crossing keep their change.
-            const std::vector<double> acc = accelerations(model, cfg, sgn, t, x, v);
             for (std::size_t c = 0; c < model.contacts.size(); ++c) {
                 const SwitchFunction gf{SwitchKind::gap, static_cast<int>(c)};
                 if (!tied[c] && std::find(switched.begin(), switched.end(), gf) != switched.end()) continue;
-                const int state = tied_contact_state(model, cfg, static_cast<int>(c), t, x, v, acc);
+                const int state = tied_contact_state(model, cfg, sgn, static_cast<int>(c), t, x, v);
                 if (state < 0 || state == cfg.closed[c]) continue;
                 cfg.closed[c] = static_cast<char>(state);
                 out.push_back({state ? EventKind::contact_close : EventKind::contact_open, static_cast<int>(c)});
@@ -286,7 +246,7 @@ Configuration entered_configuration(const Model& model, double t, const double* 
     const int n = static_cast<int>(model.dof());
     sgn.assign(n, 0);
     auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
-    // Contacts with G = 0 and G' = 0 at t are decided below by G'', then G'''
+    // Contacts with G = 0 and G' = 0 at t are decided below by G'', G''', ...
     // (the first non-zero derivative, interface.md "Ties and touches"), which
     // need the accelerations of the configuration the friction decisions give.
     std::vector<int> tied;
@@ -311,10 +271,9 @@ Configuration entered_configuration(const Model& model, double t, const double* 
     // (G' = 0), so its own state changes neither the accelerations nor the
     // friction decisions; friction is still re-decided after any change.
     for (int round = 0; round < 4 && !tied.empty(); ++round) {
-        const std::vector<double> a = accelerations(model, cfg, sgn, t, x, v);
         bool changed = false;
         for (int c : tied) {
-            const int state = tied_contact_state(model, cfg, c, t, x, v, a);
+            const int state = tied_contact_state(model, cfg, sgn, c, t, x, v);
             if (state >= 0 && state != cfg.closed[c]) {
                 cfg.closed[c] = static_cast<char>(state);
                 changed = true;
