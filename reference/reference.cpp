@@ -206,15 +206,49 @@ struct Transition {
     int element;
 };
 
+// The state a contact at G = 0 and G' = 0 (to rounding) enters at (t, x, v)
+// in cfg: closed if its first non-zero derivative is positive, open if
+// negative; -1 when it is not tied, or when no derivative decides (G stays at
+// 0, e.g. a mass stuck on the gap: a touch changes nothing). As
+// runtime/transitions.cpp tied_contact_state.
+int tied_contact_state(const MpModel& mp, const Configuration& cfg, const std::vector<signed char>& sgn, int c,
+                       const cl_F& t, const std::vector<cl_F>& x, const std::vector<cl_F>& v) {
+    const auto& k = mp.contacts[static_cast<std::size_t>(c)];
+    if (cln::abs(mp.gap(c, x)) > noise_of(mp, cln::abs(mp.body(x, k.a)) + cln::abs(mp.body(x, k.b)) + cln::abs(k.gap)))
+        return -1;
+    if (cln::abs(mp.gap_rate(c, v)) > noise_of(mp, cln::abs(mp.body(v, k.a)) + cln::abs(mp.body(v, k.b)))) return -1;
+    const Taylor T = taylor(mp, cfg, sgn, t, x, v, tie_order(mp));
+    std::vector<cl_F> d, m;
+    gap_series(mp, c, T, d, m);
+    d[1] = mp.zero;  // G' is zero to the rounding checked above
+    const int dir = first_nonzero_sign(mp, d, m);
+    return dir == 0 ? -1 : dir > 0 ? 1 : 0;
+}
+
 // runtime/transitions.cpp apply_switches, on cl_F: contacts first, then the
 // friction decisions with the forces of the resulting configuration, repeated
-// until nothing changes.
+// until nothing changes. A switched contact with G = G' = 0 (a touch, e.g. at a
+// friction stop on the gap: found "heading across" only by the rounding of the
+// stopping velocity) is a tie, and every contact at G = G' = 0 is re-decided
+// by its first non-zero derivative in the configuration the friction decisions
+// give (interface.md "Ties and touches": a function that touches 0 and stays
+// or turns back changes nothing).
 bool apply_switches(const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x, std::vector<cl_F>& v,
                     const std::vector<cl_F>& a, Configuration& cfg, std::vector<signed char>& sgn,
                     const std::vector<SwitchFunction>& switched, std::vector<Transition>& out, std::string& why) {
     const int n = mp.n;
+    for (const SwitchFunction& f : switched)  // a stop sets its velocity to 0 before the contacts are judged
+        if (f.kind == SwitchKind::velocity) v[static_cast<std::size_t>(f.element)] = mp.zero;
+    std::vector<char> tied(mp.contacts.size(), 0);
     for (const SwitchFunction& f : switched) {
         if (f.kind != SwitchKind::gap) continue;
+        const auto& k = mp.contacts[static_cast<std::size_t>(f.element)];
+        if (cln::abs(mp.gap(f.element, x)) <=
+                noise_of(mp, cln::abs(mp.body(x, k.a)) + cln::abs(mp.body(x, k.b)) + cln::abs(k.gap)) &&
+            cln::abs(mp.gap_rate(f.element, v)) <= noise_of(mp, cln::abs(mp.body(v, k.a)) + cln::abs(mp.body(v, k.b)))) {
+            tied[static_cast<std::size_t>(f.element)] = 1;
+            continue;
+        }
         cfg.closed[f.element] = !cfg.closed[f.element];
         out.push_back({cfg.closed[f.element] ? EventKind::contact_close : EventKind::contact_open, f.element});
     }
@@ -255,7 +289,18 @@ bool apply_switches(const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x
             out.push_back({EventKind::release, i});
             changed = true;
         }
-        if (!changed) return true;
+        if (!changed) {
+            for (std::size_t c = 0; c < mp.contacts.size(); ++c) {
+                const SwitchFunction gf{SwitchKind::gap, static_cast<int>(c)};
+                if (!tied[c] && std::find(switched.begin(), switched.end(), gf) != switched.end()) continue;
+                const int state = tied_contact_state(mp, cfg, sgn, static_cast<int>(c), t, x, v);
+                if (state < 0 || state == cfg.closed[c]) continue;
+                cfg.closed[c] = static_cast<char>(state);
+                out.push_back({state ? EventKind::contact_close : EventKind::contact_open, static_cast<int>(c)});
+                changed = true;
+            }
+            if (!changed) return true;
+        }
     }
     why = "friction decisions at t = " + time_text(t) + " do not settle";
     return false;

@@ -325,5 +325,18 @@ TEST(EngineTies, TouchAtAForcedFrictionStopWritesNoContactRowsOverManyPeriods) {
     }
 }
 
+// The same touch with the reference: it wrote a contact_close at the stop and
+// a contact_open at the release (its transitions toggled a contact found at
+// G = G' = 0 by the rounding of the stopping velocity); now both engines write
+// stick, release, stick, release, stick (t = 20 s), with no contact rows.
+TEST(EngineTies, TouchAtAForcedFrictionStopWritesTheReferenceRows) {
+    const Model m = model_from(touch_model(0.5));
+    const RunResult ref = run_reference(m, 20.0);
+    ASSERT_EQ(ref.events.size(), 5u) << describe(ref.events);
+    for (const Recorded& e : ref.events)
+        EXPECT_TRUE(e.kind == EventKind::stick || e.kind == EventKind::release) << describe(ref.events);
+    for (Kind& k : kernel_kinds(m)) expect_same_rows(run_with(m, *k.provider, 20.0), ref, 1e-9, "touch, " + k.name);
+}
+
 }  // namespace
 }  // namespace hsnc
