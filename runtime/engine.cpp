@@ -55,6 +55,28 @@ double side_of(const SwitchFunction& f, const Configuration& cfg, const std::vec
     }
 }
 
+// An upper bound on the rates of the motion in cfg (1/s): the fastest mode
+// (Gershgorin on M^-1 K of the free masses: omega^2 <= 2 sum_links k / m_i),
+// its Rayleigh damping rate alpha + beta omega^2, and every forcing frequency.
+double fastest_rate(const Model& model, const Configuration& cfg) {
+    const std::size_t n = model.dof();
+    std::vector<double> stiff(n, 0.0);
+    auto add = [&](int a, int b, double k) {
+        if (a == b) return;
+        if (a != kGround) stiff[static_cast<std::size_t>(a)] += k;
+        if (b != kGround) stiff[static_cast<std::size_t>(b)] += k;
+    };
+    for (const Spring& s : model.springs) add(s.a, s.b, s.k);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    double w2 = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+        if (!cfg.stuck[i]) w2 = std::max(w2, 2 * stiff[i] / model.masses[i].m);
+    double rate = std::max(std::sqrt(w2), std::fabs(model.alpha) + std::fabs(model.beta) * w2);
+    for (const Harmonic& h : model.forcing) rate = std::max(rate, std::fabs(h.omega));
+    return rate;
+}
+
 // The earliest switch of one segment.
 struct Found {
     bool any = false;
@@ -160,11 +182,28 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         return static_cast<std::size_t>(f.kind) * stride + static_cast<std::size_t>(f.element);
     };
     std::size_t progress_counter = 0;
+    double rate = 0.0;  // fastest_rate(current_cfg)
     while (true) {
         if (!current || cfg != current_cfg) {  // a reversal keeps the configuration: no lookup
             visited.insert(cfg);
             current = &provider_.solver(cfg);
             current_cfg = cfg;
+            rate = fastest_rate(model_, cfg);
+        }
+        // The smallest step is the time's own resolution, 4 eps |t|: a motion
+        // whose period is not several of them cannot be searched (at t = 1e9 an
+        // oscillation of 1.4e7 rad/s was stepped over without a row, every value
+        // of its gap within the rounding that |G'| eps |t| gives it). Refused
+        // with a message rather than run wrong: rate * step > 1, a period under
+        // 2 pi smallest steps.
+        if (rate * 4 * kEps * std::fabs(t) > 1.0) {
+            std::ostringstream msg;
+            msg.precision(3);
+            msg << "the motion is too fast for the time resolution at t = " << time_text(t) << ": configuration '"
+                << cfg.spec(model_) << "' has rates up to " << rate << " 1/s, and the smallest step there is "
+                << 4 * kEps * std::fabs(t) << " s (a period must span at least 2 pi of them); "
+                << "start nearer t = 0 (t0 shifts the forcing phase only)";
+            return finish(RunStatus::failure, msg.str());
         }
         SegmentSolver& S = *current;
         S.setup(t, t_lo, x.data(), v.data(), sgn.data());

@@ -338,5 +338,46 @@ TEST(EngineTies, TouchAtAForcedFrictionStopWritesTheReferenceRows) {
     for (Kind& k : kernel_kinds(m)) expect_same_rows(run_with(m, *k.provider, 20.0), ref, 1e-9, "touch, " + k.name);
 }
 
+// Issue 11: at t0 = 1e9 the smallest step, the time's own resolution 4 eps |t|,
+// is 8.9e-7 s. A bilinear oscillator of 1e7-1.4e7 rad/s (periods 4.4e-7 to
+// 6.3e-7 s) switched 35 times in 1e-5 s from t0 = 0, and from t0 = 1e9 the
+// engine wrote no row at all and reported ok (every value of its gap within
+// the rounding |G'| 16 eps |t| = 35 m gave it). Now it is refused with a
+// message saying why; from t0 = 0 it still runs.
+TEST(LargeT0, MotionFasterThanTheTimeResolutionIsRefused) {
+    auto fast = [](double t0) {
+        return model_from(R"(
+name = "fast"
+[[mass]]
+name = "m1"
+m = 1e-6
+[[spring]]
+between = ["ground", "m1"]
+k = 1e8
+[[contact]]
+between = ["m1", "ground"]
+gap = 0.5
+k = 1e8
+[initial]
+x = { m1 = 1 }
+t0 = )" + std::to_string(t0) + "\n");
+    };
+    const Model m0 = fast(0.0);
+    for (Kind& k : kernel_kinds(m0)) {
+        const RunResult r = run_with(m0, *k.provider, 1e-5);
+        ASSERT_EQ(r.summary.status, RunStatus::ok) << k.name << ": " << r.summary.message;
+        EXPECT_EQ(r.events.size(), 35u) << k.name;
+    }
+    const Model m = fast(1e9);
+    for (Kind& k : kernel_kinds(m)) {
+        const RunResult r = run_with(m, *k.provider, 1e9 + 1e-5);
+        EXPECT_EQ(r.summary.status, RunStatus::failure) << k.name;
+        EXPECT_TRUE(r.events.empty()) << k.name;
+        EXPECT_NE(r.summary.message.find("too fast for the time resolution at t = 1000000000"), std::string::npos)
+            << r.summary.message;
+        EXPECT_NE(r.summary.message.find("smallest step there is 8.88e-07 s"), std::string::npos) << r.summary.message;
+    }
+}
+
 }  // namespace
 }  // namespace hsnc
