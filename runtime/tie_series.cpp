@@ -114,6 +114,15 @@ void switch_series(const Model& model, const Configuration& cfg, const SwitchFun
     }
 }
 
+void force_series(const Model& model, const Configuration& cfg, int i, double t, double t_lo,
+                  const MotionSeries& series, std::vector<double>& d, std::vector<double>& mag) {
+    const std::size_t order = series.x.size() - 1;
+    d.assign(order, 0.0);
+    mag.assign(order, 0.0);
+    for (std::size_t k = 0; k < order; ++k)
+        force_derivative(model, cfg, i, t, t_lo, series, static_cast<int>(k), d[k], mag[k]);
+}
+
 double rate_magnitude(const Model& model, const Configuration& cfg, const SwitchFunction& f, const double* x,
                       const double* v) {
     auto at = [](const double* y, int b) { return b == kGround ? 0.0 : std::fabs(y[b]); };

@@ -54,6 +54,12 @@ double tie_noise(double mag);
 void switch_series(const Model& model, const Configuration& cfg, const SwitchFunction& f, double t, double t_lo,
                    const MotionSeries& series, std::vector<double>& d, std::vector<double>& mag);
 
+/// Derivatives k = 0..order-1 of A_i (every force on mass i but friction, as
+/// in motion_series) at the series' instant, with the magnitudes of their
+/// terms, from a series of order `order` in cfg.
+void force_series(const Model& model, const Configuration& cfg, int i, double t, double t_lo,
+                  const MotionSeries& series, std::vector<double>& d, std::vector<double>& mag);
+
 /// The magnitude of the terms of g_f' at (x, v) in cfg, as switch_series
 /// computes them (its order-1 entry), without allocating or evaluating the
 /// forcing: a cheap test of whether g_f' can be zero to rounding.

@@ -12,63 +12,10 @@ namespace {
 
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
-// Derivatives A_i^(k), k = 0..order, of the force on mass i at (t, x, v) in
-// cfg (friction directions sgn), with the magnitude of their terms (their
-// rounding level), from the equation of motion itself:
-//     m_j x_j^(k+2) = A_j^(k) - [k = 0] mu_k N_j sgn_j  (0 for a stuck mass),
-//     A_j^(k) = [k = 0] (load_j + contact preloads) - (K x^(k))_j - (C x^(k+1))_j
-//               + sum_h F_hj Omega_h^k sin(Omega_h t + phase_h + k pi/2).
-void force_series(const Model& model, const Configuration& cfg, const std::vector<signed char>& sgn, int i, double t,
-                  const double* x, const double* v, int order, std::vector<double>& d, std::vector<double>& mag) {
-    const int n = static_cast<int>(model.dof());
-    auto at = [](const std::vector<double>& y, int b) { return b == kGround ? 0.0 : y[b]; };
-    std::vector<std::vector<double>> X(order + 2, std::vector<double>(n, 0.0)), M = X;
-    for (int j = 0; j < n; ++j) {
-        X[0][j] = x[j], M[0][j] = std::fabs(x[j]);
-        if (!cfg.stuck[j]) X[1][j] = v[j], M[1][j] = std::fabs(v[j]);
-    }
-    auto deriv = [&](int j, int k, double& value, double& m) {
-        value = k == 0 ? model.load[j] : 0.0;
-        m = std::fabs(value);
-        value -= model.alpha * model.masses[j].m * X[k + 1][j];
-        m += std::fabs(model.alpha) * model.masses[j].m * M[k + 1][j];
-        auto link = [&](int a, int b, double kk, double gap) {
-            if (a == b || (a != j && b != j)) return;
-            double f = -kk * (at(X[k], a) - at(X[k], b)) - model.beta * kk * (at(X[k + 1], a) - at(X[k + 1], b));
-            double fm = kk * (at(M[k], a) + at(M[k], b)) + std::fabs(model.beta) * kk * (at(M[k + 1], a) + at(M[k + 1], b));
-            if (k == 0) f += kk * gap, fm += std::fabs(kk * gap);
-            value += a == j ? f : -f;
-            m += fm;
-        };
-        for (const Spring& s : model.springs) link(s.a, s.b, s.k, 0.0);
-        for (std::size_t c = 0; c < model.contacts.size(); ++c)
-            if (cfg.closed[c]) link(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k, model.contacts[c].gap);
-        for (const Harmonic& h : model.forcing) {
-            const double arg = h.omega * t + h.phase;
-            double s = (k % 2 == 0) ? std::sin(arg) : std::cos(arg);
-            if (k % 4 == 2 || k % 4 == 3) s = -s;
-            const double wk = std::pow(h.omega, k);
-            value += h.amplitude[j] * wk * s;
-            m += std::fabs(h.amplitude[j]) * wk;
-        }
-    };
-    for (int k = 0; k + 2 <= order + 1; ++k)
-        for (int j = 0; j < n; ++j) {
-            if (cfg.stuck[j]) continue;
-            double A, m;
-            deriv(j, k, A, m);
-            const double fr = k == 0 && model.masses[j].has_friction ? model.masses[j].mu_k * model.normal_force(j) : 0.0;
-            X[k + 2][j] = (A - fr * sgn[j]) / model.masses[j].m;
-            M[k + 2][j] = (m + fr * (sgn[j] != 0)) / model.masses[j].m;
-        }
-    d.assign(order + 1, 0.0);
-    mag.assign(order + 1, 0.0);
-    for (int k = 0; k <= order; ++k) deriv(i, k, d[k], mag[k]);
-}
-
 // The double engine's arithmetic for the decision rules (transition_rules.h):
-// forces and their derivatives from the equation of motion at (t, x, v), zero
-// meaning within 16 ulps of the magnitude of the terms.
+// forces and their derivatives from the equation of motion at (t, x, v) (the
+// series of tie_series.h), zero meaning within 16 ulps of the magnitude of
+// the terms.
 class DoublePhysics {
 public:
     using Scalar = double;
@@ -94,8 +41,9 @@ public:
     int tie_order() const { return hsnc::tie_order(model_); }
     rules::Series<double> held_series(const Configuration& hold, const std::vector<signed char>& sgn, int i,
                                       int order) const {
+        const MotionSeries m = motion_series(model_, hold, sgn.data(), t_, 0.0, x_, v_, order + 1);
         rules::Series<double> s;
-        force_series(model_, hold, sgn, i, t_, x_, v_, order, s.d, s.mag);
+        force_series(model_, hold, i, t_, 0.0, m, s.d, s.mag);
         return s;
     }
     rules::Series<double> gap_now(int c) const {
