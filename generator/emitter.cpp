@@ -261,8 +261,11 @@ private:
         add_to(m + kModeQ, y);
         add_to(m + kModeDQ, dy);
         add_to(m + kModeDDQ, ddy);
-        add_to(m + kModeMQ, "__builtin_fabs(" + y + ")");
-        add_to(m + kModeMDQ, "__builtin_fabs(" + dy + ")");
+        // The magnitude of the terms, not of their sum (y ~ tau^3 near tau = 0, its terms ~ tau).
+        const std::string aQ = "__builtin_fabs(" + Q + ")";
+        add_to(m + kModeMQ, aQ + "*(__builtin_fabs(" + ct + "*" + eS + ") + __builtin_fabs(" + w + "*" + Cb + "))");
+        add_to(m + kModeMDQ, aQ + "*(__builtin_fabs(" + ct + "*" + eC + ") + __builtin_fabs(" + dw + "*" + Cb +
+                                 ") + __builtin_fabs(" + k(c + kResMean) + "*" + w + "*" + Sb + "))");
     }
 
     const Program& p_;

@@ -185,8 +185,10 @@ public:
         held[static_cast<std::size_t>(i)] = mp.zero;
         return mp.force_rate_on_mass(cfg, i, t_, v_, held);
     }
-    rules::Series<cl_F> held_series(const Configuration& hold, const std::vector<signed char>& sgn, int i) const {
-        const Taylor T = taylor(mp, hold, sgn, t_, x_, v_, tie_order(mp) + 1);
+    int tie_order() const { return reference::tie_order(mp); }
+    rules::Series<cl_F> held_series(const Configuration& hold, const std::vector<signed char>& sgn, int i,
+                                    int order) const {
+        const Taylor T = taylor(mp, hold, sgn, t_, x_, v_, order + 1);
         rules::Series<cl_F> s;
         force_series(mp, hold, i, t_, T, s.d, s.mag);
         return s;
@@ -201,8 +203,8 @@ public:
         cfg_ = cfg;
         sgn_ = sgn;
     }
-    rules::Series<cl_F> tied_gap_series(int c) const {
-        const Taylor T = taylor(mp, cfg_, sgn_, t_, x_, v_, tie_order(mp));
+    rules::Series<cl_F> tied_gap_series(int c, int order) const {
+        const Taylor T = taylor(mp, cfg_, sgn_, t_, x_, v_, order);
         rules::Series<cl_F> s;
         gap_series(mp, c, T, s.d, s.mag);
         return s;

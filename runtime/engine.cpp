@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "sample_grid.h"
+#include "tie_series.h"
 #include "transitions.h"
 
 namespace hsnc {
@@ -53,6 +54,28 @@ double side_of(const SwitchFunction& f, const Configuration& cfg, const std::vec
         case SwitchKind::velocity: return sgn[f.element] >= 0 ? 1.0 : -1.0;
         default: return -1.0;  // release functions are negative while stuck
     }
+}
+
+// An upper bound on the rates of the motion in cfg (1/s): the fastest mode
+// (Gershgorin on M^-1 K of the free masses: omega^2 <= 2 sum_links k / m_i),
+// its Rayleigh damping rate alpha + beta omega^2, and every forcing frequency.
+double fastest_rate(const Model& model, const Configuration& cfg) {
+    const std::size_t n = model.dof();
+    std::vector<double> stiff(n, 0.0);
+    auto add = [&](int a, int b, double k) {
+        if (a == b) return;
+        if (a != kGround) stiff[static_cast<std::size_t>(a)] += k;
+        if (b != kGround) stiff[static_cast<std::size_t>(b)] += k;
+    };
+    for (const Spring& s : model.springs) add(s.a, s.b, s.k);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    double w2 = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+        if (!cfg.stuck[i]) w2 = std::max(w2, 2 * stiff[i] / model.masses[i].m);
+    double rate = std::max(std::sqrt(w2), std::fabs(model.alpha) + std::fabs(model.beta) * w2);
+    for (const Harmonic& h : model.forcing) rate = std::max(rate, std::fabs(h.omega));
+    return rate;
 }
 
 // The earliest switch of one segment.
@@ -137,8 +160,9 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
 
     // Per-segment working arrays, sized once for the largest switch list.
     const std::size_t max_switches = model_.contacts.size() + 2 * n;
-    std::vector<double> side(max_switches), floor(max_switches), root(max_switches);
-    std::vector<char> armed(max_switches);
+    std::vector<double> side(max_switches), floor(max_switches), root(max_switches), clear_until(max_switches);
+    std::vector<char> armed(max_switches), leaving(max_switches), leaves_now(max_switches);
+    std::vector<double> series_d, series_mag;
     Found found;
     found.switched.reserve(max_switches);
     std::vector<Transition> transitions;
@@ -159,11 +183,28 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     const bool records = observer.wants_segments();
     Configuration cfg_before;
     std::vector<signed char> sgn_before;
+    double rate = 0.0;  // fastest_rate(current_cfg)
     while (true) {
         if (!current || cfg != current_cfg) {  // a reversal keeps the configuration: no lookup
             visited.insert(cfg);
             current = &provider_.solver(cfg);
             current_cfg = cfg;
+            rate = fastest_rate(model_, cfg);
+        }
+        // The smallest step is the time's own resolution, 4 eps |t|: a motion
+        // whose period is not several of them cannot be searched (at t = 1e9 an
+        // oscillation of 1.4e7 rad/s was stepped over without a row, every value
+        // of its gap within the rounding that |G'| eps |t| gives it). Refused
+        // with a message rather than run wrong: rate * step > 1, a period under
+        // 2 pi smallest steps.
+        if (rate * 4 * kEps * std::fabs(t) > 1.0) {
+            std::ostringstream msg;
+            msg.precision(3);
+            msg << "the motion is too fast for the time resolution at t = " << time_text(t) << ": configuration '"
+                << cfg.spec(model_) << "' has rates up to " << rate << " 1/s, and the smallest step there is "
+                << 4 * kEps * std::fabs(t) << " s (a period must span at least 2 pi of them); "
+                << "start nearer t = 0 (t0 shifts the forcing phase only)";
+            return finish(RunStatus::failure, msg.str());
         }
         SegmentSolver& S = *current;
         S.setup(t, t_lo, x.data(), v.data(), sgn.data());
@@ -204,6 +245,57 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         for (std::size_t f = 0; f < nsw; ++f)
             if (sw[f].kind == SwitchKind::velocity)
                 armed[f] = side[f] * buf.g[f] > noise(f);
+        // Ties at the segment start (tie_series.h): a function at zero whose
+        // rate vanishes too. Its first non-zero derivative, of order m, decides
+        // (interface.md "Ties and touches"): one heading across switches now, at
+        // this instant; one heading into its safe side is `leaving` zero, where
+        // the bound h + h' s - B s^2/2 would make the steps shrink like s^(m/2)
+        // (a contact at rest on its gap under sin forcing took 30000
+        // evaluations). By Taylor's theorem with B' >= |h^(m+1)| on [0, T],
+        // h > 0 on (0, (m+1)|h^(m)(0)|/B'), so it is left out of the bound up to
+        // half that (clear_until) and watched by the bound from there. A function
+        // with no non-zero derivative (identically zero to rounding, by
+        // Cayley-Hamilton) stays leaving, with steps of at most tau (doubling),
+        // unless its g'' bound is 0 (then the bound gives an unlimited step).
+        std::fill(leaving.begin(), leaving.end(), 0);
+        std::fill(leaves_now.begin(), leaves_now.end(), 0);
+        {
+            MotionSeries low, full;  // order 2 for the rate; the full expansion only at a true tie
+            for (std::size_t f = 0; f < nsw; ++f) {
+                if (std::fabs(buf.g[f]) > noise(f)) continue;
+                // A rate clearly beyond its rounding (almost every function that has
+                // just switched) needs no series: the bound works.
+                if (std::fabs(buf.dg[f]) > 4 * tie_noise(rate_magnitude(model_, cfg, sw[f], x.data(), v.data())))
+                    continue;
+                if (low.x.empty()) low = motion_series(model_, cfg, sgn.data(), t, t_lo, x.data(), v.data(), 2);
+                switch_series(model_, cfg, sw[f], t, t_lo, low, series_d, series_mag);
+                if (std::fabs(series_d[1]) > tie_noise(series_mag[1])) continue;  // h' decides: the bound works
+                const int max_order = tie_order(model_);
+                if (full.x.empty())
+                    full = motion_series(model_, cfg, sgn.data(), t, t_lo, x.data(), v.data(), max_order + 2);
+                switch_series(model_, cfg, sw[f], t, t_lo, full, series_d, series_mag);
+                int order = 0;
+                const int dir = first_nonzero_sign(series_d, series_mag, max_order, &order) * (side[f] > 0 ? 1 : -1);
+                if (dir < 0) {
+                    leaves_now[f] = 1;
+                    continue;
+                }
+                if (dir == 0) {
+                    leaving[f] = buf.bound[f] > 0;
+                    clear_until[f] = 0.0;
+                    continue;
+                }
+                // clear_until = c/B'(T) for B' valid on [0, T], T <= c/B'(0): any T
+                // gives a valid interval [0, min(T, c/B'(T))].
+                const double c = 0.5 * (order + 1) * std::fabs(series_d[static_cast<std::size_t>(order)]);
+                const double T = std::min(tau_end, c / derivative_bound(model_, cfg, sw[f], full, order + 1, 0.0));
+                const double clear = std::min(T, c / derivative_bound(model_, cfg, sw[f], full, order + 1, T));
+                if (clear > 0) {
+                    leaving[f] = 1;
+                    clear_until[f] = clear;
+                }
+            }
+        }
         for (std::size_t iter = 0;; ++iter) {
             if (iter > 10'000'000) return finish(RunStatus::failure, "switch search does not converge at t = " + time_text(t + tau));
             // Which functions have switched at tau, and where is each one's zero?
@@ -214,6 +306,11 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 if (!std::isfinite(h) || !std::isfinite(hd) || !std::isfinite(buf.bound[f]))
                     return finish(RunStatus::failure, "non-finite switch function in configuration '" +
                                                           cfg.spec(model_) + "' at t = " + time_text(t + tau));
+                if (iter == 0 && leaves_now[f]) {  // a tie heading across: it switches at the segment start
+                    root[f] = 0.0;
+                    tau_star = 0.0;
+                    continue;
+                }
                 const double eps_f = noise(f);
                 const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
                 if (stop ? h > eps_f : h >= -eps_f) continue;
@@ -253,6 +350,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             // Safe step: no function can reach its trigger level inside it.
             double step = std::min(max_step, tau_end - tau);
             for (std::size_t f = 0; f < nsw; ++f) {
+                if (leaving[f]) continue;
                 const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
                 const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
                 // Contacts and releases switch only when certainly negative (level
@@ -261,13 +359,20 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 step = std::min(step, safe_step(h - level, hd, buf.bound[f]));
             }
             const double floor_step = 4 * kEps * (std::fabs(t) + std::fabs(tau)) + 1e-300;
+            for (std::size_t f = 0; f < nsw; ++f)
+                if (leaving[f]) step = std::min(step, tau < clear_until[f] ? clear_until[f] - tau : std::max(tau, floor_step));
             step = std::max(step, floor_step);
             prev_tau = tau;
             tau = std::min(tau + step, tau_end);
             eval(tau);
-            for (std::size_t f = 0; f < nsw; ++f)
+            for (std::size_t f = 0; f < nsw; ++f) {
                 if (sw[f].kind == SwitchKind::velocity && !armed[f] && side[f] * buf.g[f] > 2 * noise(f))
                     armed[f] = 1;
+                // Past its clear interval the bound watches it again (a function
+                // leaving an exact zero, clear_until = 0, once it is above its rounding).
+                if (leaving[f] && tau >= clear_until[f] && (clear_until[f] > 0 || side[f] * buf.g[f] > 2 * noise(f)))
+                    leaving[f] = 0;
+            }
         }
 
         // ---- dense output up to the event (or t_end) from the closed form ----

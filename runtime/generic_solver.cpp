@@ -427,8 +427,13 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
             q += y;
             qd += yd;
             qdd += ydd;
-            mag += std::abs(y);
-            dmag += std::abs(yd);
+            // The magnitude of the terms, not of their sum: near tau = 0 (and at any
+            // tau for the secular part) E+ and E- nearly cancel, and y is known to
+            // eps |k| (|E+| + |E-|), not to eps |y| (a contact at rest under
+            // resonant forcing: y ~ tau^3, its terms ~ tau).
+            const double km = std::abs(k);
+            mag += km * (std::abs(Ep) + std::abs(Em));
+            dmag += km * (std::abs(rp * Ep) + std::abs(rm * Em));
             // |E+-(s)| <= min(s phi1(-sigma s), 2/|z+-|) for s <= s_end, so
             // |y| <= |P| (e+ + e-)/(2 omega_d), |y'| <= omega times that, and
             // y'' = P sin - c y' - lambda y, y''' = P Omega cos - c y'' - lambda y'.

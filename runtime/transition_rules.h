@@ -20,14 +20,20 @@
 //   T static_limit(int i) const;                       // mu_s N_i
 //   T held_rate(const Configuration&, int i) const;    // dA_i/dt, mass i held, the others' accelerations
 //                                                      // from just before (0 when there are none: t0)
-//   Series<T> held_series(const Configuration&, const std::vector<signed char>& sgn, int i) const;
-//                                                      // A_i^(k), k = 0, 1, ..., in cfg with mass i held
+//   int tie_order() const;                             // 2n + 2H + 2 (H forcing harmonics)
+//   Series<T> held_series(const Configuration&, const std::vector<signed char>& sgn, int i, int order) const;
+//                                                      // A_i^(k), k = 0..order, in cfg with mass i held
 //   Series<T> gap_now(int c) const;                    // G_c, G_c' at the current state
 //   void prepare_ties(const Configuration&, const std::vector<signed char>& sgn);
-//   Series<T> tied_gap_series(int c) const;            // G_c, G_c', G_c'', ... in the configuration
+//   Series<T> tied_gap_series(int c, int order) const; // G_c^(k), k = 0..order, in the configuration
 //                                                      // of the last prepare_ties
 // where Series<T> holds derivatives d[k] with the magnitudes mag[k] of their
-// terms (their rounding level).
+// terms (their rounding level). A tie is decided by the first non-zero
+// derivative of any order: the rules ask for the series up to tie_order(),
+// the order past which a function of the motion cannot vanish with all its
+// derivatives unless it vanishes identically (the motion and the forcing
+// harmonics are a linear system of dimension at most 2n + 2H + 1:
+// Cayley-Hamilton), so "none non-zero" means the function stays at 0.
 #pragma once
 
 #include <algorithm>
@@ -84,7 +90,7 @@ signed char stick_rule(const P& p, const Configuration& cfg, const std::vector<s
     hold.stuck[i] = 1;
     std::vector<signed char> s = sgn;
     s[static_cast<std::size_t>(i)] = 0;
-    const Series<T> series = p.held_series(hold, s, i);
+    const Series<T> series = p.held_series(hold, s, i, p.tie_order());
     const T rate = p.held_rate(cfg, i);
     if (!p.negligible(rate, series.mag[1])) return p.sign(rate) == dir ? dir : 0;
     if (p.sign(limit) == 0 && p.negligible(A, series.mag[0]))
@@ -95,8 +101,9 @@ signed char stick_rule(const P& p, const Configuration& cfg, const std::vector<s
 
 /// The state a contact enters from G, G', ... at an instant where it is tied
 /// (G = G' = 0 to rounding): closed (1) if its first non-zero derivative from
-/// G'' on is positive, open (0) if negative; -1 when none decides (G stays at
-/// 0: a touch changes nothing, the contact keeps its state).
+/// G'' on (of any order the series holds: the rules pass tied_gap_series(c,
+/// p.tie_order())) is positive, open (0) if negative; -1 when none decides (G
+/// stays at 0: a touch changes nothing, the contact keeps its state).
 template <class P, class T>
 int tied_contact_state(const P& p, const Series<T>& G) {
     const int s = first_nonzero_sign(p, G, 2);
@@ -180,7 +187,7 @@ bool apply_switches(P& p, Configuration& cfg, std::vector<signed char>& sgn, con
             const SwitchFunction gf{SwitchKind::gap, static_cast<int>(c)};
             if (!is_tied[c] && std::find(switched.begin(), switched.end(), gf) != switched.end()) continue;
             if (!is_tied[c] && !tied(p, p.gap_now(static_cast<int>(c)))) continue;
-            const int state = tied_contact_state(p, p.tied_gap_series(static_cast<int>(c)));
+            const int state = tied_contact_state(p, p.tied_gap_series(static_cast<int>(c), p.tie_order()));
             if (state < 0 || state == cfg.closed[c]) continue;
             cfg.closed[c] = static_cast<char>(state);
             out.push_back({state ? EventKind::contact_close : EventKind::contact_open, static_cast<int>(c)});
@@ -227,7 +234,7 @@ void entered_configuration(P& p, Configuration& cfg, std::vector<signed char>& s
         p.prepare_ties(cfg, sgn);
         bool changed = false;
         for (int c : ties) {
-            const int state = tied_contact_state(p, p.tied_gap_series(c));
+            const int state = tied_contact_state(p, p.tied_gap_series(c, p.tie_order()));
             if (state >= 0 && state != cfg.closed[c]) {
                 cfg.closed[c] = static_cast<char>(state);
                 changed = true;

@@ -30,8 +30,8 @@ bool apply_switches(const Model& model, double t, const double* x, double* v, co
                     std::vector<Transition>& out, std::string& why);
 
 /// The configuration the motion enters at (t, x, v) (interface.md: "At t0 ...").
-/// Contacts by G, a tie G = 0 by the first non-zero of G', G'', G''' (closed
-/// if G is increasing; all zero counts as closed at t0, x[a]-x[b] >= gap);
+/// Contacts by G, a tie G = 0 by the first non-zero of G', G'', G''', ...
+/// (closed if G is increasing; all zero counts as closed at t0, x[a]-x[b] >= gap);
 /// friction masses with v_i = 0 stuck or sliding by A_i.
 Configuration entered_configuration(const Model& model, double t, const double* x, const double* v,
                                     std::vector<signed char>& sgn);

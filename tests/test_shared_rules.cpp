@@ -148,9 +148,12 @@ struct FakePhysics {
     double force(const Configuration&, int) const { return A; }
     double static_limit(int) const { return limit; }
     double held_rate(const Configuration&, int) const { return rate; }
-    rules::Series<double> held_series(const Configuration& hold, const std::vector<signed char>& sgn, int i) const {
+    int tie_order() const { return 4; }  // 2n + 2H + 2 of one mass, no forcing
+    rules::Series<double> held_series(const Configuration& hold, const std::vector<signed char>& sgn, int i,
+                                      int order) const {
         EXPECT_TRUE(hold.stuck[i]);  // the held motion
         EXPECT_EQ(sgn[i], 0);
+        EXPECT_EQ(order, tie_order());  // every order up to tie_order can decide
         return series;
     }
 };
