@@ -8,6 +8,7 @@
 #include "aot_registry.h"
 #include "error.h"
 #include "kernel_mode.h"
+#include "sample_grid.h"
 
 namespace hsnc {
 namespace {
@@ -177,7 +178,7 @@ EngineOptions tradeoff_engine_options(const Model& model, const TradeoffOptions&
     check_tradeoff_options(model, o);
     EngineOptions eopt;
     eopt.t_end = end_time(model, o);
-    eopt.dt = std::isnan(o.dt) ? (eopt.t_end - model.t0) / 1000 : o.dt;
+    eopt.dt = std::isnan(o.dt) ? SampleGrid::default_dt(model.t0, eopt.t_end) : o.dt;
     return eopt;
 }
 
@@ -201,12 +202,11 @@ std::string fit_reference(const Model& model, const TradeoffOptions& o, Recorded
     // The runs sample at t0 + k*dt and t_end: the reference must have a row at each.
     RecordedRun grid;
     grid.dof = model.dof();
+    const SampleGrid times(model.t0, t_end, eopt.dt);
     for (std::size_t k = 0;; ++k) {
-        const double t = model.t0 + static_cast<double>(k) * eopt.dt;
-        const bool end = !(t < t_end - 1e-9 * eopt.dt);
-        grid.t.push_back(end ? t_end : t);
+        grid.t.push_back(times.time(k));
         grid.x.insert(grid.x.end(), model.dof(), 0.0);
-        if (end) break;
+        if (times.last(k)) break;
     }
     const RunErrors e = compare_runs(reference, grid);
     if (e.sample_times == grid.t.size()) return "";

@@ -20,6 +20,8 @@
 #include "kernel_cache.h"
 #include "kernel_mode.h"
 #include "reference.h"
+#include "sample_grid.h"
+#include "solver_provider.h"
 
 namespace hsnc {
 namespace {
@@ -155,7 +157,7 @@ SimulateSummary simulate(const Model& model, const SimulateOptions& o, Observer&
 
     EngineOptions eopt;
     eopt.t_end = t_end;
-    eopt.dt = std::isnan(o.dt) ? (t_end - model.t0) / 1000 : o.dt;
+    eopt.dt = std::isnan(o.dt) ? SampleGrid::default_dt(model.t0, t_end) : o.dt;
     eopt.samples = o.samples;
     eopt.max_events = o.max_events;
 

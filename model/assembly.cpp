@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "contact_gap.h"
+
 namespace hsnc {
 namespace {
 
@@ -73,7 +75,7 @@ Eigen::VectorXd forcing_rate(const Model& model, double t) {
 
 double gap(const Model& model, int c, const double* x) {
     const Contact& k = model.contacts[c];
-    return position(x, k.a) - position(x, k.b) - k.gap;
+    return contact_gap(position(x, k.a), position(x, k.b), k.gap);
 }
 
 double gap_rate(const Model& model, int c, const double* v) {

@@ -2,72 +2,27 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 
 #include "assembly.h"
 #include "error.h"
+#include "free_components.h"
 
 namespace hsnc {
-namespace {
-
-// Union-find over the free masses (indices into F).
-struct DisjointSets {
-    std::vector<int> parent;
-    explicit DisjointSets(int n) : parent(static_cast<std::size_t>(n)) {
-        std::iota(parent.begin(), parent.end(), 0);
-    }
-    int find(int i) {
-        while (parent[i] != i) i = parent[i] = parent[parent[i]];
-        return i;
-    }
-    void join(int a, int b) { parent[find(a)] = find(b); }
-};
-
-}  // namespace
 
 ModalDecomposition modal_analysis(const Model& model, const Configuration& cfg) {
     const int n = static_cast<int>(model.dof());
     ModalDecomposition md;
-    std::vector<int> slot(static_cast<std::size_t>(n), -1);  // mass -> index in F, -1 if stuck
-    for (int i = 0; i < n; ++i) {
-        if (cfg.stuck[i]) {
-            md.stuck.push_back(i);
-        } else {
-            slot[i] = static_cast<int>(md.free.size());
-            md.free.push_back(i);
-        }
-    }
+    // Components and the floating ones (free_components.h: the structural rule).
+    const FreeComponents fc = free_components(model, cfg);
+    md.free = fc.free;
+    for (int i = 0; i < n; ++i)
+        if (cfg.stuck[i]) md.stuck.push_back(i);
     const int nf = static_cast<int>(md.free.size());
-
-    // Components and their anchoring, from the k > 0 links (structural test).
-    DisjointSets sets(nf);
-    std::vector<char> anchored_mass(static_cast<std::size_t>(nf), 0);
-    auto link = [&](int a, int b, double k) {
-        if (!(k > 0.0)) return;
-        const int sa = a == kGround ? -1 : slot[a];
-        const int sb = b == kGround ? -1 : slot[b];
-        if (sa >= 0 && sb >= 0) {
-            sets.join(sa, sb);
-        } else if (sa >= 0) {
-            anchored_mass[sa] = 1;  // linked to ground or to a stuck mass
-        } else if (sb >= 0) {
-            anchored_mass[sb] = 1;
-        }
-    };
-    for (const Spring& s : model.springs) link(s.a, s.b, s.k);
-    for (std::size_t c = 0; c < model.contacts.size(); ++c)
-        if (cfg.closed[c]) link(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
-
-    md.component.assign(static_cast<std::size_t>(nf), -1);
-    std::vector<int> root_id(static_cast<std::size_t>(nf), -1);
-    for (int s = 0; s < nf; ++s) {
-        const int r = sets.find(s);
-        if (root_id[r] < 0) root_id[r] = md.n_components++;
-        md.component[s] = root_id[r];
-    }
+    md.component = fc.component;
+    md.n_components = fc.count();
 
     const Eigen::MatrixXd K = stiffness_matrix(model, cfg);
     const Eigen::VectorXd m = mass_vector(model);
@@ -83,12 +38,9 @@ ModalDecomposition modal_analysis(const Model& model, const Configuration& cfg) 
 
     for (int comp = 0; comp < md.n_components; ++comp) {
         std::vector<int> members;  // indices into F
-        bool anchored = false;
+        const bool anchored = !fc.floating[static_cast<std::size_t>(comp)];
         for (int s = 0; s < nf; ++s)
-            if (md.component[s] == comp) {
-                members.push_back(s);
-                anchored = anchored || anchored_mass[s];
-            }
+            if (md.component[s] == comp) members.push_back(s);
         const Eigen::Index nc = static_cast<Eigen::Index>(members.size());
         // Symmetric form Kt = M^-1/2 K M^-1/2; its orthonormal eigenvectors w
         // give the mass-normalised modes phi = M^-1/2 w.

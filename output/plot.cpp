@@ -95,9 +95,8 @@ std::string datablock(const char* name, const PlotRecorder::Series& s, std::size
     return out + "EOD\n";
 }
 
-// gnuplot with the script on stdin, the PNG read from its stdout, its
-// diagnostics from stderr: nothing of it reaches our stdout. Returns the
-// PNG bytes; throws RunError with the first lines of its diagnostics.
+}  // namespace
+
 std::string run_gnuplot(const std::string& script) {
     int in[2], out[2], err[2];
     if (::pipe2(in, O_CLOEXEC) != 0) throw RunError(std::string("--plot: pipe: ") + std::strerror(errno));
@@ -179,8 +178,6 @@ std::string run_gnuplot(const std::string& script) {
                                       : std::string("killed by a signal")) +
                    (png.empty() ? ", no image" : "") + ")" + msg);
 }
-
-}  // namespace
 
 void require_gnuplot() {
     const char* path = std::getenv("PATH");
@@ -372,11 +369,13 @@ std::string PlotRecorder::script() const {
     return s;
 }
 
-void PlotRecorder::draw(const OutputTarget& png) const {
-    const std::string bytes = run_gnuplot(script());
+void render_png(const std::string& script, const OutputTarget& png) {
+    const std::string bytes = run_gnuplot(script);
     OutputFile file(png);
     file.write(bytes.data(), bytes.size());
     file.commit();
 }
+
+void PlotRecorder::draw(const OutputTarget& png) const { render_png(script(), png); }
 
 }  // namespace hsnc::cli

@@ -24,6 +24,15 @@ namespace hsnc::cli {
 /// Throws RunError when gnuplot is not on PATH (called before a run).
 void require_gnuplot();
 
+/// gnuplot with `script` on stdin, the PNG read from its stdout, its
+/// diagnostics from stderr: nothing of it reaches our stdout. Returns the
+/// PNG bytes; throws RunError with the first lines of its diagnostics.
+std::string run_gnuplot(const std::string& script);
+/// Renders a gnuplot script (terminal pngcairo, no `set output`: the PNG
+/// comes on gnuplot's stdout) and writes the PNG to `png`. Throws RunError
+/// when gnuplot fails (the first lines of its diagnostics in the message).
+void render_png(const std::string& script, const OutputTarget& png);
+
 class PlotRecorder : public Observer {
 public:
     /// Samples come every `dt` from t0 to t_end.

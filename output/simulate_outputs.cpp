@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "error.h"
+#include "sample_grid.h"
 
 namespace hsnc::cli {
 namespace {
@@ -24,7 +25,7 @@ std::string bytes_text(double b) {
 
 }  // namespace
 
-double trajectory_rows(double t0, double t_end, double dt) { return std::ceil((t_end - t0) / dt) + 1; }
+double trajectory_rows(double t0, double t_end, double dt) { return SampleGrid(t0, t_end, dt).count(); }
 
 SimulateOutputs::SimulateOutputs(const Model& model, const OutputRequest& r, double t_end, double dt)
     : model_(model), t_end_(t_end), dt_(dt) {

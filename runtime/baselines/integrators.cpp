@@ -17,6 +17,7 @@
 
 #include "assembly.h"
 #include "error.h"
+#include "sample_grid.h"
 #include "transitions.h"
 
 namespace hsnc {
@@ -104,24 +105,20 @@ struct Sampler {
     Observer& obs;
     std::size_t k = 0;
     bool done;
-    double dt;
+    SampleGrid grid;
     Sampler(const Model& m, const EngineOptions& o, Observer& ob)
-        : model(m), opt(o), obs(ob), done(!o.samples), dt(o.dt > 0 ? o.dt : o.t_end - m.t0) {}
-    double time(std::size_t j) const {
-        const double tk = model.t0 + static_cast<double>(j) * dt;
-        return tk < opt.t_end - 1e-9 * dt ? tk : opt.t_end;
-    }
+        : model(m), opt(o), obs(ob), done(!o.samples), grid(m.t0, o.t_end, o.dt) {}
     template <class Interpolant>  // at(t, x, v): Hermite here, CVODE's own interpolant below
     void emit(double from, double to, bool last, const Interpolant& H) {
         std::vector<double> x(model.dof()), v(model.dof());
         while (!done) {
-            const double tk = time(k);
+            const double tk = grid.time(k);
             if (last ? tk > to : tk >= to) return;
             if (tk >= from) {
                 H.at(tk, x, v);
                 obs.on_sample(tk, x.data(), v.data());
             }
-            if (tk >= opt.t_end) done = true;
+            if (grid.last(k)) done = true;
             ++k;
         }
     }

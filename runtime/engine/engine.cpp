@@ -10,6 +10,8 @@
 #include <set>
 #include <sstream>
 
+#include "sample_grid.h"
+#include "tie_series.h"
 #include "transitions.h"
 
 namespace hsnc {
@@ -54,6 +56,28 @@ double side_of(const SwitchFunction& f, const Configuration& cfg, const std::vec
     }
 }
 
+// An upper bound on the rates of the motion in cfg (1/s): the fastest mode
+// (Gershgorin on M^-1 K of the free masses: omega^2 <= 2 sum_links k / m_i),
+// its Rayleigh damping rate alpha + beta omega^2, and every forcing frequency.
+double fastest_rate(const Model& model, const Configuration& cfg) {
+    const std::size_t n = model.dof();
+    std::vector<double> stiff(n, 0.0);
+    auto add = [&](int a, int b, double k) {
+        if (a == b) return;
+        if (a != kGround) stiff[static_cast<std::size_t>(a)] += k;
+        if (b != kGround) stiff[static_cast<std::size_t>(b)] += k;
+    };
+    for (const Spring& s : model.springs) add(s.a, s.b, s.k);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    double w2 = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+        if (!cfg.stuck[i]) w2 = std::max(w2, 2 * stiff[i] / model.masses[i].m);
+    double rate = std::max(std::sqrt(w2), std::fabs(model.alpha) + std::fabs(model.beta) * w2);
+    for (const Harmonic& h : model.forcing) rate = std::max(rate, std::fabs(h.omega));
+    return rate;
+}
+
 // The earliest switch of one segment.
 struct Found {
     bool any = false;
@@ -95,13 +119,9 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     std::size_t same_instant = 0;
     double last_event_t = -kInf;
 
-    // Trajectory samples at t0 + k*dt (never accumulated), and t_end.
-    const double dt = options.dt > 0 ? options.dt : (t_end - model_.t0);
+    // Trajectory samples at t0 + k*dt (never accumulated), and t_end (sample_grid.h).
+    const SampleGrid grid(model_.t0, t_end, options.dt);
     std::size_t k_next = 0;
-    auto sample_time = [&](std::size_t k) {
-        const double tk = model_.t0 + static_cast<double>(k) * dt;
-        return tk < t_end - 1e-9 * dt ? tk : t_end;
-    };
     bool samples_done = !options.samples;
 
     auto finish = [&](RunStatus status, const std::string& message) {
@@ -117,8 +137,9 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
 
     // Per-segment working arrays, sized once for the largest switch list.
     const std::size_t max_switches = model_.contacts.size() + 2 * n;
-    std::vector<double> side(max_switches), floor(max_switches), root(max_switches);
-    std::vector<char> armed(max_switches);
+    std::vector<double> side(max_switches), floor(max_switches), root(max_switches), clear_until(max_switches);
+    std::vector<char> armed(max_switches), leaving(max_switches), leaves_now(max_switches);
+    std::vector<double> series_d, series_mag;
     Found found;
     found.switched.reserve(max_switches);
     std::vector<Transition> transitions;
@@ -135,11 +156,32 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         return static_cast<std::size_t>(f.kind) * stride + static_cast<std::size_t>(f.element);
     };
     std::size_t progress_counter = 0;
+    // Segment and switch records for observers that ask for them (the tangent dynamics).
+    const bool records = observer.wants_segments();
+    Configuration cfg_before;
+    std::vector<signed char> sgn_before;
+    double rate = 0.0;  // fastest_rate(current_cfg)
     while (true) {
         if (!current || cfg != current_cfg) {  // a reversal keeps the configuration: no lookup
             visited.insert(cfg);
             current = &provider_.solver(cfg);
             current_cfg = cfg;
+            rate = fastest_rate(model_, cfg);
+        }
+        // The smallest step is the time's own resolution, 4 eps |t|: a motion
+        // whose period is not several of them cannot be searched (at t = 1e9 an
+        // oscillation of 1.4e7 rad/s was stepped over without a row, every value
+        // of its gap within the rounding that |G'| eps |t| gives it). Refused
+        // with a message rather than run wrong: rate * step > 1, a period under
+        // 2 pi smallest steps.
+        if (rate * 4 * kEps * std::fabs(t) > 1.0) {
+            std::ostringstream msg;
+            msg.precision(3);
+            msg << "the motion is too fast for the time resolution at t = " << time_text(t) << ": configuration '"
+                << cfg.spec(model_) << "' has rates up to " << rate << " 1/s, and the smallest step there is "
+                << 4 * kEps * std::fabs(t) << " s (a period must span at least 2 pi of them); "
+                << "start nearer t = 0 (t0 shifts the forcing phase only)";
+            return finish(RunStatus::failure, msg.str());
         }
         SegmentSolver& S = *current;
         S.setup(t, t_lo, x.data(), v.data(), sgn.data());
@@ -180,6 +222,57 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         for (std::size_t f = 0; f < nsw; ++f)
             if (sw[f].kind == SwitchKind::velocity)
                 armed[f] = side[f] * buf.g[f] > noise(f);
+        // Ties at the segment start (tie_series.h): a function at zero whose
+        // rate vanishes too. Its first non-zero derivative, of order m, decides
+        // (interface.md "Ties and touches"): one heading across switches now, at
+        // this instant; one heading into its safe side is `leaving` zero, where
+        // the bound h + h' s - B s^2/2 would make the steps shrink like s^(m/2)
+        // (a contact at rest on its gap under sin forcing took 30000
+        // evaluations). By Taylor's theorem with B' >= |h^(m+1)| on [0, T],
+        // h > 0 on (0, (m+1)|h^(m)(0)|/B'), so it is left out of the bound up to
+        // half that (clear_until) and watched by the bound from there. A function
+        // with no non-zero derivative (identically zero to rounding, by
+        // Cayley-Hamilton) stays leaving, with steps of at most tau (doubling),
+        // unless its g'' bound is 0 (then the bound gives an unlimited step).
+        std::fill(leaving.begin(), leaving.end(), 0);
+        std::fill(leaves_now.begin(), leaves_now.end(), 0);
+        {
+            MotionSeries low, full;  // order 2 for the rate; the full expansion only at a true tie
+            for (std::size_t f = 0; f < nsw; ++f) {
+                if (std::fabs(buf.g[f]) > noise(f)) continue;
+                // A rate clearly beyond its rounding (almost every function that has
+                // just switched) needs no series: the bound works.
+                if (std::fabs(buf.dg[f]) > 4 * tie_noise(rate_magnitude(model_, cfg, sw[f], x.data(), v.data())))
+                    continue;
+                if (low.x.empty()) low = motion_series(model_, cfg, sgn.data(), t, t_lo, x.data(), v.data(), 2);
+                switch_series(model_, cfg, sw[f], t, t_lo, low, series_d, series_mag);
+                if (std::fabs(series_d[1]) > tie_noise(series_mag[1])) continue;  // h' decides: the bound works
+                const int max_order = tie_order(model_);
+                if (full.x.empty())
+                    full = motion_series(model_, cfg, sgn.data(), t, t_lo, x.data(), v.data(), max_order + 2);
+                switch_series(model_, cfg, sw[f], t, t_lo, full, series_d, series_mag);
+                int order = 0;
+                const int dir = first_nonzero_sign(series_d, series_mag, max_order, &order) * (side[f] > 0 ? 1 : -1);
+                if (dir < 0) {
+                    leaves_now[f] = 1;
+                    continue;
+                }
+                if (dir == 0) {
+                    leaving[f] = buf.bound[f] > 0;
+                    clear_until[f] = 0.0;
+                    continue;
+                }
+                // clear_until = c/B'(T) for B' valid on [0, T], T <= c/B'(0): any T
+                // gives a valid interval [0, min(T, c/B'(T))].
+                const double c = 0.5 * (order + 1) * std::fabs(series_d[static_cast<std::size_t>(order)]);
+                const double T = std::min(tau_end, c / derivative_bound(model_, cfg, sw[f], full, order + 1, 0.0));
+                const double clear = std::min(T, c / derivative_bound(model_, cfg, sw[f], full, order + 1, T));
+                if (clear > 0) {
+                    leaving[f] = 1;
+                    clear_until[f] = clear;
+                }
+            }
+        }
         for (std::size_t iter = 0;; ++iter) {
             if (iter > 10'000'000) return finish(RunStatus::failure, "switch search does not converge at t = " + time_text(t + tau));
             // Which functions have switched at tau, and where is each one's zero?
@@ -190,6 +283,11 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 if (!std::isfinite(h) || !std::isfinite(hd) || !std::isfinite(buf.bound[f]))
                     return finish(RunStatus::failure, "non-finite switch function in configuration '" +
                                                           cfg.spec(model_) + "' at t = " + time_text(t + tau));
+                if (iter == 0 && leaves_now[f]) {  // a tie heading across: it switches at the segment start
+                    root[f] = 0.0;
+                    tau_star = 0.0;
+                    continue;
+                }
                 const double eps_f = noise(f);
                 const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
                 if (stop ? h > eps_f : h >= -eps_f) continue;
@@ -229,6 +327,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             // Safe step: no function can reach its trigger level inside it.
             double step = std::min(max_step, tau_end - tau);
             for (std::size_t f = 0; f < nsw; ++f) {
+                if (leaving[f]) continue;
                 const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
                 const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
                 // Contacts and releases switch only when certainly negative (level
@@ -237,20 +336,27 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 step = std::min(step, safe_step(h - level, hd, buf.bound[f]));
             }
             const double floor_step = 4 * kEps * (std::fabs(t) + std::fabs(tau)) + 1e-300;
+            for (std::size_t f = 0; f < nsw; ++f)
+                if (leaving[f]) step = std::min(step, tau < clear_until[f] ? clear_until[f] - tau : std::max(tau, floor_step));
             step = std::max(step, floor_step);
             prev_tau = tau;
             tau = std::min(tau + step, tau_end);
             eval(tau);
-            for (std::size_t f = 0; f < nsw; ++f)
+            for (std::size_t f = 0; f < nsw; ++f) {
                 if (sw[f].kind == SwitchKind::velocity && !armed[f] && side[f] * buf.g[f] > 2 * noise(f))
                     armed[f] = 1;
+                // Past its clear interval the bound watches it again (a function
+                // leaving an exact zero, clear_until = 0, once it is above its rounding).
+                if (leaving[f] && tau >= clear_until[f] && (clear_until[f] > 0 || side[f] * buf.g[f] > 2 * noise(f)))
+                    leaving[f] = 0;
+            }
         }
 
         // ---- dense output up to the event (or t_end) from the closed form ----
         const double t_seg_end = found.any ? t + found.tau : t_end;
         if (!samples_done) {
             while (true) {
-                const double tk = sample_time(k_next);
+                const double tk = grid.time(k_next);
                 if (found.any ? tk >= t_seg_end : tk > t_end) break;
                 if (tk == t) {
                     // The segment's start state itself, not its modal round trip.
@@ -260,12 +366,19 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     S.eval(std::max(0.0, (tk - t) - t_lo), dense.view());
                     observer.on_sample(tk, dense.x.data(), dense.v.data());
                 }
-                if (tk >= t_end) {
+                if (grid.last(k_next)) {
                     samples_done = true;
                     break;
                 }
                 ++k_next;
             }
+        }
+
+        if (records) {
+            SegmentRecord rec;
+            rec.t = t, rec.t_lo = t_lo, rec.tau = found.any ? found.tau : tau_end;
+            rec.cfg = &cfg, rec.sgn = sgn.data(), rec.x = x.data(), rec.v = v.data();
+            observer.on_segment(rec);
         }
 
         // ---- advance to the event instant: the state at tau, the time as t + t_lo ----
@@ -287,8 +400,16 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         }
 
         transitions.clear();
+        if (records) cfg_before = cfg, sgn_before = sgn;
         if (!apply_switches(model_, t, x.data(), v.data(), buf.a.data(), cfg, sgn, found.switched, transitions, why))
             return finish(RunStatus::chattering, why);
+        if (records) {
+            SwitchRecord rec;
+            rec.t = t, rec.t_lo = t_lo, rec.switched = &found.switched;
+            rec.before = &cfg_before, rec.sgn_before = sgn_before.data();
+            rec.after = &cfg, rec.sgn_after = sgn.data(), rec.x = x.data(), rec.v = v.data();
+            observer.on_switch(rec);
+        }
         for (const Transition& tr : transitions) {
             observer.on_event(t, tr.kind, tr.element, x.data(), v.data());
             ++sum.events;

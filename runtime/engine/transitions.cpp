@@ -5,324 +5,95 @@
 #include <limits>
 
 #include "assembly.h"
+#include "tie_series.h"
 
 namespace hsnc {
 namespace {
 
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
-// Derivatives A_i^(k), k = 0..order, of the force on mass i at (t, x, v) in
-// cfg (friction directions sgn), with the magnitude of their terms (their
-// rounding level), from the equation of motion itself:
-//     m_j x_j^(k+2) = A_j^(k) - [k = 0] mu_k N_j sgn_j  (0 for a stuck mass),
-//     A_j^(k) = [k = 0] (load_j + contact preloads) - (K x^(k))_j - (C x^(k+1))_j
-//               + sum_h F_hj Omega_h^k sin(Omega_h t + phase_h + k pi/2).
-void force_series(const Model& model, const Configuration& cfg, const std::vector<signed char>& sgn, int i, double t,
-                  const double* x, const double* v, int order, std::vector<double>& d, std::vector<double>& mag) {
-    const int n = static_cast<int>(model.dof());
-    auto at = [](const std::vector<double>& y, int b) { return b == kGround ? 0.0 : y[b]; };
-    std::vector<std::vector<double>> X(order + 2, std::vector<double>(n, 0.0)), M = X;
-    for (int j = 0; j < n; ++j) {
-        X[0][j] = x[j], M[0][j] = std::fabs(x[j]);
-        if (!cfg.stuck[j]) X[1][j] = v[j], M[1][j] = std::fabs(v[j]);
-    }
-    auto deriv = [&](int j, int k, double& value, double& m) {
-        value = k == 0 ? model.load[j] : 0.0;
-        m = std::fabs(value);
-        value -= model.alpha * model.masses[j].m * X[k + 1][j];
-        m += std::fabs(model.alpha) * model.masses[j].m * M[k + 1][j];
-        auto link = [&](int a, int b, double kk, double gap) {
-            if (a == b || (a != j && b != j)) return;
-            double f = -kk * (at(X[k], a) - at(X[k], b)) - model.beta * kk * (at(X[k + 1], a) - at(X[k + 1], b));
-            double fm = kk * (at(M[k], a) + at(M[k], b)) + std::fabs(model.beta) * kk * (at(M[k + 1], a) + at(M[k + 1], b));
-            if (k == 0) f += kk * gap, fm += std::fabs(kk * gap);
-            value += a == j ? f : -f;
-            m += fm;
-        };
-        for (const Spring& s : model.springs) link(s.a, s.b, s.k, 0.0);
-        for (std::size_t c = 0; c < model.contacts.size(); ++c)
-            if (cfg.closed[c]) link(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k, model.contacts[c].gap);
-        for (const Harmonic& h : model.forcing) {
-            const double arg = h.omega * t + h.phase;
-            double s = (k % 2 == 0) ? std::sin(arg) : std::cos(arg);
-            if (k % 4 == 2 || k % 4 == 3) s = -s;
-            const double wk = std::pow(h.omega, k);
-            value += h.amplitude[j] * wk * s;
-            m += std::fabs(h.amplitude[j]) * wk;
-        }
-    };
-    for (int k = 0; k + 2 <= order + 1; ++k)
-        for (int j = 0; j < n; ++j) {
-            if (cfg.stuck[j]) continue;
-            double A, m;
-            deriv(j, k, A, m);
-            const double fr = k == 0 && model.masses[j].has_friction ? model.masses[j].mu_k * model.normal_force(j) : 0.0;
-            X[k + 2][j] = (A - fr * sgn[j]) / model.masses[j].m;
-            M[k + 2][j] = (m + fr * (sgn[j] != 0)) / model.masses[j].m;
-        }
-    d.assign(order + 1, 0.0);
-    mag.assign(order + 1, 0.0);
-    for (int k = 0; k <= order; ++k) deriv(i, k, d[k], mag[k]);
-}
+// The double engine's arithmetic for the decision rules (transition_rules.h):
+// forces and their derivatives from the equation of motion at (t, x, v) (the
+// series of tie_series.h), zero meaning within 16 ulps of the magnitude of
+// the terms.
+class DoublePhysics {
+public:
+    using Scalar = double;
+    DoublePhysics(const Model& model, double t, const double* x, double* v, const double* a)
+        : model_(model), t_(t), x_(x), v_(v), a_(a), n_(static_cast<int>(model.dof())) {}
 
-// Stick rule at v_i = 0 (interface.md): stuck if |A_i| < mu_s*N_i, else slide
-// in the direction of A_i. Returns 0 for stuck, else the direction. A tie
-// (|A_i| = mu_s*N_i to rounding) is decided by the first derivative, as the
-// contract says: stuck if |A_i| is not increasing with the mass held (a_i = 0,
-// the others' accelerations from `a`, or 0 when a is null), else sliding.
-signed char stick_rule(const Model& model, const Configuration& cfg, const std::vector<signed char>& sgn, int i,
-                       double t, const double* x, const double* v, const double* a) {
-    const double A = force_on_mass(model, cfg, i, t, x, v);
-    const double limit = model.masses[i].mu_s * model.normal_force(i);
-    const double dir = A > 0 ? 1 : -1;
-    if (std::fabs(std::fabs(A) - limit) <= 16 * kEps * std::max(std::fabs(A), limit)) {
-        std::vector<double> held(model.dof(), 0.0);
-        if (a) held.assign(a, a + model.dof());
+    int sign(double y) const { return y > 0 ? 1 : y < 0 ? -1 : 0; }
+    bool negligible(double value, double magnitude) const { return std::fabs(value) <= 16 * kEps * magnitude; }
+    double abs(double y) const { return std::fabs(y); }
+    int dof() const { return n_; }
+    std::size_t contacts() const { return model_.contacts.size(); }
+    bool has_friction(int i) const { return model_.masses[i].has_friction; }
+    int velocity_sign(int i) const { return sign(v_[i]); }
+    void stop(int i) { v_[i] = 0.0; }
+    double force(const Configuration& cfg, int i) const { return force_on_mass(model_, cfg, i, t_, x_, v_); }
+    double static_limit(int i) const { return model_.masses[i].mu_s * model_.normal_force(i); }
+    double held_rate(const Configuration& cfg, int i) const {
+        std::vector<double> held(model_.dof(), 0.0);
+        if (a_) held.assign(a_, a_ + model_.dof());
         held[i] = 0.0;
-        const double rate = dir * force_rate_on_mass(model, cfg, i, t, v, held.data());
-        // The held motion's derivatives: the rate's rounding level, and the
-        // higher orders when the rate vanishes (the first non-zero derivative
-        // decides; none at all: |A_i| stays at the limit, not increasing).
-        Configuration hold = cfg;
-        hold.stuck[i] = 1;
-        std::vector<signed char> s = sgn;
-        s[i] = 0;
-        const int order = static_cast<int>(2 * model.dof() + 2 * model.forcing.size() + 2);
-        std::vector<double> d, mag;
-        force_series(model, hold, s, i, t, x, v, order, d, mag);
-        if (std::fabs(rate) <= 16 * kEps * mag[1]) {
-            for (int k = 2; k <= order; ++k)
-                if (std::fabs(d[k]) > 16 * kEps * mag[k]) return dir * d[k] > 0 ? static_cast<signed char>(dir) : 0;
-            return 0;
-        }
-        return rate > 0 ? static_cast<signed char>(dir) : 0;
+        return force_rate_on_mass(model_, cfg, i, t_, v_, held.data());
     }
-    if (std::fabs(A) < limit) return 0;
-    return static_cast<signed char>(dir);
-}
-
-// Acceleration of every mass in cfg at (t, x, v): 0 when stuck, else
-// (A_i - mu_k N_i sgn_i)/m_i (sgn_i = 0 for masses without friction); entries n..2n-1
-// hold (|A_i| + mu_k N_i)/m_i, the magnitude of the terms (its rounding level).
-std::vector<double> accelerations(const Model& model, const Configuration& cfg, const std::vector<signed char>& sgn,
-                                  double t, const double* x, const double* v) {
-    const int n = static_cast<int>(model.dof());
-    std::vector<double> a(2 * n, 0.0);  // accelerations, then the magnitudes of their terms
-    for (int i = 0; i < n; ++i) {
-        if (cfg.stuck[i]) continue;
-        const double A = force_on_mass(model, cfg, i, t, x, v);
-        const double friction = model.masses[i].has_friction ? model.masses[i].mu_k * model.normal_force(i) : 0.0;
-        a[i] = (A - friction * sgn[i]) / model.masses[i].m;
-        a[n + i] = (std::fabs(A) + friction) / model.masses[i].m;  // magnitude of its terms
+    int tie_order() const { return hsnc::tie_order(model_); }
+    rules::Series<double> held_series(const Configuration& hold, const std::vector<signed char>& sgn, int i,
+                                      int order) const {
+        const MotionSeries m = motion_series(model_, hold, sgn.data(), t_, 0.0, x_, v_, order + 1);
+        rules::Series<double> s;
+        force_series(model_, hold, i, t_, 0.0, m, s.d, s.mag);
+        return s;
     }
-    return a;
-}
-
-// Magnitude of the terms of dA_i/dt (force_rate_on_mass) at (t, v, a), its
-// rounding level: a[n..2n-1] holds the magnitudes of the accelerations' terms.
-double force_rate_magnitude(const Model& model, const Configuration& cfg, int i, const double* v,
-                            const std::vector<double>& a) {
-    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : std::fabs(y[b]); };
-    const double* amag = a.data() + model.dof();
-    double f = std::fabs(model.alpha) * model.masses[i].m * amag[i];
-    for (const Harmonic& h : model.forcing) f += std::fabs(h.amplitude[i] * h.omega);
-    auto add = [&](int p, int q, double k) {
-        if (p != i && q != i) return;
-        f += k * (body(v, p) + body(v, q)) + std::fabs(model.beta) * k * (body(amag, p) + body(amag, q));
-    };
-    for (const Spring& s : model.springs) add(s.a, s.b, s.k);
-    for (std::size_t c = 0; c < model.contacts.size(); ++c)
-        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
-    return f;
-}
-
-// State a contact enters at (t, x, v) when G = 0 and G' = 0 there (to
-// rounding): closed if the first non-zero of G'', G''' is positive, open if
-// negative. -1: not tied, or neither decides (G stays at 0, e.g. a mass stuck
-// exactly on the gap): a function that only touches 0 changes nothing
-// (interface.md "Ties and touches"), so the contact keeps its state (at t0
-// the provisional closed: at rest on the boundary).
-int tied_contact_state(const Model& model, const Configuration& cfg, int c, double t, const double* x,
-                       const double* v, const std::vector<double>& a) {
-    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
-    const Contact& k = model.contacts[c];
-    const double G = gap(model, c, x);
-    if (std::fabs(G) > 16 * kEps * (std::fabs(body(x, k.a)) + std::fabs(body(x, k.b)) + std::fabs(k.gap))) return -1;
-    const double Gd = gap_rate(model, c, v);
-    if (std::fabs(Gd) > 16 * kEps * (std::fabs(body(v, k.a)) + std::fabs(body(v, k.b)))) return -1;
-    double decide = body(a.data(), k.a) - body(a.data(), k.b);  // G''
-    const double* amag = a.data() + model.dof();  // |A| + mu_k N over m: the rounding level of a
-    if (std::fabs(decide) <= 16 * kEps * (body(amag, k.a) + body(amag, k.b))) {
-        // G''' = A_a'/m_a - A_b'/m_b (friction forces are constant; stuck masses do not move).
-        auto jerk = [&](int b) {
-            if (b == kGround || cfg.stuck[b]) return 0.0;
-            return force_rate_on_mass(model, cfg, b, t, v, a.data()) / model.masses[b].m;
-        };
-        decide = jerk(k.a) - jerk(k.b);
-        auto jerk_level = [&](int b) {
-            if (b == kGround || cfg.stuck[b]) return 0.0;
-            return force_rate_magnitude(model, cfg, b, v, a) / model.masses[b].m;
-        };
-        if (std::fabs(decide) <= 16 * kEps * (jerk_level(k.a) + jerk_level(k.b))) return -1;
+    rules::Series<double> gap_now(int c) const {
+        const Contact& k = model_.contacts[c];
+        return {{gap(model_, c, x_), gap_rate(model_, c, v_)},
+                {std::fabs(body(x_, k.a)) + std::fabs(body(x_, k.b)) + std::fabs(k.gap),
+                 std::fabs(body(v_, k.a)) + std::fabs(body(v_, k.b))}};
     }
-    return decide > 0 ? 1 : 0;
-}
+    void prepare_ties(const Configuration& cfg, const std::vector<signed char>& sgn) {
+        cfg_ = cfg;
+        sgn_ = sgn;
+    }
+    // G^(k), k = 0..order, in the prepared configuration: the motion's
+    // derivatives from the equation of motion (tie_series.h).
+    rules::Series<double> tied_gap_series(int c, int order) const {
+        const MotionSeries m = motion_series(model_, cfg_, sgn_.data(), t_, 0.0, x_, v_, order + 1);
+        rules::Series<double> s;
+        switch_series(model_, cfg_, SwitchFunction{SwitchKind::gap, c}, t_, 0.0, m, s.d, s.mag);
+        return s;
+    }
+
+private:
+    static double body(const double* y, int b) { return b == kGround ? 0.0 : y[b]; }
+    const Model& model_;
+    double t_;
+    const double* x_;
+    double* v_;
+    const double* a_;
+    int n_;
+    Configuration cfg_;
+    std::vector<signed char> sgn_;
+};
 
 }  // namespace
 
 bool apply_switches(const Model& model, double t, const double* x, double* v, const double* a, Configuration& cfg,
                     std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
                     std::vector<Transition>& out, std::string& why) {
-    const int n = static_cast<int>(model.dof());
-    // A stop sets its velocity to 0 exactly, before the contacts are judged.
-    for (const SwitchFunction& f : switched)
-        if (f.kind == SwitchKind::velocity) v[f.element] = 0.0;
-    // 1. Every contact change first. A switched contact with G = 0 and G' = 0
-    //    (to rounding; e.g. a touch at a friction stop, found "heading across"
-    //    only by the rounding of the stopping velocity) is a tie: step 4 decides
-    //    it by G'', G''' of the configuration the friction decisions give.
-    std::vector<char> tied(model.contacts.size(), 0);
-    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
-    for (const SwitchFunction& f : switched) {
-        if (f.kind != SwitchKind::gap) continue;
-        const Contact& k = model.contacts[f.element];
-        const double G = gap(model, f.element, x), Gd = gap_rate(model, f.element, v);
-        if (std::fabs(G) <= 16 * kEps * (std::fabs(body(x, k.a)) + std::fabs(body(x, k.b)) + std::fabs(k.gap)) &&
-            std::fabs(Gd) <= 16 * kEps * (std::fabs(body(v, k.a)) + std::fabs(body(v, k.b)))) {
-            tied[f.element] = 1;
-            continue;
-        }
-        cfg.closed[f.element] = !cfg.closed[f.element];
-        out.push_back({cfg.closed[f.element] ? EventKind::contact_close : EventKind::contact_open, f.element});
-    }
-    // 2. Friction: masses whose velocity reached 0 are decided by the stick rule;
-    //    stuck masses whose release function switched start sliding along A_i.
-    std::vector<char> deciding(n, 0);
-    for (const SwitchFunction& f : switched) {
-        const int i = f.element;
-        if (f.kind == SwitchKind::velocity) {
-            v[i] = 0.0;
-            deciding[i] = 1;
-        } else if (f.kind == SwitchKind::release_pos || f.kind == SwitchKind::release_neg) {
-            cfg.stuck[i] = 0;
-            sgn[i] = f.kind == SwitchKind::release_pos ? 1 : -1;
-            out.push_back({EventKind::release, i});
-        }
-    }
-    // 3. Decide, then re-check every stuck mass against the forces of the new
-    //    configuration, until nothing changes.
-    for (int round = 0; round < 2 * n + 4; ++round) {
-        bool changed = false;
-        for (int i = 0; i < n; ++i) {
-            if (!deciding[i]) continue;
-            deciding[i] = 0;
-            const signed char dir = stick_rule(model, cfg, sgn, i, t, x, v, a);
-            if (dir == 0) {
-                cfg.stuck[i] = 1;
-                sgn[i] = 0;
-                out.push_back({EventKind::stick, i});
-            } else {
-                if (dir != sgn[i]) out.push_back({EventKind::reversal, i});
-                sgn[i] = dir;
-            }
-            changed = true;
-        }
-        for (int i = 0; i < n; ++i) {
-            if (!cfg.stuck[i]) continue;
-            const signed char dir = stick_rule(model, cfg, sgn, i, t, x, v, a);
-            if (dir == 0) continue;
-            cfg.stuck[i] = 0;
-            sgn[i] = dir;
-            out.push_back({EventKind::release, i});
-            changed = true;
-        }
-        if (!changed) {
-            // 4. Contacts at G = 0, G' = 0 at this instant (a touch, or a mass
-            //    stopped or released on its stop) enter the state the forces of
-            //    the configuration that results give them (interface.md: contacts
-            //    re-decided after the friction decisions, until settled).
-            //    Contacts the search found crossing keep their change.
-            const std::vector<double> acc = accelerations(model, cfg, sgn, t, x, v);
-            for (std::size_t c = 0; c < model.contacts.size(); ++c) {
-                const SwitchFunction gf{SwitchKind::gap, static_cast<int>(c)};
-                if (!tied[c] && std::find(switched.begin(), switched.end(), gf) != switched.end()) continue;
-                const int state = tied_contact_state(model, cfg, static_cast<int>(c), t, x, v, acc);
-                if (state < 0 || state == cfg.closed[c]) continue;
-                cfg.closed[c] = static_cast<char>(state);
-                out.push_back({state ? EventKind::contact_close : EventKind::contact_open, static_cast<int>(c)});
-                changed = true;
-            }
-            if (!changed) return true;
-        }
-    }
+    DoublePhysics p(model, t, x, v, a);
+    if (rules::apply_switches(p, cfg, sgn, switched, out)) return true;
     why = "friction decisions at t = " + std::to_string(t) + " do not settle";
     return false;
 }
 
-namespace {
-
-// Friction masses: sliding along v, or at rest stuck or sliding by the stick rule, in cfg.
-void decide_friction(const Model& model, Configuration& cfg, std::vector<signed char>& sgn, double t, const double* x,
-                     const double* v) {
-    const int n = static_cast<int>(model.dof());
-    for (int i = 0; i < n; ++i) {
-        if (!model.masses[i].has_friction) continue;
-        if (v[i] != 0.0) {
-            cfg.stuck[i] = 0;
-            sgn[i] = v[i] > 0 ? 1 : -1;
-        } else {
-            const signed char dir = stick_rule(model, cfg, sgn, i, t, x, v, nullptr);
-            cfg.stuck[i] = dir == 0;
-            sgn[i] = dir;
-        }
-    }
-}
-
-}  // namespace
-
 Configuration entered_configuration(const Model& model, double t, const double* x, const double* v,
                                     std::vector<signed char>& sgn) {
     Configuration cfg = Configuration::all_open(model);
-    const int n = static_cast<int>(model.dof());
-    sgn.assign(n, 0);
-    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
-    // Contacts with G = 0 and G' = 0 at t are decided below by G'', then G'''
-    // (the first non-zero derivative, interface.md "Ties and touches"), which
-    // need the accelerations of the configuration the friction decisions give.
-    std::vector<int> tied;
-    for (std::size_t c = 0; c < model.contacts.size(); ++c) {
-        const Contact& k = model.contacts[c];
-        const double G = gap(model, static_cast<int>(c), x);
-        const double noise = 16 * kEps * (std::fabs(body(x, k.a)) + std::fabs(body(x, k.b)) + std::fabs(k.gap));
-        if (std::fabs(G) > noise) {
-            cfg.closed[c] = G > 0;
-            continue;
-        }
-        const double Gd = gap_rate(model, static_cast<int>(c), v);
-        if (std::fabs(Gd) > 16 * kEps * (std::fabs(body(v, k.a)) + std::fabs(body(v, k.b)))) {
-            cfg.closed[c] = Gd > 0;
-        } else {
-            cfg.closed[c] = 1;  // provisionally: resting on the boundary (x[a]-x[b] >= gap)
-            tied.push_back(static_cast<int>(c));
-        }
-    }
-    decide_friction(model, cfg, sgn, t, x, v);
-    // A tied contact carries no spring force (G = 0) and no damper force
-    // (G' = 0), so its own state changes neither the accelerations nor the
-    // friction decisions; friction is still re-decided after any change.
-    for (int round = 0; round < 4 && !tied.empty(); ++round) {
-        const std::vector<double> a = accelerations(model, cfg, sgn, t, x, v);
-        bool changed = false;
-        for (int c : tied) {
-            const int state = tied_contact_state(model, cfg, c, t, x, v, a);
-            if (state >= 0 && state != cfg.closed[c]) {
-                cfg.closed[c] = static_cast<char>(state);
-                changed = true;
-            }
-        }
-        if (!changed) break;
-        decide_friction(model, cfg, sgn, t, x, v);
-    }
+    // Nothing stops at t0: v is only read.
+    DoublePhysics p(model, t, x, const_cast<double*>(v), nullptr);
+    rules::entered_configuration(p, cfg, sgn);
     return cfg;
 }
 

@@ -2,7 +2,9 @@
 // first, then the friction decisions (stick, release, reversal) with the
 // forces of the configuration that results, repeated until nothing changes.
 // Shared by the HSNC engine and the event-locating baseline integrator, so
-// every method applies exactly the same physics.
+// every method applies exactly the same physics; the decision rules
+// themselves are runtime/engine/transition_rules.h, which the CLN reference
+// instantiates too.
 #pragma once
 
 #include <string>
@@ -12,13 +14,10 @@
 #include "event_kind.h"
 #include "model.h"
 #include "switch_function.h"
+#include "transition_rules.h"  // Transition, and the rules this file instantiates for double
 
 namespace hsnc {
 
-struct Transition {
-    EventKind kind;
-    int element;
-};
 
 /// Apply the switch functions that reached zero at instant t with state
 /// (x, v) and accelerations a just before it (may be null: taken as 0; used
@@ -31,8 +30,8 @@ bool apply_switches(const Model& model, double t, const double* x, double* v, co
                     std::vector<Transition>& out, std::string& why);
 
 /// The configuration the motion enters at (t, x, v) (interface.md: "At t0 ...").
-/// Contacts by G, a tie G = 0 by the first non-zero of G', G'', G''' (closed
-/// if G is increasing; all zero counts as closed at t0, x[a]-x[b] >= gap);
+/// Contacts by G, a tie G = 0 by the first non-zero of G', G'', G''', ...
+/// (closed if G is increasing; all zero counts as closed at t0, x[a]-x[b] >= gap);
 /// friction masses with v_i = 0 stuck or sliding by A_i.
 Configuration entered_configuration(const Model& model, double t, const double* x, const double* v,
                                     std::vector<signed char>& sgn);

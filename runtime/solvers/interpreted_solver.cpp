@@ -284,8 +284,10 @@ void execute(const Program& p, const std::vector<Exec>& code, double* r) {
                 m[kModeQ] += y;
                 m[kModeDQ] += dy;
                 m[kModeDDQ] += ddy;
-                m[kModeMQ] += __builtin_fabs(y);
-                m[kModeMDQ] += __builtin_fabs(dy);
+                // The magnitude of the terms (y and y' cancel to ~tau^3 near tau = 0).
+                const double Q = __builtin_fabs(k[kResQ]);
+                m[kModeMQ] += Q * (__builtin_fabs(ct * eS) + __builtin_fabs(w * Cb));
+                m[kModeMDQ] += Q * (__builtin_fabs(ct * eC) + __builtin_fabs(dw * Cb) + __builtin_fabs(k[kResMean] * w * Sb));
                 break;
             }
         }
