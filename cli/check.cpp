@@ -42,13 +42,25 @@ void print_summary(const Model& model, std::ostream& out) {
     out << "source: " << model.source << "\n";
     if (!model.description.empty()) out << "description: " << model.description << "\n";
 
+    if (model.structure.present) {
+        out << "structure: M = " << model.structure.mass_file << "  K = " << model.structure.stiffness_file;
+        if (!model.structure.damping_file.empty())
+            out << "  C = " << model.structure.damping_file << " (proportional: alpha, beta below)";
+        out << "\n";
+    }
     out << "degrees of freedom: " << model.dof() << "\n";
     for (std::size_t i = 0; i < model.dof(); ++i)
         out << "  " << i + 1 << "  " << model.masses[i].name << "  m = " << num(model.masses[i].m) << "\n";
 
-    out << "springs: " << model.springs.size() << "\n";
+    std::size_t from_structure = 0;
+    for (const Spring& s : model.springs) from_structure += s.from_structure ? 1 : 0;
+    out << "springs: " << model.springs.size() - from_structure << "\n";
     for (const Spring& s : model.springs)
-        out << "  " << body_name(model, s.a) << " - " << body_name(model, s.b) << "  k = " << num(s.k) << "\n";
+        if (!s.from_structure)
+            out << "  " << body_name(model, s.a) << " - " << body_name(model, s.b) << "  k = " << num(s.k) << "\n";
+    if (model.structure.present)
+        out << "stiffness matrix K: " << from_structure
+            << " couplings (K = sum of -K_ij between dofs i, j and the row sums to ground)\n";
 
     out << "contacts: " << model.contacts.size() << "\n";
     for (const Contact& c : model.contacts)
@@ -56,10 +68,17 @@ void print_summary(const Model& model, std::ostream& out) {
             << "  gap = " << num(c.gap) << "  k = " << num(c.k) << "\n";
 
     std::size_t with_friction = 0;
-    for (const Mass& m : model.masses) with_friction += m.has_friction ? 1 : 0;
+    for (const Mass& m : model.masses) with_friction += m.has_friction && m.friction < 0 ? 1 : 0;
     out << "friction masses: " << with_friction << "  (normal force m*g, g = " << num(model.g) << ")\n";
     for (const Mass& m : model.masses)
-        if (m.has_friction) out << "  " << m.name << "  mu_k = " << num(m.mu_k) << "  mu_s = " << num(m.mu_s) << "\n";
+        if (m.has_friction && m.friction < 0)
+            out << "  " << m.name << "  mu_k = " << num(m.mu_k) << "  mu_s = " << num(m.mu_s) << "\n";
+    if (!model.frictions.empty()) {
+        out << "friction elements: " << model.frictions.size() << "\n";
+        for (const FrictionElement& f : model.frictions)
+            out << "  " << f.name << "  between " << body_name(model, f.a) << " and " << body_name(model, f.b)
+                << "  mu_k = " << num(f.mu_k) << "  mu_s = " << num(f.mu_s) << "  normal = " << num(f.normal) << "\n";
+    }
 
     out << "forcing harmonics: " << model.forcing.size() << "\n";
     for (const Harmonic& h : model.forcing) out << "  omega = " << num(h.omega) << " rad/s  phase = " << num(h.phase) << "\n";

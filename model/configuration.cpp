@@ -42,8 +42,11 @@ Configuration Configuration::parse(const Model& model, const std::string& spec) 
                 if (c < 0) throw InputError("--config: closed=" + name + ": no contact named '" + name + "'");
                 cfg.closed[c] = 1;
             } else {
-                const int i = model.mass_index(name);
-                if (i < 0) throw InputError("--config: stuck=" + name + ": no mass named '" + name + "'");
+                int i = model.mass_index(name);
+                for (std::size_t m = 0; i < 0 && m < model.masses.size(); ++m)
+                    if (model.masses[m].friction >= 0 && model.friction_name(m) == name) i = static_cast<int>(m);
+                if (i < 0)
+                    throw InputError("--config: stuck=" + name + ": no mass or friction element named '" + name + "'");
                 if (!model.masses[i].has_friction)
                     throw InputError("--config: stuck=" + name + ": mass '" + name +
                                      "' has no friction (no mu_k) and cannot stick");
@@ -65,7 +68,7 @@ std::string Configuration::spec(const Model& model) const {
     first = true;
     for (std::size_t i = 0; i < stuck.size(); ++i)
         if (stuck[i]) {
-            stuck_part += (first ? "" : ",") + model.masses[i].name;
+            stuck_part += (first ? "" : ",") + model.friction_name(i);
             first = false;
         }
     return closed_part + " " + stuck_part;

@@ -37,7 +37,7 @@ FreeComponents free_components(const Model& model, const Configuration& cfg) {
     };
     std::vector<char> anchored(static_cast<std::size_t>(nf), 0);  // per free mass, then per root
     auto link = [&](int a, int b, double k) {
-        if (!(k > 0.0)) return;
+        if (k == 0.0) return;  // a [structure]'s springs may be negative (structure.h)
         const int sa = a == kGround ? -1 : slot[a], sb = b == kGround ? -1 : slot[b];
         if (sa >= 0 && sb >= 0)
             parent[find(sa)] = find(sb);

@@ -32,12 +32,23 @@ struct Mass {
     bool has_friction = false;  ///< true exactly when the file gave mu_k
     double mu_k = 0.0;          ///< kinetic friction coefficient, >= 0
     double mu_s = 0.0;          ///< static coefficient, >= mu_k
+    /// Index into Model::frictions of the [[friction]] element to ground that
+    /// this mass's friction stands for, or -1 (its own mu_k, normal force m*g).
+    /// An element with normal force N is carried as the equivalent coefficients
+    /// mu_k = mu_k_element * (N / (m*g)) (and mu_s alike), so every stage that
+    /// computes mu_k*m*g computes mu_k_element*N to rounding.
+    int friction = -1;
 };
 
 struct Spring {
     int a = kGround;  ///< body index (kGround or a mass)
     int b = kGround;
-    double k = 0.0;   ///< stiffness, >= 0
+    double k = 0.0;   ///< stiffness, >= 0 (a spring of a [structure]'s K may be negative)
+    /// True for the springs that represent a [structure]'s stiffness matrix
+    /// (structure.h): K = sum over i<j of -K_ij (e_i - e_j)(e_i - e_j)^T
+    /// + diag(row sums), so k = -K_ij between two dofs (any sign) and the
+    /// row sum to ground.
+    bool from_structure = false;
 };
 
 struct Contact {
@@ -55,6 +66,26 @@ struct Harmonic {
     std::vector<double> amplitude;  ///< one entry per mass
 };
 
+/// A [[friction]] element (interface.md section 5): Coulomb friction on the
+/// relative velocity v[a] - v[b] with a constant normal force. For now only a
+/// body against the ground (b == kGround); it acts through the equivalent
+/// coefficients of Mass (Mass::friction).
+struct FrictionElement {
+    std::string name;
+    int a = kGround;
+    int b = kGround;
+    double mu_k = 0.0;
+    double mu_s = 0.0;
+    double normal = 0.0;  ///< N > 0
+};
+
+/// Where a [structure]'s matrices came from (the model then has one Mass per
+/// dof, m = M_ii, and the springs of K, Spring::from_structure).
+struct StructureSource {
+    bool present = false;
+    std::string mass_file, stiffness_file, damping_file;  ///< as written in the model file ("" when absent)
+};
+
 struct Model {
     std::string name;
     std::string description;
@@ -67,6 +98,8 @@ struct Model {
     std::vector<Mass> masses;
     std::vector<Spring> springs;
     std::vector<Contact> contacts;
+    std::vector<FrictionElement> frictions;
+    StructureSource structure;
     double alpha = 0.0;  ///< Rayleigh mass coefficient
     double beta = 0.0;   ///< Rayleigh stiffness coefficient
     std::vector<Harmonic> forcing;
@@ -108,6 +141,11 @@ struct Model {
     }
     /// Normal force of mass i (interface.md: always m*g).
     double normal_force(std::size_t i) const { return masses[i].m * g; }
+    /// The name that stands for mass i's friction in event rows and
+    /// configuration specs: its [[friction]] element's name, else its own.
+    const std::string& friction_name(std::size_t i) const {
+        return masses[i].friction >= 0 ? frictions[static_cast<std::size_t>(masses[i].friction)].name : masses[i].name;
+    }
 };
 
 }  // namespace hsnc

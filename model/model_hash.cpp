@@ -30,6 +30,10 @@ std::string model_canonical_text(const Model& model) {
         for (double a : h.amplitude) t += " " + num(a);
         t += "\n";
     }
+    // Added only when present, so the hash of a model without them is unchanged.
+    for (const FrictionElement& f : model.frictions)
+        t += "friction " + f.name + " " + std::to_string(f.a) + " " + std::to_string(f.b) + " " + num(f.mu_k) + " " +
+             num(f.mu_s) + " " + num(f.normal) + "\n";
     t += "load";
     for (double l : model.load) t += " " + num(l);
     t += "\n";

@@ -23,6 +23,8 @@
 #include "error.h"
 #include "expression_evaluator.h"
 #include "file_read.h"
+#include "matrix_market.h"
+#include "structure.h"
 
 namespace hsnc {
 
@@ -91,17 +93,25 @@ public:
 
     Model read(const toml::table& root) {
         model_.source = source_;
-        check_keys(root, "", {"name", "description", "parameters", "mass", "spring", "damping", "contact",
-                              "forcing", "load", "initial", "simulate"});
+        for (const char* later : {"jenkins", "damper"})
+            if (const toml::node* n = root.get(later))
+                fail(n, later, std::string("[[") + later + "]] elements are not yet supported by this version of hsnc");
+        check_keys(root, "", {"name", "description", "parameters", "mass", "structure", "spring", "damping", "contact",
+                              "friction", "forcing", "load", "initial", "simulate"});
         model_.name = required_string(root, "", "name");
         if (model_.name.empty()) fail(root.get("name"), "name", "must not be empty");
         if (const toml::node* d = root.get("description")) model_.description = string_value(*d, "description");
 
         read_parameters(root);
-        read_masses(root);
+        if (root.get("structure"))
+            read_structure(root);
+        else
+            read_masses(root);
         read_springs(root);
+        add_structure_springs();
         read_damping(root);
         read_contacts(root);
+        read_frictions(root);
         read_forcing(root);
         read_load(root);
         read_initial(root);
@@ -299,7 +309,8 @@ private:
         const std::string name = string_value(node, key);
         if (name == "ground") return kGround;
         const int i = model_.mass_index(name);
-        if (i < 0) fail(&node, key, "unknown body '" + excerpt(name) + "' (expected 'ground' or a mass name)");
+        if (i < 0)
+            fail(&node, key, "unknown body '" + excerpt(name) + "' (expected 'ground' or a " + body_word() + " name)");
         return i;
     }
 
@@ -320,12 +331,13 @@ private:
 
     /// A table mass-name -> number (load, amplitude, initial x and v): one entry per mass, 0 when absent.
     std::vector<double> per_mass(const toml::node& node, const std::string& key) {
-        if (!node.is_table()) fail(&node, key, "expected a table of mass names, e.g. { m1 = 1.0 }, got " + type_name(node));
+        if (!node.is_table())
+            fail(&node, key, "expected a table of " + body_word() + " names, e.g. { m1 = 1.0 }, got " + type_name(node));
         std::vector<double> values(model_.dof(), 0.0);
         for (auto&& [k, v] : *node.as_table()) {
             const std::string name(k.str());
             const int i = model_.mass_index(name);
-            if (i < 0) fail_at(k.source().begin.line, join(key, name), "unknown mass '" + excerpt(name) + "'");
+            if (i < 0) fail_at(k.source().begin.line, join(key, name), "unknown " + body_word() + " '" + excerpt(name) + "'");
             values[i] = number(v, join(key, name));
         }
         return values;
@@ -389,6 +401,139 @@ private:
         values_[name] = value;
     }
 
+    /// What a body other than ground is called in messages.
+    std::string body_word() const { return model_.structure.present ? "dof" : "mass"; }
+
+    /// A path of the model file, relative to the model file's folder (or as given when absolute).
+    std::string beside_model(const std::string& path) const {
+        if (!path.empty() && path[0] == '/') return path;
+        const auto slash = source_.rfind('/');
+        return slash == std::string::npos ? path : source_.substr(0, slash + 1) + path;
+    }
+
+    /// A matrix file named by key `key` of [structure]; its errors name the key and the file.
+    MarketMatrix matrix_file(const toml::table& t, const char* key, std::string& written) {
+        const std::string path = "structure." + std::string(key);
+        written = required_string(t, "structure", key);
+        if (written.empty()) fail(t.get(key), path, "must name a Matrix Market file");
+        try {
+            return read_matrix_market(beside_model(written));
+        } catch (const InputError& e) {
+            fail(t.get(key), path, e.what());
+        }
+    }
+
+    void read_structure(const toml::table& root) {
+        if (const toml::node* m = root.get("mass"))
+            fail(m, "mass", "[[mass]] and [structure] exclude each other (a structure's bodies are its dofs)");
+        const toml::table* t = optional_table(root, "", "structure");
+        check_keys(*t, "structure", {"dofs", "mass", "stiffness", "damping"});
+        model_.structure.present = true;
+        const toml::node* dofs = t->get("dofs");
+        if (!dofs) fail_at(table_line(*t, "structure"), "structure.dofs", "required key is missing");
+        const toml::array* list = dofs->as_array();
+        if (!list || list->empty())
+            fail(dofs, "structure.dofs", "expected a non-empty list of dof names, e.g. [\"u1\", \"u2\"]");
+        std::vector<std::string> names;
+        for (std::size_t i = 0; i < list->size(); ++i) {
+            const std::string key = "structure.dofs[" + std::to_string(i + 1) + "]";
+            const std::string name = string_value(*list->get(i), key);
+            check_new_name(list->get(i), key, name);
+            element_names_.emplace(name, key);
+            names.push_back(name);
+        }
+        const MarketMatrix M = matrix_file(*t, "mass", model_.structure.mass_file);
+        std::vector<double> mass;
+        if (const std::string why = check_mass_matrix(M, names, mass); !why.empty())
+            fail(t->get("mass"), "structure.mass", model_.structure.mass_file + ": " + why);
+        const MarketMatrix K = matrix_file(*t, "stiffness", model_.structure.stiffness_file);
+        if (const std::string why = check_stiffness_matrix(K, names, structure_springs_); !why.empty())
+            fail(t->get("stiffness"), "structure.stiffness", model_.structure.stiffness_file + ": " + why);
+        if (t->get("damping")) {
+            const MarketMatrix C = matrix_file(*t, "damping", model_.structure.damping_file);
+            double a = 0.0, b = 0.0;
+            if (const std::string why = fit_rayleigh_damping(C, M, K, names, a, b); !why.empty())
+                fail(t->get("damping"), "structure.damping", model_.structure.damping_file + ": " + why);
+            structure_damping_ = std::make_pair(a, b);
+        }
+        for (std::size_t i = 0; i < names.size(); ++i) {
+            Mass m;
+            m.name = names[i];
+            m.m = mass[i];
+            // The matrices are numbers: their text is the literal (inspect --symbolic, sweep kernels).
+            model_.field_expressions["mass[" + std::to_string(i + 1) + "].m"] = literal_text(m.m);
+            model_.masses.push_back(m);
+        }
+    }
+
+    /// The springs of a [structure]'s K, after the file's own [[spring]]s (whose
+    /// keys "spring[N].k" keep their numbers).
+    void add_structure_springs() {
+        for (const Spring& s : structure_springs_) {
+            model_.springs.push_back(s);
+            model_.field_expressions["spring[" + std::to_string(model_.springs.size()) + "].k"] = literal_text(s.k);
+        }
+    }
+
+    void read_frictions(const toml::table& root) {
+        const auto tables = table_array(root, "friction");
+        for (std::size_t i = 0; i < tables.size(); ++i) {
+            const toml::table& t = *tables[i];
+            const std::string path = "friction[" + std::to_string(i + 1) + "]";
+            check_keys(t, path, {"name", "between", "mu_k", "mu_s", "normal"});
+            FrictionElement f;
+            if (t.get("name")) {
+                f.name = required_string(t, path, "name");
+                check_new_name(t.get("name"), path + ".name", f.name);
+            } else {
+                f.name = "friction" + std::to_string(i + 1);
+                check_new_name(&t, path + ".name", f.name);
+            }
+            std::tie(f.a, f.b) = between(t, path);
+            if (f.a != kGround && f.b != kGround)
+                fail(t.get("between"), path + ".between",
+                     "friction between two bodies is not yet supported; a [[friction]] element acts between a " +
+                         body_word() + " and 'ground' for now");
+            const int body = f.a == kGround ? f.b : f.a;
+            Mass& mass = model_.masses[static_cast<std::size_t>(body)];
+            f.mu_k = required_number(t, path, "mu_k");
+            if (f.mu_k < 0.0) fail(t.get("mu_k"), path + ".mu_k", "must be >= 0, got " + show(f.mu_k));
+            f.mu_s = optional_number(t, path, "mu_s").value_or(f.mu_k);
+            if (f.mu_s < f.mu_k)
+                fail(t.get("mu_s"), path + ".mu_s",
+                     "static coefficient must be >= mu_k = " + show(f.mu_k) + ", got " + show(f.mu_s));
+            const std::string mass_key = "mass[" + std::to_string(body + 1) + "]";
+            const auto normal = optional_number(t, path, "normal");
+            if (!normal && model_.structure.present)
+                fail_at(table_line(t, path), path + ".normal",
+                        "required key is missing (a dof has no weight m*g: give the normal force)");
+            f.normal = normal.value_or(mass.m * model_.g);
+            if (!(f.normal > 0.0)) fail(t.get("normal"), path + ".normal", "normal force must be > 0, got " + show(f.normal));
+            if (mass.has_friction)
+                fail(t.get("between"), path + ".between",
+                     "'" + mass.name + "' already has friction (" +
+                         (mass.friction >= 0 ? "element '" + model_.frictions[static_cast<std::size_t>(mass.friction)].name + "'"
+                                             : std::string("its own mu_k")) +
+                         "); one friction to ground per " + body_word() + " is supported");
+            // The element acts as the mass's friction with the equivalent coefficients (model.h).
+            const double ratio = f.normal / (mass.m * model_.g);
+            mass.has_friction = true;
+            mass.mu_k = f.mu_k * ratio;
+            mass.mu_s = f.mu_s * ratio;
+            mass.friction = static_cast<int>(model_.frictions.size());
+            auto text = [&](const std::string& key) {
+                const auto it = model_.field_expressions.find(key);
+                return it == model_.field_expressions.end() ? std::string() : it->second;
+            };
+            const std::string mu_k_text = text(path + ".mu_k"), mu_s_text = t.get("mu_s") ? text(path + ".mu_s") : mu_k_text;
+            const std::string scale = normal ? "*(" + text(path + ".normal") + ")/((" + text(mass_key + ".m") + ")*g)" : "";
+            model_.field_expressions[mass_key + ".mu_k"] = "(" + mu_k_text + ")" + scale;
+            model_.field_expressions[mass_key + ".mu_s"] = "(" + mu_s_text + ")" + scale;
+            element_names_.emplace(f.name, path);
+            model_.frictions.push_back(f);
+        }
+    }
+
     void read_masses(const toml::table& root) {
         const auto tables = table_array(root, "mass");
         if (tables.empty()) fail(root.get("mass"), "mass", "no masses: give at least one [[mass]] table");
@@ -435,7 +580,14 @@ private:
 
     void read_damping(const toml::table& root) {
         const toml::table* t = optional_table(root, "", "damping");
+        if (!t && structure_damping_) {
+            std::tie(model_.alpha, model_.beta) = *structure_damping_;
+            model_.field_expressions["damping.alpha"] = literal_text(model_.alpha);
+            model_.field_expressions["damping.beta"] = literal_text(model_.beta);
+        }
         if (!t) return;
+        if (structure_damping_)
+            fail(t, "damping", "[damping] and structure.damping both give the damping; keep one");
         check_keys(*t, "damping", {"alpha", "beta"});
         model_.alpha = optional_number(*t, "damping", "alpha").value_or(0.0);
         model_.beta = optional_number(*t, "damping", "beta").value_or(0.0);
@@ -507,7 +659,8 @@ private:
                                const std::string& path) {
         for (const auto& [name, o] : overrides) {
             const int i = model_.mass_index(name);
-            if (i < 0) throw InputError(o.flag + " '" + excerpt(o.raw) + "': no mass named '" + excerpt(name) + "'");
+            if (i < 0)
+                throw InputError(o.flag + " '" + excerpt(o.raw) + "': no " + body_word() + " named '" + excerpt(name) + "'");
             const EvaluatedExpression e = override_value(o);
             state[i] = e.value;
             model_.field_expressions[path + "." + name] = e.canonical_text;
@@ -538,7 +691,9 @@ private:
     std::unordered_map<std::string, double> values_;  ///< parameters evaluated so far
     bool pi_is_constant_ = true;                   ///< no parameter is named pi
     std::string parameter_text_;                   ///< the text of the expression number() read last for a parameter
-    std::map<std::string, std::string> element_names_;  ///< mass/contact name -> who took it
+    std::map<std::string, std::string> element_names_;  ///< mass/dof/contact/friction name -> who took it
+    std::vector<Spring> structure_springs_;             ///< the springs of [structure]'s K
+    std::optional<std::pair<double, double>> structure_damping_;  ///< (alpha, beta) of structure.damping
     Model model_;
 };
 

@@ -70,7 +70,7 @@ void CsvObserver::on_event(double t, EventKind kind, int element, const double* 
     events_->number(t);
     events_->text(event_kind_name(kind));
     const bool contact = kind == EventKind::contact_close || kind == EventKind::contact_open;
-    events_->text(contact ? model_.contacts[element].name.c_str() : model_.masses[element].name.c_str());
+    events_->text(contact ? model_.contacts[element].name.c_str() : model_.friction_name(static_cast<std::size_t>(element)).c_str());
     for (std::size_t i = 0; i < model_.dof(); ++i) events_->number(x[i]);
     for (std::size_t i = 0; i < model_.dof(); ++i) events_->number(v[i]);
     events_->end_row();

@@ -77,7 +77,7 @@ void force_derivative(const MpModel& mp, const Configuration& cfg, int i, const 
     auto link = [&](const MpModel::Link& l, bool contact) {
         if (l.a == l.b || (l.a != i && l.b != i)) return;
         cl_F f = -(l.k * (mp.body(xk, l.a) - mp.body(xk, l.b))) - mp.beta * l.k * (mp.body(xk1, l.a) - mp.body(xk1, l.b));
-        cl_F fm = l.k * (mp.body(mk, l.a) + mp.body(mk, l.b)) + cln::abs(mp.beta) * l.k * (mp.body(mk1, l.a) + mp.body(mk1, l.b));
+        cl_F fm = cln::abs(l.k) * (mp.body(mk, l.a) + mp.body(mk, l.b)) + cln::abs(mp.beta * l.k) * (mp.body(mk1, l.a) + mp.body(mk1, l.b));
         if (contact && k == 0) {
             f = f + l.k * l.gap;
             fm = fm + cln::abs(l.k * l.gap);

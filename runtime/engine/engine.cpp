@@ -64,8 +64,9 @@ double fastest_rate(const Model& model, const Configuration& cfg) {
     std::vector<double> stiff(n, 0.0);
     auto add = [&](int a, int b, double k) {
         if (a == b) return;
-        if (a != kGround) stiff[static_cast<std::size_t>(a)] += k;
-        if (b != kGround) stiff[static_cast<std::size_t>(b)] += k;
+        // |k|: a [structure]'s springs may be negative (Gershgorin needs |K_ij|).
+        if (a != kGround) stiff[static_cast<std::size_t>(a)] += std::fabs(k);
+        if (b != kGround) stiff[static_cast<std::size_t>(b)] += std::fabs(k);
     };
     for (const Spring& s : model.springs) add(s.a, s.b, s.k);
     for (std::size_t c = 0; c < model.contacts.size(); ++c)

@@ -36,7 +36,7 @@ void force_derivative(const Model& model, const Configuration& cfg, int i, doubl
     for_each_link(model, cfg, [&](int a, int b, double kk, double gap) {
         if (a == b || (a != i && b != i)) return;
         double f = -kk * (body(xk, a) - body(xk, b)) - model.beta * kk * (body(xk1, a) - body(xk1, b));
-        double fm = kk * (body(mk, a) + body(mk, b)) + std::fabs(model.beta) * kk * (body(mk1, a) + body(mk1, b));
+        double fm = std::fabs(kk) * (body(mk, a) + body(mk, b)) + std::fabs(model.beta * kk) * (body(mk1, a) + body(mk1, b));
         if (k == 0 && gap != 0.0) f += kk * gap, fm += std::fabs(kk * gap);
         value += a == i ? f : -f;
         magnitude += fm;
@@ -138,7 +138,7 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
         double m = std::fabs(model.load[ii]) + std::fabs(model.alpha) * model.masses[ii].m * std::fabs(v[ii]);
         for_each_link(model, cfg, [&](int a, int b, double kk, double gap) {
             if (a == b || (a != i && b != i)) return;
-            m += kk * (at(x, a) + at(x, b)) + std::fabs(model.beta) * kk * (at(v, a) + at(v, b)) + std::fabs(kk * gap);
+            m += std::fabs(kk) * (at(x, a) + at(x, b)) + std::fabs(model.beta * kk) * (at(v, a) + at(v, b)) + std::fabs(kk * gap);
         });
         for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii]);
         if (model.masses[ii].has_friction) m += model.masses[ii].mu_k * model.normal_force(i);
@@ -150,7 +150,7 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
     double m = std::fabs(model.alpha) * model.masses[ii].m * accel_magnitude(e);
     for_each_link(model, cfg, [&](int a, int b, double kk, double) {
         if (a == b || (a != e && b != e)) return;
-        m += kk * (at(v, a) + at(v, b)) + std::fabs(model.beta) * kk * (accel_magnitude(a) + accel_magnitude(b));
+        m += std::fabs(kk) * (at(v, a) + at(v, b)) + std::fabs(model.beta * kk) * (accel_magnitude(a) + accel_magnitude(b));
     });
     for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii] * h.omega);
     return m;
@@ -188,7 +188,7 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
             const double ma = free_mass(a) ? zm[static_cast<std::size_t>(a)] : 0.0;
             const double mb = free_mass(b) ? zm[static_cast<std::size_t>(b)] : 0.0;
             const double dz = up(za - zb, ma + mb);
-            two_e += kk * dz * dz;
+            two_e += std::fabs(kk) * dz * dz;  // >= the energy also with negative springs (structure.h)
         });
         double phi = 0.0;
         for (const Harmonic& h : model.forcing) {
@@ -215,7 +215,7 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
     double B = 0.0;
     for_each_link(model, cfg, [&](int a, int b, double kk, double) {
         if (a == b || (a != e && b != e)) return;
-        for (int o : {a, b}) B += kk * per_mass(o, rk1) + std::fabs(model.beta) * kk * per_mass(o, rk);
+        for (int o : {a, b}) B += std::fabs(kk) * per_mass(o, rk1) + std::fabs(model.beta * kk) * per_mass(o, rk);
     });
     B += std::fabs(model.alpha) * model.masses[static_cast<std::size_t>(e)].m * per_mass(e, rk);
     for (const Harmonic& h : model.forcing) B += std::fabs(h.amplitude[static_cast<std::size_t>(e)]) * std::pow(std::fabs(h.omega), k);

@@ -1,0 +1,42 @@
+// hsnc -- a strict reader of Matrix Market files (the NIST exchange format) for
+// the matrices of a [structure] (interface.md section 5).
+//
+// Accepted: "%%MatrixMarket matrix coordinate|array real|integer general|symmetric".
+// Coordinate files give "i j value" lines (1-based, each entry at most once;
+// a symmetric file holds the lower triangle i >= j only); array files give
+// every value column by column (a symmetric one the lower triangle, column by
+// column). Comment lines start with '%'; blank lines are skipped. Anything
+// else (complex or pattern fields, skew-symmetric or Hermitian storage, a
+// missing or extra entry, a number that is not finite or not a normal double,
+// trailing text on a line) is an error "FILE:LINE: reason" (LINE when the
+// error belongs to one line). The whole file is read before anything is used.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace hsnc {
+
+/// A dense matrix read from a Matrix Market file, row-major.
+struct MarketMatrix {
+    std::size_t rows = 0;
+    std::size_t cols = 0;
+    std::vector<double> values;  ///< rows*cols entries, row-major; symmetric files filled in both triangles
+    double operator()(std::size_t i, std::size_t j) const { return values[i * cols + j]; }
+};
+
+/// Largest file read (a dense 2000 x 2000 matrix written with 17 digits fits).
+inline constexpr std::size_t kMaxMatrixFileBytes = std::size_t{128} << 20;
+/// Largest dimension accepted (the dense matrix must fit in memory).
+inline constexpr std::size_t kMaxMatrixDimension = 10000;
+
+/// Parse Matrix Market text; `source` names it in messages. Throws InputError.
+MarketMatrix parse_matrix_market(const std::string& text, const std::string& source);
+
+/// Read the Matrix Market file at `path` (a regular file of at most
+/// kMaxMatrixFileBytes). Throws InputError "cannot read matrix file 'PATH': REASON"
+/// or a parse error.
+MarketMatrix read_matrix_market(const std::string& path);
+
+}  // namespace hsnc

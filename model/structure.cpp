@@ -1,0 +1,230 @@
+#include "structure.h"
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+
+namespace hsnc {
+namespace {
+
+constexpr double kRelTol = 1e-12;  // symmetry, definiteness and proportionality, relative (structure.h)
+
+std::string show(double v) {
+    std::ostringstream out;
+    out.precision(17);
+    out << v;
+    return out.str();
+}
+
+std::string entry(const char* m, const std::vector<std::string>& dofs, std::size_t i, std::size_t j) {
+    return std::string(m) + "(" + dofs[i] + ", " + dofs[j] + ")";
+}
+
+std::string check_size(const char* m, const MarketMatrix& A, std::size_t n) {
+    if (A.rows == n && A.cols == n) return "";
+    return std::string(m) + " is " + std::to_string(A.rows) + " x " + std::to_string(A.cols) + ", expected " +
+           std::to_string(n) + " x " + std::to_string(n) + " (one row and column per dof of structure.dofs)";
+}
+
+double max_abs(const MarketMatrix& A) {
+    double m = 0.0;
+    for (double v : A.values) m = std::max(m, std::fabs(v));
+    return m;
+}
+
+/// Symmetric to kRelTol of the largest entry; then A is replaced by (A + A^T)/2.
+std::string check_symmetric(const char* m, MarketMatrix& A, const std::vector<std::string>& dofs) {
+    const double tol = kRelTol * max_abs(A);
+    for (std::size_t i = 0; i < A.rows; ++i)
+        for (std::size_t j = 0; j < i; ++j)
+            if (std::fabs(A(i, j) - A(j, i)) > tol)
+                return std::string(m) + " is not symmetric: " + entry(m, dofs, i, j) + " = " + show(A(i, j)) + " but " +
+                       entry(m, dofs, j, i) + " = " + show(A(j, i));
+    for (std::size_t i = 0; i < A.rows; ++i)
+        for (std::size_t j = 0; j < i; ++j) {
+            const double v = 0.5 * (A(i, j) + A(j, i));
+            A.values[i * A.cols + j] = A.values[j * A.cols + i] = v;
+        }
+    return "";
+}
+
+std::string names_of(const std::vector<std::string>& dofs, const std::vector<std::size_t>& members) {
+    std::string s;
+    for (std::size_t i : members) s += (s.empty() ? "" : ", ") + dofs[i];
+    return s;
+}
+
+/// Smallest and largest eigenvalue of the Jacobi-scaled block A[members, members]
+/// (plus u u^T, u the scaled all-ones vector, when `deflate`: the block's
+/// structural null vector then counts as eigenvalue 1). False when a diagonal
+/// entry is <= 0 (then `bad` is its member).
+bool scaled_extremes(const MarketMatrix& A, const std::vector<std::size_t>& members, bool deflate, double& lo,
+                     double& hi, std::size_t& bad) {
+    const auto c = static_cast<Eigen::Index>(members.size());
+    Eigen::VectorXd d(c);
+    for (Eigen::Index r = 0; r < c; ++r) {
+        d(r) = A(members[r], members[r]);
+        if (!(d(r) > 0.0)) {
+            bad = members[r];
+            return false;
+        }
+    }
+    Eigen::MatrixXd S(c, c);
+    for (Eigen::Index r = 0; r < c; ++r)
+        for (Eigen::Index s = 0; s < c; ++s)
+            S(r, s) = A(members[r], members[s]) / std::sqrt(d(r) * d(s));
+    if (deflate) {
+        Eigen::VectorXd u = d.cwiseSqrt();  // D^1/2 * 1: S u = D^-1/2 K 1 = 0
+        u /= u.norm();
+        S += u * u.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(S, Eigen::EigenvaluesOnly);
+    lo = es.eigenvalues()(0);
+    hi = es.eigenvalues()(c - 1);
+    return true;
+}
+
+}  // namespace
+
+std::string check_mass_matrix(const MarketMatrix& M_in, const std::vector<std::string>& dofs, std::vector<double>& mass) {
+    const std::size_t n = dofs.size();
+    if (std::string why = check_size("M", M_in, n); !why.empty()) return why;
+    MarketMatrix M = M_in;
+    if (std::string why = check_symmetric("M", M, dofs); !why.empty()) return why;
+    std::vector<std::size_t> all(n);
+    std::iota(all.begin(), all.end(), std::size_t{0});
+    double lo = 0.0, hi = 0.0;
+    std::size_t bad = 0;
+    if (!scaled_extremes(M, all, false, lo, hi, bad))
+        return "M is not positive definite: " + entry("M", dofs, bad, bad) + " = " + show(M(bad, bad));
+    if (!(lo > kRelTol * hi))
+        return "M is not positive definite (smallest eigenvalue of the scaled D^-1/2 M D^-1/2: " + show(lo) + ")";
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = 0; j < n; ++j)
+            if (i != j && M(i, j) != 0.0)
+                return "M has the off-diagonal entry " + entry("M", dofs, i, j) + " = " + show(M(i, j)) +
+                       ": a consistent (non-diagonal) mass matrix is not yet supported; give a lumped (diagonal) M";
+    mass.assign(n, 0.0);
+    for (std::size_t i = 0; i < n; ++i) mass[i] = M(i, i);
+    return "";
+}
+
+std::string check_stiffness_matrix(const MarketMatrix& K_in, const std::vector<std::string>& dofs,
+                                   std::vector<Spring>& springs) {
+    const std::size_t n = dofs.size();
+    if (std::string why = check_size("K", K_in, n); !why.empty()) return why;
+    MarketMatrix K = K_in;
+    if (std::string why = check_symmetric("K", K, dofs); !why.empty()) return why;
+
+    // Row sums, zero within rounding (structure.h).
+    std::vector<double> ground(n, 0.0);
+    const double slack = std::max<double>(16.0, static_cast<double>(n)) * DBL_EPSILON;
+    for (std::size_t i = 0; i < n; ++i) {
+        double sum = 0.0, mag = 0.0;
+        for (std::size_t j = 0; j < n; ++j) sum += K(i, j), mag += std::fabs(K(i, j));
+        ground[i] = std::fabs(sum) <= slack * mag ? 0.0 : sum;
+    }
+
+    // Groups of dofs coupled by K (union-find), anchored by a row sum != 0.
+    std::vector<std::size_t> parent(n);
+    std::iota(parent.begin(), parent.end(), std::size_t{0});
+    auto find = [&](std::size_t s) {
+        while (parent[s] != s) s = parent[s] = parent[parent[s]];
+        return s;
+    };
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = 0; j < i; ++j)
+            if (K(i, j) != 0.0) parent[find(i)] = find(j);
+    std::vector<std::vector<std::size_t>> groups(n);
+    std::vector<char> anchored(n, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+        groups[find(i)].push_back(i);
+        if (ground[i] != 0.0) anchored[find(i)] = 1;
+    }
+    for (std::size_t r = 0; r < n; ++r) {
+        const std::vector<std::size_t>& members = groups[r];
+        if (members.empty()) continue;
+        const bool floating = !anchored[r];
+        if (floating && members.size() == 1) continue;  // a dof K does not touch: its own translation
+        double lo = 0.0, hi = 0.0;
+        std::size_t bad = 0;
+        if (!scaled_extremes(K, members, floating, lo, hi, bad))
+            return "K is not positive semi-definite: " + entry("K", dofs, bad, bad) + " = " + show(K(bad, bad)) +
+                   " while the dof is coupled to others";
+        if (lo < -kRelTol * hi)
+            return "K is not positive semi-definite (dofs " + names_of(dofs, members) +
+                   ": smallest eigenvalue of the scaled D^-1/2 K D^-1/2 is " + show(lo) + ")";
+        if (lo <= kRelTol * hi)
+            return "K is singular beyond a free translation (dofs " + names_of(dofs, members) +
+                   "): hsnc takes a rigid-body mode only where a group of dofs has every row sum of K zero; "
+                   "hold the structure (a spring to ground) or remove the mode";
+    }
+
+    springs.clear();
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = i + 1; j < n; ++j)
+            if (K(i, j) != 0.0) {
+                Spring s;
+                s.a = static_cast<int>(i);
+                s.b = static_cast<int>(j);
+                s.k = -K(i, j);
+                s.from_structure = true;
+                springs.push_back(s);
+            }
+    for (std::size_t i = 0; i < n; ++i)
+        if (ground[i] != 0.0) {
+            Spring s;
+            s.a = static_cast<int>(i);
+            s.b = kGround;
+            s.k = ground[i];
+            s.from_structure = true;
+            springs.push_back(s);
+        }
+    return "";
+}
+
+std::string fit_rayleigh_damping(const MarketMatrix& C_in, const MarketMatrix& M, const MarketMatrix& K,
+                                 const std::vector<std::string>& dofs, double& alpha, double& beta) {
+    const std::size_t n = dofs.size();
+    if (std::string why = check_size("C", C_in, n); !why.empty()) return why;
+    MarketMatrix C = C_in;
+    if (std::string why = check_symmetric("C", C, dofs); !why.empty()) return why;
+    // Least squares over the entries: [MM MK; MK KK] [a; b] = [CM; CK].
+    long double mm = 0, mk = 0, kk = 0, cm = 0, ck = 0;
+    for (std::size_t e = 0; e < n * n; ++e) {
+        const long double m = M.values[e], k = K.values[e], c = C.values[e];
+        mm += m * m, mk += m * k, kk += k * k, cm += c * m, ck += c * k;
+    }
+    const long double det = mm * kk - mk * mk;
+    double a = 0.0, b = 0.0;
+    if (kk == 0 || det <= 1e-24L * mm * kk) {
+        a = static_cast<double>(cm / mm);  // M and K proportional: not separable, b = 0
+    } else {
+        a = static_cast<double>((cm * kk - ck * mk) / det);
+        b = static_cast<double>((mm * ck - mk * cm) / det);
+    }
+    const double mmax = max_abs(M), kmax = max_abs(K);
+    if (std::fabs(a) * mmax <= kRelTol * std::fabs(b) * kmax) a = 0.0;  // rounding of an exact b*K
+    if (std::fabs(b) * kmax <= kRelTol * std::fabs(a) * mmax) b = 0.0;
+    const double tol = kRelTol * (std::fabs(a) * mmax + std::fabs(b) * kmax);
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = 0; j < n; ++j) {
+            const double r = C(i, j) - a * M(i, j) - b * K(i, j);
+            if (std::fabs(r) > tol)
+                return "C is not proportional damping: the best fit C = a*M + b*K (a = " + show(a) + ", b = " + show(b) +
+                       ") misses " + entry("C", dofs, i, j) + " = " + show(C(i, j)) + " by " + show(r) +
+                       "; non-proportional damping is not yet supported";
+        }
+    if (a < 0.0 || b < 0.0)
+        return "C = a*M + b*K with a = " + show(a) + ", b = " + show(b) +
+               ": Rayleigh coefficients must be >= 0 (a negative one feeds energy in)";
+    alpha = a;
+    beta = b;
+    return "";
+}
+
+}  // namespace hsnc

@@ -1,0 +1,57 @@
+// hsnc -- a structure given by its matrices ([structure], interface.md section 5):
+// the checks on M, K and C, and the lumped-model form the rest of hsnc reads.
+//
+// The Model keeps one representation of stiffness, springs (model.h), so a
+// structure's K becomes springs exactly as written: any symmetric K is
+//     K = sum_{i<j} (-K_ij) (e_i - e_j)(e_i - e_j)^T + diag(r),  r_i = sum_j K_ij,
+// a spring -K_ij between dofs i and j (either sign) and a spring r_i from dof i
+// to the ground. A row sum within rounding of zero (|r_i| <= max(16, n) eps
+// sum_j |K_ij|) is zero: no spring to ground, so a structure whose rows sum to
+// zero keeps its rigid-body translation (free_components.h).
+//
+// Readings where the contract leaves room (each one tested):
+//  - M must be diagonal (a lumped mass matrix): a consistent mass matrix is
+//    refused with a message saying so (not yet supported), never lumped.
+//  - K must be positive semi-definite, and singular only where hsnc decides
+//    rigid-body modes structurally: a group of dofs coupled by K with every
+//    row sum zero translates freely. Any other null vector (a free beam's
+//    rotation) is refused. Symmetry and definiteness are judged to 1e-12
+//    relative (symmetry entry by entry against the largest |entry|;
+//    definiteness on the Jacobi-scaled matrix D^-1/2 K D^-1/2 of each group,
+//    against its largest eigenvalue); a matrix symmetric to that level is
+//    used as (K + K^T)/2.
+//  - C (optional) must be proportional, C = a M + b K to 1e-12 relative
+//    (least-squares a, b, then entry by entry against a|M|max + b|K|max),
+//    with a, b >= 0: it is Rayleigh damping alpha = a, beta = b, and as with
+//    [damping] beta also scales [[spring]]s and closed contacts. A C that is
+//    not proportional is refused: non-proportional damping is not yet
+//    supported. When M and K are proportional themselves (a and b not
+//    separable) the fit takes b = 0.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "matrix_market.h"
+#include "model.h"
+
+namespace hsnc {
+
+/// Each check returns "" when the matrix is acceptable, else the reason
+/// (naming entries by dof: "M(u1, u2)"). `dofs` are the dof names in matrix order.
+
+/// M: n x n, symmetric, positive definite, diagonal. On success `mass` holds its diagonal.
+std::string check_mass_matrix(const MarketMatrix& M, const std::vector<std::string>& dofs, std::vector<double>& mass);
+
+/// K: n x n, symmetric, positive semi-definite with structural null space.
+/// On success `springs` holds its springs (Spring::from_structure), the
+/// between-dof springs row by row (i < j), then the springs to ground.
+std::string check_stiffness_matrix(const MarketMatrix& K, const std::vector<std::string>& dofs,
+                                   std::vector<Spring>& springs);
+
+/// C: n x n, symmetric, C = a M + b K (a, b >= 0). On success `alpha`, `beta` hold a, b.
+std::string fit_rayleigh_damping(const MarketMatrix& C, const MarketMatrix& M, const MarketMatrix& K,
+                                 const std::vector<std::string>& dofs, double& alpha, double& beta);
+
+}  // namespace hsnc

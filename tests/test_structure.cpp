@@ -1,0 +1,612 @@
+// Tests of [structure] (matrices from Matrix Market files) and [[friction]]
+// elements to ground (interface.md section 5; model/structure.h,
+// model/matrix_market.h).
+//
+// Exact: a model given as matrices is the same model as its spring version
+// (the bundled chain and both seed scenarios rewritten as [structure] give the
+// same events to 1e-12 s); a free vibration of a structure whose K is no
+// spring network (positive off-diagonal entries) against its closed form from
+// the generalised eigenproblem of (K, M) computed here; a friction element
+// with normal = m*g gives exactly the events of the mass's own mu_k.
+// Bad input: every new key's errors, by message.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <map>
+#include <sstream>
+#include <string>
+
+#include <Eigen/Eigenvalues>
+
+#include "assembly.h"
+#include "cli_runner.h"
+#include "engine_runner.h"
+#include "error.h"
+#include "matrix_market.h"
+#include "model_reader.h"
+#include "reference.h"
+
+namespace hsnc {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string num(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+/// A folder of its own for the files of one test, removed at the end.
+class Folder {
+public:
+    Folder() {
+        path_ = fs::path(::testing::TempDir()) /
+                ("hsnc_structure_" + std::to_string(::getpid()) + "_" +
+                 ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(path_);
+        fs::create_directories(path_);
+    }
+    ~Folder() { fs::remove_all(path_); }
+    std::string write(const std::string& name, const std::string& text) const {
+        const std::string p = (path_ / name).string();
+        std::ofstream(p) << text;
+        return p;
+    }
+    std::string path(const std::string& name) const { return (path_ / name).string(); }
+
+private:
+    fs::path path_;
+};
+
+/// A dense matrix in Matrix Market coordinate form (general storage, every nonzero).
+std::string market(const Eigen::MatrixXd& A, const char* symmetry = "general") {
+    std::ostringstream out;
+    int nnz = 0;
+    const bool sym = std::string(symmetry) == "symmetric";
+    for (Eigen::Index i = 0; i < A.rows(); ++i)
+        for (Eigen::Index j = 0; j < A.cols(); ++j)
+            if (A(i, j) != 0.0 && (!sym || i >= j)) ++nnz;
+    out << "%%MatrixMarket matrix coordinate real " << symmetry << "\n% written by test_structure\n";
+    out << A.rows() << " " << A.cols() << " " << nnz << "\n";
+    for (Eigen::Index i = 0; i < A.rows(); ++i)
+        for (Eigen::Index j = 0; j < A.cols(); ++j)
+            if (A(i, j) != 0.0 && (!sym || i >= j)) out << i + 1 << " " << j + 1 << " " << num(A(i, j)) << "\n";
+    return out.str();
+}
+
+std::string body(const Model& m, int b) { return b == kGround ? "ground" : m.masses[static_cast<std::size_t>(b)].name; }
+
+/// `lumped` written as a [structure]: M, K (springs, all contacts open) and,
+/// with Rayleigh damping, C = alpha M + beta K in files; each mass's own
+/// friction as a [[friction]] element "f_<mass>" to ground with normal m*g.
+std::string as_structure(const Model& lumped, const Folder& dir) {
+    const Configuration open = Configuration::all_open(lumped);
+    const Eigen::MatrixXd M = mass_vector(lumped).asDiagonal();
+    const Eigen::MatrixXd K = stiffness_matrix(lumped, open);
+    dir.write("M.mtx", market(M, "symmetric"));
+    dir.write("K.mtx", market(K));
+    std::ostringstream t;
+    t << "name = \"" << lumped.name << "-structure\"\n";
+    t << "[structure]\ndofs = [";
+    for (std::size_t i = 0; i < lumped.dof(); ++i) t << (i ? ", " : "") << "\"" << lumped.masses[i].name << "\"";
+    t << "]\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n";
+    if (lumped.alpha != 0.0 || lumped.beta != 0.0) {
+        dir.write("C.mtx", market(damping_matrix(lumped, open)));
+        t << "damping = \"C.mtx\"\n";
+    }
+    for (const Contact& c : lumped.contacts)
+        t << "[[contact]]\nname = \"" << c.name << "\"\nbetween = [\"" << body(lumped, c.a) << "\", \""
+          << body(lumped, c.b) << "\"]\ngap = " << num(c.gap) << "\nk = " << num(c.k) << "\n";
+    for (std::size_t i = 0; i < lumped.dof(); ++i) {
+        const Mass& m = lumped.masses[i];
+        if (!m.has_friction) continue;
+        t << "[[friction]]\nname = \"f_" << m.name << "\"\nbetween = [\"" << m.name << "\", \"ground\"]\nmu_k = "
+          << num(m.mu_k) << "\nmu_s = " << num(m.mu_s) << "\nnormal = " << num(m.m * lumped.g) << "\n";
+    }
+    for (const Harmonic& h : lumped.forcing) {
+        t << "[[forcing]]\nomega = " << num(h.omega) << "\nphase = " << num(h.phase) << "\namplitude = {";
+        for (std::size_t i = 0; i < lumped.dof(); ++i) t << (i ? ", " : " ") << lumped.masses[i].name << " = " << num(h.amplitude[i]);
+        t << " }\n";
+    }
+    t << "[load]\n";
+    for (std::size_t i = 0; i < lumped.dof(); ++i) t << lumped.masses[i].name << " = " << num(lumped.load[i]) << "\n";
+    t << "[initial]\nt0 = " << num(lumped.t0) << "\nx = {";
+    for (std::size_t i = 0; i < lumped.dof(); ++i) t << (i ? ", " : " ") << lumped.masses[i].name << " = " << num(lumped.x0[i]);
+    t << " }\nv = {";
+    for (std::size_t i = 0; i < lumped.dof(); ++i) t << (i ? ", " : " ") << lumped.masses[i].name << " = " << num(lumped.v0[i]);
+    t << " }\n";
+    return dir.write("structure.toml", t.str());
+}
+
+class StructureEquivalence : public ::testing::TestWithParam<std::pair<const char*, double>> {};
+
+// The bundled models and their matrix versions: same events (kind, element,
+// time to 1e-12 s) and the same end state to 1e-9 of its size.
+TEST_P(StructureEquivalence, MatricesGiveTheEventsOfTheSpringModel) {
+    const auto [file, t_end] = GetParam();
+    Folder dir;
+    const Model lumped = read_model(testing::model_path(file));
+    const Model structure = read_model(as_structure(lumped, dir));
+    ASSERT_TRUE(structure.structure.present);
+    ASSERT_EQ(structure.dof(), lumped.dof());
+    const testing::Outcome a = testing::simulate(lumped, t_end), b = testing::simulate(structure, t_end);
+    ASSERT_GT(a.events.size(), 5u) << "the scenario should switch";
+    ASSERT_EQ(a.events.size(), b.events.size());
+    for (std::size_t e = 0; e < a.events.size(); ++e) {
+        EXPECT_NEAR(a.events[e].t, b.events[e].t, 1e-12) << "event " << e;
+        EXPECT_EQ(a.events[e].kind, b.events[e].kind) << "event " << e;
+        EXPECT_EQ(a.events[e].element, b.events[e].element) << "event " << e;
+    }
+    // The friction rows name the element, the others the contact.
+    for (const testing::Recorded& r : b.events)
+        if (r.kind == EventKind::stick || r.kind == EventKind::release || r.kind == EventKind::reversal)
+            EXPECT_EQ(structure.friction_name(static_cast<std::size_t>(r.element)),
+                      "f_" + lumped.masses[static_cast<std::size_t>(r.element)].name);
+    double size = 0.0;
+    for (std::size_t i = 0; i < lumped.dof(); ++i) size = std::max(size, std::fabs(a.summary.x[i]));
+    for (std::size_t i = 0; i < lumped.dof(); ++i) EXPECT_NEAR(a.summary.x[i], b.summary.x[i], 1e-9 * size);
+}
+
+// Scenario 2 is weakly chaotic: 20 s keep rounding differences far below 1e-12 s.
+INSTANTIATE_TEST_SUITE_P(Bundled, StructureEquivalence,
+                         ::testing::Values(std::make_pair("chain-8.toml", 20.0), std::make_pair("seed-scenario-1.toml", 2.0),
+                                           std::make_pair("seed-scenario-2.toml", 20.0)));
+
+// A structure whose K is not a spring network (positive off-diagonal entries:
+// the flexibility of a cantilever inverted), free vibration from an initial
+// displacement with Rayleigh damping: the engine's trajectory against
+// x(t) = Phi q(t) from the generalised eigenproblem K phi = lambda M phi,
+// each mode a damped oscillator, computed here independently of hsnc's modal code.
+TEST(StructureClosedForm, FreeVibrationOfADenseStiffnessMatrix) {
+    Folder dir;
+    const int n = 4;
+    const double L = 0.25, EI = 50.0;
+    Eigen::MatrixXd F(n, n);  // cantilever flexibility: F_ij = x_i^2 (3 x_j - x_i) / (6 EI), x_i <= x_j
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            const double a = L * (std::min(i, j) + 1), b = L * (std::max(i, j) + 1);
+            F(i, j) = a * a * (3 * b - a) / (6 * EI);
+        }
+    Eigen::MatrixXd K = F.inverse();
+    K = 0.5 * (K + K.transpose());
+    bool positive_off_diagonal = false;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) positive_off_diagonal |= i != j && K(i, j) > 0;
+    ASSERT_TRUE(positive_off_diagonal) << "the test needs a K that is no spring network";
+    const Eigen::VectorXd m = Eigen::VectorXd::Constant(n, 0.5);
+    const double alpha = 0.3, beta = 2e-4;
+    dir.write("M.mtx", market(Eigen::MatrixXd(m.asDiagonal()), "symmetric"));
+    dir.write("K.mtx", market(K, "symmetric"));
+    dir.write("C.mtx", market(alpha * Eigen::MatrixXd(m.asDiagonal()) + beta * K));
+    const std::string path = dir.write("beam.toml", R"(name = "beam"
+[structure]
+dofs = ["w1", "w2", "w3", "w4"]
+mass = "M.mtx"
+stiffness = "K.mtx"
+damping = "C.mtx"
+[initial]
+x = { w4 = 0.01, w2 = -0.004 }
+v = { w1 = 0.3 }
+)");
+    const Model model = read_model(path);
+    // The fit recovers a and b to the rounding of C's entries (|C| <= c_max):
+    // |da| m and |db| |K|max within a few ulps of c_max.
+    const Eigen::MatrixXd C = alpha * Eigen::MatrixXd(m.asDiagonal()) + beta * K;
+    const double c_max = C.cwiseAbs().maxCoeff(), k_max = K.cwiseAbs().maxCoeff(), eps = 2.220446049250313e-16;
+    EXPECT_LE(std::fabs(model.alpha - alpha) * 0.5, 16 * eps * c_max) << model.alpha;
+    EXPECT_LE(std::fabs(model.beta - beta) * k_max, 16 * eps * c_max) << model.beta;
+    const testing::Outcome r = testing::simulate(model, 1.0, 0.01);
+    ASSERT_EQ(r.samples.size(), 101u);
+
+    // Closed form: M^-1/2 K M^-1/2 = V diag(lambda) V^T, Phi = M^-1/2 V.
+    const Eigen::VectorXd s = m.cwiseSqrt().cwiseInverse();
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(s.asDiagonal() * K * s.asDiagonal());
+    const Eigen::MatrixXd phi = s.asDiagonal() * es.eigenvectors();
+    Eigen::VectorXd x0(n), v0(n);
+    x0 << 0, -0.004, 0, 0.01;
+    v0 << 0.3, 0, 0, 0;
+    const Eigen::VectorXd q0 = phi.transpose() * m.asDiagonal() * x0, qd0 = phi.transpose() * m.asDiagonal() * v0;
+    double worst = 0.0;
+    for (const testing::Recorded& row : r.samples) {
+        Eigen::VectorXd q(n);
+        for (int j = 0; j < n; ++j) {
+            const double w = std::sqrt(es.eigenvalues()(j)), zeta = 0.5 * (alpha / w + beta * w);
+            ASSERT_LT(zeta, 1.0);
+            const double wd = w * std::sqrt(1 - zeta * zeta), sg = zeta * w;
+            q(j) = std::exp(-sg * row.t) * (q0(j) * std::cos(wd * row.t) + (qd0(j) + sg * q0(j)) / wd * std::sin(wd * row.t));
+        }
+        const Eigen::VectorXd x = phi * q;
+        for (int i = 0; i < n; ++i) worst = std::max(worst, std::fabs(x(i) - row.x[static_cast<std::size_t>(i)]));
+    }
+    EXPECT_LT(worst, 1e-13);  // of a 1e-2 m motion
+}
+
+// The bundled cracked beam (a dense K from a file, a breathing-crack contact):
+// the double engine against the CLN reference at 30 digits (an independent
+// arithmetic of the same method), and against the rk45 baseline at tight
+// tolerances (an independent method): the same events, times within 1e-11 s
+// of the reference and 1e-9 s of rk45.
+TEST(StructureClosedForm, BundledCrackedBeamAgreesWithReferenceAndBaseline) {
+    const Model model = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/beam-crack/beam-crack.toml");
+    const double t_end = 4.0;
+    const testing::Outcome a = testing::simulate(model, t_end);
+    testing::Recorder ref(model.dof());
+    EngineOptions opt;
+    opt.t_end = t_end;
+    reference::simulate(model, 30, opt, ref);
+    const testing::Outcome rk = testing::baseline(model, t_end, 1e-12, 1e-15);
+    ASSERT_GT(a.events.size(), 10u);
+    ASSERT_EQ(a.events.size(), ref.events.size());
+    ASSERT_EQ(a.events.size(), rk.events.size());
+    for (std::size_t e = 0; e < a.events.size(); ++e) {
+        EXPECT_EQ(a.events[e].kind, ref.events[e].kind);
+        EXPECT_EQ(a.events[e].kind, rk.events[e].kind);
+        EXPECT_NEAR(a.events[e].t, ref.events[e].t, 1e-11) << "event " << e;
+        EXPECT_NEAR(a.events[e].t, rk.events[e].t, 1e-9) << "event " << e;
+    }
+}
+
+// A structure with dense K, friction elements to ground with their own normal
+// forces and a contact: stick-slip against the reference.
+TEST(StructureClosedForm, FrictionElementsOnAStructureAgreeWithReference) {
+    Folder dir;
+    dir.write("M.mtx", "%%MatrixMarket matrix array real symmetric\n3 3\n1\n0\n0\n2\n0\n1.5\n");
+    dir.write("K.mtx", "%%MatrixMarket matrix array real symmetric\n3 3\n300\n-150\n40\n320\n-120\n180\n");
+    const Model model = read_model(dir.write("s.toml", R"(name = "s3"
+[structure]
+dofs = ["a", "b", "c"]
+mass = "M.mtx"
+stiffness = "K.mtx"
+[[friction]]
+name = "fa"
+between = ["a", "ground"]
+mu_k = 0.3
+mu_s = 0.4
+normal = 20
+[[friction]]
+between = ["ground", "c"]
+mu_k = 0.2
+normal = 35
+[[contact]]
+between = ["b", "c"]
+gap = 0.05
+k = 500
+[[forcing]]
+omega = 9
+amplitude = { a = 30, c = -10 }
+[initial]
+x = { b = 0.1 }
+)"));
+    EXPECT_EQ(model.frictions[1].name, "friction2");
+    const double t_end = 6.0;
+    const testing::Outcome a = testing::simulate(model, t_end);
+    testing::Recorder ref(model.dof());
+    EngineOptions opt;
+    opt.t_end = t_end;
+    reference::simulate(model, 30, opt, ref);
+    int sticks = 0;
+    for (const testing::Recorded& r : a.events) sticks += r.kind == EventKind::stick ? 1 : 0;
+    EXPECT_GT(sticks, 3) << "the model should stick and slip";
+    ASSERT_EQ(a.events.size(), ref.events.size());
+    for (std::size_t e = 0; e < a.events.size(); ++e) {
+        EXPECT_EQ(a.events[e].kind, ref.events[e].kind);
+        EXPECT_EQ(a.events[e].element, ref.events[e].element);
+        EXPECT_NEAR(a.events[e].t, ref.events[e].t, 1e-11) << "event " << e;
+    }
+}
+
+// A [[friction]] element to ground with normal = m*g is the mass's own mu_k:
+// exactly the same events (bit for bit), named by the element.
+TEST(FrictionElement, NormalMgIsTheMassOwnFriction) {
+    const Model own = read_model(testing::model_path("seed-scenario-2.toml"));
+    std::string text = R"(name = "seed-2-elements"
+[parameters]
+m1 = 1
+m2 = 2
+mu_k = 0.6
+mu_s = 0.75
+[[mass]]
+name = "m1"
+m = "m1"
+[[mass]]
+name = "m2"
+m = "m2"
+[[spring]]
+between = ["ground", "m1"]
+k = 5
+[[spring]]
+between = ["m1", "m2"]
+k = 10
+[[spring]]
+between = ["m2", "ground"]
+k = 40
+[[contact]]
+between = ["m1", "m2"]
+gap = 0.2
+k = 100
+[[friction]]
+name = "floor1"
+between = ["m1", "ground"]
+mu_k = "mu_k"
+mu_s = "mu_s"
+normal = "m1*g"
+[[friction]]
+name = "floor2"
+between = ["ground", "m2"]
+mu_k = "mu_k"
+mu_s = "mu_s"
+[[forcing]]
+omega = 17.5515
+amplitude = { m1 = 225, m2 = 150 }
+[initial]
+x = { m1 = 0.2, m2 = -0.1 }
+v = { m1 = -5.0, m2 = -2.0 }
+)";
+    const Model elements = parse_model(text, "elements.toml");
+    ASSERT_EQ(elements.frictions.size(), 2u);
+    EXPECT_EQ(elements.masses[0].mu_k, own.masses[0].mu_k);
+    EXPECT_EQ(elements.masses[1].mu_s, own.masses[1].mu_s);
+    const testing::Outcome a = testing::simulate(own, 30.0), b = testing::simulate(elements, 30.0);
+    ASSERT_GT(a.events.size(), 20u);
+    ASSERT_EQ(a.events.size(), b.events.size());
+    for (std::size_t e = 0; e < a.events.size(); ++e) {
+        EXPECT_EQ(a.events[e].t, b.events[e].t) << "event " << e;
+        EXPECT_EQ(a.events[e].kind, b.events[e].kind);
+        EXPECT_EQ(a.events[e].element, b.events[e].element);
+        EXPECT_EQ(a.events[e].x, b.events[e].x);
+    }
+    EXPECT_EQ(elements.friction_name(0), "floor1");
+    EXPECT_EQ(elements.friction_name(1), "floor2");
+    // The configuration spec names the element.
+    Configuration cfg = Configuration::parse(elements, "stuck=floor2");
+    EXPECT_EQ(cfg.spec(elements), "closed= stuck=floor2");
+}
+
+// A normal force other than m*g scales the friction force: N = 2 m g acts as mu_k doubled.
+TEST(FrictionElement, NormalForceScalesTheFrictionForce) {
+    const Model m = parse_model(R"(name = "n"
+[[mass]]
+name = "b"
+m = 3
+[[friction]]
+between = ["b", "ground"]
+mu_k = 0.2
+mu_s = 0.3
+normal = "2*3*g"
+)", "n.toml");
+    EXPECT_EQ(m.frictions[0].name, "friction1");
+    EXPECT_NEAR(m.masses[0].mu_k * m.normal_force(0), 0.2 * 6 * 9.81, 1e-14);
+    EXPECT_NEAR(m.masses[0].mu_s * m.normal_force(0), 0.3 * 6 * 9.81, 1e-14);
+}
+
+// ---------------------------------------------------------------- Matrix Market
+
+std::string market_error(const std::string& text) {
+    try {
+        parse_matrix_market(text, "A.mtx");
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << "expected an InputError for:\n" << text;
+    return "";
+}
+
+void expect_message(const std::string& message, std::initializer_list<const char*> parts) {
+    for (const char* part : parts)
+        EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' not in: " << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << "not one line: " << message;
+}
+
+TEST(MatrixMarket, ReadsCoordinateAndArrayForms) {
+    const MarketMatrix c = parse_matrix_market(
+        "%%MatrixMarket matrix coordinate real symmetric\n%c\n\n2 2 2\n1 1 4.5\n2 1 -1e-3\n", "c.mtx");
+    EXPECT_EQ(c.rows, 2u);
+    EXPECT_EQ(c(0, 0), 4.5);
+    EXPECT_EQ(c(0, 1), -1e-3);
+    EXPECT_EQ(c(1, 0), -1e-3);
+    EXPECT_EQ(c(1, 1), 0.0);
+    const MarketMatrix a = parse_matrix_market("%%MatrixMarket matrix array real general\n2 2\n1\n2\n3\n4\n", "a.mtx");
+    EXPECT_EQ(a(1, 0), 2.0);  // column by column
+    EXPECT_EQ(a(0, 1), 3.0);
+    const MarketMatrix s = parse_matrix_market("%%MatrixMarket matrix array integer symmetric\n2 2\n1\n2\n3\n", "s.mtx");
+    EXPECT_EQ(s(0, 1), 2.0);
+    EXPECT_EQ(s(1, 1), 3.0);
+}
+
+TEST(MatrixMarket, EveryErrorNamesFileAndLine) {
+    expect_message(market_error(""), {"A.mtx: empty file"});
+    expect_message(market_error("1 1 1\n"), {"A.mtx:1: expected the header"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate complex general\n"), {"A.mtx:1: field 'complex'"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate real hermitian\n"), {"A.mtx:1: symmetry 'hermitian'"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate real general\n"), {"A.mtx: missing the size line"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate real general\n2 2\n"), {"A.mtx:2: size line must be"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate real general\n2 2 1\n3 1 1.0\n"),
+                   {"A.mtx:3: entry (3, 1) is outside the 2 x 2 matrix"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1.0\n1 1 2.0\n"),
+                   {"A.mtx:4: entry (1, 1) is given twice"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate real symmetric\n2 2 1\n1 2 1.0\n"),
+                   {"A.mtx:3: entry (1, 2) is above the diagonal"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1.0\n"),
+                   {"A.mtx: the size line announces 2 entries, the file ends after 1"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1.0\n2 2 1.0\n"),
+                   {"A.mtx:4: more entries than the size line announces"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 abc\n"), {"A.mtx:3: 'abc' is not a number"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 nan\n"), {"A.mtx:3: 'nan' is not a finite double"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1e-320\n"),
+                   {"A.mtx:3: '1e-320' is below the smallest normal double"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1.0 7\n"),
+                   {"A.mtx:3: expected an entry 'ROW COLUMN VALUE'"});
+    expect_message(market_error("%%MatrixMarket matrix array real general\n2 1\n1\n"), {"A.mtx: the file ends before entry (2, 1)"});
+    expect_message(market_error("%%MatrixMarket matrix array real symmetric\n2 3\n"), {"A.mtx:2: a symmetric matrix must be square"});
+}
+
+// ---------------------------------------------------------------- bad [structure] and [[friction]]
+
+/// The message of reading `model` (written as s.toml beside `files`) in a fresh folder.
+std::string structure_error(const std::string& model, const std::map<std::string, std::string>& files) {
+    Folder dir;
+    for (const auto& [name, text] : files) dir.write(name, text);
+    const std::string path = dir.write("s.toml", model);
+    try {
+        read_model(path);
+    } catch (const InputError& e) {
+        std::string m = e.what();
+        // Report paths relative to the folder, so messages can be compared.
+        const std::string prefix = dir.path("");
+        for (std::size_t p; (p = m.find(prefix)) != std::string::npos;) m.erase(p, prefix.size());
+        return m;
+    }
+    ADD_FAILURE() << "expected an InputError for:\n" << model;
+    return "";
+}
+
+const char* const kM2 = "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1\n2 2 2\n";
+const char* const kK2 = "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 20\n2 1 -10\n2 2 10\n";
+const std::string kHead = "name = \"s\"\n[structure]\ndofs = [\"u1\", \"u2\"]\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n";
+
+std::string with_matrices(const std::string& extra, const char* M = kM2, const char* K = kK2,
+                          const char* C = nullptr) {
+    std::map<std::string, std::string> files{{"M.mtx", M}, {"K.mtx", K}};
+    if (C) files["C.mtx"] = C;
+    return structure_error(kHead + extra, files);
+}
+
+TEST(StructureInput, AGoodStructureReads) {
+    Folder dir;
+    dir.write("M.mtx", kM2);
+    dir.write("K.mtx", kK2);
+    const Model m = read_model(dir.write("s.toml", kHead + "[[contact]]\nbetween = [\"u2\", \"ground\"]\ngap = 0.1\nk = 50\n"));
+    ASSERT_EQ(m.dof(), 2u);
+    EXPECT_EQ(m.masses[1].name, "u2");
+    EXPECT_EQ(m.masses[1].m, 2.0);
+    const Eigen::MatrixXd K = stiffness_matrix(m, Configuration::all_open(m));
+    EXPECT_EQ(K(0, 0), 20.0);
+    EXPECT_EQ(K(0, 1), -10.0);
+    EXPECT_EQ(K(1, 1), 10.0);
+    EXPECT_EQ(m.springs.size(), 2u);  // u1-u2 and u1 to ground; u2's row sums to 0
+}
+
+TEST(StructureInput, FilesAndMatrices) {
+    expect_message(structure_error(kHead, {{"K.mtx", kK2}}),
+                   {"s.toml:4: key 'structure.mass': cannot read matrix file 'M.mtx': No such file"});
+    expect_message(with_matrices("", "%%MatrixMarket matrix coordinate real general\n2 2 1\n1 9 1\n"),
+                   {"key 'structure.mass': M.mtx:3: entry (1, 9) is outside"});
+    expect_message(with_matrices("", "%%MatrixMarket matrix coordinate real general\n3 3 3\n1 1 1\n2 2 1\n3 3 1\n"),
+                   {"key 'structure.mass': M.mtx: M is 3 x 3, expected 2 x 2"});
+    expect_message(with_matrices("", "%%MatrixMarket matrix coordinate real general\n2 2 3\n1 1 1\n2 2 1\n1 2 0.5\n"),
+                   {"key 'structure.mass'", "M is not symmetric: M(u2, u1) = 0 but M(u1, u2) = 0.5"});
+    expect_message(with_matrices("", "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1\n2 2 -2\n"),
+                   {"key 'structure.mass'", "M is not positive definite: M(u2, u2) = -2"});
+    expect_message(with_matrices("", "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 1\n2 1 2\n2 2 1\n"),
+                   {"key 'structure.mass'", "M is not positive definite"});
+    expect_message(with_matrices("", "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 2\n2 1 0.5\n2 2 2\n"),
+                   {"key 'structure.mass'", "consistent (non-diagonal) mass matrix is not yet supported"});
+    expect_message(with_matrices("", kM2, "%%MatrixMarket matrix coordinate real general\n2 2 3\n1 1 20\n1 2 -10\n2 2 10\n"),
+                   {"key 'structure.stiffness'", "K is not symmetric: K(u2, u1) = 0 but K(u1, u2) = -10"});
+    expect_message(with_matrices("", kM2, "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 1\n2 1 -10\n2 2 1\n"),
+                   {"key 'structure.stiffness'", "K is not positive semi-definite"});
+    expect_message(with_matrices("", kM2, "%%MatrixMarket matrix coordinate real symmetric\n2 2 2\n1 1 5\n2 2 -1\n"),
+                   {"key 'structure.stiffness'", "K is not positive semi-definite: K(u2, u2) = -1"});
+    // Singular with a null vector (1, -1): no free translation.
+    expect_message(with_matrices("", kM2, "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 1\n2 1 1\n2 2 1\n"),
+                   {"key 'structure.stiffness'", "K is singular beyond a free translation (dofs u1, u2)"});
+    expect_message(with_matrices("", kM2, "%%MatrixMarket matrix coordinate real general\n1 1 1\n1 1 1\n"),
+                   {"key 'structure.stiffness'", "K is 1 x 1, expected 2 x 2"});
+}
+
+TEST(StructureInput, FreeTranslationIsAccepted) {
+    Folder dir;
+    dir.write("M.mtx", kM2);
+    dir.write("K.mtx", "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 10\n2 1 -10\n2 2 10\n");
+    const Model m = read_model(dir.write("s.toml", kHead));
+    ASSERT_EQ(m.springs.size(), 1u);  // rows sum to zero: no spring to ground
+    EXPECT_EQ(m.springs[0].k, 10.0);
+}
+
+TEST(StructureInput, Damping) {
+    // C = 0.5 M + 0.01 K is Rayleigh damping.
+    Folder dir;
+    dir.write("M.mtx", kM2);
+    dir.write("K.mtx", kK2);
+    dir.write("C.mtx", "%%MatrixMarket matrix coordinate real general\n2 2 4\n1 1 0.7\n1 2 -0.1\n2 1 -0.1\n2 2 1.1\n");
+    const Model m = read_model(dir.write("s.toml", kHead + "damping = \"C.mtx\"\n"));
+    EXPECT_NEAR(m.alpha, 0.5, 1e-15);
+    EXPECT_NEAR(m.beta, 0.01, 1e-17);
+    // A lone dashpot on u2 is not proportional.
+    expect_message(with_matrices("damping = \"C.mtx\"\n", kM2, kK2, "%%MatrixMarket matrix coordinate real general\n2 2 1\n2 2 0.3\n"),
+                   {"s.toml:6: key 'structure.damping': C.mtx: C is not proportional damping",
+                    "non-proportional damping is not yet supported"});
+    expect_message(with_matrices("damping = \"C.mtx\"\n", kM2, kK2, "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 -1\n2 2 -2\n"),
+                   {"key 'structure.damping'", "Rayleigh coefficients must be >= 0"});
+    expect_message(with_matrices("damping = \"C.mtx\"\n[damping]\nalpha = 1\n", kM2, kK2,
+                                 "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1\n2 2 2\n"),
+                   {"key 'damping': [damping] and structure.damping both give the damping"});
+}
+
+TEST(StructureInput, KeysAndNames) {
+    expect_message(structure_error("name = \"s\"\n[structure]\nmass = \"M.mtx\"\n", {}),
+                   {"s.toml:2: key 'structure.dofs': required key is missing"});
+    expect_message(structure_error("name = \"s\"\n[structure]\ndofs = []\n", {}),
+                   {"key 'structure.dofs': expected a non-empty list of dof names"});
+    expect_message(structure_error("name = \"s\"\n[structure]\ndofs = [\"u1\", \"u1\"]\n", {}),
+                   {"key 'structure.dofs[2]': name 'u1' is already used by structure.dofs[1]"});
+    expect_message(structure_error("name = \"s\"\n[structure]\ndofs = [\"ground\"]\n", {}),
+                   {"key 'structure.dofs[1]': 'ground' is reserved"});
+    expect_message(structure_error("name = \"s\"\n[structure]\ndofs = [\"1x\"]\n", {}),
+                   {"key 'structure.dofs[1]': '1x' is not a valid name"});
+    expect_message(structure_error("name = \"s\"\n[structure]\ndofs = [\"u\"]\nmass = \"M.mtx\"\nstiff = 1\n", {}),
+                   {"s.toml:5: key 'structure.stiff': unknown key"});
+    expect_message(structure_error("name = \"s\"\n[structure]\ndofs = [\"u\"]\n[[mass]]\nname = \"m\"\nm = 1\n", {}),
+                   {"key 'mass': [[mass]] and [structure] exclude each other"});
+    expect_message(with_matrices("[load]\nu3 = 1\n"), {"s.toml:7: key 'load.u3': unknown dof 'u3'"});
+    expect_message(with_matrices("[[spring]]\nbetween = [\"u1\", \"m9\"]\nk = 1\n"),
+                   {"key 'spring[1].between': unknown body 'm9' (expected 'ground' or a dof name)"});
+    expect_message(with_matrices("[initial]\nx = { u9 = 1 }\n"), {"key 'initial.x.u9': unknown dof 'u9'"});
+    expect_message(with_matrices("[[jenkins]]\nbetween = [\"u1\", \"ground\"]\n"),
+                   {"key 'jenkins': [[jenkins]] elements are not yet supported"});
+}
+
+TEST(FrictionInput, EveryKeyChecked) {
+    const std::string f = "[[friction]]\nname = \"f\"\nbetween = [\"u1\", \"ground\"]\nmu_k = 0.3\n";
+    expect_message(with_matrices(f), {"s.toml:6: key 'friction[1].normal': required key is missing (a dof has no weight"});
+    expect_message(with_matrices(f + "normal = 0\n"), {"s.toml:10: key 'friction[1].normal': normal force must be > 0, got 0"});
+    expect_message(with_matrices(f + "normal = 1\nmu_s = 0.2\n"),
+                   {"key 'friction[1].mu_s': static coefficient must be >= mu_k = 0.3, got 0.2"});
+    expect_message(with_matrices("[[friction]]\nbetween = [\"u1\", \"ground\"]\nmu_k = -1\nnormal = 1\n"),
+                   {"key 'friction[1].mu_k': must be >= 0"});
+    expect_message(with_matrices("[[friction]]\nbetween = [\"u1\", \"ground\"]\nnormal = 1\n"),
+                   {"key 'friction[1].mu_k': required key is missing"});
+    expect_message(with_matrices("[[friction]]\nbetween = [\"u1\", \"u2\"]\nmu_k = 0.1\nnormal = 1\n"),
+                   {"key 'friction[1].between': friction between two bodies is not yet supported"});
+    expect_message(with_matrices(f + "normal = 1\n[[friction]]\nbetween = [\"ground\", \"u1\"]\nmu_k = 0.1\nnormal = 1\n"),
+                   {"key 'friction[2].between': 'u1' already has friction (element 'f')"});
+    expect_message(with_matrices(f + "normal = 1\nmu = 2\n"), {"key 'friction[1].mu': unknown key"});
+    expect_message(with_matrices("[[friction]]\nname = \"u2\"\nbetween = [\"u1\", \"ground\"]\nmu_k = 0.1\nnormal = 1\n"),
+                   {"key 'friction[1].name': name 'u2' is already used by structure.dofs[2]"});
+    expect_message(structure_error("name = \"s\"\n[[mass]]\nname = \"m\"\nm = 1\nmu_k = 0.1\n[[friction]]\nbetween = [\"m\", \"ground\"]\nmu_k = 0.2\n", {}),
+                   {"key 'friction[1].between': 'm' already has friction (its own mu_k)"});
+}
+
+// `hsnc check` reports the structure, its dofs, the friction elements and the frequencies.
+TEST(Check, ReportsAStructure) {
+    Folder dir;
+    dir.write("M.mtx", kM2);
+    dir.write("K.mtx", kK2);
+    const std::string path = dir.write("s.toml", kHead + "[[friction]]\nname = \"pad\"\nbetween = [\"u2\", \"ground\"]\nmu_k = 0.3\nnormal = 12\n");
+    const testing::CliRun r = testing::run_hsnc("check '" + path + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    for (const char* part : {"structure: M = M.mtx  K = K.mtx", "degrees of freedom: 2", "  2  u2  m = 2",
+                             "stiffness matrix K: 2 couplings", "friction elements: 1",
+                             "  pad  between u2 and ground  mu_k = 0.3  mu_s = 0.3  normal = 12", "natural frequencies"})
+        EXPECT_NE(r.out.find(part), std::string::npos) << part << " not in:\n" << r.out;
+}
+
+}  // namespace
+}  // namespace hsnc
