@@ -31,6 +31,11 @@
 #include "matrix_market.h"
 #include "model_reader.h"
 #include "reference.h"
+#include "derivation.h"
+#include "emitter.h"
+#include "interpreted_solver.h"
+#include "jit_solver_provider.h"
+#include "lowering.h"
 
 namespace hsnc {
 namespace {
@@ -139,6 +144,9 @@ TEST_P(StructureEquivalence, MatricesGiveTheEventsOfTheSpringModel) {
     const testing::Outcome a = testing::simulate(lumped, t_end), b = testing::simulate(structure, t_end);
     ASSERT_GT(a.events.size(), 5u) << "the scenario should switch";
     ASSERT_EQ(a.events.size(), b.events.size());
+    double worst = 0.0;
+    for (std::size_t e = 0; e < a.events.size(); ++e) worst = std::max(worst, std::fabs(a.events[e].t - b.events[e].t));
+    std::printf("%s: %zu events, largest time difference %.3g s\n", file, a.events.size(), worst);
     for (std::size_t e = 0; e < a.events.size(); ++e) {
         EXPECT_NEAR(a.events[e].t, b.events[e].t, 1e-12) << "event " << e;
         EXPECT_EQ(a.events[e].kind, b.events[e].kind) << "event " << e;
@@ -155,7 +163,7 @@ TEST_P(StructureEquivalence, MatricesGiveTheEventsOfTheSpringModel) {
 }
 
 // Scenario 2 is weakly chaotic: 20 s keep rounding differences far below 1e-12 s.
-INSTANTIATE_TEST_SUITE_P(Bundled, StructureEquivalence,
+INSTANTIATE_TEST_SUITE_P(StructureEquivalence, StructureEquivalence,
                          ::testing::Values(std::make_pair("chain-8.toml", 20.0), std::make_pair("seed-scenario-1.toml", 2.0),
                                            std::make_pair("seed-scenario-2.toml", 20.0)));
 
@@ -228,6 +236,38 @@ v = { w1 = 0.3 }
     EXPECT_LT(worst, 1e-13);  // of a 1e-2 m motion
 }
 
+/// A 3-dof structure with a dense K (one positive off-diagonal entry), two
+/// friction elements to ground with their own normal forces, a contact and forcing.
+Model friction_structure(const Folder& dir) {
+    dir.write("M.mtx", "%%MatrixMarket matrix array real symmetric\n3 3\n1\n0\n0\n2\n0\n1.5\n");
+    dir.write("K.mtx", "%%MatrixMarket matrix array real symmetric\n3 3\n300\n-150\n40\n320\n-120\n180\n");
+    return read_model(dir.write("s.toml", R"(name = "s3"
+[structure]
+dofs = ["a", "b", "c"]
+mass = "M.mtx"
+stiffness = "K.mtx"
+[[friction]]
+name = "fa"
+between = ["a", "ground"]
+mu_k = 0.3
+mu_s = 0.4
+normal = 20
+[[friction]]
+between = ["ground", "c"]
+mu_k = 0.2
+normal = 35
+[[contact]]
+between = ["b", "c"]
+gap = 0.05
+k = 500
+[[forcing]]
+omega = 9
+amplitude = { a = 30, c = -10 }
+[initial]
+x = { b = 0.1 }
+)"));
+}
+
 // The bundled cracked beam (a dense K from a file, a breathing-crack contact):
 // the double engine against the CLN reference at 30 digits (an independent
 // arithmetic of the same method), and against the rk45 baseline at tight
@@ -257,33 +297,7 @@ TEST(StructureClosedForm, BundledCrackedBeamAgreesWithReferenceAndBaseline) {
 // forces and a contact: stick-slip against the reference.
 TEST(StructureClosedForm, FrictionElementsOnAStructureAgreeWithReference) {
     Folder dir;
-    dir.write("M.mtx", "%%MatrixMarket matrix array real symmetric\n3 3\n1\n0\n0\n2\n0\n1.5\n");
-    dir.write("K.mtx", "%%MatrixMarket matrix array real symmetric\n3 3\n300\n-150\n40\n320\n-120\n180\n");
-    const Model model = read_model(dir.write("s.toml", R"(name = "s3"
-[structure]
-dofs = ["a", "b", "c"]
-mass = "M.mtx"
-stiffness = "K.mtx"
-[[friction]]
-name = "fa"
-between = ["a", "ground"]
-mu_k = 0.3
-mu_s = 0.4
-normal = 20
-[[friction]]
-between = ["ground", "c"]
-mu_k = 0.2
-normal = 35
-[[contact]]
-between = ["b", "c"]
-gap = 0.05
-k = 500
-[[forcing]]
-omega = 9
-amplitude = { a = 30, c = -10 }
-[initial]
-x = { b = 0.1 }
-)"));
+    const Model model = friction_structure(dir);
     EXPECT_EQ(model.frictions[1].name, "friction2");
     const double t_end = 6.0;
     const testing::Outcome a = testing::simulate(model, t_end);
@@ -299,6 +313,43 @@ x = { b = 0.1 }
         EXPECT_EQ(a.events[e].kind, ref.events[e].kind);
         EXPECT_EQ(a.events[e].element, ref.events[e].element);
         EXPECT_NEAR(a.events[e].t, ref.events[e].t, 1e-11) << "event " << e;
+    }
+}
+
+/// Events of `model` run by the engine with `provider`.
+std::vector<testing::Recorded> events_with(const Model& model, SolverProvider& provider, double t_end) {
+    Engine engine(model, provider);
+    testing::Recorder rec(model.dof());
+    EngineOptions opt;
+    opt.t_end = t_end;
+    const RunSummary s = engine.run(opt, rec);
+    EXPECT_EQ(s.status, RunStatus::ok) << s.message;
+    return rec.events;
+}
+
+// The generator's programs for structures (negative springs, friction
+// elements): the interpreted program and the JIT-compiled kernel give the same
+// events bit for bit, and both agree with the generic solver to 1e-12 s.
+TEST(StructureKernels, InterpreterJitAndGenericSolverAgree) {
+    Folder dir;
+    const Model beam = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/beam-crack/beam-crack.toml");
+    const Model pads = friction_structure(dir);
+    for (const Model* m : {&beam, &pads}) {
+        InterpretedSolverProvider interp([m](const Configuration& cfg) { return lower(derive(*m, cfg)); });
+        JitSolverProvider jit(*m, [m](const Configuration& cfg) {
+            return JitKernelSource{kernel_symbol(*m, cfg), emit_kernel(derive(*m, cfg))};
+        });
+        const auto ei = events_with(*m, interp, 4.0), ej = events_with(*m, jit, 4.0);
+        const testing::Outcome g = testing::simulate(*m, 4.0);
+        ASSERT_GT(ei.size(), 10u) << m->name;
+        ASSERT_EQ(ei.size(), ej.size()) << m->name;
+        ASSERT_EQ(ei.size(), g.events.size()) << m->name;
+        for (std::size_t e = 0; e < ei.size(); ++e) {
+            EXPECT_EQ(ei[e].t, ej[e].t) << m->name << " event " << e;
+            EXPECT_EQ(ei[e].x, ej[e].x) << m->name << " event " << e;
+            EXPECT_EQ(ei[e].kind, g.events[e].kind) << m->name << " event " << e;
+            EXPECT_NEAR(ei[e].t, g.events[e].t, 1e-12) << m->name << " event " << e;
+        }
     }
 }
 
