@@ -106,3 +106,21 @@ def test_generic_kernels_and_reference_precision_run():
     assert abs(aot.events.t[1] - 3 * np.pi / 4) < 1e-12
     assert np.allclose(generic.x, aot.x, rtol=0, atol=1e-12)
     assert np.allclose(ref.x, aot.x, rtol=0, atol=1e-12)
+
+
+def test_structure_with_friction_element_equals_cli_csv(cli, tmp_path):
+    # A [structure] from Matrix Market files beside the model, a friction element
+    # to ground: the same numbers as the command line, rows named by the element.
+    (tmp_path / "M.mtx").write_text("%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1\n2 2 2\n")
+    (tmp_path / "K.mtx").write_text("%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 20\n2 1 -10\n2 2 10\n")
+    path = tmp_path / "s.toml"
+    path.write_text('name = "s"\n[structure]\ndofs = ["u1", "u2"]\nmass = "M.mtx"\nstiffness = "K.mtx"\n'
+                    '[[friction]]\nname = "pad"\nbetween = ["u2", "ground"]\nmu_k = 0.2\nmu_s = 0.3\nnormal = 4\n'
+                    '[[forcing]]\nomega = 3\namplitude = { u1 = 6 }\n')
+    model = hsnc.Model.from_file(str(path))
+    assert model.masses == ["u1", "u2"]
+    traj, events, line = cli_run(cli, tmp_path, path, "--t-end", "10", "--dt", "0.05")
+    r = hsnc.simulate(model, t_end=10, dt=0.05)
+    assert_same_run(r, model, traj, events, line)
+    assert set(r.events.kind) <= {"stick", "release", "reversal"}
+    assert set(r.events.element) == {"pad"}
