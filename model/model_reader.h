@@ -34,6 +34,14 @@
 //    an error. Model::t_end is then the override.
 //  - A flag naming the same parameter or mass twice is an error, not
 //    "last one wins": a repeated override is most likely a slip.
+//  - [structure] (interface.md section 5; the checks on its matrices are in
+//    structure.h): its dofs become the masses (m = M_ii) and share the name
+//    space of masses and contacts; its files are read relative to the model
+//    file's folder; messages say "dof" where they say "mass" for [[mass]].
+//  - [[friction]] between a body and the ground is that body's friction with
+//    N = normal (model.h, Mass::friction); its names share the same name
+//    space (default "friction<N>"). Friction between two bodies, [[jenkins]]
+//    and [[damper]] are refused as not yet supported.
 #pragma once
 
 #include <optional>
