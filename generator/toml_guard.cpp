@@ -64,6 +64,12 @@ public:
                     }
                 } else if (state_ == State::ml_basic && skipping_ && !toml_horizontal_whitespace(c.value)) {
                     skipping_ = false;
+                } else if (state_ == State::bare) {
+                    if (toml_whitespace(c.value)) {
+                        numeric_run_ = false;
+                    } else {
+                        last_significant_ = 'x';  // not one that starts a value
+                    }
                 }
                 step(c);
                 continue;
@@ -71,6 +77,28 @@ public:
             const char ch = static_cast<char>(c.value);
             switch (state_) {
                 case State::bare:
+                    if (numeric_run_) {
+                        if (!value_terminator(ch)) {
+                            last_significant_ = ch;
+                            step(c);  // a quote here starts no string
+                            break;
+                        }
+                        if (ch == ' ' && !run_extended_) {
+                            // toml++ reads on after one space (a date's time may follow)
+                            run_extended_ = true;
+                            step(c);
+                            break;
+                        }
+                        numeric_run_ = false;
+                    }
+                    if (ch != ' ' && ch != '\t' && ch != '\n' && ch != '\r' && ch != '#') {
+                        const bool value_start = last_significant_ == '=' || last_significant_ == '[' || last_significant_ == ',';
+                        if (value_start && ((ch >= '0' && ch <= '9') || ch == '+' || ch == '-' || ch == '.')) {
+                            numeric_run_ = true;
+                            run_extended_ = false;
+                        }
+                        last_significant_ = ch;
+                    }
                     if (ch == '#') {
                         state_ = State::comment;
                     } else if (ch == '"' || ch == '\'') {
@@ -135,6 +163,11 @@ private:
         char32_t value = 0;
         std::size_t bytes = 0;
     };
+
+    /// toml++'s is_value_terminator, for an ASCII character.
+    static bool value_terminator(char ch) {
+        return ch == ' ' || ch == '\t' || (ch >= '\n' && ch <= '\r') || ch == ']' || ch == '}' || ch == ',' || ch == '#';
+    }
 
     char at(std::size_t i) const { return i < in_.size() ? in_[i] : '\0'; }
 
@@ -258,6 +291,11 @@ private:
     std::size_t line_ = 1, column_ = 1;
     State state_ = State::bare;
     bool skipping_ = false;  ///< in the indentation a line-ending backslash skips
+    // Outside strings and comments: the last character that was not whitespace
+    // (comments skipped), and whether the current token is a value toml++ scans
+    // ahead in before it parses it.
+    char last_significant_ = '\0';
+    bool numeric_run_ = false, run_extended_ = false;
     std::vector<std::pair<std::size_t, Char>> rewrite_at_;  ///< byte offset and code point of each rewrite
 };
 

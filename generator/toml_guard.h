@@ -9,6 +9,15 @@
 // string ("""...""") right after a backslash and in the indentation it skips
 // after a line-ending backslash. Strings elsewhere and comments never reach
 // it, so those code points are fine there (and common in comments: "°", "µ").
+// One place outside strings is wider than it looks: a value that begins with
+// a digit, a sign or a dot is scanned ahead up to the next value terminator
+// (whitespace , ] } #) before it is parsed, quotes included, so a quote in
+// such a token starts no string ("a = 1"..." is all outside strings). The
+// scan counts every token that starts right after = [ or , (whitespace and
+// comments between) as such a value; that also covers keys that begin with a
+// digit or '-' in table headers and inline tables (TOML allows them, a model
+// never has them: its keys are names), where a quoted segment after them is
+// then taken as outside strings.
 //
 // guard_toml_text scans the text the way toml++ tokenises it and, at each
 // place where toml++ would ask about such a code point,

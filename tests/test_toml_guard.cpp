@@ -191,6 +191,35 @@ TEST(TomlGuard, RefusedWithFileLineAndColumn) {
               "test.toml:2: TOML syntax error: character U+00B0 is not allowed outside strings and comments (column 2)");
 }
 
+TEST(TomlGuard, AQuoteInAValueTomlScansAheadInStartsNoString) {
+    // A value that begins with a digit, a sign or a dot is scanned up to the
+    // next value terminator, quotes included: the code point after the quote
+    // is looked up (undefined without the guard).
+    const std::string s = "\xC8\xA1";
+    for (const std::string& value :
+         {"1\"" + s + "\"", "0x7'" + s + "'", "-\"" + s + "\"", "+1.\"" + s + "\"", ".5=\"" + s + "\"",
+          "1979-05-27 \"" + s + "\"", "[1, 2\"" + s + "\"]", "[\n  # a comment\n  3[\"" + s + "\"]", "1{'" + s + "'}"}) {
+        const TomlGuard g = guard_toml_text("a = " + value + "\n");
+        ASSERT_TRUE(g.problem) << value;
+        EXPECT_EQ(g.problem->description, "character U+0221 is not allowed outside strings and comments");
+        const std::string message = error_of(model_with("description = " + value));
+        EXPECT_NE(message.find("test.toml:"), std::string::npos) << message;
+    }
+    // The byte sequence the fuzzer found (fuzz/corpus/model_reader/value-scan-past-quote).
+    const std::string found("ame = 0x7\x01t\"\x00=f\x01\x01" "d\x00ZZZZZZZZZZZZZZZZ(\xEF\xBB\xA3k = \"mnd k\"\"\"\"\"\"\"eZZ", 59);
+    EXPECT_EQ(error_of(found),
+              "test.toml:1: TOML syntax error: character U+FEE3 is not allowed outside strings and comments (column 37)");
+    // Where a quote does start a string: after = [ , { . and whitespace, after
+    // a value's terminator, and in keys.
+    for (const std::string& line :
+         {"k=\"" + s + "\"", "x=[\"" + s + "\",'" + s + "']", "t={a=\"" + s + "\"}", "a = [1, \"" + s + "\"]",
+          "a = [1,\"" + s + "\"]", "a = 1979-05-27 # \"" + s, "a = 1 # \"" + s, "a.\"" + s + "\" = 1",
+          "\"" + s + "\".b = 1", "[\"" + s + "\"]", "a = [[1], [\"" + s + "\"]]", "a = 1\n\"" + s + "\" = 2"}) {
+        const TomlGuard g = guard_toml_text(line + "\n");
+        EXPECT_FALSE(g.problem) << line << ": " << g.problem->description;
+    }
+}
+
 TEST(TomlGuard, AnUnknownEscapeInABasicStringIsLeftToToml) {
     // In a single-line basic string toml++ refuses it without the lookup.
     for (const char32_t c : kSamples) {
