@@ -39,7 +39,7 @@ std::unique_ptr<JitSolverProvider> load_jit_provider(const Model& model, JitSolv
     if (!module) throw JitUnavailable(std::string("cannot load the JIT module: ") + ::dlerror());
     auto factory = reinterpret_cast<JitProviderFactory>(::dlsym(module, kJitProviderFactorySymbol));
     if (!factory) throw JitUnavailable(path + " has no " + kJitProviderFactorySymbol);
-    // The factory makes a JitSolverProvider (runtime/jit_solver_provider.cpp).
+    // The factory makes a JitSolverProvider (runtime/jit/jit_solver_provider.cpp).
     return std::unique_ptr<JitSolverProvider>(
         static_cast<JitSolverProvider*>(factory(model, std::move(source), options)));
 }

@@ -14,10 +14,13 @@
 #include "cached_kernel_provider.h"
 #include "derivation.h"
 #include "emitter.h"
+#include "engine.h"
 #include "jit_module.h"
 #include "jit_solver_provider.h"
 #include "kernel_cache.h"
+#include "kernel_mode.h"
 #include "reference.h"
+#include "sample_grid.h"
 #include "solver_provider.h"
 
 namespace hsnc {
@@ -154,7 +157,7 @@ SimulateSummary simulate(const Model& model, const SimulateOptions& o, Observer&
 
     EngineOptions eopt;
     eopt.t_end = t_end;
-    eopt.dt = std::isnan(o.dt) ? (t_end - model.t0) / 1000 : o.dt;
+    eopt.dt = std::isnan(o.dt) ? SampleGrid::default_dt(model.t0, t_end) : o.dt;
     eopt.samples = o.samples;
     eopt.max_events = o.max_events;
 

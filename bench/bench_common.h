@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "engine.h"
-#include "solver_provider.h"
+#include "kernel_mode.h"
 
 namespace hsnc::bench {
 

@@ -37,8 +37,8 @@
 #include "aot_registry.h"
 #include "engine.h"
 #include "integrators.h"
+#include "kernel_mode.h"
 #include "model_reader.h"
-#include "solver_provider.h"
 
 namespace {
 

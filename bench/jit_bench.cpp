@@ -8,7 +8,7 @@
 //      generation + JIT link, the persistent cache empty) and warm (a cache
 //      hit: read, check, JIT link), medians over the configurations a run of
 //      each model visits, and a hit the way `hsnc simulate` takes it, without
-//      LLVM (CachedKernelProvider, runtime/object_loader.h);
+//      LLVM (CachedKernelProvider, runtime/jit/object_loader.h);
 //   4. the whole `hsnc simulate` process on a model without ahead-of-time
 //      kernels: every kernel cached, none cached, the generic solver.
 //
@@ -38,7 +38,7 @@
 #include "kernel_solver.h"
 #include "jit_solver_provider.h"
 #include "model_reader.h"
-#include "solver_provider.h"
+#include "kernel_mode.h"
 #include "bench_common.h"
 
 namespace {

@@ -1,5 +1,5 @@
 // hsnc program benchmark: the interpreter of a configuration's Program
-// (runtime/interpreted_solver.h) against the kernel printed from the same
+// (runtime/solvers/interpreted_solver.h) against the kernel printed from the same
 // program (ahead of time, JIT) and the generic Eigen solver, in one run:
 //   1. one SegmentSolver::eval, in nanoseconds, as bench/jit_bench.cpp section
 //      2 measures it (the same configurations, instants and setup);
@@ -25,7 +25,7 @@
 #include "kernel_solver.h"
 #include "lowering.h"
 #include "model_reader.h"
-#include "solver_provider.h"
+#include "kernel_mode.h"
 #include "bench_common.h"
 
 namespace {

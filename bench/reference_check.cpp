@@ -20,9 +20,9 @@
 
 #include "aot_registry.h"
 #include "engine.h"
+#include "kernel_mode.h"
 #include "model_reader.h"
 #include "reference_engine.h"
-#include "solver_provider.h"
 
 using namespace hsnc;
 using cln::cl_F;

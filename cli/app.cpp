@@ -31,6 +31,9 @@ int run(int argc, const char* const* argv) {
     add_generate(app, exit_code);
     add_cache(app, exit_code);
     add_tradeoff(app, exit_code);
+    add_sweep(app, exit_code);
+    add_periodic(app, exit_code);
+    add_lyapunov(app, exit_code);
     try {
         app.parse(argc, argv);
     } catch (const CLI::Success& e) {

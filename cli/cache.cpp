@@ -1,5 +1,5 @@
 // `hsnc cache [--cache-dir DIR] --stats|--clear`: the persistent cache of
-// compiled kernels (runtime/kernel_cache.h). Plain file operations: LLVM is
+// compiled kernels (runtime/jit/kernel_cache.h). Plain file operations: LLVM is
 // not loaded.
 #include <ctime>
 #include <iostream>

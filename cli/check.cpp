@@ -3,7 +3,7 @@
 // with every contact open and every mass sliding.
 //
 // Modes: the undamped generalised eigenproblem K phi = omega^2 M phi with
-// K = K(all open), from the engine's own modal analysis (runtime/modal.h), so
+// K = K(all open), from the engine's own modal analysis (model/modal.h), so
 // a rigid-body mode is what the engine takes for one: decided structurally (a
 // group of masses with no spring or contact of k > 0 to ground), never from
 // a small eigenvalue, which stiffness or mass ratios beyond 1e10 would give.
@@ -18,6 +18,7 @@
 #include "commands.h"
 #include "configuration.h"
 #include "error.h"
+#include "free_components.h"
 #include "modal.h"
 #include "model_reader.h"
 
@@ -81,8 +82,17 @@ void print_modes(const Model& model, std::ostream& out) {
         const double xi = 0.5 * (model.alpha / omega + model.beta * omega);
         out << num(omega) << "  " << num(omega / (2.0 * kPi)) << "  " << num(xi) << "\n";
     }
-    if (rigid > 0)
-        out << "  note: " << rigid << " rigid-body mode(s): a mass or group of masses has no spring path to ground\n";
+    if (rigid > 0) {
+        // The floating groups, by the rule that made those modes rigid (free_components.h).
+        std::string groups;
+        for (const std::vector<int>& members : free_components(model, Configuration::all_open(model)).floating_members()) {
+            std::string names;
+            for (int i : members) names += (names.empty() ? "" : ", ") + model.masses[i].name;
+            groups += (groups.empty() ? " (" : "; ") + names;
+        }
+        out << "  note: " << rigid << " rigid-body mode(s): a mass or group of masses has no spring path to ground"
+            << groups << (groups.empty() ? "" : ")") << "\n";
+    }
 }
 
 }  // namespace

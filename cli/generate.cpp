@@ -3,7 +3,7 @@
 // (generator/emitter.h), all of them while there are at most 64
 // configurations, else those of the model's default run plus the initial one
 // and its neighbours (said on stderr), plus <model>.manifest listing them and
-// registry.cpp defining hsnc::aot_registry() (runtime/aot_registry.h).
+// registry.cpp defining hsnc::aot_registry() (kernels/aot_registry.h).
 // The files include "kernel_abi.h" and "aot_registry.h" from runtime/.
 #include <iostream>
 

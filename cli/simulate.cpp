@@ -16,6 +16,7 @@
 #include "hsnc/simulate.h"
 #include "kernel_cache.h"
 #include "model_reader.h"
+#include "sample_grid.h"
 #include "simulate_outputs.h"
 
 namespace hsnc::cli {
@@ -150,7 +151,7 @@ int simulate(const SimulateOptions& o) {
     }
     const double t_end = std::isnan(o.t_end) ? *model.t_end : o.t_end;
     // Default sampling: 1000 intervals over the run (as the library does).
-    const double dt = std::isnan(o.dt) ? (t_end - model.t0) / 1000 : o.dt;
+    const double dt = std::isnan(o.dt) ? SampleGrid::default_dt(model.t0, t_end) : o.dt;
     // Every output path checked before anything is written or run.
     SimulateOutputs outputs(model, o.outputs, t_end, dt);
     outputs.open();

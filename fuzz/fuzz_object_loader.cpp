@@ -1,4 +1,4 @@
-// libFuzzer target: the cached-kernel object loader (runtime/object_loader.h)
+// libFuzzer target: the cached-kernel object loader (runtime/jit/object_loader.h)
 // on arbitrary bytes taken as an object file, as a cache entry's payload would
 // be. It must map the object or refuse it with a reason; a crash, a sanitizer
 // report or a write outside its own pages is a defect. Nothing it maps is

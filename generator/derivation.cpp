@@ -7,7 +7,9 @@
 #include <numeric>
 
 #include "assembly.h"
+#include "contact_gap.h"
 #include "error.h"
+#include "free_components.h"
 
 namespace hsnc {
 
@@ -36,51 +38,6 @@ int Derivation::free_index(int mass) const {
 namespace {
 
 const numeric kZero(0), kOne(1), kTwo(2);
-
-// Floating components of the free masses: connected through springs or closed
-// contacts of positive stiffness, with no such link to ground or a stuck mass.
-// Each has one rigid-body mode (lambda = 0).
-std::vector<std::vector<int>> floating_components(const Model& model, const Configuration& cfg,
-                                                  const std::vector<int>& free_index) {
-    const std::size_t n = model.dof();
-    std::vector<int> parent(n);
-    std::iota(parent.begin(), parent.end(), 0);
-    auto find = [&](int i) {
-        while (parent[i] != i) i = parent[i] = parent[parent[i]];
-        return i;
-    };
-    std::vector<char> anchored(n, 0);
-    auto link = [&](int a, int b, double k) {
-        if (k <= 0) return;
-        const bool fa = a != kGround && free_index[a] >= 0, fb = b != kGround && free_index[b] >= 0;
-        if (fa && fb) {
-            parent[find(a)] = find(b);
-        } else if (fa) {
-            anchored[a] = 1;  // to ground or to a stuck mass
-        } else if (fb) {
-            anchored[b] = 1;
-        }
-    };
-    for (const Spring& s : model.springs) link(s.a, s.b, s.k);
-    for (std::size_t c = 0; c < model.contacts.size(); ++c)
-        if (cfg.closed[c]) link(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
-    std::vector<char> root_anchored(n, 0);
-    for (std::size_t i = 0; i < n; ++i)
-        if (free_index[i] >= 0 && anchored[i]) root_anchored[find(static_cast<int>(i))] = 1;
-    std::vector<std::vector<int>> comps;
-    std::vector<int> comp_of_root(n, -1);
-    for (std::size_t i = 0; i < n; ++i) {
-        if (free_index[i] < 0) continue;
-        const int r = find(static_cast<int>(i));
-        if (root_anchored[r]) continue;
-        if (comp_of_root[r] < 0) {
-            comp_of_root[r] = static_cast<int>(comps.size());
-            comps.emplace_back();
-        }
-        comps[comp_of_root[r]].push_back(static_cast<int>(i));
-    }
-    return comps;
-}
 
 // Cyclic Jacobi eigenvalue algorithm for a symmetric matrix (Golub & Van Loan,
 // Matrix Computations, 4th ed., Alg. 8.5.3), on GiNaC floats at the current
@@ -187,7 +144,7 @@ Derivation derive(const Model& model, const Configuration& cfg) {
     std::stable_sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return kt[p][p] < kt[q][q]; });
 
     // Rigid-body modes replace the smallest eigenpairs: lambda = 0, shape sqrt(m) on the component.
-    const auto comps = floating_components(model, cfg, free_index);
+    const auto comps = free_components(model, cfg).floating_members();  // free_components.h
     std::vector<numeric> lambda(nf);
     std::vector<std::vector<numeric>> shape(nf, std::vector<numeric>(nf, kZero));  // shape[j][r] = Phi_rj
     for (std::size_t j = 0; j < nf; ++j) {
@@ -381,7 +338,7 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
         ex g;
         if (sf.kind == SwitchKind::gap) {
             const Contact& c = model.contacts[sf.element];
-            g = pos(c.a) - pos(c.b) - exact(c.gap);
+            g = contact_gap(pos(c.a), pos(c.b), ex(exact(c.gap)));
         } else if (sf.kind == SwitchKind::velocity) {
             g = out.v[sf.element];
         } else {

@@ -27,7 +27,7 @@
 
 #include "configuration.h"
 #include "model.h"
-#include "segment.h"
+#include "switch_function.h"
 
 namespace hsnc {
 
@@ -71,7 +71,15 @@ struct HarmonicData {
 };
 
 /// Relative band |Omega - omega| / omega inside which an undamped mode uses the
-/// resonance-stable (sinc) form of its forced response.
+/// resonance-stable (sinc) form of its forced response: the one band of the
+/// folded kernels, the interpreter (both from the derivation) and the sweep
+/// kernels (printed into them as resonance_band). Why 1%: outside it the
+/// standard particular P/(lambda - Omega^2) is at most ~1/(2 * 0.01) = 50 times
+/// the static response, so its cancellation against the homogeneous part costs
+/// at most ~1.7 digits; inside it the sinc form is exact through Omega = omega
+/// but grows secularly, so its bounds hold for one forcing period only (a step
+/// limit), a cost worth paying only close to resonance. (The generic solver,
+/// the kernels' independent oracle, keeps its own criterion: generic_solver.cpp.)
 inline constexpr double kResonanceBand = 1e-2;
 
 struct Derivation {

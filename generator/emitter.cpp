@@ -6,9 +6,9 @@
 #include <cstdio>
 #include <functional>
 #include <limits>
-#include <sstream>
 #include <string>
 
+#include "code_writer.h"
 #include "lowering.h"
 #include "model_hash.h"
 
@@ -27,50 +27,16 @@ namespace {
 
 double dbl(const numeric& x) { return x.to_double(); }
 
-/// Lines of code at a fixed layout (4-space indent, one statement per line).
-class Code {
-public:
-    void line(int indent, const std::string& text) {
-        out_ << std::string(static_cast<std::size_t>(4 * indent), ' ') << text << "\n";
-    }
-    void blank() { out_ << "\n"; }
-    void raw(const char* text) { out_ << text; }
-    std::string str() const { return out_.str(); }
-
-private:
-    std::ostringstream out_;
-};
-
 std::string idx(std::size_t k) { return std::to_string(k + 1); }  // 1-based names: q_1, ...
 
-}  // namespace
-
-// The forcing phase at the segment start, as GenericSolver computes it
-// (runtime/generic_solver.cpp, reduced_phase), printed into sweep kernels
-// (generator/param_emitter.cpp); folded kernels call kernel_abi.h's copy.
-const char* const kPhaseFunctionSource =
-    "// Omega (t0 + t0_lo) + phase reduced to [-pi, pi]: the product's rounding kept (fma) and\n"
-    "// 2 pi in two parts (Cody-Waite), so a large t0 costs no phase accuracy beyond its own.\n"
-    "double hsnc_phase(double omega, double t0, double t0_lo, double phase) {\n"
-    "    const double hi = omega * t0;\n"
-    "    const double lo = __builtin_fma(omega, t0, -hi) + omega * t0_lo;\n"
-    "    const double n = __builtin_nearbyint(hi / 6.283185307179586);\n"
-    "    double r = __builtin_fma(-n, 6.283185307179586, hi);\n"
-    "    r = __builtin_fma(-n, 2.4492935982947064e-16, r);\n"
-    "    return __builtin_remainder(r + lo + phase, 6.283185307179586);\n"
-    "}\n";
-
-namespace {
-
-// ---- the printer: a Program (runtime/program.h) as C++ ----
+// ---- the printer: a Program (kernels/program.h) as C++ ----
 // Every instruction prints as the statements that compute what the
-// interpreter (runtime/interpreted_solver.cpp) computes, in the same order.
+// interpreter (runtime/solvers/interpreted_solver.cpp) computes, in the same order.
 
 /// A constant: its name when it has one, else the literal (negative ones in parentheses).
 std::string konst(const Program& p, std::uint32_t k) {
     if (!p.constant_names[k].empty()) return p.constant_names[k];
-    const double v = p.constants[k];
-    return v < 0 ? "(" + format_double(v) + ")" : format_double(v);
+    return CodeWriter::operand(p.constants[k]);
 }
 
 /// c_0 r_0 + c_1 r_1 + ... with signs folded ("1.5 - 2.0*x + y"), terms given
@@ -117,7 +83,7 @@ std::string sum_text(const Program& p, const ProgramBody& b, const ProgramInstr&
 
 class BodyPrinter {
 public:
-    BodyPrinter(const Program& p, const ProgramBody& b, Code& out) : p_(p), b_(b), out_(out) {}
+    BodyPrinter(const Program& p, const ProgramBody& b, CodeWriter& out) : p_(p), b_(b), out_(out) {}
 
     void print() {
         for (const ProgramInstr& in : b_.code) instr(in);
@@ -133,15 +99,7 @@ private:
         out_.line(1, lhs + " = " + expr + ";" + (note.empty() ? "" : "  // " + note));
     }
     void add_to(std::uint32_t dst, const std::string& expr) { out_.line(1, n(dst) + " += " + expr + ";"); }
-    void comment(const std::string& text) {
-        std::size_t start = 0;
-        while (start <= text.size() && !text.empty()) {
-            std::size_t end = text.find('\n', start);
-            if (end == std::string::npos) end = text.size();
-            if (end > start) out_.line(1, "// " + text.substr(start, end - start));
-            start = end + 1;
-        }
-    }
+    void comment(const std::string& text) { out_.comment(1, text); }
 
     void instr(const ProgramInstr& in) {
         comment(in.comment);
@@ -303,38 +261,52 @@ private:
         add_to(m + kModeQ, y);
         add_to(m + kModeDQ, dy);
         add_to(m + kModeDDQ, ddy);
-        add_to(m + kModeMQ, "__builtin_fabs(" + y + ")");
-        add_to(m + kModeMDQ, "__builtin_fabs(" + dy + ")");
+        // The magnitude of the terms, not of their sum (y ~ tau^3 near tau = 0, its terms ~ tau).
+        const std::string aQ = "__builtin_fabs(" + Q + ")";
+        add_to(m + kModeMQ, aQ + "*(__builtin_fabs(" + ct + "*" + eS + ") + __builtin_fabs(" + w + "*" + Cb + "))");
+        add_to(m + kModeMDQ, aQ + "*(__builtin_fabs(" + ct + "*" + eC + ") + __builtin_fabs(" + dw + "*" + Cb +
+                                 ") + __builtin_fabs(" + k(c + kResMean) + "*" + w + "*" + Sb + "))");
     }
 
     const Program& p_;
     const ProgramBody& b_;
-    Code& out_;
+    CodeWriter& out_;
 };
 
 }  // namespace
 
 std::string emit_kernel(const Derivation& d) { return emit_kernel(d, lower(d)); }
 
+namespace {
+
+std::string model_hash_text(const Model& model) {
+    char hash[32];
+    std::snprintf(hash, sizeof hash, "0x%016llx", static_cast<unsigned long long>(model_hash(model)));
+    return hash;
+}
+
+}  // namespace
+
+void emit_provenance(CodeWriter& c, const Derivation& d, const std::string& what, const std::string& source) {
+    const Model& model = *d.model;
+    std::vector<std::string> fr, st;
+    for (int i : d.free_dofs) fr.push_back(model.masses[i].name);
+    for (int i : d.stuck_dofs) st.push_back(model.masses[i].name);
+    c.line(0, "// " + what + " -- generated by hsnc " HSNC_VERSION " (" + source + "); do not edit.");
+    c.line(0, "// model:         " + model.name + " (hash " + model_hash_text(model) + ")");
+    c.line(0, "// configuration: " + d.cfg.spec(model) + " (key " + d.cfg.key() + ")");
+    c.line(0, "// free masses:   " + (fr.empty() ? std::string("none") : CodeWriter::join(fr)));
+    c.line(0, "// stuck masses:  " + (st.empty() ? std::string("none") : CodeWriter::join(st)));
+}
+
 std::string emit_kernel(const Derivation& d, const Program& p) {
     const Model& model = *d.model;
     const std::size_t nm = d.modes.size();
     const std::string sym = kernel_symbol(model, d.cfg);
 
-    Code c;
+    CodeWriter c;
     // ---- provenance ----
-    char hash[32];
-    std::snprintf(hash, sizeof hash, "0x%016llx", static_cast<unsigned long long>(model_hash(model)));
-    c.line(0, "// hsnc kernel -- generated by hsnc " HSNC_VERSION " (generator/emitter.cpp); do not edit.");
-    c.line(0, "// model:         " + model.name + " (hash " + hash + ")");
-    c.line(0, "// configuration: " + d.cfg.spec(model) + " (key " + d.cfg.key() + ")");
-    {
-        std::string fr, st;
-        for (int i : d.free_dofs) fr += (fr.empty() ? "" : ", ") + model.masses[i].name;
-        for (int i : d.stuck_dofs) st += (st.empty() ? "" : ", ") + model.masses[i].name;
-        c.line(0, "// free masses:   " + (fr.empty() ? std::string("none") : fr));
-        c.line(0, "// stuck masses:  " + (st.empty() ? std::string("none") : st));
-    }
+    emit_provenance(c, d, "hsnc kernel", "generator/emitter.cpp");
     c.line(0, "//");
     c.line(0, "// Free masses obey M x'' + C x' + K x = f + sum_h F_h sin(Omega_h t + phase_h) with");
     c.line(0, "// f = loads + preload - K_FS x_S - mu_k N sgn (paper Eq. 7-9). In modal coordinates");
@@ -342,9 +314,9 @@ std::string emit_kernel(const Derivation& d, const Program& p) {
     c.line(0, "// Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).");
     for (std::size_t j = 0; j < nm; ++j) {
         const Mode& m = d.modes[j];
-        c.line(0, "// mode " + idx(j) + ": " + regime_name(m.regime) + ", lambda = " + format_double(dbl(m.lambda)) +
-                      ", omega = " + format_double(dbl(m.omega)) + ", c = " + format_double(dbl(m.c)) +
-                      ", xi = " + format_double(dbl(m.xi)));
+        c.line(0, "// mode " + idx(j) + ": " + regime_name(m.regime) + ", lambda = " + c.literal(dbl(m.lambda)) +
+                      ", omega = " + c.literal(dbl(m.omega)) + ", c = " + c.literal(dbl(m.c)) +
+                      ", xi = " + c.literal(dbl(m.xi)));
     }
     c.line(0, "// The statements are the program of generator/lowering.cpp, printed in the order the");
     c.line(0, "// interpreter (runtime/interpreted_solver.cpp) runs it: both give the same bits.");
@@ -361,72 +333,88 @@ std::string emit_kernel(const Derivation& d, const Program& p) {
     c.line(0, "// Modal constants.");
     for (std::size_t k = 0; k < p.constants.size(); ++k)
         if (!p.constant_names[k].empty())
-            c.line(0, "constexpr double " + p.constant_names[k] + " = " + format_double(p.constants[k]) + ";");
+            c.line(0, "constexpr double " + p.constant_names[k] + " = " + c.literal(p.constants[k]) + ";");
     c.blank();
-    std::string out = c.str();
-    out += "// Coefficient block (" + std::to_string(p.coef_names.size()) + " doubles):";
-    for (std::size_t k = 0; k < p.coef_names.size(); ++k)
-        out += (k % 6 == 0 ? "\n//  " : " ") + std::to_string(k) + ":" + p.coef_names[k];
-    out += "\n";
+    {
+        std::string block = "// Coefficient block (" + std::to_string(p.coef_names.size()) + " doubles):";
+        for (std::size_t k = 0; k < p.coef_names.size(); ++k)
+            block += (k % 6 == 0 ? "\n//  " : " ") + std::to_string(k) + ":" + p.coef_names[k];
+        c.raw(block + "\n");
+    }
 
-    Code s;
-    s.line(0, "void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {");
-    s.line(1, "(void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;");
-    BodyPrinter(p, p.setup, s).print();
-    s.line(0, "}");
-    Code e;
-    e.line(0, "void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,");
-    e.line(0, "          double* bound, double* scale) {");
-    e.line(1, "(void)tau; (void)coef;");
-    BodyPrinter(p, p.eval, e).print();
-    e.line(0, "}");
-    out += s.str() + "\n" + e.str() + "\n";
-    out += "const hsnc_switch switches[] = {";
+    c.block(0, "void setup(double* coef, double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {",
+            "}", [&] {
+                c.line(1, "(void)t0; (void)t0_lo; (void)x0; (void)v0; (void)sgn; (void)coef;");
+                BodyPrinter(p, p.setup, c).print();
+            });
+    c.blank();
+    c.line(0, "void eval(const double* coef, double tau, double* x, double* v, double* a, double* g, double* dg,");
+    c.block(0, "          double* bound, double* scale) {", "}", [&] {
+        c.line(1, "(void)tau; (void)coef;");
+        BodyPrinter(p, p.eval, c).print();
+    });
+    c.blank();
+    std::vector<std::string> switches;
     for (const SwitchFunction& sf : d.switches)
-        out += "{" + std::to_string(static_cast<int>(sf.kind)) + ", " + std::to_string(sf.element) + "}, ";
-    if (d.switches.empty()) out += "{0, -1}";  // C++ needs one element; n_switch = 0
-    out += "};\n\n}  // namespace " + ns + "\n}  // namespace\n\n";
-    out += emit_kernel_object(d, sym, ns, {std::to_string(p.coef_names.size()), format_double(p.max_step)});
-    return out;
+        switches.push_back("{" + std::to_string(static_cast<int>(sf.kind)) + ", " + std::to_string(sf.element) + "}, ");
+    if (d.switches.empty()) switches.push_back("{0, -1}");  // C++ needs one element; n_switch = 0
+    c.line(0, "const hsnc_switch switches[] = {" + CodeWriter::join(switches, "") + "};");
+    c.blank();
+    c.line(0, "}  // namespace " + ns);
+    c.line(0, "}  // namespace");
+    c.blank();
+    emit_kernel_object(c, d, sym, ns, {std::to_string(p.coef_names.size()), c.literal(p.max_step)});
+    return c.str();
 }
 
-std::string emit_kernel_object(const Derivation& d, const std::string& sym, const std::string& ns,
-                               const std::vector<std::string>& rest) {
+void emit_kernel_object(CodeWriter& c, const Derivation& d, const std::string& sym, const std::string& ns,
+                        const std::vector<std::string>& rest) {
     const Model& model = *d.model;
-    char hash[32];
-    std::snprintf(hash, sizeof hash, "0x%016llx", static_cast<unsigned long long>(model_hash(model)));
-    std::string out = "extern \"C\" const hsnc_kernel " + sym + ";\n";
-    out += "extern \"C\" const hsnc_kernel " + sym + " = {\n";
-    out += "    HSNC_KERNEL_ABI_VERSION,\n";
-    out += "    \"" + model.name + "\",\n";
-    out += "    " + std::string(hash) + "ull,\n";
-    out += "    \"" + d.cfg.spec(model) + "\",\n";
-    out += "    \"" + d.cfg.key() + "\",\n";
-    out += "    \"" HSNC_VERSION "\",\n";
-    out += "    " + std::to_string(model.dof()) + ",\n";
-    out += "    " + std::to_string(d.switches.size()) + ",\n";
-    out += "    " + ns + "::switches,\n";
-    for (std::size_t k = 0; k < rest.size(); ++k) {
-        const std::size_t comment = rest[k].find("  //");  // "value  // why": the comma goes after the value
-        out += comment == std::string::npos ? "    " + rest[k] + ",\n"
-                                            : "    " + rest[k].substr(0, comment) + "," + rest[k].substr(comment) + "\n";
-        if (k == 1) out += "    " + ns + "::setup,\n    " + ns + "::eval,\n";
-    }
-    out += "};\n";
-    return out;
+    c.line(0, "extern \"C\" const hsnc_kernel " + sym + ";");
+    c.block(0, "extern \"C\" const hsnc_kernel " + sym + " = {", "};", [&] {
+        c.line(1, "HSNC_KERNEL_ABI_VERSION,");
+        c.line(1, "\"" + model.name + "\",");
+        c.line(1, model_hash_text(model) + "ull,");
+        c.line(1, "\"" + d.cfg.spec(model) + "\",");
+        c.line(1, "\"" + d.cfg.key() + "\",");
+        c.line(1, "\"" HSNC_VERSION "\",");
+        c.line(1, std::to_string(model.dof()) + ",");
+        c.line(1, std::to_string(d.switches.size()) + ",");
+        c.line(1, ns + "::switches,");
+        for (std::size_t k = 0; k < rest.size(); ++k) {
+            const std::size_t comment = rest[k].find("  //");  // "value  // why": the comma goes after the value
+            c.line(1, comment == std::string::npos ? rest[k] + "," : rest[k].substr(0, comment) + "," + rest[k].substr(comment));
+            if (k == 1) c.line(1, ns + "::setup,").line(1, ns + "::eval,");
+        }
+    });
 }
 
 std::string emit_registry(const std::vector<std::string>& symbols, const std::string& function) {
-    std::string out = "// hsnc AOT kernel registry -- generated by hsnc " HSNC_VERSION "; do not edit.\n";
-    out += "#include \"aot_registry.h\"\n\n";
-    for (const std::string& s : symbols) out += "extern \"C\" const hsnc_kernel " + s + ";\n";
-    out += "\nnamespace hsnc {\nnamespace {\n\nconst hsnc_kernel* const kernels[] = {\n";
-    for (const std::string& s : symbols) out += "    &" + s + ",\n";
-    if (symbols.empty()) out += "    nullptr,\n";
-    out += "};\n\n}  // namespace\n\nconst AotRegistry& " + function + "();\n\nconst AotRegistry& " + function + "() {\n";
-    out += "    static const AotRegistry registry{kernels, " + std::to_string(symbols.size()) + "};\n";
-    out += "    return registry;\n}\n\n}  // namespace hsnc\n";
-    return out;
+    CodeWriter c;
+    c.line(0, "// hsnc AOT kernel registry -- generated by hsnc " HSNC_VERSION "; do not edit.");
+    c.line(0, "#include \"aot_registry.h\"");
+    c.blank();
+    for (const std::string& s : symbols) c.line(0, "extern \"C\" const hsnc_kernel " + s + ";");
+    c.blank();
+    c.line(0, "namespace hsnc {");
+    c.line(0, "namespace {");
+    c.blank();
+    c.block(0, "const hsnc_kernel* const kernels[] = {", "};", [&] {
+        for (const std::string& s : symbols) c.line(1, "&" + s + ",");
+        if (symbols.empty()) c.line(1, "nullptr,");
+    });
+    c.blank();
+    c.line(0, "}  // namespace");
+    c.blank();
+    c.line(0, "const AotRegistry& " + function + "();");
+    c.blank();
+    c.block(0, "const AotRegistry& " + function + "() {", "}", [&] {
+        c.line(1, "static const AotRegistry registry{kernels, " + std::to_string(symbols.size()) + "};");
+        c.line(1, "return registry;");
+    });
+    c.blank();
+    c.line(0, "}  // namespace hsnc");
+    return c.str();
 }
 
 }  // namespace hsnc

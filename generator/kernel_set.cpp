@@ -10,10 +10,11 @@
 #include "assembly.h"
 #include "derivation.h"
 #include "emitter.h"
+#include "engine.h"
 #include "param_emitter.h"
 #include "error.h"
 #include "sample_models.h"
-#include "solver_provider.h"
+#include "kernel_mode.h"
 #include "transitions.h"
 
 namespace hsnc {

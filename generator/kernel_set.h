@@ -31,7 +31,7 @@ struct KernelSet {
     std::string manifest;                ///< <model>.manifest: the configurations, one spec per line
 };
 
-/// The configuration the model starts in (runtime/transitions.h
+/// The configuration the model starts in (runtime/engine/transitions.h
 /// entered_configuration at t0, x0, v0: the stick rule decides by A_i).
 Configuration initial_configuration(const Model& model);
 

@@ -1,5 +1,5 @@
 // hsnc -- lowering: a configuration's Derivation (40 digits) to the Program
-// (runtime/program.h) that both the emitter prints and the interpreter runs.
+// (kernels/program.h) that both the emitter prints and the interpreter runs.
 //
 // Every constant is rounded once from the derivation's 40-digit value; every
 // sum is written in the order in which it is computed. The maths of each

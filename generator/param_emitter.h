@@ -3,7 +3,7 @@
 //
 // A folded kernel (emitter.h) bakes every number of the configuration into
 // the code, including its modes. A sweep kernel keeps the named parameters as
-// inputs of `configure(coef, params, &max_step)` (runtime/kernel_abi.h):
+// inputs of `configure(coef, params, &max_step)` (kernels/kernel_abi.h):
 //   - every parameter computed from a kept one (k2 = "2*k1" in the file) and
 //     every model field written with them (m = "m1", mu_s = "1.25*mu_k") is
 //     emitted as that expression, so the file's relations hold for every value;

@@ -3,7 +3,7 @@
 #include <cctype>
 
 #include "derivation.h"
-#include "segment.h"
+#include "switch_function.h"
 
 namespace hsnc {
 namespace {
@@ -94,7 +94,7 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
         d.sgn.push_back(symbol("sgn_" + nm, "s_{" + tn + "}"));
     }
 
-    // Full matrices and forces (runtime/assembly.h, with symbols).
+    // Full matrices and forces (model/assembly.h, with symbols).
     std::vector<ex> m(n), f(n), mu_k(n), mu_s(n);
     GiNaC::matrix K(n, n);
     for (std::size_t i = 0; i < n; ++i) {

@@ -60,7 +60,7 @@ struct SymbolicDerivation {
     std::vector<Definition> definitions;
     std::vector<GiNaC::ex> q;     ///< q_j(t) over the definitions' names
     std::vector<GiNaC::ex> x;     ///< x_i(t), all masses, over the definitions' names
-    /// Switch functions in runtime/segment.h order: (description, g) with
+    /// Switch functions in model/switch_function.h order: (description, g) with
     /// x_<mass>, v_<mass> standing for x_i(t), v_i(t).
     std::vector<std::pair<std::string, GiNaC::ex>> switches;
 };

@@ -20,6 +20,7 @@
 #include <Python.h>
 
 #include <chrono>
+#include <complex>
 #include <cmath>
 #include <map>
 #include <string>
@@ -28,6 +29,8 @@
 #include "emitter.h"
 #include "engine.h"
 #include "error.h"
+#include "hsnc/lyapunov.h"
+#include "hsnc/periodic.h"
 #include "hsnc/simulate.h"
 #include "kernel_set.h"
 #include "model_reader.h"
@@ -35,6 +38,7 @@
 namespace py = pybind11;
 
 namespace hsnc::python {
+void bind_sweep(py::module_& m);  // sweep_binding.cpp
 namespace {
 
 constexpr EventKind kKinds[] = {EventKind::contact_close, EventKind::contact_open, EventKind::stick,
@@ -217,6 +221,97 @@ std::vector<std::string> generate(const Model& model, const std::string& dir) {
     return written;
 }
 
+// Samples of one run (the orbit's period).
+class Samples : public Observer {
+public:
+    explicit Samples(std::size_t n) : n_(n) {}
+    void on_sample(double t, const double* x, const double* v) override {
+        t_.push_back(t);
+        x_.insert(x_.end(), x, x + n_);
+        v_.insert(v_.end(), v, v + n_);
+    }
+    void on_event(double, EventKind, int, const double*, const double*) override {}
+    std::size_t n_;
+    std::vector<double> t_, x_, v_;
+};
+
+KernelChoice kernel_choice(const std::string& name) { return kernel_choice_from_name(name); }
+
+// hsnc.periodic: the result of hsnc::periodic as a dict of NumPy arrays and numbers.
+py::dict periodic(const Model& model, double period, int harmonic, double transient, double tolerance,
+                  int max_iterations, double dt, const std::string& kernels) {
+    PeriodicOptions o;
+    o.period = period;
+    o.harmonic = harmonic;
+    o.transient = transient;
+    o.tolerance = tolerance;
+    o.max_iterations = max_iterations;
+    o.dt = dt;
+    o.kernels = kernel_choice(kernels);
+    const std::size_t n = model.dof();
+    Samples orbit(n);
+    PeriodicResult r;
+    {
+        py::gil_scoped_release nogil;
+        r = hsnc::periodic(model, o, &orbit);
+    }
+    py::dict d;
+    d["status"] = periodic_status_name(r.status);
+    d["message"] = r.message;
+    d["period"] = r.period;
+    d["t"] = r.t;
+    d["iterations"] = r.iterations;
+    d["residual"] = r.residual;
+    d["x"] = vector(r.x);
+    d["v"] = vector(r.v);
+    py::array_t<std::complex<double>> mu(r.multipliers.size());
+    if (!r.multipliers.empty()) std::copy(r.multipliers.begin(), r.multipliers.end(), mu.mutable_data());
+    d["multipliers"] = mu;
+    const bool ok = r.status == PeriodicStatus::ok;
+    d["max_multiplier"] = ok ? r.max_multiplier : NAN;
+    d["stable"] = ok && r.stable;
+    d["monodromy"] = ok ? matrix(r.monodromy, 2 * n, 2 * n) : matrix({}, 0, 2 * n);
+    d["events"] = r.events;
+    py::dict path;
+    path["t"] = vector(orbit.t_);
+    path["x"] = matrix(orbit.x_, orbit.t_.size(), n);
+    path["v"] = matrix(orbit.v_, orbit.t_.size(), n);
+    d["orbit"] = path;
+    return d;
+}
+
+// hsnc.lyapunov: the spectrum and its convergence rows.
+py::dict lyapunov(const Model& model, double t_end, double transient, double row_interval, const std::string& kernels) {
+    LyapunovOptions o;
+    o.t_end = t_end;
+    o.transient = transient;
+    o.row_interval = row_interval;
+    o.kernels = kernel_choice(kernels);
+    std::vector<double> row_t, rows;
+    LyapunovResult r;
+    {
+        py::gil_scoped_release nogil;
+        r = hsnc::lyapunov(model, o, [&](double t, const std::vector<double>& ex) {
+            row_t.push_back(t);
+            rows.insert(rows.end(), ex.begin(), ex.end());
+        });
+    }
+    if (r.status != RunStatus::ok)
+        throw RunError(std::string("lyapunov: ") + run_status_name(r.status) + ": " + r.message);
+    py::dict d;
+    d["status"] = run_status_name(r.status);
+    d["t_start"] = r.t_start;
+    d["t"] = r.t;
+    d["exponents"] = vector(r.exponents);
+    d["sum"] = r.sum;
+    d["collapsed"] = r.collapsed;
+    d["events"] = r.events;
+    d["grazing"] = r.grazing;
+    d["rows_t"] = vector(row_t);
+    d["rows"] = matrix(rows, row_t.size(), 2 * model.dof());
+    return d;
+}
+
 }  // namespace
 }  // namespace hsnc::python
 
@@ -306,4 +401,9 @@ PYBIND11_MODULE(_hsnc, m) {
           py::arg("kernels"), py::arg("precision"), py::arg("max_events"), py::arg("h"), py::arg("rtol"),
           py::arg("atol"), py::arg("cache_dir"), py::arg("use_cache"));
     m.def("_generate", &hp::generate, py::arg("model"), py::arg("dir"));
+    hp::bind_sweep(m);
+    m.def("_periodic", &hp::periodic, py::arg("model"), py::arg("period"), py::arg("harmonic"), py::arg("transient"),
+          py::arg("tolerance"), py::arg("max_iterations"), py::arg("dt"), py::arg("kernels"));
+    m.def("_lyapunov", &hp::lyapunov, py::arg("model"), py::arg("t_end"), py::arg("transient"),
+          py::arg("row_interval"), py::arg("kernels"));
 }

@@ -8,7 +8,9 @@
 #include <cln/rational.h>
 #include <cln/real.h>
 
+#include "contact_gap.h"
 #include "error.h"
+#include "free_components.h"
 
 namespace hsnc::reference {
 namespace {
@@ -19,7 +21,8 @@ using cln::cl_RA;
 bool is_zero(const cl_F& x) { return cln::zerop(x); }
 cl_F sq(const cl_F& x) { return x * x; }
 
-// phi_1(x) = (e^x - 1)/x and phi_2(x) = (e^x - 1 - x)/x^2, by their Taylor
+// phi_1(x) = (e^x - 1)/x and phi_2(x) = (e^x - 1 - x)/x^2 at N digits (the double
+// code's one phi_2 is hsnc_phi2, kernels/kernel_abi.h; the reference keeps its own), by their Taylor
 // series where the subtraction would cancel (|x| < 1/2), summed until the term
 // drops below the format's roundoff.
 cl_F phi1(const MpModel& mp, const cl_F& x) {
@@ -159,7 +162,7 @@ cl_F MpModel::I(long i) const { return cln::cl_float(cl_I(i), format); }
 
 cl_F MpModel::gap(int c, const std::vector<cl_F>& x) const {
     const Link& k = contacts[static_cast<std::size_t>(c)];
-    return body(x, k.a) - body(x, k.b) - k.gap;
+    return contact_gap(body(x, k.a), body(x, k.b), k.gap);
 }
 cl_F MpModel::gap_rate(int c, const std::vector<cl_F>& v) const {
     const Link& k = contacts[static_cast<std::size_t>(c)];
@@ -173,7 +176,7 @@ cl_F MpModel::force_on_mass(const Configuration& cfg, int i, const cl_F& t, cons
     cl_F A = f_const[i] - alpha * m[i] * v[i];
     auto link = [&](const Link& k, bool contact) {
         if (k.a != i && k.b != i) return;
-        const cl_F dx = body(x, k.a) - body(x, k.b) - (contact ? k.gap : zero);
+        const cl_F dx = contact_gap(body(x, k.a), body(x, k.b), contact ? k.gap : zero);  // a spring: gap 0
         const cl_F dv = body(v, k.a) - body(v, k.b);
         const cl_F f = -(k.k * dx) - beta * k.k * dv;  // on a
         A = k.a == i ? A + f : A - f;
@@ -232,41 +235,14 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
     for (int i = 0; i < n_; ++i)
         for (int k = 0; k < n_; ++k) C_[i][k] = mp.beta * K_[i][k] + (i == k ? mp.alpha * mp.m[i] : Z0);
 
-    // Free masses, and the structural count of rigid-body modes (modal.h).
+    // Free masses, and the structural count of rigid-body modes (free_components.h: the
+    // rule the double code uses; a structure, so nothing to compute at N digits).
+    const FreeComponents fc = free_components(model, cfg);
+    free_ = fc.free;
     slot_.assign(n_, -1);
-    for (int i = 0; i < n_; ++i)
-        if (!cfg.stuck[i]) {
-            slot_[i] = static_cast<int>(free_.size());
-            free_.push_back(i);
-        }
+    for (std::size_t r = 0; r < free_.size(); ++r) slot_[free_[r]] = static_cast<int>(r);
     nf_ = static_cast<int>(free_.size());
-    std::vector<int> comp(nf_);
-    for (int r = 0; r < nf_; ++r) comp[r] = r;
-    auto root = [&](int r) {
-        while (comp[r] != r) r = comp[r] = comp[comp[r]];
-        return r;
-    };
-    std::vector<char> anchored(nf_, 0);
-    auto link = [&](const MpModel::Link& k) {
-        if (!cln::plusp(k.k)) return;
-        const int a = k.a == kGround ? -1 : slot_[k.a], b = k.b == kGround ? -1 : slot_[k.b];
-        if (a >= 0 && b >= 0) comp[root(a)] = root(b);
-    };
-    for (const auto& s : mp.springs) link(s);
-    for (std::size_t c = 0; c < mp.contacts.size(); ++c)
-        if (cfg.closed[c]) link(mp.contacts[c]);
-    auto anchor = [&](const MpModel::Link& k) {
-        if (!cln::plusp(k.k)) return;
-        const int a = k.a == kGround ? -1 : slot_[k.a], b = k.b == kGround ? -1 : slot_[k.b];
-        if (a >= 0 && b < 0) anchored[root(a)] = 1;
-        if (b >= 0 && a < 0) anchored[root(b)] = 1;
-    };
-    for (const auto& s : mp.springs) anchor(s);
-    for (std::size_t c = 0; c < mp.contacts.size(); ++c)
-        if (cfg.closed[c]) anchor(mp.contacts[c]);
-    int n_rigid = 0;
-    for (int r = 0; r < nf_; ++r)
-        if (root(r) == r && !anchored[r]) ++n_rigid;
+    const int n_rigid = fc.n_floating();
 
     // A = M^-1/2 K_F M^-1/2 = V diag(lambda) V^T, Phi = M^-1/2 V (M-orthonormal).
     std::vector<cl_F> rsqm(nf_);
@@ -563,7 +539,7 @@ void MpSegment::eval(const cl_F& tau, MpEval& out) const {
         cl_F g, dg, scale;
         if (sf.kind == SwitchKind::gap) {
             const auto& ct = mp.contacts[e];
-            g = mp.body(out.x, ct.a) - mp.body(out.x, ct.b) - ct.gap;
+            g = contact_gap(mp.body(out.x, ct.a), mp.body(out.x, ct.b), ct.gap);
             dg = mp.body(out.v, ct.a) - mp.body(out.v, ct.b);
             scale = bmag(xm, ct.a) + bmag(xm, ct.b) + cln::abs(ct.gap);
         } else if (sf.kind == SwitchKind::velocity) {

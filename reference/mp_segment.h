@@ -1,6 +1,6 @@
 // hsnc -- one configuration's closed-form solution at N digits (CLN), the
-// reference engine's SegmentSolver counterpart (runtime/segment.h has the
-// switch functions and their order; runtime/generic_solver.h the same maths in
+// reference engine's SegmentSolver counterpart (model/switch_function.h has the
+// switch functions and their order; runtime/solvers/generic_solver.h the same maths in
 // double). Clarity over speed: plain vectors of cl_F, no tricks beyond what
 // the regimes need.
 //
@@ -29,7 +29,7 @@
 
 #include "configuration.h"
 #include "model.h"
-#include "segment.h"
+#include "segment_solver.h"
 
 namespace hsnc::reference {
 

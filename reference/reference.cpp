@@ -1,6 +1,7 @@
-// The reference engine: runtime/engine.cpp's switch search and
-// runtime/transitions.cpp's physics, written again on cl_F (see
-// reference.h). The search is the same guaranteed one (README "How switches
+// The reference engine: runtime/engine/engine.cpp's switch search written again on
+// cl_F (see reference.h), with the contract's decision rules at a switch
+// (runtime/engine/transition_rules.h, shared with the double engine) evaluated in its
+// own arithmetic. The search is the same guaranteed one (README "How switches
 // are found"): each switch function is watched on the side its configuration
 // fixes, every step is bounded by the smallest positive root of
 // h + h' s - B s^2/2 (B >= |g''| from the segment), so no sign change is
@@ -21,8 +22,11 @@
 #include <cln/integer.h>
 #include <cln/rational.h>
 
+#include "contact_gap.h"
 #include "error.h"
 #include "mp_segment.h"
+#include "sample_grid.h"
+#include "transition_rules.h"
 
 namespace hsnc::reference {
 namespace {
@@ -127,25 +131,13 @@ Taylor taylor(const MpModel& mp, const Configuration& cfg, const std::vector<sig
     return T;
 }
 
-// The sign of the first derivative of order >= 1 that is not zero to rounding; 0 when none is. `order`
-// (when given) receives its order.
-int first_nonzero_sign(const MpModel& mp, const std::vector<cl_F>& d, const std::vector<cl_F>& magnitude,
-                       int* order = nullptr) {
-    for (std::size_t k = 1; k < d.size(); ++k)
-        if (cln::abs(d[k]) > noise_of(mp, magnitude[k])) {
-            if (order) *order = static_cast<int>(k);
-            return cln::plusp(d[k]) ? 1 : -1;
-        }
-    return 0;
-}
-
 // Derivatives 0..order of G_c, from a Taylor expansion of order `order`.
 void gap_series(const MpModel& mp, int c, const Taylor& T, std::vector<cl_F>& d, std::vector<cl_F>& m) {
     const auto& l = mp.contacts[static_cast<std::size_t>(c)];
     d.clear();
     m.clear();
     for (std::size_t k = 0; k < T.x.size(); ++k) {
-        d.push_back(mp.body(T.x[k], l.a) - mp.body(T.x[k], l.b) - (k == 0 ? l.gap : mp.zero));
+        d.push_back(contact_gap(mp.body(T.x[k], l.a), mp.body(T.x[k], l.b), k == 0 ? l.gap : mp.zero));
         m.push_back(mp.body(T.xm[k], l.a) + mp.body(T.xm[k], l.b) + (k == 0 ? cln::abs(l.gap) : mp.zero));
     }
 }
@@ -163,133 +155,88 @@ void force_series(const MpModel& mp, const Configuration& cfg, int i, const cl_F
     }
 }
 
-// Stick rule at v_i = 0 (interface.md): 0 = stuck if |A_i| < mu_s N_i, else the
-// direction of A_i; a tie (to rounding) by the first non-zero derivative of
-// |A_i| with mass i held: stuck unless |A_i| is increasing. `a` (the
-// accelerations just before, for the rate) is used when the rate decides.
-signed char stick_rule(const MpModel& mp, const Configuration& cfg, const std::vector<signed char>& sgn, int i,
-                       const cl_F& t, const std::vector<cl_F>& x, const std::vector<cl_F>& v,
-                       const std::vector<cl_F>* a) {
-    const cl_F A = mp.force_on_mass(cfg, i, t, x, v);
-    const cl_F limit = mp.mu_s[i] * mp.normal[i];
-    const signed char dir = cln::plusp(A) ? 1 : -1;
-    const cl_F absA = cln::abs(A);
-    if (cln::abs(absA - limit) <= noise_of(mp, cln::max(absA, limit))) {
-        std::vector<cl_F> held = a ? *a : std::vector<cl_F>(v.size(), mp.zero);
-        held[static_cast<std::size_t>(i)] = mp.zero;
-        cl_F rate = mp.force_rate_on_mass(cfg, i, t, v, held);
-        // The held motion's derivatives, for the rate's rounding level and the higher orders.
-        Configuration hold = cfg;
-        hold.stuck[i] = 1;
-        std::vector<signed char> s = sgn;
-        s[static_cast<std::size_t>(i)] = 0;
-        const Taylor T = taylor(mp, hold, s, t, x, v, tie_order(mp) + 1);
-        std::vector<cl_F> d, m;
-        force_series(mp, hold, i, t, T, d, m);
-        if (cln::abs(rate) <= noise_of(mp, m[1])) {
-            if (cln::zerop(limit) && cln::abs(A) <= noise_of(mp, m[0])) {
-                // |A| = 0 = mu_s N: |A| increases as soon as A does not vanish; it slides along A.
-                const int s0 = first_nonzero_sign(mp, d, m);
-                return static_cast<signed char>(s0);
-            }
-            const int s1 = first_nonzero_sign(mp, d, m);  // |A| - mu_s N has the derivatives dir * A^(k)
-            return s1 * dir > 0 ? dir : 0;
-        }
-        if (dir < 0) rate = -rate;
-        return cln::plusp(rate) ? dir : 0;
-    }
-    return absA < limit ? 0 : dir;
-}
-
-struct Transition {
-    EventKind kind;
-    int element;
+// The reference's arithmetic for the decision rules (runtime/engine/transition_rules.h,
+// shared with the double engine): forces and derivatives on cl_F from its own
+// MpModel, its own Taylor expansions, zero meaning below noise_of().
+struct MpArithmetic {
+    using Scalar = cl_F;
+    const MpModel& mp;
+    int sign(const cl_F& y) const { return cln::plusp(y) ? 1 : cln::minusp(y) ? -1 : 0; }
+    bool negligible(const cl_F& value, const cl_F& magnitude) const { return cln::abs(value) <= noise_of(mp, magnitude); }
+    cl_F abs(const cl_F& y) const { return cln::abs(y); }
 };
 
-// runtime/transitions.cpp apply_switches, on cl_F: contacts first, then the
-// friction decisions with the forces of the resulting configuration, repeated
-// until nothing changes.
-bool apply_switches(const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x, std::vector<cl_F>& v,
-                    const std::vector<cl_F>& a, Configuration& cfg, std::vector<signed char>& sgn,
+class MpPhysics : public MpArithmetic {
+public:
+    /// The state (t, x, v) at the instant; a: the accelerations just before (null at t0).
+    MpPhysics(const Model& model, const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x,
+              std::vector<cl_F>& v, const std::vector<cl_F>* a)
+        : MpArithmetic{mp}, model_(model), t_(t), x_(x), v_(v), a_(a) {}
+
+    int dof() const { return mp.n; }
+    std::size_t contacts() const { return mp.contacts.size(); }
+    bool has_friction(int i) const { return model_.masses[i].has_friction; }
+    int velocity_sign(int i) const { return sign(v_[static_cast<std::size_t>(i)]); }
+    void stop(int i) { v_[static_cast<std::size_t>(i)] = mp.zero; }
+    cl_F force(const Configuration& cfg, int i) const { return mp.force_on_mass(cfg, i, t_, x_, v_); }
+    cl_F static_limit(int i) const { return mp.mu_s[i] * mp.normal[i]; }
+    cl_F held_rate(const Configuration& cfg, int i) const {
+        std::vector<cl_F> held = a_ ? *a_ : std::vector<cl_F>(v_.size(), mp.zero);
+        held[static_cast<std::size_t>(i)] = mp.zero;
+        return mp.force_rate_on_mass(cfg, i, t_, v_, held);
+    }
+    int tie_order() const { return reference::tie_order(mp); }
+    rules::Series<cl_F> held_series(const Configuration& hold, const std::vector<signed char>& sgn, int i,
+                                    int order) const {
+        const Taylor T = taylor(mp, hold, sgn, t_, x_, v_, order + 1);
+        rules::Series<cl_F> s;
+        force_series(mp, hold, i, t_, T, s.d, s.mag);
+        return s;
+    }
+    rules::Series<cl_F> gap_now(int c) const {
+        const auto& k = mp.contacts[static_cast<std::size_t>(c)];
+        return {{mp.gap(c, x_), mp.body(v_, k.a) - mp.body(v_, k.b)},
+                {cln::abs(mp.body(x_, k.a)) + cln::abs(mp.body(x_, k.b)) + cln::abs(k.gap),
+                 cln::abs(mp.body(v_, k.a)) + cln::abs(mp.body(v_, k.b))}};
+    }
+    void prepare_ties(const Configuration& cfg, const std::vector<signed char>& sgn) {
+        cfg_ = cfg;
+        sgn_ = sgn;
+    }
+    rules::Series<cl_F> tied_gap_series(int c, int order) const {
+        const Taylor T = taylor(mp, cfg_, sgn_, t_, x_, v_, order);
+        rules::Series<cl_F> s;
+        gap_series(mp, c, T, s.d, s.mag);
+        return s;
+    }
+
+private:
+    const Model& model_;
+    const cl_F& t_;
+    const std::vector<cl_F>& x_;
+    std::vector<cl_F>& v_;
+    const std::vector<cl_F>* a_;
+    Configuration cfg_;
+    std::vector<signed char> sgn_;
+};
+
+// runtime/engine/transitions.cpp apply_switches, on cl_F: the shared rules with this arithmetic.
+bool apply_switches(const Model& model, const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x,
+                    std::vector<cl_F>& v, const std::vector<cl_F>& a, Configuration& cfg, std::vector<signed char>& sgn,
                     const std::vector<SwitchFunction>& switched, std::vector<Transition>& out, std::string& why) {
-    const int n = mp.n;
-    for (const SwitchFunction& f : switched) {
-        if (f.kind != SwitchKind::gap) continue;
-        cfg.closed[f.element] = !cfg.closed[f.element];
-        out.push_back({cfg.closed[f.element] ? EventKind::contact_close : EventKind::contact_open, f.element});
-    }
-    std::vector<char> deciding(n, 0);
-    for (const SwitchFunction& f : switched) {
-        const int i = f.element;
-        if (f.kind == SwitchKind::velocity) {
-            v[i] = mp.zero;
-            deciding[i] = 1;
-        } else if (f.kind == SwitchKind::release_pos || f.kind == SwitchKind::release_neg) {
-            cfg.stuck[i] = 0;
-            sgn[i] = f.kind == SwitchKind::release_pos ? 1 : -1;
-            out.push_back({EventKind::release, i});
-        }
-    }
-    for (int round = 0; round < 2 * n + 4; ++round) {
-        bool changed = false;
-        for (int i = 0; i < n; ++i) {
-            if (!deciding[i]) continue;
-            deciding[i] = 0;
-            const signed char dir = stick_rule(mp, cfg, sgn, i, t, x, v, &a);
-            if (dir == 0) {
-                cfg.stuck[i] = 1;
-                sgn[i] = 0;
-                out.push_back({EventKind::stick, i});
-            } else {
-                if (dir != sgn[i]) out.push_back({EventKind::reversal, i});
-                sgn[i] = dir;
-            }
-            changed = true;
-        }
-        for (int i = 0; i < n; ++i) {
-            if (!cfg.stuck[i]) continue;
-            const signed char dir = stick_rule(mp, cfg, sgn, i, t, x, v, &a);
-            if (dir == 0) continue;
-            cfg.stuck[i] = 0;
-            sgn[i] = dir;
-            out.push_back({EventKind::release, i});
-            changed = true;
-        }
-        if (!changed) return true;
-    }
+    MpPhysics p(model, mp, t, x, v, &a);
+    if (rules::apply_switches(p, cfg, sgn, switched, out)) return true;
     why = "friction decisions at t = " + time_text(t) + " do not settle";
     return false;
 }
 
-// The configuration entered at (t, x, v) (interface.md "At t0 ..."): a contact
-// with G = 0 (to rounding) by the first non-zero derivative of G (closed if
-// increasing), computed with the contacts decided so far; closed when G
-// vanishes identically (at rest on the boundary, as the double engine).
+// The configuration entered at (t, x, v) (interface.md "At t0 ..."), by the shared rules.
 Configuration entered_configuration(const Model& model, const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x,
                                     const std::vector<cl_F>& v, std::vector<signed char>& sgn) {
     Configuration cfg = Configuration::all_open(model);
-    sgn.assign(static_cast<std::size_t>(mp.n), 0);
-    for (int i = 0; i < mp.n; ++i)  // the friction directions of the masses already sliding
-        if (model.masses[i].has_friction && !cln::zerop(v[i])) sgn[i] = cln::plusp(v[i]) ? 1 : -1;
-    std::vector<cl_F> d, m;
-    for (std::size_t c = 0; c < mp.contacts.size(); ++c) {
-        const auto& k = mp.contacts[c];
-        const cl_F G = mp.gap(static_cast<int>(c), x);
-        const cl_F noise = noise_of(mp, cln::abs(mp.body(x, k.a)) + cln::abs(mp.body(x, k.b)) + cln::abs(k.gap));
-        if (cln::abs(G) > noise) {
-            cfg.closed[c] = cln::plusp(G);
-            continue;
-        }
-        const Taylor T = taylor(mp, cfg, sgn, t, x, v, tie_order(mp));
-        gap_series(mp, static_cast<int>(c), T, d, m);
-        cfg.closed[c] = first_nonzero_sign(mp, d, m) >= 0;
-    }
-    for (int i = 0; i < mp.n; ++i) {
-        if (!model.masses[i].has_friction || !cln::zerop(v[i])) continue;
-        const signed char dir = stick_rule(mp, cfg, sgn, i, t, x, v, nullptr);
-        cfg.stuck[i] = dir == 0;
-        sgn[i] = dir;
-    }
+    std::vector<cl_F> v_copy = v;  // nothing stops at t0
+    MpPhysics p(model, mp, t, x, v_copy, nullptr);
+    rules::entered_configuration(p, cfg, sgn);
     return cfg;
 }
 
@@ -322,13 +269,15 @@ std::size_t search_step_limit(double span, double fastest_rate, const SearchLimi
 }
 
 PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions& options, Observer& observer,
-                            const SearchLimits& limits) {
+                            const SearchLimits& limits, const std::vector<double>* offset) {
     if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
     const MpModel mp(model, digits);
     const std::size_t n = model.dof();
     PreciseRun run;
     RunSummary& sum = run.summary;
     std::vector<cl_F> x = mp.x0, v = mp.v0;
+    if (offset && offset->size() == 2 * n)
+        for (std::size_t i = 0; i < n; ++i) x[i] = x[i] + mp.F((*offset)[i]), v[i] = v[i] + mp.F((*offset)[n + i]);
     cl_F t = mp.t0;
     const cl_F t_end = mp.F(options.t_end);
     std::vector<signed char> sgn;
@@ -340,12 +289,8 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
     bool have_last = false;
     cl_F last_event_t = mp.zero;
 
-    const double dt = options.dt > 0 ? options.dt : (options.t_end - model.t0);
+    const SampleGrid grid(model.t0, options.t_end, options.dt);  // as the double engine: in double
     std::size_t k_next = 0;
-    auto sample_time = [&](std::size_t k) {  // as the double engine: t0 + k*dt in double, and t_end
-        const double tk = model.t0 + static_cast<double>(k) * dt;
-        return tk < options.t_end - 1e-9 * dt ? tk : options.t_end;
-    };
     bool samples_done = !options.samples;
 
     auto finish = [&](RunStatus status, const std::string& message) {
@@ -459,7 +404,8 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                 if (!have_t) T = taylor(mp, cfg, sgn, t, x, v, tie_order(mp) + 1), have_t = true;
                 series(f, T);
                 int order = 0;
-                const int dir = first_nonzero_sign(mp, d, m, &order) * (cln::plusp(side[f]) ? 1 : -1);
+                const int dir = rules::first_nonzero_sign(MpArithmetic{mp}, rules::Series<cl_F>{d, m}, 1, &order) *
+                                (cln::plusp(side[f]) ? 1 : -1);
                 if (dir < 0) {
                     leaves_now[f] = 1;
                     continue;
@@ -576,7 +522,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         const cl_F t_seg_end = found ? t + found_tau : t_end;
         if (!samples_done) {
             while (true) {
-                const double tkd = sample_time(k_next);
+                const double tkd = grid.time(k_next);
                 const cl_F tk = mp.F(tkd);
                 if (found ? tk >= t_seg_end : tk > t_end) break;
                 if (tk == t) {
@@ -587,7 +533,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                     const std::vector<double> xd = to_double(dense.x), vd = to_double(dense.v);
                     observer.on_sample(tkd, xd.data(), vd.data());
                 }
-                if (tkd >= options.t_end) {
+                if (grid.last(k_next)) {
                     samples_done = true;
                     break;
                 }
@@ -608,7 +554,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         t = t + found_tau;
 
         transitions.clear();
-        if (!apply_switches(mp, t, x, v, buf.a, cfg, sgn, switched, transitions, why))
+        if (!apply_switches(model, mp, t, x, v, buf.a, cfg, sgn, switched, transitions, why))
             return finish(RunStatus::chattering, why);
         if (!transitions.empty()) {
             const double td = cln::double_approx(t);

@@ -14,8 +14,10 @@
 // full precision.
 #pragma once
 
-#include "engine.h"
+#include "engine_options.h"
 #include "model.h"
+#include "observer.h"
+#include "run_summary.h"
 
 namespace hsnc::reference {
 

@@ -42,8 +42,11 @@ std::size_t search_step_limit(double span, double fastest_rate, const SearchLimi
 
 /// As simulate(), and also keeps every event and the end state at full precision.
 /// `digits` may be any value >= 17 here (tests and measurements compare N with 2N).
+/// `offset` (may be null; 2n values, positions then velocities) is added to
+/// the initial state at full precision, so two runs can start closer than a
+/// double can tell apart (x0 + 1e-30).
 PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions& options, Observer& observer,
-                            const SearchLimits& limits = {});
+                            const SearchLimits& limits = {}, const std::vector<double>* offset = nullptr);
 
 /// |a - b| / max(|a|, |b|, floor) at the lower of the two precisions, rounded to double.
 double relative_difference(const cln::cl_F& a, const cln::cl_F& b, double floor = 0.0);

@@ -8,7 +8,7 @@
 
 #include "engine.h"
 #include "integrators.h"
-#include "solver_provider.h"
+#include "kernel_mode.h"
 
 namespace hsnc::testing {
 

@@ -3,7 +3,7 @@
 #include "assembly.h"
 #include "configuration.h"
 #include "error.h"
-#include "segment.h"
+#include "switch_function.h"
 
 namespace hsnc {
 namespace {

@@ -3,7 +3,7 @@
 // (hsnc_gen --samples); here they are checked against
 //  - the textbook closed forms built by GiNaC (symbolic_segment), evaluated
 //    at 40 digits, derivatives by GiNaC diff;
-//  - the equation of motion assembled independently (runtime/assembly.h);
+//  - the equation of motion assembled independently (model/assembly.h);
 //  - the initial state; continuity through xi = 1 and Omega = omega;
 //  - the bound on |g''| sampled over [tau, tau + step].
 #include <gtest/gtest.h>
@@ -184,7 +184,7 @@ TEST(Kernel, InitialStateIsReproduced) {
 
 TEST(Kernel, SatisfiesTheEquationOfMotion) {
     // M a + C v + K x = loads + preload + forcing - friction for free masses,
-    // assembled by runtime/assembly.h (independent of the derivation).
+    // assembled by model/assembly.h (independent of the derivation).
     for (const Model& m : sample_models())
         for (const Configuration& cfg : all_configurations(m)) {
             const Start st = start_of(m, cfg);

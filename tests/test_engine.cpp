@@ -13,7 +13,7 @@
 #include "engine.h"
 #include "integrators.h"
 #include "model_reader.h"
-#include "solver_provider.h"
+#include "kernel_mode.h"
 
 namespace hsnc {
 namespace {

@@ -1,4 +1,4 @@
-// The cost of reading a model is bounded (generator/expression_evaluator.h):
+// The cost of reading a model is bounded (model/expression_evaluator.h):
 // expressions that would overflow the stack (deep nesting) or compute exact
 // numbers of billions of digits are refused with exit code 2 and a message
 // naming file, line and key, and reading is linear in the number of

@@ -19,7 +19,7 @@
 #include "engine_runner.h"
 #include "hsnc/hsnc.h"
 #include "jit_solver_provider.h"
-#include "solver_provider.h"
+#include "kernel_mode.h"
 
 namespace hsnc {
 namespace {

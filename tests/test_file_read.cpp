@@ -1,4 +1,4 @@
-// read_regular_file (runtime/file_read.h): only regular files of bounded size
+// read_regular_file (model/file_read.h): only regular files of bounded size
 // are read; a FIFO, a device or a directory is refused without blocking or
 // reading, so that `hsnc check` on any path ends promptly.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Tests of the generic closed-form segment solver (runtime/generic_solver.h).
+// Tests of the generic closed-form segment solver (runtime/solvers/generic_solver.h).
 //
 // Three kinds: closed-form answers written here independently (free sliding
 // mass, critical damping, exact undamped resonance, rigid + elastic pair, stuck
@@ -20,10 +20,10 @@
 #include "assembly.h"
 #include "configuration.h"
 #include "generic_solver.h"
-#include "segment.h"
+#include "segment_solver.h"
 #include "engine_runner.h"
 #include "model_reader.h"
-#include "solver_provider.h"
+#include "kernel_mode.h"
 
 namespace hsnc {
 namespace {

@@ -1,4 +1,4 @@
-// Kernels compiled in-process (runtime/jit.h, runtime/jit_solver_provider.h):
+// Kernels compiled in-process (runtime/jit/jit.h, runtime/jit/jit_solver_provider.h):
 // the JIT itself, its error path, and a 12-mass run against the generic solver.
 #include <gtest/gtest.h>
 
@@ -15,8 +15,8 @@
 #include "error.h"
 #include "jit.h"
 #include "jit_solver_provider.h"
+#include "kernel_mode.h"
 #include "model_reader.h"
-#include "solver_provider.h"
 
 namespace hsnc {
 namespace {

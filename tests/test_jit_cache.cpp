@@ -1,4 +1,4 @@
-// The persistent cache of compiled kernels (runtime/kernel_cache.h), through
+// The persistent cache of compiled kernels (runtime/jit/kernel_cache.h), through
 // `hsnc simulate --kernels jit` as a user runs it and through `hsnc cache`:
 // a second run hits the cache for every kernel and gives the same result; a
 // truncated, corrupt or foreign entry is rebuilt with a warning; two processes

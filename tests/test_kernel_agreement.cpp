@@ -24,10 +24,10 @@
 #include "generic_solver.h"
 #include "jit.h"
 #include "jit_solver_provider.h"
+#include "kernel_mode.h"
 #include "kernel_solver.h"
 #include "model_reader.h"
 #include "reference_engine.h"
-#include "solver_provider.h"
 
 namespace hsnc {
 namespace {

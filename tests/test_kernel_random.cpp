@@ -1,6 +1,6 @@
 // Emitted kernels of random models, 1 to 8 DOF, each for one random
 // configuration: derived, emitted and compiled in-process (the JIT), then held
-// to the equation of motion assembled independently (runtime/assembly.h), to
+// to the equation of motion assembled independently (model/assembly.h), to
 // the initial state, and to the generic solver. The bundled and sample models
 // (tests/test_emitter.cpp) cover every regime by construction; these cover
 // what nobody wrote down: random couplings, masses, damping and forcing up to

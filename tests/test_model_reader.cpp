@@ -1,4 +1,4 @@
-// Tests of the model reader (generator/model_reader.h, interface.md section 1).
+// Tests of the model reader (model/model_reader.h, interface.md section 1).
 // Good input: every field of Model against the numbers written in the TOML
 // (or their closed-form expressions). Bad input: one test per failure, each
 // checking the message names the file, the line (where toml++ has one), the

@@ -1,4 +1,4 @@
-// LoadedObject (runtime/object_loader.h): a JIT-compiled kernel mapped without
+// LoadedObject (runtime/jit/object_loader.h): a JIT-compiled kernel mapped without
 // LLVM must compute exactly what the same object linked by LLVM computes, and
 // anything outside what the loader supports is refused with a reason.
 #include <gtest/gtest.h>

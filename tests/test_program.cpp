@@ -1,7 +1,7 @@
 // One closed form, printed and interpreted: the Program of a configuration
-// (runtime/program.h, generator/lowering.h) printed as C++ and compiled by GCC
+// (kernels/program.h, generator/lowering.h) printed as C++ and compiled by GCC
 // ahead of time or by Clang in process, and run by the interpreter
-// (runtime/interpreted_solver.h), gives the same bits -- every output of
+// (runtime/solvers/interpreted_solver.h), gives the same bits -- every output of
 // setup and eval compared with memcmp, whole runs compared as CSV bytes. The
 // generic (Eigen) solver is an independent implementation: it agrees to a
 // tolerance, not to the bit.
@@ -28,6 +28,7 @@
 #include "interpreted_solver.h"
 #include "jit.h"
 #include "jit_solver_provider.h"
+#include "kernel_mode.h"
 #include "kernel_set.h"
 #include "kernel_solver.h"
 #include "lowering.h"
@@ -35,7 +36,6 @@
 #include "model_reader.h"
 #include "random_model.h"
 #include "sample_models.h"
-#include "solver_provider.h"
 
 namespace hsnc {
 const AotRegistry& sample_registry();  // tests' build-time kernels (hsnc_gen --samples)

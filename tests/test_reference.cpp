@@ -23,7 +23,7 @@
 #include "error.h"
 #include "model_reader.h"
 #include "reference_engine.h"
-#include "solver_provider.h"
+#include "kernel_mode.h"
 
 namespace hsnc {
 namespace {

@@ -1,4 +1,4 @@
-// The guard in front of toml++ 3.3 (generator/toml_guard.h, issue 11): code
+// The guard in front of toml++ 3.3 (model/toml_guard.h, issue 11): code
 // points on which toml++'s whitespace lookup reaches TOML_UNREACHABLE are
 // refused where TOML forbids them anyway (outside strings and comments, after
 // a backslash), kept where they are valid (strings, comments) and, after a

@@ -14,7 +14,9 @@
 
 #include "cli_runner.h"
 #include "error.h"
+#include "hsnc/simulate.h"
 #include "tradeoff.h"
+#include "tradeoff_cli.h"
 #include "work_precision.h"
 
 namespace hsnc {
@@ -224,7 +226,7 @@ TEST(Tradeoff, Ab4IsFourthOrderOnASmoothMotion) {
 TEST(Tradeoff, InProcessReferenceIsSampledOnTheRunsGrid) {
     // The in-process path (the mp engine once merged) with the closed form as the runner.
     const CoulombExact exact;
-    const cli::ReferenceRunner runner = [&exact](const Model&, const EngineOptions& o, Observer& obs) {
+    const ReferenceRunner runner = [&exact](const Model&, const EngineOptions& o, Observer& obs) {
         for (double t : grid(o.t_end, o.dt)) {
             double x, v;
             exact.state(t, x, v);
@@ -256,6 +258,87 @@ TEST(Tradeoff, InProcessReferenceIsSampledOnTheRunsGrid) {
     EXPECT_LT(std::stod(h[kTErr]), 1e-14);
 }
 
+// The library function itself (hsnc::tradeoff), without the command line:
+// rows against the closed-form reference, in the order of the methods, the
+// hsnc rows run by hsnc::simulate with the same kernels it would choose.
+TEST(Tradeoff, TheLibraryStudyReturnsItsRows) {
+    const CoulombExact exact;
+    const ReferenceRunner runner = [&exact](const Model&, const EngineOptions& o, Observer& obs) {
+        for (double t : grid(o.t_end, o.dt)) {
+            double x, v;
+            exact.state(t, x, v);
+            obs.on_sample(t, &x, &v);
+        }
+        for (std::size_t n = 1; n < exact.t_n.size(); ++n) {
+            const double x = exact.X[n], v = 0.0;
+            if (exact.t_n[n] <= o.t_end)
+                obs.on_event(exact.t_n[n], exact.stick(n) ? EventKind::stick : EventKind::reversal, 0, &x, &v);
+        }
+        RunSummary s;
+        s.t = o.t_end;
+        return s;
+    };
+    const Model model = read_model(model_path("coulomb-1dof.toml"));
+    TradeoffOptions o;
+    o.t_end = 1;
+    o.dt = 0.01;
+    o.methods = {Method::hsnc, Method::ab4};
+    o.quick = true;
+    o.runs = 1;
+    const RecordedRun reference = compute_reference(model, o, runner);
+    EXPECT_EQ(reference.t.size(), 101u);
+    std::size_t told = 0;
+    TradeoffProgress progress;
+    progress.measured = [&told](const TradeoffRow&) { ++told; };
+    const TradeoffResult study = tradeoff(model, o, reference, progress);
+    ASSERT_EQ(study.methods, o.methods);
+    ASSERT_GE(study.rows.size(), 3u);
+    EXPECT_EQ(told, study.rows.size());
+    // hsnc first: the bundled model's AOT kernels (quick: no generic point), as hsnc::simulate chooses them.
+    const TradeoffRow& h = study.rows[0];
+    EXPECT_EQ(h.setting.method, Method::hsnc);
+    EXPECT_EQ(h.setting.label, "kernels=auto");
+    SimulateOptions auto_kernels;
+    auto_kernels.t_end = 1;
+    EXPECT_EQ(h.solver, simulate(model, auto_kernels).solver);
+    EXPECT_EQ(h.solver, SolverKind::aot);
+    EXPECT_EQ(h.status, "ok");
+    EXPECT_LT(h.errors.relative_position_error, 1e-13);
+    EXPECT_EQ(h.errors.matched_events, 3u);  // reversals at pi/10, 2 pi/10, 3 pi/10
+    EXPECT_EQ(study.base, 0);
+    EXPECT_EQ(h.time_ratio_to_hsnc, 1.0);
+    // Then ab4's sweep, h = 1e-3, 1e-4, ... (quick: every other half decade).
+    ASSERT_EQ(study.rows[1].setting.label, "h=1e-03");
+    ASSERT_EQ(study.rows[2].setting.label, "h=1e-04");
+    for (std::size_t k = 1; k < study.rows.size(); ++k) {
+        EXPECT_EQ(study.rows[k].setting.method, Method::ab4);
+        EXPECT_EQ(study.rows[k].status, "ok");
+        EXPECT_EQ(study.rows[k].time_ratio_to_hsnc, study.rows[k].wall / h.wall);
+    }
+    EXPECT_EQ(study.response_magnitude, 0.2);  // max |x_ref| = x0
+    const TradeoffRow* reached = cheapest_reaching(study, Method::ab4, 1e-4);
+    ASSERT_NE(reached, nullptr);
+    EXPECT_EQ(reached->setting.method, Method::ab4);
+    EXPECT_LE(reached->errors.relative_position_error, 1e-4);
+    for (const TradeoffRow& r : study.rows)  // the cheapest of those that reached it
+        if (r.setting.method == Method::ab4 && r.errors.relative_position_error <= 1e-4) EXPECT_LE(reached->wall, r.wall);
+    EXPECT_EQ(cheapest_reaching(study, Method::rk45, 1.0), nullptr);  // not measured
+    // A reference off the study's grid is refused before anything runs.
+    TradeoffOptions other = o;
+    other.dt = 0.0037;
+    RecordedRun copy = reference;
+    EXPECT_NE(fit_reference(model, other, copy).find("sample times t0 + k*dt"), std::string::npos);
+    EXPECT_THROW(tradeoff(model, other, reference), InputError);
+    other = o;
+    other.budget = 0;
+    try {
+        tradeoff(model, other, reference);
+        ADD_FAILURE() << "no OptionError for budget 0";
+    } catch (const OptionError& e) {
+        EXPECT_EQ(e.option(), "budget");
+    }
+}
+
 TEST(Tradeoff, TheMpReferenceAgreesWithTheClosedForm) {
     // Default reference: the 40-digit engine in process. hsnc against it at
     // rounding level, and ab4's error the same against it as against the exact
@@ -285,7 +368,7 @@ TEST(Tradeoff, TheMpReferenceAgreesWithTheClosedForm) {
 }
 
 TEST(Tradeoff, EventsOfOneInstantMatchInAnyOrderAndMatchingStopsAtAMismatch) {
-    cli::RecordedRun ref, run;
+    RecordedRun ref, run;
     ref.dof = run.dof = 1;
     ref.t = run.t = {0.0, 1.0};
     ref.x = {0.0, 1.0};
@@ -294,7 +377,7 @@ TEST(Tradeoff, EventsOfOneInstantMatchInAnyOrderAndMatchingStopsAtAMismatch) {
                   {0.9, EventKind::release, 0}};
     run.events = {{0.5 + 1e-3, EventKind::release, 0}, {0.5 + 1e-3, EventKind::contact_close, 0},
                   {0.7 - 2e-3, EventKind::stick, 0}, {0.8, EventKind::reversal, 0}, {0.9, EventKind::release, 0}};
-    const cli::RunErrors e = cli::compare_runs(ref, run);
+    const RunErrors e = compare_runs(ref, run);
     EXPECT_EQ(e.sample_times, 2u);
     EXPECT_DOUBLE_EQ(e.max_position_error, 0.5);
     EXPECT_EQ(e.events, 5u);
@@ -371,7 +454,7 @@ TEST(Tradeoff, ErrorsAreRelativeToTheResponseAndDivergedRunsAreMarked) {
     }
     const auto& blown = rows.at("ab4 h=1e-03");
     EXPECT_EQ(blown[kDiverged], "1");
-    EXPECT_GT(std::stod(blown[kRelErr]), cli::kDivergedRatio);
+    EXPECT_GT(std::stod(blown[kRelErr]), kDivergedRatio);
     EXPECT_EQ(rows.at("ab4 h=1e-04")[kDiverged], "0");
     EXPECT_LT(std::stod(rows.at("ab4 h=1e-04")[kRelErr]), 1.0);
     EXPECT_EQ(rows.at("hsnc kernels=generic")[kDiverged], "0");
@@ -388,7 +471,7 @@ TEST(Tradeoff, ErrorsAreRelativeToTheResponseAndDivergedRunsAreMarked) {
 // long run at many digits) is not even started.
 TEST(Tradeoff, OutputPathsAreCheckedBeforeTheReference) {
     bool reference_ran = false;
-    const cli::ReferenceRunner runner = [&reference_ran](const Model&, const EngineOptions& o, Observer&) {
+    const ReferenceRunner runner = [&reference_ran](const Model&, const EngineOptions& o, Observer&) {
         reference_ran = true;
         RunSummary s;
         s.t = o.t_end;

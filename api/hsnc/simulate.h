@@ -27,11 +27,12 @@
 #include <limits>
 #include <string>
 
-#include "engine.h"
 #include "error.h"
 #include "integrators.h"
 #include "model.h"
 #include "model_reader.h"
+#include "observer.h"
+#include "run_summary.h"
 
 namespace hsnc {
 

@@ -22,7 +22,7 @@ import numpy as np
 from . import _hsnc
 from ._hsnc import InputError, RunError
 
-__all__ = ["InputError", "Model", "Result", "RunError", "generate", "simulate"]
+__all__ = ["InputError", "Model", "Result", "RunError", "generate", "lyapunov", "periodic", "simulate", "sweep"]
 
 
 class Model:
@@ -106,13 +106,13 @@ def _events(raw, n):
     return events.view(np.recarray)
 
 
-def _number(name, value, default=math.nan):
+def _number(name, value, default=math.nan, function="hsnc.simulate"):
     if value is None:
         return default
     try:
         return float(value)
     except (TypeError, ValueError):
-        raise InputError("hsnc.simulate(): %s = %r: expected a number" % (name, value)) from None
+        raise InputError("%s(): %s = %r: expected a number" % (function, name, value)) from None
 
 
 def simulate(model, t_end=None, dt=None, method="hsnc", kernels="auto", precision="double", x0=None, v0=None,
@@ -149,6 +149,92 @@ def generate(model, directory):
     `hsnc generate MODEL -o DIR`; the directory is created if needed) and
     return the names of the files written."""
     return _hsnc._generate(model._native, str(directory))
+
+
+def _override_texts(d):
+    return ["%s=%s" % (k, v if isinstance(v, str) else repr(float(v))) for k, v in d.items()]
+
+
+def sweep(model, param, start, stop, points, direction="up", max_periods=500, record_periods=16,
+          restart_each=False, param2=None, values2=None, threads=1, method="hsnc", rtol=1e-10, atol=1e-12):
+    """The response curve and bifurcation diagram of `model` (a Model) over
+    the parameter `param`, as `hsnc sweep --param PARAM --from START --to
+    STOP --points POINTS` (interface.md section 6): `points` values from
+    start to stop, swept "up", "down" or "both" with state continuation (or
+    every point from the initial state: restart_each), each point run to a
+    steady state on the stroboscopic map (at most max_periods forcing
+    periods) and recorded over record_periods periods. param2, values2: a
+    second parameter, one sweep per value. threads: independent sweeps and
+    points in parallel (the result does not depend on it).
+
+    Returns a dict: "param", "param2" (None without), "masses"; one entry
+    per point, in the order run: "value", "value2" (NaN without param2),
+    "direction" (str), "settled" (bool), "periods" (run before recording),
+    "multiple" (0 when not settled), "xmax", "xrms", "a1" (points x masses);
+    "diagram": a dict with "value", "value2", "direction", "t", "x", "v"
+    (x, v: rows x masses), one row per recorded period of every point."""
+    if not isinstance(model, Model):
+        raise InputError("hsnc.sweep(): model = %r: expected an hsnc.Model" % (model,))
+    kind, what, source, (s, x0, v0) = model._read
+    try:
+        points, max_periods, record_periods, threads = (int(points), int(max_periods), int(record_periods),
+                                                        int(threads))
+    except (TypeError, ValueError):
+        raise InputError("hsnc.sweep(): points, max_periods, record_periods, threads: expected integers") from None
+    if min(points, max_periods, record_periods, threads) < 0:
+        raise InputError("hsnc.sweep(): points, max_periods, record_periods, threads: expected integers >= 0")
+    values2 = [] if values2 is None else [float(v) for v in values2]
+    return _hsnc._sweep(kind, what, source, _override_texts(s), _override_texts(x0), _override_texts(v0),
+                        str(param), _number("start", start), _number("stop", stop), points, str(direction),
+                        max_periods, record_periods, bool(restart_each), "" if param2 is None else str(param2),
+                        values2, threads, str(method), _number("rtol", rtol), _number("atol", atol))
+def _integer(function, name, value):
+    try:
+        if isinstance(value, bool) or int(value) != value:
+            raise ValueError
+        return int(value)
+    except (TypeError, ValueError):
+        raise InputError("%s(): %s = %r: expected an integer" % (function, name, value)) from None
+
+
+def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_iterations=50, dt=None,
+             kernels="auto", x0=None, v0=None):
+    """A periodic orbit of the forced response and its stability (as
+    `hsnc periodic`): Newton shooting on the period map with the exact
+    monodromy matrix. Returns a dict: status ("ok" or "not_converged"),
+    message, period (harmonic * T), t (time of the state), iterations,
+    residual, x, v (the orbit's state at t, arrays), multipliers (complex
+    array, largest |mu| first), max_multiplier, stable, monodromy (2n x 2n
+    array, state (x, v)), events (switches a period) and orbit (dict of t, x,
+    v arrays: one period sampled every dt, default period/1000; empty when not
+    converged). period: default 2*pi/omega of the model's forcing;
+    transient: run this long first."""
+    if not isinstance(model, Model):
+        raise InputError("hsnc.periodic(): model = %r: expected an hsnc.Model" % (model,))
+    if x0 or v0:
+        model = model.with_overrides(x0=x0, v0=v0)
+    f = "hsnc.periodic"
+    return _hsnc._periodic(model._native, _number("period", period, function=f), _integer(f, "harmonic", harmonic),
+                           _number("transient", transient, 0.0, f), _number("tol", tol, 1e-10, f),
+                           _integer(f, "max_iterations", max_iterations), _number("dt", dt, function=f),
+                           str(kernels))
+
+
+def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=None, v0=None):
+    """The Lyapunov spectrum (as `hsnc lyapunov`), by the QR method on the
+    exact tangent dynamics, measured over t_end seconds after transient.
+    Returns a dict: exponents (array of 2n, 1/s, largest first, -inf for
+    directions a stick collapses), sum, t_start, t, collapsed, events,
+    grazing, rows_t and rows (the running estimates every row_interval,
+    default the forcing period, else 1 s; k x 2n). A run that stops early
+    raises RunError."""
+    if not isinstance(model, Model):
+        raise InputError("hsnc.lyapunov(): model = %r: expected an hsnc.Model" % (model,))
+    if x0 or v0:
+        model = model.with_overrides(x0=x0, v0=v0)
+    f = "hsnc.lyapunov"
+    return _hsnc._lyapunov(model._native, _number("t_end", t_end, function=f), _number("transient", transient, 0.0, f),
+                           _number("row_interval", row_interval, function=f), str(kernels))
 
 
 # Named as users see them: hsnc.InputError, not hsnc._hsnc.InputError.

@@ -1,0 +1,199 @@
+// The Lyapunov spectrum by the QR method on the exact tangent dynamics (api/hsnc/lyapunov.h).
+#include "hsnc/lyapunov.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <random>
+#include <sstream>
+
+#include <Eigen/QR>
+
+#include "flow.h"
+#include "tangent.h"
+
+namespace hsnc {
+namespace {
+
+constexpr const char* kLyapunov = "hsnc::lyapunov";
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::string number_text(double v) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v;
+    return s.str();
+}
+
+// A fixed generic orthonormal basis (QR of a pseudo-random matrix, fixed
+// seed: runs are reproducible). Not the identity: the unit vectors of the
+// positions span one direction in each mode's plane, and the linear motion
+// keeps it so, so with Q = I the first two columns of a 2-DOF linear
+// oscillator never approach the slow mode's plane (only rounding drives
+// them there, over hundreds of seconds).
+Eigen::MatrixXd initial_basis(Eigen::Index n) {
+    std::mt19937_64 rng(20240601);
+    std::normal_distribution<double> normal;
+    Eigen::MatrixXd G(n, n);
+    for (Eigen::Index j = 0; j < n; ++j)
+        for (Eigen::Index i = 0; i < n; ++i) G(i, j) = normal(rng);
+    Eigen::HouseholderQR<Eigen::MatrixXd> qr(G);
+    return qr.householderQ() * Eigen::MatrixXd::Identity(n, n);
+}
+
+// Carries the orthonormal basis through the run from t_start on.
+class SpectrumObserver : public Observer {
+public:
+    SpectrumObserver(const Model& model, double t_start, double t_end, double row_interval,
+                     const std::function<void(double, const std::vector<double>&)>& on_row, Observer* inner)
+        : tangent_(model), n2_(static_cast<Eigen::Index>(2 * model.dof())), t_start_(t_start), t_end_(t_end),
+          row_(row_interval), on_row_(on_row), inner_(inner),
+          Q_(initial_basis(n2_)), logsum_(Eigen::VectorXd::Zero(n2_)), live_(n2_) {}
+
+    bool wants_segments() const override { return true; }
+    void on_sample(double, const double*, const double*) override {}
+    void on_event(double t, EventKind kind, int element, const double* x, const double* v) override {
+        if (t >= t_start_) ++events_;
+        if (inner_) inner_->on_event(t, kind, element, x, v);
+    }
+    bool on_progress(double t) override { return inner_ ? inner_->on_progress(t) : true; }
+
+    void on_segment(const SegmentRecord& s) override {
+        const double start = s.t + s.t_lo, end = start + s.tau;
+        if (end <= t_start_ && !(s.tau == 0 && start == t_start_)) return;
+        const double from = std::max(start, t_start_);
+        const std::size_t stuck = static_cast<std::size_t>(std::count(s.cfg->stuck.begin(), s.cfg->stuck.end(), 1));
+        const Eigen::Index rank = n2_ - static_cast<Eigen::Index>(stuck);
+        // Walk through the segment, factorising at every convergence row and
+        // at least every 10/rate seconds, so that the directions part by at
+        // most e^20 between two factorisations (a 2000 s segment of a damped
+        // mode would underflow).
+        const double rate = tangent_.max_rate(*s.cfg);
+        const double hmax = rate > 0 ? 10 / rate : kInf;
+        double at = from;
+        while (true) {
+            double to = end;
+            bool row = false;
+            if (on_row_ && next_row_ <= end && next_row_ < t_end_ - 1e-9 * row_) to = std::max(next_row_, at), row = true;
+            if (to - at > hmax) to = at + hmax, row = false;
+            Eigen::MatrixXd Y = tangent_.transition(*s.cfg, to - at) * Q_.leftCols(live_);
+            factor(Y, rank, logsum_, live_, &Q_);
+            at = to;
+            if (row) {
+                emit(next_row_, logsum_, live_);
+                next_row_ = t_start_ + static_cast<double>(++row_k_) * row_;
+                continue;
+            }
+            if (at >= end) break;
+        }
+        last_ = end;
+    }
+
+    void on_switch(const SwitchRecord& r) override {
+        if (r.t < t_start_) return;
+        Eigen::MatrixXd Y = Q_.leftCols(live_);
+        if (!tangent_.apply_saltation(r, Y)) {
+            ++grazing_;
+            return;
+        }
+        Q_.leftCols(live_) = Y;
+    }
+
+    // The final row at the end of the run, and the exponents.
+    std::vector<double> finish(double t) {
+        std::vector<double> ex = exponents(logsum_, live_, t);
+        if (on_row_ && last_row_ < t) on_row_(t, ex);
+        return ex;
+    }
+    std::size_t collapsed() const { return static_cast<std::size_t>(n2_ - live_); }
+    std::size_t events() const { return events_; }
+    std::size_t grazing() const { return grazing_; }
+
+private:
+    // QR of Y (the live columns): the logarithms of |R_kk| added to logs,
+    // the columns beyond `rank` dropped for good (collapsed), and the new
+    // orthonormal basis written to Q when asked.
+    void factor(Eigen::MatrixXd& Y, Eigen::Index rank, Eigen::VectorXd& logs, Eigen::Index& live,
+                Eigen::MatrixXd* Q) const {
+        const Eigen::Index keep = std::min(live, rank);
+        if (keep == 0) {
+            live = 0;
+            return;
+        }
+        Eigen::HouseholderQR<Eigen::MatrixXd> qr(Y);
+        const Eigen::MatrixXd& R = qr.matrixQR();
+        for (Eigen::Index k = 0; k < keep; ++k) logs(k) += std::log(std::fabs(R(k, k)));
+        if (Q) {
+            Eigen::MatrixXd thin = qr.householderQ() * Eigen::MatrixXd::Identity(n2_, keep);
+            Q->leftCols(keep) = thin;
+        }
+        live = keep;
+    }
+
+    std::vector<double> exponents(const Eigen::VectorXd& logs, Eigen::Index live, double t) const {
+        std::vector<double> ex(static_cast<std::size_t>(n2_), -kInf);
+        for (Eigen::Index k = 0; k < live; ++k) ex[static_cast<std::size_t>(k)] = logs(k) / (t - t_start_);
+        std::sort(ex.begin(), ex.end(), std::greater<double>());
+        return ex;
+    }
+
+    void emit(double t, const Eigen::VectorXd& logs, Eigen::Index live) {
+        on_row_(t, exponents(logs, live, t));
+        last_row_ = t;
+    }
+
+    analysis::Tangent tangent_;
+    Eigen::Index n2_;
+    double t_start_, t_end_, row_;
+    const std::function<void(double, const std::vector<double>&)>& on_row_;
+    Observer* inner_;
+    Eigen::MatrixXd Q_;
+    Eigen::VectorXd logsum_;
+    Eigen::Index live_;
+    double next_row_ = 0.0, last_row_ = -kInf, last_ = -kInf;
+    std::size_t row_k_ = 0, events_ = 0, grazing_ = 0;
+
+public:
+    void start_rows() { next_row_ = t_start_ + row_; row_k_ = 1; }
+};
+
+}  // namespace
+
+LyapunovResult lyapunov(const Model& model, const LyapunovOptions& o,
+                        const std::function<void(double, const std::vector<double>&)>& on_row, Observer* observer) {
+    if (std::isnan(o.t_end)) throw OptionError(kLyapunov, "t_end", "NaN", "required: the length of the measurement");
+    analysis::check_number(kLyapunov, "t_end", o.t_end, true);
+    if (!(o.transient >= 0) || !std::isfinite(o.transient))
+        throw OptionError(kLyapunov, "transient", number_text(o.transient), "must be finite and >= 0");
+    double row = o.row_interval;
+    if (std::isnan(row)) {
+        double omega = 0.0;
+        for (const Harmonic& h : model.forcing)
+            if (h.omega != 0.0) omega = omega == 0.0 ? std::fabs(h.omega) : std::min(omega, std::fabs(h.omega));
+        row = omega == 0.0 ? 1.0 : 2 * M_PI / omega;
+    }
+    analysis::check_number(kLyapunov, "row_interval", row, true);
+    analysis::Flow flow(model, o.kernels, kLyapunov);
+    const double t_start = model.t0 + o.transient, t_end = t_start + o.t_end;
+    if (!(t_end > t_start)) throw OptionError(kLyapunov, "t_end", number_text(o.t_end), "too short to measure at t0 + transient");
+
+    SpectrumObserver spectrum(flow.model(), t_start, t_end, row, on_row, observer);
+    spectrum.start_rows();
+    const RunSummary s = flow.run(model.t0, model.x0.data(), model.v0.data(), t_end, spectrum);
+    LyapunovResult r;
+    r.status = s.status;
+    r.message = s.message;
+    r.t_start = t_start;
+    r.t = s.t;
+    r.events = spectrum.events();
+    r.grazing = spectrum.grazing();
+    if (s.status != RunStatus::ok) return r;
+    r.exponents = spectrum.finish(s.t);
+    r.collapsed = spectrum.collapsed();
+    r.sum = 0.0;
+    for (double e : r.exponents) r.sum += e;
+    return r;
+}
+
+}  // namespace hsnc

@@ -1,0 +1,217 @@
+// Newton shooting for periodic orbits (api/hsnc/periodic.h).
+#include "hsnc/periodic.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+
+#include "flow.h"
+#include "tangent.h"
+
+namespace hsnc {
+namespace {
+
+constexpr const char* kPeriodic = "hsnc::periodic";
+
+std::string number_text(double v) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v;
+    return s.str();
+}
+
+// Residual of the period map at y: |P(y) - y| with positions and velocities
+// each relative to the largest of their kind in y and P(y).
+double residual_of(const Eigen::VectorXd& y, const Eigen::VectorXd& Py) {
+    const Eigen::Index n = y.size() / 2;
+    double res = 0.0;
+    for (int part = 0; part < 2; ++part) {
+        const auto a = y.segment(part * n, n), b = Py.segment(part * n, n);
+        const double scale = std::max(a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff());
+        const double r = (b - a).cwiseAbs().maxCoeff();
+        if (r > 0) res = std::max(res, scale > 0 ? r / scale : INFINITY);
+    }
+    return res;
+}
+
+struct MapValue {
+    bool ok = false;
+    std::string message;
+    Eigen::VectorXd Py;
+    Eigen::MatrixXd M;
+    double residual = INFINITY;
+    std::size_t events = 0;
+    std::size_t grazing = 0;
+};
+
+class EventCounter : public Observer {
+public:
+    void on_sample(double, const double*, const double*) override {}
+    void on_event(double, EventKind, int, const double*, const double*) override { ++events; }
+    std::size_t events = 0;
+};
+
+}  // namespace
+
+const char* periodic_status_name(PeriodicStatus status) {
+    return status == PeriodicStatus::ok ? "ok" : "not_converged";
+}
+
+double forcing_period(const Model& model) {
+    double omega = 0.0;
+    for (const Harmonic& h : model.forcing) {
+        if (h.omega == 0.0) continue;
+        const double w = std::fabs(h.omega);
+        if (omega != 0.0 && w != omega) return NAN;
+        omega = w;
+    }
+    return omega == 0.0 ? NAN : 2 * M_PI / omega;
+}
+
+PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* orbit) {
+    double T = o.period;
+    if (std::isnan(T)) {
+        T = forcing_period(model);
+        if (std::isnan(T)) {
+            bool forced = false;
+            for (const Harmonic& h : model.forcing) forced = forced || h.omega != 0.0;
+            throw OptionError(kPeriodic, "period", "NaN",
+                              forced ? "the forcing has harmonics of different frequencies: give the period"
+                                     : "the model has no harmonic forcing: give the period");
+        }
+    }
+    analysis::check_number(kPeriodic, "period", T, true);
+    if (o.harmonic < 1) throw OptionError(kPeriodic, "harmonic", std::to_string(o.harmonic), "must be >= 1");
+    if (!(o.transient >= 0) || !std::isfinite(o.transient))
+        throw OptionError(kPeriodic, "transient", number_text(o.transient), "must be finite and >= 0");
+    analysis::check_number(kPeriodic, "tolerance", o.tolerance, true);
+    if (o.max_iterations < 0)
+        throw OptionError(kPeriodic, "max_iterations", std::to_string(o.max_iterations), "must be >= 0");
+    const double P = T * o.harmonic;
+    if (!std::isnan(o.dt)) analysis::check_number(kPeriodic, "dt", o.dt, true);
+    const double dt = std::isnan(o.dt) ? P / 1000 : o.dt;
+
+    analysis::Flow flow(model, o.kernels, kPeriodic);
+    const std::size_t n = model.dof();
+    const Eigen::Index N = static_cast<Eigen::Index>(2 * n);
+
+    // Start: the initial state, or the state after the transient at t0 + k*P.
+    Eigen::VectorXd y(N);
+    for (std::size_t i = 0; i < n; ++i) y(static_cast<Eigen::Index>(i)) = model.x0[i], y(static_cast<Eigen::Index>(n + i)) = model.v0[i];
+    double ts = model.t0;
+    if (o.transient > 0) {
+        const double k = std::ceil(o.transient / P * (1 - 1e-12));
+        ts = model.t0 + k * P;
+        analysis::NullObserver none;
+        const RunSummary s = flow.run(model.t0, model.x0.data(), model.v0.data(), ts, none);
+        if (s.status != RunStatus::ok)
+            throw RunError(std::string("periodic: the transient run ended with status ") + run_status_name(s.status) +
+                           ": " + s.message);
+        for (std::size_t i = 0; i < n; ++i) y(static_cast<Eigen::Index>(i)) = s.x[i], y(static_cast<Eigen::Index>(n + i)) = s.v[i];
+    }
+    const double te = ts + P;
+
+    auto evaluate = [&](const Eigen::VectorXd& state) {
+        MapValue m;
+        EventCounter events;
+        analysis::JacobianObserver jac(flow.model(), &events);
+        const RunSummary s = flow.run(ts, state.data(), state.data() + n, te, jac);
+        if (s.status != RunStatus::ok) {
+            m.message = std::string("a run of the period map ended with status ") + run_status_name(s.status) + ": " +
+                        s.message;
+            return m;
+        }
+        m.Py.resize(N);
+        for (std::size_t i = 0; i < n; ++i)
+            m.Py(static_cast<Eigen::Index>(i)) = s.x[i], m.Py(static_cast<Eigen::Index>(n + i)) = s.v[i];
+        m.M = jac.jacobian();
+        m.grazing = jac.grazing();
+        m.events = events.events;
+        m.residual = residual_of(state, m.Py);
+        m.ok = m.Py.allFinite() && std::isfinite(m.residual);
+        if (!m.ok) m.message = "the period map gave non-finite values";
+        return m;
+    };
+
+    PeriodicResult r;
+    r.period = P;
+    r.t = ts;
+    MapValue cur = evaluate(y);
+    int it = 0;
+    std::string why;
+    while (true) {
+        if (!cur.ok) {
+            why = cur.message;
+            break;
+        }
+        if (cur.residual <= o.tolerance) break;
+        if (it >= o.max_iterations) {
+            why = "no convergence in " + std::to_string(o.max_iterations) + " iterations";
+            break;
+        }
+        if (cur.grazing || !cur.M.allFinite()) {
+            why = "the period map has no derivative here (a grazing switch)";
+            break;
+        }
+        // Newton step on P(y) - y = 0, least squares where M - I is singular
+        // (a multiplier 1: an unforced model, a family of orbits).
+        const Eigen::MatrixXd A = cur.M - Eigen::MatrixXd::Identity(N, N);
+        const Eigen::VectorXd step = A.completeOrthogonalDecomposition().solve(-(cur.Py - y));
+        if (!step.allFinite()) {
+            why = "the Newton step is not finite";
+            break;
+        }
+        ++it;
+        double lambda = 1.0;
+        bool accepted = false;
+        for (int halving = 0; halving <= 10; ++halving, lambda *= 0.5) {
+            const Eigen::VectorXd trial = y + lambda * step;
+            MapValue next = evaluate(trial);
+            if (next.ok && next.residual < cur.residual) {
+                y = trial;
+                cur = std::move(next);
+                accepted = true;
+                break;
+            }
+        }
+        if (!accepted) {
+            why = "the residual stops falling at " + number_text(cur.residual) + " (no step along the Newton direction "
+                  "lowers it)";
+            break;
+        }
+    }
+    r.iterations = it;
+    r.residual = cur.residual;
+    r.x.assign(y.data(), y.data() + n);
+    r.v.assign(y.data() + n, y.data() + 2 * n);
+    if (cur.ok && cur.residual <= o.tolerance) {
+        r.status = PeriodicStatus::ok;
+        r.events = cur.events;
+        r.monodromy.resize(static_cast<std::size_t>(N * N));
+        for (Eigen::Index i = 0; i < N; ++i)
+            for (Eigen::Index j = 0; j < N; ++j) r.monodromy[static_cast<std::size_t>(i * N + j)] = cur.M(i, j);
+        Eigen::EigenSolver<Eigen::MatrixXd> es(cur.M, false);
+        for (Eigen::Index i = 0; i < N; ++i) r.multipliers.push_back(es.eigenvalues()(i));
+        std::stable_sort(r.multipliers.begin(), r.multipliers.end(),
+                         [](const std::complex<double>& a, const std::complex<double>& b) {
+                             return std::abs(a) > std::abs(b);
+                         });
+        r.max_multiplier = r.multipliers.empty() ? 0.0 : std::abs(r.multipliers.front());
+        r.stable = r.max_multiplier < 1.0;
+        if (orbit) {
+            const RunSummary s = flow.run(ts, y.data(), y.data() + n, te, *orbit, true, dt);
+            if (s.status != RunStatus::ok)
+                throw RunError(std::string("periodic: the run of the orbit ended with status ") +
+                               run_status_name(s.status) + ": " + s.message);
+        }
+    } else {
+        r.status = PeriodicStatus::not_converged;
+        r.message = why;
+    }
+    return r;
+}
+
+}  // namespace hsnc

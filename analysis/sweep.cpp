@@ -1,0 +1,556 @@
+#include "hsnc/sweep.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <mutex>
+#include <sstream>
+#include <thread>
+#include <utility>
+
+#include "file_read.h"
+#include "hsnc/simulate.h"
+#include "model_hash.h"
+#include "sweep_detail.h"
+#include "sweep_point.h"
+
+namespace hsnc {
+namespace {
+
+constexpr const char* kPlan = "hsnc::SweepPlan";
+
+std::string num(double v) {
+    char text[40];
+    std::snprintf(text, sizeof text, "%.17g", v);
+    return text;
+}
+
+// The shortest text that reads back as v (for messages and overrides).
+std::string short_num(double v) {
+    for (int digits = 1;; ++digits) {
+        char text[40];
+        std::snprintf(text, sizeof text, "%.*g", digits, v);
+        if (std::strtod(text, nullptr) == v || digits >= 17) return text;
+    }
+}
+
+std::string override_name(const std::string& raw) { return raw.substr(0, raw.find('=')); }
+
+double parameter_value(const Model& m, const std::string& name) {
+    for (const auto& p : m.parameters)
+        if (p.first == name) return p.second;
+    return std::nan("");
+}
+
+bool has_parameter(const Model& m, const std::string& name) {
+    for (const auto& p : m.parameters)
+        if (p.first == name) return true;
+    return false;
+}
+
+// Shared by the threads of one run: progress and the first failure.
+struct Context {
+    std::mutex mutex;
+    std::size_t done = 0, total = 0;
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    const SweepOptions* options = nullptr;
+};
+
+}  // namespace
+
+SweepDirection sweep_direction_from_name(const std::string& name) {
+    for (SweepDirection d : {SweepDirection::up, SweepDirection::down, SweepDirection::both})
+        if (name == sweep_direction_name(d)) return d;
+    throw OptionError("hsnc::sweep_direction_from_name", "direction", "'" + name + "'", "expected up, down or both");
+}
+
+const char* sweep_direction_name(SweepDirection d) {
+    switch (d) {
+    case SweepDirection::up: return "up";
+    case SweepDirection::down: return "down";
+    case SweepDirection::both: return "both";
+    }
+    return "?";
+}
+
+SweepPlan SweepPlan::from_file(const std::string& path, const ModelOverrides& overrides, SweepOptions options) {
+    const FileRead file = read_regular_file(path, kMaxModelFileBytes);
+    if (file.status != FileRead::Status::ok) throw InputError("cannot read model file '" + path + "': " + file.problem);
+    return SweepPlan(file.bytes, path, overrides, std::move(options));
+}
+
+SweepPlan::SweepPlan(const std::string& text, const std::string& source, const ModelOverrides& overrides,
+                     SweepOptions options)
+    : options_(std::move(options)) {
+    SweepOptions& o = options_;
+    // The model as given (parameters at the file's values): names, checks.
+    model_ = parse_model(text, source, overrides);
+    if (o.param.empty()) throw OptionError(kPlan, "param", "''", "required: the parameter to sweep");
+    if (!has_parameter(model_, o.param))
+        throw OptionError(kPlan, "param", o.param, "no parameter named '" + o.param + "' in " + source);
+    if (!std::isfinite(o.from)) throw OptionError(kPlan, "from", short_num(o.from), "must be a finite number");
+    if (!std::isfinite(o.to)) throw OptionError(kPlan, "to", short_num(o.to), "must be a finite number");
+    if (o.points < 1) throw OptionError(kPlan, "points", std::to_string(o.points), "must be >= 1");
+    if (o.points > 100'000'000) throw OptionError(kPlan, "points", std::to_string(o.points), "must be <= 1e8");
+    if (o.max_periods < 1) throw OptionError(kPlan, "max_periods", std::to_string(o.max_periods), "must be >= 1");
+    if (o.record_periods < 1)
+        throw OptionError(kPlan, "record_periods", std::to_string(o.record_periods), "must be >= 1");
+    if (o.max_periods > 1'000'000'000 || o.record_periods > 1'000'000'000)
+        throw OptionError(kPlan, o.max_periods > 1'000'000'000 ? "max_periods" : "record_periods",
+                          std::to_string(std::max(o.max_periods, o.record_periods)), "must be <= 1e9");
+    if (!o.param2.empty()) {
+        if (o.param2 == o.param)
+            throw OptionError(kPlan, "param2", o.param2, "is the swept parameter itself");
+        if (!has_parameter(model_, o.param2))
+            throw OptionError(kPlan, "param2", o.param2, "no parameter named '" + o.param2 + "' in " + source);
+        if (o.values2.empty()) throw OptionError(kPlan, "values2", "''", "required with param2: its values");
+    } else if (!o.values2.empty()) {
+        throw OptionError(kPlan, "values2", short_num(o.values2[0]), "given without param2");
+    }
+    for (double v : o.values2)
+        if (!std::isfinite(v)) throw OptionError(kPlan, "values2", short_num(v), "must be finite numbers");
+    for (const std::string& raw : overrides.set) {
+        const std::string name = override_name(raw);
+        if (name == o.param || (!o.param2.empty() && name == o.param2))
+            throw OptionError(kPlan, name == o.param ? "param" : "param2", name,
+                              "also set by an override ('" + raw + "'): a swept parameter takes the sweep's values");
+    }
+    if (o.method == Method::cvode && !HSNC_WITH_CVODE)
+        throw OptionError(kPlan, "method", "cvode", "not available: this build has no SUNDIALS CVODE");
+    try {
+        validate(o.method, o.integrator);
+    } catch (const InputError& e) {
+        throw OptionError(kPlan, "method", method_name(o.method), e.what());
+    }
+    if (o.threads == 0) o.threads = std::max(1u, std::thread::hardware_concurrency());
+
+    // The values, from .. to.
+    const std::size_t N = o.points;
+    values_.resize(N);
+    for (std::size_t j = 0; j < N; ++j)
+        values_[j] = j == 0       ? o.from
+                     : j + 1 == N ? o.to
+                                  : o.from + (o.to - o.from) * static_cast<double>(j) / static_cast<double>(N - 1);
+
+    // Every point's model, read now: a value at which the model is invalid is
+    // bad input, found before anything runs.
+    const std::size_t lines = std::max<std::size_t>(1, o.values2.size());
+    models_.reserve(lines * N);
+    for (std::size_t l = 0; l < lines; ++l)
+        for (std::size_t j = 0; j < N; ++j) {
+            ModelOverrides ov = overrides;
+            ov.set.push_back(o.param + "=" + num(values_[j]));
+            std::string at = o.param + " = " + short_num(values_[j]);
+            if (!o.param2.empty()) {
+                ov.set.push_back(o.param2 + "=" + num(o.values2[l]));
+                at += ", " + o.param2 + " = " + short_num(o.values2[l]);
+            }
+            Model m;
+            try {
+                m = parse_model(text, source, ov);
+            } catch (const InputError& e) {
+                throw InputError(std::string("sweep at ") + at + ": " + e.what());
+            }
+            // The override's text reads back as the value (17 digits), so the
+            // CSV's column is the value the point ran with.
+            if (parameter_value(m, o.param) != values_[j])
+                throw InputError("sweep at " + at + ": the value does not read back exactly");
+            sweep_detail::forcing_frequency(m, "sweep at " + at);
+            m.parameter_expressions.clear();
+            m.field_expressions.clear();
+            models_.push_back(std::move(m));
+        }
+
+    // Tasks in output order.
+    std::vector<SweepDirection> dirs;
+    if (o.direction != SweepDirection::down) dirs.push_back(SweepDirection::up);
+    if (o.direction != SweepDirection::up) dirs.push_back(SweepDirection::down);
+    for (std::size_t l = 0; l < lines; ++l)
+        for (SweepDirection d : dirs) {
+            if (o.restart_each)
+                for (std::size_t j = 0; j < N; ++j) tasks_.push_back(Task{l, d, j, 1});
+            else
+                tasks_.push_back(Task{l, d, 0, N});
+        }
+
+    // The fingerprint: the model as read (values, initial state) and the options.
+    std::ostringstream fp;
+    std::string canon = model_canonical_text(model_);
+    for (const auto& p : model_.parameters) canon += p.first + "=" + num(p.second) + "\n";
+    canon += "t0=" + num(model_.t0) + "\n";
+    for (std::size_t i = 0; i < model_.dof(); ++i) canon += num(model_.x0[i]) + " " + num(model_.v0[i]) + "\n";
+    char hash[20];
+    std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(fnv1a64(canon)));
+    fp << "model=" << model_.name << " hash=" << hash << " param=" << o.param << " from=" << num(o.from)
+       << " to=" << num(o.to) << " points=" << N << " direction=" << sweep_direction_name(o.direction)
+       << " max_periods=" << o.max_periods << " record_periods=" << o.record_periods
+       << " restart_each=" << (o.restart_each ? 1 : 0) << " param2=" << (o.param2.empty() ? "-" : o.param2)
+       << " values2=";
+    for (std::size_t l = 0; l < o.values2.size(); ++l) fp << (l ? "," : "") << num(o.values2[l]);
+    if (o.values2.empty()) fp << "-";
+    fp << " diagram=" << (o.diagram ? 1 : 0) << " method=" << method_name(o.method);
+    if (o.method != Method::hsnc)
+        fp << " h=" << num(o.integrator.h) << " rtol=" << num(o.integrator.rtol) << " atol=" << num(o.integrator.atol);
+    fingerprint_ = fp.str();
+}
+
+const Model& SweepPlan::point_model(std::size_t line, std::size_t j) const { return models_[line * values_.size() + j]; }
+
+std::size_t SweepPlan::task_points(std::size_t i) const { return tasks_.at(i).count; }
+
+std::vector<SweepPoint> SweepPlan::run_task(std::size_t i) const {
+    Context c;
+    c.total = tasks_.at(i).count;
+    c.options = &options_;
+    return run_task(i, &c);
+}
+
+std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const {
+    Context& c = *static_cast<Context*>(context);
+    const Task& task = tasks_.at(i);
+    const std::size_t N = values_.size();
+    const bool has2 = !options_.param2.empty();
+    const double v2 = has2 ? options_.values2[task.line] : std::nan("");
+    auto value_index = [&](std::size_t position) {
+        return task.direction == SweepDirection::up ? position : N - 1 - position;
+    };
+    sweep_detail::State state;
+    {
+        const Model& first = point_model(task.line, value_index(task.first));
+        state.x = first.x0;
+        state.v = first.v0;
+    }
+    std::vector<SweepPoint> out;
+    out.reserve(task.count);
+    for (std::size_t q = task.first; q < task.first + task.count; ++q) {
+        const std::size_t j = value_index(q);
+        const Model& m = point_model(task.line, j);
+        if (options_.restart_each) {
+            state.x = m.x0;
+            state.v = m.v0;
+        }
+        std::string what = options_.param + " = " + short_num(values_[j]);
+        if (has2) what += ", " + options_.param2 + " = " + short_num(v2);
+        what += std::string(" (") + sweep_direction_name(task.direction) + ")";
+        const auto t0 = std::chrono::steady_clock::now();
+        SweepPoint p = sweep_detail::run_point(m, state, options_, what);
+        p.value = values_[j];
+        p.value2 = v2;
+        p.direction = task.direction;
+        out.push_back(std::move(p));
+        if (options_.progress) {
+            const auto t1 = std::chrono::steady_clock::now();
+            std::lock_guard<std::mutex> lock(c.mutex);
+            SweepProgress pr;
+            pr.done = ++c.done;
+            pr.total = c.total;
+            pr.seconds = std::chrono::duration<double>(t1 - t0).count();
+            pr.elapsed = std::chrono::duration<double>(t1 - c.start).count();
+            const SweepPoint& b = out.back();
+            pr.value = b.value;
+            pr.value2 = b.value2;
+            pr.direction = b.direction;
+            pr.settled = b.settled;
+            pr.periods = b.periods;
+            pr.multiple = b.multiple;
+            options_.progress(pr);
+        }
+    }
+    return out;
+}
+
+std::vector<std::vector<SweepPoint>> SweepPlan::run_tasks(const std::vector<std::size_t>& which) const {
+    Context c;
+    c.options = &options_;
+    for (std::size_t i : which) c.total += tasks_.at(i).count;
+    std::vector<std::vector<SweepPoint>> results(which.size());
+    std::vector<std::exception_ptr> errors(which.size());
+    std::atomic<std::size_t> next{0};
+    // After a failure, tasks after it in the list are not started; those
+    // before it finish, so the error reported is always that of the first
+    // failing task, however the threads were scheduled.
+    std::atomic<std::size_t> first_failed{which.size()};
+    auto worker = [&] {
+        for (;;) {
+            const std::size_t k = next.fetch_add(1);
+            if (k >= which.size() || k > first_failed.load()) return;
+            try {
+                results[k] = run_task(which[k], &c);
+            } catch (...) {
+                errors[k] = std::current_exception();
+                std::size_t f = first_failed.load();
+                while (k < f && !first_failed.compare_exchange_weak(f, k)) {
+                }
+            }
+        }
+    };
+    const std::size_t n_threads = std::min<std::size_t>(options_.threads, which.size());
+    if (n_threads <= 1) {
+        worker();
+    } else {
+        std::vector<std::thread> pool;
+        for (std::size_t t = 0; t < n_threads; ++t) pool.emplace_back(worker);
+        for (std::thread& t : pool) t.join();
+    }
+    for (std::exception_ptr& e : errors)
+        if (e) std::rethrow_exception(e);
+    return results;
+}
+
+SweepResult SweepPlan::result_header() const {
+    SweepResult r;
+    r.model = model_.name;
+    r.param = options_.param;
+    r.param2 = options_.param2;
+    for (const Mass& m : model_.masses) r.masses.push_back(m.name);
+    return r;
+}
+
+SweepResult SweepPlan::run() const {
+    std::vector<std::size_t> all(tasks_.size());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+    SweepResult r = result_header();
+    for (std::vector<SweepPoint>& t : run_tasks(all))
+        for (SweepPoint& p : t) r.points.push_back(std::move(p));
+    return r;
+}
+
+std::vector<std::size_t> SweepPlan::part_tasks(std::size_t index, std::size_t count) const {
+    std::vector<std::size_t> out;
+    for (std::size_t i = index; count > 0 && i < tasks_.size(); i += count) out.push_back(i);
+    return out;
+}
+
+std::string sweep_curve_header(const SweepResult& r) {
+    std::string h = r.param + ",direction,settled,periods,multiple";
+    for (const std::string& m : r.masses) h += ",xmax_" + m + ",xrms_" + m + ",a1_" + m;
+    if (!r.param2.empty()) h += "," + r.param2;
+    return h;
+}
+
+std::string sweep_diagram_header(const SweepResult& r) {
+    std::string h = r.param + ",direction,t";
+    for (const std::string& m : r.masses) h += ",x_" + m;
+    for (const std::string& m : r.masses) h += ",v_" + m;
+    if (!r.param2.empty()) h += "," + r.param2;
+    return h;
+}
+
+// ---- the text form of points: MPI and part files ----
+
+namespace sweep_detail {
+
+std::vector<std::string> split_lines(const std::string& text) {
+    std::vector<std::string> lines;
+    std::size_t a = 0;
+    while (a < text.size()) {
+        std::size_t b = text.find('\n', a);
+        if (b == std::string::npos) b = text.size();
+        lines.push_back(text.substr(a, b - a));
+        a = b + 1;
+    }
+    return lines;
+}
+
+std::string write_tasks(const std::vector<std::size_t>& which, const std::vector<std::vector<SweepPoint>>& points,
+                        std::size_t n) {
+    std::string s;
+    for (std::size_t k = 0; k < which.size(); ++k) {
+        s += "task " + std::to_string(which[k]) + " " + std::to_string(points[k].size()) + "\n";
+        for (const SweepPoint& p : points[k]) {
+            const std::size_t rows = p.strobe_t.size();
+            s += num(p.value) + " " + num(p.value2) + " " + sweep_direction_name(p.direction) + " " +
+                 (p.settled ? "1" : "0") + " " + std::to_string(p.periods) + " " + std::to_string(p.multiple) + " " +
+                 std::to_string(rows);
+            for (std::size_t i = 0; i < n; ++i) s += " " + num(p.xmax[i]) + " " + num(p.xrms[i]) + " " + num(p.a1[i]);
+            for (std::size_t r = 0; r < rows; ++r) {
+                s += " " + num(p.strobe_t[r]);
+                for (std::size_t i = 0; i < n; ++i) s += " " + num(p.strobe_x[r * n + i]);
+                for (std::size_t i = 0; i < n; ++i) s += " " + num(p.strobe_v[r * n + i]);
+            }
+            s += "\n";
+        }
+    }
+    return s;
+}
+
+namespace {
+
+struct Reader {
+    std::istringstream in;
+    std::string where;
+    explicit Reader(const std::string& line, std::string w) : in(line), where(std::move(w)) {}
+    [[noreturn]] void fail(const std::string& what) const { throw InputError(where + ": " + what); }
+    std::string word() {
+        std::string w;
+        if (!(in >> w)) fail("the line ends early");
+        return w;
+    }
+    double number() {
+        const std::string w = word();
+        char* end = nullptr;
+        const double v = std::strtod(w.c_str(), &end);
+        if (end == w.c_str() || *end != '\0') fail("'" + w + "' is not a number");
+        return v;
+    }
+    std::size_t count(std::size_t max) {
+        const std::string w = word();
+        char* end = nullptr;
+        const unsigned long long v = std::strtoull(w.c_str(), &end, 10);
+        if (w.empty() || w[0] == '-' || *end != '\0' || v > max) fail("'" + w + "' is not a count up to " + std::to_string(max));
+        return static_cast<std::size_t>(v);
+    }
+    void end() {
+        std::string w;
+        if (in >> w) fail("unexpected '" + w + "' at the end of the line");
+    }
+};
+
+}  // namespace
+
+void read_tasks(const std::vector<std::string>& lines, std::size_t first, std::size_t n, const std::string& where,
+                std::map<std::size_t, std::vector<SweepPoint>>& out) {
+    std::size_t i = first;
+    auto at = [&](std::size_t line) { return where + ":" + std::to_string(line + 1); };
+    while (i < lines.size()) {
+        if (lines[i].empty()) {
+            ++i;
+            continue;
+        }
+        Reader head(lines[i], at(i));
+        if (head.word() != "task") head.fail("expected 'task INDEX POINTS'");
+        const std::size_t index = head.count(std::size_t{1} << 40), count = head.count(100'000'000);
+        head.end();
+        if (out.count(index)) head.fail("task " + std::to_string(index) + " given twice");
+        std::vector<SweepPoint>& pts = out[index];
+        ++i;
+        for (std::size_t k = 0; k < count; ++k, ++i) {
+            if (i >= lines.size()) throw InputError(at(i) + ": the file ends inside task " + std::to_string(index));
+            Reader r(lines[i], at(i));
+            SweepPoint p;
+            p.value = r.number();
+            p.value2 = r.number();
+            const std::string d = r.word();
+            if (d != "up" && d != "down") r.fail("direction '" + d + "'");
+            p.direction = d == "up" ? SweepDirection::up : SweepDirection::down;
+            const std::string s = r.word();
+            if (s != "0" && s != "1") r.fail("settled '" + s + "'");
+            p.settled = s == "1";
+            p.periods = r.count(std::size_t{1} << 40);
+            p.multiple = static_cast<int>(r.count(kSweepMaxMultiple));
+            const std::size_t rows = r.count(1'000'000'000);
+            for (std::size_t m = 0; m < n; ++m) {
+                p.xmax.push_back(r.number());
+                p.xrms.push_back(r.number());
+                p.a1.push_back(r.number());
+            }
+            for (std::size_t row = 0; row < rows; ++row) {
+                p.strobe_t.push_back(r.number());
+                for (std::size_t m = 0; m < n; ++m) p.strobe_x.push_back(r.number());
+                for (std::size_t m = 0; m < n; ++m) p.strobe_v.push_back(r.number());
+            }
+            r.end();
+            pts.push_back(std::move(p));
+        }
+    }
+}
+
+}  // namespace sweep_detail
+
+// ---- part files ----
+
+namespace {
+constexpr const char* kPartMagic = "hsnc-sweep-part 1";
+}
+
+std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_t count,
+                            const std::vector<std::vector<SweepPoint>>& task_points) {
+    const SweepResult names = plan.result_header();
+    std::string s = std::string(kPartMagic) + "\n";
+    s += "fingerprint " + plan.fingerprint() + "\n";
+    s += "part " + std::to_string(index + 1) + " " + std::to_string(count) + "\n";
+    s += "tasks " + std::to_string(plan.tasks()) + "\n";
+    s += "model " + names.model + "\n";
+    s += "param " + names.param + "\n";
+    s += "param2 " + (names.param2.empty() ? std::string("-") : names.param2) + "\n";
+    s += "masses";
+    for (const std::string& m : names.masses) s += " " + m;
+    s += "\n";
+    s += sweep_detail::write_tasks(plan.part_tasks(index, count), task_points, names.masses.size());
+    return s;
+}
+
+SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::vector<std::string>& names) {
+    if (texts.empty()) throw InputError("sweep merge: no part files given");
+    SweepResult r;
+    std::string fingerprint;
+    std::size_t count = 0, tasks = 0;
+    std::vector<char> seen;
+    std::map<std::size_t, std::vector<SweepPoint>> all;
+    for (std::size_t f = 0; f < texts.size(); ++f) {
+        const std::string& where = names.at(f);
+        const std::vector<std::string> lines = sweep_detail::split_lines(texts[f]);
+        auto field = [&](std::size_t i, const std::string& key) {
+            const std::string prefix = key + " ";
+            if (i >= lines.size() || lines[i].compare(0, prefix.size(), prefix) != 0)
+                throw InputError(where + ":" + std::to_string(i + 1) + ": expected '" + key + " ...'" +
+                                 (i == 0 ? "" : " (not a part file of hsnc sweep --part?)"));
+            return lines[i].substr(prefix.size());
+        };
+        if (lines.empty() || lines[0] != kPartMagic)
+            throw InputError(where + ":1: not a part file of hsnc sweep --part (expected '" + kPartMagic + "')");
+        const std::string fp = field(1, "fingerprint");
+        std::istringstream part(field(2, "part"));
+        std::size_t i = 0, n = 0;
+        if (!(part >> i >> n) || n < 1 || i < 1 || i > n)
+            throw InputError(where + ":3: expected 'part I N' with 1 <= I <= N");
+        std::size_t t = 0;
+        {
+            std::istringstream ts(field(3, "tasks"));
+            if (!(ts >> t)) throw InputError(where + ":4: expected 'tasks N'");
+        }
+        const std::string model = field(4, "model"), param = field(5, "param"), param2 = field(6, "param2");
+        std::istringstream ms(field(7, "masses"));
+        std::vector<std::string> masses;
+        for (std::string m; ms >> m;) masses.push_back(m);
+        if (f == 0) {
+            fingerprint = fp;
+            count = n;
+            tasks = t;
+            seen.assign(n, 0);
+            r.model = model;
+            r.param = param;
+            r.param2 = param2 == "-" ? "" : param2;
+            r.masses = masses;
+        } else if (fp != fingerprint || n != count || t != tasks) {
+            throw InputError(where + ": a part of another sweep than " + names[0] + " (" +
+                             (fp != fingerprint ? "model or options differ" : "split into a different number of parts") +
+                             ")");
+        }
+        if (seen[i - 1]) throw InputError(where + ": part " + std::to_string(i) + "/" + std::to_string(n) + " given twice");
+        seen[i - 1] = 1;
+        std::map<std::size_t, std::vector<SweepPoint>> mine;
+        sweep_detail::read_tasks(lines, 8, masses.size(), where, mine);
+        for (auto& [index, pts] : mine) {
+            if (index >= tasks || index % count != i - 1)
+                throw InputError(where + ": task " + std::to_string(index) + " does not belong to part " +
+                                 std::to_string(i) + "/" + std::to_string(n));
+            all[index] = std::move(pts);
+        }
+    }
+    for (std::size_t i = 0; i < count; ++i)
+        if (!seen[i])
+            throw InputError("sweep merge: part " + std::to_string(i + 1) + "/" + std::to_string(count) + " is missing");
+    for (std::size_t i = 0; i < tasks; ++i) {
+        auto it = all.find(i);
+        if (it == all.end()) throw InputError("sweep merge: task " + std::to_string(i) + " is missing from its part file");
+        for (SweepPoint& p : it->second) r.points.push_back(std::move(p));
+    }
+    return r;
+}
+
+}  // namespace hsnc

@@ -1,0 +1,424 @@
+#include "sweep_point.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+
+#include "engine.h"
+#include "error.h"
+#include "generic_solver.h"
+#include "modal.h"
+#include "kernel_mode.h"
+
+namespace hsnc::sweep_detail {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// A repeat over a divisor of the multiple found is awaited when it is this
+// close to the tolerance already (run_point).
+constexpr double kGhostFactor = 1e3;
+
+// 6-point Gauss-Legendre on [-1, 1].
+constexpr double kGaussNode[6] = {-0.93246951420315202781, -0.66120938646626451366, -0.23861918608319690863,
+                                  0.23861918608319690863,  0.66120938646626451366,  0.93246951420315202781};
+constexpr double kGaussWeight[6] = {0.17132449237917034504, 0.36076157304813860757, 0.46791393457269104739,
+                                    0.46791393457269104739, 0.36076157304813860757, 0.17132449237917034504};
+
+std::string num(double v) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v;
+    return s.str();
+}
+
+class NullObserver : public Observer {
+public:
+    void on_sample(double, const double*, const double*) override {}
+    void on_event(double, EventKind, int, const double*, const double*) override {}
+};
+
+// What the recorded window accumulates, per mass.
+struct Accumulator {
+    explicit Accumulator(std::size_t n) : xmax(n, 0.0), sxx(n, 0.0), sxc(n, 0.0), sxs(n, 0.0) {}
+    std::vector<double> xmax, sxx, sxc, sxs;
+    double length = 0;  // of the window covered so far
+
+    void extreme(std::size_t i, double x) { xmax[i] = std::max(xmax[i], std::fabs(x)); }
+};
+
+// The exact metrics of the recorded window: every segment the engine starts
+// is set up again on a solver of its own (the same generic solver, so the
+// same trajectory) and integrated once its end is known (the next segment's
+// start, or the end of the run).
+class SegmentRecorder {
+public:
+    SegmentRecorder(const Model& model, double omega, double t_window, double h, Accumulator& acc)
+        : provider_(model), n_(model.dof()), omega_(omega), t_window_(t_window), h_(h), acc_(acc) {
+        const std::size_t ns = model.contacts.size() + 2 * n_;
+        x_.resize(n_);
+        v_.resize(n_);
+        a_.resize(n_);
+        g_.resize(ns);
+        dg_.resize(ns);
+        b_.resize(ns);
+        sc_.resize(ns);
+    }
+
+    void start(const Configuration& cfg, double t, double t_lo, const double* x, const double* v,
+               const signed char* sgn) {
+        if (pending_) finish(t, t_lo);
+        pending_ = true;
+        cfg_ = cfg;
+        t_ = t;
+        t_lo_ = t_lo;
+        x0_.assign(x, x + n_);
+        v0_.assign(v, v + n_);
+        sgn_.assign(sgn, sgn + n_);
+    }
+
+    // The pending segment ends at t_end + t_end_lo.
+    void finish(double t_end, double t_end_lo) {
+        if (!pending_) return;
+        pending_ = false;
+        const double length = (t_end - t_) + (t_end_lo - t_lo_);
+        if (!(length > 0)) return;
+        SegmentSolver& s = provider_.solver(cfg_);
+        s.setup(t_, t_lo_, x0_.data(), v0_.data(), sgn_.data());
+        solver_ = &s;
+        const double offset = (t_ - t_window_) + t_lo_;  // segment start in window time
+        const std::size_t pieces = static_cast<std::size_t>(std::max(1.0, std::ceil(length / h_)));
+        eval(0.0);
+        for (std::size_t i = 0; i < n_; ++i) acc_.extreme(i, x_[i]);
+        for (std::size_t p = 0; p < pieces; ++p) {
+            const double a = length * static_cast<double>(p) / static_cast<double>(pieces);
+            const double b = p + 1 == pieces ? length : length * static_cast<double>(p + 1) / static_cast<double>(pieces);
+            va_ = v_;  // x_, v_, a_ hold the state at a
+            // Gauss-Legendre nodes of [a, b].
+            const double mid = 0.5 * (a + b), half = 0.5 * (b - a);
+            for (int q = 0; q < 6; ++q) {
+                const double tau = mid + half * kGaussNode[q];
+                eval(tau);
+                const double w = half * kGaussWeight[q], theta = omega_ * (offset + tau);
+                const double c = std::cos(theta), sn = std::sin(theta);
+                for (std::size_t i = 0; i < n_; ++i) {
+                    acc_.sxx[i] += w * x_[i] * x_[i];
+                    acc_.sxc[i] += w * x_[i] * c;
+                    acc_.sxs[i] += w * x_[i] * sn;
+                    acc_.extreme(i, x_[i]);
+                }
+            }
+            // A zero of v_i inside: x_i has an extremum there.
+            eval(b);
+            vb_ = v_;
+            bool searched = false;
+            for (std::size_t i = 0; i < n_; ++i)
+                if ((va_[i] < 0 && vb_[i] > 0) || (va_[i] > 0 && vb_[i] < 0)) {
+                    acc_.extreme(i, extremum(i, a, b, va_[i]));
+                    searched = true;
+                }
+            if (searched) eval(b);  // the state at b for the next piece
+            for (std::size_t i = 0; i < n_; ++i) acc_.extreme(i, x_[i]);
+        }
+        acc_.length += length;
+    }
+
+private:
+    void eval(double tau) {
+        const SegmentEval out{x_.data(), v_.data(), a_.data(), g_.data(), dg_.data(), b_.data(), sc_.data()};
+        solver_->eval(tau, out);
+    }
+
+    // x_i where v_i = 0 in (a, b) (v_i(a) = va, v_i(b) of the other sign):
+    // Newton on v_i with a_i, kept inside a bisection bracket. x_i is
+    // stationary there, so the error of the root enters x_i squared.
+    double extremum(std::size_t i, double a, double b, double va) {
+        double lo = a, hi = b;
+        const bool rising = va < 0;  // v_i goes from - to +
+        double tau = 0.5 * (a + b);
+        for (int it = 0; it < 100; ++it) {
+            eval(tau);
+            const double vi = v_[i], ai = a_[i];
+            if (vi == 0) break;
+            if ((vi < 0) == rising) lo = tau;
+            else hi = tau;
+            double next = ai != 0 ? tau - vi / ai : 0.5 * (lo + hi);
+            if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+            if (std::fabs(next - tau) <= 1e-14 * (b - a) || hi - lo <= 1e-14 * (b - a)) {
+                tau = next;
+                eval(tau);
+                break;
+            }
+            tau = next;
+        }
+        return x_[i];
+    }
+
+    GenericSolverProvider provider_;
+    std::size_t n_;
+    double omega_, t_window_, h_;
+    Accumulator& acc_;
+    bool pending_ = false;
+    Configuration cfg_;
+    double t_ = 0, t_lo_ = 0;
+    std::vector<double> x0_, v0_;
+    std::vector<signed char> sgn_;
+    const SegmentSolver* solver_ = nullptr;
+    std::vector<double> x_, v_, a_, g_, dg_, b_, sc_, va_, vb_;
+};
+
+// Passes the engine's solvers through, telling the recorder where every
+// segment starts.
+class RecordingSolver : public SegmentSolver {
+public:
+    RecordingSolver(SegmentRecorder& rec) : rec_(rec) {}
+    void bind(SegmentSolver& inner) { inner_ = &inner; }
+    const Configuration& configuration() const override { return inner_->configuration(); }
+    const std::vector<SwitchFunction>& switches() const override { return inner_->switches(); }
+    using SegmentSolver::setup;
+    void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override {
+        rec_.start(inner_->configuration(), t0, t0_lo, x0, v0, sgn);
+        inner_->setup(t0, t0_lo, x0, v0, sgn);
+    }
+    void eval(double tau, const SegmentEval& out) const override { inner_->eval(tau, out); }
+    double max_step() const override { return inner_->max_step(); }
+
+private:
+    SegmentRecorder& rec_;
+    SegmentSolver* inner_ = nullptr;
+};
+
+class RecordingProvider : public SolverProvider {
+public:
+    RecordingProvider(SolverProvider& inner, SegmentRecorder& rec) : inner_(inner), rec_(rec) {}
+    SegmentSolver& solver(const Configuration& cfg) override {
+        // The inner reference is valid until the inner provider's next call, as
+        // the engine's is until ours: bind it afresh on every call.
+        auto& slot = wrappers_[cfg];
+        if (!slot) slot = std::make_unique<RecordingSolver>(rec_);
+        slot->bind(inner_.solver(cfg));
+        return *slot;
+    }
+
+private:
+    SolverProvider& inner_;
+    SegmentRecorder& rec_;
+    std::map<Configuration, std::unique_ptr<RecordingSolver>> wrappers_;
+};
+
+// The state at the end of every recorded period (samples every T).
+class StrobeObserver : public Observer {
+public:
+    StrobeObserver(SweepPoint& point, std::size_t n, double t_first, bool keep)
+        : point_(point), n_(n), t_first_(t_first), keep_(keep) {}
+    void on_sample(double t, const double* x, const double* v) override {
+        if (!keep_ || t == t_first_) return;  // the window's start is the last transient period's end
+        point_.strobe_t.push_back(t);
+        point_.strobe_x.insert(point_.strobe_x.end(), x, x + n_);
+        point_.strobe_v.insert(point_.strobe_v.end(), v, v + n_);
+    }
+    void on_event(double, EventKind, int, const double*, const double*) override {}
+
+private:
+    SweepPoint& point_;
+    std::size_t n_;
+    double t_first_;
+    bool keep_;
+};
+
+// A baseline's recorded window from its samples every h (max of the
+// samples, trapezoidal integrals), and the stroboscopic samples.
+class GridObserver : public Observer {
+public:
+    GridObserver(Accumulator& acc, SweepPoint& point, std::size_t n, double omega, double t_window, double h,
+                 std::size_t per_period, bool keep)
+        : acc_(acc), point_(point), n_(n), omega_(omega), t_window_(t_window), h_(h), per_period_(per_period),
+          keep_(keep) {}
+    void on_sample(double t, const double* x, const double* v) override {
+        const double s = t - t_window_, theta = omega_ * s;
+        const double w = count_ == 0 ? 0.5 * h_ : h_;  // trapezoid; the last sample's half is taken back in close()
+        for (std::size_t i = 0; i < n_; ++i) {
+            acc_.extreme(i, x[i]);
+            acc_.sxx[i] += w * x[i] * x[i];
+            acc_.sxc[i] += w * x[i] * std::cos(theta);
+            acc_.sxs[i] += w * x[i] * std::sin(theta);
+        }
+        if (keep_ && count_ > 0 && count_ % per_period_ == 0) {
+            point_.strobe_t.push_back(t);
+            point_.strobe_x.insert(point_.strobe_x.end(), x, x + n_);
+            point_.strobe_v.insert(point_.strobe_v.end(), v, v + n_);
+        }
+        last_x_.assign(x, x + n_);
+        last_t_ = t;
+        ++count_;
+    }
+    void on_event(double, EventKind, int, const double*, const double*) override {}
+    void close() {
+        const double theta = omega_ * (last_t_ - t_window_);
+        for (std::size_t i = 0; i < n_; ++i) {
+            const double x = last_x_[i], w = 0.5 * h_;
+            acc_.sxx[i] -= w * x * x;
+            acc_.sxc[i] -= w * x * std::cos(theta);
+            acc_.sxs[i] -= w * x * std::sin(theta);
+        }
+        acc_.length = last_t_ - t_window_;
+    }
+
+private:
+    Accumulator& acc_;
+    SweepPoint& point_;
+    std::size_t n_;
+    double omega_, t_window_, h_;
+    std::size_t per_period_;
+    bool keep_;
+    std::size_t count_ = 0;
+    std::vector<double> last_x_;
+    double last_t_ = 0;
+};
+
+// The norm of a state: max(|x_i|, |v_i|/omega) (v/omega is a length too).
+double magnitude(const State& a, double omega) {
+    double mag = 0;
+    for (std::size_t i = 0; i < a.x.size(); ++i) mag = std::max({mag, std::fabs(a.x[i]), std::fabs(a.v[i]) / omega});
+    return mag;
+}
+double distance(const State& a, const State& b, double omega) {
+    double diff = 0;
+    for (std::size_t i = 0; i < a.x.size(); ++i)
+        diff = std::max({diff, std::fabs(a.x[i] - b.x[i]), std::fabs(a.v[i] - b.v[i]) / omega});
+    return diff;
+}
+// |a - b| <= tol |a|.
+bool repeats(const State& a, const State& b, double omega, double tol) {
+    return distance(a, b, omega) <= tol * magnitude(a, omega);
+}
+
+}  // namespace
+
+double forcing_frequency(const Model& model, const std::string& what) {
+    if (model.forcing.empty())
+        throw InputError(what + ": the model has no [[forcing]]; a sweep needs one forcing frequency");
+    const double omega = model.forcing[0].omega;
+    for (const Harmonic& h : model.forcing)
+        if (h.omega != omega)
+            throw InputError(what + ": the forcing has more than one frequency (" + num(omega) + " and " +
+                             num(h.omega) + " rad/s); a sweep needs one");
+    return omega;
+}
+
+double highest_natural_frequency(const Model& model) {
+    Configuration cfg = Configuration::all_open(model);
+    std::fill(cfg.closed.begin(), cfg.closed.end(), 1);
+    const ModalDecomposition d = modal_analysis(model, cfg);
+    double top = 0;
+    for (Eigen::Index j = 0; j < d.lambda.size(); ++j) top = std::max(top, d.lambda[j]);
+    return std::sqrt(top);
+}
+
+SweepPoint run_point(const Model& point_model, State& state, const SweepOptions& o, const std::string& what) {
+    Model m = point_model;  // its t0, x0, v0 move with the runs; solvers do not depend on them
+    const std::size_t n = m.dof();
+    const double omega = forcing_frequency(m, what);
+    const double period = 2 * kPi / omega;
+    const double t0 = m.t0;
+    // The grid of the recorded window: 1/16 of the shortest period present.
+    const double ratio = std::max(1.0, highest_natural_frequency(m) / omega);
+    const auto per_period = static_cast<std::size_t>(16 * std::ceil(ratio));
+    const double h = period / static_cast<double>(per_period);
+
+    std::unique_ptr<SolverProvider> provider;
+    if (o.method == Method::hsnc) provider = std::make_unique<GenericSolverProvider>(m);
+    auto advance = [&](double ta, double tb, double dt, bool samples, Observer& obs, SolverProvider* p) {
+        m.t0 = ta;
+        m.x0 = state.x;
+        m.v0 = state.v;
+        EngineOptions eo;
+        eo.t_end = tb;
+        eo.dt = dt;
+        eo.samples = samples;
+        RunSummary s;
+        if (o.method == Method::hsnc) {
+            Engine engine(m, *p);
+            s = engine.run(eo, obs);
+        } else {
+            s = integrate(m, o.method, o.integrator, eo, obs);
+        }
+        if (s.status != RunStatus::ok)
+            throw RunError("sweep: " + what + ": the run stopped: " + run_status_name(s.status) + ": " + s.message);
+        state.x = s.x;
+        state.v = s.v;
+    };
+
+    SweepPoint pt;
+    // ---- transient: whole periods until the stroboscopic state repeats ----
+    // s_k, k = 0, 1, ...; the last kSweepMaxMultiple + 1 kept (history.back() is s_k).
+    std::vector<State> history{state};
+    const std::size_t keep = static_cast<std::size_t>(kSweepMaxMultiple) + 1;
+    auto s = [&](std::size_t back) -> const State& { return history[history.size() - 1 - back]; };
+    NullObserver none;
+    std::size_t k = 0;
+    int pending = 0;  // a multiple found while a divisor of it still converged
+    while (k < o.max_periods) {
+        const double ta = t0 + static_cast<double>(k) * period, tb = t0 + static_cast<double>(k + 1) * period;
+        advance(ta, tb, 0.0, false, none, provider.get());
+        ++k;
+        history.push_back(state);
+        if (history.size() > keep) history.erase(history.begin());
+        const std::size_t last = history.size() - 1;
+        int found = 0;
+        for (int p = 1; p <= kSweepMaxMultiple && static_cast<std::size_t>(p) <= last && !found; ++p)
+            if (repeats(s(0), s(static_cast<std::size_t>(p)), omega, kSweepSettleTolerance)) found = p;
+        pending = found;
+        if (!found) continue;
+        // A transient whose multipliers turn by about 2*pi*q/p per period
+        // (a multiplier near -1: p = 2) makes s_k - s_(k-p) small before
+        // s_k - s_(k-d) for a divisor d of p, on an orbit of period d. A
+        // subharmonic orbit keeps its p points apart; so when s_k and
+        // s_(k-d) already agree to 1e3 times the tolerance, the motion runs
+        // on (up to max_periods) until they agree to the tolerance: the
+        // smallest multiple is reported, not a false subharmonic.
+        bool converging = false;
+        for (int d = 1; d < found && !converging; ++d)
+            converging = found % d == 0 && distance(s(0), s(static_cast<std::size_t>(d)), omega) <=
+                                               kGhostFactor * kSweepSettleTolerance * magnitude(s(0), omega);
+        if (converging) continue;
+        pending = 0;
+        pt.settled = true;
+        pt.multiple = found;
+        break;
+    }
+    if (pending) {  // max_periods reached while a divisor was still converging
+        pt.settled = true;
+        pt.multiple = pending;
+    }
+    pt.periods = k;
+
+    // ---- the recorded periods, in one run ----
+    const double tr = t0 + static_cast<double>(k) * period;
+    const double te = t0 + static_cast<double>(k + o.record_periods) * period;
+    Accumulator acc(n);
+    if (o.method == Method::hsnc) {
+        SegmentRecorder rec(m, omega, tr, h, acc);
+        RecordingProvider recording(*provider, rec);
+        StrobeObserver strobe(pt, n, tr, o.diagram);
+        advance(tr, te, period, true, strobe, &recording);
+        rec.finish(te, 0.0);
+    } else {
+        GridObserver grid(acc, pt, n, omega, tr, h, per_period, o.diagram);
+        advance(tr, te, h, true, grid, nullptr);
+        grid.close();
+    }
+    pt.xmax = acc.xmax;
+    pt.xrms.resize(n);
+    pt.a1.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        pt.xrms[i] = std::sqrt(acc.sxx[i] / acc.length);
+        pt.a1[i] = std::hypot(2 * acc.sxc[i] / acc.length, 2 * acc.sxs[i] / acc.length);
+    }
+    return pt;
+}
+
+}  // namespace hsnc::sweep_detail

@@ -1,0 +1,32 @@
+// hsnc -- one point of a sweep (api/hsnc/sweep.h): the transient to a steady
+// state on the stroboscopic map, then the recorded periods and what they
+// give (xmax, xrms, a1, the stroboscopic samples). Private to the library.
+#pragma once
+
+#include <vector>
+
+#include "hsnc/sweep.h"
+#include "model.h"
+
+namespace hsnc::sweep_detail {
+
+/// The state a sweep carries from point to point.
+struct State {
+    std::vector<double> x, v;
+};
+
+/// Runs one point of `model` (its parameters at the point's values; its
+/// initial state is ignored) from `state` at the model's t0; leaves in
+/// `state` the state at the end of the recorded periods. `what` names the
+/// point in messages. RunError when a run stops (chattering, Zeno, failure).
+SweepPoint run_point(const Model& model, State& state, const SweepOptions& options, const std::string& what);
+
+/// The forcing frequency of `model`; InputError (naming `what`) unless it has
+/// forcing with one frequency.
+double forcing_frequency(const Model& model, const std::string& what);
+
+/// The highest natural frequency (rad/s) with every contact closed and no
+/// mass stuck: no configuration oscillates faster.
+double highest_natural_frequency(const Model& model);
+
+}  // namespace hsnc::sweep_detail

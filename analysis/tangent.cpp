@@ -1,0 +1,303 @@
+#include "tangent.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "assembly.h"
+#include "modal.h"
+#include "transitions.h"
+
+namespace hsnc::analysis {
+namespace {
+
+// phi_1(x) = (e^x - 1)/x and phi_2(x) = (e^x - 1 - x)/x^2 without cancellation.
+double phi1(double x) { return x == 0.0 ? 1.0 : std::expm1(x) / x; }
+double phi2(double x) {
+    if (std::abs(x) < 0.5) {
+        double term = 0.5, sum = 0.5;  // x^k/(k+2)!
+        for (int k = 1; k < 20; ++k) {
+            term *= x / (k + 2);
+            sum += term;
+        }
+        return sum;
+    }
+    return (std::expm1(x) - x) / (x * x);
+}
+// sinh(x)/x.
+double sinhc(double x) { return x == 0.0 ? 1.0 : std::sinh(x) / x; }
+
+}  // namespace
+
+struct Tangent::ConfigData {
+    ModalDecomposition modal;
+    Eigen::MatrixXd E;  // Phi^T M_F: modal coordinates of (x_F, v_F)
+    Eigen::MatrixXd G;  // Phi^T (-K_FS): modal force of a unit displacement of each stuck mass
+    Eigen::VectorXd lambda, c;
+    Eigen::MatrixXd K, C;  // full K(cfg), C(cfg) (the gradient of a release function)
+};
+
+Tangent::Tangent(const Model& model) : model_(model) {}
+Tangent::~Tangent() = default;
+Tangent::Tangent(Tangent&&) noexcept = default;
+
+const Tangent::ConfigData& Tangent::data(const Configuration& cfg) {
+    auto it = cache_.find(cfg);
+    if (it != cache_.end()) return *it->second;
+    auto d = std::make_unique<ConfigData>();
+    d->modal = modal_analysis(model_, cfg);
+    const ModalDecomposition& md = d->modal;
+    const int nf = static_cast<int>(md.free.size()), ns = static_cast<int>(md.stuck.size());
+    d->K = stiffness_matrix(model_, cfg);
+    d->C = damping_matrix(model_, cfg);
+    const Eigen::VectorXd m = mass_vector(model_);
+    d->E.resize(nf, nf);
+    for (int j = 0; j < nf; ++j)
+        for (int r = 0; r < nf; ++r) d->E(j, r) = md.phi(r, j) * m(md.free[r]);
+    d->G = Eigen::MatrixXd::Zero(nf, ns);
+    for (int j = 0; j < nf; ++j)
+        for (int s = 0; s < ns; ++s) {
+            double g = 0.0;
+            for (int r = 0; r < nf; ++r) g -= md.phi(r, j) * d->K(md.free[r], md.stuck[s]);
+            d->G(j, s) = g;
+        }
+    d->lambda = md.lambda;
+    d->c.resize(nf);
+    for (int j = 0; j < nf; ++j) d->c(j) = model_.alpha + model_.beta * md.lambda(j);
+    return *cache_.emplace(cfg, std::move(d)).first->second;
+}
+
+Eigen::MatrixXd Tangent::transition(const Configuration& cfg, double tau) {
+    const ConfigData& d = data(cfg);
+    const ModalDecomposition& md = d.modal;
+    const int n = static_cast<int>(model_.dof());
+    const int nf = static_cast<int>(md.free.size()), ns = static_cast<int>(md.stuck.size());
+    // Per mode, the homogeneous motion q(tau) = a q0 + b q0', q'(tau) = c q0 + e q0'
+    // (c = -lambda b), and the response to a unit constant modal force from rest:
+    // q = st, q' = b.
+    Eigen::VectorXd a(nf), b(nf), cc(nf), e(nf), st(nf);
+    for (int j = 0; j < nf; ++j) {
+        const double lam = d.lambda(j), c = d.c(j);
+        if (lam == 0.0) {  // rigid: q'' + c q' = 0
+            a(j) = 1.0;
+            b(j) = tau * phi1(-c * tau);
+            cc(j) = 0.0;
+            e(j) = std::exp(-c * tau);
+            st(j) = tau * tau * phi2(-c * tau);
+            continue;
+        }
+        const double w = std::sqrt(lam), s = 0.5 * c;
+        if (s < w && (w - s) * (w + s) > 0.0) {  // underdamped
+            const double wd = std::sqrt((w - s) * (w + s));
+            const double E = std::exp(-s * tau), cs = std::cos(wd * tau), sn = std::sin(wd * tau) / wd;
+            a(j) = E * (cs + s * sn);
+            b(j) = E * sn;
+            e(j) = E * (cs - s * sn);
+        } else if (s > w && (s - w) * (s + w) > 0.0) {  // overdamped
+            const double gam = std::sqrt((s - w) * (s + w));
+            if (2 * gam * tau > 0.5) {
+                const double r1 = -lam / (s + gam), r2 = -(s + gam);  // slow root without cancellation
+                const double e1 = std::exp(r1 * tau), e2 = std::exp(r2 * tau), den = 2 * gam;
+                a(j) = (-r2 * e1 + r1 * e2) / den;
+                b(j) = (e1 - e2) / den;
+                e(j) = (r1 * e1 - r2 * e2) / den;
+            } else {
+                const double E = std::exp(-s * tau), ch = std::cosh(gam * tau), sh = tau * sinhc(gam * tau);
+                a(j) = E * (ch + s * sh);
+                b(j) = E * sh;
+                e(j) = E * (ch - s * sh);
+            }
+        } else {  // critical
+            const double E = std::exp(-s * tau);
+            a(j) = E * (1 + s * tau);
+            b(j) = E * tau;
+            e(j) = E * (1 - s * tau);
+        }
+        cc(j) = -lam * b(j);
+        st(j) = (1.0 - a(j)) / lam;
+    }
+    const Eigen::MatrixXd& P = md.phi;
+    const Eigen::MatrixXd XX = P * a.asDiagonal() * d.E, XV = P * b.asDiagonal() * d.E;
+    const Eigen::MatrixXd VX = P * cc.asDiagonal() * d.E, VV = P * e.asDiagonal() * d.E;
+    const Eigen::MatrixXd XS = P * st.asDiagonal() * d.G, VS = P * b.asDiagonal() * d.G;
+    Eigen::MatrixXd Phi = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+    for (int r = 0; r < nf; ++r) {
+        const int i = md.free[r];
+        for (int q = 0; q < nf; ++q) {
+            const int k = md.free[q];
+            Phi(i, k) = XX(r, q);
+            Phi(i, n + k) = XV(r, q);
+            Phi(n + i, k) = VX(r, q);
+            Phi(n + i, n + k) = VV(r, q);
+        }
+        for (int s = 0; s < ns; ++s) {
+            Phi(i, md.stuck[s]) = XS(r, s);
+            Phi(n + i, md.stuck[s]) = VS(r, s);
+        }
+    }
+    for (int s = 0; s < ns; ++s) Phi(md.stuck[s], md.stuck[s]) = 1.0;  // fixed support; its dv is gone
+    return Phi;
+}
+
+double Tangent::max_rate(const Configuration& cfg) {
+    const ConfigData& d = data(cfg);
+    return d.c.size() ? std::max(0.0, d.c.maxCoeff()) : 0.0;
+}
+
+void Tangent::apply_transition(const Configuration& cfg, double tau, Eigen::MatrixXd& Y) {
+    Y = transition(cfg, tau) * Y;
+}
+
+namespace {
+
+// Acceleration of mass i in cfg (friction directions sgn) at (t, x, v): 0 when stuck.
+double acceleration(const Model& model, const Configuration& cfg, const signed char* sgn, int i, double t,
+                    const double* x, const double* v) {
+    if (cfg.stuck[i]) return 0.0;
+    const double fr = model.masses[i].has_friction ? model.masses[i].mu_k * model.normal_force(i) : 0.0;
+    return (force_on_mass(model, cfg, i, t, x, v) - fr * sgn[i]) / model.masses[i].m;
+}
+
+}  // namespace
+
+namespace {
+
+// One switch from (A, sgnA) to (B, sgnB) triggered by f at (t, x, v):
+// Y <- (I + u h_y^T / hdot) Y with u = f+ - f- (velocity rows only).
+// Returns false for a grazing switch (hdot = 0 with u != 0).
+bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::MatrixXd& CA, const Configuration& A,
+               const signed char* sgnA, const Configuration& B, const signed char* sgnB, const SwitchFunction* f,
+               double t, const double* x, const double* v, Eigen::MatrixXd& Y) {
+    const int n = static_cast<int>(model.dof());
+    std::vector<double> aA(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) aA[i] = acceleration(model, A, sgnA, i, t, x, v);
+    // u: the jump of the accelerations. For a mass sliding on both sides it
+    // is the jump of the dampers of the contacts that change (their springs
+    // carry no force on G = 0) and of the friction direction, taken from
+    // those terms alone, without the cancellation of two full accelerations.
+    Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
+    std::vector<double> dA(static_cast<std::size_t>(n), 0.0);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c) {
+        if (A.closed[c] == B.closed[c]) continue;
+        const Contact& k = model.contacts[c];
+        const double damper = -model.beta * k.k * gap_rate(model, static_cast<int>(c), v);  // on a, while closed
+        const double sign = B.closed[c] ? 1.0 : -1.0;
+        if (k.a != kGround) dA[k.a] += sign * damper;
+        if (k.b != kGround) dA[k.b] -= sign * damper;
+    }
+    std::vector<char> stick(static_cast<std::size_t>(n), 0);
+    for (int i = 0; i < n; ++i) {
+        const double fr = model.masses[i].has_friction ? model.masses[i].mu_k * model.normal_force(i) : 0.0;
+        if (A.stuck[i] && B.stuck[i]) continue;
+        if (A.stuck[i]) {
+            u(i) = acceleration(model, B, sgnB, i, t, x, v);
+        } else if (B.stuck[i]) {
+            u(i) = -aA[i];
+            stick[i] = 1;
+        } else {
+            u(i) = (dA[i] - fr * (sgnB[i] - sgnA[i])) / model.masses[i].m;
+        }
+    }
+    if (u.isZero(0.0) || !f) return true;
+    // The switch function's gradient and rate before the switch.
+    Eigen::RowVectorXd hy = Eigen::RowVectorXd::Zero(2 * n);
+    double hdot = 0.0;
+    const int e = f->element;
+    switch (f->kind) {
+        case SwitchKind::gap: {
+            const Contact& k = model.contacts[e];
+            if (k.a != kGround) hy(k.a) += 1.0;
+            if (k.b != kGround) hy(k.b) -= 1.0;
+            hdot = gap_rate(model, e, v);
+            break;
+        }
+        case SwitchKind::velocity:
+            hy(n + e) = 1.0;
+            hdot = aA[e];
+            break;
+        case SwitchKind::release_pos:
+        case SwitchKind::release_neg: {
+            const double sg = f->kind == SwitchKind::release_pos ? 1.0 : -1.0;
+            for (int j = 0; j < n; ++j) {
+                hy(j) = -sg * KA(e, j);
+                hy(n + j) = -sg * CA(e, j);
+            }
+            hdot = sg * force_rate_on_mass(model, A, e, t, v, aA.data());
+            break;
+        }
+    }
+    if (!(std::fabs(hdot) > 0.0) || !std::isfinite(hdot)) return false;
+    const Eigen::RowVectorXd w = hy * Y;
+    Y.bottomRows(n).noalias() += (u / hdot) * w;
+    for (int i = 0; i < n; ++i)
+        if (stick[i]) Y.row(n + i).setZero();  // exactly: u_i / hdot = -1 for the stopping mass
+    return true;
+}
+
+}  // namespace
+
+bool Tangent::apply_saltation(const SwitchRecord& r, Eigen::MatrixXd& Y) {
+    const std::vector<SwitchFunction>& sw = *r.switched;
+    const int n = static_cast<int>(model_.dof());
+    if (sw.size() <= 1) {
+        const ConfigData& d = data(*r.before);
+        Eigen::MatrixXd Z = Y;
+        if (!salt_step(model_, d.K, d.C, *r.before, r.sgn_before, *r.after, r.sgn_after, sw.empty() ? nullptr : &sw[0],
+                       r.t, r.x, r.v, Z))
+            return false;
+        Y = std::move(Z);
+        return true;
+    }
+    // Several functions at once: one after the other, each with the
+    // configuration the transitions so far give (the last: the engine's).
+    Configuration cur = *r.before;
+    std::vector<signed char> sgn(r.sgn_before, r.sgn_before + n);
+    std::vector<double> v(r.v, r.v + n);
+    Eigen::MatrixXd Z = Y;
+    for (std::size_t k = 0; k < sw.size(); ++k) {
+        Configuration next = *r.after;
+        std::vector<signed char> sgn_next(r.sgn_after, r.sgn_after + n);
+        if (k + 1 < sw.size()) {
+            next = cur;
+            sgn_next = sgn;
+            std::vector<Transition> out;
+            std::string why;
+            if (!apply_switches(model_, r.t, r.x, v.data(), nullptr, next, sgn_next, {sw[k]}, out, why)) return false;
+        }
+        const ConfigData& d = data(cur);
+        if (!salt_step(model_, d.K, d.C, cur, sgn.data(), next, sgn_next.data(), &sw[k], r.t, r.x, r.v, Z))
+            return false;
+        cur = next;
+        sgn = sgn_next;
+    }
+    Y = std::move(Z);
+    return true;
+}
+
+Eigen::MatrixXd Tangent::saltation(const SwitchRecord& instant) {
+    Eigen::MatrixXd S = Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(dim()), static_cast<Eigen::Index>(dim()));
+    if (!apply_saltation(instant, S)) S.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return S;
+}
+
+JacobianObserver::JacobianObserver(const Model& model, Observer* inner)
+    : tangent_(model), inner_(inner),
+      J_(Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(2 * model.dof()),
+                                   static_cast<Eigen::Index>(2 * model.dof()))) {}
+
+void JacobianObserver::on_sample(double t, const double* x, const double* v) {
+    if (inner_) inner_->on_sample(t, x, v);
+}
+void JacobianObserver::on_event(double t, EventKind kind, int element, const double* x, const double* v) {
+    if (inner_) inner_->on_event(t, kind, element, x, v);
+}
+bool JacobianObserver::on_progress(double t) { return inner_ ? inner_->on_progress(t) : true; }
+
+void JacobianObserver::on_segment(const SegmentRecord& s) { tangent_.apply_transition(*s.cfg, s.tau, J_); }
+
+void JacobianObserver::on_switch(const SwitchRecord& r) {
+    (r.switched->size() > 1 ? multiple_ : single_) += 1;
+    if (!tangent_.apply_saltation(r, J_)) ++grazing_;
+}
+
+}  // namespace hsnc::analysis

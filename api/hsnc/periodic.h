@@ -1,0 +1,85 @@
+// hsnc -- periodic orbits of the forced response and their stability
+// (interface.md section 6, `hsnc periodic`), without the command line.
+//
+//     const hsnc::Model model = hsnc::read_model("models/coulomb-1dof.toml");
+//     hsnc::PeriodicOptions options;
+//     options.transient = 20.0;
+//     const hsnc::PeriodicResult orbit = hsnc::periodic(model, options);
+//     if (orbit.status == hsnc::PeriodicStatus::ok) ... orbit.x, orbit.multipliers
+//
+// Newton shooting on the period map P (the exact motion over one period from
+// a state at t_s = t0 + k*period): r(y) = P(y) - y is driven to zero with
+// steps solving (M - I) dy = -r, M = dP/dy the exact monodromy matrix (segment
+// transition matrices and the saltation matrix of every switch,
+// analysis/tangent.h), each step halved up to 10 times until the residual
+// falls. Converged when the residual -- |r| relative to the state's size,
+// positions and velocities each against their own largest entry -- is at most
+// `tolerance`. A search that does not get there is PeriodicStatus::not_converged
+// with the last state and residual, never a wrong orbit.
+#pragma once
+
+#include <complex>
+#include <cstddef>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "engine.h"
+#include "model.h"
+#include "simulate.h"
+
+namespace hsnc {
+
+struct PeriodicOptions {
+    /// Period of the forcing T; NaN: 2*pi/omega of the model's forcing (an
+    /// OptionError when the model has no forcing, or harmonics of different
+    /// frequencies).
+    double period = std::numeric_limits<double>::quiet_NaN();
+    /// K: look for an orbit of period K*T (subharmonic).
+    int harmonic = 1;
+    /// Run this long from the initial state first; the search starts at the
+    /// first t0 + k*K*T at or after t0 + transient.
+    double transient = 0.0;
+    /// Residual at which the search has converged.
+    double tolerance = 1e-10;
+    /// Newton iterations at most.
+    int max_iterations = 50;
+    /// Samples of the orbit's period passed to the observer every dt (and at
+    /// its end); NaN: period/1000.
+    double dt = std::numeric_limits<double>::quiet_NaN();
+    /// Where the segment solvers come from (automatic, aot or generic; not jit).
+    KernelChoice kernels = KernelChoice::automatic;
+};
+
+enum class PeriodicStatus { ok, not_converged };
+const char* periodic_status_name(PeriodicStatus status);
+
+struct PeriodicResult {
+    PeriodicStatus status = PeriodicStatus::not_converged;
+    std::string message;     ///< why the search did not converge ("" when ok)
+    double period = 0.0;     ///< K*T
+    double t = 0.0;          ///< time of the state below: t0 + k*period
+    int iterations = 0;      ///< Newton steps taken
+    double residual = 0.0;   ///< of the state below
+    std::vector<double> x, v;  ///< the orbit's state at t (the last one tried when not converged)
+    /// Floquet multipliers (eigenvalues of the monodromy matrix), 2 per
+    /// mass, largest |mu| first.
+    std::vector<std::complex<double>> multipliers;
+    double max_multiplier = 0.0;  ///< largest |mu|
+    bool stable = false;          ///< every |mu| < 1
+    /// The monodromy matrix dP/dy, 2n x 2n row-major, y = (x, v).
+    std::vector<double> monodromy;
+    std::size_t events = 0;  ///< switch events over one period of the orbit
+};
+
+/// Finds a periodic orbit (see the file comment). When converged, one period
+/// of the orbit is run once more and reported to `orbit` (samples every
+/// options.dt from t, switch events), if given. Throws OptionError for
+/// options that do not fit the model, RunError when a run fails outright.
+PeriodicResult periodic(const Model& model, const PeriodicOptions& options, Observer* orbit = nullptr);
+
+/// 2*pi/omega when every harmonic of the model with omega != 0 has the same
+/// |omega|; NaN when there is no such harmonic or several frequencies.
+double forcing_period(const Model& model);
+
+}  // namespace hsnc

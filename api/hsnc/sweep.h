@@ -1,0 +1,198 @@
+// hsnc -- response curves and bifurcation diagrams over one parameter
+// (interface.md section 6, `hsnc sweep`), without the command line.
+//
+//     hsnc::SweepOptions o;
+//     o.param = "omega"; o.from = 1.0; o.to = 3.0; o.points = 50;
+//     o.direction = hsnc::SweepDirection::both;
+//     const hsnc::SweepPlan plan = hsnc::SweepPlan::from_file("model.toml", {}, o);
+//     const hsnc::SweepResult r = plan.run();       // r.points: one per point, in output order
+//
+// A sweep is a list of *tasks*, each a sequence of points run in order with
+// state continuation: one per direction (up, down; `both` is two tasks, each
+// starting from the model's initial state), times one per value of an
+// optional second parameter (`param2`, `values2`); with `restart_each` every
+// point starts from the model's initial state and is a task of its own.
+// Tasks are independent: they run on `threads` threads, over MPI ranks
+// (the command line), or in separate processes (`part`, merged by
+// merge_sweep_parts), and the result is the same, bit for bit, however they
+// are spread: each task is computed by the same code from the same inputs,
+// and results are put in task order.
+//
+// One point: the model is read again with the parameter at its value (the
+// file's expressions follow it: k2 = "2*k1"; nothing is compiled: the
+// segments come from the generic solver), the motion runs whole forcing
+// periods T = 2*pi/omega from the task's current state, starting at the
+// model's t0, until the stroboscopic state s_k (at t0 + k*T) repeats,
+// |s_k - s_(k-p)| <= 1e-9 |s_k| for some p <= 8 (settled, multiple p; the
+// smallest such p at the first such k), with |s| = max(|x_i|, |v_i|/omega),
+// or for max_periods periods; then it records record_periods further
+// periods in one run, starting at the state reached. Over the recorded
+// window [t_r, t_r + R*T], from the exact closed-form segments:
+//   xmax_i = max |x_i(t)|: segment ends and every zero of v_i inside a
+//            segment, bracketed on a grid of 1/16 of the shortest period
+//            present (the forcing's, or the highest natural frequency with
+//            every contact closed) and refined to rounding (Newton on v_i
+//            with a_i, in a bisection bracket);
+//   xrms_i = sqrt(1/(R*T) * integral x_i^2 dt);
+//   a1_i   = sqrt(A^2 + B^2), A, B = 2/(R*T) * integral x_i cos, sin(omega (t - t_r)) dt,
+// the integrals by 6-point Gauss-Legendre on the same grid inside each
+// segment (the segments are smooth: the quadrature error is below 1e-20
+// relative). A numerical baseline (method != hsnc, for comparisons) gives
+// the same quantities from its samples on that grid (max of the samples,
+// trapezoidal integrals), so only to the grid's accuracy.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "error.h"
+#include "integrators.h"
+#include "model.h"
+#include "model_reader.h"
+
+namespace hsnc {
+
+enum class SweepDirection { up, down, both };
+
+/// "up", "down", "both"; InputError otherwise.
+SweepDirection sweep_direction_from_name(const std::string& name);
+const char* sweep_direction_name(SweepDirection direction);
+
+/// Steady-state detection (interface.md section 6).
+inline constexpr double kSweepSettleTolerance = 1e-9;
+inline constexpr int kSweepMaxMultiple = 8;
+
+/// One point done (SweepOptions::progress).
+struct SweepProgress {
+    std::size_t done = 0;         ///< points done so far by this process
+    std::size_t total = 0;        ///< points this process runs
+    double seconds = 0;           ///< wall time of this point
+    double elapsed = 0;           ///< wall time since the run started
+    double value = 0;             ///< the parameter
+    double value2 = 0;            ///< the second parameter (NaN without one)
+    SweepDirection direction = SweepDirection::up;
+    bool settled = false;
+    std::size_t periods = 0;
+    int multiple = 0;
+};
+
+struct SweepOptions {
+    std::string param;  ///< a parameter of [parameters] (required)
+    double from = std::numeric_limits<double>::quiet_NaN();
+    double to = std::numeric_limits<double>::quiet_NaN();
+    std::size_t points = 0;  ///< >= 1: from .. to inclusive, equally spaced (just `from` when 1)
+    SweepDirection direction = SweepDirection::up;
+    std::size_t max_periods = 500;   ///< >= 1
+    std::size_t record_periods = 16; ///< >= 1
+    /// Every point from the model's initial state (points independent).
+    bool restart_each = false;
+    /// Optional second parameter: the sweep runs once per value, in this order.
+    std::string param2;
+    std::vector<double> values2;
+    /// Threads of SweepPlan::run; 0: std::thread::hardware_concurrency().
+    unsigned threads = 1;
+    /// Keep the stroboscopic samples of the recorded periods (the diagram).
+    bool diagram = true;
+    /// hsnc (exact); a numerical baseline for comparisons (see the file comment).
+    Method method = Method::hsnc;
+    IntegratorOptions integrator;
+    /// Called after every point, from the thread that ran it, one call at a time.
+    std::function<void(const SweepProgress&)> progress;
+};
+
+/// One point of a sweep.
+struct SweepPoint {
+    double value = 0;   ///< the parameter
+    double value2 = std::numeric_limits<double>::quiet_NaN();  ///< the second parameter (NaN without)
+    SweepDirection direction = SweepDirection::up;             ///< up or down
+    bool settled = false;
+    std::size_t periods = 0;  ///< periods run before recording
+    int multiple = 0;         ///< p; 0 when not settled
+    std::vector<double> xmax, xrms, a1;  ///< one per mass
+    /// The diagram: the state at the end of every recorded period (record_periods rows).
+    std::vector<double> strobe_t;
+    std::vector<double> strobe_x, strobe_v;  ///< row-major, record_periods x n_mass
+};
+
+struct SweepResult {
+    std::string model;                ///< the model's name
+    std::string param, param2;        ///< param2 empty without one
+    std::vector<std::string> masses;  ///< names, model order
+    std::vector<SweepPoint> points;   ///< in output order (task order, points in run order)
+};
+
+/// A sweep whose every point's model has been read and checked: constructing
+/// one throws InputError for anything that does not fit (an option, an
+/// unknown parameter, a value at which the model is invalid, a model without
+/// exactly one forcing frequency), naming the option or the point; running
+/// throws only RunError.
+class SweepPlan {
+public:
+    /// Reads the model from `toml_text` (`source` names it in messages) with
+    /// `overrides` (as `hsnc simulate --set --x0 --v0`) for every point.
+    SweepPlan(const std::string& toml_text, const std::string& source, const ModelOverrides& overrides,
+              SweepOptions options);
+    /// The same from a file (InputError when it cannot be read).
+    static SweepPlan from_file(const std::string& path, const ModelOverrides& overrides, SweepOptions options);
+
+    const SweepOptions& options() const { return options_; }
+    /// The model with the overrides, the parameters as the file has them.
+    const Model& model() const { return model_; }
+    /// The parameter values, from .. to.
+    const std::vector<double>& values() const { return values_; }
+
+    std::size_t tasks() const { return tasks_.size(); }
+    /// Points of task `i`.
+    std::size_t task_points(std::size_t i) const;
+    /// Run task `i` (RunError when a point's run fails: chattering, Zeno, a solver failure).
+    std::vector<SweepPoint> run_task(std::size_t i) const;
+    /// Run the tasks `which` on options().threads threads; results in the order of `which`.
+    std::vector<std::vector<SweepPoint>> run_tasks(const std::vector<std::size_t>& which) const;
+    /// Every task, assembled.
+    SweepResult run() const;
+    /// An empty result with the names (to fill with tasks' points in order).
+    SweepResult result_header() const;
+
+    /// The tasks of part `index` of `count` (index from 0): every task i with i % count == index.
+    std::vector<std::size_t> part_tasks(std::size_t index, std::size_t count) const;
+
+    /// One line identifying the sweep (model, overrides, options), equal for every
+    /// part of one sweep: the part files carry it and merging checks it.
+    const std::string& fingerprint() const { return fingerprint_; }
+
+private:
+    struct Task {
+        std::size_t line;       ///< index into values2 (0 without)
+        SweepDirection direction;
+        std::size_t first, count;  ///< points [first, first + count) of the direction's order
+    };
+    const Model& point_model(std::size_t line, std::size_t value_index) const;
+    std::vector<SweepPoint> run_task(std::size_t i, void* context) const;
+
+    SweepOptions options_;
+    Model model_;
+    std::vector<double> values_;
+    std::vector<Task> tasks_;
+    std::vector<Model> models_;  // [line * points + value index], expression maps dropped
+    std::string fingerprint_;
+};
+
+/// A part file of `hsnc sweep --part i/n`: the fingerprint, the part, and
+/// the points of each of its tasks.
+std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_t count,
+                            const std::vector<std::vector<SweepPoint>>& task_points);
+
+/// Merge the part files `texts` (named by `names` in messages) of one sweep
+/// into the result a whole run gives. InputError when they are not the parts
+/// of one sweep, a part is missing or given twice, or a file is damaged.
+SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::vector<std::string>& names);
+
+/// The response-curve and diagram CSV headers of interface.md section 6
+/// (with param2: its name as one more column at the end).
+std::string sweep_curve_header(const SweepResult& r);
+std::string sweep_diagram_header(const SweepResult& r);
+
+}  // namespace hsnc

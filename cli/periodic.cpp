@@ -1,0 +1,184 @@
+// `hsnc periodic MODEL [options]` (interface.md section 6): a periodic orbit
+// of the forced response by Newton shooting with the exact monodromy matrix
+// (hsnc::periodic, api/hsnc/periodic.h), its Floquet multipliers and one
+// period of it.
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "commands.h"
+#include "csv_writer.h"
+#include "error.h"
+#include "hsnc/periodic.h"
+#include "model_reader.h"
+#include "output_file.h"
+#include "plot.h"
+
+namespace hsnc::cli {
+namespace {
+
+struct PeriodicFlags {
+    std::string model;
+    ModelOverrides overrides;
+    double period = NAN, transient = 0.0, dt = NAN, tolerance = 1e-10;
+    int harmonic = 1, max_iterations = 50;
+    std::string multipliers, out, plot, kernels = "auto";
+    bool quiet = false;
+};
+
+// The model's name as plain text inside a gnuplot string (quotes, backslashes
+// and backquotes, which gnuplot would interpret, left out).
+std::string plain_name(const std::string& name) {
+    std::string s;
+    for (char c : name)
+        if (c != '"' && c != '\\' && c != '`' && c != '\'' && static_cast<unsigned char>(c) >= 32) s += c;
+    return s;
+}
+
+std::string number_text(double v) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v;
+    return s.str();
+}
+
+// The library names its option; the command line names the flag.
+InputError flagged(const OptionError& e) {
+    static const std::pair<const char*, const char*> flags[] = {
+        {"period", "--period"},       {"harmonic", "--harmonic"}, {"transient", "--transient"},
+        {"tolerance", "--tol"},       {"dt", "--dt"},             {"max_iterations", "--max-iterations"},
+        {"kernels", "--kernels"}};
+    for (const auto& f : flags)
+        if (e.option() == f.first) return InputError(std::string(f.second) + ": " + e.reason());
+    return InputError(e.what());
+}
+
+// The multipliers in the complex plane with the unit circle (gnuplot).
+void draw_multipliers(const OutputTarget& target, const PeriodicResult& r, const Model& model) {
+    std::ostringstream title;
+    title.precision(6);
+    title << plain_name(model.name) << ": Floquet multipliers\\nperiod " << r.period << " s, max |mu| " << r.max_multiplier
+          << (r.stable ? " (stable)" : " (unstable)");
+    std::ostringstream script;
+    script.precision(17);
+    script << "set terminal pngcairo size 640,640 font ',11'\n"
+           << "set title \"" << title.str() << "\" noenhanced\n"
+           << "set size ratio -1\nset grid\nset xlabel 'Re mu'\nset ylabel 'Im mu'\nset key top right\n"
+           << "set parametric\nset trange [0:2*pi]\n"
+           << "R = " << std::max(1.05, 1.1 * r.max_multiplier) << "\n"
+           << "set xrange [-R:R]\nset yrange [-R:R]\n"
+           << "$mu << EOD\n";
+    for (const auto& mu : r.multipliers) script << mu.real() << " " << mu.imag() << "\n";
+    script << "EOD\n"
+           << "plot cos(t), sin(t) with lines lc rgb '#888888' title 'unit circle', "
+           << "$mu using 1:2 with points pt 7 ps 1.6 lc rgb '#c00000' title 'multipliers'\n";
+    render_png(script.str(), target);
+}
+
+int periodic_command(const PeriodicFlags& f) {
+    const Model model = read_model(f.model, f.overrides);
+    PeriodicOptions o;
+    o.period = f.period;
+    o.harmonic = f.harmonic;
+    o.transient = f.transient;
+    o.tolerance = f.tolerance;
+    o.max_iterations = f.max_iterations;
+    o.dt = f.dt;
+    try {
+        o.kernels = kernel_choice_from_name(f.kernels);
+    } catch (const OptionError& e) {
+        throw InputError("--kernels '" + f.kernels + "': " + e.reason());
+    }
+    // Every output path checked before anything runs (exit code 2, nothing written).
+    std::unique_ptr<OutputTarget> out, mult, plot;
+    std::vector<const OutputTarget*> all;
+    if (!f.out.empty()) all.push_back((out = std::make_unique<OutputTarget>(check_output("--out", f.out))).get());
+    if (!f.multipliers.empty())
+        all.push_back((mult = std::make_unique<OutputTarget>(check_output("--multipliers", f.multipliers))).get());
+    if (!f.plot.empty()) all.push_back((plot = std::make_unique<OutputTarget>(check_output("--plot", f.plot))).get());
+    check_distinct(all);
+    if (plot) require_gnuplot();
+
+    std::unique_ptr<CsvFile> traj;
+    std::unique_ptr<CsvObserver> csv;
+    if (out) {
+        traj = std::make_unique<CsvFile>(*out);
+        csv = std::make_unique<CsvObserver>(model, traj.get(), nullptr);
+    }
+    PeriodicResult r;
+    try {
+        r = hsnc::periodic(model, o, csv.get());
+    } catch (const OptionError& e) {
+        throw flagged(e);
+    }
+    const bool ok = r.status == PeriodicStatus::ok;
+    if (ok) {
+        if (traj) traj->commit();
+        if (mult) {
+            CsvFile file(*mult);
+            file.text("index,re,im,abs");
+            file.end_row();
+            for (std::size_t i = 0; i < r.multipliers.size(); ++i) {
+                file.number(static_cast<double>(i + 1));
+                file.number(r.multipliers[i].real());
+                file.number(r.multipliers[i].imag());
+                file.number(std::abs(r.multipliers[i]));
+                file.end_row();
+            }
+            file.commit();
+        }
+        if (plot) draw_multipliers(*plot, r, model);
+    }
+    std::ostringstream line;
+    line << "status=" << periodic_status_name(r.status) << " period=" << number_text(r.period)
+         << " iterations=" << r.iterations << " residual=" << number_text(r.residual);
+    for (std::size_t i = 0; i < model.dof(); ++i) line << " x_" << model.masses[i].name << "=" << number_text(r.x[i]);
+    for (std::size_t i = 0; i < model.dof(); ++i) line << " v_" << model.masses[i].name << "=" << number_text(r.v[i]);
+    line << " stable=" << (ok && r.stable ? "true" : "false")
+         << " max_multiplier=" << (ok ? number_text(r.max_multiplier) : "nan");
+    std::cout << line.str() << std::endl;
+    if (!f.quiet) {
+        if (ok)
+            std::fprintf(stderr, "hsnc: orbit at t = %s, %zu switch events a period\n", number_text(r.t).c_str(),
+                         r.events);
+        else
+            std::fprintf(stderr, "hsnc: periodic: not converged: %s\n", r.message.c_str());
+    }
+    if (!ok && f.quiet) std::fprintf(stderr, "hsnc: periodic: not converged: %s\n", r.message.c_str());
+    return ok ? 0 : 1;
+}
+
+}  // namespace
+
+void add_periodic(CLI::App& app, int& exit_code) {
+    auto f = std::make_shared<PeriodicFlags>();
+    auto* sub = app.add_subcommand("periodic", "a periodic orbit of the forced response and its stability");
+    sub->add_option("MODEL", f->model, "model file (TOML)")->required();
+    sub->add_option("--set", f->overrides.set, "override a parameter, NAME=VALUE (repeatable)");
+    sub->add_option("--x0", f->overrides.x0, "override an initial position, NAME=VALUE (repeatable)");
+    sub->add_option("--v0", f->overrides.v0, "override an initial velocity, NAME=VALUE (repeatable)");
+    sub->add_option("--period", f->period, "forcing period T (default 2*pi/omega of the model's forcing)")
+        ->check(finite_number());
+    sub->add_option("--harmonic", f->harmonic, "look for an orbit of period K*T (subharmonic; default 1)");
+    sub->add_option("--transient", f->transient,
+                    "simulate this long from the initial state first and start the search at the next t0 + k*K*T "
+                    "(default 0)")
+        ->check(finite_number());
+    sub->add_option("--multipliers", f->multipliers,
+                    "Floquet multipliers CSV: index,re,im,abs, largest |mu| first (written only when converged)");
+    sub->add_option("--out", f->out, "one period of the orbit, trajectory CSV (written only when converged)");
+    sub->add_option("--dt", f->dt, "sample spacing of --out (default period/1000)")->check(finite_number());
+    sub->add_option("--plot", f->plot, "draw the multipliers and the unit circle into this PNG (gnuplot)");
+    sub->add_option("--tol", f->tolerance,
+                    "converged when |P(y) - y| is at most this, relative to the largest position and velocity "
+                    "(default 1e-10)")
+        ->check(finite_number());
+    sub->add_option("--max-iterations", f->max_iterations, "Newton iterations at most (default 50)");
+    sub->add_option("--kernels", f->kernels, "auto (default), aot or generic");
+    sub->add_flag("--quiet", f->quiet, "no statistics on stderr");
+    sub->callback([f, &exit_code] { exit_code = periodic_command(*f); });
+}
+
+}  // namespace hsnc::cli

@@ -1,0 +1,365 @@
+// `hsnc sweep MODEL [options]` (interface.md section 6; docs/interface.md,
+// "hsnc sweep") and `hsnc sweep-merge PART... [outputs]`: flags, the library
+// (api/hsnc/sweep.h), the output files.
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "commands.h"
+#include "csv_writer.h"
+#include "error.h"
+#include "file_read.h"
+#include "hsnc/simulate.h"
+#include "hsnc/sweep.h"
+#include "model_reader.h"
+#include "output_file.h"
+#include "plot.h"
+#include "sweep_distributed.h"
+#include "sweep_plot.h"
+
+namespace hsnc::cli {
+namespace {
+
+struct SweepFlags {
+    std::string model;
+    ModelOverrides overrides;
+    std::string param;
+    double from = NAN, to = NAN;
+    std::size_t points = 0;
+    std::string direction = "up";
+    std::size_t max_periods = 500, record_periods = 16;
+    bool restart_each = false;
+    std::string param2, values2;
+    unsigned threads = 1;
+    std::string part, part_out;
+    std::string out, diagram, plot;
+    std::string method = "hsnc";
+    double h = NAN, rtol = 1e-10, atol = 1e-12;
+    bool quiet = false;
+};
+
+struct MergeFlags {
+    std::vector<std::string> parts;
+    std::string out, diagram, plot;
+};
+
+// The flag of each SweepOptions field, for the library's OptionError.
+InputError flagged(const OptionError& e) {
+    static const std::pair<const char*, const char*> flags[] = {
+        {"param", "--param"},           {"from", "--from"},       {"to", "--to"},
+        {"points", "--points"},         {"direction", "--direction"}, {"max_periods", "--max-periods"},
+        {"record_periods", "--record-periods"}, {"param2", "--param2"}, {"values2", "--values2"},
+        {"method", "--method"}};
+    for (const auto& f : flags)
+        if (e.option() == f.first) return InputError(std::string(f.second) + ": " + e.reason());
+    return InputError(e.what());
+}
+
+// "I/N" with 1 <= I <= N.
+std::pair<std::size_t, std::size_t> parse_part(const std::string& text) {
+    const std::size_t slash = text.find('/');
+    auto count = [&](const std::string& s) {
+        char* end = nullptr;
+        const unsigned long long v = std::strtoull(s.c_str(), &end, 10);
+        if (s.empty() || s[0] == '-' || s[0] == '+' || *end != '\0' || v > 1'000'000) return 0ull;
+        return v;
+    };
+    if (slash != std::string::npos) {
+        const unsigned long long i = count(text.substr(0, slash)), n = count(text.substr(slash + 1));
+        if (i >= 1 && n >= 1 && i <= n) return {static_cast<std::size_t>(i - 1), static_cast<std::size_t>(n)};
+    }
+    throw InputError("--part '" + text + "': expected I/N with 1 <= I <= N (N at most 1000000), e.g. --part 3/16");
+}
+
+std::vector<double> parse_values(const std::string& text) {
+    std::vector<double> out;
+    std::size_t a = 0;
+    while (true) {
+        const std::size_t b = text.find(',', a);
+        const std::string item = text.substr(a, b == std::string::npos ? std::string::npos : b - a);
+        char* end = nullptr;
+        const double v = std::strtod(item.c_str(), &end);
+        if (item.empty() || *end != '\0' || !std::isfinite(v))
+            throw InputError("--values2 '" + text + "': '" + item + "' is not a finite number (expected a,b,c)");
+        out.push_back(v);
+        if (b == std::string::npos) break;
+        a = b + 1;
+    }
+    return out;
+}
+
+// Writes the response curve and the diagram CSVs (interface.md section 6).
+void write_curve(const SweepResult& r, const OutputTarget& target) {
+    CsvFile f(target);
+    f.text(sweep_curve_header(r).c_str());
+    f.end_row();
+    const bool has2 = !r.param2.empty();
+    for (const SweepPoint& p : r.points) {
+        f.number(p.value);
+        f.text(sweep_direction_name(p.direction));
+        f.text(p.settled ? "true" : "false");
+        f.text(std::to_string(p.periods).c_str());
+        f.text(std::to_string(p.multiple).c_str());
+        for (std::size_t i = 0; i < r.masses.size(); ++i) {
+            f.number(p.xmax[i]);
+            f.number(p.xrms[i]);
+            f.number(p.a1[i]);
+        }
+        if (has2) f.number(p.value2);
+        f.end_row();
+    }
+    f.commit();
+}
+
+void write_diagram(const SweepResult& r, const OutputTarget& target) {
+    CsvFile f(target);
+    f.text(sweep_diagram_header(r).c_str());
+    f.end_row();
+    const std::size_t n = r.masses.size();
+    const bool has2 = !r.param2.empty();
+    for (const SweepPoint& p : r.points)
+        for (std::size_t row = 0; row < p.strobe_t.size(); ++row) {
+            f.number(p.value);
+            f.text(sweep_direction_name(p.direction));
+            f.number(p.strobe_t[row]);
+            for (std::size_t i = 0; i < n; ++i) f.number(p.strobe_x[row * n + i]);
+            for (std::size_t i = 0; i < n; ++i) f.number(p.strobe_v[row * n + i]);
+            if (has2) f.number(p.value2);
+            f.end_row();
+        }
+    f.commit();
+}
+
+// The outputs of a whole sweep (--out, --diagram, --plot), checked before anything runs.
+struct Outputs {
+    std::unique_ptr<OutputTarget> out, diagram, plot;
+    Outputs(const std::string& o, const std::string& d, const std::string& p) {
+        std::vector<const OutputTarget*> all;
+        if (!o.empty()) all.push_back((out = std::make_unique<OutputTarget>(check_output("--out", o))).get());
+        if (!d.empty()) all.push_back((diagram = std::make_unique<OutputTarget>(check_output("--diagram", d))).get());
+        if (!p.empty()) all.push_back((plot = std::make_unique<OutputTarget>(check_output("--plot", p))).get());
+        check_distinct(all);
+        if (plot) require_gnuplot();
+    }
+    void write(const SweepResult& r, const std::string& title) const {
+        if (out) write_curve(r, *out);
+        if (diagram) write_diagram(r, *diagram);
+        if (plot) draw_sweep_plot(r, title, *plot);
+    }
+};
+
+std::string summary_line(const SweepResult& r) {
+    std::size_t settled = 0, up = 0;
+    for (const SweepPoint& p : r.points) {
+        settled += p.settled;
+        up += p.direction == SweepDirection::up;
+    }
+    std::ostringstream s;
+    s << "status=ok points=" << r.points.size() << " up=" << up << " down=" << r.points.size() - up
+      << " settled=" << settled << " unsettled=" << r.points.size() - settled;
+    return s.str();
+}
+
+std::string short_num(double v) {
+    for (int digits = 1;; ++digits) {
+        char text[40];
+        std::snprintf(text, sizeof text, "%.*g", digits, v);
+        if (std::strtod(text, nullptr) == v || digits >= 17) return text;
+    }
+}
+
+int sweep(const SweepFlags& f) {
+    // Under an MPI launcher: the ranks (MPI loaded only now, from its module).
+    std::unique_ptr<Communicator> comm;
+    if (launched_by_mpi()) comm = mpi_communicator();
+    const int rank = comm ? comm->rank() : 0, ranks = comm ? comm->size() : 1;
+    try {
+        SweepOptions o;
+        o.param = f.param;
+        o.from = f.from;
+        o.to = f.to;
+        o.points = f.points;
+        o.max_periods = f.max_periods;
+        o.record_periods = f.record_periods;
+        o.restart_each = f.restart_each;
+        o.param2 = f.param2;
+        if (!f.values2.empty()) o.values2 = parse_values(f.values2);
+        o.threads = f.threads;
+        o.integrator.h = f.h;
+        o.integrator.rtol = f.rtol;
+        o.integrator.atol = f.atol;
+        try {
+            o.direction = sweep_direction_from_name(f.direction);
+            o.method = method_from_name(f.method);
+        } catch (const OptionError& e) {
+            throw flagged(e);
+        }
+        std::size_t part = 0, parts = 1;
+        if (!f.part.empty()) {
+            std::tie(part, parts) = parse_part(f.part);
+            if (f.part_out.empty()) throw InputError("--part " + f.part + ": needs --part-out FILE (the part file)");
+            if (!f.out.empty() || !f.diagram.empty() || !f.plot.empty())
+                throw InputError("--part " + f.part +
+                                 ": writes only the part file (--part-out); --out, --diagram and --plot come from "
+                                 "hsnc sweep-merge");
+        } else if (!f.part_out.empty()) {
+            throw InputError("--part-out: only with --part I/N");
+        }
+        if (!f.quiet) {
+            const std::string prefix = ranks > 1 ? "hsnc sweep [rank " + std::to_string(rank) + "/" +
+                                                       std::to_string(ranks) + "]: "
+                                                 : "hsnc sweep: ";
+            const std::string param = f.param, param2 = f.param2;
+            o.progress = [prefix, param, param2](const SweepProgress& p) {
+                const double per = p.elapsed / static_cast<double>(p.done);
+                std::string at = param + " = " + short_num(p.value);
+                if (!param2.empty()) at += ", " + param2 + " = " + short_num(p.value2);
+                std::fprintf(stderr, "%spoint %zu/%zu %s %s: %s after %zu periods, %.3f s; %.3f s/point, about %.0f s left\n",
+                             prefix.c_str(), p.done, p.total, at.c_str(), sweep_direction_name(p.direction),
+                             p.settled ? ("settled (multiple " + std::to_string(p.multiple) + ")").c_str()
+                                       : "not settled",
+                             p.periods, p.seconds, per, per * static_cast<double>(p.total - p.done));
+            };
+        }
+        SweepPlan plan = [&] {
+            try {
+                return SweepPlan::from_file(f.model, f.overrides, o);
+            } catch (const OptionError& e) {
+                throw flagged(e);
+            }
+        }();
+
+        // Every output checked before anything runs (rank 0 writes them all).
+        std::unique_ptr<Outputs> outputs;
+        std::unique_ptr<OutputTarget> part_target;
+        int go = 0;
+        std::string refusal;
+        if (rank == 0) {
+            try {
+                if (!f.part.empty())
+                    part_target = std::make_unique<OutputTarget>(check_output("--part-out", f.part_out));
+                else
+                    outputs = std::make_unique<Outputs>(f.out, f.diagram, f.plot);
+            } catch (const InputError& e) {
+                go = 2;
+                refusal = e.what();
+            } catch (const RunError& e) {
+                go = 1;
+                refusal = e.what();
+            }
+        }
+        if (comm) go = comm->broadcast(go);
+        if (go == 2) throw InputError(rank == 0 ? refusal : "");
+        if (go != 0) throw RunError(rank == 0 ? refusal : "");
+
+        const std::vector<std::size_t> which = plan.part_tasks(part, parts);
+        std::vector<std::vector<SweepPoint>> results =
+            comm ? run_tasks_distributed(plan, which, *comm) : plan.run_tasks(which);
+
+        int code = 0;
+        std::string failure;
+        if (rank == 0) {
+            try {
+                if (part_target) {
+                    const std::string text = sweep_part_text(plan, part, parts, results);
+                    OutputFile file(*part_target);
+                    file.write(text.data(), text.size());
+                    file.commit();
+                    std::cout << "status=ok part=" << part + 1 << "/" << parts << " tasks=" << which.size() << "\n";
+                } else {
+                    SweepResult r = plan.result_header();
+                    for (std::vector<SweepPoint>& t : results)
+                        for (SweepPoint& p : t) r.points.push_back(std::move(p));
+                    outputs->write(r, r.model + ": sweep over " + r.param);
+                    std::cout << summary_line(r) << "\n";
+                }
+            } catch (const RunError& e) {
+                code = 1;
+                failure = e.what();
+            }
+        }
+        if (comm) code = comm->broadcast(code);
+        if (code != 0) throw RunError(rank == 0 ? failure : "");
+        return 0;
+    } catch (const std::exception&) {
+        if (rank != 0) {
+            // Rank 0 says what went wrong; the others leave quietly with its exit code.
+            std::cerr.setstate(std::ios::failbit);
+        }
+        throw;
+    }
+}
+
+int merge(const MergeFlags& f) {
+    Outputs outputs(f.out, f.diagram, f.plot);
+    std::vector<std::string> texts;
+    for (const std::string& path : f.parts) {
+        const FileRead file = read_regular_file(path, std::size_t{1} << 34);
+        if (file.status != FileRead::Status::ok) throw InputError("cannot read part file '" + path + "': " + file.problem);
+        texts.push_back(file.bytes);
+    }
+    const SweepResult r = merge_sweep_parts(texts, f.parts);
+    outputs.write(r, r.model + ": sweep over " + r.param);
+    std::cout << summary_line(r) << "\n";
+    return 0;
+}
+
+}  // namespace
+
+void add_sweep(CLI::App& app, int& exit_code) {
+    auto f = std::make_shared<SweepFlags>();
+    auto* sub = app.add_subcommand(
+        "sweep", "response curves and bifurcation diagrams over one parameter (threads, MPI ranks, --part)");
+    sub->add_option("MODEL", f->model, "model file (TOML)")->required();
+    sub->add_option("--param", f->param, "the parameter to sweep (of [parameters])")->required();
+    sub->add_option("--from", f->from, "first value")->required()->check(finite_number());
+    sub->add_option("--to", f->to, "last value")->required()->check(finite_number());
+    sub->add_option("--points", f->points, "number of values from --from to --to inclusive, equally spaced")
+        ->required();
+    sub->add_option("--direction", f->direction,
+                    "up (default), down (from --to to --from) or both (up, then down; each from the initial state)");
+    sub->add_option("--max-periods", f->max_periods,
+                    "forcing periods at most before recording, when the state does not settle (default 500)");
+    sub->add_option("--record-periods", f->record_periods, "forcing periods recorded at each point (default 16)");
+    sub->add_option("--set", f->overrides.set, "override a parameter, NAME=VALUE (repeatable)");
+    sub->add_option("--x0", f->overrides.x0, "override an initial position, NAME=VALUE (repeatable)");
+    sub->add_option("--v0", f->overrides.v0, "override an initial velocity, NAME=VALUE (repeatable)");
+    sub->add_option("--out", f->out, "response curve CSV");
+    sub->add_option("--diagram", f->diagram, "bifurcation diagram CSV (the stroboscopic samples of every point)");
+    sub->add_option("--plot", f->plot, "draw the response curve and the diagram into this PNG (gnuplot)");
+    sub->add_flag("--restart-each", f->restart_each,
+                  "start every point from the model's initial state (no continuation; points run in parallel)");
+    sub->add_option("--param2", f->param2, "a second parameter: one sweep per value of --values2")
+        ->needs(sub->add_option("--values2", f->values2, "values of --param2, comma separated (a,b,c)"));
+    sub->add_option("--threads", f->threads,
+                    "threads for independent sweeps and points (default 1; 0: every core); output identical for any");
+    sub->add_option("--part", f->part,
+                    "run only part I of N (I/N, 1 <= I <= N) of the independent sweeps and points, into --part-out; "
+                    "hsnc sweep-merge joins the parts");
+    sub->add_option("--part-out", f->part_out, "the part file of --part");
+    sub->add_option("--method", f->method,
+                    "hsnc (exact, default); ab4 (--h), rk45, cvode (--rtol/--atol): a numerical baseline, for "
+                    "comparisons (its xmax, xrms, a1 from samples)");
+    sub->add_option("--h", f->h, "step of --method ab4")->check(finite_number());
+    sub->add_option("--rtol", f->rtol, "relative tolerance of --method rk45/cvode (default 1e-10)")
+        ->check(finite_number());
+    sub->add_option("--atol", f->atol, "absolute tolerance of --method rk45/cvode (default 1e-12)")
+        ->check(finite_number());
+    sub->add_flag("--quiet", f->quiet, "no progress lines on stderr");
+    sub->callback([f, &exit_code] { exit_code = sweep(*f); });
+
+    auto m = std::make_shared<MergeFlags>();
+    auto* merge_cmd = app.add_subcommand("sweep-merge", "join the part files of hsnc sweep --part into the outputs of a whole run");
+    merge_cmd->add_option("PARTS", m->parts, "the part files (every part of one sweep, in any order)")->required();
+    merge_cmd->add_option("--out", m->out, "response curve CSV");
+    merge_cmd->add_option("--diagram", m->diagram, "bifurcation diagram CSV");
+    merge_cmd->add_option("--plot", m->plot, "the figure (PNG, gnuplot)");
+    merge_cmd->callback([m, &exit_code] { exit_code = merge(*m); });
+}
+
+}  // namespace hsnc::cli

@@ -1,0 +1,188 @@
+// hsnc -- Program: the closed-form solution of one configuration as a typed,
+// straight-line program over a file of double registers.
+//
+// The generator lowers each configuration's derivation (generator/lowering.h,
+// constants from the 40-digit derivation rounded once to double) to one
+// Program. The emitter prints it as the C++ of a kernel (generator/emitter.h:
+// AOT and JIT kernels); the interpreter (runtime/solvers/interpreted_solver.h) runs it
+// as the generic path. Both follow the order of operations written here, with
+// no contraction of a*b+c into an fma (-ffp-contract=off for every target and
+// for the JIT) and the same libm calls, so a printed kernel and the interpreter
+// give the same bits (tests/test_program.cpp). Anything that branches on data
+// (the phase reduction, phi2's series) is a helper of kernels/kernel_abi.h,
+// which the printed kernels and the interpreter both call.
+//
+// Two programs: `setup` (inputs t0, t0_lo, x0, v0, sgn -> the coefficient
+// block) and `eval` (inputs tau and the coefficient block -> x, v, a, g, dg,
+// bound, scale). Instructions are coarse where eval spends its time: a
+// linear combination over a constant row, one closed-form block per mode.
+//
+// Register 0 holds 1.0 in both programs: a term c*r0 is the constant c.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "configuration.h"
+#include "switch_function.h"
+
+namespace hsnc {
+
+enum class ProgramOp : std::uint8_t {
+    /// r[dst] = (r[a] +) (c_0 r[s_0] + c_1 r[s_1] + ...), summed left to
+    /// right over terms [first, first + count) (0.0 when count = 0); the base
+    /// r[a] is added last when a != kNoRegister.
+    lincomb,
+    /// The same sum in long double, each term (long double)c_k * r[s_k],
+    /// rounded once to double (no base).
+    lincomb_ld,
+    copy,  ///< r[dst] = r[a]
+    abs,   ///< r[dst] = |r[a]|
+    sin,   ///< r[dst] = sin(r[a])
+    cos,   ///< r[dst] = cos(r[a])
+    /// r[dst] = hsnc_phase(k[0], r[a], r[b], k[1]): Omega (t0 + t0_lo) + phase, reduced.
+    phase,
+    /// A forcing harmonic at tau = r[b]: dst+0 arg = k[0]*tau + r[a] (k[0] = Omega,
+    /// r[a] = theta), dst+1 sin(arg), dst+2 cos(arg).
+    harmonic,
+    /// The homogeneous response of one mode (regime in `regime`) at tau = r[b]
+    /// from its coefficients A, B, A1, B1, A2, B2 = r[a .. a+5]; constants k[0 ..
+    /// kModeConstants) as laid out by ModeConstant. Writes the ModeRegister
+    /// block at dst: eC, eS, q, q', q'', r = sqrt(q'^2 + lambda q^2) (homogeneous),
+    /// the magnitudes |A eC| + |B eS|, |A1 eC| + |B1 eS|, and the auxiliary
+    /// exponential (e or m) of the regime.
+    mode,
+    /// q_p = p tau^2/2 of a rigid mode, p = r[a], tau = r[b], added to the mode block at c.
+    rigid_particular,
+    /// q_p = p tau^2 phi2(-c tau) of a damped rigid mode: dst = q_p, p = r[a],
+    /// tau = r[b], mode block at c, k[0] = c; added to the mode block.
+    rigid_damped_particular,
+    /// The state of one free mass from its modes, five sums in lockstep:
+    ///   x = r[a] + sum_k c_k q_k + tail_x,        v = sum_k c_k q'_k + tail_v,
+    ///   acc = sum_k c_k q''_k + tail_a,           mx = |r[a]| + sum_k |c_k| mq_k + tail_mx,
+    ///   mv = sum_k |c_k| mdq_k + tail_mv,
+    /// where term k of [first, first + count) is (c_k = V_ik, mode block register)
+    /// and the tails (forcing terms, constants) follow in `terms`, tail[0..4]
+    /// terms each; each sum left to right, as printed. x, v, acc go to dst, b, c;
+    /// mx, mv to d, d+1.
+    mass_state,
+    /// The resonant (sinc) response of an undamped mode to one harmonic, from
+    /// rest: dst+0..6 = w, w', Cb, Sb, y, y', y''; theta = r[a], tau = r[b],
+    /// mode block at c, cos(theta) = r[d]; constants ResonantConstant. Added to
+    /// the mode block.
+    resonant,
+};
+
+/// Constants of a `mode` instruction, relative to its first constant.
+enum ModeConstant : std::uint32_t {
+    kModeLambda,
+    kModeSigma,
+    kModeKappa,
+    kModeOmegaD,
+    kModeInvOmegaD,      ///< 1/omega_d
+    kModeGamma,
+    kModeR1,             ///< slow root -lambda/(sigma + gamma)
+    kModeNegTwoGamma,    ///< -2 gamma
+    kModeHalfInvGamma,   ///< 0.5/gamma
+    kModeC,              ///< c of a damped rigid mode
+    kModeInvC,           ///< 1/c
+    kModeConstants
+};
+
+/// Registers of a mode block, relative to the `mode` instruction's dst.
+enum ModeRegister : std::uint32_t {
+    kModeEC,
+    kModeES,
+    kModeQ,
+    kModeDQ,
+    kModeDDQ,
+    kModeR,
+    kModeMQ,
+    kModeMDQ,
+    kModeAux,  ///< e^{-sigma tau} (underdamped), e^{r1 tau} (overdamped), expm1(-c tau) (damped rigid)
+    kModeAux2,  ///< expm1(-2 gamma tau) (overdamped)
+    kModeRegisters
+};
+
+/// Constants of a `resonant` instruction.
+enum ResonantConstant : std::uint32_t {
+    kResHalfDiff,      ///< h = (Omega - omega)/2 (w = tau, w' = 1 when h = 0)
+    kResInvHalfDiff,   ///< 1/h
+    kResMean,          ///< wbar = (Omega + omega)/2
+    kResQ,             ///< Q = P/(omega + Omega)
+    kResH2W2,          ///< h^2 + wbar^2
+    kResTwoMean,       ///< 2 wbar
+    kResLambda,        ///< lambda of the mode
+    kResConstants
+};
+
+inline constexpr std::uint32_t kNoRegister = 0xffffffffu;
+
+struct ProgramTerm {
+    double c;
+    std::uint32_t reg;
+};
+
+struct ProgramInstr {
+    explicit ProgramInstr(ProgramOp o) : op(o) {}
+    ProgramOp op;
+    std::uint8_t regime = 0;          ///< `mode`: the Regime (generator/derivation.h order)
+    bool accumulates = false;         ///< `mode`: particular terms are added to its q, q', q''
+    std::uint32_t dst = kNoRegister;  ///< first destination register
+    std::uint32_t a = kNoRegister, b = kNoRegister, c = kNoRegister, d = kNoRegister;  ///< operands
+    std::uint32_t first = 0;          ///< first term (lincomb) or constant (the others)
+    std::uint32_t count = 0;          ///< terms (lincomb, mass_state)
+    std::uint32_t tail[5] = {};       ///< mass_state: terms of the tails of x, v, acc, mx, mv
+    std::string comment;              ///< printed above the instruction (may be empty)
+    std::string note;                 ///< printed after it, on its line (may be empty)
+};
+
+/// Mode regimes, the order of generator/derivation.h's Regime.
+enum class ProgramRegime : std::uint8_t { undamped, underdamped, critical, overdamped, rigid, rigid_damped };
+
+/// What a register is, for the printer; the interpreter only reads values.
+enum class RegisterKind : std::uint8_t {
+    one,     ///< 1.0 (register 0)
+    input,   ///< t0, t0_lo, x0[i], v0[i], sgn[i] (setup); tau, coef[k] (eval)
+    output,  ///< coef[k] (setup); x[i], v[i], a[i], g[f], dg[f], bound[f], scale[f] (eval)
+    temp,    ///< named intermediate
+};
+
+struct ProgramBody {
+    std::vector<ProgramInstr> code;
+    std::vector<std::string> names;  ///< per register: its C++ name
+    std::vector<RegisterKind> kinds;
+    std::size_t registers() const { return names.size(); }
+};
+
+struct Program {
+    int n_dof = 0;
+    int n_coef = 0;
+    double max_step = 0;  ///< validity of `bound`: +inf unless secular terms
+    Configuration cfg;
+    std::vector<SwitchFunction> switches;
+
+    std::vector<double> constants;
+    std::vector<std::string> constant_names;  ///< "" for a constant printed as a literal
+    std::vector<ProgramTerm> terms;
+
+    /// Registers: 0 = 1.0, 1 = t0, 2 = t0_lo, then x0 (n_dof), v0 (n_dof),
+    /// sgn (n_dof, as doubles); then temps. setup_coef[k] is the register
+    /// copied to coef[k] at the end.
+    ProgramBody setup;
+    std::vector<std::uint32_t> setup_coef;
+    std::vector<std::string> coef_names;  ///< what coef[k] holds ("A_1"), for the printed layout
+    /// Registers: 0 = 1.0, 1 = tau, 2 .. 2+n_coef = coef, then x, v, a
+    /// (n_dof each), g, dg, bound, scale (n_switch each); then temps.
+    ProgramBody eval;
+
+    static constexpr std::uint32_t kSetupT0 = 1, kSetupT0Lo = 2, kSetupX0 = 3;
+    static constexpr std::uint32_t kEvalTau = 1, kEvalCoef = 2;
+    std::uint32_t setup_v0() const { return kSetupX0 + static_cast<std::uint32_t>(n_dof); }
+    std::uint32_t setup_sgn() const { return kSetupX0 + 2 * static_cast<std::uint32_t>(n_dof); }
+    std::uint32_t eval_outputs() const { return kEvalCoef + static_cast<std::uint32_t>(n_coef); }
+    std::size_t n_switch() const { return switches.size(); }
+};
+
+}  // namespace hsnc

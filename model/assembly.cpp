@@ -1,0 +1,131 @@
+#include "assembly.h"
+
+#include <cmath>
+
+#include "contact_gap.h"
+
+namespace hsnc {
+namespace {
+
+// Add a spring of stiffness k between bodies a and b to K.
+void add_spring(Eigen::MatrixXd& K, int a, int b, double k) {
+    if (a != kGround) K(a, a) += k;
+    if (b != kGround) K(b, b) += k;
+    if (a != kGround && b != kGround) {
+        K(a, b) -= k;
+        K(b, a) -= k;
+    }
+}
+
+double position(const double* x, int body) { return body == kGround ? 0.0 : x[body]; }
+
+}  // namespace
+
+Eigen::VectorXd mass_vector(const Model& model) {
+    Eigen::VectorXd m(model.dof());
+    for (std::size_t i = 0; i < model.dof(); ++i) m(i) = model.masses[i].m;
+    return m;
+}
+
+Eigen::MatrixXd stiffness_matrix(const Model& model, const Configuration& cfg) {
+    const auto n = static_cast<Eigen::Index>(model.dof());
+    Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n);
+    for (const Spring& s : model.springs) add_spring(K, s.a, s.b, s.k);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c]) add_spring(K, model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    return K;
+}
+
+Eigen::MatrixXd damping_matrix(const Model& model, const Configuration& cfg) {
+    Eigen::MatrixXd C = model.beta * stiffness_matrix(model, cfg);
+    C.diagonal() += model.alpha * mass_vector(model);
+    return C;
+}
+
+Eigen::VectorXd constant_force(const Model& model, const Configuration& cfg) {
+    Eigen::VectorXd f = Eigen::Map<const Eigen::VectorXd>(model.load.data(),
+                                                          static_cast<Eigen::Index>(model.dof()));
+    for (std::size_t c = 0; c < model.contacts.size(); ++c) {
+        if (!cfg.closed[c]) continue;
+        const Contact& k = model.contacts[c];
+        // -k*(x_a - x_b - d) on a: the constant part is +k*d (paper Eq. 6).
+        if (k.a != kGround) f(k.a) += k.k * k.gap;
+        if (k.b != kGround) f(k.b) -= k.k * k.gap;
+    }
+    return f;
+}
+
+Eigen::VectorXd forcing(const Model& model, double t) {
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(model.dof()));
+    for (const Harmonic& h : model.forcing) {
+        const double s = std::sin(h.omega * t + h.phase);
+        for (std::size_t i = 0; i < model.dof(); ++i) f(i) += h.amplitude[i] * s;
+    }
+    return f;
+}
+
+Eigen::VectorXd forcing_rate(const Model& model, double t) {
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(model.dof()));
+    for (const Harmonic& h : model.forcing) {
+        const double c = h.omega * std::cos(h.omega * t + h.phase);
+        for (std::size_t i = 0; i < model.dof(); ++i) f(i) += h.amplitude[i] * c;
+    }
+    return f;
+}
+
+double gap(const Model& model, int c, const double* x) {
+    const Contact& k = model.contacts[c];
+    return contact_gap(position(x, k.a), position(x, k.b), k.gap);
+}
+
+double gap_rate(const Model& model, int c, const double* v) {
+    const Contact& k = model.contacts[c];
+    return position(v, k.a) - position(v, k.b);
+}
+
+}  // namespace hsnc
+
+namespace hsnc {
+
+double force_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* x,
+                     const double* v) {
+    const double m = model.masses[i].m;
+    double f = model.load[i] - model.alpha * m * v[i];
+    for (const Harmonic& h : model.forcing) f += h.amplitude[i] * std::sin(h.omega * t + h.phase);
+    // A spring (or closed contact) of stiffness k stretched by s = x[a] - x[b] - d pulls a with
+    // -k*s - beta*k*s' and pushes b with the opposite (C = alpha*M + beta*K(cfg)).
+    auto add = [&](int a, int b, double k, double d) {
+        if (a != i && b != i) return;
+        const double s = position(x, a) - position(x, b) - d;
+        const double sd = position(v, a) - position(v, b);
+        const double fa = -k * s - model.beta * k * sd;
+        f += a == i ? fa : -fa;
+    };
+    for (const Spring& s : model.springs) add(s.a, s.b, s.k, 0.0);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k, model.contacts[c].gap);
+    return f;
+}
+
+}  // namespace hsnc
+
+namespace hsnc {
+
+double force_rate_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* v,
+                          const double* a) {
+    double f = -model.alpha * model.masses[i].m * a[i];
+    for (const Harmonic& h : model.forcing) f += h.amplitude[i] * h.omega * std::cos(h.omega * t + h.phase);
+    auto add = [&](int p, int q, double k) {
+        if (p != i && q != i) return;
+        const double sd = position(v, p) - position(v, q);
+        const double sdd = position(a, p) - position(a, q);
+        const double fa = -k * sd - model.beta * k * sdd;
+        f += p == i ? fa : -fa;
+    };
+    for (const Spring& s : model.springs) add(s.a, s.b, s.k);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    return f;
+}
+
+}  // namespace hsnc

@@ -1,0 +1,119 @@
+#include "modal.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+
+#include "assembly.h"
+#include "error.h"
+#include "free_components.h"
+
+namespace hsnc {
+
+ModalDecomposition modal_analysis(const Model& model, const Configuration& cfg) {
+    const int n = static_cast<int>(model.dof());
+    ModalDecomposition md;
+    // Components and the floating ones (free_components.h: the structural rule).
+    const FreeComponents fc = free_components(model, cfg);
+    md.free = fc.free;
+    for (int i = 0; i < n; ++i)
+        if (cfg.stuck[i]) md.stuck.push_back(i);
+    const int nf = static_cast<int>(md.free.size());
+    md.component = fc.component;
+    md.n_components = fc.count();
+
+    const Eigen::MatrixXd K = stiffness_matrix(model, cfg);
+    const Eigen::VectorXd m = mass_vector(model);
+
+    struct Mode {
+        double lambda;
+        bool rigid;
+        int comp;
+        Eigen::VectorXd shape;  // over F
+    };
+    std::vector<Mode> modes;
+    modes.reserve(static_cast<std::size_t>(nf));
+
+    for (int comp = 0; comp < md.n_components; ++comp) {
+        std::vector<int> members;  // indices into F
+        const bool anchored = !fc.floating[static_cast<std::size_t>(comp)];
+        for (int s = 0; s < nf; ++s)
+            if (md.component[s] == comp) members.push_back(s);
+        const Eigen::Index nc = static_cast<Eigen::Index>(members.size());
+        // Symmetric form Kt = M^-1/2 K M^-1/2; its orthonormal eigenvectors w
+        // give the mass-normalised modes phi = M^-1/2 w.
+        Eigen::VectorXd inv_sqrt_m(nc);
+        Eigen::MatrixXd Kt(nc, nc);
+        for (Eigen::Index r = 0; r < nc; ++r) inv_sqrt_m(r) = 1.0 / std::sqrt(m(md.free[members[r]]));
+        for (Eigen::Index r = 0; r < nc; ++r)
+            for (Eigen::Index c = 0; c < nc; ++c)
+                Kt(r, c) = inv_sqrt_m(r) * K(md.free[members[r]], md.free[members[c]]) * inv_sqrt_m(c);
+
+        Eigen::MatrixXd W;  // mass-weighted mode shapes (columns)
+        Eigen::VectorXd lam;
+        if (anchored) {
+            Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Kt);
+            if (es.info() != Eigen::Success)
+                throw RunError("modal_analysis(): eigen decomposition failed for configuration " +
+                               cfg.spec(model));
+            W = es.eigenvectors();
+            lam = es.eigenvalues();
+        } else {
+            // Rigid-body mode w0 = sqrt(m)/sqrt(M_total) (unit vector; Kt w0 = 0
+            // because the component's K rows sum to zero). The other modes live in
+            // its orthogonal complement Q (from a Householder reflection of w0).
+            double total = 0.0;
+            for (int s : members) total += m(md.free[s]);
+            Eigen::VectorXd w0(nc);
+            for (Eigen::Index r = 0; r < nc; ++r) w0(r) = std::sqrt(m(md.free[members[r]]) / total);
+            W.resize(nc, nc);
+            lam.resize(nc);
+            W.col(0) = w0;
+            lam(0) = 0.0;
+            if (nc > 1) {
+                Eigen::HouseholderQR<Eigen::MatrixXd> qr(w0);
+                const Eigen::MatrixXd Qfull = qr.householderQ() * Eigen::MatrixXd::Identity(nc, nc);
+                const Eigen::MatrixXd Q = Qfull.rightCols(nc - 1);
+                const Eigen::MatrixXd Kq = Q.transpose() * Kt * Q;
+                Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (Kq + Kq.transpose()));
+                if (es.info() != Eigen::Success)
+                    throw RunError("modal_analysis(): eigen decomposition failed for configuration " +
+                                   cfg.spec(model));
+                W.rightCols(nc - 1) = Q * es.eigenvectors();
+                lam.tail(nc - 1) = es.eigenvalues();
+            }
+        }
+        for (Eigen::Index k = 0; k < nc; ++k) {
+            Mode md_k{std::max(lam(k), 0.0), !anchored && k == 0, comp, Eigen::VectorXd::Zero(nf)};
+            for (Eigen::Index r = 0; r < nc; ++r) md_k.shape(members[r]) = inv_sqrt_m(r) * W(r, k);
+            if (md_k.rigid) {
+                // phi = 1/sqrt(total mass) exactly on the component.
+                double total = 0.0;
+                for (int s : members) total += m(md.free[s]);
+                for (int s : members) md_k.shape(s) = 1.0 / std::sqrt(total);
+            }
+            modes.push_back(std::move(md_k));
+        }
+    }
+
+    // Ascending lambda, rigid modes first; stable so the order is deterministic.
+    std::stable_sort(modes.begin(), modes.end(), [](const Mode& a, const Mode& b) {
+        if (a.rigid != b.rigid) return a.rigid;
+        return a.lambda < b.lambda;
+    });
+    md.phi.resize(nf, nf);
+    md.lambda.resize(nf);
+    md.rigid.resize(static_cast<std::size_t>(nf));
+    md.mode_component.resize(static_cast<std::size_t>(nf));
+    for (int j = 0; j < nf; ++j) {
+        md.phi.col(j) = modes[j].shape;
+        md.lambda(j) = modes[j].lambda;
+        md.rigid[j] = modes[j].rigid ? 1 : 0;
+        md.mode_component[j] = modes[j].comp;
+    }
+    return md;
+}
+
+}  // namespace hsnc

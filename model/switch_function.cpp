@@ -1,0 +1,22 @@
+#include "switch_function.h"
+
+namespace hsnc {
+
+std::vector<SwitchFunction> switch_functions(const Model& model, const Configuration& cfg) {
+    std::vector<SwitchFunction> out;
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        out.push_back({SwitchKind::gap, static_cast<int>(c)});
+    for (std::size_t i = 0; i < model.masses.size(); ++i) {
+        if (!model.masses[i].has_friction) continue;
+        const int e = static_cast<int>(i);
+        if (cfg.stuck[i]) {
+            out.push_back({SwitchKind::release_pos, e});
+            out.push_back({SwitchKind::release_neg, e});
+        } else {
+            out.push_back({SwitchKind::velocity, e});
+        }
+    }
+    return out;
+}
+
+}  // namespace hsnc

@@ -1,0 +1,57 @@
+// hsnc -- the trajectory and events CSV files (interface.md section 4).
+// Numbers with 17 significant digits (they round-trip). Written through an
+// OutputFile (output_file.h): a regular file under a temporary name renamed
+// into place by commit(), so a run that fails never leaves half a file under
+// the name the user gave; a device or FIFO directly; the first write error
+// stops the run (RunError naming the file).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "model.h"
+#include "observer.h"
+#include "output_file.h"
+
+namespace hsnc {
+
+class CsvFile {
+public:
+    /// Checks `path` (check_output, InputError) and opens it.
+    explicit CsvFile(const std::string& path);
+    /// Opens a target checked before the run.
+    explicit CsvFile(const OutputTarget& target);
+    CsvFile(const CsvFile&) = delete;
+    CsvFile& operator=(const CsvFile&) = delete;
+
+    void text(const char* s);
+    void number(double value);  ///< 17 significant digits, shortest exact form
+    void end_row();
+    /// Flush, close and rename into place. Throws RunError on I/O failure.
+    void commit() { file_.commit(); }
+    const OutputFile& file() const { return file_; }
+
+private:
+    OutputFile file_;  // removes its temporary file unless committed
+    bool first_in_row_ = true;
+};
+
+/// Header "t,x_<mass>...,v_<mass>..." (and for events "t,kind,element,...").
+std::string trajectory_header(const Model& model);
+std::string events_header(const Model& model);
+
+/// An Observer that writes the CSVs it was given (either may be null).
+class CsvObserver : public Observer {
+public:
+    CsvObserver(const Model& model, CsvFile* trajectory, CsvFile* events);
+    void on_sample(double t, const double* x, const double* v) override;
+    void on_event(double t, EventKind kind, int element, const double* x, const double* v) override;
+
+private:
+    void state(const double* x, const double* v);
+    const Model& model_;
+    CsvFile* trajectory_;
+    CsvFile* events_;
+};
+
+}  // namespace hsnc

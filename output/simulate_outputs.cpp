@@ -1,0 +1,73 @@
+#include "simulate_outputs.h"
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "error.h"
+#include "sample_grid.h"
+
+namespace hsnc::cli {
+namespace {
+
+std::string short_number(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3g", v);
+    return buf;
+}
+
+std::string bytes_text(double b) {
+    const char* units[] = {"B", "kB", "MB", "GB", "TB", "PB", "EB"};
+    int u = 0;
+    while (b >= 1000 && u < 6) b /= 1000, ++u;
+    return short_number(b) + " " + units[u];
+}
+
+}  // namespace
+
+double trajectory_rows(double t0, double t_end, double dt) { return SampleGrid(t0, t_end, dt).count(); }
+
+SimulateOutputs::SimulateOutputs(const Model& model, const OutputRequest& r, double t_end, double dt)
+    : model_(model), t_end_(t_end), dt_(dt) {
+    std::vector<const OutputTarget*> all;
+    if (!r.out.empty()) all.push_back((out_ = std::make_unique<OutputTarget>(check_output("--out", r.out))).get());
+    if (!r.events.empty())
+        all.push_back((events_ = std::make_unique<OutputTarget>(check_output("--events", r.events))).get());
+    if (!r.plot.empty()) all.push_back((plot_ = std::make_unique<OutputTarget>(check_output("--plot", r.plot))).get());
+    check_distinct(all);
+    if (out_ && !r.allow_large_output) {
+        // Every number is printed with 17 significant digits: about 22 bytes with its comma.
+        const double rows = trajectory_rows(model.t0, t_end, dt);
+        const double bytes = rows * static_cast<double>(1 + 2 * model.dof()) * 22;
+        if (rows > static_cast<double>(kLargeOutputRows) || bytes > kLargeOutputBytes)
+            throw InputError("--dt " + short_number(dt) + ": the trajectory --out would have " + short_number(rows) +
+                             " rows, about " + bytes_text(bytes) + " (the limit is 1e7 rows or 1 GB): give a larger " +
+                             "--dt or a shorter --t-end, or --allow-large-output to write it anyway");
+    }
+    if (plot_) require_gnuplot();
+}
+
+void SimulateOutputs::open() {
+    if (out_) traj_file_ = std::make_unique<CsvFile>(*out_);
+    if (events_) events_file_ = std::make_unique<CsvFile>(*events_);
+    csv_ = std::make_unique<CsvObserver>(model_, traj_file_.get(), events_file_.get());
+    if (plot_) recorder_ = std::make_unique<PlotRecorder>(model_, model_.t0, t_end_, dt_);
+}
+
+void SimulateOutputs::on_sample(double t, const double* x, const double* v) {
+    csv_->on_sample(t, x, v);
+    if (recorder_) recorder_->on_sample(t, x, v);
+}
+
+void SimulateOutputs::on_event(double t, EventKind kind, int element, const double* x, const double* v) {
+    csv_->on_event(t, kind, element, x, v);
+    if (recorder_) recorder_->on_event(t, kind, element, x, v);
+}
+
+void SimulateOutputs::commit() {
+    if (traj_file_) traj_file_->commit();
+    if (events_file_) events_file_->commit();
+    if (recorder_) recorder_->draw(*plot_);
+}
+
+}  // namespace hsnc::cli

@@ -1,0 +1,57 @@
+// hsnc -- the output files of `hsnc simulate` (--out, --events, --plot):
+// every path checked before the run (exit code 2, nothing written), written
+// while it runs (stopping at the first write error), committed after it.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "csv_writer.h"
+#include "model.h"
+#include "observer.h"
+#include "output_file.h"
+#include "plot.h"
+
+namespace hsnc::cli {
+
+/// Without --allow-large-output, a trajectory of more rows than this, or of
+/// more than kLargeOutputBytes (estimated), is refused before the run.
+inline constexpr std::uint64_t kLargeOutputRows = 10'000'000;
+inline constexpr double kLargeOutputBytes = 1e9;
+
+struct OutputRequest {
+    std::string out, events, plot;
+    bool allow_large_output = false;
+};
+
+/// Rows of the trajectory CSV sampled every dt from t0 to t_end (without the header).
+double trajectory_rows(double t0, double t_end, double dt);
+
+class SimulateOutputs : public Observer {
+public:
+    /// Checks every path (check_output, check_distinct), gnuplot for --plot,
+    /// and the size of the trajectory; throws InputError (RunError when
+    /// gnuplot is missing). Opens nothing: call open() once every other
+    /// check has passed.
+    SimulateOutputs(const Model& model, const OutputRequest& request, double t_end, double dt);
+    void open();
+    /// Whether the run must report samples (a trajectory or a plot).
+    bool samples() const { return out_ || plot_; }
+
+    void on_sample(double t, const double* x, const double* v) override;
+    void on_event(double t, EventKind kind, int element, const double* x, const double* v) override;
+
+    /// Commit the CSVs, then draw the plot.
+    void commit();
+
+private:
+    const Model& model_;
+    double t_end_, dt_;
+    std::unique_ptr<OutputTarget> out_, events_, plot_;
+    std::unique_ptr<CsvFile> traj_file_, events_file_;
+    std::unique_ptr<CsvObserver> csv_;
+    std::unique_ptr<PlotRecorder> recorder_;
+};
+
+}  // namespace hsnc::cli

@@ -1,0 +1,144 @@
+#include "sweep_plot.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <utility>
+#include <vector>
+
+#include "plot.h"
+
+namespace hsnc::cli {
+namespace {
+
+const char* const kColours[8] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728",
+                                 "#9467bd", "#8c564b", "#e377c2", "#7f7f7f"};
+constexpr std::size_t kDiagramPanels = 3;
+
+std::string num(double v) {
+    if (!std::isfinite(v)) return "NaN";
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.10g", v);
+    return buf;
+}
+
+std::string quoted(const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("''") : std::string(1, c);
+    return q + "'";
+}
+
+}  // namespace
+
+std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
+    const std::size_t n = r.masses.size();
+    const std::size_t panels = std::min(n, kDiagramPanels);
+    const bool has2 = !r.param2.empty();
+    const int height = 520 + 330 * static_cast<int>(panels);
+    std::string s = "set terminal pngcairo size 1300," + std::to_string(height) + " noenhanced font ',11'\n";
+    s += "set encoding utf8\n";
+
+    // The points grouped by (second value, direction), in the order they ran.
+    std::vector<std::pair<double, SweepDirection>> keys;
+    std::map<std::size_t, std::vector<const SweepPoint*>> groups;
+    for (const SweepPoint& p : r.points) {
+        std::size_t g = 0;
+        while (g < keys.size() && !(keys[g].second == p.direction &&
+                                    (keys[g].first == p.value2 || (std::isnan(keys[g].first) && std::isnan(p.value2)))))
+            ++g;
+        if (g == keys.size()) keys.emplace_back(p.value2, p.direction);
+        groups[g].push_back(&p);
+    }
+    for (std::size_t g = 0; g < keys.size(); ++g) {
+        s += "$curve" + std::to_string(g) + " << EOD\n";
+        for (const SweepPoint* p : groups[g]) {
+            s += num(p->value);
+            for (std::size_t i = 0; i < n; ++i) s += " " + num(p->xmax[i]);
+            s += "\n";
+        }
+        s += "EOD\n";
+    }
+    s += "$unsettled << EOD\n";
+    bool any_unsettled = false;
+    for (const SweepPoint& p : r.points)
+        if (!p.settled) {
+            any_unsettled = true;
+            s += num(p.value);
+            for (std::size_t i = 0; i < n; ++i) s += " " + num(p.xmax[i]);
+            s += "\n";
+        }
+    s += "EOD\n";
+    // The diagram: up and down apart (two colours).
+    bool has_dir[2] = {false, false};
+    for (int d = 0; d < 2; ++d) {
+        s += std::string("$diagram") + (d ? "down" : "up") + " << EOD\n";
+        for (const SweepPoint& p : r.points) {
+            if ((p.direction == SweepDirection::down) != (d == 1)) continue;
+            has_dir[d] = has_dir[d] || !p.strobe_t.empty();
+            for (std::size_t row = 0; row < p.strobe_t.size(); ++row) {
+                s += num(p.value);
+                for (std::size_t i = 0; i < panels; ++i) s += " " + num(p.strobe_x[row * n + i]);
+                s += "\n";
+            }
+        }
+        s += "EOD\n";
+    }
+
+    const double top = 1.0 - 75.0 / height, split = 1.0 - 520.0 / height;
+    s += "set multiplot title " + quoted(title) + "\n";
+    s += "set lmargin at screen 0.09\nset rmargin at screen 0.80\nset grid\nset key outside right top\n";
+    // The response curve.
+    s += "set title " + quoted("response curve: largest |x| over the recorded periods" +
+                               std::string(any_unsettled ? " (ringed: not settled)" : "")) + "\n";
+    s += "set tmargin at screen " + num(top) + "\nset bmargin at screen " + num(split + 60.0 / height) + "\n";
+    s += "set xlabel " + quoted(r.param) + "\nset ylabel 'xmax [m]'\n";
+    std::string plot;
+    for (std::size_t g = 0; g < keys.size(); ++g) {
+        const bool down = keys[g].second == SweepDirection::down;
+        for (std::size_t i = 0; i < n; ++i) {
+            // One colour per mass (and value of param2); a single curve's down sweep in the next colour.
+            const std::size_t colour = ((has2 ? g / 2 * n + i : i) + (n == 1 && down ? 1 : 0)) % 8;
+            std::string name = r.masses[i] + (down ? " down" : " up");
+            if (has2) name += " (" + r.param2 + " = " + num(keys[g].first) + ")";
+            plot += (plot.empty() ? "" : ", ") + std::string("$curve") + std::to_string(g) + " using 1:" +
+                    std::to_string(i + 2) + " with linespoints lw 1.5 " + (down ? "dt 2 pt 6" : "dt 1 pt 7") +
+                    " ps 0.7 lc rgb '" + kColours[colour] + "' " + (i < 8 && g < 8 ? "title " + quoted(name) : "notitle");
+        }
+    }
+    if (any_unsettled)
+        for (std::size_t i = 0; i < n; ++i)
+            plot += ", $unsettled using 1:" + std::to_string(i + 2) + " with points pt 6 ps 2.2 lw 1.5 lc rgb 'black' " +
+                    (i == 0 ? "title 'not settled'" : "notitle");
+    s += "plot " + plot + "\n";
+
+    // The diagram, one panel per mass.
+    const double panel = (split - 20.0 / height) / static_cast<double>(std::max<std::size_t>(panels, 1));
+    for (std::size_t i = 0; i < panels; ++i) {
+        const double hi = split - static_cast<double>(i) * panel, lo = hi - panel;
+        s += "set title " + quoted("bifurcation diagram: x_" + r.masses[i] +
+                                   " at the end of every recorded forcing period") + "\n";
+        s += "set tmargin at screen " + num(hi - 45.0 / height) + "\nset bmargin at screen " + num(lo + 50.0 / height) +
+             "\n";
+        s += "set ylabel " + quoted("x_" + r.masses[i] + " [m]") + "\n";
+        std::string dots;
+        if (has_dir[0])
+            dots = "$diagramup using 1:" + std::to_string(i + 2) + " with points pt 7 ps 0.35 lc rgb '#1f4fb4' title 'up'";
+        if (has_dir[1])
+            dots += (dots.empty() ? "" : ", ") + std::string("$diagramdown using 1:") + std::to_string(i + 2) +
+                    " with points pt 7 ps 0.35 lc rgb '#e06000' title 'down'";
+        if (dots.empty()) dots = "NaN notitle";
+        s += "plot " + dots + "\n";
+    }
+    s += "unset multiplot\n";
+    return s;
+}
+
+void draw_sweep_plot(const SweepResult& r, const std::string& title, const OutputTarget& png) {
+    const std::string bytes = run_gnuplot(sweep_plot_script(r, title));
+    OutputFile file(png);
+    file.write(bytes.data(), bytes.size());
+    file.commit();
+}
+
+}  // namespace hsnc::cli

@@ -1,0 +1,125 @@
+// hsnc._hsnc._sweep -- the binding of hsnc::SweepPlan (api/hsnc/sweep.h)
+// for hsnc.sweep() (hsnc/__init__.py): the model read again at every point
+// from its file or text with the overrides as "NAME=VALUE" texts, the run with
+// the GIL released, the result as NumPy arrays in a dict.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "file_read.h"
+#include "hsnc/simulate.h"
+#include "hsnc/sweep.h"
+
+namespace py = pybind11;
+
+namespace hsnc::python {
+namespace {
+
+py::array_t<double> matrix(const std::vector<double>& data, std::size_t rows, std::size_t cols) {
+    py::array_t<double> a({rows, cols});
+    std::copy(data.begin(), data.end(), a.mutable_data());
+    return a;
+}
+
+py::dict sweep(const std::string& kind, const std::string& what, const std::string& source,
+               const std::vector<std::string>& set, const std::vector<std::string>& x0,
+               const std::vector<std::string>& v0, const std::string& param, double from, double to,
+               std::size_t points, const std::string& direction, std::size_t max_periods, std::size_t record_periods,
+               bool restart_each, const std::string& param2, const std::vector<double>& values2, unsigned threads,
+               const std::string& method, double rtol, double atol) {
+    SweepOptions o;
+    o.param = param;
+    o.from = from;
+    o.to = to;
+    o.points = points;
+    o.direction = sweep_direction_from_name(direction);
+    o.max_periods = max_periods;
+    o.record_periods = record_periods;
+    o.restart_each = restart_each;
+    o.param2 = param2;
+    o.values2 = values2;
+    o.threads = threads;
+    o.method = method_from_name(method);
+    o.integrator.rtol = rtol;
+    o.integrator.atol = atol;
+    const ModelOverrides ov{set, x0, v0, {}};
+    std::string text = what, src = source;
+    if (kind == "file") {
+        const FileRead file = read_regular_file(what, kMaxModelFileBytes);
+        if (file.status != FileRead::Status::ok)
+            throw InputError("cannot read model file '" + what + "': " + file.problem);
+        text = file.bytes;
+        src = what;
+    }
+    const SweepPlan plan(text, src, ov, o);
+    SweepResult r;
+    {
+        py::gil_scoped_release nogil;
+        r = plan.run();
+    }
+    const std::size_t np = r.points.size(), n = r.masses.size();
+    py::array_t<double> value(np), value2(np);
+    py::array_t<bool> settled(np);
+    py::array_t<long long> periods(np), multiple(np);
+    std::vector<double> xmax, xrms, a1;
+    py::list dirs;
+    std::vector<double> dv, dv2, dt, dx, dvel;
+    py::list ddirs;
+    for (std::size_t i = 0; i < np; ++i) {
+        const SweepPoint& p = r.points[i];
+        value.mutable_at(i) = p.value;
+        value2.mutable_at(i) = p.value2;
+        settled.mutable_at(i) = p.settled;
+        periods.mutable_at(i) = static_cast<long long>(p.periods);
+        multiple.mutable_at(i) = p.multiple;
+        dirs.append(sweep_direction_name(p.direction));
+        xmax.insert(xmax.end(), p.xmax.begin(), p.xmax.end());
+        xrms.insert(xrms.end(), p.xrms.begin(), p.xrms.end());
+        a1.insert(a1.end(), p.a1.begin(), p.a1.end());
+        for (std::size_t k = 0; k < p.strobe_t.size(); ++k) {
+            dv.push_back(p.value);
+            dv2.push_back(p.value2);
+            dt.push_back(p.strobe_t[k]);
+            ddirs.append(sweep_direction_name(p.direction));
+        }
+        dx.insert(dx.end(), p.strobe_x.begin(), p.strobe_x.end());
+        dvel.insert(dvel.end(), p.strobe_v.begin(), p.strobe_v.end());
+    }
+    py::dict diagram;
+    diagram["value"] = py::array_t<double>(dv.size(), dv.data());
+    diagram["value2"] = py::array_t<double>(dv2.size(), dv2.data());
+    diagram["direction"] = py::array(ddirs);
+    diagram["t"] = py::array_t<double>(dt.size(), dt.data());
+    diagram["x"] = matrix(dx, dt.size(), n);
+    diagram["v"] = matrix(dvel, dt.size(), n);
+    py::dict d;
+    d["param"] = r.param;
+    d["param2"] = r.param2.empty() ? py::object(py::none()) : py::object(py::str(r.param2));
+    d["masses"] = r.masses;
+    d["value"] = value;
+    d["value2"] = value2;
+    d["direction"] = py::array(dirs);
+    d["settled"] = settled;
+    d["periods"] = periods;
+    d["multiple"] = multiple;
+    d["xmax"] = matrix(xmax, np, n);
+    d["xrms"] = matrix(xrms, np, n);
+    d["a1"] = matrix(a1, np, n);
+    d["diagram"] = diagram;
+    return d;
+}
+
+}  // namespace
+
+void bind_sweep(py::module_& m) {
+    m.def("_sweep", &sweep, py::arg("kind"), py::arg("what"), py::arg("source"), py::arg("set"), py::arg("x0"),
+          py::arg("v0"), py::arg("param"), py::arg("from_"), py::arg("to"), py::arg("points"), py::arg("direction"),
+          py::arg("max_periods"), py::arg("record_periods"), py::arg("restart_each"), py::arg("param2"),
+          py::arg("values2"), py::arg("threads"), py::arg("method"), py::arg("rtol"), py::arg("atol"));
+}
+
+}  // namespace hsnc::python

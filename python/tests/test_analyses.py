@@ -1,0 +1,78 @@
+"""hsnc.periodic and hsnc.lyapunov return what `hsnc periodic` and
+`hsnc lyapunov` print (the same doubles), as NumPy arrays and dicts; bad
+input raises InputError."""
+
+import math
+
+import numpy as np
+import pytest
+
+import hsnc
+from conftest import model_path, read_csv
+
+
+def fields(line):
+    return dict(item.split("=", 1) for item in line.split())
+
+
+def test_periodic_matches_the_command_line(cli, tmp_path):
+    model = hsnc.Model.from_file(model_path("seed-scenario-1.toml"))
+    r = hsnc.periodic(model, dt=0.001)
+    mult = tmp_path / "mu.csv"
+    p = cli("periodic", model_path("seed-scenario-1.toml"), "--multipliers", mult, "--quiet")
+    line = fields(p.stdout.strip())
+    assert r["status"] == line["status"] == "ok"
+    assert r["period"] == float(line["period"])
+    assert r["x"][0] == float(line["x_m1"]) and r["v"][1] == float(line["v_m2"])
+    assert r["max_multiplier"] == float(line["max_multiplier"])
+    assert r["stable"] == (line["stable"] == "true")
+    header, rows = read_csv(mult)
+    assert header == ["index", "re", "im", "abs"]
+    assert r["multipliers"].dtype == np.complex128 and r["multipliers"].shape == (4,)
+    assert np.array_equal(r["multipliers"].real, [float(row[1]) for row in rows])
+    assert np.array_equal(r["multipliers"].imag, [float(row[2]) for row in rows])
+    assert r["monodromy"].shape == (4, 4)
+    # The multipliers are the monodromy's eigenvalues.
+    assert np.allclose(np.sort_complex(np.linalg.eigvals(r["monodromy"])), np.sort_complex(r["multipliers"]),
+                       rtol=1e-12, atol=1e-12)
+    orbit = r["orbit"]
+    assert orbit["x"].shape == (len(orbit["t"]), 2) and orbit["t"][0] == r["t"]
+    assert math.isclose(orbit["t"][-1], r["t"] + r["period"], rel_tol=1e-15)
+    assert np.allclose(orbit["x"][-1], orbit["x"][0], rtol=0, atol=1e-9)
+
+
+def test_periodic_not_converged_is_a_status_not_an_orbit():
+    model = hsnc.Model.from_file(model_path("seed-scenario-2.toml"))
+    r = hsnc.periodic(model, max_iterations=1)
+    assert r["status"] == "not_converged" and r["message"]
+    assert not r["stable"] and math.isnan(r["max_multiplier"])
+    assert r["multipliers"].shape == (0,) and r["orbit"]["t"].shape == (0,)
+
+
+def test_lyapunov_matches_the_command_line(cli, tmp_path):
+    model = hsnc.Model.from_file(model_path("seed-scenario-2.toml"))
+    r = hsnc.lyapunov(model, t_end=30)
+    out = tmp_path / "lyap.csv"
+    p = cli("lyapunov", model_path("seed-scenario-2.toml"), "--t-end", "30", "--out", out, "--quiet")
+    line = fields(p.stdout.strip())
+    assert r["exponents"].shape == (4,)
+    assert list(r["exponents"]) == [float(line["lambda_%d" % k]) for k in range(1, 5)]
+    assert r["sum"] == float(line["sum"]) == -math.inf
+    assert r["collapsed"] == 1
+    header, rows = read_csv(out)
+    assert header == ["t", "lambda_1", "lambda_2", "lambda_3", "lambda_4"]
+    assert r["rows"].shape == (len(rows), 4)
+    assert np.array_equal(r["rows_t"], [float(row[0]) for row in rows])
+    assert np.array_equal(r["rows"], [[float(c) for c in row[1:]] for row in rows])
+
+
+def test_bad_input_raises_input_error():
+    model = hsnc.Model.from_file(model_path("coulomb-1dof.toml"))
+    with pytest.raises(hsnc.InputError, match="no harmonic forcing"):
+        hsnc.periodic(model)
+    with pytest.raises(hsnc.InputError, match="harmonic"):
+        hsnc.periodic(hsnc.Model.from_file(model_path("seed-scenario-1.toml")), harmonic=0)
+    with pytest.raises(hsnc.InputError, match="t_end"):
+        hsnc.lyapunov(model, t_end=-1)
+    with pytest.raises(hsnc.InputError, match="t_end"):
+        hsnc.lyapunov(model, t_end="soon")

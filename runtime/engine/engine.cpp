@@ -1,0 +1,446 @@
+#include "engine.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <map>
+#include <cstdio>
+#include <cstdlib>
+#include <set>
+#include <sstream>
+
+#include "sample_grid.h"
+#include "tie_series.h"
+#include "transitions.h"
+
+namespace hsnc {
+namespace {
+
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Rounding level of a switch function whose summed terms have magnitude `scale`.
+double noise_of(double scale) { return 16 * kEps * scale; }
+
+// Largest s >= 0 such that h + hd*s - B*s^2/2 > 0 for every smaller s: no
+// function with h(0) = h > 0, h'(0) = hd and |h''| <= B can reach zero
+// before it. Written without cancellation in both signs of hd.
+double safe_step(double h, double hd, double B) {
+    if (!(B > 0)) return hd >= 0 ? kInf : h / -hd;
+    const double root = std::sqrt(hd * hd + 2 * B * h);
+    return hd >= 0 ? (hd + root) / B : 2 * h / (root - hd);
+}
+
+std::string time_text(double t) {
+    std::ostringstream s;
+    s.precision(17);
+    s << t;
+    return s.str();
+}
+
+// Working storage for one segment's evaluations (sized for the largest switch list).
+struct Buffers {
+    std::vector<double> x, v, a, g, dg, bound, scale;
+    Buffers(std::size_t n, std::size_t nsw) : x(n), v(n), a(n), g(nsw), dg(nsw), bound(nsw), scale(nsw) {}
+    SegmentEval view() { return {x.data(), v.data(), a.data(), g.data(), dg.data(), bound.data(), scale.data()}; }
+};
+
+// Side on which switch function f is watched in the current configuration:
+// h = side*g > 0 until it switches.
+double side_of(const SwitchFunction& f, const Configuration& cfg, const std::vector<signed char>& sgn) {
+    switch (f.kind) {
+        case SwitchKind::gap: return cfg.closed[f.element] ? 1.0 : -1.0;
+        case SwitchKind::velocity: return sgn[f.element] >= 0 ? 1.0 : -1.0;
+        default: return -1.0;  // release functions are negative while stuck
+    }
+}
+
+// An upper bound on the rates of the motion in cfg (1/s): the fastest mode
+// (Gershgorin on M^-1 K of the free masses: omega^2 <= 2 sum_links k / m_i),
+// its Rayleigh damping rate alpha + beta omega^2, and every forcing frequency.
+double fastest_rate(const Model& model, const Configuration& cfg) {
+    const std::size_t n = model.dof();
+    std::vector<double> stiff(n, 0.0);
+    auto add = [&](int a, int b, double k) {
+        if (a == b) return;
+        if (a != kGround) stiff[static_cast<std::size_t>(a)] += k;
+        if (b != kGround) stiff[static_cast<std::size_t>(b)] += k;
+    };
+    for (const Spring& s : model.springs) add(s.a, s.b, s.k);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    double w2 = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+        if (!cfg.stuck[i]) w2 = std::max(w2, 2 * stiff[i] / model.masses[i].m);
+    double rate = std::max(std::sqrt(w2), std::fabs(model.alpha) + std::fabs(model.beta) * w2);
+    for (const Harmonic& h : model.forcing) rate = std::max(rate, std::fabs(h.omega));
+    return rate;
+}
+
+// The earliest switch of one segment.
+struct Found {
+    bool any = false;
+    double tau = 0.0;
+    std::vector<SwitchFunction> switched;
+};
+
+}  // namespace
+
+Engine::Engine(const Model& model, SolverProvider& provider) : model_(model), provider_(provider) {}
+
+RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
+    const std::size_t n = model_.dof();
+    RunSummary sum;
+    std::vector<double> x = model_.x0, v = model_.v0;
+    double t = model_.t0;
+    // The segment start is the double-double t + t_lo: t is the representable
+    // time that events report, t_lo (|t_lo| <= ulp(t)/2) the rounding of the
+    // last event's instant t + tau; the solvers take the forcing phase at
+    // t + t_lo (SegmentSolver::setup), so state and forcing refer to one
+    // instant (with the phase at t alone, a forced model's contact times were
+    // a median 18-26 ulp off the 40-digit reference on seed scenario 1;
+    // bench/reference_check.sh). Without it, a switch
+    // that resets the state to its switching surface (a velocity reset to 0
+    // at a stop or reversal) would restart the motion at the rounded time,
+    // and since the rounding of t + tau repeats while tau does (Coulomb
+    // half-cycles all last pi/omega), the event times would drift by up to
+    // ulp(t)/2 per event, linearly (measured in tests/test_extremes.cpp:
+    // 170 ulp of t after 2000 reversals, before t_lo was kept).
+    double t_lo = 0.0;
+    const double t_end = options.t_end;
+    std::vector<signed char> sgn;
+    Configuration cfg = entered_configuration(model_, t, x.data(), v.data(), sgn);  // stuck only where v = 0
+
+    Buffers buf(n, model_.contacts.size() + 2 * n);
+    Buffers dense(n, model_.contacts.size() + 2 * n);  // trajectory samples, so buf keeps the event state
+    std::set<Configuration> visited;
+    std::deque<double> recent;  // times of the latest events (Zeno guard)
+    std::size_t same_instant = 0;
+    double last_event_t = -kInf;
+
+    // Trajectory samples at t0 + k*dt (never accumulated), and t_end (sample_grid.h).
+    const SampleGrid grid(model_.t0, t_end, options.dt);
+    std::size_t k_next = 0;
+    bool samples_done = !options.samples;
+
+    auto finish = [&](RunStatus status, const std::string& message) {
+        sum.status = status;
+        sum.message = message;
+        sum.t = t;
+        sum.x = x;
+        sum.v = v;
+        sum.configuration = cfg;
+        sum.configurations = visited.size();
+        return sum;
+    };
+
+    // Per-segment working arrays, sized once for the largest switch list.
+    const std::size_t max_switches = model_.contacts.size() + 2 * n;
+    std::vector<double> side(max_switches), floor(max_switches), root(max_switches), clear_until(max_switches);
+    std::vector<char> armed(max_switches), leaving(max_switches), leaves_now(max_switches);
+    std::vector<double> series_d, series_mag;
+    Found found;
+    found.switched.reserve(max_switches);
+    std::vector<Transition> transitions;
+    SegmentSolver* current = nullptr;  // solver of current_cfg
+    Configuration current_cfg;
+    std::string why;
+    // Rounding level each switch function had at the last event, by (kind,
+    // element): a value that should be 0 after a switch comes back as ~1e-17
+    // from the previous segment, whatever the new segment's own terms are.
+    // Flat table indexed by kind * stride + element; 0 where nothing was inherited.
+    const std::size_t stride = std::max(model_.contacts.size(), n);
+    std::vector<double> inherited(4 * stride, 0.0);
+    auto slot = [stride](const SwitchFunction& f) {
+        return static_cast<std::size_t>(f.kind) * stride + static_cast<std::size_t>(f.element);
+    };
+    std::size_t progress_counter = 0;
+    // Segment and switch records for observers that ask for them (the tangent dynamics).
+    const bool records = observer.wants_segments();
+    Configuration cfg_before;
+    std::vector<signed char> sgn_before;
+    double rate = 0.0;  // fastest_rate(current_cfg)
+    while (true) {
+        if (!current || cfg != current_cfg) {  // a reversal keeps the configuration: no lookup
+            visited.insert(cfg);
+            current = &provider_.solver(cfg);
+            current_cfg = cfg;
+            rate = fastest_rate(model_, cfg);
+        }
+        // The smallest step is the time's own resolution, 4 eps |t|: a motion
+        // whose period is not several of them cannot be searched (at t = 1e9 an
+        // oscillation of 1.4e7 rad/s was stepped over without a row, every value
+        // of its gap within the rounding that |G'| eps |t| gives it). Refused
+        // with a message rather than run wrong: rate * step > 1, a period under
+        // 2 pi smallest steps.
+        if (rate * 4 * kEps * std::fabs(t) > 1.0) {
+            std::ostringstream msg;
+            msg.precision(3);
+            msg << "the motion is too fast for the time resolution at t = " << time_text(t) << ": configuration '"
+                << cfg.spec(model_) << "' has rates up to " << rate << " 1/s, and the smallest step there is "
+                << 4 * kEps * std::fabs(t) << " s (a period must span at least 2 pi of them); "
+                << "start nearer t = 0 (t0 shifts the forcing phase only)";
+            return finish(RunStatus::failure, msg.str());
+        }
+        SegmentSolver& S = *current;
+        S.setup(t, t_lo, x.data(), v.data(), sgn.data());
+        ++sum.segments;
+        const std::vector<SwitchFunction>& sw = S.switches();
+        const std::size_t nsw = sw.size();
+        const double max_step = S.max_step();
+        const double tau_end = (t_end - t) - t_lo;
+        SegmentEval out = buf.view();
+
+        for (std::size_t f = 0; f < nsw; ++f) {
+            side[f] = side_of(sw[f], cfg, sgn);
+            floor[f] = inherited[slot(sw[f])];
+        }
+        // Rounding level of g_f at the point last evaluated: its terms (scale), the
+        // rounding of the time itself (|g'| * ulp-ish of t + tau, which also covers
+        // the rounding of each omega*tau), and what it inherited from the last event.
+        double tau_now = 0.0;
+        auto noise = [&](std::size_t f) {
+            return std::max(noise_of(buf.scale[f] + std::fabs(buf.dg[f]) * (std::fabs(t) + tau_now)), floor[f]);
+        };
+        // A velocity function that starts at 0 (a release, a reversal, a stop
+        // that slides on) is not watched for a stop until it has left 0.
+        std::fill(armed.begin(), armed.end(), 0);
+
+        auto eval = [&](double tau) {
+            S.eval(tau, out);
+            tau_now = tau;
+            ++sum.evaluations;
+        };
+
+        // ---- find the earliest switch in (0, tau_end] ----
+        found.any = false;
+        found.tau = 0.0;
+        found.switched.clear();
+        double tau = 0.0, prev_tau = 0.0;
+        eval(0.0);
+        for (std::size_t f = 0; f < nsw; ++f)
+            if (sw[f].kind == SwitchKind::velocity)
+                armed[f] = side[f] * buf.g[f] > noise(f);
+        // Ties at the segment start (tie_series.h): a function at zero whose
+        // rate vanishes too. Its first non-zero derivative, of order m, decides
+        // (interface.md "Ties and touches"): one heading across switches now, at
+        // this instant; one heading into its safe side is `leaving` zero, where
+        // the bound h + h' s - B s^2/2 would make the steps shrink like s^(m/2)
+        // (a contact at rest on its gap under sin forcing took 30000
+        // evaluations). By Taylor's theorem with B' >= |h^(m+1)| on [0, T],
+        // h > 0 on (0, (m+1)|h^(m)(0)|/B'), so it is left out of the bound up to
+        // half that (clear_until) and watched by the bound from there. A function
+        // with no non-zero derivative (identically zero to rounding, by
+        // Cayley-Hamilton) stays leaving, with steps of at most tau (doubling),
+        // unless its g'' bound is 0 (then the bound gives an unlimited step).
+        std::fill(leaving.begin(), leaving.end(), 0);
+        std::fill(leaves_now.begin(), leaves_now.end(), 0);
+        {
+            MotionSeries low, full;  // order 2 for the rate; the full expansion only at a true tie
+            for (std::size_t f = 0; f < nsw; ++f) {
+                if (std::fabs(buf.g[f]) > noise(f)) continue;
+                // A rate clearly beyond its rounding (almost every function that has
+                // just switched) needs no series: the bound works.
+                if (std::fabs(buf.dg[f]) > 4 * tie_noise(rate_magnitude(model_, cfg, sw[f], x.data(), v.data())))
+                    continue;
+                if (low.x.empty()) low = motion_series(model_, cfg, sgn.data(), t, t_lo, x.data(), v.data(), 2);
+                switch_series(model_, cfg, sw[f], t, t_lo, low, series_d, series_mag);
+                if (std::fabs(series_d[1]) > tie_noise(series_mag[1])) continue;  // h' decides: the bound works
+                const int max_order = tie_order(model_);
+                if (full.x.empty())
+                    full = motion_series(model_, cfg, sgn.data(), t, t_lo, x.data(), v.data(), max_order + 2);
+                switch_series(model_, cfg, sw[f], t, t_lo, full, series_d, series_mag);
+                int order = 0;
+                const int dir = first_nonzero_sign(series_d, series_mag, max_order, &order) * (side[f] > 0 ? 1 : -1);
+                if (dir < 0) {
+                    leaves_now[f] = 1;
+                    continue;
+                }
+                if (dir == 0) {
+                    leaving[f] = buf.bound[f] > 0;
+                    clear_until[f] = 0.0;
+                    continue;
+                }
+                // clear_until = c/B'(T) for B' valid on [0, T], T <= c/B'(0): any T
+                // gives a valid interval [0, min(T, c/B'(T))].
+                const double c = 0.5 * (order + 1) * std::fabs(series_d[static_cast<std::size_t>(order)]);
+                const double T = std::min(tau_end, c / derivative_bound(model_, cfg, sw[f], full, order + 1, 0.0));
+                const double clear = std::min(T, c / derivative_bound(model_, cfg, sw[f], full, order + 1, T));
+                if (clear > 0) {
+                    leaving[f] = 1;
+                    clear_until[f] = clear;
+                }
+            }
+        }
+        for (std::size_t iter = 0;; ++iter) {
+            if (iter > 10'000'000) return finish(RunStatus::failure, "switch search does not converge at t = " + time_text(t + tau));
+            // Which functions have switched at tau, and where is each one's zero?
+            double tau_star = kInf;
+            std::fill(root.begin(), root.begin() + static_cast<std::ptrdiff_t>(nsw), kInf);
+            for (std::size_t f = 0; f < nsw; ++f) {
+                const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
+                if (!std::isfinite(h) || !std::isfinite(hd) || !std::isfinite(buf.bound[f]))
+                    return finish(RunStatus::failure, "non-finite switch function in configuration '" +
+                                                          cfg.spec(model_) + "' at t = " + time_text(t + tau));
+                if (iter == 0 && leaves_now[f]) {  // a tie heading across: it switches at the segment start
+                    root[f] = 0.0;
+                    tau_star = 0.0;
+                    continue;
+                }
+                const double eps_f = noise(f);
+                const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                if (stop ? h > eps_f : h >= -eps_f) continue;
+                // Move to the zero by one Newton step (the function is monotone
+                // there), never before the last point known to be on the safe side.
+                double r = tau;
+                if (hd < 0 && std::fabs(hd) > 0) r = tau - h / hd;
+                if (stop && h <= 0 && hd >= 0) r = tau;  // touched zero and turned back
+                r = std::min(std::max(r, prev_tau), std::max(tau, prev_tau));
+                if (stop && hd < 0 && h > 0) r = tau + h / -hd;  // tiny forward step onto v = 0
+                root[f] = r;
+                tau_star = std::min(tau_star, r);
+            }
+            if (tau_star < kInf) {
+                // Every function whose zero lies at this instant (to rounding) switches now.
+                const double tol = 4 * kEps * (std::fabs(t) + std::fabs(tau_star)) + 1e-300;
+                found.any = true;
+                found.tau = std::min(tau_star, tau_end);
+                for (std::size_t f = 0; f < nsw; ++f)
+                    if (root[f] <= tau_star + tol) found.switched.push_back(sw[f]);
+                // Others within rounding of zero and heading across at the event instant.
+                eval(found.tau);
+                for (std::size_t f = 0; f < nsw; ++f) {
+                    if (root[f] <= tau_star + tol) continue;
+                    const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
+                    const double eps_f = noise(f);
+                    const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                    if (stop ? h <= eps_f : (h < -eps_f || (h <= eps_f && hd < 0)))
+                        found.switched.push_back(sw[f]);
+                }
+                std::fill(inherited.begin(), inherited.end(), 0.0);
+                for (std::size_t f = 0; f < nsw; ++f)
+                    inherited[slot(sw[f])] = noise(f);
+                break;
+            }
+            if (tau >= tau_end) break;
+            // Safe step: no function can reach its trigger level inside it.
+            double step = std::min(max_step, tau_end - tau);
+            for (std::size_t f = 0; f < nsw; ++f) {
+                if (leaving[f]) continue;
+                const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
+                const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                // Contacts and releases switch only when certainly negative (level
+                // -2*noise); armed velocities stop at zero.
+                const double level = stop ? 0.0 : -2 * noise(f);
+                step = std::min(step, safe_step(h - level, hd, buf.bound[f]));
+            }
+            const double floor_step = 4 * kEps * (std::fabs(t) + std::fabs(tau)) + 1e-300;
+            for (std::size_t f = 0; f < nsw; ++f)
+                if (leaving[f]) step = std::min(step, tau < clear_until[f] ? clear_until[f] - tau : std::max(tau, floor_step));
+            step = std::max(step, floor_step);
+            prev_tau = tau;
+            tau = std::min(tau + step, tau_end);
+            eval(tau);
+            for (std::size_t f = 0; f < nsw; ++f) {
+                if (sw[f].kind == SwitchKind::velocity && !armed[f] && side[f] * buf.g[f] > 2 * noise(f))
+                    armed[f] = 1;
+                // Past its clear interval the bound watches it again (a function
+                // leaving an exact zero, clear_until = 0, once it is above its rounding).
+                if (leaving[f] && tau >= clear_until[f] && (clear_until[f] > 0 || side[f] * buf.g[f] > 2 * noise(f)))
+                    leaving[f] = 0;
+            }
+        }
+
+        // ---- dense output up to the event (or t_end) from the closed form ----
+        const double t_seg_end = found.any ? t + found.tau : t_end;
+        if (!samples_done) {
+            while (true) {
+                const double tk = grid.time(k_next);
+                if (found.any ? tk >= t_seg_end : tk > t_end) break;
+                if (tk == t) {
+                    // The segment's start state itself, not its modal round trip.
+                    observer.on_sample(tk, x.data(), v.data());
+                } else {
+                    // dense output: not a search evaluation, and buf keeps the event state
+                    S.eval(std::max(0.0, (tk - t) - t_lo), dense.view());
+                    observer.on_sample(tk, dense.x.data(), dense.v.data());
+                }
+                if (grid.last(k_next)) {
+                    samples_done = true;
+                    break;
+                }
+                ++k_next;
+            }
+        }
+
+        if (records) {
+            SegmentRecord rec;
+            rec.t = t, rec.t_lo = t_lo, rec.tau = found.any ? found.tau : tau_end;
+            rec.cfg = &cfg, rec.sgn = sgn.data(), rec.x = x.data(), rec.v = v.data();
+            observer.on_segment(rec);
+        }
+
+        // ---- advance to the event instant: the state at tau, the time as t + t_lo ----
+        if (!found.any) eval(tau_end);  // an event's instant was evaluated last in the search
+        x = buf.x;
+        v = buf.v;
+        for (std::size_t i = 0; i < n; ++i)
+            if (cfg.stuck[i]) v[i] = 0.0;
+        if (!found.any) {
+            t = t_end;
+            break;
+        }
+        {
+            // (t, t_lo) += found.tau, the sum kept exactly (Knuth's TwoSum).
+            const double a = t, b = t_lo + found.tau;
+            const double s = a + b, bb = s - a;
+            t_lo = (a - (s - bb)) + (b - bb);
+            t = s;
+        }
+
+        transitions.clear();
+        if (records) cfg_before = cfg, sgn_before = sgn;
+        if (!apply_switches(model_, t, x.data(), v.data(), buf.a.data(), cfg, sgn, found.switched, transitions, why))
+            return finish(RunStatus::chattering, why);
+        if (records) {
+            SwitchRecord rec;
+            rec.t = t, rec.t_lo = t_lo, rec.switched = &found.switched;
+            rec.before = &cfg_before, rec.sgn_before = sgn_before.data();
+            rec.after = &cfg, rec.sgn_after = sgn.data(), rec.x = x.data(), rec.v = v.data();
+            observer.on_switch(rec);
+        }
+        for (const Transition& tr : transitions) {
+            observer.on_event(t, tr.kind, tr.element, x.data(), v.data());
+            ++sum.events;
+            recent.push_back(t);
+            if (recent.size() > options.zeno_events) recent.pop_front();
+        }
+        // Chattering: switches that keep firing at one instant.
+        same_instant = t == last_event_t ? same_instant + 1 : 0;
+        last_event_t = t;
+        if (same_instant > 4 * (nsw + 2))
+            return finish(RunStatus::chattering, "configuration keeps switching at t = " + time_text(t) +
+                                                     " (now '" + cfg.spec(model_) + "')");
+        // Zeno: many switches within a vanishing time span, measured on the
+        // run's own clock (time elapsed since t0), not relative to |t|: at
+        // t0 = 1e9 a span relative to |t| was 1 s and took 16000 regular
+        // switches of a 16 kHz oscillation for an accumulation. The second
+        // term is the time's own resolution (8 eps |t| per switch, twice the smallest step): switches
+        // that the engine can only separate by its smallest step pile up there.
+        if (recent.size() >= options.zeno_events &&
+            recent.back() - recent.front() <=
+                options.zeno_span * std::max(1.0, t - model_.t0) +
+                    static_cast<double>(options.zeno_events) * 8 * kEps * std::fabs(t))
+            return finish(RunStatus::zeno, std::to_string(recent.size()) + " switches between t = " +
+                                               time_text(recent.front()) + " and " + time_text(recent.back()) +
+                                               " (accumulating switches, configuration '" + cfg.spec(model_) + "')");
+        if (options.max_events && sum.events >= options.max_events)
+            return finish(RunStatus::max_events, "stopped after " + std::to_string(sum.events) + " events");
+        if ((++progress_counter & 255) == 0 && !observer.on_progress(t))
+            return finish(RunStatus::stopped, "stopped at t = " + time_text(t));
+    }
+    return finish(RunStatus::ok, "");
+}
+
+}  // namespace hsnc

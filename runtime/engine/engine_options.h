@@ -1,0 +1,21 @@
+// hsnc -- how far a run goes and what it reports (Engine::run, and the
+// baselines and the reference, which take the same options).
+#pragma once
+
+#include <cstddef>
+
+namespace hsnc {
+
+struct EngineOptions {
+    double t_end = 0.0;
+    double dt = 0.0;                   ///< sample spacing; 0: samples only at t0 and t_end
+    bool samples = true;               ///< call on_sample at all
+    std::size_t max_events = 0;        ///< 0: unlimited
+    /// Zeno: zeno_events switches within zeno_span * max(1, t - t0) seconds
+    /// (relative to the time the run has covered; plus the time's resolution,
+    /// 8 eps |t| per switch, twice the smallest step) stop the run with RunStatus::zeno.
+    std::size_t zeno_events = 1000;
+    double zeno_span = 1e-9;
+};
+
+}  // namespace hsnc

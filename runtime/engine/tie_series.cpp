@@ -1,0 +1,225 @@
+#include "tie_series.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "kernel_abi.h"
+
+namespace hsnc {
+namespace {
+
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+double body(const std::vector<double>& y, int b) { return b == kGround ? 0.0 : y[static_cast<std::size_t>(b)]; }
+
+// Every element acting between two bodies in cfg: springs and closed contacts
+// (stiffness, and the gap for the preload of a contact).
+template <class Fn>
+void for_each_link(const Model& model, const Configuration& cfg, Fn&& fn) {
+    for (const Spring& s : model.springs) fn(s.a, s.b, s.k, 0.0);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c]) fn(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k, model.contacts[c].gap);
+}
+
+// A_i^(k) and the magnitude of its terms, from x^(k), x^(k+1) of the series.
+void force_derivative(const Model& model, const Configuration& cfg, int i, double t, double t_lo,
+                      const MotionSeries& s, int k, double& value, double& magnitude) {
+    const std::vector<double>&xk = s.x[static_cast<std::size_t>(k)], &xk1 = s.x[static_cast<std::size_t>(k) + 1];
+    const std::vector<double>&mk = s.mag[static_cast<std::size_t>(k)], &mk1 = s.mag[static_cast<std::size_t>(k) + 1];
+    const std::size_t ii = static_cast<std::size_t>(i);
+    value = k == 0 ? model.load[ii] : 0.0;
+    magnitude = std::fabs(value);
+    value -= model.alpha * model.masses[ii].m * xk1[ii];
+    magnitude += std::fabs(model.alpha) * model.masses[ii].m * mk1[ii];
+    for_each_link(model, cfg, [&](int a, int b, double kk, double gap) {
+        if (a == b || (a != i && b != i)) return;
+        double f = -kk * (body(xk, a) - body(xk, b)) - model.beta * kk * (body(xk1, a) - body(xk1, b));
+        double fm = kk * (body(mk, a) + body(mk, b)) + std::fabs(model.beta) * kk * (body(mk1, a) + body(mk1, b));
+        if (k == 0 && gap != 0.0) f += kk * gap, fm += std::fabs(kk * gap);
+        value += a == i ? f : -f;
+        magnitude += fm;
+    });
+    for (const Harmonic& h : model.forcing) {
+        const double amp = h.amplitude[ii];
+        if (amp == 0.0) continue;
+        // d^k/dt^k sin(arg) = Omega^k sin(arg + k pi/2); the phase reduced accurately at large t.
+        const double arg = hsnc_phase(h.omega, t, t_lo, h.phase);
+        double trig = (k % 2 == 0) ? std::sin(arg) : std::cos(arg);
+        if (k % 4 == 2 || k % 4 == 3) trig = -trig;
+        const double wk = std::pow(h.omega, k);
+        value += amp * wk * trig;
+        magnitude += std::fabs(amp * wk);
+    }
+}
+
+}  // namespace
+
+int tie_order(const Model& model) { return static_cast<int>(2 * model.dof() + 2 * model.forcing.size() + 2); }
+
+double tie_noise(double mag) { return 16 * kEps * mag; }
+
+MotionSeries motion_series(const Model& model, const Configuration& cfg, const signed char* sgn, double t, double t_lo,
+                           const double* x, const double* v, int order) {
+    const std::size_t n = model.dof();
+    MotionSeries s;
+    s.x.assign(static_cast<std::size_t>(order) + 1, std::vector<double>(n, 0.0));
+    s.mag = s.x;
+    for (std::size_t i = 0; i < n; ++i) {
+        s.x[0][i] = x[i];
+        s.mag[0][i] = std::fabs(x[i]);
+        if (order >= 1 && !cfg.stuck[i]) {
+            s.x[1][i] = v[i];
+            s.mag[1][i] = std::fabs(v[i]);
+        }
+    }
+    for (int k = 0; k + 2 <= order; ++k)
+        for (std::size_t i = 0; i < n; ++i) {
+            if (cfg.stuck[i]) continue;
+            double A, m;
+            force_derivative(model, cfg, static_cast<int>(i), t, t_lo, s, k, A, m);
+            if (k == 0 && model.masses[i].has_friction && sgn[i] != 0) {
+                const double fr = model.masses[i].mu_k * model.normal_force(static_cast<int>(i));
+                A -= fr * sgn[i];
+                m += fr;
+            }
+            s.x[static_cast<std::size_t>(k) + 2][i] = A / model.masses[i].m;
+            s.mag[static_cast<std::size_t>(k) + 2][i] = m / model.masses[i].m;
+        }
+    return s;
+}
+
+void switch_series(const Model& model, const Configuration& cfg, const SwitchFunction& f, double t, double t_lo,
+                   const MotionSeries& series, std::vector<double>& d, std::vector<double>& mag) {
+    const std::size_t order = series.x.size() - 1;
+    d.assign(order, 0.0);
+    mag.assign(order, 0.0);
+    const int e = f.element;
+    for (std::size_t k = 0; k < order; ++k) {
+        if (f.kind == SwitchKind::gap) {
+            const Contact& c = model.contacts[static_cast<std::size_t>(e)];
+            d[k] = body(series.x[k], c.a) - body(series.x[k], c.b) - (k == 0 ? c.gap : 0.0);
+            mag[k] = body(series.mag[k], c.a) + body(series.mag[k], c.b) + (k == 0 ? std::fabs(c.gap) : 0.0);
+        } else if (f.kind == SwitchKind::velocity) {
+            d[k] = series.x[k + 1][static_cast<std::size_t>(e)];
+            mag[k] = series.mag[k + 1][static_cast<std::size_t>(e)];
+        } else {
+            double A, m;
+            force_derivative(model, cfg, e, t, t_lo, series, static_cast<int>(k), A, m);
+            const double limit = k == 0 ? model.masses[static_cast<std::size_t>(e)].mu_s * model.normal_force(e) : 0.0;
+            d[k] = (f.kind == SwitchKind::release_pos ? A : -A) - limit;
+            mag[k] = m + limit;
+        }
+    }
+}
+
+void force_series(const Model& model, const Configuration& cfg, int i, double t, double t_lo,
+                  const MotionSeries& series, std::vector<double>& d, std::vector<double>& mag) {
+    const std::size_t order = series.x.size() - 1;
+    d.assign(order, 0.0);
+    mag.assign(order, 0.0);
+    for (std::size_t k = 0; k < order; ++k)
+        force_derivative(model, cfg, i, t, t_lo, series, static_cast<int>(k), d[k], mag[k]);
+}
+
+double rate_magnitude(const Model& model, const Configuration& cfg, const SwitchFunction& f, const double* x,
+                      const double* v) {
+    auto at = [](const double* y, int b) { return b == kGround ? 0.0 : std::fabs(y[b]); };
+    const int e = f.element;
+    if (f.kind == SwitchKind::gap) {
+        const Contact& c = model.contacts[static_cast<std::size_t>(e)];
+        return at(v, c.a) + at(v, c.b);
+    }
+    // The magnitude of the terms of x_i'' (0 for a stuck mass): A_i's terms and the friction force.
+    auto accel_magnitude = [&](int i) {
+        const std::size_t ii = static_cast<std::size_t>(i);
+        if (i == kGround || cfg.stuck[ii]) return 0.0;
+        double m = std::fabs(model.load[ii]) + std::fabs(model.alpha) * model.masses[ii].m * std::fabs(v[ii]);
+        for_each_link(model, cfg, [&](int a, int b, double kk, double gap) {
+            if (a == b || (a != i && b != i)) return;
+            m += kk * (at(x, a) + at(x, b)) + std::fabs(model.beta) * kk * (at(v, a) + at(v, b)) + std::fabs(kk * gap);
+        });
+        for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii]);
+        if (model.masses[ii].has_friction) m += model.masses[ii].mu_k * model.normal_force(i);
+        return m / model.masses[ii].m;
+    };
+    if (f.kind == SwitchKind::velocity) return accel_magnitude(e);
+    // A_i' = -(K v)_i - (C x'')_i + sum_h F_hi Omega_h cos(...).
+    const std::size_t ii = static_cast<std::size_t>(e);
+    double m = std::fabs(model.alpha) * model.masses[ii].m * accel_magnitude(e);
+    for_each_link(model, cfg, [&](int a, int b, double kk, double) {
+        if (a == b || (a != e && b != e)) return;
+        m += kk * (at(v, a) + at(v, b)) + std::fabs(model.beta) * kk * (accel_magnitude(a) + accel_magnitude(b));
+    });
+    for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii] * h.omega);
+    return m;
+}
+
+int first_nonzero_sign(const std::vector<double>& d, const std::vector<double>& mag, int max_order, int* order) {
+    const std::size_t last = std::min(d.size() - 1, static_cast<std::size_t>(std::max(max_order, 0)));
+    for (std::size_t k = 1; k <= last; ++k)
+        if (std::fabs(d[k]) > tie_noise(mag[k])) {
+            if (order) *order = static_cast<int>(k);
+            return d[k] > 0 ? 1 : -1;
+        }
+    return 0;
+}
+
+double derivative_bound(const Model& model, const Configuration& cfg, const SwitchFunction& f,
+                        const MotionSeries& series, int k, double T) {
+    if (!(model.alpha >= 0) || !(model.beta >= 0) || k < 2) return kInf;
+    const std::size_t n = model.dof();
+    auto free_mass = [&](int b) { return b != kGround && !cfg.stuck[static_cast<std::size_t>(b)]; };
+    // R_j(T) >= sqrt(2 E_j(s)) on [0, T], j >= 1; every value taken at its
+    // magnitude plus its rounding level, and the result enlarged by a few ulps.
+    auto R = [&](int j) {
+        const std::vector<double>&z = series.x[static_cast<std::size_t>(j)], &zm = series.mag[static_cast<std::size_t>(j)];
+        const std::vector<double>&zd = series.x[static_cast<std::size_t>(j) + 1],
+                                  &zdm = series.mag[static_cast<std::size_t>(j) + 1];
+        auto up = [](double value, double mag) { return std::fabs(value) + tie_noise(mag); };
+        double two_e = 0.0;
+        for (std::size_t i = 0; i < n; ++i)
+            if (!cfg.stuck[i]) two_e += model.masses[i].m * up(zd[i], zdm[i]) * up(zd[i], zdm[i]);
+        for_each_link(model, cfg, [&](int a, int b, double kk, double) {
+            if (a == b) return;
+            const double za = free_mass(a) ? z[static_cast<std::size_t>(a)] : 0.0;
+            const double zb = free_mass(b) ? z[static_cast<std::size_t>(b)] : 0.0;
+            const double ma = free_mass(a) ? zm[static_cast<std::size_t>(a)] : 0.0;
+            const double mb = free_mass(b) ? zm[static_cast<std::size_t>(b)] : 0.0;
+            const double dz = up(za - zb, ma + mb);
+            two_e += kk * dz * dz;
+        });
+        double phi = 0.0;
+        for (const Harmonic& h : model.forcing) {
+            double norm = 0.0;
+            for (std::size_t i = 0; i < n; ++i)
+                if (!cfg.stuck[i]) norm += h.amplitude[i] * h.amplitude[i] / model.masses[i].m;
+            phi += std::pow(std::fabs(h.omega), j) * std::sqrt(norm);
+        }
+        return (std::sqrt(two_e) + phi * T) * (1 + 64 * kEps);
+    };
+    // |x_b^(j+1)| <= R_j / sqrt(m_b) for a free mass b, 0 for ground and stuck masses.
+    auto per_mass = [&](int b, double r) {
+        return free_mass(b) ? r / std::sqrt(model.masses[static_cast<std::size_t>(b)].m) : 0.0;
+    };
+    const int e = f.element;
+    if (f.kind == SwitchKind::gap) {
+        const Contact& c = model.contacts[static_cast<std::size_t>(e)];
+        const double r = R(k - 1);  // G^(k) = x_a^(k) - x_b^(k)
+        return per_mass(c.a, r) + per_mass(c.b, r);
+    }
+    if (f.kind == SwitchKind::velocity) return per_mass(e, R(k));  // v^(k) = x^(k+1)
+    // A_i^(k) = -(K x^(k))_i - (C x^(k+1))_i + sum_h F_hi Omega_h^k sin(...): the neighbours' terms.
+    const double rk1 = R(k - 1), rk = R(k);
+    double B = 0.0;
+    for_each_link(model, cfg, [&](int a, int b, double kk, double) {
+        if (a == b || (a != e && b != e)) return;
+        for (int o : {a, b}) B += kk * per_mass(o, rk1) + std::fabs(model.beta) * kk * per_mass(o, rk);
+    });
+    B += std::fabs(model.alpha) * model.masses[static_cast<std::size_t>(e)].m * per_mass(e, rk);
+    for (const Harmonic& h : model.forcing) B += std::fabs(h.amplitude[static_cast<std::size_t>(e)]) * std::pow(std::fabs(h.omega), k);
+    return B * (1 + 64 * kEps);
+}
+
+}  // namespace hsnc

@@ -1,0 +1,249 @@
+// hsnc -- the decision rules of the contract at a switch and at t0
+// (interface.md section 2, "Ties and touches", "At t0"), written once for any
+// scalar type. The double engine (runtime/engine/transitions.cpp, also behind the
+// event-locating integrators) and the CLN reference (reference/reference.cpp)
+// instantiate them, each with its own arithmetic: the forces, their time
+// derivatives and the rounding level below which a value counts as zero are
+// the method's (the reference's independence from the double code is what
+// makes it a check); which switch applies, what the new configuration is and
+// how a tie is broken are these functions.
+//
+// A method supplies a class P with
+//   using Scalar = T;
+//   int sign(const T&) const;                          // -1, 0, +1
+//   bool negligible(const T& value, const T& magnitude) const;  // zero to its rounding
+//   T abs(const T&) const;
+//   int dof() const; std::size_t contacts() const; bool has_friction(int i) const;
+//   int velocity_sign(int i) const;                    // of v_i; 0 when v_i = 0 exactly
+//   void stop(int i);                                  // v_i = 0 exactly (a stop)
+//   T force(const Configuration&, int i) const;        // A_i: every force on mass i but friction
+//   T static_limit(int i) const;                       // mu_s N_i
+//   T held_rate(const Configuration&, int i) const;    // dA_i/dt, mass i held, the others' accelerations
+//                                                      // from just before (0 when there are none: t0)
+//   int tie_order() const;                             // 2n + 2H + 2 (H forcing harmonics)
+//   Series<T> held_series(const Configuration&, const std::vector<signed char>& sgn, int i, int order) const;
+//                                                      // A_i^(k), k = 0..order, in cfg with mass i held
+//   Series<T> gap_now(int c) const;                    // G_c, G_c' at the current state
+//   void prepare_ties(const Configuration&, const std::vector<signed char>& sgn);
+//   Series<T> tied_gap_series(int c, int order) const; // G_c^(k), k = 0..order, in the configuration
+//                                                      // of the last prepare_ties
+// where Series<T> holds derivatives d[k] with the magnitudes mag[k] of their
+// terms (their rounding level). A tie is decided by the first non-zero
+// derivative of any order: the rules ask for the series up to tie_order(),
+// the order past which a function of the motion cannot vanish with all its
+// derivatives unless it vanishes identically (the motion and the forcing
+// harmonics are a linear system of dimension at most 2n + 2H + 1:
+// Cayley-Hamilton), so "none non-zero" means the function stays at 0.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+#include "configuration.h"
+#include "event_kind.h"
+#include "switch_function.h"
+
+namespace hsnc {
+
+/// One change of the configuration at a switch instant.
+struct Transition {
+    EventKind kind;
+    int element;
+};
+
+namespace rules {
+
+/// Time derivatives d[0], d[1], ... of a quantity with the magnitudes of their terms.
+template <class T>
+struct Series {
+    std::vector<T> d, mag;
+};
+
+/// The sign of the first d[k], k >= from, that is not zero to its rounding
+/// (the first non-zero derivative, interface.md "Ties and touches"); 0 when
+/// none is. `order`, when given, receives that k.
+template <class P, class T>
+int first_nonzero_sign(const P& p, const Series<T>& s, std::size_t from, int* order = nullptr) {
+    for (std::size_t k = from; k < s.d.size(); ++k)
+        if (!p.negligible(s.d[k], s.mag[k])) {
+            if (order) *order = static_cast<int>(k);
+            return p.sign(s.d[k]);
+        }
+    return 0;
+}
+
+/// Stick rule at v_i = 0: 0 when the mass sticks (|A_i| < mu_s N_i), else the
+/// direction it slides in (that of A_i). A tie |A_i| = mu_s N_i (to rounding)
+/// is decided by the first non-zero derivative of |A_i| - mu_s N_i with the
+/// mass held: stuck unless it is increasing. When mu_s N_i = 0 and A_i = 0 the
+/// mass slides along the first non-zero derivative of A_i (|A_i| grows as soon
+/// as A_i does not vanish).
+template <class P>
+signed char stick_rule(const P& p, const Configuration& cfg, const std::vector<signed char>& sgn, int i) {
+    using T = typename P::Scalar;
+    const T A = p.force(cfg, i), limit = p.static_limit(i);
+    const signed char dir = p.sign(A) > 0 ? 1 : -1;
+    const T absA = p.abs(A);
+    if (!p.negligible(absA - limit, absA < limit ? limit : absA)) return absA < limit ? 0 : dir;
+    Configuration hold = cfg;  // the held motion: mass i stuck, no friction force on it
+    hold.stuck[i] = 1;
+    std::vector<signed char> s = sgn;
+    s[static_cast<std::size_t>(i)] = 0;
+    const Series<T> series = p.held_series(hold, s, i, p.tie_order());
+    const T rate = p.held_rate(cfg, i);
+    if (!p.negligible(rate, series.mag[1])) return p.sign(rate) == dir ? dir : 0;
+    if (p.sign(limit) == 0 && p.negligible(A, series.mag[0]))
+        return static_cast<signed char>(first_nonzero_sign(p, series, 1));
+    // |A_i| - mu_s N_i has the derivatives dir * A_i^(k): none non-zero, it stays at the limit.
+    return first_nonzero_sign(p, series, 1) == dir ? dir : 0;
+}
+
+/// The state a contact enters from G, G', ... at an instant where it is tied
+/// (G = G' = 0 to rounding): closed (1) if its first non-zero derivative from
+/// G'' on (of any order the series holds: the rules pass tied_gap_series(c,
+/// p.tie_order())) is positive, open (0) if negative; -1 when none decides (G
+/// stays at 0: a touch changes nothing, the contact keeps its state).
+template <class P, class T>
+int tied_contact_state(const P& p, const Series<T>& G) {
+    const int s = first_nonzero_sign(p, G, 2);
+    return s > 0 ? 1 : s < 0 ? 0 : -1;
+}
+
+/// Whether G = G' = 0 to rounding (a touch, not a crossing).
+template <class P, class T>
+bool tied(const P& p, const Series<T>& G) {
+    return p.negligible(G.d[0], G.mag[0]) && p.negligible(G.d[1], G.mag[1]);
+}
+
+/// Applies the switch functions that reached zero at this instant (interface.md
+/// section 2): a stop sets v_i = 0 exactly; every contact change first (a
+/// switched contact that is only tied is decided in the last step); then the
+/// friction decisions -- stopped masses by the stick rule, released masses slide
+/// along A_i -- and every stuck mass re-checked against the forces of the new
+/// configuration, until nothing changes; then the contacts at G = G' = 0 enter
+/// the state the resulting forces give them, and the friction is decided again
+/// if one changed. Updates cfg, sgn (the friction direction of sliding masses),
+/// appends the events to `out`; false when the decisions do not settle
+/// (chattering).
+template <class P>
+bool apply_switches(P& p, Configuration& cfg, std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
+                    std::vector<Transition>& out) {
+    const int n = p.dof();
+    for (const SwitchFunction& f : switched)
+        if (f.kind == SwitchKind::velocity) p.stop(f.element);
+    std::vector<char> is_tied(p.contacts(), 0);
+    for (const SwitchFunction& f : switched) {
+        if (f.kind != SwitchKind::gap) continue;
+        if (tied(p, p.gap_now(f.element))) {
+            is_tied[static_cast<std::size_t>(f.element)] = 1;
+            continue;
+        }
+        cfg.closed[f.element] = !cfg.closed[f.element];
+        out.push_back({cfg.closed[f.element] ? EventKind::contact_close : EventKind::contact_open, f.element});
+    }
+    std::vector<char> deciding(static_cast<std::size_t>(n), 0);
+    for (const SwitchFunction& f : switched) {
+        const int i = f.element;
+        if (f.kind == SwitchKind::velocity) {
+            deciding[i] = 1;
+        } else if (f.kind == SwitchKind::release_pos || f.kind == SwitchKind::release_neg) {
+            cfg.stuck[i] = 0;
+            sgn[i] = f.kind == SwitchKind::release_pos ? 1 : -1;
+            out.push_back({EventKind::release, i});
+        }
+    }
+    for (int round = 0; round < 2 * n + 4; ++round) {
+        bool changed = false;
+        for (int i = 0; i < n; ++i) {
+            if (!deciding[i]) continue;
+            deciding[i] = 0;
+            const signed char dir = stick_rule(p, cfg, sgn, i);
+            if (dir == 0) {
+                cfg.stuck[i] = 1;
+                sgn[i] = 0;
+                out.push_back({EventKind::stick, i});
+            } else {
+                if (dir != sgn[i]) out.push_back({EventKind::reversal, i});
+                sgn[i] = dir;
+            }
+            changed = true;
+        }
+        for (int i = 0; i < n; ++i) {
+            if (!cfg.stuck[i]) continue;
+            const signed char dir = stick_rule(p, cfg, sgn, i);
+            if (dir == 0) continue;
+            cfg.stuck[i] = 0;
+            sgn[i] = dir;
+            out.push_back({EventKind::release, i});
+            changed = true;
+        }
+        if (changed) continue;
+        // Contacts at G = G' = 0 at this instant (a touch, or a mass stopped or
+        // released on its stop) enter the state the forces of the resulting
+        // configuration give them; contacts the search found crossing keep their change.
+        p.prepare_ties(cfg, sgn);
+        for (std::size_t c = 0; c < p.contacts(); ++c) {
+            const SwitchFunction gf{SwitchKind::gap, static_cast<int>(c)};
+            if (!is_tied[c] && std::find(switched.begin(), switched.end(), gf) != switched.end()) continue;
+            if (!is_tied[c] && !tied(p, p.gap_now(static_cast<int>(c)))) continue;
+            const int state = tied_contact_state(p, p.tied_gap_series(static_cast<int>(c), p.tie_order()));
+            if (state < 0 || state == cfg.closed[c]) continue;
+            cfg.closed[c] = static_cast<char>(state);
+            out.push_back({state ? EventKind::contact_close : EventKind::contact_open, static_cast<int>(c)});
+            changed = true;
+        }
+        if (!changed) return true;
+    }
+    return false;
+}
+
+/// The configuration the motion enters at t0 (interface.md "At t0"): a contact
+/// by the sign of G, then of G'; one with G = G' = 0 is provisionally closed (at
+/// rest on the boundary) and decided by tied_contact_state once the friction is
+/// decided. A friction mass with v_i != 0 slides along v_i; one at rest sticks
+/// or slides by the stick rule. A tied contact carries no force (G = G' = 0), so
+/// its state changes no friction decision directly; the friction is decided
+/// again after any change, at most 4 rounds. `cfg` comes in all open.
+template <class P>
+void entered_configuration(P& p, Configuration& cfg, std::vector<signed char>& sgn) {
+    const int n = p.dof();
+    sgn.assign(static_cast<std::size_t>(n), 0);
+    std::vector<int> ties;
+    for (std::size_t c = 0; c < p.contacts(); ++c) {
+        const int s = first_nonzero_sign(p, p.gap_now(static_cast<int>(c)), 0);  // G, then G'
+        cfg.closed[c] = s >= 0;
+        if (s == 0) ties.push_back(static_cast<int>(c));
+    }
+    auto decide_friction = [&] {
+        for (int i = 0; i < n; ++i) {
+            if (!p.has_friction(i)) continue;
+            const int v = p.velocity_sign(i);
+            if (v != 0) {
+                cfg.stuck[i] = 0;
+                sgn[i] = static_cast<signed char>(v);
+            } else {
+                const signed char dir = stick_rule(p, cfg, sgn, i);
+                cfg.stuck[i] = dir == 0;
+                sgn[i] = dir;
+            }
+        }
+    };
+    decide_friction();
+    for (int round = 0; round < 4 && !ties.empty(); ++round) {
+        p.prepare_ties(cfg, sgn);
+        bool changed = false;
+        for (int c : ties) {
+            const int state = tied_contact_state(p, p.tied_gap_series(c, p.tie_order()));
+            if (state >= 0 && state != cfg.closed[c]) {
+                cfg.closed[c] = static_cast<char>(state);
+                changed = true;
+            }
+        }
+        if (!changed) break;
+        decide_friction();
+    }
+}
+
+}  // namespace rules
+}  // namespace hsnc

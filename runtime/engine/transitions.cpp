@@ -1,0 +1,100 @@
+#include "transitions.h"
+
+#include <cmath>
+#include <algorithm>
+#include <limits>
+
+#include "assembly.h"
+#include "tie_series.h"
+
+namespace hsnc {
+namespace {
+
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+
+// The double engine's arithmetic for the decision rules (transition_rules.h):
+// forces and their derivatives from the equation of motion at (t, x, v) (the
+// series of tie_series.h), zero meaning within 16 ulps of the magnitude of
+// the terms.
+class DoublePhysics {
+public:
+    using Scalar = double;
+    DoublePhysics(const Model& model, double t, const double* x, double* v, const double* a)
+        : model_(model), t_(t), x_(x), v_(v), a_(a), n_(static_cast<int>(model.dof())) {}
+
+    int sign(double y) const { return y > 0 ? 1 : y < 0 ? -1 : 0; }
+    bool negligible(double value, double magnitude) const { return std::fabs(value) <= 16 * kEps * magnitude; }
+    double abs(double y) const { return std::fabs(y); }
+    int dof() const { return n_; }
+    std::size_t contacts() const { return model_.contacts.size(); }
+    bool has_friction(int i) const { return model_.masses[i].has_friction; }
+    int velocity_sign(int i) const { return sign(v_[i]); }
+    void stop(int i) { v_[i] = 0.0; }
+    double force(const Configuration& cfg, int i) const { return force_on_mass(model_, cfg, i, t_, x_, v_); }
+    double static_limit(int i) const { return model_.masses[i].mu_s * model_.normal_force(i); }
+    double held_rate(const Configuration& cfg, int i) const {
+        std::vector<double> held(model_.dof(), 0.0);
+        if (a_) held.assign(a_, a_ + model_.dof());
+        held[i] = 0.0;
+        return force_rate_on_mass(model_, cfg, i, t_, v_, held.data());
+    }
+    int tie_order() const { return hsnc::tie_order(model_); }
+    rules::Series<double> held_series(const Configuration& hold, const std::vector<signed char>& sgn, int i,
+                                      int order) const {
+        const MotionSeries m = motion_series(model_, hold, sgn.data(), t_, 0.0, x_, v_, order + 1);
+        rules::Series<double> s;
+        force_series(model_, hold, i, t_, 0.0, m, s.d, s.mag);
+        return s;
+    }
+    rules::Series<double> gap_now(int c) const {
+        const Contact& k = model_.contacts[c];
+        return {{gap(model_, c, x_), gap_rate(model_, c, v_)},
+                {std::fabs(body(x_, k.a)) + std::fabs(body(x_, k.b)) + std::fabs(k.gap),
+                 std::fabs(body(v_, k.a)) + std::fabs(body(v_, k.b))}};
+    }
+    void prepare_ties(const Configuration& cfg, const std::vector<signed char>& sgn) {
+        cfg_ = cfg;
+        sgn_ = sgn;
+    }
+    // G^(k), k = 0..order, in the prepared configuration: the motion's
+    // derivatives from the equation of motion (tie_series.h).
+    rules::Series<double> tied_gap_series(int c, int order) const {
+        const MotionSeries m = motion_series(model_, cfg_, sgn_.data(), t_, 0.0, x_, v_, order + 1);
+        rules::Series<double> s;
+        switch_series(model_, cfg_, SwitchFunction{SwitchKind::gap, c}, t_, 0.0, m, s.d, s.mag);
+        return s;
+    }
+
+private:
+    static double body(const double* y, int b) { return b == kGround ? 0.0 : y[b]; }
+    const Model& model_;
+    double t_;
+    const double* x_;
+    double* v_;
+    const double* a_;
+    int n_;
+    Configuration cfg_;
+    std::vector<signed char> sgn_;
+};
+
+}  // namespace
+
+bool apply_switches(const Model& model, double t, const double* x, double* v, const double* a, Configuration& cfg,
+                    std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
+                    std::vector<Transition>& out, std::string& why) {
+    DoublePhysics p(model, t, x, v, a);
+    if (rules::apply_switches(p, cfg, sgn, switched, out)) return true;
+    why = "friction decisions at t = " + std::to_string(t) + " do not settle";
+    return false;
+}
+
+Configuration entered_configuration(const Model& model, double t, const double* x, const double* v,
+                                    std::vector<signed char>& sgn) {
+    Configuration cfg = Configuration::all_open(model);
+    // Nothing stops at t0: v is only read.
+    DoublePhysics p(model, t, x, const_cast<double*>(v), nullptr);
+    rules::entered_configuration(p, cfg, sgn);
+    return cfg;
+}
+
+}  // namespace hsnc

@@ -1,0 +1,39 @@
+// hsnc -- what happens at a switch (interface.md section 2): contact changes
+// first, then the friction decisions (stick, release, reversal) with the
+// forces of the configuration that results, repeated until nothing changes.
+// Shared by the HSNC engine and the event-locating baseline integrator, so
+// every method applies exactly the same physics; the decision rules
+// themselves are runtime/engine/transition_rules.h, which the CLN reference
+// instantiates too.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "configuration.h"
+#include "event_kind.h"
+#include "model.h"
+#include "switch_function.h"
+#include "transition_rules.h"  // Transition, and the rules this file instantiates for double
+
+namespace hsnc {
+
+
+/// Apply the switch functions that reached zero at instant t with state
+/// (x, v) and accelerations a just before it (may be null: taken as 0; used
+/// only to break a tie |A_i| = mu_s*N_i): update cfg and sgn (friction direction of sliding masses); a mass
+/// that stops gets v_i = 0 exactly. Appends the resulting events to `out`.
+/// Returns false (and says why) when the decisions at this instant do not
+/// settle (chattering).
+bool apply_switches(const Model& model, double t, const double* x, double* v, const double* a, Configuration& cfg,
+                    std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
+                    std::vector<Transition>& out, std::string& why);
+
+/// The configuration the motion enters at (t, x, v) (interface.md: "At t0 ...").
+/// Contacts by G, a tie G = 0 by the first non-zero of G', G'', G''', ...
+/// (closed if G is increasing; all zero counts as closed at t0, x[a]-x[b] >= gap);
+/// friction masses with v_i = 0 stuck or sliding by A_i.
+Configuration entered_configuration(const Model& model, double t, const double* x, const double* v,
+                                    std::vector<signed char>& sgn);
+
+}  // namespace hsnc

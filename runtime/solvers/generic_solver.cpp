@@ -1,0 +1,544 @@
+#include "generic_solver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <type_traits>
+
+#include "assembly.h"
+#include "kernel_abi.h"  // hsnc_phi2: phi_2(x) = (e^x - 1 - x)/x^2, defined once
+
+namespace hsnc {
+namespace {
+
+using cplx = std::complex<double>;
+constexpr double kTwoPi = 6.283185307179586;             // 2*pi rounded to double
+constexpr double kTwoPiLo = 2.4492935982947064e-16;      // 2*pi - kTwoPi
+constexpr double kPi = 3.141592653589793;
+// A harmonic of mode j uses the transient-coupled form when
+// sqrt(D) < kCoupled*lambda, D = (lambda - Omega^2)^2 + (c Omega)^2: the
+// standard particular solution then has amplitude > 10x the static response and
+// would cancel against the homogeneous part. Below this threshold the standard
+// form loses at most a factor 10 in relative accuracy.
+// This band is the generic solver's own on purpose, not kResonanceBand
+// (generator/derivation.h) of the kernels and the interpreter: the generic
+// solver is their independent oracle (README "One program, printed and
+// interpreted"), so it decides with another criterion (damped modes too,
+// about 5% in frequency for an undamped one) and another resonance-stable form
+// (the Duhamel integral), and agreement across both bands is what the tests see.
+constexpr double kCoupled = 0.1;
+
+// phi_1(x) = (e^x - 1)/x, phi_1(0) = 1 (accurate for every x: expm1).
+double phi1(double x) { return x == 0.0 ? 1.0 : std::expm1(x) / x; }
+
+// e^w - 1 for complex w = x + iy without cancellation:
+// Re = expm1(x) cos y - 2 sin^2(y/2), Im = e^x sin y.
+cplx expm1c(cplx w) {
+    const double x = w.real(), y = w.imag();
+    const double s = std::sin(0.5 * y);
+    return {std::expm1(x) * std::cos(y) - 2.0 * s * s, std::exp(x) * std::sin(y)};
+}
+
+// Omega*(t0 + t0_lo) + phase reduced to [-pi, pi] with the rounding error of
+// the product kept (fma) and 2*pi in two parts (Cody-Waite), so a large t0
+// costs no phase accuracy beyond that of t0 + t0_lo itself. The emitted
+// kernels do the same (generator/emitter.cpp, hsnc_phase).
+double reduced_phase(double omega, double t0, double t0_lo, double phase) {
+    const double hi = omega * t0;
+    const double lo = std::fma(omega, t0, -hi) + omega * t0_lo;
+    const double n = std::nearbyint(hi / kTwoPi);
+    double r = std::fma(-n, kTwoPi, hi);
+    r = std::fma(-n, kTwoPiLo, r);
+    return std::remainder(r + lo + phase, kTwoPi);
+}
+
+}  // namespace
+
+GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
+    : cfg_(cfg), switches_(switch_functions(model, cfg)), modal_(modal_analysis(model, cfg)) {
+    n_ = static_cast<int>(model.dof());
+    nf_ = static_cast<int>(modal_.free.size());
+    alpha_ = model.alpha;
+    const int ns = static_cast<int>(switches_.size());
+
+    mass_ = mass_vector(model);
+    normal_.resize(n_);
+    mu_k_.resize(n_);
+    mu_s_.resize(n_);
+    friction_.resize(static_cast<std::size_t>(n_));
+    for (int i = 0; i < n_; ++i) {
+        normal_(i) = model.normal_force(static_cast<std::size_t>(i));
+        mu_k_(i) = model.masses[i].mu_k;
+        mu_s_(i) = model.masses[i].mu_s;
+        friction_[i] = model.masses[i].has_friction ? 1 : 0;
+    }
+    K_ = stiffness_matrix(model, cfg);
+    C_ = damping_matrix(model, cfg);
+    f_const_ = constant_force(model, cfg);
+
+    // Harmonics: omega = 0 is a constant force; omega < 0 is folded to
+    // |omega| with sin(-|W| t + ph) = sin(|W| t + pi - ph).
+    std::vector<int> dyn;
+    for (std::size_t h = 0; h < model.forcing.size(); ++h) {
+        const Harmonic& hm = model.forcing[h];
+        if (hm.omega == 0.0) {
+            for (int i = 0; i < n_; ++i) f_const_(i) += hm.amplitude[i] * std::sin(hm.phase);
+        } else {
+            dyn.push_back(static_cast<int>(h));
+        }
+    }
+    nh_ = static_cast<int>(dyn.size());
+    h_omega_.resize(nh_);
+    h_phase_.resize(nh_);
+    h_amp_.resize(n_, nh_);
+    for (int h = 0; h < nh_; ++h) {
+        const Harmonic& hm = model.forcing[dyn[h]];
+        h_omega_(h) = std::abs(hm.omega);
+        h_phase_(h) = hm.omega > 0.0 ? hm.phase : kPi - hm.phase;
+        for (int i = 0; i < n_; ++i) h_amp_(i, h) = hm.amplitude[i];
+    }
+
+    // Modes: M_F-normalised Phi, modal damping c = alpha + beta*lambda, regime.
+    phi_ = modal_.phi;
+    phi_t_m_.resize(nf_, nf_);
+    for (int j = 0; j < nf_; ++j)
+        for (int r = 0; r < nf_; ++r) phi_t_m_(j, r) = phi_(r, j) * mass_(modal_.free[r]);
+    regime_.resize(static_cast<std::size_t>(nf_));
+    lambda_ = modal_.lambda;
+    omega_.resize(nf_);
+    c_.resize(nf_);
+    sigma_.resize(nf_);
+    omega_d_ = Eigen::VectorXd::Zero(nf_);
+    gamma_ = Eigen::VectorXd::Zero(nf_);
+    r1_ = Eigen::VectorXd::Zero(nf_);
+    r2_ = Eigen::VectorXd::Zero(nf_);
+    for (int j = 0; j < nf_; ++j) {
+        const double lam = lambda_(j);
+        omega_(j) = std::sqrt(lam);
+        c_(j) = model.alpha + model.beta * lam;
+        sigma_(j) = 0.5 * c_(j);
+        const double w = omega_(j), s = sigma_(j);
+        if (lam == 0.0) {
+            regime_[j] = Regime::rigid;
+        } else if (s < w) {
+            regime_[j] = Regime::underdamped;
+            omega_d_(j) = std::sqrt((w - s) * (w + s));  // no cancellation near xi = 1
+            if (omega_d_(j) == 0.0) regime_[j] = Regime::critical;
+        } else if (s > w) {
+            regime_[j] = Regime::overdamped;
+            gamma_(j) = std::sqrt((s - w) * (s + w));
+            r1_(j) = -lam / (s + gamma_(j));  // slow root -sigma + gamma without cancellation
+            r2_(j) = -(s + gamma_(j));
+            if (gamma_(j) == 0.0) regime_[j] = Regime::critical;
+        } else {
+            regime_[j] = Regime::critical;
+        }
+    }
+
+    // Modal forcing and, per (mode, harmonic), the form of the particular part.
+    P_.resize(nf_, nh_);
+    for (int j = 0; j < nf_; ++j)
+        for (int h = 0; h < nh_; ++h) {
+            double s = 0.0;
+            for (int r = 0; r < nf_; ++r) s += phi_(r, j) * h_amp_(modal_.free[r], h);
+            P_(j, h) = s;
+        }
+    coupled_.setZero(nf_, nh_);
+    pa_ = Eigen::MatrixXd::Zero(nf_, nh_);
+    pb_ = Eigen::MatrixXd::Zero(nf_, nh_);
+    zp_ = Eigen::MatrixXcd::Zero(nf_, nh_);
+    zm_ = Eigen::MatrixXcd::Zero(nf_, nh_);
+    h_has_coupled_.assign(static_cast<std::size_t>(nh_), 0);
+    double min_coupled_omega = std::numeric_limits<double>::infinity();
+    for (int j = 0; j < nf_; ++j)
+        for (int h = 0; h < nh_; ++h) {
+            const double W = h_omega_(h), lam = lambda_(j), c = c_(j);
+            const double det = lam - W * W, cw = c * W;
+            const double D = det * det + cw * cw;
+            if (regime_[j] == Regime::underdamped && std::sqrt(D) < kCoupled * lam) {
+                // Zero-state response y = Im[P e^{i theta} (E+ - E-)/(2 i omega_d)],
+                // E+- = (e^{i Omega tau} - e^{r+- tau})/(i Omega - r+-), r+- = -sigma +- i omega_d
+                // (Duhamel integral of the impulse response against e^{i Omega tau}).
+                coupled_(j, h) = 1;
+                h_has_coupled_[h] = 1;
+                min_coupled_omega = std::min(min_coupled_omega, W);
+                zp_(j, h) = cplx(sigma_(j), W - omega_d_(j));
+                zm_(j, h) = cplx(sigma_(j), W + omega_d_(j));
+            } else {
+                // q_p = a cos + b sin: a = -P c Omega / D, b = P (lambda - Omega^2) / D.
+                pa_(j, h) = -P_(j, h) * cw / D;
+                pb_(j, h) = P_(j, h) * det / D;
+            }
+        }
+    // Coupled terms grow (secular at exact undamped resonance): their bounds
+    // hold over one forcing period.
+    max_step_ = std::isinf(min_coupled_omega) ? std::numeric_limits<double>::infinity()
+                                              : kTwoPi / min_coupled_omega;
+
+    // Switch functions as modal combinations (for bound): rows W, Z, D.
+    for (const Contact& ct : model.contacts) {
+        contact_a_.push_back(ct.a);
+        contact_b_.push_back(ct.b);
+    }
+    contact_gap_.resize(static_cast<Eigen::Index>(model.contacts.size()));
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        contact_gap_(static_cast<Eigen::Index>(c)) = model.contacts[c].gap;
+    W_ = Eigen::MatrixXd::Zero(ns, nf_);
+    Z_ = Eigen::MatrixXd::Zero(ns, nf_);
+    D_ = Eigen::MatrixXd::Zero(ns, nh_);
+    std::vector<int> slot(static_cast<std::size_t>(n_), -1);
+    for (int r = 0; r < nf_; ++r) slot[modal_.free[r]] = r;
+    for (int f = 0; f < ns; ++f) {
+        const SwitchFunction& sf = switches_[f];
+        if (sf.kind == SwitchKind::gap) {
+            const Contact& ct = model.contacts[sf.element];
+            for (int j = 0; j < nf_; ++j) {
+                double w = 0.0;
+                if (ct.a != kGround && slot[ct.a] >= 0) w += phi_(slot[ct.a], j);
+                if (ct.b != kGround && slot[ct.b] >= 0) w -= phi_(slot[ct.b], j);
+                W_(f, j) = w;
+            }
+        } else if (sf.kind == SwitchKind::velocity) {
+            for (int j = 0; j < nf_; ++j) Z_(f, j) = phi_(slot[sf.element], j);
+        } else {
+            // +-A_i: A_i = -(K x)_i - (C v)_i + f_i + F_i(t).
+            const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
+            const int i = sf.element;
+            for (int j = 0; j < nf_; ++j) {
+                double kw = 0.0, cz = 0.0;
+                for (int r = 0; r < nf_; ++r) {
+                    kw += K_(i, modal_.free[r]) * phi_(r, j);
+                    cz += C_(i, modal_.free[r]) * phi_(r, j);
+                }
+                W_(f, j) = -sg * kw;
+                Z_(f, j) = -sg * cz;
+            }
+            for (int h = 0; h < nh_; ++h) D_(f, h) = sg * h_amp_(i, h);
+        }
+    }
+    absW_ = W_.cwiseAbs();
+    absZ_ = Z_.cwiseAbs();
+    // Standard particular parts of harmonic h add up in g_f to ONE sinusoid
+    // A cos + B sin; its second derivative has amplitude Omega^2 sqrt(A^2 + B^2).
+    bound_sin_ = Eigen::VectorXd::Zero(ns);
+    for (int f = 0; f < ns; ++f)
+        for (int h = 0; h < nh_; ++h) {
+            const double W = h_omega_(h);
+            double A = 0.0, B = D_(f, h);
+            for (int j = 0; j < nf_; ++j) {
+                if (coupled_(j, h)) continue;
+                A += W_(f, j) * pa_(j, h) + Z_(f, j) * W * pb_(j, h);
+                B += W_(f, j) * pb_(j, h) - Z_(f, j) * W * pa_(j, h);
+            }
+            bound_sin_(f) += W * W * std::hypot(A, B);
+        }
+
+    // setup / eval storage.
+    x_fix_ = Eigen::VectorXd::Zero(n_);
+    theta_ = Eigen::VectorXd::Zero(nh_);
+    e_theta_ = Eigen::VectorXcd::Zero(nh_);
+    force_ = Eigen::VectorXd::Zero(nf_);
+    p_ = q0_ = qd0_ = u0_ = ud0_ = Eigen::VectorXd::Zero(nf_);
+    rho_ = Eigen::VectorXd::Zero(ns);
+    sn_ = cs_ = Eigen::VectorXd::Zero(nh_);
+    e_omega_tau_ = Eigen::VectorXcd::Zero(nh_);
+    q_ = qd_ = qdd_ = qmag_ = qdmag_ = b2_ = b3_ = Eigen::VectorXd::Zero(nf_);
+    xmag_ = vmag_ = Eigen::VectorXd::Zero(n_);
+}
+
+void GenericSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
+    for (int h = 0; h < nh_; ++h) {
+        theta_(h) = reduced_phase(h_omega_(h), t0, t0_lo, h_phase_(h));
+        e_theta_(h) = cplx(std::cos(theta_(h)), std::sin(theta_(h)));
+    }
+    // Constant force on the free masses (paper Eq. 7-9): loads and preloads,
+    // the stiffness coupling to the stuck masses, kinetic friction.
+    for (int r = 0; r < nf_; ++r) {
+        const int i = modal_.free[r];
+        double f = f_const_(i);
+        for (int s : modal_.stuck) f -= K_(i, s) * x0[s];
+        if (friction_[i]) f -= mu_k_(i) * normal_(i) * static_cast<double>(sgn[i]);
+        force_(r) = f;
+    }
+    // Modal initial conditions q0 = Phi^T M_F x0 (and qd0 from v0), refined
+    // by one step against the residual x0 - Phi q0 (in long double). Without
+    // it the round trip x0 -> q0 -> Phi q0 is the fixed matrix Phi Phi^T M_F
+    // = I + E, E ~ eps (Phi is M-orthonormal only to rounding), applied at
+    // every segment start of the configuration: a bias, not noise. Measured
+    // (tests/test_extremes.cpp, EnergySmall): an undamped 2-DOF contact
+    // oscillator gained 1.0e-16 .. 1.5e-16 of its energy per switch,
+    // linearly, all of it in the open configuration whose second mode had
+    // phi^T M phi - 1 = 1.5e-16.
+    for (int j = 0; j < nf_; ++j) {
+        double q0 = 0.0, qd0 = 0.0;
+        for (int r = 0; r < nf_; ++r) {
+            q0 += phi_t_m_(j, r) * x0[modal_.free[r]];
+            qd0 += phi_t_m_(j, r) * v0[modal_.free[r]];
+        }
+        q0_(j) = q0;
+        qd0_(j) = qd0;
+    }
+    for (int r = 0; r < nf_; ++r) {  // residuals, in the eval scratch b2_, b3_
+        long double rx = x0[modal_.free[r]], rv = v0[modal_.free[r]];
+        for (int j = 0; j < nf_; ++j) {
+            rx -= static_cast<long double>(phi_(r, j)) * q0_(j);
+            rv -= static_cast<long double>(phi_(r, j)) * qd0_(j);
+        }
+        b2_(r) = static_cast<double>(rx);
+        b3_(r) = static_cast<double>(rv);
+    }
+    for (int j = 0; j < nf_; ++j) {
+        double dq = 0.0, dqd = 0.0;
+        for (int r = 0; r < nf_; ++r) {
+            dq += phi_t_m_(j, r) * b2_(r);
+            dqd += phi_t_m_(j, r) * b3_(r);
+        }
+        q0_(j) += dq;
+        qd0_(j) += dqd;
+    }
+    for (int j = 0; j < nf_; ++j) {
+        double p = 0.0;
+        for (int r = 0; r < nf_; ++r) p += phi_(r, j) * force_(r);
+        p_(j) = p;
+        const double q0 = q0_(j), qd0 = qd0_(j);
+        // Initial value of the standard particular parts.
+        double qp0 = 0.0, qpd0 = 0.0;
+        for (int h = 0; h < nh_; ++h) {
+            if (coupled_(j, h)) continue;  // zero-state: y(0) = y'(0) = 0
+            const double st = std::sin(theta_(h)), ct = std::cos(theta_(h));
+            qp0 += pa_(j, h) * ct + pb_(j, h) * st;
+            qpd0 += h_omega_(h) * (-pa_(j, h) * st + pb_(j, h) * ct);
+        }
+        // Rigid: u0 is the constant base q0 - q_p(0); elastic: the homogeneous
+        // part starts from the state minus the static (Eq. 10) and particular parts.
+        u0_(j) = regime_[j] == Regime::rigid ? q0 - qp0 : q0 - p / lambda_(j) - qp0;
+        ud0_(j) = qd0 - qpd0;
+    }
+    // Rigid-mode part of g_f'': sum_j (W_fj - c Z_fj)(p_j - c u0'_j) e^{-c tau}, c = alpha.
+    for (int f = 0; f < rho_.size(); ++f) {
+        double s = 0.0;
+        for (int j = 0; j < nf_; ++j)
+            if (regime_[j] == Regime::rigid)
+                s += (W_(f, j) - c_(j) * Z_(f, j)) * (p_(j) - c_(j) * ud0_(j));
+        rho_(f) = s;
+    }
+}
+
+void GenericSolver::eval(double tau, const SegmentEval& out) const {
+    // Harmonics at tau, and the bound horizon of coupled terms.
+    for (int h = 0; h < nh_; ++h) {
+        const double ph = h_omega_(h) * tau + theta_(h);
+        sn_(h) = std::sin(ph);
+        cs_(h) = std::cos(ph);
+        if (h_has_coupled_[h]) {
+            const double wt = h_omega_(h) * tau;
+            e_omega_tau_(h) = cplx(std::cos(wt), std::sin(wt));
+        }
+    }
+    const double s_end = tau + max_step_;  // only used when max_step_ is finite
+
+    for (int j = 0; j < nf_; ++j) {
+        const double lam = lambda_(j), c = c_(j), sig = sigma_(j), w = omega_(j);
+        const double p = p_(j), u0 = u0_(j), ud0 = ud0_(j);
+        double q, qd, qdd, mag, dmag, b2 = 0.0, b3 = 0.0;
+        double ed = 0.0, cd = 0.0, sd = 0.0;  // e^{-sigma tau}, cos, sin(omega_d tau)
+        if (regime_[j] == Regime::rigid) {
+            // q = u0 + u0' tau phi1(-c tau) + p tau^2 phi2(-c tau): exact for every c >= 0
+            // (c = 0: q0 + qd0 tau + p tau^2/2), no p/c drift cancellation as c -> 0.
+            const double x = -c * tau, e = std::exp(x), f1 = phi1(x), f2 = hsnc_phi2(x);
+            q = u0 + ud0 * tau * f1 + p * tau * tau * f2;
+            qd = ud0 * e + p * tau * f1;
+            qdd = (p - c * ud0) * e;
+            mag = std::abs(u0) + std::abs(ud0 * tau * f1) + std::abs(p * tau * tau * f2);
+            dmag = std::abs(ud0 * e) + std::abs(p * tau * f1);
+        } else {
+            // u = EC u0 + ES (u0' + sigma u0), u' = EC u0' - ES (lambda u0 + sigma u0'),
+            // EC = e^{-sigma tau} cos(omega_d tau), ES = e^{-sigma tau} sin(omega_d tau)/omega_d
+            // (cosh, sinh/gamma when overdamped; 1, tau when critical).
+            double EC, ES;
+            if (regime_[j] == Regime::underdamped) {
+                ed = std::exp(-sig * tau);
+                cd = std::cos(omega_d_(j) * tau);
+                sd = std::sin(omega_d_(j) * tau);
+                EC = ed * cd;
+                ES = ed * (sd / omega_d_(j));
+            } else if (regime_[j] == Regime::overdamped) {
+                // e^{-sigma tau} cosh(gamma tau) = e^{r1 tau} (1 + e^{-2 gamma tau})/2,
+                // e^{-sigma tau} sinh(gamma tau)/gamma = e^{r1 tau} tau phi1(-2 gamma tau).
+                const double e1 = std::exp(r1_(j) * tau);
+                const double x = -2.0 * gamma_(j) * tau;
+                EC = e1 * (0.5 * std::expm1(x) + 1.0);
+                ES = e1 * tau * phi1(x);
+            } else {
+                ed = std::exp(-sig * tau);
+                EC = ed;
+                ES = ed * tau;
+            }
+            const double v0 = ud0 + sig * u0, a0 = lam * u0 + sig * ud0;
+            const double u = EC * u0 + ES * v0;
+            const double ud = EC * ud0 - ES * a0;
+            q = p / lam + u;
+            qd = ud;
+            qdd = -c * ud - lam * u;
+            mag = std::abs(p / lam) + std::abs(EC * u0) + std::abs(ES * v0);
+            dmag = std::abs(EC * ud0) + std::abs(ES * a0);
+            // Homogeneous bound: E = (u'^2 + lambda u^2)/2 never grows (dE/dt = -c u'^2),
+            // |u''| <= (c + omega) sqrt(2E), |u'''| <= (c (c + omega) + omega^2) sqrt(2E).
+            const double e2 = std::sqrt(ud * ud + lam * u * u);
+            b2 = (c + w) * e2;
+            b3 = (c * (c + w) + lam) * e2;
+            if (regime_[j] == Regime::overdamped && gamma_(j) >= 0.5 * sig) {
+                // Well separated real roots: u = U1 e^{r1 s} + U2 e^{r2 s}, each term decays.
+                const double r1 = r1_(j), r2 = r2_(j), den = -2.0 * gamma_(j);
+                const double U1 = std::abs((r2 * u - ud) / den), U2 = std::abs((ud - r1 * u) / den);
+                b2 = std::min(b2, U1 * r1 * r1 + U2 * r2 * r2);
+                b3 = std::min(b3, U1 * std::abs(r1 * r1 * r1) + U2 * std::abs(r2 * r2 * r2));
+            }
+        }
+        for (int h = 0; h < nh_; ++h) {
+            const double W = h_omega_(h);
+            if (!coupled_(j, h)) {
+                const double qp = pa_(j, h) * cs_(h) + pb_(j, h) * sn_(h);
+                const double qpd = W * (-pa_(j, h) * sn_(h) + pb_(j, h) * cs_(h));
+                q += qp;
+                qd += qpd;
+                qdd -= W * W * qp;
+                mag += std::abs(qp);
+                dmag += std::abs(qpd);
+                continue;
+            }
+            // Transient-coupled zero-state response (see the constructor).
+            const double Pj = P_(j, h), wd = omega_d_(j);
+            const cplx rp(-sig, wd), rm(-sig, -wd);
+            const cplx erp(ed * cd, ed * sd), erm(ed * cd, -ed * sd);
+            const cplx eW = e_omega_tau_(h);
+            const cplx zp = zp_(j, h), zm = zm_(j, h);
+            const cplx wz = zp * tau;
+            // E+ = e^{r+ tau} tau phi1(z+ tau) while |z+ tau| is small (no cancellation,
+            // no overflow), else the plain divided difference.
+            const cplx Ep = std::abs(wz) < 1.0 ? erp * tau * (wz == cplx(0.0) ? cplx(1.0) : expm1c(wz) / wz)
+                                               : (eW - erp) / zp;
+            const cplx Em = (eW - erm) / zm;
+            const cplx k = Pj * e_theta_(h) * cplx(0.0, -0.5 / wd);  // P e^{i theta}/(2 i omega_d)
+            const double y = (k * (Ep - Em)).imag();
+            const double yd = (k * (rp * Ep - rm * Em)).imag();
+            const double ydd = Pj * sn_(h) - c * yd - lam * y;
+            q += y;
+            qd += yd;
+            qdd += ydd;
+            // The magnitude of the terms, not of their sum: near tau = 0 (and at any
+            // tau for the secular part) E+ and E- nearly cancel, and y is known to
+            // eps |k| (|E+| + |E-|), not to eps |y| (a contact at rest under
+            // resonant forcing: y ~ tau^3, its terms ~ tau).
+            const double km = std::abs(k);
+            mag += km * (std::abs(Ep) + std::abs(Em));
+            dmag += km * (std::abs(rp * Ep) + std::abs(rm * Em));
+            // |E+-(s)| <= min(s phi1(-sigma s), 2/|z+-|) for s <= s_end, so
+            // |y| <= |P| (e+ + e-)/(2 omega_d), |y'| <= omega times that, and
+            // y'' = P sin - c y' - lambda y, y''' = P Omega cos - c y'' - lambda y'.
+            const double grow = s_end * phi1(-sig * s_end);
+            const double ep = std::min(grow, 2.0 / std::abs(zp)), em = std::min(grow, 2.0 / std::abs(zm));
+            const double Y0 = std::abs(Pj) * (ep + em) / (2.0 * wd), Y1 = w * Y0;
+            const double Y2 = std::abs(Pj) + c * Y1 + lam * Y0;
+            const double Y3 = std::abs(Pj) * W + c * Y2 + lam * Y1;
+            b2 += Y2;
+            b3 += Y3;
+        }
+        q_(j) = q;
+        qd_(j) = qd;
+        qdd_(j) = qdd;
+        qmag_(j) = mag;
+        qdmag_(j) = dmag;
+        b2_(j) = b2;
+        b3_(j) = b3;
+    }
+
+    // Physical state: x_F = Phi q (likewise v, a); stuck masses fixed.
+    for (int i = 0; i < n_; ++i) {
+        out.x[i] = x_fix_(i);
+        out.v[i] = 0.0;
+        out.a[i] = 0.0;
+        xmag_(i) = std::abs(x_fix_(i));
+        vmag_(i) = 0.0;
+    }
+    for (int r = 0; r < nf_; ++r) {
+        double x = 0.0, v = 0.0, a = 0.0, xm = 0.0, vm = 0.0;
+        for (int j = 0; j < nf_; ++j) {
+            const double ph = phi_(r, j);
+            x += ph * q_(j);
+            v += ph * qd_(j);
+            a += ph * qdd_(j);
+            xm += std::abs(ph) * qmag_(j);
+            vm += std::abs(ph) * qdmag_(j);
+        }
+        const int i = modal_.free[r];
+        out.x[i] = x;
+        out.v[i] = v;
+        out.a[i] = a;
+        xmag_(i) = xm;
+        vmag_(i) = vm;
+    }
+
+    // Switch functions (segment.h), their rates, scales (sum of |terms|) and bounds.
+    const double rigid_decay = std::exp(-alpha_ * tau);
+    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
+    auto body_mag = [](const Eigen::VectorXd& m, int b) { return b == kGround ? 0.0 : m(b); };
+    for (std::size_t f = 0; f < switches_.size(); ++f) {
+        const SwitchFunction& sf = switches_[f];
+        const int e = sf.element;
+        double g, dg, scale;
+        if (sf.kind == SwitchKind::gap) {
+            // G = x[a] - x[b] - gap (assembly.h gap()).
+            const int a = contact_a_[e], b = contact_b_[e];
+            g = body(out.x, a) - body(out.x, b) - contact_gap_(e);
+            dg = body(out.v, a) - body(out.v, b);
+            scale = body_mag(xmag_, a) + body_mag(xmag_, b) + std::abs(contact_gap_(e));
+        } else if (sf.kind == SwitchKind::velocity) {
+            g = out.v[e];
+            dg = out.a[e];
+            scale = vmag_(e);
+        } else {
+            // A_i = -(K x)_i - (C v)_i + f_i + F_i(t), A_i' = -(K v)_i - (C a)_i + F_i'(t),
+            // full K(cfg), C(cfg) (the stuck rows see every mass).
+            double A = f_const_(e), dA = 0.0, m = std::abs(f_const_(e));
+            for (int k = 0; k < n_; ++k) {
+                A -= K_(e, k) * out.x[k] + C_(e, k) * out.v[k];
+                dA -= K_(e, k) * out.v[k] + C_(e, k) * out.a[k];
+                m += std::abs(K_(e, k)) * xmag_(k) + std::abs(C_(e, k)) * vmag_(k);
+            }
+            for (int h = 0; h < nh_; ++h) {
+                A += h_amp_(e, h) * sn_(h);
+                dA += h_amp_(e, h) * h_omega_(h) * cs_(h);
+                m += std::abs(h_amp_(e, h) * sn_(h));
+            }
+            const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
+            const double mu_n = mu_s_(e) * normal_(e);
+            g = sg * A - mu_n;
+            dg = sg * dA;
+            scale = m + mu_n;
+        }
+        // |g''(s)| for s in [tau, tau + max_step]: standard sinusoids, rigid modes
+        // (exact, decaying as e^{-alpha s}), homogeneous and coupled modal bounds.
+        double B = bound_sin_(static_cast<Eigen::Index>(f)) + std::abs(rho_(static_cast<Eigen::Index>(f))) * rigid_decay;
+        for (int j = 0; j < nf_; ++j)
+            B += absW_(static_cast<Eigen::Index>(f), j) * b2_(j) + absZ_(static_cast<Eigen::Index>(f), j) * b3_(j);
+        out.g[f] = g;
+        out.dg[f] = dg;
+        out.scale[f] = scale;
+        out.bound[f] = B;
+    }
+}
+
+std::size_t GenericSolver::memory_bytes() const {
+    // Dense storage dominates: n x n (K, C), nf x nf (Phi twice, modal Phi),
+    // switches x nf (W, Z and their absolute values), mode x harmonic tables.
+    const auto d = [](const auto& m) { return static_cast<std::size_t>(m.size()) * sizeof(typename std::decay_t<decltype(m)>::Scalar); };
+    std::size_t b = sizeof(*this);
+    b += d(K_) + d(C_) + d(phi_) + d(phi_t_m_) + d(modal_.phi) + d(W_) + d(Z_) + d(absW_) + d(absZ_) + d(D_);
+    b += d(P_) + d(pa_) + d(pb_) + d(zp_) + d(zm_) + d(h_amp_) + d(coupled_);
+    b += 24 * static_cast<std::size_t>(n_ + nf_ + static_cast<int>(switches_.size()) + nh_) * sizeof(double);
+    return b;
+}
+
+}  // namespace hsnc

@@ -1,0 +1,99 @@
+#include "kernel_mode.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "error.h"
+#include "generic_solver.h"
+#include "kernel_solver.h"
+#include "model_hash.h"
+
+namespace hsnc {
+
+KernelMode parse_kernel_mode(const std::string& name) {
+    if (name == "auto") return KernelMode::automatic;
+    if (name == "aot") return KernelMode::aot;
+    if (name == "generic") return KernelMode::generic;
+    if (name == "jit") return KernelMode::jit;
+    throw InputError("--kernels '" + name + "': expected auto, aot, generic or jit");
+}
+
+SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
+    auto it = cache_.find(cfg);
+    if (it != cache_.end()) {
+        lru_.splice(lru_.begin(), lru_, it->second.lru);  // most recently used
+        return *it->second.solver;
+    }
+    auto s = std::make_unique<GenericSolver>(model_, cfg);
+    ++built_;
+    seen_.insert(cfg);
+    const std::size_t bytes = s->memory_bytes();
+    lru_.push_front(cfg);
+    it = cache_.emplace(cfg, Entry{std::move(s), bytes, lru_.begin()}).first;
+    bytes_ += bytes;
+    // Drop the least recently used until within budget; never the one returned now.
+    while (bytes_ > max_bytes_ && lru_.size() > 1) {
+        const auto victim = cache_.find(lru_.back());
+        bytes_ -= victim->second.bytes;
+        cache_.erase(victim);
+        lru_.pop_back();
+        ++evicted_;
+    }
+    return *it->second.solver;
+}
+
+std::string GenericSolverProvider::describe() const {
+    std::string text = "generic solver for " + std::to_string(seen_.size()) + " configurations";
+    if (evicted_ > 0)
+        text += " (" + std::to_string(cache_.size()) + " kept within " + std::to_string(max_bytes_ >> 20) +
+                " MB, " + std::to_string(built_ - seen_.size()) + " rebuilt)";
+    return text;
+}
+
+AotSolverProvider::AotSolverProvider(const Model& model, const AotRegistry& registry, bool fallback)
+    : model_(model), registry_(registry), fallback_(fallback), hash_(model_hash(model)) {}
+
+SegmentSolver& AotSolverProvider::solver(const Configuration& cfg) {
+    auto it = cache_.find(cfg);
+    if (it != cache_.end()) return *it->second;
+    std::unique_ptr<SegmentSolver> s;
+    if (const hsnc_kernel* k = find_aot_kernel(registry_, model_.name.c_str(), hash_, cfg.key().c_str())) {
+        s = std::make_unique<KernelSolver>(*k);
+        ++aot_;
+    } else if (fallback_) {
+        s = std::make_unique<GenericSolver>(model_, cfg);
+        ++generic_;
+    } else {
+        throw RunError("AotSolverProvider::solver(): no ahead-of-time kernel for configuration '" +
+                       cfg.spec(model_) + "' of model '" + model_.name +
+                       "' (generate it with hsnc generate, or choose the kernels auto)");
+    }
+    return *cache_.emplace(cfg, std::move(s)).first->second;
+}
+
+std::string AotSolverProvider::describe() const {
+    return std::to_string(aot_) + " ahead-of-time kernels, generic solver for " + std::to_string(generic_) +
+           " configurations";
+}
+
+bool has_aot_kernels(const Model& model, const AotRegistry* registry) {
+    const std::uint64_t hash = model_hash(model);
+    return registry && std::any_of(registry->kernels, registry->kernels + registry->count, [&](const hsnc_kernel* k) {
+               return k->model_hash == hash && model.name == k->model_name;
+           });
+}
+
+std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
+                                                     const AotRegistry* registry) {
+    if (mode == KernelMode::generic) return std::make_unique<GenericSolverProvider>(model);
+    if (mode == KernelMode::jit)
+        throw std::logic_error("make_solver_provider(): --kernels jit is built with JitSolverProvider");
+    const bool has_kernels = has_aot_kernels(model, registry);
+    if (mode == KernelMode::aot && !has_kernels)
+        throw InputError("--kernels aot: no ahead-of-time kernels for model '" + model.name +
+                         "' (bundled models only, and only as generated: a --set or an edited file changes the model)");
+    if (!has_kernels) return std::make_unique<GenericSolverProvider>(model);
+    return std::make_unique<AotSolverProvider>(model, *registry, mode == KernelMode::automatic);
+}
+
+}  // namespace hsnc

@@ -1,0 +1,98 @@
+// hsnc -- where the engine's segment solvers come from (--kernels): the
+// KernelMode, and the ahead-of-time and generic SolverProviders of each mode
+// (solver_provider.h; the JIT's and the cache's are in runtime/jit/).
+#pragma once
+
+#include <list>
+#include <map>
+#include <memory>
+#include <set>
+#include <string>
+
+#include "aot_registry.h"
+#include "generic_solver.h"
+#include "solver_provider.h"
+
+namespace hsnc {
+
+enum class KernelMode {
+    automatic,  ///< ahead-of-time kernels when the model has them, else the
+                ///  generic solver (never the JIT: hsnc::simulate, api/hsnc/simulate.h)
+    aot,        ///< ahead-of-time kernels only (error when the model has none)
+    generic,    ///< the Eigen-based generic solver
+    jit,        ///< a kernel compiled in-process per configuration visited
+                ///  (runtime/jit/jit_solver_provider.h; opt-in, built by the command line)
+};
+
+/// "auto", "aot", "generic", "jit"; InputError otherwise.
+KernelMode parse_kernel_mode(const std::string& name);
+
+/// The generic (Eigen) solver for every configuration, created on first use and
+/// kept in a cache bounded by memory: when the solvers kept exceed `max_bytes`
+/// the least recently used are dropped (and rebuilt if the run comes back to
+/// them). The solver just returned is never dropped, so the reference the
+/// engine holds to the current configuration's solver stays valid until its
+/// next call. A run on many masses visits thousands of configurations (a
+/// 64-mass chain: about 0.4 MB each); unbounded, they held 5.4 GB at t = 40 s.
+class GenericSolverProvider : public SolverProvider {
+public:
+    /// Default budget: 64 MB of solver data (a few hundred configurations of
+    /// 64 masses; every configuration of the small models).
+    static constexpr std::size_t kDefaultMaxBytes = std::size_t{64} << 20;
+
+    explicit GenericSolverProvider(const Model& model, std::size_t max_bytes = kDefaultMaxBytes)
+        : model_(model), max_bytes_(max_bytes) {}
+    GenericSolverProvider(const Model&& model, std::size_t max_bytes = kDefaultMaxBytes) = delete;  ///< would dangle: `model` must outlive it
+    SegmentSolver& solver(const Configuration& cfg) override;
+    std::string describe() const override;
+
+    std::size_t cached() const { return cache_.size(); }       ///< solvers kept now
+    std::size_t built() const { return built_; }               ///< solvers constructed (rebuilds included)
+    std::size_t evicted() const { return evicted_; }           ///< solvers dropped
+    std::size_t cached_bytes() const { return bytes_; }        ///< their estimated memory
+
+private:
+    struct Entry {
+        std::unique_ptr<GenericSolver> solver;
+        std::size_t bytes;
+        std::list<Configuration>::iterator lru;  // position in lru_ (front: most recent)
+    };
+    const Model& model_;
+    std::size_t max_bytes_;
+    std::map<Configuration, Entry> cache_;
+    std::list<Configuration> lru_;
+    std::set<Configuration> seen_;
+    std::size_t bytes_ = 0, built_ = 0, evicted_ = 0;
+};
+
+/// Ahead-of-time kernels where the registry has one for (model, configuration);
+/// otherwise the generic solver (mode automatic) or a RunError naming the
+/// configuration (mode aot).
+class AotSolverProvider : public SolverProvider {
+public:
+    AotSolverProvider(const Model& model, const AotRegistry& registry, bool fallback);
+    AotSolverProvider(const Model&& model, const AotRegistry& registry, bool fallback) = delete;  ///< would dangle
+    SegmentSolver& solver(const Configuration& cfg) override;
+    std::string describe() const override;
+
+private:
+    const Model& model_;
+    const AotRegistry& registry_;
+    bool fallback_;
+    std::uint64_t hash_;
+    std::size_t aot_ = 0, generic_ = 0;
+    std::map<Configuration, std::unique_ptr<SegmentSolver>> cache_;
+};
+
+/// Whether `registry` (may be null) holds ahead-of-time kernels of `model` as it is.
+bool has_aot_kernels(const Model& model, const AotRegistry* registry);
+
+/// The provider for `mode` (not jit: that one needs the generator, see
+/// JitSolverProvider; automatic without kernels gives the generic solver); `registry` (may be null) lists the AOT kernels linked in.
+std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
+                                                     const AotRegistry* registry);
+/// The provider keeps a reference to `model`: a temporary would dangle.
+std::unique_ptr<SolverProvider> make_solver_provider(const Model&& model, KernelMode mode,
+                                                     const AotRegistry* registry) = delete;
+
+}  // namespace hsnc

@@ -1,0 +1,63 @@
+// hsnc -- the closed-form solution of one configuration, as the engine sees it.
+//
+// Between two switches the system is linear with constant forces (paper,
+// "PWLDFE standard formulation", Eq. 9). A SegmentSolver holds the solution of
+// one configuration: `setup` fixes it from the state at the segment start, then
+// `eval` gives the exact state and every switch function (switch_function.h,
+// in that order) at any later time.
+// Three implementations give the same answers to rounding: ahead-of-time
+// generated kernels, kernels compiled in-process (JIT), and the generic
+// Eigen-based solver.
+#pragma once
+
+#include <vector>
+
+#include "configuration.h"
+#include "switch_function.h"
+
+namespace hsnc {
+
+/// Where SegmentSolver::eval writes. Every pointer is required and points to
+/// n_dof (x, v, a) or n_switch (the rest) doubles.
+struct SegmentEval {
+    double* x;      ///< positions of all masses (stuck ones at their fixed x)
+    double* v;      ///< velocities (0 for stuck masses)
+    double* a;      ///< accelerations (0 for stuck masses)
+    double* g;      ///< switch function values
+    double* dg;     ///< their first time derivatives
+    double* bound;  ///< B_f >= |g_f''(s)| for every s in [tau, tau + max_step()]
+    double* scale;  ///< magnitude of the terms summed into g_f (sum of |terms|):
+                    ///  g_f is known to about 1e-16*scale_f, no better
+};
+
+class SegmentSolver {
+public:
+    virtual ~SegmentSolver() = default;
+
+    virtual const Configuration& configuration() const = 0;
+    virtual const std::vector<SwitchFunction>& switches() const = 0;
+
+    /// Start a segment at absolute time t0 + t0_lo from the full state (x0, v0
+    /// of all masses; stuck masses must have v0 = 0). t0_lo is the rounding of
+    /// the start instant (|t0_lo| <= ulp(t0)/2; the engine keeps event instants
+    /// as t + t_lo): the forcing phase is taken at t0 + t0_lo, so the state and
+    /// the forcing refer to one instant. sgn[i] in {-1, 0, +1} is the
+    /// direction of motion of each sliding friction mass, which fixes the sign
+    /// of its kinetic friction force -mu_k*N_i*sgn[i]; it is 0 for masses that
+    /// are stuck or have no friction.
+    virtual void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) = 0;
+
+    /// A segment starting at the representable instant t0 (t0_lo = 0).
+    void setup(double t0, const double* x0, const double* v0, const signed char* sgn) {
+        setup(t0, 0.0, x0, v0, sgn);
+    }
+
+    /// Evaluate at tau = t - t0 >= 0 (time measured from the segment start).
+    virtual void eval(double tau, const SegmentEval& out) const = 0;
+
+    /// The longest step over which `bound` is valid: +infinity unless the
+    /// segment has secular (resonant, growing) terms.
+    virtual double max_step() const = 0;
+};
+
+}  // namespace hsnc
