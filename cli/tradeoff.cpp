@@ -38,6 +38,7 @@
 #include "engine.h"
 #include "error.h"
 #include "integrators.h"
+#include "lowering.h"
 #include "model_hash.h"
 #include "model_reader.h"
 #include "solver_provider.h"
@@ -167,7 +168,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 RunSummary run_point(const Model& model, const Point& p, const EngineOptions& eopt, Observer& obs) {
     const Method method = parse_method(p.method->name);
     if (method == Method::hsnc) {
-        auto provider = make_solver_provider(model, p.kernels, &aot_registry());
+        auto provider = make_solver_provider(model, p.kernels, &aot_registry(), program_source(model));
         Engine engine(model, *provider);
         return engine.run(eopt, obs);
     }

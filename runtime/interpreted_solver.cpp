@@ -970,14 +970,11 @@ SegmentSolver& InterpretedSolverProvider::solver(const Configuration& cfg) {
 }
 
 std::string InterpretedSolverProvider::describe() const {
-    char buf[192];
-    std::snprintf(buf, sizeof buf, "interpreted programs for %zu configurations (derive+lower %.3f s)", seen_.size(),
-                  lower_seconds_);
-    std::string text = buf;
+    std::string text = "generic solver for " + std::to_string(seen_.size()) + " configurations (interpreted programs";
     if (evicted_ > 0)
-        text += " (" + std::to_string(cache_.size()) + " kept within " + std::to_string(max_bytes_ >> 20) + " MB, " +
-                std::to_string(built_ - seen_.size()) + " rebuilt)";
-    return text;
+        text += "; " + std::to_string(cache_.size()) + " kept within " + std::to_string(max_bytes_ >> 20) + " MB, " +
+                std::to_string(built_ - seen_.size()) + " rebuilt";
+    return text + ")";
 }
 
 }  // namespace hsnc

@@ -86,8 +86,9 @@ public:
     explicit InterpretedSolverProvider(ProgramFn lower, std::size_t max_bytes = kDefaultMaxBytes)
         : lower_(std::move(lower)), max_bytes_(max_bytes) {}
     SegmentSolver& solver(const Configuration& cfg) override;
-    /// "interpreted programs for 5 configurations (derive+lower 0.004 s)",
-    /// with what was kept and rebuilt when the bound dropped any.
+    /// "generic solver for 5 configurations (interpreted programs)", with what
+    /// was kept and rebuilt when the bound dropped any (no times: a run's
+    /// summary is the same every time).
     std::string describe() const override;
 
     std::size_t cached() const { return cache_.size(); }  ///< solvers kept now
