@@ -19,6 +19,7 @@
 #include "jit_solver_provider.h"
 #include "kernel_cache.h"
 #include "kernel_mode.h"
+#include "lowering.h"
 #include "reference.h"
 #include "sample_grid.h"
 #include "solver_provider.h"
@@ -180,7 +181,9 @@ SimulateSummary simulate(const Model& model, const SimulateOptions& o, Observer&
             const KernelMode mode = o.kernels == KernelChoice::generic ? KernelMode::generic
                                     : o.kernels == KernelChoice::aot   ? KernelMode::aot
                                                                        : KernelMode::automatic;
-            provider = make_solver_provider(model, mode, &aot_registry());
+            // The generic path interprets each configuration's program: the bits
+            // of the kernels printed from it, without a compiler.
+            provider = make_solver_provider(model, mode, &aot_registry(), program_source(model));
             s.solver = dynamic_cast<AotSolverProvider*>(provider.get()) ? SolverKind::aot : SolverKind::generic;
         }
         Engine engine(model, *provider);

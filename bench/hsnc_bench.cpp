@@ -1,7 +1,7 @@
 // hsnc benchmark: switches, wall time, microseconds per switch, and the ratios
 // to the numerical-integration baselines, all measured in one run.
 //
-//   build/hsnc_bench [--quick]
+//   build/hsnc_bench [--quick] [--kinds]   (--kinds: the kernel kinds' table only)
 //
 // Engine times are medians of repeated runs (the machines are noisy); ab4
 // and rk45 run once, CVODE (the --method cvode baseline: Adams, fixed-point
@@ -10,6 +10,12 @@
 // timed over a shorter horizon and its cost per simulated second is scaled to
 // the full horizon (its cost is proportional to the horizon: fixed step).
 // That scaling is printed with the figure.
+//
+// Kernel kinds: one run of each model through hsnc::simulate (the facade, as
+// `hsnc simulate` runs it) with kernels aot, jit (persistent cache in a
+// temporary directory, filled by a warm-up run) and generic, in turn, each
+// run making its provider anew (kernels looked up or loaded, the generic
+// path's solvers built); medians of the thread's CPU time.
 //
 // The whole process: `hsnc simulate` on scenario 2 to 300 s is spawned
 // (posix_spawn, no shell, stdout and stderr to /dev/null) 21 times after 2
@@ -26,6 +32,8 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -36,6 +44,7 @@
 
 #include "aot_registry.h"
 #include "engine.h"
+#include "hsnc/simulate.h"
 #include "integrators.h"
 #include "kernel_mode.h"
 #include "model_reader.h"
@@ -157,10 +166,70 @@ double median_baseline(const Model& m, double t_end, Method method, const Integr
     return t[t.size() / 2];
 }
 
+double cpu_seconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// Whole runs per kernel kind through the facade (see the header comment).
+void kernel_kinds(const std::vector<std::pair<std::string, Model>>& models, const std::vector<double>& t_ends,
+                  int reps) {
+    char dir_template[] = "/tmp/hsnc_bench_cache_XXXXXX";
+    const char* dir = ::mkdtemp(dir_template);
+    std::printf("\nkernel kinds, whole run through hsnc::simulate (new provider each run; median of %d, thread CPU time):\n",
+                reps);
+    std::printf("%-16s %6s %20s %9s %9s %10s %11s %11s %10s\n", "model", "t_end", "switches aot/jit/gen", "aot_ms",
+                "jit_ms", "generic_ms", "generic/aot", "generic/jit", "jit/aot");
+    const KernelChoice kinds[3] = {KernelChoice::aot, KernelChoice::jit, KernelChoice::generic};
+    for (std::size_t c = 0; c < models.size(); ++c) {
+        const Model& m = models[c].second;
+        const bool aot = has_aot_kernels(m, &aot_registry());
+        std::vector<double> t[3];
+        std::size_t events[3] = {};
+        bool ok[3] = {aot, dir != nullptr, true};
+        for (int r = -1; r < reps; ++r)  // r = -1: warm-up (fills the JIT cache)
+            for (int k = 0; k < 3; ++k) {
+                if (!ok[k]) continue;
+                SimulateOptions o;
+                o.t_end = t_ends[c];
+                o.kernels = kinds[k];
+                if (dir) o.cache_dir = dir;
+                o.warn = [](const std::string&) {};
+                try {
+                    const double start = cpu_seconds();
+                    const SimulateSummary s = simulate(m, o);
+                    if (r >= 0) t[k].push_back(1e3 * (cpu_seconds() - start));
+                    events[k] = s.events;
+                } catch (const std::exception& e) {
+                    std::printf("  %s %s: %s\n", models[c].first.c_str(), kernel_choice_name(kinds[k]), e.what());
+                    ok[k] = false;
+                }
+            }
+        auto med = [&](int k) {
+            std::sort(t[k].begin(), t[k].end());
+            return t[k].empty() ? NAN : t[k][t[k].size() / 2];
+        };
+        const double a = med(0), j = med(1), g = med(2);
+        char sw[64];
+        std::snprintf(sw, sizeof sw, "%s/%zu/%zu", aot ? std::to_string(events[0]).c_str() : "-", events[1], events[2]);
+        std::printf("%-16s %6g %20s %9.3f %9.3f %10.3f %11.2f %11.2f %10.2f\n", models[c].first.c_str(), t_ends[c], sw, a,
+                    j, g, g / a, g / j, j / a);
+    }
+    if (dir) {
+        const std::string d = dir;
+        std::system(("rm -rf '" + d + "'").c_str());
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+    bool quick = false, kinds_only = false;
+    for (int i = 1; i < argc; ++i) {
+        quick = quick || std::strcmp(argv[i], "--quick") == 0;
+        kinds_only = kinds_only || std::strcmp(argv[i], "--kinds") == 0;
+    }
     const std::string models = HSNC_SOURCE_DIR "/models/";
     struct Case {
         std::string name;
@@ -174,6 +243,18 @@ int main(int argc, char** argv) {
         {"chain-16", parse_model(chain16(), "chain-16"), 20.0, quick ? 0.2 : 2.0},
     };
     const int reps = quick ? 3 : 11;
+    auto run_kinds = [&] {
+        std::vector<std::pair<std::string, Model>> kind_models;
+        std::vector<double> kind_t_ends;
+        for (const Case& c : cases) kind_models.emplace_back(c.name, c.model), kind_t_ends.push_back(c.t_end);
+        kind_models.emplace_back("chain-8", read_model(models + "chain-8.toml"));
+        kind_t_ends.push_back(20.0);
+        kernel_kinds(kind_models, kind_t_ends, reps);
+    };
+    if (kinds_only) {
+        run_kinds();
+        return 0;
+    }
     std::printf("%-16s %6s %8s %9s %9s %7s %11s %7s %12s %6s %13s %9s %6s\n", "model", "t_end", "switches",
                 "engine_s", "us/switch", "kernels", "ab4(1e-6)_s", "ratio", "rk45(1e-12)_s", "ratio",
                 "cvode(1e-12)_s", "us/switch", "ratio");
@@ -221,6 +302,7 @@ int main(int argc, char** argv) {
         notes.push_back(note);
     }
     for (const std::string& n : notes) std::printf("  %s\n", n.c_str());
+    run_kinds();
     // The whole process, start-up included: `hsnc simulate` on scenario 2 to 300 s.
     const std::string scenario2 = models + "seed-scenario-2.toml";
     const int preps = quick ? 5 : 21;

@@ -686,4 +686,8 @@ Program lower(const Derivation& d) {
     return p;
 }
 
+std::function<Program(const Configuration&)> program_source(const Model& model) {
+    return [&model](const Configuration& cfg) { return lower(derive(model, cfg)); };
+}
+
 }  // namespace hsnc

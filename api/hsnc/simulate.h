@@ -43,14 +43,16 @@ enum class KernelChoice {
     aot,        ///< ahead-of-time kernels only (InputError when the model has none)
     jit,        ///< a kernel per configuration, from the persistent cache or
                 ///  compiled in-process (RunError when libhsnc_jit.so cannot be loaded)
-    generic,    ///< the Eigen-based generic solver
+    generic,    ///< the generic path: each configuration's program (derived and
+                ///  lowered, as the kernels are printed from it) run by an
+                ///  interpreter, the kernels' bits without a compiler
 };
 
 /// What computed a run (for statistics).
 enum class SolverKind {
     aot,         ///< ahead-of-time kernels (the generic solver for configurations without one)
     jit,         ///< JIT-compiled or cached kernels
-    generic,     ///< the generic solver
+    generic,     ///< the generic path (interpreted programs)
     reference,   ///< the high-precision reference engine (precision_digits > 0)
     integrator,  ///< a numerical baseline (ab4, rk45, cvode)
 };
