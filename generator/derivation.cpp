@@ -155,6 +155,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     const numeric alpha = exact(model.alpha), beta = exact(model.beta);
     for (std::size_t i = 0; i < n; ++i)
         for (std::size_t j = 0; j < n; ++j) {
+            if (i != j && K(i, j) == 0.0) continue;  // both stay the exact 0 they start as
             const numeric kij = exact(K(i, j));
             d.K(i, j) = kij;
             d.C(i, j) = beta * kij + (i == j ? alpha * exact(model.masses[i].m) : kZero);
@@ -180,7 +181,8 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     std::vector<std::vector<numeric>> kt(nf, std::vector<numeric>(nf));
     for (std::size_t r = 0; r < nf; ++r)
         for (std::size_t s = 0; s < nf; ++s)
-            kt[r][s] = GiNaC::ex_to<numeric>(d.K(d.free_dofs[r], d.free_dofs[s])) / (sqm[r] * sqm[s]);
+            if (K(d.free_dofs[r], d.free_dofs[s]) != 0.0)  // else the exact 0 it starts as (0 / x)
+                kt[r][s] = GiNaC::ex_to<numeric>(d.K(d.free_dofs[r], d.free_dofs[s])) / (sqm[r] * sqm[s]);
     // eig_value[j], eig_vector[j][r]: the eigenpairs of Kt in ascending order.
     std::vector<numeric> eig_value(nf);
     std::vector<std::vector<numeric>> eig_vector(nf, std::vector<numeric>(nf));
