@@ -8,8 +8,11 @@
 //   2. one long simulation per model (median of repeated runs after a
 //      warm-up, every solver built beforehand), with the switch counts;
 //   3. the same simulation from nothing: the interpreter derives and lowers
-//      (GiNaC, 40 digits) each configuration it enters, the Eigen solver
-//      analyses it in double.
+//      (40 digits) each configuration it enters, the Eigen solver analyses it
+//      in double; before: the interpreter with the former derivation (Jacobi
+//      rotations in GiNaC numerics, EigenMethod::jacobi);
+//   4. one all-open chain configuration of 8 to 64 masses: derive + lower
+//      (refined, Jacobi) against building the Eigen solver.
 //
 // Times are this thread's CPU time (CLOCK_THREAD_CPUTIME_ID), medians.
 //
@@ -229,13 +232,22 @@ int main(int argc, char** argv) {
     std::printf("\n3. The same simulation from nothing: each run with new providers, so every configuration entered is\n"
                 "   derived and lowered (interpreter) or analysed by Eigen (generic), median of %d runs in turn\n",
                 reps3);
-    std::printf("%-16s %7s %9s %6s %10s %10s %11s %16s\n", "model", "t_end", "switches", "cfgs", "interp_ms",
-                "generic_ms", "interp/gen", "derive+lower/cfg");
+    std::printf("   (before: the interpreter with the former derivation, Jacobi rotations in GiNaC numerics)\n");
+    std::printf("%-16s %7s %9s %6s %10s %10s %11s %16s %14s %13s\n", "model", "t_end", "switches", "cfgs", "interp_ms",
+                "generic_ms", "interp/gen", "derive+lower/cfg", "before_ms", "before/gen");
     for (const Case& c : cases) {
-        std::vector<double> ti, tg, per_cfg;
+        std::vector<double> ti, tg, tb, per_cfg;
         RunSummary si, sg;
         std::size_t cfgs = 0;
         for (int r = 0; r < reps3; ++r) {
+            {
+                const double start = cpu_seconds();
+                InterpretedSolverProvider before([&m = c.model](const Configuration& cfg) {
+                    return lower(derive(m, cfg, EigenMethod::jacobi));
+                });
+                run(c.model, before, c.t_end);
+                tb.push_back(1e3 * (cpu_seconds() - start));
+            }
             {
                 const double start = cpu_seconds();
                 InterpretedSolverProvider interp(lowering(c.model));
@@ -254,8 +266,42 @@ int main(int argc, char** argv) {
         char sw[64];
         std::snprintf(sw, sizeof sw, "%zu/%zu", si.events, sg.events);
         const double mi = median(ti), mg = median(tg);
-        std::printf("%-16s %7g %9s %6zu %10.3f %10.3f %11.2f %13.3f ms\n", c.name.c_str(), c.t_end, sw, cfgs, mi, mg,
-                    mi / mg, median(per_cfg));
+        std::printf("%-16s %7g %9s %6zu %10.3f %10.3f %11.2f %13.3f ms %14.3f %13.2f\n", c.name.c_str(), c.t_end, sw,
+                    cfgs, mi, mg, mi / mg, median(per_cfg), median(tb), median(tb) / mg);
+    }
+
+    // 4. One configuration: the all-open chain of n masses (chain(n) above), derived
+    //    and lowered (refined and Jacobi) against the Eigen solver's analysis.
+    std::printf("\n4. One configuration, the all-open n-mass chain (8-64): derive (40 digits) + lower, refined and former (Jacobi),\n"
+                "   against building the Eigen solver (modal analysis in double); median of runs, thread CPU time\n");
+    std::printf("%6s %12s %12s %12s %12s %12s %14s\n", "masses", "refined_ms", "of which lower", "jacobi_ms", "eigen_ms",
+                "refined/eigen", "jacobi/refined");
+    for (int nm : {8, 16, 32, 64}) {
+        if (quick && nm > 32) continue;
+        const Model m = parse_model(chain(nm), "chain-" + std::to_string(nm));
+        const Configuration cfg = Configuration::all_open(m);
+        std::vector<double> tr, tl, tj, te;
+        const int k = nm <= 16 ? (quick ? 5 : 21) : (quick ? 3 : 7);
+        for (int r = 0; r < k; ++r) {
+            double start = cpu_seconds();
+            const Derivation d = derive(m, cfg);
+            const double mid = cpu_seconds();
+            const Program p = lower(d);
+            tr.push_back(1e3 * (cpu_seconds() - start));
+            tl.push_back(1e3 * (cpu_seconds() - mid));
+            sink = sink + static_cast<double>(p.constants.size());
+            if (r < (nm >= 64 ? 1 : nm >= 32 ? 3 : k)) {  // Jacobi at 64 masses: seconds
+                start = cpu_seconds();
+                sink = sink + static_cast<double>(lower(derive(m, cfg, EigenMethod::jacobi)).constants.size());
+                tj.push_back(1e3 * (cpu_seconds() - start));
+            }
+            start = cpu_seconds();
+            GenericSolverProvider gen(m);
+            gen.solver(cfg);
+            te.push_back(1e3 * (cpu_seconds() - start));
+        }
+        std::printf("%6d %12.3f %14.3f %12.3f %12.3f %12.1f %14.0f\n", nm, median(tr), median(tl), median(tj), median(te),
+                    median(tr) / median(te), median(tj) / median(tr));
     }
     return sink == 12345.678 ? 1 : 0;
 }
