@@ -178,13 +178,16 @@ SimulateSummary simulate(const Model& model, const SimulateOptions& o, Observer&
             provider = make_jit_provider(model, o);
             s.solver = SolverKind::jit;
         } else {
-            const KernelMode mode = o.kernels == KernelChoice::generic ? KernelMode::generic
-                                    : o.kernels == KernelChoice::aot   ? KernelMode::aot
-                                                                       : KernelMode::automatic;
-            // The generic path interprets each configuration's program: the bits
-            // of the kernels printed from it, without a compiler.
+            const KernelMode mode = o.kernels == KernelChoice::generic  ? KernelMode::generic
+                                    : o.kernels == KernelChoice::interp ? KernelMode::interp
+                                    : o.kernels == KernelChoice::aot    ? KernelMode::aot
+                                                                        : KernelMode::automatic;
+            // interp runs each configuration's program: the bits of the kernels
+            // printed from it, without a compiler.
             provider = make_solver_provider(model, mode, &aot_registry(), program_source(model));
-            s.solver = dynamic_cast<AotSolverProvider*>(provider.get()) ? SolverKind::aot : SolverKind::generic;
+            s.solver = dynamic_cast<AotSolverProvider*>(provider.get()) ? SolverKind::aot
+                       : mode == KernelMode::interp                     ? SolverKind::interp
+                                                                        : SolverKind::generic;
         }
         Engine engine(model, *provider);
         static_cast<RunSummary&>(s) = engine.run(eopt, observer);
@@ -217,10 +220,11 @@ const char* method_name(Method method) {
 }
 
 KernelChoice kernel_choice_from_name(const std::string& name) {
-    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::aot, KernelChoice::jit, KernelChoice::generic})
+    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::aot, KernelChoice::jit, KernelChoice::generic,
+                           KernelChoice::interp})
         if (name == kernel_choice_name(k)) return k;
     throw OptionError("hsnc::kernel_choice_from_name", "kernels", "'" + name + "'",
-                      "expected auto, aot, generic or jit");
+                      "expected auto, aot, generic, interp or jit");
 }
 
 const char* kernel_choice_name(KernelChoice choice) {
@@ -229,6 +233,7 @@ const char* kernel_choice_name(KernelChoice choice) {
     case KernelChoice::aot: return "aot";
     case KernelChoice::jit: return "jit";
     case KernelChoice::generic: return "generic";
+    case KernelChoice::interp: return "interp";
     }
     return "?";
 }
@@ -261,6 +266,7 @@ const char* solver_kind_name(SolverKind kind) {
     case SolverKind::aot: return "aot";
     case SolverKind::jit: return "jit";
     case SolverKind::generic: return "generic";
+    case SolverKind::interp: return "interp";
     case SolverKind::reference: return "reference";
     case SolverKind::integrator: return "integrator";
     }

@@ -77,6 +77,8 @@ int lyapunov_command(const LyapunovFlags& f) {
     } catch (const OptionError& e) {
         throw InputError("--kernels '" + f.kernels + "': " + e.reason());
     }
+    if (o.kernels == KernelChoice::interp)  // the analyses' flow takes auto, aot or generic
+        throw InputError("--kernels 'interp': expected auto, aot or generic");
     std::unique_ptr<OutputTarget> out, plot;
     std::vector<const OutputTarget*> all;
     if (!f.out.empty()) all.push_back((out = std::make_unique<OutputTarget>(check_output("--out", f.out))).get());

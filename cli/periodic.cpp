@@ -91,6 +91,8 @@ int periodic_command(const PeriodicFlags& f) {
     } catch (const OptionError& e) {
         throw InputError("--kernels '" + f.kernels + "': " + e.reason());
     }
+    if (o.kernels == KernelChoice::interp)  // the analyses' flow takes auto, aot or generic
+        throw InputError("--kernels 'interp': expected auto, aot or generic");
     // Every output path checked before anything runs (exit code 2, nothing written).
     std::unique_ptr<OutputTarget> out, mult, plot;
     std::vector<const OutputTarget*> all;

@@ -114,6 +114,7 @@ TEST(PeriodicCli, BadInputIsExitTwoWithNothingWritten) {
         {"'" + model_path("seed-scenario-1.toml") + "' --transient nan", "--transient"},
         {"'" + model_path("seed-scenario-1.toml") + "' --out '" + ::testing::TempDir() + "'", "--out"},
         {"'" + model_path("seed-scenario-1.toml") + "' --kernels jit", "--kernels"},
+        {"'" + model_path("seed-scenario-1.toml") + "' --kernels interp", "--kernels 'interp'"},
         {"'" + model_path("seed-scenario-1.toml") + "' --set nope=1", "nope"},
     };
     for (const Case& c : cases) {

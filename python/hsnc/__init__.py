@@ -122,7 +122,7 @@ def simulate(model, t_end=None, dt=None, method="hsnc", kernels="auto", precisio
 
     dt: sample spacing (default (t_end - t0) / 1000); method: "hsnc" (exact),
     "ab4" (needs h), "rk45", "cvode" (rtol, atol); kernels: "auto", "aot",
-    "generic", "jit" (cache_dir, use_cache); precision: "double" or "mp:N";
+    "generic", "interp", "jit" (cache_dir, use_cache); precision: "double" or "mp:N";
     x0, v0: dicts {mass name: value} overriding the initial state (as
     `hsnc simulate --x0 --v0`: the model is read again with them);
     max_events: stop after that many switch events (0: no limit; the result

@@ -14,8 +14,9 @@ KernelMode parse_kernel_mode(const std::string& name) {
     if (name == "auto") return KernelMode::automatic;
     if (name == "aot") return KernelMode::aot;
     if (name == "generic") return KernelMode::generic;
+    if (name == "interp") return KernelMode::interp;
     if (name == "jit") return KernelMode::jit;
-    throw InputError("--kernels '" + name + "': expected auto, aot, generic or jit");
+    throw InputError("--kernels '" + name + "': expected auto, aot, generic, interp or jit");
 }
 
 SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
@@ -89,19 +90,19 @@ bool has_aot_kernels(const Model& model, const AotRegistry* registry) {
 std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
                                                      const AotRegistry* registry,
                                                      InterpretedSolverProvider::ProgramFn lower) {
-    auto generic = [&]() -> std::unique_ptr<SolverProvider> {
-        if (lower) return std::make_unique<InterpretedSolverProvider>(std::move(lower));
-        return std::make_unique<GenericSolverProvider>(model);
-    };
-    if (mode == KernelMode::generic) return generic();
+    if (mode == KernelMode::interp) {
+        if (!lower) throw std::invalid_argument("make_solver_provider(): --kernels interp needs a program source");
+        return std::make_unique<InterpretedSolverProvider>(std::move(lower));
+    }
+    if (mode == KernelMode::generic) return std::make_unique<GenericSolverProvider>(model);
     if (mode == KernelMode::jit)
         throw std::logic_error("make_solver_provider(): --kernels jit is built with JitSolverProvider");
     const bool has_kernels = has_aot_kernels(model, registry);
     if (mode == KernelMode::aot && !has_kernels)
         throw InputError("--kernels aot: no ahead-of-time kernels for model '" + model.name +
                          "' (bundled models only, and only as generated: a --set or an edited file changes the model)");
-    if (!has_kernels) return generic();
-    return std::make_unique<AotSolverProvider>(model, *registry, mode == KernelMode::automatic, std::move(lower));
+    if (!has_kernels) return std::make_unique<GenericSolverProvider>(model);
+    return std::make_unique<AotSolverProvider>(model, *registry, mode == KernelMode::automatic);
 }
 
 }  // namespace hsnc

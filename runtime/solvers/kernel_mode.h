@@ -18,15 +18,17 @@ namespace hsnc {
 
 enum class KernelMode {
     automatic,  ///< ahead-of-time kernels when the model has them, else the
-                ///  generic path (never the JIT: hsnc::simulate, api/hsnc/simulate.h)
+                ///  generic solver (never the JIT: hsnc::simulate, api/hsnc/simulate.h)
     aot,        ///< ahead-of-time kernels only (error when the model has none)
-    generic,    ///< the generic path: the interpreter of each configuration's program
-                ///  (InterpretedSolverProvider), the Eigen solver when no program source is given
+    generic,    ///< the Eigen-based generic solver
+    interp,     ///< the interpreter of each configuration's program (InterpretedSolverProvider,
+                ///  from a program source: generator/lowering.h program_source()), the kernels'
+                ///  bits without a compiler
     jit,        ///< a kernel compiled in-process per configuration visited
                 ///  (runtime/jit/jit_solver_provider.h; opt-in, built by the command line)
 };
 
-/// "auto", "aot", "generic", "jit"; InputError otherwise.
+/// "auto", "aot", "generic", "interp", "jit"; InputError otherwise.
 KernelMode parse_kernel_mode(const std::string& name);
 
 /// The Eigen solver (runtime/generic_solver.h) for every configuration: an
@@ -71,10 +73,12 @@ private:
 };
 
 /// Ahead-of-time kernels where the registry has one for (model, configuration);
-/// otherwise the generic path (mode automatic: the interpreter of the
-/// configuration's program from `lower`, the Eigen solver without it; kept
-/// within memory as those providers keep them) or a RunError naming the
-/// configuration (mode aot).
+/// otherwise (fallback) the Eigen solver, or the interpreter of the
+/// configuration's program when `lower` is given (kept within memory as those
+/// providers keep them), or (no fallback) a RunError naming the configuration.
+/// make_solver_provider() gives mode automatic the Eigen solver as fallback:
+/// entering a configuration costs the interpreter a 40-digit derivation, slower
+/// than the Eigen solver's analysis in double (README, "The interpreter").
 class AotSolverProvider : public SolverProvider {
 public:
     AotSolverProvider(const Model& model, const AotRegistry& registry, bool fallback,
@@ -98,11 +102,11 @@ private:
 bool has_aot_kernels(const Model& model, const AotRegistry* registry);
 
 /// The provider for `mode` (not jit: that one needs the generator, see
-/// JitSolverProvider; automatic without kernels gives the generic path);
-/// `registry` (may be null) lists the AOT kernels linked in. The generic path
+/// JitSolverProvider; automatic without kernels gives the generic solver);
+/// `registry` (may be null) lists the AOT kernels linked in. Mode interp
 /// interprets the programs `lower` gives (generator/lowering.h,
-/// program_source(): the same bits as the kernels); without `lower` it is the
-/// Eigen solver.
+/// program_source(): the same bits as the kernels) and needs it
+/// (std::invalid_argument without); the other modes do not use it.
 std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
                                                      const AotRegistry* registry,
                                                      InterpretedSolverProvider::ProgramFn lower = {});
