@@ -141,10 +141,8 @@ TEST(SimulateCli, BaselinesRunThroughTheSameOutput) {
 }
 
 
-// --kernels aot and --kernels generic (the interpreter of the programs the
-// kernels are printed from) on the command line: same events, same times
-// (tests/test_kernels_cli.cpp holds them to the byte; the Eigen solver, an
-// independent implementation, is compared in process, tests/test_program.cpp).
+// The ahead-of-time kernels and the generic solver are two independent
+// implementations of the same closed forms: same events, times to rounding.
 TEST(SimulateCli, AotKernelsAgreeWithTheGenericSolver) {
     std::vector<std::vector<std::string>> rows[2];
     const char* modes[2] = {"aot", "generic"};
