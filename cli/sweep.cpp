@@ -41,6 +41,8 @@ struct SweepFlags {
     std::string method = "hsnc";
     double h = NAN, rtol = 1e-10, atol = 1e-12;
     bool quiet = false;
+    bool continuation = false;
+    std::size_t max_steps = 0;
 };
 
 struct MergeFlags {
@@ -54,7 +56,7 @@ InputError flagged(const OptionError& e) {
         {"param", "--param"},           {"from", "--from"},       {"to", "--to"},
         {"points", "--points"},         {"direction", "--direction"}, {"max_periods", "--max-periods"},
         {"record_periods", "--record-periods"}, {"param2", "--param2"}, {"values2", "--values2"},
-        {"method", "--method"}};
+        {"method", "--method"}, {"restart_each", "--restart-each"}, {"max_steps", "--max-steps"}};
     for (const auto& f : flags)
         if (e.option() == f.first) return InputError(std::string(f.second) + ": " + e.reason());
     return InputError(e.what());
@@ -111,6 +113,11 @@ void write_curve(const SweepResult& r, const OutputTarget& target) {
             f.number(p.a1[i]);
         }
         if (has2) f.number(p.value2);
+        if (r.continuation) {
+            f.text(p.failure.empty() ? (p.stable ? "true" : "false") : "");
+            f.number(p.max_multiplier);
+            f.text(p.bifurcation.c_str());
+        }
         f.end_row();
     }
     f.commit();
@@ -153,15 +160,45 @@ struct Outputs {
     }
 };
 
+// What went wrong in a finished run: failed points and branches that
+// stopped early (each already said on stderr as it happened).
+struct Problems {
+    std::size_t failed = 0, stopped = 0;
+    std::string first;
+    explicit Problems(const SweepResult& r) {
+        for (const SweepPoint& p : r.points) {
+            failed += !p.failure.empty();
+            stopped += !p.stop.empty();
+            if (first.empty()) first = !p.failure.empty() ? p.failure : p.stop;
+        }
+    }
+    bool any() const { return failed + stopped > 0; }
+    std::string message() const {
+        std::string m;
+        if (failed) m += std::to_string(failed) + (failed == 1 ? " point" : " points") + " failed";
+        if (stopped)
+            m += (m.empty() ? "" : ", ") + std::to_string(stopped) + (stopped == 1 ? " branch" : " branches") +
+                 " stopped early";
+        return m + " (the outputs are written; the first: " + first + ")";
+    }
+};
+
 std::string summary_line(const SweepResult& r) {
-    std::size_t settled = 0, up = 0;
+    std::size_t settled = 0, up = 0, stable = 0, bifurcations = 0;
     for (const SweepPoint& p : r.points) {
         settled += p.settled;
         up += p.direction == SweepDirection::up;
+        stable += p.stable;
+        bifurcations += !p.bifurcation.empty();
     }
+    const Problems problems(r);
     std::ostringstream s;
-    s << "status=ok points=" << r.points.size() << " up=" << up << " down=" << r.points.size() - up
-      << " settled=" << settled << " unsettled=" << r.points.size() - settled;
+    s << "status=" << (problems.any() ? "failed" : "ok") << " points=" << r.points.size() << " up=" << up
+      << " down=" << r.points.size() - up << " settled=" << settled << " unsettled=" << r.points.size() - settled
+      << " failed=" << problems.failed;
+    if (r.continuation)
+        s << " stable=" << stable << " unstable=" << r.points.size() - stable - problems.failed
+          << " bifurcations=" << bifurcations << " stopped=" << problems.stopped;
     return s.str();
 }
 
@@ -190,6 +227,8 @@ int sweep(const SweepFlags& f) {
         o.param2 = f.param2;
         if (!f.values2.empty()) o.values2 = parse_values(f.values2);
         o.threads = f.threads;
+        o.continuation = f.continuation;
+        o.max_steps = f.max_steps;
         o.integrator.h = f.h;
         o.integrator.rtol = f.rtol;
         o.integrator.atol = f.atol;
@@ -210,15 +249,31 @@ int sweep(const SweepFlags& f) {
         } else if (!f.part_out.empty()) {
             throw InputError("--part-out: only with --part I/N");
         }
-        if (!f.quiet) {
+        {
             const std::string prefix = ranks > 1 ? "hsnc sweep [rank " + std::to_string(rank) + "/" +
                                                        std::to_string(ranks) + "]: "
                                                  : "hsnc sweep: ";
             const std::string param = f.param, param2 = f.param2;
-            o.progress = [prefix, param, param2](const SweepProgress& p) {
-                const double per = p.elapsed / static_cast<double>(p.done);
+            const bool quiet = f.quiet;
+            // Failures are said even with --quiet (they are not progress).
+            o.progress = [prefix, param, param2, quiet](const SweepProgress& p) {
                 std::string at = param + " = " + short_num(p.value);
                 if (!param2.empty()) at += ", " + param2 + " = " + short_num(p.value2);
+                if (!p.failure.empty()) {
+                    std::fprintf(stderr, "%spoint %zu %s %s failed: %s\n", prefix.c_str(), p.done, at.c_str(),
+                                 sweep_direction_name(p.direction), p.failure.c_str());
+                    return;
+                }
+                if (quiet) return;
+                if (p.continuation) {
+                    std::fprintf(stderr, "%sbranch point %zu %s (%s): %s, max |multiplier| %.6g%s%s, %zu period runs, %.3f s\n",
+                                 prefix.c_str(), p.done, at.c_str(), sweep_direction_name(p.direction),
+                                 p.stable ? "stable" : "unstable", p.max_multiplier,
+                                 p.bifurcation.empty() ? "" : ", crossed: ", p.bifurcation.c_str(), p.periods,
+                                 p.seconds);
+                    return;
+                }
+                const double per = p.elapsed / static_cast<double>(p.done);
                 std::fprintf(stderr, "%spoint %zu/%zu %s %s: %s after %zu periods, %.3f s; %.3f s/point, about %.0f s left\n",
                              prefix.c_str(), p.done, p.total, at.c_str(), sweep_direction_name(p.direction),
                              p.settled ? ("settled (multiple " + std::to_string(p.multiple) + ")").c_str()
@@ -277,6 +332,13 @@ int sweep(const SweepFlags& f) {
                         for (SweepPoint& p : t) r.points.push_back(std::move(p));
                     outputs->write(r, r.model + ": sweep over " + r.param);
                     std::cout << summary_line(r) << "\n";
+                    const Problems problems(r);
+                    for (const SweepPoint& p : r.points)
+                        if (!p.stop.empty()) std::fprintf(stderr, "hsnc sweep: %s\n", p.stop.c_str());
+                    if (problems.any()) {
+                        code = 1;
+                        failure = problems.message();
+                    }
                 }
             } catch (const RunError& e) {
                 code = 1;
@@ -306,6 +368,8 @@ int merge(const MergeFlags& f) {
     const SweepResult r = merge_sweep_parts(texts, f.parts);
     outputs.write(r, r.model + ": sweep over " + r.param);
     std::cout << summary_line(r) << "\n";
+    const Problems problems(r);
+    if (problems.any()) throw RunError(problems.message());
     return 0;
 }
 
@@ -350,7 +414,13 @@ void add_sweep(CLI::App& app, int& exit_code) {
         ->check(finite_number());
     sub->add_option("--atol", f->atol, "absolute tolerance of --method rk45/cvode (default 1e-12)")
         ->check(finite_number());
-    sub->add_flag("--quiet", f->quiet, "no progress lines on stderr");
+    sub->add_flag("--continuation", f->continuation,
+                  "follow the periodic orbit over the parameter by pseudo-arclength continuation (exact shooting), "
+                  "through folds, with each point's stability and the bifurcations crossed (extra columns "
+                  "stable,max_multiplier,bifurcation); the branch starts at --from (--to for --direction down)");
+    sub->add_option("--max-steps", f->max_steps,
+                    "--continuation: points at most per branch (default 20 x --points)");
+    sub->add_flag("--quiet", f->quiet, "no progress lines on stderr (failures are still said)");
     sub->callback([f, &exit_code] { exit_code = sweep(*f); });
 
     auto m = std::make_shared<MergeFlags>();
