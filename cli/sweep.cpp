@@ -3,7 +3,10 @@
 // (api/hsnc/sweep.h), the output files.
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
+#include <functional>
+#include <thread>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -210,11 +213,53 @@ std::string short_num(double v) {
     }
 }
 
+// Rank 0's line for the whole MPI run: points done on every rank (its own
+// and what the others sent), the time per point over all ranks, an estimate.
+struct OverallProgress {
+    std::size_t total = 0;  // 0: not known (continuation)
+    int ranks = 1;
+    long long others = 0, printed = -1;
+    int finished = 0;  // other ranks done
+    std::size_t mine = 0;
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+
+    // After one of rank 0's own points.
+    void own_point(Communicator& comm) {
+        ++mine;
+        comm.poll_progress(others, finished);
+        print();
+    }
+    // Rank 0, its own tasks done: the others' progress until every rank has finished.
+    void wait_for_others(Communicator& comm) {
+        while (comm.poll_progress(others, finished) && finished < ranks - 1) {
+            if (others + static_cast<long long>(mine) != printed) print();
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        }
+        if (others + static_cast<long long>(mine) != printed) print();
+    }
+    void print() {
+        const long long done = others + static_cast<long long>(mine);
+        printed = done;
+        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (total == 0) {
+            std::fprintf(stderr, "hsnc sweep [all %d ranks]: %lld points, %.1f s\n", ranks, done, elapsed);
+            return;
+        }
+        const double left =
+            done > 0 ? elapsed / static_cast<double>(done) * static_cast<double>(static_cast<long long>(total) - done)
+                     : 0.0;
+        std::fprintf(stderr, "hsnc sweep [all %d ranks]: %lld/%zu points, %.1f s, about %.0f s left\n", ranks, done,
+                     total, elapsed, left);
+    }
+};
+
 int sweep(const SweepFlags& f) {
     // Under an MPI launcher: the ranks (MPI loaded only now, from its module).
     std::unique_ptr<Communicator> comm;
     if (launched_by_mpi()) comm = mpi_communicator();
     const int rank = comm ? comm->rank() : 0, ranks = comm ? comm->size() : 1;
+    auto overall = std::make_shared<OverallProgress>();
+    overall->ranks = ranks;
     try {
         SweepOptions o;
         o.param = f.param;
@@ -256,7 +301,14 @@ int sweep(const SweepFlags& f) {
             const std::string param = f.param, param2 = f.param2;
             const bool quiet = f.quiet;
             // Failures are said even with --quiet (they are not progress).
-            o.progress = [prefix, param, param2, quiet](const SweepProgress& p) {
+            // Under MPI each rank says its own points; the others also send
+            // each point to rank 0, which adds a line for the whole run.
+            Communicator* world = ranks > 1 && !quiet ? comm.get() : nullptr;
+            o.progress = [prefix, param, param2, quiet, world, rank, overall](const SweepProgress& p) {
+                if (world) {
+                    if (rank != 0) world->send_progress(1);
+                    else overall->own_point(*world);
+                }
                 std::string at = param + " = " + short_num(p.value);
                 if (!param2.empty()) at += ", " + param2 + " = " + short_num(p.value2);
                 if (!p.failure.empty()) {
@@ -313,8 +365,16 @@ int sweep(const SweepFlags& f) {
         if (go != 0) throw RunError(rank == 0 ? refusal : "");
 
         const std::vector<std::size_t> which = plan.part_tasks(part, parts);
+        if (!o.continuation)
+            for (std::size_t i : which) overall->total += plan.task_points(i);
+        std::function<void()> finished;
+        if (comm && ranks > 1 && !f.quiet)
+            finished = [&] {
+                if (rank != 0) comm->send_progress(-1);
+                else overall->wait_for_others(*comm);
+            };
         std::vector<std::vector<SweepPoint>> results =
-            comm ? run_tasks_distributed(plan, which, *comm) : plan.run_tasks(which);
+            comm ? run_tasks_distributed(plan, which, *comm, finished) : plan.run_tasks(which);
 
         int code = 0;
         std::string failure;

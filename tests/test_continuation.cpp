@@ -430,3 +430,43 @@ TEST(SweepCli, FailingPointGivesARowAndTheSweepGoesOn) {
 
 }  // namespace
 }  // namespace hsnc
+
+namespace hsnc {
+namespace {
+
+// Under MPI every rank says its own points and rank 0 the whole run's; a
+// continuation (two branches: both directions) gives the same bytes on 1
+// and 2 ranks.
+TEST(SweepCli, MpiProgressPerRankAndOverall) {
+    if (!HSNC_WITH_MPI) GTEST_SKIP() << "built without MPI";
+    ASSERT_EQ(std::system("command -v mpirun >/dev/null 2>&1"), 0) << "mpirun not on PATH (Debian package openmpi-bin)";
+    const std::string model = write_temp("hardening.toml", kHardening);
+    const std::string mpirun = "mpirun --allow-run-as-root --oversubscribe -np 2 '" + std::string(HSNC_BINARY) + "' ";
+    const std::string log = temp_path("mpi-progress.log"), out = temp_path("mpi-progress.csv");
+    const std::string cmd = mpirun + "sweep '" + model + "' --param omega --from 1.0 --to 1.4 --points 5 " +
+                            "--direction both --restart-each --max-periods 300 --record-periods 4 --out '" + out +
+                            "' >/dev/null 2>'" + log + "'";
+    int status = std::system(cmd.c_str());
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(log);
+    const std::string err = slurp(log);
+    for (int r = 0; r < 2; ++r)
+        for (int k = 1; k <= 5; ++k)
+            EXPECT_NE(err.find("hsnc sweep [rank " + std::to_string(r) + "/2]: point " + std::to_string(k) + "/5 "),
+                      std::string::npos)
+                << err;
+    const std::size_t last = err.rfind("hsnc sweep [all 2 ranks]: ");
+    ASSERT_NE(last, std::string::npos) << err;
+    EXPECT_EQ(err.compare(last, 36, "hsnc sweep [all 2 ranks]: 10/10 poin"), 0) << err;
+
+    const std::string a = temp_path("cont-1.csv"), b = temp_path("cont-2.csv");
+    const std::string args = "sweep '" + model + "' --param omega --from 0.8 --to 2.0 --points 13 --continuation " +
+                             "--direction both --quiet --out ";
+    ASSERT_EQ(run_hsnc(args + "'" + a + "'").exit_code, 0);
+    status = std::system((mpirun + args + "'" + b + "' >'" + log + "' 2>&1").c_str());
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(log);
+    EXPECT_EQ(slurp(a), slurp(b));
+    EXPECT_GT(slurp(a).size(), 1000u);
+}
+
+}  // namespace
+}  // namespace hsnc
