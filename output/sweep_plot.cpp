@@ -178,8 +178,10 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
     const double panel = (split - 20.0 / height) / static_cast<double>(std::max<std::size_t>(panels, 1));
     for (std::size_t i = 0; i < panels; ++i) {
         const double hi = split - static_cast<double>(i) * panel, lo = hi - panel;
-        s += "set title " + quoted("bifurcation diagram: x_" + r.masses[i] +
-                                   " at the end of every recorded forcing period") + "\n";
+        s += "set title " + quoted(r.continuation ? "x_" + r.masses[i] + " of each orbit at t0 (colour: the way the parameter moved)"
+                                                  : "bifurcation diagram: x_" + r.masses[i] +
+                                                        " at the end of every recorded forcing period") +
+             "\n";
         s += "set tmargin at screen " + num(hi - 45.0 / height) + "\nset bmargin at screen " + num(lo + 50.0 / height) +
              "\n";
         s += "set ylabel " + quoted("x_" + r.masses[i] + " [m]") + "\n";
