@@ -385,7 +385,17 @@ int sweep(const SweepFlags& f) {
                     OutputFile file(*part_target);
                     file.write(text.data(), text.size());
                     file.commit();
-                    std::cout << "status=ok part=" << part + 1 << "/" << parts << " tasks=" << which.size() << "\n";
+                    SweepResult r = plan.result_header();
+                    for (const std::vector<SweepPoint>& t : results) r.points.insert(r.points.end(), t.begin(), t.end());
+                    const Problems problems(r);
+                    std::cout << "status=" << (problems.any() ? "failed" : "ok") << " part=" << part + 1 << "/" << parts
+                              << " tasks=" << which.size() << "\n";
+                    for (const SweepPoint& p : r.points)
+                        if (!p.stop.empty()) std::fprintf(stderr, "hsnc sweep: %s\n", p.stop.c_str());
+                    if (problems.any()) {
+                        code = 1;
+                        failure = problems.message();
+                    }
                 } else {
                     SweepResult r = plan.result_header();
                     for (std::vector<SweepPoint>& t : results)

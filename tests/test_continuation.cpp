@@ -426,6 +426,23 @@ TEST(SweepCli, FailingPointGivesARowAndTheSweepGoesOn) {
     EXPECT_EQ(std::count(curve.begin(), curve.end(), '\n'), 4);
     EXPECT_NE(curve.find("\n2,up,false,0,0,nan,nan,nan\n"), std::string::npos) << curve;
     EXPECT_EQ(slurp(png).substr(1, 3), "PNG");
+
+    // In parts: the part with the failing point exits 1 too, its file written;
+    // the merge gives the same rows and exit status.
+    const std::string args = "sweep '" + model + "' --param p --from 1 --to 3 --points 3 --restart-each " +
+                             "--max-periods 400 --record-periods 2 --quiet ";
+    const std::string whole = temp_path("zeno-whole.csv"), merged = temp_path("zeno-merged.csv");
+    EXPECT_EQ(run_hsnc(args + "--out '" + whole + "'").exit_code, 1);
+    const std::string p1 = temp_path("zeno-p1"), p2 = temp_path("zeno-p2");
+    const auto r1 = run_hsnc(args + "--part 1/2 --part-out '" + p1 + "'");
+    EXPECT_EQ(r1.exit_code, 0) << r1.err;  // points 1 and 3
+    const auto r2 = run_hsnc(args + "--part 2/2 --part-out '" + p2 + "'");
+    EXPECT_EQ(r2.exit_code, 1);
+    EXPECT_EQ(r2.out, "status=failed part=2/2 tasks=1\n");
+    EXPECT_TRUE(file_exists(p2));
+    const auto m = run_hsnc("sweep-merge '" + p2 + "' '" + p1 + "' --out '" + merged + "'");
+    EXPECT_EQ(m.exit_code, 1);
+    EXPECT_EQ(slurp(merged), slurp(whole));
 }
 
 }  // namespace
