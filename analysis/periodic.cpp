@@ -44,7 +44,7 @@ struct MapValue {
     Eigen::MatrixXd M;
     double residual = INFINITY;
     std::size_t events = 0;
-    std::size_t grazing = 0;
+    std::size_t grazing = 0, singular = 0;
 };
 
 class EventCounter : public Observer {
@@ -94,7 +94,7 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
     if (!std::isnan(o.dt)) analysis::check_number(kPeriodic, "dt", o.dt, true);
     const double dt = std::isnan(o.dt) ? P / 1000 : o.dt;
 
-    analysis::Flow flow(model, o.kernels, kPeriodic);
+    analysis::Flow flow(model, {o.kernels, o.cache_dir, o.use_cache}, kPeriodic);
     const std::size_t n = model.dof();
     const Eigen::Index N = static_cast<Eigen::Index>(2 * n);
 
@@ -129,6 +129,7 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
             m.Py(static_cast<Eigen::Index>(i)) = s.x[i], m.Py(static_cast<Eigen::Index>(n + i)) = s.v[i];
         m.M = jac.jacobian();
         m.grazing = jac.grazing();
+        m.singular = jac.singular();
         m.events = events.events;
         m.residual = residual_of(state, m.Py);
         m.ok = m.Py.allFinite() && std::isfinite(m.residual);
@@ -152,8 +153,8 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
             why = "no convergence in " + std::to_string(o.max_iterations) + " iterations";
             break;
         }
-        if (cur.grazing || !cur.M.allFinite()) {
-            why = "the period map has no derivative here (a grazing switch)";
+        if (cur.singular || !cur.M.allFinite()) {
+            why = "the period map has no derivative here (a grazing switch with zero normal velocity)";
             break;
         }
         // Newton step on P(y) - y = 0, least squares where M - I is singular
@@ -185,6 +186,7 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
     }
     r.iterations = it;
     r.residual = cur.residual;
+    r.grazing = cur.grazing;
     r.x.assign(y.data(), y.data() + n);
     r.v.assign(y.data() + n, y.data() + 2 * n);
     if (cur.ok && cur.residual <= o.tolerance) {
