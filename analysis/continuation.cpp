@@ -73,7 +73,7 @@ private:
         auto at = std::make_unique<At>();
         at->model = branch_.model_at(p);
         at->period = 2 * M_PI / forcing_frequency(at->model, branch_.param + " = " + short_num(p));
-        at->flow = std::make_unique<analysis::Flow>(at->model, KernelChoice::generic, kFunction);
+        at->flow = std::make_unique<analysis::Flow>(at->model, analysis::FlowKernels{KernelChoice::generic}, kFunction);
         return *(cache_[p] = std::move(at));
     }
     const Branch& branch_;
@@ -299,8 +299,8 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
                 fail = v.message;
                 break;
             }
-            if (v.grazing || !v.M.allFinite()) {
-                fail = "the period map has no derivative there (a grazing switch)";
+            if (v.singular || !v.M.allFinite()) {
+                fail = "the period map has no derivative there (a grazing switch with zero normal velocity)";
                 break;
             }
             if (v.residual <= kTolerance) {

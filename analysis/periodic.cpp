@@ -62,7 +62,7 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
     if (!std::isnan(o.dt)) analysis::check_number(kPeriodic, "dt", o.dt, true);
     const double dt = std::isnan(o.dt) ? P / 1000 : o.dt;
 
-    analysis::Flow flow(model, o.kernels, kPeriodic);
+    analysis::Flow flow(model, {o.kernels, o.cache_dir, o.use_cache}, kPeriodic);
     const std::size_t n = model.dof();
     const Eigen::Index N = static_cast<Eigen::Index>(2 * n);
 
@@ -100,8 +100,8 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
             why = "no convergence in " + std::to_string(o.max_iterations) + " iterations";
             break;
         }
-        if (cur.grazing || !cur.M.allFinite()) {
-            why = "the period map has no derivative here (a grazing switch)";
+        if (cur.singular || !cur.M.allFinite()) {
+            why = "the period map has no derivative here (a grazing switch with zero normal velocity)";
             break;
         }
         // Newton step on P(y) - y = 0, least squares where M - I is singular
@@ -133,6 +133,7 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
     }
     r.iterations = it;
     r.residual = cur.residual;
+    r.grazing = cur.grazing;
     r.x.assign(y.data(), y.data() + n);
     r.v.assign(y.data() + n, y.data() + 2 * n);
     if (cur.ok && cur.residual <= o.tolerance) {

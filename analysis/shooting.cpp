@@ -48,6 +48,7 @@ PeriodMapValue evaluate_period_map(Flow& flow, double ts, double te, const Eigen
         m.Py(static_cast<Eigen::Index>(i)) = s.x[i], m.Py(static_cast<Eigen::Index>(n + i)) = s.v[i];
     m.M = jac.jacobian();
     m.grazing = jac.grazing();
+    m.singular = jac.singular();
     m.events = events.events;
     m.residual = period_residual(y, m.Py);
     m.ok = m.Py.allFinite() && std::isfinite(m.residual);

@@ -25,7 +25,8 @@ struct PeriodMapValue {
     Eigen::MatrixXd M;      ///< dP/dy (2n x 2n), y = (x, v)
     double residual = INFINITY;  ///< period_residual(y, P(y))
     std::size_t events = 0;      ///< switch events over the period
-    std::size_t grazing = 0;     ///< switches where the derivative does not exist
+    std::size_t grazing = 0;     ///< grazing switches (near-zero normal velocity; tangent.h)
+    std::size_t singular = 0;    ///< switches where the derivative does not exist
 };
 
 /// P(y) and dP/dy over [ts, te] with the flow's model.

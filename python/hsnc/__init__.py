@@ -221,7 +221,8 @@ def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_itera
     message, period (harmonic * T), t (time of the state), iterations,
     residual, x, v (the orbit's state at t, arrays), multipliers (complex
     array, largest |mu| first), max_multiplier, stable, monodromy (2n x 2n
-    array, state (x, v)), events (switches a period) and orbit (dict of t, x,
+    array, state (x, v)), events (switches a period), grazing (grazing switch
+    instants a period: the multipliers are not reliable when > 0) and orbit (dict of t, x,
     v arrays: one period sampled every dt, default period/1000; empty when not
     converged). period: default 2*pi/omega of the model's forcing;
     transient: run this long first."""
@@ -241,7 +242,9 @@ def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=
     exact tangent dynamics, measured over t_end seconds after transient.
     Returns a dict: exponents (array of 2n, 1/s, largest first, -inf for
     directions a stick collapses), sum, t_start, t, collapsed, events,
-    grazing, rows_t and rows (the running estimates every row_interval,
+    grazing (switch instants at a turning point of a contact's gap, or
+    without a saltation matrix: the exponents are not reliable when > 0),
+    singular (of them, without a saltation matrix), rows_t and rows (the running estimates every row_interval,
     default the forcing period, else 1 s; k x 2n). A run that stops early
     raises RunError."""
     if not isinstance(model, Model):
