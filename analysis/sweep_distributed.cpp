@@ -1,13 +1,10 @@
 #include "sweep_distributed.h"
 
-#include <dlfcn.h>
-#include <link.h>
-#include <unistd.h>
-
 #include <cstdlib>
 #include <map>
 
 #include "error.h"
+#include "plugin_module.h"
 #include "sweep_detail.h"
 
 namespace hsnc {
@@ -42,6 +39,10 @@ public:
         if (api_->broadcast(&value) != 0) throw RunError("MPI: broadcast failed");
         return value;
     }
+    bool send_progress(int points) override { return api_->send_progress(points) == 0; }
+    bool poll_progress(long long& points, int& finished) override {
+        return api_->poll_progress(&points, &finished) == 0;
+    }
 
 private:
     const HsncMpiApi* api_;
@@ -57,35 +58,16 @@ bool launched_by_mpi() {
 }
 
 #ifdef HSNC_MPI_MODULE
-std::string mpi_module_path() {
-    // Beside the object holding this code (libhsnc.so, or the executable),
-    // else in the library directory of an installed tree (as the JIT module).
-    std::string file;
-    Dl_info info{};
-    link_map* map = nullptr;
-    if (::dladdr1(reinterpret_cast<void*>(&mpi_module_path), &info, reinterpret_cast<void**>(&map),
-                  RTLD_DL_LINKMAP) != 0 &&
-        map != nullptr && map->l_name != nullptr && map->l_name[0] != '\0')
-        file = map->l_name;
-    if (file.empty()) {
-        char exe[4096];
-        const ssize_t len = ::readlink("/proc/self/exe", exe, sizeof exe - 1);
-        file = len > 0 ? std::string(exe, static_cast<std::size_t>(len)) : std::string("./");
-    }
-    const std::string dir = file.substr(0, file.find_last_of('/') + 1);
-    const std::string beside = dir + HSNC_MPI_MODULE;
-    const std::string installed = dir + HSNC_LIBDIR_FROM_BINDIR + "/" + HSNC_MPI_MODULE;
-    return ::access(beside.c_str(), F_OK) != 0 && ::access(installed.c_str(), F_OK) == 0 ? installed : beside;
-}
+std::string mpi_module_path() { return api::plugin_module_path(HSNC_MPI_MODULE); }
 
 std::unique_ptr<Communicator> mpi_communicator() {
     const std::string path = mpi_module_path();
-    // RTLD_GLOBAL: Open MPI's own plugins, which it dlopens, resolve
-    // symbols of libmpi against the global scope.
-    void* module = ::dlopen(path.c_str(), RTLD_NOW | RTLD_GLOBAL);
-    if (!module) throw RunError(std::string("MPI: cannot load the MPI module: ") + ::dlerror());
-    auto api = reinterpret_cast<HsncMpiApiFunction>(::dlsym(module, "hsnc_mpi_api"));
-    if (!api) throw RunError("MPI: " + path + " has no hsnc_mpi_api");
+    // Global scope: Open MPI's own plugins, which it dlopens, resolve symbols
+    // of libmpi against it.
+    std::string problem;
+    auto api = reinterpret_cast<HsncMpiApiFunction>(
+        api::plugin_module_symbol(path, "hsnc_mpi_api", api::SymbolScope::kGlobal, problem));
+    if (!api) throw RunError("MPI: cannot load the MPI module: " + problem);
     return std::make_unique<MpiCommunicator>(api());
 }
 #else
@@ -96,7 +78,7 @@ std::unique_ptr<Communicator> mpi_communicator() {
 #endif
 
 std::vector<std::vector<SweepPoint>> run_tasks_distributed(const SweepPlan& plan, const std::vector<std::size_t>& which,
-                                                           Communicator& comm) {
+                                                           Communicator& comm, const std::function<void()>& finished) {
     const int rank = comm.rank(), size = comm.size();
     std::vector<std::size_t> mine;
     for (std::size_t k = static_cast<std::size_t>(rank); k < which.size(); k += static_cast<std::size_t>(size))
@@ -108,6 +90,7 @@ std::vector<std::vector<SweepPoint>> run_tasks_distributed(const SweepPlan& plan
     } catch (const RunError& e) {
         payload = std::string("error\n") + e.what();
     }
+    if (finished) finished();
     const std::vector<std::string> all = comm.gather(payload);
     // Rank 0 decides; everyone learns whether it failed.
     std::string failure;

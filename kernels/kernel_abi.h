@@ -22,8 +22,10 @@
  * Neither allocates, throws or touches global state.
  *
  * Sweep kernels (`hsnc generate --params k1,m2`) keep some model parameters
- * as run-time arguments: n_param > 0, param_names[] names them (in the
- * model's parameter order) and configure must be called before setup:
+ * as run-time arguments: n_param > 0, param_names[] names them in the order
+ * --params gave them (for `--params all`, the model's parameter order: the
+ * file's, implicit g first), which is the order configure takes their values
+ * in, and configure must be called before setup:
  *   configure(coef, params, max_step)  computes everything that depends on the
  *       parameters (matrices, modes and their regimes, forcing responses) into
  *       the first doubles of coef (the same n_coef block setup and eval use;
@@ -91,7 +93,7 @@ typedef struct hsnc_kernel {
     /* ABI version 2: sweep kernels. Folded kernels leave these zero (an
        aggregate initialiser that stops at `eval` value-initialises them). */
     int n_param;                    /**< parameters given to configure (0: folded kernel) */
-    const char* const* param_names; /**< n_param names, model parameter order */
+    const char* const* param_names; /**< n_param names, in the order of --params */
     hsnc_configure_fn configure;    /**< null for folded kernels */
 } hsnc_kernel;
 

@@ -23,6 +23,7 @@
 #include "error.h"
 #include "expression_evaluator.h"
 #include "file_read.h"
+#include "toml_guard.h"
 
 namespace hsnc {
 
@@ -551,16 +552,23 @@ ModelOverrides with_t_end(ModelOverrides overrides, double t_end) {
 
 Model parse_model(const std::string& toml_text, const std::string& source, const ModelOverrides& overrides) {
     Reader reader(source, overrides);  // flags are checked before the file
+    const auto syntax_error = [&](std::size_t line, std::size_t column, const std::string& description) {
+        std::string message = source;
+        if (line > 0) message += ":" + std::to_string(line);
+        message += ": TOML syntax error: " + description;
+        if (column > 0) message += " (column " + std::to_string(column) + ")";
+        return InputError(message);
+    };
+    // Code points that toml++ 3.3 must not see where it looks for whitespace
+    // (toml_guard.h): refused there, or written as escapes.
+    const TomlGuard guard = guard_toml_text(toml_text);
+    if (guard.problem) throw syntax_error(guard.problem->line, guard.problem->column, guard.problem->description);
     toml::table root;
     try {
-        root = toml::parse(std::string_view(toml_text), std::string_view(source));
+        root = toml::parse(std::string_view(guard.text), std::string_view(source));
     } catch (const toml::parse_error& e) {
-        std::string message = source;
-        if (e.source().begin.line > 0)
-            message += ":" + std::to_string(e.source().begin.line);
-        message += ": TOML syntax error: " + std::string(e.description());
-        if (e.source().begin.column > 0) message += " (column " + std::to_string(e.source().begin.column) + ")";
-        throw InputError(message);
+        const std::size_t line = e.source().begin.line, column = e.source().begin.column;
+        throw syntax_error(line, column > 0 ? guard.original_column(line, column) : 0, std::string(e.description()));
     }
     return reader.read(root);
 }
