@@ -5,18 +5,20 @@
 
 #include "aot_registry.h"
 #include "kernel_mode.h"
+#include "solver_choice.h"
 
 namespace hsnc::analysis {
 
-Flow::Flow(const Model& model, KernelChoice kernels, const char* function) : work_(model) {
-    KernelMode mode = KernelMode::automatic;
-    if (kernels == KernelChoice::generic) mode = KernelMode::generic;
-    if (kernels == KernelChoice::aot) mode = KernelMode::aot;
-    if (kernels == KernelChoice::jit)
-        throw OptionError(function, "kernels", "jit", "the analyses use the ahead-of-time kernels or the generic solver");
-    if (mode == KernelMode::aot && !has_aot_kernels(work_, &aot_registry()))
+Flow::Flow(const Model& model, const FlowKernels& k, const char* function) : work_(model) {
+    if (k.kernels == KernelChoice::aot && !has_aot_kernels(work_, &aot_registry()))
         throw OptionError(function, "kernels", "aot", "no ahead-of-time kernels for model '" + work_.name + "'");
-    provider_ = make_solver_provider(work_, mode, &aot_registry());
+    SimulateOptions o;
+    o.kernels = k.kernels;
+    o.cache_dir = k.cache_dir;
+    o.use_cache = k.use_cache;
+    // The kernels of a JIT provider depend on the model's numbers only, not on
+    // the initial state that run() rewrites.
+    provider_ = api::make_provider(work_, o, &solver_, function);
 }
 
 RunSummary Flow::run(double t, const double* x, const double* v, double t_end, Observer& observer, bool samples,

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "engine.h"
@@ -13,11 +14,26 @@
 
 namespace hsnc::analysis {
 
+/// Where a flow's segment solvers come from: the kernel kind the facade
+/// selects (SimulateOptions::kernels) and, for jit, its persistent cache.
+struct FlowKernels {
+    KernelChoice kernels = KernelChoice::automatic;
+    std::string cache_dir;  ///< jit: "" the default cache directory
+    bool use_cache = true;  ///< jit: false compiles every kernel, no cache
+};
+
 class Flow {
 public:
-    /// kernels: automatic, aot or generic (OptionError for jit).
-    Flow(const Model& model, KernelChoice kernels, const char* function);
+    /// OptionError (naming option "kernels", `function` the caller) for aot
+    /// on a model without ahead-of-time kernels; RunError when jit is asked
+    /// for and the JIT module cannot be loaded.
+    Flow(const Model& model, const FlowKernels& kernels, const char* function);
+    Flow(const Flow&) = delete;  ///< the provider refers to work_
+    Flow& operator=(const Flow&) = delete;
     const Model& model() const { return work_; }
+    /// What computes the runs, and its statistics line (SolverProvider::describe).
+    SolverKind solver() const { return solver_; }
+    std::string describe() const { return provider_->describe(); }
 
     /// Runs from (x, v) at time t to t_end, reporting to `observer`.
     RunSummary run(double t, const double* x, const double* v, double t_end, Observer& observer,
@@ -25,6 +41,7 @@ public:
 
 private:
     Model work_;
+    SolverKind solver_ = SolverKind::generic;
     std::unique_ptr<SolverProvider> provider_;
 };
 

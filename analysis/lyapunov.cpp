@@ -47,7 +47,7 @@ class SpectrumObserver : public Observer {
 public:
     SpectrumObserver(const Model& model, double t_start, double t_end, double row_interval,
                      const std::function<void(double, const std::vector<double>&)>& on_row, Observer* inner)
-        : tangent_(model), n2_(static_cast<Eigen::Index>(2 * model.dof())), t_start_(t_start), t_end_(t_end),
+        : tangent_(model), grazing_(tangent_), n2_(static_cast<Eigen::Index>(2 * model.dof())), t_start_(t_start), t_end_(t_end),
           row_(row_interval), on_row_(on_row), inner_(inner),
           Q_(initial_basis(n2_)), logsum_(Eigen::VectorXd::Zero(n2_)), live_(n2_) {}
 
@@ -93,11 +93,9 @@ public:
     void on_switch(const SwitchRecord& r) override {
         if (r.t < t_start_) return;
         Eigen::MatrixXd Y = Q_.leftCols(live_);
-        if (!tangent_.apply_saltation(r, Y)) {
-            ++grazing_;
-            return;
-        }
-        Q_.leftCols(live_) = Y;
+        const bool ok = tangent_.apply_saltation(r, Y);
+        grazing_.on_switch(r, !ok);
+        if (ok) Q_.leftCols(live_) = Y;
     }
 
     // The final row at the end of the run, and the exponents.
@@ -108,7 +106,8 @@ public:
     }
     std::size_t collapsed() const { return static_cast<std::size_t>(n2_ - live_); }
     std::size_t events() const { return events_; }
-    std::size_t grazing() const { return grazing_; }
+    std::size_t grazing() const { return grazing_.count(); }
+    std::size_t singular() const { return grazing_.singular(); }
 
 private:
     // QR of Y (the live columns): the logarithms of |R_kk| added to logs,
@@ -144,6 +143,7 @@ private:
     }
 
     analysis::Tangent tangent_;
+    analysis::GrazingMonitor grazing_;
     Eigen::Index n2_;
     double t_start_, t_end_, row_;
     const std::function<void(double, const std::vector<double>&)>& on_row_;
@@ -152,7 +152,7 @@ private:
     Eigen::VectorXd logsum_;
     Eigen::Index live_;
     double next_row_ = 0.0, last_row_ = -kInf, last_ = -kInf;
-    std::size_t row_k_ = 0, events_ = 0, grazing_ = 0;
+    std::size_t row_k_ = 0, events_ = 0;
 
 public:
     void start_rows() { next_row_ = t_start_ + row_; row_k_ = 1; }
@@ -174,7 +174,7 @@ LyapunovResult lyapunov(const Model& model, const LyapunovOptions& o,
         row = omega == 0.0 ? 1.0 : 2 * M_PI / omega;
     }
     analysis::check_number(kLyapunov, "row_interval", row, true);
-    analysis::Flow flow(model, o.kernels, kLyapunov);
+    analysis::Flow flow(model, {o.kernels, o.cache_dir, o.use_cache}, kLyapunov);
     const double t_start = model.t0 + o.transient, t_end = t_start + o.t_end;
     if (!(t_end > t_start)) throw OptionError(kLyapunov, "t_end", number_text(o.t_end), "too short to measure at t0 + transient");
 
@@ -188,6 +188,7 @@ LyapunovResult lyapunov(const Model& model, const LyapunovOptions& o,
     r.t = s.t;
     r.events = spectrum.events();
     r.grazing = spectrum.grazing();
+    r.singular = spectrum.singular();
     if (s.status != RunStatus::ok) return r;
     r.exponents = spectrum.finish(s.t);
     r.collapsed = spectrum.collapsed();

@@ -5,11 +5,10 @@
 #include <cmath>
 #include <sstream>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 
 #include "flow.h"
-#include "tangent.h"
+#include "shooting.h"
 
 namespace hsnc {
 namespace {
@@ -22,37 +21,6 @@ std::string number_text(double v) {
     s << v;
     return s.str();
 }
-
-// Residual of the period map at y: |P(y) - y| with positions and velocities
-// each relative to the largest of their kind in y and P(y).
-double residual_of(const Eigen::VectorXd& y, const Eigen::VectorXd& Py) {
-    const Eigen::Index n = y.size() / 2;
-    double res = 0.0;
-    for (int part = 0; part < 2; ++part) {
-        const auto a = y.segment(part * n, n), b = Py.segment(part * n, n);
-        const double scale = std::max(a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff());
-        const double r = (b - a).cwiseAbs().maxCoeff();
-        if (r > 0) res = std::max(res, scale > 0 ? r / scale : INFINITY);
-    }
-    return res;
-}
-
-struct MapValue {
-    bool ok = false;
-    std::string message;
-    Eigen::VectorXd Py;
-    Eigen::MatrixXd M;
-    double residual = INFINITY;
-    std::size_t events = 0;
-    std::size_t grazing = 0;
-};
-
-class EventCounter : public Observer {
-public:
-    void on_sample(double, const double*, const double*) override {}
-    void on_event(double, EventKind, int, const double*, const double*) override { ++events; }
-    std::size_t events = 0;
-};
 
 }  // namespace
 
@@ -94,7 +62,7 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
     if (!std::isnan(o.dt)) analysis::check_number(kPeriodic, "dt", o.dt, true);
     const double dt = std::isnan(o.dt) ? P / 1000 : o.dt;
 
-    analysis::Flow flow(model, o.kernels, kPeriodic);
+    analysis::Flow flow(model, {o.kernels, o.cache_dir, o.use_cache}, kPeriodic);
     const std::size_t n = model.dof();
     const Eigen::Index N = static_cast<Eigen::Index>(2 * n);
 
@@ -114,32 +82,12 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
     }
     const double te = ts + P;
 
-    auto evaluate = [&](const Eigen::VectorXd& state) {
-        MapValue m;
-        EventCounter events;
-        analysis::JacobianObserver jac(flow.model(), &events);
-        const RunSummary s = flow.run(ts, state.data(), state.data() + n, te, jac);
-        if (s.status != RunStatus::ok) {
-            m.message = std::string("a run of the period map ended with status ") + run_status_name(s.status) + ": " +
-                        s.message;
-            return m;
-        }
-        m.Py.resize(N);
-        for (std::size_t i = 0; i < n; ++i)
-            m.Py(static_cast<Eigen::Index>(i)) = s.x[i], m.Py(static_cast<Eigen::Index>(n + i)) = s.v[i];
-        m.M = jac.jacobian();
-        m.grazing = jac.grazing();
-        m.events = events.events;
-        m.residual = residual_of(state, m.Py);
-        m.ok = m.Py.allFinite() && std::isfinite(m.residual);
-        if (!m.ok) m.message = "the period map gave non-finite values";
-        return m;
-    };
+    auto evaluate = [&](const Eigen::VectorXd& state) { return analysis::evaluate_period_map(flow, ts, te, state); };
 
     PeriodicResult r;
     r.period = P;
     r.t = ts;
-    MapValue cur = evaluate(y);
+    analysis::PeriodMapValue cur = evaluate(y);
     int it = 0;
     std::string why;
     while (true) {
@@ -152,8 +100,8 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
             why = "no convergence in " + std::to_string(o.max_iterations) + " iterations";
             break;
         }
-        if (cur.grazing || !cur.M.allFinite()) {
-            why = "the period map has no derivative here (a grazing switch)";
+        if (cur.singular || !cur.M.allFinite()) {
+            why = "the period map has no derivative here (a grazing switch with zero normal velocity)";
             break;
         }
         // Newton step on P(y) - y = 0, least squares where M - I is singular
@@ -169,7 +117,7 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
         bool accepted = false;
         for (int halving = 0; halving <= 10; ++halving, lambda *= 0.5) {
             const Eigen::VectorXd trial = y + lambda * step;
-            MapValue next = evaluate(trial);
+            analysis::PeriodMapValue next = evaluate(trial);
             if (next.ok && next.residual < cur.residual) {
                 y = trial;
                 cur = std::move(next);
@@ -185,6 +133,7 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
     }
     r.iterations = it;
     r.residual = cur.residual;
+    r.grazing = cur.grazing;
     r.x.assign(y.data(), y.data() + n);
     r.v.assign(y.data() + n, y.data() + 2 * n);
     if (cur.ok && cur.residual <= o.tolerance) {
@@ -193,12 +142,7 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
         r.monodromy.resize(static_cast<std::size_t>(N * N));
         for (Eigen::Index i = 0; i < N; ++i)
             for (Eigen::Index j = 0; j < N; ++j) r.monodromy[static_cast<std::size_t>(i * N + j)] = cur.M(i, j);
-        Eigen::EigenSolver<Eigen::MatrixXd> es(cur.M, false);
-        for (Eigen::Index i = 0; i < N; ++i) r.multipliers.push_back(es.eigenvalues()(i));
-        std::stable_sort(r.multipliers.begin(), r.multipliers.end(),
-                         [](const std::complex<double>& a, const std::complex<double>& b) {
-                             return std::abs(a) > std::abs(b);
-                         });
+        r.multipliers = analysis::floquet_multipliers(cur.M);
         r.max_multiplier = r.multipliers.empty() ? 0.0 : std::abs(r.multipliers.front());
         r.stable = r.max_multiplier < 1.0;
         if (orbit) {

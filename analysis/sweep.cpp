@@ -16,6 +16,7 @@
 #include "hsnc/simulate.h"
 #include "model_hash.h"
 #include "sweep_detail.h"
+#include "continuation.h"
 #include "sweep_point.h"
 
 namespace hsnc {
@@ -85,7 +86,7 @@ SweepPlan SweepPlan::from_file(const std::string& path, const ModelOverrides& ov
 
 SweepPlan::SweepPlan(const std::string& text, const std::string& source, const ModelOverrides& overrides,
                      SweepOptions options)
-    : options_(std::move(options)) {
+    : options_(std::move(options)), text_(text), source_(source), overrides_(overrides) {
     SweepOptions& o = options_;
     // The model as given (parameters at the file's values): names, checks.
     model_ = parse_model(text, source, overrides);
@@ -125,6 +126,19 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
         validate(o.method, o.integrator);
     } catch (const InputError& e) {
         throw OptionError(kPlan, "method", method_name(o.method), e.what());
+    }
+    if (o.continuation) {
+        if (o.restart_each)
+            throw OptionError(kPlan, "restart_each", "true", "does not go with continuation (a branch is followed point to point)");
+        if (o.method != Method::hsnc)
+            throw OptionError(kPlan, "method", method_name(o.method), "continuation needs the exact method hsnc (shooting)");
+        if (o.points < 2) throw OptionError(kPlan, "points", std::to_string(o.points), "must be >= 2 with continuation");
+        if (o.from == o.to)
+            throw OptionError(kPlan, "to", short_num(o.to), "must differ from from with continuation");
+        if (o.max_steps > 100'000'000)
+            throw OptionError(kPlan, "max_steps", std::to_string(o.max_steps), "must be <= 1e8");
+    } else if (o.max_steps != 0) {
+        throw OptionError(kPlan, "max_steps", std::to_string(o.max_steps), "only with continuation");
     }
     if (o.threads == 0) o.threads = std::max(1u, std::thread::hardware_concurrency());
 
@@ -193,6 +207,7 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     for (std::size_t l = 0; l < o.values2.size(); ++l) fp << (l ? "," : "") << num(o.values2[l]);
     if (o.values2.empty()) fp << "-";
     fp << " diagram=" << (o.diagram ? 1 : 0) << " method=" << method_name(o.method);
+    if (o.continuation) fp << " continuation=1 max_steps=" << o.max_steps;
     if (o.method != Method::hsnc)
         fp << " h=" << num(o.integrator.h) << " rtol=" << num(o.integrator.rtol) << " atol=" << num(o.integrator.atol);
     fingerprint_ = fp.str();
@@ -209,6 +224,33 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i) const {
     return run_task(i, &c);
 }
 
+namespace {
+
+void report(Context& c, const SweepOptions& o, const SweepPoint& b, double seconds) {
+    if (!o.progress) return;
+    const auto t1 = std::chrono::steady_clock::now();
+    std::lock_guard<std::mutex> lock(c.mutex);
+    SweepProgress pr;
+    pr.done = ++c.done;
+    pr.total = o.continuation ? 0 : c.total;
+    pr.seconds = seconds;
+    pr.elapsed = std::chrono::duration<double>(t1 - c.start).count();
+    pr.value = b.value;
+    pr.value2 = b.value2;
+    pr.direction = b.direction;
+    pr.settled = b.settled;
+    pr.periods = b.periods;
+    pr.multiple = b.multiple;
+    pr.failure = b.failure;
+    pr.continuation = o.continuation;
+    pr.stable = b.stable;
+    pr.max_multiplier = b.max_multiplier;
+    pr.bifurcation = b.bifurcation;
+    o.progress(pr);
+}
+
+}  // namespace
+
 std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const {
     Context& c = *static_cast<Context*>(context);
     const Task& task = tasks_.at(i);
@@ -218,6 +260,33 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const 
     auto value_index = [&](std::size_t position) {
         return task.direction == SweepDirection::up ? position : N - 1 - position;
     };
+    std::string where;
+    if (has2) where += ", " + options_.param2 + " = " + short_num(v2);
+    where += std::string(" (") + sweep_direction_name(task.direction) + ")";
+    sweep_detail::check_cancel(options_);
+
+    if (options_.continuation) {
+        sweep_detail::Branch branch;
+        branch.param = options_.param;
+        branch.where = where;
+        const bool up = task.direction == SweepDirection::up;
+        branch.start = up ? options_.from : options_.to;
+        branch.end = up ? options_.to : options_.from;
+        branch.start_model = &point_model(task.line, up ? 0 : N - 1);
+        branch.model_at = [this, v2, has2](double p) {
+            ModelOverrides ov = overrides_;
+            ov.set.push_back(options_.param + "=" + num(p));
+            if (has2) ov.set.push_back(options_.param2 + "=" + num(v2));
+            Model m = parse_model(text_, source_, ov);
+            m.parameter_expressions.clear();
+            m.field_expressions.clear();
+            return m;
+        };
+        branch.value2 = v2;
+        return sweep_detail::run_continuation(
+            branch, options_, [&](const SweepPoint& p, double seconds) { report(c, options_, p, seconds); });
+    }
+
     sweep_detail::State state;
     {
         const Model& first = point_model(task.line, value_index(task.first));
@@ -227,38 +296,34 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const 
     std::vector<SweepPoint> out;
     out.reserve(task.count);
     for (std::size_t q = task.first; q < task.first + task.count; ++q) {
+        sweep_detail::check_cancel(options_);
         const std::size_t j = value_index(q);
         const Model& m = point_model(task.line, j);
         if (options_.restart_each) {
             state.x = m.x0;
             state.v = m.v0;
         }
-        std::string what = options_.param + " = " + short_num(values_[j]);
-        if (has2) what += ", " + options_.param2 + " = " + short_num(v2);
-        what += std::string(" (") + sweep_direction_name(task.direction) + ")";
+        const std::string what = options_.param + " = " + short_num(values_[j]) + where;
         const auto t0 = std::chrono::steady_clock::now();
-        SweepPoint p = sweep_detail::run_point(m, state, options_, what);
+        const sweep_detail::State before = state;
+        SweepPoint p;
+        try {
+            p = sweep_detail::run_point(m, state, options_, what);
+        } catch (const RunError& e) {
+            // The point gives a row that says so; the next starts where this one did.
+            p = SweepPoint();
+            p.failure = e.what();
+            const double nan = std::nan("");
+            p.xmax.assign(m.dof(), nan);
+            p.xrms.assign(m.dof(), nan);
+            p.a1.assign(m.dof(), nan);
+            state = before;
+        }
         p.value = values_[j];
         p.value2 = v2;
         p.direction = task.direction;
         out.push_back(std::move(p));
-        if (options_.progress) {
-            const auto t1 = std::chrono::steady_clock::now();
-            std::lock_guard<std::mutex> lock(c.mutex);
-            SweepProgress pr;
-            pr.done = ++c.done;
-            pr.total = c.total;
-            pr.seconds = std::chrono::duration<double>(t1 - t0).count();
-            pr.elapsed = std::chrono::duration<double>(t1 - c.start).count();
-            const SweepPoint& b = out.back();
-            pr.value = b.value;
-            pr.value2 = b.value2;
-            pr.direction = b.direction;
-            pr.settled = b.settled;
-            pr.periods = b.periods;
-            pr.multiple = b.multiple;
-            options_.progress(pr);
-        }
+        report(c, options_, out.back(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
     return out;
 }
@@ -306,6 +371,7 @@ SweepResult SweepPlan::result_header() const {
     r.model = model_.name;
     r.param = options_.param;
     r.param2 = options_.param2;
+    r.continuation = options_.continuation;
     for (const Mass& m : model_.masses) r.masses.push_back(m.name);
     return r;
 }
@@ -329,6 +395,7 @@ std::string sweep_curve_header(const SweepResult& r) {
     std::string h = r.param + ",direction,settled,periods,multiple";
     for (const std::string& m : r.masses) h += ",xmax_" + m + ",xrms_" + m + ",a1_" + m;
     if (!r.param2.empty()) h += "," + r.param2;
+    if (r.continuation) h += ",stable,max_multiplier,bifurcation";
     return h;
 }
 
@@ -343,6 +410,48 @@ std::string sweep_diagram_header(const SweepResult& r) {
 // ---- the text form of points: MPI and part files ----
 
 namespace sweep_detail {
+namespace {
+
+// A text as one word: "-" when empty, else with \\, space, newline, tab
+// and a lone "-" escaped.
+std::string word(const std::string& text) {
+    if (text.empty()) return "-";
+    if (text == "-") return "\\-";
+    std::string w;
+    for (char ch : text) {
+        if (ch == '\\') w += "\\\\";
+        else if (ch == ' ') w += "\\s";
+        else if (ch == '\n') w += "\\n";
+        else if (ch == '\t') w += "\\t";
+        else if (ch == '\r') w += "\\r";
+        else w += ch;
+    }
+    return w;
+}
+
+bool unword(const std::string& w, std::string& text) {
+    text.clear();
+    if (w == "-") return true;
+    for (std::size_t i = 0; i < w.size(); ++i) {
+        if (w[i] != '\\') {
+            text += w[i];
+            continue;
+        }
+        if (++i >= w.size()) return false;
+        switch (w[i]) {
+        case '\\': text += '\\'; break;
+        case 's': text += ' '; break;
+        case 'n': text += '\n'; break;
+        case 't': text += '\t'; break;
+        case 'r': text += '\r'; break;
+        case '-': text += '-'; break;
+        default: return false;
+        }
+    }
+    return true;
+}
+
+}  // namespace
 
 std::vector<std::string> split_lines(const std::string& text) {
     std::vector<std::string> lines;
@@ -372,7 +481,8 @@ std::string write_tasks(const std::vector<std::size_t>& which, const std::vector
                 for (std::size_t i = 0; i < n; ++i) s += " " + num(p.strobe_x[r * n + i]);
                 for (std::size_t i = 0; i < n; ++i) s += " " + num(p.strobe_v[r * n + i]);
             }
-            s += "\n";
+            s += " " + std::string(p.branch_start ? "1" : "0") + " " + (p.stable ? "1" : "0") + " " + num(p.max_multiplier) + " " + word(p.bifurcation) +
+                 " " + word(p.failure) + " " + word(p.stop) + "\n";
         }
     }
     return s;
@@ -453,6 +563,17 @@ void read_tasks(const std::vector<std::string>& lines, std::size_t first, std::s
                 for (std::size_t m = 0; m < n; ++m) p.strobe_x.push_back(r.number());
                 for (std::size_t m = 0; m < n; ++m) p.strobe_v.push_back(r.number());
             }
+            const std::string start = r.word();
+            if (start != "0" && start != "1") r.fail("branch start '" + start + "'");
+            p.branch_start = start == "1";
+            const std::string stable = r.word();
+            if (stable != "0" && stable != "1") r.fail("stable '" + stable + "'");
+            p.stable = stable == "1";
+            p.max_multiplier = r.number();
+            for (std::string* text : {&p.bifurcation, &p.failure, &p.stop}) {
+                const std::string w = r.word();
+                if (!unword(w, *text)) r.fail("'" + w + "' is not an escaped text");
+            }
             r.end();
             pts.push_back(std::move(p));
         }
@@ -464,7 +585,7 @@ void read_tasks(const std::vector<std::string>& lines, std::size_t first, std::s
 // ---- part files ----
 
 namespace {
-constexpr const char* kPartMagic = "hsnc-sweep-part 1";
+constexpr const char* kPartMagic = "hsnc-sweep-part 2";
 }
 
 std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_t count,
@@ -477,6 +598,7 @@ std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_
     s += "model " + names.model + "\n";
     s += "param " + names.param + "\n";
     s += "param2 " + (names.param2.empty() ? std::string("-") : names.param2) + "\n";
+    s += "continuation " + std::string(names.continuation ? "1" : "0") + "\n";
     s += "masses";
     for (const std::string& m : names.masses) s += " " + m;
     s += "\n";
@@ -514,7 +636,9 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
             if (!(ts >> t)) throw InputError(where + ":4: expected 'tasks N'");
         }
         const std::string model = field(4, "model"), param = field(5, "param"), param2 = field(6, "param2");
-        std::istringstream ms(field(7, "masses"));
+        const std::string cont = field(7, "continuation");
+        if (cont != "0" && cont != "1") throw InputError(where + ":8: expected 'continuation 0|1'");
+        std::istringstream ms(field(8, "masses"));
         std::vector<std::string> masses;
         for (std::string m; ms >> m;) masses.push_back(m);
         if (f == 0) {
@@ -525,6 +649,7 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
             r.model = model;
             r.param = param;
             r.param2 = param2 == "-" ? "" : param2;
+            r.continuation = cont == "1";
             r.masses = masses;
         } else if (fp != fingerprint || n != count || t != tasks) {
             throw InputError(where + ": a part of another sweep than " + names[0] + " (" +
@@ -534,7 +659,7 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
         if (seen[i - 1]) throw InputError(where + ": part " + std::to_string(i) + "/" + std::to_string(n) + " given twice");
         seen[i - 1] = 1;
         std::map<std::size_t, std::vector<SweepPoint>> mine;
-        sweep_detail::read_tasks(lines, 8, masses.size(), where, mine);
+        sweep_detail::read_tasks(lines, 9, masses.size(), where, mine);
         for (auto& [index, pts] : mine) {
             if (index >= tasks || index % count != i - 1)
                 throw InputError(where + ": task " + std::to_string(index) + " does not belong to part " +

@@ -39,6 +39,10 @@ public:
         if (api_->broadcast(&value) != 0) throw RunError("MPI: broadcast failed");
         return value;
     }
+    bool send_progress(int points) override { return api_->send_progress(points) == 0; }
+    bool poll_progress(long long& points, int& finished) override {
+        return api_->poll_progress(&points, &finished) == 0;
+    }
 
 private:
     const HsncMpiApi* api_;
@@ -74,7 +78,7 @@ std::unique_ptr<Communicator> mpi_communicator() {
 #endif
 
 std::vector<std::vector<SweepPoint>> run_tasks_distributed(const SweepPlan& plan, const std::vector<std::size_t>& which,
-                                                           Communicator& comm) {
+                                                           Communicator& comm, const std::function<void()>& finished) {
     const int rank = comm.rank(), size = comm.size();
     std::vector<std::size_t> mine;
     for (std::size_t k = static_cast<std::size_t>(rank); k < which.size(); k += static_cast<std::size_t>(size))
@@ -86,6 +90,7 @@ std::vector<std::vector<SweepPoint>> run_tasks_distributed(const SweepPlan& plan
     } catch (const RunError& e) {
         payload = std::string("error\n") + e.what();
     }
+    if (finished) finished();
     const std::vector<std::string> all = comm.gather(payload);
     // Rank 0 decides; everyone learns whether it failed.
     std::string failure;

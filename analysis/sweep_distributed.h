@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -31,6 +32,11 @@ public:
     virtual std::vector<std::string> gather(const std::string& mine) = 0;
     /// Rank 0's `value` on every rank.
     virtual int broadcast(int value) = 0;
+    /// Progress to rank 0: `points` more done, or -1: this rank has finished.
+    /// False when the MPI library cannot (no MPI_THREAD_SERIALIZED).
+    virtual bool send_progress(int points) = 0;
+    /// Rank 0: adds the progress that has arrived to `points` and `finished` (ranks), without waiting.
+    virtual bool poll_progress(long long& points, int& finished) = 0;
 };
 
 /// True when this process was started by an MPI launcher (mpirun, srun with
@@ -50,7 +56,11 @@ std::string mpi_module_path();
 /// per rank. Rank 0 returns the points of every task of `which`, in order;
 /// the other ranks an empty list. A RunError on any rank is thrown on every
 /// rank (rank 0: with the message of the lowest rank that failed).
+/// `finished`, when given, is called on every rank once its own tasks are
+/// done (or failed), before the results are gathered (the progress protocol
+/// of the command line: ranks say they are done, rank 0 waits for them).
 std::vector<std::vector<SweepPoint>> run_tasks_distributed(const SweepPlan& plan, const std::vector<std::size_t>& which,
-                                                           Communicator& comm);
+                                                           Communicator& comm,
+                                                           const std::function<void()>& finished = nullptr);
 
 }  // namespace hsnc

@@ -15,10 +15,16 @@
 
 namespace {
 
+constexpr int kProgressTag = 7031;
+int g_thread_level = MPI_THREAD_SINGLE;
+
 int init(int* rank, int* size) {
     int ready = 0;
     MPI_Initialized(&ready);
-    if (!ready && MPI_Init(nullptr, nullptr) != MPI_SUCCESS) return 1;
+    // Serialized: progress messages go out from the worker thread that
+    // finished a point, one call at a time.
+    if (!ready && MPI_Init_thread(nullptr, nullptr, MPI_THREAD_SERIALIZED, &g_thread_level) != MPI_SUCCESS) return 1;
+    if (ready) MPI_Query_thread(&g_thread_level);
     MPI_Comm_rank(MPI_COMM_WORLD, rank);
     MPI_Comm_size(MPI_COMM_WORLD, size);
     return 0;
@@ -68,7 +74,28 @@ int finalize() {
 
 void abort_all(int code) { MPI_Abort(MPI_COMM_WORLD, code); }
 
-const HsncMpiApi kApi = {init, gather, release, broadcast, finalize, abort_all};
+int send_progress(int value) {
+    if (g_thread_level < MPI_THREAD_SERIALIZED) return 1;
+    return MPI_Send(&value, 1, MPI_INT, 0, kProgressTag, MPI_COMM_WORLD) == MPI_SUCCESS ? 0 : 1;
+}
+
+int poll_progress(long long* points, int* finished) {
+    if (g_thread_level < MPI_THREAD_SERIALIZED) return 1;
+    for (;;) {
+        int flag = 0;
+        MPI_Status status;
+        if (MPI_Iprobe(MPI_ANY_SOURCE, kProgressTag, MPI_COMM_WORLD, &flag, &status) != MPI_SUCCESS) return 1;
+        if (!flag) return 0;
+        int value = 0;
+        if (MPI_Recv(&value, 1, MPI_INT, status.MPI_SOURCE, kProgressTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE) !=
+            MPI_SUCCESS)
+            return 1;
+        if (value < 0) ++*finished;
+        else *points += value;
+    }
+}
+
+const HsncMpiApi kApi = {init, gather, release, broadcast, finalize, abort_all, send_progress, poll_progress};
 
 }  // namespace
 

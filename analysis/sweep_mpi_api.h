@@ -13,6 +13,12 @@ struct HsncMpiApi {
     int (*broadcast)(int* value);
     int (*finalize)();
     void (*abort)(int code);
+    /// Progress to rank 0 (point-to-point, tag of its own): `value` points
+    /// done, or -1 when this rank has finished its tasks. Callable from any
+    /// thread, one call at a time (MPI_THREAD_SERIALIZED).
+    int (*send_progress)(int value);
+    /// Rank 0: adds what has arrived without waiting (points done, ranks finished).
+    int (*poll_progress)(long long* points, int* finished);
 };
 /// The module exports `const HsncMpiApi* hsnc_mpi_api(void)`.
 typedef const HsncMpiApi* (*HsncMpiApiFunction)();

@@ -318,8 +318,41 @@ double highest_natural_frequency(const Model& model) {
     return std::sqrt(top);
 }
 
-SweepPoint run_point(const Model& point_model, State& state, const SweepOptions& o, const std::string& what) {
-    Model m = point_model;  // its t0, x0, v0 move with the runs; solvers do not depend on them
+namespace {
+
+// A run from `state` at ta to tb (dt, samples, observer as the engine's),
+// leaving the end state in `state`; RunError naming `what` when it stops.
+void advance(Model& m, State& state, const SweepOptions& o, const std::string& what, double ta, double tb, double dt,
+             bool samples, Observer& obs, SolverProvider* p) {
+    m.t0 = ta;
+    m.x0 = state.x;
+    m.v0 = state.v;
+    EngineOptions eo;
+    eo.t_end = tb;
+    eo.dt = dt;
+    eo.samples = samples;
+    RunSummary s;
+    if (o.method == Method::hsnc) {
+        Engine engine(m, *p);
+        s = engine.run(eo, obs);
+    } else {
+        s = integrate(m, o.method, o.integrator, eo, obs);
+    }
+    if (s.status != RunStatus::ok)
+        throw RunError("sweep: " + what + ": the run stopped: " + run_status_name(s.status) + ": " + s.message);
+    state.x = s.x;
+    state.v = s.v;
+}
+
+}  // namespace
+
+void check_cancel(const SweepOptions& o) {
+    if (o.cancel && o.cancel->load(std::memory_order_relaxed)) throw SweepCancelled();
+}
+
+void record(const Model& point_model, State& state, const SweepOptions& o, const std::string& what, std::size_t k,
+            std::size_t periods, SweepPoint& pt, SolverProvider* provider) {
+    Model m = point_model;
     const std::size_t n = m.dof();
     const double omega = forcing_frequency(m, what);
     const double period = 2 * kPi / omega;
@@ -328,29 +361,39 @@ SweepPoint run_point(const Model& point_model, State& state, const SweepOptions&
     const double ratio = std::max(1.0, highest_natural_frequency(m) / omega);
     const auto per_period = static_cast<std::size_t>(16 * std::ceil(ratio));
     const double h = period / static_cast<double>(per_period);
+    const double tr = t0 + static_cast<double>(k) * period;
+    const double te = t0 + static_cast<double>(k + periods) * period;
+    Accumulator acc(n);
+    if (o.method == Method::hsnc) {
+        std::unique_ptr<SolverProvider> own;
+        if (!provider) provider = (own = std::make_unique<GenericSolverProvider>(m)).get();
+        SegmentRecorder rec(m, omega, tr, h, acc);
+        RecordingProvider recording(*provider, rec);
+        StrobeObserver strobe(pt, n, tr, o.diagram);
+        advance(m, state, o, what, tr, te, period, true, strobe, &recording);
+        rec.finish(te, 0.0);
+    } else {
+        GridObserver grid(acc, pt, n, omega, tr, h, per_period, o.diagram);
+        advance(m, state, o, what, tr, te, h, true, grid, nullptr);
+        grid.close();
+    }
+    pt.xmax = acc.xmax;
+    pt.xrms.resize(n);
+    pt.a1.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        pt.xrms[i] = std::sqrt(acc.sxx[i] / acc.length);
+        pt.a1[i] = std::hypot(2 * acc.sxc[i] / acc.length, 2 * acc.sxs[i] / acc.length);
+    }
+}
+
+SweepPoint run_point(const Model& point_model, State& state, const SweepOptions& o, const std::string& what) {
+    Model m = point_model;  // its t0, x0, v0 move with the runs; solvers do not depend on them
+    const double omega = forcing_frequency(m, what);
+    const double period = 2 * kPi / omega;
+    const double t0 = m.t0;
 
     std::unique_ptr<SolverProvider> provider;
     if (o.method == Method::hsnc) provider = std::make_unique<GenericSolverProvider>(m);
-    auto advance = [&](double ta, double tb, double dt, bool samples, Observer& obs, SolverProvider* p) {
-        m.t0 = ta;
-        m.x0 = state.x;
-        m.v0 = state.v;
-        EngineOptions eo;
-        eo.t_end = tb;
-        eo.dt = dt;
-        eo.samples = samples;
-        RunSummary s;
-        if (o.method == Method::hsnc) {
-            Engine engine(m, *p);
-            s = engine.run(eo, obs);
-        } else {
-            s = integrate(m, o.method, o.integrator, eo, obs);
-        }
-        if (s.status != RunStatus::ok)
-            throw RunError("sweep: " + what + ": the run stopped: " + run_status_name(s.status) + ": " + s.message);
-        state.x = s.x;
-        state.v = s.v;
-    };
 
     SweepPoint pt;
     // ---- transient: whole periods until the stroboscopic state repeats ----
@@ -363,7 +406,8 @@ SweepPoint run_point(const Model& point_model, State& state, const SweepOptions&
     int pending = 0;  // a multiple found while a divisor of it still converged
     while (k < o.max_periods) {
         const double ta = t0 + static_cast<double>(k) * period, tb = t0 + static_cast<double>(k + 1) * period;
-        advance(ta, tb, 0.0, false, none, provider.get());
+        check_cancel(o);
+        advance(m, state, o, what, ta, tb, 0.0, false, none, provider.get());
         ++k;
         history.push_back(state);
         if (history.size() > keep) history.erase(history.begin());
@@ -396,28 +440,7 @@ SweepPoint run_point(const Model& point_model, State& state, const SweepOptions&
     }
     pt.periods = k;
 
-    // ---- the recorded periods, in one run ----
-    const double tr = t0 + static_cast<double>(k) * period;
-    const double te = t0 + static_cast<double>(k + o.record_periods) * period;
-    Accumulator acc(n);
-    if (o.method == Method::hsnc) {
-        SegmentRecorder rec(m, omega, tr, h, acc);
-        RecordingProvider recording(*provider, rec);
-        StrobeObserver strobe(pt, n, tr, o.diagram);
-        advance(tr, te, period, true, strobe, &recording);
-        rec.finish(te, 0.0);
-    } else {
-        GridObserver grid(acc, pt, n, omega, tr, h, per_period, o.diagram);
-        advance(tr, te, h, true, grid, nullptr);
-        grid.close();
-    }
-    pt.xmax = acc.xmax;
-    pt.xrms.resize(n);
-    pt.a1.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        pt.xrms[i] = std::sqrt(acc.sxx[i] / acc.length);
-        pt.a1[i] = std::hypot(2 * acc.sxc[i] / acc.length, 2 * acc.sxs[i] / acc.length);
-    }
+    record(point_model, state, o, what, k, o.record_periods, pt, provider.get());
     return pt;
 }
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "hsnc/sweep.h"
+#include "engine.h"
 #include "model.h"
 
 namespace hsnc::sweep_detail {
@@ -20,6 +21,16 @@ struct State {
 /// `state` the state at the end of the recorded periods. `what` names the
 /// point in messages. RunError when a run stops (chattering, Zeno, failure).
 SweepPoint run_point(const Model& model, State& state, const SweepOptions& options, const std::string& what);
+
+/// Records `periods` forcing periods of `model` from `state` at t0 + k*T
+/// into `pt` (xmax, xrms, a1, the stroboscopic samples), leaving the end
+/// state in `state`; `provider` (may be null: a generic one) gives the
+/// solvers with method hsnc. RunError naming `what` when the run stops.
+void record(const Model& model, State& state, const SweepOptions& options, const std::string& what, std::size_t k,
+            std::size_t periods, SweepPoint& pt, SolverProvider* provider = nullptr);
+
+/// SweepCancelled when options.cancel is set.
+void check_cancel(const SweepOptions& options);
 
 /// The forcing frequency of `model`; InputError (naming `what`) unless it has
 /// forcing with one frequency.

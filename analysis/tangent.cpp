@@ -274,16 +274,47 @@ bool Tangent::apply_saltation(const SwitchRecord& r, Eigen::MatrixXd& Y) {
     return true;
 }
 
+double Tangent::grazing_ratio(const SwitchRecord& r) {
+    const int n = static_cast<int>(model_.dof());
+    double omega = 0.0;
+    for (const Harmonic& h : model_.forcing) omega = std::max(omega, std::fabs(h.omega));
+    const ConfigData& d = data(*r.before);
+    if (d.lambda.size()) omega = std::max(omega, std::sqrt(std::max(0.0, d.lambda.maxCoeff())));
+    std::vector<double> a;
+    double ratio = INFINITY;
+    for (const SwitchFunction& f : *r.switched) {
+        if (f.kind != SwitchKind::gap) continue;
+        if (a.empty()) {
+            a.resize(static_cast<std::size_t>(n));
+            for (int i = 0; i < n; ++i) a[static_cast<std::size_t>(i)] = acceleration(model_, *r.before, r.sgn_before, i, r.t, r.x, r.v);
+        }
+        const Contact& k = model_.contacts[static_cast<std::size_t>(f.element)];
+        const double rate = std::fabs(gap_rate(model_, f.element, r.v));
+        const double curvature = std::fabs((k.a != kGround ? a[static_cast<std::size_t>(k.a)] : 0.0) -
+                                           (k.b != kGround ? a[static_cast<std::size_t>(k.b)] : 0.0));
+        const double q = rate * omega / curvature;  // NaN for 0/0, +inf for a straight crossing
+        if (std::isnan(q) || q < ratio) ratio = q;
+        if (std::isnan(ratio)) break;
+    }
+    return ratio;
+}
+
 Eigen::MatrixXd Tangent::saltation(const SwitchRecord& instant) {
     Eigen::MatrixXd S = Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(dim()), static_cast<Eigen::Index>(dim()));
     if (!apply_saltation(instant, S)) S.setConstant(std::numeric_limits<double>::quiet_NaN());
     return S;
 }
 
+void GrazingMonitor::on_switch(const SwitchRecord& r, bool singular) {
+    singular_ += singular;
+    if (singular || !(tangent_.grazing_ratio(r) > kGrazingRatio)) ++grazing_;
+}
+
 JacobianObserver::JacobianObserver(const Model& model, Observer* inner)
     : tangent_(model), inner_(inner),
       J_(Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(2 * model.dof()),
-                                   static_cast<Eigen::Index>(2 * model.dof()))) {}
+                                   static_cast<Eigen::Index>(2 * model.dof()))),
+      grazing_(tangent_) {}
 
 void JacobianObserver::on_sample(double t, const double* x, const double* v) {
     if (inner_) inner_->on_sample(t, x, v);
@@ -297,7 +328,7 @@ void JacobianObserver::on_segment(const SegmentRecord& s) { tangent_.apply_trans
 
 void JacobianObserver::on_switch(const SwitchRecord& r) {
     (r.switched->size() > 1 ? multiple_ : single_) += 1;
-    if (!tangent_.apply_saltation(r, J_)) ++grazing_;
+    grazing_.on_switch(r, !tangent_.apply_saltation(r, J_));
 }
 
 }  // namespace hsnc::analysis

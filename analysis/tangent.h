@@ -70,6 +70,10 @@ public:
 
     /// The saltation matrix of one switch instant (2n x 2n).
     Eigen::MatrixXd saltation(const SwitchRecord& instant);
+    /// The grazing ratio |G'| Omega / |G''| of the contacts switching at the
+    /// instant (the smallest; see GrazingMonitor); +infinity when no contact
+    /// switches, NaN when G' = G'' = 0.
+    double grazing_ratio(const SwitchRecord& instant);
     /// Y <- S Y. Returns false when a switch is grazing (dh/dt = 0 with a
     /// jump in the vector field: the derivative does not exist); Y is then
     /// left as it was.
@@ -81,6 +85,41 @@ private:
 
     const Model& model_;
     std::map<Configuration, std::unique_ptr<ConfigData>> cache_;
+};
+
+/// Grazing: a contact that closes or opens with (almost) zero normal velocity
+/// G'. There the flow map is not smooth: a perturbation to one side makes the
+/// contact engage for a time of order sqrt(depth), to the other it misses, so
+/// the derivative the saltation matrices give (it exists at every transversal
+/// switch) tells little about perturbations of the size of the penetration,
+/// and where dh/dt = 0 exactly the saltation matrix does not exist (1/dh/dt).
+/// Measured at the switch, without any scale of the motion: the ratio
+/// r = |G'| Omega / |G''| (G'' from the accelerations before the switch,
+/// Omega the largest of the configuration's natural frequencies and the
+/// forcing frequencies). Near a turning point of G at phase distance d, r is
+/// about tan d, and a stop reached with a penetration eps of the motion's
+/// amplitude gives r about sqrt(2 eps); a transversal crossing gives r of order
+/// 1 (less when the forcing is far above the natural frequencies). A switch
+/// instant counts as grazing when a contact switches at it with
+/// r <= kGrazingRatio (a penetration below about 5e-9 of the amplitude), or
+/// when its saltation matrix does not exist. A touch that the engine resolves
+/// without any switch (a gap reaching exactly 0 with G' = 0) is not seen.
+inline constexpr double kGrazingRatio = 1e-4;
+
+class GrazingMonitor {
+public:
+    /// `tangent` gives the configurations' natural frequencies; it must outlive the monitor.
+    explicit GrazingMonitor(Tangent& tangent) : tangent_(tangent) {}
+    /// A switch instant; `singular`: its saltation matrix does not exist.
+    void on_switch(const SwitchRecord& instant, bool singular);
+    /// Grazing switch instants so far.
+    std::size_t count() const { return grazing_; }
+    /// Switch instants without a saltation matrix (counted as grazing too).
+    std::size_t singular() const { return singular_; }
+
+private:
+    Tangent& tangent_;
+    std::size_t grazing_ = 0, singular_ = 0;
 };
 
 /// An Observer that accumulates the Jacobian of the flow map of a run, from
@@ -97,8 +136,10 @@ public:
     void on_switch(const SwitchRecord& instant) override;
 
     const Eigen::MatrixXd& jacobian() const { return J_; }
-    /// Switch instants whose derivative does not exist (grazing).
-    std::size_t grazing() const { return grazing_; }
+    /// Grazing switch instants (GrazingMonitor), those without a derivative included.
+    std::size_t grazing() const { return grazing_.count(); }
+    /// Switch instants whose derivative does not exist (skipped: J is not the derivative).
+    std::size_t singular() const { return grazing_.singular(); }
     /// Switch instants seen, by number of functions switching at once (1, more).
     std::size_t single_switches() const { return single_; }
     std::size_t multiple_switches() const { return multiple_; }
@@ -107,7 +148,8 @@ private:
     Tangent tangent_;
     Observer* inner_;
     Eigen::MatrixXd J_;
-    std::size_t grazing_ = 0, single_ = 0, multiple_ = 0;
+    GrazingMonitor grazing_;
+    std::size_t single_ = 0, multiple_ = 0;
 };
 
 }  // namespace hsnc::analysis

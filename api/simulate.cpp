@@ -19,8 +19,10 @@
 #include "jit_solver_provider.h"
 #include "kernel_cache.h"
 #include "kernel_mode.h"
+#include "lowering.h"
 #include "reference.h"
 #include "sample_grid.h"
+#include "solver_choice.h"
 #include "solver_provider.h"
 
 namespace hsnc {
@@ -109,7 +111,7 @@ void check_options(const Model& model, const SimulateOptions& o) {
 // module (LLVM) loaded only for a kernel the cache cannot give; no cache: the
 // JIT module for every kernel. RunError (a JitUnavailable) when it is needed
 // and cannot be loaded.
-std::unique_ptr<SolverProvider> make_jit_provider(const Model& model, const SimulateOptions& o) {
+std::unique_ptr<SolverProvider> make_jit_provider(const Model& model, const SimulateOptions& o, const std::string& who) {
     JitOptions jopt;
     jopt.cache_dir = !o.use_cache ? "" : o.cache_dir.empty() ? default_cache_dir() : o.cache_dir;
     jopt.warn = o.warn;
@@ -120,28 +122,53 @@ std::unique_ptr<SolverProvider> make_jit_provider(const Model& model, const Simu
     // Checked up front even when every kernel may come from the cache: asking
     // for the JIT is asking for the module, and a missing one says so at once.
     const std::string module = api::jit_module_path();
-    if (module.empty()) throw api::JitUnavailable("hsnc::simulate(): kernels = jit: this hsnc was built without the JIT");
+    if (module.empty()) throw api::JitUnavailable(who + "(): kernels = jit: this hsnc was built without the JIT");
     if (::access(module.c_str(), R_OK) != 0)
-        throw api::JitUnavailable("hsnc::simulate(): kernels = jit: cannot load the JIT module: " + module + ": " +
+        throw api::JitUnavailable(who + "(): kernels = jit: cannot load the JIT module: " + module + ": " +
                                   std::strerror(errno));
     if (jopt.cache_dir.empty()) {
         try {
             return api::load_jit_provider(model, source, jopt);
         } catch (const api::JitUnavailable& e) {
-            throw api::JitUnavailable(std::string("hsnc::simulate(): kernels = jit: ") + e.what());
+            throw api::JitUnavailable(who + "(): kernels = jit: " + e.what());
         }
     }
     return std::make_unique<CachedKernelProvider>(
-        model, source, jopt, [&model](JitSolverProvider::SourceFn s, const JitOptions& opt) {
+        model, source, jopt, [&model, who](JitSolverProvider::SourceFn s, const JitOptions& opt) {
             try {
                 return api::load_jit_provider(model, std::move(s), opt);
             } catch (const api::JitUnavailable& e) {
-                throw RunError(std::string("hsnc::simulate(): cannot compile a kernel: ") + e.what());
+                throw RunError(who + "(): cannot compile a kernel: " + e.what());
             }
         });
 }
 
 }  // namespace
+
+namespace api {
+
+std::unique_ptr<SolverProvider> make_provider(const Model& model, const SimulateOptions& o, SolverKind* kind,
+                                              const char* function) {
+    if (o.kernels == KernelChoice::jit) {
+        if (kind) *kind = SolverKind::jit;
+        return make_jit_provider(model, o, function);
+    }
+    const KernelMode mode = o.kernels == KernelChoice::generic  ? KernelMode::generic
+                            : o.kernels == KernelChoice::interp ? KernelMode::interp
+                            : o.kernels == KernelChoice::aot    ? KernelMode::aot
+                                                                : KernelMode::automatic;
+    // interp runs each configuration's program: the bits of the kernels
+    // printed from it, without a compiler.
+    std::unique_ptr<SolverProvider> provider =
+        make_solver_provider(model, mode, &aot_registry(), program_source(model));
+    if (kind)
+        *kind = dynamic_cast<AotSolverProvider*>(provider.get()) ? SolverKind::aot
+                : mode == KernelMode::interp                     ? SolverKind::interp
+                                                                 : SolverKind::generic;
+    return provider;
+}
+
+}  // namespace api
 
 OptionError::OptionError(const std::string& function, std::string option, const std::string& value,
                          std::string reason)
@@ -172,17 +199,7 @@ SimulateSummary simulate(const Model& model, const SimulateOptions& o, Observer&
         s.solver = SolverKind::integrator;
         s.solver_detail = method_name(o.method);
     } else {
-        std::unique_ptr<SolverProvider> provider;
-        if (o.kernels == KernelChoice::jit) {
-            provider = make_jit_provider(model, o);
-            s.solver = SolverKind::jit;
-        } else {
-            const KernelMode mode = o.kernels == KernelChoice::generic ? KernelMode::generic
-                                    : o.kernels == KernelChoice::aot   ? KernelMode::aot
-                                                                       : KernelMode::automatic;
-            provider = make_solver_provider(model, mode, &aot_registry());
-            s.solver = dynamic_cast<AotSolverProvider*>(provider.get()) ? SolverKind::aot : SolverKind::generic;
-        }
+        const std::unique_ptr<SolverProvider> provider = api::make_provider(model, o, &s.solver, kSimulate);
         Engine engine(model, *provider);
         static_cast<RunSummary&>(s) = engine.run(eopt, observer);
         s.solver_detail = provider->describe();
@@ -214,10 +231,11 @@ const char* method_name(Method method) {
 }
 
 KernelChoice kernel_choice_from_name(const std::string& name) {
-    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::aot, KernelChoice::jit, KernelChoice::generic})
+    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::aot, KernelChoice::jit, KernelChoice::generic,
+                           KernelChoice::interp})
         if (name == kernel_choice_name(k)) return k;
     throw OptionError("hsnc::kernel_choice_from_name", "kernels", "'" + name + "'",
-                      "expected auto, aot, generic or jit");
+                      "expected auto, aot, generic, interp or jit");
 }
 
 const char* kernel_choice_name(KernelChoice choice) {
@@ -226,6 +244,7 @@ const char* kernel_choice_name(KernelChoice choice) {
     case KernelChoice::aot: return "aot";
     case KernelChoice::jit: return "jit";
     case KernelChoice::generic: return "generic";
+    case KernelChoice::interp: return "interp";
     }
     return "?";
 }
@@ -258,6 +277,7 @@ const char* solver_kind_name(SolverKind kind) {
     case SolverKind::aot: return "aot";
     case SolverKind::jit: return "jit";
     case SolverKind::generic: return "generic";
+    case SolverKind::interp: return "interp";
     case SolverKind::reference: return "reference";
     case SolverKind::integrator: return "integrator";
     }

@@ -1,12 +1,24 @@
 // hsnc program benchmark: the interpreter of a configuration's Program
-// (runtime/solvers/interpreted_solver.h) against the kernel printed from the same
-// program (ahead of time, JIT) and the generic Eigen solver, in one run:
+// (runtime/solvers/interpreted_solver.h, the generic path) against the kernel printed
+// from the same program (ahead of time, JIT) and the Eigen solver
+// (runtime/solvers/generic_solver.h, the tests' independent oracle), in one run:
 //   1. one SegmentSolver::eval, in nanoseconds, as bench/jit_bench.cpp section
-//      2 measures it (the same configurations, instants and setup);
+//      2 measures it (the same configurations, instants and setup), and one
+//      SegmentSolver::setup the same way;
 //   2. one long simulation per model (median of repeated runs after a
-//      warm-up, every solver built beforehand), with the switch counts.
+//      warm-up, every solver built beforehand), with the switch counts;
+//   3. the same simulation from nothing: the interpreter derives and lowers
+//      (40 digits) each configuration it enters, the Eigen solver analyses it
+//      in double; before: the interpreter with the former derivation (Jacobi
+//      rotations in GiNaC numerics, EigenMethod::jacobi);
+//   4. one all-open chain configuration of 8 to 64 masses: derive + lower
+//      (refined, Jacobi) against building the Eigen solver.
+//
+// Times are this thread's CPU time (CLOCK_THREAD_CPUTIME_ID), medians.
 //
 //   build/hsnc_program_bench [--quick] [MODEL]   (MODEL: one of the cases only)
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -39,6 +51,33 @@ struct Case {
     double t_end;
 };
 
+/// This thread's CPU time: what a run costs, without the time a noisy
+/// neighbour (2 cores shared) keeps it off the processor.
+double cpu_seconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+/// A chain of n unit masses as bench_common.h's 12-mass chain (friction on
+/// each, contacts m3-m4, m(n-4)-m(n-3) and mn to ground), with lighter
+/// friction and forced at m1, m(n/2) and mn, so that most masses slide.
+std::string chain(int n) {
+    std::string t = "name = \"chain-" + std::to_string(n) + "\"\n[damping]\nalpha = 0.02\nbeta = 0.0005\n";
+    for (int i = 1; i <= n; ++i)
+        t += "[[mass]]\nname = \"m" + std::to_string(i) + "\"\nm = 1\nmu_k = 0.02\nmu_s = 0.03\n";
+    for (int i = 0; i <= n; ++i)
+        t += "[[spring]]\nbetween = [\"" + (i == 0 ? std::string("ground") : "m" + std::to_string(i)) + "\", \"" +
+             (i == n ? std::string("ground") : "m" + std::to_string(i + 1)) + "\"]\nk = 100\n";
+    t += "[[contact]]\nbetween = [\"m3\", \"m4\"]\ngap = 0.02\nk = 1000\n";
+    t += "[[contact]]\nbetween = [\"m" + std::to_string(n - 4) + "\", \"m" + std::to_string(n - 3) +
+         "\"]\ngap = 0.02\nk = 1000\n";
+    t += "[[contact]]\nbetween = [\"m" + std::to_string(n) + "\", \"ground\"]\ngap = 0.02\nk = 1000\n";
+    t += "[[forcing]]\nomega = 5.0\namplitude = { m1 = 60.0, m" + std::to_string(n / 2) + " = 40.0, m" +
+         std::to_string(n) + " = -30.0 }\n";
+    return t;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -51,13 +90,14 @@ int main(int argc, char** argv) {
             only = argv[i];
     }
     const std::size_t max_configs = quick ? 4 : 12;
-    const int reps = quick ? 3 : 7;
+    const int reps = quick ? 3 : 11, reps3 = quick ? 1 : 3;
     const std::string models = HSNC_SOURCE_DIR "/models/";
     std::vector<Case> cases = {
         {"seed-scenario-1", read_model(models + "seed-scenario-1.toml"), 2.0},
         {"seed-scenario-2", read_model(models + "seed-scenario-2.toml"), 300.0},
         {"chain-8", read_model(models + "chain-8.toml"), 20.0},
         {"chain-12", parse_model(chain12(), "chain-12"), 4.0},
+        {"chain-32", parse_model(chain(32), "chain-32"), 0.5},
     };
     if (!only.empty())
         cases.erase(std::remove_if(cases.begin(), cases.end(), [&](const Case& c) { return c.name != only; }),
@@ -72,11 +112,8 @@ int main(int argc, char** argv) {
     };
 
     const int rounds = quick ? 15 : 51, burst = 2000;
-    std::printf("1. One SegmentSolver::eval (ns, median over the configurations a run visits, at most %zu;"
-                " taus spread over two mean segment lengths;\n   per configuration the four solvers in turn, %d rounds of %d evals, median over the rounds)\n",
-                max_configs, rounds, burst);
-    std::printf("%-16s %5s %8s %8s %9s %11s %11s %10s\n", "model", "cfgs", "aot_ns", "jit_ns", "interp_ns",
-                "generic_ns", "interp/gen", "interp/jit");
+    // Per case one row of eval times and one of setup times, printed as two tables.
+    std::vector<std::string> eval_rows, setup_rows;
     volatile double sink = 0;
     for (const Case& c : cases) {
         Recorder rec(c.model);
@@ -90,54 +127,72 @@ int main(int argc, char** argv) {
                        : nullptr;
         GenericSolverProvider gen(c.model);
         InterpretedSolverProvider interp(lowering(c.model));
-        const std::size_t n = c.model.dof(), nf = 64;
+        const std::size_t n = c.model.dof(), nf = c.model.contacts.size() + 2 * n;  // switch functions at most
         std::vector<double> x(n), v(n), a(n), g(nf), dg(nf), bound(nf), scale(nf);
         const SegmentEval out{x.data(), v.data(), a.data(), g.data(), dg.data(), bound.data(), scale.data()};
         // The solvers of one configuration in turn, in short bursts, so that a
         // noisy neighbour (2 cores shared) slows all of them alike; per solver
-        // the median over the rounds.
-        auto time_config = [&](std::vector<SegmentSolver*> solvers, const Configuration& cfg) {
+        // the median over the rounds. setup: the same state at instants 1e-7 apart.
+        auto time_config = [&](std::vector<SegmentSolver*> solvers, const Configuration& cfg, bool setup) {
             std::vector<double> x0 = c.model.x0, v0 = c.model.v0;
             std::vector<signed char> sgn(n, 0);
             for (std::size_t i = 0; i < n; ++i) {
                 if (cfg.stuck[i]) v0[i] = 0;
                 if (c.model.masses[i].has_friction && !cfg.stuck[i]) sgn[i] = 1;
             }
+            const double t_mid = 0.5 * (c.model.t0 + c.t_end);  // mid-run, so that the forcing phases are as large as the engine sees them
             std::vector<std::vector<double>> t(solvers.size());
-            for (SegmentSolver* s : solvers)  // mid-run, so that the forcing phases are as large as the engine sees them
-                if (s) s->setup(0.5 * (c.model.t0 + c.t_end), x0.data(), v0.data(), sgn.data());
+            for (SegmentSolver* s : solvers)
+                if (s) s->setup(t_mid, x0.data(), v0.data(), sgn.data());
             for (int r = 0; r < rounds + 1; ++r)  // the first round warms up
                 for (std::size_t k = 0; k < solvers.size(); ++k) {
                     if (!solvers[k]) continue;
-                    const auto start = Clock::now();
-                    for (int e = 0; e < burst; ++e) {
-                        solvers[k]->eval(span * e / burst, out);
-                        sink = sink + g[0];
+                    const double start = cpu_seconds();
+                    if (setup) {
+                        for (int e = 0; e < burst; ++e) solvers[k]->setup(t_mid + 1e-7 * e, x0.data(), v0.data(), sgn.data());
+                    } else {
+                        for (int e = 0; e < burst; ++e) {
+                            solvers[k]->eval(span * e / burst, out);
+                            sink = sink + g[0];
+                        }
                     }
-                    if (r > 0) t[k].push_back(1e9 * seconds_since(start) / burst);
+                    if (r > 0) t[k].push_back(1e9 * (cpu_seconds() - start) / burst);
                 }
             std::vector<double> med;
             for (auto& tk : t) med.push_back(tk.empty() ? -1 : median(tk));
             return med;
         };
-        std::vector<double> ta, tj, ti, tg;
-        for (const Configuration& cfg : cfgs) {
-            SegmentSolver* a_s = nullptr;
-            if (aot) {
-                SegmentSolver& s = aot->solver(cfg);
-                if (dynamic_cast<KernelSolver*>(&s)) a_s = &s;
+        for (bool setup : {false, true}) {
+            std::vector<double> ta, tj, ti, tg;
+            for (const Configuration& cfg : cfgs) {
+                SegmentSolver* a_s = nullptr;
+                if (aot) {
+                    SegmentSolver& s = aot->solver(cfg);
+                    if (dynamic_cast<KernelSolver*>(&s)) a_s = &s;
+                }
+                const std::vector<double> m =
+                    time_config({a_s, &jit.solver(cfg), &interp.solver(cfg), &gen.solver(cfg)}, cfg, setup);
+                if (a_s) ta.push_back(m[0]);
+                tj.push_back(m[1]);
+                ti.push_back(m[2]);
+                tg.push_back(m[3]);
             }
-            const std::vector<double> m = time_config({a_s, &jit.solver(cfg), &interp.solver(cfg), &gen.solver(cfg)}, cfg);
-            if (a_s) ta.push_back(m[0]);
-            tj.push_back(m[1]);
-            ti.push_back(m[2]);
-            tg.push_back(m[3]);
+            const double mi = median(ti), mj = median(tj), mg = median(tg);
+            char aot_text[32] = "-", row[256];
+            if (!ta.empty()) std::snprintf(aot_text, sizeof aot_text, "%.1f", median(ta));
+            std::snprintf(row, sizeof row, "%-16s %5zu %8s %8.1f %9.1f %11.1f %11.2f %10.2f\n", c.name.c_str(),
+                          cfgs.size(), aot_text, mj, mi, mg, mi / mg, mi / mj);
+            (setup ? setup_rows : eval_rows).push_back(row);
         }
-        const double mi = median(ti), mj = median(tj), mg = median(tg);
-        char aot_text[32] = "-";
-        if (!ta.empty()) std::snprintf(aot_text, sizeof aot_text, "%.1f", median(ta));
-        std::printf("%-16s %5zu %8s %8.1f %9.1f %11.1f %11.2f %10.2f\n", c.name.c_str(), cfgs.size(), aot_text, mj, mi,
-                    mg, mi / mg, mi / mj);
+    }
+    for (bool setup : {false, true}) {
+        std::printf("%s. One SegmentSolver::%s (ns, median over the configurations a run visits, at most %zu;%s\n"
+                    "   per configuration the four solvers in turn, %d rounds of %d calls, median over the rounds)\n",
+                    setup ? "\n1b" : "1", setup ? "setup" : "eval", max_configs,
+                    setup ? " the same state" : " taus spread over two mean segment lengths;", rounds, burst);
+        std::printf("%-16s %5s %8s %8s %9s %11s %11s %10s\n", "model", "cfgs", "aot_ns", "jit_ns", "interp_ns",
+                    "generic_ns", "interp/gen", "interp/jit");
+        for (const std::string& r : setup ? setup_rows : eval_rows) std::printf("%s", r.c_str());
     }
 
     std::printf("\n2. One long simulation, every solver built beforehand (median of %d runs after a warm-up)\n", reps);
@@ -158,9 +213,9 @@ int main(int argc, char** argv) {
         for (int r = 0; r < reps; ++r)  // in turn, so that a noisy neighbour slows all alike
             for (int p = 0; p < 4; ++p) {
                 if (!providers[p]) continue;
-                const auto start = Clock::now();
+                const double start = cpu_seconds();
                 s[p] = run(c.model, *providers[p], c.t_end);
-                t[p].push_back(1e3 * seconds_since(start));
+                t[p].push_back(1e3 * (cpu_seconds() - start));
             }
         char sw[64], aot_ms[32] = "-";
         if (aot) {
@@ -172,6 +227,81 @@ int main(int argc, char** argv) {
         const double mj = median(t[1]), mi = median(t[2]), mg = median(t[3]);
         std::printf("%-16s %7g %21s %9s %9.3f %10.3f %10.3f %11.2f %10.2f\n", c.name.c_str(), c.t_end, sw, aot_ms, mj,
                     mi, mg, mi / mg, mi / mj);
+    }
+
+    std::printf("\n3. The same simulation from nothing: each run with new providers, so every configuration entered is\n"
+                "   derived and lowered (interpreter) or analysed by Eigen (generic), median of %d runs in turn\n",
+                reps3);
+    std::printf("   (before: the interpreter with the former derivation, Jacobi rotations in GiNaC numerics)\n");
+    std::printf("%-16s %7s %9s %6s %10s %10s %11s %16s %14s %13s\n", "model", "t_end", "switches", "cfgs", "interp_ms",
+                "generic_ms", "interp/gen", "derive+lower/cfg", "before_ms", "before/gen");
+    for (const Case& c : cases) {
+        std::vector<double> ti, tg, tb, per_cfg;
+        RunSummary si, sg;
+        std::size_t cfgs = 0;
+        for (int r = 0; r < reps3; ++r) {
+            {
+                const double start = cpu_seconds();
+                InterpretedSolverProvider before([&m = c.model](const Configuration& cfg) {
+                    return lower(derive(m, cfg, EigenMethod::jacobi));
+                });
+                run(c.model, before, c.t_end);
+                tb.push_back(1e3 * (cpu_seconds() - start));
+            }
+            {
+                const double start = cpu_seconds();
+                InterpretedSolverProvider interp(lowering(c.model));
+                si = run(c.model, interp, c.t_end);
+                ti.push_back(1e3 * (cpu_seconds() - start));
+                cfgs = interp.built();
+                per_cfg.push_back(1e3 * interp.lower_seconds() / static_cast<double>(std::max<std::size_t>(cfgs, 1)));
+            }
+            {
+                const double start = cpu_seconds();
+                GenericSolverProvider gen(c.model);
+                sg = run(c.model, gen, c.t_end);
+                tg.push_back(1e3 * (cpu_seconds() - start));
+            }
+        }
+        char sw[64];
+        std::snprintf(sw, sizeof sw, "%zu/%zu", si.events, sg.events);
+        const double mi = median(ti), mg = median(tg);
+        std::printf("%-16s %7g %9s %6zu %10.3f %10.3f %11.2f %13.3f ms %14.3f %13.2f\n", c.name.c_str(), c.t_end, sw,
+                    cfgs, mi, mg, mi / mg, median(per_cfg), median(tb), median(tb) / mg);
+    }
+
+    // 4. One configuration: the all-open chain of n masses (chain(n) above), derived
+    //    and lowered (refined and Jacobi) against the Eigen solver's analysis.
+    std::printf("\n4. One configuration, the all-open n-mass chain (8-64): derive (40 digits) + lower, refined and former (Jacobi),\n"
+                "   against building the Eigen solver (modal analysis in double); median of runs, thread CPU time\n");
+    std::printf("%6s %12s %12s %12s %12s %12s %14s\n", "masses", "refined_ms", "of which lower", "jacobi_ms", "eigen_ms",
+                "refined/eigen", "jacobi/refined");
+    for (int nm : {8, 16, 32, 64}) {
+        if (quick && nm > 32) continue;
+        const Model m = parse_model(chain(nm), "chain-" + std::to_string(nm));
+        const Configuration cfg = Configuration::all_open(m);
+        std::vector<double> tr, tl, tj, te;
+        const int k = nm <= 16 ? (quick ? 5 : 21) : (quick ? 3 : 7);
+        for (int r = 0; r < k; ++r) {
+            double start = cpu_seconds();
+            const Derivation d = derive(m, cfg);
+            const double mid = cpu_seconds();
+            const Program p = lower(d);
+            tr.push_back(1e3 * (cpu_seconds() - start));
+            tl.push_back(1e3 * (cpu_seconds() - mid));
+            sink = sink + static_cast<double>(p.constants.size());
+            if (r < (nm >= 64 ? 1 : nm >= 32 ? 3 : k)) {  // Jacobi at 64 masses: seconds
+                start = cpu_seconds();
+                sink = sink + static_cast<double>(lower(derive(m, cfg, EigenMethod::jacobi)).constants.size());
+                tj.push_back(1e3 * (cpu_seconds() - start));
+            }
+            start = cpu_seconds();
+            GenericSolverProvider gen(m);
+            gen.solver(cfg);
+            te.push_back(1e3 * (cpu_seconds() - start));
+        }
+        std::printf("%6d %12.3f %14.3f %12.3f %12.3f %12.1f %14.0f\n", nm, median(tr), median(tl), median(tj), median(te),
+                    median(tr) / median(te), median(tj) / median(tr));
     }
     return sink == 12345.678 ? 1 : 0;
 }

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <vector>
 
+#include "analysis_flags.h"
 #include "commands.h"
 #include "csv_writer.h"
 #include "error.h"
@@ -15,33 +16,17 @@
 #include "model_reader.h"
 #include "output_file.h"
 #include "plot.h"
+#include "section.h"
 
 namespace hsnc::cli {
 namespace {
 
 struct LyapunovFlags {
-    std::string model;
-    ModelOverrides overrides;
+    AnalysisFlags common;  // MODEL, --set, --x0, --v0, --kernels, --cache-dir, --no-cache, --quiet
     double t_end = NAN, transient = 0.0, row = NAN;
-    std::string out, plot, kernels = "auto";
-    bool quiet = false;
+    std::string out, plot;
+    std::string section, section_out, section_plot;
 };
-
-// The model's name as plain text inside a gnuplot string (quotes, backslashes
-// and backquotes, which gnuplot would interpret, left out).
-std::string plain_name(const std::string& name) {
-    std::string s;
-    for (char c : name)
-        if (c != '"' && c != '\\' && c != '`' && c != '\'' && static_cast<unsigned char>(c) >= 32) s += c;
-    return s;
-}
-
-std::string number_text(double v) {
-    std::ostringstream s;
-    s.precision(17);
-    s << v;
-    return s.str();
-}
 
 // The running estimates against time (gnuplot), -inf left out.
 void draw_convergence(const OutputTarget& target, const Model& model, const std::vector<double>& rows,
@@ -49,14 +34,14 @@ void draw_convergence(const OutputTarget& target, const Model& model, const std:
     std::ostringstream s;
     s.precision(10);
     s << "set terminal pngcairo size 900,560 font ',11'\n"
-      << "set title '" << plain_name(model.name) << ": Lyapunov exponents, running estimate (sum " << r.sum
+      << "set title '" << gnuplot_plain(model.name) << ": Lyapunov exponents, running estimate (sum " << r.sum
       << " 1/s)' noenhanced\n"
       << "set grid\nset xlabel 't [s]'\nset ylabel 'lambda [1/s]'\nset key outside right\n"
       << "$rows << EOD\n";
     for (std::size_t k = 0; k < rows.size(); k += width) {
         for (std::size_t j = 0; j < width; ++j) {
             const double v = rows[k + j];
-            s << (std::isfinite(v) ? number_text(v) : std::string("NaN")) << (j + 1 < width ? " " : "\n");
+            s << (std::isfinite(v) ? full_number(v) : std::string("NaN")) << (j + 1 < width ? " " : "\n");
         }
     }
     s << "EOD\nplot ";
@@ -67,22 +52,24 @@ void draw_convergence(const OutputTarget& target, const Model& model, const std:
 }
 
 int lyapunov_command(const LyapunovFlags& f) {
-    const Model model = read_model(f.model, f.overrides);
+    const Model model = read_model(f.common.model, f.common.overrides);
     LyapunovOptions o;
     o.t_end = f.t_end;
     o.transient = f.transient;
     o.row_interval = f.row;
-    try {
-        o.kernels = kernel_choice_from_name(f.kernels);
-    } catch (const OptionError& e) {
-        throw InputError("--kernels '" + f.kernels + "': " + e.reason());
-    }
-    std::unique_ptr<OutputTarget> out, plot;
-    std::vector<const OutputTarget*> all;
-    if (!f.out.empty()) all.push_back((out = std::make_unique<OutputTarget>(check_output("--out", f.out))).get());
-    if (!f.plot.empty()) all.push_back((plot = std::make_unique<OutputTarget>(check_output("--plot", f.plot))).get());
-    check_distinct(all);
-    if (plot) require_gnuplot();
+    const AnalysisKernels kern = analysis_kernels(f.common);
+    o.kernels = kern.kernels;
+    o.cache_dir = kern.cache_dir;
+    o.use_cache = kern.use_cache;
+    SectionSpec spec;
+    const bool section = section_requested(model, f.section, f.section_out, f.section_plot, &spec);
+    // Every output path checked before anything runs (exit code 2, nothing written).
+    AnalysisOutputs outputs;
+    const OutputTarget* out = outputs.add("--out", f.out);
+    const OutputTarget* plot = outputs.add("--plot", f.plot, true);
+    const OutputTarget* section_out = outputs.add("--section-out", f.section_out);
+    const OutputTarget* section_plot = outputs.add("--section-plot", f.section_plot, true);
+    outputs.check();
 
     const std::size_t n2 = 2 * model.dof();
     std::unique_ptr<CsvFile> csv;
@@ -107,32 +94,43 @@ int lyapunov_command(const LyapunovFlags& f) {
                 rows.insert(rows.end(), ex.begin(), ex.end());
             }
         };
+    // The section over the measurement (from t0 + transient on).
+    std::unique_ptr<CsvFile> section_file;
+    std::unique_ptr<SectionRecorder> recorder;
+    if (section_out) section_file = std::make_unique<CsvFile>(*section_out);
+    if (section)
+        recorder = std::make_unique<SectionRecorder>(model, spec, section_file.get(), section_plot != nullptr,
+                                                     model.t0 + f.transient);
     LyapunovResult r;
     try {
-        r = hsnc::lyapunov(model, o, on_row);
+        r = hsnc::lyapunov(model, o, on_row, recorder.get());
     } catch (const OptionError& e) {
-        static const std::pair<const char*, const char*> flags[] = {
-            {"t_end", "--t-end"}, {"transient", "--transient"}, {"row_interval", "--row-interval"}, {"kernels", "--kernels"}};
-        for (const auto& fl : flags)
-            if (e.option() == fl.first) throw InputError(std::string(fl.second) + ": " + e.reason());
-        throw;
+        throw option_flag_error(e, {{"t_end", "--t-end"}, {"transient", "--transient"}, {"row_interval", "--row-interval"}});
     }
     if (r.status != RunStatus::ok)
         throw RunError(std::string("lyapunov: ") + run_status_name(r.status) + ": " + r.message);
     if (csv) csv->commit();
+    if (section_file) section_file->commit();
     if (plot) draw_convergence(*plot, model, rows, n2 + 1, r);
+    if (section_plot) recorder->draw(*section_plot);
 
     std::ostringstream line;
-    line << "status=ok t=" << number_text(r.t);
-    for (std::size_t k = 0; k < r.exponents.size(); ++k) line << " lambda_" << k + 1 << "=" << number_text(r.exponents[k]);
-    line << " sum=" << number_text(r.sum);
+    line << "status=ok t=" << full_number(r.t);
+    for (std::size_t k = 0; k < r.exponents.size(); ++k) line << " lambda_" << k + 1 << "=" << full_number(r.exponents[k]);
+    line << " sum=" << full_number(r.sum) << " grazing=" << r.grazing;
     std::cout << line.str() << std::endl;
-    if (!f.quiet)
+    if (r.grazing)
         std::fprintf(stderr,
-                     "hsnc: measured from t = %s over %s s, %zu switch events, %zu directions collapsed by sticks%s\n",
-                     number_text(r.t_start).c_str(), number_text(r.t - r.t_start).c_str(), r.events, r.collapsed,
-                     r.grazing ? (", " + std::to_string(r.grazing) + " grazing switches skipped (no derivative)").c_str()
-                               : "");
+                     "hsnc: warning: the motion grazes: %zu switch instants where a contact closes or opens at a "
+                     "turning point of its gap (|G'| Omega / |G''| <= 1e-4; %zu of them without a saltation matrix, "
+                     "skipped); the flow is not smooth there, so the exponents are not reliable\n",
+                     r.grazing, r.singular);
+    if (!f.common.quiet) {
+        std::fprintf(stderr, "hsnc: measured from t = %s over %s s, %zu switch events, %zu directions collapsed by sticks\n",
+                     full_number(r.t_start).c_str(), full_number(r.t - r.t_start).c_str(), r.events, r.collapsed);
+        if (recorder)
+            std::fprintf(stderr, "hsnc: Poincare section at %s: %zu points\n", f.section.c_str(), recorder->points());
+    }
     return 0;
 }
 
@@ -141,23 +139,19 @@ int lyapunov_command(const LyapunovFlags& f) {
 void add_lyapunov(CLI::App& app, int& exit_code) {
     auto f = std::make_shared<LyapunovFlags>();
     auto* sub = app.add_subcommand("lyapunov", "the Lyapunov spectrum of the response");
-    sub->add_option("MODEL", f->model, "model file (TOML)")->required();
+    add_analysis_flags(sub, f->common);
     sub->add_option("--t-end", f->t_end, "length of the measurement in seconds (required)")
         ->required()
         ->check(finite_number());
     sub->add_option("--transient", f->transient, "run this long first, then measure over --t-end (default 0)")
         ->check(finite_number());
-    sub->add_option("--set", f->overrides.set, "override a parameter, NAME=VALUE (repeatable)");
-    sub->add_option("--x0", f->overrides.x0, "override an initial position, NAME=VALUE (repeatable)");
-    sub->add_option("--v0", f->overrides.v0, "override an initial velocity, NAME=VALUE (repeatable)");
     sub->add_option("--out", f->out,
                     "convergence CSV: t,lambda_1..lambda_2n, a row per forcing period (1 s without forcing) and at "
                     "the end");
     sub->add_option("--row-interval", f->row, "spacing of the --out rows (default: the forcing period, else 1 s)")
         ->check(finite_number());
     sub->add_option("--plot", f->plot, "draw the running estimates against time into this PNG (gnuplot)");
-    sub->add_option("--kernels", f->kernels, "auto (default), aot or generic");
-    sub->add_flag("--quiet", f->quiet, "no statistics on stderr");
+    add_section_flags(sub, f->section, f->section_out, f->section_plot, " over the measurement");
     sub->callback([f, &exit_code] { exit_code = lyapunov_command(*f); });
 }
 

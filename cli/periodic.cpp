@@ -8,6 +8,7 @@
 #include <memory>
 #include <sstream>
 
+#include "analysis_flags.h"
 #include "commands.h"
 #include "csv_writer.h"
 #include "error.h"
@@ -20,46 +21,17 @@ namespace hsnc::cli {
 namespace {
 
 struct PeriodicFlags {
-    std::string model;
-    ModelOverrides overrides;
+    AnalysisFlags common;  // MODEL, --set, --x0, --v0, --kernels, --cache-dir, --no-cache, --quiet
     double period = NAN, transient = 0.0, dt = NAN, tolerance = 1e-10;
     int harmonic = 1, max_iterations = 50;
-    std::string multipliers, out, plot, kernels = "auto";
-    bool quiet = false;
+    std::string multipliers, out, plot;
 };
-
-// The model's name as plain text inside a gnuplot string (quotes, backslashes
-// and backquotes, which gnuplot would interpret, left out).
-std::string plain_name(const std::string& name) {
-    std::string s;
-    for (char c : name)
-        if (c != '"' && c != '\\' && c != '`' && c != '\'' && static_cast<unsigned char>(c) >= 32) s += c;
-    return s;
-}
-
-std::string number_text(double v) {
-    std::ostringstream s;
-    s.precision(17);
-    s << v;
-    return s.str();
-}
-
-// The library names its option; the command line names the flag.
-InputError flagged(const OptionError& e) {
-    static const std::pair<const char*, const char*> flags[] = {
-        {"period", "--period"},       {"harmonic", "--harmonic"}, {"transient", "--transient"},
-        {"tolerance", "--tol"},       {"dt", "--dt"},             {"max_iterations", "--max-iterations"},
-        {"kernels", "--kernels"}};
-    for (const auto& f : flags)
-        if (e.option() == f.first) return InputError(std::string(f.second) + ": " + e.reason());
-    return InputError(e.what());
-}
 
 // The multipliers in the complex plane with the unit circle (gnuplot).
 void draw_multipliers(const OutputTarget& target, const PeriodicResult& r, const Model& model) {
     std::ostringstream title;
     title.precision(6);
-    title << plain_name(model.name) << ": Floquet multipliers\\nperiod " << r.period << " s, max |mu| " << r.max_multiplier
+    title << gnuplot_plain(model.name) << ": Floquet multipliers\\nperiod " << r.period << " s, max |mu| " << r.max_multiplier
           << (r.stable ? " (stable)" : " (unstable)");
     std::ostringstream script;
     script.precision(17);
@@ -78,7 +50,7 @@ void draw_multipliers(const OutputTarget& target, const PeriodicResult& r, const
 }
 
 int periodic_command(const PeriodicFlags& f) {
-    const Model model = read_model(f.model, f.overrides);
+    const Model model = read_model(f.common.model, f.common.overrides);
     PeriodicOptions o;
     o.period = f.period;
     o.harmonic = f.harmonic;
@@ -86,20 +58,16 @@ int periodic_command(const PeriodicFlags& f) {
     o.tolerance = f.tolerance;
     o.max_iterations = f.max_iterations;
     o.dt = f.dt;
-    try {
-        o.kernels = kernel_choice_from_name(f.kernels);
-    } catch (const OptionError& e) {
-        throw InputError("--kernels '" + f.kernels + "': " + e.reason());
-    }
+    const AnalysisKernels kern = analysis_kernels(f.common);
+    o.kernels = kern.kernels;
+    o.cache_dir = kern.cache_dir;
+    o.use_cache = kern.use_cache;
     // Every output path checked before anything runs (exit code 2, nothing written).
-    std::unique_ptr<OutputTarget> out, mult, plot;
-    std::vector<const OutputTarget*> all;
-    if (!f.out.empty()) all.push_back((out = std::make_unique<OutputTarget>(check_output("--out", f.out))).get());
-    if (!f.multipliers.empty())
-        all.push_back((mult = std::make_unique<OutputTarget>(check_output("--multipliers", f.multipliers))).get());
-    if (!f.plot.empty()) all.push_back((plot = std::make_unique<OutputTarget>(check_output("--plot", f.plot))).get());
-    check_distinct(all);
-    if (plot) require_gnuplot();
+    AnalysisOutputs outputs;
+    const OutputTarget* out = outputs.add("--out", f.out);
+    const OutputTarget* mult = outputs.add("--multipliers", f.multipliers);
+    const OutputTarget* plot = outputs.add("--plot", f.plot, true);
+    outputs.check();
 
     std::unique_ptr<CsvFile> traj;
     std::unique_ptr<CsvObserver> csv;
@@ -111,7 +79,12 @@ int periodic_command(const PeriodicFlags& f) {
     try {
         r = hsnc::periodic(model, o, csv.get());
     } catch (const OptionError& e) {
-        throw flagged(e);
+        throw option_flag_error(e, {{"period", "--period"},
+                                    {"harmonic", "--harmonic"},
+                                    {"transient", "--transient"},
+                                    {"tolerance", "--tol"},
+                                    {"dt", "--dt"},
+                                    {"max_iterations", "--max-iterations"}});
     }
     const bool ok = r.status == PeriodicStatus::ok;
     if (ok) {
@@ -132,21 +105,27 @@ int periodic_command(const PeriodicFlags& f) {
         if (plot) draw_multipliers(*plot, r, model);
     }
     std::ostringstream line;
-    line << "status=" << periodic_status_name(r.status) << " period=" << number_text(r.period)
-         << " iterations=" << r.iterations << " residual=" << number_text(r.residual);
-    for (std::size_t i = 0; i < model.dof(); ++i) line << " x_" << model.masses[i].name << "=" << number_text(r.x[i]);
-    for (std::size_t i = 0; i < model.dof(); ++i) line << " v_" << model.masses[i].name << "=" << number_text(r.v[i]);
+    line << "status=" << periodic_status_name(r.status) << " period=" << full_number(r.period)
+         << " iterations=" << r.iterations << " residual=" << full_number(r.residual);
+    for (std::size_t i = 0; i < model.dof(); ++i) line << " x_" << model.masses[i].name << "=" << full_number(r.x[i]);
+    for (std::size_t i = 0; i < model.dof(); ++i) line << " v_" << model.masses[i].name << "=" << full_number(r.v[i]);
     line << " stable=" << (ok && r.stable ? "true" : "false")
-         << " max_multiplier=" << (ok ? number_text(r.max_multiplier) : "nan");
+         << " max_multiplier=" << (ok ? full_number(r.max_multiplier) : "nan") << " grazing=" << r.grazing;
     std::cout << line.str() << std::endl;
-    if (!f.quiet) {
+    if (r.grazing)
+        std::fprintf(stderr,
+                     "hsnc: warning: the orbit grazes: %zu switch instants a period where a contact closes or opens "
+                     "at a turning point of its gap (|G'| Omega / |G''| <= 1e-4), or without a saltation matrix; the "
+                     "period map is not smooth there, so its multipliers and stability are not reliable\n",
+                     r.grazing);
+    if (!f.common.quiet) {
         if (ok)
-            std::fprintf(stderr, "hsnc: orbit at t = %s, %zu switch events a period\n", number_text(r.t).c_str(),
+            std::fprintf(stderr, "hsnc: orbit at t = %s, %zu switch events a period\n", full_number(r.t).c_str(),
                          r.events);
         else
             std::fprintf(stderr, "hsnc: periodic: not converged: %s\n", r.message.c_str());
     }
-    if (!ok && f.quiet) std::fprintf(stderr, "hsnc: periodic: not converged: %s\n", r.message.c_str());
+    if (!ok && f.common.quiet) std::fprintf(stderr, "hsnc: periodic: not converged: %s\n", r.message.c_str());
     return ok ? 0 : 1;
 }
 
@@ -155,10 +134,7 @@ int periodic_command(const PeriodicFlags& f) {
 void add_periodic(CLI::App& app, int& exit_code) {
     auto f = std::make_shared<PeriodicFlags>();
     auto* sub = app.add_subcommand("periodic", "a periodic orbit of the forced response and its stability");
-    sub->add_option("MODEL", f->model, "model file (TOML)")->required();
-    sub->add_option("--set", f->overrides.set, "override a parameter, NAME=VALUE (repeatable)");
-    sub->add_option("--x0", f->overrides.x0, "override an initial position, NAME=VALUE (repeatable)");
-    sub->add_option("--v0", f->overrides.v0, "override an initial velocity, NAME=VALUE (repeatable)");
+    add_analysis_flags(sub, f->common);
     sub->add_option("--period", f->period, "forcing period T (default 2*pi/omega of the model's forcing)")
         ->check(finite_number());
     sub->add_option("--harmonic", f->harmonic, "look for an orbit of period K*T (subharmonic; default 1)");
@@ -176,8 +152,6 @@ void add_periodic(CLI::App& app, int& exit_code) {
                     "(default 1e-10)")
         ->check(finite_number());
     sub->add_option("--max-iterations", f->max_iterations, "Newton iterations at most (default 50)");
-    sub->add_option("--kernels", f->kernels, "auto (default), aot or generic");
-    sub->add_flag("--quiet", f->quiet, "no statistics on stderr");
     sub->callback([f, &exit_code] { exit_code = periodic_command(*f); });
 }
 

@@ -9,6 +9,7 @@
 #include <memory>
 #include <sstream>
 
+#include "analysis_flags.h"
 #include "commands.h"
 #include "csv_writer.h"
 #include "engine.h"
@@ -180,6 +181,9 @@ int simulate(const SimulateOptions& o) {
                      sum.segments, sum.evaluations,
                      sum.events ? static_cast<double>(sum.evaluations) / static_cast<double>(sum.events) : 0.0,
                      sum.configurations, detail.empty() ? "" : ", ", detail.c_str(), obs.seconds());
+        if (!o.outputs.section.empty())
+            std::fprintf(stderr, "hsnc: Poincare section at %s: %zu points\n", o.outputs.section.c_str(),
+                         outputs.section_points());
         if (sum.status == RunStatus::max_events) std::fprintf(stderr, "hsnc: %s\n", sum.message.c_str());
     }
     return 0;
@@ -204,6 +208,7 @@ void add_simulate(CLI::App& app, int& exit_code) {
     sub->add_option("--plot", o->outputs.plot,
                     "draw x(t) of every mass into this PNG (gnuplot): the whole run with the switch events as "
                     "ticks, and a zoom (last 5 forcing periods, else the first 10%) with the events marked");
+    add_section_flags(sub, o->outputs.section, o->outputs.section_out, o->outputs.section_plot);
     sub->add_flag("--allow-large-output", o->outputs.allow_large_output,
                   "write a trajectory of more than 1e7 rows or about 1 GB (refused without it)");
     sub->add_option("--method", o->method,
@@ -218,8 +223,9 @@ void add_simulate(CLI::App& app, int& exit_code) {
         ->check(finite_number());
     sub->add_option("--kernels", o->kernels,
                     "auto (default: ahead-of-time kernels when the model has them, else the generic solver; "
-                    "never compiles), aot, generic, jit (a kernel compiled in-process, or taken from the cache, "
-                    "for each configuration the run enters)");
+                    "never compiles), aot, generic, interp (each configuration's program, derived at 40 digits, "
+                    "interpreted: the kernels' bits without a compiler), jit (a kernel compiled in-process, or "
+                    "taken from the cache, for each configuration the run enters)");
     sub->add_option("--cache-dir", o->cache_dir,
                     "keep compiled kernels (jit) in DIR (default $XDG_CACHE_HOME/hsnc, else ~/.cache/hsnc)");
     auto* no_cache = sub->add_flag("--no-cache", o->no_cache, "compile every kernel (jit); read and write no cache");

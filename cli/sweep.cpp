@@ -3,7 +3,10 @@
 // (api/hsnc/sweep.h), the output files.
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
+#include <functional>
+#include <thread>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -41,6 +44,8 @@ struct SweepFlags {
     std::string method = "hsnc";
     double h = NAN, rtol = 1e-10, atol = 1e-12;
     bool quiet = false;
+    bool continuation = false;
+    std::size_t max_steps = 0;
 };
 
 struct MergeFlags {
@@ -54,7 +59,7 @@ InputError flagged(const OptionError& e) {
         {"param", "--param"},           {"from", "--from"},       {"to", "--to"},
         {"points", "--points"},         {"direction", "--direction"}, {"max_periods", "--max-periods"},
         {"record_periods", "--record-periods"}, {"param2", "--param2"}, {"values2", "--values2"},
-        {"method", "--method"}};
+        {"method", "--method"}, {"restart_each", "--restart-each"}, {"max_steps", "--max-steps"}};
     for (const auto& f : flags)
         if (e.option() == f.first) return InputError(std::string(f.second) + ": " + e.reason());
     return InputError(e.what());
@@ -111,6 +116,11 @@ void write_curve(const SweepResult& r, const OutputTarget& target) {
             f.number(p.a1[i]);
         }
         if (has2) f.number(p.value2);
+        if (r.continuation) {
+            f.text(p.failure.empty() ? (p.stable ? "true" : "false") : "");
+            f.number(p.max_multiplier);
+            f.text(p.bifurcation.c_str());
+        }
         f.end_row();
     }
     f.commit();
@@ -153,15 +163,45 @@ struct Outputs {
     }
 };
 
+// What went wrong in a finished run: failed points and branches that
+// stopped early (each already said on stderr as it happened).
+struct Problems {
+    std::size_t failed = 0, stopped = 0;
+    std::string first;
+    explicit Problems(const SweepResult& r) {
+        for (const SweepPoint& p : r.points) {
+            failed += !p.failure.empty();
+            stopped += !p.stop.empty();
+            if (first.empty()) first = !p.failure.empty() ? p.failure : p.stop;
+        }
+    }
+    bool any() const { return failed + stopped > 0; }
+    std::string message() const {
+        std::string m;
+        if (failed) m += std::to_string(failed) + (failed == 1 ? " point" : " points") + " failed";
+        if (stopped)
+            m += (m.empty() ? "" : ", ") + std::to_string(stopped) + (stopped == 1 ? " branch" : " branches") +
+                 " stopped early";
+        return m + " (the outputs are written; the first: " + first + ")";
+    }
+};
+
 std::string summary_line(const SweepResult& r) {
-    std::size_t settled = 0, up = 0;
+    std::size_t settled = 0, up = 0, stable = 0, bifurcations = 0;
     for (const SweepPoint& p : r.points) {
         settled += p.settled;
         up += p.direction == SweepDirection::up;
+        stable += p.stable;
+        bifurcations += !p.bifurcation.empty();
     }
+    const Problems problems(r);
     std::ostringstream s;
-    s << "status=ok points=" << r.points.size() << " up=" << up << " down=" << r.points.size() - up
-      << " settled=" << settled << " unsettled=" << r.points.size() - settled;
+    s << "status=" << (problems.any() ? "failed" : "ok") << " points=" << r.points.size() << " up=" << up
+      << " down=" << r.points.size() - up << " settled=" << settled << " unsettled=" << r.points.size() - settled
+      << " failed=" << problems.failed;
+    if (r.continuation)
+        s << " stable=" << stable << " unstable=" << r.points.size() - stable - problems.failed
+          << " bifurcations=" << bifurcations << " stopped=" << problems.stopped;
     return s.str();
 }
 
@@ -173,11 +213,53 @@ std::string short_num(double v) {
     }
 }
 
+// Rank 0's line for the whole MPI run: points done on every rank (its own
+// and what the others sent), the time per point over all ranks, an estimate.
+struct OverallProgress {
+    std::size_t total = 0;  // 0: not known (continuation)
+    int ranks = 1;
+    long long others = 0, printed = -1;
+    int finished = 0;  // other ranks done
+    std::size_t mine = 0;
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+
+    // After one of rank 0's own points.
+    void own_point(Communicator& comm) {
+        ++mine;
+        comm.poll_progress(others, finished);
+        print();
+    }
+    // Rank 0, its own tasks done: the others' progress until every rank has finished.
+    void wait_for_others(Communicator& comm) {
+        while (comm.poll_progress(others, finished) && finished < ranks - 1) {
+            if (others + static_cast<long long>(mine) != printed) print();
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        }
+        if (others + static_cast<long long>(mine) != printed) print();
+    }
+    void print() {
+        const long long done = others + static_cast<long long>(mine);
+        printed = done;
+        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (total == 0) {
+            std::fprintf(stderr, "hsnc sweep [all %d ranks]: %lld points, %.1f s\n", ranks, done, elapsed);
+            return;
+        }
+        const double left =
+            done > 0 ? elapsed / static_cast<double>(done) * static_cast<double>(static_cast<long long>(total) - done)
+                     : 0.0;
+        std::fprintf(stderr, "hsnc sweep [all %d ranks]: %lld/%zu points, %.1f s, about %.0f s left\n", ranks, done,
+                     total, elapsed, left);
+    }
+};
+
 int sweep(const SweepFlags& f) {
     // Under an MPI launcher: the ranks (MPI loaded only now, from its module).
     std::unique_ptr<Communicator> comm;
     if (launched_by_mpi()) comm = mpi_communicator();
     const int rank = comm ? comm->rank() : 0, ranks = comm ? comm->size() : 1;
+    auto overall = std::make_shared<OverallProgress>();
+    overall->ranks = ranks;
     try {
         SweepOptions o;
         o.param = f.param;
@@ -190,6 +272,8 @@ int sweep(const SweepFlags& f) {
         o.param2 = f.param2;
         if (!f.values2.empty()) o.values2 = parse_values(f.values2);
         o.threads = f.threads;
+        o.continuation = f.continuation;
+        o.max_steps = f.max_steps;
         o.integrator.h = f.h;
         o.integrator.rtol = f.rtol;
         o.integrator.atol = f.atol;
@@ -210,15 +294,38 @@ int sweep(const SweepFlags& f) {
         } else if (!f.part_out.empty()) {
             throw InputError("--part-out: only with --part I/N");
         }
-        if (!f.quiet) {
+        {
             const std::string prefix = ranks > 1 ? "hsnc sweep [rank " + std::to_string(rank) + "/" +
                                                        std::to_string(ranks) + "]: "
                                                  : "hsnc sweep: ";
             const std::string param = f.param, param2 = f.param2;
-            o.progress = [prefix, param, param2](const SweepProgress& p) {
-                const double per = p.elapsed / static_cast<double>(p.done);
+            const bool quiet = f.quiet;
+            // Failures are said even with --quiet (they are not progress).
+            // Under MPI each rank says its own points; the others also send
+            // each point to rank 0, which adds a line for the whole run.
+            Communicator* world = ranks > 1 && !quiet ? comm.get() : nullptr;
+            o.progress = [prefix, param, param2, quiet, world, rank, overall](const SweepProgress& p) {
+                if (world) {
+                    if (rank != 0) world->send_progress(1);
+                    else overall->own_point(*world);
+                }
                 std::string at = param + " = " + short_num(p.value);
                 if (!param2.empty()) at += ", " + param2 + " = " + short_num(p.value2);
+                if (!p.failure.empty()) {
+                    std::fprintf(stderr, "%spoint %zu %s %s failed: %s\n", prefix.c_str(), p.done, at.c_str(),
+                                 sweep_direction_name(p.direction), p.failure.c_str());
+                    return;
+                }
+                if (quiet) return;
+                if (p.continuation) {
+                    std::fprintf(stderr, "%sbranch point %zu %s (%s): %s, max |multiplier| %.6g%s%s, %zu period runs, %.3f s\n",
+                                 prefix.c_str(), p.done, at.c_str(), sweep_direction_name(p.direction),
+                                 p.stable ? "stable" : "unstable", p.max_multiplier,
+                                 p.bifurcation.empty() ? "" : ", crossed: ", p.bifurcation.c_str(), p.periods,
+                                 p.seconds);
+                    return;
+                }
+                const double per = p.elapsed / static_cast<double>(p.done);
                 std::fprintf(stderr, "%spoint %zu/%zu %s %s: %s after %zu periods, %.3f s; %.3f s/point, about %.0f s left\n",
                              prefix.c_str(), p.done, p.total, at.c_str(), sweep_direction_name(p.direction),
                              p.settled ? ("settled (multiple " + std::to_string(p.multiple) + ")").c_str()
@@ -258,8 +365,16 @@ int sweep(const SweepFlags& f) {
         if (go != 0) throw RunError(rank == 0 ? refusal : "");
 
         const std::vector<std::size_t> which = plan.part_tasks(part, parts);
+        if (!o.continuation)
+            for (std::size_t i : which) overall->total += plan.task_points(i);
+        std::function<void()> finished;
+        if (comm && ranks > 1 && !f.quiet)
+            finished = [&] {
+                if (rank != 0) comm->send_progress(-1);
+                else overall->wait_for_others(*comm);
+            };
         std::vector<std::vector<SweepPoint>> results =
-            comm ? run_tasks_distributed(plan, which, *comm) : plan.run_tasks(which);
+            comm ? run_tasks_distributed(plan, which, *comm, finished) : plan.run_tasks(which);
 
         int code = 0;
         std::string failure;
@@ -270,13 +385,30 @@ int sweep(const SweepFlags& f) {
                     OutputFile file(*part_target);
                     file.write(text.data(), text.size());
                     file.commit();
-                    std::cout << "status=ok part=" << part + 1 << "/" << parts << " tasks=" << which.size() << "\n";
+                    SweepResult r = plan.result_header();
+                    for (const std::vector<SweepPoint>& t : results) r.points.insert(r.points.end(), t.begin(), t.end());
+                    const Problems problems(r);
+                    std::cout << "status=" << (problems.any() ? "failed" : "ok") << " part=" << part + 1 << "/" << parts
+                              << " tasks=" << which.size() << "\n";
+                    for (const SweepPoint& p : r.points)
+                        if (!p.stop.empty()) std::fprintf(stderr, "hsnc sweep: %s\n", p.stop.c_str());
+                    if (problems.any()) {
+                        code = 1;
+                        failure = problems.message();
+                    }
                 } else {
                     SweepResult r = plan.result_header();
                     for (std::vector<SweepPoint>& t : results)
                         for (SweepPoint& p : t) r.points.push_back(std::move(p));
                     outputs->write(r, r.model + ": sweep over " + r.param);
                     std::cout << summary_line(r) << "\n";
+                    const Problems problems(r);
+                    for (const SweepPoint& p : r.points)
+                        if (!p.stop.empty()) std::fprintf(stderr, "hsnc sweep: %s\n", p.stop.c_str());
+                    if (problems.any()) {
+                        code = 1;
+                        failure = problems.message();
+                    }
                 }
             } catch (const RunError& e) {
                 code = 1;
@@ -306,6 +438,8 @@ int merge(const MergeFlags& f) {
     const SweepResult r = merge_sweep_parts(texts, f.parts);
     outputs.write(r, r.model + ": sweep over " + r.param);
     std::cout << summary_line(r) << "\n";
+    const Problems problems(r);
+    if (problems.any()) throw RunError(problems.message());
     return 0;
 }
 
@@ -350,7 +484,13 @@ void add_sweep(CLI::App& app, int& exit_code) {
         ->check(finite_number());
     sub->add_option("--atol", f->atol, "absolute tolerance of --method rk45/cvode (default 1e-12)")
         ->check(finite_number());
-    sub->add_flag("--quiet", f->quiet, "no progress lines on stderr");
+    sub->add_flag("--continuation", f->continuation,
+                  "follow the periodic orbit over the parameter by pseudo-arclength continuation (exact shooting), "
+                  "through folds, with each point's stability and the bifurcations crossed (extra columns "
+                  "stable,max_multiplier,bifurcation); the branch starts at --from (--to for --direction down)");
+    sub->add_option("--max-steps", f->max_steps,
+                    "--continuation: points at most per branch (default 20 x --points)");
+    sub->add_flag("--quiet", f->quiet, "no progress lines on stderr (failures are still said)");
     sub->callback([f, &exit_code] { exit_code = sweep(*f); });
 
     auto m = std::make_shared<MergeFlags>();

@@ -10,6 +10,7 @@
 #include "contact_gap.h"
 #include "error.h"
 #include "free_components.h"
+#include "mp_eigen.h"
 
 namespace hsnc {
 
@@ -86,7 +87,7 @@ numeric to_float(const numeric& x) { return GiNaC::ex_to<numeric>(x.evalf()); }
 
 }  // namespace
 
-Derivation derive(const Model& model, const Configuration& cfg) {
+Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method) {
     GiNaC::Digits = kDerivationDigits;
     Derivation d;
     d.model = &model;
@@ -111,6 +112,7 @@ Derivation derive(const Model& model, const Configuration& cfg) {
     const numeric alpha = exact(model.alpha), beta = exact(model.beta);
     for (std::size_t i = 0; i < n; ++i)
         for (std::size_t j = 0; j < n; ++j) {
+            if (i != j && K(i, j) == 0.0) continue;  // both stay the exact 0 they start as
             const numeric kij = exact(K(i, j));
             d.K(i, j) = kij;
             d.C(i, j) = beta * kij + (i == j ? alpha * exact(model.masses[i].m) : kZero);
@@ -136,12 +138,39 @@ Derivation derive(const Model& model, const Configuration& cfg) {
     std::vector<std::vector<numeric>> kt(nf, std::vector<numeric>(nf));
     for (std::size_t r = 0; r < nf; ++r)
         for (std::size_t s = 0; s < nf; ++s)
-            kt[r][s] = GiNaC::ex_to<numeric>(d.K(d.free_dofs[r], d.free_dofs[s])) / (sqm[r] * sqm[s]);
-    std::vector<std::vector<numeric>> phi;
-    jacobi_eigen(kt, phi);
-    std::vector<std::size_t> order(nf);
-    std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) { return kt[p][p] < kt[q][q]; });
+            if (K(d.free_dofs[r], d.free_dofs[s]) != 0.0)  // else the exact 0 it starts as (0 / x)
+                kt[r][s] = GiNaC::ex_to<numeric>(d.K(d.free_dofs[r], d.free_dofs[s])) / (sqm[r] * sqm[s]);
+    // eig_value[j], eig_vector[j][r]: the eigenpairs of Kt in ascending order.
+    std::vector<numeric> eig_value(nf);
+    std::vector<std::vector<numeric>> eig_vector(nf, std::vector<numeric>(nf));
+    bool solved = false;
+    if (method == EigenMethod::refined) {
+        std::vector<std::vector<cln::cl_R>> a(nf, std::vector<cln::cl_R>(nf));
+        for (std::size_t r = 0; r < nf; ++r)
+            for (std::size_t s = 0; s < nf; ++s) a[r][s] = cln::the<cln::cl_R>(kt[r][s].to_cl_N());
+        try {
+            const std::vector<MpEigenpair> pairs = mp_symmetric_eigen(a, cln::float_format(kDerivationDigits));
+            for (std::size_t j = 0; j < nf; ++j) {
+                eig_value[j] = numeric(pairs[j].value);
+                for (std::size_t r = 0; r < nf; ++r) eig_vector[j][r] = numeric(pairs[j].vector[r]);
+            }
+            solved = true;
+        } catch (const RunError&) {
+            // Not converged (never seen): Jacobi below, slower but unconditional.
+        }
+    }
+    if (!solved) {
+        std::vector<std::vector<numeric>> phi;
+        jacobi_eigen(kt, phi);
+        std::vector<std::size_t> order(nf);
+        std::iota(order.begin(), order.end(), 0);
+        std::stable_sort(order.begin(), order.end(),
+                         [&](std::size_t p, std::size_t q) { return kt[p][p] < kt[q][q]; });
+        for (std::size_t j = 0; j < nf; ++j) {
+            eig_value[j] = kt[order[j]][order[j]];
+            for (std::size_t r = 0; r < nf; ++r) eig_vector[j][r] = phi[r][order[j]];
+        }
+    }
 
     // Rigid-body modes replace the smallest eigenpairs: lambda = 0, shape sqrt(m) on the component.
     const auto comps = free_components(model, cfg).floating_members();  // free_components.h
@@ -155,8 +184,8 @@ Derivation derive(const Model& model, const Configuration& cfg) {
             for (int i : comps[j]) shape[j][free_index[i]] = sqm[free_index[i]] * inv;
             lambda[j] = kZero;
         } else {
-            lambda[j] = kt[order[j]][order[j]];
-            for (std::size_t r = 0; r < nf; ++r) shape[j][r] = phi[r][order[j]];
+            lambda[j] = eig_value[j];
+            shape[j] = eig_vector[j];
             if (lambda[j] <= kZero)
                 throw RunError("derivation::derive(): eigenvalue " + std::to_string(lambda[j].to_double()) +
                                " <= 0 in a mode not detected as rigid (configuration " + cfg.spec(model) + ")");

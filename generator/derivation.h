@@ -6,9 +6,9 @@
 //     f = loads_F + preload_F - K_FS x_S - mu_k N sgn + sum_h F_h,F sin(Omega_h t + phase_h),
 // with K = K(cfg) (closed contact springs added), C = alpha M + beta K(cfg); the
 // stuck coupling -K_FS x_S is the constant force of Eq. 7 and C_FS v_S = 0.
-// Modal analysis: Kt = M^-1/2 K M^-1/2 = Phi diag(lambda) Phi^T (Jacobi
-// rotations at Digits = 40), x_F = V u with V = M^-1/2 Phi, u = W x_F with
-// W = Phi^T M^1/2. Rayleigh damping is diagonal in these coordinates:
+// Modal analysis: Kt = M^-1/2 K M^-1/2 = Phi diag(lambda) Phi^T (at Digits = 40:
+// solved in double and refined, or by Jacobi rotations; EigenMethod),
+// x_F = V u with V = M^-1/2 Phi, u = W x_F with W = Phi^T M^1/2. Rayleigh damping is diagonal in these coordinates:
 //     u_j'' + c_j u_j' + lambda_j u_j = p_j + sum_h P_jh sin(Omega_h t + phase_h),
 //     c_j = alpha + beta lambda_j,  p_j = sum_i V_ij f_i,  P_jh = sum_i V_ij F_hi.
 // Rigid-body modes (floating components of the free masses) are detected from
@@ -100,10 +100,19 @@ struct Derivation {
     int free_index(int mass) const;
 };
 
+/// How derive() finds the modes of Kt = M^-1/2 K_FF M^-1/2 at the working
+/// precision. refined: solved in double, refined to the working precision
+/// (generator/mp_eigen.h; O(n^3) with a small constant). jacobi: cyclic
+/// Jacobi rotations at the working precision throughout (the reference the
+/// refined path is tested against, and its fallback; a sweep costs O(n^3)
+/// long-float operations, about 10 sweeps).
+enum class EigenMethod { refined, jacobi };
+
 /// Derive configuration `cfg` of `model`. Throws InputError on a singular
 /// setup (e.g. a mass without stiffness that must not float is fine; none
-/// are rejected today), RunError when the eigen-solver does not converge.
-Derivation derive(const Model& model, const Configuration& cfg);
+/// are rejected today), RunError when the eigen-solver does not converge
+/// (refined: when neither it nor Jacobi converges).
+Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method = EigenMethod::refined);
 
 /// Inputs of one segment as GiNaC expressions: numbers or symbols.
 struct SegmentInputs {

@@ -95,6 +95,16 @@ Program lower(const Derivation& d) {
     p.cfg = d.cfg;
     p.switches = d.switches;
     p.max_step = d.max_step;
+    // V and W rounded once (each use below rounds the same 40-digit value), and
+    // each mass's index among the free masses (-1: stuck).
+    std::vector<std::vector<double>> vd(nm, std::vector<double>(nf)), wd(nm, std::vector<double>(nf));
+    for (std::size_t j = 0; j < nm; ++j)
+        for (std::size_t r = 0; r < nf; ++r) {
+            vd[j][r] = dbl(d.modes[j].v[r]);
+            wd[j][r] = dbl(d.modes[j].w[r]);
+        }
+    std::vector<int> free_of(n, -1);
+    for (std::size_t r = 0; r < nf; ++r) free_of[d.free_dofs[r]] = static_cast<int>(r);
 
     // ---- constants: per mode (ModeConstant layout), per harmonic (Omega, phase) ----
     std::vector<std::uint32_t> mode_k(nm), harm_k(nh);
@@ -181,7 +191,7 @@ Program lower(const Derivation& d) {
         }
         for (std::size_t j = 0; j < nm; ++j) {
             Lin l;
-            for (std::size_t r = 0; r < nf; ++r) l.add(d.modes[j].v[r], f[r]);
+            for (std::size_t r = 0; r < nf; ++r) l.add(vd[j][r], f[r]);
             pj[j] = s.temp("p_" + idx(j));
             with(s.lin(pj[j], l), j == 0 ? "Modal forces p = V^T f." : "");
         }
@@ -253,8 +263,8 @@ Program lower(const Derivation& d) {
             for (std::size_t j = 0; j < nm; ++j) {
                 Lin q, dq;
                 for (std::size_t r = 0; r < nf; ++r) {
-                    q.add(d.modes[j].w[r], px[r]);
-                    dq.add(d.modes[j].w[r], pv[r]);
+                    q.add(wd[j][r], px[r]);
+                    dq.add(wd[j][r], pv[r]);
                 }
                 q_out[j] = s.temp(prefix + "_" + idx(j));
                 with(s.lin(q_out[j], q, q_base.empty() ? kNoRegister : q_base[j]), j == 0 ? note : "");
@@ -273,8 +283,8 @@ Program lower(const Derivation& d) {
             x.add(1.0, xh[r]);
             v.add(1.0, vh[r]);
             for (std::size_t j = 0; j < nm; ++j) {
-                x.add(-dbl(d.modes[j].v[r]), q0u[j]);
-                v.add(-dbl(d.modes[j].v[r]), dq0u[j]);
+                x.add(-vd[j][r], q0u[j]);
+                v.add(-vd[j][r], dq0u[j]);
             }
             rx[r] = s.temp("rx_" + idx(r));
             with(s.lin_ld(rx[r], x),
@@ -297,8 +307,8 @@ Program lower(const Derivation& d) {
             Lin x, v;
             x.add(1.0, x_st[r]);
             for (std::size_t j = 0; j < nm; ++j) {
-                x.add(d.modes[j].v[r], q0[j]);
-                v.add(d.modes[j].v[r], dq0[j]);
+                x.add(vd[j][r], q0[j]);
+                v.add(vd[j][r], dq0[j]);
             }
             for (std::size_t h = 0; h < nh; ++h) {
                 const HarmonicData& hd = d.harmonics[h];
@@ -320,8 +330,8 @@ Program lower(const Derivation& d) {
         for (std::size_t j = 0; j < nm; ++j) {
             Lin q, dq;
             for (std::size_t r = 0; r < nf; ++r) {
-                q.add(d.modes[j].w[r], ex[r]);
-                dq.add(d.modes[j].w[r], ev[r]);
+                q.add(wd[j][r], ex[r]);
+                dq.add(wd[j][r], ev[r]);
             }
             qh0[j] = s.temp("qh0_" + idx(j));
             s.lin(qh0[j], q, q0[j]);
@@ -465,7 +475,7 @@ Program lower(const Derivation& d) {
     for (std::size_t i = 0; i < n; ++i) {
         const std::string I = std::to_string(i);
         const int ii = static_cast<int>(i);
-        const int r = d.free_index(ii);
+        const int r = free_of[i];
         const std::string comment =
             i == 0 ? "Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest." : "";
         if (r < 0) {
@@ -482,7 +492,7 @@ Program lower(const Derivation& d) {
         const std::size_t rr = static_cast<std::size_t>(r);
         Lin modal, tx, tv, ta, tmx, tmv;
         double hx = 0.0, hv = 0.0;  // magnitudes of the harmonic terms
-        for (std::size_t j = 0; j < nm; ++j) modal.add(d.modes[j].v[rr], mb[j]);
+        for (std::size_t j = 0; j < nm; ++j) modal.add(vd[j][rr], mb[j]);
         for (std::size_t h = 0; h < nh; ++h) {
             const HarmonicData& hd = d.harmonics[h];
             const double W = dbl(hd.omega), xs = dbl(hd.xs[rr]), xc = dbl(hd.xc[rr]);
@@ -516,11 +526,17 @@ Program lower(const Derivation& d) {
     // Switch functions.
     auto V = [&](int mass, std::size_t j) -> numeric {  // V_ij, 0 for stuck masses and ground
         if (mass == kGround) return 0;
-        const int r = d.free_index(mass);
+        const int r = free_of[mass];
         return r < 0 ? numeric(0) : d.modes[j].v[r];
     };
     std::uint32_t s_end = kNoRegister;
     std::vector<std::uint32_t> abs_p(nm, kNoRegister);
+    std::vector<numeric> bound_alpha(nm), bound_beta(nm);  // per mode: c + omega, c (c + omega) + lambda
+    for (std::size_t j = 0; j < nm; ++j) {
+        const Mode& m = d.modes[j];
+        bound_alpha[j] = m.c + m.omega;
+        bound_beta[j] = m.c * (m.c + m.omega) + m.lambda;
+    }
     for (std::size_t f = 0; f < d.switches.size(); ++f) {
         const SwitchFunction& sf = d.switches[f];
         const std::string F = std::to_string(f);
@@ -555,8 +571,8 @@ Program lower(const Derivation& d) {
             for (std::size_t j = 0; j < nm; ++j) al[j] = V(ct.a, j) - V(ct.b, j);
             for (std::size_t h = 0; h < nh; ++h) {
                 auto xsb = [&](int b, bool sine) -> numeric {
-                    if (b == kGround || d.free_index(b) < 0) return 0;
-                    return sine ? d.harmonics[h].xs[d.free_index(b)] : d.harmonics[h].xc[d.free_index(b)];
+                    if (b == kGround || free_of[b] < 0) return 0;
+                    return sine ? d.harmonics[h].xs[free_of[b]] : d.harmonics[h].xc[free_of[b]];
                 };
                 Gs[h] = xsb(ct.a, true) - xsb(ct.b, true);
                 Gc[h] = xsb(ct.a, false) - xsb(ct.b, false);
@@ -567,7 +583,7 @@ Program lower(const Derivation& d) {
             g.add(1.0, Vr(i));
             dg.add(1.0, Ar(i));
             sc.add(1.0, mv[i]);
-            const int r = d.free_index(i);
+            const int r = free_of[i];
             for (std::size_t j = 0; j < nm; ++j) be[j] = d.modes[j].v[r];
             for (std::size_t h = 0; h < nh; ++h) {
                 Gs[h] = -d.harmonics[h].omega * d.harmonics[h].xc[r];
@@ -646,7 +662,13 @@ Program lower(const Derivation& d) {
         b.add(konst, ONE);
         for (std::size_t j = 0; j < nm; ++j) {
             const Mode& m = d.modes[j];
-            const numeric H = abs(al[j]) * (m.c + m.omega) + abs(be[j]) * (m.c * (m.c + m.omega) + m.lambda);
+            // H = |alpha| (c + omega) + |beta| (c (c + omega) + lambda); a zero term (exact 0
+            // times a factor) adds nothing, so it is left out: the same number.
+            const bool za = al[j].is_zero(), zb = be[j].is_zero();
+            const numeric H = za && zb ? numeric(0)
+                              : za     ? abs(be[j]) * bound_beta[j]
+                              : zb     ? abs(al[j]) * bound_alpha[j]
+                                       : abs(al[j]) * bound_alpha[j] + abs(be[j]) * bound_beta[j];
             b.add(H, mb[j] + kModeR);
             if (m.regime == Regime::rigid || m.regime == Regime::rigid_damped) {  // |q_p''| <= |p|, |q_p'''| <= c |p|
                 const double cp = dbl(abs(al[j]) + abs(be[j]) * m.c);
@@ -684,6 +706,10 @@ Program lower(const Derivation& d) {
         e.lin(G(f, 6), sc);
     }
     return p;
+}
+
+std::function<Program(const Configuration&)> program_source(const Model& model) {
+    return [&model](const Configuration& cfg) { return lower(derive(model, cfg)); };
 }
 
 }  // namespace hsnc

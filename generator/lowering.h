@@ -6,6 +6,8 @@
 // block is in the comments of lowering.cpp and, printed, in each kernel.
 #pragma once
 
+#include <functional>
+
 #include "derivation.h"
 #include "program.h"
 
@@ -13,5 +15,11 @@ namespace hsnc {
 
 /// The setup and eval programs of `d`.
 Program lower(const Derivation& d);
+
+/// The program of each configuration of `model`, lower(derive(model, cfg)):
+/// the source of the generic path (InterpretedSolverProvider). `model` must
+/// outlive the function.
+std::function<Program(const Configuration&)> program_source(const Model& model);
+std::function<Program(const Configuration&)> program_source(const Model&& model) = delete;  ///< would dangle
 
 }  // namespace hsnc

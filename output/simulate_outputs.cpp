@@ -34,6 +34,13 @@ SimulateOutputs::SimulateOutputs(const Model& model, const OutputRequest& r, dou
     if (!r.events.empty())
         all.push_back((events_ = std::make_unique<OutputTarget>(check_output("--events", r.events))).get());
     if (!r.plot.empty()) all.push_back((plot_ = std::make_unique<OutputTarget>(check_output("--plot", r.plot))).get());
+    if (section_requested(model, r.section, r.section_out, r.section_plot, &section_spec_)) {
+        if (!r.section_out.empty())
+            all.push_back((section_out_ = std::make_unique<OutputTarget>(check_output("--section-out", r.section_out))).get());
+        if (!r.section_plot.empty())
+            all.push_back(
+                (section_plot_ = std::make_unique<OutputTarget>(check_output("--section-plot", r.section_plot))).get());
+    }
     check_distinct(all);
     if (out_ && !r.allow_large_output) {
         // Every number is printed with 17 significant digits: about 22 bytes with its comma.
@@ -44,7 +51,7 @@ SimulateOutputs::SimulateOutputs(const Model& model, const OutputRequest& r, dou
                              " rows, about " + bytes_text(bytes) + " (the limit is 1e7 rows or 1 GB): give a larger " +
                              "--dt or a shorter --t-end, or --allow-large-output to write it anyway");
     }
-    if (plot_) require_gnuplot();
+    if (plot_ || section_plot_) require_gnuplot();
 }
 
 void SimulateOutputs::open() {
@@ -52,6 +59,9 @@ void SimulateOutputs::open() {
     if (events_) events_file_ = std::make_unique<CsvFile>(*events_);
     csv_ = std::make_unique<CsvObserver>(model_, traj_file_.get(), events_file_.get());
     if (plot_) recorder_ = std::make_unique<PlotRecorder>(model_, model_.t0, t_end_, dt_);
+    if (section_out_) section_file_ = std::make_unique<CsvFile>(*section_out_);
+    if (section_out_ || section_plot_)
+        section_ = std::make_unique<SectionRecorder>(model_, section_spec_, section_file_.get(), section_plot_ != nullptr);
 }
 
 void SimulateOutputs::on_sample(double t, const double* x, const double* v) {
@@ -62,12 +72,15 @@ void SimulateOutputs::on_sample(double t, const double* x, const double* v) {
 void SimulateOutputs::on_event(double t, EventKind kind, int element, const double* x, const double* v) {
     csv_->on_event(t, kind, element, x, v);
     if (recorder_) recorder_->on_event(t, kind, element, x, v);
+    if (section_) section_->on_event(t, kind, element, x, v);
 }
 
 void SimulateOutputs::commit() {
     if (traj_file_) traj_file_->commit();
     if (events_file_) events_file_->commit();
+    if (section_file_) section_file_->commit();
     if (recorder_) recorder_->draw(*plot_);
+    if (section_ && section_plot_) section_->draw(*section_plot_);
 }
 
 }  // namespace hsnc::cli

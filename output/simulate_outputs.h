@@ -12,6 +12,7 @@
 #include "observer.h"
 #include "output_file.h"
 #include "plot.h"
+#include "section.h"
 
 namespace hsnc::cli {
 
@@ -23,6 +24,8 @@ inline constexpr double kLargeOutputBytes = 1e9;
 struct OutputRequest {
     std::string out, events, plot;
     bool allow_large_output = false;
+    /// --section KIND[:NAME] with --section-out CSV and/or --section-plot PNG (section.h).
+    std::string section, section_out, section_plot;
 };
 
 /// Rows of the trajectory CSV sampled every dt from t0 to t_end (without the header).
@@ -42,14 +45,18 @@ public:
     void on_sample(double t, const double* x, const double* v) override;
     void on_event(double t, EventKind kind, int element, const double* x, const double* v) override;
 
-    /// Commit the CSVs, then draw the plot.
+    /// Commit the CSVs, then draw the plots.
     void commit();
+    /// Section points recorded (0 without --section).
+    std::size_t section_points() const { return section_ ? section_->points() : 0; }
 
 private:
     const Model& model_;
     double t_end_, dt_;
-    std::unique_ptr<OutputTarget> out_, events_, plot_;
-    std::unique_ptr<CsvFile> traj_file_, events_file_;
+    std::unique_ptr<OutputTarget> out_, events_, plot_, section_out_, section_plot_;
+    SectionSpec section_spec_;
+    std::unique_ptr<CsvFile> traj_file_, events_file_, section_file_;
+    std::unique_ptr<SectionRecorder> section_;
     std::unique_ptr<CsvObserver> csv_;
     std::unique_ptr<PlotRecorder> recorder_;
 };

@@ -50,6 +50,43 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
         if (g == keys.size()) keys.emplace_back(p.value2, p.direction);
         groups[g].push_back(&p);
     }
+    // Continuation: the branches, each cut into runs of one stability
+    // (blank lines between runs; neighbouring runs share their end point).
+    std::vector<std::vector<const SweepPoint*>> branches;
+    if (r.continuation)
+        for (const SweepPoint& p : r.points) {
+            if (p.branch_start || branches.empty()) branches.emplace_back();
+            if (p.failure.empty()) branches.back().push_back(&p);
+        }
+    for (std::size_t b = 0; b < branches.size(); ++b)
+        for (int stable = 1; stable >= 0; --stable) {
+            s += std::string(stable ? "$stable" : "$unstable") + std::to_string(b) + " << EOD\n";
+            const std::vector<const SweepPoint*>& pts = branches[b];
+            for (std::size_t k = 0; k < pts.size(); ++k) {
+                const bool in = pts[k]->stable == (stable == 1);
+                const bool next_in = k + 1 < pts.size() && pts[k + 1]->stable == (stable == 1);
+                if (!in && !next_in) continue;
+                s += num(pts[k]->value);
+                for (std::size_t i = 0; i < n; ++i) s += " " + num(pts[k]->xmax[i]);
+                s += "\n";
+                if (!next_in) s += "\n";  // the run ends (with the first point of the next run)
+            }
+            s += "EOD\n";
+        }
+    const char* const kBifurcations[3] = {"fold", "period_doubling", "neimark_sacker"};
+    bool has_bifurcation[3] = {false, false, false};
+    for (int k = 0; k < 3; ++k) {
+        s += "$bif" + std::to_string(k) + " << EOD\n";
+        for (const SweepPoint& p : r.points)
+            if (r.continuation && ("+" + p.bifurcation + "+").find("+" + std::string(kBifurcations[k]) + "+") !=
+                                      std::string::npos) {
+                has_bifurcation[k] = true;
+                s += num(p.value);
+                for (std::size_t i = 0; i < n; ++i) s += " " + num(p.xmax[i]);
+                s += "\n";
+            }
+        s += "EOD\n";
+    }
     for (std::size_t g = 0; g < keys.size(); ++g) {
         s += "$curve" + std::to_string(g) + " << EOD\n";
         for (const SweepPoint* p : groups[g]) {
@@ -89,12 +126,36 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
     s += "set multiplot title " + quoted(title) + "\n";
     s += "set lmargin at screen 0.09\nset rmargin at screen 0.80\nset grid\nset key outside right top\n";
     // The response curve.
-    s += "set title " + quoted("response curve: largest |x| over the recorded periods" +
-                               std::string(any_unsettled ? " (ringed: not settled)" : "")) + "\n";
+    s += "set title " + quoted(r.continuation ? std::string("periodic orbits by continuation: largest |x| over a period "
+                                                            "(solid: stable, dashed: unstable)")
+                                              : "response curve: largest |x| over the recorded periods" +
+                                                    std::string(any_unsettled ? " (ringed: not settled or failed)" : "")) +
+         "\n";
     s += "set tmargin at screen " + num(top) + "\nset bmargin at screen " + num(split + 60.0 / height) + "\n";
     s += "set xlabel " + quoted(r.param) + "\nset ylabel 'xmax [m]'\n";
     std::string plot;
-    for (std::size_t g = 0; g < keys.size(); ++g) {
+    for (std::size_t b = 0; b < branches.size(); ++b)
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::size_t colour = (b * n + i) % 8;
+            std::string name = r.masses[i];
+            if (branches[b].size() && branches[b][0]->direction == SweepDirection::down) name += " (from " + r.param + " = " + num(branches[b][0]->value) + ")";
+            if (has2 && branches[b].size()) name += " (" + r.param2 + " = " + num(branches[b][0]->value2) + ")";
+            const bool titled = b * n + i < 8;
+            plot += (plot.empty() ? "" : ", ") + std::string("$stable") + std::to_string(b) + " using 1:" +
+                    std::to_string(i + 2) + " with lines lw 2 dt 1 lc rgb '" + kColours[colour] + "' " +
+                    (titled ? "title " + quoted(name + " stable") : "notitle");
+            plot += ", $unstable" + std::to_string(b) + " using 1:" + std::to_string(i + 2) +
+                    " with lines lw 2 dt 2 lc rgb '" + kColours[colour] + "' " +
+                    (titled ? "title " + quoted(name + " unstable") : "notitle");
+        }
+    const char* const kMarks[3] = {"pt 9 ps 1.6", "pt 5 ps 1.3", "pt 13 ps 1.6"};
+    const char* const kMarkNames[3] = {"fold", "period doubling", "Neimark-Sacker"};
+    for (int k = 0; k < 3; ++k)
+        if (has_bifurcation[k])
+            for (std::size_t i = 0; i < n; ++i)
+                plot += ", $bif" + std::to_string(k) + " using 1:" + std::to_string(i + 2) + " with points " +
+                        kMarks[k] + " lc rgb 'black' " + (i == 0 ? "title " + quoted(kMarkNames[k]) : "notitle");
+    for (std::size_t g = 0; g < keys.size() && !r.continuation; ++g) {
         const bool down = keys[g].second == SweepDirection::down;
         for (std::size_t i = 0; i < n; ++i) {
             // One colour per mass (and value of param2); a single curve's down sweep in the next colour.
@@ -110,14 +171,17 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
         for (std::size_t i = 0; i < n; ++i)
             plot += ", $unsettled using 1:" + std::to_string(i + 2) + " with points pt 6 ps 2.2 lw 1.5 lc rgb 'black' " +
                     (i == 0 ? "title 'not settled'" : "notitle");
+    if (plot.empty()) plot = "NaN notitle";
     s += "plot " + plot + "\n";
 
     // The diagram, one panel per mass.
     const double panel = (split - 20.0 / height) / static_cast<double>(std::max<std::size_t>(panels, 1));
     for (std::size_t i = 0; i < panels; ++i) {
         const double hi = split - static_cast<double>(i) * panel, lo = hi - panel;
-        s += "set title " + quoted("bifurcation diagram: x_" + r.masses[i] +
-                                   " at the end of every recorded forcing period") + "\n";
+        s += "set title " + quoted(r.continuation ? "x_" + r.masses[i] + " of each orbit at t0 (colour: the way the parameter moved)"
+                                                  : "bifurcation diagram: x_" + r.masses[i] +
+                                                        " at the end of every recorded forcing period") +
+             "\n";
         s += "set tmargin at screen " + num(hi - 45.0 / height) + "\nset bmargin at screen " + num(lo + 50.0 / height) +
              "\n";
         s += "set ylabel " + quoted("x_" + r.masses[i] + " [m]") + "\n";

@@ -272,6 +272,7 @@ py::dict periodic(const Model& model, double period, int harmonic, double transi
     d["stable"] = ok && r.stable;
     d["monodromy"] = ok ? matrix(r.monodromy, 2 * n, 2 * n) : matrix({}, 0, 2 * n);
     d["events"] = r.events;
+    d["grazing"] = r.grazing;
     py::dict path;
     path["t"] = vector(orbit.t_);
     path["x"] = matrix(orbit.x_, orbit.t_.size(), n);
@@ -307,6 +308,7 @@ py::dict lyapunov(const Model& model, double t_end, double transient, double row
     d["collapsed"] = r.collapsed;
     d["events"] = r.events;
     d["grazing"] = r.grazing;
+    d["singular"] = r.singular;
     d["rows_t"] = vector(row_t);
     d["rows"] = matrix(rows, row_t.size(), 2 * model.dof());
     return d;

@@ -6,8 +6,14 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "file_read.h"
@@ -30,7 +36,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
                const std::vector<std::string>& v0, const std::string& param, double from, double to,
                std::size_t points, const std::string& direction, std::size_t max_periods, std::size_t record_periods,
                bool restart_each, const std::string& param2, const std::vector<double>& values2, unsigned threads,
-               const std::string& method, double rtol, double atol) {
+               const std::string& method, double rtol, double atol, bool continuation, std::size_t max_steps) {
     SweepOptions o;
     o.param = param;
     o.from = from;
@@ -46,6 +52,10 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
     o.method = method_from_name(method);
     o.integrator.rtol = rtol;
     o.integrator.atol = atol;
+    o.continuation = continuation;
+    o.max_steps = max_steps;
+    std::atomic<bool> cancel{false};
+    o.cancel = &cancel;
     const ModelOverrides ov{set, x0, v0, {}};
     std::string text = what, src = source;
     if (kind == "file") {
@@ -56,15 +66,52 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
         src = what;
     }
     const SweepPlan plan(text, src, ov, o);
+    // The run on a thread of its own; this one waits without the GIL and
+    // looks for signals every 50 ms (only the main thread runs Python's
+    // signal handlers): Ctrl-C sets `cancel`, the run stops within a forcing
+    // period or a continuation step, and KeyboardInterrupt is raised here.
     SweepResult r;
+    std::exception_ptr error;
     {
-        py::gil_scoped_release nogil;
-        r = plan.run();
+        std::mutex mutex;
+        std::condition_variable finished;
+        bool done = false;
+        std::thread worker([&] {
+            try {
+                r = plan.run();
+            } catch (...) {
+                error = std::current_exception();
+            }
+            std::lock_guard<std::mutex> lock(mutex);
+            done = true;
+            finished.notify_all();
+        });
+        bool interrupted = false;
+        for (;;) {
+            {
+                py::gil_scoped_release nogil;
+                std::unique_lock<std::mutex> lock(mutex);
+                if (finished.wait_for(lock, std::chrono::milliseconds(50), [&] { return done; })) break;
+            }
+            if (!interrupted && PyErr_CheckSignals() != 0) {
+                interrupted = true;
+                cancel = true;
+            }
+        }
+        {
+            py::gil_scoped_release nogil;
+            worker.join();
+        }
+        if (interrupted) throw py::error_already_set();
     }
+    if (error) std::rethrow_exception(error);
     const std::size_t np = r.points.size(), n = r.masses.size();
     py::array_t<double> value(np), value2(np);
     py::array_t<bool> settled(np);
     py::array_t<long long> periods(np), multiple(np);
+    py::array_t<bool> stable(np);
+    py::array_t<double> max_multiplier(np);
+    py::list bifurcation, failure, stop;
     std::vector<double> xmax, xrms, a1;
     py::list dirs;
     std::vector<double> dv, dv2, dt, dx, dvel;
@@ -76,6 +123,11 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
         settled.mutable_at(i) = p.settled;
         periods.mutable_at(i) = static_cast<long long>(p.periods);
         multiple.mutable_at(i) = p.multiple;
+        stable.mutable_at(i) = p.stable;
+        max_multiplier.mutable_at(i) = p.max_multiplier;
+        bifurcation.append(p.bifurcation);
+        failure.append(p.failure);
+        stop.append(p.stop);
         dirs.append(sweep_direction_name(p.direction));
         xmax.insert(xmax.end(), p.xmax.begin(), p.xmax.end());
         xrms.insert(xrms.end(), p.xrms.begin(), p.xrms.end());
@@ -110,6 +162,13 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
     d["xrms"] = matrix(xrms, np, n);
     d["a1"] = matrix(a1, np, n);
     d["diagram"] = diagram;
+    d["failure"] = failure;
+    if (r.continuation) {
+        d["stable"] = stable;
+        d["max_multiplier"] = max_multiplier;
+        d["bifurcation"] = bifurcation;
+        d["stop"] = stop;
+    }
     return d;
 }
 
@@ -119,7 +178,8 @@ void bind_sweep(py::module_& m) {
     m.def("_sweep", &sweep, py::arg("kind"), py::arg("what"), py::arg("source"), py::arg("set"), py::arg("x0"),
           py::arg("v0"), py::arg("param"), py::arg("from_"), py::arg("to"), py::arg("points"), py::arg("direction"),
           py::arg("max_periods"), py::arg("record_periods"), py::arg("restart_each"), py::arg("param2"),
-          py::arg("values2"), py::arg("threads"), py::arg("method"), py::arg("rtol"), py::arg("atol"));
+          py::arg("values2"), py::arg("threads"), py::arg("method"), py::arg("rtol"), py::arg("atol"),
+          py::arg("continuation") = false, py::arg("max_steps") = 0);
 }
 
 }  // namespace hsnc::python

@@ -39,7 +39,7 @@ TEST(PeriodicCli, SeedScenario1OrbitMultipliersAndOnePeriod) {
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const std::regex line(
         "status=ok period=(\\S+) iterations=\\d+ residual=(\\S+) x_m1=\\S+ x_m2=\\S+ v_m1=(\\S+) v_m2=\\S+ "
-        "stable=(true|false) max_multiplier=(\\S+)\n");
+        "stable=(true|false) max_multiplier=(\\S+) grazing=0\n");
     std::smatch m;
     ASSERT_TRUE(std::regex_match(r.out, m, line)) << r.out;
     const double period = std::stod(m[1]);
@@ -80,7 +80,7 @@ TEST(PeriodicCli, NotConvergedIsExitOneAndWritesNothing) {
                                        mult + "' --out '" + out + "'");
     EXPECT_EQ(r.exit_code, 1) << r.err;
     EXPECT_EQ(r.out.rfind("status=not_converged period=", 0), 0u) << r.out;
-    EXPECT_NE(r.out.find(" stable=false max_multiplier=nan\n"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(" stable=false max_multiplier=nan grazing="), std::string::npos) << r.out;
     EXPECT_NE(r.err.find("not converged"), std::string::npos) << r.err;
     EXPECT_FALSE(file_exists(mult));
     EXPECT_FALSE(file_exists(out));
@@ -94,7 +94,7 @@ TEST(PeriodicCli, SubharmonicAndTransient) {
     ASSERT_EQ(one.exit_code, 0) << one.err;
     ASSERT_EQ(two.exit_code, 0) << two.err;
     std::smatch a, b;
-    const std::regex period("period=(\\S+) .* max_multiplier=(\\S+)\n");
+    const std::regex period("period=(\\S+) .* max_multiplier=(\\S+) grazing=0\n");
     ASSERT_TRUE(std::regex_search(one.out, a, period));
     ASSERT_TRUE(std::regex_search(two.out, b, period));
     EXPECT_EQ(std::stod(b[1]), 2 * std::stod(a[1]));
@@ -113,7 +113,8 @@ TEST(PeriodicCli, BadInputIsExitTwoWithNothingWritten) {
         {"'" + model_path("seed-scenario-1.toml") + "' --period -1", "--period"},
         {"'" + model_path("seed-scenario-1.toml") + "' --transient nan", "--transient"},
         {"'" + model_path("seed-scenario-1.toml") + "' --out '" + ::testing::TempDir() + "'", "--out"},
-        {"'" + model_path("seed-scenario-1.toml") + "' --kernels jit", "--kernels"},
+        {"'" + model_path("seed-scenario-1.toml") + "' --kernels fast", "--kernels"},
+        {"'" + model_path("seed-scenario-1.toml") + "' --set k1=1 --kernels aot", "--kernels"},
         {"'" + model_path("seed-scenario-1.toml") + "' --set nope=1", "nope"},
     };
     for (const Case& c : cases) {
@@ -131,7 +132,7 @@ TEST(LyapunovCli, SeedScenario2SpectrumAndConvergenceCsv) {
         run_hsnc("lyapunov '" + model_path("seed-scenario-2.toml") + "' --t-end 30 --out '" + out + "'");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const std::regex line(
-        "status=ok t=(\\S+) lambda_1=(\\S+) lambda_2=(\\S+) lambda_3=(\\S+) lambda_4=(\\S+) sum=(\\S+)\n");
+        "status=ok t=(\\S+) lambda_1=(\\S+) lambda_2=(\\S+) lambda_3=(\\S+) lambda_4=(\\S+) sum=(\\S+) grazing=0\n");
     std::smatch m;
     ASSERT_TRUE(std::regex_match(r.out, m, line)) << r.out;
     EXPECT_EQ(std::stod(m[1]), 30.0);
@@ -152,7 +153,7 @@ TEST(LyapunovCli, StickCollapsesADirectionToMinusInfinity) {
     const std::string out = temp_path("lyap.csv");
     const testing::CliRun r = run_hsnc("lyapunov '" + model_path("coulomb-1dof.toml") + "' --t-end 5 --out '" + out + "'");
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_NE(r.out.find(" lambda_2=-inf sum=-inf\n"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(" lambda_2=-inf sum=-inf grazing=0\n"), std::string::npos) << r.out;
     const auto rows = csv_rows(slurp(out));
     ASSERT_EQ(rows.size(), 6u);  // header and a row per second (no forcing)
     EXPECT_EQ(rows[1][0], "1");

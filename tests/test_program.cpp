@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <random>
 #include <sstream>
@@ -308,6 +309,45 @@ TEST(ProgramRun, RandomModelsJitInterpreterWriteIdenticalCsv) {
         const testing::Drawn d = testing::draw(700 + n, n);
         expect_same_runs(d.model, 5.0, 0.01, false, 1);
     }
+}
+
+// The interpreted programs are kept within a memory budget, as the Eigen
+// solvers are (tests/test_generic_solver.cpp): with room for a single one,
+// every change of configuration drops the previous solver and a return to it
+// derives it again, and the run writes the same bytes as with no bound.
+TEST(Program, ProviderKeepsItsSolversWithinTheBudgetAndRebuildsTheSame) {
+    const Model m = bundled("chain-8");
+    InterpretedSolverProvider unbounded(lowering_of(m), std::numeric_limits<std::size_t>::max());
+    InterpretedSolverProvider one(lowering_of(m), 1);  // below any solver's size: only the one in use
+    const RunFiles a = run_to_csv(m, unbounded, 5.0, 0.01, "unbounded"), b = run_to_csv(m, one, 5.0, 0.01, "one");
+    EXPECT_EQ(unbounded.evicted(), 0u);
+    ASSERT_GT(unbounded.cached(), 3u) << "the run should visit several configurations";
+    EXPECT_EQ(one.cached(), 1u);
+    EXPECT_GT(one.evicted(), 0u);
+    EXPECT_GT(one.built(), unbounded.built()) << "revisited configurations are rebuilt";
+    EXPECT_EQ(one.built(), one.evicted() + one.cached());
+    EXPECT_TRUE(a.events == b.events) << "events CSV, bounded vs unbounded";
+    EXPECT_TRUE(a.trajectory == b.trajectory) << "trajectory CSV, bounded vs unbounded";
+    EXPECT_NE(one.describe().find("rebuilt"), std::string::npos) << one.describe();
+
+    // A budget of three solvers: the least recently used goes first.
+    Configuration c0 = Configuration::all_open(m), c1 = c0, c2 = c0, c3 = c0;
+    c1.closed[0] = 1;
+    c2.stuck[0] = 1;
+    c3.stuck[1] = 1;
+    const std::size_t size = InterpretedSolver(lower(derive(m, c0))).memory_bytes();
+    EXPECT_GT(size, 1000u);
+    InterpretedSolverProvider few(lowering_of(m), 3 * size);
+    SegmentSolver* s0 = &few.solver(c0);
+    few.solver(c1);
+    few.solver(c2);
+    EXPECT_EQ(&few.solver(c0), s0) << "c0 kept, and now the most recently used";
+    few.solver(c3);  // evicts c1, the least recently used
+    const std::size_t built = few.built();
+    few.solver(c0);
+    EXPECT_EQ(few.built(), built) << "c0 was not evicted";
+    few.solver(c1);
+    EXPECT_EQ(few.built(), built + 1) << "c1 was evicted and is rebuilt";
 }
 
 // The generic solver shares no code with the programs: an independent oracle,

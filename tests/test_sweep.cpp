@@ -311,7 +311,7 @@ TEST(SweepCli, CurveAndDiagramFiles) {
     const std::string out = temp_path("curve.csv"), diagram = temp_path("diagram.csv"), png = temp_path("sweep.png");
     const auto r = run_hsnc(sweep_args(model, "--out '" + out + "' --diagram '" + diagram + "' --plot '" + png + "'"));
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_EQ(r.out, "status=ok points=10 up=5 down=5 settled=10 unsettled=0\n");
+    EXPECT_EQ(r.out, "status=ok points=10 up=5 down=5 settled=10 unsettled=0 failed=0\n");
     const std::string curve = slurp(out);
     EXPECT_EQ(curve.substr(0, curve.find('\n')), "omega,direction,settled,periods,multiple,xmax_m,xrms_m,a1_m");
     EXPECT_EQ(std::count(curve.begin(), curve.end(), '\n'), 11);
@@ -402,7 +402,7 @@ TEST(SweepCli, MpiRanksGiveTheSameBytes) {
         EXPECT_EQ(slurp(a), slurp(b));
         EXPECT_EQ(slurp(ad), slurp(bd));
         // Rank 0 alone prints the summary.
-        EXPECT_EQ(slurp(log), "status=ok points=20 up=10 down=10 settled=20 unsettled=0\n");
+        EXPECT_EQ(slurp(log), "status=ok points=20 up=10 down=10 settled=20 unsettled=0 failed=0\n");
     }
 }
 

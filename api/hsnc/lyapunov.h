@@ -40,8 +40,13 @@ struct LyapunovOptions {
     /// Spacing of the convergence rows (on_row); NaN: the period of the
     /// slowest forcing harmonic, or 1 s without forcing.
     double row_interval = std::numeric_limits<double>::quiet_NaN();
-    /// Where the segment solvers come from (automatic, aot or generic; not jit).
+    /// Where the segment solvers come from, as for hsnc::simulate: automatic,
+    /// aot, generic or jit (the tangent dynamics do not depend on it).
     KernelChoice kernels = KernelChoice::automatic;
+    /// KernelChoice::jit: directory of the persistent kernel cache ("": the
+    /// default, as SimulateOptions::cache_dir), and whether to use one.
+    std::string cache_dir;
+    bool use_cache = true;
 };
 
 struct LyapunovResult {
@@ -54,7 +59,14 @@ struct LyapunovResult {
     double sum = 0.0;            ///< their sum (-infinity when a direction collapsed)
     std::size_t collapsed = 0;   ///< directions collapsed by sticks
     std::size_t events = 0;      ///< switch events over the measurement
-    std::size_t grazing = 0;     ///< switches without a derivative (skipped: the exponents are doubtful)
+    /// Grazing switch instants over the measurement: a contact closing or
+    /// opening at a turning point of its gap, |G'| Omega / |G''| <= 1e-4
+    /// (Omega the largest natural or forcing frequency; analysis/tangent.h),
+    /// or a switch whose saltation matrix does not exist (dh/dt = 0:
+    /// `singular`, skipped). The flow is not
+    /// smooth there: exponents of motion that grazes are not reliable.
+    std::size_t grazing = 0;
+    std::size_t singular = 0;    ///< of them, without a saltation matrix
 };
 
 /// The spectrum (see the file comment). `on_row(t, exponents)` (may be empty)

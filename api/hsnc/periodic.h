@@ -47,8 +47,13 @@ struct PeriodicOptions {
     /// Samples of the orbit's period passed to the observer every dt (and at
     /// its end); NaN: period/1000.
     double dt = std::numeric_limits<double>::quiet_NaN();
-    /// Where the segment solvers come from (automatic, aot or generic; not jit).
+    /// Where the segment solvers come from, as for hsnc::simulate: automatic,
+    /// aot, generic or jit (the tangent dynamics do not depend on it).
     KernelChoice kernels = KernelChoice::automatic;
+    /// KernelChoice::jit: directory of the persistent kernel cache ("": the
+    /// default, as SimulateOptions::cache_dir), and whether to use one.
+    std::string cache_dir;
+    bool use_cache = true;
 };
 
 enum class PeriodicStatus { ok, not_converged };
@@ -70,6 +75,13 @@ struct PeriodicResult {
     /// The monodromy matrix dP/dy, 2n x 2n row-major, y = (x, v).
     std::vector<double> monodromy;
     std::size_t events = 0;  ///< switch events over one period of the orbit
+    /// Grazing switch instants over one period of the orbit (of the last
+    /// state tried when not converged): a contact closing or opening at a
+    /// turning point of its gap, |G'| Omega / |G''| <= 1e-4 (Omega the
+    /// largest natural or forcing frequency; analysis/tangent.h), or a switch
+    /// without a saltation matrix. The period map is not smooth at a grazing orbit: its
+    /// multipliers (and `stable`) are not reliable there.
+    std::size_t grazing = 0;
 };
 
 /// Finds a periodic orbit (see the file comment). When converged, one period

@@ -44,6 +44,9 @@ enum class KernelChoice {
     jit,        ///< a kernel per configuration, from the persistent cache or
                 ///  compiled in-process (RunError when libhsnc_jit.so cannot be loaded)
     generic,    ///< the Eigen-based generic solver
+    interp,     ///< each configuration's program (derived at 40 digits and
+                ///  lowered, as the kernels are printed from it) run by an
+                ///  interpreter: the kernels' bits without a compiler
 };
 
 /// What computed a run (for statistics).
@@ -51,6 +54,7 @@ enum class SolverKind {
     aot,         ///< ahead-of-time kernels (the generic solver for configurations without one)
     jit,         ///< JIT-compiled or cached kernels
     generic,     ///< the generic solver
+    interp,      ///< interpreted programs
     reference,   ///< the high-precision reference engine (precision_digits > 0)
     integrator,  ///< a numerical baseline (ab4, rk45, cvode)
 };
@@ -127,13 +131,13 @@ void check_simulate_options(const Model& model, const SimulateOptions& options);
 /// "hsnc", "ab4", "rk45", "cvode"; OptionError (option "method") otherwise.
 Method method_from_name(const std::string& name);
 const char* method_name(Method method);
-/// "auto", "aot", "jit", "generic"; OptionError (option "kernels") otherwise.
+/// "auto", "aot", "jit", "generic", "interp"; OptionError (option "kernels") otherwise.
 KernelChoice kernel_choice_from_name(const std::string& name);
 const char* kernel_choice_name(KernelChoice choice);
 /// "double" gives 0, "mp:N" gives N (N in [20, 100]); OptionError (option
 /// "precision_digits") otherwise.
 int precision_digits_from_name(const std::string& name);
-/// "aot", "jit", "generic", "reference", "integrator".
+/// "aot", "jit", "generic", "interp", "reference", "integrator".
 const char* solver_kind_name(SolverKind kind);
 
 }  // namespace hsnc

@@ -37,13 +37,56 @@
 //   a1_i   = sqrt(A^2 + B^2), A, B = 2/(R*T) * integral x_i cos, sin(omega (t - t_r)) dt,
 // the integrals by 6-point Gauss-Legendre on the same grid inside each
 // segment (the segments are smooth: the quadrature error is below 1e-20
-// relative). A numerical baseline (method != hsnc, for comparisons) gives
+// relative). A point whose run stops (chattering, Zeno, a solver failure)
+// does not stop the sweep: it gives a row with settled = false, multiple 0,
+// NaN for xmax, xrms, a1, no stroboscopic samples and the reason in
+// `failure`; the next point starts from the state the failing one started
+// from.
+//
+// Continuation (`continuation`): instead of running each value to a steady
+// state, the periodic orbit (of period T) is followed along the parameter by
+// pseudo-arclength continuation, through turning points. Unknowns
+// u = (y, p): the orbit's state y = (x, v) at t0 and the parameter p,
+// scaled by the first orbit's largest |x| and |v| and by |to - from|. Each
+// step predicts along the unit tangent of the branch, u + h t, and corrects
+// with Newton on (P(y; p) - y = 0, t . (u - u_predicted) = 0), where P is the
+// exact period map from t0 to t0 + 2*pi/omega(p) and dP/dy its exact
+// monodromy (analysis/shooting.h); dP/dp, needed only for the tangent and the
+// Newton matrix, is a central difference (the corrector converges to the
+// exact orbit whatever its accuracy). A step is accepted when the
+// residual (as hsnc::periodic) is <= 1e-10 within 12 iterations and the
+// tangent turns by less than 37 degrees; else it is halved (down to 1e-6 of
+// the largest); it grows by 1.5 after quick corrections, up to
+// 1/(points - 1) (about the sweep's own spacing where the branch is flat).
+// The branch starts at `from` (`to` for the down direction) from the orbit
+// hsnc::periodic finds after the steady-state transient of a sweep point,
+// and ends at the other end of [from, to] (the last point landed exactly on
+// it), when it leaves [from, to] through its start, or after max_steps
+// points. Every point carries the stability of its orbit (the Floquet
+// multipliers of the monodromy: stable when every |mu| < 1) and the
+// bifurcations crossed since the previous point: fold (a real multiplier
+// crosses +1: det(M - I) changes sign), period_doubling (one crosses -1:
+// det(M + I) changes sign), neimark_sacker (a complex pair crosses the unit
+// circle: the product over pairs of (mu_i mu_j - 1) changes sign and the
+// count of non-real multipliers outside the circle changes). `direction` is
+// the way the parameter moved from the previous point (the task's direction
+// for the first), settled is true, multiple 1, `periods` the period-map
+// runs the point took, and xmax, xrms, a1 and the diagram come from one
+// period of the orbit. When shooting fails (no convergence at the smallest
+// step, a run that stops, the model invalid at a value), the branch stops:
+// no row for the failed step, the reason in `stop` of the last point (when
+// the first orbit cannot be found: one row with settled = false and the
+// reason in `failure`).
+//
+// A numerical baseline (method != hsnc, for comparisons) gives
 // the same quantities from its samples on that grid (max of the samples,
 // trapezoidal integrals), so only to the grid's accuracy.
 #pragma once
 
 #include <cstddef>
+#include <atomic>
 #include <functional>
+#include <stdexcept>
 #include <limits>
 #include <string>
 #include <vector>
@@ -77,6 +120,18 @@ struct SweepProgress {
     bool settled = false;
     std::size_t periods = 0;
     int multiple = 0;
+    std::string failure;      ///< why the point failed ("" when it did not)
+    std::string stop;         ///< continuation: why the branch stopped here early ("" when not)
+    bool continuation = false;
+    bool stable = false;      ///< continuation: the orbit's stability
+    double max_multiplier = 0;
+    std::string bifurcation;  ///< continuation: crossed since the previous point
+};
+
+/// Thrown by SweepPlan::run_task / run_tasks / run when SweepOptions::cancel is set.
+class SweepCancelled : public std::runtime_error {
+public:
+    SweepCancelled() : std::runtime_error("sweep cancelled") {}
 };
 
 struct SweepOptions {
@@ -101,6 +156,13 @@ struct SweepOptions {
     IntegratorOptions integrator;
     /// Called after every point, from the thread that ran it, one call at a time.
     std::function<void(const SweepProgress&)> progress;
+    /// Continuation of periodic orbits over the parameter (see the file comment).
+    bool continuation = false;
+    /// Continuation: points at most per branch; 0: 20 * points.
+    std::size_t max_steps = 0;
+    /// When set (from any thread), runs stop soon (between two forcing
+    /// periods or two continuation steps) with SweepCancelled.
+    const std::atomic<bool>* cancel = nullptr;
 };
 
 /// One point of a sweep.
@@ -111,7 +173,17 @@ struct SweepPoint {
     bool settled = false;
     std::size_t periods = 0;  ///< periods run before recording
     int multiple = 0;         ///< p; 0 when not settled
-    std::vector<double> xmax, xrms, a1;  ///< one per mass
+    std::vector<double> xmax, xrms, a1;  ///< one per mass (NaN when the point failed)
+    std::string failure;  ///< why the point's run stopped ("" when it did not; see the file comment)
+    /// Continuation only: the orbit's stability and largest |multiplier|, the
+    /// bifurcations crossed since the previous point of the branch ("" or
+    /// fold, period_doubling, neimark_sacker; several joined by '+'), and why
+    /// the branch stopped after this point ("" when it did not stop early).
+    bool stable = false;
+    double max_multiplier = std::numeric_limits<double>::quiet_NaN();
+    std::string bifurcation;
+    std::string stop;
+    bool branch_start = false;  ///< continuation: the first point of a branch
     /// The diagram: the state at the end of every recorded period (record_periods rows).
     std::vector<double> strobe_t;
     std::vector<double> strobe_x, strobe_v;  ///< row-major, record_periods x n_mass
@@ -120,6 +192,7 @@ struct SweepPoint {
 struct SweepResult {
     std::string model;                ///< the model's name
     std::string param, param2;        ///< param2 empty without one
+    bool continuation = false;        ///< the curve has the columns stable,max_multiplier,bifurcation
     std::vector<std::string> masses;  ///< names, model order
     std::vector<SweepPoint> points;   ///< in output order (task order, points in run order)
 };
@@ -177,6 +250,8 @@ private:
     std::vector<double> values_;
     std::vector<Task> tasks_;
     std::vector<Model> models_;  // [line * points + value index], expression maps dropped
+    std::string text_, source_;  // the model file, read again at every value a continuation reaches
+    ModelOverrides overrides_;
     std::string fingerprint_;
 };
 
@@ -191,7 +266,8 @@ std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_
 SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::vector<std::string>& names);
 
 /// The response-curve and diagram CSV headers of interface.md section 6
-/// (with param2: its name as one more column at the end).
+/// (with param2: its name as one more column at the end; with continuation:
+/// then stable,max_multiplier,bifurcation).
 std::string sweep_curve_header(const SweepResult& r);
 std::string sweep_diagram_header(const SweepResult& r);
 

@@ -122,7 +122,7 @@ def simulate(model, t_end=None, dt=None, method="hsnc", kernels="auto", precisio
 
     dt: sample spacing (default (t_end - t0) / 1000); method: "hsnc" (exact),
     "ab4" (needs h), "rk45", "cvode" (rtol, atol); kernels: "auto", "aot",
-    "generic", "jit" (cache_dir, use_cache); precision: "double" or "mp:N";
+    "generic", "interp", "jit" (cache_dir, use_cache); precision: "double" or "mp:N";
     x0, v0: dicts {mass name: value} overriding the initial state (as
     `hsnc simulate --x0 --v0`: the model is read again with them);
     max_events: stop after that many switch events (0: no limit; the result
@@ -156,7 +156,8 @@ def _override_texts(d):
 
 
 def sweep(model, param, start, stop, points, direction="up", max_periods=500, record_periods=16,
-          restart_each=False, param2=None, values2=None, threads=1, method="hsnc", rtol=1e-10, atol=1e-12):
+          restart_each=False, param2=None, values2=None, threads=1, method="hsnc", rtol=1e-10, atol=1e-12,
+          continuation=False, max_steps=0):
     """The response curve and bifurcation diagram of `model` (a Model) over
     the parameter `param`, as `hsnc sweep --param PARAM --from START --to
     STOP --points POINTS` (interface.md section 6): `points` values from
@@ -172,22 +173,37 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     "direction" (str), "settled" (bool), "periods" (run before recording),
     "multiple" (0 when not settled), "xmax", "xrms", "a1" (points x masses);
     "diagram": a dict with "value", "value2", "direction", "t", "x", "v"
-    (x, v: rows x masses), one row per recorded period of every point."""
+    (x, v: rows x masses), one row per recorded period of every point;
+    "failure" (str per point, "" unless its run stopped: then settled is
+    False and xmax, xrms, a1 are NaN; the sweep goes on).
+
+    continuation=True (as `--continuation`): the periodic orbit followed
+    over the parameter by pseudo-arclength continuation with exact shooting,
+    through folds, from start (stop for direction "down") until the
+    parameter leaves [start, stop] or after max_steps points per branch (0:
+    20 * points); then also "stable" (bool), "max_multiplier" (largest
+    |Floquet multiplier|), "bifurcation" (str: "", "fold", "period_doubling",
+    "neimark_sacker", crossed since the previous point) and "stop" (str: why
+    the branch stopped early after this point, "" when it did not).
+
+    Ctrl-C (SIGINT) stops the run within a forcing period or a continuation
+    step and raises KeyboardInterrupt."""
     if not isinstance(model, Model):
         raise InputError("hsnc.sweep(): model = %r: expected an hsnc.Model" % (model,))
     kind, what, source, (s, x0, v0) = model._read
     try:
-        points, max_periods, record_periods, threads = (int(points), int(max_periods), int(record_periods),
-                                                        int(threads))
+        points, max_periods, record_periods, threads, max_steps = (int(points), int(max_periods),
+                                                                   int(record_periods), int(threads), int(max_steps))
     except (TypeError, ValueError):
-        raise InputError("hsnc.sweep(): points, max_periods, record_periods, threads: expected integers") from None
-    if min(points, max_periods, record_periods, threads) < 0:
-        raise InputError("hsnc.sweep(): points, max_periods, record_periods, threads: expected integers >= 0")
+        raise InputError("hsnc.sweep(): points, max_periods, record_periods, threads, max_steps: expected integers") from None
+    if min(points, max_periods, record_periods, threads, max_steps) < 0:
+        raise InputError("hsnc.sweep(): points, max_periods, record_periods, threads, max_steps: expected integers >= 0")
     values2 = [] if values2 is None else [float(v) for v in values2]
     return _hsnc._sweep(kind, what, source, _override_texts(s), _override_texts(x0), _override_texts(v0),
                         str(param), _number("start", start), _number("stop", stop), points, str(direction),
                         max_periods, record_periods, bool(restart_each), "" if param2 is None else str(param2),
-                        values2, threads, str(method), _number("rtol", rtol), _number("atol", atol))
+                        values2, threads, str(method), _number("rtol", rtol), _number("atol", atol),
+                        bool(continuation), max_steps)
 def _integer(function, name, value):
     try:
         if isinstance(value, bool) or int(value) != value:
@@ -205,7 +221,8 @@ def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_itera
     message, period (harmonic * T), t (time of the state), iterations,
     residual, x, v (the orbit's state at t, arrays), multipliers (complex
     array, largest |mu| first), max_multiplier, stable, monodromy (2n x 2n
-    array, state (x, v)), events (switches a period) and orbit (dict of t, x,
+    array, state (x, v)), events (switches a period), grazing (grazing switch
+    instants a period: the multipliers are not reliable when > 0) and orbit (dict of t, x,
     v arrays: one period sampled every dt, default period/1000; empty when not
     converged). period: default 2*pi/omega of the model's forcing;
     transient: run this long first."""
@@ -225,7 +242,9 @@ def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=
     exact tangent dynamics, measured over t_end seconds after transient.
     Returns a dict: exponents (array of 2n, 1/s, largest first, -inf for
     directions a stick collapses), sum, t_start, t, collapsed, events,
-    grazing, rows_t and rows (the running estimates every row_interval,
+    grazing (switch instants at a turning point of a contact's gap, or
+    without a saltation matrix: the exponents are not reliable when > 0),
+    singular (of them, without a saltation matrix), rows_t and rows (the running estimates every row_interval,
     default the forcing period, else 1 s; k x 2n). A run that stops early
     raises RunError."""
     if not isinstance(model, Model):

@@ -26,6 +26,7 @@ def test_periodic_matches_the_command_line(cli, tmp_path):
     assert r["x"][0] == float(line["x_m1"]) and r["v"][1] == float(line["v_m2"])
     assert r["max_multiplier"] == float(line["max_multiplier"])
     assert r["stable"] == (line["stable"] == "true")
+    assert r["grazing"] == int(line["grazing"]) == 0
     header, rows = read_csv(mult)
     assert header == ["index", "re", "im", "abs"]
     assert r["multipliers"].dtype == np.complex128 and r["multipliers"].shape == (4,)
@@ -59,6 +60,7 @@ def test_lyapunov_matches_the_command_line(cli, tmp_path):
     assert list(r["exponents"]) == [float(line["lambda_%d" % k]) for k in range(1, 5)]
     assert r["sum"] == float(line["sum"]) == -math.inf
     assert r["collapsed"] == 1
+    assert r["grazing"] == int(line["grazing"]) == 0 and r["singular"] == 0
     header, rows = read_csv(out)
     assert header == ["t", "lambda_1", "lambda_2", "lambda_3", "lambda_4"]
     assert r["rows"].shape == (len(rows), 4)

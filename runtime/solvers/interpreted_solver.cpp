@@ -1,5 +1,6 @@
 #include "interpreted_solver.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -8,352 +9,974 @@
 
 namespace hsnc {
 
-namespace {
+namespace interpreter {
 
-}  // namespace
-
-/// One instruction as the interpreter runs it: the operands of ProgramInstr
-/// without its comments, and `group`, the first of up to four independent
-/// linear combinations run in lockstep (each still summed in its own order:
-/// the same bits, more arithmetic in flight).
-struct InterpretedSolver::Exec {
+/// An instruction as compiled: the operands of ProgramInstr without its
+/// comments. Every op but lincomb, lincomb_ld, copy, abs and mass_state
+/// (which run in blocks) runs as one step.
+struct Instr {
     ProgramOp op;
     std::uint8_t regime;
-    std::uint8_t group;  ///< lincomb: how many lincombs from here form a group (1 = alone, 0 = inside one)
     std::uint32_t dst, a, b, c, d, first, count;
-    std::uint32_t tail[5];  ///< mass_state
+    std::uint32_t tail[5];
+};
+
+enum class StepKind : std::uint8_t {
+    single,  ///< one instruction (Instr)
+    lin,     ///< rows of `lincomb` with `count` terms each
+    lin_ld,  ///< rows of `lincomb_ld`
+    copy,    ///< rows of `copy`
+    abs,     ///< rows of `abs`
+    mass,    ///< rows of `mass_state` over the same mode blocks and tail registers
+};
+
+/// What the compiler makes of one instruction or of the instructions of one
+/// level and one shape (`rows` of them): coefficients laid out [term][row], so
+/// that a few rows advance together, each in its own order.
+struct Block {
+    StepKind kind = StepKind::single;
+    bool shared = false;    ///< lin, lin_ld: term k reads one register in every row (reg[k])
+    bool has_base = false;  ///< lin: every row adds its base register last
+    std::uint32_t rows = 0, count = 0;
+    std::uint32_t tail[5] = {};     ///< mass: terms of the tails of x, v, acc, mx, mv
+    Instr single{};
+    std::uint32_t cos_dst = kNoRegister;  ///< single sin: also cos of the same register, here
+    std::vector<double> c;          ///< coefficients [k][row] (mass: of the modal terms)
+    std::vector<double> ac;         ///< mass: |c| [k][row]
+    std::vector<double> tc;         ///< mass: tail coefficients [t][row], the five tails in turn
+    std::vector<std::uint32_t> reg;   ///< [k] (shared, mass: the mode blocks) or [k][row]
+    std::vector<std::uint32_t> treg;  ///< mass: tail registers [t]
+    std::vector<std::uint32_t> dst;   ///< [row] (mass: x)
+    std::vector<std::uint32_t> src;   ///< [row]: the base (lin), the operand (copy, abs), x_st (mass)
+    std::vector<std::uint32_t> v, acc, mag;  ///< mass: v, a, and mx (mv = mx + 1) per row
+};
+
+/// A step as run: its block's data in the body's two arrays (doubles, and
+/// registers), which hold every step's data in the order the steps run.
+///   lin, lin_ld: c [k][row]; reg [k] or [k][row], dst [row], src [row] (base)
+///   copy, abs:   dst [row], src [row]
+///   mass:        c, |c| [k][row], tail c [t][row]; reg [k], tail reg [t],
+///                src (x_st), dst (x), v, acc, mag (mx) [row]
+struct Step {
+    std::uint8_t run = 0;  ///< the case of execute() that runs it (Run)
+    std::uint32_t rows = 0, count = 0;
+    std::uint32_t tail[5] = {};
+    const double* c_ = nullptr;
+    const std::uint32_t* reg_ = nullptr;
+    const std::uint32_t* dst_ = nullptr;
+    const std::uint32_t* src_ = nullptr;
+    const Instr* single_ = nullptr;  ///< single: the instruction
+    std::uint32_t cos_dst = kNoRegister;
+
+    const double* c() const { return c_; }
+    const double* ac() const { return c_ + static_cast<std::size_t>(count) * rows; }
+    const double* tc() const { return c_ + 2 * static_cast<std::size_t>(count) * rows; }
+    const std::uint32_t* reg() const { return reg_; }
+    const std::uint32_t* treg() const { return reg_ + count; }
+    const std::uint32_t* dst() const { return dst_; }
+    const std::uint32_t* src() const { return src_; }
+    const std::uint32_t* v() const { return dst_ + rows; }
+    const std::uint32_t* acc() const { return dst_ + 2 * static_cast<std::size_t>(rows); }
+    const std::uint32_t* mag() const { return dst_ + 3 * static_cast<std::size_t>(rows); }
+    const Instr& single() const { return *single_; }
+};
+
+}  // namespace interpreter
+
+struct InterpretedSolver::Body {
+    std::vector<interpreter::Step> steps;
+    std::vector<double> doubles;
+    std::vector<std::uint32_t> regs;
+    std::vector<interpreter::Instr> singles;
+    std::size_t bytes() const {
+        return sizeof(Body) + sizeof(interpreter::Step) * steps.capacity() + sizeof(double) * doubles.capacity() +
+               sizeof(std::uint32_t) * regs.capacity() + sizeof(interpreter::Instr) * singles.capacity();
+    }
 };
 
 namespace {
 
-using Exec = InterpretedSolver::Exec;
+using namespace interpreter;
 
-std::vector<Exec> compile(const ProgramBody& body, const std::vector<ProgramTerm>& terms) {
-    std::vector<Exec> out;
-    out.reserve(body.code.size());
-    for (const ProgramInstr& in : body.code)
-        out.push_back({in.op, in.regime, 1, in.dst, in.a, in.b, in.c, in.d, in.first, in.count,
-                       {in.tail[0], in.tail[1], in.tail[2], in.tail[3], in.tail[4]}});
-    // Groups of consecutive double lincombs, none reading what another writes.
-    for (std::size_t i = 0; i < out.size();) {
-        if (out[i].op != ProgramOp::lincomb || out[i].count == 0) {
-            ++i;
-            continue;
+#define ALWAYS_INLINE __attribute__((always_inline)) inline
+
+// ---- running ----
+
+// W rows of a `lin` block from `row` on: each row's sum left to right over its
+// M terms (M = 0: s.count, at least 1), as a printed kernel sums it, its base
+// added last.
+template <int W, bool Shared, bool Base, int M>
+inline void lin_rows(const Step& s, std::uint32_t row, double* r) {
+    const std::uint32_t R = s.rows, m = M > 0 ? static_cast<std::uint32_t>(M) : s.count;
+    const double* C = s.c() + row;
+    double acc[W];
+    if (Shared) {
+        const std::uint32_t* I = s.reg();
+        const double r0 = r[I[0]];
+        for (int w = 0; w < W; ++w) acc[w] = C[w] * r0;
+        for (std::uint32_t k = 1; k < m; ++k) {
+            const double rk = r[I[k]];
+            const double* Ck = C + static_cast<std::size_t>(k) * R;
+            for (int w = 0; w < W; ++w) acc[w] += Ck[w] * rk;
         }
-        std::size_t j = i + 1;
-        while (j < out.size() && j - i < 4 && out[j].op == ProgramOp::lincomb && out[j].count > 0) {
-            bool independent = true;
-            for (std::size_t g = i; g < j && independent; ++g) {
-                independent = out[j].a != out[g].dst && out[j].dst != out[g].dst;
-                for (std::uint32_t k = 0; k < out[j].count && independent; ++k)
-                    independent = terms[out[j].first + k].reg != out[g].dst;
+    } else {
+        const std::uint32_t* I = s.reg() + row;
+        for (int w = 0; w < W; ++w) acc[w] = C[w] * r[I[w]];
+        for (std::uint32_t k = 1; k < m; ++k) {
+            const double* Ck = C + static_cast<std::size_t>(k) * R;
+            const std::uint32_t* Ik = I + static_cast<std::size_t>(k) * R;
+            for (int w = 0; w < W; ++w) acc[w] += Ck[w] * r[Ik[w]];
+        }
+    }
+    const std::uint32_t* D = s.dst() + row;
+    if (Base) {
+        const std::uint32_t* B = s.src() + row;
+        for (int w = 0; w < W; ++w) r[D[w]] = r[B[w]] + acc[w];
+    } else {
+        for (int w = 0; w < W; ++w) r[D[w]] = acc[w];
+    }
+}
+
+// The same in long double, each term (long double)c * r, rounded once (no base).
+template <int W, bool Shared>
+inline void lin_ld_rows(const Step& s, std::uint32_t row, double* r) {
+    const std::uint32_t R = s.rows, m = s.count;
+    const double* C = s.c() + row;
+    long double acc[W];
+    if (Shared) {
+        const std::uint32_t* I = s.reg();
+        const long double r0 = r[I[0]];
+        for (int w = 0; w < W; ++w) acc[w] = static_cast<long double>(C[w]) * r0;
+        for (std::uint32_t k = 1; k < m; ++k) {
+            const long double rk = r[I[k]];
+            const double* Ck = C + static_cast<std::size_t>(k) * R;
+            for (int w = 0; w < W; ++w) acc[w] += static_cast<long double>(Ck[w]) * rk;
+        }
+    } else {
+        const std::uint32_t* I = s.reg() + row;
+        for (int w = 0; w < W; ++w) acc[w] = static_cast<long double>(C[w]) * static_cast<long double>(r[I[w]]);
+        for (std::uint32_t k = 1; k < m; ++k) {
+            const double* Ck = C + static_cast<std::size_t>(k) * R;
+            const std::uint32_t* Ik = I + static_cast<std::size_t>(k) * R;
+            for (int w = 0; w < W; ++w) acc[w] += static_cast<long double>(Ck[w]) * static_cast<long double>(r[Ik[w]]);
+        }
+    }
+    const std::uint32_t* D = s.dst() + row;
+    for (int w = 0; w < W; ++w) r[D[w]] = static_cast<double>(acc[w]);
+}
+
+// Adds the n tail terms from term t on (t advanced past them) to W sums,
+// left to right; a sum not started starts from the first of them (stays 0.0
+// without any), as a printed sum does.
+template <int W>
+inline void tail_sum(double (&S)[W], bool started, std::uint32_t n, const double* TC, const std::uint32_t* TI,
+                     std::uint32_t& t, std::uint32_t R, const double* r) {
+    std::uint32_t j = 0;
+    if (n > 0 && !started) {
+        const double rt = r[TI[t]];
+        const double* Ct = TC + static_cast<std::size_t>(t) * R;
+        for (int w = 0; w < W; ++w) S[w] = Ct[w] * rt;
+        j = 1;
+    }
+    for (; j < n; ++j) {
+        const double rt = r[TI[t + j]];
+        const double* Ct = TC + static_cast<std::size_t>(t + j) * R;
+        for (int w = 0; w < W; ++w) S[w] += Ct[w] * rt;
+    }
+    t += n;
+}
+
+// W masses of a `mass` block: five sums in lockstep per mass,
+//   x = x_st + sum_k c_k q_k + tail_x,    v = sum_k c_k q'_k + tail_v,    acc = sum_k c_k q''_k + tail_a,
+//   mx = |x_st| + sum_k |c_k| mq_k + tail_mx,    mv = sum_k |c_k| mdq_k + tail_mv,
+// each left to right; a sum without modal terms starts from its first tail
+// term (0.0 without any), as a printed one does.
+template <int W>
+inline void mass_rows(const Step& s, std::uint32_t row, double* r) {
+    const std::uint32_t R = s.rows, m = s.count;
+    double sx[W], sv[W], sa[W], smx[W], smv[W];
+    for (int w = 0; w < W; ++w) {
+        const double xst = r[s.src()[row + w]];
+        sx[w] = xst;
+        smx[w] = __builtin_fabs(xst);
+        sv[w] = sa[w] = smv[w] = 0.0;
+    }
+    const double* C = s.c() + row;
+    const double* AC = s.ac() + row;
+    if (m > 0) {
+        const double* mb = r + s.reg()[0];
+        const double q = mb[kModeQ], dq = mb[kModeDQ], ddq = mb[kModeDDQ], mq = mb[kModeMQ], mdq = mb[kModeMDQ];
+        for (int w = 0; w < W; ++w) {
+            sx[w] += C[w] * q;
+            sv[w] = C[w] * dq;
+            sa[w] = C[w] * ddq;
+            smx[w] += AC[w] * mq;
+            smv[w] = AC[w] * mdq;
+        }
+        for (std::uint32_t k = 1; k < m; ++k) {
+            const double* mk = r + s.reg()[k];
+            const double qk = mk[kModeQ], dqk = mk[kModeDQ], ddqk = mk[kModeDDQ], mqk = mk[kModeMQ],
+                         mdqk = mk[kModeMDQ];
+            const double* Ck = C + static_cast<std::size_t>(k) * R;
+            const double* ACk = AC + static_cast<std::size_t>(k) * R;
+            for (int w = 0; w < W; ++w) {
+                sx[w] += Ck[w] * qk;
+                sv[w] += Ck[w] * dqk;
+                sa[w] += Ck[w] * ddqk;
+                smx[w] += ACk[w] * mqk;
+                smv[w] += ACk[w] * mdqk;
             }
-            if (!independent) break;
-            ++j;
         }
-        out[i].group = static_cast<std::uint8_t>(j - i);
-        for (std::size_t g = i + 1; g < j; ++g) out[g].group = 0;
-        i = j;
     }
-    return out;
-}
-
-// G independent linear combinations, their terms interleaved: term k of each
-// is added to its own sum in the order of that sum.
-template <int G>
-void lincomb_group(const Exec* L, const ProgramTerm* T, double* r) {
-    const ProgramTerm* t[G];
-    double s[G];
-    std::uint32_t m = L[0].count;
-#pragma GCC unroll 4
-    for (int l = 0; l < G; ++l) {
-        t[l] = T + L[l].first;
-        m = L[l].count < m ? L[l].count : m;
-        s[l] = t[l][0].c * r[t[l][0].reg];
-    }
-    for (std::uint32_t k = 1; k < m; ++k) {
-#pragma GCC unroll 4
-        for (int l = 0; l < G; ++l) s[l] += t[l][k].c * r[t[l][k].reg];
-    }
-#pragma GCC unroll 4
-    for (int l = 0; l < G; ++l) {
-        for (std::uint32_t k = m; k < L[l].count; ++k) s[l] += t[l][k].c * r[t[l][k].reg];
-        r[L[l].dst] = L[l].a == kNoRegister ? s[l] : r[L[l].a] + s[l];
+    const double* TC = s.tc() + row;
+    const std::uint32_t* TI = s.treg();
+    std::uint32_t t = 0;
+    const bool started = m > 0;
+    tail_sum<W>(sx, true, s.tail[0], TC, TI, t, R, r);
+    tail_sum<W>(sv, started, s.tail[1], TC, TI, t, R, r);
+    tail_sum<W>(sa, started, s.tail[2], TC, TI, t, R, r);
+    tail_sum<W>(smx, true, s.tail[3], TC, TI, t, R, r);
+    tail_sum<W>(smv, started, s.tail[4], TC, TI, t, R, r);
+    for (int w = 0; w < W; ++w) {
+        r[s.dst()[row + w]] = sx[w];
+        r[s.v()[row + w]] = sv[w];
+        r[s.acc()[row + w]] = sa[w];
+        r[s.mag()[row + w]] = smx[w];
+        r[s.mag()[row + w] + 1] = smv[w];
     }
 }
 
-// Adds the tail terms [t, t + n) to s, left to right; a sum without terms so
-// far (started = false) starts from the first of them, as a printed sum does,
-// and is 0.0 when there are none at all.
-inline const ProgramTerm* finish_sum(double& s, bool started, const ProgramTerm* t, std::uint32_t n,
-                                     const double* r) {
-    std::uint32_t k = 0;
-    if (!started) {
-        if (n == 0) {
-            s = 0.0;
-            return t;
+// A block's rows, four, then two, then one at a time.
+template <template <int> class F>
+inline void by_rows(const Step& s, double* r) {
+    std::uint32_t row = 0;
+    for (; row + 4 <= s.rows; row += 4) F<4>::run(s, row, r);
+    if (s.rows - row >= 2) F<2>::run(s, row, r), row += 2;
+    if (row < s.rows) F<1>::run(s, row, r);
+}
+
+template <bool Shared, bool Base, int M>
+struct Lin {
+    template <int W>
+    struct Rows {
+        static void run(const Step& s, std::uint32_t row, double* r) { lin_rows<W, Shared, Base, M>(s, row, r); }
+    };
+    ALWAYS_INLINE static void step(const Step& s, const double*, double* r) { by_rows<Rows>(s, r); }
+};
+
+template <bool Shared>
+struct LinLd {
+    template <int W>
+    struct Rows {
+        static void run(const Step& s, std::uint32_t row, double* r) { lin_ld_rows<W, Shared>(s, row, r); }
+    };
+    ALWAYS_INLINE static void step(const Step& s, const double*, double* r) { by_rows<Rows>(s, r); }
+};
+
+template <int W>
+struct MassRows {
+    static void run(const Step& s, std::uint32_t row, double* r) { mass_rows<W>(s, row, r); }
+};
+
+ALWAYS_INLINE void mass_step(const Step& s, const double*, double* r) { by_rows<MassRows>(s, r); }
+
+// Linear combinations without terms: 0.0, or the base + 0.0.
+template <bool Base>
+ALWAYS_INLINE void lin_empty_step(const Step& s, const double*, double* r) {
+    for (std::uint32_t i = 0; i < s.rows; ++i) r[s.dst()[i]] = Base ? r[s.src()[i]] + 0.0 : 0.0;
+}
+
+ALWAYS_INLINE void lin_ld_empty_step(const Step& s, const double*, double* r) {
+    for (std::uint32_t i = 0; i < s.rows; ++i) r[s.dst()[i]] = static_cast<double>(0.0L);
+}
+
+ALWAYS_INLINE void copy_step(const Step& s, const double*, double* r) {
+    for (std::uint32_t i = 0; i < s.rows; ++i) r[s.dst()[i]] = r[s.src()[i]];
+}
+
+ALWAYS_INLINE void abs_step(const Step& s, const double*, double* r) {
+    for (std::uint32_t i = 0; i < s.rows; ++i) r[s.dst()[i]] = __builtin_fabs(r[s.src()[i]]);
+}
+
+/// What runs a step: one case of execute()'s switch. kLin + 10 shared + 5 base
+/// + M: linear combinations of M terms (0: any number).
+enum Run : std::uint8_t {
+    kSingle,
+    kSinCos,
+    kHarmonic,
+    kMode,  // + ProgramRegime
+    kLinEmpty = kMode + 6,
+    kLinEmptyBase,
+    kLdEmpty,
+    kCopy,
+    kAbs,
+    kMass,
+    kLd,
+    kLdShared,
+    kLin,
+    kRuns = kLin + 20
+};
+
+// Each case below computes what generator/emitter.cpp (BodyPrinter) prints for
+// the instruction, operation for operation: change both or neither.
+// One mode's homogeneous response at tau (ProgramOp::mode), its regime fixed.
+template <ProgramRegime Regime>
+ALWAYS_INLINE void mode_step(const Step& s, const double* K, double* r) {
+    const Instr& in = s.single();
+    const double* k = K + in.first;
+    const double* A = r + in.a;  // A, B, A1, B1, A2, B2
+    double* o = r + in.dst;
+    const double tau = r[in.b];
+    double eC = 0.0, eS = 0.0;
+    if (Regime == ProgramRegime::undamped) {
+        eC = __builtin_cos(k[kModeOmegaD] * tau);
+        eS = __builtin_sin(k[kModeOmegaD] * tau) * k[kModeInvOmegaD];
+    } else if (Regime == ProgramRegime::underdamped) {
+        const double e = __builtin_exp(-k[kModeSigma] * tau);
+        o[kModeAux] = e;
+        eC = e * __builtin_cos(k[kModeOmegaD] * tau);
+        eS = e * __builtin_sin(k[kModeOmegaD] * tau) * k[kModeInvOmegaD];
+    } else if (Regime == ProgramRegime::critical) {
+        eC = __builtin_exp(-k[kModeSigma] * tau);
+        eS = tau * eC;
+    } else if (Regime == ProgramRegime::overdamped) {
+        const double e = __builtin_exp(k[kModeR1] * tau);
+        const double m = __builtin_expm1(k[kModeNegTwoGamma] * tau);
+        o[kModeAux] = e;
+        o[kModeAux2] = m;
+        eC = e * (1.0 + 0.5 * m);
+        eS = -e * m * k[kModeHalfInvGamma];
+    } else if (Regime == ProgramRegime::rigid) {
+        eC = 1.0;
+        eS = tau;
+    } else {  // rigid_damped
+        const double m = __builtin_expm1(-k[kModeC] * tau);
+        o[kModeAux] = m;
+        eC = 1.0 + 0.5 * m;
+        eS = -m * k[kModeInvC];
+    }
+    o[kModeEC] = eC;
+    o[kModeES] = eS;
+    const double q = A[0] * eC + A[1] * eS;
+    const double dq = A[2] * eC + A[3] * eS;
+    o[kModeQ] = q;
+    o[kModeDQ] = dq;
+    o[kModeDDQ] = A[4] * eC + A[5] * eS;
+    o[kModeR] = __builtin_sqrt(dq * dq + k[kModeLambda] * q * q);
+    o[kModeMQ] = __builtin_fabs(A[0] * eC) + __builtin_fabs(A[1] * eS);
+    o[kModeMDQ] = __builtin_fabs(A[2] * eC) + __builtin_fabs(A[3] * eS);
+    // + |sigma A eC|: A1 = B - sigma A cancels (generator/emitter.cpp, mode()).
+    if (k[kModeSigma] != 0.0) o[kModeMDQ] = o[kModeMDQ] + __builtin_fabs(k[kModeSigma] * A[0] * eC);
+}
+
+// sin and cos of one register (ProgramOp::sin and ProgramOp::cos).
+ALWAYS_INLINE void sincos_step(const Step& s, const double*, double* r) {
+    const double x = r[s.single().a];
+    r[s.single().dst] = __builtin_sin(x);
+    r[s.cos_dst] = __builtin_cos(x);
+}
+
+// A forcing harmonic at tau (ProgramOp::harmonic).
+ALWAYS_INLINE void harmonic_step(const Step& s, const double* K, double* r) {
+    const Instr& in = s.single();
+    const double arg = K[in.first] * r[in.b] + r[in.a];
+    r[in.dst] = arg;
+    r[in.dst + 1] = __builtin_sin(arg);
+    r[in.dst + 2] = __builtin_cos(arg);
+}
+
+ALWAYS_INLINE void single_step(const Step& s, const double* K, double* r) {
+    const Instr& in = s.single();
+    switch (in.op) {
+        case ProgramOp::sin: r[in.dst] = __builtin_sin(r[in.a]); break;
+        case ProgramOp::cos: r[in.dst] = __builtin_cos(r[in.a]); break;
+        case ProgramOp::phase: r[in.dst] = hsnc_phase(K[in.first], r[in.a], r[in.b], K[in.first + 1]); break;
+        case ProgramOp::rigid_particular: {
+            double* m = r + in.c;
+            const double P = r[in.a], tau = r[in.b];
+            m[kModeQ] += 0.5 * P * tau * tau;
+            m[kModeDQ] += P * tau;
+            m[kModeDDQ] += P;
+            m[kModeMQ] += __builtin_fabs(0.5 * P * tau * tau);
+            m[kModeMDQ] += __builtin_fabs(P * tau);
+            break;
         }
-        s = t[0].c * r[t[0].reg];
-        k = 1;
+        case ProgramOp::rigid_damped_particular: {
+            double* m = r + in.c;
+            const double P = r[in.a], tau = r[in.b];
+            const double qp = P * tau * tau * hsnc_phi2(-K[in.first] * tau);
+            r[in.dst] = qp;
+            m[kModeQ] += qp;
+            m[kModeDQ] += P * m[kModeES];
+            m[kModeDDQ] += P * (1.0 + m[kModeAux]);
+            m[kModeMQ] += __builtin_fabs(qp);
+            m[kModeMDQ] += __builtin_fabs(P * m[kModeES]);
+            break;
+        }
+        case ProgramOp::resonant: {
+            const double* k = K + in.first;
+            double* m = r + in.c;
+            double* o = r + in.dst;
+            const double tau = r[in.b], ct = r[in.d];
+            double w = tau, dw = 1.0;
+            if (k[kResHalfDiff] != 0.0) {
+                w = __builtin_sin(k[kResHalfDiff] * tau) * k[kResInvHalfDiff];
+                dw = __builtin_cos(k[kResHalfDiff] * tau);
+            }
+            const double arg = k[kResMean] * tau + r[in.a];
+            const double Cb = __builtin_cos(arg), Sb = __builtin_sin(arg);
+            const double eC = m[kModeEC], eS = m[kModeES];
+            const double y = k[kResQ] * (ct * eS - w * Cb);
+            const double dy = k[kResQ] * (ct * eC - dw * Cb + k[kResMean] * w * Sb);
+            const double ddy =
+                k[kResQ] * (k[kResH2W2] * w * Cb + k[kResTwoMean] * dw * Sb - k[kResLambda] * ct * eS);
+            o[0] = w, o[1] = dw, o[2] = Cb, o[3] = Sb, o[4] = y, o[5] = dy, o[6] = ddy;
+            m[kModeQ] += y;
+            m[kModeDQ] += dy;
+            m[kModeDDQ] += ddy;
+            // The magnitude of the terms (y and y' cancel to ~tau^3 near tau = 0).
+            const double Q = __builtin_fabs(k[kResQ]);
+            m[kModeMQ] += Q * (__builtin_fabs(ct * eS) + __builtin_fabs(w * Cb));
+            m[kModeMDQ] += Q * (__builtin_fabs(ct * eC) + __builtin_fabs(dw * Cb) + __builtin_fabs(k[kResMean] * w * Sb));
+            break;
+        }
+        default: break;  // mode, harmonic: their own steps; lincomb, lincomb_ld, copy, abs, mass_state: blocks
     }
-    for (; k < n; ++k) s += t[k].c * r[t[k].reg];
-    return t + n;
 }
 
-// Each case computes what generator/emitter.cpp (BodyPrinter) prints for the
-// instruction, operation for operation: change both or neither.
-void execute(const Program& p, const std::vector<Exec>& code, double* r) {
-    const double* K = p.constants.data();
-    const ProgramTerm* T = p.terms.data();
+// One switch for every step, everything inlined: no call and no prologue per step.
+void execute(const double* K, const InterpretedSolver::Body& body, double* r) {
+    for (const Step& s : body.steps) {
+        switch (s.run) {
+            case kSingle: single_step(s, K, r); break;
+            case kSinCos: sincos_step(s, K, r); break;
+            case kHarmonic: harmonic_step(s, K, r); break;
+            case kMode + 0: mode_step<ProgramRegime::undamped>(s, K, r); break;
+            case kMode + 1: mode_step<ProgramRegime::underdamped>(s, K, r); break;
+            case kMode + 2: mode_step<ProgramRegime::critical>(s, K, r); break;
+            case kMode + 3: mode_step<ProgramRegime::overdamped>(s, K, r); break;
+            case kMode + 4: mode_step<ProgramRegime::rigid>(s, K, r); break;
+            case kMode + 5: mode_step<ProgramRegime::rigid_damped>(s, K, r); break;
+            case kLinEmpty: lin_empty_step<false>(s, K, r); break;
+            case kLinEmptyBase: lin_empty_step<true>(s, K, r); break;
+            case kLdEmpty: lin_ld_empty_step(s, K, r); break;
+            case kCopy: copy_step(s, K, r); break;
+            case kAbs: abs_step(s, K, r); break;
+            case kMass: mass_step(s, K, r); break;
+            case kLd: LinLd<false>::step(s, K, r); break;
+            case kLdShared: LinLd<true>::step(s, K, r); break;
+            case kLin + 0: Lin<false, false, 0>::step(s, K, r); break;
+            case kLin + 1: Lin<false, false, 1>::step(s, K, r); break;
+            case kLin + 2: Lin<false, false, 2>::step(s, K, r); break;
+            case kLin + 3: Lin<false, false, 3>::step(s, K, r); break;
+            case kLin + 4: Lin<false, false, 4>::step(s, K, r); break;
+            case kLin + 5: Lin<false, true, 0>::step(s, K, r); break;
+            case kLin + 6: Lin<false, true, 1>::step(s, K, r); break;
+            case kLin + 7: Lin<false, true, 2>::step(s, K, r); break;
+            case kLin + 8: Lin<false, true, 3>::step(s, K, r); break;
+            case kLin + 9: Lin<false, true, 4>::step(s, K, r); break;
+            case kLin + 10: Lin<true, false, 0>::step(s, K, r); break;
+            case kLin + 11: Lin<true, false, 1>::step(s, K, r); break;
+            case kLin + 12: Lin<true, false, 2>::step(s, K, r); break;
+            case kLin + 13: Lin<true, false, 3>::step(s, K, r); break;
+            case kLin + 14: Lin<true, false, 4>::step(s, K, r); break;
+            case kLin + 15: Lin<true, true, 0>::step(s, K, r); break;
+            case kLin + 16: Lin<true, true, 1>::step(s, K, r); break;
+            case kLin + 17: Lin<true, true, 2>::step(s, K, r); break;
+            case kLin + 18: Lin<true, true, 3>::step(s, K, r); break;
+            case kLin + 19: Lin<true, true, 4>::step(s, K, r); break;
+            default: break;
+        }
+    }
+}
+
+// ---- scheduling: registers each instruction reads and writes ----
+
+void accesses(const Instr& in, const std::vector<ProgramTerm>& terms, std::vector<std::uint32_t>& reads,
+              std::vector<std::uint32_t>& writes) {
+    reads.clear();
+    writes.clear();
+    auto block = [](std::vector<std::uint32_t>& v, std::uint32_t base, std::initializer_list<std::uint32_t> regs) {
+        for (std::uint32_t k : regs) v.push_back(base + k);
+    };
+    const std::initializer_list<std::uint32_t> sums = {kModeQ, kModeDQ, kModeDDQ, kModeMQ, kModeMDQ};
+    switch (in.op) {
+        case ProgramOp::lincomb:
+        case ProgramOp::lincomb_ld:
+            for (std::uint32_t k = 0; k < in.count; ++k) reads.push_back(terms[in.first + k].reg);
+            if (in.op == ProgramOp::lincomb && in.a != kNoRegister) reads.push_back(in.a);
+            writes.push_back(in.dst);
+            break;
+        case ProgramOp::copy:
+        case ProgramOp::abs:
+        case ProgramOp::sin:
+        case ProgramOp::cos:
+            reads.push_back(in.a);
+            writes.push_back(in.dst);
+            break;
+        case ProgramOp::phase:
+            reads.push_back(in.a);
+            reads.push_back(in.b);
+            writes.push_back(in.dst);
+            break;
+        case ProgramOp::harmonic:
+            reads.push_back(in.a);
+            reads.push_back(in.b);
+            block(writes, in.dst, {0, 1, 2});
+            break;
+        case ProgramOp::mode:
+            for (std::uint32_t k = 0; k < 6; ++k) reads.push_back(in.a + k);
+            reads.push_back(in.b);
+            for (std::uint32_t k = 0; k < kModeRegisters; ++k) writes.push_back(in.dst + k);
+            break;
+        case ProgramOp::rigid_particular:
+            reads.push_back(in.a);
+            reads.push_back(in.b);
+            block(reads, in.c, sums);
+            block(writes, in.c, sums);
+            break;
+        case ProgramOp::rigid_damped_particular:
+            reads.push_back(in.a);
+            reads.push_back(in.b);
+            block(reads, in.c, sums);
+            block(reads, in.c, {kModeES, kModeAux});
+            writes.push_back(in.dst);
+            block(writes, in.c, sums);
+            break;
+        case ProgramOp::resonant:
+            reads.push_back(in.a);
+            reads.push_back(in.b);
+            reads.push_back(in.d);
+            block(reads, in.c, sums);
+            block(reads, in.c, {kModeEC, kModeES});
+            block(writes, in.dst, {0, 1, 2, 3, 4, 5, 6});
+            block(writes, in.c, sums);
+            break;
+        case ProgramOp::mass_state: {
+            reads.push_back(in.a);
+            for (std::uint32_t k = 0; k < in.count; ++k) block(reads, terms[in.first + k].reg, sums);
+            const std::uint32_t tails = in.tail[0] + in.tail[1] + in.tail[2] + in.tail[3] + in.tail[4];
+            for (std::uint32_t k = 0; k < tails; ++k) reads.push_back(terms[in.first + in.count + k].reg);
+            writes.push_back(in.dst);
+            writes.push_back(in.b);
+            writes.push_back(in.c);
+            writes.push_back(in.d);
+            writes.push_back(in.d + 1);
+            break;
+        }
+    }
+}
+
+/// What instructions of one level must share to run as one block (empty: none, alone).
+std::vector<std::uint32_t> shape(const Instr& in, const std::vector<ProgramTerm>& terms) {
+    switch (in.op) {
+        case ProgramOp::lincomb: return {0, in.count, in.a != kNoRegister};
+        case ProgramOp::lincomb_ld: return {1, in.count};
+        case ProgramOp::copy: return {2};
+        case ProgramOp::abs: return {3};
+        case ProgramOp::mass_state: {
+            std::vector<std::uint32_t> k = {4, in.count, in.tail[0], in.tail[1], in.tail[2], in.tail[3], in.tail[4]};
+            const std::uint32_t n = in.count + in.tail[0] + in.tail[1] + in.tail[2] + in.tail[3] + in.tail[4];
+            for (std::uint32_t t = 0; t < n; ++t) k.push_back(terms[in.first + t].reg);
+            return k;
+        }
+        default: return {};
+    }
+}
+
+Block make_block(const std::vector<const Instr*>& rows, const std::vector<ProgramTerm>& terms) {
+    const Instr& f = *rows.front();
+    const std::uint32_t R = static_cast<std::uint32_t>(rows.size());
+    Block s;
+    s.rows = R;
+    switch (f.op) {
+        case ProgramOp::lincomb:
+        case ProgramOp::lincomb_ld: {
+            s.kind = f.op == ProgramOp::lincomb ? StepKind::lin : StepKind::lin_ld;
+            s.count = f.count;
+            s.has_base = f.op == ProgramOp::lincomb && f.a != kNoRegister;
+            s.shared = true;
+            for (std::uint32_t k = 0; k < s.count && s.shared; ++k)
+                for (const Instr* in : rows) s.shared = s.shared && terms[in->first + k].reg == terms[f.first + k].reg;
+            s.c.resize(static_cast<std::size_t>(s.count) * R);
+            s.reg.resize(s.shared ? s.count : static_cast<std::size_t>(s.count) * R);
+            for (std::uint32_t row = 0; row < R; ++row) {
+                const Instr& in = *rows[row];
+                for (std::uint32_t k = 0; k < s.count; ++k) {
+                    const ProgramTerm& t = terms[in.first + k];
+                    s.c[static_cast<std::size_t>(k) * R + row] = t.c;
+                    s.reg[s.shared ? k : static_cast<std::size_t>(k) * R + row] = t.reg;
+                }
+                s.dst.push_back(in.dst);
+                if (s.has_base) s.src.push_back(in.a);
+            }
+            break;
+        }
+        case ProgramOp::copy:
+        case ProgramOp::abs:
+            s.kind = f.op == ProgramOp::copy ? StepKind::copy : StepKind::abs;
+            for (const Instr* in : rows) s.dst.push_back(in->dst), s.src.push_back(in->a);
+            break;
+        case ProgramOp::mass_state: {
+            s.kind = StepKind::mass;
+            s.count = f.count;
+            std::uint32_t tails = 0;
+            for (int q = 0; q < 5; ++q) s.tail[q] = f.tail[q], tails += f.tail[q];
+            s.c.resize(static_cast<std::size_t>(s.count) * R);
+            s.ac.resize(s.c.size());
+            s.tc.resize(static_cast<std::size_t>(tails) * R);
+            for (std::uint32_t k = 0; k < s.count; ++k) s.reg.push_back(terms[f.first + k].reg);
+            for (std::uint32_t t = 0; t < tails; ++t) s.treg.push_back(terms[f.first + s.count + t].reg);
+            for (std::uint32_t row = 0; row < R; ++row) {
+                const Instr& in = *rows[row];
+                for (std::uint32_t k = 0; k < s.count; ++k) {
+                    const double c = terms[in.first + k].c;
+                    s.c[static_cast<std::size_t>(k) * R + row] = c;
+                    s.ac[static_cast<std::size_t>(k) * R + row] = __builtin_fabs(c);
+                }
+                for (std::uint32_t t = 0; t < tails; ++t)
+                    s.tc[static_cast<std::size_t>(t) * R + row] = terms[in.first + s.count + t].c;
+                s.src.push_back(in.a);
+                s.dst.push_back(in.dst);
+                s.v.push_back(in.b);
+                s.acc.push_back(in.c);
+                s.mag.push_back(in.d);
+            }
+            break;
+        }
+        default: break;
+    }
+    return s;
+}
+
+// Registers read as part of a block (a mode's coefficients and registers, a
+// harmonic's, a resonant term's): never renamed.
+void mark_blocks(const Instr& in, const std::vector<ProgramTerm>& terms, std::vector<char>& block) {
+    auto mark = [&](std::uint32_t base, std::uint32_t n) {
+        for (std::uint32_t k = 0; k < n; ++k) block[base + k] = 1;
+    };
+    switch (in.op) {
+        case ProgramOp::mode: mark(in.a, 6), mark(in.dst, kModeRegisters); break;
+        case ProgramOp::harmonic: mark(in.dst, 3); break;
+        case ProgramOp::rigid_particular:
+        case ProgramOp::rigid_damped_particular: mark(in.c, kModeRegisters); break;
+        case ProgramOp::resonant: mark(in.c, kModeRegisters), mark(in.dst, 7); break;
+        case ProgramOp::mass_state:
+            for (std::uint32_t k = 0; k < in.count; ++k) mark(terms[in.first + k].reg, kModeRegisters);
+            break;
+        default: break;
+    }
+}
+
+// Applies `to` to every register an instruction reads as a single value.
+void rename_reads(Instr& in, std::vector<ProgramTerm>& terms, const std::vector<std::uint32_t>& to) {
+    auto re = [&](std::uint32_t& r) {
+        if (r != kNoRegister) r = to[r];
+    };
+    switch (in.op) {
+        case ProgramOp::lincomb:
+        case ProgramOp::lincomb_ld:
+            for (std::uint32_t k = 0; k < in.count; ++k) re(terms[in.first + k].reg);
+            re(in.a);
+            break;
+        case ProgramOp::copy:
+        case ProgramOp::abs:
+        case ProgramOp::sin:
+        case ProgramOp::cos: re(in.a); break;
+        case ProgramOp::phase:
+        case ProgramOp::harmonic:
+        case ProgramOp::rigid_particular:
+        case ProgramOp::rigid_damped_particular: re(in.a), re(in.b); break;
+        case ProgramOp::mode: re(in.b); break;
+        case ProgramOp::resonant: re(in.a), re(in.b), re(in.d); break;
+        case ProgramOp::mass_state: {
+            re(in.a);
+            const std::uint32_t tails = in.tail[0] + in.tail[1] + in.tail[2] + in.tail[3] + in.tail[4];
+            for (std::uint32_t k = 0; k < tails; ++k) re(terms[in.first + in.count + k].reg);
+            break;
+        }
+    }
+}
+
+// Copies forwarded: a copy into a register written only by it, not part of a
+// block and not in [pinned_begin, pinned_end) (eval's outputs), from a
+// register written at most once and before it, is dropped, and what read its
+// destination reads its source (`exported`, setup's coefficient registers,
+// too). A copy changes no bit.
+void forward_copies(std::vector<Instr>& code, std::vector<ProgramTerm>& terms, std::size_t registers,
+                    std::uint32_t pinned_begin, std::uint32_t pinned_end, std::vector<std::uint32_t>& exported) {
+    std::vector<int> writes(registers, 0), writer(registers, -1);
+    std::vector<char> block(registers, 0);
+    std::vector<std::uint32_t> reads, written;
     for (std::size_t i = 0; i < code.size(); ++i) {
-        const Exec& in = code[i];
-        switch (in.op) {
-            case ProgramOp::lincomb: {
-                switch (in.group) {
-                    case 0: continue;  // run with its group
-                    case 2: lincomb_group<2>(&in, T, r); continue;
-                    case 3: lincomb_group<3>(&in, T, r); continue;
-                    case 4: lincomb_group<4>(&in, T, r); continue;
-                    default: break;
-                }
-                double s = 0.0;
-                if (in.count > 0) {
-                    const ProgramTerm* t = T + in.first;
-                    s = t[0].c * r[t[0].reg];
-                    for (std::uint32_t k = 1; k < in.count; ++k) s += t[k].c * r[t[k].reg];
-                }
-                r[in.dst] = in.a == kNoRegister ? s : r[in.a] + s;
-                break;
-            }
-            case ProgramOp::lincomb_ld: {
-                long double s = 0.0L;
-                if (in.count > 0) {
-                    const ProgramTerm* t = T + in.first;
-                    s = static_cast<long double>(t[0].c) * static_cast<long double>(r[t[0].reg]);
-                    for (std::uint32_t k = 1; k < in.count; ++k)
-                        s += static_cast<long double>(t[k].c) * static_cast<long double>(r[t[k].reg]);
-                }
-                r[in.dst] = static_cast<double>(s);
-                break;
-            }
-            case ProgramOp::copy: r[in.dst] = r[in.a]; break;
-            case ProgramOp::abs: r[in.dst] = __builtin_fabs(r[in.a]); break;
-            case ProgramOp::sin: r[in.dst] = __builtin_sin(r[in.a]); break;
-            case ProgramOp::cos: r[in.dst] = __builtin_cos(r[in.a]); break;
-            case ProgramOp::phase: r[in.dst] = hsnc_phase(K[in.first], r[in.a], r[in.b], K[in.first + 1]); break;
-            case ProgramOp::harmonic: {
-                const double arg = K[in.first] * r[in.b] + r[in.a];
-                r[in.dst] = arg;
-                r[in.dst + 1] = __builtin_sin(arg);
-                r[in.dst + 2] = __builtin_cos(arg);
-                break;
-            }
-            case ProgramOp::mode: {
-                const double* k = K + in.first;
-                const double* A = r + in.a;  // A, B, A1, B1, A2, B2
-                double* o = r + in.dst;
-                const double tau = r[in.b];
-                double eC = 0.0, eS = 0.0;
-                switch (static_cast<ProgramRegime>(in.regime)) {
-                    case ProgramRegime::undamped:
-                        eC = __builtin_cos(k[kModeOmegaD] * tau);
-                        eS = __builtin_sin(k[kModeOmegaD] * tau) * k[kModeInvOmegaD];
-                        break;
-                    case ProgramRegime::underdamped: {
-                        const double e = __builtin_exp(-k[kModeSigma] * tau);
-                        o[kModeAux] = e;
-                        eC = e * __builtin_cos(k[kModeOmegaD] * tau);
-                        eS = e * __builtin_sin(k[kModeOmegaD] * tau) * k[kModeInvOmegaD];
-                        break;
-                    }
-                    case ProgramRegime::critical:
-                        eC = __builtin_exp(-k[kModeSigma] * tau);
-                        eS = tau * eC;
-                        break;
-                    case ProgramRegime::overdamped: {
-                        const double e = __builtin_exp(k[kModeR1] * tau);
-                        const double m = __builtin_expm1(k[kModeNegTwoGamma] * tau);
-                        o[kModeAux] = e;
-                        o[kModeAux2] = m;
-                        eC = e * (1.0 + 0.5 * m);
-                        eS = -e * m * k[kModeHalfInvGamma];
-                        break;
-                    }
-                    case ProgramRegime::rigid:
-                        eC = 1.0;
-                        eS = tau;
-                        break;
-                    case ProgramRegime::rigid_damped: {
-                        const double m = __builtin_expm1(-k[kModeC] * tau);
-                        o[kModeAux] = m;
-                        eC = 1.0 + 0.5 * m;
-                        eS = -m * k[kModeInvC];
-                        break;
-                    }
-                }
-                o[kModeEC] = eC;
-                o[kModeES] = eS;
-                const double q = A[0] * eC + A[1] * eS;
-                const double dq = A[2] * eC + A[3] * eS;
-                o[kModeQ] = q;
-                o[kModeDQ] = dq;
-                o[kModeDDQ] = A[4] * eC + A[5] * eS;
-                o[kModeR] = __builtin_sqrt(dq * dq + k[kModeLambda] * q * q);
-                o[kModeMQ] = __builtin_fabs(A[0] * eC) + __builtin_fabs(A[1] * eS);
-                o[kModeMDQ] = __builtin_fabs(A[2] * eC) + __builtin_fabs(A[3] * eS);
-                // + |sigma A eC|: A1 = B - sigma A cancels (generator/emitter.cpp, mode()).
-                if (k[kModeSigma] != 0.0) o[kModeMDQ] = o[kModeMDQ] + __builtin_fabs(k[kModeSigma] * A[0] * eC);
-                break;
-            }
-            case ProgramOp::rigid_particular: {
-                double* m = r + in.c;
-                const double P = r[in.a], tau = r[in.b];
-                m[kModeQ] += 0.5 * P * tau * tau;
-                m[kModeDQ] += P * tau;
-                m[kModeDDQ] += P;
-                m[kModeMQ] += __builtin_fabs(0.5 * P * tau * tau);
-                m[kModeMDQ] += __builtin_fabs(P * tau);
-                break;
-            }
-            case ProgramOp::rigid_damped_particular: {
-                double* m = r + in.c;
-                const double P = r[in.a], tau = r[in.b];
-                const double qp = P * tau * tau * hsnc_phi2(-K[in.first] * tau);
-                r[in.dst] = qp;
-                m[kModeQ] += qp;
-                m[kModeDQ] += P * m[kModeES];
-                m[kModeDDQ] += P * (1.0 + m[kModeAux]);
-                m[kModeMQ] += __builtin_fabs(qp);
-                m[kModeMDQ] += __builtin_fabs(P * m[kModeES]);
-                break;
-            }
-            case ProgramOp::mass_state: {
-                const ProgramTerm* t = T + in.first;
-                const double xst = r[in.a];
-                double sx = xst, sv = 0.0, sa = 0.0, smx = __builtin_fabs(xst), smv = 0.0;
-                const bool started = in.count > 0;
-                if (started) {
-                    const double c = t[0].c, ac = __builtin_fabs(c);
-                    const double* m = r + t[0].reg;
-                    sx += c * m[kModeQ];
-                    sv = c * m[kModeDQ];
-                    sa = c * m[kModeDDQ];
-                    smx += ac * m[kModeMQ];
-                    smv = ac * m[kModeMDQ];
-                    for (std::uint32_t k = 1; k < in.count; ++k) {
-                        const double ck = t[k].c, ak = __builtin_fabs(ck);
-                        const double* mk = r + t[k].reg;
-                        sx += ck * mk[kModeQ];
-                        sv += ck * mk[kModeDQ];
-                        sa += ck * mk[kModeDDQ];
-                        smx += ak * mk[kModeMQ];
-                        smv += ak * mk[kModeMDQ];
-                    }
-                }
-                const ProgramTerm* tl = t + in.count;
-                tl = finish_sum(sx, true, tl, in.tail[0], r);
-                tl = finish_sum(sv, started, tl, in.tail[1], r);
-                tl = finish_sum(sa, started, tl, in.tail[2], r);
-                tl = finish_sum(smx, true, tl, in.tail[3], r);
-                finish_sum(smv, started, tl, in.tail[4], r);
-                r[in.dst] = sx;
-                r[in.b] = sv;
-                r[in.c] = sa;
-                r[in.d] = smx;
-                r[in.d + 1] = smv;
-                break;
-            }
-            case ProgramOp::resonant: {
-                const double* k = K + in.first;
-                double* m = r + in.c;
-                double* o = r + in.dst;
-                const double tau = r[in.b], ct = r[in.d];
-                double w = tau, dw = 1.0;
-                if (k[kResHalfDiff] != 0.0) {
-                    w = __builtin_sin(k[kResHalfDiff] * tau) * k[kResInvHalfDiff];
-                    dw = __builtin_cos(k[kResHalfDiff] * tau);
-                }
-                const double arg = k[kResMean] * tau + r[in.a];
-                const double Cb = __builtin_cos(arg), Sb = __builtin_sin(arg);
-                const double eC = m[kModeEC], eS = m[kModeES];
-                const double y = k[kResQ] * (ct * eS - w * Cb);
-                const double dy = k[kResQ] * (ct * eC - dw * Cb + k[kResMean] * w * Sb);
-                const double ddy =
-                    k[kResQ] * (k[kResH2W2] * w * Cb + k[kResTwoMean] * dw * Sb - k[kResLambda] * ct * eS);
-                o[0] = w, o[1] = dw, o[2] = Cb, o[3] = Sb, o[4] = y, o[5] = dy, o[6] = ddy;
-                m[kModeQ] += y;
-                m[kModeDQ] += dy;
-                m[kModeDDQ] += ddy;
-                // The magnitude of the terms (y and y' cancel to ~tau^3 near tau = 0).
-                const double Q = __builtin_fabs(k[kResQ]);
-                m[kModeMQ] += Q * (__builtin_fabs(ct * eS) + __builtin_fabs(w * Cb));
-                m[kModeMDQ] += Q * (__builtin_fabs(ct * eC) + __builtin_fabs(dw * Cb) + __builtin_fabs(k[kResMean] * w * Sb));
-                break;
-            }
+        accesses(code[i], terms, reads, written);
+        for (std::uint32_t w : written) ++writes[w], writer[w] = static_cast<int>(i);
+        mark_blocks(code[i], terms, block);
+    }
+    std::vector<std::uint32_t> to(registers);
+    for (std::size_t r = 0; r < registers; ++r) to[r] = static_cast<std::uint32_t>(r);
+    std::vector<char> drop(code.size(), 0);
+    bool any = false;
+    for (std::size_t i = 0; i < code.size(); ++i) {
+        const Instr& in = code[i];
+        if (in.op != ProgramOp::copy) continue;
+        const std::uint32_t d = in.dst, a = in.a;
+        const bool source_fixed = writes[a] == 0 || (writes[a] == 1 && writer[a] < static_cast<int>(i));
+        if (writes[d] == 1 && !block[d] && !block[a] && source_fixed && !(d >= pinned_begin && d < pinned_end)) {
+            to[d] = to[a];
+            drop[i] = 1;
+            any = true;
         }
     }
+    if (!any) return;
+    std::vector<Instr> kept;
+    kept.reserve(code.size());
+    for (std::size_t i = 0; i < code.size(); ++i) {
+        if (drop[i]) continue;
+        kept.push_back(code[i]);
+        rename_reads(kept.back(), terms, to);
+    }
+    code = std::move(kept);
+    for (std::uint32_t& e : exported) e = to[e];
 }
 
-void copy_out(const Program& p, const double* r, const SegmentEval& out) {
-    const std::size_t n = static_cast<std::size_t>(p.n_dof), ns = p.n_switch();
-    const double* o = r + p.eval_outputs();
+/// The case of execute() that runs step `s`.
+std::uint8_t pick(const Block& s) {
+    switch (s.kind) {
+        case StepKind::single:
+            if (s.single.op == ProgramOp::harmonic) return kHarmonic;
+            if (s.single.op == ProgramOp::sin && s.cos_dst != kNoRegister) return kSinCos;
+            if (s.single.op == ProgramOp::mode) return static_cast<std::uint8_t>(kMode + s.single.regime);
+            return kSingle;
+        case StepKind::lin:
+            if (s.count == 0) return s.has_base ? kLinEmptyBase : kLinEmpty;
+            return static_cast<std::uint8_t>(kLin + (s.shared ? 10 : 0) + (s.has_base ? 5 : 0) +
+                                             (s.count <= 4 ? s.count : 0));
+        case StepKind::lin_ld:
+            if (s.count == 0) return kLdEmpty;
+            return s.shared ? kLdShared : kLd;
+        case StepKind::copy: return kCopy;
+        case StepKind::abs: return kAbs;
+        case StepKind::mass: return kMass;
+    }
+    return kSingle;
+}
+
+/// The blocks as run: their data appended to the body's arrays in order.
+std::unique_ptr<InterpretedSolver::Body> freeze(const std::vector<Block>& blocks) {
+    auto body = std::make_unique<InterpretedSolver::Body>();
+    std::size_t nd = 0, nu = 0, ns = 0;
+    for (const Block& b : blocks) {
+        nd += b.c.size() + b.ac.size() + b.tc.size();
+        nu += b.reg.size() + b.treg.size() + b.dst.size() + b.src.size() + b.v.size() + b.acc.size() + b.mag.size();
+        ns += b.kind == StepKind::single;
+    }
+    body->doubles.reserve(nd);  // no reallocation below: the steps point into these
+    body->regs.reserve(nu);
+    body->singles.reserve(ns);
+    body->steps.reserve(blocks.size());
+    auto put = [](auto& arena, const auto& v) {
+        const auto* at = arena.data() + arena.size();
+        arena.insert(arena.end(), v.begin(), v.end());
+        return at;
+    };
+    for (const Block& b : blocks) {
+        Step s;
+        s.run = pick(b);
+        s.rows = b.rows;
+        s.count = b.count;
+        for (int q = 0; q < 5; ++q) s.tail[q] = b.tail[q];
+        s.cos_dst = b.cos_dst;
+        s.c_ = put(body->doubles, b.c);
+        put(body->doubles, b.ac);
+        put(body->doubles, b.tc);
+        s.reg_ = put(body->regs, b.reg);
+        put(body->regs, b.treg);
+        if (b.kind == StepKind::mass) {
+            s.src_ = put(body->regs, b.src);
+            s.dst_ = put(body->regs, b.dst);
+        } else {
+            s.dst_ = put(body->regs, b.dst);
+            s.src_ = put(body->regs, b.src);
+        }
+        put(body->regs, b.v);
+        put(body->regs, b.acc);
+        put(body->regs, b.mag);
+        if (b.kind == StepKind::single) {
+            body->singles.push_back(b.single);
+            s.single_ = &body->singles.back();
+        }
+        body->steps.push_back(s);
+    }
+    return body;
+}
+
+/// The program's instructions scheduled by dependency level (an instruction
+/// comes after every instruction that writes what it reads, reads what it
+/// writes, or writes it too, before it in the program), each level's
+/// instructions of one shape batched into a block, in order of first
+/// appearance; a sin and a cos of one register in one step. Every value is
+/// computed by the same operations from the same operands as in program order.
+std::unique_ptr<InterpretedSolver::Body> compile(const ProgramBody& body, const std::vector<ProgramTerm>& program_terms,
+                                                 std::uint32_t pinned_begin, std::uint32_t pinned_end,
+                                                 std::vector<std::uint32_t>& exported) {
+    std::vector<ProgramTerm> terms = program_terms;
+    std::vector<Instr> code;
+    code.reserve(body.code.size());
+    for (const ProgramInstr& in : body.code)
+        code.push_back({in.op, in.regime, in.dst, in.a, in.b, in.c, in.d, in.first, in.count,
+                        {in.tail[0], in.tail[1], in.tail[2], in.tail[3], in.tail[4]}});
+    forward_copies(code, terms, body.registers(), pinned_begin, pinned_end, exported);
+
+    const std::size_t n = code.size();
+    std::vector<int> last_write(body.registers(), -1), last_read(body.registers(), -1), level(n, 0);
+    std::vector<std::uint32_t> reads, writes;
+    int levels = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        accesses(code[i], terms, reads, writes);
+        int l = 0;
+        for (std::uint32_t r : reads) l = std::max(l, last_write[r] + 1);
+        for (std::uint32_t w : writes) l = std::max({l, last_write[w] + 1, last_read[w] + 1});
+        for (std::uint32_t w : writes) last_write[w] = l;
+        for (std::uint32_t r : reads) last_read[r] = std::max(last_read[r], l);
+        level[i] = l;
+        levels = std::max(levels, l + 1);
+    }
+    std::vector<std::vector<std::size_t>> by_level(static_cast<std::size_t>(levels));
+    for (std::size_t i = 0; i < n; ++i) by_level[static_cast<std::size_t>(level[i])].push_back(i);
+
+    std::vector<Block> blocks;
+    for (const std::vector<std::size_t>& members : by_level) {
+        std::vector<std::vector<std::uint32_t>> keys;
+        std::vector<std::vector<const Instr*>> groups;
+        for (std::size_t i : members) {
+            const Instr& in = code[i];
+            std::vector<std::uint32_t> key = shape(in, terms);
+            if (key.empty()) {
+                keys.emplace_back();
+                groups.push_back({&in});
+                continue;
+            }
+            const auto it = std::find(keys.begin(), keys.end(), key);
+            if (it != keys.end()) {
+                groups[static_cast<std::size_t>(it - keys.begin())].push_back(&in);
+            } else {
+                keys.push_back(std::move(key));
+                groups.push_back({&in});
+            }
+        }
+        std::vector<char> fused(groups.size(), 0);
+        for (std::size_t g = 0; g < groups.size(); ++g) {
+            if (fused[g]) continue;
+            if (!keys[g].empty()) {
+                blocks.push_back(make_block(groups[g], terms));
+                continue;
+            }
+            const Instr& in = *groups[g].front();
+            Block s;
+            s.single = in;
+            if (in.op == ProgramOp::sin)  // its cos in this level, if any
+                for (std::size_t h = g + 1; h < groups.size(); ++h)
+                    if (keys[h].empty() && !fused[h] && groups[h].front()->op == ProgramOp::cos &&
+                        groups[h].front()->a == in.a) {
+                        s.cos_dst = groups[h].front()->dst;
+                        fused[h] = 1;
+                        break;
+                    }
+            blocks.push_back(std::move(s));
+        }
+    }
+    return freeze(blocks);
+}
+
+}  // namespace
+
+InterpretedSolver::InterpretedSolver(const Program& p)
+    : cfg_(p.cfg),
+      switches_(p.switches),
+      max_step_(p.max_step),
+      n_dof_(p.n_dof),
+      n_coef_(static_cast<std::size_t>(p.n_coef)),
+      constants_(p.constants),
+      setup_coef_(p.setup_coef),
+      setup_(compile(p.setup, p.terms, 0, 0, setup_coef_)),
+      eval_(compile(p.eval, p.terms, p.eval_outputs(),
+                    p.eval_outputs() + static_cast<std::uint32_t>(3 * p.n_dof + 4 * p.n_switch()), no_exports_)),
+      setup_regs_(p.setup.registers(), 0.0),
+      eval_regs_(p.eval.registers(), 0.0) {
+    eval_regs_[0] = 1.0;
+}
+
+InterpretedSolver::~InterpretedSolver() = default;
+
+std::size_t InterpretedSolver::memory_bytes() const {
+    return sizeof(*this) + setup_->bytes() + eval_->bytes() +
+           sizeof(double) * (constants_.capacity() + setup_regs_.capacity() + eval_regs_.capacity()) +
+           sizeof(std::uint32_t) * setup_coef_.capacity() + sizeof(SwitchFunction) * switches_.capacity() +
+           cfg_.closed.capacity() + cfg_.stuck.capacity();
+}
+
+void InterpretedSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    const std::size_t n = static_cast<std::size_t>(n_dof_);
+    double* r = setup_regs_.data();
+    r[0] = 1.0;
+    r[Program::kSetupT0] = t0;
+    r[Program::kSetupT0Lo] = t0_lo;
+    const std::size_t v0_at = Program::kSetupX0 + n, sgn_at = Program::kSetupX0 + 2 * n;
+    for (std::size_t i = 0; i < n; ++i) {
+        r[Program::kSetupX0 + i] = x0[i];
+        r[v0_at + i] = v0[i];
+        r[sgn_at + i] = sgn[i];
+    }
+    execute(constants_.data(), *setup_, r);
+    // The coefficient block goes straight into eval's registers.
+    for (std::size_t k = 0; k < setup_coef_.size(); ++k) eval_regs_[Program::kEvalCoef + k] = r[setup_coef_[k]];
+}
+
+void InterpretedSolver::eval(double tau, const SegmentEval& out) const {
+    double* r = eval_regs_.data();
+    r[Program::kEvalTau] = tau;
+    execute(constants_.data(), *eval_, r);
+    const std::size_t n = static_cast<std::size_t>(n_dof_), ns = switches_.size();
+    const double* o = r + Program::kEvalCoef + n_coef_;
     for (std::size_t i = 0; i < n; ++i) out.x[i] = o[i], out.v[i] = o[n + i], out.a[i] = o[2 * n + i];
     o += 3 * n;
     for (std::size_t f = 0; f < ns; ++f)
         out.g[f] = o[f], out.dg[f] = o[ns + f], out.bound[f] = o[2 * ns + f], out.scale[f] = o[3 * ns + f];
 }
 
-}  // namespace
-
-InterpretedSolver::InterpretedSolver(Program program)
-    : program_(std::move(program)),
-      setup_code_(compile(program_.setup, program_.terms)),
-      eval_code_(compile(program_.eval, program_.terms)),
-      setup_regs_(program_.setup.registers(), 0.0),
-      eval_regs_(program_.eval.registers(), 0.0) {
-    eval_regs_[0] = 1.0;
-}
-
-InterpretedSolver::~InterpretedSolver() = default;
-
-void InterpretedSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    const Program& p = program_;
-    const std::size_t n = static_cast<std::size_t>(p.n_dof);
-    double* r = setup_regs_.data();
-    r[0] = 1.0;
-    r[Program::kSetupT0] = t0;
-    r[Program::kSetupT0Lo] = t0_lo;
-    for (std::size_t i = 0; i < n; ++i) {
-        r[Program::kSetupX0 + i] = x0[i];
-        r[p.setup_v0() + i] = v0[i];
-        r[p.setup_sgn() + i] = sgn[i];
-    }
-    execute(p, setup_code_, r);
-    // The coefficient block goes straight into eval's registers.
-    for (std::size_t k = 0; k < p.setup_coef.size(); ++k) eval_regs_[Program::kEvalCoef + k] = r[p.setup_coef[k]];
-}
-
-void InterpretedSolver::eval(double tau, const SegmentEval& out) const {
-    double* r = eval_regs_.data();
-    r[Program::kEvalTau] = tau;
-    execute(program_, eval_code_, r);
-    copy_out(program_, r, out);
-}
-
 SegmentSolver& InterpretedSolverProvider::solver(const Configuration& cfg) {
     auto it = cache_.find(cfg);
-    if (it != cache_.end()) return *it->second;
+    if (it != cache_.end()) {
+        lru_.splice(lru_.begin(), lru_, it->second.lru);  // most recently used
+        return *it->second.solver;
+    }
     const auto start = std::chrono::steady_clock::now();
-    Program p = lower_(cfg);
+    auto s = std::make_unique<InterpretedSolver>(lower_(cfg));
     lower_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return *cache_.emplace(cfg, std::make_unique<InterpretedSolver>(std::move(p))).first->second;
+    ++built_;
+    seen_.insert(cfg);
+    const std::size_t bytes = s->memory_bytes();
+    lru_.push_front(cfg);
+    it = cache_.emplace(cfg, Entry{std::move(s), bytes, lru_.begin()}).first;
+    bytes_ += bytes;
+    // Drop the least recently used until within budget; never the one returned now.
+    while (bytes_ > max_bytes_ && lru_.size() > 1) {
+        const auto victim = cache_.find(lru_.back());
+        bytes_ -= victim->second.bytes;
+        cache_.erase(victim);
+        lru_.pop_back();
+        ++evicted_;
+    }
+    return *it->second.solver;
 }
 
 std::string InterpretedSolverProvider::describe() const {
-    char buf[128];
-    std::snprintf(buf, sizeof buf, "interpreted programs: %zu configurations (derive+lower %.3f s)", cache_.size(),
-                  lower_seconds_);
-    return buf;
+    std::string text = "generic solver for " + std::to_string(seen_.size()) + " configurations (interpreted programs";
+    if (evicted_ > 0)
+        text += "; " + std::to_string(cache_.size()) + " kept within " + std::to_string(max_bytes_ >> 20) + " MB, " +
+                std::to_string(built_ - seen_.size()) + " rebuilt";
+    return text + ")";
 }
 
 }  // namespace hsnc

@@ -14,8 +14,9 @@ KernelMode parse_kernel_mode(const std::string& name) {
     if (name == "auto") return KernelMode::automatic;
     if (name == "aot") return KernelMode::aot;
     if (name == "generic") return KernelMode::generic;
+    if (name == "interp") return KernelMode::interp;
     if (name == "jit") return KernelMode::jit;
-    throw InputError("--kernels '" + name + "': expected auto, aot, generic or jit");
+    throw InputError("--kernels '" + name + "': expected auto, aot, generic, interp or jit");
 }
 
 SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
@@ -50,30 +51,33 @@ std::string GenericSolverProvider::describe() const {
     return text;
 }
 
-AotSolverProvider::AotSolverProvider(const Model& model, const AotRegistry& registry, bool fallback)
-    : model_(model), registry_(registry), fallback_(fallback), hash_(model_hash(model)) {}
+AotSolverProvider::AotSolverProvider(const Model& model, const AotRegistry& registry, bool fallback,
+                                     InterpretedSolverProvider::ProgramFn lower)
+    : model_(model), registry_(registry), fallback_(fallback), hash_(model_hash(model)) {
+    if (!fallback_) return;
+    if (lower)
+        fallback_provider_ = std::make_unique<InterpretedSolverProvider>(std::move(lower));
+    else
+        fallback_provider_ = std::make_unique<GenericSolverProvider>(model_);
+}
 
 SegmentSolver& AotSolverProvider::solver(const Configuration& cfg) {
     auto it = cache_.find(cfg);
     if (it != cache_.end()) return *it->second;
-    std::unique_ptr<SegmentSolver> s;
-    if (const hsnc_kernel* k = find_aot_kernel(registry_, model_.name.c_str(), hash_, cfg.key().c_str())) {
-        s = std::make_unique<KernelSolver>(*k);
-        ++aot_;
-    } else if (fallback_) {
-        s = std::make_unique<GenericSolver>(model_, cfg);
-        ++generic_;
-    } else {
+    if (generic_.count(cfg)) return fallback_provider_->solver(cfg);
+    if (const hsnc_kernel* k = find_aot_kernel(registry_, model_.name.c_str(), hash_, cfg.key().c_str()))
+        return *cache_.emplace(cfg, std::make_unique<KernelSolver>(*k)).first->second;
+    if (!fallback_)
         throw RunError("AotSolverProvider::solver(): no ahead-of-time kernel for configuration '" +
                        cfg.spec(model_) + "' of model '" + model_.name +
                        "' (generate it with hsnc generate, or choose the kernels auto)");
-    }
-    return *cache_.emplace(cfg, std::move(s)).first->second;
+    generic_.insert(cfg);
+    return fallback_provider_->solver(cfg);
 }
 
 std::string AotSolverProvider::describe() const {
-    return std::to_string(aot_) + " ahead-of-time kernels, generic solver for " + std::to_string(generic_) +
-           " configurations";
+    return std::to_string(cache_.size()) + " ahead-of-time kernels, generic solver for " +
+           std::to_string(generic_.size()) + " configurations";
 }
 
 bool has_aot_kernels(const Model& model, const AotRegistry* registry) {
@@ -84,7 +88,12 @@ bool has_aot_kernels(const Model& model, const AotRegistry* registry) {
 }
 
 std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
-                                                     const AotRegistry* registry) {
+                                                     const AotRegistry* registry,
+                                                     InterpretedSolverProvider::ProgramFn lower) {
+    if (mode == KernelMode::interp) {
+        if (!lower) throw std::invalid_argument("make_solver_provider(): --kernels interp needs a program source");
+        return std::make_unique<InterpretedSolverProvider>(std::move(lower));
+    }
     if (mode == KernelMode::generic) return std::make_unique<GenericSolverProvider>(model);
     if (mode == KernelMode::jit)
         throw std::logic_error("make_solver_provider(): --kernels jit is built with JitSolverProvider");

@@ -12,6 +12,7 @@
 #include "aot_registry.h"
 #include "generic_solver.h"
 #include "solver_provider.h"
+#include "interpreted_solver.h"
 
 namespace hsnc {
 
@@ -20,14 +21,20 @@ enum class KernelMode {
                 ///  generic solver (never the JIT: hsnc::simulate, api/hsnc/simulate.h)
     aot,        ///< ahead-of-time kernels only (error when the model has none)
     generic,    ///< the Eigen-based generic solver
+    interp,     ///< the interpreter of each configuration's program (InterpretedSolverProvider,
+                ///  from a program source: generator/lowering.h program_source()), the kernels'
+                ///  bits without a compiler
     jit,        ///< a kernel compiled in-process per configuration visited
                 ///  (runtime/jit/jit_solver_provider.h; opt-in, built by the command line)
 };
 
-/// "auto", "aot", "generic", "jit"; InputError otherwise.
+/// "auto", "aot", "generic", "interp", "jit"; InputError otherwise.
 KernelMode parse_kernel_mode(const std::string& name);
 
-/// The generic (Eigen) solver for every configuration, created on first use and
+/// The Eigen solver (runtime/generic_solver.h) for every configuration: an
+/// implementation of the closed forms independent of the programs, the tests'
+/// oracle, and the generic path of a runtime used without the generator (no
+/// program source). Created on first use and
 /// kept in a cache bounded by memory: when the solvers kept exceed `max_bytes`
 /// the least recently used are dropped (and rebuilt if the run comes back to
 /// them). The solver just returned is never dropped, so the reference the
@@ -66,12 +73,18 @@ private:
 };
 
 /// Ahead-of-time kernels where the registry has one for (model, configuration);
-/// otherwise the generic solver (mode automatic) or a RunError naming the
-/// configuration (mode aot).
+/// otherwise (fallback) the Eigen solver, or the interpreter of the
+/// configuration's program when `lower` is given (kept within memory as those
+/// providers keep them), or (no fallback) a RunError naming the configuration.
+/// make_solver_provider() gives mode automatic the Eigen solver as fallback:
+/// entering a configuration costs the interpreter a 40-digit derivation, slower
+/// than the Eigen solver's analysis in double (README, "The interpreter").
 class AotSolverProvider : public SolverProvider {
 public:
-    AotSolverProvider(const Model& model, const AotRegistry& registry, bool fallback);
-    AotSolverProvider(const Model&& model, const AotRegistry& registry, bool fallback) = delete;  ///< would dangle
+    AotSolverProvider(const Model& model, const AotRegistry& registry, bool fallback,
+                      InterpretedSolverProvider::ProgramFn lower = {});
+    AotSolverProvider(const Model&& model, const AotRegistry& registry, bool fallback,
+                      InterpretedSolverProvider::ProgramFn lower = {}) = delete;  ///< would dangle
     SegmentSolver& solver(const Configuration& cfg) override;
     std::string describe() const override;
 
@@ -80,19 +93,26 @@ private:
     const AotRegistry& registry_;
     bool fallback_;
     std::uint64_t hash_;
-    std::size_t aot_ = 0, generic_ = 0;
-    std::map<Configuration, std::unique_ptr<SegmentSolver>> cache_;
+    std::map<Configuration, std::unique_ptr<SegmentSolver>> cache_;  // the kernels
+    std::set<Configuration> generic_;                                // configurations without one
+    std::unique_ptr<SolverProvider> fallback_provider_;
 };
 
 /// Whether `registry` (may be null) holds ahead-of-time kernels of `model` as it is.
 bool has_aot_kernels(const Model& model, const AotRegistry* registry);
 
 /// The provider for `mode` (not jit: that one needs the generator, see
-/// JitSolverProvider; automatic without kernels gives the generic solver); `registry` (may be null) lists the AOT kernels linked in.
+/// JitSolverProvider; automatic without kernels gives the generic solver);
+/// `registry` (may be null) lists the AOT kernels linked in. Mode interp
+/// interprets the programs `lower` gives (generator/lowering.h,
+/// program_source(): the same bits as the kernels) and needs it
+/// (std::invalid_argument without); the other modes do not use it.
 std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
-                                                     const AotRegistry* registry);
+                                                     const AotRegistry* registry,
+                                                     InterpretedSolverProvider::ProgramFn lower = {});
 /// The provider keeps a reference to `model`: a temporary would dangle.
 std::unique_ptr<SolverProvider> make_solver_provider(const Model&& model, KernelMode mode,
-                                                     const AotRegistry* registry) = delete;
+                                                     const AotRegistry* registry,
+                                                     InterpretedSolverProvider::ProgramFn lower = {}) = delete;
 
 }  // namespace hsnc

@@ -1,0 +1,70 @@
+#include "shooting.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+
+#include "tangent.h"
+
+namespace hsnc::analysis {
+namespace {
+
+class EventCounter : public Observer {
+public:
+    void on_sample(double, const double*, const double*) override {}
+    void on_event(double, EventKind, int, const double*, const double*) override { ++events; }
+    std::size_t events = 0;
+};
+
+}  // namespace
+
+double period_residual(const Eigen::VectorXd& y, const Eigen::VectorXd& Py) {
+    const Eigen::Index n = y.size() / 2;
+    double res = 0.0;
+    for (int part = 0; part < 2; ++part) {
+        const auto a = y.segment(part * n, n), b = Py.segment(part * n, n);
+        const double scale = std::max(a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff());
+        const double r = (b - a).cwiseAbs().maxCoeff();
+        if (r > 0) res = std::max(res, scale > 0 ? r / scale : INFINITY);
+    }
+    return res;
+}
+
+PeriodMapValue evaluate_period_map(Flow& flow, double ts, double te, const Eigen::VectorXd& y) {
+    PeriodMapValue m;
+    const std::size_t n = flow.model().dof();
+    const Eigen::Index N = static_cast<Eigen::Index>(2 * n);
+    EventCounter events;
+    JacobianObserver jac(flow.model(), &events);
+    const RunSummary s = flow.run(ts, y.data(), y.data() + n, te, jac);
+    if (s.status != RunStatus::ok) {
+        m.message =
+            std::string("a run of the period map ended with status ") + run_status_name(s.status) + ": " + s.message;
+        return m;
+    }
+    m.Py.resize(N);
+    for (std::size_t i = 0; i < n; ++i)
+        m.Py(static_cast<Eigen::Index>(i)) = s.x[i], m.Py(static_cast<Eigen::Index>(n + i)) = s.v[i];
+    m.M = jac.jacobian();
+    m.grazing = jac.grazing();
+    m.singular = jac.singular();
+    m.events = events.events;
+    m.residual = period_residual(y, m.Py);
+    m.ok = m.Py.allFinite() && std::isfinite(m.residual);
+    if (!m.ok) m.message = "the period map gave non-finite values";
+    return m;
+}
+
+std::vector<std::complex<double>> floquet_multipliers(const Eigen::MatrixXd& M) {
+    std::vector<std::complex<double>> mu;
+    if (M.size() == 0) return mu;
+    Eigen::EigenSolver<Eigen::MatrixXd> es(M, false);
+    for (Eigen::Index i = 0; i < M.rows(); ++i) mu.push_back(es.eigenvalues()(i));
+    std::stable_sort(mu.begin(), mu.end(), [](const std::complex<double>& a, const std::complex<double>& b) {
+        return std::abs(a) > std::abs(b);
+    });
+    return mu;
+}
+
+}  // namespace hsnc::analysis

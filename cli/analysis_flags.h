@@ -1,0 +1,73 @@
+// hsnc -- what the analysis commands `hsnc periodic` and `hsnc lyapunov`
+// share on the command line: the model and its overrides, the kernel kind
+// (as `hsnc simulate --kernels`, with its cache flags), --quiet, the output
+// paths checked before anything runs, the library's option names turned back
+// into flags, and the Poincare section flags (also `hsnc simulate`'s).
+#pragma once
+
+#include <initializer_list>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "error.h"
+#include "hsnc/simulate.h"
+#include "model_reader.h"
+#include "output_file.h"
+
+namespace hsnc::cli {
+
+struct AnalysisFlags {
+    std::string model;
+    ModelOverrides overrides;
+    std::string kernels = "auto", cache_dir;
+    bool no_cache = false, quiet = false;
+};
+
+/// Registers MODEL, --set, --x0, --v0, --kernels, --cache-dir, --no-cache and --quiet on `sub`.
+void add_analysis_flags(CLI::App* sub, AnalysisFlags& flags);
+
+/// Registers --section KIND[:NAME], --section-out CSV and --section-plot PNG
+/// (output/section.h); `what` ends the --section help ("" or " of the measurement").
+void add_section_flags(CLI::App* sub, std::string& section, std::string& out, std::string& plot,
+                       const std::string& what = "");
+
+/// --kernels, --cache-dir, --no-cache as the library takes them.
+struct AnalysisKernels {
+    KernelChoice kernels = KernelChoice::automatic;
+    std::string cache_dir;
+    bool use_cache = true;
+};
+/// InputError naming --kernels when its value is not a kernel kind.
+AnalysisKernels analysis_kernels(const AnalysisFlags& flags);
+
+/// The library names its option (OptionError::option()), the command line
+/// names the flag: "FLAG: reason" for an option listed in `flags` (pairs of
+/// option and flag; "kernels" is --kernels without being listed), else e.what().
+InputError option_flag_error(const OptionError& e, std::initializer_list<std::pair<const char*, const char*>> flags);
+
+/// The output paths of one command, each checked when added (check_output:
+/// InputError, nothing written), then all together by check().
+class AnalysisOutputs {
+public:
+    /// The target of `path` for `flag`; null when `path` is empty. `png`:
+    /// drawn by gnuplot (check() then requires it).
+    const OutputTarget* add(const char* flag, const std::string& path, bool png = false);
+    /// No two of them one file; gnuplot on PATH when a PNG is asked for.
+    void check() const;
+
+private:
+    std::vector<std::unique_ptr<OutputTarget>> targets_;
+    bool png_ = false;
+};
+
+/// Text inside a gnuplot string: quotes, backslashes, backquotes and control
+/// characters (which gnuplot would interpret) left out.
+std::string gnuplot_plain(const std::string& text);
+/// 17 significant digits (reads back as the same double).
+std::string full_number(double v);
+
+}  // namespace hsnc::cli

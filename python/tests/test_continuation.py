@@ -1,0 +1,118 @@
+"""hsnc.sweep(continuation=True): the hardening stop's branch with its two
+folds, the same numbers as `hsnc sweep --continuation`; a failing point;
+and Ctrl-C (SIGINT) interrupting a long sweep promptly."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+
+import hsnc
+from conftest import SOURCE_DIR, read_csv, run_cli
+
+HARDENING = str(SOURCE_DIR / "examples" / "hardening-stop.toml")
+
+
+def test_continuation_through_two_folds_same_as_the_command_line(tmp_path):
+    model = hsnc.Model.from_file(HARDENING)
+    r = hsnc.sweep(model, "omega", 0.8, 2.0, 25, continuation=True)
+    n = len(r["value"])
+    assert n >= 25 and r["value"][0] == 0.8 and r["value"][-1] == 2.0
+    folds = [i for i, b in enumerate(r["bifurcation"]) if b == "fold"]
+    assert len(folds) == 2
+    assert all(b in ("", "fold") for b in r["bifurcation"])
+    # Stable before the first fold and from the second on, unstable between.
+    expected = np.array([i < folds[0] or i >= folds[1] for i in range(n)])
+    assert (r["stable"] == expected).all()
+    assert ((r["max_multiplier"] < 1) == expected).all()
+    assert all(s == "" for s in r["stop"]) and all(f == "" for f in r["failure"])
+    out = tmp_path / "c.csv"
+    run_cli("sweep", HARDENING, "--param", "omega", "--from", 0.8, "--to", 2.0, "--points", 25, "--continuation",
+            "--quiet", "--out", out)
+    header, rows = read_csv(out)
+    assert header[-3:] == ["stable", "max_multiplier", "bifurcation"]
+    assert len(rows) == n
+    for i, row in enumerate(rows):
+        assert float(row[0]) == r["value"][i] and float(row[5]) == r["xmax"][i, 0]
+        assert row[8] == ("true" if r["stable"][i] else "false") and float(row[9]) == r["max_multiplier"][i]
+        assert row[10] == r["bifurcation"][i]
+
+
+def test_a_failing_point_is_a_row_and_the_sweep_goes_on():
+    # k = 1e300 at p = 2 only: that point's run fails at once.
+    text = textwrap.dedent('''
+        name = "fails-in-the-middle"
+        [parameters]
+        p = 1.0
+        [[mass]]
+        name = "m"
+        m = 1.0
+        [[spring]]
+        between = ["m", "ground"]
+        k = "pow(10, 300*exp(-100*(p - 2)^2))"
+        [[contact]]
+        between = ["m", "ground"]
+        gap = 0
+        k = 12
+        [damping]
+        alpha = 0.1
+        [[forcing]]
+        omega = 1.0
+        amplitude = { m = 1.0 }
+        ''')
+    r = hsnc.sweep(hsnc.Model.from_string(text), "p", 1, 3, 3, max_periods=400, record_periods=2)
+    assert list(r["settled"]) == [True, False, True]
+    assert r["failure"][0] == "" and r["failure"][2] == ""
+    assert "the run stopped" in r["failure"][1]
+    assert np.isnan(r["xmax"][1, 0]) and np.isfinite(r["xmax"][[0, 2], 0]).all()
+
+
+def test_ctrl_c_interrupts_a_long_sweep_promptly():
+    # An undamped oscillator at irrational frequency ratios never settles: with max_periods
+    # = 1e8 the sweep would run for a long time.
+    script = textwrap.dedent('''
+        import sys, time
+        import hsnc
+        m = hsnc.Model.from_string(\'\'\'
+        name = "undamped"
+        [parameters]
+        omega = 0.7
+        [[mass]]
+        name = "m"
+        m = 1.0
+        [[spring]]
+        between = ["ground", "m"]
+        k = 1.0
+        [[forcing]]
+        omega = "omega"
+        amplitude = { m = 1.0 }
+        \'\'\')
+        print("running", flush=True)
+        try:
+            hsnc.sweep(m, "omega", 0.6180339887498949, 0.7071067811865476, 3, max_periods=100000000, threads=2,
+                       restart_each=True)
+            print("finished", flush=True)
+        except KeyboardInterrupt:
+            print("interrupted", time.monotonic(), flush=True)
+        ''')
+    p = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         env=dict(os.environ))
+    try:
+        assert p.stdout.readline().strip() == "running"
+        time.sleep(1.0)  # inside the native run
+        assert p.poll() is None
+        sent = time.monotonic()
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=30)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    words = out.split()
+    assert words[:1] == ["interrupted"], out + err
+    # Prompt: well within a second of the signal (a forcing period is microseconds here).
+    assert float(words[1]) - sent < 1.0, (float(words[1]) - sent)
+    assert p.returncode == 0

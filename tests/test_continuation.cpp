@@ -1,0 +1,489 @@
+// hsnc sweep --continuation (api/hsnc/sweep.h, analysis/continuation.cpp):
+// branches of periodic orbits against closed forms (the linear damped
+// oscillator's F|H(omega)| and Floquet multipliers, Den Hartog's friction
+// oscillator's amplitude and multipliers), the two folds of a hardening
+// contact oscillator with its unstable middle branch between the up and
+// down sweeps, how a branch stops; and a failing sweep point that does not
+// stop the sweep.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <string>
+#include <vector>
+
+#include "cli_runner.h"
+#include "continuation.h"
+#include "hsnc/sweep.h"
+#include "model_reader.h"
+
+namespace hsnc {
+namespace {
+
+using testing::file_exists;
+using testing::run_hsnc;
+using testing::slurp;
+using testing::temp_path;
+using testing::write_temp;
+
+constexpr double kPi = 3.14159265358979323846;
+
+// x'' + 2 zeta x' + x = F sin(omega t) (Rayleigh alpha = 2 zeta).
+const char* const kLinear = R"(
+name = "linear"
+[parameters]
+omega = 1.0
+zeta = 0.05
+F = 2.5
+[[mass]]
+name = "m"
+m = 1.0
+[[spring]]
+between = ["ground", "m"]
+k = 1.0
+[damping]
+alpha = "2*zeta"
+[[forcing]]
+omega = "omega"
+amplitude = { m = "F" }
+)";
+
+// m x'' + k x + F_f sign(x') = F0 sin(omega t), m = k = F0 = 1, F_f = beta.
+const char* const kDenHartog = R"(
+name = "den-hartog"
+[parameters]
+r = 2.0
+beta = 0.3
+g = 1.0
+[[mass]]
+name = "m"
+m = 1.0
+mu_k = "beta"
+[[spring]]
+between = ["ground", "m"]
+k = 1.0
+[[forcing]]
+omega = "r"
+amplitude = { m = 1.0 }
+)";
+
+// omega_n = 1, zeta = 0.02, a stiff stop (k = 10) at x = 0.5 (examples/hardening-stop.toml).
+const char* const kHardening = R"(
+name = "hardening"
+[parameters]
+omega = 1.0
+F = 0.1
+[[mass]]
+name = "m"
+m = 1.0
+[[spring]]
+between = ["ground", "m"]
+k = 1.0
+[damping]
+alpha = 0.04
+[[contact]]
+between = ["m", "ground"]
+gap = 0.5
+k = 10.0
+[[forcing]]
+omega = "omega"
+amplitude = { m = "F" }
+)";
+
+SweepOptions continuation(const std::string& param, double from, double to, std::size_t points) {
+    SweepOptions o;
+    o.param = param;
+    o.from = from;
+    o.to = to;
+    o.points = points;
+    o.continuation = true;
+    o.max_periods = 3000;
+    return o;
+}
+
+// The response x = F |H| sin(omega t + phi), |H| = 1/sqrt((1 - w^2)^2 +
+// (2 zeta w)^2), through resonance; the multipliers are exp(s T) for the
+// eigenvalues s = -zeta +- i sqrt(1 - zeta^2): |mu| = exp(-zeta 2 pi / w).
+TEST(ContinuationClosedForm, LinearOscillatorIsFHAllStable) {
+    const SweepResult r = SweepPlan(kLinear, "linear.toml", {}, continuation("omega", 0.5, 1.5, 11)).run();
+    ASSERT_GE(r.points.size(), 11u);
+    EXPECT_TRUE(r.continuation);
+    double previous = 0;
+    for (const SweepPoint& p : r.points) {
+        SCOPED_TRACE("omega = " + std::to_string(p.value));
+        const double w = p.value, X = 2.5 / std::sqrt((1 - w * w) * (1 - w * w) + (0.1 * w) * (0.1 * w));
+        EXPECT_EQ(p.failure, "");
+        EXPECT_EQ(p.stop, "");
+        EXPECT_TRUE(p.settled);
+        EXPECT_NEAR(p.xmax[0] / X, 1.0, 1e-8);
+        EXPECT_NEAR(p.a1[0] / X, 1.0, 1e-8);
+        EXPECT_NEAR(p.xrms[0] / (X / std::sqrt(2.0)), 1.0, 1e-8);
+        EXPECT_TRUE(p.stable);
+        EXPECT_NEAR(p.max_multiplier, std::exp(-0.05 * 2 * kPi / w), 1e-10);
+        EXPECT_EQ(p.bifurcation, "");
+        EXPECT_EQ(p.direction, SweepDirection::up);
+        EXPECT_GT(w, previous);  // no turning point
+        previous = w;
+    }
+    EXPECT_EQ(r.points.front().value, 0.5);
+    EXPECT_EQ(r.points.back().value, 1.5);  // landed on --to
+    // The steps follow the curve: closer at the resonance peak than on its flanks.
+    double near_peak = 1, far = 0;
+    for (std::size_t k = 1; k < r.points.size(); ++k) {
+        const double w = r.points[k].value, dw = w - r.points[k - 1].value;
+        if (std::fabs(w - 1) < 0.05) near_peak = std::min(near_peak, dw);
+        if (w < 0.7) far = std::max(far, dw);
+    }
+    EXPECT_LT(near_peak, 0.5 * far);
+    std::printf("linear oscillator: %zu points from 0.5 to 1.5\n", r.points.size());
+}
+
+// Den Hartog (1930): X = sqrt(V^2 - beta^2 U^2), U = tan(pi/(2r))/r,
+// V = 1/(1 - r^2); multipliers mu = lambda^2 with lambda^2 - cos(pi/r)(1 +
+// rho) lambda + rho = 0, rho = (r^2 X - beta)/(r^2 X + beta). Both
+// directions, two friction levels.
+TEST(ContinuationClosedForm, DenHartogAmplitudeAndMultipliers) {
+    SweepOptions o = continuation("r", 1.5, 3.0, 7);
+    o.direction = SweepDirection::both;
+    o.param2 = "beta";
+    o.values2 = {0.1, 0.3};
+    const SweepResult r = SweepPlan(kDenHartog, "den-hartog.toml", {}, o).run();
+    std::size_t points = 0, ups = 0, downs = 0;
+    for (const SweepPoint& p : r.points) {
+        SCOPED_TRACE("r = " + std::to_string(p.value) + ", beta = " + std::to_string(p.value2));
+        const double rr = p.value, beta = p.value2;
+        const double U = std::tan(kPi / (2 * rr)) / rr, V = 1 / (1 - rr * rr);
+        const double X = std::sqrt(V * V - beta * beta * U * U);
+        const double rho = (rr * rr * X - beta) / (rr * rr * X + beta);
+        const std::complex<double> b = -std::cos(kPi / rr) * (1 + rho), disc = std::sqrt(b * b - 4.0 * rho);
+        const std::complex<double> l1 = (-b + disc) / 2.0, l2 = (-b - disc) / 2.0;
+        const double mu = std::max(std::abs(l1 * l1), std::abs(l2 * l2));
+        EXPECT_EQ(p.failure, "");
+        EXPECT_EQ(p.stop, "");
+        EXPECT_NEAR(p.xmax[0] / X, 1.0, 1e-8);
+        EXPECT_NEAR(p.max_multiplier, mu, 1e-9);
+        EXPECT_EQ(p.stable, mu < 1);
+        EXPECT_EQ(p.bifurcation, "");
+        ++points;
+        if (p.branch_start) (p.direction == SweepDirection::up ? ups : downs)++;
+    }
+    EXPECT_EQ(ups, 2u);
+    EXPECT_EQ(downs, 2u);
+    EXPECT_GE(points, 4u * 7u);
+}
+
+// The hardening oscillator's branch bends to the right: followed from 0.8
+// to 2.0 it turns back at a fold, runs back along an unstable middle branch
+// to a second fold and on along the lower branch to 2.0. Folds are marked
+// where the largest multiplier crosses +1 (det(M - I) changes sign) and the
+// parameter turns; the middle branch lies between the branches an up and a
+// down sweep end on.
+TEST(ContinuationClosedForm, HardeningOscillatorPassesTwoFolds) {
+    const SweepResult c = SweepPlan(kHardening, "hardening.toml", {}, continuation("omega", 0.8, 2.0, 25)).run();
+    ASSERT_GE(c.points.size(), 25u);
+    EXPECT_EQ(c.points.front().value, 0.8);
+    EXPECT_EQ(c.points.back().value, 2.0);
+    std::vector<std::size_t> folds;
+    for (std::size_t k = 0; k < c.points.size(); ++k) {
+        const SweepPoint& p = c.points[k];
+        EXPECT_EQ(p.failure, "");
+        EXPECT_EQ(p.stop, "");
+        EXPECT_TRUE(p.bifurcation == "" || p.bifurcation == "fold") << p.bifurcation;
+        if (p.bifurcation == "fold") folds.push_back(k);
+        // Stable exactly outside the two folds.
+        if (k > 0) EXPECT_EQ(p.stable != c.points[k - 1].stable, p.bifurcation == "fold") << "point " << k;
+    }
+    ASSERT_EQ(folds.size(), 2u);
+    for (std::size_t f : folds) {
+        // The largest multiplier crosses 1 between the marked point and the one before.
+        const double a = c.points[f - 1].max_multiplier, b = c.points[f].max_multiplier;
+        EXPECT_LT(std::min(a, b), 1.0);
+        EXPECT_GT(std::max(a, b), 1.0);
+        // The parameter turns there.
+        ASSERT_GE(f, 2u);
+        ASSERT_LT(f + 1, c.points.size());
+        const double d1 = c.points[f - 1].value - c.points[f - 2].value, d2 = c.points[f + 1].value - c.points[f].value;
+        EXPECT_LT(d1 * d2, 0) << "fold at omega = " << c.points[f].value;
+    }
+    const double upper_fold = c.points[folds[0]].value, lower_fold = c.points[folds[1]].value;
+    EXPECT_GT(upper_fold, 1.35);
+    EXPECT_LT(lower_fold, 1.15);
+    for (std::size_t k = 0; k < c.points.size(); ++k) EXPECT_EQ(c.points[k].stable, k < folds[0] || k >= folds[1]);
+
+    // The up and down sweeps on a grid of 0.05.
+    SweepOptions o;
+    o.param = "omega";
+    o.from = 0.8;
+    o.to = 2.0;
+    o.points = 25;
+    o.direction = SweepDirection::both;
+    o.max_periods = 3000;
+    const SweepResult s = SweepPlan(kHardening, "hardening.toml", {}, o).run();
+    ASSERT_EQ(s.points.size(), 50u);
+    std::size_t checked = 0;
+    for (std::size_t k = folds[0]; k < folds[1]; ++k) {
+        const SweepPoint& u = c.points[k];
+        // Bracketing grid values where the sweeps are on different branches.
+        const std::size_t j = static_cast<std::size_t>(std::floor((u.value - 0.8) / 0.05));
+        if (j + 1 >= 25) continue;
+        const SweepPoint &up0 = s.points[j], &up1 = s.points[j + 1];
+        const SweepPoint &down0 = s.points[49 - j], &down1 = s.points[49 - (j + 1)];
+        ASSERT_EQ(up0.value, down0.value);
+        if (!(up0.xmax[0] > 1.5 * down0.xmax[0] && up1.xmax[0] > 1.5 * down1.xmax[0])) continue;
+        // The lower branch is linear (below the stop): its closed form. Over
+        // the interval the up sweep's branch rises with omega and the down
+        // sweep's falls, so each lies beyond its value at one end.
+        const double w = u.value;
+        const double lower = 0.1 / std::sqrt((1 - w * w) * (1 - w * w) + (0.04 * w) * (0.04 * w));
+        EXPECT_GT(u.xmax[0], lower) << "omega = " << w;
+        EXPECT_GT(u.xmax[0], std::max(down0.xmax[0], down1.xmax[0])) << "omega = " << w;
+        EXPECT_LT(u.xmax[0], std::min(up0.xmax[0], up1.xmax[0])) << "omega = " << w;
+        EXPECT_LT(up0.xmax[0], up1.xmax[0]);
+        EXPECT_GT(down0.xmax[0], down1.xmax[0]);
+        ++checked;
+    }
+    EXPECT_GE(checked, 3u);
+    std::printf("hardening: %zu points, folds at omega = %.6f and %.6f, %zu middle points between the sweeps\n",
+                c.points.size(), upper_fold, lower_fold, checked);
+}
+
+// The same continuation on 1 and 2 threads (both directions: two branches): bit-equal.
+TEST(Continuation, ThreadsGiveTheSameBits) {
+    SweepOptions o = continuation("omega", 0.8, 2.0, 13);
+    o.direction = SweepDirection::both;
+    const SweepResult one = SweepPlan(kHardening, "hardening.toml", {}, o).run();
+    o.threads = 2;
+    const SweepResult two = SweepPlan(kHardening, "hardening.toml", {}, o).run();
+    ASSERT_EQ(one.points.size(), two.points.size());
+    for (std::size_t i = 0; i < one.points.size(); ++i) {
+        EXPECT_EQ(one.points[i].value, two.points[i].value);
+        EXPECT_EQ(one.points[i].xmax, two.points[i].xmax);
+        EXPECT_EQ(one.points[i].max_multiplier, two.points[i].max_multiplier);
+        EXPECT_EQ(one.points[i].bifurcation, two.points[i].bifurcation);
+    }
+}
+
+// Shooting that fails stops the branch: no row for the failed step, the
+// reason on the last point. Here the model is invalid beyond omega = 1.3
+// (the model reader refuses it there, as it refuses a negative stiffness).
+TEST(Continuation, ShootingFailureStopsTheBranch) {
+    const SweepOptions o = continuation("omega", 0.5, 1.5, 11);
+    const SweepPlan plan(kLinear, "linear.toml", {}, o);
+    sweep_detail::Branch b;
+    b.param = "omega";
+    b.where = " (up)";
+    b.start = 0.5;
+    b.end = 1.5;
+    b.value2 = std::nan("");
+    b.start_model = &plan.model();
+    Model start = plan.model();
+    start.forcing[0].omega = 0.5;
+    b.start_model = &start;
+    b.model_at = [](double w) {
+        if (w > 1.3) throw InputError("linear.toml: omega = " + std::to_string(w) + ": refused");
+        char text[40];
+        std::snprintf(text, sizeof text, "omega=%.17g", w);
+        return parse_model(kLinear, "linear.toml", ModelOverrides{{text}, {}, {}, {}});
+    };
+    std::size_t reported = 0;
+    const std::vector<SweepPoint> pts =
+        sweep_detail::run_continuation(b, o, [&](const SweepPoint&, double) { ++reported; });
+    ASSERT_GE(pts.size(), 5u) << pts.back().failure << pts.back().stop;
+    EXPECT_EQ(reported, pts.size());
+    for (const SweepPoint& p : pts) EXPECT_LE(p.value, 1.3);
+    EXPECT_GT(pts.back().value, 1.29);
+    for (std::size_t k = 0; k + 1 < pts.size(); ++k) EXPECT_EQ(pts[k].stop, "");
+    EXPECT_NE(pts.back().stop.find("shooting fails beyond omega = "), std::string::npos) << pts.back().stop;
+    EXPECT_NE(pts.back().stop.find("refused"), std::string::npos) << pts.back().stop;
+}
+
+TEST(Continuation, Bifurcations) {
+    using C = std::complex<double>;
+    // A real multiplier through +1; through -1; a complex pair through the circle.
+    EXPECT_EQ(sweep_detail::bifurcations_between({C(0.9, 0), C(0.2, 0)}, {C(1.1, 0), C(0.2, 0)}), "fold");
+    EXPECT_EQ(sweep_detail::bifurcations_between({C(-0.9, 0), C(0.2, 0)}, {C(-1.1, 0), C(0.2, 0)}), "period_doubling");
+    EXPECT_EQ(sweep_detail::bifurcations_between({C(0.5, 0.8), C(0.5, -0.8)}, {C(0.6, 0.9), C(0.6, -0.9)}),
+              "neimark_sacker");
+    // A complex pair outside the circle meeting on the real axis: nothing.
+    EXPECT_EQ(sweep_detail::bifurcations_between({C(1.5, 0.1), C(1.5, -0.1)}, {C(1.6, 0), C(1.4, 0)}), "");
+    EXPECT_EQ(sweep_detail::bifurcations_between({C(0.5, 0.1), C(0.5, -0.1)}, {C(0.6, 0), C(0.4, 0)}), "");
+    EXPECT_EQ(sweep_detail::bifurcations_between({C(0.9, 0)}, {C(0.95, 0)}), "");
+}
+
+// ---- the command line ----
+
+TEST(ContinuationCli, CurveColumnsPlotAndBudget) {
+    const std::string model = write_temp("hardening.toml", kHardening);
+    const std::string out = temp_path("cont.csv"), png = temp_path("cont.png"), diagram = temp_path("cd.csv");
+    const auto r = run_hsnc("sweep '" + model + "' --param omega --from 0.8 --to 2.0 --points 25 --continuation --quiet" +
+                            " --out '" + out + "' --plot '" + png + "' --diagram '" + diagram + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    EXPECT_EQ(r.out.substr(0, 10), "status=ok ");
+    EXPECT_NE(r.out.find(" bifurcations=2 stopped=0"), std::string::npos) << r.out;
+    const std::string curve = slurp(out);
+    EXPECT_EQ(curve.substr(0, curve.find('\n')),
+              "omega,direction,settled,periods,multiple,xmax_m,xrms_m,a1_m,stable,max_multiplier,bifurcation");
+    // The diagram: one period of each orbit, one row per point.
+    const std::string d = slurp(diagram);
+    EXPECT_EQ(std::count(curve.begin(), curve.end(), '\n'), std::count(d.begin(), d.end(), '\n'));
+    EXPECT_NE(curve.find(",false,"), std::string::npos);
+    EXPECT_NE(curve.find(",fold\n"), std::string::npos);
+    EXPECT_EQ(slurp(png).substr(1, 3), "PNG");
+
+    // A step budget that runs out: the rows so far, a message, exit 1.
+    const std::string out2 = temp_path("cont2.csv");
+    const auto b = run_hsnc("sweep '" + model + "' --param omega --from 0.8 --to 2.0 --points 25 --continuation " +
+                            "--max-steps 20 --quiet --out '" + out2 + "'");
+    EXPECT_EQ(b.exit_code, 1);
+    EXPECT_NE(b.err.find("the step budget (20 points) ran out at omega = "), std::string::npos) << b.err;
+    const std::string c2 = slurp(out2);
+    EXPECT_EQ(std::count(c2.begin(), c2.end(), '\n'), 21);
+    EXPECT_EQ(b.out.substr(0, 14), "status=failed ");
+
+    // Progress lines name stability and bifurcations.
+    const auto p = run_hsnc("sweep '" + model + "' --param omega --from 1.0 --to 1.5 --points 5 --continuation");
+    ASSERT_EQ(p.exit_code, 0) << p.err;
+    EXPECT_NE(p.err.find("hsnc sweep: branch point 1 omega = 1 (up): stable, max |multiplier| "), std::string::npos)
+        << p.err;
+    EXPECT_NE(p.err.find("crossed: fold"), std::string::npos) << p.err;
+
+    // What does not go with it: bad input, nothing written.
+    const std::string never = temp_path("never.csv");
+    const std::string base = "sweep '" + model + "' --param omega --from 0.8 --to 2.0 --out '" + never + "' ";
+    for (const std::string& flags :
+         {std::string("--points 5 --continuation --restart-each"), std::string("--points 5 --continuation --method rk45"),
+          std::string("--points 1 --continuation"), std::string("--points 5 --max-steps 5")}) {
+        SCOPED_TRACE(flags);
+        const auto e = run_hsnc(base + flags);
+        EXPECT_EQ(e.exit_code, 2) << e.err;
+        EXPECT_FALSE(file_exists(never));
+    }
+}
+
+// ---- a failing point does not stop a sweep ----
+
+// x'' + k x + (contact at 0, k 12) = sin(t): k = 10^(300 exp(-100 (p - 2)^2))
+// is about 1 at p = 1 and p = 3, and 1e300 at p = 2, where the run fails at
+// once (the switch functions overflow: status failure).
+const char* const kZenoInTheMiddle = R"M(
+name = "zeno-in-the-middle"
+[parameters]
+p = 1.0
+[[mass]]
+name = "m"
+m = 1.0
+[[spring]]
+between = ["m", "ground"]
+k = "pow(10, 300*exp(-100*(p - 2)^2))"
+[[contact]]
+between = ["m", "ground"]
+gap = 0
+k = 12
+[damping]
+alpha = 0.1
+[[forcing]]
+omega = 1.0
+amplitude = { m = 1.0 }
+[initial]
+v = { m = 1.0 }
+)M";
+
+TEST(SweepCli, FailingPointGivesARowAndTheSweepGoesOn) {
+    SweepOptions o;
+    o.param = "p";
+    o.from = 1;
+    o.to = 3;
+    o.points = 3;
+    o.max_periods = 400;
+    o.record_periods = 2;
+    const SweepResult r = SweepPlan(kZenoInTheMiddle, "zeno.toml", {}, o).run();
+    ASSERT_EQ(r.points.size(), 3u);
+    EXPECT_EQ(r.points[0].failure, "");
+    EXPECT_TRUE(r.points[0].settled);
+    EXPECT_NE(r.points[1].failure.find("sweep: p = 2 (up): the run stopped: failure: "), std::string::npos)
+        << r.points[1].failure;
+    EXPECT_FALSE(r.points[1].settled);
+    EXPECT_EQ(r.points[1].multiple, 0);
+    EXPECT_TRUE(std::isnan(r.points[1].xmax[0]) && std::isnan(r.points[1].xrms[0]) && std::isnan(r.points[1].a1[0]));
+    EXPECT_TRUE(r.points[1].strobe_t.empty());
+    EXPECT_EQ(r.points[2].failure, "");
+    EXPECT_TRUE(r.points[2].settled);
+    EXPECT_GT(r.points[2].xmax[0], 0.1);
+
+    // The command line: every row written, the failure said on stderr (also with --quiet), exit 1.
+    const std::string model = write_temp("zeno.toml", kZenoInTheMiddle);
+    const std::string out = temp_path("zeno.csv"), png = temp_path("zeno.png");
+    const auto c = run_hsnc("sweep '" + model + "' --param p --from 1 --to 3 --points 3 --max-periods 400 " +
+                            "--record-periods 2 --quiet --out '" + out + "' --plot '" + png + "'");
+    EXPECT_EQ(c.exit_code, 1);
+    EXPECT_NE(c.err.find("hsnc sweep: point 2 p = 2 up failed: "), std::string::npos) << c.err;
+    EXPECT_NE(c.err.find("1 point failed (the outputs are written; the first: "), std::string::npos) << c.err;
+    EXPECT_NE(c.out.find("status=failed points=3 up=3 down=0 settled=2 unsettled=1 failed=1"), std::string::npos)
+        << c.out;
+    const std::string curve = slurp(out);
+    EXPECT_EQ(std::count(curve.begin(), curve.end(), '\n'), 4);
+    EXPECT_NE(curve.find("\n2,up,false,0,0,nan,nan,nan\n"), std::string::npos) << curve;
+    EXPECT_EQ(slurp(png).substr(1, 3), "PNG");
+
+    // In parts: the part with the failing point exits 1 too, its file written;
+    // the merge gives the same rows and exit status.
+    const std::string args = "sweep '" + model + "' --param p --from 1 --to 3 --points 3 --restart-each " +
+                             "--max-periods 400 --record-periods 2 --quiet ";
+    const std::string whole = temp_path("zeno-whole.csv"), merged = temp_path("zeno-merged.csv");
+    EXPECT_EQ(run_hsnc(args + "--out '" + whole + "'").exit_code, 1);
+    const std::string p1 = temp_path("zeno-p1"), p2 = temp_path("zeno-p2");
+    const auto r1 = run_hsnc(args + "--part 1/2 --part-out '" + p1 + "'");
+    EXPECT_EQ(r1.exit_code, 0) << r1.err;  // points 1 and 3
+    const auto r2 = run_hsnc(args + "--part 2/2 --part-out '" + p2 + "'");
+    EXPECT_EQ(r2.exit_code, 1);
+    EXPECT_EQ(r2.out, "status=failed part=2/2 tasks=1\n");
+    EXPECT_TRUE(file_exists(p2));
+    const auto m = run_hsnc("sweep-merge '" + p2 + "' '" + p1 + "' --out '" + merged + "'");
+    EXPECT_EQ(m.exit_code, 1);
+    EXPECT_EQ(slurp(merged), slurp(whole));
+}
+
+}  // namespace
+}  // namespace hsnc
+
+namespace hsnc {
+namespace {
+
+// Under MPI every rank says its own points and rank 0 the whole run's; a
+// continuation (two branches: both directions) gives the same bytes on 1
+// and 2 ranks.
+TEST(SweepCli, MpiProgressPerRankAndOverall) {
+    if (!HSNC_WITH_MPI) GTEST_SKIP() << "built without MPI";
+    ASSERT_EQ(std::system("command -v mpirun >/dev/null 2>&1"), 0) << "mpirun not on PATH (Debian package openmpi-bin)";
+    const std::string model = write_temp("hardening.toml", kHardening);
+    const std::string mpirun = "mpirun --allow-run-as-root --oversubscribe -np 2 '" + std::string(HSNC_BINARY) + "' ";
+    const std::string log = temp_path("mpi-progress.log"), out = temp_path("mpi-progress.csv");
+    const std::string cmd = mpirun + "sweep '" + model + "' --param omega --from 1.0 --to 1.4 --points 5 " +
+                            "--direction both --restart-each --max-periods 300 --record-periods 4 --out '" + out +
+                            "' >/dev/null 2>'" + log + "'";
+    int status = std::system(cmd.c_str());
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(log);
+    const std::string err = slurp(log);
+    for (int r = 0; r < 2; ++r)
+        for (int k = 1; k <= 5; ++k)
+            EXPECT_NE(err.find("hsnc sweep [rank " + std::to_string(r) + "/2]: point " + std::to_string(k) + "/5 "),
+                      std::string::npos)
+                << err;
+    const std::size_t last = err.rfind("hsnc sweep [all 2 ranks]: ");
+    ASSERT_NE(last, std::string::npos) << err;
+    EXPECT_EQ(err.compare(last, 36, "hsnc sweep [all 2 ranks]: 10/10 poin"), 0) << err;
+
+    const std::string a = temp_path("cont-1.csv"), b = temp_path("cont-2.csv");
+    const std::string args = "sweep '" + model + "' --param omega --from 0.8 --to 2.0 --points 13 --continuation " +
+                             "--direction both --quiet --out ";
+    ASSERT_EQ(run_hsnc(args + "'" + a + "'").exit_code, 0);
+    status = std::system((mpirun + args + "'" + b + "' >'" + log + "' 2>&1").c_str());
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(log);
+    EXPECT_EQ(slurp(a), slurp(b));
+    EXPECT_GT(slurp(a).size(), 1000u);
+}
+
+}  // namespace
+}  // namespace hsnc
