@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -487,3 +488,117 @@ TEST(SweepCli, MpiProgressPerRankAndOverall) {
 
 }  // namespace
 }  // namespace hsnc
+
+// ---- a period doubling on a bundled model, checked by simulation ----
+
+namespace {
+
+std::vector<std::vector<std::string>> csv_rows(const std::string& text) {
+    std::vector<std::vector<std::string>> rows;
+    std::istringstream in(text);
+    std::string line;
+    std::getline(in, line);  // header
+    while (std::getline(in, line)) {
+        std::vector<std::string> cells;
+        std::istringstream l(line);
+        std::string cell;
+        while (std::getline(l, cell, ',')) cells.push_back(cell);
+        if (!line.empty() && line.back() == ',') cells.emplace_back();
+        rows.push_back(cells);
+    }
+    return rows;
+}
+
+// `name=value` from a stdout line of hsnc periodic.
+std::string field(const std::string& line, const std::string& name) {
+    const std::size_t at = line.find(" " + name + "=");
+    if (at == std::string::npos) return "";
+    const std::size_t from = at + name.size() + 2;
+    return line.substr(from, line.find_first_of(" \n", from) - from);
+}
+
+}  // namespace
+
+// Scenario 2's period-1 orbit, continued down in omega from 21, loses its
+// stability through a period doubling (a real multiplier through -1). The
+// branch marks it between two points; hsnc periodic, started from a transient
+// (its own path to the orbit), finds there the same orbits with a leading
+// multiplier of negative real part inside the circle before and a real one
+// below -1 after. And the multiplier is what the motion does: a perturbation of the
+// orbit, simulated period after period (no tangent dynamics at all), shrinks by
+// that factor each period with alternating sign.
+TEST(ContinuationCli, PeriodDoublingOfScenarioTwoMatchesSimulation) {
+    const std::string model = model_path("seed-scenario-2.toml");
+    const std::string out = temp_path("pd.csv");
+    const auto r = run_hsnc("sweep '" + model + "' --param omega --from 19.5 --to 21 --points 8 --continuation " +
+                            "--direction down --quiet --out '" + out + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto rows = csv_rows(slurp(out));
+    ASSERT_GE(rows.size(), 3u);
+    // omega,direction,settled,periods,multiple,xmax_m1,xrms_m1,a1_m1,xmax_m2,xrms_m2,a1_m2,stable,max_multiplier,bifurcation
+    std::size_t pd = 0, marks = 0;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+        ASSERT_EQ(rows[i].size(), 14u) << i;
+        if (rows[i][13].empty()) continue;
+        ++marks;
+        EXPECT_EQ(rows[i][13], "period_doubling") << i;
+        pd = i;
+    }
+    ASSERT_EQ(marks, 1u);
+    ASSERT_GE(pd, 1u);
+    for (std::size_t i = 0; i < rows.size(); ++i) EXPECT_EQ(rows[i][11], i < pd ? "true" : "false") << i;
+
+    const auto leading = [&](const std::string& omega, std::string* line) {
+        const std::string mult = temp_path("mu.csv");
+        const auto p = run_hsnc("periodic '" + model + "' --set omega=" + omega + " --transient 100 --multipliers '" +
+                                mult + "'");
+        EXPECT_EQ(p.exit_code, 0) << p.err;
+        *line = p.out;
+        const auto mu = csv_rows(slurp(mult));  // index,re,im,abs, largest abs first
+        EXPECT_FALSE(mu.empty());
+        return mu.empty() ? std::complex<double>(NAN, NAN)
+                          : std::complex<double>(std::stod(mu[0][1]), std::stod(mu[0][2]));
+    };
+    for (std::size_t i : {pd - 1, pd}) {
+        std::string line;
+        const std::complex<double> mu = leading(rows[i][0], &line);
+        // Before: a complex pair of negative real part inside the circle (it
+        // meets the real axis between the points); after: real, below -1.
+        if (i == pd) EXPECT_EQ(mu.imag(), 0.0) << rows[i][0];
+        EXPECT_LT(mu.real(), 0.0) << rows[i][0];
+        EXPECT_NEAR(std::abs(mu), std::stod(rows[i][12]), 1e-8 * std::abs(mu)) << rows[i][0];
+        EXPECT_EQ(std::abs(mu) < 1, i < pd) << rows[i][0];
+    }
+
+    // By simulation, at omega = 19.6 (stable, leading multiplier near -0.99).
+    std::string line;
+    const std::complex<double> mu = leading("19.6", &line);
+    ASSERT_LT(mu.real(), -0.98) << line;
+    const double period = std::stod(field(" " + line, "period"));
+    const std::string x1 = field(line, "x_m1"), x2 = field(line, "x_m2"), v1 = field(line, "v_m1"),
+                      v2 = field(line, "v_m2");
+    ASSERT_FALSE(x1.empty() || v2.empty()) << line;
+    const auto run = [&](double dx) {
+        std::ostringstream x1p;
+        x1p.precision(17);
+        x1p << std::stod(x1) + dx;
+        const std::string csv = temp_path("orbit.csv");
+        std::ostringstream args;
+        args.precision(17);
+        args << "simulate '" << model << "' --set omega=19.6 --x0 m1=" << x1p.str() << " --x0 m2=" << x2
+             << " --v0 m1=" << v1 << " --v0 m2=" << v2 << " --t-end " << 60 * period << " --dt " << period
+             << " --quiet --out '" << csv << "'";
+        const auto s = run_hsnc(args.str());
+        EXPECT_EQ(s.exit_code, 0) << s.err;
+        std::vector<double> x;
+        for (const auto& row : csv_rows(slurp(csv))) x.push_back(std::stod(row[1]));
+        return x;
+    };
+    const std::vector<double> a = run(0), b = run(1e-7);
+    ASSERT_EQ(a.size(), 61u);
+    ASSERT_EQ(b.size(), 61u);
+    for (int k = 38; k < 58; ++k)  // the other multipliers (|mu| < 0.9) have faded by then
+        EXPECT_LT((b[k + 1] - a[k + 1]) * (b[k] - a[k]), 0.0) << "period " << k << ": the sign alternates";
+    const double per_period = std::pow((b[58] - a[58]) / (b[38] - a[38]), 1.0 / 20);
+    EXPECT_NEAR(per_period, std::abs(mu), 1e-3) << "measured by simulation over periods 38..58";
+}
