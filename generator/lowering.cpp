@@ -144,6 +144,12 @@ Program lower(const Derivation& d) {
     }
 
     // ================= setup =================
+    // Room for the program up front (sizes estimated from the configuration):
+    // growing these vectors instruction by instruction moved them many times.
+    const std::size_t ns = d.switches.size();
+    p.setup.code.reserve(4 * (n + nm + nh) + 16);
+    p.eval.code.reserve(4 * (n + nm + nh) + 3 * ns + 16);
+    p.terms.reserve(2 * nm * (nf + nh) + 4 * n + ns * (4 * n + 2 * nm + 8) + 16);
     Builder s(p, p.setup);
     s.reg("1.0", RegisterKind::one);
     s.reg("t0", RegisterKind::input);
@@ -531,6 +537,7 @@ Program lower(const Derivation& d) {
     };
     std::uint32_t s_end = kNoRegister;
     std::vector<std::uint32_t> abs_p(nm, kNoRegister);
+    std::map<int, std::uint32_t> force_reg;  // mass -> its A_force register in eval
     std::vector<numeric> bound_alpha(nm), bound_beta(nm);  // per mode: c + omega, c (c + omega) + lambda
     for (std::size_t j = 0; j < nm; ++j) {
         const Mode& m = d.modes[j];
@@ -621,11 +628,11 @@ Program lower(const Derivation& d) {
             const std::string I = std::to_string(i);
             // release_pos comes first and computes A_i; release_neg reuses it.
             std::uint32_t af = kNoRegister, daf = kNoRegister;
-            for (std::uint32_t r = 0; r < p.eval.registers(); ++r)
-                if (p.eval.names[r] == "A_force_" + I) af = r, daf = r + 1;
+            if (const auto it = force_reg.find(i); it != force_reg.end()) af = it->second, daf = af + 1;
             if (af == kNoRegister) {
                 af = e.temp("A_force_" + I);
                 daf = e.temp("dA_force_" + I);
+                force_reg[i] = af;
                 with(e.lin(af, A), comment);
                 comment.clear();
                 e.lin(daf, dA);
@@ -633,18 +640,25 @@ Program lower(const Derivation& d) {
             const double sgn_f = pos ? 1.0 : -1.0;
             g.add(sgn_f, af).add(-mu_s_n, ONE);
             dg.add(sgn_f, daf);
-            for (std::size_t j = 0; j < nm; ++j)
-                for (std::size_t r = 0; r < nf; ++r) {
-                    const int k = d.free_dofs[r];
-                    al[j] -= entry(d.K, i, k) * d.modes[j].v[r];
-                    be[j] -= entry(d.C, i, k) * d.modes[j].v[r];
+            // Only the nonzero entries of row i of K and C: an exact-zero entry times
+            // a float is the exact 0 (CLN), whose subtraction changes nothing.
+            for (std::size_t r = 0; r < nf; ++r) {
+                const int k = d.free_dofs[r];
+                const numeric Kik = entry(d.K, i, k), Cik = entry(d.C, i, k);
+                const bool kz = Kik.is_zero() && Kik.is_rational(), cz = Cik.is_zero() && Cik.is_rational();
+                if (kz && cz) continue;
+                for (std::size_t j = 0; j < nm; ++j) {
+                    if (!kz) al[j] -= Kik * d.modes[j].v[r];
+                    if (!cz) be[j] -= Cik * d.modes[j].v[r];
                 }
+            }
             for (std::size_t h = 0; h < nh; ++h) {
                 const HarmonicData& hd = d.harmonics[h];
                 Gs[h] = hd.amplitude[i];
                 for (std::size_t r = 0; r < nf; ++r) {
                     const int k = d.free_dofs[r];
                     const numeric Kik = entry(d.K, i, k), Cik = entry(d.C, i, k);
+                    if (Kik.is_zero() && Kik.is_rational() && Cik.is_zero() && Cik.is_rational()) continue;  // adds the exact 0
                     Gs[h] += -Kik * hd.xs[r] + Cik * hd.omega * hd.xc[r];
                     Gc[h] += -Kik * hd.xc[r] - Cik * hd.omega * hd.xs[r];
                 }

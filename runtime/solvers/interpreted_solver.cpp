@@ -849,6 +849,9 @@ std::unique_ptr<InterpretedSolver::Body> compile(const ProgramBody& body, const 
     for (const std::vector<std::size_t>& members : by_level) {
         std::vector<std::vector<std::uint32_t>> keys;
         std::vector<std::vector<const Instr*>> groups;
+        // shape -> its group (groups stay in order of first appearance); a map
+        // instead of a linear search of keys: a wide level has hundreds of shapes.
+        std::map<std::vector<std::uint32_t>, std::size_t> group_of;
         for (std::size_t i : members) {
             const Instr& in = code[i];
             std::vector<std::uint32_t> key = shape(in, terms);
@@ -857,11 +860,11 @@ std::unique_ptr<InterpretedSolver::Body> compile(const ProgramBody& body, const 
                 groups.push_back({&in});
                 continue;
             }
-            const auto it = std::find(keys.begin(), keys.end(), key);
-            if (it != keys.end()) {
-                groups[static_cast<std::size_t>(it - keys.begin())].push_back(&in);
+            const auto [it, added] = group_of.emplace(std::move(key), groups.size());
+            if (!added) {
+                groups[it->second].push_back(&in);
             } else {
-                keys.push_back(std::move(key));
+                keys.push_back(it->first);
                 groups.push_back({&in});
             }
         }
