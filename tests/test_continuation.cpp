@@ -23,6 +23,7 @@ namespace hsnc {
 namespace {
 
 using testing::file_exists;
+using testing::model_path;
 using testing::run_hsnc;
 using testing::slurp;
 using testing::temp_path;
@@ -486,12 +487,8 @@ TEST(SweepCli, MpiProgressPerRankAndOverall) {
     EXPECT_GT(slurp(a).size(), 1000u);
 }
 
-}  // namespace
-}  // namespace hsnc
 
 // ---- a period doubling on a bundled model, checked by simulation ----
-
-namespace {
 
 std::vector<std::vector<std::string>> csv_rows(const std::string& text) {
     std::vector<std::vector<std::string>> rows;
@@ -516,8 +513,6 @@ std::string field(const std::string& line, const std::string& name) {
     const std::size_t from = at + name.size() + 2;
     return line.substr(from, line.find_first_of(" \n", from) - from);
 }
-
-}  // namespace
 
 // Scenario 2's period-1 orbit, continued down in omega from 21, loses its
 // stability through a period doubling (a real multiplier through -1). The
@@ -602,3 +597,6 @@ TEST(ContinuationCli, PeriodDoublingOfScenarioTwoMatchesSimulation) {
     const double per_period = std::pow((b[58] - a[58]) / (b[38] - a[38]), 1.0 / 20);
     EXPECT_NEAR(per_period, std::abs(mu), 1e-3) << "measured by simulation over periods 38..58";
 }
+
+}  // namespace
+}  // namespace hsnc
