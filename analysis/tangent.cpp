@@ -37,7 +37,7 @@ struct Tangent::ConfigData {
     Eigen::MatrixXd K, C;  // full K(cfg), C(cfg) (the gradient of a release function)
 };
 
-Tangent::Tangent(const Model& model) : model_(model) {}
+Tangent::Tangent(const Model& model) : model_(model) { require_proportional_damping(model, "Tangent()"); }
 Tangent::~Tangent() = default;
 Tangent::Tangent(Tangent&&) noexcept = default;
 

@@ -96,6 +96,17 @@ void check_options(const Model& model, const SimulateOptions& o) {
             throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels),
                               "applies to double precision only");
     }
+    // Non-proportional damping (dampers): the state-space solver is the generic
+    // path's; the derivation (kernels, interpreter) and the reference take Rayleigh
+    // damping only, for now.
+    const std::string nonprop = "the model has non-proportional damping ([[damper]] or a non-proportional "
+                                "structure.damping), which runs on the generic solver (state-space modes) only, for now";
+    if (!model.proportional_damping() && o.method == Method::hsnc) {
+        if (o.precision_digits != 0)
+            throw OptionError(kSimulate, "precision_digits", std::to_string(o.precision_digits), nonprop);
+        if (o.kernels != KernelChoice::automatic && o.kernels != KernelChoice::generic)
+            throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels), nonprop);
+    }
     if (o.method != Method::hsnc && o.kernels != KernelChoice::automatic)
         throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels),
                           std::string("applies to method hsnc only (not ") + method_name(o.method) + ")");

@@ -9,10 +9,15 @@
 // a small eigenvalue, which stiffness or mass ratios beyond 1e10 would give.
 // Damping ratio of Rayleigh damping C = alpha*M + beta*K for a mode of
 // frequency omega_n: xi = (alpha/omega_n + beta*omega_n)/2 (modal damping,
-// paper Eq. 12-13).
+// paper Eq. 12-13). With dampers (non-proportional damping) the damped modes
+// are the state matrix's eigenvalues (state_space_solver.h), printed apart.
+#include <algorithm>
 #include <cmath>
+#include <complex>
+#include <vector>
 #include <iomanip>
 #include <iostream>
+#include <memory>
 #include <sstream>
 
 #include "commands.h"
@@ -21,6 +26,7 @@
 #include "free_components.h"
 #include "modal.h"
 #include "model_reader.h"
+#include "state_space_solver.h"
 
 namespace hsnc::cli {
 namespace {
@@ -45,7 +51,8 @@ void print_summary(const Model& model, std::ostream& out) {
     if (model.structure.present) {
         out << "structure: M = " << model.structure.mass_file << "  K = " << model.structure.stiffness_file;
         if (!model.structure.damping_file.empty())
-            out << "  C = " << model.structure.damping_file << " (proportional: alpha, beta below)";
+            out << "  C = " << model.structure.damping_file
+                << (model.proportional_damping() ? " (proportional: alpha, beta below)" : " (non-proportional: dampers below)");
         out << "\n";
     }
     out << "degrees of freedom: " << model.dof() << "\n";
@@ -83,6 +90,43 @@ void print_summary(const Model& model, std::ostream& out) {
     out << "forcing harmonics: " << model.forcing.size() << "\n";
     for (const Harmonic& h : model.forcing) out << "  omega = " << num(h.omega) << " rad/s  phase = " << num(h.phase) << "\n";
     out << "damping: alpha = " << num(model.alpha) << "  beta = " << num(model.beta) << "\n";
+    if (!model.proportional_damping()) {
+        std::size_t from_c = 0;
+        for (const Damper& d : model.dampers) from_c += d.from_structure ? 1 : 0;
+        out << "dampers: " << model.dampers.size() - from_c << "  (non-proportional damping: state-space modes)\n";
+        for (const Damper& d : model.dampers)
+            if (!d.from_structure)
+                out << "  " << body_name(model, d.a) << " - " << body_name(model, d.b) << "  c = " << num(d.c) << "\n";
+        if (from_c > 0)
+            out << "damping matrix C: " << from_c << " couplings (C = sum of -C_ij between dofs i, j and the row sums to ground)\n";
+    }
+}
+
+// Non-proportional damping: the eigenvalues lambda = -xi omega +- i omega sqrt(1 - xi^2)
+// of the state matrix, one line per pair (or real root), as the solver takes them.
+void print_damped_modes(const Model& model, std::ostream& out) {
+    std::unique_ptr<StateSpaceSolver> solver;
+    try {
+        solver = std::make_unique<StateSpaceSolver>(model, Configuration::all_open(model));
+    } catch (const RunError& e) {
+        out << "damped modes: none: " << e.what() << "\n";  // simulate would stop there too
+        return;
+    }
+    const StateSpaceSolver& s = *solver;
+    std::vector<std::complex<double>> lambda(s.eigenvalues().data(), s.eigenvalues().data() + s.eigenvalues().size());
+    std::sort(lambda.begin(), lambda.end(), [](auto a, auto b) {
+        return std::abs(a) != std::abs(b) ? std::abs(a) < std::abs(b) : a.imag() > b.imag();
+    });
+    out << "damped modes (all contacts open, all masses sliding; eigenvalues of the state matrix):\n";
+    out << "  mode  Re lambda [1/s]  Im lambda [rad/s]  |lambda| [rad/s]  xi\n";
+    int j = 0;
+    for (const std::complex<double>& l : lambda) {
+        if (l.imag() < 0.0) continue;  // the conjugate of a pair printed
+        const double mag = std::abs(l);
+        out << "  " << ++j << "  " << num(l.real()) << "  " << num(l.imag()) << "  " << num(mag) << "  "
+            << (mag > 0.0 ? num(-l.real() / mag) : std::string("-")) << "\n";
+    }
+    out << "  state-space eigenvector condition: " << num(s.condition()) << "\n";
 }
 
 void print_modes(const Model& model, std::ostream& out) {
@@ -99,7 +143,9 @@ void print_modes(const Model& model, std::ostream& out) {
         }
         const double omega = std::sqrt(modes.lambda(j));  // lambda = omega_n^2, ascending
         const double xi = 0.5 * (model.alpha / omega + model.beta * omega);
-        out << num(omega) << "  " << num(omega / (2.0 * kPi)) << "  " << num(xi) << "\n";
+        // With dampers the modes of (K, M) are not the damped ones: xi below, per damped mode.
+        out << num(omega) << "  " << num(omega / (2.0 * kPi)) << "  "
+            << (model.proportional_damping() ? num(xi) : std::string("-")) << "\n";
     }
     if (rigid > 0) {
         // The floating groups, by the rule that made those modes rigid (free_components.h).
@@ -127,6 +173,7 @@ void add_check(CLI::App& app, int& exit_code) {
         std::ostringstream out;  // print nothing unless the whole check passes
         print_summary(model, out);
         print_modes(model, out);
+        if (!model.proportional_damping()) print_damped_modes(model, out);
         out << "ok\n";
         std::cout << out.str();
         exit_code = 0;

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "contact_gap.h"
+#include "error.h"
 
 namespace hsnc {
 namespace {
@@ -20,6 +21,13 @@ void add_spring(Eigen::MatrixXd& K, int a, int b, double k) {
 double position(const double* x, int body) { return body == kGround ? 0.0 : x[body]; }
 
 }  // namespace
+
+void require_proportional_damping(const Model& model, const std::string& who) {
+    if (model.proportional_damping()) return;
+    throw InputError(who + ": model '" + model.name +
+                     "' has non-proportional damping ([[damper]] or a non-proportional structure.damping); "
+                     "only the generic solver (state-space modes) takes it, for now");
+}
 
 Eigen::VectorXd mass_vector(const Model& model) {
     Eigen::VectorXd m(model.dof());
@@ -39,6 +47,7 @@ Eigen::MatrixXd stiffness_matrix(const Model& model, const Configuration& cfg) {
 Eigen::MatrixXd damping_matrix(const Model& model, const Configuration& cfg) {
     Eigen::MatrixXd C = model.beta * stiffness_matrix(model, cfg);
     C.diagonal() += model.alpha * mass_vector(model);
+    for (const Damper& d : model.dampers) add_spring(C, d.a, d.b, d.c);  // a dashpot adds to C as a spring to K
     return C;
 }
 
@@ -104,6 +113,11 @@ double force_on_mass(const Model& model, const Configuration& cfg, int i, double
     for (const Spring& s : model.springs) add(s.a, s.b, s.k, 0.0);
     for (std::size_t c = 0; c < model.contacts.size(); ++c)
         if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k, model.contacts[c].gap);
+    for (const Damper& d : model.dampers)  // -c*(v[a]-v[b]) on a
+        if (d.a == i || d.b == i) {
+            const double fa = -d.c * (position(v, d.a) - position(v, d.b));
+            f += d.a == i ? fa : -fa;
+        }
     return f;
 }
 
@@ -125,6 +139,11 @@ double force_rate_on_mass(const Model& model, const Configuration& cfg, int i, d
     for (const Spring& s : model.springs) add(s.a, s.b, s.k);
     for (std::size_t c = 0; c < model.contacts.size(); ++c)
         if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    for (const Damper& d : model.dampers)
+        if (d.a == i || d.b == i) {
+            const double fa = -d.c * (position(a, d.a) - position(a, d.b));
+            f += d.a == i ? fa : -fa;
+        }
     return f;
 }
 

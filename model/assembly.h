@@ -3,7 +3,8 @@
 // In configuration `cfg` every mass obeys, apart from friction,
 //     M x'' = A(x, v, t),
 //     A(x, v, t) = -K x - C v + f_const + sum_h F_h sin(omega_h t + phase_h),
-// with K = K(cfg) (springs + closed contacts), C = alpha*M + beta*K(cfg), and
+// with K = K(cfg) (springs + closed contacts), C = alpha*M + beta*K(cfg) + the
+// dampers (model.h Damper), and
 // f_const = loads + contact preload (a closed contact [a, b] with gap d adds
 // +k*d on a and -k*d on b; paper Eq. 5-6). A_i is the force "from everything
 // but friction" of interface.md section 2. Stuck masses are not removed here:
@@ -12,10 +13,18 @@
 
 #include <Eigen/Core>
 
+#include <string>
+
 #include "configuration.h"
 #include "model.h"
 
 namespace hsnc {
+
+/// Throws InputError "WHO: model 'NAME' has non-proportional damping ..."
+/// unless model.proportional_damping(): for the stages that decouple the
+/// damped equations by the modes of K (the derivation, the kernels, the
+/// interpreter, the reference, the tangent), which take Rayleigh damping only.
+void require_proportional_damping(const Model& model, const std::string& who);
 
 /// Diagonal of M.
 Eigen::VectorXd mass_vector(const Model& model);
@@ -23,7 +32,7 @@ Eigen::VectorXd mass_vector(const Model& model);
 /// K(cfg): springs plus the contacts closed in cfg (stuck flags are ignored).
 Eigen::MatrixXd stiffness_matrix(const Model& model, const Configuration& cfg);
 
-/// C = alpha*M + beta*K(cfg).
+/// C = alpha*M + beta*K(cfg) + the dampers' matrix.
 Eigen::MatrixXd damping_matrix(const Model& model, const Configuration& cfg);
 
 /// Loads plus the preload of the contacts closed in cfg.
@@ -42,7 +51,7 @@ double gap_rate(const Model& model, int c, const double* v);
 namespace hsnc {
 
 /// A_i: force on mass i from everything but friction (springs, closed contacts,
-/// Rayleigh dampers, forcing, loads) at time t and state (x, v), in cfg.
+/// Rayleigh damping, dampers, forcing, loads) at time t and state (x, v), in cfg.
 /// Sparse: loops over the elements touching i, no allocation.
 double force_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* x,
                      const double* v);

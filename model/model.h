@@ -11,7 +11,8 @@
 //  - springs have zero rest length: force -k*(x[a]-x[b]) on a, the opposite on b;
 //  - a contact [a, b] with gap d has gap function G = x[a] - x[b] - d and, while
 //    closed, acts as a spring of stiffness k on G;
-//  - C = alpha*M + beta*K(configuration) (Rayleigh damping).
+//  - C = alpha*M + beta*K(configuration) (Rayleigh damping) plus the dampers
+//    (non-proportional damping, runtime/solvers/state_space_solver.h).
 #pragma once
 
 #include <cstddef>
@@ -59,6 +60,18 @@ struct Contact {
     double k = 0.0;    ///< contact stiffness, > 0
 };
 
+/// A viscous dashpot (interface.md section 5): force -c*(v[a]-v[b]) on a, the
+/// opposite on b. A model with dampers has non-proportional damping: its
+/// segments are solved through state-space modes (state_space_solver.h).
+struct Damper {
+    int a = kGround;
+    int b = kGround;
+    double c = 0.0;  ///< >= 0 (a damper of a [structure]'s C may be negative)
+    /// True for the dampers that represent a non-proportional [structure]
+    /// damping matrix, written as K is written as springs (Spring::from_structure).
+    bool from_structure = false;
+};
+
 /// One forcing harmonic: force on mass i is amplitude[i]*sin(omega*t + phase).
 struct Harmonic {
     double omega = 0.0;
@@ -99,6 +112,7 @@ struct Model {
     std::vector<Spring> springs;
     std::vector<Contact> contacts;
     std::vector<FrictionElement> frictions;
+    std::vector<Damper> dampers;  ///< [[damper]]s, then those of a non-proportional structure.damping
     StructureSource structure;
     double alpha = 0.0;  ///< Rayleigh mass coefficient
     double beta = 0.0;   ///< Rayleigh stiffness coefficient
@@ -126,6 +140,10 @@ struct Model {
     std::map<std::string, std::string> field_expressions;
 
     std::size_t dof() const { return masses.size(); }
+    /// C = alpha*M + beta*K(cfg) exactly: no dampers. Only then are the modes
+    /// of K those of the damped system (the derivation, kernels, interpreter,
+    /// reference and tangent need it; the state-space solver does not).
+    bool proportional_damping() const { return dampers.empty(); }
 
     /// Index of the mass called `name`, or -1.
     int mass_index(const std::string& name) const {

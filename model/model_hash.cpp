@@ -34,6 +34,8 @@ std::string model_canonical_text(const Model& model) {
     for (const FrictionElement& f : model.frictions)
         t += "friction " + f.name + " " + std::to_string(f.a) + " " + std::to_string(f.b) + " " + num(f.mu_k) + " " +
              num(f.mu_s) + " " + num(f.normal) + "\n";
+    for (const Damper& d : model.dampers)
+        t += "damper " + std::to_string(d.a) + " " + std::to_string(d.b) + " " + num(d.c) + "\n";
     t += "load";
     for (double l : model.load) t += " " + num(l);
     t += "\n";

@@ -94,11 +94,10 @@ public:
 
     Model read(const toml::table& root) {
         model_.source = source_;
-        for (const char* later : {"jenkins", "damper"})
-            if (const toml::node* n = root.get(later))
-                fail(n, later, std::string("[[") + later + "]] elements are not yet supported by this version of hsnc");
-        check_keys(root, "", {"name", "description", "parameters", "mass", "structure", "spring", "damping", "contact",
-                              "friction", "forcing", "load", "initial", "simulate"});
+        if (const toml::node* n = root.get("jenkins"))
+            fail(n, "jenkins", "[[jenkins]] elements are not yet supported by this version of hsnc");
+        check_keys(root, "", {"name", "description", "parameters", "mass", "structure", "spring", "damping", "damper",
+                              "contact", "friction", "forcing", "load", "initial", "simulate"});
         model_.name = required_string(root, "", "name");
         if (model_.name.empty()) fail(root.get("name"), "name", "must not be empty");
         if (const toml::node* d = root.get("description")) model_.description = string_value(*d, "description");
@@ -111,6 +110,7 @@ public:
         read_springs(root);
         add_structure_springs();
         read_damping(root);
+        read_dampers(root);
         read_contacts(root);
         read_frictions(root);
         read_forcing(root);
@@ -453,9 +453,16 @@ private:
         if (t->get("damping")) {
             const MarketMatrix C = matrix_file(*t, "damping", model_.structure.damping_file);
             double a = 0.0, b = 0.0;
-            if (const std::string why = fit_rayleigh_damping(C, M, K, names, a, b); !why.empty())
+            bool proportional = false;
+            if (const std::string why = fit_rayleigh_damping(C, M, K, names, a, b, proportional); !why.empty())
                 fail(t->get("damping"), "structure.damping", model_.structure.damping_file + ": " + why);
-            structure_damping_ = std::make_pair(a, b);
+            if (proportional) {
+                structure_damping_ = std::make_pair(a, b);
+            } else {
+                if (const std::string why = check_damping_matrix(C, names, structure_dampers_); !why.empty())
+                    fail(t->get("damping"), "structure.damping", model_.structure.damping_file + ": " + why);
+                structure_damping_ = std::make_pair(0.0, 0.0);  // C is all dampers
+            }
         }
         for (std::size_t i = 0; i < names.size(); ++i) {
             Mass m;
@@ -474,6 +481,22 @@ private:
             model_.springs.push_back(s);
             model_.field_expressions["spring[" + std::to_string(model_.springs.size()) + "].k"] = literal_text(s.k);
         }
+    }
+
+    /// [[damper]] tables, then the dampers of a non-proportional structure.damping.
+    void read_dampers(const toml::table& root) {
+        const auto tables = table_array(root, "damper");
+        for (std::size_t i = 0; i < tables.size(); ++i) {
+            const toml::table& t = *tables[i];
+            const std::string path = "damper[" + std::to_string(i + 1) + "]";
+            check_keys(t, path, {"between", "c"});
+            Damper d;
+            std::tie(d.a, d.b) = between(t, path);
+            d.c = required_number(t, path, "c");
+            if (d.c < 0.0) fail(t.get("c"), path + ".c", "damping coefficient must be >= 0, got " + show(d.c));
+            if (d.c > 0.0) model_.dampers.push_back(d);  // c = 0 (a sweep's end point) is no damper at all
+        }
+        model_.dampers.insert(model_.dampers.end(), structure_dampers_.begin(), structure_dampers_.end());
     }
 
     void read_frictions(const toml::table& root) {
@@ -695,6 +718,7 @@ private:
     std::map<std::string, std::string> element_names_;  ///< mass/dof/contact/friction name -> who took it
     std::vector<Spring> structure_springs_;             ///< the springs of [structure]'s K
     std::optional<std::pair<double, double>> structure_damping_;  ///< (alpha, beta) of structure.damping
+    std::vector<Damper> structure_dampers_;  ///< a non-proportional structure.damping as dampers
     Model model_;
 };
 

@@ -40,8 +40,10 @@
 //    file's folder; messages say "dof" where they say "mass" for [[mass]].
 //  - [[friction]] between a body and the ground is that body's friction with
 //    N = normal (model.h, Mass::friction); its names share the same name
-//    space (default "friction<N>"). Friction between two bodies, [[jenkins]]
-//    and [[damper]] are refused as not yet supported.
+//    space (default "friction<N>"). Friction between two bodies and
+//    [[jenkins]] are refused as not yet supported.
+//  - [[damper]] c = 0 adds no damper (the model stays proportional: every
+//    kernel kind runs it); c < 0 is refused.
 #pragma once
 
 #include <optional>

@@ -188,7 +188,9 @@ std::string check_stiffness_matrix(const MarketMatrix& K_in, const std::vector<s
 }
 
 std::string fit_rayleigh_damping(const MarketMatrix& C_in, const MarketMatrix& M, const MarketMatrix& K,
-                                 const std::vector<std::string>& dofs, double& alpha, double& beta) {
+                                 const std::vector<std::string>& dofs, double& alpha, double& beta,
+                                 bool& proportional) {
+    proportional = false;
     const std::size_t n = dofs.size();
     if (std::string why = check_size("C", C_in, n); !why.empty()) return why;
     MarketMatrix C = C_in;
@@ -214,16 +216,43 @@ std::string fit_rayleigh_damping(const MarketMatrix& C_in, const MarketMatrix& M
     for (std::size_t i = 0; i < n; ++i)
         for (std::size_t j = 0; j < n; ++j) {
             const double r = C(i, j) - a * M(i, j) - b * K(i, j);
-            if (std::fabs(r) > tol)
-                return "C is not proportional damping: the best fit C = a*M + b*K (a = " + show(a) + ", b = " + show(b) +
-                       ") misses " + entry("C", dofs, i, j) + " = " + show(C(i, j)) + " by " + show(r) +
-                       "; non-proportional damping is not yet supported";
+            if (std::fabs(r) > tol) return "";  // not proportional: check_damping_matrix
         }
     if (a < 0.0 || b < 0.0)
         return "C = a*M + b*K with a = " + show(a) + ", b = " + show(b) +
                ": Rayleigh coefficients must be >= 0 (a negative one feeds energy in)";
     alpha = a;
     beta = b;
+    proportional = true;
+    return "";
+}
+
+std::string check_damping_matrix(const MarketMatrix& C_in, const std::vector<std::string>& dofs,
+                                 std::vector<Damper>& dampers) {
+    const std::size_t n = dofs.size();
+    if (std::string why = check_size("C", C_in, n); !why.empty()) return why;
+    MarketMatrix C = C_in;
+    if (std::string why = check_symmetric("C", C, dofs); !why.empty()) return why;
+    Eigen::MatrixXd A(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = 0; j < n; ++j) A(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = C(i, j);
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(A, Eigen::EigenvaluesOnly);
+    const double lo = es.eigenvalues()(0), hi = es.eigenvalues()(static_cast<Eigen::Index>(n) - 1);
+    if (!(hi > 0.0)) return "C has no positive eigenvalue (largest " + show(hi) + "): leave structure.damping out";
+    if (lo < -kRelTol * hi)
+        return "C is not positive semi-definite (smallest eigenvalue " + show(lo) + ", largest " + show(hi) +
+               "): a damper with negative damping feeds energy in";
+    // As K becomes springs: -C_ij between dofs i and j, the row sum to ground.
+    const double slack = std::max<double>(16.0, static_cast<double>(n)) * DBL_EPSILON;
+    dampers.clear();
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = i + 1; j < n; ++j)
+            if (C(i, j) != 0.0) dampers.push_back({static_cast<int>(i), static_cast<int>(j), -C(i, j), true});
+    for (std::size_t i = 0; i < n; ++i) {
+        double sum = 0.0, mag = 0.0;
+        for (std::size_t j = 0; j < n; ++j) sum += C(i, j), mag += std::fabs(C(i, j));
+        if (std::fabs(sum) > slack * mag) dampers.push_back({static_cast<int>(i), kGround, sum, true});
+    }
     return "";
 }
 

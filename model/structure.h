@@ -20,13 +20,15 @@
 //    definiteness on the Jacobi-scaled matrix D^-1/2 K D^-1/2 of each group,
 //    against its largest eigenvalue); a matrix symmetric to that level is
 //    used as (K + K^T)/2.
-//  - C (optional) must be proportional, C = a M + b K to 1e-12 relative
+//  - C (optional): when proportional, C = a M + b K to 1e-12 relative
 //    (least-squares a, b, then entry by entry against a|M|max + b|K|max),
-//    with a, b >= 0: it is Rayleigh damping alpha = a, beta = b, and as with
-//    [damping] beta also scales [[spring]]s and closed contacts. A C that is
-//    not proportional is refused: non-proportional damping is not yet
-//    supported. When M and K are proportional themselves (a and b not
-//    separable) the fit takes b = 0.
+//    with a, b >= 0, it is Rayleigh damping alpha = a, beta = b, and as with
+//    [damping] beta also scales [[spring]]s and closed contacts. When M and K
+//    are proportional themselves (a and b not separable) the fit takes b = 0.
+//    Any other C must be symmetric positive semi-definite (1e-12 relative)
+//    and becomes dampers exactly as K becomes springs (model.h Damper,
+//    from_structure): non-proportional damping, solved through state-space
+//    modes.
 #pragma once
 
 #include <cstddef>
@@ -50,8 +52,16 @@ std::string check_mass_matrix(const MarketMatrix& M, const std::vector<std::stri
 std::string check_stiffness_matrix(const MarketMatrix& K, const std::vector<std::string>& dofs,
                                    std::vector<Spring>& springs);
 
-/// C: n x n, symmetric, C = a M + b K (a, b >= 0). On success `alpha`, `beta` hold a, b.
+/// C: n x n, symmetric. `proportional` tells whether C = a M + b K; then a, b
+/// must be >= 0 and `alpha`, `beta` hold them. A C that is not proportional
+/// is no error here (check_damping_matrix).
 std::string fit_rayleigh_damping(const MarketMatrix& C, const MarketMatrix& M, const MarketMatrix& K,
-                                 const std::vector<std::string>& dofs, double& alpha, double& beta);
+                                 const std::vector<std::string>& dofs, double& alpha, double& beta,
+                                 bool& proportional);
+
+/// C: n x n, symmetric positive semi-definite. On success `dampers` holds its
+/// dampers (Damper::from_structure), between dofs row by row (i < j), then to ground.
+std::string check_damping_matrix(const MarketMatrix& C, const std::vector<std::string>& dofs,
+                                 std::vector<Damper>& dampers);
 
 }  // namespace hsnc

@@ -22,6 +22,7 @@
 #include <cln/integer.h>
 #include <cln/rational.h>
 
+#include "assembly.h"
 #include "contact_gap.h"
 #include "error.h"
 #include "mp_segment.h"
@@ -271,6 +272,7 @@ std::size_t search_step_limit(double span, double fastest_rate, const SearchLimi
 PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions& options, Observer& observer,
                             const SearchLimits& limits, const std::vector<double>* offset) {
     if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
+    require_proportional_damping(model, "reference::simulate_precise()");
     const MpModel mp(model, digits);
     const std::size_t n = model.dof();
     PreciseRun run;

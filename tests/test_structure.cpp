@@ -590,10 +590,41 @@ TEST(StructureInput, Damping) {
     const Model m = read_model(dir.write("s.toml", kHead + "damping = \"C.mtx\"\n"));
     EXPECT_NEAR(m.alpha, 0.5, 1e-15);
     EXPECT_NEAR(m.beta, 0.01, 1e-17);
-    // A lone dashpot on u2 is not proportional.
-    expect_message(with_matrices("damping = \"C.mtx\"\n", kM2, kK2, "%%MatrixMarket matrix coordinate real general\n2 2 1\n2 2 0.3\n"),
-                   {"s.toml:6: key 'structure.damping': C.mtx: C is not proportional damping",
-                    "non-proportional damping is not yet supported"});
+    // A C that is not proportional becomes dampers, as K becomes springs: a
+    // lone dashpot on u2 (to ground), and a coupling u1-u2 with the row sums.
+    dir.write("C.mtx", "%%MatrixMarket matrix coordinate real general\n2 2 1\n2 2 0.3\n");
+    const Model lone = read_model(dir.path("s.toml"));
+    EXPECT_EQ(lone.alpha, 0.0);
+    EXPECT_EQ(lone.beta, 0.0);
+    ASSERT_EQ(lone.dampers.size(), 1u);
+    EXPECT_EQ(lone.dampers[0].a, 1);
+    EXPECT_EQ(lone.dampers[0].b, kGround);
+    EXPECT_EQ(lone.dampers[0].c, 0.3);
+    EXPECT_TRUE(lone.dampers[0].from_structure);
+    dir.write("C.mtx", "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 0.5\n2 1 -0.2\n2 2 0.2\n");
+    const Model coupled = read_model(dir.path("s.toml"));
+    ASSERT_EQ(coupled.dampers.size(), 2u);  // 0.2 between u1 and u2, 0.3 from u1 to ground
+    EXPECT_EQ(coupled.dampers[0].a, 0);
+    EXPECT_EQ(coupled.dampers[0].b, 1);
+    EXPECT_EQ(coupled.dampers[0].c, 0.2);
+    EXPECT_EQ(coupled.dampers[1].b, kGround);
+    EXPECT_NEAR(coupled.dampers[1].c, 0.3, 1e-16);
+    EXPECT_TRUE(damping_matrix(coupled, Configuration::all_open(coupled))
+                    .isApprox((Eigen::Matrix2d() << 0.5, -0.2, -0.2, 0.2).finished(), 1e-15));
+    // The same physics as [[damper]]s: the same events, bit for bit.
+    {
+        const std::string extra = "[[contact]]\nname = \"stop\"\nbetween = [\"u2\", \"ground\"]\ngap = 0.01\nk = 500\n"
+                                  "[initial]\nv = { u2 = 0.4 }\n";
+        dir.write("C.mtx", "%%MatrixMarket matrix coordinate real general\n2 2 1\n2 2 0.3\n");
+        const Model a = read_model(dir.write("a.toml", kHead + "damping = \"C.mtx\"\n" + extra));
+        const Model b = read_model(dir.write("b.toml", kHead + "[[damper]]\nbetween = [\"u2\", \"ground\"]\nc = 0.3\n" + extra));
+        const testing::Outcome ra = testing::simulate(a, 5.0), rb = testing::simulate(b, 5.0);
+        ASSERT_GT(ra.events.size(), 4u);
+        ASSERT_EQ(ra.events.size(), rb.events.size());
+        for (std::size_t e = 0; e < ra.events.size(); ++e) EXPECT_EQ(ra.events[e].t, rb.events[e].t);
+    }
+    expect_message(with_matrices("damping = \"C.mtx\"\n", kM2, kK2, "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 0.1\n2 1 -1\n2 2 0.1\n"),
+                   {"s.toml:6: key 'structure.damping': C.mtx: C is not positive semi-definite"});
     expect_message(with_matrices("damping = \"C.mtx\"\n", kM2, kK2, "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 -1\n2 2 -2\n"),
                    {"key 'structure.damping'", "Rayleigh coefficients must be >= 0"});
     expect_message(with_matrices("damping = \"C.mtx\"\n[damping]\nalpha = 1\n", kM2, kK2,

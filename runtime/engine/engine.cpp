@@ -58,7 +58,8 @@ double side_of(const SwitchFunction& f, const Configuration& cfg, const std::vec
 
 // An upper bound on the rates of the motion in cfg (1/s): the fastest mode
 // (Gershgorin on M^-1 K of the free masses: omega^2 <= 2 sum_links k / m_i),
-// its Rayleigh damping rate alpha + beta omega^2, and every forcing frequency.
+// its Rayleigh damping rate alpha + beta omega^2, the dampers' rates, and every
+// forcing frequency.
 double fastest_rate(const Model& model, const Configuration& cfg) {
     const std::size_t n = model.dof();
     std::vector<double> stiff(n, 0.0);
@@ -75,6 +76,13 @@ double fastest_rate(const Model& model, const Configuration& cfg) {
     for (std::size_t i = 0; i < n; ++i)
         if (!cfg.stuck[i]) w2 = std::max(w2, 2 * stiff[i] / model.masses[i].m);
     double rate = std::max(std::sqrt(w2), std::fabs(model.alpha) + std::fabs(model.beta) * w2);
+    // Dampers: the damping rates of M^-1 C_d, by Gershgorin as for K.
+    std::vector<double> visc(n, 0.0);
+    for (const Damper& d : model.dampers)
+        for (int b : {d.a, d.b})
+            if (b != kGround && d.a != d.b) visc[static_cast<std::size_t>(b)] += std::fabs(d.c);
+    for (std::size_t i = 0; i < n; ++i)
+        if (!cfg.stuck[i]) rate = std::max(rate, 2 * visc[i] / model.masses[i].m);
     for (const Harmonic& h : model.forcing) rate = std::max(rate, std::fabs(h.omega));
     return rate;
 }

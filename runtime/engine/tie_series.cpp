@@ -14,13 +14,19 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 double body(const std::vector<double>& y, int b) { return b == kGround ? 0.0 : y[static_cast<std::size_t>(b)]; }
 
-// Every element acting between two bodies in cfg: springs and closed contacts
-// (stiffness, and the gap for the preload of a contact).
+// Every element acting between two bodies in cfg: springs, closed contacts
+// and dampers, as fn(a, b, stiffness, damping, gap): beta*k for a spring or
+// contact (Rayleigh), c (and stiffness 0) for a damper, the gap for the
+// preload of a contact.
 template <class Fn>
 void for_each_link(const Model& model, const Configuration& cfg, Fn&& fn) {
-    for (const Spring& s : model.springs) fn(s.a, s.b, s.k, 0.0);
+    for (const Spring& s : model.springs) fn(s.a, s.b, s.k, model.beta * s.k, 0.0);
     for (std::size_t c = 0; c < model.contacts.size(); ++c)
-        if (cfg.closed[c]) fn(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k, model.contacts[c].gap);
+        if (cfg.closed[c]) {
+            const Contact& k = model.contacts[c];
+            fn(k.a, k.b, k.k, model.beta * k.k, k.gap);
+        }
+    for (const Damper& d : model.dampers) fn(d.a, d.b, 0.0, d.c, 0.0);
 }
 
 // A_i^(k) and the magnitude of its terms, from x^(k), x^(k+1) of the series.
@@ -33,10 +39,10 @@ void force_derivative(const Model& model, const Configuration& cfg, int i, doubl
     magnitude = std::fabs(value);
     value -= model.alpha * model.masses[ii].m * xk1[ii];
     magnitude += std::fabs(model.alpha) * model.masses[ii].m * mk1[ii];
-    for_each_link(model, cfg, [&](int a, int b, double kk, double gap) {
+    for_each_link(model, cfg, [&](int a, int b, double kk, double cc, double gap) {
         if (a == b || (a != i && b != i)) return;
-        double f = -kk * (body(xk, a) - body(xk, b)) - model.beta * kk * (body(xk1, a) - body(xk1, b));
-        double fm = std::fabs(kk) * (body(mk, a) + body(mk, b)) + std::fabs(model.beta * kk) * (body(mk1, a) + body(mk1, b));
+        double f = -kk * (body(xk, a) - body(xk, b)) - cc * (body(xk1, a) - body(xk1, b));
+        double fm = std::fabs(kk) * (body(mk, a) + body(mk, b)) + std::fabs(cc) * (body(mk1, a) + body(mk1, b));
         if (k == 0 && gap != 0.0) f += kk * gap, fm += std::fabs(kk * gap);
         value += a == i ? f : -f;
         magnitude += fm;
@@ -136,9 +142,9 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
         const std::size_t ii = static_cast<std::size_t>(i);
         if (i == kGround || cfg.stuck[ii]) return 0.0;
         double m = std::fabs(model.load[ii]) + std::fabs(model.alpha) * model.masses[ii].m * std::fabs(v[ii]);
-        for_each_link(model, cfg, [&](int a, int b, double kk, double gap) {
+        for_each_link(model, cfg, [&](int a, int b, double kk, double cc, double gap) {
             if (a == b || (a != i && b != i)) return;
-            m += std::fabs(kk) * (at(x, a) + at(x, b)) + std::fabs(model.beta * kk) * (at(v, a) + at(v, b)) + std::fabs(kk * gap);
+            m += std::fabs(kk) * (at(x, a) + at(x, b)) + std::fabs(cc) * (at(v, a) + at(v, b)) + std::fabs(kk * gap);
         });
         for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii]);
         if (model.masses[ii].has_friction) m += model.masses[ii].mu_k * model.normal_force(i);
@@ -148,9 +154,9 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
     // A_i' = -(K v)_i - (C x'')_i + sum_h F_hi Omega_h cos(...).
     const std::size_t ii = static_cast<std::size_t>(e);
     double m = std::fabs(model.alpha) * model.masses[ii].m * accel_magnitude(e);
-    for_each_link(model, cfg, [&](int a, int b, double kk, double) {
+    for_each_link(model, cfg, [&](int a, int b, double kk, double cc, double) {
         if (a == b || (a != e && b != e)) return;
-        m += std::fabs(kk) * (at(v, a) + at(v, b)) + std::fabs(model.beta * kk) * (accel_magnitude(a) + accel_magnitude(b));
+        m += std::fabs(kk) * (at(v, a) + at(v, b)) + std::fabs(cc) * (accel_magnitude(a) + accel_magnitude(b));
     });
     for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii] * h.omega);
     return m;
@@ -181,7 +187,7 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
         double two_e = 0.0;
         for (std::size_t i = 0; i < n; ++i)
             if (!cfg.stuck[i]) two_e += model.masses[i].m * up(zd[i], zdm[i]) * up(zd[i], zdm[i]);
-        for_each_link(model, cfg, [&](int a, int b, double kk, double) {
+        for_each_link(model, cfg, [&](int a, int b, double kk, double, double) {
             if (a == b) return;
             const double za = free_mass(a) ? z[static_cast<std::size_t>(a)] : 0.0;
             const double zb = free_mass(b) ? z[static_cast<std::size_t>(b)] : 0.0;
@@ -213,9 +219,9 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
     // A_i^(k) = -(K x^(k))_i - (C x^(k+1))_i + sum_h F_hi Omega_h^k sin(...): the neighbours' terms.
     const double rk1 = R(k - 1), rk = R(k);
     double B = 0.0;
-    for_each_link(model, cfg, [&](int a, int b, double kk, double) {
+    for_each_link(model, cfg, [&](int a, int b, double kk, double cc, double) {
         if (a == b || (a != e && b != e)) return;
-        for (int o : {a, b}) B += std::fabs(kk) * per_mass(o, rk1) + std::fabs(model.beta * kk) * per_mass(o, rk);
+        for (int o : {a, b}) B += std::fabs(kk) * per_mass(o, rk1) + std::fabs(cc) * per_mass(o, rk);
     });
     B += std::fabs(model.alpha) * model.masses[static_cast<std::size_t>(e)].m * per_mass(e, rk);
     for (const Harmonic& h : model.forcing) B += std::fabs(h.amplitude[static_cast<std::size_t>(e)]) * std::pow(std::fabs(h.omega), k);

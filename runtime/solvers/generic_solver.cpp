@@ -56,6 +56,7 @@ double reduced_phase(double omega, double t0, double t0_lo, double phase) {
 
 GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     : cfg_(cfg), switches_(switch_functions(model, cfg)), modal_(modal_analysis(model, cfg)) {
+    require_proportional_damping(model, "GenericSolver()");  // dampers: StateSpaceSolver
     n_ = static_cast<int>(model.dof());
     nf_ = static_cast<int>(modal_.free.size());
     alpha_ = model.alpha;

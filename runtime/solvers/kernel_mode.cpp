@@ -5,6 +5,7 @@
 
 #include "error.h"
 #include "generic_solver.h"
+#include "state_space_solver.h"
 #include "kernel_solver.h"
 #include "model_hash.h"
 
@@ -25,10 +26,19 @@ SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
         lru_.splice(lru_.begin(), lru_, it->second.lru);  // most recently used
         return *it->second.solver;
     }
-    auto s = std::make_unique<GenericSolver>(model_, cfg);
+    std::unique_ptr<SegmentSolver> s;
+    std::size_t bytes = 0;
+    if (model_.proportional_damping()) {
+        auto g = std::make_unique<GenericSolver>(model_, cfg);
+        bytes = g->memory_bytes();
+        s = std::move(g);
+    } else {
+        auto g = std::make_unique<StateSpaceSolver>(model_, cfg);
+        bytes = g->memory_bytes();
+        s = std::move(g);
+    }
     ++built_;
     seen_.insert(cfg);
-    const std::size_t bytes = s->memory_bytes();
     lru_.push_front(cfg);
     it = cache_.emplace(cfg, Entry{std::move(s), bytes, lru_.begin()}).first;
     bytes_ += bytes;
@@ -44,7 +54,8 @@ SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
 }
 
 std::string GenericSolverProvider::describe() const {
-    std::string text = "generic solver for " + std::to_string(seen_.size()) + " configurations";
+    std::string text = std::string(model_.proportional_damping() ? "generic solver" : "generic solver (state-space modes)") +
+                       " for " + std::to_string(seen_.size()) + " configurations";
     if (evicted_ > 0)
         text += " (" + std::to_string(cache_.size()) + " kept within " + std::to_string(max_bytes_ >> 20) +
                 " MB, " + std::to_string(built_ - seen_.size()) + " rebuilt)";

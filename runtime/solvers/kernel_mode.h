@@ -31,7 +31,8 @@ enum class KernelMode {
 /// "auto", "aot", "generic", "interp", "jit"; InputError otherwise.
 KernelMode parse_kernel_mode(const std::string& name);
 
-/// The Eigen solver (runtime/generic_solver.h) for every configuration: an
+/// The Eigen solver (runtime/generic_solver.h) for every configuration (for a
+/// model with dampers, non-proportional damping, state_space_solver.h): an
 /// implementation of the closed forms independent of the programs, the tests'
 /// oracle, and the generic path of a runtime used without the generator (no
 /// program source). Created on first use and
@@ -60,7 +61,7 @@ public:
 
 private:
     struct Entry {
-        std::unique_ptr<GenericSolver> solver;
+        std::unique_ptr<SegmentSolver> solver;  // GenericSolver, or StateSpaceSolver for dampers
         std::size_t bytes;
         std::list<Configuration>::iterator lru;  // position in lru_ (front: most recent)
     };

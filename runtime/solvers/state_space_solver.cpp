@@ -1,0 +1,359 @@
+#include "state_space_solver.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+#include "assembly.h"
+#include "error.h"
+#include "kernel_abi.h"  // hsnc_phase: Omega (t0 + t0_lo) + phase, reduced as every solver does
+
+namespace hsnc {
+namespace {
+
+using cplx = std::complex<double>;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kPi = 3.141592653589793;
+/// |mu - lambda| < kNear |mu|: a harmonic near a mode's resonance (bounds use one forcing period).
+constexpr double kNear = 0.1;
+
+// e^w - 1 for complex w = x + iy without cancellation:
+// Re = expm1(x) cos y - 2 sin^2(y/2), Im = e^x sin y.
+cplx expm1c(cplx w) {
+    const double x = w.real(), y = w.imag();
+    const double s = std::sin(0.5 * y);
+    return {std::expm1(x) * std::cos(y) - 2.0 * s * s, std::exp(x) * std::sin(y)};
+}
+
+cplx expc(cplx w) { return std::exp(w.real()) * cplx(std::cos(w.imag()), std::sin(w.imag())); }
+
+/// E(lambda, mu, tau) = int_0^tau e^{lambda (tau - s)} e^{mu s} ds, given
+/// el = e^{lambda tau} and em = e^{mu tau}.
+cplx duhamel(cplx lambda, cplx mu, double tau, cplx el, cplx em) {
+    const cplx d = mu - lambda, w = d * tau;
+    if (std::abs(w) < 1.0) return el * tau * (w == cplx(0.0) ? cplx(1.0) : expm1c(w) / w);
+    return (em - el) / d;
+}
+
+/// A bound on |E''(s)| for s in [tau, s_end] (state_space_solver.h), given
+/// |e^{lambda tau}| and |e^{mu tau}|.
+double duhamel_bound(cplx lambda, cplx mu, double ael, double aem, double s_end) {
+    const double l = std::abs(lambda), dm = std::abs(mu - lambda);
+    const double first = dm > 0.0 ? (std::norm(mu) * aem + l * l * ael) / dm : kInf;
+    const double second = l == 0.0 ? std::abs(mu) : l * l * s_end + std::abs(lambda + mu);
+    return std::min(first, second);
+}
+
+}  // namespace
+
+StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
+    : cfg_(cfg), switches_(switch_functions(model, cfg)) {
+    n_ = static_cast<int>(model.dof());
+    ns_ = static_cast<int>(switches_.size());
+    for (int i = 0; i < n_; ++i) (cfg.stuck[static_cast<std::size_t>(i)] ? stuck_ : free_).push_back(i);
+    nf_ = static_cast<int>(free_.size());
+    const int m = 2 * nf_;
+
+    mass_ = mass_vector(model);
+    normal_.resize(n_);
+    mu_k_.resize(n_);
+    mu_s_.resize(n_);
+    friction_.resize(static_cast<std::size_t>(n_));
+    for (int i = 0; i < n_; ++i) {
+        normal_(i) = model.normal_force(static_cast<std::size_t>(i));
+        mu_k_(i) = model.masses[static_cast<std::size_t>(i)].mu_k;
+        mu_s_(i) = model.masses[static_cast<std::size_t>(i)].mu_s;
+        friction_[static_cast<std::size_t>(i)] = model.masses[static_cast<std::size_t>(i)].has_friction ? 1 : 0;
+    }
+    K_ = stiffness_matrix(model, cfg);
+    C_ = damping_matrix(model, cfg);
+    f_const_ = constant_force(model, cfg);
+    for (const Contact& c : model.contacts) {
+        contact_a_.push_back(c.a);
+        contact_b_.push_back(c.b);
+    }
+    contact_gap_.resize(static_cast<Eigen::Index>(model.contacts.size()));
+    for (std::size_t c = 0; c < model.contacts.size(); ++c) contact_gap_(static_cast<Eigen::Index>(c)) = model.contacts[c].gap;
+
+    // Harmonics as GenericSolver takes them: omega = 0 a constant force,
+    // omega < 0 folded to |omega| with the phase pi - phase.
+    std::vector<int> dyn;
+    for (std::size_t h = 0; h < model.forcing.size(); ++h) {
+        const Harmonic& hm = model.forcing[h];
+        if (hm.omega == 0.0) {
+            for (int i = 0; i < n_; ++i) f_const_(i) += hm.amplitude[static_cast<std::size_t>(i)] * std::sin(hm.phase);
+        } else {
+            dyn.push_back(static_cast<int>(h));
+        }
+    }
+    nh_ = static_cast<int>(dyn.size());
+    h_omega_.resize(nh_);
+    h_phase_.resize(nh_);
+    h_amp_.resize(n_, nh_);
+    for (int h = 0; h < nh_; ++h) {
+        const Harmonic& hm = model.forcing[static_cast<std::size_t>(dyn[static_cast<std::size_t>(h)])];
+        h_omega_(h) = std::abs(hm.omega);
+        h_phase_(h) = hm.omega > 0.0 ? hm.phase : kPi - hm.phase;
+        for (int i = 0; i < n_; ++i) h_amp_(i, h) = hm.amplitude[static_cast<std::size_t>(i)];
+    }
+
+    // y = [x_F; v_F / s], s the largest sqrt(K_ii/m_i) (else C_ii/m_i, else 1).
+    double w2 = 0.0, rate = 0.0;
+    for (int i : free_) {
+        w2 = std::max(w2, K_(i, i) / mass_(i));
+        rate = std::max(rate, C_(i, i) / mass_(i));
+    }
+    scale_s_ = w2 > 0.0 ? std::sqrt(w2) : (rate > 0.0 ? rate : 1.0);
+    const double s = scale_s_;
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, m);
+    for (int r = 0; r < nf_; ++r) {
+        A(r, nf_ + r) = s;
+        for (int q = 0; q < nf_; ++q) {
+            A(nf_ + r, q) = -K_(free_[r], free_[q]) / (mass_(free_[r]) * s);
+            A(nf_ + r, nf_ + q) = -C_(free_[r], free_[q]) / mass_(free_[r]);
+        }
+    }
+    auto refuse = [&](const std::string& why) {
+        throw RunError("StateSpaceSolver(): configuration '" + cfg.spec(model) + "' of model '" + model.name +
+                       "': " + why);
+    };
+    if (m > 0) {
+        const Eigen::EigenSolver<Eigen::MatrixXd> es(A);
+        if (es.info() != Eigen::Success) refuse("the eigen-solver of the state matrix did not converge");
+        lambda_ = es.eigenvalues();
+        V_ = es.eigenvectors();
+        const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(V_);
+        Vinv_ = lu.inverse();
+        condition_ = V_.cwiseAbs().colwise().sum().maxCoeff() * Vinv_.cwiseAbs().colwise().sum().maxCoeff();
+        if (!(condition_ <= kMaxCondition)) {
+            char text[32];
+            std::snprintf(text, sizeof text, "%.2g", condition_);
+            refuse(std::string("its state-space modes are nearly defective (eigenvector condition ") + text +
+                   " > 1e6: critically damped motion, or a free translation that no damper resists), which "
+                   "non-proportional damping does not support yet");
+        }
+        const double anorm = A.cwiseAbs().rowwise().sum().maxCoeff();
+        for (int k = 0; k < m; ++k) {
+            // Passive damping (C >= 0): Re lambda <= 0. Rounding may put an undamped
+            // pair a few ulps to the right; it is put on the axis.
+            if (lambda_(k).real() > 1e-12 * anorm) refuse("an eigenvalue of the state matrix has Re > 0");
+            if (lambda_(k).real() > 0.0) lambda_(k) = cplx(0.0, lambda_(k).imag());
+        }
+    }
+    absV_ = V_.cwiseAbs();
+
+    Eigen::MatrixXd bh = Eigen::MatrixXd::Zero(m, nh_);
+    for (int h = 0; h < nh_; ++h)
+        for (int r = 0; r < nf_; ++r) bh(nf_ + r, h) = h_amp_(free_[r], h) / (mass_(free_[r]) * s);
+    beta_h_ = Vinv_ * bh.cast<cplx>();
+
+    // Near resonance: the bound's second form, over one forcing period.
+    max_step_ = kInf;
+    near_ = Eigen::Matrix<char, Eigen::Dynamic, Eigen::Dynamic>::Zero(m, 2 * nh_);
+    for (int k = 0; k < m; ++k)
+        for (int h = 0; h < nh_; ++h)
+            for (int sign = 0; sign < 2; ++sign) {
+                const cplx mu(0.0, sign == 0 ? h_omega_(h) : -h_omega_(h));
+                if (beta_h_(k, h) != cplx(0.0) && std::abs(mu - lambda_(k)) < kNear * std::abs(mu)) {
+                    near_(k, 2 * h + sign) = 1;
+                    max_step_ = std::min(max_step_, 2 * kPi / h_omega_(h));
+                }
+            }
+
+    // Each switch function as a row over y (and the forcing it sees directly).
+    std::vector<int> slot(static_cast<std::size_t>(n_), -1);
+    for (int r = 0; r < nf_; ++r) slot[static_cast<std::size_t>(free_[r])] = r;
+    Eigen::MatrixXd L = Eigen::MatrixXd::Zero(ns_, m);
+    bound_sin_ = Eigen::VectorXd::Zero(ns_);
+    for (int f = 0; f < ns_; ++f) {
+        const SwitchFunction& sf = switches_[static_cast<std::size_t>(f)];
+        const int e = sf.element;
+        if (sf.kind == SwitchKind::gap) {
+            const int a = contact_a_[static_cast<std::size_t>(e)], b = contact_b_[static_cast<std::size_t>(e)];
+            if (a != kGround && slot[static_cast<std::size_t>(a)] >= 0) L(f, slot[static_cast<std::size_t>(a)]) += 1.0;
+            if (b != kGround && slot[static_cast<std::size_t>(b)] >= 0) L(f, slot[static_cast<std::size_t>(b)]) -= 1.0;
+        } else if (sf.kind == SwitchKind::velocity) {
+            L(f, nf_ + slot[static_cast<std::size_t>(e)]) = s;
+        } else {
+            for (int r = 0; r < nf_; ++r) {
+                L(f, r) = -K_(e, free_[r]);
+                L(f, nf_ + r) = -C_(e, free_[r]) * s;
+            }
+            for (int h = 0; h < nh_; ++h) bound_sin_(f) += std::abs(h_amp_(e, h)) * h_omega_(h) * h_omega_(h);
+        }
+    }
+    absG_ = (L.cast<cplx>() * V_).cwiseAbs();
+
+    x_fix_ = Eigen::VectorXd::Zero(n_);
+    theta_ = Eigen::VectorXd::Zero(nh_);
+    e_theta_ = Eigen::VectorXcd::Zero(nh_);
+    eta0_ = beta0_ = eta_ = Eigen::VectorXcd::Zero(m);
+    eta_mag_ = b2_ = y_ = ymag_ = Eigen::VectorXd::Zero(m);
+    xmag_ = vmag_ = Eigen::VectorXd::Zero(n_);
+    force_ = Eigen::VectorXd::Zero(nf_);
+    sn_ = cs_ = Eigen::VectorXd::Zero(nh_);
+    e_omega_ = Eigen::VectorXcd::Zero(nh_);
+}
+
+void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    const int m = 2 * nf_;
+    const double s = scale_s_;
+    for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
+    for (int h = 0; h < nh_; ++h) {
+        theta_(h) = hsnc_phase(h_omega_(h), t0, t0_lo, h_phase_(h));
+        e_theta_(h) = cplx(std::cos(theta_(h)), std::sin(theta_(h)));
+    }
+    // Constant force on the free masses: loads and preloads, the coupling to
+    // the stuck masses (their v = 0: no damper force), kinetic friction.
+    Eigen::VectorXcd b0 = Eigen::VectorXcd::Zero(m), y0(m);
+    for (int r = 0; r < nf_; ++r) {
+        const int i = free_[r];
+        double f = f_const_(i);
+        for (int q : stuck_) f -= K_(i, q) * x0[q];
+        if (friction_[static_cast<std::size_t>(i)]) f -= mu_k_(i) * normal_(i) * static_cast<double>(sgn[i]);
+        force_(r) = f;
+        b0(nf_ + r) = f / (mass_(i) * s);
+        y0(r) = x0[i];
+        y0(nf_ + r) = v0[i] / s;
+    }
+    beta0_ = Vinv_ * b0;
+    // eta0 = V^-1 y0, refined once against the residual y0 - Re(V eta0) (long
+    // double), so that y0 -> eta0 -> y0 is no fixed bias per segment start.
+    eta0_ = Vinv_ * y0;
+    Eigen::VectorXcd res(m);
+    for (int r = 0; r < m; ++r) {
+        long double e = y0(r).real();
+        for (int k = 0; k < m; ++k)
+            e -= static_cast<long double>(V_(r, k).real()) * eta0_(k).real() -
+                 static_cast<long double>(V_(r, k).imag()) * eta0_(k).imag();
+        res(r) = static_cast<double>(e);
+    }
+    eta0_ += Vinv_ * res;
+}
+
+void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
+    const int m = 2 * nf_;
+    const double s = scale_s_, s_end = tau + max_step_;
+    for (int h = 0; h < nh_; ++h) {
+        const double ph = h_omega_(h) * tau + theta_(h), wt = h_omega_(h) * tau;
+        sn_(h) = std::sin(ph);
+        cs_(h) = std::cos(ph);
+        e_omega_(h) = cplx(std::cos(wt), std::sin(wt));
+    }
+    for (int k = 0; k < m; ++k) {
+        const cplx lam = lambda_(k), el = expc(lam * tau);
+        const double ael = std::abs(el), l2 = std::norm(lam);
+        cplx eta = el * eta0_(k);
+        double mag = std::abs(eta), b2 = l2 * mag;
+        if (beta0_(k) != cplx(0.0)) {
+            const cplx E = duhamel(lam, 0.0, tau, el, 1.0);
+            eta += beta0_(k) * E;
+            mag += std::abs(beta0_(k) * E);
+            b2 += std::abs(beta0_(k)) * duhamel_bound(lam, 0.0, ael, 1.0, s_end);
+        }
+        for (int h = 0; h < nh_; ++h) {
+            const cplx bh = beta_h_(k, h);
+            if (bh == cplx(0.0)) continue;
+            const cplx mu(0.0, h_omega_(h)), ew = e_omega_(h);
+            const cplx Ep = duhamel(lam, mu, tau, el, ew), Em = duhamel(lam, -mu, tau, el, std::conj(ew));
+            const cplx c = bh * cplx(0.0, -0.5);  // beta/(2i)
+            eta += c * (e_theta_(h) * Ep - std::conj(e_theta_(h)) * Em);
+            mag += std::abs(c) * (std::abs(Ep) + std::abs(Em));
+            // The near-resonant form needs a finite horizon (max_step); a far one never does.
+            const double sp = near_(k, 2 * h) ? s_end : kInf, sm = near_(k, 2 * h + 1) ? s_end : kInf;
+            b2 += std::abs(c) * (duhamel_bound(lam, mu, ael, 1.0, sp) + duhamel_bound(lam, -mu, ael, 1.0, sm));
+        }
+        eta_(k) = eta;
+        eta_mag_(k) = mag;
+        b2_(k) = b2;
+    }
+
+    // y = Re(V eta): positions, velocities / s.
+    for (int i = 0; i < n_; ++i) {
+        out.x[i] = x_fix_(i);
+        out.v[i] = 0.0;
+        out.a[i] = 0.0;
+        xmag_(i) = std::abs(x_fix_(i));
+        vmag_(i) = 0.0;
+    }
+    for (int r = 0; r < m; ++r) {
+        double y = 0.0, ym = 0.0;
+        for (int k = 0; k < m; ++k) {
+            y += V_(r, k).real() * eta_(k).real() - V_(r, k).imag() * eta_(k).imag();
+            ym += absV_(r, k) * eta_mag_(k);
+        }
+        y_(r) = y;
+        ymag_(r) = ym;
+    }
+    for (int r = 0; r < nf_; ++r) {
+        const int i = free_[r];
+        out.x[i] = y_(r);
+        out.v[i] = s * y_(nf_ + r);
+        xmag_(i) = ymag_(r);
+        vmag_(i) = s * ymag_(nf_ + r);
+    }
+    // a = M^-1 (f - K x - C v) for the free masses, f the constant force of
+    // setup (with the stuck masses' coupling and friction) and the forcing.
+    for (int r = 0; r < nf_; ++r) {
+        const int i = free_[r];
+        double f = force_(r);
+        for (int q : free_) f -= K_(i, q) * out.x[q] + C_(i, q) * out.v[q];
+        for (int h = 0; h < nh_; ++h) f += h_amp_(i, h) * sn_(h);
+        out.a[i] = f / mass_(i);
+    }
+
+    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
+    auto body_mag = [](const Eigen::VectorXd& mg, int b) { return b == kGround ? 0.0 : mg(b); };
+    for (int f = 0; f < ns_; ++f) {
+        const SwitchFunction& sf = switches_[static_cast<std::size_t>(f)];
+        const int e = sf.element;
+        double g, dg, scale;
+        if (sf.kind == SwitchKind::gap) {
+            const int a = contact_a_[static_cast<std::size_t>(e)], b = contact_b_[static_cast<std::size_t>(e)];
+            g = body(out.x, a) - body(out.x, b) - contact_gap_(e);
+            dg = body(out.v, a) - body(out.v, b);
+            scale = body_mag(xmag_, a) + body_mag(xmag_, b) + std::abs(contact_gap_(e));
+        } else if (sf.kind == SwitchKind::velocity) {
+            g = out.v[e];
+            dg = out.a[e];
+            scale = vmag_(e);
+        } else {
+            double A = f_const_(e), dA = 0.0, mg = std::abs(f_const_(e));
+            for (int q = 0; q < n_; ++q) {
+                A -= K_(e, q) * out.x[q] + C_(e, q) * out.v[q];
+                dA -= K_(e, q) * out.v[q] + C_(e, q) * out.a[q];
+                mg += std::abs(K_(e, q)) * xmag_(q) + std::abs(C_(e, q)) * vmag_(q);
+            }
+            for (int h = 0; h < nh_; ++h) {
+                A += h_amp_(e, h) * sn_(h);
+                dA += h_amp_(e, h) * h_omega_(h) * cs_(h);
+                mg += std::abs(h_amp_(e, h) * sn_(h));
+            }
+            const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
+            const double mu_n = mu_s_(e) * normal_(e);
+            g = sg * A - mu_n;
+            dg = sg * dA;
+            scale = mg + mu_n;
+        }
+        double B = bound_sin_(f);
+        for (int k = 0; k < m; ++k) B += absG_(f, k) * b2_(k);
+        out.g[f] = g;
+        out.dg[f] = dg;
+        out.scale[f] = scale;
+        out.bound[f] = B;
+    }
+}
+
+std::size_t StateSpaceSolver::memory_bytes() const {
+    const std::size_t m = static_cast<std::size_t>(2 * nf_), n = static_cast<std::size_t>(n_);
+    const std::size_t ns = static_cast<std::size_t>(ns_), nh = static_cast<std::size_t>(nh_);
+    return sizeof(*this) + 16 * (3 * m * m + m * nh + 4 * m) + 8 * (m * m + ns * m + 2 * n * n + n * nh + 12 * n) +
+           m * 2 * nh + 4 * ns;
+}
+
+}  // namespace hsnc

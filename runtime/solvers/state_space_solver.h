@@ -1,0 +1,111 @@
+// hsnc -- the segment solver of non-proportional damping: state-space modes.
+//
+// With dampers (model.h Damper) C is not alpha*M + beta*K, the modes of K do
+// not decouple the damped equations, and GenericSolver does not apply. The
+// free masses' equations are written first order in y = [x_F; v_F/s]
+// (s a frequency scale, so both halves have the same size):
+//     y' = A y + b0 + sum_h b_h sin(Omega_h tau + theta_h),
+//     A = [0, s I; -M^-1 K / s, -M^-1 C],  b0 = [0; M^-1 f / s],  b_h = [0; M^-1 F_h / s],
+// and decoupled by A's eigenvectors, A = V diag(lambda) V^-1 (complex
+// conjugate pairs for the underdamped motions, real lambda for the overdamped
+// ones), eta = V^-1 y. Each modal coordinate then has the exact solution
+//     eta_k(tau) = e^{lambda tau} eta_k(0) + beta0_k E(lambda, 0, tau)
+//                + sum_h beta_hk/(2i) [e^{i theta} E(lambda, i Omega, tau) - e^{-i theta} E(lambda, -i Omega, tau)],
+//     E(lambda, mu, tau) = int_0^tau e^{lambda (tau - s)} e^{mu s} ds,
+// written without cancellation for every lambda and mu (e^{lambda tau} tau
+// phi_1((mu - lambda) tau) while |mu - lambda| tau < 1, the divided difference
+// (e^{mu tau} - e^{lambda tau})/(mu - lambda) beyond), so resonance (mu = lambda)
+// and a constant force on a free translation (lambda = mu = 0) are exact too.
+// y = V eta is real (conjugate pairs); a = M^-1 (f(t) - K x - C v).
+//
+// Bounds on |g''| (segment_solver.h) for s in [tau, tau + max_step]: g is
+// affine in y (and the forcing), g'' = Re sum_k G_k eta_k'' + forcing terms,
+// and with Re lambda <= 0 every e^{lambda s} decays, so
+//     |(e^{lambda s})''| <= |lambda|^2 |e^{lambda tau}|,
+//     |E''(s)| <= min((|mu|^2 |e^{mu tau}| + |lambda|^2 |e^{lambda tau}|)/|mu - lambda|,
+//                     |lambda|^2 (tau + max_step) + |lambda + mu|)
+// (E'' = lambda^2 E + (lambda + mu) e^{mu s} and |E(s)| <= s); max_step is one
+// forcing period where some |mu - lambda| < 0.1 |mu| (near resonance, where the
+// first form is loose or infinite), else infinite.
+//
+// Refused (RunError naming the configuration): a V whose condition number
+// exceeds kMaxCondition (A nearly defective: critically damped motion, or a
+// free translation that no damper resists, a double zero eigenvalue), or an
+// eigenvalue with a positive real part beyond rounding. The generic solver's
+// regimes (critical damping exactly) are not reproduced here: this solver is
+// for the models GenericSolver cannot take.
+#pragma once
+
+#include <complex>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "configuration.h"
+#include "model.h"
+#include "segment_solver.h"
+
+namespace hsnc {
+
+class StateSpaceSolver final : public SegmentSolver {
+public:
+    /// Largest accepted condition number ||V||_1 ||V^-1||_1 of the eigenvector
+    /// matrix: the closed form loses about log10 of it in digits.
+    static constexpr double kMaxCondition = 1e6;
+
+    /// Analyse `cfg` (throws RunError as above).
+    StateSpaceSolver(const Model& model, const Configuration& cfg);
+
+    const Configuration& configuration() const override { return cfg_; }
+    const std::vector<SwitchFunction>& switches() const override { return switches_; }
+    using SegmentSolver::setup;
+    void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override;
+    void eval(double tau, const SegmentEval& out) const override;
+    double max_step() const override { return max_step_; }
+
+    /// Estimated heap memory of this solver, bytes.
+    std::size_t memory_bytes() const;
+    /// Eigenvalues of A (s^-1), in the solver's order.
+    const Eigen::VectorXcd& eigenvalues() const { return lambda_; }
+    /// ||V||_1 ||V^-1||_1 of this configuration.
+    double condition() const { return condition_; }
+
+private:
+    using cplx = std::complex<double>;
+
+    Configuration cfg_;
+    std::vector<SwitchFunction> switches_;
+    int n_ = 0, nf_ = 0, nh_ = 0, ns_ = 0;
+    std::vector<int> free_, stuck_;
+    double scale_s_ = 1.0;  // s of y = [x; v/s]
+    double max_step_ = 0.0;
+    double condition_ = 0.0;
+
+    Eigen::VectorXd mass_, normal_, mu_k_, mu_s_;
+    std::vector<char> friction_;
+    Eigen::MatrixXd K_, C_;         // full n x n K(cfg), C(cfg)
+    Eigen::VectorXd f_const_;       // loads + preloads + omega = 0 harmonics
+    std::vector<int> contact_a_, contact_b_;
+    Eigen::VectorXd contact_gap_;
+    Eigen::VectorXd h_omega_, h_phase_;
+    Eigen::MatrixXd h_amp_;         // n x nh
+
+    Eigen::VectorXcd lambda_;       // 2nf eigenvalues
+    Eigen::MatrixXcd V_, Vinv_;     // 2nf x 2nf
+    Eigen::MatrixXcd beta_h_;       // 2nf x nh: V^-1 b_h
+    Eigen::MatrixXd absV_;          // |V|
+    Eigen::MatrixXd absG_;          // ns x 2nf: |L_f V_k|, L_f the switch function's row over y
+    Eigen::VectorXd bound_sin_;     // sum_h |d_fh| Omega_h^2 (the forcing in release functions)
+    Eigen::Matrix<char, Eigen::Dynamic, Eigen::Dynamic> near_;  // 2nf x (2 nh): |mu - lambda| < 0.1 |mu|
+
+    // --- fixed by setup ---
+    Eigen::VectorXd x_fix_, theta_, force_;  // force_: constant force on the free masses
+    Eigen::VectorXcd eta0_, beta0_, e_theta_;
+
+    // --- eval scratch ---
+    // --- eval scratch (no allocation in eval; one thread at a time) ---
+    mutable Eigen::VectorXcd eta_, e_omega_;
+    mutable Eigen::VectorXd eta_mag_, b2_, y_, ymag_, xmag_, vmag_, sn_, cs_;
+};
+
+}  // namespace hsnc

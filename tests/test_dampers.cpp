@@ -1,0 +1,374 @@
+// Non-proportional damping: [[damper]] elements and a non-proportional
+// structure.damping, solved by the state-space solver
+// (runtime/solvers/state_space_solver.h) on the generic path.
+//
+// The truths are independent of that solver: the textbook damped oscillator;
+// the matrix exponential (Eigen's Pade scaling and squaring) of the
+// autonomous system augmented with the forcing and a constant, which is the
+// exact flow of a forced linear system; Rayleigh damping written as dampers
+// (alpha m_i to ground), run by the modal GenericSolver; and CVODE at tight
+// tolerances on random models with contacts and friction.
+#include <gtest/gtest.h>
+
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <string>
+
+#include "assembly.h"
+#include "engine_runner.h"
+#include "error.h"
+#include "hsnc/simulate.h"
+#include "integrators.h"
+#include "model_hash.h"
+#include "model_reader.h"
+#include "random_model.h"
+#include "state_space_solver.h"
+
+namespace hsnc {
+namespace {
+
+using testing::Outcome;
+using testing::Recorder;
+
+Model dashpot_1dof(double m, double k, double c, double x0, double v0, double load) {
+    Model md;
+    md.name = "dashpot-1dof";
+    md.masses.push_back({"m1", m, false, 0.0, 0.0});
+    md.springs.push_back({kGround, 0, k});
+    md.dampers.push_back({0, kGround, c});
+    md.load = {load};
+    md.x0 = {x0};
+    md.v0 = {v0};
+    return md;
+}
+
+// Under-, over- and (nearly) critically damped 1-DOF, with a load: the
+// textbook solution about the static offset x_s = F/k.
+TEST(DamperClosedForm, OneDofAgainstTheTextbookOscillator) {
+    const double m = 2.0, k = 50.0, w = std::sqrt(k / m), x0 = 0.03, v0 = -0.4, F = 1.5, xs = F / k;
+    for (double zeta : {0.0, 0.02, 0.4, 0.9, 1.3, 4.0}) {
+        const Model md = dashpot_1dof(m, k, 2.0 * zeta * w * m, x0, v0, F);
+        const Outcome r = testing::simulate(md, 6.0, 0.25);
+        ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+        double worst = 0.0;
+        for (const auto& s : r.samples) {
+            const double t = s.t, A = x0 - xs;
+            double x;
+            if (zeta < 1.0) {
+                const double wd = w * std::sqrt(1 - zeta * zeta);
+                x = xs + std::exp(-zeta * w * t) * (A * std::cos(wd * t) + (v0 + zeta * w * A) / wd * std::sin(wd * t));
+            } else {
+                const double g = w * std::sqrt(zeta * zeta - 1), r1 = -zeta * w + g, r2 = -zeta * w - g;
+                const double c2 = (v0 - r1 * A) / (r2 - r1), c1 = A - c2;
+                x = xs + c1 * std::exp(r1 * t) + c2 * std::exp(r2 * t);
+            }
+            worst = std::max(worst, std::fabs(s.x[0] - x));
+        }
+        std::printf("zeta %.2f: max |x - closed form| %.2g m over %zu samples\n", zeta, worst, r.samples.size());
+        EXPECT_LT(worst, 1e-15) << "zeta " << zeta;  // measured 7e-18 .. 2.8e-17 (|x| up to 0.03 m)
+    }
+}
+
+// The exact flow of a forced linear system: z = [x; v; sin; cos; 1] is
+// autonomous, z' = Abar z, so z(t) = e^{Abar t} z(0).
+Eigen::VectorXd flow(const Model& md, double t) {
+    const int n = static_cast<int>(md.dof()), nh = static_cast<int>(md.forcing.size()), N = 2 * n + 2 * nh + 1;
+    const Configuration cfg = Configuration::all_open(md);
+    const Eigen::MatrixXd K = stiffness_matrix(md, cfg), C = damping_matrix(md, cfg);
+    const Eigen::VectorXd f = constant_force(md, cfg), mass = mass_vector(md);
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(N, N);
+    for (int i = 0; i < n; ++i) {
+        A(i, n + i) = 1.0;
+        for (int j = 0; j < n; ++j) {
+            A(n + i, j) = -K(i, j) / mass(i);
+            A(n + i, n + j) = -C(i, j) / mass(i);
+        }
+        A(n + i, N - 1) = f(i) / mass(i);
+        for (int h = 0; h < nh; ++h) A(n + i, 2 * n + 2 * h) = md.forcing[h].amplitude[i] / mass(i);
+    }
+    Eigen::VectorXd z0(N);
+    for (int i = 0; i < n; ++i) z0(i) = md.x0[i], z0(n + i) = md.v0[i];
+    for (int h = 0; h < nh; ++h) {
+        const double W = md.forcing[h].omega;
+        A(2 * n + 2 * h, 2 * n + 2 * h + 1) = W;   // (sin)' = W cos
+        A(2 * n + 2 * h + 1, 2 * n + 2 * h) = -W;  // (cos)' = -W sin
+        z0(2 * n + 2 * h) = std::sin(md.forcing[h].phase);
+        z0(2 * n + 2 * h + 1) = std::cos(md.forcing[h].phase);
+    }
+    z0(N - 1) = 1.0;
+    const Eigen::MatrixXd E = (A * t).exp();
+    return E * z0;
+}
+
+Model two_dof_with_dashpot() {
+    return parse_model(R"(
+name = "dashpot-2dof"
+[[mass]]
+name = "m1"
+m = 1.0
+[[mass]]
+name = "m2"
+m = 2.5
+[[spring]]
+between = ["ground", "m1"]
+k = 100.0
+[[spring]]
+between = ["m1", "m2"]
+k = 40.0
+[[damper]]
+between = ["m2", "ground"]
+c = 0.9
+[[forcing]]
+omega = 7.0
+phase = 0.3
+amplitude = { m1 = 2.0 }
+[load]
+m2 = -0.5
+[initial]
+x = { m1 = 0.01 }
+v = { m2 = -0.2 }
+)",
+                       "dashpot-2dof.toml");
+}
+
+TEST(DamperClosedForm, ForcedTwoDofAgainstTheMatrixExponential) {
+    const Model md = two_dof_with_dashpot();
+    ASSERT_FALSE(md.proportional_damping());
+    const Outcome r = testing::simulate(md, 8.0, 0.5);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    double worst = 0.0, size = 0.0;
+    for (const auto& s : r.samples) {
+        const Eigen::VectorXd z = flow(md, s.t);
+        for (int i = 0; i < 2; ++i) {
+            worst = std::max({worst, std::fabs(s.x[i] - z(i)), std::fabs(s.v[i] - z(2 + i)) / 10.0});
+            size = std::max(size, std::fabs(z(i)));
+        }
+    }
+    std::printf("2-dof dashpot, forced: max error %.2g m (|x| up to %.2g m)\n", worst, size);
+    EXPECT_LT(worst, 1e-13 * size);  // measured 1.7e-15 m with |x| up to 0.055 m
+}
+
+// A resonant harmonic on an undamped mode (the dashpot on a dof the mode
+// does not move): the Duhamel form through mu = lambda, exact secular growth.
+TEST(DamperClosedForm, UndampedModeAtResonance) {
+    // m1 and m2 equal, springs symmetric: the mode x1 = x2 stretches neither
+    // the middle spring nor the dashpot between them, which leaves it undamped.
+    Model md = parse_model(R"(
+name = "resonant-pair"
+[[mass]]
+name = "m1"
+m = 1.0
+[[mass]]
+name = "m2"
+m = 1.0
+[[spring]]
+between = ["ground", "m1"]
+k = 25.0
+[[spring]]
+between = ["m2", "ground"]
+k = 25.0
+[[spring]]
+between = ["m1", "m2"]
+k = 10.0
+[[damper]]
+between = ["m1", "m2"]
+c = 0.7
+[[forcing]]
+omega = 5.0
+amplitude = { m1 = 1.0, m2 = 1.0 }
+)",
+                           "resonant-pair.toml");
+    const Outcome r = testing::simulate(md, 12.0, 0.5);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    // x1 + x2 = u: u'' + 25 u = 2 sin 5t from rest: u = (sin 5t - 5t cos 5t)/25.
+    double worst = 0.0, size = 0.0;
+    for (const auto& s : r.samples) {
+        const double t = s.t, u = (std::sin(5 * t) - 5 * t * std::cos(5 * t)) / 25.0;
+        size = std::max(size, std::fabs(u));
+        worst = std::max(worst, std::fabs(s.x[0] + s.x[1] - u));
+        const Eigen::VectorXd z = flow(md, t);
+        worst = std::max({worst, std::fabs(s.x[0] - z(0)), std::fabs(s.x[1] - z(1))});
+    }
+    std::printf("undamped mode at resonance: max error %.2g m, |x1 + x2| up to %.2g m\n", worst, size);
+    EXPECT_LT(worst, 1e-13 * size);  // measured 4.3e-14 m with |u| up to 2.4 m
+}
+
+// Rayleigh alpha is a damper alpha*m_i from every mass to ground: the modal
+// GenericSolver on the one, the state-space solver on the other, with
+// contacts, friction (stick, release, reversal) and forcing.
+TEST(DamperEquivalence, RayleighAlphaWrittenAsDampers) {
+    const Model prop = read_model(std::string(HSNC_SOURCE_DIR) + "/models/seed-scenario-2.toml");
+    ASSERT_EQ(prop.beta, 0.0) << "the test needs a model damped by alpha only";
+    Model dmp = prop;
+    for (std::size_t i = 0; i < dmp.dof(); ++i)
+        dmp.dampers.push_back({static_cast<int>(i), kGround, prop.alpha * prop.masses[i].m});
+    dmp.alpha = 0.0;
+    for (const double t_end : {60.0}) {
+        const Outcome a = testing::simulate(prop, t_end), b = testing::simulate(dmp, t_end);
+        ASSERT_EQ(b.summary.status, RunStatus::ok) << b.summary.message;
+        ASSERT_EQ(a.events.size(), b.events.size());
+        double dt = 0.0, dx = 0.0;
+        for (std::size_t e = 0; e < a.events.size(); ++e) {
+            ASSERT_EQ(a.events[e].kind, b.events[e].kind) << "event " << e;
+            ASSERT_EQ(a.events[e].element, b.events[e].element) << "event " << e;
+            dt = std::max(dt, std::fabs(a.events[e].t - b.events[e].t));
+            for (std::size_t i = 0; i < prop.dof(); ++i) dx = std::max(dx, std::fabs(a.events[e].x[i] - b.events[e].x[i]));
+        }
+        std::printf("seed scenario 2, %zu events over %g s: alpha vs dampers max |dt| %.2g s, |dx| %.2g m\n",
+                    a.events.size(), t_end, dt, dx);
+        EXPECT_LT(dt, 1e-10);
+        EXPECT_LT(dx, 1e-10);
+    }
+}
+
+Outcome cvode(const Model& model, double t_end, double rtol) {
+    Recorder rec(model.dof());
+    EngineOptions eo;
+    eo.t_end = t_end;
+    IntegratorOptions io;
+    io.rtol = rtol;
+    io.atol = rtol * 1e-2;
+    Outcome r;
+    r.summary = integrate(model, Method::cvode, io, eo, rec);
+    r.events = std::move(rec.events);
+    return r;
+}
+
+// Random chains with contacts, friction, forcing, Rayleigh damping and a few
+// random dampers (between masses and to ground) against CVODE.
+TEST(DamperCvode, RandomModelsAgreeWithCvode) {
+#if !HSNC_WITH_CVODE
+    GTEST_SKIP() << "built without CVODE";
+#endif
+    int compared = 0;
+    for (unsigned seed = 1; seed <= 10; ++seed) {
+        testing::Drawn d = testing::draw(900 + seed, 2 + static_cast<int>(seed % 3));
+        Model& m = d.model;
+        std::mt19937 rng(seed);
+        const int n = static_cast<int>(m.dof());
+        for (int k = 0; k < 2; ++k) {
+            const int a = static_cast<int>(testing::uni(rng, 0, n - 0.001));
+            int b = static_cast<int>(testing::uni(rng, -1, n - 0.001));
+            if (b == a) b = kGround;
+            m.dampers.push_back({a, b, testing::uni(rng, 0.05, 3.0)});
+        }
+        m.x0.assign(m.dof(), 0.0);
+        m.v0.assign(m.dof(), 0.0);
+        m.v0[0] = 0.5;
+        const double t_end = 6.0;
+        Outcome h;
+        try {
+            h = testing::simulate(m, t_end);
+        } catch (const RunError& e) {
+            // Nearly defective state matrices are refused, never run inexactly.
+            EXPECT_NE(std::string(e.what()).find("nearly defective"), std::string::npos) << e.what();
+            continue;
+        }
+        ASSERT_EQ(h.summary.status, RunStatus::ok) << h.summary.message;
+        const Outcome c = cvode(m, t_end, 1e-12);
+        ASSERT_EQ(c.summary.status, RunStatus::ok) << c.summary.message;
+        // Compare the events both found before the first disagreement of
+        // kind: a grazing switch may be seen by one and not the other.
+        std::size_t same = 0;
+        double dt = 0.0;
+        while (same < h.events.size() && same < c.events.size() && h.events[same].kind == c.events[same].kind &&
+               h.events[same].element == c.events[same].element) {
+            dt = std::max(dt, std::fabs(h.events[same].t - c.events[same].t));
+            ++same;
+        }
+        std::printf("seed %u (%d masses): %zu/%zu events agree, max |dt| %.2g s\n", seed, n, same, h.events.size(), dt);
+        EXPECT_GE(same, std::min<std::size_t>(h.events.size(), 5)) << "seed " << seed;
+        EXPECT_LT(dt, 1e-7) << "seed " << seed;
+        ++compared;
+    }
+    EXPECT_GE(compared, 7);
+}
+
+// Critical damping makes the state matrix defective: refused by name, never
+// run with a loss of accuracy.
+TEST(DamperSolver, CriticalDampingIsRefusedNotRunInexactly) {
+    const double m = 2.0, k = 50.0, w = std::sqrt(k / m);
+    const Model md = dashpot_1dof(m, k, 2.0 * w * m, 0.01, 0.0, 0.0);
+    try {
+        testing::simulate(md, 1.0);
+        ADD_FAILURE() << "critical damping ran";
+    } catch (const RunError& e) {
+        EXPECT_NE(std::string(e.what()).find("nearly defective"), std::string::npos) << e.what();
+    }
+}
+
+TEST(DamperSolver, WellConditionedPassiveModes) {
+    const Model md = two_dof_with_dashpot();
+    const Configuration cfg = Configuration::all_open(md);
+    StateSpaceSolver s(md, cfg);
+    EXPECT_LT(s.condition(), 100.0);
+    for (int k = 0; k < s.eigenvalues().size(); ++k) EXPECT_LE(s.eigenvalues()(k).real(), 0.0);
+    EXPECT_TRUE(std::isinf(s.max_step()));
+}
+
+// ---- reading ----
+
+std::string damper_model(const std::string& extra) {
+    return "name = \"d\"\n[[mass]]\nname = \"m1\"\nm = 1\n[[mass]]\nname = \"m2\"\nm = 1\n"
+           "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 10\n" +
+           extra;
+}
+
+void expect_input_error(const std::string& text, const std::string& needle) {
+    try {
+        parse_model(text, "d.toml");
+        ADD_FAILURE() << "no error, expected: " << needle;
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+}
+
+TEST(DamperReader, KeysAndErrors) {
+    const Model ok = parse_model(damper_model("[[damper]]\nbetween = [\"m1\", \"m2\"]\nc = 0.5\n"), "d.toml");
+    ASSERT_EQ(ok.dampers.size(), 1u);
+    EXPECT_EQ(ok.dampers[0].a, 0);
+    EXPECT_EQ(ok.dampers[0].b, 1);
+    EXPECT_EQ(ok.dampers[0].c, 0.5);
+    EXPECT_FALSE(ok.proportional_damping());
+    // c = 0 is no damper: the model stays proportional (every kernel kind runs it).
+    EXPECT_TRUE(parse_model(damper_model("[[damper]]\nbetween = [\"m1\", \"m2\"]\nc = 0\n"), "d.toml").proportional_damping());
+    expect_input_error(damper_model("[[damper]]\nbetween = [\"m1\", \"m2\"]\nc = -1\n"),
+                       "d.toml:13: key 'damper[1].c': damping coefficient must be >= 0, got -1");
+    expect_input_error(damper_model("[[damper]]\nbetween = [\"m1\", \"m1\"]\nc = 1\n"), "key 'damper[1].between': connects 'm1' to itself");
+    expect_input_error(damper_model("[[damper]]\nbetween = [\"m1\", \"m9\"]\nc = 1\n"), "key 'damper[1].between'");
+    expect_input_error(damper_model("[[damper]]\nbetween = [\"m1\", \"m2\"]\n"), "key 'damper[1].c': required key is missing");
+    expect_input_error(damper_model("[[damper]]\nbetween = [\"m1\", \"m2\"]\nc = 1\nk = 2\n"), "damper[1]");
+    // The model hash sees dampers (cache keys, AOT kernels).
+    const Model other = parse_model(damper_model("[[damper]]\nbetween = [\"m1\", \"m2\"]\nc = 0.6\n"), "d.toml");
+    EXPECT_NE(model_canonical_text(ok), model_canonical_text(other));
+}
+
+TEST(DamperFacade, KernelsAndPrecisionThatCannotTakeItAreRefused) {
+    const Model md = two_dof_with_dashpot();
+    SimulateOptions o;
+    o.t_end = 1.0;
+    for (KernelChoice k : {KernelChoice::aot, KernelChoice::jit, KernelChoice::interp}) {
+        o.kernels = k;
+        try {
+            simulate(md, o);
+            ADD_FAILURE() << "kernels " << kernel_choice_name(k) << " ran a model with dampers";
+        } catch (const OptionError& e) {
+            EXPECT_EQ(e.option(), "kernels");
+            EXPECT_NE(e.reason().find("non-proportional damping"), std::string::npos) << e.what();
+        }
+    }
+    o.kernels = KernelChoice::automatic;
+    o.precision_digits = 30;
+    EXPECT_THROW(simulate(md, o), OptionError);
+    o.precision_digits = 0;
+    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::generic}) {
+        o.kernels = k;
+        EXPECT_EQ(simulate(md, o).status, RunStatus::ok);
+    }
+}
+
+}  // namespace
+}  // namespace hsnc
