@@ -18,6 +18,7 @@
 #include <string>
 
 #include "assembly.h"
+#include "cli_runner.h"
 #include "engine_runner.h"
 #include "error.h"
 #include "hsnc/simulate.h"
@@ -368,6 +369,27 @@ TEST(DamperFacade, KernelsAndPrecisionThatCannotTakeItAreRefused) {
         o.kernels = k;
         EXPECT_EQ(simulate(md, o).status, RunStatus::ok);
     }
+}
+
+// ---- the command line and the bundled example ----
+
+TEST(DamperCli, TheBundledAbsorberRunsOnStateSpaceModesAndRefusesKernels) {
+    const std::string model = std::string(HSNC_SOURCE_DIR) + "/examples/dashpot/absorber.toml";
+    const testing::CliRun run = testing::run_hsnc("simulate " + model + " --t-end 10");
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_NE(run.err.find("generic solver (state-space modes)"), std::string::npos) << run.err;
+    const testing::CliRun check = testing::run_hsnc("check " + model);
+    EXPECT_EQ(check.exit_code, 0) << check.err;
+    EXPECT_NE(check.out.find("dampers: 1"), std::string::npos) << check.out;
+    EXPECT_NE(check.out.find("damped modes"), std::string::npos) << check.out;
+    for (const char* flags : {"--kernels jit", "--kernels interp", "--precision mp:30"}) {
+        const testing::CliRun bad = testing::run_hsnc("simulate " + model + " --t-end 1 " + flags);
+        EXPECT_EQ(bad.exit_code, 2) << flags;
+        EXPECT_NE(bad.err.find("non-proportional damping"), std::string::npos) << bad.err;
+    }
+    const testing::CliRun gen = testing::run_hsnc("inspect " + model + " --config \"closed= stuck=\"");
+    EXPECT_EQ(gen.exit_code, 2);
+    EXPECT_NE(gen.err.find("non-proportional damping"), std::string::npos) << gen.err;
 }
 
 }  // namespace
