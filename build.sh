@@ -13,6 +13,7 @@ packages=(
   libtomlplusplus-dev            # the model file
   libcli11-dev                   # command line parsing
   libsundials-dev                # the CVODE baseline (--method cvode)
+  libmatio-dev                   # [structure] matrices from MATLAB .mat files
   llvm-14-dev libclang-cpp14-dev libclang-14-dev  # compiling kernels in-process
   libgtest-dev                   # tests
   gnuplot-nox fonts-dejavu-core   # plots (pngcairo needs a font)

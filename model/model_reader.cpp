@@ -23,6 +23,7 @@
 #include "error.h"
 #include "expression_evaluator.h"
 #include "file_read.h"
+#include "mat_file.h"
 #include "matrix_market.h"
 #include "structure.h"
 #include "toml_guard.h"
@@ -416,8 +417,13 @@ private:
     MarketMatrix matrix_file(const toml::table& t, const char* key, std::string& written) {
         const std::string path = "structure." + std::string(key);
         written = required_string(t, "structure", key);
-        if (written.empty()) fail(t.get(key), path, "must name a Matrix Market file");
+        if (written.empty()) fail(t.get(key), path, "must name a Matrix Market or .mat file");
         try {
+            if (is_mat_spec(written)) {  // "x.mat:VAR", or "x.mat" with variable M, K or C
+                const char* letter = std::string(key) == "mass" ? "M" : std::string(key) == "stiffness" ? "K" : "C";
+                const auto [file, variable] = split_mat_spec(written, letter);
+                return read_mat_variable(beside_model(file), variable);
+            }
             return read_matrix_market(beside_model(written));
         } catch (const InputError& e) {
             fail(t.get(key), path, e.what());
