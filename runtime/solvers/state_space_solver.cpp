@@ -11,6 +11,7 @@
 
 #include "assembly.h"
 #include "error.h"
+#include "free_components.h"
 #include "kernel_abi.h"  // hsnc_phase: Omega (t0 + t0_lo) + phase, reduced as every solver does
 
 namespace hsnc {
@@ -57,7 +58,6 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     ns_ = static_cast<int>(switches_.size());
     for (int i = 0; i < n_; ++i) (cfg.stuck[static_cast<std::size_t>(i)] ? stuck_ : free_).push_back(i);
     nf_ = static_cast<int>(free_.size());
-    const int m = 2 * nf_;
 
     mass_ = mass_vector(model);
     normal_.resize(n_);
@@ -102,20 +102,77 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
         for (int i = 0; i < n_; ++i) h_amp_(i, h) = hm.amplitude[static_cast<std::size_t>(i)];
     }
 
-    // y = [x_F; v_F / s], s the largest sqrt(K_ii/m_i) (else C_ii/m_i, else 1).
+    // Free translations that no damping resists (C r = 0 for a floating
+    // component's r, free_components.h) are taken out of the state: x_F =
+    // R q + T e with q_j the mass-weighted mean position of component j and
+    // T the basis of R^T M x = 0 made of e_i - (m_i/m_p) e_p for every member
+    // i but the component's first, p, and e_i for the rest. Then
+    // q_j'' = r_j^T f(t) / m_j exactly (R^T K = R^T C = 0), and the state
+    // matrix of e has no double zero eigenvalue.
+    std::vector<int> slot(static_cast<std::size_t>(n_), -1);
+    for (int r = 0; r < nf_; ++r) slot[static_cast<std::size_t>(free_[r])] = r;
+    const double cmax = C_.cwiseAbs().maxCoeff();
+    std::vector<char> pivot(static_cast<std::size_t>(nf_), 0);
+    for (const std::vector<int>& members : free_components(model, cfg).floating_members()) {
+        // C r on the free masses: every row of C_FF summed over the members.
+        double resist = 0.0;
+        for (int i : free_) {
+            double row = 0.0;
+            for (int j : members) row += C_(i, j);
+            resist = std::max(resist, std::abs(row));
+        }
+        if (resist > 1e-13 * cmax) continue;  // a damped translation: a simple zero eigenvalue, no deflation
+        Rigid rg;
+        double total = 0.0;
+        for (int i : members) {
+            rg.members.push_back(slot[static_cast<std::size_t>(i)]);
+            total += mass_(i);
+        }
+        rg.mass = total;
+        pivot[static_cast<std::size_t>(rg.members.front())] = 1;
+        rigid_.push_back(rg);
+    }
+    ne_ = nf_ - static_cast<int>(rigid_.size());
+    const int m = 2 * ne_;
+    T_ = Eigen::MatrixXd::Zero(nf_, ne_);
+    {
+        int col = 0;
+        std::vector<int> pivot_of(static_cast<std::size_t>(nf_), -1);
+        for (const Rigid& rg : rigid_)
+            for (int r : rg.members) pivot_of[static_cast<std::size_t>(r)] = rg.members.front();
+        for (int r = 0; r < nf_; ++r) {
+            if (pivot[static_cast<std::size_t>(r)]) continue;
+            T_(r, col) = 1.0;
+            const int p = pivot_of[static_cast<std::size_t>(r)];
+            if (p >= 0) T_(p, col) = -mass_(free_[r]) / mass_(free_[p]);
+            e_slot_.push_back(r);
+            ++col;
+        }
+    }
+    Eigen::MatrixXd MF = Eigen::MatrixXd::Zero(nf_, nf_), KF(nf_, nf_), CF(nf_, nf_);
+    for (int r = 0; r < nf_; ++r) {
+        MF(r, r) = mass_(free_[r]);
+        for (int q = 0; q < nf_; ++q) KF(r, q) = K_(free_[r], free_[q]), CF(r, q) = C_(free_[r], free_[q]);
+    }
+    const Eigen::MatrixXd Me = T_.transpose() * MF * T_, Ke = T_.transpose() * KF * T_, Ce = T_.transpose() * CF * T_;
+    Me_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(Me.rows() > 0 ? Me : Eigen::MatrixXd::Identity(1, 1));
+    const Eigen::MatrixXd MK = ne_ > 0 ? Eigen::MatrixXd(Me_lu_.solve(Ke)) : Eigen::MatrixXd(0, 0);
+    const Eigen::MatrixXd MC = ne_ > 0 ? Eigen::MatrixXd(Me_lu_.solve(Ce)) : Eigen::MatrixXd(0, 0);
+
+    // y = [e; e' / s], s the largest sqrt of the diagonal of Me^-1 Ke (else of Me^-1 Ce, else 1).
     double w2 = 0.0, rate = 0.0;
-    for (int i : free_) {
-        w2 = std::max(w2, K_(i, i) / mass_(i));
-        rate = std::max(rate, C_(i, i) / mass_(i));
+    for (int r = 0; r < ne_; ++r) {
+        w2 = std::max(w2, MK(r, r));
+        rate = std::max(rate, MC(r, r));
     }
     scale_s_ = w2 > 0.0 ? std::sqrt(w2) : (rate > 0.0 ? rate : 1.0);
     const double s = scale_s_;
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, m);
-    for (int r = 0; r < nf_; ++r) {
-        A(r, nf_ + r) = s;
-        for (int q = 0; q < nf_; ++q) {
-            A(nf_ + r, q) = -K_(free_[r], free_[q]) / (mass_(free_[r]) * s);
-            A(nf_ + r, nf_ + q) = -C_(free_[r], free_[q]) / mass_(free_[r]);
+    for (int r = 0; r < ne_; ++r) {
+        A(r, ne_ + r) = s;
+        for (int q = 0; q < ne_; ++q) {
+            A(ne_ + r, q) = -MK(r, q) / s;
+            A(ne_ + r, ne_ + q) = -MC(r, q);
         }
     }
     auto refuse = [&](const std::string& why) {
@@ -134,7 +191,7 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
             char text[32];
             std::snprintf(text, sizeof text, "%.2g", condition_);
             refuse(std::string("its state-space modes are nearly defective (eigenvector condition ") + text +
-                   " > 1e6: critically damped motion, or a free translation that no damper resists), which "
+                   " > 1e6: critically damped motion), which "
                    "non-proportional damping does not support yet");
         }
         const double anorm = A.cwiseAbs().rowwise().sum().maxCoeff();
@@ -148,9 +205,18 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     absV_ = V_.cwiseAbs();
 
     Eigen::MatrixXd bh = Eigen::MatrixXd::Zero(m, nh_);
-    for (int h = 0; h < nh_; ++h)
-        for (int r = 0; r < nf_; ++r) bh(nf_ + r, h) = h_amp_(free_[r], h) / (mass_(free_[r]) * s);
+    if (ne_ > 0)
+        for (int h = 0; h < nh_; ++h) {
+            Eigen::VectorXd F(nf_);
+            for (int r = 0; r < nf_; ++r) F(r) = h_amp_(free_[r], h);
+            bh.block(ne_, h, ne_, 1) = Me_lu_.solve(T_.transpose() * F) / s;
+        }
     beta_h_ = Vinv_ * bh.cast<cplx>();
+    // The rigid coordinates' forcing: q_j'' = (r_j^T f + sum_h r_j^T F_h sin) / m_j.
+    rigid_h_ = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rigid_.size()), nh_);
+    for (std::size_t j = 0; j < rigid_.size(); ++j)
+        for (int h = 0; h < nh_; ++h)
+            for (int r : rigid_[j].members) rigid_h_(static_cast<Eigen::Index>(j), h) += h_amp_(free_[r], h) / rigid_[j].mass;
 
     // Near resonance: the bound's second form, over one forcing period.
     max_step_ = kInf;
@@ -165,10 +231,10 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
                 }
             }
 
-    // Each switch function as a row over y (and the forcing it sees directly).
-    std::vector<int> slot(static_cast<std::size_t>(n_), -1);
-    for (int r = 0; r < nf_; ++r) slot[static_cast<std::size_t>(free_[r])] = r;
-    Eigen::MatrixXd L = Eigen::MatrixXd::Zero(ns_, m);
+    // Each switch function as a row over (x_F, v_F) (and the forcing it sees
+    // directly), then over y = [e; e'/s] through T, and over the rigid
+    // coordinates through R.
+    Eigen::MatrixXd L = Eigen::MatrixXd::Zero(ns_, 2 * nf_);
     bound_sin_ = Eigen::VectorXd::Zero(ns_);
     for (int f = 0; f < ns_; ++f) {
         const SwitchFunction& sf = switches_[static_cast<std::size_t>(f)];
@@ -178,30 +244,46 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
             if (a != kGround && slot[static_cast<std::size_t>(a)] >= 0) L(f, slot[static_cast<std::size_t>(a)]) += 1.0;
             if (b != kGround && slot[static_cast<std::size_t>(b)] >= 0) L(f, slot[static_cast<std::size_t>(b)]) -= 1.0;
         } else if (sf.kind == SwitchKind::velocity) {
-            L(f, nf_ + slot[static_cast<std::size_t>(e)]) = s;
+            L(f, nf_ + slot[static_cast<std::size_t>(e)]) = 1.0;
         } else {
             for (int r = 0; r < nf_; ++r) {
                 L(f, r) = -K_(e, free_[r]);
-                L(f, nf_ + r) = -C_(e, free_[r]) * s;
+                L(f, nf_ + r) = -C_(e, free_[r]);
             }
             for (int h = 0; h < nh_; ++h) bound_sin_(f) += std::abs(h_amp_(e, h)) * h_omega_(h) * h_omega_(h);
         }
     }
-    absG_ = (L.cast<cplx>() * V_).cwiseAbs();
+    Eigen::MatrixXd Ly(ns_, m);
+    if (ne_ > 0) {
+        Ly.leftCols(ne_) = L.leftCols(nf_) * T_;
+        Ly.rightCols(ne_) = L.rightCols(nf_) * T_ * s;
+    }
+    absG_ = (Ly.cast<cplx>() * V_).cwiseAbs();
+    // Rigid part of g'': x'' = R q'', v'' = R q''' with |q''| <= (|r^T f| + sum_h |P_h|),
+    // |q'''| <= sum_h |P_h| Omega_h; r^T f depends on setup (friction, stuck masses): rigid_bound_ there.
+    rigid_lx_ = Eigen::MatrixXd::Zero(ns_, static_cast<Eigen::Index>(rigid_.size()));
+    rigid_lv_ = rigid_lx_;
+    for (std::size_t j = 0; j < rigid_.size(); ++j)
+        for (int r : rigid_[j].members) {
+            rigid_lx_.col(static_cast<Eigen::Index>(j)) += L.col(r);
+            rigid_lv_.col(static_cast<Eigen::Index>(j)) += L.col(nf_ + r);
+        }
 
     x_fix_ = Eigen::VectorXd::Zero(n_);
     theta_ = Eigen::VectorXd::Zero(nh_);
     e_theta_ = Eigen::VectorXcd::Zero(nh_);
     eta0_ = beta0_ = eta_ = Eigen::VectorXcd::Zero(m);
+    q0_ = qd0_ = rigid_f_ = q_ = qd_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rigid_.size()));
+    rigid_bound_ = Eigen::VectorXd::Zero(ns_);
     eta_mag_ = b2_ = y_ = ymag_ = Eigen::VectorXd::Zero(m);
     xmag_ = vmag_ = Eigen::VectorXd::Zero(n_);
-    force_ = Eigen::VectorXd::Zero(nf_);
+    force_ = xf_ = vf_ = xfm_ = vfm_ = Eigen::VectorXd::Zero(nf_);
     sn_ = cs_ = Eigen::VectorXd::Zero(nh_);
     e_omega_ = Eigen::VectorXcd::Zero(nh_);
 }
 
 void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    const int m = 2 * nf_;
+    const int m = 2 * ne_;
     const double s = scale_s_;
     for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
     for (int h = 0; h < nh_; ++h) {
@@ -210,16 +292,51 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
     }
     // Constant force on the free masses: loads and preloads, the coupling to
     // the stuck masses (their v = 0: no damper force), kinetic friction.
-    Eigen::VectorXcd b0 = Eigen::VectorXcd::Zero(m), y0(m);
+    Eigen::VectorXd f(nf_), x(nf_), v(nf_);
     for (int r = 0; r < nf_; ++r) {
         const int i = free_[r];
-        double f = f_const_(i);
-        for (int q : stuck_) f -= K_(i, q) * x0[q];
-        if (friction_[static_cast<std::size_t>(i)]) f -= mu_k_(i) * normal_(i) * static_cast<double>(sgn[i]);
-        force_(r) = f;
-        b0(nf_ + r) = f / (mass_(i) * s);
-        y0(r) = x0[i];
-        y0(nf_ + r) = v0[i] / s;
+        double fi = f_const_(i);
+        for (int q : stuck_) fi -= K_(i, q) * x0[q];
+        if (friction_[static_cast<std::size_t>(i)]) fi -= mu_k_(i) * normal_(i) * static_cast<double>(sgn[i]);
+        force_(r) = f(r) = fi;
+        x(r) = x0[i];
+        v(r) = v0[i];
+    }
+    // Rigid coordinates: mass-weighted means; e: the rest at the non-pivot slots (T's construction).
+    Eigen::VectorXd xe = x, ve = v;
+    for (std::size_t j = 0; j < rigid_.size(); ++j) {
+        const Rigid& rg = rigid_[j];
+        double q = 0.0, qd = 0.0, fr = 0.0;
+        for (int r : rg.members) q += mass_(free_[r]) * x(r), qd += mass_(free_[r]) * v(r), fr += f(r);
+        q /= rg.mass;
+        qd /= rg.mass;
+        q0_(static_cast<Eigen::Index>(j)) = q;
+        qd0_(static_cast<Eigen::Index>(j)) = qd;
+        rigid_f_(static_cast<Eigen::Index>(j)) = fr / rg.mass;
+        for (int r : rg.members) xe(r) -= q, ve(r) -= qd;
+    }
+    Eigen::VectorXcd b0 = Eigen::VectorXcd::Zero(m), y0(m);
+    if (ne_ > 0) {
+        const Eigen::VectorXd fe = Me_lu_.solve(T_.transpose() * f) / s;
+        for (int c = 0; c < ne_; ++c) {
+            b0(ne_ + c) = fe(c);
+            y0(c) = xe(e_slot_[static_cast<std::size_t>(c)]);
+            y0(ne_ + c) = ve(e_slot_[static_cast<std::size_t>(c)]) / s;
+        }
+    }
+    for (int fn = 0; fn < ns_; ++fn) {
+        double b = 0.0;
+        for (std::size_t j = 0; j < rigid_.size(); ++j) {
+            double amp = std::abs(rigid_f_(static_cast<Eigen::Index>(j))), rate = 0.0;
+            for (int h = 0; h < nh_; ++h) {
+                const double P = std::abs(rigid_h_(static_cast<Eigen::Index>(j), h));
+                amp += P;
+                rate += P * h_omega_(h);
+            }
+            b += std::abs(rigid_lx_(fn, static_cast<Eigen::Index>(j))) * amp +
+                 std::abs(rigid_lv_(fn, static_cast<Eigen::Index>(j))) * rate;
+        }
+        rigid_bound_(fn) = b;
     }
     beta0_ = Vinv_ * b0;
     // eta0 = V^-1 y0, refined once against the residual y0 - Re(V eta0) (long
@@ -237,7 +354,7 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
 }
 
 void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
-    const int m = 2 * nf_;
+    const int m = 2 * ne_;
     const double s = scale_s_, s_end = tau + max_step_;
     for (int h = 0; h < nh_; ++h) {
         const double ph = h_omega_(h) * tau + theta_(h), wt = h_omega_(h) * tau;
@@ -290,12 +407,49 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
         y_(r) = y;
         ymag_(r) = ym;
     }
+    // x_F = R q + T e, v_F = R q' + T e' (T: 1 at e's own slot, -m_i/m_p at its pivot).
+    Eigen::VectorXd& xf = xf_;
+    Eigen::VectorXd& vf = vf_;
+    xf.setZero();
+    vf.setZero();
+    xfm_.setZero();
+    vfm_.setZero();
+    for (int c = 0; c < ne_; ++c)
+        for (int r = 0; r < nf_; ++r)
+            if (T_(r, c) != 0.0) {
+                xf(r) += T_(r, c) * y_(c);
+                vf(r) += T_(r, c) * s * y_(ne_ + c);
+                xfm_(r) += std::abs(T_(r, c)) * ymag_(c);
+                vfm_(r) += std::abs(T_(r, c)) * s * ymag_(ne_ + c);
+            }
+    for (std::size_t j = 0; j < rigid_.size(); ++j) {
+        // q = q0 + q0' tau + f tau^2/2 + sum_h P_h (sin theta/W^2 + tau cos theta/W - sin(W tau + theta)/W^2).
+        const Eigen::Index jj = static_cast<Eigen::Index>(j);
+        double q = q0_(jj) + qd0_(jj) * tau + 0.5 * rigid_f_(jj) * tau * tau, qd = qd0_(jj) + rigid_f_(jj) * tau;
+        double qm = std::abs(q0_(jj)) + std::abs(qd0_(jj) * tau) + std::abs(0.5 * rigid_f_(jj) * tau * tau);
+        double qdm = std::abs(qd0_(jj)) + std::abs(rigid_f_(jj) * tau);
+        for (int h = 0; h < nh_; ++h) {
+            const double P = rigid_h_(jj, h), W = h_omega_(h), st = std::sin(theta_(h)), ct = std::cos(theta_(h));
+            q += P * (st / (W * W) + tau * ct / W - sn_(h) / (W * W));
+            qd += P * (ct - cs_(h)) / W;
+            qm += std::abs(P) * (2.0 / (W * W) + tau / W);
+            qdm += 2.0 * std::abs(P) / W;
+        }
+        q_(jj) = q;
+        qd_(jj) = qd;
+        for (int r : rigid_[j].members) {
+            xf(r) += q;
+            vf(r) += qd;
+            xfm_(r) += qm;
+            vfm_(r) += qdm;
+        }
+    }
     for (int r = 0; r < nf_; ++r) {
         const int i = free_[r];
-        out.x[i] = y_(r);
-        out.v[i] = s * y_(nf_ + r);
-        xmag_(i) = ymag_(r);
-        vmag_(i) = s * ymag_(nf_ + r);
+        out.x[i] = xf(r);
+        out.v[i] = vf(r);
+        xmag_(i) = xfm_(r);
+        vmag_(i) = vfm_(r);
     }
     // a = M^-1 (f - K x - C v) for the free masses, f the constant force of
     // setup (with the stuck masses' coupling and friction) and the forcing.
@@ -340,7 +494,7 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
             dg = sg * dA;
             scale = mg + mu_n;
         }
-        double B = bound_sin_(f);
+        double B = bound_sin_(f) + rigid_bound_(f);
         for (int k = 0; k < m; ++k) B += absG_(f, k) * b2_(k);
         out.g[f] = g;
         out.dg[f] = dg;

@@ -28,9 +28,14 @@
 // forcing period where some |mu - lambda| < 0.1 |mu| (near resonance, where the
 // first form is loose or infinite), else infinite.
 //
+// A free translation that no damping resists (a floating component's r with
+// C r = 0) would make A defective (a double zero eigenvalue): it is taken out
+// first, x_F = R q + T e, q_j the component's mass-weighted mean position
+// with q_j'' = r_j^T f(t) / m_j in closed form (R^T K = R^T C = 0), and the
+// state above is written for e (mass T^T M T, stiffness T^T K T, ...).
+//
 // Refused (RunError naming the configuration): a V whose condition number
-// exceeds kMaxCondition (A nearly defective: critically damped motion, or a
-// free translation that no damper resists, a double zero eigenvalue), or an
+// exceeds kMaxCondition (A nearly defective: critically damped motion), or an
 // eigenvalue with a positive real part beyond rounding. The generic solver's
 // regimes (critical damping exactly) are not reproduced here: this solver is
 // for the models GenericSolver cannot take.
@@ -40,6 +45,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/LU>
 
 #include "configuration.h"
 #include "model.h"
@@ -90,7 +96,20 @@ private:
     Eigen::VectorXd h_omega_, h_phase_;
     Eigen::MatrixXd h_amp_;         // n x nh
 
-    Eigen::VectorXcd lambda_;       // 2nf eigenvalues
+    // Undamped free translations, taken out of the state (x_F = R q + T e).
+    struct Rigid {
+        std::vector<int> members;  // slots in free_, the first is the pivot
+        double mass = 0.0;         // the component's total mass
+    };
+    std::vector<Rigid> rigid_;
+    int ne_ = 0;                    // dimension of e: nf - number of rigid translations
+    std::vector<int> e_slot_;       // e_c is the free slot e_slot_[c] (minus its component's mean)
+    Eigen::MatrixXd T_;             // nf x ne
+    Eigen::PartialPivLU<Eigen::MatrixXd> Me_lu_;  // of T^T M_F T
+    Eigen::MatrixXd rigid_h_;       // nr x nh: r_j^T F_h / m_j
+    Eigen::MatrixXd rigid_lx_, rigid_lv_;  // ns x nr: switch rows summed over each component
+
+    Eigen::VectorXcd lambda_;       // 2ne eigenvalues
     Eigen::MatrixXcd V_, Vinv_;     // 2nf x 2nf
     Eigen::MatrixXcd beta_h_;       // 2nf x nh: V^-1 b_h
     Eigen::MatrixXd absV_;          // |V|
@@ -100,12 +119,14 @@ private:
 
     // --- fixed by setup ---
     Eigen::VectorXd x_fix_, theta_, force_;  // force_: constant force on the free masses
+    Eigen::VectorXd q0_, qd0_, rigid_f_;       // rigid coordinates and their constant acceleration
+    Eigen::VectorXd rigid_bound_;              // rigid part of each |g''| bound
     Eigen::VectorXcd eta0_, beta0_, e_theta_;
 
     // --- eval scratch ---
     // --- eval scratch (no allocation in eval; one thread at a time) ---
     mutable Eigen::VectorXcd eta_, e_omega_;
-    mutable Eigen::VectorXd eta_mag_, b2_, y_, ymag_, xmag_, vmag_, sn_, cs_;
+    mutable Eigen::VectorXd eta_mag_, b2_, y_, ymag_, xmag_, vmag_, sn_, cs_, q_, qd_, xf_, vf_, xfm_, vfm_;
 };
 
 }  // namespace hsnc
