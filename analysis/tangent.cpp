@@ -4,6 +4,9 @@
 #include <cmath>
 #include <string>
 
+#include <Eigen/Eigenvalues>
+#include <unsupported/Eigen/MatrixFunctions>
+
 #include "assembly.h"
 #include "modal.h"
 #include "transitions.h"
@@ -35,9 +38,13 @@ struct Tangent::ConfigData {
     Eigen::MatrixXd G;  // Phi^T (-K_FS): modal force of a unit displacement of each stuck mass
     Eigen::VectorXd lambda, c;
     Eigen::MatrixXd K, C;  // full K(cfg), C(cfg) (the gradient of a release function)
+    // Non-proportional damping: the generator of (x_F, v_F, x_S), whose
+    // exponential is Phi (x_S constant), and the fastest decay rate.
+    Eigen::MatrixXd generator;
+    double rate = 0.0;
 };
 
-Tangent::Tangent(const Model& model) : model_(model) { require_proportional_damping(model, "Tangent()"); }
+Tangent::Tangent(const Model& model) : model_(model) {}
 Tangent::~Tangent() = default;
 Tangent::Tangent(Tangent&&) noexcept = default;
 
@@ -64,6 +71,26 @@ const Tangent::ConfigData& Tangent::data(const Configuration& cfg) {
     d->lambda = md.lambda;
     d->c.resize(nf);
     for (int j = 0; j < nf; ++j) d->c(j) = model_.alpha + model_.beta * md.lambda(j);
+    if (!model_.proportional_damping()) {
+        // Dampers: the modes of K do not decouple C. dz/dt = A z for z = (x_F, v_F, x_S):
+        // x_F' = v_F, v_F' = -M^-1 (K_FF x_F + C_FF v_F + K_FS x_S), x_S' = 0.
+        Eigen::MatrixXd& A = d->generator;
+        A = Eigen::MatrixXd::Zero(2 * nf + ns, 2 * nf + ns);
+        for (int r = 0; r < nf; ++r) {
+            const int i = md.free[r];
+            A(r, nf + r) = 1.0;
+            for (int q = 0; q < nf; ++q) {
+                A(nf + r, q) = -d->K(i, md.free[q]) / m(i);
+                A(nf + r, nf + q) = -d->C(i, md.free[q]) / m(i);
+            }
+            for (int s = 0; s < ns; ++s) A(nf + r, 2 * nf + s) = -d->K(i, md.stuck[s]) / m(i);
+        }
+        if (nf > 0) {
+            const Eigen::EigenSolver<Eigen::MatrixXd> es(A.topLeftCorner(2 * nf, 2 * nf), false);
+            for (Eigen::Index k = 0; k < es.eigenvalues().size(); ++k)
+                d->rate = std::max(d->rate, -es.eigenvalues()(k).real());
+        }
+    }
     return *cache_.emplace(cfg, std::move(d)).first->second;
 }
 
@@ -72,6 +99,16 @@ Eigen::MatrixXd Tangent::transition(const Configuration& cfg, double tau) {
     const ModalDecomposition& md = d.modal;
     const int n = static_cast<int>(model_.dof());
     const int nf = static_cast<int>(md.free.size()), ns = static_cast<int>(md.stuck.size());
+    if (!model_.proportional_damping()) {
+        // exp(A tau) by Eigen's scaling and squaring with Pade approximants (Higham 2005):
+        // the matrix exponential to rounding, not an integration.
+        const Eigen::MatrixXd E = (d.generator * tau).exp();
+        Eigen::MatrixXd Phi = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+        auto at = [&](int slot) { return slot < nf ? md.free[slot] : slot < 2 * nf ? n + md.free[slot - nf] : md.stuck[slot - 2 * nf]; };
+        for (int r = 0; r < 2 * nf + ns; ++r)
+            for (int q = 0; q < 2 * nf + ns; ++q) Phi(at(r), at(q)) = E(r, q);
+        return Phi;  // a stuck mass's dv column stays 0, as in the modal form
+    }
     // Per mode, the homogeneous motion q(tau) = a q0 + b q0', q'(tau) = c q0 + e q0'
     // (c = -lambda b), and the response to a unit constant modal force from rest:
     // q = st, q' = b.
@@ -141,6 +178,7 @@ Eigen::MatrixXd Tangent::transition(const Configuration& cfg, double tau) {
 
 double Tangent::max_rate(const Configuration& cfg) {
     const ConfigData& d = data(cfg);
+    if (!model_.proportional_damping()) return 2.0 * d.rate;  // -2 Re lambda: the fastest decay of u'' + c u' + ...
     return d.c.size() ? std::max(0.0, d.c.maxCoeff()) : 0.0;
 }
 

@@ -5,7 +5,9 @@
 // Between two switches the motion is linear with constant forces, so a
 // perturbation dy obeys dy' = A(cfg) dy and moves by the segment's state
 // transition matrix Phi(tau) = exp(A tau), written here in closed form from
-// the same modal decomposition the segment solver uses (model/modal.h):
+// the same modal decomposition the segment solver uses (model/modal.h) -- with
+// dampers (non-proportional damping) as the matrix exponential of the state
+// generator, by Eigen's scaling and squaring (to rounding, no integration) --
 // per mode j, q'' + c_j q' + lambda_j q = 0 with c_j = alpha + beta lambda_j,
 // in every regime (rigid, under-, critically, over-damped). Friction forces,
 // loads and forcing are constant or given functions of time: they do not

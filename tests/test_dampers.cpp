@@ -12,6 +12,7 @@
 
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -21,6 +22,8 @@
 #include "cli_runner.h"
 #include "engine_runner.h"
 #include "error.h"
+#include "hsnc/lyapunov.h"
+#include "hsnc/periodic.h"
 #include "hsnc/simulate.h"
 #include "integrators.h"
 #include "model_hash.h"
@@ -440,6 +443,62 @@ TEST(DamperFacade, KernelsAndPrecisionThatCannotTakeItAreRefused) {
         o.kernels = k;
         EXPECT_EQ(simulate(md, o).status, RunStatus::ok);
     }
+}
+
+// ---- periodic orbits and Lyapunov exponents (the tangent's matrix exponential) ----
+
+Model absorber(double gap) {
+    Model m = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/dashpot/absorber.toml");
+    m.contacts[0].gap = gap;
+    return m;
+}
+
+// Without the stop the orbit is the linear steady state, and its Floquet
+// multipliers are exp(lambda_k T) of the state matrix's eigenvalues.
+TEST(DamperStability, MultipliersOfTheLinearOrbitAreExpLambdaT) {
+    const Model m = absorber(10.0);  // never reached
+    PeriodicOptions o;
+    o.kernels = KernelChoice::generic;
+    const PeriodicResult p = periodic(m, o);
+    ASSERT_EQ(p.status, PeriodicStatus::ok) << p.message;
+    EXPECT_EQ(p.events, 0u);
+    const StateSpaceSolver s(m, Configuration::all_open(m));
+    std::vector<double> want, got;
+    for (int k = 0; k < s.eigenvalues().size(); ++k) want.push_back(std::abs(std::exp(s.eigenvalues()(k) * p.period)));
+    for (const auto& mu : p.multipliers) got.push_back(std::abs(mu));
+    std::sort(want.begin(), want.end());
+    std::sort(got.begin(), got.end());
+    ASSERT_EQ(got.size(), want.size());
+    for (std::size_t k = 0; k < got.size(); ++k) {
+        std::printf("|mu_%zu| = %.15g, |exp(lambda T)| = %.15g\n", k, got[k], want[k]);
+        EXPECT_NEAR(got[k], want[k], 1e-10);
+    }
+}
+
+// With the stop (two switches a period, beta = 0: no damping jumps at the
+// contact), the multipliers' product and the exponents' sum are set by the
+// trace of M^-1 C alone: -(c/m_primary + c/m_absorber).
+TEST(DamperStability, PhaseVolumeShrinksByTheDampersTrace) {
+    const Model m = absorber(0.045);
+    const double trace = m.dampers[0].c / m.masses[0].m + m.dampers[0].c / m.masses[1].m;
+    PeriodicOptions o;
+    o.kernels = KernelChoice::generic;
+    const PeriodicResult p = periodic(m, o);
+    ASSERT_EQ(p.status, PeriodicStatus::ok) << p.message;
+    EXPECT_EQ(p.events, 2u);
+    std::complex<double> product = 1.0;
+    for (const auto& mu : p.multipliers) product *= mu;
+    const double want = std::exp(-trace * p.period);
+    std::printf("absorber orbit: %zu switches, product of multipliers %.15g, exp(-tr T) %.15g\n", p.events,
+                product.real(), want);
+    EXPECT_NEAR(product.real(), want, 1e-9 * want);
+    LyapunovOptions lo;
+    lo.t_end = 200.0;
+    lo.kernels = KernelChoice::generic;
+    const LyapunovResult r = lyapunov(m, lo);
+    ASSERT_EQ(r.status, RunStatus::ok);
+    std::printf("absorber: %zu switches, exponents sum %.15g, -tr(M^-1 C) %.15g\n", r.events, r.sum, -trace);
+    EXPECT_NEAR(r.sum, -trace, 1e-9);  // measured 1.2e-14
 }
 
 // ---- the command line and the bundled example ----
