@@ -10,11 +10,14 @@
 // the parameters as symbols (generator/symbolic_derivation.h) where the free
 // system has at most 2 DOF, printed in sorted term order
 // (generator/expression_printer.h).
+#include <algorithm>
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
 
+#include "assembly.h"
 #include "commands.h"
 #include "derivation.h"
 #include "emitter.h"
@@ -22,6 +25,7 @@
 #include "model_hash.h"
 #include "expression_printer.h"
 #include "model_reader.h"
+#include "state_space_solver.h"
 #include "symbolic_derivation.h"
 
 namespace hsnc::cli {
@@ -228,6 +232,101 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
 }
 
 
+/// Non-proportional damping: the configuration as the state-space solver
+/// takes it (runtime/solvers/state_space_solver.h): the reduced matrices in
+/// numbers, the eigenvalues of the state matrix, the switch functions. The
+/// derivation's closed forms (and --format cpp, a kernel) take Rayleigh
+/// damping only.
+void inspect_state_space(const Model& model, const Configuration& cfg, Format fmt, std::ostream& out) {
+    const Printer p{fmt, out};
+    const StateSpaceSolver solver(model, cfg);  // RunError: a nearly defective configuration
+    char hash[32];
+    std::snprintf(hash, sizeof hash, "0x%016llx", static_cast<unsigned long long>(model_hash(model)));
+    std::vector<int> free_dofs, stuck_dofs;
+    std::string fr, st;
+    for (std::size_t i = 0; i < model.dof(); ++i) {
+        (cfg.stuck[i] ? stuck_dofs : free_dofs).push_back(static_cast<int>(i));
+        (cfg.stuck[i] ? st : fr) += std::string((cfg.stuck[i] ? st : fr).empty() ? "" : ", ") + model.masses[i].name;
+    }
+    if (fmt == Format::latex) {
+        out << "% hsnc inspect: model " << model.name << " (hash " << hash << "), configuration " << cfg.spec(model) << "\n";
+        out << "\\paragraph{Model " << latex_name(model.name) << ", configuration \\texttt{" << latex_name(cfg.spec(model))
+            << "}} Free masses: " << latex_name(fr.empty() ? "none" : fr)
+            << "; stuck masses: " << latex_name(st.empty() ? "none" : st) << ". Non-proportional damping.\n";
+    } else {
+        out << "model " << model.name << " (hash " << hash << ")\n";
+        out << "configuration " << cfg.spec(model) << " (key " << cfg.key() << ")\n";
+        out << "free masses: " << (fr.empty() ? "none" : fr) << "; stuck masses: " << (st.empty() ? "none" : st)
+            << " (held at their x0)\n";
+        out << "non-proportional damping (dampers): solved through state-space modes\n";
+    }
+    const Eigen::MatrixXd K = stiffness_matrix(model, cfg), C = damping_matrix(model, cfg);
+    auto matrix = [&](const std::string& name, auto entry) {
+        std::string text = name + " = [", latex = "\\[ " + name + " = \\begin{bmatrix} ";
+        for (std::size_t r = 0; r < free_dofs.size(); ++r) {
+            for (std::size_t c = 0; c < free_dofs.size(); ++c) {
+                const std::string v = Printer::format_number(entry(free_dofs[r], free_dofs[c]));
+                text += (c ? ", " : "") + v;
+                latex += (c ? " & " : "") + v;
+            }
+            text += r + 1 < free_dofs.size() ? "; " : "";
+            latex += r + 1 < free_dofs.size() ? " \\\\ " : "";
+        }
+        p.line(text + "]", latex + " \\end{bmatrix} \\]");
+    };
+    if (!free_dofs.empty()) {
+        p.heading("Reduced system of the free masses: M x'' + C x' + K x = f + sum_h F_h sin(Omega_h t + phase_h)",
+                  "Reduced system of the free masses: $M \\ddot x + C \\dot x + K x = f + \\sum_h F_h \\sin(\\Omega_h t + \\varphi_h)$");
+        matrix("M", [&](int i, int j) { return i == j ? model.masses[static_cast<std::size_t>(i)].m : 0.0; });
+        matrix("K", [&](int i, int j) { return K(i, j); });
+        matrix("C", [&](int i, int j) { return C(i, j); });
+    }
+    p.heading("State-space modes: y' = A y, y = [x; v/s]; lambda = -xi |lambda| +- i |lambda| sqrt(1 - xi^2)",
+              "State-space modes: $\\dot y = A y$, $\\lambda = -\\xi |\\lambda| \\pm i |\\lambda| \\sqrt{1 - \\xi^2}$");
+    std::vector<std::complex<double>> lambda(solver.eigenvalues().data(),
+                                             solver.eigenvalues().data() + solver.eigenvalues().size());
+    std::sort(lambda.begin(), lambda.end(), [](auto a, auto b) {
+        return std::abs(a) != std::abs(b) ? std::abs(a) < std::abs(b) : a.imag() > b.imag();
+    });
+    int j = 0;
+    for (const std::complex<double>& l : lambda) {
+        if (l.imag() < 0.0) continue;  // a pair once
+        const double mag = std::abs(l), xi = mag > 0.0 ? -l.real() / mag : 0.0;
+        const std::string J = std::to_string(++j);
+        p.line("mode " + J + ": lambda = " + Printer::format_number(l.real()) + (l.imag() > 0.0 ? " +- i " + Printer::format_number(l.imag()) : "") +
+                   ", |lambda| = " + Printer::format_number(mag) + " rad/s, xi = " + Printer::format_number(xi),
+               "\\[ \\lambda_{" + J + "} = " + Printer::format_number(l.real()) +
+                   (l.imag() > 0.0 ? " \\pm " + Printer::format_number(l.imag()) + " i" : "") + ", \\quad \\xi_{" + J +
+                   "} = " + Printer::format_number(xi) + " \\]");
+    }
+    p.line("eigenvector condition ||V|| ||V^-1|| = " + Printer::format_number(solver.condition()) +
+               (solver.rigid_translations() > 0
+                    ? "; " + std::to_string(solver.rigid_translations()) +
+                          " free translation(s) that no damping resists taken out of the state (q'' = r^T f / m)"
+                    : std::string()),
+           "Eigenvector condition $\\|V\\| \\|V^{-1}\\| = " + Printer::format_number(solver.condition()) + "$.");
+    p.heading("Switch functions (runtime/segment.h order)", "Switch functions");
+    const std::vector<SwitchFunction>& sw = solver.switches();
+    for (std::size_t f = 0; f < sw.size(); ++f) {
+        const SwitchFunction& sf = sw[f];
+        std::string what;
+        switch (sf.kind) {
+            case SwitchKind::gap: {
+                const Contact& c = model.contacts[static_cast<std::size_t>(sf.element)];
+                auto body = [&](int b) { return "x_" + model.masses[static_cast<std::size_t>(b)].name; };
+                what = c.a == kGround ? "-" + body(c.b) : body(c.a) + (c.b == kGround ? "" : " - " + body(c.b));
+                what += " - " + Printer::format_number(c.gap) + " (gap of " + c.name + ")";
+                break;
+            }
+            case SwitchKind::velocity: what = "v_" + model.masses[static_cast<std::size_t>(sf.element)].name + " (sliding)"; break;
+            case SwitchKind::release_pos: what = "A - mu_s N of " + model.masses[static_cast<std::size_t>(sf.element)].name; break;
+            case SwitchKind::release_neg: what = "-A - mu_s N of " + model.masses[static_cast<std::size_t>(sf.element)].name; break;
+        }
+        const std::string F = std::to_string(f + 1);
+        p.line("g_" + F + " = " + what, "\\[ g_{" + F + "} = \\text{" + latex_name(what) + "} \\]");
+    }
+}
+
 /// The --symbolic view: the formulas of generator/symbolic_derivation.h.
 void inspect_symbolic(const Model& model, const Configuration& cfg, const SymbolicDerivation& d, Format fmt,
                       std::ostream& out) {
@@ -351,7 +450,9 @@ void add_inspect(CLI::App& app, int& exit_code) {
         const Model model = read_model(o->model);
         const Configuration cfg = Configuration::parse(model, o->config);
         const Format fmt = o->format == "latex" ? Format::latex : Format::text;
-        if (o->symbolic && o->format != "cpp") {
+        if (o->symbolic && !model.proportional_damping()) {
+            std::cerr << "hsnc inspect: --symbolic: the model has non-proportional damping (dampers); printing numbers\n";
+        } else if (o->symbolic && o->format != "cpp") {
             SymbolicDerivation sd;
             std::string why;
             if (derive_symbolic(model, cfg, sd, why)) {
@@ -364,7 +465,11 @@ void add_inspect(CLI::App& app, int& exit_code) {
             std::cerr << "hsnc inspect: --symbolic does not apply to --format cpp (the kernel holds numbers)\n";
         }
         if (o->format == "cpp") {
-            std::cout << emit_kernel(derive(model, cfg));
+            std::cout << emit_kernel(derive(model, cfg));  // dampers: derive() refuses (InputError, exit 2)
+        } else if (!model.proportional_damping()) {
+            std::ostringstream text;  // nothing printed unless the whole view is
+            inspect_state_space(model, cfg, fmt, text);
+            std::cout << text.str();
         } else {
             inspect(model, cfg, fmt, std::cout);
         }

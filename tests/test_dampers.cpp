@@ -517,9 +517,18 @@ TEST(DamperCli, TheBundledAbsorberRunsOnStateSpaceModesAndRefusesKernels) {
         EXPECT_EQ(bad.exit_code, 2) << flags;
         EXPECT_NE(bad.err.find("non-proportional damping"), std::string::npos) << bad.err;
     }
-    const testing::CliRun gen = testing::run_hsnc("inspect " + model + " --config \"closed= stuck=\"");
+    // inspect prints the state-space view; a kernel (--format cpp, generate) is refused.
+    const testing::CliRun view = testing::run_hsnc("inspect " + model + " --config \"closed=stop\"");
+    EXPECT_EQ(view.exit_code, 0) << view.err;
+    EXPECT_NE(view.out.find("C = [0.1273, -0.1273; -0.1273, 0.1273]"), std::string::npos) << view.out;
+    EXPECT_NE(view.out.find("State-space modes"), std::string::npos) << view.out;
+    EXPECT_NE(view.out.find("g_1 = x_primary - 0.044999999999999998 (gap of stop)"), std::string::npos) << view.out;
+    const testing::CliRun gen = testing::run_hsnc("inspect " + model + " --format cpp");
     EXPECT_EQ(gen.exit_code, 2);
     EXPECT_NE(gen.err.find("non-proportional damping"), std::string::npos) << gen.err;
+    const testing::CliRun generate = testing::run_hsnc("generate " + model + " -o " + testing::temp_path("dampers-gen"));
+    EXPECT_EQ(generate.exit_code, 2);
+    EXPECT_NE(generate.err.find("non-proportional damping"), std::string::npos) << generate.err;
 }
 
 }  // namespace

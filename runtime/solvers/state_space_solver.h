@@ -75,6 +75,8 @@ public:
     const Eigen::VectorXcd& eigenvalues() const { return lambda_; }
     /// ||V||_1 ||V^-1||_1 of this configuration.
     double condition() const { return condition_; }
+    /// Free translations taken out of the state (no damping resists them).
+    std::size_t rigid_translations() const { return rigid_.size(); }
 
 private:
     using cplx = std::complex<double>;
