@@ -128,6 +128,17 @@ std::string chain(int n) {
     return t;
 }
 
+/// chain(n) with a dashpot of 0.05 N s/m between every pair of neighbours
+/// in place of its Rayleigh beta: non-proportional damping.
+std::string chain_with_dampers(int n) {
+    std::string t = chain(n);
+    t.replace(t.find("beta = 0.002"), 12, "alpha = 0.0");
+    t = "name = \"chain-" + std::to_string(n) + "-dampers\"" + t.substr(t.find('\n'));
+    for (int i = 1; i < n; ++i)
+        t += "[[damper]]\nbetween = [\"m" + std::to_string(i) + "\", \"m" + std::to_string(i + 1) + "\"]\nc = 0.05\n";
+    return t;
+}
+
 struct ProcessTimes {
     double wall = -1, cpu = -1;  ///< medians, seconds
 };
@@ -253,12 +264,16 @@ int main(int argc, char** argv) {
         {"seed-scenario-1", read_model(models + "seed-scenario-1.toml"), 2.0, quick ? 0.2 : 2.0},
         {"seed-scenario-2", read_model(models + "seed-scenario-2.toml"), 300.0, quick ? 1.0 : 10.0},
         {"chain-16", parse_model(chain(16), "chain-16"), 20.0, quick ? 0.2 : 2.0},
+        // Non-proportional damping (dampers): the generic path's state-space solver.
+        {"absorber", read_model(HSNC_SOURCE_DIR "/examples/dashpot/absorber.toml"), 60.0, quick ? 0.6 : 6.0},
+        {"chain-16-dampers", parse_model(chain_with_dampers(16), "chain-16-dampers"), 20.0, quick ? 0.2 : 2.0},
     };
     const int reps = quick ? 3 : 11;
     auto run_kinds = [&] {
         std::vector<std::pair<std::string, Model>> kind_models;
         std::vector<double> kind_t_ends;
-        for (const Case& c : cases) kind_models.emplace_back(c.name, c.model), kind_t_ends.push_back(c.t_end);
+        for (const Case& c : cases)  // dampers: the generic path only (no kernels, no interpreter)
+            if (c.model.proportional_damping()) kind_models.emplace_back(c.name, c.model), kind_t_ends.push_back(c.t_end);
         kind_models.emplace_back("chain-8", read_model(models + "chain-8.toml"));
         kind_t_ends.push_back(20.0);
         kind_models.emplace_back("chain-32", parse_model(chain(32), "chain-32"));

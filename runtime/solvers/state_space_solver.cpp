@@ -27,26 +27,29 @@ constexpr double kNear = 0.1;
 // Re = expm1(x) cos y - 2 sin^2(y/2), Im = e^x sin y.
 cplx expm1c(cplx w) {
     const double x = w.real(), y = w.imag();
-    const double s = std::sin(0.5 * y);
-    return {std::expm1(x) * std::cos(y) - 2.0 * s * s, std::exp(x) * std::sin(y)};
+    const double s = std::sin(0.5 * y), em1 = std::expm1(x), c = std::cos(y), sn = std::sin(y);
+    return {em1 * c - 2.0 * s * s, (em1 + 1.0) * sn};
 }
 
 cplx expc(cplx w) { return std::exp(w.real()) * cplx(std::cos(w.imag()), std::sin(w.imag())); }
 
+/// |z| for the magnitudes and bounds: sqrt(re^2 + im^2) (std::abs, hypot,
+/// guards against overflow the values here never reach, at several times the cost).
+double mod(cplx z) { return std::sqrt(z.real() * z.real() + z.imag() * z.imag()); }
+
 /// E(lambda, mu, tau) = int_0^tau e^{lambda (tau - s)} e^{mu s} ds, given
-/// el = e^{lambda tau} and em = e^{mu tau}.
-cplx duhamel(cplx lambda, cplx mu, double tau, cplx el, cplx em) {
-    const cplx d = mu - lambda, w = d * tau;
-    if (std::abs(w) < 1.0) return el * tau * (w == cplx(0.0) ? cplx(1.0) : expm1c(w) / w);
-    return (em - el) / d;
+/// el = e^{lambda tau}, em = e^{mu tau}, d = mu - lambda and its inverse.
+cplx duhamel(cplx d, cplx inv_d, double tau, cplx el, cplx em) {
+    const cplx w = d * tau;
+    if (std::norm(w) < 1.0) return w == cplx(0.0) ? el * tau : el * (expm1c(w) * inv_d);
+    return (em - el) * inv_d;
 }
 
 /// A bound on |E''(s)| for s in [tau, s_end] (state_space_solver.h), given
-/// |e^{lambda tau}| and |e^{mu tau}|.
-double duhamel_bound(cplx lambda, cplx mu, double ael, double aem, double s_end) {
-    const double l = std::abs(lambda), dm = std::abs(mu - lambda);
-    const double first = dm > 0.0 ? (std::norm(mu) * aem + l * l * ael) / dm : kInf;
-    const double second = l == 0.0 ? std::abs(mu) : l * l * s_end + std::abs(lambda + mu);
+/// |lambda|, |mu|, |mu - lambda|, |lambda + mu| and |e^{lambda tau}| (|e^{mu tau}| = 1).
+double duhamel_bound(double l, double m, double dm, double sum, double ael, double s_end) {
+    const double first = dm > 0.0 ? (m * m + l * l * ael) / dm : kInf;
+    const double second = l == 0.0 ? m : l * l * s_end + sum;
     return std::min(first, second);
 }
 
@@ -202,7 +205,6 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
             if (lambda_(k).real() > 0.0) lambda_(k) = cplx(0.0, lambda_(k).imag());
         }
     }
-    absV_ = V_.cwiseAbs();
 
     Eigen::MatrixXd bh = Eigen::MatrixXd::Zero(m, nh_);
     if (ne_ > 0)
@@ -230,6 +232,25 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
                     max_step_ = std::min(max_step_, 2 * kPi / h_omega_(h));
                 }
             }
+
+    // Per mode and forcing term (mu = 0, +i Omega_h, -i Omega_h): 1/(mu - lambda) and the moduli the bounds use.
+    const int nmu = 1 + 2 * nh_;
+    inv_d_.resize(m, nmu);
+    mod_d_.resize(m, nmu);
+    mod_sum_.resize(m, nmu);
+    mod_lambda_.resize(m);
+    mod_beta_h_.resize(m, nh_);
+    for (int k = 0; k < m; ++k) {
+        mod_lambda_(k) = mod(lambda_(k));
+        for (int u = 0; u < nmu; ++u) {
+            const cplx mu = u == 0 ? cplx(0.0) : cplx(0.0, (u % 2 == 1 ? 1.0 : -1.0) * h_omega_((u - 1) / 2));
+            const cplx d = mu - lambda_(k);
+            inv_d_(k, u) = d == cplx(0.0) ? cplx(0.0) : 1.0 / d;
+            mod_d_(k, u) = mod(d);
+            mod_sum_(k, u) = mod(lambda_(k) + mu);
+        }
+        for (int h = 0; h < nh_; ++h) mod_beta_h_(k, h) = 0.5 * mod(beta_h_(k, h));
+    }
 
     // Each switch function as a row over (x_F, v_F) (and the forcing it sees
     // directly), then over y = [e; e'/s] through T, and over the rigid
@@ -259,6 +280,33 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
         Ly.rightCols(ne_) = L.rightCols(nf_) * T_ * s;
     }
     absG_ = (Ly.cast<cplx>() * V_).cwiseAbs();
+
+    // Conjugate pairs: y is real and b real, so the modal coordinate of
+    // conj(lambda) is the conjugate of lambda's, and the pair adds 2 Re(V_k eta_k).
+    // Eigen's real eigen-solver gives each pair adjacent, exactly conjugate;
+    // eval then takes one of each (weight 2). Anything else: every mode, weight 1.
+    std::vector<double> weight;
+    for (int k = 0; k < m; ++k) {
+        const bool pair = lambda_(k).imag() > 0.0 && k + 1 < m && lambda_(k + 1) == std::conj(lambda_(k)) &&
+                          V_.col(k + 1) == V_.col(k).conjugate();
+        rep_.push_back(k);
+        weight.push_back(pair ? 2.0 : 1.0);
+        if (pair) ++k;
+    }
+    const int nr = static_cast<int>(rep_.size());
+    Vre_.resize(m, nr);
+    Vim_.resize(m, nr);
+    absV_.resize(m, nr);
+    Eigen::MatrixXd absG(ns_, nr);
+    for (int c = 0; c < nr; ++c) {
+        const int k = rep_[static_cast<std::size_t>(c)];
+        const double w = weight[static_cast<std::size_t>(c)];
+        Vre_.col(c) = w * V_.col(k).real();
+        Vim_.col(c) = w * V_.col(k).imag();
+        absV_.col(c) = w * V_.col(k).cwiseAbs();
+        absG.col(c) = w * absG_.col(k);
+    }
+    absG_ = absG;
     // Rigid part of g'': x'' = R q'', v'' = R q''' with |q''| <= (|r^T f| + sum_h |P_h|),
     // |q'''| <= sum_h |P_h| Omega_h; r^T f depends on setup (friction, stuck masses): rigid_bound_ there.
     rigid_lx_ = Eigen::MatrixXd::Zero(ns_, static_cast<Eigen::Index>(rigid_.size()));
@@ -272,10 +320,14 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     x_fix_ = Eigen::VectorXd::Zero(n_);
     theta_ = Eigen::VectorXd::Zero(nh_);
     e_theta_ = Eigen::VectorXcd::Zero(nh_);
-    eta0_ = beta0_ = eta_ = Eigen::VectorXcd::Zero(m);
+    eta0_ = beta0_ = Eigen::VectorXcd::Zero(m);
+    eta_ = Eigen::VectorXcd::Zero(static_cast<Eigen::Index>(rep_.size()));
+    mod_eta0_ = mod_beta0_ = Eigen::VectorXd::Zero(m);
+    B_ = Eigen::VectorXd::Zero(ns_);
     q0_ = qd0_ = rigid_f_ = q_ = qd_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rigid_.size()));
     rigid_bound_ = Eigen::VectorXd::Zero(ns_);
-    eta_mag_ = b2_ = y_ = ymag_ = Eigen::VectorXd::Zero(m);
+    eta_mag_ = b2_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rep_.size()));
+    y_ = ymag_ = Eigen::VectorXd::Zero(m);
     xmag_ = vmag_ = Eigen::VectorXd::Zero(n_);
     force_ = xf_ = vf_ = xfm_ = vfm_ = Eigen::VectorXd::Zero(nf_);
     sn_ = cs_ = Eigen::VectorXd::Zero(nh_);
@@ -351,6 +403,10 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
         res(r) = static_cast<double>(e);
     }
     eta0_ += Vinv_ * res;
+    for (int k = 0; k < m; ++k) {
+        mod_eta0_(k) = mod(eta0_(k));
+        mod_beta0_(k) = mod(beta0_(k));
+    }
 }
 
 void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
@@ -362,32 +418,38 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
         cs_(h) = std::cos(ph);
         e_omega_(h) = cplx(std::cos(wt), std::sin(wt));
     }
-    for (int k = 0; k < m; ++k) {
+    for (int c = 0; c < static_cast<int>(rep_.size()); ++c) {
+        const int k = rep_[static_cast<std::size_t>(c)];
         const cplx lam = lambda_(k), el = expc(lam * tau);
-        const double ael = std::abs(el), l2 = std::norm(lam);
+        const double ael = std::exp(lam.real() * tau), l = mod_lambda_(k);
         cplx eta = el * eta0_(k);
-        double mag = std::abs(eta), b2 = l2 * mag;
+        double mag = ael * mod_eta0_(k), b2 = l * l * mag;
         if (beta0_(k) != cplx(0.0)) {
-            const cplx E = duhamel(lam, 0.0, tau, el, 1.0);
+            const cplx E = duhamel(-lam, inv_d_(k, 0), tau, el, 1.0);
             eta += beta0_(k) * E;
-            mag += std::abs(beta0_(k) * E);
-            b2 += std::abs(beta0_(k)) * duhamel_bound(lam, 0.0, ael, 1.0, s_end);
+            mag += mod(beta0_(k) * E);
+            b2 += mod_beta0_(k) * duhamel_bound(l, 0.0, mod_d_(k, 0), mod_sum_(k, 0), ael, s_end);
         }
         for (int h = 0; h < nh_; ++h) {
             const cplx bh = beta_h_(k, h);
             if (bh == cplx(0.0)) continue;
-            const cplx mu(0.0, h_omega_(h)), ew = e_omega_(h);
-            const cplx Ep = duhamel(lam, mu, tau, el, ew), Em = duhamel(lam, -mu, tau, el, std::conj(ew));
+            const double W = h_omega_(h);
+            const cplx mu(0.0, W), ew = e_omega_(h);
+            const int up = 1 + 2 * h, um = 2 + 2 * h;
+            const cplx Ep = duhamel(mu - lam, inv_d_(k, up), tau, el, ew);
+            const cplx Em = duhamel(-mu - lam, inv_d_(k, um), tau, el, std::conj(ew));
             const cplx c = bh * cplx(0.0, -0.5);  // beta/(2i)
             eta += c * (e_theta_(h) * Ep - std::conj(e_theta_(h)) * Em);
-            mag += std::abs(c) * (std::abs(Ep) + std::abs(Em));
+            const double cm = mod_beta_h_(k, h);
+            mag += cm * (mod(Ep) + mod(Em));
             // The near-resonant form needs a finite horizon (max_step); a far one never does.
             const double sp = near_(k, 2 * h) ? s_end : kInf, sm = near_(k, 2 * h + 1) ? s_end : kInf;
-            b2 += std::abs(c) * (duhamel_bound(lam, mu, ael, 1.0, sp) + duhamel_bound(lam, -mu, ael, 1.0, sm));
+            b2 += cm * (duhamel_bound(l, W, mod_d_(k, up), mod_sum_(k, up), ael, sp) +
+                        duhamel_bound(l, W, mod_d_(k, um), mod_sum_(k, um), ael, sm));
         }
-        eta_(k) = eta;
-        eta_mag_(k) = mag;
-        b2_(k) = b2;
+        eta_(c) = eta;
+        eta_mag_(c) = mag;
+        b2_(c) = b2;
     }
 
     // y = Re(V eta): positions, velocities / s.
@@ -398,14 +460,11 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
         xmag_(i) = std::abs(x_fix_(i));
         vmag_(i) = 0.0;
     }
-    for (int r = 0; r < m; ++r) {
-        double y = 0.0, ym = 0.0;
-        for (int k = 0; k < m; ++k) {
-            y += V_(r, k).real() * eta_(k).real() - V_(r, k).imag() * eta_(k).imag();
-            ym += absV_(r, k) * eta_mag_(k);
-        }
-        y_(r) = y;
-        ymag_(r) = ym;
+    if (m > 0) {  // y = Re(V eta) and its magnitude |V| |eta|: two matrix-vector products
+        y_.noalias() = Vre_ * eta_.real();
+        y_.noalias() -= Vim_ * eta_.imag();
+        ymag_.noalias() = absV_ * eta_mag_;
+        B_.noalias() = absG_ * b2_;
     }
     // x_F = R q + T e, v_F = R q' + T e' (T: 1 at e's own slot, -m_i/m_p at its pivot).
     Eigen::VectorXd& xf = xf_;
@@ -494,8 +553,7 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
             dg = sg * dA;
             scale = mg + mu_n;
         }
-        double B = bound_sin_(f) + rigid_bound_(f);
-        for (int k = 0; k < m; ++k) B += absG_(f, k) * b2_(k);
+        const double B = bound_sin_(f) + rigid_bound_(f) + (m > 0 ? B_(f) : 0.0);
         out.g[f] = g;
         out.dg[f] = dg;
         out.scale[f] = scale;

@@ -114,21 +114,28 @@ private:
     Eigen::VectorXcd lambda_;       // 2ne eigenvalues
     Eigen::MatrixXcd V_, Vinv_;     // 2nf x 2nf
     Eigen::MatrixXcd beta_h_;       // 2nf x nh: V^-1 b_h
-    Eigen::MatrixXd absV_;          // |V|
-    Eigen::MatrixXd absG_;          // ns x 2nf: |L_f V_k|, L_f the switch function's row over y
+    std::vector<int> rep_;          // the modes eval computes: one of each conjugate pair, every real one
+    Eigen::MatrixXd absV_, Vre_, Vim_;  // |V|, Re V, Im V over rep_, a pair's column doubled
+    Eigen::MatrixXd absG_;          // ns x rep: |L_f V_k| (doubled for a pair), L_f the switch function's row over y
     Eigen::VectorXd bound_sin_;     // sum_h |d_fh| Omega_h^2 (the forcing in release functions)
     Eigen::Matrix<char, Eigen::Dynamic, Eigen::Dynamic> near_;  // 2nf x (2 nh): |mu - lambda| < 0.1 |mu|
+    // Per mode k and forcing term u (mu = 0, then +-i Omega_h): 1/(mu - lambda_k), |mu - lambda_k|,
+    // |mu + lambda_k|; |lambda_k|, |beta_hk|/2.
+    Eigen::MatrixXcd inv_d_;
+    Eigen::MatrixXd mod_d_, mod_sum_, mod_beta_h_;
+    Eigen::VectorXd mod_lambda_;
 
     // --- fixed by setup ---
     Eigen::VectorXd x_fix_, theta_, force_;  // force_: constant force on the free masses
     Eigen::VectorXd q0_, qd0_, rigid_f_;       // rigid coordinates and their constant acceleration
     Eigen::VectorXd rigid_bound_;              // rigid part of each |g''| bound
     Eigen::VectorXcd eta0_, beta0_, e_theta_;
+    Eigen::VectorXd mod_eta0_, mod_beta0_;  // |eta0|, |beta0|
 
     // --- eval scratch ---
     // --- eval scratch (no allocation in eval; one thread at a time) ---
     mutable Eigen::VectorXcd eta_, e_omega_;
-    mutable Eigen::VectorXd eta_mag_, b2_, y_, ymag_, xmag_, vmag_, sn_, cs_, q_, qd_, xf_, vf_, xfm_, vfm_;
+    mutable Eigen::VectorXd eta_mag_, b2_, y_, ymag_, xmag_, vmag_, sn_, cs_, q_, qd_, xf_, vf_, xfm_, vfm_, B_;
 };
 
 }  // namespace hsnc
