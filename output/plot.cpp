@@ -19,7 +19,7 @@
 
 extern char** environ;
 
-namespace hsnc::cli {
+namespace hsnc {
 namespace {
 
 constexpr std::size_t kBuckets = 2000;     // envelope resolution: about one bucket per pixel column
@@ -378,4 +378,4 @@ void render_png(const std::string& script, const OutputTarget& png) {
 
 void PlotRecorder::draw(const OutputTarget& png) const { render_png(script(), png); }
 
-}  // namespace hsnc::cli
+}  // namespace hsnc

@@ -19,7 +19,7 @@
 #include "observer.h"
 #include "output_file.h"
 
-namespace hsnc::cli {
+namespace hsnc {
 
 /// Throws RunError when gnuplot is not on PATH (called before a run).
 void require_gnuplot();
@@ -72,4 +72,4 @@ private:
     std::size_t unmarked_ = 0;  // events past the cap, not drawn
 };
 
-}  // namespace hsnc::cli
+}  // namespace hsnc

@@ -8,7 +8,7 @@
 #include "error.h"
 #include "plot.h"
 
-namespace hsnc::cli {
+namespace hsnc {
 namespace {
 
 constexpr EventKind kKinds[] = {EventKind::contact_close, EventKind::contact_open, EventKind::stick,
@@ -151,4 +151,4 @@ std::string SectionRecorder::script() const {
 
 void SectionRecorder::draw(const OutputTarget& png) const { render_png(script(), png); }
 
-}  // namespace hsnc::cli
+}  // namespace hsnc

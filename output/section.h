@@ -19,7 +19,7 @@
 #include "observer.h"
 #include "output_file.h"
 
-namespace hsnc::cli {
+namespace hsnc {
 
 /// A section: the event kind and the element (-1: any element of that kind).
 struct SectionSpec {
@@ -72,4 +72,4 @@ private:
     std::vector<double> rows_;
 };
 
-}  // namespace hsnc::cli
+}  // namespace hsnc

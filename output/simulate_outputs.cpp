@@ -7,7 +7,7 @@
 #include "error.h"
 #include "sample_grid.h"
 
-namespace hsnc::cli {
+namespace hsnc {
 namespace {
 
 std::string short_number(double v) {
@@ -83,4 +83,4 @@ void SimulateOutputs::commit() {
     if (section_ && section_plot_) section_->draw(*section_plot_);
 }
 
-}  // namespace hsnc::cli
+}  // namespace hsnc

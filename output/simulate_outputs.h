@@ -14,7 +14,7 @@
 #include "plot.h"
 #include "section.h"
 
-namespace hsnc::cli {
+namespace hsnc {
 
 /// Without --allow-large-output, a trajectory of more rows than this, or of
 /// more than kLargeOutputBytes (estimated), is refused before the run.
@@ -61,4 +61,4 @@ private:
     std::unique_ptr<PlotRecorder> recorder_;
 };
 
-}  // namespace hsnc::cli
+}  // namespace hsnc

@@ -9,7 +9,7 @@
 
 #include "plot.h"
 
-namespace hsnc::cli {
+namespace hsnc {
 namespace {
 
 const char* const kColours[8] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728",
@@ -205,4 +205,4 @@ void draw_sweep_plot(const SweepResult& r, const std::string& title, const Outpu
     file.commit();
 }
 
-}  // namespace hsnc::cli
+}  // namespace hsnc

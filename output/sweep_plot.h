@@ -11,7 +11,7 @@
 #include "hsnc/sweep.h"
 #include "output_file.h"
 
-namespace hsnc::cli {
+namespace hsnc {
 
 /// The gnuplot script (terminal pngcairo, the image on stdout).
 std::string sweep_plot_script(const SweepResult& r, const std::string& title);
@@ -19,4 +19,4 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title);
 /// Draw it into `png` (RunError when gnuplot fails).
 void draw_sweep_plot(const SweepResult& r, const std::string& title, const OutputTarget& png);
 
-}  // namespace hsnc::cli
+}  // namespace hsnc

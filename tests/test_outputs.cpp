@@ -337,7 +337,7 @@ TEST(Outputs, TheRowEstimateMatchesTheWrittenRows) {
     const auto r = run_hsnc("simulate " + q(model_path("coulomb-1dof.toml")) + " --t-end 0.95 --dt 0.1 --quiet --out " +
                             q(out));
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_EQ(static_cast<double>(count_lines(slurp(out)) - 1), cli::trajectory_rows(0.0, 0.95, 0.1));
+    EXPECT_EQ(static_cast<double>(count_lines(slurp(out)) - 1), trajectory_rows(0.0, 0.95, 0.1));
 }
 
 // A run interrupted by a signal removes its temporary files, says so, and
@@ -461,7 +461,7 @@ Model chain(int n, bool forced) {
 
 TEST(Outputs, PlotScriptHasUnitsAZoomWindowAndEventMarks) {
     const Model m = chain(2, true);
-    cli::PlotRecorder rec(m, 0.0, 100.0, 0.01);
+    PlotRecorder rec(m, 0.0, 100.0, 0.01);
     const double x[2] = {0.01, -0.02}, v[2] = {0, 0};
     for (int k = 0; k <= 10000; ++k) rec.on_sample(k * 0.01, x, v);
     rec.on_event(99.5, EventKind::stick, 1, x, v);
@@ -482,14 +482,14 @@ TEST(Outputs, PlotScriptHasUnitsAZoomWindowAndEventMarks) {
     EXPECT_NE(s.find("title 'm2'"), std::string::npos);
 
     const Model free = chain(1, false);
-    cli::PlotRecorder rec1(free, 0.0, 20.0, 0.02);
+    PlotRecorder rec1(free, 0.0, 20.0, 0.02);
     EXPECT_NE(rec1.script().find("'first 10% of the run, t = 0 .. 2 s'"), std::string::npos);
 }
 
 TEST(Outputs, PlotScriptColoursManyMassesAlongAScale) {
     for (int n : {8, 9, 64}) {
         const Model m = chain(n, true);
-        cli::PlotRecorder rec(m, 0.0, 10.0, 0.01);
+        PlotRecorder rec(m, 0.0, 10.0, 0.01);
         std::vector<double> x(static_cast<std::size_t>(n), 0.0);
         for (int k = 0; k <= 1000; ++k) rec.on_sample(k * 0.01, x.data(), x.data());
         const std::string s = rec.script();
@@ -508,7 +508,7 @@ TEST(Outputs, PlotScriptColoursManyMassesAlongAScale) {
 // More samples than pixels: the min/max envelope keeps a single-sample spike.
 TEST(Outputs, PlotEnvelopeKeepsExtremes) {
     const Model m = chain(1, false);
-    cli::PlotRecorder rec(m, 0.0, 100.0, 1e-4);
+    PlotRecorder rec(m, 0.0, 100.0, 1e-4);
     for (int k = 0; k <= 1000000; ++k) {
         const double t = k * 1e-4;
         const double x = k == 123457 ? 7.25 : std::sin(t), v = 0;
@@ -524,7 +524,7 @@ TEST(Outputs, PlotsOfOneTwoEightAndSixtyFourMassesRender) {
     TempDir dir;
     for (int n : {1, 2, 8, 64}) {
         const Model m = chain(n, true);
-        cli::PlotRecorder rec(m, 0.0, 10.0, 0.01);
+        PlotRecorder rec(m, 0.0, 10.0, 0.01);
         std::vector<double> x(static_cast<std::size_t>(n));
         for (int k = 0; k <= 1000; ++k) {
             for (int i = 0; i < n; ++i) x[static_cast<std::size_t>(i)] = std::sin(0.1 * k + i);

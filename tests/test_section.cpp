@@ -143,7 +143,7 @@ TEST(PoincareSection, DenHartogReversalsRepeatAtHisAmplitude) {
         on.t0 = p.t;
         on.x0 = p.x;
         on.v0 = p.v;
-        cli::SectionRecorder section(on, cli::parse_section(on, "reversal:m1", "--section"), nullptr, true);
+        SectionRecorder section(on, parse_section(on, "reversal:m1", "--section"), nullptr, true);
         SimulateOptions so;
         so.t_end = p.t + 20 * p.period;
         so.samples = false;
