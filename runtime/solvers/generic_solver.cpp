@@ -6,6 +6,7 @@
 #include <type_traits>
 
 #include "assembly.h"
+#include "switch_values.h"
 #include "kernel_abi.h"  // hsnc_phi2: phi_2(x) = (e^x - 1 - x)/x^2, defined once
 
 namespace hsnc {
@@ -483,42 +484,11 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
 
     // Switch functions (segment.h), their rates, scales (sum of |terms|) and bounds.
     const double rigid_decay = std::exp(-alpha_ * tau);
-    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
-    auto body_mag = [](const Eigen::VectorXd& m, int b) { return b == kGround ? 0.0 : m(b); };
+    const SwitchInputs inputs{K_, C_, f_const_, contact_a_, contact_b_, contact_gap_, mu_s_, normal_, h_amp_, h_omega_};
     for (std::size_t f = 0; f < switches_.size(); ++f) {
         const SwitchFunction& sf = switches_[f];
-        const int e = sf.element;
         double g, dg, scale;
-        if (sf.kind == SwitchKind::gap) {
-            // G = x[a] - x[b] - gap (assembly.h gap()).
-            const int a = contact_a_[e], b = contact_b_[e];
-            g = body(out.x, a) - body(out.x, b) - contact_gap_(e);
-            dg = body(out.v, a) - body(out.v, b);
-            scale = body_mag(xmag_, a) + body_mag(xmag_, b) + std::abs(contact_gap_(e));
-        } else if (sf.kind == SwitchKind::velocity) {
-            g = out.v[e];
-            dg = out.a[e];
-            scale = vmag_(e);
-        } else {
-            // A_i = -(K x)_i - (C v)_i + f_i + F_i(t), A_i' = -(K v)_i - (C a)_i + F_i'(t),
-            // full K(cfg), C(cfg) (the stuck rows see every mass).
-            double A = f_const_(e), dA = 0.0, m = std::abs(f_const_(e));
-            for (int k = 0; k < n_; ++k) {
-                A -= K_(e, k) * out.x[k] + C_(e, k) * out.v[k];
-                dA -= K_(e, k) * out.v[k] + C_(e, k) * out.a[k];
-                m += std::abs(K_(e, k)) * xmag_(k) + std::abs(C_(e, k)) * vmag_(k);
-            }
-            for (int h = 0; h < nh_; ++h) {
-                A += h_amp_(e, h) * sn_(h);
-                dA += h_amp_(e, h) * h_omega_(h) * cs_(h);
-                m += std::abs(h_amp_(e, h) * sn_(h));
-            }
-            const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
-            const double mu_n = mu_s_(e) * normal_(e);
-            g = sg * A - mu_n;
-            dg = sg * dA;
-            scale = m + mu_n;
-        }
+        switch_value(sf, inputs, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
         // |g''(s)| for s in [tau, tau + max_step]: standard sinusoids, rigid modes
         // (exact, decaying as e^{-alpha s}), homogeneous and coupled modal bounds.
         double B = bound_sin_(static_cast<Eigen::Index>(f)) + std::abs(rho_(static_cast<Eigen::Index>(f))) * rigid_decay;

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "assembly.h"
+#include "switch_values.h"
 #include "error.h"
 #include "free_components.h"
 #include "kernel_abi.h"  // hsnc_phase: Omega (t0 + t0_lo) + phase, reduced as every solver does
@@ -520,39 +521,11 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
         out.a[i] = f / mass_(i);
     }
 
-    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
-    auto body_mag = [](const Eigen::VectorXd& mg, int b) { return b == kGround ? 0.0 : mg(b); };
+    const SwitchInputs inputs{K_, C_, f_const_, contact_a_, contact_b_, contact_gap_, mu_s_, normal_, h_amp_, h_omega_};
     for (int f = 0; f < ns_; ++f) {
         const SwitchFunction& sf = switches_[static_cast<std::size_t>(f)];
-        const int e = sf.element;
         double g, dg, scale;
-        if (sf.kind == SwitchKind::gap) {
-            const int a = contact_a_[static_cast<std::size_t>(e)], b = contact_b_[static_cast<std::size_t>(e)];
-            g = body(out.x, a) - body(out.x, b) - contact_gap_(e);
-            dg = body(out.v, a) - body(out.v, b);
-            scale = body_mag(xmag_, a) + body_mag(xmag_, b) + std::abs(contact_gap_(e));
-        } else if (sf.kind == SwitchKind::velocity) {
-            g = out.v[e];
-            dg = out.a[e];
-            scale = vmag_(e);
-        } else {
-            double A = f_const_(e), dA = 0.0, mg = std::abs(f_const_(e));
-            for (int q = 0; q < n_; ++q) {
-                A -= K_(e, q) * out.x[q] + C_(e, q) * out.v[q];
-                dA -= K_(e, q) * out.v[q] + C_(e, q) * out.a[q];
-                mg += std::abs(K_(e, q)) * xmag_(q) + std::abs(C_(e, q)) * vmag_(q);
-            }
-            for (int h = 0; h < nh_; ++h) {
-                A += h_amp_(e, h) * sn_(h);
-                dA += h_amp_(e, h) * h_omega_(h) * cs_(h);
-                mg += std::abs(h_amp_(e, h) * sn_(h));
-            }
-            const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
-            const double mu_n = mu_s_(e) * normal_(e);
-            g = sg * A - mu_n;
-            dg = sg * dA;
-            scale = mg + mu_n;
-        }
+        switch_value(sf, inputs, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
         const double B = bound_sin_(f) + rigid_bound_(f) + (m > 0 ? B_(f) : 0.0);
         out.g[f] = g;
         out.dg[f] = dg;
