@@ -15,6 +15,7 @@
 #include "derivation.h"
 #include "emitter.h"
 #include "engine.h"
+#include "ginac_lock.h"
 #include "jit_module.h"
 #include "jit_solver_provider.h"
 #include "kernel_cache.h"
@@ -128,6 +129,7 @@ std::unique_ptr<SolverProvider> make_jit_provider(const Model& model, const Simu
     jopt.warn = o.warn;
     jopt.cache_max_bytes = o.cache_max_bytes;
     JitSolverProvider::SourceFn source = [&model](const Configuration& cfg) {
+        const auto lock = ginac_lock();  // the derivation is GiNaC (ginac_lock.h)
         return JitKernelSource{kernel_symbol(model, cfg), emit_kernel(derive(model, cfg))};
     };
     // Checked up front even when every kernel may come from the cache: asking

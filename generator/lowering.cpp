@@ -6,7 +6,8 @@
 #include <utility>
 #include <vector>
 
-#include "double_literal.h"  // format_double, for comments
+#include "double_literal.h"
+#include "ginac_lock.h"  // format_double, for comments
 
 namespace hsnc {
 
@@ -723,7 +724,10 @@ Program lower(const Derivation& d) {
 }
 
 std::function<Program(const Configuration&)> program_source(const Model& model) {
-    return [&model](const Configuration& cfg) { return lower(derive(model, cfg)); };
+    return [&model](const Configuration& cfg) {
+        const auto lock = ginac_lock();  // the derivation is GiNaC (ginac_lock.h)
+        return lower(derive(model, cfg));
+    };
 }
 
 }  // namespace hsnc

@@ -23,6 +23,7 @@
 #include "error.h"
 #include "expression_evaluator.h"
 #include "file_read.h"
+#include "ginac_lock.h"
 #include "mat_file.h"
 #include "matrix_market.h"
 #include "structure.h"
@@ -736,6 +737,7 @@ ModelOverrides with_t_end(ModelOverrides overrides, double t_end) {
 }
 
 Model parse_model(const std::string& toml_text, const std::string& source, const ModelOverrides& overrides) {
+    const auto lock = ginac_lock();    // expressions are GiNaC (ginac_lock.h)
     Reader reader(source, overrides);  // flags are checked before the file
     const auto syntax_error = [&](std::size_t line, std::size_t column, const std::string& description) {
         std::string message = source;

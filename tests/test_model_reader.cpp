@@ -15,6 +15,8 @@
 #include <initializer_list>
 #include <random>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "error.h"
 #include "model_reader.h"
@@ -51,6 +53,37 @@ const char* const kTwoMasses =
     "m = 2\n";             // 7
 
 // ---------------------------------------------------------------- good input
+
+// GiNaC is not thread-safe: the reader holds ginac_lock() (ginac_lock.h).
+// Without it, threads reading models with expressions at once corrupted the
+// heap (a continuation on two threads aborted one run in two).
+TEST(ModelReader, ThreadsMayReadModelsAtOnce) {
+    const std::string text = R"toml(
+name = "expr"
+[parameters]
+k = "40 + sin(pi/7)^2"
+m = "sqrt(2) * 3/7"
+[[mass]]
+name = "a"
+m = "m"
+[[spring]]
+between = ["a", "ground"]
+k = "k * exp(1/3)"
+)toml";
+    const Model reference = parse_model(text, "expr.toml");
+    std::vector<std::thread> pool;
+    std::vector<int> wrong(4, 0);
+    for (int t = 0; t < 4; ++t)
+        pool.emplace_back([&, t] {
+            for (int i = 0; i < 150; ++i) {
+                const Model m = parse_model(text, "expr.toml", ModelOverrides{{"k=" + std::to_string(40 + i % 3)}, {}, {}, {}});
+                const Model same = parse_model(text, "expr.toml");
+                wrong[static_cast<std::size_t>(t)] += same.springs[0].k != reference.springs[0].k || m.masses[0].m != reference.masses[0].m;
+            }
+        });
+    for (std::thread& th : pool) th.join();
+    for (int w : wrong) EXPECT_EQ(w, 0);
+}
 
 TEST(ModelReader, ReadsEveryFieldOfTheInterfaceExample) {
     const std::string text = R"toml(

@@ -63,48 +63,14 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     alpha_ = model.alpha;
     const int ns = static_cast<int>(switches_.size());
 
-    mass_ = mass_vector(model);
-    normal_.resize(n_);
-    mu_k_.resize(n_);
-    mu_s_.resize(n_);
-    friction_.resize(static_cast<std::size_t>(n_));
-    for (int i = 0; i < n_; ++i) {
-        normal_(i) = model.normal_force(static_cast<std::size_t>(i));
-        mu_k_(i) = model.masses[i].mu_k;
-        mu_s_(i) = model.masses[i].mu_s;
-        friction_[i] = model.masses[i].has_friction ? 1 : 0;
-    }
-    K_ = stiffness_matrix(model, cfg);
-    C_ = damping_matrix(model, cfg);
-    f_const_ = constant_force(model, cfg);
-
-    // Harmonics: omega = 0 is a constant force; omega < 0 is folded to
-    // |omega| with sin(-|W| t + ph) = sin(|W| t + pi - ph).
-    std::vector<int> dyn;
-    for (std::size_t h = 0; h < model.forcing.size(); ++h) {
-        const Harmonic& hm = model.forcing[h];
-        if (hm.omega == 0.0) {
-            for (int i = 0; i < n_; ++i) f_const_(i) += hm.amplitude[i] * std::sin(hm.phase);
-        } else {
-            dyn.push_back(static_cast<int>(h));
-        }
-    }
-    nh_ = static_cast<int>(dyn.size());
-    h_omega_.resize(nh_);
-    h_phase_.resize(nh_);
-    h_amp_.resize(n_, nh_);
-    for (int h = 0; h < nh_; ++h) {
-        const Harmonic& hm = model.forcing[dyn[h]];
-        h_omega_(h) = std::abs(hm.omega);
-        h_phase_(h) = hm.omega > 0.0 ? hm.phase : kPi - hm.phase;
-        for (int i = 0; i < n_; ++i) h_amp_(i, h) = hm.amplitude[i];
-    }
+    t_ = configuration_terms(model, cfg);
+    nh_ = static_cast<int>(t_.h_omega.size());
 
     // Modes: M_F-normalised Phi, modal damping c = alpha + beta*lambda, regime.
     phi_ = modal_.phi;
     phi_t_m_.resize(nf_, nf_);
     for (int j = 0; j < nf_; ++j)
-        for (int r = 0; r < nf_; ++r) phi_t_m_(j, r) = phi_(r, j) * mass_(modal_.free[r]);
+        for (int r = 0; r < nf_; ++r) phi_t_m_(j, r) = phi_(r, j) * t_.mass(modal_.free[r]);
     regime_.resize(static_cast<std::size_t>(nf_));
     lambda_ = modal_.lambda;
     omega_.resize(nf_);
@@ -142,7 +108,7 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     for (int j = 0; j < nf_; ++j)
         for (int h = 0; h < nh_; ++h) {
             double s = 0.0;
-            for (int r = 0; r < nf_; ++r) s += phi_(r, j) * h_amp_(modal_.free[r], h);
+            for (int r = 0; r < nf_; ++r) s += phi_(r, j) * t_.h_amp(modal_.free[r], h);
             P_(j, h) = s;
         }
     coupled_.setZero(nf_, nh_);
@@ -154,7 +120,7 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     double min_coupled_omega = std::numeric_limits<double>::infinity();
     for (int j = 0; j < nf_; ++j)
         for (int h = 0; h < nh_; ++h) {
-            const double W = h_omega_(h), lam = lambda_(j), c = c_(j);
+            const double W = t_.h_omega(h), lam = lambda_(j), c = c_(j);
             const double det = lam - W * W, cw = c * W;
             const double D = det * det + cw * cw;
             if (regime_[j] == Regime::underdamped && std::sqrt(D) < kCoupled * lam) {
@@ -178,13 +144,6 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
                                               : kTwoPi / min_coupled_omega;
 
     // Switch functions as modal combinations (for bound): rows W, Z, D.
-    for (const Contact& ct : model.contacts) {
-        contact_a_.push_back(ct.a);
-        contact_b_.push_back(ct.b);
-    }
-    contact_gap_.resize(static_cast<Eigen::Index>(model.contacts.size()));
-    for (std::size_t c = 0; c < model.contacts.size(); ++c)
-        contact_gap_(static_cast<Eigen::Index>(c)) = model.contacts[c].gap;
     W_ = Eigen::MatrixXd::Zero(ns, nf_);
     Z_ = Eigen::MatrixXd::Zero(ns, nf_);
     D_ = Eigen::MatrixXd::Zero(ns, nh_);
@@ -209,13 +168,13 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
             for (int j = 0; j < nf_; ++j) {
                 double kw = 0.0, cz = 0.0;
                 for (int r = 0; r < nf_; ++r) {
-                    kw += K_(i, modal_.free[r]) * phi_(r, j);
-                    cz += C_(i, modal_.free[r]) * phi_(r, j);
+                    kw += t_.K(i, modal_.free[r]) * phi_(r, j);
+                    cz += t_.C(i, modal_.free[r]) * phi_(r, j);
                 }
                 W_(f, j) = -sg * kw;
                 Z_(f, j) = -sg * cz;
             }
-            for (int h = 0; h < nh_; ++h) D_(f, h) = sg * h_amp_(i, h);
+            for (int h = 0; h < nh_; ++h) D_(f, h) = sg * t_.h_amp(i, h);
         }
     }
     absW_ = W_.cwiseAbs();
@@ -225,7 +184,7 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     bound_sin_ = Eigen::VectorXd::Zero(ns);
     for (int f = 0; f < ns; ++f)
         for (int h = 0; h < nh_; ++h) {
-            const double W = h_omega_(h);
+            const double W = t_.h_omega(h);
             double A = 0.0, B = D_(f, h);
             for (int j = 0; j < nf_; ++j) {
                 if (coupled_(j, h)) continue;
@@ -251,16 +210,16 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
 void GenericSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
     for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
     for (int h = 0; h < nh_; ++h) {
-        theta_(h) = reduced_phase(h_omega_(h), t0, t0_lo, h_phase_(h));
+        theta_(h) = reduced_phase(t_.h_omega(h), t0, t0_lo, t_.h_phase(h));
         e_theta_(h) = cplx(std::cos(theta_(h)), std::sin(theta_(h)));
     }
     // Constant force on the free masses (paper Eq. 7-9): loads and preloads,
     // the stiffness coupling to the stuck masses, kinetic friction.
     for (int r = 0; r < nf_; ++r) {
         const int i = modal_.free[r];
-        double f = f_const_(i);
-        for (int s : modal_.stuck) f -= K_(i, s) * x0[s];
-        if (friction_[i]) f -= mu_k_(i) * normal_(i) * static_cast<double>(sgn[i]);
+        double f = t_.f_const(i);
+        for (int s : modal_.stuck) f -= t_.K(i, s) * x0[s];
+        if (t_.friction[i]) f -= t_.mu_k(i) * t_.normal(i) * static_cast<double>(sgn[i]);
         force_(r) = f;
     }
     // Modal initial conditions q0 = Phi^T M_F x0 (and qd0 from v0), refined
@@ -310,7 +269,7 @@ void GenericSolver::setup(double t0, double t0_lo, const double* x0, const doubl
             if (coupled_(j, h)) continue;  // zero-state: y(0) = y'(0) = 0
             const double st = std::sin(theta_(h)), ct = std::cos(theta_(h));
             qp0 += pa_(j, h) * ct + pb_(j, h) * st;
-            qpd0 += h_omega_(h) * (-pa_(j, h) * st + pb_(j, h) * ct);
+            qpd0 += t_.h_omega(h) * (-pa_(j, h) * st + pb_(j, h) * ct);
         }
         // Rigid: u0 is the constant base q0 - q_p(0); elastic: the homogeneous
         // part starts from the state minus the static (Eq. 10) and particular parts.
@@ -330,11 +289,11 @@ void GenericSolver::setup(double t0, double t0_lo, const double* x0, const doubl
 void GenericSolver::eval(double tau, const SegmentEval& out) const {
     // Harmonics at tau, and the bound horizon of coupled terms.
     for (int h = 0; h < nh_; ++h) {
-        const double ph = h_omega_(h) * tau + theta_(h);
+        const double ph = t_.h_omega(h) * tau + theta_(h);
         sn_(h) = std::sin(ph);
         cs_(h) = std::cos(ph);
         if (h_has_coupled_[h]) {
-            const double wt = h_omega_(h) * tau;
+            const double wt = t_.h_omega(h) * tau;
             e_omega_tau_(h) = cplx(std::cos(wt), std::sin(wt));
         }
     }
@@ -399,7 +358,7 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
             }
         }
         for (int h = 0; h < nh_; ++h) {
-            const double W = h_omega_(h);
+            const double W = t_.h_omega(h);
             if (!coupled_(j, h)) {
                 const double qp = pa_(j, h) * cs_(h) + pb_(j, h) * sn_(h);
                 const double qpd = W * (-pa_(j, h) * sn_(h) + pb_(j, h) * cs_(h));
@@ -484,11 +443,10 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
 
     // Switch functions (segment.h), their rates, scales (sum of |terms|) and bounds.
     const double rigid_decay = std::exp(-alpha_ * tau);
-    const SwitchInputs inputs{K_, C_, f_const_, contact_a_, contact_b_, contact_gap_, mu_s_, normal_, h_amp_, h_omega_};
     for (std::size_t f = 0; f < switches_.size(); ++f) {
         const SwitchFunction& sf = switches_[f];
         double g, dg, scale;
-        switch_value(sf, inputs, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
+        switch_value(sf, t_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
         // |g''(s)| for s in [tau, tau + max_step]: standard sinusoids, rigid modes
         // (exact, decaying as e^{-alpha s}), homogeneous and coupled modal bounds.
         double B = bound_sin_(static_cast<Eigen::Index>(f)) + std::abs(rho_(static_cast<Eigen::Index>(f))) * rigid_decay;
@@ -506,8 +464,8 @@ std::size_t GenericSolver::memory_bytes() const {
     // switches x nf (W, Z and their absolute values), mode x harmonic tables.
     const auto d = [](const auto& m) { return static_cast<std::size_t>(m.size()) * sizeof(typename std::decay_t<decltype(m)>::Scalar); };
     std::size_t b = sizeof(*this);
-    b += d(K_) + d(C_) + d(phi_) + d(phi_t_m_) + d(modal_.phi) + d(W_) + d(Z_) + d(absW_) + d(absZ_) + d(D_);
-    b += d(P_) + d(pa_) + d(pb_) + d(zp_) + d(zm_) + d(h_amp_) + d(coupled_);
+    b += d(t_.K) + d(t_.C) + d(phi_) + d(phi_t_m_) + d(modal_.phi) + d(W_) + d(Z_) + d(absW_) + d(absZ_) + d(D_);
+    b += d(P_) + d(pa_) + d(pb_) + d(zp_) + d(zm_) + d(t_.h_amp) + d(coupled_);
     b += 24 * static_cast<std::size_t>(n_ + nf_ + static_cast<int>(switches_.size()) + nh_) * sizeof(double);
     return b;
 }

@@ -30,6 +30,7 @@
 #include "modal.h"
 #include "model.h"
 #include "segment_solver.h"
+#include "switch_values.h"
 
 namespace hsnc {
 
@@ -75,20 +76,13 @@ private:
     double alpha_ = 0.0;
     double max_step_ = 0.0;
 
-    Eigen::VectorXd mass_, normal_, mu_k_, mu_s_;
-    std::vector<char> friction_;
-    Eigen::MatrixXd K_, C_;        // full n x n K(cfg), C(cfg)
-    std::vector<int> contact_a_, contact_b_;
-    Eigen::VectorXd contact_gap_;
-    Eigen::VectorXd f_const_;      // loads + preloads + omega = 0 harmonics
+    ConfigurationTerms t_;  // masses, friction, K(cfg), C(cfg), constant force, contacts, harmonics
     Eigen::MatrixXd phi_;          // nf x nf, rows in the order of modal_.free
     Eigen::MatrixXd phi_t_m_;      // Phi^T M_F (modal initial conditions)
     std::vector<Regime> regime_;
     Eigen::VectorXd lambda_, omega_, c_, sigma_, omega_d_, gamma_, r1_, r2_;
 
     // Harmonics (omega made >= 0 by flipping the phase); forcing F (n x nh).
-    Eigen::VectorXd h_omega_, h_phase_;
-    Eigen::MatrixXd h_amp_;
     Eigen::MatrixXd P_;            // nf x nh modal forcing amplitudes Phi^T F_h[F]
     Eigen::Matrix<char, Eigen::Dynamic, Eigen::Dynamic> coupled_;  // nf x nh
     Eigen::MatrixXd pa_, pb_;      // standard particular a cos + b sin (nf x nh)

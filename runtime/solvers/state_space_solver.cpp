@@ -63,48 +63,8 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     for (int i = 0; i < n_; ++i) (cfg.stuck[static_cast<std::size_t>(i)] ? stuck_ : free_).push_back(i);
     nf_ = static_cast<int>(free_.size());
 
-    mass_ = mass_vector(model);
-    normal_.resize(n_);
-    mu_k_.resize(n_);
-    mu_s_.resize(n_);
-    friction_.resize(static_cast<std::size_t>(n_));
-    for (int i = 0; i < n_; ++i) {
-        normal_(i) = model.normal_force(static_cast<std::size_t>(i));
-        mu_k_(i) = model.masses[static_cast<std::size_t>(i)].mu_k;
-        mu_s_(i) = model.masses[static_cast<std::size_t>(i)].mu_s;
-        friction_[static_cast<std::size_t>(i)] = model.masses[static_cast<std::size_t>(i)].has_friction ? 1 : 0;
-    }
-    K_ = stiffness_matrix(model, cfg);
-    C_ = damping_matrix(model, cfg);
-    f_const_ = constant_force(model, cfg);
-    for (const Contact& c : model.contacts) {
-        contact_a_.push_back(c.a);
-        contact_b_.push_back(c.b);
-    }
-    contact_gap_.resize(static_cast<Eigen::Index>(model.contacts.size()));
-    for (std::size_t c = 0; c < model.contacts.size(); ++c) contact_gap_(static_cast<Eigen::Index>(c)) = model.contacts[c].gap;
-
-    // Harmonics as GenericSolver takes them: omega = 0 a constant force,
-    // omega < 0 folded to |omega| with the phase pi - phase.
-    std::vector<int> dyn;
-    for (std::size_t h = 0; h < model.forcing.size(); ++h) {
-        const Harmonic& hm = model.forcing[h];
-        if (hm.omega == 0.0) {
-            for (int i = 0; i < n_; ++i) f_const_(i) += hm.amplitude[static_cast<std::size_t>(i)] * std::sin(hm.phase);
-        } else {
-            dyn.push_back(static_cast<int>(h));
-        }
-    }
-    nh_ = static_cast<int>(dyn.size());
-    h_omega_.resize(nh_);
-    h_phase_.resize(nh_);
-    h_amp_.resize(n_, nh_);
-    for (int h = 0; h < nh_; ++h) {
-        const Harmonic& hm = model.forcing[static_cast<std::size_t>(dyn[static_cast<std::size_t>(h)])];
-        h_omega_(h) = std::abs(hm.omega);
-        h_phase_(h) = hm.omega > 0.0 ? hm.phase : kPi - hm.phase;
-        for (int i = 0; i < n_; ++i) h_amp_(i, h) = hm.amplitude[static_cast<std::size_t>(i)];
-    }
+    t_ = configuration_terms(model, cfg);
+    nh_ = static_cast<int>(t_.h_omega.size());
 
     // Free translations that no damping resists (C r = 0 for a floating
     // component's r, free_components.h) are taken out of the state: x_F =
@@ -115,14 +75,14 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     // matrix of e has no double zero eigenvalue.
     std::vector<int> slot(static_cast<std::size_t>(n_), -1);
     for (int r = 0; r < nf_; ++r) slot[static_cast<std::size_t>(free_[r])] = r;
-    const double cmax = C_.cwiseAbs().maxCoeff();
+    const double cmax = t_.C.cwiseAbs().maxCoeff();
     std::vector<char> pivot(static_cast<std::size_t>(nf_), 0);
     for (const std::vector<int>& members : free_components(model, cfg).floating_members()) {
         // C r on the free masses: every row of C_FF summed over the members.
         double resist = 0.0;
         for (int i : free_) {
             double row = 0.0;
-            for (int j : members) row += C_(i, j);
+            for (int j : members) row += t_.C(i, j);
             resist = std::max(resist, std::abs(row));
         }
         if (resist > 1e-13 * cmax) continue;  // a damped translation: a simple zero eigenvalue, no deflation
@@ -130,7 +90,7 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
         double total = 0.0;
         for (int i : members) {
             rg.members.push_back(slot[static_cast<std::size_t>(i)]);
-            total += mass_(i);
+            total += t_.mass(i);
         }
         rg.mass = total;
         pivot[static_cast<std::size_t>(rg.members.front())] = 1;
@@ -148,15 +108,15 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
             if (pivot[static_cast<std::size_t>(r)]) continue;
             T_(r, col) = 1.0;
             const int p = pivot_of[static_cast<std::size_t>(r)];
-            if (p >= 0) T_(p, col) = -mass_(free_[r]) / mass_(free_[p]);
+            if (p >= 0) T_(p, col) = -t_.mass(free_[r]) / t_.mass(free_[p]);
             e_slot_.push_back(r);
             ++col;
         }
     }
     Eigen::MatrixXd MF = Eigen::MatrixXd::Zero(nf_, nf_), KF(nf_, nf_), CF(nf_, nf_);
     for (int r = 0; r < nf_; ++r) {
-        MF(r, r) = mass_(free_[r]);
-        for (int q = 0; q < nf_; ++q) KF(r, q) = K_(free_[r], free_[q]), CF(r, q) = C_(free_[r], free_[q]);
+        MF(r, r) = t_.mass(free_[r]);
+        for (int q = 0; q < nf_; ++q) KF(r, q) = t_.K(free_[r], free_[q]), CF(r, q) = t_.C(free_[r], free_[q]);
     }
     const Eigen::MatrixXd Me = T_.transpose() * MF * T_, Ke = T_.transpose() * KF * T_, Ce = T_.transpose() * CF * T_;
     Me_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(Me.rows() > 0 ? Me : Eigen::MatrixXd::Identity(1, 1));
@@ -211,7 +171,7 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     if (ne_ > 0)
         for (int h = 0; h < nh_; ++h) {
             Eigen::VectorXd F(nf_);
-            for (int r = 0; r < nf_; ++r) F(r) = h_amp_(free_[r], h);
+            for (int r = 0; r < nf_; ++r) F(r) = t_.h_amp(free_[r], h);
             bh.block(ne_, h, ne_, 1) = Me_lu_.solve(T_.transpose() * F) / s;
         }
     beta_h_ = Vinv_ * bh.cast<cplx>();
@@ -219,7 +179,7 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     rigid_h_ = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rigid_.size()), nh_);
     for (std::size_t j = 0; j < rigid_.size(); ++j)
         for (int h = 0; h < nh_; ++h)
-            for (int r : rigid_[j].members) rigid_h_(static_cast<Eigen::Index>(j), h) += h_amp_(free_[r], h) / rigid_[j].mass;
+            for (int r : rigid_[j].members) rigid_h_(static_cast<Eigen::Index>(j), h) += t_.h_amp(free_[r], h) / rigid_[j].mass;
 
     // Near resonance: the bound's second form, over one forcing period.
     max_step_ = kInf;
@@ -227,10 +187,10 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     for (int k = 0; k < m; ++k)
         for (int h = 0; h < nh_; ++h)
             for (int sign = 0; sign < 2; ++sign) {
-                const cplx mu(0.0, sign == 0 ? h_omega_(h) : -h_omega_(h));
+                const cplx mu(0.0, sign == 0 ? t_.h_omega(h) : -t_.h_omega(h));
                 if (beta_h_(k, h) != cplx(0.0) && std::abs(mu - lambda_(k)) < kNear * std::abs(mu)) {
                     near_(k, 2 * h + sign) = 1;
-                    max_step_ = std::min(max_step_, 2 * kPi / h_omega_(h));
+                    max_step_ = std::min(max_step_, 2 * kPi / t_.h_omega(h));
                 }
             }
 
@@ -244,7 +204,7 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     for (int k = 0; k < m; ++k) {
         mod_lambda_(k) = mod(lambda_(k));
         for (int u = 0; u < nmu; ++u) {
-            const cplx mu = u == 0 ? cplx(0.0) : cplx(0.0, (u % 2 == 1 ? 1.0 : -1.0) * h_omega_((u - 1) / 2));
+            const cplx mu = u == 0 ? cplx(0.0) : cplx(0.0, (u % 2 == 1 ? 1.0 : -1.0) * t_.h_omega((u - 1) / 2));
             const cplx d = mu - lambda_(k);
             inv_d_(k, u) = d == cplx(0.0) ? cplx(0.0) : 1.0 / d;
             mod_d_(k, u) = mod(d);
@@ -262,17 +222,17 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
         const SwitchFunction& sf = switches_[static_cast<std::size_t>(f)];
         const int e = sf.element;
         if (sf.kind == SwitchKind::gap) {
-            const int a = contact_a_[static_cast<std::size_t>(e)], b = contact_b_[static_cast<std::size_t>(e)];
+            const int a = t_.contact_a[static_cast<std::size_t>(e)], b = t_.contact_b[static_cast<std::size_t>(e)];
             if (a != kGround && slot[static_cast<std::size_t>(a)] >= 0) L(f, slot[static_cast<std::size_t>(a)]) += 1.0;
             if (b != kGround && slot[static_cast<std::size_t>(b)] >= 0) L(f, slot[static_cast<std::size_t>(b)]) -= 1.0;
         } else if (sf.kind == SwitchKind::velocity) {
             L(f, nf_ + slot[static_cast<std::size_t>(e)]) = 1.0;
         } else {
             for (int r = 0; r < nf_; ++r) {
-                L(f, r) = -K_(e, free_[r]);
-                L(f, nf_ + r) = -C_(e, free_[r]);
+                L(f, r) = -t_.K(e, free_[r]);
+                L(f, nf_ + r) = -t_.C(e, free_[r]);
             }
-            for (int h = 0; h < nh_; ++h) bound_sin_(f) += std::abs(h_amp_(e, h)) * h_omega_(h) * h_omega_(h);
+            for (int h = 0; h < nh_; ++h) bound_sin_(f) += std::abs(t_.h_amp(e, h)) * t_.h_omega(h) * t_.h_omega(h);
         }
     }
     Eigen::MatrixXd Ly(ns_, m);
@@ -340,7 +300,7 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
     const double s = scale_s_;
     for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
     for (int h = 0; h < nh_; ++h) {
-        theta_(h) = hsnc_phase(h_omega_(h), t0, t0_lo, h_phase_(h));
+        theta_(h) = hsnc_phase(t_.h_omega(h), t0, t0_lo, t_.h_phase(h));
         e_theta_(h) = cplx(std::cos(theta_(h)), std::sin(theta_(h)));
     }
     // Constant force on the free masses: loads and preloads, the coupling to
@@ -348,9 +308,9 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
     Eigen::VectorXd f(nf_), x(nf_), v(nf_);
     for (int r = 0; r < nf_; ++r) {
         const int i = free_[r];
-        double fi = f_const_(i);
-        for (int q : stuck_) fi -= K_(i, q) * x0[q];
-        if (friction_[static_cast<std::size_t>(i)]) fi -= mu_k_(i) * normal_(i) * static_cast<double>(sgn[i]);
+        double fi = t_.f_const(i);
+        for (int q : stuck_) fi -= t_.K(i, q) * x0[q];
+        if (t_.friction[static_cast<std::size_t>(i)]) fi -= t_.mu_k(i) * t_.normal(i) * static_cast<double>(sgn[i]);
         force_(r) = f(r) = fi;
         x(r) = x0[i];
         v(r) = v0[i];
@@ -360,7 +320,7 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
     for (std::size_t j = 0; j < rigid_.size(); ++j) {
         const Rigid& rg = rigid_[j];
         double q = 0.0, qd = 0.0, fr = 0.0;
-        for (int r : rg.members) q += mass_(free_[r]) * x(r), qd += mass_(free_[r]) * v(r), fr += f(r);
+        for (int r : rg.members) q += t_.mass(free_[r]) * x(r), qd += t_.mass(free_[r]) * v(r), fr += f(r);
         q /= rg.mass;
         qd /= rg.mass;
         q0_(static_cast<Eigen::Index>(j)) = q;
@@ -384,7 +344,7 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
             for (int h = 0; h < nh_; ++h) {
                 const double P = std::abs(rigid_h_(static_cast<Eigen::Index>(j), h));
                 amp += P;
-                rate += P * h_omega_(h);
+                rate += P * t_.h_omega(h);
             }
             b += std::abs(rigid_lx_(fn, static_cast<Eigen::Index>(j))) * amp +
                  std::abs(rigid_lv_(fn, static_cast<Eigen::Index>(j))) * rate;
@@ -414,7 +374,7 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
     const int m = 2 * ne_;
     const double s = scale_s_, s_end = tau + max_step_;
     for (int h = 0; h < nh_; ++h) {
-        const double ph = h_omega_(h) * tau + theta_(h), wt = h_omega_(h) * tau;
+        const double ph = t_.h_omega(h) * tau + theta_(h), wt = t_.h_omega(h) * tau;
         sn_(h) = std::sin(ph);
         cs_(h) = std::cos(ph);
         e_omega_(h) = cplx(std::cos(wt), std::sin(wt));
@@ -434,7 +394,7 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
         for (int h = 0; h < nh_; ++h) {
             const cplx bh = beta_h_(k, h);
             if (bh == cplx(0.0)) continue;
-            const double W = h_omega_(h);
+            const double W = t_.h_omega(h);
             const cplx mu(0.0, W), ew = e_omega_(h);
             const int up = 1 + 2 * h, um = 2 + 2 * h;
             const cplx Ep = duhamel(mu - lam, inv_d_(k, up), tau, el, ew);
@@ -489,7 +449,7 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
         double qm = std::abs(q0_(jj)) + std::abs(qd0_(jj) * tau) + std::abs(0.5 * rigid_f_(jj) * tau * tau);
         double qdm = std::abs(qd0_(jj)) + std::abs(rigid_f_(jj) * tau);
         for (int h = 0; h < nh_; ++h) {
-            const double P = rigid_h_(jj, h), W = h_omega_(h), st = std::sin(theta_(h)), ct = std::cos(theta_(h));
+            const double P = rigid_h_(jj, h), W = t_.h_omega(h), st = std::sin(theta_(h)), ct = std::cos(theta_(h));
             q += P * (st / (W * W) + tau * ct / W - sn_(h) / (W * W));
             qd += P * (ct - cs_(h)) / W;
             qm += std::abs(P) * (2.0 / (W * W) + tau / W);
@@ -516,16 +476,15 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
     for (int r = 0; r < nf_; ++r) {
         const int i = free_[r];
         double f = force_(r);
-        for (int q : free_) f -= K_(i, q) * out.x[q] + C_(i, q) * out.v[q];
-        for (int h = 0; h < nh_; ++h) f += h_amp_(i, h) * sn_(h);
-        out.a[i] = f / mass_(i);
+        for (int q : free_) f -= t_.K(i, q) * out.x[q] + t_.C(i, q) * out.v[q];
+        for (int h = 0; h < nh_; ++h) f += t_.h_amp(i, h) * sn_(h);
+        out.a[i] = f / t_.mass(i);
     }
 
-    const SwitchInputs inputs{K_, C_, f_const_, contact_a_, contact_b_, contact_gap_, mu_s_, normal_, h_amp_, h_omega_};
     for (int f = 0; f < ns_; ++f) {
         const SwitchFunction& sf = switches_[static_cast<std::size_t>(f)];
         double g, dg, scale;
-        switch_value(sf, inputs, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
+        switch_value(sf, t_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
         const double B = bound_sin_(f) + rigid_bound_(f) + (m > 0 ? B_(f) : 0.0);
         out.g[f] = g;
         out.dg[f] = dg;

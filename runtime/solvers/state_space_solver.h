@@ -50,6 +50,7 @@
 #include "configuration.h"
 #include "model.h"
 #include "segment_solver.h"
+#include "switch_values.h"
 
 namespace hsnc {
 
@@ -89,14 +90,7 @@ private:
     double max_step_ = 0.0;
     double condition_ = 0.0;
 
-    Eigen::VectorXd mass_, normal_, mu_k_, mu_s_;
-    std::vector<char> friction_;
-    Eigen::MatrixXd K_, C_;         // full n x n K(cfg), C(cfg)
-    Eigen::VectorXd f_const_;       // loads + preloads + omega = 0 harmonics
-    std::vector<int> contact_a_, contact_b_;
-    Eigen::VectorXd contact_gap_;
-    Eigen::VectorXd h_omega_, h_phase_;
-    Eigen::MatrixXd h_amp_;         // n x nh
+    ConfigurationTerms t_;  // masses, friction, K(cfg), C(cfg), constant force, contacts, harmonics
 
     // Undamped free translations, taken out of the state (x_F = R q + T e).
     struct Rigid {

@@ -1,6 +1,6 @@
-// hsnc -- the value, rate and term size of one switch function from the
-// physical state: what the two Eigen-based solvers (GenericSolver,
-// StateSpaceSolver) share once they have x, v, a of every mass. The kernels
+// hsnc -- what the two Eigen-based solvers (GenericSolver, StateSpaceSolver)
+// share: the physical terms of a configuration, and the value, rate and term
+// size of one switch function from the physical state x, v, a. The kernels
 // and the interpreter compute the same from their programs, independently.
 //
 // gap          G = x[a] - x[b] - gap, G' = v[a] - v[b]                 (assembly.h gap())
@@ -16,29 +16,35 @@
 
 #include <Eigen/Core>
 
+#include "configuration.h"
 #include "model.h"
 #include "segment_solver.h"
 #include "switch_function.h"
 
 namespace hsnc {
 
-/// What a configuration's switch functions read, held by the solver.
-struct SwitchInputs {
-    const Eigen::MatrixXd& K;
-    const Eigen::MatrixXd& C;
-    const Eigen::VectorXd& f_const;      ///< loads, preloads, omega = 0 harmonics
-    const std::vector<int>& contact_a;
-    const std::vector<int>& contact_b;
-    const Eigen::VectorXd& contact_gap;
-    const Eigen::VectorXd& mu_s;
-    const Eigen::VectorXd& normal;
-    const Eigen::MatrixXd& h_amp;        ///< n x nh
-    const Eigen::VectorXd& h_omega;
+/// The physical terms of one configuration both Eigen-based solvers start
+/// from (full n x n, stuck masses not removed; assembly.h): per mass m, N,
+/// mu_k, mu_s and whether it has friction; K(cfg), C(cfg); the constant force
+/// (loads, preloads, and the harmonics of omega = 0, F sin(phase)); the
+/// contacts; the harmonics of omega != 0 with omega < 0 folded to |omega|
+/// and phase pi - phase.
+struct ConfigurationTerms {
+    Eigen::VectorXd mass, normal, mu_k, mu_s;
+    std::vector<char> friction;
+    Eigen::MatrixXd K, C;
+    Eigen::VectorXd f_const;
+    std::vector<int> contact_a, contact_b;
+    Eigen::VectorXd contact_gap;
+    Eigen::VectorXd h_omega, h_phase;
+    Eigen::MatrixXd h_amp;  ///< n x nh
 };
+
+ConfigurationTerms configuration_terms(const Model& model, const Configuration& cfg);
 
 /// g, g' and the size of g's terms; xmag, vmag the magnitudes of x and v,
 /// sn, cs the sine and cosine of every harmonic's phase at the instant.
-inline void switch_value(const SwitchFunction& sf, const SwitchInputs& in, const SegmentEval& out,
+inline void switch_value(const SwitchFunction& sf, const ConfigurationTerms& in, const SegmentEval& out,
                          const Eigen::VectorXd& xmag, const Eigen::VectorXd& vmag, const Eigen::VectorXd& sn,
                          const Eigen::VectorXd& cs, double& g, double& dg, double& scale) {
     auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
