@@ -113,6 +113,7 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
             ++col;
         }
     }
+    absT_ = T_.cwiseAbs();
     Eigen::MatrixXd MF = Eigen::MatrixXd::Zero(nf_, nf_), KF(nf_, nf_), CF(nf_, nf_);
     for (int r = 0; r < nf_; ++r) {
         MF(r, r) = t_.mass(free_[r]);
@@ -285,7 +286,7 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     eta_ = Eigen::VectorXcd::Zero(static_cast<Eigen::Index>(rep_.size()));
     mod_eta0_ = mod_beta0_ = Eigen::VectorXd::Zero(m);
     B_ = Eigen::VectorXd::Zero(ns_);
-    q0_ = qd0_ = rigid_f_ = q_ = qd_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rigid_.size()));
+    q0_ = qd0_ = rigid_f_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rigid_.size()));
     rigid_bound_ = Eigen::VectorXd::Zero(ns_);
     eta_mag_ = b2_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rep_.size()));
     y_ = ymag_ = Eigen::VectorXd::Zero(m);
@@ -428,20 +429,17 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
         B_.noalias() = absG_ * b2_;
     }
     // x_F = R q + T e, v_F = R q' + T e' (T: 1 at e's own slot, -m_i/m_p at its pivot).
-    Eigen::VectorXd& xf = xf_;
-    Eigen::VectorXd& vf = vf_;
-    xf.setZero();
-    vf.setZero();
-    xfm_.setZero();
-    vfm_.setZero();
-    for (int c = 0; c < ne_; ++c)
-        for (int r = 0; r < nf_; ++r)
-            if (T_(r, c) != 0.0) {
-                xf(r) += T_(r, c) * y_(c);
-                vf(r) += T_(r, c) * s * y_(ne_ + c);
-                xfm_(r) += std::abs(T_(r, c)) * ymag_(c);
-                vfm_(r) += std::abs(T_(r, c)) * s * ymag_(ne_ + c);
-            }
+    if (ne_ > 0) {
+        xf_.noalias() = T_ * y_.head(ne_);
+        vf_.noalias() = s * (T_ * y_.tail(ne_));
+        xfm_.noalias() = absT_ * ymag_.head(ne_);
+        vfm_.noalias() = s * (absT_ * ymag_.tail(ne_));
+    } else {
+        xf_.setZero();
+        vf_.setZero();
+        xfm_.setZero();
+        vfm_.setZero();
+    }
     for (std::size_t j = 0; j < rigid_.size(); ++j) {
         // q = q0 + q0' tau + f tau^2/2 + sum_h P_h (sin theta/W^2 + tau cos theta/W - sin(W tau + theta)/W^2).
         const Eigen::Index jj = static_cast<Eigen::Index>(j);
@@ -449,25 +447,23 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
         double qm = std::abs(q0_(jj)) + std::abs(qd0_(jj) * tau) + std::abs(0.5 * rigid_f_(jj) * tau * tau);
         double qdm = std::abs(qd0_(jj)) + std::abs(rigid_f_(jj) * tau);
         for (int h = 0; h < nh_; ++h) {
-            const double P = rigid_h_(jj, h), W = t_.h_omega(h), st = std::sin(theta_(h)), ct = std::cos(theta_(h));
+            const double P = rigid_h_(jj, h), W = t_.h_omega(h), st = e_theta_(h).imag(), ct = e_theta_(h).real();
             q += P * (st / (W * W) + tau * ct / W - sn_(h) / (W * W));
             qd += P * (ct - cs_(h)) / W;
             qm += std::abs(P) * (2.0 / (W * W) + tau / W);
             qdm += 2.0 * std::abs(P) / W;
         }
-        q_(jj) = q;
-        qd_(jj) = qd;
         for (int r : rigid_[j].members) {
-            xf(r) += q;
-            vf(r) += qd;
+            xf_(r) += q;
+            vf_(r) += qd;
             xfm_(r) += qm;
             vfm_(r) += qdm;
         }
     }
     for (int r = 0; r < nf_; ++r) {
         const int i = free_[r];
-        out.x[i] = xf(r);
-        out.v[i] = vf(r);
+        out.x[i] = xf_(r);
+        out.v[i] = vf_(r);
         xmag_(i) = xfm_(r);
         vmag_(i) = vfm_(r);
     }

@@ -100,7 +100,7 @@ private:
     std::vector<Rigid> rigid_;
     int ne_ = 0;                    // dimension of e: nf - number of rigid translations
     std::vector<int> e_slot_;       // e_c is the free slot e_slot_[c] (minus its component's mean)
-    Eigen::MatrixXd T_;             // nf x ne
+    Eigen::MatrixXd T_, absT_;      // nf x ne, and |T|
     Eigen::PartialPivLU<Eigen::MatrixXd> Me_lu_;  // of T^T M_F T
     Eigen::MatrixXd rigid_h_;       // nr x nh: r_j^T F_h / m_j
     Eigen::MatrixXd rigid_lx_, rigid_lv_;  // ns x nr: switch rows summed over each component
@@ -129,7 +129,7 @@ private:
     // --- eval scratch ---
     // --- eval scratch (no allocation in eval; one thread at a time) ---
     mutable Eigen::VectorXcd eta_, e_omega_;
-    mutable Eigen::VectorXd eta_mag_, b2_, y_, ymag_, xmag_, vmag_, sn_, cs_, q_, qd_, xf_, vf_, xfm_, vfm_, B_;
+    mutable Eigen::VectorXd eta_mag_, b2_, y_, ymag_, xmag_, vmag_, sn_, cs_, xf_, vf_, xfm_, vfm_, B_;
 };
 
 }  // namespace hsnc
