@@ -32,14 +32,6 @@ constexpr double kCoupled = 0.1;
 // phi_1(x) = (e^x - 1)/x, phi_1(0) = 1 (accurate for every x: expm1).
 double phi1(double x) { return x == 0.0 ? 1.0 : std::expm1(x) / x; }
 
-// e^w - 1 for complex w = x + iy without cancellation:
-// Re = expm1(x) cos y - 2 sin^2(y/2), Im = e^x sin y.
-cplx expm1c(cplx w) {
-    const double x = w.real(), y = w.imag();
-    const double s = std::sin(0.5 * y);
-    return {std::expm1(x) * std::cos(y) - 2.0 * s * s, std::exp(x) * std::sin(y)};
-}
-
 // Omega*(t0 + t0_lo) + phase reduced to [-pi, pi] with the rounding error of
 // the product kept (fma) and 2*pi in two parts (Cody-Waite), so a large t0
 // costs no phase accuracy beyond that of t0 + t0_lo itself. The emitted

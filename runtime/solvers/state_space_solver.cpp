@@ -24,14 +24,6 @@ constexpr double kPi = 3.141592653589793;
 /// |mu - lambda| < kNear |mu|: a harmonic near a mode's resonance (bounds use one forcing period).
 constexpr double kNear = 0.1;
 
-// e^w - 1 for complex w = x + iy without cancellation:
-// Re = expm1(x) cos y - 2 sin^2(y/2), Im = e^x sin y.
-cplx expm1c(cplx w) {
-    const double x = w.real(), y = w.imag();
-    const double s = std::sin(0.5 * y), em1 = std::expm1(x), c = std::cos(y), sn = std::sin(y);
-    return {em1 * c - 2.0 * s * s, (em1 + 1.0) * sn};
-}
-
 cplx expc(cplx w) { return std::exp(w.real()) * cplx(std::cos(w.imag()), std::sin(w.imag())); }
 
 /// |z| for the magnitudes and bounds: sqrt(re^2 + im^2) (std::abs, hypot,

@@ -1,6 +1,6 @@
 // hsnc -- what the two Eigen-based solvers (GenericSolver, StateSpaceSolver)
-// share: the physical terms of a configuration, and the value, rate and term
-// size of one switch function from the physical state x, v, a. The kernels
+// share: the physical terms of a configuration, the value, rate and term
+// size of one switch function from the physical state x, v, a, and e^w - 1. The kernels
 // and the interpreter compute the same from their programs, independently.
 //
 // gap          G = x[a] - x[b] - gap, G' = v[a] - v[b]                 (assembly.h gap())
@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cmath>
+#include <complex>
 #include <vector>
 
 #include <Eigen/Core>
@@ -41,6 +42,14 @@ struct ConfigurationTerms {
 };
 
 ConfigurationTerms configuration_terms(const Model& model, const Configuration& cfg);
+
+/// e^w - 1 for complex w = x + iy without cancellation:
+/// Re = expm1(x) cos y - 2 sin^2(y/2), Im = e^x sin y.
+inline std::complex<double> expm1c(std::complex<double> w) {
+    const double x = w.real(), y = w.imag();
+    const double s = std::sin(0.5 * y);
+    return {std::expm1(x) * std::cos(y) - 2.0 * s * s, std::exp(x) * std::sin(y)};
+}
 
 /// g, g' and the size of g's terms; xmag, vmag the magnitudes of x and v,
 /// sn, cs the sine and cosine of every harmonic's phase at the instant.
