@@ -101,23 +101,17 @@ double force_on_mass(const Model& model, const Configuration& cfg, int i, double
     const double m = model.masses[i].m;
     double f = model.load[i] - model.alpha * m * v[i];
     for (const Harmonic& h : model.forcing) f += h.amplitude[i] * std::sin(h.omega * t + h.phase);
-    // A spring (or closed contact) of stiffness k stretched by s = x[a] - x[b] - d pulls a with
-    // -k*s - beta*k*s' and pushes b with the opposite (C = alpha*M + beta*K(cfg)).
-    auto add = [&](int a, int b, double k, double d) {
+    // A link of stiffness k and damping c stretched by s = x[a] - x[b] - d pulls a with
+    // -k*s - c*s' and pushes b with the opposite: a spring or closed contact has
+    // c = beta*k (C = alpha*M + beta*K(cfg)), a damper k = 0.
+    auto add = [&](int a, int b, double k, double c, double d) {
         if (a != i && b != i) return;
         const double s = position(x, a) - position(x, b) - d;
         const double sd = position(v, a) - position(v, b);
-        const double fa = -k * s - model.beta * k * sd;
+        const double fa = -k * s - c * sd;
         f += a == i ? fa : -fa;
     };
-    for (const Spring& s : model.springs) add(s.a, s.b, s.k, 0.0);
-    for (std::size_t c = 0; c < model.contacts.size(); ++c)
-        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k, model.contacts[c].gap);
-    for (const Damper& d : model.dampers)  // -c*(v[a]-v[b]) on a
-        if (d.a == i || d.b == i) {
-            const double fa = -d.c * (position(v, d.a) - position(v, d.b));
-            f += d.a == i ? fa : -fa;
-        }
+    for_each_link(model, cfg, add);
     return f;
 }
 
@@ -129,21 +123,14 @@ double force_rate_on_mass(const Model& model, const Configuration& cfg, int i, d
                           const double* a) {
     double f = -model.alpha * model.masses[i].m * a[i];
     for (const Harmonic& h : model.forcing) f += h.amplitude[i] * h.omega * std::cos(h.omega * t + h.phase);
-    auto add = [&](int p, int q, double k) {
+    auto add = [&](int p, int q, double k, double c, double) {
         if (p != i && q != i) return;
         const double sd = position(v, p) - position(v, q);
         const double sdd = position(a, p) - position(a, q);
-        const double fa = -k * sd - model.beta * k * sdd;
+        const double fa = -k * sd - c * sdd;
         f += p == i ? fa : -fa;
     };
-    for (const Spring& s : model.springs) add(s.a, s.b, s.k);
-    for (std::size_t c = 0; c < model.contacts.size(); ++c)
-        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
-    for (const Damper& d : model.dampers)
-        if (d.a == i || d.b == i) {
-            const double fa = -d.c * (position(a, d.a) - position(a, d.b));
-            f += d.a == i ? fa : -fa;
-        }
+    for_each_link(model, cfg, add);
     return f;
 }
 

@@ -50,6 +50,20 @@ double gap_rate(const Model& model, int c, const double* v);
 
 namespace hsnc {
 
+/// Every element acting between two bodies in cfg, as fn(a, b, stiffness,
+/// damping, gap): springs and closed contacts (damping beta*k, Rayleigh),
+/// then dampers (stiffness 0, damping c); gap is a contact's preload length.
+template <class Fn>
+void for_each_link(const Model& model, const Configuration& cfg, Fn&& fn) {
+    for (const Spring& s : model.springs) fn(s.a, s.b, s.k, model.beta * s.k, 0.0);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c]) {
+            const Contact& k = model.contacts[c];
+            fn(k.a, k.b, k.k, model.beta * k.k, k.gap);
+        }
+    for (const Damper& d : model.dampers) fn(d.a, d.b, 0.0, d.c, 0.0);
+}
+
 /// A_i: force on mass i from everything but friction (springs, closed contacts,
 /// Rayleigh damping, dampers, forcing, loads) at time t and state (x, v), in cfg.
 /// Sparse: loops over the elements touching i, no allocation.

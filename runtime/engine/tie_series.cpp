@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "assembly.h"
 #include "kernel_abi.h"
 
 namespace hsnc {
@@ -13,21 +14,6 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 double body(const std::vector<double>& y, int b) { return b == kGround ? 0.0 : y[static_cast<std::size_t>(b)]; }
-
-// Every element acting between two bodies in cfg: springs, closed contacts
-// and dampers, as fn(a, b, stiffness, damping, gap): beta*k for a spring or
-// contact (Rayleigh), c (and stiffness 0) for a damper, the gap for the
-// preload of a contact.
-template <class Fn>
-void for_each_link(const Model& model, const Configuration& cfg, Fn&& fn) {
-    for (const Spring& s : model.springs) fn(s.a, s.b, s.k, model.beta * s.k, 0.0);
-    for (std::size_t c = 0; c < model.contacts.size(); ++c)
-        if (cfg.closed[c]) {
-            const Contact& k = model.contacts[c];
-            fn(k.a, k.b, k.k, model.beta * k.k, k.gap);
-        }
-    for (const Damper& d : model.dampers) fn(d.a, d.b, 0.0, d.c, 0.0);
-}
 
 // A_i^(k) and the magnitude of its terms, from x^(k), x^(k+1) of the series.
 void force_derivative(const Model& model, const Configuration& cfg, int i, double t, double t_lo,
