@@ -113,15 +113,10 @@ void print_damped_modes(const Model& model, std::ostream& out) {
         return;
     }
     const StateSpaceSolver& s = *solver;
-    std::vector<std::complex<double>> lambda(s.eigenvalues().data(), s.eigenvalues().data() + s.eigenvalues().size());
-    std::sort(lambda.begin(), lambda.end(), [](auto a, auto b) {
-        return std::abs(a) != std::abs(b) ? std::abs(a) < std::abs(b) : a.imag() > b.imag();
-    });
     out << "damped modes (all contacts open, all masses sliding; eigenvalues of the state matrix):\n";
     out << "  mode  Re lambda [1/s]  Im lambda [rad/s]  |lambda| [rad/s]  xi\n";
     int j = 0;
-    for (const std::complex<double>& l : lambda) {
-        if (l.imag() < 0.0) continue;  // the conjugate of a pair printed
+    for (const std::complex<double>& l : s.damped_modes()) {
         const double mag = std::abs(l);
         out << "  " << ++j << "  " << num(l.real()) << "  " << num(l.imag()) << "  " << num(mag) << "  "
             << (mag > 0.0 ? num(-l.real() / mag) : std::string("-")) << "\n";

@@ -283,14 +283,8 @@ void inspect_state_space(const Model& model, const Configuration& cfg, Format fm
     }
     p.heading("State-space modes: y' = A y, y = [x; v/s]; lambda = -xi |lambda| +- i |lambda| sqrt(1 - xi^2)",
               "State-space modes: $\\dot y = A y$, $\\lambda = -\\xi |\\lambda| \\pm i |\\lambda| \\sqrt{1 - \\xi^2}$");
-    std::vector<std::complex<double>> lambda(solver.eigenvalues().data(),
-                                             solver.eigenvalues().data() + solver.eigenvalues().size());
-    std::sort(lambda.begin(), lambda.end(), [](auto a, auto b) {
-        return std::abs(a) != std::abs(b) ? std::abs(a) < std::abs(b) : a.imag() > b.imag();
-    });
     int j = 0;
-    for (const std::complex<double>& l : lambda) {
-        if (l.imag() < 0.0) continue;  // a pair once
+    for (const std::complex<double>& l : solver.damped_modes()) {
         const double mag = std::abs(l), xi = mag > 0.0 ? -l.real() / mag : 0.0;
         const std::string J = std::to_string(++j);
         p.line("mode " + J + ": lambda = " + Printer::format_number(l.real()) + (l.imag() > 0.0 ? " +- i " + Printer::format_number(l.imag()) : "") +

@@ -481,6 +481,16 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
     }
 }
 
+std::vector<std::complex<double>> StateSpaceSolver::damped_modes() const {
+    std::vector<cplx> modes;
+    for (int k = 0; k < lambda_.size(); ++k)
+        if (lambda_(k).imag() >= 0.0) modes.push_back(lambda_(k));
+    std::sort(modes.begin(), modes.end(), [](cplx a, cplx b) {
+        return std::abs(a) != std::abs(b) ? std::abs(a) < std::abs(b) : a.imag() > b.imag();
+    });
+    return modes;
+}
+
 std::size_t StateSpaceSolver::memory_bytes() const {
     const std::size_t m = static_cast<std::size_t>(2 * nf_), n = static_cast<std::size_t>(n_);
     const std::size_t ns = static_cast<std::size_t>(ns_), nh = static_cast<std::size_t>(nh_);

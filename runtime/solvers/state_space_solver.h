@@ -74,6 +74,9 @@ public:
     std::size_t memory_bytes() const;
     /// Eigenvalues of A (s^-1), in the solver's order.
     const Eigen::VectorXcd& eigenvalues() const { return lambda_; }
+    /// The damped modes for a reader: one eigenvalue of each conjugate pair (Im > 0)
+    /// and every real one, by |lambda| ascending.
+    std::vector<std::complex<double>> damped_modes() const;
     /// ||V||_1 ||V^-1||_1 of this configuration.
     double condition() const { return condition_; }
     /// Free translations taken out of the state (no damping resists them).
