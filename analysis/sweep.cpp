@@ -12,6 +12,7 @@
 #include <thread>
 #include <utility>
 
+#include "assembly.h"
 #include "file_read.h"
 #include "hsnc/simulate.h"
 #include "model_hash.h"
@@ -90,6 +91,7 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     SweepOptions& o = options_;
     // The model as given (parameters at the file's values): names, checks.
     model_ = parse_model(text, source, overrides);
+    require_no_jenkins(model_, kPlan);  // each point continues from the last point's (x, v): no slider state
     if (o.param.empty()) throw OptionError(kPlan, "param", "''", "required: the parameter to sweep");
     if (!has_parameter(model_, o.param))
         throw OptionError(kPlan, "param", o.param, "no parameter named '" + o.param + "' in " + source);

@@ -108,6 +108,17 @@ void check_options(const Model& model, const SimulateOptions& o) {
         if (o.kernels != KernelChoice::automatic && o.kernels != KernelChoice::generic)
             throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels), nonprop);
     }
+    // Jenkins elements: their slider is state the engine carries and the generic
+    // solvers read; the derivation, the reference and the integrators do not, yet.
+    if (!model.jenkins.empty()) {
+        const std::string jenkins = "the model has Jenkins elements ([[jenkins]] '" + model.jenkins[0].name +
+                                    "'), which run on hsnc's generic solver only, for now";
+        if (o.method != Method::hsnc) throw OptionError(kSimulate, "method", method_name(o.method), jenkins);
+        if (o.precision_digits != 0)
+            throw OptionError(kSimulate, "precision_digits", std::to_string(o.precision_digits), jenkins);
+        if (o.kernels != KernelChoice::automatic && o.kernels != KernelChoice::generic)
+            throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels), jenkins);
+    }
     if (o.method != Method::hsnc && o.kernels != KernelChoice::automatic)
         throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels),
                           std::string("applies to method hsnc only (not ") + method_name(o.method) + ")");

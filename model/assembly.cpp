@@ -29,6 +29,12 @@ void require_proportional_damping(const Model& model, const std::string& who) {
                      "only the generic solver (state-space modes) takes it, for now");
 }
 
+void require_no_jenkins(const Model& model, const std::string& who) {
+    if (model.jenkins.empty()) return;
+    throw InputError(who + ": model '" + model.name + "' has Jenkins elements ([[jenkins]] '" + model.jenkins[0].name +
+                     "'); only the generic solver takes them, for now");
+}
+
 Eigen::VectorXd mass_vector(const Model& model) {
     Eigen::VectorXd m(model.dof());
     for (std::size_t i = 0; i < model.dof(); ++i) m(i) = model.masses[i].m;
@@ -41,6 +47,8 @@ Eigen::MatrixXd stiffness_matrix(const Model& model, const Configuration& cfg) {
     for (const Spring& s : model.springs) add_spring(K, s.a, s.b, s.k);
     for (std::size_t c = 0; c < model.contacts.size(); ++c)
         if (cfg.closed[c]) add_spring(K, model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j)
+        if (cfg.slip[j] == 0) add_spring(K, model.jenkins[j].a, model.jenkins[j].b, model.jenkins[j].k);
     return K;
 }
 
@@ -61,7 +69,26 @@ Eigen::VectorXd constant_force(const Model& model, const Configuration& cfg) {
         if (k.a != kGround) f(k.a) += k.k * k.gap;
         if (k.b != kGround) f(k.b) -= k.k * k.gap;
     }
+    for_each_slipping(model, cfg, [&](int a, int b, double fa) {
+        if (a != kGround) f(a) += fa;
+        if (b != kGround) f(b) -= fa;
+    });
     return f;
+}
+
+void add_slider_preload(const Model& model, const Configuration& cfg, const double* slider, Eigen::VectorXd& f) {
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
+        if (cfg.slip[j] != 0) continue;
+        const Jenkins& e = model.jenkins[j];
+        if (e.a != kGround) f(e.a) += e.k * slider[j];
+        if (e.b != kGround) f(e.b) -= e.k * slider[j];
+    }
+}
+
+double slider_position(const Model& model, const Configuration& cfg, std::size_t j, const double* x) {
+    if (cfg.slip[j] == 0) return x[model.dof() + j];
+    const Jenkins& e = model.jenkins[j];
+    return position(x, e.a) - position(x, e.b) - static_cast<double>(cfg.slip[j]) * (e.slip_force / e.k);
 }
 
 Eigen::VectorXd forcing(const Model& model, double t) {
@@ -111,7 +138,11 @@ double force_on_mass(const Model& model, const Configuration& cfg, int i, double
         const double fa = -k * s - c * sd;
         f += a == i ? fa : -fa;
     };
-    for_each_link(model, cfg, add);
+    for_each_link(model, cfg, add, x + model.dof());
+    for_each_slipping(model, cfg, [&](int a, int b, double fa) {
+        if (a == i) f += fa;
+        if (b == i) f -= fa;
+    });
     return f;
 }
 

@@ -6,7 +6,10 @@
 // with K = K(cfg) (springs + closed contacts), C = alpha*M + beta*K(cfg) + the
 // dampers (model.h Damper), and
 // f_const = loads + contact preload (a closed contact [a, b] with gap d adds
-// +k*d on a and -k*d on b; paper Eq. 5-6). A_i is the force "from everything
+// +k*d on a and -k*d on b; paper Eq. 5-6) + the force of every slipping
+// Jenkins element. A stuck Jenkins element is a link like a closed contact
+// whose gap is its slider position s (state, not a constant of the
+// configuration): its preload k*s is added per segment (add_slider_preload). A_i is the force "from everything
 // but friction" of interface.md section 2. Stuck masses are not removed here:
 // these are the full n x n matrices.
 #pragma once
@@ -29,14 +32,30 @@ void require_proportional_damping(const Model& model, const std::string& who);
 /// Diagonal of M.
 Eigen::VectorXd mass_vector(const Model& model);
 
-/// K(cfg): springs plus the contacts closed in cfg (stuck flags are ignored).
+/// Throws InputError "WHO: model 'NAME' has Jenkins elements ..." when it has
+/// any: for the stages that take no slider state yet (the derivation, the
+/// kernels, the interpreter, the reference, the baselines, the analyses).
+void require_no_jenkins(const Model& model, const std::string& who);
+
+/// K(cfg): springs plus the contacts closed and the Jenkins elements stuck in
+/// cfg (stuck mass flags are ignored).
 Eigen::MatrixXd stiffness_matrix(const Model& model, const Configuration& cfg);
 
 /// C = alpha*M + beta*K(cfg) + the dampers' matrix.
 Eigen::MatrixXd damping_matrix(const Model& model, const Configuration& cfg);
 
-/// Loads plus the preload of the contacts closed in cfg.
+/// Loads plus the preload of the contacts closed in cfg plus the forces of
+/// the Jenkins elements slipping in cfg.
 Eigen::VectorXd constant_force(const Model& model, const Configuration& cfg);
+
+/// f += the preload k_j*s_j (+ on a, - on b) of every Jenkins element stuck
+/// in cfg, slider[j] = s_j; nothing without Jenkins elements.
+void add_slider_preload(const Model& model, const Configuration& cfg, const double* slider, Eigen::VectorXd& f);
+
+/// Slider position of Jenkins element j in state x (masses, then sliders):
+/// x[n + j] while stuck; while slipping, x[a] - x[b] - slip*F_s/k (its
+/// stretch is held at slip*F_s/k).
+double slider_position(const Model& model, const Configuration& cfg, std::size_t j, const double* x);
 
 /// Sum of the forcing harmonics at time t, and its time derivative.
 Eigen::VectorXd forcing(const Model& model, double t);
@@ -52,9 +71,11 @@ namespace hsnc {
 
 /// Every element acting between two bodies in cfg, as fn(a, b, stiffness,
 /// damping, gap): springs and closed contacts (damping beta*k, Rayleigh),
-/// then dampers (stiffness 0, damping c); gap is a contact's preload length.
+/// then dampers (stiffness 0, damping c), then stuck Jenkins elements (as a
+/// closed contact, gap = slider[j]; 0 when `slider` is null: for the callers
+/// that do not read the gap); gap is a link's preload length.
 template <class Fn>
-void for_each_link(const Model& model, const Configuration& cfg, Fn&& fn) {
+void for_each_link(const Model& model, const Configuration& cfg, Fn&& fn, const double* slider = nullptr) {
     for (const Spring& s : model.springs) fn(s.a, s.b, s.k, model.beta * s.k, 0.0);
     for (std::size_t c = 0; c < model.contacts.size(); ++c)
         if (cfg.closed[c]) {
@@ -62,10 +83,26 @@ void for_each_link(const Model& model, const Configuration& cfg, Fn&& fn) {
             fn(k.a, k.b, k.k, model.beta * k.k, k.gap);
         }
     for (const Damper& d : model.dampers) fn(d.a, d.b, 0.0, d.c, 0.0);
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j)
+        if (cfg.slip[j] == 0) {
+            const Jenkins& e = model.jenkins[j];
+            fn(e.a, e.b, e.k, model.beta * e.k, slider ? slider[j] : 0.0);
+        }
 }
 
-/// A_i: force on mass i from everything but friction (springs, closed contacts,
-/// Rayleigh damping, dampers, forcing, loads) at time t and state (x, v), in cfg.
+/// Every Jenkins element slipping in cfg, as fn(a, b, force on a).
+template <class Fn>
+void for_each_slipping(const Model& model, const Configuration& cfg, Fn&& fn) {
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j)
+        if (cfg.slip[j] != 0) {
+            const Jenkins& e = model.jenkins[j];
+            fn(e.a, e.b, -static_cast<double>(cfg.slip[j]) * e.slip_force);
+        }
+}
+
+/// A_i: force on mass i from everything but its own friction (springs, closed
+/// contacts, Rayleigh damping, dampers, Jenkins elements, forcing, loads) at
+/// time t and state (x, v), in cfg; x holds the sliders after the masses.
 /// Sparse: loops over the elements touching i, no allocation.
 double force_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* x,
                      const double* v);

@@ -19,25 +19,32 @@ std::vector<std::string> split_names(const std::string& list) {
 }  // namespace
 
 Configuration Configuration::all_open(const Model& model) {
-    return Configuration{std::vector<char>(model.contacts.size(), 0),
-                         std::vector<char>(model.masses.size(), 0)};
+    return Configuration{std::vector<char>(model.contacts.size(), 0), std::vector<char>(model.masses.size(), 0),
+                         std::vector<signed char>(model.jenkins.size(), 0)};
 }
 
 Configuration Configuration::parse(const Model& model, const std::string& spec) {
     Configuration cfg = all_open(model);
     std::istringstream in(spec);
     std::string part;
-    bool seen_closed = false, seen_stuck = false;
+    bool seen_closed = false, seen_stuck = false, seen_slip = false;
     while (in >> part) {
         const auto eq = part.find('=');
         const std::string key = part.substr(0, eq);
-        if (eq == std::string::npos || (key != "closed" && key != "stuck"))
-            throw InputError("--config: '" + part + "': expected closed=NAMES or stuck=NAMES");
-        bool& seen = key == "closed" ? seen_closed : seen_stuck;
+        if (eq == std::string::npos || (key != "closed" && key != "stuck" && key != "slip"))
+            throw InputError("--config: '" + part + "': expected closed=NAMES, stuck=NAMES or slip=NAMES");
+        bool& seen = key == "closed" ? seen_closed : key == "stuck" ? seen_stuck : seen_slip;
         if (seen) throw InputError("--config: '" + key + "=' given twice");
         seen = true;
         for (const std::string& name : split_names(part.substr(eq + 1))) {
-            if (key == "closed") {
+            if (key == "slip") {
+                const char sign = name.back();
+                const int j = model.jenkins_index(name.substr(0, name.size() - 1));
+                if ((sign != '+' && sign != '-') || j < 0)
+                    throw InputError("--config: slip=" + name +
+                                     ": expected a Jenkins element's name followed by + or - (the sign of its stretch)");
+                cfg.slip[static_cast<std::size_t>(j)] = sign == '+' ? 1 : -1;
+            } else if (key == "closed") {
                 const int c = model.contact_index(name);
                 if (c < 0) throw InputError("--config: closed=" + name + ": no contact named '" + name + "'");
                 cfg.closed[c] = 1;
@@ -71,7 +78,15 @@ std::string Configuration::spec(const Model& model) const {
             stuck_part += (first ? "" : ",") + model.friction_name(i);
             first = false;
         }
-    return closed_part + " " + stuck_part;
+    if (slip.empty()) return closed_part + " " + stuck_part;
+    std::string slip_part = "slip=";
+    first = true;
+    for (std::size_t j = 0; j < slip.size(); ++j)
+        if (slip[j]) {
+            slip_part += (first ? "" : ",") + model.jenkins[j].name + (slip[j] > 0 ? "+" : "-");
+            first = false;
+        }
+    return closed_part + " " + stuck_part + " " + slip_part;
 }
 
 std::string Configuration::key() const {
@@ -79,6 +94,9 @@ std::string Configuration::key() const {
     for (char c : closed) k += c ? '1' : '0';
     k += "_s";
     for (char s : stuck) k += s ? '1' : '0';
+    if (slip.empty()) return k;
+    k += "_j";
+    for (signed char s : slip) k += s > 0 ? 'p' : s < 0 ? 'n' : '0';
     return k;
 }
 

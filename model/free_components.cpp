@@ -49,6 +49,8 @@ FreeComponents free_components(const Model& model, const Configuration& cfg) {
     for (const Spring& s : model.springs) link(s.a, s.b, s.k);
     for (std::size_t c = 0; c < model.contacts.size(); ++c)
         if (cfg.closed[c]) link(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j)  // a stuck Jenkins element is a spring
+        if (cfg.slip[j] == 0) link(model.jenkins[j].a, model.jenkins[j].b, model.jenkins[j].k);
 
     fc.component.assign(static_cast<std::size_t>(nf), -1);
     std::vector<int> id_of_root(static_cast<std::size_t>(nf), -1);

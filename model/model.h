@@ -92,6 +92,22 @@ struct FrictionElement {
     double normal = 0.0;  ///< N > 0
 };
 
+/// A Jenkins element (interface.md section 5): a spring k in series with a
+/// massless slider that slips at slip_force, between bodies a and b. Its
+/// slider position s is state: the engine carries it after the masses'
+/// positions (x[dof() + j], see Model::state_size). While stuck it is a
+/// spring -k*(x[a] - x[b] - s) on a (the opposite on b), which K(cfg) and the
+/// Rayleigh term beta*K(cfg) include as they do a closed contact whose gap is
+/// s; while slipping it is the constant force -sigma*slip_force on a, sigma =
+/// the sign of the stretch x[a] - x[b] - s = sigma*slip_force/k, kept constant.
+struct Jenkins {
+    std::string name;
+    int a = kGround;
+    int b = kGround;
+    double k = 0.0;           ///< > 0
+    double slip_force = 0.0;  ///< F_s > 0
+};
+
 /// Where a [structure]'s matrices came from (the model then has one Mass per
 /// dof, m = M_ii, and the springs of K, Spring::from_structure).
 struct StructureSource {
@@ -113,6 +129,7 @@ struct Model {
     std::vector<Contact> contacts;
     std::vector<FrictionElement> frictions;
     std::vector<Damper> dampers;  ///< [[damper]]s, then those of a non-proportional structure.damping
+    std::vector<Jenkins> jenkins;
     StructureSource structure;
     double alpha = 0.0;  ///< Rayleigh mass coefficient
     double beta = 0.0;   ///< Rayleigh stiffness coefficient
@@ -140,6 +157,8 @@ struct Model {
     std::map<std::string, std::string> field_expressions;
 
     std::size_t dof() const { return masses.size(); }
+    /// Positions the engine carries: the masses', then every Jenkins slider's.
+    std::size_t state_size() const { return masses.size() + jenkins.size(); }
     /// C = alpha*M + beta*K(cfg) exactly: no dampers. Only then are the modes
     /// of K those of the damped system (the derivation, kernels, interpreter,
     /// reference and tangent need it; the state-space solver does not).
@@ -157,12 +176,24 @@ struct Model {
             if (contacts[i].name == name) return static_cast<int>(i);
         return -1;
     }
+    /// Index of the Jenkins element called `name`, or -1.
+    int jenkins_index(const std::string& name) const {
+        for (std::size_t j = 0; j < jenkins.size(); ++j)
+            if (jenkins[j].name == name) return static_cast<int>(j);
+        return -1;
+    }
     /// Normal force of mass i (interface.md: always m*g).
     double normal_force(std::size_t i) const { return masses[i].m * g; }
     /// The name that stands for mass i's friction in event rows and
     /// configuration specs: its [[friction]] element's name, else its own.
     const std::string& friction_name(std::size_t i) const {
         return masses[i].friction >= 0 ? frictions[static_cast<std::size_t>(masses[i].friction)].name : masses[i].name;
+    }
+    /// The element named in an event row of a friction kind (stick, release,
+    /// reversal): element < dof() is a mass's friction, dof() + j Jenkins element j.
+    const std::string& friction_event_name(int element) const {
+        const auto e = static_cast<std::size_t>(element);
+        return e < masses.size() ? friction_name(e) : jenkins[e - masses.size()].name;
     }
 };
 

@@ -36,6 +36,9 @@ std::string model_canonical_text(const Model& model) {
              num(f.mu_s) + " " + num(f.normal) + "\n";
     for (const Damper& d : model.dampers)
         t += "damper " + std::to_string(d.a) + " " + std::to_string(d.b) + " " + num(d.c) + "\n";
+    for (const Jenkins& j : model.jenkins)
+        t += "jenkins " + j.name + " " + std::to_string(j.a) + " " + std::to_string(j.b) + " " + num(j.k) + " " +
+             num(j.slip_force) + "\n";
     t += "load";
     for (double l : model.load) t += " " + num(l);
     t += "\n";

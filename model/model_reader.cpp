@@ -96,10 +96,8 @@ public:
 
     Model read(const toml::table& root) {
         model_.source = source_;
-        if (const toml::node* n = root.get("jenkins"))
-            fail(n, "jenkins", "[[jenkins]] elements are not yet supported by this version of hsnc");
         check_keys(root, "", {"name", "description", "parameters", "mass", "structure", "spring", "damping", "damper",
-                              "contact", "friction", "forcing", "load", "initial", "simulate"});
+                              "contact", "friction", "jenkins", "forcing", "load", "initial", "simulate"});
         model_.name = required_string(root, "", "name");
         if (model_.name.empty()) fail(root.get("name"), "name", "must not be empty");
         if (const toml::node* d = root.get("description")) model_.description = string_value(*d, "description");
@@ -115,6 +113,7 @@ public:
         read_dampers(root);
         read_contacts(root);
         read_frictions(root);
+        read_jenkins(root);
         read_forcing(root);
         read_load(root);
         read_initial(root);
@@ -504,6 +503,31 @@ private:
             if (d.c > 0.0) model_.dampers.push_back(d);  // c = 0 (a sweep's end point) is no damper at all
         }
         model_.dampers.insert(model_.dampers.end(), structure_dampers_.begin(), structure_dampers_.end());
+    }
+
+    void read_jenkins(const toml::table& root) {
+        const auto tables = table_array(root, "jenkins");
+        for (std::size_t i = 0; i < tables.size(); ++i) {
+            const toml::table& t = *tables[i];
+            const std::string path = "jenkins[" + std::to_string(i + 1) + "]";
+            check_keys(t, path, {"name", "between", "k", "slip_force"});
+            Jenkins j;
+            if (t.get("name")) {
+                j.name = required_string(t, path, "name");
+                check_new_name(t.get("name"), path + ".name", j.name);
+            } else {
+                j.name = "jenkins" + std::to_string(i + 1);
+                check_new_name(&t, path + ".name", j.name);
+            }
+            std::tie(j.a, j.b) = between(t, path);
+            j.k = required_number(t, path, "k");
+            if (!(j.k > 0.0)) fail(t.get("k"), path + ".k", "stiffness must be > 0, got " + show(j.k));
+            j.slip_force = required_number(t, path, "slip_force");
+            if (!(j.slip_force > 0.0))
+                fail(t.get("slip_force"), path + ".slip_force", "must be > 0, got " + show(j.slip_force));
+            model_.jenkins.push_back(j);
+            element_names_.emplace(j.name, path);
+        }
     }
 
     void read_frictions(const toml::table& root) {

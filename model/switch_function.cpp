@@ -16,6 +16,15 @@ std::vector<SwitchFunction> switch_functions(const Model& model, const Configura
             out.push_back({SwitchKind::velocity, e});
         }
     }
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
+        const int e = static_cast<int>(j);
+        if (cfg.slip[j] == 0) {
+            out.push_back({SwitchKind::slip_pos, e});
+            out.push_back({SwitchKind::slip_neg, e});
+        } else {
+            out.push_back({SwitchKind::slip_velocity, e});
+        }
+    }
     return out;
 }
 

@@ -8,6 +8,10 @@
 //        sliding:                             velocity g = v_i
 //        stuck:                               release_pos g =  A_i - mu_s*N_i
 //                                             release_neg g = -A_i - mu_s*N_i
+//   3. every Jenkins element j, in order (stretch e = x[a] - x[b] - s_j):
+//        stuck:                               slip_pos g =  k_j e - F_s
+//                                             slip_neg g = -k_j e - F_s
+//        slipping (stretch sign sigma):       slip_velocity g = w = v[a] - v[b]
 // where A_i is the force on mass i from everything but friction (assembly.h)
 // and N_i = m_i*g. The stuck-mass release condition |A_i| > mu_s*N_i is written
 // as two smooth functions so that root finding never meets a kink.
@@ -26,7 +30,16 @@ enum class SwitchKind : std::uint8_t {
     velocity,     ///< velocity of a sliding friction mass; element = mass index
     release_pos,  ///< A_i - mu_s*N_i of a stuck mass; element = mass index
     release_neg,  ///< -A_i - mu_s*N_i of a stuck mass; element = mass index
+    slip_pos,       ///< k e - F_s of a stuck Jenkins element; element = its index
+    slip_neg,       ///< -k e - F_s of a stuck Jenkins element
+    slip_velocity,  ///< v[a] - v[b] of a slipping Jenkins element
 };
+
+/// Number of SwitchKind values (tables indexed by kind).
+inline constexpr int kSwitchKinds = 7;
+
+/// The kinds whose zero is a stop (a velocity that reaches 0, crossing or touching).
+inline bool is_velocity(SwitchKind k) { return k == SwitchKind::velocity || k == SwitchKind::slip_velocity; }
 
 struct SwitchFunction {
     SwitchKind kind;

@@ -31,19 +31,30 @@ void CsvFile::end_row() {
     first_in_row_ = true;
 }
 
-std::string trajectory_header(const Model& model) {
-    std::string h = "t";
+namespace {
+
+// Positions and velocities of the masses, then the slider position of every
+// Jenkins element (interface.md: new columns only at the end).
+std::string state_columns(const Model& model) {
+    std::string h;
     for (const Mass& m : model.masses) h += ",x_" + m.name;
     for (const Mass& m : model.masses) h += ",v_" + m.name;
+    for (const Jenkins& j : model.jenkins) h += ",s_" + j.name;
     return h;
 }
 
-std::string events_header(const Model& model) {
-    std::string h = "t,kind,element";
-    for (const Mass& m : model.masses) h += ",x_" + m.name;
-    for (const Mass& m : model.masses) h += ",v_" + m.name;
-    return h;
+}  // namespace
+
+void state_numbers(const Model& model, CsvFile& file, const double* x, const double* v) {
+    const std::size_t n = model.dof();
+    for (std::size_t i = 0; i < n; ++i) file.number(x[i]);
+    for (std::size_t i = 0; i < n; ++i) file.number(v[i]);
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) file.number(x[n + j]);
 }
+
+std::string trajectory_header(const Model& model) { return "t" + state_columns(model); }
+
+std::string events_header(const Model& model) { return "t,kind,element" + state_columns(model); }
 
 CsvObserver::CsvObserver(const Model& model, CsvFile* trajectory, CsvFile* events)
     : model_(model), trajectory_(trajectory), events_(events) {
@@ -60,8 +71,7 @@ CsvObserver::CsvObserver(const Model& model, CsvFile* trajectory, CsvFile* event
 void CsvObserver::on_sample(double t, const double* x, const double* v) {
     if (!trajectory_) return;
     trajectory_->number(t);
-    for (std::size_t i = 0; i < model_.dof(); ++i) trajectory_->number(x[i]);
-    for (std::size_t i = 0; i < model_.dof(); ++i) trajectory_->number(v[i]);
+    state_numbers(model_, *trajectory_, x, v);
     trajectory_->end_row();
 }
 
@@ -70,9 +80,8 @@ void CsvObserver::on_event(double t, EventKind kind, int element, const double* 
     events_->number(t);
     events_->text(event_kind_name(kind));
     const bool contact = kind == EventKind::contact_close || kind == EventKind::contact_open;
-    events_->text(contact ? model_.contacts[element].name.c_str() : model_.friction_name(static_cast<std::size_t>(element)).c_str());
-    for (std::size_t i = 0; i < model_.dof(); ++i) events_->number(x[i]);
-    for (std::size_t i = 0; i < model_.dof(); ++i) events_->number(v[i]);
+    events_->text(contact ? model_.contacts[element].name.c_str() : model_.friction_event_name(element).c_str());
+    state_numbers(model_, *events_, x, v);
     events_->end_row();
 }
 

@@ -40,6 +40,10 @@ private:
 std::string trajectory_header(const Model& model);
 std::string events_header(const Model& model);
 
+/// The state columns of one row: the masses' x, then v, then every Jenkins
+/// slider (x holds the sliders after the masses, Model::state_size()).
+void state_numbers(const Model& model, CsvFile& file, const double* x, const double* v);
+
 /// An Observer that writes the CSVs it was given (either may be null).
 class CsvObserver : public Observer {
 public:

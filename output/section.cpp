@@ -104,8 +104,7 @@ void SectionRecorder::on_event(double t, EventKind kind, int element, const doub
     const std::size_t n = model_.dof();
     if (csv_) {
         csv_->number(t);
-        for (std::size_t i = 0; i < n; ++i) csv_->number(x[i]);
-        for (std::size_t i = 0; i < n; ++i) csv_->number(v[i]);
+        state_numbers(model_, *csv_, x, v);
         csv_->end_row();
     }
     if (keep_ && points_ <= kMaxSectionPlotPoints) {

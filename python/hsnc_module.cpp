@@ -126,7 +126,7 @@ ModelOverrides overrides(const py::dict& set, const py::dict& x0, const py::dict
 std::string element_name(const Model& model, EventKind kind, int element) {
     const bool contact = kind == EventKind::contact_close || kind == EventKind::contact_open;
     if (contact) return element >= 0 && element < static_cast<int>(model.contacts.size()) ? model.contacts[element].name : "?";
-    return element >= 0 && element < static_cast<int>(model.masses.size()) ? model.friction_name(static_cast<std::size_t>(element)) : std::string("?");
+    return element >= 0 && element < static_cast<int>(model.state_size()) ? model.friction_event_name(element) : std::string("?");
 }
 
 py::dict run(const Model& model, double t_end, double dt, const std::string& method, const std::string& kernels,

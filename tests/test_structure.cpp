@@ -652,7 +652,7 @@ TEST(StructureInput, KeysAndNames) {
                    {"key 'spring[1].between': unknown body 'm9' (expected 'ground' or a dof name)"});
     expect_message(with_matrices("[initial]\nx = { u9 = 1 }\n"), {"key 'initial.x.u9': unknown dof 'u9'"});
     expect_message(with_matrices("[[jenkins]]\nbetween = [\"u1\", \"ground\"]\n"),
-                   {"key 'jenkins': [[jenkins]] elements are not yet supported"});
+                   {"key 'jenkins[1].k': required key is missing"});
 }
 
 TEST(FrictionInput, EveryKeyChecked) {

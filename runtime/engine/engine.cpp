@@ -40,9 +40,11 @@ std::string time_text(double t) {
 }
 
 // Working storage for one segment's evaluations (sized for the largest switch list).
+// x holds the Jenkins sliders after the masses (nx = Model::state_size()).
 struct Buffers {
     std::vector<double> x, v, a, g, dg, bound, scale;
-    Buffers(std::size_t n, std::size_t nsw) : x(n), v(n), a(n), g(nsw), dg(nsw), bound(nsw), scale(nsw) {}
+    Buffers(std::size_t nx, std::size_t n, std::size_t nsw)
+        : x(nx), v(n), a(n), g(nsw), dg(nsw), bound(nsw), scale(nsw) {}
     SegmentEval view() { return {x.data(), v.data(), a.data(), g.data(), dg.data(), bound.data(), scale.data()}; }
 };
 
@@ -52,7 +54,8 @@ double side_of(const SwitchFunction& f, const Configuration& cfg, const std::vec
     switch (f.kind) {
         case SwitchKind::gap: return cfg.closed[f.element] ? 1.0 : -1.0;
         case SwitchKind::velocity: return sgn[f.element] >= 0 ? 1.0 : -1.0;
-        default: return -1.0;  // release functions are negative while stuck
+        case SwitchKind::slip_velocity: return cfg.slip[static_cast<std::size_t>(f.element)] >= 0 ? 1.0 : -1.0;
+        default: return -1.0;  // release and slip functions are negative while stuck
     }
 }
 
@@ -72,6 +75,8 @@ double fastest_rate(const Model& model, const Configuration& cfg) {
     for (const Spring& s : model.springs) add(s.a, s.b, s.k);
     for (std::size_t c = 0; c < model.contacts.size(); ++c)
         if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j)
+        if (cfg.slip[j] == 0) add(model.jenkins[j].a, model.jenkins[j].b, model.jenkins[j].k);
     double w2 = 0.0;
     for (std::size_t i = 0; i < n; ++i)
         if (!cfg.stuck[i]) w2 = std::max(w2, 2 * stiff[i] / model.masses[i].m);
@@ -101,7 +106,12 @@ Engine::Engine(const Model& model, SolverProvider& provider) : model_(model), pr
 RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     const std::size_t n = model_.dof();
     RunSummary sum;
+    // The state: positions of the masses, then of the Jenkins sliders (at rest,
+    // unstretched at t0: s = x[a] - x[b]), and the masses' velocities.
     std::vector<double> x = model_.x0, v = model_.v0;
+    for (const Jenkins& j : model_.jenkins)
+        x.push_back((j.a == kGround ? 0.0 : x[static_cast<std::size_t>(j.a)]) -
+                    (j.b == kGround ? 0.0 : x[static_cast<std::size_t>(j.b)]));
     double t = model_.t0;
     // The segment start is the double-double t + t_lo: t is the representable
     // time that events report, t_lo (|t_lo| <= ulp(t)/2) the rounding of the
@@ -121,8 +131,10 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     std::vector<signed char> sgn;
     Configuration cfg = entered_configuration(model_, t, x.data(), v.data(), sgn);  // stuck only where v = 0
 
-    Buffers buf(n, model_.contacts.size() + 2 * n);
-    Buffers dense(n, model_.contacts.size() + 2 * n);  // trajectory samples, so buf keeps the event state
+    // Per-segment working arrays, sized once for the largest switch list.
+    const std::size_t max_switches = model_.contacts.size() + 2 * n + 2 * model_.jenkins.size();
+    Buffers buf(x.size(), n, max_switches);
+    Buffers dense(x.size(), n, max_switches);  // trajectory samples, so buf keeps the event state
     std::set<Configuration> visited;
     std::deque<double> recent;  // times of the latest events (Zeno guard)
     std::size_t same_instant = 0;
@@ -137,15 +149,14 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         sum.status = status;
         sum.message = message;
         sum.t = t;
-        sum.x = x;
+        sum.x.assign(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(n));  // the masses' (sliders: sum.slider)
+        sum.slider.assign(x.begin() + static_cast<std::ptrdiff_t>(n), x.end());
         sum.v = v;
         sum.configuration = cfg;
         sum.configurations = visited.size();
         return sum;
     };
 
-    // Per-segment working arrays, sized once for the largest switch list.
-    const std::size_t max_switches = model_.contacts.size() + 2 * n;
     std::vector<double> side(max_switches), floor(max_switches), root(max_switches), clear_until(max_switches);
     std::vector<char> armed(max_switches), leaving(max_switches), leaves_now(max_switches);
     std::vector<double> series_d, series_mag;
@@ -159,8 +170,8 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     // element): a value that should be 0 after a switch comes back as ~1e-17
     // from the previous segment, whatever the new segment's own terms are.
     // Flat table indexed by kind * stride + element; 0 where nothing was inherited.
-    const std::size_t stride = std::max(model_.contacts.size(), n);
-    std::vector<double> inherited(4 * stride, 0.0);
+    const std::size_t stride = std::max({model_.contacts.size(), n, model_.jenkins.size()});
+    std::vector<double> inherited(kSwitchKinds * stride, 0.0);
     auto slot = [stride](const SwitchFunction& f) {
         return static_cast<std::size_t>(f.kind) * stride + static_cast<std::size_t>(f.element);
     };
@@ -229,7 +240,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         double tau = 0.0, prev_tau = 0.0;
         eval(0.0);
         for (std::size_t f = 0; f < nsw; ++f)
-            if (sw[f].kind == SwitchKind::velocity)
+            if (is_velocity(sw[f].kind))
                 armed[f] = side[f] * buf.g[f] > noise(f);
         // Ties at the segment start (tie_series.h): a function at zero whose
         // rate vanishes too. Its first non-zero derivative, of order m, decides
@@ -298,7 +309,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     continue;
                 }
                 const double eps_f = noise(f);
-                const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                const bool stop = is_velocity(sw[f].kind) && armed[f];
                 if (stop ? h > eps_f : h >= -eps_f) continue;
                 // Move to the zero by one Newton step (the function is monotone
                 // there), never before the last point known to be on the safe side.
@@ -323,7 +334,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     if (root[f] <= tau_star + tol) continue;
                     const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
                     const double eps_f = noise(f);
-                    const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                    const bool stop = is_velocity(sw[f].kind) && armed[f];
                     if (stop ? h <= eps_f : (h < -eps_f || (h <= eps_f && hd < 0)))
                         found.switched.push_back(sw[f]);
                 }
@@ -338,7 +349,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             for (std::size_t f = 0; f < nsw; ++f) {
                 if (leaving[f]) continue;
                 const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
-                const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                const bool stop = is_velocity(sw[f].kind) && armed[f];
                 // Contacts and releases switch only when certainly negative (level
                 // -2*noise); armed velocities stop at zero.
                 const double level = stop ? 0.0 : -2 * noise(f);
@@ -352,7 +363,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             tau = std::min(tau + step, tau_end);
             eval(tau);
             for (std::size_t f = 0; f < nsw; ++f) {
-                if (sw[f].kind == SwitchKind::velocity && !armed[f] && side[f] * buf.g[f] > 2 * noise(f))
+                if (is_velocity(sw[f].kind) && !armed[f] && side[f] * buf.g[f] > 2 * noise(f))
                     armed[f] = 1;
                 // Past its clear interval the bound watches it again (a function
                 // leaving an exact zero, clear_until = 0, once it is above its rounding).

@@ -25,7 +25,8 @@ struct RunSummary {
     RunStatus status = RunStatus::ok;
     std::string message;              ///< what happened and where, for non-ok status
     double t = 0.0;                   ///< time reached
-    std::vector<double> x, v;         ///< state reached
+    std::vector<double> x, v;         ///< state reached (the masses')
+    std::vector<double> slider;       ///< Jenkins sliders' positions reached (Model::jenkins order)
     Configuration configuration;      ///< configuration reached
     std::size_t events = 0;           ///< switch events (rows of the events CSV)
     std::size_t segments = 0;         ///< closed-form segments started

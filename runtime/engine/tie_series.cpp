@@ -32,7 +32,13 @@ void force_derivative(const Model& model, const Configuration& cfg, int i, doubl
         if (k == 0 && gap != 0.0) f += kk * gap, fm += std::fabs(kk * gap);
         value += a == i ? f : -f;
         magnitude += fm;
-    });
+    }, s.slider.data());
+    if (k == 0)
+        for_each_slipping(model, cfg, [&](int a, int b, double fa) {
+            if (a != i && b != i) return;
+            value += a == i ? fa : -fa;
+            magnitude += std::fabs(fa);
+        });
     for (const Harmonic& h : model.forcing) {
         const double amp = h.amplitude[ii];
         if (amp == 0.0) continue;
@@ -58,6 +64,7 @@ MotionSeries motion_series(const Model& model, const Configuration& cfg, const s
     MotionSeries s;
     s.x.assign(static_cast<std::size_t>(order) + 1, std::vector<double>(n, 0.0));
     s.mag = s.x;
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) s.slider.push_back(slider_position(model, cfg, j, x));
     for (std::size_t i = 0; i < n; ++i) {
         s.x[0][i] = x[i];
         s.mag[0][i] = std::fabs(x[i]);
@@ -96,6 +103,18 @@ void switch_series(const Model& model, const Configuration& cfg, const SwitchFun
         } else if (f.kind == SwitchKind::velocity) {
             d[k] = series.x[k + 1][static_cast<std::size_t>(e)];
             mag[k] = series.mag[k + 1][static_cast<std::size_t>(e)];
+        } else if (f.kind == SwitchKind::slip_velocity) {
+            const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
+            d[k] = body(series.x[k + 1], J.a) - body(series.x[k + 1], J.b);
+            mag[k] = body(series.mag[k + 1], J.a) + body(series.mag[k + 1], J.b);
+        } else if (f.kind == SwitchKind::slip_pos || f.kind == SwitchKind::slip_neg) {
+            // +-k (x_a - x_b - s) - F_s: s and F_s only in the value.
+            const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
+            const double sg = f.kind == SwitchKind::slip_pos ? 1.0 : -1.0;
+            const double s0 = k == 0 ? series.slider[static_cast<std::size_t>(e)] : 0.0;
+            const double F = k == 0 ? J.slip_force : 0.0;
+            d[k] = sg * J.k * (body(series.x[k], J.a) - body(series.x[k], J.b) - s0) - F;
+            mag[k] = J.k * (body(series.mag[k], J.a) + body(series.mag[k], J.b) + std::fabs(s0)) + F;
         } else {
             double A, m;
             force_derivative(model, cfg, e, t, t_lo, series, static_cast<int>(k), A, m);
@@ -123,6 +142,10 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
         const Contact& c = model.contacts[static_cast<std::size_t>(e)];
         return at(v, c.a) + at(v, c.b);
     }
+    if (f.kind == SwitchKind::slip_pos || f.kind == SwitchKind::slip_neg) {
+        const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
+        return J.k * (at(v, J.a) + at(v, J.b));
+    }
     // The magnitude of the terms of x_i'' (0 for a stuck mass): A_i's terms and the friction force.
     auto accel_magnitude = [&](int i) {
         const std::size_t ii = static_cast<std::size_t>(i);
@@ -131,12 +154,19 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
         for_each_link(model, cfg, [&](int a, int b, double kk, double cc, double gap) {
             if (a == b || (a != i && b != i)) return;
             m += std::fabs(kk) * (at(x, a) + at(x, b)) + std::fabs(cc) * (at(v, a) + at(v, b)) + std::fabs(kk * gap);
+        }, x + model.dof());
+        for_each_slipping(model, cfg, [&](int a, int b, double fa) {
+            if (a == i || b == i) m += std::fabs(fa);
         });
         for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii]);
         if (model.masses[ii].has_friction) m += model.masses[ii].mu_k * model.normal_force(i);
         return m / model.masses[ii].m;
     };
     if (f.kind == SwitchKind::velocity) return accel_magnitude(e);
+    if (f.kind == SwitchKind::slip_velocity) {
+        const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
+        return accel_magnitude(J.a) + accel_magnitude(J.b);
+    }
     // A_i' = -(K v)_i - (C x'')_i + sum_h F_hi Omega_h cos(...).
     const std::size_t ii = static_cast<std::size_t>(e);
     double m = std::fabs(model.alpha) * model.masses[ii].m * accel_magnitude(e);
@@ -202,6 +232,16 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
         return per_mass(c.a, r) + per_mass(c.b, r);
     }
     if (f.kind == SwitchKind::velocity) return per_mass(e, R(k));  // v^(k) = x^(k+1)
+    if (f.kind == SwitchKind::slip_pos || f.kind == SwitchKind::slip_neg) {
+        const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
+        const double r = R(k - 1);  // k (x_a^(k) - x_b^(k))
+        return J.k * (per_mass(J.a, r) + per_mass(J.b, r)) * (1 + 64 * kEps);
+    }
+    if (f.kind == SwitchKind::slip_velocity) {
+        const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
+        const double r = R(k);
+        return per_mass(J.a, r) + per_mass(J.b, r);
+    }
     // A_i^(k) = -(K x^(k))_i - (C x^(k+1))_i + sum_h F_hi Omega_h^k sin(...): the neighbours' terms.
     const double rk1 = R(k - 1), rk = R(k);
     double B = 0.0;

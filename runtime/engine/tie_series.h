@@ -25,7 +25,8 @@
 namespace hsnc {
 
 /// Time derivatives of the motion at one instant (t + t_lo) in one
-/// configuration, k = 0..order:
+/// configuration, k = 0..order (x holds the Jenkins sliders after the masses;
+/// A_i includes the Jenkins elements' forces, assembly.h):
 ///   x_i^(k+2) = (A_i^(k) - [k = 0] mu_k N_i sgn_i)/m_i for a free mass,
 ///   x_i^(k) = 0 for k >= 1 for a stuck one, where
 ///   A_i^(k) = [k = 0] (load_i + contact preloads) - (K x^(k))_i - (C x^(k+1))_i
@@ -35,6 +36,7 @@ namespace hsnc {
 struct MotionSeries {
     std::vector<std::vector<double>> x;    ///< x[k][i] = x_i^(k)
     std::vector<std::vector<double>> mag;  ///< the magnitude of the terms of x[k][i]
+    std::vector<double> slider;            ///< slider position of every Jenkins element at the instant
 };
 
 MotionSeries motion_series(const Model& model, const Configuration& cfg, const signed char* sgn, double t, double t_lo,

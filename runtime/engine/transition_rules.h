@@ -27,6 +27,10 @@
 //   void prepare_ties(const Configuration&, const std::vector<signed char>& sgn);
 //   Series<T> tied_gap_series(int c, int order) const; // G_c^(k), k = 0..order, in the configuration
 //                                                      // of the last prepare_ties
+//   std::size_t jenkins() const;                       // number of Jenkins elements
+//   bool slips_on(const Configuration&, int j) const;  // a slipping element whose relative velocity
+//                                                      // touched 0 while its relative acceleration (from
+//                                                      // just before) keeps the slip's sign: no stick
 // where Series<T> holds derivatives d[k] with the magnitudes mag[k] of their
 // terms (their rounding level). A tie is decided by the first non-zero
 // derivative of any order: the rules ask for the series up to tie_order(),
@@ -120,7 +124,9 @@ bool tied(const P& p, const Series<T>& G) {
 /// section 2): a stop sets v_i = 0 exactly; every contact change first (a
 /// switched contact that is only tied is decided in the last step); then the
 /// friction decisions -- stopped masses by the stick rule, released masses slide
-/// along A_i -- and every stuck mass re-checked against the forces of the new
+/// along A_i, Jenkins elements that reach slip_force slip and those whose
+/// relative velocity reaches 0 stick (interface.md section 5; their slider
+/// position is already the state's) -- and every stuck mass re-checked against the forces of the new
 /// configuration, until nothing changes; then the contacts at G = G' = 0 enter
 /// the state the resulting forces give them, and the friction is decided again
 /// if one changed. Updates cfg, sgn (the friction direction of sliding masses),
@@ -142,12 +148,22 @@ bool apply_switches(P& p, Configuration& cfg, std::vector<signed char>& sgn, con
         cfg.closed[f.element] = !cfg.closed[f.element];
         out.push_back({cfg.closed[f.element] ? EventKind::contact_close : EventKind::contact_open, f.element});
     }
+    for (const SwitchFunction& f : switched) {
+        const auto j = static_cast<std::size_t>(f.element);
+        if (f.kind == SwitchKind::slip_pos || f.kind == SwitchKind::slip_neg) {
+            cfg.slip[j] = f.kind == SwitchKind::slip_pos ? 1 : -1;
+            out.push_back({EventKind::release, n + f.element});
+        } else if (f.kind == SwitchKind::slip_velocity && !p.slips_on(cfg, f.element)) {
+            cfg.slip[j] = 0;
+            out.push_back({EventKind::stick, n + f.element});
+        }
+    }
     std::vector<char> deciding(static_cast<std::size_t>(n), 0);
     for (const SwitchFunction& f : switched) {
         const int i = f.element;
         if (f.kind == SwitchKind::velocity) {
             deciding[i] = 1;
-        } else if (f.kind == SwitchKind::release_pos || f.kind == SwitchKind::release_neg) {
+        } else if (f.kind == SwitchKind::release_pos || f.kind == SwitchKind::release_neg) {  // a mass's
             cfg.stuck[i] = 0;
             sgn[i] = f.kind == SwitchKind::release_pos ? 1 : -1;
             out.push_back({EventKind::release, i});

@@ -52,6 +52,14 @@ public:
                 {std::fabs(body(x_, k.a)) + std::fabs(body(x_, k.b)) + std::fabs(k.gap),
                  std::fabs(body(v_, k.a)) + std::fabs(body(v_, k.b))}};
     }
+    std::size_t jenkins() const { return model_.jenkins.size(); }
+    bool slips_on(const Configuration& cfg, int j) const {
+        if (!a_) return false;
+        const Jenkins& e = model_.jenkins[static_cast<std::size_t>(j)];
+        const double w_rate = body(a_, e.a) - body(a_, e.b);
+        const double mag = std::fabs(body(a_, e.a)) + std::fabs(body(a_, e.b));
+        return !negligible(w_rate, mag) && sign(w_rate) == cfg.slip[static_cast<std::size_t>(j)];
+    }
     void prepare_ties(const Configuration& cfg, const std::vector<signed char>& sgn) {
         cfg_ = cfg;
         sgn_ = sgn;

@@ -141,18 +141,27 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     D_ = Eigen::MatrixXd::Zero(ns, nh_);
     std::vector<int> slot(static_cast<std::size_t>(n_), -1);
     for (int r = 0; r < nf_; ++r) slot[modal_.free[r]] = r;
+    // Row j of x[a] - x[b] over the modes (ground and stuck masses do not move).
+    auto difference = [&](int a, int b, int j) {
+        double w = 0.0;
+        if (a != kGround && slot[a] >= 0) w += phi_(slot[a], j);
+        if (b != kGround && slot[b] >= 0) w -= phi_(slot[b], j);
+        return w;
+    };
     for (int f = 0; f < ns; ++f) {
         const SwitchFunction& sf = switches_[f];
         if (sf.kind == SwitchKind::gap) {
             const Contact& ct = model.contacts[sf.element];
-            for (int j = 0; j < nf_; ++j) {
-                double w = 0.0;
-                if (ct.a != kGround && slot[ct.a] >= 0) w += phi_(slot[ct.a], j);
-                if (ct.b != kGround && slot[ct.b] >= 0) w -= phi_(slot[ct.b], j);
-                W_(f, j) = w;
-            }
+            for (int j = 0; j < nf_; ++j) W_(f, j) = difference(ct.a, ct.b, j);
         } else if (sf.kind == SwitchKind::velocity) {
             for (int j = 0; j < nf_; ++j) Z_(f, j) = phi_(slot[sf.element], j);
+        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
+            const Jenkins& J = model.jenkins[static_cast<std::size_t>(sf.element)];
+            const double sg = sf.kind == SwitchKind::slip_pos ? J.k : -J.k;
+            for (int j = 0; j < nf_; ++j) W_(f, j) = sg * difference(J.a, J.b, j);
+        } else if (sf.kind == SwitchKind::slip_velocity) {
+            const Jenkins& J = model.jenkins[static_cast<std::size_t>(sf.element)];
+            for (int j = 0; j < nf_; ++j) Z_(f, j) = difference(J.a, J.b, j);
         } else {
             // +-A_i: A_i = -(K x)_i - (C v)_i + f_i + F_i(t).
             const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
@@ -187,7 +196,8 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
         }
 
     // setup / eval storage.
-    x_fix_ = Eigen::VectorXd::Zero(n_);
+    x_fix_ = fseg_ = Eigen::VectorXd::Zero(n_);
+    slider_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(model.jenkins.size()));
     theta_ = Eigen::VectorXd::Zero(nh_);
     e_theta_ = Eigen::VectorXcd::Zero(nh_);
     force_ = Eigen::VectorXd::Zero(nf_);
@@ -201,6 +211,7 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
 
 void GenericSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
     for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
+    segment_force(t_, cfg_, x0, fseg_, slider_);
     for (int h = 0; h < nh_; ++h) {
         theta_(h) = reduced_phase(t_.h_omega(h), t0, t0_lo, t_.h_phase(h));
         e_theta_(h) = cplx(std::cos(theta_(h)), std::sin(theta_(h)));
@@ -209,7 +220,7 @@ void GenericSolver::setup(double t0, double t0_lo, const double* x0, const doubl
     // the stiffness coupling to the stuck masses, kinetic friction.
     for (int r = 0; r < nf_; ++r) {
         const int i = modal_.free[r];
-        double f = t_.f_const(i);
+        double f = fseg_(i);
         for (int s : modal_.stuck) f -= t_.K(i, s) * x0[s];
         if (t_.friction[i]) f -= t_.mu_k(i) * t_.normal(i) * static_cast<double>(sgn[i]);
         force_(r) = f;
@@ -433,12 +444,14 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
         vmag_(i) = vm;
     }
 
+    write_sliders(t_, cfg_, slider_, out);
+
     // Switch functions (segment.h), their rates, scales (sum of |terms|) and bounds.
     const double rigid_decay = std::exp(-alpha_ * tau);
     for (std::size_t f = 0; f < switches_.size(); ++f) {
         const SwitchFunction& sf = switches_[f];
         double g, dg, scale;
-        switch_value(sf, t_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
+        switch_value(sf, t_, fseg_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
         // |g''(s)| for s in [tau, tau + max_step]: standard sinusoids, rigid modes
         // (exact, decaying as e^{-alpha s}), homogeneous and coupled modal bounds.
         double B = bound_sin_(static_cast<Eigen::Index>(f)) + std::abs(rho_(static_cast<Eigen::Index>(f))) * rigid_decay;

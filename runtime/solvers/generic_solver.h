@@ -96,6 +96,8 @@ private:
 
     // --- fixed by setup ---
     Eigen::VectorXd x_fix_;        // positions (stuck masses keep theirs)
+    Eigen::VectorXd fseg_;         // constant force: f_const plus the stuck Jenkins sliders' preload
+    Eigen::VectorXd slider_;       // stuck Jenkins sliders' positions
     Eigen::VectorXd theta_;        // phase of each harmonic at tau = 0
     Eigen::VectorXcd e_theta_;     // exp(i theta)
     Eigen::VectorXd force_, p_, q0_, qd0_, u0_, ud0_;

@@ -18,9 +18,10 @@
 namespace hsnc {
 
 /// Where SegmentSolver::eval writes. Every pointer is required and points to
-/// n_dof (x, v, a) or n_switch (the rest) doubles.
+/// Model::state_size() (x), n_dof (v, a) or n_switch (the rest) doubles.
 struct SegmentEval {
-    double* x;      ///< positions of all masses (stuck ones at their fixed x)
+    double* x;      ///< positions of all masses (stuck ones at their fixed x), then of
+                    ///  every Jenkins slider (model.h Jenkins)
     double* v;      ///< velocities (0 for stuck masses)
     double* a;      ///< accelerations (0 for stuck masses)
     double* g;      ///< switch function values
@@ -38,7 +39,8 @@ public:
     virtual const std::vector<SwitchFunction>& switches() const = 0;
 
     /// Start a segment at absolute time t0 + t0_lo from the full state (x0, v0
-    /// of all masses; stuck masses must have v0 = 0). t0_lo is the rounding of
+    /// of all masses, x0 followed by the Jenkins sliders' positions; stuck
+    /// masses must have v0 = 0). t0_lo is the rounding of
     /// the start instant (|t0_lo| <= ulp(t0)/2; the engine keeps event instants
     /// as t + t_lo): the forcing phase is taken at t0 + t0_lo, so the state and
     /// the forcing refer to one instant. sgn[i] in {-1, 0, +1} is the

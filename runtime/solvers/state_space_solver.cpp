@@ -214,10 +214,19 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     for (int f = 0; f < ns_; ++f) {
         const SwitchFunction& sf = switches_[static_cast<std::size_t>(f)];
         const int e = sf.element;
+        // w * (x[a] - x[b]) (offset 0) or w * (v[a] - v[b]) (offset nf) as a row of L.
+        auto difference = [&](int a, int b, int offset, double w) {
+            if (a != kGround && slot[static_cast<std::size_t>(a)] >= 0) L(f, offset + slot[static_cast<std::size_t>(a)]) += w;
+            if (b != kGround && slot[static_cast<std::size_t>(b)] >= 0) L(f, offset + slot[static_cast<std::size_t>(b)]) -= w;
+        };
         if (sf.kind == SwitchKind::gap) {
-            const int a = t_.contact_a[static_cast<std::size_t>(e)], b = t_.contact_b[static_cast<std::size_t>(e)];
-            if (a != kGround && slot[static_cast<std::size_t>(a)] >= 0) L(f, slot[static_cast<std::size_t>(a)]) += 1.0;
-            if (b != kGround && slot[static_cast<std::size_t>(b)] >= 0) L(f, slot[static_cast<std::size_t>(b)]) -= 1.0;
+            difference(t_.contact_a[static_cast<std::size_t>(e)], t_.contact_b[static_cast<std::size_t>(e)], 0, 1.0);
+        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
+            const double k = t_.jenkins_k(e);
+            difference(t_.jenkins_a[static_cast<std::size_t>(e)], t_.jenkins_b[static_cast<std::size_t>(e)], 0,
+                       sf.kind == SwitchKind::slip_pos ? k : -k);
+        } else if (sf.kind == SwitchKind::slip_velocity) {
+            difference(t_.jenkins_a[static_cast<std::size_t>(e)], t_.jenkins_b[static_cast<std::size_t>(e)], nf_, 1.0);
         } else if (sf.kind == SwitchKind::velocity) {
             L(f, nf_ + slot[static_cast<std::size_t>(e)]) = 1.0;
         } else {
@@ -271,7 +280,8 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
             rigid_lv_.col(static_cast<Eigen::Index>(j)) += L.col(nf_ + r);
         }
 
-    x_fix_ = Eigen::VectorXd::Zero(n_);
+    x_fix_ = fseg_ = Eigen::VectorXd::Zero(n_);
+    slider_ = Eigen::VectorXd::Zero(t_.jenkins_k.size());
     theta_ = Eigen::VectorXd::Zero(nh_);
     e_theta_ = Eigen::VectorXcd::Zero(nh_);
     eta0_ = beta0_ = Eigen::VectorXcd::Zero(m);
@@ -292,6 +302,7 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
     const int m = 2 * ne_;
     const double s = scale_s_;
     for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
+    segment_force(t_, cfg_, x0, fseg_, slider_);
     for (int h = 0; h < nh_; ++h) {
         theta_(h) = hsnc_phase(t_.h_omega(h), t0, t0_lo, t_.h_phase(h));
         e_theta_(h) = cplx(std::cos(theta_(h)), std::sin(theta_(h)));
@@ -301,7 +312,7 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
     Eigen::VectorXd f(nf_), x(nf_), v(nf_);
     for (int r = 0; r < nf_; ++r) {
         const int i = free_[r];
-        double fi = t_.f_const(i);
+        double fi = fseg_(i);
         for (int q : stuck_) fi -= t_.K(i, q) * x0[q];
         if (t_.friction[static_cast<std::size_t>(i)]) fi -= t_.mu_k(i) * t_.normal(i) * static_cast<double>(sgn[i]);
         force_(r) = f(r) = fi;
@@ -469,10 +480,11 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
         out.a[i] = f / t_.mass(i);
     }
 
+    write_sliders(t_, cfg_, slider_, out);
     for (int f = 0; f < ns_; ++f) {
         const SwitchFunction& sf = switches_[static_cast<std::size_t>(f)];
         double g, dg, scale;
-        switch_value(sf, t_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
+        switch_value(sf, t_, fseg_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
         const double B = bound_sin_(f) + rigid_bound_(f) + (m > 0 ? B_(f) : 0.0);
         out.g[f] = g;
         out.dg[f] = dg;

@@ -7,7 +7,10 @@
 // velocity     v_i, v_i' = a_i
 // release_pos  A_i - mu_s N_i,  release_neg -A_i - mu_s N_i, with
 //              A_i = -(K x)_i - (C v)_i + f_i + F_i(t), A_i' = -(K v)_i - (C a)_i + F_i'(t)
-//              over the full K(cfg), C(cfg) (a stuck row sees every mass).
+//              over the full K(cfg), C(cfg) (a stuck row sees every mass), f the
+//              segment's constant force (f_const plus the stuck sliders' preload)
+// slip_pos     k e - F_s, slip_neg -k e - F_s, e = x[a] - x[b] - s (s = x[n + j]), e' = w
+// slip_velocity w = v[a] - v[b], w' = a[a] - a[b]
 // scale is the sum of the terms' magnitudes (segment_solver.h).
 #pragma once
 
@@ -39,9 +42,44 @@ struct ConfigurationTerms {
     Eigen::VectorXd contact_gap;
     Eigen::VectorXd h_omega, h_phase;
     Eigen::MatrixXd h_amp;  ///< n x nh
+    std::vector<int> jenkins_a, jenkins_b;
+    Eigen::VectorXd jenkins_k, jenkins_fs;
 };
 
 ConfigurationTerms configuration_terms(const Model& model, const Configuration& cfg);
+
+/// The segment's constant force: f = f_const plus the preload k_j s_j of
+/// every Jenkins element stuck in cfg, s_j = x0[n + j] (kept in slider).
+inline void segment_force(const ConfigurationTerms& in, const Configuration& cfg, const double* x0, Eigen::VectorXd& f,
+                          Eigen::VectorXd& slider) {
+    f = in.f_const;
+    const std::size_t n = static_cast<std::size_t>(in.mass.size());
+    for (std::size_t j = 0; j < cfg.slip.size(); ++j) {
+        if (cfg.slip[j] != 0) continue;
+        const Eigen::Index jj = static_cast<Eigen::Index>(j);
+        slider(jj) = x0[n + j];
+        const double p = in.jenkins_k(jj) * slider(jj);
+        if (in.jenkins_a[j] != kGround) f(in.jenkins_a[j]) += p;
+        if (in.jenkins_b[j] != kGround) f(in.jenkins_b[j]) -= p;
+    }
+}
+
+/// out.x[n + j]: the slider of every Jenkins element, fixed while stuck,
+/// x[a] - x[b] - slip*F_s/k while slipping (after the masses' x are written).
+inline void write_sliders(const ConfigurationTerms& in, const Configuration& cfg, const Eigen::VectorXd& slider,
+                          const SegmentEval& out) {
+    const std::size_t n = static_cast<std::size_t>(in.mass.size());
+    for (std::size_t j = 0; j < cfg.slip.size(); ++j) {
+        const Eigen::Index jj = static_cast<Eigen::Index>(j);
+        if (cfg.slip[j] == 0) {
+            out.x[n + j] = slider(jj);
+            continue;
+        }
+        const int a = in.jenkins_a[j], b = in.jenkins_b[j];
+        out.x[n + j] = (a == kGround ? 0.0 : out.x[a]) - (b == kGround ? 0.0 : out.x[b]) -
+                       static_cast<double>(cfg.slip[j]) * (in.jenkins_fs(jj) / in.jenkins_k(jj));
+    }
+}
 
 /// e^w - 1 for complex w = x + iy without cancellation:
 /// Re = expm1(x) cos y - 2 sin^2(y/2), Im = e^x sin y.
@@ -53,9 +91,10 @@ inline std::complex<double> expm1c(std::complex<double> w) {
 
 /// g, g' and the size of g's terms; xmag, vmag the magnitudes of x and v,
 /// sn, cs the sine and cosine of every harmonic's phase at the instant.
-inline void switch_value(const SwitchFunction& sf, const ConfigurationTerms& in, const SegmentEval& out,
-                         const Eigen::VectorXd& xmag, const Eigen::VectorXd& vmag, const Eigen::VectorXd& sn,
-                         const Eigen::VectorXd& cs, double& g, double& dg, double& scale) {
+/// f: the segment's constant force (f_const plus add_slider_preload).
+inline void switch_value(const SwitchFunction& sf, const ConfigurationTerms& in, const Eigen::VectorXd& f,
+                         const SegmentEval& out, const Eigen::VectorXd& xmag, const Eigen::VectorXd& vmag,
+                         const Eigen::VectorXd& sn, const Eigen::VectorXd& cs, double& g, double& dg, double& scale) {
     auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
     auto body_mag = [](const Eigen::VectorXd& m, int b) { return b == kGround ? 0.0 : m(b); };
     const int e = sf.element;
@@ -72,7 +111,23 @@ inline void switch_value(const SwitchFunction& sf, const ConfigurationTerms& in,
         scale = vmag(e);
         return;
     }
-    double A = in.f_const(e), dA = 0.0, m = std::abs(in.f_const(e));
+    if (sf.kind == SwitchKind::slip_velocity) {
+        const int a = in.jenkins_a[static_cast<std::size_t>(e)], b = in.jenkins_b[static_cast<std::size_t>(e)];
+        g = body(out.v, a) - body(out.v, b);
+        dg = body(out.a, a) - body(out.a, b);
+        scale = body_mag(vmag, a) + body_mag(vmag, b);
+        return;
+    }
+    if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
+        const int a = in.jenkins_a[static_cast<std::size_t>(e)], b = in.jenkins_b[static_cast<std::size_t>(e)];
+        const double s = out.x[in.mass.size() + e], k = in.jenkins_k(e), F = in.jenkins_fs(e);
+        const double sg = sf.kind == SwitchKind::slip_pos ? 1.0 : -1.0;
+        g = sg * k * (body(out.x, a) - body(out.x, b) - s) - F;
+        dg = sg * k * (body(out.v, a) - body(out.v, b));
+        scale = k * (body_mag(xmag, a) + body_mag(xmag, b) + std::abs(s)) + F;
+        return;
+    }
+    double A = f(e), dA = 0.0, m = std::abs(f(e));
     for (Eigen::Index k = 0; k < in.K.cols(); ++k) {
         A -= in.K(e, k) * out.x[k] + in.C(e, k) * out.v[k];
         dA -= in.K(e, k) * out.v[k] + in.C(e, k) * out.a[k];

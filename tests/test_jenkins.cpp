@@ -1,0 +1,371 @@
+// Jenkins elements (interface.md section 5): a spring k in series with a
+// massless slider that slips at slip_force F_s, the slider's position s
+// carried as state after the masses' positions.
+//
+// The truths are closed forms written here, independent of the solvers: the
+// stuck phase is a linear oscillator with the element as a spring, the
+// slipping phase one with the constant force F_s; the switch instants follow
+// from k*stretch = F_s and from the relative velocity reaching 0. The energy
+// balance E = T + V_springs + (k/2) stretch^2 must drop by exactly F_s times
+// the slider's travel in each slip and not at all while stuck, which gives
+// the hysteresis loop's dissipation 4 F_s (a - F_s/k) per cycle.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "assembly.h"
+#include "cli_runner.h"
+#include "configuration.h"
+#include "engine.h"
+#include "error.h"
+#include "hsnc/periodic.h"
+#include "hsnc/simulate.h"
+#include "kernel_mode.h"
+#include "model_hash.h"
+#include "model_reader.h"
+#include "switch_function.h"
+
+namespace hsnc {
+namespace {
+
+struct Row {
+    double t;
+    EventKind kind;
+    int element;
+    std::vector<double> x, v;  ///< x: the masses', then the sliders
+};
+
+// Records every sample and event with the whole state (sliders included).
+class StateRecorder : public Observer {
+public:
+    explicit StateRecorder(const Model& m) : nx_(m.state_size()), n_(m.dof()) {}
+    void on_sample(double t, const double* x, const double* v) override {
+        samples.push_back({t, EventKind::stick, -1, {x, x + nx_}, {v, v + n_}});
+    }
+    void on_event(double t, EventKind kind, int element, const double* x, const double* v) override {
+        events.push_back({t, kind, element, {x, x + nx_}, {v, v + n_}});
+    }
+    std::vector<Row> samples, events;
+
+private:
+    std::size_t nx_, n_;
+};
+
+struct Outcome {
+    RunSummary summary;
+    std::vector<Row> samples, events;
+};
+
+Outcome run(const Model& model, double t_end, double dt = 0.0) {
+    GenericSolverProvider provider(model);
+    Engine engine(model, provider);
+    StateRecorder rec(model);
+    EngineOptions o;
+    o.t_end = t_end;
+    o.dt = dt;
+    Outcome r;
+    r.summary = engine.run(o, rec);
+    r.samples = std::move(rec.samples);
+    r.events = std::move(rec.events);
+    return r;
+}
+
+// One mass on a spring K to ground with a Jenkins element (k, F_s) to ground.
+Model mass_with_jenkins(double m, double K, double k, double Fs, double x0, double v0) {
+    Model md;
+    md.name = "jenkins-1dof";
+    md.masses.push_back({"m1", m, false, 0.0, 0.0});
+    if (K > 0) md.springs.push_back({0, kGround, K});
+    md.jenkins.push_back({"j1", 0, kGround, k, Fs});
+    md.load = {0.0};
+    md.x0 = {x0};
+    md.v0 = {v0};
+    return md;
+}
+
+// Stuck until k x = F_s, then slipping under -F_s until v = 0, then stuck:
+// both instants and states in closed form.
+TEST(JenkinsClosedForm, SlipsAtTheSlipForceAndSticksWhereTheVelocityVanishes) {
+    const double m = 1.0, K = 4.0, k = 16.0, Fs = 2.0, v0 = 3.0;
+    const double W = std::sqrt((K + k) / m), w = std::sqrt(K / m);
+    const double x1 = Fs / k, t1 = std::asin(x1 * W / v0) / W, v1 = v0 * std::cos(W * t1);
+    const double c = -Fs / K;  // the slipping phase's centre
+    const double tau2 = std::atan2(v1, (x1 - c) * w) / w, x2 = c + std::hypot(x1 - c, v1 / w);
+    const double t2 = t1 + tau2;
+    const Model md = mass_with_jenkins(m, K, k, Fs, 0.0, v0);
+    const Outcome r = run(md, t2 + 0.05, 0.01);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    ASSERT_EQ(r.events.size(), 2u);
+    EXPECT_EQ(r.events[0].kind, EventKind::release);
+    EXPECT_EQ(r.events[0].element, 1);  // dof() + 0: Model::friction_event_name
+    EXPECT_EQ(md.friction_event_name(r.events[0].element), "j1");
+    EXPECT_NEAR(r.events[0].t, t1, 1e-15);
+    EXPECT_NEAR(r.events[0].x[0], x1, 1e-15);
+    EXPECT_NEAR(r.events[0].v[0], v1, 1e-14);
+    EXPECT_EQ(r.events[0].x[1], 0.0);  // the slider has not moved while stuck
+    EXPECT_EQ(r.events[1].kind, EventKind::stick);
+    EXPECT_NEAR(r.events[1].t, t2, 1e-14);
+    EXPECT_NEAR(r.events[1].x[0], x2, 1e-14);
+    EXPECT_NEAR(r.events[1].x[1], x2 - Fs / k, 1e-14);  // stretch F_s/k kept through the slip
+    std::printf("release at %.17g (closed form %.17g), stick at %.17g (%.17g)\n", r.events[0].t, t1, r.events[1].t, t2);
+    // Every sample against the piecewise closed form, slider included.
+    double worst = 0.0;
+    for (const Row& s : r.samples) {
+        double x, sl;
+        if (s.t <= t1) {
+            x = v0 / W * std::sin(W * s.t), sl = 0.0;
+        } else if (s.t <= t2) {
+            const double tau = s.t - t1;
+            x = c + (x1 - c) * std::cos(w * tau) + v1 / w * std::sin(w * tau), sl = x - Fs / k;
+        } else {
+            const double s2 = x2 - Fs / k, xc = k * s2 / (K + k);  // stuck about the new slider
+            x = xc + (x2 - xc) * std::cos(W * (s.t - t2)), sl = s2;
+        }
+        worst = std::max({worst, std::fabs(s.x[0] - x), std::fabs(s.x[1] - sl)});
+    }
+    std::printf("max |x - closed form| over %zu samples: %.2g\n", r.samples.size(), worst);
+    EXPECT_LT(worst, 1e-14);
+    // The summary carries the slider.
+    ASSERT_EQ(r.summary.slider.size(), 1u);
+    EXPECT_NEAR(r.summary.slider[0], x2 - Fs / k, 1e-14);
+}
+
+// Two floating masses joined only by a Jenkins element: the relative motion is
+// the element on the reduced mass mu = m1 m2 / (m1 + m2) (a free pair of rigid
+// modes while it slips), the centre of mass moves uniformly.
+TEST(JenkinsClosedForm, BetweenTwoFloatingMasses) {
+    const double m1 = 1.0, m2 = 3.0, mu = m1 * m2 / (m1 + m2), k = 12.0, Fs = 1.5, w0 = 2.0;
+    const double W = std::sqrt(k / mu);
+    const double t1 = std::asin(Fs * W / (k * w0)) / W, w1 = w0 * std::cos(W * t1), t2 = t1 + mu * w1 / Fs;
+    Model md;
+    md.name = "jenkins-pair";
+    md.masses.push_back({"a", m1, false, 0.0, 0.0});
+    md.masses.push_back({"b", m2, false, 0.0, 0.0});
+    md.jenkins.push_back({"joint", 0, 1, k, Fs});
+    md.load = {0.0, 0.0};
+    md.x0 = {0.0, 0.0};
+    md.v0 = {w0, 0.0};
+    const double vcm = m1 * w0 / (m1 + m2);
+    const Outcome r = run(md, t2 + 0.3 / W, 0.02);  // before the stretch can come back to -F_s/k
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    ASSERT_EQ(r.events.size(), 2u);
+    EXPECT_EQ(r.events[0].kind, EventKind::release);
+    EXPECT_NEAR(r.events[0].t, t1, 1e-15);
+    EXPECT_EQ(r.events[1].kind, EventKind::stick);
+    EXPECT_NEAR(r.events[1].t, t2, 1e-14);
+    EXPECT_EQ(md.friction_event_name(r.events[1].element), "joint");
+    double worst = 0.0;
+    for (const Row& s : r.samples) {
+        // Centre of mass: uniform; relative coordinate: the 1-DOF closed form.
+        const double xcm = vcm * s.t;
+        double e, sl;
+        if (s.t <= t1) {
+            e = w0 / W * std::sin(W * s.t), sl = 0.0;
+        } else if (s.t <= t2) {
+            const double tau = s.t - t1;
+            e = Fs / k + w1 * tau - 0.5 * Fs / mu * tau * tau, sl = e - Fs / k;
+        } else {
+            const double s2 = Fs / k + 0.5 * mu * w1 * w1 / Fs - Fs / k;
+            e = s2 + Fs / k * std::cos(W * (s.t - t2)), sl = s2;
+        }
+        const double xa = xcm + m2 / (m1 + m2) * e, xb = xcm - m1 / (m1 + m2) * e;
+        worst = std::max({worst, std::fabs(s.x[0] - xa), std::fabs(s.x[1] - xb), std::fabs(s.x[2] - sl)});
+    }
+    std::printf("max |x - closed form| over %zu samples: %.2g\n", r.samples.size(), worst);
+    EXPECT_LT(worst, 1e-14);
+}
+
+// The energy of a mass on a spring K with a Jenkins element to ground.
+double energy(const Model& md, const Row& r) {
+    const Jenkins& j = md.jenkins[0];
+    const double stretch = r.x[0] - r.x[1];
+    return 0.5 * md.masses[0].m * r.v[0] * r.v[0] + 0.5 * md.springs[0].k * r.x[0] * r.x[0] +
+           0.5 * j.k * stretch * stretch;
+}
+
+// A heavy mass on a soft spring drives the element through a slow, nearly
+// harmonic relative motion: stuck, its energy is conserved; slipping, it drops
+// by F_s times the slider's travel; so each cycle of amplitude a dissipates
+// 4 F_s (a - F_s/k), the area of the hysteresis loop.
+TEST(JenkinsHysteresis, DissipationPerCycleIsTheLoopArea) {
+    // The loop's area per cycle, 4 F_s a = 0.4 J, against the energy K a^2/2 = 50 J.
+    const double M = 1e4, K = 1e4, k = 1000.0, Fs = 1.0, a0 = 0.1;
+    const Model md = mass_with_jenkins(M, K, k, Fs, 0.0, a0 * std::sqrt(K / M));
+    const double T = 2 * M_PI;
+    const Outcome r = run(md, 20 * T);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    ASSERT_GE(r.events.size(), 60u);
+    double worst_stuck = 0.0, worst_slip = 0.0, worst_cycle = 0.0;
+    std::size_t cycles = 0;
+    for (std::size_t i = 1; i < r.events.size(); ++i) {
+        const Row &p = r.events[i - 1], &q = r.events[i];
+        const double Ep = energy(md, p), Eq = energy(md, q);
+        if (p.kind == EventKind::stick) {  // stuck from p to q: conserved
+            ASSERT_EQ(q.kind, EventKind::release);
+            worst_stuck = std::max(worst_stuck, std::fabs(Eq - Ep) / Ep);
+        } else {  // slipping: F_s times the travel
+            ASSERT_EQ(q.kind, EventKind::stick);
+            const double lost = Fs * std::fabs(q.x[1] - p.x[1]);
+            worst_slip = std::max(worst_slip, std::fabs((Ep - Eq) - lost) / lost);
+        }
+        // One cycle: from a stick to the stick two slips later, against the
+        // loop area 4 F_s (a - F_s/k) with a the mean of its turning amplitudes
+        // (exact for a loop whose amplitude changes between half-cycles:
+        // F_s (|x_0| + 2|x_1| + |x_2| - 4 F_s/k)).
+        if (q.kind == EventKind::stick && i >= 4 && r.events[i - 4].kind == EventKind::stick) {
+            const Row &s0 = r.events[i - 4], &s1 = r.events[i - 2];
+            const double area = Fs * (std::fabs(s0.x[0]) + 2 * std::fabs(s1.x[0]) + std::fabs(q.x[0]) - 4 * Fs / k);
+            const double lost = energy(md, s0) - energy(md, q);
+            worst_cycle = std::max(worst_cycle, std::fabs(lost - area) / area);
+            const double a = std::fabs(s1.x[0]);
+            EXPECT_NEAR(lost, 4 * Fs * (a - Fs / k), 1e-3 * lost);  // the quasi-static loop
+            ++cycles;
+        }
+    }
+    std::printf("%zu events, %zu cycles: stuck energy drift %.2g, slip loss error %.2g, cycle loss error %.2g\n",
+                r.events.size(), cycles, worst_stuck, worst_slip, worst_cycle);
+    EXPECT_GE(cycles, 15u);
+    EXPECT_LT(worst_stuck, 1e-12);
+    EXPECT_LT(worst_slip, 1e-9);
+    EXPECT_LT(worst_cycle, 1e-9);
+}
+
+// Below the slip amplitude F_s/k the element is a spring: no event, no loss.
+TEST(JenkinsHysteresis, NoSlipAndNoLossBelowTheSlipAmplitude) {
+    const double M = 100.0, K = 100.0, k = 1000.0, Fs = 1.0, W = std::sqrt((K + k) / M);
+    const double amplitude = 0.9 * Fs / k;
+    const Model md = mass_with_jenkins(M, K, k, Fs, 0.0, amplitude * W);
+    const Outcome r = run(md, 50.0, 0.5);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    EXPECT_TRUE(r.events.empty());
+    double worst = 0.0;
+    for (const Row& s : r.samples) worst = std::max(worst, std::fabs(s.x[0] - amplitude * std::sin(W * s.t)));
+    EXPECT_LT(worst, 1e-16);
+}
+
+// ---- the model file, the facade and the command line ----
+
+const char* kModel = R"(name = "jenkins-test"
+[[mass]]
+name = "m1"
+m = 1.0
+[[spring]]
+between = ["ground", "m1"]
+k = 4.0
+[initial]
+v = { m1 = 3.0 }
+)";
+
+std::string input_error(const std::string& text) {
+    try {
+        parse_model(text, "j.toml");
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << "no error for:\n" << text;
+    return "";
+}
+
+TEST(JenkinsReader, KeysAndErrors) {
+    const Model md = parse_model(std::string(kModel) + "[[jenkins]]\nbetween = [\"m1\", \"ground\"]\nk = 16\nslip_force = 2\n",
+                                 "j.toml");
+    ASSERT_EQ(md.jenkins.size(), 1u);
+    EXPECT_EQ(md.jenkins[0].name, "jenkins1");
+    EXPECT_EQ(md.jenkins[0].a, 0);
+    EXPECT_EQ(md.jenkins[0].b, kGround);
+    EXPECT_EQ(md.jenkins[0].k, 16.0);
+    EXPECT_EQ(md.jenkins[0].slip_force, 2.0);
+    EXPECT_EQ(md.state_size(), 2u);
+    const std::string j = std::string(kModel) + "[[jenkins]]\nname = \"j1\"\nbetween = [\"m1\", \"ground\"]\n";
+    EXPECT_EQ(input_error(j + "slip_force = 2\n"), "j.toml:10: key 'jenkins[1].k': required key is missing");
+    EXPECT_EQ(input_error(j + "k = 16\n"), "j.toml:10: key 'jenkins[1].slip_force': required key is missing");
+    EXPECT_EQ(input_error(j + "k = 0\nslip_force = 2\n"), "j.toml:13: key 'jenkins[1].k': stiffness must be > 0, got 0");
+    EXPECT_EQ(input_error(j + "k = 16\nslip_force = -1\n"),
+              "j.toml:14: key 'jenkins[1].slip_force': must be > 0, got -1");
+    EXPECT_NE(input_error(j + "k = 16\nslip_force = 2\nmu = 1\n").find("jenkins[1]"), std::string::npos);
+    EXPECT_NE(input_error(std::string(kModel) + "[[jenkins]]\nname = \"m1\"\nbetween = [\"m1\", \"ground\"]\nk = 1\n"
+                                                "slip_force = 1\n")
+                  .find("key 'jenkins[1].name': name 'm1' is already used"),
+              std::string::npos);
+    EXPECT_NE(input_error(std::string(kModel) + "[[jenkins]]\nbetween = [\"m1\", \"m1\"]\nk = 1\nslip_force = 1\n")
+                  .find("key 'jenkins[1].between': connects 'm1' to itself"),
+              std::string::npos);
+    // The hash (kernel cache keys) and the configuration text see the elements.
+    const Model other = parse_model(j + "k = 16\nslip_force = 2.5\n", "j.toml");
+    EXPECT_NE(model_canonical_text(md), model_canonical_text(other));
+    Configuration cfg = Configuration::parse(other, "closed= stuck= slip=j1-");
+    EXPECT_EQ(cfg.slip, std::vector<signed char>{-1});
+    EXPECT_EQ(cfg.spec(other), "closed= stuck= slip=j1-");
+    EXPECT_EQ(cfg.key(), "c_s0_jn");
+    EXPECT_THROW(Configuration::parse(other, "slip=j1"), InputError);
+    EXPECT_EQ(switch_functions(other, cfg).size(), 1u);
+    EXPECT_EQ(switch_functions(other, Configuration::all_open(other)).size(), 2u);
+}
+
+TEST(JenkinsFacade, WhatCannotCarryTheSliderIsRefused) {
+    const Model md = mass_with_jenkins(1.0, 4.0, 16.0, 2.0, 0.0, 3.0);
+    SimulateOptions o;
+    o.t_end = 1.0;
+    for (KernelChoice k : {KernelChoice::aot, KernelChoice::jit, KernelChoice::interp}) {
+        o.kernels = k;
+        try {
+            simulate(md, o);
+            ADD_FAILURE() << "kernels " << kernel_choice_name(k) << " ran a model with a Jenkins element";
+        } catch (const OptionError& e) {
+            EXPECT_EQ(e.option(), "kernels");
+            EXPECT_NE(e.reason().find("Jenkins elements ([[jenkins]] 'j1')"), std::string::npos) << e.what();
+        }
+    }
+    o.kernels = KernelChoice::automatic;
+    o.method = Method::rk45;
+    EXPECT_THROW(simulate(md, o), OptionError);
+    o.method = Method::hsnc;
+    o.precision_digits = 30;
+    EXPECT_THROW(simulate(md, o), OptionError);
+    o.precision_digits = 0;
+    std::vector<std::size_t> events;
+    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::generic}) {
+        o.kernels = k;
+        const RunSummary s = simulate(md, o);
+        EXPECT_EQ(s.status, RunStatus::ok);
+        events.push_back(s.events);
+    }
+    EXPECT_GE(events[0], 2u);
+    EXPECT_EQ(events[0], events[1]);
+    PeriodicOptions po;
+    po.period = 1.0;
+    EXPECT_THROW(periodic(md, po), InputError);
+}
+
+TEST(JenkinsCli, EventsNameTheElementAndTheSliderIsTheLastColumn) {
+    const std::string model = testing::temp_path("jenkins-cli.toml"), events = testing::temp_path("jenkins-cli.csv");
+    std::ofstream(model) << kModel << "[[jenkins]]\nname = \"j1\"\nbetween = [\"m1\", \"ground\"]\nk = 16\nslip_force = 2\n";
+    const testing::CliRun ok = testing::run_hsnc("simulate " + model + " --t-end 1 --events " + events);
+    ASSERT_EQ(ok.exit_code, 0) << ok.err;
+    std::ifstream in(events);
+    std::string header, first, second;
+    std::getline(in, header);
+    std::getline(in, first);
+    std::getline(in, second);
+    EXPECT_EQ(header, "t,kind,element,x_m1,v_m1,s_j1");
+    EXPECT_NE(first.find(",release,j1,"), std::string::npos) << first;
+    EXPECT_NE(second.find(",stick,j1,"), std::string::npos) << second;
+    for (const char* flags : {"--kernels interp", "--method rk45", "--precision mp:30"}) {
+        const testing::CliRun bad = testing::run_hsnc("simulate " + model + " --t-end 1 " + flags);
+        EXPECT_EQ(bad.exit_code, 2) << flags << ": " << bad.err;
+        EXPECT_NE(bad.err.find("Jenkins elements"), std::string::npos) << bad.err;
+    }
+    for (const std::string cmd : {"periodic " + model + " --period 1", "inspect " + model + " --format cpp",
+                                  "generate " + model + " -o " + testing::temp_path("jenkins-gen")}) {
+        const testing::CliRun bad = testing::run_hsnc(cmd);
+        EXPECT_EQ(bad.exit_code, 2) << cmd << ": " << bad.err;
+        EXPECT_NE(bad.err.find("Jenkins elements"), std::string::npos) << cmd << ": " << bad.err;
+    }
+}
+
+}  // namespace
+}  // namespace hsnc
