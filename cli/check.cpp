@@ -87,6 +87,14 @@ void print_summary(const Model& model, std::ostream& out) {
                 << "  mu_k = " << num(f.mu_k) << "  mu_s = " << num(f.mu_s) << "  normal = " << num(f.normal) << "\n";
     }
 
+    if (!model.jenkins.empty()) {
+        out << "Jenkins elements: " << model.jenkins.size()
+            << "  (spring in series with a slider; stuck at t0, unstretched)\n";
+        for (const Jenkins& j : model.jenkins)
+            out << "  " << j.name << "  between " << body_name(model, j.a) << " and " << body_name(model, j.b)
+                << "  k = " << num(j.k) << "  slip_force = " << num(j.slip_force)
+                << "  (slips at a stretch of " << num(j.slip_force / j.k) << ")\n";
+    }
     out << "forcing harmonics: " << model.forcing.size() << "\n";
     for (const Harmonic& h : model.forcing) out << "  omega = " << num(h.omega) << " rad/s  phase = " << num(h.phase) << "\n";
     out << "damping: alpha = " << num(model.alpha) << "  beta = " << num(model.beta) << "\n";
@@ -113,7 +121,8 @@ void print_damped_modes(const Model& model, std::ostream& out) {
         return;
     }
     const StateSpaceSolver& s = *solver;
-    out << "damped modes (all contacts open, all masses sliding; eigenvalues of the state matrix):\n";
+    out << "damped modes (all contacts open, all masses sliding" << (model.jenkins.empty() ? "" : ", Jenkins elements stuck")
+        << "; eigenvalues of the state matrix):\n";
     out << "  mode  Re lambda [1/s]  Im lambda [rad/s]  |lambda| [rad/s]  xi\n";
     int j = 0;
     for (const std::complex<double>& l : s.damped_modes()) {
@@ -126,7 +135,8 @@ void print_damped_modes(const Model& model, std::ostream& out) {
 
 void print_modes(const Model& model, std::ostream& out) {
     const ModalDecomposition modes = modal_analysis(model, Configuration::all_open(model));
-    out << "natural frequencies (all contacts open, all masses sliding; eigenvalues of (K, M)):\n";
+    out << "natural frequencies (all contacts open, all masses sliding" << (model.jenkins.empty() ? "" : ", Jenkins elements stuck")
+        << "; eigenvalues of (K, M)):\n";
     out << "  mode  omega_n [rad/s]  f [Hz]  xi\n";
     int rigid = 0;
     for (Eigen::Index j = 0; j < modes.lambda.size(); ++j) {

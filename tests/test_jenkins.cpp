@@ -247,6 +247,83 @@ TEST(JenkinsHysteresis, NoSlipAndNoLossBelowTheSlipAmplitude) {
     EXPECT_LT(worst, 1e-16);
 }
 
+// Two independent solvers on one model with every kind of switch: the modal
+// GenericSolver with Rayleigh alpha, and the StateSpaceSolver with alpha
+// written as dampers alpha*m_i to ground (no code in common but the switch
+// values and the engine). A chain with a contact, a friction mass, a
+// Jenkins element between two masses and one to ground, forced.
+TEST(JenkinsEquivalence, ModalAndStateSpaceSolversAgree) {
+    const char* text = R"(name = "jenkins-chain"
+[[mass]]
+name = "m1"
+m = 1.0
+[[mass]]
+name = "m2"
+m = 0.7
+mu_k = 0.05
+mu_s = 0.08
+[[mass]]
+name = "m3"
+m = 1.3
+[[spring]]
+between = ["ground", "m1"]
+k = 40.0
+[[spring]]
+between = ["m1", "m2"]
+k = 25.0
+[[spring]]
+between = ["m2", "m3"]
+k = 30.0
+[[jenkins]]
+name = "joint"
+between = ["m1", "m2"]
+k = 60.0
+slip_force = 0.8
+[[jenkins]]
+name = "root"
+between = ["m3", "ground"]
+k = 80.0
+slip_force = 1.2
+[[contact]]
+name = "stop"
+between = ["m3", "ground"]
+gap = 0.06
+k = 500.0
+[damping]
+alpha = 0.2
+[[forcing]]
+omega = 5.5
+amplitude = { m1 = 3.0 }
+)";
+    const Model prop = parse_model(text, "jenkins-chain.toml");
+    Model dmp = prop;
+    for (std::size_t i = 0; i < dmp.dof(); ++i)
+        dmp.dampers.push_back({static_cast<int>(i), kGround, prop.alpha * prop.masses[i].m});
+    dmp.alpha = 0.0;
+    const double t_end = 30.0;
+    const Outcome a = run(prop, t_end), b = run(dmp, t_end);
+    ASSERT_EQ(a.summary.status, RunStatus::ok) << a.summary.message;
+    ASSERT_EQ(b.summary.status, RunStatus::ok) << b.summary.message;
+    ASSERT_EQ(a.events.size(), b.events.size());
+    std::size_t jenkins = 0, others = 0;
+    double dt = 0.0, dx = 0.0;
+    for (std::size_t e = 0; e < a.events.size(); ++e) {
+        ASSERT_EQ(a.events[e].kind, b.events[e].kind) << "event " << e;
+        ASSERT_EQ(a.events[e].element, b.events[e].element) << "event " << e;
+        const bool contact = a.events[e].kind == EventKind::contact_close || a.events[e].kind == EventKind::contact_open;
+        (!contact && a.events[e].element >= static_cast<int>(prop.dof()) ? jenkins : others) += 1;
+        dt = std::max(dt, std::fabs(a.events[e].t - b.events[e].t));
+        for (std::size_t i = 0; i < prop.state_size(); ++i)
+            dx = std::max(dx, std::fabs(a.events[e].x[i] - b.events[e].x[i]));
+    }
+    std::printf("%zu events (%zu of the Jenkins elements) over %g s: modal vs state-space max |dt| %.2g s, |dx| %.2g m\n",
+                a.events.size(), jenkins, t_end, dt, dx);
+    EXPECT_GE(jenkins, 20u);
+    EXPECT_GE(others, 10u);
+    EXPECT_LT(dt, 1e-10);
+    EXPECT_LT(dx, 1e-10);
+}
+
 // ---- the model file, the facade and the command line ----
 
 const char* kModel = R"(name = "jenkins-test"
@@ -365,6 +442,36 @@ TEST(JenkinsCli, EventsNameTheElementAndTheSliderIsTheLastColumn) {
         EXPECT_EQ(bad.exit_code, 2) << cmd << ": " << bad.err;
         EXPECT_NE(bad.err.find("Jenkins elements"), std::string::npos) << cmd << ": " << bad.err;
     }
+}
+
+// The bundled friction damper settles on one loop: its area per cycle (the
+// trapezoid sum of F dx over the last seven periods of a dense trajectory, from the
+// CSV's s_damper column) is 4 F_s (a - F_s/k).
+TEST(JenkinsCli, TheBundledFrictionDamperRunsTheLoop) {
+    const std::string model = std::string(HSNC_SOURCE_DIR) + "/examples/jenkins/friction_damper.toml";
+    const std::string csv = testing::temp_path("jenkins-damper.csv");
+    const testing::CliRun r = testing::run_hsnc("simulate " + model + " --dt 0.0005 --out " + csv);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::ifstream in(csv);
+    std::string line;
+    std::getline(in, line);
+    ASSERT_EQ(line, "t,x_airfoil,x_platform,v_airfoil,v_platform,s_damper");
+    const double k = 400.0, Fs = 5.0, T = 2 * M_PI / 10.0, to = 40.0, from = to - 7 * T;  // seven whole periods
+    double area = 0.0, lo = 0.0, hi = 0.0, px = 0.0, pf = 0.0;
+    bool first = true;
+    while (std::getline(in, line)) {
+        double t, xa, xp, va, vp, sl;
+        ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf", &t, &xa, &xp, &va, &vp, &sl), 6);
+        if (t < from) continue;
+        const double F = k * (xp - sl);
+        EXPECT_LE(std::fabs(F), Fs * (1 + 1e-12)) << "t = " << t;  // never beyond the slip force
+        if (!first) area += 0.5 * (F + pf) * (xp - px);
+        lo = std::min(lo, xp), hi = std::max(hi, xp), px = xp, pf = F, first = false;
+    }
+    const double a = 0.5 * (hi - lo), cycles = 7.0;
+    std::printf("amplitude %.6g m, loop area per cycle %.6g J, 4 F_s (a - F_s/k) = %.6g J\n", a, area / cycles,
+                4 * Fs * (a - Fs / k));
+    EXPECT_NEAR(area / cycles, 4 * Fs * (a - Fs / k), 1e-3 * area / cycles);
 }
 
 }  // namespace
