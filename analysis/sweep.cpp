@@ -91,7 +91,6 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     SweepOptions& o = options_;
     // The model as given (parameters at the file's values): names, checks.
     model_ = parse_model(text, source, overrides);
-    require_no_jenkins(model_, kPlan);  // each point continues from the last point's (x, v): no slider state
     if (o.param.empty()) throw OptionError(kPlan, "param", "''", "required: the parameter to sweep");
     if (!has_parameter(model_, o.param))
         throw OptionError(kPlan, "param", o.param, "no parameter named '" + o.param + "' in " + source);
@@ -141,6 +140,15 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
             throw OptionError(kPlan, "max_steps", std::to_string(o.max_steps), "must be <= 1e8");
     } else if (o.max_steps != 0) {
         throw OptionError(kPlan, "max_steps", std::to_string(o.max_steps), "only with continuation");
+    }
+    // Jenkins elements: the points carry their sliders (State::slider), on the
+    // exact method; the shooting of a continuation has no slider state yet.
+    if (!model_.jenkins.empty()) {
+        const std::string why = "the model has Jenkins elements ([[jenkins]] '" + model_.jenkins[0].name + "'), ";
+        if (o.method != Method::hsnc)
+            throw OptionError(kPlan, "method", method_name(o.method), why + "which only method hsnc runs, for now");
+        if (o.continuation)
+            throw OptionError(kPlan, "continuation", "true", why + "which the continuation does not take yet");
     }
     if (o.threads == 0) o.threads = std::max(1u, std::thread::hardware_concurrency());
 
@@ -294,6 +302,7 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const 
         const Model& first = point_model(task.line, value_index(task.first));
         state.x = first.x0;
         state.v = first.v0;
+        state.slider = first.slider0;
     }
     std::vector<SweepPoint> out;
     out.reserve(task.count);
@@ -304,6 +313,7 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const 
         if (options_.restart_each) {
             state.x = m.x0;
             state.v = m.v0;
+            state.slider = m.slider0;
         }
         const std::string what = options_.param + " = " + short_num(values_[j]) + where;
         const auto t0 = std::chrono::steady_clock::now();

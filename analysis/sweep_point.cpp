@@ -57,9 +57,10 @@ struct Accumulator {
 class SegmentRecorder {
 public:
     SegmentRecorder(const Model& model, double omega, double t_window, double h, Accumulator& acc)
-        : provider_(model), n_(model.dof()), omega_(omega), t_window_(t_window), h_(h), acc_(acc) {
-        const std::size_t ns = model.contacts.size() + 2 * n_;
-        x_.resize(n_);
+        : provider_(model), n_(model.dof()), nx_(model.state_size()), omega_(omega), t_window_(t_window), h_(h),
+          acc_(acc) {
+        const std::size_t ns = model.max_switches();
+        x_.resize(nx_);
         v_.resize(n_);
         a_.resize(n_);
         g_.resize(ns);
@@ -75,7 +76,7 @@ public:
         cfg_ = cfg;
         t_ = t;
         t_lo_ = t_lo;
-        x0_.assign(x, x + n_);
+        x0_.assign(x, x + nx_);  // the sliders too
         v0_.assign(v, v + n_);
         sgn_.assign(sgn, sgn + n_);
     }
@@ -158,7 +159,7 @@ private:
     }
 
     GenericSolverProvider provider_;
-    std::size_t n_;
+    std::size_t n_, nx_;
     double omega_, t_window_, h_;
     Accumulator& acc_;
     bool pending_ = false;
@@ -283,12 +284,15 @@ private:
 double magnitude(const State& a, double omega) {
     double mag = 0;
     for (std::size_t i = 0; i < a.x.size(); ++i) mag = std::max({mag, std::fabs(a.x[i]), std::fabs(a.v[i]) / omega});
+    for (double s : a.slider) mag = std::max(mag, std::fabs(s));
     return mag;
 }
 double distance(const State& a, const State& b, double omega) {
     double diff = 0;
     for (std::size_t i = 0; i < a.x.size(); ++i)
         diff = std::max({diff, std::fabs(a.x[i] - b.x[i]), std::fabs(a.v[i] - b.v[i]) / omega});
+    for (std::size_t j = 0; j < a.slider.size() && j < b.slider.size(); ++j)
+        diff = std::max(diff, std::fabs(a.slider[j] - b.slider[j]));
     return diff;
 }
 // |a - b| <= tol |a|.
@@ -327,6 +331,7 @@ void advance(Model& m, State& state, const SweepOptions& o, const std::string& w
     m.t0 = ta;
     m.x0 = state.x;
     m.v0 = state.v;
+    m.slider0 = state.slider;
     EngineOptions eo;
     eo.t_end = tb;
     eo.dt = dt;
@@ -342,6 +347,7 @@ void advance(Model& m, State& state, const SweepOptions& o, const std::string& w
         throw RunError("sweep: " + what + ": the run stopped: " + run_status_name(s.status) + ": " + s.message);
     state.x = s.x;
     state.v = s.v;
+    state.slider = s.slider;
 }
 
 }  // namespace

@@ -14,6 +14,7 @@ namespace hsnc::sweep_detail {
 /// The state a sweep carries from point to point.
 struct State {
     std::vector<double> x, v;
+    std::vector<double> slider;  ///< Jenkins sliders' positions (empty: unstretched, Model::slider0)
 };
 
 /// Runs one point of `model` (its parameters at the point's values; its

@@ -139,6 +139,10 @@ struct Model {
     double t0 = 0.0;
     std::vector<double> x0;  ///< initial positions, one per mass
     std::vector<double> v0;  ///< initial velocities, one per mass
+    /// Initial slider positions, one per Jenkins element, or empty: at rest,
+    /// unstretched (s = x0[a] - x0[b], interface.md). Set by runs that
+    /// continue from another run's end state (a sweep's points).
+    std::vector<double> slider0;
 
     std::optional<double> t_end;  ///< [simulate].t_end
 
@@ -159,6 +163,8 @@ struct Model {
     std::size_t dof() const { return masses.size(); }
     /// Positions the engine carries: the masses', then every Jenkins slider's.
     std::size_t state_size() const { return masses.size() + jenkins.size(); }
+    /// The most switch functions a configuration has (switch_function.h).
+    std::size_t max_switches() const { return contacts.size() + 2 * masses.size() + 2 * jenkins.size(); }
     /// C = alpha*M + beta*K(cfg) exactly: no dampers. Only then are the modes
     /// of K those of the damped system (the derivation, kernels, interpreter,
     /// reference and tangent need it; the state-space solver does not).

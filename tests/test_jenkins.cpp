@@ -11,7 +11,11 @@
 // the hysteresis loop's dissipation 4 F_s (a - F_s/k) per cycle.
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
+
 #include <cmath>
+#include <complex>
+#include <iterator>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -24,6 +28,7 @@
 #include "error.h"
 #include "hsnc/periodic.h"
 #include "hsnc/simulate.h"
+#include "hsnc/sweep.h"
 #include "kernel_mode.h"
 #include "model_hash.h"
 #include "model_reader.h"
@@ -322,6 +327,53 @@ amplitude = { m1 = 3.0 }
     EXPECT_GE(others, 10u);
     EXPECT_LT(dt, 1e-10);
     EXPECT_LT(dx, 1e-10);
+}
+
+// A response curve of the bundled friction damper: from the slipping
+// resonance up to where it stays stuck. There the steady state is linear,
+// the element a spring, so the first harmonic of each mass is
+// |(K_stuck - W^2 M + i W C)^-1 F| whatever slider offset the slips before
+// left; the points carry the slider (it is not reset to unstretched).
+TEST(JenkinsSweep, StuckPointsFollowTheLinearResponseWithTheSliderCarried) {
+    std::string text;
+    {
+        std::ifstream in(std::string(HSNC_SOURCE_DIR) + "/examples/jenkins/friction_damper.toml");
+        text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    SweepOptions o;
+    o.param = "omega";
+    o.from = 9.0;
+    o.to = 15.0;
+    o.points = 7;
+    o.max_periods = 3000;
+    const SweepResult r = SweepPlan(text, "friction_damper.toml", {}, o).run();
+    const Model m = parse_model(text, "friction_damper.toml");
+    const Configuration stuck = Configuration::all_open(m);  // every Jenkins element stuck
+    const Eigen::MatrixXd K = stiffness_matrix(m, stuck), C = damping_matrix(m, stuck);
+    const Eigen::VectorXd M = mass_vector(m);
+    ASSERT_EQ(r.points.size(), 7u);
+    double worst = 0.0, offset = 0.0;
+    std::size_t linear = 0;
+    for (const SweepPoint& p : r.points) {
+        SCOPED_TRACE("omega = " + std::to_string(p.value));
+        EXPECT_TRUE(p.settled);
+        if (p.value < 12.5) continue;  // slipping there (a loop each period)
+        ++linear;
+        const double W = p.value;
+        Eigen::MatrixXcd H = K.cast<std::complex<double>>();
+        for (int i = 0; i < 2; ++i) H(i, i) -= W * W * M(i);
+        H += std::complex<double>(0.0, W) * C.cast<std::complex<double>>();
+        const Eigen::VectorXcd X = H.partialPivLu().solve(2.0 * Eigen::VectorXcd::Unit(2, 0));  // 2 N on the airfoil
+        for (int i = 0; i < 2; ++i) {
+            worst = std::max(worst, std::fabs(p.a1[static_cast<std::size_t>(i)] / std::abs(X(i)) - 1.0));
+            offset = std::max(offset, p.xmax[static_cast<std::size_t>(i)] - std::abs(X(i)));
+        }
+    }
+    std::printf("%zu stuck points: first harmonic against the linear response %.2g relative; "
+                "the slips before left an offset of up to %.3g m\n", linear, worst, offset);
+    EXPECT_EQ(linear, 3u);
+    EXPECT_LT(worst, 1e-8);
+    EXPECT_GT(offset, 1e-4);  // the slider kept where it last stuck, so x is offset: it was carried
 }
 
 // ---- the model file, the facade and the command line ----

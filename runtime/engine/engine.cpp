@@ -109,9 +109,12 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     // The state: positions of the masses, then of the Jenkins sliders (at rest,
     // unstretched at t0: s = x[a] - x[b]), and the masses' velocities.
     std::vector<double> x = model_.x0, v = model_.v0;
-    for (const Jenkins& j : model_.jenkins)
-        x.push_back((j.a == kGround ? 0.0 : x[static_cast<std::size_t>(j.a)]) -
-                    (j.b == kGround ? 0.0 : x[static_cast<std::size_t>(j.b)]));
+    if (model_.slider0.size() == model_.jenkins.size())
+        x.insert(x.end(), model_.slider0.begin(), model_.slider0.end());
+    else
+        for (const Jenkins& j : model_.jenkins)
+            x.push_back((j.a == kGround ? 0.0 : x[static_cast<std::size_t>(j.a)]) -
+                        (j.b == kGround ? 0.0 : x[static_cast<std::size_t>(j.b)]));
     double t = model_.t0;
     // The segment start is the double-double t + t_lo: t is the representable
     // time that events report, t_lo (|t_lo| <= ulp(t)/2) the rounding of the
@@ -132,7 +135,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     Configuration cfg = entered_configuration(model_, t, x.data(), v.data(), sgn);  // stuck only where v = 0
 
     // Per-segment working arrays, sized once for the largest switch list.
-    const std::size_t max_switches = model_.contacts.size() + 2 * n + 2 * model_.jenkins.size();
+    const std::size_t max_switches = model_.max_switches();
     Buffers buf(x.size(), n, max_switches);
     Buffers dense(x.size(), n, max_switches);  // trajectory samples, so buf keeps the event state
     std::set<Configuration> visited;
