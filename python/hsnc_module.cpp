@@ -47,12 +47,16 @@ constexpr EventKind kKinds[] = {EventKind::contact_close, EventKind::contact_ope
 // Collects a run; checks for signals with the GIL taken briefly.
 class Collector : public Observer {
 public:
-    explicit Collector(std::size_t n) : n_(n), last_check_(std::chrono::steady_clock::now()) {}
+    /// nj: Jenkins sliders recorded after the masses' x (0: none; an observer
+    /// of the analyses' flows, whose x has the masses only).
+    explicit Collector(std::size_t n, std::size_t nj = 0)
+        : n_(n), nj_(nj), last_check_(std::chrono::steady_clock::now()) {}
 
     void on_sample(double t, const double* x, const double* v) override {
         t_.push_back(t);
         x_.insert(x_.end(), x, x + n_);
         v_.insert(v_.end(), v, v + n_);
+        s_.insert(s_.end(), x + n_, x + n_ + nj_);
         // A run with few switches calls on_progress rarely: samples check too.
         if ((++samples_ & 1023) == 0) interrupted_ = interrupted_ || !check_signals();
     }
@@ -62,14 +66,15 @@ public:
         eelement_.push_back(element);
         ex_.insert(ex_.end(), x, x + n_);
         ev_.insert(ev_.end(), v, v + n_);
+        es_.insert(es_.end(), x + n_, x + n_ + nj_);
     }
     bool on_progress(double) override { return !interrupted_ && check_signals(); }
 
     bool interrupted() const { return interrupted_; }
 
-    std::size_t n_;
-    std::vector<double> t_, x_, v_;
-    std::vector<double> et_, ex_, ev_;
+    std::size_t n_, nj_;
+    std::vector<double> t_, x_, v_, s_;
+    std::vector<double> et_, ex_, ev_, es_;
     std::vector<int> ekind_, eelement_;
 
 private:
@@ -145,7 +150,8 @@ py::dict run(const Model& model, double t_end, double dt, const std::string& met
     o.cache_dir = cache_dir;
     o.use_cache = use_cache;
     const std::size_t n = model.dof();
-    Collector c(n);
+    const std::size_t nj = model.jenkins.size();
+    Collector c(n, nj);
     SimulateSummary s;
     {
         py::gil_scoped_release nogil;
@@ -188,6 +194,9 @@ py::dict run(const Model& model, double t_end, double dt, const std::string& met
     }
     summary["x"] = x_end;
     summary["v"] = v_end;
+    py::dict slider_end;
+    for (std::size_t j = 0; j < nj && j < s.slider.size(); ++j) slider_end[py::str(model.jenkins[j].name)] = s.slider[j];
+    summary["slider"] = slider_end;
 
     py::dict out;
     out["t"] = vector(c.t_);
@@ -198,6 +207,8 @@ py::dict run(const Model& model, double t_end, double dt, const std::string& met
     out["event_element"] = elements;
     out["event_x"] = matrix(c.ex_, ne, n);
     out["event_v"] = matrix(c.ev_, ne, n);
+    out["s"] = matrix(c.s_, c.t_.size(), nj);
+    out["event_s"] = matrix(c.es_, ne, nj);
     out["summary"] = summary;
     return out;
 }
@@ -362,6 +373,12 @@ PYBIND11_MODULE(_hsnc, m) {
                                [](const Model& mo) {
                                    std::vector<std::string> names;
                                    for (const Mass& ms : mo.masses) names.push_back(ms.name);
+                                   return names;
+                               })
+        .def_property_readonly("jenkins",
+                               [](const Model& mo) {
+                                   std::vector<std::string> names;
+                                   for (const Jenkins& j : mo.jenkins) names.push_back(j.name);
                                    return names;
                                })
         .def_property_readonly("contacts",

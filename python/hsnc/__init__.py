@@ -76,33 +76,42 @@ class Result:
     sample; `events`, a NumPy record array with fields t, kind, element, x,
     v (x and v of length n_mass: the state at the switch); `summary`, a dict
     (status, t, events, counts per kind, segments, evaluations,
-    configurations, solver, x and v at the end by mass name, ...); `masses`
-    names the columns of x and v."""
+    configurations, solver, x and v at the end by mass name, slider by
+    Jenkins element, ...); `masses` names the columns of x and v. A model
+    with Jenkins elements also gives `s` (N, n_jenkins), their sliders'
+    positions, named by `jenkins` (events gain the field s too)."""
 
-    def __init__(self, t, x, v, events, summary, masses):
+    def __init__(self, t, x, v, events, summary, masses, s=None, jenkins=()):
         self.t = t
         self.x = x
         self.v = v
         self.events = events
         self.summary = summary
         self.masses = masses
+        self.s = s if s is not None else np.zeros((len(t), 0))
+        self.jenkins = list(jenkins)
 
     def __repr__(self):
         return "<hsnc.Result status=%s t=%r: %d samples, %d events>" % (
             self.summary["status"], self.summary["t"], len(self.t), len(self.events))
 
 
-def _events(raw, n):
+def _events(raw, n, nj=0):
     kinds, elements = raw["event_kind"], raw["event_element"]
     width = lambda names: max([1] + [len(s) for s in names])
-    dtype = np.dtype([("t", "f8"), ("kind", "U%d" % width(kinds)), ("element", "U%d" % width(elements)),
-                      ("x", "f8", (n,)), ("v", "f8", (n,))])
+    fields = [("t", "f8"), ("kind", "U%d" % width(kinds)), ("element", "U%d" % width(elements)),
+              ("x", "f8", (n,)), ("v", "f8", (n,))]
+    if nj:
+        fields.append(("s", "f8", (nj,)))
+    dtype = np.dtype(fields)
     events = np.zeros(len(kinds), dtype=dtype)
     events["t"] = raw["event_t"]
     events["kind"] = kinds
     events["element"] = elements
     events["x"] = raw["event_x"]
     events["v"] = raw["event_v"]
+    if nj:
+        events["s"] = raw["event_s"]
     return events.view(np.recarray)
 
 
@@ -140,8 +149,9 @@ def simulate(model, t_end=None, dt=None, method="hsnc", kernels="auto", precisio
     raw = _hsnc._simulate(model._native, _number("t_end", t_end), _number("dt", dt), str(method), str(kernels), str(precision),
                     max_events, _number("h", h), _number("rtol", rtol), _number("atol", atol), str(cache_dir),
                     bool(use_cache))
-    masses = model.masses
-    return Result(raw["t"], raw["x"], raw["v"], _events(raw, len(masses)), raw["summary"], masses)
+    masses, jenkins = model.masses, model.jenkins
+    return Result(raw["t"], raw["x"], raw["v"], _events(raw, len(masses), len(jenkins)), raw["summary"], masses,
+                  raw["s"], jenkins)
 
 
 def generate(model, directory):

@@ -92,3 +92,31 @@ def test_a_model_with_a_dashpot_runs_on_state_space_modes(tmp_path):
         assert False, "interp ran a model with dampers"
     except hsnc.InputError as e:
         assert "non-proportional damping" in str(e)
+
+
+def test_a_model_with_a_jenkins_element_gives_its_slider(tmp_path):
+    """[[jenkins]] from Python: the bundled friction damper runs as on the
+    command line, the events name the element, and the sliders come as
+    Result.s (the CSV's s_<name> column) and events.s."""
+    path = model_path("../examples/jenkins/friction_damper.toml")  # models/../examples
+    model = hsnc.Model.from_file(path)
+    assert model.jenkins == ["damper"]
+    r = hsnc.simulate(model, t_end=5.0, dt=0.01)
+    assert r.jenkins == ["damper"]
+    assert r.s.shape == (len(r.t), 1)
+    assert set(r.events.element) == {"damper"}
+    assert set(r.events.kind) == {"release", "stick"}
+    cli = tmp_path / "trajectory.csv"
+    run_cli("simulate", path, "--t-end", "5", "--dt", "0.01", "--out", cli)
+    lines = cli.read_text().splitlines()
+    assert lines[0].endswith(",s_damper")
+    assert [float(row.split(",")[-1]) for row in lines[1:]] == list(r.s[:, 0])
+    assert r.summary["slider"]["damper"] == r.s[-1, 0]
+    # At every event the damper's force k (x_platform - s) is at +-slip_force.
+    force = 400.0 * (r.events.x[:, 1] - r.events.s[:, 0])
+    assert max(abs(abs(force) - 5.0)) < 1e-12
+    try:
+        hsnc.simulate(model, t_end=1.0, kernels="interp")
+        assert False, "interp ran a model with a Jenkins element"
+    except hsnc.InputError as e:
+        assert "Jenkins elements" in str(e)
