@@ -376,6 +376,45 @@ TEST(JenkinsSweep, StuckPointsFollowTheLinearResponseWithTheSliderCarried) {
     EXPECT_GT(offset, 1e-4);  // the slider kept where it last stuck, so x is offset: it was carried
 }
 
+// The bundled under-platform damper: two identical blades forced out of
+// phase, the damper mass between their platforms through two Jenkins
+// contacts. The motion is antisymmetric (x_airfoil2 = -x_airfoil1, the
+// damper mass at rest), so both contacts release and stick at the same
+// instants: two elements switching together, hundreds of times. (A stick
+// comes at the root of each contact's relative velocity, found apart: the
+// two are apart by the rounding of the state over the relative acceleration.)
+TEST(JenkinsSymmetry, TheUnderPlatformDamperStaysAntisymmetric) {
+    ModelOverrides set;
+    set.set = {"omega=8.3"};
+    const Model md = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/jenkins/under_platform_damper.toml", set);
+    const Outcome r = run(md, 40.0, 0.01);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    const int a1 = md.mass_index("airfoil1"), a2 = md.mass_index("airfoil2"), p1 = md.mass_index("platform1"),
+              p2 = md.mass_index("platform2"), d = md.mass_index("damper");
+    double asym = 0.0, damper = 0.0, amplitude = 0.0;
+    for (const Row& s : r.samples) {
+        asym = std::max({asym, std::fabs(s.x[a1] + s.x[a2]), std::fabs(s.x[p1] + s.x[p2])});
+        damper = std::max(damper, std::fabs(s.x[d]));
+        amplitude = std::max(amplitude, std::fabs(s.x[a1]));
+    }
+    // Events come in pairs, one per contact, of the same kind, at one instant to rounding.
+    std::size_t pairs = 0;
+    double apart = 0.0;
+    for (std::size_t e = 0; e + 1 < r.events.size(); e += 2) {
+        apart = std::max(apart, r.events[e + 1].t - r.events[e].t);
+        ASSERT_LT(r.events[e + 1].t - r.events[e].t, 1e-11) << "event " << e;
+        ASSERT_EQ(r.events[e].kind, r.events[e + 1].kind) << "event " << e;
+        ASSERT_NE(r.events[e].element, r.events[e + 1].element) << "event " << e;
+        ++pairs;
+    }
+    std::printf("%zu event pairs over 40 s, at most %.2g s apart: |x1 + x2| <= %.2g, |x_damper| <= %.2g m of an "
+                "amplitude %.3g m\n", pairs, apart, asym, damper, amplitude);
+    EXPECT_EQ(r.events.size() % 2, 0u);
+    EXPECT_GE(pairs, 100u);
+    EXPECT_LT(asym, 1e-12);  // measured 6.4e-14 m
+    EXPECT_LT(damper, 1e-12);  // measured 7e-14 m
+}
+
 // ---- the model file, the facade and the command line ----
 
 const char* kModel = R"(name = "jenkins-test"
