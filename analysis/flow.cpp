@@ -11,8 +11,8 @@
 namespace hsnc::analysis {
 
 Flow::Flow(const Model& model, const FlowKernels& k, const char* function) : work_(model) {
-    // The flow's state is the masses' (x, v): a Jenkins slider is state it does not carry yet.
-    require_no_jenkins(work_, function);
+    // The flow's state is the masses' (x, v): no Jenkins slider, no stuck pair (its tangent), yet.
+    require_derivable(work_, function);
     if (k.kernels == KernelChoice::aot && !has_aot_kernels(work_, &aot_registry()))
         throw OptionError(function, "kernels", "aot", "no ahead-of-time kernels for model '" + work_.name + "'");
     SimulateOptions o;

@@ -143,8 +143,8 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     }
     // Jenkins elements: the points carry their sliders (State::slider), on the
     // exact method; the shooting of a continuation has no slider state yet.
-    if (!model_.jenkins.empty()) {
-        const std::string why = "the model has Jenkins elements ([[jenkins]] '" + model_.jenkins[0].name + "'), ";
+    if (const std::string what = generic_only(model_); !what.empty()) {
+        const std::string why = "the model has " + what + ", ";
         if (o.method != Method::hsnc)
             throw OptionError(kPlan, "method", method_name(o.method), why + "which only method hsnc runs, for now");
         if (o.continuation)

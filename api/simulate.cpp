@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "aot_registry.h"
+#include "assembly.h"
 #include "cached_kernel_provider.h"
 #include "derivation.h"
 #include "emitter.h"
@@ -110,9 +111,8 @@ void check_options(const Model& model, const SimulateOptions& o) {
     }
     // Jenkins elements: their slider is state the engine carries and the generic
     // solvers read; the derivation, the reference and the integrators do not, yet.
-    if (!model.jenkins.empty()) {
-        const std::string jenkins = "the model has Jenkins elements ([[jenkins]] '" + model.jenkins[0].name +
-                                    "'), which run on hsnc's generic solver only, for now";
+    if (const std::string what = generic_only(model); !what.empty()) {
+        const std::string jenkins = "the model has " + what + ", which runs on hsnc's generic solver only, for now";
         if (o.method != Method::hsnc) throw OptionError(kSimulate, "method", method_name(o.method), jenkins);
         if (o.precision_digits != 0)
             throw OptionError(kSimulate, "precision_digits", std::to_string(o.precision_digits), jenkins);

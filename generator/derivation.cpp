@@ -89,7 +89,7 @@ numeric to_float(const numeric& x) { return GiNaC::ex_to<numeric>(x.evalf()); }
 
 Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method) {
     require_proportional_damping(model, "derivation::derive()");
-    require_no_jenkins(model, "derivation::derive()");
+    require_derivable(model, "derivation::derive()");
     GiNaC::Digits = kDerivationDigits;
     Derivation d;
     d.model = &model;

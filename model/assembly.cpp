@@ -29,10 +29,19 @@ void require_proportional_damping(const Model& model, const std::string& who) {
                      "only the generic solver (state-space modes) takes it, for now");
 }
 
-void require_no_jenkins(const Model& model, const std::string& who) {
-    if (model.jenkins.empty()) return;
-    throw InputError(who + ": model '" + model.name + "' has Jenkins elements ([[jenkins]] '" + model.jenkins[0].name +
-                     "'); only the generic solver takes them, for now");
+std::string generic_only(const Model& model) {
+    if (!model.jenkins.empty()) return "Jenkins elements ([[jenkins]] '" + model.jenkins[0].name + "')";
+    for (const Mass& m : model.masses)
+        if (m.has_friction && m.partner != kGround)
+            return "friction between two bodies ([[friction]] '" +
+                   model.frictions[static_cast<std::size_t>(m.friction)].name + "')";
+    return "";
+}
+
+void require_derivable(const Model& model, const std::string& who) {
+    const std::string what = generic_only(model);
+    if (what.empty()) return;
+    throw InputError(who + ": model '" + model.name + "' has " + what + "; only the generic solver takes it, for now");
 }
 
 Eigen::VectorXd mass_vector(const Model& model) {
@@ -149,6 +158,23 @@ double force_on_mass(const Model& model, const Configuration& cfg, int i, double
 }  // namespace hsnc
 
 namespace hsnc {
+
+double driving_force(const Model& model, const Configuration& cfg, int i, double t, const double* x, const double* v) {
+    const double A = force_on_mass(model, cfg, i, t, x, v);
+    const int p = model.masses[static_cast<std::size_t>(i)].partner;
+    if (p == kGround) return A;
+    const double mi = model.masses[static_cast<std::size_t>(i)].m, mp = model.masses[static_cast<std::size_t>(p)].m;
+    return (mp * A - mi * force_on_mass(model, cfg, p, t, x, v)) / (mi + mp);
+}
+
+double driving_force_rate(const Model& model, const Configuration& cfg, int i, double t, const double* v,
+                          const double* a) {
+    const double A = force_rate_on_mass(model, cfg, i, t, v, a);
+    const int p = model.masses[static_cast<std::size_t>(i)].partner;
+    if (p == kGround) return A;
+    const double mi = model.masses[static_cast<std::size_t>(i)].m, mp = model.masses[static_cast<std::size_t>(p)].m;
+    return (mp * A - mi * force_rate_on_mass(model, cfg, p, t, v, a)) / (mi + mp);
+}
 
 double force_rate_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* v,
                           const double* a) {

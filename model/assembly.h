@@ -32,10 +32,17 @@ void require_proportional_damping(const Model& model, const std::string& who);
 /// Diagonal of M.
 Eigen::VectorXd mass_vector(const Model& model);
 
-/// Throws InputError "WHO: model 'NAME' has Jenkins elements ..." when it has
-/// any: for the stages that take no slider state yet (the derivation, the
-/// kernels, the interpreter, the reference, the baselines, the analyses).
-void require_no_jenkins(const Model& model, const std::string& who);
+/// What in `model` only the generic solvers take, for now, as a phrase:
+/// "Jenkins elements ([[jenkins]] 'j1')" (a slider state), "friction between
+/// two bodies ([[friction]] 'f1')" (a stuck pair moving as one body); "" when
+/// nothing.
+std::string generic_only(const Model& model);
+
+/// Throws InputError "WHO: model 'NAME' has PHRASE; only the generic solver
+/// takes it, for now" unless generic_only(model) is empty: for the stages
+/// that take neither yet (the derivation, the kernels, the interpreter, the
+/// reference, the baselines, the analyses' flows).
+void require_derivable(const Model& model, const std::string& who);
 
 /// K(cfg): springs plus the contacts closed and the Jenkins elements stuck in
 /// cfg (stuck mass flags are ignored).
@@ -109,6 +116,25 @@ double force_on_mass(const Model& model, const Configuration& cfg, int i, double
 
 /// dA_i/dt at (t, v, a): the time derivative of force_on_mass.
 double force_rate_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* v,
+                          const double* a);
+
+/// Mass i is held still in cfg: stuck against the ground.
+inline bool fixed_in(const Model& model, const Configuration& cfg, std::size_t i) {
+    return cfg.stuck[i] && model.masses[i].partner == kGround;
+}
+/// Mass i moves with its friction partner in cfg (a stuck pair: one body).
+inline bool rides_partner(const Model& model, const Configuration& cfg, std::size_t i) {
+    return cfg.stuck[i] && model.masses[i].partner != kGround;
+}
+
+/// The force that mass i's friction must hold to keep its relative velocity
+/// w = v[i] - v[partner] at 0 (interface.md: it sticks while this is below
+/// mu_s N): against the ground A_i; against a partner p, moving as one body
+/// of mass m_i + m_p, D_i = (m_p A_i - m_i A_p)/(m_i + m_p).
+double driving_force(const Model& model, const Configuration& cfg, int i, double t, const double* x, const double* v);
+
+/// dD_i/dt at (t, v, a).
+double driving_force_rate(const Model& model, const Configuration& cfg, int i, double t, const double* v,
                           const double* a);
 
 }  // namespace hsnc

@@ -19,13 +19,28 @@ ModalDecomposition modal_analysis(const Model& model, const Configuration& cfg) 
     const FreeComponents fc = free_components(model, cfg);
     md.free = fc.free;
     for (int i = 0; i < n; ++i)
-        if (cfg.stuck[i]) md.stuck.push_back(i);
+        if (fixed_in(model, cfg, static_cast<std::size_t>(i))) md.stuck.push_back(i);
+        else if (cfg.stuck[i]) md.riders.push_back(i);
     const int nf = static_cast<int>(md.free.size());
     md.component = fc.component;
     md.n_components = fc.count();
 
-    const Eigen::MatrixXd K = stiffness_matrix(model, cfg);
-    const Eigen::VectorXd m = mass_vector(model);
+    // The free coordinates: a free mass with its riders (their masses and
+    // stiffness rows summed: T^T M T and T^T K T of x = T q + const).
+    const Eigen::MatrixXd Kfull = stiffness_matrix(model, cfg);
+    const Eigen::VectorXd mfull = mass_vector(model);
+    std::vector<int> coordinate(static_cast<std::size_t>(n), -1);
+    for (int s = 0; s < nf; ++s) coordinate[static_cast<std::size_t>(md.free[s])] = s;
+    for (int i : md.riders) coordinate[static_cast<std::size_t>(i)] = coordinate[static_cast<std::size_t>(model.masses[static_cast<std::size_t>(i)].partner)];
+    Eigen::MatrixXd Kf = Eigen::MatrixXd::Zero(nf, nf);
+    md.mass = Eigen::VectorXd::Zero(nf);
+    for (int i = 0; i < n; ++i) {
+        const int r = coordinate[static_cast<std::size_t>(i)];
+        if (r < 0) continue;
+        md.mass(r) += mfull(i);
+        for (int j = 0; j < n; ++j)
+            if (coordinate[static_cast<std::size_t>(j)] >= 0) Kf(r, coordinate[static_cast<std::size_t>(j)]) += Kfull(i, j);
+    }
 
     struct Mode {
         double lambda;
@@ -46,10 +61,10 @@ ModalDecomposition modal_analysis(const Model& model, const Configuration& cfg) 
         // give the mass-normalised modes phi = M^-1/2 w.
         Eigen::VectorXd inv_sqrt_m(nc);
         Eigen::MatrixXd Kt(nc, nc);
-        for (Eigen::Index r = 0; r < nc; ++r) inv_sqrt_m(r) = 1.0 / std::sqrt(m(md.free[members[r]]));
+        for (Eigen::Index r = 0; r < nc; ++r) inv_sqrt_m(r) = 1.0 / std::sqrt(md.mass(members[r]));
         for (Eigen::Index r = 0; r < nc; ++r)
             for (Eigen::Index c = 0; c < nc; ++c)
-                Kt(r, c) = inv_sqrt_m(r) * K(md.free[members[r]], md.free[members[c]]) * inv_sqrt_m(c);
+                Kt(r, c) = inv_sqrt_m(r) * Kf(members[r], members[c]) * inv_sqrt_m(c);
 
         Eigen::MatrixXd W;  // mass-weighted mode shapes (columns)
         Eigen::VectorXd lam;
@@ -65,9 +80,9 @@ ModalDecomposition modal_analysis(const Model& model, const Configuration& cfg) 
             // because the component's K rows sum to zero). The other modes live in
             // its orthogonal complement Q (from a Householder reflection of w0).
             double total = 0.0;
-            for (int s : members) total += m(md.free[s]);
+            for (int s : members) total += md.mass(s);
             Eigen::VectorXd w0(nc);
-            for (Eigen::Index r = 0; r < nc; ++r) w0(r) = std::sqrt(m(md.free[members[r]]) / total);
+            for (Eigen::Index r = 0; r < nc; ++r) w0(r) = std::sqrt(md.mass(members[r]) / total);
             W.resize(nc, nc);
             lam.resize(nc);
             W.col(0) = w0;
@@ -91,7 +106,7 @@ ModalDecomposition modal_analysis(const Model& model, const Configuration& cfg) 
             if (md_k.rigid) {
                 // phi = 1/sqrt(total mass) exactly on the component.
                 double total = 0.0;
-                for (int s : members) total += m(md.free[s]);
+                for (int s : members) total += md.mass(s);
                 for (int s : members) md_k.shape(s) = 1.0 / std::sqrt(total);
             }
             modes.push_back(std::move(md_k));

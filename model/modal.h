@@ -28,7 +28,12 @@ namespace hsnc {
 
 struct ModalDecomposition {
     std::vector<int> free;       ///< F: indices of the free masses, in model order
-    std::vector<int> stuck;      ///< S: indices of the stuck masses, in model order
+    std::vector<int> stuck;      ///< S: indices of the masses stuck to the ground, in model order
+    /// Masses stuck to their friction partner (model.h Mass::partner), which
+    /// move with it: the partner's coordinate stands for both, with their
+    /// summed mass and stiffness rows (x_rider = x_partner + a constant).
+    std::vector<int> riders;
+    Eigen::VectorXd mass;        ///< M_F: the mass of each free coordinate (with its riders)
     std::vector<int> component;  ///< component id of each free mass (parallel to `free`)
     int n_components = 0;
 

@@ -39,6 +39,11 @@ struct Mass {
     /// mu_k = mu_k_element * (N / (m*g)) (and mu_s alike), so every stage that
     /// computes mu_k*m*g computes mu_k_element*N to rounding.
     int friction = -1;
+    /// The body this mass's friction acts against: kGround, or the other mass
+    /// of a [[friction]] element between two bodies (friction on the relative
+    /// velocity v[i] - v[partner]; stuck, the two move as one body). Such a
+    /// partner has no friction of its own and is the partner of no other mass.
+    int partner = kGround;
 };
 
 struct Spring {

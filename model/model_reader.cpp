@@ -545,12 +545,31 @@ private:
                 check_new_name(&t, path + ".name", f.name);
             }
             std::tie(f.a, f.b) = between(t, path);
-            if (f.a != kGround && f.b != kGround)
-                fail(t.get("between"), path + ".between",
-                     "friction between two bodies is not yet supported; a [[friction]] element acts between a " +
-                         body_word() + " and 'ground' for now");
+            const bool two_bodies = f.a != kGround && f.b != kGround;
             const int body = f.a == kGround ? f.b : f.a;
             Mass& mass = model_.masses[static_cast<std::size_t>(body)];
+            // Between two bodies a and b: a carries the friction, on w = v[a] - v[b],
+            // with b as its partner (model.h Mass::partner). For now each body takes
+            // part in one friction at most, so a stuck pair is two bodies moving as one.
+            auto partner_of = [&](int m) {
+                for (std::size_t q = 0; q < model_.masses.size(); ++q)
+                    if (model_.masses[q].partner == m) return static_cast<int>(q);
+                return -1;
+            };
+            if (const int q = partner_of(body); q >= 0)
+                fail(t.get("between"), path + ".between",
+                     "'" + mass.name + "' already takes part in the friction of '" + model_.friction_name(static_cast<std::size_t>(q)) +
+                         "'; one friction per " + body_word() + " is supported, for now");
+            if (two_bodies) {
+                const Mass& other = model_.masses[static_cast<std::size_t>(f.b)];
+                if (other.has_friction || partner_of(f.b) >= 0)
+                    fail(t.get("between"), path + ".between",
+                         "'" + other.name + "' already has friction; friction between two bodies needs the second one "
+                         "free of any other friction, for now");
+                if (!model_.dampers.empty())
+                    fail(t.get("between"), path + ".between",
+                         "friction between two bodies with non-proportional damping ([[damper]]) is not yet supported");
+            }
             f.mu_k = required_number(t, path, "mu_k");
             if (f.mu_k < 0.0) fail(t.get("mu_k"), path + ".mu_k", "must be >= 0, got " + show(f.mu_k));
             f.mu_s = optional_number(t, path, "mu_s").value_or(f.mu_k);
@@ -562,6 +581,9 @@ private:
             if (!normal && model_.structure.present)
                 fail_at(table_line(t, path), path + ".normal",
                         "required key is missing (a dof has no weight m*g: give the normal force)");
+            if (!normal && two_bodies)
+                fail_at(table_line(t, path), path + ".normal",
+                        "required key is missing (between two bodies the normal force is not a weight m*g: give it)");
             f.normal = normal.value_or(mass.m * model_.g);
             if (!(f.normal > 0.0)) fail(t.get("normal"), path + ".normal", "normal force must be > 0, got " + show(f.normal));
             if (mass.has_friction)
@@ -576,6 +598,7 @@ private:
             mass.mu_k = f.mu_k * ratio;
             mass.mu_s = f.mu_s * ratio;
             mass.friction = static_cast<int>(model_.frictions.size());
+            mass.partner = two_bodies ? f.b : kGround;
             auto text = [&](const std::string& key) {
                 const auto it = model_.field_expressions.find(key);
                 return it == model_.field_expressions.end() ? std::string() : it->second;

@@ -174,7 +174,7 @@ public:
               std::vector<cl_F>& v, const std::vector<cl_F>* a)
         : MpArithmetic{mp}, model_(model), t_(t), x_(x), v_(v), a_(a) {}
 
-    std::size_t jenkins() const { return 0; }  // refused (require_no_jenkins): the reference has no slider state
+    std::size_t jenkins() const { return 0; }  // refused (require_derivable): the reference has no slider state
     bool slips_on(const Configuration&, int) const { return false; }
     int dof() const { return mp.n; }
     std::size_t contacts() const { return mp.contacts.size(); }
@@ -275,7 +275,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                             const SearchLimits& limits, const std::vector<double>* offset) {
     if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
     require_proportional_damping(model, "reference::simulate_precise()");
-    require_no_jenkins(model, "reference::simulate_precise()");
+    require_derivable(model, "reference::simulate_precise()");
     const MpModel mp(model, digits);
     const std::size_t n = model.dof();
     PreciseRun run;

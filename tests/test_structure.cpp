@@ -665,8 +665,9 @@ TEST(FrictionInput, EveryKeyChecked) {
                    {"key 'friction[1].mu_k': must be >= 0"});
     expect_message(with_matrices("[[friction]]\nbetween = [\"u1\", \"ground\"]\nnormal = 1\n"),
                    {"key 'friction[1].mu_k': required key is missing"});
-    expect_message(with_matrices("[[friction]]\nbetween = [\"u1\", \"u2\"]\nmu_k = 0.1\nnormal = 1\n"),
-                   {"key 'friction[1].between': friction between two bodies is not yet supported"});
+    // Between two dofs (tests/test_friction_pair.cpp): the second may have no friction of its own.
+    expect_message(with_matrices(f + "normal = 1\n[[friction]]\nbetween = [\"u2\", \"u1\"]\nmu_k = 0.1\nnormal = 1\n"),
+                   {"key 'friction[2].between': 'u1' already has friction; friction between two bodies needs"});
     expect_message(with_matrices(f + "normal = 1\n[[friction]]\nbetween = [\"ground\", \"u1\"]\nmu_k = 0.1\nnormal = 1\n"),
                    {"key 'friction[2].between': 'u1' already has friction (element 'f')"});
     expect_message(with_matrices(f + "normal = 1\nmu = 2\n"), {"key 'friction[1].mu': unknown key"});

@@ -702,7 +702,7 @@ void validate(Method method, const IntegratorOptions& o, double t0, double t_end
 RunSummary integrate(const Model& model, Method method, const IntegratorOptions& options,
                      const EngineOptions& engine_options, Observer& observer) {
     validate(method, options, model.t0, engine_options.t_end);
-    require_no_jenkins(model, "hsnc::integrate()");  // no slider state in the integrators' ODE
+    require_derivable(model, "hsnc::integrate()");  // no slider state or stuck pairs in the integrators' ODE
     if (method == Method::ab4) return run_ab4(model, options, engine_options, observer);
     if (method == Method::rk45) return run_rk45(model, options, engine_options, observer);
     if (method == Method::cvode) return run_cvode(model, options, engine_options, observer);

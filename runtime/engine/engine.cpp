@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "assembly.h"
 #include "sample_grid.h"
 #include "tie_series.h"
 #include "transitions.h"
@@ -79,7 +80,7 @@ double fastest_rate(const Model& model, const Configuration& cfg) {
         if (cfg.slip[j] == 0) add(model.jenkins[j].a, model.jenkins[j].b, model.jenkins[j].k);
     double w2 = 0.0;
     for (std::size_t i = 0; i < n; ++i)
-        if (!cfg.stuck[i]) w2 = std::max(w2, 2 * stiff[i] / model.masses[i].m);
+        if (!fixed_in(model, cfg, i)) w2 = std::max(w2, 2 * stiff[i] / model.masses[i].m);
     double rate = std::max(std::sqrt(w2), std::fabs(model.alpha) + std::fabs(model.beta) * w2);
     // Dampers: the damping rates of M^-1 C_d, by Gershgorin as for K.
     std::vector<double> visc(n, 0.0);
@@ -87,7 +88,7 @@ double fastest_rate(const Model& model, const Configuration& cfg) {
         for (int b : {d.a, d.b})
             if (b != kGround && d.a != d.b) visc[static_cast<std::size_t>(b)] += std::fabs(d.c);
     for (std::size_t i = 0; i < n; ++i)
-        if (!cfg.stuck[i]) rate = std::max(rate, 2 * visc[i] / model.masses[i].m);
+        if (!fixed_in(model, cfg, i)) rate = std::max(rate, 2 * visc[i] / model.masses[i].m);
     for (const Harmonic& h : model.forcing) rate = std::max(rate, std::fabs(h.omega));
     return rate;
 }
@@ -409,7 +410,8 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         x = buf.x;
         v = buf.v;
         for (std::size_t i = 0; i < n; ++i)
-            if (cfg.stuck[i]) v[i] = 0.0;
+            if (fixed_in(model_, cfg, i)) v[i] = 0.0;
+            else if (rides_partner(model_, cfg, i)) v[i] = v[static_cast<std::size_t>(model_.masses[i].partner)];
         if (!found.any) {
             t = t_end;
             break;

@@ -52,6 +52,20 @@ void force_derivative(const Model& model, const Configuration& cfg, int i, doubl
     }
 }
 
+// D_i^(k) (assembly.h driving_force): A_i^(k), or against a partner p
+// (m_p A_i^(k) - m_i A_p^(k))/(m_i + m_p).
+void driving_derivative(const Model& model, const Configuration& cfg, int i, double t, double t_lo,
+                        const MotionSeries& s, int k, double& value, double& magnitude) {
+    force_derivative(model, cfg, i, t, t_lo, s, k, value, magnitude);
+    const int p = model.masses[static_cast<std::size_t>(i)].partner;
+    if (p == kGround) return;
+    double Ap, mp_mag;
+    force_derivative(model, cfg, p, t, t_lo, s, k, Ap, mp_mag);
+    const double mi = model.masses[static_cast<std::size_t>(i)].m, mp = model.masses[static_cast<std::size_t>(p)].m;
+    value = (mp * value - mi * Ap) / (mi + mp);
+    magnitude = (mp * magnitude + mi * mp_mag) / (mi + mp);
+}
+
 }  // namespace
 
 int tie_order(const Model& model) { return static_cast<int>(2 * model.dof() + 2 * model.forcing.size() + 2); }
@@ -65,26 +79,43 @@ MotionSeries motion_series(const Model& model, const Configuration& cfg, const s
     s.x.assign(static_cast<std::size_t>(order) + 1, std::vector<double>(n, 0.0));
     s.mag = s.x;
     for (std::size_t j = 0; j < model.jenkins.size(); ++j) s.slider.push_back(slider_position(model, cfg, j, x));
+    // A mass stuck to its partner moves with it: one body of both masses
+    // (rider[p] = that mass), on which their friction is internal.
+    std::vector<int> rider(n, -1);
+    for (std::size_t i = 0; i < n; ++i)
+        if (rides_partner(model, cfg, i)) rider[static_cast<std::size_t>(model.masses[i].partner)] = static_cast<int>(i);
     for (std::size_t i = 0; i < n; ++i) {
         s.x[0][i] = x[i];
         s.mag[0][i] = std::fabs(x[i]);
-        if (order >= 1 && !cfg.stuck[i]) {
+        if (order >= 1 && !fixed_in(model, cfg, i)) {
             s.x[1][i] = v[i];
             s.mag[1][i] = std::fabs(v[i]);
         }
     }
     for (int k = 0; k + 2 <= order; ++k)
         for (std::size_t i = 0; i < n; ++i) {
-            if (cfg.stuck[i]) continue;
-            double A, m;
+            if (cfg.stuck[i]) continue;  // held still, or moved with its partner below
+            double A, m, mass = model.masses[i].m;
             force_derivative(model, cfg, static_cast<int>(i), t, t_lo, s, k, A, m);
-            if (k == 0 && model.masses[i].has_friction && sgn[i] != 0) {
-                const double fr = model.masses[i].mu_k * model.normal_force(static_cast<int>(i));
-                A -= fr * sgn[i];
-                m += fr;
+            if (rider[i] >= 0) {
+                double Ar, mr;
+                force_derivative(model, cfg, rider[i], t, t_lo, s, k, Ar, mr);
+                A += Ar, m += mr, mass += model.masses[static_cast<std::size_t>(rider[i])].m;
             }
-            s.x[static_cast<std::size_t>(k) + 2][i] = A / model.masses[i].m;
-            s.mag[static_cast<std::size_t>(k) + 2][i] = m / model.masses[i].m;
+            if (k == 0)  // kinetic friction of a sliding mass, and its reaction on the partner
+                for (std::size_t q = 0; q < n; ++q) {
+                    const Mass& mq = model.masses[q];
+                    if (!mq.has_friction || sgn[q] == 0 || (q != i && mq.partner != static_cast<int>(i))) continue;
+                    const double fr = mq.mu_k * model.normal_force(q);
+                    A += q == i ? -fr * sgn[q] : fr * sgn[q];
+                    m += fr;
+                }
+            s.x[static_cast<std::size_t>(k) + 2][i] = A / mass;
+            s.mag[static_cast<std::size_t>(k) + 2][i] = m / mass;
+            if (rider[i] >= 0) {
+                s.x[static_cast<std::size_t>(k) + 2][static_cast<std::size_t>(rider[i])] = A / mass;
+                s.mag[static_cast<std::size_t>(k) + 2][static_cast<std::size_t>(rider[i])] = m / mass;
+            }
         }
     return s;
 }
@@ -100,9 +131,10 @@ void switch_series(const Model& model, const Configuration& cfg, const SwitchFun
             const Contact& c = model.contacts[static_cast<std::size_t>(e)];
             d[k] = body(series.x[k], c.a) - body(series.x[k], c.b) - (k == 0 ? c.gap : 0.0);
             mag[k] = body(series.mag[k], c.a) + body(series.mag[k], c.b) + (k == 0 ? std::fabs(c.gap) : 0.0);
-        } else if (f.kind == SwitchKind::velocity) {
-            d[k] = series.x[k + 1][static_cast<std::size_t>(e)];
-            mag[k] = series.mag[k + 1][static_cast<std::size_t>(e)];
+        } else if (f.kind == SwitchKind::velocity) {  // w = v_e - v_partner
+            const int p = model.masses[static_cast<std::size_t>(e)].partner;
+            d[k] = series.x[k + 1][static_cast<std::size_t>(e)] - body(series.x[k + 1], p);
+            mag[k] = series.mag[k + 1][static_cast<std::size_t>(e)] + body(series.mag[k + 1], p);
         } else if (f.kind == SwitchKind::slip_velocity) {
             const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
             d[k] = body(series.x[k + 1], J.a) - body(series.x[k + 1], J.b);
@@ -117,7 +149,7 @@ void switch_series(const Model& model, const Configuration& cfg, const SwitchFun
             mag[k] = J.k * (body(series.mag[k], J.a) + body(series.mag[k], J.b) + std::fabs(s0)) + F;
         } else {
             double A, m;
-            force_derivative(model, cfg, e, t, t_lo, series, static_cast<int>(k), A, m);
+            driving_derivative(model, cfg, e, t, t_lo, series, static_cast<int>(k), A, m);
             const double limit = k == 0 ? model.masses[static_cast<std::size_t>(e)].mu_s * model.normal_force(e) : 0.0;
             d[k] = (f.kind == SwitchKind::release_pos ? A : -A) - limit;
             mag[k] = m + limit;
@@ -131,7 +163,7 @@ void force_series(const Model& model, const Configuration& cfg, int i, double t,
     d.assign(order, 0.0);
     mag.assign(order, 0.0);
     for (std::size_t k = 0; k < order; ++k)
-        force_derivative(model, cfg, i, t, t_lo, series, static_cast<int>(k), d[k], mag[k]);
+        driving_derivative(model, cfg, i, t, t_lo, series, static_cast<int>(k), d[k], mag[k]);
 }
 
 double rate_magnitude(const Model& model, const Configuration& cfg, const SwitchFunction& f, const double* x,
@@ -149,7 +181,7 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
     // The magnitude of the terms of x_i'' (0 for a stuck mass): A_i's terms and the friction force.
     auto accel_magnitude = [&](int i) {
         const std::size_t ii = static_cast<std::size_t>(i);
-        if (i == kGround || cfg.stuck[ii]) return 0.0;
+        if (i == kGround || fixed_in(model, cfg, ii)) return 0.0;
         double m = std::fabs(model.load[ii]) + std::fabs(model.alpha) * model.masses[ii].m * std::fabs(v[ii]);
         for_each_link(model, cfg, [&](int a, int b, double kk, double cc, double gap) {
             if (a == b || (a != i && b != i)) return;
@@ -159,23 +191,34 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
             if (a == i || b == i) m += std::fabs(fa);
         });
         for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii]);
-        if (model.masses[ii].has_friction) m += model.masses[ii].mu_k * model.normal_force(i);
+        for (std::size_t q = 0; q < model.dof(); ++q)  // its friction, and that of a mass it is the partner of
+            if (model.masses[q].has_friction && (q == ii || model.masses[q].partner == i))
+                m += model.masses[q].mu_k * model.normal_force(q);
         return m / model.masses[ii].m;
     };
-    if (f.kind == SwitchKind::velocity) return accel_magnitude(e);
+    const int partner = f.kind == SwitchKind::velocity || f.kind == SwitchKind::release_pos ||
+                                f.kind == SwitchKind::release_neg
+                            ? model.masses[static_cast<std::size_t>(e)].partner
+                            : kGround;
+    if (f.kind == SwitchKind::velocity) return accel_magnitude(e) + accel_magnitude(partner);
     if (f.kind == SwitchKind::slip_velocity) {
         const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
         return accel_magnitude(J.a) + accel_magnitude(J.b);
     }
-    // A_i' = -(K v)_i - (C x'')_i + sum_h F_hi Omega_h cos(...).
-    const std::size_t ii = static_cast<std::size_t>(e);
-    double m = std::fabs(model.alpha) * model.masses[ii].m * accel_magnitude(e);
-    for_each_link(model, cfg, [&](int a, int b, double kk, double cc, double) {
-        if (a == b || (a != e && b != e)) return;
-        m += std::fabs(kk) * (at(v, a) + at(v, b)) + std::fabs(cc) * (accel_magnitude(a) + accel_magnitude(b));
-    });
-    for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii] * h.omega);
-    return m;
+    // A_i' = -(K v)_i - (C x'')_i + sum_h F_hi Omega_h cos(...); D_i' against a partner.
+    auto force_rate_magnitude = [&](int i) {
+        const std::size_t ii = static_cast<std::size_t>(i);
+        double m = std::fabs(model.alpha) * model.masses[ii].m * accel_magnitude(i);
+        for_each_link(model, cfg, [&](int a, int b, double kk, double cc, double) {
+            if (a == b || (a != i && b != i)) return;
+            m += std::fabs(kk) * (at(v, a) + at(v, b)) + std::fabs(cc) * (accel_magnitude(a) + accel_magnitude(b));
+        });
+        for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii] * h.omega);
+        return m;
+    };
+    if (partner == kGround) return force_rate_magnitude(e);
+    const double mi = model.masses[static_cast<std::size_t>(e)].m, mp = model.masses[static_cast<std::size_t>(partner)].m;
+    return (mp * force_rate_magnitude(e) + mi * force_rate_magnitude(partner)) / (mi + mp);
 }
 
 int first_nonzero_sign(const std::vector<double>& d, const std::vector<double>& mag, int max_order, int* order) {
@@ -192,7 +235,7 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
                         const MotionSeries& series, int k, double T) {
     if (!(model.alpha >= 0) || !(model.beta >= 0) || k < 2) return kInf;
     const std::size_t n = model.dof();
-    auto free_mass = [&](int b) { return b != kGround && !cfg.stuck[static_cast<std::size_t>(b)]; };
+    auto free_mass = [&](int b) { return b != kGround && !fixed_in(model, cfg, static_cast<std::size_t>(b)); };
     // R_j(T) >= sqrt(2 E_j(s)) on [0, T], j >= 1; every value taken at its
     // magnitude plus its rounding level, and the result enlarged by a few ulps.
     auto R = [&](int j) {
@@ -202,7 +245,7 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
         auto up = [](double value, double mag) { return std::fabs(value) + tie_noise(mag); };
         double two_e = 0.0;
         for (std::size_t i = 0; i < n; ++i)
-            if (!cfg.stuck[i]) two_e += model.masses[i].m * up(zd[i], zdm[i]) * up(zd[i], zdm[i]);
+            if (!fixed_in(model, cfg, i)) two_e += model.masses[i].m * up(zd[i], zdm[i]) * up(zd[i], zdm[i]);
         for_each_link(model, cfg, [&](int a, int b, double kk, double, double) {
             if (a == b) return;
             const double za = free_mass(a) ? z[static_cast<std::size_t>(a)] : 0.0;
@@ -216,7 +259,7 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
         for (const Harmonic& h : model.forcing) {
             double norm = 0.0;
             for (std::size_t i = 0; i < n; ++i)
-                if (!cfg.stuck[i]) norm += h.amplitude[i] * h.amplitude[i] / model.masses[i].m;
+                if (!fixed_in(model, cfg, i)) norm += h.amplitude[i] * h.amplitude[i] / model.masses[i].m;
             phi += std::pow(std::fabs(h.omega), j) * std::sqrt(norm);
         }
         return (std::sqrt(two_e) + phi * T) * (1 + 64 * kEps);
@@ -231,7 +274,8 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
         const double r = R(k - 1);  // G^(k) = x_a^(k) - x_b^(k)
         return per_mass(c.a, r) + per_mass(c.b, r);
     }
-    if (f.kind == SwitchKind::velocity) return per_mass(e, R(k));  // v^(k) = x^(k+1)
+    if (f.kind == SwitchKind::velocity)  // w^(k) = x_e^(k+1) - x_partner^(k+1)
+        return per_mass(e, R(k)) + per_mass(model.masses[static_cast<std::size_t>(e)].partner, R(k));
     if (f.kind == SwitchKind::slip_pos || f.kind == SwitchKind::slip_neg) {
         const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
         const double r = R(k - 1);  // k (x_a^(k) - x_b^(k))
@@ -244,14 +288,20 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
     }
     // A_i^(k) = -(K x^(k))_i - (C x^(k+1))_i + sum_h F_hi Omega_h^k sin(...): the neighbours' terms.
     const double rk1 = R(k - 1), rk = R(k);
-    double B = 0.0;
-    for_each_link(model, cfg, [&](int a, int b, double kk, double cc, double) {
-        if (a == b || (a != e && b != e)) return;
-        for (int o : {a, b}) B += std::fabs(kk) * per_mass(o, rk1) + std::fabs(cc) * per_mass(o, rk);
-    });
-    B += std::fabs(model.alpha) * model.masses[static_cast<std::size_t>(e)].m * per_mass(e, rk);
-    for (const Harmonic& h : model.forcing) B += std::fabs(h.amplitude[static_cast<std::size_t>(e)]) * std::pow(std::fabs(h.omega), k);
-    return B * (1 + 64 * kEps);
+    auto force_bound = [&](int i) {
+        double B = 0.0;
+        for_each_link(model, cfg, [&](int a, int b, double kk, double cc, double) {
+            if (a == b || (a != i && b != i)) return;
+            for (int o : {a, b}) B += std::fabs(kk) * per_mass(o, rk1) + std::fabs(cc) * per_mass(o, rk);
+        });
+        B += std::fabs(model.alpha) * model.masses[static_cast<std::size_t>(i)].m * per_mass(i, rk);
+        for (const Harmonic& h : model.forcing) B += std::fabs(h.amplitude[static_cast<std::size_t>(i)]) * std::pow(std::fabs(h.omega), k);
+        return B;
+    };
+    const int p = model.masses[static_cast<std::size_t>(e)].partner;
+    if (p == kGround) return force_bound(e) * (1 + 64 * kEps);
+    const double mi = model.masses[static_cast<std::size_t>(e)].m, mp = model.masses[static_cast<std::size_t>(p)].m;
+    return (mp * force_bound(e) + mi * force_bound(p)) / (mi + mp) * (1 + 64 * kEps);
 }
 
 }  // namespace hsnc

@@ -28,15 +28,26 @@ public:
     int dof() const { return n_; }
     std::size_t contacts() const { return model_.contacts.size(); }
     bool has_friction(int i) const { return model_.masses[i].has_friction; }
-    int velocity_sign(int i) const { return sign(v_[i]); }
-    void stop(int i) { v_[i] = 0.0; }
-    double force(const Configuration& cfg, int i) const { return force_on_mass(model_, cfg, i, t_, x_, v_); }
+    // A friction acts on w = v_i - v_partner (the partner may be the ground).
+    int partner(int i) const { return model_.masses[static_cast<std::size_t>(i)].partner; }
+    int velocity_sign(int i) const { return sign(v_[i] - body(v_, partner(i))); }
+    void stop(int i) { v_[i] = body(v_, partner(i)); }
+    double force(const Configuration& cfg, int i) const { return driving_force(model_, cfg, i, t_, x_, v_); }
     double static_limit(int i) const { return model_.masses[i].mu_s * model_.normal_force(i); }
     double held_rate(const Configuration& cfg, int i) const {
         std::vector<double> held(model_.dof(), 0.0);
         if (a_) held.assign(a_, a_ + model_.dof());
-        held[i] = 0.0;
-        return force_rate_on_mass(model_, cfg, i, t_, v_, held.data());
+        const int p = partner(i);
+        if (p == kGround) {
+            held[i] = 0.0;
+        } else {  // the pair held together: one acceleration, that of both masses as one body
+            Configuration hold = cfg;
+            hold.stuck[static_cast<std::size_t>(i)] = 1;
+            const double mi = model_.masses[static_cast<std::size_t>(i)].m, mp = model_.masses[static_cast<std::size_t>(p)].m;
+            held[i] = held[p] = (force_on_mass(model_, hold, i, t_, x_, v_) + force_on_mass(model_, hold, p, t_, x_, v_)) /
+                                (mi + mp);
+        }
+        return driving_force_rate(model_, cfg, i, t_, v_, held.data());
     }
     int tie_order() const { return hsnc::tie_order(model_); }
     rules::Series<double> held_series(const Configuration& hold, const std::vector<signed char>& sgn, int i,

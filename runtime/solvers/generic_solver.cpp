@@ -57,12 +57,17 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
 
     t_ = configuration_terms(model, cfg);
     nh_ = static_cast<int>(t_.h_omega.size());
+    // The free coordinate of every mass that moves: its own, or its partner's
+    // for a mass stuck to it (modal.h riders); -1 for the ground and stuck masses.
+    coord_.assign(static_cast<std::size_t>(n_), -1);
+    for (int r = 0; r < nf_; ++r) coord_[static_cast<std::size_t>(modal_.free[r])] = r;
+    for (int q : modal_.riders) coord_[static_cast<std::size_t>(q)] = coord_[static_cast<std::size_t>(t_.partner[static_cast<std::size_t>(q)])];
 
     // Modes: M_F-normalised Phi, modal damping c = alpha + beta*lambda, regime.
     phi_ = modal_.phi;
     phi_t_m_.resize(nf_, nf_);
     for (int j = 0; j < nf_; ++j)
-        for (int r = 0; r < nf_; ++r) phi_t_m_(j, r) = phi_(r, j) * t_.mass(modal_.free[r]);
+        for (int r = 0; r < nf_; ++r) phi_t_m_(j, r) = phi_(r, j) * modal_.mass(r);
     regime_.resize(static_cast<std::size_t>(nf_));
     lambda_ = modal_.lambda;
     omega_.resize(nf_);
@@ -101,6 +106,7 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
         for (int h = 0; h < nh_; ++h) {
             double s = 0.0;
             for (int r = 0; r < nf_; ++r) s += phi_(r, j) * t_.h_amp(modal_.free[r], h);
+            for (int q : modal_.riders) s += phi_(coord_[static_cast<std::size_t>(q)], j) * t_.h_amp(q, h);
             P_(j, h) = s;
         }
     coupled_.setZero(nf_, nh_);
@@ -139,8 +145,7 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     W_ = Eigen::MatrixXd::Zero(ns, nf_);
     Z_ = Eigen::MatrixXd::Zero(ns, nf_);
     D_ = Eigen::MatrixXd::Zero(ns, nh_);
-    std::vector<int> slot(static_cast<std::size_t>(n_), -1);
-    for (int r = 0; r < nf_; ++r) slot[modal_.free[r]] = r;
+    const std::vector<int>& slot = coord_;
     // Row j of x[a] - x[b] over the modes (ground and stuck masses do not move).
     auto difference = [&](int a, int b, int j) {
         double w = 0.0;
@@ -153,8 +158,9 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
         if (sf.kind == SwitchKind::gap) {
             const Contact& ct = model.contacts[sf.element];
             for (int j = 0; j < nf_; ++j) W_(f, j) = difference(ct.a, ct.b, j);
-        } else if (sf.kind == SwitchKind::velocity) {
-            for (int j = 0; j < nf_; ++j) Z_(f, j) = phi_(slot[sf.element], j);
+        } else if (sf.kind == SwitchKind::velocity) {  // w = v_i - v_partner
+            for (int j = 0; j < nf_; ++j)
+                Z_(f, j) = difference(sf.element, t_.partner[static_cast<std::size_t>(sf.element)], j);
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
             const Jenkins& J = model.jenkins[static_cast<std::size_t>(sf.element)];
             const double sg = sf.kind == SwitchKind::slip_pos ? J.k : -J.k;
@@ -163,19 +169,38 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
             const Jenkins& J = model.jenkins[static_cast<std::size_t>(sf.element)];
             for (int j = 0; j < nf_; ++j) Z_(f, j) = difference(J.a, J.b, j);
         } else {
-            // +-A_i: A_i = -(K x)_i - (C v)_i + f_i + F_i(t).
+            // +-A_i: A_i = -(K x)_i - (C v)_i + f_i + F_i(t); against a partner p,
+            // +-D_i = +-(m_p A_i - m_i A_p)/(m_i + m_p) (assembly.h driving_force).
             const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
-            const int i = sf.element;
-            for (int j = 0; j < nf_; ++j) {
-                double kw = 0.0, cz = 0.0;
+            const int i = sf.element, p = t_.partner[static_cast<std::size_t>(i)];
+            auto rows = [&](int e, int j, double& kw, double& cz) {
+                kw = cz = 0.0;
                 for (int r = 0; r < nf_; ++r) {
-                    kw += t_.K(i, modal_.free[r]) * phi_(r, j);
-                    cz += t_.C(i, modal_.free[r]) * phi_(r, j);
+                    kw += t_.K(e, modal_.free[r]) * phi_(r, j);
+                    cz += t_.C(e, modal_.free[r]) * phi_(r, j);
+                }
+                for (int q : modal_.riders) {
+                    kw += t_.K(e, q) * phi_(slot[static_cast<std::size_t>(q)], j);
+                    cz += t_.C(e, q) * phi_(slot[static_cast<std::size_t>(q)], j);
+                }
+            };
+            for (int j = 0; j < nf_; ++j) {
+                double kw, cz;
+                rows(i, j, kw, cz);
+                if (p != kGround) {
+                    double kp, cp;
+                    rows(p, j, kp, cp);
+                    const double mi = t_.mass(i), mp = t_.mass(p);
+                    kw = (mp * kw - mi * kp) / (mi + mp);
+                    cz = (mp * cz - mi * cp) / (mi + mp);
                 }
                 W_(f, j) = -sg * kw;
                 Z_(f, j) = -sg * cz;
             }
-            for (int h = 0; h < nh_; ++h) D_(f, h) = sg * t_.h_amp(i, h);
+            for (int h = 0; h < nh_; ++h)
+                D_(f, h) = sg * (p == kGround ? t_.h_amp(i, h)
+                                              : (t_.mass(p) * t_.h_amp(i, h) - t_.mass(i) * t_.h_amp(p, h)) /
+                                                    (t_.mass(i) + t_.mass(p)));
         }
     }
     absW_ = W_.cwiseAbs();
@@ -196,7 +221,7 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
         }
 
     // setup / eval storage.
-    x_fix_ = fseg_ = Eigen::VectorXd::Zero(n_);
+    x_fix_ = fseg_ = rider_offset_ = Eigen::VectorXd::Zero(n_);
     slider_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(model.jenkins.size()));
     theta_ = Eigen::VectorXd::Zero(nh_);
     e_theta_ = Eigen::VectorXcd::Zero(nh_);
@@ -224,6 +249,25 @@ void GenericSolver::setup(double t0, double t0_lo, const double* x0, const doubl
         for (int s : modal_.stuck) f -= t_.K(i, s) * x0[s];
         if (t_.friction[i]) f -= t_.mu_k(i) * t_.normal(i) * static_cast<double>(sgn[i]);
         force_(r) = f;
+    }
+    // A mass stuck to its partner adds its forces to the partner's coordinate;
+    // its offset x_q - x_partner is a constant of the segment: x = T q + d,
+    // f_F = T^T (f - K d). A sliding pair's friction pushes the partner back.
+    for (int q : modal_.riders) {
+        const double offset = x0[q] - x0[t_.partner[static_cast<std::size_t>(q)]];
+        rider_offset_(q) = offset;
+        double f = fseg_(q);
+        for (int s : modal_.stuck) f -= t_.K(q, s) * x0[s];
+        force_(coord_[static_cast<std::size_t>(q)]) += f;
+    }
+    for (int q : modal_.riders)
+        for (int i = 0; i < n_; ++i)
+            if (coord_[static_cast<std::size_t>(i)] >= 0)
+                force_(coord_[static_cast<std::size_t>(i)]) -= t_.K(i, q) * rider_offset_(q);
+    for (int i = 0; i < n_; ++i) {
+        const int p = t_.partner[static_cast<std::size_t>(i)];
+        if (p != kGround && t_.friction[static_cast<std::size_t>(i)] && sgn[i] != 0)
+            force_(coord_[static_cast<std::size_t>(p)]) += t_.mu_k(i) * t_.normal(i) * static_cast<double>(sgn[i]);
     }
     // Modal initial conditions q0 = Phi^T M_F x0 (and qd0 from v0), refined
     // by one step against the residual x0 - Phi q0 (in long double). Without
@@ -442,6 +486,14 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
         out.a[i] = a;
         xmag_(i) = xm;
         vmag_(i) = vm;
+    }
+    for (int q : modal_.riders) {  // moving with the partner, at the segment's offset
+        const int p = t_.partner[static_cast<std::size_t>(q)];
+        out.x[q] = out.x[p] + rider_offset_(q);
+        out.v[q] = out.v[p];
+        out.a[q] = out.a[p];
+        xmag_(q) = xmag_(p) + std::abs(rider_offset_(q));
+        vmag_(q) = vmag_(p);
     }
 
     write_sliders(t_, cfg_, slider_, out);

@@ -77,6 +77,7 @@ private:
     double max_step_ = 0.0;
 
     ConfigurationTerms t_;  // masses, friction, K(cfg), C(cfg), constant force, contacts, harmonics
+    std::vector<int> coord_;  // free coordinate of each mass (its partner's for a rider), -1: ground, stuck
     Eigen::MatrixXd phi_;          // nf x nf, rows in the order of modal_.free
     Eigen::MatrixXd phi_t_m_;      // Phi^T M_F (modal initial conditions)
     std::vector<Regime> regime_;
@@ -98,6 +99,7 @@ private:
     Eigen::VectorXd x_fix_;        // positions (stuck masses keep theirs)
     Eigen::VectorXd fseg_;         // constant force: f_const plus the stuck Jenkins sliders' preload
     Eigen::VectorXd slider_;       // stuck Jenkins sliders' positions
+    Eigen::VectorXd rider_offset_; // x_q - x_partner of each mass stuck to its partner (modal.h riders)
     Eigen::VectorXd theta_;        // phase of each harmonic at tau = 0
     Eigen::VectorXcd e_theta_;     // exp(i theta)
     Eigen::VectorXd force_, p_, q0_, qd0_, u0_, ud0_;

@@ -19,6 +19,7 @@ ConfigurationTerms configuration_terms(const Model& model, const Configuration& 
         t.mu_k(i) = m.mu_k;
         t.mu_s(i) = m.mu_s;
         t.friction[static_cast<std::size_t>(i)] = m.has_friction ? 1 : 0;
+        t.partner.push_back(m.partner);
     }
     t.K = stiffness_matrix(model, cfg);
     t.C = damping_matrix(model, cfg);

@@ -36,6 +36,7 @@ namespace hsnc {
 struct ConfigurationTerms {
     Eigen::VectorXd mass, normal, mu_k, mu_s;
     std::vector<char> friction;
+    std::vector<int> partner;  ///< per mass: what its friction acts against (model.h Mass::partner)
     Eigen::MatrixXd K, C;
     Eigen::VectorXd f_const;
     std::vector<int> contact_a, contact_b;
@@ -105,10 +106,11 @@ inline void switch_value(const SwitchFunction& sf, const ConfigurationTerms& in,
         scale = body_mag(xmag, a) + body_mag(xmag, b) + std::abs(in.contact_gap(e));
         return;
     }
-    if (sf.kind == SwitchKind::velocity) {
-        g = out.v[e];
-        dg = out.a[e];
-        scale = vmag(e);
+    if (sf.kind == SwitchKind::velocity) {  // w = v_e - v_partner
+        const int p = in.partner[static_cast<std::size_t>(e)];
+        g = out.v[e] - body(out.v, p);
+        dg = out.a[e] - body(out.a, p);
+        scale = vmag(e) + body_mag(vmag, p);
         return;
     }
     if (sf.kind == SwitchKind::slip_velocity) {
@@ -127,16 +129,30 @@ inline void switch_value(const SwitchFunction& sf, const ConfigurationTerms& in,
         scale = k * (body_mag(xmag, a) + body_mag(xmag, b) + std::abs(s)) + F;
         return;
     }
-    double A = f(e), dA = 0.0, m = std::abs(f(e));
-    for (Eigen::Index k = 0; k < in.K.cols(); ++k) {
-        A -= in.K(e, k) * out.x[k] + in.C(e, k) * out.v[k];
-        dA -= in.K(e, k) * out.v[k] + in.C(e, k) * out.a[k];
-        m += std::abs(in.K(e, k)) * xmag(k) + std::abs(in.C(e, k)) * vmag(k);
-    }
-    for (Eigen::Index h = 0; h < in.h_omega.size(); ++h) {
-        A += in.h_amp(e, h) * sn(h);
-        dA += in.h_amp(e, h) * in.h_omega(h) * cs(h);
-        m += std::abs(in.h_amp(e, h) * sn(h));
+    // A_i, A_i' and the size of A_i's terms.
+    auto force = [&](int i, double& A, double& dA, double& m) {
+        A = f(i), dA = 0.0, m = std::abs(f(i));
+        for (Eigen::Index k = 0; k < in.K.cols(); ++k) {
+            A -= in.K(i, k) * out.x[k] + in.C(i, k) * out.v[k];
+            dA -= in.K(i, k) * out.v[k] + in.C(i, k) * out.a[k];
+            m += std::abs(in.K(i, k)) * xmag(k) + std::abs(in.C(i, k)) * vmag(k);
+        }
+        for (Eigen::Index h = 0; h < in.h_omega.size(); ++h) {
+            A += in.h_amp(i, h) * sn(h);
+            dA += in.h_amp(i, h) * in.h_omega(h) * cs(h);
+            m += std::abs(in.h_amp(i, h) * sn(h));
+        }
+    };
+    double A, dA, m;
+    force(e, A, dA, m);
+    if (const int p = in.partner[static_cast<std::size_t>(e)]; p != kGround) {
+        // Against a partner: D = (m_p A_e - m_e A_p)/(m_e + m_p) (assembly.h driving_force).
+        double Ap, dAp, mp_mag;
+        force(p, Ap, dAp, mp_mag);
+        const double me = in.mass(e), mp = in.mass(p);
+        A = (mp * A - me * Ap) / (me + mp);
+        dA = (mp * dA - me * dAp) / (me + mp);
+        m = (mp * m + me * mp_mag) / (me + mp);
     }
     const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
     const double mu_n = in.mu_s(e) * in.normal(e);

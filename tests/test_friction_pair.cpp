@@ -1,0 +1,228 @@
+// Friction between two bodies (interface.md section 5, [[friction]] between
+// two masses): the friction acts on the relative velocity w = v[a] - v[b];
+// stuck, the two move as one body of their summed mass; it releases when the
+// force needed to keep w = 0, D = (m_b A_a - m_a A_b)/(m_a + m_b), exceeds
+// mu_s N.
+//
+// The truths are closed forms written here: a block on a block (the lower
+// one on a spring) started moving together, and a floating pair driven by a
+// harmonic force on the lower block.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "cli_runner.h"
+#include "engine_runner.h"
+#include "error.h"
+#include "hsnc/simulate.h"
+#include "model_reader.h"
+
+namespace hsnc {
+namespace {
+
+using testing::Outcome;
+
+// A lower block ("bottom", on a spring k to ground, no friction with the
+// ground) and an upper block ("top") on it, friction between them with
+// N = m_top g.
+std::string block_on_block(double mb, double mt, double k, double mu_k, double mu_s, double v0,
+                           const std::string& extra = "") {
+    char text[1024];
+    std::snprintf(text, sizeof text, R"(name = "block-on-block"
+[parameters]
+g = 9.81
+[[mass]]
+name = "bottom"
+m = %.17g
+[[mass]]
+name = "top"
+m = %.17g
+[[spring]]
+between = ["ground", "bottom"]
+k = %.17g
+[[friction]]
+name = "interface"
+between = ["top", "bottom"]
+mu_k = %.17g
+mu_s = %.17g
+normal = "%.17g * g"
+[initial]
+v = { bottom = %.17g, top = %.17g }
+)",
+                  mb, mt, k, mu_k, mu_s, mt, v0, v0);
+    return text + extra;
+}
+
+// Root of f in [a, b] (f(a), f(b) of opposite signs) by bisection to the last bit.
+double root(const std::function<double(double)>& f, double a, double b) {
+    const double fa = f(a);
+    for (int i = 0; i < 200; ++i) {
+        const double m = 0.5 * (a + b);
+        if (m == a || m == b) break;
+        ((f(m) > 0) == (fa > 0) ? a : b) = m;
+    }
+    return 0.5 * (a + b);
+}
+
+// Stuck, the pair oscillates with Omega = sqrt(k/(m_b + m_t)); it releases
+// where the force the friction must hold, m_t k x/(m_b + m_t), reaches
+// mu_s N; then the top slides under -mu_k N and the bottom oscillates about
+// mu_k N/k with sqrt(k/m_b), until w = 0.
+TEST(FrictionPairClosedForm, BlockOnBlockReleasesAtMuSNAndSlides) {
+    const double mb = 1.0, mt = 0.5, k = 100.0, mu_k = 0.3, mu_s = 0.4, g = 9.81;
+    const double M = mb + mt, W = std::sqrt(k / M), wb = std::sqrt(k / mb), N = mt * g;
+    std::vector<EventKind> seen;
+    for (const double v0 : {1.0, 0.7}) {  // then it slides back (reversal), or sticks again
+        SCOPED_TRACE("v0 = " + std::to_string(v0));
+        const double xs = mu_s * g * M / k, ts = std::asin(xs * W / v0) / W, vs = v0 * std::cos(W * ts);
+        const double c = mu_k * N / k;
+        auto top = [&](double tau) { return xs + vs * tau - 0.5 * mu_k * g * tau * tau; };
+        auto top_v = [&](double tau) { return vs - mu_k * g * tau; };
+        auto bottom = [&](double tau) { return c + (xs - c) * std::cos(wb * tau) + vs / wb * std::sin(wb * tau); };
+        auto bottom_v = [&](double tau) { return -(xs - c) * wb * std::sin(wb * tau) + vs * std::cos(wb * tau); };
+        // w = top_v - bottom_v > 0 right after the release; its first zero ends the slide.
+        double lo = 1e-9, hi = 1e-9;
+        while (top_v(hi) - bottom_v(hi) > 0) lo = hi, hi *= 1.1;
+        const double tau2 = root([&](double tau) { return top_v(tau) - bottom_v(tau); }, lo, hi), t2 = ts + tau2;
+        // At w = 0 the force to hold is m_t k x_b / M: it sticks if below mu_s N, else slides back.
+        const bool sticks = mt * k * std::fabs(bottom(tau2)) / M < mu_s * N;
+        const double xb2 = bottom(tau2), xt2 = top(tau2), v2 = top_v(tau2);
+
+        const Model md = parse_model(block_on_block(mb, mt, k, mu_k, mu_s, v0), "block.toml");
+        ASSERT_EQ(md.masses[1].partner, 0);
+        const double t_end = t2 + (sticks ? 0.05 : 1e-3);
+        const Outcome r = testing::simulate(md, t_end, 0.002);
+        ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+        ASSERT_EQ(r.events.size(), 2u);
+        EXPECT_EQ(r.events[0].kind, EventKind::release);
+        EXPECT_EQ(r.events[0].element, 1);
+        EXPECT_NEAR(r.events[0].t, ts, 1e-15);
+        EXPECT_NEAR(r.events[0].x[0], xs, 1e-15);
+        EXPECT_NEAR(r.events[0].x[1], xs, 1e-15);
+        EXPECT_EQ(r.events[1].kind, sticks ? EventKind::stick : EventKind::reversal);
+        EXPECT_NEAR(r.events[1].t, t2, 1e-13);
+        seen.push_back(r.events[1].kind);
+        std::printf("release at %.17g (closed form %.17g), then %s at %.17g (%.17g)\n", r.events[0].t, ts,
+                    event_kind_name(r.events[1].kind), r.events[1].t, t2);
+        double worst = 0.0;
+        for (const auto& s : r.samples) {
+            double xb, xt;
+            if (s.t <= ts) {
+                xb = xt = v0 / W * std::sin(W * s.t);
+            } else if (s.t <= t2) {
+                xb = bottom(s.t - ts), xt = top(s.t - ts);
+            } else if (sticks) {  // one body again, the top at its new offset
+                xb = xb2 * std::cos(W * (s.t - t2)) + v2 / W * std::sin(W * (s.t - t2)), xt = xb + (xt2 - xb2);
+            } else {
+                continue;
+            }
+            worst = std::max({worst, std::fabs(s.x[0] - xb), std::fabs(s.x[1] - xt)});
+        }
+        std::printf("max |x - closed form| over the stuck and sliding phases: %.2g m\n", worst);
+        EXPECT_LT(worst, 1e-13);
+    }
+    EXPECT_EQ(seen, (std::vector<EventKind>{EventKind::reversal, EventKind::stick}));
+}
+
+// Two blocks on a frictionless floor, friction between them, a harmonic
+// force F sin(omega t) on the lower one: stuck they are one floating body (a
+// rigid-body mode of the merged coordinate) accelerating F sin/M from rest,
+// and the top slips when m_t F sin(omega t)/M reaches mu_s N.
+TEST(FrictionPairClosedForm, FloatingPairDrivenByAHarmonicForce) {
+    const double mb = 2.0, mt = 1.0, M = mb + mt, mu_s = 0.5, mu_k = 0.4, g = 9.81, F = 30.0, w = 3.0;
+    const std::string text = std::string(R"(name = "floating-blocks"
+[[mass]]
+name = "bottom"
+m = 2.0
+[[mass]]
+name = "top"
+m = 1.0
+[[friction]]
+between = ["top", "bottom"]
+mu_k = 0.4
+mu_s = 0.5
+normal = 9.81
+[[forcing]]
+omega = 3.0
+amplitude = { bottom = 30.0 }
+)");
+    const Model md = parse_model(text, "floating.toml");
+    const double ts = std::asin(mu_s * g * M / F) / w;  // m_t F sin/M = mu_s m_t g
+    const Outcome r = testing::simulate(md, ts + 0.2, 0.01);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    ASSERT_GE(r.events.size(), 1u);
+    EXPECT_EQ(r.events[0].kind, EventKind::release);
+    EXPECT_EQ(md.friction_event_name(r.events[0].element), "friction1");
+    EXPECT_NEAR(r.events[0].t, ts, 1e-14);
+    double worst = 0.0;
+    for (const auto& s : r.samples) {
+        if (s.t > ts) break;
+        const double x = F / (M * w) * (s.t - std::sin(w * s.t) / w);  // from rest, together
+        worst = std::max({worst, std::fabs(s.x[0] - x), std::fabs(s.x[1] - x)});
+    }
+    std::printf("release at %.17g (closed form %.17g); stuck phase within %.2g m\n", r.events[0].t, ts, worst);
+    EXPECT_LT(worst, 1e-14);
+    // Sliding, the top decelerates relative to the bottom: w' = -mu_k g - (F sin - mu_k N)/m_b.
+    const auto& after = r.samples.back();
+    EXPECT_GT(after.x[0], after.x[1]);  // the bottom has run ahead
+}
+
+std::string input_error(const std::string& text) {
+    try {
+        parse_model(text, "pair.toml");
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << "no error for:\n" << text;
+    return "";
+}
+
+TEST(FrictionPairReader, KeysAndRefusals) {
+    const std::string two = "name = \"p\"\n[[mass]]\nname = \"a\"\nm = 1\n[[mass]]\nname = \"b\"\nm = 2\n";
+    const std::string element = "[[friction]]\nbetween = [\"a\", \"b\"]\nmu_k = 0.3\n";
+    EXPECT_EQ(input_error(two + element),
+              "pair.toml:8: key 'friction[1].normal': required key is missing (between two bodies the normal force is "
+              "not a weight m*g: give it)");
+    const Model md = parse_model(two + element + "normal = 5\n", "pair.toml");
+    EXPECT_EQ(md.masses[0].partner, 1);
+    EXPECT_TRUE(md.masses[0].has_friction);
+    EXPECT_FALSE(md.masses[1].has_friction);
+    // One friction per body, for now: the partner may have none of its own, and takes part in no other.
+    const std::string b_friction = "name = \"p\"\n[[mass]]\nname = \"a\"\nm = 1\n[[mass]]\nname = \"b\"\nm = 2\nmu_k = 0.1\n";
+    EXPECT_NE(input_error(b_friction + element + "normal = 5\n").find("'b' already has friction"), std::string::npos);
+    EXPECT_NE(input_error(two + element + "normal = 5\n[[friction]]\nbetween = [\"b\", \"ground\"]\nmu_k = 0.2\n")
+                  .find("'b' already takes part in the friction of 'friction1'"),
+              std::string::npos);
+    EXPECT_NE(input_error(two + "[[damper]]\nbetween = [\"a\", \"b\"]\nc = 1\n" + element + "normal = 5\n")
+                  .find("non-proportional damping"),
+              std::string::npos);
+}
+
+TEST(FrictionPairCli, EventsNameTheElementAndWhatCannotTakeItRefuses) {
+    const std::string model = testing::temp_path("pair-cli.toml"), events = testing::temp_path("pair-cli.csv");
+    std::ofstream(model) << block_on_block(1.0, 0.5, 100.0, 0.3, 0.4, 1.0);
+    const testing::CliRun ok = testing::run_hsnc("simulate " + model + " --t-end 2 --events " + events);
+    ASSERT_EQ(ok.exit_code, 0) << ok.err;
+    std::ifstream in(events);
+    std::string header, first;
+    std::getline(in, header);
+    std::getline(in, first);
+    EXPECT_EQ(header, "t,kind,element,x_bottom,x_top,v_bottom,v_top");
+    EXPECT_NE(first.find(",release,interface,"), std::string::npos) << first;
+    for (const char* flags : {"--kernels interp", "--kernels jit", "--method cvode", "--precision mp:30"}) {
+        const testing::CliRun bad = testing::run_hsnc("simulate " + model + " --t-end 1 " + flags);
+        EXPECT_EQ(bad.exit_code, 2) << flags << ": " << bad.err;
+        EXPECT_NE(bad.err.find("friction between two bodies ([[friction]] 'interface')"), std::string::npos) << bad.err;
+    }
+    const testing::CliRun gen = testing::run_hsnc("inspect " + model + " --format cpp");
+    EXPECT_EQ(gen.exit_code, 2);
+    EXPECT_NE(gen.err.find("friction between two bodies"), std::string::npos) << gen.err;
+}
+
+}  // namespace
+}  // namespace hsnc
