@@ -20,6 +20,7 @@
 #include "engine_runner.h"
 #include "error.h"
 #include "hsnc/simulate.h"
+#include "model.h"
 #include "model_reader.h"
 
 namespace hsnc {
@@ -170,6 +171,27 @@ amplitude = { bottom = 30.0 }
     // Sliding, the top decelerates relative to the bottom: w' = -mu_k g - (F sin - mu_k N)/m_b.
     const auto& after = r.samples.back();
     EXPECT_GT(after.x[0], after.x[1]);  // the bottom has run ahead
+}
+
+// The bundled load on a shaking table: releases and sticks alternate, and
+// from each stick to the next release the load rides at a constant offset.
+TEST(FrictionPairClosedForm, TheBundledLoadRidesAtAConstantOffsetWhileStuck) {
+    const Model md = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/friction/stacked_blocks.toml");
+    const Outcome r = testing::simulate(md, 5.0);
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    ASSERT_EQ(r.events.size(), 39u);
+    double worst = 0.0;
+    for (std::size_t e = 0; e < r.events.size(); ++e) {
+        EXPECT_EQ(r.events[e].kind, e % 2 == 0 ? EventKind::release : EventKind::stick) << "event " << e;
+        EXPECT_EQ(md.friction_event_name(r.events[e].element), "interface");
+        if (e % 2 == 1 && e + 1 < r.events.size()) {
+            const double stuck = r.events[e].x[1] - r.events[e].x[0], left = r.events[e + 1].x[1] - r.events[e + 1].x[0];
+            worst = std::max(worst, std::fabs(left - stuck));
+            EXPECT_EQ(r.events[e].v[0], r.events[e].v[1]) << "event " << e;  // one velocity from the stick on
+        }
+    }
+    std::printf("19 stuck phases: the offset of the load moved by at most %.2g m\n", worst);
+    EXPECT_LT(worst, 1e-15);
 }
 
 std::string input_error(const std::string& text) {
