@@ -224,6 +224,9 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
             case SwitchKind::velocity: what = "velocity of " + model.masses[sf.element].name; break;
             case SwitchKind::release_pos: what = "A - mu_s N of " + model.masses[sf.element].name; break;
             case SwitchKind::release_neg: what = "-A - mu_s N of " + model.masses[sf.element].name; break;
+            case SwitchKind::slip_pos:  // Jenkins elements: never in a derivation (require_derivable)
+            case SwitchKind::slip_neg:
+            case SwitchKind::slip_velocity: what = "slip of " + model.jenkins[static_cast<std::size_t>(sf.element)].name; break;
         }
         const std::string F = std::to_string(f + 1);
         p.line("g_" + F + " (" + what + ") = " + p.expr(s.g[f]),
@@ -313,6 +316,18 @@ void inspect_state_space(const Model& model, const Configuration& cfg, Format fm
                 break;
             }
             case SwitchKind::velocity: what = "v_" + model.masses[static_cast<std::size_t>(sf.element)].name + " (sliding)"; break;
+            case SwitchKind::slip_pos:
+            case SwitchKind::slip_neg:
+            case SwitchKind::slip_velocity: {
+                const Jenkins& j = model.jenkins[static_cast<std::size_t>(sf.element)];
+                auto body = [&](int b) { return b == kGround ? std::string("0") : "x_" + model.masses[static_cast<std::size_t>(b)].name; };
+                const std::string stretch = body(j.a) + " - " + body(j.b) + " - s_" + j.name;
+                what = sf.kind == SwitchKind::slip_velocity
+                           ? "relative velocity of " + j.name + " (slipping)"
+                           : std::string(sf.kind == SwitchKind::slip_pos ? "" : "-") + Printer::format_number(j.k) + " (" +
+                                 stretch + ") - " + Printer::format_number(j.slip_force) + " (slip of " + j.name + ")";
+                break;
+            }
             case SwitchKind::release_pos: what = "A - mu_s N of " + model.masses[static_cast<std::size_t>(sf.element)].name; break;
             case SwitchKind::release_neg: what = "-A - mu_s N of " + model.masses[static_cast<std::size_t>(sf.element)].name; break;
         }

@@ -159,21 +159,29 @@ double force_on_mass(const Model& model, const Configuration& cfg, int i, double
 
 namespace hsnc {
 
-double driving_force(const Model& model, const Configuration& cfg, int i, double t, const double* x, const double* v) {
-    const double A = force_on_mass(model, cfg, i, t, x, v);
+namespace {
+
+// A_i against the ground; against a partner p, (m_p A_i - m_i A_p)/(m_i + m_p)
+// with A_p = of(p): the force on i in the frame of the pair moving as one body.
+template <class Of>
+double against_partner(const Model& model, int i, double Ai, Of&& of) {
     const int p = model.masses[static_cast<std::size_t>(i)].partner;
-    if (p == kGround) return A;
+    if (p == kGround) return Ai;
     const double mi = model.masses[static_cast<std::size_t>(i)].m, mp = model.masses[static_cast<std::size_t>(p)].m;
-    return (mp * A - mi * force_on_mass(model, cfg, p, t, x, v)) / (mi + mp);
+    return (mp * Ai - mi * of(p)) / (mi + mp);
+}
+
+}  // namespace
+
+double driving_force(const Model& model, const Configuration& cfg, int i, double t, const double* x, const double* v) {
+    return against_partner(model, i, force_on_mass(model, cfg, i, t, x, v),
+                           [&](int p) { return force_on_mass(model, cfg, p, t, x, v); });
 }
 
 double driving_force_rate(const Model& model, const Configuration& cfg, int i, double t, const double* v,
                           const double* a) {
-    const double A = force_rate_on_mass(model, cfg, i, t, v, a);
-    const int p = model.masses[static_cast<std::size_t>(i)].partner;
-    if (p == kGround) return A;
-    const double mi = model.masses[static_cast<std::size_t>(i)].m, mp = model.masses[static_cast<std::size_t>(p)].m;
-    return (mp * A - mi * force_rate_on_mass(model, cfg, p, t, v, a)) / (mi + mp);
+    return against_partner(model, i, force_rate_on_mass(model, cfg, i, t, v, a),
+                           [&](int p) { return force_rate_on_mass(model, cfg, p, t, v, a); });
 }
 
 double force_rate_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* v,

@@ -505,6 +505,18 @@ private:
         model_.dampers.insert(model_.dampers.end(), structure_dampers_.begin(), structure_dampers_.end());
     }
 
+    /// An element's `name` (checked as a new name), or KIND<i+1> when it has none.
+    std::string element_name(const toml::table& t, const std::string& path, const std::string& kind, std::size_t i) {
+        if (t.get("name")) {
+            std::string name = required_string(t, path, "name");
+            check_new_name(t.get("name"), path + ".name", name);
+            return name;
+        }
+        std::string name = kind + std::to_string(i + 1);
+        check_new_name(&t, path + ".name", name);  // the default may clash with a mass
+        return name;
+    }
+
     void read_jenkins(const toml::table& root) {
         const auto tables = table_array(root, "jenkins");
         for (std::size_t i = 0; i < tables.size(); ++i) {
@@ -512,13 +524,7 @@ private:
             const std::string path = "jenkins[" + std::to_string(i + 1) + "]";
             check_keys(t, path, {"name", "between", "k", "slip_force"});
             Jenkins j;
-            if (t.get("name")) {
-                j.name = required_string(t, path, "name");
-                check_new_name(t.get("name"), path + ".name", j.name);
-            } else {
-                j.name = "jenkins" + std::to_string(i + 1);
-                check_new_name(&t, path + ".name", j.name);
-            }
+            j.name = element_name(t, path, "jenkins", i);
             std::tie(j.a, j.b) = between(t, path);
             j.k = required_number(t, path, "k");
             if (!(j.k > 0.0)) fail(t.get("k"), path + ".k", "stiffness must be > 0, got " + show(j.k));
@@ -537,13 +543,7 @@ private:
             const std::string path = "friction[" + std::to_string(i + 1) + "]";
             check_keys(t, path, {"name", "between", "mu_k", "mu_s", "normal"});
             FrictionElement f;
-            if (t.get("name")) {
-                f.name = required_string(t, path, "name");
-                check_new_name(t.get("name"), path + ".name", f.name);
-            } else {
-                f.name = "friction" + std::to_string(i + 1);
-                check_new_name(&t, path + ".name", f.name);
-            }
+            f.name = element_name(t, path, "friction", i);
             std::tie(f.a, f.b) = between(t, path);
             const bool two_bodies = f.a != kGround && f.b != kGround;
             const int body = f.a == kGround ? f.b : f.a;
@@ -680,13 +680,7 @@ private:
             const std::string path = "contact[" + std::to_string(i + 1) + "]";
             check_keys(t, path, {"name", "between", "gap", "k"});
             Contact contact;
-            if (t.get("name")) {
-                contact.name = required_string(t, path, "name");
-                check_new_name(t.get("name"), path + ".name", contact.name);
-            } else {
-                contact.name = "contact" + std::to_string(i + 1);
-                check_new_name(&t, path + ".name", contact.name);  // the default may clash with a mass
-            }
+            contact.name = element_name(t, path, "contact", i);
             std::tie(contact.a, contact.b) = between(t, path);
             contact.gap = required_number(t, path, "gap");
             contact.k = required_number(t, path, "k");

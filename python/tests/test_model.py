@@ -120,3 +120,16 @@ def test_a_model_with_a_jenkins_element_gives_its_slider(tmp_path):
         assert False, "interp ran a model with a Jenkins element"
     except hsnc.InputError as e:
         assert "Jenkins elements" in str(e)
+
+
+def test_friction_between_two_bodies_runs_as_on_the_command_line(tmp_path):
+    """[[friction]] between two bodies from Python: the bundled load on a
+    shaking table gives the CLI's events, named by the element."""
+    path = model_path("../examples/friction/stacked_blocks.toml")  # models/../examples
+    r = hsnc.simulate(hsnc.Model.from_file(path), t_end=5.0)
+    assert set(r.events.element) == {"interface"}
+    assert list(r.events.kind[:2]) == ["release", "stick"]
+    cli = tmp_path / "events.csv"
+    run_cli("simulate", path, "--t-end", "5", "--events", cli)
+    rows = cli.read_text().splitlines()[1:]
+    assert [float(row.split(",")[0]) for row in rows] == list(r.events.t)

@@ -463,13 +463,7 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
     }
 
     // Physical state: x_F = Phi q (likewise v, a); stuck masses fixed.
-    for (int i = 0; i < n_; ++i) {
-        out.x[i] = x_fix_(i);
-        out.v[i] = 0.0;
-        out.a[i] = 0.0;
-        xmag_(i) = std::abs(x_fix_(i));
-        vmag_(i) = 0.0;
-    }
+    write_at_rest(x_fix_, out, xmag_, vmag_);
     for (int r = 0; r < nf_; ++r) {
         double x = 0.0, v = 0.0, a = 0.0, xm = 0.0, vm = 0.0;
         for (int j = 0; j < nf_; ++j) {

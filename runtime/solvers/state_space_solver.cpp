@@ -418,13 +418,7 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
     }
 
     // y = Re(V eta): positions, velocities / s.
-    for (int i = 0; i < n_; ++i) {
-        out.x[i] = x_fix_(i);
-        out.v[i] = 0.0;
-        out.a[i] = 0.0;
-        xmag_(i) = std::abs(x_fix_(i));
-        vmag_(i) = 0.0;
-    }
+    write_at_rest(x_fix_, out, xmag_, vmag_);
     if (m > 0) {  // y = Re(V eta) and its magnitude |V| |eta|: two matrix-vector products
         y_.noalias() = Vre_ * eta_.real();
         y_.noalias() -= Vim_ * eta_.imag();

@@ -82,6 +82,19 @@ inline void write_sliders(const ConfigurationTerms& in, const Configuration& cfg
     }
 }
 
+/// Every mass at its segment-start position, at rest (then the solver writes
+/// the masses that move): x = x_fix, v = a = 0, and their magnitudes.
+inline void write_at_rest(const Eigen::VectorXd& x_fix, const SegmentEval& out, Eigen::VectorXd& xmag,
+                          Eigen::VectorXd& vmag) {
+    for (Eigen::Index i = 0; i < x_fix.size(); ++i) {
+        out.x[i] = x_fix(i);
+        out.v[i] = 0.0;
+        out.a[i] = 0.0;
+        xmag(i) = std::abs(x_fix(i));
+        vmag(i) = 0.0;
+    }
+}
+
 /// e^w - 1 for complex w = x + iy without cancellation:
 /// Re = expm1(x) cos y - 2 sin^2(y/2), Im = e^x sin y.
 inline std::complex<double> expm1c(std::complex<double> w) {
