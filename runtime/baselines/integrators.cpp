@@ -25,11 +25,14 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Accelerations with friction -mu_k*N*dir for the sliding friction masses; a
-// stuck mass does not move. dir[i] is the friction direction of mass i.
+// Accelerations with friction -mu_k*N*dir for the sliding friction masses
+// (and its reaction on a partner, friction between two bodies); a mass stuck
+// to the ground does not move, one stuck to its partner moves with it (their
+// summed forces over their summed mass). dir[i] is the friction direction of mass i.
 void accelerations(const Model& model, const Configuration& cfg, const std::vector<signed char>& dir, double t,
                    const double* x, const double* v, double* a) {
-    for (std::size_t i = 0; i < model.dof(); ++i) {
+    const std::size_t n = model.dof();
+    for (std::size_t i = 0; i < n; ++i) {
         if (cfg.stuck[i]) {
             a[i] = 0.0;
             continue;
@@ -37,8 +40,31 @@ void accelerations(const Model& model, const Configuration& cfg, const std::vect
         const Mass& m = model.masses[i];
         double f = force_on_mass(model, cfg, static_cast<int>(i), t, x, v);
         if (m.has_friction) f -= m.mu_k * model.normal_force(i) * dir[i];
-        a[i] = f / m.m;
+        a[i] = f;  // divided by the mass below
     }
+    for (std::size_t i = 0; i < n; ++i) {
+        const Mass& m = model.masses[i];
+        if (m.partner == kGround || !m.has_friction) continue;
+        const auto p = static_cast<std::size_t>(m.partner);
+        if (cfg.stuck[i]) {
+            a[p] += force_on_mass(model, cfg, static_cast<int>(i), t, x, v);
+            a[p] /= m.m + model.masses[p].m;
+            a[i] = a[p] * m.m;  // both divided by their own masses below
+            a[p] *= model.masses[p].m;
+        } else {
+            a[p] += m.mu_k * model.normal_force(i) * dir[i];
+        }
+    }
+    for (std::size_t i = 0; i < n; ++i)
+        if (!fixed_in(model, cfg, i)) a[i] /= model.masses[i].m;
+}
+
+// After a switch: a mass stuck to the ground at rest, one stuck to its
+// partner at the partner's velocity (the pair moves as one body).
+void hold_stuck(const Model& model, const Configuration& cfg, std::vector<double>& v) {
+    for (std::size_t i = 0; i < model.dof(); ++i)
+        if (fixed_in(model, cfg, i)) v[i] = 0.0;
+        else if (cfg.stuck[i]) v[i] = v[static_cast<std::size_t>(model.masses[i].partner)];
 }
 
 // Switch functions with their watched side (as in the engine): each is > 0
@@ -53,9 +79,13 @@ void watched_values(const Model& model, const Configuration& cfg, const std::vec
                 h[k] = cfg.closed[s.element] ? G : -G;
                 break;
             }
-            case SwitchKind::velocity: h[k] = dir[s.element] * v[s.element]; break;
+            case SwitchKind::velocity: {  // w = v_i - v_partner
+                const int p = model.masses[static_cast<std::size_t>(s.element)].partner;
+                h[k] = dir[s.element] * (v[s.element] - (p == kGround ? 0.0 : v[p]));
+                break;
+            }
             default: {
-                const double A = force_on_mass(model, cfg, s.element, t, x, v);
+                const double A = driving_force(model, cfg, s.element, t, x, v);
                 const double lim = model.masses[s.element].mu_s * model.normal_force(s.element);
                 h[k] = s.kind == SwitchKind::release_pos ? lim - A : lim + A;
             }
@@ -312,7 +342,7 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
     // y = (x, v); f(y) = (v, a) in the current configuration.
     auto f = [&](double tt, const std::vector<double>& y, std::vector<double>& dy) {
         accelerations(model, cfg, dir, tt, y.data(), y.data() + n, dy.data() + n);
-        for (std::size_t i = 0; i < n; ++i) dy[i] = cfg.stuck[i] ? 0.0 : y[n + i];
+        for (std::size_t i = 0; i < n; ++i) dy[i] = fixed_in(model, cfg, i) ? 0.0 : y[n + i];
     };
     auto switch_values = [&](double tt, const std::vector<double>& xx, const std::vector<double>& vv,
                              const std::vector<SwitchFunction>& sw, std::vector<double>& h) {
@@ -412,8 +442,7 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
                     obs.on_event(t, e.kind, e.element, x.data(), v.data());
                     ++sum.events;
                 }
-                for (std::size_t i = 0; i < n; ++i)
-                    if (cfg.stuck[i]) v[i] = 0.0;
+                hold_stuck(model, cfg, v);
                 switched = true;
                 ++sum.segments;
             } else {
@@ -468,7 +497,7 @@ int cvode_rhs(realtype t, N_Vector y, N_Vector ydot, void* user) {
     const double* yy = N_VGetArrayPointer(y);
     double* dy = N_VGetArrayPointer(ydot);
     accelerations(p.model, p.cfg, p.dir, t, yy, yy + p.n, dy + p.n);
-    for (std::size_t i = 0; i < p.n; ++i) dy[i] = p.cfg.stuck[i] ? 0.0 : yy[p.n + i];
+    for (std::size_t i = 0; i < p.n; ++i) dy[i] = fixed_in(p.model, p.cfg, i) ? 0.0 : yy[p.n + i];
     return 0;
 }
 
@@ -631,8 +660,7 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
                     obs.on_event(t, e.kind, e.element, x.data(), v.data());
                     ++sum.events;
                 }
-                for (std::size_t i = 0; i < n; ++i)
-                    if (cfg.stuck[i]) v[i] = 0.0;
+                hold_stuck(model, cfg, v);
                 // Restarts that keep switching at one instant (as the engine guards).
                 same_instant = t == last_switch_t ? same_instant + 1 : 0;
                 last_switch_t = t;
@@ -702,7 +730,8 @@ void validate(Method method, const IntegratorOptions& o, double t0, double t_end
 RunSummary integrate(const Model& model, Method method, const IntegratorOptions& options,
                      const EngineOptions& engine_options, Observer& observer) {
     validate(method, options, model.t0, engine_options.t_end);
-    require_derivable(model, "hsnc::integrate()");  // no slider state or stuck pairs in the integrators' ODE
+    if (!model.jenkins.empty() || method == Method::ab4)  // no slider state; ab4 has its own stick rules
+        require_derivable(model, "hsnc::integrate()");
     if (method == Method::ab4) return run_ab4(model, options, engine_options, observer);
     if (method == Method::rk45) return run_rk45(model, options, engine_options, observer);
     if (method == Method::cvode) return run_cvode(model, options, engine_options, observer);
