@@ -141,12 +141,12 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     } else if (o.max_steps != 0) {
         throw OptionError(kPlan, "max_steps", std::to_string(o.max_steps), "only with continuation");
     }
-    // Jenkins elements: the points carry their sliders (State::slider), on the
-    // exact method; the shooting of a continuation has no slider state yet.
+    // Jenkins elements and stuck pairs: the points carry the sliders
+    // (State::slider) on hsnc, rk45 and cvode; a continuation's shooting takes neither yet.
     if (const std::string what = generic_only(model_); !what.empty()) {
         const std::string why = "the model has " + what + ", ";
-        if (o.method != Method::hsnc)
-            throw OptionError(kPlan, "method", method_name(o.method), why + "which only method hsnc runs, for now");
+        if (o.method == Method::ab4)
+            throw OptionError(kPlan, "method", method_name(o.method), why + "which hsnc, rk45 and cvode run, for now");
         if (o.continuation)
             throw OptionError(kPlan, "continuation", "true", why + "which the continuation does not take yet");
     }

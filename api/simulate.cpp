@@ -109,16 +109,14 @@ void check_options(const Model& model, const SimulateOptions& o) {
         if (o.kernels != KernelChoice::automatic && o.kernels != KernelChoice::generic)
             throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels), nonprop);
     }
-    // Jenkins elements (a slider the engine carries) and friction between two
-    // bodies (a stuck pair, one body): the generic solvers take both, rk45 and
-    // CVODE the second; the derivation and the reference neither, yet.
+    // Jenkins elements (a slider carried beside the state) and friction between
+    // two bodies (a stuck pair, one body): the generic solvers, rk45 and CVODE
+    // take both; the derivation, the reference and ab4 neither, yet.
     if (const std::string what = generic_only(model); !what.empty()) {
         const std::string jenkins = "the model has " + what + ", which runs on hsnc's generic solver only, for now";
-        const bool integrable = model.jenkins.empty() && (o.method == Method::rk45 || o.method == Method::cvode);
-        if (o.method != Method::hsnc && !integrable)
+        if (o.method == Method::ab4)
             throw OptionError(kSimulate, "method", method_name(o.method),
-                              model.jenkins.empty() ? "the model has " + what + ", which hsnc, rk45 and cvode run, for now"
-                                                    : jenkins);
+                              "the model has " + what + ", which hsnc, rk45 and cvode run, for now");
         if (o.precision_digits != 0)
             throw OptionError(kSimulate, "precision_digits", std::to_string(o.precision_digits), jenkins);
         if (o.kernels != KernelChoice::automatic && o.kernels != KernelChoice::generic)

@@ -25,13 +25,46 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// The Jenkins sliders of a run, kept beside the ODE state (x, v): fixed while
+// an element is stuck, x[a] - x[b] - slip F_s/k while it slips (assembly.h
+// slider_position), so they need no integration; settled at every switch.
+struct Sliders {
+    const Model& model;
+    std::vector<double> s, buf;
+    explicit Sliders(const Model& m) : model(m), buf(m.state_size()) {
+        if (m.slider0.size() == m.jenkins.size()) {
+            s = m.slider0;
+        } else {
+            for (const Jenkins& j : m.jenkins)
+                s.push_back((j.a == kGround ? 0.0 : m.x0[static_cast<std::size_t>(j.a)]) -
+                            (j.b == kGround ? 0.0 : m.x0[static_cast<std::size_t>(j.b)]));
+        }
+    }
+    // The masses' x followed by the sliders in cfg (x itself without Jenkins elements).
+    const double* with(const Configuration& cfg, const double* x) {
+        if (model.jenkins.empty()) return x;
+        const std::size_t n = model.dof();
+        std::copy(x, x + n, buf.begin());
+        std::copy(s.begin(), s.end(), buf.begin() + static_cast<std::ptrdiff_t>(n));
+        for (std::size_t j = 0; j < s.size(); ++j)
+            if (cfg.slip[j] != 0) buf[n + j] = slider_position(model, cfg, j, buf.data());
+        return buf.data();
+    }
+    // At a switch: every slipping slider where it stands at x (it stays there if it sticks).
+    void settle(const Configuration& cfg, const double* x) {
+        const double* xs = with(cfg, x);
+        std::copy(xs + model.dof(), xs + model.state_size(), s.begin());
+    }
+};
+
 // Accelerations with friction -mu_k*N*dir for the sliding friction masses
 // (and its reaction on a partner, friction between two bodies); a mass stuck
 // to the ground does not move, one stuck to its partner moves with it (their
 // summed forces over their summed mass). dir[i] is the friction direction of mass i.
 void accelerations(const Model& model, const Configuration& cfg, const std::vector<signed char>& dir, double t,
-                   const double* x, const double* v, double* a) {
+                   const double* x_masses, const double* v, double* a, Sliders& sl) {
     const std::size_t n = model.dof();
+    const double* x = sl.with(cfg, x_masses);
     for (std::size_t i = 0; i < n; ++i) {
         if (cfg.stuck[i]) {
             a[i] = 0.0;
@@ -70,7 +103,10 @@ void hold_stuck(const Model& model, const Configuration& cfg, std::vector<double
 // Switch functions with their watched side (as in the engine): each is > 0
 // while its configuration holds.
 void watched_values(const Model& model, const Configuration& cfg, const std::vector<signed char>& dir, double t,
-                    const double* x, const double* v, const std::vector<SwitchFunction>& sw, double* h) {
+                    const double* x_masses, const double* v, const std::vector<SwitchFunction>& sw, double* h,
+                    Sliders& sl) {
+    const double* x = sl.with(cfg, x_masses);
+    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
     for (std::size_t k = 0; k < sw.size(); ++k) {
         const SwitchFunction& s = sw[k];
         switch (s.kind) {
@@ -82,6 +118,18 @@ void watched_values(const Model& model, const Configuration& cfg, const std::vec
             case SwitchKind::velocity: {  // w = v_i - v_partner
                 const int p = model.masses[static_cast<std::size_t>(s.element)].partner;
                 h[k] = dir[s.element] * (v[s.element] - (p == kGround ? 0.0 : v[p]));
+                break;
+            }
+            case SwitchKind::slip_pos:
+            case SwitchKind::slip_neg: {  // F_s -+ k (x_a - x_b - s)
+                const Jenkins& j = model.jenkins[static_cast<std::size_t>(s.element)];
+                const double e = body(x, j.a) - body(x, j.b) - x[model.dof() + static_cast<std::size_t>(s.element)];
+                h[k] = j.slip_force - (s.kind == SwitchKind::slip_pos ? j.k * e : -j.k * e);
+                break;
+            }
+            case SwitchKind::slip_velocity: {  // slip * w
+                const Jenkins& j = model.jenkins[static_cast<std::size_t>(s.element)];
+                h[k] = cfg.slip[static_cast<std::size_t>(s.element)] * (body(v, j.a) - body(v, j.b));
                 break;
             }
             default: {
@@ -136,8 +184,10 @@ struct Sampler {
     std::size_t k = 0;
     bool done;
     SampleGrid grid;
-    Sampler(const Model& m, const EngineOptions& o, Observer& ob)
-        : model(m), opt(o), obs(ob), done(!o.samples), grid(m.t0, o.t_end, o.dt) {}
+    Sliders& sl;
+    const Configuration& cfg;  // the run's current configuration (the sliders' state)
+    Sampler(const Model& m, const EngineOptions& o, Observer& ob, Sliders& s, const Configuration& c)
+        : model(m), opt(o), obs(ob), done(!o.samples), grid(m.t0, o.t_end, o.dt), sl(s), cfg(c) {}
     template <class Interpolant>  // at(t, x, v): Hermite here, CVODE's own interpolant below
     void emit(double from, double to, bool last, const Interpolant& H) {
         std::vector<double> x(model.dof()), v(model.dof());
@@ -146,7 +196,7 @@ struct Sampler {
             if (last ? tk > to : tk >= to) return;
             if (tk >= from) {
                 H.at(tk, x, v);
-                obs.on_sample(tk, x.data(), v.data());
+                obs.on_sample(tk, sl.with(cfg, x.data()), v.data());
             }
             if (grid.last(k)) done = true;
             ++k;
@@ -196,9 +246,11 @@ RunSummary run_ab4(const Model& model, const IntegratorOptions& io, const Engine
     std::vector<double> x = model.x0, v = model.v0;
     double t = model.t0;
     std::vector<signed char> dir;
-    Configuration cfg = entered_configuration(model, t, x.data(), v.data(), dir);  // stuck only where v = 0
+    Sliders sl(model);
+    Configuration cfg = entered_configuration(model, t, sl.with(Configuration::all_open(model), x.data()), v.data(),
+                                              dir);  // stuck only where v = 0
     RunSummary sum;
-    Sampler sampler(model, eo, obs);
+    Sampler sampler(model, eo, obs, sl, cfg);
 
     // Contacts from the state (closed while G >= 0); friction along v, or along
     // the decided direction while v is exactly 0.
@@ -208,7 +260,7 @@ RunSummary run_ab4(const Model& model, const IntegratorOptions& io, const Engine
         c.stuck = cfg.stuck;
         for (std::size_t k = 0; k < model.contacts.size(); ++k) c.closed[k] = gap(model, static_cast<int>(k), xx.data()) >= 0;
         for (std::size_t i = 0; i < n; ++i) d[i] = vv[i] != 0.0 ? (vv[i] > 0 ? 1 : -1) : dir[i];
-        accelerations(model, c, d, tt, xx.data(), vv.data(), a.data());
+        accelerations(model, c, d, tt, xx.data(), vv.data(), a.data(), sl);
     };
 
     std::array<std::vector<double>, 4> fv, fa;  // history of v and a, newest first
@@ -313,6 +365,8 @@ RunSummary run_ab4(const Model& model, const IntegratorOptions& io, const Engine
             return finish(sum, RunStatus::max_events, "stopped after max events", t, x, v, cfg);
     }
     sum.configurations = 0;
+    sl.settle(cfg, x.data());
+    sum.slider = sl.s;
     return finish(sum, RunStatus::ok, "", t, x, v, cfg);
 }
 
@@ -335,18 +389,20 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
     std::vector<double> x = model.x0, v = model.v0;
     double t = model.t0;
     std::vector<signed char> dir;
-    Configuration cfg = entered_configuration(model, t, x.data(), v.data(), dir);  // stuck only where v = 0
+    Sliders sl(model);
+    Configuration cfg = entered_configuration(model, t, sl.with(Configuration::all_open(model), x.data()), v.data(),
+                                              dir);  // stuck only where v = 0
     RunSummary sum;
-    Sampler sampler(model, eo, obs);
+    Sampler sampler(model, eo, obs, sl, cfg);
 
     // y = (x, v); f(y) = (v, a) in the current configuration.
     auto f = [&](double tt, const std::vector<double>& y, std::vector<double>& dy) {
-        accelerations(model, cfg, dir, tt, y.data(), y.data() + n, dy.data() + n);
+        accelerations(model, cfg, dir, tt, y.data(), y.data() + n, dy.data() + n, sl);
         for (std::size_t i = 0; i < n; ++i) dy[i] = fixed_in(model, cfg, i) ? 0.0 : y[n + i];
     };
     auto switch_values = [&](double tt, const std::vector<double>& xx, const std::vector<double>& vv,
                              const std::vector<SwitchFunction>& sw, std::vector<double>& h) {
-        watched_values(model, cfg, dir, tt, xx.data(), vv.data(), sw, h.data());
+        watched_values(model, cfg, dir, tt, xx.data(), vv.data(), sw, h.data(), sl);
     };
 
     std::vector<double> y(m2), y1(m2), k1(m2), k2(m2), k3(m2), k4(m2), k5(m2), k6(m2), k7(m2), tmp(m2), err(m2);
@@ -436,10 +492,11 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
                 std::vector<SwitchFunction> s;
                 for (std::size_t k : hit) s.push_back(sw[k]);
                 tr.clear();
-                if (!apply_switches(model, t, x.data(), v.data(), nullptr, cfg, dir, s, tr, why))
+                sl.settle(cfg, x.data());
+                if (!apply_switches(model, t, sl.with(cfg, x.data()), v.data(), nullptr, cfg, dir, s, tr, why))
                     return finish(sum, RunStatus::chattering, why, t, x, v, cfg);
                 for (const Transition& e : tr) {
-                    obs.on_event(t, e.kind, e.element, x.data(), v.data());
+                    obs.on_event(t, e.kind, e.element, sl.with(cfg, x.data()), v.data());
                     ++sum.events;
                 }
                 hold_stuck(model, cfg, v);
@@ -460,6 +517,8 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
         }
     }
     sum.evaluations = steps;
+    sl.settle(cfg, x.data());
+    sum.slider = sl.s;
     return finish(sum, RunStatus::ok, "", t, x, v, cfg);
 }
 
@@ -485,6 +544,7 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
 
 struct CvodeProblem {
     const Model& model;
+    Sliders& sl;
     Configuration cfg;
     std::vector<signed char> dir;
     std::vector<SwitchFunction> sw;
@@ -496,7 +556,7 @@ int cvode_rhs(realtype t, N_Vector y, N_Vector ydot, void* user) {
     auto& p = *static_cast<CvodeProblem*>(user);
     const double* yy = N_VGetArrayPointer(y);
     double* dy = N_VGetArrayPointer(ydot);
-    accelerations(p.model, p.cfg, p.dir, t, yy, yy + p.n, dy + p.n);
+    accelerations(p.model, p.cfg, p.dir, t, yy, yy + p.n, dy + p.n, p.sl);
     for (std::size_t i = 0; i < p.n; ++i) dy[i] = fixed_in(p.model, p.cfg, i) ? 0.0 : yy[p.n + i];
     return 0;
 }
@@ -504,7 +564,7 @@ int cvode_rhs(realtype t, N_Vector y, N_Vector ydot, void* user) {
 int cvode_roots(realtype t, N_Vector y, realtype* g, void* user) {
     auto& p = *static_cast<CvodeProblem*>(user);
     const double* yy = N_VGetArrayPointer(y);
-    watched_values(p.model, p.cfg, p.dir, t, yy, yy + p.n, p.sw, g);
+    watched_values(p.model, p.cfg, p.dir, t, yy, yy + p.n, p.sw, g, p.sl);
     return 0;
 }
 
@@ -585,11 +645,13 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
     const std::size_t n = model.dof();
     std::vector<double> x = model.x0, v = model.v0;
     double t = model.t0;
-    CvodeProblem p{model, {}, {}, {}, n, {}};
-    p.cfg = entered_configuration(model, t, x.data(), v.data(), p.dir);  // stuck only where v = 0
+    Sliders sl(model);
+    CvodeProblem p{model, sl, {}, {}, {}, n, {}};
+    p.cfg = entered_configuration(model, t, sl.with(Configuration::all_open(model), x.data()), v.data(),
+                                  p.dir);  // stuck only where v = 0
     Configuration& cfg = p.cfg;
     RunSummary sum;
-    Sampler sampler(model, eo, obs);
+    Sampler sampler(model, eo, obs, sl, cfg);
     Cvode cv(2 * n, io, t, p);
     const CvodeInterpolant interp{cv, n};
     std::string why;
@@ -620,7 +682,7 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
         if (ns) Cvode::check(CVodeSetRootDirection(cv.mem(), rootdir.data()), "CVodeSetRootDirection");
         Cvode::check(CVodeSetStopTime(cv.mem(), eo.t_end), "CVodeSetStopTime");
         Cvode::check(CVodeSetMaxStep(cv.mem(), stuck_step_limit(model, cfg)), "CVodeSetMaxStep");  // 0: none
-        watched_values(model, cfg, p.dir, t, x.data(), v.data(), p.sw, h.data());
+        watched_values(model, cfg, p.dir, t, x.data(), v.data(), p.sw, h.data(), sl);
         for (std::size_t k = 0; k < ns; ++k) armed[k] = h[k] > 0;
         for (bool switched = false; !switched;) {
             double tret = t;
@@ -628,7 +690,7 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
             if (flag < 0) return fail("step failed at t = " + std::to_string(t) + ", flag " + std::to_string(flag));
             ++steps;
             y = cv.y();
-            watched_values(model, cfg, p.dir, tret, y, y + n, p.sw, h.data());
+            watched_values(model, cfg, p.dir, tret, y, y + n, p.sw, h.data(), sl);
             // The earliest switch: CVODE's roots at tret, or an unarmed function
             // that went below zero (bisection from the last return on).
             double t_root = kInf;
@@ -642,7 +704,7 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
                 if (armed[k] || found[k] != 0 || !(h[k] < 0)) continue;
                 const double r = bisect_fall(t, tret, [&](double mid) {
                     interp.at(mid, xi, vi);
-                    watched_values(model, cfg, p.dir, mid, xi.data(), vi.data(), p.sw, hv.data());
+                    watched_values(model, cfg, p.dir, mid, xi.data(), vi.data(), p.sw, hv.data(), sl);
                     return hv[k];
                 });
                 keep_earliest(r, k, t_root, hit);
@@ -654,10 +716,11 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
                 std::vector<SwitchFunction> s;
                 for (std::size_t k : hit) s.push_back(p.sw[k]);
                 tr.clear();
-                if (!apply_switches(model, t, x.data(), v.data(), nullptr, cfg, p.dir, s, tr, why))
+                sl.settle(cfg, x.data());
+                if (!apply_switches(model, t, sl.with(cfg, x.data()), v.data(), nullptr, cfg, p.dir, s, tr, why))
                     return finish(counted(), RunStatus::chattering, why, t, x, v, cfg);
                 for (const Transition& e : tr) {
-                    obs.on_event(t, e.kind, e.element, x.data(), v.data());
+                    obs.on_event(t, e.kind, e.element, sl.with(cfg, x.data()), v.data());
                     ++sum.events;
                 }
                 hold_stuck(model, cfg, v);
@@ -686,6 +749,8 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
                 return finish(counted(), RunStatus::max_events, "stopped after max events", t, x, v, cfg);
         }
     }
+    sl.settle(cfg, x.data());
+    sum.slider = sl.s;
     return finish(counted(), RunStatus::ok, "", t, x, v, cfg);
 }
 #else  // built with HSNC_WITH_CVODE=OFF
@@ -730,7 +795,7 @@ void validate(Method method, const IntegratorOptions& o, double t0, double t_end
 RunSummary integrate(const Model& model, Method method, const IntegratorOptions& options,
                      const EngineOptions& engine_options, Observer& observer) {
     validate(method, options, model.t0, engine_options.t_end);
-    if (!model.jenkins.empty() || method == Method::ab4)  // no slider state; ab4 has its own stick rules
+    if (method == Method::ab4)  // ab4 has its own stick rules, for masses against the ground
         require_derivable(model, "hsnc::integrate()");
     if (method == Method::ab4) return run_ab4(model, options, engine_options, observer);
     if (method == Method::rk45) return run_rk45(model, options, engine_options, observer);
