@@ -46,8 +46,8 @@ SectionSpec parse_section(const Model& model, const std::string& text, const std
                          "stick, release, reversal");
     if (colon == std::string::npos) {
         if (is_contact_kind(s.kind) ? model.contacts.empty()
-                                    : std::none_of(model.masses.begin(), model.masses.end(),
-                                                   [](const Mass& m) { return m.has_friction; }))
+                                    : model.jenkins.empty() && std::none_of(model.masses.begin(), model.masses.end(),
+                                                                            [](const Mass& m) { return m.has_friction; }))
             throw InputError(flag + " '" + text + "': model '" + model.name + "' has no " +
                              (is_contact_kind(s.kind) ? "contact" : "mass with friction") + ": no such event can happen");
         return s;
@@ -63,14 +63,19 @@ SectionSpec parse_section(const Model& model, const std::string& text, const std
                              (names.empty() ? " (it has none)" : " (contacts: " + names + ")"));
         }
     } else {
+        // A friction mass by its own name or its [[friction]] element's, or a
+        // Jenkins element (element dof() + j, as in the event rows).
         for (std::size_t i = 0; i < model.masses.size(); ++i)
-            if (model.masses[i].name == name) s.element = static_cast<int>(i);
-        if (s.element < 0 || !model.masses[static_cast<std::size_t>(s.element)].has_friction) {
+            if (model.masses[i].has_friction && (model.masses[i].name == name || model.friction_name(i) == name))
+                s.element = static_cast<int>(i);
+        if (const int j = model.jenkins_index(name); j >= 0) s.element = static_cast<int>(model.dof()) + j;
+        if (s.element < 0) {
             std::string names;
-            for (const Mass& m : model.masses)
-                if (m.has_friction) names += (names.empty() ? "" : ", ") + m.name;
+            for (std::size_t i = 0; i < model.masses.size(); ++i)
+                if (model.masses[i].has_friction) names += (names.empty() ? "" : ", ") + model.friction_name(i);
+            for (const Jenkins& j : model.jenkins) names += (names.empty() ? "" : ", ") + j.name;
             throw InputError(flag + " '" + text + "': no mass with friction named '" + name + "' in model '" +
-                             model.name + "'" + (names.empty() ? " (it has none)" : " (friction masses: " + names + ")"));
+                             model.name + "'" + (names.empty() ? " (it has none)" : " (friction masses and elements: " + names + ")"));
         }
     }
     return s;

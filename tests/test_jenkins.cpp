@@ -585,6 +585,16 @@ TEST(JenkinsCli, EventsNameTheElementAndTheSliderIsTheLastColumn) {
         EXPECT_EQ(bad.exit_code, 2) << flags << ": " << bad.err;
         EXPECT_NE(bad.err.find("Jenkins elements"), std::string::npos) << bad.err;
     }
+    // A Poincare section at the element's sticks: one row per stick, the slider last.
+    const std::string section = testing::temp_path("jenkins-section.csv");
+    const testing::CliRun sec = testing::run_hsnc("simulate " + model + " --t-end 1 --section stick:j1 --section-out " + section);
+    ASSERT_EQ(sec.exit_code, 0) << sec.err;
+    std::ifstream sin(section);
+    std::string sheader, srow;
+    std::getline(sin, sheader);
+    std::getline(sin, srow);
+    EXPECT_EQ(sheader, "t,x_m1,v_m1,s_j1");
+    EXPECT_EQ(srow.substr(0, srow.find(',')), second.substr(0, second.find(',')));  // at the stick row's instant
     for (const std::string cmd : {"periodic " + model + " --period 1", "inspect " + model + " --format cpp",
                                   "generate " + model + " -o " + testing::temp_path("jenkins-gen")}) {
         const testing::CliRun bad = testing::run_hsnc(cmd);
