@@ -161,26 +161,26 @@ namespace hsnc {
 
 namespace {
 
-// A_i against the ground; against a partner p, (m_p A_i - m_i A_p)/(m_i + m_p)
+// A_i against the ground; against a partner p, against_partner(.., A_i, A_p)
 // with A_p = of(p): the force on i in the frame of the pair moving as one body.
 template <class Of>
-double against_partner(const Model& model, int i, double Ai, Of&& of) {
+double on_partner(const Model& model, int i, double Ai, Of&& of) {
     const int p = model.masses[static_cast<std::size_t>(i)].partner;
     if (p == kGround) return Ai;
-    const double mi = model.masses[static_cast<std::size_t>(i)].m, mp = model.masses[static_cast<std::size_t>(p)].m;
-    return (mp * Ai - mi * of(p)) / (mi + mp);
+    return against_partner(model.masses[static_cast<std::size_t>(i)].m, model.masses[static_cast<std::size_t>(p)].m, Ai,
+                           of(p));
 }
 
 }  // namespace
 
 double driving_force(const Model& model, const Configuration& cfg, int i, double t, const double* x, const double* v) {
-    return against_partner(model, i, force_on_mass(model, cfg, i, t, x, v),
+    return on_partner(model, i, force_on_mass(model, cfg, i, t, x, v),
                            [&](int p) { return force_on_mass(model, cfg, p, t, x, v); });
 }
 
 double driving_force_rate(const Model& model, const Configuration& cfg, int i, double t, const double* v,
                           const double* a) {
-    return against_partner(model, i, force_rate_on_mass(model, cfg, i, t, v, a),
+    return on_partner(model, i, force_rate_on_mass(model, cfg, i, t, v, a),
                            [&](int p) { return force_rate_on_mass(model, cfg, p, t, v, a); });
 }
 

@@ -127,6 +127,15 @@ inline bool rides_partner(const Model& model, const Configuration& cfg, std::siz
     return cfg.stuck[i] && model.masses[i].partner != kGround;
 }
 
+/// A quantity of mass i (mass mi) in the frame of its pair with p (mass mp)
+/// moving as one body, (m_p a_i - m_i a_p)/(m_i + m_p): the force that keeps
+/// them together (driving_force), its rate, series, rows and bounds.
+inline double against_partner(double mi, double mp, double ai, double ap) { return (mp * ai - mi * ap) / (mi + mp); }
+/// The magnitude of its terms from the magnitudes of a_i's and a_p's.
+inline double against_partner_magnitude(double mi, double mp, double mag_i, double mag_p) {
+    return (mp * mag_i + mi * mag_p) / (mi + mp);
+}
+
 /// The force that mass i's friction must hold to keep its relative velocity
 /// w = v[i] - v[partner] at 0 (interface.md: it sticks while this is below
 /// mu_s N): against the ground A_i; against a partner p, moving as one body

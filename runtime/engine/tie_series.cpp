@@ -62,8 +62,8 @@ void driving_derivative(const Model& model, const Configuration& cfg, int i, dou
     double Ap, mp_mag;
     force_derivative(model, cfg, p, t, t_lo, s, k, Ap, mp_mag);
     const double mi = model.masses[static_cast<std::size_t>(i)].m, mp = model.masses[static_cast<std::size_t>(p)].m;
-    value = (mp * value - mi * Ap) / (mi + mp);
-    magnitude = (mp * magnitude + mi * mp_mag) / (mi + mp);
+    value = against_partner(mi, mp, value, Ap);
+    magnitude = against_partner_magnitude(mi, mp, magnitude, mp_mag);
 }
 
 }  // namespace
@@ -218,7 +218,7 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
     };
     if (partner == kGround) return force_rate_magnitude(e);
     const double mi = model.masses[static_cast<std::size_t>(e)].m, mp = model.masses[static_cast<std::size_t>(partner)].m;
-    return (mp * force_rate_magnitude(e) + mi * force_rate_magnitude(partner)) / (mi + mp);
+    return against_partner_magnitude(mi, mp, force_rate_magnitude(e), force_rate_magnitude(partner));
 }
 
 int first_nonzero_sign(const std::vector<double>& d, const std::vector<double>& mag, int max_order, int* order) {
@@ -301,7 +301,7 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
     const int p = model.masses[static_cast<std::size_t>(e)].partner;
     if (p == kGround) return force_bound(e) * (1 + 64 * kEps);
     const double mi = model.masses[static_cast<std::size_t>(e)].m, mp = model.masses[static_cast<std::size_t>(p)].m;
-    return (mp * force_bound(e) + mi * force_bound(p)) / (mi + mp) * (1 + 64 * kEps);
+    return against_partner_magnitude(mi, mp, force_bound(e), force_bound(p)) * (1 + 64 * kEps);
 }
 
 }  // namespace hsnc

@@ -191,16 +191,15 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
                     double kp, cp;
                     rows(p, j, kp, cp);
                     const double mi = t_.mass(i), mp = t_.mass(p);
-                    kw = (mp * kw - mi * kp) / (mi + mp);
-                    cz = (mp * cz - mi * cp) / (mi + mp);
+                    kw = against_partner(mi, mp, kw, kp);
+                    cz = against_partner(mi, mp, cz, cp);
                 }
                 W_(f, j) = -sg * kw;
                 Z_(f, j) = -sg * cz;
             }
             for (int h = 0; h < nh_; ++h)
                 D_(f, h) = sg * (p == kGround ? t_.h_amp(i, h)
-                                              : (t_.mass(p) * t_.h_amp(i, h) - t_.mass(i) * t_.h_amp(p, h)) /
-                                                    (t_.mass(i) + t_.mass(p)));
+                                              : against_partner(t_.mass(i), t_.mass(p), t_.h_amp(i, h), t_.h_amp(p, h)));
         }
     }
     absW_ = W_.cwiseAbs();

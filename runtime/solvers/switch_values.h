@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 
+#include "assembly.h"
 #include "configuration.h"
 #include "model.h"
 #include "segment_solver.h"
@@ -163,9 +164,9 @@ inline void switch_value(const SwitchFunction& sf, const ConfigurationTerms& in,
         double Ap, dAp, mp_mag;
         force(p, Ap, dAp, mp_mag);
         const double me = in.mass(e), mp = in.mass(p);
-        A = (mp * A - me * Ap) / (me + mp);
-        dA = (mp * dA - me * dAp) / (me + mp);
-        m = (mp * m + me * mp_mag) / (me + mp);
+        A = against_partner(me, mp, A, Ap);
+        dA = against_partner(me, mp, dA, dAp);
+        m = against_partner_magnitude(me, mp, m, mp_mag);
     }
     const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
     const double mu_n = in.mu_s(e) * in.normal(e);
