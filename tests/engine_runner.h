@@ -16,22 +16,24 @@ struct Recorded {
     double t;
     EventKind kind;
     int element;  ///< -1 for samples
-    std::vector<double> x, v;
+    std::vector<double> x, v;  ///< x: the masses', then the Jenkins sliders (Model::state_size())
 };
 
 class Recorder : public Observer {
 public:
-    explicit Recorder(std::size_t n) : n_(n) {}
+    /// n masses; nx = n plus the Jenkins sliders recorded after them (the engine's and
+    /// the rk45 and CVODE baselines' x), n for an observer that gets the masses only.
+    explicit Recorder(std::size_t n, std::size_t nx = 0) : n_(n), nx_(std::max(n, nx)) {}
     void on_sample(double t, const double* x, const double* v) override {
-        samples.push_back({t, EventKind::stick, -1, {x, x + n_}, {v, v + n_}});
+        samples.push_back({t, EventKind::stick, -1, {x, x + nx_}, {v, v + n_}});
     }
     void on_event(double t, EventKind kind, int element, const double* x, const double* v) override {
-        events.push_back({t, kind, element, {x, x + n_}, {v, v + n_}});
+        events.push_back({t, kind, element, {x, x + nx_}, {v, v + n_}});
     }
     std::vector<Recorded> samples, events;
 
 private:
-    std::size_t n_;
+    std::size_t n_, nx_;
 };
 
 struct Outcome {
@@ -43,7 +45,7 @@ struct Outcome {
 inline Outcome simulate(const Model& model, double t_end, double dt = 0.0) {
     GenericSolverProvider provider(model);
     Engine engine(model, provider);
-    Recorder rec(model.dof());
+    Recorder rec(model.dof(), model.state_size());
     EngineOptions opt;
     opt.t_end = t_end;
     opt.dt = dt;
@@ -54,16 +56,17 @@ inline Outcome simulate(const Model& model, double t_end, double dt = 0.0) {
     return r;
 }
 
-/// The rk45 baseline (Dormand-Prince with event location) at the given tolerances.
-inline Outcome baseline(const Model& model, double t_end, double rtol, double atol) {
-    Recorder rec(model.dof());
+/// A baseline at the given tolerances: rk45 (Dormand-Prince with event
+/// location) unless `method` says cvode.
+inline Outcome baseline(const Model& model, double t_end, double rtol, double atol, Method method = Method::rk45) {
+    Recorder rec(model.dof(), model.state_size());
     EngineOptions eo;
     eo.t_end = t_end;
     IntegratorOptions io;
     io.rtol = rtol;
     io.atol = atol;
     Outcome r;
-    r.summary = integrate(model, Method::rk45, io, eo, rec);
+    r.summary = integrate(model, method, io, eo, rec);
     r.events = std::move(rec.events);
     r.samples = std::move(rec.samples);
     return r;

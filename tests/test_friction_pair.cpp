@@ -249,16 +249,9 @@ amplitude = { m1 = 6.0 }
                                      std::pair{"chain carrying a block", chain}}) {
         SCOPED_TRACE(name);
         const Model md = parse_model(text, "pair.toml");
-        const Outcome a = testing::simulate(md, 10.0);
-        testing::Recorder rec(md.dof());
-        EngineOptions eo;
-        eo.t_end = 10.0;
-        IntegratorOptions io;
-        io.rtol = 1e-12;
-        io.atol = 1e-14;
-        const RunSummary s = integrate(md, Method::cvode, io, eo, rec);
+        const Outcome a = testing::simulate(md, 10.0), rec = testing::baseline(md, 10.0, 1e-12, 1e-14, Method::cvode);
         ASSERT_EQ(a.summary.status, RunStatus::ok) << a.summary.message;
-        ASSERT_EQ(s.status, RunStatus::ok) << s.message;
+        ASSERT_EQ(rec.summary.status, RunStatus::ok) << rec.summary.message;
         ASSERT_EQ(a.events.size(), rec.events.size());
         double dt = 0.0;
         std::size_t pair_events = 0;

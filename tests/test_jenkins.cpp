@@ -24,6 +24,7 @@
 
 #include "assembly.h"
 #include "cli_runner.h"
+#include "engine_runner.h"
 #include "configuration.h"
 #include "engine.h"
 #include "error.h"
@@ -39,47 +40,10 @@
 namespace hsnc {
 namespace {
 
-struct Row {
-    double t;
-    EventKind kind;
-    int element;
-    std::vector<double> x, v;  ///< x: the masses', then the sliders
-};
+using testing::Outcome;
+using Row = testing::Recorded;  // x: the masses', then the sliders
 
-// Records every sample and event with the whole state (sliders included).
-class StateRecorder : public Observer {
-public:
-    explicit StateRecorder(const Model& m) : nx_(m.state_size()), n_(m.dof()) {}
-    void on_sample(double t, const double* x, const double* v) override {
-        samples.push_back({t, EventKind::stick, -1, {x, x + nx_}, {v, v + n_}});
-    }
-    void on_event(double t, EventKind kind, int element, const double* x, const double* v) override {
-        events.push_back({t, kind, element, {x, x + nx_}, {v, v + n_}});
-    }
-    std::vector<Row> samples, events;
-
-private:
-    std::size_t nx_, n_;
-};
-
-struct Outcome {
-    RunSummary summary;
-    std::vector<Row> samples, events;
-};
-
-Outcome run(const Model& model, double t_end, double dt = 0.0) {
-    GenericSolverProvider provider(model);
-    Engine engine(model, provider);
-    StateRecorder rec(model);
-    EngineOptions o;
-    o.t_end = t_end;
-    o.dt = dt;
-    Outcome r;
-    r.summary = engine.run(o, rec);
-    r.samples = std::move(rec.samples);
-    r.events = std::move(rec.events);
-    return r;
-}
+Outcome run(const Model& model, double t_end, double dt = 0.0) { return testing::simulate(model, t_end, dt); }
 
 // One mass on a spring K to ground with a Jenkins element (k, F_s) to ground.
 Model mass_with_jenkins(double m, double K, double k, double Fs, double x0, double v0) {
@@ -432,14 +396,8 @@ TEST(JenkinsCvode, EventsAgreeWithCvode) {
                                    std::pair{"under-platform damper", read_model(dir + "under_platform_damper.toml", at_resonance)}}) {
         SCOPED_TRACE(name);
         const double t_end = 10.0;
-        const Outcome a = run(md, t_end);
-        StateRecorder rec(md);
-        EngineOptions eo;
-        eo.t_end = t_end;
-        IntegratorOptions io;
-        io.rtol = 1e-12;
-        io.atol = 1e-14;
-        const RunSummary s = integrate(md, Method::cvode, io, eo, rec);
+        const Outcome a = run(md, t_end), rec = testing::baseline(md, t_end, 1e-12, 1e-14, Method::cvode);
+        const RunSummary& s = rec.summary;
         ASSERT_EQ(a.summary.status, RunStatus::ok) << a.summary.message;
         ASSERT_EQ(s.status, RunStatus::ok) << s.message;
         ASSERT_EQ(a.events.size(), rec.events.size());
