@@ -12,7 +12,7 @@ namespace hsnc::analysis {
 
 Flow::Flow(const Model& model, const FlowKernels& k, const char* function) : work_(model) {
     // The flow's state is the masses' (x, v): no Jenkins slider, no stuck pair (its tangent), yet.
-    require_derivable(work_, function);
+    require_no_stick_elements(work_, function);
     if (k.kernels == KernelChoice::aot && !has_aot_kernels(work_, &aot_registry()))
         throw OptionError(function, "kernels", "aot", "no ahead-of-time kernels for model '" + work_.name + "'");
     SimulateOptions o;

@@ -143,7 +143,7 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     }
     // Jenkins elements and stuck pairs: the points carry the sliders
     // (State::slider) on hsnc, rk45 and cvode; a continuation's shooting takes neither yet.
-    if (const std::string what = generic_only(model_); !what.empty()) {
+    if (const std::string what = stick_elements(model_); !what.empty()) {
         const std::string why = "the model has " + what + ", ";
         if (o.method == Method::ab4)
             throw OptionError(kPlan, "method", method_name(o.method), why + "which hsnc, rk45 and cvode run, for now");

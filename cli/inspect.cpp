@@ -147,6 +147,8 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
         const bool sliding_friction = model.masses[i].has_friction && !cfg.stuck[i];
         in.sgn.push_back(sliding_friction ? ex(GiNaC::symbol("sgn_" + nm, "s_{" + latex_name(nm) + "}")) : ex(0));
     }
+    for (const Jenkins& e : model.jenkins)  // sliders after the masses
+        in.x0.push_back(GiNaC::symbol("s0_" + e.name, "s_{0," + latex_name(e.name) + "}"));
 
     if (nf > 0) {
         p.heading("Reduced system of the free masses: M x'' + C x' + K x = f + sum_h F_h sin(Omega_h t + phase_h)",
@@ -158,8 +160,7 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
         print_matrix(p, "C", d, &d.C, nullptr);
         for (std::size_t r = 0; r < nf; ++r) {
             const int i = d.free_dofs[r];
-            ex f = d.f_const[i] - d.mu_k_n[i] * in.sgn[i];
-            for (int s : d.stuck_dofs) f -= d.K(i, s) * in.x0[s];
+            const ex f = segment_force(d, in, i);
             const std::string nm = model.masses[i].name;
             p.line("f_" + nm + " = " + p.expr(f), "\\[ f_{" + latex_name(nm) + "} = " + p.expr(f) + " \\]");
         }
@@ -191,8 +192,7 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
                 ex pj = 0;
                 for (std::size_t s = 0; s < nf; ++s) {
                     const int i = d.free_dofs[s];
-                    ex f = d.f_const[i] - d.mu_k_n[i] * in.sgn[i];
-                    for (int k : d.stuck_dofs) f -= d.K(i, k) * in.x0[k];
+                    const ex f = segment_force(d, in, i);
                     pj += m.v[s] * f;
                 }
                 xst += m.v[r] * pj / m.lambda;
@@ -215,6 +215,13 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
         p.line("x_" + nm + "(tau) = " + p.expr(s.x[i]),
                "\\[ x_{" + latex_name(nm) + "}(\\tau) = " + p.expr(s.x[i]) + " \\]");
     }
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
+        const std::string& nm = model.jenkins[j].name;
+        const std::string how = cfg.slip[j] == 0 ? "stuck" : "slipping";
+        p.line("s_" + nm + "(tau) = " + p.expr(s.x[n + j]) + "  (slider, " + how + ")",
+               "\\[ s_{" + latex_name(nm) + "}(\\tau) = " + p.expr(s.x[n + j]) + " \\quad \\text{(slider, " + how +
+                   ")} \\]");
+    }
     p.heading("Switch functions (runtime/segment.h order)", "Switch functions");
     for (std::size_t f = 0; f < d.switches.size(); ++f) {
         const SwitchFunction& sf = d.switches[f];
@@ -224,9 +231,11 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
             case SwitchKind::velocity: what = "velocity of " + model.masses[sf.element].name; break;
             case SwitchKind::release_pos: what = "A - mu_s N of " + model.masses[sf.element].name; break;
             case SwitchKind::release_neg: what = "-A - mu_s N of " + model.masses[sf.element].name; break;
-            case SwitchKind::slip_pos:  // Jenkins elements: never in a derivation (require_derivable)
-            case SwitchKind::slip_neg:
-            case SwitchKind::slip_velocity: what = "slip of " + model.jenkins[static_cast<std::size_t>(sf.element)].name; break;
+            case SwitchKind::slip_pos: what = "k e - F_s of " + model.jenkins[static_cast<std::size_t>(sf.element)].name; break;
+            case SwitchKind::slip_neg: what = "-k e - F_s of " + model.jenkins[static_cast<std::size_t>(sf.element)].name; break;
+            case SwitchKind::slip_velocity:
+                what = "relative velocity of " + model.jenkins[static_cast<std::size_t>(sf.element)].name;
+                break;
         }
         const std::string F = std::to_string(f + 1);
         p.line("g_" + F + " (" + what + ") = " + p.expr(s.g[f]),

@@ -87,6 +87,25 @@ numeric to_float(const numeric& x) { return GiNaC::ex_to<numeric>(x.evalf()); }
 
 }  // namespace
 
+ex slider_preload(const Derivation& d, const SegmentInputs& in, int i) {
+    const Model& model = *d.model;
+    ex f = 0;
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
+        if (d.cfg.slip[j] != 0) continue;
+        const Jenkins& e = model.jenkins[j];
+        const ex p = exact(e.k) * in.x0[model.dof() + j];
+        if (e.a == i) f += p;
+        if (e.b == i) f -= p;
+    }
+    return f;
+}
+
+ex segment_force(const Derivation& d, const SegmentInputs& in, int i) {
+    ex f = d.f_const[i] - d.mu_k_n[i] * in.sgn[i] + slider_preload(d, in, i);
+    for (int s : d.stuck_dofs) f -= d.K(i, s) * in.x0[s];
+    return f;
+}
+
 Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method) {
     require_proportional_damping(model, "derivation::derive()");
     require_derivable(model, "derivation::derive()");
@@ -294,8 +313,7 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
     std::vector<ex> f(nf);
     for (std::size_t r = 0; r < nf; ++r) {
         const int i = d.free_dofs[r];
-        f[r] = d.f_const[i] - d.mu_k_n[i] * in.sgn[i];
-        for (int s : d.stuck_dofs) f[r] -= d.K(i, s) * in.x0[s];
+        f[r] = segment_force(d, in, i);
     }
     std::vector<ex> theta;
     for (const HarmonicData& h : d.harmonics) theta.push_back(h.omega * in.t0 + h.phase);
@@ -356,7 +374,8 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
         out.u.push_back(uh + up);
     }
 
-    out.x.assign(n, 0);
+    const std::size_t nj = model.jenkins.size();
+    out.x.assign(n + nj, 0);
     for (int s : d.stuck_dofs) out.x[s] = in.x0[s];
     for (std::size_t r = 0; r < nf; ++r)
         for (std::size_t j = 0; j < d.modes.size(); ++j) out.x[d.free_dofs[r]] += d.modes[j].v[r] * out.u[j];
@@ -365,6 +384,13 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
         out.a.push_back(out.v[i].diff(tau));
     }
     auto pos = [&](int body) { return body == kGround ? ex(0) : out.x[body]; };
+    auto vel = [&](int body) { return body == kGround ? ex(0) : out.v[body]; };
+    // Sliders: fixed while stuck, the stretch held at slip F_s / k while slipping.
+    for (std::size_t j = 0; j < nj; ++j) {
+        const Jenkins& e = model.jenkins[j];
+        out.x[n + j] = d.cfg.slip[j] == 0 ? in.x0[n + j]
+                                          : pos(e.a) - pos(e.b) - numeric(static_cast<int>(d.cfg.slip[j])) * exact(e.slip_force) / exact(e.k);
+    }
     for (const SwitchFunction& sf : d.switches) {
         ex g;
         if (sf.kind == SwitchKind::gap) {
@@ -372,10 +398,18 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
             g = contact_gap(pos(c.a), pos(c.b), ex(exact(c.gap)));
         } else if (sf.kind == SwitchKind::velocity) {
             g = out.v[sf.element];
+        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
+            const std::size_t j = static_cast<std::size_t>(sf.element);
+            const Jenkins& e = model.jenkins[j];
+            const ex stretch_force = exact(e.k) * (pos(e.a) - pos(e.b) - out.x[n + j]);
+            g = (sf.kind == SwitchKind::slip_pos ? stretch_force : -stretch_force) - exact(e.slip_force);
+        } else if (sf.kind == SwitchKind::slip_velocity) {
+            const Jenkins& e = model.jenkins[static_cast<std::size_t>(sf.element)];
+            g = vel(e.a) - vel(e.b);
         } else {
-            // A_i = -K x - C v + f_const + forcing (interface.md section 2).
+            // A_i = -K x - C v + f_const + the stuck sliders' preload + forcing (interface.md section 2).
             const int i = sf.element;
-            ex A = d.f_const[i];
+            ex A = d.f_const[i] + slider_preload(d, in, i);
             for (std::size_t k = 0; k < n; ++k) A -= d.K(i, k) * out.x[k] + d.C(i, k) * out.v[k];
             for (std::size_t h = 0; h < d.harmonics.size(); ++h)
                 A += d.harmonics[h].amplitude[i] * GiNaC::sin(d.harmonics[h].omega * tau + theta[h]);

@@ -117,7 +117,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
 /// Inputs of one segment as GiNaC expressions: numbers or symbols.
 struct SegmentInputs {
     GiNaC::ex t0;
-    std::vector<GiNaC::ex> x0, v0;  ///< all masses
+    std::vector<GiNaC::ex> x0, v0;  ///< all masses (x0: then every Jenkins slider)
     std::vector<GiNaC::ex> sgn;     ///< all masses, {-1, 0, +1} (or symbols)
 };
 
@@ -126,11 +126,19 @@ struct SegmentInputs {
 /// overflow-safe forms; derivatives by GiNaC diff.
 struct SymbolicSegment {
     std::vector<GiNaC::ex> u;          ///< modal coordinates
-    std::vector<GiNaC::ex> x, v, a;    ///< all masses
+    std::vector<GiNaC::ex> x, v, a;    ///< all masses (x: then every Jenkins slider)
     std::vector<GiNaC::ex> g, dg;      ///< switch functions, as in switch_functions()
 };
 
 SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, const GiNaC::symbol& tau);
+
+/// The preload k_j s_j on mass i of every Jenkins element stuck in the
+/// configuration (+ on a, - on b; s_j = in.x0[n + j]).
+GiNaC::ex slider_preload(const Derivation& d, const SegmentInputs& in, int i);
+
+/// The constant force on mass i in a segment (paper Eq. 7-9):
+/// f_const - mu_k N sgn - K_iS x_S + slider_preload.
+GiNaC::ex segment_force(const Derivation& d, const SegmentInputs& in, int i);
 
 /// High-precision number from a double, exactly (no rounding on the way in).
 GiNaC::numeric exact(double v);

@@ -379,6 +379,7 @@ void emit_kernel_object(CodeWriter& c, const Derivation& d, const std::string& s
         c.line(1, "\"" + d.cfg.key() + "\",");
         c.line(1, "\"" HSNC_VERSION "\",");
         c.line(1, std::to_string(model.dof()) + ",");
+        c.line(1, std::to_string(model.jenkins.size()) + ",");
         c.line(1, std::to_string(d.switches.size()) + ",");
         c.line(1, ns + "::switches,");
         for (std::size_t k = 0; k < rest.size(); ++k) {

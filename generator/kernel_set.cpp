@@ -42,8 +42,9 @@ public:
     void on_event(double, EventKind, int, const double*, const double*) override {}
 };
 
+/// log2 of the number of configurations, rounded up (a Jenkins element has 3 states: 2 bits).
 std::size_t switch_bits(const Model& model) {
-    std::size_t bits = model.contacts.size();
+    std::size_t bits = model.contacts.size() + 2 * model.jenkins.size();
     for (const Mass& m : model.masses) bits += m.has_friction ? 1 : 0;
     return bits;
 }
@@ -94,9 +95,19 @@ std::vector<Configuration> configurations_to_generate(const Model& model, std::s
         next.stuck[i] = !next.stuck[i];
         add_neighbour(next);
     }
+    for (std::size_t j = 0; j < initial.slip.size(); ++j)
+        for (signed char state : {0, 1, -1}) {
+            if (state == initial.slip[j]) continue;
+            Configuration next = initial;
+            next.slip[j] = state;
+            add_neighbour(next);
+        }
     if (note) {
+        const std::size_t two = bits - 2 * model.jenkins.size();
         std::ostringstream s;
-        s << "model '" << model.name << "' has 2^" << bits << " configurations, more than "
+        s << "model '" << model.name << "' has 2^" << two
+          << (model.jenkins.empty() ? std::string() : " x 3^" + std::to_string(model.jenkins.size()))
+          << " configurations, more than "
           << kMaxGeneratedConfigurations << ": generated the " << chosen.size() << " listed in its manifest ("
           << visited << " visited by its " << run_note << ", plus the initial configuration and its single-switch "
           << "neighbours, at most " << kMaxManifestConfigurations

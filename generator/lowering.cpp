@@ -80,6 +80,18 @@ std::uint32_t constant(Program& p, double v, const std::string& name = "") {
     return static_cast<std::uint32_t>(p.constants.size() - 1);
 }
 
+/// The preload k_j s_j of every Jenkins element stuck in cfg on mass i, as
+/// fn(coefficient of s_j, j): +k_j where i is its a, -k_j where i is its b.
+template <class Fn>
+void for_each_slider_preload(const Model& model, const Configuration& cfg, int i, Fn&& fn) {
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
+        if (cfg.slip[j] != 0) continue;
+        const Jenkins& e = model.jenkins[j];
+        if (e.a == i) fn(e.k, j);
+        if (e.b == i) fn(-e.k, j);
+    }
+}
+
 ProgramInstr& with(ProgramInstr& in, const std::string& comment, const std::string& note = "") {
     in.comment = comment;
     in.note = note;
@@ -91,8 +103,10 @@ ProgramInstr& with(ProgramInstr& in, const std::string& comment, const std::stri
 Program lower(const Derivation& d) {
     const Model& model = *d.model;
     const std::size_t n = model.dof(), nf = d.n_free(), nm = d.modes.size(), nh = d.harmonics.size();
+    const std::size_t nj = model.jenkins.size();
     Program p;
     p.n_dof = static_cast<int>(n);
+    p.n_slider = static_cast<int>(nj);
     p.cfg = d.cfg;
     p.switches = d.switches;
     p.max_step = d.max_step;
@@ -155,7 +169,7 @@ Program lower(const Derivation& d) {
     s.reg("1.0", RegisterKind::one);
     s.reg("t0", RegisterKind::input);
     s.reg("t0_lo", RegisterKind::input);
-    for (std::size_t i = 0; i < n; ++i) s.reg("x0[" + std::to_string(i) + "]", RegisterKind::input);
+    for (std::size_t i = 0; i < n + nj; ++i) s.reg("x0[" + std::to_string(i) + "]", RegisterKind::input);
     for (std::size_t i = 0; i < n; ++i) s.reg("v0[" + std::to_string(i) + "]", RegisterKind::input);
     for (std::size_t i = 0; i < n; ++i) s.reg("sgn[" + std::to_string(i) + "]", RegisterKind::input);
     const std::uint32_t ONE = 0;
@@ -190,10 +204,13 @@ Program lower(const Derivation& d) {
             Lin l;
             l.add(d.f_const[i], ONE);
             for (int st : d.stuck_dofs) l.add(-dbl(entry(d.K, i, st)), x0(st));
+            for_each_slider_preload(model, d.cfg, i, [&](double k, std::size_t j) { l.add(k, x0(static_cast<int>(n + j))); });
             l.add(-dbl(d.mu_k_n[i]), sgn(i));
             f[r] = s.temp("f_" + idx(r));
             with(s.lin(f[r], l),
-                 r == 0 ? "Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9)." : "",
+                 r == 0 ? "Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9)"
+                          + std::string(nj > 0 ? ",\nwith k s of every stuck Jenkins element (slider s = x0[n + j])." : ".")
+                        : "",
                  model.masses[i].name);
         }
         for (std::size_t j = 0; j < nm; ++j) {
@@ -377,6 +394,10 @@ Program lower(const Derivation& d) {
     for (int st : d.stuck_dofs)
         coef_of["x_stuck_" + std::to_string(st)] =
             slot("x_stuck_" + std::to_string(st), x0(st), "", model.masses[st].name + " is stuck");
+    for (std::size_t j = 0; j < nj; ++j)
+        if (d.cfg.slip[j] == 0)
+            coef_of["s_stuck_" + std::to_string(j)] = slot("s_stuck_" + std::to_string(j), x0(static_cast<int>(n + j)),
+                                                           "", "the slider of " + model.jenkins[j].name + " (stuck)");
     p.n_coef = static_cast<int>(p.coef_names.size());
 
     // ================= eval =================
@@ -389,7 +410,7 @@ Program lower(const Derivation& d) {
     std::uint32_t base[7];
     for (int k = 0; k < 7; ++k) {
         base[k] = static_cast<std::uint32_t>(p.eval.registers());
-        const std::size_t len = k < 3 ? n : d.switches.size();
+        const std::size_t len = k == 0 ? n + nj : k < 3 ? n : d.switches.size();
         for (std::size_t i = 0; i < len; ++i)
             e.reg(std::string(arrays[k]) + "[" + std::to_string(i) + "]", RegisterKind::output);
     }
@@ -530,11 +551,40 @@ Program lower(const Derivation& d) {
         with(e.emit(in), comment, model.masses[i].name);
     }
 
+    // Jenkins sliders: fixed while stuck; while slipping the stretch is held,
+    // s = x[a] - x[b] - slip F_s/k. Their magnitudes for the switch functions' scale.
+    std::vector<std::uint32_t> mxs(nj);
+    for (std::size_t j = 0; j < nj; ++j) {
+        const Jenkins& el = model.jenkins[j];
+        const std::uint32_t out = X(static_cast<int>(n + j));
+        mxs[j] = e.temp("ms_" + std::to_string(j));
+        const std::string comment = j == 0 ? "Jenkins sliders: fixed while stuck, s = x[a] - x[b] - slip F_s/k while slipping." : "";
+        if (d.cfg.slip[j] == 0) {
+            const std::uint32_t sc = C("s_stuck_" + std::to_string(j));
+            with(e.unary(ProgramOp::copy, out, sc), comment, el.name + " (stuck)");
+            e.unary(ProgramOp::abs, mxs[j], sc);
+            continue;
+        }
+        const double held = static_cast<double>(d.cfg.slip[j]) * (el.slip_force / el.k);
+        Lin sl, ml;
+        if (el.a != kGround) sl.add(1.0, X(el.a)), ml.add(1.0, mx[static_cast<std::size_t>(el.a)]);
+        if (el.b != kGround) sl.add(-1.0, X(el.b)), ml.add(1.0, mx[static_cast<std::size_t>(el.b)]);
+        sl.add(-held, ONE);
+        ml.add(std::fabs(held), ONE);
+        with(e.lin(out, sl), comment, el.name + (d.cfg.slip[j] > 0 ? " (slipping, +)" : " (slipping, -)"));
+        e.lin(mxs[j], ml);
+    }
+
     // Switch functions.
     auto V = [&](int mass, std::size_t j) -> numeric {  // V_ij, 0 for stuck masses and ground
         if (mass == kGround) return 0;
         const int r = free_of[mass];
         return r < 0 ? numeric(0) : d.modes[j].v[r];
+    };
+    // The non-resonant particular part of body b's x at harmonic h: xs (sine) or xc (cosine).
+    auto harmonic_x = [&](std::size_t h, int b, bool sine) -> numeric {
+        if (b == kGround || free_of[b] < 0) return 0;
+        return sine ? d.harmonics[h].xs[free_of[b]] : d.harmonics[h].xc[free_of[b]];
     };
     std::uint32_t s_end = kNoRegister;
     std::vector<std::uint32_t> abs_p(nm, kNoRegister);
@@ -597,6 +647,52 @@ Program lower(const Derivation& d) {
                 Gs[h] = -d.harmonics[h].omega * d.harmonics[h].xc[r];
                 Gc[h] = d.harmonics[h].omega * d.harmonics[h].xs[r];
             }
+        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
+            // +-k (x[a] - x[b] - s) - F_s: the stretch force of a stuck element against F_s.
+            const std::size_t j = static_cast<std::size_t>(sf.element);
+            const Jenkins& el = model.jenkins[j];
+            const double sk = sf.kind == SwitchKind::slip_pos ? el.k : -el.k;
+            comment += "g_" + F + ": " + (sk > 0 ? "" : "-") + "k e - F_s of stuck " + el.name + ", e = x[" +
+                       body_name(model, el.a) + "] - x[" + body_name(model, el.b) + "] - s";
+            if (el.a != kGround) {
+                g.add(sk, X(el.a));
+                dg.add(sk, Vr(el.a));
+                sc.add(el.k, mx[static_cast<std::size_t>(el.a)]);
+            }
+            if (el.b != kGround) {
+                g.add(-sk, X(el.b));
+                dg.add(-sk, Vr(el.b));
+                sc.add(el.k, mx[static_cast<std::size_t>(el.b)]);
+            }
+            g.add(-sk, X(static_cast<int>(n + j))).add(-el.slip_force, ONE);
+            sc.add(el.k, mxs[j]).add(el.slip_force, ONE);
+            const numeric ks = exact(sk);
+            for (std::size_t jm = 0; jm < nm; ++jm) al[jm] = ks * (V(el.a, jm) - V(el.b, jm));
+            for (std::size_t h = 0; h < nh; ++h) {
+                Gs[h] = ks * (harmonic_x(h, el.a, true) - harmonic_x(h, el.b, true));
+                Gc[h] = ks * (harmonic_x(h, el.a, false) - harmonic_x(h, el.b, false));
+            }
+        } else if (sf.kind == SwitchKind::slip_velocity) {
+            // w = v[a] - v[b] of a slipping element.
+            const Jenkins& el = model.jenkins[static_cast<std::size_t>(sf.element)];
+            comment += "g_" + F + ": relative velocity of " + el.name + " (slipping) = v[" + body_name(model, el.a) +
+                       "] - v[" + body_name(model, el.b) + "]";
+            if (el.a != kGround) {
+                g.add(1.0, Vr(el.a));
+                dg.add(1.0, Ar(el.a));
+                sc.add(1.0, mv[static_cast<std::size_t>(el.a)]);
+            }
+            if (el.b != kGround) {
+                g.add(-1.0, Vr(el.b));
+                dg.add(-1.0, Ar(el.b));
+                sc.add(1.0, mv[static_cast<std::size_t>(el.b)]);
+            }
+            for (std::size_t jm = 0; jm < nm; ++jm) be[jm] = V(el.a, jm) - V(el.b, jm);
+            for (std::size_t h = 0; h < nh; ++h) {
+                const numeric W = d.harmonics[h].omega;
+                Gs[h] = -W * (harmonic_x(h, el.a, false) - harmonic_x(h, el.b, false));
+                Gc[h] = W * (harmonic_x(h, el.a, true) - harmonic_x(h, el.b, true));
+            }
         } else {
             const int i = sf.element;
             const bool pos = sf.kind == SwitchKind::release_pos;
@@ -619,6 +715,10 @@ Program lower(const Derivation& d) {
                     sc.add(std::fabs(Cik), mv[k]);
                 }
             }
+            for_each_slider_preload(model, d.cfg, i, [&](double k, std::size_t j) {
+                A.add(k, X(static_cast<int>(n + j)));
+                sc.add(std::fabs(k), mxs[j]);
+            });
             for (std::size_t h = 0; h < nh; ++h) {
                 const double F0 = dbl(d.harmonics[h].amplitude[i]), W = dbl(d.harmonics[h].omega);
                 A.add(F0, sin_h[h]);

@@ -22,6 +22,9 @@ std::vector<std::string> kept_parameters(const Model& model, const std::string& 
     const std::string flag = "generate: --params '" + list + "'";
     if (model.parameter_expressions.empty())
         throw InputError(flag + ": the model has no parameter source texts (not read from a file)");
+    if (!model.jenkins.empty())
+        throw InputError(flag + ": the model has Jenkins elements ([[jenkins]] '" + model.jenkins[0].name +
+                         "'), which sweep kernels do not take yet (generate without --params folds them)");
     std::vector<std::string> names;
     for (const auto& [name, text] : model.parameter_expressions) names.push_back(name);
     if (list == "all") return names;

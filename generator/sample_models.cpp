@@ -116,6 +116,36 @@ std::vector<Model> sample_models() {
         md.v0 = {0.4, -0.1};
         s.push_back(md);
     }
+    // Jenkins elements (a slider per element; every configuration: stuck,
+    // slipping + and -): a friction mass held by one element to its neighbour,
+    // the other to ground, Rayleigh damping with the stuck elements in beta K;
+    // and a free pair joined only by an element (rigid-body modes when it slips).
+    {
+        Model md;
+        md.name = "jenkins_chain";
+        md.masses = {{"m1", 1.2, true, 0.2, 0.3}, {"m2", 0.7, false, 0.0, 0.0}};
+        md.springs = {{kGround, 0, 6.0}, {0, 1, 3.0}};
+        md.jenkins = {{"j1", 0, 1, 12.0, 0.8}, {"j2", 1, kGround, 20.0, 1.5}};
+        md.alpha = 0.1;
+        md.beta = 0.02;
+        md.forcing = {{2.3, 0.5, {0.4, 1.1}}};
+        md.load = {0.2, -0.1};
+        md.x0 = {0.05, -0.08};
+        md.v0 = {0.3, -0.6};
+        md.t0 = 0.4;
+        s.push_back(md);
+    }
+    {
+        Model md;
+        md.name = "jenkins_free_pair";
+        md.masses = {{"m1", 1.0, false, 0.0, 0.0}, {"m2", 3.0, false, 0.0, 0.0}};
+        md.jenkins = {{"j1", 0, 1, 9.0, 0.6}};
+        md.forcing = {{1.7, 0.0, {1.0, 0.0}}};
+        md.load = {0.0, 0.3};
+        md.x0 = {0.1, 0.0};
+        md.v0 = {0.5, 0.0};
+        s.push_back(md);
+    }
     // Pseudo-random chains: light and heavy damping, grounded and free end.
     s.push_back(random_chain("rand_a", 1, 2, 0.02, true));
     s.push_back(random_chain("rand_b", 2, 3, 0.5, true));
@@ -128,13 +158,20 @@ std::vector<Configuration> all_configurations(const Model& model) {
     std::vector<int> friction;
     for (std::size_t i = 0; i < model.dof(); ++i)
         if (model.masses[i].has_friction) friction.push_back(static_cast<int>(i));
-    const std::size_t nc = model.contacts.size(), bits = nc + friction.size();
+    const std::size_t nc = model.contacts.size(), bits = nc + friction.size(), nj = model.jenkins.size();
+    std::uint64_t states = 1;  // of the Jenkins elements: stuck, slipping + or -
+    for (std::size_t j = 0; j < nj; ++j) states *= 3;
     std::vector<Configuration> out;
     for (std::uint64_t code = 0; code < (std::uint64_t{1} << bits); ++code) {
-        Configuration cfg = Configuration::all_open(model);
-        for (std::size_t c = 0; c < nc; ++c) cfg.closed[c] = (code >> c) & 1u;
-        for (std::size_t k = 0; k < friction.size(); ++k) cfg.stuck[friction[k]] = (code >> (nc + k)) & 1u;
-        out.push_back(cfg);
+        for (std::uint64_t js = 0; js < states; ++js) {
+            Configuration cfg = Configuration::all_open(model);
+            for (std::size_t c = 0; c < nc; ++c) cfg.closed[c] = (code >> c) & 1u;
+            for (std::size_t k = 0; k < friction.size(); ++k) cfg.stuck[friction[k]] = (code >> (nc + k)) & 1u;
+            std::uint64_t rest = js;
+            for (std::size_t j = 0; j < nj; ++j, rest /= 3)
+                cfg.slip[j] = static_cast<signed char>(rest % 3 == 0 ? 0 : rest % 3 == 1 ? 1 : -1);
+            out.push_back(cfg);
+        }
     }
     return out;
 }

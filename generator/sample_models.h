@@ -18,7 +18,8 @@ namespace hsnc {
 /// Every sample model, in a fixed order; names are unique C identifiers.
 std::vector<Model> sample_models();
 
-/// Every configuration of `model` (2^(contacts + friction masses)), in a fixed order.
+/// Every configuration of `model` (2^(contacts + friction masses) times 3^(Jenkins
+/// elements): stuck, slipping + and -), in a fixed order.
 std::vector<Configuration> all_configurations(const Model& model);
 
 }  // namespace hsnc

@@ -63,6 +63,10 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
         why = "the model has no source expressions (not read from a file)";
         return false;
     }
+    if (!model.jenkins.empty()) {
+        why = "the model has Jenkins elements, whose sliders the symbolic view does not carry";
+        return false;
+    }
     const Derivation numeric = derive(model, cfg);  // free/stuck split, switch order, rigid modes
     const std::size_t n = model.dof(), nf = numeric.n_free();
     if (nf == 0) {

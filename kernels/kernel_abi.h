@@ -9,12 +9,14 @@
  * setup/eval have exactly the semantics of SegmentSolver::setup/eval:
  *   setup(coef, t0, t0_lo, x0, v0, sgn)  fixes the segment from the full
  *       state at absolute time t0 + t0_lo (t0_lo: the rounding of the start
- *       instant, |t0_lo| <= ulp(t0)/2, used for the forcing phase);
+ *       instant, |t0_lo| <= ulp(t0)/2, used for the forcing phase); x0 holds
+ *       the masses' positions, then each Jenkins element's slider position;
  *       sgn[i] in {-1, 0, +1} is the direction of motion of
  *       each sliding friction mass (0 for stuck or frictionless masses).
  *       Writes n_coef doubles into coef (the caller owns them).
  *   eval(coef, tau, x, v, a, g, dg, bound, scale)  at tau = t - t0 >= 0:
- *       x, v, a: n_dof doubles (stuck masses at their fixed x, v = a = 0);
+ *       x: n_dof + n_slider doubles (stuck masses at their fixed x, then the
+ *       sliders); v, a: n_dof doubles (v = a = 0 for stuck masses);
  *       g, dg: the n_switch switch functions and their first derivatives, in
  *       the order of `switches` (= switch_functions() of model/switch_function.h);
  *       bound[f] >= |g_f''(s)| for every s in [tau, tau + max_step];
@@ -45,7 +47,7 @@ extern "C" {
 #endif
 
 /** Bumped whenever the layout or the meaning of hsnc_kernel changes. */
-#define HSNC_KERNEL_ABI_VERSION 3
+#define HSNC_KERNEL_ABI_VERSION 4
 
 /** Switch-function kinds; same values as hsnc::SwitchKind (model/switch_function.h). */
 enum {
@@ -83,7 +85,9 @@ typedef struct hsnc_kernel {
     const char* config_spec;        /**< Configuration::spec(), "closed=c1 stuck=m2" */
     const char* config_key;         /**< Configuration::key(), "c1_s01" */
     const char* generator_version;  /**< HSNC_VERSION of the generator */
-    int n_dof;                      /**< masses of the model (x0, v0, x, v, a sizes) */
+    int n_dof;                      /**< masses of the model (v0, v, a sizes) */
+    int n_slider;                   /**< Jenkins elements (ABI version 4): x0 and x hold n_dof + n_slider
+                                         doubles, each slider's position after the masses' */
     int n_switch;                   /**< switch functions (g, dg, bound, scale sizes) */
     const hsnc_switch* switches;    /**< n_switch entries */
     int n_coef;                     /**< doubles that setup writes and eval reads */

@@ -158,6 +158,7 @@ struct ProgramBody {
 
 struct Program {
     int n_dof = 0;
+    int n_slider = 0;  ///< Jenkins elements: x0 and x carry their sliders after the masses
     int n_coef = 0;
     double max_step = 0;  ///< validity of `bound`: +inf unless secular terms
     Configuration cfg;
@@ -167,21 +168,26 @@ struct Program {
     std::vector<std::string> constant_names;  ///< "" for a constant printed as a literal
     std::vector<ProgramTerm> terms;
 
-    /// Registers: 0 = 1.0, 1 = t0, 2 = t0_lo, then x0 (n_dof), v0 (n_dof),
-    /// sgn (n_dof, as doubles); then temps. setup_coef[k] is the register
+    /// Registers: 0 = 1.0, 1 = t0, 2 = t0_lo, then x0 (n_state(): the masses,
+    /// then the sliders), v0 (n_dof), sgn (n_dof, as doubles); then temps. setup_coef[k] is the register
     /// copied to coef[k] at the end.
     ProgramBody setup;
     std::vector<std::uint32_t> setup_coef;
     std::vector<std::string> coef_names;  ///< what coef[k] holds ("A_1"), for the printed layout
-    /// Registers: 0 = 1.0, 1 = tau, 2 .. 2+n_coef = coef, then x, v, a
-    /// (n_dof each), g, dg, bound, scale (n_switch each); then temps.
+    /// Registers: 0 = 1.0, 1 = tau, 2 .. 2+n_coef = coef, then x (n_state()),
+    /// v, a (n_dof each), g, dg, bound, scale (n_switch each); then temps.
     ProgramBody eval;
 
     static constexpr std::uint32_t kSetupT0 = 1, kSetupT0Lo = 2, kSetupX0 = 3;
     static constexpr std::uint32_t kEvalTau = 1, kEvalCoef = 2;
-    std::uint32_t setup_v0() const { return kSetupX0 + static_cast<std::uint32_t>(n_dof); }
-    std::uint32_t setup_sgn() const { return kSetupX0 + 2 * static_cast<std::uint32_t>(n_dof); }
+    int n_state() const { return n_dof + n_slider; }
+    std::uint32_t setup_v0() const { return kSetupX0 + static_cast<std::uint32_t>(n_state()); }
+    std::uint32_t setup_sgn() const { return setup_v0() + static_cast<std::uint32_t>(n_dof); }
     std::uint32_t eval_outputs() const { return kEvalCoef + static_cast<std::uint32_t>(n_coef); }
+    /// Eval's output registers: x, v, a, then four per switch function.
+    std::uint32_t eval_output_count() const {
+        return static_cast<std::uint32_t>(n_state() + 2 * n_dof) + 4 * static_cast<std::uint32_t>(n_switch());
+    }
     std::size_t n_switch() const { return switches.size(); }
 };
 

@@ -30,7 +30,6 @@ void require_proportional_damping(const Model& model, const std::string& who) {
 }
 
 std::string generic_only(const Model& model) {
-    if (!model.jenkins.empty()) return "Jenkins elements ([[jenkins]] '" + model.jenkins[0].name + "')";
     for (const Mass& m : model.masses)
         if (m.has_friction && m.partner != kGround)
             return "friction between two bodies ([[friction]] '" +
@@ -42,6 +41,17 @@ void require_derivable(const Model& model, const std::string& who) {
     const std::string what = generic_only(model);
     if (what.empty()) return;
     throw InputError(who + ": model '" + model.name + "' has " + what + "; only the generic solver takes it, for now");
+}
+
+std::string stick_elements(const Model& model) {
+    if (!model.jenkins.empty()) return "Jenkins elements ([[jenkins]] '" + model.jenkins[0].name + "')";
+    return generic_only(model);
+}
+
+void require_no_stick_elements(const Model& model, const std::string& who) {
+    const std::string what = stick_elements(model);
+    if (what.empty()) return;
+    throw InputError(who + ": model '" + model.name + "' has " + what + ", which it does not take yet");
 }
 
 Eigen::VectorXd mass_vector(const Model& model) {

@@ -33,16 +33,25 @@ void require_proportional_damping(const Model& model, const std::string& who);
 Eigen::VectorXd mass_vector(const Model& model);
 
 /// What in `model` only the generic solvers take, for now, as a phrase:
-/// "Jenkins elements ([[jenkins]] 'j1')" (a slider state), "friction between
-/// two bodies ([[friction]] 'f1')" (a stuck pair moving as one body); "" when
-/// nothing.
+/// "friction between two bodies ([[friction]] 'f1')" (a stuck pair moving as
+/// one body); "" when nothing.
 std::string generic_only(const Model& model);
 
 /// Throws InputError "WHO: model 'NAME' has PHRASE; only the generic solver
 /// takes it, for now" unless generic_only(model) is empty: for the stages
-/// that take neither yet (the derivation, the kernels, the interpreter, the
-/// reference, the baselines, the analyses' flows).
+/// that do not take it yet (the derivation, the kernels, the interpreter, the
+/// reference).
 void require_derivable(const Model& model, const std::string& who);
+
+/// The elements whose stick is not a mass held against the ground, as a
+/// phrase: "Jenkins elements ([[jenkins]] 'j1')" (a slider state), else
+/// generic_only(model); "" when none.
+std::string stick_elements(const Model& model);
+
+/// Throws InputError "WHO: model 'NAME' has PHRASE, which it does not take
+/// yet" unless stick_elements(model) is empty: for the stages that take
+/// neither a slider nor a stuck pair (the tangent's flows, ab4's stick rules).
+void require_no_stick_elements(const Model& model, const std::string& who);
 
 /// K(cfg): springs plus the contacts closed and the Jenkins elements stuck in
 /// cfg (stuck mass flags are ignored).

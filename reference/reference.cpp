@@ -275,7 +275,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                             const SearchLimits& limits, const std::vector<double>* offset) {
     if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
     require_proportional_damping(model, "reference::simulate_precise()");
-    require_derivable(model, "reference::simulate_precise()");
+    require_no_stick_elements(model, "reference::simulate_precise()");
     const MpModel mp(model, digits);
     const std::size_t n = model.dof();
     PreciseRun run;

@@ -38,7 +38,9 @@ const hsnc_kernel& sample_kernel(const Model& m, const Configuration& cfg) {
 }
 
 // A legal segment start for cfg: stuck masses at rest, sliding friction masses
-// moving in the direction sgn (taken from v0, or +1 when v0 = 0).
+// moving in the direction sgn (taken from v0, or +1 when v0 = 0); x0 holds
+// the masses, then each Jenkins slider, set a third of the slip force's
+// stretch away from unstretched (what the setup of a slipping element ignores).
 struct Start {
     double t0;
     std::vector<double> x0, v0;
@@ -53,14 +55,18 @@ Start start_of(const Model& m, const Configuration& cfg) {
             s.sgn[i] = s.v0[i] < 0 ? -1 : 1;
         }
     }
+    for (const Jenkins& e : m.jenkins) {
+        auto pos = [&](int b) { return b == kGround ? 0.0 : m.x0[static_cast<std::size_t>(b)]; };
+        s.x0.push_back(pos(e.a) - pos(e.b) - e.slip_force / (3 * e.k));
+    }
     return s;
 }
 
 SegmentInputs inputs_of(const Start& s) {
     SegmentInputs in;
     in.t0 = exact(s.t0);
-    for (std::size_t i = 0; i < s.x0.size(); ++i) {
-        in.x0.push_back(exact(s.x0[i]));
+    for (double x : s.x0) in.x0.push_back(exact(x));  // masses, then sliders
+    for (std::size_t i = 0; i < s.v0.size(); ++i) {
         in.v0.push_back(exact(s.v0[i]));
         in.sgn.push_back(static_cast<int>(s.sgn[i]));
     }
@@ -72,16 +78,18 @@ double eval40(const ex& e, const GiNaC::symbol& tau, double t) {
 }
 
 struct KernelOut {
-    std::vector<double> x, v, a, g, dg, bound, scale;
-    KernelOut(std::size_t n, std::size_t nf) : x(n), v(n), a(n), g(nf), dg(nf), bound(nf), scale(nf) {}
+    std::vector<double> x, v, a, g, dg, bound, scale;  // x: masses, then sliders
+    KernelOut(std::size_t n, std::size_t nf, std::size_t nj)
+        : x(n + nj), v(n), a(n), g(nf), dg(nf), bound(nf), scale(nf) {}
     SegmentEval view() { return {x.data(), v.data(), a.data(), g.data(), dg.data(), bound.data(), scale.data()}; }
 };
 
-KernelOut run(KernelSolver& k, std::size_t n, double tau) {
-    KernelOut o(n, k.switches().size());
+KernelOut run(KernelSolver& k, std::size_t n, double tau, std::size_t nj = 0) {
+    KernelOut o(n, k.switches().size(), nj);
     k.eval(tau, o.view());
     return o;
 }
+KernelOut run(KernelSolver& k, const Model& m, double tau) { return run(k, m.dof(), tau, m.jenkins.size()); }
 
 const std::vector<double> kTaus = {0.0, 1e-3, 0.05, 0.4, 1.3, 3.0};
 
@@ -149,13 +157,16 @@ TEST(Kernel, MatchesGiNaCClosedFormAt40Digits) {
             }
             for (std::size_t s = 0; s < kTaus.size(); ++s) {
                 const double t = kTaus[s];
-                KernelOut o = run(k, m.dof(), t);
+                KernelOut o = run(k, m, t);
                 const std::string where = m.name + " " + cfg.key() + " tau=" + std::to_string(t);
                 for (std::size_t i = 0; i < m.dof(); ++i) {
                     EXPECT_NEAR(o.x[i], X[s][i], 1e-12 * xmax) << where << " x" << i;
                     EXPECT_NEAR(o.v[i], Vv[s][i], 1e-12 * vmax) << where << " v" << i;
                     EXPECT_NEAR(o.a[i], A[s][i], 1e-12 * amax) << where << " a" << i;
                 }
+                for (std::size_t j = 0; j < m.jenkins.size(); ++j)
+                    EXPECT_NEAR(o.x[m.dof() + j], eval40(sym.x[m.dof() + j], tau, t), 1e-12 * (xmax + 1.0))
+                        << where << " slider " << j;
                 for (std::size_t f = 0; f < d.switches.size(); ++f) {
                     EXPECT_NEAR(o.g[f], eval40(sym.g[f], tau, t), 1e-13 * o.scale[f]) << where << " g" << f;
                     const double dg = eval40(sym.dg[f], tau, t);
@@ -174,7 +185,9 @@ TEST(Kernel, InitialStateIsReproduced) {
             const Start st = start_of(m, cfg);
             KernelSolver k(sample_kernel(m, cfg));
             k.setup(st.t0, st.x0.data(), st.v0.data(), st.sgn.data());
-            const KernelOut o = run(k, m.dof(), 0.0);
+            const KernelOut o = run(k, m, 0.0);
+            for (std::size_t j = 0; j < m.jenkins.size(); ++j)
+                if (cfg.slip[j] == 0) EXPECT_EQ(o.x[m.dof() + j], st.x0[m.dof() + j]) << m.name << cfg.key();
             for (std::size_t i = 0; i < m.dof(); ++i) {
                 EXPECT_NEAR(o.x[i], st.x0[i], 1e-13 * (1 + std::fabs(st.x0[i])) * 1e2) << m.name << cfg.key();
                 EXPECT_NEAR(o.v[i], st.v0[i], 1e-13 * (1 + std::fabs(st.v0[i])) * 1e2) << m.name << cfg.key();
@@ -191,10 +204,15 @@ TEST(Kernel, SatisfiesTheEquationOfMotion) {
             KernelSolver k(sample_kernel(m, cfg));
             k.setup(st.t0, st.x0.data(), st.v0.data(), st.sgn.data());
             const Eigen::MatrixXd K = stiffness_matrix(m, cfg), C = damping_matrix(m, cfg);
-            const Eigen::VectorXd M = mass_vector(m), f0 = constant_force(m, cfg);
+            const Eigen::VectorXd M = mass_vector(m);
+            Eigen::VectorXd f0 = constant_force(m, cfg);
+            add_slider_preload(m, cfg, st.x0.data() + m.dof(), f0);  // k s of the stuck Jenkins elements
             for (int s = 0; s <= 40; ++s) {
                 const double t = 0.1 * s;
-                const KernelOut o = run(k, m.dof(), t);
+                const KernelOut o = run(k, m, t);
+                for (std::size_t j = 0; j < m.jenkins.size(); ++j)  // the slider: fixed, or the stretch held
+                    EXPECT_NEAR(o.x[m.dof() + j], slider_position(m, cfg, j, o.x.data()), 1e-15)
+                        << m.name << " " << cfg.key() << " slider " << j;
                 const Eigen::Map<const Eigen::VectorXd> x(o.x.data(), m.dof()), v(o.v.data(), m.dof()),
                     a(o.a.data(), m.dof());
                 const Eigen::VectorXd F = forcing(m, st.t0 + t);
@@ -228,7 +246,7 @@ TEST(Kernel, BoundHoldsOverTheStep) {
             k.setup(st.t0, st.x0.data(), st.v0.data(), st.sgn.data());
             const double step = std::min(k.max_step(), 2.0);
             for (double t0 : {0.0, 0.7}) {
-                const KernelOut o = run(k, m.dof(), t0);
+                const KernelOut o = run(k, m, t0);
                 for (std::size_t f = 0; f < d.switches.size(); ++f) {
                     const ex g2 = sym.dg[f].diff(tau);
                     for (int s = 0; s <= 16; ++s) {
@@ -312,7 +330,7 @@ TEST(Kernel, ForcingPhaseIsTakenAtT0PlusT0Lo) {
     const std::size_t n = m.dof();
     for (double tau : {1e-3, 0.01, 0.05}) {
         const KernelOut a = run(ka, n, tau), b = run(kb, n, tau), c = run(kc, n, tau);
-        KernelOut g(n, ga.switches().size()), h(n, gb.switches().size());
+        KernelOut g(n, ga.switches().size(), 0), h(n, gb.switches().size(), 0);
         ga.eval(tau, g.view());
         gb.eval(tau, h.view());
         double apart = 0;
@@ -327,6 +345,58 @@ TEST(Kernel, ForcingPhaseIsTakenAtT0PlusT0Lo) {
     }
 }
 
+// A kernel of m in cfg against the Eigen generic solver at a few instants; the
+// number of instants compared.
+int compare_with_generic(const Model& m, const Configuration& cfg, const hsnc_kernel& kernel, const std::string& name) {
+    int compared = 0;
+    KernelSolver k(kernel);
+    GenericSolver gs(m, cfg);
+    if (k.switches() != gs.switches()) {
+        ADD_FAILURE() << name << " " << cfg.key() << ": other switch functions";
+        return 0;
+    }
+    const Start st = start_of(m, cfg);
+    k.setup(st.t0, st.x0.data(), st.v0.data(), st.sgn.data());
+    gs.setup(st.t0, st.x0.data(), st.v0.data(), st.sgn.data());
+    // Gershgorin bound on the highest natural frequency: rounding in x of size
+    // eps*|x| shows in v as eps*omega_max*|x|.
+    const Eigen::MatrixXd K = stiffness_matrix(m, cfg);
+    const Eigen::VectorXd M = mass_vector(m);
+    double omega_max = 0;
+    for (std::size_t i = 0; i < m.dof(); ++i)
+        omega_max = std::max(omega_max, std::sqrt(K.row(i).cwiseAbs().sum() / M(i)));
+    for (double t : {0.0, 0.01, 0.3, 1.7}) {
+        KernelOut a = run(k, m, t), b(m.dof(), gs.switches().size(), m.jenkins.size());
+        gs.eval(t, b.view());
+        // Reference sizes: the largest state component, or the term magnitudes the
+        // solvers report for gaps (x) and velocities (v) when the state is ~0.
+        double xs = 1e-300, vs = 1e-300;
+        for (std::size_t i = 0; i < m.dof(); ++i) {
+            xs = std::max(xs, std::fabs(b.x[i]));
+            vs = std::max(vs, std::fabs(b.v[i]));
+        }
+        for (std::size_t f = 0; f < a.g.size(); ++f) {
+            if (k.switches()[f].kind == SwitchKind::gap) xs = std::max(xs, b.scale[f]);
+            if (is_velocity(k.switches()[f].kind)) vs = std::max(vs, b.scale[f]);
+        }
+        vs = std::max(vs, omega_max * xs);
+        const std::string where = std::string(name) + " " + cfg.key() + " tau=" + std::to_string(t);
+        for (std::size_t i = 0; i < m.dof(); ++i) {
+            EXPECT_NEAR(a.x[i], b.x[i], 1e-12 * xs) << where;
+            EXPECT_NEAR(a.v[i], b.v[i], 1e-12 * vs) << where;
+        }
+        for (std::size_t i = m.dof(); i < a.x.size(); ++i)  // the sliders
+            EXPECT_NEAR(a.x[i], b.x[i], 1e-12 * (xs + std::fabs(b.x[i]))) << where << " slider";
+        for (std::size_t f = 0; f < a.g.size(); ++f) {
+            EXPECT_NEAR(a.g[f], b.g[f], 1e-12 * std::max(a.scale[f], b.scale[f])) << where << " g" << f;
+            EXPECT_NEAR(a.dg[f], b.dg[f], 1e-12 * (std::fabs(b.dg[f]) + std::max(a.scale[f], b.scale[f]) * 1e3))
+                << where << " dg" << f;
+        }
+        ++compared;
+    }
+    return compared;
+}
+
 TEST(Kernel, AgreesWithGenericSolverOnBundledModels) {
     // The AOT kernels of models/*.toml against the Eigen generic solver.
     int compared = 0;
@@ -335,49 +405,22 @@ TEST(Kernel, AgreesWithGenericSolverOnBundledModels) {
         for (const Configuration& cfg : configurations_to_generate(m, nullptr)) {
             const hsnc_kernel* kp = find_aot_kernel(aot_registry(), m.name.c_str(), model_hash(m), cfg.key().c_str());
             ASSERT_NE(kp, nullptr) << name << " " << cfg.key();
-            KernelSolver k(*kp);
-            GenericSolver gs(m, cfg);
-            ASSERT_EQ(k.switches(), gs.switches());
-            const Start st = start_of(m, cfg);
-            k.setup(st.t0, st.x0.data(), st.v0.data(), st.sgn.data());
-            gs.setup(st.t0, st.x0.data(), st.v0.data(), st.sgn.data());
-            // Gershgorin bound on the highest natural frequency: rounding in x of size
-            // eps*|x| shows in v as eps*omega_max*|x|.
-            const Eigen::MatrixXd K = stiffness_matrix(m, cfg);
-            const Eigen::VectorXd M = mass_vector(m);
-            double omega_max = 0;
-            for (std::size_t i = 0; i < m.dof(); ++i)
-                omega_max = std::max(omega_max, std::sqrt(K.row(i).cwiseAbs().sum() / M(i)));
-            for (double t : {0.0, 0.01, 0.3, 1.7}) {
-                KernelOut a = run(k, m.dof(), t), b(m.dof(), gs.switches().size());
-                gs.eval(t, b.view());
-                // Reference sizes: the largest state component, or the term magnitudes the
-                // solvers report for gaps (x) and velocities (v) when the state is ~0.
-                double xs = 1e-300, vs = 1e-300;
-                for (std::size_t i = 0; i < m.dof(); ++i) {
-                    xs = std::max(xs, std::fabs(b.x[i]));
-                    vs = std::max(vs, std::fabs(b.v[i]));
-                }
-                for (std::size_t f = 0; f < a.g.size(); ++f) {
-                    if (k.switches()[f].kind == SwitchKind::gap) xs = std::max(xs, b.scale[f]);
-                    if (k.switches()[f].kind == SwitchKind::velocity) vs = std::max(vs, b.scale[f]);
-                }
-                vs = std::max(vs, omega_max * xs);
-                const std::string where = std::string(name) + " " + cfg.key() + " tau=" + std::to_string(t);
-                for (std::size_t i = 0; i < m.dof(); ++i) {
-                    EXPECT_NEAR(a.x[i], b.x[i], 1e-12 * xs) << where;
-                    EXPECT_NEAR(a.v[i], b.v[i], 1e-12 * vs) << where;
-                }
-                for (std::size_t f = 0; f < a.g.size(); ++f) {
-                    EXPECT_NEAR(a.g[f], b.g[f], 1e-12 * std::max(a.scale[f], b.scale[f])) << where << " g" << f;
-                    EXPECT_NEAR(a.dg[f], b.dg[f], 1e-12 * (std::fabs(b.dg[f]) + std::max(a.scale[f], b.scale[f]) * 1e3))
-                        << where << " dg" << f;
-                }
-                ++compared;
-            }
+            compared += compare_with_generic(m, cfg, *kp, name);
         }
     }
     EXPECT_GT(compared, 100);
+}
+
+// Jenkins elements: every configuration of the samples that have them (stuck,
+// slipping either way; the sliders in x0 and x) against the generic solver,
+// whose slider handling (runtime/solvers/switch_values.h) shares no code with lowering.
+TEST(Kernel, AgreesWithGenericSolverWithJenkinsElements) {
+    int compared = 0;
+    for (const Model& m : sample_models()) {
+        if (m.jenkins.empty()) continue;
+        for (const Configuration& cfg : all_configurations(m)) compared += compare_with_generic(m, cfg, sample_kernel(m, cfg), m.name);
+    }
+    EXPECT_EQ(compared, 4 * (18 + 3));
 }
 
 TEST(Emitter, DeterministicAndSelfContained) {

@@ -487,20 +487,48 @@ TEST(JenkinsReader, KeysAndErrors) {
     EXPECT_EQ(switch_functions(other, Configuration::all_open(other)).size(), 2u);
 }
 
+// Every kernel kind that is not bundled runs the closed form of the
+// derivation: the interpreter and the JIT give the closed-form instants of
+// the test above, to the bit alike.
+TEST(JenkinsFacade, TheDerivedKernelsRunTheClosedForm) {
+    const double m = 1.0, K = 4.0, k = 16.0, Fs = 2.0, v0 = 3.0;
+    const double W = std::sqrt((K + k) / m), w = std::sqrt(K / m);
+    const double x1 = Fs / k, t1 = std::asin(x1 * W / v0) / W, v1 = v0 * std::cos(W * t1);
+    const double c = -Fs / K;
+    const double t2 = t1 + std::atan2(v1, (x1 - c) * w) / w;
+    const Model md = mass_with_jenkins(m, K, k, Fs, 0.0, v0);
+    SimulateOptions o;
+    o.t_end = t2 + 0.05;
+    o.use_cache = false;
+    std::vector<std::vector<double>> rows;
+    for (KernelChoice kind : {KernelChoice::interp, KernelChoice::jit}) {
+        o.kernels = kind;
+        testing::Recorder rec(md.dof(), md.state_size());
+        const SimulateSummary s = simulate(md, o, rec);
+        ASSERT_EQ(s.status, RunStatus::ok) << s.message;
+        ASSERT_EQ(rec.events.size(), 2u) << kernel_choice_name(kind);
+        EXPECT_EQ(rec.events[0].kind, EventKind::release);
+        EXPECT_EQ(rec.events[1].kind, EventKind::stick);
+        EXPECT_NEAR(rec.events[0].t, t1, 1e-15) << kernel_choice_name(kind);
+        EXPECT_NEAR(rec.events[1].t, t2, 1e-14) << kernel_choice_name(kind);
+        EXPECT_NEAR(rec.events[1].x[1], rec.events[1].x[0] - Fs / k, 1e-15) << "the slider after the slip";
+        std::vector<double> all;
+        for (const Row& e : rec.events) {
+            all.push_back(e.t);
+            all.insert(all.end(), e.x.begin(), e.x.end());
+            all.insert(all.end(), e.v.begin(), e.v.end());
+        }
+        rows.push_back(all);
+    }
+    EXPECT_EQ(rows[0], rows[1]) << "interpreter and JIT, bit for bit";
+    o.kernels = KernelChoice::aot;  // no ahead-of-time kernels for a model built here
+    EXPECT_THROW(simulate(md, o), OptionError);
+}
+
 TEST(JenkinsFacade, WhatCannotCarryTheSliderIsRefused) {
     const Model md = mass_with_jenkins(1.0, 4.0, 16.0, 2.0, 0.0, 3.0);
     SimulateOptions o;
     o.t_end = 1.0;
-    for (KernelChoice k : {KernelChoice::aot, KernelChoice::jit, KernelChoice::interp}) {
-        o.kernels = k;
-        try {
-            simulate(md, o);
-            ADD_FAILURE() << "kernels " << kernel_choice_name(k) << " ran a model with a Jenkins element";
-        } catch (const OptionError& e) {
-            EXPECT_EQ(e.option(), "kernels");
-            EXPECT_NE(e.reason().find("Jenkins elements ([[jenkins]] 'j1')"), std::string::npos) << e.what();
-        }
-    }
     o.kernels = KernelChoice::automatic;
     o.method = Method::ab4;
     o.integrator.h = 1e-3;
@@ -538,7 +566,7 @@ TEST(JenkinsCli, EventsNameTheElementAndTheSliderIsTheLastColumn) {
     EXPECT_EQ(header, "t,kind,element,x_m1,v_m1,s_j1");
     EXPECT_NE(first.find(",release,j1,"), std::string::npos) << first;
     EXPECT_NE(second.find(",stick,j1,"), std::string::npos) << second;
-    for (const char* flags : {"--kernels interp", "--method ab4 --h 1e-3", "--precision mp:30"}) {
+    for (const char* flags : {"--method ab4 --h 1e-3", "--precision mp:30"}) {
         const testing::CliRun bad = testing::run_hsnc("simulate " + model + " --t-end 1 " + flags);
         EXPECT_EQ(bad.exit_code, 2) << flags << ": " << bad.err;
         EXPECT_NE(bad.err.find("Jenkins elements"), std::string::npos) << bad.err;
@@ -553,12 +581,45 @@ TEST(JenkinsCli, EventsNameTheElementAndTheSliderIsTheLastColumn) {
     std::getline(sin, srow);
     EXPECT_EQ(sheader, "t,x_m1,v_m1,s_j1");
     EXPECT_EQ(srow.substr(0, srow.find(',')), second.substr(0, second.find(',')));  // at the stick row's instant
-    for (const std::string cmd : {"periodic " + model + " --period 1", "inspect " + model + " --format cpp",
-                                  "generate " + model + " -o " + testing::temp_path("jenkins-gen")}) {
+    for (const std::string cmd : {"periodic " + model + " --period 1",
+                                  "generate " + model + " --params k -o " + testing::temp_path("jenkins-gen-p")}) {
         const testing::CliRun bad = testing::run_hsnc(cmd);
         EXPECT_EQ(bad.exit_code, 2) << cmd << ": " << bad.err;
         EXPECT_NE(bad.err.find("Jenkins elements"), std::string::npos) << cmd << ": " << bad.err;
     }
+    // The derivation takes it: every kernel kind writes the generic solver's events to
+    // rounding, the interpreter and the JIT the same bytes.
+    std::string bytes[3];
+    const char* kinds[3] = {"generic", "interp", "jit"};
+    for (int k = 0; k < 3; ++k) {
+        const std::string out = testing::temp_path(std::string("jenkins-kind-") + kinds[k] + ".csv");
+        const testing::CliRun r = testing::run_hsnc("simulate " + model + " --t-end 1 --no-cache --kernels " + kinds[k] +
+                                                    " --events " + out);
+        ASSERT_EQ(r.exit_code, 0) << kinds[k] << ": " << r.err;
+        std::ifstream f(out);
+        bytes[k].assign(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+    }
+    EXPECT_EQ(bytes[1], bytes[2]) << "interp and jit events";
+    EXPECT_EQ(std::count(bytes[0].begin(), bytes[0].end(), '\n'), std::count(bytes[1].begin(), bytes[1].end(), '\n'));
+    // generate: a kernel per configuration (stuck, slipping + and -) and its manifest;
+    // inspect: the slider and the element's switch functions.
+    const std::string dir = testing::temp_path("jenkins-gen");
+    const testing::CliRun gen = testing::run_hsnc("generate " + model + " -o " + dir);
+    ASSERT_EQ(gen.exit_code, 0) << gen.err;
+    EXPECT_NE(gen.out.find("wrote 3 kernels"), std::string::npos) << gen.out;
+    std::ifstream manifest(dir + "/jenkins-test.manifest");
+    std::string manifest_text((std::istreambuf_iterator<char>(manifest)), std::istreambuf_iterator<char>());
+    EXPECT_NE(manifest_text.find("slip=j1+"), std::string::npos) << manifest_text;
+    const testing::CliRun cpp = testing::run_hsnc("inspect " + model + " --config slip=j1- --format cpp");
+    ASSERT_EQ(cpp.exit_code, 0) << cpp.err;
+    EXPECT_NE(cpp.out.find("relative velocity of j1"), std::string::npos) << cpp.out;
+    const testing::CliRun stuck = testing::run_hsnc("inspect " + model + " --format cpp");
+    ASSERT_EQ(stuck.exit_code, 0) << stuck.err;
+    EXPECT_NE(stuck.out.find("coef[7] = x0[1];  // the slider of j1 (stuck)"), std::string::npos) << stuck.out;
+    const testing::CliRun text = testing::run_hsnc("inspect " + model);
+    ASSERT_EQ(text.exit_code, 0) << text.err;
+    EXPECT_NE(text.out.find("s_j1(tau) = s0_j1  (slider, stuck)"), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("k e - F_s of j1"), std::string::npos) << text.out;
 }
 
 // The bundled friction damper settles on one loop: its area per cycle (the

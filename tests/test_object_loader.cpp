@@ -34,6 +34,7 @@ Compiled compile(Jit& jit, const Model& model, const Configuration& cfg) {
 // Every output of every eval, at many taus, bit for bit.
 void expect_same_kernel(const hsnc_kernel& a, const hsnc_kernel& b, const Model& model) {
     ASSERT_EQ(a.n_dof, b.n_dof);
+    ASSERT_EQ(a.n_slider, b.n_slider);
     ASSERT_EQ(a.n_switch, b.n_switch);
     ASSERT_EQ(a.n_coef, b.n_coef);
     EXPECT_STREQ(a.config_key, b.config_key);

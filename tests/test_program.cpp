@@ -7,6 +7,7 @@
 // tolerance, not to the bit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -75,20 +76,25 @@ Start start_of(const Model& m, const Configuration& cfg, unsigned seed) {
             s.sgn[i] = s.v0[i] < 0 ? -1 : 1;
         }
     }
+    for (const Jenkins& e : m.jenkins) {  // the sliders after the masses, stretched below the slip force
+        auto pos = [&](int b) { return b == kGround ? 0.0 : s.x0[static_cast<std::size_t>(b)]; };
+        s.x0.push_back(pos(e.a) - pos(e.b) - 0.9 * u(rng) * e.slip_force / e.k);
+    }
     return s;
 }
 
+// n masses, nx = n + the sliders (x's length), ns switch functions.
 template <class Setup, class Eval>
-Trace trace(std::size_t n_coef, std::size_t n, std::size_t ns, const Start& s, Setup setup, Eval eval) {
+Trace trace(std::size_t n_coef, std::size_t n, std::size_t nx, std::size_t ns, const Start& s, Setup setup, Eval eval) {
     Trace t;
     t.coef.assign(n_coef, 0.0);
     setup(t.coef.data(), s);
-    const std::size_t per = 3 * n + 4 * ns;
+    const std::size_t per = nx + 2 * n + 4 * ns;
     t.out.assign(per * (sizeof kTaus / sizeof kTaus[0]), 0.0);
     double* o = t.out.data();
     for (double tau : kTaus) {
-        eval(t.coef.data(), tau, SegmentEval{o, o + n, o + 2 * n, o + 3 * n, o + 3 * n + ns, o + 3 * n + 2 * ns,
-                                             o + 3 * n + 3 * ns});
+        double* g = o + nx + 2 * n;
+        eval(t.coef.data(), tau, SegmentEval{o, o + nx, o + nx + n, g, g + ns, g + 2 * ns, g + 3 * ns});
         o += per;
     }
     return t;
@@ -96,8 +102,8 @@ Trace trace(std::size_t n_coef, std::size_t n, std::size_t ns, const Start& s, S
 
 Trace kernel_trace(const hsnc_kernel& k, const Start& s) {
     return trace(
-        static_cast<std::size_t>(k.n_coef), static_cast<std::size_t>(k.n_dof), static_cast<std::size_t>(k.n_switch),
-        s, [&](double* coef, const Start& st) { k.setup(coef, st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data()); },
+        static_cast<std::size_t>(k.n_coef), static_cast<std::size_t>(k.n_dof),
+        static_cast<std::size_t>(k.n_dof + k.n_slider), static_cast<std::size_t>(k.n_switch), s, [&](double* coef, const Start& st) { k.setup(coef, st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data()); },
         [&](const double* coef, double tau, const SegmentEval& o) {
             k.eval(coef, tau, o.x, o.v, o.a, o.g, o.dg, o.bound, o.scale);
         });
@@ -106,7 +112,8 @@ Trace kernel_trace(const hsnc_kernel& k, const Start& s) {
 Trace program_trace(const Program& p, const Start& s) {
     auto ip = std::make_shared<InterpretedSolver>(p);
     return trace(
-        static_cast<std::size_t>(p.n_coef), static_cast<std::size_t>(p.n_dof), p.n_switch(), s,
+        static_cast<std::size_t>(p.n_coef), static_cast<std::size_t>(p.n_dof), static_cast<std::size_t>(p.n_state()),
+        p.n_switch(), s,
         [&](double* coef, const Start& st) {
             ip->setup(st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data());
             if (p.n_coef) std::memcpy(coef, ip->coefficients(), static_cast<std::size_t>(p.n_coef) * sizeof(double));
@@ -224,6 +231,36 @@ TEST(Program, RandomModelsJitAndInterpreterAreBitIdentical) {
     }
 }
 
+// Jenkins elements: the sliders are inputs of setup (stuck: their preload)
+// and outputs of eval. Every configuration of both bundled examples (3 and 9),
+// the JIT-compiled kernel set against the interpreter.
+Model jenkins_example(const std::string& stem) {
+    return read_model(std::string(HSNC_SOURCE_DIR) + "/examples/jenkins/" + stem + ".toml");
+}
+
+TEST(Program, JenkinsExamplesJitAndInterpreterAreBitIdenticalInEveryConfiguration) {
+    std::size_t checked = 0;
+    for (const char* stem : {"friction_damper", "under_platform_damper"}) {
+        const Model m = jenkins_example(stem);
+        Jit jit;
+        jit.add(std::string(stem) + ".cpp", combined_source(generate_kernel_set(m)));
+        const std::vector<Configuration> cfgs = all_configurations(m);
+        ASSERT_EQ(configurations_to_generate(m, nullptr).size(), cfgs.size()) << stem;
+        for (const Configuration& cfg : cfgs) {
+            const auto* jk = static_cast<const hsnc_kernel*>(jit.lookup(kernel_symbol(m, cfg)));
+            ASSERT_NE(jk, nullptr) << stem << " " << cfg.spec(m);
+            EXPECT_EQ(jk->n_slider, static_cast<int>(m.jenkins.size()));
+            const Program p = lower(derive(m, cfg));
+            for (unsigned seed = 1; seed <= 3; ++seed) {
+                const Start s = start_of(m, cfg, seed);
+                expect_identical(kernel_trace(*jk, s), program_trace(p, s), std::string(stem) + " " + cfg.spec(m));
+                ++checked;
+            }
+        }
+    }
+    EXPECT_EQ(checked, 3u * (3u + 9u));
+}
+
 // ---- whole runs ----
 
 std::string slurp(const std::string& path) {
@@ -302,6 +339,36 @@ TEST(ProgramRun, SeedScenario2Over300sAotJitInterpreterWriteIdenticalCsv) {
 
 TEST(ProgramRun, Chain8AotJitInterpreterWriteIdenticalCsv) {
     expect_same_runs(bundled("chain-8"), 10.0, 0.01, true, 20);
+}
+
+// The bundled Jenkins examples over their default horizons: the JIT and the
+// interpreter write the same bytes (sliders in the last columns), and the
+// generic solver, an independent oracle, gives the same events to 1e-11 s.
+TEST(ProgramRun, JenkinsExamplesJitInterpreterWriteIdenticalCsvAndAgreeWithGeneric) {
+    for (const char* stem : {"friction_damper", "under_platform_damper"}) {
+        const Model m = jenkins_example(stem);
+        expect_same_runs(m, *m.t_end, 0.01, false, 200);
+        InterpretedSolverProvider interp(lowering_of(m));
+        GenericSolverProvider generic(m);
+        const RunFiles ri = run_to_csv(m, interp, *m.t_end, 0.01, "jenkins-interp");
+        const RunFiles rg = run_to_csv(m, generic, *m.t_end, 0.01, "jenkins-generic");
+        EXPECT_NE(ri.trajectory.substr(0, ri.trajectory.find('\n')).find(",s_"), std::string::npos) << stem;
+        ASSERT_EQ(ri.summary.events, rg.summary.events) << stem;
+        auto times = [](const std::string& csv) {  // the events' instants, sorted (ties may list in either order)
+            std::vector<double> t;
+            std::istringstream in(csv);
+            std::string line;
+            while (std::getline(in, line))  // the header (run_to_csv writes it, and so does the observer) skipped
+                if (!line.empty() && line[0] != 't') t.push_back(std::stod(line.substr(0, line.find(','))));
+            std::sort(t.begin(), t.end());
+            return t;
+        };
+        const std::vector<double> ti = times(ri.events), tg = times(rg.events);
+        ASSERT_EQ(ti.size(), tg.size()) << stem;
+        double apart = 0;
+        for (std::size_t k = 0; k < ti.size(); ++k) apart = std::max(apart, std::fabs(ti[k] - tg[k]));
+        EXPECT_LT(apart, 1e-11) << stem;
+    }
 }
 
 TEST(ProgramRun, RandomModelsJitInterpreterWriteIdenticalCsv) {

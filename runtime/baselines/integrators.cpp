@@ -796,7 +796,7 @@ RunSummary integrate(const Model& model, Method method, const IntegratorOptions&
                      const EngineOptions& engine_options, Observer& observer) {
     validate(method, options, model.t0, engine_options.t_end);
     if (method == Method::ab4)  // ab4 has its own stick rules, for masses against the ground
-        require_derivable(model, "hsnc::integrate()");
+        require_no_stick_elements(model, "hsnc::integrate()");
     if (method == Method::ab4) return run_ab4(model, options, engine_options, observer);
     if (method == Method::rk45) return run_rk45(model, options, engine_options, observer);
     if (method == Method::cvode) return run_cvode(model, options, engine_options, observer);

@@ -25,7 +25,7 @@ std::string cached_kernel_problem(const void* address, const Model& model, const
     const auto& k = *static_cast<const hsnc_kernel*>(address);
     if (k.abi_version != HSNC_KERNEL_ABI_VERSION)
         return "ABI version " + std::to_string(k.abi_version) + ", not " + std::to_string(HSNC_KERNEL_ABI_VERSION);
-    if (k.n_switch < 0 || k.n_coef < 0 || k.n_dof < 0 || k.n_param != 0) return "impossible sizes";
+    if (k.n_switch < 0 || k.n_coef < 0 || k.n_dof < 0 || k.n_slider < 0 || k.n_param != 0) return "impossible sizes";
     if (object) {  // every pointer inside the object before anything is read through it
         for (const char* text : {k.model_name, k.config_spec, k.config_key, k.generator_version})
             if (!object->contains_string(text)) return "strings outside the object";
@@ -37,7 +37,8 @@ std::string cached_kernel_problem(const void* address, const Model& model, const
             return "functions outside the code";
     }
     if (!k.setup || !k.eval || !k.config_key || !k.switches) return "null pointers";
-    if (k.model_hash != model_hash(model) || k.n_dof != static_cast<int>(model.dof()))
+    if (k.model_hash != model_hash(model) || k.n_dof != static_cast<int>(model.dof()) ||
+        k.n_slider != static_cast<int>(model.jenkins.size()))
         return "built for another model";
     if (std::strcmp(k.config_key, cfg.key().c_str()) != 0)
         return std::string("built for configuration '") + k.config_key + "'";

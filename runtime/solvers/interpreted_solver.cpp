@@ -899,12 +899,13 @@ InterpretedSolver::InterpretedSolver(const Program& p)
       switches_(p.switches),
       max_step_(p.max_step),
       n_dof_(p.n_dof),
+      n_slider_(p.n_slider),
       n_coef_(static_cast<std::size_t>(p.n_coef)),
       constants_(p.constants),
       setup_coef_(p.setup_coef),
       setup_(compile(p.setup, p.terms, 0, 0, setup_coef_)),
       eval_(compile(p.eval, p.terms, p.eval_outputs(),
-                    p.eval_outputs() + static_cast<std::uint32_t>(3 * p.n_dof + 4 * p.n_switch()), no_exports_)),
+                    p.eval_outputs() + p.eval_output_count(), no_exports_)),
       setup_regs_(p.setup.registers(), 0.0),
       eval_regs_(p.eval.registers(), 0.0) {
     eval_regs_[0] = 1.0;
@@ -925,9 +926,10 @@ void InterpretedSolver::setup(double t0, double t0_lo, const double* x0, const d
     r[0] = 1.0;
     r[Program::kSetupT0] = t0;
     r[Program::kSetupT0Lo] = t0_lo;
-    const std::size_t v0_at = Program::kSetupX0 + n, sgn_at = Program::kSetupX0 + 2 * n;
+    const std::size_t ns = n + static_cast<std::size_t>(n_slider_);  // x0: masses, then sliders
+    const std::size_t v0_at = Program::kSetupX0 + ns, sgn_at = v0_at + n;
+    for (std::size_t i = 0; i < ns; ++i) r[Program::kSetupX0 + i] = x0[i];
     for (std::size_t i = 0; i < n; ++i) {
-        r[Program::kSetupX0 + i] = x0[i];
         r[v0_at + i] = v0[i];
         r[sgn_at + i] = sgn[i];
     }
@@ -940,10 +942,12 @@ void InterpretedSolver::eval(double tau, const SegmentEval& out) const {
     double* r = eval_regs_.data();
     r[Program::kEvalTau] = tau;
     execute(constants_.data(), *eval_, r);
-    const std::size_t n = static_cast<std::size_t>(n_dof_), ns = switches_.size();
+    const std::size_t n = static_cast<std::size_t>(n_dof_), nx = n + static_cast<std::size_t>(n_slider_),
+                      ns = switches_.size();
     const double* o = r + Program::kEvalCoef + n_coef_;
-    for (std::size_t i = 0; i < n; ++i) out.x[i] = o[i], out.v[i] = o[n + i], out.a[i] = o[2 * n + i];
-    o += 3 * n;
+    for (std::size_t i = 0; i < nx; ++i) out.x[i] = o[i];
+    for (std::size_t i = 0; i < n; ++i) out.v[i] = o[nx + i], out.a[i] = o[nx + n + i];
+    o += nx + 2 * n;
     for (std::size_t f = 0; f < ns; ++f)
         out.g[f] = o[f], out.dg[f] = o[ns + f], out.bound[f] = o[2 * ns + f], out.scale[f] = o[3 * ns + f];
 }

@@ -61,6 +61,7 @@ private:
     std::vector<SwitchFunction> switches_;
     double max_step_ = 0;
     int n_dof_ = 0;
+    int n_slider_ = 0;
     std::size_t n_coef_ = 0;
     std::vector<double> constants_;
     std::vector<std::uint32_t> setup_coef_;  // setup's registers of coef[k]

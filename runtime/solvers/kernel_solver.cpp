@@ -11,9 +11,13 @@ Configuration configuration_from_key(const char* key) {
     const auto us = k.find("_s");
     if (k.empty() || k[0] != 'c' || us == std::string::npos)
         throw RunError("KernelSolver: '" + k + "' is not a configuration key");
+    const auto uj = k.find("_j", us + 2);  // Jenkins elements: 0 stuck, p / n slipping (Configuration::key)
+    const std::size_t stuck_end = uj == std::string::npos ? k.size() : uj;
     Configuration cfg;
     for (std::size_t i = 1; i < us; ++i) cfg.closed.push_back(k[i] == '1');
-    for (std::size_t i = us + 2; i < k.size(); ++i) cfg.stuck.push_back(k[i] == '1');
+    for (std::size_t i = us + 2; i < stuck_end; ++i) cfg.stuck.push_back(k[i] == '1');
+    for (std::size_t i = stuck_end + 2; i < k.size(); ++i)
+        cfg.slip.push_back(static_cast<signed char>(k[i] == 'p' ? 1 : k[i] == 'n' ? -1 : 0));
     return cfg;
 }
 
