@@ -263,7 +263,7 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
             hdot = sg * force_rate_on_mass(model, A, e, t, v, aA.data());
             break;
         }
-        case SwitchKind::slip_pos:  // Jenkins elements never reach the tangent (Flow: require_derivable)
+        case SwitchKind::slip_pos:  // Jenkins elements never reach the tangent (Flow: require_no_stick_elements)
         case SwitchKind::slip_neg:
         case SwitchKind::slip_velocity: return false;
     }

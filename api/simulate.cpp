@@ -110,10 +110,9 @@ void check_options(const Model& model, const SimulateOptions& o) {
             throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels), nonprop);
     }
     // Jenkins elements (a slider carried beside the state) and friction between
-    // two bodies (a stuck pair, one body): hsnc, rk45 and CVODE take both, ab4
-    // neither (its own stick rules hold a mass against the ground); the
-    // derivation (every kernel kind) takes Jenkins elements, not stuck pairs,
-    // and the reference neither, yet.
+    // two bodies (a stuck pair, one body): hsnc (every kernel kind), rk45 and
+    // CVODE take both, ab4 neither (its own stick rules hold a mass against
+    // the ground), nor the reference, yet.
     if (const std::string what = stick_elements(model); !what.empty()) {
         if (o.method == Method::ab4)
             throw OptionError(kSimulate, "method", method_name(o.method),
@@ -121,11 +120,6 @@ void check_options(const Model& model, const SimulateOptions& o) {
         if (o.precision_digits != 0)
             throw OptionError(kSimulate, "precision_digits", std::to_string(o.precision_digits),
                               "the model has " + what + ", which the reference does not take yet");
-    }
-    if (const std::string what = generic_only(model); !what.empty()) {
-        if (o.kernels != KernelChoice::automatic && o.kernels != KernelChoice::generic)
-            throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels),
-                              "the model has " + what + ", which runs on hsnc's generic solver only, for now");
     }
     if (o.method != Method::hsnc && o.kernels != KernelChoice::automatic)
         throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels),

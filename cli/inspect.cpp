@@ -122,17 +122,23 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
     std::string fr, st;
     for (int i : d.free_dofs) fr += (fr.empty() ? "" : ", ") + model.masses[i].name;
     for (int i : d.stuck_dofs) st += (st.empty() ? "" : ", ") + model.masses[i].name;
+    std::string riders;  // stuck to their friction partner: they move with it
+    for (int q : d.riders)
+        riders += (riders.empty() ? "" : ", ") + model.masses[static_cast<std::size_t>(q)].name + " on " +
+                  model.masses[static_cast<std::size_t>(model.masses[static_cast<std::size_t>(q)].partner)].name;
     if (fmt == Format::latex) {
         out << "% hsnc inspect: model " << model.name << " (hash " << hash << "), configuration "
             << cfg.spec(model) << "\n";
         out << "\\paragraph{Model " << latex_name(model.name) << ", configuration \\texttt{" << latex_name(cfg.spec(model))
             << "}} Free masses: " << latex_name(fr.empty() ? "none" : fr)
-            << "; stuck masses: " << latex_name(st.empty() ? "none" : st) << ".\n";
+            << "; stuck masses: " << latex_name(st.empty() ? "none" : st)
+            << (riders.empty() ? "" : "; riding their partner: " + latex_name(riders)) << ".\n";
     } else {
         out << "model " << model.name << " (hash " << hash << ")\n";
         out << "configuration " << cfg.spec(model) << " (key " << cfg.key() << ")\n";
         out << "free masses: " << (fr.empty() ? "none" : fr) << "; stuck masses: " << (st.empty() ? "none" : st)
             << " (held at their x0)\n";
+        if (!riders.empty()) out << "riding their friction partner: " << riders << " (one coordinate with it)\n";
     }
 
     // Symbols of the segment start, created in a fixed order.
@@ -153,14 +159,25 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
     if (nf > 0) {
         p.heading("Reduced system of the free masses: M x'' + C x' + K x = f + sum_h F_h sin(Omega_h t + phase_h)",
                   "Reduced system of the free masses: $M \\ddot x + C \\dot x + K x = f + \\sum_h F_h \\sin(\\Omega_h t + \\varphi_h)$");
-        std::vector<numeric> mdiag;
-        for (int i : d.free_dofs) mdiag.push_back(exact(model.masses[i].m));
-        print_matrix(p, "M", d, nullptr, &mdiag);
-        print_matrix(p, "K", d, &d.K, nullptr);
-        print_matrix(p, "C", d, &d.C, nullptr);
+        // A rider's rows and columns fold into its partner's coordinate (T^T K T, T^T C T).
+        GiNaC::matrix K = d.K, C = d.C;
+        for (int q : d.riders) {
+            const int pq = model.masses[static_cast<std::size_t>(q)].partner;
+            for (std::size_t k = 0; k < n; ++k) {
+                K(pq, k) = K(pq, k) + K(q, k);
+                C(pq, k) = C(pq, k) + C(q, k);
+            }
+            for (std::size_t k = 0; k < n; ++k) {
+                K(k, pq) = K(k, pq) + K(k, q);
+                C(k, pq) = C(k, pq) + C(k, q);
+            }
+        }
+        print_matrix(p, "M", d, nullptr, &d.mass);
+        print_matrix(p, "K", d, &K, nullptr);
+        print_matrix(p, "C", d, &C, nullptr);
         for (std::size_t r = 0; r < nf; ++r) {
             const int i = d.free_dofs[r];
-            const ex f = segment_force(d, in, i);
+            const ex f = coordinate_force(d, in, r);
             const std::string nm = model.masses[i].name;
             p.line("f_" + nm + " = " + p.expr(f), "\\[ f_{" + latex_name(nm) + "} = " + p.expr(f) + " \\]");
         }
@@ -191,8 +208,7 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
                 if (m.lambda.is_zero()) continue;
                 ex pj = 0;
                 for (std::size_t s = 0; s < nf; ++s) {
-                    const int i = d.free_dofs[s];
-                    const ex f = segment_force(d, in, i);
+                    const ex f = coordinate_force(d, in, s);
                     pj += m.v[s] * f;
                 }
                 xst += m.v[r] * pj / m.lambda;
@@ -229,8 +245,13 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
         switch (sf.kind) {
             case SwitchKind::gap: what = "gap of " + model.contacts[sf.element].name; break;
             case SwitchKind::velocity: what = "velocity of " + model.masses[sf.element].name; break;
-            case SwitchKind::release_pos: what = "A - mu_s N of " + model.masses[sf.element].name; break;
-            case SwitchKind::release_neg: what = "-A - mu_s N of " + model.masses[sf.element].name; break;
+            case SwitchKind::release_pos:
+            case SwitchKind::release_neg: {
+                const Mass& ms = model.masses[static_cast<std::size_t>(sf.element)];
+                const std::string force = ms.partner == kGround ? "A" : "D";  // D: against its partner
+                what = (sf.kind == SwitchKind::release_pos ? "" : "-") + force + " - mu_s N of " + ms.name;
+                break;
+            }
             case SwitchKind::slip_pos: what = "k e - F_s of " + model.jenkins[static_cast<std::size_t>(sf.element)].name; break;
             case SwitchKind::slip_neg: what = "-k e - F_s of " + model.jenkins[static_cast<std::size_t>(sf.element)].name; break;
             case SwitchKind::slip_velocity:

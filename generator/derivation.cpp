@@ -36,6 +36,13 @@ int Derivation::free_index(int mass) const {
     return it == free_dofs.end() ? -1 : static_cast<int>(it - free_dofs.begin());
 }
 
+bool Derivation::rides(int mass) const { return std::find(riders.begin(), riders.end(), mass) != riders.end(); }
+
+int Derivation::coordinate(int mass) const {
+    if (mass == kGround) return -1;
+    return rides(mass) ? free_index(model->masses[static_cast<std::size_t>(mass)].partner) : free_index(mass);
+}
+
 namespace {
 
 const numeric kZero(0), kOne(1), kTwo(2);
@@ -101,14 +108,25 @@ ex slider_preload(const Derivation& d, const SegmentInputs& in, int i) {
 }
 
 ex segment_force(const Derivation& d, const SegmentInputs& in, int i) {
+    const Model& model = *d.model;
     ex f = d.f_const[i] - d.mu_k_n[i] * in.sgn[i] + slider_preload(d, in, i);
+    for (std::size_t q = 0; q < model.dof(); ++q)  // a sliding friction pair: the opposite force on the partner
+        if (model.masses[q].partner == i) f += d.mu_k_n[q] * in.sgn[q];
     for (int s : d.stuck_dofs) f -= d.K(i, s) * in.x0[s];
+    for (int r : d.riders) f -= d.K(i, r) * (in.x0[r] - in.x0[model.masses[static_cast<std::size_t>(r)].partner]);
+    return f;
+}
+
+ex coordinate_force(const Derivation& d, const SegmentInputs& in, std::size_t r) {
+    const int p = d.free_dofs[r];
+    ex f = segment_force(d, in, p);
+    for (int q : d.riders)
+        if (d.model->masses[static_cast<std::size_t>(q)].partner == p) f += segment_force(d, in, q);
     return f;
 }
 
 Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method) {
     require_proportional_damping(model, "derivation::derive()");
-    require_derivable(model, "derivation::derive()");
     GiNaC::Digits = kDerivationDigits;
     Derivation d;
     d.model = &model;
@@ -117,13 +135,19 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     const std::size_t n = model.dof();
     std::vector<int> free_index(n, -1);
     for (std::size_t i = 0; i < n; ++i) {
-        if (cfg.stuck[i]) {
+        if (fixed_in(model, cfg, i)) {
             d.stuck_dofs.push_back(static_cast<int>(i));
+        } else if (rides_partner(model, cfg, i)) {
+            d.riders.push_back(static_cast<int>(i));
         } else {
             free_index[i] = static_cast<int>(d.free_dofs.size());
             d.free_dofs.push_back(static_cast<int>(i));
         }
     }
+    // The masses of each coordinate: its free mass, then its riders (T of x = T q + e).
+    std::vector<std::vector<int>> group(d.free_dofs.size());
+    for (std::size_t r = 0; r < d.free_dofs.size(); ++r) group[r].push_back(d.free_dofs[r]);
+    for (int q : d.riders) group[static_cast<std::size_t>(free_index[model.masses[static_cast<std::size_t>(q)].partner])].push_back(q);
 
     // Full K(cfg), C = alpha M + beta K(cfg), constant forces, as exact rationals.
     const Eigen::MatrixXd K = stiffness_matrix(model, cfg);
@@ -155,12 +179,21 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     // Modal decomposition of Kt = M^-1/2 K_FF M^-1/2.
     const std::size_t nf = d.free_dofs.size();
     std::vector<numeric> sqm(nf);
-    for (std::size_t r = 0; r < nf; ++r) sqm[r] = to_float(sqrt(exact(model.masses[d.free_dofs[r]].m)));
+    d.mass.assign(nf, kZero);
+    for (std::size_t r = 0; r < nf; ++r) {
+        for (int i : group[r]) d.mass[r] += exact(model.masses[static_cast<std::size_t>(i)].m);
+        sqm[r] = to_float(sqrt(d.mass[r]));
+    }
     std::vector<std::vector<numeric>> kt(nf, std::vector<numeric>(nf));
     for (std::size_t r = 0; r < nf; ++r)
-        for (std::size_t s = 0; s < nf; ++s)
-            if (K(d.free_dofs[r], d.free_dofs[s]) != 0.0)  // else the exact 0 it starts as (0 / x)
-                kt[r][s] = GiNaC::ex_to<numeric>(d.K(d.free_dofs[r], d.free_dofs[s])) / (sqm[r] * sqm[s]);
+        for (std::size_t s = 0; s < nf; ++s) {
+            numeric kf = kZero;  // (T^T K T)_rs, exact
+            bool nonzero = false;
+            for (int i : group[r])
+                for (int k : group[s])
+                    if (K(i, k) != 0.0) kf += GiNaC::ex_to<numeric>(d.K(i, k)), nonzero = true;
+            if (nonzero) kt[r][s] = kf / (sqm[r] * sqm[s]);  // else the exact 0 it starts as (0 / x)
+        }
     // eig_value[j], eig_vector[j][r]: the eigenpairs of Kt in ascending order.
     std::vector<numeric> eig_value(nf);
     std::vector<std::vector<numeric>> eig_vector(nf, std::vector<numeric>(nf));
@@ -200,7 +233,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     for (std::size_t j = 0; j < nf; ++j) {
         if (j < comps.size()) {
             numeric m_total = kZero;
-            for (int i : comps[j]) m_total += exact(model.masses[i].m);
+            for (int i : comps[j]) m_total += d.mass[static_cast<std::size_t>(free_index[i])];
             const numeric inv = to_float(kOne / sqrt(m_total));
             for (int i : comps[j]) shape[j][free_index[i]] = sqm[free_index[i]] * inv;
             lambda[j] = kZero;
@@ -281,7 +314,8 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         for (const Mode& m : d.modes) {
             ModalHarmonic mh;
             mh.P = kZero;
-            for (std::size_t r = 0; r < nf; ++r) mh.P += m.v[r] * hd.amplitude[d.free_dofs[r]];
+            for (std::size_t r = 0; r < nf; ++r)
+                for (int i : group[r]) mh.P += m.v[r] * hd.amplitude[static_cast<std::size_t>(i)];
             mh.resonant = m.regime == Regime::undamped &&
                           abs(W - m.omega) <= exact(kResonanceBand) * m.omega;
             if (mh.resonant) {
@@ -311,10 +345,7 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
 
     // Constant force on the free masses (paper Eq. 7-9).
     std::vector<ex> f(nf);
-    for (std::size_t r = 0; r < nf; ++r) {
-        const int i = d.free_dofs[r];
-        f[r] = segment_force(d, in, i);
-    }
+    for (std::size_t r = 0; r < nf; ++r) f[r] = coordinate_force(d, in, r);
     std::vector<ex> theta;
     for (const HarmonicData& h : d.harmonics) theta.push_back(h.omega * in.t0 + h.phase);
 
@@ -379,6 +410,10 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
     for (int s : d.stuck_dofs) out.x[s] = in.x0[s];
     for (std::size_t r = 0; r < nf; ++r)
         for (std::size_t j = 0; j < d.modes.size(); ++j) out.x[d.free_dofs[r]] += d.modes[j].v[r] * out.u[j];
+    for (int q : d.riders) {  // at its segment-start offset from its partner
+        const int p = model.masses[static_cast<std::size_t>(q)].partner;
+        out.x[q] = out.x[p] + (in.x0[q] - in.x0[p]);
+    }
     for (std::size_t i = 0; i < n; ++i) {
         out.v.push_back(out.x[i].diff(tau));
         out.a.push_back(out.v[i].diff(tau));
@@ -396,8 +431,8 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
         if (sf.kind == SwitchKind::gap) {
             const Contact& c = model.contacts[sf.element];
             g = contact_gap(pos(c.a), pos(c.b), ex(exact(c.gap)));
-        } else if (sf.kind == SwitchKind::velocity) {
-            g = out.v[sf.element];
+        } else if (sf.kind == SwitchKind::velocity) {  // w = v_i - v_partner
+            g = out.v[sf.element] - vel(model.masses[static_cast<std::size_t>(sf.element)].partner);
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
             const std::size_t j = static_cast<std::size_t>(sf.element);
             const Jenkins& e = model.jenkins[j];
@@ -407,12 +442,22 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
             const Jenkins& e = model.jenkins[static_cast<std::size_t>(sf.element)];
             g = vel(e.a) - vel(e.b);
         } else {
-            // A_i = -K x - C v + f_const + the stuck sliders' preload + forcing (interface.md section 2).
+            // A_i = -K x - C v + f_const + the stuck sliders' preload + forcing (interface.md section 2);
+            // against a partner p, the force that holds the pair together,
+            // D = (m_p A_i - m_i A_p)/(m_i + m_p) (assembly.h driving_force).
             const int i = sf.element;
-            ex A = d.f_const[i] + slider_preload(d, in, i);
-            for (std::size_t k = 0; k < n; ++k) A -= d.K(i, k) * out.x[k] + d.C(i, k) * out.v[k];
-            for (std::size_t h = 0; h < d.harmonics.size(); ++h)
-                A += d.harmonics[h].amplitude[i] * GiNaC::sin(d.harmonics[h].omega * tau + theta[h]);
+            auto force = [&](int b) {
+                ex A = d.f_const[b] + slider_preload(d, in, b);
+                for (std::size_t k = 0; k < n; ++k) A -= d.K(b, k) * out.x[k] + d.C(b, k) * out.v[k];
+                for (std::size_t h = 0; h < d.harmonics.size(); ++h)
+                    A += d.harmonics[h].amplitude[b] * GiNaC::sin(d.harmonics[h].omega * tau + theta[h]);
+                return A;
+            };
+            ex A = force(i);
+            if (const int p = model.masses[static_cast<std::size_t>(i)].partner; p != kGround) {
+                const numeric mi = exact(model.masses[static_cast<std::size_t>(i)].m), mp = exact(model.masses[static_cast<std::size_t>(p)].m);
+                A = (mp * A - mi * force(p)) / (mi + mp);
+            }
             const numeric mu_s_n = exact(model.masses[i].mu_s) * exact(model.masses[i].m) * exact(model.g);
             g = (sf.kind == SwitchKind::release_pos ? A : -A) - mu_s_n;
         }

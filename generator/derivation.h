@@ -85,8 +85,14 @@ inline constexpr double kResonanceBand = 1e-2;
 struct Derivation {
     const Model* model = nullptr;
     Configuration cfg;
-    std::vector<int> free_dofs;   ///< mass indices of the free masses, in order
-    std::vector<int> stuck_dofs;  ///< mass indices of the stuck masses
+    std::vector<int> free_dofs;   ///< mass indices of the free masses, in order: one coordinate each
+    std::vector<int> stuck_dofs;  ///< mass indices of the masses stuck against the ground (held at x0)
+    /// Masses stuck to their friction partner (model.h Mass::partner): each
+    /// moves with its partner's coordinate at the offset x0[i] - x0[partner]
+    /// it had at the segment start (x = T q + e), so the modes are those of
+    /// T^T M T, T^T K T: a coordinate's mass and stiffness gather its riders'.
+    std::vector<int> riders;
+    std::vector<GiNaC::numeric> mass;  ///< per coordinate: its free mass plus its riders' (exact)
     GiNaC::matrix K, C;           ///< full n x n K(cfg), C (exact rationals)
     std::vector<GiNaC::numeric> f_const;  ///< loads + preload, all masses (exact)
     std::vector<GiNaC::numeric> mu_k_n;   ///< mu_k N_i of free friction masses, else 0
@@ -98,6 +104,11 @@ struct Derivation {
     std::size_t n_free() const { return free_dofs.size(); }
     /// Index into free_dofs of mass i, or -1 when stuck.
     int free_index(int mass) const;
+    /// The coordinate mass i moves with: free_index(i), or its partner's for a
+    /// rider; -1 for a mass stuck against the ground and for the ground.
+    int coordinate(int mass) const;
+    /// Mass i is one of `riders`.
+    bool rides(int mass) const;
 };
 
 /// How derive() finds the modes of Kt = M^-1/2 K_FF M^-1/2 at the working
@@ -137,8 +148,13 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
 GiNaC::ex slider_preload(const Derivation& d, const SegmentInputs& in, int i);
 
 /// The constant force on mass i in a segment (paper Eq. 7-9):
-/// f_const - mu_k N sgn - K_iS x_S + slider_preload.
+/// f_const - mu_k N sgn (+ the reaction of a sliding rider's friction on its
+/// partner) - K_iS x_S - K_iR (x0_R - x0_partner) + slider_preload.
 GiNaC::ex segment_force(const Derivation& d, const SegmentInputs& in, int i);
+
+/// The constant force on coordinate r: segment_force summed over its free
+/// mass and its riders (T^T f).
+GiNaC::ex coordinate_force(const Derivation& d, const SegmentInputs& in, std::size_t r);
 
 /// High-precision number from a double, exactly (no rounding on the way in).
 GiNaC::numeric exact(double v);

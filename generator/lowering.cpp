@@ -118,8 +118,10 @@ Program lower(const Derivation& d) {
             vd[j][r] = dbl(d.modes[j].v[r]);
             wd[j][r] = dbl(d.modes[j].w[r]);
         }
-    std::vector<int> free_of(n, -1);
-    for (std::size_t r = 0; r < nf; ++r) free_of[d.free_dofs[r]] = static_cast<int>(r);
+    std::vector<int> free_of(n, -1), coord_of(n, -1);  // coord_of: a rider moves with its partner's coordinate
+    for (std::size_t r = 0; r < nf; ++r) free_of[d.free_dofs[r]] = coord_of[d.free_dofs[r]] = static_cast<int>(r);
+    auto partner_of = [&](int q) { return model.masses[static_cast<std::size_t>(q)].partner; };
+    for (int q : d.riders) coord_of[q] = free_of[partner_of(q)];
 
     // ---- constants: per mode (ModeConstant layout), per harmonic (Omega, phase) ----
     std::vector<std::uint32_t> mode_k(nm), harm_k(nh);
@@ -197,15 +199,33 @@ Program lower(const Derivation& d) {
     };
     std::map<std::string, std::uint32_t> coef_of;  // slot name -> k
 
+    // A rider's offset from its partner, fixed for the segment: e_q = x0_q - x0_partner.
+    std::map<int, std::uint32_t> offset;
+    for (int q : d.riders) {
+        offset[q] = s.temp("e_" + model.masses[static_cast<std::size_t>(q)].name);
+        with(s.lin(offset[q], Lin().add(1.0, x0(q)).add(-1.0, x0(partner_of(q)))),
+             q == d.riders.front() ? "Riders (stuck to their friction partner) keep their offset e = x0 - x0_partner." : "");
+        coef_of["e_" + std::to_string(q)] = slot("e_" + std::to_string(q), offset[q], "", model.masses[static_cast<std::size_t>(q)].name + " rides its partner");
+    }
     std::vector<std::uint32_t> f(nf), pj(nm);
     if (nf > 0) {
         for (std::size_t r = 0; r < nf; ++r) {
-            const int i = d.free_dofs[r];
             Lin l;
-            l.add(d.f_const[i], ONE);
-            for (int st : d.stuck_dofs) l.add(-dbl(entry(d.K, i, st)), x0(st));
-            for_each_slider_preload(model, d.cfg, i, [&](double k, std::size_t j) { l.add(k, x0(static_cast<int>(n + j))); });
-            l.add(-dbl(d.mu_k_n[i]), sgn(i));
+            // The coordinate's force T^T (f - K e): its free mass's, then its riders'.
+            std::vector<int> members{d.free_dofs[r]};
+            for (int q : d.riders)
+                if (coord_of[q] == static_cast<int>(r)) members.push_back(q);
+            for (int i : members) {
+                l.add(d.f_const[i], ONE);
+                for (int st : d.stuck_dofs) l.add(-dbl(entry(d.K, i, st)), x0(st));
+                for (int q : d.riders) l.add(-dbl(entry(d.K, i, q)), offset[q]);
+                for_each_slider_preload(model, d.cfg, i,
+                                        [&](double k, std::size_t j) { l.add(k, x0(static_cast<int>(n + j))); });
+                l.add(-dbl(d.mu_k_n[i]), sgn(i));
+                for (std::size_t q = 0; q < n; ++q)  // a sliding pair: the friction's reaction on the partner
+                    if (partner_of(static_cast<int>(q)) == i) l.add(dbl(d.mu_k_n[q]), sgn(static_cast<int>(q)));
+            }
+            const int i = d.free_dofs[r];
             f[r] = s.temp("f_" + idx(r));
             with(s.lin(f[r], l),
                  r == 0 ? "Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9)"
@@ -506,6 +526,7 @@ Program lower(const Derivation& d) {
         const int r = free_of[i];
         const std::string comment =
             i == 0 ? "Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest." : "";
+        if (d.rides(ii)) continue;  // after its partner, below
         if (r < 0) {
             const std::uint32_t xs = C("x_stuck_" + I);
             with(e.unary(ProgramOp::copy, X(ii), xs), comment, model.masses[i].name + " (stuck)");
@@ -551,6 +572,22 @@ Program lower(const Derivation& d) {
         with(e.emit(in), comment, model.masses[i].name);
     }
 
+    // Riders: their partner's motion at their offset.
+    for (int q : d.riders) {
+        const int p = partner_of(q);
+        const std::uint32_t eq = C("e_" + std::to_string(q));
+        with(e.lin(X(q), Lin().add(1.0, X(p)).add(1.0, eq)), q == d.riders.front() ? "Riders: x = x_partner + e." : "",
+             model.masses[static_cast<std::size_t>(q)].name + " (rides " + model.masses[static_cast<std::size_t>(p)].name + ")");
+        e.unary(ProgramOp::copy, Vr(q), Vr(p));
+        e.unary(ProgramOp::copy, Ar(q), Ar(p));
+        const std::uint32_t ae = e.temp("me_" + std::to_string(q));
+        e.unary(ProgramOp::abs, ae, eq);
+        mx[static_cast<std::size_t>(q)] = e.temp("mx_" + std::to_string(q));
+        e.lin(mx[static_cast<std::size_t>(q)], Lin().add(1.0, mx[static_cast<std::size_t>(p)]).add(1.0, ae));
+        mv[static_cast<std::size_t>(q)] = e.temp("mv_" + std::to_string(q));
+        e.unary(ProgramOp::copy, mv[static_cast<std::size_t>(q)], mv[static_cast<std::size_t>(p)]);
+    }
+
     // Jenkins sliders: fixed while stuck; while slipping the stretch is held,
     // s = x[a] - x[b] - slip F_s/k. Their magnitudes for the switch functions' scale.
     std::vector<std::uint32_t> mxs(nj);
@@ -578,14 +615,70 @@ Program lower(const Derivation& d) {
     // Switch functions.
     auto V = [&](int mass, std::size_t j) -> numeric {  // V_ij, 0 for stuck masses and ground
         if (mass == kGround) return 0;
-        const int r = free_of[mass];
+        const int r = coord_of[mass];
         return r < 0 ? numeric(0) : d.modes[j].v[r];
     };
     // The non-resonant particular part of body b's x at harmonic h: xs (sine) or xc (cosine).
     auto harmonic_x = [&](std::size_t h, int b, bool sine) -> numeric {
-        if (b == kGround || free_of[b] < 0) return 0;
-        return sine ? d.harmonics[h].xs[free_of[b]] : d.harmonics[h].xc[free_of[b]];
+        if (b == kGround || coord_of[b] < 0) return 0;
+        return sine ? d.harmonics[h].xs[coord_of[b]] : d.harmonics[h].xc[coord_of[b]];
     };
+    // A_b = -K x - C v + f + slider preload + sum_h F_h sin, the force on mass b from
+    // everything but friction, as terms of A, A' and of their magnitudes (const_mag
+    // gathers the constant ones), and as a combination of the state: alpha (on q) and
+    // beta (on q') per mode, Gs sin + Gc cos per harmonic (the bound's inputs).
+    auto force_terms = [&](int b, Lin& A, Lin& dA, Lin& mag, double& const_mag, std::vector<numeric>& al,
+                           std::vector<numeric>& be, std::vector<numeric>& Gs, std::vector<numeric>& Gc) {
+        A.add(d.f_const[b], ONE);
+        for (std::size_t k = 0; k < n; ++k) {
+            const int kk = static_cast<int>(k);
+            const double Kbk = dbl(entry(d.K, b, kk)), Cbk = dbl(entry(d.C, b, kk));
+            A.add(-Kbk, X(kk));
+            dA.add(-Kbk, Vr(kk));
+            mag.add(std::fabs(Kbk), mx[k]);
+            if (!d.cfg.stuck[k] || d.rides(kk)) {  // a rider moves with its partner
+                A.add(-Cbk, Vr(kk));
+                dA.add(-Cbk, Ar(kk));
+                mag.add(std::fabs(Cbk), mv[k]);
+            }
+        }
+        for_each_slider_preload(model, d.cfg, b, [&](double k, std::size_t j) {
+            A.add(k, X(static_cast<int>(n + j)));
+            mag.add(std::fabs(k), mxs[j]);
+        });
+        for (std::size_t h = 0; h < nh; ++h) {
+            const double F0 = dbl(d.harmonics[h].amplitude[b]), W = dbl(d.harmonics[h].omega);
+            A.add(F0, sin_h[h]);
+            dA.add(F0 * W, cos_h[h]);
+            const_mag += std::fabs(F0);
+        }
+        // Only the nonzero entries of row b of K and C: an exact-zero entry times
+        // a float is the exact 0 (CLN), whose subtraction changes nothing.
+        auto moving = [&](int k, std::size_t r) {
+            const numeric Kbk = entry(d.K, b, k), Cbk = entry(d.C, b, k);
+            const bool kz = Kbk.is_zero() && Kbk.is_rational(), cz = Cbk.is_zero() && Cbk.is_rational();
+            if (kz && cz) return;
+            for (std::size_t j = 0; j < nm; ++j) {
+                if (!kz) al[j] -= Kbk * d.modes[j].v[r];
+                if (!cz) be[j] -= Cbk * d.modes[j].v[r];
+            }
+        };
+        for (std::size_t r = 0; r < nf; ++r) moving(d.free_dofs[r], r);
+        for (int q : d.riders) moving(q, static_cast<std::size_t>(coord_of[q]));
+        for (std::size_t h = 0; h < nh; ++h) {
+            const HarmonicData& hd = d.harmonics[h];
+            Gs[h] = hd.amplitude[b];
+            auto harmonic = [&](int k, std::size_t r) {
+                const numeric Kbk = entry(d.K, b, k), Cbk = entry(d.C, b, k);
+                if (Kbk.is_zero() && Kbk.is_rational() && Cbk.is_zero() && Cbk.is_rational()) return;  // adds the exact 0
+                Gs[h] += -Kbk * hd.xs[r] + Cbk * hd.omega * hd.xc[r];
+                Gc[h] += -Kbk * hd.xc[r] - Cbk * hd.omega * hd.xs[r];
+            };
+            for (std::size_t r = 0; r < nf; ++r) harmonic(d.free_dofs[r], r);
+            for (int q : d.riders) harmonic(q, static_cast<std::size_t>(coord_of[q]));
+        }
+    };
+    std::map<int, std::uint32_t> pair_reg;  // mass -> its A_pair register (then A', the magnitude)
     std::uint32_t s_end = kNoRegister;
     std::vector<std::uint32_t> abs_p(nm, kNoRegister);
     std::map<int, std::uint32_t> force_reg;  // mass -> its A_force register in eval
@@ -629,13 +722,13 @@ Program lower(const Derivation& d) {
             for (std::size_t j = 0; j < nm; ++j) al[j] = V(ct.a, j) - V(ct.b, j);
             for (std::size_t h = 0; h < nh; ++h) {
                 auto xsb = [&](int b, bool sine) -> numeric {
-                    if (b == kGround || free_of[b] < 0) return 0;
-                    return sine ? d.harmonics[h].xs[free_of[b]] : d.harmonics[h].xc[free_of[b]];
+                    if (b == kGround || coord_of[b] < 0) return 0;
+                    return sine ? d.harmonics[h].xs[coord_of[b]] : d.harmonics[h].xc[coord_of[b]];
                 };
                 Gs[h] = xsb(ct.a, true) - xsb(ct.b, true);
                 Gc[h] = xsb(ct.a, false) - xsb(ct.b, false);
             }
-        } else if (sf.kind == SwitchKind::velocity) {
+        } else if (sf.kind == SwitchKind::velocity && model.masses[static_cast<std::size_t>(sf.element)].partner == kGround) {
             const int i = sf.element;
             comment += "g_" + F + ": velocity of " + model.masses[i].name + " (sliding)";
             g.add(1.0, Vr(i));
@@ -646,6 +739,19 @@ Program lower(const Derivation& d) {
             for (std::size_t h = 0; h < nh; ++h) {
                 Gs[h] = -d.harmonics[h].omega * d.harmonics[h].xc[r];
                 Gc[h] = d.harmonics[h].omega * d.harmonics[h].xs[r];
+            }
+        } else if (sf.kind == SwitchKind::velocity) {
+            // Sliding on its partner: w = v_i - v_p.
+            const int i = sf.element, p = partner_of(i);
+            comment += "g_" + F + ": velocity of " + model.masses[i].name + " on " + model.masses[p].name + " (sliding)";
+            g.add(1.0, Vr(i)).add(-1.0, Vr(p));
+            dg.add(1.0, Ar(i)).add(-1.0, Ar(p));
+            sc.add(1.0, mv[i]).add(1.0, mv[p]);
+            for (std::size_t j = 0; j < nm; ++j) be[j] = V(i, j) - V(p, j);
+            for (std::size_t h = 0; h < nh; ++h) {
+                const numeric W = d.harmonics[h].omega;
+                Gs[h] = -W * (harmonic_x(h, i, false) - harmonic_x(h, p, false));
+                Gc[h] = W * (harmonic_x(h, i, true) - harmonic_x(h, p, true));
             }
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
             // +-k (x[a] - x[b] - s) - F_s: the stretch force of a stuck element against F_s.
@@ -698,70 +804,71 @@ Program lower(const Derivation& d) {
             const bool pos = sf.kind == SwitchKind::release_pos;
             const Mass& ms = model.masses[i];
             const double mu_s_n = dbl(exact(ms.mu_s) * exact(ms.m) * exact(model.g));
-            comment += std::string("g_") + F + ": " + (pos ? "A" : "-A") + " - mu_s N of stuck " + ms.name +
-                       ", A = -K x - C v + f + sum_h F_h sin (force but friction)";
-            Lin A, dA;
-            A.add(d.f_const[i], ONE);
-            double const_mag = std::fabs(dbl(d.f_const[i])) + mu_s_n;
-            for (std::size_t k = 0; k < n; ++k) {
-                const int kk = static_cast<int>(k);
-                const double Kik = dbl(entry(d.K, i, kk)), Cik = dbl(entry(d.C, i, kk));
-                A.add(-Kik, X(kk));
-                dA.add(-Kik, Vr(kk));
-                sc.add(std::fabs(Kik), mx[k]);
-                if (!d.cfg.stuck[k]) {
-                    A.add(-Cik, Vr(kk));
-                    dA.add(-Cik, Ar(kk));
-                    sc.add(std::fabs(Cik), mv[k]);
-                }
-            }
-            for_each_slider_preload(model, d.cfg, i, [&](double k, std::size_t j) {
-                A.add(k, X(static_cast<int>(n + j)));
-                sc.add(std::fabs(k), mxs[j]);
-            });
-            for (std::size_t h = 0; h < nh; ++h) {
-                const double F0 = dbl(d.harmonics[h].amplitude[i]), W = dbl(d.harmonics[h].omega);
-                A.add(F0, sin_h[h]);
-                dA.add(F0 * W, cos_h[h]);
-                const_mag += std::fabs(F0);
-            }
-            sc.add(const_mag, ONE);
-            const std::string I = std::to_string(i);
-            // release_pos comes first and computes A_i; release_neg reuses it.
-            std::uint32_t af = kNoRegister, daf = kNoRegister;
-            if (const auto it = force_reg.find(i); it != force_reg.end()) af = it->second, daf = af + 1;
-            if (af == kNoRegister) {
-                af = e.temp("A_force_" + I);
-                daf = e.temp("dA_force_" + I);
-                force_reg[i] = af;
-                with(e.lin(af, A), comment);
-                comment.clear();
-                e.lin(daf, dA);
-            }
             const double sgn_f = pos ? 1.0 : -1.0;
-            g.add(sgn_f, af).add(-mu_s_n, ONE);
-            dg.add(sgn_f, daf);
-            // Only the nonzero entries of row i of K and C: an exact-zero entry times
-            // a float is the exact 0 (CLN), whose subtraction changes nothing.
-            for (std::size_t r = 0; r < nf; ++r) {
-                const int k = d.free_dofs[r];
-                const numeric Kik = entry(d.K, i, k), Cik = entry(d.C, i, k);
-                const bool kz = Kik.is_zero() && Kik.is_rational(), cz = Cik.is_zero() && Cik.is_rational();
-                if (kz && cz) continue;
-                for (std::size_t j = 0; j < nm; ++j) {
-                    if (!kz) al[j] -= Kik * d.modes[j].v[r];
-                    if (!cz) be[j] -= Cik * d.modes[j].v[r];
+            const std::string I = std::to_string(i);
+            if (ms.partner == kGround) {
+                comment += std::string("g_") + F + ": " + (pos ? "A" : "-A") + " - mu_s N of stuck " + ms.name +
+                           ", A = -K x - C v + f + sum_h F_h sin (force but friction)";
+                Lin A, dA;
+                double const_mag = std::fabs(dbl(d.f_const[i])) + mu_s_n;
+                force_terms(i, A, dA, sc, const_mag, al, be, Gs, Gc);
+                sc.add(const_mag, ONE);
+                // release_pos comes first and computes A_i; release_neg reuses it.
+                std::uint32_t af = kNoRegister, daf = kNoRegister;
+                if (const auto it = force_reg.find(i); it != force_reg.end()) af = it->second, daf = af + 1;
+                if (af == kNoRegister) {
+                    af = e.temp("A_force_" + I);
+                    daf = e.temp("dA_force_" + I);
+                    force_reg[i] = af;
+                    with(e.lin(af, A), comment);
+                    comment.clear();
+                    e.lin(daf, dA);
                 }
-            }
-            for (std::size_t h = 0; h < nh; ++h) {
-                const HarmonicData& hd = d.harmonics[h];
-                Gs[h] = hd.amplitude[i];
-                for (std::size_t r = 0; r < nf; ++r) {
-                    const int k = d.free_dofs[r];
-                    const numeric Kik = entry(d.K, i, k), Cik = entry(d.C, i, k);
-                    if (Kik.is_zero() && Kik.is_rational() && Cik.is_zero() && Cik.is_rational()) continue;  // adds the exact 0
-                    Gs[h] += -Kik * hd.xs[r] + Cik * hd.omega * hd.xc[r];
-                    Gc[h] += -Kik * hd.xc[r] - Cik * hd.omega * hd.xs[r];
+                g.add(sgn_f, af).add(-mu_s_n, ONE);
+                dg.add(sgn_f, daf);
+            } else {
+                // Stuck to its partner p: D = (m_p A_i - m_i A_p)/(m_i + m_p), the force that
+                // holds the pair together (assembly.h driving_force), from both forces.
+                const int p = ms.partner;
+                const Mass& mp = model.masses[static_cast<std::size_t>(p)];
+                comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of " + ms.name + " stuck to " +
+                           mp.name + ", D = (m_p A_i - m_i A_p)/(m_i + m_p)";
+                const numeric mi = exact(ms.m), mpn = exact(mp.m);
+                const numeric ci = mpn / (mi + mpn), cp = -mi / (mi + mpn);
+                std::uint32_t reg[2][3];  // A, A', the magnitude of A's terms; of i, then of p
+                std::vector<numeric> al_b[2], be_b[2], Gs_b[2], Gc_b[2];
+                for (int which = 0; which < 2; ++which) {
+                    const int b = which == 0 ? i : p;
+                    Lin A, dA, mag;
+                    double const_mag = std::fabs(dbl(d.f_const[b]));
+                    al_b[which].assign(nm, 0), be_b[which].assign(nm, 0);
+                    Gs_b[which].assign(nh, 0), Gc_b[which].assign(nh, 0);
+                    force_terms(b, A, dA, mag, const_mag, al_b[which], be_b[which], Gs_b[which], Gc_b[which]);
+                    mag.add(const_mag, ONE);
+                    if (const auto it = pair_reg.find(b); it != pair_reg.end()) {
+                        for (int k = 0; k < 3; ++k) reg[which][k] = it->second + static_cast<std::uint32_t>(k);
+                        continue;
+                    }
+                    const std::string B = std::to_string(b);
+                    reg[which][0] = e.temp("A_pair_" + B);
+                    reg[which][1] = e.temp("dA_pair_" + B);
+                    reg[which][2] = e.temp("mA_pair_" + B);
+                    pair_reg[b] = reg[which][0];
+                    with(e.lin(reg[which][0], A), comment);
+                    comment.clear();
+                    e.lin(reg[which][1], dA);
+                    e.lin(reg[which][2], mag);
+                }
+                g.add(sgn_f * dbl(ci), reg[0][0]).add(sgn_f * dbl(cp), reg[1][0]).add(-mu_s_n, ONE);
+                dg.add(sgn_f * dbl(ci), reg[0][1]).add(sgn_f * dbl(cp), reg[1][1]);
+                sc.add(dbl(ci), reg[0][2]).add(-dbl(cp), reg[1][2]).add(mu_s_n, ONE);
+                for (std::size_t j = 0; j < nm; ++j) {
+                    al[j] = ci * al_b[0][j] + cp * al_b[1][j];
+                    be[j] = ci * be_b[0][j] + cp * be_b[1][j];
+                }
+                for (std::size_t h = 0; h < nh; ++h) {
+                    Gs[h] = ci * Gs_b[0][h] + cp * Gs_b[1][h];
+                    Gc[h] = ci * Gc_b[0][h] + cp * Gc_b[1][h];
                 }
             }
         }

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "emitter.h"  // CodeWriter, kernel_symbol, emit_provenance, emit_kernel_object
+#include "assembly.h"  // stick_elements
 #include "error.h"
 
 namespace hsnc {
@@ -22,9 +23,9 @@ std::vector<std::string> kept_parameters(const Model& model, const std::string& 
     const std::string flag = "generate: --params '" + list + "'";
     if (model.parameter_expressions.empty())
         throw InputError(flag + ": the model has no parameter source texts (not read from a file)");
-    if (!model.jenkins.empty())
-        throw InputError(flag + ": the model has Jenkins elements ([[jenkins]] '" + model.jenkins[0].name +
-                         "'), which sweep kernels do not take yet (generate without --params folds them)");
+    if (const std::string what = stick_elements(model); !what.empty())
+        throw InputError(flag + ": the model has " + what +
+                         ", which sweep kernels do not take yet (generate without --params folds them)");
     std::vector<std::string> names;
     for (const auto& [name, text] : model.parameter_expressions) names.push_back(name);
     if (list == "all") return names;

@@ -146,6 +146,37 @@ std::vector<Model> sample_models() {
         md.v0 = {0.5, 0.0};
         s.push_back(md);
     }
+    // Friction between two bodies (Mass::partner): m2 rides m1 while stuck (one
+    // coordinate, the pair's mass and stiffness gathered), slides on it otherwise;
+    // grounded with a stop, and floating (rigid-body modes of the pair).
+    {
+        Model md;
+        md.name = "friction_pair";
+        md.masses = {{"m1", 2.0, false, 0.0, 0.0}, {"m2", 0.6, true, 0.25, 0.4, -1, 0}};
+        md.springs = {{kGround, 0, 30.0}, {1, kGround, 4.0}};
+        md.contacts = {{"stop", 0, kGround, 0.15, 300.0}};
+        md.alpha = 0.2;
+        md.beta = 0.005;
+        md.forcing = {{4.1, 0.3, {5.0, -1.2}}};
+        md.load = {0.1, 0.2};
+        md.x0 = {0.02, 0.07};
+        md.v0 = {0.4, -0.3};
+        md.t0 = 0.2;
+        s.push_back(md);
+    }
+    {
+        Model md;
+        md.name = "friction_pair_floating";
+        md.masses = {{"m1", 1.0, false, 0.0, 0.0}, {"m2", 0.5, true, 0.3, 0.45, -1, 0}, {"m3", 0.8, false, 0.0, 0.0}};
+        md.springs = {{1, 2, 6.0}};
+        md.alpha = 0.0;
+        md.beta = 0.01;
+        md.forcing = {{1.9, 0.0, {2.0, 0.0, 0.5}}};
+        md.load = {0.0, 0.1, -0.1};
+        md.x0 = {0.0, 0.1, 0.3};
+        md.v0 = {0.2, 0.5, 0.0};
+        s.push_back(md);
+    }
     // Pseudo-random chains: light and heavy damping, grounded and free end.
     s.push_back(random_chain("rand_a", 1, 2, 0.02, true));
     s.push_back(random_chain("rand_b", 2, 3, 0.5, true));

@@ -2,6 +2,7 @@
 
 #include <cctype>
 
+#include "assembly.h"  // stick_elements
 #include "derivation.h"
 #include "switch_function.h"
 
@@ -63,8 +64,8 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
         why = "the model has no source expressions (not read from a file)";
         return false;
     }
-    if (!model.jenkins.empty()) {
-        why = "the model has Jenkins elements, whose sliders the symbolic view does not carry";
+    if (const std::string what = stick_elements(model); !what.empty()) {
+        why = "the model has " + what + ", which the symbolic view does not take yet";
         return false;
     }
     const Derivation numeric = derive(model, cfg);  // free/stuck split, switch order, rigid modes

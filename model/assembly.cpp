@@ -29,23 +29,12 @@ void require_proportional_damping(const Model& model, const std::string& who) {
                      "only the generic solver (state-space modes) takes it, for now");
 }
 
-std::string generic_only(const Model& model) {
-    for (const Mass& m : model.masses)
-        if (m.has_friction && m.partner != kGround)
-            return "friction between two bodies ([[friction]] '" +
-                   model.frictions[static_cast<std::size_t>(m.friction)].name + "')";
-    return "";
-}
-
-void require_derivable(const Model& model, const std::string& who) {
-    const std::string what = generic_only(model);
-    if (what.empty()) return;
-    throw InputError(who + ": model '" + model.name + "' has " + what + "; only the generic solver takes it, for now");
-}
-
 std::string stick_elements(const Model& model) {
     if (!model.jenkins.empty()) return "Jenkins elements ([[jenkins]] '" + model.jenkins[0].name + "')";
-    return generic_only(model);
+    for (std::size_t i = 0; i < model.dof(); ++i)
+        if (model.masses[i].has_friction && model.masses[i].partner != kGround)
+            return "friction between two bodies ([[friction]] '" + model.friction_name(i) + "')";
+    return "";
 }
 
 void require_no_stick_elements(const Model& model, const std::string& who) {

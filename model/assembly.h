@@ -32,25 +32,16 @@ void require_proportional_damping(const Model& model, const std::string& who);
 /// Diagonal of M.
 Eigen::VectorXd mass_vector(const Model& model);
 
-/// What in `model` only the generic solvers take, for now, as a phrase:
-/// "friction between two bodies ([[friction]] 'f1')" (a stuck pair moving as
-/// one body); "" when nothing.
-std::string generic_only(const Model& model);
-
-/// Throws InputError "WHO: model 'NAME' has PHRASE; only the generic solver
-/// takes it, for now" unless generic_only(model) is empty: for the stages
-/// that do not take it yet (the derivation, the kernels, the interpreter, the
-/// reference).
-void require_derivable(const Model& model, const std::string& who);
-
 /// The elements whose stick is not a mass held against the ground, as a
-/// phrase: "Jenkins elements ([[jenkins]] 'j1')" (a slider state), else
-/// generic_only(model); "" when none.
+/// phrase: "Jenkins elements ([[jenkins]] 'j1')" (a slider state), "friction
+/// between two bodies ([[friction]] 'f1')" (a stuck pair moving as one body);
+/// "" when none.
 std::string stick_elements(const Model& model);
 
 /// Throws InputError "WHO: model 'NAME' has PHRASE, which it does not take
 /// yet" unless stick_elements(model) is empty: for the stages that take
-/// neither a slider nor a stuck pair (the tangent's flows, ab4's stick rules).
+/// neither a slider nor a stuck pair (the tangent's flows, ab4's stick rules,
+/// the reference, sweep kernels).
 void require_no_stick_elements(const Model& model, const std::string& who);
 
 /// K(cfg): springs plus the contacts closed and the Jenkins elements stuck in

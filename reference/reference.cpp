@@ -174,7 +174,7 @@ public:
               std::vector<cl_F>& v, const std::vector<cl_F>* a)
         : MpArithmetic{mp}, model_(model), t_(t), x_(x), v_(v), a_(a) {}
 
-    std::size_t jenkins() const { return 0; }  // refused (require_derivable): the reference has no slider state
+    std::size_t jenkins() const { return 0; }  // refused (require_no_stick_elements): the reference has no slider state
     bool slips_on(const Configuration&, int) const { return false; }
     int dof() const { return mp.n; }
     std::size_t contacts() const { return mp.contacts.size(); }

@@ -8,7 +8,9 @@
 
 #include "engine.h"
 #include "integrators.h"
+#include "interpreted_solver.h"
 #include "kernel_mode.h"
+#include "lowering.h"
 
 namespace hsnc::testing {
 
@@ -41,9 +43,16 @@ struct Outcome {
     std::vector<Recorded> events, samples;
 };
 
-/// The HSNC engine with the generic solver from the model's initial state.
-inline Outcome simulate(const Model& model, double t_end, double dt = 0.0) {
-    GenericSolverProvider provider(model);
+/// Which segment solvers a test run uses: the Eigen generic solver, or the
+/// interpreted programs of the derivation (the kernels' closed form).
+enum class Solvers { generic, interp };
+inline const char* solvers_name(Solvers s) { return s == Solvers::generic ? "generic" : "interp"; }
+
+/// The HSNC engine from the model's initial state.
+inline Outcome simulate(const Model& model, double t_end, double dt = 0.0, Solvers solvers = Solvers::generic) {
+    GenericSolverProvider generic(model);
+    InterpretedSolverProvider interp(program_source(model));
+    SolverProvider& provider = solvers == Solvers::generic ? static_cast<SolverProvider&>(generic) : interp;
     Engine engine(model, provider);
     Recorder rec(model.dof(), model.state_size());
     EngineOptions opt;

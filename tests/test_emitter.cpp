@@ -49,10 +49,12 @@ struct Start {
 Start start_of(const Model& m, const Configuration& cfg) {
     Start s{m.t0 + 0.37, m.x0, m.v0, std::vector<signed char>(m.dof(), 0)};
     for (std::size_t i = 0; i < m.dof(); ++i) {
+        const int p = m.masses[i].partner;  // friction against the ground or a partner (no friction of its own)
+        const double vp = p == kGround ? 0.0 : s.v0[static_cast<std::size_t>(p)];
         if (cfg.stuck[i]) {
-            s.v0[i] = 0.0;
+            s.v0[i] = vp;
         } else if (m.masses[i].has_friction) {
-            s.sgn[i] = s.v0[i] < 0 ? -1 : 1;
+            s.sgn[i] = s.v0[i] < vp ? -1 : 1;
         }
     }
     for (const Jenkins& e : m.jenkins) {
@@ -112,14 +114,25 @@ TEST(Derivation, ModesDiagonaliseTheReducedSystem) {
     for (const Model& m : sample_models()) {
         const Configuration cfg = all_configurations(m).back();
         const Derivation d = derive(m, cfg);
+        // Each coordinate's masses: its free mass and the riders stuck to it (T^T M T, T^T K T).
+        auto folded_k = [&](std::size_t r, std::size_t s) {
+            numeric k = 0;
+            for (std::size_t i = 0; i < m.dof(); ++i)
+                for (std::size_t q = 0; q < m.dof(); ++q)
+                    if (d.coordinate(static_cast<int>(i)) == static_cast<int>(r) &&
+                        d.coordinate(static_cast<int>(q)) == static_cast<int>(s))
+                        k += GiNaC::ex_to<numeric>(d.K(i, q));
+            return k;
+        };
         for (std::size_t j = 0; j < d.modes.size(); ++j)
             for (std::size_t l = 0; l < d.modes.size(); ++l) {
                 numeric kjl = 0, mjl = 0;
                 for (std::size_t r = 0; r < d.n_free(); ++r) {
-                    const int i = d.free_dofs[r];
-                    mjl += d.modes[j].v[r] * exact(m.masses[i].m) * d.modes[l].v[r];
-                    for (std::size_t s = 0; s < d.n_free(); ++s)
-                        kjl += d.modes[j].v[r] * GiNaC::ex_to<numeric>(d.K(i, d.free_dofs[s])) * d.modes[l].v[s];
+                    numeric mr = 0;
+                    for (std::size_t i = 0; i < m.dof(); ++i)
+                        if (d.coordinate(static_cast<int>(i)) == static_cast<int>(r)) mr += exact(m.masses[i].m);
+                    mjl += d.modes[j].v[r] * mr * d.modes[l].v[r];
+                    for (std::size_t s = 0; s < d.n_free(); ++s) kjl += d.modes[j].v[r] * folded_k(r, s) * d.modes[l].v[s];
                 }
                 EXPECT_NEAR(mjl.to_double(), j == l ? 1.0 : 0.0, 1e-30) << m.name;
                 EXPECT_NEAR(kjl.to_double(), j == l ? d.modes[j].lambda.to_double() : 0.0, 1e-28) << m.name;
@@ -216,19 +229,39 @@ TEST(Kernel, SatisfiesTheEquationOfMotion) {
                 const Eigen::Map<const Eigen::VectorXd> x(o.x.data(), m.dof()), v(o.v.data(), m.dof()),
                     a(o.a.data(), m.dof());
                 const Eigen::VectorXd F = forcing(m, st.t0 + t);
+                // Kinetic friction: -mu_k N sgn on a sliding mass, the opposite on its partner.
+                Eigen::VectorXd friction = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(m.dof()));
+                for (std::size_t i = 0; i < m.dof(); ++i)
+                    if (m.masses[i].has_friction && !cfg.stuck[i]) {
+                        const double fk = m.masses[i].mu_k * m.normal_force(i) * st.sgn[i];
+                        friction(static_cast<Eigen::Index>(i)) += fk;
+                        if (m.masses[i].partner != kGround) friction(m.masses[i].partner) -= fk;
+                    }
+                Eigen::VectorXd res(static_cast<Eigen::Index>(m.dof())), size(res.size());
                 for (std::size_t i = 0; i < m.dof(); ++i) {
-                    if (cfg.stuck[i]) {
+                    const double lhs = M(i) * a(i) + C.row(i).dot(v) + K.row(i).dot(x);
+                    res(i) = lhs - (f0(i) + F(i) - friction(i));
+                    size(i) = std::fabs(M(i) * a(i)) + (C.row(i).cwiseAbs()).dot(v.cwiseAbs()) +
+                              (K.row(i).cwiseAbs()).dot(x.cwiseAbs()) + std::fabs(f0(i)) + std::fabs(F(i)) +
+                              std::fabs(friction(i));
+                }
+                for (std::size_t i = 0; i < m.dof(); ++i) {
+                    if (fixed_in(m, cfg, i)) {
                         EXPECT_EQ(o.x[i], st.x0[i]);
                         EXPECT_EQ(o.v[i], 0.0);
                         continue;
                     }
-                    const double friction = m.masses[i].has_friction ? m.masses[i].mu_k * m.normal_force(i) * st.sgn[i] : 0;
-                    const double lhs = M(i) * a(i) + C.row(i).dot(v) + K.row(i).dot(x);
-                    const double rhs = f0(i) + F(i) - friction;
-                    const double size = std::fabs(M(i) * a(i)) + (C.row(i).cwiseAbs()).dot(v.cwiseAbs()) +
-                                        (K.row(i).cwiseAbs()).dot(x.cwiseAbs()) + std::fabs(f0(i)) +
-                                        std::fabs(F(i)) + std::fabs(friction);
-                    EXPECT_NEAR(lhs, rhs, 1e-12 * size) << m.name << " " << cfg.key() << " tau=" << t << " mass " << i;
+                    const int p = m.masses[i].partner;
+                    if (rides_partner(m, cfg, i)) {  // moves with its partner; the pair's equation below
+                        EXPECT_NEAR(o.x[i] - o.x[p], st.x0[i] - st.x0[p], 1e-15 * (1 + std::fabs(o.x[i])));
+                        EXPECT_EQ(o.v[i], o.v[p]);
+                        EXPECT_EQ(o.a[i], o.a[p]);
+                        continue;
+                    }
+                    double r = res(i), sz = size(i);  // with its riders: the stuck pair is one body
+                    for (std::size_t q = 0; q < m.dof(); ++q)
+                        if (rides_partner(m, cfg, q) && m.masses[q].partner == static_cast<int>(i)) r += res(q), sz += size(q);
+                    EXPECT_NEAR(r, 0.0, 1e-12 * sz) << m.name << " " << cfg.key() << " tau=" << t << " mass " << i;
                 }
             }
         }
@@ -411,16 +444,19 @@ TEST(Kernel, AgreesWithGenericSolverOnBundledModels) {
     EXPECT_GT(compared, 100);
 }
 
-// Jenkins elements: every configuration of the samples that have them (stuck,
-// slipping either way; the sliders in x0 and x) against the generic solver,
-// whose slider handling (runtime/solvers/switch_values.h) shares no code with lowering.
-TEST(Kernel, AgreesWithGenericSolverWithJenkinsElements) {
+// Jenkins elements and friction between two bodies: every configuration of
+// the samples that have them (an element stuck, slipping either way, the
+// sliders in x0 and x; a pair sliding, or stuck and folded into one
+// coordinate) against the generic solver, whose sliders
+// (runtime/solvers/switch_values.h) and folding (model/modal.h) share no code
+// with lowering.
+TEST(Kernel, AgreesWithGenericSolverWithJenkinsElementsAndFrictionPairs) {
     int compared = 0;
     for (const Model& m : sample_models()) {
-        if (m.jenkins.empty()) continue;
+        if (stick_elements(m).empty()) continue;
         for (const Configuration& cfg : all_configurations(m)) compared += compare_with_generic(m, cfg, sample_kernel(m, cfg), m.name);
     }
-    EXPECT_EQ(compared, 4 * (18 + 3));
+    EXPECT_EQ(compared, 4 * (18 + 3 + 4 + 2));
 }
 
 TEST(Emitter, DeterministicAndSelfContained) {

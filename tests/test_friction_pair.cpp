@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <string>
 #include <utility>
 #include <vector>
@@ -79,57 +80,61 @@ double root(const std::function<double(double)>& f, double a, double b) {
 TEST(FrictionPairClosedForm, BlockOnBlockReleasesAtMuSNAndSlides) {
     const double mb = 1.0, mt = 0.5, k = 100.0, mu_k = 0.3, mu_s = 0.4, g = 9.81;
     const double M = mb + mt, W = std::sqrt(k / M), wb = std::sqrt(k / mb), N = mt * g;
-    std::vector<EventKind> seen;
-    for (const double v0 : {1.0, 0.7}) {  // then it slides back (reversal), or sticks again
-        SCOPED_TRACE("v0 = " + std::to_string(v0));
-        const double xs = mu_s * g * M / k, ts = std::asin(xs * W / v0) / W, vs = v0 * std::cos(W * ts);
-        const double c = mu_k * N / k;
-        auto top = [&](double tau) { return xs + vs * tau - 0.5 * mu_k * g * tau * tau; };
-        auto top_v = [&](double tau) { return vs - mu_k * g * tau; };
-        auto bottom = [&](double tau) { return c + (xs - c) * std::cos(wb * tau) + vs / wb * std::sin(wb * tau); };
-        auto bottom_v = [&](double tau) { return -(xs - c) * wb * std::sin(wb * tau) + vs * std::cos(wb * tau); };
-        // w = top_v - bottom_v > 0 right after the release; its first zero ends the slide.
-        double lo = 1e-9, hi = 1e-9;
-        while (top_v(hi) - bottom_v(hi) > 0) lo = hi, hi *= 1.1;
-        const double tau2 = root([&](double tau) { return top_v(tau) - bottom_v(tau); }, lo, hi), t2 = ts + tau2;
-        // At w = 0 the force to hold is m_t k x_b / M: it sticks if below mu_s N, else slides back.
-        const bool sticks = mt * k * std::fabs(bottom(tau2)) / M < mu_s * N;
-        const double xb2 = bottom(tau2), xt2 = top(tau2), v2 = top_v(tau2);
+    // On the generic solver and on the derivation's programs (the rider folded into its partner's coordinate).
+    for (const testing::Solvers solvers : {testing::Solvers::generic, testing::Solvers::interp}) {
+        SCOPED_TRACE(testing::solvers_name(solvers));
+        std::vector<EventKind> seen;
+        for (const double v0 : {1.0, 0.7}) {  // then it slides back (reversal), or sticks again
+            SCOPED_TRACE("v0 = " + std::to_string(v0));
+            const double xs = mu_s * g * M / k, ts = std::asin(xs * W / v0) / W, vs = v0 * std::cos(W * ts);
+            const double c = mu_k * N / k;
+            auto top = [&](double tau) { return xs + vs * tau - 0.5 * mu_k * g * tau * tau; };
+            auto top_v = [&](double tau) { return vs - mu_k * g * tau; };
+            auto bottom = [&](double tau) { return c + (xs - c) * std::cos(wb * tau) + vs / wb * std::sin(wb * tau); };
+            auto bottom_v = [&](double tau) { return -(xs - c) * wb * std::sin(wb * tau) + vs * std::cos(wb * tau); };
+            // w = top_v - bottom_v > 0 right after the release; its first zero ends the slide.
+            double lo = 1e-9, hi = 1e-9;
+            while (top_v(hi) - bottom_v(hi) > 0) lo = hi, hi *= 1.1;
+            const double tau2 = root([&](double tau) { return top_v(tau) - bottom_v(tau); }, lo, hi), t2 = ts + tau2;
+            // At w = 0 the force to hold is m_t k x_b / M: it sticks if below mu_s N, else slides back.
+            const bool sticks = mt * k * std::fabs(bottom(tau2)) / M < mu_s * N;
+            const double xb2 = bottom(tau2), xt2 = top(tau2), v2 = top_v(tau2);
 
-        const Model md = parse_model(block_on_block(mb, mt, k, mu_k, mu_s, v0), "block.toml");
-        ASSERT_EQ(md.masses[1].partner, 0);
-        const double t_end = t2 + (sticks ? 0.05 : 1e-3);
-        const Outcome r = testing::simulate(md, t_end, 0.002);
-        ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
-        ASSERT_EQ(r.events.size(), 2u);
-        EXPECT_EQ(r.events[0].kind, EventKind::release);
-        EXPECT_EQ(r.events[0].element, 1);
-        EXPECT_NEAR(r.events[0].t, ts, 1e-15);
-        EXPECT_NEAR(r.events[0].x[0], xs, 1e-15);
-        EXPECT_NEAR(r.events[0].x[1], xs, 1e-15);
-        EXPECT_EQ(r.events[1].kind, sticks ? EventKind::stick : EventKind::reversal);
-        EXPECT_NEAR(r.events[1].t, t2, 1e-13);
-        seen.push_back(r.events[1].kind);
-        std::printf("release at %.17g (closed form %.17g), then %s at %.17g (%.17g)\n", r.events[0].t, ts,
-                    event_kind_name(r.events[1].kind), r.events[1].t, t2);
-        double worst = 0.0;
-        for (const auto& s : r.samples) {
-            double xb, xt;
-            if (s.t <= ts) {
-                xb = xt = v0 / W * std::sin(W * s.t);
-            } else if (s.t <= t2) {
-                xb = bottom(s.t - ts), xt = top(s.t - ts);
-            } else if (sticks) {  // one body again, the top at its new offset
-                xb = xb2 * std::cos(W * (s.t - t2)) + v2 / W * std::sin(W * (s.t - t2)), xt = xb + (xt2 - xb2);
-            } else {
-                continue;
+            const Model md = parse_model(block_on_block(mb, mt, k, mu_k, mu_s, v0), "block.toml");
+            ASSERT_EQ(md.masses[1].partner, 0);
+            const double t_end = t2 + (sticks ? 0.05 : 1e-3);
+            const Outcome r = testing::simulate(md, t_end, 0.002, solvers);
+            ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+            ASSERT_EQ(r.events.size(), 2u);
+            EXPECT_EQ(r.events[0].kind, EventKind::release);
+            EXPECT_EQ(r.events[0].element, 1);
+            EXPECT_NEAR(r.events[0].t, ts, 1e-15);
+            EXPECT_NEAR(r.events[0].x[0], xs, 1e-15);
+            EXPECT_NEAR(r.events[0].x[1], xs, 1e-15);
+            EXPECT_EQ(r.events[1].kind, sticks ? EventKind::stick : EventKind::reversal);
+            EXPECT_NEAR(r.events[1].t, t2, 1e-13);
+            seen.push_back(r.events[1].kind);
+            std::printf("release at %.17g (closed form %.17g), then %s at %.17g (%.17g)\n", r.events[0].t, ts,
+                        event_kind_name(r.events[1].kind), r.events[1].t, t2);
+            double worst = 0.0;
+            for (const auto& s : r.samples) {
+                double xb, xt;
+                if (s.t <= ts) {
+                    xb = xt = v0 / W * std::sin(W * s.t);
+                } else if (s.t <= t2) {
+                    xb = bottom(s.t - ts), xt = top(s.t - ts);
+                } else if (sticks) {  // one body again, the top at its new offset
+                    xb = xb2 * std::cos(W * (s.t - t2)) + v2 / W * std::sin(W * (s.t - t2)), xt = xb + (xt2 - xb2);
+                } else {
+                    continue;
+                }
+                worst = std::max({worst, std::fabs(s.x[0] - xb), std::fabs(s.x[1] - xt)});
             }
-            worst = std::max({worst, std::fabs(s.x[0] - xb), std::fabs(s.x[1] - xt)});
+            std::printf("max |x - closed form| over the stuck and sliding phases: %.2g m\n", worst);
+            EXPECT_LT(worst, 1e-13);
         }
-        std::printf("max |x - closed form| over the stuck and sliding phases: %.2g m\n", worst);
-        EXPECT_LT(worst, 1e-13);
+        EXPECT_EQ(seen, (std::vector<EventKind>{EventKind::reversal, EventKind::stick}));
     }
-    EXPECT_EQ(seen, (std::vector<EventKind>{EventKind::reversal, EventKind::stick}));
 }
 
 // Two blocks on a frictionless floor, friction between them, a harmonic
@@ -156,44 +161,50 @@ amplitude = { bottom = 30.0 }
 )");
     const Model md = parse_model(text, "floating.toml");
     const double ts = std::asin(mu_s * g * M / F) / w;  // m_t F sin/M = mu_s m_t g
-    const Outcome r = testing::simulate(md, ts + 0.2, 0.01);
-    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
-    ASSERT_GE(r.events.size(), 1u);
-    EXPECT_EQ(r.events[0].kind, EventKind::release);
-    EXPECT_EQ(md.friction_event_name(r.events[0].element), "friction1");
-    EXPECT_NEAR(r.events[0].t, ts, 1e-14);
-    double worst = 0.0;
-    for (const auto& s : r.samples) {
-        if (s.t > ts) break;
-        const double x = F / (M * w) * (s.t - std::sin(w * s.t) / w);  // from rest, together
-        worst = std::max({worst, std::fabs(s.x[0] - x), std::fabs(s.x[1] - x)});
+    for (const testing::Solvers solvers : {testing::Solvers::generic, testing::Solvers::interp}) {
+        SCOPED_TRACE(testing::solvers_name(solvers));
+        const Outcome r = testing::simulate(md, ts + 0.2, 0.01, solvers);
+        ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+        ASSERT_GE(r.events.size(), 1u);
+        EXPECT_EQ(r.events[0].kind, EventKind::release);
+        EXPECT_EQ(md.friction_event_name(r.events[0].element), "friction1");
+        EXPECT_NEAR(r.events[0].t, ts, 1e-14);
+        double worst = 0.0;
+        for (const auto& s : r.samples) {
+            if (s.t > ts) break;
+            const double x = F / (M * w) * (s.t - std::sin(w * s.t) / w);  // from rest, together
+            worst = std::max({worst, std::fabs(s.x[0] - x), std::fabs(s.x[1] - x)});
+        }
+        std::printf("release at %.17g (closed form %.17g); stuck phase within %.2g m\n", r.events[0].t, ts, worst);
+        EXPECT_LT(worst, 1e-14);
+        // Sliding, the top decelerates relative to the bottom: w' = -mu_k g - (F sin - mu_k N)/m_b.
+        const auto& after = r.samples.back();
+        EXPECT_GT(after.x[0], after.x[1]);  // the bottom has run ahead
     }
-    std::printf("release at %.17g (closed form %.17g); stuck phase within %.2g m\n", r.events[0].t, ts, worst);
-    EXPECT_LT(worst, 1e-14);
-    // Sliding, the top decelerates relative to the bottom: w' = -mu_k g - (F sin - mu_k N)/m_b.
-    const auto& after = r.samples.back();
-    EXPECT_GT(after.x[0], after.x[1]);  // the bottom has run ahead
 }
 
 // The bundled load on a shaking table: releases and sticks alternate, and
 // from each stick to the next release the load rides at a constant offset.
 TEST(FrictionPairClosedForm, TheBundledLoadRidesAtAConstantOffsetWhileStuck) {
     const Model md = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/friction/stacked_blocks.toml");
-    const Outcome r = testing::simulate(md, 5.0);
-    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
-    ASSERT_EQ(r.events.size(), 39u);
-    double worst = 0.0;
-    for (std::size_t e = 0; e < r.events.size(); ++e) {
-        EXPECT_EQ(r.events[e].kind, e % 2 == 0 ? EventKind::release : EventKind::stick) << "event " << e;
-        EXPECT_EQ(md.friction_event_name(r.events[e].element), "interface");
-        if (e % 2 == 1 && e + 1 < r.events.size()) {
-            const double stuck = r.events[e].x[1] - r.events[e].x[0], left = r.events[e + 1].x[1] - r.events[e + 1].x[0];
-            worst = std::max(worst, std::fabs(left - stuck));
-            EXPECT_EQ(r.events[e].v[0], r.events[e].v[1]) << "event " << e;  // one velocity from the stick on
+    for (const testing::Solvers solvers : {testing::Solvers::generic, testing::Solvers::interp}) {
+        SCOPED_TRACE(testing::solvers_name(solvers));
+        const Outcome r = testing::simulate(md, 5.0, 0.0, solvers);
+        ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+        ASSERT_EQ(r.events.size(), 39u);
+        double worst = 0.0;
+        for (std::size_t e = 0; e < r.events.size(); ++e) {
+            EXPECT_EQ(r.events[e].kind, e % 2 == 0 ? EventKind::release : EventKind::stick) << "event " << e;
+            EXPECT_EQ(md.friction_event_name(r.events[e].element), "interface");
+            if (e % 2 == 1 && e + 1 < r.events.size()) {
+                const double stuck = r.events[e].x[1] - r.events[e].x[0], left = r.events[e + 1].x[1] - r.events[e + 1].x[0];
+                worst = std::max(worst, std::fabs(left - stuck));
+                EXPECT_EQ(r.events[e].v[0], r.events[e].v[1]) << "event " << e;  // one velocity from the stick on
+            }
         }
+        std::printf("19 stuck phases: the offset of the load moved by at most %.2g m\n", worst);
+        EXPECT_LT(worst, 1e-15);
     }
-    std::printf("19 stuck phases: the offset of the load moved by at most %.2g m\n", worst);
-    EXPECT_LT(worst, 1e-15);
 }
 
 // Against an independent integrator: CVODE (Adams, rtol 1e-12) with its own
@@ -249,23 +260,27 @@ amplitude = { m1 = 6.0 }
                                      std::pair{"chain carrying a block", chain}}) {
         SCOPED_TRACE(name);
         const Model md = parse_model(text, "pair.toml");
-        const Outcome a = testing::simulate(md, 10.0), rec = testing::baseline(md, 10.0, 1e-12, 1e-14, Method::cvode);
-        ASSERT_EQ(a.summary.status, RunStatus::ok) << a.summary.message;
+        const Outcome rec = testing::baseline(md, 10.0, 1e-12, 1e-14, Method::cvode);
         ASSERT_EQ(rec.summary.status, RunStatus::ok) << rec.summary.message;
-        ASSERT_EQ(a.events.size(), rec.events.size());
-        double dt = 0.0;
-        std::size_t pair_events = 0;
-        for (std::size_t e = 0; e < a.events.size(); ++e) {
-            ASSERT_EQ(a.events[e].kind, rec.events[e].kind) << "event " << e;
-            ASSERT_EQ(a.events[e].element, rec.events[e].element) << "event " << e;
-            dt = std::max(dt, std::fabs(a.events[e].t - rec.events[e].t));
-            const bool contact = a.events[e].kind == EventKind::contact_close || a.events[e].kind == EventKind::contact_open;
-            pair_events += contact ? 0 : 1;
+        for (const testing::Solvers solvers : {testing::Solvers::generic, testing::Solvers::interp}) {
+            const Outcome a = testing::simulate(md, 10.0, 0.0, solvers);
+            ASSERT_EQ(a.summary.status, RunStatus::ok) << a.summary.message;
+            ASSERT_EQ(a.events.size(), rec.events.size()) << testing::solvers_name(solvers);
+            double dt = 0.0;
+            std::size_t pair_events = 0;
+            for (std::size_t e = 0; e < a.events.size(); ++e) {
+                ASSERT_EQ(a.events[e].kind, rec.events[e].kind) << "event " << e;
+                ASSERT_EQ(a.events[e].element, rec.events[e].element) << "event " << e;
+                dt = std::max(dt, std::fabs(a.events[e].t - rec.events[e].t));
+                const bool contact =
+                    a.events[e].kind == EventKind::contact_close || a.events[e].kind == EventKind::contact_open;
+                pair_events += contact ? 0 : 1;
+            }
+            std::printf("%s (%s): %zu events (%zu of the pair) over 10 s, hsnc against CVODE at most %.2g s apart\n",
+                        name, testing::solvers_name(solvers), a.events.size(), pair_events, dt);
+            EXPECT_GE(pair_events, 4u);
+            EXPECT_LT(dt, 1e-9);  // measured 1.2e-11 .. 3.3e-11 s
         }
-        std::printf("%s: %zu events (%zu of the pair) over 10 s, hsnc against CVODE at most %.2g s apart\n", name,
-                    a.events.size(), pair_events, dt);
-        EXPECT_GE(pair_events, 4u);
-        EXPECT_LT(dt, 1e-9);  // measured 1.2e-11 .. 3.3e-11 s
     }
 }
 
@@ -311,14 +326,34 @@ TEST(FrictionPairCli, EventsNameTheElementAndWhatCannotTakeItRefuses) {
     std::getline(in, first);
     EXPECT_EQ(header, "t,kind,element,x_bottom,x_top,v_bottom,v_top");
     EXPECT_NE(first.find(",release,interface,"), std::string::npos) << first;
-    for (const char* flags : {"--kernels interp", "--kernels jit", "--method ab4 --h 1e-3", "--precision mp:30"}) {
+    for (const char* flags : {"--method ab4 --h 1e-3", "--precision mp:30"}) {
         const testing::CliRun bad = testing::run_hsnc("simulate " + model + " --t-end 1 " + flags);
         EXPECT_EQ(bad.exit_code, 2) << flags << ": " << bad.err;
         EXPECT_NE(bad.err.find("friction between two bodies ([[friction]] 'interface')"), std::string::npos) << bad.err;
     }
-    const testing::CliRun gen = testing::run_hsnc("inspect " + model + " --format cpp");
-    EXPECT_EQ(gen.exit_code, 2);
-    EXPECT_NE(gen.err.find("friction between two bodies"), std::string::npos) << gen.err;
+    const testing::CliRun sweep_kernels = testing::run_hsnc("generate " + model + " --params g -o " + testing::temp_path("pair-gen-p"));
+    EXPECT_EQ(sweep_kernels.exit_code, 2);
+    EXPECT_NE(sweep_kernels.err.find("friction between two bodies"), std::string::npos) << sweep_kernels.err;
+    // The derivation folds a stuck pair into one coordinate: the interpreter and
+    // the JIT write the same events; generate and inspect take the model.
+    std::string bytes[2];
+    const char* kinds[2] = {"interp", "jit"};
+    for (int k = 0; k < 2; ++k) {
+        const std::string out = testing::temp_path(std::string("pair-kind-") + kinds[k] + ".csv");
+        const testing::CliRun r = testing::run_hsnc("simulate " + model + " --t-end 2 --no-cache --kernels " + kinds[k] +
+                                                    " --events " + out);
+        ASSERT_EQ(r.exit_code, 0) << kinds[k] << ": " << r.err;
+        std::ifstream f(out);
+        bytes[k].assign(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+    }
+    EXPECT_EQ(bytes[0], bytes[1]);
+    EXPECT_NE(bytes[0].find(",release,interface,"), std::string::npos) << bytes[0];
+    const testing::CliRun gen = testing::run_hsnc("generate " + model + " -o " + testing::temp_path("pair-gen"));
+    EXPECT_EQ(gen.exit_code, 0) << gen.err;
+    EXPECT_NE(gen.out.find("wrote 2 kernels"), std::string::npos) << gen.out;
+    const testing::CliRun cpp = testing::run_hsnc("inspect " + model + " --config stuck=interface --format cpp");
+    EXPECT_EQ(cpp.exit_code, 0) << cpp.err;
+    EXPECT_NE(cpp.out.find("top (rides bottom)"), std::string::npos) << cpp.out;
 }
 
 }  // namespace

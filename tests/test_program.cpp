@@ -70,10 +70,14 @@ Start start_of(const Model& m, const Configuration& cfg, unsigned seed) {
     for (std::size_t i = 0; i < m.dof(); ++i) {
         s.x0[i] += 0.01 * u(rng);
         s.v0[i] += 0.1 * u(rng);
+    }
+    for (std::size_t i = 0; i < m.dof(); ++i) {  // friction against the ground or a partner (which has none)
+        const int p = m.masses[i].partner;
+        const double vp = p == kGround ? 0.0 : s.v0[static_cast<std::size_t>(p)];
         if (cfg.stuck[i]) {
-            s.v0[i] = 0.0;
+            s.v0[i] = vp;
         } else if (m.masses[i].has_friction) {
-            s.sgn[i] = s.v0[i] < 0 ? -1 : 1;
+            s.sgn[i] = s.v0[i] < vp ? -1 : 1;
         }
     }
     for (const Jenkins& e : m.jenkins) {  // the sliders after the masses, stretched below the slip force
