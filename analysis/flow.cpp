@@ -11,8 +11,6 @@
 namespace hsnc::analysis {
 
 Flow::Flow(const Model& model, const FlowKernels& k, const char* function) : work_(model) {
-    // The flow's state is the masses' (x, v): no Jenkins slider, no stuck pair (its tangent), yet.
-    require_no_stick_elements(work_, function);
     if (k.kernels == KernelChoice::aot && !has_aot_kernels(work_, &aot_registry()))
         throw OptionError(function, "kernels", "aot", "no ahead-of-time kernels for model '" + work_.name + "'");
     SimulateOptions o;
@@ -25,11 +23,15 @@ Flow::Flow(const Model& model, const FlowKernels& k, const char* function) : wor
 }
 
 RunSummary Flow::run(double t, const double* x, const double* v, double t_end, Observer& observer, bool samples,
-                     double dt) {
+                     double dt, const double* slider) {
     const std::size_t n = work_.dof();
     work_.t0 = t;
     work_.x0.assign(x, x + n);
     work_.v0.assign(v, v + n);
+    if (slider)
+        work_.slider0.assign(slider, slider + work_.jenkins.size());
+    else
+        work_.slider0.clear();  // at rest, unstretched
     Engine engine(work_, *provider_);
     EngineOptions opt;
     opt.t_end = t_end;

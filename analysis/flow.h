@@ -35,9 +35,10 @@ public:
     SolverKind solver() const { return solver_; }
     std::string describe() const { return provider_->describe(); }
 
-    /// Runs from (x, v) at time t to t_end, reporting to `observer`.
+    /// Runs from (x, v) at time t to t_end, reporting to `observer`; `slider`:
+    /// the Jenkins sliders' positions (null: unstretched, interface.md).
     RunSummary run(double t, const double* x, const double* v, double t_end, Observer& observer,
-                   bool samples = false, double dt = 0.0);
+                   bool samples = false, double dt = 0.0, const double* slider = nullptr);
 
 private:
     Model work_;

@@ -47,7 +47,7 @@ class SpectrumObserver : public Observer {
 public:
     SpectrumObserver(const Model& model, double t_start, double t_end, double row_interval,
                      const std::function<void(double, const std::vector<double>&)>& on_row, Observer* inner)
-        : tangent_(model), grazing_(tangent_), n2_(static_cast<Eigen::Index>(2 * model.dof())), t_start_(t_start), t_end_(t_end),
+        : tangent_(model), grazing_(tangent_), n2_(static_cast<Eigen::Index>(tangent_.dim())), t_start_(t_start), t_end_(t_end),
           row_(row_interval), on_row_(on_row), inner_(inner),
           Q_(initial_basis(n2_)), logsum_(Eigen::VectorXd::Zero(n2_)), live_(n2_) {}
 
@@ -63,7 +63,11 @@ public:
         const double start = s.t + s.t_lo, end = start + s.tau;
         if (end <= t_start_ && !(s.tau == 0 && start == t_start_)) return;
         const double from = std::max(start, t_start_);
-        const std::size_t stuck = static_cast<std::size_t>(std::count(s.cfg->stuck.begin(), s.cfg->stuck.end(), 1));
+        // A stuck mass (against the ground or its partner) and a slipping slider each take one
+        // direction out (analysis/stick_tangent.h: the projection of the configuration).
+        const std::size_t stuck = static_cast<std::size_t>(std::count(s.cfg->stuck.begin(), s.cfg->stuck.end(), 1)) +
+                                  static_cast<std::size_t>(s.cfg->slip.size() -
+                                                           static_cast<std::size_t>(std::count(s.cfg->slip.begin(), s.cfg->slip.end(), 0)));
         const Eigen::Index rank = n2_ - static_cast<Eigen::Index>(stuck);
         // Walk through the segment, factorising at every convergence row and
         // at least every 10/rate seconds, so that the directions part by at
@@ -180,7 +184,8 @@ LyapunovResult lyapunov(const Model& model, const LyapunovOptions& o,
 
     SpectrumObserver spectrum(flow.model(), t_start, t_end, row, on_row, observer);
     spectrum.start_rows();
-    const RunSummary s = flow.run(model.t0, model.x0.data(), model.v0.data(), t_end, spectrum);
+    const RunSummary s = flow.run(model.t0, model.x0.data(), model.v0.data(), t_end, spectrum, false, 0.0,
+                                  model.slider0.empty() ? nullptr : model.slider0.data());
     LyapunovResult r;
     r.status = s.status;
     r.message = s.message;

@@ -63,22 +63,30 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
     const double dt = std::isnan(o.dt) ? P / 1000 : o.dt;
 
     analysis::Flow flow(model, {o.kernels, o.cache_dir, o.use_cache}, kPeriodic);
-    const std::size_t n = model.dof();
-    const Eigen::Index N = static_cast<Eigen::Index>(2 * n);
+    const std::size_t n = model.dof(), nj = model.jenkins.size();
+    const Eigen::Index N = static_cast<Eigen::Index>(2 * n + nj);
 
-    // Start: the initial state, or the state after the transient at t0 + k*P.
+    // Start: the initial state, or the state after the transient at t0 + k*P;
+    // y = (x, v, s), the Jenkins sliders last (at rest, unstretched, or slider0).
     Eigen::VectorXd y(N);
     for (std::size_t i = 0; i < n; ++i) y(static_cast<Eigen::Index>(i)) = model.x0[i], y(static_cast<Eigen::Index>(n + i)) = model.v0[i];
+    for (std::size_t j = 0; j < nj; ++j) {
+        const Jenkins& e = model.jenkins[j];
+        auto pos = [&](int b) { return b == kGround ? 0.0 : model.x0[static_cast<std::size_t>(b)]; };
+        y(static_cast<Eigen::Index>(2 * n + j)) = model.slider0.empty() ? pos(e.a) - pos(e.b) : model.slider0[j];
+    }
     double ts = model.t0;
     if (o.transient > 0) {
         const double k = std::ceil(o.transient / P * (1 - 1e-12));
         ts = model.t0 + k * P;
         analysis::NullObserver none;
-        const RunSummary s = flow.run(model.t0, model.x0.data(), model.v0.data(), ts, none);
+        const RunSummary s = flow.run(model.t0, model.x0.data(), model.v0.data(), ts, none, false, 0.0,
+                                      nj ? y.data() + 2 * n : nullptr);
         if (s.status != RunStatus::ok)
             throw RunError(std::string("periodic: the transient run ended with status ") + run_status_name(s.status) +
                            ": " + s.message);
         for (std::size_t i = 0; i < n; ++i) y(static_cast<Eigen::Index>(i)) = s.x[i], y(static_cast<Eigen::Index>(n + i)) = s.v[i];
+        for (std::size_t j = 0; j < nj; ++j) y(static_cast<Eigen::Index>(2 * n + j)) = s.slider[j];
     }
     const double te = ts + P;
 
@@ -136,6 +144,7 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
     r.grazing = cur.grazing;
     r.x.assign(y.data(), y.data() + n);
     r.v.assign(y.data() + n, y.data() + 2 * n);
+    r.s.assign(y.data() + 2 * n, y.data() + N);
     if (cur.ok && cur.residual <= o.tolerance) {
         r.status = PeriodicStatus::ok;
         r.events = cur.events;
@@ -146,7 +155,7 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
         r.max_multiplier = r.multipliers.empty() ? 0.0 : std::abs(r.multipliers.front());
         r.stable = r.max_multiplier < 1.0;
         if (orbit) {
-            const RunSummary s = flow.run(ts, y.data(), y.data() + n, te, *orbit, true, dt);
+            const RunSummary s = flow.run(ts, y.data(), y.data() + n, te, *orbit, true, dt, nj ? y.data() + 2 * n : nullptr);
             if (s.status != RunStatus::ok)
                 throw RunError(std::string("periodic: the run of the orbit ended with status ") +
                                run_status_name(s.status) + ": " + s.message);

@@ -19,25 +19,31 @@ public:
 
 }  // namespace
 
-double period_residual(const Eigen::VectorXd& y, const Eigen::VectorXd& Py) {
-    const Eigen::Index n = y.size() / 2;
+double period_residual(const Eigen::VectorXd& y, const Eigen::VectorXd& Py, std::size_t masses) {
+    const Eigen::Index n = static_cast<Eigen::Index>(masses), nj = y.size() - 2 * n;
+    // Lengths (the masses' positions and the sliders), then velocities.
+    Eigen::VectorXd a(n + nj), b(n + nj);
+    a << y.head(n), y.tail(nj);
+    b << Py.head(n), Py.tail(nj);
     double res = 0.0;
-    for (int part = 0; part < 2; ++part) {
-        const auto a = y.segment(part * n, n), b = Py.segment(part * n, n);
-        const double scale = std::max(a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff());
-        const double r = (b - a).cwiseAbs().maxCoeff();
+    auto part = [&](const Eigen::VectorXd& p, const Eigen::VectorXd& q) {
+        if (p.size() == 0) return;
+        const double scale = std::max(p.cwiseAbs().maxCoeff(), q.cwiseAbs().maxCoeff());
+        const double r = (q - p).cwiseAbs().maxCoeff();
         if (r > 0) res = std::max(res, scale > 0 ? r / scale : INFINITY);
-    }
+    };
+    part(a, b);
+    part(y.segment(n, n), Py.segment(n, n));
     return res;
 }
 
 PeriodMapValue evaluate_period_map(Flow& flow, double ts, double te, const Eigen::VectorXd& y) {
     PeriodMapValue m;
-    const std::size_t n = flow.model().dof();
-    const Eigen::Index N = static_cast<Eigen::Index>(2 * n);
+    const std::size_t n = flow.model().dof(), nj = flow.model().jenkins.size();
+    const Eigen::Index N = static_cast<Eigen::Index>(2 * n + nj);
     EventCounter events;
     JacobianObserver jac(flow.model(), &events);
-    const RunSummary s = flow.run(ts, y.data(), y.data() + n, te, jac);
+    const RunSummary s = flow.run(ts, y.data(), y.data() + n, te, jac, false, 0.0, nj ? y.data() + 2 * n : nullptr);
     if (s.status != RunStatus::ok) {
         m.message =
             std::string("a run of the period map ended with status ") + run_status_name(s.status) + ": " + s.message;
@@ -46,11 +52,12 @@ PeriodMapValue evaluate_period_map(Flow& flow, double ts, double te, const Eigen
     m.Py.resize(N);
     for (std::size_t i = 0; i < n; ++i)
         m.Py(static_cast<Eigen::Index>(i)) = s.x[i], m.Py(static_cast<Eigen::Index>(n + i)) = s.v[i];
+    for (std::size_t j = 0; j < nj; ++j) m.Py(static_cast<Eigen::Index>(2 * n + j)) = s.slider[j];
     m.M = jac.jacobian();
     m.grazing = jac.grazing();
     m.singular = jac.singular();
     m.events = events.events;
-    m.residual = period_residual(y, m.Py);
+    m.residual = period_residual(y, m.Py, n);
     m.ok = m.Py.allFinite() && std::isfinite(m.residual);
     if (!m.ok) m.message = "the period map gave non-finite values";
     return m;

@@ -2,7 +2,8 @@
 // building block of shooting (hsnc::periodic) and of the continuation of
 // periodic orbits over a parameter (hsnc sweep --continuation).
 //
-// P(y): the exact motion from the state y = (x, v) at t_s to t_s + period;
+// P(y): the exact motion from the state y = (x, v, s) at t_s to t_s + period
+// (s: the Jenkins sliders, if any; analysis/stick_tangent.h);
 // M = dP/dy its monodromy matrix, from the segment transition matrices and
 // the saltation matrix of every switch (tangent.h).
 #pragma once
@@ -22,7 +23,7 @@ struct PeriodMapValue {
     bool ok = false;        ///< the run went through and gave finite numbers
     std::string message;    ///< why not
     Eigen::VectorXd Py;     ///< P(y)
-    Eigen::MatrixXd M;      ///< dP/dy (2n x 2n), y = (x, v)
+    Eigen::MatrixXd M;      ///< dP/dy (2n + nj square), y = (x, v, s)
     double residual = INFINITY;  ///< period_residual(y, P(y))
     std::size_t events = 0;      ///< switch events over the period
     std::size_t grazing = 0;     ///< grazing switches (near-zero normal velocity; tangent.h)
@@ -32,10 +33,10 @@ struct PeriodMapValue {
 /// P(y) and dP/dy over [ts, te] with the flow's model.
 PeriodMapValue evaluate_period_map(Flow& flow, double ts, double te, const Eigen::VectorXd& y);
 
-/// |P(y) - y| with positions and velocities each relative to the largest of
-/// their kind in y and P(y) (INFINITY when such a scale is 0 and the
-/// difference is not).
-double period_residual(const Eigen::VectorXd& y, const Eigen::VectorXd& Py);
+/// |P(y) - y| with lengths (positions and sliders) and velocities each
+/// relative to the largest of their kind in y and P(y) (INFINITY when such a
+/// scale is 0 and the difference is not); `masses` = n.
+double period_residual(const Eigen::VectorXd& y, const Eigen::VectorXd& Py, std::size_t masses);
 
 /// The eigenvalues of M, largest |mu| first (stable order among equals).
 std::vector<std::complex<double>> floquet_multipliers(const Eigen::MatrixXd& M);

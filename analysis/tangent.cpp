@@ -9,6 +9,7 @@
 
 #include "assembly.h"
 #include "modal.h"
+#include "stick_tangent.h"
 #include "transitions.h"
 
 namespace hsnc::analysis {
@@ -42,9 +43,11 @@ struct Tangent::ConfigData {
     // exponential is Phi (x_S constant), and the fastest decay rate.
     Eigen::MatrixXd generator;
     double rate = 0.0;
+    // Stick elements: the full-state generator and projection (stick_tangent.h).
+    Eigen::MatrixXd stick_A, stick_P;
 };
 
-Tangent::Tangent(const Model& model) : model_(model) {}
+Tangent::Tangent(const Model& model) : model_(model), stick_(!stick_elements(model).empty()) {}
 Tangent::~Tangent() = default;
 Tangent::Tangent(Tangent&&) noexcept = default;
 
@@ -68,6 +71,13 @@ const Tangent::ConfigData& Tangent::data(const Configuration& cfg) {
             for (int r = 0; r < nf; ++r) g -= md.phi(r, j) * d->K(md.free[r], md.stuck[s]);
             d->G(j, s) = g;
         }
+    if (stick_) {
+        d->stick_A = stick_generator(model_, cfg);
+        d->stick_P = stick_projection(model_, cfg);
+        const Eigen::EigenSolver<Eigen::MatrixXd> es(d->stick_A, false);
+        for (Eigen::Index k = 0; k < es.eigenvalues().size(); ++k) d->rate = std::max(d->rate, -es.eigenvalues()(k).real());
+        return *cache_.emplace(cfg, std::move(d)).first->second;
+    }
     d->lambda = md.lambda;
     d->c.resize(nf);
     for (int j = 0; j < nf; ++j) d->c(j) = model_.alpha + model_.beta * md.lambda(j);
@@ -99,6 +109,7 @@ Eigen::MatrixXd Tangent::transition(const Configuration& cfg, double tau) {
     const ModalDecomposition& md = d.modal;
     const int n = static_cast<int>(model_.dof());
     const int nf = static_cast<int>(md.free.size()), ns = static_cast<int>(md.stuck.size());
+    if (stick_) return (d.stick_A * tau).exp() * d.stick_P;  // stick_tangent.h
     if (!model_.proportional_damping()) {
         // exp(A tau) by Eigen's scaling and squaring with Pade approximants (Higham 2005):
         // the matrix exponential to rounding, not an integration.
@@ -178,7 +189,7 @@ Eigen::MatrixXd Tangent::transition(const Configuration& cfg, double tau) {
 
 double Tangent::max_rate(const Configuration& cfg) {
     const ConfigData& d = data(cfg);
-    if (!model_.proportional_damping()) return 2.0 * d.rate;  // -2 Re lambda: the fastest decay of u'' + c u' + ...
+    if (stick_ || !model_.proportional_damping()) return 2.0 * d.rate;  // -2 Re lambda: the fastest decay of u'' + c u' + ...
     return d.c.size() ? std::max(0.0, d.c.maxCoeff()) : 0.0;
 }
 
@@ -275,6 +286,24 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
     return true;
 }
 
+// The same switch on the full state of a model with stick elements
+// (stick_tangent.h): u = f+ - f- of the whole vector field.
+bool salt_step_stick(const Model& model, const Configuration& A, const signed char* sgnA, const Configuration& B,
+                     const signed char* sgnB, const SwitchFunction* f, double t, const double* x, const double* v,
+                     Eigen::MatrixXd& Y) {
+    const Eigen::VectorXd fA = stick_field(model, A, sgnA, t, x, v);
+    const Eigen::VectorXd u = stick_field(model, B, sgnB, t, x, v) - fA;
+    if (u.isZero(0.0) || !f) return true;
+    Eigen::RowVectorXd hz;
+    double ht = 0.0;
+    stick_gradient(model, A, *f, t, hz, ht);
+    const double hdot = hz.dot(fA) + ht;
+    if (!(std::fabs(hdot) > 0.0) || !std::isfinite(hdot)) return false;
+    const Eigen::RowVectorXd w = hz * Y;
+    Y.noalias() += (u / hdot) * w;
+    return true;
+}
+
 }  // namespace
 
 bool Tangent::apply_saltation(const SwitchRecord& r, Eigen::MatrixXd& Y) {
@@ -283,8 +312,9 @@ bool Tangent::apply_saltation(const SwitchRecord& r, Eigen::MatrixXd& Y) {
     if (sw.size() <= 1) {
         const ConfigData& d = data(*r.before);
         Eigen::MatrixXd Z = Y;
-        if (!salt_step(model_, d.K, d.C, *r.before, r.sgn_before, *r.after, r.sgn_after, sw.empty() ? nullptr : &sw[0],
-                       r.t, r.x, r.v, Z))
+        const SwitchFunction* f = sw.empty() ? nullptr : &sw[0];
+        if (stick_ ? !salt_step_stick(model_, *r.before, r.sgn_before, *r.after, r.sgn_after, f, r.t, r.x, r.v, Z)
+                   : !salt_step(model_, d.K, d.C, *r.before, r.sgn_before, *r.after, r.sgn_after, f, r.t, r.x, r.v, Z))
             return false;
         Y = std::move(Z);
         return true;
@@ -306,7 +336,8 @@ bool Tangent::apply_saltation(const SwitchRecord& r, Eigen::MatrixXd& Y) {
             if (!apply_switches(model_, r.t, r.x, v.data(), nullptr, next, sgn_next, {sw[k]}, out, why)) return false;
         }
         const ConfigData& d = data(cur);
-        if (!salt_step(model_, d.K, d.C, cur, sgn.data(), next, sgn_next.data(), &sw[k], r.t, r.x, r.v, Z))
+        if (stick_ ? !salt_step_stick(model_, cur, sgn.data(), next, sgn_next.data(), &sw[k], r.t, r.x, r.v, Z)
+                   : !salt_step(model_, d.K, d.C, cur, sgn.data(), next, sgn_next.data(), &sw[k], r.t, r.x, r.v, Z))
             return false;
         cur = next;
         sgn = sgn_next;
@@ -321,13 +352,20 @@ double Tangent::grazing_ratio(const SwitchRecord& r) {
     for (const Harmonic& h : model_.forcing) omega = std::max(omega, std::fabs(h.omega));
     const ConfigData& d = data(*r.before);
     if (d.lambda.size()) omega = std::max(omega, std::sqrt(std::max(0.0, d.lambda.maxCoeff())));
+    if (stick_) {  // the full generator's fastest frequency
+        const Eigen::EigenSolver<Eigen::MatrixXd> es(d.stick_A, false);
+        for (Eigen::Index k = 0; k < es.eigenvalues().size(); ++k) omega = std::max(omega, std::abs(es.eigenvalues()(k)));
+    }
     std::vector<double> a;
     double ratio = INFINITY;
     for (const SwitchFunction& f : *r.switched) {
         if (f.kind != SwitchKind::gap) continue;
         if (a.empty()) {
             a.resize(static_cast<std::size_t>(n));
-            for (int i = 0; i < n; ++i) a[static_cast<std::size_t>(i)] = acceleration(model_, *r.before, r.sgn_before, i, r.t, r.x, r.v);
+            const Eigen::VectorXd f = stick_ ? stick_field(model_, *r.before, r.sgn_before, r.t, r.x, r.v) : Eigen::VectorXd();
+            for (int i = 0; i < n; ++i)
+                a[static_cast<std::size_t>(i)] =
+                    stick_ ? f(n + i) : acceleration(model_, *r.before, r.sgn_before, i, r.t, r.x, r.v);
         }
         const Contact& k = model_.contacts[static_cast<std::size_t>(f.element)];
         const double rate = std::fabs(gap_rate(model_, f.element, r.v));
@@ -353,8 +391,7 @@ void GrazingMonitor::on_switch(const SwitchRecord& r, bool singular) {
 
 JacobianObserver::JacobianObserver(const Model& model, Observer* inner)
     : tangent_(model), inner_(inner),
-      J_(Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(2 * model.dof()),
-                                   static_cast<Eigen::Index>(2 * model.dof()))),
+      J_(Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(tangent_.dim()), static_cast<Eigen::Index>(tangent_.dim()))),
       grazing_(tangent_) {}
 
 void JacobianObserver::on_sample(double t, const double* x, const double* v) {

@@ -59,7 +59,8 @@ public:
     ~Tangent();
     Tangent(Tangent&&) noexcept;
 
-    std::size_t dim() const { return 2 * model_.dof(); }
+    /// State (x, v), then every Jenkins slider (analysis/stick_tangent.h).
+    std::size_t dim() const { return 2 * model_.dof() + model_.jenkins.size(); }
 
     /// Phi(tau) of configuration cfg (2n x 2n).
     Eigen::MatrixXd transition(const Configuration& cfg, double tau);
@@ -86,6 +87,9 @@ private:
     const ConfigData& data(const Configuration& cfg);
 
     const Model& model_;
+    /// Jenkins elements or stuck pairs: the full-state generator and field
+    /// (analysis/stick_tangent.h) instead of the modal forms.
+    bool stick_ = false;
     std::map<Configuration, std::unique_ptr<ConfigData>> cache_;
 };
 

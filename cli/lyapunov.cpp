@@ -71,7 +71,7 @@ int lyapunov_command(const LyapunovFlags& f) {
     const OutputTarget* section_plot = outputs.add("--section-plot", f.section_plot, true);
     outputs.check();
 
-    const std::size_t n2 = 2 * model.dof();
+    const std::size_t n2 = 2 * model.dof() + model.jenkins.size();  // and one per Jenkins slider
     std::unique_ptr<CsvFile> csv;
     std::vector<double> rows;  // for the plot: t, lambda_1..lambda_2n per row
     std::function<void(double, const std::vector<double>&)> on_row;

@@ -109,6 +109,8 @@ int periodic_command(const PeriodicFlags& f) {
          << " iterations=" << r.iterations << " residual=" << full_number(r.residual);
     for (std::size_t i = 0; i < model.dof(); ++i) line << " x_" << model.masses[i].name << "=" << full_number(r.x[i]);
     for (std::size_t i = 0; i < model.dof(); ++i) line << " v_" << model.masses[i].name << "=" << full_number(r.v[i]);
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j)  // the sliders are state too (docs/interface.md)
+        line << " s_" << model.jenkins[j].name << "=" << full_number(r.s[j]);
     line << " stable=" << (ok && r.stable ? "true" : "false")
          << " max_multiplier=" << (ok ? full_number(r.max_multiplier) : "nan") << " grazing=" << r.grazing;
     std::cout << line.str() << std::endl;

@@ -275,13 +275,15 @@ py::dict periodic(const Model& model, double period, int harmonic, double transi
     d["residual"] = r.residual;
     d["x"] = vector(r.x);
     d["v"] = vector(r.v);
+    d["s"] = vector(r.s);  // the Jenkins sliders (state after v)
     py::array_t<std::complex<double>> mu(r.multipliers.size());
     if (!r.multipliers.empty()) std::copy(r.multipliers.begin(), r.multipliers.end(), mu.mutable_data());
     d["multipliers"] = mu;
     const bool ok = r.status == PeriodicStatus::ok;
     d["max_multiplier"] = ok ? r.max_multiplier : NAN;
     d["stable"] = ok && r.stable;
-    d["monodromy"] = ok ? matrix(r.monodromy, 2 * n, 2 * n) : matrix({}, 0, 2 * n);
+    const std::size_t N = 2 * n + model.jenkins.size();  // y = (x, v, s)
+    d["monodromy"] = ok ? matrix(r.monodromy, N, N) : matrix({}, 0, N);
     d["events"] = r.events;
     d["grazing"] = r.grazing;
     py::dict path;
@@ -321,7 +323,7 @@ py::dict lyapunov(const Model& model, double t_end, double transient, double row
     d["grazing"] = r.grazing;
     d["singular"] = r.singular;
     d["rows_t"] = vector(row_t);
-    d["rows"] = matrix(rows, row_t.size(), 2 * model.dof());
+    d["rows"] = matrix(rows, row_t.size(), 2 * model.dof() + model.jenkins.size());
     return d;
 }
 

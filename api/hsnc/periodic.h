@@ -67,12 +67,13 @@ struct PeriodicResult {
     int iterations = 0;      ///< Newton steps taken
     double residual = 0.0;   ///< of the state below
     std::vector<double> x, v;  ///< the orbit's state at t (the last one tried when not converged)
+    std::vector<double> s;     ///< and its Jenkins sliders' positions (Model::jenkins order)
     /// Floquet multipliers (eigenvalues of the monodromy matrix), 2 per
-    /// mass, largest |mu| first.
+    /// mass and 1 per Jenkins element, largest |mu| first.
     std::vector<std::complex<double>> multipliers;
     double max_multiplier = 0.0;  ///< largest |mu|
     bool stable = false;          ///< every |mu| < 1
-    /// The monodromy matrix dP/dy, 2n x 2n row-major, y = (x, v).
+    /// The monodromy matrix dP/dy, row-major, y = (x, v, s): 2n + nj square.
     std::vector<double> monodromy;
     std::size_t events = 0;  ///< switch events over one period of the orbit
     /// Grazing switch instants over one period of the orbit (of the last

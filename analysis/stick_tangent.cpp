@@ -1,0 +1,193 @@
+#include "stick_tangent.h"
+
+#include <vector>
+
+#include "assembly.h"
+
+namespace hsnc::analysis {
+namespace {
+
+// Rows and columns of the full state z = (x, v, s).
+struct Layout {
+    Eigen::Index n, nj;
+    Eigen::Index x(int i) const { return i; }
+    Eigen::Index v(int i) const { return n + i; }
+    Eigen::Index s(std::size_t j) const { return 2 * n + static_cast<Eigen::Index>(j); }
+    Eigen::Index size() const { return 2 * n + nj; }
+};
+
+Layout layout(const Model& model) {
+    return {static_cast<Eigen::Index>(model.dof()), static_cast<Eigen::Index>(model.jenkins.size())};
+}
+
+// The body mass i moves as: itself, its partner when stuck to it (a rider),
+// or none (-1) when held against the ground.
+int body_of(const Model& model, const Configuration& cfg, std::size_t i) {
+    if (fixed_in(model, cfg, i)) return -1;
+    return rides_partner(model, cfg, i) ? model.masses[i].partner : static_cast<int>(i);
+}
+
+// d A_i / dz: -K_i. on x, -C_i. on v, +-k on the sliders of the stuck Jenkins elements at i.
+Eigen::RowVectorXd force_gradient(const Model& model, const Configuration& cfg, const Eigen::MatrixXd& K,
+                                  const Eigen::MatrixXd& C, int i) {
+    const Layout L = layout(model);
+    Eigen::RowVectorXd g = Eigen::RowVectorXd::Zero(L.size());
+    g.segment(0, L.n) = -K.row(i);
+    g.segment(L.n, L.n) = -C.row(i);
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
+        if (cfg.slip[j] != 0) continue;
+        const Jenkins& e = model.jenkins[j];
+        if (e.a == i) g(L.s(j)) += e.k;
+        if (e.b == i) g(L.s(j)) -= e.k;
+    }
+    return g;
+}
+
+}  // namespace
+
+Eigen::MatrixXd stick_generator(const Model& model, const Configuration& cfg) {
+    const Layout L = layout(model);
+    const Eigen::MatrixXd K = stiffness_matrix(model, cfg), C = damping_matrix(model, cfg);
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(L.size(), L.size());
+    // Each body's acceleration row: its members' force gradients over their summed mass.
+    std::vector<Eigen::RowVectorXd> row(model.dof(), Eigen::RowVectorXd::Zero(L.size()));
+    std::vector<double> mass(model.dof(), 0.0);
+    for (std::size_t i = 0; i < model.dof(); ++i) {
+        const int b = body_of(model, cfg, i);
+        if (b < 0) continue;
+        row[static_cast<std::size_t>(b)] += force_gradient(model, cfg, K, C, static_cast<int>(i));
+        mass[static_cast<std::size_t>(b)] += model.masses[i].m;
+    }
+    for (std::size_t i = 0; i < model.dof(); ++i) {
+        const int b = body_of(model, cfg, i);
+        if (b < 0) continue;
+        const int ii = static_cast<int>(i);
+        A(L.x(ii), L.v(ii)) = 1.0;
+        A.row(L.v(ii)) = row[static_cast<std::size_t>(b)] / mass[static_cast<std::size_t>(b)];
+    }
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
+        if (cfg.slip[j] == 0) continue;  // stuck: s' = 0
+        const Jenkins& e = model.jenkins[j];
+        if (e.a != kGround) A(L.s(j), L.v(e.a)) += 1.0;
+        if (e.b != kGround) A(L.s(j), L.v(e.b)) -= 1.0;
+    }
+    return A;
+}
+
+Eigen::MatrixXd stick_projection(const Model& model, const Configuration& cfg) {
+    const Layout L = layout(model);
+    Eigen::MatrixXd P = Eigen::MatrixXd::Identity(L.size(), L.size());
+    std::vector<double> mass(model.dof(), 0.0);
+    for (std::size_t i = 0; i < model.dof(); ++i)
+        if (const int b = body_of(model, cfg, i); b >= 0) mass[static_cast<std::size_t>(b)] += model.masses[i].m;
+    for (std::size_t i = 0; i < model.dof(); ++i) {
+        const int ii = static_cast<int>(i), b = body_of(model, cfg, i);
+        if (b < 0) {
+            P.row(L.v(ii)).setZero();
+            continue;
+        }
+        bool pair = b != ii;  // a rider, or a partner with riders: the pair's momentum-weighted velocity
+        for (std::size_t q = 0; q < model.dof() && !pair; ++q) pair = q != i && body_of(model, cfg, q) == ii;
+        if (!pair) continue;
+        P.row(L.v(ii)).setZero();
+        for (std::size_t q = 0; q < model.dof(); ++q)
+            if (body_of(model, cfg, q) == b) P(L.v(ii), L.v(static_cast<int>(q))) = model.masses[q].m / mass[static_cast<std::size_t>(b)];
+    }
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
+        if (cfg.slip[j] == 0) continue;
+        const Jenkins& e = model.jenkins[j];
+        P.row(L.s(j)).setZero();
+        if (e.a != kGround) P(L.s(j), L.x(e.a)) = 1.0;
+        if (e.b != kGround) P(L.s(j), L.x(e.b)) = -1.0;
+    }
+    return P;
+}
+
+Eigen::VectorXd stick_field(const Model& model, const Configuration& cfg, const signed char* sgn, double t,
+                            const double* x, const double* v) {
+    const Layout L = layout(model);
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(L.size());
+    std::vector<double> force(model.dof(), 0.0), mass(model.dof(), 0.0);
+    for (std::size_t i = 0; i < model.dof(); ++i) {
+        const int b = body_of(model, cfg, i);
+        if (b < 0) continue;
+        double F = force_on_mass(model, cfg, static_cast<int>(i), t, x, v);
+        const Mass& ms = model.masses[i];
+        if (ms.has_friction && !cfg.stuck[i] && sgn[i] != 0) {  // kinetic friction, and its reaction on the partner
+            const double fk = ms.mu_k * model.normal_force(i) * sgn[i];
+            F -= fk;
+            if (ms.partner != kGround) force[static_cast<std::size_t>(ms.partner)] += fk;
+        }
+        force[static_cast<std::size_t>(b)] += F;
+        mass[static_cast<std::size_t>(b)] += ms.m;
+    }
+    for (std::size_t i = 0; i < model.dof(); ++i) {
+        const int ii = static_cast<int>(i), b = body_of(model, cfg, i);
+        if (b < 0) continue;
+        f(L.x(ii)) = v[i];
+        f(L.v(ii)) = force[static_cast<std::size_t>(b)] / mass[static_cast<std::size_t>(b)];
+    }
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
+        if (cfg.slip[j] == 0) continue;
+        const Jenkins& e = model.jenkins[j];
+        f(L.s(j)) = (e.a == kGround ? 0.0 : v[e.a]) - (e.b == kGround ? 0.0 : v[e.b]);
+    }
+    return f;
+}
+
+void stick_gradient(const Model& model, const Configuration& cfg, const SwitchFunction& f, double t,
+                    Eigen::RowVectorXd& hz, double& ht) {
+    const Layout L = layout(model);
+    hz = Eigen::RowVectorXd::Zero(L.size());
+    ht = 0.0;
+    auto add = [&](Eigen::Index at, int body, double c) {
+        if (body != kGround) hz(at + body) += c;
+    };
+    const int e = f.element;
+    switch (f.kind) {
+        case SwitchKind::gap: {
+            const Contact& c = model.contacts[static_cast<std::size_t>(e)];
+            add(0, c.a, 1.0);
+            add(0, c.b, -1.0);
+            return;
+        }
+        case SwitchKind::velocity:  // w = v_e - v_partner
+            add(L.n, e, 1.0);
+            add(L.n, model.masses[static_cast<std::size_t>(e)].partner, -1.0);
+            return;
+        case SwitchKind::release_pos:
+        case SwitchKind::release_neg: {
+            const double sg = f.kind == SwitchKind::release_pos ? 1.0 : -1.0;
+            const Eigen::MatrixXd K = stiffness_matrix(model, cfg), C = damping_matrix(model, cfg);
+            const Eigen::VectorXd rate = forcing_rate(model, t);
+            const int p = model.masses[static_cast<std::size_t>(e)].partner;
+            if (p == kGround) {
+                hz = sg * force_gradient(model, cfg, K, C, e);
+                ht = sg * rate(e);
+                return;
+            }
+            // D = (m_p A_e - m_e A_p)/(m_e + m_p) (assembly.h driving_force).
+            const double me = model.masses[static_cast<std::size_t>(e)].m, mp = model.masses[static_cast<std::size_t>(p)].m;
+            hz = sg * (mp * force_gradient(model, cfg, K, C, e) - me * force_gradient(model, cfg, K, C, p)) / (me + mp);
+            ht = sg * against_partner(me, mp, rate(e), rate(p));
+            return;
+        }
+        case SwitchKind::slip_pos:
+        case SwitchKind::slip_neg: {  // +-k (x_a - x_b - s) - F_s
+            const Jenkins& el = model.jenkins[static_cast<std::size_t>(e)];
+            const double sk = f.kind == SwitchKind::slip_pos ? el.k : -el.k;
+            add(0, el.a, sk);
+            add(0, el.b, -sk);
+            hz(L.s(static_cast<std::size_t>(e))) = -sk;
+            return;
+        }
+        case SwitchKind::slip_velocity: {
+            const Jenkins& el = model.jenkins[static_cast<std::size_t>(e)];
+            add(L.n, el.a, 1.0);
+            add(L.n, el.b, -1.0);
+            return;
+        }
+    }
+}
+
+}  // namespace hsnc::analysis

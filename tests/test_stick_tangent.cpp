@@ -1,0 +1,173 @@
+// The tangent dynamics of models with stick elements (analysis/stick_tangent.h):
+// Jenkins elements (the slider is state: z = (x, v, s)) and friction between
+// two bodies (a stuck pair moves as one body). The Jacobian of the flow map
+// over runs with releases and sticks of both, J = S_k Phi_k ... S_1 Phi_1,
+// against central differences of the exact engine, column by column; the
+// Floquet multipliers of the friction damper's orbit against its Lyapunov
+// spectrum; and the command line's outputs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli_runner.h"
+#include "engine_runner.h"
+#include "hsnc/lyapunov.h"
+#include "hsnc/periodic.h"
+#include "kernel_mode.h"
+#include "model_reader.h"
+#include "tangent.h"
+
+namespace hsnc {
+namespace {
+
+class Kinds : public Observer {
+public:
+    void on_sample(double, const double*, const double*) override {}
+    void on_event(double, EventKind k, int e, const double*, const double*) override { seq.emplace_back(k, e); }
+    std::vector<std::pair<EventKind, int>> seq;
+};
+
+// The end state (x, v, s) of a run of m from its initial state (sliders: slider0).
+std::vector<double> end_state(const Model& m, double t_end, Kinds& kinds) {
+    GenericSolverProvider provider(m);
+    Engine engine(m, provider);
+    EngineOptions opt;
+    opt.t_end = t_end;
+    opt.samples = false;
+    const RunSummary s = engine.run(opt, kinds);
+    EXPECT_EQ(s.status, RunStatus::ok) << s.message;
+    std::vector<double> y = s.x;
+    y.resize(m.dof());
+    y.insert(y.end(), s.v.begin(), s.v.end());
+    y.insert(y.end(), s.slider.begin(), s.slider.end());
+    return y;
+}
+
+// J against (y(z0 + h e_j) - y(z0 - h e_j)) / 2h, every column whose two runs
+// meet the same switches as the base run; returns the columns compared.
+int expect_jacobian_matches(const Model& m, double t_end, double h, double tol, std::size_t min_events) {
+    const std::size_t n = m.dof(), nj = m.jenkins.size(), N = 2 * n + nj;
+    Model base = m;
+    if (base.slider0.empty())
+        for (const Jenkins& e : m.jenkins)
+            base.slider0.push_back((e.a == kGround ? 0.0 : m.x0[e.a]) - (e.b == kGround ? 0.0 : m.x0[e.b]));
+    GenericSolverProvider provider(base);
+    Engine engine(base, provider);
+    Kinds kinds;
+    analysis::JacobianObserver jac(base, &kinds);
+    EngineOptions opt;
+    opt.t_end = t_end;
+    opt.samples = false;
+    const RunSummary s = engine.run(opt, jac);
+    EXPECT_EQ(s.status, RunStatus::ok) << s.message;
+    EXPECT_GE(kinds.seq.size(), min_events) << m.name;
+    EXPECT_EQ(jac.grazing(), 0u);
+    const Eigen::MatrixXd& J = jac.jacobian();
+    EXPECT_EQ(static_cast<std::size_t>(J.rows()), N);
+    int compared = 0;
+    double worst = 0.0;
+    for (std::size_t j = 0; j < N; ++j) {
+        Model p = base, q = base;
+        auto& yp = j < n ? p.x0 : j < 2 * n ? p.v0 : p.slider0;
+        auto& yq = j < n ? q.x0 : j < 2 * n ? q.v0 : q.slider0;
+        const std::size_t k = j < n ? j : j < 2 * n ? j - n : j - 2 * n;
+        yp[k] += h;
+        yq[k] -= h;
+        Kinds kp, kq;
+        const std::vector<double> a = end_state(p, t_end, kp), b = end_state(q, t_end, kq);
+        if (kp.seq != kinds.seq || kq.seq != kinds.seq) continue;  // a switch moved past the end: not differentiable here
+        double scale = 1.0;
+        for (std::size_t i = 0; i < N; ++i) scale = std::max(scale, std::fabs((a[i] - b[i]) / (2 * h)));
+        for (std::size_t i = 0; i < N; ++i) {
+            const double fd = (a[i] - b[i]) / (2 * h);
+            const double err = std::fabs(J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) - fd) / scale;
+            worst = std::max(worst, err);
+            EXPECT_LT(err, tol) << m.name << " dz" << i << "/dz0_" << j << ": J " << J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j))
+                                << ", finite difference " << fd;
+        }
+        ++compared;
+    }
+    std::printf("%s: %zu switches over %g s, %d of %zu columns against central differences, worst %.2g\n",
+                m.name.c_str(), kinds.seq.size(), t_end, compared, N, worst);
+    return compared;
+}
+
+Model example(const std::string& path) { return read_model(std::string(HSNC_SOURCE_DIR) + "/examples/" + path); }
+
+TEST(StickTangent, JenkinsRunsJacobianMatchesFiniteDifferences) {
+    // The blade with its friction damper: releases and sticks of the element.
+    EXPECT_EQ(expect_jacobian_matches(example("jenkins/friction_damper.toml"), 3.0, 1e-6, 2e-6, 6), 5);
+    // Two elements (the under-platform damper), one made to slip later than the other so
+    // that a perturbation cannot swap the order of their switches.
+    Model up = example("jenkins/under_platform_damper.toml");
+    up.jenkins[1].slip_force *= 1.3;
+    EXPECT_EQ(expect_jacobian_matches(up, 2.5, 1e-6, 2e-6, 6), 12);
+}
+
+TEST(StickTangent, FrictionPairRunsJacobianMatchesFiniteDifferences) {
+    // The load on a shaking table: the pair releases and sticks again. Started sliding
+    // (stuck at the start, a velocity perturbation of one block alone is a slip of
+    // its own: not differentiable there).
+    Model m = example("friction/stacked_blocks.toml");
+    m.v0[1] += 0.05;
+    EXPECT_EQ(expect_jacobian_matches(m, 1.2, 1e-6, 2e-6, 6), 4);
+}
+
+// Floquet multipliers mu of the friction damper's stable orbit and the
+// Lyapunov spectrum of the motion that settles on it: lambda = log|mu| / T,
+// and the slider's direction, slaved to x while it slips, is a multiplier 0
+// and an exponent -inf (a direction a release collapses).
+TEST(StickTangent, FrictionDamperFloquetMultipliersAreItsLyapunovExponents) {
+    const Model m = example("jenkins/friction_damper.toml");
+    PeriodicOptions po;
+    po.transient = 30.0;
+    po.kernels = KernelChoice::generic;
+    const PeriodicResult orbit = periodic(m, po);
+    ASSERT_EQ(orbit.status, PeriodicStatus::ok) << orbit.message;
+    ASSERT_EQ(orbit.multipliers.size(), 5u);
+    ASSERT_EQ(orbit.s.size(), 1u);
+    EXPECT_TRUE(orbit.stable);
+    EXPECT_LT(std::abs(orbit.multipliers.back()), 1e-12);
+    LyapunovOptions lo;
+    lo.transient = 30.0;
+    lo.t_end = 3000.0;
+    lo.kernels = KernelChoice::generic;
+    const LyapunovResult ly = lyapunov(m, lo);
+    ASSERT_EQ(ly.status, RunStatus::ok) << ly.message;
+    ASSERT_EQ(ly.exponents.size(), 5u);
+    EXPECT_EQ(ly.exponents[4], -INFINITY);
+    for (std::size_t k = 0; k < 4; ++k) {
+        const double expected = std::log(std::abs(orbit.multipliers[k])) / orbit.period;
+        std::printf("lambda_%zu = %.6f, log|mu_%zu| / T = %.6f\n", k + 1, ly.exponents[k], k + 1, expected);
+        EXPECT_NEAR(ly.exponents[k], expected, 0.005 * std::fabs(expected));  // measured 0.24% at most
+    }
+}
+
+TEST(StickTangentCli, PeriodicAndLyapunovCarryTheSlider) {
+    const std::string model = std::string(HSNC_SOURCE_DIR) + "/examples/jenkins/friction_damper.toml";
+    const std::string mu = testing::temp_path("stick-mu.csv");
+    const testing::CliRun p = testing::run_hsnc("periodic " + model + " --transient 30 --multipliers " + mu);
+    ASSERT_EQ(p.exit_code, 0) << p.err;
+    EXPECT_NE(p.out.find(" s_damper="), std::string::npos) << p.out;
+    EXPECT_NE(p.out.find("stable=true"), std::string::npos) << p.out;
+    std::ifstream in(mu);
+    std::string line;
+    int rows = -1;
+    while (std::getline(in, line)) ++rows;
+    EXPECT_EQ(rows, 5) << "2 per mass, 1 per Jenkins element";
+    const testing::CliRun l = testing::run_hsnc("lyapunov " + model + " --t-end 20");
+    ASSERT_EQ(l.exit_code, 0) << l.err;
+    EXPECT_NE(l.out.find(" lambda_5=-inf"), std::string::npos) << l.out;
+    const std::string pair = std::string(HSNC_SOURCE_DIR) + "/examples/friction/stacked_blocks.toml";
+    const testing::CliRun q = testing::run_hsnc("periodic " + pair + " --transient 10");
+    ASSERT_EQ(q.exit_code, 0) << q.err;
+    EXPECT_NE(q.out.find("status=ok"), std::string::npos) << q.out;
+}
+
+}  // namespace
+}  // namespace hsnc
