@@ -229,9 +229,10 @@ def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_itera
     `hsnc periodic`): Newton shooting on the period map with the exact
     monodromy matrix. Returns a dict: status ("ok" or "not_converged"),
     message, period (harmonic * T), t (time of the state), iterations,
-    residual, x, v (the orbit's state at t, arrays), multipliers (complex
-    array, largest |mu| first), max_multiplier, stable, monodromy (2n x 2n
-    array, state (x, v)), events (switches a period), grazing (grazing switch
+    residual, x, v, s (the orbit's state at t, arrays; s: the Jenkins
+    sliders), multipliers (complex array, largest |mu| first),
+    max_multiplier, stable, monodromy ((2n + nj) square array, state (x, v,
+    s)), events (switches a period), grazing (grazing switch
     instants a period: the multipliers are not reliable when > 0) and orbit (dict of t, x,
     v arrays: one period sampled every dt, default period/1000; empty when not
     converged). period: default 2*pi/omega of the model's forcing;
@@ -250,8 +251,8 @@ def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_itera
 def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=None, v0=None):
     """The Lyapunov spectrum (as `hsnc lyapunov`), by the QR method on the
     exact tangent dynamics, measured over t_end seconds after transient.
-    Returns a dict: exponents (array of 2n, 1/s, largest first, -inf for
-    directions a stick collapses), sum, t_start, t, collapsed, events,
+    Returns a dict: exponents (array of 2n, plus one per Jenkins element,
+    1/s, largest first, -inf for directions a stick or a slip collapses), sum, t_start, t, collapsed, events,
     grazing (switch instants at a turning point of a contact's gap, or
     without a saltation matrix: the exponents are not reliable when > 0),
     singular (of them, without a saltation matrix), rows_t and rows (the running estimates every row_interval,

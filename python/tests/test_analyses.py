@@ -42,6 +42,21 @@ def test_periodic_matches_the_command_line(cli, tmp_path):
     assert np.allclose(orbit["x"][-1], orbit["x"][0], rtol=0, atol=1e-9)
 
 
+def test_periodic_and_lyapunov_carry_a_jenkins_slider(cli):
+    """The friction damper's orbit: the slider is state (s), one multiplier
+    and one exponent more; the command line prints the same orbit."""
+    path = model_path("../examples/jenkins/friction_damper.toml")
+    model = hsnc.Model.from_file(path)
+    r = hsnc.periodic(model, transient=30.0, kernels="generic")
+    assert r["status"] == "ok" and r["stable"]
+    assert r["s"].shape == (1,) and r["multipliers"].shape == (5,) and r["monodromy"].shape == (5, 5)
+    line = fields(cli("periodic", path, "--transient", "30", "--kernels", "generic", "--quiet").stdout.strip())
+    assert r["s"][0] == float(line["s_damper"]) and r["x"][1] == float(line["x_platform"])
+    ly = hsnc.lyapunov(model, t_end=20.0, transient=30.0, kernels="generic")
+    assert ly["exponents"].shape == (5,) and ly["exponents"][-1] == -math.inf
+    assert ly["rows"].shape[1] == 5
+
+
 def test_periodic_not_converged_is_a_status_not_an_orbit():
     model = hsnc.Model.from_file(model_path("seed-scenario-2.toml"))
     r = hsnc.periodic(model, max_iterations=1)
