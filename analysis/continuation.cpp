@@ -73,7 +73,7 @@ private:
         auto at = std::make_unique<At>();
         at->model = branch_.model_at(p);
         at->period = 2 * M_PI / forcing_frequency(at->model, branch_.param + " = " + short_num(p));
-        at->flow = std::make_unique<analysis::Flow>(at->model, analysis::FlowKernels{KernelChoice::generic}, kFunction);
+        at->flow = std::make_unique<analysis::Flow>(at->model, analysis::FlowKernels{KernelChoice::generic, "", true}, kFunction);
         return *(cache_[p] = std::move(at));
     }
     const Branch& branch_;
@@ -127,8 +127,10 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
                                          const std::function<void(const SweepPoint&, double)>& done) {
     using Clock = std::chrono::steady_clock;
     const Model& first = *b.start_model;
-    const std::size_t n = first.dof();
-    const Eigen::Index N = static_cast<Eigen::Index>(2 * n);
+    const std::size_t n = first.dof(), nj = first.jenkins.size();
+    const Eigen::Index N = static_cast<Eigen::Index>(2 * n + nj);  // y = (x, v, s): the sliders are state too
+    // y's lengths (positions and sliders) and velocities.
+    auto is_velocity_row = [&](Eigen::Index i) { return i >= static_cast<Eigen::Index>(n) && i < static_cast<Eigen::Index>(2 * n); };
     const double lo = std::min(b.start, b.end), hi = std::max(b.start, b.end), span = hi - lo;
     const double sense = b.end > b.start ? 1.0 : -1.0;
     const std::size_t budget = o.max_steps ? o.max_steps : 20 * o.points;
@@ -148,7 +150,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
     };
 
     // ---- the first orbit: a sweep point's transient, then shooting ----
-    State state{first.x0, first.v0};
+    State state{first.x0, first.v0, first.slider0};
     PeriodicResult orbit;
     std::string why;
     std::size_t transient = 0;
@@ -157,6 +159,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         Model m = first;
         m.x0 = state.x;
         m.v0 = state.v;
+        m.slider0 = state.slider;
         PeriodicOptions po;
         po.kernels = KernelChoice::generic;
         po.tolerance = kTolerance;
@@ -187,7 +190,8 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
     Eigen::VectorXd D(N + 1);
     double sx = 0, sv = 0;
     for (std::size_t i = 0; i < n; ++i) sx = std::max(sx, std::fabs(orbit.x[i])), sv = std::max(sv, std::fabs(orbit.v[i]));
-    for (Eigen::Index i = 0; i < N; ++i) D(i) = i < static_cast<Eigen::Index>(n) ? (sx > 0 ? sx : 1) : (sv > 0 ? sv : 1);
+    for (double s : orbit.s) sx = std::max(sx, std::fabs(s));
+    for (Eigen::Index i = 0; i < N; ++i) D(i) = !is_velocity_row(i) ? (sx > 0 ? sx : 1) : (sv > 0 ? sv : 1);
     D(N) = span;
 
     // The scaled Jacobian [dP/dy - I, dP/dp] of the residual over u = (y, p) / D.
@@ -224,6 +228,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
 
     Eigen::VectorXd y(N);
     for (std::size_t i = 0; i < n; ++i) y(static_cast<Eigen::Index>(i)) = orbit.x[i], y(static_cast<Eigen::Index>(n + i)) = orbit.v[i];
+    for (std::size_t j = 0; j < nj; ++j) y(static_cast<Eigen::Index>(2 * n + j)) = orbit.s[j];
     double p = b.start;
     Eigen::MatrixXd M(N, N);
     for (Eigen::Index i = 0; i < N; ++i)
@@ -236,7 +241,8 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         SweepPoint pt;
         State s;
         s.x.assign(y.data(), y.data() + n);
-        s.v.assign(y.data() + n, y.data() + N);
+        s.v.assign(y.data() + n, y.data() + 2 * n);
+        s.slider.assign(y.data() + 2 * n, y.data() + N);
         record(model, s, o, name(p), 0, 1, pt);
         pt.value = p;
         pt.value2 = b.value2;
@@ -359,7 +365,8 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
             try {
                 Model m = maps.model(bound);
                 m.x0.assign(guess.data(), guess.data() + n);
-                m.v0.assign(guess.data() + n, guess.data() + N);
+                m.v0.assign(guess.data() + n, guess.data() + 2 * n);
+                m.slider0.assign(guess.data() + 2 * n, guess.data() + N);
                 PeriodicOptions po;
                 po.kernels = KernelChoice::generic;
                 po.tolerance = kTolerance;
@@ -371,6 +378,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
                 p = bound;
                 for (std::size_t i = 0; i < n; ++i)
                     y(static_cast<Eigen::Index>(i)) = end.x[i], y(static_cast<Eigen::Index>(n + i)) = end.v[i];
+                for (std::size_t j = 0; j < nj; ++j) y(static_cast<Eigen::Index>(2 * n + j)) = end.s[j];
                 mu = end.multipliers;
                 emit(maps.model(bound), previous_p, &previous_mu, maps.runs - runs_before + end.iterations + 1);
             } catch (const InputError& e) {
@@ -387,9 +395,9 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         // The state scales follow the largest orbit so far (steps relative
         // to the amplitude), the tangent expressed in the new scales.
         const Eigen::VectorXd D_old = D;
-        const Eigen::Index half = static_cast<Eigen::Index>(n);
-        const double mx = y.head(half).cwiseAbs().maxCoeff(), mv = y.tail(half).cwiseAbs().maxCoeff();
-        for (Eigen::Index j = 0; j < half; ++j) D(j) = std::max(D(j), mx), D(half + j) = std::max(D(half + j), mv);
+        double mx = 0, mv = 0;
+        for (Eigen::Index i = 0; i < N; ++i) (is_velocity_row(i) ? mv : mx) = std::max(is_velocity_row(i) ? mv : mx, std::fabs(y(i)));
+        for (Eigen::Index i = 0; i < N; ++i) D(i) = std::max(D(i), is_velocity_row(i) ? mv : mx);
         t = t.cwiseProduct(D_old).cwiseQuotient(D).normalized();
         mu = analysis::floquet_multipliers(M);
         try {

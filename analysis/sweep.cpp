@@ -142,13 +142,12 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
         throw OptionError(kPlan, "max_steps", std::to_string(o.max_steps), "only with continuation");
     }
     // Jenkins elements and stuck pairs: the points carry the sliders
-    // (State::slider) on hsnc, rk45 and cvode; a continuation's shooting takes neither yet.
+    // (State::slider) on hsnc, rk45 and cvode, and so does a continuation's
+    // shooting (y = (x, v, s)); ab4 takes neither.
     if (const std::string what = stick_elements(model_); !what.empty()) {
-        const std::string why = "the model has " + what + ", ";
         if (o.method == Method::ab4)
-            throw OptionError(kPlan, "method", method_name(o.method), why + "which hsnc, rk45 and cvode run, for now");
-        if (o.continuation)
-            throw OptionError(kPlan, "continuation", "true", why + "which the continuation does not take yet");
+            throw OptionError(kPlan, "method", method_name(o.method),
+                              "the model has " + what + ", which hsnc, rk45 and cvode run, for now");
     }
     if (o.threads == 0) o.threads = std::max(1u, std::thread::hardware_concurrency());
 

@@ -581,7 +581,7 @@ TEST(JenkinsCli, EventsNameTheElementAndTheSliderIsTheLastColumn) {
     std::getline(sin, srow);
     EXPECT_EQ(sheader, "t,x_m1,v_m1,s_j1");
     EXPECT_EQ(srow.substr(0, srow.find(',')), second.substr(0, second.find(',')));  // at the stick row's instant
-    for (const std::string cmd : {"sweep " + model + " --param g --from 9 --to 10 --points 2 --continuation",
+    for (const std::string cmd : {"sweep " + model + " --param g --from 9 --to 10 --points 2 --method ab4 --h 1e-3",
                                   "generate " + model + " --params k -o " + testing::temp_path("jenkins-gen-p")}) {
         const testing::CliRun bad = testing::run_hsnc(cmd);
         EXPECT_EQ(bad.exit_code, 2) << cmd << ": " << bad.err;

@@ -18,6 +18,7 @@
 #include "engine_runner.h"
 #include "hsnc/lyapunov.h"
 #include "hsnc/periodic.h"
+#include "hsnc/sweep.h"
 #include "kernel_mode.h"
 #include "model_reader.h"
 #include "tangent.h"
@@ -146,6 +147,43 @@ TEST(StickTangent, FrictionDamperFloquetMultipliersAreItsLyapunovExponents) {
         std::printf("lambda_%zu = %.6f, log|mu_%zu| / T = %.6f\n", k + 1, ly.exponents[k], k + 1, expected);
         EXPECT_NEAR(ly.exponents[k], expected, 0.005 * std::fabs(expected));  // measured 0.24% at most
     }
+}
+
+// The continuation of the friction damper's orbit over the forcing frequency
+// (y = (x, v, s)): every point is an orbit that hsnc::periodic finds again from
+// a transient at that frequency, with the same largest multiplier.
+TEST(StickTangent, ContinuationOfTheFrictionDamperFollowsItsOrbits) {
+    SweepOptions o;
+    o.param = "omega";
+    o.from = 8.0;
+    o.to = 12.0;
+    o.points = 5;
+    o.continuation = true;
+    o.max_periods = 3000;
+    const std::string path = std::string(HSNC_SOURCE_DIR) + "/examples/jenkins/friction_damper.toml";
+    const SweepResult r = SweepPlan::from_file(path, {}, o).run();
+    ASSERT_GE(r.points.size(), 5u);
+    EXPECT_EQ(r.points.back().value, 12.0);
+    std::size_t checked = 0;
+    for (std::size_t k = 0; k < r.points.size(); k += r.points.size() / 4) {
+        const SweepPoint& p = r.points[k];
+        SCOPED_TRACE("omega = " + std::to_string(p.value));
+        EXPECT_EQ(p.failure, "");
+        EXPECT_TRUE(p.stable);
+        char text[64];
+        std::snprintf(text, sizeof text, "omega=%.17g", p.value);
+        ModelOverrides set;
+        set.set.emplace_back(text);
+        const Model m = read_model(path, set);
+        PeriodicOptions po;
+        po.transient = 40.0;
+        po.kernels = KernelChoice::generic;
+        const PeriodicResult orbit = periodic(m, po);
+        ASSERT_EQ(orbit.status, PeriodicStatus::ok) << orbit.message;
+        EXPECT_NEAR(p.max_multiplier, orbit.max_multiplier, 1e-8);
+        ++checked;
+    }
+    EXPECT_GE(checked, 4u);
 }
 
 TEST(StickTangentCli, PeriodicAndLyapunovCarryTheSlider) {
