@@ -65,4 +65,15 @@ inline std::string write_temp(const std::string& name, const std::string& text) 
 
 inline bool file_exists(const std::string& path) { return std::ifstream(path).good(); }
 
+/// The events CSV of `hsnc simulate MODEL FLAGS --events FILE`, as bytes; ""
+/// (with a test failure) when the run does not exit 0.
+inline std::string events_csv(const std::string& model, const std::string& flags) {
+    const std::string out = temp_path("events.csv");
+    const CliRun r = run_hsnc("simulate " + model + " " + flags + " --events " + out);
+    EXPECT_EQ(r.exit_code, 0) << flags << ": " << r.err;
+    const std::string bytes = r.exit_code == 0 ? slurp(out) : "";
+    std::remove(out.c_str());
+    return bytes;
+}
+
 }  // namespace hsnc::testing

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 #include "engine.h"
@@ -36,6 +37,14 @@ public:
 
 private:
     std::size_t n_, nx_;
+};
+
+/// The (kind, element) of every event of a run, in order.
+class EventSequence : public Observer {
+public:
+    void on_sample(double, const double*, const double*) override {}
+    void on_event(double, EventKind k, int e, const double*, const double*) override { seq.emplace_back(k, e); }
+    std::vector<std::pair<EventKind, int>> seq;
 };
 
 struct Outcome {

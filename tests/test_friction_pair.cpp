@@ -336,16 +336,8 @@ TEST(FrictionPairCli, EventsNameTheElementAndWhatCannotTakeItRefuses) {
     EXPECT_NE(sweep_kernels.err.find("friction between two bodies"), std::string::npos) << sweep_kernels.err;
     // The derivation folds a stuck pair into one coordinate: the interpreter and
     // the JIT write the same events; generate and inspect take the model.
-    std::string bytes[2];
-    const char* kinds[2] = {"interp", "jit"};
-    for (int k = 0; k < 2; ++k) {
-        const std::string out = testing::temp_path(std::string("pair-kind-") + kinds[k] + ".csv");
-        const testing::CliRun r = testing::run_hsnc("simulate " + model + " --t-end 2 --no-cache --kernels " + kinds[k] +
-                                                    " --events " + out);
-        ASSERT_EQ(r.exit_code, 0) << kinds[k] << ": " << r.err;
-        std::ifstream f(out);
-        bytes[k].assign(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
-    }
+    const std::string bytes[2] = {testing::events_csv(model, "--t-end 2 --no-cache --kernels interp"),
+                                  testing::events_csv(model, "--t-end 2 --no-cache --kernels jit")};
     EXPECT_EQ(bytes[0], bytes[1]);
     EXPECT_NE(bytes[0].find(",release,interface,"), std::string::npos) << bytes[0];
     const testing::CliRun gen = testing::run_hsnc("generate " + model + " -o " + testing::temp_path("pair-gen"));

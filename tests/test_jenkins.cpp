@@ -591,14 +591,8 @@ TEST(JenkinsCli, EventsNameTheElementAndTheSliderIsTheLastColumn) {
     // rounding, the interpreter and the JIT the same bytes.
     std::string bytes[3];
     const char* kinds[3] = {"generic", "interp", "jit"};
-    for (int k = 0; k < 3; ++k) {
-        const std::string out = testing::temp_path(std::string("jenkins-kind-") + kinds[k] + ".csv");
-        const testing::CliRun r = testing::run_hsnc("simulate " + model + " --t-end 1 --no-cache --kernels " + kinds[k] +
-                                                    " --events " + out);
-        ASSERT_EQ(r.exit_code, 0) << kinds[k] << ": " << r.err;
-        std::ifstream f(out);
-        bytes[k].assign(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
-    }
+    for (int k = 0; k < 3; ++k)
+        bytes[k] = testing::events_csv(model, std::string("--t-end 1 --no-cache --kernels ") + kinds[k]);
     EXPECT_EQ(bytes[1], bytes[2]) << "interp and jit events";
     EXPECT_EQ(std::count(bytes[0].begin(), bytes[0].end(), '\n'), std::count(bytes[1].begin(), bytes[1].end(), '\n'));
     // generate: a kernel per configuration (stuck, slipping + and -) and its manifest;

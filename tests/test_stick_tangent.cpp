@@ -26,12 +26,7 @@
 namespace hsnc {
 namespace {
 
-class Kinds : public Observer {
-public:
-    void on_sample(double, const double*, const double*) override {}
-    void on_event(double, EventKind k, int e, const double*, const double*) override { seq.emplace_back(k, e); }
-    std::vector<std::pair<EventKind, int>> seq;
-};
+using Kinds = testing::EventSequence;
 
 // The end state (x, v, s) of a run of m from its initial state (sliders: slider0).
 std::vector<double> end_state(const Model& m, double t_end, Kinds& kinds) {

@@ -25,12 +25,7 @@
 namespace hsnc {
 namespace {
 
-class EventList : public Observer {
-public:
-    void on_sample(double, const double*, const double*) override {}
-    void on_event(double, EventKind k, int e, const double*, const double*) override { seq.emplace_back(k, e); }
-    std::vector<std::pair<EventKind, int>> seq;
-};
+using EventList = testing::EventSequence;
 
 struct Run {
     bool ok = false;
