@@ -116,6 +116,10 @@ void print_damped_modes(const Model& model, std::ostream& out) {
     std::unique_ptr<StateSpaceSolver> solver;
     try {
         solver = std::make_unique<StateSpaceSolver>(model, Configuration::all_open(model));
+    } catch (const DefectiveModes& e) {  // critical damping: simulate takes it by the matrix exponential
+        out << "damped modes: the state matrix is defective or nearly so (" << e.what()
+            << "); its segments are the matrix exponential of the state (runtime/solvers/exponential_solver.h)\n";
+        return;
     } catch (const RunError& e) {
         out << "damped modes: none: " << e.what() << "\n";  // simulate would stop there too
         return;

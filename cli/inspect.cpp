@@ -15,6 +15,7 @@
 #include <complex>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 #include <sstream>
 
 #include "assembly.h"
@@ -272,7 +273,15 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
 /// damping only.
 void inspect_state_space(const Model& model, const Configuration& cfg, Format fmt, std::ostream& out) {
     const Printer p{fmt, out};
-    const StateSpaceSolver solver(model, cfg);  // RunError: a nearly defective configuration
+    // A (nearly) defective state matrix (critical damping) runs by the matrix
+    // exponential instead (runtime/solvers/exponential_solver.h): no modes to print.
+    std::unique_ptr<StateSpaceSolver> solver;
+    std::string defective;
+    try {
+        solver = std::make_unique<StateSpaceSolver>(model, cfg);
+    } catch (const DefectiveModes& e) {
+        defective = e.what();
+    }
     char hash[32];
     std::snprintf(hash, sizeof hash, "0x%016llx", static_cast<unsigned long long>(model_hash(model)));
     std::vector<int> free_dofs, stuck_dofs;
@@ -316,8 +325,13 @@ void inspect_state_space(const Model& model, const Configuration& cfg, Format fm
     }
     p.heading("State-space modes: y' = A y, y = [x; v/s]; lambda = -xi |lambda| +- i |lambda| sqrt(1 - xi^2)",
               "State-space modes: $\\dot y = A y$, $\\lambda = -\\xi |\\lambda| \\pm i |\\lambda| \\sqrt{1 - \\xi^2}$");
+    if (!solver)
+        p.line("the state matrix is defective or nearly so (" + defective +
+                   "): the segment is z(tau) = exp(Z tau) z(0) on z = (x, v, 1, sin, cos of each harmonic) "
+                   "(runtime/solvers/exponential_solver.h)",
+               "The state matrix is defective or nearly so (critical damping): the segment is $z(\\tau) = e^{Z \\tau} z(0)$.");
     int j = 0;
-    for (const std::complex<double>& l : solver.damped_modes()) {
+    for (const std::complex<double>& l : solver ? solver->damped_modes() : std::vector<std::complex<double>>()) {
         const double mag = std::abs(l), xi = mag > 0.0 ? -l.real() / mag : 0.0;
         const std::string J = std::to_string(++j);
         p.line("mode " + J + ": lambda = " + Printer::format_number(l.real()) + (l.imag() > 0.0 ? " +- i " + Printer::format_number(l.imag()) : "") +
@@ -326,14 +340,15 @@ void inspect_state_space(const Model& model, const Configuration& cfg, Format fm
                    (l.imag() > 0.0 ? " \\pm " + Printer::format_number(l.imag()) + " i" : "") + ", \\quad \\xi_{" + J +
                    "} = " + Printer::format_number(xi) + " \\]");
     }
-    p.line("eigenvector condition ||V|| ||V^-1|| = " + Printer::format_number(solver.condition()) +
-               (solver.rigid_translations() > 0
-                    ? "; " + std::to_string(solver.rigid_translations()) +
-                          " free translation(s) that no damping resists taken out of the state (q'' = r^T f / m)"
-                    : std::string()),
-           "Eigenvector condition $\\|V\\| \\|V^{-1}\\| = " + Printer::format_number(solver.condition()) + "$.");
+    if (solver)
+        p.line("eigenvector condition ||V|| ||V^-1|| = " + Printer::format_number(solver->condition()) +
+                   (solver->rigid_translations() > 0
+                        ? "; " + std::to_string(solver->rigid_translations()) +
+                              " free translation(s) that no damping resists taken out of the state (q'' = r^T f / m)"
+                        : std::string()),
+               "Eigenvector condition $\\|V\\| \\|V^{-1}\\| = " + Printer::format_number(solver->condition()) + "$.");
     p.heading("Switch functions (runtime/segment.h order)", "Switch functions");
-    const std::vector<SwitchFunction>& sw = solver.switches();
+    const std::vector<SwitchFunction> sw = switch_functions(model, cfg);
     for (std::size_t f = 0; f < sw.size(); ++f) {
         const SwitchFunction& sf = sw[f];
         std::string what;

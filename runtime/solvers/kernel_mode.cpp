@@ -5,6 +5,7 @@
 
 #include "error.h"
 #include "generic_solver.h"
+#include "exponential_solver.h"
 #include "state_space_solver.h"
 #include "kernel_solver.h"
 #include "model_hash.h"
@@ -33,9 +34,16 @@ SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
         bytes = g->memory_bytes();
         s = std::move(g);
     } else {
-        auto g = std::make_unique<StateSpaceSolver>(model_, cfg);
-        bytes = g->memory_bytes();
-        s = std::move(g);
+        try {
+            auto g = std::make_unique<StateSpaceSolver>(model_, cfg);
+            bytes = g->memory_bytes();
+            s = std::move(g);
+        } catch (const DefectiveModes&) {  // critically damped: the matrix exponential takes every regime
+            auto g = std::make_unique<ExponentialSolver>(model_, cfg);
+            bytes = g->memory_bytes();
+            s = std::move(g);
+            ++exponential_;
+        }
     }
     ++built_;
     seen_.insert(cfg);
@@ -56,6 +64,8 @@ SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
 std::string GenericSolverProvider::describe() const {
     std::string text = std::string(model_.proportional_damping() ? "generic solver" : "generic solver (state-space modes)") +
                        " for " + std::to_string(seen_.size()) + " configurations";
+    if (exponential_ > 0)
+        text += " (" + std::to_string(exponential_) + " critically damped: by the matrix exponential)";
     if (evicted_ > 0)
         text += " (" + std::to_string(cache_.size()) + " kept within " + std::to_string(max_bytes_ >> 20) +
                 " MB, " + std::to_string(built_ - seen_.size()) + " rebuilt)";

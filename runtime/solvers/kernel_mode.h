@@ -71,6 +71,7 @@ private:
     std::list<Configuration> lru_;
     std::set<Configuration> seen_;
     std::size_t bytes_ = 0, built_ = 0, evicted_ = 0;
+    std::size_t exponential_ = 0;  ///< configurations taken by ExponentialSolver (critically damped)
 };
 
 /// Ahead-of-time kernels where the registry has one for (model, configuration);

@@ -132,10 +132,10 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
             A(ne_ + r, ne_ + q) = -MC(r, q);
         }
     }
-    auto refuse = [&](const std::string& why) {
-        throw RunError("StateSpaceSolver(): configuration '" + cfg.spec(model) + "' of model '" + model.name +
-                       "': " + why);
+    auto what = [&](const std::string& why) {
+        return "StateSpaceSolver(): configuration '" + cfg.spec(model) + "' of model '" + model.name + "': " + why;
     };
+    auto refuse = [&](const std::string& why) { throw RunError(what(why)); };
     if (m > 0) {
         const Eigen::EigenSolver<Eigen::MatrixXd> es(A);
         if (es.info() != Eigen::Success) refuse("the eigen-solver of the state matrix did not converge");
@@ -147,9 +147,8 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
         if (!(condition_ <= kMaxCondition)) {
             char text[32];
             std::snprintf(text, sizeof text, "%.2g", condition_);
-            refuse(std::string("its state-space modes are nearly defective (eigenvector condition ") + text +
-                   " > 1e6: critically damped motion), which "
-                   "non-proportional damping does not support yet");
+            throw DefectiveModes(what(std::string("its state-space modes are nearly defective (eigenvector condition ") +
+                                      text + " > 200: critically damped motion)"));
         }
         const double anorm = A.cwiseAbs().rowwise().sum().maxCoeff();
         for (int k = 0; k < m; ++k) {

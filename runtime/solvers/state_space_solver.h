@@ -35,10 +35,10 @@
 // state above is written for e (mass T^T M T, stiffness T^T K T, ...).
 //
 // Refused (RunError naming the configuration): a V whose condition number
-// exceeds kMaxCondition (A nearly defective: critically damped motion), or an
-// eigenvalue with a positive real part beyond rounding. The generic solver's
-// regimes (critical damping exactly) are not reproduced here: this solver is
-// for the models GenericSolver cannot take.
+// exceeds kMaxCondition (A nearly defective: critically damped motion; then
+// DefectiveModes, and the providers take the configuration with the matrix
+// exponential, exponential_solver.h), or an eigenvalue with a positive real
+// part beyond rounding.
 #pragma once
 
 #include <complex>
@@ -48,17 +48,29 @@
 #include <Eigen/LU>
 
 #include "configuration.h"
+#include "error.h"
 #include "model.h"
 #include "segment_solver.h"
 #include "switch_values.h"
 
 namespace hsnc {
 
+/// A configuration whose state-space modes are (nearly) defective: the
+/// providers take it with ExponentialSolver (exponential_solver.h) instead.
+class DefectiveModes : public RunError {
+public:
+    using RunError::RunError;
+};
+
 class StateSpaceSolver final : public SegmentSolver {
 public:
     /// Largest accepted condition number ||V||_1 ||V^-1||_1 of the eigenvector
-    /// matrix: the closed form loses about log10 of it in digits.
-    static constexpr double kMaxCondition = 1e6;
+    /// matrix. Near critical damping the modal form loses accuracy much faster
+    /// than log10 of it (a 1-DOF oscillator against the matrix exponential,
+    /// tests/test_dampers.cpp: condition 141 -> 1e-16, 447 -> 8.5e-14, 4.5e4
+    /// -> 1.7e-9 of a 0.03 m motion, underdamped side); beyond this bound the
+    /// configuration goes to ExponentialSolver.
+    static constexpr double kMaxCondition = 200;
 
     /// Analyse `cfg` (throws RunError as above).
     StateSpaceSolver(const Model& model, const Configuration& cfg);

@@ -1,0 +1,68 @@
+// hsnc -- the segment solver of a configuration whose state-space modes are
+// defective or nearly so (critically damped motion under non-proportional
+// damping), where StateSpaceSolver's eigenvectors lose too many digits.
+//
+// The free masses' motion with its forcing is one linear autonomous system on
+// the augmented state
+//     z = (x_F, v_F, 1, sin(Omega_1 tau + theta_1), cos(...), ...),
+//     z' = Z z,  Z = [0, I, 0, 0; -M^-1 K, -M^-1 C, M^-1 f, M^-1 F_h (on the
+//                    sines); 0 ...; the rotations d(s, c)/dtau = Omega (c, -s)],
+// so z(tau) = exp(Z tau) z(0) exactly, in every regime: a Jordan block (the
+// critically damped e^{lambda tau}(1, tau)) is no special case of the
+// exponential. It is taken by Eigen's scaling and squaring with Pade
+// approximants (Higham 2005; to rounding, no integration), once per eval: an
+// O(m^3) closed form for the configurations the modal forms cannot take.
+//
+// Bounds on |g''| (segment_solver.h): every switch function is affine in z,
+// g = L z + g0, so g'' = L Z^2 z; over [tau, tau + h] with h = 1/||Z||
+// (max_step), ||exp(Z u)|| <= e^{||Z|| u} <= e, hence
+//     |g''(s)| <= ||L Z^2||_1 e ||z(tau)||_inf  (norms: the row's absolute sum, the largest |z_k|),
+// with 1% added for the rounding of L Z^2. Steps are shorter than the modal
+// solvers' (at most 1/||Z||), the price of taking every regime.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "configuration.h"
+#include "model.h"
+#include "segment_solver.h"
+#include "switch_values.h"
+
+namespace hsnc {
+
+class ExponentialSolver final : public SegmentSolver {
+public:
+    ExponentialSolver(const Model& model, const Configuration& cfg);
+
+    const Configuration& configuration() const override { return cfg_; }
+    const std::vector<SwitchFunction>& switches() const override { return switches_; }
+    using SegmentSolver::setup;
+    void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override;
+    void eval(double tau, const SegmentEval& out) const override;
+    double max_step() const override { return max_step_; }
+
+    /// Estimated heap memory of this solver, bytes.
+    std::size_t memory_bytes() const;
+
+private:
+    Configuration cfg_;
+    std::vector<SwitchFunction> switches_;
+    int n_ = 0, nf_ = 0, nh_ = 0, ns_ = 0, m_ = 0;
+    std::vector<int> free_, stuck_;
+    ConfigurationTerms t_;
+    double max_step_ = 0.0;
+
+    // --- fixed by setup ---
+    Eigen::MatrixXd Z_;                  // the generator (its constant column holds this segment's force)
+    Eigen::VectorXd z0_, absz0_;         // z(0) and |z(0)|
+    Eigen::VectorXd bound_row_;          // ||L_f Z^2||_1 per switch function
+    Eigen::VectorXd x_fix_, fseg_, slider_, theta_;
+
+    // --- eval scratch (no state between evals) ---
+    mutable Eigen::MatrixXd E_;
+    mutable Eigen::VectorXd z_, zmag_, xmag_, vmag_, sn_, cs_;
+};
+
+}  // namespace hsnc
