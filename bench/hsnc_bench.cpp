@@ -269,7 +269,7 @@ int main(int argc, char** argv) {
         // Non-proportional damping (dampers): the generic path's state-space solver.
         {"absorber", read_model(HSNC_SOURCE_DIR "/examples/dashpot/absorber.toml"), 60.0, quick ? 0.6 : 6.0},
         {"chain-16-dampers", parse_model(chain_with_dampers(16), "chain-16-dampers"), 20.0, quick ? 0.2 : 2.0},
-        // Jenkins elements and friction between two bodies: the generic solver, rk45 and CVODE (no ab4).
+        // Jenkins elements and friction between two bodies: hsnc (every kernel kind), rk45 and CVODE (no ab4).
         {"friction-damper", read_model(HSNC_SOURCE_DIR "/examples/jenkins/friction_damper.toml"), 40.0, 0.0},
         {"platform-damper", read_model(HSNC_SOURCE_DIR "/examples/jenkins/under_platform_damper.toml", [] {
              ModelOverrides near_resonance;
@@ -283,7 +283,7 @@ int main(int argc, char** argv) {
     auto run_kinds = [&] {
         std::vector<std::pair<std::string, Model>> kind_models;
         std::vector<double> kind_t_ends;
-        for (const Case& c : cases)  // dampers, Jenkins, pairs: the generic path only (no kernels, no interpreter)
+        for (const Case& c : cases)  // dampers: the generic path only (no kernels, no interpreter, for now)
             if (c.model.proportional_damping()) kind_models.emplace_back(c.name, c.model), kind_t_ends.push_back(c.t_end);
         kind_models.emplace_back("chain-8", read_model(models + "chain-8.toml"));
         kind_t_ends.push_back(20.0);
