@@ -254,7 +254,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         pt.branch_start = previous_mu == nullptr;
         pt.periods = periods;
         pt.max_multiplier = mu.empty() ? 0.0 : std::abs(mu.front());
-        pt.stable = pt.max_multiplier < 1;
+        pt.stable = pt.max_multiplier < 1.0 - kNeutralMultiplier;  // hsnc/periodic.h
         if (previous_mu) pt.bifurcation = bifurcations_between(*previous_mu, mu);
         out.push_back(std::move(pt));
         done(out.back(), seconds());

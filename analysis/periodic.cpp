@@ -153,7 +153,7 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
             for (Eigen::Index j = 0; j < N; ++j) r.monodromy[static_cast<std::size_t>(i * N + j)] = cur.M(i, j);
         r.multipliers = analysis::floquet_multipliers(cur.M);
         r.max_multiplier = r.multipliers.empty() ? 0.0 : std::abs(r.multipliers.front());
-        r.stable = r.max_multiplier < 1.0;
+        r.stable = r.max_multiplier < 1.0 - kNeutralMultiplier;
         if (orbit) {
             const RunSummary s = flow.run(ts, y.data(), y.data() + n, te, *orbit, true, dt, nj ? y.data() + 2 * n : nullptr);
             if (s.status != RunStatus::ok)

@@ -59,6 +59,13 @@ struct PeriodicOptions {
 enum class PeriodicStatus { ok, not_converged };
 const char* periodic_status_name(PeriodicStatus status);
 
+/// A multiplier within this of the unit circle is on it: a neutral direction
+/// (a family of orbits: a stuck pair's offset, a slider stuck all period, an
+/// undamped linear mode), whose |mu| = 1 comes out as 1 +- a few 1e-15; such
+/// an orbit is not stable (interface.md: "a multiplier on the unit circle is
+/// not stable"), whichever side rounding puts it.
+inline constexpr double kNeutralMultiplier = 1e-10;
+
 struct PeriodicResult {
     PeriodicStatus status = PeriodicStatus::not_converged;
     std::string message;     ///< why the search did not converge ("" when ok)
@@ -72,7 +79,7 @@ struct PeriodicResult {
     /// mass and 1 per Jenkins element, largest |mu| first.
     std::vector<std::complex<double>> multipliers;
     double max_multiplier = 0.0;  ///< largest |mu|
-    bool stable = false;          ///< every |mu| < 1
+    bool stable = false;          ///< every |mu| < 1 - kNeutralMultiplier
     /// The monodromy matrix dP/dy, row-major, y = (x, v, s): 2n + nj square.
     std::vector<double> monodromy;
     std::size_t events = 0;  ///< switch events over one period of the orbit
