@@ -91,7 +91,8 @@ Eigen::MatrixXd stick_projection(const Model& model, const Configuration& cfg) {
         if (!pair) continue;
         P.row(L.v(ii)).setZero();
         for (std::size_t q = 0; q < model.dof(); ++q)
-            if (body_of(model, cfg, q) == b) P(L.v(ii), L.v(static_cast<int>(q))) = model.masses[q].m / mass[static_cast<std::size_t>(b)];
+            if (body_of(model, cfg, q) == b)
+                P(L.v(ii), L.v(static_cast<int>(q))) = model.masses[q].m / mass[static_cast<std::size_t>(b)];
     }
     for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
         if (cfg.slip[j] == 0) continue;
@@ -167,7 +168,8 @@ void stick_gradient(const Model& model, const Configuration& cfg, const SwitchFu
                 return;
             }
             // D = (m_p A_e - m_e A_p)/(m_e + m_p) (assembly.h driving_force).
-            const double me = model.masses[static_cast<std::size_t>(e)].m, mp = model.masses[static_cast<std::size_t>(p)].m;
+            const double me = model.masses[static_cast<std::size_t>(e)].m,
+                         mp = model.masses[static_cast<std::size_t>(p)].m;
             hz = sg * (mp * force_gradient(model, cfg, K, C, e) - me * force_gradient(model, cfg, K, C, p)) / (me + mp);
             ht = sg * against_partner(me, mp, rate(e), rate(p));
             return;

@@ -76,14 +76,16 @@ int expect_jacobian_matches(const Model& m, double t_end, double h, double tol, 
         yq[k] -= h;
         Kinds kp, kq;
         const std::vector<double> a = end_state(p, t_end, kp), b = end_state(q, t_end, kq);
-        if (kp.seq != kinds.seq || kq.seq != kinds.seq) continue;  // a switch moved past the end: not differentiable here
+        if (kp.seq != kinds.seq || kq.seq != kinds.seq)
+            continue;  // a switch moved past the end: not differentiable here
         double scale = 1.0;
         for (std::size_t i = 0; i < N; ++i) scale = std::max(scale, std::fabs((a[i] - b[i]) / (2 * h)));
         for (std::size_t i = 0; i < N; ++i) {
             const double fd = (a[i] - b[i]) / (2 * h);
             const double err = std::fabs(J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) - fd) / scale;
             worst = std::max(worst, err);
-            EXPECT_LT(err, tol) << m.name << " dz" << i << "/dz0_" << j << ": J " << J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j))
+            EXPECT_LT(err, tol) << m.name << " dz" << i << "/dz0_" << j << ": J "
+                                << J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j))
                                 << ", finite difference " << fd;
         }
         ++compared;
@@ -93,7 +95,9 @@ int expect_jacobian_matches(const Model& m, double t_end, double h, double tol, 
     return compared;
 }
 
-Model example(const std::string& path) { return read_model(std::string(HSNC_SOURCE_DIR) + "/examples/" + path); }
+Model example(const std::string& path) {
+    return read_model(std::string(HSNC_SOURCE_DIR) + "/examples/" + path);
+}
 
 TEST(StickTangent, JenkinsRunsJacobianMatchesFiniteDifferences) {
     // The blade with its friction damper: releases and sticks of the element.

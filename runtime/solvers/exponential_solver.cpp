@@ -90,7 +90,8 @@ void ExponentialSolver::setup(double t0, double t0_lo, const double* x0, const d
         gz.resize(ns_);
         for (int f = 0; f < ns_; ++f) {
             double gv, dgv, scale;
-            switch_value(switches_[static_cast<std::size_t>(f)], t_, fseg_, out, xmag_, vmag_, sn_, cs_, gv, dgv, scale);
+            switch_value(switches_[static_cast<std::size_t>(f)], t_, fseg_, out, xmag_, vmag_, sn_, cs_, gv, dgv,
+                         scale);
             gz(f) = gv;
         }
     };

@@ -55,9 +55,9 @@ private:
     double max_step_ = 0.0;
 
     // --- fixed by setup ---
-    Eigen::MatrixXd Z_;                  // the generator (its constant column holds this segment's force)
-    Eigen::VectorXd z0_, absz0_;         // z(0) and |z(0)|
-    Eigen::VectorXd bound_row_;          // ||L_f Z^2||_1 per switch function
+    Eigen::MatrixXd Z_;           // the generator (its constant column holds this segment's force)
+    Eigen::VectorXd z0_, absz0_;  // z(0) and |z(0)|
+    Eigen::VectorXd bound_row_;   // ||L_f Z^2||_1 per switch function
     Eigen::VectorXd x_fix_, fseg_, slider_, theta_;
 
     // --- eval scratch (no state between evals) ---
