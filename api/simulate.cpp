@@ -112,15 +112,17 @@ void check_options(const Model& model, const SimulateOptions& o) {
     // Jenkins elements (a slider carried beside the state) and friction between
     // two bodies (a stuck pair, one body): hsnc (every kernel kind), rk45 and
     // CVODE take both, ab4 neither (its own stick rules hold a mass against
-    // the ground), nor the reference, yet.
+    // the ground); the reference takes the Jenkins elements, not the pairs, yet.
     if (const std::string what = stick_elements(model); !what.empty()) {
         if (o.method == Method::ab4)
             throw OptionError(kSimulate, "method", method_name(o.method),
                               "the model has " + what + ", which hsnc, rk45 and cvode run, for now");
-        if (o.precision_digits != 0)
-            throw OptionError(kSimulate, "precision_digits", std::to_string(o.precision_digits),
-                              "the model has " + what + ", which the reference does not take yet");
     }
+    for (std::size_t i = 0; i < model.dof() && o.precision_digits != 0; ++i)
+        if (model.masses[i].has_friction && model.masses[i].partner != kGround)
+            throw OptionError(kSimulate, "precision_digits", std::to_string(o.precision_digits),
+                              "the model has friction between two bodies ([[friction]] '" + model.friction_name(i) +
+                                  "'), which the reference does not take yet");
     if (o.method != Method::hsnc && o.kernels != KernelChoice::automatic)
         throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels),
                           std::string("applies to method hsnc only (not ") + method_name(o.method) + ")");

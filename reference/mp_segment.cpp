@@ -134,6 +134,7 @@ MpModel::MpModel(const Model& model, int digits)
     }
     for (const Spring& s : model.springs) springs.push_back({s.a, s.b, F(s.k), zero});
     for (const Contact& c : model.contacts) contacts.push_back({c.a, c.b, F(c.k), F(c.gap)});
+    for (const Jenkins& e : model.jenkins) jenkins.push_back({e.a, e.b, F(e.k), F(e.slip_force)});
     f_const.assign(static_cast<std::size_t>(n), zero);
     for (int i = 0; i < n; ++i)
         if (static_cast<std::size_t>(i) < model.load.size()) f_const[i] = F(model.load[i]);
@@ -155,6 +156,9 @@ MpModel::MpModel(const Model& model, int digits)
         x0.push_back(F(model.x0[i]));
         v0.push_back(F(model.v0[i]));
     }
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j)  // the sliders after the masses: unstretched, or slider0
+        x0.push_back(model.slider0.empty() ? body(x0, model.jenkins[j].a) - body(x0, model.jenkins[j].b)
+                                           : F(model.slider0[j]));
 }
 
 cl_F MpModel::F(double d) const { return cln::cl_float(d, format); }
@@ -185,6 +189,15 @@ cl_F MpModel::force_on_mass(const Configuration& cfg, int i, const cl_F& t, cons
     for (const Link& s : springs) link(s, false);
     for (std::size_t c = 0; c < contacts.size(); ++c)
         if (cfg.closed[c]) link(contacts[c], true);
+    for (std::size_t j = 0; j < jenkins.size(); ++j) {
+        const Link& e = jenkins[j];
+        if (cfg.slip[j] == 0) {  // a spring whose gap is the slider
+            link({e.a, e.b, e.k, x[static_cast<std::size_t>(n) + j]}, true);
+        } else if (e.a == i || e.b == i) {
+            const cl_F f = cfg.slip[j] > 0 ? -e.gap : e.gap;  // on a
+            A = e.a == i ? A + f : A - f;
+        }
+    }
     for (std::size_t h = 0; h < h_omega.size(); ++h) A = A + h_amp[h][i] * cln::sin(h_omega[h] * t + h_phase[h]);
     return A;
 }
@@ -201,6 +214,8 @@ cl_F MpModel::force_rate_on_mass(const Configuration& cfg, int i, const cl_F& t,
     for (const Link& s : springs) link(s);
     for (std::size_t c = 0; c < contacts.size(); ++c)
         if (cfg.closed[c]) link(contacts[c]);
+    for (std::size_t j = 0; j < jenkins.size(); ++j)
+        if (cfg.slip[j] == 0) link(jenkins[j]);  // slipping: a constant force
     for (std::size_t h = 0; h < h_omega.size(); ++h)
         dA = dA + h_amp[h][i] * h_omega[h] * cln::cos(h_omega[h] * t + h_phase[h]);
     return dA;
@@ -231,6 +246,16 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
     for (const auto& s : mp.springs) add(s, false);
     for (std::size_t c = 0; c < mp.contacts.size(); ++c)
         if (cfg.closed[c]) add(mp.contacts[c], true);
+    for (std::size_t j = 0; j < mp.jenkins.size(); ++j) {
+        const MpModel::Link& e = mp.jenkins[j];
+        if (cfg.slip[j] == 0) {
+            add(e, false);  // its preload k s: per segment (setup)
+        } else {            // -slip F_s on a, the opposite on b
+            const cl_F f = cfg.slip[j] > 0 ? -e.gap : e.gap;
+            if (e.a != kGround) f_const_[e.a] = f_const_[e.a] + f;
+            if (e.b != kGround) f_const_[e.b] = f_const_[e.b] - f;
+        }
+    }
     C_ = K_;
     for (int i = 0; i < n_; ++i)
         for (int k = 0; k < n_; ++k) C_[i][k] = mp.beta * K_[i][k] + (i == k ? mp.alpha * mp.m[i] : Z0);
@@ -333,6 +358,17 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
             }
         } else if (sf.kind == SwitchKind::velocity) {
             for (int j = 0; j < nf_; ++j) Z_[f][j] = phi_[slot_[sf.element]][j];
+        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg ||
+                   sf.kind == SwitchKind::slip_velocity) {
+            // +-k (x_a - x_b - s) - F_s (the slider fixed) on q; w = v_a - v_b on q'.
+            const auto& e = mp.jenkins[static_cast<std::size_t>(sf.element)];
+            const cl_F c = sf.kind == SwitchKind::slip_neg ? -e.k : sf.kind == SwitchKind::slip_pos ? e.k : mp.one;
+            for (int j = 0; j < nf_; ++j) {
+                cl_F w = Z0;
+                if (e.a != kGround && slot_[e.a] >= 0) w = w + phi_[slot_[e.a]][j];
+                if (e.b != kGround && slot_[e.b] >= 0) w = w - phi_[slot_[e.b]][j];
+                (sf.kind == SwitchKind::slip_velocity ? Z_ : W_)[f][j] = c * w;
+            }
         } else {
             const bool pos = sf.kind == SwitchKind::release_pos;
             const int i = sf.element;
@@ -374,12 +410,23 @@ void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::ve
     const MpModel& mp = mp_;
     x_fix_ = x0;
     for (int h = 0; h < nh_; ++h) theta_[h] = mp.h_omega[h] * t0 + mp.h_phase[h];
+    // The stuck sliders' preload k s (+ on a, - on b), s = x0[n + j].
+    fseg_ = f_const_;
+    slider_.assign(mp.jenkins.size(), mp.zero);
+    for (std::size_t j = 0; j < mp.jenkins.size(); ++j) {
+        if (cfg_.slip[j] != 0) continue;
+        const MpModel::Link& e = mp.jenkins[j];
+        slider_[j] = x0[static_cast<std::size_t>(n_) + j];
+        const cl_F p = e.k * slider_[j];
+        if (e.a != kGround) fseg_[e.a] = fseg_[e.a] + p;
+        if (e.b != kGround) fseg_[e.b] = fseg_[e.b] - p;
+    }
     // Constant force on the free masses: loads, preloads, the stuck masses as
     // supports (-K_FS x_S), kinetic friction -mu_k N_i sgn_i.
     std::vector<cl_F> force(nf_, mp.zero);
     for (int r = 0; r < nf_; ++r) {
         const int i = free_[r];
-        cl_F f = f_const_[i];
+        cl_F f = fseg_[i];
         for (int s = 0; s < n_; ++s)
             if (cfg_.stuck[s]) f = f - K_[i][s] * x0[s];
         if (sgn[i] > 0) f = f - mp.mu_k[i] * mp.normal[i];
@@ -500,8 +547,8 @@ void MpSegment::eval(const cl_F& tau, MpEval& out) const {
         b3[j] = bb3;
     }
 
-    // x_F = Phi q (likewise v, a); stuck masses fixed.
-    out.x.assign(n_, Z0);
+    // x_F = Phi q (likewise v, a); stuck masses fixed; then the sliders.
+    out.x.assign(static_cast<std::size_t>(n_) + mp.jenkins.size(), Z0);
     out.v.assign(n_, Z0);
     out.a.assign(n_, Z0);
     std::vector<cl_F> xm(n_, Z0), vm(n_, Z0);
@@ -526,6 +573,19 @@ void MpSegment::eval(const cl_F& tau, MpEval& out) const {
         xm[i] = xmr;
         vm[i] = vmr;
     }
+    std::vector<cl_F> sm(mp.jenkins.size(), Z0);  // the sliders' magnitudes
+    for (std::size_t j = 0; j < mp.jenkins.size(); ++j) {
+        const MpModel::Link& e = mp.jenkins[j];
+        cl_F& s = out.x[static_cast<std::size_t>(n_) + j];
+        if (cfg_.slip[j] == 0) {
+            s = slider_[j];
+            sm[j] = cln::abs(s);
+        } else {  // the stretch held at slip F_s / k
+            const cl_F held = cfg_.slip[j] > 0 ? e.gap / e.k : -(e.gap / e.k);
+            s = mp.body(out.x, e.a) - mp.body(out.x, e.b) - held;
+            sm[j] = (e.a == kGround ? Z0 : xm[e.a]) + (e.b == kGround ? Z0 : xm[e.b]) + cln::abs(held);
+        }
+    }
 
     const std::size_t ns = switches_.size();
     out.g.resize(ns, Z0);
@@ -546,9 +606,23 @@ void MpSegment::eval(const cl_F& tau, MpEval& out) const {
             g = out.v[e];
             dg = out.a[e];
             scale = vm[e];
+        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
+            const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
+            const cl_F s = out.x[static_cast<std::size_t>(n_ + e)];
+            const cl_F force = el.k * (mp.body(out.x, el.a) - mp.body(out.x, el.b) - s);
+            const cl_F rate = el.k * (mp.body(out.v, el.a) - mp.body(out.v, el.b));
+            const bool pos = sf.kind == SwitchKind::slip_pos;
+            g = (pos ? force : -force) - el.gap;
+            dg = pos ? rate : -rate;
+            scale = el.k * (bmag(xm, el.a) + bmag(xm, el.b) + sm[static_cast<std::size_t>(e)]) + el.gap;
+        } else if (sf.kind == SwitchKind::slip_velocity) {
+            const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
+            g = mp.body(out.v, el.a) - mp.body(out.v, el.b);
+            dg = mp.body(out.a, el.a) - mp.body(out.a, el.b);
+            scale = bmag(vm, el.a) + bmag(vm, el.b);
         } else {
-            // A_i = -(K x)_i - (C v)_i + f_i + F_i(t), with the full K(cfg), C(cfg).
-            cl_F A = f_const_[e], dA = Z0, m = cln::abs(f_const_[e]);
+            // A_i = -(K x)_i - (C v)_i + f_i + F_i(t), with the full K(cfg), C(cfg), f with the sliders' preload.
+            cl_F A = fseg_[e], dA = Z0, m = cln::abs(fseg_[e]);
             for (int k = 0; k < n_; ++k) {
                 A = A - K_[e][k] * out.x[k] - C_[e][k] * out.v[k];
                 dA = dA - K_[e][k] * out.v[k] - C_[e][k] * out.a[k];

@@ -49,6 +49,10 @@ struct MpModel {
         cl_F k, gap;
     };
     std::vector<Link> springs, contacts;   ///< gap = 0 for springs
+    /// Jenkins elements (model.h Jenkins): k, and the slip force in `gap`.
+    /// Stuck, a link whose gap is the slider x[n + j]; slipping, the constant
+    /// force -slip * F_s on a (the opposite on b).
+    std::vector<Link> jenkins;
     std::vector<cl_F> h_omega, h_phase;    ///< harmonics with omega != 0, folded to omega > 0
     std::vector<std::vector<cl_F>> h_amp;  ///< [h][i]
     std::vector<cl_F> f_const;             ///< loads + omega = 0 harmonics
@@ -60,7 +64,8 @@ struct MpModel {
     cl_F F(double d) const;
     cl_F I(long i) const;
 
-    /// A_i (assembly.h force_on_mass) in cfg at (t, x, v), and dA_i/dt given the accelerations a.
+    /// A_i (assembly.h force_on_mass) in cfg at (t, x, v) (x: the masses, then
+    /// the sliders), and dA_i/dt given the accelerations a.
     cl_F force_on_mass(const Configuration& cfg, int i, const cl_F& t, const std::vector<cl_F>& x,
                        const std::vector<cl_F>& v) const;
     cl_F force_rate_on_mass(const Configuration& cfg, int i, const cl_F& t, const std::vector<cl_F>& v,
@@ -85,7 +90,7 @@ public:
 
     const Configuration& configuration() const { return cfg_; }
     const std::vector<SwitchFunction>& switches() const { return switches_; }
-    /// Start at absolute time t0 (see SegmentSolver::setup).
+    /// Start at absolute time t0 (see SegmentSolver::setup; x0: the masses, then the sliders).
     void setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::vector<cl_F>& v0,
                const std::vector<signed char>& sgn);
     /// State, switch functions, rates, bounds B_f >= |g_f''| over [tau, tau + max_step] and term scales at tau >= 0.
@@ -128,6 +133,8 @@ private:
     cl_F max_step_;
     // setup
     std::vector<cl_F> x_fix_, theta_, p_, u0_, ud0_;
+    std::vector<cl_F> fseg_;  // f_const_ plus the stuck sliders' preload k s
+    std::vector<cl_F> slider_;  // the stuck sliders' positions
 };
 
 }  // namespace hsnc::reference

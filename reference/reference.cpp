@@ -62,6 +62,7 @@ cl_F noise_of(const MpModel& mp, const cl_F& scale) { return mp.I(64) * mp.eps *
 // function whose first kTieOrder(n, H) derivatives all vanish vanishes identically (Cayley-Hamilton).
 struct Taylor {
     std::vector<std::vector<cl_F>> x, xm;  ///< x^(k)_i and the magnitude of its terms, k = 0..order
+    std::vector<cl_F> s;                   ///< the Jenkins sliders (constant while stuck)
 };
 
 int tie_order(const MpModel& mp) { return 2 * mp.n + 2 * static_cast<int>(mp.h_omega.size()) + 2; }
@@ -89,6 +90,16 @@ void force_derivative(const MpModel& mp, const Configuration& cfg, int i, const 
     for (const auto& l : mp.springs) link(l, false);
     for (std::size_t c = 0; c < mp.contacts.size(); ++c)
         if (cfg.closed[c]) link(mp.contacts[c], true);
+    for (std::size_t j = 0; j < mp.jenkins.size(); ++j) {
+        const MpModel::Link& e = mp.jenkins[j];
+        if (cfg.slip[j] == 0) {  // a link whose gap is the slider (constant: only k = 0 sees it)
+            link({e.a, e.b, e.k, T.s[j]}, true);
+        } else if (k == 0 && (e.a == i || e.b == i)) {  // the constant slip force, -slip F_s on a
+            const cl_F f = cfg.slip[j] > 0 ? -e.gap : e.gap;
+            value = e.a == i ? value + f : value - f;
+            magnitude = magnitude + e.gap;
+        }
+    }
     for (std::size_t h = 0; h < mp.h_omega.size(); ++h) {
         const cl_F& W = mp.h_omega[h];
         const cl_F arg = W * t + mp.h_phase[h];
@@ -108,6 +119,7 @@ Taylor taylor(const MpModel& mp, const Configuration& cfg, const std::vector<sig
     Taylor T;
     T.x.assign(static_cast<std::size_t>(order) + 1, std::vector<cl_F>(static_cast<std::size_t>(n), mp.zero));
     T.xm = T.x;
+    T.s.assign(x.begin() + n, x.end());
     for (int i = 0; i < n; ++i) {
         T.x[0][i] = x[i];
         T.xm[0][i] = cln::abs(x[i]);
@@ -174,8 +186,15 @@ public:
               std::vector<cl_F>& v, const std::vector<cl_F>* a)
         : MpArithmetic{mp}, model_(model), t_(t), x_(x), v_(v), a_(a) {}
 
-    std::size_t jenkins() const { return 0; }  // refused (require_no_stick_elements): the reference has no slider state
-    bool slips_on(const Configuration&, int) const { return false; }
+    std::size_t jenkins() const { return mp.jenkins.size(); }
+    // A slipping element whose relative acceleration (just before) keeps the slip's sign: no stick.
+    bool slips_on(const Configuration& cfg, int j) const {
+        if (!a_) return false;
+        const MpModel::Link& e = mp.jenkins[static_cast<std::size_t>(j)];
+        const cl_F w_rate = mp.body(*a_, e.a) - mp.body(*a_, e.b);
+        const cl_F mag = cln::abs(mp.body(*a_, e.a)) + cln::abs(mp.body(*a_, e.b));
+        return !negligible(w_rate, mag) && sign(w_rate) == cfg.slip[static_cast<std::size_t>(j)];
+    }
     int dof() const { return mp.n; }
     std::size_t contacts() const { return mp.contacts.size(); }
     bool has_friction(int i) const { return model_.masses[i].has_friction; }
@@ -275,7 +294,11 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                             const SearchLimits& limits, const std::vector<double>* offset) {
     if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
     require_proportional_damping(model, "reference::simulate_precise()");
-    require_no_stick_elements(model, "reference::simulate_precise()");
+    for (std::size_t i = 0; i < model.dof(); ++i)  // Jenkins elements: their sliders are state (x after the masses)
+        if (model.masses[i].has_friction && model.masses[i].partner != kGround)
+            throw InputError("reference::simulate_precise(): model '" + model.name +
+                             "' has friction between two bodies ([[friction]] '" + model.friction_name(i) +
+                             "'), which the reference does not take yet");
     const MpModel mp(model, digits);
     const std::size_t n = model.dof();
     PreciseRun run;
@@ -303,6 +326,8 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         sum.message = message;
         sum.t = cln::double_approx(t);
         sum.x = to_double(x);
+        sum.slider.assign(sum.x.begin() + static_cast<std::ptrdiff_t>(n), sum.x.end());  // the sliders after the masses
+        sum.x.resize(n);
         sum.v = to_double(v);
         sum.configuration = cfg;
         sum.configurations = segments.size();
@@ -312,9 +337,9 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         return run;
     };
 
-    const std::size_t max_switches = model.contacts.size() + 2 * n;
-    const std::size_t stride = std::max(model.contacts.size(), n);
-    std::vector<cl_F> inherited(4 * stride, mp.zero);
+    const std::size_t max_switches = model.max_switches();
+    const std::size_t stride = std::max({model.contacts.size(), n, model.jenkins.size()});
+    std::vector<cl_F> inherited(kSwitchKinds * stride, mp.zero);
     auto slot = [stride](const SwitchFunction& f) {
         return static_cast<std::size_t>(f.kind) * stride + static_cast<std::size_t>(f.element);
     };
@@ -344,8 +369,11 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                 case SwitchKind::velocity:
                     side[f] = sgn[sw[f].element] >= 0 ? mp.one : -mp.one;
                     break;
+                case SwitchKind::slip_velocity:  // w has the sign of the slip
+                    side[f] = cfg.slip[static_cast<std::size_t>(sw[f].element)] >= 0 ? mp.one : -mp.one;
+                    break;
                 default:
-                    side[f] = -mp.one;  // release functions are negative while stuck
+                    side[f] = -mp.one;  // release and slip functions are negative while stuck
             }
             floor[f] = inherited[slot(sw[f])];
         }
@@ -368,7 +396,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         cl_F tau = mp.zero, prev_tau = mp.zero;
         eval(tau);
         for (std::size_t f = 0; f < nsw; ++f)
-            armed[f] = sw[f].kind == SwitchKind::velocity && h_of(buf, f) > noise(buf, f);
+            armed[f] = is_velocity(sw[f].kind) && h_of(buf, f) > noise(buf, f);
         // Ties at the segment start: a function at zero whose first derivative vanishes too. Its
         // direction is its first non-zero derivative, of order m (interface.md "Ties and touches"). One
         // that heads across (into the side its configuration forbids) switches now, at this instant.
@@ -395,6 +423,26 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                     gap_series(mp, e, X, d, m);
                 } else if (sw[f].kind == SwitchKind::velocity) {
                     for (std::size_t k = 0; k + 1 < X.x.size(); ++k) d.push_back(X.x[k + 1][e]), m.push_back(X.xm[k + 1][e]);
+                } else if (sw[f].kind == SwitchKind::slip_velocity) {  // w^(k) = x_a^(k+1) - x_b^(k+1)
+                    const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
+                    for (std::size_t k = 0; k + 1 < X.x.size(); ++k) {
+                        d.push_back(mp.body(X.x[k + 1], el.a) - mp.body(X.x[k + 1], el.b));
+                        m.push_back(mp.body(X.xm[k + 1], el.a) + mp.body(X.xm[k + 1], el.b));
+                    }
+                } else if (sw[f].kind == SwitchKind::slip_pos || sw[f].kind == SwitchKind::slip_neg) {
+                    // +-k (x_a - x_b - s) - F_s, the slider constant while stuck.
+                    const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
+                    const cl_F c = sw[f].kind == SwitchKind::slip_pos ? el.k : -el.k;
+                    for (std::size_t k = 0; k < X.x.size(); ++k) {
+                        cl_F dk = c * (mp.body(X.x[k], el.a) - mp.body(X.x[k], el.b));
+                        cl_F mk = el.k * (mp.body(X.xm[k], el.a) + mp.body(X.xm[k], el.b));
+                        if (k == 0) {
+                            dk = dk - c * X.s[static_cast<std::size_t>(e)] - el.gap;
+                            mk = mk + el.k * cln::abs(X.s[static_cast<std::size_t>(e)]) + el.gap;
+                        }
+                        d.push_back(dk);
+                        m.push_back(mk);
+                    }
                 } else {
                     force_series(mp, cfg, e, t, X, d, m);
                     if (sw[f].kind == SwitchKind::release_neg)
@@ -445,7 +493,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                     continue;
                 }
                 const cl_F h = h_of(buf, f), hd = hd_of(buf, f), eps_f = noise(buf, f);
-                const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                const bool stop = is_velocity(sw[f].kind) && armed[f];
                 if (stop ? h > eps_f : h >= -eps_f) continue;
                 // The zero, by Newton iterations inside [prev_tau, tau] (the function is on its
                 // safe side at prev_tau); a stop by forward Newton steps onto v = 0.
@@ -489,7 +537,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                 for (std::size_t f = 0; f < nsw; ++f) {
                     if (has_root[f] && root[f] <= tau_star + tol) continue;
                     const cl_F h = h_of(buf, f), hd = hd_of(buf, f), eps_f = noise(buf, f);
-                    const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                    const bool stop = is_velocity(sw[f].kind) && armed[f];
                     if (stop ? h <= eps_f : (h < -eps_f || (h <= eps_f && cln::minusp(hd)))) switched.push_back(sw[f]);
                 }
                 std::fill(inherited.begin(), inherited.end(), mp.zero);
@@ -502,7 +550,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
             if (S.has_max_step()) step = cln::min(step, S.max_step());
             for (std::size_t f = 0; f < nsw; ++f) {
                 if (leaving[f]) continue;
-                const bool stop = sw[f].kind == SwitchKind::velocity && armed[f];
+                const bool stop = is_velocity(sw[f].kind) && armed[f];
                 const cl_F level = stop ? mp.zero : -(mp.two * noise(buf, f));
                 cl_F s;
                 if (safe_step(mp, h_of(buf, f) - level, hd_of(buf, f), buf.bound[f], s)) step = cln::min(step, s);
@@ -517,7 +565,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
             tau = cln::min(tau + step, tau_end);
             eval(tau);
             for (std::size_t f = 0; f < nsw; ++f) {
-                if (sw[f].kind == SwitchKind::velocity && !armed[f] && h_of(buf, f) > mp.two * noise(buf, f))
+                if (is_velocity(sw[f].kind) && !armed[f] && h_of(buf, f) > mp.two * noise(buf, f))
                     armed[f] = 1;
                 if (leaving[f] && tau >= clear_until[f] && h_of(buf, f) > mp.two * noise(buf, f)) leaving[f] = 0;
             }
