@@ -59,15 +59,24 @@ Model mass_with_jenkins(double m, double K, double k, double Fs, double x0, doub
     return md;
 }
 
-// Stuck until k x = F_s, then slipping under -F_s until v = 0, then stuck:
-// both instants and states in closed form.
+// The mass of mass_with_jenkins(m, K, k, Fs, 0, v0) started moving: stuck
+// (a spring K + k) until k x = F_s at t1, then slipping under -F_s about the
+// centre c = -F_s/K until v = 0 at t2, then stuck.
+struct OneDofSlip {
+    double m = 1.0, K = 4.0, k = 16.0, Fs = 2.0, v0 = 3.0;
+    double W = std::sqrt((K + k) / m), w = std::sqrt(K / m);
+    double x1 = Fs / k, t1 = std::asin(x1 * W / v0) / W, v1 = v0 * std::cos(W * t1);
+    double c = -Fs / K;
+    double tau2 = std::atan2(v1, (x1 - c) * w) / w, x2 = c + std::hypot(x1 - c, v1 / w);
+    double t2 = t1 + tau2;
+    Model model() const { return mass_with_jenkins(m, K, k, Fs, 0.0, v0); }
+};
+
+// Both instants and states in closed form.
 TEST(JenkinsClosedForm, SlipsAtTheSlipForceAndSticksWhereTheVelocityVanishes) {
-    const double m = 1.0, K = 4.0, k = 16.0, Fs = 2.0, v0 = 3.0;
-    const double W = std::sqrt((K + k) / m), w = std::sqrt(K / m);
-    const double x1 = Fs / k, t1 = std::asin(x1 * W / v0) / W, v1 = v0 * std::cos(W * t1);
-    const double c = -Fs / K;  // the slipping phase's centre
-    const double tau2 = std::atan2(v1, (x1 - c) * w) / w, x2 = c + std::hypot(x1 - c, v1 / w);
-    const double t2 = t1 + tau2;
+    const OneDofSlip cf;
+    const double m = cf.m, K = cf.K, k = cf.k, Fs = cf.Fs, v0 = cf.v0, W = cf.W, w = cf.w, x1 = cf.x1, t1 = cf.t1,
+                 v1 = cf.v1, c = cf.c, tau2 = cf.tau2, x2 = cf.x2, t2 = cf.t2;
     const Model md = mass_with_jenkins(m, K, k, Fs, 0.0, v0);
     const Outcome r = run(md, t2 + 0.05, 0.01);
     ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
@@ -492,12 +501,9 @@ TEST(JenkinsReader, KeysAndErrors) {
 // derivation: the interpreter and the JIT give the closed-form instants of
 // the test above, to the bit alike.
 TEST(JenkinsFacade, TheDerivedKernelsRunTheClosedForm) {
-    const double m = 1.0, K = 4.0, k = 16.0, Fs = 2.0, v0 = 3.0;
-    const double W = std::sqrt((K + k) / m), w = std::sqrt(K / m);
-    const double x1 = Fs / k, t1 = std::asin(x1 * W / v0) / W, v1 = v0 * std::cos(W * t1);
-    const double c = -Fs / K;
-    const double t2 = t1 + std::atan2(v1, (x1 - c) * w) / w;
-    const Model md = mass_with_jenkins(m, K, k, Fs, 0.0, v0);
+    const OneDofSlip cf;
+    const double k = cf.k, Fs = cf.Fs, t1 = cf.t1, t2 = cf.t2;
+    const Model md = cf.model();
     SimulateOptions o;
     o.t_end = t2 + 0.05;
     o.use_cache = false;
@@ -530,12 +536,9 @@ TEST(JenkinsFacade, TheDerivedKernelsRunTheClosedForm) {
 // digits the 1-DOF closed form's instants, and the bundled damper's events
 // and sliders against the double engine.
 TEST(JenkinsReference, ClosedFormAndTheDamperAt40Digits) {
-    const double m = 1.0, K = 4.0, k = 16.0, Fs = 2.0, v0 = 3.0;
-    const double W = std::sqrt((K + k) / m), w = std::sqrt(K / m);
-    const double x1 = Fs / k, t1 = std::asin(x1 * W / v0) / W, v1 = v0 * std::cos(W * t1);
-    const double c = -Fs / K;
-    const double t2 = t1 + std::atan2(v1, (x1 - c) * w) / w;
-    const Model md = mass_with_jenkins(m, K, k, Fs, 0.0, v0);
+    const OneDofSlip cf;
+    const double k = cf.k, Fs = cf.Fs, t1 = cf.t1, t2 = cf.t2;
+    const Model md = cf.model();
     EngineOptions opt;
     opt.t_end = t2 + 0.05;
     opt.samples = false;
