@@ -1,0 +1,46 @@
+// hsnc -- mp_complex_eigen: the eigenpairs of a real, non-symmetric matrix at
+// high precision (CLN), and the inverse of its eigenvector matrix: the
+// state-space modes of non-proportional damping at the derivation's 40
+// digits (the first stage of dampers on the derivation path; the generic
+// path's StateSpaceSolver does the same in double).
+//
+//   1. A = V diag(lambda) V^-1 in double (Eigen::EigenSolver).
+//   2. Each pair (lambda, v), v scaled so that its largest component p is 1,
+//      refined by Newton's method on F(v, lambda) = ((A - lambda I) v, v_p - 1)
+//      with the Jacobian [A - lambda I, -v; e_p^T, 0], solved by complex
+//      Gaussian elimination with partial pivoting at the working precision:
+//      quadratic convergence from the double solution, 16 -> 32 -> 64 digits.
+//      One of each conjugate pair is refined; the other is its exact
+//      conjugate. A real eigenvalue keeps a real vector.
+//   3. W = V^-1 by the same elimination.
+// Refused (RunError): a matrix whose double eigenvectors are nearly
+// dependent (condition above kMaxEigenCondition: critical damping, where the
+// generic path uses the matrix exponential), or a refinement that does not
+// converge.
+#pragma once
+
+#include <cln/complex.h>
+#include <cln/lfloat.h>
+#include <cln/real.h>
+
+#include <vector>
+
+namespace hsnc {
+
+/// Largest ||V||_1 ||V^-1||_1 of the double eigenvectors accepted (the
+/// bound StateSpaceSolver hands over at).
+inline constexpr double kMaxEigenCondition = 200;
+
+struct MpComplexEigen {
+    std::vector<cln::cl_N> values;               ///< lambda_k
+    std::vector<std::vector<cln::cl_N>> vectors;  ///< vectors[k][i] = V_ik: A V_k = lambda_k V_k
+    std::vector<std::vector<cln::cl_N>> inverse;  ///< inverse[k][i] = (V^-1)_ki
+};
+
+/// The eigen-decomposition of the real n x n matrix `a` (long floats of
+/// `format` or exact rationals) at the precision of `format`, the
+/// eigenvalues in the order of the double solve with each conjugate pair
+/// adjacent (Im > 0 first).
+MpComplexEigen mp_complex_eigen(const std::vector<std::vector<cln::cl_R>>& a, cln::float_format_t format);
+
+}  // namespace hsnc
