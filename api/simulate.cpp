@@ -118,11 +118,9 @@ void check_options(const Model& model, const SimulateOptions& o) {
             throw OptionError(kSimulate, "method", method_name(o.method),
                               "the model has " + what + ", which hsnc, rk45 and cvode run, for now");
     }
-    for (std::size_t i = 0; i < model.dof() && o.precision_digits != 0; ++i)
-        if (model.masses[i].has_friction && model.masses[i].partner != kGround)
-            throw OptionError(kSimulate, "precision_digits", std::to_string(o.precision_digits),
-                              "the model has friction between two bodies ([[friction]] '" + model.friction_name(i) +
-                                  "'), which the reference does not take yet");
+    if (const std::string what = friction_pairs(model); !what.empty() && o.precision_digits != 0)
+        throw OptionError(kSimulate, "precision_digits", std::to_string(o.precision_digits),
+                          "the model has " + what + ", which the reference does not take yet");
     if (o.method != Method::hsnc && o.kernels != KernelChoice::automatic)
         throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels),
                           std::string("applies to method hsnc only (not ") + method_name(o.method) + ")");

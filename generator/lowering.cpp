@@ -721,12 +721,8 @@ Program lower(const Derivation& d) {
             sc.add(std::fabs(ct.gap), ONE);
             for (std::size_t j = 0; j < nm; ++j) al[j] = V(ct.a, j) - V(ct.b, j);
             for (std::size_t h = 0; h < nh; ++h) {
-                auto xsb = [&](int b, bool sine) -> numeric {
-                    if (b == kGround || coord_of[b] < 0) return 0;
-                    return sine ? d.harmonics[h].xs[coord_of[b]] : d.harmonics[h].xc[coord_of[b]];
-                };
-                Gs[h] = xsb(ct.a, true) - xsb(ct.b, true);
-                Gc[h] = xsb(ct.a, false) - xsb(ct.b, false);
+                Gs[h] = harmonic_x(h, ct.a, true) - harmonic_x(h, ct.b, true);
+                Gc[h] = harmonic_x(h, ct.a, false) - harmonic_x(h, ct.b, false);
             }
         } else if (sf.kind == SwitchKind::velocity && model.masses[static_cast<std::size_t>(sf.element)].partner == kGround) {
             const int i = sf.element;

@@ -29,12 +29,16 @@ void require_proportional_damping(const Model& model, const std::string& who) {
                      "only the generic solver (state-space modes) takes it, for now");
 }
 
-std::string stick_elements(const Model& model) {
-    if (!model.jenkins.empty()) return "Jenkins elements ([[jenkins]] '" + model.jenkins[0].name + "')";
+std::string friction_pairs(const Model& model) {
     for (std::size_t i = 0; i < model.dof(); ++i)
         if (model.masses[i].has_friction && model.masses[i].partner != kGround)
             return "friction between two bodies ([[friction]] '" + model.friction_name(i) + "')";
     return "";
+}
+
+std::string stick_elements(const Model& model) {
+    if (!model.jenkins.empty()) return "Jenkins elements ([[jenkins]] '" + model.jenkins[0].name + "')";
+    return friction_pairs(model);
 }
 
 void require_no_stick_elements(const Model& model, const std::string& who) {

@@ -32,10 +32,13 @@ void require_proportional_damping(const Model& model, const std::string& who);
 /// Diagonal of M.
 Eigen::VectorXd mass_vector(const Model& model);
 
+/// "friction between two bodies ([[friction]] 'f1')" when a [[friction]]
+/// element joins two bodies (a stuck pair moves as one body), else "".
+std::string friction_pairs(const Model& model);
+
 /// The elements whose stick is not a mass held against the ground, as a
-/// phrase: "Jenkins elements ([[jenkins]] 'j1')" (a slider state), "friction
-/// between two bodies ([[friction]] 'f1')" (a stuck pair moving as one body);
-/// "" when none.
+/// phrase: "Jenkins elements ([[jenkins]] 'j1')" (a slider state), else
+/// friction_pairs(model).
 std::string stick_elements(const Model& model);
 
 /// Throws InputError "WHO: model 'NAME' has PHRASE, which it does not take

@@ -294,11 +294,10 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                             const SearchLimits& limits, const std::vector<double>* offset) {
     if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
     require_proportional_damping(model, "reference::simulate_precise()");
-    for (std::size_t i = 0; i < model.dof(); ++i)  // Jenkins elements: their sliders are state (x after the masses)
-        if (model.masses[i].has_friction && model.masses[i].partner != kGround)
-            throw InputError("reference::simulate_precise(): model '" + model.name +
-                             "' has friction between two bodies ([[friction]] '" + model.friction_name(i) +
-                             "'), which the reference does not take yet");
+    // Jenkins elements: their sliders are state (x after the masses); stuck pairs: not yet.
+    if (const std::string what = friction_pairs(model); !what.empty())
+        throw InputError("reference::simulate_precise(): model '" + model.name + "' has " + what +
+                         ", which the reference does not take yet");
     const MpModel mp(model, digits);
     const std::size_t n = model.dof();
     PreciseRun run;

@@ -44,10 +44,7 @@ void ExponentialSolver::setup(double t0, double t0_lo, const double* x0, const d
     z0_.setZero();
     for (int r = 0; r < nf_; ++r) {
         const int i = free_[r];
-        // The constant force: loads, preloads, the stuck masses' coupling, kinetic friction.
-        double f = fseg_(i);
-        for (int q : stuck_) f -= t_.K(i, q) * x0[q];
-        if (t_.friction[static_cast<std::size_t>(i)]) f -= t_.mu_k(i) * t_.normal(i) * static_cast<double>(sgn[i]);
+        const double f = free_mass_force(t_, fseg_, stuck_, i, x0, sgn);  // loads, preloads, coupling, friction
         const double m = t_.mass(i);
         Z_(r, nf_ + r) = 1.0;
         for (int q = 0; q < nf_; ++q) {

@@ -243,11 +243,7 @@ void GenericSolver::setup(double t0, double t0_lo, const double* x0, const doubl
     // Constant force on the free masses (paper Eq. 7-9): loads and preloads,
     // the stiffness coupling to the stuck masses, kinetic friction.
     for (int r = 0; r < nf_; ++r) {
-        const int i = modal_.free[r];
-        double f = fseg_(i);
-        for (int s : modal_.stuck) f -= t_.K(i, s) * x0[s];
-        if (t_.friction[i]) f -= t_.mu_k(i) * t_.normal(i) * static_cast<double>(sgn[i]);
-        force_(r) = f;
+        force_(r) = free_mass_force(t_, fseg_, modal_.stuck, modal_.free[r], x0, sgn);
     }
     // A mass stuck to its partner adds its forces to the partner's coordinate;
     // its offset x_q - x_partner is a constant of the segment: x = T q + d,

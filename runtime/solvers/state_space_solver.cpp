@@ -311,10 +311,7 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
     Eigen::VectorXd f(nf_), x(nf_), v(nf_);
     for (int r = 0; r < nf_; ++r) {
         const int i = free_[r];
-        double fi = fseg_(i);
-        for (int q : stuck_) fi -= t_.K(i, q) * x0[q];
-        if (t_.friction[static_cast<std::size_t>(i)]) fi -= t_.mu_k(i) * t_.normal(i) * static_cast<double>(sgn[i]);
-        force_(r) = f(r) = fi;
+        force_(r) = f(r) = free_mass_force(t_, fseg_, stuck_, i, x0, sgn);
         x(r) = x0[i];
         v(r) = v0[i];
     }

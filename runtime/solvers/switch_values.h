@@ -66,6 +66,18 @@ inline void segment_force(const ConfigurationTerms& in, const Configuration& cfg
     }
 }
 
+/// The constant force on free mass i in a segment (paper Eq. 7-9): f(i)
+/// (segment_force: loads, preloads, the stuck sliders'), the stiffness
+/// coupling -K_iS x_S to the masses held in `stuck`, and kinetic friction
+/// -mu_k N sgn_i. The Eigen solvers' one sum, in one order.
+inline double free_mass_force(const ConfigurationTerms& in, const Eigen::VectorXd& f, const std::vector<int>& stuck,
+                              int i, const double* x0, const signed char* sgn) {
+    double fi = f(i);
+    for (int s : stuck) fi -= in.K(i, s) * x0[s];
+    if (in.friction[static_cast<std::size_t>(i)]) fi -= in.mu_k(i) * in.normal(i) * static_cast<double>(sgn[i]);
+    return fi;
+}
+
 /// out.x[n + j]: the slider of every Jenkins element, fixed while stuck,
 /// x[a] - x[b] - slip*F_s/k while slipping (after the masses' x are written).
 inline void write_sliders(const ConfigurationTerms& in, const Configuration& cfg, const Eigen::VectorXd& slider,
