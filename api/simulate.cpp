@@ -98,17 +98,13 @@ void check_options(const Model& model, const SimulateOptions& o) {
             throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels),
                               "applies to double precision only");
     }
-    // Non-proportional damping (dampers): the state-space solver is the generic
-    // path's; the derivation (kernels, interpreter) and the reference take Rayleigh
-    // damping only, for now.
-    const std::string nonprop = "the model has non-proportional damping ([[damper]] or a non-proportional "
-                                "structure.damping), which runs on the generic solver (state-space modes) only, for now";
-    if (!model.proportional_damping() && o.method == Method::hsnc) {
-        if (o.precision_digits != 0)
-            throw OptionError(kSimulate, "precision_digits", std::to_string(o.precision_digits), nonprop);
-        if (o.kernels != KernelChoice::automatic && o.kernels != KernelChoice::generic)
-            throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels), nonprop);
-    }
+    // Non-proportional damping (dampers): every kernel kind takes it (state-space
+    // pseudo-modes, generator/derivation.h; the configurations the derivation
+    // refuses run on the generic solver in every kind); the reference does not yet.
+    if (!model.proportional_damping() && o.method == Method::hsnc && o.precision_digits != 0)
+        throw OptionError(kSimulate, "precision_digits", std::to_string(o.precision_digits),
+                          "the model has non-proportional damping ([[damper]] or a non-proportional "
+                          "structure.damping), which the reference does not take yet");
     // Jenkins elements (a slider carried beside the state) and friction between
     // two bodies (a stuck pair, one body): hsnc (every kernel kind), rk45 and
     // CVODE take both, ab4 neither (its own stick rules hold a mass against
@@ -177,7 +173,7 @@ std::unique_ptr<SolverProvider> make_provider(const Model& model, const Simulate
                                               const char* function) {
     if (o.kernels == KernelChoice::jit) {
         if (kind) *kind = SolverKind::jit;
-        return make_jit_provider(model, o, function);
+        return std::make_unique<DerivationFallbackProvider>(model, make_jit_provider(model, o, function));
     }
     const KernelMode mode = o.kernels == KernelChoice::generic  ? KernelMode::generic
                             : o.kernels == KernelChoice::interp ? KernelMode::interp

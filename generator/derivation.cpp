@@ -10,6 +10,7 @@
 #include "contact_gap.h"
 #include "error.h"
 #include "free_components.h"
+#include "mp_complex_eigen.h"
 #include "mp_eigen.h"
 
 namespace hsnc {
@@ -92,6 +93,152 @@ void jacobi_eigen(std::vector<std::vector<numeric>>& a, std::vector<std::vector<
 
 numeric to_float(const numeric& x) { return GiNaC::ex_to<numeric>(x.evalf()); }
 
+cln::cl_N to_cl(const numeric& x) { return x.to_cl_N(); }
+
+/// The folded matrix T^T X T of the free coordinates (exact): entry (r, s) sums
+/// X over the masses of coordinates r and s.
+std::vector<std::vector<numeric>> folded(const GiNaC::matrix& X, const std::vector<std::vector<int>>& group) {
+    const std::size_t nf = group.size();
+    std::vector<std::vector<numeric>> out(nf, std::vector<numeric>(nf, kZero));
+    for (std::size_t r = 0; r < nf; ++r)
+        for (std::size_t s = 0; s < nf; ++s)
+            for (int i : group[r])
+                for (int k : group[s]) out[r][s] += GiNaC::ex_to<numeric>(X(i, k));
+    return out;
+}
+
+/// The pseudo-modes, static inverse and harmonic particular parts of a
+/// configuration with dampers (StateSpaceData, derivation.h).
+void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& group) {
+    const Model& model = *d.model;
+    const std::size_t nf = group.size(), ns = 2 * nf;
+    const std::string where = "derivation::derive(): configuration " + d.cfg.spec(model) + ": ";
+    if (!free_components(model, d.cfg).floating_members().empty())
+        throw NotDerivable(where + "rigid-body modes under dampers");
+    d.state_space = true;
+    const cln::float_format_t format = cln::float_format(kDerivationDigits);
+    const auto K = folded(d.K, group), C = folded(d.C, group);
+    std::vector<std::vector<cln::cl_R>> S(ns, std::vector<cln::cl_R>(ns, 0));
+    for (std::size_t r = 0; r < nf; ++r) {
+        S[r][nf + r] = 1;
+        for (std::size_t c = 0; c < nf; ++c) {
+            S[nf + r][c] = cln::the<cln::cl_R>(to_cl(-K[r][c] / d.mass[r]));
+            S[nf + r][nf + c] = cln::the<cln::cl_R>(to_cl(-C[r][c] / d.mass[r]));
+        }
+    }
+    MpComplexEigen eig;
+    try {
+        eig = mp_complex_eigen(S, format);
+    } catch (const RunError& e) {
+        throw NotDerivable(where + e.what());
+    }
+    StateSpaceData& st = d.state;
+    for (std::size_t k = 0; k < ns; ++k) {
+        st.values.emplace_back(eig.values[k]);
+        st.vectors.emplace_back();
+        st.inverse.emplace_back();
+        for (std::size_t i = 0; i < ns; ++i) {
+            st.vectors[k].emplace_back(eig.vectors[k][i]);
+            st.inverse[k].emplace_back(eig.inverse[k][i]);
+        }
+    }
+    // Pseudo-modes in ascending |mu| (then Im mu): one per real mu, two per pair.
+    std::vector<std::size_t> order;
+    for (std::size_t k = 0; k < ns; ++k)
+        if (st.values[k].imag() >= kZero) order.push_back(k);
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        const numeric ma = abs(st.values[a]), mb = abs(st.values[b]);
+        return ma != mb ? ma < mb : st.values[a].imag() < st.values[b].imag();
+    });
+    const numeric undamped_tol = numeric(1, 1000000000000000LL) * numeric(1, 1000000000000000LL);  // 1e-30
+    for (std::size_t k : order) {
+        const numeric mu = st.values[k], sigma = -mu.real(), om = mu.imag();
+        if (sigma < -undamped_tol * abs(mu))
+            throw RunError(where + "a state-space mode grows (Re mu = " + std::to_string(mu.real().to_double()) + ")");
+        const std::vector<numeric>& psi = st.vectors[k];
+        const std::vector<numeric>& L = st.inverse[k];
+        for (int part = 0; part < (om.is_zero() ? 1 : 2); ++part) {
+            // part 0: Re (u), part 1: Im (w) of c e^{mu tau}.
+            auto take = [&](const numeric& z) { return part == 0 ? z.real() : z.imag(); };
+            Mode m;
+            if (om.is_zero()) {
+                if (!(sigma > kZero)) throw NotDerivable(where + "a zero state-space eigenvalue under dampers");
+                m.regime = Regime::critical;
+                m.sigma = sigma;
+                m.lambda = sigma * sigma;
+                m.omega = sigma;
+                m.xi = kOne;
+                m.kappa = kZero;
+            } else {
+                const bool undamped = abs(sigma) <= undamped_tol * abs(mu);
+                m.regime = undamped ? Regime::undamped : Regime::underdamped;
+                m.sigma = undamped ? kZero : sigma;
+                m.kappa = om * om;
+                m.omega_d = om;
+                m.lambda = m.sigma * m.sigma + m.kappa;
+                m.omega = to_float(sqrt(m.lambda));
+                m.xi = m.sigma / m.omega;
+            }
+            m.c = kTwo * m.sigma;
+            for (std::size_t r = 0; r < nf; ++r) {
+                // x = sum (psi c e^{mu tau} + its conjugate) = 2 Re(psi) u - 2 Im(psi) w; a real mu: psi u.
+                m.v.push_back(om.is_zero() ? psi[r].real() : part == 0 ? kTwo * psi[r].real() : -kTwo * psi[r].imag());
+                m.w.push_back(take(L[r]));
+                m.w_v.push_back(take(L[nf + r]));
+                m.dw_x.push_back(take(mu * L[r]));
+                m.dw_v.push_back(take(mu * L[nf + r]));
+            }
+            d.modes.push_back(std::move(m));
+        }
+    }
+    // K_FF^-1 at the working precision, column by column.
+    std::vector<std::vector<cln::cl_N>> Kf(nf, std::vector<cln::cl_N>(nf));
+    for (std::size_t r = 0; r < nf; ++r)
+        for (std::size_t c = 0; c < nf; ++c) Kf[r][c] = cln::cl_float(cln::the<cln::cl_R>(to_cl(K[r][c])), format);
+    st.static_inverse.assign(nf, std::vector<numeric>(nf, kZero));
+    for (std::size_t c = 0; c < nf; ++c) {
+        std::vector<cln::cl_N> e(nf, cln::cl_float(0, format));
+        e[c] = cln::cl_float(1, format);
+        if (!mp_solve(Kf, e)) throw NotDerivable(where + "a singular stiffness under dampers");
+        for (std::size_t r = 0; r < nf; ++r) st.static_inverse[r][c] = numeric(e[r]);
+    }
+    // Harmonics: X = (K - Omega^2 M + i Omega C)^-1 F.
+    d.max_step = std::numeric_limits<double>::infinity();
+    for (const Harmonic& h : model.forcing) {
+        if (h.omega == 0.0) continue;
+        HarmonicData hd;
+        hd.omega = exact(h.omega);
+        hd.phase = exact(h.phase);
+        for (double a : h.amplitude) hd.amplitude.push_back(exact(a));
+        const numeric& W = hd.omega;
+        for (const Mode& m : d.modes) {
+            if (m.regime == Regime::undamped && abs(W - m.omega) <= exact(kResonanceBand) * m.omega)
+                throw NotDerivable(where + "forcing at " + std::to_string(h.omega) +
+                                   " rad/s within 1% of an undamped state-space mode (" +
+                                   std::to_string(m.omega.to_double()) + " rad/s)");
+            hd.modal.push_back(ModalHarmonic{kZero, false, kZero, kZero});
+        }
+        std::vector<std::vector<cln::cl_N>> Z(nf, std::vector<cln::cl_N>(nf));
+        std::vector<cln::cl_N> X(nf);
+        for (std::size_t r = 0; r < nf; ++r) {
+            numeric F = kZero;
+            for (int i : group[r]) F += hd.amplitude[static_cast<std::size_t>(i)];
+            X[r] = cln::cl_float(cln::the<cln::cl_R>(to_cl(F)), format);
+            for (std::size_t c = 0; c < nf; ++c) {
+                const numeric re = K[r][c] - (r == c ? W * W * d.mass[r] : kZero), im = W * C[r][c];
+                Z[r][c] = cln::complex(cln::cl_float(cln::the<cln::cl_R>(to_cl(re)), format),
+                                       cln::cl_float(cln::the<cln::cl_R>(to_cl(im)), format));
+            }
+        }
+        if (!mp_solve(Z, X)) throw NotDerivable(where + "a singular dynamic stiffness at " + std::to_string(h.omega) + " rad/s");
+        for (std::size_t r = 0; r < nf; ++r) {
+            hd.xs.push_back(numeric(cln::realpart(X[r])));
+            hd.xc.push_back(numeric(cln::imagpart(X[r])));
+        }
+        d.harmonics.push_back(std::move(hd));
+    }
+}
+
 }  // namespace
 
 ex slider_preload(const Derivation& d, const SegmentInputs& in, int i) {
@@ -126,7 +273,6 @@ ex coordinate_force(const Derivation& d, const SegmentInputs& in, std::size_t r)
 }
 
 Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method) {
-    require_proportional_damping(model, "derivation::derive()");
     GiNaC::Digits = kDerivationDigits;
     Derivation d;
     d.model = &model;
@@ -162,6 +308,15 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
             d.K(i, j) = kij;
             d.C(i, j) = beta * kij + (i == j ? alpha * exact(model.masses[i].m) : kZero);
         }
+    for (const Damper& dm : model.dampers) {  // non-proportional damping: added as K adds a spring
+        const numeric c = exact(dm.c);
+        for (int a : {dm.a, dm.b})
+            if (a != kGround) d.C(a, a) = d.C(a, a) + c;
+        if (dm.a != kGround && dm.b != kGround) {
+            d.C(dm.a, dm.b) = d.C(dm.a, dm.b) - c;
+            d.C(dm.b, dm.a) = d.C(dm.b, dm.a) - c;
+        }
+    }
     d.f_const.resize(n);
     d.mu_k_n.assign(n, kZero);
     for (std::size_t i = 0; i < n; ++i) {
@@ -183,6 +338,10 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     for (std::size_t r = 0; r < nf; ++r) {
         for (int i : group[r]) d.mass[r] += exact(model.masses[static_cast<std::size_t>(i)].m);
         sqm[r] = to_float(sqrt(d.mass[r]));
+    }
+    if (!model.proportional_damping()) {
+        derive_state_space(d, group);
+        return d;
     }
     std::vector<std::vector<numeric>> kt(nf, std::vector<numeric>(nf));
     for (std::size_t r = 0; r < nf; ++r)

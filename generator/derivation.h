@@ -54,6 +54,10 @@ struct Mode {
     GiNaC::numeric r1;               ///< slow root -lambda/(sigma + gamma) (overdamped, rigid_damped)
     std::vector<GiNaC::numeric> v;   ///< column j of V over the free masses
     std::vector<GiNaC::numeric> w;   ///< row j of W over the free masses
+    /// State-space pseudo-modes only (Derivation::state_space): q(0) = w.xh + w_v.vh,
+    /// q'(0) = dw_x.xh + dw_v.vh from the homogeneous initial state (xh, vh). Empty
+    /// for the modes of proportional damping, where q(0) = w.xh, q'(0) = w.vh.
+    std::vector<GiNaC::numeric> w_v, dw_x, dw_v;
 };
 
 /// The response of one mode to one forcing harmonic.
@@ -82,6 +86,26 @@ struct HarmonicData {
 /// the kernels' independent oracle, keeps its own criterion: generic_solver.cpp.)
 inline constexpr double kResonanceBand = 1e-2;
 
+/// Non-proportional damping (dampers): the free coordinates' state z = (x, v)
+/// obeys z' = S z + b, S = [0 I; -M^-1 K  -M^-1 C], decomposed at 40 digits as
+/// S = Psi diag(mu) L (generator/mp_complex_eigen.h). Each conjugate pair
+/// mu = -sigma + i omega_d, with c = L z_h(0), gives two real pseudo-modes that
+/// the mode blocks of proportional damping already compute:
+///     u = Re(c e^{mu tau}),  w = Im(c e^{mu tau}):  u'' + 2 sigma u' + |mu|^2 u = 0
+/// (regime underdamped, or undamped when sigma = 0), x = sum 2 Re(psi) u - 2 Im(psi) w;
+/// each real mu < 0 one pseudo-mode u = c e^{mu tau} (regime critical with
+/// sigma = -mu, whose B is zero). The static offset is x_st = K^-1 f, a harmonic's
+/// particular part X = (K - Omega^2 M + i Omega C)^-1 F (xs = Re X, xc = Im X).
+/// Refused (NotDerivable, the generic solver takes the configuration):
+/// rigid-body modes, nearly defective S (critical damping), an undamped
+/// pseudo-mode forced within kResonanceBand of its frequency.
+struct StateSpaceData {
+    std::vector<GiNaC::numeric> values;               ///< mu_k, the order of mp_complex_eigen
+    std::vector<std::vector<GiNaC::numeric>> vectors;  ///< vectors[k]: Psi_k over (x, v) of the free coordinates
+    std::vector<std::vector<GiNaC::numeric>> inverse;  ///< inverse[k]: row k of L = Psi^-1
+    std::vector<std::vector<GiNaC::numeric>> static_inverse;  ///< K_FF^-1 (folded), for x_st
+};
+
 struct Derivation {
     const Model* model = nullptr;
     Configuration cfg;
@@ -100,6 +124,8 @@ struct Derivation {
     std::vector<HarmonicData> harmonics;   ///< Omega > 0 harmonics (Omega = 0 ones fold into f_const)
     std::vector<SwitchFunction> switches;
     double max_step = 0;  ///< +inf unless resonant (secular) terms: then one forcing period
+    bool state_space = false;  ///< dampers: `modes` are pseudo-modes of `state` (StateSpaceData)
+    StateSpaceData state;
 
     std::size_t n_free() const { return free_dofs.size(); }
     /// Index into free_dofs of mass i, or -1 when stuck.
@@ -119,10 +145,9 @@ struct Derivation {
 /// long-float operations, about 10 sweeps).
 enum class EigenMethod { refined, jacobi };
 
-/// Derive configuration `cfg` of `model`. Throws InputError on a singular
-/// setup (e.g. a mass without stiffness that must not float is fine; none
-/// are rejected today), RunError when the eigen-solver does not converge
-/// (refined: when neither it nor Jacobi converges).
+/// Derive configuration `cfg` of `model`. Throws RunError when the
+/// eigen-solver does not converge (refined: when neither it nor Jacobi
+/// converges), NotDerivable for what StateSpaceData refuses.
 Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method = EigenMethod::refined);
 
 /// Inputs of one segment as GiNaC expressions: numbers or symbols.

@@ -131,14 +131,26 @@ std::string manifest_text(const Model& model, const std::vector<Configuration>& 
 KernelSet generate_kernel_set(const Model& model, const std::vector<std::string>& kept) {
     KernelSet set;
     std::vector<Configuration> configurations;
+    std::size_t refused = 0;
+    std::string reason;
     for (const Configuration& cfg : configurations_to_generate(model, &set.note)) {
-        const Derivation d = derive(model, cfg);
+        Derivation d;
+        try {
+            d = derive(model, cfg);
+        } catch (const NotDerivable& e) {  // the generic solver takes it at run time, in every kind
+            if (refused++ == 0) reason = e.what();
+            continue;
+        }
         const std::string sym = kept.empty() ? kernel_symbol(model, cfg) : sweep_kernel_symbol(model, cfg);
         const std::string file = kernel_symbol(model, cfg).substr(std::string("hsnc_kernel_").size()) + ".cpp";
         set.kernels.push_back({file, kept.empty() ? emit_kernel(d) : emit_sweep_kernel(d, kept)});
         set.symbols.push_back(sym);
         configurations.push_back(cfg);
     }
+    if (refused > 0)
+        set.note += (set.note.empty() ? "" : "; ") + std::to_string(refused) +
+                    " configurations the derivation does not take are solved by the generic solver at run time (first: " +
+                    reason + ")";
     set.manifest = manifest_text(model, configurations, set.note);
     if (!kept.empty()) {  // a comment line after the header, so readers of the list skip it
         std::string names;

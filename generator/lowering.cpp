@@ -233,7 +233,7 @@ Program lower(const Derivation& d) {
                         : "",
                  model.masses[i].name);
         }
-        for (std::size_t j = 0; j < nm; ++j) {
+        for (std::size_t j = 0; j < nm && !d.state_space; ++j) {
             Lin l;
             for (std::size_t r = 0; r < nf; ++r) l.add(vd[j][r], f[r]);
             pj[j] = s.temp("p_" + idx(j));
@@ -262,10 +262,17 @@ Program lower(const Derivation& d) {
     std::vector<std::uint32_t> x_st(nf);
     for (std::size_t r = 0; r < nf; ++r) {
         Lin l;
-        for (std::size_t j = 0; j < nm; ++j)
-            if (!d.modes[j].lambda.is_zero()) l.add(d.modes[j].v[r] / d.modes[j].lambda, pj[j]);
+        if (d.state_space) {
+            for (std::size_t c = 0; c < nf; ++c) l.add(d.state.static_inverse[r][c], f[c]);
+        } else {
+            for (std::size_t j = 0; j < nm; ++j)
+                if (!d.modes[j].lambda.is_zero()) l.add(d.modes[j].v[r] / d.modes[j].lambda, pj[j]);
+        }
         x_st[r] = s.temp("x_st_" + idx(r));
-        with(s.lin(x_st[r], l), r == 0 ? "Static offset x_st = V (p / lambda) over the elastic modes." : "",
+        with(s.lin(x_st[r], l),
+             r != 0            ? ""
+             : d.state_space ? "Static offset x_st = K_FF^-1 f (dampers: state-space pseudo-modes, derivation.h)."
+                             : "Static offset x_st = V (p / lambda) over the elastic modes.",
              model.masses[d.free_dofs[r]].name);
         coef_of["x_st_" + idx(r)] = slot("x_st_" + idx(r), x_st[r]);
     }
@@ -296,6 +303,21 @@ Program lower(const Derivation& d) {
             vh[r] = s.temp("vh_" + idx(r));
             s.lin_ld(vh[r], v);
         }
+        // Mode j's q and q' from one pair of physical vectors: q = W x, q' = W v, or for
+        // state-space pseudo-modes q = W x + W_v v, q' = dW_x x + dW_v v.
+        auto project = [&](std::size_t j, const std::vector<std::uint32_t>& px, const std::vector<std::uint32_t>& pv,
+                           Lin& q, Lin& dq) {
+            const Mode& m = d.modes[j];
+            if (d.state_space) {
+                for (std::size_t r = 0; r < nf; ++r) q.add(wd[j][r], px[r]).add(m.w_v[r], pv[r]);
+                for (std::size_t r = 0; r < nf; ++r) dq.add(m.dw_x[r], px[r]).add(m.dw_v[r], pv[r]);
+                return;
+            }
+            for (std::size_t r = 0; r < nf; ++r) {
+                q.add(wd[j][r], px[r]);
+                dq.add(wd[j][r], pv[r]);
+            }
+        };
         // q = W x, q' = W v of one pair of physical vectors, each added to its base
         // (q_base, dq_base; empty: none), into temporaries named prefix_j and dprefix_j.
         auto to_modes = [&](const std::vector<std::uint32_t>& px, const std::vector<std::uint32_t>& pv,
@@ -306,10 +328,7 @@ Program lower(const Derivation& d) {
             dq_out.assign(nm, 0);
             for (std::size_t j = 0; j < nm; ++j) {
                 Lin q, dq;
-                for (std::size_t r = 0; r < nf; ++r) {
-                    q.add(wd[j][r], px[r]);
-                    dq.add(wd[j][r], pv[r]);
-                }
+                project(j, px, pv, q, dq);
                 q_out[j] = s.temp(prefix + "_" + idx(j));
                 with(s.lin(q_out[j], q, q_base.empty() ? kNoRegister : q_base[j]), j == 0 ? note : "");
                 dq_out[j] = s.temp("d" + prefix + "_" + idx(j));
@@ -373,10 +392,7 @@ Program lower(const Derivation& d) {
         }
         for (std::size_t j = 0; j < nm; ++j) {
             Lin q, dq;
-            for (std::size_t r = 0; r < nf; ++r) {
-                q.add(wd[j][r], ex[r]);
-                dq.add(wd[j][r], ev[r]);
-            }
+            project(j, ex, ev, q, dq);
             qh0[j] = s.temp("qh0_" + idx(j));
             s.lin(qh0[j], q, q0[j]);
             dqh0[j] = s.temp("dqh0_" + idx(j));

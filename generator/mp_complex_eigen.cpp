@@ -19,9 +19,13 @@ using cln::cl_N;
 using cln::cl_R;
 using Matrix = std::vector<std::vector<cl_N>>;
 
-/// Solves M x = b in place (M n x n, b n) by Gaussian elimination with
-/// partial pivoting; false when a pivot is exactly zero.
-bool solve(Matrix M, std::vector<cl_N>& b) {
+cl_N from_double(std::complex<double> z, cln::float_format_t format) {
+    return cln::complex(cln::cl_float(z.real(), format), cln::cl_float(z.imag(), format));
+}
+
+}  // namespace
+
+bool mp_solve(Matrix M, std::vector<cl_N>& b) {
     const std::size_t n = M.size();
     for (std::size_t c = 0; c < n; ++c) {
         std::size_t p = c;
@@ -45,12 +49,6 @@ bool solve(Matrix M, std::vector<cl_N>& b) {
     }
     return true;
 }
-
-cl_N from_double(std::complex<double> z, cln::float_format_t format) {
-    return cln::complex(cln::cl_float(z.real(), format), cln::cl_float(z.imag(), format));
-}
-
-}  // namespace
 
 MpComplexEigen mp_complex_eigen(const std::vector<std::vector<cl_R>>& a, cln::float_format_t format) {
     const std::size_t n = a.size();
@@ -123,7 +121,7 @@ MpComplexEigen mp_complex_eigen(const std::vector<std::vector<cl_R>>& a, cln::fl
                 J[i][n] = -v[i];
             }
             J[n][p] = cln::cl_float(1, format);
-            if (!solve(J, r)) break;
+            if (!mp_solve(J, r)) break;
             for (std::size_t i = 0; i < n; ++i) v[i] = v[i] + r[i];
             lam = lam + r[n];
         }
@@ -142,7 +140,7 @@ MpComplexEigen mp_complex_eigen(const std::vector<std::vector<cl_R>>& a, cln::fl
     for (std::size_t c = 0; c < n; ++c) {
         std::vector<cl_N> e(n, cln::cl_float(0, format));
         e[c] = cln::cl_float(1, format);
-        if (!solve(Vm, e)) throw RunError("mp_complex_eigen(): the eigenvector matrix is singular");
+        if (!mp_solve(Vm, e)) throw RunError("mp_complex_eigen(): the eigenvector matrix is singular");
         for (std::size_t k = 0; k < n; ++k) out.inverse[k][c] = e[k];
     }
     return out;

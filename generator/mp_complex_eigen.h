@@ -43,4 +43,9 @@ struct MpComplexEigen {
 /// adjacent (Im > 0 first).
 MpComplexEigen mp_complex_eigen(const std::vector<std::vector<cln::cl_R>>& a, cln::float_format_t format);
 
+/// Solves m x = b in place (b becomes x) by Gaussian elimination with
+/// partial pivoting, in the arithmetic of the entries; false when a pivot
+/// is exactly zero.
+bool mp_solve(std::vector<std::vector<cln::cl_N>> m, std::vector<cln::cl_N>& b);
+
 }  // namespace hsnc

@@ -60,7 +60,8 @@ inline const char* solvers_name(Solvers s) { return s == Solvers::generic ? "gen
 /// The HSNC engine from the model's initial state.
 inline Outcome simulate(const Model& model, double t_end, double dt = 0.0, Solvers solvers = Solvers::generic) {
     GenericSolverProvider generic(model);
-    InterpretedSolverProvider interp(program_source(model));
+    // The configurations the derivation refuses (NotDerivable) on the generic solver, as in the facade.
+    DerivationFallbackProvider interp(model, std::make_unique<InterpretedSolverProvider>(program_source(model)));
     SolverProvider& provider = solvers == Solvers::generic ? static_cast<SolverProvider&>(generic) : interp;
     Engine engine(model, provider);
     Recorder rec(model.dof(), model.state_size());

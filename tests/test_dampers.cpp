@@ -29,6 +29,7 @@
 #include "hsnc/simulate.h"
 #include "hsnc/sweep.h"
 #include "integrators.h"
+#include "jit_module.h"
 #include "model_hash.h"
 #include "model_reader.h"
 #include "random_model.h"
@@ -57,9 +58,10 @@ Model dashpot_1dof(double m, double k, double c, double x0, double v0, double lo
 // textbook solution about the static offset x_s = F/k.
 TEST(DamperClosedForm, OneDofAgainstTheTextbookOscillator) {
     const double m = 2.0, k = 50.0, w = std::sqrt(k / m), x0 = 0.03, v0 = -0.4, F = 1.5, xs = F / k;
+    for (testing::Solvers sv : {testing::Solvers::generic, testing::Solvers::interp})
     for (double zeta : {0.0, 0.02, 0.4, 0.9, 1.3, 4.0}) {
         const Model md = dashpot_1dof(m, k, 2.0 * zeta * w * m, x0, v0, F);
-        const Outcome r = testing::simulate(md, 6.0, 0.25);
+        const Outcome r = testing::simulate(md, 6.0, 0.25, sv);
         ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
         double worst = 0.0;
         for (const auto& s : r.samples) {
@@ -75,8 +77,9 @@ TEST(DamperClosedForm, OneDofAgainstTheTextbookOscillator) {
             }
             worst = std::max(worst, std::fabs(s.x[0] - x));
         }
-        std::printf("zeta %.2f: max |x - closed form| %.2g m over %zu samples\n", zeta, worst, r.samples.size());
-        EXPECT_LT(worst, 1e-15) << "zeta " << zeta;  // measured 7e-18 .. 2.8e-17 (|x| up to 0.03 m)
+        std::printf("%s, zeta %.2f: max |x - closed form| %.2g m over %zu samples\n", testing::solvers_name(sv), zeta,
+                    worst, r.samples.size());
+        EXPECT_LT(worst, 1e-15) << testing::solvers_name(sv) << " zeta " << zeta;  // measured 7e-18 .. 2.8e-17 (|x| up to 0.03 m)
     }
 }
 
@@ -145,7 +148,8 @@ v = { m2 = -0.2 }
 TEST(DamperClosedForm, ForcedTwoDofAgainstTheMatrixExponential) {
     const Model md = two_dof_with_dashpot();
     ASSERT_FALSE(md.proportional_damping());
-    const Outcome r = testing::simulate(md, 8.0, 0.5);
+    for (testing::Solvers sv : {testing::Solvers::generic, testing::Solvers::interp}) {
+    const Outcome r = testing::simulate(md, 8.0, 0.5, sv);
     ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
     double worst = 0.0, size = 0.0;
     for (const auto& s : r.samples) {
@@ -155,8 +159,9 @@ TEST(DamperClosedForm, ForcedTwoDofAgainstTheMatrixExponential) {
             size = std::max(size, std::fabs(z(i)));
         }
     }
-    std::printf("2-dof dashpot, forced: max error %.2g m (|x| up to %.2g m)\n", worst, size);
-    EXPECT_LT(worst, 1e-13 * size);  // measured 1.7e-15 m with |x| up to 0.055 m
+    std::printf("%s, 2-dof dashpot, forced: max error %.2g m (|x| up to %.2g m)\n", testing::solvers_name(sv), worst, size);
+    EXPECT_LT(worst, 1e-13 * size) << testing::solvers_name(sv);  // measured 1.7e-15 m with |x| up to 0.055 m
+    }
 }
 
 // A resonant harmonic on an undamped mode (the dashpot on a dof the mode
@@ -496,27 +501,39 @@ TEST(DamperReader, KeysAndErrors) {
     EXPECT_NE(model_canonical_text(ok), model_canonical_text(other));
 }
 
-TEST(DamperFacade, KernelsAndPrecisionThatCannotTakeItAreRefused) {
+// Every kernel kind takes dampers (state-space pseudo-modes on the derivation
+// path); aot only where kernels were generated, the reference not yet.
+TEST(DamperFacade, EveryKernelKindRunsDampersAndTheReferenceRefusesThem) {
     const Model md = two_dof_with_dashpot();
     SimulateOptions o;
     o.t_end = 1.0;
-    for (KernelChoice k : {KernelChoice::aot, KernelChoice::jit, KernelChoice::interp}) {
+    o.use_cache = false;
+    o.kernels = KernelChoice::aot;
+    try {
+        simulate(md, o);
+        ADD_FAILURE() << "kernels aot ran a model without generated kernels";
+    } catch (const OptionError& e) {
+        EXPECT_EQ(e.option(), "kernels");
+        EXPECT_NE(e.reason().find("no ahead-of-time kernels"), std::string::npos) << e.what();
+    }
+    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::generic, KernelChoice::interp, KernelChoice::jit}) {
         o.kernels = k;
+        SimulateSummary s;
         try {
-            simulate(md, o);
-            ADD_FAILURE() << "kernels " << kernel_choice_name(k) << " ran a model with dampers";
-        } catch (const OptionError& e) {
-            EXPECT_EQ(e.option(), "kernels");
-            EXPECT_NE(e.reason().find("non-proportional damping"), std::string::npos) << e.what();
+            s = simulate(md, o);
+        } catch (const api::JitUnavailable&) {
+            continue;  // built without the JIT
         }
+        EXPECT_EQ(s.status, RunStatus::ok) << kernel_choice_name(k);
     }
     o.kernels = KernelChoice::automatic;
     o.precision_digits = 30;
-    EXPECT_THROW(simulate(md, o), OptionError);
-    o.precision_digits = 0;
-    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::generic}) {
-        o.kernels = k;
-        EXPECT_EQ(simulate(md, o).status, RunStatus::ok);
+    try {
+        simulate(md, o);
+        ADD_FAILURE() << "the reference ran a model with dampers";
+    } catch (const OptionError& e) {
+        EXPECT_EQ(e.option(), "precision_digits");
+        EXPECT_NE(e.reason().find("non-proportional damping"), std::string::npos) << e.what();
     }
 }
 
@@ -619,7 +636,7 @@ TEST(DamperStability, SweptResponseIsTheFrequencyResponseOfKMC) {
 
 // ---- the command line and the bundled example ----
 
-TEST(DamperCli, TheBundledAbsorberRunsOnStateSpaceModesAndRefusesKernels) {
+TEST(DamperCli, TheBundledAbsorberRunsOnEveryKernelKind) {
     const std::string model = std::string(HSNC_SOURCE_DIR) + "/examples/dashpot/absorber.toml";
     const testing::CliRun run = testing::run_hsnc("simulate " + model + " --t-end 10");
     EXPECT_EQ(run.exit_code, 0) << run.err;
@@ -628,23 +645,32 @@ TEST(DamperCli, TheBundledAbsorberRunsOnStateSpaceModesAndRefusesKernels) {
     EXPECT_EQ(check.exit_code, 0) << check.err;
     EXPECT_NE(check.out.find("dampers: 1"), std::string::npos) << check.out;
     EXPECT_NE(check.out.find("damped modes"), std::string::npos) << check.out;
-    for (const char* flags : {"--kernels jit", "--kernels interp", "--precision mp:30"}) {
-        const testing::CliRun bad = testing::run_hsnc("simulate " + model + " --t-end 1 " + flags);
-        EXPECT_EQ(bad.exit_code, 2) << flags;
-        EXPECT_NE(bad.err.find("non-proportional damping"), std::string::npos) << bad.err;
+    // The interpreter and the JIT: the same bytes (the derivation's pseudo-modes).
+    const std::string ev_interp = testing::temp_path("dampers-interp.csv"), ev_jit = testing::temp_path("dampers-jit.csv");
+    const testing::CliRun interp = testing::run_hsnc("simulate " + model + " --t-end 20 --kernels interp --events " + ev_interp);
+    EXPECT_EQ(interp.exit_code, 0) << interp.err;
+    EXPECT_NE(interp.err.find("interpreted programs"), std::string::npos) << interp.err;
+    const testing::CliRun jit = testing::run_hsnc("simulate " + model + " --t-end 20 --kernels jit --no-cache --events " + ev_jit);
+    if (jit.exit_code == 0) {
+        EXPECT_EQ(testing::slurp(ev_interp), testing::slurp(ev_jit));
+        EXPECT_EQ(interp.out, jit.out);
     }
-    // inspect prints the state-space view; a kernel (--format cpp, generate) is refused.
+    const testing::CliRun bad = testing::run_hsnc("simulate " + model + " --t-end 1 --precision mp:30");
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_NE(bad.err.find("non-proportional damping"), std::string::npos) << bad.err;
+    // inspect prints the state-space view, and the kernel of the pseudo-modes.
     const testing::CliRun view = testing::run_hsnc("inspect " + model + " --config \"closed=stop\"");
     EXPECT_EQ(view.exit_code, 0) << view.err;
     EXPECT_NE(view.out.find("C = [0.1273, -0.1273; -0.1273, 0.1273]"), std::string::npos) << view.out;
     EXPECT_NE(view.out.find("State-space modes"), std::string::npos) << view.out;
     EXPECT_NE(view.out.find("g_1 = x_primary - 0.044999999999999998 (gap of stop)"), std::string::npos) << view.out;
-    const testing::CliRun gen = testing::run_hsnc("inspect " + model + " --format cpp");
-    EXPECT_EQ(gen.exit_code, 2);
-    EXPECT_NE(gen.err.find("non-proportional damping"), std::string::npos) << gen.err;
-    const testing::CliRun generate = testing::run_hsnc("generate " + model + " -o " + testing::temp_path("dampers-gen"));
-    EXPECT_EQ(generate.exit_code, 2);
-    EXPECT_NE(generate.err.find("non-proportional damping"), std::string::npos) << generate.err;
+    const testing::CliRun cpp = testing::run_hsnc("inspect " + model + " --format cpp");
+    EXPECT_EQ(cpp.exit_code, 0) << cpp.err;
+    EXPECT_NE(cpp.out.find("x_st = K_FF^-1 f"), std::string::npos);
+    const std::string dir = testing::temp_path("dampers-gen");
+    const testing::CliRun generate = testing::run_hsnc("generate " + model + " -o " + dir);
+    EXPECT_EQ(generate.exit_code, 0) << generate.err;
+    EXPECT_NE(testing::slurp(dir + "/dashpot-absorber.manifest").find("all 2 configurations"), std::string::npos);
 }
 
 }  // namespace

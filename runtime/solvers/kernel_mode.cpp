@@ -77,7 +77,8 @@ AotSolverProvider::AotSolverProvider(const Model& model, const AotRegistry& regi
     : model_(model), registry_(registry), fallback_(fallback), hash_(model_hash(model)) {
     if (!fallback_) return;
     if (lower)
-        fallback_provider_ = std::make_unique<InterpretedSolverProvider>(std::move(lower));
+        fallback_provider_ = std::make_unique<DerivationFallbackProvider>(
+            model_, std::make_unique<InterpretedSolverProvider>(std::move(lower)));
     else
         fallback_provider_ = std::make_unique<GenericSolverProvider>(model_);
 }
@@ -101,6 +102,24 @@ std::string AotSolverProvider::describe() const {
            std::to_string(generic_.size()) + " configurations";
 }
 
+SegmentSolver& DerivationFallbackProvider::solver(const Configuration& cfg) {
+    if (refused_.count(cfg)) return generic_.solver(cfg);
+    try {
+        return primary_->solver(cfg);
+    } catch (const NotDerivable& e) {
+        if (refused_.empty()) first_reason_ = e.what();
+        refused_.insert(cfg);
+        return generic_.solver(cfg);
+    }
+}
+
+std::string DerivationFallbackProvider::describe() const {
+    std::string text = primary_->describe();
+    if (!refused_.empty())
+        text += "; " + generic_.describe() + " the derivation does not take (first: " + first_reason_ + ")";
+    return text;
+}
+
 bool has_aot_kernels(const Model& model, const AotRegistry* registry) {
     const std::uint64_t hash = model_hash(model);
     return registry && std::any_of(registry->kernels, registry->kernels + registry->count, [&](const hsnc_kernel* k) {
@@ -113,7 +132,8 @@ std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelM
                                                      InterpretedSolverProvider::ProgramFn lower) {
     if (mode == KernelMode::interp) {
         if (!lower) throw std::invalid_argument("make_solver_provider(): --kernels interp needs a program source");
-        return std::make_unique<InterpretedSolverProvider>(std::move(lower));
+        return std::make_unique<DerivationFallbackProvider>(model,
+                                                            std::make_unique<InterpretedSolverProvider>(std::move(lower)));
     }
     if (mode == KernelMode::generic) return std::make_unique<GenericSolverProvider>(model);
     if (mode == KernelMode::jit)

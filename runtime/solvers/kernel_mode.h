@@ -100,6 +100,31 @@ private:
     std::unique_ptr<SolverProvider> fallback_provider_;
 };
 
+/// Any provider whose solvers come from the derivation (interpreted programs,
+/// JIT kernels; generator/derivation.h), with the configurations the
+/// derivation refuses (NotDerivable: critical damping or rigid-body modes
+/// under dampers) on the Eigen solver: the same configurations on the same
+/// solver whatever the kernel kind, so that every kind still gives the same
+/// bits.
+class DerivationFallbackProvider : public SolverProvider {
+public:
+    DerivationFallbackProvider(const Model& model, std::unique_ptr<SolverProvider> primary)
+        : primary_(std::move(primary)), generic_(model) {}
+    DerivationFallbackProvider(const Model&& model, std::unique_ptr<SolverProvider> primary) = delete;  ///< would dangle
+    SegmentSolver& solver(const Configuration& cfg) override;
+    /// The primary's line, then "; generic solver for N configurations the
+    /// derivation does not take (first: reason)" when there were any.
+    std::string describe() const override;
+    std::size_t not_derivable() const { return refused_.size(); }  ///< configurations on the generic solver
+    SolverProvider& primary() { return *primary_; }
+
+private:
+    std::unique_ptr<SolverProvider> primary_;
+    GenericSolverProvider generic_;
+    std::set<Configuration> refused_;
+    std::string first_reason_;
+};
+
 /// Whether `registry` (may be null) holds ahead-of-time kernels of `model` as it is.
 bool has_aot_kernels(const Model& model, const AotRegistry* registry);
 
