@@ -519,7 +519,7 @@ void add_inspect(CLI::App& app, int& exit_code) {
             std::cerr << "hsnc inspect: --symbolic does not apply to --format cpp (the kernel holds numbers)\n";
         }
         if (o->format == "cpp") {
-            std::cout << emit_kernel(derive(model, cfg));  // dampers: derive() refuses (InputError, exit 2)
+            std::cout << emit_kernel(derive(model, cfg));  // NotDerivable (RunError, exit 1): the generic solver takes it
         } else if (!model.proportional_damping()) {
             std::ostringstream text;  // nothing printed unless the whole view is
             inspect_state_space(model, cfg, fmt, text);
