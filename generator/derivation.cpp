@@ -496,6 +496,75 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     return d;
 }
 
+namespace {
+
+/// The free coordinates' x(tau) of a configuration with dampers, in the
+/// textbook form z(tau) = z_p(tau) + sum_k Psi_k e^{mu_k tau} L_k (z(0) - z_p(0)),
+/// each conjugate pair written with e^{-sigma tau} cos and sin: independent of
+/// the pseudo-modes (only the eigenpairs are shared), with x_st and each
+/// harmonic's particular part solved exactly from the folded K, C, M by GiNaC.
+std::vector<ex> state_space_response(const Derivation& d, const SegmentInputs& in, const std::vector<ex>& f,
+                                     const std::vector<ex>& theta, const GiNaC::symbol& tau) {
+    const std::size_t nf = d.n_free();
+    GiNaC::matrix K(nf, nf), C(nf, nf);
+    for (std::size_t i = 0; i < d.model->dof(); ++i)
+        for (std::size_t k = 0; k < d.model->dof(); ++k) {
+            const int r = d.coordinate(static_cast<int>(i)), s = d.coordinate(static_cast<int>(k));
+            if (r < 0 || s < 0) continue;
+            K(r, s) = K(r, s) + d.K(i, k);
+            C(r, s) = C(r, s) + d.C(i, k);
+        }
+    GiNaC::matrix fv(nf, 1);
+    for (std::size_t r = 0; r < nf; ++r) fv(r, 0) = f[r];
+    const GiNaC::matrix x_st = K.inverse().mul(fv);
+    std::vector<ex> x(nf), xh(nf), vh(nf);
+    for (std::size_t r = 0; r < nf; ++r) {
+        x[r] = x_st(r, 0);
+        xh[r] = in.x0[d.free_dofs[r]] - x_st(r, 0);
+        vh[r] = in.v0[d.free_dofs[r]];
+    }
+    for (std::size_t h = 0; h < d.harmonics.size(); ++h) {
+        const HarmonicData& hd = d.harmonics[h];
+        const numeric& W = hd.omega;
+        GiNaC::matrix Z(nf, nf), F(nf, 1);
+        for (std::size_t r = 0; r < nf; ++r)
+            for (std::size_t s = 0; s < nf; ++s) Z(r, s) = K(r, s) - (r == s ? W * W * d.mass[r] : kZero) + GiNaC::I * W * C(r, s);
+        for (std::size_t i = 0; i < d.model->dof(); ++i)
+            if (const int r = d.coordinate(static_cast<int>(i)); r >= 0) F(r, 0) = F(r, 0) + hd.amplitude[i];
+        const GiNaC::matrix X = Z.inverse().mul(F);
+        for (std::size_t r = 0; r < nf; ++r) {
+            const numeric X_r = GiNaC::ex_to<numeric>(X(r, 0).evalf());
+            const numeric re = X_r.real(), im = X_r.imag();
+            const ex arg = W * tau + theta[h];
+            x[r] += re * GiNaC::sin(arg) + im * GiNaC::cos(arg);
+            xh[r] -= re * GiNaC::sin(theta[h]) + im * GiNaC::cos(theta[h]);
+            vh[r] -= W * (re * GiNaC::cos(theta[h]) - im * GiNaC::sin(theta[h]));
+        }
+    }
+    const StateSpaceData& st = d.state;
+    for (std::size_t k = 0; k < st.values.size(); ++k) {
+        const numeric mu = st.values[k];
+        if (mu.imag() < kZero) continue;  // the conjugate of a pair, written with its first
+        const bool pair = mu.imag() > kZero;
+        for (std::size_t r = 0; r < nf; ++r) {
+            ex re = 0, im = 0;  // Psi_rk L_k z_h(0), real and imaginary parts
+            for (std::size_t j = 0; j < 2 * nf; ++j) {
+                const numeric pl = st.vectors[k][r] * st.inverse[k][j];
+                const ex& zj = j < nf ? xh[j] : vh[j - nf];
+                re += pl.real() * zj;
+                im += pl.imag() * zj;
+            }
+            if (pair)
+                x[r] += 2 * GiNaC::exp(mu.real() * tau) * (re * GiNaC::cos(mu.imag() * tau) - im * GiNaC::sin(mu.imag() * tau));
+            else
+                x[r] += GiNaC::exp(mu.real() * tau) * re;
+        }
+    }
+    return x;
+}
+
+}  // namespace
+
 SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, const GiNaC::symbol& tau) {
     GiNaC::Digits = kDerivationDigits;
     const Model& model = *d.model;
@@ -508,7 +577,10 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
     std::vector<ex> theta;
     for (const HarmonicData& h : d.harmonics) theta.push_back(h.omega * in.t0 + h.phase);
 
-    for (std::size_t j = 0; j < d.modes.size(); ++j) {
+    // The free coordinates' x(tau), when not from the modes below.
+    std::vector<ex> xf;
+    if (d.state_space) xf = state_space_response(d, in, f, theta, tau);
+    for (std::size_t j = 0; j < d.modes.size() && !d.state_space; ++j) {
         const Mode& m = d.modes[j];
         ex p = 0, u0 = 0, du0 = 0;
         for (std::size_t r = 0; r < nf; ++r) {
@@ -567,8 +639,10 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
     const std::size_t nj = model.jenkins.size();
     out.x.assign(n + nj, 0);
     for (int s : d.stuck_dofs) out.x[s] = in.x0[s];
-    for (std::size_t r = 0; r < nf; ++r)
-        for (std::size_t j = 0; j < d.modes.size(); ++j) out.x[d.free_dofs[r]] += d.modes[j].v[r] * out.u[j];
+    for (std::size_t r = 0; r < nf; ++r) {
+        if (d.state_space) out.x[d.free_dofs[r]] = xf[r];
+        for (std::size_t j = 0; j < out.u.size(); ++j) out.x[d.free_dofs[r]] += d.modes[j].v[r] * out.u[j];
+    }
     for (int q : d.riders) {  // at its segment-start offset from its partner
         const int p = model.masses[static_cast<std::size_t>(q)].partner;
         out.x[q] = out.x[p] + (in.x0[q] - in.x0[p]);

@@ -161,7 +161,7 @@ struct SegmentInputs {
 /// exp, the secular resonance term), independent of the emitter's
 /// overflow-safe forms; derivatives by GiNaC diff.
 struct SymbolicSegment {
-    std::vector<GiNaC::ex> u;          ///< modal coordinates
+    std::vector<GiNaC::ex> u;          ///< modal coordinates (empty with dampers: x from the state-space modes)
     std::vector<GiNaC::ex> x, v, a;    ///< all masses (x: then every Jenkins slider)
     std::vector<GiNaC::ex> g, dg;      ///< switch functions, as in switch_functions()
 };

@@ -314,12 +314,20 @@ std::string emit_kernel(const Derivation& d, const Program& p) {
     emit_provenance(c, d, "hsnc kernel", "generator/emitter.cpp");
     c.line(0, "//");
     c.line(0, "// Free masses obey M x'' + C x' + K x = f + sum_h F_h sin(Omega_h t + phase_h) with");
-    c.line(0, "// f = loads + preload - K_FS x_S - mu_k N sgn (paper Eq. 7-9). In modal coordinates");
-    c.line(0, "// x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).");
+    if (d.state_space) {
+        c.line(0, "// f = loads + preload - K_FS x_S - mu_k N sgn (paper Eq. 7-9), C with dampers (not");
+        c.line(0, "// proportional): x = K^-1 f + sum_h Im((K - W^2 M + i W C)^-1 F_h e^{i(W t + phase)}) + V q over");
+        c.line(0, "// the state-space pseudo-modes q (generator/derivation.h): Re and Im of c e^{mu tau} for each");
+        c.line(0, "// conjugate pair mu (q'' + 2 sigma q' + |mu|^2 q = 0), c e^{mu tau} for each real mu (critical");
+        c.line(0, "// regime, B = 0); (q(0), q'(0)) from the homogeneous state by the rows of Psi^-1.");
+    } else {
+        c.line(0, "// f = loads + preload - K_FS x_S - mu_k N sgn (paper Eq. 7-9). In modal coordinates");
+        c.line(0, "// x = V q, q = W x: q_j'' + c_j q_j' + lambda_j q_j = p_j + sum_h P_jh sin(...).");
+    }
     c.line(0, "// Homogeneous part q_h = A eC + B eS with d/dtau (A, B) = (B - sigma A, -kappa A - sigma B).");
     for (std::size_t j = 0; j < nm; ++j) {
         const Mode& m = d.modes[j];
-        c.line(0, "// mode " + idx(j) + ": " + regime_name(m.regime) + ", lambda = " + c.literal(dbl(m.lambda)) +
+        c.line(0, std::string(d.state_space ? "// pseudo-mode " : "// mode ") + idx(j) + ": " + regime_name(m.regime) + ", lambda = " + c.literal(dbl(m.lambda)) +
                       ", omega = " + c.literal(dbl(m.omega)) + ", c = " + c.literal(dbl(m.c)) +
                       ", xi = " + c.literal(dbl(m.xi)));
     }

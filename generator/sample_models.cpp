@@ -177,6 +177,26 @@ std::vector<Model> sample_models() {
         md.v0 = {0.2, 0.5, 0.0};
         s.push_back(md);
     }
+    // Dampers (non-proportional damping: state-space pseudo-modes) beside Rayleigh
+    // damping: a stop and friction on m1, so that the configurations take
+    // complex pairs (all free; the stop closed) and real eigenvalues only (m1
+    // stuck, the stop open: m2 alone at zeta 1.28).
+    {
+        Model md;
+        md.name = "dashpot_pair";
+        md.masses = {{"m1", 1.0, true, 0.2, 0.3}, {"m2", 0.8, false, 0.0, 0.0}};
+        md.springs = {{kGround, 0, 20.0}, {0, 1, 8.0}};
+        md.dampers = {{1, kGround, 6.0}, {0, 1, 0.5}};
+        md.contacts = {{"stop", 1, kGround, 0.1, 60.0}};
+        md.alpha = 0.05;
+        md.beta = 0.002;
+        md.forcing = {{2.5, 0.3, {1.0, 0.0}}};
+        md.load = {0.1, -0.05};
+        md.x0 = {0.05, 0.12};
+        md.v0 = {-0.3, 0.2};
+        md.t0 = 0.1;
+        s.push_back(md);
+    }
     // Pseudo-random chains: light and heavy damping, grounded and free end.
     s.push_back(random_chain("rand_a", 1, 2, 0.02, true));
     s.push_back(random_chain("rand_b", 2, 3, 0.5, true));

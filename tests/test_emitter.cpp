@@ -22,6 +22,7 @@
 #include "kernel_solver.h"
 #include "model_hash.h"
 #include "sample_models.h"
+#include "state_space_solver.h"
 
 namespace hsnc {
 const AotRegistry& sample_registry();  // tests' build-time kernels (hsnc_gen --samples)
@@ -110,8 +111,11 @@ TEST(Derivation, SampleCatalogueCoversEveryRegime) {
 }
 
 TEST(Derivation, ModesDiagonaliseTheReducedSystem) {
-    // V^T K V = diag(lambda), V^T M V = I, at the working precision.
+    // V^T K V = diag(lambda), V^T M V = I, at the working precision (the modes
+    // of Rayleigh damping; the state-space pseudo-modes of dampers are checked
+    // through their eigenpairs, tests/test_mp_complex_eigen.cpp).
     for (const Model& m : sample_models()) {
+        if (!m.proportional_damping()) continue;
         const Configuration cfg = all_configurations(m).back();
         const Derivation d = derive(m, cfg);
         // Each coordinate's masses: its free mass and the riders stuck to it (T^T M T, T^T K T).
@@ -378,12 +382,15 @@ TEST(Kernel, ForcingPhaseIsTakenAtT0PlusT0Lo) {
     }
 }
 
-// A kernel of m in cfg against the Eigen generic solver at a few instants; the
-// number of instants compared.
+// A kernel of m in cfg against the Eigen generic solver (the state-space one
+// for dampers) at a few instants; the number of instants compared.
 int compare_with_generic(const Model& m, const Configuration& cfg, const hsnc_kernel& kernel, const std::string& name) {
     int compared = 0;
     KernelSolver k(kernel);
-    GenericSolver gs(m, cfg);
+    const std::unique_ptr<SegmentSolver> generic = m.proportional_damping()
+                                                       ? std::unique_ptr<SegmentSolver>(new GenericSolver(m, cfg))
+                                                       : std::unique_ptr<SegmentSolver>(new StateSpaceSolver(m, cfg));
+    SegmentSolver& gs = *generic;
     if (k.switches() != gs.switches()) {
         ADD_FAILURE() << name << " " << cfg.key() << ": other switch functions";
         return 0;
@@ -457,6 +464,17 @@ TEST(Kernel, AgreesWithGenericSolverWithJenkinsElementsAndFrictionPairs) {
         for (const Configuration& cfg : all_configurations(m)) compared += compare_with_generic(m, cfg, sample_kernel(m, cfg), m.name);
     }
     EXPECT_EQ(compared, 4 * (18 + 3 + 4 + 2));
+}
+
+// Dampers: every configuration of the sample with dampers (complex pairs, and
+// real eigenvalues only) against the state-space solver.
+TEST(Kernel, AgreesWithStateSpaceSolverWithDampers) {
+    int compared = 0;
+    for (const Model& m : sample_models()) {
+        if (m.proportional_damping()) continue;
+        for (const Configuration& cfg : all_configurations(m)) compared += compare_with_generic(m, cfg, sample_kernel(m, cfg), m.name);
+    }
+    EXPECT_EQ(compared, 4 * 4);
 }
 
 TEST(Emitter, DeterministicAndSelfContained) {
