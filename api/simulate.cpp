@@ -100,11 +100,8 @@ void check_options(const Model& model, const SimulateOptions& o) {
     }
     // Non-proportional damping (dampers): every kernel kind takes it (state-space
     // pseudo-modes, generator/derivation.h; the configurations the derivation
-    // refuses run on the generic solver in every kind); the reference does not yet.
-    if (!model.proportional_damping() && o.method == Method::hsnc && o.precision_digits != 0)
-        throw OptionError(kSimulate, "precision_digits", std::to_string(o.precision_digits),
-                          "the model has non-proportional damping ([[damper]] or a non-proportional "
-                          "structure.damping), which the reference does not take yet");
+    // refuses run on the generic solver in every kind), and the reference too
+    // (the matrix exponential at N digits, reference/mp_segment.h).
     // Jenkins elements (a slider carried beside the state) and friction between
     // two bodies (a stuck pair, one body): hsnc (every kernel kind), rk45 and
     // CVODE take both, ab4 neither (its own stick rules hold a mass against

@@ -50,9 +50,11 @@ cl_F phi2(const MpModel& mp, const cl_F& x) {
     return (cln::exp(x) - mp.one - x) / (x * x);
 }
 
-struct CosSin {
-    cl_F c, s;
-};
+using CosSin = MpSegment::CosSin;
+
+// The real and imaginary parts of z as floats of the format (an exact 0 included).
+cl_F re_of(const MpModel& mp, const cln::cl_N& z) { return cln::cl_float(cln::realpart(z), mp.format); }
+cl_F im_of(const MpModel& mp, const cln::cl_N& z) { return cln::cl_float(cln::imagpart(z), mp.format); }
 CosSin cos_sin_of(const cl_F& x) {
     const cln::cos_sin_t cs = cln::cos_sin(x);
     return {cln::the<cl_F>(cs.cos), cln::the<cl_F>(cs.sin)};
@@ -110,6 +112,78 @@ bool jacobi(const MpModel& mp, std::vector<std::vector<cl_F>> A, std::vector<cl_
     return converged;
 }
 
+// Solves M x = b in place (b becomes x) by Gaussian elimination with partial
+// pivoting, in the arithmetic of T (cl_F or cl_N); false on an exactly zero pivot.
+template <class T>
+bool solve_in_place(std::vector<std::vector<T>> M, std::vector<T>& b) {
+    const std::size_t n = M.size();
+    for (std::size_t c = 0; c < n; ++c) {
+        std::size_t p = c;
+        for (std::size_t r = c + 1; r < n; ++r)
+            if (cln::abs(M[r][c]) > cln::abs(M[p][c])) p = r;
+        if (cln::zerop(M[p][c])) return false;
+        std::swap(M[c], M[p]);
+        std::swap(b[c], b[p]);
+        for (std::size_t r = c + 1; r < n; ++r) {
+            const T f = M[r][c] / M[c][c];
+            for (std::size_t k = c; k < n; ++k) M[r][k] = M[r][k] - f * M[c][k];
+            b[r] = b[r] - f * b[c];
+        }
+    }
+    for (std::size_t c = n; c-- > 0;) {
+        T x = b[c];
+        for (std::size_t k = c + 1; k < n; ++k) x = x - M[c][k] * b[k];
+        b[c] = x / M[c][c];
+    }
+    return true;
+}
+
+using Matrix = std::vector<std::vector<cl_F>>;
+
+Matrix product(const MpModel& mp, const Matrix& A, const Matrix& B) {
+    const std::size_t n = A.size();
+    Matrix C(n, std::vector<cl_F>(n, mp.zero));
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t k = 0; k < n; ++k) {
+            if (is_zero(A[i][k])) continue;
+            for (std::size_t j = 0; j < n; ++j) C[i][j] = C[i][j] + A[i][k] * B[k][j];
+        }
+    return C;
+}
+
+cl_F norm_inf(const MpModel& mp, const Matrix& A) {
+    cl_F m = mp.zero;
+    for (const auto& row : A) {
+        cl_F s = mp.zero;
+        for (const cl_F& a : row) s = s + cln::abs(a);
+        m = cln::max(m, s);
+    }
+    return m;
+}
+
+// exp(A) by scaling and squaring: A / 2^s with norm at most 1/2, its Taylor
+// series summed until a term drops below the roundoff of the sum, squared s times.
+Matrix expm(const MpModel& mp, Matrix A) {
+    const std::size_t n = A.size();
+    int s = 0;
+    for (cl_F nrm = norm_inf(mp, A); nrm > mp.half; nrm = nrm * mp.half) ++s;
+    const cl_F scale = cln::scale_float(mp.one, -s);
+    for (auto& row : A)
+        for (cl_F& a : row) a = a * scale;
+    Matrix E(n, std::vector<cl_F>(n, mp.zero)), term = E;
+    for (std::size_t i = 0; i < n; ++i) E[i][i] = term[i][i] = mp.one;
+    for (long k = 1; k < 1000; ++k) {
+        term = product(mp, term, A);
+        for (auto& row : term)
+            for (cl_F& a : row) a = a / cl_I(k);
+        for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t j = 0; j < n; ++j) E[i][j] = E[i][j] + term[i][j];
+        if (norm_inf(mp, term) <= mp.eps * norm_inf(mp, E)) break;
+    }
+    for (int k = 0; k < s; ++k) E = product(mp, E, E);
+    return E;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------- MpModel
@@ -135,6 +209,7 @@ MpModel::MpModel(const Model& model, int digits)
     for (const Spring& s : model.springs) springs.push_back({s.a, s.b, F(s.k), zero});
     for (const Contact& c : model.contacts) contacts.push_back({c.a, c.b, F(c.k), F(c.gap)});
     for (const Jenkins& e : model.jenkins) jenkins.push_back({e.a, e.b, F(e.k), F(e.slip_force)});
+    for (const Damper& d : model.dampers) dampers.push_back({d.a, d.b, F(d.c), zero});
     f_const.assign(static_cast<std::size_t>(n), zero);
     for (int i = 0; i < n; ++i)
         if (static_cast<std::size_t>(i) < model.load.size()) f_const[i] = F(model.load[i]);
@@ -198,6 +273,11 @@ cl_F MpModel::force_on_mass(const Configuration& cfg, int i, const cl_F& t, cons
             A = e.a == i ? A + f : A - f;
         }
     }
+    for (const Link& d : dampers)  // -c (v_a - v_b) on a
+        if ((d.a == i || d.b == i) && d.a != d.b) {
+            const cl_F f = -(d.k * (body(v, d.a) - body(v, d.b)));
+            A = d.a == i ? A + f : A - f;
+        }
     for (std::size_t h = 0; h < h_omega.size(); ++h) A = A + h_amp[h][i] * cln::sin(h_omega[h] * t + h_phase[h]);
     return A;
 }
@@ -216,6 +296,11 @@ cl_F MpModel::force_rate_on_mass(const Configuration& cfg, int i, const cl_F& t,
         if (cfg.closed[c]) link(contacts[c]);
     for (std::size_t j = 0; j < jenkins.size(); ++j)
         if (cfg.slip[j] == 0) link(jenkins[j]);  // slipping: a constant force
+    for (const Link& d : dampers)
+        if ((d.a == i || d.b == i) && d.a != d.b) {
+            const cl_F f = -(d.k * (body(a, d.a) - body(a, d.b)));
+            dA = d.a == i ? dA + f : dA - f;
+        }
     for (std::size_t h = 0; h < h_omega.size(); ++h)
         dA = dA + h_amp[h][i] * h_omega[h] * cln::cos(h_omega[h] * t + h_phase[h]);
     return dA;
@@ -268,6 +353,21 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
     for (std::size_t r = 0; r < free_.size(); ++r) slot_[free_[r]] = static_cast<int>(r);
     nf_ = static_cast<int>(free_.size());
     const int n_rigid = fc.n_floating();
+    if (!mp.dampers.empty()) {
+        for (const MpModel::Link& d : mp.dampers) {  // C as K takes a spring
+            if (d.a != kGround) C_[d.a][d.a] = C_[d.a][d.a] + d.k;
+            if (d.b != kGround) C_[d.b][d.b] = C_[d.b][d.b] + d.k;
+            if (d.a != kGround && d.b != kGround) {
+                C_[d.a][d.b] = C_[d.a][d.b] - d.k;
+                C_[d.b][d.a] = C_[d.b][d.a] - d.k;
+            }
+        }
+        if (n_rigid > 0)
+            throw RunError("reference::MpSegment(): configuration '" + cfg.spec(model) +
+                           "': rigid-body modes under dampers are not taken by the reference yet");
+        init_damped(model);
+        return;
+    }
 
     // A = M^-1/2 K_F M^-1/2 = V diag(lambda) V^T, Phi = M^-1/2 V (M-orthonormal).
     std::vector<cl_F> rsqm(nf_);
@@ -405,6 +505,148 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
     ud0_.assign(nf_, Z0);
 }
 
+// ---------------------------------------------------------------- dampers
+
+void MpSegment::init_damped(const Model& model) {
+    const MpModel& mp = mp_;
+    const cl_F& Z0 = mp.zero;
+    damped_ = true;
+    const std::size_t nf = static_cast<std::size_t>(nf_);
+    S_.assign(2 * nf, std::vector<cl_F>(2 * nf, Z0));
+    for (std::size_t r = 0; r < nf; ++r) {
+        const int i = free_[r];
+        S_[r][nf + r] = mp.one;
+        for (std::size_t c = 0; c < nf; ++c) {
+            S_[nf + r][c] = -(K_[i][free_[c]] / mp.m[i]);
+            S_[nf + r][nf + c] = -(C_[i][free_[c]] / mp.m[i]);
+        }
+    }
+    Matrix KF(nf, std::vector<cl_F>(nf, Z0));
+    for (std::size_t r = 0; r < nf; ++r)
+        for (std::size_t c = 0; c < nf; ++c) KF[r][c] = K_[free_[r]][free_[c]];
+    Kinv_.assign(nf, std::vector<cl_F>(nf, Z0));
+    for (std::size_t c = 0; c < nf; ++c) {
+        std::vector<cl_F> e(nf, Z0);
+        e[c] = mp.one;
+        if (!solve_in_place(KF, e))
+            throw RunError("reference::MpSegment(): configuration '" + cfg_.spec(model) + "': singular stiffness");
+        for (std::size_t r = 0; r < nf; ++r) Kinv_[r][c] = e[r];
+    }
+    X_.assign(static_cast<std::size_t>(nh_), {});
+    for (int h = 0; h < nh_; ++h) {
+        const cl_F& W = mp.h_omega[h];
+        std::vector<std::vector<cln::cl_N>> Zm(nf, std::vector<cln::cl_N>(nf));
+        std::vector<cln::cl_N> X(nf);
+        for (std::size_t r = 0; r < nf; ++r) {
+            const int i = free_[r];
+            X[r] = mp.h_amp[h][i];
+            for (std::size_t c = 0; c < nf; ++c)
+                Zm[r][c] = cln::complex(K_[i][free_[c]] - (r == c ? W * W * mp.m[i] : Z0), W * C_[i][free_[c]]);
+        }
+        if (!solve_in_place(Zm, X))
+            throw RunError("reference::MpSegment(): configuration '" + cfg_.spec(model) +
+                           "': forced at a frequency of an undamped mode");
+        X_[h] = X;
+    }
+    // Each switch function as rows on (x_F, v_F), plus its harmonic amplitudes G_fh:
+    // the part of g from harmonic h is Im(G_fh e^{i(W tau + theta_h)}).
+    const std::size_t ns = switches_.size();
+    Lx_.assign(ns, std::vector<cl_F>(nf, Z0));
+    Lv_ = Lx_;
+    G_.assign(ns, std::vector<cln::cl_N>(static_cast<std::size_t>(nh_), Z0));
+    auto on = [&](std::vector<cl_F>& row, int body, const cl_F& c) {
+        if (body != kGround && slot_[body] >= 0) row[slot_[body]] = row[slot_[body]] + c;
+    };
+    for (std::size_t f = 0; f < ns; ++f) {
+        const SwitchFunction& sf = switches_[f];
+        const int e = sf.element;
+        if (sf.kind == SwitchKind::gap) {
+            on(Lx_[f], mp.contacts[e].a, mp.one);
+            on(Lx_[f], mp.contacts[e].b, -mp.one);
+        } else if (sf.kind == SwitchKind::velocity) {
+            on(Lv_[f], e, mp.one);
+        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
+            const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
+            const cl_F k = sf.kind == SwitchKind::slip_pos ? el.k : -el.k;
+            on(Lx_[f], el.a, k);
+            on(Lx_[f], el.b, -k);
+        } else if (sf.kind == SwitchKind::slip_velocity) {
+            const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
+            on(Lv_[f], el.a, mp.one);
+            on(Lv_[f], el.b, -mp.one);
+        } else {  // +-A_e, A = -K x - C v + ... + F sin
+            const cl_F sg = sf.kind == SwitchKind::release_pos ? mp.one : -mp.one;
+            for (std::size_t r = 0; r < nf; ++r) {
+                Lx_[f][r] = -(sg * K_[e][free_[r]]);
+                Lv_[f][r] = -(sg * C_[e][free_[r]]);
+            }
+            for (int h = 0; h < nh_; ++h) G_[f][h] = sg * mp.h_amp[h][e];
+        }
+        for (int h = 0; h < nh_; ++h)
+            for (std::size_t r = 0; r < nf; ++r)  // x_p = Im(X e^{i arg}), v_p = Im(i W X e^{i arg})
+                G_[f][h] = G_[f][h] + Lx_[f][r] * X_[h][r] + Lv_[f][r] * cln::complex(Z0, mp.h_omega[h]) * X_[h][r];
+    }
+    weight2_.resize(ns);
+    for (std::size_t f = 0; f < ns; ++f) weight2_[f] = damped_weight(f, 2);
+    fseg_ = f_const_;
+    x_fix_.assign(n_, Z0);
+    theta_.assign(nh_, Z0);
+}
+
+cl_F MpSegment::damped_weight(std::size_t f, int k) const {
+    const MpModel& mp = mp_;
+    const std::size_t nf = static_cast<std::size_t>(nf_);
+    std::vector<cl_F> p = Lx_[f], q = Lv_[f];
+    for (int r = 0; r < k; ++r) {  // (p, q) S = (-(q M^-1) K_F, p - (q M^-1) C_F)
+        std::vector<cl_F> np(nf, mp.zero), nq = p;
+        for (std::size_t i = 0; i < nf; ++i) {
+            if (is_zero(q[i])) continue;
+            const cl_F qi = q[i] / mp.m[free_[i]];
+            for (std::size_t c = 0; c < nf; ++c) {
+                np[c] = np[c] - qi * K_[free_[i]][free_[c]];
+                nq[c] = nq[c] - qi * C_[free_[i]][free_[c]];
+            }
+        }
+        p = np;
+        q = nq;
+    }
+    cl_F pk = mp.zero, qm = mp.zero;
+    for (std::size_t r = 0; r < nf; ++r) {
+        qm = qm + q[r] * q[r] / mp.m[free_[r]];
+        for (std::size_t c = 0; c < nf; ++c) pk = pk + p[r] * Kinv_[r][c] * p[c];
+    }
+    return cln::sqrt(cln::max(pk, mp.zero)) + cln::sqrt(qm);
+}
+
+void MpSegment::setup_damped(const std::vector<cl_F>& force, const std::vector<cl_F>& v0) {
+    const MpModel& mp = mp_;
+    const std::size_t nf = static_cast<std::size_t>(nf_);
+    force_ = force;
+    x_st_.assign(nf, mp.zero);
+    zh0_.assign(2 * nf, mp.zero);
+    for (std::size_t r = 0; r < nf; ++r)
+        for (std::size_t c = 0; c < nf; ++c) x_st_[r] = x_st_[r] + Kinv_[r][c] * force[c];
+    for (std::size_t r = 0; r < nf; ++r) {
+        zh0_[r] = x_fix_[free_[r]] - x_st_[r];
+        zh0_[nf + r] = v0[free_[r]];
+    }
+    for (int h = 0; h < nh_; ++h) {
+        const CosSin cs = cos_sin_of(theta_[h]);
+        const cl_F& W = mp.h_omega[h];
+        for (std::size_t r = 0; r < nf; ++r) {
+            const cl_F re = re_of(mp, X_[h][r]), im = im_of(mp, X_[h][r]);
+            zh0_[r] = zh0_[r] - (re * cs.s + im * cs.c);
+            zh0_[nf + r] = zh0_[nf + r] - W * (re * cs.c - im * cs.s);
+        }
+    }
+    energy0_ = mp.zero;
+    for (std::size_t r = 0; r < nf; ++r) {
+        energy0_ = energy0_ + mp.m[free_[r]] * zh0_[nf + r] * zh0_[nf + r];
+        for (std::size_t c = 0; c < nf; ++c) energy0_ = energy0_ + zh0_[r] * K_[free_[r]][free_[c]] * zh0_[c];
+    }
+    energy0_ = energy0_ * mp.half;
+}
+
 void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::vector<cl_F>& v0,
                       const std::vector<signed char>& sgn) {
     const MpModel& mp = mp_;
@@ -433,6 +675,10 @@ void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::ve
         if (sgn[i] < 0) f = f + mp.mu_k[i] * mp.normal[i];
         force[r] = f;
     }
+    if (damped_) {
+        setup_damped(force, v0);
+        return;
+    }
     for (int j = 0; j < nf_; ++j) {
         // q0 = Phi^T M_F x0, qd0 = Phi^T M_F v0, p = Phi^T f.
         cl_F q0 = mp.zero, qd0 = mp.zero, p = mp.zero;
@@ -459,12 +705,91 @@ void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::ve
     }
 }
 
+void MpSegment::eval_damped(const cl_F& tau, MpEval& out, std::vector<cl_F>& xm, std::vector<cl_F>& vm,
+                            cl_F& energy) const {
+    const MpModel& mp = mp_;
+    const std::size_t nf = static_cast<std::size_t>(nf_);
+    Matrix St = S_;
+    for (auto& row : St)
+        for (cl_F& a : row) a = a * tau;
+    const Matrix E = expm(mp, St);
+    std::vector<cl_F> zh(2 * nf, mp.zero);
+    for (std::size_t i = 0; i < 2 * nf; ++i)
+        for (std::size_t j = 0; j < 2 * nf; ++j) zh[i] = zh[i] + E[i][j] * zh0_[j];
+    std::vector<CosSin> hcs(nh_);
+    for (int h = 0; h < nh_; ++h) hcs[h] = cos_sin_of(mp.h_omega[h] * tau + theta_[h]);
+    std::vector<cl_F> xf(nf), vf(nf);
+    for (std::size_t r = 0; r < nf; ++r) {
+        const int i = free_[r];
+        cl_F x = x_st_[r] + zh[r], v = zh[nf + r];
+        cl_F m = cln::abs(x_st_[r]) + cln::abs(zh[r]), dm = cln::abs(zh[nf + r]);
+        for (int h = 0; h < nh_; ++h) {
+            const cl_F re = re_of(mp, X_[h][r]), im = im_of(mp, X_[h][r]);
+            const cl_F& W = mp.h_omega[h];
+            const cl_F xp = re * hcs[h].s + im * hcs[h].c, vp = W * (re * hcs[h].c - im * hcs[h].s);
+            x = x + xp;
+            v = v + vp;
+            m = m + cln::abs(xp);
+            dm = dm + cln::abs(vp);
+        }
+        out.x[i] = xf[r] = x;
+        out.v[i] = vf[r] = v;
+        xm[i] = m;
+        vm[i] = dm;
+    }
+    // a = M^-1 (f - K x - C v + sum_h F_h sin), f the segment's constant force (stuck masses: v = 0).
+    for (std::size_t r = 0; r < nf; ++r) {
+        const int i = free_[r];
+        cl_F A = force_[r];
+        for (std::size_t c = 0; c < nf; ++c) A = A - K_[i][free_[c]] * xf[c] - C_[i][free_[c]] * vf[c];
+        for (int h = 0; h < nh_; ++h) A = A + mp.h_amp[h][i] * hcs[h].s;
+        out.a[i] = A / mp.m[i];
+    }
+    energy = mp.zero;
+    for (std::size_t r = 0; r < nf; ++r) {
+        energy = energy + mp.m[free_[r]] * zh[nf + r] * zh[nf + r];
+        for (std::size_t c = 0; c < nf; ++c) energy = energy + zh[r] * K_[free_[r]][free_[c]] * zh[c];
+    }
+    energy = cln::max(energy * mp.half, mp.zero);
+}
+
 void MpSegment::eval(const cl_F& tau, MpEval& out) const {
     const MpModel& mp = mp_;
     const cl_F& Z0 = mp.zero;
     std::vector<CosSin> hcs(nh_);
     for (int h = 0; h < nh_; ++h) hcs[h] = cos_sin_of(mp.h_omega[h] * tau + theta_[h]);
-    std::vector<cl_F> q(nf_), qd(nf_), qdd(nf_), mag(nf_), dmag(nf_), b2(nf_), b3(nf_);
+    out.x.assign(static_cast<std::size_t>(n_) + mp.jenkins.size(), Z0);
+    out.v.assign(n_, Z0);
+    out.a.assign(n_, Z0);
+    std::vector<cl_F> xm(n_, Z0), vm(n_, Z0);
+    for (int i = 0; i < n_; ++i) {
+        out.x[i] = x_fix_[i];
+        xm[i] = cln::abs(x_fix_[i]);
+    }
+    std::vector<cl_F> b2(nf_), b3(nf_);
+    cl_F energy = Z0;
+    if (damped_)
+        eval_damped(tau, out, xm, vm, energy);
+    else
+        eval_modal(tau, hcs, out, xm, vm, b2, b3);
+    sliders_and_switches(out, xm, vm, hcs, [&](std::size_t f) {
+        if (damped_) {
+            cl_F B = weight2_[f] * cln::sqrt(mp.two * energy);
+            for (int h = 0; h < nh_; ++h) B = B + mp.h_omega[h] * mp.h_omega[h] * cln::abs(G_[f][h]);
+            return B;
+        }
+        cl_F B = bound_sin_[f];
+        for (int j = 0; j < nf_; ++j) B = B + cln::abs(W_[f][j]) * b2[j] + cln::abs(Z_[f][j]) * b3[j];
+        return B;
+    });
+}
+
+void MpSegment::eval_modal(const cl_F& tau, const std::vector<CosSin>& hcs, MpEval& out, std::vector<cl_F>& xm,
+                           std::vector<cl_F>& vm, std::vector<cl_F>& b2, std::vector<cl_F>& b3) const {
+    const MpModel& mp = mp_;
+    const cl_F& Z0 = mp.zero;
+    std::vector<cl_F> q(nf_), qd(nf_), qdd(nf_), mag(nf_), dmag(nf_);
+
     for (int j = 0; j < nf_; ++j) {
         const cl_F &lam = lambda_[j], &c = c_[j], &sig = sigma_[j], &w = omega_[j], &p = p_[j];
         const cl_F &u0 = u0_[j], &ud0 = ud0_[j];
@@ -547,15 +872,7 @@ void MpSegment::eval(const cl_F& tau, MpEval& out) const {
         b3[j] = bb3;
     }
 
-    // x_F = Phi q (likewise v, a); stuck masses fixed; then the sliders.
-    out.x.assign(static_cast<std::size_t>(n_) + mp.jenkins.size(), Z0);
-    out.v.assign(n_, Z0);
-    out.a.assign(n_, Z0);
-    std::vector<cl_F> xm(n_, Z0), vm(n_, Z0);
-    for (int i = 0; i < n_; ++i) {
-        out.x[i] = x_fix_[i];
-        xm[i] = cln::abs(x_fix_[i]);
-    }
+    // x_F = Phi q (likewise v, a); stuck masses fixed (by eval()).
     for (int r = 0; r < nf_; ++r) {
         cl_F x = Z0, v = Z0, a = Z0, xmr = Z0, vmr = Z0;
         for (int j = 0; j < nf_; ++j) {
@@ -573,6 +890,13 @@ void MpSegment::eval(const cl_F& tau, MpEval& out) const {
         xm[i] = xmr;
         vm[i] = vmr;
     }
+}
+
+template <class Bound>
+void MpSegment::sliders_and_switches(MpEval& out, const std::vector<cl_F>& xm, const std::vector<cl_F>& vm,
+                                     const std::vector<CosSin>& hcs, Bound&& bound) const {
+    const MpModel& mp = mp_;
+    const cl_F& Z0 = mp.zero;
     std::vector<cl_F> sm(mp.jenkins.size(), Z0);  // the sliders' magnitudes
     for (std::size_t j = 0; j < mp.jenkins.size(); ++j) {
         const MpModel::Link& e = mp.jenkins[j];
@@ -639,17 +963,24 @@ void MpSegment::eval(const cl_F& tau, MpEval& out) const {
             dg = pos ? dA : -dA;
             scale = m + mu_n;
         }
-        cl_F B = bound_sin_[f];
-        for (int j = 0; j < nf_; ++j) B = B + cln::abs(W_[f][j]) * b2[j] + cln::abs(Z_[f][j]) * b3[j];
         out.g[f] = g;
         out.dg[f] = dg;
-        out.bound[f] = B;
+        out.bound[f] = bound(f);
         out.scale[f] = scale;
     }
 }
 
 cl_F MpSegment::derivative_bound(std::size_t f, int k, const cl_F& horizon) const {
     const MpModel& mp = mp_;
+    if (damped_) {
+        cl_F B = damped_weight(f, k) * cln::sqrt(mp.two * energy0_);
+        for (int h = 0; h < nh_; ++h) {
+            cl_F Wk = mp.one;
+            for (int r = 0; r < k; ++r) Wk = Wk * mp.h_omega[h];
+            B = B + Wk * cln::abs(G_[f][h]);
+        }
+        return B;
+    }
     // Bounds on |q_j^(i)| for i = k and k + 1 (the Z terms carry q').
     auto mode_bound = [&](int j, int i) {
         const cl_F &lam = lambda_[j], &c = c_[j];
@@ -700,7 +1031,10 @@ cl_F MpSegment::derivative_bound(std::size_t f, int k, const cl_F& horizon) cons
 
 cl_F MpSegment::fastest_rate() const {
     cl_F r = mp_.zero;
-    for (int j = 0; j < nf_; ++j) r = cln::max(r, cln::max(omega_[j], cln::abs(c_[j])));
+    if (damped_)
+        r = norm_inf(mp_, S_);  // every |eigenvalue| of S is below it
+    else
+        for (int j = 0; j < nf_; ++j) r = cln::max(r, cln::max(omega_[j], cln::abs(c_[j])));
     for (const cl_F& W : mp_.h_omega) r = cln::max(r, W);
     return r;
 }

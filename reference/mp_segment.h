@@ -25,6 +25,7 @@
 
 #include <vector>
 
+#include <cln/complex.h>
 #include <cln/float.h>
 
 #include "configuration.h"
@@ -53,6 +54,8 @@ struct MpModel {
     /// Stuck, a link whose gap is the slider x[n + j]; slipping, the constant
     /// force -slip * F_s on a (the opposite on b).
     std::vector<Link> jenkins;
+    /// Dampers (model.h Damper): the coefficient c in `k`; force -c (v[a] - v[b]) on a.
+    std::vector<Link> dampers;
     std::vector<cl_F> h_omega, h_phase;    ///< harmonics with omega != 0, folded to omega > 0
     std::vector<std::vector<cl_F>> h_amp;  ///< [h][i]
     std::vector<cl_F> f_const;             ///< loads + omega = 0 harmonics
@@ -84,6 +87,9 @@ struct MpEval {
 class MpSegment {
 public:
     enum class Regime { rigid, underdamped, critical, overdamped };
+    struct CosSin {
+        cl_F c, s;
+    };
 
     /// Analyse cfg (throws RunError when Jacobi does not converge).
     MpSegment(const Model& model, const MpModel& mp, const Configuration& cfg);
@@ -111,11 +117,39 @@ public:
     /// a segment may legitimately take (reference.cpp).
     cl_F fastest_rate() const;
 
+    /// Dampers: the free coordinates' state by the matrix exponential (below).
+    bool damped() const { return damped_; }
+
     // For tests.
     const std::vector<cl_F>& lambda() const { return lambda_; }
     Regime regime(int j) const { return regime_[static_cast<std::size_t>(j)]; }
 
 private:
+    // Dampers (non-proportional damping), independent of the derivation's
+    // state-space modes: the homogeneous state z_h = (x_F, v_F) - z_p moves as
+    // z_h(tau) = exp(S tau) z_h(0), S = [0 I; -M^-1 K  -M^-1 C], by scaling and
+    // squaring of S's Taylor series at the working precision (a defective S,
+    // critical damping, is no special case); x_st = K^-1 f and each harmonic's
+    // X_h = (K - W^2 M + i W C)^-1 F_h by elimination. The bounds use the energy
+    // E = (v_h^T M v_h + x_h^T K x_h)/2, which never grows (dE/dt = -v_h^T C v_h):
+    // a row (p, q) on (x_h, v_h) is at most (sqrt(p^T K^-1 p) + sqrt(q^T M^-1 q))
+    // sqrt(2 E), so |g^(k)| <= that of L_f S^k plus sum_h W^k |G_fh| over any
+    // step. Rigid-body modes (K_FF singular) are refused (RunError).
+    void init_damped(const Model& model);
+    void setup_damped(const std::vector<cl_F>& force, const std::vector<cl_F>& v0);
+    /// x, v, a of the free masses and their term magnitudes at tau; the energy of the homogeneous part.
+    void eval_damped(const cl_F& tau, MpEval& out, std::vector<cl_F>& xm, std::vector<cl_F>& vm, cl_F& energy) const;
+    /// sqrt(p^T K^-1 p) + sqrt(q^T M^-1 q) of the row L_f S^k.
+    cl_F damped_weight(std::size_t f, int k) const;
+    /// x, v, a of the free masses from the modes, their magnitudes, and per mode
+    /// the bounds on the second and third derivatives from here on.
+    void eval_modal(const cl_F& tau, const std::vector<CosSin>& hcs, MpEval& out, std::vector<cl_F>& xm,
+                    std::vector<cl_F>& vm, std::vector<cl_F>& b2, std::vector<cl_F>& b3) const;
+    /// The sliders, then the switch functions from x, v, a; bound(f) gives B_f.
+    template <class Bound>
+    void sliders_and_switches(MpEval& out, const std::vector<cl_F>& xm, const std::vector<cl_F>& vm,
+                              const std::vector<CosSin>& hcs, Bound&& bound) const;
+
     const MpModel& mp_;
     Configuration cfg_;
     std::vector<SwitchFunction> switches_;
@@ -135,6 +169,13 @@ private:
     std::vector<cl_F> x_fix_, theta_, p_, u0_, ud0_;
     std::vector<cl_F> fseg_;  // f_const_ plus the stuck sliders' preload k s
     std::vector<cl_F> slider_;  // the stuck sliders' positions
+    // dampers
+    bool damped_ = false;
+    std::vector<std::vector<cl_F>> S_, Kinv_, Lx_, Lv_;  // S, K_FF^-1 (2nf, nf square); g_f's rows on x_F, v_F
+    std::vector<std::vector<cln::cl_N>> X_, G_;          // [h][r] particular amplitudes; [f][h] g_f's
+    std::vector<cl_F> weight2_;                          // damped_weight(f, 2)
+    std::vector<cl_F> force_, x_st_, zh0_;               // setup: constant force, static offset, z_h(0)
+    cl_F energy0_;
 };
 
 }  // namespace hsnc::reference

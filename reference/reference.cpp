@@ -100,6 +100,12 @@ void force_derivative(const MpModel& mp, const Configuration& cfg, int i, const 
             magnitude = magnitude + e.gap;
         }
     }
+    for (const auto& d : mp.dampers)  // -c (x^(k+1)_a - x^(k+1)_b) on a
+        if (d.a != d.b && (d.a == i || d.b == i)) {
+            const cl_F f = -(d.k * (mp.body(xk1, d.a) - mp.body(xk1, d.b)));
+            value = d.a == i ? value + f : value - f;
+            magnitude = magnitude + d.k * (mp.body(mk1, d.a) + mp.body(mk1, d.b));
+        }
     for (std::size_t h = 0; h < mp.h_omega.size(); ++h) {
         const cl_F& W = mp.h_omega[h];
         const cl_F arg = W * t + mp.h_phase[h];
@@ -293,7 +299,6 @@ std::size_t search_step_limit(double span, double fastest_rate, const SearchLimi
 PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions& options, Observer& observer,
                             const SearchLimits& limits, const std::vector<double>* offset) {
     if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
-    require_proportional_damping(model, "reference::simulate_precise()");
     // Jenkins elements: their sliders are state (x after the masses); stuck pairs: not yet.
     if (const std::string what = friction_pairs(model); !what.empty())
         throw InputError("reference::simulate_precise(): model '" + model.name + "' has " + what +

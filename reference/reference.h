@@ -4,7 +4,8 @@
 // It solves exactly the problem the double engine sees: the Model's double
 // values (parameters, initial state, t0, t_end, sample times) are converted
 // EXACTLY to CLN floats, and from there on everything -- the modal
-// decomposition (cyclic Jacobi), the closed forms of every regime, the forcing
+// decomposition (cyclic Jacobi; with dampers the matrix exponential of the
+// state matrix), the closed forms of every regime, the forcing
 // particular solutions, the switch search and the transitions -- is evaluated
 // at N digits (reference/mp_segment.h, reference/reference.cpp). Its own
 // accuracy is checked by agreement between N and 2N digits

@@ -31,6 +31,7 @@
 #include "lowering.h"
 #include "model_reader.h"
 #include "random_model.h"
+#include "reference_engine.h"
 #include "sample_models.h"
 #include "state_space_solver.h"
 #if HSNC_WITH_JIT
@@ -354,6 +355,48 @@ TEST(DamperDerivation, WholeRunsAgreeWithCvode) {
         EXPECT_EQ(same, h.events.size()) << m.name;
         EXPECT_GE(same, 10u) << m.name;
         EXPECT_LT(dt, 1e-8) << m.name;
+    }
+}
+
+// The CLN reference with dampers (reference/mp_segment.h: the matrix
+// exponential at N digits, bounds from the energy): at 30 and 60 digits it
+// agrees with itself, and the interpreter (the derivation's pseudo-modes, in
+// double) with it, on the three models and on critical damping, which the
+// derivation refuses and the exponential takes.
+reference::PreciseRun reference_run(const Model& m, double t_end, int digits) {
+    testing::Recorder rec(m.dof(), m.state_size());
+    EngineOptions opt;
+    opt.t_end = t_end;
+    return reference::simulate_precise(m, digits, opt, rec);
+}
+
+TEST(DamperReference, AgreesWithItselfAndWithTheInterpreter) {
+    Model critical = heavy_dashpot();
+    critical.name = "critical";
+    critical.dampers[0].c = 2.0 * std::sqrt(150.0 * 1.0) - 0.3;  // m1 alone with m2 stuck: c = 2 sqrt(k m)
+    Configuration m2_stuck = Configuration::all_open(critical);
+    m2_stuck.stuck[1] = true;
+    EXPECT_THROW(derive(critical, m2_stuck), NotDerivable);  // the interpreter's run takes it on the generic solver
+    for (const Model& m : {absorber(), heavy_dashpot(), jenkins_with_dashpot(), critical}) {
+        const double t_end = 8.0;
+        const reference::PreciseRun r30 = reference_run(m, t_end, 30), r60 = reference_run(m, t_end, 60);
+        ASSERT_EQ(r30.summary.status, RunStatus::ok) << m.name << ": " << r30.summary.message;
+        ASSERT_EQ(r60.summary.status, RunStatus::ok) << m.name << ": " << r60.summary.message;
+        const testing::Outcome h = testing::simulate(m, t_end, 0.0, testing::Solvers::interp);
+        ASSERT_EQ(r30.events.size(), r60.events.size()) << m.name;
+        ASSERT_EQ(h.events.size(), r60.events.size()) << m.name;
+        double self = 0.0, vs_double = 0.0;
+        for (std::size_t k = 0; k < r60.events.size(); ++k) {
+            EXPECT_EQ(r30.events[k].kind, r60.events[k].kind) << m.name << " event " << k;
+            EXPECT_EQ(h.events[k].kind, r60.events[k].kind) << m.name << " event " << k;
+            self = std::max(self, reference::relative_difference(r30.events[k].t, r60.events[k].t, 1.0));
+            vs_double = std::max(vs_double, std::fabs(h.events[k].t - cln::double_approx(r60.events[k].t)));
+        }
+        std::printf("%s: %zu events; reference 30 vs 60 digits %.2g s, interpreter vs reference %.2g s\n",
+                    m.name.c_str(), r60.events.size(), self, vs_double);
+        EXPECT_GE(r60.events.size(), 10u) << m.name;
+        EXPECT_LT(self, 1e-25) << m.name;
+        EXPECT_LT(vs_double, 1e-12) << m.name;
     }
 }
 
