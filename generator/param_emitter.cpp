@@ -26,6 +26,12 @@ std::vector<std::string> kept_parameters(const Model& model, const std::string& 
     if (const std::string what = stick_elements(model); !what.empty())
         throw InputError(flag + ": the model has " + what +
                          ", which sweep kernels do not take yet (generate without --params folds them)");
+    // Sweep kernels redo the modal analysis of K at run time (sweep_kernel_core.h):
+    // state-space pseudo-modes there are still to come.
+    if (!model.proportional_damping())
+        throw InputError(flag + ": the model has non-proportional damping ([[damper]] or a non-proportional "
+                                "structure.damping), which sweep kernels do not take yet (generate without --params "
+                                "derives its kernels)");
     std::vector<std::string> names;
     for (const auto& [name, text] : model.parameter_expressions) names.push_back(name);
     if (list == "all") return names;

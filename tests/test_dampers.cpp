@@ -667,6 +667,17 @@ TEST(DamperCli, TheBundledAbsorberRunsOnEveryKernelKind) {
     const testing::CliRun generate = testing::run_hsnc("generate " + model + " -o " + dir);
     EXPECT_EQ(generate.exit_code, 0) << generate.err;
     EXPECT_NE(testing::slurp(dir + "/dashpot-absorber.manifest").find("all 2 configurations"), std::string::npos);
+    // Sweep kernels (parameters at run time) redo the modal analysis of K: refused, not silently wrong.
+    const std::string with_parameter = testing::temp_path("dampers-params.toml");
+    std::ofstream(with_parameter) << "name = \"dampers-params\"\n[parameters]\nca = 0.1273\n"
+                                  << "[[mass]]\nname = \"m1\"\nm = 1.0\n[[mass]]\nname = \"m2\"\nm = 0.05\n"
+                                  << "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 100.0\n"
+                                  << "[[spring]]\nbetween = [\"m1\", \"m2\"]\nk = 4.5\n"
+                                  << "[[damper]]\nbetween = [\"m1\", \"m2\"]\nc = \"ca\"\n";
+    const testing::CliRun params =
+        testing::run_hsnc("generate " + with_parameter + " --params all -o " + testing::temp_path("dampers-params-gen"));
+    EXPECT_EQ(params.exit_code, 2) << params.out;
+    EXPECT_NE(params.err.find("non-proportional damping"), std::string::npos) << params.err;
 }
 
 }  // namespace
