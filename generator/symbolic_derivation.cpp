@@ -68,6 +68,10 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
         why = "the model has " + what + ", which the symbolic view does not take yet";
         return false;
     }
+    if (!model.proportional_damping()) {  // state-space modes: a quartic and up, not the symmetric 2x2 below
+        why = "the model has non-proportional damping (dampers), which the symbolic view does not take";
+        return false;
+    }
     const Derivation numeric = derive(model, cfg);  // free/stuck split, switch order, rigid modes
     const std::size_t n = model.dof(), nf = numeric.n_free();
     if (nf == 0) {
