@@ -3,6 +3,7 @@
 #include <cln/cln.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <numeric>
 
@@ -118,11 +119,22 @@ void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& grou
     d.state_space = true;
     const cln::float_format_t format = cln::float_format(kDerivationDigits);
     const auto K = folded(d.K, group), C = folded(d.C, group);
+    // Balanced as the state-space solver balances it: y = (x, v / s), s the power of 2
+    // nearest the largest sqrt(K_rr / m_r) (else C_rr / m_r), so that the eigenvectors'
+    // condition measures the modes, not the units (unbalanced, a 16-mass chain's
+    // configurations went from condition ~10 to above 200).
+    double w2 = 0.0, rate = 0.0;
+    for (std::size_t r = 0; r < nf; ++r) {
+        w2 = std::max(w2, (K[r][r] / d.mass[r]).to_double());
+        rate = std::max(rate, (C[r][r] / d.mass[r]).to_double());
+    }
+    const double s_double = w2 > 0.0 ? std::sqrt(w2) : rate > 0.0 ? rate : 1.0;
+    const numeric s_scale = numeric(2).power(static_cast<long>(std::lround(std::log2(s_double))));  // exact
     std::vector<std::vector<cln::cl_R>> S(ns, std::vector<cln::cl_R>(ns, 0));
     for (std::size_t r = 0; r < nf; ++r) {
-        S[r][nf + r] = 1;
+        S[r][nf + r] = cln::the<cln::cl_R>(to_cl(s_scale));
         for (std::size_t c = 0; c < nf; ++c) {
-            S[nf + r][c] = cln::the<cln::cl_R>(to_cl(-K[r][c] / d.mass[r]));
+            S[nf + r][c] = cln::the<cln::cl_R>(to_cl(-K[r][c] / (d.mass[r] * s_scale)));
             S[nf + r][nf + c] = cln::the<cln::cl_R>(to_cl(-C[r][c] / d.mass[r]));
         }
     }
@@ -133,13 +145,13 @@ void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& grou
         throw NotDerivable(where + e.what());
     }
     StateSpaceData& st = d.state;
-    for (std::size_t k = 0; k < ns; ++k) {
+    for (std::size_t k = 0; k < ns; ++k) {  // back to z = (x, v): Psi_v = s Psi_y,v, L_v = L_y,v / s
         st.values.emplace_back(eig.values[k]);
         st.vectors.emplace_back();
         st.inverse.emplace_back();
         for (std::size_t i = 0; i < ns; ++i) {
-            st.vectors[k].emplace_back(eig.vectors[k][i]);
-            st.inverse[k].emplace_back(eig.inverse[k][i]);
+            st.vectors[k].push_back(i < nf ? numeric(eig.vectors[k][i]) : numeric(eig.vectors[k][i]) * s_scale);
+            st.inverse[k].push_back(i < nf ? numeric(eig.inverse[k][i]) : numeric(eig.inverse[k][i]) / s_scale);
         }
     }
     // Pseudo-modes in ascending |mu| (then Im mu): one per real mu, two per pair.
