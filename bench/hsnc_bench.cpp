@@ -283,8 +283,7 @@ int main(int argc, char** argv) {
     auto run_kinds = [&] {
         std::vector<std::pair<std::string, Model>> kind_models;
         std::vector<double> kind_t_ends;
-        for (const Case& c : cases)  // dampers: the generic path only (no kernels, no interpreter, for now)
-            if (c.model.proportional_damping()) kind_models.emplace_back(c.name, c.model), kind_t_ends.push_back(c.t_end);
+        for (const Case& c : cases) kind_models.emplace_back(c.name, c.model), kind_t_ends.push_back(c.t_end);
         kind_models.emplace_back("chain-8", read_model(models + "chain-8.toml"));
         kind_t_ends.push_back(20.0);
         kind_models.emplace_back("chain-32", parse_model(chain(32), "chain-32"));
