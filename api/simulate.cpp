@@ -105,15 +105,12 @@ void check_options(const Model& model, const SimulateOptions& o) {
     // Jenkins elements (a slider carried beside the state) and friction between
     // two bodies (a stuck pair, one body): hsnc (every kernel kind), rk45 and
     // CVODE take both, ab4 neither (its own stick rules hold a mass against
-    // the ground); the reference takes the Jenkins elements, not the pairs, yet.
+    // the ground); the reference takes both.
     if (const std::string what = stick_elements(model); !what.empty()) {
         if (o.method == Method::ab4)
             throw OptionError(kSimulate, "method", method_name(o.method),
                               "the model has " + what + ", which hsnc, rk45 and cvode run, for now");
     }
-    if (const std::string what = friction_pairs(model); !what.empty() && o.precision_digits != 0)
-        throw OptionError(kSimulate, "precision_digits", std::to_string(o.precision_digits),
-                          "the model has " + what + ", which the reference does not take yet");
     if (o.method != Method::hsnc && o.kernels != KernelChoice::automatic)
         throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels),
                           std::string("applies to method hsnc only (not ") + method_name(o.method) + ")");

@@ -210,6 +210,7 @@ MpModel::MpModel(const Model& model, int digits)
     for (const Contact& c : model.contacts) contacts.push_back({c.a, c.b, F(c.k), F(c.gap)});
     for (const Jenkins& e : model.jenkins) jenkins.push_back({e.a, e.b, F(e.k), F(e.slip_force)});
     for (const Damper& d : model.dampers) dampers.push_back({d.a, d.b, F(d.c), zero});
+    for (const Mass& ms : model.masses) partner.push_back(ms.partner);
     f_const.assign(static_cast<std::size_t>(n), zero);
     for (int i = 0; i < n; ++i)
         if (static_cast<std::size_t>(i) < model.load.size()) f_const[i] = F(model.load[i]);
@@ -234,6 +235,15 @@ MpModel::MpModel(const Model& model, int digits)
     for (std::size_t j = 0; j < model.jenkins.size(); ++j)  // the sliders after the masses: unstretched, or slider0
         x0.push_back(model.slider0.empty() ? body(x0, model.jenkins[j].a) - body(x0, model.jenkins[j].b)
                                            : F(model.slider0[j]));
+}
+
+cl_F MpModel::against_partner(int i, const cl_F& ai, const cl_F& ap) const {
+    const cl_F &mi = m[i], &mp = m[partner[i]];
+    return (mp * ai - mi * ap) / (mi + mp);
+}
+cl_F MpModel::against_partner_magnitude(int i, const cl_F& mag_i, const cl_F& mag_p) const {
+    const cl_F &mi = m[i], &mp = m[partner[i]];
+    return (mp * mag_i + mi * mag_p) / (mi + mp);
 }
 
 cl_F MpModel::F(double d) const { return cln::cl_float(d, format); }
@@ -352,6 +362,20 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
     slot_.assign(n_, -1);
     for (std::size_t r = 0; r < free_.size(); ++r) slot_[free_[r]] = static_cast<int>(r);
     nf_ = static_cast<int>(free_.size());
+    // Masses stuck to their friction partner ride its coordinate: the coordinate's
+    // mass and stiffness gather theirs (T^T M T, T^T K T of x = T q + e).
+    mass_.assign(nf_, Z0);
+    for (int r = 0; r < nf_; ++r) mass_[r] = mp.m[free_[r]];
+    for (int i = 0; i < n_; ++i)
+        if (mp.rides(cfg, i)) {
+            riders_.push_back(i);
+            slot_[i] = slot_[mp.partner[i]];
+            mass_[slot_[i]] = mass_[slot_[i]] + mp.m[i];
+        }
+    std::vector<std::vector<cl_F>> Kf(nf_, std::vector<cl_F>(nf_, Z0));
+    for (int i = 0; i < n_; ++i)
+        for (int k = 0; k < n_; ++k)
+            if (slot_[i] >= 0 && slot_[k] >= 0) Kf[slot_[i]][slot_[k]] = Kf[slot_[i]][slot_[k]] + K_[i][k];
     const int n_rigid = fc.n_floating();
     if (!mp.dampers.empty()) {
         for (const MpModel::Link& d : mp.dampers) {  // C as K takes a spring
@@ -365,16 +389,18 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
         if (n_rigid > 0)
             throw RunError("reference::MpSegment(): configuration '" + cfg.spec(model) +
                            "': rigid-body modes under dampers are not taken by the reference yet");
+        if (!riders_.empty())  // the model reader refuses friction between two bodies with dampers
+            throw RunError("reference::MpSegment(): a stuck friction pair under dampers");
         init_damped(model);
         return;
     }
 
     // A = M^-1/2 K_F M^-1/2 = V diag(lambda) V^T, Phi = M^-1/2 V (M-orthonormal).
     std::vector<cl_F> rsqm(nf_);
-    for (int r = 0; r < nf_; ++r) rsqm[r] = mp.one / cln::sqrt(mp.m[free_[r]]);
+    for (int r = 0; r < nf_; ++r) rsqm[r] = mp.one / cln::sqrt(mass_[r]);
     std::vector<std::vector<cl_F>> A(nf_, std::vector<cl_F>(nf_, Z0)), V;
     for (int r = 0; r < nf_; ++r)
-        for (int s = 0; s < nf_; ++s) A[r][s] = rsqm[r] * K_[free_[r]][free_[s]] * rsqm[s];
+        for (int s = 0; s < nf_; ++s) A[r][s] = rsqm[r] * Kf[r][s] * rsqm[s];
     std::vector<cl_F> d;
     if (!jacobi(mp, A, d, V))
         throw RunError("reference::MpSegment(): Jacobi eigen-solver did not converge in configuration '" +
@@ -425,7 +451,8 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
     for (int j = 0; j < nf_; ++j)
         for (int h = 0; h < nh_; ++h) {
             cl_F P = Z0;
-            for (int r = 0; r < nf_; ++r) P = P + phi_[r][j] * mp.h_amp[h][free_[r]];
+            for (int i = 0; i < n_; ++i)
+                if (slot_[i] >= 0) P = P + phi_[slot_[i]][j] * mp.h_amp[h][i];
             P_[j][h] = P;
             const cl_F& W = mp.h_omega[h];
             const cl_F det = lambda_[j] - W * W, cw = c_[j] * W;
@@ -457,7 +484,9 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
                 W_[f][j] = w;
             }
         } else if (sf.kind == SwitchKind::velocity) {
-            for (int j = 0; j < nf_; ++j) Z_[f][j] = phi_[slot_[sf.element]][j];
+            const int p = mp.partner[sf.element];  // w = v_e - v_partner
+            for (int j = 0; j < nf_; ++j)
+                Z_[f][j] = p == kGround ? phi_[slot_[sf.element]][j] : phi_[slot_[sf.element]][j] - phi_[slot_[p]][j];
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg ||
                    sf.kind == SwitchKind::slip_velocity) {
             // +-k (x_a - x_b - s) - F_s (the slider fixed) on q; w = v_a - v_b on q'.
@@ -470,18 +499,34 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
                 (sf.kind == SwitchKind::slip_velocity ? Z_ : W_)[f][j] = c * w;
             }
         } else {
+            // +-A_i on the modes, A_i = -(K x)_i - (C v)_i + ... over every moving mass;
+            // against a partner p, D_i = (m_p A_i - m_i A_p)/(m_i + m_p).
             const bool pos = sf.kind == SwitchKind::release_pos;
-            const int i = sf.element;
+            const int i = sf.element, p = mp.partner[i];
+            auto rows = [&](int b, int j, cl_F& kw, cl_F& cz) {
+                kw = cz = Z0;
+                for (int k = 0; k < n_; ++k) {
+                    if (slot_[k] < 0) continue;
+                    kw = kw + K_[b][k] * phi_[slot_[k]][j];
+                    cz = cz + C_[b][k] * phi_[slot_[k]][j];
+                }
+            };
             for (int j = 0; j < nf_; ++j) {
-                cl_F kw = Z0, cz = Z0;
-                for (int r = 0; r < nf_; ++r) {
-                    kw = kw + K_[i][free_[r]] * phi_[r][j];
-                    cz = cz + C_[i][free_[r]] * phi_[r][j];
+                cl_F kw, cz;
+                rows(i, j, kw, cz);
+                if (p != kGround) {
+                    cl_F kp, cp;
+                    rows(p, j, kp, cp);
+                    kw = mp.against_partner(i, kw, kp);
+                    cz = mp.against_partner(i, cz, cp);
                 }
                 W_[f][j] = pos ? -kw : kw;
                 Z_[f][j] = pos ? -cz : cz;
             }
-            for (int h = 0; h < nh_; ++h) D_[f][h] = pos ? mp.h_amp[h][i] : -mp.h_amp[h][i];
+            for (int h = 0; h < nh_; ++h) {
+                const cl_F F = p == kGround ? mp.h_amp[h][i] : mp.against_partner(i, mp.h_amp[h][i], mp.h_amp[h][p]);
+                D_[f][h] = pos ? F : -F;
+            }
         }
     }
     // The standard particular parts of harmonic h add up in g_f to one sinusoid
@@ -663,17 +708,26 @@ void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::ve
         if (e.a != kGround) fseg_[e.a] = fseg_[e.a] + p;
         if (e.b != kGround) fseg_[e.b] = fseg_[e.b] - p;
     }
-    // Constant force on the free masses: loads, preloads, the stuck masses as
-    // supports (-K_FS x_S), kinetic friction -mu_k N_i sgn_i.
+    // Constant force on each coordinate, summed over its masses (T^T (f - K e)):
+    // loads, preloads, the masses held still as supports (-K_FS x_S), the riders'
+    // offsets (-K e), kinetic friction -mu_k N sgn and its reaction on a partner.
+    offset_.clear();
+    for (int q : riders_) offset_.push_back(x0[q] - x0[mp.partner[q]]);
+    std::vector<cl_F> fric(n_, mp.zero);
+    for (int i = 0; i < n_; ++i) {
+        if (sgn[i] == 0) continue;
+        const cl_F fr = sgn[i] > 0 ? mp.mu_k[i] * mp.normal[i] : -(mp.mu_k[i] * mp.normal[i]);
+        fric[i] = fric[i] - fr;
+        if (mp.partner[i] != kGround) fric[mp.partner[i]] = fric[mp.partner[i]] + fr;
+    }
     std::vector<cl_F> force(nf_, mp.zero);
-    for (int r = 0; r < nf_; ++r) {
-        const int i = free_[r];
-        cl_F f = fseg_[i];
+    for (int i = 0; i < n_; ++i) {
+        if (slot_[i] < 0) continue;
+        cl_F f = fseg_[i] + fric[i];
         for (int s = 0; s < n_; ++s)
-            if (cfg_.stuck[s]) f = f - K_[i][s] * x0[s];
-        if (sgn[i] > 0) f = f - mp.mu_k[i] * mp.normal[i];
-        if (sgn[i] < 0) f = f + mp.mu_k[i] * mp.normal[i];
-        force[r] = f;
+            if (mp.fixed(cfg_, s)) f = f - K_[i][s] * x0[s];
+        for (std::size_t r = 0; r < riders_.size(); ++r) f = f - K_[i][riders_[r]] * offset_[r];
+        force[slot_[i]] = force[slot_[i]] + f;
     }
     if (damped_) {
         setup_damped(force, v0);
@@ -684,8 +738,8 @@ void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::ve
         cl_F q0 = mp.zero, qd0 = mp.zero, p = mp.zero;
         for (int r = 0; r < nf_; ++r) {
             const int i = free_[r];
-            q0 = q0 + phi_[r][j] * mp.m[i] * x0[i];
-            qd0 = qd0 + phi_[r][j] * mp.m[i] * v0[i];
+            q0 = q0 + phi_[r][j] * mass_[r] * x0[i];
+            qd0 = qd0 + phi_[r][j] * mass_[r] * v0[i];
             p = p + phi_[r][j] * force[r];
         }
         p_[j] = p;
@@ -772,6 +826,14 @@ void MpSegment::eval(const cl_F& tau, MpEval& out) const {
         eval_damped(tau, out, xm, vm, energy);
     else
         eval_modal(tau, hcs, out, xm, vm, b2, b3);
+    for (std::size_t r = 0; r < riders_.size(); ++r) {  // with their partner, at their offset
+        const int q = riders_[r], p = mp.partner[q];
+        out.x[q] = out.x[p] + offset_[r];
+        out.v[q] = out.v[p];
+        out.a[q] = out.a[p];
+        xm[q] = xm[p] + cln::abs(offset_[r]);
+        vm[q] = vm[p];
+    }
     sliders_and_switches(out, xm, vm, hcs, [&](std::size_t f) {
         if (damped_) {
             cl_F B = weight2_[f] * cln::sqrt(mp.two * energy);
@@ -926,10 +988,11 @@ void MpSegment::sliders_and_switches(MpEval& out, const std::vector<cl_F>& xm, c
             g = contact_gap(mp.body(out.x, ct.a), mp.body(out.x, ct.b), ct.gap);
             dg = mp.body(out.v, ct.a) - mp.body(out.v, ct.b);
             scale = bmag(xm, ct.a) + bmag(xm, ct.b) + cln::abs(ct.gap);
-        } else if (sf.kind == SwitchKind::velocity) {
-            g = out.v[e];
-            dg = out.a[e];
-            scale = vm[e];
+        } else if (sf.kind == SwitchKind::velocity) {  // w = v_e - v_partner
+            const int p = mp.partner[e];
+            g = out.v[e] - mp.body(out.v, p);
+            dg = out.a[e] - mp.body(out.a, p);
+            scale = vm[e] + bmag(vm, p);
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
             const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
             const cl_F s = out.x[static_cast<std::size_t>(n_ + e)];
@@ -945,17 +1008,29 @@ void MpSegment::sliders_and_switches(MpEval& out, const std::vector<cl_F>& xm, c
             dg = mp.body(out.a, el.a) - mp.body(out.a, el.b);
             scale = bmag(vm, el.a) + bmag(vm, el.b);
         } else {
-            // A_i = -(K x)_i - (C v)_i + f_i + F_i(t), with the full K(cfg), C(cfg), f with the sliders' preload.
-            cl_F A = fseg_[e], dA = Z0, m = cln::abs(fseg_[e]);
-            for (int k = 0; k < n_; ++k) {
-                A = A - K_[e][k] * out.x[k] - C_[e][k] * out.v[k];
-                dA = dA - K_[e][k] * out.v[k] - C_[e][k] * out.a[k];
-                m = m + cln::abs(K_[e][k]) * xm[k] + cln::abs(C_[e][k]) * vm[k];
-            }
-            for (int h = 0; h < nh_; ++h) {
-                A = A + mp.h_amp[h][e] * hcs[h].s;
-                dA = dA + mp.h_amp[h][e] * mp.h_omega[h] * hcs[h].c;
-                m = m + cln::abs(mp.h_amp[h][e] * hcs[h].s);
+            // A_i = -(K x)_i - (C v)_i + f_i + F_i(t), with the full K(cfg), C(cfg), f with the sliders' preload;
+            // against a partner p, D_i = (m_p A_i - m_i A_p)/(m_i + m_p).
+            auto force = [&](int b, cl_F& A, cl_F& dA, cl_F& m) {
+                A = fseg_[b], dA = Z0, m = cln::abs(fseg_[b]);
+                for (int k = 0; k < n_; ++k) {
+                    A = A - K_[b][k] * out.x[k] - C_[b][k] * out.v[k];
+                    dA = dA - K_[b][k] * out.v[k] - C_[b][k] * out.a[k];
+                    m = m + cln::abs(K_[b][k]) * xm[k] + cln::abs(C_[b][k]) * vm[k];
+                }
+                for (int h = 0; h < nh_; ++h) {
+                    A = A + mp.h_amp[h][b] * hcs[h].s;
+                    dA = dA + mp.h_amp[h][b] * mp.h_omega[h] * hcs[h].c;
+                    m = m + cln::abs(mp.h_amp[h][b] * hcs[h].s);
+                }
+            };
+            cl_F A, dA, m;
+            force(e, A, dA, m);
+            if (const int p = mp.partner[e]; p != kGround) {
+                cl_F Ap, dAp, mpart;
+                force(p, Ap, dAp, mpart);
+                A = mp.against_partner(e, A, Ap);
+                dA = mp.against_partner(e, dA, dAp);
+                m = mp.against_partner_magnitude(e, m, mpart);
             }
             const cl_F mu_n = mp.mu_s[e] * mp.normal[e];
             const bool pos = sf.kind == SwitchKind::release_pos;

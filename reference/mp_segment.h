@@ -56,6 +56,16 @@ struct MpModel {
     std::vector<Link> jenkins;
     /// Dampers (model.h Damper): the coefficient c in `k`; force -c (v[a] - v[b]) on a.
     std::vector<Link> dampers;
+    /// Each mass's friction partner (model.h Mass::partner; kGround: the ground).
+    std::vector<int> partner;
+    /// Held against the ground (stuck, its partner the ground), or moving with its
+    /// partner (stuck to a partner body), in cfg.
+    bool fixed(const Configuration& cfg, int i) const { return cfg.stuck[i] && partner[i] == kGround; }
+    bool rides(const Configuration& cfg, int i) const { return cfg.stuck[i] && partner[i] != kGround; }
+    /// (m_p a_i - m_i a_p)/(m_i + m_p): what holds mass i to its partner p (assembly.h against_partner),
+    /// and the magnitude of its terms.
+    cl_F against_partner(int i, const cl_F& ai, const cl_F& ap) const;
+    cl_F against_partner_magnitude(int i, const cl_F& mag_i, const cl_F& mag_p) const;
     std::vector<cl_F> h_omega, h_phase;    ///< harmonics with omega != 0, folded to omega > 0
     std::vector<std::vector<cl_F>> h_amp;  ///< [h][i]
     std::vector<cl_F> f_const;             ///< loads + omega = 0 harmonics
@@ -154,7 +164,10 @@ private:
     Configuration cfg_;
     std::vector<SwitchFunction> switches_;
     int n_ = 0, nf_ = 0, nh_ = 0;
-    std::vector<int> free_, slot_;
+    std::vector<int> free_, slot_;  // slot_: each moving mass's coordinate (a rider: its partner's), else -1
+    std::vector<int> riders_;       // masses stuck to their friction partner: x = x_partner + e
+    std::vector<cl_F> mass_;        // per coordinate: its free mass plus its riders'
+    std::vector<cl_F> offset_;      // setup: each rider's e = x0 - x0_partner
     std::vector<std::vector<cl_F>> K_, C_, phi_;  // full n x n; phi nf x nf (rows: free masses)
     std::vector<cl_F> f_const_;
     std::vector<Regime> regime_;

@@ -126,26 +126,42 @@ Taylor taylor(const MpModel& mp, const Configuration& cfg, const std::vector<sig
     T.x.assign(static_cast<std::size_t>(order) + 1, std::vector<cl_F>(static_cast<std::size_t>(n), mp.zero));
     T.xm = T.x;
     T.s.assign(x.begin() + n, x.end());
+    // A mass stuck to its partner moves with it: one body of both masses (rider[p]).
+    std::vector<int> rider(static_cast<std::size_t>(n), -1);
+    for (int i = 0; i < n; ++i)
+        if (mp.rides(cfg, i)) rider[static_cast<std::size_t>(mp.partner[i])] = i;
     for (int i = 0; i < n; ++i) {
         T.x[0][i] = x[i];
         T.xm[0][i] = cln::abs(x[i]);
-        if (order >= 1 && !cfg.stuck[i]) {
+        if (order >= 1 && !mp.fixed(cfg, i)) {
             T.x[1][i] = v[i];
             T.xm[1][i] = cln::abs(v[i]);
         }
     }
     for (int k = 0; k + 2 <= order; ++k)
         for (int i = 0; i < n; ++i) {
-            if (cfg.stuck[i]) continue;
-            cl_F A, m;
+            if (cfg.stuck[i]) continue;  // held still, or moved with its partner below
+            cl_F A, m, mass = mp.m[i];
             force_derivative(mp, cfg, i, t, T, k, A, m);
-            if (k == 0 && sgn[i] != 0) {
-                const cl_F fr = mp.mu_k[i] * mp.normal[i];
-                A = sgn[i] > 0 ? A - fr : A + fr;
-                m = m + fr;
+            const int r = rider[static_cast<std::size_t>(i)];
+            if (r >= 0) {
+                cl_F Ar, mr;
+                force_derivative(mp, cfg, r, t, T, k, Ar, mr);
+                A = A + Ar, m = m + mr, mass = mass + mp.m[r];
             }
-            T.x[k + 2][i] = A / mp.m[i];
-            T.xm[k + 2][i] = m / mp.m[i];
+            if (k == 0)  // kinetic friction of a sliding mass, and its reaction on the partner
+                for (int q = 0; q < n; ++q) {
+                    if (sgn[q] == 0 || (q != i && mp.partner[q] != i)) continue;
+                    const cl_F fr = mp.mu_k[q] * mp.normal[q];
+                    A = (q == i) == (sgn[q] > 0) ? A - fr : A + fr;
+                    m = m + fr;
+                }
+            T.x[k + 2][i] = A / mass;
+            T.xm[k + 2][i] = m / mass;
+            if (r >= 0) {
+                T.x[k + 2][r] = T.x[k + 2][i];
+                T.xm[k + 2][r] = T.xm[k + 2][i];
+            }
         }
     return T;
 }
@@ -171,6 +187,21 @@ void force_series(const MpModel& mp, const Configuration& cfg, int i, const cl_F
         force_derivative(mp, cfg, i, t, T, static_cast<int>(k), A, mag);
         d.push_back(A);
         m.push_back(mag);
+    }
+}
+
+// Derivatives 0..order-1 of D_i (assembly.h driving_force): A_i's, or against
+// its partner p, (m_p A_i - m_i A_p)/(m_i + m_p).
+void driving_series(const MpModel& mp, const Configuration& cfg, int i, const cl_F& t, const Taylor& T,
+                    std::vector<cl_F>& d, std::vector<cl_F>& m) {
+    force_series(mp, cfg, i, t, T, d, m);
+    const int p = mp.partner[i];
+    if (p == kGround) return;
+    std::vector<cl_F> dp, mpart;
+    force_series(mp, cfg, p, t, T, dp, mpart);
+    for (std::size_t k = 0; k < d.size(); ++k) {
+        d[k] = mp.against_partner(i, d[k], dp[k]);
+        m[k] = mp.against_partner_magnitude(i, m[k], mpart[k]);
     }
 }
 
@@ -204,21 +235,35 @@ public:
     int dof() const { return mp.n; }
     std::size_t contacts() const { return mp.contacts.size(); }
     bool has_friction(int i) const { return model_.masses[i].has_friction; }
-    int velocity_sign(int i) const { return sign(v_[static_cast<std::size_t>(i)]); }
-    void stop(int i) { v_[static_cast<std::size_t>(i)] = mp.zero; }
-    cl_F force(const Configuration& cfg, int i) const { return mp.force_on_mass(cfg, i, t_, x_, v_); }
+    // A friction acts on w = v_i - v_partner (the partner may be the ground).
+    int velocity_sign(int i) const { return sign(v_[static_cast<std::size_t>(i)] - mp.body(v_, mp.partner[i])); }
+    void stop(int i) { v_[static_cast<std::size_t>(i)] = mp.body(v_, mp.partner[i]); }
+    cl_F force(const Configuration& cfg, int i) const {
+        const cl_F A = mp.force_on_mass(cfg, i, t_, x_, v_);
+        const int p = mp.partner[i];
+        return p == kGround ? A : mp.against_partner(i, A, mp.force_on_mass(cfg, p, t_, x_, v_));
+    }
     cl_F static_limit(int i) const { return mp.mu_s[i] * mp.normal[i]; }
     cl_F held_rate(const Configuration& cfg, int i) const {
         std::vector<cl_F> held = a_ ? *a_ : std::vector<cl_F>(v_.size(), mp.zero);
-        held[static_cast<std::size_t>(i)] = mp.zero;
-        return mp.force_rate_on_mass(cfg, i, t_, v_, held);
+        const int p = mp.partner[i];
+        if (p == kGround) {
+            held[static_cast<std::size_t>(i)] = mp.zero;
+            return mp.force_rate_on_mass(cfg, i, t_, v_, held);
+        }
+        // The pair held together: one acceleration, that of both masses as one body.
+        Configuration hold = cfg;
+        hold.stuck[static_cast<std::size_t>(i)] = 1;
+        const cl_F a = (mp.force_on_mass(hold, i, t_, x_, v_) + mp.force_on_mass(hold, p, t_, x_, v_)) / (mp.m[i] + mp.m[p]);
+        held[static_cast<std::size_t>(i)] = held[static_cast<std::size_t>(p)] = a;
+        return mp.against_partner(i, mp.force_rate_on_mass(cfg, i, t_, v_, held), mp.force_rate_on_mass(cfg, p, t_, v_, held));
     }
     int tie_order() const { return reference::tie_order(mp); }
     rules::Series<cl_F> held_series(const Configuration& hold, const std::vector<signed char>& sgn, int i,
                                     int order) const {
         const Taylor T = taylor(mp, hold, sgn, t_, x_, v_, order + 1);
         rules::Series<cl_F> s;
-        force_series(mp, hold, i, t_, T, s.d, s.mag);
+        driving_series(mp, hold, i, t_, T, s.d, s.mag);
         return s;
     }
     rules::Series<cl_F> gap_now(int c) const {
@@ -299,10 +344,7 @@ std::size_t search_step_limit(double span, double fastest_rate, const SearchLimi
 PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions& options, Observer& observer,
                             const SearchLimits& limits, const std::vector<double>* offset) {
     if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
-    // Jenkins elements: their sliders are state (x after the masses); stuck pairs: not yet.
-    if (const std::string what = friction_pairs(model); !what.empty())
-        throw InputError("reference::simulate_precise(): model '" + model.name + "' has " + what +
-                         ", which the reference does not take yet");
+    // Jenkins elements: their sliders are state (x after the masses); a stuck pair rides one coordinate.
     const MpModel mp(model, digits);
     const std::size_t n = model.dof();
     PreciseRun run;
@@ -425,8 +467,12 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                 d.clear(), m.clear();
                 if (sw[f].kind == SwitchKind::gap) {
                     gap_series(mp, e, X, d, m);
-                } else if (sw[f].kind == SwitchKind::velocity) {
-                    for (std::size_t k = 0; k + 1 < X.x.size(); ++k) d.push_back(X.x[k + 1][e]), m.push_back(X.xm[k + 1][e]);
+                } else if (sw[f].kind == SwitchKind::velocity) {  // w^(k) = x_e^(k+1) - x_partner^(k+1)
+                    const int p = mp.partner[e];
+                    for (std::size_t k = 0; k + 1 < X.x.size(); ++k) {
+                        d.push_back(X.x[k + 1][e] - mp.body(X.x[k + 1], p));
+                        m.push_back(X.xm[k + 1][e] + mp.body(X.xm[k + 1], p));
+                    }
                 } else if (sw[f].kind == SwitchKind::slip_velocity) {  // w^(k) = x_a^(k+1) - x_b^(k+1)
                     const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
                     for (std::size_t k = 0; k + 1 < X.x.size(); ++k) {
@@ -448,7 +494,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                         m.push_back(mk);
                     }
                 } else {
-                    force_series(mp, cfg, e, t, X, d, m);
+                    driving_series(mp, cfg, e, t, X, d, m);
                     if (sw[f].kind == SwitchKind::release_neg)
                         for (cl_F& dk : d) dk = -dk;
                 }
@@ -603,7 +649,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         x = buf.x;
         v = buf.v;
         for (std::size_t i = 0; i < n; ++i)
-            if (cfg.stuck[i]) v[i] = mp.zero;
+            if (cfg.stuck[i]) v[i] = mp.body(v, mp.partner[i]);  // still, or with its partner
         if (!found) {
             t = t_end;
             break;
