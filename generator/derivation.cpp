@@ -96,6 +96,15 @@ numeric to_float(const numeric& x) { return GiNaC::ex_to<numeric>(x.evalf()); }
 
 cln::cl_N to_cl(const numeric& x) { return x.to_cl_N(); }
 
+/// A harmonic's frequency, phase and amplitudes, exactly (Omega > 0).
+HarmonicData harmonic_data(const Harmonic& h) {
+    HarmonicData hd;
+    hd.omega = exact(h.omega);
+    hd.phase = exact(h.phase);
+    for (double a : h.amplitude) hd.amplitude.push_back(exact(a));
+    return hd;
+}
+
 /// The folded matrix T^T X T of the free coordinates (exact): entry (r, s) sums
 /// X over the masses of coordinates r and s.
 std::vector<std::vector<numeric>> folded(const GiNaC::matrix& X, const std::vector<std::vector<int>>& group) {
@@ -218,10 +227,7 @@ void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& grou
     d.max_step = std::numeric_limits<double>::infinity();
     for (const Harmonic& h : model.forcing) {
         if (h.omega == 0.0) continue;
-        HarmonicData hd;
-        hd.omega = exact(h.omega);
-        hd.phase = exact(h.phase);
-        for (double a : h.amplitude) hd.amplitude.push_back(exact(a));
+        HarmonicData hd = harmonic_data(h);
         const numeric& W = hd.omega;
         for (const Mode& m : d.modes) {
             if (m.regime == Regime::undamped && abs(W - m.omega) <= exact(kResonanceBand) * m.omega)
@@ -475,10 +481,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     d.max_step = std::numeric_limits<double>::infinity();
     for (const Harmonic& h : model.forcing) {
         if (h.omega == 0.0) continue;
-        HarmonicData hd;
-        hd.omega = exact(h.omega);
-        hd.phase = exact(h.phase);
-        for (double a : h.amplitude) hd.amplitude.push_back(exact(a));
+        HarmonicData hd = harmonic_data(h);
         hd.xs.assign(nf, kZero);
         hd.xc.assign(nf, kZero);
         const numeric& W = hd.omega;

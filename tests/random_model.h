@@ -73,4 +73,17 @@ inline Drawn draw(unsigned seed, int n) {
     return d;
 }
 
+// Two dampers at random places of d's model (between masses or to ground):
+// non-proportional damping.
+inline void add_random_dampers(Drawn& d, unsigned seed) {
+    std::mt19937 rng(seed);
+    const int n = static_cast<int>(d.model.dof());
+    for (int k = 0; k < 2; ++k) {
+        const int a = static_cast<int>(uni(rng, 0, n - 0.001));
+        int b = static_cast<int>(uni(rng, -1, n - 0.001));
+        if (b == a) b = kGround;
+        d.model.dampers.push_back({a, b, uni(rng, 0.05, 3.0)});
+    }
+}
+
 }  // namespace hsnc::testing

@@ -330,15 +330,9 @@ TEST(DamperCvode, RandomModelsAgreeWithCvode) {
     int compared = 0;
     for (unsigned seed = 1; seed <= 10; ++seed) {
         testing::Drawn d = testing::draw(900 + seed, 2 + static_cast<int>(seed % 3));
+        testing::add_random_dampers(d, seed);
         Model& m = d.model;
-        std::mt19937 rng(seed);
         const int n = static_cast<int>(m.dof());
-        for (int k = 0; k < 2; ++k) {
-            const int a = static_cast<int>(testing::uni(rng, 0, n - 0.001));
-            int b = static_cast<int>(testing::uni(rng, -1, n - 0.001));
-            if (b == a) b = kGround;
-            m.dampers.push_back({a, b, testing::uni(rng, 0.05, 3.0)});
-        }
         m.x0.assign(m.dof(), 0.0);
         m.v0.assign(m.dof(), 0.0);
         m.v0[0] = 0.5;

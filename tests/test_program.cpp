@@ -38,6 +38,7 @@
 #include "model_reader.h"
 #include "random_model.h"
 #include "sample_models.h"
+#include "segment_start.h"
 
 namespace hsnc {
 const AotRegistry& sample_registry();  // tests' build-time kernels (hsnc_gen --samples)
@@ -56,36 +57,8 @@ struct Trace {
 
 const double kTaus[] = {0.0, 1e-9, 1e-3, 0.07, 0.4, 1.1, 2.5, 17.0};
 
-// A legal segment start for cfg: stuck masses at rest, sliding masses moving
-// as sgn says; t0 with a rounding part t0_lo (event instants are t + t_lo).
-struct Start {
-    double t0, t0_lo;
-    std::vector<double> x0, v0;
-    std::vector<signed char> sgn;
-};
-Start start_of(const Model& m, const Configuration& cfg, unsigned seed) {
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    Start s{m.t0 + 3.7 + u(rng), 1e-17 * u(rng), m.x0, m.v0, std::vector<signed char>(m.dof(), 0)};
-    for (std::size_t i = 0; i < m.dof(); ++i) {
-        s.x0[i] += 0.01 * u(rng);
-        s.v0[i] += 0.1 * u(rng);
-    }
-    for (std::size_t i = 0; i < m.dof(); ++i) {  // friction against the ground or a partner (which has none)
-        const int p = m.masses[i].partner;
-        const double vp = p == kGround ? 0.0 : s.v0[static_cast<std::size_t>(p)];
-        if (cfg.stuck[i]) {
-            s.v0[i] = vp;
-        } else if (m.masses[i].has_friction) {
-            s.sgn[i] = s.v0[i] < vp ? -1 : 1;
-        }
-    }
-    for (const Jenkins& e : m.jenkins) {  // the sliders after the masses, stretched below the slip force
-        auto pos = [&](int b) { return b == kGround ? 0.0 : s.x0[static_cast<std::size_t>(b)]; };
-        s.x0.push_back(pos(e.a) - pos(e.b) - 0.9 * u(rng) * e.slip_force / e.k);
-    }
-    return s;
-}
+using testing::Start;
+using testing::start_of;
 
 // n masses, nx = n + the sliders (x's length), ns switch functions.
 template <class Setup, class Eval>
