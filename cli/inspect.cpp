@@ -268,9 +268,9 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
 
 /// Non-proportional damping: the configuration as the state-space solver
 /// takes it (runtime/solvers/state_space_solver.h): the reduced matrices in
-/// numbers, the eigenvalues of the state matrix, the switch functions. The
-/// derivation's closed forms (and --format cpp, a kernel) take Rayleigh
-/// damping only.
+/// numbers, the eigenvalues of the state matrix, the switch functions; and
+/// whether the derivation (kernels, interpreter; --format cpp prints its
+/// kernel) takes it as pseudo-modes, or leaves it to the generic solver.
 void inspect_state_space(const Model& model, const Configuration& cfg, Format fmt, std::ostream& out) {
     const Printer p{fmt, out};
     // A (nearly) defective state matrix (critical damping) runs by the matrix
@@ -301,6 +301,14 @@ void inspect_state_space(const Model& model, const Configuration& cfg, Format fm
         out << "free masses: " << (fr.empty() ? "none" : fr) << "; stuck masses: " << (st.empty() ? "none" : st)
             << " (held at their x0)\n";
         out << "non-proportional damping (dampers): solved through state-space modes\n";
+        try {
+            const Derivation d = derive(model, cfg);
+            out << "derivation (kernels, interpreter): " << d.modes.size()
+                << " state-space pseudo-modes at 40 digits (inspect --format cpp prints the kernel)\n";
+        } catch (const NotDerivable& e) {
+            out << "derivation (kernels, interpreter): not taken (" << e.what()
+                << "); every kernel kind runs this configuration on the generic solver\n";
+        }
     }
     const Eigen::MatrixXd K = stiffness_matrix(model, cfg), C = damping_matrix(model, cfg);
     auto matrix = [&](const std::string& name, auto entry) {
