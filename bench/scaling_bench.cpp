@@ -1,0 +1,157 @@
+// hsnc_scaling_bench: how the exact method scales with the size of a model,
+// against this build's CVODE (issue 13's benchmark).
+//
+//   build/hsnc_scaling_bench [--quick] [--jit] [--csv FILE]
+//
+// Chains of 2, 8, 32, 64 and 128 masses, generated like the bundled chain:
+// unit masses joined by 400 N/m springs and to ground at both ends, friction
+// on every mass (mu_k 0.05, mu_s 0.07), three stiff contacts (two between
+// neighbours, one to ground), stiffness-proportional damping (beta 0.002),
+// forced at both ends at 9 rad/s, the middle mass started at 1 m/s. Each
+// chain runs through hsnc::simulate (a new provider every run, so every
+// configuration entered is analysed again):
+//   generic  the Eigen solver (--kernels generic, and auto for such a model);
+//   interp   the interpreted programs (the 40-digit derivation of every
+//            configuration entered, then its program);
+//   jit      (with --jit, up to 32 masses) kernels compiled in-process, from
+//            an empty cache (cold) and again from the cache it filled (warm);
+//   cvode    CVODE (Adams, rtol 1e-12, atol 1e-14) with root finding.
+// Times are thread CPU time, medians of the runs (5, or 3 with --quick; one
+// cold JIT run); per switch and per evaluation are the generic solver's, the
+// ratio is CVODE's time over the generic solver's. --csv writes the table
+// for the plot (bench/scaling.gp).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <stdlib.h>
+
+#include "hsnc/simulate.h"
+#include "model_reader.h"
+
+namespace {
+
+using namespace hsnc;
+
+double cpu_seconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+std::string chain(int n) {
+    auto m = [](int i) { return "m" + std::to_string(i); };
+    const int q1 = std::max(1, n / 4), q2 = std::max(1, n / 2), q3 = std::max(1, 3 * n / 4);
+    std::string t = "name = \"chain-" + std::to_string(n) + "\"\n[damping]\nbeta = 0.002\n";
+    for (int i = 1; i <= n; ++i) t += "[[mass]]\nname = \"" + m(i) + "\"\nm = 1\nmu_k = 0.05\nmu_s = 0.07\n";
+    t += "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 400\n";
+    for (int i = 1; i < n; ++i) t += "[[spring]]\nbetween = [\"" + m(i) + "\", \"" + m(i + 1) + "\"]\nk = 400\n";
+    t += "[[spring]]\nbetween = [\"" + m(n) + "\", \"ground\"]\nk = 400\n";
+    if (q1 < n) t += "[[contact]]\nbetween = [\"" + m(q1) + "\", \"" + m(q1 + 1) + "\"]\ngap = 0.01\nk = 4000\n";
+    if (q2 != q1 && q2 < n) t += "[[contact]]\nbetween = [\"" + m(q2) + "\", \"" + m(q2 + 1) + "\"]\ngap = 0.01\nk = 4000\n";
+    t += "[[contact]]\nbetween = [\"" + m(q3) + "\", \"ground\"]\ngap = 0.02\nk = 4000\n";
+    t += "[[forcing]]\nomega = 9.0\namplitude = { m1 = 30.0" + (n > 1 ? ", " + m(n) + " = -20.0" : std::string()) + " }\n";
+    t += "[initial]\nv = { " + m(q2) + " = 1.0 }\n";
+    return t;
+}
+
+struct Timed {
+    double ms = NAN;
+    SimulateSummary summary;
+};
+
+Timed run(const Model& m, SimulateOptions o, int reps) {
+    std::vector<double> t;
+    Timed out;
+    o.warn = [](const std::string&) {};
+    for (int r = 0; r < reps; ++r) {
+        const double start = cpu_seconds();
+        out.summary = simulate(m, o);
+        t.push_back(1e3 * (cpu_seconds() - start));
+    }
+    std::sort(t.begin(), t.end());
+    out.ms = t[t.size() / 2];
+    return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    bool quick = false, jit = false;
+    std::string csv;
+    for (int i = 1; i < argc; ++i) {
+        if (std::strcmp(argv[i], "--quick") == 0) {
+            quick = true;
+        } else if (std::strcmp(argv[i], "--jit") == 0) {
+            jit = true;
+        } else if (std::strcmp(argv[i], "--csv") == 0 && i + 1 < argc) {
+            csv = argv[++i];
+        } else {
+            std::fprintf(stderr, "usage: %s [--quick] [--jit] [--csv FILE]\n", argv[0]);
+            return 2;
+        }
+    }
+    const int reps = quick ? 3 : 5;
+    const double t_end = quick ? 2.0 : 10.0;
+    std::printf("chains of n masses over %g s, whole runs through hsnc::simulate (thread CPU time, median of %d)\n",
+                t_end, reps);
+    std::printf("%5s %8s %9s %11s %9s %8s %11s %10s %10s %11s %9s %8s\n", "n", "switches", "cfgs", "generic_ms",
+                "us/switch", "us/eval", "interp_ms", "jit_cold", "jit_warm", "cvode_ms", "us/switch", "ratio");
+    std::ofstream table;
+    if (!csv.empty()) {
+        table.open(csv);
+        table << "n,switches,generic_ms,generic_us_per_switch,generic_us_per_eval,interp_ms,jit_cold_ms,jit_warm_ms,"
+                 "cvode_ms,cvode_over_generic\n";
+    }
+    for (int n : {2, 8, 32, 64, 128}) {
+        const Model m = parse_model(chain(n), "chain-" + std::to_string(n) + ".toml");
+        SimulateOptions o;
+        o.t_end = t_end;
+        o.kernels = KernelChoice::generic;
+        const Timed g = run(m, o, reps);
+        o.kernels = KernelChoice::interp;
+        const Timed in = run(m, o, n >= 64 ? 1 : reps);
+        double cold = NAN, warm = NAN;
+        if (jit && n <= 32) {  // beyond, compiling every configuration takes minutes
+            std::string dir = (std::filesystem::temp_directory_path() / "hsnc_scaling_XXXXXX").string();
+            if (::mkdtemp(dir.data())) {
+                o.kernels = KernelChoice::jit;
+                o.cache_dir = dir;
+                try {
+                    cold = run(m, o, 1).ms;
+                    warm = run(m, o, reps).ms;
+                } catch (const std::exception& e) {
+                    std::fprintf(stderr, "n = %d: jit: %s\n", n, e.what());
+                }
+                std::filesystem::remove_all(dir);
+                o.cache_dir.clear();
+            }
+        }
+        SimulateOptions c;
+        c.t_end = t_end;
+        c.method = Method::cvode;
+        c.integrator.rtol = 1e-12;
+        c.integrator.atol = 1e-14;
+        const Timed cv = run(m, c, n >= 64 ? 1 : std::min(reps, 3));
+        const double sw = static_cast<double>(g.summary.events), ev = static_cast<double>(g.summary.evaluations);
+        std::printf("%5d %8zu %9s %11.2f %9.2f %8.3f %11.2f %10.2f %10.2f %11.2f %9.2f %8.1f\n", n, g.summary.events,
+                    g.summary.solver_detail.substr(g.summary.solver_detail.find("for ") + 4,
+                                                   g.summary.solver_detail.find(" config") -
+                                                       g.summary.solver_detail.find("for ") - 4)
+                        .c_str(),
+                    g.ms, 1e3 * g.ms / std::max(sw, 1.0), 1e3 * g.ms / std::max(ev, 1.0), in.ms, cold, warm, cv.ms,
+                    1e3 * cv.ms / std::max(static_cast<double>(cv.summary.events), 1.0), cv.ms / g.ms);
+        if (table)
+            table << n << ',' << g.summary.events << ',' << g.ms << ',' << 1e3 * g.ms / std::max(sw, 1.0) << ','
+                  << 1e3 * g.ms / std::max(ev, 1.0) << ',' << in.ms << ',' << cold << ',' << warm << ',' << cv.ms << ','
+                  << cv.ms / g.ms << '\n';
+        std::fflush(stdout);
+    }
+    return 0;
+}
