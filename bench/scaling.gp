@@ -12,6 +12,7 @@ set logscale xy
 set xlabel "masses in the chain"
 set ylabel "CPU time per switch [us]"
 set xtics (2, 8, 32, 64, 128)
+set xrange [1.6:160]
 set grid
 plot in skip 1 using 1:4 with linespoints lw 2 title "hsnc, generic solver", \
      in skip 1 using 1:(1e3*$6/$2) with linespoints lw 2 title "hsnc, interpreter (40-digit derivation per configuration)", \

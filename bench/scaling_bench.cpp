@@ -13,8 +13,9 @@
 //   generic  the Eigen solver (--kernels generic, and auto for such a model);
 //   interp   the interpreted programs (the 40-digit derivation of every
 //            configuration entered, then its program);
-//   jit      (with --jit, up to 32 masses) kernels compiled in-process, from
+//   jit      (with --jit, up to 8 masses) kernels compiled in-process, from
 //            an empty cache (cold) and again from the cache it filled (warm);
+//            at 32 masses the cold run took more than 20 minutes of LLVM;
 //   cvode    CVODE (Adams, rtol 1e-12, atol 1e-14) with root finding.
 // Times are thread CPU time, medians of the runs (5, or 3 with --quick; one
 // cold JIT run); per switch and per evaluation are the generic solver's, the
@@ -118,7 +119,7 @@ int main(int argc, char** argv) {
         o.kernels = KernelChoice::interp;
         const Timed in = run(m, o, n >= 64 ? 1 : reps);
         double cold = NAN, warm = NAN;
-        if (jit && n <= 32) {  // beyond, compiling every configuration takes minutes
+        if (jit && n <= 8) {  // beyond, compiling every configuration takes minutes (32 masses: over 20 min)
             std::string dir = (std::filesystem::temp_directory_path() / "hsnc_scaling_XXXXXX").string();
             if (::mkdtemp(dir.data())) {
                 o.kernels = KernelChoice::jit;
@@ -150,7 +151,7 @@ int main(int argc, char** argv) {
         if (table)
             table << n << ',' << g.summary.events << ',' << g.ms << ',' << 1e3 * g.ms / std::max(sw, 1.0) << ','
                   << 1e3 * g.ms / std::max(ev, 1.0) << ',' << in.ms << ',' << cold << ',' << warm << ',' << cv.ms << ','
-                  << cv.ms / g.ms << '\n';
+                  << cv.ms / g.ms << std::endl;
         std::fflush(stdout);
     }
     return 0;
