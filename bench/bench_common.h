@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,37 @@ inline std::string chain12() {
     t += "[[contact]]\nbetween = [\"m8\", \"m9\"]\ngap = 0.02\nk = 1000\n";
     t += "[[contact]]\nbetween = [\"m12\", \"ground\"]\ngap = 0.02\nk = 1000\n";
     t += "[[forcing]]\nomega = 5.0\namplitude = { m1 = 60.0 }\n";
+    return t;
+}
+
+/// This thread's CPU time: what a run costs, without the time a noisy
+/// neighbour (2 cores shared) keeps it off the processor.
+inline double cpu_seconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+/// The chain of n masses of hsnc_bench and hsnc_scaling_bench: unit masses
+/// with friction (mu_k 0.05, mu_s 0.07) joined by 400 N/m springs and to
+/// ground at both ends, contacts between masses n/4 and n/4+1, n/2 and
+/// n/2+1, and 3n/4 to ground (each at least mass 1; one left out where it
+/// would repeat another or leave the chain), beta = 0.002, forced at both
+/// ends at 9 rad/s, the middle mass started at 1 m/s. friction_chain(16) is the
+/// 16-mass chain of the figures in the README.
+inline std::string friction_chain(int n) {
+    auto m = [](int i) { return "m" + std::to_string(i); };
+    const int q1 = std::max(1, n / 4), q2 = std::max(1, n / 2), q3 = std::max(1, 3 * n / 4);
+    std::string t = "name = \"chain-" + std::to_string(n) + "\"\n[damping]\nbeta = 0.002\n";
+    for (int i = 1; i <= n; ++i) t += "[[mass]]\nname = \"" + m(i) + "\"\nm = 1\nmu_k = 0.05\nmu_s = 0.07\n";
+    t += "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 400\n";
+    for (int i = 1; i < n; ++i) t += "[[spring]]\nbetween = [\"" + m(i) + "\", \"" + m(i + 1) + "\"]\nk = 400\n";
+    t += "[[spring]]\nbetween = [\"" + m(n) + "\", \"ground\"]\nk = 400\n";
+    if (q1 < n) t += "[[contact]]\nbetween = [\"" + m(q1) + "\", \"" + m(q1 + 1) + "\"]\ngap = 0.01\nk = 4000\n";
+    if (q2 != q1 && q2 < n) t += "[[contact]]\nbetween = [\"" + m(q2) + "\", \"" + m(q2 + 1) + "\"]\ngap = 0.01\nk = 4000\n";
+    t += "[[contact]]\nbetween = [\"" + m(q3) + "\", \"ground\"]\ngap = 0.02\nk = 4000\n";
+    t += "[[forcing]]\nomega = 9.0\namplitude = { m1 = 30.0" + (n > 1 ? ", " + m(n) + " = -20.0" : std::string()) + " }\n";
+    t += "[initial]\nv = { " + m(q2) + " = 1.0 }\n";
     return t;
 }
 

@@ -49,6 +49,7 @@
 #include <vector>
 
 #include "aot_registry.h"
+#include "bench_common.h"
 #include "assembly.h"
 #include "engine.h"
 #include "hsnc/simulate.h"
@@ -59,6 +60,8 @@
 namespace {
 
 using namespace hsnc;
+using bench::friction_chain;
+using bench::cpu_seconds;
 using Clock = std::chrono::steady_clock;
 
 class Counter : public Observer {
@@ -111,29 +114,10 @@ Timed run_baseline(const Model& m, double t_end, Method method, const Integrator
     return {seconds_since(start), s};
 }
 
-// The chain of n masses (n a multiple of 4): springs between neighbours and to
-// ground at both ends, contacts between masses n/4 and n/4+1, n/2 and n/2+1,
-// and 3n/4 to ground, friction on every mass. chain(16) is the 16-mass chain
-// of the figures in the README.
-std::string chain(int n) {
-    auto m = [](int i) { return "m" + std::to_string(i); };
-    std::string t = "name = \"chain-" + std::to_string(n) + "\"\n[damping]\nbeta = 0.002\n";
-    for (int i = 1; i <= n; ++i) t += "[[mass]]\nname = \"" + m(i) + "\"\nm = 1\nmu_k = 0.05\nmu_s = 0.07\n";
-    t += "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 400\n";
-    for (int i = 1; i < n; ++i) t += "[[spring]]\nbetween = [\"" + m(i) + "\", \"" + m(i + 1) + "\"]\nk = 400\n";
-    t += "[[spring]]\nbetween = [\"" + m(n) + "\", \"ground\"]\nk = 400\n";
-    t += "[[contact]]\nbetween = [\"" + m(n / 4) + "\", \"" + m(n / 4 + 1) + "\"]\ngap = 0.01\nk = 4000\n";
-    t += "[[contact]]\nbetween = [\"" + m(n / 2) + "\", \"" + m(n / 2 + 1) + "\"]\ngap = 0.01\nk = 4000\n";
-    t += "[[contact]]\nbetween = [\"" + m(3 * n / 4) + "\", \"ground\"]\ngap = 0.02\nk = 4000\n";
-    t += "[[forcing]]\nomega = 9.0\namplitude = { m1 = 30.0, " + m(n) + " = -20.0 }\n";
-    t += "[initial]\nv = { " + m(n / 2) + " = 1.0 }\n";
-    return t;
-}
-
-/// chain(n) with a dashpot of 0.05 N s/m between every pair of neighbours
+/// friction_chain(n) with a dashpot of 0.05 N s/m between every pair of neighbours
 /// in place of its Rayleigh beta: non-proportional damping.
 std::string chain_with_dampers(int n) {
-    std::string t = chain(n);
+    std::string t = friction_chain(n);
     t.replace(t.find("beta = 0.002"), 12, "alpha = 0.0");
     t = "name = \"chain-" + std::to_string(n) + "-dampers\"" + t.substr(t.find('\n'));
     for (int i = 1; i < n; ++i)
@@ -185,11 +169,6 @@ double median_baseline(const Model& m, double t_end, Method method, const Integr
     return t[t.size() / 2];
 }
 
-double cpu_seconds() {
-    timespec ts{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 // A directory for the JIT cache under $TMPDIR (else the system's temporary
 // directory); empty when none can be made.
@@ -265,7 +244,7 @@ int main(int argc, char** argv) {
     std::vector<Case> cases = {
         {"seed-scenario-1", read_model(models + "seed-scenario-1.toml"), 2.0, quick ? 0.2 : 2.0},
         {"seed-scenario-2", read_model(models + "seed-scenario-2.toml"), 300.0, quick ? 1.0 : 10.0},
-        {"chain-16", parse_model(chain(16), "chain-16"), 20.0, quick ? 0.2 : 2.0},
+        {"chain-16", parse_model(friction_chain(16), "chain-16"), 20.0, quick ? 0.2 : 2.0},
         // Non-proportional damping (dampers): the generic path's state-space solver.
         {"absorber", read_model(HSNC_SOURCE_DIR "/examples/dashpot/absorber.toml"), 60.0, quick ? 0.6 : 6.0},
         {"chain-16-dampers", parse_model(chain_with_dampers(16), "chain-16-dampers"), 20.0, quick ? 0.2 : 2.0},
@@ -286,7 +265,7 @@ int main(int argc, char** argv) {
         for (const Case& c : cases) kind_models.emplace_back(c.name, c.model), kind_t_ends.push_back(c.t_end);
         kind_models.emplace_back("chain-8", read_model(models + "chain-8.toml"));
         kind_t_ends.push_back(20.0);
-        kind_models.emplace_back("chain-32", parse_model(chain(32), "chain-32"));
+        kind_models.emplace_back("chain-32", parse_model(friction_chain(32), "chain-32"));
         kind_t_ends.push_back(5.0);
         kernel_kinds(kind_models, kind_t_ends, reps);
     };

@@ -51,13 +51,6 @@ struct Case {
     double t_end;
 };
 
-/// This thread's CPU time: what a run costs, without the time a noisy
-/// neighbour (2 cores shared) keeps it off the processor.
-double cpu_seconds() {
-    timespec ts{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 /// A chain of n unit masses as bench_common.h's 12-mass chain (friction on
 /// each, contacts m3-m4, m(n-4)-m(n-3) and mn to ground), with lighter

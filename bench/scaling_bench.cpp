@@ -3,11 +3,8 @@
 //
 //   build/hsnc_scaling_bench [--quick] [--jit] [--csv FILE]
 //
-// Chains of 2, 8, 32, 64 and 128 masses, generated like the bundled chain:
-// unit masses joined by 400 N/m springs and to ground at both ends, friction
-// on every mass (mu_k 0.05, mu_s 0.07), three stiff contacts (two between
-// neighbours, one to ground), stiffness-proportional damping (beta 0.002),
-// forced at both ends at 9 rad/s, the middle mass started at 1 m/s. Each
+// Chains of 2, 8, 32, 64 and 128 masses (bench_common.h friction_chain(): friction on
+// every mass, three stiff contacts, forced at both ends), as hsnc_bench's. Each
 // chain runs through hsnc::simulate (a new provider every run, so every
 // configuration entered is analysed again):
 //   generic  the Eigen solver (--kernels generic, and auto for such a model);
@@ -33,34 +30,15 @@
 
 #include <stdlib.h>
 
+#include "bench_common.h"
 #include "hsnc/simulate.h"
 #include "model_reader.h"
 
 namespace {
 
 using namespace hsnc;
-
-double cpu_seconds() {
-    timespec ts{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-std::string chain(int n) {
-    auto m = [](int i) { return "m" + std::to_string(i); };
-    const int q1 = std::max(1, n / 4), q2 = std::max(1, n / 2), q3 = std::max(1, 3 * n / 4);
-    std::string t = "name = \"chain-" + std::to_string(n) + "\"\n[damping]\nbeta = 0.002\n";
-    for (int i = 1; i <= n; ++i) t += "[[mass]]\nname = \"" + m(i) + "\"\nm = 1\nmu_k = 0.05\nmu_s = 0.07\n";
-    t += "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 400\n";
-    for (int i = 1; i < n; ++i) t += "[[spring]]\nbetween = [\"" + m(i) + "\", \"" + m(i + 1) + "\"]\nk = 400\n";
-    t += "[[spring]]\nbetween = [\"" + m(n) + "\", \"ground\"]\nk = 400\n";
-    if (q1 < n) t += "[[contact]]\nbetween = [\"" + m(q1) + "\", \"" + m(q1 + 1) + "\"]\ngap = 0.01\nk = 4000\n";
-    if (q2 != q1 && q2 < n) t += "[[contact]]\nbetween = [\"" + m(q2) + "\", \"" + m(q2 + 1) + "\"]\ngap = 0.01\nk = 4000\n";
-    t += "[[contact]]\nbetween = [\"" + m(q3) + "\", \"ground\"]\ngap = 0.02\nk = 4000\n";
-    t += "[[forcing]]\nomega = 9.0\namplitude = { m1 = 30.0" + (n > 1 ? ", " + m(n) + " = -20.0" : std::string()) + " }\n";
-    t += "[initial]\nv = { " + m(q2) + " = 1.0 }\n";
-    return t;
-}
+using bench::friction_chain;
+using bench::cpu_seconds;
 
 struct Timed {
     double ms = NAN;
@@ -76,8 +54,7 @@ Timed run(const Model& m, SimulateOptions o, int reps) {
         out.summary = simulate(m, o);
         t.push_back(1e3 * (cpu_seconds() - start));
     }
-    std::sort(t.begin(), t.end());
-    out.ms = t[t.size() / 2];
+    out.ms = bench::median(t);
     return out;
 }
 
@@ -111,7 +88,7 @@ int main(int argc, char** argv) {
                  "cvode_ms,cvode_over_generic\n";
     }
     for (int n : {2, 8, 32, 64, 128}) {
-        const Model m = parse_model(chain(n), "chain-" + std::to_string(n) + ".toml");
+        const Model m = parse_model(friction_chain(n), "chain-" + std::to_string(n) + ".toml");
         SimulateOptions o;
         o.t_end = t_end;
         o.kernels = KernelChoice::generic;

@@ -361,16 +361,10 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         derive_state_space(d, group);
         return d;
     }
-    std::vector<std::vector<numeric>> kt(nf, std::vector<numeric>(nf));
+    std::vector<std::vector<numeric>> kt = folded(d.K, group);  // T^T K T, exact
     for (std::size_t r = 0; r < nf; ++r)
-        for (std::size_t s = 0; s < nf; ++s) {
-            numeric kf = kZero;  // (T^T K T)_rs, exact
-            bool nonzero = false;
-            for (int i : group[r])
-                for (int k : group[s])
-                    if (K(i, k) != 0.0) kf += GiNaC::ex_to<numeric>(d.K(i, k)), nonzero = true;
-            if (nonzero) kt[r][s] = kf / (sqm[r] * sqm[s]);  // else the exact 0 it starts as (0 / x)
-        }
+        for (std::size_t s = 0; s < nf; ++s)
+            if (!kt[r][s].is_zero()) kt[r][s] = kt[r][s] / (sqm[r] * sqm[s]);  // a zero stays the exact 0
     // eig_value[j], eig_vector[j][r]: the eigenpairs of Kt in ascending order.
     std::vector<numeric> eig_value(nf);
     std::vector<std::vector<numeric>> eig_vector(nf, std::vector<numeric>(nf));

@@ -68,7 +68,7 @@ MpComplexEigen mp_complex_eigen(const std::vector<std::vector<cl_R>>& a, cln::fl
     const double condition = V.cwiseAbs().colwise().sum().maxCoeff() * Vinv.cwiseAbs().colwise().sum().maxCoeff();
     if (!(condition <= kMaxEigenCondition))
         throw RunError("mp_complex_eigen(): the eigenvectors are nearly dependent (condition " +
-                       std::to_string(condition) + " > 200: a defective matrix, critical damping)");
+                       std::to_string(condition) + " > " + std::to_string(static_cast<int>(kMaxEigenCondition)) + ": a defective matrix, critical damping)");
 
     const cl_R tol = cln::float_epsilon(format) * cln::cl_float(1024, format) * norm;
     out.values.resize(n);

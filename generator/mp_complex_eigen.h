@@ -25,11 +25,15 @@
 
 #include <vector>
 
+#include "state_space_solver.h"
+
 namespace hsnc {
 
-/// Largest ||V||_1 ||V^-1||_1 of the double eigenvectors accepted (the
-/// bound StateSpaceSolver hands over at).
-inline constexpr double kMaxEigenCondition = 200;
+/// Largest ||V||_1 ||V^-1||_1 of the double eigenvectors accepted: the one
+/// bound at which the state-space solver, too, hands a configuration over to
+/// the matrix exponential (StateSpaceSolver::kMaxCondition), both measured on
+/// the balanced state matrix.
+inline constexpr double kMaxEigenCondition = StateSpaceSolver::kMaxCondition;
 
 struct MpComplexEigen {
     std::vector<cln::cl_N> values;               ///< lambda_k
