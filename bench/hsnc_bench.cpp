@@ -14,7 +14,7 @@
 // Kernel kinds: one run of each model through hsnc::simulate (the facade, as
 // `hsnc simulate` runs it) with kernels aot, jit (persistent cache in a
 // temporary directory under $TMPDIR, filled by a warm-up run), generic (the
-// Eigen solver) and interp (each configuration derived at 40 digits, lowered
+// Eigen solver) and interp (each configuration derived in double-double, lowered
 // and interpreted), in turn, each run making its provider anew (kernels looked
 // up or loaded, the generic and interpreted solvers built for every
 // configuration entered); medians of the thread's CPU time. interp/generic is

@@ -8,7 +8,7 @@
 //   2. one long simulation per model (median of repeated runs after a
 //      warm-up, every solver built beforehand), with the switch counts;
 //   3. the same simulation from nothing: the interpreter derives and lowers
-//      (40 digits) each configuration it enters, the Eigen solver analyses it
+//      (double-double) each configuration it enters, the Eigen solver analyses it
 //      in double; before: the interpreter with the former derivation (Jacobi
 //      rotations in GiNaC numerics, EigenMethod::jacobi);
 //   4. one all-open chain configuration of 8 to 64 masses: derive + lower
@@ -265,7 +265,7 @@ int main(int argc, char** argv) {
 
     // 4. One configuration: the all-open chain of n masses (chain(n) above), derived
     //    and lowered (refined and Jacobi) against the Eigen solver's analysis.
-    std::printf("\n4. One configuration, the all-open n-mass chain (8-64): derive (40 digits) + lower, refined and former (Jacobi),\n"
+    std::printf("\n4. One configuration, the all-open n-mass chain (8-64): derive (double-double) + lower, refined and former (Jacobi),\n"
                 "   against building the Eigen solver (modal analysis in double); median of runs, thread CPU time\n");
     std::printf("%6s %12s %12s %12s %12s %12s %14s\n", "masses", "refined_ms", "of which lower", "jacobi_ms", "eigen_ms",
                 "refined/eigen", "jacobi/refined");

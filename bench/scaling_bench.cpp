@@ -8,7 +8,7 @@
 // chain runs through hsnc::simulate (a new provider every run, so every
 // configuration entered is analysed again):
 //   generic  the Eigen solver (--kernels generic, and auto for such a model);
-//   interp   the interpreted programs (the 40-digit derivation of every
+//   interp   the interpreted programs (the double-double derivation of every
 //            configuration entered, then its program);
 //   jit      (with --jit, up to 8 masses) kernels compiled in-process, from
 //            an empty cache (cold) and again from the cache it filled (warm);

@@ -70,6 +70,7 @@ struct Printer {
         return s.str();
     }
     std::string num(const numeric& v) const { return format_number(v.to_double()); }
+    std::string num(const DD& v) const { return format_number(v.to_double()); }
     static std::string format_number(double v) {
         char buf[40];
         std::snprintf(buf, sizeof buf, "%.17g", v);
@@ -203,6 +204,7 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
         // Static offset x_st = V diag(1/lambda) V^T f over the elastic modes.
         p.heading("Static offset (elastic modes): x_st = sum_j V_j p_j / lambda_j",
                   "Static offset (elastic modes): $x_{\\mathrm{st}} = \\sum_j V_j p_j / \\lambda_j$");
+        auto lf = [](const DD& x) { return GiNaC::ex_to<numeric>(exact(x).evalf()); };
         for (std::size_t r = 0; r < nf; ++r) {
             ex xst = 0;
             for (const Mode& m : d.modes) {
@@ -210,9 +212,9 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
                 ex pj = 0;
                 for (std::size_t s = 0; s < nf; ++s) {
                     const ex f = coordinate_force(d, in, s);
-                    pj += m.v[s] * f;
+                    pj += lf(m.v[s]) * f;
                 }
-                xst += m.v[r] * pj / m.lambda;
+                xst += lf(m.v[r]) * pj / lf(m.lambda);
             }
             const std::string nm = model.masses[d.free_dofs[r]].name;
             p.line("x_st_" + nm + " = " + p.expr(xst),

@@ -223,7 +223,7 @@ void add_simulate(CLI::App& app, int& exit_code) {
         ->check(finite_number());
     sub->add_option("--kernels", o->kernels,
                     "auto (default: ahead-of-time kernels when the model has them, else the generic solver; "
-                    "never compiles), aot, generic, interp (each configuration's program, derived at 40 digits, "
+                    "never compiles), aot, generic, interp (each configuration's program, derived in double-double, "
                     "interpreted: the kernels' bits without a compiler), jit (a kernel compiled in-process, or "
                     "taken from the cache, for each configuration the run enters)");
     sub->add_option("--cache-dir", o->cache_dir,

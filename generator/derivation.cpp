@@ -33,6 +33,13 @@ const char* regime_name(Regime r) {
 
 numeric exact(double v) { return numeric(cln::rational(cln::cl_DF(v))); }
 
+numeric exact(const DD& v) { return exact(v.hi()) + exact(v.lo()); }
+
+DD to_dd(const numeric& v) {
+    const double hi = v.to_double();
+    return DD(hi) + DD((v - exact(hi)).to_double());
+}
+
 int Derivation::free_index(int mass) const {
     const auto it = std::find(free_dofs.begin(), free_dofs.end(), mass);
     return it == free_dofs.end() ? -1 : static_cast<int>(it - free_dofs.begin());
@@ -52,16 +59,16 @@ const numeric kZero(0), kOne(1), kTwo(2);
 // Cyclic Jacobi eigenvalue algorithm for a symmetric matrix (Golub & Van Loan,
 // Matrix Computations, 4th ed., Alg. 8.5.3), on GiNaC floats at the current
 // Digits. On return a is (nearly) diagonal and a = V^T a_in V.
-void jacobi_eigen(std::vector<std::vector<numeric>>& a, std::vector<std::vector<numeric>>& vec) {
+void jacobi_eigen(std::vector<std::vector<DD>>& a, std::vector<std::vector<DD>>& vec) {
     const std::size_t n = a.size();
-    vec.assign(n, std::vector<numeric>(n, kZero));
-    for (std::size_t i = 0; i < n; ++i) vec[i][i] = kOne;
-    numeric norm2 = kZero;
+    vec.assign(n, std::vector<DD>(n, DD(0.0)));
+    for (std::size_t i = 0; i < n; ++i) vec[i][i] = DD(1.0);
+    DD norm2;
     for (auto& row : a)
         for (auto& e : row) norm2 += e * e;
-    const numeric tol2 = norm2 * numeric(1, 10).power(2 * (kDerivationDigits - 4));
+    const DD tol2 = norm2 * DD(std::ldexp(1.0, -2 * (104 - 8)));  // DD's 104 bits, less 8
     for (int sweep = 0; sweep < 100; ++sweep) {
-        numeric off2 = kZero;
+        DD off2;
         for (std::size_t p = 0; p < n; ++p)
             for (std::size_t q = p + 1; q < n; ++q) off2 += a[p][q] * a[p][q];
         if (off2 <= tol2) return;
@@ -69,21 +76,23 @@ void jacobi_eigen(std::vector<std::vector<numeric>>& a, std::vector<std::vector<
             for (std::size_t q = p + 1; q < n; ++q) {
                 if (a[p][q].is_zero()) continue;
                 // Zero a[p][q]: tan of the rotation angle, smaller root (Eq. 8.5.x).
-                const numeric theta = (a[q][q] - a[p][p]) / (kTwo * a[p][q]);
-                const numeric t = (theta >= kZero ? kOne : -kOne) / (abs(theta) + sqrt(theta * theta + kOne));
-                const numeric c = kOne / sqrt(t * t + kOne), s = t * c;
+                const DD theta = (a[q][q] - a[p][p]) / (DD(2.0) * a[p][q]);
+                // (For |theta| > 1e100, t = 1/(2 theta) to DD precision; theta^2 would overflow DD's products.)
+                const DD t = abs(theta) > DD(1e100) ? DD(1.0) / (DD(2.0) * theta)
+                                                    : DD(theta >= DD(0.0) ? 1.0 : -1.0) / (abs(theta) + sqrt(theta * theta + DD(1.0)));
+                const DD c = DD(1.0) / sqrt(t * t + DD(1.0)), s = t * c;
                 for (std::size_t k = 0; k < n; ++k) {  // a <- a J
-                    const numeric akp = a[k][p], akq = a[k][q];
+                    const DD akp = a[k][p], akq = a[k][q];
                     a[k][p] = c * akp - s * akq;
                     a[k][q] = s * akp + c * akq;
                 }
                 for (std::size_t k = 0; k < n; ++k) {  // a <- J^T a
-                    const numeric apk = a[p][k], aqk = a[q][k];
+                    const DD apk = a[p][k], aqk = a[q][k];
                     a[p][k] = c * apk - s * aqk;
                     a[q][k] = s * apk + c * aqk;
                 }
                 for (std::size_t k = 0; k < n; ++k) {  // V <- V J
-                    const numeric vkp = vec[k][p], vkq = vec[k][q];
+                    const DD vkp = vec[k][p], vkq = vec[k][q];
                     vec[k][p] = c * vkp - s * vkq;
                     vec[k][q] = s * vkp + c * vkq;
                 }
@@ -94,14 +103,17 @@ void jacobi_eigen(std::vector<std::vector<numeric>>& a, std::vector<std::vector<
 
 numeric to_float(const numeric& x) { return GiNaC::ex_to<numeric>(x.evalf()); }
 
+/// A DD as a GiNaC float of the current Digits (symbolic_segment's numbers).
+numeric lf(const DD& x) { return to_float(exact(x)); }
+
 cln::cl_N to_cl(const numeric& x) { return x.to_cl_N(); }
 
 /// A harmonic's frequency, phase and amplitudes, exactly (Omega > 0).
 HarmonicData harmonic_data(const Harmonic& h) {
     HarmonicData hd;
-    hd.omega = exact(h.omega);
-    hd.phase = exact(h.phase);
-    for (double a : h.amplitude) hd.amplitude.push_back(exact(a));
+    hd.omega = DD(h.omega);
+    hd.phase = DD(h.phase);
+    for (double a : h.amplitude) hd.amplitude.push_back(DD(a));
     return hd;
 }
 
@@ -181,33 +193,34 @@ void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& grou
         for (int part = 0; part < (om.is_zero() ? 1 : 2); ++part) {
             // part 0: Re (u), part 1: Im (w) of c e^{mu tau}.
             auto take = [&](const numeric& z) { return part == 0 ? z.real() : z.imag(); };
+            // The mode's numbers in DD, from the eigenpair's 40 digits.
             Mode m;
             if (om.is_zero()) {
                 if (!(sigma > kZero)) throw NotDerivable(where + "a zero state-space eigenvalue under dampers");
                 m.regime = Regime::critical;
-                m.sigma = sigma;
-                m.lambda = sigma * sigma;
-                m.omega = sigma;
-                m.xi = kOne;
-                m.kappa = kZero;
+                m.sigma = to_dd(sigma);
+                m.lambda = m.sigma * m.sigma;
+                m.omega = m.sigma;
+                m.xi = DD(1.0);
+                m.kappa = DD(0.0);
             } else {
                 const bool undamped = abs(sigma) <= undamped_tol * abs(mu);
                 m.regime = undamped ? Regime::undamped : Regime::underdamped;
-                m.sigma = undamped ? kZero : sigma;
-                m.kappa = om * om;
-                m.omega_d = om;
+                m.sigma = undamped ? DD(0.0) : to_dd(sigma);
+                m.omega_d = to_dd(om);
+                m.kappa = m.omega_d * m.omega_d;
                 m.lambda = m.sigma * m.sigma + m.kappa;
-                m.omega = to_float(sqrt(m.lambda));
+                m.omega = sqrt(m.lambda);
                 m.xi = m.sigma / m.omega;
             }
-            m.c = kTwo * m.sigma;
+            m.c = DD(2.0) * m.sigma;
             for (std::size_t r = 0; r < nf; ++r) {
                 // x = sum (psi c e^{mu tau} + its conjugate) = 2 Re(psi) u - 2 Im(psi) w; a real mu: psi u.
-                m.v.push_back(om.is_zero() ? psi[r].real() : part == 0 ? kTwo * psi[r].real() : -kTwo * psi[r].imag());
-                m.w.push_back(take(L[r]));
-                m.w_v.push_back(take(L[nf + r]));
-                m.dw_x.push_back(take(mu * L[r]));
-                m.dw_v.push_back(take(mu * L[nf + r]));
+                m.v.push_back(to_dd(om.is_zero() ? psi[r].real() : part == 0 ? kTwo * psi[r].real() : -kTwo * psi[r].imag()));
+                m.w.push_back(to_dd(take(L[r])));
+                m.w_v.push_back(to_dd(take(L[nf + r])));
+                m.dw_x.push_back(to_dd(take(mu * L[r])));
+                m.dw_v.push_back(to_dd(take(mu * L[nf + r])));
             }
             d.modes.push_back(std::move(m));
         }
@@ -228,19 +241,19 @@ void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& grou
     for (const Harmonic& h : model.forcing) {
         if (h.omega == 0.0) continue;
         HarmonicData hd = harmonic_data(h);
-        const numeric& W = hd.omega;
+        const numeric W = exact(h.omega);
         for (const Mode& m : d.modes) {
-            if (m.regime == Regime::undamped && abs(W - m.omega) <= exact(kResonanceBand) * m.omega)
+            if (m.regime == Regime::undamped && abs(hd.omega - m.omega) <= DD(kResonanceBand) * m.omega)
                 throw NotDerivable(where + "forcing at " + std::to_string(h.omega) +
                                    " rad/s within 1% of an undamped state-space mode (" +
                                    std::to_string(m.omega.to_double()) + " rad/s)");
-            hd.modal.push_back(ModalHarmonic{kZero, false, kZero, kZero});
+            hd.modal.push_back(ModalHarmonic{});
         }
         std::vector<std::vector<cln::cl_N>> Z(nf, std::vector<cln::cl_N>(nf));
         std::vector<cln::cl_N> X(nf);
         for (std::size_t r = 0; r < nf; ++r) {
             numeric F = kZero;
-            for (int i : group[r]) F += hd.amplitude[static_cast<std::size_t>(i)];
+            for (int i : group[r]) F += exact(h.amplitude[static_cast<std::size_t>(i)]);
             X[r] = cln::cl_float(cln::the<cln::cl_R>(to_cl(F)), format);
             for (std::size_t c = 0; c < nf; ++c) {
                 const numeric re = K[r][c] - (r == c ? W * W * d.mass[r] : kZero), im = W * C[r][c];
@@ -250,8 +263,8 @@ void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& grou
         }
         if (!mp_solve(Z, X)) throw NotDerivable(where + "a singular dynamic stiffness at " + std::to_string(h.omega) + " rad/s");
         for (std::size_t r = 0; r < nf; ++r) {
-            hd.xs.push_back(numeric(cln::realpart(X[r])));
-            hd.xc.push_back(numeric(cln::imagpart(X[r])));
+            hd.xs.push_back(to_dd(numeric(cln::realpart(X[r]))));
+            hd.xc.push_back(to_dd(numeric(cln::imagpart(X[r]))));
         }
         d.harmonics.push_back(std::move(hd));
     }
@@ -318,6 +331,8 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     const Eigen::VectorXd f0 = constant_force(model, cfg);
     d.K = GiNaC::matrix(n, n);
     d.C = GiNaC::matrix(n, n);
+    d.k_dd.assign(n, std::vector<DD>(n));
+    d.c_dd.assign(n, std::vector<DD>(n));
     const numeric alpha = exact(model.alpha), beta = exact(model.beta);
     for (std::size_t i = 0; i < n; ++i)
         for (std::size_t j = 0; j < n; ++j) {
@@ -325,14 +340,18 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
             const numeric kij = exact(K(i, j));
             d.K(i, j) = kij;
             d.C(i, j) = beta * kij + (i == j ? alpha * exact(model.masses[i].m) : kZero);
+            d.k_dd[i][j] = DD(K(i, j));
+            d.c_dd[i][j] = DD(model.beta) * DD(K(i, j)) + (i == j ? DD(model.alpha) * DD(model.masses[i].m) : DD(0.0));
         }
     for (const Damper& dm : model.dampers) {  // non-proportional damping: added as K adds a spring
         const numeric c = exact(dm.c);
         for (int a : {dm.a, dm.b})
-            if (a != kGround) d.C(a, a) = d.C(a, a) + c;
+            if (a != kGround) d.C(a, a) = d.C(a, a) + c, d.c_dd[a][a] += DD(dm.c);
         if (dm.a != kGround && dm.b != kGround) {
             d.C(dm.a, dm.b) = d.C(dm.a, dm.b) - c;
             d.C(dm.b, dm.a) = d.C(dm.b, dm.a) - c;
+            d.c_dd[dm.a][dm.b] -= DD(dm.c);
+            d.c_dd[dm.b][dm.a] -= DD(dm.c);
         }
     }
     d.f_const.resize(n);
@@ -349,35 +368,38 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         for (std::size_t i = 0; i < n; ++i) d.f_const[i] += exact(h.amplitude[i]) * s;
     }
 
-    // Modal decomposition of Kt = M^-1/2 K_FF M^-1/2.
+    // Modal decomposition of Kt = M^-1/2 K_FF M^-1/2, in DD.
     const std::size_t nf = d.free_dofs.size();
-    std::vector<numeric> sqm(nf);
+    std::vector<DD> mass_dd(nf), sqm(nf);
     d.mass.assign(nf, kZero);
     for (std::size_t r = 0; r < nf; ++r) {
-        for (int i : group[r]) d.mass[r] += exact(model.masses[static_cast<std::size_t>(i)].m);
-        sqm[r] = to_float(sqrt(d.mass[r]));
+        for (int i : group[r]) {
+            d.mass[r] += exact(model.masses[static_cast<std::size_t>(i)].m);
+            mass_dd[r] += DD(model.masses[static_cast<std::size_t>(i)].m);
+        }
+        sqm[r] = sqrt(mass_dd[r]);
     }
     if (!model.proportional_damping()) {
         derive_state_space(d, group);
         return d;
     }
-    std::vector<std::vector<numeric>> kt = folded(d.K, group);  // T^T K T, exact
+    std::vector<std::vector<DD>> kt(nf, std::vector<DD>(nf));  // T^T K T / sqrt(m_r m_s)
     for (std::size_t r = 0; r < nf; ++r)
-        for (std::size_t s = 0; s < nf; ++s)
+        for (std::size_t s = 0; s < nf; ++s) {
+            for (int i : group[r])
+                for (int k : group[s]) kt[r][s] += d.k_dd[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
             if (!kt[r][s].is_zero()) kt[r][s] = kt[r][s] / (sqm[r] * sqm[s]);  // a zero stays the exact 0
+        }
     // eig_value[j], eig_vector[j][r]: the eigenpairs of Kt in ascending order.
-    std::vector<numeric> eig_value(nf);
-    std::vector<std::vector<numeric>> eig_vector(nf, std::vector<numeric>(nf));
+    std::vector<DD> eig_value(nf);
+    std::vector<std::vector<DD>> eig_vector(nf, std::vector<DD>(nf));
     bool solved = false;
     if (method == EigenMethod::refined) {
-        std::vector<std::vector<cln::cl_R>> a(nf, std::vector<cln::cl_R>(nf));
-        for (std::size_t r = 0; r < nf; ++r)
-            for (std::size_t s = 0; s < nf; ++s) a[r][s] = cln::the<cln::cl_R>(kt[r][s].to_cl_N());
         try {
-            const std::vector<MpEigenpair> pairs = mp_symmetric_eigen(a, cln::float_format(kDerivationDigits));
+            const std::vector<DdEigenpair> pairs = dd_symmetric_eigen(kt);
             for (std::size_t j = 0; j < nf; ++j) {
-                eig_value[j] = numeric(pairs[j].value);
-                for (std::size_t r = 0; r < nf; ++r) eig_vector[j][r] = numeric(pairs[j].vector[r]);
+                eig_value[j] = pairs[j].value;
+                eig_vector[j] = pairs[j].vector;
             }
             solved = true;
         } catch (const RunError&) {
@@ -385,7 +407,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         }
     }
     if (!solved) {
-        std::vector<std::vector<numeric>> phi;
+        std::vector<std::vector<DD>> phi;
         jacobi_eigen(kt, phi);
         std::vector<std::size_t> order(nf);
         std::iota(order.begin(), order.end(), 0);
@@ -399,35 +421,35 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
 
     // Rigid-body modes replace the smallest eigenpairs: lambda = 0, shape sqrt(m) on the component.
     const auto comps = free_components(model, cfg).floating_members();  // free_components.h
-    std::vector<numeric> lambda(nf);
-    std::vector<std::vector<numeric>> shape(nf, std::vector<numeric>(nf, kZero));  // shape[j][r] = Phi_rj
+    std::vector<DD> lambda(nf);
+    std::vector<std::vector<DD>> shape(nf, std::vector<DD>(nf));  // shape[j][r] = Phi_rj
     for (std::size_t j = 0; j < nf; ++j) {
         if (j < comps.size()) {
-            numeric m_total = kZero;
-            for (int i : comps[j]) m_total += d.mass[static_cast<std::size_t>(free_index[i])];
-            const numeric inv = to_float(kOne / sqrt(m_total));
+            DD m_total;
+            for (int i : comps[j]) m_total += mass_dd[static_cast<std::size_t>(free_index[i])];
+            const DD inv = DD(1.0) / sqrt(m_total);
             for (int i : comps[j]) shape[j][free_index[i]] = sqm[free_index[i]] * inv;
-            lambda[j] = kZero;
+            lambda[j] = DD(0.0);
         } else {
             lambda[j] = eig_value[j];
             shape[j] = eig_vector[j];
-            if (lambda[j] <= kZero)
+            if (lambda[j] <= DD(0.0))
                 throw RunError("derivation::derive(): eigenvalue " + std::to_string(lambda[j].to_double()) +
                                " <= 0 in a mode not detected as rigid (configuration " + cfg.spec(model) + ")");
         }
         // Deterministic sign: the largest component is positive.
         std::size_t big = 0;
         for (std::size_t r = 1; r < nf; ++r)
-            if (abs(shape[j][r]) > abs(shape[j][big]) + numeric(1, 1000000)) big = r;
-        if (shape[j][big] < kZero)
+            if (abs(shape[j][r]) > abs(shape[j][big]) + DD(1e-6)) big = r;
+        if (shape[j][big] < DD(0.0))
             for (auto& e : shape[j]) e = -e;
     }
 
-    const numeric critical_tol = numeric(1, 100000000) * numeric(1, 100000000) * numeric(1, 10000);  // 1e-20
+    const DD critical_tol(1e-20), alpha_dd(model.alpha), beta_dd(model.beta);
     for (std::size_t j = 0; j < nf; ++j) {
         Mode m;
         m.lambda = lambda[j];
-        m.c = alpha + beta * lambda[j];
+        m.c = alpha_dd + beta_dd * lambda[j];
         m.v.resize(nf);
         m.w.resize(nf);
         for (std::size_t r = 0; r < nf; ++r) {
@@ -435,36 +457,36 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
             m.w[r] = shape[j][r] * sqm[r];
         }
         if (m.lambda.is_zero()) {
-            m.omega = kZero;
-            m.xi = kZero;
+            m.omega = DD(0.0);
+            m.xi = DD(0.0);
             if (m.c.is_zero()) {
                 m.regime = Regime::rigid;
-                m.sigma = m.kappa = m.omega_d = m.gamma = m.r1 = kZero;
+                m.sigma = m.kappa = m.omega_d = m.gamma = m.r1 = DD(0.0);
             } else {
                 // u = A + B (1 - e^{-c tau})/c as the overdamped form with lambda = 0.
                 m.regime = Regime::rigid_damped;
-                m.sigma = m.gamma = m.c / kTwo;
+                m.sigma = m.gamma = m.c / DD(2.0);
                 m.kappa = -m.sigma * m.sigma;
-                m.r1 = kZero;
-                m.omega_d = kZero;
+                m.r1 = DD(0.0);
+                m.omega_d = DD(0.0);
             }
         } else {
-            m.omega = to_float(sqrt(m.lambda));
-            m.sigma = m.c / kTwo;
+            m.omega = sqrt(m.lambda);
+            m.sigma = m.c / DD(2.0);
             m.xi = m.sigma / m.omega;
             m.kappa = m.lambda - m.sigma * m.sigma;
             if (m.c.is_zero()) {
                 m.regime = Regime::undamped;
                 m.omega_d = m.omega;
-            } else if (abs(m.xi - kOne) <= critical_tol) {
+            } else if (abs(m.xi - DD(1.0)) <= critical_tol) {
                 m.regime = Regime::critical;
-                m.kappa = kZero;
-            } else if (m.xi < kOne) {
+                m.kappa = DD(0.0);
+            } else if (m.xi < DD(1.0)) {
                 m.regime = Regime::underdamped;
-                m.omega_d = to_float(sqrt(m.kappa));
+                m.omega_d = sqrt(m.kappa);
             } else {
                 m.regime = Regime::overdamped;
-                m.gamma = to_float(sqrt(-m.kappa));
+                m.gamma = sqrt(-m.kappa);
                 m.r1 = -m.lambda / (m.sigma + m.gamma);  // = -sigma + gamma without cancellation
             }
         }
@@ -476,21 +498,19 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     for (const Harmonic& h : model.forcing) {
         if (h.omega == 0.0) continue;
         HarmonicData hd = harmonic_data(h);
-        hd.xs.assign(nf, kZero);
-        hd.xc.assign(nf, kZero);
-        const numeric& W = hd.omega;
+        hd.xs.assign(nf, DD(0.0));
+        hd.xc.assign(nf, DD(0.0));
+        const DD& W = hd.omega;
         for (const Mode& m : d.modes) {
             ModalHarmonic mh;
-            mh.P = kZero;
             for (std::size_t r = 0; r < nf; ++r)
                 for (int i : group[r]) mh.P += m.v[r] * hd.amplitude[static_cast<std::size_t>(i)];
-            mh.resonant = m.regime == Regime::undamped &&
-                          abs(W - m.omega) <= exact(kResonanceBand) * m.omega;
+            mh.resonant = m.regime == Regime::undamped && abs(W - m.omega) <= DD(kResonanceBand) * m.omega;
             if (mh.resonant) {
                 d.max_step = std::min(d.max_step, 2 * 3.14159265358979323846 / h.omega);
             } else {
                 // u_p = P [(lambda - W^2) sin - c W cos] / ((lambda - W^2)^2 + (c W)^2)
-                const numeric det = m.lambda - W * W, den = det * det + m.c * m.c * W * W;
+                const DD det = m.lambda - W * W, den = det * det + m.c * m.c * W * W;
                 mh.a_s = det / den;
                 mh.a_c = -m.c * W / den;
                 for (std::size_t r = 0; r < nf; ++r) {
@@ -534,12 +554,12 @@ std::vector<ex> state_space_response(const Derivation& d, const SegmentInputs& i
     }
     for (std::size_t h = 0; h < d.harmonics.size(); ++h) {
         const HarmonicData& hd = d.harmonics[h];
-        const numeric& W = hd.omega;
+        const numeric W = lf(hd.omega);
         GiNaC::matrix Z(nf, nf), F(nf, 1);
         for (std::size_t r = 0; r < nf; ++r)
             for (std::size_t s = 0; s < nf; ++s) Z(r, s) = K(r, s) - (r == s ? W * W * d.mass[r] : kZero) + GiNaC::I * W * C(r, s);
         for (std::size_t i = 0; i < d.model->dof(); ++i)
-            if (const int r = d.coordinate(static_cast<int>(i)); r >= 0) F(r, 0) = F(r, 0) + hd.amplitude[i];
+            if (const int r = d.coordinate(static_cast<int>(i)); r >= 0) F(r, 0) = F(r, 0) + lf(hd.amplitude[i]);
         const GiNaC::matrix X = Z.inverse().mul(F);
         for (std::size_t r = 0; r < nf; ++r) {
             const numeric X_r = GiNaC::ex_to<numeric>(X(r, 0).evalf());
@@ -584,39 +604,42 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
     std::vector<ex> f(nf);
     for (std::size_t r = 0; r < nf; ++r) f[r] = coordinate_force(d, in, r);
     std::vector<ex> theta;
-    for (const HarmonicData& h : d.harmonics) theta.push_back(h.omega * in.t0 + h.phase);
+    for (const HarmonicData& h : d.harmonics) theta.push_back(lf(h.omega) * in.t0 + lf(h.phase));
 
     // The free coordinates' x(tau), when not from the modes below.
     std::vector<ex> xf;
     if (d.state_space) xf = state_space_response(d, in, f, theta, tau);
     for (std::size_t j = 0; j < d.modes.size() && !d.state_space; ++j) {
         const Mode& m = d.modes[j];
+        const numeric lambda = lf(m.lambda), c = lf(m.c), omega = lf(m.omega), sigma = lf(m.sigma);
+        const numeric omega_d = lf(m.omega_d), gamma = lf(m.gamma);
         ex p = 0, u0 = 0, du0 = 0;
         for (std::size_t r = 0; r < nf; ++r) {
-            p += m.v[r] * f[r];
-            u0 += m.w[r] * in.x0[d.free_dofs[r]];
-            du0 += m.w[r] * in.v0[d.free_dofs[r]];
+            p += lf(m.v[r]) * f[r];
+            u0 += lf(m.w[r]) * in.x0[d.free_dofs[r]];
+            du0 += lf(m.w[r]) * in.v0[d.free_dofs[r]];
         }
         // Particular solution.
         ex up;
         if (m.regime == Regime::rigid) {
             up = p * GiNaC::pow(tau, 2) / 2;
         } else if (m.regime == Regime::rigid_damped) {
-            up = p * tau / m.c;
+            up = p * tau / c;
         } else {
-            up = p / m.lambda;
+            up = p / lambda;
         }
         for (std::size_t h = 0; h < d.harmonics.size(); ++h) {
             const HarmonicData& hd = d.harmonics[h];
             const ModalHarmonic& mh = hd.modal[j];
-            const ex arg = hd.omega * tau + theta[h];
-            const numeric det = m.lambda - hd.omega * hd.omega;
+            const numeric W = lf(hd.omega), P = lf(mh.P);
+            const ex arg = W * tau + theta[h];
+            const numeric det = lambda - W * W;
             // At (or within rounding of) exact resonance the textbook form is singular.
-            if (mh.resonant && abs(det) <= m.lambda * numeric(1, 1000000000).power(3)) {
-                up += -mh.P * tau * GiNaC::cos(arg) / (2 * m.omega);  // exact resonance
+            if (mh.resonant && abs(det) <= lambda * numeric(1, 1000000000).power(3)) {
+                up += -P * tau * GiNaC::cos(arg) / (2 * omega);  // exact resonance
             } else {
-                const numeric den = det * det + m.c * m.c * hd.omega * hd.omega;
-                up += mh.P * (det * GiNaC::sin(arg) - m.c * hd.omega * GiNaC::cos(arg)) / den;
+                const numeric den = det * det + c * c * W * W;
+                up += P * (det * GiNaC::sin(arg) - c * W * GiNaC::cos(arg)) / den;
             }
         }
         const ex A = u0 - up.subs(tau == 0);
@@ -625,21 +648,21 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
         switch (m.regime) {
             case Regime::undamped:
             case Regime::underdamped:
-                uh = GiNaC::exp(-m.sigma * tau) *
-                     (A * GiNaC::cos(m.omega_d * tau) + (B + m.sigma * A) / m.omega_d * GiNaC::sin(m.omega_d * tau));
+                uh = GiNaC::exp(-sigma * tau) *
+                     (A * GiNaC::cos(omega_d * tau) + (B + sigma * A) / omega_d * GiNaC::sin(omega_d * tau));
                 break;
             case Regime::critical:
-                uh = GiNaC::exp(-m.sigma * tau) * (A + (B + m.sigma * A) * tau);
+                uh = GiNaC::exp(-sigma * tau) * (A + (B + sigma * A) * tau);
                 break;
             case Regime::overdamped:
-                uh = GiNaC::exp(-m.sigma * tau) *
-                     (A * GiNaC::cosh(m.gamma * tau) + (B + m.sigma * A) / m.gamma * GiNaC::sinh(m.gamma * tau));
+                uh = GiNaC::exp(-sigma * tau) *
+                     (A * GiNaC::cosh(gamma * tau) + (B + sigma * A) / gamma * GiNaC::sinh(gamma * tau));
                 break;
             case Regime::rigid:
                 uh = A + B * tau;
                 break;
             case Regime::rigid_damped:
-                uh = A + B * (1 - GiNaC::exp(-m.c * tau)) / m.c;
+                uh = A + B * (1 - GiNaC::exp(-c * tau)) / c;
                 break;
         }
         out.u.push_back(uh + up);
@@ -650,7 +673,7 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
     for (int s : d.stuck_dofs) out.x[s] = in.x0[s];
     for (std::size_t r = 0; r < nf; ++r) {
         if (d.state_space) out.x[d.free_dofs[r]] = xf[r];
-        for (std::size_t j = 0; j < out.u.size(); ++j) out.x[d.free_dofs[r]] += d.modes[j].v[r] * out.u[j];
+        for (std::size_t j = 0; j < out.u.size(); ++j) out.x[d.free_dofs[r]] += lf(d.modes[j].v[r]) * out.u[j];
     }
     for (int q : d.riders) {  // at its segment-start offset from its partner
         const int p = model.masses[static_cast<std::size_t>(q)].partner;
@@ -692,7 +715,7 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
                 ex A = d.f_const[b] + slider_preload(d, in, b);
                 for (std::size_t k = 0; k < n; ++k) A -= d.K(b, k) * out.x[k] + d.C(b, k) * out.v[k];
                 for (std::size_t h = 0; h < d.harmonics.size(); ++h)
-                    A += d.harmonics[h].amplitude[b] * GiNaC::sin(d.harmonics[h].omega * tau + theta[h]);
+                    A += lf(d.harmonics[h].amplitude[b]) * GiNaC::sin(lf(d.harmonics[h].omega) * tau + theta[h]);
                 return A;
             };
             ex A = force(i);

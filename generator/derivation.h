@@ -6,7 +6,7 @@
 //     f = loads_F + preload_F - K_FS x_S - mu_k N sgn + sum_h F_h,F sin(Omega_h t + phase_h),
 // with K = K(cfg) (closed contact springs added), C = alpha M + beta K(cfg); the
 // stuck coupling -K_FS x_S is the constant force of Eq. 7 and C_FS v_S = 0.
-// Modal analysis: Kt = M^-1/2 K M^-1/2 = Phi diag(lambda) Phi^T (at Digits = 40:
+// Modal analysis: Kt = M^-1/2 K M^-1/2 = Phi diag(lambda) Phi^T (in double-double:
 // solved in double and refined, or by Jacobi rotations; EigenMethod),
 // x_F = V u with V = M^-1/2 Phi, u = W x_F with W = Phi^T M^1/2. Rayleigh damping is diagonal in these coordinates:
 //     u_j'' + c_j u_j' + lambda_j u_j = p_j + sum_h P_jh sin(Omega_h t + phase_h),
@@ -26,12 +26,16 @@
 #include <vector>
 
 #include "configuration.h"
+#include "double_double.h"
 #include "model.h"
 #include "switch_function.h"
 
 namespace hsnc {
 
-/// Working precision of the derivation (decimal digits).
+/// Working precision of the derivation: double-double (DD, double_double.h,
+/// about 32 digits) for the modes, the harmonics and every constant of the
+/// program; CLN long floats of kDerivationDigits decimal digits where
+/// GiNaC works (the state-space eigenproblem of dampers, symbolic_segment).
 inline constexpr int kDerivationDigits = 40;
 
 enum class Regime {
@@ -47,31 +51,31 @@ const char* regime_name(Regime r);
 
 struct Mode {
     Regime regime = Regime::undamped;
-    GiNaC::numeric lambda, c;        ///< u'' + c u' + lambda u = ...
-    GiNaC::numeric omega, xi;        ///< sqrt(lambda), c / (2 omega) (0 for rigid modes)
-    GiNaC::numeric sigma, kappa;     ///< e^{-sigma tau}; C' = -kappa S
-    GiNaC::numeric omega_d, gamma;   ///< sqrt(kappa) (under/undamped), sqrt(-kappa) (overdamped)
-    GiNaC::numeric r1;               ///< slow root -lambda/(sigma + gamma) (overdamped, rigid_damped)
-    std::vector<GiNaC::numeric> v;   ///< column j of V over the free masses
-    std::vector<GiNaC::numeric> w;   ///< row j of W over the free masses
+    DD lambda, c;        ///< u'' + c u' + lambda u = ...
+    DD omega, xi;        ///< sqrt(lambda), c / (2 omega) (0 for rigid modes)
+    DD sigma, kappa;     ///< e^{-sigma tau}; C' = -kappa S
+    DD omega_d, gamma;   ///< sqrt(kappa) (under/undamped), sqrt(-kappa) (overdamped)
+    DD r1;               ///< slow root -lambda/(sigma + gamma) (overdamped, rigid_damped)
+    std::vector<DD> v;   ///< column j of V over the free masses
+    std::vector<DD> w;   ///< row j of W over the free masses
     /// State-space pseudo-modes only (Derivation::state_space): q(0) = w.xh + w_v.vh,
     /// q'(0) = dw_x.xh + dw_v.vh from the homogeneous initial state (xh, vh). Empty
     /// for the modes of proportional damping, where q(0) = w.xh, q'(0) = w.vh.
-    std::vector<GiNaC::numeric> w_v, dw_x, dw_v;
+    std::vector<DD> w_v, dw_x, dw_v;
 };
 
 /// The response of one mode to one forcing harmonic.
 struct ModalHarmonic {
-    GiNaC::numeric P;          ///< modal amplitude P_jh
+    DD P;                      ///< modal amplitude P_jh
     bool resonant = false;     ///< c = 0 and |Omega - omega| <= kResonanceBand omega: sinc form
-    GiNaC::numeric a_s, a_c;   ///< non-resonant particular: P (a_s sin + a_c cos)(Omega tau + theta)
+    DD a_s, a_c;               ///< non-resonant particular: P (a_s sin + a_c cos)(Omega tau + theta)
 };
 
 struct HarmonicData {
-    GiNaC::numeric omega, phase;
-    std::vector<GiNaC::numeric> amplitude;  ///< F_hi, all masses
-    std::vector<ModalHarmonic> modal;       ///< one per mode
-    std::vector<GiNaC::numeric> xs, xc;     ///< non-resonant particular in x: xs sin + xc cos (free masses)
+    DD omega, phase;
+    std::vector<DD> amplitude;         ///< F_hi, all masses
+    std::vector<ModalHarmonic> modal;  ///< one per mode
+    std::vector<DD> xs, xc;            ///< non-resonant particular in x: xs sin + xc cos (free masses)
 };
 
 /// Relative band |Omega - omega| / omega inside which an undamped mode uses the
@@ -118,6 +122,7 @@ struct Derivation {
     std::vector<int> riders;
     std::vector<GiNaC::numeric> mass;  ///< per coordinate: its free mass plus its riders' (exact)
     GiNaC::matrix K, C;           ///< full n x n K(cfg), C (exact rationals)
+    std::vector<std::vector<DD>> k_dd, c_dd;  ///< the same in DD, for the lowering
     std::vector<GiNaC::numeric> f_const;  ///< loads + preload, all masses (exact)
     std::vector<GiNaC::numeric> mu_k_n;   ///< mu_k N_i of free friction masses, else 0
     std::vector<Mode> modes;               ///< ascending lambda
@@ -183,5 +188,9 @@ GiNaC::ex coordinate_force(const Derivation& d, const SegmentInputs& in, std::si
 
 /// High-precision number from a double, exactly (no rounding on the way in).
 GiNaC::numeric exact(double v);
+/// A DD exactly as a GiNaC number (the rational hi + lo), and a GiNaC real
+/// number rounded to DD.
+GiNaC::numeric exact(const DD& v);
+DD to_dd(const GiNaC::numeric& v);
 
 }  // namespace hsnc

@@ -16,8 +16,11 @@ using GiNaC::numeric;
 namespace {
 
 double dbl(const numeric& x) { return x.to_double(); }
-numeric num_sqrt(const numeric& x) { return GiNaC::ex_to<numeric>(GiNaC::sqrt(x).evalf()); }
-numeric entry(const GiNaC::matrix& m, int i, int k) { return GiNaC::ex_to<numeric>(m(i, k)); }
+double dbl(const DD& x) { return x.to_double(); }
+/// Entry (i, k) of K(cfg) or C(cfg) (Derivation::k_dd, c_dd).
+const DD& entry(const std::vector<std::vector<DD>>& m, int i, int k) {
+    return m[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
+}
 std::string idx(std::size_t k) { return std::to_string(k + 1); }  // 1-based names: q_1, ...
 std::string body_name(const Model& m, int b) { return b == kGround ? "ground" : m.masses[b].name; }
 
@@ -30,6 +33,7 @@ struct Lin {
         return *this;
     }
     Lin& add(const numeric& c, std::uint32_t reg) { return add(dbl(c), reg); }
+    Lin& add(const DD& c, std::uint32_t reg) { return add(dbl(c), reg); }
 };
 
 /// Appends registers and instructions to one body of a program.
@@ -110,7 +114,7 @@ Program lower(const Derivation& d) {
     p.cfg = d.cfg;
     p.switches = d.switches;
     p.max_step = d.max_step;
-    // V and W rounded once (each use below rounds the same 40-digit value), and
+    // V and W rounded once (each use below rounds the same double-double value), and
     // each mass's index among the free masses (-1: stuck).
     std::vector<std::vector<double>> vd(nm, std::vector<double>(nf)), wd(nm, std::vector<double>(nf));
     for (std::size_t j = 0; j < nm; ++j)
@@ -217,8 +221,8 @@ Program lower(const Derivation& d) {
                 if (coord_of[q] == static_cast<int>(r)) members.push_back(q);
             for (int i : members) {
                 l.add(d.f_const[i], ONE);
-                for (int st : d.stuck_dofs) l.add(-dbl(entry(d.K, i, st)), x0(st));
-                for (int q : d.riders) l.add(-dbl(entry(d.K, i, q)), offset[q]);
+                for (int st : d.stuck_dofs) l.add(-dbl(entry(d.k_dd, i, st)), x0(st));
+                for (int q : d.riders) l.add(-dbl(entry(d.k_dd, i, q)), offset[q]);
                 for_each_slider_preload(model, d.cfg, i,
                                         [&](double k, std::size_t j) { l.add(k, x0(static_cast<int>(n + j))); });
                 l.add(-dbl(d.mu_k_n[i]), sgn(i));
@@ -513,7 +517,7 @@ Program lower(const Derivation& d) {
             const ModalHarmonic& mh = d.harmonics[h].modal[j];
             if (!mh.resonant) continue;
             const std::string JH = J + "_" + idx(h), H = idx(h);
-            const numeric W = d.harmonics[h].omega;
+            const DD W = d.harmonics[h].omega;
             const double Q = dbl(mh.P / (m.omega + W)), hw = dbl((W - m.omega) / 2), wb = dbl((W + m.omega) / 2);
             ProgramInstr ri{ProgramOp::resonant};
             ri.dst = static_cast<std::uint32_t>(p.eval.registers());
@@ -629,13 +633,13 @@ Program lower(const Derivation& d) {
     }
 
     // Switch functions.
-    auto V = [&](int mass, std::size_t j) -> numeric {  // V_ij, 0 for stuck masses and ground
+    auto V = [&](int mass, std::size_t j) -> DD {  // V_ij, 0 for stuck masses and ground
         if (mass == kGround) return 0;
         const int r = coord_of[mass];
-        return r < 0 ? numeric(0) : d.modes[j].v[r];
+        return r < 0 ? DD(0) : d.modes[j].v[r];
     };
     // The non-resonant particular part of body b's x at harmonic h: xs (sine) or xc (cosine).
-    auto harmonic_x = [&](std::size_t h, int b, bool sine) -> numeric {
+    auto harmonic_x = [&](std::size_t h, int b, bool sine) -> DD {
         if (b == kGround || coord_of[b] < 0) return 0;
         return sine ? d.harmonics[h].xs[coord_of[b]] : d.harmonics[h].xc[coord_of[b]];
     };
@@ -643,12 +647,12 @@ Program lower(const Derivation& d) {
     // everything but friction, as terms of A, A' and of their magnitudes (const_mag
     // gathers the constant ones), and as a combination of the state: alpha (on q) and
     // beta (on q') per mode, Gs sin + Gc cos per harmonic (the bound's inputs).
-    auto force_terms = [&](int b, Lin& A, Lin& dA, Lin& mag, double& const_mag, std::vector<numeric>& al,
-                           std::vector<numeric>& be, std::vector<numeric>& Gs, std::vector<numeric>& Gc) {
+    auto force_terms = [&](int b, Lin& A, Lin& dA, Lin& mag, double& const_mag, std::vector<DD>& al,
+                           std::vector<DD>& be, std::vector<DD>& Gs, std::vector<DD>& Gc) {
         A.add(d.f_const[b], ONE);
         for (std::size_t k = 0; k < n; ++k) {
             const int kk = static_cast<int>(k);
-            const double Kbk = dbl(entry(d.K, b, kk)), Cbk = dbl(entry(d.C, b, kk));
+            const double Kbk = dbl(entry(d.k_dd, b, kk)), Cbk = dbl(entry(d.c_dd, b, kk));
             A.add(-Kbk, X(kk));
             dA.add(-Kbk, Vr(kk));
             mag.add(std::fabs(Kbk), mx[k]);
@@ -671,8 +675,8 @@ Program lower(const Derivation& d) {
         // Only the nonzero entries of row b of K and C: an exact-zero entry times
         // a float is the exact 0 (CLN), whose subtraction changes nothing.
         auto moving = [&](int k, std::size_t r) {
-            const numeric Kbk = entry(d.K, b, k), Cbk = entry(d.C, b, k);
-            const bool kz = Kbk.is_zero() && Kbk.is_rational(), cz = Cbk.is_zero() && Cbk.is_rational();
+            const DD Kbk = entry(d.k_dd, b, k), Cbk = entry(d.c_dd, b, k);
+            const bool kz = Kbk.is_zero(), cz = Cbk.is_zero();
             if (kz && cz) return;
             for (std::size_t j = 0; j < nm; ++j) {
                 if (!kz) al[j] -= Kbk * d.modes[j].v[r];
@@ -685,8 +689,8 @@ Program lower(const Derivation& d) {
             const HarmonicData& hd = d.harmonics[h];
             Gs[h] = hd.amplitude[b];
             auto harmonic = [&](int k, std::size_t r) {
-                const numeric Kbk = entry(d.K, b, k), Cbk = entry(d.C, b, k);
-                if (Kbk.is_zero() && Kbk.is_rational() && Cbk.is_zero() && Cbk.is_rational()) return;  // adds the exact 0
+                const DD Kbk = entry(d.k_dd, b, k), Cbk = entry(d.c_dd, b, k);
+                if (Kbk.is_zero() && Cbk.is_zero()) return;  // adds the exact 0
                 Gs[h] += -Kbk * hd.xs[r] + Cbk * hd.omega * hd.xc[r];
                 Gc[h] += -Kbk * hd.xc[r] - Cbk * hd.omega * hd.xs[r];
             };
@@ -698,7 +702,7 @@ Program lower(const Derivation& d) {
     std::uint32_t s_end = kNoRegister;
     std::vector<std::uint32_t> abs_p(nm, kNoRegister);
     std::map<int, std::uint32_t> force_reg;  // mass -> its A_force register in eval
-    std::vector<numeric> bound_alpha(nm), bound_beta(nm);  // per mode: c + omega, c (c + omega) + lambda
+    std::vector<DD> bound_alpha(nm), bound_beta(nm);  // per mode: c + omega, c (c + omega) + lambda
     for (std::size_t j = 0; j < nm; ++j) {
         const Mode& m = d.modes[j];
         bound_alpha[j] = m.c + m.omega;
@@ -716,8 +720,8 @@ Program lower(const Derivation& d) {
                                      : "";
         // g as a combination of the state: alpha (on q) and beta (on q') per mode, and the
         // harmonic sinusoid Gs sin + Gc cos of the non-resonant particular parts.
-        std::vector<numeric> al(nm, 0), be(nm, 0);
-        std::vector<numeric> Gs(nh, 0), Gc(nh, 0);
+        std::vector<DD> al(nm, 0), be(nm, 0);
+        std::vector<DD> Gs(nh, 0), Gc(nh, 0);
         Lin g, dg, sc;
         if (sf.kind == SwitchKind::gap) {
             const Contact& ct = model.contacts[sf.element];
@@ -761,7 +765,7 @@ Program lower(const Derivation& d) {
             sc.add(1.0, mv[i]).add(1.0, mv[p]);
             for (std::size_t j = 0; j < nm; ++j) be[j] = V(i, j) - V(p, j);
             for (std::size_t h = 0; h < nh; ++h) {
-                const numeric W = d.harmonics[h].omega;
+                const DD W = d.harmonics[h].omega;
                 Gs[h] = -W * (harmonic_x(h, i, false) - harmonic_x(h, p, false));
                 Gc[h] = W * (harmonic_x(h, i, true) - harmonic_x(h, p, true));
             }
@@ -784,7 +788,7 @@ Program lower(const Derivation& d) {
             }
             g.add(-sk, X(static_cast<int>(n + j))).add(-el.slip_force, ONE);
             sc.add(el.k, mxs[j]).add(el.slip_force, ONE);
-            const numeric ks = exact(sk);
+            const DD ks(sk);
             for (std::size_t jm = 0; jm < nm; ++jm) al[jm] = ks * (V(el.a, jm) - V(el.b, jm));
             for (std::size_t h = 0; h < nh; ++h) {
                 Gs[h] = ks * (harmonic_x(h, el.a, true) - harmonic_x(h, el.b, true));
@@ -807,7 +811,7 @@ Program lower(const Derivation& d) {
             }
             for (std::size_t jm = 0; jm < nm; ++jm) be[jm] = V(el.a, jm) - V(el.b, jm);
             for (std::size_t h = 0; h < nh; ++h) {
-                const numeric W = d.harmonics[h].omega;
+                const DD W = d.harmonics[h].omega;
                 Gs[h] = -W * (harmonic_x(h, el.a, false) - harmonic_x(h, el.b, false));
                 Gc[h] = W * (harmonic_x(h, el.a, true) - harmonic_x(h, el.b, true));
             }
@@ -845,10 +849,10 @@ Program lower(const Derivation& d) {
                 const Mass& mp = model.masses[static_cast<std::size_t>(p)];
                 comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of " + ms.name + " stuck to " +
                            mp.name + ", D = (m_p A_i - m_i A_p)/(m_i + m_p)";
-                const numeric mi = exact(ms.m), mpn = exact(mp.m);
-                const numeric ci = mpn / (mi + mpn), cp = -mi / (mi + mpn);
+                const DD mi(ms.m), mpn(mp.m);
+                const DD ci = mpn / (mi + mpn), cp = -mi / (mi + mpn);
                 std::uint32_t reg[2][3];  // A, A', the magnitude of A's terms; of i, then of p
-                std::vector<numeric> al_b[2], be_b[2], Gs_b[2], Gc_b[2];
+                std::vector<DD> al_b[2], be_b[2], Gs_b[2], Gc_b[2];
                 for (int which = 0; which < 2; ++which) {
                     const int b = which == 0 ? i : p;
                     Lin A, dA, mag;
@@ -887,10 +891,10 @@ Program lower(const Derivation& d) {
         with(e.lin(G(f, 3), g), comment);
         e.lin(G(f, 4), dg);
         // bound
-        numeric konst = 0;
+        DD konst = 0;
         for (std::size_t h = 0; h < nh; ++h) {
-            const numeric W = d.harmonics[h].omega;
-            konst += num_sqrt(Gs[h] * Gs[h] + Gc[h] * Gc[h]) * W * W;
+            const DD W = d.harmonics[h].omega;
+            konst += sqrt(Gs[h] * Gs[h] + Gc[h] * Gc[h]) * W * W;
         }
         Lin b;
         b.add(konst, ONE);
@@ -899,7 +903,7 @@ Program lower(const Derivation& d) {
             // H = |alpha| (c + omega) + |beta| (c (c + omega) + lambda); a zero term (exact 0
             // times a factor) adds nothing, so it is left out: the same number.
             const bool za = al[j].is_zero(), zb = be[j].is_zero();
-            const numeric H = za && zb ? numeric(0)
+            const DD H = za && zb ? DD(0)
                               : za     ? abs(be[j]) * bound_beta[j]
                               : zb     ? abs(al[j]) * bound_alpha[j]
                                        : abs(al[j]) * bound_alpha[j] + abs(be[j]) * bound_beta[j];
@@ -927,11 +931,11 @@ Program lower(const Derivation& d) {
                     se.comment = "Secular terms are bounded at the end of the step, s_end = tau + max_step.";
                     p.eval.code.insert(p.eval.code.begin(), se);
                 }
-                const numeric W = d.harmonics[h].omega, Q = abs(mh.P / (m.omega + W));
-                const numeric hw = abs(W - m.omega) / 2, wb = (W + m.omega) / 2;
+                const DD W = d.harmonics[h].omega, Q = abs(mh.P / (m.omega + W));
+                const DD hw = abs(W - m.omega) / 2, wb = (W + m.omega) / 2;
                 // |y''| <= Q ((h^2 + wbar^2) s + 2 wbar + omega), |y'''| <= Q (wbar^3 s + 3 wbar^2 + 3 h wbar + h^2 + omega^2)
-                const numeric slope = abs(al[j]) * Q * (hw * hw + wb * wb) + abs(be[j]) * Q * wb * wb * wb;
-                const numeric off = abs(al[j]) * Q * (2 * wb + m.omega) +
+                const DD slope = abs(al[j]) * Q * (hw * hw + wb * wb) + abs(be[j]) * Q * wb * wb * wb;
+                const DD off = abs(al[j]) * Q * (2 * wb + m.omega) +
                                     abs(be[j]) * Q * (3 * wb * wb + 3 * hw * wb + hw * hw + m.lambda);
                 b.add(slope, s_end).add(off, ONE);
             }

@@ -1,7 +1,7 @@
-// hsnc -- lowering: a configuration's Derivation (40 digits) to the Program
+// hsnc -- lowering: a configuration's Derivation (double-double) to the Program
 // (kernels/program.h) that both the emitter prints and the interpreter runs.
 //
-// Every constant is rounded once from the derivation's 40-digit value; every
+// Every constant is rounded once from the derivation's double-double value; every
 // sum is written in the order in which it is computed. The maths of each
 // block is in the comments of lowering.cpp and, printed, in each kernel.
 #pragma once

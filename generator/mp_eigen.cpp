@@ -21,70 +21,103 @@ namespace {
 /// relative separation of the eigenvalues; 3 or 4 are typical).
 constexpr int kMaxSteps = 40;
 
-/// A block's matrix: sparse rows over the block's own (local) indices.
-struct SparseRows {
-    std::vector<std::vector<int>> col;
-    std::vector<std::vector<cl_LF>> val;
+/// The arithmetic of a refinement: CLN long floats of one format, or DD.
+struct LongFloat {
+    using S = cl_LF;
+    cln::float_format_t format;
+    S of(double x) const { return cln::the<cl_LF>(cln::cl_float(x, format)); }
+    static double approx(const S& x) { return cln::double_approx(x); }
+    static S root(const S& x) { return cln::sqrt(x); }
+    static S inverse(const S& x) { return cln::recip(x); }
+    static bool zero(const S& x) { return cln::zerop(x); }
+    static bool negative(const S& x) { return cln::minusp(x); }
+    long bits() const { return static_cast<long>(cln::float_digits(of(1.0))); }
+    double residual_tol() const { return kResidualTol; }
 };
 
-cl_LF to_lf(double x, cln::float_format_t f) { return cln::the<cl_LF>(cln::cl_float(x, f)); }
+struct DoubleDouble {
+    using S = DD;
+    static S of(double x) { return DD(x); }
+    static double approx(const S& x) { return x.to_double(); }
+    static S root(const S& x) { return sqrt(x); }
+    static S inverse(const S& x) { return DD(1.0) / x; }
+    static bool zero(const S& x) { return x.is_zero(); }
+    static bool negative(const S& x) { return x.hi() < 0.0; }
+    static long bits() { return 104; }
+    static double residual_tol() { return kDdResidualTol; }
+};
 
-cl_LF dot(const std::vector<cl_LF>& x, const std::vector<cl_LF>& y) {
-    cl_LF s = x[0] * y[0];
+/// A block's matrix: sparse rows over the block's own (local) indices.
+template <class S>
+struct SparseRows {
+    std::vector<std::vector<int>> col;
+    std::vector<std::vector<S>> val;
+};
+
+template <class S>
+S dot(const std::vector<S>& x, const std::vector<S>& y) {
+    S s = x[0] * y[0];
     for (std::size_t k = 1; k < x.size(); ++k) s = s + x[k] * y[k];
     return s;
 }
 
-void multiply(const SparseRows& a, const std::vector<cl_LF>& x, std::vector<cl_LF>& y) {
+template <class S>
+void multiply(const SparseRows<S>& a, const std::vector<S>& x, std::vector<S>& y) {
     for (std::size_t r = 0; r < a.col.size(); ++r) {
         const std::vector<int>& c = a.col[r];
-        cl_LF s = a.val[r][0] * x[c[0]];
+        S s = a.val[r][0] * x[c[0]];
         for (std::size_t k = 1; k < c.size(); ++k) s = s + a.val[r][k] * x[c[k]];
         y[r] = s;
     }
 }
 
-void normalise(std::vector<cl_LF>& x) {
-    const cl_LF f = cln::recip(cln::sqrt(dot(x, x)));
-    for (cl_LF& e : x) e = e * f;
+template <class A>
+void normalise(const A& ar, std::vector<typename A::S>& x) {
+    const typename A::S f = ar.inverse(ar.root(dot(x, x)));
+    for (auto& e : x) e = e * f;
 }
 
-/// Cyclic Jacobi on a small symmetric matrix h (m x m, long floats): on return
-/// h's diagonal holds the eigenvalues and q (m x m) the eigenvectors as
-/// columns. Used on a cluster's projected matrix only (m is its size).
-void small_jacobi(std::vector<std::vector<cl_LF>>& h, std::vector<std::vector<cl_LF>>& q, cln::float_format_t f) {
+/// Cyclic Jacobi on a small symmetric matrix h (m x m): on return h's
+/// diagonal holds the eigenvalues and q (m x m) the eigenvectors as columns.
+/// Used on a cluster's projected matrix only (m is its size).
+template <class A>
+void small_jacobi(const A& ar, std::vector<std::vector<typename A::S>>& h, std::vector<std::vector<typename A::S>>& q) {
+    using S = typename A::S;
     const std::size_t m = h.size();
-    const cl_LF zero = to_lf(0.0, f), one = to_lf(1.0, f);
-    q.assign(m, std::vector<cl_LF>(m, zero));
+    const S zero = ar.of(0.0), one = ar.of(1.0);
+    q.assign(m, std::vector<S>(m, zero));
     for (std::size_t i = 0; i < m; ++i) q[i][i] = one;
-    cl_LF norm2 = zero;
+    S norm2 = zero;
     for (auto& row : h)
         for (auto& e : row) norm2 = norm2 + e * e;
     // Off-diagonal mass below 2^-2*(mantissa bits - 8) of the whole: converged.
-    const cl_LF tol2 = norm2 * cln::scale_float(one, -2 * (static_cast<long>(cln::float_digits(one)) - 8));
+    const S tol2 = norm2 * ar.of(std::ldexp(1.0, static_cast<int>(-2 * (ar.bits() - 8))));
     for (int sweep = 0; sweep < 60; ++sweep) {
-        cl_LF off2 = zero;
+        S off2 = zero;
         for (std::size_t p = 0; p < m; ++p)
             for (std::size_t s = p + 1; s < m; ++s) off2 = off2 + h[p][s] * h[p][s];
         if (off2 <= tol2) return;
         for (std::size_t p = 0; p < m; ++p)
             for (std::size_t s = p + 1; s < m; ++s) {
-                if (cln::zerop(h[p][s])) continue;
-                const cl_LF theta = (h[s][s] - h[p][p]) / (h[p][s] + h[p][s]);
-                const cl_LF t = (cln::minusp(theta) ? -one : one) / (cln::abs(theta) + cln::sqrt(theta * theta + one));
-                const cl_LF c = cln::recip(cln::sqrt(t * t + one)), sn = t * c;
+                if (ar.zero(h[p][s])) continue;
+                const S theta = (h[s][s] - h[p][p]) / (h[p][s] + h[p][s]);
+                const S abs_theta = ar.negative(theta) ? -theta : theta;
+                // (For |theta| > 1e100, t = 1/(2 theta) to the working precision; theta^2 would overflow DD's products.)
+                const S t = abs_theta > ar.of(1e100) ? one / (theta + theta)
+                                                     : (ar.negative(theta) ? -one : one) / (abs_theta + ar.root(theta * theta + one));
+                const S c = ar.inverse(ar.root(t * t + one)), sn = t * c;
                 for (std::size_t k = 0; k < m; ++k) {
-                    const cl_LF hkp = h[k][p], hks = h[k][s];
+                    const S hkp = h[k][p], hks = h[k][s];
                     h[k][p] = c * hkp - sn * hks;
                     h[k][s] = sn * hkp + c * hks;
                 }
                 for (std::size_t k = 0; k < m; ++k) {
-                    const cl_LF hpk = h[p][k], hsk = h[s][k];
+                    const S hpk = h[p][k], hsk = h[s][k];
                     h[p][k] = c * hpk - sn * hsk;
                     h[s][k] = sn * hpk + c * hsk;
                 }
                 for (std::size_t k = 0; k < m; ++k) {
-                    const cl_LF qkp = q[k][p], qks = q[k][s];
+                    const S qkp = q[k][p], qks = q[k][s];
                     q[k][p] = c * qkp - sn * qks;
                     q[k][s] = sn * qkp + c * qks;
                 }
@@ -96,29 +129,32 @@ void small_jacobi(std::vector<std::vector<cl_LF>>& h, std::vector<std::vector<cl
 /// Rayleigh-Ritz on the cluster vectors v[c0..c1]: orthonormalised
 /// (Gram-Schmidt), then rotated to the eigenvectors of the projected matrix
 /// V^T A V (ascending).
-void rayleigh_ritz(const SparseRows& a, std::vector<std::vector<cl_LF>>& v, int c0, int c1, cln::float_format_t f) {
+template <class A>
+void rayleigh_ritz(const A& ar, const SparseRows<typename A::S>& a, std::vector<std::vector<typename A::S>>& v, int c0,
+                   int c1) {
+    using S = typename A::S;
     const std::size_t b = v[c0].size();
     for (int i = c0; i <= c1; ++i) {
         for (int k = c0; k < i; ++k) {
-            const cl_LF p = dot(v[k], v[i]);
+            const S p = dot(v[k], v[i]);
             for (std::size_t r = 0; r < b; ++r) v[i][r] = v[i][r] - p * v[k][r];
         }
-        normalise(v[i]);
+        normalise(ar, v[i]);
     }
     const int m = c1 - c0 + 1;
-    std::vector<std::vector<cl_LF>> av(m, std::vector<cl_LF>(b, to_lf(0.0, f)));
+    std::vector<std::vector<S>> av(m, std::vector<S>(b, ar.of(0.0)));
     for (int p = 0; p < m; ++p) multiply(a, v[c0 + p], av[p]);
-    std::vector<std::vector<cl_LF>> h(m, std::vector<cl_LF>(m, to_lf(0.0, f))), q;
+    std::vector<std::vector<S>> h(m, std::vector<S>(m, ar.of(0.0))), q;
     for (int p = 0; p < m; ++p)
         for (int s = p; s < m; ++s) h[p][s] = h[s][p] = dot(v[c0 + p], av[s]);
-    small_jacobi(h, q, f);
+    small_jacobi(ar, h, q);
     std::vector<int> order(m);
     std::iota(order.begin(), order.end(), 0);
     std::stable_sort(order.begin(), order.end(), [&](int p, int s) { return h[p][p] < h[s][s]; });
-    std::vector<std::vector<cl_LF>> rotated(m, std::vector<cl_LF>(b, to_lf(0.0, f)));
+    std::vector<std::vector<S>> rotated(m, std::vector<S>(b, ar.of(0.0)));
     for (int s = 0; s < m; ++s)
         for (std::size_t r = 0; r < b; ++r) {
-            cl_LF e = v[c0][r] * q[0][order[s]];
+            S e = v[c0][r] * q[0][order[s]];
             for (int p = 1; p < m; ++p) e = e + v[c0 + p][r] * q[p][order[s]];
             rotated[s][r] = e;
         }
@@ -135,15 +171,17 @@ inline void two_sum_into(double& hi, double& lo, double t) {
 
 /// The eigenpairs of one block (b > 1): values[i], vectors[i][r] over the
 /// block's local indices, ascending.
-void solve_block(const SparseRows& a, const Eigen::MatrixXd& ad, const Eigen::MatrixXd& ad_lo, cln::float_format_t f,
-                 std::vector<cl_LF>& values, std::vector<std::vector<cl_LF>>& vectors) {
+template <class A>
+void solve_block(const A& ar, const SparseRows<typename A::S>& a, const Eigen::MatrixXd& ad, const Eigen::MatrixXd& ad_lo,
+                 std::vector<typename A::S>& values, std::vector<std::vector<typename A::S>>& vectors) {
+    using S = typename A::S;
     const int b = static_cast<int>(ad.rows());
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(ad);
     if (es.info() != Eigen::Success) throw RunError("mp_symmetric_eigen(): the double eigen-solver failed");
     const Eigen::VectorXd& mu = es.eigenvalues();
     const Eigen::MatrixXd& x = es.eigenvectors();
     const double scale = std::max({std::fabs(mu(0)), std::fabs(mu(b - 1)), 1e-300});
-    const double tol = kResidualTol * std::max(ad.norm(), 1e-300);
+    const double tol = ar.residual_tol() * std::max(ad.norm(), 1e-300);
 
     // Clusters: runs of eigenvalues closer than kClusterGap * scale to a neighbour.
     std::vector<int> first(b), last(b);  // cluster of i = [first[i], last[i]]
@@ -160,8 +198,8 @@ void solve_block(const SparseRows& a, const Eigen::MatrixXd& ad, const Eigen::Ma
     // Step 1 in double-double: the residual of (mu_i, X_i) with error-free
     // products (A as hi + lo), accurate to about 1e-32 |A|; its correction
     // takes the pair from about 16 to about 32 digits.
-    vectors.assign(b, std::vector<cl_LF>(b, to_lf(0.0, f)));
-    values.assign(b, to_lf(0.0, f));
+    vectors.assign(b, std::vector<S>(b, ar.of(0.0)));
+    values.assign(b, ar.of(0.0));
     Eigen::VectorXd residual(b);
     for (int i = 0; i < b; ++i) {
         for (int r = 0; r < b; ++r) {
@@ -179,16 +217,16 @@ void solve_block(const SparseRows& a, const Eigen::MatrixXd& ad, const Eigen::Ma
         }
         const Eigen::VectorXd delta = correction(i, residual, mu(i));
         for (int r = 0; r < b; ++r) {
-            vectors[i][r] = to_lf(x(r, i), f);
-            if (delta(r) != 0.0) vectors[i][r] = vectors[i][r] - to_lf(delta(r), f);
+            vectors[i][r] = ar.of(x(r, i));
+            if (delta(r) != 0.0) vectors[i][r] = vectors[i][r] - ar.of(delta(r));
         }
     }
     for (int c0 = 0; c0 < b; c0 = last[c0] + 1)
-        if (last[c0] > c0) rayleigh_ritz(a, vectors, c0, last[c0], f);
+        if (last[c0] > c0) rayleigh_ritz(ar, a, vectors, c0, last[c0]);
 
-    // Then in long floats until converged: Rayleigh quotients and residuals,
-    // corrections, the clusters' Rayleigh-Ritz again.
-    std::vector<cl_LF> y(b, to_lf(0.0, f)), norm2(b, to_lf(1.0, f));
+    // Then in the working precision until converged: Rayleigh quotients and
+    // residuals, corrections, the clusters' Rayleigh-Ritz again.
+    std::vector<S> y(b, ar.of(0.0)), norm2(b, ar.of(1.0));
     std::vector<Eigen::VectorXd> res(b, Eigen::VectorXd(b));
     std::vector<char> done(b, 0);
     for (int step = 0;; ++step) {
@@ -200,7 +238,7 @@ void solve_block(const SparseRows& a, const Eigen::MatrixXd& ad, const Eigen::Ma
             values[i] = dot(vectors[i], y) / norm2[i];
             double n2 = 0;
             for (int r = 0; r < b; ++r) {
-                res[i](r) = cln::double_approx(y[r] - values[i] * vectors[i][r]);
+                res[i](r) = ar.approx(y[r] - values[i] * vectors[i][r]);
                 n2 += res[i](r) * res[i](r);
             }
             done[i] = std::sqrt(n2) <= tol;
@@ -216,28 +254,26 @@ void solve_block(const SparseRows& a, const Eigen::MatrixXd& ad, const Eigen::Ma
             if (!pending) continue;
             for (int i = c0; i <= c1; ++i) {
                 if (done[i]) continue;
-                const Eigen::VectorXd delta = correction(i, res[i], cln::double_approx(values[i]));
+                const Eigen::VectorXd delta = correction(i, res[i], ar.approx(values[i]));
                 for (int r = 0; r < b; ++r)
-                    if (delta(r) != 0.0) vectors[i][r] = vectors[i][r] - to_lf(delta(r), f);
+                    if (delta(r) != 0.0) vectors[i][r] = vectors[i][r] - ar.of(delta(r));
             }
             if (c1 > c0) {
-                rayleigh_ritz(a, vectors, c0, c1, f);
+                rayleigh_ritz(ar, a, vectors, c0, c1);
                 for (int i = c0; i <= c1; ++i) done[i] = 0;
             }
         }
     }
     for (int i = 0; i < b; ++i) {
-        const cl_LF inv = cln::recip(cln::sqrt(norm2[i]));
-        for (cl_LF& e : vectors[i]) e = e * inv;
+        const S inv = ar.inverse(ar.root(norm2[i]));
+        for (S& e : vectors[i]) e = e * inv;
     }
 }
 
-}  // namespace
-
-std::vector<MpEigenpair> mp_symmetric_eigen(const std::vector<std::vector<cl_R>>& a, cln::float_format_t format) {
-    const std::size_t n = a.size();
-    // Blocks: connected components of the nonzero off-diagonal entries, numbered
-    // in the order of their first index.
+/// The blocks of a: connected components of its nonzero off-diagonal entries,
+/// numbered in the order of their first index.
+template <class IsZero>
+std::vector<std::vector<int>> blocks_of(std::size_t n, IsZero is_zero) {
     std::vector<int> parent(n);
     std::iota(parent.begin(), parent.end(), 0);
     auto find = [&](int i) {
@@ -246,7 +282,7 @@ std::vector<MpEigenpair> mp_symmetric_eigen(const std::vector<std::vector<cl_R>>
     };
     for (std::size_t i = 0; i < n; ++i)
         for (std::size_t j = i + 1; j < n; ++j)
-            if (!cln::zerop(a[i][j])) parent[find(static_cast<int>(i))] = find(static_cast<int>(j));
+            if (!is_zero(i, j)) parent[find(static_cast<int>(i))] = find(static_cast<int>(j));
     std::vector<std::vector<int>> blocks;
     std::vector<int> block_of_root(n, -1);
     for (std::size_t i = 0; i < n; ++i) {
@@ -257,54 +293,86 @@ std::vector<MpEigenpair> mp_symmetric_eigen(const std::vector<std::vector<cl_R>>
         }
         blocks[block_of_root[r]].push_back(static_cast<int>(i));
     }
+    return blocks;
+}
 
-    std::vector<MpEigenpair> pairs;
+/// The eigenpairs of `a` in the arithmetic `ar`: entry(r, s, hi, lo) gives the
+/// working-precision value of a nonzero entry and its double-double split,
+/// exact(r, s) the entry as it is (a block of size 1 keeps its diagonal entry).
+template <class A, class Pair, class Entry, class Exact, class IsZero>
+std::vector<Pair> symmetric_eigen(const A& ar, std::size_t n, Entry entry, Exact exact, IsZero is_zero,
+                                  typename Pair::Scalar exact_zero, typename Pair::Scalar exact_one) {
+    using S = typename A::S;
+    std::vector<Pair> pairs;
     pairs.reserve(n);
-    for (const std::vector<int>& idx : blocks) {
+    for (const std::vector<int>& idx : blocks_of(n, is_zero)) {
         const std::size_t b = idx.size();
         if (b == 1) {
-            MpEigenpair p;
-            p.value = a[idx[0]][idx[0]];
-            p.vector.assign(n, cl_R(0));
-            p.vector[idx[0]] = cl_R(1);
+            Pair p;
+            p.value = exact(idx[0], idx[0]);
+            p.vector.assign(n, exact_zero);
+            p.vector[idx[0]] = exact_one;
             pairs.push_back(std::move(p));
             continue;
         }
-        SparseRows rows;
+        SparseRows<S> rows;
         rows.col.resize(b);
         rows.val.resize(b);
         Eigen::MatrixXd ad = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(b));
         Eigen::MatrixXd ad_lo = ad;  // A = ad + ad_lo to about 32 digits
         for (std::size_t r = 0; r < b; ++r)
             for (std::size_t s = 0; s < b; ++s) {
-                const cl_R& e = a[idx[r]][idx[s]];
-                if (cln::zerop(e)) continue;  // exact zero (or a zero float: nothing to add)
-                const cl_LF lf = cln::the<cl_LF>(cln::cl_float(e, format));
+                if (is_zero(idx[r], idx[s])) continue;  // exact zero (or a zero float: nothing to add)
+                double hi = 0, lo = 0;
                 rows.col[r].push_back(static_cast<int>(s));
-                rows.val[r].push_back(lf);
-                const double hi = cln::double_approx(lf);
+                rows.val[r].push_back(entry(idx[r], idx[s], hi, lo));
                 ad(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(s)) = hi;
-                ad_lo(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(s)) = cln::double_approx(lf - to_lf(hi, format));
+                ad_lo(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(s)) = lo;
             }
         for (std::size_t r = 0; r < b; ++r)
             if (rows.col[r].empty()) {  // a zero row: keep one explicit zero term for the products
                 rows.col[r].push_back(static_cast<int>(r));
-                rows.val[r].push_back(to_lf(0.0, format));
+                rows.val[r].push_back(ar.of(0.0));
             }
-        std::vector<cl_LF> values;
-        std::vector<std::vector<cl_LF>> vectors;
-        solve_block(rows, ad, ad_lo, format, values, vectors);
+        std::vector<S> values;
+        std::vector<std::vector<S>> vectors;
+        solve_block(ar, rows, ad, ad_lo, values, vectors);
         for (std::size_t i = 0; i < b; ++i) {
-            MpEigenpair p;
+            Pair p;
             p.value = values[i];
-            p.vector.assign(n, cl_R(0));
+            p.vector.assign(n, exact_zero);
             for (std::size_t r = 0; r < b; ++r) p.vector[idx[r]] = vectors[i][r];
             pairs.push_back(std::move(p));
         }
     }
-    std::stable_sort(pairs.begin(), pairs.end(),
-                     [](const MpEigenpair& p, const MpEigenpair& q) { return p.value < q.value; });
+    std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& p, const Pair& q) { return p.value < q.value; });
     return pairs;
+}
+
+}  // namespace
+
+std::vector<MpEigenpair> mp_symmetric_eigen(const std::vector<std::vector<cl_R>>& a, cln::float_format_t format) {
+    const LongFloat ar{format};
+    auto entry = [&](int r, int s, double& hi, double& lo) {
+        const cl_LF lf = cln::the<cl_LF>(cln::cl_float(a[r][s], format));
+        hi = cln::double_approx(lf);
+        lo = cln::double_approx(lf - ar.of(hi));
+        return lf;
+    };
+    auto exact = [&](int r, int s) { return a[r][s]; };
+    auto is_zero = [&](std::size_t r, std::size_t s) { return cln::zerop(a[r][s]); };
+    return symmetric_eigen<LongFloat, MpEigenpair>(ar, a.size(), entry, exact, is_zero, cl_R(0), cl_R(1));
+}
+
+std::vector<DdEigenpair> dd_symmetric_eigen(const std::vector<std::vector<DD>>& a) {
+    auto entry = [&](int r, int s, double& hi, double& lo) {
+        hi = a[r][s].hi();
+        lo = a[r][s].lo();
+        return a[r][s];
+    };
+    auto exact = [&](int r, int s) { return a[r][s]; };
+    auto is_zero = [&](std::size_t r, std::size_t s) { return a[r][s].is_zero(); };
+    return symmetric_eigen<DoubleDouble, DdEigenpair>(DoubleDouble{}, a.size(), entry, exact, is_zero, DD(0.0), DD(1.0));
 }
 
 }  // namespace hsnc

@@ -1,6 +1,7 @@
 // hsnc -- mp_eigen: the eigenpairs of a real symmetric matrix at high
-// precision (the derivation's 40 digits, CLN long floats), in O(n^3) with a
-// small constant: solved in double (Eigen), then refined.
+// precision, in O(n^3) with a small constant: solved in double (Eigen), then
+// refined in the working precision: double-double (DD, about 32 digits: the
+// derivation's) or CLN long floats of any format (the tests' 40 digits).
 //
 // The matrix is split into the blocks its exact zeros leave uncoupled
 // (connected components of the graph of its nonzero off-diagonal entries);
@@ -31,21 +32,26 @@
 
 #include <vector>
 
+#include "double_double.h"
+
 namespace hsnc {
 
 /// One eigenpair: A v = value v, v normalised (Euclidean), exactly zero (the
 /// rational 0) off the eigenpair's block. A block of size 1 gives its
 /// diagonal entry and the exact unit vector.
 struct MpEigenpair {
-    cln::cl_R value;
+    using Scalar = cln::cl_R;
+    Scalar value;
     std::vector<cln::cl_R> vector;
 };
 
 /// Relative gap (to the largest |eigenvalue| of the block) below which
 /// neighbouring eigenvalues of the double solve form one cluster.
 inline constexpr double kClusterGap = 1e-8;
-/// Residual |A v - value v| at which a pair is converged, relative to |A|_F.
+/// Residual |A v - value v| at which a pair is converged, relative to |A|_F:
+/// long floats, and DD (a few units of its 2^-104 times sqrt(b)).
 inline constexpr double kResidualTol = 1e-50;
+inline constexpr double kDdResidualTol = 1e-29;
 
 /// The eigenpairs of the symmetric matrix `a` (n x n; each entry the exact
 /// rational 0 or a long float of `format`), in ascending order of value
@@ -53,5 +59,14 @@ inline constexpr double kResidualTol = 1e-50;
 /// Throws RunError when a refinement does not converge.
 std::vector<MpEigenpair> mp_symmetric_eigen(const std::vector<std::vector<cln::cl_R>>& a,
                                             cln::float_format_t format);
+
+/// The same in double-double: a block of size 1 gives its entry and the unit
+/// vector, the other vectors are exactly 0 off their block.
+struct DdEigenpair {
+    using Scalar = DD;
+    Scalar value;
+    std::vector<DD> vector;
+};
+std::vector<DdEigenpair> dd_symmetric_eigen(const std::vector<std::vector<DD>>& a);
 
 }  // namespace hsnc

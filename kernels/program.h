@@ -2,7 +2,7 @@
 // straight-line program over a file of double registers.
 //
 // The generator lowers each configuration's derivation (generator/lowering.h,
-// constants from the 40-digit derivation rounded once to double) to one
+// constants from the double-double derivation rounded once to double) to one
 // Program. The emitter prints it as the C++ of a kernel (generator/emitter.h:
 // AOT and JIT kernels); the interpreter (runtime/solvers/interpreted_solver.h) runs it
 // as the generic path. Both follow the order of operations written here, with

@@ -22,7 +22,7 @@ public:
     using std::runtime_error::runtime_error;
 };
 
-/// A configuration the 40-digit derivation does not take (generator/derivation.h:
+/// A configuration the derivation does not take (generator/derivation.h:
 /// state-space modes that are defective, rigid-body modes or an undamped
 /// resonance under dampers). Every kernel kind runs such a configuration on the
 /// generic solver instead, so all kinds still agree.

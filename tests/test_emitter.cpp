@@ -120,21 +120,21 @@ TEST(Derivation, ModesDiagonaliseTheReducedSystem) {
         const Derivation d = derive(m, cfg);
         // Each coordinate's masses: its free mass and the riders stuck to it (T^T M T, T^T K T).
         auto folded_k = [&](std::size_t r, std::size_t s) {
-            numeric k = 0;
+            DD k = 0;
             for (std::size_t i = 0; i < m.dof(); ++i)
                 for (std::size_t q = 0; q < m.dof(); ++q)
                     if (d.coordinate(static_cast<int>(i)) == static_cast<int>(r) &&
                         d.coordinate(static_cast<int>(q)) == static_cast<int>(s))
-                        k += GiNaC::ex_to<numeric>(d.K(i, q));
+                        k += to_dd(GiNaC::ex_to<numeric>(d.K(i, q)));
             return k;
         };
         for (std::size_t j = 0; j < d.modes.size(); ++j)
             for (std::size_t l = 0; l < d.modes.size(); ++l) {
-                numeric kjl = 0, mjl = 0;
+                DD kjl = 0, mjl = 0;
                 for (std::size_t r = 0; r < d.n_free(); ++r) {
-                    numeric mr = 0;
+                    DD mr = 0;
                     for (std::size_t i = 0; i < m.dof(); ++i)
-                        if (d.coordinate(static_cast<int>(i)) == static_cast<int>(r)) mr += exact(m.masses[i].m);
+                        if (d.coordinate(static_cast<int>(i)) == static_cast<int>(r)) mr += DD(m.masses[i].m);
                     mjl += d.modes[j].v[r] * mr * d.modes[l].v[r];
                     for (std::size_t s = 0; s < d.n_free(); ++s) kjl += d.modes[j].v[r] * folded_k(r, s) * d.modes[l].v[s];
                 }

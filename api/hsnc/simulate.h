@@ -44,7 +44,7 @@ enum class KernelChoice {
     jit,        ///< a kernel per configuration, from the persistent cache or
                 ///  compiled in-process (RunError when libhsnc_jit.so cannot be loaded)
     generic,    ///< the Eigen-based generic solver
-    interp,     ///< each configuration's program (derived at 40 digits and
+    interp,     ///< each configuration's program (derived in double-double and
                 ///  lowered, as the kernels are printed from it) run by an
                 ///  interpreter: the kernels' bits without a compiler
 };

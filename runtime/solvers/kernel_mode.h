@@ -79,7 +79,7 @@ private:
 /// configuration's program when `lower` is given (kept within memory as those
 /// providers keep them), or (no fallback) a RunError naming the configuration.
 /// make_solver_provider() gives mode automatic the Eigen solver as fallback:
-/// entering a configuration costs the interpreter a 40-digit derivation, slower
+/// entering a configuration costs the interpreter a derivation (double-double), slower
 /// than the Eigen solver's analysis in double (README, "The interpreter").
 class AotSolverProvider : public SolverProvider {
 public:
