@@ -56,51 +56,6 @@ namespace {
 
 const numeric kZero(0), kOne(1), kTwo(2);
 
-// Cyclic Jacobi eigenvalue algorithm for a symmetric matrix (Golub & Van Loan,
-// Matrix Computations, 4th ed., Alg. 8.5.3), on GiNaC floats at the current
-// Digits. On return a is (nearly) diagonal and a = V^T a_in V.
-void jacobi_eigen(std::vector<std::vector<DD>>& a, std::vector<std::vector<DD>>& vec) {
-    const std::size_t n = a.size();
-    vec.assign(n, std::vector<DD>(n, DD(0.0)));
-    for (std::size_t i = 0; i < n; ++i) vec[i][i] = DD(1.0);
-    DD norm2;
-    for (auto& row : a)
-        for (auto& e : row) norm2 += e * e;
-    const DD tol2 = norm2 * DD(std::ldexp(1.0, -2 * (104 - 8)));  // DD's 104 bits, less 8
-    for (int sweep = 0; sweep < 100; ++sweep) {
-        DD off2;
-        for (std::size_t p = 0; p < n; ++p)
-            for (std::size_t q = p + 1; q < n; ++q) off2 += a[p][q] * a[p][q];
-        if (off2 <= tol2) return;
-        for (std::size_t p = 0; p < n; ++p)
-            for (std::size_t q = p + 1; q < n; ++q) {
-                if (a[p][q].is_zero()) continue;
-                // Zero a[p][q]: tan of the rotation angle, smaller root (Eq. 8.5.x).
-                const DD theta = (a[q][q] - a[p][p]) / (DD(2.0) * a[p][q]);
-                // (For |theta| > 1e100, t = 1/(2 theta) to DD precision; theta^2 would overflow DD's products.)
-                const DD t = abs(theta) > DD(1e100) ? DD(1.0) / (DD(2.0) * theta)
-                                                    : DD(theta >= DD(0.0) ? 1.0 : -1.0) / (abs(theta) + sqrt(theta * theta + DD(1.0)));
-                const DD c = DD(1.0) / sqrt(t * t + DD(1.0)), s = t * c;
-                for (std::size_t k = 0; k < n; ++k) {  // a <- a J
-                    const DD akp = a[k][p], akq = a[k][q];
-                    a[k][p] = c * akp - s * akq;
-                    a[k][q] = s * akp + c * akq;
-                }
-                for (std::size_t k = 0; k < n; ++k) {  // a <- J^T a
-                    const DD apk = a[p][k], aqk = a[q][k];
-                    a[p][k] = c * apk - s * aqk;
-                    a[q][k] = s * apk + c * aqk;
-                }
-                for (std::size_t k = 0; k < n; ++k) {  // V <- V J
-                    const DD vkp = vec[k][p], vkq = vec[k][q];
-                    vec[k][p] = c * vkp - s * vkq;
-                    vec[k][q] = s * vkp + c * vkq;
-                }
-            }
-    }
-    throw RunError("derivation::jacobi_eigen(): no convergence after 100 sweeps");
-}
-
 numeric to_float(const numeric& x) { return GiNaC::ex_to<numeric>(x.evalf()); }
 
 /// A DD as a GiNaC float of the current Digits (symbolic_segment's numbers).
@@ -408,7 +363,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     }
     if (!solved) {
         std::vector<std::vector<DD>> phi;
-        jacobi_eigen(kt, phi);
+        dd_jacobi_eigen(kt, phi);
         std::vector<std::size_t> order(nf);
         std::iota(order.begin(), order.end(), 0);
         std::stable_sort(order.begin(), order.end(),

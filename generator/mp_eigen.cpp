@@ -77,9 +77,10 @@ void normalise(const A& ar, std::vector<typename A::S>& x) {
     for (auto& e : x) e = e * f;
 }
 
-/// Cyclic Jacobi on a small symmetric matrix h (m x m): on return h's
-/// diagonal holds the eigenvalues and q (m x m) the eigenvectors as columns.
-/// Used on a cluster's projected matrix only (m is its size).
+/// Cyclic Jacobi rotations (Golub & Van Loan, Matrix Computations, 4th ed.,
+/// Alg. 8.5.3) on a symmetric matrix h (m x m): on return h's diagonal holds
+/// the eigenvalues and q (m x m) the eigenvectors as columns. The refinement
+/// uses it on a cluster's projected matrix (m is its size).
 template <class A>
 void small_jacobi(const A& ar, std::vector<std::vector<typename A::S>>& h, std::vector<std::vector<typename A::S>>& q) {
     using S = typename A::S;
@@ -92,7 +93,7 @@ void small_jacobi(const A& ar, std::vector<std::vector<typename A::S>>& h, std::
         for (auto& e : row) norm2 = norm2 + e * e;
     // Off-diagonal mass below 2^-2*(mantissa bits - 8) of the whole: converged.
     const S tol2 = norm2 * ar.of(std::ldexp(1.0, static_cast<int>(-2 * (ar.bits() - 8))));
-    for (int sweep = 0; sweep < 60; ++sweep) {
+    for (int sweep = 0; sweep < 100; ++sweep) {
         S off2 = zero;
         for (std::size_t p = 0; p < m; ++p)
             for (std::size_t s = p + 1; s < m; ++s) off2 = off2 + h[p][s] * h[p][s];
@@ -123,7 +124,7 @@ void small_jacobi(const A& ar, std::vector<std::vector<typename A::S>>& h, std::
                 }
             }
     }
-    throw RunError("mp_symmetric_eigen(): no convergence of a cluster's Jacobi rotations");
+    throw RunError("mp_eigen::jacobi(): no convergence after 100 sweeps");
 }
 
 /// Rayleigh-Ritz on the cluster vectors v[c0..c1]: orthonormalised
@@ -362,6 +363,10 @@ std::vector<MpEigenpair> mp_symmetric_eigen(const std::vector<std::vector<cl_R>>
     auto exact = [&](int r, int s) { return a[r][s]; };
     auto is_zero = [&](std::size_t r, std::size_t s) { return cln::zerop(a[r][s]); };
     return symmetric_eigen<LongFloat, MpEigenpair>(ar, a.size(), entry, exact, is_zero, cl_R(0), cl_R(1));
+}
+
+void dd_jacobi_eigen(std::vector<std::vector<DD>>& a, std::vector<std::vector<DD>>& vectors) {
+    small_jacobi(DoubleDouble{}, a, vectors);
 }
 
 std::vector<DdEigenpair> dd_symmetric_eigen(const std::vector<std::vector<DD>>& a) {

@@ -69,4 +69,10 @@ struct DdEigenpair {
 };
 std::vector<DdEigenpair> dd_symmetric_eigen(const std::vector<std::vector<DD>>& a);
 
+/// Cyclic Jacobi rotations in DD throughout, on the whole matrix (slow,
+/// unconditional: the refinement's fallback and reference): on return a's
+/// diagonal holds the eigenvalues (unordered), vectors' columns the
+/// eigenvectors. Throws RunError after 100 sweeps without convergence.
+void dd_jacobi_eigen(std::vector<std::vector<DD>>& a, std::vector<std::vector<DD>>& vectors);
+
 }  // namespace hsnc
