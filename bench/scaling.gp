@@ -15,5 +15,5 @@ set xtics (2, 8, 32, 64, 128)
 set xrange [1.6:160]
 set grid
 plot in skip 1 using 1:4 with linespoints lw 2 title "hsnc, generic solver", \
-     in skip 1 using 1:(1e3*$6/$2) with linespoints lw 2 title "hsnc, interpreter (40-digit derivation per configuration)", \
+     in skip 1 using 1:(1e3*$6/$2) with linespoints lw 2 title "hsnc, interpreter (a derivation per configuration)", \
      in skip 1 using 1:(1e3*$9/$2) with linespoints lw 2 title "CVODE, rtol 1e-12"
