@@ -60,8 +60,8 @@ numeric to_float(const numeric& x) { return GiNaC::ex_to<numeric>(x.evalf()); }
 
 /// A DD as a GiNaC float of the current Digits (symbolic_segment's numbers).
 numeric lf(const DD& x) { return to_float(exact(x)); }
+numeric lfc(const DDComplex& z) { return GiNaC::ex_to<numeric>((exact(z.re) + exact(z.im) * GiNaC::I).evalf()); }
 
-cln::cl_N to_cl(const numeric& x) { return x.to_cl_N(); }
 
 /// A harmonic's frequency, phase and amplitudes, exactly (Omega > 0).
 HarmonicData harmonic_data(const Harmonic& h) {
@@ -72,97 +72,103 @@ HarmonicData harmonic_data(const Harmonic& h) {
     return hd;
 }
 
-/// The folded matrix T^T X T of the free coordinates (exact): entry (r, s) sums
-/// X over the masses of coordinates r and s.
-std::vector<std::vector<numeric>> folded(const GiNaC::matrix& X, const std::vector<std::vector<int>>& group) {
+/// The folded matrix T^T X T of the free coordinates: entry (r, s) sums X
+/// over the masses of coordinates r and s (a coordinate's free mass and its riders).
+std::vector<std::vector<DD>> folded(const std::vector<std::vector<DD>>& X, const std::vector<std::vector<int>>& group) {
     const std::size_t nf = group.size();
-    std::vector<std::vector<numeric>> out(nf, std::vector<numeric>(nf, kZero));
+    std::vector<std::vector<DD>> out(nf, std::vector<DD>(nf));
     for (std::size_t r = 0; r < nf; ++r)
         for (std::size_t s = 0; s < nf; ++s)
             for (int i : group[r])
-                for (int k : group[s]) out[r][s] += GiNaC::ex_to<numeric>(X(i, k));
+                for (int k : group[s]) out[r][s] += X[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
     return out;
 }
 
 /// The pseudo-modes, static inverse and harmonic particular parts of a
-/// configuration with dampers (StateSpaceData, derivation.h).
-void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& group) {
+/// configuration with dampers (StateSpaceData, derivation.h), in DD.
+void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& group, const std::vector<DD>& mass) {
     const Model& model = *d.model;
     const std::size_t nf = group.size(), ns = 2 * nf;
     const std::string where = "derivation::derive(): configuration " + d.cfg.spec(model) + ": ";
     if (!free_components(model, d.cfg).floating_members().empty())
         throw NotDerivable(where + "rigid-body modes under dampers");
     d.state_space = true;
-    const cln::float_format_t format = cln::float_format(kDerivationDigits);
-    const auto K = folded(d.K, group), C = folded(d.C, group);
+    const auto K = folded(d.k_dd, group), C = folded(d.c_dd, group);
     // Balanced as the state-space solver balances it: y = (x, v / s), s the power of 2
     // nearest the largest sqrt(K_rr / m_r) (else C_rr / m_r), so that the eigenvectors'
     // condition measures the modes, not the units (unbalanced, a 16-mass chain's
     // configurations went from condition ~10 to above 200).
     double w2 = 0.0, rate = 0.0;
     for (std::size_t r = 0; r < nf; ++r) {
-        w2 = std::max(w2, (K[r][r] / d.mass[r]).to_double());
-        rate = std::max(rate, (C[r][r] / d.mass[r]).to_double());
+        w2 = std::max(w2, (K[r][r] / mass[r]).to_double());
+        rate = std::max(rate, (C[r][r] / mass[r]).to_double());
     }
     const double s_double = w2 > 0.0 ? std::sqrt(w2) : rate > 0.0 ? rate : 1.0;
-    const numeric s_scale = numeric(2).power(static_cast<long>(std::lround(std::log2(s_double))));  // exact
-    std::vector<std::vector<cln::cl_R>> S(ns, std::vector<cln::cl_R>(ns, 0));
+    const DD s_scale(std::ldexp(1.0, static_cast<int>(std::lround(std::log2(s_double)))));  // exact
+    std::vector<std::vector<DD>> S(ns, std::vector<DD>(ns));
+    double norm = 0.0;
     for (std::size_t r = 0; r < nf; ++r) {
-        S[r][nf + r] = cln::the<cln::cl_R>(to_cl(s_scale));
+        S[r][nf + r] = s_scale;
         for (std::size_t c = 0; c < nf; ++c) {
-            S[nf + r][c] = cln::the<cln::cl_R>(to_cl(-K[r][c] / (d.mass[r] * s_scale)));
-            S[nf + r][nf + c] = cln::the<cln::cl_R>(to_cl(-C[r][c] / d.mass[r]));
+            if (!K[r][c].is_zero()) S[nf + r][c] = -K[r][c] / (mass[r] * s_scale);
+            if (!C[r][c].is_zero()) S[nf + r][nf + c] = -C[r][c] / mass[r];
         }
     }
-    MpComplexEigen eig;
+    for (const auto& row : S)
+        for (const DD& e : row) norm = std::max(norm, std::fabs(e.to_double()));
+    DdComplexEigen eig;
     try {
-        eig = mp_complex_eigen(S, format);
+        eig = dd_complex_eigen(S);
     } catch (const RunError& e) {
         throw NotDerivable(where + e.what());
     }
     StateSpaceData& st = d.state;
     for (std::size_t k = 0; k < ns; ++k) {  // back to z = (x, v): Psi_v = s Psi_y,v, L_v = L_y,v / s
-        st.values.emplace_back(eig.values[k]);
+        st.values.push_back(eig.values[k]);
         st.vectors.emplace_back();
         st.inverse.emplace_back();
         for (std::size_t i = 0; i < ns; ++i) {
-            st.vectors[k].push_back(i < nf ? numeric(eig.vectors[k][i]) : numeric(eig.vectors[k][i]) * s_scale);
-            st.inverse[k].push_back(i < nf ? numeric(eig.inverse[k][i]) : numeric(eig.inverse[k][i]) / s_scale);
+            const DDComplex &v = eig.vectors[k][i], &l = eig.inverse[k][i];
+            st.vectors[k].push_back(i < nf ? v : DDComplex(v.re * s_scale, v.im * s_scale));
+            st.inverse[k].push_back(i < nf ? l : DDComplex(l.re / s_scale, l.im / s_scale));
         }
     }
     // Pseudo-modes in ascending |mu| (then Im mu): one per real mu, two per pair.
     std::vector<std::size_t> order;
     for (std::size_t k = 0; k < ns; ++k)
-        if (st.values[k].imag() >= kZero) order.push_back(k);
+        if (st.values[k].im >= DD(0.0)) order.push_back(k);
+    auto mag2 = [](const DDComplex& z) { return z.re * z.re + z.im * z.im; };
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-        const numeric ma = abs(st.values[a]), mb = abs(st.values[b]);
-        return ma != mb ? ma < mb : st.values[a].imag() < st.values[b].imag();
+        const DD ma = mag2(st.values[a]), mb = mag2(st.values[b]);
+        return ma != mb ? ma < mb : st.values[a].im < st.values[b].im;
     });
-    const numeric undamped_tol = numeric(1, 1000000000000000LL) * numeric(1, 1000000000000000LL);  // 1e-30
+    // A real part within the refinement's rounding (1024 units of 2^-104 of max |S|)
+    // is zero: the mode is undamped; below that it grows.
+    const DD undamped_tol(1e-25 * norm);
     for (std::size_t k : order) {
-        const numeric mu = st.values[k], sigma = -mu.real(), om = mu.imag();
-        if (sigma < -undamped_tol * abs(mu))
-            throw RunError(where + "a state-space mode grows (Re mu = " + std::to_string(mu.real().to_double()) + ")");
-        const std::vector<numeric>& psi = st.vectors[k];
-        const std::vector<numeric>& L = st.inverse[k];
+        const DDComplex mu = st.values[k];
+        const DD sigma = -mu.re, om = mu.im;
+        if (sigma < -undamped_tol)
+            throw RunError(where + "a state-space mode grows (Re mu = " + std::to_string(mu.re.to_double()) + ")");
+        const std::vector<DDComplex>& psi = st.vectors[k];
+        const std::vector<DDComplex>& L = st.inverse[k];
         for (int part = 0; part < (om.is_zero() ? 1 : 2); ++part) {
             // part 0: Re (u), part 1: Im (w) of c e^{mu tau}.
-            auto take = [&](const numeric& z) { return part == 0 ? z.real() : z.imag(); };
-            // The mode's numbers in DD, from the eigenpair's 40 digits.
+            auto take = [&](const DDComplex& z) { return part == 0 ? z.re : z.im; };
             Mode m;
             if (om.is_zero()) {
-                if (!(sigma > kZero)) throw NotDerivable(where + "a zero state-space eigenvalue under dampers");
+                if (!(sigma > DD(0.0))) throw NotDerivable(where + "a zero state-space eigenvalue under dampers");
                 m.regime = Regime::critical;
-                m.sigma = to_dd(sigma);
+                m.sigma = sigma;
                 m.lambda = m.sigma * m.sigma;
                 m.omega = m.sigma;
                 m.xi = DD(1.0);
                 m.kappa = DD(0.0);
             } else {
-                const bool undamped = abs(sigma) <= undamped_tol * abs(mu);
+                const bool undamped = abs(sigma) <= undamped_tol;
                 m.regime = undamped ? Regime::undamped : Regime::underdamped;
-                m.sigma = undamped ? DD(0.0) : to_dd(sigma);
-                m.omega_d = to_dd(om);
+                m.sigma = undamped ? DD(0.0) : sigma;
+                m.omega_d = om;
                 m.kappa = m.omega_d * m.omega_d;
                 m.lambda = m.sigma * m.sigma + m.kappa;
                 m.omega = sqrt(m.lambda);
@@ -171,55 +177,50 @@ void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& grou
             m.c = DD(2.0) * m.sigma;
             for (std::size_t r = 0; r < nf; ++r) {
                 // x = sum (psi c e^{mu tau} + its conjugate) = 2 Re(psi) u - 2 Im(psi) w; a real mu: psi u.
-                m.v.push_back(to_dd(om.is_zero() ? psi[r].real() : part == 0 ? kTwo * psi[r].real() : -kTwo * psi[r].imag()));
-                m.w.push_back(to_dd(take(L[r])));
-                m.w_v.push_back(to_dd(take(L[nf + r])));
-                m.dw_x.push_back(to_dd(take(mu * L[r])));
-                m.dw_v.push_back(to_dd(take(mu * L[nf + r])));
+                m.v.push_back(om.is_zero() ? psi[r].re : part == 0 ? DD(2.0) * psi[r].re : DD(-2.0) * psi[r].im);
+                m.w.push_back(take(L[r]));
+                m.w_v.push_back(take(L[nf + r]));
+                m.dw_x.push_back(take(mu * L[r]));
+                m.dw_v.push_back(take(mu * L[nf + r]));
             }
             d.modes.push_back(std::move(m));
         }
     }
-    // K_FF^-1 at the working precision, column by column.
-    std::vector<std::vector<cln::cl_N>> Kf(nf, std::vector<cln::cl_N>(nf));
+    // K_FF^-1, column by column.
+    std::vector<std::vector<DDComplex>> Kf(nf, std::vector<DDComplex>(nf));
     for (std::size_t r = 0; r < nf; ++r)
-        for (std::size_t c = 0; c < nf; ++c) Kf[r][c] = cln::cl_float(cln::the<cln::cl_R>(to_cl(K[r][c])), format);
-    st.static_inverse.assign(nf, std::vector<numeric>(nf, kZero));
+        for (std::size_t c = 0; c < nf; ++c) Kf[r][c] = K[r][c];
+    st.static_inverse.assign(nf, std::vector<DD>(nf));
     for (std::size_t c = 0; c < nf; ++c) {
-        std::vector<cln::cl_N> e(nf, cln::cl_float(0, format));
-        e[c] = cln::cl_float(1, format);
-        if (!mp_solve(Kf, e)) throw NotDerivable(where + "a singular stiffness under dampers");
-        for (std::size_t r = 0; r < nf; ++r) st.static_inverse[r][c] = numeric(e[r]);
+        std::vector<DDComplex> e(nf);
+        e[c] = DD(1.0);
+        if (!dd_solve(Kf, e)) throw NotDerivable(where + "a singular stiffness under dampers");
+        for (std::size_t r = 0; r < nf; ++r) st.static_inverse[r][c] = e[r].re;
     }
     // Harmonics: X = (K - Omega^2 M + i Omega C)^-1 F.
     d.max_step = std::numeric_limits<double>::infinity();
     for (const Harmonic& h : model.forcing) {
         if (h.omega == 0.0) continue;
         HarmonicData hd = harmonic_data(h);
-        const numeric W = exact(h.omega);
+        const DD W = hd.omega;
         for (const Mode& m : d.modes) {
-            if (m.regime == Regime::undamped && abs(hd.omega - m.omega) <= DD(kResonanceBand) * m.omega)
+            if (m.regime == Regime::undamped && abs(W - m.omega) <= DD(kResonanceBand) * m.omega)
                 throw NotDerivable(where + "forcing at " + std::to_string(h.omega) +
                                    " rad/s within 1% of an undamped state-space mode (" +
                                    std::to_string(m.omega.to_double()) + " rad/s)");
             hd.modal.push_back(ModalHarmonic{});
         }
-        std::vector<std::vector<cln::cl_N>> Z(nf, std::vector<cln::cl_N>(nf));
-        std::vector<cln::cl_N> X(nf);
+        std::vector<std::vector<DDComplex>> Z(nf, std::vector<DDComplex>(nf));
+        std::vector<DDComplex> X(nf);
         for (std::size_t r = 0; r < nf; ++r) {
-            numeric F = kZero;
-            for (int i : group[r]) F += exact(h.amplitude[static_cast<std::size_t>(i)]);
-            X[r] = cln::cl_float(cln::the<cln::cl_R>(to_cl(F)), format);
-            for (std::size_t c = 0; c < nf; ++c) {
-                const numeric re = K[r][c] - (r == c ? W * W * d.mass[r] : kZero), im = W * C[r][c];
-                Z[r][c] = cln::complex(cln::cl_float(cln::the<cln::cl_R>(to_cl(re)), format),
-                                       cln::cl_float(cln::the<cln::cl_R>(to_cl(im)), format));
-            }
+            for (int i : group[r]) X[r].re += hd.amplitude[static_cast<std::size_t>(i)];
+            for (std::size_t c = 0; c < nf; ++c)
+                Z[r][c] = DDComplex(K[r][c] - (r == c ? W * W * mass[r] : DD(0.0)), W * C[r][c]);
         }
-        if (!mp_solve(Z, X)) throw NotDerivable(where + "a singular dynamic stiffness at " + std::to_string(h.omega) + " rad/s");
+        if (!dd_solve(Z, X)) throw NotDerivable(where + "a singular dynamic stiffness at " + std::to_string(h.omega) + " rad/s");
         for (std::size_t r = 0; r < nf; ++r) {
-            hd.xs.push_back(to_dd(numeric(cln::realpart(X[r]))));
-            hd.xc.push_back(to_dd(numeric(cln::imagpart(X[r]))));
+            hd.xs.push_back(X[r].re);
+            hd.xc.push_back(X[r].im);
         }
         d.harmonics.push_back(std::move(hd));
     }
@@ -335,16 +336,13 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         sqm[r] = sqrt(mass_dd[r]);
     }
     if (!model.proportional_damping()) {
-        derive_state_space(d, group);
+        derive_state_space(d, group, mass_dd);
         return d;
     }
-    std::vector<std::vector<DD>> kt(nf, std::vector<DD>(nf));  // T^T K T / sqrt(m_r m_s)
+    std::vector<std::vector<DD>> kt = folded(d.k_dd, group);  // T^T K T, then / sqrt(m_r m_s)
     for (std::size_t r = 0; r < nf; ++r)
-        for (std::size_t s = 0; s < nf; ++s) {
-            for (int i : group[r])
-                for (int k : group[s]) kt[r][s] += d.k_dd[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
+        for (std::size_t s = 0; s < nf; ++s)
             if (!kt[r][s].is_zero()) kt[r][s] = kt[r][s] / (sqm[r] * sqm[s]);  // a zero stays the exact 0
-        }
     // eig_value[j], eig_vector[j][r]: the eigenpairs of Kt in ascending order.
     std::vector<DD> eig_value(nf);
     std::vector<std::vector<DD>> eig_vector(nf, std::vector<DD>(nf));
@@ -527,13 +525,13 @@ std::vector<ex> state_space_response(const Derivation& d, const SegmentInputs& i
     }
     const StateSpaceData& st = d.state;
     for (std::size_t k = 0; k < st.values.size(); ++k) {
-        const numeric mu = st.values[k];
+        const numeric mu = lfc(st.values[k]);
         if (mu.imag() < kZero) continue;  // the conjugate of a pair, written with its first
         const bool pair = mu.imag() > kZero;
         for (std::size_t r = 0; r < nf; ++r) {
             ex re = 0, im = 0;  // Psi_rk L_k z_h(0), real and imaginary parts
             for (std::size_t j = 0; j < 2 * nf; ++j) {
-                const numeric pl = st.vectors[k][r] * st.inverse[k][j];
+                const numeric pl = lfc(st.vectors[k][r]) * lfc(st.inverse[k][j]);
                 const ex& zj = j < nf ? xh[j] : vh[j - nf];
                 re += pl.real() * zj;
                 im += pl.imag() * zj;

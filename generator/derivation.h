@@ -91,8 +91,8 @@ struct HarmonicData {
 inline constexpr double kResonanceBand = 1e-2;
 
 /// Non-proportional damping (dampers): the free coordinates' state z = (x, v)
-/// obeys z' = S z + b, S = [0 I; -M^-1 K  -M^-1 C], decomposed at 40 digits as
-/// S = Psi diag(mu) L (generator/mp_complex_eigen.h). Each conjugate pair
+/// obeys z' = S z + b, S = [0 I; -M^-1 K  -M^-1 C], decomposed in double-double
+/// as S = Psi diag(mu) L (generator/mp_complex_eigen.h). Each conjugate pair
 /// mu = -sigma + i omega_d, with c = L z_h(0), gives two real pseudo-modes that
 /// the mode blocks of proportional damping already compute:
 ///     u = Re(c e^{mu tau}),  w = Im(c e^{mu tau}):  u'' + 2 sigma u' + |mu|^2 u = 0
@@ -104,10 +104,10 @@ inline constexpr double kResonanceBand = 1e-2;
 /// rigid-body modes, nearly defective S (critical damping), an undamped
 /// pseudo-mode forced within kResonanceBand of its frequency.
 struct StateSpaceData {
-    std::vector<GiNaC::numeric> values;               ///< mu_k, the order of mp_complex_eigen
-    std::vector<std::vector<GiNaC::numeric>> vectors;  ///< vectors[k]: Psi_k over (x, v) of the free coordinates
-    std::vector<std::vector<GiNaC::numeric>> inverse;  ///< inverse[k]: row k of L = Psi^-1
-    std::vector<std::vector<GiNaC::numeric>> static_inverse;  ///< K_FF^-1 (folded), for x_st
+    std::vector<DDComplex> values;               ///< mu_k, the order of dd_complex_eigen
+    std::vector<std::vector<DDComplex>> vectors;  ///< vectors[k]: Psi_k over (x, v) of the free coordinates
+    std::vector<std::vector<DDComplex>> inverse;  ///< inverse[k]: row k of L = Psi^-1
+    std::vector<std::vector<DD>> static_inverse;  ///< K_FF^-1 (folded), for x_st
 };
 
 struct Derivation {

@@ -132,4 +132,27 @@ private:
     double hi_ = 0.0, lo_ = 0.0;
 };
 
+/// A complex number of two DD parts: the state-space eigenproblem of dampers.
+struct DDComplex {
+    DD re, im;
+    constexpr DDComplex() = default;
+    constexpr DDComplex(DD r, DD i = DD()) : re(r), im(i) {}  // NOLINT(google-explicit-constructor)
+
+    friend DDComplex operator-(const DDComplex& a) { return {-a.re, -a.im}; }
+    friend DDComplex operator+(const DDComplex& a, const DDComplex& b) { return {a.re + b.re, a.im + b.im}; }
+    friend DDComplex operator-(const DDComplex& a, const DDComplex& b) { return {a.re - b.re, a.im - b.im}; }
+    friend DDComplex operator*(const DDComplex& a, const DDComplex& b) {
+        return {a.re * b.re - a.im * b.im, a.re * b.im + a.im * b.re};
+    }
+    /// a / b = a conj(b) / |b|^2 (|b| far from DD's range limits here).
+    friend DDComplex operator/(const DDComplex& a, const DDComplex& b) {
+        const DD d = b.re * b.re + b.im * b.im;
+        return {(a.re * b.re + a.im * b.im) / d, (a.im * b.re - a.re * b.im) / d};
+    }
+    friend DDComplex conj(const DDComplex& a) { return {a.re, -a.im}; }
+    /// |a| to double precision (pivots, tolerances).
+    friend double magnitude(const DDComplex& a) { return std::hypot(a.re.to_double(), a.im.to_double()); }
+    bool is_zero() const { return re.is_zero() && im.is_zero(); }
+};
+
 }  // namespace hsnc

@@ -25,7 +25,6 @@ std::string kernel_symbol(const Model& model, const Configuration& cfg) {
 
 namespace {
 
-double dbl(const numeric& x) { return x.to_double(); }
 double dbl(const DD& x) { return x.to_double(); }
 
 std::string idx(std::size_t k) { return std::to_string(k + 1); }  // 1-based names: q_1, ...

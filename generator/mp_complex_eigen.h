@@ -25,6 +25,7 @@
 
 #include <vector>
 
+#include "double_double.h"
 #include "state_space_solver.h"
 
 namespace hsnc {
@@ -48,8 +49,18 @@ struct MpComplexEigen {
 MpComplexEigen mp_complex_eigen(const std::vector<std::vector<cln::cl_R>>& a, cln::float_format_t format);
 
 /// Solves m x = b in place (b becomes x) by Gaussian elimination with
-/// partial pivoting, in the arithmetic of the entries; false when a pivot
-/// is exactly zero.
+/// partial pivoting (pivots chosen by their magnitude in double), in the
+/// arithmetic of the entries; false when a pivot is exactly zero.
 bool mp_solve(std::vector<std::vector<cln::cl_N>> m, std::vector<cln::cl_N>& b);
+
+/// The same decomposition in double-double (the derivation's working
+/// precision): the refinement stops at 1024 units of 2^-104 of max |a_ij|.
+struct DdComplexEigen {
+    std::vector<DDComplex> values;
+    std::vector<std::vector<DDComplex>> vectors;  ///< vectors[k][i] = V_ik
+    std::vector<std::vector<DDComplex>> inverse;  ///< inverse[k][i] = (V^-1)_ki
+};
+DdComplexEigen dd_complex_eigen(const std::vector<std::vector<DD>>& a);
+bool dd_solve(std::vector<std::vector<DDComplex>> m, std::vector<DDComplex>& b);
 
 }  // namespace hsnc
