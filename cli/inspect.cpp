@@ -306,7 +306,7 @@ void inspect_state_space(const Model& model, const Configuration& cfg, Format fm
         try {
             const Derivation d = derive(model, cfg);
             out << "derivation (kernels, interpreter): " << d.modes.size()
-                << " state-space pseudo-modes at 40 digits (inspect --format cpp prints the kernel)\n";
+                << " state-space pseudo-modes in double-double (inspect --format cpp prints the kernel)\n";
         } catch (const NotDerivable& e) {
             out << "derivation (kernels, interpreter): not taken (" << e.what()
                 << "); every kernel kind runs this configuration on the generic solver\n";
