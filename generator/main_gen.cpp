@@ -21,8 +21,17 @@ int main(int argc, char** argv) {
     namespace fs = std::filesystem;
     try {
         std::vector<std::string> args(argv + 1, argv + argc);
+        const char* usage = "usage: hsnc_gen --samples FILE | hsnc_gen DIR [MODEL.toml ...]\n";
         if (args.empty()) {
-            std::cerr << "usage: hsnc_gen --samples FILE | hsnc_gen DIR [MODEL.toml ...]\n";
+            std::cerr << usage;
+            return 2;
+        }
+        if (args[0] == "--help" || args[0] == "-h") {
+            std::cout << usage;
+            return 0;
+        }
+        if (args[0].rfind("-", 0) == 0 && args[0] != "--samples") {  // not taken for an output folder
+            std::cerr << "hsnc_gen: unknown option " << args[0] << "\n" << usage;
             return 2;
         }
         std::vector<std::string> symbols;
