@@ -1,15 +1,17 @@
 // hsnc -- mp_complex_eigen: the eigenpairs of a real, non-symmetric matrix at
-// high precision (CLN), and the inverse of its eigenvector matrix: the
-// state-space modes of non-proportional damping at the derivation's 40
-// digits (the first stage of dampers on the derivation path; the generic
-// path's StateSpaceSolver does the same in double).
+// high precision, and the inverse of its eigenvector matrix: the state-space
+// modes of non-proportional damping, in double-double for the derivation
+// (dd_complex_eigen) or in CLN numbers of any precision (mp_complex_eigen,
+// the tests' 40 digits); one code, templated on the arithmetic. The generic
+// path's StateSpaceSolver does the same in double.
 //
 //   1. A = V diag(lambda) V^-1 in double (Eigen::EigenSolver).
 //   2. Each pair (lambda, v), v scaled so that its largest component p is 1,
 //      refined by Newton's method on F(v, lambda) = ((A - lambda I) v, v_p - 1)
 //      with the Jacobian [A - lambda I, -v; e_p^T, 0], solved by complex
-//      Gaussian elimination with partial pivoting at the working precision:
-//      quadratic convergence from the double solution, 16 -> 32 -> 64 digits.
+//      Gaussian elimination with partial pivoting at the working precision
+//      (first simplified steps, the double Jacobian factorised once; exact
+//      steps only should those stall).
 //      One of each conjugate pair is refined; the other is its exact
 //      conjugate. A real eigenvalue keeps a real vector.
 //   3. W = V^-1 by the same elimination.

@@ -10,21 +10,22 @@
 //   1. A = X diag(mu) X^T in double (Eigen::SelfAdjointEigenSolver).
 //   2. Mixed-precision Newton refinement of each pair (lambda_i, phi_i),
 //      starting from (mu_i, X_i): the residual r = A phi - lambda phi and the
-//      Rayleigh quotient lambda = phi.A phi / phi.phi in long floats, the
-//      correction in double through the double decomposition,
+//      Rayleigh quotient lambda = phi.A phi / phi.phi in the working
+//      precision, the correction in double through the double decomposition,
 //          phi <- phi - sum_{k not in C(i)} X_k (X_k^T r) / (mu_k - lambda_i),
-//      accumulated in long floats. C(i) is i's cluster: the eigenvalues of
-//      the double solve closer than kClusterGap (relative) to a neighbour.
-//      A cluster's vectors are refined as a subspace (only the components
-//      out of it are corrected), then orthonormalised (Gram-Schmidt) and
-//      rotated by the Jacobi eigenvectors of the projected matrix Phi^T A Phi
-//      (Rayleigh-Ritz, long floats): (near-)repeated eigenvalues get an
+//      accumulated in the working precision. C(i) is i's cluster: the
+//      eigenvalues of the double solve closer than kClusterGap (relative) to
+//      a neighbour. A cluster's vectors are refined as a subspace (only the
+//      components out of it are corrected), then orthonormalised
+//      (Gram-Schmidt) and rotated by the Jacobi eigenvectors of the projected
+//      matrix Phi^T A Phi (Rayleigh-Ritz): (near-)repeated eigenvalues get an
 //      orthonormal basis of their invariant subspace.
-//   3. Until every residual is below kResidualTol * |A|_F; each step gains
-//      about 16 digits times the separation of the eigenvalues.
+//   3. Until every residual is below kResidualTol (DD: kDdResidualTol) times
+//      |A|_F; each step gains about 16 digits times the separation of the
+//      eigenvalues.
 // The cost per step is a sparse product A phi and a few vector operations in
-// long floats per eigenpair and two dense double products: O(b nnz + b^2)
-// long-float operations, O(b^3) double ones.
+// the working precision per eigenpair and two dense double products:
+// O(b nnz + b^2) working-precision operations, O(b^3) double ones.
 #pragma once
 
 #include <cln/lfloat.h>
