@@ -54,7 +54,7 @@ int Derivation::coordinate(int mass) const {
 
 namespace {
 
-const numeric kZero(0), kOne(1), kTwo(2);
+const numeric kZero(0);
 
 numeric to_float(const numeric& x) { return GiNaC::ex_to<numeric>(x.evalf()); }
 

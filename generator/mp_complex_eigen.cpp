@@ -73,15 +73,25 @@ bool solve(const A& ar, std::vector<std::vector<typename A::C>> M, std::vector<t
     return true;
 }
 
-/// The eigen-decomposition of `a` (entries in the arithmetic of `ar`; `A`
-/// their doubles, `norm` the largest |entry|): see mp_complex_eigen().
-template <class A>
-void complex_eigen(const A& ar, const std::vector<std::vector<typename A::C>>& a, const Eigen::MatrixXd& A_d, double norm,
-                   std::vector<typename A::C>& values, std::vector<std::vector<typename A::C>>& vectors,
-                   std::vector<std::vector<typename A::C>>& inverse) {
+/// The eigen-decomposition of the real matrix `a` (entries in the arithmetic
+/// of `ar`, imaginary parts zero): see mp_complex_eigen().
+template <class A, class Out>
+Out complex_eigen(const A& ar, const std::vector<std::vector<typename A::C>>& a) {
     using C = typename A::C;
     using Matrix = std::vector<std::vector<C>>;
     const std::size_t n = a.size();
+    Out out;
+    if (n == 0) return out;
+    std::vector<C>& values = out.values;
+    std::vector<std::vector<C>>& vectors = out.vectors;
+    std::vector<std::vector<C>>& inverse = out.inverse;
+    Eigen::MatrixXd A_d(n, n);
+    double norm = 0.0;  // the largest |a_ij|
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = 0; j < n; ++j) {
+            A_d(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = ar.approx(a[i][j]).real();
+            norm = std::max(norm, std::fabs(ar.approx(a[i][j]).real()));
+        }
     const Eigen::EigenSolver<Eigen::MatrixXd> es(A_d);
     if (es.info() != Eigen::Success) throw RunError("mp_complex_eigen(): the double eigen-solver did not converge");
     const Eigen::MatrixXcd V = es.eigenvectors();
@@ -210,11 +220,13 @@ void complex_eigen(const A& ar, const std::vector<std::vector<typename A::C>>& a
     inverse.assign(n, std::vector<C>(n));
     for (std::size_t k = 0; k < n; ++k)
         for (std::size_t c = 0; c < n; ++c) inverse[k][c] = Vm[k][n + c];
+    return out;
 }
 
 }  // namespace
 
 bool mp_solve(std::vector<std::vector<cl_N>> m, std::vector<cl_N>& b) {
+    // solve() only combines the entries, in their own precision: the format is never used.
     return solve(ClnArith{cln::float_format(40)}, std::move(m), b);
 }
 
@@ -223,37 +235,15 @@ bool dd_solve(std::vector<std::vector<DDComplex>> m, std::vector<DDComplex>& b) 
 }
 
 MpComplexEigen mp_complex_eigen(const std::vector<std::vector<cl_R>>& a, cln::float_format_t format) {
-    const std::size_t n = a.size();
-    MpComplexEigen out;
-    if (n == 0) return out;
-    Eigen::MatrixXd A(n, n);
-    double norm = 0.0;
-    std::vector<std::vector<cl_N>> ac(n, std::vector<cl_N>(n));
-    for (std::size_t i = 0; i < n; ++i)
-        for (std::size_t j = 0; j < n; ++j) {
-            A(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = cln::double_approx(a[i][j]);
-            norm = std::max(norm, std::fabs(cln::double_approx(a[i][j])));
-            ac[i][j] = a[i][j];
-        }
-    complex_eigen(ClnArith{format}, ac, A, norm, out.values, out.vectors, out.inverse);
-    return out;
+    std::vector<std::vector<cl_N>> ac(a.size());
+    for (std::size_t i = 0; i < a.size(); ++i) ac[i].assign(a[i].begin(), a[i].end());
+    return complex_eigen<ClnArith, MpComplexEigen>(ClnArith{format}, ac);
 }
 
 DdComplexEigen dd_complex_eigen(const std::vector<std::vector<DD>>& a) {
-    const std::size_t n = a.size();
-    DdComplexEigen out;
-    if (n == 0) return out;
-    Eigen::MatrixXd A(n, n);
-    double norm = 0.0;
-    std::vector<std::vector<DDComplex>> ac(n, std::vector<DDComplex>(n));
-    for (std::size_t i = 0; i < n; ++i)
-        for (std::size_t j = 0; j < n; ++j) {
-            A(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = a[i][j].to_double();
-            norm = std::max(norm, std::fabs(a[i][j].to_double()));
-            ac[i][j] = a[i][j];
-        }
-    complex_eigen(DDArith{}, ac, A, norm, out.values, out.vectors, out.inverse);
-    return out;
+    std::vector<std::vector<DDComplex>> ac(a.size());
+    for (std::size_t i = 0; i < a.size(); ++i) ac[i].assign(a[i].begin(), a[i].end());
+    return complex_eigen<DDArith, DdComplexEigen>(DDArith{}, ac);
 }
 
 }  // namespace hsnc
