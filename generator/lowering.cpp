@@ -27,6 +27,7 @@ std::string body_name(const Model& m, int b) { return b == kGround ? "ground" : 
 /// Terms of a linear combination in the order they are summed; exact zeros
 /// are left out (in the printed kernel and the interpreter alike).
 struct Lin {
+    Lin() { terms.reserve(48); }  // one allocation for most rows (a mode's row has n + 1 terms)
     std::vector<ProgramTerm> terms;
     Lin& add(double c, std::uint32_t reg) {
         if (c != 0.0) terms.push_back({c, reg});
@@ -39,7 +40,10 @@ struct Lin {
 /// Appends registers and instructions to one body of a program.
 class Builder {
 public:
-    Builder(Program& p, ProgramBody& b) : p_(p), b_(b) {}
+    Builder(Program& p, ProgramBody& b) : p_(p), b_(b) {
+        b_.names.reserve(2 * b_.code.capacity() + 64);  // registers: inputs, outputs and a temporary per instruction
+        b_.kinds.reserve(b_.names.capacity());
+    }
 
     std::uint32_t reg(const std::string& name, RegisterKind kind) {
         b_.names.push_back(name);
@@ -168,9 +172,13 @@ Program lower(const Derivation& d) {
     // Room for the program up front (sizes estimated from the configuration):
     // growing these vectors instruction by instruction moved them many times.
     const std::size_t ns = d.switches.size();
-    p.setup.code.reserve(4 * (n + nm + nh) + 16);
-    p.eval.code.reserve(4 * (n + nm + nh) + 3 * ns + 16);
-    p.terms.reserve(2 * nm * (nf + nh) + 4 * n + ns * (4 * n + 2 * nm + 8) + 16);
+    // setup: about 10 instructions per free mass, 17 per mode and 12 n^2 terms
+    // (modal forces, static offset, two projections to modes and their refinement,
+    // x(0) and its residual); eval: a mass_state of n terms per mass and, per
+    // switch function, a bound over the modes.
+    p.setup.code.reserve(12 * nf + 20 * nm + 8 * nh + 16);
+    p.eval.code.reserve(4 * n + 2 * nm + 6 * ns + 4 * nh + 16);
+    p.terms.reserve(12 * nm * nf + 6 * nf * nh + n * (nm + 6 + 6 * nh) + ns * (nm + 24) + 64);
     Builder s(p, p.setup);
     s.reg("1.0", RegisterKind::one);
     s.reg("t0", RegisterKind::input);

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <unordered_map>
 
 #include "kernel_abi.h"  // hsnc_phase, hsnc_phi2: the very helpers the printed kernels call
 
@@ -567,21 +568,53 @@ void accesses(const Instr& in, const std::vector<ProgramTerm>& terms, std::vecto
     }
 }
 
-/// What instructions of one level must share to run as one block (empty: none, alone).
-std::vector<std::uint32_t> shape(const Instr& in, const std::vector<ProgramTerm>& terms) {
-    switch (in.op) {
-        case ProgramOp::lincomb: return {0, in.count, in.a != kNoRegister};
-        case ProgramOp::lincomb_ld: return {1, in.count};
-        case ProgramOp::copy: return {2};
-        case ProgramOp::abs: return {3};
+/// Whether an instruction runs in a block with others of its level.
+bool batched(ProgramOp op) {
+    return op == ProgramOp::lincomb || op == ProgramOp::lincomb_ld || op == ProgramOp::copy || op == ProgramOp::abs ||
+           op == ProgramOp::mass_state;
+}
+
+/// What instructions of one level must share to run as one block: the op, the
+/// number of terms, a base (lincomb); for mass_state also the tails' lengths
+/// and every term's register (the mode blocks, the tails' registers).
+bool same_shape(const Instr& a, const Instr& b, const std::vector<ProgramTerm>& terms) {
+    if (a.op != b.op) return false;
+    switch (a.op) {
+        case ProgramOp::lincomb: return a.count == b.count && (a.a != kNoRegister) == (b.a != kNoRegister);
+        case ProgramOp::lincomb_ld: return a.count == b.count;
         case ProgramOp::mass_state: {
-            std::vector<std::uint32_t> k = {4, in.count, in.tail[0], in.tail[1], in.tail[2], in.tail[3], in.tail[4]};
-            const std::uint32_t n = in.count + in.tail[0] + in.tail[1] + in.tail[2] + in.tail[3] + in.tail[4];
-            for (std::uint32_t t = 0; t < n; ++t) k.push_back(terms[in.first + t].reg);
-            return k;
+            if (a.count != b.count) return false;
+            std::uint32_t n = a.count;
+            for (int q = 0; q < 5; ++q) {
+                if (a.tail[q] != b.tail[q]) return false;
+                n += a.tail[q];
+            }
+            for (std::uint32_t t = 0; t < n; ++t)
+                if (terms[a.first + t].reg != terms[b.first + t].reg) return false;
+            return true;
         }
-        default: return {};
+        default: return true;
     }
+}
+
+/// A hash of what same_shape compares.
+std::uint64_t shape_hash(const Instr& in, const std::vector<ProgramTerm>& terms) {
+    std::uint64_t h = 1469598103934665603ull;
+    auto mix = [&h](std::uint64_t v) { h = (h ^ v) * 1099511628211ull; };
+    mix(static_cast<std::uint64_t>(in.op));
+    switch (in.op) {
+        case ProgramOp::lincomb: mix(in.count), mix(in.a != kNoRegister); break;
+        case ProgramOp::lincomb_ld: mix(in.count); break;
+        case ProgramOp::mass_state: {
+            std::uint32_t n = in.count;
+            mix(in.count);
+            for (int q = 0; q < 5; ++q) mix(in.tail[q]), n += in.tail[q];
+            for (std::uint32_t t = 0; t < n; ++t) mix(terms[in.first + t].reg);
+            break;
+        }
+        default: break;
+    }
+    return h;
 }
 
 Block make_block(const std::vector<const Instr*>& rows, const std::vector<ProgramTerm>& terms) {
@@ -817,10 +850,11 @@ std::unique_ptr<InterpretedSolver::Body> freeze(const std::vector<Block>& blocks
 /// instructions of one shape batched into a block, in order of first
 /// appearance; a sin and a cos of one register in one step. Every value is
 /// computed by the same operations from the same operands as in program order.
-std::unique_ptr<InterpretedSolver::Body> compile(const ProgramBody& body, const std::vector<ProgramTerm>& program_terms,
+/// `terms` are the program's: the registers of this body's terms are renamed in
+/// place (forward_copies), the other body's terms are not touched.
+std::unique_ptr<InterpretedSolver::Body> compile(const ProgramBody& body, std::vector<ProgramTerm>& terms,
                                                  std::uint32_t pinned_begin, std::uint32_t pinned_end,
                                                  std::vector<std::uint32_t>& exported) {
-    std::vector<ProgramTerm> terms = program_terms;
     std::vector<Instr> code;
     code.reserve(body.code.size());
     for (const ProgramInstr& in : body.code)
@@ -847,31 +881,35 @@ std::unique_ptr<InterpretedSolver::Body> compile(const ProgramBody& body, const 
 
     std::vector<Block> blocks;
     for (const std::vector<std::size_t>& members : by_level) {
-        std::vector<std::vector<std::uint32_t>> keys;
+        std::vector<char> alone;  // per group: an instruction that runs by itself
         std::vector<std::vector<const Instr*>> groups;
         // shape -> its group (groups stay in order of first appearance); a map
         // instead of a linear search of keys: a wide level has hundreds of shapes.
-        std::map<std::vector<std::uint32_t>, std::size_t> group_of;
+        std::unordered_multimap<std::uint64_t, std::size_t> group_of;  // shape_hash -> groups of that hash
         for (std::size_t i : members) {
             const Instr& in = code[i];
-            std::vector<std::uint32_t> key = shape(in, terms);
-            if (key.empty()) {
-                keys.emplace_back();
+            if (!batched(in.op)) {
+                alone.push_back(1);
                 groups.push_back({&in});
                 continue;
             }
-            const auto [it, added] = group_of.emplace(std::move(key), groups.size());
-            if (!added) {
-                groups[it->second].push_back(&in);
+            const std::uint64_t h = shape_hash(in, terms);
+            std::size_t g = groups.size();
+            const auto range = group_of.equal_range(h);
+            for (auto it = range.first; it != range.second && g == groups.size(); ++it)
+                if (same_shape(*groups[it->second].front(), in, terms)) g = it->second;
+            if (g < groups.size()) {
+                groups[g].push_back(&in);
             } else {
-                keys.push_back(it->first);
+                group_of.emplace(h, g);
+                alone.push_back(0);
                 groups.push_back({&in});
             }
         }
         std::vector<char> fused(groups.size(), 0);
         for (std::size_t g = 0; g < groups.size(); ++g) {
             if (fused[g]) continue;
-            if (!keys[g].empty()) {
+            if (!alone[g]) {
                 blocks.push_back(make_block(groups[g], terms));
                 continue;
             }
@@ -880,7 +918,7 @@ std::unique_ptr<InterpretedSolver::Body> compile(const ProgramBody& body, const 
             s.single = in;
             if (in.op == ProgramOp::sin)  // its cos in this level, if any
                 for (std::size_t h = g + 1; h < groups.size(); ++h)
-                    if (keys[h].empty() && !fused[h] && groups[h].front()->op == ProgramOp::cos &&
+                    if (alone[h] && !fused[h] && groups[h].front()->op == ProgramOp::cos &&
                         groups[h].front()->a == in.a) {
                         s.cos_dst = groups[h].front()->dst;
                         fused[h] = 1;
@@ -894,14 +932,14 @@ std::unique_ptr<InterpretedSolver::Body> compile(const ProgramBody& body, const 
 
 }  // namespace
 
-InterpretedSolver::InterpretedSolver(const Program& p)
-    : cfg_(p.cfg),
-      switches_(p.switches),
+InterpretedSolver::InterpretedSolver(Program p)
+    : cfg_(std::move(p.cfg)),
+      switches_(p.switches),  // copied: eval_output_count() below reads p.switches
       max_step_(p.max_step),
       n_dof_(p.n_dof),
       n_slider_(p.n_slider),
       n_coef_(static_cast<std::size_t>(p.n_coef)),
-      constants_(p.constants),
+      constants_(std::move(p.constants)),
       setup_coef_(p.setup_coef),
       setup_(compile(p.setup, p.terms, 0, 0, setup_coef_)),
       eval_(compile(p.eval, p.terms, p.eval_outputs(),

@@ -35,7 +35,9 @@ namespace hsnc {
 
 class InterpretedSolver : public SegmentSolver {
 public:
-    explicit InterpretedSolver(const Program& program);
+    /// Compiles `program` (taken by value: a program moved in is compiled in
+    /// place, without a copy of its terms).
+    explicit InterpretedSolver(Program program);
     ~InterpretedSolver() override;
 
     const Configuration& configuration() const override { return cfg_; }
