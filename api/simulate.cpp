@@ -21,6 +21,7 @@
 #include "jit_solver_provider.h"
 #include "kernel_cache.h"
 #include "kernel_mode.h"
+#include "tiered_provider.h"
 #include "lowering.h"
 #include "reference.h"
 #include "sample_grid.h"
@@ -111,6 +112,8 @@ void check_options(const Model& model, const SimulateOptions& o) {
             throw OptionError(kSimulate, "method", method_name(o.method),
                               "the model has " + what + ", which hsnc, rk45 and cvode run, for now");
     }
+    if (o.tier_evaluations < 1)
+        throw OptionError(kSimulate, "tier_evaluations", "0", "must be at least 1");
     if (o.method != Method::hsnc && o.kernels != KernelChoice::automatic)
         throw OptionError(kSimulate, "kernels", kernel_choice_name(o.kernels),
                           std::string("applies to method hsnc only (not ") + method_name(o.method) + ")");
@@ -126,7 +129,8 @@ void check_options(const Model& model, const SimulateOptions& o) {
 // module (LLVM) loaded only for a kernel the cache cannot give; no cache: the
 // JIT module for every kernel. RunError (a JitUnavailable) when it is needed
 // and cannot be loaded.
-std::unique_ptr<SolverProvider> make_jit_provider(const Model& model, const SimulateOptions& o, const std::string& who) {
+std::unique_ptr<SolverProvider> make_jit_provider(const Model& model, const SimulateOptions& o, const std::string& who,
+                                                  bool tiered = false) {
     JitOptions jopt;
     jopt.cache_dir = !o.use_cache ? "" : o.cache_dir.empty() ? default_cache_dir() : o.cache_dir;
     jopt.warn = o.warn;
@@ -138,15 +142,16 @@ std::unique_ptr<SolverProvider> make_jit_provider(const Model& model, const Simu
     // Checked up front even when every kernel may come from the cache: asking
     // for the JIT is asking for the module, and a missing one says so at once.
     const std::string module = api::jit_module_path();
-    if (module.empty()) throw api::JitUnavailable(who + "(): kernels = jit: this hsnc was built without the JIT");
+    const std::string kind = tiered ? "tiered" : "jit";
+    if (module.empty()) throw api::JitUnavailable(who + "(): kernels = " + kind + ": this hsnc was built without the JIT");
     if (::access(module.c_str(), R_OK) != 0)
-        throw api::JitUnavailable(who + "(): kernels = jit: cannot load the JIT module: " + module + ": " +
+        throw api::JitUnavailable(who + "(): kernels = " + kind + ": cannot load the JIT module: " + module + ": " +
                                   std::strerror(errno));
     if (jopt.cache_dir.empty()) {
         try {
             return api::load_jit_provider(model, source, jopt);
         } catch (const api::JitUnavailable& e) {
-            throw api::JitUnavailable(who + "(): kernels = jit: " + e.what());
+            throw api::JitUnavailable(who + "(): kernels = " + kind + ": " + e.what());
         }
     }
     return std::make_unique<CachedKernelProvider>(
@@ -165,6 +170,38 @@ namespace api {
 
 std::unique_ptr<SolverProvider> make_provider(const Model& model, const SimulateOptions& o, SolverKind* kind,
                                               const char* function) {
+    if (o.kernels == KernelChoice::tiered) {
+        // The interpreter, then kernels: from the cache at a configuration's
+        // first entry (a provider that never compiles), or compiled into the
+        // cache by a child process once the configuration has earned it.
+        // Without a cache, interpreted only.
+        if (kind) *kind = SolverKind::tiered;
+        TieredSolverProvider::ProbeFn probe;
+        TieredSolverProvider::CompileFn compile;
+        if (o.use_cache) {
+            JitOptions jopt;
+            jopt.cache_dir = o.cache_dir.empty() ? default_cache_dir() : o.cache_dir;
+            jopt.warn = o.warn;
+            jopt.cache_max_bytes = o.cache_max_bytes;
+            auto lookup = std::make_shared<CachedKernelProvider>(
+                model, [](const Configuration&) -> JitKernelSource { throw std::logic_error("never emitted"); },
+                jopt, [](JitSolverProvider::SourceFn, const JitOptions&) -> std::unique_ptr<JitSolverProvider> {
+                    throw std::logic_error("never compiles");
+                });
+            probe = [lookup](const Configuration& cfg) { return lookup->cached(cfg); };
+            SimulateOptions quiet = o;
+            quiet.warn = [](const std::string&) {};  // the child's warnings would interleave with the run's
+            const std::string who = function;
+            compile = [&model, quiet, who](const Configuration& cfg) {
+                make_jit_provider(model, quiet, who, true)->solver(cfg);
+            };
+        }
+        TierOptions tier;
+        tier.compile_after = o.tier_evaluations;
+        auto base = make_solver_provider(model, KernelMode::interp, &aot_registry(), program_source(model));
+        return std::make_unique<TieredSolverProvider>(std::move(base), std::move(probe), std::move(compile), tier,
+                                                      o.warn);
+    }
     if (o.kernels == KernelChoice::jit) {
         if (kind) *kind = SolverKind::jit;
         return std::make_unique<DerivationFallbackProvider>(model, make_jit_provider(model, o, function));
@@ -248,10 +285,10 @@ const char* method_name(Method method) {
 
 KernelChoice kernel_choice_from_name(const std::string& name) {
     for (KernelChoice k : {KernelChoice::automatic, KernelChoice::aot, KernelChoice::jit, KernelChoice::generic,
-                           KernelChoice::interp})
+                           KernelChoice::interp, KernelChoice::tiered})
         if (name == kernel_choice_name(k)) return k;
     throw OptionError("hsnc::kernel_choice_from_name", "kernels", "'" + name + "'",
-                      "expected auto, aot, generic, interp or jit");
+                      "expected auto, aot, generic, interp, jit or tiered");
 }
 
 const char* kernel_choice_name(KernelChoice choice) {
@@ -261,6 +298,7 @@ const char* kernel_choice_name(KernelChoice choice) {
     case KernelChoice::jit: return "jit";
     case KernelChoice::generic: return "generic";
     case KernelChoice::interp: return "interp";
+    case KernelChoice::tiered: return "tiered";
     }
     return "?";
 }
@@ -294,6 +332,7 @@ const char* solver_kind_name(SolverKind kind) {
     case SolverKind::jit: return "jit";
     case SolverKind::generic: return "generic";
     case SolverKind::interp: return "interp";
+    case SolverKind::tiered: return "tiered";
     case SolverKind::reference: return "reference";
     case SolverKind::integrator: return "integrator";
     }

@@ -36,6 +36,7 @@ struct SimulateOptions {
     std::string cache_dir;
     bool no_cache = false;
     std::uint64_t cache_max_bytes = kDefaultCacheMaxBytes;
+    std::uint64_t tier_evaluations = hsnc::SimulateOptions().tier_evaluations;
     std::size_t max_events = 0;
     bool quiet = false;
     std::string precision = "double";
@@ -110,6 +111,7 @@ InputError flagged(const OptionError& e, const SimulateOptions& o, bool quoted =
                           {"integrator.rtol", "--rtol", flag_value(o.rtol)},
                           {"integrator.atol", "--atol", flag_value(o.atol)},
                           {"kernels", "--kernels", o.kernels},
+                          {"tier_evaluations", "--tier-evaluations", std::to_string(o.tier_evaluations)},
                           {"precision_digits", "--precision", o.precision}};
     for (const Flag& f : flags)
         if (e.option() == f.option) {
@@ -145,6 +147,7 @@ int simulate(const SimulateOptions& o) {
     run.cache_dir = o.cache_dir;
     run.use_cache = !o.no_cache;
     run.cache_max_bytes = o.cache_max_bytes;
+    run.tier_evaluations = o.tier_evaluations;
     try {
         check_simulate_options(model, run);
     } catch (const OptionError& e) {
@@ -225,9 +228,15 @@ void add_simulate(CLI::App& app, int& exit_code) {
                     "auto (default: ahead-of-time kernels when the model has them, else the generic solver; "
                     "never compiles), aot, generic, interp (each configuration's program, derived in double-double, "
                     "interpreted: the kernels' bits without a compiler), jit (a kernel compiled in-process, or "
-                    "taken from the cache, for each configuration the run enters)");
+                    "taken from the cache, for each configuration the run enters), tiered (interp, then a "
+                    "configuration's kernel from the cache at once, or compiled on a background thread once it has "
+                    "run --tier-evaluations evaluations: never waits for a compiler; the bits of interp and jit)");
+    sub->add_option("--tier-evaluations", o->tier_evaluations,
+                    "kernels tiered: evaluations a configuration runs interpreted before its kernel is compiled "
+                    "(default 200000)")
+        ->check(CLI::PositiveNumber);
     sub->add_option("--cache-dir", o->cache_dir,
-                    "keep compiled kernels (jit) in DIR (default $XDG_CACHE_HOME/hsnc, else ~/.cache/hsnc)");
+                    "keep compiled kernels (jit, tiered) in DIR (default $XDG_CACHE_HOME/hsnc, else ~/.cache/hsnc)");
     auto* no_cache = sub->add_flag("--no-cache", o->no_cache, "compile every kernel (jit); read and write no cache");
     no_cache->excludes(sub->get_option("--cache-dir"));
     sub->add_option_function<std::string>(

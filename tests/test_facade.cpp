@@ -321,7 +321,7 @@ TEST(Facade, NamesParseOrSayWhat) {
         {[] { method_from_name("euler"); }, "method",
          "hsnc::method_from_name(): method = 'euler': expected hsnc, ab4, rk45 or cvode"},
         {[] { kernel_choice_from_name("fast"); }, "kernels",
-         "hsnc::kernel_choice_from_name(): kernels = 'fast': expected auto, aot, generic, interp or jit"},
+         "hsnc::kernel_choice_from_name(): kernels = 'fast': expected auto, aot, generic, interp, jit or tiered"},
         {[] { precision_digits_from_name("mp:3x"); }, "precision_digits",
          "hsnc::precision_digits_from_name(): precision_digits = mp:3x: expected double, or mp:N with N in 20..100"},
         {[] { precision_digits_from_name("long-double"); }, "precision_digits", "not offered; use mp:N"},

@@ -47,6 +47,11 @@ enum class KernelChoice {
     interp,     ///< each configuration's program (derived in double-double and
                 ///  lowered, as the kernels are printed from it) run by an
                 ///  interpreter: the kernels' bits without a compiler
+    tiered,     ///< interp first; a configuration that has run
+                ///  SimulateOptions::tier_evaluations evaluations gets its JIT
+                ///  kernel, compiled on a background thread (the run never
+                ///  waits), kernels in the persistent cache from its first entry;
+                ///  the same bits as interp and jit (runtime/solvers/tiered_provider.h)
 };
 
 /// What computed a run (for statistics).
@@ -55,6 +60,7 @@ enum class SolverKind {
     jit,         ///< JIT-compiled or cached kernels
     generic,     ///< the generic solver
     interp,      ///< interpreted programs
+    tiered,      ///< interpreted programs, then kernels (KernelChoice::tiered)
     reference,   ///< the high-precision reference engine (precision_digits > 0)
     integrator,  ///< a numerical baseline (ab4, rk45, cvode)
 };
@@ -87,6 +93,9 @@ struct SimulateOptions {
     /// KernelChoice::jit: the cache's size limit in bytes (storing a kernel
     /// evicts the least recently used entries beyond it); 0: no limit.
     std::uint64_t cache_max_bytes = std::uint64_t{256} << 20;
+    /// KernelChoice::tiered: evaluations a configuration runs interpreted
+    /// before its kernel is compiled (at least 1).
+    std::uint64_t tier_evaluations = 200000;
     /// Problems that do not stop the run (a damaged cache entry, an
     /// unwritable cache), one line each; empty: "hsnc: warning: ..." on stderr.
     std::function<void(const std::string&)> warn;
@@ -131,13 +140,13 @@ void check_simulate_options(const Model& model, const SimulateOptions& options);
 /// "hsnc", "ab4", "rk45", "cvode"; OptionError (option "method") otherwise.
 Method method_from_name(const std::string& name);
 const char* method_name(Method method);
-/// "auto", "aot", "jit", "generic", "interp"; OptionError (option "kernels") otherwise.
+/// "auto", "aot", "jit", "generic", "interp", "tiered"; OptionError (option "kernels") otherwise.
 KernelChoice kernel_choice_from_name(const std::string& name);
 const char* kernel_choice_name(KernelChoice choice);
 /// "double" gives 0, "mp:N" gives N (N in [20, 100]); OptionError (option
 /// "precision_digits") otherwise.
 int precision_digits_from_name(const std::string& name);
-/// "aot", "jit", "generic", "interp", "reference", "integrator".
+/// "aot", "jit", "generic", "interp", "tiered", "reference", "integrator".
 const char* solver_kind_name(SolverKind kind);
 
 }  // namespace hsnc

@@ -110,30 +110,31 @@ void CachedKernelProvider::record_index(const std::string& index, const std::str
         cache().store(index, key + " " + symbol, kCacheIndexExtension);  // best effort
 }
 
-SegmentSolver& CachedKernelProvider::solver(const Configuration& cfg) {
+SegmentSolver* CachedKernelProvider::cached(const Configuration& cfg) {
     auto it = all_.find(cfg);
-    if (it != all_.end()) return *it->second;
-
-    // 1. By the index: no derivation at all.
-    auto start = std::chrono::steady_clock::now();
+    if (it != all_.end()) return it->second;
+    const auto start = std::chrono::steady_clock::now();
     const std::string index = jit_index_key(model_text_, cfg.key());
-    if (!index.empty() && !options_.cache_dir.empty()) {
-        // Its payload: "<object key> <kernel symbol>".
-        const KernelCache::Entry by_index = cache().load(index, kCacheIndexExtension);
-        const std::size_t space = by_index.payload.find(' ');
-        if (by_index.status == KernelCache::Status::hit && space != std::string::npos) {
-            if (SegmentSolver* s =
-                    load_object(cfg, by_index.payload.substr(0, space), by_index.payload.substr(space + 1))) {
-                load_seconds_ += seconds_since(start);
-                ++hits_;
-                ++index_hits_;
-                return *all_.emplace(cfg, s).first->second;
-            }
-        }
-    }
+    if (index.empty() || options_.cache_dir.empty() || refused_) return nullptr;
+    // Its payload: "<object key> <kernel symbol>".
+    const KernelCache::Entry by_index = cache().load(index, kCacheIndexExtension);
+    const std::size_t space = by_index.payload.find(' ');
+    if (by_index.status != KernelCache::Status::hit || space == std::string::npos) return nullptr;
+    SegmentSolver* s = load_object(cfg, by_index.payload.substr(0, space), by_index.payload.substr(space + 1));
+    if (!s) return nullptr;
+    load_seconds_ += seconds_since(start);
+    ++hits_;
+    ++index_hits_;
+    return all_.emplace(cfg, s).first->second;
+}
+
+SegmentSolver& CachedKernelProvider::solver(const Configuration& cfg) {
+    // 1. By the index: no derivation at all.
+    if (SegmentSolver* s = cached(cfg)) return *s;
+    const std::string index = jit_index_key(model_text_, cfg.key());
 
     // 2. By the source's key.
-    start = std::chrono::steady_clock::now();
+    auto start = std::chrono::steady_clock::now();
     JitKernelSource unit = source_(cfg);
     emit_seconds_ += seconds_since(start);
     start = std::chrono::steady_clock::now();

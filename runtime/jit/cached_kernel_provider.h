@@ -63,6 +63,10 @@ public:
 
     SegmentSolver& solver(const Configuration& cfg) override;
 
+    /// The kernel of `cfg` when the cache's index holds it (no derivation, no
+    /// compiler), else null; what solver() would load first.
+    SegmentSolver* cached(const Configuration& cfg);
+
     /// The JIT's line (JitSolverProvider::describe) with this provider's cache
     /// hits added: "JIT: 5 configurations visited, 1 kernels compiled (...), 4
     /// cache hits (3 by index, load ...), cache DIR".
