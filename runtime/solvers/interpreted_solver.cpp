@@ -617,9 +617,9 @@ std::uint64_t shape_hash(const Instr& in, const std::vector<ProgramTerm>& terms)
     return h;
 }
 
-Block make_block(const std::vector<const Instr*>& rows, const std::vector<ProgramTerm>& terms) {
-    const Instr& f = *rows.front();
-    const std::uint32_t R = static_cast<std::uint32_t>(rows.size());
+/// The block of the R instructions rows[0 .. R) (one level, one shape).
+Block make_block(const Instr* const* rows, std::uint32_t R, const std::vector<ProgramTerm>& terms) {
+    const Instr& f = *rows[0];
     Block s;
     s.rows = R;
     switch (f.op) {
@@ -630,7 +630,8 @@ Block make_block(const std::vector<const Instr*>& rows, const std::vector<Progra
             s.has_base = f.op == ProgramOp::lincomb && f.a != kNoRegister;
             s.shared = true;
             for (std::uint32_t k = 0; k < s.count && s.shared; ++k)
-                for (const Instr* in : rows) s.shared = s.shared && terms[in->first + k].reg == terms[f.first + k].reg;
+                for (std::uint32_t row = 0; row < R; ++row)
+                    s.shared = s.shared && terms[rows[row]->first + k].reg == terms[f.first + k].reg;
             s.c.resize(static_cast<std::size_t>(s.count) * R);
             s.reg.resize(s.shared ? s.count : static_cast<std::size_t>(s.count) * R);
             for (std::uint32_t row = 0; row < R; ++row) {
@@ -648,7 +649,7 @@ Block make_block(const std::vector<const Instr*>& rows, const std::vector<Progra
         case ProgramOp::copy:
         case ProgramOp::abs:
             s.kind = f.op == ProgramOp::copy ? StepKind::copy : StepKind::abs;
-            for (const Instr* in : rows) s.dst.push_back(in->dst), s.src.push_back(in->a);
+            for (std::uint32_t row = 0; row < R; ++row) s.dst.push_back(rows[row]->dst), s.src.push_back(rows[row]->a);
             break;
         case ProgramOp::mass_state: {
             s.kind = StepKind::mass;
@@ -876,51 +877,65 @@ std::unique_ptr<InterpretedSolver::Body> compile(const ProgramBody& body, std::v
         level[i] = l;
         levels = std::max(levels, l + 1);
     }
-    std::vector<std::vector<std::size_t>> by_level(static_cast<std::size_t>(levels));
-    for (std::size_t i = 0; i < n; ++i) by_level[static_cast<std::size_t>(level[i])].push_back(i);
+    // The instructions in order of level, in program order within one (a counting sort).
+    std::vector<std::uint32_t> start(static_cast<std::size_t>(levels) + 1, 0), order(n);
+    for (std::size_t i = 0; i < n; ++i) ++start[static_cast<std::size_t>(level[i]) + 1];
+    for (std::size_t l = 0; l < static_cast<std::size_t>(levels); ++l) start[l + 1] += start[l];
+    {
+        std::vector<std::uint32_t> at(start.begin(), start.end() - 1);
+        for (std::size_t i = 0; i < n; ++i) order[at[static_cast<std::size_t>(level[i])]++] = static_cast<std::uint32_t>(i);
+    }
 
     std::vector<Block> blocks;
-    for (const std::vector<std::size_t>& members : by_level) {
-        std::vector<char> alone;  // per group: an instruction that runs by itself
-        std::vector<std::vector<const Instr*>> groups;
-        // shape -> its group (groups stay in order of first appearance); a map
-        // instead of a linear search of keys: a wide level has hundreds of shapes.
-        std::unordered_multimap<std::uint64_t, std::size_t> group_of;  // shape_hash -> groups of that hash
-        for (std::size_t i : members) {
-            const Instr& in = code[i];
-            if (!batched(in.op)) {
-                alone.push_back(1);
-                groups.push_back({&in});
-                continue;
+    blocks.reserve(n);
+    // Per level (kept across levels, so that a small program does not allocate
+    // per level): each member's group, each group's first instruction and
+    // whether it runs alone, the groups' members in order (rows, from offset[g]).
+    std::vector<std::uint32_t> group, first, offset, at;
+    std::vector<char> alone, fused;
+    std::vector<const Instr*> rows;
+    // shape -> its groups (groups stay in order of first appearance); a map
+    // instead of a linear search: a wide level has hundreds of shapes.
+    std::unordered_multimap<std::uint64_t, std::uint32_t> group_of;
+    for (std::size_t l = 0; l < static_cast<std::size_t>(levels); ++l) {
+        group.clear(), first.clear(), alone.clear(), group_of.clear();
+        for (std::uint32_t k = start[l]; k < start[l + 1]; ++k) {
+            const Instr& in = code[order[k]];
+            auto g = static_cast<std::uint32_t>(first.size());
+            if (batched(in.op)) {
+                const std::uint64_t h = shape_hash(in, terms);
+                const auto range = group_of.equal_range(h);
+                for (auto it = range.first; it != range.second && g == first.size(); ++it)
+                    if (same_shape(code[first[it->second]], in, terms)) g = it->second;
+                if (g == first.size()) group_of.emplace(h, g);
             }
-            const std::uint64_t h = shape_hash(in, terms);
-            std::size_t g = groups.size();
-            const auto range = group_of.equal_range(h);
-            for (auto it = range.first; it != range.second && g == groups.size(); ++it)
-                if (same_shape(*groups[it->second].front(), in, terms)) g = it->second;
-            if (g < groups.size()) {
-                groups[g].push_back(&in);
-            } else {
-                group_of.emplace(h, g);
-                alone.push_back(0);
-                groups.push_back({&in});
+            if (g == first.size()) {
+                first.push_back(order[k]);
+                alone.push_back(!batched(in.op));
             }
+            group.push_back(g);
         }
-        std::vector<char> fused(groups.size(), 0);
-        for (std::size_t g = 0; g < groups.size(); ++g) {
+        const std::size_t G = first.size();
+        offset.assign(G + 1, 0);
+        for (std::uint32_t g : group) ++offset[g + 1];
+        for (std::size_t g = 0; g < G; ++g) offset[g + 1] += offset[g];
+        at.assign(offset.begin(), offset.end() - 1);
+        rows.resize(group.size());
+        for (std::size_t k = 0; k < group.size(); ++k) rows[at[group[k]]++] = &code[order[start[l] + k]];
+        fused.assign(G, 0);
+        for (std::size_t g = 0; g < G; ++g) {
             if (fused[g]) continue;
             if (!alone[g]) {
-                blocks.push_back(make_block(groups[g], terms));
+                blocks.push_back(make_block(rows.data() + offset[g], offset[g + 1] - offset[g], terms));
                 continue;
             }
-            const Instr& in = *groups[g].front();
+            const Instr& in = code[first[g]];
             Block s;
             s.single = in;
             if (in.op == ProgramOp::sin)  // its cos in this level, if any
-                for (std::size_t h = g + 1; h < groups.size(); ++h)
-                    if (alone[h] && !fused[h] && groups[h].front()->op == ProgramOp::cos &&
-                        groups[h].front()->a == in.a) {
-                        s.cos_dst = groups[h].front()->dst;
+                for (std::size_t h = g + 1; h < G; ++h)
+                    if (alone[h] && !fused[h] && code[first[h]].op == ProgramOp::cos && code[first[h]].a == in.a) {
+                        s.cos_dst = code[first[h]].dst;
                         fused[h] = 1;
                         break;
                     }
