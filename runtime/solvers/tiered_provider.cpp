@@ -83,8 +83,9 @@ void TieredSolverProvider::start_next() {
             ::_exit(status);
         }
         if (pid < 0) {
-            ++failed_;
-            if (warn_) warn_(std::string("kernels = tiered: cannot start a compile: ") + std::strerror(errno));
+            if (failed_++ == 0 && warn_)
+                warn_(std::string("kernels = tiered: cannot start a compile (the configuration stays interpreted): ") +
+                      std::strerror(errno));
             continue;
         }
         child_ = pid;
