@@ -72,7 +72,8 @@ CachedKernelProvider::CachedKernelProvider(const Model& model, JitSolverProvider
       options_(std::move(options)),
       make_jit_(std::move(make_jit)),
       hash_(model_hash(model)),
-      model_text_(model_canonical_text(model)) {
+      model_text_(model_canonical_text(model)),
+      index_key_(model_text_) {
     const std::string distrust = KernelCache::trust_problem(options_.cache_dir);
     if (!distrust.empty()) {
         const std::string text = "kernel cache " + distrust + "; running without the cache";
@@ -114,7 +115,7 @@ SegmentSolver* CachedKernelProvider::cached(const Configuration& cfg) {
     auto it = all_.find(cfg);
     if (it != all_.end()) return it->second;
     const auto start = std::chrono::steady_clock::now();
-    const std::string index = jit_index_key(model_text_, cfg.key());
+    const std::string index = index_key_(cfg.key());
     if (index.empty() || options_.cache_dir.empty() || refused_) return nullptr;
     // Its payload: "<object key> <kernel symbol>".
     const KernelCache::Entry by_index = cache().load(index, kCacheIndexExtension);
@@ -131,7 +132,7 @@ SegmentSolver* CachedKernelProvider::cached(const Configuration& cfg) {
 SegmentSolver& CachedKernelProvider::solver(const Configuration& cfg) {
     // 1. By the index: no derivation at all.
     if (SegmentSolver* s = cached(cfg)) return *s;
-    const std::string index = jit_index_key(model_text_, cfg.key());
+    const std::string index = index_key_(cfg.key());
 
     // 2. By the source's key.
     auto start = std::chrono::steady_clock::now();

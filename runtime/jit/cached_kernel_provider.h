@@ -85,6 +85,7 @@ private:
     JitFactory make_jit_;
     std::uint64_t hash_;
     std::string model_text_;  // model_canonical_text: what the index key covers
+    JitIndexKeys index_key_;  // jit_index_key(model_text_, .)
     std::map<Configuration, std::unique_ptr<LoadedObject>> objects_;  // the code: outlives solvers_
     std::map<Configuration, std::unique_ptr<SegmentSolver>> solvers_;
     std::map<Configuration, SegmentSolver*> all_;

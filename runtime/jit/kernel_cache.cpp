@@ -181,19 +181,27 @@ namespace {
 
 // FNV-1a 128 (Fowler, Noll, Vo) of the parts, each followed by a separator
 // byte ("ab"+"c" differs from "a"+"bc"), in hex.
-std::string fnv1a128_hex(std::initializer_list<std::string> parts) {
-    __extension__ typedef unsigned __int128 u128;  // GCC and Clang on 64-bit hosts
-    // Offset basis and prime 2^88 + 2^8 + 0x3b.
-    u128 h = (static_cast<u128>(0x6c62272e07bb0142ULL) << 64) | 0x62b821756295c58dULL;
+__extension__ typedef unsigned __int128 u128;  // GCC and Clang on 64-bit hosts
+
+// FNV-1a-128 (offset basis, prime 2^88 + 2^8 + 0x3b) over parts, each followed by 0xff.
+constexpr u128 kFnvBasis = (static_cast<u128>(0x6c62272e07bb0142ULL) << 64) | 0x62b821756295c58dULL;
+u128 fnv1a128_add(u128 h, const std::string& t) {
     const u128 prime = (static_cast<u128>(1) << 88) | 0x13b;
-    for (const std::string& t : parts) {
-        for (unsigned char c : t) h = (h ^ c) * prime;
-        h = (h ^ 0xff) * prime;
-    }
+    for (unsigned char c : t) h = (h ^ c) * prime;
+    return (h ^ 0xff) * prime;
+}
+
+std::string hex128(u128 h) {
     char hex[33];
     std::snprintf(hex, sizeof hex, "%016llx%016llx", static_cast<unsigned long long>(h >> 64),
                   static_cast<unsigned long long>(h));
     return hex;
+}
+
+std::string fnv1a128_hex(std::initializer_list<std::string> parts) {
+    u128 h = kFnvBasis;
+    for (const std::string& t : parts) h = fnv1a128_add(h, t);
+    return hex128(h);
 }
 
 std::string compiler_identity() {
@@ -264,10 +272,28 @@ std::string module_build_id() {
 }
 
 std::string jit_index_key(const std::string& model_text, const std::string& config_key) {
-    static const std::string build_id = module_build_id(), cpu = host_cpu_identity();
-    if (build_id.empty()) return "";
-    return fnv1a128_hex({"hsnc-jit-index 1", build_id, compiler_identity(), cpu,
-                         kKernelAbiHeaderText, model_text, config_key});
+    return JitIndexKeys(model_text)(config_key);
+}
+
+JitIndexKeys::JitIndexKeys(const std::string& model_text) {
+    static const std::string build_id = module_build_id();
+    // The parts every model shares, hashed once per process.
+    static const u128 shared = [] {
+        u128 h = kFnvBasis;
+        for (const std::string& t : {std::string("hsnc-jit-index 1"), build_id, compiler_identity(),
+                                     host_cpu_identity(), std::string(kKernelAbiHeaderText)})
+            h = fnv1a128_add(h, t);
+        return h;
+    }();
+    none_ = build_id.empty();
+    const u128 h = fnv1a128_add(shared, model_text);
+    hi_ = static_cast<std::uint64_t>(h >> 64);
+    lo_ = static_cast<std::uint64_t>(h);
+}
+
+std::string JitIndexKeys::operator()(const std::string& config_key) const {
+    if (none_) return "";
+    return hex128(fnv1a128_add((static_cast<u128>(hi_) << 64) | lo_, config_key));
 }
 
 std::string default_cache_dir() {

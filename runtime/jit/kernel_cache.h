@@ -75,6 +75,19 @@ std::string jit_cache_key(const std::string& source);
 /// (kCacheIndexExtension) holds the jit_cache_key of the kernel's source.
 std::string jit_index_key(const std::string& model_text, const std::string& config_key);
 
+/// jit_index_key for one model, its fixed parts (kernel_abi.h is long) hashed
+/// once: a provider looks up every configuration it enters.
+class JitIndexKeys {
+public:
+    explicit JitIndexKeys(const std::string& model_text);
+    /// jit_index_key(model_text, config_key).
+    std::string operator()(const std::string& config_key) const;
+
+private:
+    std::uint64_t hi_ = 0, lo_ = 0;  // the FNV state after the fixed parts
+    bool none_ = false;              // no build ID: ""
+};
+
 /// The GNU build ID, in hex, of the object this code is linked into: the
 /// executable (`hsnc`), or libhsnc.so in a program that links the library
 /// (found by the address of a function of this file among the loaded
