@@ -136,7 +136,7 @@ std::string element_name(const Model& model, EventKind kind, int element) {
 
 py::dict run(const Model& model, double t_end, double dt, const std::string& method, const std::string& kernels,
              const std::string& precision, std::size_t max_events, double h, double rtol, double atol,
-             const std::string& cache_dir, bool use_cache) {
+             const std::string& cache_dir, bool use_cache, std::uint64_t tier_evaluations) {
     SimulateOptions o;
     o.method = method_from_name(method);
     o.kernels = kernel_choice_from_name(kernels);
@@ -149,6 +149,7 @@ py::dict run(const Model& model, double t_end, double dt, const std::string& met
     o.integrator.atol = atol;
     o.cache_dir = cache_dir;
     o.use_cache = use_cache;
+    o.tier_evaluations = tier_evaluations;
     const std::size_t n = model.dof();
     const std::size_t nj = model.jenkins.size();
     Collector c(n, nj);
@@ -420,7 +421,7 @@ PYBIND11_MODULE(_hsnc, m) {
 
     m.def("_simulate", &hp::run, py::arg("model"), py::arg("t_end"), py::arg("dt"), py::arg("method"),
           py::arg("kernels"), py::arg("precision"), py::arg("max_events"), py::arg("h"), py::arg("rtol"),
-          py::arg("atol"), py::arg("cache_dir"), py::arg("use_cache"));
+          py::arg("atol"), py::arg("cache_dir"), py::arg("use_cache"), py::arg("tier_evaluations"));
     m.def("_generate", &hp::generate, py::arg("model"), py::arg("dir"));
     hp::bind_sweep(m);
     m.def("_periodic", &hp::periodic, py::arg("model"), py::arg("period"), py::arg("harmonic"), py::arg("transient"),

@@ -125,13 +125,14 @@ def _number(name, value, default=math.nan, function="hsnc.simulate"):
 
 
 def simulate(model, t_end=None, dt=None, method="hsnc", kernels="auto", precision="double", x0=None, v0=None,
-             max_events=0, h=None, rtol=1e-10, atol=1e-12, cache_dir="", use_cache=True):
+             max_events=0, h=None, rtol=1e-10, atol=1e-12, cache_dir="", use_cache=True, tier_evaluations=200000):
     """Run `model` (a Model) from its initial state to `t_end` (default: the
     model's [simulate].t_end) and return a Result.
 
     dt: sample spacing (default (t_end - t0) / 1000); method: "hsnc" (exact),
     "ab4" (needs h), "rk45", "cvode" (rtol, atol); kernels: "auto", "aot",
-    "generic", "interp", "jit", "tiered" (cache_dir, use_cache; tiered with its default of 200000 evaluations); precision: "double" or "mp:N";
+    "generic", "interp", "jit", "tiered" (cache_dir, use_cache; tiered also
+    tier_evaluations, as `--tier-evaluations`); precision: "double" or "mp:N";
     x0, v0: dicts {mass name: value} overriding the initial state (as
     `hsnc simulate --x0 --v0`: the model is read again with them);
     max_events: stop after that many switch events (0: no limit; the result
@@ -146,9 +147,11 @@ def simulate(model, t_end=None, dt=None, method="hsnc", kernels="auto", precisio
         raise InputError("hsnc.simulate(): max_events = %r: expected an integer >= 0" % (max_events,)) from None
     if max_events < 0:
         raise InputError("hsnc.simulate(): max_events = %d: expected an integer >= 0" % max_events)
+    if isinstance(tier_evaluations, bool) or not isinstance(tier_evaluations, int) or tier_evaluations < 1:
+        raise InputError("hsnc.simulate(): tier_evaluations = %r: expected an integer >= 1" % (tier_evaluations,))
     raw = _hsnc._simulate(model._native, _number("t_end", t_end), _number("dt", dt), str(method), str(kernels), str(precision),
                     max_events, _number("h", h), _number("rtol", rtol), _number("atol", atol), str(cache_dir),
-                    bool(use_cache))
+                    bool(use_cache), tier_evaluations)
     masses, jenkins = model.masses, model.jenkins
     return Result(raw["t"], raw["x"], raw["v"], _events(raw, len(masses), len(jenkins)), raw["summary"], masses,
                   raw["s"], jenkins)

@@ -108,6 +108,21 @@ def test_generic_kernels_and_reference_precision_run():
     assert np.allclose(ref.x, aot.x, rtol=0, atol=1e-12)
 
 
+def test_tiered_kernels_give_the_interpreters_bits(tmp_path):
+    # A low tier_evaluations starts compiles in a child process; whether or not
+    # they finish before the run does, not a bit changes (tests/test_tiered.cpp
+    # makes sure kernels take over).
+    model = hsnc.Model.from_file(model_path("chain-8.toml"))
+    interp = hsnc.simulate(model, t_end=20, kernels="interp")
+    for _ in range(2):  # an empty cache, then the one the first run filled
+        tiered = hsnc.simulate(model, t_end=20, kernels="tiered", tier_evaluations=500, cache_dir=str(tmp_path))
+        assert tiered.summary["solver"] == "tiered"
+        assert np.array_equal(tiered.x, interp.x) and np.array_equal(tiered.v, interp.v)
+        assert np.array_equal(tiered.events.t, interp.events.t)
+    with pytest.raises(hsnc.InputError, match=r"tier_evaluations = 0: expected an integer >= 1"):
+        hsnc.simulate(model, t_end=1, kernels="tiered", tier_evaluations=0)
+
+
 def test_structure_with_friction_element_equals_cli_csv(cli, tmp_path):
     # A [structure] from Matrix Market files beside the model, a friction element
     # to ground: the same numbers as the command line, rows named by the element.
