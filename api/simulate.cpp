@@ -129,12 +129,17 @@ void check_options(const Model& model, const SimulateOptions& o) {
 // module (LLVM) loaded only for a kernel the cache cannot give; no cache: the
 // JIT module for every kernel. RunError (a JitUnavailable) when it is needed
 // and cannot be loaded.
-std::unique_ptr<SolverProvider> make_jit_provider(const Model& model, const SimulateOptions& o, const std::string& who,
-                                                  bool tiered = false) {
+JitOptions jit_options(const SimulateOptions& o) {
     JitOptions jopt;
     jopt.cache_dir = !o.use_cache ? "" : o.cache_dir.empty() ? default_cache_dir() : o.cache_dir;
     jopt.warn = o.warn;
     jopt.cache_max_bytes = o.cache_max_bytes;
+    return jopt;
+}
+
+std::unique_ptr<SolverProvider> make_jit_provider(const Model& model, const SimulateOptions& o, const std::string& who,
+                                                  bool tiered = false) {
+    const JitOptions jopt = jit_options(o);
     JitSolverProvider::SourceFn source = [&model](const Configuration& cfg) {
         const auto lock = ginac_lock();  // the derivation is GiNaC (ginac_lock.h)
         return JitKernelSource{kernel_symbol(model, cfg), emit_kernel(derive(model, cfg))};
@@ -164,6 +169,33 @@ std::unique_ptr<SolverProvider> make_jit_provider(const Model& model, const Simu
         });
 }
 
+// KernelChoice::tiered: the interpreter, then kernels, from the cache at a
+// configuration's first entry (a provider that never compiles) or compiled
+// into the cache by a child process once the configuration has earned them.
+// Without a cache, interpreted only.
+std::unique_ptr<SolverProvider> make_tiered_provider(const Model& model, const SimulateOptions& o, const std::string& who) {
+    TieredSolverProvider::ProbeFn probe;
+    TieredSolverProvider::CompileFn compile;
+    if (o.use_cache) {
+        auto lookup = std::make_shared<CachedKernelProvider>(
+            model, [](const Configuration&) -> JitKernelSource { throw std::logic_error("never emitted"); },
+            jit_options(o), [](JitSolverProvider::SourceFn, const JitOptions&) -> std::unique_ptr<JitSolverProvider> {
+                throw std::logic_error("never compiles");
+            });
+        probe = [lookup](const Configuration& cfg) { return lookup->cached(cfg); };
+        SimulateOptions quiet = o;
+        quiet.warn = [](const std::string&) {};  // the child's warnings would interleave with the run's
+        compile = [&model, quiet, who](const Configuration& cfg) {
+            make_jit_provider(model, quiet, who, true)->solver(cfg);
+        };
+    }
+    TierOptions tier;
+    tier.compile_after = o.tier_evaluations;
+    return std::make_unique<TieredSolverProvider>(
+        make_solver_provider(model, KernelMode::interp, &aot_registry(), program_source(model)), std::move(probe),
+        std::move(compile), tier, o.warn);
+}
+
 }  // namespace
 
 namespace api {
@@ -171,36 +203,8 @@ namespace api {
 std::unique_ptr<SolverProvider> make_provider(const Model& model, const SimulateOptions& o, SolverKind* kind,
                                               const char* function) {
     if (o.kernels == KernelChoice::tiered) {
-        // The interpreter, then kernels: from the cache at a configuration's
-        // first entry (a provider that never compiles), or compiled into the
-        // cache by a child process once the configuration has earned it.
-        // Without a cache, interpreted only.
         if (kind) *kind = SolverKind::tiered;
-        TieredSolverProvider::ProbeFn probe;
-        TieredSolverProvider::CompileFn compile;
-        if (o.use_cache) {
-            JitOptions jopt;
-            jopt.cache_dir = o.cache_dir.empty() ? default_cache_dir() : o.cache_dir;
-            jopt.warn = o.warn;
-            jopt.cache_max_bytes = o.cache_max_bytes;
-            auto lookup = std::make_shared<CachedKernelProvider>(
-                model, [](const Configuration&) -> JitKernelSource { throw std::logic_error("never emitted"); },
-                jopt, [](JitSolverProvider::SourceFn, const JitOptions&) -> std::unique_ptr<JitSolverProvider> {
-                    throw std::logic_error("never compiles");
-                });
-            probe = [lookup](const Configuration& cfg) { return lookup->cached(cfg); };
-            SimulateOptions quiet = o;
-            quiet.warn = [](const std::string&) {};  // the child's warnings would interleave with the run's
-            const std::string who = function;
-            compile = [&model, quiet, who](const Configuration& cfg) {
-                make_jit_provider(model, quiet, who, true)->solver(cfg);
-            };
-        }
-        TierOptions tier;
-        tier.compile_after = o.tier_evaluations;
-        auto base = make_solver_provider(model, KernelMode::interp, &aot_registry(), program_source(model));
-        return std::make_unique<TieredSolverProvider>(std::move(base), std::move(probe), std::move(compile), tier,
-                                                      o.warn);
+        return make_tiered_provider(model, o, function);
     }
     if (o.kernels == KernelChoice::jit) {
         if (kind) *kind = SolverKind::jit;
