@@ -40,9 +40,11 @@ namespace hsnc {
 
 struct TierOptions {
     /// Evaluations a configuration runs on the base tier before its kernel is
-    /// compiled. The kernel of an n-mass chain takes about as long to compile
-    /// as the interpreter takes for a few hundred thousand evaluations more
-    /// than the kernel (build/hsnc_jit_bench, build/hsnc_program_bench).
+    /// compiled. The compile runs on another core, so it need not be won back
+    /// on the run's own; the threshold keeps short runs from compiling at all.
+    /// (What a kernel saves: 0.75 us an evaluation on the 32-mass chain, 0.2
+    /// us on chain-8, build/hsnc_program_bench; its compile: 0.4-6 s and 0.17 s,
+    /// so on one core it would pay after 0.5-8 and about 0.9 million.)
     std::uint64_t compile_after = 200000;
     /// Tests: solver() waits for a compile it has just started, so that the
     /// switch of tier happens at a known entry. Runs never set it.
