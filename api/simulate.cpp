@@ -176,17 +176,27 @@ std::unique_ptr<SolverProvider> make_jit_provider(const Model& model, const Simu
 std::unique_ptr<SolverProvider> make_tiered_provider(const Model& model, const SimulateOptions& o, const std::string& who) {
     TieredSolverProvider::ProbeFn probe;
     TieredSolverProvider::CompileFn compile;
+    std::shared_ptr<CachedKernelProvider> lookup;
     if (o.use_cache) {
-        auto lookup = std::make_shared<CachedKernelProvider>(
-            model, [](const Configuration&) -> JitKernelSource { throw std::logic_error("never emitted"); },
-            jit_options(o), [](JitSolverProvider::SourceFn, const JitOptions&) -> std::unique_ptr<JitSolverProvider> {
-                throw std::logic_error("never compiles");
-            });
+        auto never_emitted = [](const Configuration&) -> JitKernelSource { throw std::logic_error("never emitted"); };
+        auto never_compiles = [](JitSolverProvider::SourceFn, const JitOptions&) -> std::unique_ptr<JitSolverProvider> {
+            throw std::logic_error("never compiles");
+        };
+        lookup = std::make_shared<CachedKernelProvider>(model, never_emitted, jit_options(o), never_compiles);
+    }
+    if (lookup && !lookup->refused()) {  // a refused cache (others can write to it) was warned about
         probe = [lookup](const Configuration& cfg) { return lookup->cached(cfg); };
-        SimulateOptions quiet = o;
-        quiet.warn = [](const std::string&) {};  // the child's warnings would interleave with the run's
-        compile = [&model, quiet, who](const Configuration& cfg) {
+        // In the child: a kernel compiled but not stored (a cache it cannot
+        // write) is a failure, which the run reports once; its warnings would
+        // interleave with the run's output.
+        compile = [&model, o, who](const Configuration& cfg) {
+            SimulateOptions quiet = o;
+            auto problem = std::make_shared<std::string>();
+            quiet.warn = [problem](const std::string& w) {
+                if (problem->empty()) *problem = w;
+            };
             make_jit_provider(model, quiet, who, true)->solver(cfg);
+            if (!problem->empty()) throw RunError(*problem);
         };
     }
     TierOptions tier;

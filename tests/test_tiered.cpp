@@ -196,6 +196,25 @@ TEST(TieredCli, WritesTheBytesOfInterpAndAot) {
     std::remove(events.c_str());
 }
 
+TEST(TieredCli, ACacheOthersCanWriteIsNotUsed) {
+    // As --kernels jit: a cache directory others can write to is refused, with
+    // a warning; tiered then stays on the interpreter (and compiles nothing).
+    const std::string model = "'" + model_path("chain-8.toml") + "'";
+    const std::string dir = testing::temp_path("tiered_open_cache");
+    std::filesystem::create_directory(dir);
+    std::filesystem::permissions(dir, std::filesystem::perms::all);
+    const std::string events = testing::temp_path("events.csv");
+    const testing::CliRun r = testing::run_hsnc("simulate " + model + " --kernels tiered --tier-evaluations 100 " +
+                                                "--cache-dir '" + dir + "' --events '" + events + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("world-writable"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("no kernel cache: interpreted only"), std::string::npos) << r.err;
+    EXPECT_EQ(testing::slurp(events), testing::events_csv(model, "--kernels interp"));
+    EXPECT_TRUE(std::filesystem::is_empty(dir));
+    std::filesystem::remove_all(dir);
+    std::remove(events.c_str());
+}
+
 TEST(TieredCli, RefusesZeroEvaluations) {
     const testing::CliRun r =
         testing::run_hsnc("simulate '" + model_path("chain-8.toml") + "' --kernels tiered --tier-evaluations 0");

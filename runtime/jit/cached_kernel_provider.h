@@ -77,6 +77,9 @@ public:
     std::size_t kernels_compiled() const { return jit_ ? jit_->kernels_compiled() : 0; }
     /// Whether the JIT (LLVM) had to be loaded.
     bool jit_loaded() const { return jit_ != nullptr; }
+    /// Whether the cache directory was refused (others can write to it): no
+    /// kernel is read from it or stored in it.
+    bool refused() const { return refused_; }
 
 private:
     const Model& model_;

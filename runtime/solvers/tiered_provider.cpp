@@ -56,6 +56,13 @@ TieredSolverProvider::TieredSolverProvider(std::unique_ptr<SolverProvider> base,
       options_(options),
       warn_(std::move(warn)) {}
 
+void TieredSolverProvider::warn(const std::string& text) const {
+    if (warn_)
+        warn_(text);
+    else
+        std::fprintf(stderr, "hsnc: warning: %s\n", text.c_str());
+}
+
 TieredSolverProvider::~TieredSolverProvider() {
     if (child_ > 0) {  // never wait for a compiler: stop it
         ::kill(child_, SIGKILL);
@@ -83,9 +90,9 @@ void TieredSolverProvider::start_next() {
             ::_exit(status);
         }
         if (pid < 0) {
-            if (failed_++ == 0 && warn_)
-                warn_(std::string("kernels = tiered: cannot start a compile (the configuration stays interpreted): ") +
-                      std::strerror(errno));
+            if (failed_++ == 0)
+                warn(std::string("kernels = tiered: cannot start a compile (the configuration stays interpreted): ") +
+                     std::strerror(errno));
             continue;
         }
         child_ = pid;
@@ -109,9 +116,9 @@ void TieredSolverProvider::poll(bool block) {
         tiers_.at(child_cfg_)->stored = true;
     } else if (code != kNotDerivable) {  // not derivable: on the generic solver in every tier
         // The configuration stays on the base tier: the same results, at its speed.
-        if (failed_++ == 0 && warn_)
-            warn_("kernels = tiered: the kernel of configuration '" + child_cfg_.key() +
-                  "' did not compile (it stays interpreted; --kernels jit shows why)");
+        if (failed_++ == 0)
+            warn("kernels = tiered: the kernel of configuration '" + child_cfg_.key() +
+                 "' could not be compiled into the cache (it stays interpreted; --kernels jit shows why)");
     }
     child_ = -1;
     start_next();
@@ -137,7 +144,8 @@ SegmentSolver& TieredSolverProvider::solver(const Configuration& cfg) {
     }
     if (t.on_kernel) return t.kernel;
     t.base.inner = &base_->solver(cfg);
-    if (!t.queued && t.base.evaluations >= options_.compile_after && compile_ && probe_) {
+    // Three kernels that failed (a cache it cannot write, a compiler missing): stop asking.
+    if (!t.queued && t.base.evaluations >= options_.compile_after && compile_ && probe_ && failed_ < 3) {
         t.queued = true;
         queue_.push_back(cfg);
         start_next();

@@ -61,7 +61,8 @@ public:
     /// on the generic solver in every tier).
     using CompileFn = std::function<void(const Configuration&)>;
 
-    /// Without `probe` or `compile` the run stays on the base tier.
+    /// Without `probe` or `compile` the run stays on the base tier. `warn`
+    /// gets one line per problem (empty: "hsnc: warning: ..." on stderr).
     TieredSolverProvider(std::unique_ptr<SolverProvider> base, ProbeFn probe, CompileFn compile,
                          TierOptions options = {}, std::function<void(const std::string&)> warn = {});
     ~TieredSolverProvider() override;
@@ -87,6 +88,7 @@ public:
 private:
     struct Tier;
     void start_next();
+    void warn(const std::string& text) const;
     void poll(bool block);
 
     std::unique_ptr<SolverProvider> base_;
