@@ -124,6 +124,14 @@ void TieredSolverProvider::poll(bool block) {
     start_next();
 }
 
+bool TieredSolverProvider::take_stored(Tier& t, const Configuration& cfg) {
+    if (!t.on_kernel && t.stored) {  // a child has compiled it into the cache: loaded once
+        t.stored = false;
+        if (SegmentSolver* made = probe_(cfg)) t.kernel.inner = made, t.on_kernel = true;
+    }
+    return t.on_kernel;
+}
+
 SegmentSolver& TieredSolverProvider::solver(const Configuration& cfg) {
     poll(false);
     auto it = tiers_.find(cfg);
@@ -138,11 +146,7 @@ SegmentSolver& TieredSolverProvider::solver(const Configuration& cfg) {
             }
     }
     Tier& t = *it->second;
-    if (!t.on_kernel && t.stored) {  // a child has compiled it: load it once
-        t.stored = false;
-        if (SegmentSolver* made = probe_(cfg)) t.kernel.inner = made, t.on_kernel = true;
-    }
-    if (t.on_kernel) return t.kernel;
+    if (take_stored(t, cfg)) return t.kernel;
     t.base.inner = &base_->solver(cfg);
     // Three kernels that failed (a cache it cannot write, a compiler missing): stop asking.
     if (!t.queued && t.base.evaluations >= options_.compile_after && compile_ && probe_ && failed_ < 3) {
@@ -151,11 +155,7 @@ SegmentSolver& TieredSolverProvider::solver(const Configuration& cfg) {
         start_next();
         if (options_.wait_for_compiles) {
             while (child_ > 0) poll(true);
-            if (t.stored) {
-                t.stored = false;
-                if (SegmentSolver* made = probe_(cfg)) t.kernel.inner = made, t.on_kernel = true;
-            }
-            if (t.on_kernel) return t.kernel;
+            if (take_stored(t, cfg)) return t.kernel;
         }
     }
     return t.base;

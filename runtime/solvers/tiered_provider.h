@@ -89,6 +89,8 @@ private:
     struct Tier;
     void start_next();
     void warn(const std::string& text) const;
+    /// Whether `t` runs on its kernel, after loading the one a child stored.
+    bool take_stored(Tier& t, const Configuration& cfg);
     void poll(bool block);
 
     std::unique_ptr<SolverProvider> base_;
