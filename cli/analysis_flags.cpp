@@ -17,7 +17,7 @@ void add_analysis_flags(CLI::App* sub, AnalysisFlags& f) {
                     "dynamics are the same closed forms whatever the kind)");
     sub->add_option("--cache-dir", f.cache_dir,
                     "keep compiled kernels (jit, tiered) in DIR (default $XDG_CACHE_HOME/hsnc, else ~/.cache/hsnc)");
-    sub->add_flag("--no-cache", f.no_cache, "compile every kernel (jit); read and write no cache")
+    sub->add_flag("--no-cache", f.no_cache, "read and write no cache: jit compiles every kernel, tiered stays interpreted")
         ->excludes(sub->get_option("--cache-dir"));
     sub->add_flag("--quiet", f.quiet, "no statistics on stderr");
 }

@@ -237,7 +237,7 @@ void add_simulate(CLI::App& app, int& exit_code) {
         ->check(CLI::PositiveNumber);
     sub->add_option("--cache-dir", o->cache_dir,
                     "keep compiled kernels (jit, tiered) in DIR (default $XDG_CACHE_HOME/hsnc, else ~/.cache/hsnc)");
-    auto* no_cache = sub->add_flag("--no-cache", o->no_cache, "compile every kernel (jit); read and write no cache");
+    auto* no_cache = sub->add_flag("--no-cache", o->no_cache, "read and write no cache: jit compiles every kernel, tiered stays interpreted");
     no_cache->excludes(sub->get_option("--cache-dir"));
     sub->add_option_function<std::string>(
         "--cache-max-size", [o](const std::string& t) { o->cache_max_bytes = parse_byte_size(t, "--cache-max-size"); },
