@@ -72,8 +72,7 @@ CachedKernelProvider::CachedKernelProvider(const Model& model, JitSolverProvider
       options_(std::move(options)),
       make_jit_(std::move(make_jit)),
       hash_(model_hash(model)),
-      model_text_(model_canonical_text(model)),
-      index_key_(model_text_) {
+      index_key_(model_canonical_text(model)) {
     const std::string distrust = KernelCache::trust_problem(options_.cache_dir);
     if (!distrust.empty()) {
         const std::string text = "kernel cache " + distrust + "; running without the cache";
@@ -113,10 +112,12 @@ void CachedKernelProvider::record_index(const std::string& index, const std::str
 
 SegmentSolver* CachedKernelProvider::cached(const Configuration& cfg) {
     auto it = all_.find(cfg);
-    if (it != all_.end()) return it->second;
+    return it != all_.end() ? it->second : load_by_index(cfg, index_key_(cfg.key()));
+}
+
+SegmentSolver* CachedKernelProvider::load_by_index(const Configuration& cfg, const std::string& index) {
     const auto start = std::chrono::steady_clock::now();
-    const std::string index = index_key_(cfg.key());
-    if (index.empty() || options_.cache_dir.empty() || refused_) return nullptr;
+    if (index.empty() || options_.cache_dir.empty()) return nullptr;  // a refused cache has no directory
     // Its payload: "<object key> <kernel symbol>".
     const KernelCache::Entry by_index = cache().load(index, kCacheIndexExtension);
     const std::size_t space = by_index.payload.find(' ');
@@ -130,9 +131,12 @@ SegmentSolver* CachedKernelProvider::cached(const Configuration& cfg) {
 }
 
 SegmentSolver& CachedKernelProvider::solver(const Configuration& cfg) {
+    auto it = all_.find(cfg);
+    if (it != all_.end()) return *it->second;
+
     // 1. By the index: no derivation at all.
-    if (SegmentSolver* s = cached(cfg)) return *s;
     const std::string index = index_key_(cfg.key());
+    if (SegmentSolver* s = load_by_index(cfg, index)) return *s;
 
     // 2. By the source's key.
     auto start = std::chrono::steady_clock::now();

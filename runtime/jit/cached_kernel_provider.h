@@ -87,13 +87,14 @@ private:
     JitOptions options_;  // cache_dir cleared when the directory is refused
     JitFactory make_jit_;
     std::uint64_t hash_;
-    std::string model_text_;  // model_canonical_text: what the index key covers
-    JitIndexKeys index_key_;  // jit_index_key(model_text_, .)
+    JitIndexKeys index_key_;  // jit_index_key(model_canonical_text(model), .)
     std::map<Configuration, std::unique_ptr<LoadedObject>> objects_;  // the code: outlives solvers_
     std::map<Configuration, std::unique_ptr<SegmentSolver>> solvers_;
     std::map<Configuration, SegmentSolver*> all_;
     std::map<Configuration, JitKernelSource> emitted_;  // handed to the JIT, not emitted twice
     std::unique_ptr<JitSolverProvider> jit_;            // declared last: destroyed first
+    /// The kernel the cache's index entry `index` names, mapped, or null.
+    SegmentSolver* load_by_index(const Configuration& cfg, const std::string& index);
     /// The kernel in the object stored under `key`, mapped without LLVM, or null.
     SegmentSolver* load_object(const Configuration& cfg, const std::string& key, const std::string& symbol);
     void record_index(const std::string& index, const std::string& key, const std::string& symbol) const;
