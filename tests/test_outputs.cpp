@@ -187,7 +187,8 @@ void bind_socket(const std::string& path) {
 }
 
 std::string with_dir(std::string s, const std::string& dir) {
-    for (std::size_t k; (k = s.find("DIR")) != std::string::npos;) s.replace(k, 3, dir);
+    // Past each replacement: a temporary directory's random name may itself hold "DIR".
+    for (std::size_t k = s.find("DIR"); k != std::string::npos; k = s.find("DIR", k + dir.size())) s.replace(k, 3, dir);
     return s;
 }
 
