@@ -73,7 +73,11 @@ private:
         auto at = std::make_unique<At>();
         at->model = branch_.model_at(p);
         at->period = 2 * M_PI / forcing_frequency(at->model, branch_.param + " = " + short_num(p));
-        at->flow = std::make_unique<analysis::Flow>(at->model, analysis::FlowKernels{KernelChoice::generic, "", true}, kFunction);
+        // The Eigen solver, as the sweep's own points (sweep_point.cpp): every
+        // parameter value is a new model whose configurations are all entered
+        // anew, where its analysis in double is the cheapest entry, and
+        // threads never wait for each other (the derivation holds the GiNaC lock).
+        at->flow = std::make_unique<analysis::Flow>(at->model, analysis::FlowKernels{KernelChoice::eigen, "", true}, kFunction);
         return *(cache_[p] = std::move(at));
     }
     const Branch& branch_;
@@ -161,7 +165,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         m.v0 = state.v;
         m.slider0 = state.slider;
         PeriodicOptions po;
-        po.kernels = KernelChoice::generic;
+        po.kernels = KernelChoice::eigen;
         po.tolerance = kTolerance;
         orbit = periodic(m, po);
         if (orbit.status != PeriodicStatus::ok)
@@ -368,7 +372,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
                 m.v0.assign(guess.data() + n, guess.data() + 2 * n);
                 m.slider0.assign(guess.data() + 2 * n, guess.data() + N);
                 PeriodicOptions po;
-                po.kernels = KernelChoice::generic;
+                po.kernels = KernelChoice::eigen;
                 po.tolerance = kTolerance;
                 const PeriodicResult end = periodic(m, po);
                 if (end.status != PeriodicStatus::ok) {

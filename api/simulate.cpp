@@ -222,15 +222,18 @@ std::unique_ptr<SolverProvider> make_provider(const Model& model, const Simulate
     }
     const KernelMode mode = o.kernels == KernelChoice::generic  ? KernelMode::generic
                             : o.kernels == KernelChoice::interp ? KernelMode::interp
+                            : o.kernels == KernelChoice::eigen  ? KernelMode::eigen
                             : o.kernels == KernelChoice::aot    ? KernelMode::aot
                                                                 : KernelMode::automatic;
-    // interp runs each configuration's program: the bits of the kernels
-    // printed from it, without a compiler.
+    // generic (and auto without AOT kernels, and for the configurations the
+    // AOT kernels leave out) runs each configuration's program: the bits of
+    // the kernels printed from it, without a compiler.
     std::unique_ptr<SolverProvider> provider =
         make_solver_provider(model, mode, &aot_registry(), program_source(model));
     if (kind)
         *kind = dynamic_cast<AotSolverProvider*>(provider.get()) ? SolverKind::aot
                 : mode == KernelMode::interp                     ? SolverKind::interp
+                : mode == KernelMode::eigen                      ? SolverKind::eigen
                                                                  : SolverKind::generic;
     return provider;
 }
@@ -299,10 +302,10 @@ const char* method_name(Method method) {
 
 KernelChoice kernel_choice_from_name(const std::string& name) {
     for (KernelChoice k : {KernelChoice::automatic, KernelChoice::aot, KernelChoice::jit, KernelChoice::generic,
-                           KernelChoice::interp, KernelChoice::tiered})
+                           KernelChoice::interp, KernelChoice::eigen, KernelChoice::tiered})
         if (name == kernel_choice_name(k)) return k;
     throw OptionError("hsnc::kernel_choice_from_name", "kernels", "'" + name + "'",
-                      "expected auto, aot, generic, interp, jit or tiered");
+                      "expected auto, aot, generic, interp, eigen, jit or tiered");
 }
 
 const char* kernel_choice_name(KernelChoice choice) {
@@ -312,6 +315,7 @@ const char* kernel_choice_name(KernelChoice choice) {
     case KernelChoice::jit: return "jit";
     case KernelChoice::generic: return "generic";
     case KernelChoice::interp: return "interp";
+    case KernelChoice::eigen: return "eigen";
     case KernelChoice::tiered: return "tiered";
     }
     return "?";
@@ -346,6 +350,7 @@ const char* solver_kind_name(SolverKind kind) {
     case SolverKind::jit: return "jit";
     case SolverKind::generic: return "generic";
     case SolverKind::interp: return "interp";
+    case SolverKind::eigen: return "eigen";
     case SolverKind::tiered: return "tiered";
     case SolverKind::reference: return "reference";
     case SolverKind::integrator: return "integrator";

@@ -1,5 +1,5 @@
 # The scaling plot of README "How it scales": time per switch against the
-# number of masses, hsnc's generic solver, its interpreter and CVODE, from
+# number of masses, hsnc's Eigen solver, generic (the interpreter) and CVODE, from
 # build/hsnc_scaling_bench --csv scaling.csv.
 #   gnuplot -e "in='scaling.csv'; out='docs/scaling.png'" bench/scaling.gp
 if (!exists("in")) in = 'scaling.csv'
@@ -14,6 +14,6 @@ set ylabel "CPU time per switch [us]"
 set xtics (2, 8, 32, 64, 128)
 set xrange [1.6:160]
 set grid
-plot in skip 1 using 1:4 with linespoints lw 2 title "hsnc, generic solver", \
-     in skip 1 using 1:(1e3*$6/$2) with linespoints lw 2 title "hsnc, interpreter (a derivation per configuration)", \
+plot in skip 1 using 1:4 with linespoints lw 2 title "hsnc, --kernels eigen", \
+     in skip 1 using 1:(1e3*$6/$2) with linespoints lw 2 title "hsnc, --kernels generic (a derivation per configuration)", \
      in skip 1 using 1:(1e3*$9/$2) with linespoints lw 2 title "CVODE, rtol 1e-12"

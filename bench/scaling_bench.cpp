@@ -7,9 +7,10 @@
 // every mass, three stiff contacts, forced at both ends), as hsnc_bench's. Each
 // chain runs through hsnc::simulate (a new provider every run, so every
 // configuration entered is analysed again):
-//   generic  the Eigen solver (--kernels generic, and auto for such a model);
-//   interp   the interpreted programs (the double-double derivation of every
-//            configuration entered, then its program);
+//   eigen    the Eigen solver (--kernels eigen);
+//   generic  the interpreted programs (--kernels generic, and auto for such a
+//            model: the double-double derivation of every configuration
+//            entered, then its program);
 //   jit      (with --jit, up to 8 masses) kernels compiled in-process, from
 //            an empty cache (cold) and again from the cache it filled (warm);
 //            at 32 masses the cold run took more than 20 minutes of LLVM;
@@ -17,8 +18,8 @@
 // Then the first run of --kernels tiered from an empty cache against the
 // interpreter alone, in wall time (chains of 2 to 32 masses).
 // Times are thread CPU time, medians of the runs (5, or 3 with --quick; one
-// cold JIT run); per switch and per evaluation are the generic solver's, the
-// ratio is CVODE's time over the generic solver's. --csv writes the table
+// cold JIT run); per switch and per evaluation are the Eigen solver's, the
+// ratios are CVODE's time over the Eigen solver's and over generic's. --csv writes the table
 // for the plot (bench/scaling.gp).
 #include <algorithm>
 #include <chrono>
@@ -82,21 +83,22 @@ int main(int argc, char** argv) {
     const double t_end = quick ? 2.0 : 10.0;
     std::printf("chains of n masses over %g s, whole runs through hsnc::simulate (thread CPU time, median of %d)\n",
                 t_end, reps);
-    std::printf("%5s %8s %9s %11s %9s %8s %11s %10s %10s %11s %9s %8s\n", "n", "switches", "cfgs", "generic_ms",
-                "us/switch", "us/eval", "interp_ms", "jit_cold", "jit_warm", "cvode_ms", "us/switch", "ratio");
+    std::printf("%5s %8s %9s %11s %9s %8s %11s %10s %10s %11s %9s %10s %12s\n", "n", "switches", "cfgs", "eigen_ms",
+                "us/switch", "us/eval", "generic_ms", "jit_cold", "jit_warm", "cvode_ms", "us/switch", "cvode/eigen",
+                "cvode/generic");
     std::ofstream table;
     if (!csv.empty()) {
         table.open(csv);
-        table << "n,switches,generic_ms,generic_us_per_switch,generic_us_per_eval,interp_ms,jit_cold_ms,jit_warm_ms,"
-                 "cvode_ms,cvode_over_generic\n";
+        table << "n,switches,eigen_ms,eigen_us_per_switch,eigen_us_per_eval,generic_ms,jit_cold_ms,jit_warm_ms,"
+                 "cvode_ms,cvode_over_eigen,cvode_over_generic\n";
     }
     for (int n : {2, 8, 32, 64, 128}) {
         const Model m = parse_model(friction_chain(n), "chain-" + std::to_string(n) + ".toml");
         SimulateOptions o;
         o.t_end = t_end;
-        o.kernels = KernelChoice::generic;
+        o.kernels = KernelChoice::eigen;
         const Timed g = run(m, o, reps);
-        o.kernels = KernelChoice::interp;
+        o.kernels = KernelChoice::generic;
         const Timed in = run(m, o, n >= 64 ? 1 : reps);
         double cold = NAN, warm = NAN;
         if (jit && n <= 8) {  // beyond, compiling every configuration takes minutes (32 masses: over 20 min)
@@ -121,27 +123,27 @@ int main(int argc, char** argv) {
         c.integrator.atol = 1e-14;
         const Timed cv = run(m, c, n >= 64 ? 1 : std::min(reps, 3));
         const double sw = static_cast<double>(g.summary.events), ev = static_cast<double>(g.summary.evaluations);
-        std::printf("%5d %8zu %9s %11.2f %9.2f %8.3f %11.2f %10.2f %10.2f %11.2f %9.2f %8.1f\n", n, g.summary.events,
+        std::printf("%5d %8zu %9s %11.2f %9.2f %8.3f %11.2f %10.2f %10.2f %11.2f %9.2f %10.1f %12.1f\n", n, g.summary.events,
                     g.summary.solver_detail.substr(g.summary.solver_detail.find("for ") + 4,
                                                    g.summary.solver_detail.find(" config") -
                                                        g.summary.solver_detail.find("for ") - 4)
                         .c_str(),
                     g.ms, 1e3 * g.ms / std::max(sw, 1.0), 1e3 * g.ms / std::max(ev, 1.0), in.ms, cold, warm, cv.ms,
-                    1e3 * cv.ms / std::max(static_cast<double>(cv.summary.events), 1.0), cv.ms / g.ms);
+                    1e3 * cv.ms / std::max(static_cast<double>(cv.summary.events), 1.0), cv.ms / g.ms, cv.ms / in.ms);
         if (table)
             table << n << ',' << g.summary.events << ',' << g.ms << ',' << 1e3 * g.ms / std::max(sw, 1.0) << ','
                   << 1e3 * g.ms / std::max(ev, 1.0) << ',' << in.ms << ',' << cold << ',' << warm << ',' << cv.ms << ','
-                  << cv.ms / g.ms << std::endl;
+                  << cv.ms / g.ms << ',' << cv.ms / in.ms << std::endl;
         std::fflush(stdout);
     }
 
     // A first run never waits for a compiler (issue 13): --kernels tiered from
-    // an empty cache against the interpreter alone, wall time (a compile would
+    // an empty cache against generic (the interpreter) alone, wall time (a compile would
     // run in a child process: thread CPU time would not see it), the two in
     // turn, median of the ratios of each pair.
-    std::printf("\nfirst run, kernels tiered from an empty cache against interp (wall time, median of %d pairs in turn)\n",
+    std::printf("\nfirst run, kernels tiered from an empty cache against generic (wall time, median of %d pairs in turn)\n",
                 reps);
-    std::printf("%5s %11s %11s %8s %s\n", "n", "interp_ms", "tiered_ms", "ratio", "tiers");
+    std::printf("%5s %11s %11s %8s %s\n", "n", "generic_ms", "tiered_ms", "ratio", "tiers");
     for (int n : {2, 8, 16, 32}) {
         const Model m = parse_model(friction_chain(n), "chain-" + std::to_string(n) + ".toml");
         std::vector<double> ti, tt, ratio;
@@ -150,7 +152,7 @@ int main(int argc, char** argv) {
             SimulateOptions o;
             o.t_end = t_end;
             o.warn = [](const std::string&) {};
-            o.kernels = KernelChoice::interp;
+            o.kernels = KernelChoice::generic;
             auto start = std::chrono::steady_clock::now();
             simulate(m, o);
             ti.push_back(1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());

@@ -13,7 +13,7 @@ void add_analysis_flags(CLI::App* sub, AnalysisFlags& f) {
     sub->add_option("--x0", f.overrides.x0, "override an initial position, NAME=VALUE (repeatable)");
     sub->add_option("--v0", f.overrides.v0, "override an initial velocity, NAME=VALUE (repeatable)");
     sub->add_option("--kernels", f.kernels,
-                    "the segment solvers, as simulate --kernels: auto (default), aot, generic, interp, jit or tiered (the tangent "
+                    "the segment solvers, as simulate --kernels: auto (default), aot, generic, interp, eigen, jit or tiered (the tangent "
                     "dynamics are the same closed forms whatever the kind)");
     sub->add_option("--cache-dir", f.cache_dir,
                     "keep compiled kernels (jit, tiered) in DIR (default $XDG_CACHE_HOME/hsnc, else ~/.cache/hsnc)");

@@ -225,12 +225,14 @@ void add_simulate(CLI::App& app, int& exit_code) {
     sub->add_option("--atol", o->atol, "absolute tolerance of --method rk45/cvode (default 1e-12)")
         ->check(finite_number());
     sub->add_option("--kernels", o->kernels,
-                    "auto (default: ahead-of-time kernels when the model has them, else the generic solver; "
-                    "never compiles), aot, generic, interp (each configuration's program, derived in double-double, "
-                    "interpreted: the kernels' bits without a compiler), jit (a kernel compiled in-process, or "
-                    "taken from the cache, for each configuration the run enters), tiered (interp, then a "
-                    "configuration's kernel from the cache at once, or compiled on a background thread once it has "
-                    "run --tier-evaluations evaluations: never waits for a compiler; the bits of interp and jit)");
+                    "auto (default: ahead-of-time kernels when the model has them, else generic; "
+                    "never compiles), aot, generic (each configuration's program, derived in double-double, "
+                    "interpreted: the kernels' bits without a compiler; interp is another name for it), jit (a "
+                    "kernel compiled in-process, or taken from the cache, for each configuration the run enters), "
+                    "tiered (generic, then a configuration's kernel from the cache at once, or compiled by a child "
+                    "process once it has run --tier-evaluations evaluations: never waits for a compiler), eigen (the "
+                    "Eigen solver, written apart from the programs: agrees to rounding, not to the bit; enters a "
+                    "configuration faster). Every kind but eigen writes the same bits");
     sub->add_option("--tier-evaluations", o->tier_evaluations,
                     "kernels tiered: evaluations a configuration runs interpreted before its kernel is compiled "
                     "(default 200000)")

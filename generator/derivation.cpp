@@ -343,6 +343,14 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     for (std::size_t r = 0; r < nf; ++r)
         for (std::size_t s = 0; s < nf; ++s)
             if (!kt[r][s].is_zero()) kt[r][s] = kt[r][s] / (sqm[r] * sqm[s]);  // a zero stays the exact 0
+    // Stiffness over mass beyond double's range (k/m = 1e400): no constant of
+    // the program could hold it; the Eigen solver takes the configuration and
+    // the engine says what is wrong (the motion too fast to resolve).
+    for (std::size_t r = 0; r < nf; ++r)
+        for (std::size_t s = 0; s < nf; ++s)
+            if (!std::isfinite(kt[r][s].to_double()))
+                throw NotDerivable("derivation::derive(): configuration " + cfg.spec(model) +
+                                   ": stiffness over mass beyond the range of double");
     // eig_value[j], eig_vector[j][r]: the eigenpairs of Kt in ascending order.
     std::vector<DD> eig_value(nf);
     std::vector<std::vector<DD>> eig_vector(nf, std::vector<DD>(nf));

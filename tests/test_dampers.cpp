@@ -510,7 +510,8 @@ TEST(DamperFacade, EveryKernelKindAndTheReferenceRunDampers) {
         EXPECT_EQ(e.option(), "kernels");
         EXPECT_NE(e.reason().find("no ahead-of-time kernels"), std::string::npos) << e.what();
     }
-    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::generic, KernelChoice::interp, KernelChoice::jit}) {
+    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::generic, KernelChoice::interp, KernelChoice::eigen,
+                           KernelChoice::jit}) {
         o.kernels = k;
         SimulateSummary s;
         try {
@@ -628,7 +629,10 @@ TEST(DamperCli, TheBundledAbsorberRunsOnEveryKernelKind) {
     const std::string model = std::string(HSNC_SOURCE_DIR) + "/examples/dashpot/absorber.toml";
     const testing::CliRun run = testing::run_hsnc("simulate " + model + " --t-end 10");
     EXPECT_EQ(run.exit_code, 0) << run.err;
-    EXPECT_NE(run.err.find("generic solver (state-space modes)"), std::string::npos) << run.err;
+    EXPECT_NE(run.err.find("generic solver for 2 configurations (interpreted programs)"), std::string::npos) << run.err;
+    const testing::CliRun eigen = testing::run_hsnc("simulate " + model + " --t-end 10 --kernels eigen");
+    EXPECT_EQ(eigen.exit_code, 0) << eigen.err;
+    EXPECT_NE(eigen.err.find("Eigen solver (state-space modes)"), std::string::npos) << eigen.err;
     const testing::CliRun check = testing::run_hsnc("check " + model);
     EXPECT_EQ(check.exit_code, 0) << check.err;
     EXPECT_NE(check.out.find("dampers: 1"), std::string::npos) << check.out;

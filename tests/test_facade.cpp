@@ -137,6 +137,8 @@ INSTANTIATE_TEST_SUITE_P(
              SolverKind::generic},
         Case{"seed-scenario-2.toml", "--kernels interp", 20.0, Method::hsnc, 0, KernelChoice::interp,
              SolverKind::interp},
+        Case{"seed-scenario-2.toml", "--kernels eigen", 20.0, Method::hsnc, 0, KernelChoice::eigen,
+             SolverKind::eigen},
         Case{"seed-scenario-1.toml", "--kernels aot", 1.0, Method::hsnc, 0, KernelChoice::aot, SolverKind::aot},
         Case{"coulomb-1dof.toml", "", 5.0, Method::hsnc, 0, KernelChoice::automatic, SolverKind::aot},
         Case{"coulomb-1dof.toml", "--method rk45", 5.0, Method::rk45, 0, KernelChoice::automatic,
@@ -169,13 +171,13 @@ TEST(Facade, AutoWithoutAotKernelsIsTheGenericSolverAndNeverTheCache) {
 }
 
 #if HSNC_WITH_JIT
-// jit: compiled, then from the cache, the same switches as the generic solver.
+// jit: compiled, then from the cache, the same switches as the Eigen solver.
 TEST(Facade, JitKernelsThroughTheCache) {
     const std::string dir = testing::temp_path("cache");
     const Model model = read_model(model_path("seed-scenario-2.toml"), {{"mu_k=0.31"}, {}, {}});
     SimulateOptions o;
     o.t_end = 5;
-    o.kernels = KernelChoice::generic;
+    o.kernels = KernelChoice::eigen;
     Recorder generic(model.dof());
     hsnc::simulate(model, o, generic);
     o.kernels = KernelChoice::jit;
@@ -321,7 +323,7 @@ TEST(Facade, NamesParseOrSayWhat) {
         {[] { method_from_name("euler"); }, "method",
          "hsnc::method_from_name(): method = 'euler': expected hsnc, ab4, rk45 or cvode"},
         {[] { kernel_choice_from_name("fast"); }, "kernels",
-         "hsnc::kernel_choice_from_name(): kernels = 'fast': expected auto, aot, generic, interp, jit or tiered"},
+         "hsnc::kernel_choice_from_name(): kernels = 'fast': expected auto, aot, generic, interp, eigen, jit or tiered"},
         {[] { precision_digits_from_name("mp:3x"); }, "precision_digits",
          "hsnc::precision_digits_from_name(): precision_digits = mp:3x: expected double, or mp:N with N in 20..100"},
         {[] { precision_digits_from_name("long-double"); }, "precision_digits", "not offered; use mp:N"},

@@ -590,7 +590,7 @@ TEST(JenkinsFacade, WhatCannotCarryTheSliderIsRefused) {
     EXPECT_EQ(simulate(md, o).events, 3u);
     o.precision_digits = 0;
     std::vector<std::size_t> events;
-    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::generic}) {
+    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::eigen}) {
         o.kernels = k;
         const RunSummary s = simulate(md, o);
         EXPECT_EQ(s.status, RunStatus::ok);
@@ -637,13 +637,13 @@ TEST(JenkinsCli, EventsNameTheElementAndTheSliderIsTheLastColumn) {
         EXPECT_EQ(bad.exit_code, 2) << cmd << ": " << bad.err;
         EXPECT_NE(bad.err.find("Jenkins elements"), std::string::npos) << cmd << ": " << bad.err;
     }
-    // The derivation takes it: every kernel kind writes the generic solver's events to
-    // rounding, the interpreter and the JIT the same bytes.
+    // The derivation takes it: every kernel kind writes the Eigen solver's events to
+    // rounding, generic (the interpreter) and the JIT the same bytes.
     std::string bytes[3];
-    const char* kinds[3] = {"generic", "interp", "jit"};
+    const char* kinds[3] = {"eigen", "generic", "jit"};
     for (int k = 0; k < 3; ++k)
         bytes[k] = testing::events_csv(model, std::string("--t-end 1 --no-cache --kernels ") + kinds[k]);
-    EXPECT_EQ(bytes[1], bytes[2]) << "interp and jit events";
+    EXPECT_EQ(bytes[1], bytes[2]) << "generic and jit events";
     EXPECT_EQ(std::count(bytes[0].begin(), bytes[0].end(), '\n'), std::count(bytes[1].begin(), bytes[1].end(), '\n'));
     // generate: a kernel per configuration (stuck, slipping + and -) and its manifest;
     // inspect: the slider and the element's switch functions.

@@ -212,7 +212,7 @@ TEST(SimulateCli, KernelsJitOnANonBundledModel) {
     EXPECT_NE(r.err.find("kernels compiled"), std::string::npos) << r.err;
     const testing::CliRun bad = testing::run_hsnc("simulate '" + path + "' --t-end 1 --kernels jot");
     EXPECT_EQ(bad.exit_code, 2);
-    EXPECT_NE(bad.err.find("expected auto, aot, generic, interp, jit or tiered"), std::string::npos) << bad.err;
+    EXPECT_NE(bad.err.find("expected auto, aot, generic, interp, eigen, jit or tiered"), std::string::npos) << bad.err;
     std::remove(path.c_str());
 }
 

@@ -174,11 +174,16 @@ TEST_F(CacheDir, SecondRunHitsTheCacheForEveryKernel) {
     EXPECT_EQ(traced.err.find("libLLVM"), std::string::npos) << "LLVM loaded although every kernel was cached";
     EXPECT_EQ(traced.err.find("libclang-cpp"), std::string::npos) << "Clang loaded although every kernel was cached";
 
-    // And the generic solver, an independent path, agrees on the switches.
+    // generic interprets the programs the kernels were printed from: the same
+    // bits; the Eigen solver, an independent path, agrees on the switches.
     const CliRun generic = run_hsnc("simulate '" + model_path("seed-scenario-2.toml") +
                                     "' --set mu_k=0.31 --t-end 50 --kernels generic");
     ASSERT_EQ(generic.exit_code, 0) << generic.err;
-    EXPECT_EQ(generic.out.substr(0, generic.out.find(" x_")), first.out.substr(0, first.out.find(" x_")));
+    EXPECT_EQ(generic.out, first.out);
+    const CliRun eigen = run_hsnc("simulate '" + model_path("seed-scenario-2.toml") +
+                                  "' --set mu_k=0.31 --t-end 50 --kernels eigen");
+    ASSERT_EQ(eigen.exit_code, 0) << eigen.err;
+    EXPECT_EQ(eigen.out.substr(0, eigen.out.find(" x_")), first.out.substr(0, first.out.find(" x_")));
 }
 
 TEST_F(CacheDir, TruncatedAndForeignEntriesAreRebuiltWithAWarning) {
@@ -281,7 +286,8 @@ TEST_F(CacheDir, AutoUsesAotKernelsElseGenericAndNeverTheJit) {
     const std::string edited = "simulate '" + model_path("seed-scenario-2.toml") + "' --set mu_k=0.31 --t-end 5";
     const CliRun generic = run_hsnc(edited + " --cache-dir '" + dir + "'");
     ASSERT_EQ(generic.exit_code, 0) << generic.err;
-    EXPECT_NE(generic.err.find(", generic solver for 2 configurations, "), std::string::npos) << generic.err;
+    EXPECT_NE(generic.err.find(", generic solver for 2 configurations (interpreted programs), "), std::string::npos)
+        << generic.err;
     EXPECT_EQ(generic.err.find("JIT"), std::string::npos) << generic.err;
     EXPECT_FALSE(fs::exists(dir)) << "auto never compiles, so it never makes a cache";
 
@@ -290,6 +296,7 @@ TEST_F(CacheDir, AutoUsesAotKernelsElseGenericAndNeverTheJit) {
     EXPECT_NE(jit.err.find("JIT: 2 configurations visited"), std::string::npos) << jit.err;
     const auto events = [](const std::string& out) { return out.substr(out.find(" events="), out.find(" x_") - out.find(" events=")); };
     EXPECT_EQ(events(jit.out), events(generic.out)) << "the same switches of each kind";
+    EXPECT_EQ(jit.out, generic.out) << "auto's generic path and the JIT: the same bits";
 
     // An hsnc without libhsnc_jit.so beside it: auto runs as before, without
     // a word about the JIT; --kernels jit is a failure that says why.

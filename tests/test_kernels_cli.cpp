@@ -1,11 +1,11 @@
 // One closed form, printed and interpreted, through the command line: `hsnc
-// simulate` with --kernels aot (bundled models), jit and interp (the
-// interpreter of each configuration's program) writes byte-identical
-// trajectory and events CSV files, and so does auto where every configuration
-// has an ahead-of-time kernel; auto gives the same bytes whether or not the JIT
-// module can be loaded, and interp needs no compiler. (The Eigen generic
-// solver, an independent implementation, is compared in process to tolerances:
-// tests/test_program.cpp, tests/test_kernel_agreement.cpp.)
+// simulate` with --kernels aot (bundled models), jit and generic (the
+// interpreter of each configuration's program; interp is its other name)
+// writes byte-identical trajectory and events CSV files, and so does auto,
+// with ahead-of-time kernels or without; auto gives the same bytes whether or
+// not the JIT module can be loaded, and generic needs no compiler. (The Eigen
+// solver, --kernels eigen, an independent implementation, is compared in
+// process to tolerances: tests/test_program.cpp, tests/test_kernel_agreement.cpp.)
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -74,25 +74,26 @@ void expect_identical(const std::string& model, const std::string& args, const s
     }
 }
 
-TEST(ProgramRun, CliSeedScenario1AotJitInterpAutoWriteIdenticalCsv) {
-    expect_identical(model_path("seed-scenario-1.toml"), "--t-end 20 --dt 0.01", {"aot", "jit", "interp", "auto"},
-                     100);
+TEST(ProgramRun, CliSeedScenario1AotJitGenericAutoWriteIdenticalCsv) {
+    expect_identical(model_path("seed-scenario-1.toml"), "--t-end 20 --dt 0.01",
+                     {"aot", "jit", "generic", "interp", "auto"}, 100);
 }
 
 // Chaotic: one differing bit shows within 300 s (the Eigen solver writes the
 // same number of events with other bytes).
-TEST(ProgramRun, CliSeedScenario2Over300sAotJitInterpAutoWriteIdenticalCsv) {
-    expect_identical(model_path("seed-scenario-2.toml"), "--t-end 300 --dt 0.01", {"aot", "jit", "interp", "auto"},
+TEST(ProgramRun, CliSeedScenario2Over300sAotJitGenericAutoWriteIdenticalCsv) {
+    expect_identical(model_path("seed-scenario-2.toml"), "--t-end 300 --dt 0.01", {"aot", "jit", "generic", "auto"},
                      4000);
 }
 
-TEST(ProgramRun, CliChain8AotJitInterpAutoWriteIdenticalCsv) {
-    expect_identical(model_path("chain-8.toml"), "--t-end 20 --dt 0.01", {"aot", "jit", "interp", "auto"}, 200);
+TEST(ProgramRun, CliChain8AotJitGenericAutoWriteIdenticalCsv) {
+    expect_identical(model_path("chain-8.toml"), "--t-end 20 --dt 0.01", {"aot", "jit", "generic", "auto"}, 200);
 }
 
-// An edited bundled model has no ahead-of-time kernels.
-TEST(ProgramRun, CliEditedModelJitInterpWriteIdenticalCsv) {
-    expect_identical(model_path("chain-8.toml"), "--t-end 10 --dt 0.01 --set gap=0.011", {"jit", "interp"}, 50);
+// An edited bundled model has no ahead-of-time kernels: auto is generic.
+TEST(ProgramRun, CliEditedModelJitGenericAutoWriteIdenticalCsv) {
+    expect_identical(model_path("chain-8.toml"), "--t-end 10 --dt 0.01 --set gap=0.011", {"jit", "generic", "auto"},
+                     50);
 }
 
 std::string number(double v) {
@@ -132,12 +133,12 @@ std::string toml(const Model& m) {
     return t;
 }
 
-TEST(ProgramRun, CliRandomModelsJitInterpWriteIdenticalCsv) {
+TEST(ProgramRun, CliRandomModelsJitGenericAutoWriteIdenticalCsv) {
     for (int n : {2, 3, 5, 8}) {
         const testing::Drawn d = testing::draw(900 + static_cast<unsigned>(n), n);
         const std::string path = write_temp("random.toml", toml(d.model));
         const std::string t_end = number(d.model.t0 + 5.0);
-        expect_identical(path, "--t-end " + t_end + " --dt 0.01", {"jit", "interp"}, 1);
+        expect_identical(path, "--t-end " + t_end + " --dt 0.01", {"jit", "generic", "auto"}, 1);
         std::remove(path.c_str());
     }
 }
@@ -155,8 +156,9 @@ struct LoneCopy {
 };
 
 // auto never loads the JIT: the same bytes with and without it, on a bundled
-// model (ahead-of-time kernels) and on models without kernels (the generic
-// solver); interp needs no compiler (and no PATH) and writes the JIT's bytes.
+// model (ahead-of-time kernels) and on models without kernels (generic, the
+// interpreter), and they are the JIT's bytes; generic needs no compiler (and
+// no PATH).
 TEST(ProgramRun, CliAutoWritesTheSameBytesWhetherOrNotTheJitLoadsAndInterpTheJits) {
     const LoneCopy copy;
     const Output jit = simulate(model_path("seed-scenario-1.toml"), "--t-end 1 --no-cache", "jit", copy.binary);
@@ -180,12 +182,14 @@ TEST(ProgramRun, CliAutoWritesTheSameBytesWhetherOrNotTheJitLoadsAndInterpTheJit
         EXPECT_GT(rows(with.events), 1u) << c.model;
         EXPECT_TRUE(with.events == without.events) << c.model << ": events CSV, auto with and without the JIT";
         EXPECT_TRUE(with.trajectory == without.trajectory) << c.model << ": trajectory CSV, auto with and without the JIT";
-        const Output interp = simulate(c.model, c.args + " --quiet", "interp", copy.binary, "PATH=");
+        const Output interp = simulate(c.model, c.args + " --quiet", "generic", copy.binary, "PATH=");
         const Output compiled = simulate(c.model, c.args, "jit");
         EXPECT_EQ(interp.exit_code, 0) << interp.err;
         ASSERT_EQ(compiled.exit_code, 0) << compiled.err;
-        EXPECT_TRUE(interp.events == compiled.events) << c.model << ": events CSV, interp without the JIT vs jit";
-        EXPECT_TRUE(interp.trajectory == compiled.trajectory) << c.model << ": trajectory CSV, interp vs jit";
+        EXPECT_TRUE(interp.events == compiled.events) << c.model << ": events CSV, generic without the JIT vs jit";
+        EXPECT_TRUE(interp.trajectory == compiled.trajectory) << c.model << ": trajectory CSV, generic vs jit";
+        EXPECT_TRUE(without.events == compiled.events) << c.model << ": events CSV, auto without the JIT vs jit";
+        EXPECT_TRUE(without.trajectory == compiled.trajectory) << c.model << ": trajectory CSV, auto vs jit";
     }
     std::remove(random.c_str());
 }

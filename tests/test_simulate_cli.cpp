@@ -141,11 +141,11 @@ TEST(SimulateCli, BaselinesRunThroughTheSameOutput) {
 }
 
 
-// The ahead-of-time kernels and the generic solver are two independent
+// The ahead-of-time kernels and the Eigen solver are two independent
 // implementations of the same closed forms: same events, times to rounding.
-TEST(SimulateCli, AotKernelsAgreeWithTheGenericSolver) {
+TEST(SimulateCli, AotKernelsAgreeWithTheEigenSolver) {
     std::vector<std::vector<std::string>> rows[2];
-    const char* modes[2] = {"aot", "generic"};
+    const char* modes[2] = {"aot", "eigen"};
     for (int k = 0; k < 2; ++k) {
         const std::string ev = temp_path("events.csv");
         const auto r = run_hsnc("simulate '" + model_path("seed-scenario-2.toml") + "' --t-end 20 --quiet --events '" +

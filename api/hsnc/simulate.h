@@ -8,7 +8,7 @@
 //
 // One call covers the method (hsnc or the baselines ab4, rk45, cvode), the
 // kernels of the exact method (ahead-of-time, JIT-compiled with their
-// persistent cache, or the generic solver), the precision (double, or the
+// persistent cache, or the generic path: the same programs interpreted), the precision (double, or the
 // high-precision reference at N digits) and sampling. The JIT module
 // (libhsnc_jit.so, which links LLVM) is loaded here, from beside the library,
 // and only when the caller asks for KernelChoice::jit.
@@ -39,14 +39,19 @@ namespace hsnc {
 /// Where the exact method's segment solvers come from.
 enum class KernelChoice {
     automatic,  ///< the ahead-of-time kernels when the model has them (bundled
-                ///  models as generated), else the generic solver; never compiles
+                ///  models as generated), else generic; never compiles. The
+                ///  same bits whichever it takes.
     aot,        ///< ahead-of-time kernels only (InputError when the model has none)
     jit,        ///< a kernel per configuration, from the persistent cache or
                 ///  compiled in-process (RunError when libhsnc_jit.so cannot be loaded)
-    generic,    ///< the Eigen-based generic solver
-    interp,     ///< each configuration's program (derived in double-double and
+    generic,    ///< each configuration's program (derived in double-double and
                 ///  lowered, as the kernels are printed from it) run by an
                 ///  interpreter: the kernels' bits without a compiler
+    interp,     ///< the same as generic (its name before generic was the interpreter)
+    eigen,      ///< the Eigen solver: the closed forms written independently of
+                ///  the programs (the tests' oracle), agreeing with the other
+                ///  kinds to rounding, not to the bit; its entry into a
+                ///  configuration is cheaper (a modal analysis in double)
     tiered,     ///< interp first; a configuration that has run
                 ///  SimulateOptions::tier_evaluations evaluations gets its JIT
                 ///  kernel, compiled on a background thread (the run never
@@ -58,8 +63,9 @@ enum class KernelChoice {
 enum class SolverKind {
     aot,         ///< ahead-of-time kernels (the generic solver for configurations without one)
     jit,         ///< JIT-compiled or cached kernels
-    generic,     ///< the generic solver
-    interp,      ///< interpreted programs
+    generic,     ///< interpreted programs (KernelChoice::generic)
+    interp,      ///< interpreted programs (KernelChoice::interp)
+    eigen,       ///< the Eigen solver
     tiered,      ///< interpreted programs, then kernels (KernelChoice::tiered)
     reference,   ///< the high-precision reference engine (precision_digits > 0)
     integrator,  ///< a numerical baseline (ab4, rk45, cvode)

@@ -131,7 +131,7 @@ def simulate(model, t_end=None, dt=None, method="hsnc", kernels="auto", precisio
 
     dt: sample spacing (default (t_end - t0) / 1000); method: "hsnc" (exact),
     "ab4" (needs h), "rk45", "cvode" (rtol, atol); kernels: "auto", "aot",
-    "generic", "interp", "jit", "tiered" (cache_dir, use_cache; tiered also
+    "generic" (= "interp"), "eigen", "jit", "tiered" (cache_dir, use_cache; tiered also
     tier_evaluations, as `--tier-evaluations`); precision: "double" or "mp:N";
     x0, v0: dicts {mass name: value} overriding the initial state (as
     `hsnc simulate --x0 --v0`: the model is read again with them);

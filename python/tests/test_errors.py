@@ -74,7 +74,7 @@ def test_missing_file_and_unknown_override_are_input_errors(cli, tmp_path):
     ({"t_end": 1.0, "method": "euler"}, "hsnc::method_from_name(): method = 'euler': expected hsnc, ab4, rk45 or cvode"),
     ({"t_end": 1.0, "method": "ab4"}, "hsnc::simulate(): integrator.h = nan: method ab4 needs a fixed step h > 0"),
     ({"t_end": 1.0, "kernels": "fast"},
-     "hsnc::kernel_choice_from_name(): kernels = 'fast': expected auto, aot, generic, interp, jit or tiered"),
+     "hsnc::kernel_choice_from_name(): kernels = 'fast': expected auto, aot, generic, interp, eigen, jit or tiered"),
     ({"t_end": 1.0, "precision": "mp:5"}, "hsnc::precision_digits_from_name(): precision_digits = mp:5: "
                                           "expected double, or mp:N with N in 20..100"),
 ])

@@ -108,6 +108,19 @@ def test_generic_kernels_and_reference_precision_run():
     assert np.allclose(ref.x, aot.x, rtol=0, atol=1e-12)
 
 
+def test_generic_is_the_aot_kernels_bits_and_eigen_the_independent_solver():
+    model = hsnc.Model.from_file(model_path("seed-scenario-2.toml"))
+    aot = hsnc.simulate(model, t_end=100, kernels="aot")
+    generic = hsnc.simulate(model, t_end=100, kernels="generic")
+    eigen = hsnc.simulate(model, t_end=100, kernels="eigen")
+    assert (generic.summary["solver"], eigen.summary["solver"]) == ("generic", "eigen")
+    assert np.array_equal(generic.events.t, aot.events.t) and np.array_equal(generic.x, aot.x)
+    # The Eigen solver: the same closed forms written apart, equal to rounding
+    # (the run is chaotic: compare its first 10 s).
+    early = aot.t <= 10
+    assert np.allclose(eigen.x[early], aot.x[early], rtol=0, atol=1e-9)
+
+
 def test_tiered_kernels_give_the_interpreters_bits(tmp_path):
     # A low tier_evaluations starts compiles in a child process; whether or not
     # they finish before the run does, not a bit changes (tests/test_tiered.cpp

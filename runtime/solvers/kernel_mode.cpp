@@ -17,8 +17,9 @@ KernelMode parse_kernel_mode(const std::string& name) {
     if (name == "aot") return KernelMode::aot;
     if (name == "generic") return KernelMode::generic;
     if (name == "interp") return KernelMode::interp;
+    if (name == "eigen") return KernelMode::eigen;
     if (name == "jit") return KernelMode::jit;
-    throw InputError("--kernels '" + name + "': expected auto, aot, generic, interp or jit");
+    throw InputError("--kernels '" + name + "': expected auto, aot, generic, interp, eigen or jit");
 }
 
 SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
@@ -62,7 +63,7 @@ SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
 }
 
 std::string GenericSolverProvider::describe() const {
-    std::string text = std::string(model_.proportional_damping() ? "generic solver" : "generic solver (state-space modes)") +
+    std::string text = std::string(model_.proportional_damping() ? "Eigen solver" : "Eigen solver (state-space modes)") +
                        " for " + std::to_string(seen_.size()) + " configurations";
     if (exponential_ > 0)
         text += " (" + std::to_string(exponential_) + " critically damped: by the matrix exponential)";
@@ -76,6 +77,7 @@ AotSolverProvider::AotSolverProvider(const Model& model, const AotRegistry& regi
                                      InterpretedSolverProvider::ProgramFn lower)
     : model_(model), registry_(registry), fallback_(fallback), hash_(model_hash(model)) {
     if (!fallback_) return;
+    fallback_eigen_ = !lower;
     if (lower)
         fallback_provider_ = std::make_unique<DerivationFallbackProvider>(
             model_, std::make_unique<InterpretedSolverProvider>(std::move(lower)));
@@ -98,8 +100,9 @@ SegmentSolver& AotSolverProvider::solver(const Configuration& cfg) {
 }
 
 std::string AotSolverProvider::describe() const {
-    return std::to_string(cache_.size()) + " ahead-of-time kernels, generic solver for " +
-           std::to_string(generic_.size()) + " configurations";
+    return std::to_string(cache_.size()) + " ahead-of-time kernels, " +
+           (fallback_eigen_ ? "Eigen solver for " : "generic solver for ") + std::to_string(generic_.size()) +
+           " configurations";
 }
 
 SegmentSolver& DerivationFallbackProvider::solver(const Configuration& cfg) {
@@ -130,20 +133,29 @@ bool has_aot_kernels(const Model& model, const AotRegistry* registry) {
 std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
                                                      const AotRegistry* registry,
                                                      InterpretedSolverProvider::ProgramFn lower) {
-    if (mode == KernelMode::interp) {
-        if (!lower) throw std::invalid_argument("make_solver_provider(): --kernels interp needs a program source");
-        return std::make_unique<DerivationFallbackProvider>(model,
-                                                            std::make_unique<InterpretedSolverProvider>(std::move(lower)));
-    }
-    if (mode == KernelMode::generic) return std::make_unique<GenericSolverProvider>(model);
     if (mode == KernelMode::jit)
         throw std::logic_error("make_solver_provider(): --kernels jit is built with JitSolverProvider");
+    if (mode == KernelMode::eigen) return std::make_unique<GenericSolverProvider>(model);
+    auto interpreted = [&] {
+        return std::make_unique<DerivationFallbackProvider>(model,
+                                                            std::make_unique<InterpretedSolverProvider>(std::move(lower)));
+    };
+    if (mode == KernelMode::generic || mode == KernelMode::interp) {
+        if (!lower)
+            throw std::invalid_argument(std::string("make_solver_provider(): --kernels ") +
+                                        (mode == KernelMode::generic ? "generic" : "interp") +
+                                        " needs a program source");
+        return interpreted();
+    }
     const bool has_kernels = has_aot_kernels(model, registry);
     if (mode == KernelMode::aot && !has_kernels)
         throw InputError("--kernels aot: no ahead-of-time kernels for model '" + model.name +
                          "' (bundled models only, and only as generated: a --set or an edited file changes the model)");
-    if (!has_kernels) return std::make_unique<GenericSolverProvider>(model);
-    return std::make_unique<AotSolverProvider>(model, *registry, mode == KernelMode::automatic);
+    if (!has_kernels) {
+        if (lower) return interpreted();
+        return std::make_unique<GenericSolverProvider>(model);
+    }
+    return std::make_unique<AotSolverProvider>(model, *registry, mode == KernelMode::automatic, std::move(lower));
 }
 
 }  // namespace hsnc

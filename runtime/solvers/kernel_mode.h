@@ -18,17 +18,20 @@ namespace hsnc {
 
 enum class KernelMode {
     automatic,  ///< ahead-of-time kernels when the model has them, else the
-                ///  generic solver (never the JIT: hsnc::simulate, api/hsnc/simulate.h)
+                ///  generic path (never the JIT: hsnc::simulate, api/hsnc/simulate.h)
     aot,        ///< ahead-of-time kernels only (error when the model has none)
-    generic,    ///< the Eigen-based generic solver
-    interp,     ///< the interpreter of each configuration's program (InterpretedSolverProvider,
-                ///  from a program source: generator/lowering.h program_source()), the kernels'
-                ///  bits without a compiler
+    generic,    ///< the generic path: each configuration's program interpreted
+                ///  (InterpretedSolverProvider, from a program source:
+                ///  generator/lowering.h program_source()), the kernels' bits
+                ///  without a compiler
+    interp,     ///< the same as generic (its older name)
+    eigen,      ///< the Eigen solver (GenericSolverProvider): the closed forms
+                ///  written independently of the programs, the tests' oracle
     jit,        ///< a kernel compiled in-process per configuration visited
                 ///  (runtime/jit/jit_solver_provider.h; opt-in, built by the command line)
 };
 
-/// "auto", "aot", "generic", "interp", "jit"; InputError otherwise.
+/// "auto", "aot", "generic", "interp", "eigen", "jit"; InputError otherwise.
 KernelMode parse_kernel_mode(const std::string& name);
 
 /// The Eigen solver (runtime/generic_solver.h) for every configuration (for a
@@ -78,9 +81,9 @@ private:
 /// otherwise (fallback) the Eigen solver, or the interpreter of the
 /// configuration's program when `lower` is given (kept within memory as those
 /// providers keep them), or (no fallback) a RunError naming the configuration.
-/// make_solver_provider() gives mode automatic the Eigen solver as fallback:
-/// entering a configuration costs the interpreter a derivation (double-double), slower
-/// than the Eigen solver's analysis in double (README, "The interpreter").
+/// make_solver_provider() gives mode automatic the interpreter as fallback
+/// when it has a program source (the kernels' bits for every configuration),
+/// else the Eigen solver.
 class AotSolverProvider : public SolverProvider {
 public:
     AotSolverProvider(const Model& model, const AotRegistry& registry, bool fallback,
@@ -94,6 +97,7 @@ private:
     const Model& model_;
     const AotRegistry& registry_;
     bool fallback_;
+    bool fallback_eigen_ = false;  ///< the fallback is the Eigen solver (no program source)
     std::uint64_t hash_;
     std::map<Configuration, std::unique_ptr<SegmentSolver>> cache_;  // the kernels
     std::set<Configuration> generic_;                                // configurations without one
@@ -112,10 +116,10 @@ public:
         : primary_(std::move(primary)), generic_(model) {}
     DerivationFallbackProvider(const Model&& model, std::unique_ptr<SolverProvider> primary) = delete;  ///< would dangle
     SegmentSolver& solver(const Configuration& cfg) override;
-    /// The primary's line, then "; generic solver for N configurations the
+    /// The primary's line, then "; Eigen solver for N configurations the
     /// derivation does not take (first: reason)" when there were any.
     std::string describe() const override;
-    std::size_t not_derivable() const { return refused_.size(); }  ///< configurations on the generic solver
+    std::size_t not_derivable() const { return refused_.size(); }  ///< configurations on the Eigen solver
     SolverProvider& primary() { return *primary_; }
 
 private:
@@ -129,11 +133,13 @@ private:
 bool has_aot_kernels(const Model& model, const AotRegistry* registry);
 
 /// The provider for `mode` (not jit: that one needs the generator, see
-/// JitSolverProvider; automatic without kernels gives the generic solver);
-/// `registry` (may be null) lists the AOT kernels linked in. Mode interp
-/// interprets the programs `lower` gives (generator/lowering.h,
-/// program_source(): the same bits as the kernels) and needs it
-/// (std::invalid_argument without); the other modes do not use it.
+/// JitSolverProvider); `registry` (may be null) lists the AOT kernels linked
+/// in. Modes generic and interp interpret the programs `lower` gives
+/// (generator/lowering.h, program_source(): the same bits as the kernels) and
+/// need it (std::invalid_argument without). Mode automatic takes the AOT
+/// kernels when the model has them, and the interpreter for every other
+/// configuration, or, without `lower` (a runtime used without the generator),
+/// the Eigen solver. Mode eigen does not use `lower`.
 std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
                                                      const AotRegistry* registry,
                                                      InterpretedSolverProvider::ProgramFn lower = {});
