@@ -430,3 +430,96 @@ TEST(Program, GenericSolverAgreesAsAnIndependentOracle) {
 
 }  // namespace
 }  // namespace hsnc
+
+// ---- the switch search's own program (SegmentSolver::eval_switches) ----
+
+namespace hsnc {
+namespace {
+
+/// A chain of n unit masses whose only switch functions are one contact at
+/// its far end and, on that mass, friction: the search needs the state of
+/// one mass, eval computes that of all n.
+Model beam_chain(int n) {
+    auto m = [](int i) { return "m" + std::to_string(i); };
+    std::string t = "name = \"beam\"\n[damping]\nbeta = 0.002\n";
+    for (int i = 1; i <= n; ++i) t += "[[mass]]\nname = \"" + m(i) + "\"\nm = 1\n" + (i == n ? "mu_k = 0.05\nmu_s = 0.07\n" : "");
+    t += "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 400\n";
+    for (int i = 1; i < n; ++i) t += "[[spring]]\nbetween = [\"" + m(i) + "\", \"" + m(i + 1) + "\"]\nk = 400\n";
+    t += "[[contact]]\nbetween = [\"" + m(n) + "\", \"ground\"]\ngap = 0.002\nk = 4000\n";
+    t += "[[forcing]]\nomega = 9.0\namplitude = { m1 = 30.0 }\n";
+    t += "[initial]\nv = { " + m(n) + " = 0.5 }\n";
+    return parse_model(t, "beam.toml");
+}
+
+/// Runs another provider's solvers with the search evaluating in full (what
+/// the printed kernels do: SegmentSolver's default eval_switches).
+class FullEvalProvider : public SolverProvider {
+public:
+    explicit FullEvalProvider(SolverProvider& inner) : inner_(inner) {}
+    SegmentSolver& solver(const Configuration& cfg) override {
+        solver_.inner = &inner_.solver(cfg);
+        return solver_;
+    }
+
+private:
+    struct Full : SegmentSolver {
+        SegmentSolver* inner = nullptr;
+        const Configuration& configuration() const override { return inner->configuration(); }
+        const std::vector<SwitchFunction>& switches() const override { return inner->switches(); }
+        using SegmentSolver::setup;
+        void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override {
+            inner->setup(t0, t0_lo, x0, v0, sgn);
+        }
+        void eval(double tau, const SegmentEval& out) const override { inner->eval(tau, out); }
+        double max_step() const override { return inner->max_step(); }
+    };
+    SolverProvider& inner_;
+    Full solver_;
+};
+
+TEST(SwitchProgram, HasTheBitsOfEvalAndLeavesOutTheRest) {
+    const Model m = beam_chain(24);
+    int with_program = 0;
+    for (const Configuration& cfg : {Configuration::all_open(m), Configuration::parse(m, "closed=contact1 stuck=m24")}) {
+        const InterpretedSolver s(lower(derive(m, cfg)));
+        with_program += s.has_switch_program();
+        const testing::Start st = testing::start_of(m, cfg, 7);
+        const std::size_t n = m.dof(), ns = s.switches().size();
+        std::vector<double> x(m.state_size()), v(n), a(n), g(ns), dg(ns), b(ns), sc(ns);
+        std::vector<double> x2 = x, v2 = v, a2 = a, g2 = g, dg2 = dg, b2 = b, sc2 = sc;
+        const SegmentEval full{x.data(), v.data(), a.data(), g.data(), dg.data(), b.data(), sc.data()};
+        const SegmentEval search{x2.data(), v2.data(), a2.data(), g2.data(), dg2.data(), b2.data(), sc2.data()};
+        const_cast<InterpretedSolver&>(s).setup(st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data());
+        for (double tau : {0.0, 1e-9, 0.013, 0.5, 3.25, 40.0}) {
+            s.eval_switches(tau, search);  // first, so that eval cannot leave it its registers
+            s.eval(tau, full);
+            EXPECT_TRUE(same_bits(g, g2)) << cfg.spec(m) << " tau " << tau << ": g";
+            EXPECT_TRUE(same_bits(dg, dg2)) << cfg.spec(m) << " tau " << tau << ": dg";
+            EXPECT_TRUE(same_bits(b, b2)) << cfg.spec(m) << " tau " << tau << ": bound";
+            EXPECT_TRUE(same_bits(sc, sc2)) << cfg.spec(m) << " tau " << tau << ": scale";
+        }
+    }
+    EXPECT_EQ(with_program, 2) << "24 masses, one of them read by the switch functions: a program of its own";
+    // Where every mass has a switch function there is nothing to leave out.
+    const Model chain = bundled("chain-8");
+    EXPECT_FALSE(InterpretedSolver(lower(derive(chain, Configuration::all_open(chain)))).has_switch_program());
+}
+
+TEST(SwitchProgram, ARunSearchingWithItWritesTheBytesOfAFullSearch) {
+    const Model m = beam_chain(24);
+    InterpretedSolverProvider own(lowering_of(m));
+    const RunFiles ro = run_to_csv(m, own, 30.0, 0.01, "switch-program");
+    InterpretedSolverProvider inner(lowering_of(m));
+    FullEvalProvider full(inner);
+    const RunFiles rf = run_to_csv(m, full, 30.0, 0.01, "full-search");
+    ASSERT_EQ(ro.summary.status, RunStatus::ok) << ro.summary.message;
+    EXPECT_GE(ro.summary.events, 20u);
+    EXPECT_EQ(ro.summary.evaluations, rf.summary.evaluations);
+    EXPECT_TRUE(same_bits(ro.summary.x, rf.summary.x)) << "the state reached";
+    EXPECT_TRUE(same_bits(ro.summary.v, rf.summary.v)) << "the state reached";
+    EXPECT_TRUE(ro.events == rf.events) << "events CSV";
+    EXPECT_TRUE(ro.trajectory == rf.trajectory) << "trajectory CSV";
+}
+
+}  // namespace
+}  // namespace hsnc

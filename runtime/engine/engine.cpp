@@ -231,7 +231,14 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         // that slides on) is not watched for a stop until it has left 0.
         std::fill(armed.begin(), armed.end(), 0);
 
+        // The search reads only the switch outputs; the state (x, v, a) is
+        // read at the segment's last instant, evaluated in full.
         auto eval = [&](double tau) {
+            S.eval_switches(tau, out);
+            tau_now = tau;
+            ++sum.evaluations;
+        };
+        auto eval_full = [&](double tau) {
             S.eval(tau, out);
             tau_now = tau;
             ++sum.evaluations;
@@ -333,7 +340,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 for (std::size_t f = 0; f < nsw; ++f)
                     if (root[f] <= tau_star + tol) found.switched.push_back(sw[f]);
                 // Others within rounding of zero and heading across at the event instant.
-                eval(found.tau);
+                eval_full(found.tau);
                 for (std::size_t f = 0; f < nsw; ++f) {
                     if (root[f] <= tau_star + tol) continue;
                     const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
@@ -406,7 +413,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         }
 
         // ---- advance to the event instant: the state at tau, the time as t + t_lo ----
-        if (!found.any) eval(tau_end);  // an event's instant was evaluated last in the search
+        if (!found.any) eval_full(tau_end);  // an event's instant was evaluated last in the search
         x = buf.x;
         v = buf.v;
         for (std::size_t i = 0; i < n; ++i)

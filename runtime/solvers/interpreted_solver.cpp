@@ -845,26 +845,53 @@ std::unique_ptr<InterpretedSolver::Body> freeze(const std::vector<Block>& blocks
     return body;
 }
 
-/// The program's instructions scheduled by dependency level (an instruction
-/// comes after every instruction that writes what it reads, reads what it
-/// writes, or writes it too, before it in the program), each level's
-/// instructions of one shape batched into a block, in order of first
-/// appearance; a sin and a cos of one register in one step. Every value is
-/// computed by the same operations from the same operands as in program order.
-/// `terms` are the program's: the registers of this body's terms are renamed in
-/// place (forward_copies), the other body's terms are not touched.
-std::unique_ptr<InterpretedSolver::Body> compile(const ProgramBody& body, std::vector<ProgramTerm>& terms,
-                                                 std::uint32_t pinned_begin, std::uint32_t pinned_end,
-                                                 std::vector<std::uint32_t>& exported) {
+/// A body's instructions as the scheduler takes them, with the copies that
+/// only rename a register forwarded (forward_copies). `terms` are the
+/// program's: the registers of this body's terms are renamed in place, the
+/// other body's terms are not touched.
+std::vector<Instr> prepare(const ProgramBody& body, std::vector<ProgramTerm>& terms, std::uint32_t pinned_begin,
+                           std::uint32_t pinned_end, std::vector<std::uint32_t>& exported) {
     std::vector<Instr> code;
     code.reserve(body.code.size());
     for (const ProgramInstr& in : body.code)
         code.push_back({in.op, in.regime, in.dst, in.a, in.b, in.c, in.d, in.first, in.count,
                         {in.tail[0], in.tail[1], in.tail[2], in.tail[3], in.tail[4]}});
     forward_copies(code, terms, body.registers(), pinned_begin, pinned_end, exported);
+    return code;
+}
 
+/// The instructions of `code` that registers [live_begin, live_end) depend
+/// on, in program order: an instruction is kept when it writes a register
+/// that a kept instruction after it (or the live range) reads. Every writer of
+/// such a register is kept, so each kept instruction sees the operands it
+/// sees in the whole program and computes the same bits.
+std::vector<Instr> needed_for(const std::vector<Instr>& code, const std::vector<ProgramTerm>& terms,
+                              std::size_t registers, std::uint32_t live_begin, std::uint32_t live_end) {
+    std::vector<char> needed(registers, 0), keep(code.size(), 0);
+    for (std::uint32_t r = live_begin; r < live_end; ++r) needed[r] = 1;
+    std::vector<std::uint32_t> reads, writes;
+    for (std::size_t i = code.size(); i-- > 0;) {
+        accesses(code[i], terms, reads, writes);
+        for (std::uint32_t w : writes) keep[i] = keep[i] || needed[w];
+        if (keep[i])
+            for (std::uint32_t r : reads) needed[r] = 1;
+    }
+    std::vector<Instr> kept;
+    for (std::size_t i = 0; i < code.size(); ++i)
+        if (keep[i]) kept.push_back(code[i]);
+    return kept;
+}
+
+/// The instructions scheduled by dependency level (an instruction
+/// comes after every instruction that writes what it reads, reads what it
+/// writes, or writes it too, before it in the program), each level's
+/// instructions of one shape batched into a block, in order of first
+/// appearance; a sin and a cos of one register in one step. Every value is
+/// computed by the same operations from the same operands as in program order.
+std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code, std::vector<ProgramTerm>& terms,
+                                                  std::size_t registers) {
     const std::size_t n = code.size();
-    std::vector<int> last_write(body.registers(), -1), last_read(body.registers(), -1), level(n, 0);
+    std::vector<int> last_write(registers, -1), last_read(registers, -1), level(n, 0);
     std::vector<std::uint32_t> reads, writes;
     int levels = 0;
     for (std::size_t i = 0; i < n; ++i) {
@@ -956,18 +983,27 @@ InterpretedSolver::InterpretedSolver(Program p)
       n_coef_(static_cast<std::size_t>(p.n_coef)),
       constants_(std::move(p.constants)),
       setup_coef_(p.setup_coef),
-      setup_(compile(p.setup, p.terms, 0, 0, setup_coef_)),
-      eval_(compile(p.eval, p.terms, p.eval_outputs(),
-                    p.eval_outputs() + p.eval_output_count(), no_exports_)),
+      setup_(schedule(prepare(p.setup, p.terms, 0, 0, setup_coef_), p.terms, p.setup.registers())),
       setup_regs_(p.setup.registers(), 0.0),
       eval_regs_(p.eval.registers(), 0.0) {
     eval_regs_[0] = 1.0;
+    const std::uint32_t outputs = p.eval_outputs(), switch_outputs = outputs + static_cast<std::uint32_t>(
+                                                                                   p.n_state() + 2 * p.n_dof);
+    const std::vector<Instr> code =
+        prepare(p.eval, p.terms, outputs, outputs + p.eval_output_count(), no_exports_);
+    eval_ = schedule(code, p.terms, p.eval.registers());
+    // The search's program: what g, dg, bound and scale need. Worth a body of
+    // its own only when it leaves out a good part (the state of masses no
+    // switch function reads).
+    const std::vector<Instr> search =
+        needed_for(code, p.terms, p.eval.registers(), switch_outputs, outputs + p.eval_output_count());
+    if (search.size() * 5 < code.size() * 4) switches_body_ = schedule(search, p.terms, p.eval.registers());
 }
 
 InterpretedSolver::~InterpretedSolver() = default;
 
 std::size_t InterpretedSolver::memory_bytes() const {
-    return sizeof(*this) + setup_->bytes() + eval_->bytes() +
+    return sizeof(*this) + setup_->bytes() + eval_->bytes() + (switches_body_ ? switches_body_->bytes() : 0) +
            sizeof(double) * (constants_.capacity() + setup_regs_.capacity() + eval_regs_.capacity()) +
            sizeof(std::uint32_t) * setup_coef_.capacity() + sizeof(SwitchFunction) * switches_.capacity() +
            cfg_.closed.capacity() + cfg_.stuck.capacity();
@@ -989,6 +1025,18 @@ void InterpretedSolver::setup(double t0, double t0_lo, const double* x0, const d
     execute(constants_.data(), *setup_, r);
     // The coefficient block goes straight into eval's registers.
     for (std::size_t k = 0; k < setup_coef_.size(); ++k) eval_regs_[Program::kEvalCoef + k] = r[setup_coef_[k]];
+}
+
+void InterpretedSolver::eval_switches(double tau, const SegmentEval& out) const {
+    if (!switches_body_) return eval(tau, out);
+    double* r = eval_regs_.data();
+    r[Program::kEvalTau] = tau;
+    execute(constants_.data(), *switches_body_, r);
+    const std::size_t n = static_cast<std::size_t>(n_dof_), nx = n + static_cast<std::size_t>(n_slider_),
+                      ns = switches_.size();
+    const double* o = r + Program::kEvalCoef + n_coef_ + nx + 2 * n;
+    for (std::size_t f = 0; f < ns; ++f)
+        out.g[f] = o[f], out.dg[f] = o[ns + f], out.bound[f] = o[2 * ns + f], out.scale[f] = o[3 * ns + f];
 }
 
 void InterpretedSolver::eval(double tau, const SegmentEval& out) const {

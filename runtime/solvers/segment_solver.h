@@ -57,6 +57,12 @@ public:
     /// Evaluate at tau = t - t0 >= 0 (time measured from the segment start).
     virtual void eval(double tau, const SegmentEval& out) const = 0;
 
+    /// What the switch search needs at tau: g, dg, bound and scale, each with
+    /// the bits eval() gives them; x, v and a are left unspecified (their
+    /// buffers may be written or not). The default is eval(); a solver that
+    /// can skip the state of masses no switch function reads overrides it.
+    virtual void eval_switches(double tau, const SegmentEval& out) const { eval(tau, out); }
+
     /// The longest step over which `bound` is valid: +infinity unless the
     /// segment has secular (resonant, growing) terms.
     virtual double max_step() const = 0;
