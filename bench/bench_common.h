@@ -104,4 +104,21 @@ inline std::string friction_chain(int n) {
     return t;
 }
 
+/// A chain of n unit masses whose switches are few, as in a structure with a
+/// crack or a bolted joint: springs of 400 N/m, beta = 0.002, one contact
+/// (gap 0.02 m, 4000 N/m) and one friction joint (mu_k 0.05, mu_s 0.07) at its
+/// far end, forced at m1 at 9 rad/s. Its switch functions read the state of
+/// mn alone.
+inline std::string jointed_chain(int n) {
+    auto m = [](int i) { return "m" + std::to_string(i); };
+    std::string t = "name = \"jointed-" + std::to_string(n) + "\"\n[damping]\nbeta = 0.002\n";
+    for (int i = 1; i <= n; ++i)
+        t += "[[mass]]\nname = \"" + m(i) + "\"\nm = 1\n" + (i == n ? "mu_k = 0.05\nmu_s = 0.07\n" : "");
+    t += "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 400\n";
+    for (int i = 1; i < n; ++i) t += "[[spring]]\nbetween = [\"" + m(i) + "\", \"" + m(i + 1) + "\"]\nk = 400\n";
+    t += "[[contact]]\nbetween = [\"" + m(n) + "\", \"ground\"]\ngap = 0.02\nk = 4000\n";
+    t += "[[forcing]]\nomega = 9.0\namplitude = { m1 = 30.0 }\n";
+    return t;
+}
+
 }  // namespace hsnc::bench

@@ -16,7 +16,10 @@
 //            at 32 masses the cold run took more than 20 minutes of LLVM;
 //   cvode    CVODE (Adams, rtol 1e-12, atol 1e-14) with root finding.
 // Then the first run of --kernels tiered from an empty cache against the
-// interpreter alone, in wall time (chains of 2 to 32 masses).
+// interpreter alone, in wall time (chains of 2 to 32 masses). Then chains
+// whose switches are few (one contact, one friction joint): one eval against
+// the search's own program (SegmentSolver::eval_switches), and whole runs
+// against CVODE.
 // Times are thread CPU time, medians of the runs (5, or 3 with --quick; one
 // cold JIT run); per switch and per evaluation are the Eigen solver's, the
 // ratios are CVODE's time over the Eigen solver's and over generic's. --csv writes the table
@@ -35,7 +38,10 @@
 #include <stdlib.h>
 
 #include "bench_common.h"
+#include "derivation.h"
 #include "hsnc/simulate.h"
+#include "interpreted_solver.h"
+#include "lowering.h"
 #include "model_reader.h"
 
 namespace {
@@ -169,6 +175,52 @@ int main(int argc, char** argv) {
         }
         std::printf("%5d %11.2f %11.2f %8.2f %s\n", n, bench::median(ti), bench::median(tt), bench::median(ratio),
                     tiers.c_str());
+        std::fflush(stdout);
+    }
+
+    // Few switches (bench_common.h jointed_chain: one contact and one friction
+    // joint at the far end): the search's own program (eval_switches) against
+    // a whole eval, one call in the all-open configuration (median of 15
+    // rounds of 2000 calls each, the two in turn), then whole runs of eigen,
+    // generic and CVODE (thread CPU time).
+    const double t_joint = quick ? 50.0 : 200.0;
+    std::printf("\nfew switches: a chain with one contact and one friction joint at its far end, over %g s\n", t_joint);
+    std::printf("%5s %9s %9s %8s %8s %10s %11s %10s %12s %13s\n", "n", "eval_ns", "search_ns", "ratio", "switches",
+                "eigen_ms", "generic_ms", "cvode_ms", "cvode/eigen", "cvode/generic");
+    for (int n : {32, 64, 128}) {
+        const Model m = parse_model(bench::jointed_chain(n), "jointed-" + std::to_string(n) + ".toml");
+        const Configuration cfg = Configuration::all_open(m);
+        const InterpretedSolver s(lower(derive(m, cfg)));
+        const std::size_t ns = s.switches().size();
+        std::vector<double> x(m.state_size()), v(m.dof()), a(m.dof()), g(ns), dg(ns), b(ns), sc(ns);
+        std::vector<signed char> sgn(m.dof(), 0);
+        const_cast<InterpretedSolver&>(s).setup(0.0, m.x0.data(), m.v0.data(), sgn.data());
+        const SegmentEval o{x.data(), v.data(), a.data(), g.data(), dg.data(), b.data(), sc.data()};
+        std::vector<double> te, ts;
+        constexpr int kCalls = 2000;
+        for (int round = 0; round < 15; ++round) {
+            double start = cpu_seconds();
+            for (int i = 0; i < kCalls; ++i) s.eval(1e-3 * i, o);
+            te.push_back(1e9 * (cpu_seconds() - start) / kCalls);
+            start = cpu_seconds();
+            for (int i = 0; i < kCalls; ++i) s.eval_switches(1e-3 * i, o);
+            ts.push_back(1e9 * (cpu_seconds() - start) / kCalls);
+        }
+        SimulateOptions e;
+        e.t_end = t_joint;
+        e.kernels = KernelChoice::eigen;
+        const Timed eig = run(m, e, 3);
+        e.kernels = KernelChoice::generic;
+        const Timed gen = run(m, e, 3);
+        SimulateOptions c;
+        c.t_end = t_joint;
+        c.method = Method::cvode;
+        c.integrator.rtol = 1e-12;
+        c.integrator.atol = 1e-14;
+        const Timed cv = run(m, c, 1);
+        std::printf("%5d %9.0f %9.0f %8.2f %8zu %10.1f %11.1f %10.1f %12.1f %13.1f%s\n", n, bench::median(te),
+                    bench::median(ts), bench::median(ts) / bench::median(te), gen.summary.events, eig.ms, gen.ms,
+                    cv.ms, cv.ms / eig.ms, cv.ms / gen.ms, s.has_switch_program() ? "" : " (no program of its own)");
         std::fflush(stdout);
     }
     return 0;
