@@ -132,6 +132,38 @@ TEST(Tiered, KernelsTakeOverWithoutChangingABit) {
     std::filesystem::remove_all(dir);
 }
 
+// A structure whose switch functions read one mass of 64: the interpreter's
+// search program (SegmentSolver::eval_switches) does less than a kernel's
+// whole eval would, so no kernel is asked for, however long it runs.
+TEST(Tiered, AStructureWithFewSwitchesKeepsItsInterpretedSearch) {
+    constexpr int n = 64;
+    const std::string last = "m" + std::to_string(n);
+    std::string text = "name = \"jointed\"\n[damping]\nbeta = 0.002\n";
+    for (int i = 1; i <= n; ++i)
+        text += "[[mass]]\nname = \"m" + std::to_string(i) + "\"\nm = 1\n" + (i == n ? "mu_k = 0.05\nmu_s = 0.07\n" : "");
+    text += "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 400\n";
+    for (int i = 1; i < n; ++i)
+        text += "[[spring]]\nbetween = [\"m" + std::to_string(i) + "\", \"m" + std::to_string(i + 1) + "\"]\nk = 400\n";
+    text += "[[contact]]\nbetween = [\"" + last + "\", \"ground\"]\ngap = 0.002\nk = 4000\n";
+    text += "[[forcing]]\nomega = 9.0\namplitude = { m1 = 30.0 }\n[initial]\nv = { " + last + " = 0.5 }\n";
+    const Model model = parse_model(text, "jointed.toml");
+    const std::string dir = testing::temp_path("tiered_cache");
+    const testing::Outcome interp = testing::simulate(model, 20.0, 0.1, testing::Solvers::interp);
+    TierOptions o;
+    o.compile_after = 1;
+    o.wait_for_compiles = true;
+    // A compile would run in a child and fail: the run would warn that the
+    // kernel could not be compiled into the cache.
+    std::vector<std::string> warnings;
+    auto provider = tiered(model, dir, [](const Configuration&) { throw RunError("asked for a kernel"); }, o, &warnings);
+    const testing::Outcome run_ = run(model, *provider, 20.0);
+    expect_same_bits(interp, run_);
+    EXPECT_GE(interp.events.size(), 10u);
+    EXPECT_TRUE(warnings.empty()) << warnings.front();
+    EXPECT_EQ(provider->on_kernels(), 0u) << provider->describe();
+    std::filesystem::remove_all(dir);
+}
+
 TEST(Tiered, TheRunNeverWaitsForTheCompiler) {
     const Model model = read_model(model_path("chain-8.toml"));
     const std::string dir = testing::temp_path("tiered_slow");

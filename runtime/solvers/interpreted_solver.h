@@ -46,12 +46,15 @@ public:
     void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override;
     void eval(double tau, const SegmentEval& out) const override;
     /// Runs only the instructions the switch outputs depend on, when that
-    /// leaves out a fifth of eval's or more (the state of masses no switch
+    /// leaves out a fifth of eval's work or more (the state of masses no switch
     /// function reads); the same bits as eval() for g, dg, bound and scale.
     void eval_switches(double tau, const SegmentEval& out) const override;
     double max_step() const override { return max_step_; }
     /// Whether eval_switches() runs a program of its own (else it is eval()).
     bool has_switch_program() const { return static_cast<bool>(switches_body_); }
+    /// The share of eval's work (terms summed, libm calls) the search does (1
+    /// without a program of its own).
+    double switch_program_share() const { return switch_share_; }
 
     /// The coefficient block the last setup computed (n_coef doubles): what a
     /// kernel's setup writes into `coef`.
@@ -75,6 +78,7 @@ private:
     std::vector<std::uint32_t> setup_coef_;  // setup's registers of coef[k]
     std::vector<std::uint32_t> no_exports_;
     std::unique_ptr<Body> setup_, eval_, switches_body_;  // switches_body_: null when eval_switches() is eval()
+    double switch_share_ = 1.0;
     std::vector<double> setup_regs_;
     // eval's register file; setup writes the coefficient block straight into it.
     mutable std::vector<double> eval_regs_;
