@@ -54,7 +54,7 @@ enum class KernelChoice {
                 ///  configuration is cheaper (a modal analysis in double)
     tiered,     ///< interp first; a configuration that has run
                 ///  SimulateOptions::tier_evaluations evaluations gets its JIT
-                ///  kernel, compiled on a background thread (the run never
+                ///  kernel, compiled by a child process (the run never
                 ///  waits), kernels in the persistent cache from its first entry;
                 ///  the same bits as interp and jit (runtime/solvers/tiered_provider.h)
 };

@@ -882,6 +882,21 @@ std::vector<Instr> needed_for(const std::vector<Instr>& code, const std::vector<
     return kept;
 }
 
+/// The time `code` takes, estimated in multiply-adds of a batched mass state
+/// (about 0.2 ns each, measured at 128 masses): a mass's state 5 per mode, a
+/// term of any other sum 2, any other instruction 100 (a mode block's libm
+/// calls, about 25 ns).
+double estimated_work(const std::vector<Instr>& code) {
+    double w = 0;
+    for (const Instr& in : code) {
+        const double tails = in.tail[0] + in.tail[1] + in.tail[2] + in.tail[3] + in.tail[4];
+        w += in.op == ProgramOp::mass_state                                   ? 5.0 * in.count + 2.0 * tails
+             : in.op == ProgramOp::lincomb || in.op == ProgramOp::lincomb_ld ? 2.0 * (1.0 + in.count)
+                                                                              : 100.0;
+    }
+    return w;
+}
+
 /// The instructions scheduled by dependency level (an instruction
 /// comes after every instruction that writes what it reads, reads what it
 /// writes, or writes it too, before it in the program), each level's
@@ -997,20 +1012,7 @@ InterpretedSolver::InterpretedSolver(Program p)
     // switch function reads).
     const std::vector<Instr> search =
         needed_for(code, p.terms, p.eval.registers(), switch_outputs, outputs + p.eval_output_count());
-    // Estimated work, in multiply-adds of a batched mass state (about 0.2 ns
-    // each, measured at 128 masses): a mass's state 5 per mode, a term of a
-    // sum 2, any other instruction 100 (a mode block's libm calls, ~25 ns).
-    auto work = [](const std::vector<Instr>& c) {
-        double w = 0;
-        for (const Instr& in : c) {
-            const double tails = in.tail[0] + in.tail[1] + in.tail[2] + in.tail[3] + in.tail[4];
-            w += in.op == ProgramOp::mass_state ? 5.0 * in.count + 2.0 * tails
-                 : in.op == ProgramOp::lincomb || in.op == ProgramOp::lincomb_ld ? 2.0 * (1.0 + in.count)
-                                                                                 : 100.0;
-        }
-        return w;
-    };
-    const double share = work(search) / std::max(1.0, work(code));
+    const double share = estimated_work(search) / std::max(1.0, estimated_work(code));
     if (share < 0.8) {
         switches_body_ = schedule(search, p.terms, p.eval.registers());
         switch_share_ = share;
