@@ -1,7 +1,7 @@
 // hsnc program benchmark: the interpreter of a configuration's Program
-// (runtime/solvers/interpreted_solver.h, the generic path) against the kernel printed
+// (runtime/solvers/interpreted_solver.h, --kernels generic) against the kernel printed
 // from the same program (ahead of time, JIT) and the Eigen solver
-// (runtime/solvers/generic_solver.h, the tests' independent oracle), in one run:
+// (runtime/solvers/generic_solver.h, --kernels eigen, the tests' independent oracle), in one run:
 //   1. one SegmentSolver::eval, in nanoseconds, as bench/jit_bench.cpp section
 //      2 measures it (the same configurations, instants and setup), and one
 //      SegmentSolver::setup the same way;
@@ -184,13 +184,13 @@ int main(int argc, char** argv) {
                     setup ? "\n1b" : "1", setup ? "setup" : "eval", max_configs,
                     setup ? " the same state" : " taus spread over two mean segment lengths;", rounds, burst);
         std::printf("%-16s %5s %8s %8s %9s %11s %11s %10s\n", "model", "cfgs", "aot_ns", "jit_ns", "interp_ns",
-                    "generic_ns", "interp/gen", "interp/jit");
+                    "eigen_ns", "interp/eig", "interp/jit");
         for (const std::string& r : setup ? setup_rows : eval_rows) std::printf("%s", r.c_str());
     }
 
     std::printf("\n2. One long simulation, every solver built beforehand (median of %d runs after a warm-up)\n", reps);
-    std::printf("%-16s %7s %21s %9s %9s %10s %10s %11s %10s\n", "model", "t_end", "switches aot/jit/int/gen",
-                "aot_ms", "jit_ms", "interp_ms", "generic_ms", "interp/gen", "interp/jit");
+    std::printf("%-16s %7s %21s %9s %9s %10s %10s %11s %10s\n", "model", "t_end", "switches aot/jit/int/eig",
+                "aot_ms", "jit_ms", "interp_ms", "eigen_ms", "interp/eig", "interp/jit");
     for (const Case& c : cases) {
         std::unique_ptr<SolverProvider> aot;
         if (has_aot_kernels(c.model, &aot_registry()))
@@ -223,11 +223,11 @@ int main(int argc, char** argv) {
     }
 
     std::printf("\n3. The same simulation from nothing: each run with new providers, so every configuration entered is\n"
-                "   derived and lowered (interpreter) or analysed by Eigen (generic), median of %d runs in turn\n",
+                "   derived and lowered (interpreter) or analysed by the Eigen solver (eigen), median of %d runs in turn\n",
                 reps3);
     std::printf("   (before: the interpreter with the former derivation, Jacobi rotations in GiNaC numerics)\n");
     std::printf("%-16s %7s %9s %6s %10s %10s %11s %16s %14s %13s\n", "model", "t_end", "switches", "cfgs", "interp_ms",
-                "generic_ms", "interp/gen", "derive+lower/cfg", "before_ms", "before/gen");
+                "eigen_ms", "interp/eig", "derive+lower/cfg", "before_ms", "before/eig");
     for (const Case& c : cases) {
         std::vector<double> ti, tg, tb, per_cfg;
         RunSummary si, sg;
