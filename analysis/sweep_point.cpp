@@ -51,7 +51,7 @@ struct Accumulator {
 };
 
 // The exact metrics of the recorded window: every segment the engine starts
-// is set up again on a solver of its own (the same generic solver, so the
+// is set up again on a solver of its own (the same Eigen solver, so the
 // same trajectory) and integrated once its end is known (the next segment's
 // start, or the end of the run).
 class SegmentRecorder {

@@ -101,7 +101,7 @@ void check_options(const Model& model, const SimulateOptions& o) {
     }
     // Non-proportional damping (dampers): every kernel kind takes it (state-space
     // pseudo-modes, generator/derivation.h; the configurations the derivation
-    // refuses run on the generic solver in every kind), and the reference too
+    // refuses run on the Eigen solver in every kind), and the reference too
     // (the matrix exponential at N digits, reference/mp_segment.h).
     // Jenkins elements (a slider carried beside the state) and friction between
     // two bodies (a stuck pair, one body): hsnc (every kernel kind), rk45 and
@@ -202,7 +202,7 @@ std::unique_ptr<SolverProvider> make_tiered_provider(const Model& model, const S
     TierOptions tier;
     tier.compile_after = o.tier_evaluations;
     return std::make_unique<TieredSolverProvider>(
-        make_solver_provider(model, KernelMode::interp, &aot_registry(), program_source(model)), std::move(probe),
+        make_solver_provider(model, KernelMode::generic, &aot_registry(), program_source(model)), std::move(probe),
         std::move(compile), tier, o.warn);
 }
 

@@ -33,7 +33,7 @@ public:
     std::size_t events = 0;
 };
 
-/// The generic solver, remembering the configurations the engine asks for.
+/// The Eigen solver, remembering the configurations the engine asks for.
 class Recorder : public SolverProvider {
 public:
     explicit Recorder(const Model& m) : inner_(m) {}

@@ -190,11 +190,11 @@ int main(int argc, char** argv) {
     for (int n : {32, 64, 128}) {
         const Model m = parse_model(bench::jointed_chain(n), "jointed-" + std::to_string(n) + ".toml");
         const Configuration cfg = Configuration::all_open(m);
-        const InterpretedSolver s(lower(derive(m, cfg)));
+        InterpretedSolver s(lower(derive(m, cfg)));
         const std::size_t ns = s.switches().size();
         std::vector<double> x(m.state_size()), v(m.dof()), a(m.dof()), g(ns), dg(ns), b(ns), sc(ns);
         std::vector<signed char> sgn(m.dof(), 0);
-        const_cast<InterpretedSolver&>(s).setup(0.0, m.x0.data(), m.v0.data(), sgn.data());
+        s.setup(0.0, m.x0.data(), m.v0.data(), sgn.data());
         const SegmentEval o{x.data(), v.data(), a.data(), g.data(), dg.data(), b.data(), sc.data()};
         std::vector<double> te, ts;
         constexpr int kCalls = 2000;

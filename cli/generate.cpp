@@ -30,7 +30,7 @@ void add_generate(CLI::App& app, int& exit_code) {
                     "kernels' configure(); what the model computes from them follows them");
     sub->footer(
         "Every configuration is generated while there are at most 64 (2^(contacts + friction masses));\n"
-        "beyond that, those the model's default run ([simulate].t_end, generic solver) visits, plus the\n"
+        "beyond that, those the model's default run ([simulate].t_end, Eigen solver) visits, plus the\n"
         "initial configuration and its single-switch neighbours (at most 128). <model>.manifest lists the\n"
         "configurations generated. Compile the files with runtime/ on the include path (kernel_abi.h,\n"
         "aot_registry.h).");

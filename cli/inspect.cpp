@@ -272,7 +272,7 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
 /// takes it (runtime/solvers/state_space_solver.h): the reduced matrices in
 /// numbers, the eigenvalues of the state matrix, the switch functions; and
 /// whether the derivation (kernels, interpreter; --format cpp prints its
-/// kernel) takes it as pseudo-modes, or leaves it to the generic solver.
+/// kernel) takes it as pseudo-modes, or leaves it to the Eigen solver.
 void inspect_state_space(const Model& model, const Configuration& cfg, Format fmt, std::ostream& out) {
     const Printer p{fmt, out};
     // A (nearly) defective state matrix (critical damping) runs by the matrix
@@ -309,7 +309,7 @@ void inspect_state_space(const Model& model, const Configuration& cfg, Format fm
                 << " state-space pseudo-modes in double-double (inspect --format cpp prints the kernel)\n";
         } catch (const NotDerivable& e) {
             out << "derivation (kernels, interpreter): not taken (" << e.what()
-                << "); every kernel kind runs this configuration on the generic solver\n";
+                << "); every kernel kind runs this configuration on the Eigen solver\n";
         }
     }
     const Eigen::MatrixXd K = stiffness_matrix(model, cfg), C = damping_matrix(model, cfg);
@@ -529,7 +529,7 @@ void add_inspect(CLI::App& app, int& exit_code) {
             std::cerr << "hsnc inspect: --symbolic does not apply to --format cpp (the kernel holds numbers)\n";
         }
         if (o->format == "cpp") {
-            std::cout << emit_kernel(derive(model, cfg));  // NotDerivable (RunError, exit 1): the generic solver takes it
+            std::cout << emit_kernel(derive(model, cfg));  // NotDerivable (RunError, exit 1): the Eigen solver takes it
         } else if (!model.proportional_damping()) {
             std::ostringstream text;  // nothing printed unless the whole view is
             inspect_state_space(model, cfg, fmt, text);

@@ -86,7 +86,7 @@ struct HarmonicData {
 /// the static response, so its cancellation against the homogeneous part costs
 /// at most ~1.7 digits; inside it the sinc form is exact through Omega = omega
 /// but grows secularly, so its bounds hold for one forcing period only (a step
-/// limit), a cost worth paying only close to resonance. (The generic solver,
+/// limit), a cost worth paying only close to resonance. (The Eigen solver,
 /// the kernels' independent oracle, keeps its own criterion: generic_solver.cpp.)
 inline constexpr double kResonanceBand = 1e-2;
 
@@ -100,7 +100,7 @@ inline constexpr double kResonanceBand = 1e-2;
 /// each real mu < 0 one pseudo-mode u = c e^{mu tau} (regime critical with
 /// sigma = -mu, whose B is zero). The static offset is x_st = K^-1 f, a harmonic's
 /// particular part X = (K - Omega^2 M + i Omega C)^-1 F (xs = Re X, xc = Im X).
-/// Refused (NotDerivable, the generic solver takes the configuration):
+/// Refused (NotDerivable, the Eigen solver takes the configuration):
 /// rigid-body modes, nearly defective S (critical damping), an undamped
 /// pseudo-mode forced within kResonanceBand of its frequency.
 struct StateSpaceData {

@@ -22,7 +22,7 @@ namespace hsnc {
 namespace {
 
 /// Records every configuration the engine asks a solver for, and hands the
-/// request on to the generic solver.
+/// request on to the Eigen solver.
 class RecordingProvider : public SolverProvider {
 public:
     explicit RecordingProvider(const Model& model) : generic_(model) {}
@@ -62,7 +62,7 @@ std::vector<Configuration> configurations_to_generate(const Model& model, std::s
         if (note) note->clear();
         return all_configurations(model);
     }
-    // The configurations of the model's own default run (generic solver, to
+    // The configurations of the model's own default run (Eigen solver, to
     // [simulate].t_end), then the initial one and its single-flip neighbours.
     const Configuration initial = initial_configuration(model);
     RecordingProvider recorder(model);
@@ -137,7 +137,7 @@ KernelSet generate_kernel_set(const Model& model, const std::vector<std::string>
         Derivation d;
         try {
             d = derive(model, cfg);
-        } catch (const NotDerivable& e) {  // the generic solver takes it at run time, in every kind
+        } catch (const NotDerivable& e) {  // the Eigen solver takes it at run time, in every kind
             if (refused++ == 0) reason = e.what();
             continue;
         }
@@ -149,7 +149,7 @@ KernelSet generate_kernel_set(const Model& model, const std::vector<std::string>
     }
     if (refused > 0)
         set.note += (set.note.empty() ? "" : "; ") + std::to_string(refused) +
-                    " configurations the derivation does not take are solved by the generic solver at run time (first: " +
+                    " configurations the derivation does not take are solved by the Eigen solver at run time (first: " +
                     reason + ")";
     set.manifest = manifest_text(model, configurations, set.note);
     if (!kept.empty()) {  // a comment line after the header, so readers of the list skip it

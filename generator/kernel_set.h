@@ -37,7 +37,7 @@ Configuration initial_configuration(const Model& model);
 
 /// All configurations when there are at most kMaxGeneratedConfigurations;
 /// else every configuration the model's default run visits (the engine with
-/// the generic solver from t0 to [simulate].t_end), plus the initial one and
+/// the Eigen solver from t0 to [simulate].t_end), plus the initial one and
 /// its single-switch neighbours while fewer than kMaxManifestConfigurations.
 /// Sorted (Configuration::operator<). `note` says which.
 std::vector<Configuration> configurations_to_generate(const Model& model, std::string* note);

@@ -481,7 +481,7 @@ TEST(SwitchProgram, HasTheBitsOfEvalAndLeavesOutTheRest) {
     const Model m = beam_chain(24);
     int with_program = 0;
     for (const Configuration& cfg : {Configuration::all_open(m), Configuration::parse(m, "closed=contact1 stuck=m24")}) {
-        const InterpretedSolver s(lower(derive(m, cfg)));
+        InterpretedSolver s(lower(derive(m, cfg)));
         with_program += s.has_switch_program();
         const testing::Start st = testing::start_of(m, cfg, 7);
         const std::size_t n = m.dof(), ns = s.switches().size();
@@ -489,7 +489,7 @@ TEST(SwitchProgram, HasTheBitsOfEvalAndLeavesOutTheRest) {
         std::vector<double> x2 = x, v2 = v, a2 = a, g2 = g, dg2 = dg, b2 = b, sc2 = sc;
         const SegmentEval full{x.data(), v.data(), a.data(), g.data(), dg.data(), b.data(), sc.data()};
         const SegmentEval search{x2.data(), v2.data(), a2.data(), g2.data(), dg2.data(), b2.data(), sc2.data()};
-        const_cast<InterpretedSolver&>(s).setup(st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data());
+        s.setup(st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data());
         for (double tau : {0.0, 1e-9, 0.013, 0.5, 3.25, 40.0}) {
             s.eval_switches(tau, search);  // first, so that eval cannot leave it its registers
             s.eval(tau, full);

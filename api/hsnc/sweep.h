@@ -20,7 +20,7 @@
 //
 // One point: the model is read again with the parameter at its value (the
 // file's expressions follow it: k2 = "2*k1"; nothing is compiled: the
-// segments come from the generic solver), the motion runs whole forcing
+// segments come from the Eigen solver), the motion runs whole forcing
 // periods T = 2*pi/omega from the task's current state, starting at the
 // model's t0, until the stroboscopic state s_k (at t0 + k*T) repeats,
 // |s_k - s_(k-p)| <= 1e-9 |s_k| for some p <= 8 (settled, multiple p; the

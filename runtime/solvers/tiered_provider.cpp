@@ -133,7 +133,7 @@ void TieredSolverProvider::poll(bool block) {
     if (code == kCompiled) {
         ++compiled_;
         tiers_.at(child_cfg_)->stored = true;
-    } else if (code != kNotDerivable) {  // not derivable: on the generic solver in every tier
+    } else if (code != kNotDerivable) {  // not derivable: on the Eigen solver in every tier
         // The configuration stays on the base tier: the same results, at its speed.
         if (failed_++ == 0)
             warn("kernels = tiered: the kernel of configuration '" + child_cfg_.key() +

@@ -57,7 +57,7 @@ public:
     using ProbeFn = std::function<SegmentSolver*(const Configuration&)>;
     /// Compiles the kernel of a configuration into the persistent cache, in a
     /// child process; throws on failure (NotDerivable: the configuration runs
-    /// on the generic solver in every tier).
+    /// on the Eigen solver in every tier).
     using CompileFn = std::function<void(const Configuration&)>;
 
     /// Without `probe` or `compile` the run stays on the base tier. `warn`
