@@ -259,7 +259,7 @@ ex coordinate_force(const Derivation& d, const SegmentInputs& in, std::size_t r)
     return f;
 }
 
-Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method) {
+Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method, ExactMatrices exact_matrices) {
     GiNaC::Digits = kDerivationDigits;
     Derivation d;
     d.model = &model;
@@ -285,17 +285,22 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     // Full K(cfg), C = alpha M + beta K(cfg), constant forces, as exact rationals.
     const Eigen::MatrixXd K = stiffness_matrix(model, cfg);
     const Eigen::VectorXd f0 = constant_force(model, cfg);
-    d.K = GiNaC::matrix(n, n);
-    d.C = GiNaC::matrix(n, n);
+    const bool with_exact = exact_matrices == ExactMatrices::yes || !model.proportional_damping();
+    if (with_exact) {
+        d.K = GiNaC::matrix(n, n);
+        d.C = GiNaC::matrix(n, n);
+    }
     d.k_dd.assign(n, std::vector<DD>(n));
     d.c_dd.assign(n, std::vector<DD>(n));
     const numeric alpha = exact(model.alpha), beta = exact(model.beta);
     for (std::size_t i = 0; i < n; ++i)
         for (std::size_t j = 0; j < n; ++j) {
             if (i != j && K(i, j) == 0.0) continue;  // both stay the exact 0 they start as
-            const numeric kij = exact(K(i, j));
-            d.K(i, j) = kij;
-            d.C(i, j) = beta * kij + (i == j ? alpha * exact(model.masses[i].m) : kZero);
+            if (with_exact) {
+                const numeric kij = exact(K(i, j));
+                d.K(i, j) = kij;
+                d.C(i, j) = beta * kij + (i == j ? alpha * exact(model.masses[i].m) : kZero);
+            }
             d.k_dd[i][j] = DD(K(i, j));
             d.c_dd[i][j] = DD(model.beta) * DD(K(i, j)) + (i == j ? DD(model.alpha) * DD(model.masses[i].m) : DD(0.0));
         }
@@ -384,6 +389,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     const auto comps = free_components(model, cfg).floating_members();  // free_components.h
     std::vector<DD> lambda(nf);
     std::vector<std::vector<DD>> shape(nf, std::vector<DD>(nf));  // shape[j][r] = Phi_rj
+    std::vector<std::vector<std::size_t>> support(nf);             // r with shape[j][r] != 0, ascending
     for (std::size_t j = 0; j < nf; ++j) {
         if (j < comps.size()) {
             DD m_total;
@@ -398,12 +404,19 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
                 throw RunError("derivation::derive(): eigenvalue " + std::to_string(lambda[j].to_double()) +
                                " <= 0 in a mode not detected as rigid (configuration " + cfg.spec(model) + ")");
         }
-        // Deterministic sign: the largest component is positive.
+        // The mode's support: the free coordinates of its block, where its shape is
+        // nonzero (mp_eigen.h solves each block apart; elsewhere the shape is the
+        // exact 0). The loops below visit the support alone: a zero entry's terms
+        // are exact zeros, which change no sum, so the numbers are those of the
+        // dense loops, at a cost that grows with the blocks rather than with nf^2.
+        for (std::size_t r = 0; r < nf; ++r)
+            if (!shape[j][r].is_zero()) support[j].push_back(r);
+        // Deterministic sign: the largest component is positive (a zero never is).
         std::size_t big = 0;
-        for (std::size_t r = 1; r < nf; ++r)
-            if (abs(shape[j][r]) > abs(shape[j][big]) + DD(1e-6)) big = r;
+        for (std::size_t r : support[j])
+            if (r > 0 && abs(shape[j][r]) > abs(shape[j][big]) + DD(1e-6)) big = r;
         if (shape[j][big] < DD(0.0))
-            for (auto& e : shape[j]) e = -e;
+            for (std::size_t r : support[j]) shape[j][r] = -shape[j][r];
     }
 
     const DD critical_tol(1e-20), alpha_dd(model.alpha), beta_dd(model.beta);
@@ -413,7 +426,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         m.c = alpha_dd + beta_dd * lambda[j];
         m.v.resize(nf);
         m.w.resize(nf);
-        for (std::size_t r = 0; r < nf; ++r) {
+        for (std::size_t r : support[j]) {
             m.v[r] = shape[j][r] / sqm[r];
             m.w[r] = shape[j][r] * sqm[r];
         }
@@ -462,9 +475,10 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         hd.xs.assign(nf, DD(0.0));
         hd.xc.assign(nf, DD(0.0));
         const DD& W = hd.omega;
-        for (const Mode& m : d.modes) {
+        for (std::size_t j = 0; j < d.modes.size(); ++j) {
+            const Mode& m = d.modes[j];
             ModalHarmonic mh;
-            for (std::size_t r = 0; r < nf; ++r)
+            for (std::size_t r : support[j])
                 for (int i : group[r]) mh.P += m.v[r] * hd.amplitude[static_cast<std::size_t>(i)];
             mh.resonant = m.regime == Regime::undamped && abs(W - m.omega) <= DD(kResonanceBand) * m.omega;
             if (mh.resonant) {
@@ -474,7 +488,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
                 const DD det = m.lambda - W * W, den = det * det + m.c * m.c * W * W;
                 mh.a_s = det / den;
                 mh.a_c = -m.c * W / den;
-                for (std::size_t r = 0; r < nf; ++r) {
+                for (std::size_t r : support[j]) {
                     hd.xs[r] += m.v[r] * mh.P * mh.a_s;
                     hd.xc[r] += m.v[r] * mh.P * mh.a_c;
                 }

@@ -121,7 +121,10 @@ struct Derivation {
     /// T^T M T, T^T K T: a coordinate's mass and stiffness gather its riders'.
     std::vector<int> riders;
     std::vector<GiNaC::numeric> mass;  ///< per coordinate: its free mass plus its riders' (exact)
-    GiNaC::matrix K, C;           ///< full n x n K(cfg), C (exact rationals)
+    /// Full n x n K(cfg), C (exact rationals), for the symbolic forms
+    /// (symbolic_segment, segment_force) and the state-space solution; empty
+    /// (0 x 0) when derive() was asked for Exact::no.
+    GiNaC::matrix K, C;
     std::vector<std::vector<DD>> k_dd, c_dd;  ///< the same in DD, for the lowering
     std::vector<GiNaC::numeric> f_const;  ///< loads + preload, all masses (exact)
     std::vector<GiNaC::numeric> mu_k_n;   ///< mu_k N_i of free friction masses, else 0
@@ -150,10 +153,19 @@ struct Derivation {
 /// long-float operations, about 10 sweeps).
 enum class EigenMethod { refined, jacobi };
 
+/// Whether derive() also fills Derivation::K and C as exact rationals. The
+/// lowering reads only their double-double copies (k_dd, c_dd); building the
+/// exact matrices costs an n x n GiNaC matrix and rational arithmetic per
+/// entry, the largest share of deriving a configuration of a 128-mass chain
+/// that is not modal analysis. Dampers need them (the state-space solution):
+/// with dampers they are built whatever is asked.
+enum class ExactMatrices { yes, no };
+
 /// Derive configuration `cfg` of `model`. Throws RunError when the
 /// eigen-solver does not converge (refined: when neither it nor Jacobi
 /// converges), NotDerivable for what StateSpaceData refuses.
-Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method = EigenMethod::refined);
+Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method = EigenMethod::refined,
+                  ExactMatrices exact_matrices = ExactMatrices::yes);
 
 /// Inputs of one segment as GiNaC expressions: numbers or symbols.
 struct SegmentInputs {

@@ -1,6 +1,7 @@
 #include "lowering.h"
 
 #include <cmath>
+#include <initializer_list>
 #include <map>
 #include <string>
 #include <utility>
@@ -121,10 +122,22 @@ Program lower(const Derivation& d) {
     // V and W rounded once (each use below rounds the same double-double value), and
     // each mass's index among the free masses (-1: stuck).
     std::vector<std::vector<double>> vd(nm, std::vector<double>(nf)), wd(nm, std::vector<double>(nf));
+    // The sparsity of V and W: a mode lives on its block's coordinates (derivation.h),
+    // exact zeros elsewhere. mode_rows[j] lists the coordinates r where V_rj or W_jr
+    // is nonzero, row_modes[r] the modes j (both ascending), so that each sum below
+    // visits the terms it keeps (Lin leaves out exact zeros) and no others: the same
+    // terms in the same order as the dense loops, at the cost of the blocks.
+    std::vector<std::vector<std::size_t>> mode_rows(nm), row_modes(nf);
+    std::size_t nonzeros = 0;
     for (std::size_t j = 0; j < nm; ++j)
         for (std::size_t r = 0; r < nf; ++r) {
             vd[j][r] = dbl(d.modes[j].v[r]);
             wd[j][r] = dbl(d.modes[j].w[r]);
+            if (vd[j][r] != 0.0 || wd[j][r] != 0.0 || !d.modes[j].v[r].is_zero() || !d.modes[j].w[r].is_zero()) {
+                mode_rows[j].push_back(r);
+                row_modes[r].push_back(j);
+                ++nonzeros;
+            }
         }
     std::vector<int> free_of(n, -1), coord_of(n, -1);  // coord_of: a rider moves with its partner's coordinate
     for (std::size_t r = 0; r < nf; ++r) free_of[d.free_dofs[r]] = coord_of[d.free_dofs[r]] = static_cast<int>(r);
@@ -178,7 +191,7 @@ Program lower(const Derivation& d) {
     // switch function, a bound over the modes.
     p.setup.code.reserve(12 * nf + 20 * nm + 8 * nh + 16);
     p.eval.code.reserve(4 * n + 2 * nm + 6 * ns + 4 * nh + 16);
-    p.terms.reserve(12 * nm * nf + 6 * nf * nh + n * (nm + 6 + 6 * nh) + ns * (nm + 24) + 64);
+    p.terms.reserve(12 * nonzeros + 6 * nf * nh + n * (6 + 6 * nh) + nonzeros + ns * (nm + 24) + 64);
     Builder s(p, p.setup);
     s.reg("1.0", RegisterKind::one);
     s.reg("t0", RegisterKind::input);
@@ -247,7 +260,7 @@ Program lower(const Derivation& d) {
         }
         for (std::size_t j = 0; j < nm && !d.state_space; ++j) {
             Lin l;
-            for (std::size_t r = 0; r < nf; ++r) l.add(vd[j][r], f[r]);
+            for (std::size_t r : mode_rows[j]) l.add(vd[j][r], f[r]);
             pj[j] = s.temp("p_" + idx(j));
             with(s.lin(pj[j], l), j == 0 ? "Modal forces p = V^T f." : "");
         }
@@ -277,7 +290,7 @@ Program lower(const Derivation& d) {
         if (d.state_space) {
             for (std::size_t c = 0; c < nf; ++c) l.add(d.state.static_inverse[r][c], f[c]);
         } else {
-            for (std::size_t j = 0; j < nm; ++j)
+            for (std::size_t j : row_modes[r])
                 if (!d.modes[j].lambda.is_zero()) l.add(d.modes[j].v[r] / d.modes[j].lambda, pj[j]);
         }
         x_st[r] = s.temp("x_st_" + idx(r));
@@ -325,7 +338,7 @@ Program lower(const Derivation& d) {
                 for (std::size_t r = 0; r < nf; ++r) dq.add(m.dw_x[r], px[r]).add(m.dw_v[r], pv[r]);
                 return;
             }
-            for (std::size_t r = 0; r < nf; ++r) {
+            for (std::size_t r : mode_rows[j]) {
                 q.add(wd[j][r], px[r]);
                 dq.add(wd[j][r], pv[r]);
             }
@@ -357,7 +370,7 @@ Program lower(const Derivation& d) {
             Lin x, v;
             x.add(1.0, xh[r]);
             v.add(1.0, vh[r]);
-            for (std::size_t j = 0; j < nm; ++j) {
+            for (std::size_t j : row_modes[r]) {
                 x.add(-vd[j][r], q0u[j]);
                 v.add(-vd[j][r], dq0u[j]);
             }
@@ -381,7 +394,7 @@ Program lower(const Derivation& d) {
             const int i = d.free_dofs[r];
             Lin x, v;
             x.add(1.0, x_st[r]);
-            for (std::size_t j = 0; j < nm; ++j) {
+            for (std::size_t j : row_modes[r]) {
                 x.add(vd[j][r], q0[j]);
                 v.add(vd[j][r], dq0[j]);
             }
@@ -569,7 +582,7 @@ Program lower(const Derivation& d) {
         const std::size_t rr = static_cast<std::size_t>(r);
         Lin modal, tx, tv, ta, tmx, tmv;
         double hx = 0.0, hv = 0.0;  // magnitudes of the harmonic terms
-        for (std::size_t j = 0; j < nm; ++j) modal.add(vd[j][rr], mb[j]);
+        for (std::size_t j : row_modes[rr]) modal.add(vd[j][rr], mb[j]);
         for (std::size_t h = 0; h < nh; ++h) {
             const HarmonicData& hd = d.harmonics[h];
             const double W = dbl(hd.omega), xs = dbl(hd.xs[rr]), xc = dbl(hd.xc[rr]);
@@ -646,6 +659,21 @@ Program lower(const Derivation& d) {
         const int r = coord_of[mass];
         return r < 0 ? DD(0) : d.modes[j].v[r];
     };
+    // The nonzero entries of each row of K(cfg) and C(cfg), ascending: a force reads these alone.
+    std::vector<std::vector<std::size_t>> row_nz(n);
+    for (std::size_t b = 0; b < n; ++b)
+        for (std::size_t k = 0; k < n; ++k)
+            if (!entry(d.k_dd, static_cast<int>(b), static_cast<int>(k)).is_zero() ||
+                !entry(d.c_dd, static_cast<int>(b), static_cast<int>(k)).is_zero())
+                row_nz[b].push_back(k);
+    // fn(j) for each mode j that moves one of `bodies` (a mode twice when it moves two):
+    // the others have V = 0 on all of them.
+    auto each_mode_of = [&](std::initializer_list<int> bodies, auto&& fn) {
+        for (int b : bodies) {
+            if (b == kGround || coord_of[b] < 0) continue;
+            for (std::size_t j : row_modes[static_cast<std::size_t>(coord_of[b])]) fn(j);
+        }
+    };
     // The non-resonant particular part of body b's x at harmonic h: xs (sine) or xc (cosine).
     auto harmonic_x = [&](std::size_t h, int b, bool sine) -> DD {
         if (b == kGround || coord_of[b] < 0) return 0;
@@ -658,7 +686,7 @@ Program lower(const Derivation& d) {
     auto force_terms = [&](int b, Lin& A, Lin& dA, Lin& mag, double& const_mag, std::vector<DD>& al,
                            std::vector<DD>& be, std::vector<DD>& Gs, std::vector<DD>& Gc) {
         A.add(d.f_const[b], ONE);
-        for (std::size_t k = 0; k < n; ++k) {
+        for (std::size_t k : row_nz[static_cast<std::size_t>(b)]) {  // the other entries are exact zeros, left out
             const int kk = static_cast<int>(k);
             const double Kbk = dbl(entry(d.k_dd, b, kk)), Cbk = dbl(entry(d.c_dd, b, kk));
             A.add(-Kbk, X(kk));
@@ -686,12 +714,13 @@ Program lower(const Derivation& d) {
             const DD Kbk = entry(d.k_dd, b, k), Cbk = entry(d.c_dd, b, k);
             const bool kz = Kbk.is_zero(), cz = Cbk.is_zero();
             if (kz && cz) return;
-            for (std::size_t j = 0; j < nm; ++j) {
+            for (std::size_t j : row_modes[r]) {  // elsewhere v_r = 0: the exact 0 changes nothing
                 if (!kz) al[j] -= Kbk * d.modes[j].v[r];
                 if (!cz) be[j] -= Cbk * d.modes[j].v[r];
             }
         };
-        for (std::size_t r = 0; r < nf; ++r) moving(d.free_dofs[r], r);
+        for (std::size_t k : row_nz[static_cast<std::size_t>(b)])  // the free masses, in the order of their coordinates
+            if (free_of[k] >= 0) moving(static_cast<int>(k), static_cast<std::size_t>(free_of[k]));
         for (int q : d.riders) moving(q, static_cast<std::size_t>(coord_of[q]));
         for (std::size_t h = 0; h < nh; ++h) {
             const HarmonicData& hd = d.harmonics[h];
@@ -702,7 +731,8 @@ Program lower(const Derivation& d) {
                 Gs[h] += -Kbk * hd.xs[r] + Cbk * hd.omega * hd.xc[r];
                 Gc[h] += -Kbk * hd.xc[r] - Cbk * hd.omega * hd.xs[r];
             };
-            for (std::size_t r = 0; r < nf; ++r) harmonic(d.free_dofs[r], r);
+            for (std::size_t k : row_nz[static_cast<std::size_t>(b)])
+                if (free_of[k] >= 0) harmonic(static_cast<int>(k), static_cast<std::size_t>(free_of[k]));
             for (int q : d.riders) harmonic(q, static_cast<std::size_t>(coord_of[q]));
         }
     };
@@ -716,6 +746,7 @@ Program lower(const Derivation& d) {
         bound_alpha[j] = m.c + m.omega;
         bound_beta[j] = m.c * (m.c + m.omega) + m.lambda;
     }
+    std::vector<double> mu_s_n_of(n, std::nan(""));  // mu_s N of each mass, exactly rounded, once computed
     for (std::size_t f = 0; f < d.switches.size(); ++f) {
         const SwitchFunction& sf = d.switches[f];
         const std::string F = std::to_string(f);
@@ -747,7 +778,7 @@ Program lower(const Derivation& d) {
             }
             g.add(-ct.gap, ONE);
             sc.add(std::fabs(ct.gap), ONE);
-            for (std::size_t j = 0; j < nm; ++j) al[j] = V(ct.a, j) - V(ct.b, j);
+            each_mode_of({ct.a, ct.b}, [&](std::size_t j) { al[j] = V(ct.a, j) - V(ct.b, j); });
             for (std::size_t h = 0; h < nh; ++h) {
                 Gs[h] = harmonic_x(h, ct.a, true) - harmonic_x(h, ct.b, true);
                 Gc[h] = harmonic_x(h, ct.a, false) - harmonic_x(h, ct.b, false);
@@ -759,7 +790,7 @@ Program lower(const Derivation& d) {
             dg.add(1.0, Ar(i));
             sc.add(1.0, mv[i]);
             const int r = free_of[i];
-            for (std::size_t j = 0; j < nm; ++j) be[j] = d.modes[j].v[r];
+            for (std::size_t j : row_modes[static_cast<std::size_t>(r)]) be[j] = d.modes[j].v[r];
             for (std::size_t h = 0; h < nh; ++h) {
                 Gs[h] = -d.harmonics[h].omega * d.harmonics[h].xc[r];
                 Gc[h] = d.harmonics[h].omega * d.harmonics[h].xs[r];
@@ -771,7 +802,7 @@ Program lower(const Derivation& d) {
             g.add(1.0, Vr(i)).add(-1.0, Vr(p));
             dg.add(1.0, Ar(i)).add(-1.0, Ar(p));
             sc.add(1.0, mv[i]).add(1.0, mv[p]);
-            for (std::size_t j = 0; j < nm; ++j) be[j] = V(i, j) - V(p, j);
+            each_mode_of({i, p}, [&](std::size_t j) { be[j] = V(i, j) - V(p, j); });
             for (std::size_t h = 0; h < nh; ++h) {
                 const DD W = d.harmonics[h].omega;
                 Gs[h] = -W * (harmonic_x(h, i, false) - harmonic_x(h, p, false));
@@ -827,7 +858,9 @@ Program lower(const Derivation& d) {
             const int i = sf.element;
             const bool pos = sf.kind == SwitchKind::release_pos;
             const Mass& ms = model.masses[i];
-            const double mu_s_n = dbl(exact(ms.mu_s) * exact(ms.m) * exact(model.g));
+            if (std::isnan(mu_s_n_of[static_cast<std::size_t>(i)]))  // once per mass: release_pos and _neg share it
+                mu_s_n_of[static_cast<std::size_t>(i)] = dbl(exact(ms.mu_s) * exact(ms.m) * exact(model.g));
+            const double mu_s_n = mu_s_n_of[static_cast<std::size_t>(i)];
             const double sgn_f = pos ? 1.0 : -1.0;
             const std::string I = std::to_string(i);
             if (ms.partner == kGround) {
@@ -957,7 +990,7 @@ Program lower(const Derivation& d) {
 std::function<Program(const Configuration&)> program_source(const Model& model) {
     return [&model](const Configuration& cfg) {
         const auto lock = ginac_lock();  // the derivation is GiNaC (ginac_lock.h)
-        return lower(derive(model, cfg));
+        return lower(derive(model, cfg, EigenMethod::refined, ExactMatrices::no));
     };
 }
 
