@@ -16,7 +16,9 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "configuration.h"
 #include "model.h"
@@ -110,12 +112,35 @@ void for_each_slipping(const Model& model, const Configuration& cfg, Fn&& fn) {
         }
 }
 
+/// The elements touching each mass (springs, contacts, dampers, Jenkins
+/// elements), in the order for_each_link visits them. force_on_mass given one
+/// visits a mass's own elements, O(its degree) where the model's whole list is
+/// O(n): the engine's friction decisions ask for the force on every stuck
+/// mass, several times per event. The same terms in the same order, so the
+/// same bits. Built once per model (its element lists only; parameters may
+/// change).
+class ElementIndex {
+public:
+    enum Kind : std::uint32_t { spring, contact, damper, jenkins };
+    explicit ElementIndex(const Model& model);
+    /// Mass i's elements, each (kind << 28 | index), springs first, then
+    /// contacts, dampers and Jenkins elements, each kind in model order.
+    const std::uint32_t* begin(int i) const { return codes_.data() + start_[static_cast<std::size_t>(i)]; }
+    const std::uint32_t* end(int i) const { return codes_.data() + start_[static_cast<std::size_t>(i) + 1]; }
+    static Kind kind(std::uint32_t code) { return static_cast<Kind>(code >> 28); }
+    static std::size_t index(std::uint32_t code) { return code & ((1u << 28) - 1); }
+
+private:
+    std::vector<std::size_t> start_;
+    std::vector<std::uint32_t> codes_;
+};
+
 /// A_i: force on mass i from everything but its own friction (springs, closed
 /// contacts, Rayleigh damping, dampers, Jenkins elements, forcing, loads) at
 /// time t and state (x, v), in cfg; x holds the sliders after the masses.
-/// Sparse: loops over the elements touching i, no allocation.
+/// No allocation; with `elements`, loops over the elements touching i only.
 double force_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* x,
-                     const double* v);
+                     const double* v, const ElementIndex* elements = nullptr);
 
 /// dA_i/dt at (t, v, a): the time derivative of force_on_mass.
 double force_rate_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* v,
@@ -143,7 +168,8 @@ inline double against_partner_magnitude(double mi, double mp, double mag_i, doub
 /// w = v[i] - v[partner] at 0 (interface.md: it sticks while this is below
 /// mu_s N): against the ground A_i; against a partner p, moving as one body
 /// of mass m_i + m_p, D_i = (m_p A_i - m_i A_p)/(m_i + m_p).
-double driving_force(const Model& model, const Configuration& cfg, int i, double t, const double* x, const double* v);
+double driving_force(const Model& model, const Configuration& cfg, int i, double t, const double* x, const double* v,
+                     const ElementIndex* elements = nullptr);
 
 /// dD_i/dt at (t, v, a).
 double driving_force_rate(const Model& model, const Configuration& cfg, int i, double t, const double* v,

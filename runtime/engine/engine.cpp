@@ -110,6 +110,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     // The state: positions of the masses, then of the Jenkins sliders (at rest,
     // unstretched at t0: s = x[a] - x[b]), and the masses' velocities.
     std::vector<double> x = model_.x0, v = model_.v0;
+    const ElementIndex elements(model_);  // the friction decisions' forces visit each mass's own elements
     if (model_.slider0.size() == model_.jenkins.size())
         x.insert(x.end(), model_.slider0.begin(), model_.slider0.end());
     else
@@ -433,7 +434,8 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
 
         transitions.clear();
         if (records) cfg_before = cfg, sgn_before = sgn;
-        if (!apply_switches(model_, t, x.data(), v.data(), buf.a.data(), cfg, sgn, found.switched, transitions, why))
+        if (!apply_switches(model_, t, x.data(), v.data(), buf.a.data(), cfg, sgn, found.switched, transitions, why,
+                            &elements))
             return finish(RunStatus::chattering, why);
         if (records) {
             SwitchRecord rec;

@@ -19,8 +19,9 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 class DoublePhysics {
 public:
     using Scalar = double;
-    DoublePhysics(const Model& model, double t, const double* x, double* v, const double* a)
-        : model_(model), t_(t), x_(x), v_(v), a_(a), n_(static_cast<int>(model.dof())) {}
+    DoublePhysics(const Model& model, double t, const double* x, double* v, const double* a,
+                  const ElementIndex* elements = nullptr)
+        : model_(model), elements_(elements), t_(t), x_(x), v_(v), a_(a), n_(static_cast<int>(model.dof())) {}
 
     int sign(double y) const { return y > 0 ? 1 : y < 0 ? -1 : 0; }
     bool negligible(double value, double magnitude) const { return std::fabs(value) <= 16 * kEps * magnitude; }
@@ -32,7 +33,7 @@ public:
     int partner(int i) const { return model_.masses[static_cast<std::size_t>(i)].partner; }
     int velocity_sign(int i) const { return sign(v_[i] - body(v_, partner(i))); }
     void stop(int i) { v_[i] = body(v_, partner(i)); }
-    double force(const Configuration& cfg, int i) const { return driving_force(model_, cfg, i, t_, x_, v_); }
+    double force(const Configuration& cfg, int i) const { return driving_force(model_, cfg, i, t_, x_, v_, elements_); }
     double static_limit(int i) const { return model_.masses[i].mu_s * model_.normal_force(i); }
     double held_rate(const Configuration& cfg, int i) const {
         std::vector<double> held(model_.dof(), 0.0);
@@ -87,6 +88,7 @@ public:
 private:
     static double body(const double* y, int b) { return b == kGround ? 0.0 : y[b]; }
     const Model& model_;
+    const ElementIndex* elements_;
     double t_;
     const double* x_;
     double* v_;
@@ -100,8 +102,8 @@ private:
 
 bool apply_switches(const Model& model, double t, const double* x, double* v, const double* a, Configuration& cfg,
                     std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
-                    std::vector<Transition>& out, std::string& why) {
-    DoublePhysics p(model, t, x, v, a);
+                    std::vector<Transition>& out, std::string& why, const ElementIndex* elements) {
+    DoublePhysics p(model, t, x, v, a, elements);
     if (rules::apply_switches(p, cfg, sgn, switched, out)) return true;
     why = "friction decisions at t = " + std::to_string(t) + " do not settle";
     return false;
