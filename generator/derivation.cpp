@@ -259,7 +259,8 @@ ex coordinate_force(const Derivation& d, const SegmentInputs& in, std::size_t r)
     return f;
 }
 
-Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method, ExactMatrices exact_matrices) {
+Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method, ExactMatrices exact_matrices,
+                  DdEigenCache* eigen_cache) {
     GiNaC::Digits = kDerivationDigits;
     Derivation d;
     d.model = &model;
@@ -362,7 +363,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     bool solved = false;
     if (method == EigenMethod::refined) {
         try {
-            const std::vector<DdEigenpair> pairs = dd_symmetric_eigen(kt);
+            const std::vector<DdEigenpair> pairs = dd_symmetric_eigen(kt, eigen_cache);
             for (std::size_t j = 0; j < nf; ++j) {
                 eig_value[j] = pairs[j].value;
                 eig_vector[j] = pairs[j].vector;

@@ -28,6 +28,7 @@
 #include "configuration.h"
 #include "double_double.h"
 #include "model.h"
+#include "mp_eigen.h"  // DdEigenCache
 #include "switch_function.h"
 
 namespace hsnc {
@@ -164,8 +165,10 @@ enum class ExactMatrices { yes, no };
 /// Derive configuration `cfg` of `model`. Throws RunError when the
 /// eigen-solver does not converge (refined: when neither it nor Jacobi
 /// converges), NotDerivable for what StateSpaceData refuses.
+/// `eigen_cache` (may be null) keeps the blocks the refined eigen-solver has
+/// solved for the next configurations of the same run (mp_eigen.h).
 Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method = EigenMethod::refined,
-                  ExactMatrices exact_matrices = ExactMatrices::yes);
+                  ExactMatrices exact_matrices = ExactMatrices::yes, DdEigenCache* eigen_cache = nullptr);
 
 /// Inputs of one segment as GiNaC expressions: numbers or symbols.
 struct SegmentInputs {

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <initializer_list>
 #include <map>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -27,15 +28,37 @@ std::string body_name(const Model& m, int b) { return b == kGround ? "ground" : 
 
 /// Terms of a linear combination in the order they are summed; exact zeros
 /// are left out (in the printed kernel and the interpreter alike).
-struct Lin {
-    Lin() { terms.reserve(48); }  // one allocation for most rows (a mode's row has n + 1 terms)
-    std::vector<ProgramTerm> terms;
+/// The first kInline terms live in the object itself: most rows are short (a
+/// switch function's g has two or three terms), and a lowering builds
+/// thousands of them, so only the long ones (a row over a block's modes)
+/// allocate.
+class Lin {
+public:
     Lin& add(double c, std::uint32_t reg) {
-        if (c != 0.0) terms.push_back({c, reg});
+        if (c == 0.0) return *this;
+        if (n_ < kInline) {
+            inline_[n_] = {c, reg};
+        } else {
+            if (n_ == kInline) {
+                heap_.reserve(4 * kInline);
+                heap_.assign(inline_, inline_ + kInline);
+            }
+            heap_.push_back({c, reg});
+        }
+        ++n_;
         return *this;
     }
     Lin& add(const numeric& c, std::uint32_t reg) { return add(dbl(c), reg); }
     Lin& add(const DD& c, std::uint32_t reg) { return add(dbl(c), reg); }
+    const ProgramTerm* begin() const { return n_ <= kInline ? inline_ : heap_.data(); }
+    const ProgramTerm* end() const { return begin() + n_; }
+    std::size_t size() const { return n_; }
+
+private:
+    static constexpr std::size_t kInline = 12;
+    ProgramTerm inline_[kInline];
+    std::vector<ProgramTerm> heap_;  // every term once there are more than kInline
+    std::size_t n_ = 0;
 };
 
 /// Appends registers and instructions to one body of a program.
@@ -62,8 +85,8 @@ public:
         in.dst = dst;
         in.a = base;
         in.first = static_cast<std::uint32_t>(p_.terms.size());
-        in.count = static_cast<std::uint32_t>(l.terms.size());
-        p_.terms.insert(p_.terms.end(), l.terms.begin(), l.terms.end());
+        in.count = static_cast<std::uint32_t>(l.size());
+        p_.terms.insert(p_.terms.end(), l.begin(), l.end());
         return emit(std::move(in));
     }
     ProgramInstr& lin_ld(std::uint32_t dst, const Lin& l) {
@@ -603,12 +626,12 @@ Program lower(const Derivation& d) {
         in.d = mx[i];
         in.a = C("x_st_" + idx(rr));
         in.first = static_cast<std::uint32_t>(p.terms.size());
-        in.count = static_cast<std::uint32_t>(modal.terms.size());
-        p.terms.insert(p.terms.end(), modal.terms.begin(), modal.terms.end());
+        in.count = static_cast<std::uint32_t>(modal.size());
+        p.terms.insert(p.terms.end(), modal.begin(), modal.end());
         const Lin* tails[5] = {&tx, &tv, &ta, &tmx, &tmv};
         for (int k = 0; k < 5; ++k) {
-            in.tail[k] = static_cast<std::uint32_t>(tails[k]->terms.size());
-            p.terms.insert(p.terms.end(), tails[k]->terms.begin(), tails[k]->terms.end());
+            in.tail[k] = static_cast<std::uint32_t>(tails[k]->size());
+            p.terms.insert(p.terms.end(), tails[k]->begin(), tails[k]->end());
         }
         with(e.emit(in), comment, model.masses[i].name);
     }
@@ -988,9 +1011,13 @@ Program lower(const Derivation& d) {
 }
 
 std::function<Program(const Configuration&)> program_source(const Model& model) {
-    return [&model](const Configuration& cfg) {
+    // The blocks of the modal analysis recur from one configuration to the next:
+    // solved once per run (the cache is used under the GiNaC lock, by one
+    // thread at a time).
+    auto eigen = std::make_shared<DdEigenCache>();
+    return [&model, eigen](const Configuration& cfg) {
         const auto lock = ginac_lock();  // the derivation is GiNaC (ginac_lock.h)
-        return lower(derive(model, cfg, EigenMethod::refined, ExactMatrices::no));
+        return lower(derive(model, cfg, EigenMethod::refined, ExactMatrices::no, eigen.get()));
     };
 }
 

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 #include <string>
 
@@ -300,9 +301,11 @@ std::vector<std::vector<int>> blocks_of(std::size_t n, IsZero is_zero) {
 /// The eigenpairs of `a` in the arithmetic `ar`: entry(r, s, hi, lo) gives the
 /// working-precision value of a nonzero entry and its double-double split,
 /// exact(r, s) the entry as it is (a block of size 1 keeps its diagonal entry).
-template <class A, class Pair, class Entry, class Exact, class IsZero>
+/// `memo(idx, solve)` returns the block's (values, vectors), calling solve()
+/// for them or taking them from where it kept them.
+template <class A, class Pair, class Entry, class Exact, class IsZero, class Memo>
 std::vector<Pair> symmetric_eigen(const A& ar, std::size_t n, Entry entry, Exact exact, IsZero is_zero,
-                                  typename Pair::Scalar exact_zero, typename Pair::Scalar exact_one) {
+                                  typename Pair::Scalar exact_zero, typename Pair::Scalar exact_one, Memo memo) {
     using S = typename A::S;
     std::vector<Pair> pairs;
     pairs.reserve(n);
@@ -316,28 +319,30 @@ std::vector<Pair> symmetric_eigen(const A& ar, std::size_t n, Entry entry, Exact
             pairs.push_back(std::move(p));
             continue;
         }
-        SparseRows<S> rows;
-        rows.col.resize(b);
-        rows.val.resize(b);
-        Eigen::MatrixXd ad = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(b));
-        Eigen::MatrixXd ad_lo = ad;  // A = ad + ad_lo to about 32 digits
-        for (std::size_t r = 0; r < b; ++r)
-            for (std::size_t s = 0; s < b; ++s) {
-                if (is_zero(idx[r], idx[s])) continue;  // exact zero (or a zero float: nothing to add)
-                double hi = 0, lo = 0;
-                rows.col[r].push_back(static_cast<int>(s));
-                rows.val[r].push_back(entry(idx[r], idx[s], hi, lo));
-                ad(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(s)) = hi;
-                ad_lo(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(s)) = lo;
-            }
-        for (std::size_t r = 0; r < b; ++r)
-            if (rows.col[r].empty()) {  // a zero row: keep one explicit zero term for the products
-                rows.col[r].push_back(static_cast<int>(r));
-                rows.val[r].push_back(ar.of(0.0));
-            }
-        std::vector<S> values;
-        std::vector<std::vector<S>> vectors;
-        solve_block(ar, rows, ad, ad_lo, values, vectors);
+        const auto& [values, vectors] = memo(idx, [&] {
+            SparseRows<S> rows;
+            rows.col.resize(b);
+            rows.val.resize(b);
+            Eigen::MatrixXd ad = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(b));
+            Eigen::MatrixXd ad_lo = ad;  // A = ad + ad_lo to about 32 digits
+            for (std::size_t r = 0; r < b; ++r)
+                for (std::size_t s = 0; s < b; ++s) {
+                    if (is_zero(idx[r], idx[s])) continue;  // exact zero (or a zero float: nothing to add)
+                    double hi = 0, lo = 0;
+                    rows.col[r].push_back(static_cast<int>(s));
+                    rows.val[r].push_back(entry(idx[r], idx[s], hi, lo));
+                    ad(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(s)) = hi;
+                    ad_lo(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(s)) = lo;
+                }
+            for (std::size_t r = 0; r < b; ++r)
+                if (rows.col[r].empty()) {  // a zero row: keep one explicit zero term for the products
+                    rows.col[r].push_back(static_cast<int>(r));
+                    rows.val[r].push_back(ar.of(0.0));
+                }
+            std::pair<std::vector<S>, std::vector<std::vector<S>>> solved;
+            solve_block(ar, rows, ad, ad_lo, solved.first, solved.second);
+            return solved;
+        });
         for (std::size_t i = 0; i < b; ++i) {
             Pair p;
             p.value = values[i];
@@ -362,14 +367,15 @@ std::vector<MpEigenpair> mp_symmetric_eigen(const std::vector<std::vector<cl_R>>
     };
     auto exact = [&](int r, int s) { return a[r][s]; };
     auto is_zero = [&](std::size_t r, std::size_t s) { return cln::zerop(a[r][s]); };
-    return symmetric_eigen<LongFloat, MpEigenpair>(ar, a.size(), entry, exact, is_zero, cl_R(0), cl_R(1));
+    return symmetric_eigen<LongFloat, MpEigenpair>(ar, a.size(), entry, exact, is_zero, cl_R(0), cl_R(1),
+                                                   [](const std::vector<int>&, auto&& solve) { return solve(); });
 }
 
 void dd_jacobi_eigen(std::vector<std::vector<DD>>& a, std::vector<std::vector<DD>>& vectors) {
     small_jacobi(DoubleDouble{}, a, vectors);
 }
 
-std::vector<DdEigenpair> dd_symmetric_eigen(const std::vector<std::vector<DD>>& a) {
+std::vector<DdEigenpair> dd_symmetric_eigen(const std::vector<std::vector<DD>>& a, DdEigenCache* cache) {
     auto entry = [&](int r, int s, double& hi, double& lo) {
         hi = a[r][s].hi();
         lo = a[r][s].lo();
@@ -377,7 +383,35 @@ std::vector<DdEigenpair> dd_symmetric_eigen(const std::vector<std::vector<DD>>& 
     };
     auto exact = [&](int r, int s) { return a[r][s]; };
     auto is_zero = [&](std::size_t r, std::size_t s) { return a[r][s].is_zero(); };
-    return symmetric_eigen<DoubleDouble, DdEigenpair>(DoubleDouble{}, a.size(), entry, exact, is_zero, DD(0.0), DD(1.0));
+    using Result = std::pair<std::vector<DD>, std::vector<std::vector<DD>>>;
+    Result scratch;  // the block just solved, when it is not kept
+    auto memo = [&](const std::vector<int>& idx, auto&& solve) -> const Result& {
+        if (!cache) return scratch = solve();
+        // The block's entries, bit for bit (its zeros too: they are its structure).
+        std::string key(idx.size() * idx.size() * 2 * sizeof(double), '\0');
+        char* at = key.data();
+        for (int r : idx)
+            for (int c : idx) {
+                const double hl[2] = {a[r][c].hi(), a[r][c].lo()};
+                std::memcpy(at, hl, sizeof hl);
+                at += sizeof hl;
+            }
+        if (const auto it = cache->blocks_.find(key); it != cache->blocks_.end()) {
+            ++cache->hits_;
+            return it->second;
+        }
+        Result solved = solve();
+        const std::size_t bytes = key.size() + sizeof(DD) * idx.size() * (idx.size() + 1);
+        if (cache->bytes_ + bytes > cache->max_bytes_) {  // full: start again (a run's blocks recur soon)
+            cache->blocks_.clear();
+            cache->bytes_ = 0;
+        }
+        if (bytes > cache->max_bytes_) return scratch = std::move(solved);
+        cache->bytes_ += bytes;
+        return cache->blocks_.emplace(std::move(key), std::move(solved)).first->second;
+    };
+    return symmetric_eigen<DoubleDouble, DdEigenpair>(DoubleDouble{}, a.size(), entry, exact, is_zero, DD(0.0), DD(1.0),
+                                                      memo);
 }
 
 }  // namespace hsnc

@@ -31,6 +31,10 @@
 #include <cln/lfloat.h>
 #include <cln/real.h>
 
+#include <cstddef>
+#include <string>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "double_double.h"
@@ -68,7 +72,26 @@ struct DdEigenpair {
     Scalar value;
     std::vector<DD> vector;
 };
-std::vector<DdEigenpair> dd_symmetric_eigen(const std::vector<std::vector<DD>>& a);
+class DdEigenCache;
+/// With a cache, each block solved is kept by its entries (bit for bit), and
+/// a block met again is not solved again: the same numbers, as the solution
+/// of a block depends on its entries alone. The configurations a run enters
+/// share most of their blocks (one mass sticking splits one block in two).
+std::vector<DdEigenpair> dd_symmetric_eigen(const std::vector<std::vector<DD>>& a, DdEigenCache* cache = nullptr);
+
+/// Blocks dd_symmetric_eigen has solved, within max_bytes (when full, it
+/// starts again empty). Not thread-safe: one user at a time.
+class DdEigenCache {
+public:
+    explicit DdEigenCache(std::size_t max_bytes = std::size_t{32} << 20) : max_bytes_(max_bytes) {}
+    /// Blocks taken from the cache instead of solved.
+    std::size_t hits() const { return hits_; }
+
+private:
+    friend std::vector<DdEigenpair> dd_symmetric_eigen(const std::vector<std::vector<DD>>& a, DdEigenCache* cache);
+    std::unordered_map<std::string, std::pair<std::vector<DD>, std::vector<std::vector<DD>>>> blocks_;
+    std::size_t bytes_ = 0, max_bytes_, hits_ = 0;
+};
 
 /// Cyclic Jacobi rotations in DD throughout, on the whole matrix (slow,
 /// unconditional: the refinement's fallback and reference): on return a's

@@ -238,6 +238,47 @@ TEST(MpEigen, BlocksStayExactlyUncoupled) {
     }
 }
 
+// A block solved once and met again, alone or beside others, in another place
+// of another matrix: taken from the cache, and every pair the bits of a solve
+// without it (the cache the interpreter's derivations share in one run).
+TEST(MpEigen, ACachedBlockGivesTheBitsOfASolve) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(0.5, 2.0);
+    auto block = [&](std::vector<std::vector<DD>>& a, int at, int size) {
+        for (int i = at; i < at + size; ++i) a[i][i] = DD(4.0 + u(rng)) + DD(1e-20);
+        for (int i = at; i + 1 < at + size; ++i) a[i][i + 1] = a[i + 1][i] = DD(-u(rng));
+    };
+    auto same = [](const std::vector<DdEigenpair>& p, const std::vector<DdEigenpair>& q) {
+        ASSERT_EQ(p.size(), q.size());
+        for (std::size_t j = 0; j < p.size(); ++j) {
+            EXPECT_EQ(p[j].value.hi(), q[j].value.hi()) << j;
+            EXPECT_EQ(p[j].value.lo(), q[j].value.lo()) << j;
+            for (std::size_t r = 0; r < p[j].vector.size(); ++r) {
+                EXPECT_EQ(p[j].vector[r].hi(), q[j].vector[r].hi()) << j << ' ' << r;
+                EXPECT_EQ(p[j].vector[r].lo(), q[j].vector[r].lo()) << j << ' ' << r;
+            }
+        }
+    };
+    std::vector<std::vector<DD>> a(9, std::vector<DD>(9));
+    block(a, 0, 4);  // blocks {0..3}, {4} and {5..8}
+    a[4][4] = DD(3.0);
+    block(a, 5, 4);
+    DdEigenCache cache;
+    same(dd_symmetric_eigen(a, &cache), dd_symmetric_eigen(a));
+    EXPECT_EQ(cache.hits(), 0u);
+    // The first block again, now at the end; the second and a new one before it.
+    std::vector<std::vector<DD>> b(10, std::vector<DD>(10));
+    for (int i = 0; i < 4; ++i)
+        for (int k = 0; k < 4; ++k) b[6 + i][6 + k] = a[i][k], b[1 + i][1 + k] = a[5 + i][5 + k];
+    b[0][0] = DD(2.5);
+    b[5][5] = DD(7.0);
+    b[5][4] = b[4][5] = DD(-0.25);  // {1..5}: the second block grown by one mass
+    same(dd_symmetric_eigen(b, &cache), dd_symmetric_eigen(b));
+    EXPECT_EQ(cache.hits(), 1u);  // {6..9}; {0} is a block of one, never solved
+    same(dd_symmetric_eigen(b, &cache), dd_symmetric_eigen(b));
+    EXPECT_EQ(cache.hits(), 3u);  // {1..5} and {6..9}
+}
+
 // ---- the refined derivation against the Jacobi one ----
 
 double gap(const numeric& a, const numeric& b, double scale) {
