@@ -152,16 +152,23 @@ Program lower(const Derivation& d) {
     // terms in the same order as the dense loops, at the cost of the blocks.
     std::vector<std::vector<std::size_t>> mode_rows(nm), row_modes(nf);
     std::size_t nonzeros = 0;
-    for (std::size_t j = 0; j < nm; ++j)
+    for (std::size_t j = 0; j < nm; ++j) {
         for (std::size_t r = 0; r < nf; ++r) {
             vd[j][r] = dbl(d.modes[j].v[r]);
             wd[j][r] = dbl(d.modes[j].w[r]);
-            if (vd[j][r] != 0.0 || wd[j][r] != 0.0 || !d.modes[j].v[r].is_zero() || !d.modes[j].w[r].is_zero()) {
+            if (vd[j][r] != 0.0 || wd[j][r] != 0.0 || !d.modes[j].v[r].is_zero() || !d.modes[j].w[r].is_zero())
                 mode_rows[j].push_back(r);
-                row_modes[r].push_back(j);
-                ++nonzeros;
-            }
         }
+        nonzeros += mode_rows[j].size();
+    }
+    for (std::size_t j = 0; j < nm; ++j)  // a block's modes share their rows: each row_modes[r] as long as them
+        for (std::size_t r : mode_rows[j]) {
+            if (row_modes[r].empty()) row_modes[r].reserve(mode_rows[j].size());
+            row_modes[r].push_back(j);
+        }
+    // The exact constant forces rounded once each (GiNaC numbers: a conversion is not free).
+    std::vector<double> f_const(n), mu_k_n(n);
+    for (std::size_t i = 0; i < n; ++i) f_const[i] = dbl(d.f_const[i]), mu_k_n[i] = dbl(d.mu_k_n[i]);
     std::vector<int> free_of(n, -1), coord_of(n, -1);  // coord_of: a rider moves with its partner's coordinate
     for (std::size_t r = 0; r < nf; ++r) free_of[d.free_dofs[r]] = coord_of[d.free_dofs[r]] = static_cast<int>(r);
     auto partner_of = [&](int q) { return model.masses[static_cast<std::size_t>(q)].partner; };
@@ -264,14 +271,14 @@ Program lower(const Derivation& d) {
             for (int q : d.riders)
                 if (coord_of[q] == static_cast<int>(r)) members.push_back(q);
             for (int i : members) {
-                l.add(d.f_const[i], ONE);
+                l.add(f_const[i], ONE);
                 for (int st : d.stuck_dofs) l.add(-dbl(entry(d.k_dd, i, st)), x0(st));
                 for (int q : d.riders) l.add(-dbl(entry(d.k_dd, i, q)), offset[q]);
                 for_each_slider_preload(model, d.cfg, i,
                                         [&](double k, std::size_t j) { l.add(k, x0(static_cast<int>(n + j))); });
-                l.add(-dbl(d.mu_k_n[i]), sgn(i));
+                l.add(-mu_k_n[i], sgn(i));
                 for (std::size_t q = 0; q < n; ++q)  // a sliding pair: the friction's reaction on the partner
-                    if (partner_of(static_cast<int>(q)) == i) l.add(dbl(d.mu_k_n[q]), sgn(static_cast<int>(q)));
+                    if (partner_of(static_cast<int>(q)) == i) l.add(mu_k_n[q], sgn(static_cast<int>(q)));
             }
             const int i = d.free_dofs[r];
             f[r] = s.temp("f_" + idx(r));
@@ -708,7 +715,7 @@ Program lower(const Derivation& d) {
     // beta (on q') per mode, Gs sin + Gc cos per harmonic (the bound's inputs).
     auto force_terms = [&](int b, Lin& A, Lin& dA, Lin& mag, double& const_mag, std::vector<DD>& al,
                            std::vector<DD>& be, std::vector<DD>& Gs, std::vector<DD>& Gc) {
-        A.add(d.f_const[b], ONE);
+        A.add(f_const[b], ONE);
         for (std::size_t k : row_nz[static_cast<std::size_t>(b)]) {  // the other entries are exact zeros, left out
             const int kk = static_cast<int>(k);
             const double Kbk = dbl(entry(d.k_dd, b, kk)), Cbk = dbl(entry(d.c_dd, b, kk));
@@ -890,7 +897,7 @@ Program lower(const Derivation& d) {
                 comment += std::string("g_") + F + ": " + (pos ? "A" : "-A") + " - mu_s N of stuck " + ms.name +
                            ", A = -K x - C v + f + sum_h F_h sin (force but friction)";
                 Lin A, dA;
-                double const_mag = std::fabs(dbl(d.f_const[i])) + mu_s_n;
+                double const_mag = std::fabs(f_const[i]) + mu_s_n;
                 force_terms(i, A, dA, sc, const_mag, al, be, Gs, Gc);
                 sc.add(const_mag, ONE);
                 // release_pos comes first and computes A_i; release_neg reuses it.
@@ -920,7 +927,7 @@ Program lower(const Derivation& d) {
                 for (int which = 0; which < 2; ++which) {
                     const int b = which == 0 ? i : p;
                     Lin A, dA, mag;
-                    double const_mag = std::fabs(dbl(d.f_const[b]));
+                    double const_mag = std::fabs(f_const[b]);
                     al_b[which].assign(nm, 0), be_b[which].assign(nm, 0);
                     Gs_b[which].assign(nh, 0), Gc_b[which].assign(nh, 0);
                     force_terms(b, A, dA, mag, const_mag, al_b[which], be_b[which], Gs_b[which], Gc_b[which]);

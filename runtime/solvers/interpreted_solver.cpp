@@ -877,6 +877,7 @@ std::vector<Instr> needed_for(const std::vector<Instr>& code, const std::vector<
             for (std::uint32_t r : reads) needed[r] = 1;
     }
     std::vector<Instr> kept;
+    kept.reserve(static_cast<std::size_t>(std::count(keep.begin(), keep.end(), 1)));
     for (std::size_t i = 0; i < code.size(); ++i)
         if (keep[i]) kept.push_back(code[i]);
     return kept;
