@@ -57,6 +57,37 @@ TEST(Assembly, ClosedContactAddsStiffnessAndPreload) {
     EXPECT_DOUBLE_EQ(f(1), 1.0 - 100.0 * 0.2);  // load - k*d on b
 }
 
+// The friction decisions' force on a mass from its own elements
+// (ElementIndex) is the force from the model's whole list, bit for bit: every
+// kind of element, every state of each (contacts open and closed, Jenkins
+// elements stuck and slipping), grounded and between masses.
+TEST(Assembly, ForceFromAMassOwnElementsIsTheForceFromAll) {
+    Model m = two_mass();
+    m.masses.push_back({"m3", 0.5, true, 0.3, 0.4});
+    m.springs.push_back({1, 2, 7.0});
+    m.contacts.push_back({"c2", 2, kGround, -0.1, 300.0});
+    m.dampers = {{0, 2, 0.3}, {2, kGround, 0.05}};
+    m.jenkins = {{"j1", 0, 2, 20.0, 0.5}, {"j2", kGround, 1, 15.0, 0.2}};
+    m.load = {0.1, 1.0, -0.4};
+    m.alpha = 0.02;
+    m.beta = 0.003;
+    m.forcing.push_back({3.0, 0.2, {1.0, 0.0, -2.0}});
+    const ElementIndex elements(m);
+    const double x[] = {0.013, -0.27, 0.191, 0.031, -0.007}, v[] = {0.5, -1.25, 0.75};
+    for (int closed = 0; closed < 4; ++closed)
+        for (int slip0 = -1; slip0 <= 1; ++slip0)
+            for (int slip1 = -1; slip1 <= 1; ++slip1) {
+                Configuration c = Configuration::all_open(m);
+                c.closed[0] = closed & 1, c.closed[1] = closed >> 1;
+                c.slip[0] = static_cast<signed char>(slip0), c.slip[1] = static_cast<signed char>(slip1);
+                for (int i = 0; i < 3; ++i) {
+                    const double all = force_on_mass(m, c, i, 0.7, x, v);
+                    EXPECT_EQ(force_on_mass(m, c, i, 0.7, x, v, &elements), all) << c.spec(m) << " m" << i + 1;
+                    EXPECT_NE(all, 0.0);
+                }
+            }
+}
+
 TEST(Segment, SwitchFunctionOrder) {
     const Model m = two_mass();
     const auto sf = switch_functions(m, Configuration::parse(m, "stuck=m2"));
