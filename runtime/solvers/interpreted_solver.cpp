@@ -103,11 +103,19 @@ using namespace interpreter;
 
 // ---- running ----
 
+// The row loops below run W rows side by side (a sum per row, each in its own
+// order): with AVX2 four rows are one vector operation. They are built for
+// both (target_clones: the loader picks the clone the processor runs), which
+// gives the same bits, as a vector lane adds and multiplies as a scalar does
+// and -ffp-contract=off leaves no fused multiply-add to either. A 32-mass
+// friction chain over 100 s ran 0.91x as long as without.
+#define HSNC_ROWS_CLONES __attribute__((target_clones("avx2", "default")))
+
 // W rows of a `lin` block from `row` on: each row's sum left to right over its
 // M terms (M = 0: s.count, at least 1), as a printed kernel sums it, its base
 // added last.
 template <int W, bool Shared, bool Base, int M>
-inline void lin_rows(const Step& s, std::uint32_t row, double* r) {
+HSNC_ROWS_CLONES void lin_rows(const Step& s, std::uint32_t row, double* r) {
     const std::uint32_t R = s.rows, m = M > 0 ? static_cast<std::uint32_t>(M) : s.count;
     const double* C = s.c() + row;
     double acc[W];
@@ -193,7 +201,7 @@ inline void tail_sum(double (&S)[W], bool started, std::uint32_t n, const double
 // each left to right; a sum without modal terms starts from its first tail
 // term (0.0 without any), as a printed one does.
 template <int W>
-inline void mass_rows(const Step& s, std::uint32_t row, double* r) {
+HSNC_ROWS_CLONES void mass_rows(const Step& s, std::uint32_t row, double* r) {
     const std::uint32_t R = s.rows, m = s.count;
     double sx[W], sv[W], sa[W], smx[W], smv[W];
     for (int w = 0; w < W; ++w) {
