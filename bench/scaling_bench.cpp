@@ -70,6 +70,23 @@ Timed run(const Model& m, SimulateOptions o, int reps) {
     return out;
 }
 
+/// This build's CVODE as the benchmark runs it: Adams, rtol 1e-12, atol 1e-14.
+SimulateOptions cvode_options(double t_end) {
+    SimulateOptions c;
+    c.t_end = t_end;
+    c.method = Method::cvode;
+    c.integrator.rtol = 1e-12;
+    c.integrator.atol = 1e-14;
+    return c;
+}
+
+/// The number of configurations a run's solver line names ("... for 84 configurations ...").
+std::string configurations(const SimulateSummary& s) {
+    const std::string& d = s.solver_detail;
+    const std::size_t at = d.find("for ") + 4;
+    return d.substr(at, d.find(" config") - at);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -124,18 +141,10 @@ int main(int argc, char** argv) {
                 o.cache_dir.clear();
             }
         }
-        SimulateOptions c;
-        c.t_end = t_end;
-        c.method = Method::cvode;
-        c.integrator.rtol = 1e-12;
-        c.integrator.atol = 1e-14;
-        const Timed cv = run(m, c, n >= 64 ? 1 : std::min(reps, 3));
+        const Timed cv = run(m, cvode_options(t_end), n >= 64 ? 1 : std::min(reps, 3));
         const double sw = static_cast<double>(g.summary.events), ev = static_cast<double>(g.summary.evaluations);
         std::printf("%5d %8zu %9s %11.2f %9.2f %8.3f %11.2f %10.2f %10.2f %11.2f %9.2f %10.1f %12.1f\n", n, g.summary.events,
-                    g.summary.solver_detail.substr(g.summary.solver_detail.find("for ") + 4,
-                                                   g.summary.solver_detail.find(" config") -
-                                                       g.summary.solver_detail.find("for ") - 4)
-                        .c_str(),
+                    configurations(g.summary).c_str(),
                     g.ms, 1e3 * g.ms / std::max(sw, 1.0), 1e3 * g.ms / std::max(ev, 1.0), in.ms, cold, warm, cv.ms,
                     1e3 * cv.ms / std::max(static_cast<double>(cv.summary.events), 1.0), cv.ms / g.ms, cv.ms / in.ms);
         if (table)
@@ -214,12 +223,7 @@ int main(int argc, char** argv) {
         const Timed eig = run(m, e, 3);
         e.kernels = KernelChoice::generic;
         const Timed gen = run(m, e, 3);
-        SimulateOptions c;
-        c.t_end = t_joint;
-        c.method = Method::cvode;
-        c.integrator.rtol = 1e-12;
-        c.integrator.atol = 1e-14;
-        const Timed cv = run(m, c, 1);
+        const Timed cv = run(m, cvode_options(t_joint), 1);
         std::printf("%5d %9.0f %9.0f %8.2f %8zu %10.1f %11.1f %10.1f %12.1f %13.1f%s\n", n, bench::median(te),
                     bench::median(ts), bench::median(ts) / bench::median(te), gen.summary.events, eig.ms, gen.ms,
                     cv.ms, cv.ms / eig.ms, cv.ms / gen.ms, s.has_switch_program() ? "" : " (no program of its own)");
@@ -241,16 +245,9 @@ int main(int argc, char** argv) {
         o.t_end = t_long;
         o.kernels = KernelChoice::generic;
         const Timed gen = run(m, o, quick ? 1 : 3);
-        SimulateOptions c;
-        c.t_end = t_long;
-        c.method = Method::cvode;
-        c.integrator.rtol = 1e-12;
-        c.integrator.atol = 1e-14;
-        const Timed cv = run(m, c, 1);
-        const std::string& sd = gen.summary.solver_detail;
-        const std::size_t at = sd.find("for ") + 4;
+        const Timed cv = run(m, cvode_options(t_long), 1);
         std::printf("%5d %8zu %9s %11.1f %10.2f %10.1f %12.1f %7.0fx\n", n, gen.summary.events,
-                    sd.substr(at, sd.find(" config") - at).c_str(), gen.ms,
+                    configurations(gen.summary).c_str(), gen.ms,
                     1e3 * gen.ms / std::max(static_cast<double>(gen.summary.events), 1.0), cv.ms, cv.ms / gen.ms, target);
         std::fflush(stdout);
     }
