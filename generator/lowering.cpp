@@ -64,17 +64,23 @@ private:
 /// Appends registers and instructions to one body of a program.
 class Builder {
 public:
-    Builder(Program& p, ProgramBody& b) : p_(p), b_(b) {
+    Builder(Program& p, ProgramBody& b, bool named) : p_(p), b_(b), named_(named) {
         b_.names.reserve(2 * b_.code.capacity() + 64);  // registers: inputs, outputs and a temporary per instruction
         b_.kinds.reserve(b_.names.capacity());
     }
 
     std::uint32_t reg(const std::string& name, RegisterKind kind) {
-        b_.names.push_back(name);
+        b_.names.push_back(named_ ? name : std::string());
         b_.kinds.push_back(kind);
         return static_cast<std::uint32_t>(b_.names.size() - 1);
     }
+    /// A register named prefix + number + suffix, the name formatted only for a named program.
+    std::uint32_t reg(const char* prefix, std::size_t number, RegisterKind kind, const char* suffix = "") {
+        if (!named_) return reg(std::string(), kind);
+        return reg(prefix + std::to_string(number) + suffix, kind);
+    }
     std::uint32_t temp(const std::string& name) { return reg(name, RegisterKind::temp); }
+    std::uint32_t temp(const char* prefix, std::size_t number) { return reg(prefix, number, RegisterKind::temp); }
 
     ProgramInstr& emit(ProgramInstr in) {
         b_.code.push_back(std::move(in));
@@ -104,6 +110,7 @@ public:
 private:
     Program& p_;
     ProgramBody& b_;
+    bool named_;
 };
 
 std::uint32_t constant(Program& p, double v, const std::string& name = "") {
@@ -124,7 +131,9 @@ void for_each_slider_preload(const Model& model, const Configuration& cfg, int i
     }
 }
 
-ProgramInstr& with(ProgramInstr& in, const std::string& comment, const std::string& note = "") {
+/// Sets an instruction's comment and note, in a named program (ProgramNames).
+ProgramInstr& with(bool named, ProgramInstr& in, const std::string& comment, const std::string& note = "") {
+    if (!named) return in;
     in.comment = comment;
     in.note = note;
     return in;
@@ -132,7 +141,8 @@ ProgramInstr& with(ProgramInstr& in, const std::string& comment, const std::stri
 
 }  // namespace
 
-Program lower(const Derivation& d) {
+Program lower(const Derivation& d, ProgramNames names) {
+    const bool named = names == ProgramNames::yes;
     const Model& model = *d.model;
     const std::size_t n = model.dof(), nf = d.n_free(), nm = d.modes.size(), nh = d.harmonics.size();
     const std::size_t nj = model.jenkins.size();
@@ -222,45 +232,50 @@ Program lower(const Derivation& d) {
     p.setup.code.reserve(12 * nf + 20 * nm + 8 * nh + 16);
     p.eval.code.reserve(4 * n + 2 * nm + 6 * ns + 4 * nh + 16);
     p.terms.reserve(12 * nonzeros + 6 * nf * nh + n * (6 + 6 * nh) + nonzeros + ns * (nm + 24) + 64);
-    Builder s(p, p.setup);
+    Builder s(p, p.setup, named);
     s.reg("1.0", RegisterKind::one);
     s.reg("t0", RegisterKind::input);
     s.reg("t0_lo", RegisterKind::input);
-    for (std::size_t i = 0; i < n + nj; ++i) s.reg("x0[" + std::to_string(i) + "]", RegisterKind::input);
-    for (std::size_t i = 0; i < n; ++i) s.reg("v0[" + std::to_string(i) + "]", RegisterKind::input);
-    for (std::size_t i = 0; i < n; ++i) s.reg("sgn[" + std::to_string(i) + "]", RegisterKind::input);
+    for (std::size_t i = 0; i < n + nj; ++i) s.reg("x0[", i, RegisterKind::input, "]");
+    for (std::size_t i = 0; i < n; ++i) s.reg("v0[", i, RegisterKind::input, "]");
+    for (std::size_t i = 0; i < n; ++i) s.reg("sgn[", i, RegisterKind::input, "]");
     const std::uint32_t ONE = 0;
     auto x0 = [&](int i) { return Program::kSetupX0 + static_cast<std::uint32_t>(i); };
     auto v0 = [&](int i) { return p.setup_v0() + static_cast<std::uint32_t>(i); };
     auto sgn = [&](int i) { return p.setup_sgn() + static_cast<std::uint32_t>(i); };
     // A coefficient slot: coef[k] = src at the end of setup, read by eval.
     std::vector<std::uint32_t> slot_src;
-    auto slot = [&](const std::string& name, std::uint32_t src, const std::string& comment = "",
-                     const std::string& note = "") {
-        const std::uint32_t k = static_cast<std::uint32_t>(p.coef_names.size());
-        p.coef_names.push_back(name);
-        const std::uint32_t out = s.reg("coef[" + std::to_string(k) + "]", RegisterKind::output);
-        p.setup_coef.push_back(out);
-        with(s.unary(ProgramOp::copy, out, src), comment, note);
+    // Its name (what coef[k] holds, for the printed layout) is prefix + number.
+    auto slot_name = [&](const char* prefix, std::size_t number) {
+        p.coef_names.push_back(named ? prefix + std::to_string(number) : std::string());
+        const auto k = static_cast<std::uint32_t>(p.coef_names.size() - 1);
+        p.setup_coef.push_back(s.reg("coef[", k, RegisterKind::output, "]"));
         return k;
     };
-    auto slot_lin = [&](const std::string& name, const Lin& l) {
-        const std::uint32_t k = static_cast<std::uint32_t>(p.coef_names.size());
-        p.coef_names.push_back(name);
-        const std::uint32_t out = s.reg("coef[" + std::to_string(k) + "]", RegisterKind::output);
-        p.setup_coef.push_back(out);
-        s.lin(out, l);
+    auto slot = [&](const char* prefix, std::size_t number, std::uint32_t src, const std::string& comment = "",
+                    const std::string& note = "") {
+        const std::uint32_t k = slot_name(prefix, number);
+        with(named, s.unary(ProgramOp::copy, p.setup_coef.back(), src), comment, note);
         return k;
     };
-    std::map<std::string, std::uint32_t> coef_of;  // slot name -> k
+    auto slot_lin = [&](const char* prefix, std::size_t number, const Lin& l) {
+        const std::uint32_t k = slot_name(prefix, number);
+        s.lin(p.setup_coef.back(), l);
+        return k;
+    };
+    // The slots eval reads by what they hold.
+    std::map<int, std::uint32_t> e_slot;                    // a rider's offset
+    std::vector<std::uint32_t> theta_slot(nh), c_theta_slot(nh), x_st_slot(nf), p_slot(nm);
+    std::vector<std::uint32_t> x_stuck_slot(n), s_stuck_slot(nj);
 
     // A rider's offset from its partner, fixed for the segment: e_q = x0_q - x0_partner.
     std::map<int, std::uint32_t> offset;
     for (int q : d.riders) {
         offset[q] = s.temp("e_" + model.masses[static_cast<std::size_t>(q)].name);
-        with(s.lin(offset[q], Lin().add(1.0, x0(q)).add(-1.0, x0(partner_of(q)))),
+        with(named, s.lin(offset[q], Lin().add(1.0, x0(q)).add(-1.0, x0(partner_of(q)))),
              q == d.riders.front() ? "Riders (stuck to their friction partner) keep their offset e = x0 - x0_partner." : "");
-        coef_of["e_" + std::to_string(q)] = slot("e_" + std::to_string(q), offset[q], "", model.masses[static_cast<std::size_t>(q)].name + " rides its partner");
+        e_slot[q] = slot("e_", static_cast<std::size_t>(q), offset[q], "",
+                         named ? model.masses[static_cast<std::size_t>(q)].name + " rides its partner" : "");
     }
     std::vector<std::uint32_t> f(nf), pj(nm);
     if (nf > 0) {
@@ -281,8 +296,8 @@ Program lower(const Derivation& d) {
                     if (partner_of(static_cast<int>(q)) == i) l.add(mu_k_n[q], sgn(static_cast<int>(q)));
             }
             const int i = d.free_dofs[r];
-            f[r] = s.temp("f_" + idx(r));
-            with(s.lin(f[r], l),
+            f[r] = s.temp("f_", r + 1);
+            with(named, s.lin(f[r], l),
                  r == 0 ? "Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9)"
                           + std::string(nj > 0 ? ",\nwith k s of every stuck Jenkins element (slider s = x0[n + j])." : ".")
                         : "",
@@ -291,8 +306,8 @@ Program lower(const Derivation& d) {
         for (std::size_t j = 0; j < nm && !d.state_space; ++j) {
             Lin l;
             for (std::size_t r : mode_rows[j]) l.add(vd[j][r], f[r]);
-            pj[j] = s.temp("p_" + idx(j));
-            with(s.lin(pj[j], l), j == 0 ? "Modal forces p = V^T f." : "");
+            pj[j] = s.temp("p_", j + 1);
+            with(named, s.lin(pj[j], l), j == 0 ? "Modal forces p = V^T f." : "");
         }
     }
     // Forcing phases at the segment start.
@@ -305,14 +320,14 @@ Program lower(const Derivation& d) {
         in.a = Program::kSetupT0;
         in.b = Program::kSetupT0Lo;
         in.first = harm_k[h];
-        if (h == 0) in.comment = "Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.";
+        if (h == 0 && named) in.comment = "Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.";
         s.emit(in);
         s_theta[h] = s.temp("s_theta_" + H);
         s.unary(ProgramOp::sin, s_theta[h], theta);
         c_theta[h] = s.temp("c_theta_" + H);
         s.unary(ProgramOp::cos, c_theta[h], theta);
-        coef_of["theta_" + H] = slot("theta_" + H, theta);
-        coef_of["c_theta_" + H] = slot("c_theta_" + H, c_theta[h]);
+        theta_slot[h] = slot("theta_", h + 1, theta);
+        c_theta_slot[h] = slot("c_theta_", h + 1, c_theta[h]);
     }
     std::vector<std::uint32_t> x_st(nf);
     for (std::size_t r = 0; r < nf; ++r) {
@@ -323,13 +338,13 @@ Program lower(const Derivation& d) {
             for (std::size_t j : row_modes[r])
                 if (!d.modes[j].lambda.is_zero()) l.add(d.modes[j].v[r] / d.modes[j].lambda, pj[j]);
         }
-        x_st[r] = s.temp("x_st_" + idx(r));
-        with(s.lin(x_st[r], l),
+        x_st[r] = s.temp("x_st_", r + 1);
+        with(named, s.lin(x_st[r], l),
              r != 0            ? ""
              : d.state_space ? "Static offset x_st = K_FF^-1 f (dampers: state-space pseudo-modes, derivation.h)."
                              : "Static offset x_st = V (p / lambda) over the elastic modes.",
              model.masses[d.free_dofs[r]].name);
-        coef_of["x_st_" + idx(r)] = slot("x_st_" + idx(r), x_st[r]);
+        x_st_slot[r] = slot("x_st_", r + 1, x_st[r]);
     }
     std::vector<std::uint32_t> qh0(nm), dqh0(nm);
     if (nf > 0) {
@@ -350,12 +365,12 @@ Program lower(const Derivation& d) {
                 x.add(-xs, s_theta[h]).add(-xc, c_theta[h]);
                 v.add(-(W * xs), c_theta[h]).add(W * xc, s_theta[h]);
             }
-            xh[r] = s.temp("xh_" + idx(r));
-            with(s.lin_ld(xh[r], x),
+            xh[r] = s.temp("xh_", r + 1);
+            with(named, s.lin_ld(xh[r], x),
                  r == 0 ? "Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with\n"
                           "x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums)."
                         : "");
-            vh[r] = s.temp("vh_" + idx(r));
+            vh[r] = s.temp("vh_", r + 1);
             s.lin_ld(vh[r], v);
         }
         // Mode j's q and q' from one pair of physical vectors: q = W x, q' = W v, or for
@@ -376,7 +391,7 @@ Program lower(const Derivation& d) {
         // q = W x, q' = W v of one pair of physical vectors, each added to its base
         // (q_base, dq_base; empty: none), into temporaries named prefix_j and dprefix_j.
         auto to_modes = [&](const std::vector<std::uint32_t>& px, const std::vector<std::uint32_t>& pv,
-                            const std::string& prefix, std::vector<std::uint32_t>& q_out,
+                            const char* prefix, const char* dprefix, std::vector<std::uint32_t>& q_out,
                             std::vector<std::uint32_t>& dq_out, const std::vector<std::uint32_t>& q_base,
                             const std::vector<std::uint32_t>& dq_base, const std::string& note) {
             q_out.assign(nm, 0);
@@ -384,14 +399,14 @@ Program lower(const Derivation& d) {
             for (std::size_t j = 0; j < nm; ++j) {
                 Lin q, dq;
                 project(j, px, pv, q, dq);
-                q_out[j] = s.temp(prefix + "_" + idx(j));
-                with(s.lin(q_out[j], q, q_base.empty() ? kNoRegister : q_base[j]), j == 0 ? note : "");
-                dq_out[j] = s.temp("d" + prefix + "_" + idx(j));
+                q_out[j] = s.temp(prefix, j + 1);
+                with(named, s.lin(q_out[j], q, q_base.empty() ? kNoRegister : q_base[j]), j == 0 ? note : "");
+                dq_out[j] = s.temp(dprefix, j + 1);
                 s.lin(dq_out[j], dq, dq_base.empty() ? kNoRegister : dq_base[j]);
             }
         };
         std::vector<std::uint32_t> q0u, dq0u;
-        to_modes(xh, vh, "q0u", q0u, dq0u, {}, {}, "Its modal coordinates q = W xh, q' = W vh.");
+        to_modes(xh, vh, "q0u_", "dq0u_", q0u, dq0u, {}, {}, "Its modal coordinates q = W xh, q' = W vh.");
         // V and W are inverse only to rounding, so xh -> W xh -> V W xh is the fixed
         // matrix I + E (E ~ eps): applied at every segment start it is a bias (a steady
         // energy gain), not noise. One refinement against the residual removes it.
@@ -404,16 +419,16 @@ Program lower(const Derivation& d) {
                 x.add(-vd[j][r], q0u[j]);
                 v.add(-vd[j][r], dq0u[j]);
             }
-            rx[r] = s.temp("rx_" + idx(r));
-            with(s.lin_ld(rx[r], x),
+            rx[r] = s.temp("rx_", r + 1);
+            with(named, s.lin_ld(rx[r], x),
                  r == 0 ? "One refinement of q against the residuals r = xh - V q (long double): removes the bias of "
                           "V W = I + E."
                         : "");
-            rv[r] = s.temp("rv_" + idx(r));
+            rv[r] = s.temp("rv_", r + 1);
             s.lin_ld(rv[r], v);
         }
         std::vector<std::uint32_t> q0, dq0;
-        to_modes(rx, rv, "q0", q0, dq0, q0u, dq0u, "");
+        to_modes(rx, rv, "q0_", "dq0_", q0, dq0, q0u, dq0u, "");
         // A second refinement, against what eval returns at tau = 0: x(0) and v(0) with
         // eval's constants in eval's order, the residuals x0 - x(0), v0 - v(0) (long
         // double) mapped back with W. x(0) is a sum of terms larger than x, so without it
@@ -434,23 +449,23 @@ Program lower(const Derivation& d) {
                 x.add(xs, s_theta[h]).add(xc, c_theta[h]);
                 v.add(W * xs, c_theta[h]).add(-W * xc, s_theta[h]);
             }
-            const std::uint32_t xe = s.temp("xe_" + idx(r)), ve = s.temp("ve_" + idx(r));
-            with(s.lin(xe, x),
+            const std::uint32_t xe = s.temp("xe_", r + 1), ve = s.temp("ve_", r + 1);
+            with(named, s.lin(xe, x),
                  r == 0 ? "Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), "
                           "v0 - v(0)."
                         : "");
             s.lin(ve, v);
-            ex[r] = s.temp("ex_" + idx(r));
+            ex[r] = s.temp("ex_", r + 1);
             s.lin_ld(ex[r], Lin().add(1.0, x0(i)).add(-1.0, xe));
-            ev[r] = s.temp("ev_" + idx(r));
+            ev[r] = s.temp("ev_", r + 1);
             s.lin_ld(ev[r], Lin().add(1.0, v0(i)).add(-1.0, ve));
         }
         for (std::size_t j = 0; j < nm; ++j) {
             Lin q, dq;
             project(j, ex, ev, q, dq);
-            qh0[j] = s.temp("qh0_" + idx(j));
+            qh0[j] = s.temp("qh0_", j + 1);
             s.lin(qh0[j], q, q0[j]);
-            dqh0[j] = s.temp("dqh0_" + idx(j));
+            dqh0[j] = s.temp("dqh0_", j + 1);
             s.lin(dqh0[j], dq, dq0[j]);
         }
     }
@@ -460,50 +475,52 @@ Program lower(const Derivation& d) {
         const Mode& m = d.modes[j];
         const std::string J = idx(j);
         const double sigma = dbl(m.sigma), kappa = dbl(m.kappa);
-        const std::string comment = "Mode " + J + " (" + regime_name(m.regime) +
-                                    "): A = q_h(0), B = q_h'(0) + sigma A (the particular\n"
-                                    "parts start at rest or are in x_p) and the derivative pairs, consistent to rounding.";
+        const std::string comment = !named ? std::string()
+                                           : "Mode " + J + " (" + regime_name(m.regime) +
+                                                 "): A = q_h(0), B = q_h'(0) + sigma A (the particular\n"
+                                                 "parts start at rest or are in x_p) and the derivative pairs, consistent "
+                                                 "to rounding.";
         bool commented = false;
         if (m.regime == Regime::rigid || m.regime == Regime::rigid_damped) {
-            coef_of["p_" + J] = slot("p_" + J, pj[j], comment,
-                                     m.regime == Regime::rigid ? "q_p = p tau^2 / 2" : "q_p = p tau^2 phi2(-c tau)");
+            p_slot[j] = slot("p_", j + 1, pj[j], comment,
+                             m.regime == Regime::rigid ? "q_p = p tau^2 / 2" : "q_p = p tau^2 phi2(-c tau)");
             commented = true;
         }
-        const std::uint32_t A = s.temp("A_" + J), B = s.temp("B_" + J);
-        with(s.unary(ProgramOp::copy, A, qh0[j]), commented ? "" : comment);
+        const std::uint32_t A = s.temp("A_", j + 1), B = s.temp("B_", j + 1);
+        with(named, s.unary(ProgramOp::copy, A, qh0[j]), commented ? "" : comment);
         s.lin(B, Lin().add(1.0, dqh0[j]).add(sigma, A));
-        mode_coef[j] = slot("A_" + J, A);
-        slot("B_" + J, B);
-        const std::uint32_t A1 = s.temp("A1_" + J), B1 = s.temp("B1_" + J);
+        mode_coef[j] = slot("A_", j + 1, A);
+        slot("B_", j + 1, B);
+        const std::uint32_t A1 = s.temp("A1_", j + 1), B1 = s.temp("B1_", j + 1);
         s.lin(A1, Lin().add(1.0, B).add(-sigma, A));
         s.lin(B1, Lin().add(-kappa, A).add(-sigma, B));
-        slot("A1_" + J, A1);
-        slot("B1_" + J, B1);
-        slot_lin("A2_" + J, Lin().add(1.0, B1).add(-sigma, A1));
-        slot_lin("B2_" + J, Lin().add(-kappa, A1).add(-sigma, B1));
+        slot("A1_", j + 1, A1);
+        slot("B1_", j + 1, B1);
+        slot_lin("A2_", j + 1, Lin().add(1.0, B1).add(-sigma, A1));
+        slot_lin("B2_", j + 1, Lin().add(-kappa, A1).add(-sigma, B1));
     }
     for (int st : d.stuck_dofs)
-        coef_of["x_stuck_" + std::to_string(st)] =
-            slot("x_stuck_" + std::to_string(st), x0(st), "", model.masses[st].name + " is stuck");
+        x_stuck_slot[static_cast<std::size_t>(st)] =
+            slot("x_stuck_", static_cast<std::size_t>(st), x0(st), "", named ? model.masses[st].name + " is stuck" : "");
     for (std::size_t j = 0; j < nj; ++j)
         if (d.cfg.slip[j] == 0)
-            coef_of["s_stuck_" + std::to_string(j)] = slot("s_stuck_" + std::to_string(j), x0(static_cast<int>(n + j)),
-                                                           "", "the slider of " + model.jenkins[j].name + " (stuck)");
+            s_stuck_slot[j] = slot("s_stuck_", j, x0(static_cast<int>(n + j)), "",
+                                   named ? "the slider of " + model.jenkins[j].name + " (stuck)" : "");
     p.n_coef = static_cast<int>(p.coef_names.size());
 
     // ================= eval =================
-    Builder e(p, p.eval);
+    Builder e(p, p.eval, named);
     e.reg("1.0", RegisterKind::one);
     const std::uint32_t TAU = e.reg("tau", RegisterKind::input);
-    for (int k = 0; k < p.n_coef; ++k) e.reg("coef[" + std::to_string(k) + "]", RegisterKind::input);
-    auto C = [&](const std::string& name) { return Program::kEvalCoef + coef_of.at(name); };
+    for (int k = 0; k < p.n_coef; ++k) e.reg("coef[", static_cast<std::size_t>(k), RegisterKind::input, "]");
+    auto C = [&](std::uint32_t slot) { return Program::kEvalCoef + slot; };
     const char* arrays[] = {"x", "v", "a", "g", "dg", "bound", "scale"};
     std::uint32_t base[7];
     for (int k = 0; k < 7; ++k) {
         base[k] = static_cast<std::uint32_t>(p.eval.registers());
         const std::size_t len = k == 0 ? n + nj : k < 3 ? n : d.switches.size();
-        for (std::size_t i = 0; i < len; ++i)
-            e.reg(std::string(arrays[k]) + "[" + std::to_string(i) + "]", RegisterKind::output);
+        const std::string prefix = std::string(arrays[k]) + "[";
+        for (std::size_t i = 0; i < len; ++i) e.reg(prefix.c_str(), i, RegisterKind::output, "]");
     }
     auto X = [&](int i) { return base[0] + static_cast<std::uint32_t>(i); };
     auto Vr = [&](int i) { return base[1] + static_cast<std::uint32_t>(i); };
@@ -520,10 +537,10 @@ Program lower(const Derivation& d) {
         cos_h[h] = r0 + 2;
         ProgramInstr in{ProgramOp::harmonic};
         in.dst = r0;
-        in.a = C("theta_" + H);
+        in.a = C(theta_slot[h]);
         in.b = TAU;
         in.first = harm_k[h];
-        if (h == 0) in.comment = "Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.";
+        if (h == 0 && named) in.comment = "Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.";
         e.emit(in);
     }
     std::vector<std::uint32_t> mb(nm);  // mode blocks
@@ -533,7 +550,7 @@ Program lower(const Derivation& d) {
         const char* names[kModeRegisters] = {"eC_", "eS_", "q_", "dq_", "ddq_", "r_", "mq_", "mdq_", "e_", "m_"};
         if (m.regime == Regime::rigid_damped) names[kModeAux] = "m_";
         mb[j] = static_cast<std::uint32_t>(p.eval.registers());
-        for (const char* nm_ : names) e.temp(nm_ + J);
+        for (const char* nm_ : names) e.temp(nm_, j + 1);
         bool resonant = false;
         for (std::size_t h = 0; h < nh; ++h) resonant |= d.harmonics[h].modal[j].resonant;
         ProgramInstr in{ProgramOp::mode};
@@ -543,25 +560,25 @@ Program lower(const Derivation& d) {
         in.a = Program::kEvalCoef + mode_coef[j];
         in.b = TAU;
         in.first = mode_k[j];
-        in.comment = "Mode " + J + " (" + regime_name(m.regime) + ").";
+        if (named) in.comment = "Mode " + J + " (" + regime_name(m.regime) + ").";
         e.emit(in);
         if (m.regime == Regime::rigid) {
             ProgramInstr pi{ProgramOp::rigid_particular};
-            pi.a = C("p_" + J);
+            pi.a = C(p_slot[j]);
             pi.b = TAU;
             pi.c = mb[j];
-            pi.comment = "particular q_p = p tau^2/2";
+            if (named) pi.comment = "particular q_p = p tau^2/2";
             e.emit(pi);
         } else if (m.regime == Regime::rigid_damped) {
             // One form for every c > 0, exact as c -> 0: the split (p/c) tau + (q'(0) - p/c) eS
             // lost eps |p/c| (6e-10 at alpha = 1e-6; tests/test_sweep_kernels.cpp, floating pair).
             ProgramInstr pi{ProgramOp::rigid_damped_particular};
-            pi.dst = e.temp("qp_" + J);
-            pi.a = C("p_" + J);
+            pi.dst = e.temp("qp_", j + 1);
+            pi.a = C(p_slot[j]);
             pi.b = TAU;
             pi.c = mb[j];
             pi.first = mode_k[j] + kModeC;
-            pi.comment = "particular q_p = p tau^2 phi2(-c tau) from rest: q_p' = p eS, q_p'' = p e^{-c tau}";
+            if (named) pi.comment = "particular q_p = p tau^2 phi2(-c tau) from rest: q_p' = p eS, q_p'' = p e^{-c tau}";
             e.emit(pi);
         }
         for (std::size_t h = 0; h < nh; ++h) {
@@ -573,15 +590,15 @@ Program lower(const Derivation& d) {
             ProgramInstr ri{ProgramOp::resonant};
             ri.dst = static_cast<std::uint32_t>(p.eval.registers());
             for (const char* nm_ : {"w_", "dw_", "Cb_", "Sb_", "y_", "dy_", "ddy_"}) e.temp(nm_ + JH);
-            ri.a = C("theta_" + H);
+            ri.a = C(theta_slot[h]);
             ri.b = TAU;
             ri.c = mb[j];
-            ri.d = C("c_theta_" + H);
+            ri.d = C(c_theta_slot[h]);
             ri.first = static_cast<std::uint32_t>(p.constants.size());
             const double k[kResConstants] = {hw, hw == 0.0 ? 0.0 : 1.0 / hw, wb, Q, hw * hw + wb * wb, 2 * wb,
                                               dbl(m.lambda)};
             for (double c : k) constant(p, c);
-            ri.comment = "Resonant response to harmonic " + H +
+            if (named) ri.comment = "Resonant response to harmonic " + H +
                          " from rest, stable through Omega = omega:\n"
                          "y = Q [-w cos(wbar tau + theta) + cos(theta) sin(omega tau)/omega], Q = P/(omega + Omega),\n"
                          "w = sin(h tau)/h -> tau (h = (Omega - omega)/2, wbar = (Omega + omega)/2): the secular term.";
@@ -599,13 +616,13 @@ Program lower(const Derivation& d) {
             i == 0 ? "Physical state: x = x_st + V q + sum_h (xs_h sin + xc_h cos); stuck masses rest." : "";
         if (d.rides(ii)) continue;  // after its partner, below
         if (r < 0) {
-            const std::uint32_t xs = C("x_stuck_" + I);
-            with(e.unary(ProgramOp::copy, X(ii), xs), comment, model.masses[i].name + " (stuck)");
+            const std::uint32_t xs = C(x_stuck_slot[i]);
+            with(named, e.unary(ProgramOp::copy, X(ii), xs), comment, named ? model.masses[i].name + " (stuck)" : "");
             e.lin(Vr(ii), Lin());
             e.lin(Ar(ii), Lin());
-            mx[i] = e.temp("mx_" + I);
+            mx[i] = e.temp("mx_", i);
             e.unary(ProgramOp::abs, mx[i], xs);
-            mv[i] = e.temp("mv_" + I);
+            mv[i] = e.temp("mv_", i);
             e.lin(mv[i], Lin());
             continue;
         }
@@ -624,14 +641,14 @@ Program lower(const Derivation& d) {
         }
         tmx.add(hx, ONE);
         tmv.add(hv, ONE);
-        mx[i] = e.temp("mx_" + I);
-        mv[i] = e.temp("mv_" + I);
+        mx[i] = e.temp("mx_", i);
+        mv[i] = e.temp("mv_", i);
         ProgramInstr in{ProgramOp::mass_state};
         in.dst = X(ii);
         in.b = Vr(ii);
         in.c = Ar(ii);
         in.d = mx[i];
-        in.a = C("x_st_" + idx(rr));
+        in.a = C(x_st_slot[rr]);
         in.first = static_cast<std::uint32_t>(p.terms.size());
         in.count = static_cast<std::uint32_t>(modal.size());
         p.terms.insert(p.terms.end(), modal.begin(), modal.end());
@@ -640,14 +657,14 @@ Program lower(const Derivation& d) {
             in.tail[k] = static_cast<std::uint32_t>(tails[k]->size());
             p.terms.insert(p.terms.end(), tails[k]->begin(), tails[k]->end());
         }
-        with(e.emit(in), comment, model.masses[i].name);
+        with(named, e.emit(in), comment, model.masses[i].name);
     }
 
     // Riders: their partner's motion at their offset.
     for (int q : d.riders) {
         const int p = partner_of(q);
-        const std::uint32_t eq = C("e_" + std::to_string(q));
-        with(e.lin(X(q), Lin().add(1.0, X(p)).add(1.0, eq)), q == d.riders.front() ? "Riders: x = x_partner + e." : "",
+        const std::uint32_t eq = C(e_slot.at(q));
+        with(named, e.lin(X(q), Lin().add(1.0, X(p)).add(1.0, eq)), q == d.riders.front() ? "Riders: x = x_partner + e." : "",
              model.masses[static_cast<std::size_t>(q)].name + " (rides " + model.masses[static_cast<std::size_t>(p)].name + ")");
         e.unary(ProgramOp::copy, Vr(q), Vr(p));
         e.unary(ProgramOp::copy, Ar(q), Ar(p));
@@ -668,8 +685,8 @@ Program lower(const Derivation& d) {
         mxs[j] = e.temp("ms_" + std::to_string(j));
         const std::string comment = j == 0 ? "Jenkins sliders: fixed while stuck, s = x[a] - x[b] - slip F_s/k while slipping." : "";
         if (d.cfg.slip[j] == 0) {
-            const std::uint32_t sc = C("s_stuck_" + std::to_string(j));
-            with(e.unary(ProgramOp::copy, out, sc), comment, el.name + " (stuck)");
+            const std::uint32_t sc = C(s_stuck_slot[j]);
+            with(named, e.unary(ProgramOp::copy, out, sc), comment, el.name + " (stuck)");
             e.unary(ProgramOp::abs, mxs[j], sc);
             continue;
         }
@@ -679,7 +696,7 @@ Program lower(const Derivation& d) {
         if (el.b != kGround) sl.add(-1.0, X(el.b)), ml.add(1.0, mx[static_cast<std::size_t>(el.b)]);
         sl.add(-held, ONE);
         ml.add(std::fabs(held), ONE);
-        with(e.lin(out, sl), comment, el.name + (d.cfg.slip[j] > 0 ? " (slipping, +)" : " (slipping, -)"));
+        with(named, e.lin(out, sl), comment, el.name + (d.cfg.slip[j] > 0 ? " (slipping, +)" : " (slipping, -)"));
         e.lin(mxs[j], ml);
     }
 
@@ -780,7 +797,7 @@ Program lower(const Derivation& d) {
     for (std::size_t f = 0; f < d.switches.size(); ++f) {
         const SwitchFunction& sf = d.switches[f];
         const std::string F = std::to_string(f);
-        std::string comment = f == 0 ? "Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and "
+        std::string comment = f == 0 && named ? "Switch functions (runtime/segment.h order), derivatives, bounds on |g''| and "
                                        "term magnitudes.\n"
                                        "bound = sum_j (|alpha_j| (c_j + omega_j) + |beta_j| (c_j (c_j + omega_j) + "
                                        "lambda_j)) sqrt(2 E_j)\n"
@@ -794,7 +811,7 @@ Program lower(const Derivation& d) {
         Lin g, dg, sc;
         if (sf.kind == SwitchKind::gap) {
             const Contact& ct = model.contacts[sf.element];
-            comment += "g_" + F + ": gap of contact " + ct.name + " = x[" + body_name(model, ct.a) + "] - x[" +
+            if (named) comment += "g_" + F + ": gap of contact " + ct.name + " = x[" + body_name(model, ct.a) + "] - x[" +
                        body_name(model, ct.b) + "] - " + format_double(ct.gap);
             if (ct.a != kGround) {
                 g.add(1.0, X(ct.a));
@@ -815,7 +832,7 @@ Program lower(const Derivation& d) {
             }
         } else if (sf.kind == SwitchKind::velocity && model.masses[static_cast<std::size_t>(sf.element)].partner == kGround) {
             const int i = sf.element;
-            comment += "g_" + F + ": velocity of " + model.masses[i].name + " (sliding)";
+            if (named) comment += "g_" + F + ": velocity of " + model.masses[i].name + " (sliding)";
             g.add(1.0, Vr(i));
             dg.add(1.0, Ar(i));
             sc.add(1.0, mv[i]);
@@ -828,7 +845,7 @@ Program lower(const Derivation& d) {
         } else if (sf.kind == SwitchKind::velocity) {
             // Sliding on its partner: w = v_i - v_p.
             const int i = sf.element, p = partner_of(i);
-            comment += "g_" + F + ": velocity of " + model.masses[i].name + " on " + model.masses[p].name + " (sliding)";
+            if (named) comment += "g_" + F + ": velocity of " + model.masses[i].name + " on " + model.masses[p].name + " (sliding)";
             g.add(1.0, Vr(i)).add(-1.0, Vr(p));
             dg.add(1.0, Ar(i)).add(-1.0, Ar(p));
             sc.add(1.0, mv[i]).add(1.0, mv[p]);
@@ -843,7 +860,7 @@ Program lower(const Derivation& d) {
             const std::size_t j = static_cast<std::size_t>(sf.element);
             const Jenkins& el = model.jenkins[j];
             const double sk = sf.kind == SwitchKind::slip_pos ? el.k : -el.k;
-            comment += "g_" + F + ": " + (sk > 0 ? "" : "-") + "k e - F_s of stuck " + el.name + ", e = x[" +
+            if (named) comment += "g_" + F + ": " + (sk > 0 ? "" : "-") + "k e - F_s of stuck " + el.name + ", e = x[" +
                        body_name(model, el.a) + "] - x[" + body_name(model, el.b) + "] - s";
             if (el.a != kGround) {
                 g.add(sk, X(el.a));
@@ -866,7 +883,7 @@ Program lower(const Derivation& d) {
         } else if (sf.kind == SwitchKind::slip_velocity) {
             // w = v[a] - v[b] of a slipping element.
             const Jenkins& el = model.jenkins[static_cast<std::size_t>(sf.element)];
-            comment += "g_" + F + ": relative velocity of " + el.name + " (slipping) = v[" + body_name(model, el.a) +
+            if (named) comment += "g_" + F + ": relative velocity of " + el.name + " (slipping) = v[" + body_name(model, el.a) +
                        "] - v[" + body_name(model, el.b) + "]";
             if (el.a != kGround) {
                 g.add(1.0, Vr(el.a));
@@ -894,7 +911,7 @@ Program lower(const Derivation& d) {
             const double sgn_f = pos ? 1.0 : -1.0;
             const std::string I = std::to_string(i);
             if (ms.partner == kGround) {
-                comment += std::string("g_") + F + ": " + (pos ? "A" : "-A") + " - mu_s N of stuck " + ms.name +
+                if (named) comment += std::string("g_") + F + ": " + (pos ? "A" : "-A") + " - mu_s N of stuck " + ms.name +
                            ", A = -K x - C v + f + sum_h F_h sin (force but friction)";
                 Lin A, dA;
                 double const_mag = std::fabs(f_const[i]) + mu_s_n;
@@ -904,10 +921,10 @@ Program lower(const Derivation& d) {
                 std::uint32_t af = kNoRegister, daf = kNoRegister;
                 if (const auto it = force_reg.find(i); it != force_reg.end()) af = it->second, daf = af + 1;
                 if (af == kNoRegister) {
-                    af = e.temp("A_force_" + I);
-                    daf = e.temp("dA_force_" + I);
+                    af = e.temp("A_force_", static_cast<std::size_t>(i));
+                    daf = e.temp("dA_force_", static_cast<std::size_t>(i));
                     force_reg[i] = af;
-                    with(e.lin(af, A), comment);
+                    with(named, e.lin(af, A), comment);
                     comment.clear();
                     e.lin(daf, dA);
                 }
@@ -918,7 +935,7 @@ Program lower(const Derivation& d) {
                 // holds the pair together (assembly.h driving_force), from both forces.
                 const int p = ms.partner;
                 const Mass& mp = model.masses[static_cast<std::size_t>(p)];
-                comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of " + ms.name + " stuck to " +
+                if (named) comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of " + ms.name + " stuck to " +
                            mp.name + ", D = (m_p A_i - m_i A_p)/(m_i + m_p)";
                 const DD mi(ms.m), mpn(mp.m);
                 const DD ci = mpn / (mi + mpn), cp = -mi / (mi + mpn);
@@ -941,7 +958,7 @@ Program lower(const Derivation& d) {
                     reg[which][1] = e.temp("dA_pair_" + B);
                     reg[which][2] = e.temp("mA_pair_" + B);
                     pair_reg[b] = reg[which][0];
-                    with(e.lin(reg[which][0], A), comment);
+                    with(named, e.lin(reg[which][0], A), comment);
                     comment.clear();
                     e.lin(reg[which][1], dA);
                     e.lin(reg[which][2], mag);
@@ -959,7 +976,7 @@ Program lower(const Derivation& d) {
                 }
             }
         }
-        with(e.lin(G(f, 3), g), comment);
+        with(named, e.lin(G(f, 3), g), comment);
         e.lin(G(f, 4), dg);
         // bound
         DD konst = 0;
@@ -982,8 +999,8 @@ Program lower(const Derivation& d) {
             if (m.regime == Regime::rigid || m.regime == Regime::rigid_damped) {  // |q_p''| <= |p|, |q_p'''| <= c |p|
                 const double cp = dbl(abs(al[j]) + abs(be[j]) * m.c);
                 if (cp != 0.0 && abs_p[j] == kNoRegister) {
-                    abs_p[j] = e.temp("p_abs_" + idx(j));
-                    e.unary(ProgramOp::abs, abs_p[j], C("p_" + idx(j)));
+                    abs_p[j] = e.temp("p_abs_", j + 1);
+                    e.unary(ProgramOp::abs, abs_p[j], C(p_slot[j]));
                 }
                 b.add(cp, abs_p[j]);
             }
@@ -999,7 +1016,7 @@ Program lower(const Derivation& d) {
                     se.count = 2;
                     p.terms.push_back({1.0, TAU});
                     p.terms.push_back({d.max_step, ONE});
-                    se.comment = "Secular terms are bounded at the end of the step, s_end = tau + max_step.";
+                    if (named) se.comment = "Secular terms are bounded at the end of the step, s_end = tau + max_step.";
                     p.eval.code.insert(p.eval.code.begin(), se);
                 }
                 const DD W = d.harmonics[h].omega, Q = abs(mh.P / (m.omega + W));
@@ -1024,7 +1041,7 @@ std::function<Program(const Configuration&)> program_source(const Model& model) 
     auto eigen = std::make_shared<DdEigenCache>();
     return [&model, eigen](const Configuration& cfg) {
         const auto lock = ginac_lock();  // the derivation is GiNaC (ginac_lock.h)
-        return lower(derive(model, cfg, EigenMethod::refined, ExactMatrices::no, eigen.get()));
+        return lower(derive(model, cfg, EigenMethod::refined, ExactMatrices::no, eigen.get()), ProgramNames::no);
     };
 }
 

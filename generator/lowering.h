@@ -13,8 +13,15 @@
 
 namespace hsnc {
 
-/// The setup and eval programs of `d`.
-Program lower(const Derivation& d);
+/// Whether a program carries what only its printer reads: the names of its
+/// registers and coefficient slots, and the comments and notes of its
+/// instructions. The interpreter reads none of them; building them was about
+/// half of lowering a configuration of a 32-mass chain.
+enum class ProgramNames { yes, no };
+
+/// The setup and eval programs of `d`; the same numbers and the same
+/// instructions with or without names.
+Program lower(const Derivation& d, ProgramNames names = ProgramNames::yes);
 
 /// The program of each configuration of `model`, lower(derive(model, cfg)):
 /// the source of the generic path (InterpretedSolverProvider). `model` must

@@ -190,6 +190,55 @@ TEST(Program, SampleModelsEveryRegimeAotAndInterpreterAreBitIdentical) {
     for (int r = 0; r < 6; ++r) EXPECT_TRUE(regimes[r]) << "regime " << r << " not covered";
 }
 
+// A program lowered without names (ProgramNames::no: the interpreter's) is the
+// printed one's instructions, terms and constants, bit for bit, with every
+// register name, slot name, comment and note empty: what the printer alone reads.
+TEST(Program, WithoutNamesItIsThePrintedProgram) {
+    auto same_body = [](const ProgramBody& a, const ProgramBody& b, const std::string& what) {
+        ASSERT_EQ(a.code.size(), b.code.size()) << what;
+        ASSERT_EQ(a.registers(), b.registers()) << what;
+        EXPECT_TRUE(a.kinds == b.kinds) << what;
+        for (std::size_t i = 0; i < a.code.size(); ++i) {
+            const ProgramInstr &x = a.code[i], &y = b.code[i];
+            EXPECT_TRUE(x.op == y.op && x.regime == y.regime && x.accumulates == y.accumulates && x.dst == y.dst &&
+                        x.a == y.a && x.b == y.b && x.c == y.c && x.d == y.d && x.first == y.first &&
+                        x.count == y.count && std::equal(x.tail, x.tail + 5, y.tail))
+                << what << " instruction " << i;
+            EXPECT_TRUE(y.comment.empty() && y.note.empty()) << what << " instruction " << i;
+        }
+        for (const std::string& name : b.names) EXPECT_TRUE(name.empty()) << what;
+    };
+    std::size_t checked = 0, named = 0;
+    auto check = [&](const Model& m, const Configuration& cfg) {
+        const std::string what = m.name + " " + cfg.spec(m);
+        const Derivation d = derive(m, cfg);
+        const Program a = lower(d), b = lower(d, ProgramNames::no);
+        ASSERT_EQ(a.constants.size(), b.constants.size()) << what;
+        EXPECT_EQ(std::memcmp(a.constants.data(), b.constants.data(), sizeof(double) * a.constants.size()), 0) << what;
+        ASSERT_EQ(a.terms.size(), b.terms.size()) << what;
+        for (std::size_t t = 0; t < a.terms.size(); ++t)
+            EXPECT_TRUE(std::memcmp(&a.terms[t].c, &b.terms[t].c, sizeof(double)) == 0 && a.terms[t].reg == b.terms[t].reg)
+                << what << " term " << t;
+        EXPECT_EQ(a.n_coef, b.n_coef) << what;
+        EXPECT_TRUE(a.setup_coef == b.setup_coef) << what;
+        EXPECT_EQ(a.coef_names.size(), b.coef_names.size()) << what;
+        for (const std::string& name : b.coef_names) EXPECT_TRUE(name.empty()) << what;
+        same_body(a.setup, b.setup, what + " setup");
+        same_body(a.eval, b.eval, what + " eval");
+        for (const std::string& name : a.eval.names) named += !name.empty();
+        ++checked;
+    };
+    for (int n = 1; n <= 8; ++n)
+        for (unsigned seed = 300 * n; seed < 300 * n + 3; ++seed) {
+            const testing::Drawn dr = testing::draw(seed, n);
+            check(dr.model, dr.cfg);
+        }
+    for (const Model& m : sample_models())
+        for (const Configuration& cfg : all_configurations(m)) check(m, cfg);
+    EXPECT_GE(checked, 40u);
+    EXPECT_GT(named, 0u);  // the printed programs do have names
+}
+
 // Random models of 1 to 8 masses (tests/random_model.h), each in a random
 // configuration: the JIT-compiled kernel against the interpreter.
 TEST(Program, RandomModelsJitAndInterpreterAreBitIdentical) {
