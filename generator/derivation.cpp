@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <utility>
 
 #include "assembly.h"
 #include "contact_gap.h"
@@ -80,7 +81,10 @@ std::vector<std::vector<DD>> folded(const std::vector<std::vector<DD>>& X, const
     for (std::size_t r = 0; r < nf; ++r)
         for (std::size_t s = 0; s < nf; ++s)
             for (int i : group[r])
-                for (int k : group[s]) out[r][s] += X[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
+                for (int k : group[s]) {
+                    const DD& x = X[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
+                    if (!x.is_zero()) out[r][s] += x;  // an exact zero adds nothing (and most entries are)
+                }
     return out;
 }
 
@@ -359,14 +363,14 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
                                    ": stiffness over mass beyond the range of double");
     // eig_value[j], eig_vector[j][r]: the eigenpairs of Kt in ascending order.
     std::vector<DD> eig_value(nf);
-    std::vector<std::vector<DD>> eig_vector(nf, std::vector<DD>(nf));
+    std::vector<std::vector<DD>> eig_vector(nf);
     bool solved = false;
     if (method == EigenMethod::refined) {
         try {
-            const std::vector<DdEigenpair> pairs = dd_symmetric_eigen(kt, eigen_cache);
+            std::vector<DdEigenpair> pairs = dd_symmetric_eigen(kt, eigen_cache);
             for (std::size_t j = 0; j < nf; ++j) {
                 eig_value[j] = pairs[j].value;
-                eig_vector[j] = pairs[j].vector;
+                eig_vector[j] = std::move(pairs[j].vector);
             }
             solved = true;
         } catch (const RunError&) {
@@ -382,6 +386,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
                          [&](std::size_t p, std::size_t q) { return kt[p][p] < kt[q][q]; });
         for (std::size_t j = 0; j < nf; ++j) {
             eig_value[j] = kt[order[j]][order[j]];
+            eig_vector[j].resize(nf);
             for (std::size_t r = 0; r < nf; ++r) eig_vector[j][r] = phi[r][order[j]];
         }
     }
@@ -389,18 +394,19 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     // Rigid-body modes replace the smallest eigenpairs: lambda = 0, shape sqrt(m) on the component.
     const auto comps = free_components(model, cfg).floating_members();  // free_components.h
     std::vector<DD> lambda(nf);
-    std::vector<std::vector<DD>> shape(nf, std::vector<DD>(nf));  // shape[j][r] = Phi_rj
+    std::vector<std::vector<DD>> shape(nf);  // shape[j][r] = Phi_rj
     std::vector<std::vector<std::size_t>> support(nf);             // r with shape[j][r] != 0, ascending
     for (std::size_t j = 0; j < nf; ++j) {
         if (j < comps.size()) {
             DD m_total;
             for (int i : comps[j]) m_total += mass_dd[static_cast<std::size_t>(free_index[i])];
             const DD inv = DD(1.0) / sqrt(m_total);
+            shape[j].assign(nf, DD());
             for (int i : comps[j]) shape[j][free_index[i]] = sqm[free_index[i]] * inv;
             lambda[j] = DD(0.0);
         } else {
             lambda[j] = eig_value[j];
-            shape[j] = eig_vector[j];
+            shape[j] = std::move(eig_vector[j]);
             if (lambda[j] <= DD(0.0))
                 throw RunError("derivation::derive(): eigenvalue " + std::to_string(lambda[j].to_double()) +
                                " <= 0 in a mode not detected as rigid (configuration " + cfg.spec(model) + ")");
