@@ -264,7 +264,7 @@ ex coordinate_force(const Derivation& d, const SegmentInputs& in, std::size_t r)
 }
 
 Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method, ExactMatrices exact_matrices,
-                  DdEigenCache* eigen_cache) {
+                  DerivationCache* cache) {
     GiNaC::Digits = kDerivationDigits;
     Derivation d;
     d.model = &model;
@@ -321,11 +321,24 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         }
     }
     d.f_const.resize(n);
+    // mu N of each friction mass, exact products (GiNaC arithmetic: once per run with a cache).
+    DerivationCache local;
+    DerivationCache& mu = cache ? *cache : local;
+    if (mu.mu_k_n.size() != n) {
+        mu.mu_k_n.assign(n, kZero);
+        mu.mu_s_n.assign(n, 0.0);
+        for (std::size_t i = 0; i < n; ++i) {
+            if (!model.masses[i].has_friction) continue;
+            const numeric N = exact(model.masses[i].m) * exact(model.g);
+            mu.mu_k_n[i] = exact(model.masses[i].mu_k) * N;
+            mu.mu_s_n[i] = (exact(model.masses[i].mu_s) * N).to_double();
+        }
+    }
     d.mu_k_n.assign(n, kZero);
+    d.mu_s_n = mu.mu_s_n;
     for (std::size_t i = 0; i < n; ++i) {
         d.f_const[i] = exact(f0(i));
-        if (model.masses[i].has_friction && !cfg.stuck[i])
-            d.mu_k_n[i] = exact(model.masses[i].mu_k) * exact(model.masses[i].m) * exact(model.g);
+        if (model.masses[i].has_friction && !cfg.stuck[i]) d.mu_k_n[i] = mu.mu_k_n[i];
     }
     // A harmonic with Omega = 0 is the constant force F sin(phase).
     for (const Harmonic& h : model.forcing) {
@@ -367,7 +380,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     bool solved = false;
     if (method == EigenMethod::refined) {
         try {
-            std::vector<DdEigenpair> pairs = dd_symmetric_eigen(kt, eigen_cache);
+            std::vector<DdEigenpair> pairs = dd_symmetric_eigen(kt, cache ? &cache->eigen : nullptr);
             for (std::size_t j = 0; j < nf; ++j) {
                 eig_value[j] = pairs[j].value;
                 eig_vector[j] = std::move(pairs[j].vector);

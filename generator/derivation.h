@@ -129,6 +129,7 @@ struct Derivation {
     std::vector<std::vector<DD>> k_dd, c_dd;  ///< the same in DD, for the lowering
     std::vector<GiNaC::numeric> f_const;  ///< loads + preload, all masses (exact)
     std::vector<GiNaC::numeric> mu_k_n;   ///< mu_k N_i of free friction masses, else 0
+    std::vector<double> mu_s_n;           ///< mu_s N_i of every friction mass, the exact product rounded once; else 0
     std::vector<Mode> modes;               ///< ascending lambda
     std::vector<HarmonicData> harmonics;   ///< Omega > 0 harmonics (Omega = 0 ones fold into f_const)
     std::vector<SwitchFunction> switches;
@@ -165,10 +166,20 @@ enum class ExactMatrices { yes, no };
 /// Derive configuration `cfg` of `model`. Throws RunError when the
 /// eigen-solver does not converge (refined: when neither it nor Jacobi
 /// converges), NotDerivable for what StateSpaceData refuses.
-/// `eigen_cache` (may be null) keeps the blocks the refined eigen-solver has
-/// solved for the next configurations of the same run (mp_eigen.h).
+/// What a run's derivations of one model share: the blocks the refined
+/// eigen-solver has solved (mp_eigen.h), and the friction forces mu N of each
+/// mass, exact products of the model's numbers. One user at a time (the
+/// derivation holds the GiNaC lock).
+struct DerivationCache {
+    DdEigenCache eigen;
+    std::vector<GiNaC::numeric> mu_k_n;  ///< per mass (0 without friction)
+    std::vector<double> mu_s_n;          ///< per mass, rounded once (0 without friction)
+};
+
+/// `cache` (may be null; for one model) keeps what the next configurations of
+/// the same run reuse.
 Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method = EigenMethod::refined,
-                  ExactMatrices exact_matrices = ExactMatrices::yes, DdEigenCache* eigen_cache = nullptr);
+                  ExactMatrices exact_matrices = ExactMatrices::yes, DerivationCache* cache = nullptr);
 
 /// Inputs of one segment as GiNaC expressions: numbers or symbols.
 struct SegmentInputs {

@@ -65,14 +65,14 @@ private:
 class Builder {
 public:
     Builder(Program& p, ProgramBody& b, bool named) : p_(p), b_(b), named_(named) {
-        b_.names.reserve(2 * b_.code.capacity() + 64);  // registers: inputs, outputs and a temporary per instruction
-        b_.kinds.reserve(b_.names.capacity());
+        b_.kinds.reserve(2 * b_.code.capacity() + 64);  // registers: inputs, outputs and a temporary per instruction
+        if (named_) b_.names.reserve(b_.kinds.capacity());
     }
 
     std::uint32_t reg(const std::string& name, RegisterKind kind) {
-        b_.names.push_back(named_ ? name : std::string());
+        if (named_) b_.names.push_back(name);
         b_.kinds.push_back(kind);
-        return static_cast<std::uint32_t>(b_.names.size() - 1);
+        return static_cast<std::uint32_t>(b_.kinds.size() - 1);
     }
     /// A register named prefix + number + suffix, the name formatted only for a named program.
     std::uint32_t reg(const char* prefix, std::size_t number, RegisterKind kind, const char* suffix = "") {
@@ -793,7 +793,6 @@ Program lower(const Derivation& d, ProgramNames names) {
         bound_alpha[j] = m.c + m.omega;
         bound_beta[j] = m.c * (m.c + m.omega) + m.lambda;
     }
-    std::vector<double> mu_s_n_of(n, std::nan(""));  // mu_s N of each mass, exactly rounded, once computed
     for (std::size_t f = 0; f < d.switches.size(); ++f) {
         const SwitchFunction& sf = d.switches[f];
         const std::string F = std::to_string(f);
@@ -905,9 +904,7 @@ Program lower(const Derivation& d, ProgramNames names) {
             const int i = sf.element;
             const bool pos = sf.kind == SwitchKind::release_pos;
             const Mass& ms = model.masses[i];
-            if (std::isnan(mu_s_n_of[static_cast<std::size_t>(i)]))  // once per mass: release_pos and _neg share it
-                mu_s_n_of[static_cast<std::size_t>(i)] = dbl(exact(ms.mu_s) * exact(ms.m) * exact(model.g));
-            const double mu_s_n = mu_s_n_of[static_cast<std::size_t>(i)];
+            const double mu_s_n = d.mu_s_n[static_cast<std::size_t>(i)];
             const double sgn_f = pos ? 1.0 : -1.0;
             const std::string I = std::to_string(i);
             if (ms.partner == kGround) {
@@ -1035,13 +1032,13 @@ Program lower(const Derivation& d, ProgramNames names) {
 }
 
 std::function<Program(const Configuration&)> program_source(const Model& model) {
-    // The blocks of the modal analysis recur from one configuration to the next:
-    // solved once per run (the cache is used under the GiNaC lock, by one
-    // thread at a time).
-    auto eigen = std::make_shared<DdEigenCache>();
-    return [&model, eigen](const Configuration& cfg) {
+    // The blocks of the modal analysis recur from one configuration to the next,
+    // and the friction forces are the model's: both computed once per run (the
+    // cache is used under the GiNaC lock, by one thread at a time).
+    auto cache = std::make_shared<DerivationCache>();
+    return [&model, cache](const Configuration& cfg) {
         const auto lock = ginac_lock();  // the derivation is GiNaC (ginac_lock.h)
-        return lower(derive(model, cfg, EigenMethod::refined, ExactMatrices::no, eigen.get()), ProgramNames::no);
+        return lower(derive(model, cfg, EigenMethod::refined, ExactMatrices::no, cache.get()), ProgramNames::no);
     };
 }
 

@@ -151,9 +151,11 @@ enum class RegisterKind : std::uint8_t {
 
 struct ProgramBody {
     std::vector<ProgramInstr> code;
-    std::vector<std::string> names;  ///< per register: its C++ name
-    std::vector<RegisterKind> kinds;
-    std::size_t registers() const { return names.size(); }
+    /// Per register: its C++ name; empty in a program lowered without names
+    /// (generator/lowering.h ProgramNames::no), which only the interpreter runs.
+    std::vector<std::string> names;
+    std::vector<RegisterKind> kinds;  ///< per register
+    std::size_t registers() const { return kinds.size(); }
 };
 
 struct Program {
