@@ -138,15 +138,19 @@ namespace hsnc {
 ElementIndex::ElementIndex(const Model& model) {
     const std::size_t n = model.dof();
     std::vector<std::vector<std::uint32_t>> of(n);
-    auto put = [&](Kind k, std::size_t e, int a, int b) {
+    auto put = [&](ElementKind k, std::size_t e, int a, int b) {
         const std::uint32_t code = static_cast<std::uint32_t>(k) << 28 | static_cast<std::uint32_t>(e);
         if (a != kGround) of[static_cast<std::size_t>(a)].push_back(code);
         if (b != kGround && b != a) of[static_cast<std::size_t>(b)].push_back(code);
     };
-    for (std::size_t e = 0; e < model.springs.size(); ++e) put(spring, e, model.springs[e].a, model.springs[e].b);
-    for (std::size_t e = 0; e < model.contacts.size(); ++e) put(contact, e, model.contacts[e].a, model.contacts[e].b);
-    for (std::size_t e = 0; e < model.dampers.size(); ++e) put(damper, e, model.dampers[e].a, model.dampers[e].b);
-    for (std::size_t e = 0; e < model.jenkins.size(); ++e) put(jenkins, e, model.jenkins[e].a, model.jenkins[e].b);
+    for (std::size_t e = 0; e < model.springs.size(); ++e)
+        put(ElementKind::spring, e, model.springs[e].a, model.springs[e].b);
+    for (std::size_t e = 0; e < model.contacts.size(); ++e)
+        put(ElementKind::contact, e, model.contacts[e].a, model.contacts[e].b);
+    for (std::size_t e = 0; e < model.dampers.size(); ++e)
+        put(ElementKind::damper, e, model.dampers[e].a, model.dampers[e].b);
+    for (std::size_t e = 0; e < model.jenkins.size(); ++e)
+        put(ElementKind::jenkins, e, model.jenkins[e].a, model.jenkins[e].b);
     start_.assign(n + 1, 0);
     for (std::size_t i = 0; i < n; ++i) {
         start_[i + 1] = start_[i] + of[i].size();
@@ -178,40 +182,11 @@ double force_on_mass(const Model& model, const Configuration& cfg, int i, double
         for_each_slipping(model, cfg, slipping);
         return f;
     }
-    // The same links in the same order (for_each_link's), those of mass i alone.
-    const double* slider = x + model.dof();
-    for (const std::uint32_t* e = elements->begin(i); e != elements->end(i); ++e) {
-        const std::size_t k = ElementIndex::index(*e);
-        switch (ElementIndex::kind(*e)) {
-            case ElementIndex::spring: {
-                const Spring& s = model.springs[k];
-                add(s.a, s.b, s.k, model.beta * s.k, 0.0);
-                break;
-            }
-            case ElementIndex::contact:
-                if (cfg.closed[k]) {
-                    const Contact& c = model.contacts[k];
-                    add(c.a, c.b, c.k, model.beta * c.k, c.gap);
-                }
-                break;
-            case ElementIndex::damper: {
-                const Damper& d = model.dampers[k];
-                add(d.a, d.b, 0.0, d.c, 0.0);
-                break;
-            }
-            case ElementIndex::jenkins:
-                if (cfg.slip[k] == 0) {
-                    const Jenkins& j = model.jenkins[k];
-                    add(j.a, j.b, j.k, model.beta * j.k, slider[k]);
-                }
-                break;
-        }
-    }
-    for (const std::uint32_t* e = elements->begin(i); e != elements->end(i); ++e)  // then for_each_slipping's
-        if (ElementIndex::kind(*e) == ElementIndex::jenkins && cfg.slip[ElementIndex::index(*e)] != 0) {
-            const Jenkins& j = model.jenkins[ElementIndex::index(*e)];
-            slipping(j.a, j.b, -static_cast<double>(cfg.slip[ElementIndex::index(*e)]) * j.slip_force);
-        }
+    // The same links in the same order (for_each_link's, then for_each_slipping's), mass i's alone.
+    for (const std::uint32_t* e = elements->begin(i); e != elements->end(i); ++e)
+        link_of(model, cfg, ElementIndex::kind(*e), ElementIndex::index(*e), add, x + model.dof());
+    for (const std::uint32_t* e = elements->begin(i); e != elements->end(i); ++e)
+        if (ElementIndex::kind(*e) == ElementKind::jenkins) slipping_of(model, cfg, ElementIndex::index(*e), slipping);
     return f;
 }
 

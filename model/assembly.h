@@ -81,35 +81,65 @@ double gap_rate(const Model& model, int c, const double* v);
 
 namespace hsnc {
 
-/// Every element acting between two bodies in cfg, as fn(a, b, stiffness,
-/// damping, gap): springs and closed contacts (damping beta*k, Rayleigh),
-/// then dampers (stiffness 0, damping c), then stuck Jenkins elements (as a
-/// closed contact, gap = slider[j]; 0 when `slider` is null: for the callers
+/// The kinds of element between two bodies, in the order for_each_link visits them.
+enum class ElementKind : std::uint32_t { spring, contact, damper, jenkins };
+
+/// Element e of `kind` as a link in cfg, fn(a, b, stiffness, damping, gap),
+/// when it acts as one: a spring or a closed contact (damping beta*k,
+/// Rayleigh), a damper (stiffness 0, damping c), a stuck Jenkins element (as a
+/// closed contact, gap = slider[e]; 0 when `slider` is null: for the callers
 /// that do not read the gap); gap is a link's preload length.
 template <class Fn>
-void for_each_link(const Model& model, const Configuration& cfg, Fn&& fn, const double* slider = nullptr) {
-    for (const Spring& s : model.springs) fn(s.a, s.b, s.k, model.beta * s.k, 0.0);
-    for (std::size_t c = 0; c < model.contacts.size(); ++c)
-        if (cfg.closed[c]) {
-            const Contact& k = model.contacts[c];
-            fn(k.a, k.b, k.k, model.beta * k.k, k.gap);
+void link_of(const Model& model, const Configuration& cfg, ElementKind kind, std::size_t e, Fn&& fn,
+             const double* slider = nullptr) {
+    switch (kind) {
+        case ElementKind::spring: {
+            const Spring& s = model.springs[e];
+            fn(s.a, s.b, s.k, model.beta * s.k, 0.0);
+            break;
         }
-    for (const Damper& d : model.dampers) fn(d.a, d.b, 0.0, d.c, 0.0);
-    for (std::size_t j = 0; j < model.jenkins.size(); ++j)
-        if (cfg.slip[j] == 0) {
-            const Jenkins& e = model.jenkins[j];
-            fn(e.a, e.b, e.k, model.beta * e.k, slider ? slider[j] : 0.0);
+        case ElementKind::contact:
+            if (cfg.closed[e]) {
+                const Contact& k = model.contacts[e];
+                fn(k.a, k.b, k.k, model.beta * k.k, k.gap);
+            }
+            break;
+        case ElementKind::damper: {
+            const Damper& d = model.dampers[e];
+            fn(d.a, d.b, 0.0, d.c, 0.0);
+            break;
         }
+        case ElementKind::jenkins:
+            if (cfg.slip[e] == 0) {
+                const Jenkins& j = model.jenkins[e];
+                fn(j.a, j.b, j.k, model.beta * j.k, slider ? slider[e] : 0.0);
+            }
+            break;
+    }
 }
 
-/// Every Jenkins element slipping in cfg, as fn(a, b, force on a).
+/// Every element acting between two bodies in cfg, as link_of gives it:
+/// springs, contacts, dampers, then Jenkins elements, each kind in model order.
+template <class Fn>
+void for_each_link(const Model& model, const Configuration& cfg, Fn&& fn, const double* slider = nullptr) {
+    for (std::size_t e = 0; e < model.springs.size(); ++e) link_of(model, cfg, ElementKind::spring, e, fn, slider);
+    for (std::size_t e = 0; e < model.contacts.size(); ++e) link_of(model, cfg, ElementKind::contact, e, fn, slider);
+    for (std::size_t e = 0; e < model.dampers.size(); ++e) link_of(model, cfg, ElementKind::damper, e, fn, slider);
+    for (std::size_t e = 0; e < model.jenkins.size(); ++e) link_of(model, cfg, ElementKind::jenkins, e, fn, slider);
+}
+
+/// Jenkins element j as fn(a, b, force on a) when it slips in cfg.
+template <class Fn>
+void slipping_of(const Model& model, const Configuration& cfg, std::size_t j, Fn&& fn) {
+    if (cfg.slip[j] == 0) return;
+    const Jenkins& e = model.jenkins[j];
+    fn(e.a, e.b, -static_cast<double>(cfg.slip[j]) * e.slip_force);
+}
+
+/// Every Jenkins element slipping in cfg, as slipping_of gives it.
 template <class Fn>
 void for_each_slipping(const Model& model, const Configuration& cfg, Fn&& fn) {
-    for (std::size_t j = 0; j < model.jenkins.size(); ++j)
-        if (cfg.slip[j] != 0) {
-            const Jenkins& e = model.jenkins[j];
-            fn(e.a, e.b, -static_cast<double>(cfg.slip[j]) * e.slip_force);
-        }
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) slipping_of(model, cfg, j, fn);
 }
 
 /// The elements touching each mass (springs, contacts, dampers, Jenkins
@@ -121,13 +151,12 @@ void for_each_slipping(const Model& model, const Configuration& cfg, Fn&& fn) {
 /// change).
 class ElementIndex {
 public:
-    enum Kind : std::uint32_t { spring, contact, damper, jenkins };
     explicit ElementIndex(const Model& model);
     /// Mass i's elements, each (kind << 28 | index), springs first, then
     /// contacts, dampers and Jenkins elements, each kind in model order.
     const std::uint32_t* begin(int i) const { return codes_.data() + start_[static_cast<std::size_t>(i)]; }
     const std::uint32_t* end(int i) const { return codes_.data() + start_[static_cast<std::size_t>(i) + 1]; }
-    static Kind kind(std::uint32_t code) { return static_cast<Kind>(code >> 28); }
+    static ElementKind kind(std::uint32_t code) { return static_cast<ElementKind>(code >> 28); }
     static std::size_t index(std::uint32_t code) { return code & ((1u << 28) - 1); }
 
 private:
