@@ -313,8 +313,7 @@ Program lower(const Derivation& d, ProgramNames names) {
     // Forcing phases at the segment start.
     std::vector<std::uint32_t> s_theta(nh), c_theta(nh);
     for (std::size_t h = 0; h < nh; ++h) {
-        const std::string H = idx(h);
-        const std::uint32_t theta = s.temp("theta_" + H);
+        const std::uint32_t theta = s.temp("theta_", h + 1);
         ProgramInstr in{ProgramOp::phase};
         in.dst = theta;
         in.a = Program::kSetupT0;
@@ -322,9 +321,9 @@ Program lower(const Derivation& d, ProgramNames names) {
         in.first = harm_k[h];
         if (h == 0 && named) in.comment = "Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.";
         s.emit(in);
-        s_theta[h] = s.temp("s_theta_" + H);
+        s_theta[h] = s.temp("s_theta_", h + 1);
         s.unary(ProgramOp::sin, s_theta[h], theta);
-        c_theta[h] = s.temp("c_theta_" + H);
+        c_theta[h] = s.temp("c_theta_", h + 1);
         s.unary(ProgramOp::cos, c_theta[h], theta);
         theta_slot[h] = slot("theta_", h + 1, theta);
         c_theta_slot[h] = slot("c_theta_", h + 1, c_theta[h]);
@@ -529,10 +528,9 @@ Program lower(const Derivation& d, ProgramNames names) {
 
     std::vector<std::uint32_t> sin_h(nh), cos_h(nh);
     for (std::size_t h = 0; h < nh; ++h) {
-        const std::string H = idx(h);
-        const std::uint32_t r0 = e.temp("arg_" + H);
-        e.temp("sin_" + H);
-        e.temp("cos_" + H);
+        const std::uint32_t r0 = e.temp("arg_", h + 1);
+        e.temp("sin_", h + 1);
+        e.temp("cos_", h + 1);
         sin_h[h] = r0 + 1;
         cos_h[h] = r0 + 2;
         ProgramInstr in{ProgramOp::harmonic};
@@ -609,7 +607,6 @@ Program lower(const Derivation& d, ProgramNames names) {
     // x, v, a of every mass and the magnitudes of their terms.
     std::vector<std::uint32_t> mx(n), mv(n);
     for (std::size_t i = 0; i < n; ++i) {
-        const std::string I = std::to_string(i);
         const int ii = static_cast<int>(i);
         const int r = free_of[i];
         const std::string comment =
@@ -906,7 +903,6 @@ Program lower(const Derivation& d, ProgramNames names) {
             const Mass& ms = model.masses[i];
             const double mu_s_n = d.mu_s_n[static_cast<std::size_t>(i)];
             const double sgn_f = pos ? 1.0 : -1.0;
-            const std::string I = std::to_string(i);
             if (ms.partner == kGround) {
                 if (named) comment += std::string("g_") + F + ": " + (pos ? "A" : "-A") + " - mu_s N of stuck " + ms.name +
                            ", A = -K x - C v + f + sum_h F_h sin (force but friction)";
