@@ -57,8 +57,11 @@ struct Outcome {
 enum class Solvers { generic, interp };
 inline const char* solvers_name(Solvers s) { return s == Solvers::generic ? "generic" : "interp"; }
 
-/// The HSNC engine from the model's initial state.
-inline Outcome simulate(const Model& model, double t_end, double dt = 0.0, Solvers solvers = Solvers::generic) {
+/// The HSNC engine from the model's initial state; configurations with
+/// `schedule_from` switch functions or more searched on a schedule per
+/// function (EngineOptions::schedule_from).
+inline Outcome simulate(const Model& model, double t_end, double dt = 0.0, Solvers solvers = Solvers::generic,
+                        std::size_t schedule_from = kScheduleFrom) {
     GenericSolverProvider generic(model);
     // The configurations the derivation refuses (NotDerivable) on the generic solver, as in the facade.
     DerivationFallbackProvider interp(model, std::make_unique<InterpretedSolverProvider>(program_source(model)));
@@ -68,6 +71,7 @@ inline Outcome simulate(const Model& model, double t_end, double dt = 0.0, Solve
     EngineOptions opt;
     opt.t_end = t_end;
     opt.dt = dt;
+    opt.schedule_from = schedule_from;
     Outcome r;
     r.summary = engine.run(opt, rec);
     r.events = std::move(rec.events);

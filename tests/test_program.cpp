@@ -572,5 +572,82 @@ TEST(SwitchProgram, ARunSearchingWithItWritesTheBytesOfAFullSearch) {
     EXPECT_TRUE(ro.trajectory == rf.trajectory) << "trajectory CSV";
 }
 
+// ---- the search by function (SegmentSolver::eval_some) ----
+
+/// A chain of n unit masses with friction on every one and three contacts:
+/// a switch function for every mass (bench_common.h friction_chain's kind).
+Model friction_chain_model(int n) {
+    auto m = [](int i) { return "m" + std::to_string(i); };
+    std::string t = "name = \"friction-chain\"\n[damping]\nbeta = 0.002\n";
+    for (int i = 1; i <= n; ++i) t += "[[mass]]\nname = \"" + m(i) + "\"\nm = 1\nmu_k = 0.05\nmu_s = 0.07\n";
+    t += "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 400\n";
+    for (int i = 1; i < n; ++i) t += "[[spring]]\nbetween = [\"" + m(i) + "\", \"" + m(i + 1) + "\"]\nk = 400\n";
+    t += "[[spring]]\nbetween = [\"" + m(n) + "\", \"ground\"]\nk = 400\n";
+    for (int q : {n / 4, n / 2})
+        t += "[[contact]]\nbetween = [\"" + m(q) + "\", \"" + m(q + 1) + "\"]\ngap = 0.01\nk = 4000\n";
+    t += "[[contact]]\nbetween = [\"" + m(3 * n / 4) + "\", \"ground\"]\ngap = 0.02\nk = 4000\n";
+    t += "[[forcing]]\nomega = 9.0\namplitude = { m1 = 30.0, " + m(n) + " = -20.0 }\n";
+    t += "[initial]\nv = { " + m(n / 2) + " = 1.0 }\n";
+    return parse_model(t, "friction-chain.toml");
+}
+
+TEST(FunctionRows, EvalSomeHasTheBitsOfEvalForTheListedFunctionsAndLeavesTheOthers) {
+    const Model m = friction_chain_model(20);
+    std::mt19937 rng(11);
+    for (const char* spec : {"", "closed=contact1", "closed=contact2,contact3 stuck=m3,m4,m11,m17", "stuck=m1,m20"}) {
+        const Configuration cfg = Configuration::parse(m, spec);
+        InterpretedSolver s(lower(derive(m, cfg)));
+        const std::size_t n = m.dof(), ns = s.switches().size();
+        ASSERT_GE(ns, kScheduleFrom) << spec;
+        ASSERT_TRUE(s.has_function_rows()) << spec;
+        const testing::Start st = testing::start_of(m, cfg, 5);
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        std::vector<double> x(m.state_size()), v(n), a(n), g(ns), dg(ns), b(ns), sc(ns);
+        const SegmentEval full{x.data(), v.data(), a.data(), g.data(), dg.data(), b.data(), sc.data()};
+        s.setup(st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data());
+        for (double tau : {0.0, 1e-9, 0.013, 0.5, 3.25}) {
+            // A few functions, listed in any order (the engine lists them ascending).
+            std::vector<std::uint32_t> which;
+            for (std::uint32_t f = 0; f < ns; ++f)
+                if (rng() % 5 == 0) which.push_back(f);
+            std::shuffle(which.begin(), which.end(), rng);
+            std::vector<double> x2(x.size(), nan), v2(n, nan), a2(n, nan), g2(ns, nan), dg2(ns, nan), b2(ns, nan),
+                sc2(ns, nan);
+            const SegmentEval some{x2.data(), v2.data(), a2.data(), g2.data(), dg2.data(), b2.data(), sc2.data()};
+            s.eval_some(tau, which.data(), which.size(), some);  // first: eval cannot leave it its registers
+            s.eval(tau, full);
+            std::vector<char> listed(ns, 0);
+            for (std::uint32_t f : which) {
+                listed[f] = 1;
+                EXPECT_EQ(std::memcmp(&g[f], &g2[f], sizeof(double)), 0) << spec << " tau " << tau << " g " << f;
+                EXPECT_EQ(std::memcmp(&dg[f], &dg2[f], sizeof(double)), 0) << spec << " tau " << tau << " dg " << f;
+                EXPECT_EQ(std::memcmp(&b[f], &b2[f], sizeof(double)), 0) << spec << " tau " << tau << " bound " << f;
+                EXPECT_EQ(std::memcmp(&sc[f], &sc2[f], sizeof(double)), 0) << spec << " tau " << tau << " scale " << f;
+            }
+            for (std::size_t f = 0; f < ns; ++f)
+                if (!listed[f]) EXPECT_TRUE(std::isnan(g2[f]) && std::isnan(dg2[f]) && std::isnan(b2[f]) && std::isnan(sc2[f])) << f;
+        }
+    }
+}
+
+TEST(FunctionRows, ARunSearchingByFunctionWritesTheBytesOfAFullSearch) {
+    // What a kernel does (every function at every instant, the search reading
+    // the listed ones) and what the interpreter does (the listed ones alone)
+    // must be the same run: aot, jit and generic write the same bytes.
+    const Model m = friction_chain_model(20);
+    InterpretedSolverProvider own(lowering_of(m));
+    const RunFiles ro = run_to_csv(m, own, 10.0, 0.01, "by-function");
+    InterpretedSolverProvider inner(lowering_of(m));
+    FullEvalProvider full(inner);
+    const RunFiles rf = run_to_csv(m, full, 10.0, 0.01, "full-by-function");
+    ASSERT_EQ(ro.summary.status, RunStatus::ok) << ro.summary.message;
+    EXPECT_GE(ro.summary.events, 500u);
+    EXPECT_EQ(ro.summary.evaluations, rf.summary.evaluations);
+    EXPECT_TRUE(same_bits(ro.summary.x, rf.summary.x)) << "the state reached";
+    EXPECT_TRUE(same_bits(ro.summary.v, rf.summary.v)) << "the state reached";
+    EXPECT_TRUE(ro.events == rf.events) << "events CSV";
+    EXPECT_TRUE(ro.trajectory == rf.trajectory) << "trajectory CSV";
+}
+
 }  // namespace
 }  // namespace hsnc

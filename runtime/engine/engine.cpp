@@ -20,6 +20,9 @@ namespace {
 
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// A scheduled search evaluates, beside the functions due at the next instant,
+// those due within this many times the step to it.
+constexpr double kScheduleAhead = 1.0;
 
 // Rounding level of a switch function whose summed terms have magnitude `scale`.
 double noise_of(double scale) { return 16 * kEps * scale; }
@@ -140,6 +143,8 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     const std::size_t max_switches = model_.max_switches();
     Buffers buf(x.size(), n, max_switches);
     Buffers dense(x.size(), n, max_switches);  // trajectory samples, so buf keeps the event state
+    Buffers probe(x.size(), n, max_switches);  // a search evaluation: its due functions go to buf
+    const SegmentEval probe_view = probe.view();
     std::set<Configuration> visited;
     std::deque<double> recent;  // times of the latest events (Zeno guard)
     std::size_t same_instant = 0;
@@ -163,6 +168,11 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     };
 
     std::vector<double> side(max_switches), floor(max_switches), root(max_switches), clear_until(max_switches);
+    // The per-function schedule of the switch search: when each function was
+    // evaluated (at), the evaluation before (before), until when it is safe (next).
+    std::vector<double> at(max_switches), before(max_switches), next(max_switches);
+    std::vector<std::uint32_t> due;
+    due.reserve(max_switches);
     std::vector<char> armed(max_switches), leaving(max_switches), leaves_now(max_switches);
     std::vector<double> series_d, series_mag;
     Found found;
@@ -221,12 +231,25 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             side[f] = side_of(sw[f], cfg, sgn);
             floor[f] = inherited[slot(sw[f])];
         }
+        // at_f is the instant at which function f's values in buf (g, dg,
+        // bound, scale) were taken, before_f the one before, next_f the instant
+        // up to which its bound keeps it from its trigger level. With few
+        // functions every instant evaluates all of them (next_f is the same
+        // step for all). With many (kScheduleFrom, segment_solver.h), each is
+        // evaluated on its own schedule: an instant takes the functions whose
+        // next_f it reaches, or soon will (`due`), and the others keep their
+        // values and their guarantee. So a function far from switching is not
+        // evaluated at every instant another one needs, and a solver that
+        // computes a function alone (the interpreter, SegmentSolver::eval_some)
+        // does only what is due. The instants depend on the values alone, so
+        // every kind of solver takes the same ones (a kernel computes every
+        // function and the search reads the due ones).
+        const bool scheduled = nsw >= options.schedule_from;
         // Rounding level of g_f at the point last evaluated: its terms (scale), the
-        // rounding of the time itself (|g'| * ulp-ish of t + tau, which also covers
+        // rounding of the time itself (|g'| * ulp-ish of t + at_f, which also covers
         // the rounding of each omega*tau), and what it inherited from the last event.
-        double tau_now = 0.0;
         auto noise = [&](std::size_t f) {
-            return std::max(noise_of(buf.scale[f] + std::fabs(buf.dg[f]) * (std::fabs(t) + tau_now)), floor[f]);
+            return std::max(noise_of(buf.scale[f] + std::fabs(buf.dg[f]) * (std::fabs(t) + at[f])), floor[f]);
         };
         // A velocity function that starts at 0 (a release, a reversal, a stop
         // that slides on) is not watched for a stop until it has left 0.
@@ -234,14 +257,22 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
 
         // The search reads only the switch outputs; the state (x, v, a) is
         // read at the segment's last instant, evaluated in full.
-        auto eval = [&](double tau) {
-            S.eval_switches(tau, out);
-            tau_now = tau;
+        auto eval_all = [&](double tau, bool full) {
+            if (full)
+                S.eval(tau, out);
+            else
+                S.eval_switches(tau, out);
+            for (std::size_t f = 0; f < nsw; ++f) before[f] = at[f], at[f] = tau;
             ++sum.evaluations;
         };
-        auto eval_full = [&](double tau) {
-            S.eval(tau, out);
-            tau_now = tau;
+        auto eval_due = [&](double tau) {
+            S.eval_some(tau, due.data(), due.size(), probe_view);
+            for (std::uint32_t f : due) {
+                buf.g[f] = probe.g[f], buf.dg[f] = probe.dg[f], buf.bound[f] = probe.bound[f];
+                buf.scale[f] = probe.scale[f];
+                before[f] = at[f];
+                at[f] = tau;
+            }
             ++sum.evaluations;
         };
 
@@ -249,8 +280,12 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         found.any = false;
         found.tau = 0.0;
         found.switched.clear();
-        double tau = 0.0, prev_tau = 0.0;
-        eval(0.0);
+        eval_all(0.0, false);
+        due.resize(nsw);
+        for (std::size_t f = 0; f < nsw; ++f) {
+            due[f] = static_cast<std::uint32_t>(f);
+            before[f] = 0.0;
+        }
         for (std::size_t f = 0; f < nsw; ++f)
             if (is_velocity(sw[f].kind))
                 armed[f] = side[f] * buf.g[f] > noise(f);
@@ -305,12 +340,13 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 }
             }
         }
+        double tau = 0.0;  // the instant evaluated last
         for (std::size_t iter = 0;; ++iter) {
             if (iter > 10'000'000) return finish(RunStatus::failure, "switch search does not converge at t = " + time_text(t + tau));
-            // Which functions have switched at tau, and where is each one's zero?
+            // Which of the functions just evaluated have switched, and where is each one's zero?
             double tau_star = kInf;
-            std::fill(root.begin(), root.begin() + static_cast<std::ptrdiff_t>(nsw), kInf);
-            for (std::size_t f = 0; f < nsw; ++f) {
+            for (std::uint32_t f : due) {
+                root[f] = kInf;
                 const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
                 if (!std::isfinite(h) || !std::isfinite(hd) || !std::isfinite(buf.bound[f]))
                     return finish(RunStatus::failure, "non-finite switch function in configuration '" +
@@ -325,10 +361,11 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 if (stop ? h > eps_f : h >= -eps_f) continue;
                 // Move to the zero by one Newton step (the function is monotone
                 // there), never before the last point known to be on the safe side.
+                const double prev = before[f];
                 double r = tau;
                 if (hd < 0 && std::fabs(hd) > 0) r = tau - h / hd;
                 if (stop && h <= 0 && hd >= 0) r = tau;  // touched zero and turned back
-                r = std::min(std::max(r, prev_tau), std::max(tau, prev_tau));
+                r = std::min(std::max(r, prev), std::max(tau, prev));
                 if (stop && hd < 0 && h > 0) r = tau + h / -hd;  // tiny forward step onto v = 0
                 root[f] = r;
                 tau_star = std::min(tau_star, r);
@@ -341,7 +378,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 for (std::size_t f = 0; f < nsw; ++f)
                     if (root[f] <= tau_star + tol) found.switched.push_back(sw[f]);
                 // Others within rounding of zero and heading across at the event instant.
-                eval_full(found.tau);
+                eval_all(found.tau, true);
                 for (std::size_t f = 0; f < nsw; ++f) {
                     if (root[f] <= tau_star + tol) continue;
                     const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
@@ -355,26 +392,42 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     inherited[slot(sw[f])] = noise(f);
                 break;
             }
-            if (tau >= tau_end) break;
-            // Safe step: no function can reach its trigger level inside it.
-            double step = std::min(max_step, tau_end - tau);
-            for (std::size_t f = 0; f < nsw; ++f) {
-                if (leaving[f]) continue;
-                const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
-                const bool stop = is_velocity(sw[f].kind) && armed[f];
-                // Contacts and releases switch only when certainly negative (level
-                // -2*noise); armed velocities stop at zero.
-                const double level = stop ? 0.0 : -2 * noise(f);
-                step = std::min(step, safe_step(h - level, hd, buf.bound[f]));
-            }
+            if (tau >= tau_end) break;  // every function was evaluated at tau_end (next_f <= tau_end)
+            // Safe step of each function just evaluated: none can reach its
+            // trigger level before next_f.
+            const double step_cap = std::min(max_step, tau_end - tau);
             const double floor_step = 4 * kEps * (std::fabs(t) + std::fabs(tau)) + 1e-300;
-            for (std::size_t f = 0; f < nsw; ++f)
-                if (leaving[f]) step = std::min(step, tau < clear_until[f] ? clear_until[f] - tau : std::max(tau, floor_step));
-            step = std::max(step, floor_step);
-            prev_tau = tau;
-            tau = std::min(tau + step, tau_end);
-            eval(tau);
-            for (std::size_t f = 0; f < nsw; ++f) {
+            for (std::uint32_t f : due) {
+                double step = step_cap;
+                if (leaving[f]) {
+                    step = std::min(step, tau < clear_until[f] ? clear_until[f] - tau : std::max(tau, floor_step));
+                } else {
+                    const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
+                    const bool stop = is_velocity(sw[f].kind) && armed[f];
+                    // Contacts and releases switch only when certainly negative (level
+                    // -2*noise); armed velocities stop at zero.
+                    const double level = stop ? 0.0 : -2 * noise(f);
+                    step = std::min(step, safe_step(h - level, hd, buf.bound[f]));
+                }
+                next[f] = std::min(tau + std::max(step, floor_step), tau_end);
+            }
+            // The next instant: the earliest next_f (the segment's own step
+            // without switch functions).
+            double tau_next = nsw ? kInf : std::min(tau + std::max(step_cap, floor_step), tau_end);
+            for (std::size_t f = 0; f < nsw; ++f) tau_next = std::min(tau_next, next[f]);
+            if (scheduled) {
+                // The functions due by then, and those due soon after: one
+                // evaluation of a few more functions is cheaper than an instant more.
+                const double by = tau_next + kScheduleAhead * (tau_next - tau);
+                due.clear();
+                for (std::size_t f = 0; f < nsw; ++f)
+                    if (next[f] <= by) due.push_back(static_cast<std::uint32_t>(f));
+                eval_due(tau_next);
+            } else {
+                eval_all(tau_next, false);
+            }
+            tau = tau_next;
+            for (std::uint32_t f : due) {
                 if (is_velocity(sw[f].kind) && !armed[f] && side[f] * buf.g[f] > 2 * noise(f))
                     armed[f] = 1;
                 // Past its clear interval the bound watches it again (a function
@@ -414,7 +467,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         }
 
         // ---- advance to the event instant: the state at tau, the time as t + t_lo ----
-        if (!found.any) eval_full(tau_end);  // an event's instant was evaluated last in the search
+        if (!found.any) eval_all(tau_end, true);  // an event's instant was evaluated in full in the search
         x = buf.x;
         v = buf.v;
         for (std::size_t i = 0; i < n; ++i)

@@ -4,6 +4,8 @@
 
 #include <cstddef>
 
+#include "segment_solver.h"  // kScheduleFrom
+
 namespace hsnc {
 
 struct EngineOptions {
@@ -16,6 +18,11 @@ struct EngineOptions {
     /// 8 eps |t| per switch, twice the smallest step) stop the run with RunStatus::zeno.
     std::size_t zeno_events = 1000;
     double zeno_span = 1e-9;
+    /// A configuration with at least this many switch functions is searched
+    /// on a schedule per function (engine.cpp; the default is
+    /// kScheduleFrom, segment_solver.h). Results depend on it to rounding
+    /// only; tests set it to search small models that way too.
+    std::size_t schedule_from = kScheduleFrom;
 };
 
 }  // namespace hsnc

@@ -82,6 +82,9 @@ struct Step {
     const Instr& single() const { return *single_; }
 };
 
+using RowRef = InterpretedSolver::RowRef;
+constexpr std::uint32_t kNoStep = ~std::uint32_t{0};
+
 }  // namespace interpreter
 
 struct InterpretedSolver::Body {
@@ -499,6 +502,41 @@ void execute(const double* K, const InterpretedSolver::Body& body, double* r) {
     }
 }
 
+// One row of a batched step (lin, lin_ld, copy, abs, mass), as its block
+// computes it: the rows of a block are independent sums.
+template <bool Shared, bool Base, int M>
+void lin_row(const Step& s, std::uint32_t row, double* r) {
+    lin_rows<1, Shared, Base, M>(s, row, r);
+}
+
+using RowFn = void (*)(const Step&, std::uint32_t, double*);
+
+constexpr RowFn lin_row_fn(int k) {
+    constexpr RowFn fns[20] = {
+        lin_row<false, false, 0>, lin_row<false, false, 1>, lin_row<false, false, 2>, lin_row<false, false, 3>,
+        lin_row<false, false, 4>, lin_row<false, true, 0>,  lin_row<false, true, 1>,  lin_row<false, true, 2>,
+        lin_row<false, true, 3>,  lin_row<false, true, 4>,  lin_row<true, false, 0>,  lin_row<true, false, 1>,
+        lin_row<true, false, 2>,  lin_row<true, false, 3>,  lin_row<true, false, 4>,  lin_row<true, true, 0>,
+        lin_row<true, true, 1>,   lin_row<true, true, 2>,   lin_row<true, true, 3>,   lin_row<true, true, 4>};
+    return fns[k];
+}
+
+void run_row(const Step& s, std::uint32_t row, double* r) {
+    switch (s.run) {
+        case kLinEmpty: r[s.dst()[row]] = 0.0; break;
+        case kLinEmptyBase: r[s.dst()[row]] = r[s.src()[row]] + 0.0; break;
+        case kLdEmpty: r[s.dst()[row]] = static_cast<double>(0.0L); break;
+        case kCopy: r[s.dst()[row]] = r[s.src()[row]]; break;
+        case kAbs: r[s.dst()[row]] = __builtin_fabs(r[s.src()[row]]); break;
+        case kMass: mass_rows<1>(s, row, r); break;
+        case kLd: lin_ld_rows<1, false>(s, row, r); break;
+        case kLdShared: lin_ld_rows<1, true>(s, row, r); break;
+        default:
+            if (s.run >= kLin && s.run < kRuns) lin_row_fn(s.run - kLin)(s, row, r);
+            break;  // single steps are never a function's row (rows_by_function)
+    }
+}
+
 // ---- scheduling: registers each instruction reads and writes ----
 
 void accesses(const Instr& in, const std::vector<ProgramTerm>& terms, std::vector<std::uint32_t>& reads,
@@ -913,8 +951,9 @@ double estimated_work(const std::vector<Instr>& code) {
 /// appearance; a sin and a cos of one register in one step. Every value is
 /// computed by the same operations from the same operands as in program order.
 std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code, std::vector<ProgramTerm>& terms,
-                                                  std::size_t registers) {
+                                                  std::size_t registers, std::vector<RowRef>* where = nullptr) {
     const std::size_t n = code.size();
+    if (where) where->assign(n, {kNoStep, 0});
     std::vector<int> last_write(registers, -1), last_read(registers, -1), level(n, 0);
     std::vector<std::uint32_t> reads, writes;
     int levels = 0;
@@ -977,6 +1016,10 @@ std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code
         for (std::size_t g = 0; g < G; ++g) {
             if (fused[g]) continue;
             if (!alone[g]) {
+                if (where)
+                    for (std::uint32_t k = offset[g]; k < offset[g + 1]; ++k)
+                        (*where)[static_cast<std::size_t>(rows[k] - code.data())] = {static_cast<std::uint32_t>(blocks.size()),
+                                                                                   k - offset[g]};
                 blocks.push_back(make_block(rows.data() + offset[g], offset[g + 1] - offset[g], terms));
                 continue;
             }
@@ -994,6 +1037,91 @@ std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code
         }
     }
     return freeze(blocks);
+}
+
+/// The rows of eval's body that function f's outputs need beyond the common
+/// part (the modes, the harmonics and what they read: everything but the
+/// sums, run once per instant): the states of the masses it reads and its
+/// sums, in program order, each as where eval runs it (`where`, from
+/// schedule()), so that a row computes from the operands it has in the whole
+/// program: the same bits. `common` marks the common instructions. False when
+/// a register that a function's rows write has two writers (then running a
+/// part alone could leave another writer's value).
+struct FunctionRows {
+    std::vector<char> common;       ///< [instruction]
+    std::vector<RowRef> rows;       ///< the parts, one after another
+    std::vector<std::uint32_t> at;  ///< function f's rows: rows[at[f] .. at[f + 1])
+};
+
+bool rows_by_function(const std::vector<Instr>& code, const std::vector<ProgramTerm>& terms, std::size_t registers,
+                      std::uint32_t outputs, std::size_t ns, const std::vector<RowRef>& where, FunctionRows& out) {
+    const std::size_t n = code.size();
+    // Every instruction's reads (rows of read_regs) and each register's writer.
+    std::vector<int> writer(registers, -1), writers(registers, 0);
+    std::vector<std::uint32_t> read_at(n + 1, 0), read_regs, reads, writes;
+    std::vector<char> needed(registers, 0);
+    std::vector<char>& is_common = out.common;
+    is_common.assign(n, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+        accesses(code[i], terms, reads, writes);
+        for (std::uint32_t w : writes) writer[w] = static_cast<int>(i), ++writers[w];
+        read_regs.insert(read_regs.end(), reads.begin(), reads.end());
+        read_at[i + 1] = static_cast<std::uint32_t>(read_regs.size());
+        if (!batched(code[i].op)) is_common[i] = 1;
+    }
+    // Common: the unbatched instructions and every writer of what they read
+    // (as needed_for: each writer of a needed register, before its reader).
+    for (std::size_t i = n; i-- > 0;) {
+        if (!is_common[i]) {
+            accesses(code[i], terms, reads, writes);
+            for (std::uint32_t w : writes) is_common[i] = is_common[i] || needed[w];
+        }
+        if (is_common[i])
+            for (std::uint32_t k = read_at[i]; k < read_at[i + 1]; ++k) needed[read_regs[k]] = 1;
+    }
+    // Each other instruction's dependencies outside the common part: the
+    // writers of what it reads, each once (stamp).
+    std::vector<std::uint32_t> dep_at(n + 1, 0), deps;
+    std::vector<int> stamp(n, -1);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!is_common[i]) {
+            accesses(code[i], terms, reads, writes);
+            for (std::uint32_t w : writes)
+                if (writers[w] != 1) return false;
+            if (where[i].step == kNoStep) return false;
+            for (std::uint32_t k = read_at[i]; k < read_at[i + 1]; ++k) {
+                const int w = writer[read_regs[k]];
+                if (w < 0 || is_common[static_cast<std::size_t>(w)] || stamp[static_cast<std::size_t>(w)] == static_cast<int>(i))
+                    continue;
+                stamp[static_cast<std::size_t>(w)] = static_cast<int>(i);
+                deps.push_back(static_cast<std::uint32_t>(w));
+            }
+        }
+        dep_at[i + 1] = static_cast<std::uint32_t>(deps.size());
+    }
+    std::fill(stamp.begin(), stamp.end(), -1);  // now: the function whose part holds instruction i last
+    std::vector<std::uint32_t> stack, part;
+    out.rows.clear();
+    out.at.assign(1, 0);
+    for (std::size_t f = 0; f < ns; ++f) {
+        part.clear();
+        for (std::uint32_t q = 0; q < 4; ++q) {
+            const int w = writer[outputs + static_cast<std::uint32_t>(q * ns + f)];
+            if (w >= 0 && !is_common[static_cast<std::size_t>(w)]) stack.push_back(static_cast<std::uint32_t>(w));
+        }
+        while (!stack.empty()) {
+            const std::uint32_t w = stack.back();
+            stack.pop_back();
+            if (stamp[w] == static_cast<int>(f)) continue;
+            stamp[w] = static_cast<int>(f);
+            part.push_back(w);
+            stack.insert(stack.end(), deps.begin() + dep_at[w], deps.begin() + dep_at[w + 1]);
+        }
+        std::sort(part.begin(), part.end());
+        for (std::uint32_t i : part) out.rows.push_back(where[i]);
+        out.at.push_back(static_cast<std::uint32_t>(out.rows.size()));
+    }
+    return true;
 }
 
 }  // namespace
@@ -1015,7 +1143,9 @@ InterpretedSolver::InterpretedSolver(Program p)
                                                                                    p.n_state() + 2 * p.n_dof);
     const std::vector<Instr> code =
         prepare(p.eval, p.terms, outputs, outputs + p.eval_output_count(), no_exports_);
-    eval_ = schedule(code, p.terms, p.eval.registers());
+    const bool by_function = switches_.size() >= kScheduleFrom;  // eval_some() runs rows of eval_
+    std::vector<RowRef> where;
+    eval_ = schedule(code, p.terms, p.eval.registers(), by_function ? &where : nullptr);
     // The search's program: what g, dg, bound and scale need. Worth a body of
     // its own only when it leaves out a good part (the state of masses no
     // switch function reads).
@@ -1026,12 +1156,27 @@ InterpretedSolver::InterpretedSolver(Program p)
         switches_body_ = schedule(search, p.terms, p.eval.registers());
         switch_share_ = share;
     }
+    if (by_function) {
+        // Rows by function for eval_some (rows_by_function); without them
+        // eval_some() is eval_switches().
+        FunctionRows parts;
+        if (rows_by_function(code, p.terms, p.eval.registers(), switch_outputs, switches_.size(), where, parts)) {
+            std::vector<Instr> common;
+            for (std::size_t i = 0; i < code.size(); ++i)
+                if (parts.common[i]) common.push_back(code[i]);
+            common_ = schedule(common, p.terms, p.eval.registers());
+            part_rows_ = std::move(parts.rows);
+            part_at_ = std::move(parts.at);
+        }
+    }
 }
 
 InterpretedSolver::~InterpretedSolver() = default;
 
 std::size_t InterpretedSolver::memory_bytes() const {
-    return sizeof(*this) + setup_->bytes() + eval_->bytes() + (switches_body_ ? switches_body_->bytes() : 0) +
+    const std::size_t cut = (common_ ? common_->bytes() : 0) + sizeof(RowRef) * part_rows_.capacity() +
+                            sizeof(std::uint32_t) * part_at_.capacity();
+    return sizeof(*this) + setup_->bytes() + eval_->bytes() + (switches_body_ ? switches_body_->bytes() : 0) + cut +
            sizeof(double) * (constants_.capacity() + setup_regs_.capacity() + eval_regs_.capacity()) +
            sizeof(std::uint32_t) * setup_coef_.capacity() + sizeof(SwitchFunction) * switches_.capacity() +
            cfg_.closed.capacity() + cfg_.stuck.capacity();
@@ -1065,6 +1210,23 @@ void InterpretedSolver::eval_switches(double tau, const SegmentEval& out) const 
     const double* o = r + Program::kEvalCoef + n_coef_ + nx + 2 * n;
     for (std::size_t f = 0; f < ns; ++f)
         out.g[f] = o[f], out.dg[f] = o[ns + f], out.bound[f] = o[2 * ns + f], out.scale[f] = o[3 * ns + f];
+}
+
+void InterpretedSolver::eval_some(double tau, const std::uint32_t* which, std::size_t count,
+                                  const SegmentEval& out) const {
+    if (!common_) return eval_switches(tau, out);
+    double* r = eval_regs_.data();
+    r[Program::kEvalTau] = tau;
+    execute(constants_.data(), *common_, r);
+    const std::size_t n = static_cast<std::size_t>(n_dof_), nx = n + static_cast<std::size_t>(n_slider_),
+                      ns = switches_.size();
+    const double* o = r + Program::kEvalCoef + n_coef_ + nx + 2 * n;
+    for (std::size_t k = 0; k < count; ++k) {
+        const std::uint32_t f = which[k];
+        for (std::uint32_t i = part_at_[f]; i < part_at_[f + 1]; ++i)
+            run_row(eval_->steps[part_rows_[i].step], part_rows_[i].row, r);
+        out.g[f] = o[f], out.dg[f] = o[ns + f], out.bound[f] = o[2 * ns + f], out.scale[f] = o[3 * ns + f];
+    }
 }
 
 void InterpretedSolver::eval(double tau, const SegmentEval& out) const {

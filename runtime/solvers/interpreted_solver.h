@@ -49,7 +49,14 @@ public:
     /// leaves out a fifth of eval's work or more (the state of masses no switch
     /// function reads); the same bits as eval() for g, dg, bound and scale.
     void eval_switches(double tau, const SegmentEval& out) const override;
+    /// With kScheduleFrom switch functions or more: the modes once, then the
+    /// instructions each listed function needs beyond them (the states of the
+    /// masses it reads, its sums); the same bits as eval() for the listed
+    /// functions' g, dg, bound and scale, the others' left as they were.
+    void eval_some(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const override;
     double max_step() const override { return max_step_; }
+    /// Whether eval_some() runs the listed functions' rows alone (else it is eval_switches()).
+    bool has_function_rows() const { return static_cast<bool>(common_); }
     /// Whether eval_switches() runs a program of its own (else it is eval()).
     bool has_switch_program() const { return static_cast<bool>(switches_body_); }
     /// The share of eval's work (terms summed, libm calls) the search does (1
@@ -66,6 +73,10 @@ public:
     std::size_t memory_bytes() const;
 
     struct Body;  // a program as run: its steps and their data (interpreted_solver.cpp)
+    /// One row of one step of a body (a block runs its rows independently).
+    struct RowRef {
+        std::uint32_t step, row;
+    };
 
 private:
     Configuration cfg_;
@@ -78,6 +89,11 @@ private:
     std::vector<std::uint32_t> setup_coef_;  // setup's registers of coef[k]
     std::vector<std::uint32_t> no_exports_;
     std::unique_ptr<Body> setup_, eval_, switches_body_;  // switches_body_: null when eval_switches() is eval()
+    // eval_some: the modes and harmonics once (null: eval_some() is
+    // eval_switches()), then function f's rows of eval_, part_rows_[part_at_[f] .. part_at_[f + 1]).
+    std::unique_ptr<Body> common_;
+    std::vector<RowRef> part_rows_;
+    std::vector<std::uint32_t> part_at_;
     double switch_share_ = 1.0;
     std::vector<double> setup_regs_;
     // eval's register file; setup writes the coefficient block straight into it.

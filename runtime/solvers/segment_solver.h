@@ -10,6 +10,8 @@
 // Eigen-based solver.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "configuration.h"
@@ -30,6 +32,13 @@ struct SegmentEval {
     double* scale;  ///< magnitude of the terms summed into g_f (sum of |terms|):
                     ///  g_f is known to about 1e-16*scale_f, no better
 };
+
+/// A switch search over a configuration with at least this many switch
+/// functions evaluates each function on its own schedule (engine.cpp,
+/// EngineOptions::schedule_from): an instant computes the functions whose
+/// safe step ends there (SegmentSolver::eval_some), not all of them. Solvers
+/// prepare for eval_some() from this many.
+inline constexpr std::size_t kScheduleFrom = 16;
 
 class SegmentSolver {
 public:
@@ -62,6 +71,15 @@ public:
     /// buffers may be written or not). The default is eval(); a solver that
     /// can skip the state of masses no switch function reads overrides it.
     virtual void eval_switches(double tau, const SegmentEval& out) const { eval(tau, out); }
+
+    /// The switch functions which[0 .. count) at tau, as eval_switches gives
+    /// them (g, dg, bound, scale); the others' outputs are left unspecified.
+    /// The default is eval_switches(); the interpreter computes only what the
+    /// listed functions read.
+    virtual void eval_some(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const {
+        (void)which, (void)count;
+        eval_switches(tau, out);
+    }
 
     /// The longest step over which `bound` is valid: +infinity unless the
     /// segment has secular (resonant, growing) terms.

@@ -41,6 +41,10 @@ public:
         ++evaluations;
         inner->eval_switches(tau, out);
     }
+    void eval_some(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const override {
+        ++evaluations;
+        inner->eval_some(tau, which, count, out);
+    }
     double max_step() const override { return inner->max_step(); }
 };
 
