@@ -164,6 +164,34 @@ TEST(Tiered, AStructureWithFewSwitchesKeepsItsInterpretedSearch) {
     std::filesystem::remove_all(dir);
 }
 
+// A friction chain of 20 masses: every configuration has a switch function
+// per mass, searched by function (kScheduleFrom), where the interpreter
+// computes the few functions due and a kernel would compute all of them: no
+// kernel is asked for.
+TEST(Tiered, ASearchByFunctionKeepsTheInterpreter) {
+    std::string text = "name = \"friction-chain\"\n[damping]\nbeta = 0.002\n";
+    for (int i = 1; i <= 20; ++i) text += "[[mass]]\nname = \"m" + std::to_string(i) + "\"\nm = 1\nmu_k = 0.05\nmu_s = 0.07\n";
+    text += "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 400\n";
+    for (int i = 1; i < 20; ++i)
+        text += "[[spring]]\nbetween = [\"m" + std::to_string(i) + "\", \"m" + std::to_string(i + 1) + "\"]\nk = 400\n";
+    text += "[[contact]]\nbetween = [\"m10\", \"m11\"]\ngap = 0.01\nk = 4000\n";
+    text += "[[forcing]]\nomega = 9.0\namplitude = { m1 = 30.0, m20 = -20.0 }\n[initial]\nv = { m10 = 1.0 }\n";
+    const Model model = parse_model(text, "friction-chain.toml");
+    const std::string dir = testing::temp_path("tiered_by_function");
+    const testing::Outcome interp = testing::simulate(model, 5.0, 5.0 / 200, testing::Solvers::interp);
+    TierOptions o;
+    o.compile_after = 1;
+    o.wait_for_compiles = true;
+    std::vector<std::string> warnings;
+    auto provider = tiered(model, dir, [](const Configuration&) { throw RunError("asked for a kernel"); }, o, &warnings);
+    const testing::Outcome run_ = run(model, *provider, 5.0);
+    expect_same_bits(interp, run_);
+    EXPECT_GE(interp.events.size(), 100u);
+    EXPECT_TRUE(warnings.empty()) << warnings.front();
+    EXPECT_EQ(provider->on_kernels(), 0u) << provider->describe();
+    std::filesystem::remove_all(dir);
+}
+
 TEST(Tiered, TheRunNeverWaitsForTheCompiler) {
     const Model model = read_model(model_path("chain-8.toml"));
     const std::string dir = testing::temp_path("tiered_slow");
