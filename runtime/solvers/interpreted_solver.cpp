@@ -1058,7 +1058,7 @@ bool rows_by_function(const std::vector<Instr>& code, const std::vector<ProgramT
     const std::size_t n = code.size();
     // Every instruction's reads (rows of read_regs) and each register's writer.
     std::vector<int> writer(registers, -1), writers(registers, 0);
-    std::vector<std::uint32_t> read_at(n + 1, 0), read_regs, reads, writes;
+    std::vector<std::uint32_t> read_at(n + 1, 0), write_at(n + 1, 0), read_regs, write_regs, reads, writes;
     std::vector<char> needed(registers, 0);
     std::vector<char>& is_common = out.common;
     is_common.assign(n, 0);
@@ -1067,15 +1067,15 @@ bool rows_by_function(const std::vector<Instr>& code, const std::vector<ProgramT
         for (std::uint32_t w : writes) writer[w] = static_cast<int>(i), ++writers[w];
         read_regs.insert(read_regs.end(), reads.begin(), reads.end());
         read_at[i + 1] = static_cast<std::uint32_t>(read_regs.size());
+        write_regs.insert(write_regs.end(), writes.begin(), writes.end());
+        write_at[i + 1] = static_cast<std::uint32_t>(write_regs.size());
         if (!batched(code[i].op)) is_common[i] = 1;
     }
     // Common: the unbatched instructions and every writer of what they read
     // (as needed_for: each writer of a needed register, before its reader).
     for (std::size_t i = n; i-- > 0;) {
-        if (!is_common[i]) {
-            accesses(code[i], terms, reads, writes);
-            for (std::uint32_t w : writes) is_common[i] = is_common[i] || needed[w];
-        }
+        for (std::uint32_t k = write_at[i]; k < write_at[i + 1] && !is_common[i]; ++k)
+            is_common[i] = needed[write_regs[k]];
         if (is_common[i])
             for (std::uint32_t k = read_at[i]; k < read_at[i + 1]; ++k) needed[read_regs[k]] = 1;
     }
@@ -1085,9 +1085,8 @@ bool rows_by_function(const std::vector<Instr>& code, const std::vector<ProgramT
     std::vector<int> stamp(n, -1);
     for (std::size_t i = 0; i < n; ++i) {
         if (!is_common[i]) {
-            accesses(code[i], terms, reads, writes);
-            for (std::uint32_t w : writes)
-                if (writers[w] != 1) return false;
+            for (std::uint32_t k = write_at[i]; k < write_at[i + 1]; ++k)
+                if (writers[write_regs[k]] != 1) return false;
             if (where[i].step == kNoStep) return false;
             for (std::uint32_t k = read_at[i]; k < read_at[i + 1]; ++k) {
                 const int w = writer[read_regs[k]];
@@ -1165,8 +1164,8 @@ InterpretedSolver::InterpretedSolver(Program p)
             for (std::size_t i = 0; i < code.size(); ++i)
                 if (parts.common[i]) common.push_back(code[i]);
             common_ = schedule(common, p.terms, p.eval.registers());
-            part_rows_ = std::move(parts.rows);
-            part_at_ = std::move(parts.at);
+            part_rows_.assign(parts.rows.begin(), parts.rows.end());  // no spare capacity: the budget counts it
+            part_at_.assign(parts.at.begin(), parts.at.end());
         }
     }
 }
