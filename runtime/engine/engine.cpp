@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <set>
 #include <sstream>
+#include <type_traits>
 
 #include "assembly.h"
 #include "sample_grid.h"
@@ -244,198 +245,228 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         // does only what is due. The instants depend on the values alone, so
         // every kind of solver takes the same ones (a kernel computes every
         // function and the search reads the due ones).
-        const bool scheduled = nsw >= options.schedule_from;
-        // Rounding level of g_f at the point last evaluated: its terms (scale), the
-        // rounding of the time itself (|g'| * ulp-ish of t + at_f, which also covers
-        // the rounding of each omega*tau), and what it inherited from the last event.
-        auto noise = [&](std::size_t f) {
-            return std::max(noise_of(buf.scale[f] + std::fabs(buf.dg[f]) * (std::fabs(t) + at[f])), floor[f]);
-        };
-        // A velocity function that starts at 0 (a release, a reversal, a stop
-        // that slides on) is not watched for a stop until it has left 0.
-        std::fill(armed.begin(), armed.end(), 0);
+        // The search, compiled for each case so that the unscheduled one (every
+        // small model) pays nothing for the schedule.
+        std::string failure;
+        auto search = [&](auto schedule_tag) __attribute__((always_inline)) {
+            constexpr bool scheduled = decltype(schedule_tag)::value;
+            // Rounding level of g_f at the point last evaluated: its terms (scale), the
+            // rounding of the time itself (|g'| * ulp-ish of t + at_f, which also covers
+            // the rounding of each omega*tau), and what it inherited from the last event.
+            // Unscheduled, every function has the values of the last instant (tau_now).
+            double tau_now = 0.0, prev_tau = 0.0;
+            auto noise = [&](std::size_t f) {
+                const double at_f = scheduled ? at[f] : tau_now;
+                return std::max(noise_of(buf.scale[f] + std::fabs(buf.dg[f]) * (std::fabs(t) + at_f)), floor[f]);
+            };
+            // A velocity function that starts at 0 (a release, a reversal, a stop
+            // that slides on) is not watched for a stop until it has left 0.
+            std::fill(armed.begin(), armed.end(), 0);
 
-        // The search reads only the switch outputs; the state (x, v, a) is
-        // read at the segment's last instant, evaluated in full.
-        auto eval_all = [&](double tau, bool full) {
-            if (full)
-                S.eval(tau, out);
-            else
-                S.eval_switches(tau, out);
-            for (std::size_t f = 0; f < nsw; ++f) before[f] = at[f], at[f] = tau;
-            ++sum.evaluations;
-        };
-        auto eval_due = [&](double tau) {
-            S.eval_some(tau, due.data(), due.size(), probe_view);
-            for (std::uint32_t f : due) {
-                buf.g[f] = probe.g[f], buf.dg[f] = probe.dg[f], buf.bound[f] = probe.bound[f];
-                buf.scale[f] = probe.scale[f];
-                before[f] = at[f];
-                at[f] = tau;
-            }
-            ++sum.evaluations;
-        };
+            // The search reads only the switch outputs; the state (x, v, a) is
+            // read at the segment's last instant, evaluated in full.
+            auto eval_all = [&](double tau, bool full) {
+                if (full)
+                    S.eval(tau, out);
+                else
+                    S.eval_switches(tau, out);
+                prev_tau = tau_now, tau_now = tau;
+                if (scheduled)
+                    for (std::size_t f = 0; f < nsw; ++f) before[f] = at[f], at[f] = tau;
+                ++sum.evaluations;
+            };
+            auto eval_due = [&](double tau) {
+                S.eval_some(tau, due.data(), due.size(), probe_view);
+                for (std::uint32_t f : due) {
+                    buf.g[f] = probe.g[f], buf.dg[f] = probe.dg[f], buf.bound[f] = probe.bound[f];
+                    buf.scale[f] = probe.scale[f];
+                    before[f] = at[f];
+                    at[f] = tau;
+                }
+                ++sum.evaluations;
+            };
 
-        // ---- find the earliest switch in (0, tau_end] ----
-        found.any = false;
-        found.tau = 0.0;
-        found.switched.clear();
-        eval_all(0.0, false);
-        due.resize(nsw);
-        for (std::size_t f = 0; f < nsw; ++f) {
-            due[f] = static_cast<std::uint32_t>(f);
-            before[f] = 0.0;
-        }
-        for (std::size_t f = 0; f < nsw; ++f)
-            if (is_velocity(sw[f].kind))
-                armed[f] = side[f] * buf.g[f] > noise(f);
-        // Ties at the segment start (tie_series.h): a function at zero whose
-        // rate vanishes too. Its first non-zero derivative, of order m, decides
-        // (interface.md "Ties and touches"): one heading across switches now, at
-        // this instant; one heading into its safe side is `leaving` zero, where
-        // the bound h + h' s - B s^2/2 would make the steps shrink like s^(m/2)
-        // (a contact at rest on its gap under sin forcing took 30000
-        // evaluations). By Taylor's theorem with B' >= |h^(m+1)| on [0, T],
-        // h > 0 on (0, (m+1)|h^(m)(0)|/B'), so it is left out of the bound up to
-        // half that (clear_until) and watched by the bound from there. A function
-        // with no non-zero derivative (identically zero to rounding, by
-        // Cayley-Hamilton) stays leaving, with steps of at most tau (doubling),
-        // unless its g'' bound is 0 (then the bound gives an unlimited step).
-        std::fill(leaving.begin(), leaving.end(), 0);
-        std::fill(leaves_now.begin(), leaves_now.end(), 0);
-        {
-            MotionSeries low, full;  // order 2 for the rate; the full expansion only at a true tie
-            for (std::size_t f = 0; f < nsw; ++f) {
-                if (std::fabs(buf.g[f]) > noise(f)) continue;
-                // A rate clearly beyond its rounding (almost every function that has
-                // just switched) needs no series: the bound works.
-                if (std::fabs(buf.dg[f]) > 4 * tie_noise(rate_magnitude(model_, cfg, sw[f], x.data(), v.data())))
-                    continue;
-                if (low.x.empty()) low = motion_series(model_, cfg, sgn.data(), t, t_lo, x.data(), v.data(), 2);
-                switch_series(model_, cfg, sw[f], t, t_lo, low, series_d, series_mag);
-                if (std::fabs(series_d[1]) > tie_noise(series_mag[1])) continue;  // h' decides: the bound works
-                const int max_order = tie_order(model_);
-                if (full.x.empty())
-                    full = motion_series(model_, cfg, sgn.data(), t, t_lo, x.data(), v.data(), max_order + 2);
-                switch_series(model_, cfg, sw[f], t, t_lo, full, series_d, series_mag);
-                int order = 0;
-                const int dir = first_nonzero_sign(series_d, series_mag, max_order, &order) * (side[f] > 0 ? 1 : -1);
-                if (dir < 0) {
-                    leaves_now[f] = 1;
-                    continue;
-                }
-                if (dir == 0) {
-                    leaving[f] = buf.bound[f] > 0;
-                    clear_until[f] = 0.0;
-                    continue;
-                }
-                // clear_until = c/B'(T) for B' valid on [0, T], T <= c/B'(0): any T
-                // gives a valid interval [0, min(T, c/B'(T))].
-                const double c = 0.5 * (order + 1) * std::fabs(series_d[static_cast<std::size_t>(order)]);
-                const double T = std::min(tau_end, c / derivative_bound(model_, cfg, sw[f], full, order + 1, 0.0));
-                const double clear = std::min(T, c / derivative_bound(model_, cfg, sw[f], full, order + 1, T));
-                if (clear > 0) {
-                    leaving[f] = 1;
-                    clear_until[f] = clear;
-                }
-            }
-        }
-        double tau = 0.0;  // the instant evaluated last
-        for (std::size_t iter = 0;; ++iter) {
-            if (iter > 10'000'000) return finish(RunStatus::failure, "switch search does not converge at t = " + time_text(t + tau));
-            // Which of the functions just evaluated have switched, and where is each one's zero?
-            double tau_star = kInf;
-            for (std::uint32_t f : due) {
-                root[f] = kInf;
-                const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
-                if (!std::isfinite(h) || !std::isfinite(hd) || !std::isfinite(buf.bound[f]))
-                    return finish(RunStatus::failure, "non-finite switch function in configuration '" +
-                                                          cfg.spec(model_) + "' at t = " + time_text(t + tau));
-                if (iter == 0 && leaves_now[f]) {  // a tie heading across: it switches at the segment start
-                    root[f] = 0.0;
-                    tau_star = 0.0;
-                    continue;
-                }
-                const double eps_f = noise(f);
-                const bool stop = is_velocity(sw[f].kind) && armed[f];
-                if (stop ? h > eps_f : h >= -eps_f) continue;
-                // Move to the zero by one Newton step (the function is monotone
-                // there), never before the last point known to be on the safe side.
-                const double prev = before[f];
-                double r = tau;
-                if (hd < 0 && std::fabs(hd) > 0) r = tau - h / hd;
-                if (stop && h <= 0 && hd >= 0) r = tau;  // touched zero and turned back
-                r = std::min(std::max(r, prev), std::max(tau, prev));
-                if (stop && hd < 0 && h > 0) r = tau + h / -hd;  // tiny forward step onto v = 0
-                root[f] = r;
-                tau_star = std::min(tau_star, r);
-            }
-            if (tau_star < kInf) {
-                // Every function whose zero lies at this instant (to rounding) switches now.
-                const double tol = 4 * kEps * (std::fabs(t) + std::fabs(tau_star)) + 1e-300;
-                found.any = true;
-                found.tau = std::min(tau_star, tau_end);
-                for (std::size_t f = 0; f < nsw; ++f)
-                    if (root[f] <= tau_star + tol) found.switched.push_back(sw[f]);
-                // Others within rounding of zero and heading across at the event instant.
-                eval_all(found.tau, true);
+            // ---- find the earliest switch in (0, tau_end] ----
+            found.any = false;
+            found.tau = 0.0;
+            found.switched.clear();
+            eval_all(0.0, false);
+            prev_tau = 0.0;
+            if (scheduled) {
+                due.resize(nsw);
                 for (std::size_t f = 0; f < nsw; ++f) {
-                    if (root[f] <= tau_star + tol) continue;
+                    due[f] = static_cast<std::uint32_t>(f);
+                    before[f] = 0.0;
+                }
+            }
+            // The functions evaluated at the last instant: all of them, or those due.
+            auto evaluated = [&]() { return scheduled ? due.size() : nsw; };
+            auto function = [&](std::size_t k) -> std::size_t { return scheduled ? due[k] : k; };
+            for (std::size_t f = 0; f < nsw; ++f)
+                if (is_velocity(sw[f].kind))
+                    armed[f] = side[f] * buf.g[f] > noise(f);
+            // Ties at the segment start (tie_series.h): a function at zero whose
+            // rate vanishes too. Its first non-zero derivative, of order m, decides
+            // (interface.md "Ties and touches"): one heading across switches now, at
+            // this instant; one heading into its safe side is `leaving` zero, where
+            // the bound h + h' s - B s^2/2 would make the steps shrink like s^(m/2)
+            // (a contact at rest on its gap under sin forcing took 30000
+            // evaluations). By Taylor's theorem with B' >= |h^(m+1)| on [0, T],
+            // h > 0 on (0, (m+1)|h^(m)(0)|/B'), so it is left out of the bound up to
+            // half that (clear_until) and watched by the bound from there. A function
+            // with no non-zero derivative (identically zero to rounding, by
+            // Cayley-Hamilton) stays leaving, with steps of at most tau (doubling),
+            // unless its g'' bound is 0 (then the bound gives an unlimited step).
+            std::fill(leaving.begin(), leaving.end(), 0);
+            std::fill(leaves_now.begin(), leaves_now.end(), 0);
+            {
+                MotionSeries low, full;  // order 2 for the rate; the full expansion only at a true tie
+                for (std::size_t f = 0; f < nsw; ++f) {
+                    if (std::fabs(buf.g[f]) > noise(f)) continue;
+                    // A rate clearly beyond its rounding (almost every function that has
+                    // just switched) needs no series: the bound works.
+                    if (std::fabs(buf.dg[f]) > 4 * tie_noise(rate_magnitude(model_, cfg, sw[f], x.data(), v.data())))
+                        continue;
+                    if (low.x.empty()) low = motion_series(model_, cfg, sgn.data(), t, t_lo, x.data(), v.data(), 2);
+                    switch_series(model_, cfg, sw[f], t, t_lo, low, series_d, series_mag);
+                    if (std::fabs(series_d[1]) > tie_noise(series_mag[1])) continue;  // h' decides: the bound works
+                    const int max_order = tie_order(model_);
+                    if (full.x.empty())
+                        full = motion_series(model_, cfg, sgn.data(), t, t_lo, x.data(), v.data(), max_order + 2);
+                    switch_series(model_, cfg, sw[f], t, t_lo, full, series_d, series_mag);
+                    int order = 0;
+                    const int dir = first_nonzero_sign(series_d, series_mag, max_order, &order) * (side[f] > 0 ? 1 : -1);
+                    if (dir < 0) {
+                        leaves_now[f] = 1;
+                        continue;
+                    }
+                    if (dir == 0) {
+                        leaving[f] = buf.bound[f] > 0;
+                        clear_until[f] = 0.0;
+                        continue;
+                    }
+                    // clear_until = c/B'(T) for B' valid on [0, T], T <= c/B'(0): any T
+                    // gives a valid interval [0, min(T, c/B'(T))].
+                    const double c = 0.5 * (order + 1) * std::fabs(series_d[static_cast<std::size_t>(order)]);
+                    const double T = std::min(tau_end, c / derivative_bound(model_, cfg, sw[f], full, order + 1, 0.0));
+                    const double clear = std::min(T, c / derivative_bound(model_, cfg, sw[f], full, order + 1, T));
+                    if (clear > 0) {
+                        leaving[f] = 1;
+                        clear_until[f] = clear;
+                    }
+                }
+            }
+            double tau = 0.0;  // the instant evaluated last
+            for (std::size_t iter = 0;; ++iter) {
+                if (iter > 10'000'000) {
+                    failure = "switch search does not converge at t = " + time_text(t + tau);
+                    return;
+                }
+                // Which of the functions just evaluated have switched, and where is each one's zero?
+                double tau_star = kInf;
+                for (std::size_t k = 0, count = evaluated(); k < count; ++k) {
+                    const std::size_t f = function(k);
+                    root[f] = kInf;
                     const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
+                    if (!std::isfinite(h) || !std::isfinite(hd) || !std::isfinite(buf.bound[f])) {
+                        failure = "non-finite switch function in configuration '" + cfg.spec(model_) + "' at t = " +
+                                  time_text(t + tau);
+                        return;
+                    }
+                    if (iter == 0 && leaves_now[f]) {  // a tie heading across: it switches at the segment start
+                        root[f] = 0.0;
+                        tau_star = 0.0;
+                        continue;
+                    }
                     const double eps_f = noise(f);
                     const bool stop = is_velocity(sw[f].kind) && armed[f];
-                    if (stop ? h <= eps_f : (h < -eps_f || (h <= eps_f && hd < 0)))
-                        found.switched.push_back(sw[f]);
+                    if (stop ? h > eps_f : h >= -eps_f) continue;
+                    // Move to the zero by one Newton step (the function is monotone
+                    // there), never before the last point known to be on the safe side.
+                    const double prev = scheduled ? before[f] : prev_tau;
+                    double r = tau;
+                    if (hd < 0 && std::fabs(hd) > 0) r = tau - h / hd;
+                    if (stop && h <= 0 && hd >= 0) r = tau;  // touched zero and turned back
+                    r = std::min(std::max(r, prev), std::max(tau, prev));
+                    if (stop && hd < 0 && h > 0) r = tau + h / -hd;  // tiny forward step onto v = 0
+                    root[f] = r;
+                    tau_star = std::min(tau_star, r);
                 }
-                std::fill(inherited.begin(), inherited.end(), 0.0);
-                for (std::size_t f = 0; f < nsw; ++f)
-                    inherited[slot(sw[f])] = noise(f);
-                break;
-            }
-            if (tau >= tau_end) break;  // every function was evaluated at tau_end (next_f <= tau_end)
-            // Safe step of each function just evaluated: none can reach its
-            // trigger level before next_f.
-            const double step_cap = std::min(max_step, tau_end - tau);
-            const double floor_step = 4 * kEps * (std::fabs(t) + std::fabs(tau)) + 1e-300;
-            for (std::uint32_t f : due) {
-                double step = step_cap;
-                if (leaving[f]) {
-                    step = std::min(step, tau < clear_until[f] ? clear_until[f] - tau : std::max(tau, floor_step));
-                } else {
+                if (tau_star < kInf) {
+                    // Every function whose zero lies at this instant (to rounding) switches now.
+                    const double tol = 4 * kEps * (std::fabs(t) + std::fabs(tau_star)) + 1e-300;
+                    found.any = true;
+                    found.tau = std::min(tau_star, tau_end);
+                    for (std::size_t f = 0; f < nsw; ++f)
+                        if (root[f] <= tau_star + tol) found.switched.push_back(sw[f]);
+                    // Others within rounding of zero and heading across at the event instant.
+                    eval_all(found.tau, true);
+                    for (std::size_t f = 0; f < nsw; ++f) {
+                        if (root[f] <= tau_star + tol) continue;
+                        const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
+                        const double eps_f = noise(f);
+                        const bool stop = is_velocity(sw[f].kind) && armed[f];
+                        if (stop ? h <= eps_f : (h < -eps_f || (h <= eps_f && hd < 0)))
+                            found.switched.push_back(sw[f]);
+                    }
+                    std::fill(inherited.begin(), inherited.end(), 0.0);
+                    for (std::size_t f = 0; f < nsw; ++f)
+                        inherited[slot(sw[f])] = noise(f);
+                    break;
+                }
+                if (tau >= tau_end) break;  // every function was evaluated at tau_end (next_f <= tau_end)
+                // Safe step of each function just evaluated: none can reach its
+                // trigger level inside it.
+                const double step_cap = std::min(max_step, tau_end - tau);
+                const double floor_step = 4 * kEps * (std::fabs(t) + std::fabs(tau)) + 1e-300;
+                auto own_step = [&](std::size_t f) {
+                    // A function leaving zero: up to its clear instant, then doubling.
+                    if (leaving[f]) return tau < clear_until[f] ? clear_until[f] - tau : std::max(tau, floor_step);
                     const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
                     const bool stop = is_velocity(sw[f].kind) && armed[f];
                     // Contacts and releases switch only when certainly negative (level
                     // -2*noise); armed velocities stop at zero.
                     const double level = stop ? 0.0 : -2 * noise(f);
-                    step = std::min(step, safe_step(h - level, hd, buf.bound[f]));
+                    return safe_step(h - level, hd, buf.bound[f]);
+                };
+                double tau_next;
+                if (!scheduled) {
+                    double step = step_cap;
+                    for (std::size_t f = 0; f < nsw; ++f) step = std::min(step, own_step(f));
+                    tau_next = std::min(tau + std::max(step, floor_step), tau_end);
+                    eval_all(tau_next, false);
+                } else {
+                    // Each function just evaluated is safe up to next_f; the next
+                    // instant is the earliest next_f. It evaluates the functions due
+                    // by then, and those due soon after: one evaluation of a few more
+                    // functions is cheaper than an instant more.
+                    for (std::uint32_t f : due) next[f] = std::min(tau + std::max(std::min(step_cap, own_step(f)), floor_step), tau_end);
+                    tau_next = kInf;
+                    for (std::size_t f = 0; f < nsw; ++f) tau_next = std::min(tau_next, next[f]);
+                    const double by = tau_next + kScheduleAhead * (tau_next - tau);
+                    due.clear();
+                    for (std::size_t f = 0; f < nsw; ++f)
+                        if (next[f] <= by) due.push_back(static_cast<std::uint32_t>(f));
+                    eval_due(tau_next);
                 }
-                next[f] = std::min(tau + std::max(step, floor_step), tau_end);
+                tau = tau_next;
+                for (std::size_t k = 0, count = evaluated(); k < count; ++k) {
+                    const std::size_t f = function(k);
+                    if (is_velocity(sw[f].kind) && !armed[f] && side[f] * buf.g[f] > 2 * noise(f))
+                        armed[f] = 1;
+                    // Past its clear interval the bound watches it again (a function
+                    // leaving an exact zero, clear_until = 0, once it is above its rounding).
+                    if (leaving[f] && tau >= clear_until[f] && (clear_until[f] > 0 || side[f] * buf.g[f] > 2 * noise(f)))
+                        leaving[f] = 0;
+                }
             }
-            // The next instant: the earliest next_f (the segment's own step
-            // without switch functions).
-            double tau_next = nsw ? kInf : std::min(tau + std::max(step_cap, floor_step), tau_end);
-            for (std::size_t f = 0; f < nsw; ++f) tau_next = std::min(tau_next, next[f]);
-            if (scheduled) {
-                // The functions due by then, and those due soon after: one
-                // evaluation of a few more functions is cheaper than an instant more.
-                const double by = tau_next + kScheduleAhead * (tau_next - tau);
-                due.clear();
-                for (std::size_t f = 0; f < nsw; ++f)
-                    if (next[f] <= by) due.push_back(static_cast<std::uint32_t>(f));
-                eval_due(tau_next);
-            } else {
-                eval_all(tau_next, false);
-            }
-            tau = tau_next;
-            for (std::uint32_t f : due) {
-                if (is_velocity(sw[f].kind) && !armed[f] && side[f] * buf.g[f] > 2 * noise(f))
-                    armed[f] = 1;
-                // Past its clear interval the bound watches it again (a function
-                // leaving an exact zero, clear_until = 0, once it is above its rounding).
-                if (leaving[f] && tau >= clear_until[f] && (clear_until[f] > 0 || side[f] * buf.g[f] > 2 * noise(f)))
-                    leaving[f] = 0;
-            }
-        }
+            if (!found.any) eval_all(tau_end, true);  // an event's instant was evaluated in full above
+        };
+        if (nsw > 0 && nsw >= options.schedule_from)
+            search(std::true_type{});
+        else
+            search(std::false_type{});
+        if (!failure.empty()) return finish(RunStatus::failure, failure);
 
         // ---- dense output up to the event (or t_end) from the closed form ----
         const double t_seg_end = found.any ? t + found.tau : t_end;
@@ -467,7 +498,6 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         }
 
         // ---- advance to the event instant: the state at tau, the time as t + t_lo ----
-        if (!found.any) eval_all(tau_end, true);  // an event's instant was evaluated in full in the search
         x = buf.x;
         v = buf.v;
         for (std::size_t i = 0; i < n; ++i)
