@@ -125,7 +125,11 @@ std::vector<std::string> override_texts(const py::dict& d) {
 }
 
 ModelOverrides overrides(const py::dict& set, const py::dict& x0, const py::dict& v0) {
-    return ModelOverrides{override_texts(set), override_texts(x0), override_texts(v0)};
+    ModelOverrides o;  // t_end: the model's own (the Python calls take it as an argument)
+    o.set = override_texts(set);
+    o.x0 = override_texts(x0);
+    o.v0 = override_texts(v0);
+    return o;
 }
 
 std::string element_name(const Model& model, EventKind kind, int element) {

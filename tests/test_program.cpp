@@ -26,6 +26,7 @@
 #include "derivation.h"
 #include "emitter.h"
 #include "engine.h"
+#include "forwarding_solver.h"
 #include "generic_solver.h"
 #include "interpreted_solver.h"
 #include "jit.h"
@@ -502,31 +503,25 @@ Model beam_chain(int n) {
     return parse_model(t, "beam.toml");
 }
 
-/// Runs another provider's solvers with the search evaluating in full (what
-/// the printed kernels do: SegmentSolver's default eval_switches).
-class FullEvalProvider : public SolverProvider {
-public:
-    explicit FullEvalProvider(SolverProvider& inner) : inner_(inner) {}
-    SegmentSolver& solver(const Configuration& cfg) override {
-        solver_.inner = &inner_.solver(cfg);
-        return solver_;
+/// Another provider's solvers with the search evaluating in full (what the
+/// printed kernels do: SegmentSolver's defaults for eval_switches and eval_some).
+struct FullEval : testing::ForwardingSolver {
+    void eval_switches(double tau, const SegmentEval& out) const override { eval(tau, out); }
+    void eval_some(double tau, const std::uint32_t*, std::size_t, const SegmentEval& out) const override {
+        eval(tau, out);
     }
-
-private:
-    struct Full : SegmentSolver {
-        SegmentSolver* inner = nullptr;
-        const Configuration& configuration() const override { return inner->configuration(); }
-        const std::vector<SwitchFunction>& switches() const override { return inner->switches(); }
-        using SegmentSolver::setup;
-        void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override {
-            inner->setup(t0, t0_lo, x0, v0, sgn);
-        }
-        void eval(double tau, const SegmentEval& out) const override { inner->eval(tau, out); }
-        double max_step() const override { return inner->max_step(); }
-    };
-    SolverProvider& inner_;
-    Full solver_;
 };
+using FullEvalProvider = testing::ForwardingProvider<FullEval>;
+
+/// The same run, byte for byte: events and trajectory CSVs, state reached and
+/// evaluations.
+void expect_same_run(const RunFiles& a, const RunFiles& b) {
+    EXPECT_EQ(a.summary.evaluations, b.summary.evaluations);
+    EXPECT_TRUE(same_bits(a.summary.x, b.summary.x)) << "the state reached";
+    EXPECT_TRUE(same_bits(a.summary.v, b.summary.v)) << "the state reached";
+    EXPECT_TRUE(a.events == b.events) << "events CSV";
+    EXPECT_TRUE(a.trajectory == b.trajectory) << "trajectory CSV";
+}
 
 TEST(SwitchProgram, HasTheBitsOfEvalAndLeavesOutTheRest) {
     const Model m = beam_chain(24);
@@ -565,11 +560,7 @@ TEST(SwitchProgram, ARunSearchingWithItWritesTheBytesOfAFullSearch) {
     const RunFiles rf = run_to_csv(m, full, 30.0, 0.01, "full-search");
     ASSERT_EQ(ro.summary.status, RunStatus::ok) << ro.summary.message;
     EXPECT_GE(ro.summary.events, 20u);
-    EXPECT_EQ(ro.summary.evaluations, rf.summary.evaluations);
-    EXPECT_TRUE(same_bits(ro.summary.x, rf.summary.x)) << "the state reached";
-    EXPECT_TRUE(same_bits(ro.summary.v, rf.summary.v)) << "the state reached";
-    EXPECT_TRUE(ro.events == rf.events) << "events CSV";
-    EXPECT_TRUE(ro.trajectory == rf.trajectory) << "trajectory CSV";
+    expect_same_run(ro, rf);
 }
 
 // ---- the search by function (SegmentSolver::eval_some) ----
@@ -642,11 +633,7 @@ TEST(FunctionRows, ARunSearchingByFunctionWritesTheBytesOfAFullSearch) {
     const RunFiles rf = run_to_csv(m, full, 10.0, 0.01, "full-by-function");
     ASSERT_EQ(ro.summary.status, RunStatus::ok) << ro.summary.message;
     EXPECT_GE(ro.summary.events, 500u);
-    EXPECT_EQ(ro.summary.evaluations, rf.summary.evaluations);
-    EXPECT_TRUE(same_bits(ro.summary.x, rf.summary.x)) << "the state reached";
-    EXPECT_TRUE(same_bits(ro.summary.v, rf.summary.v)) << "the state reached";
-    EXPECT_TRUE(ro.events == rf.events) << "events CSV";
-    EXPECT_TRUE(ro.trajectory == rf.trajectory) << "trajectory CSV";
+    expect_same_run(ro, rf);
 }
 
 }  // namespace

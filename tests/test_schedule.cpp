@@ -13,6 +13,7 @@
 
 #include "engine.h"
 #include "engine_runner.h"
+#include "forwarding_solver.h"
 #include "generic_solver.h"
 #include "interpreted_solver.h"
 #include "lowering.h"
@@ -50,40 +51,17 @@ Model bilinear_bank(int n, std::vector<double>& k, std::vector<double>& c) {
     return parse_model(t + " }\n", "bilinear-bank.toml");
 }
 
-/// Another provider's solvers, counting the search's evaluations by function
-/// (SegmentSolver::eval_some): calls, and functions listed against those the
-/// configuration has.
-class CountingProvider : public SolverProvider {
-public:
-    explicit CountingProvider(SolverProvider& inner) : inner_(inner) {}
-    SegmentSolver& solver(const Configuration& cfg) override {
-        solver_.inner = &inner_.solver(cfg);
-        return solver_;
+/// Counts the search's evaluations by function (SegmentSolver::eval_some):
+/// calls, and functions listed against those the configuration has.
+struct Counting : testing::ForwardingSolver {
+    mutable std::size_t calls = 0, listed = 0, offered = 0;
+    void eval_some(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const override {
+        ++calls, listed += count, offered += inner->switches().size();
+        inner->eval_some(tau, which, count, out);
     }
-    std::size_t calls() const { return solver_.calls; }
-    double listed_share() const { return static_cast<double>(solver_.listed) / static_cast<double>(solver_.offered); }
-
-private:
-    struct Counting : SegmentSolver {
-        SegmentSolver* inner = nullptr;
-        mutable std::size_t calls = 0, listed = 0, offered = 0;
-        const Configuration& configuration() const override { return inner->configuration(); }
-        const std::vector<SwitchFunction>& switches() const override { return inner->switches(); }
-        using SegmentSolver::setup;
-        void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override {
-            inner->setup(t0, t0_lo, x0, v0, sgn);
-        }
-        void eval(double tau, const SegmentEval& out) const override { inner->eval(tau, out); }
-        void eval_switches(double tau, const SegmentEval& out) const override { inner->eval_switches(tau, out); }
-        void eval_some(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const override {
-            ++calls, listed += count, offered += inner->switches().size();
-            inner->eval_some(tau, which, count, out);
-        }
-        double max_step() const override { return inner->max_step(); }
-    };
-    SolverProvider& inner_;
-    Counting solver_;
+    double listed_share() const { return static_cast<double>(listed) / static_cast<double>(offered); }
 };
+using CountingProvider = testing::ForwardingProvider<Counting>;
 
 /// The engine over `provider` from the model's initial state.
 Outcome run(const Model& model, SolverProvider& provider, double t_end, std::size_t schedule_from) {
@@ -142,13 +120,13 @@ TEST(FunctionSchedule, UncoupledBilinearOscillatorsKeepTheirPeriods) {
                         from == kNever ? "all functions every instant" : "by function", r.events.size(),
                         r.summary.evaluations, worst);
             if (from == kNever) {
-                EXPECT_EQ(counting.calls(), 0u) << name;
+                EXPECT_EQ(counting.front().calls, 0u) << name;
             } else {
                 // The search evaluated a small share of the functions at its instants.
-                ASSERT_GT(counting.calls(), 100u) << name;
-                std::printf("  %zu evaluations by function, %.1f%% of the functions each\n", counting.calls(),
-                            100 * counting.listed_share());
-                EXPECT_LT(counting.listed_share(), 0.5) << name;
+                ASSERT_GT(counting.front().calls, 100u) << name;
+                std::printf("  %zu evaluations by function, %.1f%% of the functions each\n", counting.front().calls,
+                            100 * counting.front().listed_share());
+                EXPECT_LT(counting.front().listed_share(), 0.5) << name;
             }
         }
     }

@@ -132,6 +132,27 @@ TEST(Tiered, KernelsTakeOverWithoutChangingABit) {
     std::filesystem::remove_all(dir);
 }
 
+/// A run of `model` on tiered kernels that compile after one evaluation,
+/// with a compiler that fails: no kernel may be asked for (no warning), and
+/// the run has the interpreter's bits.
+void expect_interpreted_throughout(const Model& model, double t_end, std::size_t min_events) {
+    const std::string dir = testing::temp_path("tiered_interpreted");
+    const testing::Outcome interp = testing::simulate(model, t_end, t_end / 200, testing::Solvers::interp);
+    TierOptions o;
+    o.compile_after = 1;
+    o.wait_for_compiles = true;
+    // A compile would run in a child and fail: the run would warn that the
+    // kernel could not be compiled into the cache.
+    std::vector<std::string> warnings;
+    auto provider = tiered(model, dir, [](const Configuration&) { throw RunError("asked for a kernel"); }, o, &warnings);
+    const testing::Outcome run_ = run(model, *provider, t_end);
+    expect_same_bits(interp, run_);
+    EXPECT_GE(interp.events.size(), min_events);
+    EXPECT_TRUE(warnings.empty()) << warnings.front();
+    EXPECT_EQ(provider->on_kernels(), 0u) << provider->describe();
+    std::filesystem::remove_all(dir);
+}
+
 // A structure whose switch functions read one mass of 64: the interpreter's
 // search program (SegmentSolver::eval_switches) does less than a kernel's
 // whole eval would, so no kernel is asked for, however long it runs.
@@ -147,21 +168,7 @@ TEST(Tiered, AStructureWithFewSwitchesKeepsItsInterpretedSearch) {
     text += "[[contact]]\nbetween = [\"" + last + "\", \"ground\"]\ngap = 0.002\nk = 4000\n";
     text += "[[forcing]]\nomega = 9.0\namplitude = { m1 = 30.0 }\n[initial]\nv = { " + last + " = 0.5 }\n";
     const Model model = parse_model(text, "jointed.toml");
-    const std::string dir = testing::temp_path("tiered_cache");
-    const testing::Outcome interp = testing::simulate(model, 20.0, 0.1, testing::Solvers::interp);
-    TierOptions o;
-    o.compile_after = 1;
-    o.wait_for_compiles = true;
-    // A compile would run in a child and fail: the run would warn that the
-    // kernel could not be compiled into the cache.
-    std::vector<std::string> warnings;
-    auto provider = tiered(model, dir, [](const Configuration&) { throw RunError("asked for a kernel"); }, o, &warnings);
-    const testing::Outcome run_ = run(model, *provider, 20.0);
-    expect_same_bits(interp, run_);
-    EXPECT_GE(interp.events.size(), 10u);
-    EXPECT_TRUE(warnings.empty()) << warnings.front();
-    EXPECT_EQ(provider->on_kernels(), 0u) << provider->describe();
-    std::filesystem::remove_all(dir);
+    expect_interpreted_throughout(model, 20.0, 10);
 }
 
 // A friction chain of 20 masses: every configuration has a switch function
@@ -177,19 +184,7 @@ TEST(Tiered, ASearchByFunctionKeepsTheInterpreter) {
     text += "[[contact]]\nbetween = [\"m10\", \"m11\"]\ngap = 0.01\nk = 4000\n";
     text += "[[forcing]]\nomega = 9.0\namplitude = { m1 = 30.0, m20 = -20.0 }\n[initial]\nv = { m10 = 1.0 }\n";
     const Model model = parse_model(text, "friction-chain.toml");
-    const std::string dir = testing::temp_path("tiered_by_function");
-    const testing::Outcome interp = testing::simulate(model, 5.0, 5.0 / 200, testing::Solvers::interp);
-    TierOptions o;
-    o.compile_after = 1;
-    o.wait_for_compiles = true;
-    std::vector<std::string> warnings;
-    auto provider = tiered(model, dir, [](const Configuration&) { throw RunError("asked for a kernel"); }, o, &warnings);
-    const testing::Outcome run_ = run(model, *provider, 5.0);
-    expect_same_bits(interp, run_);
-    EXPECT_GE(interp.events.size(), 100u);
-    EXPECT_TRUE(warnings.empty()) << warnings.front();
-    EXPECT_EQ(provider->on_kernels(), 0u) << provider->describe();
-    std::filesystem::remove_all(dir);
+    expect_interpreted_throughout(model, 5.0, 100);
 }
 
 TEST(Tiered, TheRunNeverWaitsForTheCompiler) {

@@ -1204,11 +1204,7 @@ void InterpretedSolver::eval_switches(double tau, const SegmentEval& out) const 
     double* r = eval_regs_.data();
     r[Program::kEvalTau] = tau;
     execute(constants_.data(), *switches_body_, r);
-    const std::size_t n = static_cast<std::size_t>(n_dof_), nx = n + static_cast<std::size_t>(n_slider_),
-                      ns = switches_.size();
-    const double* o = r + Program::kEvalCoef + n_coef_ + nx + 2 * n;
-    for (std::size_t f = 0; f < ns; ++f)
-        out.g[f] = o[f], out.dg[f] = o[ns + f], out.bound[f] = o[2 * ns + f], out.scale[f] = o[3 * ns + f];
+    for (std::size_t f = 0; f < switches_.size(); ++f) switch_outputs(f, out);
 }
 
 void InterpretedSolver::eval_some(double tau, const std::uint32_t* which, std::size_t count,
@@ -1217,14 +1213,11 @@ void InterpretedSolver::eval_some(double tau, const std::uint32_t* which, std::s
     double* r = eval_regs_.data();
     r[Program::kEvalTau] = tau;
     execute(constants_.data(), *common_, r);
-    const std::size_t n = static_cast<std::size_t>(n_dof_), nx = n + static_cast<std::size_t>(n_slider_),
-                      ns = switches_.size();
-    const double* o = r + Program::kEvalCoef + n_coef_ + nx + 2 * n;
     for (std::size_t k = 0; k < count; ++k) {
         const std::uint32_t f = which[k];
         for (std::uint32_t i = part_at_[f]; i < part_at_[f + 1]; ++i)
             run_row(eval_->steps[part_rows_[i].step], part_rows_[i].row, r);
-        out.g[f] = o[f], out.dg[f] = o[ns + f], out.bound[f] = o[2 * ns + f], out.scale[f] = o[3 * ns + f];
+        switch_outputs(f, out);
     }
 }
 
@@ -1232,14 +1225,19 @@ void InterpretedSolver::eval(double tau, const SegmentEval& out) const {
     double* r = eval_regs_.data();
     r[Program::kEvalTau] = tau;
     execute(constants_.data(), *eval_, r);
-    const std::size_t n = static_cast<std::size_t>(n_dof_), nx = n + static_cast<std::size_t>(n_slider_),
-                      ns = switches_.size();
+    const std::size_t n = static_cast<std::size_t>(n_dof_), nx = n + static_cast<std::size_t>(n_slider_);
     const double* o = r + Program::kEvalCoef + n_coef_;
     for (std::size_t i = 0; i < nx; ++i) out.x[i] = o[i];
     for (std::size_t i = 0; i < n; ++i) out.v[i] = o[nx + i], out.a[i] = o[nx + n + i];
-    o += nx + 2 * n;
-    for (std::size_t f = 0; f < ns; ++f)
-        out.g[f] = o[f], out.dg[f] = o[ns + f], out.bound[f] = o[2 * ns + f], out.scale[f] = o[3 * ns + f];
+    for (std::size_t f = 0; f < switches_.size(); ++f) switch_outputs(f, out);
+}
+
+void InterpretedSolver::switch_outputs(std::size_t f, const SegmentEval& out) const {
+    // eval's outputs: x, v, a, then g, dg, bound and scale of every function.
+    const std::size_t n = static_cast<std::size_t>(n_dof_), nx = n + static_cast<std::size_t>(n_slider_),
+                      ns = switches_.size();
+    const double* o = eval_regs_.data() + Program::kEvalCoef + n_coef_ + nx + 2 * n;
+    out.g[f] = o[f], out.dg[f] = o[ns + f], out.bound[f] = o[2 * ns + f], out.scale[f] = o[3 * ns + f];
 }
 
 SegmentSolver& InterpretedSolverProvider::solver(const Configuration& cfg) {

@@ -79,6 +79,8 @@ public:
     };
 
 private:
+    void switch_outputs(std::size_t f, const SegmentEval& out) const;  // function f's four outputs, from eval's registers
+
     Configuration cfg_;
     std::vector<SwitchFunction> switches_;
     double max_step_ = 0;
