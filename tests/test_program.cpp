@@ -513,9 +513,17 @@ struct FullEval : testing::ForwardingSolver {
 };
 using FullEvalProvider = testing::ForwardingProvider<FullEval>;
 
-/// The same run, byte for byte: events and trajectory CSVs, state reached and
-/// evaluations.
-void expect_same_run(const RunFiles& a, const RunFiles& b) {
+/// A run of m on the interpreter and one whose search evaluates in full (as
+/// a kernel does) are the same run, byte for byte: events and trajectory
+/// CSVs, state reached and evaluations.
+void expect_same_as_a_full_search(const Model& m, double t_end, const std::string& tag, std::size_t min_events) {
+    InterpretedSolverProvider own(lowering_of(m));
+    const RunFiles a = run_to_csv(m, own, t_end, 0.01, tag);
+    InterpretedSolverProvider inner(lowering_of(m));
+    FullEvalProvider full(inner);
+    const RunFiles b = run_to_csv(m, full, t_end, 0.01, tag + "-full");
+    ASSERT_EQ(a.summary.status, RunStatus::ok) << a.summary.message;
+    EXPECT_GE(a.summary.events, min_events);
     EXPECT_EQ(a.summary.evaluations, b.summary.evaluations);
     EXPECT_TRUE(same_bits(a.summary.x, b.summary.x)) << "the state reached";
     EXPECT_TRUE(same_bits(a.summary.v, b.summary.v)) << "the state reached";
@@ -552,15 +560,7 @@ TEST(SwitchProgram, HasTheBitsOfEvalAndLeavesOutTheRest) {
 }
 
 TEST(SwitchProgram, ARunSearchingWithItWritesTheBytesOfAFullSearch) {
-    const Model m = beam_chain(24);
-    InterpretedSolverProvider own(lowering_of(m));
-    const RunFiles ro = run_to_csv(m, own, 30.0, 0.01, "switch-program");
-    InterpretedSolverProvider inner(lowering_of(m));
-    FullEvalProvider full(inner);
-    const RunFiles rf = run_to_csv(m, full, 30.0, 0.01, "full-search");
-    ASSERT_EQ(ro.summary.status, RunStatus::ok) << ro.summary.message;
-    EXPECT_GE(ro.summary.events, 20u);
-    expect_same_run(ro, rf);
+    expect_same_as_a_full_search(beam_chain(24), 30.0, "switch-program", 20);
 }
 
 // ---- the search by function (SegmentSolver::eval_some) ----
@@ -625,15 +625,7 @@ TEST(FunctionRows, ARunSearchingByFunctionWritesTheBytesOfAFullSearch) {
     // What a kernel does (every function at every instant, the search reading
     // the listed ones) and what the interpreter does (the listed ones alone)
     // must be the same run: aot, jit and generic write the same bytes.
-    const Model m = friction_chain_model(20);
-    InterpretedSolverProvider own(lowering_of(m));
-    const RunFiles ro = run_to_csv(m, own, 10.0, 0.01, "by-function");
-    InterpretedSolverProvider inner(lowering_of(m));
-    FullEvalProvider full(inner);
-    const RunFiles rf = run_to_csv(m, full, 10.0, 0.01, "full-by-function");
-    ASSERT_EQ(ro.summary.status, RunStatus::ok) << ro.summary.message;
-    EXPECT_GE(ro.summary.events, 500u);
-    expect_same_run(ro, rf);
+    expect_same_as_a_full_search(friction_chain_model(20), 10.0, "by-function", 500);
 }
 
 }  // namespace
