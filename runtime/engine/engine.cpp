@@ -232,21 +232,23 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             side[f] = side_of(sw[f], cfg, sgn);
             floor[f] = inherited[slot(sw[f])];
         }
-        // at_f is the instant at which function f's values in buf (g, dg,
-        // bound, scale) were taken, before_f the one before, next_f the instant
-        // up to which its bound keeps it from its trigger level. With few
-        // functions every instant evaluates all of them (next_f is the same
-        // step for all). With many (kScheduleFrom, segment_solver.h), each is
-        // evaluated on its own schedule: an instant takes the functions whose
-        // next_f it reaches, or soon will (`due`), and the others keep their
-        // values and their guarantee. So a function far from switching is not
-        // evaluated at every instant another one needs, and a solver that
-        // computes a function alone (the interpreter, SegmentSolver::eval_some)
-        // does only what is due. The instants depend on the values alone, so
-        // every kind of solver takes the same ones (a kernel computes every
-        // function and the search reads the due ones).
-        // The search, compiled for each case so that the unscheduled one (every
-        // small model) pays nothing for the schedule.
+        // With few switch functions every instant evaluates all of them, and
+        // the step is the smallest of their safe steps. With many
+        // (kScheduleFrom, segment_solver.h) each is evaluated on its own
+        // schedule: at_f is the instant at which function f's values in buf
+        // (g, dg, bound, scale) were taken, before_f the one before, next_f the
+        // instant up to which its bound keeps it from its trigger level. An
+        // instant takes the functions whose next_f it reaches, or soon will
+        // (`due`), and the others keep their values and their guarantee. So a
+        // function far from switching is not evaluated at every instant
+        // another one needs, and a solver that computes a function alone (the
+        // interpreter, SegmentSolver::eval_some) does only what is due. The
+        // instants depend on the values alone, so every kind of solver takes
+        // the same ones (a kernel computes every function and the search reads
+        // the due ones).
+        //
+        // The search is compiled for each case, so that the unscheduled one
+        // (every small model) pays nothing for the schedule.
         std::string failure;
         auto search = [&](auto schedule_tag) __attribute__((always_inline)) {
             constexpr bool scheduled = decltype(schedule_tag)::value;
