@@ -293,7 +293,6 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             found.tau = 0.0;
             found.switched.clear();
             eval_all(0.0, false);
-            prev_tau = 0.0;
             if (scheduled) {
                 due.resize(nsw);
                 for (std::size_t f = 0; f < nsw; ++f) {

@@ -906,22 +906,44 @@ std::vector<Instr> prepare(const ProgramBody& body, std::vector<ProgramTerm>& te
     return code;
 }
 
-/// The instructions of `code` that registers [live_begin, live_end) depend
-/// on, in program order: an instruction is kept when it writes a register
-/// that a kept instruction after it (or the live range) reads. Every writer of
-/// such a register is kept, so each kept instruction sees the operands it
-/// sees in the whole program and computes the same bits.
-std::vector<Instr> needed_for(const std::vector<Instr>& code, const std::vector<ProgramTerm>& terms,
-                              std::size_t registers, std::uint32_t live_begin, std::uint32_t live_end) {
-    std::vector<char> needed(registers, 0), keep(code.size(), 0);
-    for (std::uint32_t r = live_begin; r < live_end; ++r) needed[r] = 1;
-    std::vector<std::uint32_t> reads, writes;
-    for (std::size_t i = code.size(); i-- > 0;) {
-        accesses(code[i], terms, reads, writes);
-        for (std::uint32_t w : writes) keep[i] = keep[i] || needed[w];
-        if (keep[i])
-            for (std::uint32_t r : reads) needed[r] = 1;
+/// Every instruction's reads and writes (accesses()), row i of each table
+/// from at[i] to at[i + 1]: taken once for the passes over one program.
+struct AccessTable {
+    std::vector<std::uint32_t> read_at, write_at, reads, writes;
+    AccessTable(const std::vector<Instr>& code, const std::vector<ProgramTerm>& terms)
+        : read_at(1, 0), write_at(1, 0) {
+        std::vector<std::uint32_t> r, w;
+        for (const Instr& in : code) {
+            accesses(in, terms, r, w);
+            reads.insert(reads.end(), r.begin(), r.end());
+            writes.insert(writes.end(), w.begin(), w.end());
+            read_at.push_back(static_cast<std::uint32_t>(reads.size()));
+            write_at.push_back(static_cast<std::uint32_t>(writes.size()));
+        }
     }
+};
+
+/// Which instructions the registers marked in `needed` depend on, beside
+/// those `keep` marks already: an instruction is kept when it writes a
+/// register that a kept instruction after it (or a marked register) reads.
+/// Every writer of such a register is kept, so each kept instruction sees the
+/// operands it sees in the whole program and computes the same bits.
+std::vector<char> kept_for(const AccessTable& a, std::vector<char> keep, std::vector<char> needed) {
+    for (std::size_t i = keep.size(); i-- > 0;) {
+        for (std::uint32_t k = a.write_at[i]; k < a.write_at[i + 1] && !keep[i]; ++k) keep[i] = needed[a.writes[k]];
+        if (keep[i])
+            for (std::uint32_t k = a.read_at[i]; k < a.read_at[i + 1]; ++k) needed[a.reads[k]] = 1;
+    }
+    return keep;
+}
+
+/// The instructions of `code` that registers [live_begin, live_end) depend
+/// on (kept_for), in program order.
+std::vector<Instr> needed_for(const std::vector<Instr>& code, const AccessTable& a, std::size_t registers,
+                              std::uint32_t live_begin, std::uint32_t live_end) {
+    std::vector<char> needed(registers, 0);
+    for (std::uint32_t r = live_begin; r < live_end; ++r) needed[r] = 1;
+    const std::vector<char> keep = kept_for(a, std::vector<char>(code.size(), 0), std::move(needed));
     std::vector<Instr> kept;
     kept.reserve(static_cast<std::size_t>(std::count(keep.begin(), keep.end(), 1)));
     for (std::size_t i = 0; i < code.size(); ++i)
@@ -1053,43 +1075,30 @@ struct FunctionRows {
     std::vector<std::uint32_t> at;  ///< function f's rows: rows[at[f] .. at[f + 1])
 };
 
-bool rows_by_function(const std::vector<Instr>& code, const std::vector<ProgramTerm>& terms, std::size_t registers,
+bool rows_by_function(const std::vector<Instr>& code, const AccessTable& a, std::size_t registers,
                       std::uint32_t outputs, std::size_t ns, const std::vector<RowRef>& where, FunctionRows& out) {
     const std::size_t n = code.size();
-    // Every instruction's reads (rows of read_regs) and each register's writer.
+    // Each register's writer, and how many it has.
     std::vector<int> writer(registers, -1), writers(registers, 0);
-    std::vector<std::uint32_t> read_at(n + 1, 0), write_at(n + 1, 0), read_regs, write_regs, reads, writes;
-    std::vector<char> needed(registers, 0);
-    std::vector<char>& is_common = out.common;
-    is_common.assign(n, 0);
-    for (std::size_t i = 0; i < n; ++i) {
-        accesses(code[i], terms, reads, writes);
-        for (std::uint32_t w : writes) writer[w] = static_cast<int>(i), ++writers[w];
-        read_regs.insert(read_regs.end(), reads.begin(), reads.end());
-        read_at[i + 1] = static_cast<std::uint32_t>(read_regs.size());
-        write_regs.insert(write_regs.end(), writes.begin(), writes.end());
-        write_at[i + 1] = static_cast<std::uint32_t>(write_regs.size());
-        if (!batched(code[i].op)) is_common[i] = 1;
-    }
-    // Common: the unbatched instructions and every writer of what they read
-    // (as needed_for: each writer of a needed register, before its reader).
-    for (std::size_t i = n; i-- > 0;) {
-        for (std::uint32_t k = write_at[i]; k < write_at[i + 1] && !is_common[i]; ++k)
-            is_common[i] = needed[write_regs[k]];
-        if (is_common[i])
-            for (std::uint32_t k = read_at[i]; k < read_at[i + 1]; ++k) needed[read_regs[k]] = 1;
-    }
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::uint32_t k = a.write_at[i]; k < a.write_at[i + 1]; ++k)
+            writer[a.writes[k]] = static_cast<int>(i), ++writers[a.writes[k]];
+    // Common: the unbatched instructions and every writer of what they read.
+    std::vector<char> unbatched(n, 0);
+    for (std::size_t i = 0; i < n; ++i) unbatched[i] = !batched(code[i].op);
+    out.common = kept_for(a, std::move(unbatched), std::vector<char>(registers, 0));
+    const std::vector<char>& is_common = out.common;
     // Each other instruction's dependencies outside the common part: the
     // writers of what it reads, each once (stamp).
     std::vector<std::uint32_t> dep_at(n + 1, 0), deps;
     std::vector<int> stamp(n, -1);
     for (std::size_t i = 0; i < n; ++i) {
         if (!is_common[i]) {
-            for (std::uint32_t k = write_at[i]; k < write_at[i + 1]; ++k)
-                if (writers[write_regs[k]] != 1) return false;
+            for (std::uint32_t k = a.write_at[i]; k < a.write_at[i + 1]; ++k)
+                if (writers[a.writes[k]] != 1) return false;
             if (where[i].step == kNoStep) return false;
-            for (std::uint32_t k = read_at[i]; k < read_at[i + 1]; ++k) {
-                const int w = writer[read_regs[k]];
+            for (std::uint32_t k = a.read_at[i]; k < a.read_at[i + 1]; ++k) {
+                const int w = writer[a.reads[k]];
                 if (w < 0 || is_common[static_cast<std::size_t>(w)] || stamp[static_cast<std::size_t>(w)] == static_cast<int>(i))
                     continue;
                 stamp[static_cast<std::size_t>(w)] = static_cast<int>(i);
@@ -1148,8 +1157,9 @@ InterpretedSolver::InterpretedSolver(Program p)
     // The search's program: what g, dg, bound and scale need. Worth a body of
     // its own only when it leaves out a good part (the state of masses no
     // switch function reads).
+    const AccessTable table(code, p.terms);
     const std::vector<Instr> search =
-        needed_for(code, p.terms, p.eval.registers(), switch_outputs, outputs + p.eval_output_count());
+        needed_for(code, table, p.eval.registers(), switch_outputs, outputs + p.eval_output_count());
     const double share = estimated_work(search) / std::max(1.0, estimated_work(code));
     if (share < 0.8) {
         switches_body_ = schedule(search, p.terms, p.eval.registers());
@@ -1159,7 +1169,7 @@ InterpretedSolver::InterpretedSolver(Program p)
         // Rows by function for eval_some (rows_by_function); without them
         // eval_some() is eval_switches().
         FunctionRows parts;
-        if (rows_by_function(code, p.terms, p.eval.registers(), switch_outputs, switches_.size(), where, parts)) {
+        if (rows_by_function(code, table, p.eval.registers(), switch_outputs, switches_.size(), where, parts)) {
             std::vector<Instr> common;
             for (std::size_t i = 0; i < code.size(); ++i)
                 if (parts.common[i]) common.push_back(code[i]);

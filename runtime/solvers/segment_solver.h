@@ -76,8 +76,8 @@ public:
     /// them (g, dg, bound, scale); the others' outputs are left unspecified.
     /// The default is eval_switches(); the interpreter computes only what the
     /// listed functions read.
-    virtual void eval_some(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const {
-        (void)which, (void)count;
+    virtual void eval_some(double tau, const std::uint32_t* /*which*/, std::size_t /*count*/,
+                           const SegmentEval& out) const {
         eval_switches(tau, out);
     }
 
