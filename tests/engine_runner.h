@@ -57,15 +57,11 @@ struct Outcome {
 enum class Solvers { generic, interp };
 inline const char* solvers_name(Solvers s) { return s == Solvers::generic ? "generic" : "interp"; }
 
-/// The HSNC engine from the model's initial state; configurations with
-/// `schedule_from` switch functions or more searched on a schedule per
-/// function (EngineOptions::schedule_from).
-inline Outcome simulate(const Model& model, double t_end, double dt = 0.0, Solvers solvers = Solvers::generic,
-                        std::size_t schedule_from = kScheduleFrom) {
-    GenericSolverProvider generic(model);
-    // The configurations the derivation refuses (NotDerivable) on the generic solver, as in the facade.
-    DerivationFallbackProvider interp(model, std::make_unique<InterpretedSolverProvider>(program_source(model)));
-    SolverProvider& provider = solvers == Solvers::generic ? static_cast<SolverProvider&>(generic) : interp;
+/// The HSNC engine over `provider` from the model's initial state;
+/// configurations with `schedule_from` switch functions or more searched on a
+/// schedule per function (EngineOptions::schedule_from).
+inline Outcome run_engine(const Model& model, SolverProvider& provider, double t_end, double dt = 0.0,
+                          std::size_t schedule_from = kScheduleFrom) {
     Engine engine(model, provider);
     Recorder rec(model.dof(), model.state_size());
     EngineOptions opt;
@@ -77,6 +73,15 @@ inline Outcome simulate(const Model& model, double t_end, double dt = 0.0, Solve
     r.events = std::move(rec.events);
     r.samples = std::move(rec.samples);
     return r;
+}
+
+/// The HSNC engine from the model's initial state.
+inline Outcome simulate(const Model& model, double t_end, double dt = 0.0, Solvers solvers = Solvers::generic) {
+    GenericSolverProvider generic(model);
+    // The configurations the derivation refuses (NotDerivable) on the generic solver, as in the facade.
+    DerivationFallbackProvider interp(model, std::make_unique<InterpretedSolverProvider>(program_source(model)));
+    SolverProvider& provider = solvers == Solvers::generic ? static_cast<SolverProvider&>(generic) : interp;
+    return run_engine(model, provider, t_end, dt);
 }
 
 /// A baseline at the given tolerances: rk45 (Dormand-Prince with event

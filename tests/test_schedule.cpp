@@ -63,19 +63,6 @@ struct Counting : testing::ForwardingSolver {
 };
 using CountingProvider = testing::ForwardingProvider<Counting>;
 
-/// The engine over `provider` from the model's initial state.
-Outcome run(const Model& model, SolverProvider& provider, double t_end, std::size_t schedule_from) {
-    Engine engine(model, provider);
-    testing::Recorder rec(model.dof(), model.state_size());
-    EngineOptions opt;
-    opt.t_end = t_end;
-    opt.schedule_from = schedule_from;
-    Outcome r;
-    r.summary = engine.run(opt, rec);
-    r.events = std::move(rec.events);
-    return r;
-}
-
 // Each oscillator starts closed (G = 0, G' > 0), opens after pi/omega2 and
 // closes pi/omega1 later: period T = pi/omega1 + pi/omega2, held by every
 // event of every element.
@@ -104,7 +91,7 @@ TEST(FunctionSchedule, UncoupledBilinearOscillatorsKeepTheirPeriods) {
         const char* name = p == &eigen ? "eigen" : "interp";
         for (std::size_t from : {kScheduleFrom, kNever}) {
             CountingProvider counting(*p);
-            const Outcome r = run(m, counting, t_end, from);
+            const Outcome r = testing::run_engine(m, counting, t_end, 0.0, from);
             ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
             std::vector<std::size_t> per_element;
             const double worst = bilinear_worst(r, k, c, per_element);

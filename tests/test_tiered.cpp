@@ -77,16 +77,7 @@ TieredSolverProvider::CompileFn jit_compile(const Model& model, const std::strin
 }
 
 testing::Outcome run(const Model& model, SolverProvider& provider, double t_end) {
-    Engine engine(model, provider);
-    testing::Recorder rec(model.dof(), model.state_size());
-    EngineOptions opt;
-    opt.t_end = t_end;
-    opt.dt = t_end / 200;
-    testing::Outcome r;
-    r.summary = engine.run(opt, rec);
-    r.events = std::move(rec.events);
-    r.samples = std::move(rec.samples);
-    return r;
+    return testing::run_engine(model, provider, t_end, t_end / 200);
 }
 
 /// Every event and sample the same, to the bit.
