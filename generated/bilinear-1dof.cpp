@@ -40,13 +40,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1));
     const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]));
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = xh_1;
-    const double dq0u_1 = vh_1;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(q0u_1));
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(dq0u_1));
-    const double q0_1 = q0u_1 + (rx_1);
-    const double dq0_1 = dq0u_1 + (rv_1);
+    const double q0_1 = xh_1;
+    const double dq0_1 = vh_1;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + q0_1;
     const double ve_1 = dq0_1;
@@ -164,13 +159,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1));
     const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]));
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = xh_1;
-    const double dq0u_1 = vh_1;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(q0u_1));
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(dq0u_1));
-    const double q0_1 = q0u_1 + (rx_1);
-    const double dq0_1 = dq0u_1 + (rv_1);
+    const double q0_1 = xh_1;
+    const double dq0_1 = vh_1;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + q0_1;
     const double ve_1 = dq0_1;

@@ -59,19 +59,10 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) - static_cast<long double>(0.24367804547490879)*s_theta_1 - static_cast<long double>(0.0055583100824806502)*c_theta_1);
     const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.769176519333158)*c_theta_1 + static_cast<long double>(0.97556734995759953)*s_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = 0.88807383397711526*xh_1 + 0.65011516734373631*xh_2;
-    const double dq0u_1 = 0.88807383397711526*vh_1 + 0.65011516734373631*vh_2;
-    const double q0u_2 = -0.45970084338098305*xh_1 + 1.2559260603991087*xh_2;
-    const double dq0u_2 = -0.45970084338098305*vh_1 + 1.2559260603991087*vh_2;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.88807383397711526)*q0u_1 + static_cast<long double>(0.45970084338098305)*q0u_2);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.88807383397711526)*dq0u_1 + static_cast<long double>(0.45970084338098305)*dq0u_2);
-    const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.32505758367186816)*q0u_1 - static_cast<long double>(0.62796303019955435)*q0u_2);
-    const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.32505758367186816)*dq0u_1 - static_cast<long double>(0.62796303019955435)*dq0u_2);
-    const double q0_1 = q0u_1 + (0.88807383397711526*rx_1 + 0.65011516734373631*rx_2);
-    const double dq0_1 = dq0u_1 + (0.88807383397711526*rv_1 + 0.65011516734373631*rv_2);
-    const double q0_2 = q0u_2 + (-0.45970084338098305*rx_1 + 1.2559260603991087*rx_2);
-    const double dq0_2 = dq0u_2 + (-0.45970084338098305*rv_1 + 1.2559260603991087*rv_2);
+    const double q0_1 = 0.88807383397711526*xh_1 + 0.65011516734373631*xh_2;
+    const double dq0_1 = 0.88807383397711526*vh_1 + 0.65011516734373631*vh_2;
+    const double q0_2 = -0.45970084338098305*xh_1 + 1.2559260603991087*xh_2;
+    const double dq0_2 = -0.45970084338098305*vh_1 + 1.2559260603991087*vh_2;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + 0.88807383397711526*q0_1 - 0.45970084338098305*q0_2 - 0.73072581908970025*s_theta_1 - 0.0076388658185612014*c_theta_1;
     const double ve_1 = 0.88807383397711526*dq0_1 - 0.45970084338098305*dq0_2 - 128.25341521011063*c_theta_1 + 1.3407362980313511*s_theta_1;
@@ -259,19 +250,10 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) - static_cast<long double>(0.24194593481455143)*s_theta_1 - static_cast<long double>(0.033337329577655686)*c_theta_1);
     const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.465164943569469)*c_theta_1 + static_cast<long double>(5.8512047345551954)*s_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = 0.6127686665676223*xh_1 + 1.1175997148111108*xh_2;
-    const double dq0u_1 = 0.6127686665676223*vh_1 + 1.1175997148111108*vh_2;
-    const double q0u_2 = 0.79026233699508808*xh_1 - 0.86658575885720845*xh_2;
-    const double dq0u_2 = 0.79026233699508808*vh_1 - 0.86658575885720845*vh_2;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.6127686665676223)*q0u_1 - static_cast<long double>(0.79026233699508808)*q0u_2);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.6127686665676223)*dq0u_1 - static_cast<long double>(0.79026233699508808)*dq0u_2);
-    const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.55879985740555538)*q0u_1 + static_cast<long double>(0.43329287942860423)*q0u_2);
-    const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.55879985740555538)*dq0u_1 + static_cast<long double>(0.43329287942860423)*dq0u_2);
-    const double q0_1 = q0u_1 + (0.6127686665676223*rx_1 + 1.1175997148111108*rx_2);
-    const double dq0_1 = dq0u_1 + (0.6127686665676223*rv_1 + 1.1175997148111108*rv_2);
-    const double q0_2 = q0u_2 + (0.79026233699508808*rx_1 - 0.86658575885720845*rx_2);
-    const double dq0_2 = dq0u_2 + (0.79026233699508808*rv_1 - 0.86658575885720845*rv_2);
+    const double q0_1 = 0.6127686665676223*xh_1 + 1.1175997148111108*xh_2;
+    const double dq0_1 = 0.6127686665676223*vh_1 + 1.1175997148111108*vh_2;
+    const double q0_2 = 0.79026233699508808*xh_1 - 0.86658575885720845*xh_2;
+    const double dq0_2 = 0.79026233699508808*vh_1 - 0.86658575885720845*vh_2;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + 0.6127686665676223*q0_1 + 0.79026233699508808*q0_2 - 0.72773816497394384*s_theta_1 - 0.06320081663878023*c_theta_1;
     const double ve_1 = 0.6127686665676223*dq0_1 + 0.79026233699508808*dq0_2 - 127.72903679921824*c_theta_1 + 11.092697652437176*s_theta_1;
@@ -447,13 +429,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) - static_cast<long double>(0.24361085541406602)*s_theta_1 - static_cast<long double>(0.0034727598429402139)*c_theta_1);
     const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.757383649085334)*c_theta_1 + static_cast<long double>(0.60952179110963589)*s_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = 1.4142135623730951*xh_1;
-    const double dq0u_1 = 1.4142135623730951*vh_1;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.70710678118654757)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.70710678118654757)*dq0u_1);
-    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
-    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
+    const double q0_1 = 1.4142135623730951*xh_1;
+    const double dq0_1 = 1.4142135623730951*vh_1;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + 0.70710678118654757*q0_1 + 0.24361085541406602*s_theta_1 + 0.0034727598429402139*c_theta_1;
     const double ve_1 = 0.70710678118654757*dq0_1 + 42.757383649085334*c_theta_1 - 0.60952179110963589*s_theta_1;
@@ -606,13 +583,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) - static_cast<long double>(0.24360980929693524)*s_theta_1 - static_cast<long double>(0.010435185731304798)*c_theta_1);
     const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) - static_cast<long double>(42.757200039732517)*c_theta_1 + static_cast<long double>(1.8315326671485346)*s_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = 1.4142135623730951*xh_1;
-    const double dq0u_1 = 1.4142135623730951*vh_1;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.70710678118654757)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.70710678118654757)*dq0u_1);
-    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
-    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
+    const double q0_1 = 1.4142135623730951*xh_1;
+    const double dq0_1 = 1.4142135623730951*vh_1;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + 0.70710678118654757*q0_1 + 0.24360980929693524*s_theta_1 + 0.010435185731304798*c_theta_1;
     const double ve_1 = 0.70710678118654757*dq0_1 + 42.757200039732517*c_theta_1 - 1.8315326671485346*s_theta_1;
@@ -765,13 +737,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) + static_cast<long double>(0.7306902574434726)*s_theta_1 + static_cast<long double>(0.0062477207570832737)*c_theta_1);
     const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) + static_cast<long double>(128.24717360421684)*c_theta_1 - static_cast<long double>(1.0965693334515465)*s_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = xh_1;
-    const double dq0u_1 = vh_1;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(q0u_1));
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(dq0u_1));
-    const double q0_1 = q0u_1 + (rx_1);
-    const double dq0_1 = dq0u_1 + (rv_1);
+    const double q0_1 = xh_1;
+    const double dq0_1 = vh_1;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + q0_1 - 0.7306902574434726*s_theta_1 - 0.0062477207570832737*c_theta_1;
     const double ve_1 = dq0_1 - 128.24717360421684*c_theta_1 + 1.0965693334515465*s_theta_1;
@@ -924,13 +891,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) + static_cast<long double>(0.72996736260496498)*s_theta_1 + static_cast<long double>(0.048007721356019183)*c_theta_1);
     const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) + static_cast<long double>(128.12029464434667)*c_theta_1 - static_cast<long double>(8.4260800145738415)*s_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = xh_1;
-    const double dq0u_1 = vh_1;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(q0u_1));
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(dq0u_1));
-    const double q0_1 = q0u_1 + (rx_1);
-    const double dq0_1 = dq0u_1 + (rv_1);
+    const double q0_1 = xh_1;
+    const double dq0_1 = vh_1;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + q0_1 - 0.72996736260496498*s_theta_1 - 0.048007721356019183*c_theta_1;
     const double ve_1 = dq0_1 - 128.12029464434667*c_theta_1 + 8.4260800145738415*s_theta_1;

@@ -59,19 +59,10 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) + static_cast<long double>(0.25155539849822628)*s_theta_1);
     const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) + static_cast<long double>(4.4151745767416184)*c_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = 0.88807383397711526*xh_1 + 0.65011516734373631*xh_2;
-    const double dq0u_1 = 0.88807383397711526*vh_1 + 0.65011516734373631*vh_2;
-    const double q0u_2 = -0.45970084338098305*xh_1 + 1.2559260603991087*xh_2;
-    const double dq0u_2 = -0.45970084338098305*vh_1 + 1.2559260603991087*vh_2;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.88807383397711526)*q0u_1 + static_cast<long double>(0.45970084338098305)*q0u_2);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.88807383397711526)*dq0u_1 + static_cast<long double>(0.45970084338098305)*dq0u_2);
-    const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.32505758367186816)*q0u_1 - static_cast<long double>(0.62796303019955435)*q0u_2);
-    const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.32505758367186816)*dq0u_1 - static_cast<long double>(0.62796303019955435)*dq0u_2);
-    const double q0_1 = q0u_1 + (0.88807383397711526*rx_1 + 0.65011516734373631*rx_2);
-    const double dq0_1 = dq0u_1 + (0.88807383397711526*rv_1 + 0.65011516734373631*rv_2);
-    const double q0_2 = q0u_2 + (-0.45970084338098305*rx_1 + 1.2559260603991087*rx_2);
-    const double dq0_2 = dq0u_2 + (-0.45970084338098305*rv_1 + 1.2559260603991087*rv_2);
+    const double q0_1 = 0.88807383397711526*xh_1 + 0.65011516734373631*xh_2;
+    const double dq0_1 = 0.88807383397711526*vh_1 + 0.65011516734373631*vh_2;
+    const double q0_2 = -0.45970084338098305*xh_1 + 1.2559260603991087*xh_2;
+    const double dq0_2 = -0.45970084338098305*vh_1 + 1.2559260603991087*vh_2;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + 0.88807383397711526*q0_1 - 0.45970084338098305*q0_2 - 0.75918967575502749*s_theta_1;
     const double ve_1 = 0.88807383397711526*dq0_1 - 0.45970084338098305*dq0_2 - 13.324917594014366*c_theta_1;
@@ -257,19 +248,10 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_2 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_2) + static_cast<long double>(0.054031881163313256)*s_theta_1);
     const double vh_2 = static_cast<double>(static_cast<long double>(v0[1]) + static_cast<long double>(0.94834056223789265)*c_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = 0.6127686665676223*xh_1 + 1.1175997148111108*xh_2;
-    const double dq0u_1 = 0.6127686665676223*vh_1 + 1.1175997148111108*vh_2;
-    const double q0u_2 = 0.79026233699508808*xh_1 - 0.86658575885720845*xh_2;
-    const double dq0u_2 = 0.79026233699508808*vh_1 - 0.86658575885720845*vh_2;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.6127686665676223)*q0u_1 - static_cast<long double>(0.79026233699508808)*q0u_2);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.6127686665676223)*dq0u_1 - static_cast<long double>(0.79026233699508808)*dq0u_2);
-    const double rx_2 = static_cast<double>(static_cast<long double>(xh_2) - static_cast<long double>(0.55879985740555538)*q0u_1 + static_cast<long double>(0.43329287942860423)*q0u_2);
-    const double rv_2 = static_cast<double>(static_cast<long double>(vh_2) - static_cast<long double>(0.55879985740555538)*dq0u_1 + static_cast<long double>(0.43329287942860423)*dq0u_2);
-    const double q0_1 = q0u_1 + (0.6127686665676223*rx_1 + 1.1175997148111108*rx_2);
-    const double dq0_1 = dq0u_1 + (0.6127686665676223*rv_1 + 1.1175997148111108*rv_2);
-    const double q0_2 = q0u_2 + (0.79026233699508808*rx_1 - 0.86658575885720845*rx_2);
-    const double dq0_2 = dq0u_2 + (0.79026233699508808*rv_1 - 0.86658575885720845*rv_2);
+    const double q0_1 = 0.6127686665676223*xh_1 + 1.1175997148111108*xh_2;
+    const double dq0_1 = 0.6127686665676223*vh_1 + 1.1175997148111108*vh_2;
+    const double q0_2 = 0.79026233699508808*xh_1 - 0.86658575885720845*xh_2;
+    const double dq0_2 = 0.79026233699508808*vh_1 - 0.86658575885720845*vh_2;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + 0.6127686665676223*q0_1 + 0.79026233699508808*q0_2 - 1.1346834856205477*s_theta_1;
     const double ve_1 = 0.6127686665676223*dq0_1 + 0.79026233699508808*dq0_2 - 19.915397197869044*c_theta_1;
@@ -443,13 +425,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) + static_cast<long double>(0.26496603013167724)*s_theta_1);
     const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) + static_cast<long double>(4.6505512778561338)*c_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = 1.4142135623730951*xh_1;
-    const double dq0u_1 = 1.4142135623730951*vh_1;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.70710678118654757)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.70710678118654757)*dq0u_1);
-    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
-    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
+    const double q0_1 = 1.4142135623730951*xh_1;
+    const double dq0_1 = 1.4142135623730951*vh_1;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + 0.70710678118654757*q0_1 - 0.26496603013167724*s_theta_1;
     const double ve_1 = 0.70710678118654757*dq0_1 - 4.6505512778561338*c_theta_1;
@@ -601,13 +578,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_1 = static_cast<double>(static_cast<long double>(x0[1]) - static_cast<long double>(x_st_1) + static_cast<long double>(0.32181223747221399)*s_theta_1);
     const double vh_1 = static_cast<double>(static_cast<long double>(v0[1]) + static_cast<long double>(5.6482874859935643)*c_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = 1.4142135623730951*xh_1;
-    const double dq0u_1 = 1.4142135623730951*vh_1;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(0.70710678118654757)*q0u_1);
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(0.70710678118654757)*dq0u_1);
-    const double q0_1 = q0u_1 + (1.4142135623730951*rx_1);
-    const double dq0_1 = dq0u_1 + (1.4142135623730951*rv_1);
+    const double q0_1 = 1.4142135623730951*xh_1;
+    const double dq0_1 = 1.4142135623730951*vh_1;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + 0.70710678118654757*q0_1 - 0.32181223747221399*s_theta_1;
     const double ve_1 = 0.70710678118654757*dq0_1 - 5.6482874859935643*c_theta_1;
@@ -759,13 +731,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) + static_cast<long double>(0.76777356846487577)*s_theta_1);
     const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) + static_cast<long double>(13.475577786911268)*c_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = xh_1;
-    const double dq0u_1 = vh_1;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(q0u_1));
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(dq0u_1));
-    const double q0_1 = q0u_1 + (rx_1);
-    const double dq0_1 = dq0u_1 + (rv_1);
+    const double q0_1 = xh_1;
+    const double dq0_1 = vh_1;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + q0_1 - 0.76777356846487577*s_theta_1;
     const double ve_1 = dq0_1 - 13.475577786911268*c_theta_1;
@@ -917,13 +884,8 @@ void setup(double* coef, double t0, double t0_lo, const double* x0, const double
     const double xh_1 = static_cast<double>(static_cast<long double>(x0[0]) - static_cast<long double>(x_st_1) + static_cast<long double>(1.1654700606416992)*s_theta_1);
     const double vh_1 = static_cast<double>(static_cast<long double>(v0[0]) + static_cast<long double>(20.455747769352786)*c_theta_1);
     // Its modal coordinates q = W xh, q' = W vh.
-    const double q0u_1 = xh_1;
-    const double dq0u_1 = vh_1;
-    // One refinement of q against the residuals r = xh - V q (long double): removes the bias of V W = I + E.
-    const double rx_1 = static_cast<double>(static_cast<long double>(xh_1) - static_cast<long double>(q0u_1));
-    const double rv_1 = static_cast<double>(static_cast<long double>(vh_1) - static_cast<long double>(dq0u_1));
-    const double q0_1 = q0u_1 + (rx_1);
-    const double dq0_1 = dq0u_1 + (rv_1);
+    const double q0_1 = xh_1;
+    const double dq0_1 = vh_1;
     // Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), v0 - v(0).
     const double xe_1 = x_st_1 + q0_1 - 1.1654700606416992*s_theta_1;
     const double ve_1 = dq0_1 - 20.455747769352786*c_theta_1;

@@ -225,13 +225,13 @@ Program lower(const Derivation& d, ProgramNames names) {
     // Room for the program up front (sizes estimated from the configuration):
     // growing these vectors instruction by instruction moved them many times.
     const std::size_t ns = d.switches.size();
-    // setup: about 10 instructions per free mass, 17 per mode and 12 n^2 terms
-    // (modal forces, static offset, two projections to modes and their refinement,
-    // x(0) and its residual); eval: a mass_state of n terms per mass and, per
+    // setup: about 10 instructions per free mass, 17 per mode and 8 n^2 terms
+    // (modal forces, static offset, the projection to modes, x(0) and v(0) for its
+    // refinement, the refinement); eval: a mass_state of n terms per mass and, per
     // switch function, a bound over the modes.
     p.setup.code.reserve(12 * nf + 20 * nm + 8 * nh + 16);
     p.eval.code.reserve(4 * n + 2 * nm + 6 * ns + 4 * nh + 16);
-    p.terms.reserve(12 * nonzeros + 6 * nf * nh + n * (6 + 6 * nh) + nonzeros + ns * (nm + 24) + 64);
+    p.terms.reserve(8 * nonzeros + 6 * nf * nh + n * (6 + 6 * nh) + nonzeros + ns * (nm + 24) + 64);
     Builder s(p, p.setup, named);
     s.reg("1.0", RegisterKind::one);
     s.reg("t0", RegisterKind::input);
@@ -387,52 +387,24 @@ Program lower(const Derivation& d, ProgramNames names) {
                 dq.add(wd[j][r], pv[r]);
             }
         };
-        // q = W x, q' = W v of one pair of physical vectors, each added to its base
-        // (q_base, dq_base; empty: none), into temporaries named prefix_j and dprefix_j.
-        auto to_modes = [&](const std::vector<std::uint32_t>& px, const std::vector<std::uint32_t>& pv,
-                            const char* prefix, const char* dprefix, std::vector<std::uint32_t>& q_out,
-                            std::vector<std::uint32_t>& dq_out, const std::vector<std::uint32_t>& q_base,
-                            const std::vector<std::uint32_t>& dq_base, const std::string& note) {
-            q_out.assign(nm, 0);
-            dq_out.assign(nm, 0);
-            for (std::size_t j = 0; j < nm; ++j) {
-                Lin q, dq;
-                project(j, px, pv, q, dq);
-                q_out[j] = s.temp(prefix, j + 1);
-                with(named, s.lin(q_out[j], q, q_base.empty() ? kNoRegister : q_base[j]), j == 0 ? note : "");
-                dq_out[j] = s.temp(dprefix, j + 1);
-                s.lin(dq_out[j], dq, dq_base.empty() ? kNoRegister : dq_base[j]);
-            }
-        };
-        std::vector<std::uint32_t> q0u, dq0u;
-        to_modes(xh, vh, "q0u_", "dq0u_", q0u, dq0u, {}, {}, "Its modal coordinates q = W xh, q' = W vh.");
-        // V and W are inverse only to rounding, so xh -> W xh -> V W xh is the fixed
-        // matrix I + E (E ~ eps): applied at every segment start it is a bias (a steady
-        // energy gain), not noise. One refinement against the residual removes it.
-        std::vector<std::uint32_t> rx(nf), rv(nf);
-        for (std::size_t r = 0; r < nf; ++r) {
-            Lin x, v;
-            x.add(1.0, xh[r]);
-            v.add(1.0, vh[r]);
-            for (std::size_t j : row_modes[r]) {
-                x.add(-vd[j][r], q0u[j]);
-                v.add(-vd[j][r], dq0u[j]);
-            }
-            rx[r] = s.temp("rx_", r + 1);
-            with(named, s.lin_ld(rx[r], x),
-                 r == 0 ? "One refinement of q against the residuals r = xh - V q (long double): removes the bias of "
-                          "V W = I + E."
-                        : "");
-            rv[r] = s.temp("rv_", r + 1);
-            s.lin_ld(rv[r], v);
+        // The projection q = W xh, q' = W vh, refined once, against what eval returns at
+        // tau = 0 (below). V and W are inverse only to rounding, so xh -> W xh -> V W xh
+        // is the fixed matrix I + E (E ~ eps): applied at every segment start it is a
+        // bias (a steady energy gain), not noise; the refinement leaves E^2.
+        std::vector<std::uint32_t> q0(nm), dq0(nm);
+        for (std::size_t j = 0; j < nm; ++j) {
+            Lin q, dq;
+            project(j, xh, vh, q, dq);
+            q0[j] = s.temp("q0_", j + 1);
+            with(named, s.lin(q0[j], q), j == 0 ? "Its modal coordinates q = W xh, q' = W vh." : "");
+            dq0[j] = s.temp("dq0_", j + 1);
+            s.lin(dq0[j], dq);
         }
-        std::vector<std::uint32_t> q0, dq0;
-        to_modes(rx, rv, "q0_", "dq0_", q0, dq0, q0u, dq0u, "");
-        // A second refinement, against what eval returns at tau = 0: x(0) and v(0) with
-        // eval's constants in eval's order, the residuals x0 - x(0), v0 - v(0) (long
-        // double) mapped back with W. x(0) is a sum of terms larger than x, so without it
-        // a state restarted again and again kept moving the same way
-        // (tests/test_restart_drift.cpp).
+        // The refinement, against what eval returns at tau = 0: x(0) and v(0) with eval's
+        // constants in eval's order, the residuals x0 - x(0), v0 - v(0) (long double)
+        // mapped back with W. It removes the bias of V W = I + E and the rounding of x(0),
+        // a sum of terms larger than x: without it a state restarted again and again kept
+        // moving the same way (tests/test_restart_drift.cpp).
         std::vector<std::uint32_t> ex(nf), ev(nf);
         for (std::size_t r = 0; r < nf; ++r) {
             const int i = d.free_dofs[r];
