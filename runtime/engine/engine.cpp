@@ -357,6 +357,28 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     }
                 }
             }
+            // The event at tau_star: every function whose zero lies there (to
+            // rounding) switches, and so do the others within rounding of zero
+            // and heading across at that instant, evaluated in full.
+            auto take_event = [&](double tau_star) {
+                const double tol = 4 * kEps * (std::fabs(t) + std::fabs(tau_star)) + 1e-300;
+                found.any = true;
+                found.tau = std::min(tau_star, tau_end);
+                for (std::size_t f = 0; f < nsw; ++f)
+                    if (root[f] <= tau_star + tol) found.switched.push_back(sw[f]);
+                eval_all(found.tau, true);
+                for (std::size_t f = 0; f < nsw; ++f) {
+                    if (root[f] <= tau_star + tol) continue;
+                    const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
+                    const double eps_f = noise(f);
+                    const bool stop = is_velocity(sw[f].kind) && armed[f];
+                    if (stop ? h <= eps_f : (h < -eps_f || (h <= eps_f && hd < 0)))
+                        found.switched.push_back(sw[f]);
+                }
+                std::fill(inherited.begin(), inherited.end(), 0.0);
+                for (std::size_t f = 0; f < nsw; ++f)
+                    inherited[slot(sw[f])] = noise(f);
+            };
             double tau = 0.0;  // the instant evaluated last
             for (std::size_t iter = 0;; ++iter) {
                 if (iter > 10'000'000) {
@@ -394,25 +416,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     tau_star = std::min(tau_star, r);
                 }
                 if (tau_star < kInf) {
-                    // Every function whose zero lies at this instant (to rounding) switches now.
-                    const double tol = 4 * kEps * (std::fabs(t) + std::fabs(tau_star)) + 1e-300;
-                    found.any = true;
-                    found.tau = std::min(tau_star, tau_end);
-                    for (std::size_t f = 0; f < nsw; ++f)
-                        if (root[f] <= tau_star + tol) found.switched.push_back(sw[f]);
-                    // Others within rounding of zero and heading across at the event instant.
-                    eval_all(found.tau, true);
-                    for (std::size_t f = 0; f < nsw; ++f) {
-                        if (root[f] <= tau_star + tol) continue;
-                        const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
-                        const double eps_f = noise(f);
-                        const bool stop = is_velocity(sw[f].kind) && armed[f];
-                        if (stop ? h <= eps_f : (h < -eps_f || (h <= eps_f && hd < 0)))
-                            found.switched.push_back(sw[f]);
-                    }
-                    std::fill(inherited.begin(), inherited.end(), 0.0);
-                    for (std::size_t f = 0; f < nsw; ++f)
-                        inherited[slot(sw[f])] = noise(f);
+                    take_event(tau_star);
                     break;
                 }
                 if (tau >= tau_end) break;  // every function was evaluated at tau_end (next_f <= tau_end)
@@ -430,10 +434,35 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     const double level = stop ? 0.0 : -2 * noise(f);
                     return safe_step(h - level, hd, buf.bound[f]);
                 };
+                // A sliding velocity whose Newton step s = h / -h' lands on its zero
+                // to half the time's resolution (B s^2 / (2 |h'|) <= eps |t| / 2: the
+                // bound keeps the zero within that of tau + s), before any other
+                // function can reach its trigger level (`horizon`): its zero is known,
+                // and the event is taken there without one more instant to find it.
+                auto landing = [&](std::size_t f, double horizon) {
+                    if (f >= nsw || leaving[f] || !is_velocity(sw[f].kind) || !armed[f]) return kInf;
+                    const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
+                    if (!(hd < 0)) return kInf;
+                    const double s = h / -hd;
+                    if (!(buf.bound[f] * s * s <= -hd * kEps * (std::fabs(t) + tau))) return kInf;
+                    return tau + s <= horizon ? tau + s : kInf;
+                };
                 double tau_next;
                 if (!scheduled) {
-                    double step = step_cap;
-                    for (std::size_t f = 0; f < nsw; ++f) step = std::min(step, own_step(f));
+                    // The smallest step and the one after it (the horizon of the others).
+                    double step = step_cap, second = step_cap;
+                    std::size_t first = nsw;
+                    for (std::size_t f = 0; f < nsw; ++f) {
+                        const double s = own_step(f);
+                        if (s < step) second = step, step = s, first = f;
+                        else if (s < second) second = s;
+                    }
+                    const double r = landing(first, tau + second);
+                    if (r < kInf) {
+                        root[first] = r;
+                        take_event(r);
+                        break;
+                    }
                     tau_next = std::min(tau + std::max(step, floor_step), tau_end);
                     eval_all(tau_next, false);
                 } else {
@@ -443,7 +472,20 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     // functions is cheaper than an instant more.
                     for (std::uint32_t f : due) next[f] = std::min(tau + std::max(std::min(step_cap, own_step(f)), floor_step), tau_end);
                     tau_next = kInf;
-                    for (std::size_t f = 0; f < nsw; ++f) tau_next = std::min(tau_next, next[f]);
+                    double second = kInf;
+                    std::size_t first = nsw;
+                    for (std::size_t f = 0; f < nsw; ++f) {
+                        if (next[f] < tau_next) second = tau_next, tau_next = next[f], first = f;
+                        else if (next[f] < second) second = next[f];
+                    }
+                    if (first < nsw && at[first] == tau) {  // evaluated at this instant
+                        const double r = landing(first, second);
+                        if (r < kInf) {
+                            root[first] = r;
+                            take_event(r);
+                            break;
+                        }
+                    }
                     const double by = tau_next + kScheduleAhead * (tau_next - tau);
                     due.clear();
                     for (std::size_t f = 0; f < nsw; ++f)
