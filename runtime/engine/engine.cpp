@@ -437,14 +437,15 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 // A sliding velocity whose Newton step s = h / -h' lands on its zero
                 // to half the time's resolution (B s^2 / (2 |h'|) <= eps |t| / 2: the
                 // bound keeps the zero within that of tau + s), before any other
-                // function can reach its trigger level (`horizon`): its zero is known,
-                // and the event is taken there without one more instant to find it.
+                // function can reach its trigger level (`horizon`) and within the
+                // bound's validity (step_cap): its zero is known, and the event is
+                // taken there without one more instant to find it.
                 auto landing = [&](std::size_t f, double horizon) {
                     if (f >= nsw || leaving[f] || !is_velocity(sw[f].kind) || !armed[f]) return kInf;
                     const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
                     if (!(hd < 0)) return kInf;
                     const double s = h / -hd;
-                    if (!(buf.bound[f] * s * s <= -hd * kEps * (std::fabs(t) + tau))) return kInf;
+                    if (!(buf.bound[f] * s * s <= -hd * kEps * (std::fabs(t) + tau)) || s > step_cap) return kInf;
                     return tau + s <= horizon ? tau + s : kInf;
                 };
                 double tau_next;
