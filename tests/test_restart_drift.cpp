@@ -83,8 +83,8 @@ void report(const std::string& what, const Drift& d) {
 // Bound: 1e-14 of it over 2000 restarts, and the moves of x[0] must not go one
 // way more often than a fair coin allows (3 sigma). An unbiased rounding walk
 // of the measured per-restart size (<= 1.5e-16) stays below sqrt(2000) x 1.5e-16
-// = 6.7e-15. Measured after the fix: at most 1.5e-15 (chain-8 sweep kernel,
-// 105 moves, 54 one way); the others reach a fixed point within a few restarts.
+// = 6.7e-15. Measured: at most 2.3e-15 (chain-8 sweep kernel, 99 moves, 56
+// one way; 1.5e-15 when the fix went in); the others stay within 6.6e-16.
 // Before it, the folded and sweep kernels (a) took the homogeneous start as
 // q(0) - q_p(0) with modal constants while eval adds x_p back with physical
 // ones: a fixed offset per restart, 4.1e-12 of |x| on seed-scenario-1 with the
