@@ -228,5 +228,56 @@ TEST(SwitchSearch, AStopIsTakenWhereItsNewtonStepLands) {
     }
 }
 
+
+// Two Coulomb oscillators reversing at the same instants (omega = 10 rad/s,
+// released together), and a third one whose stops come 1e-13 to 1e-9 s later
+// or earlier: with stops taken where their Newton step lands, every stop of a
+// tie is still one event instant and a near tie two, each on its closed form.
+// Both searches: every instant all functions, and by function. (Here the
+// earliest zero always has the smallest safe step, so the landing's horizon
+// is not what keeps them apart: dropping it, tried, still passes.)
+TEST(SwitchSearch, SimultaneousStopsAreOneInstant) {
+    const double w = 10.0;
+    for (double offset : {1e-13, -1e-13, 1e-10, -1e-10, -1e-11, -1e-9}) {
+        // The third oscillator: omega' = omega pi / (pi + omega offset), so
+        // that its first stop, at pi / omega', comes `offset` after the others'.
+        const double w3 = w * kPi / (kPi + w * offset);
+        std::string t = "name = \"tied-stops\"\n";
+        const double k[3] = {w * w, w * w, w3 * w3};
+        for (int i = 0; i < 3; ++i) {
+            char b[256];
+            std::snprintf(b, sizeof b,
+                          "[[mass]]\nname = \"m%d\"\nm = 1\nmu_k = 0.1\n[[spring]]\nbetween = [\"m%d\", \"ground\"]\n"
+                          "k = %.17g\n",
+                          i + 1, i + 1, k[i]);
+            t += b;
+        }
+        const Model m = parse_model(t + "[initial]\nx = { m1 = 0.2, m2 = 0.2, m3 = 0.2 }\n", "tied-stops.toml");
+        for (std::size_t schedule_from : {kScheduleFrom, std::size_t{1}}) {
+            SCOPED_TRACE(std::string(schedule_from == 1 ? "by function" : "all functions") +
+                         (offset > 0 ? ", m3 later" : ", m3 earlier"));
+            DerivationFallbackProvider interp(m, std::make_unique<InterpretedSolverProvider>(program_source(m)));
+            const Outcome r = testing::run_engine(m, interp, 1.0, 0.0, schedule_from);
+            ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+            // m1 and m2 at one instant, k pi / omega; m3 at k pi / omega', apart.
+            std::vector<int> seen(3, 0);
+            double tie = -1;
+            for (std::size_t e = 0; e < r.events.size(); ++e) {
+                const Recorded& ev = r.events[e];
+                const auto i = static_cast<std::size_t>(ev.element);
+                const int kth = ++seen[i];
+                const double expected = kth * kPi / (i < 2 ? w : w3);
+                EXPECT_NEAR(ev.t, expected, 4 * std::numeric_limits<double>::epsilon() * expected) << "mass " << i;
+                if (i == 0) tie = ev.t;
+                if (i == 1) EXPECT_EQ(ev.t, tie) << "m2 stops in m1's switch";
+                if (i == 2) EXPECT_NE(ev.t, kth * kPi / w) << "m3 apart from the tie";
+            }
+            EXPECT_EQ(seen[0], seen[1]);
+            EXPECT_EQ(seen[0], seen[2]);
+            EXPECT_GE(seen[0], 3);
+        }
+    }
+}
+
 }  // namespace
 }  // namespace hsnc
