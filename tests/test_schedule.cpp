@@ -202,7 +202,7 @@ struct StopWatch : testing::ForwardingSolver {
 
 // The Coulomb oscillator (models/coulomb-1dof.toml: omega = 10 rad/s) reverses
 // at k pi / omega and sticks at pi. Each stop is taken where the Newton step
-// from the last instant before it lands (engine.cpp, `landing`), not at an
+// from the last instant before it lands (engine.cpp, `land`), not at an
 // instant that finds the velocity at zero: that instant lies a Newton step
 // before the event, many times the time's rounding, and the event time is the
 // closed form's to within that rounding.
@@ -227,7 +227,6 @@ TEST(SwitchSearch, AStopIsTakenWhereItsNewtonStepLands) {
         EXPECT_GT(gap, 1000 * eps * expected);
     }
 }
-
 
 // Two Coulomb oscillators reversing at the same instants (omega = 10 rad/s,
 // released together), and a third one whose stops come 1e-13 to 1e-9 s later

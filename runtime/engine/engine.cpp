@@ -439,14 +439,17 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 // bound keeps the zero within that of tau + s), before any other
                 // function can reach its trigger level (`horizon`) and within the
                 // bound's validity (step_cap): its zero is known, and the event is
-                // taken there without one more instant to find it.
-                auto landing = [&](std::size_t f, double horizon) {
-                    if (f >= nsw || leaving[f] || !is_velocity(sw[f].kind) || !armed[f]) return kInf;
+                // taken there without one more instant to find it. True when it was.
+                auto land = [&](std::size_t f, double horizon) {
+                    if (f >= nsw || leaving[f] || !is_velocity(sw[f].kind) || !armed[f]) return false;
                     const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
-                    if (!(hd < 0)) return kInf;
+                    if (!(hd < 0)) return false;
                     const double s = h / -hd;
-                    if (!(buf.bound[f] * s * s <= -hd * kEps * (std::fabs(t) + tau)) || s > step_cap) return kInf;
-                    return tau + s <= horizon ? tau + s : kInf;
+                    if (!(buf.bound[f] * s * s <= -hd * kEps * (std::fabs(t) + tau)) || s > step_cap) return false;
+                    if (!(tau + s <= horizon)) return false;
+                    root[f] = tau + s;
+                    take_event(tau + s);
+                    return true;
                 };
                 double tau_next;
                 if (!scheduled) {
@@ -458,12 +461,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                         if (s < step) second = step, step = s, first = f;
                         else if (s < second) second = s;
                     }
-                    const double r = landing(first, tau + second);
-                    if (r < kInf) {
-                        root[first] = r;
-                        take_event(r);
-                        break;
-                    }
+                    if (land(first, tau + second)) break;
                     tau_next = std::min(tau + std::max(step, floor_step), tau_end);
                     eval_all(tau_next, false);
                 } else {
@@ -479,14 +477,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                         if (next[f] < tau_next) second = tau_next, tau_next = next[f], first = f;
                         else if (next[f] < second) second = next[f];
                     }
-                    if (first < nsw && at[first] == tau) {  // evaluated at this instant
-                        const double r = landing(first, second);
-                        if (r < kInf) {
-                            root[first] = r;
-                            take_event(r);
-                            break;
-                        }
-                    }
+                    if (first < nsw && at[first] == tau && land(first, second)) break;  // evaluated at this instant
                     const double by = tau_next + kScheduleAhead * (tau_next - tau);
                     due.clear();
                     for (std::size_t f = 0; f < nsw; ++f)
