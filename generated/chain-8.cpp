@@ -302,11 +302,22 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
     const double cos_1 = __builtin_cos(arg_1);
+    // e^{-sigma tau} (modesG_e), sin and cos(omega_d tau) (modesG_s, modesG_c) of the 8 modes below, four in the lanes of each call (kernel_abi.h).
+    const double modes1_xe[4] = {-sigma_1*tau, -sigma_2*tau, -sigma_3*tau, -sigma_4*tau};
+    const double modes1_xt[4] = {omega_d_1*tau, omega_d_2*tau, omega_d_3*tau, omega_d_4*tau};
+    double modes1_e[4], modes1_s[4], modes1_c[4];
+    const double modes2_xe[4] = {-sigma_5*tau, -sigma_6*tau, -sigma_7*tau, -sigma_8*tau};
+    const double modes2_xt[4] = {omega_d_5*tau, omega_d_6*tau, omega_d_7*tau, omega_d_8*tau};
+    double modes2_e[4], modes2_s[4], modes2_c[4];
+    hsnc_sincos4(modes1_xt, modes1_s, modes1_c);
+    hsnc_exp4(modes1_xe, modes1_e);
+    hsnc_sincos4(modes2_xt, modes2_s, modes2_c);
+    hsnc_exp4(modes2_xe, modes2_e);
     // Mode 1 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_1 = __builtin_exp(-sigma_1*tau);
-    const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
-    const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.2879405461838076;
+    const double e_1 = modes1_e[0];
+    const double eC_1 = e_1*modes1_c[0];
+    const double eS_1 = e_1*modes1_s[0]*0.2879405461838076;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_1 = coef[10]*eC_1 + coef[11]*eS_1;
@@ -317,9 +328,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_2 = __builtin_exp(-sigma_2*tau);
-    const double eC_2 = e_2*__builtin_cos(omega_d_2*tau);
-    const double eS_2 = e_2*__builtin_sin(omega_d_2*tau)*0.1461909554676461;
+    const double e_2 = modes1_e[1];
+    const double eC_2 = e_2*modes1_c[1];
+    const double eS_2 = e_2*modes1_s[1]*0.1461909554676461;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_2 = coef[16]*eC_2 + coef[17]*eS_2;
@@ -330,9 +341,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_3 = __builtin_exp(-sigma_3*tau);
-    const double eC_3 = e_3*__builtin_cos(omega_d_3*tau);
-    const double eS_3 = e_3*__builtin_sin(omega_d_3*tau)*0.1000006125056274;
+    const double e_3 = modes1_e[2];
+    const double eC_3 = e_3*modes1_c[2];
+    const double eS_3 = e_3*modes1_s[2]*0.1000006125056274;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_3 = coef[22]*eC_3 + coef[23]*eS_3;
@@ -343,9 +354,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_4 = __builtin_exp(-sigma_4*tau);
-    const double eC_4 = e_4*__builtin_cos(omega_d_4*tau);
-    const double eS_4 = e_4*__builtin_sin(omega_d_4*tau)*0.077786811091174149;
+    const double e_4 = modes1_e[3];
+    const double eC_4 = e_4*modes1_c[3];
+    const double eS_4 = e_4*modes1_s[3]*0.077786811091174149;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_4 = coef[28]*eC_4 + coef[29]*eS_4;
@@ -356,9 +367,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_5 = __builtin_exp(-sigma_5*tau);
-    const double eC_5 = e_5*__builtin_cos(omega_d_5*tau);
-    const double eS_5 = e_5*__builtin_sin(omega_d_5*tau)*0.065271020333494759;
+    const double e_5 = modes2_e[0];
+    const double eC_5 = e_5*modes2_c[0];
+    const double eS_5 = e_5*modes2_s[0]*0.065271020333494759;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_5 = coef[34]*eC_5 + coef[35]*eS_5;
@@ -369,9 +380,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_6 = __builtin_exp(-sigma_6*tau);
-    const double eC_6 = e_6*__builtin_cos(omega_d_6*tau);
-    const double eS_6 = e_6*__builtin_sin(omega_d_6*tau)*0.057735722157469492;
+    const double e_6 = modes2_e[1];
+    const double eC_6 = e_6*modes2_c[1];
+    const double eS_6 = e_6*modes2_s[1]*0.057735722157469492;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_6 = coef[40]*eC_6 + coef[41]*eS_6;
@@ -382,9 +393,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_7 = __builtin_exp(-sigma_7*tau);
-    const double eC_7 = e_7*__builtin_cos(omega_d_7*tau);
-    const double eS_7 = e_7*__builtin_sin(omega_d_7*tau)*0.053209616501053075;
+    const double e_7 = modes2_e[2];
+    const double eC_7 = e_7*modes2_c[2];
+    const double eS_7 = e_7*modes2_s[2]*0.053209616501053075;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_7 = coef[46]*eC_7 + coef[47]*eS_7;
@@ -395,9 +406,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_8 = __builtin_exp(-sigma_8*tau);
-    const double eC_8 = e_8*__builtin_cos(omega_d_8*tau);
-    const double eS_8 = e_8*__builtin_sin(omega_d_8*tau)*0.050772079587767145;
+    const double e_8 = modes2_e[3];
+    const double eC_8 = e_8*modes2_c[3];
+    const double eS_8 = e_8*modes2_s[3]*0.050772079587767145;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_8 = coef[52]*eC_8 + coef[53]*eS_8;
@@ -5662,11 +5673,22 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
     const double cos_1 = __builtin_cos(arg_1);
+    // e^{-sigma tau} (modesG_e), sin and cos(omega_d tau) (modesG_s, modesG_c) of the 8 modes below, four in the lanes of each call (kernel_abi.h).
+    const double modes1_xe[4] = {-sigma_1*tau, -sigma_2*tau, -sigma_3*tau, -sigma_4*tau};
+    const double modes1_xt[4] = {omega_d_1*tau, omega_d_2*tau, omega_d_3*tau, omega_d_4*tau};
+    double modes1_e[4], modes1_s[4], modes1_c[4];
+    const double modes2_xe[4] = {-sigma_5*tau, -sigma_6*tau, -sigma_7*tau, -sigma_8*tau};
+    const double modes2_xt[4] = {omega_d_5*tau, omega_d_6*tau, omega_d_7*tau, omega_d_8*tau};
+    double modes2_e[4], modes2_s[4], modes2_c[4];
+    hsnc_sincos4(modes1_xt, modes1_s, modes1_c);
+    hsnc_exp4(modes1_xe, modes1_e);
+    hsnc_sincos4(modes2_xt, modes2_s, modes2_c);
+    hsnc_exp4(modes2_xe, modes2_e);
     // Mode 1 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_1 = __builtin_exp(-sigma_1*tau);
-    const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
-    const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.2591145208509682;
+    const double e_1 = modes1_e[0];
+    const double eC_1 = e_1*modes1_c[0];
+    const double eS_1 = e_1*modes1_s[0]*0.2591145208509682;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_1 = coef[10]*eC_1 + coef[11]*eS_1;
@@ -5677,9 +5699,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_2 = __builtin_exp(-sigma_2*tau);
-    const double eC_2 = e_2*__builtin_cos(omega_d_2*tau);
-    const double eS_2 = e_2*__builtin_sin(omega_d_2*tau)*0.13195967441300036;
+    const double e_2 = modes1_e[1];
+    const double eC_2 = e_2*modes1_c[1];
+    const double eS_2 = e_2*modes1_s[1]*0.13195967441300036;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_2 = coef[16]*eC_2 + coef[17]*eS_2;
@@ -5690,9 +5712,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_3 = __builtin_exp(-sigma_3*tau);
-    const double eC_3 = e_3*__builtin_cos(omega_d_3*tau);
-    const double eS_3 = e_3*__builtin_sin(omega_d_3*tau)*0.090748743459379985;
+    const double e_3 = modes1_e[2];
+    const double eC_3 = e_3*modes1_c[2];
+    const double eS_3 = e_3*modes1_s[2]*0.090748743459379985;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_3 = coef[22]*eC_3 + coef[23]*eS_3;
@@ -5703,9 +5725,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_4 = __builtin_exp(-sigma_4*tau);
-    const double eC_4 = e_4*__builtin_cos(omega_d_4*tau);
-    const double eS_4 = e_4*__builtin_sin(omega_d_4*tau)*0.071155349483542213;
+    const double e_4 = modes1_e[3];
+    const double eC_4 = e_4*modes1_c[3];
+    const double eS_4 = e_4*modes1_s[3]*0.071155349483542213;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_4 = coef[28]*eC_4 + coef[29]*eS_4;
@@ -5716,9 +5738,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_5 = __builtin_exp(-sigma_5*tau);
-    const double eC_5 = e_5*__builtin_cos(omega_d_5*tau);
-    const double eS_5 = e_5*__builtin_sin(omega_d_5*tau)*0.060378635195755585;
+    const double e_5 = modes2_e[0];
+    const double eC_5 = e_5*modes2_c[0];
+    const double eS_5 = e_5*modes2_s[0]*0.060378635195755585;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_5 = coef[34]*eC_5 + coef[35]*eS_5;
@@ -5729,9 +5751,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_6 = __builtin_exp(-sigma_6*tau);
-    const double eC_6 = e_6*__builtin_cos(omega_d_6*tau);
-    const double eS_6 = e_6*__builtin_sin(omega_d_6*tau)*0.054228501168289957;
+    const double e_6 = modes2_e[1];
+    const double eC_6 = e_6*modes2_c[1];
+    const double eS_6 = e_6*modes2_s[1]*0.054228501168289957;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_6 = coef[40]*eC_6 + coef[41]*eS_6;
@@ -5742,9 +5764,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_7 = __builtin_exp(-sigma_7*tau);
-    const double eC_7 = e_7*__builtin_cos(omega_d_7*tau);
-    const double eS_7 = e_7*__builtin_sin(omega_d_7*tau)*0.05100754423541104;
+    const double e_7 = modes2_e[2];
+    const double eC_7 = e_7*modes2_c[2];
+    const double eS_7 = e_7*modes2_s[2]*0.05100754423541104;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_7 = coef[46]*eC_7 + coef[47]*eS_7;
@@ -5755,9 +5777,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_8 = __builtin_exp(-sigma_8*tau);
-    const double eC_8 = e_8*__builtin_cos(omega_d_8*tau);
-    const double eS_8 = e_8*__builtin_sin(omega_d_8*tau)*0.028749138889854829;
+    const double e_8 = modes2_e[3];
+    const double eC_8 = e_8*modes2_c[3];
+    const double eS_8 = e_8*modes2_s[3]*0.028749138889854829;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_8 = coef[52]*eC_8 + coef[53]*eS_8;
@@ -6423,11 +6445,22 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
     const double cos_1 = __builtin_cos(arg_1);
+    // e^{-sigma tau} (modesG_e), sin and cos(omega_d tau) (modesG_s, modesG_c) of the 8 modes below, four in the lanes of each call (kernel_abi.h).
+    const double modes1_xe[4] = {-sigma_1*tau, -sigma_2*tau, -sigma_3*tau, -sigma_4*tau};
+    const double modes1_xt[4] = {omega_d_1*tau, omega_d_2*tau, omega_d_3*tau, omega_d_4*tau};
+    double modes1_e[4], modes1_s[4], modes1_c[4];
+    const double modes2_xe[4] = {-sigma_5*tau, -sigma_6*tau, -sigma_7*tau, -sigma_8*tau};
+    const double modes2_xt[4] = {omega_d_5*tau, omega_d_6*tau, omega_d_7*tau, omega_d_8*tau};
+    double modes2_e[4], modes2_s[4], modes2_c[4];
+    hsnc_sincos4(modes1_xt, modes1_s, modes1_c);
+    hsnc_exp4(modes1_xe, modes1_e);
+    hsnc_sincos4(modes2_xt, modes2_s, modes2_c);
+    hsnc_exp4(modes2_xe, modes2_e);
     // Mode 1 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_1 = __builtin_exp(-sigma_1*tau);
-    const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
-    const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.284466684128514;
+    const double e_1 = modes1_e[0];
+    const double eC_1 = e_1*modes1_c[0];
+    const double eS_1 = e_1*modes1_s[0]*0.284466684128514;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_1 = coef[10]*eC_1 + coef[11]*eS_1;
@@ -6438,9 +6471,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_2 = __builtin_exp(-sigma_2*tau);
-    const double eC_2 = e_2*__builtin_cos(omega_d_2*tau);
-    const double eS_2 = e_2*__builtin_sin(omega_d_2*tau)*0.13841854933240635;
+    const double e_2 = modes1_e[1];
+    const double eC_2 = e_2*modes1_c[1];
+    const double eS_2 = e_2*modes1_s[1]*0.13841854933240635;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_2 = coef[16]*eC_2 + coef[17]*eS_2;
@@ -6451,9 +6484,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_3 = __builtin_exp(-sigma_3*tau);
-    const double eC_3 = e_3*__builtin_cos(omega_d_3*tau);
-    const double eS_3 = e_3*__builtin_sin(omega_d_3*tau)*0.092400010461681892;
+    const double e_3 = modes1_e[2];
+    const double eC_3 = e_3*modes1_c[2];
+    const double eS_3 = e_3*modes1_s[2]*0.092400010461681892;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_3 = coef[22]*eC_3 + coef[23]*eS_3;
@@ -6464,9 +6497,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_4 = __builtin_exp(-sigma_4*tau);
-    const double eC_4 = e_4*__builtin_cos(omega_d_4*tau);
-    const double eS_4 = e_4*__builtin_sin(omega_d_4*tau)*0.077565925100049851;
+    const double e_4 = modes1_e[3];
+    const double eC_4 = e_4*modes1_c[3];
+    const double eS_4 = e_4*modes1_s[3]*0.077565925100049851;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_4 = coef[28]*eC_4 + coef[29]*eS_4;
@@ -6477,9 +6510,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_5 = __builtin_exp(-sigma_5*tau);
-    const double eC_5 = e_5*__builtin_cos(omega_d_5*tau);
-    const double eS_5 = e_5*__builtin_sin(omega_d_5*tau)*0.061048840676268271;
+    const double e_5 = modes2_e[0];
+    const double eC_5 = e_5*modes2_c[0];
+    const double eS_5 = e_5*modes2_s[0]*0.061048840676268271;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_5 = coef[34]*eC_5 + coef[35]*eS_5;
@@ -6490,9 +6523,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_6 = __builtin_exp(-sigma_6*tau);
-    const double eC_6 = e_6*__builtin_cos(omega_d_6*tau);
-    const double eS_6 = e_6*__builtin_sin(omega_d_6*tau)*0.056447039637921186;
+    const double e_6 = modes2_e[1];
+    const double eC_6 = e_6*modes2_c[1];
+    const double eS_6 = e_6*modes2_s[1]*0.056447039637921186;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_6 = coef[40]*eC_6 + coef[41]*eS_6;
@@ -6503,9 +6536,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_7 = __builtin_exp(-sigma_7*tau);
-    const double eC_7 = e_7*__builtin_cos(omega_d_7*tau);
-    const double eS_7 = e_7*__builtin_sin(omega_d_7*tau)*0.052330949496838128;
+    const double e_7 = modes2_e[2];
+    const double eC_7 = e_7*modes2_c[2];
+    const double eS_7 = e_7*modes2_s[2]*0.052330949496838128;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_7 = coef[46]*eC_7 + coef[47]*eS_7;
@@ -6516,9 +6549,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_8 = __builtin_exp(-sigma_8*tau);
-    const double eC_8 = e_8*__builtin_cos(omega_d_8*tau);
-    const double eS_8 = e_8*__builtin_sin(omega_d_8*tau)*0.020831442525852627;
+    const double e_8 = modes2_e[3];
+    const double eC_8 = e_8*modes2_c[3];
+    const double eS_8 = e_8*modes2_s[3]*0.020831442525852627;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_8 = coef[52]*eC_8 + coef[53]*eS_8;
@@ -8632,11 +8665,22 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
     const double cos_1 = __builtin_cos(arg_1);
+    // e^{-sigma tau} (modesG_e), sin and cos(omega_d tau) (modesG_s, modesG_c) of the 8 modes below, four in the lanes of each call (kernel_abi.h).
+    const double modes1_xe[4] = {-sigma_1*tau, -sigma_2*tau, -sigma_3*tau, -sigma_4*tau};
+    const double modes1_xt[4] = {omega_d_1*tau, omega_d_2*tau, omega_d_3*tau, omega_d_4*tau};
+    double modes1_e[4], modes1_s[4], modes1_c[4];
+    const double modes2_xe[4] = {-sigma_5*tau, -sigma_6*tau, -sigma_7*tau, -sigma_8*tau};
+    const double modes2_xt[4] = {omega_d_5*tau, omega_d_6*tau, omega_d_7*tau, omega_d_8*tau};
+    double modes2_e[4], modes2_s[4], modes2_c[4];
+    hsnc_sincos4(modes1_xt, modes1_s, modes1_c);
+    hsnc_exp4(modes1_xe, modes1_e);
+    hsnc_sincos4(modes2_xt, modes2_s, modes2_c);
+    hsnc_exp4(modes2_xe, modes2_e);
     // Mode 1 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_1 = __builtin_exp(-sigma_1*tau);
-    const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
-    const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.27507624959494004;
+    const double e_1 = modes1_e[0];
+    const double eC_1 = e_1*modes1_c[0];
+    const double eS_1 = e_1*modes1_s[0]*0.27507624959494004;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_1 = coef[10]*eC_1 + coef[11]*eS_1;
@@ -8647,9 +8691,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_2 = __builtin_exp(-sigma_2*tau);
-    const double eC_2 = e_2*__builtin_cos(omega_d_2*tau);
-    const double eS_2 = e_2*__builtin_sin(omega_d_2*tau)*0.14576800213407096;
+    const double e_2 = modes1_e[1];
+    const double eC_2 = e_2*modes1_c[1];
+    const double eS_2 = e_2*modes1_s[1]*0.14576800213407096;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_2 = coef[16]*eC_2 + coef[17]*eS_2;
@@ -8660,9 +8704,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_3 = __builtin_exp(-sigma_3*tau);
-    const double eC_3 = e_3*__builtin_cos(omega_d_3*tau);
-    const double eS_3 = e_3*__builtin_sin(omega_d_3*tau)*0.094295832440053157;
+    const double e_3 = modes1_e[2];
+    const double eC_3 = e_3*modes1_c[2];
+    const double eS_3 = e_3*modes1_s[2]*0.094295832440053157;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_3 = coef[22]*eC_3 + coef[23]*eS_3;
@@ -8673,9 +8717,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_4 = __builtin_exp(-sigma_4*tau);
-    const double eC_4 = e_4*__builtin_cos(omega_d_4*tau);
-    const double eS_4 = e_4*__builtin_sin(omega_d_4*tau)*0.071140063573121901;
+    const double e_4 = modes1_e[3];
+    const double eC_4 = e_4*modes1_c[3];
+    const double eS_4 = e_4*modes1_s[3]*0.071140063573121901;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_4 = coef[28]*eC_4 + coef[29]*eS_4;
@@ -8686,9 +8730,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_5 = __builtin_exp(-sigma_5*tau);
-    const double eC_5 = e_5*__builtin_cos(omega_d_5*tau);
-    const double eS_5 = e_5*__builtin_sin(omega_d_5*tau)*0.06431442125779295;
+    const double e_5 = modes2_e[0];
+    const double eC_5 = e_5*modes2_c[0];
+    const double eS_5 = e_5*modes2_s[0]*0.06431442125779295;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_5 = coef[34]*eC_5 + coef[35]*eS_5;
@@ -8699,9 +8743,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_6 = __builtin_exp(-sigma_6*tau);
-    const double eC_6 = e_6*__builtin_cos(omega_d_6*tau);
-    const double eS_6 = e_6*__builtin_sin(omega_d_6*tau)*0.056961964478582712;
+    const double e_6 = modes2_e[1];
+    const double eC_6 = e_6*modes2_c[1];
+    const double eS_6 = e_6*modes2_s[1]*0.056961964478582712;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_6 = coef[40]*eC_6 + coef[41]*eS_6;
@@ -8712,9 +8756,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_7 = __builtin_exp(-sigma_7*tau);
-    const double eC_7 = e_7*__builtin_cos(omega_d_7*tau);
-    const double eS_7 = e_7*__builtin_sin(omega_d_7*tau)*0.051645199591304952;
+    const double e_7 = modes2_e[2];
+    const double eC_7 = e_7*modes2_c[2];
+    const double eS_7 = e_7*modes2_s[2]*0.051645199591304952;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_7 = coef[46]*eC_7 + coef[47]*eS_7;
@@ -8725,9 +8769,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_8 = __builtin_exp(-sigma_8*tau);
-    const double eC_8 = e_8*__builtin_cos(omega_d_8*tau);
-    const double eS_8 = e_8*__builtin_sin(omega_d_8*tau)*0.020831466756241208;
+    const double e_8 = modes2_e[3];
+    const double eC_8 = e_8*modes2_c[3];
+    const double eS_8 = e_8*modes2_s[3]*0.020831466756241208;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_8 = coef[52]*eC_8 + coef[53]*eS_8;
@@ -11003,11 +11047,22 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double arg_1 = Omega_1*tau + coef[0];
     const double sin_1 = __builtin_sin(arg_1);
     const double cos_1 = __builtin_cos(arg_1);
+    // e^{-sigma tau} (modesG_e), sin and cos(omega_d tau) (modesG_s, modesG_c) of the 8 modes below, four in the lanes of each call (kernel_abi.h).
+    const double modes1_xe[4] = {-sigma_1*tau, -sigma_2*tau, -sigma_3*tau, -sigma_4*tau};
+    const double modes1_xt[4] = {omega_d_1*tau, omega_d_2*tau, omega_d_3*tau, omega_d_4*tau};
+    double modes1_e[4], modes1_s[4], modes1_c[4];
+    const double modes2_xe[4] = {-sigma_5*tau, -sigma_6*tau, -sigma_7*tau, -sigma_8*tau};
+    const double modes2_xt[4] = {omega_d_5*tau, omega_d_6*tau, omega_d_7*tau, omega_d_8*tau};
+    double modes2_e[4], modes2_s[4], modes2_c[4];
+    hsnc_sincos4(modes1_xt, modes1_s, modes1_c);
+    hsnc_exp4(modes1_xe, modes1_e);
+    hsnc_sincos4(modes2_xt, modes2_s, modes2_c);
+    hsnc_exp4(modes2_xe, modes2_e);
     // Mode 1 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_1 = __builtin_exp(-sigma_1*tau);
-    const double eC_1 = e_1*__builtin_cos(omega_d_1*tau);
-    const double eS_1 = e_1*__builtin_sin(omega_d_1*tau)*0.27285616124554135;
+    const double e_1 = modes1_e[0];
+    const double eC_1 = e_1*modes1_c[0];
+    const double eS_1 = e_1*modes1_s[0]*0.27285616124554135;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_1 = coef[10]*eC_1 + coef[11]*eS_1;
@@ -11018,9 +11073,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_1 = __builtin_fabs(coef[12]*eC_1) + __builtin_fabs(coef[13]*eS_1) + __builtin_fabs(sigma_1*coef[10]*eC_1);
     // Mode 2 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_2 = __builtin_exp(-sigma_2*tau);
-    const double eC_2 = e_2*__builtin_cos(omega_d_2*tau);
-    const double eS_2 = e_2*__builtin_sin(omega_d_2*tau)*0.1371230442793035;
+    const double e_2 = modes1_e[1];
+    const double eC_2 = e_2*modes1_c[1];
+    const double eS_2 = e_2*modes1_s[1]*0.1371230442793035;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_2 = coef[16]*eC_2 + coef[17]*eS_2;
@@ -11031,9 +11086,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_2 = __builtin_fabs(coef[18]*eC_2) + __builtin_fabs(coef[19]*eS_2) + __builtin_fabs(sigma_2*coef[16]*eC_2);
     // Mode 3 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_3 = __builtin_exp(-sigma_3*tau);
-    const double eC_3 = e_3*__builtin_cos(omega_d_3*tau);
-    const double eS_3 = e_3*__builtin_sin(omega_d_3*tau)*0.088565764222734017;
+    const double e_3 = modes1_e[2];
+    const double eC_3 = e_3*modes1_c[2];
+    const double eS_3 = e_3*modes1_s[2]*0.088565764222734017;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_3 = coef[22]*eC_3 + coef[23]*eS_3;
@@ -11044,9 +11099,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_3 = __builtin_fabs(coef[24]*eC_3) + __builtin_fabs(coef[25]*eS_3) + __builtin_fabs(sigma_3*coef[22]*eC_3);
     // Mode 4 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_4 = __builtin_exp(-sigma_4*tau);
-    const double eC_4 = e_4*__builtin_cos(omega_d_4*tau);
-    const double eS_4 = e_4*__builtin_sin(omega_d_4*tau)*0.068810014499874353;
+    const double e_4 = modes1_e[3];
+    const double eC_4 = e_4*modes1_c[3];
+    const double eS_4 = e_4*modes1_s[3]*0.068810014499874353;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_4 = coef[28]*eC_4 + coef[29]*eS_4;
@@ -11057,9 +11112,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_4 = __builtin_fabs(coef[30]*eC_4) + __builtin_fabs(coef[31]*eS_4) + __builtin_fabs(sigma_4*coef[28]*eC_4);
     // Mode 5 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_5 = __builtin_exp(-sigma_5*tau);
-    const double eC_5 = e_5*__builtin_cos(omega_d_5*tau);
-    const double eS_5 = e_5*__builtin_sin(omega_d_5*tau)*0.060980416139285835;
+    const double e_5 = modes2_e[0];
+    const double eC_5 = e_5*modes2_c[0];
+    const double eS_5 = e_5*modes2_s[0]*0.060980416139285835;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_5 = coef[34]*eC_5 + coef[35]*eS_5;
@@ -11070,9 +11125,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_5 = __builtin_fabs(coef[36]*eC_5) + __builtin_fabs(coef[37]*eS_5) + __builtin_fabs(sigma_5*coef[34]*eC_5);
     // Mode 6 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_6 = __builtin_exp(-sigma_6*tau);
-    const double eC_6 = e_6*__builtin_cos(omega_d_6*tau);
-    const double eS_6 = e_6*__builtin_sin(omega_d_6*tau)*0.056232150816803682;
+    const double e_6 = modes2_e[1];
+    const double eC_6 = e_6*modes2_c[1];
+    const double eS_6 = e_6*modes2_s[1]*0.056232150816803682;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_6 = coef[40]*eC_6 + coef[41]*eS_6;
@@ -11083,9 +11138,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_6 = __builtin_fabs(coef[42]*eC_6) + __builtin_fabs(coef[43]*eS_6) + __builtin_fabs(sigma_6*coef[40]*eC_6);
     // Mode 7 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_7 = __builtin_exp(-sigma_7*tau);
-    const double eC_7 = e_7*__builtin_cos(omega_d_7*tau);
-    const double eS_7 = e_7*__builtin_sin(omega_d_7*tau)*0.020842197665579609;
+    const double e_7 = modes2_e[2];
+    const double eC_7 = e_7*modes2_c[2];
+    const double eS_7 = e_7*modes2_s[2]*0.020842197665579609;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_7 = coef[46]*eC_7 + coef[47]*eS_7;
@@ -11096,9 +11151,9 @@ void eval(const double* coef, double tau, double* x, double* v, double* a, doubl
     const double mdq_7 = __builtin_fabs(coef[48]*eC_7) + __builtin_fabs(coef[49]*eS_7) + __builtin_fabs(sigma_7*coef[46]*eC_7);
     // Mode 8 (underdamped).
     // eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d
-    const double e_8 = __builtin_exp(-sigma_8*tau);
-    const double eC_8 = e_8*__builtin_cos(omega_d_8*tau);
-    const double eS_8 = e_8*__builtin_sin(omega_d_8*tau)*0.02082077764730873;
+    const double e_8 = modes2_e[3];
+    const double eC_8 = e_8*modes2_c[3];
+    const double eS_8 = e_8*modes2_s[3]*0.02082077764730873;
     // Homogeneous q_h = A eC + B eS and its derivatives; sqrt(2E), E = (q_h'^2 + lambda q_h^2)/2,
     // never grows (c >= 0); the magnitudes of the terms.
     const double q_8 = coef[52]*eC_8 + coef[53]*eS_8;

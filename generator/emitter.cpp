@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <functional>
 #include <limits>
+#include <map>
 #include <string>
 
 #include "code_writer.h"
@@ -86,10 +87,63 @@ public:
     BodyPrinter(const Program& p, const ProgramBody& b, CodeWriter& out) : p_(p), b_(b), out_(out) {}
 
     void print() {
-        for (const ProgramInstr& in : b_.code) instr(in);
+        const std::vector<ProgramInstr>& code = b_.code;
+        const bool vector = vector_factors(b_);
+        for (std::size_t i = 0; i < code.size(); ++i) {
+            if (vector && takes_factors(code[i]) && factor_of_.count(i) == 0) factors(i);
+            instr(code[i], i);
+        }
     }
 
 private:
+    // The factors (e^{-sigma tau}, sin and cos(omega_d tau)) of the run of
+    // consecutive modes from code[i] on that take them, printed before the
+    // first: their arguments -sigma tau and omega_d tau (0.0 where the regime
+    // takes none), then a call of kernel_abi.h's four-lane helpers per four
+    // modes, the calls together so that they overlap, as the interpreter runs
+    // them (a lane's bits are its own, so the grouping changes none).
+    void factors(std::size_t i) {
+        const std::vector<ProgramInstr>& code = b_.code;
+        std::size_t end = i;
+        bool exp = false;
+        for (; end < code.size() && takes_factors(code[end]); ++end)
+            exp = exp || static_cast<ProgramRegime>(code[end].regime) != ProgramRegime::undamped;
+        comment("e^{-sigma tau} (modesG_e), sin and cos(omega_d tau) (modesG_s, modesG_c) of the " +
+                std::to_string(end - i) + " modes below, four in the lanes of each call (kernel_abi.h).");
+        std::vector<std::string> calls;
+        for (std::size_t at = i; at < end; at += 4) {
+            const std::string g = "modes" + std::to_string(++groups_) + "_";
+            std::string xe, xt;
+            for (std::size_t lane = 0; lane < 4; ++lane) {
+                const std::string sep = lane ? ", " : "";
+                if (at + lane >= end) {
+                    xe += sep + "0.0", xt += sep + "0.0";
+                    continue;
+                }
+                const ProgramInstr& in = code[at + lane];
+                const auto regime = static_cast<ProgramRegime>(in.regime);
+                const std::string tau = n(in.b);
+                xe += sep + (regime == ProgramRegime::undamped ? std::string("0.0")
+                                                                : "-" + k(in.first + kModeSigma) + "*" + tau);
+                xt += sep + (regime == ProgramRegime::critical ? std::string("0.0")
+                                                                : k(in.first + kModeOmegaD) + "*" + tau);
+                factor_of_[at + lane] = g + "e[" + std::to_string(lane) + "]";
+            }
+            if (exp) out_.line(1, "const double " + g + "xe[4] = {" + xe + "};");
+            out_.line(1, "const double " + g + "xt[4] = {" + xt + "};");
+            out_.line(1, "double " + (exp ? g + "e[4], " : std::string()) + g + "s[4], " + g + "c[4];");
+            calls.push_back("hsnc_sincos4(" + g + "xt, " + g + "s, " + g + "c);");
+            if (exp) calls.push_back("hsnc_exp4(" + g + "xe, " + g + "e);");
+        }
+        for (const std::string& call : calls) out_.line(1, call);
+    }
+    // Mode code[i]'s factor f ('e', 's' or 'c').
+    std::string factor(std::size_t i, char f) const {
+        std::string name = factor_of_.at(i);
+        name[name.find('_') + 1] = f;
+        return name;
+    }
+
     const std::string& n(std::uint32_t r) const { return b_.names[r]; }
     std::string k(std::uint32_t c) const { return konst(p_, c); }
     // dst = expr;  declared const (or mutable: accumulators) unless an output.
@@ -101,7 +155,7 @@ private:
     void add_to(std::uint32_t dst, const std::string& expr) { out_.line(1, n(dst) + " += " + expr + ";"); }
     void comment(const std::string& text) { out_.comment(1, text); }
 
-    void instr(const ProgramInstr& in) {
+    void instr(const ProgramInstr& in, std::size_t i) {
         comment(in.comment);
         switch (in.op) {
             case ProgramOp::lincomb: {
@@ -123,7 +177,7 @@ private:
                 assign(in.dst + 1, "__builtin_sin(" + n(in.dst) + ")");
                 assign(in.dst + 2, "__builtin_cos(" + n(in.dst) + ")");
                 break;
-            case ProgramOp::mode: mode(in); break;
+            case ProgramOp::mode: mode(in, i); break;
             case ProgramOp::rigid_particular: {
                 const std::uint32_t m = in.c;
                 const std::string P = n(in.a), tau = n(in.b);
@@ -173,26 +227,30 @@ private:
         for (int row = 0; row < 5; ++row) assign(dst[row], sum_text(rows[row], false), row == 0 ? in.note : "");
     }
 
-    void mode(const ProgramInstr& in) {
+    void mode(const ProgramInstr& in, std::size_t i) {
         const std::uint32_t d = in.dst, c = in.first;
         const std::string tau = n(in.b), eC = n(d + kModeEC), eS = n(d + kModeES);
         const std::string aux = n(d + kModeAux), aux2 = n(d + kModeAux2);
+        const bool given = factor_of_.count(i) != 0;  // its factors printed above (factors())
         switch (static_cast<ProgramRegime>(in.regime)) {
             case ProgramRegime::undamped:
                 comment("eC = cos(omega tau), eS = sin(omega tau)/omega");
-                assign(d + kModeEC, "__builtin_cos(" + k(c + kModeOmegaD) + "*" + tau + ")");
-                assign(d + kModeES, "__builtin_sin(" + k(c + kModeOmegaD) + "*" + tau + ")*" + k(c + kModeInvOmegaD));
+                assign(d + kModeEC, given ? factor(i, 'c') : "__builtin_cos(" + k(c + kModeOmegaD) + "*" + tau + ")");
+                assign(d + kModeES, (given ? factor(i, 's') : "__builtin_sin(" + k(c + kModeOmegaD) + "*" + tau + ")") +
+                                        "*" + k(c + kModeInvOmegaD));
                 break;
             case ProgramRegime::underdamped:
                 comment("eC = e^{-sigma tau} cos(omega_d tau), eS = e^{-sigma tau} sin(omega_d tau)/omega_d");
-                assign(d + kModeAux, "__builtin_exp(-" + k(c + kModeSigma) + "*" + tau + ")");
-                assign(d + kModeEC, aux + "*__builtin_cos(" + k(c + kModeOmegaD) + "*" + tau + ")");
+                assign(d + kModeAux, given ? factor(i, 'e') : "__builtin_exp(-" + k(c + kModeSigma) + "*" + tau + ")");
+                assign(d + kModeEC,
+                       aux + "*" + (given ? factor(i, 'c') : "__builtin_cos(" + k(c + kModeOmegaD) + "*" + tau + ")"));
                 assign(d + kModeES,
-                       aux + "*__builtin_sin(" + k(c + kModeOmegaD) + "*" + tau + ")*" + k(c + kModeInvOmegaD));
+                       aux + "*" + (given ? factor(i, 's') : "__builtin_sin(" + k(c + kModeOmegaD) + "*" + tau + ")") +
+                           "*" + k(c + kModeInvOmegaD));
                 break;
             case ProgramRegime::critical:
                 comment("eC = e^{-sigma tau}, eS = tau e^{-sigma tau}");
-                assign(d + kModeEC, "__builtin_exp(-" + k(c + kModeSigma) + "*" + tau + ")");
+                assign(d + kModeEC, given ? factor(i, 'e') : "__builtin_exp(-" + k(c + kModeSigma) + "*" + tau + ")");
                 assign(d + kModeES, tau + "*" + eC);
                 break;
             case ProgramRegime::overdamped:
@@ -271,6 +329,8 @@ private:
     const Program& p_;
     const ProgramBody& b_;
     CodeWriter& out_;
+    std::map<std::size_t, std::string> factor_of_;  // mode instruction -> its lane's e ("modesG_e[l]")
+    int groups_ = 0;
 };
 
 }  // namespace

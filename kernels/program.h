@@ -20,6 +20,7 @@
 // Register 0 holds 1.0 in both programs: a term c*r0 is the constant c.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -51,7 +52,9 @@ enum class ProgramOp : std::uint8_t {
     /// kModeConstants) as laid out by ModeConstant. Writes the ModeRegister
     /// block at dst: eC, eS, q, q', q'', r = sqrt(q'^2 + lambda q^2) (homogeneous),
     /// the magnitudes |A eC| + |B eS|, |A1 eC| + |B1 eS|, and the auxiliary
-    /// exponential (e or m) of the regime.
+    /// exponential (e or m) of the regime. Its e^{-sigma tau}, sin and
+    /// cos(omega_d tau) are libm's, or kernel_abi.h's four-lane helpers'
+    /// (vector_factors, below).
     mode,
     /// q_p = p tau^2/2 of a rigid mode, p = r[a], tau = r[b], added to the mode block at c.
     rigid_particular,
@@ -157,6 +160,28 @@ struct ProgramBody {
     std::vector<RegisterKind> kinds;  ///< per register
     std::size_t registers() const { return kinds.size(); }
 };
+
+/// Whether a mode instruction's regime takes e^{-sigma tau} or sin, cos(omega_d tau).
+inline bool takes_factors(const ProgramInstr& in) {
+    if (in.op != ProgramOp::mode) return false;
+    const auto regime = static_cast<ProgramRegime>(in.regime);
+    return regime == ProgramRegime::undamped || regime == ProgramRegime::underdamped ||
+           regime == ProgramRegime::critical;
+}
+
+/// From this many such modes in eval, every one takes its factors from
+/// kernel_abi.h's four-lane hsnc_exp4 and hsnc_sincos4, else each from libm.
+/// Four lanes are fast when many modes' calls overlap; a few modes alone wait
+/// for a longer chain than libm's (measured: bench/program_bench.cpp).
+inline constexpr std::size_t kVectorFactorsFrom = 8;
+
+/// Whether `eval`'s modes take their factors four lanes at a time (the
+/// printer and the interpreter decide alike).
+inline bool vector_factors(const ProgramBody& eval) {
+    std::size_t n = 0;
+    for (const ProgramInstr& in : eval.code) n += takes_factors(in);
+    return n >= kVectorFactorsFrom;
+}
 
 struct Program {
     int n_dof = 0;

@@ -89,6 +89,7 @@ constexpr std::uint32_t kNoStep = ~std::uint32_t{0};
 
 struct InterpretedSolver::Body {
     std::vector<interpreter::Step> steps;
+    bool vector_factors = false;  ///< its modes take their factors four lanes at a time (program.h)
     std::vector<double> doubles;
     std::vector<std::uint32_t> regs;
     std::vector<interpreter::Instr> singles;
@@ -331,9 +332,36 @@ enum Run : std::uint8_t {
 
 // Each case below computes what generator/emitter.cpp (BodyPrinter) prints for
 // the instruction, operation for operation: change both or neither.
+// The arguments of mode step s's factors: -sigma tau and omega_d tau, as the
+// printed kernel writes them (0.0 for the one its regime does not use).
+ALWAYS_INLINE void factor_arguments(const Step& s, const double* K, const double* r, double& xe, double& xt) {
+    const Instr& in = s.single();
+    const double* k = K + in.first;
+    const double tau = r[in.b];
+    const auto regime = static_cast<ProgramRegime>(in.regime);
+    xe = regime == ProgramRegime::undamped ? 0.0 : -k[kModeSigma] * tau;
+    xt = regime == ProgramRegime::critical ? 0.0 : k[kModeOmegaD] * tau;
+}
+
+// The factors of n modes (n a multiple of 4), four lanes at a time, in AVX2
+// registers where the processor has them (the same bits: HSNC_ROWS_CLONES
+// below). The calls are independent, so they overlap: one alone is a long
+// chain of dependent operations. exp only when some mode takes it.
+__attribute__((target_clones("avx2", "default"))) void mode_factors(const double* xe, const double* xt, double* e,
+                                                                     double* sn, double* cs, std::size_t n,
+                                                                     bool exp) {
+    for (std::size_t i = 0; i < n; i += 4) hsnc_sincos4(xt + i, sn + i, cs + i);
+    if (exp)
+        for (std::size_t i = 0; i < n; i += 4) hsnc_exp4(xe + i, e + i);
+}
+
 // One mode's homogeneous response at tau (ProgramOp::mode), its regime fixed.
-template <ProgramRegime Regime>
-ALWAYS_INLINE void mode_step(const Step& s, const double* K, double* r) {
+// Given: e, sn, cs are its factors e^{-sigma tau}, sin and cos(omega_d tau)
+// where the regime takes them (undamped: sin, cos; underdamped: all three;
+// critical: e; program.h vector_factors), else libm computes them here.
+template <ProgramRegime Regime, bool Given = false>
+ALWAYS_INLINE void mode_step(const Step& s, const double* K, double* r, double e = 0.0, double sn = 0.0,
+                             double cs = 0.0) {
     const Instr& in = s.single();
     const double* k = K + in.first;
     const double* A = r + in.a;  // A, B, A1, B1, A2, B2
@@ -341,23 +369,27 @@ ALWAYS_INLINE void mode_step(const Step& s, const double* K, double* r) {
     const double tau = r[in.b];
     double eC = 0.0, eS = 0.0;
     if (Regime == ProgramRegime::undamped) {
-        eC = __builtin_cos(k[kModeOmegaD] * tau);
-        eS = __builtin_sin(k[kModeOmegaD] * tau) * k[kModeInvOmegaD];
+        eC = Given ? cs : __builtin_cos(k[kModeOmegaD] * tau);
+        eS = (Given ? sn : __builtin_sin(k[kModeOmegaD] * tau)) * k[kModeInvOmegaD];
     } else if (Regime == ProgramRegime::underdamped) {
-        const double e = __builtin_exp(-k[kModeSigma] * tau);
+        if (!Given) {
+            e = __builtin_exp(-k[kModeSigma] * tau);
+            cs = __builtin_cos(k[kModeOmegaD] * tau);
+            sn = __builtin_sin(k[kModeOmegaD] * tau);
+        }
         o[kModeAux] = e;
-        eC = e * __builtin_cos(k[kModeOmegaD] * tau);
-        eS = e * __builtin_sin(k[kModeOmegaD] * tau) * k[kModeInvOmegaD];
+        eC = e * cs;
+        eS = e * sn * k[kModeInvOmegaD];
     } else if (Regime == ProgramRegime::critical) {
-        eC = __builtin_exp(-k[kModeSigma] * tau);
+        eC = Given ? e : __builtin_exp(-k[kModeSigma] * tau);
         eS = tau * eC;
     } else if (Regime == ProgramRegime::overdamped) {
-        const double e = __builtin_exp(k[kModeR1] * tau);
+        const double ex = __builtin_exp(k[kModeR1] * tau);
         const double m = __builtin_expm1(k[kModeNegTwoGamma] * tau);
-        o[kModeAux] = e;
+        o[kModeAux] = ex;
         o[kModeAux2] = m;
-        eC = e * (1.0 + 0.5 * m);
-        eS = -e * m * k[kModeHalfInvGamma];
+        eC = ex * (1.0 + 0.5 * m);
+        eS = -ex * m * k[kModeHalfInvGamma];
     } else if (Regime == ProgramRegime::rigid) {
         eC = 1.0;
         eS = tau;
@@ -457,8 +489,44 @@ ALWAYS_INLINE void single_step(const Step& s, const double* K, double* r) {
 }
 
 // One switch for every step, everything inlined: no call and no prologue per step.
+// The consecutive mode steps of the factored regimes from `first` (up to
+// kFactorBatch), in a body whose modes take vector factors: their factors at
+// once, then each step. Returns the step after them.
+constexpr std::size_t kFactorBatch = 64;
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // xe, xt: set up to m, padded to a multiple of 4
+const Step* factored_modes(const Step* first, const Step* end, const double* K, double* r) {
+    double xe[kFactorBatch], xt[kFactorBatch], e[kFactorBatch], sn[kFactorBatch], cs[kFactorBatch];
+    const Step* last = first;
+    std::size_t m = 0;
+    bool exp = false;
+    for (; last != end && m < kFactorBatch && last->run >= kMode && last->run <= kMode + 2; ++last, ++m) {
+        factor_arguments(*last, K, r, xe[m], xt[m]);
+        exp = exp || last->run != kMode + 0;
+    }
+    for (std::size_t pad = m; pad % 4 != 0; ++pad) xe[pad] = xt[pad] = 0.0;
+    mode_factors(xe, xt, e, sn, cs, (m + 3) / 4 * 4, exp);
+    m = 0;
+    for (const Step* s = first; s != last; ++s, ++m) {
+        switch (s->run) {
+            case kMode + 0: mode_step<ProgramRegime::undamped, true>(*s, K, r, 0.0, sn[m], cs[m]); break;
+            case kMode + 1: mode_step<ProgramRegime::underdamped, true>(*s, K, r, e[m], sn[m], cs[m]); break;
+            default: mode_step<ProgramRegime::critical, true>(*s, K, r, e[m], 0.0, 0.0); break;
+        }
+    }
+    return last;
+}
+#pragma GCC diagnostic pop
+
 void execute(const double* K, const InterpretedSolver::Body& body, double* r) {
-    for (const Step& s : body.steps) {
+    const Step* const end = body.steps.data() + body.steps.size();
+    for (const Step* it = body.steps.data(); it != end;) {
+        const Step& s = *it;
+        if (body.vector_factors && s.run >= kMode && s.run <= kMode + 2) {
+            it = factored_modes(it, end, K, r);
+            continue;
+        }
+        ++it;
         switch (s.run) {
             case kSingle: single_step(s, K, r); break;
             case kSinCos: sincos_step(s, K, r); break;
@@ -1153,7 +1221,9 @@ InterpretedSolver::InterpretedSolver(Program p)
         prepare(p.eval, p.terms, outputs, outputs + p.eval_output_count(), no_exports_);
     const bool by_function = switches_.size() >= kScheduleFrom;  // eval_some() runs rows of eval_
     std::vector<RowRef> where;
+    const bool vector = vector_factors(p.eval);  // the printer decides alike (emitter.cpp)
     eval_ = schedule(code, p.terms, p.eval.registers(), by_function ? &where : nullptr);
+    eval_->vector_factors = vector;
     // The search's program: what g, dg, bound and scale need. Worth a body of
     // its own only when it leaves out a good part (the state of masses no
     // switch function reads).
@@ -1163,6 +1233,7 @@ InterpretedSolver::InterpretedSolver(Program p)
     const double share = estimated_work(search) / std::max(1.0, estimated_work(code));
     if (share < 0.8) {
         switches_body_ = schedule(search, p.terms, p.eval.registers());
+        switches_body_->vector_factors = vector;
         switch_share_ = share;
     }
     if (by_function) {
@@ -1174,6 +1245,7 @@ InterpretedSolver::InterpretedSolver(Program p)
             for (std::size_t i = 0; i < code.size(); ++i)
                 if (parts.common[i]) common.push_back(code[i]);
             common_ = schedule(common, p.terms, p.eval.registers());
+            common_->vector_factors = vector;
             part_rows_.assign(parts.rows.begin(), parts.rows.end());  // no spare capacity: the budget counts it
             part_at_.assign(parts.at.begin(), parts.at.end());
         }

@@ -5,7 +5,9 @@
 //
 // It computes each instruction as the emitter prints it (generator/emitter.cpp):
 // the same operations in the same order, the same libm calls, the same
-// helpers of kernel_abi.h, no fma contraction. So it gives the bits of the
+// helpers of kernel_abi.h (a configuration's modes may take their exp, sin
+// and cos four lanes at a time there, grouped as it likes: a lane's bits are
+// its own), no fma contraction. So it gives the bits of the
 // printed kernel, ahead-of-time (GCC) or JIT-compiled (Clang), without a
 // compiler (tests/test_program.cpp holds the three to memcmp equality).
 //
