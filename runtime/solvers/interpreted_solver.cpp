@@ -620,7 +620,12 @@ const Step* factored_modes(const Step* first, const Step* end, const double* K, 
         exp = exp || last->run != kMode + 0;
     }
     for (std::size_t pad = m; pad % 4 != 0; ++pad) xe[pad] = xt[pad] = 0.0;
-    mode_factors(xe, xt, e, sn, cs, (m + 3) / 4 * 4, exp);
+    bool at_zero = true;  // a segment's start: e^0, sin 0, cos 0 are 1, 0, 1, as the helpers give them
+    for (std::size_t i = 0; i < m; ++i) at_zero = at_zero && xe[i] == 0.0 && xt[i] == 0.0;
+    if (at_zero)
+        for (std::size_t i = 0; i < m; ++i) e[i] = 1.0, sn[i] = 0.0, cs[i] = 1.0;
+    else
+        mode_factors(xe, xt, e, sn, cs, (m + 3) / 4 * 4, exp);
     m = 0;
     for (const Step* s = first; s != last; ++s, ++m) {
         switch (s->run) {
