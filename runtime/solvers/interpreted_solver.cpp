@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <type_traits>
 #include <unordered_map>
 
 #include "kernel_abi.h"  // hsnc_phase, hsnc_phi2: the very helpers the printed kernels call
@@ -244,9 +245,46 @@ inline void tail_sum(double (&S)[W], bool started, std::uint32_t n, const double
 //   mx = |x_st| + sum_k |c_k| mq_k + tail_mx,    mv = sum_k |c_k| mdq_k + tail_mv,
 // each left to right; a sum without modal terms starts from its first tail
 // term (0.0 without any), as a printed one does.
+// Four rows (a vector, kernel_abi.h hsnc_v4d) or one row of coefficients.
+template <class T>
+ALWAYS_INLINE void load_rows(T& v, const double* p) {
+    std::memcpy(&v, p, sizeof v);
+}
+
+// The modal terms of a `mass` block's five sums, V units of T side by side
+// (T = hsnc_v4d: four rows each; T = double: one), term by term in order.
+template <class T, int V>
+ALWAYS_INLINE void modal_sums(T (&x)[V], T (&v)[V], T (&a)[V], T (&mx)[V], T (&mv)[V], const Step& s,
+                              const double* C, const double* AC, const double* r) {
+    constexpr int L = sizeof(T) / sizeof(double);  // rows per unit
+    const std::uint32_t R = s.rows;
+    auto term = [&](std::uint32_t k, auto first) __attribute__((always_inline)) {
+        const double* mk = r + s.reg()[k];
+        const double q = mk[kModeQ], dq = mk[kModeDQ], ddq = mk[kModeDDQ], mq = mk[kModeMQ], mdq = mk[kModeMDQ];
+        const double* Ck = C + static_cast<std::size_t>(k) * R;
+        const double* ACk = AC + static_cast<std::size_t>(k) * R;
+        for (int i = 0; i < V; ++i) {
+            T c, ac;
+            load_rows(c, Ck + L * i), load_rows(ac, ACk + L * i);
+            x[i] += c * q;  // x and mx start from x_st, the others from their first term
+            mx[i] += ac * mq;
+            if constexpr (decltype(first)::value) {
+                v[i] = c * dq;
+                a[i] = c * ddq;
+                mv[i] = ac * mdq;
+            } else {
+                v[i] += c * dq;
+                a[i] += c * ddq;
+                mv[i] += ac * mdq;
+            }
+        }
+    };
+    if (s.count > 0) term(0, std::true_type{});
+    for (std::uint32_t k = 1; k < s.count; ++k) term(k, std::false_type{});
+}
+
 template <int W>
 HSNC_ROWS_CLONES void mass_rows(const Step& s, std::uint32_t row, double* r) {
-    const std::uint32_t R = s.rows, m = s.count;
     double sx[W], sv[W], sa[W], smx[W], smv[W];
     for (int w = 0; w < W; ++w) {
         const double xst = r[s.src()[row + w]];
@@ -256,74 +294,18 @@ HSNC_ROWS_CLONES void mass_rows(const Step& s, std::uint32_t row, double* r) {
     }
     const double* C = s.c() + row;
     const double* AC = s.ac() + row;
-    if (m > 0 && W % 4 == 0) {
-        // Eight masses: two vectors per sum, ten sums side by side (kernel_abi.h
-        // hsnc_v4d, written out as lin_rows_shared_wide); the same terms in the same order.
-        constexpr int V = W % 4 == 0 ? W / 4 : 1;
-        hsnc_v4d x[V], v[V], a[V], mx[V], mv[V];
-        std::memcpy(x, sx, sizeof x);
-        std::memcpy(mx, smx, sizeof mx);
-        {
-            const double* mb = r + s.reg()[0];
-            const double q = mb[kModeQ], dq = mb[kModeDQ], ddq = mb[kModeDDQ], mq = mb[kModeMQ], mdq = mb[kModeMDQ];
-            for (int i = 0; i < V; ++i) {
-                hsnc_v4d c, ac;
-                std::memcpy(&c, C + 4 * i, sizeof c);
-                std::memcpy(&ac, AC + 4 * i, sizeof ac);
-                x[i] += c * q;
-                v[i] = c * dq;
-                a[i] = c * ddq;
-                mx[i] += ac * mq;
-                mv[i] = ac * mdq;
-            }
-        }
-        for (std::uint32_t k = 1; k < m; ++k) {
-            const double* mk = r + s.reg()[k];
-            const double qk = mk[kModeQ], dqk = mk[kModeDQ], ddqk = mk[kModeDDQ], mqk = mk[kModeMQ],
-                         mdqk = mk[kModeMDQ];
-            const double* Ck = C + static_cast<std::size_t>(k) * R;
-            const double* ACk = AC + static_cast<std::size_t>(k) * R;
-            for (int i = 0; i < V; ++i) {
-                hsnc_v4d c, ac;
-                std::memcpy(&c, Ck + 4 * i, sizeof c);
-                std::memcpy(&ac, ACk + 4 * i, sizeof ac);
-                x[i] += c * qk;
-                v[i] += c * dqk;
-                a[i] += c * ddqk;
-                mx[i] += ac * mqk;
-                mv[i] += ac * mdqk;
-            }
-        }
-        std::memcpy(sx, x, sizeof sx);
-        std::memcpy(sv, v, sizeof sv);
-        std::memcpy(sa, a, sizeof sa);
-        std::memcpy(smx, mx, sizeof smx);
-        std::memcpy(smv, mv, sizeof smv);
-    } else if (m > 0) {
-        const double* mb = r + s.reg()[0];
-        const double q = mb[kModeQ], dq = mb[kModeDQ], ddq = mb[kModeDDQ], mq = mb[kModeMQ], mdq = mb[kModeMDQ];
-        for (int w = 0; w < W; ++w) {
-            sx[w] += C[w] * q;
-            sv[w] = C[w] * dq;
-            sa[w] = C[w] * ddq;
-            smx[w] += AC[w] * mq;
-            smv[w] = AC[w] * mdq;
-        }
-        for (std::uint32_t k = 1; k < m; ++k) {
-            const double* mk = r + s.reg()[k];
-            const double qk = mk[kModeQ], dqk = mk[kModeDQ], ddqk = mk[kModeDDQ], mqk = mk[kModeMQ],
-                         mdqk = mk[kModeMDQ];
-            const double* Ck = C + static_cast<std::size_t>(k) * R;
-            const double* ACk = AC + static_cast<std::size_t>(k) * R;
-            for (int w = 0; w < W; ++w) {
-                sx[w] += Ck[w] * qk;
-                sv[w] += Ck[w] * dqk;
-                sa[w] += Ck[w] * ddqk;
-                smx[w] += ACk[w] * mqk;
-                smv[w] += ACk[w] * mdqk;
-            }
-        }
+    if constexpr (W % 4 == 0) {
+        // Four rows to a vector: eight masses are ten sums side by side.
+        hsnc_v4d x[W / 4], v[W / 4], a[W / 4], mx[W / 4], mv[W / 4];
+        std::memcpy(x, sx, sizeof x), std::memcpy(v, sv, sizeof v), std::memcpy(a, sa, sizeof a);
+        std::memcpy(mx, smx, sizeof mx), std::memcpy(mv, smv, sizeof mv);
+        modal_sums(x, v, a, mx, mv, s, C, AC, r);
+        std::memcpy(sx, x, sizeof sx), std::memcpy(sv, v, sizeof sv), std::memcpy(sa, a, sizeof sa);
+        std::memcpy(smx, mx, sizeof smx), std::memcpy(smv, mv, sizeof smv);
+    } else {
+        modal_sums(sx, sv, sa, smx, smv, s, C, AC, r);
     }
+    const std::uint32_t R = s.rows, m = s.count;
     const double* TC = s.tc() + row;
     const std::uint32_t* TI = s.treg();
     std::uint32_t t = 0;
