@@ -478,6 +478,7 @@ Program lower(const Derivation& d, ProgramNames names) {
             s_stuck_slot[j] = slot("s_stuck_", j, x0(static_cast<int>(n + j)), "",
                                    named ? "the slider of " + model.jenkins[j].name + " (stuck)" : "");
     p.n_coef = static_cast<int>(p.coef_names.size());
+    p.mode_coef = mode_coef, p.x_st_coef = x_st_slot, p.theta_coef = theta_slot, p.c_theta_coef = c_theta_slot;
 
     // ================= eval =================
     Builder e(p, p.eval, named);
@@ -997,6 +998,41 @@ Program lower(const Derivation& d, ProgramNames names) {
         e.lin(G(f, 6), sc);
     }
     return p;
+}
+
+RestartPlan restart_plan(const Derivation& d, const Program& p) {
+    const Model& model = *d.model;
+    RestartPlan plan;
+    const std::size_t nf = d.n_free(), nm = d.modes.size();
+    if (d.state_space || !d.riders.empty() || !model.jenkins.empty() || nf == 0 || nm == 0) return plan;
+    for (const Mass& mass : model.masses)
+        if (mass.partner != kGround) return plan;
+    for (const Mode& m : d.modes)
+        if (m.regime == Regime::rigid || m.regime == Regime::rigid_damped) return plan;
+    for (const HarmonicData& h : d.harmonics)
+        for (const ModalHarmonic& mh : h.modal)
+            if (mh.resonant) return plan;
+    for (std::size_t j = 0; j < nm; ++j) {
+        const Mode& m = d.modes[j];
+        RestartPlan::Mode rm;
+        rm.coef = p.mode_coef[j];
+        rm.regime = static_cast<ProgramRegime>(m.regime);
+        rm.sigma = dbl(m.sigma), rm.kappa = dbl(m.kappa), rm.omega_d = dbl(m.omega_d), rm.lambda = dbl(m.lambda);
+        rm.r1 = dbl(m.r1), rm.gamma = dbl(m.gamma);
+        plan.modes.push_back(rm);
+    }
+    plan.v.resize(nf * nm);
+    for (std::size_t r = 0; r < nf; ++r) {
+        const int i = d.free_dofs[r];
+        plan.free_mass.push_back(i);
+        plan.mu_k_n.push_back(dbl(d.mu_k_n[static_cast<std::size_t>(i)]));
+        plan.x_st.push_back(p.x_st_coef[r]);
+        for (std::size_t j = 0; j < nm; ++j) plan.v[r * nm + j] = dbl(d.modes[j].v[r]);
+    }
+    for (std::size_t h = 0; h < d.harmonics.size(); ++h)
+        plan.harmonics.push_back({p.theta_coef[h], p.c_theta_coef[h], dbl(d.harmonics[h].omega),
+                                  dbl(d.harmonics[h].phase)});
+    return plan;
 }
 
 std::function<Program(const Configuration&)> program_source(const Model& model) {

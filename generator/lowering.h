@@ -23,6 +23,12 @@ enum class ProgramNames { yes, no };
 /// instructions with or without names.
 Program lower(const Derivation& d, ProgramNames names = ProgramNames::yes);
 
+/// What restarting one of `d`'s segments at a reversal needs (kernels/program.h
+/// RestartPlan), with the coefficient indices of `p` = lower(d); empty when
+/// `d` has dampers' pseudo-modes, riders, Jenkins elements, friction pairs,
+/// rigid modes or a resonant harmonic.
+RestartPlan restart_plan(const Derivation& d, const Program& p);
+
 /// The program of each configuration of `model`, lower(derive(model, cfg)):
 /// the source of the generic path (InterpretedSolverProvider). `model` must
 /// outlive the function.

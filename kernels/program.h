@@ -161,6 +161,33 @@ struct ProgramBody {
     std::size_t registers() const { return kinds.size(); }
 };
 
+/// What restarting a segment at a reversal needs of a configuration
+/// (runtime/solvers/restart.h): a reversal flips one sliding mass's kinetic
+/// friction and keeps the configuration, so the modes stay and only the
+/// modal forces change; the coefficient block can be carried over instead of
+/// projecting the state again. Built by generator/lowering.h restart_plan()
+/// for configurations of plain modes (no dampers' pseudo-modes, riders,
+/// Jenkins elements, friction pairs, rigid modes or resonance); empty otherwise.
+struct RestartPlan {
+    struct Mode {
+        std::uint32_t coef = 0;  ///< coef index of its A (B, A1, B1, A2, B2 follow)
+        ProgramRegime regime = ProgramRegime::undamped;
+        double sigma = 0, kappa = 0, omega_d = 0, lambda = 0;
+        double r1 = 0, gamma = 0;  ///< overdamped: the slow root and gamma
+    };
+    struct Harmonic {
+        std::uint32_t theta = 0, c_theta = 0;  ///< coef indices
+        double omega = 0, phase = 0;
+    };
+    std::vector<Mode> modes;
+    std::vector<int> free_mass;          ///< per free coordinate: its mass
+    std::vector<double> mu_k_n;          ///< per free coordinate: mu_k N of its mass (0 without friction)
+    std::vector<double> v;               ///< V, row-major: v[r * modes.size() + j]
+    std::vector<std::uint32_t> x_st;     ///< per free coordinate: coef index of its static offset
+    std::vector<Harmonic> harmonics;
+    bool empty() const { return modes.empty(); }
+};
+
 /// Whether a mode instruction's regime takes e^{-sigma tau} or sin, cos(omega_d tau).
 inline bool takes_factors(const ProgramInstr& in) {
     if (in.op != ProgramOp::mode) return false;
@@ -201,6 +228,10 @@ struct Program {
     ProgramBody setup;
     std::vector<std::uint32_t> setup_coef;
     std::vector<std::string> coef_names;  ///< what coef[k] holds ("A_1"), for the printed layout
+    /// coef indices of what setup computes from the state: each mode's A (B,
+    /// A1, B1, A2, B2 follow), each free coordinate's static offset x_st, each
+    /// harmonic's phase theta and cos(theta) (restart_plan(), generator/lowering.h).
+    std::vector<std::uint32_t> mode_coef, x_st_coef, theta_coef, c_theta_coef;
     /// Registers: 0 = 1.0, 1 = tau, 2 .. 2+n_coef = coef, then x (n_state()),
     /// v, a (n_dof each), g, dg, bound, scale (n_switch each); then temps.
     ProgramBody eval;
