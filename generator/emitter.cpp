@@ -8,6 +8,7 @@
 #include <limits>
 #include <map>
 #include <string>
+#include <utility>
 
 #include "code_writer.h"
 #include "lowering.h"
@@ -127,7 +128,7 @@ private:
                                                                 : "-" + k(in.first + kModeSigma) + "*" + tau);
                 xt += sep + (regime == ProgramRegime::critical ? std::string("0.0")
                                                                 : k(in.first + kModeOmegaD) + "*" + tau);
-                factor_of_[at + lane] = g + "e[" + std::to_string(lane) + "]";
+                factor_of_[at + lane] = {g, lane};
             }
             if (exp) out_.line(1, "const double " + g + "xe[4] = {" + xe + "};");
             out_.line(1, "const double " + g + "xt[4] = {" + xt + "};");
@@ -137,11 +138,10 @@ private:
         }
         for (const std::string& call : calls) out_.line(1, call);
     }
-    // Mode code[i]'s factor f ('e', 's' or 'c').
+    // Mode code[i]'s factor f ('e', 's' or 'c'): its group's array, at its lane.
     std::string factor(std::size_t i, char f) const {
-        std::string name = factor_of_.at(i);
-        name[name.find('_') + 1] = f;
-        return name;
+        const auto& [group, lane] = factor_of_.at(i);
+        return group + f + "[" + std::to_string(lane) + "]";
     }
 
     const std::string& n(std::uint32_t r) const { return b_.names[r]; }
@@ -329,7 +329,7 @@ private:
     const Program& p_;
     const ProgramBody& b_;
     CodeWriter& out_;
-    std::map<std::size_t, std::string> factor_of_;  // mode instruction -> its lane's e ("modesG_e[l]")
+    std::map<std::size_t, std::pair<std::string, std::size_t>> factor_of_;  // mode instruction -> group ("modesG_"), lane
     int groups_ = 0;
 };
 

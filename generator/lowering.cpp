@@ -478,7 +478,6 @@ Program lower(const Derivation& d, ProgramNames names) {
             s_stuck_slot[j] = slot("s_stuck_", j, x0(static_cast<int>(n + j)), "",
                                    named ? "the slider of " + model.jenkins[j].name + " (stuck)" : "");
     p.n_coef = static_cast<int>(p.coef_names.size());
-    p.mode_coef = mode_coef, p.x_st_coef = x_st_slot, p.theta_coef = theta_slot, p.c_theta_coef = c_theta_slot;
 
     // ================= eval =================
     Builder e(p, p.eval, named);
@@ -997,6 +996,8 @@ Program lower(const Derivation& d, ProgramNames names) {
         e.lin(G(f, 5), b);
         e.lin(G(f, 6), sc);
     }
+    p.mode_coef = std::move(mode_coef), p.x_st_coef = std::move(x_st_slot);
+    p.theta_coef = std::move(theta_slot), p.c_theta_coef = std::move(c_theta_slot);
     return p;
 }
 

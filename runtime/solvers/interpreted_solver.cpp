@@ -324,10 +324,9 @@ HSNC_ROWS_CLONES void mass_rows(const Step& s, std::uint32_t row, double* r) {
     }
 }
 
-// A block's rows, four, then two, then one at a time.
+// A block's rows from `row` on, four, then two, then one at a time.
 template <template <int> class F>
-inline void by_rows(const Step& s, double* r) {
-    std::uint32_t row = 0;
+inline void by_rows(const Step& s, double* r, std::uint32_t row = 0) {
     for (; row + 4 <= s.rows; row += 4) F<4>::run(s, row, r);
     if (s.rows - row >= 2) F<2>::run(s, row, r), row += 2;
     if (row < s.rows) F<1>::run(s, row, r);
@@ -343,9 +342,7 @@ inline void by_wide_rows(const Step& s, double* r) {
     std::uint32_t row = 0;
     for (; row + 16 <= s.rows; row += 16) F<16>::run(s, row, r);
     if (s.rows - row >= 8) F<8>::run(s, row, r), row += 8;
-    for (; row + 4 <= s.rows; row += 4) F<4>::run(s, row, r);
-    if (s.rows - row >= 2) F<2>::run(s, row, r), row += 2;
-    if (row < s.rows) F<1>::run(s, row, r);
+    by_rows<F>(s, r, row);
 }
 
 template <bool Shared, bool Base, int M>
@@ -385,9 +382,7 @@ struct MassRows {
 ALWAYS_INLINE void mass_step(const Step& s, const double*, double* r) {
     std::uint32_t row = 0;
     for (; row + 8 <= s.rows; row += 8) mass_rows<8>(s, row, r);
-    for (; row + 4 <= s.rows; row += 4) mass_rows<4>(s, row, r);
-    if (s.rows - row >= 2) mass_rows<2>(s, row, r), row += 2;
-    if (row < s.rows) mass_rows<1>(s, row, r);
+    by_rows<MassRows>(s, r, row);
 }
 
 // Linear combinations without terms: 0.0, or the base + 0.0.
@@ -429,6 +424,10 @@ enum Run : std::uint8_t {
 
 // Each case below computes what generator/emitter.cpp (BodyPrinter) prints for
 // the instruction, operation for operation: change both or neither.
+// Whether a step is a mode whose regime takes factors (program.h
+// takes_factors): undamped, underdamped or critical (Run kMode + regime).
+constexpr bool factored_run(std::uint8_t run) { return run >= kMode && run <= kMode + 2; }
+
 // The arguments of mode step s's factors: -sigma tau and omega_d tau, as the
 // printed kernel writes them (0.0 for the one its regime does not use).
 ALWAYS_INLINE void factor_arguments(const Step& s, const double* K, const double* r, double& xe, double& xt) {
@@ -597,7 +596,7 @@ const Step* factored_modes(const Step* first, const Step* end, const double* K, 
     const Step* last = first;
     std::size_t m = 0;
     bool exp = false;
-    for (; last != end && m < kFactorBatch && last->run >= kMode && last->run <= kMode + 2; ++last, ++m) {
+    for (; last != end && m < kFactorBatch && factored_run(last->run); ++last, ++m) {
         factor_arguments(*last, K, r, xe[m], xt[m]);
         exp = exp || last->run != kMode + 0;
     }
@@ -624,7 +623,7 @@ void execute(const double* K, const InterpretedSolver::Body& body, double* r) {
     const Step* const end = body.steps.data() + body.steps.size();
     for (const Step* it = body.steps.data(); it != end;) {
         const Step& s = *it;
-        if (body.vector_factors && s.run >= kMode && s.run <= kMode + 2) {
+        if (body.vector_factors && factored_run(s.run)) {
             it = factored_modes(it, end, K, r);
             continue;
         }
@@ -1323,9 +1322,14 @@ InterpretedSolver::InterpretedSolver(Program p)
         prepare(p.eval, p.terms, outputs, outputs + p.eval_output_count(), no_exports_);
     const bool by_function = switches_.size() >= kScheduleFrom;  // eval_some() runs rows of eval_
     std::vector<RowRef> where;
-    const bool vector = vector_factors(p.eval);  // the printer decides alike (emitter.cpp)
-    eval_ = schedule(code, p.terms, p.eval.registers(), by_function ? &where : nullptr);
-    eval_->vector_factors = vector;
+    // eval's bodies, their modes' factors taken as the printer takes them (emitter.cpp).
+    const bool vector = vector_factors(p.eval);
+    auto eval_body = [&](const std::vector<Instr>& instrs, std::vector<RowRef>* rows = nullptr) {
+        std::unique_ptr<Body> body = schedule(instrs, p.terms, p.eval.registers(), rows);
+        body->vector_factors = vector;
+        return body;
+    };
+    eval_ = eval_body(code, by_function ? &where : nullptr);
     // The search's program: what g, dg, bound and scale need. Worth a body of
     // its own only when it leaves out a good part (the state of masses no
     // switch function reads).
@@ -1334,8 +1338,7 @@ InterpretedSolver::InterpretedSolver(Program p)
         needed_for(code, table, p.eval.registers(), switch_outputs, outputs + p.eval_output_count());
     const double share = estimated_work(search) / std::max(1.0, estimated_work(code));
     if (share < 0.8) {
-        switches_body_ = schedule(search, p.terms, p.eval.registers());
-        switches_body_->vector_factors = vector;
+        switches_body_ = eval_body(search);
         switch_share_ = share;
     }
     if (by_function) {
@@ -1346,8 +1349,7 @@ InterpretedSolver::InterpretedSolver(Program p)
             std::vector<Instr> common;
             for (std::size_t i = 0; i < code.size(); ++i)
                 if (parts.common[i]) common.push_back(code[i]);
-            common_ = schedule(common, p.terms, p.eval.registers());
-            common_->vector_factors = vector;
+            common_ = eval_body(common);
             part_rows_.assign(parts.rows.begin(), parts.rows.end());  // no spare capacity: the budget counts it
             part_at_.assign(parts.at.begin(), parts.at.end());
         }
