@@ -6,6 +6,7 @@
 #include "aot_registry.h"
 #include "assembly.h"
 #include "kernel_mode.h"
+#include "lowering.h"
 #include "solver_choice.h"
 
 namespace hsnc::analysis {
@@ -20,6 +21,7 @@ Flow::Flow(const Model& model, const FlowKernels& k, const char* function) : wor
     // The kernels of a JIT provider depend on the model's numbers only, not on
     // the initial state that run() rewrites.
     provider_ = api::make_provider(work_, o, &solver_, function);
+    restart_plans_ = restart_plan_source(work_);
 }
 
 RunSummary Flow::run(double t, const double* x, const double* v, double t_end, Observer& observer, bool samples,
@@ -37,6 +39,7 @@ RunSummary Flow::run(double t, const double* x, const double* v, double t_end, O
     opt.t_end = t_end;
     opt.samples = samples;
     opt.dt = dt;
+    opt.restart_plans = restart_plans_;
     return engine.run(opt, observer);
 }
 

@@ -4,6 +4,7 @@
 // initial state).
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -44,6 +45,9 @@ private:
     Model work_;
     SolverKind solver_ = SolverKind::generic;
     std::unique_ptr<SolverProvider> provider_;
+    // EngineOptions::restart_plans, as hsnc::simulate sets it: a flow's
+    // segments are simulate's, bit for bit.
+    std::function<std::shared_ptr<const RestartPlan>(const Configuration&)> restart_plans_;
 };
 
 /// An observer that ignores everything.

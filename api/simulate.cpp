@@ -270,6 +270,7 @@ SimulateSummary simulate(const Model& model, const SimulateOptions& o, Observer&
         s.solver_detail = method_name(o.method);
     } else {
         const std::unique_ptr<SolverProvider> provider = api::make_provider(model, o, &s.solver, kSimulate);
+        eopt.restart_plans = restart_plan_source(model);  // for the kernels: the interpreter keeps its own
         Engine engine(model, *provider);
         static_cast<RunSummary&>(s) = engine.run(eopt, observer);
         s.solver_detail = provider->describe();

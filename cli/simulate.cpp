@@ -180,8 +180,10 @@ int simulate(const SimulateOptions& o) {
     for (std::size_t i = 0; i < model.dof(); ++i) line << " v_" << model.masses[i].name << "=" << number_text(sum.v[i]);
     std::cout << line.str() << std::endl;
     if (!o.quiet) {
-        std::fprintf(stderr, "hsnc: %zu segments, %zu evaluations (%.1f per switch), %zu configurations visited%s%s, %.3f s\n",
-                     sum.segments, sum.evaluations,
+        const std::string carried =
+            sum.restarts ? " (" + std::to_string(sum.restarts) + " carried over a switch)" : std::string();
+        std::fprintf(stderr, "hsnc: %zu segments%s, %zu evaluations (%.1f per switch), %zu configurations visited%s%s, %.3f s\n",
+                     sum.segments, carried.c_str(), sum.evaluations,
                      sum.events ? static_cast<double>(sum.evaluations) / static_cast<double>(sum.events) : 0.0,
                      sum.configurations, detail.empty() ? "" : ", ", detail.c_str(), obs.seconds());
         if (!o.outputs.section.empty())

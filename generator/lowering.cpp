@@ -998,6 +998,7 @@ Program lower(const Derivation& d, ProgramNames names) {
     }
     p.mode_coef = std::move(mode_coef), p.x_st_coef = std::move(x_st_slot);
     p.theta_coef = std::move(theta_slot), p.c_theta_coef = std::move(c_theta_slot);
+    p.restart = restart_plan(d, p);
     return p;
 }
 
@@ -1033,6 +1034,21 @@ RestartPlan restart_plan(const Derivation& d, const Program& p) {
     for (std::size_t h = 0; h < d.harmonics.size(); ++h)
         plan.harmonics.push_back({p.theta_coef[h], p.c_theta_coef[h], dbl(d.harmonics[h].omega),
                                   dbl(d.harmonics[h].phase)});
+    // F = V Lambda^-1 V^T in double (a restart adds F Delta f, a small change
+    // of x_st), one mode at a time, rows contiguous: n^3 products in vector
+    // registers, a few us at 32 masses.
+    std::vector<double> vt(nm * nf);  // V^T
+    for (std::size_t r = 0; r < nf; ++r)
+        for (std::size_t j = 0; j < nm; ++j) vt[j * nf + r] = plan.v[r * nm + j];
+    plan.flex.assign(nf * nf, 0.0);
+    for (std::size_t j = 0; j < nm; ++j) {
+        const double* col = vt.data() + j * nf;
+        for (std::size_t r = 0; r < nf; ++r) {
+            const double a = col[r] / plan.modes[j].lambda;
+            double* row = plan.flex.data() + r * nf;
+            for (std::size_t c = 0; c < nf; ++c) row[c] += a * col[c];
+        }
+    }
     return plan;
 }
 
@@ -1044,6 +1060,13 @@ std::function<Program(const Configuration&)> program_source(const Model& model) 
     return [&model, cache](const Configuration& cfg) {
         const auto lock = ginac_lock();  // the derivation is GiNaC (ginac_lock.h)
         return lower(derive(model, cfg, EigenMethod::refined, ExactMatrices::no, cache.get()), ProgramNames::no);
+    };
+}
+
+std::function<std::shared_ptr<const RestartPlan>(const Configuration&)> restart_plan_source(const Model& model) {
+    const std::function<Program(const Configuration&)> programs = program_source(model);
+    return [programs](const Configuration& cfg) {
+        return std::make_shared<const RestartPlan>(programs(cfg).restart);
     };
 }
 

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 
 #include "derivation.h"
 #include "program.h"
@@ -34,5 +35,11 @@ RestartPlan restart_plan(const Derivation& d, const Program& p);
 /// outlive the function.
 std::function<Program(const Configuration&)> program_source(const Model& model);
 std::function<Program(const Configuration&)> program_source(const Model&& model) = delete;  ///< would dangle
+
+/// The restart plan of each configuration of `model`, as program_source's
+/// programs carry it (Program::restart): EngineOptions::restart_plans for
+/// solvers that keep none (compiled kernels). `model` must outlive the function.
+std::function<std::shared_ptr<const RestartPlan>(const Configuration&)> restart_plan_source(const Model& model);
+std::function<std::shared_ptr<const RestartPlan>(const Configuration&)> restart_plan_source(const Model&& model) = delete;
 
 }  // namespace hsnc

@@ -183,6 +183,9 @@ struct RestartPlan {
     std::vector<int> free_mass;          ///< per free coordinate: its mass
     std::vector<double> mu_k_n;          ///< per free coordinate: mu_k N of its mass (0 without friction)
     std::vector<double> v;               ///< V, row-major: v[r * modes.size() + j]
+    /// The free coordinates' flexibility V Lambda^-1 V^T, row-major nf x nf:
+    /// a change Delta f of the constant forces moves x_st by F Delta f.
+    std::vector<double> flex;
     std::vector<std::uint32_t> x_st;     ///< per free coordinate: coef index of its static offset
     std::vector<Harmonic> harmonics;
     bool empty() const { return modes.empty(); }
@@ -232,6 +235,9 @@ struct Program {
     /// A1, B1, A2, B2 follow), each free coordinate's static offset x_st, each
     /// harmonic's phase theta and cos(theta) (restart_plan(), generator/lowering.h).
     std::vector<std::uint32_t> mode_coef, x_st_coef, theta_coef, c_theta_coef;
+    /// How a segment is carried over an event that keeps the configuration
+    /// (restart_plan(), generator/lowering.h); empty where it cannot be.
+    RestartPlan restart;
     /// Registers: 0 = 1.0, 1 = tau, 2 .. 2+n_coef = coef, then x (n_state()),
     /// v, a (n_dof each), g, dg, bound, scale (n_switch each); then temps.
     ProgramBody eval;

@@ -187,6 +187,7 @@ py::dict run(const Model& model, double t_end, double dt, const std::string& met
     summary["events"] = s.events;
     summary["counts"] = counts;
     summary["segments"] = s.segments;
+    summary["restarts"] = s.restarts;
     summary["evaluations"] = s.evaluations;
     summary["configurations"] = s.configurations;
     summary["configuration"] = s.configuration.spec(model);

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <functional>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -59,15 +61,18 @@ inline const char* solvers_name(Solvers s) { return s == Solvers::generic ? "gen
 
 /// The HSNC engine over `provider` from the model's initial state;
 /// configurations with `schedule_from` switch functions or more searched on a
-/// schedule per function (EngineOptions::schedule_from).
+/// schedule per function (EngineOptions::schedule_from); segments restarted
+/// with `restart_plans` (EngineOptions::restart_plans), else all set up.
 inline Outcome run_engine(const Model& model, SolverProvider& provider, double t_end, double dt = 0.0,
-                          std::size_t schedule_from = kScheduleFrom) {
+                          std::size_t schedule_from = kScheduleFrom,
+                          std::function<std::shared_ptr<const RestartPlan>(const Configuration&)> restart_plans = {}) {
     Engine engine(model, provider);
     Recorder rec(model.dof(), model.state_size());
     EngineOptions opt;
     opt.t_end = t_end;
     opt.dt = dt;
     opt.schedule_from = schedule_from;
+    opt.restart_plans = std::move(restart_plans);
     Outcome r;
     r.summary = engine.run(opt, rec);
     r.events = std::move(rec.events);

@@ -1,7 +1,11 @@
 // Tests of restarting a segment at a reversal from its coefficient block
 // (runtime/solvers/restart.h): against the Coulomb oscillator's closed form
 // over nine half-cycles carried over by restarts alone, and against setup
-// from the event state on a damped, forced 8-mass chain.
+// from the event state on a damped, forced 8-mass chain. Then through the
+// engine: 16 Coulomb oscillators of different frequencies, every reversal
+// against the closed form; a forced friction chain of 20 masses, the same
+// bits whether the plan is the solver's or EngineOptions::restart_plans',
+// and, to rounding, what setting up every segment gives.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,6 +15,7 @@
 #include <vector>
 
 #include "derivation.h"
+#include "engine_runner.h"
 #include "interpreted_solver.h"
 #include "lowering.h"
 #include "model_reader.h"
@@ -52,7 +57,7 @@ TEST(Restart, CoulombHalfCyclesCarriedOverByRestartsAloneMatchTheClosedForm) {
         EXPECT_NEAR(out.v[0], 0.0, 1e-14) << "half-cycle " << k;
         t += half;
         next[0] = static_cast<signed char>(-sgn[0]);
-        s.restart(plan, half, t, 0.0, sgn.data(), next.data());
+        restart_coefficients(plan, s.coefficient_block(), half, t, 0.0, sgn.data(), next.data());
         sgn = next;
         // The restarted segment starts where the last one ended.
         s.eval(0.0, out.view());
@@ -86,7 +91,7 @@ TEST(Restart, AgreesWithSetupFromTheEventStateOnAForcedDampedChain) {
             next[static_cast<std::size_t>(rev * 3) % n] *= -1;
             t += tau;
             ref.setup(t, out.x.data(), out.v.data(), next.data());
-            s.restart(plan, tau, t, 0.0, sgn.data(), next.data());
+            restart_coefficients(plan, s.coefficient_block(), tau, t, 0.0, sgn.data(), next.data());
             sgn = next;
             for (double at : {0.0, 1e-3, 3.9e-3}) {
                 s.eval(at, out.view());
@@ -112,6 +117,157 @@ TEST(Restart, PlansOnlyForPlainModes) {
     const Model rigid = parse_model("name = \"free\"\n[[mass]]\nname = \"m1\"\nm = 1\nmu_k = 0.1\n", "free.toml");
     const Derivation free = derive(rigid, Configuration::all_open(rigid));
     EXPECT_TRUE(restart_plan(free, lower(free, ProgramNames::no)).empty());
+}
+
+// 16 masses on springs of their own (k_i = 100 + 10 i N/m), each with
+// Coulomb friction (mu_k N = 0.5 N) and released from rest at 0.5 m: the
+// modes are the masses, and each mass's half-cycles last pi / omega_i and
+// end 2 mu_k N / k_i nearer the origin, as a lone Coulomb oscillator's. All
+// 16 slide throughout, so every reversal keeps the configuration and the
+// engine carries the segment over it (restart.h kRestartFrom = 16).
+std::string coulomb_bank(int n) {
+    std::string t = "name = \"coulomb-bank\"\n";
+    for (int i = 1; i <= n; ++i)
+        t += "[[mass]]\nname = \"m" + std::to_string(i) + "\"\nm = 1\nmu_k = " + std::to_string(0.5 / 9.81) +
+             "\nmu_s = " + std::to_string(0.6 / 9.81) + "\n";
+    for (int i = 1; i <= n; ++i)
+        t += "[[spring]]\nbetween = [\"ground\", \"m" + std::to_string(i) + "\"]\nk = " + std::to_string(100 + 10 * i) +
+             "\n";
+    t += "[initial]\nx = { ";
+    for (int i = 1; i <= n; ++i) t += (i > 1 ? ", m" : "m") + std::to_string(i) + " = 0.5";
+    return t + " }\n";
+}
+
+TEST(RestartEngine, SixteenCoulombOscillatorsReverseOnTheirClosedForms) {
+    const int n = 16;
+    const Model m = parse_model(coulomb_bank(n), "coulomb-bank.toml");
+    InterpretedSolverProvider programs(program_source(m));
+    const testing::Outcome r = testing::run_engine(m, programs, 3.0, 0.0, kScheduleFrom, restart_plan_source(m));
+    ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+    std::vector<int> half(n, 0);
+    double worst_t = 0, worst_x = 0;
+    for (const testing::Recorded& e : r.events) {
+        ASSERT_EQ(e.kind, EventKind::reversal) << "at t = " << e.t;
+        const int i = e.element;
+        const double k = 100.0 + 10.0 * (i + 1), w = std::sqrt(k), d = m.masses[i].mu_k * 9.81 / k;
+        const int h = ++half[i];
+        const double t = h * M_PI / w, x = (h % 2 ? -1.0 : 1.0) * (0.5 - 2 * h * d);
+        worst_t = std::max(worst_t, std::fabs(e.t - t) / t);
+        worst_x = std::max(worst_x, std::fabs(e.x[i] - x));
+    }
+    // Every reversal but the run's first configuration's first segment was carried over.
+    EXPECT_EQ(r.summary.restarts, r.summary.segments - 1);
+    for (int i = 0; i < n; ++i)  // none sticks: every half-cycle that ends by t = 3 s reverses
+        EXPECT_EQ(half[i], static_cast<int>(3.0 * std::sqrt(100.0 + 10.0 * (i + 1)) / M_PI)) << "m" << i + 1;
+    EXPECT_LT(worst_t, 1e-14);
+    EXPECT_LT(worst_x, 1e-14);
+    std::printf("[ restart  ] %zu reversals of 16 Coulomb oscillators, all carried over: worst |t - t_exact| / t %.1e, "
+                "|x - x_exact| %.1e m\n", r.events.size(), worst_t, worst_x);
+}
+
+// A solver that forwards to the interpreter but keeps no plan of its own, as
+// a compiled kernel: the engine asks EngineOptions::restart_plans.
+class PlanlessSolver : public SegmentSolver {
+public:
+    SegmentSolver* inner = nullptr;
+    const Configuration& configuration() const override { return inner->configuration(); }
+    const std::vector<SwitchFunction>& switches() const override { return inner->switches(); }
+    using SegmentSolver::setup;
+    void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override {
+        inner->setup(t0, t0_lo, x0, v0, sgn);
+    }
+    void eval(double tau, const SegmentEval& out) const override { inner->eval(tau, out); }
+    void eval_switches(double tau, const SegmentEval& out) const override { inner->eval_switches(tau, out); }
+    void eval_some(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const override {
+        inner->eval_some(tau, which, count, out);
+    }
+    double max_step() const override { return inner->max_step(); }
+    double* coefficient_block() override { return inner->coefficient_block(); }
+};
+
+class PlanlessProvider : public SolverProvider {
+public:
+    explicit PlanlessProvider(const Model& m) : inner_(program_source(m)) {}
+    SegmentSolver& solver(const Configuration& cfg) override {
+        solver_.inner = &inner_.solver(cfg);
+        return solver_;
+    }
+    std::string describe() const override { return "planless"; }
+
+private:
+    InterpretedSolverProvider inner_;
+    PlanlessSolver solver_;
+};
+
+bool same_bits(const std::vector<testing::Recorded>& a, const std::vector<testing::Recorded>& b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t k = 0; k < a.size(); ++k)
+        if (a[k].t != b[k].t || a[k].kind != b[k].kind || a[k].element != b[k].element || a[k].x != b[k].x ||
+            a[k].v != b[k].v)
+            return false;
+    return true;
+}
+
+// A forced chain of 20 masses with friction on each and three contacts
+// (bench/bench_common.h friction_chain): contacts open and close, masses
+// stick and release, and in between the sliding masses reverse.
+std::string friction_chain_20() {
+    const int n = 20;
+    auto name = [](int i) { return "m" + std::to_string(i); };
+    std::string t = "name = \"chain-20\"\n[damping]\nbeta = 0.002\n";
+    for (int i = 1; i <= n; ++i) t += "[[mass]]\nname = \"" + name(i) + "\"\nm = 1\nmu_k = 0.05\nmu_s = 0.07\n";
+    t += "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 400\n";
+    for (int i = 1; i < n; ++i) t += "[[spring]]\nbetween = [\"" + name(i) + "\", \"" + name(i + 1) + "\"]\nk = 400\n";
+    t += "[[spring]]\nbetween = [\"m20\", \"ground\"]\nk = 400\n";
+    t += "[[contact]]\nbetween = [\"m5\", \"m6\"]\ngap = 0.01\nk = 4000\n";
+    t += "[[contact]]\nbetween = [\"m10\", \"m11\"]\ngap = 0.01\nk = 4000\n";
+    t += "[[contact]]\nbetween = [\"m15\", \"ground\"]\ngap = 0.02\nk = 4000\n";
+    t += "[[forcing]]\nomega = 9.0\namplitude = { m1 = 30.0, m20 = -20.0 }\n";
+    return t + "[initial]\nv = { m10 = 1.0 }\n";
+}
+
+TEST(RestartEngine, TheSolversPlanAndTheSourcesGiveTheSameBits) {
+    const Model m = parse_model(friction_chain_20(), "chain-20.toml");
+    InterpretedSolverProvider own(program_source(m));
+    PlanlessProvider planless(m);
+    const testing::Outcome a = testing::run_engine(m, own, 10.0, 0.05, kScheduleFrom, restart_plan_source(m));
+    const testing::Outcome b = testing::run_engine(m, planless, 10.0, 0.05, kScheduleFrom, restart_plan_source(m));
+    ASSERT_EQ(a.summary.status, RunStatus::ok) << a.summary.message;
+    EXPECT_GT(a.summary.restarts, a.summary.segments / 2);
+    EXPECT_EQ(a.summary.restarts, b.summary.restarts);
+    EXPECT_TRUE(same_bits(a.events, b.events));
+    EXPECT_TRUE(same_bits(a.samples, b.samples));
+    // Without a plan source nothing restarts, whatever the solver keeps.
+    EXPECT_EQ(testing::run_engine(m, own, 1.0).summary.restarts, 0u);
+}
+
+TEST(RestartEngine, RestartsAgreeWithSetupToRounding) {
+    const Model m = parse_model(friction_chain_20(), "chain-20.toml");
+    InterpretedSolverProvider programs(program_source(m));
+    const testing::Outcome carried = testing::run_engine(m, programs, 2.0, 0.01, kScheduleFrom, restart_plan_source(m));
+    const testing::Outcome set_up = testing::run_engine(m, programs, 2.0, 0.01);
+    ASSERT_EQ(carried.summary.status, RunStatus::ok) << carried.summary.message;
+    ASSERT_EQ(set_up.summary.status, RunStatus::ok) << set_up.summary.message;
+    EXPECT_GT(carried.summary.restarts, 100u);
+    EXPECT_EQ(set_up.summary.restarts, 0u);
+    ASSERT_EQ(carried.events.size(), set_up.events.size());
+    double worst_t = 0, worst_x = 0, top = 0;
+    for (std::size_t k = 0; k < carried.events.size(); ++k) {
+        EXPECT_EQ(carried.events[k].kind, set_up.events[k].kind) << k;
+        EXPECT_EQ(carried.events[k].element, set_up.events[k].element) << k;
+        worst_t = std::max(worst_t, std::fabs(carried.events[k].t - set_up.events[k].t));
+    }
+    ASSERT_EQ(carried.samples.size(), set_up.samples.size());
+    for (std::size_t k = 0; k < carried.samples.size(); ++k)
+        for (std::size_t i = 0; i < m.dof(); ++i) {
+            top = std::max(top, std::fabs(set_up.samples[k].x[i]));
+            worst_x = std::max(worst_x, std::fabs(carried.samples[k].x[i] - set_up.samples[k].x[i]));
+        }
+    EXPECT_LT(worst_t, 1e-12);
+    EXPECT_LT(worst_x, 1e-12 * top);
+    std::printf("[ restart  ] chain-20 over 2 s, %zu of %zu segments carried over: event times within %.1e s, "
+                "x within %.1e of max|x|\n", carried.summary.restarts, carried.summary.segments, worst_t,
+                worst_x / top);
 }
 
 }  // namespace

@@ -75,9 +75,9 @@ class Result:
     """One run: `t` (N,), `x` and `v` (N, n_mass) NumPy arrays, one row per
     sample; `events`, a NumPy record array with fields t, kind, element, x,
     v (x and v of length n_mass: the state at the switch); `summary`, a dict
-    (status, t, events, counts per kind, segments, evaluations,
-    configurations, solver, x and v at the end by mass name, slider by
-    Jenkins element, ...); `masses` names the columns of x and v. A model
+    (status, t, events, counts per kind, segments, restarts (the segments
+    carried over a switch), evaluations, configurations, solver, x and v at
+    the end by mass name, slider by Jenkins element, ...); `masses` names the columns of x and v. A model
     with Jenkins elements also gives `s` (N, n_jenkins), their sliders'
     positions, named by `jenkins` (events gain the field s too)."""
 

@@ -12,6 +12,7 @@
 #include <type_traits>
 
 #include "assembly.h"
+#include "restart.h"
 #include "sample_grid.h"
 #include "tie_series.h"
 #include "transitions.h"
@@ -195,14 +196,53 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     // Segment and switch records for observers that ask for them (the tangent dynamics).
     const bool records = observer.wants_segments();
     Configuration cfg_before;
-    std::vector<signed char> sgn_before;
+    std::vector<signed char> sgn_before;  // the friction directions before the last event
     double rate = 0.0;  // fastest_rate(current_cfg)
+    // Restarts (restart.h): an event that keeps the configuration (a
+    // reversal, a stop that slides on, a touch) carries the segment's
+    // coefficient block over, where the configuration has kRestartFrom
+    // modes or more, its solver's block is the programs' layout and a plan
+    // is known (the solver's own, else options.restart_plans, asked once per
+    // configuration). The rule reads nothing a kind of solver decides, so
+    // every kind restarts at the same events and keeps the same bits.
+    bool carried = false;  // the last event kept the configuration (and the solver)
+    double carried_tau = 0.0;  // its instant in the last segment
+    std::size_t free_masses = 0;  // of current_cfg: an upper bound on its modes
+    // The plans asked for, kept within kPlanBytes (V is n^2 doubles: 128 kB
+    // at 128 masses); beyond it they are dropped and asked for again.
+    constexpr std::size_t kPlanBytes = std::size_t{32} << 20;
+    std::map<Configuration, std::shared_ptr<const RestartPlan>> plans;
+    std::size_t plan_bytes = 0;
+    auto restarted = [&](SegmentSolver& S) {
+        if (!carried || !options.restart_plans || free_masses < kRestartFrom) return false;
+        double* block = S.coefficient_block();
+        if (!block) return false;
+        const RestartPlan* plan = S.restart_plan();
+        if (!plan) {
+            auto it = plans.find(cfg);
+            if (it == plans.end()) {
+                std::shared_ptr<const RestartPlan> asked = options.restart_plans(cfg);
+                const std::size_t bytes =
+                    asked ? sizeof(double) * (asked->v.size() + asked->flex.size()) + 64 * asked->modes.size() : 0;
+                if (plan_bytes + bytes > kPlanBytes) plans.clear(), plan_bytes = 0;
+                plan_bytes += bytes;
+                it = plans.emplace(cfg, std::move(asked)).first;
+            }
+            plan = it->second.get();
+        }
+        if (!plan || plan->empty() || plan->modes.size() < kRestartFrom) return false;
+        restart_coefficients(*plan, block, carried_tau, t, t_lo, sgn_before.data(), sgn.data());
+        return true;
+    };
     while (true) {
         if (!current || cfg != current_cfg) {  // a reversal keeps the configuration: no lookup
             visited.insert(cfg);
             current = &provider_.solver(cfg);
             current_cfg = cfg;
             rate = fastest_rate(model_, cfg);
+            carried = false;
+            free_masses = 0;
+            for (std::size_t i = 0; i < n; ++i) free_masses += !fixed_in(model_, cfg, i);
         }
         // The smallest step is the time's own resolution, 4 eps |t|: a motion
         // whose period is not several of them cannot be searched (at t = 1e9 an
@@ -220,7 +260,10 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             return finish(RunStatus::failure, msg.str());
         }
         SegmentSolver& S = *current;
-        S.setup(t, t_lo, x.data(), v.data(), sgn.data());
+        if (restarted(S))
+            ++sum.restarts;
+        else
+            S.setup(t, t_lo, x.data(), v.data(), sgn.data());
         ++sum.segments;
         const std::vector<SwitchFunction>& sw = S.switches();
         const std::size_t nsw = sw.size();
@@ -551,10 +594,13 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         }
 
         transitions.clear();
-        if (records) cfg_before = cfg, sgn_before = sgn;
+        if (records) cfg_before = cfg;
+        sgn_before = sgn;
         if (!apply_switches(model_, t, x.data(), v.data(), buf.a.data(), cfg, sgn, found.switched, transitions, why,
                             &elements))
             return finish(RunStatus::chattering, why);
+        carried = cfg == current_cfg;
+        carried_tau = found.tau;
         if (records) {
             SwitchRecord rec;
             rec.t = t, rec.t_lo = t_lo, rec.switched = &found.switched;

@@ -3,8 +3,10 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
+#include <memory>
 
-#include "segment_solver.h"  // kScheduleFrom
+#include "segment_solver.h"  // kScheduleFrom, RestartPlan
 
 namespace hsnc {
 
@@ -23,6 +25,13 @@ struct EngineOptions {
     /// kScheduleFrom, segment_solver.h). Results depend on it to rounding
     /// only; tests set it to search small models that way too.
     std::size_t schedule_from = kScheduleFrom;
+    /// The restart plan of a configuration (kernels/program.h; the facade's
+    /// is generator/lowering.h restart_plan_source), for a solver that keeps
+    /// none of its own: the engine asks once per configuration, and only for
+    /// one with restart.h kRestartFrom modes or more. Empty (the default):
+    /// every segment is set up from the state, whatever the solver. Results
+    /// depend on it to rounding only.
+    std::function<std::shared_ptr<const RestartPlan>(const Configuration&)> restart_plans;
 };
 
 }  // namespace hsnc

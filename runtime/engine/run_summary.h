@@ -30,6 +30,8 @@ struct RunSummary {
     Configuration configuration;      ///< configuration reached
     std::size_t events = 0;           ///< switch events (rows of the events CSV)
     std::size_t segments = 0;         ///< closed-form segments started
+    std::size_t restarts = 0;         ///< of them, carried over an event that kept the
+                                      ///  configuration (runtime/solvers/restart.h), not set up
     std::size_t evaluations = 0;      ///< segment evaluations made to find switches
     std::size_t configurations = 0;   ///< distinct configurations visited
 };

@@ -1316,6 +1316,7 @@ InterpretedSolver::InterpretedSolver(Program p)
       setup_regs_(p.setup.registers(), 0.0),
       eval_regs_(p.eval.registers(), 0.0) {
     eval_regs_[0] = 1.0;
+    plan_ = std::move(p.restart);
     const std::uint32_t outputs = p.eval_outputs(), switch_outputs = outputs + static_cast<std::uint32_t>(
                                                                                    p.n_state() + 2 * p.n_dof);
     const std::vector<Instr> code =
@@ -1364,6 +1365,8 @@ std::size_t InterpretedSolver::memory_bytes() const {
     return sizeof(*this) + setup_->bytes() + eval_->bytes() + (switches_body_ ? switches_body_->bytes() : 0) + cut +
            sizeof(double) * (constants_.capacity() + setup_regs_.capacity() + eval_regs_.capacity()) +
            sizeof(std::uint32_t) * setup_coef_.capacity() + sizeof(SwitchFunction) * switches_.capacity() +
+           sizeof(double) * (plan_.v.capacity() + plan_.flex.capacity() + plan_.mu_k_n.capacity()) +
+           sizeof(RestartPlan::Mode) * plan_.modes.capacity() +
            cfg_.closed.capacity() + cfg_.stuck.capacity();
 }
 

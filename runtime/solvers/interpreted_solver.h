@@ -30,7 +30,6 @@
 #include <vector>
 
 #include "program.h"
-#include "restart.h"
 #include "segment_solver.h"
 #include "solver_provider.h"
 
@@ -69,13 +68,9 @@ public:
     /// The coefficient block the last setup computed (n_coef doubles): what a
     /// kernel's setup writes into `coef`.
     const double* coefficients() const { return eval_regs_.data() + Program::kEvalCoef; }
-    /// Carries the segment over a reversal at tau (restart.h) instead of a
-    /// setup from the state there: `plan` is restart_plan() of this
-    /// configuration (generator/lowering.h), not empty.
-    void restart(const RestartPlan& plan, double tau, double t0, double t0_lo, const signed char* sgn_old,
-                 const signed char* sgn_new) {
-        restart_coefficients(plan, eval_regs_.data() + Program::kEvalCoef, tau, t0, t0_lo, sgn_old, sgn_new);
-    }
+    double* coefficient_block() override { return eval_regs_.data() + Program::kEvalCoef; }
+    /// The program's plan (Program::restart; empty where it cannot restart).
+    const RestartPlan* restart_plan() const override { return &plan_; }
     std::size_t n_coef() const { return n_coef_; }
 
     /// Estimated heap memory of this solver (its compiled programs, constants
@@ -107,6 +102,7 @@ private:
     std::vector<RowRef> part_rows_;
     std::vector<std::uint32_t> part_at_;
     double switch_share_ = 1.0;
+    RestartPlan plan_;
     std::vector<double> setup_regs_;
     // eval's register file; setup writes the coefficient block straight into it.
     mutable std::vector<double> eval_regs_;

@@ -33,6 +33,9 @@ public:
     void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override;
     void eval(double tau, const SegmentEval& out) const override;
     double max_step() const override { return max_step_; }
+    /// A folded kernel's block; null for a sweep kernel (its block starts
+    /// with the configured parameters' terms, so it is set up every segment).
+    double* coefficient_block() override { return kernel_.n_param == 0 ? coef_.data() : nullptr; }
 
     const hsnc_kernel& kernel() const { return kernel_; }
 

@@ -3,22 +3,49 @@
 #include <cmath>
 #include <vector>
 
-#include "kernel_abi.h"  // hsnc_phase
+#include "kernel_abi.h"  // hsnc_phase, hsnc_exp4, hsnc_sincos4
 
 namespace hsnc {
+
+namespace {
+
+// e^{x_e}, sin and cos(x_t) of n arguments (n a multiple of 4), four lanes at
+// a time, in AVX2 registers where the processor has them: a lane's bits are
+// its own argument's, whatever the grouping or the clone (kernel_abi.h).
+__attribute__((target_clones("avx2", "default"))) void factors(double* e, double* sn, double* cs, std::size_t n) {
+    for (std::size_t i = 0; i < n; i += 4) hsnc_sincos4(sn + i, sn + i, cs + i);
+    for (std::size_t i = 0; i < n; i += 4) hsnc_exp4(e + i, e + i);
+}
+
+}  // namespace
 
 void restart_coefficients(const RestartPlan& plan, double* coef, double tau, double t0, double t0_lo,
                           const signed char* sgn_old, const signed char* sgn_new) {
     const std::size_t nm = plan.modes.size(), nf = plan.free_mass.size();
-    // Delta(p / lambda) per mode: the modal force's change, V^T Delta f, over
-    // the coordinates whose friction direction flipped.
-    std::vector<double> delta(nm, 0.0);
+    // Per mode: Delta(p / lambda), then e^{-sigma tau}, sin and cos(omega_d tau).
+    const std::size_t padded = 4 * ((nm + 3) / 4);
+    thread_local std::vector<double> scratch;
+    scratch.assign(4 * padded, 0.0);
+    double* delta = scratch.data();
+    double* e = delta + padded;
+    double* sn = e + padded;
+    double* cs = sn + padded;
+    // Each flipped friction force changes the modal forces by V^T Delta f and
+    // the static offset by F Delta f: O(n) each.
     for (std::size_t r = 0; r < nf; ++r) {
         const int i = plan.free_mass[r];
-        if (sgn_new[i] == sgn_old[i]) continue;
+        if (sgn_new[i] == sgn_old[i] || plan.mu_k_n[r] == 0.0) continue;
         const double df = -plan.mu_k_n[r] * (sgn_new[i] - sgn_old[i]);
-        for (std::size_t j = 0; j < nm; ++j) delta[j] += plan.v[r * nm + j] * df;
+        const double* vr = plan.v.data() + r * nm;
+        for (std::size_t j = 0; j < nm; ++j) delta[j] += vr[j] * df;
+        const double* fr = plan.flex.data() + r * nf;  // F is symmetric: its row r is its column r
+        for (std::size_t c = 0; c < nf; ++c) coef[plan.x_st[c]] += fr[c] * df;
     }
+    for (std::size_t j = 0; j < nm; ++j) {
+        e[j] = -plan.modes[j].sigma * tau;
+        sn[j] = plan.modes[j].omega_d * tau;
+    }
+    factors(e, sn, cs, padded);
     for (std::size_t j = 0; j < nm; ++j) {
         const RestartPlan::Mode& m = plan.modes[j];
         delta[j] /= m.lambda;
@@ -26,19 +53,17 @@ void restart_coefficients(const RestartPlan& plan, double* coef, double tau, dou
         double eC = 0.0, eS = 0.0;
         switch (m.regime) {
             case ProgramRegime::undamped:
-                eC = std::cos(m.omega_d * tau), eS = std::sin(m.omega_d * tau) / m.omega_d;
+                eC = cs[j], eS = sn[j] / m.omega_d;
                 break;
-            case ProgramRegime::underdamped: {
-                const double e = std::exp(-m.sigma * tau);
-                eC = e * std::cos(m.omega_d * tau), eS = e * std::sin(m.omega_d * tau) / m.omega_d;
+            case ProgramRegime::underdamped:
+                eC = e[j] * cs[j], eS = e[j] * sn[j] / m.omega_d;
                 break;
-            }
             case ProgramRegime::critical:
-                eC = std::exp(-m.sigma * tau), eS = tau * eC;
+                eC = e[j], eS = tau * eC;
                 break;
             default: {  // overdamped (restart_plan() admits no rigid mode)
-                const double e = std::exp(m.r1 * tau), em = std::expm1(-2 * m.gamma * tau);
-                eC = e * (1.0 + 0.5 * em), eS = -e * em * (0.5 / m.gamma);
+                const double ex = std::exp(m.r1 * tau), em = std::expm1(-2 * m.gamma * tau);
+                eC = ex * (1.0 + 0.5 * em), eS = -ex * em * (0.5 / m.gamma);
                 break;
             }
         }
@@ -49,11 +74,6 @@ void restart_coefficients(const RestartPlan& plan, double* coef, double tau, dou
         const double A1 = B - m.sigma * A, B1 = -m.kappa * A - m.sigma * B;
         c[0] = A, c[1] = B, c[2] = A1, c[3] = B1;
         c[4] = B1 - m.sigma * A1, c[5] = -m.kappa * A1 - m.sigma * B1;
-    }
-    for (std::size_t r = 0; r < nf; ++r) {
-        double dx = 0.0;
-        for (std::size_t j = 0; j < nm; ++j) dx += plan.v[r * nm + j] * delta[j];
-        coef[plan.x_st[r]] += dx;
     }
     for (const RestartPlan::Harmonic& h : plan.harmonics) {
         coef[h.theta] = hsnc_phase(h.omega, t0, t0_lo, h.phase);

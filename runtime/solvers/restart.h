@@ -14,13 +14,23 @@
 //
 // It reads and writes only the coefficient block, whose layout every kind of
 // solver shares bit for bit (kernels/program.h), so every kind restarted this
-// way would keep giving the same bits. Not wired into the engine yet: the
-// engine calls setup at every segment (issue 13's note says what remains).
+// way gives the same bits. The engine restarts a segment so when the event
+// kept the configuration, the configuration has at least kRestartFrom modes
+// and EngineOptions::restart_plans gives its plan; otherwise it sets up.
 #pragma once
 
 #include "program.h"
 
 namespace hsnc {
+
+/// Configurations with at least this many modes are restarted at events that
+/// keep them (engine.cpp); smaller ones are set up from the state. A setup
+/// costs about four n x n sums, a restart O(n) per changed friction force
+/// plus one n x n sum for the static offset (bench/program_bench.cpp
+/// measures both): below this, the saving is small and a compiled setup
+/// (ahead-of-time kernels, whose bundled models are small) would pay for a
+/// derivation to learn the plan.
+inline constexpr std::size_t kRestartFrom = 16;
 
 /// Rewrites `coef` (a segment started at absolute time t_start, evaluated up
 /// to the reversal at tau) for the segment that starts at t0 + t0_lo = the

@@ -19,6 +19,8 @@
 
 namespace hsnc {
 
+struct RestartPlan;  // kernels/program.h
+
 /// Where SegmentSolver::eval writes. Every pointer is required and points to
 /// Model::state_size() (x), n_dof (v, a) or n_switch (the rest) doubles.
 struct SegmentEval {
@@ -84,6 +86,19 @@ public:
     /// The longest step over which `bound` is valid: +infinity unless the
     /// segment has secular (resonant, growing) terms.
     virtual double max_step() const = 0;
+
+    /// The coefficient block setup writes and eval reads (kernels/program.h:
+    /// its layout is the same, bit for bit, for every solver of a program),
+    /// which the engine may carry over an event that keeps the configuration
+    /// (runtime/solvers/restart.h) instead of calling setup; null (the
+    /// default) for a solver whose block is not that layout. Valid until the
+    /// solver's next setup.
+    virtual double* coefficient_block() { return nullptr; }
+
+    /// The configuration's restart plan when the solver carries one (the
+    /// interpreter's, from its program), else null: the engine then asks
+    /// EngineOptions::restart_plans.
+    virtual const RestartPlan* restart_plan() const { return nullptr; }
 };
 
 }  // namespace hsnc

@@ -46,6 +46,8 @@ public:
         inner->eval_some(tau, which, count, out);
     }
     double max_step() const override { return inner->max_step(); }
+    double* coefficient_block() override { return inner->coefficient_block(); }
+    const RestartPlan* restart_plan() const override { return inner->restart_plan(); }
 };
 
 namespace {
