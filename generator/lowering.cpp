@@ -1023,32 +1023,18 @@ RestartPlan restart_plan(const Derivation& d, const Program& p) {
         rm.r1 = dbl(m.r1), rm.gamma = dbl(m.gamma);
         plan.modes.push_back(rm);
     }
-    plan.v.resize(nf * nm);
+    plan.vt.resize(nf * nm);
     for (std::size_t r = 0; r < nf; ++r) {
         const int i = d.free_dofs[r];
         plan.free_mass.push_back(i);
         plan.mu_k_n.push_back(dbl(d.mu_k_n[static_cast<std::size_t>(i)]));
         plan.x_st.push_back(p.x_st_coef[r]);
-        for (std::size_t j = 0; j < nm; ++j) plan.v[r * nm + j] = dbl(d.modes[j].v[r]);
     }
+    for (std::size_t j = 0; j < nm; ++j)
+        for (std::size_t r = 0; r < nf; ++r) plan.vt[j * nf + r] = dbl(d.modes[j].v[r]);
     for (std::size_t h = 0; h < d.harmonics.size(); ++h)
         plan.harmonics.push_back({p.theta_coef[h], p.c_theta_coef[h], dbl(d.harmonics[h].omega),
                                   dbl(d.harmonics[h].phase)});
-    // F = V Lambda^-1 V^T in double (a restart adds F Delta f, a small change
-    // of x_st), one mode at a time, rows contiguous: n^3 products in vector
-    // registers, a few us at 32 masses.
-    std::vector<double> vt(nm * nf);  // V^T
-    for (std::size_t r = 0; r < nf; ++r)
-        for (std::size_t j = 0; j < nm; ++j) vt[j * nf + r] = plan.v[r * nm + j];
-    plan.flex.assign(nf * nf, 0.0);
-    for (std::size_t j = 0; j < nm; ++j) {
-        const double* col = vt.data() + j * nf;
-        for (std::size_t r = 0; r < nf; ++r) {
-            const double a = col[r] / plan.modes[j].lambda;
-            double* row = plan.flex.data() + r * nf;
-            for (std::size_t c = 0; c < nf; ++c) row[c] += a * col[c];
-        }
-    }
     return plan;
 }
 

@@ -182,10 +182,10 @@ struct RestartPlan {
     std::vector<Mode> modes;
     std::vector<int> free_mass;          ///< per free coordinate: its mass
     std::vector<double> mu_k_n;          ///< per free coordinate: mu_k N of its mass (0 without friction)
-    std::vector<double> v;               ///< V, row-major: v[r * modes.size() + j]
-    /// The free coordinates' flexibility V Lambda^-1 V^T, row-major nf x nf:
-    /// a change Delta f of the constant forces moves x_st by F Delta f.
-    std::vector<double> flex;
+    /// V by modes: vt[j * free_mass.size() + r] is V_rj (mode j's column,
+    /// contiguous, so that x_st moves by sum_j V_j Delta(p_j / lambda_j) in
+    /// vector registers).
+    std::vector<double> vt;
     std::vector<std::uint32_t> x_st;     ///< per free coordinate: coef index of its static offset
     std::vector<Harmonic> harmonics;
     bool empty() const { return modes.empty(); }

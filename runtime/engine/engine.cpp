@@ -223,7 +223,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             if (it == plans.end()) {
                 std::shared_ptr<const RestartPlan> asked = options.restart_plans(cfg);
                 const std::size_t bytes =
-                    asked ? sizeof(double) * (asked->v.size() + asked->flex.size()) + 64 * asked->modes.size() : 0;
+                    asked ? sizeof(double) * asked->vt.size() + 64 * asked->modes.size() : 0;
                 if (plan_bytes + bytes > kPlanBytes) plans.clear(), plan_bytes = 0;
                 plan_bytes += bytes;
                 it = plans.emplace(cfg, std::move(asked)).first;

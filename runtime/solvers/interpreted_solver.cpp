@@ -1365,7 +1365,7 @@ std::size_t InterpretedSolver::memory_bytes() const {
     return sizeof(*this) + setup_->bytes() + eval_->bytes() + (switches_body_ ? switches_body_->bytes() : 0) + cut +
            sizeof(double) * (constants_.capacity() + setup_regs_.capacity() + eval_regs_.capacity()) +
            sizeof(std::uint32_t) * setup_coef_.capacity() + sizeof(SwitchFunction) * switches_.capacity() +
-           sizeof(double) * (plan_.v.capacity() + plan_.flex.capacity() + plan_.mu_k_n.capacity()) +
+           sizeof(double) * (plan_.vt.capacity() + plan_.mu_k_n.capacity()) +
            sizeof(RestartPlan::Mode) * plan_.modes.capacity() +
            cfg_.closed.capacity() + cfg_.stuck.capacity();
 }

@@ -17,38 +17,49 @@ __attribute__((target_clones("avx2", "default"))) void factors(double* e, double
     for (std::size_t i = 0; i < n; i += 4) hsnc_exp4(e + i, e + i);
 }
 
+// dx[r] = sum_j vt[j * nf + r] * d[j], mode by mode (each dx[r] summed in
+// the order of the modes, whatever the clone): O(n^2), in vector registers.
+__attribute__((target_clones("avx2", "default"))) void static_shift(const double* vt, const double* d, double* dx,
+                                                                      std::size_t nm, std::size_t nf) {
+    for (std::size_t j = 0; j < nm; ++j) {
+        const double dj = d[j];
+        const double* col = vt + j * nf;
+        for (std::size_t r = 0; r < nf; ++r) dx[r] += col[r] * dj;
+    }
+}
+
 }  // namespace
 
 void restart_coefficients(const RestartPlan& plan, double* coef, double tau, double t0, double t0_lo,
                           const signed char* sgn_old, const signed char* sgn_new) {
     const std::size_t nm = plan.modes.size(), nf = plan.free_mass.size();
-    // Per mode: Delta(p / lambda), then e^{-sigma tau}, sin and cos(omega_d tau).
+    // Per mode: Delta(p / lambda), then e^{-sigma tau}, sin and cos(omega_d tau);
+    // per free coordinate the static offset's change.
     const std::size_t padded = 4 * ((nm + 3) / 4);
     thread_local std::vector<double> scratch;
-    scratch.assign(4 * padded, 0.0);
+    scratch.assign(4 * padded + nf, 0.0);
     double* delta = scratch.data();
     double* e = delta + padded;
     double* sn = e + padded;
     double* cs = sn + padded;
-    // Each flipped friction force changes the modal forces by V^T Delta f and
-    // the static offset by F Delta f: O(n) each.
+    double* dx = cs + padded;
+    // Each flipped friction force changes the modal forces by V^T Delta f.
+    bool moved = false;
     for (std::size_t r = 0; r < nf; ++r) {
         const int i = plan.free_mass[r];
         if (sgn_new[i] == sgn_old[i] || plan.mu_k_n[r] == 0.0) continue;
         const double df = -plan.mu_k_n[r] * (sgn_new[i] - sgn_old[i]);
-        const double* vr = plan.v.data() + r * nm;
-        for (std::size_t j = 0; j < nm; ++j) delta[j] += vr[j] * df;
-        const double* fr = plan.flex.data() + r * nf;  // F is symmetric: its row r is its column r
-        for (std::size_t c = 0; c < nf; ++c) coef[plan.x_st[c]] += fr[c] * df;
+        for (std::size_t j = 0; j < nm; ++j) delta[j] += plan.vt[j * nf + r] * df;
+        moved = true;
     }
     for (std::size_t j = 0; j < nm; ++j) {
+        delta[j] /= plan.modes[j].lambda;
         e[j] = -plan.modes[j].sigma * tau;
         sn[j] = plan.modes[j].omega_d * tau;
     }
     factors(e, sn, cs, padded);
     for (std::size_t j = 0; j < nm; ++j) {
         const RestartPlan::Mode& m = plan.modes[j];
-        delta[j] /= m.lambda;
         // The homogeneous response at tau, as the mode instruction forms it.
         double eC = 0.0, eS = 0.0;
         switch (m.regime) {
@@ -74,6 +85,11 @@ void restart_coefficients(const RestartPlan& plan, double* coef, double tau, dou
         const double A1 = B - m.sigma * A, B1 = -m.kappa * A - m.sigma * B;
         c[0] = A, c[1] = B, c[2] = A1, c[3] = B1;
         c[4] = B1 - m.sigma * A1, c[5] = -m.kappa * A1 - m.sigma * B1;
+    }
+    // x_st moves by V Delta(p / lambda).
+    if (moved) {
+        static_shift(plan.vt.data(), delta, dx, nm, nf);
+        for (std::size_t r = 0; r < nf; ++r) coef[plan.x_st[r]] += dx[r];
     }
     for (const RestartPlan::Harmonic& h : plan.harmonics) {
         coef[h.theta] = hsnc_phase(h.omega, t0, t0_lo, h.phase);
