@@ -12,7 +12,9 @@
 //      in double; before: the interpreter with the former derivation (Jacobi
 //      rotations in GiNaC numerics, EigenMethod::jacobi);
 //   4. one all-open chain configuration of 8 to 64 masses: derive + lower
-//      (refined, Jacobi) against building the Eigen solver.
+//      (refined, Jacobi) against building the Eigen solver;
+//   5. one segment start in the all-open friction chain of 16 to 128 masses:
+//      setup from the state against a restart at a reversal.
 //
 // Times are this thread's CPU time (CLOCK_THREAD_CPUTIME_ID), medians.
 //
@@ -37,6 +39,7 @@
 #include "kernel_solver.h"
 #include "lowering.h"
 #include "model_reader.h"
+#include "restart.h"
 #include "kernel_mode.h"
 #include "bench_common.h"
 
@@ -295,6 +298,40 @@ int main(int argc, char** argv) {
         }
         std::printf("%6d %12.3f %14.3f %12.3f %12.3f %12.1f %14.0f\n", nm, median(tr), median(tl), median(tj), median(te),
                     median(tr) / median(te), median(tj) / median(tr));
+    }
+
+    // 5. A segment carried over a reversal (runtime/solvers/restart.h) against a
+    //    setup from the state, in the all-open configuration of bench_common.h's
+    //    friction chain: the interpreter, one mass's friction flipped each call.
+    std::printf("\n5. One segment start in the all-open n-mass friction chain (bench_common.h friction_chain): the\n"
+                "   interpreter's setup from the state against restart_coefficients at a reversal (ns, median of\n"
+                "   %d rounds of %d calls in turn)\n", rounds, burst);
+    std::printf("%6s %6s %10s %11s %15s\n", "masses", "modes", "setup_ns", "restart_ns", "restart/setup");
+    for (int nm : {16, 32, 64, 128}) {
+        if (quick && nm > 32) continue;
+        const Model m = parse_model(friction_chain(nm), "chain-" + std::to_string(nm));
+        Program p = lower(derive(m, Configuration::all_open(m)), ProgramNames::no);
+        const RestartPlan plan = p.restart;
+        InterpretedSolver s(std::move(p));
+        const std::size_t n = m.dof();
+        std::vector<double> x(n, 0.01), v(n, 0.1);
+        std::vector<signed char> up(n, 1), flipped(n, 1);
+        flipped[n / 2] = -1;
+        std::vector<double> ts, tr;
+        for (int r = 0; r < rounds + 1; ++r) {
+            double start = cpu_seconds();
+            for (int e = 0; e < burst; ++e)
+                s.setup(1.0 + 1e-7 * e, 0.0, x.data(), v.data(), (e & 1) ? up.data() : flipped.data());
+            const double mid = cpu_seconds();
+            for (int e = 0; e < burst; ++e)
+                restart_coefficients(plan, s.coefficient_block(), 1e-3, 1.0 + 1e-7 * e, 0.0,
+                                     (e & 1) ? up.data() : flipped.data(), (e & 1) ? flipped.data() : up.data());
+            const double end = cpu_seconds();
+            sink = sink + s.coefficient_block()[0];
+            if (r > 0) ts.push_back(1e9 * (mid - start) / burst), tr.push_back(1e9 * (end - mid) / burst);
+        }
+        std::printf("%6d %6zu %10.0f %11.0f %15.2f\n", nm, plan.modes.size(), median(ts), median(tr),
+                    median(tr) / median(ts));
     }
     return sink == 12345.678 ? 1 : 0;
 }
