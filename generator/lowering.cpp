@@ -1030,8 +1030,16 @@ RestartPlan restart_plan(const Derivation& d, const Program& p) {
         plan.mu_k_n.push_back(dbl(d.mu_k_n[static_cast<std::size_t>(i)]));
         plan.x_st.push_back(p.x_st_coef[r]);
     }
-    for (std::size_t j = 0; j < nm; ++j)
-        for (std::size_t r = 0; r < nf; ++r) plan.vt[j * nf + r] = dbl(d.modes[j].v[r]);
+    plan.span.assign(2 * nm, 0);
+    for (std::size_t j = 0; j < nm; ++j) {
+        std::uint32_t lo = static_cast<std::uint32_t>(nf), hi = 0;
+        for (std::size_t r = 0; r < nf; ++r) {
+            const double v = dbl(d.modes[j].v[r]);
+            plan.vt[j * nf + r] = v;
+            if (v != 0.0) lo = std::min(lo, static_cast<std::uint32_t>(r)), hi = static_cast<std::uint32_t>(r + 1);
+        }
+        plan.span[2 * j] = std::min(lo, hi), plan.span[2 * j + 1] = hi;
+    }
     for (std::size_t h = 0; h < d.harmonics.size(); ++h)
         plan.harmonics.push_back({p.theta_coef[h], p.c_theta_coef[h], dbl(d.harmonics[h].omega),
                                   dbl(d.harmonics[h].phase)});

@@ -186,6 +186,9 @@ struct RestartPlan {
     /// contiguous, so that x_st moves by sum_j V_j Delta(p_j / lambda_j) in
     /// vector registers).
     std::vector<double> vt;
+    /// Per mode j, the free coordinates [span[2j], span[2j + 1]) outside of
+    /// which V_rj is 0 (a mode of one block of the chain a stuck mass cuts).
+    std::vector<std::uint32_t> span;
     std::vector<std::uint32_t> x_st;     ///< per free coordinate: coef index of its static offset
     std::vector<Harmonic> harmonics;
     bool empty() const { return modes.empty(); }

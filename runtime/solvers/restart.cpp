@@ -17,14 +17,16 @@ __attribute__((target_clones("avx2", "default"))) void factors(double* e, double
     for (std::size_t i = 0; i < n; i += 4) hsnc_exp4(e + i, e + i);
 }
 
-// dx[r] = sum_j vt[j * nf + r] * d[j], mode by mode (each dx[r] summed in
-// the order of the modes, whatever the clone): O(n^2), in vector registers.
-__attribute__((target_clones("avx2", "default"))) void static_shift(const double* vt, const double* d, double* dx,
-                                                                      std::size_t nm, std::size_t nf) {
+// dx[r] = sum_j vt[j * nf + r] * d[j], mode by mode over each mode's span
+// (each dx[r] summed in the order of the modes, whatever the clone): the
+// nonzeros of V, in vector registers.
+__attribute__((target_clones("avx2", "default"))) void static_shift(const double* vt, const std::uint32_t* span,
+                                                                      const double* d, double* dx, std::size_t nm,
+                                                                      std::size_t nf) {
     for (std::size_t j = 0; j < nm; ++j) {
         const double dj = d[j];
         const double* col = vt + j * nf;
-        for (std::size_t r = 0; r < nf; ++r) dx[r] += col[r] * dj;
+        for (std::size_t r = span[2 * j]; r < span[2 * j + 1]; ++r) dx[r] += col[r] * dj;
     }
 }
 
@@ -49,7 +51,8 @@ void restart_coefficients(const RestartPlan& plan, double* coef, double tau, dou
         const int i = plan.free_mass[r];
         if (sgn_new[i] == sgn_old[i] || plan.mu_k_n[r] == 0.0) continue;
         const double df = -plan.mu_k_n[r] * (sgn_new[i] - sgn_old[i]);
-        for (std::size_t j = 0; j < nm; ++j) delta[j] += plan.vt[j * nf + r] * df;
+        for (std::size_t j = 0; j < nm; ++j)
+            if (r >= plan.span[2 * j] && r < plan.span[2 * j + 1]) delta[j] += plan.vt[j * nf + r] * df;
         moved = true;
     }
     for (std::size_t j = 0; j < nm; ++j) {
@@ -88,7 +91,7 @@ void restart_coefficients(const RestartPlan& plan, double* coef, double tau, dou
     }
     // x_st moves by V Delta(p / lambda).
     if (moved) {
-        static_shift(plan.vt.data(), delta, dx, nm, nf);
+        static_shift(plan.vt.data(), plan.span.data(), delta, dx, nm, nf);
         for (std::size_t r = 0; r < nf; ++r) coef[plan.x_st[r]] += dx[r];
     }
     for (const RestartPlan::Harmonic& h : plan.harmonics) {
