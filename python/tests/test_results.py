@@ -152,3 +152,23 @@ def test_structure_with_friction_element_equals_cli_csv(cli, tmp_path):
     assert_same_run(r, model, traj, events, line)
     assert set(r.events.kind) <= {"stick", "release", "reversal"}
     assert set(r.events.element) == {"pad"}
+
+
+def test_segments_carried_over_reversals_are_counted_and_agree_with_eigen():
+    # 16 masses on springs of their own, coupled by weaker ones, friction on
+    # each: every switch is a reversal, so every segment after the first is
+    # carried over (runtime/solvers/restart.h); the Eigen solver sets each up.
+    text = "name = \"friction-bank-16\"\n[damping]\nbeta = 0.002\n"
+    text += "".join("[[mass]]\nname = \"m%d\"\nm = 1\nmu_k = 0.05\nmu_s = 0.06\n" % i for i in range(1, 17))
+    text += "".join("[[spring]]\nbetween = [\"ground\", \"m%d\"]\nk = %d\n" % (i, 100 + 10 * i) for i in range(1, 17))
+    text += "".join("[[spring]]\nbetween = [\"m%d\", \"m%d\"]\nk = 20\n" % (i, i + 1) for i in range(1, 16))
+    text += "[[forcing]]\nomega = 7.0\namplitude = { m1 = 5.0 }\n[initial]\nx = { "
+    text += ", ".join("m%d = 0.5" % i for i in range(1, 17)) + " }\n"
+    model = hsnc.Model.from_string(text)
+    generic = hsnc.simulate(model, t_end=3, dt=0.01, kernels="generic")
+    eigen = hsnc.simulate(model, t_end=3, dt=0.01, kernels="eigen")
+    assert generic.summary["segments"] == 204 and generic.summary["restarts"] == 203
+    assert eigen.summary["restarts"] == 0
+    assert list(generic.events.kind) == list(eigen.events.kind) == ["reversal"] * 203
+    assert np.allclose(generic.events.t, eigen.events.t, rtol=0, atol=1e-12)
+    assert np.allclose(generic.x, eigen.x, rtol=0, atol=1e-12)

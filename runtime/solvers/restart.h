@@ -32,8 +32,9 @@ namespace hsnc {
 /// keep them (engine.cpp); smaller ones are set up from the state. A setup
 /// costs about four n x n sums, a restart one, O(n) per changed friction
 /// force and each mode's factors: in the all-open configuration of the
-/// chains of bench_common.h 0.25 against 0.47 us at 16 masses, 0.51 against
-/// 1.60 us at 32, 4.1 against 22 us at 128. Below
+/// chains of bench_common.h 0.24 against 0.46 us at 16 masses, 0.52 against
+/// 1.42 us at 32, 3.6 against 16.3 us at 128 (bench/program_bench.cpp,
+/// section 5). Below
 /// this the saving is small, and a compiled setup (the bundled models'
 /// ahead-of-time kernels, 8 masses at most) would pay for a derivation to
 /// learn the plan: seed scenario 2 ran 1.06x when every size restarted.
