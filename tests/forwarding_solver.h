@@ -26,6 +26,8 @@ struct ForwardingSolver : SegmentSolver {
         inner->eval_some(tau, which, count, out);
     }
     double max_step() const override { return inner->max_step(); }
+    double* coefficient_block() override { return inner->coefficient_block(); }
+    const RestartPlan* restart_plan() const override { return inner->restart_plan(); }
 };
 
 /// `inner`'s solvers behind one Solver (a ForwardingSolver).

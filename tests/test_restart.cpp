@@ -16,6 +16,7 @@
 
 #include "derivation.h"
 #include "engine_runner.h"
+#include "forwarding_solver.h"
 #include "interpreted_solver.h"
 #include "lowering.h"
 #include "model_reader.h"
@@ -165,38 +166,10 @@ TEST(RestartEngine, SixteenCoulombOscillatorsReverseOnTheirClosedForms) {
                 "|x - x_exact| %.1e m\n", r.events.size(), worst_t, worst_x);
 }
 
-// A solver that forwards to the interpreter but keeps no plan of its own, as
-// a compiled kernel: the engine asks EngineOptions::restart_plans.
-class PlanlessSolver : public SegmentSolver {
-public:
-    SegmentSolver* inner = nullptr;
-    const Configuration& configuration() const override { return inner->configuration(); }
-    const std::vector<SwitchFunction>& switches() const override { return inner->switches(); }
-    using SegmentSolver::setup;
-    void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override {
-        inner->setup(t0, t0_lo, x0, v0, sgn);
-    }
-    void eval(double tau, const SegmentEval& out) const override { inner->eval(tau, out); }
-    void eval_switches(double tau, const SegmentEval& out) const override { inner->eval_switches(tau, out); }
-    void eval_some(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const override {
-        inner->eval_some(tau, which, count, out);
-    }
-    double max_step() const override { return inner->max_step(); }
-    double* coefficient_block() override { return inner->coefficient_block(); }
-};
-
-class PlanlessProvider : public SolverProvider {
-public:
-    explicit PlanlessProvider(const Model& m) : inner_(program_source(m)) {}
-    SegmentSolver& solver(const Configuration& cfg) override {
-        solver_.inner = &inner_.solver(cfg);
-        return solver_;
-    }
-    std::string describe() const override { return "planless"; }
-
-private:
-    InterpretedSolverProvider inner_;
-    PlanlessSolver solver_;
+// The interpreter's solvers, keeping no plan of their own, as compiled
+// kernels: the engine asks EngineOptions::restart_plans.
+struct PlanlessSolver : testing::ForwardingSolver {
+    const RestartPlan* restart_plan() const override { return nullptr; }
 };
 
 bool same_bits(const std::vector<testing::Recorded>& a, const std::vector<testing::Recorded>& b) {
@@ -228,8 +201,8 @@ std::string friction_chain_20() {
 
 TEST(RestartEngine, TheSolversPlanAndTheSourcesGiveTheSameBits) {
     const Model m = parse_model(friction_chain_20(), "chain-20.toml");
-    InterpretedSolverProvider own(program_source(m));
-    PlanlessProvider planless(m);
+    InterpretedSolverProvider own(program_source(m)), programs(program_source(m));
+    testing::ForwardingProvider<PlanlessSolver> planless(programs);
     const testing::Outcome a = testing::run_engine(m, own, 10.0, 0.05, kScheduleFrom, restart_plan_source(m));
     const testing::Outcome b = testing::run_engine(m, planless, 10.0, 0.05, kScheduleFrom, restart_plan_source(m));
     ASSERT_EQ(a.summary.status, RunStatus::ok) << a.summary.message;
