@@ -329,13 +329,19 @@ Program lower(const Derivation& d, ProgramNames names) {
         c_theta_slot[h] = slot("c_theta_", h + 1, c_theta[h]);
     }
     std::vector<std::uint32_t> x_st(nf);
+    // 1 / lambda_j once per mode (double-double: v / lambda and v (1 / lambda)
+    // round to the same double but where they straddle a midpoint, about one
+    // in 1e16), not a division per term.
+    std::vector<DD> inv_lambda(d.state_space ? 0 : nm);
+    for (std::size_t j = 0; j < inv_lambda.size(); ++j)
+        if (!d.modes[j].lambda.is_zero()) inv_lambda[j] = DD(1.0) / d.modes[j].lambda;
     for (std::size_t r = 0; r < nf; ++r) {
         Lin l;
         if (d.state_space) {
             for (std::size_t c = 0; c < nf; ++c) l.add(d.state.static_inverse[r][c], f[c]);
         } else {
             for (std::size_t j : row_modes[r])
-                if (!d.modes[j].lambda.is_zero()) l.add(d.modes[j].v[r] / d.modes[j].lambda, pj[j]);
+                if (!d.modes[j].lambda.is_zero()) l.add(d.modes[j].v[r] * inv_lambda[j], pj[j]);
         }
         x_st[r] = s.temp("x_st_", r + 1);
         with(named, s.lin(x_st[r], l),
