@@ -213,23 +213,27 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     constexpr std::size_t kPlanBytes = std::size_t{32} << 20;
     std::map<Configuration, std::shared_ptr<const RestartPlan>> plans;
     std::size_t plan_bytes = 0;
+    const RestartPlan* asked_plan = nullptr;  // current_cfg's, once asked for
+    bool asked = false;
     auto restarted = [&](SegmentSolver& S) {
         if (!carried || !options.restart_plans || free_masses < kRestartFrom) return false;
         double* block = S.coefficient_block();
         if (!block) return false;
         const RestartPlan* plan = S.restart_plan();
-        if (!plan) {
+        if (!plan && !asked) {
             auto it = plans.find(cfg);
             if (it == plans.end()) {
-                std::shared_ptr<const RestartPlan> asked = options.restart_plans(cfg);
+                std::shared_ptr<const RestartPlan> given = options.restart_plans(cfg);
                 const std::size_t bytes =
-                    asked ? sizeof(double) * asked->vt.size() + 64 * asked->modes.size() : 0;
+                    given ? sizeof(double) * given->vt.size() + 64 * given->modes.size() : 0;
                 if (plan_bytes + bytes > kPlanBytes) plans.clear(), plan_bytes = 0;
                 plan_bytes += bytes;
-                it = plans.emplace(cfg, std::move(asked)).first;
+                it = plans.emplace(cfg, std::move(given)).first;
             }
-            plan = it->second.get();
+            asked_plan = it->second.get();
+            asked = true;
         }
+        if (!plan) plan = asked_plan;
         if (!plan || plan->empty() || plan->modes.size() < kRestartFrom) return false;
         restart_coefficients(*plan, block, carried_tau, t, t_lo, sgn_before.data(), sgn.data());
         return true;
@@ -241,6 +245,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             current_cfg = cfg;
             rate = fastest_rate(model_, cfg);
             carried = false;
+            asked = false;
             free_masses = 0;
             for (std::size_t i = 0; i < n; ++i) free_masses += !fixed_in(model_, cfg, i);
         }
