@@ -113,7 +113,7 @@ TEST(Restart, AgreesWithSetupFromTheEventStateOnAForcedDampedChain) {
 
 // What it does not carry over: a configuration with a stuck mass between two
 // sliding ones still restarts (its blocks are plain modes), one with a rigid
-// mode does not.
+// mode, a damper or a Jenkins element does not.
 TEST(Restart, PlansOnlyForPlainModes) {
     const Model chain = bundled("chain-8");
     const Derivation stuck = derive(chain, Configuration::parse(chain, "stuck=m4"));
@@ -121,6 +121,24 @@ TEST(Restart, PlansOnlyForPlainModes) {
     const Model rigid = parse_model("name = \"free\"\n[[mass]]\nname = \"m1\"\nm = 1\nmu_k = 0.1\n", "free.toml");
     const Derivation free = derive(rigid, Configuration::all_open(rigid));
     EXPECT_TRUE(restart_plan(free, lower(free, ProgramNames::no)).empty());
+    // A damper (state-space pseudo-modes) or a Jenkins element (a slider's
+    // state beside the masses'): set up at every segment, so the engine
+    // never asks more of them.
+    const std::string two = "[[mass]]\nname = \"a\"\nm = 1\nmu_k = 0.1\n[[mass]]\nname = \"b\"\nm = 1\n"
+                            "[[spring]]\nbetween = [\"ground\", \"a\"]\nk = 100\n"
+                            "[[spring]]\nbetween = [\"a\", \"b\"]\nk = 100\n";
+    const Model damped = parse_model("name = \"damped\"\n" + two + "[[damper]]\nbetween = [\"b\", \"ground\"]\nc = 0.5\n",
+                                     "damped.toml");
+    const Derivation dd = derive(damped, Configuration::all_open(damped));
+    EXPECT_TRUE(dd.state_space);
+    EXPECT_TRUE(restart_plan(dd, lower(dd, ProgramNames::no)).empty());
+    const Model jenkins = parse_model("name = \"jenkins\"\n" + two +
+                                          "[[jenkins]]\nbetween = [\"b\", \"ground\"]\nk = 50\nslip_force = 1\n",
+                                      "jenkins.toml");
+    const Derivation dj = derive(jenkins, Configuration::all_open(jenkins));
+    EXPECT_TRUE(lower(dj, ProgramNames::no).restart.empty());
+    // A plain chain's program carries its plan.
+    EXPECT_FALSE(lower(stuck, ProgramNames::no).restart.empty());
 }
 
 // 16 masses on springs of their own (k_i = 100 + 10 i N/m), each with
@@ -224,10 +242,10 @@ bool same_bits(const std::vector<testing::Recorded>& a, const std::vector<testin
 // A forced chain of 20 masses with friction on each and three contacts
 // (bench/bench_common.h friction_chain): contacts open and close, masses
 // stick and release, and in between the sliding masses reverse.
-std::string friction_chain_20() {
+std::string friction_chain_20(const std::string& beta = "0.002") {
     const int n = 20;
     auto name = [](int i) { return "m" + std::to_string(i); };
-    std::string t = "name = \"chain-20\"\n[damping]\nbeta = 0.002\n";
+    std::string t = "name = \"chain-20\"\n[damping]\nbeta = " + beta + "\n";
     for (int i = 1; i <= n; ++i) t += "[[mass]]\nname = \"" + name(i) + "\"\nm = 1\nmu_k = 0.05\nmu_s = 0.07\n";
     t += "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 400\n";
     for (int i = 1; i < n; ++i) t += "[[spring]]\nbetween = [\"" + name(i) + "\", \"" + name(i + 1) + "\"]\nk = 400\n";
@@ -254,33 +272,40 @@ TEST(RestartEngine, TheSolversPlanAndTheSourcesGiveTheSameBits) {
     EXPECT_EQ(testing::run_engine(m, own, 1.0).summary.restarts, 0u);
 }
 
+// With light damping every mode is underdamped; with beta = 0.08 the modes
+// above 25 rad/s are overdamped (restart.cpp's scalar branch).
 TEST(RestartEngine, RestartsAgreeWithSetupToRounding) {
-    const Model m = parse_model(friction_chain_20(), "chain-20.toml");
-    InterpretedSolverProvider programs(program_source(m));
-    const testing::Outcome carried = testing::run_engine(m, programs, 2.0, 0.01, kScheduleFrom, restart_plan_source(m));
-    const testing::Outcome set_up = testing::run_engine(m, programs, 2.0, 0.01);
-    ASSERT_EQ(carried.summary.status, RunStatus::ok) << carried.summary.message;
-    ASSERT_EQ(set_up.summary.status, RunStatus::ok) << set_up.summary.message;
-    EXPECT_GT(carried.summary.restarts, 100u);
-    EXPECT_EQ(set_up.summary.restarts, 0u);
-    ASSERT_EQ(carried.events.size(), set_up.events.size());
-    double worst_t = 0, worst_x = 0, top = 0;
-    for (std::size_t k = 0; k < carried.events.size(); ++k) {
-        EXPECT_EQ(carried.events[k].kind, set_up.events[k].kind) << k;
-        EXPECT_EQ(carried.events[k].element, set_up.events[k].element) << k;
-        worst_t = std::max(worst_t, std::fabs(carried.events[k].t - set_up.events[k].t));
-    }
-    ASSERT_EQ(carried.samples.size(), set_up.samples.size());
-    for (std::size_t k = 0; k < carried.samples.size(); ++k)
-        for (std::size_t i = 0; i < m.dof(); ++i) {
-            top = std::max(top, std::fabs(set_up.samples[k].x[i]));
-            worst_x = std::max(worst_x, std::fabs(carried.samples[k].x[i] - set_up.samples[k].x[i]));
+    for (const std::string beta : {"0.002", "0.08"}) {
+        const Model m = parse_model(friction_chain_20(beta), "chain-20.toml");
+        std::size_t overdamped = 0;
+        for (const Mode& mode : derive(m, Configuration::all_open(m)).modes) overdamped += mode.regime == Regime::overdamped;
+        if (beta == "0.08") EXPECT_GT(overdamped, 0u);
+        InterpretedSolverProvider programs(program_source(m));
+        const testing::Outcome carried = testing::run_engine(m, programs, 2.0, 0.01, kScheduleFrom, restart_plan_source(m));
+        const testing::Outcome set_up = testing::run_engine(m, programs, 2.0, 0.01);
+        ASSERT_EQ(carried.summary.status, RunStatus::ok) << carried.summary.message;
+        ASSERT_EQ(set_up.summary.status, RunStatus::ok) << set_up.summary.message;
+        EXPECT_GT(carried.summary.restarts, 50u) << beta;
+        EXPECT_EQ(set_up.summary.restarts, 0u);
+        ASSERT_EQ(carried.events.size(), set_up.events.size()) << beta;
+        double worst_t = 0, worst_x = 0, top = 0;
+        for (std::size_t k = 0; k < carried.events.size(); ++k) {
+            EXPECT_EQ(carried.events[k].kind, set_up.events[k].kind) << k;
+            EXPECT_EQ(carried.events[k].element, set_up.events[k].element) << k;
+            worst_t = std::max(worst_t, std::fabs(carried.events[k].t - set_up.events[k].t));
         }
-    EXPECT_LT(worst_t, 1e-12);
-    EXPECT_LT(worst_x, 1e-12 * top);
-    std::printf("[ restart  ] chain-20 over 2 s, %zu of %zu segments carried over: event times within %.1e s, "
-                "x within %.1e of max|x|\n", carried.summary.restarts, carried.summary.segments, worst_t,
-                worst_x / top);
+        ASSERT_EQ(carried.samples.size(), set_up.samples.size());
+        for (std::size_t k = 0; k < carried.samples.size(); ++k)
+            for (std::size_t i = 0; i < m.dof(); ++i) {
+                top = std::max(top, std::fabs(set_up.samples[k].x[i]));
+                worst_x = std::max(worst_x, std::fabs(carried.samples[k].x[i] - set_up.samples[k].x[i]));
+            }
+        EXPECT_LT(worst_t, 1e-12) << beta;
+        EXPECT_LT(worst_x, 1e-12 * top) << beta;
+        std::printf("[ restart  ] chain-20, beta %s (%zu overdamped modes) over 2 s, %zu of %zu segments carried "
+                    "over: event times within %.1e s, x within %.1e of max|x|\n", beta.c_str(), overdamped,
+                    carried.summary.restarts, carried.summary.segments, worst_t, worst_x / top);
+    }
 }
 
 }  // namespace
