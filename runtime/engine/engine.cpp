@@ -215,8 +215,13 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     std::size_t plan_bytes = 0;
     const RestartPlan* asked_plan = nullptr;  // current_cfg's, once asked for
     bool asked = false;
+    // Dampers, Jenkins elements and friction pairs never have a plan
+    // (restart_plan(), generator/lowering.h): no derivation is asked for one.
+    const bool plain = model_.dampers.empty() && model_.jenkins.empty() &&
+                       std::none_of(model_.masses.begin(), model_.masses.end(),
+                                    [](const Mass& m) { return m.partner != kGround; });
     auto restarted = [&](SegmentSolver& S) {
-        if (!carried || !options.restart_plans || free_masses < kRestartFrom) return false;
+        if (!carried || !plain || !options.restart_plans || free_masses < kRestartFrom) return false;
         double* block = S.coefficient_block();
         if (!block) return false;
         const RestartPlan* plan = S.restart_plan();
