@@ -7,7 +7,7 @@
 // carried over, against the Eigen solver's events; a forced friction chain of
 // 20 masses, the same bits whether the plan is the solver's or
 // EngineOptions::restart_plans', and, to rounding, what setting up every
-// segment gives.
+// segment gives, also with overdamped modes and on random chains of 20.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -23,6 +23,7 @@
 #include "interpreted_solver.h"
 #include "lowering.h"
 #include "model_reader.h"
+#include "random_model.h"
 #include "restart.h"
 
 namespace hsnc {
@@ -306,6 +307,37 @@ TEST(RestartEngine, RestartsAgreeWithSetupToRounding) {
                     "over: event times within %.1e s, x within %.1e of max|x|\n", beta.c_str(), overdamped,
                     carried.summary.restarts, carried.summary.segments, worst_t, worst_x / top);
     }
+}
+
+// Random chains of 20 masses (tests/random_model.h: random springs,
+// contacts, friction on about half of them, Rayleigh damping from none to
+// heavy, one or two harmonics, loads): carried over and set up, the runs'
+// events agree to rounding over 3 s, whatever the regimes and forces.
+TEST(RestartEngine, RandomChainsAgreeWithSetUpRuns) {
+    std::size_t carried_total = 0, compared = 0;
+    for (unsigned seed = 1; seed <= 8; ++seed) {
+        const testing::Drawn d = testing::draw(7100 + seed, 20);
+        const Model& m = d.model;
+        InterpretedSolverProvider programs(program_source(m));
+        const double t_end = m.t0 + 3.0;
+        const testing::Outcome carried = testing::run_engine(m, programs, t_end, 0.0, kScheduleFrom, restart_plan_source(m));
+        const testing::Outcome set_up = testing::run_engine(m, programs, t_end);
+        ASSERT_EQ(carried.summary.status, set_up.summary.status) << seed;
+        carried_total += carried.summary.restarts;
+        ASSERT_EQ(carried.events.size(), set_up.events.size()) << "seed " << seed;
+        double worst = 0;
+        for (std::size_t k = 0; k < carried.events.size(); ++k) {
+            ASSERT_EQ(carried.events[k].kind, set_up.events[k].kind) << "seed " << seed << " event " << k;
+            ASSERT_EQ(carried.events[k].element, set_up.events[k].element) << "seed " << seed << " event " << k;
+            worst = std::max(worst, std::fabs(carried.events[k].t - set_up.events[k].t));
+        }
+        EXPECT_LT(worst, 1e-12) << "seed " << seed;
+        compared += carried.events.size();
+        std::printf("[ restart  ] random chain %u: %zu events, %zu of %zu segments carried over, times within %.1e s\n",
+                    seed, carried.events.size(), carried.summary.restarts, carried.summary.segments, worst);
+    }
+    EXPECT_GT(carried_total, 100u);
+    EXPECT_GT(compared, 500u);
 }
 
 }  // namespace
