@@ -14,7 +14,8 @@
 //   4. one all-open chain configuration of 8 to 64 masses: derive + lower
 //      (refined, Jacobi) against building the Eigen solver;
 //   5. one segment start in the all-open friction chain of 16 to 128 masses:
-//      setup from the state against a restart at a reversal.
+//      setup from the state against a restart at a reversal, and the search's
+//      first evaluation there against an eval later in the segment.
 //
 // Times are this thread's CPU time (CLOCK_THREAD_CPUTIME_ID), medians.
 //
@@ -304,9 +305,11 @@ int main(int argc, char** argv) {
     //    setup from the state, in the all-open configuration of bench_common.h's
     //    friction chain: the interpreter, one mass's friction flipped each call.
     std::printf("\n5. One segment start in the all-open n-mass friction chain (bench_common.h friction_chain): the\n"
-                "   interpreter's setup from the state against restart_coefficients at a reversal (ns, median of\n"
-                "   %d rounds of %d calls in turn)\n", rounds, burst);
-    std::printf("%6s %6s %10s %11s %15s\n", "masses", "modes", "setup_ns", "restart_ns", "restart/setup");
+                "   interpreter's setup from the state against restart_coefficients at a reversal, then the search's\n"
+                "   first evaluation at the start (eval_switches at tau = 0) against an eval at tau > 0 (ns, median\n"
+                "   of %d rounds of %d calls in turn)\n", rounds, burst);
+    std::printf("%6s %6s %10s %11s %15s %14s %9s\n", "masses", "modes", "setup_ns", "restart_ns", "restart/setup",
+                "start_eval_ns", "eval_ns");
     for (int nm : {16, 32, 64, 128}) {
         if (quick && nm > 32) continue;
         const Model m = parse_model(friction_chain(nm), "chain-" + std::to_string(nm));
@@ -317,7 +320,10 @@ int main(int argc, char** argv) {
         std::vector<double> x(n, 0.01), v(n, 0.1);
         std::vector<signed char> up(n, 1), flipped(n, 1);
         flipped[n / 2] = -1;
-        std::vector<double> ts, tr;
+        const std::size_t ns = s.switches().size();
+        std::vector<double> xs(m.state_size()), vs(n), as(n), g(ns), dg(ns), bound(ns), scale(ns);
+        const SegmentEval eval_out{xs.data(), vs.data(), as.data(), g.data(), dg.data(), bound.data(), scale.data()};
+        std::vector<double> ts, tr, t0, te;
         for (int r = 0; r < rounds + 1; ++r) {
             double start = cpu_seconds();
             for (int e = 0; e < burst; ++e)
@@ -327,11 +333,18 @@ int main(int argc, char** argv) {
                 restart_coefficients(plan, s.coefficient_block(), 1e-3, 1.0 + 1e-7 * e, 0.0,
                                      (e & 1) ? up.data() : flipped.data(), (e & 1) ? flipped.data() : up.data());
             const double end = cpu_seconds();
+            for (int e = 0; e < burst; ++e) s.eval_switches(0.0, eval_out), sink = sink + g[0];
+            const double at_start = cpu_seconds();
+            for (int e = 0; e < burst; ++e) s.eval(1e-3 + 1e-9 * e, eval_out), sink = sink + g[0];
+            const double at_tau = cpu_seconds();
             sink = sink + s.coefficient_block()[0];
-            if (r > 0) ts.push_back(1e9 * (mid - start) / burst), tr.push_back(1e9 * (end - mid) / burst);
+            if (r > 0) {
+                ts.push_back(1e9 * (mid - start) / burst), tr.push_back(1e9 * (end - mid) / burst);
+                t0.push_back(1e9 * (at_start - end) / burst), te.push_back(1e9 * (at_tau - at_start) / burst);
+            }
         }
-        std::printf("%6d %6zu %10.0f %11.0f %15.2f\n", nm, plan.modes.size(), median(ts), median(tr),
-                    median(tr) / median(ts));
+        std::printf("%6d %6zu %10.0f %11.0f %15.2f %14.0f %9.0f\n", nm, plan.modes.size(), median(ts), median(tr),
+                    median(tr) / median(ts), median(t0), median(te));
     }
     return sink == 12345.678 ? 1 : 0;
 }
