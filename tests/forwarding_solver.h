@@ -25,6 +25,9 @@ struct ForwardingSolver : SegmentSolver {
     void eval_some(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const override {
         inner->eval_some(tau, which, count, out);
     }
+    void eval_start(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const override {
+        inner->eval_start(tau, which, count, out);
+    }
     double max_step() const override { return inner->max_step(); }
     double* coefficient_block() override { return inner->coefficient_block(); }
     const RestartPlan* restart_plan() const override { return inner->restart_plan(); }
@@ -40,6 +43,7 @@ public:
         return solver_;
     }
     const Solver& front() const { return solver_; }
+    Solver& front() { return solver_; }
 
 private:
     SolverProvider& inner_;

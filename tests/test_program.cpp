@@ -621,6 +621,47 @@ TEST(FunctionRows, EvalSomeHasTheBitsOfEvalForTheListedFunctionsAndLeavesTheOthe
     }
 }
 
+// eval_start (a segment carried over a switch starts with it, engine.cpp):
+// every function's bound and the listed functions' four outputs with eval's
+// bits, whatever the registers held from the evaluation before.
+TEST(FunctionRows, EvalStartHasTheBitsOfEvalForEveryBoundAndTheListedFunctions) {
+    const Model m = friction_chain_model(20);
+    std::mt19937 rng(12);
+    for (const char* spec : {"", "closed=contact1", "closed=contact2,contact3 stuck=m3,m4,m11,m17", "stuck=m1,m20"}) {
+        const Configuration cfg = Configuration::parse(m, spec);
+        InterpretedSolver s(lower(derive(m, cfg)));
+        const std::size_t n = m.dof(), ns = s.switches().size();
+        ASSERT_TRUE(s.has_start_steps()) << spec;
+        const testing::Start st = testing::start_of(m, cfg, 5);
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        std::vector<double> x(m.state_size()), v(n), a(n), g(ns), dg(ns), b(ns), sc(ns);
+        const SegmentEval full{x.data(), v.data(), a.data(), g.data(), dg.data(), b.data(), sc.data()};
+        s.setup(st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data());
+        for (double tau : {0.0, 1e-9, 0.013, 0.5, 3.25}) {
+            std::vector<std::uint32_t> which;
+            for (std::uint32_t f = 0; f < ns; ++f)
+                if (rng() % 6 == 0) which.push_back(f);
+            std::vector<double> x2(x.size(), nan), v2(n, nan), a2(n, nan), g2(ns, nan), dg2(ns, nan), b2(ns, nan),
+                sc2(ns, nan);
+            const SegmentEval start{x2.data(), v2.data(), a2.data(), g2.data(), dg2.data(), b2.data(), sc2.data()};
+            s.eval(0.77 * tau + 0.1, full);  // the registers hold another instant's values
+            s.eval_start(tau, which.data(), which.size(), start);
+            s.eval(tau, full);
+            std::vector<char> listed(ns, 0);
+            for (std::uint32_t f : which) {
+                listed[f] = 1;
+                EXPECT_EQ(std::memcmp(&g[f], &g2[f], sizeof(double)), 0) << spec << " tau " << tau << " g " << f;
+                EXPECT_EQ(std::memcmp(&dg[f], &dg2[f], sizeof(double)), 0) << spec << " tau " << tau << " dg " << f;
+                EXPECT_EQ(std::memcmp(&sc[f], &sc2[f], sizeof(double)), 0) << spec << " tau " << tau << " scale " << f;
+            }
+            for (std::size_t f = 0; f < ns; ++f) {
+                EXPECT_EQ(std::memcmp(&b[f], &b2[f], sizeof(double)), 0) << spec << " tau " << tau << " bound " << f;
+                if (!listed[f]) EXPECT_TRUE(std::isnan(g2[f]) && std::isnan(dg2[f]) && std::isnan(sc2[f])) << f;
+            }
+        }
+    }
+}
+
 TEST(FunctionRows, ARunSearchingByFunctionWritesTheBytesOfAFullSearch) {
     // What a kernel does (every function at every instant, the search reading
     // the listed ones) and what the interpreter does (the listed ones alone)

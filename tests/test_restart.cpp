@@ -273,6 +273,58 @@ TEST(RestartEngine, TheSolversPlanAndTheSourcesGiveTheSameBits) {
     EXPECT_EQ(testing::run_engine(m, own, 1.0).summary.restarts, 0u);
 }
 
+// What a carried segment's start takes from the event (engine.cpp): every
+// function's g and g' but those it lists for eval_start. A solver in front
+// of the interpreter keeps the last full evaluation's (the event's: no
+// samples in between) and, at each carried start, compares the new
+// segment's own values at 0 with them for the functions not listed: they
+// must be continuous. The velocities of the masses whose friction flipped
+// must be listed: their g' jumps by 2 mu_k N / m.
+struct ContinuityCheck : testing::ForwardingSolver {
+    mutable std::vector<double> g, dg, scale;
+    mutable double worst_g = 0, worst_dg = 0;
+    mutable std::size_t starts = 0, listed = 0;
+    void eval(double tau, const SegmentEval& out) const override {
+        inner->eval(tau, out);
+        const std::size_t ns = switches().size();
+        g.assign(out.g, out.g + ns), dg.assign(out.dg, out.dg + ns), scale.assign(out.scale, out.scale + ns);
+    }
+    void eval_start(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const override {
+        const std::size_t ns = switches().size();
+        std::vector<double> x(state_size), v(state_size), a(state_size), g0(ns), dg0(ns), b0(ns), s0(ns);
+        inner->eval(tau, {x.data(), v.data(), a.data(), g0.data(), dg0.data(), b0.data(), s0.data()});
+        std::vector<char> in(ns, 0);
+        for (std::size_t k = 0; k < count; ++k) in[which[k]] = 1;
+        for (std::size_t f = 0; f < ns; ++f) {
+            if (in[f]) continue;
+            worst_g = std::max(worst_g, std::fabs(g0[f] - g[f]) / (scale[f] + 1e-300));
+            worst_dg = std::max(worst_dg, std::fabs(dg0[f] - dg[f]) / (std::fabs(dg[f]) + 1e-3));
+        }
+        ++starts, listed += count;
+        inner->eval_start(tau, which, count, out);
+    }
+    std::size_t state_size = 0;  ///< Model::state_size(): x, v and a are at most that long
+};
+
+TEST(RestartEngine, WhatACarriedStartTakesFromTheEventIsContinuous) {
+    for (const std::string& text : {friction_chain_20(), friction_chain_20("0.08")}) {
+        const Model m = parse_model(text, "chain-20.toml");
+        InterpretedSolverProvider programs(program_source(m));
+        testing::ForwardingProvider<ContinuityCheck> check(programs);
+        check.front().state_size = m.state_size();
+        const testing::Outcome r = testing::run_engine(m, check, 2.0, 0.0, kScheduleFrom, restart_plan_source(m));
+        ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
+        const ContinuityCheck& c = check.front();
+        EXPECT_EQ(c.starts, r.summary.restarts);
+        EXPECT_GT(c.starts, 50u);
+        EXPECT_GE(c.listed, c.starts);  // at least the reversing mass's velocity each time
+        EXPECT_LT(c.worst_g, 1e-12);
+        EXPECT_LT(c.worst_dg, 1e-10);
+        std::printf("[ restart  ] %zu carried starts, %zu functions listed: the others' g within %.1e of their scale, "
+                    "g' within %.1e\n", c.starts, c.listed, c.worst_g, c.worst_dg);
+    }
+}
+
 // With light damping every mode is underdamped; with beta = 0.08 the modes
 // above 25 rad/s are overdamped (restart.cpp's scalar branch).
 TEST(RestartEngine, RestartsAgreeWithSetupToRounding) {

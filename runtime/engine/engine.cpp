@@ -173,8 +173,9 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     // The per-function schedule of the switch search: when each function was
     // evaluated (at), the evaluation before (before), until when it is safe (next).
     std::vector<double> at(max_switches), before(max_switches), next(max_switches);
-    std::vector<std::uint32_t> due;
+    std::vector<std::uint32_t> due, start_due;  // start_due: a carried segment's functions evaluated at its start
     due.reserve(max_switches);
+    start_due.reserve(max_switches);
     std::vector<char> armed(max_switches), leaving(max_switches), leaves_now(max_switches);
     std::vector<double> series_d, series_mag;
     Found found;
@@ -270,7 +271,8 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             return finish(RunStatus::failure, msg.str());
         }
         SegmentSolver& S = *current;
-        if (restarted(S))
+        const bool carried_start = restarted(S);
+        if (carried_start)
             ++sum.restarts;
         else
             S.setup(t, t_lo, x.data(), v.data(), sgn.data());
@@ -345,7 +347,34 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             found.any = false;
             found.tau = 0.0;
             found.switched.clear();
-            eval_all(0.0, false);
+            if (carried_start) {
+                // A segment carried over a switch starts where the event's full
+                // evaluation (buf) left every function: positions and velocities
+                // are continuous, and the only accelerations that jump are those
+                // of the masses whose friction flipped. So g, g' and the scale
+                // are the event's, but for the velocities of those masses and
+                // the release functions (their g' reads the neighbours'
+                // accelerations); every bound is the new segment's own.
+                start_due.clear();
+                for (std::size_t f = 0; f < nsw; ++f) {
+                    const SwitchFunction& fn = sw[f];
+                    const bool jumps = fn.kind == SwitchKind::release_pos || fn.kind == SwitchKind::release_neg ||
+                                       (fn.kind == SwitchKind::velocity &&
+                                        sgn_before[static_cast<std::size_t>(fn.element)] !=
+                                            sgn[static_cast<std::size_t>(fn.element)]);
+                    if (jumps) start_due.push_back(static_cast<std::uint32_t>(f));
+                }
+                S.eval_start(0.0, start_due.data(), start_due.size(), probe_view);
+                for (std::size_t f = 0; f < nsw; ++f) buf.bound[f] = probe.bound[f];
+                for (std::uint32_t f : start_due)
+                    buf.g[f] = probe.g[f], buf.dg[f] = probe.dg[f], buf.scale[f] = probe.scale[f];
+                prev_tau = tau_now, tau_now = 0.0;
+                if (scheduled)
+                    for (std::size_t f = 0; f < nsw; ++f) before[f] = at[f], at[f] = 0.0;
+                ++sum.evaluations;
+            } else {
+                eval_all(0.0, false);
+            }
             if (scheduled) {
                 due.resize(nsw);
                 for (std::size_t f = 0; f < nsw; ++f) {

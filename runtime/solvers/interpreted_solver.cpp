@@ -619,6 +619,50 @@ const Step* factored_modes(const Step* first, const Step* end, const double* K, 
 }
 #pragma GCC diagnostic pop
 
+// One step of a body, everything inlined: no call and no prologue per step.
+ALWAYS_INLINE void run_step(const Step& s, const double* K, double* r) {
+    switch (s.run) {
+        case kSingle: single_step(s, K, r); break;
+        case kSinCos: sincos_step(s, K, r); break;
+        case kHarmonic: harmonic_step(s, K, r); break;
+        case kMode + 0: mode_step<ProgramRegime::undamped>(s, K, r); break;
+        case kMode + 1: mode_step<ProgramRegime::underdamped>(s, K, r); break;
+        case kMode + 2: mode_step<ProgramRegime::critical>(s, K, r); break;
+        case kMode + 3: mode_step<ProgramRegime::overdamped>(s, K, r); break;
+        case kMode + 4: mode_step<ProgramRegime::rigid>(s, K, r); break;
+        case kMode + 5: mode_step<ProgramRegime::rigid_damped>(s, K, r); break;
+        case kLinEmpty: lin_empty_step<false>(s, K, r); break;
+        case kLinEmptyBase: lin_empty_step<true>(s, K, r); break;
+        case kLdEmpty: lin_ld_empty_step(s, K, r); break;
+        case kCopy: copy_step(s, K, r); break;
+        case kAbs: abs_step(s, K, r); break;
+        case kMass: mass_step(s, K, r); break;
+        case kLd: LinLd<false>::step(s, K, r); break;
+        case kLdShared: LinLd<true>::step(s, K, r); break;
+        case kLin + 0: Lin<false, false, 0>::step(s, K, r); break;
+        case kLin + 1: Lin<false, false, 1>::step(s, K, r); break;
+        case kLin + 2: Lin<false, false, 2>::step(s, K, r); break;
+        case kLin + 3: Lin<false, false, 3>::step(s, K, r); break;
+        case kLin + 4: Lin<false, false, 4>::step(s, K, r); break;
+        case kLin + 5: Lin<false, true, 0>::step(s, K, r); break;
+        case kLin + 6: Lin<false, true, 1>::step(s, K, r); break;
+        case kLin + 7: Lin<false, true, 2>::step(s, K, r); break;
+        case kLin + 8: Lin<false, true, 3>::step(s, K, r); break;
+        case kLin + 9: Lin<false, true, 4>::step(s, K, r); break;
+        case kLin + 10: Lin<true, false, 0>::step(s, K, r); break;
+        case kLin + 11: Lin<true, false, 1>::step(s, K, r); break;
+        case kLin + 12: Lin<true, false, 2>::step(s, K, r); break;
+        case kLin + 13: Lin<true, false, 3>::step(s, K, r); break;
+        case kLin + 14: Lin<true, false, 4>::step(s, K, r); break;
+        case kLin + 15: Lin<true, true, 0>::step(s, K, r); break;
+        case kLin + 16: Lin<true, true, 1>::step(s, K, r); break;
+        case kLin + 17: Lin<true, true, 2>::step(s, K, r); break;
+        case kLin + 18: Lin<true, true, 3>::step(s, K, r); break;
+        case kLin + 19: Lin<true, true, 4>::step(s, K, r); break;
+        default: break;
+    }
+}
+
 void execute(const double* K, const InterpretedSolver::Body& body, double* r) {
     const Step* const end = body.steps.data() + body.steps.size();
     for (const Step* it = body.steps.data(); it != end;) {
@@ -628,46 +672,7 @@ void execute(const double* K, const InterpretedSolver::Body& body, double* r) {
             continue;
         }
         ++it;
-        switch (s.run) {
-            case kSingle: single_step(s, K, r); break;
-            case kSinCos: sincos_step(s, K, r); break;
-            case kHarmonic: harmonic_step(s, K, r); break;
-            case kMode + 0: mode_step<ProgramRegime::undamped>(s, K, r); break;
-            case kMode + 1: mode_step<ProgramRegime::underdamped>(s, K, r); break;
-            case kMode + 2: mode_step<ProgramRegime::critical>(s, K, r); break;
-            case kMode + 3: mode_step<ProgramRegime::overdamped>(s, K, r); break;
-            case kMode + 4: mode_step<ProgramRegime::rigid>(s, K, r); break;
-            case kMode + 5: mode_step<ProgramRegime::rigid_damped>(s, K, r); break;
-            case kLinEmpty: lin_empty_step<false>(s, K, r); break;
-            case kLinEmptyBase: lin_empty_step<true>(s, K, r); break;
-            case kLdEmpty: lin_ld_empty_step(s, K, r); break;
-            case kCopy: copy_step(s, K, r); break;
-            case kAbs: abs_step(s, K, r); break;
-            case kMass: mass_step(s, K, r); break;
-            case kLd: LinLd<false>::step(s, K, r); break;
-            case kLdShared: LinLd<true>::step(s, K, r); break;
-            case kLin + 0: Lin<false, false, 0>::step(s, K, r); break;
-            case kLin + 1: Lin<false, false, 1>::step(s, K, r); break;
-            case kLin + 2: Lin<false, false, 2>::step(s, K, r); break;
-            case kLin + 3: Lin<false, false, 3>::step(s, K, r); break;
-            case kLin + 4: Lin<false, false, 4>::step(s, K, r); break;
-            case kLin + 5: Lin<false, true, 0>::step(s, K, r); break;
-            case kLin + 6: Lin<false, true, 1>::step(s, K, r); break;
-            case kLin + 7: Lin<false, true, 2>::step(s, K, r); break;
-            case kLin + 8: Lin<false, true, 3>::step(s, K, r); break;
-            case kLin + 9: Lin<false, true, 4>::step(s, K, r); break;
-            case kLin + 10: Lin<true, false, 0>::step(s, K, r); break;
-            case kLin + 11: Lin<true, false, 1>::step(s, K, r); break;
-            case kLin + 12: Lin<true, false, 2>::step(s, K, r); break;
-            case kLin + 13: Lin<true, false, 3>::step(s, K, r); break;
-            case kLin + 14: Lin<true, false, 4>::step(s, K, r); break;
-            case kLin + 15: Lin<true, true, 0>::step(s, K, r); break;
-            case kLin + 16: Lin<true, true, 1>::step(s, K, r); break;
-            case kLin + 17: Lin<true, true, 2>::step(s, K, r); break;
-            case kLin + 18: Lin<true, true, 3>::step(s, K, r); break;
-            case kLin + 19: Lin<true, true, 4>::step(s, K, r); break;
-            default: break;
-        }
+        run_step(s, K, r);
     }
 }
 
@@ -1353,6 +1358,30 @@ InterpretedSolver::InterpretedSolver(Program p)
             common_ = eval_body(common);
             part_rows_.assign(parts.rows.begin(), parts.rows.end());  // no spare capacity: the budget counts it
             part_at_.assign(parts.at.begin(), parts.at.end());
+            // eval_start: the common part, then the steps of eval_ that hold
+            // what every function's bound needs beyond it (without the
+            // masses' states that g, g' and the scale read), then a listed
+            // function's rows as in eval_some. The other rows of those steps
+            // compute what nothing read there needs: their registers are
+            // their own (one writer each), and a listed function's rows
+            // compute them again. No body is scheduled for it.
+            const std::size_t ns = switches_.size();
+            std::vector<char> needed(p.eval.registers(), 0);
+            const std::uint32_t bounds_at = switch_outputs + 2 * static_cast<std::uint32_t>(ns);
+            for (std::size_t f = 0; f < ns; ++f) needed[bounds_at + f] = 1;
+            const std::vector<char> keep = kept_for(table, parts.common, std::move(needed));
+            std::vector<char> used(eval_->steps.size(), 0);
+            std::vector<Instr> beyond;
+            bool mapped = true;
+            for (std::size_t i = 0; i < code.size(); ++i) {
+                if (!keep[i] || parts.common[i]) continue;
+                if (where[i].step == kNoStep) mapped = false;
+                else used[where[i].step] = 1;
+                beyond.push_back(code[i]);
+            }
+            if (mapped && estimated_work(beyond) < 0.4 * estimated_work(code))
+                for (std::size_t k = 0; k < used.size(); ++k)
+                    if (used[k]) start_steps_.push_back(static_cast<std::uint32_t>(k));
         }
     }
 }
@@ -1362,7 +1391,8 @@ InterpretedSolver::~InterpretedSolver() = default;
 std::size_t InterpretedSolver::memory_bytes() const {
     const std::size_t cut = (common_ ? common_->bytes() : 0) + sizeof(RowRef) * part_rows_.capacity() +
                             sizeof(std::uint32_t) * part_at_.capacity();
-    return sizeof(*this) + setup_->bytes() + eval_->bytes() + (switches_body_ ? switches_body_->bytes() : 0) + cut +
+    return sizeof(*this) + setup_->bytes() + eval_->bytes() + (switches_body_ ? switches_body_->bytes() : 0) +
+           sizeof(std::uint32_t) * start_steps_.capacity() + cut +
            sizeof(double) * (constants_.capacity() + setup_regs_.capacity() + eval_regs_.capacity()) +
            sizeof(std::uint32_t) * setup_coef_.capacity() + sizeof(SwitchFunction) * switches_.capacity() +
            sizeof(double) * (plan_.vt.capacity() + plan_.mu_k_n.capacity()) +
@@ -1394,6 +1424,25 @@ void InterpretedSolver::eval_switches(double tau, const SegmentEval& out) const 
     r[Program::kEvalTau] = tau;
     execute(constants_.data(), *switches_body_, r);
     for (std::size_t f = 0; f < switches_.size(); ++f) switch_outputs(f, out);
+}
+
+void InterpretedSolver::eval_start(double tau, const std::uint32_t* which, std::size_t count,
+                                   const SegmentEval& out) const {
+    if (start_steps_.empty()) return eval_switches(tau, out);
+    double* r = eval_regs_.data();
+    r[Program::kEvalTau] = tau;
+    execute(constants_.data(), *common_, r);
+    for (std::uint32_t k : start_steps_) run_step(eval_->steps[k], constants_.data(), r);
+    const std::size_t n = static_cast<std::size_t>(n_dof_), nx = n + static_cast<std::size_t>(n_slider_),
+                      ns = switches_.size();
+    const double* o = r + Program::kEvalCoef + n_coef_ + nx + 2 * n + 2 * ns;
+    for (std::size_t f = 0; f < ns; ++f) out.bound[f] = o[f];
+    for (std::size_t k = 0; k < count; ++k) {
+        const std::uint32_t f = which[k];
+        for (std::uint32_t i = part_at_[f]; i < part_at_[f + 1]; ++i)
+            run_row(eval_->steps[part_rows_[i].step], part_rows_[i].row, r);
+        switch_outputs(f, out);
+    }
 }
 
 void InterpretedSolver::eval_some(double tau, const std::uint32_t* which, std::size_t count,

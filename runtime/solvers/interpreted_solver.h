@@ -56,9 +56,15 @@ public:
     /// masses it reads, its sums); the same bits as eval() for the listed
     /// functions' g, dg, bound and scale, the others' left as they were.
     void eval_some(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const override;
+    /// The common part, the steps of eval that every bound needs beyond it,
+    /// then the listed functions' rows, when that leaves out a good part of
+    /// eval (else eval_switches()).
+    void eval_start(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const override;
     double max_step() const override { return max_step_; }
     /// Whether eval_some() runs the listed functions' rows alone (else it is eval_switches()).
     bool has_function_rows() const { return static_cast<bool>(common_); }
+    /// Whether eval_start() runs the common part and the bounds' steps (else it is eval_switches()).
+    bool has_start_steps() const { return !start_steps_.empty(); }
     /// Whether eval_switches() runs a program of its own (else it is eval()).
     bool has_switch_program() const { return static_cast<bool>(switches_body_); }
     /// The share of eval's work (terms summed, libm calls) the search does (1
@@ -96,6 +102,7 @@ private:
     std::vector<std::uint32_t> setup_coef_;  // setup's registers of coef[k]
     std::vector<std::uint32_t> no_exports_;
     std::unique_ptr<Body> setup_, eval_, switches_body_;  // switches_body_: null when eval_switches() is eval()
+    std::vector<std::uint32_t> start_steps_;  // eval_start: eval_'s steps after common_ (none: eval_switches())
     // eval_some: the modes and harmonics once (null: eval_some() is
     // eval_switches()), then function f's rows of eval_, part_rows_[part_at_[f] .. part_at_[f + 1]).
     std::unique_ptr<Body> common_;

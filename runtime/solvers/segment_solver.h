@@ -83,6 +83,17 @@ public:
         eval_switches(tau, out);
     }
 
+    /// Every function's bound at tau, and the g, dg, bound and scale of the
+    /// functions which[0 .. count), each with the bits eval() gives it; the
+    /// other functions' g, dg and scale are left unspecified. The engine
+    /// starts a segment carried over a switch with it (engine.cpp: the
+    /// others' values are the event's). The default is eval_switches(); the
+    /// interpreter leaves out the states of the masses only g, dg and scale read.
+    virtual void eval_start(double tau, const std::uint32_t* /*which*/, std::size_t /*count*/,
+                            const SegmentEval& out) const {
+        eval_switches(tau, out);
+    }
+
     /// The longest step over which `bound` is valid: +infinity unless the
     /// segment has secular (resonant, growing) terms.
     virtual double max_step() const = 0;

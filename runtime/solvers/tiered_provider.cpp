@@ -45,6 +45,10 @@ public:
         ++evaluations;
         inner->eval_some(tau, which, count, out);
     }
+    void eval_start(double tau, const std::uint32_t* which, std::size_t count, const SegmentEval& out) const override {
+        ++evaluations;
+        inner->eval_start(tau, which, count, out);
+    }
     double max_step() const override { return inner->max_step(); }
     double* coefficient_block() override { return inner->coefficient_block(); }
     const RestartPlan* restart_plan() const override { return inner->restart_plan(); }
