@@ -15,7 +15,8 @@
 //      (refined, Jacobi) against building the Eigen solver;
 //   5. one segment start in the all-open friction chain of 16 to 128 masses:
 //      setup from the state against a restart at a reversal, and the search's
-//      first evaluation there against an eval later in the segment.
+//      first evaluation there (set up, and carried over) against an eval later
+//      in the segment.
 //
 // Times are this thread's CPU time (CLOCK_THREAD_CPUTIME_ID), medians.
 //
@@ -306,10 +307,11 @@ int main(int argc, char** argv) {
     //    friction chain: the interpreter, one mass's friction flipped each call.
     std::printf("\n5. One segment start in the all-open n-mass friction chain (bench_common.h friction_chain): the\n"
                 "   interpreter's setup from the state against restart_coefficients at a reversal, then the search's\n"
-                "   first evaluation at the start (eval_switches at tau = 0) against an eval at tau > 0 (ns, median\n"
+                "   first evaluation at the start (eval_switches at tau = 0) against an eval at tau > 0, and a carried\n"
+                "   segment's first evaluation (eval_start: the bounds and the flipped mass's velocity) (ns, median\n"
                 "   of %d rounds of %d calls in turn)\n", rounds, burst);
-    std::printf("%6s %6s %10s %11s %15s %14s %9s\n", "masses", "modes", "setup_ns", "restart_ns", "restart/setup",
-                "start_eval_ns", "eval_ns");
+    std::printf("%6s %6s %10s %11s %15s %14s %9s %16s\n", "masses", "modes", "setup_ns", "restart_ns", "restart/setup",
+                "start_eval_ns", "eval_ns", "carried_start_ns");
     for (int nm : {16, 32, 64, 128}) {
         if (quick && nm > 32) continue;
         const Model m = parse_model(friction_chain(nm), "chain-" + std::to_string(nm));
@@ -323,7 +325,12 @@ int main(int argc, char** argv) {
         const std::size_t ns = s.switches().size();
         std::vector<double> xs(m.state_size()), vs(n), as(n), g(ns), dg(ns), bound(ns), scale(ns);
         const SegmentEval eval_out{xs.data(), vs.data(), as.data(), g.data(), dg.data(), bound.data(), scale.data()};
-        std::vector<double> ts, tr, t0, te;
+        std::vector<double> ts, tr, t0, te, tc;
+        // A carried start evaluates the bounds and, among others, the flipped mass's velocity.
+        std::uint32_t flipped_function = 0;
+        for (std::size_t f = 0; f < ns; ++f)
+            if (s.switches()[f].kind == SwitchKind::velocity && s.switches()[f].element == static_cast<int>(n / 2))
+                flipped_function = static_cast<std::uint32_t>(f);
         for (int r = 0; r < rounds + 1; ++r) {
             double start = cpu_seconds();
             for (int e = 0; e < burst; ++e)
@@ -337,14 +344,17 @@ int main(int argc, char** argv) {
             const double at_start = cpu_seconds();
             for (int e = 0; e < burst; ++e) s.eval(1e-3 + 1e-9 * e, eval_out), sink = sink + g[0];
             const double at_tau = cpu_seconds();
+            for (int e = 0; e < burst; ++e) s.eval_start(0.0, &flipped_function, 1, eval_out), sink = sink + bound[0];
+            const double carried = cpu_seconds();
             sink = sink + s.coefficient_block()[0];
             if (r > 0) {
                 ts.push_back(1e9 * (mid - start) / burst), tr.push_back(1e9 * (end - mid) / burst);
                 t0.push_back(1e9 * (at_start - end) / burst), te.push_back(1e9 * (at_tau - at_start) / burst);
+                tc.push_back(1e9 * (carried - at_tau) / burst);
             }
         }
-        std::printf("%6d %6zu %10.0f %11.0f %15.2f %14.0f %9.0f\n", nm, plan.modes.size(), median(ts), median(tr),
-                    median(tr) / median(ts), median(t0), median(te));
+        std::printf("%6d %6zu %10.0f %11.0f %15.2f %14.0f %9.0f %16.0f\n", nm, plan.modes.size(), median(ts),
+                    median(tr), median(tr) / median(ts), median(t0), median(te), median(tc));
     }
     return sink == 12345.678 ? 1 : 0;
 }

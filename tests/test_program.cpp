@@ -640,7 +640,7 @@ TEST(FunctionRows, EvalStartHasTheBitsOfEvalForEveryBoundAndTheListedFunctions) 
         for (double tau : {0.0, 1e-9, 0.013, 0.5, 3.25}) {
             std::vector<std::uint32_t> which;
             for (std::uint32_t f = 0; f < ns; ++f)
-                if (rng() % 6 == 0) which.push_back(f);
+                if (rng() % (tau == 3.25 ? 2 : 8) == 0) which.push_back(f);  // the last: more than a quarter
             std::vector<double> x2(x.size(), nan), v2(n, nan), a2(n, nan), g2(ns, nan), dg2(ns, nan), b2(ns, nan),
                 sc2(ns, nan);
             const SegmentEval start{x2.data(), v2.data(), a2.data(), g2.data(), dg2.data(), b2.data(), sc2.data()};
@@ -654,9 +654,12 @@ TEST(FunctionRows, EvalStartHasTheBitsOfEvalForEveryBoundAndTheListedFunctions) 
                 EXPECT_EQ(std::memcmp(&dg[f], &dg2[f], sizeof(double)), 0) << spec << " tau " << tau << " dg " << f;
                 EXPECT_EQ(std::memcmp(&sc[f], &sc2[f], sizeof(double)), 0) << spec << " tau " << tau << " scale " << f;
             }
+            // With at most a quarter listed, the others' g, g' and scale are not computed.
+            const bool start_path = 4 * which.size() <= ns;
             for (std::size_t f = 0; f < ns; ++f) {
                 EXPECT_EQ(std::memcmp(&b[f], &b2[f], sizeof(double)), 0) << spec << " tau " << tau << " bound " << f;
-                if (!listed[f]) EXPECT_TRUE(std::isnan(g2[f]) && std::isnan(dg2[f]) && std::isnan(sc2[f])) << f;
+                if (start_path && !listed[f])
+                    EXPECT_TRUE(std::isnan(g2[f]) && std::isnan(dg2[f]) && std::isnan(sc2[f])) << f;
             }
         }
     }

@@ -1428,7 +1428,7 @@ void InterpretedSolver::eval_switches(double tau, const SegmentEval& out) const 
 
 void InterpretedSolver::eval_start(double tau, const std::uint32_t* which, std::size_t count,
                                    const SegmentEval& out) const {
-    if (start_steps_.empty()) return eval_switches(tau, out);
+    if (start_steps_.empty() || 4 * count > switches_.size()) return eval_switches(tau, out);
     double* r = eval_regs_.data();
     r[Program::kEvalTau] = tau;
     execute(constants_.data(), *common_, r);
