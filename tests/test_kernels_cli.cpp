@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "cli_runner.h"
+#include "friction_bank.h"
 #include "random_model.h"
 
 namespace hsnc {
@@ -103,15 +104,8 @@ TEST(ProgramRun, CliEditedModelJitGenericAutoWriteIdenticalCsv) {
 // the compiled kernel (jit, and tiered from the cache) with the plan the
 // engine asks for. The same bytes.
 TEST(ProgramRun, CliSegmentsCarriedOverSwitchesJitGenericTieredWriteIdenticalCsv) {
-    std::string t = "name = \"friction-bank-16\"\n[damping]\nbeta = 0.002\n";
-    for (int i = 1; i <= 16; ++i) t += "[[mass]]\nname = \"m" + std::to_string(i) + "\"\nm = 1\nmu_k = 0.05\nmu_s = 0.06\n";
-    for (int i = 1; i <= 16; ++i)
-        t += "[[spring]]\nbetween = [\"ground\", \"m" + std::to_string(i) + "\"]\nk = " + std::to_string(100 + 10 * i) + "\n";
-    for (int i = 1; i < 16; ++i)
-        t += "[[spring]]\nbetween = [\"m" + std::to_string(i) + "\", \"m" + std::to_string(i + 1) + "\"]\nk = 20\n";
-    t += "[[forcing]]\nomega = 7.0\namplitude = { m1 = 5.0 }\n[initial]\nx = { m1 = 0.5";
-    for (int i = 2; i <= 16; ++i) t += ", m" + std::to_string(i) + " = 0.5";
-    const std::string path = write_temp("friction-bank-16.toml", t + " }\n");
+    const std::string path = write_temp(
+        "friction-bank-16.toml", testing::friction_bank("friction-bank-16", 16, [](int i) { return i == 1 ? 5.0 : 0.0; }, 0.5));
     const Output generic = simulate(path, "--t-end 3 --dt 0.01", "generic");
     ASSERT_EQ(generic.exit_code, 0) << generic.err;
     EXPECT_NE(generic.err.find("204 segments (203 carried over a switch)"), std::string::npos) << generic.err;

@@ -582,43 +582,63 @@ Model friction_chain_model(int n) {
     return parse_model(t, "friction-chain.toml");
 }
 
-TEST(FunctionRows, EvalSomeHasTheBitsOfEvalForTheListedFunctionsAndLeavesTheOthers) {
-    const Model m = friction_chain_model(20);
-    std::mt19937 rng(11);
+/// eval's outputs for a solver of n masses (nx state entries) and ns
+/// functions, every one NaN to start with.
+struct Outs {
+    std::vector<double> x, v, a, g, dg, b, sc;
+    Outs(std::size_t nx, std::size_t n, std::size_t ns)
+        : x(nx, kNaN), v(n, kNaN), a(n, kNaN), g(ns, kNaN), dg(ns, kNaN), b(ns, kNaN), sc(ns, kNaN) {}
+    SegmentEval view() { return {x.data(), v.data(), a.data(), g.data(), dg.data(), b.data(), sc.data()}; }
+    static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// Each configuration of the 20-mass friction chain the function-row tests
+/// take, its interpreter set up at a start state: body(spec, solver).
+template <class Body>
+void for_each_rows_case(const Model& m, Body&& body) {
     for (const char* spec : {"", "closed=contact1", "closed=contact2,contact3 stuck=m3,m4,m11,m17", "stuck=m1,m20"}) {
         const Configuration cfg = Configuration::parse(m, spec);
         InterpretedSolver s(lower(derive(m, cfg)));
+        const testing::Start st = testing::start_of(m, cfg, 5);
+        s.setup(st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data());
+        body(spec, s);
+    }
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+TEST(FunctionRows, EvalSomeHasTheBitsOfEvalForTheListedFunctionsAndLeavesTheOthers) {
+    const Model m = friction_chain_model(20);
+    std::mt19937 rng(11);
+    for_each_rows_case(m, [&](const char* spec, InterpretedSolver& s) {
         const std::size_t n = m.dof(), ns = s.switches().size();
         ASSERT_GE(ns, kScheduleFrom) << spec;
         ASSERT_TRUE(s.has_function_rows()) << spec;
-        const testing::Start st = testing::start_of(m, cfg, 5);
-        const double nan = std::numeric_limits<double>::quiet_NaN();
-        std::vector<double> x(m.state_size()), v(n), a(n), g(ns), dg(ns), b(ns), sc(ns);
-        const SegmentEval full{x.data(), v.data(), a.data(), g.data(), dg.data(), b.data(), sc.data()};
-        s.setup(st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data());
+        Outs full(m.state_size(), n, ns);
         for (double tau : {0.0, 1e-9, 0.013, 0.5, 3.25}) {
             // A few functions, listed in any order (the engine lists them ascending).
             std::vector<std::uint32_t> which;
             for (std::uint32_t f = 0; f < ns; ++f)
                 if (rng() % 5 == 0) which.push_back(f);
             std::shuffle(which.begin(), which.end(), rng);
-            std::vector<double> x2(x.size(), nan), v2(n, nan), a2(n, nan), g2(ns, nan), dg2(ns, nan), b2(ns, nan),
-                sc2(ns, nan);
-            const SegmentEval some{x2.data(), v2.data(), a2.data(), g2.data(), dg2.data(), b2.data(), sc2.data()};
-            s.eval_some(tau, which.data(), which.size(), some);  // first: eval cannot leave it its registers
-            s.eval(tau, full);
+            Outs some(m.state_size(), n, ns);
+            s.eval_some(tau, which.data(), which.size(), some.view());  // first: eval cannot leave it its registers
+            s.eval(tau, full.view());
             std::vector<char> listed(ns, 0);
             for (std::uint32_t f : which) {
                 listed[f] = 1;
-                EXPECT_EQ(std::memcmp(&g[f], &g2[f], sizeof(double)), 0) << spec << " tau " << tau << " g " << f;
-                EXPECT_EQ(std::memcmp(&dg[f], &dg2[f], sizeof(double)), 0) << spec << " tau " << tau << " dg " << f;
-                EXPECT_EQ(std::memcmp(&b[f], &b2[f], sizeof(double)), 0) << spec << " tau " << tau << " bound " << f;
-                EXPECT_EQ(std::memcmp(&sc[f], &sc2[f], sizeof(double)), 0) << spec << " tau " << tau << " scale " << f;
+                EXPECT_TRUE(same_bits(full.g[f], some.g[f])) << spec << " tau " << tau << " g " << f;
+                EXPECT_TRUE(same_bits(full.dg[f], some.dg[f])) << spec << " tau " << tau << " dg " << f;
+                EXPECT_TRUE(same_bits(full.b[f], some.b[f])) << spec << " tau " << tau << " bound " << f;
+                EXPECT_TRUE(same_bits(full.sc[f], some.sc[f])) << spec << " tau " << tau << " scale " << f;
             }
             for (std::size_t f = 0; f < ns; ++f)
-                if (!listed[f]) EXPECT_TRUE(std::isnan(g2[f]) && std::isnan(dg2[f]) && std::isnan(b2[f]) && std::isnan(sc2[f])) << f;
+                if (!listed[f])
+                    EXPECT_TRUE(std::isnan(some.g[f]) && std::isnan(some.dg[f]) && std::isnan(some.b[f]) &&
+                                std::isnan(some.sc[f]))
+                        << f;
         }
-    }
+    });
 }
 
 // eval_start (a segment carried over a switch starts with it, engine.cpp):
@@ -627,42 +647,34 @@ TEST(FunctionRows, EvalSomeHasTheBitsOfEvalForTheListedFunctionsAndLeavesTheOthe
 TEST(FunctionRows, EvalStartHasTheBitsOfEvalForEveryBoundAndTheListedFunctions) {
     const Model m = friction_chain_model(20);
     std::mt19937 rng(12);
-    for (const char* spec : {"", "closed=contact1", "closed=contact2,contact3 stuck=m3,m4,m11,m17", "stuck=m1,m20"}) {
-        const Configuration cfg = Configuration::parse(m, spec);
-        InterpretedSolver s(lower(derive(m, cfg)));
+    for_each_rows_case(m, [&](const char* spec, InterpretedSolver& s) {
         const std::size_t n = m.dof(), ns = s.switches().size();
         ASSERT_TRUE(s.has_start_steps()) << spec;
-        const testing::Start st = testing::start_of(m, cfg, 5);
-        const double nan = std::numeric_limits<double>::quiet_NaN();
-        std::vector<double> x(m.state_size()), v(n), a(n), g(ns), dg(ns), b(ns), sc(ns);
-        const SegmentEval full{x.data(), v.data(), a.data(), g.data(), dg.data(), b.data(), sc.data()};
-        s.setup(st.t0, st.t0_lo, st.x0.data(), st.v0.data(), st.sgn.data());
+        Outs full(m.state_size(), n, ns);
         for (double tau : {0.0, 1e-9, 0.013, 0.5, 3.25}) {
             std::vector<std::uint32_t> which;
             for (std::uint32_t f = 0; f < ns; ++f)
                 if (rng() % (tau == 3.25 ? 2 : 8) == 0) which.push_back(f);  // the last: more than a quarter
-            std::vector<double> x2(x.size(), nan), v2(n, nan), a2(n, nan), g2(ns, nan), dg2(ns, nan), b2(ns, nan),
-                sc2(ns, nan);
-            const SegmentEval start{x2.data(), v2.data(), a2.data(), g2.data(), dg2.data(), b2.data(), sc2.data()};
-            s.eval(0.77 * tau + 0.1, full);  // the registers hold another instant's values
-            s.eval_start(tau, which.data(), which.size(), start);
-            s.eval(tau, full);
+            Outs start(m.state_size(), n, ns);
+            s.eval(0.77 * tau + 0.1, full.view());  // the registers hold another instant's values
+            s.eval_start(tau, which.data(), which.size(), start.view());
+            s.eval(tau, full.view());
             std::vector<char> listed(ns, 0);
             for (std::uint32_t f : which) {
                 listed[f] = 1;
-                EXPECT_EQ(std::memcmp(&g[f], &g2[f], sizeof(double)), 0) << spec << " tau " << tau << " g " << f;
-                EXPECT_EQ(std::memcmp(&dg[f], &dg2[f], sizeof(double)), 0) << spec << " tau " << tau << " dg " << f;
-                EXPECT_EQ(std::memcmp(&sc[f], &sc2[f], sizeof(double)), 0) << spec << " tau " << tau << " scale " << f;
+                EXPECT_TRUE(same_bits(full.g[f], start.g[f])) << spec << " tau " << tau << " g " << f;
+                EXPECT_TRUE(same_bits(full.dg[f], start.dg[f])) << spec << " tau " << tau << " dg " << f;
+                EXPECT_TRUE(same_bits(full.sc[f], start.sc[f])) << spec << " tau " << tau << " scale " << f;
             }
             // With at most a quarter listed, the others' g, g' and scale are not computed.
             const bool start_path = 4 * which.size() <= ns;
             for (std::size_t f = 0; f < ns; ++f) {
-                EXPECT_EQ(std::memcmp(&b[f], &b2[f], sizeof(double)), 0) << spec << " tau " << tau << " bound " << f;
+                EXPECT_TRUE(same_bits(full.b[f], start.b[f])) << spec << " tau " << tau << " bound " << f;
                 if (start_path && !listed[f])
-                    EXPECT_TRUE(std::isnan(g2[f]) && std::isnan(dg2[f]) && std::isnan(sc2[f])) << f;
+                    EXPECT_TRUE(std::isnan(start.g[f]) && std::isnan(start.dg[f]) && std::isnan(start.sc[f])) << f;
             }
         }
-    }
+    });
 }
 
 TEST(FunctionRows, ARunSearchingByFunctionWritesTheBytesOfAFullSearch) {

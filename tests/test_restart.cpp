@@ -19,6 +19,7 @@
 #include "derivation.h"
 #include "engine_runner.h"
 #include "forwarding_solver.h"
+#include "friction_bank.h"
 #include "generic_solver.h"
 #include "interpreted_solver.h"
 #include "lowering.h"
@@ -196,15 +197,8 @@ TEST(RestartEngine, SixteenCoulombOscillatorsReverseOnTheirClosedForms) {
 // within 1e-13 s of each other to the end (measured: 5.7e-14 s at t = 280 s,
 // one ulp of t), so carrying segments over does not walk the motion away.
 TEST(RestartEngine, TenThousandCarriedSegmentsKeepToTheEigenSolversEvents) {
-    std::string t = "name = \"forced-bank-16\"\n[damping]\nbeta = 0.002\n";
-    for (int i = 1; i <= 16; ++i) t += "[[mass]]\nname = \"m" + std::to_string(i) + "\"\nm = 1\nmu_k = 0.05\nmu_s = 0.06\n";
-    for (int i = 1; i <= 16; ++i)
-        t += "[[spring]]\nbetween = [\"ground\", \"m" + std::to_string(i) + "\"]\nk = " + std::to_string(100 + 10 * i) + "\n";
-    for (int i = 1; i < 16; ++i)
-        t += "[[spring]]\nbetween = [\"m" + std::to_string(i) + "\", \"m" + std::to_string(i + 1) + "\"]\nk = 20\n";
-    t += "[[forcing]]\nomega = 7.0\namplitude = { m1 = 11.0";
-    for (int i = 2; i <= 16; ++i) t += ", m" + std::to_string(i) + " = " + std::to_string(10 + i) + ".0";
-    const Model m = parse_model(t + " }\n", "forced-bank-16.toml");
+    const Model m = parse_model(
+        testing::friction_bank("forced-bank-16", 16, [](int i) { return 10.0 + i; }, 0.0), "forced-bank-16.toml");
     InterpretedSolverProvider programs(program_source(m));
     GenericSolverProvider eigen(m);
     const testing::Outcome carried = testing::run_engine(m, programs, 300.0, 0.0, kScheduleFrom, restart_plan_source(m));
