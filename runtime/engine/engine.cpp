@@ -322,15 +322,19 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
 
             // The search reads only the switch outputs; the state (x, v, a) is
             // read at the segment's last instant, evaluated in full.
+            // Every function's values in buf are now those at tau.
+            auto all_at = [&](double tau) {
+                prev_tau = tau_now, tau_now = tau;
+                if (scheduled)
+                    for (std::size_t f = 0; f < nsw; ++f) before[f] = at[f], at[f] = tau;
+                ++sum.evaluations;
+            };
             auto eval_all = [&](double tau, bool full) {
                 if (full)
                     S.eval(tau, out);
                 else
                     S.eval_switches(tau, out);
-                prev_tau = tau_now, tau_now = tau;
-                if (scheduled)
-                    for (std::size_t f = 0; f < nsw; ++f) before[f] = at[f], at[f] = tau;
-                ++sum.evaluations;
+                all_at(tau);
             };
             auto eval_due = [&](double tau) {
                 S.eval_some(tau, due.data(), due.size(), probe_view);
@@ -368,10 +372,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 for (std::size_t f = 0; f < nsw; ++f) buf.bound[f] = probe.bound[f];
                 for (std::uint32_t f : start_due)
                     buf.g[f] = probe.g[f], buf.dg[f] = probe.dg[f], buf.scale[f] = probe.scale[f];
-                prev_tau = tau_now, tau_now = 0.0;
-                if (scheduled)
-                    for (std::size_t f = 0; f < nsw; ++f) before[f] = at[f], at[f] = 0.0;
-                ++sum.evaluations;
+                all_at(0.0);
             } else {
                 eval_all(0.0, false);
             }

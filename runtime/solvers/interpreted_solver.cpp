@@ -584,7 +584,6 @@ ALWAYS_INLINE void single_step(const Step& s, const double* K, double* r) {
     }
 }
 
-// One switch for every step, everything inlined: no call and no prologue per step.
 // The consecutive mode steps of the factored regimes from `first` (up to
 // kFactorBatch), in a body whose modes take vector factors: their factors at
 // once, then each step. Returns the step after them.
@@ -1433,16 +1432,10 @@ void InterpretedSolver::eval_start(double tau, const std::uint32_t* which, std::
     r[Program::kEvalTau] = tau;
     execute(constants_.data(), *common_, r);
     for (std::uint32_t k : start_steps_) run_step(eval_->steps[k], constants_.data(), r);
-    const std::size_t n = static_cast<std::size_t>(n_dof_), nx = n + static_cast<std::size_t>(n_slider_),
-                      ns = switches_.size();
-    const double* o = r + Program::kEvalCoef + n_coef_ + nx + 2 * n + 2 * ns;
-    for (std::size_t f = 0; f < ns; ++f) out.bound[f] = o[f];
-    for (std::size_t k = 0; k < count; ++k) {
-        const std::uint32_t f = which[k];
-        for (std::uint32_t i = part_at_[f]; i < part_at_[f + 1]; ++i)
-            run_row(eval_->steps[part_rows_[i].step], part_rows_[i].row, r);
-        switch_outputs(f, out);
-    }
+    const std::size_t ns = switches_.size();
+    const double* bounds = switch_registers() + 2 * ns;
+    for (std::size_t f = 0; f < ns; ++f) out.bound[f] = bounds[f];
+    function_rows(which, count, out);
 }
 
 void InterpretedSolver::eval_some(double tau, const std::uint32_t* which, std::size_t count,
@@ -1451,6 +1444,11 @@ void InterpretedSolver::eval_some(double tau, const std::uint32_t* which, std::s
     double* r = eval_regs_.data();
     r[Program::kEvalTau] = tau;
     execute(constants_.data(), *common_, r);
+    function_rows(which, count, out);
+}
+
+void InterpretedSolver::function_rows(const std::uint32_t* which, std::size_t count, const SegmentEval& out) const {
+    double* r = eval_regs_.data();
     for (std::size_t k = 0; k < count; ++k) {
         const std::uint32_t f = which[k];
         for (std::uint32_t i = part_at_[f]; i < part_at_[f + 1]; ++i)
@@ -1470,11 +1468,15 @@ void InterpretedSolver::eval(double tau, const SegmentEval& out) const {
     for (std::size_t f = 0; f < switches_.size(); ++f) switch_outputs(f, out);
 }
 
-void InterpretedSolver::switch_outputs(std::size_t f, const SegmentEval& out) const {
+const double* InterpretedSolver::switch_registers() const {
     // eval's outputs: x, v, a, then g, dg, bound and scale of every function.
-    const std::size_t n = static_cast<std::size_t>(n_dof_), nx = n + static_cast<std::size_t>(n_slider_),
-                      ns = switches_.size();
-    const double* o = eval_regs_.data() + Program::kEvalCoef + n_coef_ + nx + 2 * n;
+    const std::size_t n = static_cast<std::size_t>(n_dof_), nx = n + static_cast<std::size_t>(n_slider_);
+    return eval_regs_.data() + Program::kEvalCoef + n_coef_ + nx + 2 * n;
+}
+
+void InterpretedSolver::switch_outputs(std::size_t f, const SegmentEval& out) const {
+    const std::size_t ns = switches_.size();
+    const double* o = switch_registers();
     out.g[f] = o[f], out.dg[f] = o[ns + f], out.bound[f] = o[2 * ns + f], out.scale[f] = o[3 * ns + f];
 }
 

@@ -93,6 +93,9 @@ public:
 
 private:
     void switch_outputs(std::size_t f, const SegmentEval& out) const;  // function f's four outputs, from eval's registers
+    const double* switch_registers() const;  // eval's g of every function, then dg, bound and scale
+    // The listed functions' rows of eval_ (after common_ has run) and their outputs.
+    void function_rows(const std::uint32_t* which, std::size_t count, const SegmentEval& out) const;
 
     Configuration cfg_;
     std::vector<SwitchFunction> switches_;
