@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "kernel_abi.h"  // hsnc_phase, hsnc_phi2: the very helpers the printed kernels call
+#include "mode_factors.h"
 
 namespace hsnc {
 
@@ -437,18 +438,6 @@ ALWAYS_INLINE void factor_arguments(const Step& s, const double* K, const double
     const auto regime = static_cast<ProgramRegime>(in.regime);
     xe = regime == ProgramRegime::undamped ? 0.0 : -k[kModeSigma] * tau;
     xt = regime == ProgramRegime::critical ? 0.0 : k[kModeOmegaD] * tau;
-}
-
-// The factors of n modes (n a multiple of 4), four lanes at a time, in AVX2
-// registers where the processor has them (the same bits: HSNC_ROWS_CLONES
-// below). The calls are independent, so they overlap: one alone is a long
-// chain of dependent operations. exp only when some mode takes it.
-__attribute__((target_clones("avx2", "default"))) void mode_factors(const double* xe, const double* xt, double* e,
-                                                                     double* sn, double* cs, std::size_t n,
-                                                                     bool exp) {
-    for (std::size_t i = 0; i < n; i += 4) hsnc_sincos4(xt + i, sn + i, cs + i);
-    if (exp)
-        for (std::size_t i = 0; i < n; i += 4) hsnc_exp4(xe + i, e + i);
 }
 
 // One mode's homogeneous response at tau (ProgramOp::mode), its regime fixed.
@@ -1512,6 +1501,16 @@ std::string InterpretedSolverProvider::describe() const {
         text += "; " + std::to_string(cache_.size()) + " kept within " + std::to_string(max_bytes_ >> 20) + " MB, " +
                 std::to_string(built_ - seen_.size()) + " rebuilt";
     return text + ")";
+}
+
+// The calls are independent, so they overlap: one alone is a long chain of
+// dependent operations.
+__attribute__((target_clones("avx2", "default"))) void mode_factors(const double* xe, const double* xt, double* e,
+                                                                     double* sn, double* cs, std::size_t n,
+                                                                     bool exp) {
+    for (std::size_t i = 0; i < n; i += 4) hsnc_sincos4(xt + i, sn + i, cs + i);
+    if (exp)
+        for (std::size_t i = 0; i < n; i += 4) hsnc_exp4(xe + i, e + i);
 }
 
 }  // namespace hsnc

@@ -3,19 +3,12 @@
 #include <cmath>
 #include <vector>
 
-#include "kernel_abi.h"  // hsnc_phase, hsnc_exp4, hsnc_sincos4
+#include "kernel_abi.h"  // hsnc_phase
+#include "mode_factors.h"
 
 namespace hsnc {
 
 namespace {
-
-// e^{x_e}, sin and cos(x_t) of n arguments (n a multiple of 4), four lanes at
-// a time, in AVX2 registers where the processor has them: a lane's bits are
-// its own argument's, whatever the grouping or the clone (kernel_abi.h).
-__attribute__((target_clones("avx2", "default"))) void factors(double* e, double* sn, double* cs, std::size_t n) {
-    for (std::size_t i = 0; i < n; i += 4) hsnc_sincos4(sn + i, sn + i, cs + i);
-    for (std::size_t i = 0; i < n; i += 4) hsnc_exp4(e + i, e + i);
-}
 
 // dx[r] = sum_j vt[j * nf + r] * d[j], mode by mode over each mode's span
 // (each dx[r] summed in the order of the modes, whatever the clone): the
@@ -60,7 +53,7 @@ void restart_coefficients(const RestartPlan& plan, double* coef, double tau, dou
         e[j] = -plan.modes[j].sigma * tau;
         sn[j] = plan.modes[j].omega_d * tau;
     }
-    factors(e, sn, cs, padded);
+    mode_factors(e, sn, e, sn, cs, padded, true);
     for (std::size_t j = 0; j < nm; ++j) {
         const RestartPlan::Mode& m = plan.modes[j];
         // The homogeneous response at tau, as the mode instruction forms it.
