@@ -701,76 +701,76 @@ void run_row(const Step& s, std::uint32_t row, double* r) {
 
 // ---- scheduling: registers each instruction reads and writes ----
 
-void accesses(const Instr& in, const std::vector<ProgramTerm>& terms, std::vector<std::uint32_t>& reads,
-              std::vector<std::uint32_t>& writes) {
-    reads.clear();
-    writes.clear();
-    auto block = [](std::vector<std::uint32_t>& v, std::uint32_t base, std::initializer_list<std::uint32_t> regs) {
-        for (std::uint32_t k : regs) v.push_back(base + k);
+// Calls read(register) for every register an instruction reads and
+// write(register) for every one it writes, in a fixed order.
+template <class Read, class Write>
+ALWAYS_INLINE void visit_accesses(const Instr& in, const std::vector<ProgramTerm>& terms, Read&& read, Write&& write) {
+    auto block = [](auto&& to, std::uint32_t base, std::initializer_list<std::uint32_t> regs) {
+        for (std::uint32_t k : regs) to(base + k);
     };
     const std::initializer_list<std::uint32_t> sums = {kModeQ, kModeDQ, kModeDDQ, kModeMQ, kModeMDQ};
     switch (in.op) {
         case ProgramOp::lincomb:
         case ProgramOp::lincomb_ld:
-            for (std::uint32_t k = 0; k < in.count; ++k) reads.push_back(terms[in.first + k].reg);
-            if (in.op == ProgramOp::lincomb && in.a != kNoRegister) reads.push_back(in.a);
-            writes.push_back(in.dst);
+            for (std::uint32_t k = 0; k < in.count; ++k) read(terms[in.first + k].reg);
+            if (in.op == ProgramOp::lincomb && in.a != kNoRegister) read(in.a);
+            write(in.dst);
             break;
         case ProgramOp::copy:
         case ProgramOp::abs:
         case ProgramOp::sin:
         case ProgramOp::cos:
-            reads.push_back(in.a);
-            writes.push_back(in.dst);
+            read(in.a);
+            write(in.dst);
             break;
         case ProgramOp::phase:
-            reads.push_back(in.a);
-            reads.push_back(in.b);
-            writes.push_back(in.dst);
+            read(in.a);
+            read(in.b);
+            write(in.dst);
             break;
         case ProgramOp::harmonic:
-            reads.push_back(in.a);
-            reads.push_back(in.b);
-            block(writes, in.dst, {0, 1, 2});
+            read(in.a);
+            read(in.b);
+            block(write, in.dst, {0, 1, 2});
             break;
         case ProgramOp::mode:
-            for (std::uint32_t k = 0; k < 6; ++k) reads.push_back(in.a + k);
-            reads.push_back(in.b);
-            for (std::uint32_t k = 0; k < kModeRegisters; ++k) writes.push_back(in.dst + k);
+            for (std::uint32_t k = 0; k < 6; ++k) read(in.a + k);
+            read(in.b);
+            for (std::uint32_t k = 0; k < kModeRegisters; ++k) write(in.dst + k);
             break;
         case ProgramOp::rigid_particular:
-            reads.push_back(in.a);
-            reads.push_back(in.b);
-            block(reads, in.c, sums);
-            block(writes, in.c, sums);
+            read(in.a);
+            read(in.b);
+            block(read, in.c, sums);
+            block(write, in.c, sums);
             break;
         case ProgramOp::rigid_damped_particular:
-            reads.push_back(in.a);
-            reads.push_back(in.b);
-            block(reads, in.c, sums);
-            block(reads, in.c, {kModeES, kModeAux});
-            writes.push_back(in.dst);
-            block(writes, in.c, sums);
+            read(in.a);
+            read(in.b);
+            block(read, in.c, sums);
+            block(read, in.c, {kModeES, kModeAux});
+            write(in.dst);
+            block(write, in.c, sums);
             break;
         case ProgramOp::resonant:
-            reads.push_back(in.a);
-            reads.push_back(in.b);
-            reads.push_back(in.d);
-            block(reads, in.c, sums);
-            block(reads, in.c, {kModeEC, kModeES});
-            block(writes, in.dst, {0, 1, 2, 3, 4, 5, 6});
-            block(writes, in.c, sums);
+            read(in.a);
+            read(in.b);
+            read(in.d);
+            block(read, in.c, sums);
+            block(read, in.c, {kModeEC, kModeES});
+            block(write, in.dst, {0, 1, 2, 3, 4, 5, 6});
+            block(write, in.c, sums);
             break;
         case ProgramOp::mass_state: {
-            reads.push_back(in.a);
-            for (std::uint32_t k = 0; k < in.count; ++k) block(reads, terms[in.first + k].reg, sums);
+            read(in.a);
+            for (std::uint32_t k = 0; k < in.count; ++k) block(read, terms[in.first + k].reg, sums);
             const std::uint32_t tails = in.tail[0] + in.tail[1] + in.tail[2] + in.tail[3] + in.tail[4];
-            for (std::uint32_t k = 0; k < tails; ++k) reads.push_back(terms[in.first + in.count + k].reg);
-            writes.push_back(in.dst);
-            writes.push_back(in.b);
-            writes.push_back(in.c);
-            writes.push_back(in.d);
-            writes.push_back(in.d + 1);
+            for (std::uint32_t k = 0; k < tails; ++k) read(terms[in.first + in.count + k].reg);
+            write(in.dst);
+            write(in.b);
+            write(in.c);
+            write(in.d);
+            write(in.d + 1);
             break;
         }
     }
@@ -949,10 +949,9 @@ void forward_copies(std::vector<Instr>& code, std::vector<ProgramTerm>& terms, s
                     std::uint32_t pinned_begin, std::uint32_t pinned_end, std::vector<std::uint32_t>& exported) {
     std::vector<int> writes(registers, 0), writer(registers, -1);
     std::vector<char> block(registers, 0);
-    std::vector<std::uint32_t> reads, written;
     for (std::size_t i = 0; i < code.size(); ++i) {
-        accesses(code[i], terms, reads, written);
-        for (std::uint32_t w : written) ++writes[w], writer[w] = static_cast<int>(i);
+        visit_accesses(
+            code[i], terms, [](std::uint32_t) {}, [&](std::uint32_t w) { ++writes[w], writer[w] = static_cast<int>(i); });
         mark_blocks(code[i], terms, block);
     }
     std::vector<std::uint32_t> to(registers);
@@ -1068,17 +1067,27 @@ std::vector<Instr> prepare(const ProgramBody& body, std::vector<ProgramTerm>& te
     return code;
 }
 
-/// Every instruction's reads and writes (accesses()), row i of each table
-/// from at[i] to at[i + 1]: taken once for the passes over one program.
+struct AccessTable;
+std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code, const AccessTable& a,
+                                                  std::vector<ProgramTerm>& terms, std::size_t registers,
+                                                  const std::vector<char>* only, std::vector<RowRef>* where);
+
+/// Every instruction's reads and writes (visit_accesses()), row i of each
+/// table from at[i] to at[i + 1]: taken once for the passes over one program.
 struct AccessTable {
     std::vector<std::uint32_t> read_at, write_at, reads, writes;
-    AccessTable(const std::vector<Instr>& code, const std::vector<ProgramTerm>& terms)
-        : read_at(1, 0), write_at(1, 0) {
-        std::vector<std::uint32_t> r, w;
+    AccessTable(const std::vector<Instr>& code, const std::vector<ProgramTerm>& terms) {
+        read_at.reserve(code.size() + 1);
+        write_at.reserve(code.size() + 1);
+        read_at.push_back(0);
+        write_at.push_back(0);
+        std::size_t nr = 0;
+        for (const Instr& in : code) nr += in.count;  // most reads are terms (a mass state's are 5 per mode)
+        reads.reserve(5 * nr + 2 * code.size());
+        writes.reserve(2 * code.size());
         for (const Instr& in : code) {
-            accesses(in, terms, r, w);
-            reads.insert(reads.end(), r.begin(), r.end());
-            writes.insert(writes.end(), w.begin(), w.end());
+            visit_accesses(
+                in, terms, [this](std::uint32_t r) { reads.push_back(r); }, [this](std::uint32_t w) { writes.push_back(w); });
             read_at.push_back(static_cast<std::uint32_t>(reads.size()));
             write_at.push_back(static_cast<std::uint32_t>(writes.size()));
         }
@@ -1099,27 +1108,24 @@ std::vector<char> kept_for(const AccessTable& a, std::vector<char> keep, std::ve
     return keep;
 }
 
-/// The instructions of `code` that registers [live_begin, live_end) depend
-/// on (kept_for), in program order.
-std::vector<Instr> needed_for(const std::vector<Instr>& code, const AccessTable& a, std::size_t registers,
-                              std::uint32_t live_begin, std::uint32_t live_end) {
+/// The instructions of a program of `n` instructions that registers
+/// [live_begin, live_end) depend on (kept_for), marked.
+std::vector<char> needed_for(std::size_t n, const AccessTable& a, std::size_t registers, std::uint32_t live_begin,
+                             std::uint32_t live_end) {
     std::vector<char> needed(registers, 0);
     for (std::uint32_t r = live_begin; r < live_end; ++r) needed[r] = 1;
-    const std::vector<char> keep = kept_for(a, std::vector<char>(code.size(), 0), std::move(needed));
-    std::vector<Instr> kept;
-    kept.reserve(static_cast<std::size_t>(std::count(keep.begin(), keep.end(), 1)));
-    for (std::size_t i = 0; i < code.size(); ++i)
-        if (keep[i]) kept.push_back(code[i]);
-    return kept;
+    return kept_for(a, std::vector<char>(n, 0), std::move(needed));
 }
 
 /// The time `code` takes, estimated in multiply-adds of a batched mass state
 /// (about 0.2 ns each, measured at 128 masses): a mass's state 5 per mode, a
 /// term of any other sum 2, any other instruction 100 (a mode block's libm
 /// calls, about 25 ns).
-double estimated_work(const std::vector<Instr>& code) {
+double estimated_work(const std::vector<Instr>& code, const std::vector<char>* only = nullptr) {
     double w = 0;
-    for (const Instr& in : code) {
+    for (std::size_t i = 0; i < code.size(); ++i) {
+        if (only && !(*only)[i]) continue;
+        const Instr& in = code[i];
         const double tails = in.tail[0] + in.tail[1] + in.tail[2] + in.tail[3] + in.tail[4];
         w += in.op == ProgramOp::mass_state                                   ? 5.0 * in.count + 2.0 * tails
              : in.op == ProgramOp::lincomb || in.op == ProgramOp::lincomb_ld ? 2.0 * (1.0 + in.count)
@@ -1134,34 +1140,41 @@ double estimated_work(const std::vector<Instr>& code) {
 /// instructions of one shape batched into a block, in order of first
 /// appearance; a sin and a cos of one register in one step. Every value is
 /// computed by the same operations from the same operands as in program order.
-std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code, std::vector<ProgramTerm>& terms,
-                                                  std::size_t registers, std::vector<RowRef>* where = nullptr) {
+/// `a` holds code's accesses; with `only`, the instructions it marks alone
+/// (`where` is by instruction of `code`).
+std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code, const AccessTable& a,
+                                                  std::vector<ProgramTerm>& terms, std::size_t registers,
+                                                  const std::vector<char>* only, std::vector<RowRef>* where) {
     const std::size_t n = code.size();
     if (where) where->assign(n, {kNoStep, 0});
-    std::vector<int> last_write(registers, -1), last_read(registers, -1), level(n, 0);
-    std::vector<std::uint32_t> reads, writes;
+    std::vector<int> last_write(registers, -1), last_read(registers, -1), level(n, -1);
     int levels = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        accesses(code[i], terms, reads, writes);
+        if (only && !(*only)[i]) continue;
+        const std::uint32_t *r0 = a.reads.data() + a.read_at[i], *r1 = a.reads.data() + a.read_at[i + 1];
+        const std::uint32_t *w0 = a.writes.data() + a.write_at[i], *w1 = a.writes.data() + a.write_at[i + 1];
         int l = 0;
-        for (std::uint32_t r : reads) l = std::max(l, last_write[r] + 1);
-        for (std::uint32_t w : writes) l = std::max({l, last_write[w] + 1, last_read[w] + 1});
-        for (std::uint32_t w : writes) last_write[w] = l;
-        for (std::uint32_t r : reads) last_read[r] = std::max(last_read[r], l);
+        for (const std::uint32_t* r = r0; r != r1; ++r) l = std::max(l, last_write[*r] + 1);
+        for (const std::uint32_t* w = w0; w != w1; ++w) l = std::max({l, last_write[*w] + 1, last_read[*w] + 1});
+        for (const std::uint32_t* w = w0; w != w1; ++w) last_write[*w] = l;
+        for (const std::uint32_t* r = r0; r != r1; ++r) last_read[*r] = std::max(last_read[*r], l);
         level[i] = l;
         levels = std::max(levels, l + 1);
     }
     // The instructions in order of level, in program order within one (a counting sort).
-    std::vector<std::uint32_t> start(static_cast<std::size_t>(levels) + 1, 0), order(n);
-    for (std::size_t i = 0; i < n; ++i) ++start[static_cast<std::size_t>(level[i]) + 1];
+    std::vector<std::uint32_t> start(static_cast<std::size_t>(levels) + 1, 0);
+    for (std::size_t i = 0; i < n; ++i)
+        if (level[i] >= 0) ++start[static_cast<std::size_t>(level[i]) + 1];
     for (std::size_t l = 0; l < static_cast<std::size_t>(levels); ++l) start[l + 1] += start[l];
+    std::vector<std::uint32_t> order(start.back());
     {
         std::vector<std::uint32_t> at(start.begin(), start.end() - 1);
-        for (std::size_t i = 0; i < n; ++i) order[at[static_cast<std::size_t>(level[i])]++] = static_cast<std::uint32_t>(i);
+        for (std::size_t i = 0; i < n; ++i)
+            if (level[i] >= 0) order[at[static_cast<std::size_t>(level[i])]++] = static_cast<std::uint32_t>(i);
     }
 
     std::vector<Block> blocks;
-    blocks.reserve(n);
+    blocks.reserve(order.size());
     // Per level (kept across levels, so that a small program does not allocate
     // per level): each member's group, each group's first instruction and
     // whether it runs alone, the groups' members in order (rows, from offset[g]).
@@ -1221,6 +1234,13 @@ std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code
         }
     }
     return freeze(blocks);
+}
+
+/// A body run whole, in one block per level and shape (setup's).
+std::unique_ptr<InterpretedSolver::Body> whole_body(const ProgramBody& body, std::vector<ProgramTerm>& terms,
+                                                    std::vector<std::uint32_t>& exported) {
+    const std::vector<Instr> code = prepare(body, terms, 0, 0, exported);
+    return schedule(code, AccessTable(code, terms), terms, body.registers(), nullptr, nullptr);
 }
 
 /// The rows of eval's body that function f's outputs need beyond the common
@@ -1305,7 +1325,7 @@ InterpretedSolver::InterpretedSolver(Program p)
       n_coef_(static_cast<std::size_t>(p.n_coef)),
       constants_(std::move(p.constants)),
       setup_coef_(p.setup_coef),
-      setup_(schedule(prepare(p.setup, p.terms, 0, 0, setup_coef_), p.terms, p.setup.registers())),
+      setup_(whole_body(p.setup, p.terms, setup_coef_)),
       setup_regs_(p.setup.registers(), 0.0),
       eval_regs_(p.eval.registers(), 0.0) {
     eval_regs_[0] = 1.0;
@@ -1318,21 +1338,21 @@ InterpretedSolver::InterpretedSolver(Program p)
     std::vector<RowRef> where;
     // eval's bodies, their modes' factors taken as the printer takes them (emitter.cpp).
     const bool vector = vector_factors(p.eval);
-    auto eval_body = [&](const std::vector<Instr>& instrs, std::vector<RowRef>* rows = nullptr) {
-        std::unique_ptr<Body> body = schedule(instrs, p.terms, p.eval.registers(), rows);
+    const AccessTable table(code, p.terms);
+    auto eval_body = [&](const std::vector<char>* only, std::vector<RowRef>* rows = nullptr) {
+        std::unique_ptr<Body> body = schedule(code, table, p.terms, p.eval.registers(), only, rows);
         body->vector_factors = vector;
         return body;
     };
-    eval_ = eval_body(code, by_function ? &where : nullptr);
+    eval_ = eval_body(nullptr, by_function ? &where : nullptr);
     // The search's program: what g, dg, bound and scale need. Worth a body of
     // its own only when it leaves out a good part (the state of masses no
     // switch function reads).
-    const AccessTable table(code, p.terms);
-    const std::vector<Instr> search =
-        needed_for(code, table, p.eval.registers(), switch_outputs, outputs + p.eval_output_count());
-    const double share = estimated_work(search) / std::max(1.0, estimated_work(code));
+    const std::vector<char> search =
+        needed_for(code.size(), table, p.eval.registers(), switch_outputs, outputs + p.eval_output_count());
+    const double share = estimated_work(code, &search) / std::max(1.0, estimated_work(code));
     if (share < 0.8) {
-        switches_body_ = eval_body(search);
+        switches_body_ = eval_body(&search);
         switch_share_ = share;
     }
     if (by_function) {
@@ -1340,10 +1360,7 @@ InterpretedSolver::InterpretedSolver(Program p)
         // eval_some() is eval_switches().
         FunctionRows parts;
         if (rows_by_function(code, table, p.eval.registers(), switch_outputs, switches_.size(), where, parts)) {
-            std::vector<Instr> common;
-            for (std::size_t i = 0; i < code.size(); ++i)
-                if (parts.common[i]) common.push_back(code[i]);
-            common_ = eval_body(common);
+            common_ = eval_body(&parts.common);
             part_rows_.assign(parts.rows.begin(), parts.rows.end());  // no spare capacity: the budget counts it
             part_at_.assign(parts.at.begin(), parts.at.end());
             // eval_start: the common part, then the steps of eval_ that hold
@@ -1358,16 +1375,15 @@ InterpretedSolver::InterpretedSolver(Program p)
             const std::uint32_t bounds_at = switch_outputs + 2 * static_cast<std::uint32_t>(ns);
             for (std::size_t f = 0; f < ns; ++f) needed[bounds_at + f] = 1;
             const std::vector<char> keep = kept_for(table, parts.common, std::move(needed));
-            std::vector<char> used(eval_->steps.size(), 0);
-            std::vector<Instr> beyond;
+            std::vector<char> used(eval_->steps.size(), 0), beyond(code.size(), 0);
             bool mapped = true;
             for (std::size_t i = 0; i < code.size(); ++i) {
                 if (!keep[i] || parts.common[i]) continue;
                 if (where[i].step == kNoStep) mapped = false;
                 else used[where[i].step] = 1;
-                beyond.push_back(code[i]);
+                beyond[i] = 1;
             }
-            if (mapped && estimated_work(beyond) < 0.4 * estimated_work(code))
+            if (mapped && estimated_work(code, &beyond) < 0.4 * estimated_work(code))
                 for (std::size_t k = 0; k < used.size(); ++k)
                     if (used[k]) start_steps_.push_back(static_cast<std::uint32_t>(k));
         }
