@@ -35,7 +35,8 @@ enum class StepKind : std::uint8_t {
 
 /// What the compiler makes of one instruction or of the instructions of one
 /// level and one shape (`rows` of them): coefficients laid out [term][row], so
-/// that a few rows advance together, each in its own order.
+/// that a few rows advance together, each in its own order. Its data is in
+/// the scheduler's two pools (BlockPools), in the order a Step reads it.
 struct Block {
     StepKind kind = StepKind::single;
     bool shared = false;    ///< lin, lin_ld: term k reads one register in every row (reg[k])
@@ -44,14 +45,19 @@ struct Block {
     std::uint32_t tail[5] = {};     ///< mass: terms of the tails of x, v, acc, mx, mv
     Instr single{};
     std::uint32_t cos_dst = kNoRegister;  ///< single sin: also cos of the same register, here
-    std::vector<double> c;          ///< coefficients [k][row] (mass: of the modal terms)
-    std::vector<double> ac;         ///< mass: |c| [k][row]
-    std::vector<double> tc;         ///< mass: tail coefficients [t][row], the five tails in turn
-    std::vector<std::uint32_t> reg;   ///< [k] (shared, mass: the mode blocks) or [k][row]
-    std::vector<std::uint32_t> treg;  ///< mass: tail registers [t]
-    std::vector<std::uint32_t> dst;   ///< [row] (mass: x)
-    std::vector<std::uint32_t> src;   ///< [row]: the base (lin), the operand (copy, abs), x_st (mass)
-    std::vector<std::uint32_t> v, acc, mag;  ///< mass: v, a, and mx (mv = mx + 1) per row
+    /// Where its data starts in the pools: c (then |c| and the tails' c for a
+    /// mass), reg (then the tails' registers), dst and src (a mass: src first).
+    std::size_t c_at = 0, reg_at = 0, dst_at = 0, src_at = 0;
+};
+
+/// The data of a body's blocks, appended block by block:
+///   lin, lin_ld: c [k][row]; reg [k] or [k][row], dst [row], src [row] (base)
+///   copy, abs:   dst [row], src [row]
+///   mass:        c, |c| [k][row], tail c [t][row]; reg [k], tail reg [t],
+///                src (x_st), dst (x), v, acc, mag (mx) [row]
+struct BlockPools {
+    std::vector<double> doubles;
+    std::vector<std::uint32_t> regs;
 };
 
 /// A step as run: its block's data in the body's two arrays (doubles, and
@@ -825,11 +831,16 @@ std::uint64_t shape_hash(const Instr& in, const std::vector<ProgramTerm>& terms)
     return h;
 }
 
-/// The block of the R instructions rows[0 .. R) (one level, one shape).
-Block make_block(const Instr* const* rows, std::uint32_t R, const std::vector<ProgramTerm>& terms) {
+/// The block of the R instructions rows[0 .. R) (one level, one shape), its
+/// data appended to `pools`.
+Block make_block(const Instr* const* rows, std::uint32_t R, const std::vector<ProgramTerm>& terms, BlockPools& pools) {
     const Instr& f = *rows[0];
+    std::vector<double>& dbl = pools.doubles;
+    std::vector<std::uint32_t>& reg = pools.regs;
     Block s;
     s.rows = R;
+    s.c_at = dbl.size();
+    s.reg_at = reg.size();
     switch (f.op) {
         case ProgramOp::lincomb:
         case ProgramOp::lincomb_ld: {
@@ -840,49 +851,64 @@ Block make_block(const Instr* const* rows, std::uint32_t R, const std::vector<Pr
             for (std::uint32_t k = 0; k < s.count && s.shared; ++k)
                 for (std::uint32_t row = 0; row < R; ++row)
                     s.shared = s.shared && terms[rows[row]->first + k].reg == terms[f.first + k].reg;
-            s.c.resize(static_cast<std::size_t>(s.count) * R);
-            s.reg.resize(s.shared ? s.count : static_cast<std::size_t>(s.count) * R);
+            const std::size_t nc = static_cast<std::size_t>(s.count) * R;
+            dbl.resize(s.c_at + nc);
+            reg.resize(s.reg_at + (s.shared ? s.count : nc));
+            s.dst_at = reg.size();
+            s.src_at = s.dst_at + R;
+            reg.resize(s.src_at + (s.has_base ? R : 0));
+            double* c = dbl.data() + s.c_at;
+            std::uint32_t* rg = reg.data() + s.reg_at;
             for (std::uint32_t row = 0; row < R; ++row) {
                 const Instr& in = *rows[row];
                 for (std::uint32_t k = 0; k < s.count; ++k) {
                     const ProgramTerm& t = terms[in.first + k];
-                    s.c[static_cast<std::size_t>(k) * R + row] = t.c;
-                    s.reg[s.shared ? k : static_cast<std::size_t>(k) * R + row] = t.reg;
+                    c[static_cast<std::size_t>(k) * R + row] = t.c;
+                    rg[s.shared ? k : static_cast<std::size_t>(k) * R + row] = t.reg;
                 }
-                s.dst.push_back(in.dst);
-                if (s.has_base) s.src.push_back(in.a);
+                reg[s.dst_at + row] = in.dst;
+                if (s.has_base) reg[s.src_at + row] = in.a;
             }
             break;
         }
         case ProgramOp::copy:
         case ProgramOp::abs:
             s.kind = f.op == ProgramOp::copy ? StepKind::copy : StepKind::abs;
-            for (std::uint32_t row = 0; row < R; ++row) s.dst.push_back(rows[row]->dst), s.src.push_back(rows[row]->a);
+            s.dst_at = reg.size();
+            s.src_at = s.dst_at + R;
+            for (std::uint32_t row = 0; row < R; ++row) reg.push_back(rows[row]->dst);
+            for (std::uint32_t row = 0; row < R; ++row) reg.push_back(rows[row]->a);
             break;
         case ProgramOp::mass_state: {
             s.kind = StepKind::mass;
             s.count = f.count;
             std::uint32_t tails = 0;
             for (int q = 0; q < 5; ++q) s.tail[q] = f.tail[q], tails += f.tail[q];
-            s.c.resize(static_cast<std::size_t>(s.count) * R);
-            s.ac.resize(s.c.size());
-            s.tc.resize(static_cast<std::size_t>(tails) * R);
-            for (std::uint32_t k = 0; k < s.count; ++k) s.reg.push_back(terms[f.first + k].reg);
-            for (std::uint32_t t = 0; t < tails; ++t) s.treg.push_back(terms[f.first + s.count + t].reg);
+            const std::size_t nc = static_cast<std::size_t>(s.count) * R;
+            dbl.resize(s.c_at + 2 * nc + static_cast<std::size_t>(tails) * R);
+            double* c = dbl.data() + s.c_at;
+            double* ac = c + nc;
+            double* tc = ac + nc;
+            for (std::uint32_t k = 0; k < s.count; ++k) reg.push_back(terms[f.first + k].reg);
+            for (std::uint32_t t = 0; t < tails; ++t) reg.push_back(terms[f.first + s.count + t].reg);
+            s.src_at = reg.size();
+            s.dst_at = s.src_at + R;
+            reg.resize(s.src_at + 5 * static_cast<std::size_t>(R));  // src, dst, v, acc, mag
+            std::uint32_t* src = reg.data() + s.src_at;
             for (std::uint32_t row = 0; row < R; ++row) {
                 const Instr& in = *rows[row];
                 for (std::uint32_t k = 0; k < s.count; ++k) {
-                    const double c = terms[in.first + k].c;
-                    s.c[static_cast<std::size_t>(k) * R + row] = c;
-                    s.ac[static_cast<std::size_t>(k) * R + row] = __builtin_fabs(c);
+                    const double ck = terms[in.first + k].c;
+                    c[static_cast<std::size_t>(k) * R + row] = ck;
+                    ac[static_cast<std::size_t>(k) * R + row] = __builtin_fabs(ck);
                 }
                 for (std::uint32_t t = 0; t < tails; ++t)
-                    s.tc[static_cast<std::size_t>(t) * R + row] = terms[in.first + s.count + t].c;
-                s.src.push_back(in.a);
-                s.dst.push_back(in.dst);
-                s.v.push_back(in.b);
-                s.acc.push_back(in.c);
-                s.mag.push_back(in.d);
+                    tc[static_cast<std::size_t>(t) * R + row] = terms[in.first + s.count + t].c;
+                src[row] = in.a;
+                src[R + row] = in.dst;
+                src[2 * R + row] = in.b;
+                src[3 * R + row] = in.c;
+                src[4 * R + row] = in.d;
             }
             break;
         }
@@ -1003,24 +1029,18 @@ std::uint8_t pick(const Block& s) {
     return kSingle;
 }
 
-/// The blocks as run: their data appended to the body's arrays in order.
-std::unique_ptr<InterpretedSolver::Body> freeze(const std::vector<Block>& blocks) {
+/// The blocks as run: the pools become the body's arrays, which the steps
+/// point into.
+std::unique_ptr<InterpretedSolver::Body> freeze(const std::vector<Block>& blocks, BlockPools& pools) {
     auto body = std::make_unique<InterpretedSolver::Body>();
-    std::size_t nd = 0, nu = 0, ns = 0;
-    for (const Block& b : blocks) {
-        nd += b.c.size() + b.ac.size() + b.tc.size();
-        nu += b.reg.size() + b.treg.size() + b.dst.size() + b.src.size() + b.v.size() + b.acc.size() + b.mag.size();
-        ns += b.kind == StepKind::single;
-    }
-    body->doubles.reserve(nd);  // no reallocation below: the steps point into these
-    body->regs.reserve(nu);
-    body->singles.reserve(ns);
+    body->doubles = std::move(pools.doubles);
+    body->regs = std::move(pools.regs);
+    body->doubles.shrink_to_fit();  // the memory budget counts capacity
+    body->regs.shrink_to_fit();
+    std::size_t ns = 0;
+    for (const Block& b : blocks) ns += b.kind == StepKind::single;
+    body->singles.reserve(ns);  // no reallocation below: the steps point into it
     body->steps.reserve(blocks.size());
-    auto put = [](auto& arena, const auto& v) {
-        const auto* at = arena.data() + arena.size();
-        arena.insert(arena.end(), v.begin(), v.end());
-        return at;
-    };
     for (const Block& b : blocks) {
         Step s;
         s.run = pick(b);
@@ -1028,21 +1048,10 @@ std::unique_ptr<InterpretedSolver::Body> freeze(const std::vector<Block>& blocks
         s.count = b.count;
         for (int q = 0; q < 5; ++q) s.tail[q] = b.tail[q];
         s.cos_dst = b.cos_dst;
-        s.c_ = put(body->doubles, b.c);
-        put(body->doubles, b.ac);
-        put(body->doubles, b.tc);
-        s.reg_ = put(body->regs, b.reg);
-        put(body->regs, b.treg);
-        if (b.kind == StepKind::mass) {
-            s.src_ = put(body->regs, b.src);
-            s.dst_ = put(body->regs, b.dst);
-        } else {
-            s.dst_ = put(body->regs, b.dst);
-            s.src_ = put(body->regs, b.src);
-        }
-        put(body->regs, b.v);
-        put(body->regs, b.acc);
-        put(body->regs, b.mag);
+        s.c_ = body->doubles.data() + b.c_at;
+        s.reg_ = body->regs.data() + b.reg_at;
+        s.dst_ = body->regs.data() + b.dst_at;
+        s.src_ = body->regs.data() + b.src_at;
         if (b.kind == StepKind::single) {
             body->singles.push_back(b.single);
             s.single_ = &body->singles.back();
@@ -1175,6 +1184,7 @@ std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code
 
     std::vector<Block> blocks;
     blocks.reserve(order.size());
+    BlockPools pools;
     // Per level (kept across levels, so that a small program does not allocate
     // per level): each member's group, each group's first instruction and
     // whether it runs alone, the groups' members in order (rows, from offset[g]).
@@ -1217,7 +1227,7 @@ std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code
                     for (std::uint32_t k = offset[g]; k < offset[g + 1]; ++k)
                         (*where)[static_cast<std::size_t>(rows[k] - code.data())] = {static_cast<std::uint32_t>(blocks.size()),
                                                                                    k - offset[g]};
-                blocks.push_back(make_block(rows.data() + offset[g], offset[g + 1] - offset[g], terms));
+                blocks.push_back(make_block(rows.data() + offset[g], offset[g + 1] - offset[g], terms, pools));
                 continue;
             }
             const Instr& in = code[first[g]];
@@ -1233,7 +1243,7 @@ std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code
             blocks.push_back(std::move(s));
         }
     }
-    return freeze(blocks);
+    return freeze(blocks, pools);
 }
 
 /// A body run whole, in one block per level and shape (setup's).
