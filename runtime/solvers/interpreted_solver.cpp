@@ -1076,11 +1076,6 @@ std::vector<Instr> prepare(const ProgramBody& body, std::vector<ProgramTerm>& te
     return code;
 }
 
-struct AccessTable;
-std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code, const AccessTable& a,
-                                                  std::vector<ProgramTerm>& terms, std::size_t registers,
-                                                  const std::vector<char>* only, std::vector<RowRef>* where);
-
 /// Every instruction's reads and writes (visit_accesses()), row i of each
 /// table from at[i] to at[i + 1]: taken once for the passes over one program.
 struct AccessTable {
@@ -1143,33 +1138,53 @@ double estimated_work(const std::vector<Instr>& code, const std::vector<char>* o
     return w;
 }
 
+/// Each instruction's dependency level: one more than the level of every
+/// instruction before it that writes what it reads, reads what it writes or
+/// writes it too. each(i, read, write) calls read and write for instruction
+/// i's registers; `keep(i)` says whether instruction i is scheduled (else -1).
+template <class Keep, class Each>
+std::vector<int> dependency_levels(std::size_t n, std::size_t registers, Keep&& keep, Each&& each) {
+    std::vector<int> last_write(registers, -1), last_read(registers, -1), level(n, -1);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!keep(i)) continue;
+        int l = 0;
+        each(
+            i, [&](std::uint32_t r) { l = std::max(l, last_write[r] + 1); },
+            [&](std::uint32_t w) { l = std::max({l, last_write[w] + 1, last_read[w] + 1}); });
+        each(
+            i, [&](std::uint32_t r) { last_read[r] = std::max(last_read[r], l); },
+            [&](std::uint32_t w) { last_write[w] = l; });
+        level[i] = l;
+    }
+    return level;
+}
+
+/// The levels of the instructions `only` marks (all without it), from their
+/// access table.
+std::vector<int> table_levels(const AccessTable& a, std::size_t n, std::size_t registers,
+                              const std::vector<char>* only) {
+    return dependency_levels(
+        n, registers, [&](std::size_t i) { return !only || (*only)[i]; },
+        [&](std::size_t i, auto&& read, auto&& write) {
+            for (std::uint32_t k = a.read_at[i]; k < a.read_at[i + 1]; ++k) read(a.reads[k]);
+            for (std::uint32_t k = a.write_at[i]; k < a.write_at[i + 1]; ++k) write(a.writes[k]);
+        });
+}
+
 /// The instructions scheduled by dependency level (an instruction
 /// comes after every instruction that writes what it reads, reads what it
 /// writes, or writes it too, before it in the program), each level's
 /// instructions of one shape batched into a block, in order of first
 /// appearance; a sin and a cos of one register in one step. Every value is
 /// computed by the same operations from the same operands as in program order.
-/// `a` holds code's accesses; with `only`, the instructions it marks alone
-/// (`where` is by instruction of `code`).
-std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code, const AccessTable& a,
-                                                  std::vector<ProgramTerm>& terms, std::size_t registers,
-                                                  const std::vector<char>* only, std::vector<RowRef>* where) {
+/// `level` is each instruction's (dependency_levels; -1: left out); `where`
+/// is by instruction of `code`.
+std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code, const std::vector<int>& level,
+                                                  std::vector<ProgramTerm>& terms, std::vector<RowRef>* where) {
     const std::size_t n = code.size();
     if (where) where->assign(n, {kNoStep, 0});
-    std::vector<int> last_write(registers, -1), last_read(registers, -1), level(n, -1);
     int levels = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        if (only && !(*only)[i]) continue;
-        const std::uint32_t *r0 = a.reads.data() + a.read_at[i], *r1 = a.reads.data() + a.read_at[i + 1];
-        const std::uint32_t *w0 = a.writes.data() + a.write_at[i], *w1 = a.writes.data() + a.write_at[i + 1];
-        int l = 0;
-        for (const std::uint32_t* r = r0; r != r1; ++r) l = std::max(l, last_write[*r] + 1);
-        for (const std::uint32_t* w = w0; w != w1; ++w) l = std::max({l, last_write[*w] + 1, last_read[*w] + 1});
-        for (const std::uint32_t* w = w0; w != w1; ++w) last_write[*w] = l;
-        for (const std::uint32_t* r = r0; r != r1; ++r) last_read[*r] = std::max(last_read[*r], l);
-        level[i] = l;
-        levels = std::max(levels, l + 1);
-    }
+    for (int l : level) levels = std::max(levels, l + 1);
     // The instructions in order of level, in program order within one (a counting sort).
     std::vector<std::uint32_t> start(static_cast<std::size_t>(levels) + 1, 0);
     for (std::size_t i = 0; i < n; ++i)
@@ -1250,7 +1265,10 @@ std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code
 std::unique_ptr<InterpretedSolver::Body> whole_body(const ProgramBody& body, std::vector<ProgramTerm>& terms,
                                                     std::vector<std::uint32_t>& exported) {
     const std::vector<Instr> code = prepare(body, terms, 0, 0, exported);
-    return schedule(code, AccessTable(code, terms), terms, body.registers(), nullptr, nullptr);
+    const std::vector<int> level = dependency_levels(
+        code.size(), body.registers(), [](std::size_t) { return true; },
+        [&](std::size_t i, auto&& read, auto&& write) { visit_accesses(code[i], terms, read, write); });
+    return schedule(code, level, terms, nullptr);
 }
 
 /// The rows of eval's body that function f's outputs need beyond the common
@@ -1350,7 +1368,8 @@ InterpretedSolver::InterpretedSolver(Program p)
     const bool vector = vector_factors(p.eval);
     const AccessTable table(code, p.terms);
     auto eval_body = [&](const std::vector<char>* only, std::vector<RowRef>* rows = nullptr) {
-        std::unique_ptr<Body> body = schedule(code, table, p.terms, p.eval.registers(), only, rows);
+        std::unique_ptr<Body> body =
+            schedule(code, table_levels(table, code.size(), p.eval.registers(), only), p.terms, rows);
         body->vector_factors = vector;
         return body;
     };
