@@ -156,18 +156,18 @@ private:
     void comment(const std::string& text) { out_.comment(1, text); }
 
     void instr(const ProgramInstr& in, std::size_t i) {
-        comment(in.comment);
+        comment(b_.comment(in));
         switch (in.op) {
             case ProgramOp::lincomb: {
                 const std::string sum = sum_text(p_, b_, in);
-                assign(in.dst, in.a == kNoRegister ? sum : n(in.a) + " + (" + sum + ")", in.note);
+                assign(in.dst, in.a == kNoRegister ? sum : n(in.a) + " + (" + sum + ")", b_.note(in));
                 break;
             }
-            case ProgramOp::lincomb_ld: assign(in.dst, sum_text(p_, b_, in), in.note); break;
-            case ProgramOp::copy: assign(in.dst, n(in.a), in.note); break;
-            case ProgramOp::abs: assign(in.dst, "__builtin_fabs(" + n(in.a) + ")", in.note); break;
-            case ProgramOp::sin: assign(in.dst, "__builtin_sin(" + n(in.a) + ")", in.note); break;
-            case ProgramOp::cos: assign(in.dst, "__builtin_cos(" + n(in.a) + ")", in.note); break;
+            case ProgramOp::lincomb_ld: assign(in.dst, sum_text(p_, b_, in), b_.note(in)); break;
+            case ProgramOp::copy: assign(in.dst, n(in.a), b_.note(in)); break;
+            case ProgramOp::abs: assign(in.dst, "__builtin_fabs(" + n(in.a) + ")", b_.note(in)); break;
+            case ProgramOp::sin: assign(in.dst, "__builtin_sin(" + n(in.a) + ")", b_.note(in)); break;
+            case ProgramOp::cos: assign(in.dst, "__builtin_cos(" + n(in.a) + ")", b_.note(in)); break;
             case ProgramOp::phase:
                 assign(in.dst, "hsnc_phase(" + k(in.first) + ", " + n(in.a) + ", " + n(in.b) + ", " +
                                    k(in.first + 1) + ")");
@@ -224,7 +224,7 @@ private:
             first += in.tail[row];
         }
         const std::uint32_t dst[5] = {in.dst, in.b, in.c, in.d, in.d + 1};
-        for (int row = 0; row < 5; ++row) assign(dst[row], sum_text(rows[row], false), row == 0 ? in.note : "");
+        for (int row = 0; row < 5; ++row) assign(dst[row], sum_text(rows[row], false), row == 0 ? b_.note(in) : "");
     }
 
     void mode(const ProgramInstr& in, std::size_t i) {

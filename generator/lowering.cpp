@@ -100,6 +100,13 @@ public:
         in.op = ProgramOp::lincomb_ld;
         return in;
     }
+    /// Sets an instruction's comment and note, in a named program (ProgramNames).
+    ProgramInstr& annotate(ProgramInstr& in, const std::string& comment, const std::string& note = "") {
+        if (!named_ || (comment.empty() && note.empty())) return in;
+        in.text = static_cast<std::uint32_t>(b_.texts.size());
+        b_.texts.push_back({comment, note});
+        return in;
+    }
     ProgramInstr& unary(ProgramOp op, std::uint32_t dst, std::uint32_t a) {
         ProgramInstr in{op};
         in.dst = dst;
@@ -131,14 +138,6 @@ void for_each_slider_preload(const Model& model, const Configuration& cfg, int i
     }
 }
 
-/// Sets an instruction's comment and note, in a named program (ProgramNames).
-ProgramInstr& with(bool named, ProgramInstr& in, const std::string& comment, const std::string& note = "") {
-    if (!named) return in;
-    in.comment = comment;
-    in.note = note;
-    return in;
-}
-
 }  // namespace
 
 Program lower(const Derivation& d, ProgramNames names) {
@@ -154,7 +153,13 @@ Program lower(const Derivation& d, ProgramNames names) {
     p.max_step = d.max_step;
     // V and W rounded once (each use below rounds the same double-double value), and
     // each mass's index among the free masses (-1: stuck).
-    std::vector<std::vector<double>> vd(nm, std::vector<double>(nf)), wd(nm, std::vector<double>(nf));
+    struct Matrix {  // rows of nf doubles, one allocation
+        std::vector<double> a;
+        std::size_t cols;
+        double* operator[](std::size_t j) { return a.data() + j * cols; }
+        const double* operator[](std::size_t j) const { return a.data() + j * cols; }
+    };
+    Matrix vd{std::vector<double>(nm * nf), nf}, wd{std::vector<double>(nm * nf), nf};
     // The sparsity of V and W: a mode lives on its block's coordinates (derivation.h),
     // exact zeros elsewhere. mode_rows[j] lists the coordinates r where V_rj or W_jr
     // is nonzero, row_modes[r] the modes j (both ascending), so that each sum below
@@ -188,26 +193,29 @@ Program lower(const Derivation& d, ProgramNames names) {
     std::vector<std::uint32_t> mode_k(nm), harm_k(nh);
     for (std::size_t j = 0; j < nm; ++j) {
         const Mode& m = d.modes[j];
-        const std::string J = idx(j);
+        const std::string J = named ? idx(j) : std::string();
         double k[kModeConstants] = {};
-        std::string names[kModeConstants];
-        k[kModeLambda] = dbl(m.lambda), names[kModeLambda] = "lambda_" + J;
-        k[kModeSigma] = dbl(m.sigma), names[kModeSigma] = "sigma_" + J;
-        k[kModeKappa] = dbl(m.kappa), names[kModeKappa] = "kappa_" + J;
+        std::string names[kModeConstants];  // printed names (a named program's only)
+        auto name = [&](ModeConstant c, const char* prefix) {
+            if (named) names[c] = prefix + J;
+        };
+        k[kModeLambda] = dbl(m.lambda), name(kModeLambda, "lambda_");
+        k[kModeSigma] = dbl(m.sigma), name(kModeSigma, "sigma_");
+        k[kModeKappa] = dbl(m.kappa), name(kModeKappa, "kappa_");
         switch (m.regime) {
             case Regime::undamped:
             case Regime::underdamped:
-                k[kModeOmegaD] = dbl(m.omega_d), names[kModeOmegaD] = "omega_d_" + J;
+                k[kModeOmegaD] = dbl(m.omega_d), name(kModeOmegaD, "omega_d_");
                 k[kModeInvOmegaD] = 1.0 / dbl(m.omega_d);
                 break;
             case Regime::overdamped:
-                k[kModeGamma] = dbl(m.gamma), names[kModeGamma] = "gamma_" + J;
-                k[kModeR1] = dbl(m.r1), names[kModeR1] = "r1_" + J;
+                k[kModeGamma] = dbl(m.gamma), name(kModeGamma, "gamma_");
+                k[kModeR1] = dbl(m.r1), name(kModeR1, "r1_");
                 k[kModeNegTwoGamma] = -2.0 * dbl(m.gamma);
                 k[kModeHalfInvGamma] = 0.5 / dbl(m.gamma);
                 break;
             case Regime::rigid_damped:
-                k[kModeC] = dbl(m.c), names[kModeC] = "c_" + J;
+                k[kModeC] = dbl(m.c), name(kModeC, "c_");
                 k[kModeInvC] = 1.0 / dbl(m.c);
                 break;
             default:
@@ -217,7 +225,7 @@ Program lower(const Derivation& d, ProgramNames names) {
         for (std::uint32_t c = 0; c < kModeConstants; ++c) constant(p, k[c], names[c]);
     }
     for (std::size_t h = 0; h < nh; ++h) {
-        harm_k[h] = constant(p, dbl(d.harmonics[h].omega), "Omega_" + idx(h));
+        harm_k[h] = constant(p, dbl(d.harmonics[h].omega), named ? "Omega_" + idx(h) : std::string());
         constant(p, dbl(d.harmonics[h].phase));
     }
 
@@ -255,7 +263,7 @@ Program lower(const Derivation& d, ProgramNames names) {
     auto slot = [&](const char* prefix, std::size_t number, std::uint32_t src, const std::string& comment = "",
                     const std::string& note = "") {
         const std::uint32_t k = slot_name(prefix, number);
-        with(named, s.unary(ProgramOp::copy, p.setup_coef.back(), src), comment, note);
+        s.annotate(s.unary(ProgramOp::copy, p.setup_coef.back(), src), comment, note);
         return k;
     };
     auto slot_lin = [&](const char* prefix, std::size_t number, const Lin& l) {
@@ -272,7 +280,7 @@ Program lower(const Derivation& d, ProgramNames names) {
     std::map<int, std::uint32_t> offset;
     for (int q : d.riders) {
         offset[q] = s.temp("e_" + model.masses[static_cast<std::size_t>(q)].name);
-        with(named, s.lin(offset[q], Lin().add(1.0, x0(q)).add(-1.0, x0(partner_of(q)))),
+        s.annotate(s.lin(offset[q], Lin().add(1.0, x0(q)).add(-1.0, x0(partner_of(q)))),
              q == d.riders.front() ? "Riders (stuck to their friction partner) keep their offset e = x0 - x0_partner." : "");
         e_slot[q] = slot("e_", static_cast<std::size_t>(q), offset[q], "",
                          named ? model.masses[static_cast<std::size_t>(q)].name + " rides its partner" : "");
@@ -297,7 +305,7 @@ Program lower(const Derivation& d, ProgramNames names) {
             }
             const int i = d.free_dofs[r];
             f[r] = s.temp("f_", r + 1);
-            with(named, s.lin(f[r], l),
+            s.annotate(s.lin(f[r], l),
                  r == 0 ? "Constant force on the free masses: loads + preload - K_FS x_S - mu_k N sgn (Eq. 7-9)"
                           + std::string(nj > 0 ? ",\nwith k s of every stuck Jenkins element (slider s = x0[n + j])." : ".")
                         : "",
@@ -307,7 +315,7 @@ Program lower(const Derivation& d, ProgramNames names) {
             Lin l;
             for (std::size_t r : mode_rows[j]) l.add(vd[j][r], f[r]);
             pj[j] = s.temp("p_", j + 1);
-            with(named, s.lin(pj[j], l), j == 0 ? "Modal forces p = V^T f." : "");
+            s.annotate(s.lin(pj[j], l), j == 0 ? "Modal forces p = V^T f." : "");
         }
     }
     // Forcing phases at the segment start.
@@ -319,7 +327,7 @@ Program lower(const Derivation& d, ProgramNames names) {
         in.a = Program::kSetupT0;
         in.b = Program::kSetupT0Lo;
         in.first = harm_k[h];
-        if (h == 0 && named) in.comment = "Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.";
+        if (h == 0) s.annotate(in, "Forcing phases at the segment start: theta_h = Omega_h (t0 + t0_lo) + phase_h, reduced.");
         s.emit(in);
         s_theta[h] = s.temp("s_theta_", h + 1);
         s.unary(ProgramOp::sin, s_theta[h], theta);
@@ -344,7 +352,7 @@ Program lower(const Derivation& d, ProgramNames names) {
                 if (!d.modes[j].lambda.is_zero()) l.add(d.modes[j].v[r] * inv_lambda[j], pj[j]);
         }
         x_st[r] = s.temp("x_st_", r + 1);
-        with(named, s.lin(x_st[r], l),
+        s.annotate(s.lin(x_st[r], l),
              r != 0            ? ""
              : d.state_space ? "Static offset x_st = K_FF^-1 f (dampers: state-space pseudo-modes, derivation.h)."
                              : "Static offset x_st = V (p / lambda) over the elastic modes.",
@@ -371,7 +379,7 @@ Program lower(const Derivation& d, ProgramNames names) {
                 v.add(-(W * xs), c_theta[h]).add(W * xc, s_theta[h]);
             }
             xh[r] = s.temp("xh_", r + 1);
-            with(named, s.lin_ld(xh[r], x),
+            s.annotate(s.lin_ld(xh[r], x),
                  r == 0 ? "Homogeneous part of the initial state in x: xh = x0 - x_p(0), vh = v0 - v_p(0), with\n"
                           "x_p = x_st + sum_h (xs sin + xc cos) and the same constants as eval (long double sums)."
                         : "");
@@ -402,7 +410,7 @@ Program lower(const Derivation& d, ProgramNames names) {
             Lin q, dq;
             project(j, xh, vh, q, dq);
             q0[j] = s.temp("q0_", j + 1);
-            with(named, s.lin(q0[j], q), j == 0 ? "Its modal coordinates q = W xh, q' = W vh." : "");
+            s.annotate(s.lin(q0[j], q), j == 0 ? "Its modal coordinates q = W xh, q' = W vh." : "");
             dq0[j] = s.temp("dq0_", j + 1);
             s.lin(dq0[j], dq);
         }
@@ -427,7 +435,7 @@ Program lower(const Derivation& d, ProgramNames names) {
                 v.add(W * xs, c_theta[h]).add(-W * xc, s_theta[h]);
             }
             const std::uint32_t xe = s.temp("xe_", r + 1), ve = s.temp("ve_", r + 1);
-            with(named, s.lin(xe, x),
+            s.annotate(s.lin(xe, x),
                  r == 0 ? "Refinement against eval at tau = 0 (same constants, same order): residuals x0 - x(0), "
                           "v0 - v(0)."
                         : "");
@@ -464,7 +472,7 @@ Program lower(const Derivation& d, ProgramNames names) {
             commented = true;
         }
         const std::uint32_t A = s.temp("A_", j + 1), B = s.temp("B_", j + 1);
-        with(named, s.unary(ProgramOp::copy, A, qh0[j]), commented ? "" : comment);
+        s.annotate(s.unary(ProgramOp::copy, A, qh0[j]), commented ? "" : comment);
         s.lin(B, Lin().add(1.0, dqh0[j]).add(sigma, A));
         mode_coef[j] = slot("A_", j + 1, A);
         slot("B_", j + 1, B);
@@ -516,7 +524,7 @@ Program lower(const Derivation& d, ProgramNames names) {
         in.a = C(theta_slot[h]);
         in.b = TAU;
         in.first = harm_k[h];
-        if (h == 0 && named) in.comment = "Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.";
+        if (h == 0) e.annotate(in, "Forcing harmonics: sin/cos(Omega_h tau + theta_h), once each.");
         e.emit(in);
     }
     std::vector<std::uint32_t> mb(nm);  // mode blocks
@@ -536,14 +544,14 @@ Program lower(const Derivation& d, ProgramNames names) {
         in.a = Program::kEvalCoef + mode_coef[j];
         in.b = TAU;
         in.first = mode_k[j];
-        if (named) in.comment = "Mode " + J + " (" + regime_name(m.regime) + ").";
+        if (named) e.annotate(in, "Mode " + J + " (" + regime_name(m.regime) + ").");
         e.emit(in);
         if (m.regime == Regime::rigid) {
             ProgramInstr pi{ProgramOp::rigid_particular};
             pi.a = C(p_slot[j]);
             pi.b = TAU;
             pi.c = mb[j];
-            if (named) pi.comment = "particular q_p = p tau^2/2";
+            e.annotate(pi, "particular q_p = p tau^2/2");
             e.emit(pi);
         } else if (m.regime == Regime::rigid_damped) {
             // One form for every c > 0, exact as c -> 0: the split (p/c) tau + (q'(0) - p/c) eS
@@ -554,7 +562,7 @@ Program lower(const Derivation& d, ProgramNames names) {
             pi.b = TAU;
             pi.c = mb[j];
             pi.first = mode_k[j] + kModeC;
-            if (named) pi.comment = "particular q_p = p tau^2 phi2(-c tau) from rest: q_p' = p eS, q_p'' = p e^{-c tau}";
+            e.annotate(pi, "particular q_p = p tau^2 phi2(-c tau) from rest: q_p' = p eS, q_p'' = p e^{-c tau}");
             e.emit(pi);
         }
         for (std::size_t h = 0; h < nh; ++h) {
@@ -574,10 +582,11 @@ Program lower(const Derivation& d, ProgramNames names) {
             const double k[kResConstants] = {hw, hw == 0.0 ? 0.0 : 1.0 / hw, wb, Q, hw * hw + wb * wb, 2 * wb,
                                               dbl(m.lambda)};
             for (double c : k) constant(p, c);
-            if (named) ri.comment = "Resonant response to harmonic " + H +
-                         " from rest, stable through Omega = omega:\n"
-                         "y = Q [-w cos(wbar tau + theta) + cos(theta) sin(omega tau)/omega], Q = P/(omega + Omega),\n"
-                         "w = sin(h tau)/h -> tau (h = (Omega - omega)/2, wbar = (Omega + omega)/2): the secular term.";
+            if (named)
+                e.annotate(ri, "Resonant response to harmonic " + H +
+                                   " from rest, stable through Omega = omega:\n"
+                                   "y = Q [-w cos(wbar tau + theta) + cos(theta) sin(omega tau)/omega], Q = P/(omega + Omega),\n"
+                                   "w = sin(h tau)/h -> tau (h = (Omega - omega)/2, wbar = (Omega + omega)/2): the secular term.");
             e.emit(ri);
         }
     }
@@ -592,7 +601,7 @@ Program lower(const Derivation& d, ProgramNames names) {
         if (d.rides(ii)) continue;  // after its partner, below
         if (r < 0) {
             const std::uint32_t xs = C(x_stuck_slot[i]);
-            with(named, e.unary(ProgramOp::copy, X(ii), xs), comment, named ? model.masses[i].name + " (stuck)" : "");
+            e.annotate(e.unary(ProgramOp::copy, X(ii), xs), comment, named ? model.masses[i].name + " (stuck)" : "");
             e.lin(Vr(ii), Lin());
             e.lin(Ar(ii), Lin());
             mx[i] = e.temp("mx_", i);
@@ -632,14 +641,14 @@ Program lower(const Derivation& d, ProgramNames names) {
             in.tail[k] = static_cast<std::uint32_t>(tails[k]->size());
             p.terms.insert(p.terms.end(), tails[k]->begin(), tails[k]->end());
         }
-        with(named, e.emit(in), comment, model.masses[i].name);
+        e.annotate(e.emit(in), comment, model.masses[i].name);
     }
 
     // Riders: their partner's motion at their offset.
     for (int q : d.riders) {
         const int p = partner_of(q);
         const std::uint32_t eq = C(e_slot.at(q));
-        with(named, e.lin(X(q), Lin().add(1.0, X(p)).add(1.0, eq)), q == d.riders.front() ? "Riders: x = x_partner + e." : "",
+        e.annotate(e.lin(X(q), Lin().add(1.0, X(p)).add(1.0, eq)), q == d.riders.front() ? "Riders: x = x_partner + e." : "",
              model.masses[static_cast<std::size_t>(q)].name + " (rides " + model.masses[static_cast<std::size_t>(p)].name + ")");
         e.unary(ProgramOp::copy, Vr(q), Vr(p));
         e.unary(ProgramOp::copy, Ar(q), Ar(p));
@@ -661,7 +670,7 @@ Program lower(const Derivation& d, ProgramNames names) {
         const std::string comment = j == 0 ? "Jenkins sliders: fixed while stuck, s = x[a] - x[b] - slip F_s/k while slipping." : "";
         if (d.cfg.slip[j] == 0) {
             const std::uint32_t sc = C(s_stuck_slot[j]);
-            with(named, e.unary(ProgramOp::copy, out, sc), comment, el.name + " (stuck)");
+            e.annotate(e.unary(ProgramOp::copy, out, sc), comment, el.name + " (stuck)");
             e.unary(ProgramOp::abs, mxs[j], sc);
             continue;
         }
@@ -671,7 +680,7 @@ Program lower(const Derivation& d, ProgramNames names) {
         if (el.b != kGround) sl.add(-1.0, X(el.b)), ml.add(1.0, mx[static_cast<std::size_t>(el.b)]);
         sl.add(-held, ONE);
         ml.add(std::fabs(held), ONE);
-        with(named, e.lin(out, sl), comment, el.name + (d.cfg.slip[j] > 0 ? " (slipping, +)" : " (slipping, -)"));
+        e.annotate(e.lin(out, sl), comment, el.name + (d.cfg.slip[j] > 0 ? " (slipping, +)" : " (slipping, -)"));
         e.lin(mxs[j], ml);
     }
 
@@ -895,7 +904,7 @@ Program lower(const Derivation& d, ProgramNames names) {
                     af = e.temp("A_force_", static_cast<std::size_t>(i));
                     daf = e.temp("dA_force_", static_cast<std::size_t>(i));
                     force_reg[i] = af;
-                    with(named, e.lin(af, A), comment);
+                    e.annotate(e.lin(af, A), comment);
                     comment.clear();
                     e.lin(daf, dA);
                 }
@@ -929,7 +938,7 @@ Program lower(const Derivation& d, ProgramNames names) {
                     reg[which][1] = e.temp("dA_pair_" + B);
                     reg[which][2] = e.temp("mA_pair_" + B);
                     pair_reg[b] = reg[which][0];
-                    with(named, e.lin(reg[which][0], A), comment);
+                    e.annotate(e.lin(reg[which][0], A), comment);
                     comment.clear();
                     e.lin(reg[which][1], dA);
                     e.lin(reg[which][2], mag);
@@ -947,7 +956,7 @@ Program lower(const Derivation& d, ProgramNames names) {
                 }
             }
         }
-        with(named, e.lin(G(f, 3), g), comment);
+        e.annotate(e.lin(G(f, 3), g), comment);
         e.lin(G(f, 4), dg);
         // bound
         DD konst = 0;
@@ -987,7 +996,7 @@ Program lower(const Derivation& d, ProgramNames names) {
                     se.count = 2;
                     p.terms.push_back({1.0, TAU});
                     p.terms.push_back({d.max_step, ONE});
-                    if (named) se.comment = "Secular terms are bounded at the end of the step, s_end = tau + max_step.";
+                    e.annotate(se, "Secular terms are bounded at the end of the step, s_end = tau + max_step.");
                     p.eval.code.insert(p.eval.code.begin(), se);
                 }
                 const DD W = d.harmonics[h].omega, Q = abs(mh.P / (m.omega + W));

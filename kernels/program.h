@@ -121,6 +121,7 @@ enum ResonantConstant : std::uint32_t {
 };
 
 inline constexpr std::uint32_t kNoRegister = 0xffffffffu;
+inline constexpr std::uint32_t kNoText = 0xffffffffu;  ///< an instruction without comment or note
 
 struct ProgramTerm {
     double c;
@@ -137,8 +138,13 @@ struct ProgramInstr {
     std::uint32_t first = 0;          ///< first term (lincomb) or constant (the others)
     std::uint32_t count = 0;          ///< terms (lincomb, mass_state)
     std::uint32_t tail[5] = {};       ///< mass_state: terms of the tails of x, v, acc, mx, mv
-    std::string comment;              ///< printed above the instruction (may be empty)
-    std::string note;                 ///< printed after it, on its line (may be empty)
+    std::uint32_t text = kNoText;     ///< its comment and note: ProgramBody::texts[text] (named programs)
+};
+
+/// What the printer writes around an instruction: a comment above it and a
+/// note after it, on its line (either may be empty).
+struct ProgramText {
+    std::string comment, note;
 };
 
 /// Mode regimes, the order of generator/derivation.h's Regime.
@@ -158,7 +164,19 @@ struct ProgramBody {
     /// (generator/lowering.h ProgramNames::no), which only the interpreter runs.
     std::vector<std::string> names;
     std::vector<RegisterKind> kinds;  ///< per register
+    /// The instructions' comments and notes, kept apart from the code: only a
+    /// named program has any (the printer's), and the interpreter copies the
+    /// code of every configuration a run enters.
+    std::vector<ProgramText> texts;
     std::size_t registers() const { return kinds.size(); }
+    const std::string& comment(const ProgramInstr& in) const { return in.text == kNoText ? none() : texts[in.text].comment; }
+    const std::string& note(const ProgramInstr& in) const { return in.text == kNoText ? none() : texts[in.text].note; }
+
+private:
+    static const std::string& none() {
+        static const std::string empty;
+        return empty;
+    }
 };
 
 /// What restarting a segment at a reversal needs of a configuration

@@ -206,9 +206,9 @@ TEST(Program, WithoutNamesItIsThePrintedProgram) {
                         x.a == y.a && x.b == y.b && x.c == y.c && x.d == y.d && x.first == y.first &&
                         x.count == y.count && std::equal(x.tail, x.tail + 5, y.tail))
                 << what << " instruction " << i;
-            EXPECT_TRUE(y.comment.empty() && y.note.empty()) << what << " instruction " << i;
+            EXPECT_EQ(y.text, kNoText) << what << " instruction " << i;
         }
-        EXPECT_TRUE(b.names.empty()) << what;
+        EXPECT_TRUE(b.names.empty() && b.texts.empty()) << what;
         EXPECT_EQ(a.names.size(), a.registers()) << what;
     };
     std::size_t checked = 0, named = 0;
