@@ -326,25 +326,32 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     DerivationCache& mu = cache ? *cache : local;
     if (mu.mu_k_n.size() != n) {
         mu.mu_k_n.assign(n, kZero);
+        mu.mu_k_n_double.assign(n, 0.0);
         mu.mu_s_n.assign(n, 0.0);
         for (std::size_t i = 0; i < n; ++i) {
             if (!model.masses[i].has_friction) continue;
             const numeric N = exact(model.masses[i].m) * exact(model.g);
             mu.mu_k_n[i] = exact(model.masses[i].mu_k) * N;
+            mu.mu_k_n_double[i] = mu.mu_k_n[i].to_double();
             mu.mu_s_n[i] = (exact(model.masses[i].mu_s) * N).to_double();
         }
     }
     d.mu_k_n.assign(n, kZero);
+    d.mu_k_n_double.assign(n, 0.0);
     d.mu_s_n = mu.mu_s_n;
+    d.f_const_double.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
         d.f_const[i] = exact(f0(i));
-        if (model.masses[i].has_friction && !cfg.stuck[i]) d.mu_k_n[i] = mu.mu_k_n[i];
+        d.f_const_double[i] = f0(i) + 0.0;  // what the exact value of f0(i) rounds to (-0 is 0 there)
+        if (model.masses[i].has_friction && !cfg.stuck[i])
+            d.mu_k_n[i] = mu.mu_k_n[i], d.mu_k_n_double[i] = mu.mu_k_n_double[i];
     }
     // A harmonic with Omega = 0 is the constant force F sin(phase).
     for (const Harmonic& h : model.forcing) {
         if (h.omega != 0.0) continue;
         const numeric s = GiNaC::sin(exact(h.phase));
         for (std::size_t i = 0; i < n; ++i) d.f_const[i] += exact(h.amplitude[i]) * s;
+        for (std::size_t i = 0; i < n; ++i) d.f_const_double[i] = d.f_const[i].to_double();
     }
 
     // Modal decomposition of Kt = M^-1/2 K_FF M^-1/2, in DD.

@@ -129,6 +129,9 @@ struct Derivation {
     std::vector<std::vector<DD>> k_dd, c_dd;  ///< the same in DD, for the lowering
     std::vector<GiNaC::numeric> f_const;  ///< loads + preload, all masses (exact)
     std::vector<GiNaC::numeric> mu_k_n;   ///< mu_k N_i of free friction masses, else 0
+    /// f_const and mu_k_n rounded once each, for the lowering (a conversion of
+    /// a GiNaC number is not free).
+    std::vector<double> f_const_double, mu_k_n_double;
     std::vector<double> mu_s_n;           ///< mu_s N_i of every friction mass, the exact product rounded once; else 0
     std::vector<Mode> modes;               ///< ascending lambda
     std::vector<HarmonicData> harmonics;   ///< Omega > 0 harmonics (Omega = 0 ones fold into f_const)
@@ -173,6 +176,7 @@ enum class ExactMatrices { yes, no };
 struct DerivationCache {
     DdEigenCache eigen;
     std::vector<GiNaC::numeric> mu_k_n;  ///< per mass (0 without friction)
+    std::vector<double> mu_k_n_double;   ///< the same rounded once
     std::vector<double> mu_s_n;          ///< per mass, rounded once (0 without friction)
 };
 

@@ -181,9 +181,8 @@ Program lower(const Derivation& d, ProgramNames names) {
             if (row_modes[r].empty()) row_modes[r].reserve(mode_rows[j].size());
             row_modes[r].push_back(j);
         }
-    // The exact constant forces rounded once each (GiNaC numbers: a conversion is not free).
-    std::vector<double> f_const(n), mu_k_n(n);
-    for (std::size_t i = 0; i < n; ++i) f_const[i] = dbl(d.f_const[i]), mu_k_n[i] = dbl(d.mu_k_n[i]);
+    // The exact constant forces, rounded once each by derive() (Derivation::f_const_double).
+    const std::vector<double>&f_const = d.f_const_double, &mu_k_n = d.mu_k_n_double;
     std::vector<int> free_of(n, -1), coord_of(n, -1);  // coord_of: a rider moves with its partner's coordinate
     for (std::size_t r = 0; r < nf; ++r) free_of[d.free_dofs[r]] = coord_of[d.free_dofs[r]] = static_cast<int>(r);
     auto partner_of = [&](int q) { return model.masses[static_cast<std::size_t>(q)].partner; };
@@ -1042,7 +1041,7 @@ RestartPlan restart_plan(const Derivation& d, const Program& p) {
     for (std::size_t r = 0; r < nf; ++r) {
         const int i = d.free_dofs[r];
         plan.free_mass.push_back(i);
-        plan.mu_k_n.push_back(dbl(d.mu_k_n[static_cast<std::size_t>(i)]));
+        plan.mu_k_n.push_back(d.mu_k_n_double[static_cast<std::size_t>(i)]);
         plan.x_st.push_back(p.x_st_coef[r]);
     }
     plan.span.assign(2 * nm, 0);
