@@ -1067,11 +1067,19 @@ std::unique_ptr<InterpretedSolver::Body> freeze(const std::vector<Block>& blocks
 /// other body's terms are not touched.
 std::vector<Instr> prepare(const ProgramBody& body, std::vector<ProgramTerm>& terms, std::uint32_t pinned_begin,
                            std::uint32_t pinned_end, std::vector<std::uint32_t>& exported) {
-    std::vector<Instr> code;
-    code.reserve(body.code.size());
-    for (const ProgramInstr& in : body.code)
-        code.push_back({in.op, in.regime, in.dst, in.a, in.b, in.c, in.d, in.first, in.count,
-                        {in.tail[0], in.tail[1], in.tail[2], in.tail[3], in.tail[4]}});
+    // Field by field into place: a whole Instr built on the stack and copied
+    // stalled on every copy (its scalar stores read back as vectors).
+    std::vector<Instr> code(body.code.size());
+    for (std::size_t i = 0; i < code.size(); ++i) {
+        const ProgramInstr& in = body.code[i];
+        Instr& x = code[i];
+        x.op = in.op;
+        x.regime = in.regime;
+        x.dst = in.dst, x.a = in.a, x.b = in.b, x.c = in.c, x.d = in.d;
+        x.first = in.first;
+        x.count = in.count;
+        for (int q = 0; q < 5; ++q) x.tail[q] = in.tail[q];
+    }
     forward_copies(code, terms, body.registers(), pinned_begin, pinned_end, exported);
     return code;
 }
