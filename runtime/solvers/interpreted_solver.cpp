@@ -581,11 +581,12 @@ ALWAYS_INLINE void single_step(const Step& s, const double* K, double* r) {
 
 // The consecutive mode steps of the factored regimes from `first` (up to
 // kFactorBatch), in a body whose modes take vector factors: their factors at
-// once, then each step. Returns the step after them.
+// once, then each step. Returns the step after them. Built for AVX2 too (the
+// steps' scalar arithmetic in VEX form: the same operations, the same bits).
 constexpr std::size_t kFactorBatch = 64;
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // xe, xt: set up to m, padded to a multiple of 4
-const Step* factored_modes(const Step* first, const Step* end, const double* K, double* r) {
+HSNC_ROWS_CLONES const Step* factored_modes(const Step* first, const Step* end, const double* K, double* r) {
     double xe[kFactorBatch], xt[kFactorBatch], e[kFactorBatch], sn[kFactorBatch], cs[kFactorBatch];
     const Step* last = first;
     std::size_t m = 0;
