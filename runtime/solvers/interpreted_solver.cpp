@@ -45,7 +45,7 @@ struct Block {
     std::uint32_t tail[5] = {};     ///< mass: terms of the tails of x, v, acc, mx, mv
     Instr single{};
     std::uint32_t cos_dst = kNoRegister;  ///< single sin: also cos of the same register, here
-    /// Where its data starts in the pools: c (then |c| and the tails' c for a
+    /// Where its data starts in the pools: c (then the tails' c for a
     /// mass), reg (then the tails' registers), dst and src (a mass: src first).
     std::size_t c_at = 0, reg_at = 0, dst_at = 0, src_at = 0;
 };
@@ -53,7 +53,7 @@ struct Block {
 /// The data of a body's blocks, appended block by block:
 ///   lin, lin_ld: c [k][row]; reg [k] or [k][row], dst [row], src [row] (base)
 ///   copy, abs:   dst [row], src [row]
-///   mass:        c, |c| [k][row], tail c [t][row]; reg [k], tail reg [t],
+///   mass:        c [k][row], tail c [t][row]; reg [k], tail reg [t],
 ///                src (x_st), dst (x), v, acc, mag (mx) [row]
 struct BlockPools {
     std::vector<double> doubles;
@@ -64,7 +64,7 @@ struct BlockPools {
 /// registers), which hold every step's data in the order the steps run.
 ///   lin, lin_ld: c [k][row]; reg [k] or [k][row], dst [row], src [row] (base)
 ///   copy, abs:   dst [row], src [row]
-///   mass:        c, |c| [k][row], tail c [t][row]; reg [k], tail reg [t],
+///   mass:        c [k][row], tail c [t][row]; reg [k], tail reg [t],
 ///                src (x_st), dst (x), v, acc, mag (mx) [row]
 struct Step {
     std::uint8_t run = 0;  ///< the case of execute() that runs it (Run)
@@ -78,8 +78,7 @@ struct Step {
     std::uint32_t cos_dst = kNoRegister;
 
     const double* c() const { return c_; }
-    const double* ac() const { return c_ + static_cast<std::size_t>(count) * rows; }
-    const double* tc() const { return c_ + 2 * static_cast<std::size_t>(count) * rows; }
+    const double* tc() const { return c_ + static_cast<std::size_t>(count) * rows; }
     const std::uint32_t* reg() const { return reg_; }
     const std::uint32_t* treg() const { return reg_ + count; }
     const std::uint32_t* dst() const { return dst_; }
@@ -258,21 +257,31 @@ ALWAYS_INLINE void load_rows(T& v, const double* p) {
     std::memcpy(&v, p, sizeof v);
 }
 
+// |v|: the sign bit cleared (a vector lane as fabs does it).
+ALWAYS_INLINE double magnitude(double v) { return __builtin_fabs(v); }
+ALWAYS_INLINE hsnc_v4d magnitude(hsnc_v4d v) {
+    hsnc_v4l bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    bits &= 0x7fffffffffffffffll;
+    std::memcpy(&v, &bits, sizeof v);
+    return v;
+}
+
 // The modal terms of a `mass` block's five sums, V units of T side by side
 // (T = hsnc_v4d: four rows each; T = double: one), term by term in order.
 template <class T, int V>
 ALWAYS_INLINE void modal_sums(T (&x)[V], T (&v)[V], T (&a)[V], T (&mx)[V], T (&mv)[V], const Step& s,
-                              const double* C, const double* AC, const double* r) {
+                              const double* C, const double* r) {
     constexpr int L = sizeof(T) / sizeof(double);  // rows per unit
     const std::uint32_t R = s.rows;
     auto term = [&](std::uint32_t k, auto first) __attribute__((always_inline)) {
         const double* mk = r + s.reg()[k];
         const double q = mk[kModeQ], dq = mk[kModeDQ], ddq = mk[kModeDDQ], mq = mk[kModeMQ], mdq = mk[kModeMDQ];
         const double* Ck = C + static_cast<std::size_t>(k) * R;
-        const double* ACk = AC + static_cast<std::size_t>(k) * R;
         for (int i = 0; i < V; ++i) {
             T c, ac;
-            load_rows(c, Ck + L * i), load_rows(ac, ACk + L * i);
+            load_rows(c, Ck + L * i);
+            ac = magnitude(c);
             x[i] += c * q;  // x and mx start from x_st, the others from their first term
             mx[i] += ac * mq;
             if constexpr (decltype(first)::value) {
@@ -300,17 +309,16 @@ HSNC_ROWS_CLONES void mass_rows(const Step& s, std::uint32_t row, double* r) {
         sv[w] = sa[w] = smv[w] = 0.0;
     }
     const double* C = s.c() + row;
-    const double* AC = s.ac() + row;
     if constexpr (W % 4 == 0) {
         // Four rows to a vector: eight masses are ten sums side by side.
         hsnc_v4d x[W / 4], v[W / 4], a[W / 4], mx[W / 4], mv[W / 4];
         std::memcpy(x, sx, sizeof x), std::memcpy(v, sv, sizeof v), std::memcpy(a, sa, sizeof a);
         std::memcpy(mx, smx, sizeof mx), std::memcpy(mv, smv, sizeof mv);
-        modal_sums(x, v, a, mx, mv, s, C, AC, r);
+        modal_sums(x, v, a, mx, mv, s, C, r);
         std::memcpy(sx, x, sizeof sx), std::memcpy(sv, v, sizeof sv), std::memcpy(sa, a, sizeof sa);
         std::memcpy(smx, mx, sizeof smx), std::memcpy(smv, mv, sizeof smv);
     } else {
-        modal_sums(sx, sv, sa, smx, smv, s, C, AC, r);
+        modal_sums(sx, sv, sa, smx, smv, s, C, r);
     }
     const std::uint32_t R = s.rows, m = s.count;
     const double* TC = s.tc() + row;
@@ -886,10 +894,9 @@ Block make_block(const Instr* const* rows, std::uint32_t R, const std::vector<Pr
             std::uint32_t tails = 0;
             for (int q = 0; q < 5; ++q) s.tail[q] = f.tail[q], tails += f.tail[q];
             const std::size_t nc = static_cast<std::size_t>(s.count) * R;
-            dbl.resize(s.c_at + 2 * nc + static_cast<std::size_t>(tails) * R);
+            dbl.resize(s.c_at + nc + static_cast<std::size_t>(tails) * R);
             double* c = dbl.data() + s.c_at;
-            double* ac = c + nc;
-            double* tc = ac + nc;
+            double* tc = c + nc;
             for (std::uint32_t k = 0; k < s.count; ++k) reg.push_back(terms[f.first + k].reg);
             for (std::uint32_t t = 0; t < tails; ++t) reg.push_back(terms[f.first + s.count + t].reg);
             s.src_at = reg.size();
@@ -899,9 +906,7 @@ Block make_block(const Instr* const* rows, std::uint32_t R, const std::vector<Pr
             for (std::uint32_t row = 0; row < R; ++row) {
                 const Instr& in = *rows[row];
                 for (std::uint32_t k = 0; k < s.count; ++k) {
-                    const double ck = terms[in.first + k].c;
-                    c[static_cast<std::size_t>(k) * R + row] = ck;
-                    ac[static_cast<std::size_t>(k) * R + row] = __builtin_fabs(ck);
+                    c[static_cast<std::size_t>(k) * R + row] = terms[in.first + k].c;
                 }
                 for (std::uint32_t t = 0; t < tails; ++t)
                     tc[static_cast<std::size_t>(t) * R + row] = terms[in.first + s.count + t].c;
