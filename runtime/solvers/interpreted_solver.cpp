@@ -1213,7 +1213,24 @@ std::unique_ptr<InterpretedSolver::Body> schedule(const std::vector<Instr>& code
 
     std::vector<Block> blocks;
     blocks.reserve(order.size());
+    // The pools' room up front (growing them copied them again and again):
+    // the coefficients exactly (a row's terms once each), the registers at
+    // most a term's, a row's and the tail registers of every row.
     BlockPools pools;
+    {
+        std::size_t nd = 0, nr = 0;
+        for (const std::uint32_t i : order) {
+            const Instr& in = code[i];
+            const std::size_t tails = in.op == ProgramOp::mass_state
+                                          ? in.tail[0] + in.tail[1] + in.tail[2] + in.tail[3] + in.tail[4]
+                                          : 0;
+            if (in.op == ProgramOp::lincomb || in.op == ProgramOp::lincomb_ld || in.op == ProgramOp::mass_state)
+                nd += in.count + tails;
+            nr += in.count + tails + 5;
+        }
+        pools.doubles.reserve(nd);
+        pools.regs.reserve(nr);
+    }
     // Per level (kept across levels, so that a small program does not allocate
     // per level): each member's group, each group's first instruction and
     // whether it runs alone, the groups' members in order (rows, from offset[g]).
