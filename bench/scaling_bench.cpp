@@ -1,7 +1,7 @@
 // hsnc_scaling_bench: how the exact method scales with the size of a model,
 // against this build's CVODE (issue 13's benchmark).
 //
-//   build/hsnc_scaling_bench [--quick] [--jit] [--csv FILE]
+//   build/hsnc_scaling_bench [--quick] [--jit] [--csv FILE] [--targets [PAIRS]]
 //
 // Chains of 2, 8, 32, 64 and 128 masses (bench_common.h friction_chain(): friction on
 // every mass, three stiff contacts, forced at both ends), as hsnc_bench's. Each
@@ -21,7 +21,8 @@
 // the search's own program (SegmentSolver::eval_switches), and whole runs
 // against CVODE. Last, issue 13's targets: the 32- and 128-mass friction
 // chains over 100 s, generic and CVODE in turn (5 pairs at 32 masses), the
-// median of the pairs' ratios.
+// median of the pairs' ratios. --targets runs that table alone, with PAIRS
+// pairs at 32 masses (default 5).
 // Times are thread CPU time, medians of the runs (5, or 3 with --quick; one
 // cold JIT run); per switch and per evaluation are the Eigen solver's, the
 // ratios are CVODE's time over the Eigen solver's and over generic's. --csv writes the table
@@ -90,21 +91,10 @@ std::string configurations(const SimulateSummary& s) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-    bool quick = false, jit = false;
-    std::string csv;
-    for (int i = 1; i < argc; ++i) {
-        if (std::strcmp(argv[i], "--quick") == 0) {
-            quick = true;
-        } else if (std::strcmp(argv[i], "--jit") == 0) {
-            jit = true;
-        } else if (std::strcmp(argv[i], "--csv") == 0 && i + 1 < argc) {
-            csv = argv[++i];
-        } else {
-            std::fprintf(stderr, "usage: %s [--quick] [--jit] [--csv FILE]\n", argv[0]);
-            return 2;
-        }
-    }
+/// The tables before the targets': chains of 2 to 128 masses over 10 s, the
+/// first run of tiered kernels, and chains whose switches are few.
+/// False when it cannot make a temporary cache directory.
+bool scale_tables(bool quick, bool jit, const std::string& csv) {
     const int reps = quick ? 3 : 5;
     const double t_end = quick ? 2.0 : 10.0;
     std::printf("chains of n masses over %g s, whole runs through hsnc::simulate (thread CPU time, median of %d)\n",
@@ -175,7 +165,7 @@ int main(int argc, char** argv) {
             simulate(m, o);
             ti.push_back(1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
             std::string dir = (std::filesystem::temp_directory_path() / "hsnc_scaling_XXXXXX").string();
-            if (!::mkdtemp(dir.data())) return 1;
+            if (!::mkdtemp(dir.data())) return false;
             o.kernels = KernelChoice::tiered;
             o.cache_dir = dir;
             start = std::chrono::steady_clock::now();
@@ -230,6 +220,29 @@ int main(int argc, char** argv) {
                     cv.ms, cv.ms / eig.ms, cv.ms / gen.ms, s.has_switch_program() ? "" : " (no program of its own)");
         std::fflush(stdout);
     }
+    return true;
+}
+
+int main(int argc, char** argv) {
+    bool quick = false, jit = false, targets_only = false;
+    int target_pairs = 5;
+    std::string csv;
+    for (int i = 1; i < argc; ++i) {
+        if (std::strcmp(argv[i], "--quick") == 0) {
+            quick = true;
+        } else if (std::strcmp(argv[i], "--jit") == 0) {
+            jit = true;
+        } else if (std::strcmp(argv[i], "--csv") == 0 && i + 1 < argc) {
+            csv = argv[++i];
+        } else if (std::strcmp(argv[i], "--targets") == 0) {
+            targets_only = true;
+            if (i + 1 < argc && std::atoi(argv[i + 1]) > 0) target_pairs = std::atoi(argv[++i]);
+        } else {
+            std::fprintf(stderr, "usage: %s [--quick] [--jit] [--csv FILE] [--targets [PAIRS]]\n", argv[0]);
+            return 2;
+        }
+    }
+    if (!targets_only && !scale_tables(quick, jit, csv)) return 1;
 
     // Issue 13's targets, on long runs of the friction chains: over 100 s a
     // run revisits its configurations, so entering them (the derivation and
@@ -249,7 +262,7 @@ int main(int argc, char** argv) {
         SimulateOptions o;
         o.t_end = t_long;
         o.kernels = KernelChoice::generic;
-        const int pairs = quick || n > 32 ? 1 : 5;
+        const int pairs = quick || n > 32 ? 1 : target_pairs;
         std::vector<double> tg, tc, ratio;
         Timed gen;
         for (int i = 0; i < pairs; ++i) {
