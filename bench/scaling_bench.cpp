@@ -21,8 +21,9 @@
 // the search's own program (SegmentSolver::eval_switches), and whole runs
 // against CVODE. Last, issue 13's targets: the 32- and 128-mass friction
 // chains over 100 s, generic and CVODE in turn (5 pairs at 32 masses), the
-// median of the pairs' ratios. --targets runs that table alone, with PAIRS
-// pairs at 32 masses (default 5).
+// median of the pairs' ratios, and what entering the 32-mass chain's
+// configurations costs (derive, lower, build the programs). --targets runs
+// those two alone, with PAIRS pairs at 32 masses (default 5).
 // Times are thread CPU time, medians of the runs (5, or 3 with --quick; one
 // cold JIT run); per switch and per evaluation are the Eigen solver's, the
 // ratios are CVODE's time over the Eigen solver's and over generic's. --csv writes the table
@@ -276,6 +277,38 @@ int main(int argc, char** argv) {
                     1e3 * g / std::max(static_cast<double>(gen.summary.events), 1.0), bench::median(tc), pairs,
                     bench::median(ratio), target);
         std::fflush(stdout);
+    }
+
+    // What entering costs: the configurations the 32-mass chain visits over
+    // 100 s (a run of the Eigen solver records them), each derived, lowered
+    // and built into the interpreter's programs as a run does it
+    // (lowering.h program_source: one DerivationCache for the run).
+    {
+        const Model m = parse_model(friction_chain(32), "chain-32.toml");
+        bench::Recorder recorder(m);
+        bench::run(m, recorder, t_long);
+        const std::vector<Configuration> cfgs = recorder.seen;
+        std::vector<double> td, tl, tc;
+        for (int round = 0; round < (quick ? 3 : 5); ++round) {
+            DerivationCache cache;
+            double d = 0, l = 0, c = 0;
+            for (const Configuration& cfg : cfgs) {
+                const double t0 = cpu_seconds();
+                const Derivation der = derive(m, cfg, EigenMethod::refined, ExactMatrices::no, &cache);
+                const double t1 = cpu_seconds();
+                Program p = lower(der, ProgramNames::no);
+                const double t2 = cpu_seconds();
+                const InterpretedSolver s(std::move(p));
+                c += cpu_seconds() - t2, l += t2 - t1, d += t1 - t0;
+            }
+            const double k = 1e6 / static_cast<double>(cfgs.size());
+            td.push_back(k * d), tl.push_back(k * l), tc.push_back(k * c);
+        }
+        std::printf("\nentering the %zu configurations the 32-mass chain visits over %g s (us each, median of %d rounds)\n",
+                    cfgs.size(), t_long, quick ? 3 : 5);
+        std::printf("%9s %9s %9s %9s\n", "derive", "lower", "build", "total");
+        std::printf("%9.1f %9.1f %9.1f %9.1f\n", bench::median(td), bench::median(tl), bench::median(tc),
+                    bench::median(td) + bench::median(tl) + bench::median(tc));
     }
     return 0;
 }
