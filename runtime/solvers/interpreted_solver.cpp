@@ -112,6 +112,11 @@ using namespace interpreter;
 
 #define ALWAYS_INLINE __attribute__((always_inline)) inline
 
+// Eval's mode blocks are laid out by lane (lay_out_modes): four modes to a
+// group, field f of a mode kLane * f registers from its first.
+constexpr std::uint32_t kLane = 4;
+constexpr std::uint32_t mf(std::uint32_t field) { return kLane * field; }
+
 // ---- running ----
 
 // The row loops below run W rows side by side (a sum per row, each in its own
@@ -257,14 +262,15 @@ ALWAYS_INLINE void load_rows(T& v, const double* p) {
     std::memcpy(&v, p, sizeof v);
 }
 
-// |v|: the sign bit cleared (a vector lane as fabs does it).
-ALWAYS_INLINE double magnitude(double v) { return __builtin_fabs(v); }
-ALWAYS_INLINE hsnc_v4d magnitude(hsnc_v4d v) {
+// out = |v|: the sign bit cleared (a vector lane as fabs does it). By
+// reference: a vector passed by value in a function built without AVX
+// changes the ABI.
+ALWAYS_INLINE void magnitude(const double& v, double& out) { out = __builtin_fabs(v); }
+ALWAYS_INLINE void magnitude(const hsnc_v4d& v, hsnc_v4d& out) {
     hsnc_v4l bits;
     std::memcpy(&bits, &v, sizeof bits);
     bits &= 0x7fffffffffffffffll;
-    std::memcpy(&v, &bits, sizeof v);
-    return v;
+    std::memcpy(&out, &bits, sizeof out);
 }
 
 // The modal terms of a `mass` block's five sums, V units of T side by side
@@ -276,12 +282,13 @@ ALWAYS_INLINE void modal_sums(T (&x)[V], T (&v)[V], T (&a)[V], T (&mx)[V], T (&m
     const std::uint32_t R = s.rows;
     auto term = [&](std::uint32_t k, auto first) __attribute__((always_inline)) {
         const double* mk = r + s.reg()[k];
-        const double q = mk[kModeQ], dq = mk[kModeDQ], ddq = mk[kModeDDQ], mq = mk[kModeMQ], mdq = mk[kModeMDQ];
+        const double q = mk[mf(kModeQ)], dq = mk[mf(kModeDQ)], ddq = mk[mf(kModeDDQ)], mq = mk[mf(kModeMQ)],
+                     mdq = mk[mf(kModeMDQ)];
         const double* Ck = C + static_cast<std::size_t>(k) * R;
         for (int i = 0; i < V; ++i) {
             T c, ac;
             load_rows(c, Ck + L * i);
-            ac = magnitude(c);
+            magnitude(c, ac);
             x[i] += c * q;  // x and mx start from x_st, the others from their first term
             mx[i] += ac * mq;
             if constexpr (decltype(first)::value) {
@@ -476,7 +483,7 @@ ALWAYS_INLINE void mode_step(const Step& s, const double* K, double* r, double e
             cs = __builtin_cos(k[kModeOmegaD] * tau);
             sn = __builtin_sin(k[kModeOmegaD] * tau);
         }
-        o[kModeAux] = e;
+        o[mf(kModeAux)] = e;
         eC = e * cs;
         eS = e * sn * k[kModeInvOmegaD];
     } else if (Regime == ProgramRegime::critical) {
@@ -485,8 +492,8 @@ ALWAYS_INLINE void mode_step(const Step& s, const double* K, double* r, double e
     } else if (Regime == ProgramRegime::overdamped) {
         const double ex = __builtin_exp(k[kModeR1] * tau);
         const double m = __builtin_expm1(k[kModeNegTwoGamma] * tau);
-        o[kModeAux] = ex;
-        o[kModeAux2] = m;
+        o[mf(kModeAux)] = ex;
+        o[mf(kModeAux2)] = m;
         eC = ex * (1.0 + 0.5 * m);
         eS = -ex * m * k[kModeHalfInvGamma];
     } else if (Regime == ProgramRegime::rigid) {
@@ -494,22 +501,22 @@ ALWAYS_INLINE void mode_step(const Step& s, const double* K, double* r, double e
         eS = tau;
     } else {  // rigid_damped
         const double m = __builtin_expm1(-k[kModeC] * tau);
-        o[kModeAux] = m;
+        o[mf(kModeAux)] = m;
         eC = 1.0 + 0.5 * m;
         eS = -m * k[kModeInvC];
     }
-    o[kModeEC] = eC;
-    o[kModeES] = eS;
+    o[mf(kModeEC)] = eC;
+    o[mf(kModeES)] = eS;
     const double q = A[0] * eC + A[1] * eS;
     const double dq = A[2] * eC + A[3] * eS;
-    o[kModeQ] = q;
-    o[kModeDQ] = dq;
-    o[kModeDDQ] = A[4] * eC + A[5] * eS;
-    o[kModeR] = __builtin_sqrt(dq * dq + k[kModeLambda] * q * q);
-    o[kModeMQ] = __builtin_fabs(A[0] * eC) + __builtin_fabs(A[1] * eS);
-    o[kModeMDQ] = __builtin_fabs(A[2] * eC) + __builtin_fabs(A[3] * eS);
+    o[mf(kModeQ)] = q;
+    o[mf(kModeDQ)] = dq;
+    o[mf(kModeDDQ)] = A[4] * eC + A[5] * eS;
+    o[mf(kModeR)] = __builtin_sqrt(dq * dq + k[kModeLambda] * q * q);
+    o[mf(kModeMQ)] = __builtin_fabs(A[0] * eC) + __builtin_fabs(A[1] * eS);
+    o[mf(kModeMDQ)] = __builtin_fabs(A[2] * eC) + __builtin_fabs(A[3] * eS);
     // + |sigma A eC|: A1 = B - sigma A cancels (generator/emitter.cpp, mode()).
-    if (k[kModeSigma] != 0.0) o[kModeMDQ] = o[kModeMDQ] + __builtin_fabs(k[kModeSigma] * A[0] * eC);
+    if (k[kModeSigma] != 0.0) o[mf(kModeMDQ)] = o[mf(kModeMDQ)] + __builtin_fabs(k[kModeSigma] * A[0] * eC);
 }
 
 // sin and cos of one register (ProgramOp::sin and ProgramOp::cos).
@@ -537,11 +544,11 @@ ALWAYS_INLINE void single_step(const Step& s, const double* K, double* r) {
         case ProgramOp::rigid_particular: {
             double* m = r + in.c;
             const double P = r[in.a], tau = r[in.b];
-            m[kModeQ] += 0.5 * P * tau * tau;
-            m[kModeDQ] += P * tau;
-            m[kModeDDQ] += P;
-            m[kModeMQ] += __builtin_fabs(0.5 * P * tau * tau);
-            m[kModeMDQ] += __builtin_fabs(P * tau);
+            m[mf(kModeQ)] += 0.5 * P * tau * tau;
+            m[mf(kModeDQ)] += P * tau;
+            m[mf(kModeDDQ)] += P;
+            m[mf(kModeMQ)] += __builtin_fabs(0.5 * P * tau * tau);
+            m[mf(kModeMDQ)] += __builtin_fabs(P * tau);
             break;
         }
         case ProgramOp::rigid_damped_particular: {
@@ -549,11 +556,11 @@ ALWAYS_INLINE void single_step(const Step& s, const double* K, double* r) {
             const double P = r[in.a], tau = r[in.b];
             const double qp = P * tau * tau * hsnc_phi2(-K[in.first] * tau);
             r[in.dst] = qp;
-            m[kModeQ] += qp;
-            m[kModeDQ] += P * m[kModeES];
-            m[kModeDDQ] += P * (1.0 + m[kModeAux]);
-            m[kModeMQ] += __builtin_fabs(qp);
-            m[kModeMDQ] += __builtin_fabs(P * m[kModeES]);
+            m[mf(kModeQ)] += qp;
+            m[mf(kModeDQ)] += P * m[mf(kModeES)];
+            m[mf(kModeDDQ)] += P * (1.0 + m[mf(kModeAux)]);
+            m[mf(kModeMQ)] += __builtin_fabs(qp);
+            m[mf(kModeMDQ)] += __builtin_fabs(P * m[mf(kModeES)]);
             break;
         }
         case ProgramOp::resonant: {
@@ -568,23 +575,60 @@ ALWAYS_INLINE void single_step(const Step& s, const double* K, double* r) {
             }
             const double arg = k[kResMean] * tau + r[in.a];
             const double Cb = __builtin_cos(arg), Sb = __builtin_sin(arg);
-            const double eC = m[kModeEC], eS = m[kModeES];
+            const double eC = m[mf(kModeEC)], eS = m[mf(kModeES)];
             const double y = k[kResQ] * (ct * eS - w * Cb);
             const double dy = k[kResQ] * (ct * eC - dw * Cb + k[kResMean] * w * Sb);
             const double ddy =
                 k[kResQ] * (k[kResH2W2] * w * Cb + k[kResTwoMean] * dw * Sb - k[kResLambda] * ct * eS);
             o[0] = w, o[1] = dw, o[2] = Cb, o[3] = Sb, o[4] = y, o[5] = dy, o[6] = ddy;
-            m[kModeQ] += y;
-            m[kModeDQ] += dy;
-            m[kModeDDQ] += ddy;
+            m[mf(kModeQ)] += y;
+            m[mf(kModeDQ)] += dy;
+            m[mf(kModeDDQ)] += ddy;
             // The magnitude of the terms (y and y' cancel to ~tau^3 near tau = 0).
             const double Q = __builtin_fabs(k[kResQ]);
-            m[kModeMQ] += Q * (__builtin_fabs(ct * eS) + __builtin_fabs(w * Cb));
-            m[kModeMDQ] += Q * (__builtin_fabs(ct * eC) + __builtin_fabs(dw * Cb) + __builtin_fabs(k[kResMean] * w * Sb));
+            m[mf(kModeMQ)] += Q * (__builtin_fabs(ct * eS) + __builtin_fabs(w * Cb));
+            m[mf(kModeMDQ)] += Q * (__builtin_fabs(ct * eC) + __builtin_fabs(dw * Cb) + __builtin_fabs(k[kResMean] * w * Sb));
             break;
         }
         default: break;  // mode, harmonic: their own steps; lincomb, lincomb_ld, copy, abs, mass_state: blocks
     }
+}
+
+// Whether steps s[0 .. kLane) are underdamped modes in the lanes of one group
+// (lay_out_modes): their fields are then vectors.
+ALWAYS_INLINE bool lanes_of_one_group(const Step* s) {
+    for (std::uint32_t l = 1; l < kLane; ++l)
+        if (s[l].run != kMode + 1 || s[l].single().dst != s[0].single().dst + l) return false;
+    return true;
+}
+
+// Four underdamped modes' steps as mode_step computes each, lane by lane: the
+// same operations on the same operands, so the same bits.
+ALWAYS_INLINE void underdamped_lanes(const Step* s, const double* K, double* r, const double* e, const double* sn,
+                                     const double* cs) {
+    hsnc_v4d A0, A1, A2, A3, A4, A5, sigma, inv_omega, lambda, E, S, C;
+    for (std::uint32_t l = 0; l < kLane; ++l) {
+        const Instr& in = s[l].single();
+        const double* A = r + in.a;
+        const double* k = K + in.first;
+        A0[l] = A[0], A1[l] = A[1], A2[l] = A[2], A3[l] = A[3], A4[l] = A[4], A5[l] = A[5];
+        sigma[l] = k[kModeSigma], inv_omega[l] = k[kModeInvOmegaD], lambda[l] = k[kModeLambda];
+    }
+    std::memcpy(&E, e, sizeof E), std::memcpy(&S, sn, sizeof S), std::memcpy(&C, cs, sizeof C);
+    const hsnc_v4d eC = E * C, eS = E * S * inv_omega;
+    const hsnc_v4d q = A0 * eC + A1 * eS, dq = A2 * eC + A3 * eS, ddq = A4 * eC + A5 * eS;
+    const hsnc_v4d rr = dq * dq + lambda * q * q;
+    hsnc_v4d R;
+    for (std::uint32_t l = 0; l < kLane; ++l) R[l] = __builtin_sqrt(rr[l]);
+    hsnc_v4d m0, m1, m2, m3, ms;
+    magnitude(A0 * eC, m0), magnitude(A1 * eS, m1), magnitude(A2 * eC, m2), magnitude(A3 * eS, m3);
+    magnitude(sigma * A0 * eC, ms);
+    const hsnc_v4d mq = m0 + m1, mdq0 = m2 + m3, mdq1 = mdq0 + ms;
+    const hsnc_v4d mdq = sigma != 0.0 ? mdq1 : mdq0;  // + |sigma A eC| where sigma is not 0, as mode_step
+    double* o = r + s[0].single().dst;
+    auto put = [&](std::uint32_t field, const hsnc_v4d& v) { std::memcpy(o + mf(field), &v, sizeof v); };
+    put(kModeAux, E), put(kModeEC, eC), put(kModeES, eS), put(kModeQ, q), put(kModeDQ, dq), put(kModeDDQ, ddq);
+    put(kModeR, R), put(kModeMQ, mq), put(kModeMDQ, mdq);
 }
 
 // The consecutive mode steps of the factored regimes from `first` (up to
@@ -612,6 +656,11 @@ HSNC_ROWS_CLONES const Step* factored_modes(const Step* first, const Step* end, 
         mode_factors(xe, xt, e, sn, cs, (m + 3) / 4 * 4, exp);
     m = 0;
     for (const Step* s = first; s != last; ++s, ++m) {
+        if (s->run == kMode + 1 && last - s >= static_cast<std::ptrdiff_t>(kLane) && lanes_of_one_group(s)) {
+            underdamped_lanes(s, K, r, e + m, sn + m, cs + m);
+            s += kLane - 1, m += kLane - 1;
+            continue;
+        }
         switch (s->run) {
             case kMode + 0: mode_step<ProgramRegime::undamped, true>(*s, K, r, 0.0, sn[m], cs[m]); break;
             case kMode + 1: mode_step<ProgramRegime::underdamped, true>(*s, K, r, e[m], sn[m], cs[m]); break;
@@ -723,7 +772,8 @@ ALWAYS_INLINE void visit_accesses(const Instr& in, const std::vector<ProgramTerm
     auto block = [](auto&& to, std::uint32_t base, std::initializer_list<std::uint32_t> regs) {
         for (std::uint32_t k : regs) to(base + k);
     };
-    const std::initializer_list<std::uint32_t> sums = {kModeQ, kModeDQ, kModeDDQ, kModeMQ, kModeMDQ};
+    const std::initializer_list<std::uint32_t> sums = {mf(kModeQ), mf(kModeDQ), mf(kModeDDQ), mf(kModeMQ),
+                                                       mf(kModeMDQ)};
     switch (in.op) {
         case ProgramOp::lincomb:
         case ProgramOp::lincomb_ld:
@@ -751,7 +801,7 @@ ALWAYS_INLINE void visit_accesses(const Instr& in, const std::vector<ProgramTerm
         case ProgramOp::mode:
             for (std::uint32_t k = 0; k < 6; ++k) read(in.a + k);
             read(in.b);
-            for (std::uint32_t k = 0; k < kModeRegisters; ++k) write(in.dst + k);
+            for (std::uint32_t k = 0; k < kModeRegisters; ++k) write(in.dst + mf(k));
             break;
         case ProgramOp::rigid_particular:
             read(in.a);
@@ -763,7 +813,7 @@ ALWAYS_INLINE void visit_accesses(const Instr& in, const std::vector<ProgramTerm
             read(in.a);
             read(in.b);
             block(read, in.c, sums);
-            block(read, in.c, {kModeES, kModeAux});
+            block(read, in.c, {mf(kModeES), mf(kModeAux)});
             write(in.dst);
             block(write, in.c, sums);
             break;
@@ -772,7 +822,7 @@ ALWAYS_INLINE void visit_accesses(const Instr& in, const std::vector<ProgramTerm
             read(in.b);
             read(in.d);
             block(read, in.c, sums);
-            block(read, in.c, {kModeEC, kModeES});
+            block(read, in.c, {mf(kModeEC), mf(kModeES)});
             block(write, in.dst, {0, 1, 2, 3, 4, 5, 6});
             block(write, in.c, sums);
             break;
@@ -929,14 +979,17 @@ void mark_blocks(const Instr& in, const std::vector<ProgramTerm>& terms, std::ve
     auto mark = [&](std::uint32_t base, std::uint32_t n) {
         for (std::uint32_t k = 0; k < n; ++k) block[base + k] = 1;
     };
+    auto mark_mode = [&](std::uint32_t base) {  // a mode block, laid out by lane
+        for (std::uint32_t k = 0; k < kModeRegisters; ++k) block[base + mf(k)] = 1;
+    };
     switch (in.op) {
-        case ProgramOp::mode: mark(in.a, 6), mark(in.dst, kModeRegisters); break;
+        case ProgramOp::mode: mark(in.a, 6), mark_mode(in.dst); break;
         case ProgramOp::harmonic: mark(in.dst, 3); break;
         case ProgramOp::rigid_particular:
-        case ProgramOp::rigid_damped_particular: mark(in.c, kModeRegisters); break;
-        case ProgramOp::resonant: mark(in.c, kModeRegisters), mark(in.dst, 7); break;
+        case ProgramOp::rigid_damped_particular: mark_mode(in.c); break;
+        case ProgramOp::resonant: mark_mode(in.c), mark(in.dst, 7); break;
         case ProgramOp::mass_state:
-            for (std::uint32_t k = 0; k < in.count; ++k) mark(terms[in.first + k].reg, kModeRegisters);
+            for (std::uint32_t k = 0; k < in.count; ++k) mark_mode(terms[in.first + k].reg);
             break;
         default: break;
     }
@@ -1071,8 +1124,47 @@ std::unique_ptr<InterpretedSolver::Body> freeze(const std::vector<Block>& blocks
 /// only rename a register forwarded (forward_copies). `terms` are the
 /// program's: the registers of this body's terms are renamed in place, the
 /// other body's terms are not touched.
+/// Mode blocks laid out by lane: the body's modes in program order, four to a
+/// group of kLane * kModeRegisters registers appended to the body's, mode m's
+/// field f at its group's first register + kLane * f + m % kLane. Every
+/// register the instructions name is renamed; the coefficient registers and
+/// the outputs keep their numbers. So four modes' fields are vectors
+/// (factored_modes) and a value's operations do not change.
+void lay_out_modes(std::vector<Instr>& code, std::vector<ProgramTerm>& terms, std::size_t& registers) {
+    const std::size_t old = registers;
+    std::vector<std::uint32_t> to;
+    std::uint32_t m = 0;
+    for (const Instr& in : code) {
+        if (in.op != ProgramOp::mode) continue;
+        if (to.empty()) {
+            to.resize(old);
+            for (std::size_t r = 0; r < old; ++r) to[r] = static_cast<std::uint32_t>(r);
+        }
+        const std::uint32_t first =
+            static_cast<std::uint32_t>(old) + kLane * kModeRegisters * (m / kLane) + m % kLane;
+        for (std::uint32_t f = 0; f < kModeRegisters; ++f) to[in.dst + f] = first + mf(f);
+        ++m;
+    }
+    if (m == 0) return;
+    registers = old + static_cast<std::size_t>(kLane) * kModeRegisters * ((m + kLane - 1) / kLane);
+    auto re = [&](std::uint32_t& r) {
+        if (r != kNoRegister && r < old) r = to[r];
+    };
+    for (Instr& in : code) {
+        re(in.dst), re(in.a), re(in.b), re(in.c), re(in.d);
+        std::uint32_t n = 0;
+        if (in.op == ProgramOp::lincomb || in.op == ProgramOp::lincomb_ld) n = in.count;
+        if (in.op == ProgramOp::mass_state)
+            n = in.count + in.tail[0] + in.tail[1] + in.tail[2] + in.tail[3] + in.tail[4];
+        for (std::uint32_t k = 0; k < n; ++k) re(terms[in.first + k].reg);
+    }
+}
+
+/// With `registers` (eval's), the modes laid out by lane (lay_out_modes), and
+/// the body's registers counted there; setup has no modes.
 std::vector<Instr> prepare(const ProgramBody& body, std::vector<ProgramTerm>& terms, std::uint32_t pinned_begin,
-                           std::uint32_t pinned_end, std::vector<std::uint32_t>& exported) {
+                           std::uint32_t pinned_end, std::vector<std::uint32_t>& exported,
+                           std::size_t* registers = nullptr) {
     // Field by field into place: a whole Instr built on the stack and copied
     // stalled on every copy (its scalar stores read back as vectors).
     std::vector<Instr> code(body.code.size());
@@ -1086,7 +1178,9 @@ std::vector<Instr> prepare(const ProgramBody& body, std::vector<ProgramTerm>& te
         x.count = in.count;
         for (int q = 0; q < 5; ++q) x.tail[q] = in.tail[q];
     }
-    forward_copies(code, terms, body.registers(), pinned_begin, pinned_end, exported);
+    std::size_t count = body.registers();
+    if (registers) lay_out_modes(code, terms, count), *registers = count;
+    forward_copies(code, terms, count, pinned_begin, pinned_end, exported);
     return code;
 }
 
@@ -1385,14 +1479,15 @@ InterpretedSolver::InterpretedSolver(Program p)
       constants_(std::move(p.constants)),
       setup_coef_(p.setup_coef),
       setup_(whole_body(p.setup, p.terms, setup_coef_)),
-      setup_regs_(p.setup.registers(), 0.0),
-      eval_regs_(p.eval.registers(), 0.0) {
-    eval_regs_[0] = 1.0;
+      setup_regs_(p.setup.registers(), 0.0) {
     plan_ = std::move(p.restart);
     const std::uint32_t outputs = p.eval_outputs(), switch_outputs = outputs + static_cast<std::uint32_t>(
                                                                                    p.n_state() + 2 * p.n_dof);
+    std::size_t registers = 0;  // eval's, its modes laid out by lane
     const std::vector<Instr> code =
-        prepare(p.eval, p.terms, outputs, outputs + p.eval_output_count(), no_exports_);
+        prepare(p.eval, p.terms, outputs, outputs + p.eval_output_count(), no_exports_, &registers);
+    eval_regs_.assign(registers, 0.0);
+    eval_regs_[0] = 1.0;
     const bool by_function = switches_.size() >= kScheduleFrom;  // eval_some() runs rows of eval_
     std::vector<RowRef> where;
     // eval's bodies, their modes' factors taken as the printer takes them (emitter.cpp).
@@ -1400,7 +1495,7 @@ InterpretedSolver::InterpretedSolver(Program p)
     const AccessTable table(code, p.terms);
     auto eval_body = [&](const std::vector<char>* only, std::vector<RowRef>* rows = nullptr) {
         std::unique_ptr<Body> body =
-            schedule(code, table_levels(table, code.size(), p.eval.registers(), only), p.terms, rows);
+            schedule(code, table_levels(table, code.size(), registers, only), p.terms, rows);
         body->vector_factors = vector;
         return body;
     };
@@ -1409,7 +1504,7 @@ InterpretedSolver::InterpretedSolver(Program p)
     // its own only when it leaves out a good part (the state of masses no
     // switch function reads).
     const std::vector<char> search =
-        needed_for(code.size(), table, p.eval.registers(), switch_outputs, outputs + p.eval_output_count());
+        needed_for(code.size(), table, registers, switch_outputs, outputs + p.eval_output_count());
     const double share = estimated_work(code, &search) / std::max(1.0, estimated_work(code));
     if (share < 0.8) {
         switches_body_ = eval_body(&search);
@@ -1419,7 +1514,7 @@ InterpretedSolver::InterpretedSolver(Program p)
         // Rows by function for eval_some (rows_by_function); without them
         // eval_some() is eval_switches().
         FunctionRows parts;
-        if (rows_by_function(code, table, p.eval.registers(), switch_outputs, switches_.size(), where, parts)) {
+        if (rows_by_function(code, table, registers, switch_outputs, switches_.size(), where, parts)) {
             common_ = eval_body(&parts.common);
             part_rows_.assign(parts.rows.begin(), parts.rows.end());  // no spare capacity: the budget counts it
             part_at_.assign(parts.at.begin(), parts.at.end());
@@ -1431,7 +1526,7 @@ InterpretedSolver::InterpretedSolver(Program p)
             // their own (one writer each), and a listed function's rows
             // compute them again. No body is scheduled for it.
             const std::size_t ns = switches_.size();
-            std::vector<char> needed(p.eval.registers(), 0);
+            std::vector<char> needed(registers, 0);
             const std::uint32_t bounds_at = switch_outputs + 2 * static_cast<std::uint32_t>(ns);
             for (std::size_t f = 0; f < ns; ++f) needed[bounds_at + f] = 1;
             const std::vector<char> keep = kept_for(table, parts.common, std::move(needed));
