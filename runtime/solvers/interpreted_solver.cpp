@@ -100,9 +100,14 @@ struct InterpretedSolver::Body {
     std::vector<double> doubles;
     std::vector<std::uint32_t> regs;
     std::vector<interpreter::Instr> singles;
+    /// Per group of four underdamped modes run as vectors (attach_lanes): their
+    /// sigma, 1/omega_d and lambda, four lanes each; the group's first step
+    /// points to them (Step::c_).
+    std::vector<double> lanes;
     std::size_t bytes() const {
         return sizeof(Body) + sizeof(interpreter::Step) * steps.capacity() + sizeof(double) * doubles.capacity() +
-               sizeof(std::uint32_t) * regs.capacity() + sizeof(interpreter::Instr) * singles.capacity();
+               sizeof(std::uint32_t) * regs.capacity() + sizeof(interpreter::Instr) * singles.capacity() +
+               sizeof(double) * lanes.capacity();
     }
 };
 
@@ -602,18 +607,36 @@ ALWAYS_INLINE bool lanes_of_one_group(const Step* s) {
     return true;
 }
 
+// Marks each group of four underdamped modes in one group's lanes (from the
+// first such step on, greedily, as factored_modes meets them) with its
+// constants by lane in the body (Body::lanes).
+void attach_lanes(InterpretedSolver::Body& body, const double* K) {
+    std::vector<Step>& st = body.steps;
+    std::vector<std::size_t> firsts;
+    for (std::size_t i = 0; i + kLane <= st.size(); ++i)
+        if (st[i].run == kMode + 1 && lanes_of_one_group(&st[i])) firsts.push_back(i), i += kLane - 1;
+    body.lanes.assign(3 * kLane * firsts.size(), 0.0);
+    for (std::size_t g = 0; g < firsts.size(); ++g) {
+        double* out = body.lanes.data() + 3 * kLane * g;
+        for (std::uint32_t l = 0; l < kLane; ++l) {
+            const double* k = K + st[firsts[g] + l].single().first;
+            out[l] = k[kModeSigma], out[kLane + l] = k[kModeInvOmegaD], out[2 * kLane + l] = k[kModeLambda];
+        }
+        st[firsts[g]].c_ = out;
+    }
+}
+
 // Four underdamped modes' steps as mode_step computes each, lane by lane: the
 // same operations on the same operands, so the same bits.
-ALWAYS_INLINE void underdamped_lanes(const Step* s, const double* K, double* r, const double* e, const double* sn,
-                                     const double* cs) {
+ALWAYS_INLINE void underdamped_lanes(const Step* s, double* r, const double* e, const double* sn, const double* cs) {
     hsnc_v4d A0, A1, A2, A3, A4, A5, sigma, inv_omega, lambda, E, S, C;
     for (std::uint32_t l = 0; l < kLane; ++l) {
-        const Instr& in = s[l].single();
-        const double* A = r + in.a;
-        const double* k = K + in.first;
+        const double* A = r + s[l].single().a;
         A0[l] = A[0], A1[l] = A[1], A2[l] = A[2], A3[l] = A[3], A4[l] = A[4], A5[l] = A[5];
-        sigma[l] = k[kModeSigma], inv_omega[l] = k[kModeInvOmegaD], lambda[l] = k[kModeLambda];
     }
+    const double* k = s->c();  // attach_lanes
+    std::memcpy(&sigma, k, sizeof sigma), std::memcpy(&inv_omega, k + kLane, sizeof inv_omega);
+    std::memcpy(&lambda, k + 2 * kLane, sizeof lambda);
     std::memcpy(&E, e, sizeof E), std::memcpy(&S, sn, sizeof S), std::memcpy(&C, cs, sizeof C);
     const hsnc_v4d eC = E * C, eS = E * S * inv_omega;
     const hsnc_v4d q = A0 * eC + A1 * eS, dq = A2 * eC + A3 * eS, ddq = A4 * eC + A5 * eS;
@@ -656,8 +679,8 @@ HSNC_ROWS_CLONES const Step* factored_modes(const Step* first, const Step* end, 
         mode_factors(xe, xt, e, sn, cs, (m + 3) / 4 * 4, exp);
     m = 0;
     for (const Step* s = first; s != last; ++s, ++m) {
-        if (s->run == kMode + 1 && last - s >= static_cast<std::ptrdiff_t>(kLane) && lanes_of_one_group(s)) {
-            underdamped_lanes(s, K, r, e + m, sn + m, cs + m);
+        if (s->run == kMode + 1 && s->c_ && last - s >= static_cast<std::ptrdiff_t>(kLane)) {
+            underdamped_lanes(s, r, e + m, sn + m, cs + m);
             s += kLane - 1, m += kLane - 1;
             continue;
         }
@@ -1107,7 +1130,7 @@ std::unique_ptr<InterpretedSolver::Body> freeze(const std::vector<Block>& blocks
         s.count = b.count;
         for (int q = 0; q < 5; ++q) s.tail[q] = b.tail[q];
         s.cos_dst = b.cos_dst;
-        s.c_ = body->doubles.data() + b.c_at;
+        s.c_ = b.kind == StepKind::single ? nullptr : body->doubles.data() + b.c_at;
         s.reg_ = body->regs.data() + b.reg_at;
         s.dst_ = body->regs.data() + b.dst_at;
         s.src_ = body->regs.data() + b.src_at;
@@ -1497,6 +1520,7 @@ InterpretedSolver::InterpretedSolver(Program p)
         std::unique_ptr<Body> body =
             schedule(code, table_levels(table, code.size(), registers, only), p.terms, rows);
         body->vector_factors = vector;
+        if (vector) attach_lanes(*body, constants_.data());
         return body;
     };
     eval_ = eval_body(nullptr, by_function ? &where : nullptr);
