@@ -101,8 +101,8 @@ struct InterpretedSolver::Body {
     std::vector<std::uint32_t> regs;
     std::vector<interpreter::Instr> singles;
     /// Per group of four underdamped modes run as vectors (attach_lanes): their
-    /// sigma, 1/omega_d and lambda, four lanes each; the group's first step
-    /// points to them (Step::c_).
+    /// sigma, 1/omega_d, lambda and omega_d, four lanes each; the group's first
+    /// step points to them (Step::c_).
     std::vector<double> lanes;
     std::size_t bytes() const {
         return sizeof(Body) + sizeof(interpreter::Step) * steps.capacity() + sizeof(double) * doubles.capacity() +
@@ -615,12 +615,13 @@ void attach_lanes(InterpretedSolver::Body& body, const double* K) {
     std::vector<std::size_t> firsts;
     for (std::size_t i = 0; i + kLane <= st.size(); ++i)
         if (st[i].run == kMode + 1 && lanes_of_one_group(&st[i])) firsts.push_back(i), i += kLane - 1;
-    body.lanes.assign(3 * kLane * firsts.size(), 0.0);
+    body.lanes.assign(4 * kLane * firsts.size(), 0.0);
     for (std::size_t g = 0; g < firsts.size(); ++g) {
-        double* out = body.lanes.data() + 3 * kLane * g;
+        double* out = body.lanes.data() + 4 * kLane * g;
         for (std::uint32_t l = 0; l < kLane; ++l) {
             const double* k = K + st[firsts[g] + l].single().first;
             out[l] = k[kModeSigma], out[kLane + l] = k[kModeInvOmegaD], out[2 * kLane + l] = k[kModeLambda];
+            out[3 * kLane + l] = k[kModeOmegaD];
         }
         st[firsts[g]].c_ = out;
     }
@@ -666,9 +667,20 @@ HSNC_ROWS_CLONES const Step* factored_modes(const Step* first, const Step* end, 
     const Step* last = first;
     std::size_t m = 0;
     bool exp = false;
-    for (; last != end && m < kFactorBatch && factored_run(last->run); ++last, ++m) {
+    while (last != end && m < kFactorBatch && factored_run(last->run)) {
+        if (last->run == kMode + 1 && last->c_ && end - last >= static_cast<std::ptrdiff_t>(kLane) &&
+            m + kLane <= kFactorBatch) {
+            // A lane group (attach_lanes): -sigma tau and omega_d tau as factor_arguments.
+            const double tau = r[last->single().b];
+            for (std::uint32_t l = 0; l < kLane; ++l)
+                xe[m + l] = -last->c()[l] * tau, xt[m + l] = last->c()[3 * kLane + l] * tau;
+            last += kLane, m += kLane;
+            exp = true;
+            continue;
+        }
         factor_arguments(*last, K, r, xe[m], xt[m]);
         exp = exp || last->run != kMode + 0;
+        ++last, ++m;
     }
     for (std::size_t pad = m; pad % 4 != 0; ++pad) xe[pad] = xt[pad] = 0.0;
     bool at_zero = true;  // a segment's start: e^0, sin 0, cos 0 are 1, 0, 1, as the helpers give them
