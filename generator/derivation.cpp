@@ -347,12 +347,15 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
             d.mu_k_n[i] = mu.mu_k_n[i], d.mu_k_n_double[i] = mu.mu_k_n_double[i];
     }
     // A harmonic with Omega = 0 is the constant force F sin(phase).
+    bool static_forcing = false;
     for (const Harmonic& h : model.forcing) {
         if (h.omega != 0.0) continue;
         const numeric s = GiNaC::sin(exact(h.phase));
         for (std::size_t i = 0; i < n; ++i) d.f_const[i] += exact(h.amplitude[i]) * s;
-        for (std::size_t i = 0; i < n; ++i) d.f_const_double[i] = d.f_const[i].to_double();
+        static_forcing = true;
     }
+    if (static_forcing)  // the exact sums rounded once
+        for (std::size_t i = 0; i < n; ++i) d.f_const_double[i] = d.f_const[i].to_double();
 
     // Modal decomposition of Kt = M^-1/2 K_FF M^-1/2, in DD.
     const std::size_t nf = d.free_dofs.size();

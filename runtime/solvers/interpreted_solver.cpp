@@ -1155,10 +1155,6 @@ std::unique_ptr<InterpretedSolver::Body> freeze(const std::vector<Block>& blocks
     return body;
 }
 
-/// A body's instructions as the scheduler takes them, with the copies that
-/// only rename a register forwarded (forward_copies). `terms` are the
-/// program's: the registers of this body's terms are renamed in place, the
-/// other body's terms are not touched.
 /// Mode blocks laid out by lane: the body's modes in program order, four to a
 /// group of kLane * kModeRegisters registers appended to the body's, mode m's
 /// field f at its group's first register + kLane * f + m % kLane. Every
@@ -1195,8 +1191,12 @@ void lay_out_modes(std::vector<Instr>& code, std::vector<ProgramTerm>& terms, st
     }
 }
 
-/// With `registers` (eval's), the modes laid out by lane (lay_out_modes), and
-/// the body's registers counted there; setup has no modes.
+/// A body's instructions as the scheduler takes them, with the copies that
+/// only rename a register forwarded (forward_copies). `terms` are the
+/// program's: the registers of this body's terms are renamed in place, the
+/// other body's terms are not touched.
+/// With `registers` (eval's), the modes laid out by lane first
+/// (lay_out_modes), and the body's registers counted there; setup has no modes.
 std::vector<Instr> prepare(const ProgramBody& body, std::vector<ProgramTerm>& terms, std::uint32_t pinned_begin,
                            std::uint32_t pinned_end, std::vector<std::uint32_t>& exported,
                            std::size_t* registers = nullptr) {
@@ -1541,7 +1541,8 @@ InterpretedSolver::InterpretedSolver(Program p)
     // switch function reads).
     const std::vector<char> search =
         needed_for(code.size(), table, registers, switch_outputs, outputs + p.eval_output_count());
-    const double share = estimated_work(code, &search) / std::max(1.0, estimated_work(code));
+    const double work = estimated_work(code);
+    const double share = estimated_work(code, &search) / std::max(1.0, work);
     if (share < 0.8) {
         switches_body_ = eval_body(&search);
         switch_share_ = share;
@@ -1574,7 +1575,7 @@ InterpretedSolver::InterpretedSolver(Program p)
                 else used[where[i].step] = 1;
                 beyond[i] = 1;
             }
-            if (mapped && estimated_work(code, &beyond) < 0.4 * estimated_work(code))
+            if (mapped && estimated_work(code, &beyond) < 0.4 * work)
                 for (std::size_t k = 0; k < used.size(); ++k)
                     if (used[k]) start_steps_.push_back(static_cast<std::uint32_t>(k));
         }
