@@ -17,6 +17,7 @@
 #include "csv_writer.h"
 #include "error.h"
 #include "file_read.h"
+#include "input_files.h"
 #include "hsnc/simulate.h"
 #include "hsnc/sweep.h"
 #include "model_reader.h"
@@ -385,6 +386,8 @@ int sweep(const SweepFlags& f) {
                     OutputFile file(*part_target);
                     file.write(text.data(), text.size());
                     file.commit();
+                    // Failed points are recorded in it: the part stays even when the command exits 1.
+                    commit_outputs();
                     SweepResult r = plan.result_header();
                     for (const std::vector<SweepPoint>& t : results) r.points.insert(r.points.end(), t.begin(), t.end());
                     const Problems problems(r);
@@ -401,6 +404,8 @@ int sweep(const SweepFlags& f) {
                     for (std::vector<SweepPoint>& t : results)
                         for (SweepPoint& p : t) r.points.push_back(std::move(p));
                     outputs->write(r, r.model + ": sweep over " + r.param);
+                    // Failed points are rows of the outputs: they stay when the command exits 1.
+                    commit_outputs();
                     std::cout << summary_line(r) << "\n";
                     const Problems problems(r);
                     for (const SweepPoint& p : r.points)
@@ -428,6 +433,7 @@ int sweep(const SweepFlags& f) {
 }
 
 int merge(const MergeFlags& f) {
+    for (const std::string& path : f.parts) note_input_file(path);  // no output may replace a part
     Outputs outputs(f.out, f.diagram, f.plot);
     std::vector<std::string> texts;
     for (const std::string& path : f.parts) {
@@ -437,6 +443,7 @@ int merge(const MergeFlags& f) {
     }
     const SweepResult r = merge_sweep_parts(texts, f.parts);
     outputs.write(r, r.model + ": sweep over " + r.param);
+    commit_outputs();  // failed points are rows of the outputs: they stay when the command exits 1
     std::cout << summary_line(r) << "\n";
     const Problems problems(r);
     if (problems.any()) throw RunError(problems.message());

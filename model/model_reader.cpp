@@ -23,6 +23,7 @@
 #include "error.h"
 #include "expression_evaluator.h"
 #include "file_read.h"
+#include "input_files.h"
 #include "ginac_lock.h"
 #include "mat_file.h"
 #include "matrix_market.h"
@@ -422,8 +423,10 @@ private:
             if (is_mat_spec(written)) {  // "x.mat:VAR", or "x.mat" with variable M, K or C
                 const char* letter = std::string(key) == "mass" ? "M" : std::string(key) == "stiffness" ? "K" : "C";
                 const auto [file, variable] = split_mat_spec(written, letter);
+                note_input_file(beside_model(file));  // no output of the run may replace it
                 return read_mat_variable(beside_model(file), variable);
             }
+            note_input_file(beside_model(written));
             return read_matrix_market(beside_model(written));
         } catch (const InputError& e) {
             fail(t.get(key), path, e.what());
@@ -802,8 +805,10 @@ Model parse_model(const std::string& toml_text, const std::string& source, const
 }
 
 Model read_model(const std::string& path, const ModelOverrides& overrides) {
-    const FileRead file = read_regular_file(path, kMaxModelFileBytes);  // never a FIFO or /dev/zero
+    struct stat st;
+    const FileRead file = read_regular_file(path, kMaxModelFileBytes, &st);  // never a FIFO or /dev/zero
     if (file.status != FileRead::Status::ok) throw InputError("cannot read model file '" + path + "': " + file.problem);
+    note_input_file(path, st);  // no output of the run may replace it
     return parse_model(file.bytes, path, overrides);
 }
 
