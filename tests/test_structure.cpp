@@ -29,6 +29,7 @@
 #include "engine_runner.h"
 #include "error.h"
 #include "matrix_market.h"
+#include "modal.h"
 #include "model_reader.h"
 #include "reference.h"
 #include "derivation.h"
@@ -675,6 +676,43 @@ TEST(FrictionInput, EveryKeyChecked) {
                    {"key 'friction[1].name': name 'u2' is already used by structure.dofs[2]"});
     expect_message(structure_error("name = \"s\"\n[[mass]]\nname = \"m\"\nm = 1\nmu_k = 0.1\n[[friction]]\nbetween = [\"m\", \"ground\"]\nmu_k = 0.2\n", {}),
                    {"key 'friction[1].between': 'm' already has friction (its own mu_k)"});
+}
+
+// A structure scaled by 1e200 or 1e-200 is the same structure: the Jacobi
+// scaling of the definiteness checks took sqrt(d_i * d_j), which overflows
+// beyond 1.3e154 (and underflows below 1.5e-154) and called such M and K
+// "not positive definite". Same natural frequencies, same Rayleigh damping.
+TEST(StructureInput, ScaledMatricesGiveTheSameFrequencies) {
+    const std::string beam = std::string(HSNC_SOURCE_DIR) + "/examples/beam-crack/";
+    const Model ref = read_model(beam + "beam-crack.toml");
+    const ModalDecomposition ref_modes = modal_analysis(ref, Configuration::all_open(ref));
+    for (const double scale : {1e200, 1e-200, 1e300, 1e-300}) {
+        Folder dir;
+        for (const char* name : {"M", "K", "C"}) {
+            MarketMatrix A = read_matrix_market(beam + name + ".mtx");
+            Eigen::MatrixXd scaled(A.rows, A.cols);
+            for (std::size_t i = 0; i < A.rows; ++i)
+                for (std::size_t j = 0; j < A.cols; ++j) scaled(i, j) = A(i, j) * scale;
+            dir.write(std::string(name) + ".mtx", market(scaled));
+        }
+        std::ifstream in(beam + "beam-crack.toml");
+        const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const std::string path = dir.write("beam-crack.toml", text);
+        Model m;
+        try {
+            m = read_model(path);
+        } catch (const InputError& e) {
+            ADD_FAILURE() << "scale " << scale << ": " << e.what();
+            continue;
+        }
+        EXPECT_NEAR(m.alpha, ref.alpha, 1e-12 * ref.alpha) << scale;
+        EXPECT_NEAR(m.beta, ref.beta, 1e-12 * ref.beta) << scale;
+        const ModalDecomposition modes = modal_analysis(m, Configuration::all_open(m));
+        ASSERT_EQ(modes.lambda.size(), ref_modes.lambda.size());
+        for (Eigen::Index j = 0; j < modes.lambda.size(); ++j)
+            EXPECT_NEAR(modes.lambda(j), ref_modes.lambda(j), 1e-9 * ref_modes.lambda(modes.lambda.size() - 1))
+                << "scale " << scale << " mode " << j;
+    }
 }
 
 // `hsnc check` reports the structure, its dofs, the friction elements and the frequencies.
