@@ -8,7 +8,8 @@
 // column). Comment lines start with '%'; blank lines are skipped. Anything
 // else (complex or pattern fields, skew-symmetric or Hermitian storage, a
 // missing or extra entry, a number that is not finite or not a normal double,
-// trailing text on a line) is an error "FILE:LINE: reason" (LINE when the
+// a value of an integer file that is not an integer literal, trailing text on
+// a line, a NUL byte) is an error "FILE:LINE: reason" (LINE when the
 // error belongs to one line). The whole file is read before anything is used.
 #pragma once
 

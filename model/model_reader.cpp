@@ -418,6 +418,8 @@ private:
         const std::string path = "structure." + std::string(key);
         written = required_string(t, "structure", key);
         if (written.empty()) fail(t.get(key), path, "must name a Matrix Market or .mat file");
+        if (written.find('\0') != std::string::npos)  // the file system would read the path up to the NUL only
+            fail(t.get(key), path, "'" + excerpt(written) + "': a path cannot hold a NUL character");
         try {
             if (is_mat_spec(written)) {  // "x.mat:VAR", or "x.mat" with variable M, K or C
                 const char* letter = std::string(key) == "mass" ? "M" : std::string(key) == "stiffness" ? "K" : "C";

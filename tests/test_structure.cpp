@@ -28,6 +28,7 @@
 #include "cli_runner.h"
 #include "engine_runner.h"
 #include "error.h"
+#include "file_read.h"
 #include "matrix_market.h"
 #include "modal.h"
 #include "model_reader.h"
@@ -499,6 +500,27 @@ TEST(MatrixMarket, EveryErrorNamesFileAndLine) {
     expect_message(market_error("%%MatrixMarket matrix array real symmetric\n2 3\n"), {"A.mtx:2: a symmetric matrix must be square"});
 }
 
+// A NUL ends the C string strtod reads ("1\0garbage" read as 1), and an
+// integer file's "1.5" is no integer: each refused, by line.
+template <std::size_t N>
+std::string with_nul(const char (&text)[N]) {
+    return std::string(text, N - 1);  // the whole literal, past its embedded NUL
+}
+
+TEST(MatrixMarket, NulBytesAndNonIntegersAreRefused) {
+    expect_message(market_error(with_nul("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1\0garbage\n")),
+                   {"A.mtx:3: contains a NUL byte"});
+    expect_message(market_error(with_nul("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1\0\n")),
+                   {"A.mtx:3: contains a NUL byte"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate integer general\n2 2 1\n1 1 1.5\n"),
+                   {"A.mtx:3: '1.5' is not an integer (the header says the field is integer)"});
+    expect_message(market_error("%%MatrixMarket matrix array integer general\n1 2\n3\n2e3\n"),
+                   {"A.mtx:4: '2e3' is not an integer"});
+    expect_message(market_error("%%MatrixMarket matrix array integer general\n1 2\n3\n-\n"), {"A.mtx:4: '-' is not an integer"});
+    const MarketMatrix m = parse_matrix_market("%%MatrixMarket matrix array integer general\n1 3\n+3\n-2\n007\n", "i.mtx");
+    EXPECT_EQ(m.values, (std::vector<double>{3.0, -2.0, 7.0}));
+}
+
 // ---------------------------------------------------------------- bad [structure] and [[friction]]
 
 /// The message of reading `model` (written as s.toml beside `files`) in a fresh folder.
@@ -676,6 +698,20 @@ TEST(FrictionInput, EveryKeyChecked) {
                    {"key 'friction[1].name': name 'u2' is already used by structure.dofs[2]"});
     expect_message(structure_error("name = \"s\"\n[[mass]]\nname = \"m\"\nm = 1\nmu_k = 0.1\n[[friction]]\nbetween = [\"m\", \"ground\"]\nmu_k = 0.2\n", {}),
                    {"key 'friction[1].between': 'm' already has friction (its own mu_k)"});
+}
+
+// A path holding a NUL would open the file named by its part before the NUL.
+TEST(StructureInput, APathWithANulCharacterIsRefused) {
+    Folder dir;
+    dir.write("M.mtx", kM2);
+    dir.write("K.mtx", kK2);
+    const std::string model = "name = \"s\"\n[structure]\ndofs = [\"u1\", \"u2\"]\nmass = \"M.mtx\"\n"
+                              "stiffness = \"K.mtx\\u0000.bak\"\n";
+    expect_message(structure_error(model, {{"M.mtx", kM2}, {"K.mtx", kK2}}),
+                   {"s.toml:5: key 'structure.stiffness': 'K.mtx .bak': a path cannot hold a NUL character"});
+    const FileRead r = read_regular_file(dir.path("K.mtx") + std::string(1, '\0') + ".bak", 1 << 20);
+    EXPECT_EQ(r.status, FileRead::Status::refused);
+    EXPECT_EQ(r.problem, "the path contains a NUL character");
 }
 
 // A structure scaled by 1e200 or 1e-200 is the same structure: the Jacobi
