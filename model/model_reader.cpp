@@ -403,6 +403,14 @@ private:
         values_[name] = value;
     }
 
+    /// The model size limit (matrix_market.h kMaxMatrixDimension), said once for masses and dofs.
+    static std::string too_many_dofs(std::size_t n) {
+        return std::to_string(n) + " degrees of freedom, more than the " + std::to_string(kMaxMatrixDimension) +
+               " hsnc takes for now: its matrices are dense and its modal analysis is cubic in the dofs (at " +
+               std::to_string(kMaxMatrixDimension) + " dofs, check takes under a second and simulate seconds per "
+               "configuration; at 10000 check would take hours and gigabytes)";
+    }
+
     /// What a body other than ground is called in messages.
     std::string body_word() const { return model_.structure.present ? "dof" : "mass"; }
 
@@ -418,6 +426,8 @@ private:
         const std::string path = "structure." + std::string(key);
         written = required_string(t, "structure", key);
         if (written.empty()) fail(t.get(key), path, "must name a Matrix Market or .mat file");
+        if (written.find('\0') != std::string::npos)  // the file system would read the path up to the NUL only
+            fail(t.get(key), path, "'" + excerpt(written) + "': a path cannot hold a NUL character");
         if (written.find('\0') != std::string::npos)  // the file system would read the path up to the NUL only
             fail(t.get(key), path, "'" + excerpt(written) + "': a path cannot hold a NUL character");
         try {
@@ -443,6 +453,7 @@ private:
         const toml::array* list = dofs->as_array();
         if (!list || list->empty())
             fail(dofs, "structure.dofs", "expected a non-empty list of dof names, e.g. [\"u1\", \"u2\"]");
+        if (list->size() > kMaxMatrixDimension) fail(dofs, "structure.dofs", too_many_dofs(list->size()));
         std::vector<std::string> names;
         for (std::size_t i = 0; i < list->size(); ++i) {
             const std::string key = "structure.dofs[" + std::to_string(i + 1) + "]";
@@ -617,6 +628,7 @@ private:
     void read_masses(const toml::table& root) {
         const auto tables = table_array(root, "mass");
         if (tables.empty()) fail(root.get("mass"), "mass", "no masses: give at least one [[mass]] table");
+        if (tables.size() > kMaxMatrixDimension) fail(root.get("mass"), "mass", too_many_dofs(tables.size()));
         for (std::size_t i = 0; i < tables.size(); ++i) {
             const toml::table& t = *tables[i];
             const std::string path = "mass[" + std::to_string(i + 1) + "]";

@@ -13,6 +13,7 @@
 
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -749,6 +750,45 @@ TEST(StructureInput, ScaledMatricesGiveTheSameFrequencies) {
             EXPECT_NEAR(modes.lambda(j), ref_modes.lambda(j), 1e-9 * ref_modes.lambda(modes.lambda.size() - 1))
                 << "scale " << scale << " mode " << j;
     }
+}
+
+// A 10,000-dof structure: `check` took over 120 s and 3.1 GB (dense matrices,
+// cubic modal analysis). Refused at once with the stated limit
+// (kMaxMatrixDimension), as are a matrix file and a [[mass]] model beyond it.
+TEST(StructureInput, AStructureBeyondTheSizeLimitIsRefusedAtOnce) {
+    Folder dir;
+    const std::size_t n = 10000;
+    std::ostringstream M, K, toml;
+    M << "%%MatrixMarket matrix coordinate real symmetric\n" << n << " " << n << " " << n << "\n";
+    K << "%%MatrixMarket matrix coordinate real symmetric\n" << n << " " << n << " " << 2 * n - 1 << "\n";
+    toml << "name = \"big\"\n[structure]\ndofs = [";
+    for (std::size_t i = 1; i <= n; ++i) {
+        M << i << " " << i << " 1\n";
+        K << i << " " << i << " 2e4\n";
+        if (i > 1) K << i << " " << i - 1 << " -1e4\n";
+        toml << (i > 1 ? ", " : "") << "\"u" << i << "\"";
+    }
+    toml << "]\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n";
+    dir.write("M.mtx", M.str());
+    dir.write("K.mtx", K.str());
+    const std::string path = dir.write("big.toml", toml.str());
+    const auto start = std::chrono::steady_clock::now();
+    const testing::CliRun r = testing::run_hsnc("check '" + path + "'");
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_EQ(r.exit_code, 2) << r.out;
+    EXPECT_EQ(r.err, "hsnc: " + path + ":3: key 'structure.dofs': 10000 degrees of freedom, more than the " +
+                         std::to_string(kMaxMatrixDimension) + " hsnc takes for now: its matrices are dense and its "
+                         "modal analysis is cubic in the dofs (at " + std::to_string(kMaxMatrixDimension) +
+                         " dofs, check takes under a second and simulate seconds per configuration; at 10000 check "
+                         "would take hours and gigabytes)\n");
+    EXPECT_LT(seconds, 10.0);
+    // Two dofs, and a matrix file announcing 10000 x 10000: refused at its size line.
+    expect_message(with_matrices("", kM2, K.str().c_str()),
+                   {"key 'structure.stiffness': K.mtx:2: larger than 500 rows or columns"});
+    // [[mass]] models have the same limit.
+    std::string masses = "name = \"many\"\n";
+    for (std::size_t i = 1; i <= kMaxMatrixDimension + 1; ++i) masses += "[[mass]]\nname = \"m" + std::to_string(i) + "\"\nm = 1\n";
+    expect_message(structure_error(masses, {}), {"s.toml:2: key 'mass': 501 degrees of freedom, more than the 500"});
 }
 
 // `hsnc check` reports the structure, its dofs, the friction elements and the frequencies.
