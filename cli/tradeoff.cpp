@@ -20,6 +20,8 @@
 #include "commands.h"
 #include "csv_writer.h"
 #include "error.h"
+#include "input_files.h"
+#include "output_file.h"
 #include "model_reader.h"
 #include "tradeoff.h"
 #include "tradeoff_cli.h"
@@ -165,20 +167,6 @@ void print_summary(const TradeoffResult& study, std::ostream& out) {
     }
 }
 
-// An output file that cannot be written is bad input, found before any work:
-// a directory, or a directory we cannot create a file in (probed with a
-// temporary file beside it, removed at once).
-void check_output_path(const char* flag, const std::string& path) {
-    struct stat st {};
-    if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
-        throw InputError(std::string(flag) + " '" + path + "': is a directory");
-    const std::string probe = path + ".probe." + std::to_string(::getpid());
-    std::FILE* f = std::fopen(probe.c_str(), "w");
-    if (!f) throw InputError(std::string(flag) + " '" + path + "': cannot write it (" + std::strerror(errno) + ")");
-    std::fclose(f);
-    std::remove(probe.c_str());
-}
-
 }  // namespace
 
 int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
@@ -202,10 +190,17 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
     if (!o.plot.empty() && o.csv.empty()) throw InputError("--plot: needs --csv (the table it draws)");
     study.methods = chosen_methods(o.methods);
     // Every output path before any work (the reference alone can take minutes).
-    if (!o.csv.empty()) check_output_path("--csv", o.csv);
-    if (!o.plot.empty()) check_output_path("--plot", o.plot);
+    // The reference files are inputs: no output may replace them (input_files.h).
+    if (!o.reference_out.empty()) note_input_file(o.reference_out);
+    if (!o.reference_events.empty()) note_input_file(o.reference_events);
+    std::unique_ptr<OutputTarget> csv_target, plot_target;
+    std::vector<const OutputTarget*> targets;
+    if (!o.csv.empty()) targets.push_back((csv_target = std::make_unique<OutputTarget>(check_output("--csv", o.csv))).get());
+    if (!o.plot.empty())
+        targets.push_back((plot_target = std::make_unique<OutputTarget>(check_output("--plot", o.plot))).get());
+    check_distinct(targets);
     std::unique_ptr<CsvFile> csv;  // opened now, committed at the end; removed on any error before
-    if (!o.csv.empty()) csv = std::make_unique<CsvFile>(o.csv);
+    if (csv_target) csv = std::make_unique<CsvFile>(*csv_target);
 
     // The reference: read, or computed in process.
     RecordedRun reference;
@@ -253,7 +248,10 @@ int tradeoff(const TradeoffOptions& o, const ReferenceRunner& in_process) {
     const TradeoffResult result = hsnc::tradeoff(model, study, reference, progress);
 
     if (csv) write_csv(*csv, result);
-    if (!o.plot.empty() && !result.rows.empty()) plot_tradeoff(plot_of(model, result, reference_label), o.csv, o.plot);
+    // The figure reads the table where it is now: under its temporary name
+    // until the command's outputs are renamed together (output_file.h).
+    if (!o.plot.empty() && !result.rows.empty())
+        plot_tradeoff(plot_of(model, result, reference_label), csv->file().committed_at(), *plot_target);
     print_summary(result, std::cout);
     return 0;
 }

@@ -344,12 +344,14 @@ void OutputFile::commit() {
         std::lock_guard<std::mutex> lock(g_transaction_mutex);
         if (g_transaction && !tmp_.empty()) {  // renamed when the whole command has succeeded
             g_transaction->pending_.push_back({tmp_, target_.file, target_.label(), slot_});
+            committed_at_ = tmp_;
             tmp_.clear();
             slot_ = -1;
             return;
         }
     }
     if (!tmp_.empty() && ::rename(tmp_.c_str(), target_.file.c_str()) != 0) fail("cannot rename into place", errno);
+    committed_at_ = target_.file;
     tmp_.clear();
     unregister_temporary(slot_);
     slot_ = -1;

@@ -92,6 +92,9 @@ public:
     const OutputTarget& target() const { return target_; }
     /// The temporary file being written ("" for Mode::stream).
     const std::string& temporary() const { return tmp_; }
+    /// After commit(): where the complete bytes can be read now (the
+    /// temporary name while an OutputTransaction holds it, else the file).
+    const std::string& committed_at() const { return committed_at_; }
 
 private:
     void flush();
@@ -100,6 +103,7 @@ private:
 
     OutputTarget target_;
     std::string tmp_;
+    std::string committed_at_;
     int fd_ = -1;
     int slot_ = -1;  // in the interrupt-cleanup registry
     std::vector<char> buffer_;

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "error.h"
+#include "plot.h"
 
 namespace hsnc {
 namespace {
@@ -31,15 +32,13 @@ std::string quoted(const std::string& s) {
 // error of exactly 0 is drawn at 1e-17. Diverged runs (column `diverged`) are
 // pinned at diverged_ratio on the left, labelled with method and setting, so
 // that a 1e100 does not squash the axis, and left out on the right.
-void plot_tradeoff(const TradeoffPlot& plot, const std::string& csv, const std::string& png) {
+void plot_tradeoff(const TradeoffPlot& plot, const std::string& csv, const OutputTarget& png) {
     const std::string& reference_label = plot.reference_label;
     const double magnitude = plot.magnitude, diverged_ratio = plot.diverged_ratio;
     const bool any_diverged = plot.any_diverged, any_matched = plot.any_matched;
     const double min_wall = plot.min_wall, max_wall = plot.max_wall;
-    const std::string tmp = png + ".tmp." + std::to_string(::getpid()) + ".png";
     const std::string top = num(diverged_ratio);
     std::string script = "set terminal pngcairo size 1600,700 noenhanced font ',11'\n"
-                         "set output " + quoted(tmp) + "\n"
                          "set datafile separator ','\n"
                          "set logscale xy\nset grid\nset offsets graph 0.04, graph 0.04, 0, 0\nset format y '%.0e'\nset format x '%.0e'\n"
                          "set key below horizontal\nset bmargin 7\nset xlabel 'wall time [s]'\n"
@@ -101,15 +100,12 @@ void plot_tradeoff(const TradeoffPlot& plot, const std::string& csv, const std::
         script += "\n";
     }
     script += "unset multiplot\n";
-    std::FILE* gp = ::popen("gnuplot 2>&1", "w");
-    if (!gp) throw RunError("--plot: cannot start gnuplot (install the Debian package gnuplot-nox)");
-    std::fputs(script.c_str(), gp);
-    const int status = ::pclose(gp);
-    if (status != 0 || std::rename(tmp.c_str(), png.c_str()) != 0) {
-        std::remove(tmp.c_str());
-        throw RunError("--plot: gnuplot failed (exit status " + std::to_string(status) +
-                       "); is the Debian package gnuplot-nox installed?");
-    }
+    // The PNG through gnuplot's stdout into an output file (output_file.h):
+    // checked, written under a temporary name, renamed with the other outputs.
+    const std::string bytes = run_gnuplot(script);
+    OutputFile file(png);
+    file.write(bytes.data(), bytes.size());
+    file.commit();
 }
 
 }  // namespace hsnc

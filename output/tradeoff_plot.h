@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "output_file.h"
+
 namespace hsnc {
 
 struct TradeoffPlot {
@@ -26,6 +28,6 @@ struct TradeoffPlot {
 
 /// Draws `plot` from `csv` into `png` (written beside it, then renamed into
 /// place). RunError when gnuplot cannot be started or fails.
-void plot_tradeoff(const TradeoffPlot& plot, const std::string& csv, const std::string& png);
+void plot_tradeoff(const TradeoffPlot& plot, const std::string& csv, const OutputTarget& png);
 
 }  // namespace hsnc

@@ -407,7 +407,7 @@ TEST(Tradeoff, BadInputExitsTwoAndWritesNothing) {
         {"--t-end 1 --reference-out '" + ref.events + "' --reference-events '" + ref.events + "'" + out,
          ref.events + ":1: header"},
         {"--t-end 1 --bogus" + refs + out, "bogus"},
-        {"--t-end 1" + refs + " --csv /nonexistent-dir/x.csv", "--csv '/nonexistent-dir/x.csv': cannot write it"},
+        {"--t-end 1" + refs + " --csv /nonexistent-dir/x.csv", "--csv '/nonexistent-dir/x.csv': directory '/nonexistent-dir' does not exist"},
     };
     for (const Case& c : cases) {
         const auto r = run_hsnc("tradeoff " + m + " " + c.args);
@@ -484,9 +484,9 @@ TEST(Tradeoff, OutputPathsAreCheckedBeforeTheReference) {
     };
     const std::string good_csv = temp_path("t.csv");
     const Case cases[] = {
-        {"/nonexistent-dir/x.csv", "", "--csv '/nonexistent-dir/x.csv': cannot write it (No such file or directory)"},
+        {"/nonexistent-dir/x.csv", "", "--csv '/nonexistent-dir/x.csv': directory '/nonexistent-dir' does not exist"},
         {dir, "", "--csv '" + dir + "': is a directory"},
-        {good_csv, "/nonexistent-dir/x.png", "--plot '/nonexistent-dir/x.png': cannot write it"},
+        {good_csv, "/nonexistent-dir/x.png", "--plot '/nonexistent-dir/x.png': directory '/nonexistent-dir' does not exist"},
         {good_csv, dir, "--plot '" + dir + "': is a directory"},
     };
     for (const Case& c : cases) {
@@ -511,7 +511,7 @@ TEST(Tradeoff, OutputPathsAreCheckedBeforeTheReference) {
     const auto r = run_hsnc("tradeoff '" + model_path("coulomb-1dof.toml") + "' --t-end 1 --csv '" + good_csv +
                             "' --plot /nonexistent-dir/x.png");
     EXPECT_EQ(r.exit_code, 2) << r.err;
-    EXPECT_NE(r.err.find("--plot '/nonexistent-dir/x.png': cannot write it"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("--plot '/nonexistent-dir/x.png': directory '/nonexistent-dir' does not exist"), std::string::npos) << r.err;
     EXPECT_EQ(r.err.find("computing the reference"), std::string::npos) << r.err;
     EXPECT_FALSE(file_exists(good_csv));
     std::system(("rmdir '" + dir + "'").c_str());
