@@ -128,7 +128,7 @@ std::string bifurcations_between(const std::vector<std::complex<double>>& a,
 }
 
 std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
-                                         const std::function<void(const SweepPoint&, double)>& done) {
+                                         const std::function<void(const SweepPoint&, double)>& done, bool* cut) {
     using Clock = std::chrono::steady_clock;
     const Model& first = *b.start_model;
     const std::size_t n = first.dof(), nj = first.jenkins.size();
@@ -282,6 +282,10 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
     bool finished = false;
     while (stop.empty() && out.size() < budget) {
         check_cancel(o);
+        if (stop_requested(o)) {  // a graceful stop: the points so far are the branch's result
+            if (cut) *cut = true;
+            return out;
+        }
         Eigen::VectorXd u(N + 1);
         u.head(N) = y.cwiseQuotient(D.head(N));
         u(N) = p / D(N);
