@@ -234,12 +234,14 @@ def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_itera
     message, period (harmonic * T), t (time of the state), iterations,
     residual, x, v, s (the orbit's state at t, arrays; s: the Jenkins
     sliders), multipliers (complex array, largest |mu| first),
-    max_multiplier, stable, monodromy ((2n + nj) square array, state (x, v,
+    max_multiplier, stable, neutral (multipliers of a family of orbits at +1,
+    left out of stable), monodromy ((2n + nj) square array, state (x, v,
     s)), events (switches a period), grazing (grazing switch
     instants a period: the multipliers are not reliable when > 0) and orbit (dict of t, x,
     v arrays: one period sampled every dt, default period/1000; empty when not
     converged). period: default 2*pi/omega of the model's forcing;
-    transient: run this long first."""
+    transient: run this long first. Ctrl-C (SIGINT) stops it promptly with
+    KeyboardInterrupt."""
     if not isinstance(model, Model):
         raise InputError("hsnc.periodic(): model = %r: expected an hsnc.Model" % (model,))
     if x0 or v0:
@@ -260,7 +262,7 @@ def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=
     without a saltation matrix: the exponents are not reliable when > 0),
     singular (of them, without a saltation matrix), rows_t and rows (the running estimates every row_interval,
     default the forcing period, else 1 s; k x 2n). A run that stops early
-    raises RunError."""
+    raises RunError; Ctrl-C (SIGINT) stops it promptly with KeyboardInterrupt."""
     if not isinstance(model, Model):
         raise InputError("hsnc.lyapunov(): model = %r: expected an hsnc.Model" % (model,))
     if x0 or v0:
