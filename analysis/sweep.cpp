@@ -14,6 +14,7 @@
 
 #include "assembly.h"
 #include "file_read.h"
+#include "input_files.h"
 #include "hsnc/simulate.h"
 #include "model_hash.h"
 #include "sweep_detail.h"
@@ -81,8 +82,10 @@ const char* sweep_direction_name(SweepDirection d) {
 }
 
 SweepPlan SweepPlan::from_file(const std::string& path, const ModelOverrides& overrides, SweepOptions options) {
-    const FileRead file = read_regular_file(path, kMaxModelFileBytes);
+    struct stat st;
+    const FileRead file = read_regular_file(path, kMaxModelFileBytes, &st);
     if (file.status != FileRead::Status::ok) throw InputError("cannot read model file '" + path + "': " + file.problem);
+    note_input_file(path, st);  // no output of the run may replace it
     return SweepPlan(file.bytes, path, overrides, std::move(options));
 }
 

@@ -4,6 +4,8 @@
 
 #include "commands.h"
 #include "error.h"
+#include "input_files.h"
+#include "output_file.h"
 
 namespace hsnc::cli {
 
@@ -34,8 +36,14 @@ int run(int argc, const char* const* argv) {
     add_sweep(app, exit_code);
     add_periodic(app, exit_code);
     add_lyapunov(app, exit_code);
+    // Per command: no output may replace a file the command reads, and its
+    // outputs are kept all or none (a failure leaves the files they would
+    // have replaced as they were).
+    InputFileScope inputs;
+    OutputTransaction outputs;
     try {
         app.parse(argc, argv);
+        outputs.commit();
     } catch (const CLI::Success& e) {
         return app.exit(e);  // --help, --version
     } catch (const CLI::ParseError& e) {

@@ -21,6 +21,7 @@
 #include "csv_writer.h"
 #include "error.h"
 #include "file_read.h"
+#include "input_files.h"
 #include "hsnc/simulate.h"
 #include "hsnc/sweep.h"
 #include "model_reader.h"
@@ -472,6 +473,8 @@ int sweep(const SweepFlags& f) {
                     OutputFile file(*part_target);
                     file.write(text.data(), text.size());
                     file.commit();
+                    // Failed points are recorded in it: the part stays even when the command exits 1.
+                    commit_outputs();
                     SweepResult r = plan.result_header();
                     for (const std::vector<SweepPoint>& t : results) r.points.insert(r.points.end(), t.begin(), t.end());
                     const Problems problems(r);
@@ -490,6 +493,8 @@ int sweep(const SweepFlags& f) {
                     const std::string note =
                         interrupted ? interrupted_note(r.points.size(), overall->total) : std::string();
                     outputs->write(r, r.model + ": sweep over " + r.param, note);
+                    // Failed points are rows of the outputs: they stay when the command exits 1.
+                    commit_outputs();
                     std::cout << summary_line(r, interrupted) << "\n";
                     const Problems problems(r);
                     for (const SweepPoint& p : r.points)
@@ -526,6 +531,7 @@ int sweep(const SweepFlags& f) {
 }
 
 int merge(const MergeFlags& f) {
+    for (const std::string& path : f.parts) note_input_file(path);  // no output may replace a part
     Outputs outputs(f.out, f.diagram, f.plot);
     std::vector<std::string> texts;
     for (const std::string& path : f.parts) {
@@ -535,6 +541,7 @@ int merge(const MergeFlags& f) {
     }
     const SweepResult r = merge_sweep_parts(texts, f.parts);
     outputs.write(r, r.model + ": sweep over " + r.param);
+    commit_outputs();  // failed points are rows of the outputs: they stay when the command exits 1
     std::cout << summary_line(r) << "\n";
     const Problems problems(r);
     if (problems.any()) throw RunError(problems.message());

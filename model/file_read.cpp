@@ -13,6 +13,12 @@ namespace hsnc {
 
 FileRead read_regular_file(const std::string& path, std::size_t max_bytes, struct stat* status) {
     FileRead r;
+    // open() stops at a NUL: "K.mtx\0x" would read K.mtx, a file the caller did not name.
+    if (path.find('\0') != std::string::npos) {
+        r.status = FileRead::Status::refused;
+        r.problem = "the path contains a NUL character";
+        return r;
+    }
     // O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer.
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
     if (fd < 0) {

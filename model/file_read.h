@@ -36,7 +36,8 @@ struct FileRead {
     std::string problem;
 };
 
-/// The contents of `path` when it is a regular file of at most `max_bytes`.
+/// The contents of `path` when it is a regular file of at most `max_bytes`
+/// (a path holding a NUL character is refused, never cut at the NUL).
 /// Never blocks on a FIFO and never reads more than max_bytes + 1 bytes.
 /// `status`, when given, receives the fstat of the file read (when opened).
 FileRead read_regular_file(const std::string& path, std::size_t max_bytes, struct stat* status = nullptr);

@@ -27,6 +27,12 @@ std::vector<std::string> words(const std::string& line) {
     return out;
 }
 
+/// [+-]?[0-9]+
+bool is_integer_literal(const std::string& w) {
+    const std::size_t digits = !w.empty() && (w[0] == '+' || w[0] == '-') ? 1 : 0;
+    return w.size() > digits && w.find_first_not_of("0123456789", digits) == std::string::npos;
+}
+
 class Parser {
 public:
     Parser(const std::string& text, std::string source) : text_(text), source_(std::move(source)) {}
@@ -47,6 +53,7 @@ public:
         if (symmetry != "general" && symmetry != "symmetric")
             fail(line_, "symmetry '" + h[4] + "' is not supported (expected general or symmetric)");
         const bool symmetric = symmetry == "symmetric";
+        integer_ = field == "integer";
 
         if (!next_data(line)) fail(0, "missing the size line");
         const std::vector<std::string> size = words(line);
@@ -110,6 +117,8 @@ private:
         if (!line.empty() && line.back() == '\r') line.pop_back();
         pos_ = end == std::string::npos ? text_.size() : end + 1;
         ++line_;
+        // A NUL would end the C string strtod reads: "1\0garbage" would read as 1.
+        if (line.find('\0') != std::string::npos) fail(line_, "contains a NUL byte (not a text file?)");
         return true;
     }
     /// The next line that is neither blank nor a comment.
@@ -129,10 +138,13 @@ private:
     }
 
     double value(const std::string& word) const {
+        // An integer field holds integers: "1.5" or "1e3" there is a damaged or mislabelled file.
+        if (integer_ && !is_integer_literal(word))
+            fail(line_, "'" + word + "' is not an integer (the header says the field is integer)");
         errno = 0;
         char* end = nullptr;
         const double v = std::strtod(word.c_str(), &end);
-        if (end == word.c_str() || *end != '\0') fail(line_, "'" + word + "' is not a number");
+        if (end == word.c_str() || end != word.c_str() + word.size()) fail(line_, "'" + word + "' is not a number");
         if (!std::isfinite(v)) fail(line_, "'" + word + "' is not a finite double");
         if ((v != 0.0 && std::fabs(v) < DBL_MIN) || (v == 0.0 && errno == ERANGE))
             fail(line_, "'" + word + "' is below the smallest normal double (subnormal values are refused)");
@@ -149,6 +161,7 @@ private:
     std::string source_;
     std::size_t pos_ = 0;
     std::size_t line_ = 0;
+    bool integer_ = false;  ///< the header's field is integer
 };
 
 }  // namespace

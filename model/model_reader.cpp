@@ -23,6 +23,7 @@
 #include "error.h"
 #include "expression_evaluator.h"
 #include "file_read.h"
+#include "input_files.h"
 #include "ginac_lock.h"
 #include "mat_file.h"
 #include "matrix_market.h"
@@ -117,6 +118,7 @@ public:
         read_forcing(root);
         read_load(root);
         read_initial(root);
+        check_finite_rates(root);
         read_simulate(root);
         if (t_end_override_) {
             const double t_end = *t_end_override_;
@@ -403,6 +405,14 @@ private:
         values_[name] = value;
     }
 
+    /// The model size limit (matrix_market.h kMaxMatrixDimension), said once for masses and dofs.
+    static std::string too_many_dofs(std::size_t n) {
+        return std::to_string(n) + " degrees of freedom, more than the " + std::to_string(kMaxMatrixDimension) +
+               " hsnc takes for now: its matrices are dense and its modal analysis is cubic in the dofs (at " +
+               std::to_string(kMaxMatrixDimension) + " dofs, check takes under a second and simulate seconds per "
+               "configuration; at 10000 check would take hours and gigabytes)";
+    }
+
     /// What a body other than ground is called in messages.
     std::string body_word() const { return model_.structure.present ? "dof" : "mass"; }
 
@@ -418,12 +428,16 @@ private:
         const std::string path = "structure." + std::string(key);
         written = required_string(t, "structure", key);
         if (written.empty()) fail(t.get(key), path, "must name a Matrix Market or .mat file");
+        if (written.find('\0') != std::string::npos)  // the file system would read the path up to the NUL only
+            fail(t.get(key), path, "'" + excerpt(written) + "': a path cannot hold a NUL character");
         try {
             if (is_mat_spec(written)) {  // "x.mat:VAR", or "x.mat" with variable M, K or C
                 const char* letter = std::string(key) == "mass" ? "M" : std::string(key) == "stiffness" ? "K" : "C";
                 const auto [file, variable] = split_mat_spec(written, letter);
+                note_input_file(beside_model(file));  // no output of the run may replace it
                 return read_mat_variable(beside_model(file), variable);
             }
+            note_input_file(beside_model(written));
             return read_matrix_market(beside_model(written));
         } catch (const InputError& e) {
             fail(t.get(key), path, e.what());
@@ -441,6 +455,7 @@ private:
         const toml::array* list = dofs->as_array();
         if (!list || list->empty())
             fail(dofs, "structure.dofs", "expected a non-empty list of dof names, e.g. [\"u1\", \"u2\"]");
+        if (list->size() > kMaxMatrixDimension) fail(dofs, "structure.dofs", too_many_dofs(list->size()));
         std::vector<std::string> names;
         for (std::size_t i = 0; i < list->size(); ++i) {
             const std::string key = "structure.dofs[" + std::to_string(i + 1) + "]";
@@ -500,7 +515,10 @@ private:
             std::tie(d.a, d.b) = between(t, path);
             d.c = required_number(t, path, "c");
             if (d.c < 0.0) fail(t.get("c"), path + ".c", "damping coefficient must be >= 0, got " + show(d.c));
-            if (d.c > 0.0) model_.dampers.push_back(d);  // c = 0 (a sweep's end point) is no damper at all
+            if (d.c > 0.0) {  // c = 0 (a sweep's end point) is no damper at all
+                model_.dampers.push_back(d);
+                damper_keys_.emplace_back(path + ".c", t.get("c")->source().begin.line);
+            }
         }
         model_.dampers.insert(model_.dampers.end(), structure_dampers_.begin(), structure_dampers_.end());
     }
@@ -615,6 +633,7 @@ private:
     void read_masses(const toml::table& root) {
         const auto tables = table_array(root, "mass");
         if (tables.empty()) fail(root.get("mass"), "mass", "no masses: give at least one [[mass]] table");
+        if (tables.size() > kMaxMatrixDimension) fail(root.get("mass"), "mass", too_many_dofs(tables.size()));
         for (std::size_t i = 0; i < tables.size(); ++i) {
             const toml::table& t = *tables[i];
             const std::string path = "mass[" + std::to_string(i + 1) + "]";
@@ -739,6 +758,125 @@ private:
         }
     }
 
+    // ---- the model as a whole ----
+
+    /// The line of key `key` of table `array`[i] (an array of tables), or 0.
+    static std::size_t line_of(const toml::table& root, const char* array, std::size_t i, const char* key) {
+        const toml::array* tables = root.get(array) ? root.get(array)->as_array() : nullptr;
+        const toml::node* table = tables ? tables->get(i) : nullptr;
+        if (!table || !table->is_table()) return 0;
+        const toml::node* value = table->as_table()->get(key);
+        return (value ? value : table)->source().begin.line;
+    }
+
+    /// Every rate the solvers derive from the model must be a finite double:
+    /// stiffness over mass (the squared natural frequencies, bounded by
+    /// Gershgorin's sum |k| / m over the stiffest configuration: every contact
+    /// closed, every Jenkins element stuck), beta k/m and c/m (decay rates) and
+    /// force over mass (accelerations). Beyond the double range (k = 1e300 on
+    /// m = 1e-300) every solver would step NaN states to a run that ends "ok".
+    /// The element whose own ratio overflows is named, else the mass.
+    void check_finite_rates(const toml::table& root) {
+        struct Term {
+            double value;
+            std::string key;
+            std::size_t line;
+            std::string what;  ///< the element, for the message
+        };
+        const std::size_t n = model_.dof();
+        std::vector<std::vector<Term>> stiffness(n), damping(n);
+        auto add = [&](std::vector<std::vector<Term>>& to, int a, int b, const Term& term) {
+            for (int end : {a, b})
+                if (end != kGround) to[static_cast<std::size_t>(end)].push_back(term);
+        };
+        const std::string k_file = model_.structure.stiffness_file, c_file = model_.structure.damping_file;
+        auto matrix_entry = [&](const char* matrix, int a, int b) {
+            return b == kGround ? std::string("the row sum of ") + matrix + " at " + model_.masses[a].name
+                                : std::string("-") + matrix + "(" + model_.masses[a].name + ", " + model_.masses[b].name + ")";
+        };
+        std::size_t from_file = 0;
+        for (const Spring& sp : model_.springs) {
+            if (sp.from_structure)
+                add(stiffness, sp.a, sp.b, {sp.k, "structure.stiffness", line_of_key(root, "structure", "stiffness"),
+                                           k_file + ": " + matrix_entry("K", sp.a, sp.b)});
+            else {
+                const std::string key = "spring[" + std::to_string(from_file + 1) + "].k";
+                add(stiffness, sp.a, sp.b, {sp.k, key, line_of(root, "spring", from_file, "k"), "the spring"});
+                ++from_file;
+            }
+        }
+        for (std::size_t c = 0; c < model_.contacts.size(); ++c)
+            add(stiffness, model_.contacts[c].a, model_.contacts[c].b,
+                {model_.contacts[c].k, "contact[" + std::to_string(c + 1) + "].k", line_of(root, "contact", c, "k"),
+                 "contact '" + model_.contacts[c].name + "'"});
+        for (std::size_t j = 0; j < model_.jenkins.size(); ++j)
+            add(stiffness, model_.jenkins[j].a, model_.jenkins[j].b,
+                {model_.jenkins[j].k, "jenkins[" + std::to_string(j + 1) + "].k", line_of(root, "jenkins", j, "k"),
+                 "Jenkins element '" + model_.jenkins[j].name + "'"});
+        for (std::size_t d = 0; d < model_.dampers.size(); ++d) {
+            const Damper& dp = model_.dampers[d];
+            if (dp.from_structure)
+                add(damping, dp.a, dp.b, {dp.c, "structure.damping", line_of_key(root, "structure", "damping"),
+                                         c_file + ": " + matrix_entry("C", dp.a, dp.b)});
+            else
+                add(damping, dp.a, dp.b, {dp.c, damper_keys_[d].first, damper_keys_[d].second, "the damper"});
+        }
+
+        const bool structure = model_.structure.present;
+        for (std::size_t i = 0; i < n; ++i) {
+            const Mass& mass = model_.masses[i];
+            const std::string mass_key = structure ? "structure.mass" : "mass[" + std::to_string(i + 1) + "].m";
+            const std::size_t mass_line = structure ? line_of_key(root, "structure", "mass") : line_of(root, "mass", i, "m");
+            const std::string on = (structure ? "dof '" : "mass '") + mass.name + "' (m = " + literal_text(mass.m) + ")";
+            // One rate: sum |value| / m over `terms`, finite or an error naming the culprit.
+            auto rate = [&](const std::vector<Term>& terms, const std::string& quantity, const std::string& plural,
+                            const std::string& derived) {
+                double sum = 0.0;
+                const Term* largest = nullptr;
+                for (const Term& t : terms) {
+                    sum += std::fabs(t.value);
+                    if (!largest || std::fabs(t.value) > std::fabs(largest->value)) largest = &t;
+                }
+                if (std::isfinite(sum / mass.m)) return sum;
+                const std::string why = " is beyond the double range: " + derived + " would not be finite";
+                if (largest && !std::isfinite(std::fabs(largest->value) / mass.m))
+                    fail_at(largest->line, largest->key,
+                            largest->what + ": " + quantity + " " + literal_text(largest->value) + " over " + on + why);
+                fail_at(mass_line, mass_key,
+                        "the " + plural + " on " + on + " sum to " + literal_text(sum) + "; over the mass that" + why);
+            };
+            const double k_sum = rate(stiffness[i], "stiffness", "stiffnesses", "the natural frequency sqrt(k/m)");
+            if (!std::isfinite(model_.beta * (k_sum / mass.m)))
+                fail_at(line_of_key(root, "damping", "beta"), structure_damping_ ? "structure.damping" : "damping.beta",
+                        "beta = " + literal_text(model_.beta) + " times the stiffness over " + on +
+                            " is beyond the double range: the modal damping alpha + beta omega^2 would not be finite");
+            rate(damping[i], "damping", "dampings", "the decay rate c/m");
+            // Forces over the mass: the load, each harmonic's amplitude, the friction force.
+            std::vector<Term> forces;
+            forces.push_back({model_.load[i], "load." + mass.name, line_of_key(root, "load", mass.name.c_str()), "the load"});
+            for (std::size_t h = 0; h < model_.forcing.size(); ++h)
+                forces.push_back({model_.forcing[h].amplitude[i],
+                                  "forcing[" + std::to_string(h + 1) + "].amplitude." + mass.name, 0, "the amplitude"});
+            if (mass.has_friction) {
+                const double friction = mass.mu_s * mass.m * model_.g;  // the largest friction force
+                const std::string key = mass.friction >= 0
+                                            ? "friction[" + std::to_string(mass.friction + 1) + "].normal"
+                                            : "mass[" + std::to_string(i + 1) + "].mu_s";
+                if (!std::isfinite(friction) || !std::isfinite(mass.mu_s * model_.g))
+                    fail_at(0, key, "the friction force mu_s*N on " + on + " is beyond the double range");
+                forces.push_back({friction, key, 0, "the friction force"});
+            }
+            rate(forces, "force", "forces", "the acceleration F/m");
+        }
+    }
+
+    /// The line of key `key` of table `table` (a table of the root), or 0.
+    static std::size_t line_of_key(const toml::table& root, const char* table, const char* key) {
+        const toml::node* t = root.get(table);
+        const toml::node* value = t && t->is_table() ? t->as_table()->get(key) : nullptr;
+        return value ? value->source().begin.line : 0;
+    }
+
     void read_simulate(const toml::table& root) {
         const toml::table* t = optional_table(root, "", "simulate");
         if (!t) return;
@@ -767,6 +905,8 @@ private:
     std::vector<Spring> structure_springs_;             ///< the springs of [structure]'s K
     std::optional<std::pair<double, double>> structure_damping_;  ///< (alpha, beta) of structure.damping
     std::vector<Damper> structure_dampers_;  ///< a non-proportional structure.damping as dampers
+    /// ("damper[N].c", its line) of each [[damper]] in model_.dampers
+    std::vector<std::pair<std::string, std::size_t>> damper_keys_;
     Model model_;
 };
 
@@ -802,8 +942,10 @@ Model parse_model(const std::string& toml_text, const std::string& source, const
 }
 
 Model read_model(const std::string& path, const ModelOverrides& overrides) {
-    const FileRead file = read_regular_file(path, kMaxModelFileBytes);  // never a FIFO or /dev/zero
+    struct stat st;
+    const FileRead file = read_regular_file(path, kMaxModelFileBytes, &st);  // never a FIFO or /dev/zero
     if (file.status != FileRead::Status::ok) throw InputError("cannot read model file '" + path + "': " + file.problem);
+    note_input_file(path, st);  // no output of the run may replace it
     return parse_model(file.bytes, path, overrides);
 }
 

@@ -73,13 +73,16 @@ bool scaled_extremes(const MarketMatrix& A, const std::vector<std::size_t>& memb
             return false;
         }
     }
+    // S = D^-1/2 A D^-1/2 as (A_rs / sqrt(d_r)) / sqrt(d_s): sqrt(d_r * d_s) would
+    // overflow beyond 1.3e154 (or underflow below 1.5e-154) where each factor does not.
+    const Eigen::VectorXd root = d.cwiseSqrt();
     Eigen::MatrixXd S(c, c);
     for (Eigen::Index r = 0; r < c; ++r)
         for (Eigen::Index s = 0; s < c; ++s)
-            S(r, s) = A(members[r], members[s]) / std::sqrt(d(r) * d(s));
+            S(r, s) = A(members[r], members[s]) / root(r) / root(s);
     if (deflate) {
-        Eigen::VectorXd u = d.cwiseSqrt();  // D^1/2 * 1: S u = D^-1/2 K 1 = 0
-        u /= u.norm();
+        Eigen::VectorXd u = root;  // D^1/2 * 1: S u = D^-1/2 K 1 = 0
+        u /= u.stableNorm();  // no overflow of the squares near the double range
         S += u * u.transpose();
     }
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(S, Eigen::EigenvaluesOnly);

@@ -11,8 +11,12 @@
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
+#include <mutex>
+#include <stdexcept>
 
 #include "error.h"
+#include "input_files.h"
 
 namespace hsnc {
 namespace {
@@ -21,12 +25,16 @@ namespace {
 // The signal handler may only use async-signal-safe calls (POSIX.1-2017,
 // 2.4.3: unlink, kill, waitpid, write, signal, raise, sigprocmask, _exit), so
 // the temporary paths live in fixed arrays, not in std::string.
-constexpr int kSlots = 16;
+constexpr int kSlots = 64;
 constexpr std::size_t kPathMax = 4096;
 char g_paths[kSlots][kPathMax];
 volatile std::sig_atomic_t g_used[kSlots];
 volatile std::sig_atomic_t g_child = 0;
 volatile std::sig_atomic_t g_stderr_tty = 0;
+
+// The transaction of this command, if any (OutputTransaction).
+std::mutex g_transaction_mutex;
+OutputTransaction* g_transaction = nullptr;
 
 int register_temporary(const std::string& path) {
     if (path.size() >= kPathMax) return -1;
@@ -104,6 +112,79 @@ void check_directory(const OutputTarget& t, const std::string& dir) {
         throw InputError(t.label() + ": cannot create a file in directory '" + dir + "': " + std::strerror(errno));
 }
 
+// ---- following symbolic links safely ----
+// hsnc replaces an existing file by renaming a temporary file onto the end of
+// its path's chain of links, so the kernel's fs.protected_symlinks, which
+// guards open(), never sees those links. walk_links applies its rule itself
+// (Documentation/admin-guide/sysctl/fs.rst, protected_symlinks): a link in a
+// sticky world-writable directory (/tmp) is followed only when the caller or
+// the directory's owner owns it. Otherwise any user could plant
+// /tmp/run.csv -> /etc/passwd and wait for root to write its output there.
+// It also refuses a final link whose target does not exist: a file is never
+// created through a dangling link (where the link says, as whoever runs).
+// Links under /proc (/dev/stdout -> /proc/self/fd/1 -> "pipe:[..]") are the
+// kernel's own and are not read as text: the walk stops there.
+
+// Splits a path into its components, empty ones dropped.
+void push_components(std::deque<std::string>& to, const std::string& path) {
+    std::deque<std::string> parts;
+    std::size_t i = 0;
+    while (i <= path.size()) {
+        const std::size_t j = std::min(path.find('/', i), path.size());
+        if (j > i) parts.push_back(path.substr(i, j - i));
+        i = j + 1;
+    }
+    to.insert(to.begin(), parts.begin(), parts.end());
+}
+
+void walk_links(const OutputTarget& t) {
+    std::deque<std::string> rest;
+    push_components(rest, t.path);
+    std::string dir = t.path[0] == '/' ? "" : ".";  // the part resolved so far: no links in it
+    bool final_from_link = false;  // the last component is (in) a link's target
+    for (int hops = 0; !rest.empty();) {
+        const std::string name = rest.front();
+        rest.pop_front();
+        if (name == ".") continue;
+        const std::string next = dir + "/" + name;
+        struct stat ls;
+        if (::lstat(next.c_str(), &ls) != 0) {
+            if (errno == ENOENT && rest.empty() && final_from_link)
+                throw InputError(t.label() + ": is a symbolic link to '" + next +
+                                 "', which does not exist: hsnc does not create a file through a dangling link");
+            return;  // a new name, or an error check_output reports with the kernel's words
+        }
+        if (!S_ISLNK(ls.st_mode)) {
+            dir = next;
+            continue;
+        }
+        if (dir == "/proc" || dir.rfind("/proc/", 0) == 0) return;  // the kernel's own links
+        if (++hops > 40) throw InputError(t.label() + ": cannot be resolved (a loop of symbolic links?)");
+        struct stat ds;
+        const std::string parent = dir.empty() ? "/" : dir;
+        if (::stat(parent.c_str(), &ds) == 0 && (ds.st_mode & S_ISVTX) && (ds.st_mode & S_IWOTH) &&
+            ls.st_uid != ::geteuid() && ls.st_uid != ds.st_uid)
+            throw InputError(t.label() + ": '" + next + "' is a symbolic link in the shared directory '" + parent +
+                             "' owned by another user (uid " + std::to_string(ls.st_uid) +
+                             "): hsnc does not write through it (as the kernel's protected_symlinks would refuse)");
+        char buf[PATH_MAX];
+        const ssize_t n = ::readlink(next.c_str(), buf, sizeof buf - 1);
+        if (n < 0) throw InputError(t.label() + ": " + std::strerror(errno));
+        const std::string target(buf, static_cast<std::size_t>(n));
+        final_from_link = final_from_link || rest.empty();
+        push_components(rest, target);
+        if (!target.empty() && target[0] == '/') dir = "";
+    }
+}
+
+// An output that is one of the run's inputs (input_files.h) would replace it.
+void check_not_input(const OutputTarget& t, const struct stat& st) {
+    const std::string input = input_file_named(st.st_dev, st.st_ino);
+    if (!input.empty())
+        throw InputError(t.label() + ": is the input file '" + input +
+                         "' of this run: an output never replaces an input (name another file)");
+}
+
 }  // namespace
 
 std::string OutputTarget::label() const { return (flag.empty() ? "cannot write" : flag) + " '" + path + "'"; }
@@ -114,6 +195,8 @@ OutputTarget check_output(const std::string& flag, const std::string& path) {
     t.path = path;
     t.file = path;
     if (path.empty()) throw InputError((flag.empty() ? std::string("output") : flag) + ": empty file name");
+    if (path.find('\0') != std::string::npos) throw InputError(t.label() + ": the file name holds a NUL character");
+    walk_links(t);  // links planted by another user, dangling links
     struct stat st;
     if (::stat(path.c_str(), &st) == 0) {  // exists (through symbolic links)
         t.exists = true;
@@ -131,6 +214,7 @@ OutputTarget check_output(const std::string& flag, const std::string& path) {
                 return t;
             }
         }
+        check_not_input(t, st);
         if (S_ISDIR(st.st_mode)) throw InputError(t.label() + ": is a directory");
         if (S_ISBLK(st.st_mode))
             throw InputError(t.label() + ": is a block device (hsnc writes CSV and PNG files, not disks)");
@@ -142,8 +226,9 @@ OutputTarget check_output(const std::string& flag, const std::string& path) {
             return t;
         }
         if (!S_ISREG(st.st_mode)) throw InputError(t.label() + ": is not a regular file");
-        // A regular file, possibly through symbolic links: the link's target
-        // is replaced (the temporary file goes beside it), the link stays.
+        // A regular file, possibly through symbolic links (walk_links let them
+        // through): the link's target is replaced (the temporary file goes
+        // beside it), the link stays.
         t.file = t.canonical;
         if (::access(t.file.c_str(), W_OK) != 0)
             throw InputError(t.label() + ": not writable: " + std::strerror(errno));
@@ -151,24 +236,14 @@ OutputTarget check_output(const std::string& flag, const std::string& path) {
         return t;
     }
     if (errno != ENOENT) throw InputError(t.label() + ": " + std::strerror(errno));  // ENOTDIR, EACCES, ELOOP, ...
-    // Does not exist: a new file, or the missing target of a dangling link.
-    std::string p = path;
-    for (int hops = 0;; ++hops) {
-        struct stat ls;
-        if (::lstat(p.c_str(), &ls) != 0) break;  // the name to create
-        if (!S_ISLNK(ls.st_mode) || hops == 40)
-            throw InputError(t.label() + ": cannot be resolved (a loop of symbolic links?)");
-        char buf[PATH_MAX];
-        const ssize_t n = ::readlink(p.c_str(), buf, sizeof buf - 1);
-        if (n < 0) throw InputError(t.label() + ": " + std::strerror(errno));
-        const std::string target(buf, static_cast<std::size_t>(n));
-        p = !target.empty() && target[0] == '/' ? target : dir_of(p) + "/" + target;
-    }
-    const std::string name = base_of(p);
+    // Does not exist: a new name (walk_links refused a dangling link).
+    struct stat ls;
+    if (::lstat(path.c_str(), &ls) == 0)  // a link whose target vanished since walk_links
+        throw InputError(t.label() + ": is a dangling symbolic link: hsnc does not create a file through it");
+    const std::string name = base_of(path);
     if (name.empty() || name == "." || name == "..") throw InputError(t.label() + ": names a directory, not a file");
-    const std::string dir = dir_of(p);
+    const std::string dir = dir_of(path);
     check_directory(t, dir);
-    t.file = p;
     t.canonical = real_path(dir) + "/" + name;
     return t;
 }
@@ -265,10 +340,98 @@ void OutputFile::commit() {
     const int fd = fd_;
     fd_ = -1;
     if (::close(fd) != 0) fail("write failed", errno);  // NFS and quotas report at close
+    {
+        std::lock_guard<std::mutex> lock(g_transaction_mutex);
+        if (g_transaction && !tmp_.empty()) {  // renamed when the whole command has succeeded
+            g_transaction->pending_.push_back({tmp_, target_.file, target_.label(), slot_});
+            tmp_.clear();
+            slot_ = -1;
+            return;
+        }
+    }
     if (!tmp_.empty() && ::rename(tmp_.c_str(), target_.file.c_str()) != 0) fail("cannot rename into place", errno);
     tmp_.clear();
     unregister_temporary(slot_);
     slot_ = -1;
+}
+
+// ---- OutputTransaction ----
+
+OutputTransaction::OutputTransaction() {
+    std::lock_guard<std::mutex> lock(g_transaction_mutex);
+    if (g_transaction) throw std::logic_error("OutputTransaction: transactions do not nest");
+    g_transaction = this;
+}
+
+OutputTransaction::~OutputTransaction() {
+    std::lock_guard<std::mutex> lock(g_transaction_mutex);
+    for (const Pending& p : pending_) {
+        ::unlink(p.temporary.c_str());
+        unregister_temporary(p.slot);
+    }
+    pending_.clear();
+    g_transaction = nullptr;
+}
+
+void commit_outputs() {
+    OutputTransaction* t;
+    {
+        std::lock_guard<std::mutex> lock(g_transaction_mutex);
+        t = g_transaction;
+    }
+    if (t) t->commit();
+}
+
+std::size_t OutputTransaction::pending() const {
+    std::lock_guard<std::mutex> lock(g_transaction_mutex);
+    return pending_.size();
+}
+
+void OutputTransaction::commit() {
+    std::lock_guard<std::mutex> lock(g_transaction_mutex);
+    // Before anything is renamed, a second name (hard link) for each file to
+    // be replaced, so that a failed rename can put every output back. A file
+    // that cannot be linked (a file system without hard links) has none.
+    std::vector<std::string> backups(pending_.size());
+    for (std::size_t i = 0; i < pending_.size(); ++i) {
+        struct stat st;
+        if (::lstat(pending_[i].file.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;
+        for (int k = 0; k < 100; ++k) {
+            const std::string b = pending_[i].file + ".old." + std::to_string(::getpid()) + (k ? "." + std::to_string(k) : "");
+            if (::link(pending_[i].file.c_str(), b.c_str()) == 0) {
+                backups[i] = b;
+                break;
+            }
+            if (errno != EEXIST) break;
+        }
+    }
+    std::size_t done = 0;
+    int err = 0;
+    for (; done < pending_.size(); ++done)
+        if (::rename(pending_[done].temporary.c_str(), pending_[done].file.c_str()) != 0) {
+            err = errno;
+            break;
+        }
+    if (done < pending_.size()) {
+        for (std::size_t i = 0; i < done; ++i) {  // undo: the replaced file back, or the new name gone
+            if (!backups[i].empty())
+                (void)::rename(backups[i].c_str(), pending_[i].file.c_str());
+            else
+                (void)::unlink(pending_[i].file.c_str());
+            backups[i].clear();
+        }
+    }
+    for (const std::string& b : backups)
+        if (!b.empty()) ::unlink(b.c_str());
+    for (std::size_t i = 0; i < pending_.size(); ++i) {
+        if (i >= done) ::unlink(pending_[i].temporary.c_str());
+        unregister_temporary(pending_[i].slot);
+    }
+    const std::string label = done < pending_.size() ? pending_[done].label : std::string();
+    pending_.clear();
+    if (!label.empty())
+        throw RunError(label + ": cannot rename into place: " + std::strerror(err) +
+                       " (no output of this run was written)");
 }
 
 void install_interrupt_cleanup() {

@@ -12,6 +12,12 @@
 //    written directly, in order: replacing it would destroy it;
 //  - a directory, a block device or a socket is refused.
 // Writes stop at the first error (RunError naming the file and the OS error).
+// Paths are refused before a run (InputError) when they would replace one of
+// the run's input files (input_files.h), or would be written through a
+// symbolic link planted by another user in a shared sticky directory such as
+// /tmp (the kernel's protected_symlinks rule), or through a dangling link.
+// Inside an OutputTransaction every output is kept under its temporary name
+// until the transaction commits: a run that fails leaves none of its outputs.
 // install_interrupt_cleanup() makes SIGINT and SIGTERM remove the temporary
 // files of the outputs still open before the process ends.
 #pragma once
@@ -48,7 +54,9 @@ struct OutputTarget {
 /// Checks `path` for the output named by `flag` (e.g. "--out"). Throws
 /// InputError when it cannot be written: a directory, a block device or a
 /// socket, a directory that does not exist or is not writable, a file that
-/// is not writable, a loop of symbolic links.
+/// is not writable, a loop of symbolic links, a dangling link, a link in a
+/// sticky world-writable directory that neither the caller nor the
+/// directory's owner owns, an input file of this run (input_files.h).
 OutputTarget check_output(const std::string& flag, const std::string& path);
 
 /// True when the two targets are one file (same inode, or the same new name
@@ -76,8 +84,9 @@ public:
         if (used_ == buffer_.size()) flush();
         buffer_[used_++] = c;
     }
-    /// Flush, close, and rename into place. Throws RunError on I/O failure
-    /// (the temporary file is removed).
+    /// Flush, close, and rename into place (inside an OutputTransaction: hand
+    /// the closed temporary file to it, which renames it when it commits).
+    /// Throws RunError on I/O failure (the temporary file is removed).
     void commit();
 
     const OutputTarget& target() const { return target_; }
@@ -96,6 +105,44 @@ private:
     std::vector<char> buffer_;
     std::size_t used_ = 0;
 };
+
+/// The outputs of one command, all or nothing. While a transaction exists,
+/// OutputFile::commit() writes and closes its file but leaves it under its
+/// temporary name; commit() then renames every one into place, and the
+/// destructor of a transaction that was not committed (the command failed)
+/// removes them, so that the files they would have replaced stay as they
+/// were. Outputs written directly (a device, a FIFO, stdout) cannot be held
+/// back and are not part of it. One transaction at a time (the command line
+/// opens one per command; a second throws std::logic_error).
+class OutputTransaction {
+public:
+    OutputTransaction();
+    ~OutputTransaction();  ///< removes the outputs not committed
+    OutputTransaction(const OutputTransaction&) = delete;
+    OutputTransaction& operator=(const OutputTransaction&) = delete;
+
+    /// Renames every output into place. When a rename fails (a directory
+    /// changed under the run), the outputs already renamed are put back as
+    /// they were (the replaced files restored from links taken before), the
+    /// rest removed, and RunError names the output.
+    void commit();
+    /// Outputs waiting for commit().
+    std::size_t pending() const;
+
+    struct Pending {
+        std::string temporary, file, label;
+        int slot;  // in the interrupt-cleanup registry
+    };
+
+private:
+    std::vector<Pending> pending_;
+    friend class OutputFile;
+};
+
+/// Commits the current OutputTransaction now (no-op without one): for a
+/// command whose outputs record a failure (a sweep's failed points) and that
+/// exits 1 after writing them.
+void commit_outputs();
 
 /// SIGINT and SIGTERM: remove the temporary files of every OutputFile not yet
 /// committed, stop the child registered with set_interrupt_child, print

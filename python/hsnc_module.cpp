@@ -29,11 +29,14 @@
 #include "emitter.h"
 #include "engine.h"
 #include "error.h"
+#include "file_read.h"
 #include "hsnc/lyapunov.h"
 #include "hsnc/periodic.h"
 #include "hsnc/simulate.h"
 #include "kernel_set.h"
 #include "model_reader.h"
+#include "sample_grid.h"
+#include "simulate_outputs.h"
 
 namespace py = pybind11;
 
@@ -134,9 +137,14 @@ py::array_t<double> vector(const std::vector<double>& data) {
 
 // NAME=VALUE texts for the reader: a number with 17 digits (it reads back
 // exactly), a string as given (an expression of the model's parameters).
+// hsnc/__init__.py checks the dicts (names, finite floats or str); anything
+// else is still an InputError here, never pybind11's cast error.
 std::vector<std::string> override_texts(const py::dict& d) {
     std::vector<std::string> out;
     for (const auto& [key, value] : d) {
+        if (!py::isinstance<py::str>(key) || !(py::isinstance<py::str>(value) || py::isinstance<py::float_>(value)))
+            throw InputError("override " + py::repr(key).cast<std::string>() + ": " +
+                             py::repr(value).cast<std::string>() + ": expected a name and a number or an expression");
         std::string text;
         if (py::isinstance<py::str>(value)) {
             text = value.cast<std::string>();
@@ -466,4 +474,15 @@ PYBIND11_MODULE(_hsnc, m) {
           py::arg("tolerance"), py::arg("max_iterations"), py::arg("dt"), py::arg("kernels"));
     m.def("_lyapunov", &hp::lyapunov, py::arg("model"), py::arg("t_end"), py::arg("transient"),
           py::arg("row_interval"), py::arg("kernels"));
+
+    // For the argument checks of hsnc/__init__.py: the CLI's output guard
+    // (output/simulate_outputs.h) and model size limit (model/file_read.h),
+    // the sample grid's row count, and the default spans of periodic and lyapunov.
+    m.attr("_LARGE_OUTPUT_ROWS") = kLargeOutputRows;
+    m.attr("_LARGE_OUTPUT_BYTES") = kLargeOutputBytes;
+    m.attr("_MAX_MODEL_BYTES") = kMaxModelFileBytes;
+    m.def("_sample_count", [](double t0, double t_end, double dt) { return SampleGrid(t0, t_end, dt).count(); });
+    m.def("_forcing_period", &forcing_period);
+    // hsnc::lyapunov's default row_interval: the period of the slowest forcing harmonic, else 1 s.
+    m.def("_default_row_interval", [](const Model& mo) { return lyapunov_row_interval(mo, LyapunovOptions{}); });
 }

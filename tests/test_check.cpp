@@ -5,8 +5,10 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -192,6 +194,42 @@ TEST(Check, BadModelGivesExitCode2AndOneMessage) {
     EXPECT_EQ(r.exit_code, 2);
     EXPECT_EQ(r.out, "");  // nothing printed on stdout
     EXPECT_EQ(r.err, "hsnc: " + path + ":4: key 'mass[1].m': mass must be > 0, got -1\n");
+}
+
+// Stiffness over mass beyond the double range (k = 1e300 on m = 1e-300):
+// check printed "inf -nan" and ok, simulate ran to status=ok with NaN states
+// on every kernel kind. Both refuse the model, naming the element, for
+// [[mass]]/[[spring]] models and [structure] ones.
+TEST(Check, StiffnessOverMassBeyondTheDoubleRangeIsRefused) {
+    const std::string lumped = write_temp("hsnc_overflow.toml",
+                                          "name = \"overflow\"\n[[mass]]\nname = \"m1\"\nm = 1e-300\n"
+                                          "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 1e300\n"
+                                          "[initial]\nx = { m1 = 0.1 }\n[simulate]\nt_end = 1\n");
+    const std::filesystem::path dir = testing::temp_path("overflow-structure");
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir / "M.mtx") << "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1\n2 2 1e-300\n";
+    std::ofstream(dir / "K.mtx") << "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 2e300\n2 1 -1e300\n2 2 1e300\n";
+    const std::string structure = (dir / "s.toml").string();
+    std::ofstream(structure) << "name = \"overflow-structure\"\n[structure]\ndofs = [\"u1\", \"u2\"]\n"
+                                "mass = \"M.mtx\"\nstiffness = \"K.mtx\"\n[initial]\nx = { u2 = 0.1 }\n"
+                                "[simulate]\nt_end = 1\n";
+    const std::string lumped_why = lumped + ":7: key 'spring[1].k': the spring: stiffness 1e+300 over "
+                                            "mass 'm1' (m = 1e-300) is beyond the double "
+                                            "range: the natural frequency sqrt(k/m) would not be finite";
+    const std::string structure_why = structure + ":5: key 'structure.stiffness': K.mtx: -K(u1, u2): stiffness "
+                                                  "1e+300 over dof 'u2'";
+    for (const char* command : {"check", "simulate"}) {
+        const CliRun a = run_hsnc(std::string(command) + " '" + lumped + "'");
+        EXPECT_EQ(a.exit_code, 2) << command << ": " << a.out;
+        EXPECT_EQ(a.out, "") << command;
+        EXPECT_EQ(a.err, "hsnc: " + lumped_why + "\n") << command;
+        const CliRun b = run_hsnc(std::string(command) + " '" + structure + "'");
+        EXPECT_EQ(b.exit_code, 2) << command << ": " << b.out;
+        EXPECT_EQ(b.out, "") << command;
+        EXPECT_NE(b.err.find(structure_why), std::string::npos) << command << ": " << b.err;
+        EXPECT_EQ(std::count(b.err.begin(), b.err.end(), '\n'), 1) << b.err;
+    }
+    std::filesystem::remove_all(dir);
 }
 
 TEST(Check, MissingFileGivesExitCode2) {

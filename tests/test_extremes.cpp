@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "engine_runner.h"
+#include "error.h"
 #include "engine.h"
 #include "integrators.h"
 #include "model_reader.h"
@@ -560,15 +561,17 @@ v = { m1 = 1.0 }
 )");
 }
 
-TEST(Refusal, OverflowingStiffnessOverMassIsAFailureWithAMessage) {
-    // k/m = 1e400 overflows: the run stops at t0 with status failure.
-    const Model m = bilinear_mk("1e-200", "1e200");
-    const Outcome o = simulate(m, 1.0);
-    EXPECT_EQ(o.summary.status, RunStatus::failure);
-    EXPECT_EQ(o.events.size(), 0u);
-    EXPECT_NE(o.summary.message.find("non-finite switch function in configuration 'closed=contact1"),
-              std::string::npos)
-        << o.summary.message;
+TEST(Refusal, OverflowingStiffnessOverMassIsRefusedWhenRead) {
+    // k/m = 1e400 overflows: the reader refuses the model (model_reader.cpp,
+    // check_finite_rates), naming the spring, before any run.
+    try {
+        bilinear_mk("1e-200", "1e200");
+        ADD_FAILURE() << "read";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("key 'spring[1].k': the spring: stiffness 1e+200 over mass 'm1'"),
+                  std::string::npos)
+            << e.what();
+    }
 }
 
 TEST(Refusal, TinyPeriodIsReportedAsZeno) {

@@ -4,13 +4,19 @@
 // by file, variable and reason.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
 
+#include "cli_runner.h"
 #include "engine_runner.h"
 #include "error.h"
 #include "mat_file.h"
@@ -46,7 +52,8 @@ protected:
 
 // Variables of one .mat file: dense (column-major) or sparse (CSC) doubles.
 struct Writer {
-    explicit Writer(const std::string& file) : mat(Mat_CreateVer(file.c_str(), nullptr, MAT_FT_MAT5)) {}
+    explicit Writer(const std::string& file, mat_ft version = MAT_FT_MAT5, matio_compression z = MAT_COMPRESSION_NONE)
+        : mat(Mat_CreateVer(file.c_str(), nullptr, version)), compression(z) {}
     ~Writer() { Mat_Close(mat); }
     void dense(const char* name, const MarketMatrix& A) {
         std::vector<double> col(A.rows * A.cols);
@@ -54,7 +61,7 @@ struct Writer {
             for (std::size_t j = 0; j < A.cols; ++j) col[j * A.rows + i] = A(i, j);
         std::size_t dims[2] = {A.rows, A.cols};
         matvar_t* v = Mat_VarCreate(name, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, col.data(), 0);
-        Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE);
+        Mat_VarWrite(mat, v, compression);
         Mat_VarFree(v);
     }
     void sparse(const char* name, const MarketMatrix& A) {
@@ -75,10 +82,11 @@ struct Writer {
         s.data = data.data();
         std::size_t dims[2] = {A.rows, A.cols};
         matvar_t* v = Mat_VarCreate(name, MAT_C_SPARSE, MAT_T_DOUBLE, 2, dims, &s, MAT_F_DONT_COPY_DATA);
-        Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE);
+        Mat_VarWrite(mat, v, compression);
         Mat_VarFree(v);
     }
     mat_t* mat;
+    matio_compression compression;
 };
 
 std::string beam_toml(const std::string& mass, const std::string& stiffness, const std::string& damping) {
@@ -171,6 +179,177 @@ TEST_F(MatFolder, BadVariablesAreRefusedByFileVariableAndReason) {
     expect_error(model("text.mat"), "text.mat");
     fs::create_directories(path("dir.mat"));
     expect_error(model("dir.mat"), "cannot read matrix file");
+}
+
+std::string bytes_of(const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void write_bytes(const std::string& file, const std::string& bytes) {
+    std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+/// The message of read_mat_variable(file, variable), or "" (with a failure) when it reads.
+std::string mat_error(const std::string& file, const std::string& variable) {
+    try {
+        read_mat_variable(file, variable);
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << file << ":" << variable << " was read";
+    return "";
+}
+
+// libmatio reads a variable cut short by the end of the file as zeros (K = 0,
+// or half its couplings) and says nothing: every cut of the compressed
+// default, of an uncompressed file (sparse and dense) and of a version 7.3
+// (HDF5) file is refused, naming the file and the variable.
+TEST_F(MatFolder, TruncatedFilesAreRefusedNamingFileAndVariable) {
+    const MarketMatrix K = read_matrix_market(kBeam + "K.mtx");
+    struct Kind {
+        const char* name;
+        mat_ft version;
+        matio_compression compression;
+        bool sparse;
+    };
+    for (const Kind& kind : {Kind{"zlib.mat", MAT_FT_MAT5, MAT_COMPRESSION_ZLIB, false},
+                             Kind{"zlib-sparse.mat", MAT_FT_MAT5, MAT_COMPRESSION_ZLIB, true},
+                             Kind{"plain.mat", MAT_FT_MAT5, MAT_COMPRESSION_NONE, false},
+                             Kind{"plain-sparse.mat", MAT_FT_MAT5, MAT_COMPRESSION_NONE, true},
+                             Kind{"hdf5.mat", MAT_FT_MAT73, MAT_COMPRESSION_NONE, false}}) {
+        const std::string whole = path(kind.name);
+        {
+            Writer w(whole, kind.version, kind.compression);
+            ASSERT_NE(w.mat, nullptr) << kind.name;
+            kind.sparse ? w.sparse("K", K) : w.dense("K", K);
+        }
+        const MarketMatrix read = read_mat_variable(whole, "K");  // the whole file reads, bit for bit
+        ASSERT_EQ(read.values, K.values) << kind.name;
+        const std::string bytes = bytes_of(whole);
+        const std::size_t size = bytes.size();
+        for (const std::size_t cut : {std::size_t{1}, std::size_t{7}, std::size_t{8}, std::size_t{100}, size / 2,
+                                      size - 200, size - 130, size - 100}) {
+            const std::string cut_file = path(std::string("cut-") + kind.name);
+            write_bytes(cut_file, bytes.substr(0, size - cut));
+            const std::string message = mat_error(cut_file, "K");
+            EXPECT_NE(message.find(cut_file + ":K: "), std::string::npos) << kind.name << " cut " << cut << ": " << message;
+            EXPECT_NE(message.find("truncated"), std::string::npos) << kind.name << " cut " << cut << ": " << message;
+        }
+    }
+    // Through a model: exit with the key, the file and the variable.
+    {
+        Writer w(path("beam.mat"), MAT_FT_MAT5, MAT_COMPRESSION_ZLIB);
+        w.dense("K", K);
+    }
+    const std::string bytes = bytes_of(path("beam.mat"));
+    write_bytes(path("beam.mat"), bytes.substr(0, bytes.size() - 8));
+    fs::copy_file(kBeam + "M.mtx", path("M.mtx"));
+    fs::copy_file(kBeam + "C.mtx", path("C.mtx"));
+    std::ofstream(path("b.toml")) << beam_toml("M.mtx", "beam.mat", "C.mtx");
+    const testing::CliRun r = testing::run_hsnc("check '" + path("b.toml") + "'");
+    EXPECT_EQ(r.exit_code, 2) << r.out;
+    EXPECT_EQ(r.out, "");
+    EXPECT_NE(r.err.find("key 'structure.stiffness': " + path("beam.mat") + ":K: the file is truncated"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
+/// The peak resident memory (bytes) that `work` adds, run in a child process,
+/// and whether it threw an InputError whose message holds `needle` (exit 0) ...
+struct ChildRun {
+    int exit_code = -1;
+    long added_kb = 0;
+    double seconds = 0;
+};
+
+template <class Work>
+ChildRun in_child(Work work) {
+    struct rusage self {};
+    ::getrusage(RUSAGE_SELF, &self);  // the child starts with the parent's pages
+    const auto start = std::chrono::steady_clock::now();
+    const pid_t pid = ::fork();
+    if (pid == 0) ::_exit(work());
+    int status = 0;
+    struct rusage child {};
+    ::wait4(pid, &status, 0, &child);
+    ChildRun r;
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.added_kb = child.ru_maxrss - self.ru_maxrss;
+    return r;
+}
+
+// A small file whose header claims large dimensions is refused from its header,
+// before libmatio allocates and reads the data (it read a 1.1 MB file into
+// 1.14 GB): beyond the dimension limit, and within it but more doubles than
+// the file can hold.
+TEST_F(MatFolder, AHeaderClaimingHugeDimensionsIsRefusedBeforeReading) {
+    MarketMatrix A;
+    A.rows = A.cols = 20;
+    A.values.assign(400, 1.0);
+    {
+        Writer w(path("small.mat"));
+        w.dense("A", A);
+    }
+    const std::string bytes = bytes_of(path("small.mat"));
+    // The dimensions subelement of the first variable: tag (miINT32, 8 bytes) at byte 152, then rows, cols.
+    ASSERT_EQ(bytes.substr(160, 8), std::string("\x14\0\0\0\x14\0\0\0", 8));
+    auto with_dims = [&](std::uint32_t rows, std::uint32_t cols) {
+        std::string b = bytes;
+        for (int k = 0; k < 4; ++k) {
+            b[160 + k] = static_cast<char>(rows >> (8 * k));
+            b[164 + k] = static_cast<char>(cols >> (8 * k));
+        }
+        const std::string file = path("claims-" + std::to_string(rows) + "x" + std::to_string(cols) + ".mat");
+        write_bytes(file, b);
+        return file;
+    };
+    const std::string huge = with_dims(9000, 9000), wide = with_dims(20, 2000000), fits = with_dims(300, 300);
+    for (const auto& [file, needle] : {std::pair<std::string, std::string>{huge, ":A: 9000 x 9000 exceeds"},
+                                       {wide, ":A: 20 x 2000000 exceeds"},
+                                       {fits, ":A: the header says 300 x 300 (720000 bytes of doubles), more than"}}) {
+        const ChildRun r = in_child([&] {
+            try {
+                read_mat_variable(file, "A");
+            } catch (const InputError& e) {
+                return std::string(e.what()).find(file + needle) != std::string::npos ? 0 : 3;
+            }
+            return 4;
+        });
+        EXPECT_EQ(r.exit_code, 0) << file << " (3: another message, 4: read)";
+        EXPECT_LT(r.added_kb, 64 * 1024) << file;
+        EXPECT_LT(r.seconds, 5.0) << file;
+        if (r.exit_code != 0) std::cerr << mat_error(file, "A") << "\n";
+    }
+}
+
+// A version 7.3 header on a file that is no HDF5 file: one message, not
+// HDF5's 14-line error stack on stderr.
+TEST_F(MatFolder, AVersion73HeaderOnAnotherFileGivesOneMessage) {
+    std::string header = "MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Jan  1 00:00:00 2024 HDF5 schema 1.00 .";
+    header.resize(116, ' ');
+    header += std::string(8, ' ') + std::string("\x00\x02", 2) + "IM";
+    write_bytes(path("fake.mat"), header + std::string(2000, 'x'));
+    fs::copy_file(kBeam + "M.mtx", path("M.mtx"));
+    fs::copy_file(kBeam + "C.mtx", path("C.mtx"));
+    std::ofstream(path("b.toml")) << beam_toml("M.mtx", "fake.mat", "C.mtx");
+    const testing::CliRun r = testing::run_hsnc("check '" + path("b.toml") + "'");
+    EXPECT_EQ(r.exit_code, 2) << r.out;
+    EXPECT_EQ(r.out, "");
+    EXPECT_NE(r.err.find(path("fake.mat") + ":K: a MATLAB version 7.3 header, but not an HDF5 file"), std::string::npos)
+        << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_EQ(r.err.find("HDF5-DIAG"), std::string::npos) << r.err;
+    // An HDF5 signature where HDF5 looks, the rest damaged: HDF5 cannot open it, still one message.
+    std::string damaged = header + std::string(512 - 128, ' ') + "\x89HDF\r\n\x1a\n" + std::string(2000, '\x01');
+    write_bytes(path("fake.mat"), damaged);
+    const testing::CliRun d = testing::run_hsnc("check '" + path("b.toml") + "'");
+    EXPECT_EQ(d.exit_code, 2) << d.out;
+    EXPECT_NE(d.err.find(path("fake.mat") + ":K: a MATLAB version 7.3 file that HDF5 cannot open"), std::string::npos)
+        << d.err;
+    EXPECT_EQ(std::count(d.err.begin(), d.err.end(), '\n'), 1) << d.err;
 }
 
 #else

@@ -1026,5 +1026,36 @@ TEST(ModelReaderErrors, V0InvalidName) {
     expect_message(error_of(kTwoMasses, o), {"--v0 '2m=1': '2m' is not a valid name"});
 }
 
+// ------------------------------------------------- rates beyond the double range
+
+// k = 1e300 on m = 1e-300: k/m overflows and every solver stepped NaN states
+// to a run that ended "ok". The reader refuses the element whose stiffness
+// (or damping, or force) over the mass is beyond the double range, by key.
+TEST(ModelReaderErrors, StiffnessOverMassBeyondTheDoubleRange) {
+    const std::string tiny = "name = \"t\"\n[[mass]]\nname = \"m1\"\nm = 1e-300\n";  // lines 1-4
+    expect_message(error_of(tiny + "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 1e300\n"),
+                   {"test.toml:7: key 'spring[1].k': the spring: stiffness 1e+300 over "
+                    "mass 'm1' (m = 1e-300) is beyond the double range: the natural frequency "
+                    "sqrt(k/m) would not be finite"});
+    expect_message(error_of(tiny + "[[contact]]\nname = \"stop\"\nbetween = [\"m1\", \"ground\"]\ngap = 0\nk = 1e300\n"),
+                   {"test.toml:9: key 'contact[1].k': contact 'stop': stiffness", "natural frequency"});
+    expect_message(error_of(tiny + "[[jenkins]]\nbetween = [\"m1\", \"ground\"]\nk = 1e300\nslip_force = 1\n"),
+                   {"test.toml:7: key 'jenkins[1].k': Jenkins element 'jenkins1': stiffness", "natural frequency"});
+    expect_message(error_of(tiny + "[[damper]]\nbetween = [\"m1\", \"ground\"]\nc = 1e300\n"),
+                   {"test.toml:7: key 'damper[1].c': the damper: damping 1e+300", "decay rate c/m"});
+    expect_message(error_of(tiny + "[load]\nm1 = 1e300\n"),
+                   {"test.toml:6: key 'load.m1': the load: force 1e+300 over mass 'm1'", "acceleration F/m"});
+    // Two springs each within range whose sum over the mass is not: the mass is named.
+    const std::string one = "name = \"t\"\n[[mass]]\nname = \"m1\"\nm = 0.5\n";
+    expect_message(error_of(one + "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 8e307\n"
+                                  "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 8e307\n"),
+                   {"test.toml:4: key 'mass[1].m': the stiffnesses on mass 'm1' (m = 0.5) sum to 1.6e+308; over the "
+                    "mass that is beyond the double range"});
+    expect_message(error_of(one + "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 1e300\n[damping]\nbeta = 1e10\n"),
+                   {"key 'damping.beta': beta = 1e+10 times the stiffness over mass 'm1'", "modal damping"});
+    // Within the range: read.
+    EXPECT_NO_THROW(parse_model(tiny + "[[spring]]\nbetween = [\"ground\", \"m1\"]\nk = 1e7\n", "ok.toml"));
+}
+
 }  // namespace
 }  // namespace hsnc

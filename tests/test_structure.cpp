@@ -13,6 +13,7 @@
 
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -28,7 +29,9 @@
 #include "cli_runner.h"
 #include "engine_runner.h"
 #include "error.h"
+#include "file_read.h"
 #include "matrix_market.h"
+#include "modal.h"
 #include "model_reader.h"
 #include "reference.h"
 #include "derivation.h"
@@ -498,6 +501,27 @@ TEST(MatrixMarket, EveryErrorNamesFileAndLine) {
     expect_message(market_error("%%MatrixMarket matrix array real symmetric\n2 3\n"), {"A.mtx:2: a symmetric matrix must be square"});
 }
 
+// A NUL ends the C string strtod reads ("1\0garbage" read as 1), and an
+// integer file's "1.5" is no integer: each refused, by line.
+template <std::size_t N>
+std::string with_nul(const char (&text)[N]) {
+    return std::string(text, N - 1);  // the whole literal, past its embedded NUL
+}
+
+TEST(MatrixMarket, NulBytesAndNonIntegersAreRefused) {
+    expect_message(market_error(with_nul("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1\0garbage\n")),
+                   {"A.mtx:3: contains a NUL byte"});
+    expect_message(market_error(with_nul("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1\0\n")),
+                   {"A.mtx:3: contains a NUL byte"});
+    expect_message(market_error("%%MatrixMarket matrix coordinate integer general\n2 2 1\n1 1 1.5\n"),
+                   {"A.mtx:3: '1.5' is not an integer (the header says the field is integer)"});
+    expect_message(market_error("%%MatrixMarket matrix array integer general\n1 2\n3\n2e3\n"),
+                   {"A.mtx:4: '2e3' is not an integer"});
+    expect_message(market_error("%%MatrixMarket matrix array integer general\n1 2\n3\n-\n"), {"A.mtx:4: '-' is not an integer"});
+    const MarketMatrix m = parse_matrix_market("%%MatrixMarket matrix array integer general\n1 3\n+3\n-2\n007\n", "i.mtx");
+    EXPECT_EQ(m.values, (std::vector<double>{3.0, -2.0, 7.0}));
+}
+
 // ---------------------------------------------------------------- bad [structure] and [[friction]]
 
 /// The message of reading `model` (written as s.toml beside `files`) in a fresh folder.
@@ -675,6 +699,96 @@ TEST(FrictionInput, EveryKeyChecked) {
                    {"key 'friction[1].name': name 'u2' is already used by structure.dofs[2]"});
     expect_message(structure_error("name = \"s\"\n[[mass]]\nname = \"m\"\nm = 1\nmu_k = 0.1\n[[friction]]\nbetween = [\"m\", \"ground\"]\nmu_k = 0.2\n", {}),
                    {"key 'friction[1].between': 'm' already has friction (its own mu_k)"});
+}
+
+// A path holding a NUL would open the file named by its part before the NUL.
+TEST(StructureInput, APathWithANulCharacterIsRefused) {
+    Folder dir;
+    dir.write("M.mtx", kM2);
+    dir.write("K.mtx", kK2);
+    const std::string model = "name = \"s\"\n[structure]\ndofs = [\"u1\", \"u2\"]\nmass = \"M.mtx\"\n"
+                              "stiffness = \"K.mtx\\u0000.bak\"\n";
+    expect_message(structure_error(model, {{"M.mtx", kM2}, {"K.mtx", kK2}}),
+                   {"s.toml:5: key 'structure.stiffness': 'K.mtx .bak': a path cannot hold a NUL character"});
+    const FileRead r = read_regular_file(dir.path("K.mtx") + std::string(1, '\0') + ".bak", 1 << 20);
+    EXPECT_EQ(r.status, FileRead::Status::refused);
+    EXPECT_EQ(r.problem, "the path contains a NUL character");
+}
+
+// A structure scaled by 1e200 or 1e-200 is the same structure: the Jacobi
+// scaling of the definiteness checks took sqrt(d_i * d_j), which overflows
+// beyond 1.3e154 (and underflows below 1.5e-154) and called such M and K
+// "not positive definite". Same natural frequencies, same Rayleigh damping.
+TEST(StructureInput, ScaledMatricesGiveTheSameFrequencies) {
+    const std::string beam = std::string(HSNC_SOURCE_DIR) + "/examples/beam-crack/";
+    const Model ref = read_model(beam + "beam-crack.toml");
+    const ModalDecomposition ref_modes = modal_analysis(ref, Configuration::all_open(ref));
+    for (const double scale : {1e200, 1e-200, 1e300, 1e-300}) {
+        Folder dir;
+        for (const char* name : {"M", "K", "C"}) {
+            MarketMatrix A = read_matrix_market(beam + name + ".mtx");
+            Eigen::MatrixXd scaled(A.rows, A.cols);
+            for (std::size_t i = 0; i < A.rows; ++i)
+                for (std::size_t j = 0; j < A.cols; ++j) scaled(i, j) = A(i, j) * scale;
+            dir.write(std::string(name) + ".mtx", market(scaled));
+        }
+        std::ifstream in(beam + "beam-crack.toml");
+        const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const std::string path = dir.write("beam-crack.toml", text);
+        Model m;
+        try {
+            m = read_model(path);
+        } catch (const InputError& e) {
+            ADD_FAILURE() << "scale " << scale << ": " << e.what();
+            continue;
+        }
+        EXPECT_NEAR(m.alpha, ref.alpha, 1e-12 * ref.alpha) << scale;
+        EXPECT_NEAR(m.beta, ref.beta, 1e-12 * ref.beta) << scale;
+        const ModalDecomposition modes = modal_analysis(m, Configuration::all_open(m));
+        ASSERT_EQ(modes.lambda.size(), ref_modes.lambda.size());
+        for (Eigen::Index j = 0; j < modes.lambda.size(); ++j)
+            EXPECT_NEAR(modes.lambda(j), ref_modes.lambda(j), 1e-9 * ref_modes.lambda(modes.lambda.size() - 1))
+                << "scale " << scale << " mode " << j;
+    }
+}
+
+// A 10,000-dof structure: `check` took over 120 s and 3.1 GB (dense matrices,
+// cubic modal analysis). Refused at once with the stated limit
+// (kMaxMatrixDimension), as are a matrix file and a [[mass]] model beyond it.
+TEST(StructureInput, AStructureBeyondTheSizeLimitIsRefusedAtOnce) {
+    Folder dir;
+    const std::size_t n = 10000;
+    std::ostringstream M, K, toml;
+    M << "%%MatrixMarket matrix coordinate real symmetric\n" << n << " " << n << " " << n << "\n";
+    K << "%%MatrixMarket matrix coordinate real symmetric\n" << n << " " << n << " " << 2 * n - 1 << "\n";
+    toml << "name = \"big\"\n[structure]\ndofs = [";
+    for (std::size_t i = 1; i <= n; ++i) {
+        M << i << " " << i << " 1\n";
+        K << i << " " << i << " 2e4\n";
+        if (i > 1) K << i << " " << i - 1 << " -1e4\n";
+        toml << (i > 1 ? ", " : "") << "\"u" << i << "\"";
+    }
+    toml << "]\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n";
+    dir.write("M.mtx", M.str());
+    dir.write("K.mtx", K.str());
+    const std::string path = dir.write("big.toml", toml.str());
+    const auto start = std::chrono::steady_clock::now();
+    const testing::CliRun r = testing::run_hsnc("check '" + path + "'");
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_EQ(r.exit_code, 2) << r.out;
+    EXPECT_EQ(r.err, "hsnc: " + path + ":3: key 'structure.dofs': 10000 degrees of freedom, more than the " +
+                         std::to_string(kMaxMatrixDimension) + " hsnc takes for now: its matrices are dense and its "
+                         "modal analysis is cubic in the dofs (at " + std::to_string(kMaxMatrixDimension) +
+                         " dofs, check takes under a second and simulate seconds per configuration; at 10000 check "
+                         "would take hours and gigabytes)\n");
+    EXPECT_LT(seconds, 10.0);
+    // Two dofs, and a matrix file announcing 10000 x 10000: refused at its size line.
+    expect_message(with_matrices("", kM2, K.str().c_str()),
+                   {"key 'structure.stiffness': K.mtx:2: larger than 500 rows or columns"});
+    // [[mass]] models have the same limit.
+    std::string masses = "name = \"many\"\n";
+    for (std::size_t i = 1; i <= kMaxMatrixDimension + 1; ++i) masses += "[[mass]]\nname = \"m" + std::to_string(i) + "\"\nm = 1\n";
+    expect_message(structure_error(masses, {}), {"s.toml:2: key 'mass': 501 degrees of freedom, more than the 500"});
 }
 
 // `hsnc check` reports the structure, its dofs, the friction elements and the frequencies.

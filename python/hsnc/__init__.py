@@ -15,7 +15,11 @@ with KeyboardInterrupt. Bad input raises InputError (a ValueError), a
 failure while running RunError (a RuntimeError), with the library's message.
 """
 
+import collections.abc
 import math
+import operator
+import os
+import re
 
 import numpy as np
 
@@ -23,6 +27,150 @@ from . import _hsnc
 from ._hsnc import InputError, RunError
 
 __all__ = ["InputError", "Model", "Result", "RunError", "generate", "lyapunov", "periodic", "simulate", "sweep"]
+
+
+# Argument checks. Every argument is checked here for what the native part
+# cannot take (a type, a NaN or an infinity, an integer beyond its C++ type,
+# a NUL in a text) and refused as InputError naming it and saying what is
+# allowed; what depends on the model (t_end after t0, a parameter that
+# exists, ...) is the library's check, with the message the CLI prints.
+# Numbers are int, float or NumPy numbers; a bool is not a number here.
+
+_REQUIRED = object()
+_SIZE_MAX = 2**64 - 1  # std::size_t, std::uint64_t
+_UINT_MAX = 2**32 - 1  # unsigned
+_INT_MAX = 2**31 - 1   # int
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")  # a name of the model (interface.md section 1)
+
+
+def _show(value):
+    try:
+        text = repr(value)
+    except Exception:  # an int beyond sys.get_int_max_str_digits() has no repr
+        text = "<%s>" % type(value).__name__
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _refuse(function, name, value, allowed):
+    raise InputError("%s(): %s = %s: expected %s" % (function, name, _show(value), allowed))
+
+
+def _real(function, name, value, default=_REQUIRED, allowed="a finite number"):
+    """value as a finite float; None is `default` (not given) unless required."""
+    if value is None and default is not _REQUIRED:
+        return default
+    if not isinstance(value, (bool, np.bool_, str, bytes)):
+        try:
+            number = float(value)
+        except (TypeError, ValueError, OverflowError):  # float(10**400): OverflowError
+            pass
+        else:
+            if math.isfinite(number):
+                return number
+    _refuse(function, name, value, allowed)
+
+
+def _positive(function, name, value):
+    number = _real(function, name, value, allowed="a finite number > 0")
+    if number > 0:
+        return number
+    _refuse(function, name, value, "a finite number > 0")
+
+
+def _int(function, name, value, low, high, allowed=None):
+    """value as an int in [low, high] (an integral float is taken: 3.0 is 3)."""
+    if not isinstance(value, (bool, np.bool_)):
+        try:
+            number = operator.index(value)
+        except TypeError:
+            number = int(value) if isinstance(value, float) and value.is_integer() else None
+        if number is not None and low <= number <= high:
+            return number
+    _refuse(function, name, value, allowed or "an integer >= %d (at most %s)" % (
+        low, {_SIZE_MAX: "2**64 - 1", _UINT_MAX: "2**32 - 1", _INT_MAX: "2**31 - 1"}.get(high, high)))
+
+
+def _bool(function, name, value):
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    _refuse(function, name, value, "True or False")
+
+
+def _text(function, name, value, allowed="a str"):
+    """A str the C++ part takes whole: UTF-8 (no lone surrogate), no NUL."""
+    if isinstance(value, str):
+        try:
+            value.encode()
+        except UnicodeEncodeError:
+            _refuse(function, name, value, allowed + " (encodable as UTF-8)")
+        if "\0" not in value:
+            return value
+        _refuse(function, name, value, allowed + " (without NUL characters)")
+    _refuse(function, name, value, allowed)
+
+
+def _path(function, name, value, allowed="a path (str or os.PathLike)"):
+    """A file system path as str; a NUL would cut it short in the C++ part."""
+    try:
+        path = os.fsdecode(os.fspath(value))
+    except TypeError:
+        _refuse(function, name, value, allowed)
+    if path and "\0" not in path:
+        try:
+            path.encode()
+            return path
+        except UnicodeEncodeError:  # undecodable bytes (os.fsdecode's surrogates)
+            _refuse(function, name, value, allowed + " (encodable as UTF-8)")
+    _refuse(function, name, value, allowed + (" (not empty)" if not path else " (without NUL characters)"))
+
+
+def _overrides(function, name, value):
+    """set, x0 or v0: {name: number or expression}, values a finite float or a str."""
+    if value is None:
+        return {}
+    if not isinstance(value, collections.abc.Mapping):
+        _refuse(function, name, value, "a dict {name: number or expression str}")
+    out = {}
+    for key, item in value.items():
+        if not isinstance(key, str) or not _NAME.match(key):
+            raise InputError("%s(): %s key %s: expected a name (str: letters, digits, _)" % (function, name, _show(key)))
+        if isinstance(item, str):
+            out[key] = _text(function, "%s[%r]" % (name, key), item, "a finite number or an expression str")
+        else:
+            out[key] = _real(function, "%s[%r]" % (name, key), item, allowed="a finite number or an expression str")
+    return out
+
+
+def _model(function, model):
+    if not isinstance(model, Model):
+        raise InputError("%s(): model = %s: expected an hsnc.Model" % (function, _show(model)))
+    return model
+
+
+_METHODS = "a str: 'hsnc', 'ab4', 'rk45' or 'cvode'"
+_KERNELS = "a str: 'auto', 'aot', 'generic', 'interp', 'eigen', 'jit' or 'tiered'"
+
+
+def _bytes_text(size):
+    units = ["B", "kB", "MB", "GB", "TB", "PB", "EB"]
+    u = 0
+    while size >= 1000 and u < len(units) - 1:
+        size /= 1000
+        u += 1
+    return "%.3g %s" % (size, units[u])
+
+
+def _output_guard(function, name, value, rows, width, allow, shorter):
+    """The CLI's output guard (output/simulate_outputs.h, --allow-large-output)
+    on what a call collects in memory: `rows` rows of `width` doubles. Checked
+    before the run, so a dt of 1e-300 is refused instead of filling memory."""
+    if allow:
+        return
+    size = rows * width * 8.0
+    if rows > _hsnc._LARGE_OUTPUT_ROWS or size > _hsnc._LARGE_OUTPUT_BYTES:
+        raise InputError("%s(): %s = %.3g: the result would have %.3g rows, about %s (the limit is 1e7 rows or 1 GB): "
+                         "give a larger %s or a shorter %s, or allow_large_output=True to collect it anyway"
+                         % (function, name, value, rows, _bytes_text(size), name, shorter))
 
 
 class Model:
@@ -40,24 +188,34 @@ class Model:
         """Read and validate a model file. set, x0, v0: dicts {name: value}
         overriding parameters and the initial state (as `hsnc simulate --set
         --x0 --v0`); a value may be a number or an expression string."""
-        overrides = (dict(set or {}), dict(x0 or {}), dict(v0 or {}))
-        native = _hsnc.Model.from_file(str(path), set=overrides[0], x0=overrides[1], v0=overrides[2])
-        return cls(native, ("file", str(path), "", overrides))
+        f = "hsnc.Model.from_file"
+        path = _path(f, "path", path)
+        overrides = (_overrides(f, "set", set), _overrides(f, "x0", x0), _overrides(f, "v0", v0))
+        native = _hsnc.Model.from_file(path, set=overrides[0], x0=overrides[1], v0=overrides[2])
+        return cls(native, ("file", path, "", overrides))
 
     @classmethod
     def from_string(cls, text, *, source="<string>", set=None, x0=None, v0=None):
-        """Read a model from TOML text; `source` names it in messages."""
-        overrides = (dict(set or {}), dict(x0 or {}), dict(v0 or {}))
+        """Read a model from TOML text; `source` names it in messages. Text
+        of more than 16 MiB (in UTF-8) is refused, as a model file is."""
+        f = "hsnc.Model.from_string"
+        limit = _hsnc._MAX_MODEL_BYTES
+        # len(text) <= its UTF-8 size: a huge text is refused before it is encoded (by _text).
+        if isinstance(text, str) and len(text) > limit or len(_text(f, "text", text, "a str (TOML)").encode()) > limit:
+            raise InputError("%s(): text: larger than %d bytes (UTF-8), the limit of a model file" % (f, limit))
+        source = _text(f, "source", source)
+        overrides = (_overrides(f, "set", set), _overrides(f, "x0", x0), _overrides(f, "v0", v0))
         native = _hsnc.Model.from_string(text, source=source, set=overrides[0], x0=overrides[1], v0=overrides[2])
         return cls(native, ("text", text, source, overrides))
 
     def with_overrides(self, *, set=None, x0=None, v0=None):
         """The same model read again with these overrides added to its own."""
+        f = "hsnc.Model.with_overrides"
         kind, what, source, (s0, x00, v00) = self._read
         s, x, v = dict(s0), dict(x00), dict(v00)
-        s.update(set or {})
-        x.update(x0 or {})
-        v.update(v0 or {})
+        s.update(_overrides(f, "set", set))
+        x.update(_overrides(f, "x0", x0))
+        v.update(_overrides(f, "v0", v0))
         if kind == "file":
             return Model.from_file(what, set=s, x0=x, v0=v)
         return Model.from_string(what, source=source, set=s, x0=x, v0=v)
@@ -115,17 +273,9 @@ def _events(raw, n, nj=0):
     return events.view(np.recarray)
 
 
-def _number(name, value, default=math.nan, function="hsnc.simulate"):
-    if value is None:
-        return default
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        raise InputError("%s(): %s = %r: expected a number" % (function, name, value)) from None
-
-
 def simulate(model, t_end=None, dt=None, method="hsnc", kernels="auto", precision="double", x0=None, v0=None,
-             max_events=0, h=None, rtol=1e-10, atol=1e-12, cache_dir="", use_cache=True, tier_evaluations=200000):
+             max_events=0, h=None, rtol=1e-10, atol=1e-12, cache_dir="", use_cache=True, tier_evaluations=200000,
+             allow_large_output=False):
     """Run `model` (a Model) from its initial state to `t_end` (default: the
     model's [simulate].t_end) and return a Result.
 
@@ -136,22 +286,34 @@ def simulate(model, t_end=None, dt=None, method="hsnc", kernels="auto", precisio
     x0, v0: dicts {mass name: value} overriding the initial state (as
     `hsnc simulate --x0 --v0`: the model is read again with them);
     max_events: stop after that many switch events (0: no limit; the result
-    then has status "max_events")."""
-    if not isinstance(model, Model):
-        raise InputError("hsnc.simulate(): model = %r: expected an hsnc.Model" % (model,))
+    then has status "max_events"). More than 1e7 samples, or about 1 GB of
+    them, are refused before the run (as `hsnc simulate --out`) unless
+    allow_large_output=True."""
+    f = "hsnc.simulate"
+    model = _model(f, model)
+    x0, v0 = _overrides(f, "x0", x0), _overrides(f, "v0", v0)
+    t_end = _real(f, "t_end", t_end, math.nan, "a finite number (None: the model's [simulate].t_end)")
+    dt = _real(f, "dt", dt, math.nan, "a finite number > 0 (None: (t_end - t0) / 1000)")
+    method = _text(f, "method", method, _METHODS)
+    kernels = _text(f, "kernels", kernels, _KERNELS)
+    precision = _text(f, "precision", precision, "a str: 'double' or 'mp:N'")
+    max_events = _int(f, "max_events", max_events, 0, _SIZE_MAX, "an integer >= 0 (0: no limit; at most 2**64 - 1)")
+    h = _real(f, "h", h, math.nan, "a finite number > 0 (the ab4 step; None: not given)")
+    rtol = _real(f, "rtol", rtol, allowed="a finite number > 0")
+    atol = _real(f, "atol", atol, allowed="a finite number > 0")
+    cache_dir = "" if cache_dir is None or cache_dir == "" else _path(f, "cache_dir", cache_dir,
+                                                                      "a path (str or os.PathLike; \"\": the default)")
+    use_cache = _bool(f, "use_cache", use_cache)
+    tier_evaluations = _int(f, "tier_evaluations", tier_evaluations, 1, _SIZE_MAX)
+    allow_large_output = _bool(f, "allow_large_output", allow_large_output)
     if x0 or v0:
         model = model.with_overrides(x0=x0, v0=v0)
-    try:
-        max_events = int(max_events)
-    except (TypeError, ValueError):
-        raise InputError("hsnc.simulate(): max_events = %r: expected an integer >= 0" % (max_events,)) from None
-    if max_events < 0:
-        raise InputError("hsnc.simulate(): max_events = %d: expected an integer >= 0" % max_events)
-    if isinstance(tier_evaluations, bool) or not isinstance(tier_evaluations, int) or tier_evaluations < 1:
-        raise InputError("hsnc.simulate(): tier_evaluations = %r: expected an integer >= 1" % (tier_evaluations,))
-    raw = _hsnc._simulate(model._native, _number("t_end", t_end), _number("dt", dt), str(method), str(kernels), str(precision),
-                    max_events, _number("h", h), _number("rtol", rtol), _number("atol", atol), str(cache_dir),
-                    bool(use_cache), tier_evaluations)
+    end = t_end if not math.isnan(t_end) else model.t_end
+    if not math.isnan(dt) and end is not None:
+        rows = _hsnc._sample_count(model.t0, end, dt)
+        _output_guard(f, "dt", dt, rows, 1 + 2 * model.dof + len(model.jenkins), allow_large_output, "t_end")
+    raw = _hsnc._simulate(model._native, t_end, dt, method, kernels, precision, max_events, h, rtol, atol, cache_dir,
+                          use_cache, tier_evaluations)
     masses, jenkins = model.masses, model.jenkins
     return Result(raw["t"], raw["x"], raw["v"], _events(raw, len(masses), len(jenkins)), raw["summary"], masses,
                   raw["s"], jenkins)
@@ -161,7 +323,9 @@ def generate(model, directory):
     """Write the specialised C++ kernels of `model` into `directory` (as
     `hsnc generate MODEL -o DIR`; the directory is created if needed) and
     return the names of the files written."""
-    return _hsnc._generate(model._native, str(directory))
+    f = "hsnc.generate"
+    model = _model(f, model)
+    return _hsnc._generate(model._native, _path(f, "directory", directory))
 
 
 def _override_texts(d):
@@ -201,33 +365,37 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
 
     Ctrl-C (SIGINT) stops the run within a forcing period or a continuation
     step and raises KeyboardInterrupt."""
-    if not isinstance(model, Model):
-        raise InputError("hsnc.sweep(): model = %r: expected an hsnc.Model" % (model,))
-    kind, what, source, (s, x0, v0) = model._read
-    try:
-        points, max_periods, record_periods, threads, max_steps = (int(points), int(max_periods),
-                                                                   int(record_periods), int(threads), int(max_steps))
-    except (TypeError, ValueError):
-        raise InputError("hsnc.sweep(): points, max_periods, record_periods, threads, max_steps: expected integers") from None
-    if min(points, max_periods, record_periods, threads, max_steps) < 0:
-        raise InputError("hsnc.sweep(): points, max_periods, record_periods, threads, max_steps: expected integers >= 0")
-    values2 = [] if values2 is None else [float(v) for v in values2]
+    f = "hsnc.sweep"
+    kind, what, source, (s, x0, v0) = _model(f, model)._read
+    param = _text(f, "param", param, "a parameter's name (str)")
+    start = _real(f, "start", start)
+    stop = _real(f, "stop", stop)
+    points = _int(f, "points", points, 1, _SIZE_MAX)
+    direction = _text(f, "direction", direction, "a str: 'up', 'down' or 'both'")
+    max_periods = _int(f, "max_periods", max_periods, 1, _SIZE_MAX)
+    record_periods = _int(f, "record_periods", record_periods, 1, _SIZE_MAX)
+    restart_each = _bool(f, "restart_each", restart_each)
+    param2 = "" if param2 is None else _text(f, "param2", param2, "a parameter's name (str) or None")
+    if values2 is None:
+        values2 = []
+    elif isinstance(values2, (str, bytes, collections.abc.Mapping)) or not isinstance(values2, collections.abc.Iterable):
+        _refuse(f, "values2", values2, "a sequence of finite numbers or None")
+    else:
+        values2 = [_real(f, "values2[%d]" % i, v) for i, v in enumerate(values2)]
+    threads = _int(f, "threads", threads, 0, _UINT_MAX, "an integer >= 0 (0: every core; at most 2**32 - 1)")
+    method = _text(f, "method", method, _METHODS)
+    # As hsnc.simulate's (api/simulate.cpp): checked whatever the method, a bad one is a mistake even where unused.
+    rtol = _positive(f, "rtol", rtol)
+    atol = _positive(f, "atol", atol)
+    continuation = _bool(f, "continuation", continuation)
+    max_steps = _int(f, "max_steps", max_steps, 0, _SIZE_MAX, "an integer >= 0 (0: 20 * points; at most 2**64 - 1)")
     return _hsnc._sweep(kind, what, source, _override_texts(s), _override_texts(x0), _override_texts(v0),
-                        str(param), _number("start", start), _number("stop", stop), points, str(direction),
-                        max_periods, record_periods, bool(restart_each), "" if param2 is None else str(param2),
-                        values2, threads, str(method), _number("rtol", rtol), _number("atol", atol),
-                        bool(continuation), max_steps)
-def _integer(function, name, value):
-    try:
-        if isinstance(value, bool) or int(value) != value:
-            raise ValueError
-        return int(value)
-    except (TypeError, ValueError):
-        raise InputError("%s(): %s = %r: expected an integer" % (function, name, value)) from None
+                        param, start, stop, points, direction, max_periods, record_periods, restart_each, param2,
+                        values2, threads, method, rtol, atol, continuation, max_steps)
 
 
 def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_iterations=50, dt=None,
-             kernels="auto", x0=None, v0=None):
+             kernels="auto", x0=None, v0=None, allow_large_output=False):
     """A periodic orbit of the forced response and its stability (as
     `hsnc periodic`): Newton shooting on the period map with the exact
     monodromy matrix. Returns a dict: status ("ok" or "not_converged"),
@@ -240,20 +408,31 @@ def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_itera
     instants a period: the multipliers are not reliable when > 0) and orbit (dict of t, x,
     v arrays: one period sampled every dt, default period/1000; empty when not
     converged). period: default 2*pi/omega of the model's forcing;
-    transient: run this long first. Ctrl-C (SIGINT) stops it promptly with
-    KeyboardInterrupt."""
-    if not isinstance(model, Model):
-        raise InputError("hsnc.periodic(): model = %r: expected an hsnc.Model" % (model,))
+    transient: run this long first. An orbit of more than 1e7 samples, or
+    about 1 GB, is refused before the run unless allow_large_output=True.
+    Ctrl-C (SIGINT) stops it promptly with KeyboardInterrupt."""
+    f = "hsnc.periodic"
+    model = _model(f, model)
+    x0, v0 = _overrides(f, "x0", x0), _overrides(f, "v0", v0)
+    period = _real(f, "period", period, math.nan, "a finite number > 0 (None: 2*pi/omega of the model's forcing)")
+    harmonic = _int(f, "harmonic", harmonic, 1, _INT_MAX)
+    transient = _real(f, "transient", transient, 0.0, "a finite number >= 0")
+    tol = _real(f, "tol", tol, 1e-10, "a finite number > 0")
+    max_iterations = _int(f, "max_iterations", max_iterations, 0, _INT_MAX)
+    dt = _real(f, "dt", dt, math.nan, "a finite number > 0 (None: the period / 1000)")
+    kernels = _text(f, "kernels", kernels, _KERNELS)
+    allow_large_output = _bool(f, "allow_large_output", allow_large_output)
     if x0 or v0:
         model = model.with_overrides(x0=x0, v0=v0)
-    f = "hsnc.periodic"
-    return _hsnc._periodic(model._native, _number("period", period, function=f), _integer(f, "harmonic", harmonic),
-                           _number("transient", transient, 0.0, f), _number("tol", tol, 1e-10, f),
-                           _integer(f, "max_iterations", max_iterations), _number("dt", dt, function=f),
-                           str(kernels))
+    span = harmonic * (period if not math.isnan(period) else _hsnc._forcing_period(model._native))
+    if not math.isnan(dt) and math.isfinite(span) and span > 0:  # else the library refuses the period
+        _output_guard(f, "dt", dt, _hsnc._sample_count(0.0, span, dt), 1 + 2 * model.dof, allow_large_output,
+                      "period")
+    return _hsnc._periodic(model._native, period, harmonic, transient, tol, max_iterations, dt, kernels)
 
 
-def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=None, v0=None):
+def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=None, v0=None,
+             allow_large_output=False):
     """The Lyapunov spectrum (as `hsnc lyapunov`), by the QR method on the
     exact tangent dynamics, measured over t_end seconds after transient.
     Returns a dict: exponents (array of 2n, plus one per Jenkins element,
@@ -261,15 +440,26 @@ def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=
     grazing (switch instants at a turning point of a contact's gap, or
     without a saltation matrix: the exponents are not reliable when > 0),
     singular (of them, without a saltation matrix), rows_t and rows (the running estimates every row_interval,
-    default the forcing period, else 1 s; k x 2n). A run that stops early
-    raises RunError; Ctrl-C (SIGINT) stops it promptly with KeyboardInterrupt."""
-    if not isinstance(model, Model):
-        raise InputError("hsnc.lyapunov(): model = %r: expected an hsnc.Model" % (model,))
+    default the forcing period, else 1 s; k x 2n; more than 1e7 rows, or about
+    1 GB, are refused before the run unless allow_large_output=True). A run
+    that stops early raises RunError; Ctrl-C (SIGINT) stops it promptly with
+    KeyboardInterrupt."""
+    f = "hsnc.lyapunov"
+    model = _model(f, model)
+    x0, v0 = _overrides(f, "x0", x0), _overrides(f, "v0", v0)
+    t_end = _real(f, "t_end", t_end, allowed="a finite number > 0")
+    transient = _real(f, "transient", transient, 0.0, "a finite number >= 0")
+    row_interval = _real(f, "row_interval", row_interval, math.nan,
+                         "a finite number > 0 (None: the period of the slowest forcing, else 1 s)")
+    kernels = _text(f, "kernels", kernels, _KERNELS)
+    allow_large_output = _bool(f, "allow_large_output", allow_large_output)
     if x0 or v0:
         model = model.with_overrides(x0=x0, v0=v0)
-    f = "hsnc.lyapunov"
-    return _hsnc._lyapunov(model._native, _number("t_end", t_end, function=f), _number("transient", transient, 0.0, f),
-                           _number("row_interval", row_interval, function=f), str(kernels))
+    row = row_interval if not math.isnan(row_interval) else _hsnc._default_row_interval(model._native)
+    if t_end > 0 and row > 0:  # else the library refuses them
+        _output_guard(f, "row_interval", row, _hsnc._sample_count(0.0, t_end, row),
+                      1 + 2 * model.dof + len(model.jenkins), allow_large_output, "t_end")
+    return _hsnc._lyapunov(model._native, t_end, transient, row_interval, kernels)
 
 
 # Named as users see them: hsnc.InputError, not hsnc._hsnc.InputError.
