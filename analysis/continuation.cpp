@@ -128,7 +128,7 @@ std::string bifurcations_between(const std::vector<std::complex<double>>& a,
 }
 
 std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
-                                         const std::function<void(const SweepPoint&, double)>& done) {
+                                         const std::function<void(const SweepPoint&, double)>& done, bool* cut) {
     using Clock = std::chrono::steady_clock;
     const Model& first = *b.start_model;
     const std::size_t n = first.dof(), nj = first.jenkins.size();
@@ -238,6 +238,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
     for (Eigen::Index i = 0; i < N; ++i)
         for (Eigen::Index j = 0; j < N; ++j) M(i, j) = orbit.monodromy[static_cast<std::size_t>(i * N + j)];
     std::vector<std::complex<double>> mu = orbit.multipliers;
+    std::size_t neutral = orbit.neutral;  // of mu: a family's multipliers at +1 (hsnc/periodic.h)
 
     // A point of the branch: the orbit at (p, y) with multipliers mu, one period recorded.
     auto emit = [&](const Model& model, double previous_p, const std::vector<std::complex<double>>* previous_mu,
@@ -258,7 +259,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         pt.branch_start = previous_mu == nullptr;
         pt.periods = periods;
         pt.max_multiplier = mu.empty() ? 0.0 : std::abs(mu.front());
-        pt.stable = pt.max_multiplier < 1.0 - kNeutralMultiplier;  // hsnc/periodic.h
+        pt.stable = analysis::orbit_stable(mu, neutral);  // hsnc/periodic.h
         if (previous_mu) pt.bifurcation = bifurcations_between(*previous_mu, mu);
         out.push_back(std::move(pt));
         done(out.back(), seconds());
@@ -282,6 +283,10 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
     bool finished = false;
     while (stop.empty() && out.size() < budget) {
         check_cancel(o);
+        if (stop_requested(o)) {  // a graceful stop: the points so far are the branch's result
+            if (cut) *cut = true;
+            return out;
+        }
         Eigen::VectorXd u(N + 1);
         u.head(N) = y.cwiseQuotient(D.head(N));
         u(N) = p / D(N);
@@ -384,6 +389,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
                     y(static_cast<Eigen::Index>(i)) = end.x[i], y(static_cast<Eigen::Index>(n + i)) = end.v[i];
                 for (std::size_t j = 0; j < nj; ++j) y(static_cast<Eigen::Index>(2 * n + j)) = end.s[j];
                 mu = end.multipliers;
+                neutral = end.neutral;
                 emit(maps.model(bound), previous_p, &previous_mu, maps.runs - runs_before + end.iterations + 1);
             } catch (const InputError& e) {
                 stop = "sweep --continuation: shooting fails at " + name(bound) + ": " + e.what();
@@ -404,6 +410,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         for (Eigen::Index i = 0; i < N; ++i) D(i) = std::max(D(i), is_velocity_row(i) ? mv : mx);
         t = t.cwiseProduct(D_old).cwiseQuotient(D).normalized();
         mu = analysis::floquet_multipliers(M);
+        neutral = analysis::family_multipliers(M, mu);
         try {
             emit(maps.model(p), previous_p, &previous_mu, maps.runs - runs_before);
         } catch (const RunError& e) {

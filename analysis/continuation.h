@@ -28,8 +28,10 @@ struct Branch {
 
 /// Follows the branch; calls `done(point, seconds)` after each point (in
 /// order). Returns the points (see api/hsnc/sweep.h for what they hold).
+/// SweepOptions::stop ends it after the point under way, `*cut` (when given) then true.
 std::vector<SweepPoint> run_continuation(const Branch& branch, const SweepOptions& options,
-                                         const std::function<void(const SweepPoint&, double)>& done);
+                                         const std::function<void(const SweepPoint&, double)>& done,
+                                         bool* cut = nullptr);
 
 /// The bifurcations (fold, period_doubling, neimark_sacker, joined by '+')
 /// crossed between orbits with multipliers `a` and `b` ("" for none).

@@ -41,13 +41,23 @@ public:
     RunSummary run(double t, const double* x, const double* v, double t_end, Observer& observer,
                    bool samples = false, double dt = 0.0, const double* slider = nullptr);
 
+    /// `progress(t)` is called during every run now and then (after every
+    /// segment the observer takes, every 1024 samples, and at the engine's
+    /// progress checks) with the time reached; when it returns false the run
+    /// stops soon after (RunStatus::stopped) and stopped() is true from then on.
+    void set_progress(std::function<bool(double)> progress) { progress_ = std::move(progress); }
+    bool stopped() const { return stopped_; }
+
 private:
+    class ProgressObserver;
     Model work_;
     SolverKind solver_ = SolverKind::generic;
     std::unique_ptr<SolverProvider> provider_;
     // EngineOptions::restart_plans, as hsnc::simulate sets it: a flow's
     // segments are simulate's, bit for bit.
     std::function<std::shared_ptr<const RestartPlan>(const Configuration&)> restart_plans_;
+    std::function<bool(double)> progress_;
+    bool stopped_ = false;
 };
 
 /// An observer that ignores everything.

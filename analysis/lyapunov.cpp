@@ -5,9 +5,12 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <map>
 #include <random>
 #include <sstream>
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <Eigen/QR>
 
 #include "flow.h"
@@ -18,6 +21,7 @@ namespace {
 
 constexpr const char* kLyapunov = "hsnc::lyapunov";
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 std::string number_text(double v) {
     std::ostringstream s;
@@ -74,7 +78,13 @@ public:
         // most e^20 between two factorisations (a 2000 s segment of a damped
         // mode would underflow).
         const double rate = tangent_.max_rate(*s.cfg);
-        const double hmax = rate > 0 ? 10 / rate : kInf;
+        double hmax = rate > 0 ? 10 / rate : kInf;
+        // With every direction live, the last one's growth is known without
+        // resolving it (Liouville): the steps need only keep the others
+        // within e^20, so one stiff mode (a dashpot of 1e8) does not set them.
+        const Liouville* last = rank == n2_ && live_ == n2_ ? &liouville(*s.cfg) : nullptr;
+        if (last && !(last->step > hmax)) last = nullptr;  // no gain: the factorisations as they were
+        if (last) hmax = last->step;
         double at = from;
         while (true) {
             double to = end;
@@ -82,7 +92,7 @@ public:
             if (on_row_ && next_row_ <= end && next_row_ < t_end_ - 1e-9 * row_) to = std::max(next_row_, at), row = true;
             if (to - at > hmax) to = at + hmax, row = false;
             Eigen::MatrixXd Y = tangent_.transition(*s.cfg, to - at) * Q_.leftCols(live_);
-            factor(Y, rank, logsum_, live_, &Q_);
+            factor(Y, rank, logsum_, live_, &Q_, last ? last->trace * (to - at) : kNaN);
             at = to;
             if (row) {
                 emit(next_row_, logsum_, live_);
@@ -117,8 +127,11 @@ private:
     // QR of Y (the live columns): the logarithms of |R_kk| added to logs,
     // the columns beyond `rank` dropped for good (collapsed), and the new
     // orthonormal basis written to Q when asked.
+    // `log_det`, when not NaN: log |det Phi| of the step (every direction
+    // live): the last |R_kk| is then exp(log_det) over the others' product
+    // (the volume grows by det Phi), not the rounding left of its column.
     void factor(Eigen::MatrixXd& Y, Eigen::Index rank, Eigen::VectorXd& logs, Eigen::Index& live,
-                Eigen::MatrixXd* Q) const {
+                Eigen::MatrixXd* Q, double log_det = kNaN) const {
         const Eigen::Index keep = std::min(live, rank);
         if (keep == 0) {
             live = 0;
@@ -126,7 +139,14 @@ private:
         }
         Eigen::HouseholderQR<Eigen::MatrixXd> qr(Y);
         const Eigen::MatrixXd& R = qr.matrixQR();
-        for (Eigen::Index k = 0; k < keep; ++k) logs(k) += std::log(std::fabs(R(k, k)));
+        const Eigen::Index exact = std::isnan(log_det) ? keep : keep - 1;
+        double others = 0.0;
+        for (Eigen::Index k = 0; k < exact; ++k) {
+            const double l = std::log(std::fabs(R(k, k)));
+            logs(k) += l;
+            others += l;
+        }
+        if (exact < keep) logs(exact) += log_det - others;
         if (Q) {
             Eigen::MatrixXd thin = qr.householderQ() * Eigen::MatrixXd::Identity(n2_, keep);
             Q->leftCols(keep) = thin;
@@ -146,7 +166,48 @@ private:
         last_row_ = t;
     }
 
+    // A configuration's generator A: tr A (log det Phi(tau) = tau tr A) and the
+    // step that keeps every direction but the fastest-decaying one within
+    // e^20 of each other and of 1: 20 / max(r_1 - r_(N-1), |r_1|, |r_(N-1)|),
+    // r the real parts of A's eigenvalues, largest first, when r_N is apart
+    // from the others by 10 times that spread. From Phi(tau) at
+    // tau = 1/max_rate (no |mu| below e^-2 there: log |mu| / tau is each r
+    // to rounding).
+    struct Liouville {
+        double trace = kNaN;
+        double step = 0.0;  // 0: no gain (a collapsed direction, or NaN)
+    };
+    const Liouville& liouville(const Configuration& cfg) {
+        auto found = liouville_.find(cfg);
+        if (found != liouville_.end()) return found->second;
+        Liouville l;
+        const double rate = tangent_.max_rate(cfg);
+        if (rate > 0 && n2_ >= 2) {
+            const double tau = 1 / rate;
+            const Eigen::MatrixXd P = tangent_.transition(cfg, tau);
+            const Eigen::PartialPivLU<Eigen::MatrixXd> lu(P);
+            double log_det = 0.0;
+            for (Eigen::Index k = 0; k < n2_; ++k) log_det += std::log(std::fabs(lu.matrixLU()(k, k)));
+            const Eigen::VectorXcd mu = Eigen::EigenSolver<Eigen::MatrixXd>(P, false).eigenvalues();
+            std::vector<double> r;
+            for (Eigen::Index k = 0; k < mu.size(); ++k) r.push_back(std::log(std::abs(mu(k))) / tau);
+            std::sort(r.begin(), r.end(), std::greater<double>());
+            if (std::isfinite(log_det) && std::isfinite(r.front()) && std::isfinite(r[r.size() - 2])) {
+                l.trace = log_det / tau;
+                // Also no growth or decay beyond e^20 of any of them (no overflow, no underflow).
+                const double spread = std::max({r.front() - r[r.size() - 2], std::fabs(r.front()),
+                                                std::fabs(r[r.size() - 2])});
+                // Only for a fastest decay well apart from the rest (a stiff
+                // dashpot); else the steps stay as they were, bit for bit.
+                const bool apart = r[r.size() - 2] - r.back() >= 10 * spread;
+                l.step = !apart ? 0.0 : spread > 0 ? 20 / spread : kInf;
+            }
+        }
+        return liouville_.emplace(cfg, l).first->second;
+    }
+
     analysis::Tangent tangent_;
+    std::map<Configuration, Liouville> liouville_;
     analysis::GrazingMonitor grazing_;
     Eigen::Index n2_;
     double t_start_, t_end_, row_;
@@ -164,21 +225,24 @@ public:
 
 }  // namespace
 
+double lyapunov_row_interval(const Model& model, const LyapunovOptions& o) {
+    if (!std::isnan(o.row_interval)) return o.row_interval;
+    double omega = 0.0;
+    for (const Harmonic& h : model.forcing)
+        if (h.omega != 0.0) omega = omega == 0.0 ? std::fabs(h.omega) : std::min(omega, std::fabs(h.omega));
+    return omega == 0.0 ? 1.0 : 2 * M_PI / omega;
+}
+
 LyapunovResult lyapunov(const Model& model, const LyapunovOptions& o,
                         const std::function<void(double, const std::vector<double>&)>& on_row, Observer* observer) {
     if (std::isnan(o.t_end)) throw OptionError(kLyapunov, "t_end", "NaN", "required: the length of the measurement");
     analysis::check_number(kLyapunov, "t_end", o.t_end, true);
     if (!(o.transient >= 0) || !std::isfinite(o.transient))
         throw OptionError(kLyapunov, "transient", number_text(o.transient), "must be finite and >= 0");
-    double row = o.row_interval;
-    if (std::isnan(row)) {
-        double omega = 0.0;
-        for (const Harmonic& h : model.forcing)
-            if (h.omega != 0.0) omega = omega == 0.0 ? std::fabs(h.omega) : std::min(omega, std::fabs(h.omega));
-        row = omega == 0.0 ? 1.0 : 2 * M_PI / omega;
-    }
+    const double row = lyapunov_row_interval(model, o);
     analysis::check_number(kLyapunov, "row_interval", row, true);
     analysis::Flow flow(model, {o.kernels, o.cache_dir, o.use_cache}, kLyapunov);
+    if (o.progress) flow.set_progress(o.progress);
     const double t_start = model.t0 + o.transient, t_end = t_start + o.t_end;
     if (!(t_end > t_start)) throw OptionError(kLyapunov, "t_end", number_text(o.t_end), "too short to measure at t0 + transient");
 

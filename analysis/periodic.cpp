@@ -9,6 +9,7 @@
 
 #include "flow.h"
 #include "shooting.h"
+#include "sweep_point.h"
 
 namespace hsnc {
 namespace {
@@ -22,10 +23,44 @@ std::string number_text(double v) {
     return s.str();
 }
 
+// The fastest angular frequency of the model: the forcing's, or the highest
+// natural frequency with every contact closed (0 when there is neither).
+double fastest_frequency(const Model& model) {
+    double omega = 0.0;
+    for (const Harmonic& h : model.forcing) omega = std::max(omega, std::fabs(h.omega));
+    try {
+        omega = std::max(omega, sweep_detail::highest_natural_frequency(model));
+    } catch (const std::exception&) {
+        // no modal form (a model the analyses refuse later, naming why)
+    }
+    return omega;
+}
+
+// A period P too short to say anything is refused: one over which every state
+// repeats to the tolerance (Omega P below max(1e-6, 10 tol), Omega the
+// fastest frequency: `status=ok` at the initial state, whatever it is), or
+// one the time cannot resolve at the start of the search.
+void refuse_unresolved_period(const Model& model, const PeriodicOptions& o, double P) {
+    // (The forcing's own period is never too short: Omega P >= 2 pi.)
+    const double omega = std::isnan(o.period) ? 0.0 : fastest_frequency(model), ts = model.t0 + o.transient;
+    if (omega > 0 && omega * P < std::max(1e-6, 10 * o.tolerance))
+        throw OptionError(kPeriodic, "period", number_text(P),
+                          "too short for this model: over it every state repeats to the tolerance (period times "
+                          "the fastest angular frequency " + number_text(omega) + " rad/s is below max(1e-6, 10 tol))");
+    if (P < 1e-12 * std::fabs(ts))
+        throw OptionError(kPeriodic, "period", number_text(P),
+                          "too short to resolve at t = " + number_text(ts) + " (below 1e-12 of the time)");
+}
+
 }  // namespace
 
 const char* periodic_status_name(PeriodicStatus status) {
-    return status == PeriodicStatus::ok ? "ok" : "not_converged";
+    switch (status) {
+    case PeriodicStatus::ok: return "ok";
+    case PeriodicStatus::not_converged: return "not_converged";
+    case PeriodicStatus::stopped: return "stopped";
+    }
+    return "?";
 }
 
 double forcing_period(const Model& model) {
@@ -59,10 +94,25 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
     if (o.max_iterations < 0)
         throw OptionError(kPeriodic, "max_iterations", std::to_string(o.max_iterations), "must be >= 0");
     const double P = T * o.harmonic;
+    refuse_unresolved_period(model, o, P);
     if (!std::isnan(o.dt)) analysis::check_number(kPeriodic, "dt", o.dt, true);
     const double dt = std::isnan(o.dt) ? P / 1000 : o.dt;
 
     analysis::Flow flow(model, {o.kernels, o.cache_dir, o.use_cache}, kPeriodic);
+    PeriodicProgress progress;
+    if (o.progress)
+        flow.set_progress([&](double t) {
+            progress.t = t;
+            return o.progress(progress);
+        });
+    auto stage = [&](PeriodicProgress::Stage st, double from, double to) {
+        progress.stage = st;
+        progress.t = progress.t_from = from;
+        progress.t_to = to;
+    };
+    PeriodicResult stopped;
+    stopped.status = PeriodicStatus::stopped;
+    stopped.message = "stopped by the progress callback";
     const std::size_t n = model.dof(), nj = model.jenkins.size();
     const Eigen::Index N = static_cast<Eigen::Index>(2 * n + nj);
 
@@ -80,8 +130,10 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
         const double k = std::ceil(o.transient / P * (1 - 1e-12));
         ts = model.t0 + k * P;
         analysis::NullObserver none;
+        stage(PeriodicProgress::Stage::transient, model.t0, ts);
         const RunSummary s = flow.run(model.t0, model.x0.data(), model.v0.data(), ts, none, false, 0.0,
                                       nj ? y.data() + 2 * n : nullptr);
+        if (flow.stopped()) return stopped;
         if (s.status != RunStatus::ok)
             throw RunError(std::string("periodic: the transient run ended with status ") + run_status_name(s.status) +
                            ": " + s.message);
@@ -90,7 +142,11 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
     }
     const double te = ts + P;
 
-    auto evaluate = [&](const Eigen::VectorXd& state) { return analysis::evaluate_period_map(flow, ts, te, state); };
+    auto evaluate = [&](const Eigen::VectorXd& state) {
+        stage(PeriodicProgress::Stage::search, ts, te);
+        ++progress.runs;
+        return analysis::evaluate_period_map(flow, ts, te, state);
+    };
 
     PeriodicResult r;
     r.period = P;
@@ -99,6 +155,9 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
     int it = 0;
     std::string why;
     while (true) {
+        if (flow.stopped()) return stopped;
+        progress.iterations = it;
+        progress.residual = cur.residual;
         if (!cur.ok) {
             why = cur.message;
             break;
@@ -126,6 +185,7 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
         for (int halving = 0; halving <= 10; ++halving, lambda *= 0.5) {
             const Eigen::VectorXd trial = y + lambda * step;
             analysis::PeriodMapValue next = evaluate(trial);
+            if (flow.stopped()) return stopped;
             if (next.ok && next.residual < cur.residual) {
                 y = trial;
                 cur = std::move(next);
@@ -153,9 +213,12 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
             for (Eigen::Index j = 0; j < N; ++j) r.monodromy[static_cast<std::size_t>(i * N + j)] = cur.M(i, j);
         r.multipliers = analysis::floquet_multipliers(cur.M);
         r.max_multiplier = r.multipliers.empty() ? 0.0 : std::abs(r.multipliers.front());
-        r.stable = r.max_multiplier < 1.0 - kNeutralMultiplier;
+        r.neutral = analysis::family_multipliers(cur.M, r.multipliers);
+        r.stable = analysis::orbit_stable(r.multipliers, r.neutral);
         if (orbit) {
+            stage(PeriodicProgress::Stage::orbit, ts, te);
             const RunSummary s = flow.run(ts, y.data(), y.data() + n, te, *orbit, true, dt, nj ? y.data() + 2 * n : nullptr);
+            if (flow.stopped()) return stopped;
             if (s.status != RunStatus::ok)
                 throw RunError(std::string("periodic: the run of the orbit ended with status ") +
                                run_status_name(s.status) + ": " + s.message);

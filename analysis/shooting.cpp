@@ -4,6 +4,9 @@
 #include <cmath>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+
+#include "hsnc/periodic.h"
 
 #include "tangent.h"
 
@@ -72,6 +75,29 @@ std::vector<std::complex<double>> floquet_multipliers(const Eigen::MatrixXd& M) 
         return std::abs(a) > std::abs(b);
     });
     return mu;
+}
+
+std::size_t family_multipliers(const Eigen::MatrixXd& M, const std::vector<std::complex<double>>& mu) {
+    std::size_t at_one = 0;
+    for (const std::complex<double>& m : mu) at_one += std::abs(m - 1.0) <= kNeutralMultiplier;
+    if (at_one == 0) return 0;
+    const Eigen::Index N = M.rows();
+    const Eigen::VectorXd sigma = Eigen::JacobiSVD<Eigen::MatrixXd>(M - Eigen::MatrixXd::Identity(N, N)).singularValues();
+    const double floor = 1e-8 * std::max(1.0, M.norm());
+    std::size_t null = 0;
+    for (Eigen::Index k = 0; k < sigma.size(); ++k) null += sigma(k) <= floor;
+    return null >= at_one ? at_one : 0;
+}
+
+bool orbit_stable(const std::vector<std::complex<double>>& mu, std::size_t neutral) {
+    for (const std::complex<double>& m : mu) {
+        if (neutral > 0 && std::abs(m - 1.0) <= kNeutralMultiplier) {
+            --neutral;
+            continue;
+        }
+        if (!(std::abs(m) < 1.0 - kNeutralMultiplier)) return false;
+    }
+    return true;
 }
 
 }  // namespace hsnc::analysis

@@ -41,4 +41,17 @@ double period_residual(const Eigen::VectorXd& y, const Eigen::VectorXd& Py, std:
 /// The eigenvalues of M, largest |mu| first (stable order among equals).
 std::vector<std::complex<double>> floquet_multipliers(const Eigen::MatrixXd& M);
 
+/// The neutral multipliers of a family of orbits (hsnc/periodic.h,
+/// PeriodicResult::neutral): how many of `mu` (the eigenvalues of M) lie
+/// within kNeutralMultiplier of +1, when M - I has as many independent null
+/// directions (singular values at most 1e-8 max(1, |M|)): each is then a
+/// direction along which the orbit moved is an orbit too, to first order,
+/// and a perturbation along it neither grows nor decays. 0 when there are
+/// fewer (a Jordan block: perturbations drift, as a free body's position).
+std::size_t family_multipliers(const Eigen::MatrixXd& M, const std::vector<std::complex<double>>& mu);
+
+/// Stable: every multiplier inside the unit circle by kNeutralMultiplier,
+/// but for `neutral` of those at +1 (family_multipliers).
+bool orbit_stable(const std::vector<std::complex<double>>& mu, std::size_t neutral);
+
 }  // namespace hsnc::analysis

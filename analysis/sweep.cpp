@@ -61,6 +61,7 @@ struct Context {
     std::size_t done = 0, total = 0;
     std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
     const SweepOptions* options = nullptr;
+    std::atomic<bool> cut{false};  // SweepOptions::stop ended a task early
 };
 
 }  // namespace
@@ -295,8 +296,11 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const 
             return m;
         };
         branch.value2 = v2;
-        return sweep_detail::run_continuation(
-            branch, options_, [&](const SweepPoint& p, double seconds) { report(c, options_, p, seconds); });
+        bool cut = false;
+        std::vector<SweepPoint> out = sweep_detail::run_continuation(
+            branch, options_, [&](const SweepPoint& p, double seconds) { report(c, options_, p, seconds); }, &cut);
+        if (cut) c.cut = true;
+        return out;
     }
 
     sweep_detail::State state;
@@ -310,6 +314,10 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const 
     out.reserve(task.count);
     for (std::size_t q = task.first; q < task.first + task.count; ++q) {
         sweep_detail::check_cancel(options_);
+        if (sweep_detail::stop_requested(options_)) {  // a graceful stop: keep the points finished
+            c.cut = true;
+            break;
+        }
         const std::size_t j = value_index(q);
         const Model& m = point_model(task.line, j);
         if (options_.restart_each) {
@@ -342,7 +350,8 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const 
     return out;
 }
 
-std::vector<std::vector<SweepPoint>> SweepPlan::run_tasks(const std::vector<std::size_t>& which) const {
+std::vector<std::vector<SweepPoint>> SweepPlan::run_tasks(const std::vector<std::size_t>& which,
+                                                          bool* stopped) const {
     Context c;
     c.options = &options_;
     for (std::size_t i : which) c.total += tasks_.at(i).count;
@@ -357,6 +366,10 @@ std::vector<std::vector<SweepPoint>> SweepPlan::run_tasks(const std::vector<std:
         for (;;) {
             const std::size_t k = next.fetch_add(1);
             if (k >= which.size() || k > first_failed.load()) return;
+            if (sweep_detail::stop_requested(options_)) {  // not started: no points
+                c.cut = true;
+                continue;
+            }
             try {
                 results[k] = run_task(which[k], &c);
             } catch (...) {
@@ -377,6 +390,7 @@ std::vector<std::vector<SweepPoint>> SweepPlan::run_tasks(const std::vector<std:
     }
     for (std::exception_ptr& e : errors)
         if (e) std::rethrow_exception(e);
+    if (stopped) *stopped = c.cut.load();
     return results;
 }
 

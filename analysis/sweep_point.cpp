@@ -356,6 +356,8 @@ void check_cancel(const SweepOptions& o) {
     if (o.cancel && o.cancel->load(std::memory_order_relaxed)) throw SweepCancelled();
 }
 
+bool stop_requested(const SweepOptions& o) { return o.stop && o.stop->load(std::memory_order_relaxed); }
+
 void record(const Model& point_model, State& state, const SweepOptions& o, const std::string& what, std::size_t k,
             std::size_t periods, SweepPoint& pt, SolverProvider* provider) {
     Model m = point_model;

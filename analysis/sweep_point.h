@@ -33,6 +33,9 @@ void record(const Model& model, State& state, const SweepOptions& options, const
 /// SweepCancelled when options.cancel is set.
 void check_cancel(const SweepOptions& options);
 
+/// True when options.stop is set: the task ends after the point it has finished.
+bool stop_requested(const SweepOptions& options);
+
 /// The forcing frequency of `model`; InputError (naming `what`) unless it has
 /// forcing with one frequency.
 double forcing_frequency(const Model& model, const std::string& what);

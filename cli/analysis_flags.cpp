@@ -1,9 +1,13 @@
 #include "analysis_flags.h"
 
+#include <unistd.h>
+
+#include <cstdio>
 #include <sstream>
 
 #include "commands.h"
 #include "plot.h"
+#include "simulate_outputs.h"
 
 namespace hsnc::cli {
 
@@ -64,6 +68,56 @@ void AnalysisOutputs::check() const {
     for (const auto& t : targets_) all.push_back(t.get());
     check_distinct(all);
     if (png_) require_gnuplot();
+}
+
+void check_output_size(const std::string& cause, const std::string& what, double rows, std::size_t columns,
+                       bool allowed) {
+    if (allowed) return;
+    // Every number is printed with 17 significant digits: about 22 bytes with its comma.
+    const double bytes = rows * static_cast<double>(columns) * 22;
+    if (!(rows > static_cast<double>(kLargeOutputRows) || bytes > kLargeOutputBytes)) return;
+    auto short_number = [](double v) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.3g", v);
+        return std::string(buf);
+    };
+    const char* units[] = {"B", "kB", "MB", "GB", "TB", "PB", "EB"};
+    double b = bytes;
+    int u = 0;
+    while (b >= 1000 && u < 6) b /= 1000, ++u;
+    throw InputError(cause + ": " + what + " would have " + short_number(rows) + " rows, about " + short_number(b) +
+                     " " + units[u] + " (the limit is 1e7 rows or 1 GB): give fewer rows, or --allow-large-output " +
+                     "to write it anyway");
+}
+
+ProgressLine::ProgressLine(bool enabled)
+    : enabled_(enabled), terminal_(enabled && ::isatty(2)), start_(std::chrono::steady_clock::now()) {}
+
+double ProgressLine::seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+}
+
+bool ProgressLine::due() {
+    if (!enabled_) return false;
+    const double now = seconds();
+    const double first = terminal_ ? 0.5 : 10.0, every = terminal_ ? 0.1 : 10.0;
+    if (now < first || (last_ > 0 && now - last_ < every)) return false;
+    last_ = now;
+    return true;
+}
+
+void ProgressLine::show(const std::string& text) {
+    if (terminal_) {
+        std::fprintf(stderr, "\r%-79.79s", text.c_str());
+        drawn_ = true;
+    } else {
+        std::fprintf(stderr, "%s\n", text.c_str());
+    }
+}
+
+void ProgressLine::clear() {
+    if (drawn_) std::fprintf(stderr, "\r%79s\r", "");
+    drawn_ = false;
 }
 
 std::string gnuplot_plain(const std::string& text) {

@@ -5,6 +5,8 @@
 // into flags, and the Poincare section flags (also `hsnc simulate`'s).
 #pragma once
 
+#include <chrono>
+#include <cstddef>
 #include <initializer_list>
 #include <memory>
 #include <string>
@@ -62,6 +64,38 @@ public:
 private:
     std::vector<std::unique_ptr<OutputTarget>> targets_;
     bool png_ = false;
+};
+
+/// The output guard of `hsnc simulate` (simulate_outputs.h: kLargeOutputRows,
+/// kLargeOutputBytes) for a CSV of `rows` rows of `columns` numbers: an
+/// InputError naming `cause` (the flags that set the rows, "--dt 1e-09") and
+/// `what` ("the orbit --out") unless `allowed` (--allow-large-output).
+void check_output_size(const std::string& cause, const std::string& what, double rows, std::size_t columns,
+                       bool allowed);
+
+/// A long command's progress on stderr (as `hsnc simulate`'s bar and `hsnc
+/// sweep`'s lines): on a terminal one line redrawn in place, at most 10 times
+/// a second from 0.5 s on, erased at the end; otherwise (a log) a line every
+/// 10 s from 10 s on, so that a long run is seen to be alive. Nothing when
+/// not enabled (--quiet).
+class ProgressLine {
+public:
+    explicit ProgressLine(bool enabled);
+    ~ProgressLine() { clear(); }
+    ProgressLine(const ProgressLine&) = delete;
+    ProgressLine& operator=(const ProgressLine&) = delete;
+    /// True when a line is due now (then call show()).
+    bool due();
+    /// Seconds since the start.
+    double seconds() const;
+    void show(const std::string& text);
+    /// Erases the terminal line (before other output).
+    void clear();
+
+private:
+    bool enabled_, terminal_, drawn_ = false;
+    double last_ = 0.0;
+    std::chrono::steady_clock::time_point start_;
 };
 
 /// Text inside a gnuplot string: quotes, backslashes, backquotes and control

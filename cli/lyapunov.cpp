@@ -1,6 +1,7 @@
 // `hsnc lyapunov MODEL --t-end T [options]` (interface.md section 6): the
 // Lyapunov spectrum by the QR method on the exact tangent dynamics
 // (hsnc::lyapunov, api/hsnc/lyapunov.h), with its convergence CSV.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -24,6 +25,7 @@ namespace {
 struct LyapunovFlags {
     AnalysisFlags common;  // MODEL, --set, --x0, --v0, --kernels, --cache-dir, --no-cache, --quiet
     double t_end = NAN, transient = 0.0, row = NAN;
+    bool allow_large_output = false;
     std::string out, plot;
     std::string section, section_out, section_plot;
 };
@@ -72,6 +74,17 @@ int lyapunov_command(const LyapunovFlags& f) {
     outputs.check();
 
     const std::size_t n2 = 2 * model.dof() + model.jenkins.size();  // and one per Jenkins slider
+    // The rows are written (--out) and kept for the plot (--plot): the output
+    // guard of `hsnc simulate`, before the run.
+    if (out || plot) {
+        const double row = lyapunov_row_interval(model, o);
+        if (row > 0 && std::isfinite(f.t_end) && f.t_end > 0)
+            check_output_size(std::isnan(f.row) ? "--t-end " + full_number(f.t_end) + " (a row every " +
+                                                      full_number(row) + " s)"
+                                                : "--row-interval " + full_number(f.row),
+                              out ? "the convergence --out" : "the convergence rows of --plot", std::floor(f.t_end / row) + 1,
+                              n2 + 1, f.allow_large_output);
+    }
     std::unique_ptr<CsvFile> csv;
     std::vector<double> rows;  // for the plot: t, lambda_1..lambda_2n per row
     std::function<void(double, const std::vector<double>&)> on_row;
@@ -101,12 +114,26 @@ int lyapunov_command(const LyapunovFlags& f) {
     if (section)
         recorder = std::make_unique<SectionRecorder>(model, spec, section_file.get(), section_plot != nullptr,
                                                      model.t0 + f.transient);
+    // Progress on stderr: the time reached over transient + measurement.
+    ProgressLine progress(!f.common.quiet);
+    const double span = f.transient + f.t_end;
+    o.progress = [&](double t) {
+        if (!progress.due()) return true;
+        const double done = std::min(1.0, std::max(0.0, (t - model.t0) / span)), elapsed = progress.seconds();
+        char text[200];
+        std::snprintf(text, sizeof text, "hsnc lyapunov: t = %.6g s, %.1f%% of %s, %.0f s, about %.0f s left", t,
+                      100 * done, f.transient > 0 ? "transient and measurement" : "the measurement", elapsed,
+                      done > 0 ? elapsed * (1 - done) / done : 0.0);
+        progress.show(text);
+        return true;
+    };
     LyapunovResult r;
     try {
         r = hsnc::lyapunov(model, o, on_row, recorder.get());
     } catch (const OptionError& e) {
         throw option_flag_error(e, {{"t_end", "--t-end"}, {"transient", "--transient"}, {"row_interval", "--row-interval"}});
     }
+    progress.clear();
     if (r.status != RunStatus::ok)
         throw RunError(std::string("lyapunov: ") + run_status_name(r.status) + ": " + r.message);
     if (csv) csv->commit();
@@ -151,6 +178,8 @@ void add_lyapunov(CLI::App& app, int& exit_code) {
     sub->add_option("--row-interval", f->row, "spacing of the --out rows (default: the forcing period, else 1 s)")
         ->check(finite_number());
     sub->add_option("--plot", f->plot, "draw the running estimates against time into this PNG (gnuplot)");
+    sub->add_flag("--allow-large-output", f->allow_large_output,
+                  "write --out (and keep for --plot) more than 1e7 rows or about 1 GB (refused otherwise)");
     add_section_flags(sub, f->section, f->section_out, f->section_plot, " over the measurement");
     sub->callback([f, &exit_code] { exit_code = lyapunov_command(*f); });
 }

@@ -3,10 +3,12 @@
 // (hsnc::periodic, api/hsnc/periodic.h), its Floquet multipliers and one
 // period of it.
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <vector>
 
 #include "analysis_flags.h"
 #include "commands.h"
@@ -16,6 +18,7 @@
 #include "model_reader.h"
 #include "output_file.h"
 #include "plot.h"
+#include "simulate_outputs.h"
 
 namespace hsnc::cli {
 namespace {
@@ -24,6 +27,7 @@ struct PeriodicFlags {
     AnalysisFlags common;  // MODEL, --set, --x0, --v0, --kernels, --cache-dir, --no-cache, --quiet
     double period = NAN, transient = 0.0, dt = NAN, tolerance = 1e-10;
     int harmonic = 1, max_iterations = 50;
+    bool allow_large_output = false;
     std::string multipliers, out, plot;
 };
 
@@ -32,7 +36,8 @@ void draw_multipliers(const OutputTarget& target, const PeriodicResult& r, const
     std::ostringstream title;
     title.precision(6);
     title << gnuplot_plain(model.name) << ": Floquet multipliers\\nperiod " << r.period << " s, max |mu| " << r.max_multiplier
-          << (r.stable ? " (stable)" : " (unstable)");
+          << (r.stable ? " (stable" : " (unstable")
+          << (r.neutral ? "; " + std::to_string(r.neutral) + " neutral: a family of orbits)" : std::string(")"));
     std::ostringstream script;
     script.precision(17);
     script << "set terminal pngcairo size 640,640 font ',11'\n"
@@ -42,10 +47,28 @@ void draw_multipliers(const OutputTarget& target, const PeriodicResult& r, const
            << "R = " << std::max(1.05, 1.1 * r.max_multiplier) << "\n"
            << "set xrange [-R:R]\nset yrange [-R:R]\n"
            << "$mu << EOD\n";
-    for (const auto& mu : r.multipliers) script << mu.real() << " " << mu.imag() << "\n";
-    script << "EOD\n"
-           << "plot cos(t), sin(t) with lines lc rgb '#888888' title 'unit circle', "
-           << "$mu using 1:2 with points pt 7 ps 1.6 lc rgb '#c00000' title 'multipliers'\n";
+    // The family's multipliers at +1 (PeriodicResult::neutral) apart: they do not make the orbit unstable.
+    std::size_t neutral = r.neutral;
+    std::vector<std::complex<double>> family;
+    for (const auto& mu : r.multipliers) {
+        if (neutral > 0 && std::abs(mu - 1.0) <= kNeutralMultiplier) {
+            --neutral;
+            family.push_back(mu);
+            continue;
+        }
+        script << mu.real() << " " << mu.imag() << "\n";
+    }
+    script << "EOD\n";
+    if (!family.empty()) {
+        script << "$family << EOD\n";
+        for (const auto& mu : family) script << mu.real() << " " << mu.imag() << "\n";
+        script << "EOD\n";
+    }
+    script << "plot cos(t), sin(t) with lines lc rgb '#888888' title 'unit circle', "
+           << "$mu using 1:2 with points pt 7 ps 1.6 lc rgb '#c00000' title 'multipliers'";
+    if (!family.empty())
+        script << ", $family using 1:2 with points pt 6 ps 2.2 lw 2 lc rgb '#0060c0' title 'neutral (a family of orbits)'";
+    script << "\n";
     render_png(script.str(), target);
 }
 
@@ -68,6 +91,15 @@ int periodic_command(const PeriodicFlags& f) {
     const OutputTarget* mult = outputs.add("--multipliers", f.multipliers);
     const OutputTarget* plot = outputs.add("--plot", f.plot, true);
     outputs.check();
+    // One period of the orbit sampled every --dt: the output guard of `hsnc simulate`, before the run.
+    if (out) {
+        const double period = (std::isnan(f.period) ? forcing_period(model) : f.period) * f.harmonic;
+        const double dt = std::isnan(f.dt) ? period / 1000 : f.dt;
+        if (period > 0 && std::isfinite(period) && dt > 0)
+            check_output_size("--dt " + full_number(dt), "one period (" + full_number(period) + " s) of the orbit --out",
+                              trajectory_rows(0.0, period, dt), 1 + 2 * model.dof() + model.jenkins.size(),
+                              f.allow_large_output);
+    }
 
     std::unique_ptr<CsvFile> traj;
     std::unique_ptr<CsvObserver> csv;
@@ -75,6 +107,24 @@ int periodic_command(const PeriodicFlags& f) {
         traj = std::make_unique<CsvFile>(*out);
         csv = std::make_unique<CsvObserver>(model, traj.get(), nullptr);
     }
+    // Progress on stderr: the stage, the Newton iterations and residual, the time reached.
+    ProgressLine progress(!f.common.quiet);
+    o.progress = [&](const PeriodicProgress& p) {
+        if (!progress.due()) return true;
+        const double span = p.t_to - p.t_from, done = span > 0 ? (p.t - p.t_from) / span : 1.0;
+        char text[240];
+        if (p.stage == PeriodicProgress::Stage::transient)
+            std::snprintf(text, sizeof text, "hsnc periodic: transient, t = %.6g s (%.1f%%), %.0f s", p.t, 100 * done,
+                          progress.seconds());
+        else
+            std::snprintf(text, sizeof text,
+                          "hsnc periodic: %s, %d Newton iterations, residual %.3g, %zu period runs (this one %.0f%%), "
+                          "%.0f s",
+                          p.stage == PeriodicProgress::Stage::search ? "search" : "the orbit", p.iterations,
+                          p.residual, p.runs, 100 * done, progress.seconds());
+        progress.show(text);
+        return true;
+    };
     PeriodicResult r;
     try {
         r = hsnc::periodic(model, o, csv.get());
@@ -86,6 +136,7 @@ int periodic_command(const PeriodicFlags& f) {
                                     {"dt", "--dt"},
                                     {"max_iterations", "--max-iterations"}});
     }
+    progress.clear();
     const bool ok = r.status == PeriodicStatus::ok;
     if (ok) {
         if (traj) traj->commit();
@@ -113,6 +164,7 @@ int periodic_command(const PeriodicFlags& f) {
         line << " s_" << model.jenkins[j].name << "=" << full_number(r.s[j]);
     line << " stable=" << (ok && r.stable ? "true" : "false")
          << " max_multiplier=" << (ok ? full_number(r.max_multiplier) : "nan") << " grazing=" << r.grazing;
+    if (ok && r.neutral) line << " neutral=" << r.neutral;  // a family's multipliers at +1 (docs/interface.md)
     std::cout << line.str() << std::endl;
     if (r.grazing)
         std::fprintf(stderr,
@@ -148,6 +200,8 @@ void add_periodic(CLI::App& app, int& exit_code) {
                     "Floquet multipliers CSV: index,re,im,abs, largest |mu| first (written only when converged)");
     sub->add_option("--out", f->out, "one period of the orbit, trajectory CSV (written only when converged)");
     sub->add_option("--dt", f->dt, "sample spacing of --out (default period/1000)")->check(finite_number());
+    sub->add_flag("--allow-large-output", f->allow_large_output,
+                  "write an --out of more than 1e7 rows or about 1 GB (refused otherwise)");
     sub->add_option("--plot", f->plot, "draw the multipliers and the unit circle into this PNG (gnuplot)");
     sub->add_option("--tol", f->tolerance,
                     "converged when |P(y) - y| is at most this, relative to the largest position and velocity "

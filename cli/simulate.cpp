@@ -45,8 +45,10 @@ struct SimulateOptions {
 // Wraps the CSV observer: counts event kinds, draws a progress bar on a terminal.
 class RunObserver : public Observer {
 public:
-    RunObserver(Observer& inner, double t0, double t_end, bool show)
-        : inner_(inner), t0_(t0), t_end_(t_end), show_(show), start_(std::chrono::steady_clock::now()) {}
+    /// show: the bar (stderr a terminal); log: a line every 10 s instead (stderr not a terminal).
+    RunObserver(Observer& inner, double t0, double t_end, bool show, bool log = false)
+        : inner_(inner), t0_(t0), t_end_(t_end), show_(show), log_(log && !show),
+          start_(std::chrono::steady_clock::now()) {}
     void on_sample(double t, const double* x, const double* v) override {
         inner_.on_sample(t, x, v);
         if ((++samples_ & 1023) == 0) on_progress(t);
@@ -56,11 +58,18 @@ public:
         ++counts_[static_cast<int>(kind)];
     }
     bool on_progress(double t) override {
-        if (!show_) return true;
+        if (!show_ && !log_) return true;
         const double elapsed = seconds();
+        const double frac = std::min(1.0, std::max(0.0, (t - t0_) / (t_end_ - t0_)));
+        if (log_) {  // not a terminal: a line every 10 s of a long run (the reference takes minutes)
+            if (elapsed >= last_draw_ + 10.0) {
+                last_draw_ = elapsed;
+                std::fprintf(stderr, "hsnc simulate: t = %.6g s, %.1f%%, %.0f s\n", t, 100 * frac, elapsed);
+            }
+            return true;
+        }
         if (elapsed < 0.5 || elapsed - last_draw_ < 0.1) return true;
         last_draw_ = elapsed;
-        const double frac = std::min(1.0, std::max(0.0, (t - t0_) / (t_end_ - t0_)));
         const int width = 30, filled = static_cast<int>(frac * width);
         std::fprintf(stderr, "\r[%.*s%*s] %5.1f%%  t = %.6g s", filled, "##############################",
                      width - filled, "", 100 * frac, t);
@@ -80,7 +89,7 @@ public:
 private:
     Observer& inner_;
     double t0_, t_end_;
-    bool show_;
+    bool show_, log_;
     std::chrono::steady_clock::time_point start_;
     double last_draw_ = 0;
     bool drawn_ = false;
@@ -159,9 +168,10 @@ int simulate(const SimulateOptions& o) {
     // Every output path checked before anything is written or run.
     SimulateOutputs outputs(model, o.outputs, t_end, dt);
     outputs.open();
-    RunObserver obs(outputs, model.t0, t_end, !o.quiet && ::isatty(2));
+    RunObserver obs(outputs, model.t0, t_end, !o.quiet && ::isatty(2), !o.quiet);
 
     run.samples = outputs.samples();
+    if (outputs.sample_dt() != dt) run.dt = outputs.sample_dt();  // the plot alone: bounded samples
     const SimulateSummary sum = hsnc::simulate(model, run, obs);
     const std::string& detail = sum.solver_detail;
     obs.clear();

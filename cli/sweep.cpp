@@ -3,12 +3,16 @@
 // (api/hsnc/sweep.h), the output files.
 #include <unistd.h>
 
+#include <atomic>
+#include <cerrno>
+#include <csignal>
 #include <chrono>
 #include <cmath>
 #include <functional>
 #include <thread>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -34,9 +38,10 @@ struct SweepFlags {
     ModelOverrides overrides;
     std::string param;
     double from = NAN, to = NAN;
-    std::size_t points = 0;
+    // Signed, so that a negative count is said as such (an unsigned flag wraps -5 to 2^64 - 5).
+    long long points = 0;
     std::string direction = "up";
-    std::size_t max_periods = 500, record_periods = 16;
+    long long max_periods = 500, record_periods = 16;
     bool restart_each = false;
     std::string param2, values2;
     unsigned threads = 1;
@@ -46,8 +51,16 @@ struct SweepFlags {
     double h = NAN, rtol = 1e-10, atol = 1e-12;
     bool quiet = false;
     bool continuation = false;
-    std::size_t max_steps = 0;
+    long long max_steps = 0;
 };
+
+// A count flag's value, refused below `least` naming the flag.
+std::size_t count_flag(const char* flag, long long value, long long least) {
+    if (value < least)
+        throw InputError(std::string(flag) + ": must be >= " + std::to_string(least) +
+                         (least >= 1 ? " (a positive whole number)" : "") + ", not " + std::to_string(value));
+    return static_cast<std::size_t>(value);
+}
 
 struct MergeFlags {
     std::vector<std::string> parts;
@@ -99,8 +112,61 @@ std::vector<double> parse_values(const std::string& text) {
     return out;
 }
 
-// Writes the response curve and the diagram CSVs (interface.md section 6).
-void write_curve(const SweepResult& r, const OutputTarget& target) {
+// Ctrl-C on a whole sweep (one process, no --part): the first SIGINT asks
+// every task to stop after the point under way (SweepOptions::stop), so the
+// points done are written, and puts back the handler that was there (the
+// interrupt cleanup of output_file.h), so a second Ctrl-C stops at once as
+// on any run. Only async-signal-safe calls in the handler: an atomic store,
+// write, sigaction.
+std::atomic<bool> g_stop_sweep{false};
+struct sigaction g_previous_sigint;
+
+extern "C" void on_sweep_interrupt(int) {
+    const int saved = errno;
+    g_stop_sweep.store(true);
+    static const char msg[] =
+        "\nhsnc sweep: interrupted (SIGINT): finishing the points under way, then writing the points done "
+        "(Ctrl-C again: stop at once, nothing written)\n";
+    (void)!::write(2, msg, sizeof msg - 1);
+    ::sigaction(SIGINT, &g_previous_sigint, nullptr);
+    errno = saved;
+}
+
+class GracefulInterrupt {
+public:
+    GracefulInterrupt() {
+        struct sigaction old;
+        // A SIGINT ignored by whoever started us (nohup, a background job) stays ignored.
+        if (::sigaction(SIGINT, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) return;
+        struct sigaction sa;
+        std::memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_sweep_interrupt;
+        sigemptyset(&sa.sa_mask);
+        installed_ = ::sigaction(SIGINT, &sa, &g_previous_sigint) == 0;
+    }
+    /// The previous handler back (before the outputs are written: Ctrl-C then removes them).
+    void restore() {
+        if (installed_ && !g_stop_sweep.load()) ::sigaction(SIGINT, &g_previous_sigint, nullptr);
+        installed_ = false;
+    }
+    ~GracefulInterrupt() { restore(); }
+    GracefulInterrupt(const GracefulInterrupt&) = delete;
+    GracefulInterrupt& operator=(const GracefulInterrupt&) = delete;
+
+private:
+    bool installed_ = false;
+};
+
+// The last line of the CSVs of an interrupted sweep (a comment: the rows
+// above are complete points; interface.md).
+std::string interrupted_note(std::size_t done, std::size_t total) {
+    return "# interrupted (SIGINT) after " + std::to_string(done) +
+           (total ? " of " + std::to_string(total) : std::string()) + " points: the rest were not run";
+}
+
+// Writes the response curve and the diagram CSVs (interface.md section 6);
+// `note`: a last comment line ("" for none).
+void write_curve(const SweepResult& r, const OutputTarget& target, const std::string& note) {
     CsvFile f(target);
     f.text(sweep_curve_header(r).c_str());
     f.end_row();
@@ -124,10 +190,14 @@ void write_curve(const SweepResult& r, const OutputTarget& target) {
         }
         f.end_row();
     }
+    if (!note.empty()) {
+        f.text(note.c_str());
+        f.end_row();
+    }
     f.commit();
 }
 
-void write_diagram(const SweepResult& r, const OutputTarget& target) {
+void write_diagram(const SweepResult& r, const OutputTarget& target, const std::string& note) {
     CsvFile f(target);
     f.text(sweep_diagram_header(r).c_str());
     f.end_row();
@@ -143,6 +213,10 @@ void write_diagram(const SweepResult& r, const OutputTarget& target) {
             if (has2) f.number(p.value2);
             f.end_row();
         }
+    if (!note.empty()) {
+        f.text(note.c_str());
+        f.end_row();
+    }
     f.commit();
 }
 
@@ -157,10 +231,10 @@ struct Outputs {
         check_distinct(all);
         if (plot) require_gnuplot();
     }
-    void write(const SweepResult& r, const std::string& title) const {
-        if (out) write_curve(r, *out);
-        if (diagram) write_diagram(r, *diagram);
-        if (plot) draw_sweep_plot(r, title, *plot);
+    void write(const SweepResult& r, const std::string& title, const std::string& note = "") const {
+        if (out) write_curve(r, *out, note);
+        if (diagram) write_diagram(r, *diagram, note);
+        if (plot) draw_sweep_plot(r, note.empty() ? title : title + " (interrupted)", *plot);
     }
 };
 
@@ -187,7 +261,7 @@ struct Problems {
     }
 };
 
-std::string summary_line(const SweepResult& r) {
+std::string summary_line(const SweepResult& r, bool interrupted = false) {
     std::size_t settled = 0, up = 0, stable = 0, bifurcations = 0;
     for (const SweepPoint& p : r.points) {
         settled += p.settled;
@@ -197,7 +271,8 @@ std::string summary_line(const SweepResult& r) {
     }
     const Problems problems(r);
     std::ostringstream s;
-    s << "status=" << (problems.any() ? "failed" : "ok") << " points=" << r.points.size() << " up=" << up
+    s << "status=" << (interrupted ? "interrupted" : problems.any() ? "failed" : "ok") << " points=" << r.points.size()
+      << " up=" << up
       << " down=" << r.points.size() - up << " settled=" << settled << " unsettled=" << r.points.size() - settled
       << " failed=" << problems.failed;
     if (r.continuation)
@@ -266,15 +341,15 @@ int sweep(const SweepFlags& f) {
         o.param = f.param;
         o.from = f.from;
         o.to = f.to;
-        o.points = f.points;
-        o.max_periods = f.max_periods;
-        o.record_periods = f.record_periods;
+        o.points = count_flag("--points", f.points, 1);
+        o.max_periods = count_flag("--max-periods", f.max_periods, 1);
+        o.record_periods = count_flag("--record-periods", f.record_periods, 1);
         o.restart_each = f.restart_each;
         o.param2 = f.param2;
         if (!f.values2.empty()) o.values2 = parse_values(f.values2);
         o.threads = f.threads;
         o.continuation = f.continuation;
-        o.max_steps = f.max_steps;
+        o.max_steps = count_flag("--max-steps", f.max_steps, 0);
         o.integrator.h = f.h;
         o.integrator.rtol = f.rtol;
         o.integrator.atol = f.atol;
@@ -334,6 +409,7 @@ int sweep(const SweepFlags& f) {
                              p.periods, p.seconds, per, per * static_cast<double>(p.total - p.done));
             };
         }
+        if (!comm && f.part.empty()) o.stop = &g_stop_sweep;
         SweepPlan plan = [&] {
             try {
                 return SweepPlan::from_file(f.model, f.overrides, o);
@@ -374,8 +450,19 @@ int sweep(const SweepFlags& f) {
                 if (rank != 0) comm->send_progress(-1);
                 else overall->wait_for_others(*comm);
             };
-        std::vector<std::vector<SweepPoint>> results =
-            comm ? run_tasks_distributed(plan, which, *comm, finished) : plan.run_tasks(which);
+        // A whole sweep in one process keeps its finished points on Ctrl-C
+        // (GracefulInterrupt); a part or an MPI rank stops at once, as any run.
+        bool interrupted = false;
+        std::vector<std::vector<SweepPoint>> results;
+        if (comm) {
+            results = run_tasks_distributed(plan, which, *comm, finished);
+        } else if (part_target) {
+            results = plan.run_tasks(which);
+        } else {
+            GracefulInterrupt graceful;
+            results = plan.run_tasks(which, &interrupted);
+            graceful.restore();
+        }
 
         int code = 0;
         std::string failure;
@@ -403,13 +490,24 @@ int sweep(const SweepFlags& f) {
                     SweepResult r = plan.result_header();
                     for (std::vector<SweepPoint>& t : results)
                         for (SweepPoint& p : t) r.points.push_back(std::move(p));
-                    outputs->write(r, r.model + ": sweep over " + r.param);
+                    const std::string note =
+                        interrupted ? interrupted_note(r.points.size(), overall->total) : std::string();
+                    outputs->write(r, r.model + ": sweep over " + r.param, note);
                     // Failed points are rows of the outputs: they stay when the command exits 1.
                     commit_outputs();
-                    std::cout << summary_line(r) << "\n";
+                    std::cout << summary_line(r, interrupted) << "\n";
                     const Problems problems(r);
                     for (const SweepPoint& p : r.points)
                         if (!p.stop.empty()) std::fprintf(stderr, "hsnc sweep: %s\n", p.stop.c_str());
+                    if (interrupted) {
+                        // The outputs hold the points done; end by the signal, as an
+                        // interrupted run does (the shell reports 130).
+                        std::cout.flush();
+                        std::fprintf(stderr, "hsnc sweep: interrupted (SIGINT): the outputs hold the %zu points done\n",
+                                     r.points.size());
+                        std::signal(SIGINT, SIG_DFL);
+                        std::raise(SIGINT);
+                    }
                     if (problems.any()) {
                         code = 1;
                         failure = problems.message();

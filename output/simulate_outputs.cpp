@@ -54,11 +54,17 @@ SimulateOutputs::SimulateOutputs(const Model& model, const OutputRequest& r, dou
     if (plot_ || section_plot_) require_gnuplot();
 }
 
+double SimulateOutputs::sample_dt() const {
+    if (out_ || !plot_) return dt_;
+    const double coarsest = (t_end_ - model_.t0) / static_cast<double>(kLargeOutputRows);
+    return dt_ < coarsest ? coarsest : dt_;
+}
+
 void SimulateOutputs::open() {
     if (out_) traj_file_ = std::make_unique<CsvFile>(*out_);
     if (events_) events_file_ = std::make_unique<CsvFile>(*events_);
     csv_ = std::make_unique<CsvObserver>(model_, traj_file_.get(), events_file_.get());
-    if (plot_) recorder_ = std::make_unique<PlotRecorder>(model_, model_.t0, t_end_, dt_);
+    if (plot_) recorder_ = std::make_unique<PlotRecorder>(model_, model_.t0, t_end_, sample_dt());
     if (section_out_) section_file_ = std::make_unique<CsvFile>(*section_out_);
     if (section_out_ || section_plot_)
         section_ = std::make_unique<SectionRecorder>(model_, section_spec_, section_file_.get(), section_plot_ != nullptr);

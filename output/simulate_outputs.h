@@ -41,6 +41,10 @@ public:
     void open();
     /// Whether the run must report samples (a trajectory or a plot).
     bool samples() const { return out_ || plot_; }
+    /// The spacing the run samples at: dt with a trajectory (--out); for the
+    /// plot alone at least (t_end - t0) / kLargeOutputRows (the figure keeps
+    /// 2000 buckets: a tiny --dt must not make a run of endless samples).
+    double sample_dt() const;
 
     void on_sample(double t, const double* x, const double* v) override;
     void on_event(double t, EventKind kind, int element, const double* x, const double* v) override;

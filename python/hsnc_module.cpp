@@ -97,6 +97,32 @@ private:
     std::chrono::steady_clock::time_point last_check_;
 };
 
+// Ctrl-C in hsnc.periodic and hsnc.lyapunov: their progress hook (called
+// with the GIL released) takes the GIL at most every 50 ms for
+// PyErr_CheckSignals(), as Collector does for simulate; once a handler has
+// raised, the hook says stop, the analysis ends soon after, and the binding
+// raises that exception (KeyboardInterrupt).
+class SignalCheck {
+public:
+    SignalCheck() : last_(std::chrono::steady_clock::now()) {}
+    /// False (stop) once a signal handler has raised.
+    bool operator()() {
+        if (interrupted_) return false;
+        const auto now = std::chrono::steady_clock::now();
+        if (now - last_ < std::chrono::milliseconds(50)) return true;
+        last_ = now;
+        py::gil_scoped_acquire gil;
+        if (PyErr_CheckSignals() == 0) return true;
+        interrupted_ = true;  // the exception stays set on this thread
+        return false;
+    }
+    bool interrupted() const { return interrupted_; }
+
+private:
+    bool interrupted_ = false;
+    std::chrono::steady_clock::time_point last_;
+};
+
 py::array_t<double> matrix(const std::vector<double>& data, std::size_t rows, std::size_t cols) {
     py::array_t<double> a({rows, cols});
     if (!data.empty()) std::copy(data.begin(), data.end(), a.mutable_data());
@@ -276,10 +302,13 @@ py::dict periodic(const Model& model, double period, int harmonic, double transi
     const std::size_t n = model.dof();
     Samples orbit(n);
     PeriodicResult r;
+    SignalCheck signals;
+    o.progress = [&signals](const PeriodicProgress&) { return signals(); };
     {
         py::gil_scoped_release nogil;
         r = hsnc::periodic(model, o, &orbit);
     }
+    if (signals.interrupted()) throw py::error_already_set();  // the handler's exception (KeyboardInterrupt)
     py::dict d;
     d["status"] = periodic_status_name(r.status);
     d["message"] = r.message;
@@ -296,6 +325,7 @@ py::dict periodic(const Model& model, double period, int harmonic, double transi
     const bool ok = r.status == PeriodicStatus::ok;
     d["max_multiplier"] = ok ? r.max_multiplier : NAN;
     d["stable"] = ok && r.stable;
+    d["neutral"] = ok ? r.neutral : 0;  // a family's multipliers at +1, left out of `stable`
     const std::size_t N = 2 * n + model.jenkins.size();  // y = (x, v, s)
     d["monodromy"] = ok ? matrix(r.monodromy, N, N) : matrix({}, 0, N);
     d["events"] = r.events;
@@ -317,6 +347,8 @@ py::dict lyapunov(const Model& model, double t_end, double transient, double row
     o.kernels = kernel_choice(kernels);
     std::vector<double> row_t, rows;
     LyapunovResult r;
+    SignalCheck signals;
+    o.progress = [&signals](double) { return signals(); };
     {
         py::gil_scoped_release nogil;
         r = hsnc::lyapunov(model, o, [&](double t, const std::vector<double>& ex) {
@@ -324,6 +356,7 @@ py::dict lyapunov(const Model& model, double t_end, double transient, double row
             rows.insert(rows.end(), ex.begin(), ex.end());
         });
     }
+    if (signals.interrupted()) throw py::error_already_set();  // the handler's exception (KeyboardInterrupt)
     if (r.status != RunStatus::ok)
         throw RunError(std::string("lyapunov: ") + run_status_name(r.status) + ": " + r.message);
     py::dict d;
@@ -450,12 +483,6 @@ PYBIND11_MODULE(_hsnc, m) {
     m.attr("_MAX_MODEL_BYTES") = kMaxModelFileBytes;
     m.def("_sample_count", [](double t0, double t_end, double dt) { return SampleGrid(t0, t_end, dt).count(); });
     m.def("_forcing_period", &forcing_period);
-    // hsnc::lyapunov's default row_interval (analysis/lyapunov.cpp): the
-    // period of the slowest forcing harmonic, else 1 s.
-    m.def("_default_row_interval", [](const Model& mo) {
-        double omega = 0.0;
-        for (const Harmonic& h : mo.forcing)
-            if (h.omega != 0.0) omega = omega == 0.0 ? std::fabs(h.omega) : std::min(omega, std::fabs(h.omega));
-        return omega == 0.0 ? 1.0 : 2 * M_PI / omega;
-    });
+    // hsnc::lyapunov's default row_interval: the period of the slowest forcing harmonic, else 1 s.
+    m.def("_default_row_interval", [](const Model& mo) { return lyapunov_row_interval(mo, LyapunovOptions{}); });
 }

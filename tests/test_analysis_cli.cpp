@@ -1,12 +1,19 @@
 // `hsnc periodic` and `hsnc lyapunov` as a user runs them (interface.md
 // section 6): the stdout line, the CSV files, exit codes 0 / 1 / 2 and
 // nothing written on failure or bad input.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <cmath>
+#include <csignal>
+#include <cstdio>
 #include <regex>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "cli_runner.h"
@@ -116,6 +123,9 @@ TEST(PeriodicCli, BadInputIsExitTwoWithNothingWritten) {
         {"'" + model_path("seed-scenario-1.toml") + "' --kernels fast", "--kernels"},
         {"'" + model_path("seed-scenario-1.toml") + "' --set k1=1 --kernels aot", "--kernels"},
         {"'" + model_path("seed-scenario-1.toml") + "' --set nope=1", "nope"},
+        // A period over which every state repeats to the tolerance: not `status=ok` at the initial state.
+        {"'" + model_path("seed-scenario-1.toml") + "' --period 1e-300", "--period: too short for this model"},
+        {"'" + model_path("seed-scenario-1.toml") + "' --period 1e-300 --harmonic 3", "--period: too short"},
     };
     for (const Case& c : cases) {
         const testing::CliRun r = run_hsnc("periodic " + c.args + " --multipliers '" + mult + "'");
@@ -159,6 +169,100 @@ TEST(LyapunovCli, StickCollapsesADirectionToMinusInfinity) {
     EXPECT_EQ(rows[1][0], "1");
     EXPECT_NE(rows[1][2], "-inf");  // still sliding at t = 1
     EXPECT_EQ(rows[5][2], "-inf");
+}
+
+// The output guard of `hsnc simulate` (1e7 rows or 1 GB, --allow-large-output)
+// before the run: one period of the orbit every --dt, the convergence rows
+// every --row-interval (or every forcing period of a very long --t-end).
+TEST(PeriodicCli, ALargeOrbitOutputIsRefusedBeforeTheRun) {
+    const std::string out = temp_path("orbit.csv");
+    const testing::CliRun r =
+        run_hsnc("periodic '" + model_path("seed-scenario-1.toml") + "' --dt 1e-12 --out '" + out + "'");
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("--dt 9.9999999999999998e-13: one period"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("--allow-large-output"), std::string::npos) << r.err;
+    EXPECT_TRUE(r.out.empty());
+    EXPECT_FALSE(file_exists(out));
+    // A --dt that gives a modest file (3580 rows) runs.
+    const testing::CliRun ok = run_hsnc("periodic '" + model_path("seed-scenario-1.toml") +
+                                        "' --quiet --dt 1e-5 --out '" + out + "'");
+    EXPECT_EQ(ok.exit_code, 0) << ok.err;
+}
+
+TEST(LyapunovCli, ALargeConvergenceOutputIsRefusedBeforeTheRun) {
+    const std::string out = temp_path("lyap.csv");
+    const std::string model = "'" + model_path("seed-scenario-2.toml") + "'";
+    for (const std::string& args : {std::string("--t-end 100 --row-interval 1e-9"), std::string("--t-end 1e12")}) {
+        const testing::CliRun r = run_hsnc("lyapunov " + model + " " + args + " --out '" + out + "'");
+        EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.err;
+        EXPECT_NE(r.err.find(args.find("row") != std::string::npos ? "--row-interval 1.0000000000000001e-09: the "
+                                                                      "convergence --out would have 1e+11 rows"
+                                                                    : "--t-end 1000000000000 (a row every "),
+                  std::string::npos)
+            << r.err;
+        EXPECT_NE(r.err.find("--allow-large-output"), std::string::npos) << r.err;
+        EXPECT_TRUE(r.out.empty()) << args;
+        EXPECT_FALSE(file_exists(out)) << args;
+    }
+}
+
+// `simulate --plot` alone samples for the figure on a bounded grid: a --dt of
+// 1e-300 ran forever (1e300 samples for a figure of 2000 buckets).
+TEST(SimulateCli, APlotAloneWithATinyDtFinishes) {
+    const std::string png = temp_path("tiny-dt.png");
+    const auto start = std::chrono::steady_clock::now();
+    const testing::CliRun r =
+        run_hsnc("simulate '" + model_path("coulomb-1dof.toml") + "' --t-end 1 --dt 1e-300 --quiet --plot '" + png + "'");
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(slurp(png).substr(1, 3), "PNG");
+    EXPECT_LT(seconds, 60.0);
+}
+
+// A friction damper stuck all period: a linear orbit with a neutral
+// multiplier (a family of orbits: its slider at any offset) is stable, with
+// `neutral=1` (it was `stable=false` at a multiplier 0.99999999999999978).
+TEST(PeriodicCli, AFullyStuckOrbitIsStableWithItsNeutralMultiplier) {
+    const std::string model = "'" + std::string(HSNC_SOURCE_DIR) + "/examples/jenkins/friction_damper.toml'";
+    const testing::CliRun r = run_hsnc("periodic " + model + " --set omega=12 --transient 40 --quiet");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::regex line(".* stable=true max_multiplier=(\\S+) grazing=0 neutral=1\n");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_match(r.out, m, line)) << r.out;
+    EXPECT_NEAR(std::stod(m[1]), 1.0, 1e-12);
+    // A slipping orbit has none: the line ends as before.
+    const testing::CliRun slip = run_hsnc("periodic " + model + " --transient 30 --quiet");
+    ASSERT_EQ(slip.exit_code, 0) << slip.err;
+    EXPECT_NE(slip.out.find(" stable=true max_multiplier="), std::string::npos) << slip.out;
+    EXPECT_EQ(slip.out.find("neutral="), std::string::npos) << slip.out;
+}
+
+// A long command says it is alive on stderr when stderr is not a terminal: a
+// line every 10 s (a measurement of hours here, stopped once it has spoken).
+TEST(LyapunovCli, ALongRunSaysItsProgressEveryTenSeconds) {
+    const std::string err = temp_path("stderr");
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        ::setenv("XDG_CACHE_HOME", HSNC_TEST_CACHE_HOME, 1);
+        const int e = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+        const int n = ::open("/dev/null", O_WRONLY);
+        ::dup2(n, 1);
+        ::dup2(e, 2);
+        const std::string model = model_path("seed-scenario-2.toml");
+        ::execl(HSNC_BINARY, "hsnc", "lyapunov", model.c_str(), "--t-end", "1e8", static_cast<char*>(nullptr));
+        ::_exit(127);
+    }
+    std::string text;
+    for (int i = 0; i < 600 && text.find('\n') == std::string::npos; ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        text = slurp(err);
+    }
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, nullptr, 0);
+    std::remove(err.c_str());
+    const std::regex line("hsnc lyapunov: t = \\S+ s, \\S+% of the measurement, 1\\d s, about \\d+ s left\n");
+    EXPECT_TRUE(std::regex_match(text, line)) << text;
 }
 
 TEST(LyapunovCli, BadInputIsExitTwo) {

@@ -10,14 +10,19 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <complex>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
 
 #include "hsnc/lyapunov.h"
 #include "hsnc/periodic.h"
+#include "model_reader.h"
+#include "shooting.h"
 #include "solver_provider.h"
 
 namespace hsnc {
@@ -141,6 +146,87 @@ TEST(LinearLyapunov, ExponentsAreRealPartsOfEigenvalues) {
             EXPECT_NEAR(r.exponents[i], want[i], 1e-3) << "alpha " << alpha << " beta " << beta << " exponent " << i;
         EXPECT_NEAR(r.sum, -(C.diagonal().array() / M.diagonal().array()).sum(), 1e-9);
     }
+}
+
+// A dashpot of 1e8 N s/m on m1 (and Rayleigh alpha): the generator has one
+// eigenvalue near -1e8. The exponents are still the real parts of the
+// eigenvalues, the stiff one included, and the measurement costs what the
+// motion does: the QR steps are set by the other directions (the last one's
+// growth is det Phi over theirs), not by 10/1e8 s (52 s of work per
+// simulated second before).
+TEST(LinearLyapunov, AStiffDashpotCostsWhatTheMotionDoes) {
+    Model m = linear_chain(0.1, 0.0);
+    m.dampers.push_back({kGround, 0, 1e8});
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(4, 4);
+    const Eigen::Matrix2d M = Eigen::Vector2d(1.0, 2.0).asDiagonal();
+    Eigen::Matrix2d K;
+    K << 7.0, -3.0, -3.0, 4.0;
+    Eigen::Matrix2d C = 0.1 * M;
+    C(0, 0) += 1e8;
+    A.topRightCorner(2, 2) = Eigen::Matrix2d::Identity();
+    A.bottomLeftCorner(2, 2) = -M.inverse() * K;
+    A.bottomRightCorner(2, 2) = -M.inverse() * C;
+    Eigen::EigenSolver<Eigen::MatrixXd> es(A);
+    std::vector<double> want;
+    for (int i = 0; i < 4; ++i) want.push_back(es.eigenvalues()(i).real());
+    std::sort(want.rbegin(), want.rend());
+    ASSERT_LT(want[3], -0.9e8);
+
+    LyapunovOptions o;
+    o.t_end = 20000.0;  // the exponents' O(1/T) transient below 1e-4
+    o.kernels = KernelChoice::generic;
+    const auto start = std::chrono::steady_clock::now();
+    const LyapunovResult r = lyapunov(m, o);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ASSERT_EQ(r.status, RunStatus::ok) << r.message;
+    ASSERT_EQ(r.exponents.size(), 4u);
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(r.exponents[i], want[i], 1e-3) << "exponent " << i;
+    EXPECT_NEAR(r.exponents[3], want[3], 1e-9 * std::fabs(want[3]));
+    EXPECT_NEAR(r.sum, -(C.diagonal().array() / M.diagonal().array()).sum(), 1e-9 * 1e8);
+    EXPECT_LT(seconds, 5.0) << "20000 s of a linear motion";
+}
+
+// The rule for multipliers at +1 (hsnc/periodic.h, kNeutralMultiplier): with
+// as many eigenvectors as such multipliers they are a family's (neutral, left
+// out of stability); a Jordan block (a free body's drift) is not stable, and
+// neither is a pair on the unit circle.
+TEST(NeutralMultipliers, AFamilyIsNeutralADriftIsNot) {
+    auto judge = [](const Eigen::MatrixXd& M) {
+        const std::vector<std::complex<double>> mu = analysis::floquet_multipliers(M);
+        const std::size_t k = analysis::family_multipliers(M, mu);
+        return std::pair{k, analysis::orbit_stable(mu, k)};
+    };
+    Eigen::MatrixXd family(3, 3);
+    family << 1.0 - 2e-16, 0.3, 0.0, 0.0, 0.5, 0.1, 0.0, 0.0, -0.2;
+    EXPECT_EQ(judge(family), (std::pair<std::size_t, bool>{1, true}));
+    Eigen::MatrixXd unstable = family;
+    unstable(2, 2) = -1.5;
+    EXPECT_EQ(judge(unstable), (std::pair<std::size_t, bool>{1, false}));
+    Eigen::MatrixXd drift(2, 2);
+    drift << 1.0, 0.7, 0.0, 1.0;  // a free body over one period: x += T v
+    EXPECT_EQ(judge(drift), (std::pair<std::size_t, bool>{0, false}));
+    Eigen::MatrixXd circle(2, 2);
+    circle << std::cos(1.0), -std::sin(1.0), std::sin(1.0), std::cos(1.0);
+    EXPECT_EQ(judge(circle), (std::pair<std::size_t, bool>{0, false}));
+}
+
+// A friction damper that never slips (forced above about 10.43 rad/s it stays
+// stuck all period): a linear orbit whose slider may sit at any offset, so its
+// multiplier 1 (to rounding) is a family's: stable, one neutral multiplier.
+TEST(NeutralMultipliers, AFullyStuckOrbitIsStableWithOneNeutralMultiplier) {
+    ModelOverrides set;
+    set.set.emplace_back("omega=12");
+    const Model m = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/jenkins/friction_damper.toml", set);
+    PeriodicOptions o;
+    o.transient = 40.0;
+    o.kernels = KernelChoice::generic;
+    const PeriodicResult r = periodic(m, o);
+    ASSERT_EQ(r.status, PeriodicStatus::ok) << r.message;
+    EXPECT_EQ(r.events, 0u) << "stuck all period";
+    EXPECT_NEAR(std::abs(r.multipliers.front() - 1.0), 0.0, 1e-12);
+    EXPECT_EQ(r.neutral, 1u);
+    EXPECT_TRUE(r.stable);
+    EXPECT_LT(std::abs(r.multipliers[1]), 1.0);
 }
 
 // Two masses between walls with gap contacts (one-sided stops, and one

@@ -2,9 +2,15 @@
 // closed forms (Den Hartog's friction oscillator, the linear oscillator's
 // |H(omega)|), the two branches of a hardening contact oscillator, and the
 // distribution (threads, --part, MPI ranks) giving identical bytes.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <thread>
 #include <cmath>
 #include <cstdlib>
 #include <string>
@@ -334,6 +340,65 @@ TEST(SweepCli, ProgressLinePerPoint) {
     EXPECT_EQ(q.err, "");
 }
 
+// Ctrl-C on a whole sweep keeps the points done: the sweep stops after the
+// point under way, writes the curve and the diagram with the finished points
+// and a last comment line saying it was interrupted, says status=interrupted
+// and ends by SIGINT (the shell reports 130).
+TEST(SweepCli, SigintKeepsTheFinishedPoints) {
+    // Barely damped: no point settles, each runs its --max-periods.
+    std::string text = kLinear;
+    text.replace(text.find("zeta = 0.05"), 11, "zeta = 1e-7");
+    const std::string model = write_temp("slow.toml", text);
+    const std::string out = temp_path("curve.csv"), diagram = temp_path("diagram.csv"), err = temp_path("stderr"),
+                      stdout_path = temp_path("stdout");
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        ::setenv("XDG_CACHE_HOME", HSNC_TEST_CACHE_HOME, 1);
+        const int e = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+        const int o = ::open(stdout_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+        ::dup2(o, 1);
+        ::dup2(e, 2);
+        ::signal(SIGINT, SIG_DFL);  // as from an interactive shell
+        ::execl(HSNC_BINARY, "hsnc", "sweep", model.c_str(), "--param", "omega", "--from", "0.5", "--to", "1.5",
+                "--points", "1000", "--max-periods", "3000", "--record-periods", "2", "--out", out.c_str(),
+                "--diagram", diagram.c_str(), static_cast<char*>(nullptr));
+        ::_exit(127);
+    }
+    // Interrupt once two points are done.
+    bool started = false;
+    for (int i = 0; i < 3000 && !started; ++i) {
+        started = slurp(err).find("point 2/1000") != std::string::npos;
+        if (!started) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    EXPECT_TRUE(started) << slurp(err);
+    const auto t0 = std::chrono::steady_clock::now();
+    ::kill(pid, SIGINT);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << status << "\n" << slurp(err);
+    EXPECT_LT(seconds, 30.0);  // one point at most after the signal
+    const std::string curve = slurp(out), d = slurp(diagram), line = slurp(stdout_path);
+    ASSERT_EQ(line.rfind("status=interrupted points=", 0), 0u) << line << slurp(err);
+    const std::size_t done = std::stoul(line.substr(std::string("status=interrupted points=").size()));
+    EXPECT_GE(done, 2u);
+    EXPECT_LT(done, 1000u);
+    EXPECT_EQ(curve.substr(0, curve.find('\n')), "omega,direction,settled,periods,multiple,xmax_m,xrms_m,a1_m");
+    const std::string note =
+        "# interrupted (SIGINT) after " + std::to_string(done) + " of 1000 points: the rest were not run\n";
+    EXPECT_EQ(std::count(curve.begin(), curve.end(), '\n'), static_cast<long>(done + 2));
+    ASSERT_GE(curve.size(), note.size());
+    EXPECT_EQ(curve.substr(curve.size() - note.size()), note);
+    EXPECT_NE(curve.find("\n0.5,up,false,3000,0,"), std::string::npos) << curve;
+    EXPECT_EQ(std::count(d.begin(), d.end(), '\n'), static_cast<long>(1 + 2 * done + 1));
+    ASSERT_GE(d.size(), note.size());
+    EXPECT_EQ(d.substr(d.size() - note.size()), note);
+    EXPECT_NE(slurp(err).find("interrupted (SIGINT)"), std::string::npos);
+    std::remove(err.c_str());
+    std::remove(stdout_path.c_str());
+}
+
 // Output identical for 1 and 2 threads, and for --part merged against a whole run.
 TEST(SweepCli, ThreadsAndPartsGiveTheSameBytes) {
     const std::string model = write_temp("hardening.toml", kHardening);
@@ -415,6 +480,8 @@ TEST(SweepCli, BadInputWritesNothing) {
     const Case cases[] = {
         {"--param nope --from 1 --to 2 --points 3", "--param: no parameter named 'nope'"},
         {"--param omega --from 1 --to 2 --points 0", "--points: must be >= 1"},
+        {"--param omega --from 1 --to 2 --points -5", "--points: must be >= 1 (a positive whole number), not -5"},
+        {"--param omega --from 1 --to 2 --points 3 --max-periods -1", "--max-periods: must be >= 1"},
         {"--param omega --from 1 --to nan --points 3", "--to"},
         {"--param omega --from 1 --to 2 --points 3 --direction sideways", "--direction: expected up, down or both"},
         {"--param omega --from 1 --to -1 --points 3", "sweep at omega = 0: "},

@@ -47,6 +47,11 @@ struct LyapunovOptions {
     /// default, as SimulateOptions::cache_dir), and whether to use one.
     std::string cache_dir;
     bool use_cache = true;
+    /// Called now and then from the calling thread with the time reached
+    /// (t0 to t0 + transient + t_end; after every segment, and at least every
+    /// few hundred switches), for a progress report or a cancel check; return
+    /// false to stop: the result's status is then RunStatus::stopped. May be empty.
+    std::function<bool(double)> progress;
 };
 
 struct LyapunovResult {
@@ -68,6 +73,10 @@ struct LyapunovResult {
     std::size_t grazing = 0;
     std::size_t singular = 0;    ///< of them, without a saltation matrix
 };
+
+/// The spacing of the convergence rows `options` give: row_interval, or its
+/// default (the period of the slowest forcing harmonic, 1 s without forcing).
+double lyapunov_row_interval(const Model& model, const LyapunovOptions& options);
 
 /// The spectrum (see the file comment). `on_row(t, exponents)` (may be empty)
 /// receives the running estimate, largest first, every row_interval from the

@@ -20,6 +20,7 @@
 
 #include <complex>
 #include <cstddef>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -29,6 +30,17 @@
 #include "simulate.h"
 
 namespace hsnc {
+
+/// Where a search is (PeriodicOptions::progress).
+struct PeriodicProgress {
+    enum class Stage { transient, search, orbit };
+    Stage stage = Stage::transient;  ///< the transient, the Newton search, the final run of the orbit
+    double t = 0.0;                  ///< time the run under way has reached
+    double t_from = 0.0, t_to = 0.0; ///< that run's span
+    int iterations = 0;              ///< Newton steps taken
+    double residual = std::numeric_limits<double>::quiet_NaN();  ///< of the current state (NaN before the first)
+    std::size_t runs = 0;            ///< period-map runs so far
+};
 
 struct PeriodicOptions {
     /// Period of the forcing T; NaN: 2*pi/omega of the model's forcing (an
@@ -54,16 +66,26 @@ struct PeriodicOptions {
     /// default, as SimulateOptions::cache_dir), and whether to use one.
     std::string cache_dir;
     bool use_cache = true;
+    /// Called now and then from the calling thread (after every segment of
+    /// every run, and at least every few hundred switches), for a progress
+    /// report or a cancel check; return false to stop the search: the result
+    /// is then PeriodicStatus::stopped (no orbit). May be empty.
+    std::function<bool(const PeriodicProgress&)> progress;
 };
 
-enum class PeriodicStatus { ok, not_converged };
+/// ok: converged; not_converged: see the file comment; stopped: options.progress returned false.
+enum class PeriodicStatus { ok, not_converged, stopped };
 const char* periodic_status_name(PeriodicStatus status);
 
-/// A multiplier within this of the unit circle is on it: a neutral direction
-/// (a family of orbits: a stuck pair's offset, a slider stuck all period, an
-/// undamped linear mode), whose |mu| = 1 comes out as 1 +- a few 1e-15; such
-/// an orbit is not stable (interface.md: "a multiplier on the unit circle is
-/// not stable"), whichever side rounding puts it.
+/// A multiplier within this of the unit circle is on it, whichever side
+/// rounding puts it (|mu| = 1 comes out as 1 +- a few 1e-15). On it is not
+/// stable (interface.md), except a family's multiplier: within this of +1
+/// with as many independent eigenvectors as such multipliers (a stuck pair's
+/// offset, a slider or a mass stuck all period: the orbit moved along it is
+/// an orbit too), counted in PeriodicResult::neutral and left out of
+/// `stable` (a perturbation along the family neither grows nor decays). An
+/// undamped linear mode (a complex pair on the circle) or a free body's drift
+/// (+1 without its eigenvectors: a Jordan block) stays not stable.
 inline constexpr double kNeutralMultiplier = 1e-10;
 
 struct PeriodicResult {
@@ -79,7 +101,10 @@ struct PeriodicResult {
     /// mass and 1 per Jenkins element, largest |mu| first.
     std::vector<std::complex<double>> multipliers;
     double max_multiplier = 0.0;  ///< largest |mu|
-    bool stable = false;          ///< every |mu| < 1 - kNeutralMultiplier
+    bool stable = false;          ///< every |mu| < 1 - kNeutralMultiplier, but the `neutral` ones
+    /// Multipliers of a family of orbits (+1 to kNeutralMultiplier, with their eigenvectors; see
+    /// kNeutralMultiplier), left out of `stable`.
+    std::size_t neutral = 0;
     /// The monodromy matrix dP/dy, row-major, y = (x, v, s): 2n + nj square.
     std::vector<double> monodromy;
     std::size_t events = 0;  ///< switch events over one period of the orbit

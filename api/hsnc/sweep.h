@@ -163,6 +163,12 @@ struct SweepOptions {
     /// When set (from any thread), runs stop soon (between two forcing
     /// periods or two continuation steps) with SweepCancelled.
     const std::atomic<bool>* cancel = nullptr;
+    /// When set (from any thread), every task ends after the point it is
+    /// running (a continuation branch after its step under way) and keeps the
+    /// points it has finished; tasks not started yet run none. A graceful
+    /// stop (the command line's Ctrl-C): run_tasks says whether it cut any
+    /// task short.
+    const std::atomic<bool>* stop = nullptr;
 };
 
 /// One point of a sweep.
@@ -223,7 +229,10 @@ public:
     /// Run task `i` (RunError when a point's run fails: chattering, Zeno, a solver failure).
     std::vector<SweepPoint> run_task(std::size_t i) const;
     /// Run the tasks `which` on options().threads threads; results in the order of `which`.
-    std::vector<std::vector<SweepPoint>> run_tasks(const std::vector<std::size_t>& which) const;
+    /// `stopped` (may be null): set to whether SweepOptions::stop cut a task short
+    /// (the results then hold only the points finished).
+    std::vector<std::vector<SweepPoint>> run_tasks(const std::vector<std::size_t>& which,
+                                                   bool* stopped = nullptr) const;
     /// Every task, assembled.
     SweepResult run() const;
     /// An empty result with the names (to fill with tasks' points in order).

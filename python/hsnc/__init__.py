@@ -402,13 +402,15 @@ def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_itera
     message, period (harmonic * T), t (time of the state), iterations,
     residual, x, v, s (the orbit's state at t, arrays; s: the Jenkins
     sliders), multipliers (complex array, largest |mu| first),
-    max_multiplier, stable, monodromy ((2n + nj) square array, state (x, v,
+    max_multiplier, stable, neutral (multipliers of a family of orbits at +1,
+    left out of stable), monodromy ((2n + nj) square array, state (x, v,
     s)), events (switches a period), grazing (grazing switch
     instants a period: the multipliers are not reliable when > 0) and orbit (dict of t, x,
     v arrays: one period sampled every dt, default period/1000; empty when not
     converged). period: default 2*pi/omega of the model's forcing;
     transient: run this long first. An orbit of more than 1e7 samples, or
-    about 1 GB, is refused before the run unless allow_large_output=True."""
+    about 1 GB, is refused before the run unless allow_large_output=True.
+    Ctrl-C (SIGINT) stops it promptly with KeyboardInterrupt."""
     f = "hsnc.periodic"
     model = _model(f, model)
     x0, v0 = _overrides(f, "x0", x0), _overrides(f, "v0", v0)
@@ -440,7 +442,8 @@ def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=
     singular (of them, without a saltation matrix), rows_t and rows (the running estimates every row_interval,
     default the forcing period, else 1 s; k x 2n; more than 1e7 rows, or about
     1 GB, are refused before the run unless allow_large_output=True). A run
-    that stops early raises RunError."""
+    that stops early raises RunError; Ctrl-C (SIGINT) stops it promptly with
+    KeyboardInterrupt."""
     f = "hsnc.lyapunov"
     model = _model(f, model)
     x0, v0 = _overrides(f, "x0", x0), _overrides(f, "v0", v0)
