@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <deque>
 #include <limits>
 #include <map>
 #include <cstdio>
@@ -14,6 +13,7 @@
 #include "assembly.h"
 #include "restart.h"
 #include "sample_grid.h"
+#include "switch_guard.h"
 #include "tie_series.h"
 #include "transitions.h"
 
@@ -148,9 +148,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     Buffers probe(x.size(), n, max_switches);  // a search evaluation: its due functions go to buf
     const SegmentEval probe_view = probe.view();
     std::set<Configuration> visited;
-    std::deque<double> recent;  // times of the latest events (Zeno guard)
-    std::size_t same_instant = 0;
-    double last_event_t = -kInf;
+    SwitchGuard guard(options, model_.t0);  // chattering and Zeno
 
     // Trajectory samples at t0 + k*dt (never accumulated), and t_end (sample_grid.h).
     const SampleGrid grid(model_.t0, t_end, options.dt);
@@ -651,28 +649,10 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         for (const Transition& tr : transitions) {
             observer.on_event(t, tr.kind, tr.element, x.data(), v.data());
             ++sum.events;
-            recent.push_back(t);
-            if (recent.size() > options.zeno_events) recent.pop_front();
+            guard.event(t);
         }
-        // Chattering: switches that keep firing at one instant.
-        same_instant = t == last_event_t ? same_instant + 1 : 0;
-        last_event_t = t;
-        if (same_instant > 4 * (nsw + 2))
-            return finish(RunStatus::chattering, "configuration keeps switching at t = " + time_text(t) +
-                                                     " (now '" + cfg.spec(model_) + "')");
-        // Zeno: many switches within a vanishing time span, measured on the
-        // run's own clock (time elapsed since t0), not relative to |t|: at
-        // t0 = 1e9 a span relative to |t| was 1 s and took 16000 regular
-        // switches of a 16 kHz oscillation for an accumulation. The second
-        // term is the time's own resolution (8 eps |t| per switch, twice the smallest step): switches
-        // that the engine can only separate by its smallest step pile up there.
-        if (recent.size() >= options.zeno_events &&
-            recent.back() - recent.front() <=
-                options.zeno_span * std::max(1.0, t - model_.t0) +
-                    static_cast<double>(options.zeno_events) * 8 * kEps * std::fabs(t))
-            return finish(RunStatus::zeno, std::to_string(recent.size()) + " switches between t = " +
-                                               time_text(recent.front()) + " and " + time_text(recent.back()) +
-                                               " (accumulating switches, configuration '" + cfg.spec(model_) + "')");
+        if (const RunStatus g = guard.after_switch(t, nsw); g != RunStatus::ok)
+            return finish(g, guard.message(cfg.spec(model_)));
         if (options.max_events && sum.events >= options.max_events)
             return finish(RunStatus::max_events, "stopped after " + std::to_string(sum.events) + " events");
         if ((++progress_counter & 255) == 0 && !observer.on_progress(t))
