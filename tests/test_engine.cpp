@@ -13,6 +13,7 @@
 #include "engine.h"
 #include "integrators.h"
 #include "model_reader.h"
+#include "switch_guard.h"
 #include "kernel_mode.h"
 
 namespace hsnc {
@@ -282,6 +283,39 @@ TEST(EngineGuards, AccumulatingSwitchesStopWithZenoStatus) {
     EXPECT_EQ(s.events, 3u);
     EXPECT_NEAR(s.t, 3 * kPi / 10, 1e-13);
     EXPECT_NE(s.message.find("3 switches between t = 0.314"), std::string::npos) << s.message;
+}
+
+
+// The guard itself (switch_guard.h), which the engine and the baselines share:
+// switches one ulp of t apart (a baseline's restarts cycling at a Jenkins
+// element's stick, issue 35) are an accumulation; switch instants that keep
+// coming at one t are chattering; regular switches go on.
+TEST(EngineGuards, SharedGuardStopsUlpApartAndSameInstantSwitches) {
+    EngineOptions opt;
+    SwitchGuard ulps(opt, 0.0);
+    double t = 0.23026537685633708;
+    std::size_t k = 0;
+    RunStatus status = RunStatus::ok;
+    for (; k < 100000 && status == RunStatus::ok; ++k) {
+        ulps.event(t);
+        status = ulps.after_switch(t, 4);
+        t = std::nextafter(t, 1.0);
+    }
+    EXPECT_EQ(status, RunStatus::zeno);
+    EXPECT_EQ(k, opt.zeno_events);
+    EXPECT_NE(ulps.message("slip=j1+").find("1000 switches between t = 0.23026537685633708"), std::string::npos)
+        << ulps.message("slip=j1+");
+    SwitchGuard same(opt, 0.0);
+    status = RunStatus::ok;
+    for (k = 0; k < 100 && status == RunStatus::ok; ++k) status = same.after_switch(1.5, 3);
+    EXPECT_EQ(status, RunStatus::chattering);
+    EXPECT_EQ(k, 4u * (3 + 2) + 2);
+    EXPECT_EQ(same.message("closed=c1"), "configuration keeps switching at t = 1.5 (now 'closed=c1')");
+    SwitchGuard regular(opt, 0.0);
+    for (k = 0; k < 10000; ++k) {
+        regular.event(1e-3 * static_cast<double>(k));
+        ASSERT_EQ(regular.after_switch(1e-3 * static_cast<double>(k), 4), RunStatus::ok) << k;
+    }
 }
 
 

@@ -18,6 +18,7 @@
 #include "assembly.h"
 #include "error.h"
 #include "sample_grid.h"
+#include "switch_guard.h"
 #include "transitions.h"
 
 namespace hsnc {
@@ -228,6 +229,15 @@ double bisect_fall(double lo, double hi, H&& h) {
     return hi;
 }
 
+// Whether a function that was not armed at the restart (it started at zero,
+// or a rounding below: the one just switched, a Jenkins element's slip
+// function at its stick) has switched at a step end where it is h, having
+// been h_start at the restart: it is negative and has fallen since. A
+// function that starts a rounding below zero and heads into its safe side
+// has not: taken as switched, CVODE's restarts stuck and released a Jenkins
+// element one ulp of t apart for ever (tests/test_cvode.cpp).
+bool falls_from_zero(double h, double h_start) { return h < 0 && h < h_start; }
+
 // Keep the earliest root: function k at `root` replaces the roots found so far
 // when earlier, and joins them when at the same instant (to 1e-15 relative).
 void keep_earliest(double root, std::size_t k, double& t_root, std::vector<std::size_t>& hit) {
@@ -251,6 +261,7 @@ RunSummary run_ab4(const Model& model, const IntegratorOptions& io, const Engine
                                               dir);  // stuck only where v = 0
     RunSummary sum;
     Sampler sampler(model, eo, obs, sl, cfg);
+    SwitchGuard guard(eo, model.t0);  // chattering and Zeno, as the engine (switch_guard.h)
 
     // Contacts from the state (closed while G >= 0); friction along v, or along
     // the decided direction while v is exactly 0.
@@ -310,6 +321,7 @@ RunSummary run_ab4(const Model& model, const IntegratorOptions& io, const Engine
 
         // Step-end decisions: contacts by G, friction by the stick rule.
         bool restart = false;
+        const std::size_t events_before = sum.events;
         for (std::size_t c = 0; c < model.contacts.size(); ++c) {
             const bool closed = gap(model, static_cast<int>(c), xn.data()) >= 0;
             if (closed != static_cast<bool>(cfg.closed[c])) {
@@ -353,6 +365,11 @@ RunSummary run_ab4(const Model& model, const IntegratorOptions& io, const Engine
             }
         }
         if (restart) rhs(t1, xn, vn, an);
+        if (sum.events > events_before) {  // the engine's guard (switch_guard.h)
+            for (std::size_t e = events_before; e < sum.events; ++e) guard.event(t1);
+            if (const RunStatus g = guard.after_switch(t1, switch_functions(model, cfg).size()); g != RunStatus::ok)
+                return finish(sum, g, "ab4: " + guard.message(cfg.spec(model)), t1, xn, vn, cfg);
+        }
         // Shift the history.
         fv[2] = fv[1], fv[1] = fv[0], fv[0] = v;
         fa[2] = fa[1], fa[1] = fa[0], fa[0] = a;
@@ -394,6 +411,7 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
                                               dir);  // stuck only where v = 0
     RunSummary sum;
     Sampler sampler(model, eo, obs, sl, cfg);
+    SwitchGuard guard(eo, model.t0);  // chattering and Zeno, as the engine (switch_guard.h)
 
     // y = (x, v); f(y) = (v, a) in the current configuration.
     auto f = [&](double tt, const std::vector<double>& y, std::vector<double>& dy) {
@@ -472,7 +490,7 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
             double t_root = kInf;
             std::vector<std::size_t> hit;
             for (std::size_t k = 0; k < sw.size(); ++k) {
-                const bool crossed = armed[k] ? h1[k] <= 0 : h1[k] < 0;
+                const bool crossed = armed[k] ? h1[k] <= 0 : falls_from_zero(h1[k], h0[k]);
                 if (!crossed) {
                     if (h1[k] > 0) armed[k] = 1;
                     continue;
@@ -498,8 +516,12 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
                 for (const Transition& e : tr) {
                     obs.on_event(t, e.kind, e.element, sl.with(cfg, x.data()), v.data());
                     ++sum.events;
+                    guard.event(t);
                 }
                 hold_stuck(model, cfg, v);
+                // Restarts that keep switching at one instant or one ulp apart (as the engine guards).
+                if (const RunStatus g = guard.after_switch(t, sw.size()); g != RunStatus::ok)
+                    return finish(sum, g, "rk45: " + guard.message(cfg.spec(model)), t, x, v, cfg);
                 switched = true;
                 ++sum.segments;
             } else {
@@ -656,12 +678,11 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
     const CvodeInterpolant interp{cv, n};
     std::string why;
     std::vector<Transition> tr;
-    std::vector<double> h, hv, xi(n), vi(n);
+    std::vector<double> h, h_start, hv, xi(n), vi(n);
     std::vector<int> found, rootdir;
     std::vector<char> armed;
     long steps = 0;
-    std::size_t same_instant = 0;
-    double last_switch_t = -kInf;
+    SwitchGuard guard(eo, model.t0);  // chattering and Zeno, as the engine
     auto counted = [&] {  // the summary with CVODE's steps as its evaluations
         sum.evaluations = static_cast<std::size_t>(steps);
         return sum;
@@ -684,6 +705,7 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
         Cvode::check(CVodeSetMaxStep(cv.mem(), stuck_step_limit(model, cfg)), "CVodeSetMaxStep");  // 0: none
         watched_values(model, cfg, p.dir, t, x.data(), v.data(), p.sw, h.data(), sl);
         for (std::size_t k = 0; k < ns; ++k) armed[k] = h[k] > 0;
+        h_start = h;
         for (bool switched = false; !switched;) {
             double tret = t;
             const int flag = CVode(cv.mem(), eo.t_end, cv.y_vector(), &tret, CV_ONE_STEP);
@@ -701,7 +723,7 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
                     if (found[k] != 0) t_root = tret, hit.push_back(k);
             }
             for (std::size_t k = 0; k < ns; ++k) {
-                if (armed[k] || found[k] != 0 || !(h[k] < 0)) continue;
+                if (armed[k] || found[k] != 0 || !falls_from_zero(h[k], h_start[k])) continue;
                 const double r = bisect_fall(t, tret, [&](double mid) {
                     interp.at(mid, xi, vi);
                     watched_values(model, cfg, p.dir, mid, xi.data(), vi.data(), p.sw, hv.data(), sl);
@@ -722,14 +744,12 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
                 for (const Transition& e : tr) {
                     obs.on_event(t, e.kind, e.element, sl.with(cfg, x.data()), v.data());
                     ++sum.events;
+                    guard.event(t);
                 }
                 hold_stuck(model, cfg, v);
-                // Restarts that keep switching at one instant (as the engine guards).
-                same_instant = t == last_switch_t ? same_instant + 1 : 0;
-                last_switch_t = t;
-                if (same_instant > 4 * (ns + 2))
-                    return finish(counted(), RunStatus::chattering,
-                                  "cvode: configuration keeps switching at t = " + std::to_string(t), t, x, v, cfg);
+                // Restarts that keep switching at one instant or one ulp apart (as the engine guards).
+                if (const RunStatus g = guard.after_switch(t, ns); g != RunStatus::ok)
+                    return finish(counted(), g, "cvode: " + guard.message(cfg.spec(model)), t, x, v, cfg);
                 switched = true;
                 ++sum.segments;
             } else {

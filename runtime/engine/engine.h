@@ -17,7 +17,9 @@
 // the last event); it is then moved back to its zero by one
 // Newton step. A function that only touches zero within rounding changes
 // nothing. A sliding velocity that reaches zero, crossing or touching, is a stop
-// (h <= noise), and the stick rule decides.
+// (h <= noise), and the stick rule decides; one still falling inside its
+// noise stops only where the bound says it reaches zero (an overdamped creep
+// into equilibrium never does: engine.cpp stops_here).
 #pragma once
 
 #include "engine_options.h"
