@@ -48,6 +48,14 @@ int run(int argc, const char* const* argv) {
         return app.exit(e);  // --help, --version
     } catch (const CLI::ParseError& e) {
         // Bad flags are bad input: one message, exit code 2 (interface.md section 3).
+        // CLI11 checks required options before it reports the arguments it did
+        // not take, so `generate --bogus M` would say "--out-dir is required":
+        // an unknown flag is named first, as it is most likely the cause.
+        const std::vector<std::string> extras = app.remaining(true);
+        if (e.get_name() == "RequiredError" && !extras.empty()) {
+            std::cerr << "hsnc: " << CLI::ExtrasError(extras).what() << "\n";
+            return 2;
+        }
         std::cerr << "hsnc: " << e.what() << "\n";
         if (e.get_name() == "RequiredError" || e.get_name() == "CallForHelp") std::cerr << "Run with --help for usage.\n";
         return 2;

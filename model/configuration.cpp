@@ -16,6 +16,12 @@ std::vector<std::string> split_names(const std::string& list) {
     return out;
 }
 
+// An element named twice in one list (closed=c1,c1; stuck= a mass and its
+// friction element) is most likely a typo for another one: refused.
+[[noreturn]] void twice(const std::string& part, const std::string& name) {
+    throw InputError("--config: " + part + ": '" + name + "' names an element given before in the list");
+}
+
 }  // namespace
 
 Configuration Configuration::all_open(const Model& model) {
@@ -43,10 +49,12 @@ Configuration Configuration::parse(const Model& model, const std::string& spec) 
                 if ((sign != '+' && sign != '-') || j < 0)
                     throw InputError("--config: slip=" + name +
                                      ": expected a Jenkins element's name followed by + or - (the sign of its stretch)");
+                if (cfg.slip[static_cast<std::size_t>(j)] != 0) twice(part, name.substr(0, name.size() - 1));
                 cfg.slip[static_cast<std::size_t>(j)] = sign == '+' ? 1 : -1;
             } else if (key == "closed") {
                 const int c = model.contact_index(name);
                 if (c < 0) throw InputError("--config: closed=" + name + ": no contact named '" + name + "'");
+                if (cfg.closed[c]) twice(part, name);
                 cfg.closed[c] = 1;
             } else {
                 int i = model.mass_index(name);
@@ -57,6 +65,7 @@ Configuration Configuration::parse(const Model& model, const std::string& spec) 
                 if (!model.masses[i].has_friction)
                     throw InputError("--config: stuck=" + name + ": mass '" + name +
                                      "' has no friction (no mu_k) and cannot stick");
+                if (cfg.stuck[i]) twice(part, name);
                 cfg.stuck[i] = 1;
             }
         }

@@ -9,6 +9,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "cli_runner.h"
 
@@ -68,6 +69,49 @@ TEST(Inspect, CppFormatIsTheKernel) {
 TEST(Inspect, BadConfigIsInputError) {
     EXPECT_EQ(run_hsnc("inspect " + kSeed1 + " --config closed=nope").exit_code, 2);
     EXPECT_EQ(run_hsnc("inspect " + kSeed1 + " --format pdf").exit_code, 2);
+}
+
+// stuck=m1,m1 was taken as stuck=m1: a name given twice in one list is most
+// likely a typo for another one.
+TEST(Inspect, ConfigNamingAnElementTwiceIsRefused) {
+    const std::string jenkins = std::string(HSNC_SOURCE_DIR) + "/examples/jenkins/friction_damper.toml";
+    const std::pair<std::string, std::string> cases[] = {
+        {kSeed1 + " --config stuck=m1,m1", "--config: stuck=m1,m1: 'm1'"},
+        {kSeed1 + " --config 'closed=contact1,contact1 stuck=m2'", "--config: closed=contact1,contact1: 'contact1'"},
+        {jenkins + " --config slip=damper+,damper-", "--config: slip=damper+,damper-: 'damper'"},
+    };
+    for (const auto& [args, message] : cases) {
+        const auto r = run_hsnc("inspect " + args);
+        EXPECT_EQ(r.exit_code, 2) << args;
+        EXPECT_EQ(r.out, "") << args;
+        EXPECT_EQ(r.err, "hsnc: " + message + " names an element given before in the list\n") << args;
+    }
+    EXPECT_EQ(run_hsnc("inspect " + kSeed1 + " --config stuck=m1,m2").exit_code, 0);
+}
+
+// `generate --bogus M` said "--out-dir is required" (CLI11 checks required
+// options before the arguments it did not take): the unknown flag is named,
+// on every subcommand.
+TEST(Generate, AnUnknownFlagIsNamedBeforeAMissingRequiredOne) {
+    for (const char* sub : {"check", "simulate", "inspect", "generate", "cache", "tradeoff", "sweep", "sweep-merge",
+                            "periodic", "lyapunov"}) {
+        for (const std::string& args : {std::string(sub) + " --bogus", std::string(sub) + " --bogus " + kSeed1}) {
+            if (args == "cache --bogus " + kSeed1) continue;  // cache takes no file: two arguments not expected
+            const auto r = run_hsnc(args);
+            EXPECT_EQ(r.exit_code, 2) << args;
+            EXPECT_EQ(r.out, "") << args;
+            EXPECT_EQ(r.err, "hsnc: The following argument was not expected: --bogus\n") << args;
+        }
+    }
+    // Two of them: named as when nothing required is missing (CLI11's message).
+    const auto two = run_hsnc("generate --bogus " + kSeed1 + " --frob");
+    EXPECT_NE(two.err.find("hsnc: The following arguments were not expected: "), std::string::npos) << two.err;
+    EXPECT_EQ(two.err, run_hsnc("generate --bogus " + kSeed1 + " --frob -o never-created").err);
+    EXPECT_FALSE(std::filesystem::exists("never-created"));
+    // Without an unknown flag the missing one is still what is said.
+    const auto missing = run_hsnc("generate " + kSeed1);
+    EXPECT_EQ(missing.exit_code, 2);
+    EXPECT_NE(missing.err.find("--out-dir is required"), std::string::npos) << missing.err;
 }
 
 std::string slurp(const std::filesystem::path& p) {

@@ -381,6 +381,28 @@ TEST_F(CacheDir, WholeEntriesWithAWrongObjectAreRebuilt) {
     EXPECT_EQ(again.out, first.out);
 }
 
+// A whole entry holding another kernel's object (header, key and checksum
+// fine) was counted as a good entry by `cache --stats`, which has no model to
+// check it against as a run does: the object names the key it was compiled
+// for, and stats checks that name.
+TEST_F(CacheDir, StatsCountsAnEntryHoldingAnotherKernelsObjectAsDamaged) {
+    ASSERT_EQ(run_hsnc(jit_run_args("--quiet --cache-dir '" + dir + "'")).exit_code, 0);
+    const std::vector<fs::path> objects = entries(dir);
+    ASSERT_EQ(objects.size(), 3u);
+    const std::string key0 = objects[0].stem().string(), key2 = objects[2].stem().string();
+    const CliRun good = run_hsnc("cache --stats --cache-dir '" + dir + "'");
+    EXPECT_NE(good.out.find("\nentries: 3\ndamaged: 0\n"), std::string::npos) << good.out;
+
+    ASSERT_EQ(KernelCache(dir).store(key0, payload_of(dir, key2)), "");
+    const CliRun stats = run_hsnc("cache --stats --cache-dir '" + dir + "'");
+    ASSERT_EQ(stats.exit_code, 0) << stats.err;
+    EXPECT_NE(stats.out.find("\nentries: 2\ndamaged: 1\n"), std::string::npos) << stats.out;
+    EXPECT_NE(stats.out.find("damaged: " + objects[0].string() + ": holds the object of key " + key2 + ", not " +
+                             key0 + "\n"),
+              std::string::npos)
+        << stats.out;
+}
+
 // A FIFO (open would wait for a writer) and a link to /dev/zero (read would
 // never end) in place of entries and index entries: refused unread, the
 // kernels rebuilt and the files replaced by whole entries. Bounded by
@@ -570,6 +592,28 @@ TEST(ByteSize, ParsesBytesAndBinarySuffixes) {
         } catch (const InputError& e) {
             EXPECT_EQ(std::string(e.what()), "--opt: '" + std::string(bad) + "' is not a size (a number of bytes, or with K, M or G: 256M)");
         }
+    }
+}
+
+// 17179869184G is 2^64 bytes: shifted, it wrapped to 0, which means "no limit".
+TEST(ByteSize, SizesBeyondTwoToTheSixtyFourAreRefusedNotWrapped) {
+    EXPECT_EQ(parse_byte_size("17179869183G", "x"), std::uint64_t{17179869183} << 30);
+    EXPECT_EQ(parse_byte_size("999999999999", "x"), 999999999999u);
+    for (const char* big : {"17179869184G", "999999999999G", "17179869184GiB"}) {
+        try {
+            parse_byte_size(big, "--opt");
+            ADD_FAILURE() << big;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("--opt: '" + std::string(big) + "' is too large (at most "),
+                      std::string::npos)
+                << e.what();
+        }
+    }
+    const std::string flag = " --cache-max-size 17179869184G";
+    for (const std::string& args : {"cache --stats" + flag, "simulate '" + model_path("seed-scenario-2.toml") + "'" + flag}) {
+        const CliRun r = run_hsnc(args);
+        EXPECT_EQ(r.exit_code, 2) << args << ": " << r.out;
+        EXPECT_EQ(r.err, "hsnc: --cache-max-size: '17179869184G' is too large (at most 17179869183G)\n") << args;
     }
 }
 

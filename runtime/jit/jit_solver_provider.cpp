@@ -52,11 +52,10 @@ SegmentSolver& JitSolverProvider::solver(const Configuration& cfg) {
     // The persistent cache first: a hit skips Clang and code generation.
     start = std::chrono::steady_clock::now();
     const std::string name = unit.symbol + ".cpp";
-    std::string key;
+    const std::string key = jit_->cache_key(unit.source);
     bool loaded = false;
     const hsnc_kernel* kernel = nullptr;
     if (!cache_dir_.empty()) {
-        key = jit_->cache_key(unit.source);
         const KernelCache cache(cache_dir_, options_.cache_max_bytes);
         KernelCache::Entry entry = cache.load(key);
         // Whole, but is it this kernel? Checked before LLVM sees it: symbols a
@@ -83,7 +82,9 @@ SegmentSolver& JitSolverProvider::solver(const Configuration& cfg) {
     if (loaded) {
         ++hits_;
     } else {
-        const std::string object = jit_->compile(name, unit.source);
+        // The object names its key, so that `hsnc cache --stats` can tell it
+        // from another kernel's object without the model.
+        const std::string object = jit_->compile(name, unit.source + jit_key_definition(key));
         jit_->add_object(name, object);
         ++compiled_;
         if (!cache_dir_.empty()) {

@@ -102,23 +102,37 @@ std::string check_entry(const std::string& data, const std::string& key, std::st
     return "";
 }
 
-// Why the payload of a whole .hsncobj entry is not a kernel object this
-// process can use: "" when the loader (runtime/jit/object_loader.h) maps it and
-// it defines a kernel (an hsnc_kernel_* object of this ABI version). Only on
-// x86-64, where the loader takes what the JIT makes.
-std::string object_problem(const std::string& payload) {
+// Why the payload of a whole .hsncobj entry of `key` is not a kernel object
+// this process can use: "" when the loader (runtime/jit/object_loader.h) maps
+// it, it defines a kernel (an hsnc_kernel_* object of this ABI version) and it
+// names `key` (jit_key_definition: the object compiled for this key, not
+// another kernel's). Only on x86-64, where the loader takes what the JIT makes.
+std::string object_problem(const std::string& payload, const std::string& key) {
 #if defined(__x86_64__)
     std::string why;
     const std::unique_ptr<LoadedObject> object = LoadedObject::load(payload, why);
     if (!object) return "not a loadable object: " + why;
+    bool kernel = false, own = false;
+    std::string other;  // the key another kernel's object names
+    const std::string prefix = kCacheKeySymbolPrefix;
     for (const std::string& name : object->symbol_names()) {
-        if (name.compare(0, 12, "hsnc_kernel_") != 0) continue;
-        const auto* k = static_cast<const hsnc_kernel*>(object->symbol(name, sizeof(hsnc_kernel)));
-        if (k && k->abi_version == HSNC_KERNEL_ABI_VERSION) return "";
+        if (name.compare(0, prefix.size(), prefix) == 0) {
+            const auto* text = static_cast<const char*>(object->symbol(name, key.size() + 1));
+            if (name == prefix + key)
+                own = text && object->contains_string(text) && key == text;
+            else
+                other = name.substr(prefix.size());
+        } else if (name.compare(0, 12, "hsnc_kernel_") == 0) {
+            const auto* k = static_cast<const hsnc_kernel*>(object->symbol(name, sizeof(hsnc_kernel)));
+            kernel = kernel || (k && k->abi_version == HSNC_KERNEL_ABI_VERSION);
+        }
     }
-    return "defines no kernel of ABI version " + std::to_string(HSNC_KERNEL_ABI_VERSION);
+    if (!kernel) return "defines no kernel of ABI version " + std::to_string(HSNC_KERNEL_ABI_VERSION);
+    if (!other.empty()) return "holds the object of key " + other + ", not " + key;
+    if (!own) return "its object does not name its key (no " + prefix + key + ")";
+    return "";
 #else
-    (void)payload;
+    (void)payload, (void)key;
     return "";
 #endif
 }
@@ -214,7 +228,13 @@ std::string compiler_identity() {
 
 std::string jit_cache_key(const std::string& source) {
     static const std::string cpu = host_cpu_identity();
-    return fnv1a128_hex({"hsnc-jit-object 2", compiler_identity(), cpu, kKernelAbiHeaderText, source});
+    // 3: the object names its key (jit_key_definition).
+    return fnv1a128_hex({"hsnc-jit-object 3", compiler_identity(), cpu, kKernelAbiHeaderText, source});
+}
+
+std::string jit_key_definition(const std::string& key) {
+    return "\n// The key of this kernel's cache entry (runtime/jit/kernel_cache.h).\nextern \"C\" const char " +
+           std::string(kCacheKeySymbolPrefix) + key + "[] = \"" + key + "\";\n";
 }
 
 namespace {
@@ -424,7 +444,13 @@ std::uint64_t parse_byte_size(const std::string& text, const std::string& what) 
     if (suffix == "G" || suffix == "GB" || suffix == "GiB") shift = 30;
     if (digits == 0 || digits > 12 || shift < 0)
         throw InputError(what + ": '" + text + "' is not a size (a number of bytes, or with K, M or G: 256M)");
-    return std::stoull(text.substr(0, digits)) << shift;
+    // At most 12 digits, so the number fits; shifted, it may not (2^64 wraps
+    // to 0, which means "no limit").
+    const std::uint64_t number = std::stoull(text.substr(0, digits));
+    const std::uint64_t largest = UINT64_MAX >> shift;
+    if (number > largest)
+        throw InputError(what + ": '" + text + "' is too large (at most " + std::to_string(largest) + suffix + ")");
+    return number << shift;
 }
 
 KernelCache::Stats KernelCache::stats(const std::string& dir) {
@@ -447,7 +473,7 @@ KernelCache::Stats KernelCache::stats(const std::string& dir) {
         if (::lstat(p.c_str(), &link) == 0 && S_ISREG(link.st_mode)) s.bytes += static_cast<std::uint64_t>(link.st_size);
         if (problem.empty()) problem = ownership_problem(st);
         if (problem.empty()) problem = check_entry(file.bytes, p.stem().string(), payload);
-        if (problem.empty()) problem = object ? object_problem(payload) : index_problem(payload);
+        if (problem.empty()) problem = object ? object_problem(payload, p.stem().string()) : index_problem(payload);
         if (!problem.empty()) {
             ++(object ? s.damaged : s.index_damaged);
             s.problems.push_back(p.string() + ": " + problem);

@@ -18,7 +18,9 @@
 //     32+K     P  payload (the object file)
 //
 // so a truncated, corrupt or foreign file (another key, another format, not
-// ours at all) is told apart from a good one, and never loaded. Writes go to a
+// ours at all) is told apart from a good one, and never loaded. Since format
+// 2 the object itself names its key (jit_key_definition), so that an entry
+// holding another kernel's object is told apart without the model (stats). Writes go to a
 // temporary name in the same directory (pid and a random suffix) and are
 // renamed into place (rename(2) is atomic within a file system), so two
 // processes filling one cache at once each leave a whole file: a reader sees
@@ -43,7 +45,7 @@
 
 namespace hsnc {
 
-inline constexpr std::uint32_t kCacheFormatVersion = 1;
+inline constexpr std::uint32_t kCacheFormatVersion = 2;
 inline constexpr const char* kCacheFileExtension = ".hsncobj";
 /// Index entries: same format, the payload is the key of a .hsncobj entry.
 inline constexpr const char* kCacheIndexExtension = ".hsncidx";
@@ -51,7 +53,8 @@ inline constexpr const char* kCacheIndexExtension = ".hsncidx";
 inline constexpr std::uint64_t kDefaultCacheMaxBytes = std::uint64_t{256} << 20;
 
 /// "256M", "1G", "64k", "1000" (bytes; K, M, G are powers of 1024) as bytes.
-/// Throws InputError "WHAT: 'TEXT' is not a size (...)" when it is none of these.
+/// Throws InputError "WHAT: 'TEXT' is not a size (...)" when it is none of these,
+/// "WHAT: 'TEXT' is too large (at most ...)" beyond 2^64 - 1 bytes.
 std::uint64_t parse_byte_size(const std::string& text, const std::string& what);
 
 /// The cache directory when none is given: $XDG_CACHE_HOME/hsnc when that is
@@ -74,6 +77,14 @@ std::string jit_cache_key(const std::string& source);
 /// the configuration key. "" when that object has no build ID. Its entry
 /// (kCacheIndexExtension) holds the jit_cache_key of the kernel's source.
 std::string jit_index_key(const std::string& model_text, const std::string& config_key);
+
+/// What the JIT appends to a kernel's source before compiling it, so that the
+/// object names the key it is stored under: a definition of
+/// kCacheKeySymbolPrefix + KEY (one symbol per kernel: a JIT holds many)
+/// holding KEY. KernelCache::stats counts an entry whose object does not
+/// define its own key's symbol as damaged (another kernel's object).
+inline constexpr const char* kCacheKeySymbolPrefix = "hsnc_cache_key_";
+std::string jit_key_definition(const std::string& key);
 
 /// jit_index_key for one model, its fixed parts (kernel_abi.h is long) hashed
 /// once: a provider looks up every configuration it enters.
@@ -146,7 +157,7 @@ public:
     static std::size_t evict(const std::string& dir, std::uint64_t max_bytes, const std::string& keep = "");
 
     struct Stats {
-        std::size_t entries = 0;  ///< *.hsncobj that load: whole, our key, checksum, a loadable kernel object
+        std::size_t entries = 0;  ///< *.hsncobj that load: whole, our key, checksum, a loadable kernel object naming that key
         std::size_t damaged = 0;  ///< *.hsncobj that do not (truncated, corrupt, foreign, not a file, not ours)
         std::size_t index_entries = 0, index_damaged = 0;  ///< the same for *.hsncidx
         std::uint64_t bytes = 0;                           ///< file sizes of all of them

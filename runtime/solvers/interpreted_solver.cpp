@@ -129,8 +129,15 @@ constexpr std::uint32_t mf(std::uint32_t field) { return kLane * field; }
 // both (target_clones: the loader picks the clone the processor runs), which
 // gives the same bits, as a vector lane adds and multiplies as a scalar does
 // and -ffp-contract=off leaves no fused multiply-add to either. A 32-mass
-// friction chain over 100 s ran 0.91x as long as without.
+// friction chain over 100 s ran 0.91x as long as without. Clang 14 refuses
+// target_clones on a function template ("do not yet support function
+// templates"): built with Clang (the fuzz targets, .ci/fuzz) they are built
+// once, for the default target, with the same bits.
+#if defined(__clang__)
+#define HSNC_ROWS_CLONES
+#else
 #define HSNC_ROWS_CLONES __attribute__((target_clones("avx2", "default")))
+#endif
 
 // W rows of a `lin` block from `row` on: each row's sum left to right over its
 // M terms (M = 0: s.count, at least 1), as a printed kernel sums it, its base
