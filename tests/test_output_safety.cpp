@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "cli_runner.h"
+#include "temp_dir.h"
 #include "error.h"
 #include "input_files.h"
 #include "output_file.h"
@@ -26,30 +27,7 @@ using testing::run_hsnc;
 using testing::slurp;
 namespace fs = std::filesystem;
 
-class TempDir {
-public:
-    TempDir() {
-        std::string templ = ::testing::TempDir() + "hsnc_safety_XXXXXX";
-        if (!::mkdtemp(templ.data())) ADD_FAILURE() << "mkdtemp failed";
-        path_ = templ;
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path_, ec);
-    }
-    std::string operator/(const std::string& name) const { return path_ + "/" + name; }
-    const std::string& path() const { return path_; }
-    std::vector<std::string> names(const std::string& sub = "") const {
-        std::vector<std::string> out;
-        for (const auto& e : fs::directory_iterator(sub.empty() ? path_ : path_ + "/" + sub))
-            out.push_back(e.path().filename().string());
-        std::sort(out.begin(), out.end());
-        return out;
-    }
-
-private:
-    std::string path_;
-};
+using testing::TempDir;
 
 std::string q(const std::string& s) { return "'" + s + "'"; }
 

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "cli_runner.h"
+#include "temp_dir.h"
 #include "csv_writer.h"
 #include "error.h"
 #include "integrators.h"
@@ -41,31 +42,7 @@ using testing::run_hsnc;
 using testing::slurp;
 namespace fs = std::filesystem;
 
-// A fresh private directory for one test, removed with everything in it.
-class TempDir {
-public:
-    TempDir() {
-        std::string templ = ::testing::TempDir() + "hsnc_outputs_XXXXXX";
-        if (!::mkdtemp(templ.data())) ADD_FAILURE() << "mkdtemp failed";
-        path_ = templ;
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path_, ec);
-    }
-    std::string operator/(const std::string& name) const { return path_ + "/" + name; }
-    const std::string& path() const { return path_; }
-    /// Names in the directory, sorted.
-    std::vector<std::string> names() const {
-        std::vector<std::string> out;
-        for (const auto& e : fs::directory_iterator(path_)) out.push_back(e.path().filename().string());
-        std::sort(out.begin(), out.end());
-        return out;
-    }
-
-private:
-    std::string path_;
-};
+using testing::TempDir;
 
 std::string q(const std::string& s) { return "'" + s + "'"; }
 
