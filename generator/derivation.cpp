@@ -9,7 +9,10 @@
 #include <utility>
 
 #include "assembly.h"
-#include "contact_gap.h"
+#include "elements/contact.h"
+#include "elements/friction.h"
+#include "elements/jenkins.h"
+#include "elements/motion.h"
 #include "error.h"
 #include "free_components.h"
 #include "mp_complex_eigen.h"
@@ -693,29 +696,30 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
         out.v.push_back(out.x[i].diff(tau));
         out.a.push_back(out.v[i].diff(tau));
     }
-    auto pos = [&](int body) { return body == kGround ? ex(0) : out.x[body]; };
-    auto vel = [&](int body) { return body == kGround ? ex(0) : out.v[body]; };
+    // The motion the element files read (model/elements/): x(tau), v(tau).
+    const ex* rows[] = {out.x.data(), out.v.data()};
+    const RowsMotion<ex, decltype(rows)> motion(rows, nullptr, ex(0));
     // Sliders: fixed while stuck, the stretch held at slip F_s / k while slipping.
     for (std::size_t j = 0; j < nj; ++j) {
         const Jenkins& e = model.jenkins[j];
         out.x[n + j] = d.cfg.slip[j] == 0 ? in.x0[n + j]
-                                          : pos(e.a) - pos(e.b) - numeric(static_cast<int>(d.cfg.slip[j])) * exact(e.slip_force) / exact(e.k);
+                                          : along(e.direction(), motion, 0) -
+                                                jenkins::held_stretch(d.cfg.slip[j], ex(exact(e.k)), ex(exact(e.slip_force)));
     }
     for (const SwitchFunction& sf : d.switches) {
         ex g;
+        const auto ee = static_cast<std::size_t>(sf.element);
         if (sf.kind == SwitchKind::gap) {
-            const Contact& c = model.contacts[sf.element];
-            g = contact_gap(pos(c.a), pos(c.b), ex(exact(c.gap)));
+            const Contact& c = model.contacts[ee];
+            g = contact::gap_value(c.direction(), ex(exact(c.gap)), motion, 0);
         } else if (sf.kind == SwitchKind::velocity) {  // w = v_i - v_partner
-            g = out.v[sf.element] - vel(model.masses[static_cast<std::size_t>(sf.element)].partner);
+            g = friction::velocity_value(Direction{sf.element, model.masses[ee].partner}, motion, 0);
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
-            const std::size_t j = static_cast<std::size_t>(sf.element);
-            const Jenkins& e = model.jenkins[j];
-            const ex stretch_force = exact(e.k) * (pos(e.a) - pos(e.b) - out.x[n + j]);
-            g = (sf.kind == SwitchKind::slip_pos ? stretch_force : -stretch_force) - exact(e.slip_force);
+            const Jenkins& e = model.jenkins[ee];
+            g = jenkins::slip_value(sf.kind == SwitchKind::slip_pos ? 1 : -1, ex(exact(e.k)), ex(exact(e.slip_force)),
+                                    e.direction(), out.x[n + ee], motion, 0);
         } else if (sf.kind == SwitchKind::slip_velocity) {
-            const Jenkins& e = model.jenkins[static_cast<std::size_t>(sf.element)];
-            g = vel(e.a) - vel(e.b);
+            g = jenkins::slip_velocity_value(model.jenkins[ee].direction(), motion, 0);
         } else {
             // A_i = -K x - C v + f_const + the stuck sliders' preload + forcing (interface.md section 2);
             // against a partner p, the force that holds the pair together,
@@ -734,7 +738,7 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
                 A = (mp * A - mi * force(p)) / (mi + mp);
             }
             const numeric mu_s_n = exact(model.masses[i].mu_s) * exact(model.masses[i].m) * exact(model.g);
-            g = (sf.kind == SwitchKind::release_pos ? A : -A) - mu_s_n;
+            g = friction::release_value(sf.kind == SwitchKind::release_pos ? 1 : -1, A, ex(mu_s_n), 0);
         }
         out.g.push_back(g);
         out.dg.push_back(g.diff(tau));

@@ -2,7 +2,9 @@
 
 #include <cmath>
 
-#include "contact_gap.h"
+#include "elements/contact.h"
+#include "elements/jenkins.h"
+#include "elements/motion.h"
 #include "error.h"
 
 namespace hsnc {
@@ -100,7 +102,8 @@ void add_slider_preload(const Model& model, const Configuration& cfg, const doub
 double slider_position(const Model& model, const Configuration& cfg, std::size_t j, const double* x) {
     if (cfg.slip[j] == 0) return x[model.dof() + j];
     const Jenkins& e = model.jenkins[j];
-    return position(x, e.a) - position(x, e.b) - static_cast<double>(cfg.slip[j]) * (e.slip_force / e.k);
+    const double* rows[] = {x};
+    return along(e.direction(), double_motion(rows), 0) - jenkins::held_stretch(cfg.slip[j], e.k, e.slip_force);
 }
 
 Eigen::VectorXd forcing(const Model& model, double t) {
@@ -122,13 +125,15 @@ Eigen::VectorXd forcing_rate(const Model& model, double t) {
 }
 
 double gap(const Model& model, int c, const double* x) {
-    const Contact& k = model.contacts[c];
-    return contact_gap(position(x, k.a), position(x, k.b), k.gap);
+    const Contact& k = model.contacts[static_cast<std::size_t>(c)];
+    const double* rows[] = {x};
+    return contact::gap_value(k.direction(), k.gap, double_motion(rows), 0);
 }
 
 double gap_rate(const Model& model, int c, const double* v) {
-    const Contact& k = model.contacts[c];
-    return position(v, k.a) - position(v, k.b);
+    const Contact& k = model.contacts[static_cast<std::size_t>(c)];
+    const double* rows[] = {nullptr, v};
+    return contact::gap_value(k.direction(), k.gap, double_motion(rows), 1);
 }
 
 }  // namespace hsnc

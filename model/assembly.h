@@ -133,7 +133,7 @@ template <class Fn>
 void slipping_of(const Model& model, const Configuration& cfg, std::size_t j, Fn&& fn) {
     if (cfg.slip[j] == 0) return;
     const Jenkins& e = model.jenkins[j];
-    fn(e.a, e.b, -static_cast<double>(cfg.slip[j]) * e.slip_force);
+    fn(e.a, e.b, jenkins::slipping_force(cfg.slip[j], e.slip_force));
 }
 
 /// Every Jenkins element slipping in cfg, as slipping_of gives it.

@@ -22,10 +22,12 @@
 #include <utility>
 #include <vector>
 
-namespace hsnc {
+#include "elements/contact.h"
+#include "elements/direction.h"
+#include "elements/friction.h"
+#include "elements/jenkins.h"
 
-/// Body index of the ground (position 0, never moves).
-inline constexpr int kGround = -1;
+namespace hsnc {
 
 struct Mass {
     std::string name;
@@ -57,14 +59,6 @@ struct Spring {
     bool from_structure = false;
 };
 
-struct Contact {
-    std::string name;
-    int a = kGround;
-    int b = kGround;
-    double gap = 0.0;  ///< closed while x[a] - x[b] >= gap
-    double k = 0.0;    ///< contact stiffness, > 0
-};
-
 /// A viscous dashpot (interface.md section 5): force -c*(v[a]-v[b]) on a, the
 /// opposite on b. A model with dampers has non-proportional damping: its
 /// segments are solved through state-space modes (state_space_solver.h).
@@ -82,35 +76,6 @@ struct Harmonic {
     double omega = 0.0;
     double phase = 0.0;
     std::vector<double> amplitude;  ///< one entry per mass
-};
-
-/// A [[friction]] element (interface.md section 5): Coulomb friction on the
-/// relative velocity v[a] - v[b] with a constant normal force. For now only a
-/// body against the ground (b == kGround); it acts through the equivalent
-/// coefficients of Mass (Mass::friction).
-struct FrictionElement {
-    std::string name;
-    int a = kGround;
-    int b = kGround;
-    double mu_k = 0.0;
-    double mu_s = 0.0;
-    double normal = 0.0;  ///< N > 0
-};
-
-/// A Jenkins element (interface.md section 5): a spring k in series with a
-/// massless slider that slips at slip_force, between bodies a and b. Its
-/// slider position s is state: the engine carries it after the masses'
-/// positions (x[dof() + j], see Model::state_size). While stuck it is a
-/// spring -k*(x[a] - x[b] - s) on a (the opposite on b), which K(cfg) and the
-/// Rayleigh term beta*K(cfg) include as they do a closed contact whose gap is
-/// s; while slipping it is the constant force -sigma*slip_force on a, sigma =
-/// the sign of the stretch x[a] - x[b] - s = sigma*slip_force/k, kept constant.
-struct Jenkins {
-    std::string name;
-    int a = kGround;
-    int b = kGround;
-    double k = 0.0;           ///< > 0
-    double slip_force = 0.0;  ///< F_s > 0
 };
 
 /// Where a [structure]'s matrices came from (the model then has one Mass per

@@ -8,7 +8,10 @@
 #include <cln/rational.h>
 #include <cln/real.h>
 
-#include "contact_gap.h"
+#include "elements/contact.h"
+#include "elements/friction.h"
+#include "elements/jenkins.h"
+#include "elements/motion.h"
 #include "error.h"
 #include "free_components.h"
 
@@ -251,11 +254,13 @@ cl_F MpModel::I(long i) const { return cln::cl_float(cl_I(i), format); }
 
 cl_F MpModel::gap(int c, const std::vector<cl_F>& x) const {
     const Link& k = contacts[static_cast<std::size_t>(c)];
-    return contact_gap(body(x, k.a), body(x, k.b), k.gap);
+    const cl_F* rows[] = {x.data()};
+    return contact::gap_value(Direction{k.a, k.b}, k.gap, RowsMotion<cl_F, decltype(rows)>(rows, nullptr, zero), 0);
 }
 cl_F MpModel::gap_rate(int c, const std::vector<cl_F>& v) const {
     const Link& k = contacts[static_cast<std::size_t>(c)];
-    return body(v, k.a) - body(v, k.b);
+    const cl_F* rows[] = {nullptr, v.data()};
+    return contact::gap_value(Direction{k.a, k.b}, k.gap, RowsMotion<cl_F, decltype(rows)>(rows, nullptr, zero), 1);
 }
 
 cl_F MpModel::force_on_mass(const Configuration& cfg, int i, const cl_F& t, const std::vector<cl_F>& x,
@@ -265,7 +270,7 @@ cl_F MpModel::force_on_mass(const Configuration& cfg, int i, const cl_F& t, cons
     cl_F A = f_const[i] - alpha * m[i] * v[i];
     auto link = [&](const Link& k, bool contact) {
         if (k.a != i && k.b != i) return;
-        const cl_F dx = contact_gap(body(x, k.a), body(x, k.b), contact ? k.gap : zero);  // a spring: gap 0
+        const cl_F dx = body(x, k.a) - body(x, k.b) - (contact ? k.gap : zero);  // a spring: gap 0
         const cl_F dv = body(v, k.a) - body(v, k.b);
         const cl_F f = -(k.k * dx) - beta * k.k * dv;  // on a
         A = k.a == i ? A + f : A - f;
@@ -959,17 +964,18 @@ void MpSegment::sliders_and_switches(MpEval& out, const std::vector<cl_F>& xm, c
                                      const std::vector<CosSin>& hcs, Bound&& bound) const {
     const MpModel& mp = mp_;
     const cl_F& Z0 = mp.zero;
-    std::vector<cl_F> sm(mp.jenkins.size(), Z0);  // the sliders' magnitudes
+    // The motion the element files read (model/elements/): x, v, a and the magnitudes of x and v.
+    const cl_F* rows[] = {out.x.data(), out.v.data(), out.a.data()};
+    const cl_F* mags[] = {xm.data(), vm.data(), nullptr};
+    const RowsMotion<cl_F, decltype(rows)> motion(rows, &mags, Z0);
     for (std::size_t j = 0; j < mp.jenkins.size(); ++j) {
         const MpModel::Link& e = mp.jenkins[j];
         cl_F& s = out.x[static_cast<std::size_t>(n_) + j];
         if (cfg_.slip[j] == 0) {
             s = slider_[j];
-            sm[j] = cln::abs(s);
         } else {  // the stretch held at slip F_s / k
-            const cl_F held = cfg_.slip[j] > 0 ? e.gap / e.k : -(e.gap / e.k);
-            s = mp.body(out.x, e.a) - mp.body(out.x, e.b) - held;
-            sm[j] = (e.a == kGround ? Z0 : xm[e.a]) + (e.b == kGround ? Z0 : xm[e.b]) + cln::abs(held);
+            const cl_F held = jenkins::held_stretch(cfg_.slip[j], e.k, e.gap);
+            s = along(Direction{e.a, e.b}, motion, 0) - held;
         }
     }
 
@@ -978,35 +984,35 @@ void MpSegment::sliders_and_switches(MpEval& out, const std::vector<cl_F>& xm, c
     out.dg.resize(ns, Z0);
     out.bound.resize(ns, Z0);
     out.scale.resize(ns, Z0);
-    auto bmag = [&](const std::vector<cl_F>& mv, int b) { return b == kGround ? Z0 : mv[b]; };
     for (std::size_t f = 0; f < ns; ++f) {
         const SwitchFunction& sf = switches_[f];
         const int e = sf.element;
         cl_F g, dg, scale;
         if (sf.kind == SwitchKind::gap) {
-            const auto& ct = mp.contacts[e];
-            g = contact_gap(mp.body(out.x, ct.a), mp.body(out.x, ct.b), ct.gap);
-            dg = mp.body(out.v, ct.a) - mp.body(out.v, ct.b);
-            scale = bmag(xm, ct.a) + bmag(xm, ct.b) + cln::abs(ct.gap);
+            const auto& ct = mp.contacts[static_cast<std::size_t>(e)];
+            const Direction d{ct.a, ct.b};
+            g = contact::gap_value(d, ct.gap, motion, 0);
+            dg = contact::gap_value(d, ct.gap, motion, 1);
+            scale = contact::gap_magnitude(d, ct.gap, motion, 0);
         } else if (sf.kind == SwitchKind::velocity) {  // w = v_e - v_partner
-            const int p = mp.partner[e];
-            g = out.v[e] - mp.body(out.v, p);
-            dg = out.a[e] - mp.body(out.a, p);
-            scale = vm[e] + bmag(vm, p);
+            const Direction d{e, mp.partner[static_cast<std::size_t>(e)]};
+            g = friction::velocity_value(d, motion, 0);
+            dg = friction::velocity_value(d, motion, 1);
+            scale = friction::velocity_magnitude(d, motion, 0);
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
             const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
-            const cl_F s = out.x[static_cast<std::size_t>(n_ + e)];
-            const cl_F force = el.k * (mp.body(out.x, el.a) - mp.body(out.x, el.b) - s);
-            const cl_F rate = el.k * (mp.body(out.v, el.a) - mp.body(out.v, el.b));
-            const bool pos = sf.kind == SwitchKind::slip_pos;
-            g = (pos ? force : -force) - el.gap;
-            dg = pos ? rate : -rate;
-            scale = el.k * (bmag(xm, el.a) + bmag(xm, el.b) + sm[static_cast<std::size_t>(e)]) + el.gap;
+            const Direction d{el.a, el.b};
+            const cl_F& s = out.x[static_cast<std::size_t>(n_ + e)];
+            const int sigma = sf.kind == SwitchKind::slip_pos ? 1 : -1;
+            g = jenkins::slip_value(sigma, el.k, el.gap, d, s, motion, 0);
+            dg = jenkins::slip_value(sigma, el.k, el.gap, d, s, motion, 1);
+            scale = jenkins::slip_magnitude(el.k, el.gap, d, s, motion, 0);
         } else if (sf.kind == SwitchKind::slip_velocity) {
             const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
-            g = mp.body(out.v, el.a) - mp.body(out.v, el.b);
-            dg = mp.body(out.a, el.a) - mp.body(out.a, el.b);
-            scale = bmag(vm, el.a) + bmag(vm, el.b);
+            const Direction d{el.a, el.b};
+            g = jenkins::slip_velocity_value(d, motion, 0);
+            dg = jenkins::slip_velocity_value(d, motion, 1);
+            scale = jenkins::slip_velocity_magnitude(d, motion, 0);
         } else {
             // A_i = -(K x)_i - (C v)_i + f_i + F_i(t), with the full K(cfg), C(cfg), f with the sliders' preload;
             // against a partner p, D_i = (m_p A_i - m_i A_p)/(m_i + m_p).
@@ -1033,10 +1039,10 @@ void MpSegment::sliders_and_switches(MpEval& out, const std::vector<cl_F>& xm, c
                 m = mp.against_partner_magnitude(e, m, mpart);
             }
             const cl_F mu_n = mp.mu_s[e] * mp.normal[e];
-            const bool pos = sf.kind == SwitchKind::release_pos;
-            g = (pos ? A : -A) - mu_n;
-            dg = pos ? dA : -dA;
-            scale = m + mu_n;
+            const int sigma = sf.kind == SwitchKind::release_pos ? 1 : -1;
+            g = friction::release_value(sigma, A, mu_n, 0);
+            dg = friction::release_value(sigma, dA, mu_n, 1);
+            scale = friction::release_magnitude(m, mu_n, 0);
         }
         out.g[f] = g;
         out.dg[f] = dg;

@@ -23,7 +23,10 @@
 #include <cln/rational.h>
 
 #include "assembly.h"
-#include "contact_gap.h"
+#include "elements/contact.h"
+#include "elements/friction.h"
+#include "elements/jenkins.h"
+#include "elements/motion.h"
 #include "error.h"
 #include "mp_segment.h"
 #include "sample_grid.h"
@@ -180,9 +183,10 @@ void gap_series(const MpModel& mp, int c, const Taylor& T, std::vector<cl_F>& d,
     const auto& l = mp.contacts[static_cast<std::size_t>(c)];
     d.clear();
     m.clear();
+    const RowsMotion<cl_F, std::vector<std::vector<cl_F>>> motion(T.x, &T.xm, mp.zero);
     for (std::size_t k = 0; k < T.x.size(); ++k) {
-        d.push_back(contact_gap(mp.body(T.x[k], l.a), mp.body(T.x[k], l.b), k == 0 ? l.gap : mp.zero));
-        m.push_back(mp.body(T.xm[k], l.a) + mp.body(T.xm[k], l.b) + (k == 0 ? cln::abs(l.gap) : mp.zero));
+        d.push_back(contact::gap_value(Direction{l.a, l.b}, l.gap, motion, static_cast<int>(k)));
+        m.push_back(contact::gap_magnitude(Direction{l.a, l.b}, l.gap, motion, static_cast<int>(k)));
     }
 }
 
@@ -277,9 +281,11 @@ public:
     }
     rules::Series<cl_F> gap_now(int c) const {
         const auto& k = mp.contacts[static_cast<std::size_t>(c)];
-        return {{mp.gap(c, x_), mp.body(v_, k.a) - mp.body(v_, k.b)},
-                {cln::abs(mp.body(x_, k.a)) + cln::abs(mp.body(x_, k.b)) + cln::abs(k.gap),
-                 cln::abs(mp.body(v_, k.a)) + cln::abs(mp.body(v_, k.b))}};
+        const Direction w{k.a, k.b};
+        const cl_F* rows[] = {x_.data(), v_.data()};
+        const RowsMotion<cl_F, decltype(rows)> m(rows, nullptr, mp.zero);  // magnitudes |x|, |v|
+        return {{contact::gap_value(w, k.gap, m, 0), contact::gap_value(w, k.gap, m, 1)},
+                {contact::gap_magnitude(w, k.gap, m, 0), contact::gap_magnitude(w, k.gap, m, 1)}};
     }
     void prepare_ties(const Configuration& cfg, const std::vector<signed char>& sgn) {
         cfg_ = cfg;
@@ -473,38 +479,40 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
             auto series = [&](std::size_t f, const Taylor& X) {
                 const int e = sw[f].element;
                 d.clear(), m.clear();
+                const RowsMotion<cl_F, std::vector<std::vector<cl_F>>> motion(X.x, &X.xm, mp.zero);
+                const auto ee = static_cast<std::size_t>(e);
+                const int orders = static_cast<int>(X.x.size());
                 if (sw[f].kind == SwitchKind::gap) {
                     gap_series(mp, e, X, d, m);
                 } else if (sw[f].kind == SwitchKind::velocity) {  // w^(k) = x_e^(k+1) - x_partner^(k+1)
-                    const int p = mp.partner[e];
-                    for (std::size_t k = 0; k + 1 < X.x.size(); ++k) {
-                        d.push_back(X.x[k + 1][e] - mp.body(X.x[k + 1], p));
-                        m.push_back(X.xm[k + 1][e] + mp.body(X.xm[k + 1], p));
+                    const Direction w{e, mp.partner[ee]};
+                    for (int k = 0; k + 1 < orders; ++k) {
+                        d.push_back(friction::velocity_value(w, motion, k));
+                        m.push_back(friction::velocity_magnitude(w, motion, k));
                     }
                 } else if (sw[f].kind == SwitchKind::slip_velocity) {  // w^(k) = x_a^(k+1) - x_b^(k+1)
-                    const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
-                    for (std::size_t k = 0; k + 1 < X.x.size(); ++k) {
-                        d.push_back(mp.body(X.x[k + 1], el.a) - mp.body(X.x[k + 1], el.b));
-                        m.push_back(mp.body(X.xm[k + 1], el.a) + mp.body(X.xm[k + 1], el.b));
+                    const Direction w{mp.jenkins[ee].a, mp.jenkins[ee].b};
+                    for (int k = 0; k + 1 < orders; ++k) {
+                        d.push_back(jenkins::slip_velocity_value(w, motion, k));
+                        m.push_back(jenkins::slip_velocity_magnitude(w, motion, k));
                     }
                 } else if (sw[f].kind == SwitchKind::slip_pos || sw[f].kind == SwitchKind::slip_neg) {
                     // +-k (x_a - x_b - s) - F_s, the slider constant while stuck.
-                    const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
-                    const cl_F c = sw[f].kind == SwitchKind::slip_pos ? el.k : -el.k;
-                    for (std::size_t k = 0; k < X.x.size(); ++k) {
-                        cl_F dk = c * (mp.body(X.x[k], el.a) - mp.body(X.x[k], el.b));
-                        cl_F mk = el.k * (mp.body(X.xm[k], el.a) + mp.body(X.xm[k], el.b));
-                        if (k == 0) {
-                            dk = dk - c * X.s[static_cast<std::size_t>(e)] - el.gap;
-                            mk = mk + el.k * cln::abs(X.s[static_cast<std::size_t>(e)]) + el.gap;
-                        }
-                        d.push_back(dk);
-                        m.push_back(mk);
+                    const MpModel::Link& el = mp.jenkins[ee];
+                    const Direction w{el.a, el.b};
+                    const int sigma = sw[f].kind == SwitchKind::slip_pos ? 1 : -1;
+                    for (int k = 0; k < orders; ++k) {
+                        d.push_back(jenkins::slip_value(sigma, el.k, el.gap, w, X.s[ee], motion, k));
+                        m.push_back(jenkins::slip_magnitude(el.k, el.gap, w, X.s[ee], motion, k));
                     }
                 } else {
                     driving_series(mp, cfg, e, t, X, d, m);
-                    if (sw[f].kind == SwitchKind::release_neg)
-                        for (cl_F& dk : d) dk = -dk;
+                    const int sigma = sw[f].kind == SwitchKind::release_pos ? 1 : -1;
+                    const cl_F limit = mp.mu_s[ee] * mp.normal[ee];
+                    for (std::size_t k = 0; k < d.size(); ++k) {
+                        d[k] = friction::release_value(sigma, d[k], limit, static_cast<int>(k));
+                        m[k] = friction::release_magnitude(m[k], limit, static_cast<int>(k));
+                    }
                 }
             };
             for (std::size_t f = 0; f < nsw; ++f) {

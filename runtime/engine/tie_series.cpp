@@ -5,6 +5,10 @@
 #include <limits>
 
 #include "assembly.h"
+#include "elements/contact.h"
+#include "elements/friction.h"
+#include "elements/jenkins.h"
+#include "elements/motion.h"
 #include "kernel_abi.h"
 
 namespace hsnc {
@@ -126,33 +130,33 @@ void switch_series(const Model& model, const Configuration& cfg, const SwitchFun
     d.assign(order, 0.0);
     mag.assign(order, 0.0);
     const int e = f.element;
+    const auto m = double_motion(series.x, &series.mag);
+    const auto ee = static_cast<std::size_t>(e);
     for (std::size_t k = 0; k < order; ++k) {
+        const int kk = static_cast<int>(k);
         if (f.kind == SwitchKind::gap) {
-            const Contact& c = model.contacts[static_cast<std::size_t>(e)];
-            d[k] = body(series.x[k], c.a) - body(series.x[k], c.b) - (k == 0 ? c.gap : 0.0);
-            mag[k] = body(series.mag[k], c.a) + body(series.mag[k], c.b) + (k == 0 ? std::fabs(c.gap) : 0.0);
+            const Contact& c = model.contacts[ee];
+            d[k] = contact::gap_value(c.direction(), c.gap, m, kk);
+            mag[k] = contact::gap_magnitude(c.direction(), c.gap, m, kk);
         } else if (f.kind == SwitchKind::velocity) {  // w = v_e - v_partner
-            const int p = model.masses[static_cast<std::size_t>(e)].partner;
-            d[k] = series.x[k + 1][static_cast<std::size_t>(e)] - body(series.x[k + 1], p);
-            mag[k] = series.mag[k + 1][static_cast<std::size_t>(e)] + body(series.mag[k + 1], p);
+            const Direction w{e, model.masses[ee].partner};
+            d[k] = friction::velocity_value(w, m, kk);
+            mag[k] = friction::velocity_magnitude(w, m, kk);
         } else if (f.kind == SwitchKind::slip_velocity) {
-            const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
-            d[k] = body(series.x[k + 1], J.a) - body(series.x[k + 1], J.b);
-            mag[k] = body(series.mag[k + 1], J.a) + body(series.mag[k + 1], J.b);
+            const Direction w = model.jenkins[ee].direction();
+            d[k] = jenkins::slip_velocity_value(w, m, kk);
+            mag[k] = jenkins::slip_velocity_magnitude(w, m, kk);
         } else if (f.kind == SwitchKind::slip_pos || f.kind == SwitchKind::slip_neg) {
-            // +-k (x_a - x_b - s) - F_s: s and F_s only in the value.
-            const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
-            const double sg = f.kind == SwitchKind::slip_pos ? 1.0 : -1.0;
-            const double s0 = k == 0 ? series.slider[static_cast<std::size_t>(e)] : 0.0;
-            const double F = k == 0 ? J.slip_force : 0.0;
-            d[k] = sg * J.k * (body(series.x[k], J.a) - body(series.x[k], J.b) - s0) - F;
-            mag[k] = J.k * (body(series.mag[k], J.a) + body(series.mag[k], J.b) + std::fabs(s0)) + F;
+            const Jenkins& J = model.jenkins[ee];
+            const double s = series.slider[ee];
+            d[k] = jenkins::slip_value(f.kind == SwitchKind::slip_pos ? 1 : -1, J.k, J.slip_force, J.direction(), s, m, kk);
+            mag[k] = jenkins::slip_magnitude(J.k, J.slip_force, J.direction(), s, m, kk);
         } else {
-            double A, m;
-            driving_derivative(model, cfg, e, t, t_lo, series, static_cast<int>(k), A, m);
-            const double limit = k == 0 ? model.masses[static_cast<std::size_t>(e)].mu_s * model.normal_force(e) : 0.0;
-            d[k] = (f.kind == SwitchKind::release_pos ? A : -A) - limit;
-            mag[k] = m + limit;
+            double A, Am;
+            driving_derivative(model, cfg, e, t, t_lo, series, kk, A, Am);
+            const double limit = model.masses[ee].mu_s * model.normal_force(ee);
+            d[k] = friction::release_value(f.kind == SwitchKind::release_pos ? 1 : -1, A, limit, kk);
+            mag[k] = friction::release_magnitude(Am, limit, kk);
         }
     }
 }
@@ -170,13 +174,15 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
                       const double* v) {
     auto at = [](const double* y, int b) { return b == kGround ? 0.0 : std::fabs(y[b]); };
     const int e = f.element;
+    const double* rows[] = {x, v};
+    const auto m = double_motion(rows);  // the magnitudes |x|, |v|
     if (f.kind == SwitchKind::gap) {
         const Contact& c = model.contacts[static_cast<std::size_t>(e)];
-        return at(v, c.a) + at(v, c.b);
+        return contact::gap_magnitude(c.direction(), c.gap, m, 1);
     }
     if (f.kind == SwitchKind::slip_pos || f.kind == SwitchKind::slip_neg) {
         const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
-        return J.k * (at(v, J.a) + at(v, J.b));
+        return jenkins::slip_magnitude(J.k, J.slip_force, J.direction(), 0.0, m, 1);
     }
     // The magnitude of the terms of x_i'' (0 for a stuck mass): A_i's terms and the friction force.
     auto accel_magnitude = [&](int i) {

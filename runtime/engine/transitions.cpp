@@ -5,6 +5,10 @@
 #include <limits>
 
 #include "assembly.h"
+#include "elements/contact.h"
+#include "elements/friction.h"
+#include "elements/jenkins.h"
+#include "elements/motion.h"
 #include "tie_series.h"
 
 namespace hsnc {
@@ -31,7 +35,10 @@ public:
     bool has_friction(int i) const { return model_.masses[i].has_friction; }
     // A friction acts on w = v_i - v_partner (the partner may be the ground).
     int partner(int i) const { return model_.masses[static_cast<std::size_t>(i)].partner; }
-    int velocity_sign(int i) const { return sign(v_[i] - body(v_, partner(i))); }
+    int velocity_sign(int i) const {
+        const double* rows[] = {x_, v_};
+        return sign(friction::velocity_value(Direction{i, partner(i)}, double_motion(rows), 0));
+    }
     void stop(int i) { v_[i] = body(v_, partner(i)); }
     double force(const Configuration& cfg, int i) const { return driving_force(model_, cfg, i, t_, x_, v_, elements_); }
     double static_limit(int i) const { return model_.masses[i].mu_s * model_.normal_force(i); }
@@ -59,17 +66,20 @@ public:
         return s;
     }
     rules::Series<double> gap_now(int c) const {
-        const Contact& k = model_.contacts[c];
-        return {{gap(model_, c, x_), gap_rate(model_, c, v_)},
-                {std::fabs(body(x_, k.a)) + std::fabs(body(x_, k.b)) + std::fabs(k.gap),
-                 std::fabs(body(v_, k.a)) + std::fabs(body(v_, k.b))}};
+        const Contact& k = model_.contacts[static_cast<std::size_t>(c)];
+        const double* rows[] = {x_, v_};
+        const auto m = double_motion(rows);  // magnitudes |x|, |v|
+        return {{contact::gap_value(k.direction(), k.gap, m, 0), contact::gap_value(k.direction(), k.gap, m, 1)},
+                {contact::gap_magnitude(k.direction(), k.gap, m, 0), contact::gap_magnitude(k.direction(), k.gap, m, 1)}};
     }
     std::size_t jenkins() const { return model_.jenkins.size(); }
     bool slips_on(const Configuration& cfg, int j) const {
         if (!a_) return false;
         const Jenkins& e = model_.jenkins[static_cast<std::size_t>(j)];
-        const double w_rate = body(a_, e.a) - body(a_, e.b);
-        const double mag = std::fabs(body(a_, e.a)) + std::fabs(body(a_, e.b));
+        const double* rows[] = {x_, v_, a_};
+        const auto m = double_motion(rows);  // magnitudes |x|, |v|, |a|
+        const double w_rate = jenkins::slip_velocity_value(e.direction(), m, 1);
+        const double mag = jenkins::slip_velocity_magnitude(e.direction(), m, 1);
         return !negligible(w_rate, mag) && sign(w_rate) == cfg.slip[static_cast<std::size_t>(j)];
     }
     void prepare_ties(const Configuration& cfg, const std::vector<signed char>& sgn) {

@@ -29,7 +29,7 @@ ExponentialSolver::ExponentialSolver(const Model& model, const Configuration& cf
     z0_ = absz0_ = Eigen::VectorXd::Zero(m_);
     bound_row_ = Eigen::VectorXd::Zero(ns_);
     x_fix_ = fseg_ = Eigen::VectorXd::Zero(n_);
-    slider_ = Eigen::VectorXd::Zero(t_.jenkins_k.size());
+    slider_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(t_.jenkins.size()));
     theta_ = sn_ = cs_ = Eigen::VectorXd::Zero(nh_);
     z_ = zmag_ = Eigen::VectorXd::Zero(m_);
     xmag_ = vmag_ = Eigen::VectorXd::Zero(n_);
@@ -71,7 +71,7 @@ void ExponentialSolver::setup(double t0, double t0_lo, const double* x0, const d
 
     // Each switch function's linear part L_f over z: g(e_k) - g(0), the affine
     // function evaluated at the unit vectors (the forcing read from z).
-    std::vector<double> x(t_.jenkins_k.size() + static_cast<std::size_t>(n_)), v(n_), a(n_), g(ns_), dg(ns_), bnd(ns_),
+    std::vector<double> x(t_.jenkins.size() + static_cast<std::size_t>(n_)), v(n_), a(n_), g(ns_), dg(ns_), bnd(ns_),
         sc(ns_);
     const SegmentEval out{x.data(), v.data(), a.data(), g.data(), dg.data(), bnd.data(), sc.data()};
     auto values = [&](const Eigen::VectorXd& z, Eigen::VectorXd& gz) {

@@ -218,14 +218,14 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
             if (a != kGround && slot[static_cast<std::size_t>(a)] >= 0) L(f, offset + slot[static_cast<std::size_t>(a)]) += w;
             if (b != kGround && slot[static_cast<std::size_t>(b)] >= 0) L(f, offset + slot[static_cast<std::size_t>(b)]) -= w;
         };
+        const auto ee = static_cast<std::size_t>(e);
         if (sf.kind == SwitchKind::gap) {
-            difference(t_.contact_a[static_cast<std::size_t>(e)], t_.contact_b[static_cast<std::size_t>(e)], 0, 1.0);
+            difference(t_.contacts[ee].a, t_.contacts[ee].b, 0, 1.0);
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
-            const double k = t_.jenkins_k(e);
-            difference(t_.jenkins_a[static_cast<std::size_t>(e)], t_.jenkins_b[static_cast<std::size_t>(e)], 0,
-                       sf.kind == SwitchKind::slip_pos ? k : -k);
+            const Jenkins& j = t_.jenkins[ee];
+            difference(j.a, j.b, 0, sf.kind == SwitchKind::slip_pos ? j.k : -j.k);
         } else if (sf.kind == SwitchKind::slip_velocity) {
-            difference(t_.jenkins_a[static_cast<std::size_t>(e)], t_.jenkins_b[static_cast<std::size_t>(e)], nf_, 1.0);
+            difference(t_.jenkins[ee].a, t_.jenkins[ee].b, nf_, 1.0);
         } else if (sf.kind == SwitchKind::velocity) {
             L(f, nf_ + slot[static_cast<std::size_t>(e)]) = 1.0;
         } else {
@@ -280,7 +280,7 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
         }
 
     x_fix_ = fseg_ = Eigen::VectorXd::Zero(n_);
-    slider_ = Eigen::VectorXd::Zero(t_.jenkins_k.size());
+    slider_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(t_.jenkins.size()));
     theta_ = Eigen::VectorXd::Zero(nh_);
     e_theta_ = Eigen::VectorXcd::Zero(nh_);
     eta0_ = beta0_ = Eigen::VectorXcd::Zero(m);

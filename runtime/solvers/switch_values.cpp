@@ -24,22 +24,8 @@ ConfigurationTerms configuration_terms(const Model& model, const Configuration& 
     t.K = stiffness_matrix(model, cfg);
     t.C = damping_matrix(model, cfg);
     t.f_const = constant_force(model, cfg);
-    t.contact_gap.resize(static_cast<Eigen::Index>(model.contacts.size()));
-    for (std::size_t c = 0; c < model.contacts.size(); ++c) {
-        t.contact_a.push_back(model.contacts[c].a);
-        t.contact_b.push_back(model.contacts[c].b);
-        t.contact_gap(static_cast<Eigen::Index>(c)) = model.contacts[c].gap;
-    }
-    const Eigen::Index nj = static_cast<Eigen::Index>(model.jenkins.size());
-    t.jenkins_k.resize(nj);
-    t.jenkins_fs.resize(nj);
-    for (Eigen::Index j = 0; j < nj; ++j) {
-        const Jenkins& e = model.jenkins[static_cast<std::size_t>(j)];
-        t.jenkins_a.push_back(e.a);
-        t.jenkins_b.push_back(e.b);
-        t.jenkins_k(j) = e.k;
-        t.jenkins_fs(j) = e.slip_force;
-    }
+    t.contacts = model.contacts;
+    t.jenkins = model.jenkins;
     std::vector<const Harmonic*> dyn;
     for (const Harmonic& hm : model.forcing) {
         if (hm.omega == 0.0) {

@@ -22,6 +22,10 @@
 
 #include "assembly.h"
 #include "configuration.h"
+#include "elements/contact.h"
+#include "elements/friction.h"
+#include "elements/jenkins.h"
+#include "elements/motion.h"
 #include "model.h"
 #include "segment_solver.h"
 #include "switch_function.h"
@@ -40,12 +44,10 @@ struct ConfigurationTerms {
     std::vector<int> partner;  ///< per mass: what its friction acts against (model.h Mass::partner)
     Eigen::MatrixXd K, C;
     Eigen::VectorXd f_const;
-    std::vector<int> contact_a, contact_b;
-    Eigen::VectorXd contact_gap;
+    std::vector<Contact> contacts;
     Eigen::VectorXd h_omega, h_phase;
     Eigen::MatrixXd h_amp;  ///< n x nh
-    std::vector<int> jenkins_a, jenkins_b;
-    Eigen::VectorXd jenkins_k, jenkins_fs;
+    std::vector<Jenkins> jenkins;
 };
 
 ConfigurationTerms configuration_terms(const Model& model, const Configuration& cfg);
@@ -60,9 +62,10 @@ inline void segment_force(const ConfigurationTerms& in, const Configuration& cfg
         if (cfg.slip[j] != 0) continue;
         const Eigen::Index jj = static_cast<Eigen::Index>(j);
         slider(jj) = x0[n + j];
-        const double p = in.jenkins_k(jj) * slider(jj);
-        if (in.jenkins_a[j] != kGround) f(in.jenkins_a[j]) += p;
-        if (in.jenkins_b[j] != kGround) f(in.jenkins_b[j]) -= p;
+        const Jenkins& e = in.jenkins[j];
+        const double p = e.k * slider(jj);
+        if (e.a != kGround) f(e.a) += p;
+        if (e.b != kGround) f(e.b) -= p;
     }
 }
 
@@ -89,9 +92,9 @@ inline void write_sliders(const ConfigurationTerms& in, const Configuration& cfg
             out.x[n + j] = slider(jj);
             continue;
         }
-        const int a = in.jenkins_a[j], b = in.jenkins_b[j];
-        out.x[n + j] = (a == kGround ? 0.0 : out.x[a]) - (b == kGround ? 0.0 : out.x[b]) -
-                       static_cast<double>(cfg.slip[j]) * (in.jenkins_fs(jj) / in.jenkins_k(jj));
+        const Jenkins& e = in.jenkins[j];
+        const double* rows[] = {out.x};
+        out.x[n + j] = along(e.direction(), double_motion(rows), 0) - jenkins::held_stretch(cfg.slip[j], e.k, e.slip_force);
     }
 }
 
@@ -122,55 +125,58 @@ inline std::complex<double> expm1c(std::complex<double> w) {
 inline void switch_value(const SwitchFunction& sf, const ConfigurationTerms& in, const Eigen::VectorXd& f,
                          const SegmentEval& out, const Eigen::VectorXd& xmag, const Eigen::VectorXd& vmag,
                          const Eigen::VectorXd& sn, const Eigen::VectorXd& cs, double& g, double& dg, double& scale) {
-    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
-    auto body_mag = [](const Eigen::VectorXd& m, int b) { return b == kGround ? 0.0 : m(b); };
+    // The motion: x, v, a and the magnitudes of x and v (element files, model/elements/).
+    const double* rows[] = {out.x, out.v, out.a};
+    const double* mags[] = {xmag.data(), vmag.data(), nullptr};
+    const auto m = double_motion(rows, &mags);
     const int e = sf.element;
+    const auto ee = static_cast<std::size_t>(e);
     if (sf.kind == SwitchKind::gap) {
-        const int a = in.contact_a[static_cast<std::size_t>(e)], b = in.contact_b[static_cast<std::size_t>(e)];
-        g = body(out.x, a) - body(out.x, b) - in.contact_gap(e);
-        dg = body(out.v, a) - body(out.v, b);
-        scale = body_mag(xmag, a) + body_mag(xmag, b) + std::abs(in.contact_gap(e));
+        const Contact& c = in.contacts[ee];
+        g = contact::gap_value(c.direction(), c.gap, m, 0);
+        dg = contact::gap_value(c.direction(), c.gap, m, 1);
+        scale = contact::gap_magnitude(c.direction(), c.gap, m, 0);
         return;
     }
     if (sf.kind == SwitchKind::velocity) {  // w = v_e - v_partner
-        const int p = in.partner[static_cast<std::size_t>(e)];
-        g = out.v[e] - body(out.v, p);
-        dg = out.a[e] - body(out.a, p);
-        scale = vmag(e) + body_mag(vmag, p);
+        const Direction d{e, in.partner[ee]};
+        g = friction::velocity_value(d, m, 0);
+        dg = friction::velocity_value(d, m, 1);
+        scale = friction::velocity_magnitude(d, m, 0);
         return;
     }
     if (sf.kind == SwitchKind::slip_velocity) {
-        const int a = in.jenkins_a[static_cast<std::size_t>(e)], b = in.jenkins_b[static_cast<std::size_t>(e)];
-        g = body(out.v, a) - body(out.v, b);
-        dg = body(out.a, a) - body(out.a, b);
-        scale = body_mag(vmag, a) + body_mag(vmag, b);
+        const Direction d = in.jenkins[ee].direction();
+        g = jenkins::slip_velocity_value(d, m, 0);
+        dg = jenkins::slip_velocity_value(d, m, 1);
+        scale = jenkins::slip_velocity_magnitude(d, m, 0);
         return;
     }
     if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
-        const int a = in.jenkins_a[static_cast<std::size_t>(e)], b = in.jenkins_b[static_cast<std::size_t>(e)];
-        const double s = out.x[in.mass.size() + e], k = in.jenkins_k(e), F = in.jenkins_fs(e);
-        const double sg = sf.kind == SwitchKind::slip_pos ? 1.0 : -1.0;
-        g = sg * k * (body(out.x, a) - body(out.x, b) - s) - F;
-        dg = sg * k * (body(out.v, a) - body(out.v, b));
-        scale = k * (body_mag(xmag, a) + body_mag(xmag, b) + std::abs(s)) + F;
+        const Jenkins& j = in.jenkins[ee];
+        const double s = out.x[static_cast<std::size_t>(in.mass.size()) + ee];
+        const int sigma = sf.kind == SwitchKind::slip_pos ? 1 : -1;
+        g = jenkins::slip_value(sigma, j.k, j.slip_force, j.direction(), s, m, 0);
+        dg = jenkins::slip_value(sigma, j.k, j.slip_force, j.direction(), s, m, 1);
+        scale = jenkins::slip_magnitude(j.k, j.slip_force, j.direction(), s, m, 0);
         return;
     }
     // A_i, A_i' and the size of A_i's terms.
-    auto force = [&](int i, double& A, double& dA, double& m) {
-        A = f(i), dA = 0.0, m = std::abs(f(i));
+    auto force = [&](int i, double& A, double& dA, double& size) {
+        A = f(i), dA = 0.0, size = std::abs(f(i));
         for (Eigen::Index k = 0; k < in.K.cols(); ++k) {
             A -= in.K(i, k) * out.x[k] + in.C(i, k) * out.v[k];
             dA -= in.K(i, k) * out.v[k] + in.C(i, k) * out.a[k];
-            m += std::abs(in.K(i, k)) * xmag(k) + std::abs(in.C(i, k)) * vmag(k);
+            size += std::abs(in.K(i, k)) * xmag(k) + std::abs(in.C(i, k)) * vmag(k);
         }
         for (Eigen::Index h = 0; h < in.h_omega.size(); ++h) {
             A += in.h_amp(i, h) * sn(h);
             dA += in.h_amp(i, h) * in.h_omega(h) * cs(h);
-            m += std::abs(in.h_amp(i, h) * sn(h));
+            size += std::abs(in.h_amp(i, h) * sn(h));
         }
     };
-    double A, dA, m;
-    force(e, A, dA, m);
+    double A, dA, mag;
+    force(e, A, dA, mag);
     if (const int p = in.partner[static_cast<std::size_t>(e)]; p != kGround) {
         // Against a partner: D = (m_p A_e - m_e A_p)/(m_e + m_p) (assembly.h driving_force).
         double Ap, dAp, mp_mag;
@@ -178,13 +184,13 @@ inline void switch_value(const SwitchFunction& sf, const ConfigurationTerms& in,
         const double me = in.mass(e), mp = in.mass(p);
         A = against_partner(me, mp, A, Ap);
         dA = against_partner(me, mp, dA, dAp);
-        m = against_partner_magnitude(me, mp, m, mp_mag);
+        mag = against_partner_magnitude(me, mp, mag, mp_mag);
     }
-    const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
+    const int sigma = sf.kind == SwitchKind::release_pos ? 1 : -1;
     const double mu_n = in.mu_s(e) * in.normal(e);
-    g = sg * A - mu_n;
-    dg = sg * dA;
-    scale = m + mu_n;
+    g = friction::release_value(sigma, A, mu_n, 0);
+    dg = friction::release_value(sigma, dA, mu_n, 1);
+    scale = friction::release_magnitude(mag, mu_n, 0);
 }
 
 }  // namespace hsnc

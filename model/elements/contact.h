@@ -1,0 +1,50 @@
+// hsnc -- the contact element (interface.md, [[contact]]): a unilateral
+// spring of stiffness k with a gap, along its direction u (direction.h).
+//
+//   G = u - gap                 the gap function; the contact is closed while G >= 0
+//   closed: force -k G along w  (K += k w w^T, the preload +k gap w in the constant
+//                                force, Rayleigh damping beta k w w^T: assembly.h)
+//   open:   no force
+//   switch: G itself (SwitchKind::gap); a crossing toggles the state, a touch
+//           (G = G' = 0) is decided by the first non-zero derivative
+//           (runtime/engine/transition_rules.h tied_contact_state)
+//
+// The functions below are the only place G and its derivatives are written:
+// the Eigen solvers, the event rules, the tie series, the baselines, the
+// 30-digit reference and the symbolic derivation instantiate them.
+#pragma once
+
+#include <string>
+
+#include "direction.h"
+
+namespace hsnc {
+
+struct Contact {
+    std::string name;
+    int a = kGround;
+    int b = kGround;
+    double gap = 0.0;  ///< closed while x[a] - x[b] >= gap
+    double k = 0.0;    ///< contact stiffness, > 0
+
+    Direction direction() const { return {a, b}; }
+};
+
+namespace contact {
+
+/// G^(k) = u^(k) - [k = 0] gap.
+template <class M, class T>
+auto gap_value(const Direction& d, const T& gap, const M& m, int k) {
+    auto u = along(d, m, k);
+    return k == 0 ? u - gap : u;
+}
+
+/// The magnitude of G^(k)'s terms.
+template <class M, class T>
+auto gap_magnitude(const Direction& d, const T& gap, const M& m, int k) {
+    auto u = along_magnitude(d, m, k);
+    return k == 0 ? u + m.abs(gap) : u;
+}
+
+}  // namespace contact
+}  // namespace hsnc

@@ -1,0 +1,61 @@
+// hsnc -- Coulomb friction (interface.md sections 2 and 5): on a mass
+// against the ground, or a [[friction]] element against another body, along
+// the relative velocity u' of its direction (direction.h; today w = e_i -
+// e_partner, Mass::partner in model.h).
+//
+//   sliding:  the force -mu_k N sgn(u') along w; switch velocity u'
+//   stuck:    u' = 0 held; it releases when the force D it must hold (A_i
+//             against the ground, assembly.h driving_force) exceeds mu_s N:
+//             switches release_pos  D - mu_s N,  release_neg  -D - mu_s N
+//             (two smooth functions, so that root finding never meets a kink)
+//   at a stop: the stick rule (runtime/engine/transition_rules.h stick_rule)
+//
+// The functions below are the only place these switch functions are
+// written: every back end instantiates them with its own scalar and motion.
+#pragma once
+
+#include <string>
+
+#include "direction.h"
+
+namespace hsnc {
+
+/// A [[friction]] element (interface.md section 5): Coulomb friction on the
+/// relative velocity v[a] - v[b] with a constant normal force. It acts through
+/// the equivalent coefficients of Mass (model.h Mass::friction).
+struct FrictionElement {
+    std::string name;
+    int a = kGround;
+    int b = kGround;
+    double mu_k = 0.0;
+    double mu_s = 0.0;
+    double normal = 0.0;  ///< N > 0
+};
+
+namespace friction {
+
+/// d^k/dt^k of the relative velocity u' while sliding (SwitchKind::velocity).
+template <class M>
+auto velocity_value(const Direction& d, const M& m, int k) {
+    return along(d, m, k + 1);
+}
+template <class M>
+auto velocity_magnitude(const Direction& d, const M& m, int k) {
+    return along_magnitude(d, m, k + 1);
+}
+
+/// d^k/dt^k of sigma D - mu_s N while stuck (sigma = +1 release_pos, -1
+/// release_neg), from D^(k) and the static limit mu_s N.
+template <class T>
+T release_value(int sigma, const T& D, const T& limit, int k) {
+    const T s = sigma > 0 ? D : -D;
+    return k == 0 ? s - limit : s;
+}
+/// Its magnitude, from that of D^(k)'s terms.
+template <class T>
+T release_magnitude(const T& D_magnitude, const T& limit, int k) {
+    return k == 0 ? D_magnitude + limit : D_magnitude;
+}
+
+}  // namespace friction
+}  // namespace hsnc

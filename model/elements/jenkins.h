@@ -1,0 +1,74 @@
+// hsnc -- the Jenkins element (interface.md section 5): a spring k in series
+// with a massless slider that slips at slip_force F_s, along its direction u
+// (direction.h). The slider position s is state (the engine carries it after
+// the masses' positions, Model::state_size); the stretch is e = u - s.
+//
+//   stuck:     force -k e along w (a link like a closed contact whose gap is s)
+//              switches slip_pos  k e - F_s,  slip_neg  -k e - F_s
+//   slipping:  the constant force -sigma F_s along w, sigma = the sign of the
+//              stretch, held at e = sigma F_s / k (s follows u)
+//              switch slip_velocity  u' (it sticks where u' reaches 0 and the
+//              relative acceleration does not keep the slip's sign)
+//
+// The functions below are the only place these are written: every back end
+// instantiates them with its own scalar and motion (direction.h).
+#pragma once
+
+#include <string>
+
+#include "direction.h"
+
+namespace hsnc {
+
+struct Jenkins {
+    std::string name;
+    int a = kGround;
+    int b = kGround;
+    double k = 0.0;           ///< > 0
+    double slip_force = 0.0;  ///< F_s > 0
+
+    Direction direction() const { return {a, b}; }
+};
+
+namespace jenkins {
+
+/// d^k/dt^k of sigma k e - F_s (sigma = +1 slip_pos, -1 slip_neg) while stuck:
+/// sigma k (u^(k) - [k = 0] s) - [k = 0] F_s.
+template <class M, class T>
+auto slip_value(int sigma, const T& k, const T& slip_force, const Direction& d, const T& s, const M& m, int order) {
+    const T ks = sigma > 0 ? k : -k;
+    auto u = along(d, m, order);
+    return order == 0 ? ks * (u - s) - slip_force : ks * u;
+}
+
+/// The magnitude of slip_value's terms: k (|u^(k)| + [k = 0] |s|) + [k = 0] F_s.
+template <class M, class T>
+auto slip_magnitude(const T& k, const T& slip_force, const Direction& d, const T& s, const M& m, int order) {
+    auto u = along_magnitude(d, m, order);
+    return order == 0 ? k * (u + m.abs(s)) + slip_force : k * u;
+}
+
+/// d^k/dt^k of the relative velocity u' while slipping (slip_velocity).
+template <class M>
+auto slip_velocity_value(const Direction& d, const M& m, int k) {
+    return along(d, m, k + 1);
+}
+template <class M>
+auto slip_velocity_magnitude(const Direction& d, const M& m, int k) {
+    return along_magnitude(d, m, k + 1);
+}
+
+/// The stretch held while slipping with sign `slip`: slip F_s / k.
+template <class T>
+T held_stretch(int slip, const T& k, const T& slip_force) {
+    return slip > 0 ? slip_force / k : -(slip_force / k);
+}
+
+/// The constant force on body a (its opposite on b) while slipping: -slip F_s.
+template <class T>
+T slipping_force(int slip, const T& slip_force) {
+    return slip > 0 ? -slip_force : slip_force;
+}
+
+}  // namespace jenkins
+}  // namespace hsnc
