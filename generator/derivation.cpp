@@ -13,6 +13,7 @@
 #include "elements/friction.h"
 #include "elements/jenkins.h"
 #include "elements/motion.h"
+#include "elements/switch_derivative.h"
 #include "error.h"
 #include "free_components.h"
 #include "mp_complex_eigen.h"
@@ -706,20 +707,12 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
                                           : along(e.direction(), motion, 0) -
                                                 jenkins::held_stretch(d.cfg.slip[j], ex(exact(e.k)), ex(exact(e.slip_force)));
     }
+    const auto elements = model_elements<ex>(model, [](double v) { return ex(exact(v)); },
+                                             [&](int j) { return out.x[n + static_cast<std::size_t>(j)]; });
     for (const SwitchFunction& sf : d.switches) {
         ex g;
-        const auto ee = static_cast<std::size_t>(sf.element);
-        if (sf.kind == SwitchKind::gap) {
-            const Contact& c = model.contacts[ee];
-            g = contact::gap_value(c.direction(), ex(exact(c.gap)), motion, 0);
-        } else if (sf.kind == SwitchKind::velocity) {  // w = v_i - v_partner
-            g = friction::velocity_value(Direction{sf.element, model.masses[ee].partner}, motion, 0);
-        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
-            const Jenkins& e = model.jenkins[ee];
-            g = jenkins::slip_value(sf.kind == SwitchKind::slip_pos ? 1 : -1, ex(exact(e.k)), ex(exact(e.slip_force)),
-                                    e.direction(), out.x[n + ee], motion, 0);
-        } else if (sf.kind == SwitchKind::slip_velocity) {
-            g = jenkins::slip_velocity_value(model.jenkins[ee].direction(), motion, 0);
+        if (!is_release(sf.kind)) {
+            g = switch_derivative(elements, sf, motion, 0);
         } else {
             // A_i = -K x - C v + f_const + the stuck sliders' preload + forcing (interface.md section 2);
             // against a partner p, the force that holds the pair together,

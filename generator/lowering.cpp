@@ -1,6 +1,8 @@
 #include "lowering.h"
 
 #include <cmath>
+#include <functional>
+#include <stdexcept>
 #include <initializer_list>
 #include <map>
 #include <memory>
@@ -9,6 +11,10 @@
 #include <vector>
 
 #include "double_literal.h"
+#include "elements/contact.h"
+#include "elements/friction.h"
+#include "elements/jenkins.h"
+#include "elements/switch_derivative.h"
 #include "ginac_lock.h"  // format_double, for comments
 
 namespace hsnc {
@@ -59,6 +65,73 @@ private:
     ProgramTerm inline_[kInline];
     std::vector<ProgramTerm> heap_;  // every term once there are more than kInline
     std::size_t n_ = 0;
+};
+
+/// A linear combination of registers as a value (register 0 is the constant
+/// 1.0), so that the formulas of the element files (model/elements/) build
+/// the kernels' switch functions: u - gap, k (u - s) - F_s, ... term by term,
+/// in the order they write them. A product needs one constant factor.
+class LinValue {
+public:
+    LinValue() = default;
+    LinValue(double c, std::uint32_t reg) { lin_.add(c, reg); }
+    static LinValue constant(double c) { return {c, kOne}; }
+    const Lin& lin() const { return lin_; }
+
+    friend LinValue operator+(const LinValue& a, const LinValue& b) { return a.plus(b, 1.0); }
+    friend LinValue operator-(const LinValue& a, const LinValue& b) { return a.plus(b, -1.0); }
+    friend LinValue operator-(const LinValue& a) { return LinValue().plus(a, -1.0); }
+    friend LinValue operator*(const LinValue& a, const LinValue& b) {
+        return a.is_constant() ? LinValue().plus(b, a.value()) : LinValue().plus(a, b.constant_factor());
+    }
+    bool is_constant() const { return lin_.size() == 0 || (lin_.size() == 1 && lin_.begin()->reg == kOne); }
+    double value() const { return lin_.size() == 0 ? 0.0 : lin_.begin()->c; }
+
+    static constexpr std::uint32_t kOne = 0;
+
+private:
+    LinValue plus(const LinValue& b, double factor) const {
+        LinValue r = *this;
+        for (const ProgramTerm& t : b.lin_) r.lin_.add(factor * t.c, t.reg);
+        return r;
+    }
+    double constant_factor() const {
+        if (!is_constant()) throw std::logic_error("LinValue: a product of two non-constant combinations");
+        return value();
+    }
+    Lin lin_;
+};
+
+/// The kernels' motion for the element files (model/elements/direction.h):
+/// x, v, a of every body as the registers of the eval body, the magnitudes
+/// of x and v as the registers that hold them; |s| of a slider is its
+/// magnitude register.
+class LinMotion {
+public:
+    using Reg = std::function<std::uint32_t(int)>;
+    LinMotion(Reg x, Reg v, Reg a, const std::vector<std::uint32_t>& mx, const std::vector<std::uint32_t>& mv,
+              std::map<std::uint32_t, std::uint32_t> magnitude_of)
+        : x_{std::move(x), std::move(v), std::move(a)}, mx_(mx), mv_(mv), magnitude_of_(std::move(magnitude_of)) {}
+    LinValue x(int k, int body) const {
+        return body == kGround ? LinValue() : LinValue(1.0, x_[static_cast<std::size_t>(k)](body));
+    }
+    LinValue mag(int k, int body) const {
+        if (body == kGround) return {};
+        return {1.0, (k == 0 ? mx_ : mv_)[static_cast<std::size_t>(body)]};
+    }
+    LinValue abs(const LinValue& v) const {
+        if (v.is_constant()) return LinValue::constant(std::fabs(v.value()));
+        const auto it = magnitude_of_.find(v.lin().begin()->reg);
+        if (v.lin().size() != 1 || v.lin().begin()->c != 1.0 || it == magnitude_of_.end())
+            throw std::logic_error("LinMotion: the magnitude of a combination that is not a state register");
+        return {1.0, it->second};
+    }
+
+private:
+    Reg x_[3];
+    const std::vector<std::uint32_t>& mx_;
+    const std::vector<std::uint32_t>& mv_;
+    std::map<std::uint32_t, std::uint32_t> magnitude_of_;
 };
 
 /// Appends registers and instructions to one body of a program.
@@ -662,6 +735,7 @@ Program lower(const Derivation& d, ProgramNames names) {
     // Jenkins sliders: fixed while stuck; while slipping the stretch is held,
     // s = x[a] - x[b] - slip F_s/k. Their magnitudes for the switch functions' scale.
     std::vector<std::uint32_t> mxs(nj);
+    const LinMotion state(X, Vr, Ar, mx, mv, {});  // the element files' motion (model/elements/)
     for (std::size_t j = 0; j < nj; ++j) {
         const Jenkins& el = model.jenkins[j];
         const std::uint32_t out = X(static_cast<int>(n + j));
@@ -673,15 +747,17 @@ Program lower(const Derivation& d, ProgramNames names) {
             e.unary(ProgramOp::abs, mxs[j], sc);
             continue;
         }
-        const double held = static_cast<double>(d.cfg.slip[j]) * (el.slip_force / el.k);
-        Lin sl, ml;
-        if (el.a != kGround) sl.add(1.0, X(el.a)), ml.add(1.0, mx[static_cast<std::size_t>(el.a)]);
-        if (el.b != kGround) sl.add(-1.0, X(el.b)), ml.add(1.0, mx[static_cast<std::size_t>(el.b)]);
-        sl.add(-held, ONE);
-        ml.add(std::fabs(held), ONE);
-        e.annotate(e.lin(out, sl), comment, el.name + (d.cfg.slip[j] > 0 ? " (slipping, +)" : " (slipping, -)"));
-        e.lin(mxs[j], ml);
+        const LinValue held = LinValue::constant(jenkins::held_stretch(d.cfg.slip[j], el.k, el.slip_force));
+        const LinValue sl = along(el.direction(), state, 0) - held;
+        const LinValue ml = along_magnitude(el.direction(), state, 0) + state.abs(held);
+        e.annotate(e.lin(out, sl.lin()), comment, el.name + (d.cfg.slip[j] > 0 ? " (slipping, +)" : " (slipping, -)"));
+        e.lin(mxs[j], ml.lin());
     }
+    std::map<std::uint32_t, std::uint32_t> slider_magnitude;  // |s_j| is the register mxs[j]
+    for (std::size_t j = 0; j < nj; ++j) slider_magnitude[X(static_cast<int>(n + j))] = mxs[j];
+    const LinMotion motion(X, Vr, Ar, mx, mv, slider_magnitude);
+    const auto elements = model_elements<LinValue>(model, LinValue::constant,
+                                                   [&](int j) { return LinValue(1.0, X(static_cast<int>(n) + j)); });
 
     // Switch functions.
     auto V = [&](int mass, std::size_t j) -> DD {  // V_ij, 0 for stuck masses and ground
@@ -791,22 +867,15 @@ Program lower(const Derivation& d, ProgramNames names) {
         std::vector<DD> al(nm, 0), be(nm, 0);
         std::vector<DD> Gs(nh, 0), Gc(nh, 0);
         Lin g, dg, sc;
+        if (!is_release(sf.kind)) {  // the element's own file says what g is (model/elements/)
+            g = switch_derivative(elements, sf, motion, 0).lin();
+            dg = switch_derivative(elements, sf, motion, 1).lin();
+            sc = switch_magnitude(elements, sf, motion, 0).lin();
+        }
         if (sf.kind == SwitchKind::gap) {
             const Contact& ct = model.contacts[sf.element];
             if (named) comment += "g_" + F + ": gap of contact " + ct.name + " = x[" + body_name(model, ct.a) + "] - x[" +
                        body_name(model, ct.b) + "] - " + format_double(ct.gap);
-            if (ct.a != kGround) {
-                g.add(1.0, X(ct.a));
-                dg.add(1.0, Vr(ct.a));
-                sc.add(1.0, mx[ct.a]);
-            }
-            if (ct.b != kGround) {
-                g.add(-1.0, X(ct.b));
-                dg.add(-1.0, Vr(ct.b));
-                sc.add(1.0, mx[ct.b]);
-            }
-            g.add(-ct.gap, ONE);
-            sc.add(std::fabs(ct.gap), ONE);
             each_mode_of({ct.a, ct.b}, [&](std::size_t j) { al[j] = V(ct.a, j) - V(ct.b, j); });
             for (std::size_t h = 0; h < nh; ++h) {
                 Gs[h] = harmonic_x(h, ct.a, true) - harmonic_x(h, ct.b, true);
@@ -815,9 +884,6 @@ Program lower(const Derivation& d, ProgramNames names) {
         } else if (sf.kind == SwitchKind::velocity && model.masses[static_cast<std::size_t>(sf.element)].partner == kGround) {
             const int i = sf.element;
             if (named) comment += "g_" + F + ": velocity of " + model.masses[i].name + " (sliding)";
-            g.add(1.0, Vr(i));
-            dg.add(1.0, Ar(i));
-            sc.add(1.0, mv[i]);
             const int r = free_of[i];
             for (std::size_t j : row_modes[static_cast<std::size_t>(r)]) be[j] = d.modes[j].v[r];
             for (std::size_t h = 0; h < nh; ++h) {
@@ -828,9 +894,6 @@ Program lower(const Derivation& d, ProgramNames names) {
             // Sliding on its partner: w = v_i - v_p.
             const int i = sf.element, p = partner_of(i);
             if (named) comment += "g_" + F + ": velocity of " + model.masses[i].name + " on " + model.masses[p].name + " (sliding)";
-            g.add(1.0, Vr(i)).add(-1.0, Vr(p));
-            dg.add(1.0, Ar(i)).add(-1.0, Ar(p));
-            sc.add(1.0, mv[i]).add(1.0, mv[p]);
             each_mode_of({i, p}, [&](std::size_t j) { be[j] = V(i, j) - V(p, j); });
             for (std::size_t h = 0; h < nh; ++h) {
                 const DD W = d.harmonics[h].omega;
@@ -844,18 +907,6 @@ Program lower(const Derivation& d, ProgramNames names) {
             const double sk = sf.kind == SwitchKind::slip_pos ? el.k : -el.k;
             if (named) comment += "g_" + F + ": " + (sk > 0 ? "" : "-") + "k e - F_s of stuck " + el.name + ", e = x[" +
                        body_name(model, el.a) + "] - x[" + body_name(model, el.b) + "] - s";
-            if (el.a != kGround) {
-                g.add(sk, X(el.a));
-                dg.add(sk, Vr(el.a));
-                sc.add(el.k, mx[static_cast<std::size_t>(el.a)]);
-            }
-            if (el.b != kGround) {
-                g.add(-sk, X(el.b));
-                dg.add(-sk, Vr(el.b));
-                sc.add(el.k, mx[static_cast<std::size_t>(el.b)]);
-            }
-            g.add(-sk, X(static_cast<int>(n + j))).add(-el.slip_force, ONE);
-            sc.add(el.k, mxs[j]).add(el.slip_force, ONE);
             const DD ks(sk);
             for (std::size_t jm = 0; jm < nm; ++jm) al[jm] = ks * (V(el.a, jm) - V(el.b, jm));
             for (std::size_t h = 0; h < nh; ++h) {
@@ -867,16 +918,6 @@ Program lower(const Derivation& d, ProgramNames names) {
             const Jenkins& el = model.jenkins[static_cast<std::size_t>(sf.element)];
             if (named) comment += "g_" + F + ": relative velocity of " + el.name + " (slipping) = v[" + body_name(model, el.a) +
                        "] - v[" + body_name(model, el.b) + "]";
-            if (el.a != kGround) {
-                g.add(1.0, Vr(el.a));
-                dg.add(1.0, Ar(el.a));
-                sc.add(1.0, mv[static_cast<std::size_t>(el.a)]);
-            }
-            if (el.b != kGround) {
-                g.add(-1.0, Vr(el.b));
-                dg.add(-1.0, Ar(el.b));
-                sc.add(1.0, mv[static_cast<std::size_t>(el.b)]);
-            }
             for (std::size_t jm = 0; jm < nm; ++jm) be[jm] = V(el.a, jm) - V(el.b, jm);
             for (std::size_t h = 0; h < nh; ++h) {
                 const DD W = d.harmonics[h].omega;
@@ -888,7 +929,8 @@ Program lower(const Derivation& d, ProgramNames names) {
             const bool pos = sf.kind == SwitchKind::release_pos;
             const Mass& ms = model.masses[i];
             const double mu_s_n = d.mu_s_n[static_cast<std::size_t>(i)];
-            const double sgn_f = pos ? 1.0 : -1.0;
+            const int sigma = pos ? 1 : -1;
+            const LinValue limit = LinValue::constant(mu_s_n);
             if (ms.partner == kGround) {
                 if (named) comment += std::string("g_") + F + ": " + (pos ? "A" : "-A") + " - mu_s N of stuck " + ms.name +
                            ", A = -K x - C v + f + sum_h F_h sin (force but friction)";
@@ -907,8 +949,8 @@ Program lower(const Derivation& d, ProgramNames names) {
                     comment.clear();
                     e.lin(daf, dA);
                 }
-                g.add(sgn_f, af).add(-mu_s_n, ONE);
-                dg.add(sgn_f, daf);
+                g = friction::release_value(sigma, LinValue(1.0, af), limit, 0).lin();
+                dg = friction::release_value(sigma, LinValue(1.0, daf), limit, 1).lin();
             } else {
                 // Stuck to its partner p: D = (m_p A_i - m_i A_p)/(m_i + m_p), the force that
                 // holds the pair together (assembly.h driving_force), from both forces.
@@ -942,8 +984,10 @@ Program lower(const Derivation& d, ProgramNames names) {
                     e.lin(reg[which][1], dA);
                     e.lin(reg[which][2], mag);
                 }
-                g.add(sgn_f * dbl(ci), reg[0][0]).add(sgn_f * dbl(cp), reg[1][0]).add(-mu_s_n, ONE);
-                dg.add(sgn_f * dbl(ci), reg[0][1]).add(sgn_f * dbl(cp), reg[1][1]);
+                const LinValue D = LinValue(dbl(ci), reg[0][0]) + LinValue(dbl(cp), reg[1][0]);
+                const LinValue dD = LinValue(dbl(ci), reg[0][1]) + LinValue(dbl(cp), reg[1][1]);
+                g = friction::release_value(sigma, D, limit, 0).lin();
+                dg = friction::release_value(sigma, dD, limit, 1).lin();
                 sc.add(dbl(ci), reg[0][2]).add(-dbl(cp), reg[1][2]).add(mu_s_n, ONE);
                 for (std::size_t j = 0; j < nm; ++j) {
                     al[j] = ci * al_b[0][j] + cp * al_b[1][j];

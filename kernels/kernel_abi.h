@@ -49,12 +49,17 @@ extern "C" {
 /** Bumped whenever the layout or the meaning of hsnc_kernel changes. */
 #define HSNC_KERNEL_ABI_VERSION 4
 
-/** Switch-function kinds; same values as hsnc::SwitchKind (model/switch_function.h). */
+/** Switch-function kinds; the values of hsnc::SwitchKind (model/switch_function.h
+    HSNC_SWITCH_KINDS, checked by static_assert in runtime/solvers/kernel_solver.cpp). */
 enum {
-    HSNC_SWITCH_GAP = 0,         /**< contact gap G_c; element = contact index */
-    HSNC_SWITCH_VELOCITY = 1,    /**< v_i of a sliding friction mass */
-    HSNC_SWITCH_RELEASE_POS = 2, /**<  A_i - mu_s*N_i of a stuck mass */
-    HSNC_SWITCH_RELEASE_NEG = 3  /**< -A_i - mu_s*N_i of a stuck mass */
+    HSNC_SWITCH_GAP = 0,           /**< contact gap G_c; element = contact index */
+    HSNC_SWITCH_VELOCITY = 1,      /**< v_i of a sliding friction mass */
+    HSNC_SWITCH_RELEASE_POS = 2,   /**<  A_i - mu_s*N_i of a stuck mass */
+    HSNC_SWITCH_RELEASE_NEG = 3,   /**< -A_i - mu_s*N_i of a stuck mass */
+    HSNC_SWITCH_SLIP_POS = 4,      /**<  k e - F_s of a stuck Jenkins element; element = its index */
+    HSNC_SWITCH_SLIP_NEG = 5,      /**< -k e - F_s of a stuck Jenkins element */
+    HSNC_SWITCH_SLIP_VELOCITY = 6, /**< v[a] - v[b] of a slipping Jenkins element */
+    HSNC_SWITCH_KINDS_END = 7      /**< one past the last kind */
 };
 
 /** Results of hsnc_configure_fn. */

@@ -58,31 +58,30 @@ Eigen::VectorXd mass_vector(const Model& model) {
 Eigen::MatrixXd stiffness_matrix(const Model& model, const Configuration& cfg) {
     const auto n = static_cast<Eigen::Index>(model.dof());
     Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n);
-    for (const Spring& s : model.springs) add_spring(K, s.a, s.b, s.k);
-    for (std::size_t c = 0; c < model.contacts.size(); ++c)
-        if (cfg.closed[c]) add_spring(K, model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
-    for (std::size_t j = 0; j < model.jenkins.size(); ++j)
-        if (cfg.slip[j] == 0) add_spring(K, model.jenkins[j].a, model.jenkins[j].b, model.jenkins[j].k);
+    for_each_link(model, cfg, [&](int a, int b, double k, double, double) {
+        if (k != 0.0) add_spring(K, a, b, k);  // a dashpot: stiffness 0
+    });
     return K;
 }
 
 Eigen::MatrixXd damping_matrix(const Model& model, const Configuration& cfg) {
     Eigen::MatrixXd C = model.beta * stiffness_matrix(model, cfg);
     C.diagonal() += model.alpha * mass_vector(model);
-    for (const Damper& d : model.dampers) add_spring(C, d.a, d.b, d.c);  // a dashpot adds to C as a spring to K
+    for (std::size_t e = 0; e < model.dampers.size(); ++e)  // a dashpot adds to C as a spring to K
+        link_of(model, cfg, ElementKind::damper, e, [&](int a, int b, double, double c, double) { add_spring(C, a, b, c); });
     return C;
 }
 
 Eigen::VectorXd constant_force(const Model& model, const Configuration& cfg) {
     Eigen::VectorXd f = Eigen::Map<const Eigen::VectorXd>(model.load.data(),
                                                           static_cast<Eigen::Index>(model.dof()));
-    for (std::size_t c = 0; c < model.contacts.size(); ++c) {
-        if (!cfg.closed[c]) continue;
-        const Contact& k = model.contacts[c];
-        // -k*(x_a - x_b - d) on a: the constant part is +k*d (paper Eq. 6).
-        if (k.a != kGround) f(k.a) += k.k * k.gap;
-        if (k.b != kGround) f(k.b) -= k.k * k.gap;
-    }
+    // A link -k (u - length) along w: the constant part +k length w (paper Eq. 6); the
+    // stuck sliders' lengths are state (add_slider_preload).
+    for_each_link(model, cfg, [&](int a, int b, double k, double, double length) {
+        if (k == 0.0 || length == 0.0) return;
+        if (a != kGround) f(a) += k * length;
+        if (b != kGround) f(b) -= k * length;
+    });
     for_each_slipping(model, cfg, [&](int a, int b, double fa) {
         if (a != kGround) f(a) += fa;
         if (b != kGround) f(b) -= fa;
@@ -91,12 +90,11 @@ Eigen::VectorXd constant_force(const Model& model, const Configuration& cfg) {
 }
 
 void add_slider_preload(const Model& model, const Configuration& cfg, const double* slider, Eigen::VectorXd& f) {
-    for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
-        if (cfg.slip[j] != 0) continue;
-        const Jenkins& e = model.jenkins[j];
-        if (e.a != kGround) f(e.a) += e.k * slider[j];
-        if (e.b != kGround) f(e.b) -= e.k * slider[j];
-    }
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j)
+        link_of(model, cfg, ElementKind::jenkins, j, [&](int a, int b, double k, double, double length) {
+            if (a != kGround) f(a) += k * length;
+            if (b != kGround) f(b) -= k * length;
+        }, slider);
 }
 
 double slider_position(const Model& model, const Configuration& cfg, std::size_t j, const double* x) {

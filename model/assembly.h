@@ -21,6 +21,9 @@
 #include <vector>
 
 #include "configuration.h"
+#include "elements/contact.h"
+#include "elements/jenkins.h"
+#include "elements/spring.h"
 #include "model.h"
 
 namespace hsnc {
@@ -84,37 +87,50 @@ namespace hsnc {
 /// The kinds of element between two bodies, in the order for_each_link visits them.
 enum class ElementKind : std::uint32_t { spring, contact, damper, jenkins };
 
-/// Element e of `kind` as a link in cfg, fn(a, b, stiffness, damping, gap),
-/// when it acts as one: a spring or a closed contact (damping beta*k,
-/// Rayleigh), a damper (stiffness 0, damping c), a stuck Jenkins element (as a
-/// closed contact, gap = slider[e]; 0 when `slider` is null: for the callers
-/// that do not read the gap); gap is a link's preload length.
+/// A visitor of an element's forces (model/elements/direction.h) that hands
+/// its links to fn(a, b, stiffness, damping, length) and its constant forces
+/// to force(a, b, f on a).
+template <class Link, class Force>
+struct BodyForces {
+    Link& link_fn;
+    Force& force_fn;
+    void link(const Direction& d, double k, double c, double length) { link_fn(d.a, d.b, k, c, length); }
+    void force(const Direction& d, double f) { force_fn(d.a, d.b, f); }
+    double zero() const { return 0.0; }
+};
+template <class Link, class Force>
+BodyForces<Link, Force> body_forces(Link& link, Force& force) {
+    return {link, force};
+}
+
+/// Element e of `kind` as a link in cfg, fn(a, b, stiffness, damping, length),
+/// when it acts as one (its file in model/elements/ says when and how): a
+/// spring or a closed contact (damping beta*k, Rayleigh), a damper (stiffness
+/// 0, damping c), a stuck Jenkins element (as a closed contact, length =
+/// slider[e]; 0 when `slider` is null: for the callers that do not read the
+/// length); length is a link's preload length.
 template <class Fn>
 void link_of(const Model& model, const Configuration& cfg, ElementKind kind, std::size_t e, Fn&& fn,
              const double* slider = nullptr) {
+    auto no_force = [](int, int, double) {};
+    auto v = body_forces(fn, no_force);
     switch (kind) {
-        case ElementKind::spring: {
-            const Spring& s = model.springs[e];
-            fn(s.a, s.b, s.k, model.beta * s.k, 0.0);
+        case ElementKind::spring:
+            spring::forces(model.springs[e].direction(), model.springs[e].k, model.beta, v);
+            break;
+        case ElementKind::contact: {
+            const Contact& c = model.contacts[e];
+            contact::forces(cfg.closed[e] != 0, c.direction(), c.k, c.gap, model.beta, v);
             break;
         }
-        case ElementKind::contact:
-            if (cfg.closed[e]) {
-                const Contact& k = model.contacts[e];
-                fn(k.a, k.b, k.k, model.beta * k.k, k.gap);
-            }
+        case ElementKind::damper:
+            damper::forces(model.dampers[e].direction(), model.dampers[e].c, v);
             break;
-        case ElementKind::damper: {
-            const Damper& d = model.dampers[e];
-            fn(d.a, d.b, 0.0, d.c, 0.0);
+        case ElementKind::jenkins: {
+            const Jenkins& j = model.jenkins[e];
+            jenkins::forces(cfg.slip[e], j.direction(), j.k, j.slip_force, slider ? slider[e] : 0.0, model.beta, v);
             break;
         }
-        case ElementKind::jenkins:
-            if (cfg.slip[e] == 0) {
-                const Jenkins& j = model.jenkins[e];
-                fn(j.a, j.b, j.k, model.beta * j.k, slider ? slider[e] : 0.0);
-            }
-            break;
     }
 }
 
@@ -131,9 +147,9 @@ void for_each_link(const Model& model, const Configuration& cfg, Fn&& fn, const 
 /// Jenkins element j as fn(a, b, force on a) when it slips in cfg.
 template <class Fn>
 void slipping_of(const Model& model, const Configuration& cfg, std::size_t j, Fn&& fn) {
-    if (cfg.slip[j] == 0) return;
     const Jenkins& e = model.jenkins[j];
-    fn(e.a, e.b, jenkins::slipping_force(cfg.slip[j], e.slip_force));
+    auto no_link = [](int, int, double, double, double) {};
+    jenkins::forces(cfg.slip[j], e.direction(), e.k, e.slip_force, 0.0, model.beta, body_forces(no_link, fn));
 }
 
 /// Every Jenkins element slipping in cfg, as slipping_of gives it.

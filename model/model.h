@@ -26,6 +26,7 @@
 #include "elements/direction.h"
 #include "elements/friction.h"
 #include "elements/jenkins.h"
+#include "elements/spring.h"
 
 namespace hsnc {
 
@@ -46,29 +47,6 @@ struct Mass {
     /// velocity v[i] - v[partner]; stuck, the two move as one body). Such a
     /// partner has no friction of its own and is the partner of no other mass.
     int partner = kGround;
-};
-
-struct Spring {
-    int a = kGround;  ///< body index (kGround or a mass)
-    int b = kGround;
-    double k = 0.0;   ///< stiffness, >= 0 (a spring of a [structure]'s K may be negative)
-    /// True for the springs that represent a [structure]'s stiffness matrix
-    /// (structure.h): K = sum over i<j of -K_ij (e_i - e_j)(e_i - e_j)^T
-    /// + diag(row sums), so k = -K_ij between two dofs (any sign) and the
-    /// row sum to ground.
-    bool from_structure = false;
-};
-
-/// A viscous dashpot (interface.md section 5): force -c*(v[a]-v[b]) on a, the
-/// opposite on b. A model with dampers has non-proportional damping: its
-/// segments are solved through state-space modes (state_space_solver.h).
-struct Damper {
-    int a = kGround;
-    int b = kGround;
-    double c = 0.0;  ///< >= 0 (a damper of a [structure]'s C may be negative)
-    /// True for the dampers that represent a non-proportional [structure]
-    /// damping matrix, written as K is written as springs (Spring::from_structure).
-    bool from_structure = false;
 };
 
 /// One forcing harmonic: force on mass i is amplitude[i]*sin(omega*t + phase).

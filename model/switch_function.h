@@ -25,12 +25,15 @@
 
 namespace hsnc {
 
+/// The kinds of switch function; the kernel ABI's HSNC_SWITCH_* carry the same
+/// values (static_assert in runtime/solvers/kernel_solver.cpp). Each belongs to
+/// one element kind, whose file in model/elements/ defines it.
 enum class SwitchKind : std::uint8_t {
-    gap,          ///< contact gap function G_c; element = contact index
-    velocity,     ///< velocity of a sliding friction mass; element = mass index
-    release_pos,  ///< A_i - mu_s*N_i of a stuck mass; element = mass index
-    release_neg,  ///< -A_i - mu_s*N_i of a stuck mass; element = mass index
-    slip_pos,       ///< k e - F_s of a stuck Jenkins element; element = its index
+    gap,            ///< contact gap function G_c (elements/contact.h); element = contact index
+    velocity,       ///< velocity of a sliding friction mass (elements/friction.h); element = mass index
+    release_pos,    ///< A_i - mu_s*N_i of a stuck mass; element = mass index
+    release_neg,    ///< -A_i - mu_s*N_i of a stuck mass; element = mass index
+    slip_pos,       ///< k e - F_s of a stuck Jenkins element (elements/jenkins.h); element = its index
     slip_neg,       ///< -k e - F_s of a stuck Jenkins element
     slip_velocity,  ///< v[a] - v[b] of a slipping Jenkins element
 };

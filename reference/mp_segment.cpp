@@ -11,7 +11,9 @@
 #include "elements/contact.h"
 #include "elements/friction.h"
 #include "elements/jenkins.h"
+#include "elements/spring.h"
 #include "elements/motion.h"
+#include "elements/switch_derivative.h"
 #include "error.h"
 #include "free_components.h"
 
@@ -263,59 +265,52 @@ cl_F MpModel::gap_rate(int c, const std::vector<cl_F>& v) const {
     return contact::gap_value(Direction{k.a, k.b}, k.gap, RowsMotion<cl_F, decltype(rows)>(rows, nullptr, zero), 1);
 }
 
+namespace {
+
+// The force on body i of the elements' links and constant forces, and of
+// their time derivative (order 1: the constant forces drop out), from the
+// motion's rows 0 (x) and 1 (v), or 1 and 2 (v, a).
+struct ForceOnBody {
+    const MpModel& mp;
+    int i;
+    const std::vector<cl_F>& y0;
+    const std::vector<cl_F>& y1;
+    bool rate;
+    cl_F sum;
+    void link(const Direction& d, const cl_F& k, const cl_F& c, const cl_F& length) {
+        if (!acts_on(d, i)) return;
+        const cl_F dx = rate ? mp.body(y0, d.a) - mp.body(y0, d.b) : mp.body(y0, d.a) - mp.body(y0, d.b) - length;
+        const cl_F f = -(k * dx) - c * (mp.body(y1, d.a) - mp.body(y1, d.b));  // on a
+        add(d, f);
+    }
+    void force(const Direction& d, const cl_F& f) {
+        if (!rate && acts_on(d, i)) add(d, f);
+    }
+    const cl_F& zero() const { return mp.zero; }
+    void add(const Direction& d, const cl_F& f) {
+        if (d.a == d.b) return;  // a link from a body to itself does nothing
+        sum = d.a == i ? sum + f : sum - f;
+    }
+};
+
+}  // namespace
+
 cl_F MpModel::force_on_mass(const Configuration& cfg, int i, const cl_F& t, const std::vector<cl_F>& x,
                             const std::vector<cl_F>& v) const {
-    // A_i = sum over links touching i of -k (y_i - y_other) - beta k (v_i - v_other) [+ k gap for contacts]
-    //       - alpha m_i v_i + f_i + sum_h F_hi sin(Omega_h t + phase_h).
-    cl_F A = f_const[i] - alpha * m[i] * v[i];
-    auto link = [&](const Link& k, bool contact) {
-        if (k.a != i && k.b != i) return;
-        const cl_F dx = body(x, k.a) - body(x, k.b) - (contact ? k.gap : zero);  // a spring: gap 0
-        const cl_F dv = body(v, k.a) - body(v, k.b);
-        const cl_F f = -(k.k * dx) - beta * k.k * dv;  // on a
-        A = k.a == i ? A + f : A - f;
-        if (k.a == i && k.b == i) A = A - f;  // a link from a mass to itself does nothing
-    };
-    for (const Link& s : springs) link(s, false);
-    for (std::size_t c = 0; c < contacts.size(); ++c)
-        if (cfg.closed[c]) link(contacts[c], true);
-    for (std::size_t j = 0; j < jenkins.size(); ++j) {
-        const Link& e = jenkins[j];
-        if (cfg.slip[j] == 0) {  // a spring whose gap is the slider
-            link({e.a, e.b, e.k, x[static_cast<std::size_t>(n) + j]}, true);
-        } else if (e.a == i || e.b == i) {
-            const cl_F f = cfg.slip[j] > 0 ? -e.gap : e.gap;  // on a
-            A = e.a == i ? A + f : A - f;
-        }
-    }
-    for (const Link& d : dampers)  // -c (v_a - v_b) on a
-        if ((d.a == i || d.b == i) && d.a != d.b) {
-            const cl_F f = -(d.k * (body(v, d.a) - body(v, d.b)));
-            A = d.a == i ? A + f : A - f;
-        }
+    // A_i = sum over the elements' links touching i of -k (u - length) - c u' and their constant
+    // forces, - alpha m_i v_i + f_i + sum_h F_hi sin(Omega_h t + phase_h).
+    ForceOnBody on{*this, i, x, v, false, f_const[i] - alpha * m[i] * v[i]};
+    each_force(cfg, [&](std::size_t j) { return x[static_cast<std::size_t>(n) + j]; }, on);
+    cl_F A = on.sum;
     for (std::size_t h = 0; h < h_omega.size(); ++h) A = A + h_amp[h][i] * cln::sin(h_omega[h] * t + h_phase[h]);
     return A;
 }
 
 cl_F MpModel::force_rate_on_mass(const Configuration& cfg, int i, const cl_F& t, const std::vector<cl_F>& v,
                                  const std::vector<cl_F>& a) const {
-    cl_F dA = -(alpha * m[i] * a[i]);
-    auto link = [&](const Link& k) {
-        if (k.a != i && k.b != i) return;
-        const cl_F f = -(k.k * (body(v, k.a) - body(v, k.b))) - beta * k.k * (body(a, k.a) - body(a, k.b));
-        dA = k.a == i ? dA + f : dA - f;
-        if (k.a == i && k.b == i) dA = dA - f;
-    };
-    for (const Link& s : springs) link(s);
-    for (std::size_t c = 0; c < contacts.size(); ++c)
-        if (cfg.closed[c]) link(contacts[c]);
-    for (std::size_t j = 0; j < jenkins.size(); ++j)
-        if (cfg.slip[j] == 0) link(jenkins[j]);  // slipping: a constant force
-    for (const Link& d : dampers)
-        if ((d.a == i || d.b == i) && d.a != d.b) {
-            const cl_F f = -(d.k * (body(a, d.a) - body(a, d.b)));
-            dA = d.a == i ? dA + f : dA - f;
-        }
+    ForceOnBody on{*this, i, v, a, true, -(alpha * m[i] * a[i])};
+    each_force(cfg, [&](std::size_t) { return zero; }, on);  // a stuck slider's length drops out
+    cl_F dA = on.sum;
     for (std::size_t h = 0; h < h_omega.size(); ++h)
         dA = dA + h_amp[h][i] * h_omega[h] * cln::cos(h_omega[h] * t + h_phase[h]);
     return dA;
@@ -331,31 +326,33 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
     // K(cfg), C = alpha M + beta K, constant force with contact preloads (assembly.h).
     K_.assign(n_, std::vector<cl_F>(n_, Z0));
     f_const_ = mp.f_const;
-    auto add = [&](const MpModel::Link& k, bool contact) {
-        if (k.a != kGround) K_[k.a][k.a] = K_[k.a][k.a] + k.k;
-        if (k.b != kGround) K_[k.b][k.b] = K_[k.b][k.b] + k.k;
-        if (k.a != kGround && k.b != kGround) {
-            K_[k.a][k.b] = K_[k.a][k.b] - k.k;
-            K_[k.b][k.a] = K_[k.b][k.a] - k.k;
+    // Every element's links (K, with their lengths' preload; a stuck slider's is per
+    // segment, setup) and constant forces (f_const).
+    struct Stamp {
+        MpSegment& seg;
+        const cl_F& z;
+        void link(const Direction& d, const cl_F& k, const cl_F&, const cl_F& length) {
+            auto& K = seg.K_;
+            auto& f = seg.f_const_;
+            if (cln::zerop(k)) return;  // a dashpot (the reference takes Rayleigh damping only)
+            if (d.a != kGround) K[d.a][d.a] = K[d.a][d.a] + k;
+            if (d.b != kGround) K[d.b][d.b] = K[d.b][d.b] + k;
+            if (d.a != kGround && d.b != kGround) {
+                K[d.a][d.b] = K[d.a][d.b] - k;
+                K[d.b][d.a] = K[d.b][d.a] - k;
+            }
+            if (cln::zerop(length)) return;  // -k (u - length): +k length on a, -k length on b
+            if (d.a != kGround) f[d.a] = f[d.a] + k * length;
+            if (d.b != kGround) f[d.b] = f[d.b] - k * length;
         }
-        if (contact) {  // -k (x_a - x_b - d): +k d on a, -k d on b
-            if (k.a != kGround) f_const_[k.a] = f_const_[k.a] + k.k * k.gap;
-            if (k.b != kGround) f_const_[k.b] = f_const_[k.b] - k.k * k.gap;
+        void force(const Direction& d, const cl_F& fa) {
+            auto& f = seg.f_const_;
+            if (d.a != kGround) f[d.a] = f[d.a] + fa;
+            if (d.b != kGround) f[d.b] = f[d.b] - fa;
         }
+        const cl_F& zero() const { return z; }
     };
-    for (const auto& s : mp.springs) add(s, false);
-    for (std::size_t c = 0; c < mp.contacts.size(); ++c)
-        if (cfg.closed[c]) add(mp.contacts[c], true);
-    for (std::size_t j = 0; j < mp.jenkins.size(); ++j) {
-        const MpModel::Link& e = mp.jenkins[j];
-        if (cfg.slip[j] == 0) {
-            add(e, false);  // its preload k s: per segment (setup)
-        } else {            // -slip F_s on a, the opposite on b
-            const cl_F f = cfg.slip[j] > 0 ? -e.gap : e.gap;
-            if (e.a != kGround) f_const_[e.a] = f_const_[e.a] + f;
-            if (e.b != kGround) f_const_[e.b] = f_const_[e.b] - f;
-        }
-    }
+    mp.each_force(cfg, [&](std::size_t) { return Z0; }, Stamp{*this, Z0});  // sliders: per segment
     C_ = K_;
     for (int i = 0; i < n_; ++i)
         for (int k = 0; k < n_; ++k) C_[i][k] = mp.beta * K_[i][k] + (i == k ? mp.alpha * mp.m[i] : Z0);
@@ -988,31 +985,11 @@ void MpSegment::sliders_and_switches(MpEval& out, const std::vector<cl_F>& xm, c
         const SwitchFunction& sf = switches_[f];
         const int e = sf.element;
         cl_F g, dg, scale;
-        if (sf.kind == SwitchKind::gap) {
-            const auto& ct = mp.contacts[static_cast<std::size_t>(e)];
-            const Direction d{ct.a, ct.b};
-            g = contact::gap_value(d, ct.gap, motion, 0);
-            dg = contact::gap_value(d, ct.gap, motion, 1);
-            scale = contact::gap_magnitude(d, ct.gap, motion, 0);
-        } else if (sf.kind == SwitchKind::velocity) {  // w = v_e - v_partner
-            const Direction d{e, mp.partner[static_cast<std::size_t>(e)]};
-            g = friction::velocity_value(d, motion, 0);
-            dg = friction::velocity_value(d, motion, 1);
-            scale = friction::velocity_magnitude(d, motion, 0);
-        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
-            const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
-            const Direction d{el.a, el.b};
-            const cl_F& s = out.x[static_cast<std::size_t>(n_ + e)];
-            const int sigma = sf.kind == SwitchKind::slip_pos ? 1 : -1;
-            g = jenkins::slip_value(sigma, el.k, el.gap, d, s, motion, 0);
-            dg = jenkins::slip_value(sigma, el.k, el.gap, d, s, motion, 1);
-            scale = jenkins::slip_magnitude(el.k, el.gap, d, s, motion, 0);
-        } else if (sf.kind == SwitchKind::slip_velocity) {
-            const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
-            const Direction d{el.a, el.b};
-            g = jenkins::slip_velocity_value(d, motion, 0);
-            dg = jenkins::slip_velocity_value(d, motion, 1);
-            scale = jenkins::slip_velocity_magnitude(d, motion, 0);
+        if (!is_release(sf.kind)) {
+            const auto p = mp_elements(mp, [&](int j) { return out.x[static_cast<std::size_t>(n_ + j)]; });
+            g = switch_derivative(p, sf, motion, 0);
+            dg = switch_derivative(p, sf, motion, 1);
+            scale = switch_magnitude(p, sf, motion, 0);
         } else {
             // A_i = -(K x)_i - (C v)_i + f_i + F_i(t), with the full K(cfg), C(cfg), f with the sliders' preload;
             // against a partner p, D_i = (m_p A_i - m_i A_p)/(m_i + m_p).

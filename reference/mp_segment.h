@@ -23,12 +23,16 @@
 //   cancellation, which the working precision absorbs.
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include <cln/complex.h>
 #include <cln/float.h>
 
 #include "configuration.h"
+#include "elements/contact.h"
+#include "elements/jenkins.h"
+#include "elements/spring.h"
 #include "model.h"
 #include "segment_solver.h"
 
@@ -77,6 +81,11 @@ struct MpModel {
     cl_F F(double d) const;
     cl_F I(long i) const;
 
+    /// Visits every element's forces in cfg (model/elements/direction.h):
+    /// springs, contacts, Jenkins elements (a stuck one's length is its
+    /// slider, slider(j)), dampers.
+    template <class S, class V>
+    void each_force(const Configuration& cfg, S&& slider, V&& visit) const;
     /// A_i (assembly.h force_on_mass) in cfg at (t, x, v) (x: the masses, then
     /// the sliders), and dA_i/dt given the accelerations a.
     cl_F force_on_mass(const Configuration& cfg, int i, const cl_F& t, const std::vector<cl_F>& x,
@@ -190,5 +199,48 @@ private:
     std::vector<cl_F> force_, x_st_, zh0_;               // setup: constant force, static offset, z_h(0)
     cl_F energy0_;
 };
+
+template <class S, class V>
+void MpModel::each_force(const Configuration& cfg, S&& slider, V&& visit) const {
+    for (const Link& s : springs) spring::forces(Direction{s.a, s.b}, s.k, beta, visit);
+    for (std::size_t c = 0; c < contacts.size(); ++c)
+        contact::forces(cfg.closed[c] != 0, Direction{contacts[c].a, contacts[c].b}, contacts[c].k, contacts[c].gap, beta,
+                        visit);
+    for (std::size_t j = 0; j < jenkins.size(); ++j) {
+        const Link& e = jenkins[j];
+        jenkins::forces(cfg.slip[j], Direction{e.a, e.b}, e.k, e.gap, cl_F(slider(j)), beta, visit);
+    }
+    for (const Link& d : dampers) damper::forces(Direction{d.a, d.b}, d.k, visit);
+}
+
+/// The elements' parameters at N digits as the switch functions read them
+/// (model/elements/switch_derivative.h); the slider of Jenkins element j
+/// through slider(j).
+template <class Slider>
+struct MpElements {
+    struct ContactView {
+        Direction d;
+        cl_F gap;
+    };
+    struct JenkinsView {
+        Direction d;
+        cl_F k, slip_force, s;
+    };
+    const MpModel& mp;
+    Slider slider;
+    ContactView contact(int e) const {
+        const MpModel::Link& l = mp.contacts[static_cast<std::size_t>(e)];
+        return {{l.a, l.b}, l.gap};
+    }
+    JenkinsView jenkins(int e) const {
+        const MpModel::Link& l = mp.jenkins[static_cast<std::size_t>(e)];
+        return {{l.a, l.b}, l.k, l.gap, slider(e)};
+    }
+    Direction friction(int e) const { return {e, mp.partner[static_cast<std::size_t>(e)]}; }
+};
+template <class Slider>
+MpElements<Slider> mp_elements(const MpModel& mp, Slider slider) {
+    return {mp, std::move(slider)};
+}
 
 }  // namespace hsnc::reference

@@ -27,6 +27,7 @@
 #include "elements/friction.h"
 #include "elements/jenkins.h"
 #include "elements/motion.h"
+#include "elements/switch_derivative.h"
 #include "error.h"
 #include "mp_segment.h"
 #include "sample_grid.h"
@@ -88,36 +89,33 @@ void force_derivative(const MpModel& mp, const Configuration& cfg, int i, const 
     magnitude = cln::abs(value);
     value = value - mp.alpha * mp.m[i] * xk1[i];
     magnitude = magnitude + cln::abs(mp.alpha * mp.m[i]) * mk1[i];
-    auto link = [&](const MpModel::Link& l, bool contact) {
-        if (l.a == l.b || (l.a != i && l.b != i)) return;
-        cl_F f = -(l.k * (mp.body(xk, l.a) - mp.body(xk, l.b))) - mp.beta * l.k * (mp.body(xk1, l.a) - mp.body(xk1, l.b));
-        cl_F fm = cln::abs(l.k) * (mp.body(mk, l.a) + mp.body(mk, l.b)) + cln::abs(mp.beta * l.k) * (mp.body(mk1, l.a) + mp.body(mk1, l.b));
-        if (contact && k == 0) {
-            f = f + l.k * l.gap;
-            fm = fm + cln::abs(l.k * l.gap);
-        }
-        value = l.a == i ? value + f : value - f;
-        magnitude = magnitude + fm;
-    };
-    for (const auto& l : mp.springs) link(l, false);
-    for (std::size_t c = 0; c < mp.contacts.size(); ++c)
-        if (cfg.closed[c]) link(mp.contacts[c], true);
-    for (std::size_t j = 0; j < mp.jenkins.size(); ++j) {
-        const MpModel::Link& e = mp.jenkins[j];
-        if (cfg.slip[j] == 0) {  // a link whose gap is the slider (constant: only k = 0 sees it)
-            link({e.a, e.b, e.k, T.s[j]}, true);
-        } else if (k == 0 && (e.a == i || e.b == i)) {  // the constant slip force, -slip F_s on a
-            const cl_F f = cfg.slip[j] > 0 ? -e.gap : e.gap;
-            value = e.a == i ? value + f : value - f;
-            magnitude = magnitude + e.gap;
-        }
-    }
-    for (const auto& d : mp.dampers)  // -c (x^(k+1)_a - x^(k+1)_b) on a
-        if (d.a != d.b && (d.a == i || d.b == i)) {
-            const cl_F f = -(d.k * (mp.body(xk1, d.a) - mp.body(xk1, d.b)));
+    // Every element's links and constant forces (model/elements/): a link -k (u - length) - c u'
+    // gives -k u^(k) - c u^(k+1), and +k length at k = 0 only, as a constant force does.
+    struct Derivative {
+        const MpModel& mp;
+        int i, k;
+        const std::vector<cl_F>&xk, &xk1, &mk, &mk1;
+        cl_F& value;
+        cl_F& magnitude;
+        void link(const Direction& d, const cl_F& kk, const cl_F& c, const cl_F& length) {
+            if (d.a == d.b || !acts_on(d, i)) return;
+            cl_F f = -(kk * (mp.body(xk, d.a) - mp.body(xk, d.b))) - c * (mp.body(xk1, d.a) - mp.body(xk1, d.b));
+            cl_F fm = cln::abs(kk) * (mp.body(mk, d.a) + mp.body(mk, d.b)) + cln::abs(c) * (mp.body(mk1, d.a) + mp.body(mk1, d.b));
+            if (k == 0) {
+                f = f + kk * length;
+                fm = fm + cln::abs(kk * length);
+            }
             value = d.a == i ? value + f : value - f;
-            magnitude = magnitude + d.k * (mp.body(mk1, d.a) + mp.body(mk1, d.b));
+            magnitude = magnitude + fm;
         }
+        void force(const Direction& d, const cl_F& f) {
+            if (k != 0 || !acts_on(d, i)) return;
+            value = d.a == i ? value + f : value - f;
+            magnitude = magnitude + cln::abs(f);
+        }
+        const cl_F& zero() const { return mp.zero; }
+    };
+    mp.each_force(cfg, [&](std::size_t j) { return T.s[j]; }, Derivative{mp, i, k, xk, xk1, mk, mk1, value, magnitude});
     for (std::size_t h = 0; h < mp.h_omega.size(); ++h) {
         const cl_F& W = mp.h_omega[h];
         const cl_F arg = W * t + mp.h_phase[h];
@@ -482,28 +480,13 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                 const RowsMotion<cl_F, std::vector<std::vector<cl_F>>> motion(X.x, &X.xm, mp.zero);
                 const auto ee = static_cast<std::size_t>(e);
                 const int orders = static_cast<int>(X.x.size());
-                if (sw[f].kind == SwitchKind::gap) {
-                    gap_series(mp, e, X, d, m);
-                } else if (sw[f].kind == SwitchKind::velocity) {  // w^(k) = x_e^(k+1) - x_partner^(k+1)
-                    const Direction w{e, mp.partner[ee]};
-                    for (int k = 0; k + 1 < orders; ++k) {
-                        d.push_back(friction::velocity_value(w, motion, k));
-                        m.push_back(friction::velocity_magnitude(w, motion, k));
-                    }
-                } else if (sw[f].kind == SwitchKind::slip_velocity) {  // w^(k) = x_a^(k+1) - x_b^(k+1)
-                    const Direction w{mp.jenkins[ee].a, mp.jenkins[ee].b};
-                    for (int k = 0; k + 1 < orders; ++k) {
-                        d.push_back(jenkins::slip_velocity_value(w, motion, k));
-                        m.push_back(jenkins::slip_velocity_magnitude(w, motion, k));
-                    }
-                } else if (sw[f].kind == SwitchKind::slip_pos || sw[f].kind == SwitchKind::slip_neg) {
-                    // +-k (x_a - x_b - s) - F_s, the slider constant while stuck.
-                    const MpModel::Link& el = mp.jenkins[ee];
-                    const Direction w{el.a, el.b};
-                    const int sigma = sw[f].kind == SwitchKind::slip_pos ? 1 : -1;
-                    for (int k = 0; k < orders; ++k) {
-                        d.push_back(jenkins::slip_value(sigma, el.k, el.gap, w, X.s[ee], motion, k));
-                        m.push_back(jenkins::slip_magnitude(el.k, el.gap, w, X.s[ee], motion, k));
+                if (!is_release(sw[f].kind)) {
+                    // Velocities' series are one order shorter: w^(k) needs x^(k+1).
+                    const auto p = mp_elements(mp, [&](int j) { return X.s[static_cast<std::size_t>(j)]; });
+                    const int last = is_velocity(sw[f].kind) ? orders - 1 : orders;
+                    for (int k = 0; k < last; ++k) {
+                        d.push_back(switch_derivative(p, sw[f], motion, k));
+                        m.push_back(switch_magnitude(p, sw[f], motion, k));
                     }
                 } else {
                     driving_series(mp, cfg, e, t, X, d, m);

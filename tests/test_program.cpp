@@ -26,6 +26,7 @@
 #include "derivation.h"
 #include "emitter.h"
 #include "engine.h"
+#include "error.h"
 #include "forwarding_solver.h"
 #include "generic_solver.h"
 #include "interpreted_solver.h"
@@ -167,6 +168,30 @@ TEST(Program, BundledModelsAotJitAndInterpreterAreBitIdentical) {
         }
     }
     EXPECT_GE(checked, 3u * 50u);
+}
+
+// The kernel ABI names every switch kind of the model (kernel_solver.cpp
+// static_asserts the values); a kernel that reports a kind past them is
+// refused by name instead of being cast into a SwitchKind no rule knows.
+TEST(Program, AKernelWithAnUnknownSwitchKindIsRefused) {
+    const Model m = bundled("chain-8");
+    const Configuration cfg = Configuration::all_open(m);
+    const hsnc_kernel* aot = find_aot_kernel(aot_registry(), m.name.c_str(), model_hash(m), cfg.key().c_str());
+    ASSERT_NE(aot, nullptr);
+    ASSERT_GE(aot->n_switch, 1);
+    EXPECT_NO_THROW(KernelSolver{*aot});
+    std::vector<hsnc_switch> switches(aot->switches, aot->switches + aot->n_switch);
+    switches.back().kind = HSNC_SWITCH_KINDS_END;
+    hsnc_kernel bad = *aot;
+    bad.switches = switches.data();
+    try {
+        KernelSolver solver(bad);
+        ADD_FAILURE() << "a switch kind past the ABI's was taken";
+    } catch (const RunError& e) {
+        EXPECT_NE(std::string(e.what()).find("of kind 7, which this runtime does not know"), std::string::npos)
+            << e.what();
+    }
+    static_assert(HSNC_SWITCH_SLIP_VELOCITY == static_cast<int>(SwitchKind::slip_velocity));
 }
 
 // The sample catalogue (generator/sample_models.h) has every regime and

@@ -46,5 +46,12 @@ auto gap_magnitude(const Direction& d, const T& gap, const M& m, int k) {
     return k == 0 ? u + m.abs(gap) : u;
 }
 
+/// Closed, a contact is a link of stiffness k, Rayleigh damping beta k and
+/// rest length gap (its preload +k gap on a); open, nothing.
+template <class T, class V>
+void forces(bool closed, const Direction& d, const T& k, const T& gap, const T& beta, V&& visit) {
+    if (closed) visit.link(d, k, beta * k, gap);
+}
+
 }  // namespace contact
 }  // namespace hsnc

@@ -15,6 +15,19 @@
 //     T M::abs(const T&) const          // |.| in T (only the magnitudes need it)
 // k = 0 is the position, 1 the velocity, 2 the acceleration, and higher
 // orders are a Taylor series' (runtime/engine/tie_series.h).
+//
+// What an element does to the structure in its current state is said by its
+// forces(..., visit) in one vocabulary, for any scalar T:
+//   visit.link(d, k, c, length)   a spring k and a dashpot c along direction d
+//                                 (direction.h): force -k (u - length) - c u'
+//                                 along w (on body a; the opposite on b)
+//   visit.force(d, f)             a constant force f along w
+//   visit.zero()                  the scalar 0 of the back end
+// A back end supplies the visitor: it stamps K += k w w^T, C += c w w^T and
+// the preload k length w (assembly.h, reference/mp_segment.cpp), or sums the
+// force on one body or its time derivatives (the event rules, the tie
+// series). So the force law of an element kind is written once, in its file;
+// the link arithmetic once per back end, for every kind.
 #pragma once
 
 namespace hsnc {

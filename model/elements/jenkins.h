@@ -70,5 +70,16 @@ T slipping_force(int slip, const T& slip_force) {
     return slip > 0 ? -slip_force : slip_force;
 }
 
+/// Stuck (slip = 0), a link of stiffness k, Rayleigh damping beta k and rest
+/// length s (the slider); slipping with sign `slip`, the constant force
+/// -slip F_s along w.
+template <class T, class V>
+void forces(int slip, const Direction& d, const T& k, const T& slip_force, const T& s, const T& beta, V&& visit) {
+    if (slip == 0)
+        visit.link(d, k, beta * k, s);
+    else
+        visit.force(d, slipping_force(slip, slip_force));
+}
+
 }  // namespace jenkins
 }  // namespace hsnc

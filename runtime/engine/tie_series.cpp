@@ -9,6 +9,7 @@
 #include "elements/friction.h"
 #include "elements/jenkins.h"
 #include "elements/motion.h"
+#include "elements/switch_derivative.h"
 #include "kernel_abi.h"
 
 namespace hsnc {
@@ -132,32 +133,20 @@ void switch_series(const Model& model, const Configuration& cfg, const SwitchFun
     const int e = f.element;
     const auto m = double_motion(series.x, &series.mag);
     const auto ee = static_cast<std::size_t>(e);
+    const auto p = model_elements<double>(model, [](double v) { return v; },
+                                          [&](int j) { return series.slider[static_cast<std::size_t>(j)]; });
     for (std::size_t k = 0; k < order; ++k) {
         const int kk = static_cast<int>(k);
-        if (f.kind == SwitchKind::gap) {
-            const Contact& c = model.contacts[ee];
-            d[k] = contact::gap_value(c.direction(), c.gap, m, kk);
-            mag[k] = contact::gap_magnitude(c.direction(), c.gap, m, kk);
-        } else if (f.kind == SwitchKind::velocity) {  // w = v_e - v_partner
-            const Direction w{e, model.masses[ee].partner};
-            d[k] = friction::velocity_value(w, m, kk);
-            mag[k] = friction::velocity_magnitude(w, m, kk);
-        } else if (f.kind == SwitchKind::slip_velocity) {
-            const Direction w = model.jenkins[ee].direction();
-            d[k] = jenkins::slip_velocity_value(w, m, kk);
-            mag[k] = jenkins::slip_velocity_magnitude(w, m, kk);
-        } else if (f.kind == SwitchKind::slip_pos || f.kind == SwitchKind::slip_neg) {
-            const Jenkins& J = model.jenkins[ee];
-            const double s = series.slider[ee];
-            d[k] = jenkins::slip_value(f.kind == SwitchKind::slip_pos ? 1 : -1, J.k, J.slip_force, J.direction(), s, m, kk);
-            mag[k] = jenkins::slip_magnitude(J.k, J.slip_force, J.direction(), s, m, kk);
-        } else {
-            double A, Am;
-            driving_derivative(model, cfg, e, t, t_lo, series, kk, A, Am);
-            const double limit = model.masses[ee].mu_s * model.normal_force(ee);
-            d[k] = friction::release_value(f.kind == SwitchKind::release_pos ? 1 : -1, A, limit, kk);
-            mag[k] = friction::release_magnitude(Am, limit, kk);
+        if (!is_release(f.kind)) {
+            d[k] = switch_derivative(p, f, m, kk);
+            mag[k] = switch_magnitude(p, f, m, kk);
+            continue;
         }
+        double A, Am;
+        driving_derivative(model, cfg, e, t, t_lo, series, kk, A, Am);
+        const double limit = model.masses[ee].mu_s * model.normal_force(ee);
+        d[k] = friction::release_value(f.kind == SwitchKind::release_pos ? 1 : -1, A, limit, kk);
+        mag[k] = friction::release_magnitude(Am, limit, kk);
     }
 }
 

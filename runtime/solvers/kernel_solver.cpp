@@ -4,6 +4,16 @@
 
 #include "error.h"
 
+// The kernel ABI's switch kinds are the model's (one list: HSNC_SWITCH_KINDS).
+static_assert(HSNC_SWITCH_GAP == static_cast<int>(hsnc::SwitchKind::gap));
+static_assert(HSNC_SWITCH_VELOCITY == static_cast<int>(hsnc::SwitchKind::velocity));
+static_assert(HSNC_SWITCH_RELEASE_POS == static_cast<int>(hsnc::SwitchKind::release_pos));
+static_assert(HSNC_SWITCH_RELEASE_NEG == static_cast<int>(hsnc::SwitchKind::release_neg));
+static_assert(HSNC_SWITCH_SLIP_POS == static_cast<int>(hsnc::SwitchKind::slip_pos));
+static_assert(HSNC_SWITCH_SLIP_NEG == static_cast<int>(hsnc::SwitchKind::slip_neg));
+static_assert(HSNC_SWITCH_SLIP_VELOCITY == static_cast<int>(hsnc::SwitchKind::slip_velocity));
+static_assert(HSNC_SWITCH_KINDS_END == hsnc::kSwitchKinds, "a switch kind the kernel ABI does not name");
+
 namespace hsnc {
 
 Configuration configuration_from_key(const char* key) {
@@ -29,8 +39,15 @@ KernelSolver::KernelSolver(const hsnc_kernel& kernel)
                        kernel.model_name + "' has ABI version " + std::to_string(kernel.abi_version) +
                        ", this runtime expects " + std::to_string(HSNC_KERNEL_ABI_VERSION));
     switches_.reserve(static_cast<std::size_t>(kernel.n_switch));
-    for (int f = 0; f < kernel.n_switch; ++f)
-        switches_.push_back({static_cast<SwitchKind>(kernel.switches[f].kind), kernel.switches[f].element});
+    for (int f = 0; f < kernel.n_switch; ++f) {
+        const int kind = kernel.switches[f].kind;
+        if (kind < 0 || kind >= kSwitchKinds)
+            throw RunError("KernelSolver: kernel '" + std::string(kernel.config_key) + "' of model '" +
+                           kernel.model_name + "' has switch function " + std::to_string(f) + " of kind " +
+                           std::to_string(kind) + ", which this runtime does not know (kinds 0.." +
+                           std::to_string(kSwitchKinds - 1) + ")");
+        switches_.push_back({static_cast<SwitchKind>(kind), kernel.switches[f].element});
+    }
     max_step_ = kernel.max_step;
     configured_ = kernel.n_param == 0;
 }

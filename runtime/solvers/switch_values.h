@@ -26,6 +26,7 @@
 #include "elements/friction.h"
 #include "elements/jenkins.h"
 #include "elements/motion.h"
+#include "elements/switch_derivative.h"
 #include "model.h"
 #include "segment_solver.h"
 #include "switch_function.h"
@@ -119,6 +120,31 @@ inline std::complex<double> expm1c(std::complex<double> w) {
     return {std::expm1(x) * std::cos(y) - 2.0 * s * s, std::exp(x) * std::sin(y)};
 }
 
+/// The elements' parameters as the switch functions read them
+/// (model/elements/switch_derivative.h), from a configuration's terms and the
+/// state x (masses, then sliders).
+struct TermsView {
+    const ConfigurationTerms& in;
+    const double* x;
+    struct ContactView {
+        Direction d;
+        double gap;
+    };
+    struct JenkinsView {
+        Direction d;
+        double k, slip_force, s;
+    };
+    ContactView contact(int e) const {
+        const Contact& c = in.contacts[static_cast<std::size_t>(e)];
+        return {c.direction(), c.gap};
+    }
+    JenkinsView jenkins(int e) const {
+        const Jenkins& j = in.jenkins[static_cast<std::size_t>(e)];
+        return {j.direction(), j.k, j.slip_force, x[static_cast<std::size_t>(in.mass.size() + e)]};
+    }
+    Direction friction(int e) const { return {e, in.partner[static_cast<std::size_t>(e)]}; }
+};
+
 /// g, g' and the size of g's terms; xmag, vmag the magnitudes of x and v,
 /// sn, cs the sine and cosine of every harmonic's phase at the instant.
 /// f: the segment's constant force (f_const plus add_slider_preload).
@@ -130,35 +156,11 @@ inline void switch_value(const SwitchFunction& sf, const ConfigurationTerms& in,
     const double* mags[] = {xmag.data(), vmag.data(), nullptr};
     const auto m = double_motion(rows, &mags);
     const int e = sf.element;
-    const auto ee = static_cast<std::size_t>(e);
-    if (sf.kind == SwitchKind::gap) {
-        const Contact& c = in.contacts[ee];
-        g = contact::gap_value(c.direction(), c.gap, m, 0);
-        dg = contact::gap_value(c.direction(), c.gap, m, 1);
-        scale = contact::gap_magnitude(c.direction(), c.gap, m, 0);
-        return;
-    }
-    if (sf.kind == SwitchKind::velocity) {  // w = v_e - v_partner
-        const Direction d{e, in.partner[ee]};
-        g = friction::velocity_value(d, m, 0);
-        dg = friction::velocity_value(d, m, 1);
-        scale = friction::velocity_magnitude(d, m, 0);
-        return;
-    }
-    if (sf.kind == SwitchKind::slip_velocity) {
-        const Direction d = in.jenkins[ee].direction();
-        g = jenkins::slip_velocity_value(d, m, 0);
-        dg = jenkins::slip_velocity_value(d, m, 1);
-        scale = jenkins::slip_velocity_magnitude(d, m, 0);
-        return;
-    }
-    if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
-        const Jenkins& j = in.jenkins[ee];
-        const double s = out.x[static_cast<std::size_t>(in.mass.size()) + ee];
-        const int sigma = sf.kind == SwitchKind::slip_pos ? 1 : -1;
-        g = jenkins::slip_value(sigma, j.k, j.slip_force, j.direction(), s, m, 0);
-        dg = jenkins::slip_value(sigma, j.k, j.slip_force, j.direction(), s, m, 1);
-        scale = jenkins::slip_magnitude(j.k, j.slip_force, j.direction(), s, m, 0);
+    if (!is_release(sf.kind)) {
+        const TermsView p{in, out.x};
+        g = switch_derivative(p, sf, m, 0);
+        dg = switch_derivative(p, sf, m, 1);
+        scale = switch_magnitude(p, sf, m, 0);
         return;
     }
     // A_i, A_i' and the size of A_i's terms.
