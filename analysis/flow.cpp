@@ -8,6 +8,7 @@
 #include "kernel_mode.h"
 #include "lowering.h"
 #include "solver_choice.h"
+#include "number_text.h"
 
 namespace hsnc::analysis {
 
@@ -82,10 +83,7 @@ RunSummary Flow::run(double t, const double* x, const double* v, double t_end, O
 
 void check_number(const char* function, const char* option, double value, bool positive) {
     if (std::isfinite(value) && (!positive || value > 0)) return;
-    std::ostringstream s;
-    s.precision(17);
-    s << value;
-    throw OptionError(function, option, s.str(), positive ? "must be finite and > 0" : "must be finite");
+    throw OptionError(function, option, number_text(value), positive ? "must be finite and > 0" : "must be finite");
 }
 
 }  // namespace hsnc::analysis

@@ -15,6 +15,7 @@
 
 #include "flow.h"
 #include "tangent.h"
+#include "number_text.h"
 
 namespace hsnc {
 namespace {
@@ -22,13 +23,6 @@ namespace {
 constexpr const char* kLyapunov = "hsnc::lyapunov";
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::string number_text(double v) {
-    std::ostringstream s;
-    s.precision(17);
-    s << v;
-    return s.str();
-}
 
 // A fixed generic orthonormal basis (QR of a pseudo-random matrix, fixed
 // seed: runs are reproducible). Not the identity: the unit vectors of the

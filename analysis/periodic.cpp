@@ -10,18 +10,12 @@
 #include "flow.h"
 #include "shooting.h"
 #include "sweep_point.h"
+#include "number_text.h"
 
 namespace hsnc {
 namespace {
 
 constexpr const char* kPeriodic = "hsnc::periodic";
-
-std::string number_text(double v) {
-    std::ostringstream s;
-    s.precision(17);
-    s << v;
-    return s.str();
-}
 
 // The fastest angular frequency of the model: the forcing's, or the highest
 // natural frequency with every contact closed (0 when there is neither).

@@ -617,7 +617,7 @@ constexpr const char* kPartMagic = "hsnc-sweep-part 2";
 }
 
 std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_t count,
-                            const std::vector<std::vector<SweepPoint>>& task_points) {
+                            const std::vector<std::vector<SweepPoint>>& task_points, const std::string& interrupted) {
     const SweepResult names = plan.result_header();
     std::string s = std::string(kPartMagic) + "\n";
     s += "fingerprint " + plan.fingerprint() + "\n";
@@ -631,6 +631,7 @@ std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_
     for (const std::string& m : names.masses) s += " " + m;
     s += "\n";
     s += sweep_detail::write_tasks(plan.part_tasks(index, count), task_points, names.masses.size());
+    if (!interrupted.empty()) s += interrupted + "\n";
     return s;
 }
 
@@ -686,6 +687,14 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
         }
         if (seen[i - 1]) throw InputError(where + ": part " + std::to_string(i) + "/" + std::to_string(n) + " given twice");
         seen[i - 1] = 1;
+        // A part stopped by SIGINT ends with its '# interrupted ...' line: its
+        // tasks lack points, and a merge would be a sweep with holes.
+        for (std::size_t k = 9; k < lines.size(); ++k)
+            if (lines[k].compare(0, 13, "# interrupted") == 0)
+                throw InputError(where + ":" + std::to_string(k + 1) + ": part " + std::to_string(i) + "/" +
+                                 std::to_string(n) + " was interrupted ('" + lines[k].substr(2) +
+                                 "'): run it again (hsnc sweep --part " + std::to_string(i) + "/" + std::to_string(n) +
+                                 ") before merging");
         std::map<std::size_t, std::vector<SweepPoint>> mine;
         sweep_detail::read_tasks(lines, 9, masses.size(), where, mine);
         for (auto& [index, pts] : mine) {

@@ -13,6 +13,7 @@
 #include "generic_solver.h"
 #include "modal.h"
 #include "kernel_mode.h"
+#include "number_text.h"
 
 namespace hsnc::sweep_detail {
 namespace {
@@ -27,13 +28,6 @@ constexpr double kGaussNode[6] = {-0.93246951420315202781, -0.661209386466264513
                                   0.23861918608319690863,  0.66120938646626451366,  0.93246951420315202781};
 constexpr double kGaussWeight[6] = {0.17132449237917034504, 0.36076157304813860757, 0.46791393457269104739,
                                     0.46791393457269104739, 0.36076157304813860757, 0.17132449237917034504};
-
-std::string num(double v) {
-    std::ostringstream s;
-    s.precision(17);
-    s << v;
-    return s.str();
-}
 
 class NullObserver : public Observer {
 public:
@@ -308,8 +302,8 @@ double forcing_frequency(const Model& model, const std::string& what) {
     const double omega = model.forcing[0].omega;
     for (const Harmonic& h : model.forcing)
         if (h.omega != omega)
-            throw InputError(what + ": the forcing has more than one frequency (" + num(omega) + " and " +
-                             num(h.omega) + " rad/s); a sweep needs one");
+            throw InputError(what + ": the forcing has more than one frequency (" + number_text(omega) + " and " +
+                             number_text(h.omega) + " rad/s); a sweep needs one");
     return omega;
 }
 

@@ -27,18 +27,12 @@
 #include "sample_grid.h"
 #include "solver_choice.h"
 #include "solver_provider.h"
+#include "number_text.h"
 
 namespace hsnc {
 namespace {
 
 constexpr const char* kSimulate = "hsnc::simulate";
-
-std::string number_text(double v) {
-    std::ostringstream s;
-    s.precision(17);
-    s << v;
-    return s.str();
-}
 
 class NullObserver : public Observer {
 public:

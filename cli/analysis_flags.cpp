@@ -127,11 +127,4 @@ std::string gnuplot_plain(const std::string& text) {
     return s;
 }
 
-std::string full_number(double v) {
-    std::ostringstream s;
-    s.precision(17);
-    s << v;
-    return s.str();
-}
-
 }  // namespace hsnc::cli

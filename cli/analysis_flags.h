@@ -101,7 +101,5 @@ private:
 /// Text inside a gnuplot string: quotes, backslashes, backquotes and control
 /// characters (which gnuplot would interpret) left out.
 std::string gnuplot_plain(const std::string& text);
-/// 17 significant digits (reads back as the same double).
-std::string full_number(double v);
 
 }  // namespace hsnc::cli

@@ -18,6 +18,7 @@
 #include "output_file.h"
 #include "plot.h"
 #include "section.h"
+#include "number_text.h"
 
 namespace hsnc::cli {
 namespace {
@@ -43,7 +44,7 @@ void draw_convergence(const OutputTarget& target, const Model& model, const std:
     for (std::size_t k = 0; k < rows.size(); k += width) {
         for (std::size_t j = 0; j < width; ++j) {
             const double v = rows[k + j];
-            s << (std::isfinite(v) ? full_number(v) : std::string("NaN")) << (j + 1 < width ? " " : "\n");
+            s << (std::isfinite(v) ? number_text(v) : std::string("NaN")) << (j + 1 < width ? " " : "\n");
         }
     }
     s << "EOD\nplot ";
@@ -79,9 +80,9 @@ int lyapunov_command(const LyapunovFlags& f) {
     if (out || plot) {
         const double row = lyapunov_row_interval(model, o);
         if (row > 0 && std::isfinite(f.t_end) && f.t_end > 0)
-            check_output_size(std::isnan(f.row) ? "--t-end " + full_number(f.t_end) + " (a row every " +
-                                                      full_number(row) + " s)"
-                                                : "--row-interval " + full_number(f.row),
+            check_output_size(std::isnan(f.row) ? "--t-end " + number_text(f.t_end) + " (a row every " +
+                                                      number_text(row) + " s)"
+                                                : "--row-interval " + number_text(f.row),
                               out ? "the convergence --out" : "the convergence rows of --plot", std::floor(f.t_end / row) + 1,
                               n2 + 1, f.allow_large_output);
     }
@@ -142,9 +143,9 @@ int lyapunov_command(const LyapunovFlags& f) {
     if (section_plot) recorder->draw(*section_plot);
 
     std::ostringstream line;
-    line << "status=ok t=" << full_number(r.t);
-    for (std::size_t k = 0; k < r.exponents.size(); ++k) line << " lambda_" << k + 1 << "=" << full_number(r.exponents[k]);
-    line << " sum=" << full_number(r.sum) << " grazing=" << r.grazing;
+    line << "status=ok t=" << number_text(r.t);
+    for (std::size_t k = 0; k < r.exponents.size(); ++k) line << " lambda_" << k + 1 << "=" << number_text(r.exponents[k]);
+    line << " sum=" << number_text(r.sum) << " grazing=" << r.grazing;
     std::cout << line.str() << std::endl;
     if (r.grazing)
         std::fprintf(stderr,
@@ -154,7 +155,7 @@ int lyapunov_command(const LyapunovFlags& f) {
                      r.grazing, r.singular);
     if (!f.common.quiet) {
         std::fprintf(stderr, "hsnc: measured from t = %s over %s s, %zu switch events, %zu directions collapsed by sticks\n",
-                     full_number(r.t_start).c_str(), full_number(r.t - r.t_start).c_str(), r.events, r.collapsed);
+                     number_text(r.t_start).c_str(), number_text(r.t - r.t_start).c_str(), r.events, r.collapsed);
         if (recorder)
             std::fprintf(stderr, "hsnc: Poincare section at %s: %zu points\n", f.section.c_str(), recorder->points());
     }

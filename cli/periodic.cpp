@@ -19,6 +19,7 @@
 #include "output_file.h"
 #include "plot.h"
 #include "simulate_outputs.h"
+#include "number_text.h"
 
 namespace hsnc::cli {
 namespace {
@@ -96,7 +97,7 @@ int periodic_command(const PeriodicFlags& f) {
         const double period = (std::isnan(f.period) ? forcing_period(model) : f.period) * f.harmonic;
         const double dt = std::isnan(f.dt) ? period / 1000 : f.dt;
         if (period > 0 && std::isfinite(period) && dt > 0)
-            check_output_size("--dt " + full_number(dt), "one period (" + full_number(period) + " s) of the orbit --out",
+            check_output_size("--dt " + number_text(dt), "one period (" + number_text(period) + " s) of the orbit --out",
                               trajectory_rows(0.0, period, dt), 1 + 2 * model.dof() + model.jenkins.size(),
                               f.allow_large_output);
     }
@@ -156,14 +157,14 @@ int periodic_command(const PeriodicFlags& f) {
         if (plot) draw_multipliers(*plot, r, model);
     }
     std::ostringstream line;
-    line << "status=" << periodic_status_name(r.status) << " period=" << full_number(r.period)
-         << " iterations=" << r.iterations << " residual=" << full_number(r.residual);
-    for (std::size_t i = 0; i < model.dof(); ++i) line << " x_" << model.masses[i].name << "=" << full_number(r.x[i]);
-    for (std::size_t i = 0; i < model.dof(); ++i) line << " v_" << model.masses[i].name << "=" << full_number(r.v[i]);
+    line << "status=" << periodic_status_name(r.status) << " period=" << number_text(r.period)
+         << " iterations=" << r.iterations << " residual=" << number_text(r.residual);
+    for (std::size_t i = 0; i < model.dof(); ++i) line << " x_" << model.masses[i].name << "=" << number_text(r.x[i]);
+    for (std::size_t i = 0; i < model.dof(); ++i) line << " v_" << model.masses[i].name << "=" << number_text(r.v[i]);
     for (std::size_t j = 0; j < model.jenkins.size(); ++j)  // the sliders are state too (docs/interface.md)
-        line << " s_" << model.jenkins[j].name << "=" << full_number(r.s[j]);
+        line << " s_" << model.jenkins[j].name << "=" << number_text(r.s[j]);
     line << " stable=" << (ok && r.stable ? "true" : "false")
-         << " max_multiplier=" << (ok ? full_number(r.max_multiplier) : "nan") << " grazing=" << r.grazing;
+         << " max_multiplier=" << (ok ? number_text(r.max_multiplier) : "nan") << " grazing=" << r.grazing;
     if (ok && r.neutral) line << " neutral=" << r.neutral;  // a family's multipliers at +1 (docs/interface.md)
     std::cout << line.str() << std::endl;
     if (r.grazing)
@@ -174,7 +175,7 @@ int periodic_command(const PeriodicFlags& f) {
                      r.grazing);
     if (!f.common.quiet) {
         if (ok)
-            std::fprintf(stderr, "hsnc: orbit at t = %s, %zu switch events a period\n", full_number(r.t).c_str(),
+            std::fprintf(stderr, "hsnc: orbit at t = %s, %zu switch events a period\n", number_text(r.t).c_str(),
                          r.events);
         else
             std::fprintf(stderr, "hsnc: periodic: not converged: %s\n", r.message.c_str());

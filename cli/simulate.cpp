@@ -19,6 +19,7 @@
 #include "model_reader.h"
 #include "sample_grid.h"
 #include "simulate_outputs.h"
+#include "number_text.h"
 
 namespace hsnc::cli {
 namespace {
@@ -128,13 +129,6 @@ InputError flagged(const OptionError& e, const SimulateOptions& o, bool quoted =
             return InputError(std::string(f.flag) + (f.value.empty() ? "" : " " + value) + ": " + e.reason());
         }
     return InputError(e.what());
-}
-
-std::string number_text(double v) {
-    std::ostringstream s;
-    s.precision(17);
-    s << v;
-    return s.str();
 }
 
 int simulate(const SimulateOptions& o) {

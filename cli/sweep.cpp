@@ -112,7 +112,7 @@ std::vector<double> parse_values(const std::string& text) {
     return out;
 }
 
-// Ctrl-C on a whole sweep (one process, no --part): the first SIGINT asks
+// Ctrl-C on a sweep in one process (a whole sweep or a --part): the first SIGINT asks
 // every task to stop after the point under way (SweepOptions::stop), so the
 // points done are written, and puts back the handler that was there (the
 // interrupt cleanup of output_file.h), so a second Ctrl-C stops at once as
@@ -409,7 +409,7 @@ int sweep(const SweepFlags& f) {
                              p.periods, p.seconds, per, per * static_cast<double>(p.total - p.done));
             };
         }
-        if (!comm && f.part.empty()) o.stop = &g_stop_sweep;
+        if (!comm) o.stop = &g_stop_sweep;
         SweepPlan plan = [&] {
             try {
                 return SweepPlan::from_file(f.model, f.overrides, o);
@@ -450,14 +450,12 @@ int sweep(const SweepFlags& f) {
                 if (rank != 0) comm->send_progress(-1);
                 else overall->wait_for_others(*comm);
             };
-        // A whole sweep in one process keeps its finished points on Ctrl-C
-        // (GracefulInterrupt); a part or an MPI rank stops at once, as any run.
+        // A sweep in one process (whole or a part) keeps its finished points on
+        // Ctrl-C (GracefulInterrupt); an MPI rank stops at once, as any run.
         bool interrupted = false;
         std::vector<std::vector<SweepPoint>> results;
         if (comm) {
             results = run_tasks_distributed(plan, which, *comm, finished);
-        } else if (part_target) {
-            results = plan.run_tasks(which);
         } else {
             GracefulInterrupt graceful;
             results = plan.run_tasks(which, &interrupted);
@@ -469,19 +467,34 @@ int sweep(const SweepFlags& f) {
         if (rank == 0) {
             try {
                 if (part_target) {
-                    const std::string text = sweep_part_text(plan, part, parts, results);
+                    SweepResult r = plan.result_header();
+                    for (const std::vector<SweepPoint>& t : results) r.points.insert(r.points.end(), t.begin(), t.end());
+                    // An interrupted part keeps its finished points and says so on its
+                    // last line; sweep-merge refuses it (run the part again).
+                    const std::string note =
+                        interrupted ? interrupted_note(r.points.size(), overall->total) : std::string();
+                    const std::string text = sweep_part_text(plan, part, parts, results, note);
                     OutputFile file(*part_target);
                     file.write(text.data(), text.size());
                     file.commit();
                     // Failed points are recorded in it: the part stays even when the command exits 1.
                     commit_outputs();
-                    SweepResult r = plan.result_header();
-                    for (const std::vector<SweepPoint>& t : results) r.points.insert(r.points.end(), t.begin(), t.end());
                     const Problems problems(r);
-                    std::cout << "status=" << (problems.any() ? "failed" : "ok") << " part=" << part + 1 << "/" << parts
-                              << " tasks=" << which.size() << "\n";
+                    std::cout << "status=" << (interrupted ? "interrupted" : problems.any() ? "failed" : "ok")
+                              << " part=" << part + 1 << "/" << parts << " tasks=" << which.size();
+                    if (interrupted) std::cout << " points=" << r.points.size();
+                    std::cout << "\n";
                     for (const SweepPoint& p : r.points)
                         if (!p.stop.empty()) std::fprintf(stderr, "hsnc sweep: %s\n", p.stop.c_str());
+                    if (interrupted) {
+                        std::cout.flush();
+                        std::fprintf(stderr,
+                                     "hsnc sweep: interrupted (SIGINT): the part file holds the %zu points done "
+                                     "(sweep-merge refuses it: run part %zu/%zu again)\n",
+                                     r.points.size(), part + 1, parts);
+                        std::signal(SIGINT, SIG_DFL);
+                        std::raise(SIGINT);
+                    }
                     if (problems.any()) {
                         code = 1;
                         failure = problems.message();

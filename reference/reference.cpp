@@ -32,16 +32,12 @@
 #include "mp_segment.h"
 #include "sample_grid.h"
 #include "transition_rules.h"
+#include "number_text.h"
 
 namespace hsnc::reference {
 namespace {
 
-std::string time_text(const cl_F& t) {
-    std::ostringstream s;
-    s.precision(17);
-    s << cln::double_approx(t);
-    return s.str();
-}
+std::string time_text(const cl_F& t) { return number_text(cln::double_approx(t)); }
 
 std::vector<double> to_double(const std::vector<cl_F>& y) {
     std::vector<double> d(y.size());
@@ -53,15 +49,6 @@ std::vector<double> to_double(const std::vector<cl_F>& y) {
 // the terms of a switch function pass through a few dozen operations (modal
 // projection, closed form, back-projection).
 cl_F noise_of(const MpModel& mp, const cl_F& scale) { return mp.I(64) * mp.eps * scale; }
-
-// Whether an armed sliding velocity within its rounding level eps of zero stops
-// here (the engine's rule, runtime/engine/engine.cpp stops_here): reached or
-// touching zero (hd >= 0) it does; still falling, only where its bound B >= |h''|
-// says it reaches zero (hd^2 >= 2 B h), which an overdamped creep never does.
-bool stops_here(const MpModel& mp, const cl_F& h, const cl_F& hd, const cl_F& B, const cl_F& eps) {
-    if (h > eps) return false;
-    return !cln::plusp(h) || !cln::minusp(hd) || hd * hd >= mp.two * B * h;
-}
 
 // ---- ties: the first non-zero time derivative (interface.md "Ties and touches") ----
 //
@@ -543,7 +530,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                 }
                 const cl_F h = h_of(buf, f), hd = hd_of(buf, f), eps_f = noise(buf, f);
                 const bool stop = is_velocity(sw[f].kind) && armed[f];
-                if (stop ? !stops_here(mp, h, hd, buf.bound[f], eps_f) : h >= -eps_f) continue;
+                if (stop ? !rules::stops_here(h, hd, buf.bound[f], eps_f, mp.zero, [&] { return mp.zero; }) : h >= -eps_f) continue;
                 // The zero, by Newton iterations inside [prev_tau, tau] (the function is on its
                 // safe side at prev_tau); a stop by forward Newton steps onto v = 0.
                 cl_F lo = prev_tau, hi = tau, r = tau;
@@ -587,7 +574,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                     if (has_root[f] && root[f] <= tau_star + tol) continue;
                     const cl_F h = h_of(buf, f), hd = hd_of(buf, f), eps_f = noise(buf, f);
                     const bool stop = is_velocity(sw[f].kind) && armed[f];
-                    if (stop ? stops_here(mp, h, hd, buf.bound[f], eps_f) : (h < -eps_f || (h <= eps_f && cln::minusp(hd))))
+                    if (stop ? rules::stops_here(h, hd, buf.bound[f], eps_f, mp.zero, [&] { return mp.zero; }) : (h < -eps_f || (h <= eps_f && cln::minusp(hd))))
                         switched.push_back(sw[f]);
                 }
                 std::fill(inherited.begin(), inherited.end(), mp.zero);

@@ -1,15 +1,18 @@
 // Running the built `hsnc` binary from tests, as a user would.
 #pragma once
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace hsnc::testing {
 
@@ -53,6 +56,27 @@ inline CliRun run_hsnc(const std::string& args, const std::string& env = "") {
     std::remove(out.c_str());
     std::remove(err.c_str());
     return r;
+}
+
+/// Start `hsnc ARGS` (one argument each, no shell) in the background with
+/// stdout to `out` and stderr to `err` ("/dev/null" for none), SIGINT and
+/// SIGTERM at their defaults as from an interactive shell; its pid (the
+/// caller signals and waits for it), or -1.
+inline pid_t spawn_hsnc(const std::vector<std::string>& args, const std::string& out, const std::string& err) {
+    const pid_t pid = ::fork();
+    if (pid != 0) return pid;
+    ::setenv("XDG_CACHE_HOME", HSNC_TEST_CACHE_HOME, 1);
+    const int o = ::open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    const int e = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    ::dup2(o, 1);
+    ::dup2(e, 2);
+    ::signal(SIGINT, SIG_DFL);
+    ::signal(SIGTERM, SIG_DFL);
+    std::vector<char*> argv{const_cast<char*>("hsnc")};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(HSNC_BINARY, argv.data());
+    ::_exit(127);
 }
 
 inline std::string model_path(const std::string& file) { return std::string(HSNC_SOURCE_DIR) + "/models/" + file; }

@@ -241,18 +241,9 @@ TEST(PeriodicCli, AFullyStuckOrbitIsStableWithItsNeutralMultiplier) {
 // line every 10 s (a measurement of hours here, stopped once it has spoken).
 TEST(LyapunovCli, ALongRunSaysItsProgressEveryTenSeconds) {
     const std::string err = temp_path("stderr");
-    const pid_t pid = ::fork();
+    const pid_t pid =
+        testing::spawn_hsnc({"lyapunov", model_path("seed-scenario-2.toml"), "--t-end", "1e8"}, "/dev/null", err);
     ASSERT_GE(pid, 0);
-    if (pid == 0) {
-        ::setenv("XDG_CACHE_HOME", HSNC_TEST_CACHE_HOME, 1);
-        const int e = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-        const int n = ::open("/dev/null", O_WRONLY);
-        ::dup2(n, 1);
-        ::dup2(e, 2);
-        const std::string model = model_path("seed-scenario-2.toml");
-        ::execl(HSNC_BINARY, "hsnc", "lyapunov", model.c_str(), "--t-end", "1e8", static_cast<char*>(nullptr));
-        ::_exit(127);
-    }
     std::string text;
     for (int i = 0; i < 600 && text.find('\n') == std::string::npos; ++i) {
         std::this_thread::sleep_for(std::chrono::milliseconds(100));

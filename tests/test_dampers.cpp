@@ -378,8 +378,12 @@ TEST(DamperCvode, RandomModelsAgreeWithCvode) {
 // absolute rounding (Re(V eta) and a = M^-1 (f - K x - C v) near x_e), so it
 // reads 0 once the exact one is a few 1e-18: it may stick there, never while
 // the exact velocity is above 1e-16 of the initial speed.
-TEST(DamperCreep, OverdampedCreepIntoEquilibriumSlidesOnAsTheReference) {
-    Model md = dashpot_1dof(1.0, 400.0, 50.0, 0.1, 0.3, 0.0);
+// The creep of a 1-DOF oscillator with dashpot c and friction into its
+// equilibrium, against the 40-digit reference: one reversal, then sliding on
+// to t_end on the programs (when `programs`) and on the Eigen solver. `solver`:
+// what the Eigen solver's provider must say it took.
+void creep_slides_on(double c, const char* solver, bool programs) {
+    Model md = dashpot_1dof(1.0, 400.0, c, 0.1, 0.3, 0.0);
     md.masses[0].has_friction = true;
     md.masses[0].mu_k = 0.1;
     md.masses[0].mu_s = 0.2;
@@ -393,28 +397,49 @@ TEST(DamperCreep, OverdampedCreepIntoEquilibriumSlidesOnAsTheReference) {
     ASSERT_EQ(ref_rec.events.size(), 1u);
     ASSERT_EQ(ref_rec.events[0].kind, EventKind::reversal);
     ASSERT_LT(ref.v[0], 0.0);  // still sliding down onto x_e
-    // The programs (interpreted: the kernels' bits).
-    const Outcome o = testing::simulate(md, t_end, 0.0, testing::Solvers::interp);
-    ASSERT_EQ(o.summary.status, RunStatus::ok) << o.summary.message;
-    ASSERT_EQ(o.events.size(), ref_rec.events.size()) << "a stick at t = " << o.events.back().t;
-    EXPECT_EQ(o.events[0].kind, EventKind::reversal);
-    EXPECT_NEAR(o.events[0].t, ref_rec.events[0].t, 1e-15);
-    EXPECT_EQ(o.summary.configuration.stuck[0], 0);
-    // v ~ -2.7e-22 at 5 s: the exact motion's, to rounding (measured 2e-14 relative)
-    EXPECT_NEAR(o.summary.v[0], ref.v[0], 1e-12 * std::fabs(ref.v[0]));
-    EXPECT_NEAR(o.summary.x[0], ref.x[0], 1e-15);
-    // The Eigen solver: a stick only where the exact velocity, ref.v e^{-10 (t - t_end)}
-    // (the slow mode alone by then), is below its absolute resolution.
-    const Outcome e = testing::simulate(md, t_end, 0.0, testing::Solvers::generic);
-    ASSERT_EQ(e.summary.status, RunStatus::ok) << e.summary.message;
-    ASSERT_GE(e.events.size(), 1u);
-    ASSERT_LE(e.events.size(), 2u);
-    if (e.events.size() == 2) {
-        ASSERT_EQ(e.events[1].kind, EventKind::stick);
-        const double v_exact = std::fabs(ref.v[0]) * std::exp(10.0 * (t_end - e.events[1].t));
-        std::printf("Eigen solver: stuck at t = %.4f s, where the exact velocity is %.2g m/s\n", e.events[1].t, v_exact);
-        EXPECT_LT(v_exact, 1e-16 * 0.3);  // measured: 5e-18 (before: 3.3e-15)
+    if (programs) {  // interpreted: the kernels' bits
+        const Outcome o = testing::simulate(md, t_end, 0.0, testing::Solvers::interp);
+        ASSERT_EQ(o.summary.status, RunStatus::ok) << o.summary.message;
+        ASSERT_EQ(o.events.size(), ref_rec.events.size()) << "a stick at t = " << o.events.back().t;
+        EXPECT_EQ(o.events[0].kind, EventKind::reversal);
+        EXPECT_NEAR(o.events[0].t, ref_rec.events[0].t, 1e-15);
+        EXPECT_EQ(o.summary.configuration.stuck[0], 0);
+        // v ~ -2.7e-22 at 5 s (overdamped): the exact motion's, to rounding (measured 2e-14 relative)
+        EXPECT_NEAR(o.summary.v[0], ref.v[0], 1e-12 * std::fabs(ref.v[0]));
+        EXPECT_NEAR(o.summary.x[0], ref.x[0], 1e-15);
     }
+    // The Eigen solver: the same events. Its velocity and acceleration are the
+    // decaying modes about the static offset (state_space_solver.h,
+    // exponential_solver.h), so they keep their relative rounding as they decay;
+    // taken about zero, they carried the absolute rounding of the offset, and the
+    // overdamped velocity fell through zero at ~4.01 s (a stick where the exact
+    // velocity is 5e-18 m/s).
+    GenericSolverProvider provider(md);
+    const Outcome e = testing::run_engine(md, provider, t_end);
+    EXPECT_NE(provider.describe().find(solver), std::string::npos) << provider.describe();
+    ASSERT_EQ(e.summary.status, RunStatus::ok) << e.summary.message;
+    ASSERT_EQ(e.events.size(), ref_rec.events.size()) << "a stick at t = " << e.events.back().t;
+    EXPECT_EQ(e.events[0].kind, EventKind::reversal);
+    EXPECT_NEAR(e.events[0].t, ref_rec.events[0].t, 1e-15);
+    EXPECT_EQ(e.summary.configuration.stuck[0], 0);
+    std::printf("c = %.9g: v(5 s) reference %.6g, Eigen solver %.6g m/s (relative %.2g)\n", c, ref.v[0], e.summary.v[0],
+                std::fabs(e.summary.v[0] / ref.v[0] - 1));
+    EXPECT_NEAR(e.summary.v[0], ref.v[0], 1e-9 * std::fabs(ref.v[0]));
+    EXPECT_NEAR(e.summary.x[0], ref.x[0], 1e-15);
+}
+
+TEST(DamperCreep, OverdampedCreepIntoEquilibriumSlidesOnAsTheReference) {
+    creep_slides_on(50.0, "state-space modes", true);
+}
+
+// Critically damped to 1e-6 (zeta = 1 + 1e-6; the reference's modes need the
+// pair apart): the Eigen solver takes it by the matrix exponential, about the
+// static offset too, with a bound on g'' that decays with the motion (about 0,
+// with the constant force in the state, the bound stayed fixed as the velocity
+// decayed, and the switch search did not converge at t = 1.55 s). The programs
+// do not converge there either (not yet: the near-critical pseudo-modes' bound).
+TEST(DamperCreep, NearlyCriticallyDampedCreepIntoEquilibriumSlidesOnAsTheReference) {
+    creep_slides_on(40.0 * (1 + 1e-6), "critically damped: by the matrix exponential", false);
 }
 
 
@@ -474,6 +499,8 @@ TEST(DamperSolver, NearCriticalDampingStaysExact) {
                 x.eval(t, SegmentEval{xb, vb, ab, nullptr, nullptr, nullptr, nullptr});
                 worst = std::max(worst, std::fabs(xa[0] - xb[0]));
             }
+            std::printf("zeta = 1 %+g: %s, max |x - exponential| %.3g m\n", side * std::pow(10.0, -e),
+                        provider.describe().c_str(), worst);
             EXPECT_LT(worst, 1e-15) << "zeta = 1 " << side * std::pow(10.0, -e);
         }
     EXPECT_GE(exponential, 8);  // 1 +- 1e-5 .. 1e-9

@@ -320,21 +320,10 @@ TEST(Outputs, TheRowEstimateMatchesTheWrittenRows) {
 void interrupt_test(int sig, const char* message) {
     TempDir dir;
     const std::string out = dir / "out.csv", err = dir / "stderr";
-    const pid_t pid = ::fork();
+    const pid_t pid = testing::spawn_hsnc({"simulate", model_path("seed-scenario-2.toml"), "--t-end", "1e6", "--dt",
+                                           "1e-4", "--allow-large-output", "--quiet", "--out", out},
+                                          "/dev/null", err);
     ASSERT_GE(pid, 0);
-    if (pid == 0) {
-        ::setenv("XDG_CACHE_HOME", HSNC_TEST_CACHE_HOME, 1);
-        const int e = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-        const int n = ::open("/dev/null", O_WRONLY);
-        ::dup2(n, 1);
-        ::dup2(e, 2);
-        ::signal(SIGINT, SIG_DFL);  // as from an interactive shell
-        ::signal(SIGTERM, SIG_DFL);
-        const std::string model = model_path("seed-scenario-2.toml");
-        ::execl(HSNC_BINARY, "hsnc", "simulate", model.c_str(), "--t-end", "1e6", "--dt", "1e-4",
-                "--allow-large-output", "--quiet", "--out", out.c_str(), static_cast<char*>(nullptr));
-        ::_exit(127);
-    }
     // Wait until the temporary file has data, then interrupt.
     bool started = false;
     for (int i = 0; i < 1000 && !started; ++i) {

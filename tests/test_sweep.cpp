@@ -340,43 +340,47 @@ TEST(SweepCli, ProgressLinePerPoint) {
     EXPECT_EQ(q.err, "");
 }
 
-// Ctrl-C on a whole sweep keeps the points done: the sweep stops after the
-// point under way, writes the curve and the diagram with the finished points
-// and a last comment line saying it was interrupted, says status=interrupted
-// and ends by SIGINT (the shell reports 130).
-TEST(SweepCli, SigintKeepsTheFinishedPoints) {
-    // Barely damped: no point settles, each runs its --max-periods.
-    std::string text = kLinear;
-    text.replace(text.find("zeta = 0.05"), 11, "zeta = 1e-7");
-    const std::string model = write_temp("slow.toml", text);
-    const std::string out = temp_path("curve.csv"), diagram = temp_path("diagram.csv"), err = temp_path("stderr"),
-                      stdout_path = temp_path("stdout");
-    const pid_t pid = ::fork();
-    ASSERT_GE(pid, 0);
-    if (pid == 0) {
-        ::setenv("XDG_CACHE_HOME", HSNC_TEST_CACHE_HOME, 1);
-        const int e = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-        const int o = ::open(stdout_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-        ::dup2(o, 1);
-        ::dup2(e, 2);
-        ::signal(SIGINT, SIG_DFL);  // as from an interactive shell
-        ::execl(HSNC_BINARY, "hsnc", "sweep", model.c_str(), "--param", "omega", "--from", "0.5", "--to", "1.5",
-                "--points", "1000", "--max-periods", "3000", "--record-periods", "2", "--out", out.c_str(),
-                "--diagram", diagram.c_str(), static_cast<char*>(nullptr));
-        ::_exit(127);
-    }
-    // Interrupt once two points are done.
+// Runs hsnc with `args` (stdout to `out`, stderr to `err`), sends one SIGINT
+// once stderr says `marker`, and returns the wait status; `seconds`: from the
+// signal to the end.
+int interrupt_run(const std::vector<std::string>& args, const std::string& out, const std::string& err,
+                  const std::string& marker, double& seconds) {
+    const pid_t pid = testing::spawn_hsnc(args, out, err);
+    if (pid < 0) return -1;
     bool started = false;
     for (int i = 0; i < 3000 && !started; ++i) {
-        started = slurp(err).find("point 2/1000") != std::string::npos;
+        started = slurp(err).find(marker) != std::string::npos;
         if (!started) std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     EXPECT_TRUE(started) << slurp(err);
     const auto t0 = std::chrono::steady_clock::now();
     ::kill(pid, SIGINT);
     int status = 0;
-    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (::waitpid(pid, &status, 0) != pid) return -1;
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return status;
+}
+
+// A barely damped linear model: no point settles, each runs its --max-periods.
+std::string slow_model() {
+    std::string text = kLinear;
+    text.replace(text.find("zeta = 0.05"), 11, "zeta = 1e-7");
+    return write_temp("slow.toml", text);
+}
+
+// Ctrl-C on a whole sweep keeps the points done: the sweep stops after the
+// point under way, writes the curve and the diagram with the finished points
+// and a last comment line saying it was interrupted, says status=interrupted
+// and ends by SIGINT (the shell reports 130).
+TEST(SweepCli, SigintKeepsTheFinishedPoints) {
+    const std::string model = slow_model();
+    const std::string out = temp_path("curve.csv"), diagram = temp_path("diagram.csv"), err = temp_path("stderr"),
+                      stdout_path = temp_path("stdout");
+    double seconds = 0.0;
+    const int status = interrupt_run({"sweep", model, "--param", "omega", "--from", "0.5", "--to", "1.5", "--points",
+                                      "1000", "--max-periods", "3000", "--record-periods", "2", "--out", out,
+                                      "--diagram", diagram},
+                                     stdout_path, err, "point 2/1000", seconds);  // once two points are done
     EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << status << "\n" << slurp(err);
     EXPECT_LT(seconds, 30.0);  // one point at most after the signal
     const std::string curve = slurp(out), d = slurp(diagram), line = slurp(stdout_path);
@@ -395,6 +399,44 @@ TEST(SweepCli, SigintKeepsTheFinishedPoints) {
     ASSERT_GE(d.size(), note.size());
     EXPECT_EQ(d.substr(d.size() - note.size()), note);
     EXPECT_NE(slurp(err).find("interrupted (SIGINT)"), std::string::npos);
+    std::remove(err.c_str());
+    std::remove(stdout_path.c_str());
+}
+
+// Ctrl-C on `sweep --part` keeps the points done in the part file (a part is
+// hours of a long study), which ends with the same '# interrupted' line; and
+// sweep-merge refuses that part, naming the file and the line (exit 2, nothing
+// written), rather than merge a sweep with holes.
+TEST(SweepCli, SigintOnAPartKeepsTheFinishedPointsAndMergeRefusesThem) {
+    const std::string model = slow_model();
+    const std::string part = temp_path("part1"), err = temp_path("stderr"), stdout_path = temp_path("stdout");
+    double seconds = 0.0;
+    const int status = interrupt_run({"sweep", model, "--param", "omega", "--from", "0.5", "--to", "1.5", "--points",
+                                      "1000", "--max-periods", "3000", "--part", "1/2", "--part-out", part},
+                                     stdout_path, err, "point 2/", seconds);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << status << "\n" << slurp(err);
+    EXPECT_LT(seconds, 30.0);
+    const std::string line = slurp(stdout_path), text = slurp(part);
+    ASSERT_EQ(line.rfind("status=interrupted part=1/2 ", 0), 0u) << line << slurp(err);
+    const std::size_t at = line.find(" points=");
+    ASSERT_NE(at, std::string::npos) << line;
+    const std::size_t done = std::stoul(line.substr(at + 8));
+    EXPECT_GE(done, 2u);
+    EXPECT_LT(done, 1000u);
+    ASSERT_EQ(text.rfind("hsnc-sweep-part 2\n", 0), 0u) << text.substr(0, 200);
+    const std::string note = "# interrupted (SIGINT) after " + std::to_string(done) + " of ";
+    const std::size_t last = text.rfind('\n', text.size() - 2) + 1;
+    EXPECT_EQ(text.substr(last, note.size()), note) << text.substr(last);
+    EXPECT_NE(slurp(err).find("interrupted (SIGINT): the part file holds the " + std::to_string(done) + " points done"),
+              std::string::npos)
+        << slurp(err);
+    // The merge refuses it for what it is (before it says that part 2/2 is missing).
+    const std::string merged = temp_path("merged.csv");
+    const auto m = run_hsnc("sweep-merge '" + part + "' --out '" + merged + "'");
+    EXPECT_EQ(m.exit_code, 2) << m.err;
+    EXPECT_NE(m.err.find(part + ":"), std::string::npos) << m.err;
+    EXPECT_NE(m.err.find("part 1/2 was interrupted"), std::string::npos) << m.err;
+    EXPECT_FALSE(file_exists(merged));
     std::remove(err.c_str());
     std::remove(stdout_path.c_str());
 }

@@ -265,13 +265,17 @@ private:
 };
 
 /// A part file of `hsnc sweep --part i/n`: the fingerprint, the part, and
-/// the points of each of its tasks.
+/// the points of each of its tasks. `interrupted`: "" for a finished part, else
+/// the last line of a part stopped by SIGINT (a '#' comment; its tasks hold
+/// the points done), which merge_sweep_parts refuses.
 std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_t count,
-                            const std::vector<std::vector<SweepPoint>>& task_points);
+                            const std::vector<std::vector<SweepPoint>>& task_points,
+                            const std::string& interrupted = "");
 
 /// Merge the part files `texts` (named by `names` in messages) of one sweep
 /// into the result a whole run gives. InputError when they are not the parts
-/// of one sweep, a part is missing or given twice, or a file is damaged.
+/// of one sweep, a part is missing or given twice, was interrupted, or a file
+/// is damaged.
 SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::vector<std::string>& names);
 
 /// The response-curve and diagram CSV headers of interface.md section 6

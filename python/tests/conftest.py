@@ -5,7 +5,11 @@ and this checkout)."""
 import csv
 import os
 import pathlib
+import signal
 import subprocess
+import sys
+import textwrap
+import time
 
 import numpy as np
 import pytest
@@ -43,3 +47,38 @@ def cli():
     if not BINARY.exists():
         pytest.fail("no hsnc executable at %s (set HSNC_BINARY)" % BINARY)
     return run_cli
+
+
+def interrupt_long_run(call, model, delay, timeout):
+    """Runs `result = CALL` (Python text; `model` is hsnc.Model.from_file(MODEL),
+    `hsnc` imported) in a fresh interpreter, sends SIGINT `delay` s after the
+    run started, and returns (stdout, stderr, returncode, seconds from the
+    signal to the end). The script prints "interrupted after S s" when the run
+    raises KeyboardInterrupt (then re-raised) and "finished" when it returns."""
+    script = textwrap.dedent("""
+        import sys, time
+        import hsnc
+        model = hsnc.Model.from_file(sys.argv[1])
+        print("running", flush=True)
+        start = time.monotonic()
+        try:
+            result = %s
+        except KeyboardInterrupt:
+            print("interrupted after %%.3f s" %% (time.monotonic() - start), flush=True)
+            raise
+        print("finished", flush=True)
+    """) % call
+    p = subprocess.Popen([sys.executable, "-c", script, model], env=dict(os.environ), stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline().strip() == "running"
+        time.sleep(delay)
+        sent = time.monotonic()
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=timeout)
+        waited = time.monotonic() - sent
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+    return out, err, p.returncode, waited

@@ -2,18 +2,14 @@
 give one after the other, and Ctrl-C (SIGINT) stops a long run with
 KeyboardInterrupt, promptly, without a result."""
 
-import os
 import signal
-import subprocess
-import sys
-import textwrap
 import threading
 import time
 
 import numpy as np
 
 import hsnc
-from conftest import model_path
+from conftest import interrupt_long_run, model_path
 
 
 def run_pair():
@@ -77,38 +73,11 @@ def test_gil_is_released_while_running():
     assert t1 - t0 > 0.05 and len(during) >= 5, (t1 - t0, len(during))
 
 
-LONG_RUN = textwrap.dedent("""
-    import sys, time
-    import hsnc
-    model = hsnc.Model.from_file(sys.argv[1])
-    print("running", flush=True)
-    start = time.monotonic()
-    try:
-        r = hsnc.simulate(model, t_end=1e7)
-    except KeyboardInterrupt:
-        print("interrupted after %.3f s" % (time.monotonic() - start), flush=True)
-        raise
-    print("finished", r.summary["status"], flush=True)
-""")
-
-
 def test_sigint_raises_keyboard_interrupt_promptly():
-    env = dict(os.environ)
-    p = subprocess.Popen([sys.executable, "-c", LONG_RUN, model_path("seed-scenario-2.toml")], env=env,
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        assert p.stdout.readline().strip() == "running"
-        time.sleep(0.5)
-        sent = time.monotonic()
-        p.send_signal(signal.SIGINT)
-        out, err = p.communicate(timeout=20)
-        waited = time.monotonic() - sent
-    finally:
-        if p.poll() is None:
-            p.kill()
-            p.wait()
+    out, err, code, waited = interrupt_long_run("hsnc.simulate(model, t_end=1e7)", model_path("seed-scenario-2.toml"),
+                                                0.5, 20)
     # Python's default handler: KeyboardInterrupt and a traceback; an uncaught
     # KeyboardInterrupt ends the interpreter by SIGINT itself (Python >= 3.8).
     assert "KeyboardInterrupt" in err and "interrupted after" in out and "finished" not in out, (out, err)
-    assert p.returncode == -signal.SIGINT
+    assert code == -signal.SIGINT
     assert waited < 2.0, waited

@@ -15,7 +15,9 @@
 #include "sample_grid.h"
 #include "switch_guard.h"
 #include "tie_series.h"
+#include "transition_rules.h"
 #include "transitions.h"
+#include "number_text.h"
 
 namespace hsnc {
 namespace {
@@ -36,33 +38,6 @@ double safe_step(double h, double hd, double B) {
     if (!(B > 0)) return hd >= 0 ? kInf : h / -hd;
     const double root = std::sqrt(hd * hd + 2 * B * h);
     return hd >= 0 ? (hd + root) / B : 2 * h / (root - hd);
-}
-
-// Whether an armed sliding velocity, h = side*w within its rounding level eps
-// of zero, with rate hd and |h''| <= B, stops here. One that has reached zero,
-// or touches it (turns back: hd >= 0), does (interface.md: a sliding velocity
-// that touches 0 is a stop). One still falling stops only where its bound says
-// that it reaches zero, h + hd s + B s^2/2 <= 0 for some s (hd^2 >= 2 B h),
-// with a rate beyond its own rounding (rate_noise(): the equation of motion's
-// terms; the Eigen solver takes the acceleration from them, M^-1 (f - K x - C v),
-// so near an equilibrium its hd is their rounding, not the motion's). An
-// overdamped creep into equilibrium (w ~ exp(-lambda t), |h''| ~ lambda^2 h:
-// never) reaches zero only as t grows without bound; it fell under the level
-// inherited from its last event at an instant set by rounding alone and was
-// declared stuck there (3.29 s generic, 3.37 s eigen; the 40-digit reference
-// slides on: tests/test_dampers.cpp DamperCreep).
-template <class RateNoise>
-bool stops_here(double h, double hd, double B, double eps, RateNoise&& rate_noise) {
-    if (h > eps) return false;
-    if (h <= 0 || hd >= 0) return true;
-    return hd * hd >= 2 * B * h && -hd > rate_noise();
-}
-
-std::string time_text(double t) {
-    std::ostringstream s;
-    s.precision(17);
-    s << t;
-    return s.str();
 }
 
 // Working storage for one segment's evaluations (sized for the largest switch list).
@@ -282,7 +257,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         if (rate * 4 * kEps * std::fabs(t) > 1.0) {
             std::ostringstream msg;
             msg.precision(3);
-            msg << "the motion is too fast for the time resolution at t = " << time_text(t) << ": configuration '"
+            msg << "the motion is too fast for the time resolution at t = " << number_text(t) << ": configuration '"
                 << cfg.spec(model_) << "' has rates up to " << rate << " 1/s, and the smallest step there is "
                 << 4 * kEps * std::fabs(t) << " s (a period must span at least 2 pi of them); "
                 << "start nearer t = 0 (t0 shifts the forcing phase only)";
@@ -468,6 +443,29 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                 for (std::size_t f = 0; f < nsw; ++f)
                     if (root[f] <= tau_star + tol) found.switched.push_back(sw[f]);
                 eval_all(found.tau, true);
+                // The Newton step that located the event is clamped to the last instant
+                // inside the trigger level (the root may lie before it), and that level
+                // may be what the function inherited, above its own rounding: where the
+                // event's function is still beyond its own rounding, Newton steps on from
+                // the located instant (at most 3, while they shrink), as the reference
+                // iterates. A contact was located at G = 14 times its rounding, which the
+                // tie rules, judging G by its own rounding, may read as the other side.
+                {
+                    std::size_t lead = nsw;
+                    for (std::size_t f = 0; f < nsw && lead == nsw; ++f)
+                        if (root[f] == tau_star && !(is_velocity(sw[f].kind) && armed[f])) lead = f;
+                    double last = kInf;
+                    for (int it = 0; lead < nsw && it < 3; ++it) {
+                        const double h = side[lead] * buf.g[lead], hd = side[lead] * buf.dg[lead];
+                        const double own = noise_of(buf.scale[lead] + std::fabs(buf.dg[lead]) * (std::fabs(t) + found.tau));
+                        if (std::fabs(h) <= own || !(hd < 0)) break;
+                        const double r = found.tau - h / hd;
+                        if (!(r >= 0 && r <= tau_end) || !(std::fabs(r - found.tau) < last) || r == found.tau) break;
+                        last = std::fabs(r - found.tau);
+                        found.tau = r;
+                        eval_all(found.tau, true);
+                    }
+                }
                 for (std::size_t f = 0; f < nsw; ++f) {
                     if (root[f] <= tau_star + tol) continue;
                     const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
@@ -477,18 +475,29 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     auto rate_noise = [&] {
                         return 4 * tie_noise(rate_magnitude(model_, cfg, sw[f], buf.x.data(), buf.v.data()));
                     };
-                    if (stop ? stops_here(h, hd, buf.bound[f], eps_f, rate_noise)
+                    if (stop ? rules::stops_here(h, hd, buf.bound[f], eps_f, 0.0, rate_noise)
                              : (h < -eps_f || (h <= eps_f && hd < 0)))
                         found.switched.push_back(sw[f]);
                 }
+                // What the next segment inherits: each function's rounding at this
+                // instant. The level it had itself inherited is passed on only by an
+                // event at that same instant (a chain of switches at one t). Passed on
+                // always, it was a ratchet: once a function's terms were large (a stiff
+                // Jenkins element stuck), their level stayed for the rest of the run,
+                // and a contact was located 18 times its own rounding from zero (clamped
+                // to the last instant inside that level), where the tie rules, which
+                // judge G by its own rounding, then saw it open (tests/test_contact_location.cpp).
+                const bool same_instant = found.tau <= 4 * kEps * std::fabs(t);
                 std::fill(inherited.begin(), inherited.end(), 0.0);
                 for (std::size_t f = 0; f < nsw; ++f)
-                    inherited[slot(sw[f])] = noise(f);
+                    inherited[slot(sw[f])] =
+                        same_instant ? noise(f)
+                                     : noise_of(buf.scale[f] + std::fabs(buf.dg[f]) * (std::fabs(t) + found.tau));
             };
             double tau = 0.0;  // the instant evaluated last
             for (std::size_t iter = 0;; ++iter) {
                 if (iter > 10'000'000) {
-                    failure = "switch search does not converge at t = " + time_text(t + tau);
+                    failure = "switch search does not converge at t = " + number_text(t + tau);
                     return;
                 }
                 // Which of the functions just evaluated have switched, and where is each one's zero?
@@ -499,7 +508,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
                     if (!std::isfinite(h) || !std::isfinite(hd) || !std::isfinite(buf.bound[f])) {
                         failure = "non-finite switch function in configuration '" + cfg.spec(model_) + "' at t = " +
-                                  time_text(t + tau);
+                                  number_text(t + tau);
                         return;
                     }
                     if (iter == 0 && leaves_now[f]) {  // a tie heading across: it switches at the segment start
@@ -515,7 +524,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                         S.eval(tau, probe_view);
                         return 4 * tie_noise(rate_magnitude(model_, cfg, sw[f], probe.x.data(), probe.v.data()));
                     };
-                    if (stop ? !stops_here(h, hd, buf.bound[f], eps_f, rate_noise) : h >= -eps_f) continue;
+                    if (stop ? !rules::stops_here(h, hd, buf.bound[f], eps_f, 0.0, rate_noise) : h >= -eps_f) continue;
                     // Move to the zero by one Newton step (the function is monotone
                     // there), never before the last point known to be on the safe side.
                     const double prev = scheduled ? before[f] : prev_tau;
@@ -687,7 +696,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         if (options.max_events && sum.events >= options.max_events)
             return finish(RunStatus::max_events, "stopped after " + std::to_string(sum.events) + " events");
         if ((++progress_counter & 255) == 0 && !observer.on_progress(t))
-            return finish(RunStatus::stopped, "stopped at t = " + time_text(t));
+            return finish(RunStatus::stopped, "stopped at t = " + number_text(t));
     }
     return finish(RunStatus::ok, "");
 }

@@ -19,7 +19,7 @@
 // nothing. A sliding velocity that reaches zero, crossing or touching, is a stop
 // (h <= noise), and the stick rule decides; one still falling inside its
 // noise stops only where the bound says it reaches zero (an overdamped creep
-// into equilibrium never does: engine.cpp stops_here).
+// into equilibrium never does: transition_rules.h stops_here).
 #pragma once
 
 #include "engine_options.h"

@@ -1,4 +1,5 @@
 #include "switch_guard.h"
+#include "number_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,13 +10,6 @@ namespace hsnc {
 namespace {
 
 constexpr double kEps = std::numeric_limits<double>::epsilon();
-
-std::string time_text(double t) {
-    std::ostringstream s;
-    s.precision(17);
-    s << t;
-    return s.str();
-}
 
 }  // namespace
 
@@ -50,10 +44,10 @@ RunStatus SwitchGuard::after_switch(double t, std::size_t switch_functions) {
 
 std::string SwitchGuard::message(const std::string& configuration) const {
     if (status_ == RunStatus::chattering)
-        return "configuration keeps switching at t = " + time_text(last_t_) + " (now '" + configuration + "')";
+        return "configuration keeps switching at t = " + number_text(last_t_) + " (now '" + configuration + "')";
     if (status_ == RunStatus::zeno)
-        return std::to_string(recent_.size()) + " switches between t = " + time_text(recent_.front()) + " and " +
-               time_text(recent_.back()) + " (accumulating switches, configuration '" + configuration + "')";
+        return std::to_string(recent_.size()) + " switches between t = " + number_text(recent_.front()) + " and " +
+               number_text(recent_.back()) + " (accumulating switches, configuration '" + configuration + "')";
     return "";
 }
 

@@ -261,5 +261,23 @@ void entered_configuration(P& p, Configuration& cfg, std::vector<signed char>& s
     }
 }
 
+/// Whether an armed sliding velocity, h = side*v within its rounding level eps
+/// of zero, with rate hd and |h''| <= B, stops here. One that has reached zero,
+/// or touches it (turns back: hd >= 0), does (interface.md: a sliding velocity
+/// that touches 0 is a stop). One still falling stops only where its bound says
+/// that it reaches zero, h + hd s + B s^2/2 <= 0 for some s (hd^2 >= 2 B h),
+/// with a rate beyond its own rounding (rate_noise(), evaluated only then: the
+/// double engine's level of the equation of motion's terms; the reference's
+/// 40 digits pass zero). An overdamped creep into equilibrium (w ~ exp(-lambda t),
+/// |h''| ~ lambda^2 h) never does: it reaches zero only as t grows without
+/// bound (tests/test_dampers.cpp DamperCreep). B + B: 2 B exactly in every
+/// arithmetic, so both methods compare the same quantity.
+template <class T, class RateNoise>
+bool stops_here(const T& h, const T& hd, const T& B, const T& eps, const T& zero, RateNoise&& rate_noise) {
+    if (h > eps) return false;
+    if (h <= zero || hd >= zero) return true;
+    return hd * hd >= (B + B) * h && -hd > rate_noise();
+}
+
 }  // namespace rules
 }  // namespace hsnc

@@ -19,6 +19,11 @@
 //     |g''(s)| <= ||L Z^2||_1 e ||z(tau)||_inf  (norms: the row's absolute sum, the largest |z_k|),
 // with 1% added for the rounding of L Z^2. Steps are shorter than the modal
 // solvers' (at most 1/||Z||), the price of taking every regime.
+//
+// Where K_FF is regular, x_F is written about its static offset x_s =
+// K_FF^-1 f (the constant force then drives nothing: Z's column of 1 is 0),
+// so that near the equilibrium x - x_s, v and a keep their relative rounding
+// as they decay (as StateSpaceSolver, state_space_solver.h).
 #pragma once
 
 #include <vector>
@@ -57,6 +62,8 @@ private:
     // --- fixed by setup ---
     Eigen::MatrixXd Z_;           // the generator (its constant column holds this segment's force)
     Eigen::VectorXd z0_, absz0_;  // z(0) and |z(0)|
+    Eigen::VectorXd xs_;          // the free masses' static offset (K_FF regular), else 0: x_F = xs + z_x
+    bool free_offset_ = false;    // xs_ taken (Z's column of 1 is then 0)
     Eigen::VectorXd bound_row_;   // ||L_f Z^2||_1 per switch function
     Eigen::VectorXd x_fix_, fseg_, slider_, theta_;
 

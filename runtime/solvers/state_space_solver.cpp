@@ -167,6 +167,15 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
             bh.block(ne_, h, ne_, 1) = Me_lu_.solve(T_.transpose() * F) / s;
         }
     beta_h_ = Vinv_ * bh.cast<cplx>();
+    bh_tail_ = bh.bottomRows(ne_);
+    // The static offset where A is regular (every eigenvalue off 0: K_e regular).
+    if (m > 0) {
+        const double anorm = A.cwiseAbs().rowwise().sum().maxCoeff();
+        offset_ = true;
+        for (int k = 0; k < m; ++k)
+            if (!(std::abs(lambda_(k)) > 1e-12 * anorm)) offset_ = false;
+        if (offset_) Ke_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(Ke);
+    }
     // The rigid coordinates' forcing: q_j'' = (r_j^T f + sum_h r_j^T F_h sin) / m_j.
     rigid_h_ = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rigid_.size()), nh_);
     for (std::size_t j = 0; j < rigid_.size(); ++j)
@@ -284,7 +293,10 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     theta_ = Eigen::VectorXd::Zero(nh_);
     e_theta_ = Eigen::VectorXcd::Zero(nh_);
     eta0_ = beta0_ = Eigen::VectorXcd::Zero(m);
-    eta_ = Eigen::VectorXcd::Zero(static_cast<Eigen::Index>(rep_.size()));
+    eta_ = deta_ = Eigen::VectorXcd::Zero(static_cast<Eigen::Index>(rep_.size()));
+    ys_ = fe_ = Eigen::VectorXd::Zero(ne_);
+    dy_ = Eigen::VectorXd::Zero(m);
+    af_ = Eigen::VectorXd::Zero(nf_);
     mod_eta0_ = mod_beta0_ = Eigen::VectorXd::Zero(m);
     B_ = Eigen::VectorXd::Zero(ns_);
     q0_ = qd0_ = rigid_f_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rigid_.size()));
@@ -330,10 +342,18 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
     }
     Eigen::VectorXcd b0 = Eigen::VectorXcd::Zero(m), y0(m);
     if (ne_ > 0) {
-        const Eigen::VectorXd fe = Me_lu_.solve(T_.transpose() * f) / s;
+        const Eigen::VectorXd Tf = T_.transpose() * f;
+        // With the static offset the modes see no constant force (b0 = 0) and start from y0 - y_s.
+        if (offset_) {
+            ys_ = Ke_lu_.solve(Tf);
+            fe_.setZero();
+        } else {
+            ys_.setZero();
+            fe_ = Me_lu_.solve(Tf) / s;
+        }
         for (int c = 0; c < ne_; ++c) {
-            b0(ne_ + c) = fe(c);
-            y0(c) = xe(e_slot_[static_cast<std::size_t>(c)]);
+            b0(ne_ + c) = fe_(c);
+            y0(c) = xe(e_slot_[static_cast<std::size_t>(c)]) - ys_(c);
             y0(ne_ + c) = ve(e_slot_[static_cast<std::size_t>(c)]) / s;
         }
     }
@@ -364,6 +384,20 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
         res(r) = static_cast<double>(e);
     }
     eta0_ += Vinv_ * res;
+    // Once more against what eval computes at tau = 0 (its order, in double):
+    // a state near the static offset is a sum of modal terms far larger than it
+    // (near critical damping, 1e2 times: V is ill-conditioned), whose rounding
+    // in eval is the error at the segment start.
+    if (m > 0) {
+        Eigen::VectorXcd er(static_cast<Eigen::Index>(rep_.size()));
+        for (int c = 0; c < static_cast<int>(rep_.size()); ++c) er(c) = eta0_(rep_[static_cast<std::size_t>(c)]);
+        Eigen::VectorXd yv(m);
+        yv.noalias() = Vre_ * er.real();
+        yv.noalias() -= Vim_ * er.imag();
+        Eigen::VectorXcd r2(m);
+        for (int r = 0; r < m; ++r) r2(r) = y0(r).real() - yv(r);
+        eta0_ += Vinv_ * r2;
+    }
     for (int k = 0; k < m; ++k) {
         mod_eta0_(k) = mod(eta0_(k));
         mod_beta0_(k) = mod(beta0_(k));
@@ -409,6 +443,7 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
                         duhamel_bound(l, W, mod_d_(k, um), mod_sum_(k, um), ael, sm));
         }
         eta_(c) = eta;
+        deta_(c) = lam * eta;
         eta_mag_(c) = mag;
         b2_(c) = b2;
     }
@@ -420,6 +455,14 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
         y_.noalias() -= Vim_ * eta_.imag();
         ymag_.noalias() = absV_ * eta_mag_;
         B_.noalias() = absG_ * b2_;
+        // y' = Re(V lambda eta) + b0 + sum_h b_h sin(Omega_h tau + theta_h): its velocity half
+        // gives e'' = s y'_v, decaying with the modes (b0 = 0 about the static offset).
+        dy_.noalias() = Vre_.bottomRows(ne_) * deta_.real();
+        dy_.noalias() -= Vim_.bottomRows(ne_) * deta_.imag();
+        for (int c = 0; c < ne_; ++c) {
+            y_(c) += ys_(c);
+            ymag_(c) += std::abs(ys_(c));
+        }
     }
     // x_F = R q + T e, v_F = R q' + T e' (T: 1 at e's own slot, -m_i/m_p at its pivot).
     if (ne_ > 0) {
@@ -460,15 +503,23 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
         xmag_(i) = xfm_(r);
         vmag_(i) = vfm_(r);
     }
-    // a = M^-1 (f - K x - C v) for the free masses, f the constant force of
-    // setup (with the stuck masses' coupling and friction) and the forcing.
-    for (int r = 0; r < nf_; ++r) {
-        const int i = free_[r];
-        double f = force_(r);
-        for (int q : free_) f -= t_.K(i, q) * out.x[q] + t_.C(i, q) * out.v[q];
-        for (int h = 0; h < nh_; ++h) f += t_.h_amp(i, h) * sn_(h);
-        out.a[i] = f / t_.mass(i);
+    // a = x_F'' = T e'' + R q'', e'' = s (Re(V lambda eta) + b0 + b_h sin)'s velocity half
+    // (state_space_solver.h: not M^-1 (f - K x - C v), which keeps the offset's rounding).
+    if (ne_ > 0) {
+        Eigen::VectorXd& ed = dy_;  // ne rows used
+        ed.head(ne_) += fe_;
+        for (int h = 0; h < nh_; ++h) ed.head(ne_) += bh_tail_.col(h) * sn_(h);
+        af_.noalias() = s * (T_ * ed.head(ne_));
+    } else {
+        af_.setZero();
     }
+    for (std::size_t j = 0; j < rigid_.size(); ++j) {
+        const Eigen::Index jj = static_cast<Eigen::Index>(j);
+        double qdd = rigid_f_(jj);
+        for (int h = 0; h < nh_; ++h) qdd += rigid_h_(jj, h) * sn_(h);
+        for (int r : rigid_[j].members) af_(r) += qdd;
+    }
+    for (int r = 0; r < nf_; ++r) out.a[free_[r]] = af_(r);
 
     write_sliders(t_, cfg_, slider_, out);
     for (int f = 0; f < ns_; ++f) {

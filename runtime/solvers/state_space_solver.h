@@ -16,7 +16,18 @@
 // phi_1((mu - lambda) tau) while |mu - lambda| tau < 1, the divided difference
 // (e^{mu tau} - e^{lambda tau})/(mu - lambda) beyond), so resonance (mu = lambda)
 // and a constant force on a free translation (lambda = mu = 0) are exact too.
-// y = V eta is real (conjugate pairs); a = M^-1 (f(t) - K x - C v).
+// y = V eta is real (conjugate pairs).
+//
+// Where A is regular (no rigid body that a damper alone holds: K_e regular),
+// the constant force is taken by the static offset y_s = [K_e^-1 T^T f; 0]
+// (its velocity half exactly 0) and the modes carry y - y_s alone (beta0 = 0):
+// y = y_s + Re(V eta), and a = s (Re(V lambda eta) + b_h sin)'s velocity half,
+// as the programs compute x = x_st + modes, a = the modes' second derivative.
+// Summed about 0 instead (y = Re(V eta) with each eta_k tending to
+// -beta0_k/lambda_k), the velocity and a = M^-1 (f - K x - C v) kept the
+// absolute rounding of the offset (~eps |x_s| s) as the motion decayed, and an
+// overdamped creep into equilibrium fell through v = 0 at an instant set by
+// rounding (tests/test_dampers.cpp DamperCreep).
 //
 // Bounds on |g''| (segment_solver.h) for s in [tau, tau + max_step]: g is
 // affine in y (and the forcing), g'' = Re sum_k G_k eta_k'' + forcing terms,
@@ -123,6 +134,9 @@ private:
     Eigen::VectorXcd lambda_;       // 2ne eigenvalues
     Eigen::MatrixXcd V_, Vinv_;     // 2nf x 2nf
     Eigen::MatrixXcd beta_h_;       // 2nf x nh: V^-1 b_h
+    Eigen::MatrixXd bh_tail_;       // ne x nh: the velocity half of b_h (Me^-1 T^T F_h / s)
+    bool offset_ = false;           // A regular: the constant force by the static offset y_s
+    Eigen::PartialPivLU<Eigen::MatrixXd> Ke_lu_;  // of T^T K_F T (when offset_)
     std::vector<int> rep_;          // the modes eval computes: one of each conjugate pair, every real one
     Eigen::MatrixXd absV_, Vre_, Vim_;  // |V|, Re V, Im V over rep_, a pair's column doubled
     Eigen::MatrixXd absG_;          // ns x rep: |L_f V_k| (doubled for a pair), L_f the switch function's row over y
@@ -140,11 +154,13 @@ private:
     Eigen::VectorXd q0_, qd0_, rigid_f_;       // rigid coordinates and their constant acceleration
     Eigen::VectorXd rigid_bound_;              // rigid part of each |g''| bound
     Eigen::VectorXcd eta0_, beta0_, e_theta_;
+    Eigen::VectorXd ys_, fe_;  // the static offset's e (offset_; else 0), the velocity half of b0 (else 0)
     Eigen::VectorXd mod_eta0_, mod_beta0_;  // |eta0|, |beta0|
 
     // --- eval scratch ---
     // --- eval scratch (no allocation in eval; one thread at a time) ---
-    mutable Eigen::VectorXcd eta_, e_omega_;
+    mutable Eigen::VectorXcd eta_, e_omega_, deta_;
+    mutable Eigen::VectorXd dy_, af_;
     mutable Eigen::VectorXd eta_mag_, b2_, y_, ymag_, xmag_, vmag_, sn_, cs_, xf_, vf_, xfm_, vfm_, B_;
 };
 
