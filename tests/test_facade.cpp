@@ -8,9 +8,11 @@
 #include <cctype>
 #include <filesystem>
 #include <functional>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "cached_kernel_provider.h"
@@ -47,7 +49,7 @@ static_assert(std::is_constructible_v<CachedKernelProvider, const Model&, JitSol
 template <class M, class = void>
 struct CanMakeProvider : std::false_type {};
 template <class M>
-struct CanMakeProvider<M, std::void_t<decltype(make_solver_provider(std::declval<M>(), KernelMode::generic,
+struct CanMakeProvider<M, std::void_t<decltype(make_solver_provider(std::declval<M>(), KernelChoice::generic,
                                                                     nullptr))>> : std::true_type {};
 static_assert(!CanMakeProvider<Model>::value, "make_solver_provider(read_model(p), ...) would dangle");
 static_assert(CanMakeProvider<const Model&>::value);
@@ -304,6 +306,28 @@ TEST(Facade, ReadmeShowsTheExampleConsumer) {
     std::string example = testing::slurp(std::string(HSNC_SOURCE_DIR) + "/examples/simulate_model.cpp");
     example = example.substr(example.find("#include"));  // after its header comment
     EXPECT_EQ(shown, example);
+}
+
+// One name table (kernel_choice.h) for the command line, the facade, Python
+// and the runtime: every kind parses back from its name, and a run reports a
+// kernel kind by the same name.
+TEST(Facade, KernelChoiceNamesAreOneTable) {
+    const std::vector<std::pair<const char*, KernelChoice>> expected = {
+        {"auto", KernelChoice::automatic}, {"aot", KernelChoice::aot},     {"generic", KernelChoice::generic},
+        {"interp", KernelChoice::interp},  {"eigen", KernelChoice::eigen}, {"jit", KernelChoice::jit},
+        {"tiered", KernelChoice::tiered}};
+    ASSERT_EQ(std::size(kKernelChoiceNames), expected.size());
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+        EXPECT_STREQ(kKernelChoiceNames[i].name, expected[i].first);
+        EXPECT_EQ(kernel_choice_from_name(expected[i].first), expected[i].second);
+        EXPECT_STREQ(kernel_choice_name(expected[i].second), expected[i].first);
+    }
+    EXPECT_EQ(kernel_choice_names(), "auto, aot, generic, interp, eigen, jit or tiered");
+    for (SolverKind k : {SolverKind::aot, SolverKind::jit, SolverKind::generic, SolverKind::interp, SolverKind::eigen,
+                         SolverKind::tiered})
+        EXPECT_EQ(kernel_choice_from_name(solver_kind_name(k)), static_cast<KernelChoice>(k));
+    EXPECT_STREQ(solver_kind_name(SolverKind::reference), "reference");
+    EXPECT_STREQ(solver_kind_name(SolverKind::integrator), "integrator");
 }
 
 TEST(Facade, NamesParseOrSayWhat) {
