@@ -19,9 +19,12 @@
 #include "kernel_cache.h"
 #include "cli_runner.h"
 #include "engine_runner.h"
+#include "hsnc/check.h"
+#include "hsnc/generate.h"
 #include "hsnc/hsnc.h"
 #include "jit_solver_provider.h"
 #include "kernel_mode.h"
+#include "temp_dir.h"
 
 namespace hsnc {
 namespace {
@@ -328,6 +331,29 @@ TEST(Facade, KernelChoiceNamesAreOneTable) {
         EXPECT_EQ(kernel_choice_from_name(solver_kind_name(k)), static_cast<KernelChoice>(k));
     EXPECT_STREQ(solver_kind_name(SolverKind::reference), "reference");
     EXPECT_STREQ(solver_kind_name(SolverKind::integrator), "integrator");
+}
+
+// generate and check through the facade (api/hsnc/generate.h, check.h): the
+// command line and the Python module call these, so the library writes what
+// `hsnc generate` writes and returns what `hsnc check` prints.
+TEST(Facade, GenerateAndCheckAreTheCommandLines) {
+    const std::string path = model_path("seed-scenario-2.toml");
+    const Model model = read_model(path);
+    testing::TempDir lib, cli;
+    const GeneratedKernels k = generate_kernels(model);
+    const std::vector<std::string> written = write_kernels(model, k, lib.path());
+    EXPECT_EQ(written.size(), k.kernels() + 2);
+    const auto g = testing::run_hsnc("generate '" + path + "' -o '" + cli.path() + "'");
+    ASSERT_EQ(g.exit_code, 0) << g.err;
+    ASSERT_EQ(lib.names().size(), written.size());
+    ASSERT_EQ(lib.names(), cli.names());
+    for (const std::string& name : lib.names())
+        EXPECT_EQ(testing::slurp(lib / name), testing::slurp(cli / name)) << name;
+    std::ostringstream report;
+    check_report(model, report);
+    const auto c = testing::run_hsnc("check '" + path + "'");
+    ASSERT_EQ(c.exit_code, 0) << c.err;
+    EXPECT_EQ(report.str(), c.out);
 }
 
 TEST(Facade, NamesParseOrSayWhat) {
