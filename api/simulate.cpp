@@ -196,7 +196,7 @@ std::unique_ptr<SolverProvider> make_tiered_provider(const Model& model, const S
     TierOptions tier;
     tier.compile_after = o.tier_evaluations;
     return std::make_unique<TieredSolverProvider>(
-        make_solver_provider(model, KernelMode::generic, &aot_registry(), program_source(model)), std::move(probe),
+        make_solver_provider(model, KernelChoice::generic, &aot_registry(), program_source(model)), std::move(probe),
         std::move(compile), tier, o.warn);
 }
 
@@ -214,11 +214,7 @@ std::unique_ptr<SolverProvider> make_provider(const Model& model, const Simulate
         if (kind) *kind = SolverKind::jit;
         return std::make_unique<DerivationFallbackProvider>(model, make_jit_provider(model, o, function));
     }
-    const KernelMode mode = o.kernels == KernelChoice::generic  ? KernelMode::generic
-                            : o.kernels == KernelChoice::interp ? KernelMode::interp
-                            : o.kernels == KernelChoice::eigen  ? KernelMode::eigen
-                            : o.kernels == KernelChoice::aot    ? KernelMode::aot
-                                                                : KernelMode::automatic;
+    const KernelChoice mode = o.kernels;
     // generic (and auto without AOT kernels, and for the configurations the
     // AOT kernels leave out) runs each configuration's program: the bits of
     // the kernels printed from it, without a compiler.
@@ -226,8 +222,8 @@ std::unique_ptr<SolverProvider> make_provider(const Model& model, const Simulate
         make_solver_provider(model, mode, &aot_registry(), program_source(model));
     if (kind)
         *kind = dynamic_cast<AotSolverProvider*>(provider.get()) ? SolverKind::aot
-                : mode == KernelMode::interp                     ? SolverKind::interp
-                : mode == KernelMode::eigen                      ? SolverKind::eigen
+                : mode == KernelChoice::interp                   ? SolverKind::interp
+                : mode == KernelChoice::eigen                    ? SolverKind::eigen
                                                                  : SolverKind::generic;
     return provider;
 }
@@ -296,24 +292,9 @@ const char* method_name(Method method) {
 }
 
 KernelChoice kernel_choice_from_name(const std::string& name) {
-    for (KernelChoice k : {KernelChoice::automatic, KernelChoice::aot, KernelChoice::jit, KernelChoice::generic,
-                           KernelChoice::interp, KernelChoice::eigen, KernelChoice::tiered})
-        if (name == kernel_choice_name(k)) return k;
+    if (const std::optional<KernelChoice> k = parse_kernel_choice(name)) return *k;
     throw OptionError("hsnc::kernel_choice_from_name", "kernels", "'" + name + "'",
-                      "expected auto, aot, generic, interp, eigen, jit or tiered");
-}
-
-const char* kernel_choice_name(KernelChoice choice) {
-    switch (choice) {
-    case KernelChoice::automatic: return "auto";
-    case KernelChoice::aot: return "aot";
-    case KernelChoice::jit: return "jit";
-    case KernelChoice::generic: return "generic";
-    case KernelChoice::interp: return "interp";
-    case KernelChoice::eigen: return "eigen";
-    case KernelChoice::tiered: return "tiered";
-    }
-    return "?";
+                      "expected " + kernel_choice_names());
 }
 
 int precision_digits_from_name(const std::string& name) {
@@ -341,16 +322,10 @@ int precision_digits_from_name(const std::string& name) {
 
 const char* solver_kind_name(SolverKind kind) {
     switch (kind) {
-    case SolverKind::aot: return "aot";
-    case SolverKind::jit: return "jit";
-    case SolverKind::generic: return "generic";
-    case SolverKind::interp: return "interp";
-    case SolverKind::eigen: return "eigen";
-    case SolverKind::tiered: return "tiered";
     case SolverKind::reference: return "reference";
     case SolverKind::integrator: return "integrator";
+    default: return kernel_choice_name(static_cast<KernelChoice>(kind));
     }
-    return "?";
 }
 
 }  // namespace hsnc

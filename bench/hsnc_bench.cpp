@@ -80,7 +80,7 @@ struct Timed {
     RunSummary summary;
 };
 
-Timed run_engine(const Model& m, double t_end, KernelMode mode) {
+Timed run_engine(const Model& m, double t_end, KernelChoice mode) {
     EngineOptions eo;
     eo.t_end = t_end;
     eo.samples = false;
@@ -93,7 +93,7 @@ Timed run_engine(const Model& m, double t_end, KernelMode mode) {
     return {seconds_since(start), s};
 }
 
-double median_engine(const Model& m, double t_end, KernelMode mode, int reps, RunSummary& summary) {
+double median_engine(const Model& m, double t_end, KernelChoice mode, int reps, RunSummary& summary) {
     std::vector<double> t;
     for (int r = 0; r < reps; ++r) {
         Timed x = run_engine(m, t_end, mode);
@@ -280,7 +280,7 @@ int main(int argc, char** argv) {
     std::vector<std::string> notes;
     for (Case& c : cases) {
         RunSummary s;
-        const KernelMode mode = KernelMode::automatic;
+        const KernelChoice mode = KernelChoice::automatic;
         const double engine = median_engine(c.model, c.t_end, mode, reps, s);
         IntegratorOptions ab4;
         ab4.h = 1e-6;

@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
         std::unique_ptr<SolverProvider> aot_p;
         std::string aot_note;
         if (has_aot_kernels(c.model, &aot_registry()))
-            aot_p = make_solver_provider(c.model, KernelMode::automatic, &aot_registry());
+            aot_p = make_solver_provider(c.model, KernelChoice::automatic, &aot_registry());
         JitOptions jo;
         jo.cache_dir = cache_dir;
         JitSolverProvider jit(c.model,
@@ -139,7 +139,7 @@ int main(int argc, char** argv) {
                               },
                               jo);
         auto aot = has_aot_kernels(c.model, &aot_registry())
-                       ? make_solver_provider(c.model, KernelMode::automatic, &aot_registry())
+                       ? make_solver_provider(c.model, KernelChoice::automatic, &aot_registry())
                        : nullptr;
         GenericSolverProvider gen(c.model);
         const std::size_t n = c.model.dof(), nf = 64;

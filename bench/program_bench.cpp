@@ -121,7 +121,7 @@ int main(int argc, char** argv) {
         const double span = 2 * (c.t_end - c.model.t0) / static_cast<double>(std::max<std::size_t>(visit.segments, 1));
         JitSolverProvider jit(c.model, emitter(c.model));  // no persistent cache
         auto aot = has_aot_kernels(c.model, &aot_registry())
-                       ? make_solver_provider(c.model, KernelMode::automatic, &aot_registry())
+                       ? make_solver_provider(c.model, KernelChoice::automatic, &aot_registry())
                        : nullptr;
         GenericSolverProvider gen(c.model);
         InterpretedSolverProvider interp(lowering(c.model));
@@ -199,7 +199,7 @@ int main(int argc, char** argv) {
     for (const Case& c : cases) {
         std::unique_ptr<SolverProvider> aot;
         if (has_aot_kernels(c.model, &aot_registry()))
-            aot = make_solver_provider(c.model, KernelMode::automatic, &aot_registry());
+            aot = make_solver_provider(c.model, KernelChoice::automatic, &aot_registry());
         JitSolverProvider jit(c.model, emitter(c.model));
         InterpretedSolverProvider interp(lowering(c.model));
         GenericSolverProvider gen(c.model);

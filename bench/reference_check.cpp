@@ -20,6 +20,7 @@
 
 #include "aot_registry.h"
 #include "engine.h"
+#include "hsnc/simulate.h"
 #include "kernel_mode.h"
 #include "lowering.h"
 #include "model_reader.h"
@@ -126,7 +127,7 @@ int main(int argc, char** argv) {
 
     // The double engine against the 2N-digit reference.
     Events dbl;
-    const KernelMode mode = argc == 5 ? parse_kernel_mode(argv[4]) : KernelMode::automatic;
+    const KernelChoice mode = argc == 5 ? kernel_choice_from_name(argv[4]) : KernelChoice::automatic;
     auto provider = make_solver_provider(model, mode, &aot_registry(), program_source(model));
     Engine engine(model, *provider);
     const RunSummary ds = engine.run(opt, dbl);

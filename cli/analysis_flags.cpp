@@ -16,9 +16,11 @@ void add_analysis_flags(CLI::App* sub, AnalysisFlags& f) {
     sub->add_option("--set", f.overrides.set, "override a parameter, NAME=VALUE (repeatable)");
     sub->add_option("--x0", f.overrides.x0, "override an initial position, NAME=VALUE (repeatable)");
     sub->add_option("--v0", f.overrides.v0, "override an initial velocity, NAME=VALUE (repeatable)");
+    std::string kernels = kernel_choice_names();  // "auto, aot, ...": auto is the default
+    kernels.insert(std::string(kKernelChoiceNames[0].name).size(), " (default)");
     sub->add_option("--kernels", f.kernels,
-                    "the segment solvers, as simulate --kernels: auto (default), aot, generic, interp, eigen, jit or tiered (the tangent "
-                    "dynamics are the same closed forms whatever the kind)");
+                    "the segment solvers, as simulate --kernels: " + kernels +
+                        " (the tangent dynamics are the same closed forms whatever the kind)");
     sub->add_option("--cache-dir", f.cache_dir,
                     "keep compiled kernels (jit, tiered) in DIR (default $XDG_CACHE_HOME/hsnc, else ~/.cache/hsnc)");
     sub->add_flag("--no-cache", f.no_cache, "read and write no cache: jit compiles every kernel, tiered stays interpreted")

@@ -8,9 +8,8 @@
 #include <iostream>
 
 #include "commands.h"
-#include "emitter.h"
 #include "error.h"
-#include "kernel_set.h"
+#include "hsnc/generate.h"
 #include "model_reader.h"
 #include "param_emitter.h"
 
@@ -41,16 +40,14 @@ void add_generate(CLI::App& app, int& exit_code) {
         const Model model = read_model(*model_path);
         const std::vector<std::string> kept =
             params_opt->count() == 0 ? std::vector<std::string>{} : kept_parameters(model, *params);
-        const KernelSet set = generate_kernel_set(model, kept);
-        if (!set.note.empty()) std::cerr << "hsnc generate: " << set.note << "\n";
+        const GeneratedKernels kernels = generate_kernels(model, kept);
+        if (!kernels.note().empty()) std::cerr << "hsnc generate: " << kernels.note() << "\n";
         try {
-            for (const GeneratedFile& f : set.kernels) write_if_changed(*out_dir, f.name, f.text);
-            write_if_changed(*out_dir, model.name + ".manifest", set.manifest);
-            write_if_changed(*out_dir, "registry.cpp", emit_registry(set.symbols));
+            write_kernels(model, kernels, *out_dir);
         } catch (const RunError& e) {
             throw InputError(std::string("generate: -o ") + *out_dir + ": " + e.what());  // a bad output path
         }
-        std::cout << "wrote " << set.kernels.size() << (kept.empty() ? "" : " sweep") << " kernels, " << model.name
+        std::cout << "wrote " << kernels.kernels() << (kept.empty() ? "" : " sweep") << " kernels, " << model.name
                   << ".manifest and registry.cpp of model '" << model.name
                   << "' to " << *out_dir << "\n";
         exit_code = 0;

@@ -26,14 +26,13 @@
 #include <string>
 #include <vector>
 
-#include "emitter.h"
 #include "engine.h"
 #include "error.h"
 #include "file_read.h"
+#include "hsnc/generate.h"
 #include "hsnc/lyapunov.h"
 #include "hsnc/periodic.h"
 #include "hsnc/simulate.h"
-#include "kernel_set.h"
 #include "model_reader.h"
 #include "sample_grid.h"
 #include "simulate_outputs.h"
@@ -253,23 +252,11 @@ py::dict run(const Model& model, double t_end, double dt, const std::string& met
     return out;
 }
 
-// The kernels of `model` into `dir`, as `hsnc generate MODEL -o DIR` writes them.
+// The kernels of `model` into `dir`, as `hsnc generate MODEL -o DIR` writes
+// them (the facade's generate_kernels and write_kernels, api/hsnc/generate.h).
 std::vector<std::string> generate(const Model& model, const std::string& dir) {
-    std::vector<std::string> written;
-    KernelSet set;
-    {
-        py::gil_scoped_release nogil;
-        set = generate_kernel_set(model);
-        for (const GeneratedFile& f : set.kernels) {
-            write_if_changed(dir, f.name, f.text);
-            written.push_back(f.name);
-        }
-        write_if_changed(dir, model.name + ".manifest", set.manifest);
-        write_if_changed(dir, "registry.cpp", emit_registry(set.symbols));
-    }
-    written.push_back(model.name + ".manifest");
-    written.push_back("registry.cpp");
-    return written;
+    py::gil_scoped_release nogil;
+    return write_kernels(model, generate_kernels(model), dir);
 }
 
 // Samples of one run (the orbit's period).

@@ -8,18 +8,23 @@
 #include <cctype>
 #include <filesystem>
 #include <functional>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "cached_kernel_provider.h"
 #include "kernel_cache.h"
 #include "cli_runner.h"
 #include "engine_runner.h"
+#include "hsnc/check.h"
+#include "hsnc/generate.h"
 #include "hsnc/hsnc.h"
 #include "jit_solver_provider.h"
 #include "kernel_mode.h"
+#include "temp_dir.h"
 
 namespace hsnc {
 namespace {
@@ -47,7 +52,7 @@ static_assert(std::is_constructible_v<CachedKernelProvider, const Model&, JitSol
 template <class M, class = void>
 struct CanMakeProvider : std::false_type {};
 template <class M>
-struct CanMakeProvider<M, std::void_t<decltype(make_solver_provider(std::declval<M>(), KernelMode::generic,
+struct CanMakeProvider<M, std::void_t<decltype(make_solver_provider(std::declval<M>(), KernelChoice::generic,
                                                                     nullptr))>> : std::true_type {};
 static_assert(!CanMakeProvider<Model>::value, "make_solver_provider(read_model(p), ...) would dangle");
 static_assert(CanMakeProvider<const Model&>::value);
@@ -304,6 +309,51 @@ TEST(Facade, ReadmeShowsTheExampleConsumer) {
     std::string example = testing::slurp(std::string(HSNC_SOURCE_DIR) + "/examples/simulate_model.cpp");
     example = example.substr(example.find("#include"));  // after its header comment
     EXPECT_EQ(shown, example);
+}
+
+// One name table (kernel_choice.h) for the command line, the facade, Python
+// and the runtime: every kind parses back from its name, and a run reports a
+// kernel kind by the same name.
+TEST(Facade, KernelChoiceNamesAreOneTable) {
+    const std::vector<std::pair<const char*, KernelChoice>> expected = {
+        {"auto", KernelChoice::automatic}, {"aot", KernelChoice::aot},     {"generic", KernelChoice::generic},
+        {"interp", KernelChoice::interp},  {"eigen", KernelChoice::eigen}, {"jit", KernelChoice::jit},
+        {"tiered", KernelChoice::tiered}};
+    ASSERT_EQ(std::size(kKernelChoiceNames), expected.size());
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+        EXPECT_STREQ(kKernelChoiceNames[i].name, expected[i].first);
+        EXPECT_EQ(kernel_choice_from_name(expected[i].first), expected[i].second);
+        EXPECT_STREQ(kernel_choice_name(expected[i].second), expected[i].first);
+    }
+    EXPECT_EQ(kernel_choice_names(), "auto, aot, generic, interp, eigen, jit or tiered");
+    for (SolverKind k : {SolverKind::aot, SolverKind::jit, SolverKind::generic, SolverKind::interp, SolverKind::eigen,
+                         SolverKind::tiered})
+        EXPECT_EQ(kernel_choice_from_name(solver_kind_name(k)), static_cast<KernelChoice>(k));
+    EXPECT_STREQ(solver_kind_name(SolverKind::reference), "reference");
+    EXPECT_STREQ(solver_kind_name(SolverKind::integrator), "integrator");
+}
+
+// generate and check through the facade (api/hsnc/generate.h, check.h): the
+// command line and the Python module call these, so the library writes what
+// `hsnc generate` writes and returns what `hsnc check` prints.
+TEST(Facade, GenerateAndCheckAreTheCommandLines) {
+    const std::string path = model_path("seed-scenario-2.toml");
+    const Model model = read_model(path);
+    testing::TempDir lib, cli;
+    const GeneratedKernels k = generate_kernels(model);
+    const std::vector<std::string> written = write_kernels(model, k, lib.path());
+    EXPECT_EQ(written.size(), k.kernels() + 2);
+    const auto g = testing::run_hsnc("generate '" + path + "' -o '" + cli.path() + "'");
+    ASSERT_EQ(g.exit_code, 0) << g.err;
+    ASSERT_EQ(lib.names().size(), written.size());
+    ASSERT_EQ(lib.names(), cli.names());
+    for (const std::string& name : lib.names())
+        EXPECT_EQ(testing::slurp(lib / name), testing::slurp(cli / name)) << name;
+    std::ostringstream report;
+    check_report(model, report);
+    const auto c = testing::run_hsnc("check '" + path + "'");
+    ASSERT_EQ(c.exit_code, 0) << c.err;
+    EXPECT_EQ(report.str(), c.out);
 }
 
 TEST(Facade, NamesParseOrSayWhat) {

@@ -256,7 +256,7 @@ TEST(ReferenceAgreement, DoubleEngineOnScenario1First1000Switches) {
     const Model m = bundled("seed-scenario-1.toml");
     const PreciseRun ref = run_at(m, 30, 20.0, 1000);
     ASSERT_EQ(ref.events.size(), 1000u);
-    auto provider = make_solver_provider(m, KernelMode::automatic, &aot_registry());
+    auto provider = make_solver_provider(m, KernelChoice::automatic, &aot_registry());
     Engine engine(m, *provider);
     Recorder rec(m.dof());
     EngineOptions opt;
@@ -307,7 +307,7 @@ TEST(ReferenceAgreement, SamplesMatchTheDoubleEngineOnScenario1) {
     opt.dt = 0.0075;  // t_end off the grid: a last row at t_end
     Recorder ref(m.dof()), dbl(m.dof());
     reference::simulate_precise(m, 30, opt, ref);
-    auto provider = make_solver_provider(m, KernelMode::automatic, &aot_registry());
+    auto provider = make_solver_provider(m, KernelChoice::automatic, &aot_registry());
     Engine(m, *provider).run(opt, dbl);
     ASSERT_EQ(ref.samples.size(), 68u);  // 0, 0.0075, ..., 0.495, and 0.5
     ASSERT_EQ(ref.samples.size(), dbl.samples.size());

@@ -29,6 +29,7 @@
 
 #include "error.h"
 #include "integrators.h"
+#include "kernel_choice.h"
 #include "model.h"
 #include "model_reader.h"
 #include "observer.h"
@@ -36,39 +37,18 @@
 
 namespace hsnc {
 
-/// Where the exact method's segment solvers come from.
-enum class KernelChoice {
-    automatic,  ///< the ahead-of-time kernels when the model has them (bundled
-                ///  models as generated), else generic; never compiles. The
-                ///  same bits whichever it takes.
-    aot,        ///< ahead-of-time kernels only (InputError when the model has none)
-    jit,        ///< a kernel per configuration, from the persistent cache or
-                ///  compiled in-process (RunError when libhsnc_jit.so cannot be loaded)
-    generic,    ///< each configuration's program (derived in double-double and
-                ///  lowered, as the kernels are printed from it) run by an
-                ///  interpreter: the kernels' bits without a compiler
-    interp,     ///< the same as generic (its name before generic was the interpreter)
-    eigen,      ///< the Eigen solver: the closed forms written independently of
-                ///  the programs (the tests' oracle), agreeing with the other
-                ///  kinds to rounding, not to the bit; its entry into a
-                ///  configuration is cheaper (a modal analysis in double)
-    tiered,     ///< interp first; a configuration that has run
-                ///  SimulateOptions::tier_evaluations evaluations gets its JIT
-                ///  kernel, compiled by a child process (the run never
-                ///  waits), kernels in the persistent cache from its first entry;
-                ///  the same bits as interp and jit (runtime/solvers/tiered_provider.h)
-};
-
-/// What computed a run (for statistics).
+/// What computed a run (for statistics): the kernel kind that ran (a
+/// KernelChoice other than automatic, with its value and its name), or one of
+/// two engines that are not kernel kinds.
 enum class SolverKind {
-    aot,         ///< ahead-of-time kernels (the generic solver for configurations without one)
-    jit,         ///< JIT-compiled or cached kernels
-    generic,     ///< interpreted programs (KernelChoice::generic)
-    interp,      ///< interpreted programs (KernelChoice::interp)
-    eigen,       ///< the Eigen solver
-    tiered,      ///< interpreted programs, then kernels (KernelChoice::tiered)
-    reference,   ///< the high-precision reference engine (precision_digits > 0)
-    integrator,  ///< a numerical baseline (ab4, rk45, cvode)
+    aot = static_cast<int>(KernelChoice::aot),          ///< ahead-of-time kernels (the generic solver for configurations without one)
+    jit = static_cast<int>(KernelChoice::jit),          ///< JIT-compiled or cached kernels
+    generic = static_cast<int>(KernelChoice::generic),  ///< interpreted programs (KernelChoice::generic)
+    interp = static_cast<int>(KernelChoice::interp),    ///< interpreted programs (KernelChoice::interp)
+    eigen = static_cast<int>(KernelChoice::eigen),      ///< the Eigen solver
+    tiered = static_cast<int>(KernelChoice::tiered),    ///< interpreted programs, then kernels (KernelChoice::tiered)
+    reference = 100,                                    ///< the high-precision reference engine (precision_digits > 0)
+    integrator,                                         ///< a numerical baseline (ab4, rk45, cvode)
 };
 
 struct SimulateOptions {
@@ -146,13 +126,14 @@ void check_simulate_options(const Model& model, const SimulateOptions& options);
 /// "hsnc", "ab4", "rk45", "cvode"; OptionError (option "method") otherwise.
 Method method_from_name(const std::string& name);
 const char* method_name(Method method);
-/// "auto", "aot", "jit", "generic", "interp", "tiered"; OptionError (option "kernels") otherwise.
+/// A name of kernel_choice.h's table ("auto", "aot", "generic", "interp",
+/// "eigen", "jit", "tiered"); OptionError (option "kernels") otherwise.
+/// kernel_choice_name() (kernel_choice.h) gives the name back.
 KernelChoice kernel_choice_from_name(const std::string& name);
-const char* kernel_choice_name(KernelChoice choice);
 /// "double" gives 0, "mp:N" gives N (N in [20, 100]); OptionError (option
 /// "precision_digits") otherwise.
 int precision_digits_from_name(const std::string& name);
-/// "aot", "jit", "generic", "interp", "tiered", "reference", "integrator".
+/// The kernel kind's name (kernel_choice_name), "reference" or "integrator".
 const char* solver_kind_name(SolverKind kind);
 
 }  // namespace hsnc

@@ -12,16 +12,6 @@
 
 namespace hsnc {
 
-KernelMode parse_kernel_mode(const std::string& name) {
-    if (name == "auto") return KernelMode::automatic;
-    if (name == "aot") return KernelMode::aot;
-    if (name == "generic") return KernelMode::generic;
-    if (name == "interp") return KernelMode::interp;
-    if (name == "eigen") return KernelMode::eigen;
-    if (name == "jit") return KernelMode::jit;
-    throw InputError("--kernels '" + name + "': expected auto, aot, generic, interp, eigen or jit");
-}
-
 SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
     auto it = cache_.find(cfg);
     if (it != cache_.end()) {
@@ -130,32 +120,34 @@ bool has_aot_kernels(const Model& model, const AotRegistry* registry) {
            });
 }
 
-std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
+std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelChoice mode,
                                                      const AotRegistry* registry,
                                                      InterpretedSolverProvider::ProgramFn lower) {
-    if (mode == KernelMode::jit)
-        throw std::logic_error("make_solver_provider(): --kernels jit is built with JitSolverProvider");
-    if (mode == KernelMode::eigen) return std::make_unique<GenericSolverProvider>(model);
+    if (mode == KernelChoice::jit || mode == KernelChoice::tiered)
+        throw std::logic_error(std::string("make_solver_provider(): --kernels ") + kernel_choice_name(mode) +
+                               (mode == KernelChoice::jit ? " is built with JitSolverProvider"
+                                                          : " is built with TieredSolverProvider"));
+    if (mode == KernelChoice::eigen) return std::make_unique<GenericSolverProvider>(model);
     auto interpreted = [&] {
         return std::make_unique<DerivationFallbackProvider>(model,
                                                             std::make_unique<InterpretedSolverProvider>(std::move(lower)));
     };
-    if (mode == KernelMode::generic || mode == KernelMode::interp) {
+    if (mode == KernelChoice::generic || mode == KernelChoice::interp) {
         if (!lower)
             throw std::invalid_argument(std::string("make_solver_provider(): --kernels ") +
-                                        (mode == KernelMode::generic ? "generic" : "interp") +
+                                        kernel_choice_name(mode) +
                                         " needs a program source");
         return interpreted();
     }
     const bool has_kernels = has_aot_kernels(model, registry);
-    if (mode == KernelMode::aot && !has_kernels)
+    if (mode == KernelChoice::aot && !has_kernels)
         throw InputError("--kernels aot: no ahead-of-time kernels for model '" + model.name +
                          "' (bundled models only, and only as generated: a --set or an edited file changes the model)");
     if (!has_kernels) {
         if (lower) return interpreted();
         return std::make_unique<GenericSolverProvider>(model);
     }
-    return std::make_unique<AotSolverProvider>(model, *registry, mode == KernelMode::automatic, std::move(lower));
+    return std::make_unique<AotSolverProvider>(model, *registry, mode == KernelChoice::automatic, std::move(lower));
 }
 
 }  // namespace hsnc

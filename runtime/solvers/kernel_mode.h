@@ -1,6 +1,7 @@
 // hsnc -- where the engine's segment solvers come from (--kernels): the
-// KernelMode, and the ahead-of-time and generic SolverProviders of each mode
-// (solver_provider.h; the JIT's and the cache's are in runtime/jit/).
+// ahead-of-time and generic SolverProviders of each KernelChoice
+// (kernel_choice.h, solver_provider.h; the JIT's and the cache's are in
+// runtime/jit/, the tiered one in tiered_provider.h).
 #pragma once
 
 #include <list>
@@ -11,28 +12,11 @@
 
 #include "aot_registry.h"
 #include "generic_solver.h"
+#include "kernel_choice.h"
 #include "solver_provider.h"
 #include "interpreted_solver.h"
 
 namespace hsnc {
-
-enum class KernelMode {
-    automatic,  ///< ahead-of-time kernels when the model has them, else the
-                ///  generic path (never the JIT: hsnc::simulate, api/hsnc/simulate.h)
-    aot,        ///< ahead-of-time kernels only (error when the model has none)
-    generic,    ///< the generic path: each configuration's program interpreted
-                ///  (InterpretedSolverProvider, from a program source:
-                ///  generator/lowering.h program_source()), the kernels' bits
-                ///  without a compiler
-    interp,     ///< the same as generic (its older name)
-    eigen,      ///< the Eigen solver (GenericSolverProvider): the closed forms
-                ///  written independently of the programs, the tests' oracle
-    jit,        ///< a kernel compiled in-process per configuration visited
-                ///  (runtime/jit/jit_solver_provider.h; opt-in, built by the command line)
-};
-
-/// "auto", "aot", "generic", "interp", "eigen", "jit"; InputError otherwise.
-KernelMode parse_kernel_mode(const std::string& name);
 
 /// The Eigen solver (runtime/generic_solver.h) for every configuration (for a
 /// model with dampers, non-proportional damping, state_space_solver.h): an
@@ -132,19 +116,20 @@ private:
 /// Whether `registry` (may be null) holds ahead-of-time kernels of `model` as it is.
 bool has_aot_kernels(const Model& model, const AotRegistry* registry);
 
-/// The provider for `mode` (not jit: that one needs the generator, see
-/// JitSolverProvider); `registry` (may be null) lists the AOT kernels linked
-/// in. Modes generic and interp interpret the programs `lower` gives
+/// The provider for `mode` (not jit or tiered, std::logic_error: those need
+/// the generator, see JitSolverProvider and TieredSolverProvider); `registry`
+/// (may be null) lists the AOT kernels linked in. Modes generic and interp interpret the programs `lower` gives
 /// (generator/lowering.h, program_source(): the same bits as the kernels) and
 /// need it (std::invalid_argument without). Mode automatic takes the AOT
 /// kernels when the model has them, and the interpreter for every other
 /// configuration, or, without `lower` (a runtime used without the generator),
-/// the Eigen solver. Mode eigen does not use `lower`.
-std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelMode mode,
+/// the Eigen solver. Mode eigen does not use `lower`. Mode aot: InputError
+/// when the model has no ahead-of-time kernels.
+std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelChoice mode,
                                                      const AotRegistry* registry,
                                                      InterpretedSolverProvider::ProgramFn lower = {});
 /// The provider keeps a reference to `model`: a temporary would dangle.
-std::unique_ptr<SolverProvider> make_solver_provider(const Model&& model, KernelMode mode,
+std::unique_ptr<SolverProvider> make_solver_provider(const Model&& model, KernelChoice mode,
                                                      const AotRegistry* registry,
                                                      InterpretedSolverProvider::ProgramFn lower = {}) = delete;
 

@@ -1,0 +1,184 @@
+// hsnc::check_report (api/hsnc/check.h): the summary `hsnc check MODEL`
+// prints (interface.md section 3): its DOFs, contacts and friction masses,
+// and the modes of the configuration with every contact open and every mass
+// sliding.
+//
+// Modes: the undamped generalised eigenproblem K phi = omega^2 M phi with
+// K = K(all open), from the engine's own modal analysis (model/modal.h), so
+// a rigid-body mode is what the engine takes for one: decided structurally (a
+// group of masses with no spring or contact of k > 0 to ground), never from
+// a small eigenvalue, which stiffness or mass ratios beyond 1e10 would give.
+// Damping ratio of Rayleigh damping C = alpha*M + beta*K for a mode of
+// frequency omega_n: xi = (alpha/omega_n + beta*omega_n)/2 (modal damping,
+// paper Eq. 12-13). With dampers (non-proportional damping) the damped modes
+// are the state matrix's eigenvalues (state_space_solver.h), printed apart.
+#include "hsnc/check.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <iomanip>
+#include <memory>
+#include <sstream>
+#include <vector>
+
+#include "configuration.h"
+#include "error.h"
+#include "free_components.h"
+#include "modal.h"
+#include "state_space_solver.h"
+
+namespace hsnc {
+namespace {
+
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::string body_name(const Model& model, int body) {
+    return body == kGround ? std::string("ground") : model.masses[body].name;
+}
+
+std::string num(double value) {
+    std::ostringstream out;
+    out << std::setprecision(12) << value;
+    return out.str();
+}
+
+void print_summary(const Model& model, std::ostream& out) {
+    out << "model: " << model.name << "\n";
+    out << "source: " << model.source << "\n";
+    if (!model.description.empty()) out << "description: " << model.description << "\n";
+
+    if (model.structure.present) {
+        out << "structure: M = " << model.structure.mass_file << "  K = " << model.structure.stiffness_file;
+        if (!model.structure.damping_file.empty())
+            out << "  C = " << model.structure.damping_file
+                << (model.proportional_damping() ? " (proportional: alpha, beta below)" : " (non-proportional: dampers below)");
+        out << "\n";
+    }
+    out << "degrees of freedom: " << model.dof() << "\n";
+    for (std::size_t i = 0; i < model.dof(); ++i)
+        out << "  " << i + 1 << "  " << model.masses[i].name << "  m = " << num(model.masses[i].m) << "\n";
+
+    std::size_t from_structure = 0;
+    for (const Spring& s : model.springs) from_structure += s.from_structure ? 1 : 0;
+    out << "springs: " << model.springs.size() - from_structure << "\n";
+    for (const Spring& s : model.springs)
+        if (!s.from_structure)
+            out << "  " << body_name(model, s.a) << " - " << body_name(model, s.b) << "  k = " << num(s.k) << "\n";
+    if (model.structure.present)
+        out << "stiffness matrix K: " << from_structure
+            << " couplings (K = sum of -K_ij between dofs i, j and the row sums to ground)\n";
+
+    out << "contacts: " << model.contacts.size() << "\n";
+    for (const Contact& c : model.contacts)
+        out << "  " << c.name << "  between " << body_name(model, c.a) << " and " << body_name(model, c.b)
+            << "  gap = " << num(c.gap) << "  k = " << num(c.k) << "\n";
+
+    std::size_t with_friction = 0;
+    for (const Mass& m : model.masses) with_friction += m.has_friction && m.friction < 0 ? 1 : 0;
+    out << "friction masses: " << with_friction << "  (normal force m*g, g = " << num(model.g) << ")\n";
+    for (const Mass& m : model.masses)
+        if (m.has_friction && m.friction < 0)
+            out << "  " << m.name << "  mu_k = " << num(m.mu_k) << "  mu_s = " << num(m.mu_s) << "\n";
+    if (!model.frictions.empty()) {
+        out << "friction elements: " << model.frictions.size() << "\n";
+        for (const FrictionElement& f : model.frictions)
+            out << "  " << f.name << "  between " << body_name(model, f.a) << " and " << body_name(model, f.b)
+                << "  mu_k = " << num(f.mu_k) << "  mu_s = " << num(f.mu_s) << "  normal = " << num(f.normal) << "\n";
+    }
+
+    if (!model.jenkins.empty()) {
+        out << "Jenkins elements: " << model.jenkins.size()
+            << "  (spring in series with a slider; stuck at t0, unstretched)\n";
+        for (const Jenkins& j : model.jenkins)
+            out << "  " << j.name << "  between " << body_name(model, j.a) << " and " << body_name(model, j.b)
+                << "  k = " << num(j.k) << "  slip_force = " << num(j.slip_force)
+                << "  (slips at a stretch of " << num(j.slip_force / j.k) << ")\n";
+    }
+    out << "forcing harmonics: " << model.forcing.size() << "\n";
+    for (const Harmonic& h : model.forcing) out << "  omega = " << num(h.omega) << " rad/s  phase = " << num(h.phase) << "\n";
+    out << "damping: alpha = " << num(model.alpha) << "  beta = " << num(model.beta) << "\n";
+    if (!model.proportional_damping()) {
+        std::size_t from_c = 0;
+        for (const Damper& d : model.dampers) from_c += d.from_structure ? 1 : 0;
+        out << "dampers: " << model.dampers.size() - from_c << "  (non-proportional damping: state-space modes)\n";
+        for (const Damper& d : model.dampers)
+            if (!d.from_structure)
+                out << "  " << body_name(model, d.a) << " - " << body_name(model, d.b) << "  c = " << num(d.c) << "\n";
+        if (from_c > 0)
+            out << "damping matrix C: " << from_c << " couplings (C = sum of -C_ij between dofs i, j and the row sums to ground)\n";
+    }
+}
+
+// Non-proportional damping: the eigenvalues lambda = -xi omega +- i omega sqrt(1 - xi^2)
+// of the state matrix, one line per pair (or real root), as the solver takes them.
+void print_damped_modes(const Model& model, std::ostream& out) {
+    std::unique_ptr<StateSpaceSolver> solver;
+    try {
+        solver = std::make_unique<StateSpaceSolver>(model, Configuration::all_open(model));
+    } catch (const DefectiveModes& e) {  // critical damping: simulate takes it by the matrix exponential
+        out << "damped modes: the state matrix is defective or nearly so (" << e.what()
+            << "); its segments are the matrix exponential of the state (runtime/solvers/exponential_solver.h)\n";
+        return;
+    } catch (const RunError& e) {
+        out << "damped modes: none: " << e.what() << "\n";  // simulate would stop there too
+        return;
+    }
+    const StateSpaceSolver& s = *solver;
+    out << "damped modes (all contacts open, all masses sliding" << (model.jenkins.empty() ? "" : ", Jenkins elements stuck")
+        << "; eigenvalues of the state matrix):\n";
+    out << "  mode  Re lambda [1/s]  Im lambda [rad/s]  |lambda| [rad/s]  xi\n";
+    int j = 0;
+    for (const std::complex<double>& l : s.damped_modes()) {
+        const double mag = std::abs(l);
+        out << "  " << ++j << "  " << num(l.real()) << "  " << num(l.imag()) << "  " << num(mag) << "  "
+            << (mag > 0.0 ? num(-l.real() / mag) : std::string("-")) << "\n";
+    }
+    out << "  state-space eigenvector condition: " << num(s.condition()) << "\n";
+}
+
+void print_modes(const Model& model, std::ostream& out) {
+    const ModalDecomposition modes = modal_analysis(model, Configuration::all_open(model));
+    out << "natural frequencies (all contacts open, all masses sliding" << (model.jenkins.empty() ? "" : ", Jenkins elements stuck")
+        << "; eigenvalues of (K, M)):\n";
+    out << "  mode  omega_n [rad/s]  f [Hz]  xi\n";
+    int rigid = 0;
+    for (Eigen::Index j = 0; j < modes.lambda.size(); ++j) {
+        out << "  " << j + 1 << "  ";
+        if (modes.rigid[static_cast<std::size_t>(j)]) {
+            out << "0 (rigid-body mode)\n";
+            ++rigid;
+            continue;
+        }
+        const double omega = std::sqrt(modes.lambda(j));  // lambda = omega_n^2, ascending
+        const double xi = 0.5 * (model.alpha / omega + model.beta * omega);
+        // With dampers the modes of (K, M) are not the damped ones: xi below, per damped mode.
+        out << num(omega) << "  " << num(omega / (2.0 * kPi)) << "  "
+            << (model.proportional_damping() ? num(xi) : std::string("-")) << "\n";
+    }
+    if (rigid > 0) {
+        // The floating groups, by the rule that made those modes rigid (free_components.h).
+        std::string groups;
+        for (const std::vector<int>& members : free_components(model, Configuration::all_open(model)).floating_members()) {
+            std::string names;
+            for (int i : members) names += (names.empty() ? "" : ", ") + model.masses[i].name;
+            groups += (groups.empty() ? " (" : "; ") + names;
+        }
+        out << "  note: " << rigid << " rigid-body mode(s): a mass or group of masses has no spring path to ground"
+            << groups << (groups.empty() ? "" : ")") << "\n";
+    }
+}
+
+}  // namespace
+
+void check_report(const Model& model, std::ostream& out) {
+    std::ostringstream text;  // nothing written unless the whole check passes
+    print_summary(model, text);
+    print_modes(model, text);
+    if (!model.proportional_damping()) print_damped_modes(model, text);
+    text << "ok\n";
+    out << text.str();
+}
+
+}  // namespace hsnc
