@@ -13,7 +13,7 @@
 #include "elements/friction.h"
 #include "elements/jenkins.h"
 #include "elements/motion.h"
-#include "elements/switch_derivative.h"
+#include "switch_derivative.h"
 #include "error.h"
 #include "free_components.h"
 #include "mp_complex_eigen.h"

@@ -14,7 +14,7 @@
 #include "elements/contact.h"
 #include "elements/friction.h"
 #include "elements/jenkins.h"
-#include "elements/switch_derivative.h"
+#include "switch_derivative.h"
 #include "ginac_lock.h"  // format_double, for comments
 
 namespace hsnc {

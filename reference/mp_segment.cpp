@@ -13,7 +13,7 @@
 #include "elements/jenkins.h"
 #include "elements/spring.h"
 #include "elements/motion.h"
-#include "elements/switch_derivative.h"
+#include "switch_derivative.h"
 #include "error.h"
 #include "free_components.h"
 

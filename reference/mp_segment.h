@@ -214,7 +214,7 @@ void MpModel::each_force(const Configuration& cfg, S&& slider, V&& visit) const 
 }
 
 /// The elements' parameters at N digits as the switch functions read them
-/// (model/elements/switch_derivative.h); the slider of Jenkins element j
+/// (model/switch_derivative.h); the slider of Jenkins element j
 /// through slider(j).
 template <class Slider>
 struct MpElements {

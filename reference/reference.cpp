@@ -27,7 +27,7 @@
 #include "elements/friction.h"
 #include "elements/jenkins.h"
 #include "elements/motion.h"
-#include "elements/switch_derivative.h"
+#include "switch_derivative.h"
 #include "error.h"
 #include "mp_segment.h"
 #include "sample_grid.h"

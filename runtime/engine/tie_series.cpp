@@ -9,7 +9,7 @@
 #include "elements/friction.h"
 #include "elements/jenkins.h"
 #include "elements/motion.h"
-#include "elements/switch_derivative.h"
+#include "switch_derivative.h"
 #include "kernel_abi.h"
 
 namespace hsnc {

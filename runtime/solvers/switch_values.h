@@ -26,7 +26,7 @@
 #include "elements/friction.h"
 #include "elements/jenkins.h"
 #include "elements/motion.h"
-#include "elements/switch_derivative.h"
+#include "switch_derivative.h"
 #include "model.h"
 #include "segment_solver.h"
 #include "switch_function.h"
@@ -121,7 +121,7 @@ inline std::complex<double> expm1c(std::complex<double> w) {
 }
 
 /// The elements' parameters as the switch functions read them
-/// (model/elements/switch_derivative.h), from a configuration's terms and the
+/// (model/switch_derivative.h), from a configuration's terms and the
 /// state x (masses, then sliders).
 struct TermsView {
     const ConfigurationTerms& in;

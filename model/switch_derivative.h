@@ -14,11 +14,11 @@
 #include <stdexcept>
 #include <utility>
 
-#include "../switch_function.h"
-#include "contact.h"
-#include "friction.h"
-#include "jenkins.h"
-#include "../model.h"
+#include "elements/contact.h"
+#include "elements/friction.h"
+#include "elements/jenkins.h"
+#include "model.h"
+#include "switch_function.h"
 
 namespace hsnc {
 
