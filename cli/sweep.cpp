@@ -329,6 +329,33 @@ struct OverallProgress {
     }
 };
 
+// The study's options from the flags (progress and the part are set by sweep()).
+SweepOptions sweep_options(const SweepFlags& f) {
+    SweepOptions o;
+    o.param = f.param;
+    o.from = f.from;
+    o.to = f.to;
+    o.points = count_flag("--points", f.points, 1);
+    o.max_periods = count_flag("--max-periods", f.max_periods, 1);
+    o.record_periods = count_flag("--record-periods", f.record_periods, 1);
+    o.restart_each = f.restart_each;
+    o.param2 = f.param2;
+    if (!f.values2.empty()) o.values2 = parse_values(f.values2);
+    o.threads = f.threads;
+    o.continuation = f.continuation;
+    o.max_steps = count_flag("--max-steps", f.max_steps, 0);
+    o.integrator.h = f.h;
+    o.integrator.rtol = f.rtol;
+    o.integrator.atol = f.atol;
+    try {
+        o.direction = sweep_direction_from_name(f.direction);
+        o.method = method_from_name(f.method);
+    } catch (const OptionError& e) {
+        throw flagged(e);
+    }
+    return o;
+}
+
 int sweep(const SweepFlags& f) {
     // Under an MPI launcher: the ranks (MPI loaded only now, from its module).
     std::unique_ptr<Communicator> comm;
@@ -337,28 +364,7 @@ int sweep(const SweepFlags& f) {
     auto overall = std::make_shared<OverallProgress>();
     overall->ranks = ranks;
     try {
-        SweepOptions o;
-        o.param = f.param;
-        o.from = f.from;
-        o.to = f.to;
-        o.points = count_flag("--points", f.points, 1);
-        o.max_periods = count_flag("--max-periods", f.max_periods, 1);
-        o.record_periods = count_flag("--record-periods", f.record_periods, 1);
-        o.restart_each = f.restart_each;
-        o.param2 = f.param2;
-        if (!f.values2.empty()) o.values2 = parse_values(f.values2);
-        o.threads = f.threads;
-        o.continuation = f.continuation;
-        o.max_steps = count_flag("--max-steps", f.max_steps, 0);
-        o.integrator.h = f.h;
-        o.integrator.rtol = f.rtol;
-        o.integrator.atol = f.atol;
-        try {
-            o.direction = sweep_direction_from_name(f.direction);
-            o.method = method_from_name(f.method);
-        } catch (const OptionError& e) {
-            throw flagged(e);
-        }
+        SweepOptions o = sweep_options(f);
         std::size_t part = 0, parts = 1;
         if (!f.part.empty()) {
             std::tie(part, parts) = parse_part(f.part);

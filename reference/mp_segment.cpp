@@ -318,6 +318,35 @@ cl_F MpModel::force_rate_on_mass(const Configuration& cfg, int i, const cl_F& t,
 
 // ---------------------------------------------------------------- MpSegment
 
+namespace {
+
+// Stamps an element's links into K (with their lengths' preload into f) and its
+// constant forces into f (model/elements/direction.h).
+struct Stamp {
+    std::vector<std::vector<cl_F>>& K;
+    std::vector<cl_F>& f;
+    const cl_F& z;
+    void link(const Direction& d, const cl_F& k, const cl_F&, const cl_F& length) {
+        if (cln::zerop(k)) return;  // a dashpot (C is built apart)
+        if (d.a != kGround) K[d.a][d.a] = K[d.a][d.a] + k;
+        if (d.b != kGround) K[d.b][d.b] = K[d.b][d.b] + k;
+        if (d.a != kGround && d.b != kGround) {
+            K[d.a][d.b] = K[d.a][d.b] - k;
+            K[d.b][d.a] = K[d.b][d.a] - k;
+        }
+        if (cln::zerop(length)) return;  // -k (u - length): +k length on a, -k length on b
+        if (d.a != kGround) f[d.a] = f[d.a] + k * length;
+        if (d.b != kGround) f[d.b] = f[d.b] - k * length;
+    }
+    void force(const Direction& d, const cl_F& fa) {
+        if (d.a != kGround) f[d.a] = f[d.a] + fa;
+        if (d.b != kGround) f[d.b] = f[d.b] - fa;
+    }
+    const cl_F& zero() const { return z; }
+};
+
+}  // namespace
+
 MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration& cfg)
     : mp_(mp), cfg_(cfg), switches_(switch_functions(model, cfg)), max_step_(mp.zero) {
     n_ = mp.n;
@@ -328,31 +357,7 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
     f_const_ = mp.f_const;
     // Every element's links (K, with their lengths' preload; a stuck slider's is per
     // segment, setup) and constant forces (f_const).
-    struct Stamp {
-        MpSegment& seg;
-        const cl_F& z;
-        void link(const Direction& d, const cl_F& k, const cl_F&, const cl_F& length) {
-            auto& K = seg.K_;
-            auto& f = seg.f_const_;
-            if (cln::zerop(k)) return;  // a dashpot (the reference takes Rayleigh damping only)
-            if (d.a != kGround) K[d.a][d.a] = K[d.a][d.a] + k;
-            if (d.b != kGround) K[d.b][d.b] = K[d.b][d.b] + k;
-            if (d.a != kGround && d.b != kGround) {
-                K[d.a][d.b] = K[d.a][d.b] - k;
-                K[d.b][d.a] = K[d.b][d.a] - k;
-            }
-            if (cln::zerop(length)) return;  // -k (u - length): +k length on a, -k length on b
-            if (d.a != kGround) f[d.a] = f[d.a] + k * length;
-            if (d.b != kGround) f[d.b] = f[d.b] - k * length;
-        }
-        void force(const Direction& d, const cl_F& fa) {
-            auto& f = seg.f_const_;
-            if (d.a != kGround) f[d.a] = f[d.a] + fa;
-            if (d.b != kGround) f[d.b] = f[d.b] - fa;
-        }
-        const cl_F& zero() const { return z; }
-    };
-    mp.each_force(cfg, [&](std::size_t) { return Z0; }, Stamp{*this, Z0});  // sliders: per segment
+    mp.each_force(cfg, [&](std::size_t) { return Z0; }, Stamp{K_, f_const_, Z0});  // sliders: per segment
     C_ = K_;
     for (int i = 0; i < n_; ++i)
         for (int k = 0; k < n_; ++k) C_[i][k] = mp.beta * K_[i][k] + (i == k ? mp.alpha * mp.m[i] : Z0);
