@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <unsupported/Eigen/MatrixFunctions>
 
@@ -47,7 +48,9 @@ struct Tangent::ConfigData {
     Eigen::MatrixXd stick_A, stick_P;
 };
 
-Tangent::Tangent(const Model& model) : model_(model), stick_(!stick_elements(model).empty()) {}
+Tangent::Tangent(const Model& model) : model_(model), stick_(!stick_elements(model).empty()) {
+    if (stick_) require_lumped_mass(model, "the tangent of a model with stick elements");  // stick_tangent.cpp: bodies' masses
+}
 Tangent::~Tangent() = default;
 Tangent::Tangent(Tangent&&) noexcept = default;
 
@@ -62,8 +65,12 @@ const Tangent::ConfigData& Tangent::data(const Configuration& cfg) {
     d->C = damping_matrix(model_, cfg);
     const Eigen::VectorXd m = mass_vector(model_);
     d->E.resize(nf, nf);
-    for (int j = 0; j < nf; ++j)
-        for (int r = 0; r < nf; ++r) d->E(j, r) = md.phi(r, j) * m(md.free[r]);
+    if (model_.coupled_mass()) {
+        d->E = md.phi_t_m();
+    } else {
+        for (int j = 0; j < nf; ++j)
+            for (int r = 0; r < nf; ++r) d->E(j, r) = md.phi(r, j) * m(md.free[r]);
+    }
     d->G = Eigen::MatrixXd::Zero(nf, ns);
     for (int j = 0; j < nf; ++j)
         for (int s = 0; s < ns; ++s) {
@@ -94,6 +101,10 @@ const Tangent::ConfigData& Tangent::data(const Configuration& cfg) {
                 A(nf + r, nf + q) = -d->C(i, md.free[q]) / m(i);
             }
             for (int s = 0; s < ns; ++s) A(nf + r, 2 * nf + s) = -d->K(i, md.stuck[s]) / m(i);
+        }
+        if (model_.coupled_mass() && nf > 0) {  // rows over M_F^-1, not over the diagonal
+            const Eigen::MatrixXd D = m(md.free).asDiagonal();
+            A.middleRows(nf, nf) = md.mass_matrix.llt().solve(D * A.middleRows(nf, nf));
         }
         if (nf > 0) {
             const Eigen::EigenSolver<Eigen::MatrixXd> es(A.topLeftCorner(2 * nf, 2 * nf), false);
@@ -207,6 +218,24 @@ double acceleration(const Model& model, const Configuration& cfg, const signed c
     return (force_on_mass(model, cfg, i, t, x, v) - fr * sgn[i]) / model.masses[i].m;
 }
 
+// M^-1 y for a coupled M (no friction there: every mass is free).
+Eigen::VectorXd coupled_solve(const Model& model, const Eigen::VectorXd& y) { return mass_matrix(model).llt().solve(y); }
+
+// Every mass's acceleration in cfg.
+std::vector<double> accelerations(const Model& model, const Configuration& cfg, const signed char* sgn, double t,
+                                  const double* x, const double* v) {
+    const int n = static_cast<int>(model.dof());
+    std::vector<double> a(static_cast<std::size_t>(n));
+    if (model.coupled_mass()) {
+        Eigen::VectorXd f(n);
+        for (int i = 0; i < n; ++i) f(i) = force_on_mass(model, cfg, i, t, x, v);
+        Eigen::VectorXd::Map(a.data(), n) = coupled_solve(model, f);
+        return a;
+    }
+    for (int i = 0; i < n; ++i) a[static_cast<std::size_t>(i)] = acceleration(model, cfg, sgn, i, t, x, v);
+    return a;
+}
+
 }  // namespace
 
 namespace {
@@ -218,8 +247,7 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
                const signed char* sgnA, const Configuration& B, const signed char* sgnB, const SwitchFunction* f,
                double t, const double* x, const double* v, Eigen::MatrixXd& Y) {
     const int n = static_cast<int>(model.dof());
-    std::vector<double> aA(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) aA[i] = acceleration(model, A, sgnA, i, t, x, v);
+    const std::vector<double> aA = accelerations(model, A, sgnA, t, x, v);
     // u: the jump of the accelerations. For a mass sliding on both sides it
     // is the jump of the dampers of the contacts that change (their springs
     // carry no force on G = 0) and of the friction direction, taken from
@@ -247,6 +275,7 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
             u(i) = (dA[i] - fr * (sgnB[i] - sgnA[i])) / model.masses[i].m;
         }
     }
+    if (model.coupled_mass()) u = coupled_solve(model, Eigen::VectorXd::Map(dA.data(), n));  // no friction there
     if (u.isZero(0.0) || !f) return true;
     // The switch function's gradient and rate before the switch.
     Eigen::RowVectorXd hy = Eigen::RowVectorXd::Zero(2 * n);
@@ -361,11 +390,11 @@ double Tangent::grazing_ratio(const SwitchRecord& r) {
     for (const SwitchFunction& f : *r.switched) {
         if (f.kind != SwitchKind::gap) continue;
         if (a.empty()) {
-            a.resize(static_cast<std::size_t>(n));
-            const Eigen::VectorXd f = stick_ ? stick_field(model_, *r.before, r.sgn_before, r.t, r.x, r.v) : Eigen::VectorXd();
-            for (int i = 0; i < n; ++i)
-                a[static_cast<std::size_t>(i)] =
-                    stick_ ? f(n + i) : acceleration(model_, *r.before, r.sgn_before, i, r.t, r.x, r.v);
+            a = accelerations(model_, *r.before, r.sgn_before, r.t, r.x, r.v);
+            if (stick_) {
+                const Eigen::VectorXd f = stick_field(model_, *r.before, r.sgn_before, r.t, r.x, r.v);
+                for (int i = 0; i < n; ++i) a[static_cast<std::size_t>(i)] = f(n + i);
+            }
         }
         const Contact& k = model_.contacts[static_cast<std::size_t>(f.element)];
         const double rate = std::fabs(gap_rate(model_, f.element, r.v));

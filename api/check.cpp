@@ -55,6 +55,13 @@ void print_summary(const Model& model, std::ostream& out) {
             out << "  C = " << model.structure.damping_file
                 << (model.proportional_damping() ? " (proportional: alpha, beta below)" : " (non-proportional: dampers below)");
         out << "\n";
+        if (model.coupled_mass()) {
+            std::size_t couplings = 0;
+            for (std::size_t i = 0; i < model.dof(); ++i)
+                for (std::size_t j = i + 1; j < model.dof(); ++j) couplings += model.mass_entry(i, j) != 0.0 ? 1 : 0;
+            out << "mass matrix M: coupled (" << couplings << " off-diagonal pairs; smallest eigenvalue "
+                << num(model.mass_floor) << "); m below is M_ii\n";
+        }
     }
     out << "degrees of freedom: " << model.dof() << "\n";
     for (std::size_t i = 0; i < model.dof(); ++i)

@@ -269,6 +269,9 @@ ex coordinate_force(const Derivation& d, const SegmentInputs& in, std::size_t r)
 
 Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method, ExactMatrices exact_matrices,
                   DerivationCache* cache) {
+    if (model.coupled_mass())  // the generalized eigenproblem in double-double: issue 36, stage b
+        throw NotDerivable("derivation::derive(): configuration " + cfg.spec(model) +
+                           ": a coupled (non-diagonal) mass matrix");
     GiNaC::Digits = kDerivationDigits;
     Derivation d;
     d.model = &model;

@@ -68,6 +68,10 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
         why = "the model has " + what + ", which the symbolic view does not take yet";
         return false;
     }
+    if (model.coupled_mass()) {
+        why = "the model has a coupled (non-diagonal) mass matrix, which the symbolic view does not take yet";
+        return false;
+    }
     if (!model.proportional_damping()) {  // state-space modes: a quartic and up, not the symmetric 2x2 below
         why = "the model has non-proportional damping (dampers), which the symbolic view does not take";
         return false;

@@ -55,6 +55,30 @@ Eigen::VectorXd mass_vector(const Model& model) {
     return m;
 }
 
+Eigen::MatrixXd mass_matrix(const Model& model) {
+    const auto n = static_cast<Eigen::Index>(model.dof());
+    if (!model.coupled_mass()) return mass_vector(model).asDiagonal();
+    Eigen::MatrixXd M(n, n);
+    for (Eigen::Index i = 0; i < n; ++i)
+        for (Eigen::Index j = 0; j < n; ++j)
+            M(i, j) = model.mass_entry(static_cast<std::size_t>(i), static_cast<std::size_t>(j));
+    return M;
+}
+
+double mass_times(const Model& model, std::size_t i, const double* y) {
+    if (!model.coupled_mass()) return model.masses[i].m * y[i];
+    const std::size_t n = model.dof();
+    double s = 0.0;
+    for (std::size_t j = 0; j < n; ++j) s += model.mass_matrix[i * n + j] * y[j];
+    return s;
+}
+
+void require_lumped_mass(const Model& model, const std::string& who) {
+    if (!model.coupled_mass()) return;
+    throw InputError(who + ": model '" + model.name +
+                     "' has a coupled (non-diagonal) mass matrix, which it does not take yet");
+}
+
 Eigen::MatrixXd stiffness_matrix(const Model& model, const Configuration& cfg) {
     const auto n = static_cast<Eigen::Index>(model.dof());
     Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n);
@@ -66,7 +90,8 @@ Eigen::MatrixXd stiffness_matrix(const Model& model, const Configuration& cfg) {
 
 Eigen::MatrixXd damping_matrix(const Model& model, const Configuration& cfg) {
     Eigen::MatrixXd C = model.beta * stiffness_matrix(model, cfg);
-    C.diagonal() += model.alpha * mass_vector(model);
+    if (model.coupled_mass()) C += model.alpha * mass_matrix(model);
+    else C.diagonal() += model.alpha * mass_vector(model);
     for (std::size_t e = 0; e < model.dampers.size(); ++e)  // a dashpot adds to C as a spring to K
         link_of(model, cfg, ElementKind::damper, e, [&](int a, int b, double, double c, double) { add_spring(C, a, b, c); });
     return C;
@@ -163,8 +188,9 @@ ElementIndex::ElementIndex(const Model& model) {
 
 double force_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* x,
                      const double* v, const ElementIndex* elements) {
-    const double m = model.masses[i].m;
-    double f = model.load[i] - model.alpha * m * v[i];
+    const std::size_t ii = static_cast<std::size_t>(i);
+    double f = model.load[ii] - (model.coupled_mass() ? model.alpha * mass_times(model, ii, v)
+                                                      : model.alpha * model.masses[ii].m * v[i]);  // (alpha m) v
     for (const Harmonic& h : model.forcing) f += h.amplitude[i] * std::sin(h.omega * t + h.phase);
     // A link of stiffness k and damping c stretched by s = x[a] - x[b] - d pulls a with
     // -k*s - c*s' and pushes b with the opposite: a spring or closed contact has
@@ -225,7 +251,8 @@ double driving_force_rate(const Model& model, const Configuration& cfg, int i, d
 
 double force_rate_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* v,
                           const double* a) {
-    double f = -model.alpha * model.masses[i].m * a[i];
+    const std::size_t ii = static_cast<std::size_t>(i);
+    double f = model.coupled_mass() ? -model.alpha * mass_times(model, ii, a) : -model.alpha * model.masses[ii].m * a[i];
     for (const Harmonic& h : model.forcing) f += h.amplitude[i] * h.omega * std::cos(h.omega * t + h.phase);
     auto add = [&](int p, int q, double k, double c, double) {
         if (p != i && q != i) return;

@@ -11,6 +11,77 @@
 #include "free_components.h"
 
 namespace hsnc {
+namespace {
+
+// A coupled M (modal.h): one generalized eigenproblem over all free masses.
+// A friction element cannot be written on such a model (model_reader), so no
+// mass is stuck and none rides a partner.
+void coupled_modes(const Model& model, const Configuration& cfg, const FreeComponents& fc, ModalDecomposition& md) {
+    const int nf = static_cast<int>(md.free.size());
+    if (!md.riders.empty() || !md.stuck.empty())
+        throw RunError("modal_analysis(): configuration " + cfg.spec(model) +
+                       ": a stuck mass on a coupled mass matrix (not yet supported)");
+    const Eigen::MatrixXd Kfull = stiffness_matrix(model, cfg);
+    Eigen::MatrixXd Kf(nf, nf), Mf(nf, nf);
+    for (int r = 0; r < nf; ++r)
+        for (int s = 0; s < nf; ++s) {
+            const auto i = static_cast<std::size_t>(md.free[r]), j = static_cast<std::size_t>(md.free[s]);
+            Kf(r, s) = Kfull(md.free[r], md.free[s]);
+            Mf(r, s) = model.mass_entry(i, j);
+        }
+    md.mass = Mf.diagonal();
+    md.mass_matrix = Mf;
+    // The structural rigid-body modes, M-orthonormalised in component order.
+    const int nr = fc.n_floating();
+    Eigen::MatrixXd R = Eigen::MatrixXd::Zero(nf, nr);
+    std::vector<int> rigid_component;
+    for (int comp = 0, col = 0; comp < fc.count(); ++comp) {
+        if (!fc.floating[static_cast<std::size_t>(comp)]) continue;
+        for (int s = 0; s < nf; ++s)
+            if (md.component[static_cast<std::size_t>(s)] == comp) R(s, col) = 1.0;
+        rigid_component.push_back(comp);
+        ++col;
+    }
+    for (int c = 0; c < nr; ++c) {  // modified Gram-Schmidt in the M inner product
+        for (int p = 0; p < c; ++p) R.col(c) -= (R.col(p).dot(Mf * R.col(c))) * R.col(p);
+        R.col(c) /= std::sqrt(R.col(c).dot(Mf * R.col(c)));
+    }
+    // Elastic modes in the M-orthogonal complement {x : R^T M x = 0}.
+    Eigen::MatrixXd Q = Eigen::MatrixXd::Identity(nf, nf);
+    if (nr > 0) {
+        const Eigen::MatrixXd Y = Mf * R;
+        Eigen::HouseholderQR<Eigen::MatrixXd> qr(Y);
+        Q = (qr.householderQ() * Eigen::MatrixXd::Identity(nf, nf)).rightCols(nf - nr);
+    }
+    Eigen::MatrixXd Z;
+    Eigen::VectorXd lam;
+    if (nf - nr > 0) {
+        const Eigen::MatrixXd Kq = Q.transpose() * Kf * Q, Mq = Q.transpose() * Mf * Q;
+        Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (Kq + Kq.transpose()),
+                                                                    0.5 * (Mq + Mq.transpose()));
+        if (es.info() != Eigen::Success)
+            throw RunError("modal_analysis(): generalized eigen decomposition failed for configuration " +
+                           cfg.spec(model));
+        Z = es.eigenvectors();  // Z^T Mq Z = I
+        lam = es.eigenvalues();
+    }
+    md.phi.resize(nf, nf);
+    md.lambda.resize(nf);
+    md.rigid.assign(static_cast<std::size_t>(nf), 0);
+    md.mode_component.assign(static_cast<std::size_t>(nf), -1);
+    for (int c = 0; c < nr; ++c) {
+        md.phi.col(c) = R.col(c);
+        md.lambda(c) = 0.0;
+        md.rigid[static_cast<std::size_t>(c)] = 1;
+        md.mode_component[static_cast<std::size_t>(c)] = rigid_component[static_cast<std::size_t>(c)];
+    }
+    for (int k = 0; k < nf - nr; ++k) {
+        md.phi.col(nr + k) = Q * Z.col(k);
+        md.lambda(nr + k) = std::max(lam(k), 0.0);
+    }
+}
+
+}  // namespace
 
 ModalDecomposition modal_analysis(const Model& model, const Configuration& cfg) {
     const int n = static_cast<int>(model.dof());
@@ -24,6 +95,10 @@ ModalDecomposition modal_analysis(const Model& model, const Configuration& cfg) 
     const int nf = static_cast<int>(md.free.size());
     md.component = fc.component;
     md.n_components = fc.count();
+    if (model.coupled_mass()) {
+        coupled_modes(model, cfg, fc, md);
+        return md;
+    }
 
     // The free coordinates: a free mass with its riders (their masses and
     // stiffness rows summed: T^T M T and T^T K T of x = T q + const).

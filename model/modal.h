@@ -33,7 +33,9 @@ struct ModalDecomposition {
     /// move with it: the partner's coordinate stands for both, with their
     /// summed mass and stiffness rows (x_rider = x_partner + a constant).
     std::vector<int> riders;
-    Eigen::VectorXd mass;        ///< M_F: the mass of each free coordinate (with its riders)
+    Eigen::VectorXd mass;        ///< the diagonal of M_F: the mass of each free coordinate (with its riders)
+    /// M_F whole when the model's M is coupled (Model::coupled_mass()); empty when lumped.
+    Eigen::MatrixXd mass_matrix;
     std::vector<int> component;  ///< component id of each free mass (parallel to `free`)
     int n_components = 0;
 
@@ -42,10 +44,21 @@ struct ModalDecomposition {
     Eigen::MatrixXd phi;
     Eigen::VectorXd lambda;    ///< eigenvalues, >= 0, ascending
     std::vector<char> rigid;   ///< 1 for the structural rigid-body modes (lambda == 0 exactly)
-    std::vector<int> mode_component;  ///< component of each mode
+    std::vector<int> mode_component;  ///< component of each mode (coupled M: -1 for an elastic mode)
+
+    /// Phi^T M_F, the projection of a physical state onto the modes (q = Phi^T M_F x_F).
+    Eigen::MatrixXd phi_t_m() const {
+        if (mass_matrix.size() > 0) return phi.transpose() * mass_matrix;
+        return phi.transpose() * mass.asDiagonal();
+    }
 };
 
 /// Modal decomposition of the free masses of `cfg` (see the file comment).
+/// A coupled M (Model::coupled_mass()) is decomposed whole, K_F phi = lambda
+/// M_F phi (Cholesky of M_F): the rigid-body modes are still the structural
+/// ones (all ones on a floating component, M-orthonormalised), the elastic
+/// modes those of the M-orthogonal complement; the components no longer
+/// decouple, since M couples them.
 ModalDecomposition modal_analysis(const Model& model, const Configuration& cfg);
 
 }  // namespace hsnc

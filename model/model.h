@@ -73,6 +73,13 @@ struct Model {
     double g = 9.81;
 
     std::vector<Mass> masses;
+    /// The full mass matrix, dof() x dof() row-major, when a [structure]'s M is
+    /// coupled (consistent or reduced mass: an off-diagonal entry); empty for a
+    /// lumped model, whose M is diag(masses[i].m). masses[i].m is M_ii either way.
+    std::vector<double> mass_matrix;
+    /// The smallest eigenvalue of a coupled M (a bound the switch search uses:
+    /// lambda_max(K, M) <= lambda_max(K) / mass_floor); 0 when M is lumped.
+    double mass_floor = 0.0;
     std::vector<Spring> springs;
     std::vector<Contact> contacts;
     std::vector<FrictionElement> frictions;
@@ -109,6 +116,13 @@ struct Model {
     std::map<std::string, std::string> field_expressions;
 
     std::size_t dof() const { return masses.size(); }
+    /// True when M has off-diagonal entries (mass_matrix holds it).
+    bool coupled_mass() const { return !mass_matrix.empty(); }
+    /// M_ij, lumped or coupled.
+    double mass_entry(std::size_t i, std::size_t j) const {
+        if (coupled_mass()) return mass_matrix[i * masses.size() + j];
+        return i == j ? masses[i].m : 0.0;
+    }
     /// Positions the engine carries: the masses', then every Jenkins slider's.
     std::size_t state_size() const { return masses.size() + jenkins.size(); }
     /// The most switch functions a configuration has (switch_function.h).

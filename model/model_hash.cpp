@@ -36,6 +36,13 @@ std::string model_canonical_text(const Model& model) {
              num(f.mu_s) + " " + num(f.normal) + "\n";
     for (const Damper& d : model.dampers)
         t += "damper " + std::to_string(d.a) + " " + std::to_string(d.b) + " " + num(d.c) + "\n";
+    if (model.coupled_mass()) {  // the off-diagonal entries, upper triangle (M_ii is each mass's m)
+        const std::size_t n = model.dof();
+        t += "mass_matrix";
+        for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t j = i + 1; j < n; ++j) t += " " + num(model.mass_entry(i, j));
+        t += "\n";
+    }
     for (const Jenkins& j : model.jenkins)
         t += "jenkins " + j.name + " " + std::to_string(j.a) + " " + std::to_string(j.b) + " " + num(j.k) + " " +
              num(j.slip_force) + "\n";

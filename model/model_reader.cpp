@@ -466,7 +466,8 @@ private:
         }
         const MarketMatrix M = matrix_file(*t, "mass", model_.structure.mass_file);
         std::vector<double> mass;
-        if (const std::string why = check_mass_matrix(M, names, mass); !why.empty())
+        if (const std::string why = check_mass_matrix(M, names, mass, model_.mass_matrix, model_.mass_floor);
+            !why.empty())
             fail(t->get("mass"), "structure.mass", model_.structure.mass_file + ": " + why);
         const MarketMatrix K = matrix_file(*t, "stiffness", model_.structure.stiffness_file);
         if (const std::string why = check_stiffness_matrix(K, names, structure_springs_); !why.empty())
@@ -588,6 +589,10 @@ private:
                     fail(t.get("between"), path + ".between",
                          "friction between two bodies with non-proportional damping ([[damper]]) is not yet supported");
             }
+            if (model_.coupled_mass())  // the stuck dof's constraint force needs M_iF a_F (issue 36, stage b)
+                fail(t.get("between"), path + ".between",
+                     "friction on a structure with a coupled (non-diagonal) mass matrix is not yet supported: "
+                     "give a lumped (diagonal) M, or model the joint with a [[jenkins]] element");
             f.mu_k = required_number(t, path, "mu_k");
             if (f.mu_k < 0.0) fail(t.get("mu_k"), path + ".mu_k", "must be >= 0, got " + show(f.mu_k));
             f.mu_s = optional_number(t, path, "mu_s").value_or(f.mu_k);

@@ -93,7 +93,8 @@ bool scaled_extremes(const MarketMatrix& A, const std::vector<std::size_t>& memb
 
 }  // namespace
 
-std::string check_mass_matrix(const MarketMatrix& M_in, const std::vector<std::string>& dofs, std::vector<double>& mass) {
+std::string check_mass_matrix(const MarketMatrix& M_in, const std::vector<std::string>& dofs, std::vector<double>& mass,
+                              std::vector<double>& coupled, double& floor) {
     const std::size_t n = dofs.size();
     if (std::string why = check_size("M", M_in, n); !why.empty()) return why;
     MarketMatrix M = M_in;
@@ -106,13 +107,20 @@ std::string check_mass_matrix(const MarketMatrix& M_in, const std::vector<std::s
         return "M is not positive definite: " + entry("M", dofs, bad, bad) + " = " + show(M(bad, bad));
     if (!(lo > kRelTol * hi))
         return "M is not positive definite (smallest eigenvalue of the scaled D^-1/2 M D^-1/2: " + show(lo) + ")";
-    for (std::size_t i = 0; i < n; ++i)
-        for (std::size_t j = 0; j < n; ++j)
-            if (i != j && M(i, j) != 0.0)
-                return "M has the off-diagonal entry " + entry("M", dofs, i, j) + " = " + show(M(i, j)) +
-                       ": a consistent (non-diagonal) mass matrix is not yet supported; give a lumped (diagonal) M";
     mass.assign(n, 0.0);
     for (std::size_t i = 0; i < n; ++i) mass[i] = M(i, i);
+    coupled.clear();
+    floor = 0.0;
+    bool diagonal = true;
+    for (std::size_t e = 0; e < n * n && diagonal; ++e)
+        if (e / n != e % n && M.values[e] != 0.0) diagonal = false;
+    if (diagonal) return "";
+    coupled = M.values;  // symmetrised by check_symmetric
+    Eigen::MatrixXd A = Eigen::Map<const Eigen::MatrixXd>(coupled.data(), static_cast<Eigen::Index>(n),
+                                                          static_cast<Eigen::Index>(n));
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(A, Eigen::EigenvaluesOnly);
+    floor = es.eigenvalues()(0);
+    if (!(floor > 0.0)) return "M is not positive definite (smallest eigenvalue " + show(floor) + ")";
     return "";
 }
 

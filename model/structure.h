@@ -10,8 +10,8 @@
 // zero keeps its rigid-body translation (free_components.h).
 //
 // Readings where the contract leaves room (each one tested):
-//  - M must be diagonal (a lumped mass matrix): a consistent mass matrix is
-//    refused with a message saying so (not yet supported), never lumped.
+//  - M may be coupled (a consistent or reduced mass matrix): it is kept whole
+//    (Model::mass_matrix) and never lumped; a diagonal M is the lumped model.
 //  - K must be positive semi-definite, and singular only where hsnc decides
 //    rigid-body modes structurally: a group of dofs coupled by K with every
 //    row sum zero translates freely. Any other null vector (a free beam's
@@ -43,8 +43,11 @@ namespace hsnc {
 /// Each check returns "" when the matrix is acceptable, else the reason
 /// (naming entries by dof: "M(u1, u2)"). `dofs` are the dof names in matrix order.
 
-/// M: n x n, symmetric, positive definite, diagonal. On success `mass` holds its diagonal.
-std::string check_mass_matrix(const MarketMatrix& M, const std::vector<std::string>& dofs, std::vector<double>& mass);
+/// M: n x n, symmetric, positive definite. On success `mass` holds its
+/// diagonal, and when M has an off-diagonal entry `coupled` holds all of it
+/// (row-major) and `floor` its smallest eigenvalue (else both are empty / 0).
+std::string check_mass_matrix(const MarketMatrix& M, const std::vector<std::string>& dofs, std::vector<double>& mass,
+                              std::vector<double>& coupled, double& floor);
 
 /// K: n x n, symmetric, positive semi-definite with structural null space.
 /// On success `springs` holds its springs (Spring::from_structure), the

@@ -344,6 +344,7 @@ std::size_t search_step_limit(double span, double fastest_rate, const SearchLimi
 PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions& options, Observer& observer,
                             const SearchLimits& limits, const std::vector<double>* offset) {
     if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
+    require_lumped_mass(model, "the reference (--precision mp:N)");
     // Jenkins elements: their sliders are state (x after the masses); a stuck pair rides one coordinate.
     const MpModel mp(model, digits);
     const std::size_t n = model.dof();

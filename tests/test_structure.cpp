@@ -581,8 +581,6 @@ TEST(StructureInput, FilesAndMatrices) {
                    {"key 'structure.mass'", "M is not positive definite: M(u2, u2) = -2"});
     expect_message(with_matrices("", "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 1\n2 1 2\n2 2 1\n"),
                    {"key 'structure.mass'", "M is not positive definite"});
-    expect_message(with_matrices("", "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 2\n2 1 0.5\n2 2 2\n"),
-                   {"key 'structure.mass'", "consistent (non-diagonal) mass matrix is not yet supported"});
     expect_message(with_matrices("", kM2, "%%MatrixMarket matrix coordinate real general\n2 2 3\n1 1 20\n1 2 -10\n2 2 10\n"),
                    {"key 'structure.stiffness'", "K is not symmetric: K(u2, u1) = 0 but K(u1, u2) = -10"});
     expect_message(with_matrices("", kM2, "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 1\n2 1 -10\n2 2 1\n"),

@@ -15,6 +15,8 @@
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 #endif
 
+#include <Eigen/Cholesky>
+
 #include "assembly.h"
 #include "error.h"
 #include "sample_grid.h"
@@ -32,7 +34,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 struct Sliders {
     const Model& model;
     std::vector<double> s, buf;
+    /// The Cholesky factor of a coupled M (Model::coupled_mass()), once per run.
+    Eigen::LLT<Eigen::MatrixXd> mass_llt;
     explicit Sliders(const Model& m) : model(m), buf(m.state_size()) {
+        if (m.coupled_mass()) mass_llt.compute(mass_matrix(m));
         if (m.slider0.size() == m.jenkins.size()) {
             s = m.slider0;
         } else {
@@ -88,6 +93,11 @@ void accelerations(const Model& model, const Configuration& cfg, const std::vect
         } else {
             a[p] += m.mu_k * model.normal_force(i) * dir[i];
         }
+    }
+    if (model.coupled_mass()) {  // no friction there (model_reader): a = M^-1 A over every mass
+        const auto nn = static_cast<Eigen::Index>(n);
+        Eigen::VectorXd::Map(a, nn) = sl.mass_llt.solve(Eigen::VectorXd::Map(a, nn));
+        return;
     }
     for (std::size_t i = 0; i < n; ++i)
         if (!fixed_in(model, cfg, i)) a[i] /= model.masses[i].m;

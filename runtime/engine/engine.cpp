@@ -78,9 +78,12 @@ double fastest_rate(const Model& model, const Configuration& cfg) {
         if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
     for (std::size_t j = 0; j < model.jenkins.size(); ++j)
         if (cfg.slip[j] == 0) add(model.jenkins[j].a, model.jenkins[j].b, model.jenkins[j].k);
+    // A coupled M: lambda_max(K_F, M_F) <= lambda_max(K_F) / lambda_min(M) (interlacing), and
+    // lambda_max(K_F) <= max_i 2 stiff_i (Gershgorin), so m_i becomes M's smallest eigenvalue.
+    auto mass_of = [&](std::size_t i) { return model.coupled_mass() ? model.mass_floor : model.masses[i].m; };
     double w2 = 0.0;
     for (std::size_t i = 0; i < n; ++i)
-        if (!fixed_in(model, cfg, i)) w2 = std::max(w2, 2 * stiff[i] / model.masses[i].m);
+        if (!fixed_in(model, cfg, i)) w2 = std::max(w2, 2 * stiff[i] / mass_of(i));
     double rate = std::max(std::sqrt(w2), std::fabs(model.alpha) + std::fabs(model.beta) * w2);
     // Dampers: the damping rates of M^-1 C_d, by Gershgorin as for K.
     std::vector<double> visc(n, 0.0);
@@ -88,7 +91,7 @@ double fastest_rate(const Model& model, const Configuration& cfg) {
         for (int b : {d.a, d.b})
             if (b != kGround && d.a != d.b) visc[static_cast<std::size_t>(b)] += std::fabs(d.c);
     for (std::size_t i = 0; i < n; ++i)
-        if (!fixed_in(model, cfg, i)) rate = std::max(rate, 2 * visc[i] / model.masses[i].m);
+        if (!fixed_in(model, cfg, i)) rate = std::max(rate, 2 * visc[i] / mass_of(i));
     for (const Harmonic& h : model.forcing) rate = std::max(rate, std::fabs(h.omega));
     return rate;
 }

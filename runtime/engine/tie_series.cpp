@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/Cholesky>
+
 #include "assembly.h"
 #include "elements/contact.h"
 #include "elements/friction.h"
@@ -28,8 +30,17 @@ void force_derivative(const Model& model, const Configuration& cfg, int i, doubl
     const std::size_t ii = static_cast<std::size_t>(i);
     value = k == 0 ? model.load[ii] : 0.0;
     magnitude = std::fabs(value);
-    value -= model.alpha * model.masses[ii].m * xk1[ii];
-    magnitude += std::fabs(model.alpha) * model.masses[ii].m * mk1[ii];
+    if (model.coupled_mass()) {  // -alpha (M x^(k+1))_i over the row of M
+        const std::size_t n = model.dof();
+        for (std::size_t j = 0; j < n; ++j) {
+            const double mij = model.mass_matrix[ii * n + j];
+            value -= model.alpha * mij * xk1[j];
+            magnitude += std::fabs(model.alpha * mij) * mk1[j];
+        }
+    } else {
+        value -= model.alpha * model.masses[ii].m * xk1[ii];
+        magnitude += std::fabs(model.alpha) * model.masses[ii].m * mk1[ii];
+    }
     for_each_link(model, cfg, [&](int a, int b, double kk, double cc, double gap) {
         if (a == b || (a != i && b != i)) return;
         double f = -kk * (body(xk, a) - body(xk, b)) - cc * (body(xk1, a) - body(xk1, b));
@@ -96,6 +107,23 @@ MotionSeries motion_series(const Model& model, const Configuration& cfg, const s
             s.x[1][i] = v[i];
             s.mag[1][i] = std::fabs(v[i]);
         }
+    }
+    if (model.coupled_mass()) {  // no friction (model_reader): x^(k+2) = M^-1 A^(k), |M^-1| on the magnitudes
+        const Eigen::MatrixXd M = mass_matrix(model);
+        const Eigen::LLT<Eigen::MatrixXd> llt(M);
+        const Eigen::MatrixXd inv_abs = llt.solve(Eigen::MatrixXd::Identity(M.rows(), M.cols())).cwiseAbs();
+        Eigen::VectorXd A(static_cast<Eigen::Index>(n)), m(static_cast<Eigen::Index>(n));
+        for (int k = 0; k + 2 <= order; ++k) {
+            for (std::size_t i = 0; i < n; ++i)
+                force_derivative(model, cfg, static_cast<int>(i), t, t_lo, s, k, A(static_cast<Eigen::Index>(i)),
+                                 m(static_cast<Eigen::Index>(i)));
+            const Eigen::VectorXd x = llt.solve(A), xm = inv_abs * m;
+            for (std::size_t i = 0; i < n; ++i) {
+                s.x[static_cast<std::size_t>(k) + 2][i] = x(static_cast<Eigen::Index>(i));
+                s.mag[static_cast<std::size_t>(k) + 2][i] = xm(static_cast<Eigen::Index>(i));
+            }
+        }
+        return s;
     }
     for (int k = 0; k + 2 <= order; ++k)
         for (std::size_t i = 0; i < n; ++i) {
@@ -174,10 +202,10 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
         return jenkins::slip_magnitude(J.k, J.slip_force, J.direction(), 0.0, m, 1);
     }
     // The magnitude of the terms of x_i'' (0 for a stuck mass): A_i's terms and the friction force.
-    auto accel_magnitude = [&](int i) {
+    auto force_magnitude = [&](int i) {
         const std::size_t ii = static_cast<std::size_t>(i);
-        if (i == kGround || fixed_in(model, cfg, ii)) return 0.0;
         double m = std::fabs(model.load[ii]) + std::fabs(model.alpha) * model.masses[ii].m * std::fabs(v[ii]);
+        if (model.coupled_mass()) m = std::fabs(model.load[ii]) + std::fabs(model.alpha * mass_times(model, ii, v));
         for_each_link(model, cfg, [&](int a, int b, double kk, double cc, double gap) {
             if (a == b || (a != i && b != i)) return;
             m += std::fabs(kk) * (at(x, a) + at(x, b)) + std::fabs(cc) * (at(v, a) + at(v, b)) + std::fabs(kk * gap);
@@ -189,7 +217,16 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
         for (std::size_t q = 0; q < model.dof(); ++q)  // its friction, and that of a mass it is the partner of
             if (model.masses[q].has_friction && (q == ii || model.masses[q].partner == i))
                 m += model.masses[q].mu_k * model.normal_force(q);
-        return m / model.masses[ii].m;
+        return m;
+    };
+    auto accel_magnitude = [&](int i) {
+        const std::size_t ii = static_cast<std::size_t>(i);
+        if (i == kGround || fixed_in(model, cfg, ii)) return 0.0;
+        if (!model.coupled_mass()) return force_magnitude(i) / model.masses[ii].m;
+        // |(M^-1 A)_i| <= ||A||_2 / lambda_min(M) <= sum_j |A_j| / lambda_min(M).
+        double sum = 0.0;
+        for (std::size_t j = 0; j < model.dof(); ++j) sum += force_magnitude(static_cast<int>(j));
+        return sum / model.mass_floor;
     };
     const int partner = f.kind == SwitchKind::velocity || f.kind == SwitchKind::release_pos ||
                                 f.kind == SwitchKind::release_neg

@@ -1,5 +1,6 @@
 #include "exponential_solver.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <unsupported/Eigen/MatrixFunctions>
 
@@ -34,6 +35,13 @@ ExponentialSolver::ExponentialSolver(const Model& model, const Configuration& cf
     theta_ = sn_ = cs_ = Eigen::VectorXd::Zero(nh_);
     z_ = zmag_ = Eigen::VectorXd::Zero(m_);
     xmag_ = vmag_ = Eigen::VectorXd::Zero(n_);
+    if (model.coupled_mass()) {  // a coupled M_F: the rows of the state matrix are M_F^-1 times the forces
+        Eigen::MatrixXd MF(nf_, nf_);
+        for (int r = 0; r < nf_; ++r)
+            for (int q = 0; q < nf_; ++q)
+                MF(r, q) = model.mass_entry(static_cast<std::size_t>(free_[r]), static_cast<std::size_t>(free_[q]));
+        minv_ = MF.llt().solve(Eigen::MatrixXd::Identity(nf_, nf_));
+    }
 }
 
 void ExponentialSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
@@ -64,7 +72,7 @@ void ExponentialSolver::setup(double t0, double t0_lo, const double* x0, const d
     for (int r = 0; r < nf_; ++r) {
         const int i = free_[r];
         const double f = offset ? 0.0 : force(r);
-        const double m = t_.mass(i);
+        const double m = minv_.size() > 0 ? 1.0 : t_.mass(i);  // M_F^-1 applied below when coupled
         Z_(r, nf_ + r) = 1.0;
         for (int q = 0; q < nf_; ++q) {
             Z_(nf_ + r, q) = -t_.K(i, free_[q]) / m;
@@ -75,6 +83,7 @@ void ExponentialSolver::setup(double t0, double t0_lo, const double* x0, const d
         z0_(r) = x0[i] - xs_(r);
         z0_(nf_ + r) = v0[i];
     }
+    if (minv_.size() > 0) Z_.middleRows(nf_, nf_) = minv_ * Z_.middleRows(nf_, nf_);
     z0_(one) = 1.0;
     for (int h = 0; h < nh_; ++h) {
         const double W = t_.h_omega(h);

@@ -60,6 +60,7 @@ private:
     double max_step_ = 0.0;
 
     // --- fixed by setup ---
+    Eigen::MatrixXd minv_;        // M_F^-1 of a coupled M (empty when lumped)
     Eigen::MatrixXd Z_;           // the generator (its constant column holds this segment's force)
     Eigen::VectorXd z0_, absz0_;  // z(0) and |z(0)|
     Eigen::VectorXd xs_;          // the free masses' static offset (K_FF regular), else 0: x_F = xs + z_x

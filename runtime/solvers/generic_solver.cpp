@@ -66,8 +66,12 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     // Modes: M_F-normalised Phi, modal damping c = alpha + beta*lambda, regime.
     phi_ = modal_.phi;
     phi_t_m_.resize(nf_, nf_);
-    for (int j = 0; j < nf_; ++j)
-        for (int r = 0; r < nf_; ++r) phi_t_m_(j, r) = phi_(r, j) * modal_.mass(r);
+    if (model.coupled_mass()) {
+        phi_t_m_ = modal_.phi_t_m();
+    } else {
+        for (int j = 0; j < nf_; ++j)
+            for (int r = 0; r < nf_; ++r) phi_t_m_(j, r) = phi_(r, j) * modal_.mass(r);
+    }
     regime_.resize(static_cast<std::size_t>(nf_));
     lambda_ = modal_.lambda;
     omega_.resize(nf_);

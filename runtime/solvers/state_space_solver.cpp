@@ -1,11 +1,13 @@
 #include "state_space_solver.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <string>
 
@@ -47,6 +49,44 @@ double duhamel_bound(double l, double m, double dm, double sum, double ael, doub
 }
 
 }  // namespace
+
+void StateSpaceSolver::coupled_rigid_basis(const Eigen::MatrixXd& MF, const std::vector<char>& pivot,
+                                           const std::function<void(const std::string&)>& refuse) {
+    // x_F = R q + T e with R^T M_F T = 0 (the file's construction, M_F coupled):
+    // w_j = M_F r_j; T's column of a non-pivot slot s is e_s - sum_j c_j e_{p_j}
+    // with W c = w(s), W(k, j) = w_k(p_j). q_j'' = r_j^T f / (r_j^T M r_j) needs
+    // R^T M_F R diagonal: rigid translations that M couples are refused.
+    const auto nr = static_cast<Eigen::Index>(rigid_.size());
+    rigid_w_ = Eigen::MatrixXd::Zero(nf_, nr);
+    for (Eigen::Index j = 0; j < nr; ++j) {
+        Rigid& rg = rigid_[static_cast<std::size_t>(j)];
+        for (int r : rg.members) rigid_w_.col(j) += MF.col(r);
+        double total = 0.0;
+        for (int r : rg.members) total += rigid_w_(r, j);
+        rg.mass = total;
+        for (Eigen::Index k = 0; k < j; ++k) {
+            double cross = 0.0;
+            for (int r : rigid_[static_cast<std::size_t>(k)].members) cross += rigid_w_(r, j);
+            if (std::abs(cross) > 1e-12 * std::sqrt(total * rigid_[static_cast<std::size_t>(k)].mass))
+                refuse("two free-floating parts coupled through the mass matrix (not yet supported)");
+        }
+    }
+    Eigen::MatrixXd W(nr, nr);
+    for (Eigen::Index k = 0; k < nr; ++k)
+        for (Eigen::Index j = 0; j < nr; ++j) W(k, j) = rigid_w_(rigid_[static_cast<std::size_t>(j)].members.front(), k);
+    const Eigen::PartialPivLU<Eigen::MatrixXd> lu(nr > 0 ? W : Eigen::MatrixXd::Identity(1, 1));
+    int col = 0;
+    for (int r = 0; r < nf_; ++r) {
+        if (pivot[static_cast<std::size_t>(r)]) continue;
+        T_(r, col) = 1.0;
+        if (nr > 0) {
+            const Eigen::VectorXd c = lu.solve(Eigen::VectorXd(rigid_w_.row(r).transpose()));
+            for (Eigen::Index j = 0; j < nr; ++j) T_(rigid_[static_cast<std::size_t>(j)].members.front(), col) -= c(j);
+        }
+        e_slot_.push_back(r);
+        ++col;
+    }
+}
 
 StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     : cfg_(cfg), switches_(switch_functions(model, cfg)) {
@@ -91,7 +131,20 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     ne_ = nf_ - static_cast<int>(rigid_.size());
     const int m = 2 * ne_;
     T_ = Eigen::MatrixXd::Zero(nf_, ne_);
-    {
+    Eigen::MatrixXd MF = Eigen::MatrixXd::Zero(nf_, nf_), KF(nf_, nf_), CF(nf_, nf_);
+    for (int r = 0; r < nf_; ++r) {
+        MF(r, r) = t_.mass(free_[r]);
+        for (int q = 0; q < nf_; ++q) KF(r, q) = t_.K(free_[r], free_[q]), CF(r, q) = t_.C(free_[r], free_[q]);
+    }
+    if (model.coupled_mass()) {
+        for (int r = 0; r < nf_; ++r)
+            for (int q = 0; q < nf_; ++q)
+                MF(r, q) = model.mass_entry(static_cast<std::size_t>(free_[r]), static_cast<std::size_t>(free_[q]));
+        coupled_rigid_basis(MF, pivot, [&](const std::string& why) {
+            throw RunError("StateSpaceSolver(): configuration '" + cfg.spec(model) + "' of model '" + model.name +
+                           "': " + why);
+        });
+    } else {
         int col = 0;
         std::vector<int> pivot_of(static_cast<std::size_t>(nf_), -1);
         for (const Rigid& rg : rigid_)
@@ -105,12 +158,19 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
             ++col;
         }
     }
-    absT_ = T_.cwiseAbs();
-    Eigen::MatrixXd MF = Eigen::MatrixXd::Zero(nf_, nf_), KF(nf_, nf_), CF(nf_, nf_);
-    for (int r = 0; r < nf_; ++r) {
-        MF(r, r) = t_.mass(free_[r]);
-        for (int q = 0; q < nf_; ++q) KF(r, q) = t_.K(free_[r], free_[q]), CF(r, q) = t_.C(free_[r], free_[q]);
+    if (model.coupled_mass() && ne_ > 0) {
+        // Mass-normalised e: with T^T M_F T = L L^T, T becomes T L^-T and e L^T e, so that Me = I.
+        // The eigenvectors of the state matrix then stay well conditioned where the masses of the
+        // dofs differ by orders (translations and rotations of finite elements).
+        const Eigen::MatrixXd Me0 = T_.transpose() * MF * T_;
+        const Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (Me0 + Me0.transpose()));
+        if (llt.info() != Eigen::Success)
+            throw RunError("StateSpaceSolver(): configuration '" + cfg.spec(model) + "' of model '" + model.name +
+                           "': the mass matrix of the free dofs is not positive definite");
+        e_lt_ = llt.matrixU();
+        T_ = llt.matrixU().solve<Eigen::OnTheRight>(T_);  // T U^-1, U = L^T
     }
+    absT_ = T_.cwiseAbs();
     const Eigen::MatrixXd Me = T_.transpose() * MF * T_, Ke = T_.transpose() * KF * T_, Ce = T_.transpose() * CF * T_;
     Me_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(Me.rows() > 0 ? Me : Eigen::MatrixXd::Identity(1, 1));
     const Eigen::MatrixXd MK = ne_ > 0 ? Eigen::MatrixXd(Me_lu_.solve(Ke)) : Eigen::MatrixXd(0, 0);
@@ -332,7 +392,13 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
     for (std::size_t j = 0; j < rigid_.size(); ++j) {
         const Rigid& rg = rigid_[j];
         double q = 0.0, qd = 0.0, fr = 0.0;
-        for (int r : rg.members) q += t_.mass(free_[r]) * x(r), qd += t_.mass(free_[r]) * v(r), fr += f(r);
+        if (rigid_w_.size() > 0) {  // coupled M: q = r^T M x / (r^T M r)
+            const auto jj = static_cast<Eigen::Index>(j);
+            q = rigid_w_.col(jj).dot(x), qd = rigid_w_.col(jj).dot(v);
+            for (int r : rg.members) fr += f(r);
+        } else {
+            for (int r : rg.members) q += t_.mass(free_[r]) * x(r), qd += t_.mass(free_[r]) * v(r), fr += f(r);
+        }
         q /= rg.mass;
         qd /= rg.mass;
         q0_(static_cast<Eigen::Index>(j)) = q;
@@ -351,10 +417,14 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
             ys_.setZero();
             fe_ = Me_lu_.solve(Tf) / s;
         }
+        Eigen::VectorXd ex(ne_), ev(ne_);
+        for (int c = 0; c < ne_; ++c)
+            ex(c) = xe(e_slot_[static_cast<std::size_t>(c)]), ev(c) = ve(e_slot_[static_cast<std::size_t>(c)]);
+        if (e_lt_.size() > 0) ex = e_lt_ * ex, ev = e_lt_ * ev;  // coupled M: e in mass-normalised form
         for (int c = 0; c < ne_; ++c) {
             b0(ne_ + c) = fe_(c);
-            y0(c) = xe(e_slot_[static_cast<std::size_t>(c)]) - ys_(c);
-            y0(ne_ + c) = ve(e_slot_[static_cast<std::size_t>(c)]) / s;
+            y0(c) = ex(c) - ys_(c);
+            y0(ne_ + c) = ev(c) / s;
         }
     }
     for (int fn = 0; fn < ns_; ++fn) {

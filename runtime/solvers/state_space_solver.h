@@ -53,6 +53,7 @@
 #pragma once
 
 #include <complex>
+#include <functional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -124,6 +125,11 @@ private:
         double mass = 0.0;         // the component's total mass
     };
     std::vector<Rigid> rigid_;
+    Eigen::MatrixXd rigid_w_;       // nf x nr: M_F r_j (a coupled M; empty when lumped)
+    Eigen::MatrixXd e_lt_;          // L^T of T^T M_F T = L L^T (a coupled M: e in mass-normalised form; else empty)
+    /// T_, e_slot_, rigid_w_ and the rigid masses r^T M_F r for a coupled M_F.
+    void coupled_rigid_basis(const Eigen::MatrixXd& MF, const std::vector<char>& pivot,
+                             const std::function<void(const std::string&)>& refuse);
     int ne_ = 0;                    // dimension of e: nf - number of rigid translations
     std::vector<int> e_slot_;       // e_c is the free slot e_slot_[c] (minus its component's mean)
     Eigen::MatrixXd T_, absT_;      // nf x ne, and |T|
