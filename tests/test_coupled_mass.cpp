@@ -29,8 +29,10 @@
 #include "assembly.h"
 #include "cli_runner.h"
 #include "engine_runner.h"
+#include "flow.h"
 #include "modal.h"
 #include "model_reader.h"
+#include "shooting.h"
 #include "temp_dir.h"
 
 namespace hsnc {
@@ -323,6 +325,41 @@ TEST(CoupledMass, ADiagonalMassThroughTheCoupledPathGivesTheLumpedEvents) {
     const double gap = event_gap(a, b);
     std::printf("%zu events, the coupled path within %.3g s\n", a.events.size(), gap);
     EXPECT_LT(gap, 1e-13);
+}
+
+TEST(CoupledMass, ThePeriodMapsExactJacobianMatchesCentralDifferences) {
+    // The tangent (saltation and transitions with Phi^T M) of the beam against
+    // its stop over one forcing period, from rest: 2 impacts.
+    testing::TempDir dir;
+    const Beam b = cantilever(4);
+    const Forced f = forced_beam(dir, b, 15.0, 5.0,
+                                 "[[contact]]\nname = \"stop\"\nbetween = [\"w4\", \"ground\"]\ngap = 0.004\nk = 2000.0\n");
+    const Model model = read_model(f.path);
+    analysis::FlowKernels kernels;
+    kernels.kernels = KernelChoice::eigen;
+    analysis::Flow flow(model, kernels, "test");
+    const Eigen::Index N = static_cast<Eigen::Index>(2 * model.dof());
+    Eigen::VectorXd y(N);
+    for (std::size_t i = 0; i < model.dof(); ++i)
+        y(static_cast<Eigen::Index>(i)) = 0.5 * model.x0[i], y(static_cast<Eigen::Index>(model.dof() + i)) = 0.5 * model.v0[i];
+    const double T = 2 * M_PI / f.omega;
+    const analysis::PeriodMapValue at = analysis::evaluate_period_map(flow, 0.0, T, y);
+    ASSERT_TRUE(at.ok) << at.message;
+    ASSERT_GE(at.events, 2u);
+    Eigen::MatrixXd fd(N, N);
+    for (Eigen::Index j = 0; j < N; ++j) {
+        const double h = 1e-7 * std::max(1.0, std::fabs(y(j)));
+        Eigen::VectorXd yp = y, ym = y;
+        yp(j) += h, ym(j) -= h;
+        const analysis::PeriodMapValue p = analysis::evaluate_period_map(flow, 0.0, T, yp),
+                                       m = analysis::evaluate_period_map(flow, 0.0, T, ym);
+        ASSERT_EQ(p.events, at.events);
+        ASSERT_EQ(m.events, at.events);
+        fd.col(j) = (p.Py - m.Py) / (2 * h);
+    }
+    const double off = (at.M - fd).norm() / fd.norm();
+    std::printf("%zu events a period, |J - central differences| / |J| = %.3g\n", at.events, off);
+    EXPECT_LT(off, 1e-6);
 }
 
 std::string beam_model(const testing::TempDir& dir, const std::string& extra) {

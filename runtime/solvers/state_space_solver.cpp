@@ -88,16 +88,7 @@ void StateSpaceSolver::coupled_rigid_basis(const Eigen::MatrixXd& MF, const std:
     }
 }
 
-StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
-    : cfg_(cfg), switches_(switch_functions(model, cfg)) {
-    n_ = static_cast<int>(model.dof());
-    ns_ = static_cast<int>(switches_.size());
-    for (int i = 0; i < n_; ++i) (cfg.stuck[static_cast<std::size_t>(i)] ? stuck_ : free_).push_back(i);
-    nf_ = static_cast<int>(free_.size());
-
-    t_ = configuration_terms(model, cfg);
-    nh_ = static_cast<int>(t_.h_omega.size());
-
+Eigen::MatrixXd StateSpaceSolver::rigid_basis(const Model& model, const Configuration& cfg) {
     // Free translations that no damping resists (C r = 0 for a floating
     // component's r, free_components.h) are taken out of the state: x_F =
     // R q + T e with q_j the mass-weighted mean position of component j and
@@ -129,13 +120,9 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
         rigid_.push_back(rg);
     }
     ne_ = nf_ - static_cast<int>(rigid_.size());
-    const int m = 2 * ne_;
     T_ = Eigen::MatrixXd::Zero(nf_, ne_);
-    Eigen::MatrixXd MF = Eigen::MatrixXd::Zero(nf_, nf_), KF(nf_, nf_), CF(nf_, nf_);
-    for (int r = 0; r < nf_; ++r) {
-        MF(r, r) = t_.mass(free_[r]);
-        for (int q = 0; q < nf_; ++q) KF(r, q) = t_.K(free_[r], free_[q]), CF(r, q) = t_.C(free_[r], free_[q]);
-    }
+    Eigen::MatrixXd MF = Eigen::MatrixXd::Zero(nf_, nf_);
+    for (int r = 0; r < nf_; ++r) MF(r, r) = t_.mass(free_[r]);
     if (model.coupled_mass()) {
         for (int r = 0; r < nf_; ++r)
             for (int q = 0; q < nf_; ++q)
@@ -171,6 +158,26 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
         T_ = llt.matrixU().solve<Eigen::OnTheRight>(T_);  // T U^-1, U = L^T
     }
     absT_ = T_.cwiseAbs();
+    return MF;
+}
+
+StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
+    : cfg_(cfg), switches_(switch_functions(model, cfg)) {
+    n_ = static_cast<int>(model.dof());
+    ns_ = static_cast<int>(switches_.size());
+    for (int i = 0; i < n_; ++i) (cfg.stuck[static_cast<std::size_t>(i)] ? stuck_ : free_).push_back(i);
+    nf_ = static_cast<int>(free_.size());
+
+    t_ = configuration_terms(model, cfg);
+    nh_ = static_cast<int>(t_.h_omega.size());
+
+    const Eigen::MatrixXd MF = rigid_basis(model, cfg);
+    std::vector<int> slot(static_cast<std::size_t>(n_), -1);  // the free slot of each mass, -1 when stuck
+    for (int r = 0; r < nf_; ++r) slot[static_cast<std::size_t>(free_[r])] = r;
+    const int m = 2 * ne_;
+    Eigen::MatrixXd KF(nf_, nf_), CF(nf_, nf_);
+    for (int r = 0; r < nf_; ++r)
+        for (int q = 0; q < nf_; ++q) KF(r, q) = t_.K(free_[r], free_[q]), CF(r, q) = t_.C(free_[r], free_[q]);
     const Eigen::MatrixXd Me = T_.transpose() * MF * T_, Ke = T_.transpose() * KF * T_, Ce = T_.transpose() * CF * T_;
     Me_lu_ = Eigen::PartialPivLU<Eigen::MatrixXd>(Me.rows() > 0 ? Me : Eigen::MatrixXd::Identity(1, 1));
     const Eigen::MatrixXd MK = ne_ > 0 ? Eigen::MatrixXd(Me_lu_.solve(Ke)) : Eigen::MatrixXd(0, 0);

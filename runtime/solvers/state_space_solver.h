@@ -127,6 +127,8 @@ private:
     std::vector<Rigid> rigid_;
     Eigen::MatrixXd rigid_w_;       // nf x nr: M_F r_j (a coupled M; empty when lumped)
     Eigen::MatrixXd e_lt_;          // L^T of T^T M_F T = L L^T (a coupled M: e in mass-normalised form; else empty)
+    /// The undamped free translations (rigid_), T_, absT_, e_slot_ and ne_; returns M_F.
+    Eigen::MatrixXd rigid_basis(const Model& model, const Configuration& cfg);
     /// T_, e_slot_, rigid_w_ and the rigid masses r^T M_F r for a coupled M_F.
     void coupled_rigid_basis(const Eigen::MatrixXd& MF, const std::vector<char>& pivot,
                              const std::function<void(const std::string&)>& refuse);
