@@ -189,6 +189,39 @@ Matrix expm(const MpModel& mp, Matrix A) {
     return E;
 }
 
+// L of A = L L^T (A symmetric positive definite), at the format's precision.
+Matrix cholesky(const MpModel& mp, const Matrix& A) {
+    const std::size_t n = A.size();
+    Matrix L(n, std::vector<cl_F>(n, mp.zero));
+    for (std::size_t j = 0; j < n; ++j) {
+        cl_F d = A[j][j];
+        for (std::size_t k = 0; k < j; ++k) d = d - L[j][k] * L[j][k];
+        if (!cln::plusp(d)) throw RunError("reference: the mass matrix of the free dofs is not positive definite");
+        L[j][j] = cln::sqrt(d);
+        for (std::size_t i = j + 1; i < n; ++i) {
+            cl_F v = A[i][j];
+            for (std::size_t k = 0; k < j; ++k) v = v - L[i][k] * L[j][k];
+            L[i][j] = v / L[j][j];
+        }
+    }
+    return L;
+}
+
+// L^-1 of a lower triangular L (itself lower triangular).
+Matrix lower_inverse(const MpModel& mp, const Matrix& L) {
+    const std::size_t n = L.size();
+    Matrix W(n, std::vector<cl_F>(n, mp.zero));
+    for (std::size_t j = 0; j < n; ++j) {
+        W[j][j] = mp.one / L[j][j];
+        for (std::size_t i = j + 1; i < n; ++i) {
+            cl_F v = mp.zero;
+            for (std::size_t k = j; k < i; ++k) v = v - L[i][k] * W[k][j];
+            W[i][j] = v / L[i][i];
+        }
+    }
+    return W;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------- MpModel
@@ -201,6 +234,10 @@ MpModel::MpModel(const Model& model, int digits)
       half(cln::cl_float(cl_RA(1) / 2, format)),
       eps(cln::cl_float(cln::expt(cl_RA(2), 1 - static_cast<long>(cln::float_digits(one))), format)),
       pi(cln::pi(format)) {
+    if (model.coupled_mass() && !model.proportional_damping())  // init_damped divides by the masses
+        throw InputError("the reference (--precision mp:N): model '" + model.name +
+                         "' has a coupled (non-diagonal) mass matrix with non-proportional damping, which it does "
+                         "not take yet");
     n = static_cast<int>(model.dof());
     g = F(model.g);
     alpha = F(model.alpha);
@@ -210,6 +247,16 @@ MpModel::MpModel(const Model& model, int digits)
         normal.push_back(F(ms.m) * g);  // N_i = m_i g, at this precision
         mu_k.push_back(F(ms.mu_k));
         mu_s.push_back(F(ms.mu_s));
+    }
+    if (model.coupled_mass()) {
+        M.assign(static_cast<std::size_t>(n), std::vector<cl_F>(static_cast<std::size_t>(n), zero));
+        for (std::size_t i = 0; i < model.dof(); ++i)
+            for (std::size_t j = 0; j < model.dof(); ++j) M[i][j] = F(model.mass_entry(i, j));
+        const Matrix W = lower_inverse(*this, cholesky(*this, M));  // M^-1 = W^T W
+        M_inv.assign(M.size(), std::vector<cl_F>(M.size(), zero));
+        for (std::size_t i = 0; i < M.size(); ++i)
+            for (std::size_t j = 0; j < M.size(); ++j)
+                for (std::size_t k = std::max(i, j); k < M.size(); ++k) M_inv[i][j] = M_inv[i][j] + W[k][i] * W[k][j];
     }
     for (const Spring& s : model.springs) springs.push_back({s.a, s.b, F(s.k), zero});
     for (const Contact& c : model.contacts) contacts.push_back({c.a, c.b, F(c.k), F(c.gap)});
@@ -249,6 +296,16 @@ cl_F MpModel::against_partner(int i, const cl_F& ai, const cl_F& ap) const {
 cl_F MpModel::against_partner_magnitude(int i, const cl_F& mag_i, const cl_F& mag_p) const {
     const cl_F &mi = m[i], &mp = m[partner[i]];
     return (mp * mag_i + mi * mag_p) / (mi + mp);
+}
+
+cl_F MpModel::mass(int i, int j) const {
+    if (coupled()) return M[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
+    return i == j ? m[static_cast<std::size_t>(i)] : zero;
+}
+cl_F MpModel::mass_times(int i, const std::vector<cl_F>& y) const {
+    cl_F s = zero;
+    for (int j = 0; j < n; ++j) s = s + M[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] * y[static_cast<std::size_t>(j)];
+    return s;
 }
 
 cl_F MpModel::F(double d) const { return cln::cl_float(d, format); }
@@ -299,7 +356,7 @@ cl_F MpModel::force_on_mass(const Configuration& cfg, int i, const cl_F& t, cons
                             const std::vector<cl_F>& v) const {
     // A_i = sum over the elements' links touching i of -k (u - length) - c u' and their constant
     // forces, - alpha m_i v_i + f_i + sum_h F_hi sin(Omega_h t + phase_h).
-    ForceOnBody on{*this, i, x, v, false, f_const[i] - alpha * m[i] * v[i]};
+    ForceOnBody on{*this, i, x, v, false, f_const[i] - (coupled() ? alpha * mass_times(i, v) : alpha * m[i] * v[i])};
     each_force(cfg, [&](std::size_t j) { return x[static_cast<std::size_t>(n) + j]; }, on);
     cl_F A = on.sum;
     for (std::size_t h = 0; h < h_omega.size(); ++h) A = A + h_amp[h][i] * cln::sin(h_omega[h] * t + h_phase[h]);
@@ -308,7 +365,7 @@ cl_F MpModel::force_on_mass(const Configuration& cfg, int i, const cl_F& t, cons
 
 cl_F MpModel::force_rate_on_mass(const Configuration& cfg, int i, const cl_F& t, const std::vector<cl_F>& v,
                                  const std::vector<cl_F>& a) const {
-    ForceOnBody on{*this, i, v, a, true, -(alpha * m[i] * a[i])};
+    ForceOnBody on{*this, i, v, a, true, -(coupled() ? alpha * mass_times(i, a) : alpha * m[i] * a[i])};
     each_force(cfg, [&](std::size_t) { return zero; }, on);  // a stuck slider's length drops out
     cl_F dA = on.sum;
     for (std::size_t h = 0; h < h_omega.size(); ++h)
@@ -347,6 +404,50 @@ struct Stamp {
 
 }  // namespace
 
+void MpSegment::undamped_modes(const Model& model, const std::vector<std::vector<cl_F>>& Kf, int n_rigid) {
+    const MpModel& mp = mp_;
+    const cl_F& Z0 = mp.zero;
+    // A = W K_F W^T = V diag(lambda) V^T, Phi = W^T V (M-orthonormal): W = M^-1/2 for a
+    // lumped M, L^-1 of M_F = L L^T (Cholesky at N digits) for a coupled one.
+    std::vector<std::vector<cl_F>> Wm(nf_, std::vector<cl_F>(nf_, Z0));
+    if (mp.coupled()) {
+        mass_matrix_.assign(nf_, std::vector<cl_F>(nf_, Z0));
+        for (int r = 0; r < nf_; ++r)
+            for (int s = 0; s < nf_; ++s) mass_matrix_[r][s] = mp.M[free_[r]][free_[s]];
+        Wm = lower_inverse(mp, cholesky(mp, mass_matrix_));
+    } else {
+        for (int r = 0; r < nf_; ++r) Wm[r][r] = mp.one / cln::sqrt(mass_[r]);
+    }
+    std::vector<std::vector<cl_F>> A(nf_, std::vector<cl_F>(nf_, Z0)), V;
+    for (int r = 0; r < nf_; ++r)
+        for (int s = 0; s < nf_; ++s) {
+            if (!mp.coupled()) {
+                A[r][s] = Wm[r][r] * Kf[r][s] * Wm[s][s];
+                continue;
+            }
+            for (int p = 0; p <= r; ++p)
+                for (int q = 0; q <= s; ++q) A[r][s] = A[r][s] + Wm[r][p] * Kf[p][q] * Wm[s][q];
+        }
+    std::vector<cl_F> d;
+    if (!jacobi(mp, A, d, V))
+        throw RunError("reference::MpSegment(): Jacobi eigen-solver did not converge in configuration '" +
+                       cfg_.spec(model) + "'");
+    std::vector<int> order(nf_);
+    for (int j = 0; j < nf_; ++j) order[j] = j;
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return d[a] < d[b]; });
+    phi_.assign(nf_, std::vector<cl_F>(nf_, Z0));
+    lambda_.assign(nf_, Z0);
+    for (int j = 0; j < nf_; ++j) {
+        lambda_[j] = j < n_rigid ? Z0 : d[order[j]];  // structural zeros, exactly
+        if (cln::minusp(lambda_[j])) lambda_[j] = Z0;
+        for (int r = 0; r < nf_; ++r)
+            for (int p = r; p < nf_; ++p) {  // (W^T V)_rj: W lower triangular (diagonal when lumped)
+                if (!mp.coupled() && p != r) break;
+                phi_[r][j] = phi_[r][j] + Wm[p][r] * V[p][order[j]];
+            }
+    }
+}
+
 MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration& cfg)
     : mp_(mp), cfg_(cfg), switches_(switch_functions(model, cfg)), max_step_(mp.zero) {
     n_ = mp.n;
@@ -360,7 +461,7 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
     mp.each_force(cfg, [&](std::size_t) { return Z0; }, Stamp{K_, f_const_, Z0});  // sliders: per segment
     C_ = K_;
     for (int i = 0; i < n_; ++i)
-        for (int k = 0; k < n_; ++k) C_[i][k] = mp.beta * K_[i][k] + (i == k ? mp.alpha * mp.m[i] : Z0);
+        for (int k = 0; k < n_; ++k) C_[i][k] = mp.beta * K_[i][k] + mp.alpha * mp.mass(i, k);
 
     // Free masses, and the structural count of rigid-body modes (free_components.h: the
     // rule the double code uses; a structure, so nothing to compute at N digits).
@@ -402,26 +503,7 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
         return;
     }
 
-    // A = M^-1/2 K_F M^-1/2 = V diag(lambda) V^T, Phi = M^-1/2 V (M-orthonormal).
-    std::vector<cl_F> rsqm(nf_);
-    for (int r = 0; r < nf_; ++r) rsqm[r] = mp.one / cln::sqrt(mass_[r]);
-    std::vector<std::vector<cl_F>> A(nf_, std::vector<cl_F>(nf_, Z0)), V;
-    for (int r = 0; r < nf_; ++r)
-        for (int s = 0; s < nf_; ++s) A[r][s] = rsqm[r] * Kf[r][s] * rsqm[s];
-    std::vector<cl_F> d;
-    if (!jacobi(mp, A, d, V))
-        throw RunError("reference::MpSegment(): Jacobi eigen-solver did not converge in configuration '" +
-                       cfg.spec(model) + "'");
-    std::vector<int> order(nf_);
-    for (int j = 0; j < nf_; ++j) order[j] = j;
-    std::sort(order.begin(), order.end(), [&](int a, int b) { return d[a] < d[b]; });
-    phi_.assign(nf_, std::vector<cl_F>(nf_, Z0));
-    lambda_.assign(nf_, Z0);
-    for (int j = 0; j < nf_; ++j) {
-        lambda_[j] = j < n_rigid ? Z0 : d[order[j]];  // structural zeros, exactly
-        if (cln::minusp(lambda_[j])) lambda_[j] = Z0;
-        for (int r = 0; r < nf_; ++r) phi_[r][j] = rsqm[r] * V[r][order[j]];
-    }
+    undamped_modes(model, Kf, n_rigid);
 
     // Regimes.
     regime_.assign(nf_, Regime::rigid);
@@ -745,8 +827,15 @@ void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::ve
         cl_F q0 = mp.zero, qd0 = mp.zero, p = mp.zero;
         for (int r = 0; r < nf_; ++r) {
             const int i = free_[r];
-            q0 = q0 + phi_[r][j] * mass_[r] * x0[i];
-            qd0 = qd0 + phi_[r][j] * mass_[r] * v0[i];
+            if (mp.coupled()) {  // (Phi^T M_F)_jr = sum_c phi_cj M_cr
+                cl_F pm = mp.zero;
+                for (int c = 0; c < nf_; ++c) pm = pm + phi_[c][j] * mass_matrix_[c][r];
+                q0 = q0 + pm * x0[i];
+                qd0 = qd0 + pm * v0[i];
+            } else {
+                q0 = q0 + phi_[r][j] * mass_[r] * x0[i];
+                qd0 = qd0 + phi_[r][j] * mass_[r] * v0[i];
+            }
             p = p + phi_[r][j] * force[r];
         }
         p_[j] = p;

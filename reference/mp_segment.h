@@ -49,6 +49,13 @@ struct MpModel {
     int n = 0;
     cl_F g, alpha, beta;
     std::vector<cl_F> m, normal, mu_k, mu_s;
+    /// A coupled M whole (Model::coupled_mass()); empty for a lumped model (M = diag(m)).
+    std::vector<std::vector<cl_F>> M, M_inv;
+    bool coupled() const { return !M.empty(); }
+    /// M_ij, lumped or coupled.
+    cl_F mass(int i, int j) const;
+    /// (M y)_i of a coupled M.
+    cl_F mass_times(int i, const std::vector<cl_F>& y) const;
     struct Link {
         int a, b;
         cl_F k, gap;
@@ -176,6 +183,9 @@ private:
     std::vector<int> free_, slot_;  // slot_: each moving mass's coordinate (a rider: its partner's), else -1
     std::vector<int> riders_;       // masses stuck to their friction partner: x = x_partner + e
     std::vector<cl_F> mass_;        // per coordinate: its free mass plus its riders'
+    std::vector<std::vector<cl_F>> mass_matrix_;  // M_F of a coupled M (empty when lumped)
+    /// lambda_, phi_ of K_F phi = lambda M_F phi, the first n_rigid eigenvalues the structural zeros.
+    void undamped_modes(const Model& model, const std::vector<std::vector<cl_F>>& Kf, int n_rigid);
     std::vector<cl_F> offset_;      // setup: each rider's e = x0 - x0_partner
     std::vector<std::vector<cl_F>> K_, C_, phi_;  // full n x n; phi nf x nf (rows: free masses)
     std::vector<cl_F> f_const_;

@@ -74,8 +74,12 @@ void force_derivative(const MpModel& mp, const Configuration& cfg, int i, const 
     const std::vector<cl_F>&mk = T.xm[static_cast<std::size_t>(k)], &mk1 = T.xm[static_cast<std::size_t>(k) + 1];
     value = k == 0 ? mp.f_const[i] : mp.zero;
     magnitude = cln::abs(value);
-    value = value - mp.alpha * mp.m[i] * xk1[i];
-    magnitude = magnitude + cln::abs(mp.alpha * mp.m[i]) * mk1[i];
+    for (int j = 0; j < mp.n; ++j) {  // -alpha (M x^(k+1))_i
+        const cl_F mij = mp.mass(i, j);
+        if (j != i && cln::zerop(mij)) continue;
+        value = value - mp.alpha * mij * xk1[j];
+        magnitude = magnitude + cln::abs(mp.alpha * mij) * mk1[j];
+    }
     // Every element's links and constant forces (model/elements/): a link -k (u - length) - c u'
     // gives -k u^(k) - c u^(k+1), and +k length at k = 0 only, as a constant force does.
     struct Derivative {
@@ -134,6 +138,19 @@ Taylor taylor(const MpModel& mp, const Configuration& cfg, const std::vector<sig
             T.x[1][i] = v[i];
             T.xm[1][i] = cln::abs(v[i]);
         }
+    }
+    if (mp.coupled()) {  // no friction on a coupled M (model_reader): x^(k+2) = M^-1 A^(k)
+        std::vector<cl_F> A(static_cast<std::size_t>(n)), m(static_cast<std::size_t>(n));
+        for (int k = 0; k + 2 <= order; ++k) {
+            for (int i = 0; i < n; ++i) force_derivative(mp, cfg, i, t, T, k, A[i], m[i]);
+            for (int i = 0; i < n; ++i) {
+                cl_F a = mp.zero, am = mp.zero;
+                for (int j = 0; j < n; ++j) a = a + mp.M_inv[i][j] * A[j], am = am + cln::abs(mp.M_inv[i][j]) * m[j];
+                T.x[k + 2][i] = a;
+                T.xm[k + 2][i] = am;
+            }
+        }
+        return T;
     }
     for (int k = 0; k + 2 <= order; ++k)
         for (int i = 0; i < n; ++i) {
@@ -344,7 +361,6 @@ std::size_t search_step_limit(double span, double fastest_rate, const SearchLimi
 PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions& options, Observer& observer,
                             const SearchLimits& limits, const std::vector<double>* offset) {
     if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
-    require_lumped_mass(model, "the reference (--precision mp:N)");
     // Jenkins elements: their sliders are state (x after the masses); a stuck pair rides one coordinate.
     const MpModel mp(model, digits);
     const std::size_t n = model.dof();
