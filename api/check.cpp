@@ -55,6 +55,13 @@ void print_summary(const Model& model, std::ostream& out) {
             out << "  C = " << model.structure.damping_file
                 << (model.proportional_damping() ? " (proportional: alpha, beta below)" : " (non-proportional: dampers below)");
         out << "\n";
+        if (model.condensation.present()) {
+            std::string list;
+            for (std::size_t d = 0; d < model.condensation.dofs.size(); ++d)
+                if (model.condensation.mass[d] < 0) list += (list.empty() ? "" : ", ") + model.condensation.dofs[d];
+            out << "massless dofs: " << model.condensation.condensed() << " condensed statically (Guyan: "
+                << list << "; recovered in the CSV outputs)\n";
+        }
         if (model.coupled_mass()) {
             std::size_t couplings = 0;
             for (std::size_t i = 0; i < model.dof(); ++i)

@@ -15,6 +15,7 @@
 //    (non-proportional damping, runtime/solvers/state_space_solver.h).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <map>
 #include <optional>
@@ -56,6 +57,21 @@ struct Harmonic {
     std::vector<double> amplitude;  ///< one entry per mass
 };
 
+/// The massless dofs of a [structure] (zero rows of M: rotations without
+/// rotary inertia), condensed statically (Guyan): they are not among the
+/// masses, and follow them as x_c = R x (interface.md, "Massless dofs").
+struct Condensation {
+    std::vector<std::string> dofs;  ///< every dof of the structure, in matrix order
+    std::vector<int> mass;          ///< per dof: its mass index, or -1 when condensed
+    /// Row-major, (condensed dofs) x dof(): x_c = R x, R = -K_cc^-1 K_cm, in the order of `dofs`.
+    std::vector<double> recovery;
+    bool present() const { return !dofs.empty(); }
+    /// How many dofs are condensed.
+    std::size_t condensed() const {
+        return static_cast<std::size_t>(std::count(mass.begin(), mass.end(), -1));
+    }
+};
+
 /// Where a [structure]'s matrices came from (the model then has one Mass per
 /// dof, m = M_ii, and the springs of K, Spring::from_structure).
 struct StructureSource {
@@ -86,6 +102,7 @@ struct Model {
     std::vector<Damper> dampers;  ///< [[damper]]s, then those of a non-proportional structure.damping
     std::vector<Jenkins> jenkins;
     StructureSource structure;
+    Condensation condensation;  ///< a [structure]'s massless dofs (empty when it has none)
     double alpha = 0.0;  ///< Rayleigh mass coefficient
     double beta = 0.0;   ///< Rayleigh stiffness coefficient
     std::vector<Harmonic> forcing;

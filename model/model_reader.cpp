@@ -308,11 +308,24 @@ private:
             fail(where, key, "name '" + excerpt(name) + "' is already used by " + taken->second);
     }
 
+    /// A massless dof of [structure], condensed statically.
+    bool condensed(const std::string& name) const {
+        const Condensation& c = model_.condensation;
+        for (std::size_t d = 0; d < c.dofs.size(); ++d)
+            if (c.dofs[d] == name && c.mass[d] < 0) return true;
+        return false;
+    }
+    static std::string condensed_message(const std::string& name) {
+        return "'" + name + "' is a massless dof (a zero row of M), condensed statically: an element, load, "
+               "forcing or initial value cannot name it yet (give it a mass, or act on a dof with mass)";
+    }
+
     /// Mass name -> index; `kGround` for "ground".
     int body(const toml::node& node, const std::string& key) const {
         const std::string name = string_value(node, key);
         if (name == "ground") return kGround;
         const int i = model_.mass_index(name);
+        if (i < 0 && condensed(name)) fail(&node, key, condensed_message(name));
         if (i < 0)
             fail(&node, key, "unknown body '" + excerpt(name) + "' (expected 'ground' or a " + body_word() + " name)");
         return i;
@@ -341,6 +354,7 @@ private:
         for (auto&& [k, v] : *node.as_table()) {
             const std::string name(k.str());
             const int i = model_.mass_index(name);
+            if (i < 0 && condensed(name)) fail_at(k.source().begin.line, join(key, name), condensed_message(name));
             if (i < 0) fail_at(k.source().begin.line, join(key, name), "unknown " + body_word() + " '" + excerpt(name) + "'");
             values[i] = number(v, join(key, name));
         }
@@ -464,16 +478,28 @@ private:
             element_names_.emplace(name, key);
             names.push_back(name);
         }
-        const MarketMatrix M = matrix_file(*t, "mass", model_.structure.mass_file);
+        MarketMatrix M = matrix_file(*t, "mass", model_.structure.mass_file);
+        MarketMatrix K = matrix_file(*t, "stiffness", model_.structure.stiffness_file);
+        std::optional<MarketMatrix> damping;
+        if (t->get("damping")) damping = matrix_file(*t, "damping", model_.structure.damping_file);
+        // Massless dofs (zero rows of M) condensed statically before the checks (structure.h).
+        if (const std::string why =
+                condense_massless(M, K, damping ? &*damping : nullptr, names, model_.condensation);
+            !why.empty()) {
+            const bool of_c = why.rfind("C ", 0) == 0, of_k = why.rfind("K ", 0) == 0;
+            const char* key = of_c ? "damping" : of_k ? "stiffness" : "mass";
+            const std::string& file = of_c ? model_.structure.damping_file
+                                      : of_k ? model_.structure.stiffness_file : model_.structure.mass_file;
+            fail(t->get(key), std::string("structure.") + key, file + ": " + why);
+        }
         std::vector<double> mass;
         if (const std::string why = check_mass_matrix(M, names, mass, model_.mass_matrix, model_.mass_floor);
             !why.empty())
             fail(t->get("mass"), "structure.mass", model_.structure.mass_file + ": " + why);
-        const MarketMatrix K = matrix_file(*t, "stiffness", model_.structure.stiffness_file);
         if (const std::string why = check_stiffness_matrix(K, names, structure_springs_); !why.empty())
             fail(t->get("stiffness"), "structure.stiffness", model_.structure.stiffness_file + ": " + why);
-        if (t->get("damping")) {
-            const MarketMatrix C = matrix_file(*t, "damping", model_.structure.damping_file);
+        if (damping) {
+            const MarketMatrix& C = *damping;
             double a = 0.0, b = 0.0;
             bool proportional = false;
             if (const std::string why = fit_rayleigh_damping(C, M, K, names, a, b, proportional); !why.empty())

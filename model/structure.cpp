@@ -6,6 +6,7 @@
 #include <numeric>
 #include <sstream>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
 namespace hsnc {
@@ -92,6 +93,84 @@ bool scaled_extremes(const MarketMatrix& A, const std::vector<std::size_t>& memb
 }
 
 }  // namespace
+
+namespace {
+
+MarketMatrix submatrix(const MarketMatrix& A, const std::vector<std::size_t>& rows, const std::vector<std::size_t>& cols) {
+    MarketMatrix B;
+    B.rows = rows.size();
+    B.cols = cols.size();
+    B.values.resize(B.rows * B.cols);
+    for (std::size_t r = 0; r < rows.size(); ++r)
+        for (std::size_t c = 0; c < cols.size(); ++c) B.values[r * B.cols + c] = A(rows[r], cols[c]);
+    return B;
+}
+
+Eigen::MatrixXd dense(const MarketMatrix& A) {
+    Eigen::MatrixXd D(static_cast<Eigen::Index>(A.rows), static_cast<Eigen::Index>(A.cols));
+    for (std::size_t i = 0; i < A.rows; ++i)
+        for (std::size_t j = 0; j < A.cols; ++j) D(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = A(i, j);
+    return D;
+}
+
+}  // namespace
+
+std::string condense_massless(MarketMatrix& M, MarketMatrix& K, MarketMatrix* C, std::vector<std::string>& names,
+                              Condensation& out) {
+    const std::size_t n = names.size();
+    out = Condensation{};
+    if (M.rows != n || M.cols != n || K.rows != n || K.cols != n) return "";  // the checks name the size
+    std::vector<std::size_t> kept, massless;
+    for (std::size_t i = 0; i < n; ++i) {
+        bool zero = true;
+        for (std::size_t j = 0; j < n && zero; ++j) zero = M(i, j) == 0.0 && M(j, i) == 0.0;
+        (zero ? massless : kept).push_back(i);
+    }
+    if (massless.empty()) return "";
+    if (kept.empty()) return "M is zero: no dof has mass";
+    if (std::string why = check_symmetric("K", K, names); !why.empty()) return why;
+    if (C && C->rows == n && C->cols == n)
+        for (std::size_t c : massless)
+            for (std::size_t j = 0; j < n; ++j)
+                if (C->values[c * n + j] != 0.0 || C->values[j * n + c] != 0.0)
+                    return "C damps the massless dof " + names[c] + " (" + entry("C", names, c, j) +
+                           "): its motion would not be static; damp the dofs with mass, or give Rayleigh damping as "
+                           "[damping] alpha, beta";
+    const Eigen::MatrixXd Kcc = dense(submatrix(K, massless, massless)), Kcm = dense(submatrix(K, massless, kept));
+    // K_cc must be positive definite (K is semi-definite): judged on its Jacobi-scaled form, as K is.
+    std::string list;
+    for (std::size_t c : massless) list += (list.empty() ? "" : ", ") + names[c];
+    const Eigen::VectorXd d = Kcc.diagonal();
+    if (!(d.minCoeff() > 0.0))
+        return "K is singular on the massless dofs " + list + ": the static condensation needs every one held by stiffness";
+    const Eigen::VectorXd root = d.cwiseSqrt().cwiseInverse();
+    const Eigen::MatrixXd S = root.asDiagonal() * Kcc * root.asDiagonal();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (S + S.transpose()), Eigen::EigenvaluesOnly);
+    if (!(es.eigenvalues()(0) > kRelTol * es.eigenvalues().maxCoeff()))
+        return "K is singular on the massless dofs " + list + ": the static condensation needs every one held by stiffness";
+    const Eigen::MatrixXd R = -Eigen::MatrixXd(Kcc.llt().solve(Kcm));
+    const Eigen::MatrixXd Kmm = dense(submatrix(K, kept, kept));
+    const Eigen::MatrixXd Kred = Kmm + Kcm.transpose() * R;
+    MarketMatrix Kr = submatrix(K, kept, kept);
+    for (std::size_t r = 0; r < kept.size(); ++r)
+        for (std::size_t c = 0; c < kept.size(); ++c)
+            Kr.values[r * kept.size() + c] =
+                0.5 * (Kred(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) +
+                       Kred(static_cast<Eigen::Index>(c), static_cast<Eigen::Index>(r)));
+    out.dofs = names;
+    out.mass.assign(n, -1);
+    for (std::size_t r = 0; r < kept.size(); ++r) out.mass[kept[r]] = static_cast<int>(r);
+    out.recovery.assign(R.data(), R.data() + R.size());  // column-major of (condensed x kept): transposed below
+    for (Eigen::Index i = 0; i < R.rows(); ++i)
+        for (Eigen::Index j = 0; j < R.cols(); ++j) out.recovery[static_cast<std::size_t>(i * R.cols() + j)] = R(i, j);
+    M = submatrix(M, kept, kept);
+    K = Kr;
+    if (C && C->rows == n && C->cols == n) *C = submatrix(*C, kept, kept);
+    std::vector<std::string> kept_names;
+    for (std::size_t i : kept) kept_names.push_back(names[i]);
+    names = kept_names;
+    return "";
+}
 
 std::string check_mass_matrix(const MarketMatrix& M_in, const std::vector<std::string>& dofs, std::vector<double>& mass,
                               std::vector<double>& coupled, double& floor) {

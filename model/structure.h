@@ -43,6 +43,19 @@ namespace hsnc {
 /// Each check returns "" when the matrix is acceptable, else the reason
 /// (naming entries by dof: "M(u1, u2)"). `dofs` are the dof names in matrix order.
 
+/// Massless dofs: a dof whose row of M is zero (a rotation without rotary
+/// inertia) carries no inertia, so K_cm x_m + K_cc x_c = 0 holds at every
+/// instant (no force may act on it): it is condensed statically (Guyan),
+/// exact for such a model. M, K (and C) become those of the dofs with mass,
+/// K_mm - K_mc K_cc^-1 K_cm, and `names` theirs; `out` records every dof and
+/// R = -K_cc^-1 K_cm (model.h Condensation). "" when done or nothing is
+/// massless, else the reason: M not square as the dofs, K singular on the
+/// massless dofs (the condensation does not exist), or C damping a massless
+/// dof (its motion would be first order, not static). Reasons about K start
+/// "K ", about C "C ".
+std::string condense_massless(MarketMatrix& M, MarketMatrix& K, MarketMatrix* C, std::vector<std::string>& names,
+                              Condensation& out);
+
 /// M: n x n, symmetric, positive definite. On success `mass` holds its
 /// diagonal, and when M has an off-diagonal entry `coupled` holds all of it
 /// (row-major) and `floor` its smallest eigenvalue (else both are empty / 0).

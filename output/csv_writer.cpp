@@ -35,8 +35,16 @@ namespace {
 
 // Positions and velocities of the masses, then the slider position of every
 // Jenkins element (interface.md: new columns only at the end).
+// A structure with massless dofs (model.h Condensation): every dof in the
+// structure's order, the condensed ones recovered from the others.
 std::string state_columns(const Model& model) {
     std::string h;
+    if (model.condensation.present()) {
+        for (const std::string& d : model.condensation.dofs) h += ",x_" + d;
+        for (const std::string& d : model.condensation.dofs) h += ",v_" + d;
+        for (const Jenkins& j : model.jenkins) h += ",s_" + j.name;
+        return h;
+    }
     for (const Mass& m : model.masses) h += ",x_" + m.name;
     for (const Mass& m : model.masses) h += ",v_" + m.name;
     for (const Jenkins& j : model.jenkins) h += ",s_" + j.name;
@@ -47,8 +55,27 @@ std::string state_columns(const Model& model) {
 
 void state_numbers(const Model& model, CsvFile& file, const double* x, const double* v) {
     const std::size_t n = model.dof();
-    for (std::size_t i = 0; i < n; ++i) file.number(x[i]);
-    for (std::size_t i = 0; i < n; ++i) file.number(v[i]);
+    const Condensation& c = model.condensation;
+    if (c.present()) {  // x_c = R x and v_c = R v, rows of R in the order of the condensed dofs
+        auto all = [&](const double* y) {
+            std::size_t row = 0;
+            for (int i : c.mass) {
+                if (i >= 0) {
+                    file.number(y[i]);
+                    continue;
+                }
+                double sum = 0.0;
+                for (std::size_t j = 0; j < n; ++j) sum += c.recovery[row * n + j] * y[j];
+                file.number(sum);
+                ++row;
+            }
+        };
+        all(x);
+        all(v);
+    } else {
+        for (std::size_t i = 0; i < n; ++i) file.number(x[i]);
+        for (std::size_t i = 0; i < n; ++i) file.number(v[i]);
+    }
     for (std::size_t j = 0; j < model.jenkins.size(); ++j) file.number(x[n + j]);
 }
 

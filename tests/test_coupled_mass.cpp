@@ -400,6 +400,129 @@ TEST(CoupledMass, ThePeriodMapsExactJacobianMatchesCentralDifferences) {
     EXPECT_LT(off, 1e-6);
 }
 
+/// The cantilever with its mass at the w dofs alone (no rotary inertia: zero
+/// rows of M at the rotations), forced at its tip.
+std::string massless_rotations(const testing::TempDir& dir, const Beam& b, const std::string& extra) {
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(b.M.rows(), b.M.cols());
+    const Eigen::Index nodes = b.M.rows() / 2;
+    for (Eigen::Index k = 0; k < nodes; ++k) M(2 * k, 2 * k) = k + 1 == nodes ? 0.2 : 0.4;  // 2 kg/m, 4 elements
+    write(dir / "M.mtx", market(M));
+    write(dir / "K.mtx", market(b.K));
+    std::ostringstream t;
+    t << "name = \"massless-rotations\"\n[structure]\ndofs = " << dof_list(b.dofs)
+      << "\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n[damping]\nalpha = 0.1\n"
+      << "[[forcing]]\nomega = 20.0\namplitude = { w" << nodes << " = 2.0 }\n"
+      << "[initial]\nx = { w2 = 0.003 }\n" << extra;
+    write(dir / "beam.toml", t.str());
+    return dir / "beam.toml";
+}
+
+TEST(MasslessDofs, ACantileverWithoutRotaryInertiaIsItsFlexibilityClosedForm) {
+    // Condensed, the beam's stiffness at its w dofs is the inverse of its
+    // flexibility, f_ij = x_i^2 (3 x_j - x_i) / (6 EI) for x_i <= x_j, and its
+    // rotations follow as theta = G F^-1 w, g_ij = x_i (2 x_j - x_i) / (2 EI)
+    // for x_i <= x_j, x_j^2 / (2 EI) beyond (the slope under a unit tip load).
+    testing::TempDir dir;
+    const Beam b = cantilever(4);
+    const Model model = read_model(massless_rotations(dir, b, "[simulate]\nt_end = 1.0\n"));
+    ASSERT_TRUE(model.condensation.present());
+    ASSERT_EQ(model.dof(), 4u);
+    EXPECT_EQ(model.condensation.condensed(), 4u);
+    EXPECT_FALSE(model.coupled_mass());
+    const double EI = 100.0;
+    Eigen::Matrix4d F, G;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) {
+            const double xi = 0.25 * (i + 1), xj = 0.25 * (j + 1), a = std::min(xi, xj), c = std::max(xi, xj);
+            F(i, j) = a * a * (3 * c - a) / (6 * EI);
+            G(i, j) = xi <= xj ? xi * (2 * xj - xi) / (2 * EI) : xj * xj / (2 * EI);
+        }
+    const Eigen::Matrix4d Kw = F.inverse(), R = G * Kw;
+    const Eigen::MatrixXd K = stiffness_matrix(model, Configuration::all_open(model));
+    const double kerr = (K - Kw).cwiseAbs().maxCoeff() / Kw.cwiseAbs().maxCoeff();
+    double rerr = 0.0;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j)
+            rerr = std::max(rerr, std::fabs(model.condensation.recovery[static_cast<std::size_t>(4 * i + j)] - R(i, j)) /
+                                      R.cwiseAbs().maxCoeff());
+    std::printf("condensed K against F^-1: %.3g, recovery against G F^-1: %.3g (relative)\n", kerr, rerr);
+    EXPECT_LT(kerr, 1e-10);
+    EXPECT_LT(rerr, 1e-10);
+
+    // The CSVs carry every dof in the structure's order, the rotations recovered from the deflections.
+    const std::string out = testing::temp_path("trajectory.csv");
+    const testing::CliRun run = testing::run_hsnc("simulate '" + (dir / "beam.toml") + "' --dt 0.01 --out '" + out + "' --quiet");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    std::istringstream csv(testing::slurp(out));
+    std::remove(out.c_str());
+    std::string line;
+    std::getline(csv, line);
+    EXPECT_EQ(line, "t,x_w1,x_t1,x_w2,x_t2,x_w3,x_t3,x_w4,x_t4,v_w1,v_t1,v_w2,v_t2,v_w3,v_t3,v_w4,v_t4");
+    std::size_t rows = 0;
+    double worst = 0.0, size = 0.0;
+    while (std::getline(csv, line)) {
+        std::vector<double> f;
+        std::istringstream fields(line);
+        for (std::string cell; std::getline(fields, cell, ',');) f.push_back(std::stod(cell));
+        ASSERT_EQ(f.size(), 17u);
+        for (int half = 0; half < 2; ++half) {  // x, then v
+            Eigen::Vector4d w, th;
+            for (int k = 0; k < 4; ++k) w(k) = f[1 + 8 * half + 2 * k], th(k) = f[2 + 8 * half + 2 * k];
+            worst = std::max(worst, (th - R * w).cwiseAbs().maxCoeff());
+            size = std::max(size, th.cwiseAbs().maxCoeff());
+        }
+        ++rows;
+    }
+    EXPECT_EQ(rows, 101u);
+    std::printf("rotations recovered to %.3g of their size\n", worst / size);
+    EXPECT_LT(worst, 1e-10 * size);
+}
+
+TEST(MasslessDofs, WhatCannotBeCondensedIsRefusedByName) {
+    const Beam b = cantilever(2);
+    {
+        testing::TempDir dir;
+        const std::string model = massless_rotations(dir, b, "[[contact]]\nbetween = [\"t2\", \"ground\"]\ngap = 0.1\nk = 5.0\n");
+        const testing::CliRun r = testing::run_hsnc("check '" + model + "'");
+        EXPECT_EQ(r.exit_code, 2);
+        EXPECT_NE(r.err.find("key 'contact[1].between': 't2' is a massless dof (a zero row of M), condensed statically"),
+                  std::string::npos)
+            << r.err;
+    }
+    {
+        testing::TempDir dir;
+        const std::string model = massless_rotations(dir, b, "");
+        const testing::CliRun c = testing::run_hsnc("check '" + model + "'");
+        EXPECT_EQ(c.exit_code, 0) << c.err;
+        EXPECT_NE(c.out.find("massless dofs: 2 condensed statically (Guyan: t1, t2; recovered in the CSV outputs)"),
+                  std::string::npos)
+            << c.out;
+        // A rotation K does not hold: no static condensation exists.
+        Eigen::MatrixXd K = Eigen::MatrixXd::Zero(3, 3), M = Eigen::MatrixXd::Zero(3, 3);
+        K(0, 0) = 2, K(0, 1) = K(1, 0) = -1, K(1, 1) = 1;  // u1, u2 a chain; r free of K
+        M(0, 0) = M(1, 1) = 1;
+        write(dir / "M3.mtx", market(M));
+        write(dir / "K3.mtx", market(K));
+        write(dir / "free.toml", "name = \"free-rotation\"\n[structure]\ndofs = [\"u1\", \"u2\", \"r\"]\n"
+                                 "mass = \"M3.mtx\"\nstiffness = \"K3.mtx\"\n");
+        const testing::CliRun s = testing::run_hsnc("check '" + (dir / "free.toml") + "'");
+        EXPECT_EQ(s.exit_code, 2);
+        EXPECT_NE(s.err.find("key 'structure.stiffness': K3.mtx: K is singular on the massless dofs r"), std::string::npos)
+            << s.err;
+        // A dashpot on a massless dof: its motion would be first order.
+        Eigen::MatrixXd C = Eigen::MatrixXd::Zero(3, 3);
+        K(2, 2) = 1.0;
+        C(2, 2) = 0.5;
+        write(dir / "K3.mtx", market(K));
+        write(dir / "C3.mtx", market(C));
+        write(dir / "damped.toml", "name = \"damped-rotation\"\n[structure]\ndofs = [\"u1\", \"u2\", \"r\"]\n"
+                                   "mass = \"M3.mtx\"\nstiffness = \"K3.mtx\"\ndamping = \"C3.mtx\"\n");
+        const testing::CliRun d = testing::run_hsnc("check '" + (dir / "damped.toml") + "'");
+        EXPECT_EQ(d.exit_code, 2);
+        EXPECT_NE(d.err.find("key 'structure.damping': C3.mtx: C damps the massless dof r"), std::string::npos) << d.err;
+    }
+}
+
 std::string beam_model(const testing::TempDir& dir, const std::string& extra) {
     const Beam b = cantilever(2);
     return forced_beam(dir, b, 15.0, 1.0, extra).path;
