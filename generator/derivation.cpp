@@ -267,18 +267,19 @@ ex coordinate_force(const Derivation& d, const SegmentInputs& in, std::size_t r)
     return f;
 }
 
-Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method, ExactMatrices exact_matrices,
-                  DerivationCache* cache) {
-    if (model.coupled_mass())  // the generalized eigenproblem in double-double: issue 36, stage b
+namespace {
+
+// The free, stuck and riding masses of cfg (d.free_dofs, d.stuck_dofs,
+// d.riders), and the masses of each free coordinate: its free mass, then its
+// riders (T of x = T q + e). NotDerivable for a coupled M (its generalized
+// eigenproblem in double-double is not built yet: the Eigen solver takes it).
+std::vector<std::vector<int>> coordinates(const Model& model, const Configuration& cfg, Derivation& d,
+                                          std::vector<int>& free_index) {
+    if (model.coupled_mass())
         throw NotDerivable("derivation::derive(): configuration " + cfg.spec(model) +
                            ": a coupled (non-diagonal) mass matrix");
-    GiNaC::Digits = kDerivationDigits;
-    Derivation d;
-    d.model = &model;
-    d.cfg = cfg;
-    d.switches = switch_functions(model, cfg);
     const std::size_t n = model.dof();
-    std::vector<int> free_index(n, -1);
+    free_index.assign(n, -1);
     for (std::size_t i = 0; i < n; ++i) {
         if (fixed_in(model, cfg, i)) {
             d.stuck_dofs.push_back(static_cast<int>(i));
@@ -289,10 +290,24 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
             d.free_dofs.push_back(static_cast<int>(i));
         }
     }
-    // The masses of each coordinate: its free mass, then its riders (T of x = T q + e).
     std::vector<std::vector<int>> group(d.free_dofs.size());
     for (std::size_t r = 0; r < d.free_dofs.size(); ++r) group[r].push_back(d.free_dofs[r]);
     for (int q : d.riders) group[static_cast<std::size_t>(free_index[model.masses[static_cast<std::size_t>(q)].partner])].push_back(q);
+    return group;
+}
+
+}  // namespace
+
+Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method, ExactMatrices exact_matrices,
+                  DerivationCache* cache) {
+    GiNaC::Digits = kDerivationDigits;
+    Derivation d;
+    d.model = &model;
+    d.cfg = cfg;
+    d.switches = switch_functions(model, cfg);
+    const std::size_t n = model.dof();
+    std::vector<int> free_index;  // per mass: its free coordinate, or -1
+    const std::vector<std::vector<int>> group = coordinates(model, cfg, d, free_index);
 
     // Full K(cfg), C = alpha M + beta K(cfg), constant forces, as exact rationals.
     const Eigen::MatrixXd K = stiffness_matrix(model, cfg);

@@ -59,23 +59,25 @@ std::string idx(std::size_t i) { return std::to_string(i + 1); }
 
 }  // namespace
 
+namespace {
+
+// Why the symbolic view does not take `model` at all, or "".
+std::string not_taken(const Model& model) {
+    if (model.parameter_expressions.empty()) return "the model has no source expressions (not read from a file)";
+    if (const std::string what = stick_elements(model); !what.empty())
+        return "the model has " + what + ", which the symbolic view does not take yet";
+    if (model.coupled_mass())
+        return "the model has a coupled (non-diagonal) mass matrix, which the symbolic view does not take yet";
+    if (!model.proportional_damping())  // state-space modes: a quartic and up, not the symmetric 2x2 below
+        return "the model has non-proportional damping (dampers), which the symbolic view does not take";
+    return "";
+}
+
+}  // namespace
+
 bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDerivation& d, std::string& why) {
-    if (model.parameter_expressions.empty()) {
-        why = "the model has no source expressions (not read from a file)";
-        return false;
-    }
-    if (const std::string what = stick_elements(model); !what.empty()) {
-        why = "the model has " + what + ", which the symbolic view does not take yet";
-        return false;
-    }
-    if (model.coupled_mass()) {
-        why = "the model has a coupled (non-diagonal) mass matrix, which the symbolic view does not take yet";
-        return false;
-    }
-    if (!model.proportional_damping()) {  // state-space modes: a quartic and up, not the symmetric 2x2 below
-        why = "the model has non-proportional damping (dampers), which the symbolic view does not take";
-        return false;
-    }
+    why = not_taken(model);
+    if (!why.empty()) return false;
     const Derivation numeric = derive(model, cfg);  // free/stuck split, switch order, rigid modes
     const std::size_t n = model.dof(), nf = numeric.n_free();
     if (nf == 0) {
