@@ -400,6 +400,20 @@ TEST(CoupledMass, ThePeriodMapsExactJacobianMatchesCentralDifferences) {
     EXPECT_LT(off, 1e-6);
 }
 
+TEST(CoupledMass, TheFiniteElementExampleIsTheTestedCantilever) {
+    // examples/fe-cantilever (matrices from its make_matrices.py) is the beam these tests assemble.
+    const Model model = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/fe-cantilever/fe-cantilever.toml");
+    const Beam b = cantilever(8);
+    ASSERT_TRUE(model.coupled_mass());
+    ASSERT_EQ(static_cast<Eigen::Index>(model.dof()), b.M.rows());
+    const Eigen::MatrixXd M = mass_matrix(model), K = stiffness_matrix(model, Configuration::all_open(model));
+    EXPECT_LT((M - b.M).cwiseAbs().maxCoeff(), 1e-15 * b.M.cwiseAbs().maxCoeff());
+    EXPECT_LT((K - b.K).cwiseAbs().maxCoeff(), 1e-12 * b.K.cwiseAbs().maxCoeff());
+    const testing::Outcome run = testing::simulate(model, 10.0);
+    EXPECT_GE(run.events.size(), 40u) << "the tip should hit its stop about twice a period";
+    EXPECT_EQ(run.summary.status, RunStatus::ok);
+}
+
 /// The cantilever with its mass at the w dofs alone (no rotary inertia: zero
 /// rows of M at the rotations), forced at its tip.
 std::string massless_rotations(const testing::TempDir& dir, const Beam& b, const std::string& extra) {
