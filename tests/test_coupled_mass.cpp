@@ -92,9 +92,9 @@ Beam cantilever(int elements) {
     return b;
 }
 
-/// A bar of length 1 m, EA = 1e4 N, 1 kg/m, clamped at its root, in
-/// `elements` consistent-mass axial elements; dofs u1 ... uN (N at the tip).
-Beam clamped_bar(int elements) {
+/// A free-free bar of length 1 m, EA = 1e4 N, 1 kg/m, in `elements`
+/// consistent-mass axial elements: M and K of its elements + 1 nodes.
+std::pair<Eigen::MatrixXd, Eigen::MatrixXd> axial_bar(int elements) {
     const double h = 1.0 / elements, EA = 1e4, rhoA = 1.0;
     const int n = elements + 1;
     Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n), K = Eigen::MatrixXd::Zero(n, n);
@@ -102,6 +102,13 @@ Beam clamped_bar(int elements) {
         M.block(e, e, 2, 2) += rhoA * h / 6 * (Eigen::Matrix2d() << 2, 1, 1, 2).finished();
         K.block(e, e, 2, 2) += EA / h * (Eigen::Matrix2d() << 1, -1, -1, 1).finished();
     }
+    return {M, K};
+}
+
+/// The bar clamped at its root; dofs u1 ... uN (N at the tip).
+Beam clamped_bar(int elements) {
+    const auto [M, K] = axial_bar(elements);
+    const int n = elements + 1;
     Beam b{M.bottomRightCorner(n - 1, n - 1), K.bottomRightCorner(n - 1, n - 1), {}, n - 2};
     for (int k = 1; k <= elements; ++k) b.dofs.push_back("u" + std::to_string(k));
     return b;
@@ -155,6 +162,12 @@ Forced forced_beam(const testing::TempDir& dir, const Beam& b, double omega, dou
       << extra;
     write(dir / "beam.toml", t.str());
     return {dir / "beam.toml", X, omega};
+}
+
+/// The 4-element cantilever forced at 15 rad/s against a stop 4 mm above its tip.
+Forced beam_with_stop(const testing::TempDir& dir) {
+    return forced_beam(dir, cantilever(4), 15.0, 5.0,
+                       "[[contact]]\nname = \"stop\"\nbetween = [\"w4\", \"ground\"]\ngap = 0.004\nk = 2000.0\n");
 }
 
 /// Largest |x(t) - Im(X e^{i omega t})| over the samples, against max |X|.
@@ -218,9 +231,7 @@ double event_gap(const testing::Outcome& a, const testing::Outcome& b) {
 
 TEST(CoupledMass, CantileverWithATipStopGivesTheEventsOfCvode) {
     testing::TempDir dir;
-    const Beam b = cantilever(4);
-    const Forced f = forced_beam(dir, b, 15.0, 5.0,
-                                 "[[contact]]\nname = \"stop\"\nbetween = [\"w4\", \"ground\"]\ngap = 0.004\nk = 2000.0\n");
+    const Forced f = beam_with_stop(dir);
     const Model model = read_model(f.path);
     const testing::Outcome exact = testing::simulate(model, 3.0);
     ASSERT_GE(exact.events.size(), 20u) << "the stop should close and open";
@@ -253,9 +264,7 @@ TEST(CoupledMass, CantileverWithATipStopGivesTheEventsOfTheReference) {
     // at 30 and at 60 digits it agrees with itself far below the double
     // engine's rounding, and the double engine agrees with it to 1e-11 s.
     testing::TempDir dir;
-    const Beam b = cantilever(4);
-    const Forced f = forced_beam(dir, b, 15.0, 5.0,
-                                 "[[contact]]\nname = \"stop\"\nbetween = [\"w4\", \"ground\"]\ngap = 0.004\nk = 2000.0\n");
+    const Forced f = beam_with_stop(dir);
     const Model model = read_model(f.path);
     const testing::Outcome exact = testing::simulate(model, 3.0);
     ASSERT_GE(exact.events.size(), 20u);
@@ -267,16 +276,10 @@ TEST(CoupledMass, CantileverWithATipStopGivesTheEventsOfTheReference) {
     EXPECT_LT(gap, 1e-11);
 }
 
-/// A free-free bar of `elements` consistent-mass axial elements (EA = 1e4 N,
-/// 1 kg/m, 1 m), its left end `gap` from a wall, moving towards it.
+/// The free-free bar (axial_bar), its left end 1 cm from a wall, moving towards it.
 std::string free_bar(const testing::TempDir& dir, int elements, bool dampers) {
-    const double h = 1.0 / elements, EA = 1e4, rhoA = 1.0;
+    const auto [M, K] = axial_bar(elements);
     const int n = elements + 1;
-    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n), K = Eigen::MatrixXd::Zero(n, n);
-    for (int e = 0; e < elements; ++e) {
-        M.block(e, e, 2, 2) += rhoA * h / 6 * (Eigen::Matrix2d() << 2, 1, 1, 2).finished();
-        K.block(e, e, 2, 2) += EA / h * (Eigen::Matrix2d() << 1, -1, -1, 1).finished();
-    }
     write(dir / "M.mtx", market(M));
     write(dir / "K.mtx", market(K));
     std::vector<std::string> dofs;
@@ -369,9 +372,7 @@ TEST(CoupledMass, ThePeriodMapsExactJacobianMatchesCentralDifferences) {
     // The tangent (saltation and transitions with Phi^T M) of the beam against
     // its stop over one forcing period, from rest: 2 impacts.
     testing::TempDir dir;
-    const Beam b = cantilever(4);
-    const Forced f = forced_beam(dir, b, 15.0, 5.0,
-                                 "[[contact]]\nname = \"stop\"\nbetween = [\"w4\", \"ground\"]\ngap = 0.004\nk = 2000.0\n");
+    const Forced f = beam_with_stop(dir);
     const Model model = read_model(f.path);
     analysis::FlowKernels kernels;
     kernels.kernels = KernelChoice::eigen;
