@@ -25,6 +25,7 @@
 #include "error.h"
 #include "model_hash.h"
 #include "expression_printer.h"
+#include "modal.h"
 #include "model_reader.h"
 #include "state_space_solver.h"
 #include "symbolic_derivation.h"
@@ -329,7 +330,7 @@ void inspect_state_space(const Model& model, const Configuration& cfg, Format fm
     if (!free_dofs.empty()) {
         p.heading("Reduced system of the free masses: M x'' + C x' + K x = f + sum_h F_h sin(Omega_h t + phase_h)",
                   "Reduced system of the free masses: $M \\ddot x + C \\dot x + K x = f + \\sum_h F_h \\sin(\\Omega_h t + \\varphi_h)$");
-        matrix("M", [&](int i, int j) { return i == j ? model.masses[static_cast<std::size_t>(i)].m : 0.0; });
+        matrix("M", [&](int i, int j) { return model.mass_entry(static_cast<std::size_t>(i), static_cast<std::size_t>(j)); });
         matrix("K", [&](int i, int j) { return K(i, j); });
         matrix("C", [&](int i, int j) { return C(i, j); });
     }
@@ -388,6 +389,32 @@ void inspect_state_space(const Model& model, const Configuration& cfg, Format fm
         }
         const std::string F = std::to_string(f + 1);
         p.line("g_" + F + " = " + what, "\\[ g_{" + F + "} = \\text{" + latex_name(what) + "} \\]");
+    }
+}
+
+/// A coupled mass matrix with Rayleigh damping: the modes of the generalized
+/// eigenproblem K phi = lambda M phi the Eigen solver uses (model/modal.h);
+/// the derivation does not take it, so no program or kernel to print.
+void inspect_coupled(const Model& model, const Configuration& cfg, Format fmt, std::ostream& out) {
+    const Printer p{fmt, out};
+    const ModalDecomposition md = modal_analysis(model, cfg);
+    std::string fr;
+    for (int i : md.free) fr += (fr.empty() ? "" : ", ") + model.masses[static_cast<std::size_t>(i)].name;
+    if (fmt == Format::latex)
+        out << "\\paragraph{Model " << latex_name(model.name) << ", configuration \\texttt{" << latex_name(cfg.spec(model))
+            << "}} Free masses: " << latex_name(fr.empty() ? "none" : fr) << ". Coupled mass matrix.\n";
+    else
+        out << "model " << model.name << "\nconfiguration " << cfg.spec(model) << " (key " << cfg.key()
+            << ")\nfree masses: " << (fr.empty() ? "none" : fr)
+            << "\ncoupled mass matrix: the derivation does not take it; every kernel kind runs this configuration "
+               "on the Eigen solver (generalized eigenproblem of K and M)\n";
+    p.heading("Modes: K phi = lambda M phi, c_j = alpha + beta lambda_j", "Modes: $K \\phi = \\lambda M \\phi$");
+    for (Eigen::Index j = 0; j < md.lambda.size(); ++j) {
+        const double lam = md.lambda(j), w = std::sqrt(lam), c = model.alpha + model.beta * lam;
+        const std::string J = std::to_string(j + 1);
+        const std::string xi = w > 0.0 ? Printer::format_number(c / (2 * w)) : std::string("- (rigid)");
+        p.line("mode " + J + ": omega = " + Printer::format_number(w) + " rad/s, xi = " + xi,
+               "\\[ \\omega_{" + J + "} = " + Printer::format_number(w) + ", \\quad \\xi_{" + J + "} = " + xi + " \\]");
     }
 }
 
@@ -530,6 +557,10 @@ void add_inspect(CLI::App& app, int& exit_code) {
         }
         if (o->format == "cpp") {
             std::cout << emit_kernel(derive(model, cfg));  // NotDerivable (RunError, exit 1): the Eigen solver takes it
+        } else if (model.coupled_mass() && model.proportional_damping()) {
+            std::ostringstream text;  // nothing printed unless the whole view is
+            inspect_coupled(model, cfg, fmt, text);
+            std::cout << text.str();
         } else if (!model.proportional_damping()) {
             std::ostringstream text;  // nothing printed unless the whole view is
             inspect_state_space(model, cfg, fmt, text);

@@ -413,6 +413,16 @@ TEST(CoupledMass, TheFiniteElementExampleIsTheTestedCantilever) {
     const testing::Outcome run = testing::simulate(model, 10.0);
     EXPECT_GE(run.events.size(), 40u) << "the tip should hit its stop about twice a period";
     EXPECT_EQ(run.summary.status, RunStatus::ok);
+    // `inspect` prints the modes of (K, M): the first as solved here.
+    const testing::CliRun r =
+        testing::run_hsnc("inspect '" + std::string(HSNC_SOURCE_DIR) + "/examples/fe-cantilever/fe-cantilever.toml'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(b.K, b.M);
+    const std::size_t at = r.out.find("mode 1: omega = ");
+    ASSERT_NE(at, std::string::npos) << r.out;
+    const double omega1 = std::stod(r.out.substr(at + 16));
+    EXPECT_NEAR(omega1, std::sqrt(es.eigenvalues()(0)), 1e-12 * omega1);
+    EXPECT_NEAR(omega1, 24.86, 0.01);  // 1.8751^2 sqrt(EI / (rho L^4)) = 24.86 rad/s, Euler-Bernoulli
 }
 
 /// The cantilever with its mass at the w dofs alone (no rotary inertia: zero
