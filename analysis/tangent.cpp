@@ -46,6 +46,9 @@ struct Tangent::ConfigData {
     double rate = 0.0;
     // Stick elements: the full-state generator and projection (stick_tangent.h).
     Eigen::MatrixXd stick_A, stick_P;
+    // A coupled M: the Cholesky factor of M_F (every mass is free there), once per configuration.
+    Eigen::LLT<Eigen::MatrixXd> mass_llt;
+    const Eigen::LLT<Eigen::MatrixXd>* coupled() const { return mass_llt.rows() > 0 ? &mass_llt : nullptr; }
 };
 
 Tangent::Tangent(const Model& model) : model_(model), stick_(!stick_elements(model).empty()) {
@@ -67,6 +70,7 @@ const Tangent::ConfigData& Tangent::data(const Configuration& cfg) {
     d->E.resize(nf, nf);
     if (model_.coupled_mass()) {
         d->E = md.phi_t_m();
+        d->mass_llt.compute(md.mass_matrix);
     } else {
         for (int j = 0; j < nf; ++j)
             for (int r = 0; r < nf; ++r) d->E(j, r) = md.phi(r, j) * m(md.free[r]);
@@ -104,7 +108,7 @@ const Tangent::ConfigData& Tangent::data(const Configuration& cfg) {
         }
         if (model_.coupled_mass() && nf > 0) {  // rows over M_F^-1, not over the diagonal
             const Eigen::MatrixXd D = m(md.free).asDiagonal();
-            A.middleRows(nf, nf) = md.mass_matrix.llt().solve(D * A.middleRows(nf, nf));
+            A.middleRows(nf, nf) = d->mass_llt.solve(D * A.middleRows(nf, nf));
         }
         if (nf > 0) {
             const Eigen::EigenSolver<Eigen::MatrixXd> es(A.topLeftCorner(2 * nf, 2 * nf), false);
@@ -218,18 +222,16 @@ double acceleration(const Model& model, const Configuration& cfg, const signed c
     return (force_on_mass(model, cfg, i, t, x, v) - fr * sgn[i]) / model.masses[i].m;
 }
 
-// M^-1 y for a coupled M (no friction there: every mass is free).
-Eigen::VectorXd coupled_solve(const Model& model, const Eigen::VectorXd& y) { return mass_matrix(model).llt().solve(y); }
-
-// Every mass's acceleration in cfg.
+// Every mass's acceleration in cfg; `coupled`: the factor of a coupled M (no
+// friction there: every mass is free), null for a lumped one.
 std::vector<double> accelerations(const Model& model, const Configuration& cfg, const signed char* sgn, double t,
-                                  const double* x, const double* v) {
+                                  const double* x, const double* v, const Eigen::LLT<Eigen::MatrixXd>* coupled) {
     const int n = static_cast<int>(model.dof());
     std::vector<double> a(static_cast<std::size_t>(n));
-    if (model.coupled_mass()) {
+    if (coupled) {
         Eigen::VectorXd f(n);
         for (int i = 0; i < n; ++i) f(i) = force_on_mass(model, cfg, i, t, x, v);
-        Eigen::VectorXd::Map(a.data(), n) = coupled_solve(model, f);
+        Eigen::VectorXd::Map(a.data(), n) = coupled->solve(f);
         return a;
     }
     for (int i = 0; i < n; ++i) a[static_cast<std::size_t>(i)] = acceleration(model, cfg, sgn, i, t, x, v);
@@ -243,11 +245,12 @@ namespace {
 // One switch from (A, sgnA) to (B, sgnB) triggered by f at (t, x, v):
 // Y <- (I + u h_y^T / hdot) Y with u = f+ - f- (velocity rows only).
 // Returns false for a grazing switch (hdot = 0 with u != 0).
-bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::MatrixXd& CA, const Configuration& A,
+bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::MatrixXd& CA,
+               const Eigen::LLT<Eigen::MatrixXd>* coupled, const Configuration& A,
                const signed char* sgnA, const Configuration& B, const signed char* sgnB, const SwitchFunction* f,
                double t, const double* x, const double* v, Eigen::MatrixXd& Y) {
     const int n = static_cast<int>(model.dof());
-    const std::vector<double> aA = accelerations(model, A, sgnA, t, x, v);
+    const std::vector<double> aA = accelerations(model, A, sgnA, t, x, v, coupled);
     // u: the jump of the accelerations. For a mass sliding on both sides it
     // is the jump of the dampers of the contacts that change (their springs
     // carry no force on G = 0) and of the friction direction, taken from
@@ -275,7 +278,7 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
             u(i) = (dA[i] - fr * (sgnB[i] - sgnA[i])) / model.masses[i].m;
         }
     }
-    if (model.coupled_mass()) u = coupled_solve(model, Eigen::VectorXd::Map(dA.data(), n));  // no friction there
+    if (coupled) u = coupled->solve(Eigen::VectorXd::Map(dA.data(), n));  // no friction there
     if (u.isZero(0.0) || !f) return true;
     // The switch function's gradient and rate before the switch.
     Eigen::RowVectorXd hy = Eigen::RowVectorXd::Zero(2 * n);
@@ -343,7 +346,7 @@ bool Tangent::apply_saltation(const SwitchRecord& r, Eigen::MatrixXd& Y) {
         Eigen::MatrixXd Z = Y;
         const SwitchFunction* f = sw.empty() ? nullptr : &sw[0];
         if (stick_ ? !salt_step_stick(model_, *r.before, r.sgn_before, *r.after, r.sgn_after, f, r.t, r.x, r.v, Z)
-                   : !salt_step(model_, d.K, d.C, *r.before, r.sgn_before, *r.after, r.sgn_after, f, r.t, r.x, r.v, Z))
+                   : !salt_step(model_, d.K, d.C, d.coupled(), *r.before, r.sgn_before, *r.after, r.sgn_after, f, r.t, r.x, r.v, Z))
             return false;
         Y = std::move(Z);
         return true;
@@ -366,7 +369,7 @@ bool Tangent::apply_saltation(const SwitchRecord& r, Eigen::MatrixXd& Y) {
         }
         const ConfigData& d = data(cur);
         if (stick_ ? !salt_step_stick(model_, cur, sgn.data(), next, sgn_next.data(), &sw[k], r.t, r.x, r.v, Z)
-                   : !salt_step(model_, d.K, d.C, cur, sgn.data(), next, sgn_next.data(), &sw[k], r.t, r.x, r.v, Z))
+                   : !salt_step(model_, d.K, d.C, d.coupled(), cur, sgn.data(), next, sgn_next.data(), &sw[k], r.t, r.x, r.v, Z))
             return false;
         cur = next;
         sgn = sgn_next;
@@ -390,10 +393,12 @@ double Tangent::grazing_ratio(const SwitchRecord& r) {
     for (const SwitchFunction& f : *r.switched) {
         if (f.kind != SwitchKind::gap) continue;
         if (a.empty()) {
-            a = accelerations(model_, *r.before, r.sgn_before, r.t, r.x, r.v);
             if (stick_) {
                 const Eigen::VectorXd f = stick_field(model_, *r.before, r.sgn_before, r.t, r.x, r.v);
+                a.resize(static_cast<std::size_t>(n));
                 for (int i = 0; i < n; ++i) a[static_cast<std::size_t>(i)] = f(n + i);
+            } else {
+                a = accelerations(model_, *r.before, r.sgn_before, r.t, r.x, r.v, d.coupled());
             }
         }
         const Contact& k = model_.contacts[static_cast<std::size_t>(f.element)];

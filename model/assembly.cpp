@@ -65,6 +65,16 @@ Eigen::MatrixXd mass_matrix(const Model& model) {
     return M;
 }
 
+Eigen::MatrixXd mass_matrix(const Model& model, const std::vector<int>& dofs) {
+    const auto n = static_cast<Eigen::Index>(dofs.size());
+    Eigen::MatrixXd M(n, n);
+    for (Eigen::Index r = 0; r < n; ++r)
+        for (Eigen::Index c = 0; c < n; ++c)
+            M(r, c) = model.mass_entry(static_cast<std::size_t>(dofs[static_cast<std::size_t>(r)]),
+                                       static_cast<std::size_t>(dofs[static_cast<std::size_t>(c)]));
+    return M;
+}
+
 double mass_times(const Model& model, std::size_t i, const double* y) {
     if (!model.coupled_mass()) return model.masses[i].m * y[i];
     const std::size_t n = model.dof();

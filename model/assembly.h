@@ -40,6 +40,9 @@ Eigen::VectorXd mass_vector(const Model& model);
 /// M whole (diagonal for a lumped model).
 Eigen::MatrixXd mass_matrix(const Model& model);
 
+/// M[dofs, dofs]: the mass matrix of the masses `dofs` (model indices), in that order.
+Eigen::MatrixXd mass_matrix(const Model& model, const std::vector<int>& dofs);
+
 /// (M y)_i: m_i y_i for a lumped model, the row of a coupled M (model.h) times y.
 double mass_times(const Model& model, std::size_t i, const double* y);
 

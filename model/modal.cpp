@@ -22,13 +22,7 @@ void coupled_modes(const Model& model, const Configuration& cfg, const FreeCompo
         throw RunError("modal_analysis(): configuration " + cfg.spec(model) +
                        ": a stuck mass on a coupled mass matrix (not yet supported)");
     const Eigen::MatrixXd Kfull = stiffness_matrix(model, cfg);
-    Eigen::MatrixXd Kf(nf, nf), Mf(nf, nf);
-    for (int r = 0; r < nf; ++r)
-        for (int s = 0; s < nf; ++s) {
-            const auto i = static_cast<std::size_t>(md.free[r]), j = static_cast<std::size_t>(md.free[s]);
-            Kf(r, s) = Kfull(md.free[r], md.free[s]);
-            Mf(r, s) = model.mass_entry(i, j);
-        }
+    const Eigen::MatrixXd Kf = Kfull(md.free, md.free), Mf = mass_matrix(model, md.free);
     md.mass = Mf.diagonal();
     md.mass_matrix = Mf;
     // The structural rigid-body modes, M-orthonormalised in component order.

@@ -35,13 +35,8 @@ ExponentialSolver::ExponentialSolver(const Model& model, const Configuration& cf
     theta_ = sn_ = cs_ = Eigen::VectorXd::Zero(nh_);
     z_ = zmag_ = Eigen::VectorXd::Zero(m_);
     xmag_ = vmag_ = Eigen::VectorXd::Zero(n_);
-    if (model.coupled_mass()) {  // a coupled M_F: the rows of the state matrix are M_F^-1 times the forces
-        Eigen::MatrixXd MF(nf_, nf_);
-        for (int r = 0; r < nf_; ++r)
-            for (int q = 0; q < nf_; ++q)
-                MF(r, q) = model.mass_entry(static_cast<std::size_t>(free_[r]), static_cast<std::size_t>(free_[q]));
-        minv_ = MF.llt().solve(Eigen::MatrixXd::Identity(nf_, nf_));
-    }
+    if (model.coupled_mass())  // a coupled M_F: the rows of the state matrix are M_F^-1 times the forces
+        minv_ = mass_matrix(model, free_).llt().solve(Eigen::MatrixXd::Identity(nf_, nf_));
 }
 
 void ExponentialSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {

@@ -124,9 +124,7 @@ Eigen::MatrixXd StateSpaceSolver::rigid_basis(const Model& model, const Configur
     Eigen::MatrixXd MF = Eigen::MatrixXd::Zero(nf_, nf_);
     for (int r = 0; r < nf_; ++r) MF(r, r) = t_.mass(free_[r]);
     if (model.coupled_mass()) {
-        for (int r = 0; r < nf_; ++r)
-            for (int q = 0; q < nf_; ++q)
-                MF(r, q) = model.mass_entry(static_cast<std::size_t>(free_[r]), static_cast<std::size_t>(free_[q]));
+        MF = mass_matrix(model, free_);
         coupled_rigid_basis(MF, pivot, [&](const std::string& why) {
             throw RunError("StateSpaceSolver(): configuration '" + cfg.spec(model) + "' of model '" + model.name +
                            "': " + why);
