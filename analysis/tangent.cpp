@@ -9,6 +9,7 @@
 #include <unsupported/Eigen/MatrixFunctions>
 
 #include "assembly.h"
+#include "error.h"
 #include "modal.h"
 #include "stick_tangent.h"
 #include "transitions.h"
@@ -53,6 +54,9 @@ struct Tangent::ConfigData {
 
 Tangent::Tangent(const Model& model) : model_(model), stick_(!stick_elements(model).empty()) {
     if (stick_) require_lumped_mass(model, "the tangent of a model with stick elements");  // stick_tangent.cpp: bodies' masses
+    if (model.coupled_mass() && has_mass_friction(model))  // the saltation of a held force P_i . f: not yet
+        throw InputError("the tangent (periodic, lyapunov): model '" + model.name +
+                         "' has friction on a coupled (non-diagonal) mass matrix, which it does not take yet");
 }
 Tangent::~Tangent() = default;
 Tangent::Tangent(Tangent&&) noexcept = default;

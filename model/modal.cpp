@@ -13,14 +13,14 @@
 namespace hsnc {
 namespace {
 
-// A coupled M (modal.h): one generalized eigenproblem over all free masses.
-// A friction element cannot be written on such a model (model_reader), so no
-// mass is stuck and none rides a partner.
+// A coupled M (modal.h): one generalized eigenproblem over all free masses,
+// M_FF and K_FF (a dof stuck to the ground is held still; no dof rides a
+// partner: model_reader takes friction against the ground only on a coupled M).
 void coupled_modes(const Model& model, const Configuration& cfg, const FreeComponents& fc, ModalDecomposition& md) {
     const int nf = static_cast<int>(md.free.size());
-    if (!md.riders.empty() || !md.stuck.empty())
+    if (!md.riders.empty())
         throw RunError("modal_analysis(): configuration " + cfg.spec(model) +
-                       ": a stuck mass on a coupled mass matrix (not yet supported)");
+                       ": a dof stuck to another on a coupled mass matrix (not yet supported)");
     const Eigen::MatrixXd Kfull = stiffness_matrix(model, cfg);
     const Eigen::MatrixXd Kf = Kfull(md.free, md.free), Mf = mass_matrix(model, md.free);
     md.mass = Mf.diagonal();

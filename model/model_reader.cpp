@@ -615,10 +615,10 @@ private:
                     fail(t.get("between"), path + ".between",
                          "friction between two bodies with non-proportional damping ([[damper]]) is not yet supported");
             }
-            if (model_.coupled_mass())  // the stuck dof's constraint force needs M_iF a_F (issue 36, stage b)
+            if (model_.coupled_mass() && two_bodies)  // a stuck pair on a coupled M: stage c of issue 36
                 fail(t.get("between"), path + ".between",
-                     "friction on a structure with a coupled (non-diagonal) mass matrix is not yet supported: "
-                     "give a lumped (diagonal) M, or model the joint with a [[jenkins]] element");
+                     "friction between two dofs of a structure with a coupled (non-diagonal) mass matrix is not yet "
+                     "supported: give friction against the ground, or model the joint with a [[jenkins]] element");
             f.mu_k = required_number(t, path, "mu_k");
             if (f.mu_k < 0.0) fail(t.get("mu_k"), path + ".mu_k", "must be >= 0, got " + show(f.mu_k));
             f.mu_s = optional_number(t, path, "mu_s").value_or(f.mu_k);

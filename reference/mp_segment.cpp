@@ -8,6 +8,7 @@
 #include <cln/rational.h>
 #include <cln/real.h>
 
+#include "assembly.h"
 #include "elements/contact.h"
 #include "elements/friction.h"
 #include "elements/jenkins.h"
@@ -238,6 +239,9 @@ MpModel::MpModel(const Model& model, int digits)
         throw InputError("the reference (--precision mp:N): model '" + model.name +
                          "' has a coupled (non-diagonal) mass matrix with non-proportional damping, which it does "
                          "not take yet");
+    if (model.coupled_mass() && has_mass_friction(model))  // the held force P_i . f at N digits: not yet
+        throw InputError("the reference (--precision mp:N): model '" + model.name +
+                         "' has friction on a coupled (non-diagonal) mass matrix, which it does not take yet");
     n = static_cast<int>(model.dof());
     g = F(model.g);
     alpha = F(model.alpha);

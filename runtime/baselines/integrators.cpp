@@ -18,6 +18,7 @@
 #include <Eigen/Cholesky>
 
 #include "assembly.h"
+#include "held_mass.h"
 #include "error.h"
 #include "sample_grid.h"
 #include "switch_guard.h"
@@ -34,10 +35,12 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 struct Sliders {
     const Model& model;
     std::vector<double> s, buf;
-    /// The Cholesky factor of a coupled M (Model::coupled_mass()), once per run.
-    Eigen::LLT<Eigen::MatrixXd> mass_llt;
+    /// A coupled M (Model::coupled_mass()) factored for the dofs stuck in the
+    /// current configuration (held_mass.h), again only when they change.
+    HeldMass held;
+    std::vector<double> held_f, held_a;
     explicit Sliders(const Model& m) : model(m), buf(m.state_size()) {
-        if (m.coupled_mass()) mass_llt.compute(mass_matrix(m));
+        if (m.coupled_mass()) held.hold(m, std::vector<char>(m.dof(), 0)), held_f.resize(m.dof()), held_a.resize(m.dof());
         if (m.slider0.size() == m.jenkins.size()) {
             s = m.slider0;
         } else {
@@ -94,9 +97,9 @@ void accelerations(const Model& model, const Configuration& cfg, const std::vect
             a[p] += m.mu_k * model.normal_force(i) * dir[i];
         }
     }
-    if (model.coupled_mass()) {  // no friction there (model_reader): a = M^-1 A over every mass
-        const auto nn = static_cast<Eigen::Index>(n);
-        Eigen::VectorXd::Map(a, nn) = sl.mass_llt.solve(Eigen::VectorXd::Map(a, nn));
+    if (model.coupled_mass()) {  // a_F = M_FF^-1 f_F, the stuck dofs held (friction only against the ground there)
+        sl.held.hold(model, cfg.stuck);
+        sl.held.accelerations(a, a);
         return;
     }
     for (std::size_t i = 0; i < n; ++i)
@@ -144,7 +147,15 @@ void watched_values(const Model& model, const Configuration& cfg, const std::vec
                 break;
             }
             default: {
-                const double A = driving_force(model, cfg, s.element, t, x, v);
+                double A;
+                if (model.coupled_mass()) {  // the held force D_i = f_i - (M a)_i (held_mass.h)
+                    sl.held.hold(model, cfg.stuck);
+                    held_forces(model, cfg, cfg.stuck, dir.data(), t, x, v, sl.held_f.data());
+                    sl.held.accelerations(sl.held_f.data(), sl.held_a.data());
+                    A = sl.held.held_force(s.element, sl.held_f.data(), sl.held_a.data());
+                } else {
+                    A = driving_force(model, cfg, s.element, t, x, v);
+                }
                 const double lim = model.masses[s.element].mu_s * model.normal_force(s.element);
                 h[k] = s.kind == SwitchKind::release_pos ? lim - A : lim + A;
             }

@@ -11,6 +11,7 @@
 #include "elements/friction.h"
 #include "elements/jenkins.h"
 #include "elements/motion.h"
+#include "held_mass.h"
 #include "switch_derivative.h"
 #include "kernel_abi.h"
 
@@ -72,6 +73,19 @@ void force_derivative(const Model& model, const Configuration& cfg, int i, doubl
 // (m_p A_i^(k) - m_i A_p^(k))/(m_i + m_p).
 void driving_derivative(const Model& model, const Configuration& cfg, int i, double t, double t_lo,
                         const MotionSeries& s, int k, double& value, double& magnitude) {
+    if (model.coupled_mass()) {  // D_i^(k) = P_i . (A^(k) + [k = 0] kinetic friction), i held (held_mass.h)
+        const Eigen::VectorXd P = HeldMass(model, cfg.stuck).release_row(i);
+        value = magnitude = 0.0;
+        for (Eigen::Index q = 0; q < P.size(); ++q) {
+            if (P(q) == 0.0) continue;
+            double A, m;
+            force_derivative(model, cfg, static_cast<int>(q), t, t_lo, s, k, A, m);
+            if (k == 0) A += s.friction[static_cast<std::size_t>(q)], m += std::fabs(s.friction[static_cast<std::size_t>(q)]);
+            value += P(q) * A;
+            magnitude += std::fabs(P(q)) * m;
+        }
+        return;
+    }
     force_derivative(model, cfg, i, t, t_lo, s, k, value, magnitude);
     const int p = model.masses[static_cast<std::size_t>(i)].partner;
     if (p == kGround) return;
@@ -108,16 +122,22 @@ MotionSeries motion_series(const Model& model, const Configuration& cfg, const s
             s.mag[1][i] = std::fabs(v[i]);
         }
     }
-    if (model.coupled_mass()) {  // no friction (model_reader): x^(k+2) = M^-1 A^(k), |M^-1| on the magnitudes
-        const Eigen::MatrixXd M = mass_matrix(model);
-        const Eigen::LLT<Eigen::MatrixXd> llt(M);
-        const Eigen::MatrixXd inv_abs = llt.solve(Eigen::MatrixXd::Identity(M.rows(), M.cols())).cwiseAbs();
-        Eigen::VectorXd A(static_cast<Eigen::Index>(n)), m(static_cast<Eigen::Index>(n));
+    if (model.coupled_mass()) {  // x_F^(k+2) = M_FF^-1 (A_F^(k) + [k = 0] friction), |M_FF^-1| on the magnitudes
+        const HeldMass held(model, cfg.stuck);  // only ground friction on a coupled M (model_reader)
+        const Eigen::MatrixXd inv_abs = held.inverse().cwiseAbs();
+        s.friction.assign(n, 0.0);
+        for (std::size_t i = 0; i < n; ++i)
+            if (!cfg.stuck[i] && model.masses[i].has_friction)
+                s.friction[i] = -model.masses[i].mu_k * model.normal_force(i) * static_cast<double>(sgn[i]);
+        Eigen::VectorXd A(static_cast<Eigen::Index>(n)), m(static_cast<Eigen::Index>(n)), x(static_cast<Eigen::Index>(n));
         for (int k = 0; k + 2 <= order; ++k) {
-            for (std::size_t i = 0; i < n; ++i)
-                force_derivative(model, cfg, static_cast<int>(i), t, t_lo, s, k, A(static_cast<Eigen::Index>(i)),
-                                 m(static_cast<Eigen::Index>(i)));
-            const Eigen::VectorXd x = llt.solve(A), xm = inv_abs * m;
+            for (std::size_t i = 0; i < n; ++i) {
+                const auto ii = static_cast<Eigen::Index>(i);
+                force_derivative(model, cfg, static_cast<int>(i), t, t_lo, s, k, A(ii), m(ii));
+                if (k == 0) A(ii) += s.friction[i], m(ii) += std::fabs(s.friction[i]);
+            }
+            held.accelerations(A.data(), x.data());
+            const Eigen::VectorXd xm = inv_abs * m;
             for (std::size_t i = 0; i < n; ++i) {
                 s.x[static_cast<std::size_t>(k) + 2][i] = x(static_cast<Eigen::Index>(i));
                 s.mag[static_cast<std::size_t>(k) + 2][i] = xm(static_cast<Eigen::Index>(i));
@@ -241,6 +261,11 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
     auto force_rate_magnitude = [&](int i) {
         const std::size_t ii = static_cast<std::size_t>(i);
         double m = std::fabs(model.alpha) * model.masses[ii].m * accel_magnitude(i);
+        if (model.coupled_mass()) {  // -alpha (M x'')_i over the row of M
+            m = 0.0;
+            for (std::size_t j = 0; j < model.dof(); ++j)
+                m += std::fabs(model.alpha * model.mass_entry(ii, j)) * accel_magnitude(static_cast<int>(j));
+        }
         for_each_link(model, cfg, [&](int a, int b, double kk, double cc, double) {
             if (a == b || (a != i && b != i)) return;
             m += std::fabs(kk) * (at(v, a) + at(v, b)) + std::fabs(cc) * (accel_magnitude(a) + accel_magnitude(b));
@@ -248,6 +273,13 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
         for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii] * h.omega);
         return m;
     };
+    if (model.coupled_mass()) {  // D_i' = P_i . A' (held_mass.h)
+        const Eigen::VectorXd P = HeldMass(model, cfg.stuck).release_row(e);
+        double m = 0.0;
+        for (Eigen::Index q = 0; q < P.size(); ++q)
+            if (P(q) != 0.0) m += std::fabs(P(q)) * force_rate_magnitude(static_cast<int>(q));
+        return m;
+    }
     if (partner == kGround) return force_rate_magnitude(e);
     const double mi = model.masses[static_cast<std::size_t>(e)].m, mp = model.masses[static_cast<std::size_t>(partner)].m;
     return against_partner_magnitude(mi, mp, force_rate_magnitude(e), force_rate_magnitude(partner));
@@ -276,8 +308,15 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
                                   &zdm = series.mag[static_cast<std::size_t>(j) + 1];
         auto up = [](double value, double mag) { return std::fabs(value) + tie_noise(mag); };
         double two_e = 0.0;
-        for (std::size_t i = 0; i < n; ++i)
-            if (!fixed_in(model, cfg, i)) two_e += model.masses[i].m * up(zd[i], zdm[i]) * up(zd[i], zdm[i]);
+        if (model.coupled_mass()) {  // z'^T M z' <= sum |M_ij| |z'_i| |z'_j| over the free dofs
+            for (std::size_t i = 0; i < n; ++i)
+                for (std::size_t l = 0; l < n; ++l)
+                    if (!fixed_in(model, cfg, i) && !fixed_in(model, cfg, l))
+                        two_e += std::fabs(model.mass_entry(i, l)) * up(zd[i], zdm[i]) * up(zd[l], zdm[l]);
+        } else {
+            for (std::size_t i = 0; i < n; ++i)
+                if (!fixed_in(model, cfg, i)) two_e += model.masses[i].m * up(zd[i], zdm[i]) * up(zd[i], zdm[i]);
+        }
         for_each_link(model, cfg, [&](int a, int b, double kk, double, double) {
             if (a == b) return;
             const double za = free_mass(a) ? z[static_cast<std::size_t>(a)] : 0.0;
@@ -291,14 +330,17 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
         for (const Harmonic& h : model.forcing) {
             double norm = 0.0;
             for (std::size_t i = 0; i < n; ++i)
-                if (!fixed_in(model, cfg, i)) norm += h.amplitude[i] * h.amplitude[i] / model.masses[i].m;
+                if (!fixed_in(model, cfg, i))  // F^T M_FF^-1 F <= |F|^2 / lambda_min(M) on a coupled M
+                    norm += h.amplitude[i] * h.amplitude[i] / (model.coupled_mass() ? model.mass_floor : model.masses[i].m);
             phi += std::pow(std::fabs(h.omega), j) * std::sqrt(norm);
         }
         return (std::sqrt(two_e) + phi * T) * (1 + 64 * kEps);
     };
-    // |x_b^(j+1)| <= R_j / sqrt(m_b) for a free mass b, 0 for ground and stuck masses.
+    // |x_b^(j+1)| <= R_j / sqrt(m_b) for a free mass b, 0 for ground and stuck masses
+    // (coupled M: z^T M z >= lambda_min(M) z_b^2, lambda_min(M_FF) >= lambda_min(M)).
     auto per_mass = [&](int b, double r) {
-        return free_mass(b) ? r / std::sqrt(model.masses[static_cast<std::size_t>(b)].m) : 0.0;
+        if (!free_mass(b)) return 0.0;
+        return r / std::sqrt(model.coupled_mass() ? model.mass_floor : model.masses[static_cast<std::size_t>(b)].m);
     };
     const int e = f.element;
     if (f.kind == SwitchKind::gap) {
@@ -326,10 +368,22 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
             if (a == b || (a != i && b != i)) return;
             for (int o : {a, b}) B += std::fabs(kk) * per_mass(o, rk1) + std::fabs(cc) * per_mass(o, rk);
         });
-        B += std::fabs(model.alpha) * model.masses[static_cast<std::size_t>(i)].m * per_mass(i, rk);
+        if (model.coupled_mass()) {
+            for (std::size_t l = 0; l < n; ++l)
+                B += std::fabs(model.alpha * model.mass_entry(static_cast<std::size_t>(i), l)) * per_mass(static_cast<int>(l), rk);
+        } else {
+            B += std::fabs(model.alpha) * model.masses[static_cast<std::size_t>(i)].m * per_mass(i, rk);
+        }
         for (const Harmonic& h : model.forcing) B += std::fabs(h.amplitude[static_cast<std::size_t>(i)]) * std::pow(std::fabs(h.omega), k);
         return B;
     };
+    if (model.coupled_mass()) {  // D_i^(k) = P_i . A^(k) (held_mass.h)
+        const Eigen::VectorXd P = HeldMass(model, cfg.stuck).release_row(e);
+        double B = 0.0;
+        for (Eigen::Index q = 0; q < P.size(); ++q)
+            if (P(q) != 0.0) B += std::fabs(P(q)) * force_bound(static_cast<int>(q));
+        return B * (1 + 64 * kEps);
+    }
     const int p = model.masses[static_cast<std::size_t>(e)].partner;
     if (p == kGround) return force_bound(e) * (1 + 64 * kEps);
     const double mi = model.masses[static_cast<std::size_t>(e)].m, mp = model.masses[static_cast<std::size_t>(p)].m;

@@ -37,6 +37,9 @@ struct MotionSeries {
     std::vector<std::vector<double>> x;    ///< x[k][i] = x_i^(k)
     std::vector<std::vector<double>> mag;  ///< the magnitude of the terms of x[k][i]
     std::vector<double> slider;            ///< slider position of every Jenkins element at the instant
+    /// Coupled M: the kinetic friction force on every dof (0 on a stuck one),
+    /// for the held force of held_mass.h; empty for a lumped M.
+    std::vector<double> friction;
 };
 
 MotionSeries motion_series(const Model& model, const Configuration& cfg, const signed char* sgn, double t, double t_lo,

@@ -9,6 +9,7 @@
 #include "elements/friction.h"
 #include "elements/jenkins.h"
 #include "elements/motion.h"
+#include "held_mass.h"
 #include "tie_series.h"
 
 namespace hsnc {
@@ -23,9 +24,12 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 class DoublePhysics {
 public:
     using Scalar = double;
+    // sgn: the live friction directions the rules update (a coupled M's
+    // held force depends on how the other dofs slide, held_mass.h).
     DoublePhysics(const Model& model, double t, const double* x, double* v, const double* a,
-                  const ElementIndex* elements = nullptr)
-        : model_(model), elements_(elements), t_(t), x_(x), v_(v), a_(a), n_(static_cast<int>(model.dof())) {}
+                  const std::vector<signed char>& sgn, const ElementIndex* elements = nullptr)
+        : model_(model), elements_(elements), t_(t), x_(x), v_(v), a_(a), n_(static_cast<int>(model.dof())),
+          live_sgn_(sgn) {}
 
     int sign(double y) const { return y > 0 ? 1 : y < 0 ? -1 : 0; }
     bool negligible(double value, double magnitude) const { return std::fabs(value) <= 16 * kEps * magnitude; }
@@ -40,9 +44,21 @@ public:
         return sign(friction::velocity_value(Direction{i, partner(i)}, double_motion(rows), 0));
     }
     void stop(int i) { v_[i] = body(v_, partner(i)); }
-    double force(const Configuration& cfg, int i) const { return driving_force(model_, cfg, i, t_, x_, v_, elements_); }
+    double force(const Configuration& cfg, int i) const {
+        if (model_.coupled_mass()) {  // with i held, the rest of M moving (held_mass.h)
+            double D, rate;
+            held_driving_force(model_, cfg, live_sgn_.data(), i, t_, x_, v_, D, rate);
+            return D;
+        }
+        return driving_force(model_, cfg, i, t_, x_, v_, elements_);
+    }
     double static_limit(int i) const { return model_.masses[i].mu_s * model_.normal_force(i); }
     double held_rate(const Configuration& cfg, int i) const {
+        if (model_.coupled_mass()) {  // the held motion's own accelerations (held_mass.h)
+            double D, rate;
+            held_driving_force(model_, cfg, live_sgn_.data(), i, t_, x_, v_, D, rate);
+            return rate;
+        }
         std::vector<double> held(model_.dof(), 0.0);
         if (a_) held.assign(a_, a_ + model_.dof());
         const int p = partner(i);
@@ -106,6 +122,7 @@ private:
     int n_;
     Configuration cfg_;
     std::vector<signed char> sgn_;
+    const std::vector<signed char>& live_sgn_;
 };
 
 }  // namespace
@@ -113,7 +130,7 @@ private:
 bool apply_switches(const Model& model, double t, const double* x, double* v, const double* a, Configuration& cfg,
                     std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
                     std::vector<Transition>& out, std::string& why, const ElementIndex* elements) {
-    DoublePhysics p(model, t, x, v, a, elements);
+    DoublePhysics p(model, t, x, v, a, sgn, elements);
     if (rules::apply_switches(p, cfg, sgn, switched, out)) return true;
     why = "friction decisions at t = " + std::to_string(t) + " do not settle";
     return false;
@@ -123,7 +140,7 @@ Configuration entered_configuration(const Model& model, double t, const double* 
                                     std::vector<signed char>& sgn) {
     Configuration cfg = Configuration::all_open(model);
     // Nothing stops at t0: v is only read.
-    DoublePhysics p(model, t, x, const_cast<double*>(v), nullptr);
+    DoublePhysics p(model, t, x, const_cast<double*>(v), nullptr, sgn);
     rules::entered_configuration(p, cfg, sgn);
     return cfg;
 }

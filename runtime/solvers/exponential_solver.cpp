@@ -42,6 +42,7 @@ ExponentialSolver::ExponentialSolver(const Model& model, const Configuration& cf
 void ExponentialSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
     for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
     segment_force(t_, cfg_, x0, fseg_, slider_);
+    release_force(t_, fseg_, sgn, frel_);
     const int one = 2 * nf_;
     auto sine = [&](int h) { return one + 1 + 2 * h; };
     Z_.setZero();
@@ -110,7 +111,7 @@ void ExponentialSolver::setup(double t0, double t0_lo, const double* x0, const d
         gz.resize(ns_);
         for (int f = 0; f < ns_; ++f) {
             double gv, dgv, scale;
-            switch_value(switches_[static_cast<std::size_t>(f)], t_, fseg_, out, xmag_, vmag_, sn_, cs_, gv, dgv,
+            switch_value(switches_[static_cast<std::size_t>(f)], t_, t_.coupled() ? frel_ : fseg_, out, xmag_, vmag_, sn_, cs_, gv, dgv,
                          scale);
             gz(f) = gv;
         }
@@ -158,7 +159,7 @@ void ExponentialSolver::eval(double tau, const SegmentEval& out) const {
     const double zmax = (free_offset_ && nh_ == 0 ? z_.head(2 * nf_) : z_).cwiseAbs().maxCoeff();
     for (int f = 0; f < ns_; ++f) {
         double g, dg, scale;
-        switch_value(switches_[static_cast<std::size_t>(f)], t_, fseg_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
+        switch_value(switches_[static_cast<std::size_t>(f)], t_, t_.coupled() ? frel_ : fseg_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
         out.g[f] = g;
         out.dg[f] = dg;
         out.scale[f] = scale;

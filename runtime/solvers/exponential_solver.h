@@ -67,6 +67,7 @@ private:
     bool free_offset_ = false;    // xs_ taken (Z's column of 1 is then 0)
     Eigen::VectorXd bound_row_;   // ||L_f Z^2||_1 per switch function
     Eigen::VectorXd x_fix_, fseg_, slider_, theta_;
+    Eigen::VectorXd frel_;  // coupled M: fseg_ plus the kinetic friction, for the held forces (release_force)
 
     // --- eval scratch (no state between evals) ---
     mutable Eigen::MatrixXd E_;

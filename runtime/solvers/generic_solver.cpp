@@ -188,6 +188,24 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
                     cz += t_.C(e, q) * phi_(slot[static_cast<std::size_t>(q)], j);
                 }
             };
+            if (t_.coupled()) {  // D_i = P_i . A (held_mass.h)
+                const Eigen::Index row = t_.release_row[static_cast<std::size_t>(i)];
+                for (int j = 0; j < nf_; ++j) {
+                    double kw = 0.0, cz = 0.0;
+                    for (int q = 0; q < n_; ++q) {
+                        const double w = t_.release(row, q);
+                        if (w == 0.0) continue;
+                        double kq, cq;
+                        rows(q, j, kq, cq);
+                        kw += w * kq;
+                        cz += w * cq;
+                    }
+                    W_(f, j) = -sg * kw;
+                    Z_(f, j) = -sg * cz;
+                }
+                for (int h = 0; h < nh_; ++h) D_(f, h) = sg * t_.release.row(row).dot(t_.h_amp.col(h));
+                continue;
+            }
             for (int j = 0; j < nf_; ++j) {
                 double kw, cz;
                 rows(i, j, kw, cz);
@@ -240,6 +258,7 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
 void GenericSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
     for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
     segment_force(t_, cfg_, x0, fseg_, slider_);
+    release_force(t_, fseg_, sgn, frel_);
     for (int h = 0; h < nh_; ++h) {
         theta_(h) = reduced_phase(t_.h_omega(h), t0, t0_lo, t_.h_phase(h));
         e_theta_(h) = cplx(std::cos(theta_(h)), std::sin(theta_(h)));
@@ -496,7 +515,7 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
     for (std::size_t f = 0; f < switches_.size(); ++f) {
         const SwitchFunction& sf = switches_[f];
         double g, dg, scale;
-        switch_value(sf, t_, fseg_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
+        switch_value(sf, t_, t_.coupled() ? frel_ : fseg_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
         // |g''(s)| for s in [tau, tau + max_step]: standard sinusoids, rigid modes
         // (exact, decaying as e^{-alpha s}), homogeneous and coupled modal bounds.
         double B = bound_sin_(static_cast<Eigen::Index>(f)) + std::abs(rho_(static_cast<Eigen::Index>(f))) * rigid_decay;

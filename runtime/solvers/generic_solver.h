@@ -98,6 +98,7 @@ private:
     // --- fixed by setup ---
     Eigen::VectorXd x_fix_;        // positions (stuck masses keep theirs)
     Eigen::VectorXd fseg_;         // constant force: f_const plus the stuck Jenkins sliders' preload
+    Eigen::VectorXd frel_;  // coupled M: fseg_ plus the kinetic friction, for the held forces (release_force)
     Eigen::VectorXd slider_;       // stuck Jenkins sliders' positions
     Eigen::VectorXd rider_offset_; // x_q - x_partner of each mass stuck to its partner (modal.h riders)
     Eigen::VectorXd theta_;        // phase of each harmonic at tau = 0

@@ -379,6 +379,7 @@ void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const do
     const double s = scale_s_;
     for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
     segment_force(t_, cfg_, x0, fseg_, slider_);
+    release_force(t_, fseg_, sgn, frel_);
     for (int h = 0; h < nh_; ++h) {
         theta_(h) = hsnc_phase(t_.h_omega(h), t0, t0_lo, t_.h_phase(h));
         e_theta_(h) = cplx(std::cos(theta_(h)), std::sin(theta_(h)));
@@ -600,7 +601,7 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
     for (int f = 0; f < ns_; ++f) {
         const SwitchFunction& sf = switches_[static_cast<std::size_t>(f)];
         double g, dg, scale;
-        switch_value(sf, t_, fseg_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
+        switch_value(sf, t_, t_.coupled() ? frel_ : fseg_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
         const double B = bound_sin_(f) + rigid_bound_(f) + (m > 0 ? B_(f) : 0.0);
         out.g[f] = g;
         out.dg[f] = dg;

@@ -159,6 +159,7 @@ private:
     // --- fixed by setup ---
     Eigen::VectorXd x_fix_, theta_, force_;  // force_: constant force on the free masses
     Eigen::VectorXd fseg_, slider_;          // f_const plus the stuck Jenkins sliders' preload; their positions
+    Eigen::VectorXd frel_;  // coupled M: fseg_ plus the kinetic friction, for the held forces (release_force)
     Eigen::VectorXd q0_, qd0_, rigid_f_;       // rigid coordinates and their constant acceleration
     Eigen::VectorXd rigid_bound_;              // rigid part of each |g''| bound
     Eigen::VectorXcd eta0_, beta0_, e_theta_;

@@ -1,6 +1,9 @@
 #include "switch_values.h"
 
+#include <algorithm>
+
 #include "assembly.h"
+#include "held_mass.h"
 
 namespace hsnc {
 
@@ -26,6 +29,16 @@ ConfigurationTerms configuration_terms(const Model& model, const Configuration& 
     t.f_const = constant_force(model, cfg);
     t.contacts = model.contacts;
     t.jenkins = model.jenkins;
+    if (model.coupled_mass()) {  // every stuck dof's P_i (held_mass.h)
+        const HeldMass held(model, cfg.stuck);
+        t.release_row.assign(static_cast<std::size_t>(n), -1);
+        t.release = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(std::count(cfg.stuck.begin(), cfg.stuck.end(), 1)), n);
+        for (Eigen::Index i = 0, r = 0; i < n; ++i)
+            if (cfg.stuck[static_cast<std::size_t>(i)]) {
+                t.release_row[static_cast<std::size_t>(i)] = static_cast<int>(r);
+                t.release.row(r++) = held.release_row(static_cast<int>(i)).transpose();
+            }
+    }
     std::vector<const Harmonic*> dyn;
     for (const Harmonic& hm : model.forcing) {
         if (hm.omega == 0.0) {

@@ -49,6 +49,11 @@ struct ConfigurationTerms {
     Eigen::VectorXd h_omega, h_phase;
     Eigen::MatrixXd h_amp;  ///< n x nh
     std::vector<Jenkins> jenkins;
+    /// Coupled M: row release_row[i] of `release` is P_i of a stuck dof i
+    /// (held_mass.h), D_i = P_i . (A + kinetic friction); empty for a lumped M.
+    Eigen::MatrixXd release;
+    std::vector<int> release_row;
+    bool coupled() const { return release_row.size() > 0; }
 };
 
 ConfigurationTerms configuration_terms(const Model& model, const Configuration& cfg);
@@ -68,6 +73,18 @@ inline void segment_force(const ConfigurationTerms& in, const Configuration& cfg
         if (e.a != kGround) f(e.a) += p;
         if (e.b != kGround) f(e.b) -= p;
     }
+}
+
+/// The forces a coupled M's held force D_i = P_i . f sums (held_mass.h): the
+/// segment's constant force f plus the kinetic friction of every sliding dof;
+/// f itself for a lumped M (its release functions read A_i, no friction).
+inline const Eigen::VectorXd& release_force(const ConfigurationTerms& in, const Eigen::VectorXd& f,
+                                            const signed char* sgn, Eigen::VectorXd& scratch) {
+    if (!in.coupled()) return f;
+    scratch = f;
+    for (Eigen::Index i = 0; i < f.size(); ++i)
+        if (in.friction[static_cast<std::size_t>(i)]) scratch(i) -= in.mu_k(i) * in.normal(i) * static_cast<double>(sgn[i]);
+    return scratch;
 }
 
 /// The constant force on free mass i in a segment (paper Eq. 7-9): f(i)
@@ -178,7 +195,21 @@ inline void switch_value(const SwitchFunction& sf, const ConfigurationTerms& in,
         }
     };
     double A, dA, mag;
-    force(e, A, dA, mag);
+    if (in.coupled()) {  // D = P_e . (A + friction), f carrying the friction (release_force)
+        A = dA = mag = 0.0;
+        const Eigen::Index r = in.release_row[static_cast<std::size_t>(e)];
+        for (Eigen::Index q = 0; q < in.release.cols(); ++q) {
+            const double w = in.release(r, q);
+            if (w == 0.0) continue;
+            double Aq, dAq, mq;
+            force(static_cast<int>(q), Aq, dAq, mq);
+            A += w * Aq;
+            dA += w * dAq;
+            mag += std::abs(w) * mq;
+        }
+    } else {
+        force(e, A, dA, mag);
+    }
     if (const int p = in.partner[static_cast<std::size_t>(e)]; p != kGround) {
         // Against a partner: D = (m_p A_e - m_e A_p)/(m_e + m_p) (assembly.h driving_force).
         double Ap, dAp, mp_mag;
