@@ -40,6 +40,11 @@ numeric exact(double v) { return numeric(cln::rational(cln::cl_DF(v))); }
 
 numeric exact(const DD& v) { return exact(v.hi()) + exact(v.lo()); }
 
+numeric exact_normal(const Model& model, std::size_t i) {
+    const Mass& m = model.masses[i];
+    return m.normal > 0.0 ? exact(m.normal) : exact(m.m) * exact(model.g);
+}
+
 DD to_dd(const numeric& v) {
     const double hi = v.to_double();
     return DD(hi) + DD((v - exact(hi)).to_double());
@@ -352,7 +357,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         mu.mu_s_n.assign(n, 0.0);
         for (std::size_t i = 0; i < n; ++i) {
             if (!model.masses[i].has_friction) continue;
-            const numeric N = exact(model.masses[i].m) * exact(model.g);
+            const numeric N = exact_normal(model, i);
             mu.mu_k_n[i] = exact(model.masses[i].mu_k) * N;
             mu.mu_k_n_double[i] = mu.mu_k_n[i].to_double();
             mu.mu_s_n[i] = (exact(model.masses[i].mu_s) * N).to_double();
@@ -748,7 +753,7 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
                 const numeric mi = exact(model.masses[static_cast<std::size_t>(i)].m), mp = exact(model.masses[static_cast<std::size_t>(p)].m);
                 A = (mp * A - mi * force(p)) / (mi + mp);
             }
-            const numeric mu_s_n = exact(model.masses[i].mu_s) * exact(model.masses[i].m) * exact(model.g);
+            const numeric mu_s_n = exact(model.masses[i].mu_s) * exact_normal(model, static_cast<std::size_t>(i));
             g = friction::release_value(sf.kind == SwitchKind::release_pos ? 1 : -1, A, ex(mu_s_n), 0);
         }
         out.g.push_back(g);

@@ -221,6 +221,10 @@ GiNaC::numeric exact(double v);
 /// A DD exactly as a GiNaC number (the rational hi + lo), and a GiNaC real
 /// number rounded to DD.
 GiNaC::numeric exact(const DD& v);
+
+/// Mass i's normal force exactly: its element's `normal` as given, else the
+/// exact product m*g of the two doubles (model.h Mass::normal).
+GiNaC::numeric exact_normal(const Model& model, std::size_t i);
 DD to_dd(const GiNaC::numeric& v);
 
 }  // namespace hsnc

@@ -310,6 +310,10 @@ std::string emit_sweep_kernel(const Derivation& d, const std::vector<std::string
             k.line(1, "const double mu_s_" + I + " = " + fields.field(p + ".mu_s", ms.mu_s, mu_k_var) + ";");
             check(fields.variable(p + ".mu_k"), "mu_k_" + I + " >= 0.0");
             check(fields.variable(p + ".mu_k") || fields.variable(p + ".mu_s"), "mu_s_" + I + " >= mu_k_" + I);
+            if (ms.normal > 0.0) {  // an element's normal force as given (model.h Mass::normal)
+                k.line(1, "const double N_" + I + " = " + fields.field(p + ".normal", ms.normal) + ";");
+                check(fields.variable(p + ".normal"), "N_" + I + " > 0.0");
+            }
         }
     }
     for (std::size_t s = 0; s < model.springs.size(); ++s) {
@@ -373,8 +377,9 @@ std::string emit_sweep_kernel(const Derivation& d, const std::vector<std::string
         const Mass& ms = model.masses[i];
         const std::string I = std::to_string(i);
         k.line(1, "st.f_const[" + I + "] = " + fields.field("load." + ms.name, model.load[i]) + ";");
-        k.line(1, "st.mu_k_n[" + I + "] = " + (ms.has_friction && !d.cfg.stuck[i] ? "mu_k_" + I + "*m_" + I + "*g" : "0.0") + ";");
-        k.line(1, "st.mu_s_n[" + I + "] = " + (ms.has_friction ? "mu_s_" + I + "*m_" + I + "*g" : "0.0") + ";");
+        const std::string N = ms.normal > 0.0 ? "N_" + I : "m_" + I + "*g";
+        k.line(1, "st.mu_k_n[" + I + "] = " + (ms.has_friction && !d.cfg.stuck[i] ? "mu_k_" + I + "*" + N : "0.0") + ";");
+        k.line(1, "st.mu_s_n[" + I + "] = " + (ms.has_friction ? "mu_s_" + I + "*" + N : "0.0") + ";");
     }
     for (std::size_t cc = 0; cc < nc; ++cc) {
         const Contact& ct = model.contacts[cc];

@@ -110,7 +110,7 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
     }
 
     // Full matrices and forces (model/assembly.h, with symbols).
-    std::vector<ex> m(n), f(n), mu_k(n), mu_s(n);
+    std::vector<ex> m(n), f(n), mu_k(n), mu_s(n), normal(n);
     GiNaC::matrix K(n, n);
     for (std::size_t i = 0; i < n; ++i) {
         const std::string p = "mass[" + idx(i) + "]";
@@ -142,6 +142,8 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
     }
     const ex alpha = b.field("damping.alpha", 0), beta = b.field("damping.beta", 0);
     const ex g = b.parameter("g");
+    for (std::size_t i = 0; i < n; ++i)  // an element's normal force as given, else the weight m g (model.h Mass::normal)
+        normal[i] = model.masses[i].normal > 0.0 ? b.field("mass[" + idx(i) + "].normal", model.masses[i].normal) : m[i] * g;
 
     // Reduced system of the free masses.
     d.M = GiNaC::matrix(nf, nf);
@@ -158,7 +160,7 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
         }
         d.f[r] = f[i];
         for (int s : d.stuck_dofs) d.f[r] -= K(i, s) * d.x0[s];
-        if (model.masses[i].has_friction) d.f[r] -= mu_k[i] * m[i] * g * d.sgn[i];
+        if (model.masses[i].has_friction) d.f[r] -= mu_k[i] * normal[i] * d.sgn[i];
     }
     std::vector<std::vector<ex>> amplitude_all;  // per harmonic, all masses
     for (std::size_t h = 0; h < model.forcing.size(); ++h) {
@@ -289,7 +291,7 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
             }
             for (std::size_t h = 0; h < d.harmonics.size(); ++h)
                 A += amplitude_all[h][e] * GiNaC::sin(d.harmonics[h].omega * d.t + d.harmonics[h].phase);
-            const ex N = m[e] * g;
+            const ex N = normal[e];
             if (sf.kind == SwitchKind::release_pos)
                 d.switches.push_back({"A - mu_s N of " + model.masses[e].name, A - mu_s[e] * N});
             else

@@ -37,17 +37,20 @@ struct Mass {
     bool has_friction = false;  ///< true exactly when the file gave mu_k
     double mu_k = 0.0;          ///< kinetic friction coefficient, >= 0
     double mu_s = 0.0;          ///< static coefficient, >= mu_k
-    /// Index into Model::frictions of the [[friction]] element to ground that
-    /// this mass's friction stands for, or -1 (its own mu_k, normal force m*g).
-    /// An element with normal force N is carried as the equivalent coefficients
-    /// mu_k = mu_k_element * (N / (m*g)) (and mu_s alike), so every stage that
-    /// computes mu_k*m*g computes mu_k_element*N to rounding.
+    /// Index into Model::frictions of the [[friction]] element that this
+    /// mass's friction stands for (its mu_k, mu_s are the element's), or -1
+    /// (its own mu_k, normal force m*g).
     int friction = -1;
     /// The body this mass's friction acts against: kGround, or the other mass
     /// of a [[friction]] element between two bodies (friction on the relative
     /// velocity v[i] - v[partner]; stuck, the two move as one body). Such a
     /// partner has no friction of its own and is the partner of no other mass.
     int partner = kGround;
+    /// The normal force N of an element that gives one (`normal`), used as
+    /// given: g does not enter its friction. 0 for the weight m*g (a mass's own
+    /// friction, an element without `normal`), which the exact stages form as
+    /// the product m*g (Model::normal_force).
+    double normal = 0.0;
 };
 
 /// One forcing harmonic: force on mass i is amplitude[i]*sin(omega*t + phase).
@@ -128,7 +131,8 @@ struct Model {
     /// "spring[2].k", "contact[1].gap", "contact[1].k", "damping.alpha",
     /// "damping.beta", "forcing[1].omega", "forcing[1].phase",
     /// "forcing[1].amplitude.m1", "load.m2", "initial.t0", "initial.x.m1",
-    /// "initial.v.m1", "simulate.t_end" (indices from 1, in file order). A field
+    /// "initial.v.m1", "simulate.t_end" (indices from 1, in file order), and
+    /// "mass[1].normal" for a [[friction]] element's `normal`. A field
     /// left out (its default applies) has no entry.
     std::map<std::string, std::string> field_expressions;
 
@@ -167,8 +171,8 @@ struct Model {
             if (jenkins[j].name == name) return static_cast<int>(j);
         return -1;
     }
-    /// Normal force of mass i (interface.md: always m*g).
-    double normal_force(std::size_t i) const { return masses[i].m * g; }
+    /// Normal force of mass i's friction: its element's `normal` as given, else m*g.
+    double normal_force(std::size_t i) const { return masses[i].normal > 0.0 ? masses[i].normal : masses[i].m * g; }
     /// The name that stands for mass i's friction in event rows and
     /// configuration specs: its [[friction]] element's name, else its own.
     const std::string& friction_name(std::size_t i) const {

@@ -641,11 +641,11 @@ private:
                          (mass.friction >= 0 ? "element '" + model_.frictions[static_cast<std::size_t>(mass.friction)].name + "'"
                                              : std::string("its own mu_k")) +
                          "); one friction to ground per " + body_word() + " is supported");
-            // The element acts as the mass's friction with the equivalent coefficients (model.h).
-            const double ratio = f.normal / (mass.m * model_.g);
+            // The element acts as the mass's friction, with its own coefficients and normal force (model.h).
             mass.has_friction = true;
-            mass.mu_k = f.mu_k * ratio;
-            mass.mu_s = f.mu_s * ratio;
+            mass.mu_k = f.mu_k;
+            mass.mu_s = f.mu_s;
+            mass.normal = normal ? f.normal : 0.0;
             mass.friction = static_cast<int>(model_.frictions.size());
             mass.partner = two_bodies ? f.b : kGround;
             auto text = [&](const std::string& key) {
@@ -653,9 +653,9 @@ private:
                 return it == model_.field_expressions.end() ? std::string() : it->second;
             };
             const std::string mu_k_text = text(path + ".mu_k"), mu_s_text = t.get("mu_s") ? text(path + ".mu_s") : mu_k_text;
-            const std::string scale = normal ? "*(" + text(path + ".normal") + ")/((" + text(mass_key + ".m") + ")*g)" : "";
-            model_.field_expressions[mass_key + ".mu_k"] = "(" + mu_k_text + ")" + scale;
-            model_.field_expressions[mass_key + ".mu_s"] = "(" + mu_s_text + ")" + scale;
+            model_.field_expressions[mass_key + ".mu_k"] = mu_k_text;
+            model_.field_expressions[mass_key + ".mu_s"] = mu_s_text;
+            if (normal) model_.field_expressions[mass_key + ".normal"] = text(path + ".normal");
             element_names_.emplace(f.name, path);
             model_.frictions.push_back(f);
         }
@@ -889,11 +889,11 @@ private:
                 forces.push_back({model_.forcing[h].amplitude[i],
                                   "forcing[" + std::to_string(h + 1) + "].amplitude." + mass.name, 0, "the amplitude"});
             if (mass.has_friction) {
-                const double friction = mass.mu_s * mass.m * model_.g;  // the largest friction force
+                const double friction = mass.mu_s * model_.normal_force(i);  // the largest friction force
                 const std::string key = mass.friction >= 0
                                             ? "friction[" + std::to_string(mass.friction + 1) + "].normal"
                                             : "mass[" + std::to_string(i + 1) + "].mu_s";
-                if (!std::isfinite(friction) || !std::isfinite(mass.mu_s * model_.g))
+                if (!std::isfinite(friction) || (mass.normal == 0.0 && !std::isfinite(mass.mu_s * model_.g)))
                     fail_at(0, key, "the friction force mu_s*N on " + on + " is beyond the double range");
                 forces.push_back({friction, key, 0, "the friction force"});
             }

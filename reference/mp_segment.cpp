@@ -248,7 +248,7 @@ MpModel::MpModel(const Model& model, int digits)
     beta = F(model.beta);
     for (const Mass& ms : model.masses) {
         m.push_back(F(ms.m));
-        normal.push_back(F(ms.m) * g);  // N_i = m_i g, at this precision
+        normal.push_back(ms.normal > 0.0 ? F(ms.normal) : F(ms.m) * g);  // an element's N as given, else m_i g here
         mu_k.push_back(F(ms.mu_k));
         mu_s.push_back(F(ms.mu_s));
     }
