@@ -239,9 +239,6 @@ MpModel::MpModel(const Model& model, int digits)
         throw InputError("the reference (--precision mp:N): model '" + model.name +
                          "' has a coupled (non-diagonal) mass matrix with non-proportional damping, which it does "
                          "not take yet");
-    if (model.coupled_mass() && has_mass_friction(model))  // the held force P_i . f at N digits: not yet
-        throw InputError("the reference (--precision mp:N): model '" + model.name +
-                         "' has friction on a coupled (non-diagonal) mass matrix, which it does not take yet");
     n = static_cast<int>(model.dof());
     g = F(model.g);
     alpha = F(model.alpha);
@@ -256,11 +253,6 @@ MpModel::MpModel(const Model& model, int digits)
         M.assign(static_cast<std::size_t>(n), std::vector<cl_F>(static_cast<std::size_t>(n), zero));
         for (std::size_t i = 0; i < model.dof(); ++i)
             for (std::size_t j = 0; j < model.dof(); ++j) M[i][j] = F(model.mass_entry(i, j));
-        const Matrix W = lower_inverse(*this, cholesky(*this, M));  // M^-1 = W^T W
-        M_inv.assign(M.size(), std::vector<cl_F>(M.size(), zero));
-        for (std::size_t i = 0; i < M.size(); ++i)
-            for (std::size_t j = 0; j < M.size(); ++j)
-                for (std::size_t k = std::max(i, j); k < M.size(); ++k) M_inv[i][j] = M_inv[i][j] + W[k][i] * W[k][j];
     }
     for (const Spring& s : model.springs) springs.push_back({s.a, s.b, F(s.k), zero});
     for (const Contact& c : model.contacts) contacts.push_back({c.a, c.b, F(c.k), F(c.gap)});
@@ -310,6 +302,42 @@ cl_F MpModel::mass_times(int i, const std::vector<cl_F>& y) const {
     cl_F s = zero;
     for (int j = 0; j < n; ++j) s = s + M[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] * y[static_cast<std::size_t>(j)];
     return s;
+}
+
+std::vector<std::vector<cl_F>> MpModel::held_inverse(const std::vector<char>& held) const {
+    std::vector<int> free;
+    for (int i = 0; i < n; ++i)
+        if (!held[static_cast<std::size_t>(i)]) free.push_back(i);
+    const std::size_t nf = free.size();
+    Matrix MF(nf, std::vector<cl_F>(nf, zero));
+    for (std::size_t r = 0; r < nf; ++r)
+        for (std::size_t s = 0; s < nf; ++s) MF[r][s] = M[free[r]][free[s]];
+    const Matrix W = lower_inverse(*this, cholesky(*this, MF));  // M_FF^-1 = W^T W
+    std::vector<std::vector<cl_F>> inv(static_cast<std::size_t>(n), std::vector<cl_F>(static_cast<std::size_t>(n), zero));
+    for (std::size_t r = 0; r < nf; ++r)
+        for (std::size_t s = 0; s < nf; ++s) {
+            cl_F sum = zero;
+            for (std::size_t k = std::max(r, s); k < nf; ++k) sum = sum + W[k][r] * W[k][s];
+            inv[free[r]][free[s]] = sum;
+        }
+    return inv;
+}
+
+std::vector<cl_F> MpModel::held_row(const std::vector<std::vector<cl_F>>& inverse, int i) const {
+    std::vector<cl_F> P(static_cast<std::size_t>(n), zero);
+    for (int q = 0; q < n; ++q) {
+        cl_F s = q == i ? one : zero;
+        for (int r = 0; r < n; ++r) s = s - M[static_cast<std::size_t>(i)][static_cast<std::size_t>(r)] * inverse[r][q];
+        P[static_cast<std::size_t>(q)] = s;
+    }
+    return P;
+}
+
+std::vector<cl_F> MpModel::kinetic(const std::vector<char>& held, const std::vector<signed char>& sgn) const {
+    std::vector<cl_F> fr(static_cast<std::size_t>(n), zero);
+    for (std::size_t i = 0; i < fr.size(); ++i)
+        if (!held[i] && sgn[i] != 0) fr[i] = sgn[i] > 0 ? -(mu_k[i] * normal[i]) : mu_k[i] * normal[i];
+    return fr;
 }
 
 cl_F MpModel::F(double d) const { return cln::cl_float(d, format); }
@@ -604,6 +632,32 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
                     cz = cz + C_[b][k] * phi_[slot_[k]][j];
                 }
             };
+            if (mp.coupled()) {  // D_i = P_i . A (MpModel::held_row)
+                if (release_rows_.empty()) {
+                    const auto inverse = mp.held_inverse(cfg.stuck);
+                    release_rows_.assign(static_cast<std::size_t>(n_), {});
+                    for (int s = 0; s < n_; ++s)
+                        if (cfg.stuck[static_cast<std::size_t>(s)]) release_rows_[static_cast<std::size_t>(s)] = mp.held_row(inverse, s);
+                }
+                const std::vector<cl_F>& P = release_rows_[static_cast<std::size_t>(i)];
+                for (int j = 0; j < nf_; ++j) {
+                    cl_F kw = Z0, cz = Z0;
+                    for (int q = 0; q < n_; ++q) {
+                        cl_F kq, cq;
+                        rows(q, j, kq, cq);
+                        kw = kw + P[static_cast<std::size_t>(q)] * kq;
+                        cz = cz + P[static_cast<std::size_t>(q)] * cq;
+                    }
+                    W_[f][j] = pos ? -kw : kw;
+                    Z_[f][j] = pos ? -cz : cz;
+                }
+                for (int h = 0; h < nh_; ++h) {
+                    cl_F F = Z0;
+                    for (int q = 0; q < n_; ++q) F = F + P[static_cast<std::size_t>(q)] * mp.h_amp[h][q];
+                    D_[f][h] = pos ? F : -F;
+                }
+                continue;
+            }
             for (int j = 0; j < nf_; ++j) {
                 cl_F kw, cz;
                 rows(i, j, kw, cz);
@@ -806,7 +860,8 @@ void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::ve
     // offsets (-K e), kinetic friction -mu_k N sgn and its reaction on a partner.
     offset_.clear();
     for (int q : riders_) offset_.push_back(x0[q] - x0[mp.partner[q]]);
-    std::vector<cl_F> fric(n_, mp.zero);
+    std::vector<cl_F>& fric = fric_;
+    fric.assign(static_cast<std::size_t>(n_), mp.zero);
     for (int i = 0; i < n_; ++i) {
         if (sgn[i] == 0) continue;
         const cl_F fr = sgn[i] > 0 ? mp.mu_k[i] * mp.normal[i] : -(mp.mu_k[i] * mp.normal[i]);
@@ -1105,8 +1160,21 @@ void MpSegment::sliders_and_switches(MpEval& out, const std::vector<cl_F>& xm, c
                 }
             };
             cl_F A, dA, m;
-            force(e, A, dA, m);
-            if (const int p = mp.partner[e]; p != kGround) {
+            if (mp.coupled()) {  // D_e = P_e . (A + kinetic friction) (MpModel::held_row)
+                const std::vector<cl_F>& P = release_rows_[static_cast<std::size_t>(e)];
+                A = dA = m = Z0;
+                for (int q = 0; q < n_; ++q) {
+                    cl_F Aq, dAq, mq;
+                    force(q, Aq, dAq, mq);
+                    const cl_F& w = P[static_cast<std::size_t>(q)];
+                    A = A + w * (Aq + fric_[static_cast<std::size_t>(q)]);
+                    dA = dA + w * dAq;
+                    m = m + cln::abs(w) * (mq + cln::abs(fric_[static_cast<std::size_t>(q)]));
+                }
+            } else {
+                force(e, A, dA, m);
+            }
+            if (const int p = mp.partner[e]; !mp.coupled() && p != kGround) {
                 cl_F Ap, dAp, mpart;
                 force(p, Ap, dAp, mpart);
                 A = mp.against_partner(e, A, Ap);

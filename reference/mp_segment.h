@@ -50,12 +50,20 @@ struct MpModel {
     cl_F g, alpha, beta;
     std::vector<cl_F> m, normal, mu_k, mu_s;
     /// A coupled M whole (Model::coupled_mass()); empty for a lumped model (M = diag(m)).
-    std::vector<std::vector<cl_F>> M, M_inv;
+    std::vector<std::vector<cl_F>> M;
     bool coupled() const { return !M.empty(); }
     /// M_ij, lumped or coupled.
     cl_F mass(int i, int j) const;
     /// (M y)_i of a coupled M.
     cl_F mass_times(int i, const std::vector<cl_F>& y) const;
+    /// A coupled M with the dofs `held` still (model/held_mass.h, at this
+    /// precision): M_FF^-1 spread over every dof (zero on the held ones).
+    std::vector<std::vector<cl_F>> held_inverse(const std::vector<char>& held) const;
+    /// P_i of held_mass.h from that inverse: the force a held dof i's friction
+    /// must hold is D_i = P_i . f (f every force, kinetic friction included).
+    std::vector<cl_F> held_row(const std::vector<std::vector<cl_F>>& inverse, int i) const;
+    /// The kinetic friction -mu_k N sgn on every dof not held, 0 on the held ones.
+    std::vector<cl_F> kinetic(const std::vector<char>& held, const std::vector<signed char>& sgn) const;
     struct Link {
         int a, b;
         cl_F k, gap;
@@ -200,6 +208,9 @@ private:
     // setup
     std::vector<cl_F> x_fix_, theta_, p_, u0_, ud0_;
     std::vector<cl_F> fseg_;  // f_const_ plus the stuck sliders' preload k s
+    std::vector<cl_F> fric_;  // the segment's kinetic friction on every dof (setup)
+    /// A coupled M: P_i of every stuck dof i (MpModel::held_row), else empty.
+    std::vector<std::vector<cl_F>> release_rows_;
     std::vector<cl_F> slider_;  // the stuck sliders' positions
     // dampers
     bool damped_ = false;

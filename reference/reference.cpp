@@ -63,6 +63,7 @@ cl_F noise_of(const MpModel& mp, const cl_F& scale) { return mp.I(64) * mp.eps *
 struct Taylor {
     std::vector<std::vector<cl_F>> x, xm;  ///< x^(k)_i and the magnitude of its terms, k = 0..order
     std::vector<cl_F> s;                   ///< the Jenkins sliders (constant while stuck)
+    std::vector<cl_F> friction;            ///< a coupled M: the kinetic friction on every dof (MpModel::kinetic)
 };
 
 int tie_order(const MpModel& mp) { return 2 * mp.n + 2 * static_cast<int>(mp.h_omega.size()) + 2; }
@@ -139,13 +140,18 @@ Taylor taylor(const MpModel& mp, const Configuration& cfg, const std::vector<sig
             T.xm[1][i] = cln::abs(v[i]);
         }
     }
-    if (mp.coupled()) {  // no friction on a coupled M (model_reader): x^(k+2) = M^-1 A^(k)
+    if (mp.coupled()) {  // x^(k+2) = M_FF^-1 (A^(k) + [k = 0] friction), the stuck dofs held (held_mass.h)
+        const auto inverse = mp.held_inverse(cfg.stuck);
+        T.friction = mp.kinetic(cfg.stuck, sgn);
         std::vector<cl_F> A(static_cast<std::size_t>(n)), m(static_cast<std::size_t>(n));
         for (int k = 0; k + 2 <= order; ++k) {
-            for (int i = 0; i < n; ++i) force_derivative(mp, cfg, i, t, T, k, A[i], m[i]);
+            for (int i = 0; i < n; ++i) {
+                force_derivative(mp, cfg, i, t, T, k, A[i], m[i]);
+                if (k == 0) A[i] = A[i] + T.friction[i], m[i] = m[i] + cln::abs(T.friction[i]);
+            }
             for (int i = 0; i < n; ++i) {
                 cl_F a = mp.zero, am = mp.zero;
-                for (int j = 0; j < n; ++j) a = a + mp.M_inv[i][j] * A[j], am = am + cln::abs(mp.M_inv[i][j]) * m[j];
+                for (int j = 0; j < n; ++j) a = a + inverse[i][j] * A[j], am = am + cln::abs(inverse[i][j]) * m[j];
                 T.x[k + 2][i] = a;
                 T.xm[k + 2][i] = am;
             }
@@ -209,6 +215,23 @@ void force_series(const MpModel& mp, const Configuration& cfg, int i, const cl_F
 // its partner p, (m_p A_i - m_i A_p)/(m_i + m_p).
 void driving_series(const MpModel& mp, const Configuration& cfg, int i, const cl_F& t, const Taylor& T,
                     std::vector<cl_F>& d, std::vector<cl_F>& m) {
+    if (mp.coupled()) {  // D_i^(k) = P_i . (A^(k) + [k = 0] friction), i held (MpModel::held_row)
+        const std::vector<cl_F> P = mp.held_row(mp.held_inverse(cfg.stuck), i);
+        d.assign(T.x.size() - 1, mp.zero);
+        m.assign(T.x.size() - 1, mp.zero);
+        for (int q = 0; q < mp.n; ++q) {
+            if (cln::zerop(P[static_cast<std::size_t>(q)])) continue;
+            std::vector<cl_F> dq, mq;
+            force_series(mp, cfg, q, t, T, dq, mq);
+            const cl_F fr = T.friction.empty() ? mp.zero : T.friction[static_cast<std::size_t>(q)];
+            for (std::size_t k = 0; k < d.size(); ++k) {
+                const cl_F a = k == 0 ? dq[k] + fr : dq[k], am = k == 0 ? mq[k] + cln::abs(fr) : mq[k];
+                d[k] = d[k] + P[static_cast<std::size_t>(q)] * a;
+                m[k] = m[k] + cln::abs(P[static_cast<std::size_t>(q)]) * am;
+            }
+        }
+        return;
+    }
     force_series(mp, cfg, i, t, T, d, m);
     const int p = mp.partner[i];
     if (p == kGround) return;
@@ -234,9 +257,10 @@ struct MpArithmetic {
 class MpPhysics : public MpArithmetic {
 public:
     /// The state (t, x, v) at the instant; a: the accelerations just before (null at t0).
+    /// sgn: the live friction directions the rules update (a coupled M's held force reads them).
     MpPhysics(const Model& model, const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x,
-              std::vector<cl_F>& v, const std::vector<cl_F>* a)
-        : MpArithmetic{mp}, model_(model), t_(t), x_(x), v_(v), a_(a) {}
+              std::vector<cl_F>& v, const std::vector<cl_F>* a, const std::vector<signed char>& sgn)
+        : MpArithmetic{mp}, model_(model), t_(t), x_(x), v_(v), a_(a), live_sgn_(sgn) {}
 
     std::size_t jenkins() const { return mp.jenkins.size(); }
     // A slipping element whose relative acceleration (just before) keeps the slip's sign: no stick.
@@ -254,12 +278,14 @@ public:
     int velocity_sign(int i) const { return sign(v_[static_cast<std::size_t>(i)] - mp.body(v_, mp.partner[i])); }
     void stop(int i) { v_[static_cast<std::size_t>(i)] = mp.body(v_, mp.partner[i]); }
     cl_F force(const Configuration& cfg, int i) const {
+        if (mp.coupled()) return held_force(cfg, i, false);
         const cl_F A = mp.force_on_mass(cfg, i, t_, x_, v_);
         const int p = mp.partner[i];
         return p == kGround ? A : mp.against_partner(i, A, mp.force_on_mass(cfg, p, t_, x_, v_));
     }
     cl_F static_limit(int i) const { return mp.mu_s[i] * mp.normal[i]; }
     cl_F held_rate(const Configuration& cfg, int i) const {
+        if (mp.coupled()) return held_force(cfg, i, true);
         std::vector<cl_F> held = a_ ? *a_ : std::vector<cl_F>(v_.size(), mp.zero);
         const int p = mp.partner[i];
         if (p == kGround) {
@@ -301,11 +327,33 @@ public:
     }
 
 private:
+    // A coupled M: D_i with dof i and the stuck dofs held, the others sliding
+    // along the live directions (model/held_mass.h at this precision), or its
+    // rate along the held motion (`rate`).
+    cl_F held_force(const Configuration& cfg, int i, bool rate) const {
+        Configuration hold = cfg;
+        hold.stuck[static_cast<std::size_t>(i)] = 1;
+        const auto inverse = mp.held_inverse(hold.stuck);
+        const std::vector<cl_F> P = mp.held_row(inverse, i), fr = mp.kinetic(hold.stuck, live_sgn_);
+        const std::size_t n = static_cast<std::size_t>(mp.n);
+        std::vector<cl_F> f(n, mp.zero);
+        for (std::size_t q = 0; q < n; ++q) f[q] = mp.force_on_mass(hold, static_cast<int>(q), t_, x_, v_) + fr[q];
+        if (rate) {  // the friction is constant along the held motion: f' = A'(v, a), a = M_FF^-1 f
+            std::vector<cl_F> a(n, mp.zero);
+            for (std::size_t r = 0; r < n; ++r)
+                for (std::size_t q = 0; q < n; ++q) a[r] = a[r] + inverse[r][q] * f[q];
+            for (std::size_t q = 0; q < n; ++q) f[q] = mp.force_rate_on_mass(hold, static_cast<int>(q), t_, v_, a);
+        }
+        cl_F D = mp.zero;
+        for (std::size_t q = 0; q < n; ++q) D = D + P[q] * f[q];
+        return D;
+    }
     const Model& model_;
     const cl_F& t_;
     const std::vector<cl_F>& x_;
     std::vector<cl_F>& v_;
     const std::vector<cl_F>* a_;
+    const std::vector<signed char>& live_sgn_;
     Configuration cfg_;
     std::vector<signed char> sgn_;
 };
@@ -314,7 +362,7 @@ private:
 bool apply_switches(const Model& model, const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x,
                     std::vector<cl_F>& v, const std::vector<cl_F>& a, Configuration& cfg, std::vector<signed char>& sgn,
                     const std::vector<SwitchFunction>& switched, std::vector<Transition>& out, std::string& why) {
-    MpPhysics p(model, mp, t, x, v, &a);
+    MpPhysics p(model, mp, t, x, v, &a, sgn);
     if (rules::apply_switches(p, cfg, sgn, switched, out)) return true;
     why = "friction decisions at t = " + time_text(t) + " do not settle";
     return false;
@@ -325,7 +373,7 @@ Configuration entered_configuration(const Model& model, const MpModel& mp, const
                                     const std::vector<cl_F>& v, std::vector<signed char>& sgn) {
     Configuration cfg = Configuration::all_open(model);
     std::vector<cl_F> v_copy = v;  // nothing stops at t0
-    MpPhysics p(model, mp, t, x, v_copy, nullptr);
+    MpPhysics p(model, mp, t, x, v_copy, nullptr, sgn);
     rules::entered_configuration(p, cfg, sgn);
     return cfg;
 }

@@ -612,11 +612,16 @@ TEST(CoupledMass, TwoFrictionsCoupledThroughMGiveTheLumpedModelsEventsInOtherCoo
         ASSERT_TRUE(coupled.coupled_mass());
         ASSERT_FALSE(lumped.coupled_mass());
         const testing::Outcome a = testing::simulate(lumped, 6.0, 1e-2), b = testing::simulate(coupled, 6.0, 1e-2);
-        int kinds[5] = {0, 0, 0, 0, 0};
-        for (const testing::Recorded& e : a.events) ++kinds[static_cast<int>(e.kind)];
+        int kinds[5] = {0, 0, 0, 0, 0}, stuck = 0, both = 0;  // both: stick events that leave f1 and f2 stuck
+        for (const testing::Recorded& e : a.events) {
+            ++kinds[static_cast<int>(e.kind)];
+            stuck += e.kind == EventKind::stick ? 1 : e.kind == EventKind::release ? -1 : 0;
+            both += e.kind == EventKind::stick && stuck == 2 ? 1 : 0;
+        }
         ASSERT_GE(a.events.size(), 20u);
         for (EventKind k : {EventKind::contact_close, EventKind::stick, EventKind::release})
             EXPECT_GT(kinds[static_cast<int>(k)], 0) << "the run should close the stop, stick and release";
+        EXPECT_GT(both, 0) << "both frictions should be stuck at once (D of each then holds the other still)";
         const double gap = event_gap(a, b);
         // The same motion: y = T x at every sample.
         double worst = 0.0;
@@ -627,14 +632,29 @@ TEST(CoupledMass, TwoFrictionsCoupledThroughMGiveTheLumpedModelsEventsInOtherCoo
         }
         const testing::Outcome cvode = testing::baseline(coupled, 6.0, 1e-12, 1e-14, Method::cvode);
         const double cv = event_gap(b, cvode);
-        std::printf("%s: %zu events (stick %d, release %d, reversal %d, impacts %d), the coupled model within %.3g s "
+        std::printf("%s: %zu events (stick %d, %d of them with both stuck, release %d, reversal %d, impacts %d), the coupled model within %.3g s "
                     "and %.3g m of the lumped one; CVODE on the coupled one within %.3g s\n",
-                    damper ? "dashpot" : "Rayleigh", a.events.size(), kinds[static_cast<int>(EventKind::stick)],
+                    damper ? "dashpot" : "Rayleigh", a.events.size(), kinds[static_cast<int>(EventKind::stick)], both,
                     kinds[static_cast<int>(EventKind::release)], kinds[static_cast<int>(EventKind::reversal)],
                     kinds[static_cast<int>(EventKind::contact_close)], gap, worst, cv);
         EXPECT_LT(gap, 1e-12);
         EXPECT_LT(worst, 1e-12);
         EXPECT_LT(cv, 1e-8);
+        if (damper) continue;  // the reference takes a coupled M with Rayleigh damping only
+        // The CLN reference (held forces at N digits): 30 against 60 digits, and the double engine against it.
+        const std::vector<testing::Recorded> r30 = reference_events(coupled, 30, 6.0), r60 = reference_events(coupled, 60, 6.0);
+        ASSERT_EQ(r30.size(), b.events.size());
+        ASSERT_EQ(r60.size(), b.events.size());
+        double to_ref = 0.0, digits = 0.0;
+        for (std::size_t e = 0; e < r30.size(); ++e) {
+            EXPECT_EQ(r30[e].kind, b.events[e].kind) << "event " << e;
+            EXPECT_EQ(r30[e].element, b.events[e].element) << "event " << e;
+            to_ref = std::max(to_ref, std::fabs(r30[e].t - b.events[e].t));
+            digits = std::max(digits, std::fabs(r30[e].t - r60[e].t));
+        }
+        std::printf("reference: the double engine within %.3g s, 30 against 60 digits %.3g s\n", to_ref, digits);
+        EXPECT_LT(to_ref, 1e-11);
+        EXPECT_LT(digits, 1e-15);
     }
 }
 
@@ -653,12 +673,13 @@ TEST(CoupledMass, WhatIsNotYetTakenIsRefusedByName) {
     EXPECT_NE(r.err.find("friction between two dofs of a structure with a coupled (non-diagonal) mass matrix is not yet"),
               std::string::npos)
         << r.err;
-    // Friction against the ground is taken, but not yet by the reference nor the tangent.
+    // Friction against the ground is taken, but not yet by the tangent.
     testing::TempDir grounded;
     const std::string ground = beam_model(grounded, "[[friction]]\nbetween = [\"w2\", \"ground\"]\nmu_k = 0.2\n"
                                                     "normal = 10.0\n[simulate]\nt_end = 0.2\n");
     EXPECT_EQ(testing::run_hsnc("simulate '" + ground + "'").exit_code, 0);
-    for (const char* cmd : {"simulate --precision mp:30 '", "periodic '"}) {
+    EXPECT_EQ(testing::run_hsnc("simulate --precision mp:30 '" + ground + "'").exit_code, 0);
+    for (const char* cmd : {"periodic '"}) {
         const testing::CliRun f = testing::run_hsnc(cmd + ground + "'");
         EXPECT_EQ(f.exit_code, 2) << cmd << f.err;
         EXPECT_NE(f.err.find("has friction on a coupled (non-diagonal) mass matrix, which it does not take yet"),
