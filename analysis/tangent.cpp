@@ -9,7 +9,7 @@
 #include <unsupported/Eigen/MatrixFunctions>
 
 #include "assembly.h"
-#include "error.h"
+#include "held_mass.h"
 #include "modal.h"
 #include "stick_tangent.h"
 #include "transitions.h"
@@ -47,16 +47,12 @@ struct Tangent::ConfigData {
     double rate = 0.0;
     // Stick elements: the full-state generator and projection (stick_tangent.h).
     Eigen::MatrixXd stick_A, stick_P;
-    // A coupled M: the Cholesky factor of M_F (every mass is free there), once per configuration.
+    // A coupled M: the Cholesky factor of M_F (the free dofs), once per configuration.
     Eigen::LLT<Eigen::MatrixXd> mass_llt;
-    const Eigen::LLT<Eigen::MatrixXd>* coupled() const { return mass_llt.rows() > 0 ? &mass_llt : nullptr; }
 };
 
 Tangent::Tangent(const Model& model) : model_(model), stick_(!stick_elements(model).empty()) {
     if (stick_) require_lumped_mass(model, "the tangent of a model with stick elements");  // stick_tangent.cpp: bodies' masses
-    if (model.coupled_mass() && has_mass_friction(model))  // the saltation of a held force P_i . f: not yet
-        throw InputError("the tangent (periodic, lyapunov): model '" + model.name +
-                         "' has friction on a coupled (non-diagonal) mass matrix, which it does not take yet");
 }
 Tangent::~Tangent() = default;
 Tangent::Tangent(Tangent&&) noexcept = default;
@@ -226,16 +222,16 @@ double acceleration(const Model& model, const Configuration& cfg, const signed c
     return (force_on_mass(model, cfg, i, t, x, v) - fr * sgn[i]) / model.masses[i].m;
 }
 
-// Every mass's acceleration in cfg; `coupled`: the factor of a coupled M (no
-// friction there: every mass is free), null for a lumped one.
+// Every mass's acceleration in cfg (a coupled M: M_FF a_F = f_F with the
+// stuck dofs held, model/held_mass.h).
 std::vector<double> accelerations(const Model& model, const Configuration& cfg, const signed char* sgn, double t,
-                                  const double* x, const double* v, const Eigen::LLT<Eigen::MatrixXd>* coupled) {
+                                  const double* x, const double* v) {
     const int n = static_cast<int>(model.dof());
     std::vector<double> a(static_cast<std::size_t>(n));
-    if (coupled) {
-        Eigen::VectorXd f(n);
-        for (int i = 0; i < n; ++i) f(i) = force_on_mass(model, cfg, i, t, x, v);
-        Eigen::VectorXd::Map(a.data(), n) = coupled->solve(f);
+    if (model.coupled_mass()) {
+        std::vector<double> f(static_cast<std::size_t>(n));
+        held_forces(model, cfg, cfg.stuck, sgn, t, x, v, f.data());
+        HeldMass(model, cfg.stuck).accelerations(f.data(), a.data());
         return a;
     }
     for (int i = 0; i < n; ++i) a[static_cast<std::size_t>(i)] = acceleration(model, cfg, sgn, i, t, x, v);
@@ -249,12 +245,11 @@ namespace {
 // One switch from (A, sgnA) to (B, sgnB) triggered by f at (t, x, v):
 // Y <- (I + u h_y^T / hdot) Y with u = f+ - f- (velocity rows only).
 // Returns false for a grazing switch (hdot = 0 with u != 0).
-bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::MatrixXd& CA,
-               const Eigen::LLT<Eigen::MatrixXd>* coupled, const Configuration& A,
+bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::MatrixXd& CA, const Configuration& A,
                const signed char* sgnA, const Configuration& B, const signed char* sgnB, const SwitchFunction* f,
                double t, const double* x, const double* v, Eigen::MatrixXd& Y) {
     const int n = static_cast<int>(model.dof());
-    const std::vector<double> aA = accelerations(model, A, sgnA, t, x, v, coupled);
+    const std::vector<double> aA = accelerations(model, A, sgnA, t, x, v);
     // u: the jump of the accelerations. For a mass sliding on both sides it
     // is the jump of the dampers of the contacts that change (their springs
     // carry no force on G = 0) and of the friction direction, taken from
@@ -282,7 +277,17 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
             u(i) = (dA[i] - fr * (sgnB[i] - sgnA[i])) / model.masses[i].m;
         }
     }
-    if (coupled) u = coupled->solve(Eigen::VectorXd::Map(dA.data(), n));  // no friction there
+    if (model.coupled_mass()) {  // the held motion (held_mass.h): the jump of the forces over M_FF, or a_B - a_A
+        if (A.stuck == B.stuck) {
+            for (int i = 0; i < n; ++i)
+                if (!A.stuck[i] && model.masses[i].has_friction)
+                    dA[i] -= model.masses[i].mu_k * model.normal_force(i) * (sgnB[i] - sgnA[i]);
+            HeldMass(model, A.stuck).accelerations(dA.data(), u.data());
+        } else {
+            const std::vector<double> aB = accelerations(model, B, sgnB, t, x, v);
+            for (int i = 0; i < n; ++i) u(i) = aB[i] - aA[i];
+        }
+    }
     if (u.isZero(0.0) || !f) return true;
     // The switch function's gradient and rate before the switch.
     Eigen::RowVectorXd hy = Eigen::RowVectorXd::Zero(2 * n);
@@ -303,6 +308,16 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
         case SwitchKind::release_pos:
         case SwitchKind::release_neg: {
             const double sg = f->kind == SwitchKind::release_pos ? 1.0 : -1.0;
+            if (model.coupled_mass()) {  // D_e = P_e . f (held_mass.h)
+                const Eigen::VectorXd P = HeldMass(model, A.stuck).release_row(e);
+                for (int j = 0; j < n; ++j) {
+                    hy(j) = -sg * P.dot(KA.col(j));
+                    hy(n + j) = -sg * P.dot(CA.col(j));
+                }
+                for (int q = 0; q < n; ++q)
+                    if (P(q) != 0.0) hdot += sg * P(q) * force_rate_on_mass(model, A, q, t, v, aA.data());
+                break;
+            }
             for (int j = 0; j < n; ++j) {
                 hy(j) = -sg * KA(e, j);
                 hy(n + j) = -sg * CA(e, j);
@@ -350,7 +365,7 @@ bool Tangent::apply_saltation(const SwitchRecord& r, Eigen::MatrixXd& Y) {
         Eigen::MatrixXd Z = Y;
         const SwitchFunction* f = sw.empty() ? nullptr : &sw[0];
         if (stick_ ? !salt_step_stick(model_, *r.before, r.sgn_before, *r.after, r.sgn_after, f, r.t, r.x, r.v, Z)
-                   : !salt_step(model_, d.K, d.C, d.coupled(), *r.before, r.sgn_before, *r.after, r.sgn_after, f, r.t, r.x, r.v, Z))
+                   : !salt_step(model_, d.K, d.C, *r.before, r.sgn_before, *r.after, r.sgn_after, f, r.t, r.x, r.v, Z))
             return false;
         Y = std::move(Z);
         return true;
@@ -373,7 +388,7 @@ bool Tangent::apply_saltation(const SwitchRecord& r, Eigen::MatrixXd& Y) {
         }
         const ConfigData& d = data(cur);
         if (stick_ ? !salt_step_stick(model_, cur, sgn.data(), next, sgn_next.data(), &sw[k], r.t, r.x, r.v, Z)
-                   : !salt_step(model_, d.K, d.C, d.coupled(), cur, sgn.data(), next, sgn_next.data(), &sw[k], r.t, r.x, r.v, Z))
+                   : !salt_step(model_, d.K, d.C, cur, sgn.data(), next, sgn_next.data(), &sw[k], r.t, r.x, r.v, Z))
             return false;
         cur = next;
         sgn = sgn_next;
@@ -402,7 +417,7 @@ double Tangent::grazing_ratio(const SwitchRecord& r) {
                 a.resize(static_cast<std::size_t>(n));
                 for (int i = 0; i < n; ++i) a[static_cast<std::size_t>(i)] = f(n + i);
             } else {
-                a = accelerations(model_, *r.before, r.sgn_before, r.t, r.x, r.v, d.coupled());
+                a = accelerations(model_, *r.before, r.sgn_before, r.t, r.x, r.v);
             }
         }
         const Contact& k = model_.contacts[static_cast<std::size_t>(f.element)];

@@ -51,13 +51,6 @@ double mass_times(const Model& model, std::size_t i, const double* y);
 /// stages that still take lumped masses only (issue 36, stage b).
 void require_lumped_mass(const Model& model, const std::string& who);
 
-/// Whether any mass has Coulomb friction (its own or a [[friction]] element's).
-inline bool has_mass_friction(const Model& model) {
-    for (const Mass& m : model.masses)
-        if (m.has_friction) return true;
-    return false;
-}
-
 /// "friction between two bodies ([[friction]] 'f1')" when a [[friction]]
 /// element joins two bodies (a stuck pair moves as one body), else "".
 std::string friction_pairs(const Model& model);
