@@ -190,6 +190,33 @@ private:
     std::vector<std::string> params_;
 };
 
+// The masses' fields of a sweep kernel's configure(): m, and mu_k, mu_s and
+// an element's normal force N where there is friction, each with the
+// conditions that make it valid when it depends on a kept parameter.
+void emit_mass_fields(CodeWriter& k, const Model& model, Fields& fields, std::vector<std::string>& checks) {
+    auto check = [&](bool variable, const std::string& cond) {
+        if (variable) checks.push_back(cond);
+    };
+    for (std::size_t i = 0; i < model.dof(); ++i) {
+        const Mass& ms = model.masses[i];
+        const std::string p = "mass[" + idx(i) + "]", I = std::to_string(i);
+        const std::string mu_k = fields.field(p + ".mu_k", ms.mu_k);
+        const std::string mu_k_var = fields.variable(p + ".mu_k") ? mu_k : "";
+        k.line(1, "const double m_" + I + " = " + fields.field(p + ".m", ms.m) + ";  // " + ms.name);
+        check(fields.variable(p + ".m"), "m_" + I + " > 0.0");
+        if (ms.has_friction) {
+            k.line(1, "const double mu_k_" + I + " = " + mu_k + ";");
+            k.line(1, "const double mu_s_" + I + " = " + fields.field(p + ".mu_s", ms.mu_s, mu_k_var) + ";");
+            check(fields.variable(p + ".mu_k"), "mu_k_" + I + " >= 0.0");
+            check(fields.variable(p + ".mu_k") || fields.variable(p + ".mu_s"), "mu_s_" + I + " >= mu_k_" + I);
+            if (ms.normal > 0.0) {  // an element's normal force as given (model.h Mass::normal)
+                k.line(1, "const double N_" + I + " = " + fields.field(p + ".normal", ms.normal) + ";");
+                check(fields.variable(p + ".normal"), "N_" + I + " > 0.0");
+            }
+        }
+    }
+}
+
 }  // namespace
 
 std::string emit_sweep_kernel(const Derivation& d, const std::vector<std::string>& kept) {
@@ -298,24 +325,7 @@ std::string emit_sweep_kernel(const Derivation& d, const std::vector<std::string
     k.line(1, "// Model fields (written with the parameters where they use a kept one).");
     k.line(1, "const double g = " + fields.g() + ";");
     k.line(1, "(void)g;  // unused without friction");
-    for (std::size_t i = 0; i < n; ++i) {
-        const Mass& ms = model.masses[i];
-        const std::string p = "mass[" + idx(i) + "]", I = std::to_string(i);
-        const std::string mu_k = fields.field(p + ".mu_k", ms.mu_k);
-        const std::string mu_k_var = fields.variable(p + ".mu_k") ? mu_k : "";
-        k.line(1, "const double m_" + I + " = " + fields.field(p + ".m", ms.m) + ";  // " + ms.name);
-        check(fields.variable(p + ".m"), "m_" + I + " > 0.0");
-        if (ms.has_friction) {
-            k.line(1, "const double mu_k_" + I + " = " + mu_k + ";");
-            k.line(1, "const double mu_s_" + I + " = " + fields.field(p + ".mu_s", ms.mu_s, mu_k_var) + ";");
-            check(fields.variable(p + ".mu_k"), "mu_k_" + I + " >= 0.0");
-            check(fields.variable(p + ".mu_k") || fields.variable(p + ".mu_s"), "mu_s_" + I + " >= mu_k_" + I);
-            if (ms.normal > 0.0) {  // an element's normal force as given (model.h Mass::normal)
-                k.line(1, "const double N_" + I + " = " + fields.field(p + ".normal", ms.normal) + ";");
-                check(fields.variable(p + ".normal"), "N_" + I + " > 0.0");
-            }
-        }
-    }
+    emit_mass_fields(k, model, fields, checks);
     for (std::size_t s = 0; s < model.springs.size(); ++s) {
         const std::string key = "spring[" + idx(s) + "].k", S = idx(s);
         k.line(1, "const double k_spring_" + S + " = " + fields.field(key, model.springs[s].k) + ";");

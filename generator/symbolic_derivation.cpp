@@ -73,6 +73,41 @@ std::string not_taken(const Model& model) {
     return "";
 }
 
+// Eigenvalues of det(K - lambda M) = 0 and mode shapes (header comment), the
+// modal frequencies and damping, and the static offset x_st = K^-1 f of the
+// reduced 1x1 or 2x2 system in d.
+void modes_and_offset(SymbolicDerivation& d, const ex& alpha, const ex& beta) {
+    const std::size_t nf = d.f.size();
+    // Eigenvalues of det(K - lambda M) = 0 and mode shapes (header comment).
+    if (nf == 1) {
+        d.lambda = {d.K(0, 0) / d.M(0, 0)};
+        d.shapes = {{ex(1)}};
+    } else {
+        const ex k11 = d.K(0, 0), k12 = d.K(0, 1), k22 = d.K(1, 1), m1 = d.M(0, 0), m2 = d.M(1, 1);
+        if (k12.expand().is_zero()) {
+            d.lambda = {k11 / m1, k22 / m2};
+            d.shapes = {{ex(1), ex(0)}, {ex(0), ex(1)}};
+        } else {
+            const ex root = GiNaC::sqrt(GiNaC::pow(k11 * m2 - k22 * m1, 2) + 4 * m1 * m2 * GiNaC::pow(k12, 2));
+            d.lambda = {(k11 * m2 + k22 * m1 - root) / (2 * m1 * m2), (k11 * m2 + k22 * m1 + root) / (2 * m1 * m2)};
+            for (const ex& l : d.lambda) d.shapes.push_back({-k12, k11 - l * m1});
+        }
+    }
+    for (const ex& l : d.lambda) {
+        d.omega.push_back(GiNaC::sqrt(l));
+        d.c.push_back(alpha + beta * l);
+        d.xi.push_back(d.c.back() / (2 * d.omega.back()));
+    }
+
+    // Static offset x_st = K^-1 f (2x2 by the adjugate).
+    if (nf == 1) {
+        d.x_static = {d.f[0] / d.K(0, 0)};
+    } else {
+        const ex det = d.K(0, 0) * d.K(1, 1) - d.K(0, 1) * d.K(1, 0);
+        d.x_static = {(d.K(1, 1) * d.f[0] - d.K(0, 1) * d.f[1]) / det,
+                      (d.K(0, 0) * d.f[1] - d.K(1, 0) * d.f[0]) / det};
+    }
+}
 }  // namespace
 
 bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDerivation& d, std::string& why) {
@@ -175,35 +210,7 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
         d.harmonics.push_back(hd);
     }
 
-    // Eigenvalues of det(K - lambda M) = 0 and mode shapes (header comment).
-    if (nf == 1) {
-        d.lambda = {d.K(0, 0) / d.M(0, 0)};
-        d.shapes = {{ex(1)}};
-    } else {
-        const ex k11 = d.K(0, 0), k12 = d.K(0, 1), k22 = d.K(1, 1), m1 = d.M(0, 0), m2 = d.M(1, 1);
-        if (k12.expand().is_zero()) {
-            d.lambda = {k11 / m1, k22 / m2};
-            d.shapes = {{ex(1), ex(0)}, {ex(0), ex(1)}};
-        } else {
-            const ex root = GiNaC::sqrt(GiNaC::pow(k11 * m2 - k22 * m1, 2) + 4 * m1 * m2 * GiNaC::pow(k12, 2));
-            d.lambda = {(k11 * m2 + k22 * m1 - root) / (2 * m1 * m2), (k11 * m2 + k22 * m1 + root) / (2 * m1 * m2)};
-            for (const ex& l : d.lambda) d.shapes.push_back({-k12, k11 - l * m1});
-        }
-    }
-    for (const ex& l : d.lambda) {
-        d.omega.push_back(GiNaC::sqrt(l));
-        d.c.push_back(alpha + beta * l);
-        d.xi.push_back(d.c.back() / (2 * d.omega.back()));
-    }
-
-    // Static offset x_st = K^-1 f (2x2 by the adjugate).
-    if (nf == 1) {
-        d.x_static = {d.f[0] / d.K(0, 0)};
-    } else {
-        const ex det = d.K(0, 0) * d.K(1, 1) - d.K(0, 1) * d.K(1, 0);
-        d.x_static = {(d.K(1, 1) * d.f[0] - d.K(0, 1) * d.f[1]) / det,
-                      (d.K(0, 0) * d.f[1] - d.K(1, 0) * d.f[0]) / det};
-    }
+    modes_and_offset(d, alpha, beta);
 
     // Response over named quantities (the printout defines each of them).
     const ex tau = d.t - d.t0;

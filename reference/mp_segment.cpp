@@ -480,6 +480,99 @@ void MpSegment::undamped_modes(const Model& model, const std::vector<std::vector
     }
 }
 
+// The switch functions as modal combinations g = W q + Z q' + D sin + const
+// (for the bounds; a release function's from D_i, MpModel::held_row when M is coupled).
+void MpSegment::switch_rows() {
+    const MpModel& mp = mp_;
+    const cl_F& Z0 = mp.zero;
+    const int ns = static_cast<int>(switches_.size());
+    W_.assign(ns, std::vector<cl_F>(nf_, Z0));
+    Z_ = W_;
+    D_.assign(ns, std::vector<cl_F>(nh_, Z0));
+    for (int f = 0; f < ns; ++f) {
+        const SwitchFunction& sf = switches_[f];
+        if (sf.kind == SwitchKind::gap) {
+            const auto& ct = mp.contacts[sf.element];
+            for (int j = 0; j < nf_; ++j) {
+                cl_F w = Z0;
+                if (ct.a != kGround && slot_[ct.a] >= 0) w = w + phi_[slot_[ct.a]][j];
+                if (ct.b != kGround && slot_[ct.b] >= 0) w = w - phi_[slot_[ct.b]][j];
+                W_[f][j] = w;
+            }
+        } else if (sf.kind == SwitchKind::velocity) {
+            const int p = mp.partner[sf.element];  // w = v_e - v_partner
+            for (int j = 0; j < nf_; ++j)
+                Z_[f][j] = p == kGround ? phi_[slot_[sf.element]][j] : phi_[slot_[sf.element]][j] - phi_[slot_[p]][j];
+        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg ||
+                   sf.kind == SwitchKind::slip_velocity) {
+            // +-k (x_a - x_b - s) - F_s (the slider fixed) on q; w = v_a - v_b on q'.
+            const auto& e = mp.jenkins[static_cast<std::size_t>(sf.element)];
+            const cl_F c = sf.kind == SwitchKind::slip_neg ? -e.k : sf.kind == SwitchKind::slip_pos ? e.k : mp.one;
+            for (int j = 0; j < nf_; ++j) {
+                cl_F w = Z0;
+                if (e.a != kGround && slot_[e.a] >= 0) w = w + phi_[slot_[e.a]][j];
+                if (e.b != kGround && slot_[e.b] >= 0) w = w - phi_[slot_[e.b]][j];
+                (sf.kind == SwitchKind::slip_velocity ? Z_ : W_)[f][j] = c * w;
+            }
+        } else {
+            // +-A_i on the modes, A_i = -(K x)_i - (C v)_i + ... over every moving mass;
+            // against a partner p, D_i = (m_p A_i - m_i A_p)/(m_i + m_p).
+            const bool pos = sf.kind == SwitchKind::release_pos;
+            const int i = sf.element, p = mp.partner[i];
+            auto rows = [&](int b, int j, cl_F& kw, cl_F& cz) {
+                kw = cz = Z0;
+                for (int k = 0; k < n_; ++k) {
+                    if (slot_[k] < 0) continue;
+                    kw = kw + K_[b][k] * phi_[slot_[k]][j];
+                    cz = cz + C_[b][k] * phi_[slot_[k]][j];
+                }
+            };
+            if (mp.coupled()) {  // D_i = P_i . A (MpModel::held_row)
+                if (release_rows_.empty()) {
+                    const auto inverse = mp.held_inverse(cfg_.stuck);
+                    release_rows_.assign(static_cast<std::size_t>(n_), {});
+                    for (int s = 0; s < n_; ++s)
+                        if (cfg_.stuck[static_cast<std::size_t>(s)]) release_rows_[static_cast<std::size_t>(s)] = mp.held_row(inverse, s);
+                }
+                const std::vector<cl_F>& P = release_rows_[static_cast<std::size_t>(i)];
+                for (int j = 0; j < nf_; ++j) {
+                    cl_F kw = Z0, cz = Z0;
+                    for (int q = 0; q < n_; ++q) {
+                        cl_F kq, cq;
+                        rows(q, j, kq, cq);
+                        kw = kw + P[static_cast<std::size_t>(q)] * kq;
+                        cz = cz + P[static_cast<std::size_t>(q)] * cq;
+                    }
+                    W_[f][j] = pos ? -kw : kw;
+                    Z_[f][j] = pos ? -cz : cz;
+                }
+                for (int h = 0; h < nh_; ++h) {
+                    cl_F F = Z0;
+                    for (int q = 0; q < n_; ++q) F = F + P[static_cast<std::size_t>(q)] * mp.h_amp[h][q];
+                    D_[f][h] = pos ? F : -F;
+                }
+                continue;
+            }
+            for (int j = 0; j < nf_; ++j) {
+                cl_F kw, cz;
+                rows(i, j, kw, cz);
+                if (p != kGround) {
+                    cl_F kp, cp;
+                    rows(p, j, kp, cp);
+                    kw = mp.against_partner(i, kw, kp);
+                    cz = mp.against_partner(i, cz, cp);
+                }
+                W_[f][j] = pos ? -kw : kw;
+                Z_[f][j] = pos ? -cz : cz;
+            }
+            for (int h = 0; h < nh_; ++h) {
+                const cl_F F = p == kGround ? mp.h_amp[h][i] : mp.against_partner(i, mp.h_amp[h][i], mp.h_amp[h][p]);
+                D_[f][h] = pos ? F : -F;
+            }
+        }
+    }
+}
+
 MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration& cfg)
     : mp_(mp), cfg_(cfg), switches_(switch_functions(model, cfg)), max_step_(mp.zero) {
     n_ = mp.n;
@@ -589,93 +682,8 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
             }
         }
 
-    // Switch functions as modal combinations g = W q + Z q' + D sin + const (for the bounds).
+    switch_rows();
     const int ns = static_cast<int>(switches_.size());
-    W_.assign(ns, std::vector<cl_F>(nf_, Z0));
-    Z_ = W_;
-    D_.assign(ns, std::vector<cl_F>(nh_, Z0));
-    for (int f = 0; f < ns; ++f) {
-        const SwitchFunction& sf = switches_[f];
-        if (sf.kind == SwitchKind::gap) {
-            const auto& ct = mp.contacts[sf.element];
-            for (int j = 0; j < nf_; ++j) {
-                cl_F w = Z0;
-                if (ct.a != kGround && slot_[ct.a] >= 0) w = w + phi_[slot_[ct.a]][j];
-                if (ct.b != kGround && slot_[ct.b] >= 0) w = w - phi_[slot_[ct.b]][j];
-                W_[f][j] = w;
-            }
-        } else if (sf.kind == SwitchKind::velocity) {
-            const int p = mp.partner[sf.element];  // w = v_e - v_partner
-            for (int j = 0; j < nf_; ++j)
-                Z_[f][j] = p == kGround ? phi_[slot_[sf.element]][j] : phi_[slot_[sf.element]][j] - phi_[slot_[p]][j];
-        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg ||
-                   sf.kind == SwitchKind::slip_velocity) {
-            // +-k (x_a - x_b - s) - F_s (the slider fixed) on q; w = v_a - v_b on q'.
-            const auto& e = mp.jenkins[static_cast<std::size_t>(sf.element)];
-            const cl_F c = sf.kind == SwitchKind::slip_neg ? -e.k : sf.kind == SwitchKind::slip_pos ? e.k : mp.one;
-            for (int j = 0; j < nf_; ++j) {
-                cl_F w = Z0;
-                if (e.a != kGround && slot_[e.a] >= 0) w = w + phi_[slot_[e.a]][j];
-                if (e.b != kGround && slot_[e.b] >= 0) w = w - phi_[slot_[e.b]][j];
-                (sf.kind == SwitchKind::slip_velocity ? Z_ : W_)[f][j] = c * w;
-            }
-        } else {
-            // +-A_i on the modes, A_i = -(K x)_i - (C v)_i + ... over every moving mass;
-            // against a partner p, D_i = (m_p A_i - m_i A_p)/(m_i + m_p).
-            const bool pos = sf.kind == SwitchKind::release_pos;
-            const int i = sf.element, p = mp.partner[i];
-            auto rows = [&](int b, int j, cl_F& kw, cl_F& cz) {
-                kw = cz = Z0;
-                for (int k = 0; k < n_; ++k) {
-                    if (slot_[k] < 0) continue;
-                    kw = kw + K_[b][k] * phi_[slot_[k]][j];
-                    cz = cz + C_[b][k] * phi_[slot_[k]][j];
-                }
-            };
-            if (mp.coupled()) {  // D_i = P_i . A (MpModel::held_row)
-                if (release_rows_.empty()) {
-                    const auto inverse = mp.held_inverse(cfg.stuck);
-                    release_rows_.assign(static_cast<std::size_t>(n_), {});
-                    for (int s = 0; s < n_; ++s)
-                        if (cfg.stuck[static_cast<std::size_t>(s)]) release_rows_[static_cast<std::size_t>(s)] = mp.held_row(inverse, s);
-                }
-                const std::vector<cl_F>& P = release_rows_[static_cast<std::size_t>(i)];
-                for (int j = 0; j < nf_; ++j) {
-                    cl_F kw = Z0, cz = Z0;
-                    for (int q = 0; q < n_; ++q) {
-                        cl_F kq, cq;
-                        rows(q, j, kq, cq);
-                        kw = kw + P[static_cast<std::size_t>(q)] * kq;
-                        cz = cz + P[static_cast<std::size_t>(q)] * cq;
-                    }
-                    W_[f][j] = pos ? -kw : kw;
-                    Z_[f][j] = pos ? -cz : cz;
-                }
-                for (int h = 0; h < nh_; ++h) {
-                    cl_F F = Z0;
-                    for (int q = 0; q < n_; ++q) F = F + P[static_cast<std::size_t>(q)] * mp.h_amp[h][q];
-                    D_[f][h] = pos ? F : -F;
-                }
-                continue;
-            }
-            for (int j = 0; j < nf_; ++j) {
-                cl_F kw, cz;
-                rows(i, j, kw, cz);
-                if (p != kGround) {
-                    cl_F kp, cp;
-                    rows(p, j, kp, cp);
-                    kw = mp.against_partner(i, kw, kp);
-                    cz = mp.against_partner(i, cz, cp);
-                }
-                W_[f][j] = pos ? -kw : kw;
-                Z_[f][j] = pos ? -cz : cz;
-            }
-            for (int h = 0; h < nh_; ++h) {
-                const cl_F F = p == kGround ? mp.h_amp[h][i] : mp.against_partner(i, mp.h_amp[h][i], mp.h_amp[h][p]);
-                D_[f][h] = pos ? F : -F;
-            }
-        }
-    }
     // The standard particular parts of harmonic h add up in g_f to one sinusoid
     // A cos + B sin; its second derivative has amplitude Omega^2 sqrt(A^2 + B^2).
     bound_sin_.assign(ns, Z0);

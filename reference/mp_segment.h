@@ -194,6 +194,7 @@ private:
     std::vector<std::vector<cl_F>> mass_matrix_;  // M_F of a coupled M (empty when lumped)
     /// lambda_, phi_ of K_F phi = lambda M_F phi, the first n_rigid eigenvalues the structural zeros.
     void undamped_modes(const Model& model, const std::vector<std::vector<cl_F>>& Kf, int n_rigid);
+    void switch_rows();  // W_, Z_, D_ (and release_rows_) from the modes
     std::vector<cl_F> offset_;      // setup: each rider's e = x0 - x0_partner
     std::vector<std::vector<cl_F>> K_, C_, phi_;  // full n x n; phi nf x nf (rows: free masses)
     std::vector<cl_F> f_const_;

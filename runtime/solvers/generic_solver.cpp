@@ -47,6 +47,90 @@ double reduced_phase(double omega, double t0, double t0_lo, double phase) {
 
 }  // namespace
 
+// The switch functions as modal combinations (for bound): rows W, Z, D
+// (a release function's from D_i, over P_i when M is coupled: held_mass.h).
+void GenericSolver::switch_rows(const Model& model) {
+    const int ns = static_cast<int>(switches_.size());
+    W_ = Eigen::MatrixXd::Zero(ns, nf_);
+    Z_ = Eigen::MatrixXd::Zero(ns, nf_);
+    D_ = Eigen::MatrixXd::Zero(ns, nh_);
+    const std::vector<int>& slot = coord_;
+    // Row j of x[a] - x[b] over the modes (ground and stuck masses do not move).
+    auto difference = [&](int a, int b, int j) {
+        double w = 0.0;
+        if (a != kGround && slot[a] >= 0) w += phi_(slot[a], j);
+        if (b != kGround && slot[b] >= 0) w -= phi_(slot[b], j);
+        return w;
+    };
+    for (int f = 0; f < ns; ++f) {
+        const SwitchFunction& sf = switches_[f];
+        if (sf.kind == SwitchKind::gap) {
+            const Contact& ct = model.contacts[sf.element];
+            for (int j = 0; j < nf_; ++j) W_(f, j) = difference(ct.a, ct.b, j);
+        } else if (sf.kind == SwitchKind::velocity) {  // w = v_i - v_partner
+            for (int j = 0; j < nf_; ++j)
+                Z_(f, j) = difference(sf.element, t_.partner[static_cast<std::size_t>(sf.element)], j);
+        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
+            const Jenkins& J = model.jenkins[static_cast<std::size_t>(sf.element)];
+            const double sg = sf.kind == SwitchKind::slip_pos ? J.k : -J.k;
+            for (int j = 0; j < nf_; ++j) W_(f, j) = sg * difference(J.a, J.b, j);
+        } else if (sf.kind == SwitchKind::slip_velocity) {
+            const Jenkins& J = model.jenkins[static_cast<std::size_t>(sf.element)];
+            for (int j = 0; j < nf_; ++j) Z_(f, j) = difference(J.a, J.b, j);
+        } else {
+            // +-A_i: A_i = -(K x)_i - (C v)_i + f_i + F_i(t); against a partner p,
+            // +-D_i = +-(m_p A_i - m_i A_p)/(m_i + m_p) (assembly.h driving_force).
+            const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
+            const int i = sf.element, p = t_.partner[static_cast<std::size_t>(i)];
+            auto rows = [&](int e, int j, double& kw, double& cz) {
+                kw = cz = 0.0;
+                for (int r = 0; r < nf_; ++r) {
+                    kw += t_.K(e, modal_.free[r]) * phi_(r, j);
+                    cz += t_.C(e, modal_.free[r]) * phi_(r, j);
+                }
+                for (int q : modal_.riders) {
+                    kw += t_.K(e, q) * phi_(slot[static_cast<std::size_t>(q)], j);
+                    cz += t_.C(e, q) * phi_(slot[static_cast<std::size_t>(q)], j);
+                }
+            };
+            if (t_.coupled()) {  // D_i = P_i . A (held_mass.h)
+                const Eigen::Index row = t_.release_row[static_cast<std::size_t>(i)];
+                for (int j = 0; j < nf_; ++j) {
+                    double kw = 0.0, cz = 0.0;
+                    for (int q = 0; q < n_; ++q) {
+                        const double w = t_.release(row, q);
+                        if (w == 0.0) continue;
+                        double kq, cq;
+                        rows(q, j, kq, cq);
+                        kw += w * kq;
+                        cz += w * cq;
+                    }
+                    W_(f, j) = -sg * kw;
+                    Z_(f, j) = -sg * cz;
+                }
+                for (int h = 0; h < nh_; ++h) D_(f, h) = sg * t_.release.row(row).dot(t_.h_amp.col(h));
+                continue;
+            }
+            for (int j = 0; j < nf_; ++j) {
+                double kw, cz;
+                rows(i, j, kw, cz);
+                if (p != kGround) {
+                    double kp, cp;
+                    rows(p, j, kp, cp);
+                    const double mi = t_.mass(i), mp = t_.mass(p);
+                    kw = against_partner(mi, mp, kw, kp);
+                    cz = against_partner(mi, mp, cz, cp);
+                }
+                W_(f, j) = -sg * kw;
+                Z_(f, j) = -sg * cz;
+            }
+            for (int h = 0; h < nh_; ++h)
+                D_(f, h) = sg * (p == kGround ? t_.h_amp(i, h)
+                                              : against_partner(t_.mass(i), t_.mass(p), t_.h_amp(i, h), t_.h_amp(p, h)));
+        }
+    }
+}
+
 GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     : cfg_(cfg), switches_(switch_functions(model, cfg)), modal_(modal_analysis(model, cfg)) {
     require_proportional_damping(model, "GenericSolver()");  // dampers: StateSpaceSolver
@@ -145,85 +229,7 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     max_step_ = std::isinf(min_coupled_omega) ? std::numeric_limits<double>::infinity()
                                               : kTwoPi / min_coupled_omega;
 
-    // Switch functions as modal combinations (for bound): rows W, Z, D.
-    W_ = Eigen::MatrixXd::Zero(ns, nf_);
-    Z_ = Eigen::MatrixXd::Zero(ns, nf_);
-    D_ = Eigen::MatrixXd::Zero(ns, nh_);
-    const std::vector<int>& slot = coord_;
-    // Row j of x[a] - x[b] over the modes (ground and stuck masses do not move).
-    auto difference = [&](int a, int b, int j) {
-        double w = 0.0;
-        if (a != kGround && slot[a] >= 0) w += phi_(slot[a], j);
-        if (b != kGround && slot[b] >= 0) w -= phi_(slot[b], j);
-        return w;
-    };
-    for (int f = 0; f < ns; ++f) {
-        const SwitchFunction& sf = switches_[f];
-        if (sf.kind == SwitchKind::gap) {
-            const Contact& ct = model.contacts[sf.element];
-            for (int j = 0; j < nf_; ++j) W_(f, j) = difference(ct.a, ct.b, j);
-        } else if (sf.kind == SwitchKind::velocity) {  // w = v_i - v_partner
-            for (int j = 0; j < nf_; ++j)
-                Z_(f, j) = difference(sf.element, t_.partner[static_cast<std::size_t>(sf.element)], j);
-        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
-            const Jenkins& J = model.jenkins[static_cast<std::size_t>(sf.element)];
-            const double sg = sf.kind == SwitchKind::slip_pos ? J.k : -J.k;
-            for (int j = 0; j < nf_; ++j) W_(f, j) = sg * difference(J.a, J.b, j);
-        } else if (sf.kind == SwitchKind::slip_velocity) {
-            const Jenkins& J = model.jenkins[static_cast<std::size_t>(sf.element)];
-            for (int j = 0; j < nf_; ++j) Z_(f, j) = difference(J.a, J.b, j);
-        } else {
-            // +-A_i: A_i = -(K x)_i - (C v)_i + f_i + F_i(t); against a partner p,
-            // +-D_i = +-(m_p A_i - m_i A_p)/(m_i + m_p) (assembly.h driving_force).
-            const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
-            const int i = sf.element, p = t_.partner[static_cast<std::size_t>(i)];
-            auto rows = [&](int e, int j, double& kw, double& cz) {
-                kw = cz = 0.0;
-                for (int r = 0; r < nf_; ++r) {
-                    kw += t_.K(e, modal_.free[r]) * phi_(r, j);
-                    cz += t_.C(e, modal_.free[r]) * phi_(r, j);
-                }
-                for (int q : modal_.riders) {
-                    kw += t_.K(e, q) * phi_(slot[static_cast<std::size_t>(q)], j);
-                    cz += t_.C(e, q) * phi_(slot[static_cast<std::size_t>(q)], j);
-                }
-            };
-            if (t_.coupled()) {  // D_i = P_i . A (held_mass.h)
-                const Eigen::Index row = t_.release_row[static_cast<std::size_t>(i)];
-                for (int j = 0; j < nf_; ++j) {
-                    double kw = 0.0, cz = 0.0;
-                    for (int q = 0; q < n_; ++q) {
-                        const double w = t_.release(row, q);
-                        if (w == 0.0) continue;
-                        double kq, cq;
-                        rows(q, j, kq, cq);
-                        kw += w * kq;
-                        cz += w * cq;
-                    }
-                    W_(f, j) = -sg * kw;
-                    Z_(f, j) = -sg * cz;
-                }
-                for (int h = 0; h < nh_; ++h) D_(f, h) = sg * t_.release.row(row).dot(t_.h_amp.col(h));
-                continue;
-            }
-            for (int j = 0; j < nf_; ++j) {
-                double kw, cz;
-                rows(i, j, kw, cz);
-                if (p != kGround) {
-                    double kp, cp;
-                    rows(p, j, kp, cp);
-                    const double mi = t_.mass(i), mp = t_.mass(p);
-                    kw = against_partner(mi, mp, kw, kp);
-                    cz = against_partner(mi, mp, cz, cp);
-                }
-                W_(f, j) = -sg * kw;
-                Z_(f, j) = -sg * cz;
-            }
-            for (int h = 0; h < nh_; ++h)
-                D_(f, h) = sg * (p == kGround ? t_.h_amp(i, h)
-                                              : against_partner(t_.mass(i), t_.mass(p), t_.h_amp(i, h), t_.h_amp(p, h)));
-        }
-    }
+    switch_rows(model);
     absW_ = W_.cwiseAbs();
     absZ_ = Z_.cwiseAbs();
     // Standard particular parts of harmonic h add up in g_f to ONE sinusoid

@@ -66,6 +66,7 @@ public:
     bool coupled(int j, int h) const { return coupled_(j, h) != 0; }
 
 private:
+    void switch_rows(const Model& model);  // W_, Z_, D_ from the modes (constructor)
     // --- fixed by the configuration ---
     Configuration cfg_;
     std::vector<SwitchFunction> switches_;
