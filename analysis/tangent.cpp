@@ -47,8 +47,6 @@ struct Tangent::ConfigData {
     double rate = 0.0;
     // Stick elements: the full-state generator and projection (stick_tangent.h).
     Eigen::MatrixXd stick_A, stick_P;
-    // A coupled M: the Cholesky factor of M_F (the free dofs), once per configuration.
-    Eigen::LLT<Eigen::MatrixXd> mass_llt;
 };
 
 Tangent::Tangent(const Model& model) : model_(model), stick_(!stick_elements(model).empty()) {
@@ -70,7 +68,6 @@ const Tangent::ConfigData& Tangent::data(const Configuration& cfg) {
     d->E.resize(nf, nf);
     if (model_.coupled_mass()) {
         d->E = md.phi_t_m();
-        d->mass_llt.compute(md.mass_matrix);
     } else {
         for (int j = 0; j < nf; ++j)
             for (int r = 0; r < nf; ++r) d->E(j, r) = md.phi(r, j) * m(md.free[r]);
@@ -108,7 +105,7 @@ const Tangent::ConfigData& Tangent::data(const Configuration& cfg) {
         }
         if (model_.coupled_mass() && nf > 0) {  // rows over M_F^-1, not over the diagonal
             const Eigen::MatrixXd D = m(md.free).asDiagonal();
-            A.middleRows(nf, nf) = d->mass_llt.solve(D * A.middleRows(nf, nf));
+            A.middleRows(nf, nf) = md.mass_matrix.llt().solve(D * A.middleRows(nf, nf));
         }
         if (nf > 0) {
             const Eigen::EigenSolver<Eigen::MatrixXd> es(A.topLeftCorner(2 * nf, 2 * nf), false);

@@ -49,13 +49,17 @@ Eigen::MatrixXd HeldMass::inverse() const {
     return out;
 }
 
+void kinetic_friction(const Model& model, const std::vector<char>& held, const signed char* sgn, double* fr) {
+    for (std::size_t k = 0; k < model.dof(); ++k)
+        fr[k] = !held[k] && model.masses[k].has_friction
+                    ? -model.masses[k].mu_k * model.normal_force(k) * static_cast<double>(sgn[k])
+                    : 0.0;
+}
+
 void held_forces(const Model& model, const Configuration& cfg, const std::vector<char>& held, const signed char* sgn,
                  double t, const double* x, const double* v, double* f) {
-    for (std::size_t k = 0; k < model.dof(); ++k) {
-        f[k] = force_on_mass(model, cfg, static_cast<int>(k), t, x, v);
-        if (!held[k] && model.masses[k].has_friction)
-            f[k] -= model.masses[k].mu_k * model.normal_force(k) * static_cast<double>(sgn[k]);
-    }
+    kinetic_friction(model, held, sgn, f);
+    for (std::size_t k = 0; k < model.dof(); ++k) f[k] += force_on_mass(model, cfg, static_cast<int>(k), t, x, v);
 }
 
 void held_driving_force(const Model& model, const Configuration& cfg, const signed char* sgn, int i, double t,

@@ -48,6 +48,10 @@ private:
     mutable Eigen::VectorXd rhs_;
 };
 
+/// The kinetic friction -mu_k N_k sgn_k on every dof that slides (not held,
+/// with friction), 0 on the others.
+void kinetic_friction(const Model& model, const std::vector<char>& held, const signed char* sgn, double* fr);
+
 /// The forces f of HeldMass on every dof: A_k (assembly.h force_on_mass) and
 /// the kinetic friction -mu_k N_k sgn_k of a sliding dof (none on a held one).
 void held_forces(const Model& model, const Configuration& cfg, const std::vector<char>& held, const signed char* sgn,

@@ -126,9 +126,7 @@ MotionSeries motion_series(const Model& model, const Configuration& cfg, const s
         const HeldMass held(model, cfg.stuck);  // only ground friction on a coupled M (model_reader)
         const Eigen::MatrixXd inv_abs = held.inverse().cwiseAbs();
         s.friction.assign(n, 0.0);
-        for (std::size_t i = 0; i < n; ++i)
-            if (!cfg.stuck[i] && model.masses[i].has_friction)
-                s.friction[i] = -model.masses[i].mu_k * model.normal_force(i) * static_cast<double>(sgn[i]);
+        kinetic_friction(model, cfg.stuck, sgn, s.friction.data());
         Eigen::VectorXd A(static_cast<Eigen::Index>(n)), m(static_cast<Eigen::Index>(n)), x(static_cast<Eigen::Index>(n));
         for (int k = 0; k + 2 <= order; ++k) {
             for (std::size_t i = 0; i < n; ++i) {
