@@ -276,13 +276,11 @@ namespace {
 
 // The free, stuck and riding masses of cfg (d.free_dofs, d.stuck_dofs,
 // d.riders), and the masses of each free coordinate: its free mass, then its
-// riders (T of x = T q + e). NotDerivable for a coupled M (its generalized
-// eigenproblem in double-double is not built yet: the Eigen solver takes it).
+// riders (T of x = T q + e). On a coupled M, NotDerivable for a stuck
+// friction (its held force P_i . f, model/held_mass.h, is not lowered yet: the
+// Eigen solver takes the configuration).
 std::vector<std::vector<int>> coordinates(const Model& model, const Configuration& cfg, Derivation& d,
                                           std::vector<int>& free_index) {
-    if (model.coupled_mass())
-        throw NotDerivable("derivation::derive(): configuration " + cfg.spec(model) +
-                           ": a coupled (non-diagonal) mass matrix");
     const std::size_t n = model.dof();
     free_index.assign(n, -1);
     for (std::size_t i = 0; i < n; ++i) {
@@ -295,12 +293,147 @@ std::vector<std::vector<int>> coordinates(const Model& model, const Configuratio
             d.free_dofs.push_back(static_cast<int>(i));
         }
     }
+    if (model.coupled_mass() && (!d.stuck_dofs.empty() || !d.riders.empty()))
+        throw NotDerivable("derivation::derive(): configuration " + cfg.spec(model) +
+                           ": a stuck friction on a coupled (non-diagonal) mass matrix");
     std::vector<std::vector<int>> group(d.free_dofs.size());
     for (std::size_t r = 0; r < d.free_dofs.size(); ++r) group[r].push_back(d.free_dofs[r]);
     for (int q : d.riders) group[static_cast<std::size_t>(free_index[model.masses[static_cast<std::size_t>(q)].partner])].push_back(q);
     return group;
 }
 
+/// M_FF = L L^T of a coupled M over the free dofs, in DD (L lower
+/// triangular); NotDerivable where a pivot is not positive.
+std::vector<std::vector<DD>> mass_cholesky(const Model& model, const Derivation& d, const std::string& where) {
+    const std::size_t nf = d.free_dofs.size();
+    std::vector<std::vector<DD>> L(nf, std::vector<DD>(nf));
+    for (std::size_t r = 0; r < nf; ++r)
+        for (std::size_t c = 0; c <= r; ++c) {
+            DD sum(model.mass_entry(static_cast<std::size_t>(d.free_dofs[r]), static_cast<std::size_t>(d.free_dofs[c])));
+            for (std::size_t k = 0; k < c; ++k) sum -= L[r][k] * L[c][k];
+            if (r == c) {
+                if (!(sum > DD(0.0))) throw NotDerivable(where + "the free dofs' mass matrix is not positive definite");
+                L[r][r] = sqrt(sum);
+            } else {
+                L[r][c] = sum / L[c][c];
+            }
+        }
+    return L;
+}
+
+/// L^-1 b (forward substitution).
+std::vector<DD> lower_solve(const std::vector<std::vector<DD>>& L, std::vector<DD> b) {
+    for (std::size_t r = 0; r < b.size(); ++r) {
+        for (std::size_t k = 0; k < r; ++k) b[r] -= L[r][k] * b[k];
+        b[r] = b[r] / L[r][r];
+    }
+    return b;
+}
+
+/// L^-T b (back substitution).
+std::vector<DD> upper_solve(const std::vector<std::vector<DD>>& L, std::vector<DD> b) {
+    for (std::size_t r = b.size(); r-- > 0;) {
+        for (std::size_t k = r + 1; k < b.size(); ++k) b[r] -= L[k][r] * b[k];
+        b[r] = b[r] / L[r][r];
+    }
+    return b;
+}
+
+/// The symmetric A = L^-1 K_FF L^-T of a coupled M = L L^T (the generalized
+/// eigenproblem K v = lambda M v as A y = lambda y, v = L^-T y).
+std::vector<std::vector<DD>> coupled_kt(const std::vector<std::vector<DD>>& K, const std::vector<std::vector<DD>>& L) {
+    const std::size_t nf = K.size();
+    std::vector<std::vector<DD>> B(nf), A(nf, std::vector<DD>(nf));  // B[c] = L^-1 K e_c; A = L^-1 B^T
+    for (std::size_t c = 0; c < nf; ++c) {
+        std::vector<DD> col(nf);
+        for (std::size_t r = 0; r < nf; ++r) col[r] = K[r][c];
+        B[c] = lower_solve(L, std::move(col));
+    }
+    for (std::size_t r = 0; r < nf; ++r) {
+        std::vector<DD> row(nf);
+        for (std::size_t c = 0; c < nf; ++c) row[c] = B[c][r];  // (L^-1 K)^T's column r
+        const std::vector<DD> a = lower_solve(L, std::move(row));
+        for (std::size_t c = 0; c < nf; ++c) A[c][r] = a[c];
+    }
+    for (std::size_t r = 0; r < nf; ++r)  // symmetric to the last bit: the mean of the two rounded halves
+        for (std::size_t c = r + 1; c < nf; ++c) A[r][c] = A[c][r] = (A[r][c] + A[c][r]) / DD(2.0);
+    return A;
+}
+
+/// The eigenpairs of the symmetric kt in ascending order (value[j], vector[j][r]):
+/// mp_eigen.h refined, else (or when it does not converge) Jacobi, which
+/// diagonalises kt in place.
+void symmetric_eigenpairs(std::vector<std::vector<DD>>& kt, EigenMethod method, DerivationCache* cache,
+                          std::vector<DD>& eig_value, std::vector<std::vector<DD>>& eig_vector) {
+    const std::size_t nf = kt.size();
+    eig_value.assign(nf, DD());
+    eig_vector.assign(nf, {});
+    bool solved = false;
+    if (method == EigenMethod::refined) {
+        try {
+            std::vector<DdEigenpair> pairs = dd_symmetric_eigen(kt, cache ? &cache->eigen : nullptr);
+            for (std::size_t j = 0; j < nf; ++j) {
+                eig_value[j] = pairs[j].value;
+                eig_vector[j] = std::move(pairs[j].vector);
+            }
+            solved = true;
+        } catch (const RunError&) {
+            // Not converged (never seen): Jacobi below, slower but unconditional.
+        }
+    }
+    if (!solved) {
+        std::vector<std::vector<DD>> phi;
+        dd_jacobi_eigen(kt, phi);
+        std::vector<std::size_t> order(nf);
+        std::iota(order.begin(), order.end(), 0);
+        std::stable_sort(order.begin(), order.end(),
+                         [&](std::size_t p, std::size_t q) { return kt[p][p] < kt[q][q]; });
+        for (std::size_t j = 0; j < nf; ++j) {
+            eig_value[j] = kt[order[j]][order[j]];
+            eig_vector[j].resize(nf);
+            for (std::size_t r = 0; r < nf; ++r) eig_vector[j][r] = phi[r][order[j]];
+        }
+    }
+}
+
+/// The regime of mode m from its lambda and c (u'' + c u' + lambda u = ...), and
+/// the constants of its closed form.
+void set_regime(Mode& m, const DD& critical_tol) {
+    if (m.lambda.is_zero()) {
+        m.omega = DD(0.0);
+        m.xi = DD(0.0);
+        if (m.c.is_zero()) {
+            m.regime = Regime::rigid;
+            m.sigma = m.kappa = m.omega_d = m.gamma = m.r1 = DD(0.0);
+        } else {
+            // u = A + B (1 - e^{-c tau})/c as the overdamped form with lambda = 0.
+            m.regime = Regime::rigid_damped;
+            m.sigma = m.gamma = m.c / DD(2.0);
+            m.kappa = -m.sigma * m.sigma;
+            m.r1 = DD(0.0);
+            m.omega_d = DD(0.0);
+        }
+    } else {
+        m.omega = sqrt(m.lambda);
+        m.sigma = m.c / DD(2.0);
+        m.xi = m.sigma / m.omega;
+        m.kappa = m.lambda - m.sigma * m.sigma;
+        if (m.c.is_zero()) {
+            m.regime = Regime::undamped;
+            m.omega_d = m.omega;
+        } else if (abs(m.xi - DD(1.0)) <= critical_tol) {
+            m.regime = Regime::critical;
+            m.kappa = DD(0.0);
+        } else if (m.xi < DD(1.0)) {
+            m.regime = Regime::underdamped;
+            m.omega_d = sqrt(m.kappa);
+        } else {
+            m.regime = Regime::overdamped;
+            m.gamma = sqrt(-m.kappa);
+            m.r1 = -m.lambda / (m.sigma + m.gamma);  // = -sigma + gamma without cancellation
+        }
+    }
+}
 }  // namespace
 
 Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method, ExactMatrices exact_matrices,
@@ -325,16 +458,18 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     d.k_dd.assign(n, std::vector<DD>(n));
     d.c_dd.assign(n, std::vector<DD>(n));
     const numeric alpha = exact(model.alpha), beta = exact(model.beta);
+    const bool coupled = model.coupled_mass();
     for (std::size_t i = 0; i < n; ++i)
         for (std::size_t j = 0; j < n; ++j) {
-            if (i != j && K(i, j) == 0.0) continue;  // both stay the exact 0 they start as
+            const double mij = model.mass_entry(i, j);
+            if (i != j && K(i, j) == 0.0 && mij == 0.0) continue;  // both stay the exact 0 they start as
             if (with_exact) {
                 const numeric kij = exact(K(i, j));
                 d.K(i, j) = kij;
-                d.C(i, j) = beta * kij + (i == j ? alpha * exact(model.masses[i].m) : kZero);
+                d.C(i, j) = beta * kij + (i == j || coupled ? alpha * exact(mij) : kZero);
             }
             d.k_dd[i][j] = DD(K(i, j));
-            d.c_dd[i][j] = DD(model.beta) * DD(K(i, j)) + (i == j ? DD(model.alpha) * DD(model.masses[i].m) : DD(0.0));
+            d.c_dd[i][j] = DD(model.beta) * DD(K(i, j)) + (i == j || coupled ? DD(model.alpha) * DD(mij) : DD(0.0));
         }
     for (const Damper& dm : model.dampers) {  // non-proportional damping: added as K adds a spring
         const numeric c = exact(dm.c);
@@ -395,12 +530,17 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         }
         sqm[r] = sqrt(mass_dd[r]);
     }
+    const std::string where = "derivation::derive(): configuration " + cfg.spec(model) + ": ";
     if (!model.proportional_damping()) {
+        if (coupled) throw NotDerivable(where + "non-proportional damping on a coupled (non-diagonal) mass matrix");
         derive_state_space(d, group, mass_dd);
         return d;
     }
-    std::vector<std::vector<DD>> kt = folded(d.k_dd, group);  // T^T K T, then / sqrt(m_r m_s)
-    for (std::size_t r = 0; r < nf; ++r)
+    // Coupled M: A = L^-1 K_FF L^-T (M_FF = L L^T). Lumped: T^T K T / sqrt(m_r m_s).
+    const std::vector<std::vector<DD>> chol = coupled ? mass_cholesky(model, d, where) : std::vector<std::vector<DD>>{};
+    std::vector<std::vector<DD>> kt = folded(d.k_dd, group);
+    if (coupled) kt = coupled_kt(kt, chol);
+    for (std::size_t r = 0; r < nf && !coupled; ++r)
         for (std::size_t s = 0; s < nf; ++s)
             if (!kt[r][s].is_zero()) kt[r][s] = kt[r][s] / (sqm[r] * sqm[s]);  // a zero stays the exact 0
     // Stiffness over mass beyond double's range (k/m = 1e400): no constant of
@@ -412,37 +552,13 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
                 throw NotDerivable("derivation::derive(): configuration " + cfg.spec(model) +
                                    ": stiffness over mass beyond the range of double");
     // eig_value[j], eig_vector[j][r]: the eigenpairs of Kt in ascending order.
-    std::vector<DD> eig_value(nf);
-    std::vector<std::vector<DD>> eig_vector(nf);
-    bool solved = false;
-    if (method == EigenMethod::refined) {
-        try {
-            std::vector<DdEigenpair> pairs = dd_symmetric_eigen(kt, cache ? &cache->eigen : nullptr);
-            for (std::size_t j = 0; j < nf; ++j) {
-                eig_value[j] = pairs[j].value;
-                eig_vector[j] = std::move(pairs[j].vector);
-            }
-            solved = true;
-        } catch (const RunError&) {
-            // Not converged (never seen): Jacobi below, slower but unconditional.
-        }
-    }
-    if (!solved) {
-        std::vector<std::vector<DD>> phi;
-        dd_jacobi_eigen(kt, phi);
-        std::vector<std::size_t> order(nf);
-        std::iota(order.begin(), order.end(), 0);
-        std::stable_sort(order.begin(), order.end(),
-                         [&](std::size_t p, std::size_t q) { return kt[p][p] < kt[q][q]; });
-        for (std::size_t j = 0; j < nf; ++j) {
-            eig_value[j] = kt[order[j]][order[j]];
-            eig_vector[j].resize(nf);
-            for (std::size_t r = 0; r < nf; ++r) eig_vector[j][r] = phi[r][order[j]];
-        }
-    }
+    std::vector<DD> eig_value;
+    std::vector<std::vector<DD>> eig_vector;
+    symmetric_eigenpairs(kt, method, cache, eig_value, eig_vector);
 
     // Rigid-body modes replace the smallest eigenpairs: lambda = 0, shape sqrt(m) on the component.
     const auto comps = free_components(model, cfg).floating_members();  // free_components.h
+    if (coupled && !comps.empty()) throw NotDerivable(where + "a rigid-body mode on a coupled (non-diagonal) mass matrix");
     std::vector<DD> lambda(nf);
     std::vector<std::vector<DD>> shape(nf);  // shape[j][r] = Phi_rj
     std::vector<std::vector<std::size_t>> support(nf);             // r with shape[j][r] != 0, ascending
@@ -488,44 +604,19 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         m.c = alpha_dd + beta_dd * lambda[j];
         m.v.resize(nf);
         m.w.resize(nf);
-        for (std::size_t r : support[j]) {
-            m.v[r] = shape[j][r] * inv_sqm[r];
-            m.w[r] = shape[j][r] * sqm[r];
-        }
-        if (m.lambda.is_zero()) {
-            m.omega = DD(0.0);
-            m.xi = DD(0.0);
-            if (m.c.is_zero()) {
-                m.regime = Regime::rigid;
-                m.sigma = m.kappa = m.omega_d = m.gamma = m.r1 = DD(0.0);
-            } else {
-                // u = A + B (1 - e^{-c tau})/c as the overdamped form with lambda = 0.
-                m.regime = Regime::rigid_damped;
-                m.sigma = m.gamma = m.c / DD(2.0);
-                m.kappa = -m.sigma * m.sigma;
-                m.r1 = DD(0.0);
-                m.omega_d = DD(0.0);
-            }
+        if (coupled) {  // v = L^-T y (V^T M V = I), w = L y = M v (q = W x): dense
+            m.v = upper_solve(chol, shape[j]);
+            for (std::size_t r = 0; r < nf; ++r)
+                for (std::size_t k = 0; k <= r; ++k) m.w[r] += chol[r][k] * shape[j][k];
+            support[j].resize(nf);
+            std::iota(support[j].begin(), support[j].end(), std::size_t{0});
         } else {
-            m.omega = sqrt(m.lambda);
-            m.sigma = m.c / DD(2.0);
-            m.xi = m.sigma / m.omega;
-            m.kappa = m.lambda - m.sigma * m.sigma;
-            if (m.c.is_zero()) {
-                m.regime = Regime::undamped;
-                m.omega_d = m.omega;
-            } else if (abs(m.xi - DD(1.0)) <= critical_tol) {
-                m.regime = Regime::critical;
-                m.kappa = DD(0.0);
-            } else if (m.xi < DD(1.0)) {
-                m.regime = Regime::underdamped;
-                m.omega_d = sqrt(m.kappa);
-            } else {
-                m.regime = Regime::overdamped;
-                m.gamma = sqrt(-m.kappa);
-                m.r1 = -m.lambda / (m.sigma + m.gamma);  // = -sigma + gamma without cancellation
+            for (std::size_t r : support[j]) {
+                m.v[r] = shape[j][r] * inv_sqm[r];
+                m.w[r] = shape[j][r] * sqm[r];
             }
         }
+        set_regime(m, critical_tol);
         d.modes.push_back(std::move(m));
     }
 

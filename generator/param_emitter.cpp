@@ -26,8 +26,11 @@ std::vector<std::string> kept_parameters(const Model& model, const std::string& 
     if (const std::string what = stick_elements(model); !what.empty())
         throw InputError(flag + ": the model has " + what +
                          ", which sweep kernels do not take yet (generate without --params folds them)");
-    // Sweep kernels redo the modal analysis of K at run time (sweep_kernel_core.h):
-    // state-space pseudo-modes there are still to come.
+    // Sweep kernels redo the modal analysis of K over the lumped masses at run time (sweep_kernel_core.h):
+    // a coupled M and state-space pseudo-modes there are still to come.
+    if (model.coupled_mass())
+        throw InputError(flag + ": the model has a coupled (non-diagonal) mass matrix, which sweep kernels do not "
+                                "take yet (generate without --params derives its kernels)");
     if (!model.proportional_damping())
         throw InputError(flag + ": the model has non-proportional damping ([[damper]] or a non-proportional "
                                 "structure.damping), which sweep kernels do not take yet (generate without --params "
