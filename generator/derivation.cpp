@@ -434,6 +434,60 @@ void set_regime(Mode& m, const DD& critical_tol) {
         }
     }
 }
+/// Rigid-body mode j of a coupled M in the coordinates y = L^T x: L^T e_c of
+/// the component's members, made orthonormal to the rigid modes 0..j-1.
+std::vector<DD> rigid_shape(const std::vector<std::vector<DD>>& L, const std::vector<int>& members,
+                            const std::vector<int>& free_index, const std::vector<std::vector<DD>>& before, std::size_t j) {
+    const std::size_t nf = L.size();
+    std::vector<DD> y(nf);
+    for (int i : members) {
+        const std::size_t r = static_cast<std::size_t>(free_index[static_cast<std::size_t>(i)]);
+        for (std::size_t k = 0; k <= r; ++k) y[k] += L[r][k];
+    }
+    for (std::size_t p = 0; p < j; ++p) {
+        DD dot;
+        for (std::size_t k = 0; k < nf; ++k) dot += y[k] * before[p][k];
+        for (std::size_t k = 0; k < nf; ++k) y[k] -= dot * before[p][k];
+    }
+    DD norm2;
+    for (const DD& e : y) norm2 += e * e;
+    const DD inv = DD(1.0) / sqrt(norm2);
+    for (DD& e : y) e = e * inv;
+    return y;
+}
+
+/// mu N of each friction mass into the cache, exact products (GiNaC
+/// arithmetic: once per run with a cache).
+void friction_limits(const Model& model, DerivationCache& mu) {
+    const std::size_t n = model.dof();
+    if (mu.mu_k_n.size() == n) return;
+    mu.mu_k_n.assign(n, kZero);
+    mu.mu_k_n_double.assign(n, 0.0);
+    mu.mu_s_n.assign(n, 0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!model.masses[i].has_friction) continue;
+        const numeric N = exact_normal(model, i);
+        mu.mu_k_n[i] = exact(model.masses[i].mu_k) * N;
+        mu.mu_k_n_double[i] = mu.mu_k_n[i].to_double();
+        mu.mu_s_n[i] = (exact(model.masses[i].mu_s) * N).to_double();
+    }
+}
+
+/// A harmonic with Omega = 0 is the constant force F sin(phase): added to
+/// d.f_const exactly, the sums rounded once into d.f_const_double.
+void add_static_forcing(const Model& model, Derivation& d) {
+    const std::size_t n = model.dof();
+    bool static_forcing = false;
+    for (const Harmonic& h : model.forcing) {
+        if (h.omega != 0.0) continue;
+        const numeric s = GiNaC::sin(exact(h.phase));
+        for (std::size_t i = 0; i < n; ++i) d.f_const[i] += exact(h.amplitude[i]) * s;
+        static_forcing = true;
+    }
+    if (static_forcing)
+        for (std::size_t i = 0; i < n; ++i) d.f_const_double[i] = d.f_const[i].to_double();
+}
+
 }  // namespace
 
 Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method, ExactMatrices exact_matrices,
@@ -483,21 +537,9 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         }
     }
     d.f_const.resize(n);
-    // mu N of each friction mass, exact products (GiNaC arithmetic: once per run with a cache).
     DerivationCache local;
     DerivationCache& mu = cache ? *cache : local;
-    if (mu.mu_k_n.size() != n) {
-        mu.mu_k_n.assign(n, kZero);
-        mu.mu_k_n_double.assign(n, 0.0);
-        mu.mu_s_n.assign(n, 0.0);
-        for (std::size_t i = 0; i < n; ++i) {
-            if (!model.masses[i].has_friction) continue;
-            const numeric N = exact_normal(model, i);
-            mu.mu_k_n[i] = exact(model.masses[i].mu_k) * N;
-            mu.mu_k_n_double[i] = mu.mu_k_n[i].to_double();
-            mu.mu_s_n[i] = (exact(model.masses[i].mu_s) * N).to_double();
-        }
-    }
+    friction_limits(model, mu);
     d.mu_k_n.assign(n, kZero);
     d.mu_k_n_double.assign(n, 0.0);
     d.mu_s_n = mu.mu_s_n;
@@ -508,16 +550,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         if (model.masses[i].has_friction && !cfg.stuck[i])
             d.mu_k_n[i] = mu.mu_k_n[i], d.mu_k_n_double[i] = mu.mu_k_n_double[i];
     }
-    // A harmonic with Omega = 0 is the constant force F sin(phase).
-    bool static_forcing = false;
-    for (const Harmonic& h : model.forcing) {
-        if (h.omega != 0.0) continue;
-        const numeric s = GiNaC::sin(exact(h.phase));
-        for (std::size_t i = 0; i < n; ++i) d.f_const[i] += exact(h.amplitude[i]) * s;
-        static_forcing = true;
-    }
-    if (static_forcing)  // the exact sums rounded once
-        for (std::size_t i = 0; i < n; ++i) d.f_const_double[i] = d.f_const[i].to_double();
+    add_static_forcing(model, d);
 
     // Modal decomposition of Kt = M^-1/2 K_FF M^-1/2, in DD.
     const std::size_t nf = d.free_dofs.size();
@@ -556,14 +589,17 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     std::vector<std::vector<DD>> eig_vector;
     symmetric_eigenpairs(kt, method, cache, eig_value, eig_vector);
 
-    // Rigid-body modes replace the smallest eigenpairs: lambda = 0, shape sqrt(m) on the component.
+    // Rigid-body modes replace the smallest eigenpairs: lambda = 0, shape sqrt(m) on the component
+    // (coupled M: y = L^T e_c, orthonormalised against the rigid modes before it, as M may couple components).
     const auto comps = free_components(model, cfg).floating_members();  // free_components.h
-    if (coupled && !comps.empty()) throw NotDerivable(where + "a rigid-body mode on a coupled (non-diagonal) mass matrix");
     std::vector<DD> lambda(nf);
     std::vector<std::vector<DD>> shape(nf);  // shape[j][r] = Phi_rj
     std::vector<std::vector<std::size_t>> support(nf);             // r with shape[j][r] != 0, ascending
     for (std::size_t j = 0; j < nf; ++j) {
-        if (j < comps.size()) {
+        if (j < comps.size() && coupled) {
+            shape[j] = rigid_shape(chol, comps[j], free_index, shape, j);
+            lambda[j] = DD(0.0);
+        } else if (j < comps.size()) {
             DD m_total;
             for (int i : comps[j]) m_total += mass_dd[static_cast<std::size_t>(free_index[i])];
             const DD inv = DD(1.0) / sqrt(m_total);

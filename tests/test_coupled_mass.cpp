@@ -255,40 +255,49 @@ TEST(CoupledMass, CantileverWithATipStopGivesTheEventsOfCvode) {
     EXPECT_GT(programs, 0.0) << "the same bits as the Eigen solver: the programs handed it the coupled M";
 }
 
+/// The double-double derivation's modes of cfg checked in double against the
+/// model's own K and M: |V^T M V - I|, |K V - M V Lambda| / |K|, |W - V^T M| / |M|
+/// (the modal rows), and the eigenvalues ascending.
+struct ModalResiduals {
+    double orth, eig, rows;
+    bool ascending;
+};
+ModalResiduals modal_residuals(const Model& model, const Configuration& cfg) {
+    const Derivation d = derive(model, cfg);
+    const std::size_t n = model.dof();
+    EXPECT_EQ(d.free_dofs.size(), n);
+    EXPECT_EQ(d.modes.size(), n);
+    const Eigen::MatrixXd K = stiffness_matrix(model, cfg);
+    Eigen::MatrixXd M(n, n), V(n, n), W(n, n);
+    Eigen::VectorXd lambda(n);
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = 0; j < n; ++j) M(i, j) = model.mass_entry(i, j);
+    for (std::size_t j = 0; j < n; ++j) {
+        lambda(j) = d.modes[j].lambda.to_double();
+        for (std::size_t r = 0; r < n; ++r) V(r, j) = d.modes[j].v[r].to_double(), W(j, r) = d.modes[j].w[r].to_double();
+    }
+    ModalResiduals out{(V.transpose() * M * V - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff(),
+                       (K * V - M * V * lambda.asDiagonal()).cwiseAbs().maxCoeff() / K.cwiseAbs().maxCoeff(),
+                       (W - V.transpose() * M).cwiseAbs().maxCoeff() / M.cwiseAbs().maxCoeff(), true};
+    for (std::size_t j = 1; j < n; ++j) out.ascending = out.ascending && lambda(j - 1) < lambda(j);
+    std::printf("%s: |V'MV - I| %.3g, |KV - MV L|/|K| %.3g, |W - V'M|/|M| %.3g\n", cfg.spec(model).c_str(), out.orth,
+                out.eig, out.rows);
+    return out;
+}
+
 TEST(CoupledMass, TheDoubleDoubleDerivationSolvesTheGeneralizedEigenproblem) {
-    // V^T M V = I and K V = M V Lambda for the free dofs, checked in double
-    // against the beam's own matrices, and the modal rows W = V^T M.
     testing::TempDir dir;
     const Forced f = beam_with_stop(dir);
     const Model model = read_model(f.path);
     ASSERT_TRUE(model.coupled_mass());
-    for (const Configuration& cfg : {Configuration::all_open(model), [&] {
-             Configuration c = Configuration::all_open(model);
-             c.closed[0] = 1;
-             return c;
-         }()}) {
-        const Derivation d = derive(model, cfg);
-        const std::size_t n = model.dof();
-        ASSERT_EQ(d.free_dofs.size(), n);
-        ASSERT_EQ(d.modes.size(), n);
-        const Eigen::MatrixXd K = stiffness_matrix(model, cfg);
-        Eigen::MatrixXd M(n, n), V(n, n), W(n, n);
-        Eigen::VectorXd lambda(n);
-        for (std::size_t i = 0; i < n; ++i)
-            for (std::size_t j = 0; j < n; ++j) M(i, j) = model.mass_entry(i, j);
-        for (std::size_t j = 0; j < n; ++j) {
-            lambda(j) = d.modes[j].lambda.to_double();
-            for (std::size_t r = 0; r < n; ++r) V(r, j) = d.modes[j].v[r].to_double(), W(j, r) = d.modes[j].w[r].to_double();
-        }
-        const double orth = (V.transpose() * M * V - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff();
-        const double eig = (K * V - M * V * lambda.asDiagonal()).cwiseAbs().maxCoeff() / K.cwiseAbs().maxCoeff();
-        const double rows = (W - V.transpose() * M).cwiseAbs().maxCoeff() / M.cwiseAbs().maxCoeff();
-        std::printf("%s: |V'MV - I| %.3g, |KV - MV L|/|K| %.3g, |W - V'M|/|M| %.3g\n", cfg.spec(model).c_str(), orth, eig,
-                    rows);
-        EXPECT_LT(orth, 1e-13);
-        EXPECT_LT(eig, 1e-13);
-        EXPECT_LT(rows, 1e-14);
-        for (std::size_t j = 1; j < n; ++j) EXPECT_LT(lambda(j - 1), lambda(j));
+    Configuration closed = Configuration::all_open(model);
+    closed.closed[0] = 1;
+    for (const Configuration& cfg : {Configuration::all_open(model), closed}) {
+        const ModalResiduals r = modal_residuals(model, cfg);
+        EXPECT_LT(r.orth, 1e-13);
+        EXPECT_LT(r.eig, 1e-13);
+        EXPECT_LT(r.rows, 1e-14);
+        EXPECT_TRUE(r.ascending);
     }
 }
 
@@ -364,11 +373,15 @@ std::string free_bar(const testing::TempDir& dir, int elements, bool dampers) {
 }
 
 TEST(CoupledMass, FreeBarKeepsItsMomentumBetweenImpactsAndGivesTheEventsOfCvode) {
-    for (bool dampers : {false, true}) {
+    // On the Eigen solver and on the programs (the derivation's rigid-body mode
+    // of a coupled M, y = L^T 1; with dampers the Eigen solver takes it in both).
+    for (bool dampers : {false, true})
+        for (testing::Solvers solvers : {testing::Solvers::generic, testing::Solvers::interp}) {
+        SCOPED_TRACE(testing::solvers_name(solvers));
         testing::TempDir dir;
         const Model model = read_model(free_bar(dir, 4, dampers));
         ASSERT_TRUE(model.coupled_mass());
-        const testing::Outcome run = testing::simulate(model, 0.5, 1e-3);
+        const testing::Outcome run = testing::simulate(model, 0.5, 1e-3, solvers);
         ASSERT_GE(run.events.size(), 2u) << "the bar should hit the wall and leave it";
         ASSERT_EQ(run.events[0].kind, EventKind::contact_close);
         // Before the first impact nothing acts on the bar: p = 1^T M v stays -0.5 kg m/s (mass 1 kg).
@@ -402,9 +415,27 @@ TEST(CoupledMass, FreeBarKeepsItsMomentumBetweenImpactsAndGivesTheEventsOfCvode)
         EXPECT_LT(drift, 1e-13);
         const testing::Outcome cvode = testing::baseline(model, 0.5, 1e-12, 1e-14, Method::cvode);
         const double gap = event_gap(run, cvode);
-        std::printf("%s: %zu events, CVODE within %.3g s\n", dampers ? "dampers" : "undamped", run.events.size(), gap);
+        std::printf("%s, %s: %zu events, CVODE within %.3g s\n", dampers ? "dampers" : "undamped",
+                    testing::solvers_name(solvers), run.events.size(), gap);
         EXPECT_LT(gap, 1e-9);
-    }
+        }
+}
+
+TEST(CoupledMass, TheDerivationsRigidBodyModeOfACoupledMIsTheTranslation) {
+    testing::TempDir dir;
+    const Model model = read_model(free_bar(dir, 4, false));
+    const Configuration open = Configuration::all_open(model);
+    const Derivation d = derive(model, open);
+    ASSERT_EQ(d.modes[0].regime, Regime::rigid);
+    EXPECT_TRUE(d.modes[0].lambda.is_zero());
+    const double v0 = d.modes[0].v[0].to_double();  // 1 / sqrt(1^T M 1): the bar's mass is 1 kg
+    EXPECT_NEAR(v0, 1.0, 1e-15);
+    for (const DD& v : d.modes[0].v) EXPECT_NEAR(v.to_double(), v0, 1e-15);
+    const ModalResiduals r = modal_residuals(model, open);
+    EXPECT_LT(r.orth, 1e-13);
+    EXPECT_LT(r.eig, 1e-13);
+    EXPECT_LT(r.rows, 1e-14);
+    EXPECT_NE(d.modes[1].regime, Regime::rigid);
 }
 
 TEST(CoupledMass, ADiagonalMassThroughTheCoupledPathGivesTheLumpedEvents) {
