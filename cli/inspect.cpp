@@ -393,11 +393,18 @@ void inspect_state_space(const Model& model, const Configuration& cfg, Format fm
 }
 
 /// A coupled mass matrix with Rayleigh damping: the modes of the generalized
-/// eigenproblem K phi = lambda M phi the Eigen solver uses (model/modal.h);
-/// the derivation does not take it, so no program or kernel to print.
+/// eigenproblem K phi = lambda M phi the Eigen solver uses (model/modal.h),
+/// and whether the kernels derive the configuration (`--format cpp` prints
+/// its program) or leave it to the Eigen solver.
 void inspect_coupled(const Model& model, const Configuration& cfg, Format fmt, std::ostream& out) {
     const Printer p{fmt, out};
     const ModalDecomposition md = modal_analysis(model, cfg);
+    std::string kernels = "the kernels derive these modes in double-double (inspect --format cpp prints the program)";
+    try {
+        (void)derive(model, cfg);
+    } catch (const NotDerivable& e) {
+        kernels = std::string("every kernel kind runs this configuration on the Eigen solver (") + e.what() + ")";
+    }
     std::string fr;
     for (int i : md.free) fr += (fr.empty() ? "" : ", ") + model.masses[static_cast<std::size_t>(i)].name;
     if (fmt == Format::latex)
@@ -406,8 +413,7 @@ void inspect_coupled(const Model& model, const Configuration& cfg, Format fmt, s
     else
         out << "model " << model.name << "\nconfiguration " << cfg.spec(model) << " (key " << cfg.key()
             << ")\nfree masses: " << (fr.empty() ? "none" : fr)
-            << "\ncoupled mass matrix: the derivation does not take it; every kernel kind runs this configuration "
-               "on the Eigen solver (generalized eigenproblem of K and M)\n";
+            << "\ncoupled mass matrix, the generalized eigenproblem of K and M: " << kernels << "\n";
     p.heading("Modes: K phi = lambda M phi, c_j = alpha + beta lambda_j", "Modes: $K \\phi = \\lambda M \\phi$");
     for (Eigen::Index j = 0; j < md.lambda.size(); ++j) {
         const double lam = md.lambda(j), w = std::sqrt(lam), c = model.alpha + model.beta * lam;

@@ -517,6 +517,7 @@ TEST(CoupledMass, TheFiniteElementExampleIsTheTestedCantilever) {
     const double omega1 = std::stod(r.out.substr(at + 16));
     EXPECT_NEAR(omega1, std::sqrt(es.eigenvalues()(0)), 1e-12 * omega1);
     EXPECT_NEAR(omega1, 24.86, 0.01);  // 1.8751^2 sqrt(EI / (rho L^4)) = 24.86 rad/s, Euler-Bernoulli
+    EXPECT_NE(r.out.find("the kernels derive these modes in double-double"), std::string::npos) << r.out;
 }
 
 /// The cantilever with its mass at the w dofs alone (no rotary inertia: zero
@@ -822,6 +823,12 @@ TEST(CoupledMass, WhatIsNotYetTakenIsRefusedByName) {
                                                     "normal = 10.0\n[simulate]\nt_end = 0.2\n");
     EXPECT_EQ(testing::run_hsnc("simulate '" + ground + "'").exit_code, 0);
     EXPECT_EQ(testing::run_hsnc("simulate --precision mp:30 '" + ground + "'").exit_code, 0);
+    // A stuck friction on a coupled M stays on the Eigen solver in every kernel kind, and inspect says so.
+    const testing::CliRun stuck = testing::run_hsnc("inspect '" + ground + "' --config 'stuck=w2'");
+    EXPECT_EQ(stuck.exit_code, 0) << stuck.err;
+    EXPECT_NE(stuck.out.find("every kernel kind runs this configuration on the Eigen solver"), std::string::npos)
+        << stuck.out;
+    EXPECT_NE(stuck.out.find("a stuck friction on a coupled (non-diagonal) mass matrix"), std::string::npos) << stuck.out;
 
     testing::TempDir plain;
     const std::string ok = beam_model(plain, "[simulate]\nt_end = 0.5\n");
