@@ -97,6 +97,43 @@ std::vector<std::vector<DD>> folded(const std::vector<std::vector<DD>>& X, const
     return out;
 }
 
+/// M_FF = L L^T of a coupled M over the free dofs, in DD (L lower
+/// triangular); NotDerivable where a pivot is not positive.
+std::vector<std::vector<DD>> mass_cholesky(const Model& model, const Derivation& d, const std::string& where) {
+    const std::size_t nf = d.free_dofs.size();
+    std::vector<std::vector<DD>> L(nf, std::vector<DD>(nf));
+    for (std::size_t r = 0; r < nf; ++r)
+        for (std::size_t c = 0; c <= r; ++c) {
+            DD sum(model.mass_entry(static_cast<std::size_t>(d.free_dofs[r]), static_cast<std::size_t>(d.free_dofs[c])));
+            for (std::size_t k = 0; k < c; ++k) sum -= L[r][k] * L[c][k];
+            if (r == c) {
+                if (!(sum > DD(0.0))) throw NotDerivable(where + "the free dofs' mass matrix is not positive definite");
+                L[r][r] = sqrt(sum);
+            } else {
+                L[r][c] = sum / L[c][c];
+            }
+        }
+    return L;
+}
+
+/// L^-1 b (forward substitution).
+std::vector<DD> lower_solve(const std::vector<std::vector<DD>>& L, std::vector<DD> b) {
+    for (std::size_t r = 0; r < b.size(); ++r) {
+        for (std::size_t k = 0; k < r; ++k) b[r] -= L[r][k] * b[k];
+        b[r] = b[r] / L[r][r];
+    }
+    return b;
+}
+
+/// L^-T b (back substitution).
+std::vector<DD> upper_solve(const std::vector<std::vector<DD>>& L, std::vector<DD> b) {
+    for (std::size_t r = b.size(); r-- > 0;) {
+        for (std::size_t k = r + 1; k < b.size(); ++k) b[r] -= L[k][r] * b[k];
+        b[r] = b[r] / L[r][r];
+    }
+    return b;
+}
+
 /// The pseudo-modes, static inverse and harmonic particular parts of a
 /// configuration with dampers (StateSpaceData, derivation.h), in DD.
 void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& group, const std::vector<DD>& mass) {
@@ -107,6 +144,23 @@ void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& grou
         throw NotDerivable(where + "rigid-body modes under dampers");
     d.state_space = true;
     const auto K = folded(d.k_dd, group), C = folded(d.c_dd, group);
+    // Coupled M (no riders there: group[r] = {free_dofs[r]}): M_FF^-1 K and M_FF^-1 C by its Cholesky factor.
+    const bool coupled = model.coupled_mass();
+    std::vector<std::vector<DD>> MK, MC, Mff;
+    if (coupled) {
+        const auto L = mass_cholesky(model, d, where);
+        MK.assign(nf, std::vector<DD>(nf)), MC = MK, Mff = MK;
+        for (std::size_t c = 0; c < nf; ++c) {
+            std::vector<DD> k(nf), cc(nf);
+            for (std::size_t r = 0; r < nf; ++r) {
+                k[r] = K[r][c], cc[r] = C[r][c];
+                Mff[r][c] = DD(model.mass_entry(static_cast<std::size_t>(d.free_dofs[r]), static_cast<std::size_t>(d.free_dofs[c])));
+            }
+            k = upper_solve(L, lower_solve(L, std::move(k)));
+            cc = upper_solve(L, lower_solve(L, std::move(cc)));
+            for (std::size_t r = 0; r < nf; ++r) MK[r][c] = k[r], MC[r][c] = cc[r];
+        }
+    }
     // Balanced as the state-space solver balances it: y = (x, v / s), s the power of 2
     // nearest the largest sqrt(K_rr / m_r) (else C_rr / m_r), so that the eigenvectors'
     // condition measures the modes, not the units (unbalanced, a 16-mass chain's
@@ -123,6 +177,11 @@ void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& grou
     for (std::size_t r = 0; r < nf; ++r) {
         S[r][nf + r] = s_scale;
         for (std::size_t c = 0; c < nf; ++c) {
+            if (coupled) {
+                S[nf + r][c] = -MK[r][c] / s_scale;
+                S[nf + r][nf + c] = -MC[r][c];
+                continue;
+            }
             if (!K[r][c].is_zero()) S[nf + r][c] = -K[r][c] / (mass[r] * s_scale);
             if (!C[r][c].is_zero()) S[nf + r][nf + c] = -C[r][c] / mass[r];
         }
@@ -228,7 +287,7 @@ void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& grou
         for (std::size_t r = 0; r < nf; ++r) {
             for (int i : group[r]) X[r].re += hd.amplitude[static_cast<std::size_t>(i)];
             for (std::size_t c = 0; c < nf; ++c)
-                Z[r][c] = DDComplex(K[r][c] - (r == c ? W * W * mass[r] : DD(0.0)), W * C[r][c]);
+                Z[r][c] = DDComplex(K[r][c] - (coupled ? W * W * Mff[r][c] : r == c ? W * W * mass[r] : DD(0.0)), W * C[r][c]);
         }
         if (!dd_solve(Z, X)) throw NotDerivable(where + "a singular dynamic stiffness at " + std::to_string(h.omega) + " rad/s");
         for (std::size_t r = 0; r < nf; ++r) {
@@ -300,43 +359,6 @@ std::vector<std::vector<int>> coordinates(const Model& model, const Configuratio
     for (std::size_t r = 0; r < d.free_dofs.size(); ++r) group[r].push_back(d.free_dofs[r]);
     for (int q : d.riders) group[static_cast<std::size_t>(free_index[model.masses[static_cast<std::size_t>(q)].partner])].push_back(q);
     return group;
-}
-
-/// M_FF = L L^T of a coupled M over the free dofs, in DD (L lower
-/// triangular); NotDerivable where a pivot is not positive.
-std::vector<std::vector<DD>> mass_cholesky(const Model& model, const Derivation& d, const std::string& where) {
-    const std::size_t nf = d.free_dofs.size();
-    std::vector<std::vector<DD>> L(nf, std::vector<DD>(nf));
-    for (std::size_t r = 0; r < nf; ++r)
-        for (std::size_t c = 0; c <= r; ++c) {
-            DD sum(model.mass_entry(static_cast<std::size_t>(d.free_dofs[r]), static_cast<std::size_t>(d.free_dofs[c])));
-            for (std::size_t k = 0; k < c; ++k) sum -= L[r][k] * L[c][k];
-            if (r == c) {
-                if (!(sum > DD(0.0))) throw NotDerivable(where + "the free dofs' mass matrix is not positive definite");
-                L[r][r] = sqrt(sum);
-            } else {
-                L[r][c] = sum / L[c][c];
-            }
-        }
-    return L;
-}
-
-/// L^-1 b (forward substitution).
-std::vector<DD> lower_solve(const std::vector<std::vector<DD>>& L, std::vector<DD> b) {
-    for (std::size_t r = 0; r < b.size(); ++r) {
-        for (std::size_t k = 0; k < r; ++k) b[r] -= L[r][k] * b[k];
-        b[r] = b[r] / L[r][r];
-    }
-    return b;
-}
-
-/// L^-T b (back substitution).
-std::vector<DD> upper_solve(const std::vector<std::vector<DD>>& L, std::vector<DD> b) {
-    for (std::size_t r = b.size(); r-- > 0;) {
-        for (std::size_t k = r + 1; k < b.size(); ++k) b[r] -= L[k][r] * b[k];
-        b[r] = b[r] / L[r][r];
-    }
-    return b;
 }
 
 /// The symmetric A = L^-1 K_FF L^-T of a coupled M = L L^T (the generalized
@@ -565,7 +587,6 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     }
     const std::string where = "derivation::derive(): configuration " + cfg.spec(model) + ": ";
     if (!model.proportional_damping()) {
-        if (coupled) throw NotDerivable(where + "non-proportional damping on a coupled (non-diagonal) mass matrix");
         derive_state_space(d, group, mass_dd);
         return d;
     }
@@ -721,7 +742,12 @@ std::vector<ex> state_space_response(const Derivation& d, const SegmentInputs& i
         const numeric W = lf(hd.omega);
         GiNaC::matrix Z(nf, nf), F(nf, 1);
         for (std::size_t r = 0; r < nf; ++r)
-            for (std::size_t s = 0; s < nf; ++s) Z(r, s) = K(r, s) - (r == s ? W * W * d.mass[r] : kZero) + GiNaC::I * W * C(r, s);
+            for (std::size_t s = 0; s < nf; ++s) {
+                const numeric m_rs = d.model->coupled_mass() ? exact(d.model->mass_entry(static_cast<std::size_t>(d.free_dofs[r]),
+                                                                                        static_cast<std::size_t>(d.free_dofs[s])))
+                                                             : r == s ? d.mass[r] : kZero;
+                Z(r, s) = K(r, s) - W * W * m_rs + GiNaC::I * W * C(r, s);
+            }
         for (std::size_t i = 0; i < d.model->dof(); ++i)
             if (const int r = d.coordinate(static_cast<int>(i)); r >= 0) F(r, 0) = F(r, 0) + lf(hd.amplitude[i]);
         const GiNaC::matrix X = Z.inverse().mul(F);
