@@ -97,14 +97,19 @@ std::vector<std::vector<DD>> folded(const std::vector<std::vector<DD>>& X, const
     return out;
 }
 
+/// (M_FF)_rc: M between free coordinates r and c (a coupled M has no riders).
+double free_mass(const Derivation& d, std::size_t r, std::size_t c) {
+    return d.model->mass_entry(static_cast<std::size_t>(d.free_dofs[r]), static_cast<std::size_t>(d.free_dofs[c]));
+}
+
 /// M_FF = L L^T of a coupled M over the free dofs, in DD (L lower
 /// triangular); NotDerivable where a pivot is not positive.
-std::vector<std::vector<DD>> mass_cholesky(const Model& model, const Derivation& d, const std::string& where) {
+std::vector<std::vector<DD>> mass_cholesky(const Derivation& d, const std::string& where) {
     const std::size_t nf = d.free_dofs.size();
     std::vector<std::vector<DD>> L(nf, std::vector<DD>(nf));
     for (std::size_t r = 0; r < nf; ++r)
         for (std::size_t c = 0; c <= r; ++c) {
-            DD sum(model.mass_entry(static_cast<std::size_t>(d.free_dofs[r]), static_cast<std::size_t>(d.free_dofs[c])));
+            DD sum(free_mass(d, r, c));
             for (std::size_t k = 0; k < c; ++k) sum -= L[r][k] * L[c][k];
             if (r == c) {
                 if (!(sum > DD(0.0))) throw NotDerivable(where + "the free dofs' mass matrix is not positive definite");
@@ -148,13 +153,13 @@ void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& grou
     const bool coupled = model.coupled_mass();
     std::vector<std::vector<DD>> MK, MC, Mff;
     if (coupled) {
-        const auto L = mass_cholesky(model, d, where);
+        const auto L = mass_cholesky(d, where);
         MK.assign(nf, std::vector<DD>(nf)), MC = MK, Mff = MK;
         for (std::size_t c = 0; c < nf; ++c) {
             std::vector<DD> k(nf), cc(nf);
             for (std::size_t r = 0; r < nf; ++r) {
                 k[r] = K[r][c], cc[r] = C[r][c];
-                Mff[r][c] = DD(model.mass_entry(static_cast<std::size_t>(d.free_dofs[r]), static_cast<std::size_t>(d.free_dofs[c])));
+                Mff[r][c] = DD(free_mass(d, r, c));
             }
             k = upper_solve(L, lower_solve(L, std::move(k)));
             cc = upper_solve(L, lower_solve(L, std::move(cc)));
@@ -456,6 +461,7 @@ void set_regime(Mode& m, const DD& critical_tol) {
         }
     }
 }
+
 /// Rigid-body mode j of a coupled M in the coordinates y = L^T x: L^T e_c of
 /// the component's members, made orthonormal to the rigid modes 0..j-1.
 std::vector<DD> rigid_shape(const std::vector<std::vector<DD>>& L, const std::vector<int>& members,
@@ -591,12 +597,15 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         return d;
     }
     // Coupled M: A = L^-1 K_FF L^-T (M_FF = L L^T). Lumped: T^T K T / sqrt(m_r m_s).
-    const std::vector<std::vector<DD>> chol = coupled ? mass_cholesky(model, d, where) : std::vector<std::vector<DD>>{};
+    const std::vector<std::vector<DD>> chol = coupled ? mass_cholesky(d, where) : std::vector<std::vector<DD>>{};
     std::vector<std::vector<DD>> kt = folded(d.k_dd, group);
-    if (coupled) kt = coupled_kt(kt, chol);
-    for (std::size_t r = 0; r < nf && !coupled; ++r)
-        for (std::size_t s = 0; s < nf; ++s)
-            if (!kt[r][s].is_zero()) kt[r][s] = kt[r][s] / (sqm[r] * sqm[s]);  // a zero stays the exact 0
+    if (coupled) {
+        kt = coupled_kt(kt, chol);
+    } else {
+        for (std::size_t r = 0; r < nf; ++r)
+            for (std::size_t s = 0; s < nf; ++s)
+                if (!kt[r][s].is_zero()) kt[r][s] = kt[r][s] / (sqm[r] * sqm[s]);  // a zero stays the exact 0
+    }
     // Stiffness over mass beyond double's range (k/m = 1e400): no constant of
     // the program could hold it; the Eigen solver takes the configuration and
     // the engine says what is wrong (the motion too fast to resolve).
@@ -743,9 +752,7 @@ std::vector<ex> state_space_response(const Derivation& d, const SegmentInputs& i
         GiNaC::matrix Z(nf, nf), F(nf, 1);
         for (std::size_t r = 0; r < nf; ++r)
             for (std::size_t s = 0; s < nf; ++s) {
-                const numeric m_rs = d.model->coupled_mass() ? exact(d.model->mass_entry(static_cast<std::size_t>(d.free_dofs[r]),
-                                                                                        static_cast<std::size_t>(d.free_dofs[s])))
-                                                             : r == s ? d.mass[r] : kZero;
+                const numeric m_rs = d.model->coupled_mass() ? exact(free_mass(d, r, s)) : r == s ? d.mass[r] : kZero;
                 Z(r, s) = K(r, s) - W * W * m_rs + GiNaC::I * W * C(r, s);
             }
         for (std::size_t i = 0; i < d.model->dof(); ++i)
