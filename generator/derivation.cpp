@@ -340,9 +340,8 @@ namespace {
 
 // The free, stuck and riding masses of cfg (d.free_dofs, d.stuck_dofs,
 // d.riders), and the masses of each free coordinate: its free mass, then its
-// riders (T of x = T q + e). On a coupled M, NotDerivable for a stuck
-// friction (its held force P_i . f, model/held_mass.h, is not lowered yet: the
-// Eigen solver takes the configuration).
+// riders (T of x = T q + e). A coupled M has no riders (the reader refuses
+// friction between two dofs on it).
 std::vector<std::vector<int>> coordinates(const Model& model, const Configuration& cfg, Derivation& d,
                                           std::vector<int>& free_index) {
     const std::size_t n = model.dof();
@@ -357,9 +356,9 @@ std::vector<std::vector<int>> coordinates(const Model& model, const Configuratio
             d.free_dofs.push_back(static_cast<int>(i));
         }
     }
-    if (model.coupled_mass() && (!d.stuck_dofs.empty() || !d.riders.empty()))
+    if (model.coupled_mass() && !d.riders.empty())
         throw NotDerivable("derivation::derive(): configuration " + cfg.spec(model) +
-                           ": a stuck friction on a coupled (non-diagonal) mass matrix");
+                           ": a friction between two dofs of a coupled (non-diagonal) mass matrix");
     std::vector<std::vector<int>> group(d.free_dofs.size());
     for (std::size_t r = 0; r < d.free_dofs.size(); ++r) group[r].push_back(d.free_dofs[r]);
     for (int q : d.riders) group[static_cast<std::size_t>(free_index[model.masses[static_cast<std::size_t>(q)].partner])].push_back(q);
@@ -501,6 +500,18 @@ void friction_limits(const Model& model, DerivationCache& mu) {
     }
 }
 
+/// Derivation::held of a coupled M = L L^T over the free dofs: per stuck dof
+/// i, c = M_FF^-1 M_Fi by two triangular solves.
+void held_rows(Derivation& d, const std::vector<std::vector<DD>>& L) {
+    const std::size_t nf = d.free_dofs.size();
+    for (int i : d.stuck_dofs) {
+        std::vector<DD> b(nf);
+        for (std::size_t r = 0; r < nf; ++r)
+            b[r] = DD(d.model->mass_entry(static_cast<std::size_t>(d.free_dofs[r]), static_cast<std::size_t>(i)));
+        d.held.push_back(nf > 0 ? upper_solve(L, lower_solve(L, std::move(b))) : std::move(b));
+    }
+}
+
 /// A harmonic with Omega = 0 is the constant force F sin(phase): added to
 /// d.f_const exactly, the sums rounded once into d.f_const_double.
 void add_static_forcing(const Model& model, Derivation& d) {
@@ -592,12 +603,13 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
         sqm[r] = sqrt(mass_dd[r]);
     }
     const std::string where = "derivation::derive(): configuration " + cfg.spec(model) + ": ";
+    const std::vector<std::vector<DD>> chol = coupled ? mass_cholesky(d, where) : std::vector<std::vector<DD>>{};
+    if (coupled) held_rows(d, chol);
     if (!model.proportional_damping()) {
         derive_state_space(d, group, mass_dd);
         return d;
     }
     // Coupled M: A = L^-1 K_FF L^-T (M_FF = L L^T). Lumped: T^T K T / sqrt(m_r m_s).
-    const std::vector<std::vector<DD>> chol = coupled ? mass_cholesky(d, where) : std::vector<std::vector<DD>>{};
     std::vector<std::vector<DD>> kt = folded(d.k_dd, group);
     if (coupled) {
         kt = coupled_kt(kt, chol);
@@ -899,7 +911,8 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
         } else {
             // A_i = -K x - C v + f_const + the stuck sliders' preload + forcing (interface.md section 2);
             // against a partner p, the force that holds the pair together,
-            // D = (m_p A_i - m_i A_p)/(m_i + m_p) (assembly.h driving_force).
+            // D = (m_p A_i - m_i A_p)/(m_i + m_p) (assembly.h driving_force);
+            // on a coupled M, D = A_i - M_iF a_F (model/held_mass.h).
             const int i = sf.element;
             auto force = [&](int b) {
                 ex A = d.f_const[b] + slider_preload(d, in, b);
@@ -913,6 +926,9 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
                 const numeric mi = exact(model.masses[static_cast<std::size_t>(i)].m), mp = exact(model.masses[static_cast<std::size_t>(p)].m);
                 A = (mp * A - mi * force(p)) / (mi + mp);
             }
+            if (model.coupled_mass())
+                for (int r : d.free_dofs)
+                    A -= exact(model.mass_entry(static_cast<std::size_t>(i), static_cast<std::size_t>(r))) * out.a[r];
             const numeric mu_s_n = exact(model.masses[i].mu_s) * exact_normal(model, static_cast<std::size_t>(i));
             g = friction::release_value(sf.kind == SwitchKind::release_pos ? 1 : -1, A, ex(mu_s_n), 0);
         }

@@ -136,6 +136,11 @@ struct Derivation {
     std::vector<Mode> modes;               ///< ascending lambda
     std::vector<HarmonicData> harmonics;   ///< Omega > 0 harmonics (Omega = 0 ones fold into f_const)
     std::vector<SwitchFunction> switches;
+    /// Coupled M: per stuck dof (stuck_dofs order), c = M_FF^-1 M_Fi over the
+    /// free coordinates. The force its friction holds is D_i = A_i - c^T A_F
+    /// (model/held_mass.h), A_F the free dofs' forces with their kinetic
+    /// friction. Empty for a lumped M.
+    std::vector<std::vector<DD>> held;
     double max_step = 0;  ///< +inf unless resonant (secular) terms: then one forcing period
     bool state_space = false;  ///< dampers: `modes` are pseudo-modes of `state` (StateSpaceData)
     StateSpaceData state;

@@ -1,5 +1,7 @@
 #include "lowering.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <stdexcept>
@@ -211,6 +213,68 @@ void for_each_slider_preload(const Model& model, const Configuration& cfg, int i
     }
 }
 
+/// The constants of each mode (ModeConstant layout) appended to p.constants;
+/// the index of each mode's first.
+std::vector<std::uint32_t> mode_constants(Program& p, const Derivation& d, bool named) {
+    const std::size_t nm = d.modes.size();
+    std::vector<std::uint32_t> mode_k(nm);
+    for (std::size_t j = 0; j < nm; ++j) {
+        const Mode& m = d.modes[j];
+        const std::string J = named ? idx(j) : std::string();
+        double k[kModeConstants] = {};
+        std::string names[kModeConstants];  // printed names (a named program's only)
+        auto name = [&](ModeConstant c, const char* prefix) {
+            if (named) names[c] = prefix + J;
+        };
+        k[kModeLambda] = dbl(m.lambda), name(kModeLambda, "lambda_");
+        k[kModeSigma] = dbl(m.sigma), name(kModeSigma, "sigma_");
+        k[kModeKappa] = dbl(m.kappa), name(kModeKappa, "kappa_");
+        switch (m.regime) {
+            case Regime::undamped:
+            case Regime::underdamped:
+                k[kModeOmegaD] = dbl(m.omega_d), name(kModeOmegaD, "omega_d_");
+                k[kModeInvOmegaD] = 1.0 / dbl(m.omega_d);
+                break;
+            case Regime::overdamped:
+                k[kModeGamma] = dbl(m.gamma), name(kModeGamma, "gamma_");
+                k[kModeR1] = dbl(m.r1), name(kModeR1, "r1_");
+                k[kModeNegTwoGamma] = -2.0 * dbl(m.gamma);
+                k[kModeHalfInvGamma] = 0.5 / dbl(m.gamma);
+                break;
+            case Regime::rigid_damped:
+                k[kModeC] = dbl(m.c), name(kModeC, "c_");
+                k[kModeInvC] = 1.0 / dbl(m.c);
+                break;
+            default:
+                break;
+        }
+        mode_k[j] = static_cast<std::uint32_t>(p.constants.size());
+        for (std::uint32_t c = 0; c < kModeConstants; ++c) constant(p, k[c], names[c]);
+    }
+    return mode_k;
+}
+
+/// The held force of stuck dof i on a coupled M as a combination of the
+/// forces on bodies: D_i = A_i - sum_r c_r A_r over the free dofs r with
+/// c_r != 0 (Derivation::held).
+std::vector<std::pair<int, DD>> held_terms(const Derivation& d, int i) {
+    const auto at = std::find(d.stuck_dofs.begin(), d.stuck_dofs.end(), i) - d.stuck_dofs.begin();
+    const std::vector<DD>& c = d.held[static_cast<std::size_t>(at)];
+    std::vector<std::pair<int, DD>> terms{{i, DD(1.0)}};
+    for (std::size_t r = 0; r < c.size(); ++r)
+        if (!c[r].is_zero()) terms.emplace_back(d.free_dofs[r], -c[r]);
+    return terms;
+}
+
+/// out[j] = sum_k c_k of[k][j] for the combination `terms` (c_k its
+/// coefficients), summed in their order.
+void combine(const std::vector<std::pair<int, DD>>& terms, const std::vector<std::vector<DD>>& of, std::vector<DD>& out) {
+    for (std::size_t j = 0; j < out.size(); ++j) {
+        out[j] = terms[0].second * of[0][j];
+        for (std::size_t k = 1; k < terms.size(); ++k) out[j] = out[j] + terms[k].second * of[k][j];
+    }
+}
+
 }  // namespace
 
 Program lower(const Derivation& d, ProgramNames names) {
@@ -262,40 +326,8 @@ Program lower(const Derivation& d, ProgramNames names) {
     for (int q : d.riders) coord_of[q] = free_of[partner_of(q)];
 
     // ---- constants: per mode (ModeConstant layout), per harmonic (Omega, phase) ----
-    std::vector<std::uint32_t> mode_k(nm), harm_k(nh);
-    for (std::size_t j = 0; j < nm; ++j) {
-        const Mode& m = d.modes[j];
-        const std::string J = named ? idx(j) : std::string();
-        double k[kModeConstants] = {};
-        std::string names[kModeConstants];  // printed names (a named program's only)
-        auto name = [&](ModeConstant c, const char* prefix) {
-            if (named) names[c] = prefix + J;
-        };
-        k[kModeLambda] = dbl(m.lambda), name(kModeLambda, "lambda_");
-        k[kModeSigma] = dbl(m.sigma), name(kModeSigma, "sigma_");
-        k[kModeKappa] = dbl(m.kappa), name(kModeKappa, "kappa_");
-        switch (m.regime) {
-            case Regime::undamped:
-            case Regime::underdamped:
-                k[kModeOmegaD] = dbl(m.omega_d), name(kModeOmegaD, "omega_d_");
-                k[kModeInvOmegaD] = 1.0 / dbl(m.omega_d);
-                break;
-            case Regime::overdamped:
-                k[kModeGamma] = dbl(m.gamma), name(kModeGamma, "gamma_");
-                k[kModeR1] = dbl(m.r1), name(kModeR1, "r1_");
-                k[kModeNegTwoGamma] = -2.0 * dbl(m.gamma);
-                k[kModeHalfInvGamma] = 0.5 / dbl(m.gamma);
-                break;
-            case Regime::rigid_damped:
-                k[kModeC] = dbl(m.c), name(kModeC, "c_");
-                k[kModeInvC] = 1.0 / dbl(m.c);
-                break;
-            default:
-                break;
-        }
-        mode_k[j] = static_cast<std::uint32_t>(p.constants.size());
-        for (std::uint32_t c = 0; c < kModeConstants; ++c) constant(p, k[c], names[c]);
-    }
+    const std::vector<std::uint32_t> mode_k = mode_constants(p, d, named);
+    std::vector<std::uint32_t> harm_k(nh);
     for (std::size_t h = 0; h < nh; ++h) {
         harm_k[h] = constant(p, dbl(d.harmonics[h].omega), named ? "Omega_" + idx(h) : std::string());
         constant(p, dbl(d.harmonics[h].phase));
@@ -563,6 +595,13 @@ Program lower(const Derivation& d, ProgramNames names) {
         if (d.cfg.slip[j] == 0)
             s_stuck_slot[j] = slot("s_stuck_", j, x0(static_cast<int>(n + j)), "",
                                    named ? "the slider of " + model.jenkins[j].name + " (stuck)" : "");
+    // A coupled M with a stuck friction: the kinetic friction -mu_k N sgn of each
+    // sliding free dof, which the held forces read (Derivation::held).
+    std::vector<std::uint32_t> kinetic_slot(n, kNoRegister);
+    if (!d.held.empty())
+        for (int i : d.free_dofs)
+            if (mu_k_n[i] != 0.0)
+                kinetic_slot[static_cast<std::size_t>(i)] = slot_lin("F_k_", static_cast<std::size_t>(i), Lin().add(-mu_k_n[i], sgn(i)));
     p.n_coef = static_cast<int>(p.coef_names.size());
 
     // ================= eval =================
@@ -931,7 +970,7 @@ Program lower(const Derivation& d, ProgramNames names) {
             const double mu_s_n = d.mu_s_n[static_cast<std::size_t>(i)];
             const int sigma = pos ? 1 : -1;
             const LinValue limit = LinValue::constant(mu_s_n);
-            if (ms.partner == kGround) {
+            if (ms.partner == kGround && d.held.empty()) {  // lumped: D_i = A_i
                 if (named) comment += std::string("g_") + F + ": " + (pos ? "A" : "-A") + " - mu_s N of stuck " + ms.name +
                            ", A = -K x - C v + f + sum_h F_h sin (force but friction)";
                 Lin A, dA;
@@ -952,51 +991,65 @@ Program lower(const Derivation& d, ProgramNames names) {
                 g = friction::release_value(sigma, LinValue(1.0, af), limit, 0).lin();
                 dg = friction::release_value(sigma, LinValue(1.0, daf), limit, 1).lin();
             } else {
-                // Stuck to its partner p: D = (m_p A_i - m_i A_p)/(m_i + m_p), the force that
-                // holds the pair together (assembly.h driving_force), from both forces.
-                const int p = ms.partner;
-                const Mass& mp = model.masses[static_cast<std::size_t>(p)];
-                if (named) comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of " + ms.name + " stuck to " +
-                           mp.name + ", D = (m_p A_i - m_i A_p)/(m_i + m_p)";
-                const DD mi(ms.m), mpn(mp.m);
-                const DD ci = mpn / (mi + mpn), cp = -mi / (mi + mpn);
-                std::uint32_t reg[2][3];  // A, A', the magnitude of A's terms; of i, then of p
-                std::vector<DD> al_b[2], be_b[2], Gs_b[2], Gc_b[2];
-                for (int which = 0; which < 2; ++which) {
-                    const int b = which == 0 ? i : p;
+                // The force that holds i, D = sum_k c_k A_k over bodies k. Stuck to its partner p:
+                // D = (m_p A_i - m_i A_p)/(m_i + m_p), the force that holds the pair together
+                // (assembly.h driving_force). On a coupled M: D = A_i - c^T A_F with
+                // c = M_FF^-1 M_Fi (Derivation::held, model/held_mass.h), A_F the free dofs'
+                // forces with their kinetic friction.
+                std::vector<std::pair<int, DD>> terms;
+                std::string prefix = "A_pair_";
+                if (ms.partner != kGround) {
+                    const int p = ms.partner;
+                    const Mass& mp = model.masses[static_cast<std::size_t>(p)];
+                    if (named) comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of " + ms.name + " stuck to " +
+                               mp.name + ", D = (m_p A_i - m_i A_p)/(m_i + m_p)";
+                    const DD mi(ms.m), mpn(mp.m);
+                    terms = {{i, mpn / (mi + mpn)}, {p, -mi / (mi + mpn)}};
+                } else {
+                    if (named) comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of stuck " + ms.name +
+                               ", D = A_i - M_iF M_FF^-1 A_F (coupled M), A = -K x - C v + f + sum_h F_h sin - mu_k N sgn";
+                    prefix = "A_held_";
+                    terms = held_terms(d, i);
+                }
+                const std::size_t nt = terms.size();
+                std::vector<std::array<std::uint32_t, 3>> reg(nt);  // A, A', the magnitude of A's terms, per body
+                std::vector<std::vector<DD>> al_b(nt), be_b(nt), Gs_b(nt), Gc_b(nt);
+                for (std::size_t k = 0; k < nt; ++k) {
+                    const int b = terms[k].first;
                     Lin A, dA, mag;
                     double const_mag = std::fabs(f_const[b]);
-                    al_b[which].assign(nm, 0), be_b[which].assign(nm, 0);
-                    Gs_b[which].assign(nh, 0), Gc_b[which].assign(nh, 0);
-                    force_terms(b, A, dA, mag, const_mag, al_b[which], be_b[which], Gs_b[which], Gc_b[which]);
+                    al_b[k].assign(nm, 0), be_b[k].assign(nm, 0);
+                    Gs_b[k].assign(nh, 0), Gc_b[k].assign(nh, 0);
+                    force_terms(b, A, dA, mag, const_mag, al_b[k], be_b[k], Gs_b[k], Gc_b[k]);
+                    if (kinetic_slot[static_cast<std::size_t>(b)] != kNoRegister) {  // a sliding free dof of a coupled M
+                        A.add(1.0, C(kinetic_slot[static_cast<std::size_t>(b)]));
+                        const_mag += mu_k_n[b];
+                    }
                     mag.add(const_mag, ONE);
                     if (const auto it = pair_reg.find(b); it != pair_reg.end()) {
-                        for (int k = 0; k < 3; ++k) reg[which][k] = it->second + static_cast<std::uint32_t>(k);
+                        for (std::uint32_t q = 0; q < 3; ++q) reg[k][q] = it->second + q;
                         continue;
                     }
                     const std::string B = std::to_string(b);
-                    reg[which][0] = e.temp("A_pair_" + B);
-                    reg[which][1] = e.temp("dA_pair_" + B);
-                    reg[which][2] = e.temp("mA_pair_" + B);
-                    pair_reg[b] = reg[which][0];
-                    e.annotate(e.lin(reg[which][0], A), comment);
+                    reg[k][0] = e.temp(prefix + B);
+                    reg[k][1] = e.temp("d" + prefix + B);
+                    reg[k][2] = e.temp("m" + prefix + B);
+                    pair_reg[b] = reg[k][0];
+                    e.annotate(e.lin(reg[k][0], A), comment);
                     comment.clear();
-                    e.lin(reg[which][1], dA);
-                    e.lin(reg[which][2], mag);
+                    e.lin(reg[k][1], dA);
+                    e.lin(reg[k][2], mag);
                 }
-                const LinValue D = LinValue(dbl(ci), reg[0][0]) + LinValue(dbl(cp), reg[1][0]);
-                const LinValue dD = LinValue(dbl(ci), reg[0][1]) + LinValue(dbl(cp), reg[1][1]);
+                LinValue D(dbl(terms[0].second), reg[0][0]), dD(dbl(terms[0].second), reg[0][1]);
+                for (std::size_t k = 1; k < nt; ++k) {
+                    D = D + LinValue(dbl(terms[k].second), reg[k][0]);
+                    dD = dD + LinValue(dbl(terms[k].second), reg[k][1]);
+                }
                 g = friction::release_value(sigma, D, limit, 0).lin();
                 dg = friction::release_value(sigma, dD, limit, 1).lin();
-                sc.add(dbl(ci), reg[0][2]).add(-dbl(cp), reg[1][2]).add(mu_s_n, ONE);
-                for (std::size_t j = 0; j < nm; ++j) {
-                    al[j] = ci * al_b[0][j] + cp * al_b[1][j];
-                    be[j] = ci * be_b[0][j] + cp * be_b[1][j];
-                }
-                for (std::size_t h = 0; h < nh; ++h) {
-                    Gs[h] = ci * Gs_b[0][h] + cp * Gs_b[1][h];
-                    Gc[h] = ci * Gc_b[0][h] + cp * Gc_b[1][h];
-                }
+                for (std::size_t k = 0; k < nt; ++k) sc.add(std::fabs(dbl(terms[k].second)), reg[k][2]);
+                sc.add(mu_s_n, ONE);
+                combine(terms, al_b, al), combine(terms, be_b, be), combine(terms, Gs_b, Gs), combine(terms, Gc_b, Gc);
             }
         }
         e.annotate(e.lin(G(f, 3), g), comment);
