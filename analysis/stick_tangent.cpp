@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "assembly.h"
+#include "held_mass.h"
 
 namespace hsnc::analysis {
 namespace {
@@ -49,16 +50,26 @@ Eigen::MatrixXd stick_generator(const Model& model, const Configuration& cfg) {
     const Layout L = layout(model);
     const Eigen::MatrixXd K = stiffness_matrix(model, cfg), C = damping_matrix(model, cfg);
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(L.size(), L.size());
+    if (model.coupled_mass()) {  // a_F = M_FF^-1 f_F with the stuck dofs held (held_mass.h; a coupled M has no riders)
+        Eigen::MatrixXd grad(L.n, L.size());
+        for (Eigen::Index i = 0; i < L.n; ++i) grad.row(i) = force_gradient(model, cfg, K, C, static_cast<int>(i));
+        const Eigen::MatrixXd inv = HeldMass(model, cfg.stuck).inverse();
+        for (Eigen::Index i = 0; i < L.n; ++i) {
+            if (cfg.stuck[static_cast<std::size_t>(i)]) continue;
+            A(L.x(static_cast<int>(i)), L.v(static_cast<int>(i))) = 1.0;
+            A.row(L.v(static_cast<int>(i))) = inv.row(i) * grad;
+        }
+    }
     // Each body's acceleration row: its members' force gradients over their summed mass.
     std::vector<Eigen::RowVectorXd> row(model.dof(), Eigen::RowVectorXd::Zero(L.size()));
     std::vector<double> mass(model.dof(), 0.0);
-    for (std::size_t i = 0; i < model.dof(); ++i) {
+    for (std::size_t i = 0; i < model.dof() && !model.coupled_mass(); ++i) {
         const int b = body_of(model, cfg, i);
         if (b < 0) continue;
         row[static_cast<std::size_t>(b)] += force_gradient(model, cfg, K, C, static_cast<int>(i));
         mass[static_cast<std::size_t>(b)] += model.masses[i].m;
     }
-    for (std::size_t i = 0; i < model.dof(); ++i) {
+    for (std::size_t i = 0; i < model.dof() && !model.coupled_mass(); ++i) {
         const int b = body_of(model, cfg, i);
         if (b < 0) continue;
         const int ii = static_cast<int>(i);
@@ -109,7 +120,17 @@ Eigen::VectorXd stick_field(const Model& model, const Configuration& cfg, const 
     const Layout L = layout(model);
     Eigen::VectorXd f = Eigen::VectorXd::Zero(L.size());
     std::vector<double> force(model.dof(), 0.0), mass(model.dof(), 0.0);
-    for (std::size_t i = 0; i < model.dof(); ++i) {
+    if (model.coupled_mass()) {  // M_FF a_F = f_F, kinetic friction included (held_mass.h)
+        std::vector<double> a(model.dof());
+        held_forces(model, cfg, cfg.stuck, sgn, t, x, v, force.data());
+        HeldMass(model, cfg.stuck).accelerations(force.data(), a.data());
+        for (std::size_t i = 0; i < model.dof(); ++i) {
+            if (cfg.stuck[i]) continue;
+            f(L.x(static_cast<int>(i))) = v[i];
+            f(L.v(static_cast<int>(i))) = a[i];
+        }
+    }
+    for (std::size_t i = 0; i < model.dof() && !model.coupled_mass(); ++i) {
         const int b = body_of(model, cfg, i);
         if (b < 0) continue;
         double F = force_on_mass(model, cfg, static_cast<int>(i), t, x, v);
@@ -122,7 +143,7 @@ Eigen::VectorXd stick_field(const Model& model, const Configuration& cfg, const 
         force[static_cast<std::size_t>(b)] += F;
         mass[static_cast<std::size_t>(b)] += ms.m;
     }
-    for (std::size_t i = 0; i < model.dof(); ++i) {
+    for (std::size_t i = 0; i < model.dof() && !model.coupled_mass(); ++i) {
         const int ii = static_cast<int>(i), b = body_of(model, cfg, i);
         if (b < 0) continue;
         f(L.x(ii)) = v[i];
@@ -162,6 +183,15 @@ void stick_gradient(const Model& model, const Configuration& cfg, const SwitchFu
             const Eigen::MatrixXd K = stiffness_matrix(model, cfg), C = damping_matrix(model, cfg);
             const Eigen::VectorXd rate = forcing_rate(model, t);
             const int p = model.masses[static_cast<std::size_t>(e)].partner;
+            if (model.coupled_mass()) {  // D_e = P_e . f (held_mass.h)
+                const Eigen::VectorXd P = HeldMass(model, cfg.stuck).release_row(e);
+                for (Eigen::Index q = 0; q < L.n; ++q) {
+                    if (P(q) == 0.0) continue;
+                    hz += sg * P(q) * force_gradient(model, cfg, K, C, static_cast<int>(q));
+                    ht += sg * P(q) * rate(q);
+                }
+                return;
+            }
             if (p == kGround) {
                 hz = sg * force_gradient(model, cfg, K, C, e);
                 ht = sg * rate(e);

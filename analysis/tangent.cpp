@@ -49,9 +49,7 @@ struct Tangent::ConfigData {
     Eigen::MatrixXd stick_A, stick_P;
 };
 
-Tangent::Tangent(const Model& model) : model_(model), stick_(!stick_elements(model).empty()) {
-    if (stick_) require_lumped_mass(model, "the tangent of a model with stick elements");  // stick_tangent.cpp: bodies' masses
-}
+Tangent::Tangent(const Model& model) : model_(model), stick_(!stick_elements(model).empty()) {}
 Tangent::~Tangent() = default;
 Tangent::Tangent(Tangent&&) noexcept = default;
 

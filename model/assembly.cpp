@@ -83,12 +83,6 @@ double mass_times(const Model& model, std::size_t i, const double* y) {
     return s;
 }
 
-void require_lumped_mass(const Model& model, const std::string& who) {
-    if (!model.coupled_mass()) return;
-    throw InputError(who + ": model '" + model.name +
-                     "' has a coupled (non-diagonal) mass matrix, which it does not take yet");
-}
-
 Eigen::MatrixXd stiffness_matrix(const Model& model, const Configuration& cfg) {
     const auto n = static_cast<Eigen::Index>(model.dof());
     Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n);

@@ -46,11 +46,6 @@ Eigen::MatrixXd mass_matrix(const Model& model, const std::vector<int>& dofs);
 /// (M y)_i: m_i y_i for a lumped model, the row of a coupled M (model.h) times y.
 double mass_times(const Model& model, std::size_t i, const double* y);
 
-/// Throws InputError "WHO: model 'NAME' has a coupled (non-diagonal) mass
-/// matrix, which it does not take yet" when model.coupled_mass(): for the
-/// stages that still take lumped masses only (issue 36, stage b).
-void require_lumped_mass(const Model& model, const std::string& who);
-
 /// "friction between two bodies ([[friction]] 'f1')" when a [[friction]]
 /// element joins two bodies (a stuck pair moves as one body), else "".
 std::string friction_pairs(const Model& model);

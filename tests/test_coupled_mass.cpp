@@ -701,7 +701,7 @@ struct RelativeChain {
     std::string lumped, coupled;
 };
 
-RelativeChain relative_chain(const testing::TempDir& dir, bool damper) {
+RelativeChain relative_chain(const testing::TempDir& dir, bool damper, bool jenkins = false) {
     const Eigen::Vector3d m(1.0, 1.5, 2.0);
     Eigen::Matrix3d K = Eigen::Matrix3d::Zero();  // y1-ground 100, y2-ground 80, y1-y3 50, y2-y3 40
     K(0, 0) = 100 + 50, K(1, 1) = 80 + 40, K(2, 2) = 50 + 40, K(0, 2) = K(2, 0) = -50, K(1, 2) = K(2, 1) = -40;
@@ -714,7 +714,8 @@ RelativeChain relative_chain(const testing::TempDir& dir, bool damper) {
         "[[friction]]\nname = \"f1\"\nbetween = [\"u1\", \"ground\"]\nmu_k = 0.3\nmu_s = 0.4\nnormal = 10.0\n"
         "[[friction]]\nname = \"f2\"\nbetween = [\"u2\", \"ground\"]\nmu_k = 0.25\nmu_s = 0.35\nnormal = 12.0\n"
         "[[contact]]\nname = \"stop\"\nbetween = [\"u1\", \"ground\"]\ngap = 0.06\nk = 500.0\n" +
-        std::string(damper ? "" : "[damping]\nalpha = 0.2\nbeta = 0.001\n");  // structure.damping excludes [damping]
+        std::string(damper ? "" : "[damping]\nalpha = 0.2\nbeta = 0.001\n") +  // structure.damping excludes [damping]
+        std::string(jenkins ? "[[jenkins]]\nname = \"j2\"\nbetween = [\"u2\", \"ground\"]\nk = 60.0\nslip_force = 1.5\n" : "");
     std::ostringstream l;
     l << "name = \"chain-lumped\"\n";
     for (int i = 0; i < 3; ++i) l << "[[mass]]\nname = \"u" << i + 1 << "\"\nm = " << num(m(i)) << "\n";
@@ -899,53 +900,63 @@ TEST(CoupledMass, ThePeriodMapOfFrictionOnACoupledMIsTheLumpedOneInOtherCoordina
     // The exact Jacobian through stick, release and impacts (saltation of the
     // held forces, held_mass.h): J_coupled = S^-1 J_lumped S with S = diag(T, T),
     // y = T x, against the lumped model's tangent, and against central differences.
-    testing::TempDir dir;
-    const RelativeChain files = relative_chain(dir, false);
-    const Model lumped = read_model(files.lumped), coupled = read_model(files.coupled);
-    analysis::FlowKernels kernels;
-    kernels.kernels = KernelChoice::eigen;
-    analysis::Flow fl(lumped, kernels, "test"), fc(coupled, kernels, "test");
-    Eigen::Matrix3d T;
-    T << 1, 0, 0, 0, 1, 0, 1, 1, 1;
-    Eigen::MatrixXd S = Eigen::MatrixXd::Zero(6, 6);
-    S.topLeftCorner(3, 3) = T;
-    S.bottomRightCorner(3, 3) = T;
-    // From a state of the lumped run where both friction dofs slide (no tie at the start).
-    const testing::Outcome run = testing::simulate(lumped, 3.0, 0.01);
-    Eigen::VectorXd y(6);
-    double t0 = -1.0;
-    for (const testing::Recorded& s : run.samples)
-        if (s.t > 1.0 && std::fabs(s.v[0]) > 0.02 && std::fabs(s.v[1]) > 0.02) {
-            t0 = s.t;
-            for (int i = 0; i < 3; ++i) y(i) = s.x[static_cast<std::size_t>(i)], y(3 + i) = s.v[static_cast<std::size_t>(i)];
-            break;
+    // With a Jenkins element on u2 (y2 = x2: the same element in both models)
+    // the full-state tangent of stick elements (stick_tangent.cpp) takes the
+    // coupled M too; its slider is the last coordinate, S's 1 there.
+    for (bool jenkins : {false, true}) {
+        testing::TempDir dir;
+        const RelativeChain files = relative_chain(dir, false, jenkins);
+        const Model lumped = read_model(files.lumped), coupled = read_model(files.coupled);
+        analysis::FlowKernels kernels;
+        kernels.kernels = KernelChoice::eigen;
+        analysis::Flow fl(lumped, kernels, "test"), fc(coupled, kernels, "test");
+        Eigen::Matrix3d T;
+        T << 1, 0, 0, 0, 1, 0, 1, 1, 1;
+        const Eigen::Index N = jenkins ? 7 : 6;
+        Eigen::MatrixXd S = Eigen::MatrixXd::Identity(N, N);
+        S.block(0, 0, 3, 3) = T;
+        S.block(3, 3, 3, 3) = T;
+        // From a state of the lumped run where both friction dofs slide and the Jenkins element
+        // is stuck inside its slip force (no tie at the start: a slipping element's slider is a
+        // function of x, so central differences in it would cross the slip boundary).
+        const testing::Outcome run = testing::simulate(lumped, 3.0, 0.01);
+        Eigen::VectorXd y(N);
+        double t0 = -1.0;
+        for (const testing::Recorded& s : run.samples)
+            if (s.t > 1.0 && std::fabs(s.v[0]) > 0.02 && std::fabs(s.v[1]) > 0.02 &&
+                (!jenkins || std::fabs(60.0 * (s.x[1] - s.x[3])) < 0.8 * 1.5)) {
+                t0 = s.t;
+                for (int i = 0; i < 3; ++i) y(i) = s.x[static_cast<std::size_t>(i)], y(3 + i) = s.v[static_cast<std::size_t>(i)];
+                if (jenkins) y(6) = s.x[3];
+                break;
+            }
+        ASSERT_GE(t0, 0.0);
+        const Eigen::VectorXd x = S.inverse() * y;
+        const double period = 2 * M_PI / 6.0;
+        const analysis::PeriodMapValue a = analysis::evaluate_period_map(fl, t0, t0 + period, y),
+                                       b = analysis::evaluate_period_map(fc, t0, t0 + period, x);
+        ASSERT_TRUE(a.ok) << a.message;
+        ASSERT_TRUE(b.ok) << b.message;
+        ASSERT_EQ(a.events, b.events);
+        ASSERT_GE(a.events, 4u);
+        const double similar = (a.M * S - S * b.M).norm() / a.M.norm();
+        Eigen::MatrixXd fd(N, N);
+        for (Eigen::Index j = 0; j < N; ++j) {
+            const double h = 1e-7 * std::max(1.0, std::fabs(x(j)));
+            Eigen::VectorXd xp = x, xm = x;
+            xp(j) += h, xm(j) -= h;
+            const analysis::PeriodMapValue p = analysis::evaluate_period_map(fc, t0, t0 + period, xp),
+                                           m = analysis::evaluate_period_map(fc, t0, t0 + period, xm);
+            ASSERT_EQ(p.events, b.events);
+            ASSERT_EQ(m.events, b.events);
+            fd.col(j) = (p.Py - m.Py) / (2 * h);
         }
-    ASSERT_GE(t0, 0.0);
-    const Eigen::VectorXd x = S.inverse() * y;
-    const double period = 2 * M_PI / 6.0;
-    const analysis::PeriodMapValue a = analysis::evaluate_period_map(fl, t0, t0 + period, y),
-                                   b = analysis::evaluate_period_map(fc, t0, t0 + period, x);
-    ASSERT_TRUE(a.ok) << a.message;
-    ASSERT_TRUE(b.ok) << b.message;
-    ASSERT_EQ(a.events, b.events);
-    ASSERT_GE(a.events, 4u);
-    const double similar = (a.M * S - S * b.M).norm() / a.M.norm();
-    Eigen::MatrixXd fd(6, 6);
-    for (Eigen::Index j = 0; j < 6; ++j) {
-        const double h = 1e-7 * std::max(1.0, std::fabs(x(j)));
-        Eigen::VectorXd xp = x, xm = x;
-        xp(j) += h, xm(j) -= h;
-        const analysis::PeriodMapValue p = analysis::evaluate_period_map(fc, t0, t0 + period, xp),
-                                       m = analysis::evaluate_period_map(fc, t0, t0 + period, xm);
-        ASSERT_EQ(p.events, b.events);
-        ASSERT_EQ(m.events, b.events);
-        fd.col(j) = (p.Py - m.Py) / (2 * h);
+        const double off = (b.M - fd).norm() / fd.norm();
+        std::printf("%s: %zu events a period: |J S - S J_coupled| / |J| = %.3g, |J_coupled - central differences| / |J| = %.3g\n",
+                    jenkins ? "with a Jenkins element" : "frictions", a.events, similar, off);
+        EXPECT_LT(similar, 1e-10);
+        EXPECT_LT(off, 1e-6);
     }
-    const double off = (b.M - fd).norm() / fd.norm();
-    std::printf("%zu events a period: |J S - S J_coupled| / |J| = %.3g, |J_coupled - central differences| / |J| = %.3g\n",
-                a.events, similar, off);
-    EXPECT_LT(similar, 1e-10);
-    EXPECT_LT(off, 1e-6);
 }
 
 std::string beam_model(const testing::TempDir& dir, const std::string& extra) {
