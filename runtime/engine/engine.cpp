@@ -103,6 +103,577 @@ struct Found {
     std::vector<SwitchFunction> switched;
 };
 
+// The segment the search runs on: its solver, switch functions and instant,
+// and the state and friction directions it starts from.
+struct SearchSegment {
+    SegmentSolver* solver = nullptr;
+    const std::vector<SwitchFunction>* switches = nullptr;
+    const Configuration* cfg = nullptr;
+    const std::vector<signed char>* sgn = nullptr;
+    const std::vector<signed char>* sgn_before = nullptr;  // before the last event (a carried start)
+    const double* x = nullptr;
+    const double* v = nullptr;
+    double t = 0.0, t_lo = 0.0;
+    double tau_end = 0.0, max_step = 0.0;
+    bool carried_start = false;  // the coefficient block carried over a switch (restart.h)
+};
+
+// The switch search of one segment: the earliest instant in (0, tau_end] at
+// which a switch function reaches its trigger level, the functions that
+// switch there, and the event state (buf), with the rounding level each
+// function passes on to the next segment (inherited). Phases, each a member:
+//   start()       evaluate every function at the segment start (or take a
+//                 carried segment's values), arm the velocities;
+//   start_ties()  decide the functions at zero with a vanishing rate by
+//                 their Taylor series (tie_series.h);
+//   step loop     safe steps from each function's bound until one is beyond
+//                 its trigger level (search<scheduled>);
+//   take_event()  evaluate the instant in full, Newton-refine it, collect
+//                 every function that switches there.
+// With few switch functions every instant evaluates all of them, and the
+// step is the smallest of their safe steps. With many (kScheduleFrom,
+// segment_solver.h) each is evaluated on its own schedule: at_f is the
+// instant at which function f's values in buf (g, dg, bound, scale) were
+// taken, before_f the one before, next_f the instant up to which its bound
+// keeps it from its trigger level. An instant takes the functions whose
+// next_f it reaches, or soon will (`due`), and the others keep their values
+// and their guarantee. So a function far from switching is not evaluated at
+// every instant another one needs, and a solver that computes a function
+// alone (the interpreter, SegmentSolver::eval_some) does only what is due.
+// The instants depend on the values alone, so every kind of solver takes the
+// same ones (a kernel computes every function and the search reads the due
+// ones). The search is compiled for each case, so that the unscheduled one
+// (every small model) pays nothing for the schedule.
+class SwitchSearch {
+public:
+    SwitchSearch(const Model& model, std::size_t nx, std::size_t max_switches, RunSummary& sum)
+        : buf(nx, model.dof(), max_switches), model_(model), sum_(sum), probe_(nx, model.dof(), max_switches),
+          probe_view_(probe_.view()), side_(max_switches), floor_(max_switches), root_(max_switches),
+          clear_until_(max_switches), at_(max_switches), before_(max_switches), next_(max_switches),
+          armed_(max_switches), leaving_(max_switches), leaves_now_(max_switches),
+          stride_(std::max({model.contacts.size(), model.dof(), model.jenkins.size()})),
+          inherited_(kSwitchKinds * stride_, 0.0) {
+        due_.reserve(max_switches);
+        start_due_.reserve(max_switches);
+        found.switched.reserve(max_switches);
+    }
+
+    /// Searches segment s; "" or why the search failed. `scheduled`: each
+    /// function on its own schedule.
+    std::string run(const SearchSegment& s, bool scheduled) {
+        seg_ = s;
+        nsw_ = s.switches->size();
+        out_ = buf.view();
+        for (std::size_t f = 0; f < nsw_; ++f) {
+            side_[f] = side_of((*s.switches)[f], *s.cfg, *s.sgn);
+            floor_[f] = inherited_[slot((*s.switches)[f])];
+        }
+        failure_.clear();
+        if (scheduled)
+            search<true>();
+        else
+            search<false>();
+        return failure_;
+    }
+
+    Buffers buf;  // the event state: the last full evaluation
+    Found found;
+
+private:
+    const SwitchFunction& fn(std::size_t f) const { return (*seg_.switches)[f]; }
+    SegmentSolver& solver() const { return *seg_.solver; }
+    // Rounding level each switch function had at the last event, by (kind,
+    // element): a value that should be 0 after a switch comes back as ~1e-17
+    // from the previous segment, whatever the new segment's own terms are.
+    // Flat table indexed by kind * stride + element; 0 where nothing was inherited.
+    std::size_t slot(const SwitchFunction& f) const {
+        return static_cast<std::size_t>(f.kind) * stride_ + static_cast<std::size_t>(f.element);
+    }
+    // Rounding level of g_f at the point last evaluated: its terms (scale), the
+    // rounding of the time itself (|g'| * ulp-ish of t + at_f, which also covers
+    // the rounding of each omega*tau), and what it inherited from the last event.
+    // Unscheduled, every function has the values of the last instant (tau_now).
+    template <bool scheduled>
+    double noise(std::size_t f) const {
+        const double at_f = scheduled ? at_[f] : tau_now_;
+        return std::max(noise_of(buf.scale[f] + std::fabs(buf.dg[f]) * (std::fabs(seg_.t) + at_f)), floor_[f]);
+    }
+    // Every function's values in buf are now those at tau.
+    template <bool scheduled>
+    void all_at(double tau) {
+        prev_tau_ = tau_now_, tau_now_ = tau;
+        if (scheduled)
+            for (std::size_t f = 0; f < nsw_; ++f) before_[f] = at_[f], at_[f] = tau;
+        ++sum_.evaluations;
+    }
+    // The search reads only the switch outputs; the state (x, v, a) is read
+    // at the segment's last instant, evaluated in full.
+    template <bool scheduled>
+    void eval_all(double tau, bool full) {
+        if (full)
+            solver().eval(tau, out_);
+        else
+            solver().eval_switches(tau, out_);
+        all_at<scheduled>(tau);
+    }
+    void eval_due(double tau) {
+        solver().eval_some(tau, due_.data(), due_.size(), probe_view_);
+        for (std::uint32_t f : due_) {
+            buf.g[f] = probe_.g[f], buf.dg[f] = probe_.dg[f], buf.bound[f] = probe_.bound[f];
+            buf.scale[f] = probe_.scale[f];
+            before_[f] = at_[f];
+            at_[f] = tau;
+        }
+        ++sum_.evaluations;
+    }
+    // The functions evaluated at the last instant: all of them, or those due.
+    template <bool scheduled>
+    std::size_t evaluated() const { return scheduled ? due_.size() : nsw_; }
+    template <bool scheduled>
+    std::size_t function(std::size_t k) const { return scheduled ? due_[k] : k; }
+
+    template <bool scheduled>
+    void start();
+    template <bool scheduled>
+    void start_ties();
+    template <bool scheduled>
+    void take_event(double tau_star);
+    template <bool scheduled>
+    bool scan(std::size_t iter, double tau, double& tau_star);
+    template <bool scheduled>
+    double own_step(std::size_t f, double tau) const;
+    template <bool scheduled>
+    bool land(std::size_t f, double tau, double horizon, double step_cap);
+    template <bool scheduled>
+    void search();
+
+    const Model& model_;
+    RunSummary& sum_;
+    SearchSegment seg_;
+    std::size_t nsw_ = 0;
+    SegmentEval out_{};
+    Buffers probe_;  // a search evaluation: its due functions go to buf
+    SegmentEval probe_view_;
+    std::vector<double> side_, floor_, root_, clear_until_;
+    // The per-function schedule: when each function was evaluated (at), the
+    // evaluation before (before), until when it is safe (next).
+    std::vector<double> at_, before_, next_;
+    std::vector<std::uint32_t> due_, start_due_;  // start_due: a carried segment's functions evaluated at its start
+    std::vector<char> armed_, leaving_, leaves_now_;
+    std::vector<double> series_d_, series_mag_;
+    std::size_t stride_;
+    std::vector<double> inherited_;
+    double tau_now_ = 0.0, prev_tau_ = 0.0;
+    std::string failure_;
+};
+
+// Evaluates every function at the segment start. A segment carried over a
+// switch starts where the event's full evaluation (buf) left every function:
+// positions and velocities are continuous, and the only accelerations that
+// jump are those of the masses whose friction flipped. So g, g' and the scale
+// are the event's, but for the velocities of those masses and the release
+// functions (their g' reads the neighbours' accelerations); every bound is
+// the new segment's own. A velocity function that starts at 0 (a release, a
+// reversal, a stop that slides on) is not watched for a stop until it has
+// left 0.
+template <bool scheduled>
+void SwitchSearch::start() {
+    tau_now_ = 0.0, prev_tau_ = 0.0;
+    std::fill(armed_.begin(), armed_.end(), 0);
+    found.any = false;
+    found.tau = 0.0;
+    found.switched.clear();
+    if (seg_.carried_start) {
+        start_due_.clear();
+        for (std::size_t f = 0; f < nsw_; ++f) {
+            const SwitchFunction& w = fn(f);
+            const bool jumps = w.kind == SwitchKind::release_pos || w.kind == SwitchKind::release_neg ||
+                               (w.kind == SwitchKind::velocity &&
+                                (*seg_.sgn_before)[static_cast<std::size_t>(w.element)] !=
+                                    (*seg_.sgn)[static_cast<std::size_t>(w.element)]);
+            if (jumps) start_due_.push_back(static_cast<std::uint32_t>(f));
+        }
+        solver().eval_start(0.0, start_due_.data(), start_due_.size(), probe_view_);
+        for (std::size_t f = 0; f < nsw_; ++f) buf.bound[f] = probe_.bound[f];
+        for (std::uint32_t f : start_due_)
+            buf.g[f] = probe_.g[f], buf.dg[f] = probe_.dg[f], buf.scale[f] = probe_.scale[f];
+        all_at<scheduled>(0.0);
+    } else {
+        eval_all<scheduled>(0.0, false);
+    }
+    if (scheduled) {
+        due_.resize(nsw_);
+        for (std::size_t f = 0; f < nsw_; ++f) {
+            due_[f] = static_cast<std::uint32_t>(f);
+            before_[f] = 0.0;
+        }
+    }
+    for (std::size_t f = 0; f < nsw_; ++f)
+        if (is_velocity(fn(f).kind)) armed_[f] = side_[f] * buf.g[f] > noise<scheduled>(f);
+}
+
+// Ties at the segment start (tie_series.h): a function at zero whose rate
+// vanishes too. Its first non-zero derivative, of order m, decides
+// (interface.md "Ties and touches"): one heading across switches now, at this
+// instant; one heading into its safe side is `leaving` zero, where the bound
+// h + h' s - B s^2/2 would make the steps shrink like s^(m/2) (a contact at
+// rest on its gap under sin forcing took 30000 evaluations). By Taylor's
+// theorem with B' >= |h^(m+1)| on [0, T], h > 0 on (0, (m+1)|h^(m)(0)|/B'),
+// so it is left out of the bound up to half that (clear_until) and watched
+// by the bound from there. A function with no non-zero derivative
+// (identically zero to rounding, by Cayley-Hamilton) stays leaving, with
+// steps of at most tau (doubling), unless its g'' bound is 0 (then the bound
+// gives an unlimited step).
+template <bool scheduled>
+void SwitchSearch::start_ties() {
+    std::fill(leaving_.begin(), leaving_.end(), 0);
+    std::fill(leaves_now_.begin(), leaves_now_.end(), 0);
+    const Configuration& cfg = *seg_.cfg;
+    MotionSeries low, full;  // order 2 for the rate; the full expansion only at a true tie
+    for (std::size_t f = 0; f < nsw_; ++f) {
+        if (std::fabs(buf.g[f]) > noise<scheduled>(f)) continue;
+        // A rate clearly beyond its rounding (almost every function that has
+        // just switched) needs no series: the bound works.
+        if (std::fabs(buf.dg[f]) > 4 * tie_noise(rate_magnitude(model_, cfg, fn(f), seg_.x, seg_.v))) continue;
+        if (low.x.empty()) low = motion_series(model_, cfg, seg_.sgn->data(), seg_.t, seg_.t_lo, seg_.x, seg_.v, 2);
+        switch_series(model_, cfg, fn(f), seg_.t, seg_.t_lo, low, series_d_, series_mag_);
+        if (std::fabs(series_d_[1]) > tie_noise(series_mag_[1])) continue;  // h' decides: the bound works
+        const int max_order = tie_order(model_);
+        if (full.x.empty())
+            full = motion_series(model_, cfg, seg_.sgn->data(), seg_.t, seg_.t_lo, seg_.x, seg_.v, max_order + 2);
+        switch_series(model_, cfg, fn(f), seg_.t, seg_.t_lo, full, series_d_, series_mag_);
+        int order = 0;
+        const int dir = first_nonzero_sign(series_d_, series_mag_, max_order, &order) * (side_[f] > 0 ? 1 : -1);
+        if (dir < 0) {
+            leaves_now_[f] = 1;
+            continue;
+        }
+        if (dir == 0) {
+            leaving_[f] = buf.bound[f] > 0;
+            clear_until_[f] = 0.0;
+            continue;
+        }
+        // clear_until = c/B'(T) for B' valid on [0, T], T <= c/B'(0): any T
+        // gives a valid interval [0, min(T, c/B'(T))].
+        const double c = 0.5 * (order + 1) * std::fabs(series_d_[static_cast<std::size_t>(order)]);
+        const double T = std::min(seg_.tau_end, c / derivative_bound(model_, cfg, fn(f), full, order + 1, 0.0));
+        const double clear = std::min(T, c / derivative_bound(model_, cfg, fn(f), full, order + 1, T));
+        if (clear > 0) {
+            leaving_[f] = 1;
+            clear_until_[f] = clear;
+        }
+    }
+}
+
+// The event at tau_star: every function whose zero lies there (to rounding)
+// switches, and so do the others within rounding of zero and heading across
+// at that instant, evaluated in full.
+template <bool scheduled>
+void SwitchSearch::take_event(double tau_star) {
+    const double t = seg_.t;
+    const double tol = 4 * kEps * (std::fabs(t) + std::fabs(tau_star)) + 1e-300;
+    found.any = true;
+    found.tau = std::min(tau_star, seg_.tau_end);
+    for (std::size_t f = 0; f < nsw_; ++f)
+        if (root_[f] <= tau_star + tol) found.switched.push_back(fn(f));
+    eval_all<scheduled>(found.tau, true);
+    // The Newton step that located the event is clamped to the last instant
+    // inside the trigger level (the root may lie before it), and that level
+    // may be what the function inherited, above its own rounding: where the
+    // event's function is still beyond its own rounding, Newton steps on from
+    // the located instant (at most 3, while they shrink), as the reference
+    // iterates. A contact was located at G = 14 times its rounding, which the
+    // tie rules, judging G by its own rounding, may read as the other side.
+    {
+        std::size_t lead = nsw_;
+        for (std::size_t f = 0; f < nsw_ && lead == nsw_; ++f)
+            if (root_[f] == tau_star && !(is_velocity(fn(f).kind) && armed_[f])) lead = f;
+        double last = kInf;
+        for (int it = 0; lead < nsw_ && it < 3; ++it) {
+            const double h = side_[lead] * buf.g[lead], hd = side_[lead] * buf.dg[lead];
+            const double own = noise_of(buf.scale[lead] + std::fabs(buf.dg[lead]) * (std::fabs(t) + found.tau));
+            if (std::fabs(h) <= own || !(hd < 0)) break;
+            const double r = found.tau - h / hd;
+            if (!(r >= 0 && r <= seg_.tau_end) || !(std::fabs(r - found.tau) < last) || r == found.tau) break;
+            last = std::fabs(r - found.tau);
+            found.tau = r;
+            eval_all<scheduled>(found.tau, true);
+        }
+    }
+    for (std::size_t f = 0; f < nsw_; ++f) {
+        if (root_[f] <= tau_star + tol) continue;
+        const double h = side_[f] * buf.g[f], hd = side_[f] * buf.dg[f];
+        const double eps_f = noise<scheduled>(f);
+        const bool stop = is_velocity(fn(f).kind) && armed_[f];
+        // buf holds the full evaluation at found.tau: its state gives the rate's terms.
+        auto rate_noise = [&] {
+            return 4 * tie_noise(rate_magnitude(model_, *seg_.cfg, fn(f), buf.x.data(), buf.v.data()));
+        };
+        if (stop ? rules::stops_here(h, hd, buf.bound[f], eps_f, 0.0, rate_noise) : (h < -eps_f || (h <= eps_f && hd < 0)))
+            found.switched.push_back(fn(f));
+    }
+    // What the next segment inherits: each function's rounding at this
+    // instant. The level it had itself inherited is passed on only by an
+    // event at that same instant (a chain of switches at one t). Passed on
+    // always, it was a ratchet: once a function's terms were large (a stiff
+    // Jenkins element stuck), their level stayed for the rest of the run, and
+    // a contact was located 18 times its own rounding from zero (clamped to
+    // the last instant inside that level), where the tie rules, which judge G
+    // by its own rounding, then saw it open (tests/test_contact_location.cpp).
+    const bool same_instant = found.tau <= 4 * kEps * std::fabs(t);
+    std::fill(inherited_.begin(), inherited_.end(), 0.0);
+    for (std::size_t f = 0; f < nsw_; ++f)
+        inherited_[slot(fn(f))] = same_instant
+                                      ? noise<scheduled>(f)
+                                      : noise_of(buf.scale[f] + std::fabs(buf.dg[f]) * (std::fabs(t) + found.tau));
+}
+
+// Which of the functions just evaluated (at tau) have switched, and where is
+// each one's zero (root_)? tau_star: the earliest. False on a failure.
+template <bool scheduled>
+bool SwitchSearch::scan(std::size_t iter, double tau, double& tau_star) {
+    tau_star = kInf;
+    for (std::size_t k = 0, count = evaluated<scheduled>(); k < count; ++k) {
+        const std::size_t f = function<scheduled>(k);
+        root_[f] = kInf;
+        const double h = side_[f] * buf.g[f], hd = side_[f] * buf.dg[f];
+        if (!std::isfinite(h) || !std::isfinite(hd) || !std::isfinite(buf.bound[f])) {
+            failure_ = "non-finite switch function in configuration '" + seg_.cfg->spec(model_) + "' at t = " +
+                       number_text(seg_.t + tau);
+            return false;
+        }
+        if (iter == 0 && leaves_now_[f]) {  // a tie heading across: it switches at the segment start
+            root_[f] = 0.0;
+            tau_star = 0.0;
+            continue;
+        }
+        const double eps_f = noise<scheduled>(f);
+        const bool stop = is_velocity(fn(f).kind) && armed_[f];
+        // The rate's terms from the state at tau (a search evaluation has the
+        // switch functions only): asked for only by a velocity falling in its band.
+        auto rate_noise = [&] {
+            solver().eval(tau, probe_view_);
+            return 4 * tie_noise(rate_magnitude(model_, *seg_.cfg, fn(f), probe_.x.data(), probe_.v.data()));
+        };
+        if (stop ? !rules::stops_here(h, hd, buf.bound[f], eps_f, 0.0, rate_noise) : h >= -eps_f) continue;
+        // Move to the zero by one Newton step (the function is monotone
+        // there), never before the last point known to be on the safe side.
+        const double prev = scheduled ? before_[f] : prev_tau_;
+        double r = tau;
+        if (hd < 0 && std::fabs(hd) > 0) r = tau - h / hd;
+        if (stop && h <= 0 && hd >= 0) r = tau;  // touched zero and turned back
+        r = std::min(std::max(r, prev), std::max(tau, prev));
+        if (stop && hd < 0 && h > 0) r = tau + h / -hd;  // tiny forward step onto v = 0
+        root_[f] = r;
+        tau_star = std::min(tau_star, r);
+    }
+    return true;
+}
+
+// Safe step of function f from tau: it cannot reach its trigger level inside it.
+template <bool scheduled>
+double SwitchSearch::own_step(std::size_t f, double tau) const {
+    const double floor_step = 4 * kEps * (std::fabs(seg_.t) + std::fabs(tau)) + 1e-300;
+    // A function leaving zero: up to its clear instant, then doubling.
+    if (leaving_[f]) return tau < clear_until_[f] ? clear_until_[f] - tau : std::max(tau, floor_step);
+    const double h = side_[f] * buf.g[f], hd = side_[f] * buf.dg[f];
+    const bool stop = is_velocity(fn(f).kind) && armed_[f];
+    // Contacts and releases switch only when certainly negative (level
+    // -2*noise); armed velocities stop at zero.
+    const double level = stop ? 0.0 : -2 * noise<scheduled>(f);
+    return safe_step(h - level, hd, buf.bound[f]);
+}
+
+// A sliding velocity whose Newton step s = h / -h' lands on its zero to half
+// the time's resolution (B s^2 / (2 |h'|) <= eps |t| / 2: the bound keeps the
+// zero within that of tau + s), before any other function can reach its
+// trigger level (`horizon`) and within the bound's validity (step_cap): its
+// zero is known, and the event is taken there without one more instant to
+// find it. True when it was.
+template <bool scheduled>
+bool SwitchSearch::land(std::size_t f, double tau, double horizon, double step_cap) {
+    if (f >= nsw_ || leaving_[f] || !is_velocity(fn(f).kind) || !armed_[f]) return false;
+    const double h = side_[f] * buf.g[f], hd = side_[f] * buf.dg[f];
+    if (!(hd < 0)) return false;
+    const double s = h / -hd;
+    if (!(buf.bound[f] * s * s <= -hd * kEps * (std::fabs(seg_.t) + tau)) || s > step_cap) return false;
+    if (!(tau + s <= horizon)) return false;
+    root_[f] = tau + s;
+    take_event<scheduled>(tau + s);
+    return true;
+}
+
+// ---- find the earliest switch in (0, tau_end] ----
+template <bool scheduled>
+void SwitchSearch::search() {
+    start<scheduled>();
+    start_ties<scheduled>();
+    const double tau_end = seg_.tau_end;
+    double tau = 0.0;  // the instant evaluated last
+    for (std::size_t iter = 0;; ++iter) {
+        if (iter > 10'000'000) {
+            failure_ = "switch search does not converge at t = " + number_text(seg_.t + tau);
+            return;
+        }
+        double tau_star = kInf;
+        if (!scan<scheduled>(iter, tau, tau_star)) return;
+        if (tau_star < kInf) {
+            take_event<scheduled>(tau_star);
+            break;
+        }
+        if (tau >= tau_end) break;  // every function was evaluated at tau_end (next_f <= tau_end)
+        // Safe step of each function just evaluated: none can reach its
+        // trigger level inside it.
+        const double step_cap = std::min(seg_.max_step, tau_end - tau);
+        const double floor_step = 4 * kEps * (std::fabs(seg_.t) + std::fabs(tau)) + 1e-300;
+        double tau_next;
+        if (!scheduled) {
+            // The smallest step and the one after it (the horizon of the others).
+            double step = step_cap, second = step_cap;
+            std::size_t first = nsw_;
+            for (std::size_t f = 0; f < nsw_; ++f) {
+                const double s = own_step<scheduled>(f, tau);
+                if (s < step) second = step, step = s, first = f;
+                else if (s < second) second = s;
+            }
+            if (land<scheduled>(first, tau, tau + second, step_cap)) break;
+            tau_next = std::min(tau + std::max(step, floor_step), tau_end);
+            eval_all<scheduled>(tau_next, false);
+        } else {
+            // Each function just evaluated is safe up to next_f; the next
+            // instant is the earliest next_f. It evaluates the functions due
+            // by then, and those due soon after: one evaluation of a few more
+            // functions is cheaper than an instant more.
+            for (std::uint32_t f : due_)
+                next_[f] = std::min(tau + std::max(std::min(step_cap, own_step<scheduled>(f, tau)), floor_step), tau_end);
+            tau_next = kInf;
+            double second = kInf;
+            std::size_t first = nsw_;
+            for (std::size_t f = 0; f < nsw_; ++f) {
+                if (next_[f] < tau_next) second = tau_next, tau_next = next_[f], first = f;
+                else if (next_[f] < second) second = next_[f];
+            }
+            if (first < nsw_ && at_[first] == tau && land<scheduled>(first, tau, second, step_cap)) break;  // evaluated at this instant
+            const double by = tau_next + kScheduleAhead * (tau_next - tau);
+            due_.clear();
+            for (std::size_t f = 0; f < nsw_; ++f)
+                if (next_[f] <= by) due_.push_back(static_cast<std::uint32_t>(f));
+            eval_due(tau_next);
+        }
+        tau = tau_next;
+        for (std::size_t k = 0, count = evaluated<scheduled>(); k < count; ++k) {
+            const std::size_t f = function<scheduled>(k);
+            if (is_velocity(fn(f).kind) && !armed_[f] && side_[f] * buf.g[f] > 2 * noise<scheduled>(f)) armed_[f] = 1;
+            // Past its clear interval the bound watches it again (a function
+            // leaving an exact zero, clear_until = 0, once it is above its rounding).
+            if (leaving_[f] && tau >= clear_until_[f] && (clear_until_[f] > 0 || side_[f] * buf.g[f] > 2 * noise<scheduled>(f)))
+                leaving_[f] = 0;
+        }
+    }
+    if (!found.any) eval_all<scheduled>(tau_end, true);  // an event's instant was evaluated in full above
+}
+
+// Restarts (restart.h): an event that keeps the configuration (a reversal,
+// a stop that slides on, a touch) carries the segment's coefficient block
+// over, where the configuration has kRestartFrom modes or more, its solver's
+// block is the programs' layout and a plan is known (the solver's own, else
+// options.restart_plans, asked once per configuration). The rule reads
+// nothing a kind of solver decides, so every kind restarts at the same events
+// and keeps the same bits.
+class Restarts {
+public:
+    Restarts(const Model& model, const EngineOptions& options)
+        : options_(options),
+          // Dampers, Jenkins elements and friction pairs never have a plan
+          // (restart_plan(), generator/lowering.h): no derivation is asked for one.
+          plain_(model.dampers.empty() && model.jenkins.empty() &&
+                 std::none_of(model.masses.begin(), model.masses.end(), [](const Mass& m) { return m.partner != kGround; })) {}
+
+    /// A new configuration, with `free_masses` (an upper bound on its modes).
+    void enter(std::size_t free_masses) {
+        carried = false;
+        asked_ = false;
+        free_masses_ = free_masses;
+    }
+    /// Carries the last segment's block over to S when the rule allows; true when it did.
+    bool restart(SegmentSolver& S, const Configuration& cfg, double t, double t_lo, const signed char* sgn_before,
+                 const signed char* sgn) {
+        if (!carried || !plain_ || !options_.restart_plans || free_masses_ < kRestartFrom) return false;
+        double* block = S.coefficient_block();
+        if (!block) return false;
+        const RestartPlan* plan = S.restart_plan();
+        if (!plan && !asked_) {
+            auto it = plans_.find(cfg);
+            if (it == plans_.end()) {
+                std::shared_ptr<const RestartPlan> given = options_.restart_plans(cfg);
+                const std::size_t bytes = given ? sizeof(double) * given->vt.size() + 64 * given->modes.size() : 0;
+                if (plan_bytes_ + bytes > kPlanBytes) plans_.clear(), plan_bytes_ = 0;
+                plan_bytes_ += bytes;
+                it = plans_.emplace(cfg, std::move(given)).first;
+            }
+            asked_plan_ = it->second.get();
+            asked_ = true;
+        }
+        if (!plan) plan = asked_plan_;
+        if (!plan || plan->empty() || plan->modes.size() < kRestartFrom) return false;
+        restart_coefficients(*plan, block, carried_tau, t, t_lo, sgn_before, sgn);
+        return true;
+    }
+
+    bool carried = false;      // the last event kept the configuration (and the solver)
+    double carried_tau = 0.0;  // its instant in the last segment
+
+private:
+    // The plans asked for, kept within kPlanBytes (V is n^2 doubles: 128 kB
+    // at 128 masses); beyond it they are dropped and asked for again.
+    static constexpr std::size_t kPlanBytes = std::size_t{32} << 20;
+    const EngineOptions& options_;
+    const bool plain_;
+    std::size_t free_masses_ = 0;
+    std::map<Configuration, std::shared_ptr<const RestartPlan>> plans_;
+    std::size_t plan_bytes_ = 0;
+    const RestartPlan* asked_plan_ = nullptr;  // the configuration's, once asked for
+    bool asked_ = false;
+};
+
+// The state at t0: the masses' positions, then the Jenkins sliders' (the
+// model's, else at rest, unstretched: s = x[a] - x[b]).
+std::vector<double> initial_positions(const Model& model) {
+    std::vector<double> x = model.x0;
+    if (model.slider0.size() == model.jenkins.size())
+        x.insert(x.end(), model.slider0.begin(), model.slider0.end());
+    else
+        for (const Jenkins& j : model.jenkins)
+            x.push_back((j.a == kGround ? 0.0 : x[static_cast<std::size_t>(j.a)]) -
+                        (j.b == kGround ? 0.0 : x[static_cast<std::size_t>(j.b)]));
+    return x;
+}
+
+// The smallest step is the time's own resolution, 4 eps |t|: a motion whose
+// period is not several of them cannot be searched (at t = 1e9 an oscillation
+// of 1.4e7 rad/s was stepped over without a row, every value of its gap
+// within the rounding that |G'| eps |t| gives it). Refused with a message
+// rather than run wrong: rate * step > 1, a period under 2 pi smallest steps.
+// "" when the motion can be searched.
+std::string too_fast(const Model& model, const Configuration& cfg, double rate, double t) {
+    if (!(rate * 4 * kEps * std::fabs(t) > 1.0)) return "";
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << "the motion is too fast for the time resolution at t = " << number_text(t) << ": configuration '"
+        << cfg.spec(model) << "' has rates up to " << rate << " 1/s, and the smallest step there is "
+        << 4 * kEps * std::fabs(t) << " s (a period must span at least 2 pi of them); "
+        << "start nearer t = 0 (t0 shifts the forcing phase only)";
+    return msg.str();
+}
+
+// (t, t_lo) += tau, the sum kept exactly (Knuth's TwoSum).
+void advance_time(double& t, double& t_lo, double tau) {
+    const double a = t, b = t_lo + tau;
+    const double s = a + b, bb = s - a;
+    t_lo = (a - (s - bb)) + (b - bb);
+    t = s;
+}
+
 }  // namespace
 
 Engine::Engine(const Model& model, SolverProvider& provider) : model_(model), provider_(provider) {}
@@ -110,16 +681,9 @@ Engine::Engine(const Model& model, SolverProvider& provider) : model_(model), pr
 RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     const std::size_t n = model_.dof();
     RunSummary sum;
-    // The state: positions of the masses, then of the Jenkins sliders (at rest,
-    // unstretched at t0: s = x[a] - x[b]), and the masses' velocities.
-    std::vector<double> x = model_.x0, v = model_.v0;
+    // The state: positions of the masses, then of the Jenkins sliders, and the masses' velocities.
+    std::vector<double> x = initial_positions(model_), v = model_.v0;
     const ElementIndex elements(model_);  // the friction decisions' forces visit each mass's own elements
-    if (model_.slider0.size() == model_.jenkins.size())
-        x.insert(x.end(), model_.slider0.begin(), model_.slider0.end());
-    else
-        for (const Jenkins& j : model_.jenkins)
-            x.push_back((j.a == kGround ? 0.0 : x[static_cast<std::size_t>(j.a)]) -
-                        (j.b == kGround ? 0.0 : x[static_cast<std::size_t>(j.b)]));
     double t = model_.t0;
     // The segment start is the double-double t + t_lo: t is the representable
     // time that events report, t_lo (|t_lo| <= ulp(t)/2) the rounding of the
@@ -141,10 +705,10 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
 
     // Per-segment working arrays, sized once for the largest switch list.
     const std::size_t max_switches = model_.max_switches();
-    Buffers buf(x.size(), n, max_switches);
+    SwitchSearch search(model_, x.size(), max_switches, sum);
+    Buffers& buf = search.buf;  // the event state
+    const Found& found = search.found;
     Buffers dense(x.size(), n, max_switches);  // trajectory samples, so buf keeps the event state
-    Buffers probe(x.size(), n, max_switches);  // a search evaluation: its due functions go to buf
-    const SegmentEval probe_view = probe.view();
     std::set<Configuration> visited;
     SwitchGuard guard(options, model_.t0);  // chattering and Zeno
 
@@ -165,467 +729,45 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         return sum;
     };
 
-    std::vector<double> side(max_switches), floor(max_switches), root(max_switches), clear_until(max_switches);
-    // The per-function schedule of the switch search: when each function was
-    // evaluated (at), the evaluation before (before), until when it is safe (next).
-    std::vector<double> at(max_switches), before(max_switches), next(max_switches);
-    std::vector<std::uint32_t> due, start_due;  // start_due: a carried segment's functions evaluated at its start
-    due.reserve(max_switches);
-    start_due.reserve(max_switches);
-    std::vector<char> armed(max_switches), leaving(max_switches), leaves_now(max_switches);
-    std::vector<double> series_d, series_mag;
-    Found found;
-    found.switched.reserve(max_switches);
     std::vector<Transition> transitions;
     SegmentSolver* current = nullptr;  // solver of current_cfg
     Configuration current_cfg;
     std::string why;
-    // Rounding level each switch function had at the last event, by (kind,
-    // element): a value that should be 0 after a switch comes back as ~1e-17
-    // from the previous segment, whatever the new segment's own terms are.
-    // Flat table indexed by kind * stride + element; 0 where nothing was inherited.
-    const std::size_t stride = std::max({model_.contacts.size(), n, model_.jenkins.size()});
-    std::vector<double> inherited(kSwitchKinds * stride, 0.0);
-    auto slot = [stride](const SwitchFunction& f) {
-        return static_cast<std::size_t>(f.kind) * stride + static_cast<std::size_t>(f.element);
-    };
     std::size_t progress_counter = 0;
     // Segment and switch records for observers that ask for them (the tangent dynamics).
     const bool records = observer.wants_segments();
     Configuration cfg_before;
     std::vector<signed char> sgn_before;  // the friction directions before the last event
     double rate = 0.0;  // fastest_rate(current_cfg)
-    // Restarts (restart.h): an event that keeps the configuration (a
-    // reversal, a stop that slides on, a touch) carries the segment's
-    // coefficient block over, where the configuration has kRestartFrom
-    // modes or more, its solver's block is the programs' layout and a plan
-    // is known (the solver's own, else options.restart_plans, asked once per
-    // configuration). The rule reads nothing a kind of solver decides, so
-    // every kind restarts at the same events and keeps the same bits.
-    bool carried = false;  // the last event kept the configuration (and the solver)
-    double carried_tau = 0.0;  // its instant in the last segment
-    std::size_t free_masses = 0;  // of current_cfg: an upper bound on its modes
-    // The plans asked for, kept within kPlanBytes (V is n^2 doubles: 128 kB
-    // at 128 masses); beyond it they are dropped and asked for again.
-    constexpr std::size_t kPlanBytes = std::size_t{32} << 20;
-    std::map<Configuration, std::shared_ptr<const RestartPlan>> plans;
-    std::size_t plan_bytes = 0;
-    const RestartPlan* asked_plan = nullptr;  // current_cfg's, once asked for
-    bool asked = false;
-    // Dampers, Jenkins elements and friction pairs never have a plan
-    // (restart_plan(), generator/lowering.h): no derivation is asked for one.
-    const bool plain = model_.dampers.empty() && model_.jenkins.empty() &&
-                       std::none_of(model_.masses.begin(), model_.masses.end(),
-                                    [](const Mass& m) { return m.partner != kGround; });
-    auto restarted = [&](SegmentSolver& S) {
-        if (!carried || !plain || !options.restart_plans || free_masses < kRestartFrom) return false;
-        double* block = S.coefficient_block();
-        if (!block) return false;
-        const RestartPlan* plan = S.restart_plan();
-        if (!plan && !asked) {
-            auto it = plans.find(cfg);
-            if (it == plans.end()) {
-                std::shared_ptr<const RestartPlan> given = options.restart_plans(cfg);
-                const std::size_t bytes =
-                    given ? sizeof(double) * given->vt.size() + 64 * given->modes.size() : 0;
-                if (plan_bytes + bytes > kPlanBytes) plans.clear(), plan_bytes = 0;
-                plan_bytes += bytes;
-                it = plans.emplace(cfg, std::move(given)).first;
-            }
-            asked_plan = it->second.get();
-            asked = true;
-        }
-        if (!plan) plan = asked_plan;
-        if (!plan || plan->empty() || plan->modes.size() < kRestartFrom) return false;
-        restart_coefficients(*plan, block, carried_tau, t, t_lo, sgn_before.data(), sgn.data());
-        return true;
-    };
+    Restarts restarts(model_, options);
     while (true) {
         if (!current || cfg != current_cfg) {  // a reversal keeps the configuration: no lookup
             visited.insert(cfg);
             current = &provider_.solver(cfg);
             current_cfg = cfg;
             rate = fastest_rate(model_, cfg);
-            carried = false;
-            asked = false;
-            free_masses = 0;
+            std::size_t free_masses = 0;
             for (std::size_t i = 0; i < n; ++i) free_masses += !fixed_in(model_, cfg, i);
+            restarts.enter(free_masses);
         }
-        // The smallest step is the time's own resolution, 4 eps |t|: a motion
-        // whose period is not several of them cannot be searched (at t = 1e9 an
-        // oscillation of 1.4e7 rad/s was stepped over without a row, every value
-        // of its gap within the rounding that |G'| eps |t| gives it). Refused
-        // with a message rather than run wrong: rate * step > 1, a period under
-        // 2 pi smallest steps.
-        if (rate * 4 * kEps * std::fabs(t) > 1.0) {
-            std::ostringstream msg;
-            msg.precision(3);
-            msg << "the motion is too fast for the time resolution at t = " << number_text(t) << ": configuration '"
-                << cfg.spec(model_) << "' has rates up to " << rate << " 1/s, and the smallest step there is "
-                << 4 * kEps * std::fabs(t) << " s (a period must span at least 2 pi of them); "
-                << "start nearer t = 0 (t0 shifts the forcing phase only)";
-            return finish(RunStatus::failure, msg.str());
-        }
+        if (const std::string fast = too_fast(model_, cfg, rate, t); !fast.empty())
+            return finish(RunStatus::failure, fast);
         SegmentSolver& S = *current;
-        const bool carried_start = restarted(S);
+        const bool carried_start = restarts.restart(S, cfg, t, t_lo, sgn_before.data(), sgn.data());
         if (carried_start)
             ++sum.restarts;
         else
             S.setup(t, t_lo, x.data(), v.data(), sgn.data());
         ++sum.segments;
-        const std::vector<SwitchFunction>& sw = S.switches();
-        const std::size_t nsw = sw.size();
-        const double max_step = S.max_step();
+        const std::size_t nsw = S.switches().size();
         const double tau_end = (t_end - t) - t_lo;
-        SegmentEval out = buf.view();
 
-        for (std::size_t f = 0; f < nsw; ++f) {
-            side[f] = side_of(sw[f], cfg, sgn);
-            floor[f] = inherited[slot(sw[f])];
-        }
-        // With few switch functions every instant evaluates all of them, and
-        // the step is the smallest of their safe steps. With many
-        // (kScheduleFrom, segment_solver.h) each is evaluated on its own
-        // schedule: at_f is the instant at which function f's values in buf
-        // (g, dg, bound, scale) were taken, before_f the one before, next_f the
-        // instant up to which its bound keeps it from its trigger level. An
-        // instant takes the functions whose next_f it reaches, or soon will
-        // (`due`), and the others keep their values and their guarantee. So a
-        // function far from switching is not evaluated at every instant
-        // another one needs, and a solver that computes a function alone (the
-        // interpreter, SegmentSolver::eval_some) does only what is due. The
-        // instants depend on the values alone, so every kind of solver takes
-        // the same ones (a kernel computes every function and the search reads
-        // the due ones).
-        //
-        // The search is compiled for each case, so that the unscheduled one
-        // (every small model) pays nothing for the schedule.
-        std::string failure;
-        auto search = [&](auto schedule_tag) __attribute__((always_inline)) {
-            constexpr bool scheduled = decltype(schedule_tag)::value;
-            // Rounding level of g_f at the point last evaluated: its terms (scale), the
-            // rounding of the time itself (|g'| * ulp-ish of t + at_f, which also covers
-            // the rounding of each omega*tau), and what it inherited from the last event.
-            // Unscheduled, every function has the values of the last instant (tau_now).
-            double tau_now = 0.0, prev_tau = 0.0;
-            auto noise = [&](std::size_t f) {
-                const double at_f = scheduled ? at[f] : tau_now;
-                return std::max(noise_of(buf.scale[f] + std::fabs(buf.dg[f]) * (std::fabs(t) + at_f)), floor[f]);
-            };
-            // A velocity function that starts at 0 (a release, a reversal, a stop
-            // that slides on) is not watched for a stop until it has left 0.
-            std::fill(armed.begin(), armed.end(), 0);
-
-            // The search reads only the switch outputs; the state (x, v, a) is
-            // read at the segment's last instant, evaluated in full.
-            // Every function's values in buf are now those at tau.
-            auto all_at = [&](double tau) {
-                prev_tau = tau_now, tau_now = tau;
-                if (scheduled)
-                    for (std::size_t f = 0; f < nsw; ++f) before[f] = at[f], at[f] = tau;
-                ++sum.evaluations;
-            };
-            auto eval_all = [&](double tau, bool full) {
-                if (full)
-                    S.eval(tau, out);
-                else
-                    S.eval_switches(tau, out);
-                all_at(tau);
-            };
-            auto eval_due = [&](double tau) {
-                S.eval_some(tau, due.data(), due.size(), probe_view);
-                for (std::uint32_t f : due) {
-                    buf.g[f] = probe.g[f], buf.dg[f] = probe.dg[f], buf.bound[f] = probe.bound[f];
-                    buf.scale[f] = probe.scale[f];
-                    before[f] = at[f];
-                    at[f] = tau;
-                }
-                ++sum.evaluations;
-            };
-
-            // ---- find the earliest switch in (0, tau_end] ----
-            found.any = false;
-            found.tau = 0.0;
-            found.switched.clear();
-            if (carried_start) {
-                // A segment carried over a switch starts where the event's full
-                // evaluation (buf) left every function: positions and velocities
-                // are continuous, and the only accelerations that jump are those
-                // of the masses whose friction flipped. So g, g' and the scale
-                // are the event's, but for the velocities of those masses and
-                // the release functions (their g' reads the neighbours'
-                // accelerations); every bound is the new segment's own.
-                start_due.clear();
-                for (std::size_t f = 0; f < nsw; ++f) {
-                    const SwitchFunction& fn = sw[f];
-                    const bool jumps = fn.kind == SwitchKind::release_pos || fn.kind == SwitchKind::release_neg ||
-                                       (fn.kind == SwitchKind::velocity &&
-                                        sgn_before[static_cast<std::size_t>(fn.element)] !=
-                                            sgn[static_cast<std::size_t>(fn.element)]);
-                    if (jumps) start_due.push_back(static_cast<std::uint32_t>(f));
-                }
-                S.eval_start(0.0, start_due.data(), start_due.size(), probe_view);
-                for (std::size_t f = 0; f < nsw; ++f) buf.bound[f] = probe.bound[f];
-                for (std::uint32_t f : start_due)
-                    buf.g[f] = probe.g[f], buf.dg[f] = probe.dg[f], buf.scale[f] = probe.scale[f];
-                all_at(0.0);
-            } else {
-                eval_all(0.0, false);
-            }
-            if (scheduled) {
-                due.resize(nsw);
-                for (std::size_t f = 0; f < nsw; ++f) {
-                    due[f] = static_cast<std::uint32_t>(f);
-                    before[f] = 0.0;
-                }
-            }
-            // The functions evaluated at the last instant: all of them, or those due.
-            auto evaluated = [&]() { return scheduled ? due.size() : nsw; };
-            auto function = [&](std::size_t k) -> std::size_t { return scheduled ? due[k] : k; };
-            for (std::size_t f = 0; f < nsw; ++f)
-                if (is_velocity(sw[f].kind))
-                    armed[f] = side[f] * buf.g[f] > noise(f);
-            // Ties at the segment start (tie_series.h): a function at zero whose
-            // rate vanishes too. Its first non-zero derivative, of order m, decides
-            // (interface.md "Ties and touches"): one heading across switches now, at
-            // this instant; one heading into its safe side is `leaving` zero, where
-            // the bound h + h' s - B s^2/2 would make the steps shrink like s^(m/2)
-            // (a contact at rest on its gap under sin forcing took 30000
-            // evaluations). By Taylor's theorem with B' >= |h^(m+1)| on [0, T],
-            // h > 0 on (0, (m+1)|h^(m)(0)|/B'), so it is left out of the bound up to
-            // half that (clear_until) and watched by the bound from there. A function
-            // with no non-zero derivative (identically zero to rounding, by
-            // Cayley-Hamilton) stays leaving, with steps of at most tau (doubling),
-            // unless its g'' bound is 0 (then the bound gives an unlimited step).
-            std::fill(leaving.begin(), leaving.end(), 0);
-            std::fill(leaves_now.begin(), leaves_now.end(), 0);
-            {
-                MotionSeries low, full;  // order 2 for the rate; the full expansion only at a true tie
-                for (std::size_t f = 0; f < nsw; ++f) {
-                    if (std::fabs(buf.g[f]) > noise(f)) continue;
-                    // A rate clearly beyond its rounding (almost every function that has
-                    // just switched) needs no series: the bound works.
-                    if (std::fabs(buf.dg[f]) > 4 * tie_noise(rate_magnitude(model_, cfg, sw[f], x.data(), v.data())))
-                        continue;
-                    if (low.x.empty()) low = motion_series(model_, cfg, sgn.data(), t, t_lo, x.data(), v.data(), 2);
-                    switch_series(model_, cfg, sw[f], t, t_lo, low, series_d, series_mag);
-                    if (std::fabs(series_d[1]) > tie_noise(series_mag[1])) continue;  // h' decides: the bound works
-                    const int max_order = tie_order(model_);
-                    if (full.x.empty())
-                        full = motion_series(model_, cfg, sgn.data(), t, t_lo, x.data(), v.data(), max_order + 2);
-                    switch_series(model_, cfg, sw[f], t, t_lo, full, series_d, series_mag);
-                    int order = 0;
-                    const int dir = first_nonzero_sign(series_d, series_mag, max_order, &order) * (side[f] > 0 ? 1 : -1);
-                    if (dir < 0) {
-                        leaves_now[f] = 1;
-                        continue;
-                    }
-                    if (dir == 0) {
-                        leaving[f] = buf.bound[f] > 0;
-                        clear_until[f] = 0.0;
-                        continue;
-                    }
-                    // clear_until = c/B'(T) for B' valid on [0, T], T <= c/B'(0): any T
-                    // gives a valid interval [0, min(T, c/B'(T))].
-                    const double c = 0.5 * (order + 1) * std::fabs(series_d[static_cast<std::size_t>(order)]);
-                    const double T = std::min(tau_end, c / derivative_bound(model_, cfg, sw[f], full, order + 1, 0.0));
-                    const double clear = std::min(T, c / derivative_bound(model_, cfg, sw[f], full, order + 1, T));
-                    if (clear > 0) {
-                        leaving[f] = 1;
-                        clear_until[f] = clear;
-                    }
-                }
-            }
-            // The event at tau_star: every function whose zero lies there (to
-            // rounding) switches, and so do the others within rounding of zero
-            // and heading across at that instant, evaluated in full.
-            auto take_event = [&](double tau_star) {
-                const double tol = 4 * kEps * (std::fabs(t) + std::fabs(tau_star)) + 1e-300;
-                found.any = true;
-                found.tau = std::min(tau_star, tau_end);
-                for (std::size_t f = 0; f < nsw; ++f)
-                    if (root[f] <= tau_star + tol) found.switched.push_back(sw[f]);
-                eval_all(found.tau, true);
-                // The Newton step that located the event is clamped to the last instant
-                // inside the trigger level (the root may lie before it), and that level
-                // may be what the function inherited, above its own rounding: where the
-                // event's function is still beyond its own rounding, Newton steps on from
-                // the located instant (at most 3, while they shrink), as the reference
-                // iterates. A contact was located at G = 14 times its rounding, which the
-                // tie rules, judging G by its own rounding, may read as the other side.
-                {
-                    std::size_t lead = nsw;
-                    for (std::size_t f = 0; f < nsw && lead == nsw; ++f)
-                        if (root[f] == tau_star && !(is_velocity(sw[f].kind) && armed[f])) lead = f;
-                    double last = kInf;
-                    for (int it = 0; lead < nsw && it < 3; ++it) {
-                        const double h = side[lead] * buf.g[lead], hd = side[lead] * buf.dg[lead];
-                        const double own = noise_of(buf.scale[lead] + std::fabs(buf.dg[lead]) * (std::fabs(t) + found.tau));
-                        if (std::fabs(h) <= own || !(hd < 0)) break;
-                        const double r = found.tau - h / hd;
-                        if (!(r >= 0 && r <= tau_end) || !(std::fabs(r - found.tau) < last) || r == found.tau) break;
-                        last = std::fabs(r - found.tau);
-                        found.tau = r;
-                        eval_all(found.tau, true);
-                    }
-                }
-                for (std::size_t f = 0; f < nsw; ++f) {
-                    if (root[f] <= tau_star + tol) continue;
-                    const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
-                    const double eps_f = noise(f);
-                    const bool stop = is_velocity(sw[f].kind) && armed[f];
-                    // buf holds the full evaluation at found.tau: its state gives the rate's terms.
-                    auto rate_noise = [&] {
-                        return 4 * tie_noise(rate_magnitude(model_, cfg, sw[f], buf.x.data(), buf.v.data()));
-                    };
-                    if (stop ? rules::stops_here(h, hd, buf.bound[f], eps_f, 0.0, rate_noise)
-                             : (h < -eps_f || (h <= eps_f && hd < 0)))
-                        found.switched.push_back(sw[f]);
-                }
-                // What the next segment inherits: each function's rounding at this
-                // instant. The level it had itself inherited is passed on only by an
-                // event at that same instant (a chain of switches at one t). Passed on
-                // always, it was a ratchet: once a function's terms were large (a stiff
-                // Jenkins element stuck), their level stayed for the rest of the run,
-                // and a contact was located 18 times its own rounding from zero (clamped
-                // to the last instant inside that level), where the tie rules, which
-                // judge G by its own rounding, then saw it open (tests/test_contact_location.cpp).
-                const bool same_instant = found.tau <= 4 * kEps * std::fabs(t);
-                std::fill(inherited.begin(), inherited.end(), 0.0);
-                for (std::size_t f = 0; f < nsw; ++f)
-                    inherited[slot(sw[f])] =
-                        same_instant ? noise(f)
-                                     : noise_of(buf.scale[f] + std::fabs(buf.dg[f]) * (std::fabs(t) + found.tau));
-            };
-            double tau = 0.0;  // the instant evaluated last
-            for (std::size_t iter = 0;; ++iter) {
-                if (iter > 10'000'000) {
-                    failure = "switch search does not converge at t = " + number_text(t + tau);
-                    return;
-                }
-                // Which of the functions just evaluated have switched, and where is each one's zero?
-                double tau_star = kInf;
-                for (std::size_t k = 0, count = evaluated(); k < count; ++k) {
-                    const std::size_t f = function(k);
-                    root[f] = kInf;
-                    const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
-                    if (!std::isfinite(h) || !std::isfinite(hd) || !std::isfinite(buf.bound[f])) {
-                        failure = "non-finite switch function in configuration '" + cfg.spec(model_) + "' at t = " +
-                                  number_text(t + tau);
-                        return;
-                    }
-                    if (iter == 0 && leaves_now[f]) {  // a tie heading across: it switches at the segment start
-                        root[f] = 0.0;
-                        tau_star = 0.0;
-                        continue;
-                    }
-                    const double eps_f = noise(f);
-                    const bool stop = is_velocity(sw[f].kind) && armed[f];
-                    // The rate's terms from the state at tau (a search evaluation has the
-                    // switch functions only): asked for only by a velocity falling in its band.
-                    auto rate_noise = [&] {
-                        S.eval(tau, probe_view);
-                        return 4 * tie_noise(rate_magnitude(model_, cfg, sw[f], probe.x.data(), probe.v.data()));
-                    };
-                    if (stop ? !rules::stops_here(h, hd, buf.bound[f], eps_f, 0.0, rate_noise) : h >= -eps_f) continue;
-                    // Move to the zero by one Newton step (the function is monotone
-                    // there), never before the last point known to be on the safe side.
-                    const double prev = scheduled ? before[f] : prev_tau;
-                    double r = tau;
-                    if (hd < 0 && std::fabs(hd) > 0) r = tau - h / hd;
-                    if (stop && h <= 0 && hd >= 0) r = tau;  // touched zero and turned back
-                    r = std::min(std::max(r, prev), std::max(tau, prev));
-                    if (stop && hd < 0 && h > 0) r = tau + h / -hd;  // tiny forward step onto v = 0
-                    root[f] = r;
-                    tau_star = std::min(tau_star, r);
-                }
-                if (tau_star < kInf) {
-                    take_event(tau_star);
-                    break;
-                }
-                if (tau >= tau_end) break;  // every function was evaluated at tau_end (next_f <= tau_end)
-                // Safe step of each function just evaluated: none can reach its
-                // trigger level inside it.
-                const double step_cap = std::min(max_step, tau_end - tau);
-                const double floor_step = 4 * kEps * (std::fabs(t) + std::fabs(tau)) + 1e-300;
-                auto own_step = [&](std::size_t f) {
-                    // A function leaving zero: up to its clear instant, then doubling.
-                    if (leaving[f]) return tau < clear_until[f] ? clear_until[f] - tau : std::max(tau, floor_step);
-                    const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
-                    const bool stop = is_velocity(sw[f].kind) && armed[f];
-                    // Contacts and releases switch only when certainly negative (level
-                    // -2*noise); armed velocities stop at zero.
-                    const double level = stop ? 0.0 : -2 * noise(f);
-                    return safe_step(h - level, hd, buf.bound[f]);
-                };
-                // A sliding velocity whose Newton step s = h / -h' lands on its zero
-                // to half the time's resolution (B s^2 / (2 |h'|) <= eps |t| / 2: the
-                // bound keeps the zero within that of tau + s), before any other
-                // function can reach its trigger level (`horizon`) and within the
-                // bound's validity (step_cap): its zero is known, and the event is
-                // taken there without one more instant to find it. True when it was.
-                auto land = [&](std::size_t f, double horizon) {
-                    if (f >= nsw || leaving[f] || !is_velocity(sw[f].kind) || !armed[f]) return false;
-                    const double h = side[f] * buf.g[f], hd = side[f] * buf.dg[f];
-                    if (!(hd < 0)) return false;
-                    const double s = h / -hd;
-                    if (!(buf.bound[f] * s * s <= -hd * kEps * (std::fabs(t) + tau)) || s > step_cap) return false;
-                    if (!(tau + s <= horizon)) return false;
-                    root[f] = tau + s;
-                    take_event(tau + s);
-                    return true;
-                };
-                double tau_next;
-                if (!scheduled) {
-                    // The smallest step and the one after it (the horizon of the others).
-                    double step = step_cap, second = step_cap;
-                    std::size_t first = nsw;
-                    for (std::size_t f = 0; f < nsw; ++f) {
-                        const double s = own_step(f);
-                        if (s < step) second = step, step = s, first = f;
-                        else if (s < second) second = s;
-                    }
-                    if (land(first, tau + second)) break;
-                    tau_next = std::min(tau + std::max(step, floor_step), tau_end);
-                    eval_all(tau_next, false);
-                } else {
-                    // Each function just evaluated is safe up to next_f; the next
-                    // instant is the earliest next_f. It evaluates the functions due
-                    // by then, and those due soon after: one evaluation of a few more
-                    // functions is cheaper than an instant more.
-                    for (std::uint32_t f : due) next[f] = std::min(tau + std::max(std::min(step_cap, own_step(f)), floor_step), tau_end);
-                    tau_next = kInf;
-                    double second = kInf;
-                    std::size_t first = nsw;
-                    for (std::size_t f = 0; f < nsw; ++f) {
-                        if (next[f] < tau_next) second = tau_next, tau_next = next[f], first = f;
-                        else if (next[f] < second) second = next[f];
-                    }
-                    if (first < nsw && at[first] == tau && land(first, second)) break;  // evaluated at this instant
-                    const double by = tau_next + kScheduleAhead * (tau_next - tau);
-                    due.clear();
-                    for (std::size_t f = 0; f < nsw; ++f)
-                        if (next[f] <= by) due.push_back(static_cast<std::uint32_t>(f));
-                    eval_due(tau_next);
-                }
-                tau = tau_next;
-                for (std::size_t k = 0, count = evaluated(); k < count; ++k) {
-                    const std::size_t f = function(k);
-                    if (is_velocity(sw[f].kind) && !armed[f] && side[f] * buf.g[f] > 2 * noise(f))
-                        armed[f] = 1;
-                    // Past its clear interval the bound watches it again (a function
-                    // leaving an exact zero, clear_until = 0, once it is above its rounding).
-                    if (leaving[f] && tau >= clear_until[f] && (clear_until[f] > 0 || side[f] * buf.g[f] > 2 * noise(f)))
-                        leaving[f] = 0;
-                }
-            }
-            if (!found.any) eval_all(tau_end, true);  // an event's instant was evaluated in full above
-        };
-        if (nsw > 0 && nsw >= options.schedule_from)
-            search(std::true_type{});
-        else
-            search(std::false_type{});
-        if (!failure.empty()) return finish(RunStatus::failure, failure);
+        SearchSegment seg;
+        seg.solver = &S, seg.switches = &S.switches(), seg.cfg = &cfg, seg.sgn = &sgn, seg.sgn_before = &sgn_before;
+        seg.x = x.data(), seg.v = v.data(), seg.t = t, seg.t_lo = t_lo;
+        seg.tau_end = tau_end, seg.max_step = S.max_step(), seg.carried_start = carried_start;
+        if (const std::string failure = search.run(seg, nsw > 0 && nsw >= options.schedule_from); !failure.empty())
+            return finish(RunStatus::failure, failure);
 
         // ---- dense output up to the event (or t_end) from the closed form ----
         const double t_seg_end = found.any ? t + found.tau : t_end;
@@ -666,13 +808,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
             t = t_end;
             break;
         }
-        {
-            // (t, t_lo) += found.tau, the sum kept exactly (Knuth's TwoSum).
-            const double a = t, b = t_lo + found.tau;
-            const double s = a + b, bb = s - a;
-            t_lo = (a - (s - bb)) + (b - bb);
-            t = s;
-        }
+        advance_time(t, t_lo, found.tau);
 
         transitions.clear();
         if (records) cfg_before = cfg;
@@ -680,8 +816,8 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         if (!apply_switches(model_, t, x.data(), v.data(), buf.a.data(), cfg, sgn, found.switched, transitions, why,
                             &elements))
             return finish(RunStatus::chattering, why);
-        carried = cfg == current_cfg;
-        carried_tau = found.tau;
+        restarts.carried = cfg == current_cfg;
+        restarts.carried_tau = found.tau;
         if (records) {
             SwitchRecord rec;
             rec.t = t, rec.t_lo = t_lo, rec.switched = &found.switched;
