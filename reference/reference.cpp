@@ -406,6 +406,199 @@ std::size_t search_step_limit(double span, double fastest_rate, const SearchLimi
     return n >= 1e18 ? static_cast<std::size_t>(1e18) : static_cast<std::size_t>(n);
 }
 
+namespace {
+
+// What the tie rules decide at a segment start, per switch function: heading
+// across now (leaves_now), or leaving zero into its side up to clear_until.
+struct StartTies {
+    std::vector<char> leaving, leaves_now;
+    std::vector<cl_F> clear_until;
+};
+
+// Ties at the segment start: a function at zero whose first derivative
+// vanishes too. Its direction is its first non-zero derivative, of order m
+// (interface.md "Ties and touches"). One that heads across (into the side its
+// configuration forbids) switches now, at this instant. One that heads into
+// its side is `leaving` zero: the guaranteed bound h + h' s - B s^2/2 is
+// useless for it (h = h' = 0 while h grows like s^m: the step would shrink
+// with s^(m/2), the search crawl on for ever). Taylor's theorem with the
+// bound B' >= |h^(m+1)| of the segment (MpSegment::derivative_bound) gives
+// instead h(s) >= s^m/m! (|h^(m)(0)| - B' s/(m+1)) > 0 for s <
+// (m+1)|h^(m)(0)|/B', so it is left out of the bound up to half that
+// (`clear_until`); from there, once above its rounding band (h > 2 noise),
+// the bound takes over. A function with no non-zero derivative (identically
+// zero to rounding) stays leaving, with steps of at most tau (tau doubles).
+template <class Noise>
+void start_ties(const MpModel& mp, const MpSegment& S, const Configuration& cfg, const std::vector<signed char>& sgn,
+                const cl_F& t, const std::vector<cl_F>& x, const std::vector<cl_F>& v, const MpEval& buf,
+                const std::vector<cl_F>& side, const cl_F& tau_end, Noise&& noise, StartTies& ties) {
+    const std::vector<SwitchFunction>& sw = S.switches();
+    std::fill(ties.leaving.begin(), ties.leaving.end(), 0);
+    std::fill(ties.leaves_now.begin(), ties.leaves_now.end(), 0);
+    // The first derivatives (Taylor order 2) decide almost every function at zero (the ones
+    // that just switched); the full expansion only when h' vanishes too.
+    Taylor T1, T;
+    bool have_t1 = false, have_t = false;
+    std::vector<cl_F> d, m;
+    auto series = [&](std::size_t f, const Taylor& X) {
+        const int e = sw[f].element;
+        d.clear(), m.clear();
+        const RowsMotion<cl_F, std::vector<std::vector<cl_F>>> motion(X.x, &X.xm, mp.zero);
+        const auto ee = static_cast<std::size_t>(e);
+        const int orders = static_cast<int>(X.x.size());
+        if (!is_release(sw[f].kind)) {
+            // Velocities' series are one order shorter: w^(k) needs x^(k+1).
+            const auto p = mp_elements(mp, [&](int j) { return X.s[static_cast<std::size_t>(j)]; });
+            const int last = is_velocity(sw[f].kind) ? orders - 1 : orders;
+            for (int k = 0; k < last; ++k) {
+                d.push_back(switch_derivative(p, sw[f], motion, k));
+                m.push_back(switch_magnitude(p, sw[f], motion, k));
+            }
+        } else {
+            driving_series(mp, cfg, e, t, X, d, m);
+            const int sigma = sw[f].kind == SwitchKind::release_pos ? 1 : -1;
+            const cl_F limit = mp.mu_s[ee] * mp.normal[ee];
+            for (std::size_t k = 0; k < d.size(); ++k) {
+                d[k] = friction::release_value(sigma, d[k], limit, static_cast<int>(k));
+                m[k] = friction::release_magnitude(m[k], limit, static_cast<int>(k));
+            }
+        }
+    };
+    for (std::size_t f = 0; f < sw.size(); ++f) {
+        if (cln::abs(side[f] * buf.g[f]) > noise(f)) continue;
+        if (!have_t1) T1 = taylor(mp, cfg, sgn, t, x, v, 2), have_t1 = true;
+        series(f, T1);
+        if (cln::abs(d[1]) > noise_of(mp, m[1])) continue;  // h' decides: the bound works
+        if (!have_t) T = taylor(mp, cfg, sgn, t, x, v, tie_order(mp) + 1), have_t = true;
+        series(f, T);
+        int order = 0;
+        const int dir = rules::first_nonzero_sign(MpArithmetic{mp}, rules::Series<cl_F>{d, m}, 1, &order) *
+                        (cln::plusp(side[f]) ? 1 : -1);
+        if (dir < 0) {
+            ties.leaves_now[f] = 1;
+            continue;
+        }
+        ties.leaving[f] = 1;
+        ties.clear_until[f] = mp.zero;
+        if (dir > 0) {
+            const cl_F Bn = S.derivative_bound(f, order + 1, tau_end);
+            const cl_F dm = cln::abs(d[static_cast<std::size_t>(order)]);
+            ties.clear_until[f] = cln::plusp(Bn) ? cln::min(tau_end, mp.I(order + 1) * dm / (mp.two * Bn)) : tau_end;
+        }
+    }
+}
+
+// The zero of h_f = side_f g_f, beyond its trigger level at tau: by Newton
+// iterations inside [prev_tau, tau] (the function is on its safe side at
+// prev_tau); a stop (an armed velocity) still at or above zero by a forward
+// Newton step onto v = 0.
+cl_F locate_root(const MpModel& mp, const MpSegment& S, std::size_t f, const cl_F& side_f, const cl_F& h, const cl_F& hd,
+                 bool stop, const cl_F& prev_tau, const cl_F& tau, const cl_F& t, MpEval& probe, std::size_t& evaluations) {
+    cl_F lo = prev_tau, hi = tau, r = tau;
+    if (stop && !cln::minusp(h)) {
+        if (cln::minusp(hd)) r = tau + h / -hd;  // tiny forward step
+        return r;
+    }
+    for (int k = 0; k < 60; ++k) {
+        S.eval(r, probe);
+        ++evaluations;
+        const cl_F hr = side_f * probe.g[f], hdr = side_f * probe.dg[f];
+        if (cln::zerop(hr)) break;
+        if (cln::minusp(hr))
+            hi = r;
+        else
+            lo = r;
+        // Converged when the Newton correction is below the time's own rounding
+        // (checked before the bracket test: it may round onto a bracket end).
+        if (cln::minusp(hdr) && cln::abs(hr / hdr) <= mp.I(4) * mp.eps * (cln::abs(t) + cln::abs(r))) {
+            r = r - hr / hdr;
+            break;
+        }
+        cl_F next = cln::minusp(hdr) ? r - hr / hdr : (lo + hi) * mp.half;
+        if (!(next > lo && next < hi)) next = (lo + hi) * mp.half;
+        r = next;
+    }
+    if (stop && cln::minusp(h) && !cln::minusp(hd)) r = tau;  // touched zero and turned back
+    return r;
+}
+
+// The run's guards against switches that do not let time move on: the same
+// instant too often (chattering), too many switches in too short a span (Zeno,
+// on the run's clock, as the engine's SwitchGuard).
+class MpGuard {
+public:
+    MpGuard(const EngineOptions& options, const cl_F& t0) : options_(options), t0_(t0), last_(t0) {}
+    void event(const cl_F& t) {
+        recent_.push_back(t);
+        if (recent_.size() > options_.zeno_events) recent_.pop_front();
+    }
+    /// "" or why the run stops, after the switches at t (nsw functions in cfg).
+    RunStatus after_switch(const cl_F& t, std::size_t nsw, const std::string& cfg, std::string& why) {
+        same_instant_ = have_last_ && t == last_ ? same_instant_ + 1 : 0;
+        last_ = t;
+        have_last_ = true;
+        if (same_instant_ > 4 * (nsw + 2)) {
+            why = "configuration keeps switching at t = " + time_text(t) + " (now '" + cfg + "')";
+            return RunStatus::chattering;
+        }
+        if (recent_.size() >= options_.zeno_events &&
+            cln::double_approx(recent_.back() - recent_.front()) <=
+                options_.zeno_span * std::max(1.0, cln::double_approx(t - t0_))) {
+            why = std::to_string(recent_.size()) + " switches between t = " + time_text(recent_.front()) + " and " +
+                  time_text(recent_.back()) + " (accumulating switches, configuration '" + cfg + "')";
+            return RunStatus::zeno;
+        }
+        return RunStatus::ok;
+    }
+
+private:
+    const EngineOptions& options_;
+    cl_F t0_;
+    std::deque<cl_F> recent_;
+    std::size_t same_instant_ = 0;
+    bool have_last_ = false;
+    cl_F last_;
+};
+
+// The safe step of the search from tau: no function reaches its trigger
+// level inside it (a leaving function: up to its clear instant, then
+// doubling), at least the time's own rounding (at t = tau = 0, that of the
+// run's span).
+template <class Noise>
+cl_F search_step(const MpModel& mp, const MpSegment& S, const MpEval& buf, const std::vector<cl_F>& side,
+                 const std::vector<char>& armed, const StartTies& ties, const cl_F& t, const cl_F& tau,
+                 const cl_F& tau_end, const cl_F& span, Noise&& noise) {
+    const std::vector<SwitchFunction>& sw = S.switches();
+    cl_F step = tau_end - tau;
+    if (S.has_max_step()) step = cln::min(step, S.max_step());
+    for (std::size_t f = 0; f < sw.size(); ++f) {
+        if (ties.leaving[f]) continue;
+        const bool stop = is_velocity(sw[f].kind) && armed[f];
+        const cl_F level = stop ? mp.zero : -(mp.two * noise(f));
+        cl_F s;
+        if (safe_step(mp, side[f] * buf.g[f] - level, side[f] * buf.dg[f], buf.bound[f], s)) step = cln::min(step, s);
+    }
+    cl_F floor_step = mp.I(4) * mp.eps * (cln::abs(t) + cln::abs(tau));
+    if (cln::zerop(floor_step)) floor_step = mp.I(4) * mp.eps * span;
+    for (std::size_t f = 0; f < sw.size(); ++f)
+        if (ties.leaving[f])
+            step = cln::min(step, tau < ties.clear_until[f] ? ties.clear_until[f] - tau : cln::max(tau, floor_step));
+    return cln::max(step, floor_step);
+}
+
+// The side on which switch function f is watched in cfg: h = side g > 0 until it switches.
+cl_F side_of(const MpModel& mp, const SwitchFunction& f, const Configuration& cfg, const std::vector<signed char>& sgn) {
+    switch (f.kind) {
+        case SwitchKind::gap: return cfg.closed[f.element] ? mp.one : -mp.one;
+        case SwitchKind::velocity: return sgn[f.element] >= 0 ? mp.one : -mp.one;
+        case SwitchKind::slip_velocity:  // w has the sign of the slip
+            return cfg.slip[static_cast<std::size_t>(f.element)] >= 0 ? mp.one : -mp.one;
+        default: return -mp.one;  // release and slip functions are negative while stuck
+    }
+}
+
+}  // namespace
+
 PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions& options, Observer& observer,
                             const SearchLimits& limits, const std::vector<double>* offset) {
     if (digits < 17) throw InputError("reference::simulate_precise(): digits " + std::to_string(digits) + " < 17");
@@ -423,10 +616,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
     Configuration cfg = entered_configuration(model, mp, t, x, v, sgn);
 
     std::map<Configuration, std::unique_ptr<MpSegment>> segments;
-    std::deque<cl_F> recent;
-    std::size_t same_instant = 0;
-    bool have_last = false;
-    cl_F last_event_t = mp.zero;
+    MpGuard guard(options, mp.t0);
 
     const SampleGrid grid(model.t0, options.t_end, options.dt);  // as the double engine: in double
     std::size_t k_next = 0;
@@ -455,8 +645,10 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         return static_cast<std::size_t>(f.kind) * stride + static_cast<std::size_t>(f.element);
     };
     std::vector<cl_F> side(max_switches, mp.one), floor(max_switches, mp.zero);
-    std::vector<char> armed(max_switches), has_root(max_switches), leaving(max_switches), leaves_now(max_switches);
-    std::vector<cl_F> root(max_switches, mp.zero), clear_until(max_switches, mp.zero);
+    std::vector<char> armed(max_switches), has_root(max_switches);
+    std::vector<cl_F> root(max_switches, mp.zero);
+    StartTies ties{std::vector<char>(max_switches), std::vector<char>(max_switches),
+                   std::vector<cl_F>(max_switches, mp.zero)};
     MpEval buf, dense, probe;
     std::vector<SwitchFunction> switched;
     std::vector<Transition> transitions;
@@ -472,19 +664,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         const std::size_t nsw = sw.size();
         const cl_F tau_end = t_end - t;
         for (std::size_t f = 0; f < nsw; ++f) {
-            switch (sw[f].kind) {
-                case SwitchKind::gap:
-                    side[f] = cfg.closed[sw[f].element] ? mp.one : -mp.one;
-                    break;
-                case SwitchKind::velocity:
-                    side[f] = sgn[sw[f].element] >= 0 ? mp.one : -mp.one;
-                    break;
-                case SwitchKind::slip_velocity:  // w has the sign of the slip
-                    side[f] = cfg.slip[static_cast<std::size_t>(sw[f].element)] >= 0 ? mp.one : -mp.one;
-                    break;
-                default:
-                    side[f] = -mp.one;  // release and slip functions are negative while stuck
-            }
+            side[f] = side_of(mp, sw[f], cfg, sgn);
             floor[f] = inherited[slot(sw[f])];
         }
         cl_F tau_now = mp.zero;
@@ -507,72 +687,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         eval(tau);
         for (std::size_t f = 0; f < nsw; ++f)
             armed[f] = is_velocity(sw[f].kind) && h_of(buf, f) > noise(buf, f);
-        // Ties at the segment start: a function at zero whose first derivative vanishes too. Its
-        // direction is its first non-zero derivative, of order m (interface.md "Ties and touches"). One
-        // that heads across (into the side its configuration forbids) switches now, at this instant.
-        // One that heads into its side is `leaving` zero: the guaranteed bound h + h' s - B s^2/2 is
-        // useless for it (h = h' = 0 while h grows like s^m: the step would shrink with s^(m/2), the
-        // search crawl on for ever). Taylor's theorem with the bound B' >= |h^(m+1)| of the segment
-        // (MpSegment::derivative_bound) gives instead h(s) >= s^m/m! (|h^(m)(0)| - B' s/(m+1)) > 0
-        // for s < (m+1)|h^(m)(0)|/B', so it is left out of the bound up to half that (`clear_until`);
-        // from there, once above its rounding band (h > 2 noise), the bound takes over. A function
-        // with no non-zero derivative (identically zero to rounding) stays leaving, with steps of at
-        // most tau (tau doubles).
-        std::fill(leaving.begin(), leaving.end(), 0);
-        std::fill(leaves_now.begin(), leaves_now.end(), 0);
-        {
-            // The first derivatives (Taylor order 2) decide almost every function at zero (the ones
-            // that just switched); the full expansion only when h' vanishes too.
-            Taylor T1, T;
-            bool have_t1 = false, have_t = false;
-            std::vector<cl_F> d, m;
-            auto series = [&](std::size_t f, const Taylor& X) {
-                const int e = sw[f].element;
-                d.clear(), m.clear();
-                const RowsMotion<cl_F, std::vector<std::vector<cl_F>>> motion(X.x, &X.xm, mp.zero);
-                const auto ee = static_cast<std::size_t>(e);
-                const int orders = static_cast<int>(X.x.size());
-                if (!is_release(sw[f].kind)) {
-                    // Velocities' series are one order shorter: w^(k) needs x^(k+1).
-                    const auto p = mp_elements(mp, [&](int j) { return X.s[static_cast<std::size_t>(j)]; });
-                    const int last = is_velocity(sw[f].kind) ? orders - 1 : orders;
-                    for (int k = 0; k < last; ++k) {
-                        d.push_back(switch_derivative(p, sw[f], motion, k));
-                        m.push_back(switch_magnitude(p, sw[f], motion, k));
-                    }
-                } else {
-                    driving_series(mp, cfg, e, t, X, d, m);
-                    const int sigma = sw[f].kind == SwitchKind::release_pos ? 1 : -1;
-                    const cl_F limit = mp.mu_s[ee] * mp.normal[ee];
-                    for (std::size_t k = 0; k < d.size(); ++k) {
-                        d[k] = friction::release_value(sigma, d[k], limit, static_cast<int>(k));
-                        m[k] = friction::release_magnitude(m[k], limit, static_cast<int>(k));
-                    }
-                }
-            };
-            for (std::size_t f = 0; f < nsw; ++f) {
-                if (cln::abs(h_of(buf, f)) > noise(buf, f)) continue;
-                if (!have_t1) T1 = taylor(mp, cfg, sgn, t, x, v, 2), have_t1 = true;
-                series(f, T1);
-                if (cln::abs(d[1]) > noise_of(mp, m[1])) continue;  // h' decides: the bound works
-                if (!have_t) T = taylor(mp, cfg, sgn, t, x, v, tie_order(mp) + 1), have_t = true;
-                series(f, T);
-                int order = 0;
-                const int dir = rules::first_nonzero_sign(MpArithmetic{mp}, rules::Series<cl_F>{d, m}, 1, &order) *
-                                (cln::plusp(side[f]) ? 1 : -1);
-                if (dir < 0) {
-                    leaves_now[f] = 1;
-                    continue;
-                }
-                leaving[f] = 1;
-                clear_until[f] = mp.zero;
-                if (dir > 0) {
-                    const cl_F Bn = S.derivative_bound(f, order + 1, tau_end);
-                    const cl_F dm = cln::abs(d[static_cast<std::size_t>(order)]);
-                    clear_until[f] = cln::plusp(Bn) ? cln::min(tau_end, mp.I(order + 1) * dm / (mp.two * Bn)) : tau_end;
-                }
-            }
-        }
+        start_ties(mp, S, cfg, sgn, t, x, v, buf, side, tau_end, [&](std::size_t f) { return noise(buf, f); }, ties);
         // Every loop is bounded: a legitimate search takes a few steps per period of the segment's
         // fastest motion (and a few dozen Newton-like steps onto each root); far more is a stall.
         const std::size_t max_iter = search_step_limit(options.t_end - cln::double_approx(t),
@@ -586,7 +701,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
             cl_F tau_star = mp.zero;
             for (std::size_t f = 0; f < nsw; ++f) {
                 has_root[f] = 0;
-                if (iter == 0 && leaves_now[f]) {  // the motion leaves this contact's configuration now
+                if (iter == 0 && ties.leaves_now[f]) {  // the motion leaves this contact's configuration now
                     has_root[f] = 1;
                     root[f] = mp.zero;
                     tau_star = mp.zero;
@@ -596,36 +711,9 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                 const cl_F h = h_of(buf, f), hd = hd_of(buf, f), eps_f = noise(buf, f);
                 const bool stop = is_velocity(sw[f].kind) && armed[f];
                 if (stop ? !rules::stops_here(h, hd, buf.bound[f], eps_f, mp.zero, [&] { return mp.zero; }) : h >= -eps_f) continue;
-                // The zero, by Newton iterations inside [prev_tau, tau] (the function is on its
-                // safe side at prev_tau); a stop by forward Newton steps onto v = 0.
-                cl_F lo = prev_tau, hi = tau, r = tau;
-                if (stop && !cln::minusp(h)) {
-                    if (cln::minusp(hd)) r = tau + h / -hd;  // tiny forward step
-                } else {
-                    for (int k = 0; k < 60; ++k) {
-                        S.eval(r, probe);
-                        ++sum.evaluations;
-                        const cl_F hr = h_of(probe, f), hdr = hd_of(probe, f);
-                        if (cln::zerop(hr)) break;
-                        if (cln::minusp(hr))
-                            hi = r;
-                        else
-                            lo = r;
-                        // Converged when the Newton correction is below the time's own rounding
-                        // (checked before the bracket test: it may round onto a bracket end).
-                        if (cln::minusp(hdr) && cln::abs(hr / hdr) <= mp.I(4) * mp.eps * (cln::abs(t) + cln::abs(r))) {
-                            r = r - hr / hdr;
-                            break;
-                        }
-                        cl_F next = cln::minusp(hdr) ? r - hr / hdr : (lo + hi) * mp.half;
-                        if (!(next > lo && next < hi)) next = (lo + hi) * mp.half;
-                        r = next;
-                    }
-                    if (stop && cln::minusp(h) && !cln::minusp(hd)) r = tau;  // touched zero and turned back
-                }
                 has_root[f] = 1;
-                root[f] = r;
-                tau_star = any ? cln::min(tau_star, r) : r;
+                root[f] = locate_root(mp, S, f, side[f], h, hd, stop, prev_tau, tau, t, probe, sum.evaluations);
+                tau_star = any ? cln::min(tau_star, root[f]) : root[f];
                 any = true;
             }
             if (any) {
@@ -647,53 +735,30 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                 break;
             }
             if (tau >= tau_end) break;
-            // Safe step: no function reaches its trigger level inside it.
-            cl_F step = tau_end - tau;
-            if (S.has_max_step()) step = cln::min(step, S.max_step());
-            for (std::size_t f = 0; f < nsw; ++f) {
-                if (leaving[f]) continue;
-                const bool stop = is_velocity(sw[f].kind) && armed[f];
-                const cl_F level = stop ? mp.zero : -(mp.two * noise(buf, f));
-                cl_F s;
-                if (safe_step(mp, h_of(buf, f) - level, hd_of(buf, f), buf.bound[f], s)) step = cln::min(step, s);
-            }
-            // The smallest step: the time's own rounding; at t = tau = 0, that of the run's span.
-            cl_F floor_step = mp.I(4) * mp.eps * (cln::abs(t) + cln::abs(tau));
-            if (cln::zerop(floor_step)) floor_step = mp.I(4) * mp.eps * cln::abs(t_end - mp.t0);
-            for (std::size_t f = 0; f < nsw; ++f)
-                if (leaving[f]) step = cln::min(step, tau < clear_until[f] ? clear_until[f] - tau : cln::max(tau, floor_step));
-            step = cln::max(step, floor_step);
+            const cl_F step = search_step(mp, S, buf, side, armed, ties, t, tau, tau_end, cln::abs(t_end - mp.t0),
+                                          [&](std::size_t f) { return noise(buf, f); });
             prev_tau = tau;
             tau = cln::min(tau + step, tau_end);
             eval(tau);
             for (std::size_t f = 0; f < nsw; ++f) {
                 if (is_velocity(sw[f].kind) && !armed[f] && h_of(buf, f) > mp.two * noise(buf, f))
                     armed[f] = 1;
-                if (leaving[f] && tau >= clear_until[f] && h_of(buf, f) > mp.two * noise(buf, f)) leaving[f] = 0;
+                if (ties.leaving[f] && tau >= ties.clear_until[f] && h_of(buf, f) > mp.two * noise(buf, f))
+                    ties.leaving[f] = 0;
             }
         }
 
         // ---- samples up to the event (or t_end), from the closed form ----
         const cl_F t_seg_end = found ? t + found_tau : t_end;
-        if (!samples_done) {
-            while (true) {
-                const double tkd = grid.time(k_next);
-                const cl_F tk = mp.F(tkd);
-                if (found ? tk >= t_seg_end : tk > t_end) break;
-                if (tk == t) {
-                    const std::vector<double> xd = to_double(x), vd = to_double(v);
-                    observer.on_sample(tkd, xd.data(), vd.data());
-                } else {
-                    S.eval(cln::max(mp.zero, tk - t), dense);
-                    const std::vector<double> xd = to_double(dense.x), vd = to_double(dense.v);
-                    observer.on_sample(tkd, xd.data(), vd.data());
-                }
-                if (grid.last(k_next)) {
-                    samples_done = true;
-                    break;
-                }
-                ++k_next;
-            }
+        while (!samples_done) {
+            const double tkd = grid.time(k_next);
+            const cl_F tk = mp.F(tkd);
+            if (found ? tk >= t_seg_end : tk > t_end) break;
+            if (tk != t) S.eval(cln::max(mp.zero, tk - t), dense);  // else the segment's start state itself
+            const std::vector<double> xd = to_double(tk == t ? x : dense.x), vd = to_double(tk == t ? v : dense.v);
+            observer.on_sample(tkd, xd.data(), vd.data());
+            if (grid.last(k_next)) samples_done = true;
+            ++k_next;
         }
 
         // ---- advance to the event instant ----
@@ -718,22 +783,11 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
                 observer.on_event(td, tr.kind, tr.element, xd.data(), vd.data());
                 run.events.push_back({t, tr.kind, tr.element, x, v});
                 ++sum.events;
-                recent.push_back(t);
-                if (recent.size() > options.zeno_events) recent.pop_front();
+                guard.event(t);
             }
         }
-        same_instant = have_last && t == last_event_t ? same_instant + 1 : 0;
-        last_event_t = t;
-        have_last = true;
-        if (same_instant > 4 * (nsw + 2))
-            return finish(RunStatus::chattering,
-                          "configuration keeps switching at t = " + time_text(t) + " (now '" + cfg.spec(model) + "')");
-        if (recent.size() >= options.zeno_events &&
-            cln::double_approx(recent.back() - recent.front()) <=
-                options.zeno_span * std::max(1.0, cln::double_approx(t - mp.t0)))  // the run's clock, as the engine
-            return finish(RunStatus::zeno, std::to_string(recent.size()) + " switches between t = " +
-                                               time_text(recent.front()) + " and " + time_text(recent.back()) +
-                                               " (accumulating switches, configuration '" + cfg.spec(model) + "')");
+        if (const RunStatus g = guard.after_switch(t, nsw, cfg.spec(model), why); g != RunStatus::ok)
+            return finish(g, why);
         if (options.max_events && sum.events >= options.max_events)
             return finish(RunStatus::max_events, "stopped after " + std::to_string(sum.events) + " events");
         // Every switch: one at N digits costs far more than the observer's check
