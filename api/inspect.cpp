@@ -60,15 +60,11 @@ struct Printer {
     Format fmt;
     std::ostream& out;
 
+    // In sorted term order (expression_printer.h): GiNaC's own order follows
+    // symbol serial numbers and hashes, and varied from run to run here.
     std::string expr(const ex& e) const {
         RoundNumbers round;
-        std::ostringstream s;
-        const ex r = round(e.evalf());
-        if (fmt == Format::latex)
-            s << GiNaC::latex << r;
-        else
-            s << r;
-        return s.str();
+        return print_sorted(round(e.evalf()), fmt == Format::latex ? ExpressionFormat::latex : ExpressionFormat::text);
     }
     std::string num(const numeric& v) const { return format_number(v.to_double()); }
     std::string num(const DD& v) const { return format_number(v.to_double()); }
