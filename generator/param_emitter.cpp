@@ -28,6 +28,9 @@ std::vector<std::string> kept_parameters(const Model& model, const std::string& 
                          ", which sweep kernels do not take yet (generate without --params folds them)");
     // Sweep kernels redo the modal analysis of K over the lumped masses at run time (sweep_kernel_core.h):
     // a coupled M and state-space pseudo-modes there are still to come.
+    if (model.condensation.loaded())
+        throw InputError(flag + ": the model has a load or forcing on a massless (condensed) dof, which sweep kernels "
+                                "do not take yet (generate without --params derives its kernels)");
     if (model.coupled_mass())
         throw InputError(flag + ": the model has a coupled (non-diagonal) mass matrix, which sweep kernels do not "
                                 "take yet (generate without --params derives its kernels)");

@@ -68,7 +68,22 @@ struct Condensation {
     std::vector<int> mass;          ///< per dof: its mass index, or -1 when condensed
     /// Row-major, (condensed dofs) x dof(): x_c = R x, R = -K_cc^-1 K_cm, in the order of `dofs`.
     std::vector<double> recovery;
+    /// Row-major, (condensed dofs) x (condensed dofs): K_cc^-1, the static
+    /// response of the condensed dofs to forces on them.
+    std::vector<double> flexibility;
+    /// Forces given on condensed dofs, per condensed dof (in the order of
+    /// their rows): the constant load, and each forcing harmonic's amplitude
+    /// (Model::forcing order). The dofs with mass carry them as R^T f_c (the
+    /// reader folds them into Model::load and Harmonic::amplitude); the
+    /// recovered x_c adds K_cc^-1 f_c(t).
+    std::vector<double> load;
+    std::vector<std::vector<double>> amplitude;
     bool present() const { return !dofs.empty(); }
+    /// Whether a load or a forcing amplitude is given on a condensed dof.
+    bool loaded() const {
+        auto any = [](const std::vector<double>& f) { return std::any_of(f.begin(), f.end(), [](double x) { return x != 0.0; }); };
+        return any(load) || std::any_of(amplitude.begin(), amplitude.end(), any);
+    }
     /// How many dofs are condensed.
     std::size_t condensed() const {
         return static_cast<std::size_t>(std::count(mass.begin(), mass.end(), -1));

@@ -316,8 +316,28 @@ private:
         return false;
     }
     static std::string condensed_message(const std::string& name) {
-        return "'" + name + "' is a massless dof (a zero row of M), condensed statically: an element, load, "
-               "forcing or initial value cannot name it yet (give it a mass, or act on a dof with mass)";
+        return "'" + name + "' is a massless dof (a zero row of M), condensed statically: an element or an "
+               "initial value cannot name it (give it a mass, or act on a dof with mass; a load or forcing may)";
+    }
+    /// The row of condensed dof `name` in Condensation::recovery, or -1.
+    int condensed_row(const std::string& name) const {
+        const Condensation& c = model_.condensation;
+        int row = 0;
+        for (std::size_t d = 0; d < c.dofs.size(); ++d) {
+            if (c.mass[d] >= 0) continue;
+            if (c.dofs[d] == name) return row;
+            ++row;
+        }
+        return -1;
+    }
+    /// Forces f_c given on condensed dofs, carried by the dofs with mass as
+    /// R^T f_c (static condensation: K_cc x_c + K_cm x_m = f_c).
+    void fold_condensed(const std::vector<double>& fc, std::vector<double>& f) const {
+        const Condensation& c = model_.condensation;
+        const std::size_t n = model_.dof();
+        for (std::size_t r = 0; r < fc.size(); ++r)
+            if (fc[r] != 0.0)
+                for (std::size_t j = 0; j < n; ++j) f[j] += c.recovery[r * n + j] * fc[r];
     }
 
     /// Mass name -> index; `kGround` for "ground".
@@ -347,13 +367,20 @@ private:
     }
 
     /// A table mass-name -> number (load, amplitude, initial x and v): one entry per mass, 0 when absent.
-    std::vector<double> per_mass(const toml::node& node, const std::string& key) {
+    /// With `on_condensed` (a force), a condensed dof's value goes there, by its row.
+    std::vector<double> per_mass(const toml::node& node, const std::string& key,
+                                 std::vector<double>* on_condensed = nullptr) {
         if (!node.is_table())
             fail(&node, key, "expected a table of " + body_word() + " names, e.g. { m1 = 1.0 }, got " + type_name(node));
         std::vector<double> values(model_.dof(), 0.0);
+        if (on_condensed) on_condensed->assign(model_.condensation.condensed(), 0.0);
         for (auto&& [k, v] : *node.as_table()) {
             const std::string name(k.str());
             const int i = model_.mass_index(name);
+            if (i < 0 && on_condensed && condensed(name)) {
+                (*on_condensed)[static_cast<std::size_t>(condensed_row(name))] = number(v, join(key, name));
+                continue;
+            }
             if (i < 0 && condensed(name)) fail_at(k.source().begin.line, join(key, name), condensed_message(name));
             if (i < 0) fail_at(k.source().begin.line, join(key, name), "unknown " + body_word() + " '" + excerpt(name) + "'");
             values[i] = number(v, join(key, name));
@@ -754,14 +781,20 @@ private:
             h.phase = optional_number(t, path, "phase").value_or(0.0);
             const toml::node* amplitude = t.get("amplitude");
             if (!amplitude) fail_at(table_line(t, path), path + ".amplitude", "required key is missing");
-            h.amplitude = per_mass(*amplitude, path + ".amplitude");
+            std::vector<double> on_condensed;
+            h.amplitude = per_mass(*amplitude, path + ".amplitude", &on_condensed);
+            fold_condensed(on_condensed, h.amplitude);
+            if (model_.condensation.present()) model_.condensation.amplitude.push_back(on_condensed);
             model_.forcing.push_back(h);
         }
     }
 
     void read_load(const toml::table& root) {
         model_.load.assign(model_.dof(), 0.0);
-        if (const toml::node* load = root.get("load")) model_.load = per_mass(*load, "load");
+        if (const toml::node* load = root.get("load")) {
+            model_.load = per_mass(*load, "load", &model_.condensation.load);
+            fold_condensed(model_.condensation.load, model_.load);
+        }
     }
 
     void read_initial(const toml::table& root) {

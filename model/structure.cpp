@@ -148,7 +148,9 @@ std::string condense_massless(MarketMatrix& M, MarketMatrix& K, MarketMatrix* C,
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (S + S.transpose()), Eigen::EigenvaluesOnly);
     if (!(es.eigenvalues()(0) > kRelTol * es.eigenvalues().maxCoeff()))
         return "K is singular on the massless dofs " + list + ": the static condensation needs every one held by stiffness";
-    const Eigen::MatrixXd R = -Eigen::MatrixXd(Kcc.llt().solve(Kcm));
+    const Eigen::LLT<Eigen::MatrixXd> llt(Kcc);
+    const Eigen::MatrixXd R = -Eigen::MatrixXd(llt.solve(Kcm));
+    const Eigen::MatrixXd flex = llt.solve(Eigen::MatrixXd::Identity(Kcc.rows(), Kcc.cols()));
     const Eigen::MatrixXd Kmm = dense(submatrix(K, kept, kept));
     const Eigen::MatrixXd Kred = Kmm + Kcm.transpose() * R;
     MarketMatrix Kr = submatrix(K, kept, kept);
@@ -163,6 +165,9 @@ std::string condense_massless(MarketMatrix& M, MarketMatrix& K, MarketMatrix* C,
     out.recovery.assign(R.data(), R.data() + R.size());  // column-major of (condensed x kept): transposed below
     for (Eigen::Index i = 0; i < R.rows(); ++i)
         for (Eigen::Index j = 0; j < R.cols(); ++j) out.recovery[static_cast<std::size_t>(i * R.cols() + j)] = R(i, j);
+    for (Eigen::Index i = 0; i < flex.rows(); ++i)  // symmetric: its two halves averaged
+        for (Eigen::Index j = 0; j < flex.cols(); ++j) out.flexibility.push_back(0.5 * (flex(i, j) + flex(j, i)));
+    out.load.assign(massless.size(), 0.0);
     M = submatrix(M, kept, kept);
     K = Kr;
     if (C && C->rows == n && C->cols == n) *C = submatrix(*C, kept, kept);

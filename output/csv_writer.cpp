@@ -1,6 +1,8 @@
 #include "csv_writer.h"
 
 #include <charconv>
+#include <cmath>
+#include <vector>
 #include <cstring>
 
 #include "error.h"
@@ -53,11 +55,24 @@ std::string state_columns(const Model& model) {
 
 }  // namespace
 
-void state_numbers(const Model& model, CsvFile& file, const double* x, const double* v) {
+void state_numbers(const Model& model, CsvFile& file, double t, const double* x, const double* v) {
     const std::size_t n = model.dof();
     const Condensation& c = model.condensation;
-    if (c.present()) {  // x_c = R x and v_c = R v, rows of R in the order of the condensed dofs
-        auto all = [&](const double* y) {
+    if (c.present()) {  // x_c = R x + K_cc^-1 f_c(t) and v_c = R v + K_cc^-1 f_c'(t), rows in the order of the condensed dofs
+        const std::size_t nc = c.condensed();
+        std::vector<double> f(nc, 0.0), df(nc, 0.0);  // the forces on the condensed dofs and their rates
+        if (c.loaded()) {
+            for (std::size_t r = 0; r < nc; ++r) f[r] = c.load.empty() ? 0.0 : c.load[r];
+            for (std::size_t h = 0; h < c.amplitude.size(); ++h) {
+                const Harmonic& hm = model.forcing[h];
+                const double s = std::sin(hm.omega * t + hm.phase), co = std::cos(hm.omega * t + hm.phase);
+                for (std::size_t r = 0; r < nc; ++r) {
+                    f[r] += c.amplitude[h][r] * s;
+                    df[r] += c.amplitude[h][r] * hm.omega * co;
+                }
+            }
+        }
+        auto all = [&](const double* y, const std::vector<double>& force) {
             std::size_t row = 0;
             for (int i : c.mass) {
                 if (i >= 0) {
@@ -66,12 +81,14 @@ void state_numbers(const Model& model, CsvFile& file, const double* x, const dou
                 }
                 double sum = 0.0;
                 for (std::size_t j = 0; j < n; ++j) sum += c.recovery[row * n + j] * y[j];
+                if (c.loaded())
+                    for (std::size_t q = 0; q < nc; ++q) sum += c.flexibility[row * nc + q] * force[q];
                 file.number(sum);
                 ++row;
             }
         };
-        all(x);
-        all(v);
+        all(x, f);
+        all(v, df);
     } else {
         for (std::size_t i = 0; i < n; ++i) file.number(x[i]);
         for (std::size_t i = 0; i < n; ++i) file.number(v[i]);
@@ -98,7 +115,7 @@ CsvObserver::CsvObserver(const Model& model, CsvFile* trajectory, CsvFile* event
 void CsvObserver::on_sample(double t, const double* x, const double* v) {
     if (!trajectory_) return;
     trajectory_->number(t);
-    state_numbers(model_, *trajectory_, x, v);
+    state_numbers(model_, *trajectory_, t, x, v);
     trajectory_->end_row();
 }
 
@@ -108,7 +125,7 @@ void CsvObserver::on_event(double t, EventKind kind, int element, const double* 
     events_->text(event_kind_name(kind));
     const bool contact = kind == EventKind::contact_close || kind == EventKind::contact_open;
     events_->text(contact ? model_.contacts[element].name.c_str() : model_.friction_event_name(element).c_str());
-    state_numbers(model_, *events_, x, v);
+    state_numbers(model_, *events_, t, x, v);
     events_->end_row();
 }
 

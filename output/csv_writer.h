@@ -40,9 +40,11 @@ private:
 std::string trajectory_header(const Model& model);
 std::string events_header(const Model& model);
 
-/// The state columns of one row: the masses' x, then v, then every Jenkins
-/// slider (x holds the sliders after the masses, Model::state_size()).
-void state_numbers(const Model& model, CsvFile& file, const double* x, const double* v);
+/// The state columns of one row at time t: the masses' x, then v, then every
+/// Jenkins slider (x holds the sliders after the masses, Model::state_size());
+/// with massless dofs, every dof of the structure, the condensed ones
+/// recovered as x_c = R x + K_cc^-1 f_c(t) (their loads and forcing).
+void state_numbers(const Model& model, CsvFile& file, double t, const double* x, const double* v);
 
 /// An Observer that writes the CSVs it was given (either may be null).
 class CsvObserver : public Observer {

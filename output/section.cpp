@@ -109,7 +109,7 @@ void SectionRecorder::on_event(double t, EventKind kind, int element, const doub
     const std::size_t n = model_.dof();
     if (csv_) {
         csv_->number(t);
-        state_numbers(model_, *csv_, x, v);
+        state_numbers(model_, *csv_, t, x, v);
         csv_->end_row();
     }
     if (keep_ && points_ <= kMaxSectionPlotPoints) {
