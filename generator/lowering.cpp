@@ -1117,7 +1117,10 @@ RestartPlan restart_plan(const Derivation& d, const Program& p) {
     const Model& model = *d.model;
     RestartPlan plan;
     const std::size_t nf = d.n_free(), nm = d.modes.size();
-    if (d.state_space || !d.riders.empty() || !model.jenkins.empty() || nf == 0 || nm == 0) return plan;
+    // A coupled M's held forces read the free dofs' kinetic friction from slots
+    // (F_k_) that a reversal changes and the plan does not: such a configuration sets up.
+    if (d.state_space || !d.riders.empty() || !model.jenkins.empty() || !d.held.empty() || nf == 0 || nm == 0)
+        return plan;
     for (const Mass& mass : model.masses)
         if (mass.partner != kGround) return plan;
     for (const Mode& m : d.modes)

@@ -952,6 +952,47 @@ TEST(CoupledMass, FrictionsCoupledThroughAConsistentMassGiveTheEventsOfTheRefere
     EXPECT_LT(to_cvode, 1e-9);
 }
 
+TEST(CoupledMass, AReversalWhileAnotherDofIsStuckRestartsWithTheNewKineticFriction) {
+    // 20 consistent-mass elements (past restart.h's kRestartFrom modes, so an
+    // event that keeps the configuration carries the coefficient block over):
+    // friction at mid-span and at the tip. When the tip reverses while the
+    // mid-span dof is stuck, the held force's kinetic-friction term changes
+    // sign; a carried block kept the old one (events 5e-9 s off), so such a
+    // configuration sets up instead. Programs against the Eigen solver and the
+    // 30-digit reference.
+    testing::TempDir dir;
+    Beam b = clamped_bar(20);
+    b.K *= 0.01;  // EA = 100 N
+    write(dir / "M.mtx", market(b.M));
+    write(dir / "K.mtx", market(b.K));
+    write(dir / "bar.toml",
+          "name = \"long-friction-bar\"\n[structure]\ndofs = " + dof_list(b.dofs) +
+              "\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n[damping]\nalpha = 2.0\nbeta = 1e-6\n"
+              "[[friction]]\nname = \"fm\"\nbetween = [\"u10\", \"ground\"]\nmu_k = 0.3\nmu_s = 0.4\nnormal = 8.0\n"
+              "[[friction]]\nname = \"ft\"\nbetween = [\"u20\", \"ground\"]\nmu_k = 0.25\nmu_s = 0.35\nnormal = 0.3\n"
+              "[[forcing]]\nomega = 5.0\namplitude = { u20 = 20.0 }\n");
+    const Model m = read_model(dir / "bar.toml");
+    // As the facade runs it: restarts on (EngineOptions::restart_plans).
+    DerivationFallbackProvider interp(m, std::make_unique<InterpretedSolverProvider>(program_source(m)));
+    const testing::Outcome programs = testing::run_engine(m, interp, 5.0, 0.0, kScheduleFrom, restart_plan_source(m)),
+                           eigen = testing::simulate(m, 5.0, 0.0, testing::Solvers::generic);
+    bool mid_stuck = false;
+    int reversals_while_stuck = 0;
+    for (const testing::Recorded& e : programs.events) {
+        if (e.element == 9 && e.kind == EventKind::stick) mid_stuck = true;
+        if (e.element == 9 && e.kind == EventKind::release) mid_stuck = false;
+        reversals_while_stuck += e.element == 19 && e.kind == EventKind::reversal && mid_stuck;
+    }
+    EXPECT_GE(reversals_while_stuck, 1) << "the tip should reverse while mid-span is stuck";
+    const std::vector<testing::Recorded> r30 = reference_events(m, 30, 5.0);
+    const double to_eigen = event_gap(programs, eigen), to_ref = event_gap(programs.events, r30);
+    std::printf("%zu events, %d tip reversals with mid-span stuck: the programs within %.3g s of the Eigen solver, "
+                "%.3g s of the reference\n",
+                programs.events.size(), reversals_while_stuck, to_eigen, to_ref);
+    EXPECT_LT(to_eigen, 1e-11);
+    EXPECT_LT(to_ref, 1e-11);
+}
+
 TEST(CoupledMass, TheProgramsHeldForcesAreTheClosedFormsAndTheirBoundsHold) {
     // Every configuration with a stuck friction on the coupled chain: the
     // program's release functions (D_i = A_i - c^T A_F, c = M_FF^-1 M_Fi, the
