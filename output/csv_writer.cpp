@@ -60,8 +60,9 @@ void state_numbers(const Model& model, CsvFile& file, double t, const double* x,
     const Condensation& c = model.condensation;
     if (c.present()) {  // x_c = R x + K_cc^-1 f_c(t) and v_c = R v + K_cc^-1 f_c'(t), rows in the order of the condensed dofs
         const std::size_t nc = c.condensed();
+        const bool loaded = c.loaded();
         std::vector<double> f(nc, 0.0), df(nc, 0.0);  // the forces on the condensed dofs and their rates
-        if (c.loaded()) {
+        if (loaded) {
             for (std::size_t r = 0; r < nc; ++r) f[r] = c.load.empty() ? 0.0 : c.load[r];
             for (std::size_t h = 0; h < c.amplitude.size(); ++h) {
                 const Harmonic& hm = model.forcing[h];
@@ -81,7 +82,7 @@ void state_numbers(const Model& model, CsvFile& file, double t, const double* x,
                 }
                 double sum = 0.0;
                 for (std::size_t j = 0; j < n; ++j) sum += c.recovery[row * n + j] * y[j];
-                if (c.loaded())
+                if (loaded)
                     for (std::size_t q = 0; q < nc; ++q) sum += c.flexibility[row * nc + q] * force[q];
                 file.number(sum);
                 ++row;

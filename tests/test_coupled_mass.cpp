@@ -138,6 +138,18 @@ std::string table(const std::vector<std::string>& dofs, const Eigen::VectorXd& v
     return s + " }";
 }
 
+/// A [structure] model in dir: M.mtx, K.mtx and `file` (named `name`, dofs
+/// `dofs`), its other sections given as TOML text.
+std::string structure_model(const testing::TempDir& dir, const std::string& file, const std::string& name,
+                            const Eigen::MatrixXd& M, const Eigen::MatrixXd& K, const std::vector<std::string>& dofs,
+                            const std::string& sections) {
+    write(dir / "M.mtx", market(M));
+    write(dir / "K.mtx", market(K));
+    write(dir / file, "name = \"" + name + "\"\n[structure]\ndofs = " + dof_list(dofs) +
+                          "\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n" + sections);
+    return dir / file;
+}
+
 /// The beam forced at its tip, F sin(omega t), started on its steady state
 /// X = (K - omega^2 M + i omega C)^-1 F (x = Im(X e^{i omega t})). Damping:
 /// Rayleigh (alpha, beta) or, when `C` is given, that matrix.
@@ -564,10 +576,17 @@ TEST(CoupledMass, TheFiniteElementExampleIsTheTestedCantilever) {
 
 /// The cantilever with its mass at the w dofs alone (no rotary inertia: zero
 /// rows of M at the rotations), forced at its tip.
-std::string massless_rotations(const testing::TempDir& dir, const Beam& b, const std::string& extra) {
+/// The cantilever's mass at its deflections alone (2 kg/m, 4 elements): zero rows at the rotations.
+Eigen::MatrixXd deflection_mass(const Beam& b) {
     Eigen::MatrixXd M = Eigen::MatrixXd::Zero(b.M.rows(), b.M.cols());
     const Eigen::Index nodes = b.M.rows() / 2;
-    for (Eigen::Index k = 0; k < nodes; ++k) M(2 * k, 2 * k) = k + 1 == nodes ? 0.2 : 0.4;  // 2 kg/m, 4 elements
+    for (Eigen::Index k = 0; k < nodes; ++k) M(2 * k, 2 * k) = k + 1 == nodes ? 0.2 : 0.4;
+    return M;
+}
+
+std::string massless_rotations(const testing::TempDir& dir, const Beam& b, const std::string& extra) {
+    const Eigen::MatrixXd M = deflection_mass(b);
+    const Eigen::Index nodes = b.M.rows() / 2;
     write(dir / "M.mtx", market(M));
     write(dir / "K.mtx", market(b.K));
     std::ostringstream t;
@@ -643,15 +662,8 @@ TEST(MasslessDofs, ACantileverWithoutRotaryInertiaIsItsFlexibilityClosedForm) {
 /// The cantilever of massless_rotations without damping, loaded by `forces`
 /// (TOML: [load], [[forcing]]) from `initial`.
 std::string loaded_beam(const testing::TempDir& dir, const Beam& b, const std::string& forces, const std::string& initial) {
-    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(b.M.rows(), b.M.cols());
-    const Eigen::Index nodes = b.M.rows() / 2;
-    for (Eigen::Index k = 0; k < nodes; ++k) M(2 * k, 2 * k) = k + 1 == nodes ? 0.2 : 0.4;
-    write(dir / "M.mtx", market(M));
-    write(dir / "K.mtx", market(b.K));
-    write(dir / "beam.toml", "name = \"loaded-beam\"\n[structure]\ndofs = " + dof_list(b.dofs) +
-                                 "\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n" + forces + "[initial]\n" + initial +
-                                 "[simulate]\nt_end = 1.0\n");
-    return dir / "beam.toml";
+    return structure_model(dir, "beam.toml", "loaded-beam", deflection_mass(b), b.K, b.dofs,
+                           forces + "[initial]\n" + initial + "[simulate]\nt_end = 1.0\n");
 }
 
 /// The rows of a trajectory CSV (t, then the state), header checked.
@@ -910,16 +922,13 @@ TEST(CoupledMass, TwoFrictionsCoupledThroughMGiveTheLumpedModelsEventsInOtherCoo
 /// depends on the kinetic friction of the other, D_i = A_i - M_iF M_FF^-1 A_F.
 std::string friction_bar(const testing::TempDir& dir) {
     const Beam b = clamped_bar(3);
-    write(dir / "M.mtx", market(b.M));
-    write(dir / "K.mtx", market(b.K));
-    write(dir / "bar.toml",
-          "name = \"friction-bar\"\n[structure]\ndofs = " + dof_list(b.dofs) +
-              "\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n[damping]\nalpha = 2.0\nbeta = 1e-5\n"
+    return structure_model(
+        dir, "bar.toml", "friction-bar", b.M, b.K, b.dofs,
+        "[damping]\nalpha = 2.0\nbeta = 1e-5\n"
               "[[friction]]\nname = \"f2\"\nbetween = [\"u2\", \"ground\"]\nmu_k = 0.3\nmu_s = 0.4\nnormal = 20.0\n"
               "[[friction]]\nname = \"f3\"\nbetween = [\"u3\", \"ground\"]\nmu_k = 0.25\nmu_s = 0.35\nnormal = 24.0\n"
               "[[forcing]]\nomega = 60.0\namplitude = { u3 = 20.0 }\n"
               "[initial]\nx = { u1 = 0.0, u2 = 0.0, u3 = 0.0 }\nv = { u1 = 0.0, u2 = 0.01, u3 = -0.02 }\n");
-    return dir / "bar.toml";
 }
 
 TEST(CoupledMass, FrictionsCoupledThroughAConsistentMassGiveTheEventsOfTheReferenceOnThePrograms) {
@@ -963,15 +972,12 @@ TEST(CoupledMass, AReversalWhileAnotherDofIsStuckRestartsWithTheNewKineticFricti
     testing::TempDir dir;
     Beam b = clamped_bar(20);
     b.K *= 0.01;  // EA = 100 N
-    write(dir / "M.mtx", market(b.M));
-    write(dir / "K.mtx", market(b.K));
-    write(dir / "bar.toml",
-          "name = \"long-friction-bar\"\n[structure]\ndofs = " + dof_list(b.dofs) +
-              "\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n[damping]\nalpha = 2.0\nbeta = 1e-6\n"
+    const Model m = read_model(structure_model(
+        dir, "bar.toml", "long-friction-bar", b.M, b.K, b.dofs,
+        "[damping]\nalpha = 2.0\nbeta = 1e-6\n"
               "[[friction]]\nname = \"fm\"\nbetween = [\"u10\", \"ground\"]\nmu_k = 0.3\nmu_s = 0.4\nnormal = 8.0\n"
               "[[friction]]\nname = \"ft\"\nbetween = [\"u20\", \"ground\"]\nmu_k = 0.25\nmu_s = 0.35\nnormal = 0.3\n"
-              "[[forcing]]\nomega = 5.0\namplitude = { u20 = 20.0 }\n");
-    const Model m = read_model(dir / "bar.toml");
+              "[[forcing]]\nomega = 5.0\namplitude = { u20 = 20.0 }\n"));
     // As the facade runs it: restarts on (EngineOptions::restart_plans).
     DerivationFallbackProvider interp(m, std::make_unique<InterpretedSolverProvider>(program_source(m)));
     const testing::Outcome programs = testing::run_engine(m, interp, 5.0, 0.0, kScheduleFrom, restart_plan_source(m)),
