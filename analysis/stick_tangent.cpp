@@ -168,9 +168,7 @@ void stick_gradient(const Model& model, const Configuration& cfg, const SwitchFu
     const int e = f.element;
     switch (f.kind) {
         case SwitchKind::gap: {
-            const Contact& c = model.contacts[static_cast<std::size_t>(e)];
-            add(0, c.a, 1.0);
-            add(0, c.b, -1.0);
+            for_each_term(model.contacts[static_cast<std::size_t>(e)].direction(), [&](int i, double w) { add(0, i, w); });
             return;
         }
         case SwitchKind::velocity:  // w = v_e - v_partner

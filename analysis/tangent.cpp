@@ -256,8 +256,7 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
         const Contact& k = model.contacts[c];
         const double damper = -model.beta * k.k * gap_rate(model, static_cast<int>(c), v);  // on a, while closed
         const double sign = B.closed[c] ? 1.0 : -1.0;
-        if (k.a != kGround) dA[k.a] += sign * damper;
-        if (k.b != kGround) dA[k.b] -= sign * damper;
+        for_each_term(k.direction(), [&](int i, double w) { dA[static_cast<std::size_t>(i)] += sign * damper * w; });
     }
     std::vector<char> stick(static_cast<std::size_t>(n), 0);
     for (int i = 0; i < n; ++i) {
@@ -290,9 +289,7 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
     const int e = f->element;
     switch (f->kind) {
         case SwitchKind::gap: {
-            const Contact& k = model.contacts[e];
-            if (k.a != kGround) hy(k.a) += 1.0;
-            if (k.b != kGround) hy(k.b) -= 1.0;
+            for_each_term(model.contacts[e].direction(), [&](int i, double w) { hy(i) += w; });
             hdot = gap_rate(model, e, v);
             break;
         }
@@ -417,8 +414,9 @@ double Tangent::grazing_ratio(const SwitchRecord& r) {
         }
         const Contact& k = model_.contacts[static_cast<std::size_t>(f.element)];
         const double rate = std::fabs(gap_rate(model_, f.element, r.v));
-        const double curvature = std::fabs((k.a != kGround ? a[static_cast<std::size_t>(k.a)] : 0.0) -
-                                           (k.b != kGround ? a[static_cast<std::size_t>(k.b)] : 0.0));
+        double curvature = 0.0;  // G'' = w^T a
+        for_each_term(k.direction(), [&](int i, double w) { curvature += w * a[static_cast<std::size_t>(i)]; });
+        curvature = std::fabs(curvature);
         const double q = rate * omega / curvature;  // NaN for 0/0, +inf for a straight crossing
         if (std::isnan(q) || q < ratio) ratio = q;
         if (std::isnan(ratio)) break;

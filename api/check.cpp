@@ -85,9 +85,15 @@ void print_summary(const Model& model, std::ostream& out) {
             << " couplings (K = sum of -K_ij between dofs i, j and the row sums to ground)\n";
 
     out << "contacts: " << model.contacts.size() << "\n";
-    for (const Contact& c : model.contacts)
-        out << "  " << c.name << "  between " << body_name(model, c.a) << " and " << body_name(model, c.b)
-            << "  gap = " << num(c.gap) << "  k = " << num(c.k) << "\n";
+    for (const Contact& c : model.contacts) {
+        out << "  " << c.name;
+        if (c.weights.empty()) out << "  between " << body_name(model, c.a) << " and " << body_name(model, c.b);
+        else {
+            out << "  along";
+            for (const Weight& w : c.weights) out << " " << num(w.w) << " " << body_name(model, w.body);
+        }
+        out << "  gap = " << num(c.gap) << "  k = " << num(c.k) << "\n";
+    }
 
     std::size_t with_friction = 0;
     for (const Mass& m : model.masses) with_friction += m.has_friction && m.friction < 0 ? 1 : 0;

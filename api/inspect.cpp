@@ -363,7 +363,10 @@ void inspect_state_space(const Model& model, const Configuration& cfg, Format fm
             case SwitchKind::gap: {
                 const Contact& c = model.contacts[static_cast<std::size_t>(sf.element)];
                 auto body = [&](int b) { return "x_" + model.masses[static_cast<std::size_t>(b)].name; };
-                what = c.a == kGround ? "-" + body(c.b) : body(c.a) + (c.b == kGround ? "" : " - " + body(c.b));
+                if (!c.direction().weighted())
+                    what = c.a == kGround ? "-" + body(c.b) : body(c.a) + (c.b == kGround ? "" : " - " + body(c.b));
+                for (const Weight& t : c.weights)
+                    what += (what.empty() ? "" : " + ") + Printer::format_number(t.w) + " " + body(t.body);
                 what += " - " + Printer::format_number(c.gap) + " (gap of " + c.name + ")";
                 break;
             }

@@ -27,6 +27,7 @@
 
 #include "configuration.h"
 #include "double_double.h"
+#include "elements/motion.h"
 #include "model.h"
 #include "mp_eigen.h"  // DdEigenCache
 #include "switch_function.h"
@@ -226,6 +227,12 @@ GiNaC::numeric exact(double v);
 /// A DD exactly as a GiNaC number (the rational hi + lo), and a GiNaC real
 /// number rounded to DD.
 GiNaC::numeric exact(const DD& v);
+
+/// A direction's weights in the derivation's motion (RowsMotion<ex>), exactly.
+template <>
+struct ExactWeight<GiNaC::ex> {
+    static GiNaC::ex of(double w, const GiNaC::ex&) { return exact(w); }
+};
 
 /// Mass i's normal force exactly: its element's `normal` as given, else the
 /// exact product m*g of the two doubles (model.h Mass::normal).

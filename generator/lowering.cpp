@@ -121,6 +121,7 @@ public:
         if (body == kGround) return {};
         return {1.0, (k == 0 ? mx_ : mv_)[static_cast<std::size_t>(body)]};
     }
+    LinValue weight(double w) const { return LinValue::constant(w); }
     LinValue abs(const LinValue& v) const {
         if (v.is_constant()) return LinValue::constant(std::fabs(v.value()));
         const auto it = magnitude_of_.find(v.lin().begin()->reg);
@@ -273,6 +274,43 @@ void combine(const std::vector<std::pair<int, DD>>& terms, const std::vector<std
         out[j] = terms[0].second * of[0][j];
         for (std::size_t k = 1; k < terms.size(); ++k) out[j] = out[j] + terms[k].second * of[k][j];
     }
+}
+
+// G of a contact as the comment of its switch function: "x[a] - x[b] - gap",
+// or "+ w_1 x[b_1] + ... - gap" along a general direction.
+std::string gap_text(const Model& model, const Contact& ct) {
+    if (ct.weights.empty())
+        return "x[" + body_name(model, ct.a) + "] - x[" + body_name(model, ct.b) + "] - " + format_double(ct.gap);
+    std::string s;
+    for (const Weight& t : ct.weights) s += "+ " + format_double(t.w) + " x[" + body_name(model, t.body) + "] ";
+    return s + "- " + format_double(ct.gap);
+}
+
+// The modal rows of a contact's G = w^T x - gap: alpha_j = sum_i w_i V_ij over
+// the modes that move one of its bodies, and the harmonic parts
+// sum_i w_i X_hi (lower's V, harmonic_x, each_mode_of).
+template <class Vf, class Hx, class Each>
+void gap_rows(const Contact& ct, const Vf& V, const Hx& harmonic_x, const Each& each_mode_of, std::vector<DD>& al,
+              std::vector<DD>& Gs, std::vector<DD>& Gc) {
+    if (ct.weights.empty()) {  // x[a] - x[b]
+        each_mode_of({ct.a, ct.b}, [&](std::size_t j) { al[j] = V(ct.a, j) - V(ct.b, j); });
+        for (std::size_t h = 0; h < Gs.size(); ++h) {
+            Gs[h] = harmonic_x(h, ct.a, true) - harmonic_x(h, ct.b, true);
+            Gc[h] = harmonic_x(h, ct.a, false) - harmonic_x(h, ct.b, false);
+        }
+        return;
+    }
+    std::vector<char> seen(al.size(), 0);
+    for (const Weight& t : ct.weights) {
+        each_mode_of({t.body}, [&](std::size_t j) { seen[j] = 1; });
+        for (std::size_t h = 0; h < Gs.size(); ++h) {
+            Gs[h] = Gs[h] + DD(t.w) * harmonic_x(h, t.body, true);
+            Gc[h] = Gc[h] + DD(t.w) * harmonic_x(h, t.body, false);
+        }
+    }
+    for (std::size_t j = 0; j < al.size(); ++j)
+        if (seen[j])
+            for (const Weight& t : ct.weights) al[j] = al[j] + DD(t.w) * V(t.body, j);
 }
 
 }  // namespace
@@ -913,13 +951,8 @@ Program lower(const Derivation& d, ProgramNames names) {
         }
         if (sf.kind == SwitchKind::gap) {
             const Contact& ct = model.contacts[sf.element];
-            if (named) comment += "g_" + F + ": gap of contact " + ct.name + " = x[" + body_name(model, ct.a) + "] - x[" +
-                       body_name(model, ct.b) + "] - " + format_double(ct.gap);
-            each_mode_of({ct.a, ct.b}, [&](std::size_t j) { al[j] = V(ct.a, j) - V(ct.b, j); });
-            for (std::size_t h = 0; h < nh; ++h) {
-                Gs[h] = harmonic_x(h, ct.a, true) - harmonic_x(h, ct.b, true);
-                Gc[h] = harmonic_x(h, ct.a, false) - harmonic_x(h, ct.b, false);
-            }
+            if (named) comment += "g_" + F + ": gap of contact " + ct.name + " = " + gap_text(model, ct);
+            gap_rows(ct, V, harmonic_x, each_mode_of, al, Gs, Gc);
         } else if (sf.kind == SwitchKind::velocity && model.masses[static_cast<std::size_t>(sf.element)].partner == kGround) {
             const int i = sf.element;
             if (named) comment += "g_" + F + ": velocity of " + model.masses[i].name + " (sliding)";

@@ -31,6 +31,10 @@ std::vector<std::string> kept_parameters(const Model& model, const std::string& 
     if (model.condensation.loaded())
         throw InputError(flag + ": the model has a load or forcing on a massless (condensed) dof, which sweep kernels "
                                 "do not take yet (generate without --params derives its kernels)");
+    for (const Contact& c : model.contacts)
+        if (c.direction().weighted())
+            throw InputError(flag + ": contact '" + c.name + "' acts along a direction (direction = {...}), which sweep "
+                                    "kernels do not take yet (generate without --params derives its kernels)");
     if (model.coupled_mass())
         throw InputError(flag + ": the model has a coupled (non-diagonal) mass matrix, which sweep kernels do not "
                                 "take yet (generate without --params derives its kernels)");

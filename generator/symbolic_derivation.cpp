@@ -170,10 +170,11 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
         gap[c] = b.field(p + ".gap", 0);
         if (!cfg.closed[c]) continue;
         const ex k = b.field(p + ".k", 0);
-        add_spring(model.contacts[c].a, model.contacts[c].b, k);
-        // Preload: -k (x_a - x_b - gap) has the constant +k gap on a, -k gap on b.
-        if (model.contacts[c].a >= 0) f[model.contacts[c].a] += k * gap[c];
-        if (model.contacts[c].b >= 0) f[model.contacts[c].b] -= k * gap[c];
+        // Closed: K += k w w^T and the preload +k gap w (-k (u - gap) along w).
+        for_each_term(model.contacts[c].direction(), [&](int i, double wi) {
+            for_each_term(model.contacts[c].direction(), [&](int j, double wj) { K(i, j) += k * exact(wi) * exact(wj); });
+            f[i] += k * gap[c] * exact(wi);
+        });
     }
     const ex alpha = b.field("damping.alpha", 0), beta = b.field("damping.beta", 0);
     const ex g = b.parameter("g");
@@ -287,7 +288,9 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
         const int e = sf.element;
         if (sf.kind == SwitchKind::gap) {
             const Contact& c = model.contacts[e];
-            d.switches.push_back({"gap of " + c.name, body(c.a, xs) - body(c.b, xs) - gap[e]});
+            ex u = 0;
+            for_each_term(c.direction(), [&](int i, double w) { u += exact(w) * xs[i]; });
+            d.switches.push_back({"gap of " + c.name, u - gap[e]});
         } else if (sf.kind == SwitchKind::velocity) {
             d.switches.push_back({"velocity of " + model.masses[e].name, vs[e]});
         } else {

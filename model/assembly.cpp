@@ -111,7 +111,7 @@ Eigen::VectorXd constant_force(const Model& model, const Configuration& cfg) {
         if (a != kGround) f(a) += k * length;
         if (b != kGround) f(b) -= k * length;
     });
-    for_each_slipping(model, cfg, [&](int a, int b, double fa) {
+    for_each_constant(model, cfg, [&](int a, int b, double fa) {
         if (a != kGround) f(a) += fa;
         if (b != kGround) f(b) -= fa;
     });
@@ -170,19 +170,17 @@ namespace hsnc {
 ElementIndex::ElementIndex(const Model& model) {
     const std::size_t n = model.dof();
     std::vector<std::vector<std::uint32_t>> of(n);
-    auto put = [&](ElementKind k, std::size_t e, int a, int b) {
+    auto put = [&](ElementKind k, std::size_t e, const Direction& d) {
         const std::uint32_t code = static_cast<std::uint32_t>(k) << 28 | static_cast<std::uint32_t>(e);
-        if (a != kGround) of[static_cast<std::size_t>(a)].push_back(code);
-        if (b != kGround && b != a) of[static_cast<std::size_t>(b)].push_back(code);
+        for_each_term(d, [&](int body, double) {
+            auto& list = of[static_cast<std::size_t>(body)];
+            if (list.empty() || list.back() != code) list.push_back(code);
+        });
     };
-    for (std::size_t e = 0; e < model.springs.size(); ++e)
-        put(ElementKind::spring, e, model.springs[e].a, model.springs[e].b);
-    for (std::size_t e = 0; e < model.contacts.size(); ++e)
-        put(ElementKind::contact, e, model.contacts[e].a, model.contacts[e].b);
-    for (std::size_t e = 0; e < model.dampers.size(); ++e)
-        put(ElementKind::damper, e, model.dampers[e].a, model.dampers[e].b);
-    for (std::size_t e = 0; e < model.jenkins.size(); ++e)
-        put(ElementKind::jenkins, e, model.jenkins[e].a, model.jenkins[e].b);
+    for (std::size_t e = 0; e < model.springs.size(); ++e) put(ElementKind::spring, e, model.springs[e].direction());
+    for (std::size_t e = 0; e < model.contacts.size(); ++e) put(ElementKind::contact, e, model.contacts[e].direction());
+    for (std::size_t e = 0; e < model.dampers.size(); ++e) put(ElementKind::damper, e, model.dampers[e].direction());
+    for (std::size_t e = 0; e < model.jenkins.size(); ++e) put(ElementKind::jenkins, e, model.jenkins[e].direction());
     start_.assign(n + 1, 0);
     for (std::size_t i = 0; i < n; ++i) {
         start_[i + 1] = start_[i] + of[i].size();
@@ -212,14 +210,18 @@ double force_on_mass(const Model& model, const Configuration& cfg, int i, double
     };
     if (!elements) {
         for_each_link(model, cfg, add, x + model.dof());
-        for_each_slipping(model, cfg, slipping);
+        for_each_constant(model, cfg, slipping);
         return f;
     }
-    // The same links in the same order (for_each_link's, then for_each_slipping's), mass i's alone.
+    // The same links in the same order (for_each_link's, then for_each_constant's), mass i's alone.
     for (const std::uint32_t* e = elements->begin(i); e != elements->end(i); ++e)
         link_of(model, cfg, ElementIndex::kind(*e), ElementIndex::index(*e), add, x + model.dof());
-    for (const std::uint32_t* e = elements->begin(i); e != elements->end(i); ++e)
-        if (ElementIndex::kind(*e) == ElementKind::jenkins) slipping_of(model, cfg, ElementIndex::index(*e), slipping);
+    for (const std::uint32_t* e = elements->begin(i); e != elements->end(i); ++e) {
+        const ElementKind kind = ElementIndex::kind(*e);
+        const std::size_t j = ElementIndex::index(*e);
+        if (kind == ElementKind::jenkins || (kind == ElementKind::contact && model.contacts[j].direction().weighted()))
+            constant_of(model, cfg, kind, j, slipping);
+    }
     return f;
 }
 

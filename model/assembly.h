@@ -112,17 +112,14 @@ BodyForces<Link, Force> body_forces(Link& link, Force& force) {
     return {link, force};
 }
 
-/// Element e of `kind` as a link in cfg, fn(a, b, stiffness, damping, length),
-/// when it acts as one (its file in model/elements/ says when and how): a
-/// spring or a closed contact (damping beta*k, Rayleigh), a damper (stiffness
-/// 0, damping c), a stuck Jenkins element (as a closed contact, length =
-/// slider[e]; 0 when `slider` is null: for the callers that do not read the
-/// length); length is a link's preload length.
-template <class Fn>
-void link_of(const Model& model, const Configuration& cfg, ElementKind kind, std::size_t e, Fn&& fn,
-             const double* slider = nullptr) {
-    auto no_force = [](int, int, double) {};
-    auto v = body_forces(fn, no_force);
+/// Element e of `kind` in cfg through the visitor of body_forces(link,
+/// force): its links and its constant forces (its file in model/elements/
+/// says which).
+template <class Link, class Force>
+void visit_element(const Model& model, const Configuration& cfg, ElementKind kind, std::size_t e, Link&& link,
+                   Force&& force, const double* slider) {
+    auto bodies = body_forces(link, force);
+    auto v = pair_links(bodies, [](double w) { return w; });
     switch (kind) {
         case ElementKind::spring:
             spring::forces(model.springs[e].direction(), model.springs[e].k, model.beta, v);
@@ -143,6 +140,20 @@ void link_of(const Model& model, const Configuration& cfg, ElementKind kind, std
     }
 }
 
+/// Element e of `kind` as a link in cfg, fn(a, b, stiffness, damping, length),
+/// when it acts as one: a spring or a closed contact (damping beta*k,
+/// Rayleigh), a damper (stiffness 0, damping c), a stuck Jenkins element (as
+/// a closed contact, length = slider[e]; 0 when `slider` is null: for the
+/// callers that do not read the length); length is a link's preload length.
+/// A link along a general direction comes as the pair links of
+/// as_pair_links (direction.h), length 0: its preload is a constant force
+/// (constant_of).
+template <class Fn>
+void link_of(const Model& model, const Configuration& cfg, ElementKind kind, std::size_t e, Fn&& fn,
+             const double* slider = nullptr) {
+    visit_element(model, cfg, kind, e, fn, [](int, int, double) {}, slider);
+}
+
 /// Every element acting between two bodies in cfg, as link_of gives it:
 /// springs, contacts, dampers, then Jenkins elements, each kind in model order.
 template <class Fn>
@@ -153,18 +164,22 @@ void for_each_link(const Model& model, const Configuration& cfg, Fn&& fn, const 
     for (std::size_t e = 0; e < model.jenkins.size(); ++e) link_of(model, cfg, ElementKind::jenkins, e, fn, slider);
 }
 
-/// Jenkins element j as fn(a, b, force on a) when it slips in cfg.
+/// Element e's constant forces in cfg as fn(a, b, force on a) (the opposite
+/// on b): a slipping Jenkins element's, and the preload k length w_i of a
+/// link along a general direction, as (i, kGround, f_i).
 template <class Fn>
-void slipping_of(const Model& model, const Configuration& cfg, std::size_t j, Fn&& fn) {
-    const Jenkins& e = model.jenkins[j];
-    auto no_link = [](int, int, double, double, double) {};
-    jenkins::forces(cfg.slip[j], e.direction(), e.k, e.slip_force, 0.0, model.beta, body_forces(no_link, fn));
+void constant_of(const Model& model, const Configuration& cfg, ElementKind kind, std::size_t e, Fn&& fn,
+                 const double* slider = nullptr) {
+    visit_element(model, cfg, kind, e, [](int, int, double, double, double) {}, fn, slider);
 }
 
-/// Every Jenkins element slipping in cfg, as slipping_of gives it.
+/// Every element's constant forces in cfg, as constant_of gives them, in
+/// for_each_link's order.
 template <class Fn>
-void for_each_slipping(const Model& model, const Configuration& cfg, Fn&& fn) {
-    for (std::size_t j = 0; j < model.jenkins.size(); ++j) slipping_of(model, cfg, j, fn);
+void for_each_constant(const Model& model, const Configuration& cfg, Fn&& fn, const double* slider = nullptr) {
+    for (std::size_t e = 0; e < model.contacts.size(); ++e)
+        if (model.contacts[e].direction().weighted()) constant_of(model, cfg, ElementKind::contact, e, fn, slider);
+    for (std::size_t e = 0; e < model.jenkins.size(); ++e) constant_of(model, cfg, ElementKind::jenkins, e, fn, slider);
 }
 
 /// The elements touching each mass (springs, contacts, dampers, Jenkins

@@ -2,6 +2,8 @@
 
 #include <numeric>
 
+#include "error.h"
+
 namespace hsnc {
 
 int FreeComponents::n_floating() const {
@@ -52,7 +54,8 @@ FreeComponents free_components(const Model& model, const Configuration& cfg) {
     };
     for (const Spring& s : model.springs) link(s.a, s.b, s.k);
     for (std::size_t c = 0; c < model.contacts.size(); ++c)
-        if (cfg.closed[c]) link(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+        if (cfg.closed[c] && !model.contacts[c].direction().weighted())
+            link(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
     for (std::size_t j = 0; j < model.jenkins.size(); ++j)  // a stuck Jenkins element is a spring
         if (cfg.slip[j] == 0) link(model.jenkins[j].a, model.jenkins[j].b, model.jenkins[j].k);
 
@@ -68,6 +71,19 @@ FreeComponents free_components(const Model& model, const Configuration& cfg) {
     }
     for (int s = 0; s < nf; ++s)
         if (anchored[s]) fc.floating[static_cast<std::size_t>(fc.component[s])] = 0;
+    // A contact along a general direction is no edge: w w^T may hold a combination of a
+    // floating part's rigid motions and leave others, which its bodies do not say. Closed
+    // on a floating part, its rigid-body modes are not decided by the structure: refused.
+    for (std::size_t c = 0; c < model.contacts.size(); ++c) {
+        if (!cfg.closed[c] || !model.contacts[c].direction().weighted()) continue;
+        for_each_term(model.contacts[c].direction(), [&](int body, double) {
+            const int sb = slot[static_cast<std::size_t>(body)];
+            if (sb >= 0 && fc.floating[static_cast<std::size_t>(fc.component[sb])])
+                throw InputError("model '" + model.name + "': contact '" + model.contacts[c].name +
+                                 "' acts along a direction on '" + model.masses[static_cast<std::size_t>(body)].name +
+                                 "', which floats (no spring to the ground); a direction needs an anchored structure");
+        });
+    }
     return fc;
 }
 

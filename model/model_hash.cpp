@@ -21,9 +21,12 @@ std::string model_canonical_text(const Model& model) {
              num(m.mu_k) + " " + num(m.mu_s) + "\n";
     for (const Spring& s : model.springs)
         t += "spring " + std::to_string(s.a) + " " + std::to_string(s.b) + " " + num(s.k) + "\n";
-    for (const Contact& c : model.contacts)
+    for (const Contact& c : model.contacts) {
         t += "contact " + c.name + " " + std::to_string(c.a) + " " + std::to_string(c.b) + " " +
-             num(c.gap) + " " + num(c.k) + "\n";
+             num(c.gap) + " " + num(c.k);
+        for (const Weight& w : c.weights) t += " " + std::to_string(w.body) + ":" + num(w.w);  // only when given
+        t += "\n";
+    }
     t += "damping " + num(model.alpha) + " " + num(model.beta) + "\n";
     for (const Harmonic& h : model.forcing) {
         t += "forcing " + num(h.omega) + " " + num(h.phase);

@@ -366,6 +366,28 @@ private:
         return {a, b};
     }
 
+    /// `direction = { dof = w, ... }`: u = sum w_i x_i over dofs with mass,
+    /// each weight finite and non-zero (toml++ keeps the keys sorted by name:
+    /// the terms come in that order).
+    std::vector<Weight> direction(const toml::node& node, const std::string& key) {
+        const toml::table* table = node.as_table();
+        if (!table || table->empty())
+            fail(&node, key, "expected a table of " + body_word() + " names and weights, e.g. { th3 = -0.05, th4 = 0.05 }");
+        std::vector<Weight> terms;
+        for (auto&& [k, v] : *table) {
+            const std::string name(k.str());
+            const std::string at = join(key, name);
+            if (name == "ground") fail_at(k.source().begin.line, at, "the ground does not move: leave it out of a direction");
+            const int i = model_.mass_index(name);
+            if (i < 0 && condensed(name)) fail_at(k.source().begin.line, at, condensed_message(name));
+            if (i < 0) fail_at(k.source().begin.line, at, "unknown " + body_word() + " '" + excerpt(name) + "'");
+            const double w = number(v, at);
+            if (w == 0.0) fail(&v, at, "a weight of 0 (leave the " + body_word() + " out)");
+            terms.push_back({i, w});
+        }
+        return terms;
+    }
+
     /// A table mass-name -> number (load, amplitude, initial x and v): one entry per mass, 0 when absent.
     /// With `on_condensed` (a force), a condensed dof's value goes there, by its row.
     std::vector<double> per_mass(const toml::node& node, const std::string& key,
@@ -755,10 +777,16 @@ private:
         for (std::size_t i = 0; i < tables.size(); ++i) {
             const toml::table& t = *tables[i];
             const std::string path = "contact[" + std::to_string(i + 1) + "]";
-            check_keys(t, path, {"name", "between", "gap", "k"});
+            check_keys(t, path, {"name", "between", "direction", "gap", "k"});
             Contact contact;
             contact.name = element_name(t, path, "contact", i);
-            std::tie(contact.a, contact.b) = between(t, path);
+            if (const toml::node* dir = t.get("direction")) {
+                if (t.get("between"))
+                    fail(dir, path + ".direction", "give either 'between' or 'direction', not both");
+                contact.weights = direction(*dir, path + ".direction");
+            } else {
+                std::tie(contact.a, contact.b) = between(t, path);
+            }
             contact.gap = required_number(t, path, "gap");
             contact.k = required_number(t, path, "k");
             if (!(contact.k > 0.0)) fail(t.get("k"), path + ".k", "contact stiffness must be > 0, got " + show(contact.k));
@@ -869,10 +897,17 @@ private:
                 ++from_file;
             }
         }
-        for (std::size_t c = 0; c < model_.contacts.size(); ++c)
-            add(stiffness, model_.contacts[c].a, model_.contacts[c].b,
-                {model_.contacts[c].k, "contact[" + std::to_string(c + 1) + "].k", line_of(root, "contact", c, "k"),
-                 "contact '" + model_.contacts[c].name + "'"});
+        for (std::size_t c = 0; c < model_.contacts.size(); ++c) {
+            // k w w^T: row i's sum |k w_i| sum_j |w_j| (1 and 1 between two bodies)
+            const Contact& ct = model_.contacts[c];
+            double norm1 = 0.0;
+            for_each_term(ct.direction(), [&](int, double w) { norm1 += std::fabs(w); });
+            for_each_term(ct.direction(), [&](int body, double w) {
+                const double k = ct.weights.empty() ? ct.k : ct.k * std::fabs(w) * norm1;
+                stiffness[static_cast<std::size_t>(body)].push_back(
+                    {k, "contact[" + std::to_string(c + 1) + "].k", line_of(root, "contact", c, "k"), "contact '" + ct.name + "'"});
+            });
+        }
         for (std::size_t j = 0; j < model_.jenkins.size(); ++j)
             add(stiffness, model_.jenkins[j].a, model_.jenkins[j].b,
                 {model_.jenkins[j].k, "jenkins[" + std::to_string(j + 1) + "].k", line_of(root, "jenkins", j, "k"),

@@ -258,7 +258,10 @@ void PlotRecorder::on_event(double t, EventKind kind, int element, const double*
     int body = element;  // the mass whose curve carries the mark
     if (kind == EventKind::contact_close || kind == EventKind::contact_open) {
         const Contact& c = model_.contacts[static_cast<std::size_t>(element)];
-        body = c.a != kGround ? c.a : c.b;
+        body = kGround;  // the first body it acts on
+        for_each_term(c.direction(), [&](int i, double) {
+            if (body == kGround) body = i;
+        });
     }
     marks_.push_back({t, kind, body >= 0 ? x[body] : 0.0});
 }

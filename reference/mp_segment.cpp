@@ -255,7 +255,7 @@ MpModel::MpModel(const Model& model, int digits)
             for (std::size_t j = 0; j < model.dof(); ++j) M[i][j] = F(model.mass_entry(i, j));
     }
     for (const Spring& s : model.springs) springs.push_back({s.a, s.b, F(s.k), zero});
-    for (const Contact& c : model.contacts) contacts.push_back({c.a, c.b, F(c.k), F(c.gap)});
+    for (const Contact& c : model.contacts) contacts.push_back({c.a, c.b, F(c.k), F(c.gap), c.weights});
     for (const Jenkins& e : model.jenkins) jenkins.push_back({e.a, e.b, F(e.k), F(e.slip_force)});
     for (const Damper& d : model.dampers) dampers.push_back({d.a, d.b, F(d.c), zero});
     for (const Mass& ms : model.masses) partner.push_back(ms.partner);
@@ -346,12 +346,12 @@ cl_F MpModel::I(long i) const { return cln::cl_float(cl_I(i), format); }
 cl_F MpModel::gap(int c, const std::vector<cl_F>& x) const {
     const Link& k = contacts[static_cast<std::size_t>(c)];
     const cl_F* rows[] = {x.data()};
-    return contact::gap_value(Direction{k.a, k.b}, k.gap, RowsMotion<cl_F, decltype(rows)>(rows, nullptr, zero), 0);
+    return contact::gap_value(k.direction(), k.gap, RowsMotion<cl_F, decltype(rows)>(rows, nullptr, zero), 0);
 }
 cl_F MpModel::gap_rate(int c, const std::vector<cl_F>& v) const {
     const Link& k = contacts[static_cast<std::size_t>(c)];
     const cl_F* rows[] = {nullptr, v.data()};
-    return contact::gap_value(Direction{k.a, k.b}, k.gap, RowsMotion<cl_F, decltype(rows)>(rows, nullptr, zero), 1);
+    return contact::gap_value(k.direction(), k.gap, RowsMotion<cl_F, decltype(rows)>(rows, nullptr, zero), 1);
 }
 
 namespace {
@@ -495,8 +495,12 @@ void MpSegment::switch_rows() {
             const auto& ct = mp.contacts[sf.element];
             for (int j = 0; j < nf_; ++j) {
                 cl_F w = Z0;
-                if (ct.a != kGround && slot_[ct.a] >= 0) w = w + phi_[slot_[ct.a]][j];
-                if (ct.b != kGround && slot_[ct.b] >= 0) w = w - phi_[slot_[ct.b]][j];
+                if (ct.weights.empty()) {
+                    if (ct.a != kGround && slot_[ct.a] >= 0) w = w + phi_[slot_[ct.a]][j];
+                    if (ct.b != kGround && slot_[ct.b] >= 0) w = w - phi_[slot_[ct.b]][j];
+                }
+                for (const Weight& t : ct.weights)
+                    if (slot_[t.body] >= 0) w = w + mp.F(t.w) * phi_[slot_[t.body]][j];
                 W_[f][j] = w;
             }
         } else if (sf.kind == SwitchKind::velocity) {
@@ -761,8 +765,11 @@ void MpSegment::init_damped(const Model& model) {
         const SwitchFunction& sf = switches_[f];
         const int e = sf.element;
         if (sf.kind == SwitchKind::gap) {
-            on(Lx_[f], mp.contacts[e].a, mp.one);
-            on(Lx_[f], mp.contacts[e].b, -mp.one);
+            if (mp.contacts[e].weights.empty()) {
+                on(Lx_[f], mp.contacts[e].a, mp.one);
+                on(Lx_[f], mp.contacts[e].b, -mp.one);
+            }
+            for (const Weight& t : mp.contacts[e].weights) on(Lx_[f], t.body, mp.F(t.w));
         } else if (sf.kind == SwitchKind::velocity) {
             on(Lv_[f], e, mp.one);
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {

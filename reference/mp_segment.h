@@ -32,9 +32,19 @@
 #include "configuration.h"
 #include "elements/contact.h"
 #include "elements/jenkins.h"
+#include "elements/motion.h"
 #include "elements/spring.h"
 #include "model.h"
 #include "segment_solver.h"
+
+namespace hsnc {
+/// A direction's weights in the reference's motion (RowsMotion<cl_F>): at the
+/// precision of the motion's zero, exactly.
+template <>
+struct ExactWeight<cln::cl_F> {
+    static cln::cl_F of(double w, const cln::cl_F& like) { return cln::cl_float(w, like); }
+};
+}  // namespace hsnc
 
 namespace hsnc::reference {
 
@@ -67,6 +77,11 @@ struct MpModel {
     struct Link {
         int a, b;
         cl_F k, gap;
+        std::vector<Weight> weights;  ///< a general direction (contact.h), else empty
+
+        Direction direction() const {
+            return {a, b, weights.empty() ? nullptr : weights.data(), static_cast<int>(weights.size())};
+        }
     };
     std::vector<Link> springs, contacts;   ///< gap = 0 for springs
     /// Jenkins elements (model.h Jenkins): k, and the slip force in `gap`.
@@ -223,11 +238,11 @@ private:
 };
 
 template <class S, class V>
-void MpModel::each_force(const Configuration& cfg, S&& slider, V&& visit) const {
+void MpModel::each_force(const Configuration& cfg, S&& slider, V&& bodies) const {
+    auto visit = pair_links(bodies, [this](double w) { return cln::cl_float(w, format); });
     for (const Link& s : springs) spring::forces(Direction{s.a, s.b}, s.k, beta, visit);
     for (std::size_t c = 0; c < contacts.size(); ++c)
-        contact::forces(cfg.closed[c] != 0, Direction{contacts[c].a, contacts[c].b}, contacts[c].k, contacts[c].gap, beta,
-                        visit);
+        contact::forces(cfg.closed[c] != 0, contacts[c].direction(), contacts[c].k, contacts[c].gap, beta, visit);
     for (std::size_t j = 0; j < jenkins.size(); ++j) {
         const Link& e = jenkins[j];
         jenkins::forces(cfg.slip[j], Direction{e.a, e.b}, e.k, e.gap, cl_F(slider(j)), beta, visit);
@@ -252,7 +267,7 @@ struct MpElements {
     Slider slider;
     ContactView contact(int e) const {
         const MpModel::Link& l = mp.contacts[static_cast<std::size_t>(e)];
-        return {{l.a, l.b}, l.gap};
+        return {l.direction(), l.gap};
     }
     JenkinsView jenkins(int e) const {
         const MpModel::Link& l = mp.jenkins[static_cast<std::size_t>(e)];

@@ -193,8 +193,8 @@ void gap_series(const MpModel& mp, int c, const Taylor& T, std::vector<cl_F>& d,
     m.clear();
     const RowsMotion<cl_F, std::vector<std::vector<cl_F>>> motion(T.x, &T.xm, mp.zero);
     for (std::size_t k = 0; k < T.x.size(); ++k) {
-        d.push_back(contact::gap_value(Direction{l.a, l.b}, l.gap, motion, static_cast<int>(k)));
-        m.push_back(contact::gap_magnitude(Direction{l.a, l.b}, l.gap, motion, static_cast<int>(k)));
+        d.push_back(contact::gap_value(l.direction(), l.gap, motion, static_cast<int>(k)));
+        m.push_back(contact::gap_magnitude(l.direction(), l.gap, motion, static_cast<int>(k)));
     }
 }
 
@@ -309,7 +309,7 @@ public:
     }
     rules::Series<cl_F> gap_now(int c) const {
         const auto& k = mp.contacts[static_cast<std::size_t>(c)];
-        const Direction w{k.a, k.b};
+        const Direction w = k.direction();
         const cl_F* rows[] = {x_.data(), v_.data()};
         const RowsMotion<cl_F, decltype(rows)> m(rows, nullptr, mp.zero);  // magnitudes |x|, |v|
         return {{contact::gap_value(w, k.gap, m, 0), contact::gap_value(w, k.gap, m, 1)},

@@ -38,6 +38,7 @@
 #include "cli_runner.h"
 #include "derivation.h"
 #include "engine_runner.h"
+#include "fe_models.h"
 #include "flow.h"
 #include "interpreted_solver.h"
 #include "lowering.h"
@@ -54,101 +55,7 @@ namespace {
 
 using cplx = std::complex<double>;
 
-std::string num(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    return buf;
-}
-
-std::string market(const Eigen::MatrixXd& A) {
-    std::ostringstream out;
-    int nnz = 0;
-    for (Eigen::Index j = 0; j < A.cols(); ++j)
-        for (Eigen::Index i = j; i < A.rows(); ++i) nnz += A(i, j) != 0.0 ? 1 : 0;
-    out << "%%MatrixMarket matrix coordinate real symmetric\n" << A.rows() << " " << A.cols() << " " << nnz << "\n";
-    for (Eigen::Index j = 0; j < A.cols(); ++j)
-        for (Eigen::Index i = j; i < A.rows(); ++i)
-            if (A(i, j) != 0.0) out << i + 1 << " " << j + 1 << " " << num(A(i, j)) << "\n";
-    return out.str();
-}
-
-void write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
-
-/// A cantilever of length 1 m, EI = 100 N m^2, 2 kg/m, in `elements`
-/// Euler-Bernoulli elements with consistent mass; dofs w1, t1, ..., wN, tN
-/// (the root clamped).
-struct Beam {
-    Eigen::MatrixXd M, K;
-    std::vector<std::string> dofs;
-    Eigen::Index tip = 0;  ///< the dof the forcing drives
-};
-
-Beam cantilever(int elements) {
-    const double L = 1.0, EI = 100.0, rhoA = 2.0, h = L / elements;
-    Eigen::Matrix4d ke, me;
-    ke << 12, 6 * h, -12, 6 * h, 6 * h, 4 * h * h, -6 * h, 2 * h * h, -12, -6 * h, 12, -6 * h, 6 * h, 2 * h * h,
-        -6 * h, 4 * h * h;
-    ke *= EI / (h * h * h);
-    me << 156, 22 * h, 54, -13 * h, 22 * h, 4 * h * h, 13 * h, -3 * h * h, 54, 13 * h, 156, -22 * h, -13 * h,
-        -3 * h * h, -22 * h, 4 * h * h;
-    me *= rhoA * h / 420;
-    const int n = 2 * (elements + 1);
-    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n), K = Eigen::MatrixXd::Zero(n, n);
-    for (int e = 0; e < elements; ++e) {
-        M.block(2 * e, 2 * e, 4, 4) += me;
-        K.block(2 * e, 2 * e, 4, 4) += ke;
-    }
-    Beam b{M.bottomRightCorner(n - 2, n - 2), K.bottomRightCorner(n - 2, n - 2), {}, n - 4};
-    for (int k = 1; k <= elements; ++k) b.dofs.push_back("w" + std::to_string(k)), b.dofs.push_back("t" + std::to_string(k));
-    return b;
-}
-
-/// A free-free bar of length 1 m, EA = 1e4 N, 1 kg/m, in `elements`
-/// consistent-mass axial elements: M and K of its elements + 1 nodes.
-std::pair<Eigen::MatrixXd, Eigen::MatrixXd> axial_bar(int elements) {
-    const double h = 1.0 / elements, EA = 1e4, rhoA = 1.0;
-    const int n = elements + 1;
-    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n), K = Eigen::MatrixXd::Zero(n, n);
-    for (int e = 0; e < elements; ++e) {
-        M.block(e, e, 2, 2) += rhoA * h / 6 * (Eigen::Matrix2d() << 2, 1, 1, 2).finished();
-        K.block(e, e, 2, 2) += EA / h * (Eigen::Matrix2d() << 1, -1, -1, 1).finished();
-    }
-    return {M, K};
-}
-
-/// The bar clamped at its root; dofs u1 ... uN (N at the tip).
-Beam clamped_bar(int elements) {
-    const auto [M, K] = axial_bar(elements);
-    const int n = elements + 1;
-    Beam b{M.bottomRightCorner(n - 1, n - 1), K.bottomRightCorner(n - 1, n - 1), {}, n - 2};
-    for (int k = 1; k <= elements; ++k) b.dofs.push_back("u" + std::to_string(k));
-    return b;
-}
-
-std::string dof_list(const std::vector<std::string>& dofs) {
-    std::string s = "[";
-    for (std::size_t i = 0; i < dofs.size(); ++i) s += (i ? ", \"" : "\"") + dofs[i] + "\"";
-    return s + "]";
-}
-
-std::string table(const std::vector<std::string>& dofs, const Eigen::VectorXd& values) {
-    std::string s = "{";
-    for (std::size_t i = 0; i < dofs.size(); ++i)
-        s += (i ? ", " : " ") + dofs[i] + " = " + num(values(static_cast<Eigen::Index>(i)));
-    return s + " }";
-}
-
-/// A [structure] model in dir: M.mtx, K.mtx and `file` (named `name`, dofs
-/// `dofs`), its other sections given as TOML text.
-std::string structure_model(const testing::TempDir& dir, const std::string& file, const std::string& name,
-                            const Eigen::MatrixXd& M, const Eigen::MatrixXd& K, const std::vector<std::string>& dofs,
-                            const std::string& sections) {
-    write(dir / "M.mtx", market(M));
-    write(dir / "K.mtx", market(K));
-    write(dir / file, "name = \"" + name + "\"\n[structure]\ndofs = " + dof_list(dofs) +
-                          "\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n" + sections);
-    return dir / file;
-}
+using namespace fe;  // the test structures (fe_models.h)
 
 /// The beam forced at its tip, F sin(omega t), started on its steady state
 /// X = (K - omega^2 M + i omega C)^-1 F (x = Im(X e^{i omega t})). Damping:
@@ -243,18 +150,6 @@ TEST(CoupledMass, NonProportionalDampingOnAConsistentMassStaysOnItsFrequencyResp
         EXPECT_LT(off, 1e-9);
     }
     EXPECT_TRUE(derive(model, Configuration::all_open(model)).state_space);
-}
-
-/// Event times of two runs: same kinds and elements, the largest time difference.
-double event_gap(const testing::Outcome& a, const testing::Outcome& b) {
-    EXPECT_EQ(a.events.size(), b.events.size());
-    double worst = 0.0;
-    for (std::size_t e = 0; e < std::min(a.events.size(), b.events.size()); ++e) {
-        EXPECT_EQ(a.events[e].kind, b.events[e].kind) << "event " << e;
-        EXPECT_EQ(a.events[e].element, b.events[e].element) << "event " << e;
-        worst = std::max(worst, std::fabs(a.events[e].t - b.events[e].t));
-    }
-    return worst;
 }
 
 TEST(CoupledMass, CantileverWithATipStopGivesTheEventsOfCvode) {
@@ -364,22 +259,6 @@ TEST(CoupledMass, ADashpotOnAClampedBarWithATipStopGivesTheEventsOfCvodeOnThePro
                 programs.events.size(), gap, apart);
     EXPECT_LT(gap, 1e-9);
     EXPECT_LT(apart, 1e-11);
-}
-
-/// The events of the CLN reference at `digits`.
-std::vector<testing::Recorded> reference_events(const Model& model, int digits, double t_end) {
-    testing::Recorder rec(model.dof(), model.state_size());
-    EngineOptions opt;
-    opt.t_end = t_end;
-    opt.samples = false;
-    reference::simulate_precise(model, digits, opt, rec);
-    return rec.events;
-}
-
-double event_gap(const std::vector<testing::Recorded>& a, const std::vector<testing::Recorded>& b) {
-    testing::Outcome x, y;
-    x.events = a, y.events = b;
-    return event_gap(x, y);
 }
 
 TEST(CoupledMass, CantileverWithATipStopGivesTheEventsOfTheReference) {

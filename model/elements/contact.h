@@ -15,6 +15,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "direction.h"
 
@@ -24,10 +25,15 @@ struct Contact {
     std::string name;
     int a = kGround;
     int b = kGround;
-    double gap = 0.0;  ///< closed while x[a] - x[b] >= gap
+    double gap = 0.0;  ///< closed while u = w^T x >= gap
     double k = 0.0;    ///< contact stiffness, > 0
+    /// A general direction (`direction = { dof = w, ... }`): u = sum w_i x_i;
+    /// empty for `between = [a, b]`, u = x[a] - x[b].
+    std::vector<Weight> weights;
 
-    Direction direction() const { return {a, b}; }
+    Direction direction() const {
+        return {a, b, weights.empty() ? nullptr : weights.data(), static_cast<int>(weights.size())};
+    }
 };
 
 namespace contact {

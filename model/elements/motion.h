@@ -12,6 +12,14 @@
 
 namespace hsnc {
 
+/// w in T, exactly: T(w) for double; a back end whose T needs more (CLN's
+/// cl_F at the precision of `like`, GiNaC's exact rational) specializes it
+/// where it instantiates RowsMotion.
+template <class T>
+struct ExactWeight {
+    static T of(double w, const T&) { return T(w); }
+};
+
 template <class T, class Rows>
 class RowsMotion {
 public:
@@ -25,6 +33,7 @@ public:
         using std::abs;
         return abs(v);
     }
+    T weight(double w) const { return ExactWeight<T>::of(w, zero_); }
 
 private:
     const Rows& rows_;

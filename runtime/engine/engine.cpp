@@ -74,8 +74,8 @@ double fastest_rate(const Model& model, const Configuration& cfg) {
         if (b != kGround) stiff[static_cast<std::size_t>(b)] += std::fabs(k);
     };
     for (const Spring& s : model.springs) add(s.a, s.b, s.k);
-    for (std::size_t c = 0; c < model.contacts.size(); ++c)
-        if (cfg.closed[c]) add(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)  // as pair links when along a general direction
+        link_of(model, cfg, ElementKind::contact, c, [&](int a, int b, double k, double, double) { add(a, b, k); });
     for (std::size_t j = 0; j < model.jenkins.size(); ++j)
         if (cfg.slip[j] == 0) add(model.jenkins[j].a, model.jenkins[j].b, model.jenkins[j].k);
     // A coupled M: lambda_max(K_F, M_F) <= lambda_max(K_F) / lambda_min(M) (interlacing), and

@@ -51,7 +51,7 @@ void force_derivative(const Model& model, const Configuration& cfg, int i, doubl
         magnitude += fm;
     }, s.slider.data());
     if (k == 0)
-        for_each_slipping(model, cfg, [&](int a, int b, double fa) {
+        for_each_constant(model, cfg, [&](int a, int b, double fa) {
             if (a != i && b != i) return;
             value += a == i ? fa : -fa;
             magnitude += std::fabs(fa);
@@ -228,7 +228,7 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
             if (a == b || (a != i && b != i)) return;
             m += std::fabs(kk) * (at(x, a) + at(x, b)) + std::fabs(cc) * (at(v, a) + at(v, b)) + std::fabs(kk * gap);
         }, x + model.dof());
-        for_each_slipping(model, cfg, [&](int a, int b, double fa) {
+        for_each_constant(model, cfg, [&](int a, int b, double fa) {
             if (a == i || b == i) m += std::fabs(fa);
         });
         for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii]);
@@ -342,9 +342,11 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
     };
     const int e = f.element;
     if (f.kind == SwitchKind::gap) {
-        const Contact& c = model.contacts[static_cast<std::size_t>(e)];
-        const double r = R(k - 1);  // G^(k) = x_a^(k) - x_b^(k)
-        return per_mass(c.a, r) + per_mass(c.b, r);
+        const double r = R(k - 1);  // G^(k) = w^T x^(k)
+        const Direction d = model.contacts[static_cast<std::size_t>(e)].direction();
+        double B = 0.0;
+        for_each_term(d, [&](int b, double w) { B += std::fabs(w) * per_mass(b, r); });
+        return d.weighted() ? B * (1 + 64 * kEps) : B;  // |w_i| products rounded
     }
     if (f.kind == SwitchKind::velocity)  // w^(k) = x_e^(k+1) - x_partner^(k+1)
         return per_mass(e, R(k)) + per_mass(model.masses[static_cast<std::size_t>(e)].partner, R(k));

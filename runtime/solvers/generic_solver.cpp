@@ -65,8 +65,14 @@ void GenericSolver::switch_rows(const Model& model) {
     for (int f = 0; f < ns; ++f) {
         const SwitchFunction& sf = switches_[f];
         if (sf.kind == SwitchKind::gap) {
-            const Contact& ct = model.contacts[sf.element];
-            for (int j = 0; j < nf_; ++j) W_(f, j) = difference(ct.a, ct.b, j);
+            const Direction d = model.contacts[sf.element].direction();
+            if (!d.weighted())
+                for (int j = 0; j < nf_; ++j) W_(f, j) = difference(d.a, d.b, j);
+            else  // w^T x over the modes
+                for_each_term(d, [&](int b, double w) {
+                    if (slot[b] >= 0)
+                        for (int j = 0; j < nf_; ++j) W_(f, j) += w * phi_(slot[b], j);
+                });
         } else if (sf.kind == SwitchKind::velocity) {  // w = v_i - v_partner
             for (int j = 0; j < nf_; ++j)
                 Z_(f, j) = difference(sf.element, t_.partner[static_cast<std::size_t>(sf.element)], j);

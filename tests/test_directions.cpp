@@ -1,0 +1,206 @@
+// Elements along a general direction, u = w^T x (`direction = { dof = w }`):
+// a breathing crack in a consistent-mass cantilever (a contact on the
+// opening of the crack's outer fibre, a weighted difference of the two
+// rotations at the crack) against CVODE and the 30- and 60-digit reference;
+// a scaled direction against the same contact written with `between`; and
+// the input and back ends that refuse it by name.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "assembly.h"
+#include "cli_runner.h"
+#include "engine_runner.h"
+#include "flow.h"
+#include "fe_models.h"
+#include "model_reader.h"
+#include "shooting.h"
+#include "temp_dir.h"
+
+namespace hsnc {
+namespace {
+
+using namespace fe;
+
+/// A cantilever of 4 Euler-Bernoulli elements (1 m, EI = 100 N m^2,
+/// 2 kg/m, consistent mass) cracked at mid-span: node 2 keeps one
+/// deflection w2 but two rotations, tL (the root side) and tR (the tip
+/// side), joined by the open crack's rotational spring k_r.
+Beam cracked_cantilever(double k_r) {
+    const double h = 0.25;
+    Eigen::Matrix4d ke, me;
+    beam_element(h, 100.0, 2.0, ke, me);
+    const std::vector<std::string> dofs = {"w1", "t1", "w2", "tL", "tR", "w3", "t3", "w4", "t4"};
+    const int of[4][4] = {{-1, -1, 0, 1}, {0, 1, 2, 3}, {2, 4, 5, 6}, {5, 6, 7, 8}};  // element -> dofs (-1: clamped)
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(9, 9), K = Eigen::MatrixXd::Zero(9, 9);
+    for (const auto& e : of)
+        for (int r = 0; r < 4; ++r)
+            for (int c = 0; c < 4; ++c)
+                if (e[r] >= 0 && e[c] >= 0) {
+                    M(e[r], e[c]) += me(r, c);
+                    K(e[r], e[c]) += ke(r, c);
+                }
+    K(3, 3) += k_r, K(4, 4) += k_r, K(3, 4) -= k_r, K(4, 3) -= k_r;
+    return {M, K, dofs, 7};
+}
+
+/// The cracked cantilever forced at its tip near its first mode; the crack's
+/// faces touch where the outer fibre (0.05 m from the axis) has opened by
+/// `gap`: u = 0.05 (tR - tL), contact stiffness k_c.
+std::string breathing_crack(const testing::TempDir& dir, const std::string& contact) {
+    const Beam b = cracked_cantilever(1000.0);
+    return structure_model(dir, "crack.toml", "breathing-crack", b.M, b.K, b.dofs,
+                           "[damping]\nalpha = 0.2\nbeta = 5e-4\n"
+                           "[[forcing]]\nomega = 20.0\namplitude = { w4 = 5.0 }\n" +
+                               contact);
+}
+
+const char* kCrack = "[[contact]]\nname = \"crack\"\ndirection = { tL = -0.05, tR = 0.05 }\ngap = 2e-5\nk = 4e6\n";
+
+TEST(Direction, ABreathingCrackGivesTheEventsOfCvodeAndTheReference) {
+    testing::TempDir dir;
+    const Model model = read_model(breathing_crack(dir, kCrack));
+    ASSERT_TRUE(model.contacts[0].direction().weighted());
+    const testing::Outcome eigen = testing::simulate(model, 2.0);
+    ASSERT_GE(eigen.events.size(), 8u);
+    const testing::Outcome programs = testing::simulate(model, 2.0, 0.0, testing::Solvers::interp);
+    const testing::Outcome cvode = testing::baseline(model, 2.0, 1e-12, 1e-14, Method::cvode);
+    const std::vector<testing::Recorded> r30 = reference_events(model, 30, 2.0), r60 = reference_events(model, 60, 2.0);
+    const double eigen_off = event_gap(eigen.events, r30), to_cvode = event_gap(programs, cvode),
+                 to_reference = event_gap(programs.events, r30), self = event_gap(r30, r60);
+    std::printf("%zu events: programs within %.3g s of the reference, %.3g s of CVODE; the Eigen solver (modal "
+                "analysis in double) %.3g s of the reference; 30 against 60 digits %.3g s\n",
+                programs.events.size(), to_reference, to_cvode, eigen_off, self);
+    EXPECT_LT(eigen_off, 1e-11);  // as on the cantilever with a tip stop (test_coupled_mass.cpp)
+    EXPECT_LT(to_cvode, 1e-9);
+    EXPECT_LT(to_reference, 1e-11);
+    EXPECT_LT(self, 1e-20);
+}
+
+TEST(Direction, AClosedContactStampsKWwTAndItsPreload) {
+    // K(closed) - K(open) = k w w^T, f(closed) - f(open) = k gap w, from the
+    // pair links every back end stamps (direction.h as_pair_links).
+    testing::TempDir dir;
+    const Model model = read_model(breathing_crack(dir, kCrack));
+    Configuration open = Configuration::all_open(model), closed = open;
+    closed.closed[0] = 1;
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(9);
+    w(3) = -0.05, w(4) = 0.05;
+    const Eigen::MatrixXd dK = stiffness_matrix(model, closed) - stiffness_matrix(model, open);
+    const Eigen::VectorXd df = constant_force(model, closed) - constant_force(model, open);
+    EXPECT_LT((dK - 4e6 * w * w.transpose()).norm(), 1e-12 * 4e6 * w.squaredNorm());
+    EXPECT_LT((df - 4e6 * 2e-5 * w).norm(), 1e-15 * 4e6 * 2e-5 * w.norm());
+    EXPECT_GT(df.norm(), 0.0);
+}
+
+TEST(Direction, AScaledDirectionIsTheContactBetweenTwoBodies) {
+    // u = 2 w4 >= 2 g with k / 4 is w4 - ground >= g with k: the same force
+    // k (w4 - g) when closed, the same instants.
+    testing::TempDir a, b;
+    const Model between = read_model(breathing_crack(
+        a, "[[contact]]\nname = \"stop\"\nbetween = [\"w4\", \"ground\"]\ngap = 0.004\nk = 2000.0\n"));
+    const Model scaled =
+        read_model(breathing_crack(b, "[[contact]]\nname = \"stop\"\ndirection = { w4 = 2.0 }\ngap = 0.008\nk = 500.0\n"));
+    for (testing::Solvers s : {testing::Solvers::generic, testing::Solvers::interp}) {
+        const testing::Outcome x = testing::simulate(between, 2.0, 0.0, s), y = testing::simulate(scaled, 2.0, 0.0, s);
+        ASSERT_GE(x.events.size(), 6u);
+        const double gap = event_gap(x, y);
+        std::printf("%s: %zu events, %.3g s apart\n", testing::solvers_name(s), x.events.size(), gap);
+        EXPECT_LT(gap, 1e-12);
+    }
+}
+
+TEST(Direction, ThePeriodMapsExactJacobianMatchesCentralDifferences) {
+    // The tangent's gradient of the crack's gap function is w (saltation at
+    // each closing and opening), over one forcing period from rest.
+    testing::TempDir dir;
+    const Model model = read_model(breathing_crack(dir, kCrack));
+    analysis::FlowKernels kernels;
+    kernels.kernels = KernelChoice::eigen;
+    analysis::Flow flow(model, kernels, "test");
+    const Eigen::Index N = static_cast<Eigen::Index>(2 * model.dof());
+    const Eigen::VectorXd y = Eigen::VectorXd::Zero(N);
+    const double T = 2 * M_PI / 20.0;
+    const analysis::PeriodMapValue at = analysis::evaluate_period_map(flow, 0.0, T, y);
+    ASSERT_TRUE(at.ok) << at.message;
+    ASSERT_GE(at.events, 2u);
+    Eigen::MatrixXd fd(N, N);
+    for (Eigen::Index j = 0; j < N; ++j) {
+        const double h = 1e-7;
+        Eigen::VectorXd yp = y, ym = y;
+        yp(j) += h, ym(j) -= h;
+        const analysis::PeriodMapValue p = analysis::evaluate_period_map(flow, 0.0, T, yp),
+                                       m = analysis::evaluate_period_map(flow, 0.0, T, ym);
+        ASSERT_EQ(p.events, at.events);
+        ASSERT_EQ(m.events, at.events);
+        fd.col(j) = (p.Py - m.Py) / (2 * h);
+    }
+    const double off = (at.M - fd).norm() / fd.norm();
+    std::printf("%zu events a period, |J - central differences| / |J| = %.3g\n", at.events, off);
+    EXPECT_LT(off, 1e-6);
+}
+
+TEST(Direction, JitAndInterpreterWriteTheSameBytesOnADirection) {
+    testing::TempDir dir;
+    const std::string path = "'" + breathing_crack(dir, kCrack) + "'";
+    const std::string interp = testing::events_csv(path, "--t-end 0.5 --kernels interp");
+    EXPECT_GE(std::count(interp.begin(), interp.end(), '\n'), 3);
+    EXPECT_EQ(interp, testing::events_csv(path, "--t-end 0.5 --no-cache --kernels jit"));
+}
+
+TEST(Direction, BadDirectionsAreRefusedByKey) {
+    testing::TempDir dir;
+    struct Case {
+        std::string contact, says;
+    };
+    const std::vector<Case> cases = {
+        {"direction = { tL = -0.05, tR = 0.05 }\nbetween = [\"w4\", \"ground\"]", "not both"},
+        {"direction = { tL = 0.0, tR = 0.05 }", "'contact[1].direction.tL': a weight of 0"},
+        {"direction = { tX = 1.0 }", "'contact[1].direction.tX': unknown dof 'tX'"},
+        {"direction = { ground = 1.0 }", "leave it out"},
+        {"direction = {}", "contact[1].direction"},
+        {"direction = [\"tL\", \"tR\"]", "contact[1].direction"},
+        {"direction = { tL = \"a\" }", "contact[1].direction.tL"},
+    };
+    for (const Case& c : cases) {
+        const std::string path =
+            breathing_crack(dir, "[[contact]]\nname = \"crack\"\n" + c.contact + "\ngap = 2e-5\nk = 4e6\n");
+        const testing::CliRun r = testing::run_hsnc("check '" + path + "'");
+        EXPECT_EQ(r.exit_code, 2) << c.contact;
+        EXPECT_NE(r.err.find(c.says), std::string::npos) << c.contact << " -> " << r.err;
+        EXPECT_NE(r.err.find("crack.toml"), std::string::npos) << r.err;
+    }
+}
+
+TEST(Direction, ADirectionClosedOnAFloatingPartIsRefusedByName) {
+    // k (x1 + x2)^2 holds the pair's common motion and leaves its stretch
+    // free: which rigid-body modes remain is not said by the bodies alone.
+    testing::TempDir dir;
+    write(dir / "float.toml", "name = \"floating\"\n[[mass]]\nname = \"m1\"\nm = 1.0\n[[mass]]\nname = \"m2\"\nm = 1.0\n"
+                              "[[spring]]\nbetween = [\"m1\", \"m2\"]\nk = 10.0\n"
+                              "[[contact]]\nname = \"c\"\ndirection = { m1 = 1.0, m2 = 1.0 }\ngap = 0.1\nk = 100.0\n"
+                              "[initial]\nv = { m1 = 1.0, m2 = 1.0 }\n");
+    const std::string out = dir / "trajectory.csv";
+    const testing::CliRun r = testing::run_hsnc("simulate '" + (dir / "float.toml") + "' --t-end 1 --out '" + out + "'");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("contact 'c' acts along a direction on 'm1', which floats"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::ifstream(out).good());
+}
+
+TEST(Direction, SweepKernelsRefuseADirectionByName) {
+    testing::TempDir dir;
+    const std::string path = breathing_crack(dir, kCrack);
+    const testing::CliRun r = testing::run_hsnc("generate '" + path + "' --params all -o '" + (dir / "kernels") + "'");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("contact 'crack' acts along a direction"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace hsnc
