@@ -140,3 +140,18 @@ def test_friction_between_two_bodies_runs_as_on_the_command_line(tmp_path):
     run_cli("simulate", path, "--t-end", "5", "--events", cli)
     rows = cli.read_text().splitlines()[1:]
     assert [float(row.split(",")[0]) for row in rows] == list(r.events.t)
+
+
+def test_a_contact_along_a_direction_runs_from_python_as_from_the_file(tmp_path):
+    # direction = { right = 2 } with gap and k scaled (u = 2 x, 2 gap, k / 4)
+    # is the stop between right and ground: the same force, the same events.
+    scaled = TWO_MASS.replace('between = ["right", "ground"]\ngap = 0.05\nk = "kc"',
+                              'direction = { right = 2.0 }\ngap = 0.1\nk = "kc / 4"')
+    assert scaled != TWO_MASS
+    a = hsnc.simulate(hsnc.Model.from_string(TWO_MASS))
+    b = hsnc.simulate(hsnc.Model.from_string(scaled))
+    assert len(a.events) > 0
+    assert np.array_equal(a.events.t, b.events.t) and list(a.events.element) == list(b.events.element)
+    path = tmp_path / "scaled.toml"
+    path.write_text(scaled)
+    assert "stop  along 2 right  gap = 0.1" in run_cli("check", path).stdout
