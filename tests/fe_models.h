@@ -17,7 +17,9 @@
 #include <gtest/gtest.h>
 
 #include "engine_runner.h"
+#include "flow.h"
 #include "reference_engine.h"
+#include "shooting.h"
 #include "temp_dir.h"
 
 namespace hsnc::fe {
@@ -152,6 +154,29 @@ inline double event_gap(const std::vector<testing::Recorded>& a, const std::vect
     testing::Outcome x, y;
     x.events = a, y.events = b;
     return event_gap(x, y);
+}
+
+/// The period map's exact Jacobian at y over [0, T] against central
+/// differences (steps h max(1, |y_j|)): |J - J_fd| / |J_fd|, each perturbed
+/// run with the events of the exact one (a failure otherwise); `events`
+/// gets their number.
+inline double off_central_differences(analysis::Flow& flow, double T, const Eigen::VectorXd& y, std::size_t& events) {
+    const analysis::PeriodMapValue at = analysis::evaluate_period_map(flow, 0.0, T, y);
+    EXPECT_TRUE(at.ok) << at.message;
+    events = at.events;
+    const Eigen::Index N = y.size();
+    Eigen::MatrixXd fd(N, N);
+    for (Eigen::Index j = 0; j < N; ++j) {
+        const double h = 1e-7 * std::max(1.0, std::fabs(y(j)));
+        Eigen::VectorXd yp = y, ym = y;
+        yp(j) += h, ym(j) -= h;
+        const analysis::PeriodMapValue p = analysis::evaluate_period_map(flow, 0.0, T, yp),
+                                       m = analysis::evaluate_period_map(flow, 0.0, T, ym);
+        EXPECT_EQ(p.events, at.events);
+        EXPECT_EQ(m.events, at.events);
+        fd.col(j) = (p.Py - m.Py) / (2 * h);
+    }
+    return (at.M - fd).norm() / fd.norm();
 }
 
 }  // namespace hsnc::fe
