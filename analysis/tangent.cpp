@@ -254,7 +254,7 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
     for (std::size_t c = 0; c < model.contacts.size(); ++c) {
         if (A.closed[c] == B.closed[c]) continue;
         const Contact& k = model.contacts[c];
-        const double damper = -model.beta * k.k * gap_rate(model, static_cast<int>(c), v);  // on a, while closed
+        const double damper = -(model.beta * k.k + k.c) * gap_rate(model, static_cast<int>(c), v);  // along w, while closed
         const double sign = B.closed[c] ? 1.0 : -1.0;
         for_each_term(k.direction(), [&](int i, double w) { dA[static_cast<std::size_t>(i)] += sign * damper * w; });
     }

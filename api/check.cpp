@@ -92,7 +92,9 @@ void print_summary(const Model& model, std::ostream& out) {
             out << "  along";
             for (const Weight& w : c.weights) out << " " << num(w.w) << " " << body_name(model, w.body);
         }
-        out << "  gap = " << num(c.gap) << "  k = " << num(c.k) << "\n";
+        out << "  gap = " << num(c.gap) << "  k = " << num(c.k);
+        if (c.c != 0.0) out << "  c = " << num(c.c) << " (while closed)";
+        out << "\n";
     }
 
     std::size_t with_friction = 0;

@@ -527,6 +527,21 @@ void add_static_forcing(const Model& model, Derivation& d) {
         for (std::size_t i = 0; i < n; ++i) d.f_const_double[i] = d.f_const[i].to_double();
 }
 
+// C += c w w^T of every contact closed in cfg with a damping c of its own
+// (contact.h), exactly and in double-double: non-proportional damping.
+void add_contact_damping(const Model& model, const Configuration& cfg, Derivation& d) {
+    for (std::size_t e = 0; e < model.contacts.size(); ++e) {
+        const Contact& ct = model.contacts[e];
+        if (!cfg.closed[e] || ct.c == 0.0) continue;
+        for_each_term(ct.direction(), [&](int i, double wi) {
+            for_each_term(ct.direction(), [&](int j, double wj) {
+                d.C(i, j) = d.C(i, j) + exact(ct.c) * exact(wi) * exact(wj);
+                d.c_dd[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] += DD(ct.c) * DD(wi) * DD(wj);
+            });
+        });
+    }
+}
+
 }  // namespace
 
 Derivation derive(const Model& model, const Configuration& cfg, EigenMethod method, ExactMatrices exact_matrices,
@@ -564,6 +579,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
             d.k_dd[i][j] = DD(K(i, j));
             d.c_dd[i][j] = DD(model.beta) * DD(K(i, j)) + (i == j || coupled ? DD(model.alpha) * DD(mij) : DD(0.0));
         }
+    add_contact_damping(model, cfg, d);
     for (const Damper& dm : model.dampers) {  // non-proportional damping: added as K adds a spring
         const numeric c = exact(dm.c);
         for (int a : {dm.a, dm.b})

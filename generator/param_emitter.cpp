@@ -39,8 +39,8 @@ std::vector<std::string> kept_parameters(const Model& model, const std::string& 
         throw InputError(flag + ": the model has a coupled (non-diagonal) mass matrix, which sweep kernels do not "
                                 "take yet (generate without --params derives its kernels)");
     if (!model.proportional_damping())
-        throw InputError(flag + ": the model has non-proportional damping ([[damper]] or a non-proportional "
-                                "structure.damping), which sweep kernels do not take yet (generate without --params "
+        throw InputError(flag + ": the model has non-proportional damping ([[damper]], a contact's c or a "
+                                "non-proportional structure.damping), which sweep kernels do not take yet (generate without --params "
                                 "derives its kernels)");
     std::vector<std::string> names;
     for (const auto& [name, text] : model.parameter_expressions) names.push_back(name);

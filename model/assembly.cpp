@@ -98,6 +98,13 @@ Eigen::MatrixXd damping_matrix(const Model& model, const Configuration& cfg) {
     else C.diagonal() += model.alpha * mass_vector(model);
     for (std::size_t e = 0; e < model.dampers.size(); ++e)  // a dashpot adds to C as a spring to K
         link_of(model, cfg, ElementKind::damper, e, [&](int a, int b, double, double c, double) { add_spring(C, a, b, c); });
+    for (std::size_t e = 0; e < model.contacts.size(); ++e) {  // a closed contact's own c w w^T (contact.h)
+        const Contact& ct = model.contacts[e];
+        if (!cfg.closed[e] || ct.c == 0.0) continue;
+        for_each_term(ct.direction(), [&](int i, double wi) {
+            for_each_term(ct.direction(), [&](int j, double wj) { C(i, j) += ct.c * wi * wj; });
+        });
+    }
     return C;
 }
 

@@ -126,7 +126,7 @@ void visit_element(const Model& model, const Configuration& cfg, ElementKind kin
             break;
         case ElementKind::contact: {
             const Contact& c = model.contacts[e];
-            contact::forces(cfg.closed[e] != 0, c.direction(), c.k, c.gap, model.beta, v);
+            contact::forces(cfg.closed[e] != 0, c.direction(), c.k, c.gap, model.beta, c.c, v);
             break;
         }
         case ElementKind::damper:

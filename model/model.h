@@ -166,7 +166,12 @@ struct Model {
     /// C = alpha*M + beta*K(cfg) exactly: no dampers. Only then are the modes
     /// of K those of the damped system (the derivation, kernels, interpreter,
     /// reference and tangent need it; the state-space solver does not).
-    bool proportional_damping() const { return dampers.empty(); }
+    bool proportional_damping() const {
+        if (!dampers.empty()) return false;
+        for (const Contact& c : contacts)
+            if (c.c != 0.0) return false;  // a contact's own damping (contact.h)
+        return true;
+    }
 
     /// Index of the mass called `name`, or -1.
     int mass_index(const std::string& name) const {

@@ -660,9 +660,10 @@ private:
                     fail(t.get("between"), path + ".between",
                          "'" + other.name + "' already has friction; friction between two bodies needs the second one "
                          "free of any other friction, for now");
-                if (!model_.dampers.empty())
+                if (!model_.proportional_damping())
                     fail(t.get("between"), path + ".between",
-                         "friction between two bodies with non-proportional damping ([[damper]]) is not yet supported");
+                         "friction between two bodies with non-proportional damping ([[damper]] or a contact's c) is "
+                         "not yet supported");
             }
             if (model_.coupled_mass() && two_bodies)  // a stuck pair on a coupled M: stage c of issue 36
                 fail(t.get("between"), path + ".between",
@@ -777,7 +778,7 @@ private:
         for (std::size_t i = 0; i < tables.size(); ++i) {
             const toml::table& t = *tables[i];
             const std::string path = "contact[" + std::to_string(i + 1) + "]";
-            check_keys(t, path, {"name", "between", "direction", "gap", "k"});
+            check_keys(t, path, {"name", "between", "direction", "gap", "k", "c"});
             Contact contact;
             contact.name = element_name(t, path, "contact", i);
             if (const toml::node* dir = t.get("direction")) {
@@ -790,6 +791,8 @@ private:
             contact.gap = required_number(t, path, "gap");
             contact.k = required_number(t, path, "k");
             if (!(contact.k > 0.0)) fail(t.get("k"), path + ".k", "contact stiffness must be > 0, got " + show(contact.k));
+            contact.c = optional_number(t, path, "c").value_or(0.0);
+            if (!(contact.c >= 0.0)) fail(t.get("c"), path + ".c", "contact damping must be >= 0, got " + show(contact.c));
             element_names_.emplace(contact.name, path);
             model_.contacts.push_back(contact);
         }
@@ -906,6 +909,10 @@ private:
                 const double k = ct.weights.empty() ? ct.k : ct.k * std::fabs(w) * norm1;
                 stiffness[static_cast<std::size_t>(body)].push_back(
                     {k, "contact[" + std::to_string(c + 1) + "].k", line_of(root, "contact", c, "k"), "contact '" + ct.name + "'"});
+                if (ct.c != 0.0)
+                    damping[static_cast<std::size_t>(body)].push_back(
+                        {ct.weights.empty() ? ct.c : ct.c * std::fabs(w) * norm1, "contact[" + std::to_string(c + 1) + "].c",
+                         line_of(root, "contact", c, "c"), "contact '" + ct.name + "'"});
             });
         }
         for (std::size_t j = 0; j < model_.jenkins.size(); ++j)

@@ -254,10 +254,10 @@ MpModel::MpModel(const Model& model, int digits)
         for (std::size_t i = 0; i < model.dof(); ++i)
             for (std::size_t j = 0; j < model.dof(); ++j) M[i][j] = F(model.mass_entry(i, j));
     }
-    for (const Spring& s : model.springs) springs.push_back({s.a, s.b, F(s.k), zero});
-    for (const Contact& c : model.contacts) contacts.push_back({c.a, c.b, F(c.k), F(c.gap), c.weights});
-    for (const Jenkins& e : model.jenkins) jenkins.push_back({e.a, e.b, F(e.k), F(e.slip_force)});
-    for (const Damper& d : model.dampers) dampers.push_back({d.a, d.b, F(d.c), zero});
+    for (const Spring& s : model.springs) springs.push_back({s.a, s.b, F(s.k), zero, zero});
+    for (const Contact& c : model.contacts) contacts.push_back({c.a, c.b, F(c.k), F(c.gap), F(c.c), c.weights});
+    for (const Jenkins& e : model.jenkins) jenkins.push_back({e.a, e.b, F(e.k), F(e.slip_force), zero});
+    for (const Damper& d : model.dampers) dampers.push_back({d.a, d.b, F(d.c), zero, zero});
     for (const Mass& ms : model.masses) partner.push_back(ms.partner);
     f_const.assign(static_cast<std::size_t>(n), zero);
     for (int i = 0; i < n; ++i)
@@ -614,7 +614,16 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
         for (int k = 0; k < n_; ++k)
             if (slot_[i] >= 0 && slot_[k] >= 0) Kf[slot_[i]][slot_[k]] = Kf[slot_[i]][slot_[k]] + K_[i][k];
     const int n_rigid = fc.n_floating();
-    if (!mp.dampers.empty()) {
+    bool contact_damped = false;  // a closed contact's own c w w^T (contact.h)
+    for (std::size_t c = 0; c < mp.contacts.size(); ++c) {
+        const MpModel::Link& l = mp.contacts[c];
+        if (!cfg.closed[c] || cln::zerop(l.c)) continue;
+        contact_damped = true;
+        for_each_term(l.direction(), [&](int i, double wi) {
+            for_each_term(l.direction(), [&](int j, double wj) { C_[i][j] = C_[i][j] + l.c * mp.F(wi) * mp.F(wj); });
+        });
+    }
+    if (!mp.dampers.empty() || contact_damped) {
         for (const MpModel::Link& d : mp.dampers) {  // C as K takes a spring
             if (d.a != kGround) C_[d.a][d.a] = C_[d.a][d.a] + d.k;
             if (d.b != kGround) C_[d.b][d.b] = C_[d.b][d.b] + d.k;

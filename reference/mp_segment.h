@@ -77,6 +77,7 @@ struct MpModel {
     struct Link {
         int a, b;
         cl_F k, gap;
+        cl_F c;                       ///< a contact's damping while closed (0 for the others)
         std::vector<Weight> weights;  ///< a general direction (contact.h), else empty
 
         Direction direction() const {
@@ -242,7 +243,8 @@ void MpModel::each_force(const Configuration& cfg, S&& slider, V&& bodies) const
     auto visit = pair_links(bodies, [this](double w) { return cln::cl_float(w, format); });
     for (const Link& s : springs) spring::forces(Direction{s.a, s.b}, s.k, beta, visit);
     for (std::size_t c = 0; c < contacts.size(); ++c)
-        contact::forces(cfg.closed[c] != 0, contacts[c].direction(), contacts[c].k, contacts[c].gap, beta, visit);
+        contact::forces(cfg.closed[c] != 0, contacts[c].direction(), contacts[c].k, contacts[c].gap, beta, contacts[c].c,
+                        visit);
     for (std::size_t j = 0; j < jenkins.size(); ++j) {
         const Link& e = jenkins[j];
         jenkins::forces(cfg.slip[j], Direction{e.a, e.b}, e.k, e.gap, cl_F(slider(j)), beta, visit);

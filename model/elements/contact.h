@@ -2,8 +2,9 @@
 // spring of stiffness k with a gap, along its direction u (direction.h).
 //
 //   G = u - gap                 the gap function; the contact is closed while G >= 0
-//   closed: force -k G along w  (K += k w w^T, the preload +k gap w in the constant
-//                                force, Rayleigh damping beta k w w^T: assembly.h)
+//   closed: force -k G - c G' along w  (K += k w w^T, the preload +k gap w in the
+//                                constant force, damping (beta k + c) w w^T: assembly.h;
+//                                c > 0 makes the damping non-proportional)
 //   open:   no force
 //   switch: G itself (SwitchKind::gap); a crossing toggles the state, a touch
 //           (G = G' = 0) is decided by the first non-zero derivative
@@ -27,6 +28,7 @@ struct Contact {
     int b = kGround;
     double gap = 0.0;  ///< closed while u = w^T x >= gap
     double k = 0.0;    ///< contact stiffness, > 0
+    double c = 0.0;    ///< contact damping, >= 0: a dashpot c w w^T while closed (non-proportional)
     /// A general direction (`direction = { dof = w, ... }`): u = sum w_i x_i;
     /// empty for `between = [a, b]`, u = x[a] - x[b].
     std::vector<Weight> weights;
@@ -52,11 +54,12 @@ auto gap_magnitude(const Direction& d, const T& gap, const M& m, int k) {
     return k == 0 ? u + m.abs(gap) : u;
 }
 
-/// Closed, a contact is a link of stiffness k, Rayleigh damping beta k and
-/// rest length gap (its preload +k gap on a); open, nothing.
+/// Closed, a contact is a link of stiffness k, damping beta k (Rayleigh)
+/// plus its own c, and rest length gap (its preload +k gap on a); open,
+/// nothing.
 template <class T, class V>
-void forces(bool closed, const Direction& d, const T& k, const T& gap, const T& beta, V&& visit) {
-    if (closed) visit.link(d, k, beta * k, gap);
+void forces(bool closed, const Direction& d, const T& k, const T& gap, const T& beta, const T& c, V&& visit) {
+    if (closed) visit.link(d, k, beta * k + c, gap);
 }
 
 }  // namespace contact

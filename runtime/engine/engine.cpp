@@ -90,6 +90,13 @@ double fastest_rate(const Model& model, const Configuration& cfg) {
     for (const Damper& d : model.dampers)
         for (int b : {d.a, d.b})
             if (b != kGround && d.a != d.b) visc[static_cast<std::size_t>(b)] += std::fabs(d.c);
+    for (std::size_t e = 0; e < model.contacts.size(); ++e) {  // a closed contact's own c w w^T: row sums
+        const Contact& ct = model.contacts[e];
+        if (!cfg.closed[e] || ct.c == 0.0) continue;
+        double norm1 = 0.0;
+        for_each_term(ct.direction(), [&](int, double w) { norm1 += std::fabs(w); });
+        for_each_term(ct.direction(), [&](int b, double w) { visc[static_cast<std::size_t>(b)] += ct.c * std::fabs(w) * norm1 / 2; });
+    }
     for (std::size_t i = 0; i < n; ++i)
         if (!fixed_in(model, cfg, i)) rate = std::max(rate, 2 * visc[i] / mass_of(i));
     for (const Harmonic& h : model.forcing) rate = std::max(rate, std::fabs(h.omega));
@@ -586,7 +593,7 @@ public:
         : options_(options),
           // Dampers, Jenkins elements and friction pairs never have a plan
           // (restart_plan(), generator/lowering.h): no derivation is asked for one.
-          plain_(model.dampers.empty() && model.jenkins.empty() &&
+          plain_(model.proportional_damping() && model.jenkins.empty() &&
                  std::none_of(model.masses.begin(), model.masses.end(), [](const Mass& m) { return m.partner != kGround; })) {}
 
     /// A new configuration, with `free_masses` (an upper bound on its modes).
