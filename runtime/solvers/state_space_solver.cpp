@@ -294,9 +294,7 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
         };
         const auto ee = static_cast<std::size_t>(e);
         if (sf.kind == SwitchKind::gap) {
-            const Direction d = t_.contacts[ee].direction();
-            if (!d.weighted()) difference(d.a, d.b, 0, 1.0);
-            for (int i = 0; i < d.count; ++i) difference(d.terms[i].body, kGround, 0, d.terms[i].w);
+            for_each_term(t_.contacts[ee].direction(), [&](int b, double w) { difference(b, kGround, 0, w); });
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
             const Jenkins& j = t_.jenkins[ee];
             difference(j.a, j.b, 0, sf.kind == SwitchKind::slip_pos ? j.k : -j.k);
