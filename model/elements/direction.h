@@ -102,7 +102,8 @@ inline bool acts_on(const Direction& d, int i) {
 ///     sum_{i<j} (-k w_i w_j) (e_i - e_j)(e_i - e_j)^T + sum_i k w_i (sum_j w_j) e_i e_i^T,
 /// the decomposition a [structure]'s K is read with (spring.h), so
 /// pair(a, b, k_ab, c_ab) gets each pair link (b = kGround for the diagonal
-/// rest; zero terms left out) and force(i, f_i) the preload k length w_i.
+/// rest, left out where sum_j w_j = 0, as for e_a - e_b) and force(i, f_i)
+/// the preload k length w_i.
 /// weight(w) is w in the back end's scalar T, exactly.
 template <class T, class Weigh, class Pair, class Force>
 void as_pair_links(const Direction& d, const T& k, const T& c, const T& length, const Weigh& weight, Pair&& pair,
