@@ -10,6 +10,7 @@ packages=(
   build-essential cmake pkg-config
   libginac-dev libcln-dev        # symbolic derivation of the segment formulas
   libeigen3-dev                  # linear algebra (modal analysis) at run time
+  libspectra-dev                 # sparse eigenproblems (the fixed-interface modes of [reduction])
   libtomlplusplus-dev            # the model file
   libcli11-dev                   # command line parsing
   libsundials-dev                # the CVODE baseline (--method cvode)

@@ -55,6 +55,27 @@ void print_summary(const Model& model, std::ostream& out) {
             out << "  C = " << model.structure.damping_file
                 << (model.proportional_damping() ? " (proportional: alpha, beta below)" : " (non-proportional: dampers below)");
         out << "\n";
+        if (model.reduction.present) {
+            const ReductionSource& r = model.reduction;
+            out << "reduction: " << r.method << ", " << r.full_dofs << " dofs -> " << r.boundary
+                << " boundary dofs (those the model names) + " << r.modal_names.size() << " fixed-interface modes";
+            if (!r.interface_omega.empty())
+                out << " (omega " << num(r.interface_omega.front()) << " to " << num(r.interface_omega.back()) << " rad/s)";
+            out << "\n";
+            if (!r.reduced_omega.empty()) {
+                out << "  lowest frequencies, rad/s (all contacts open): full  reduced  relative error\n";
+                for (std::size_t k = 0; k < r.reduced_omega.size(); ++k) {
+                    out << "    " << k + 1 << "  ";
+                    if (k < r.full_omega.size())
+                        out << num(r.full_omega[k]) << "  " << num(r.reduced_omega[k]) << "  "
+                            << num((r.reduced_omega[k] - r.full_omega[k]) / r.full_omega[k]);
+                    else
+                        out << "-  " << num(r.reduced_omega[k]) << "  -";
+                    out << "\n";
+                }
+                if (!r.full_omega_problem.empty()) out << "  (full structure: " << r.full_omega_problem << ")\n";
+            }
+        }
         if (model.condensation.present()) {
             std::string list;
             for (std::size_t d = 0; d < model.condensation.dofs.size(); ++d)

@@ -1,8 +1,10 @@
 #include "matrix_market.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cfloat>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <sstream>
 
@@ -35,9 +37,11 @@ bool is_integer_literal(const std::string& w) {
 
 class Parser {
 public:
-    Parser(const std::string& text, std::string source) : text_(text), source_(std::move(source)) {}
+    Parser(const std::string& text, std::string source, std::size_t max_dimension)
+        : text_(text), source_(std::move(source)), max_dimension_(max_dimension) {}
 
-    MarketMatrix parse() {
+    /// Every entry the file gives, both triangles of a symmetric one, in file order.
+    SparseMarket parse() {
         std::string line;
         if (!next_raw(line)) fail(0, "empty file (expected a '%%MatrixMarket matrix ...' header)");
         const std::vector<std::string> h = words(line);
@@ -57,21 +61,29 @@ public:
 
         if (!next_data(line)) fail(0, "missing the size line");
         const std::vector<std::string> size = words(line);
-        MarketMatrix m;
+        SparseMarket m;
         std::size_t nnz = 0;
         if (size.size() != (format == "coordinate" ? 3u : 2u))
             fail(line_, format == "coordinate" ? "size line must be 'ROWS COLS ENTRIES'" : "size line must be 'ROWS COLS'");
         m.rows = count(size[0], "rows");
         m.cols = count(size[1], "columns");
         if (m.rows == 0 || m.cols == 0) fail(line_, "the matrix is empty (0 rows or columns)");
-        if (m.rows > kMaxMatrixDimension || m.cols > kMaxMatrixDimension)
-            fail(line_, "larger than " + std::to_string(kMaxMatrixDimension) + " rows or columns");
+        if (m.rows > max_dimension_ || m.cols > max_dimension_)
+            fail(line_, "larger than " + std::to_string(max_dimension_) + " rows or columns");
         if (symmetric && m.rows != m.cols) fail(line_, "a symmetric matrix must be square");
-        m.values.assign(m.rows * m.cols, 0.0);
+        if (format == "array" && m.rows > kMaxMatrixDimension)  // every value listed: a dense file
+            fail(line_, "an array (dense) file of more than " + std::to_string(kMaxMatrixDimension) +
+                            " rows; give a coordinate file");
 
         if (format == "coordinate") {
             nnz = count(size[2], "entries");
-            std::vector<char> seen(m.rows * m.cols, 0);
+            // Each entry at most once: a bitmap while the matrix is small, else
+            // the sorted positions once the whole file is read.
+            const bool small = m.rows * m.cols <= kMaxMatrixDimension * kMaxMatrixDimension;
+            std::vector<char> seen(small ? m.rows * m.cols : 0, 0);
+            std::vector<std::size_t> lines;
+            std::vector<std::uint64_t> positions;  // (i - 1) << 32 | (j - 1)
+            m.entries.reserve(std::min<std::size_t>(nnz, std::size_t{1} << 24) * (symmetric ? 2 : 1));
             for (std::size_t e = 0; e < nnz; ++e) {
                 if (!next_data(line))
                     fail(0, "the size line announces " + std::to_string(nnz) + " entries, the file ends after " +
@@ -85,10 +97,17 @@ public:
                 if (symmetric && i < j)
                     fail(line_, "entry (" + w[0] + ", " + w[1] +
                                     ") is above the diagonal; a symmetric file holds the lower triangle only");
-                if (seen[(i - 1) * m.cols + (j - 1)]) fail(line_, "entry (" + w[0] + ", " + w[1] + ") is given twice");
-                seen[(i - 1) * m.cols + (j - 1)] = 1;
+                if (small) {
+                    if (seen[(i - 1) * m.cols + (j - 1)])
+                        fail(line_, "entry (" + w[0] + ", " + w[1] + ") is given twice");
+                    seen[(i - 1) * m.cols + (j - 1)] = 1;
+                } else {
+                    lines.push_back(line_);
+                    positions.push_back(static_cast<std::uint64_t>(i - 1) << 32 | (j - 1));
+                }
                 put(m, i - 1, j - 1, value(w[2]), symmetric);
             }
+            if (!small) no_duplicates(positions, lines);
         } else {
             for (std::size_t j = 0; j < m.cols; ++j)
                 for (std::size_t i = symmetric ? j : 0; i < m.rows; ++i) {
@@ -152,14 +171,32 @@ private:
         return v;
     }
 
-    static void put(MarketMatrix& m, std::size_t i, std::size_t j, double v, bool symmetric) {
-        m.values[i * m.cols + j] = v;
-        if (symmetric) m.values[j * m.cols + i] = v;
+    static void put(SparseMarket& m, std::size_t i, std::size_t j, double v, bool symmetric) {
+        if (v == 0.0) return;
+        m.entries.emplace_back(static_cast<int>(i), static_cast<int>(j), v);
+        if (symmetric && i != j) m.entries.emplace_back(static_cast<int>(j), static_cast<int>(i), v);
+    }
+
+    /// A large coordinate file: no position twice (positions[k] and lines[k]
+    /// of the k-th entry given, zero or not; the later line of a pair is named).
+    void no_duplicates(const std::vector<std::uint64_t>& positions, const std::vector<std::size_t>& lines) const {
+        std::vector<std::size_t> order(lines.size());
+        for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+        std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+            return positions[a] != positions[b] ? positions[a] < positions[b] : a < b;
+        });
+        for (std::size_t k = 1; k < order.size(); ++k)
+            if (positions[order[k]] == positions[order[k - 1]]) {
+                const std::uint64_t p = positions[order[k]];
+                fail(lines[order[k]], "entry (" + std::to_string((p >> 32) + 1) + ", " +
+                                          std::to_string((p & 0xffffffffu) + 1) + ") is given twice");
+            }
     }
 
     const std::string& text_;
     std::string source_;
     std::size_t pos_ = 0;
+    std::size_t max_dimension_;
     std::size_t line_ = 0;
     bool integer_ = false;  ///< the header's field is integer
 };
@@ -167,7 +204,24 @@ private:
 }  // namespace
 
 MarketMatrix parse_matrix_market(const std::string& text, const std::string& source) {
-    return Parser(text, source).parse();
+    const SparseMarket s = Parser(text, source, kMaxMatrixDimension).parse();
+    MarketMatrix m;
+    m.rows = s.rows;
+    m.cols = s.cols;
+    m.values.assign(m.rows * m.cols, 0.0);
+    for (const auto& e : s.entries)
+        m.values[static_cast<std::size_t>(e.row()) * m.cols + static_cast<std::size_t>(e.col())] = e.value();
+    return m;
+}
+
+SparseMarket parse_sparse_matrix_market(const std::string& text, const std::string& source) {
+    return Parser(text, source, kMaxSparseDimension).parse();
+}
+
+SparseMarket read_sparse_matrix_market(const std::string& path) {
+    const FileRead file = read_regular_file(path, kMaxSparseFileBytes);
+    if (file.status != FileRead::Status::ok) throw InputError("cannot read matrix file '" + path + "': " + file.problem);
+    return parse_sparse_matrix_market(file.bytes, path);
 }
 
 MarketMatrix read_matrix_market(const std::string& path) {

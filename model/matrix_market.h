@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/SparseCore>
+
 namespace hsnc {
 
 /// A dense matrix read from a Matrix Market file, row-major.
@@ -25,6 +27,15 @@ struct MarketMatrix {
     std::size_t cols = 0;
     std::vector<double> values;  ///< rows*cols entries, row-major; symmetric files filled in both triangles
     double operator()(std::size_t i, std::size_t j) const { return values[i * cols + j]; }
+};
+
+/// A matrix read entry by entry, for the structures a [reduction] reduces
+/// (reduction.h): its nonzero entries (a symmetric file's mirrored), in file order.
+struct SparseMarket {
+    using Entry = Eigen::Triplet<double, int>;
+    std::size_t rows = 0;
+    std::size_t cols = 0;
+    std::vector<Entry> entries;
 };
 
 /// Largest file read (a dense 2000 x 2000 matrix written with 17 digits fits).
@@ -38,6 +49,11 @@ inline constexpr std::size_t kMaxMatrixFileBytes = std::size_t{128} << 20;
 /// 305 MB at 750. 500 keeps both within seconds and a few hundred MB.
 inline constexpr std::size_t kMaxMatrixDimension = 500;
 
+/// Largest dimension of a matrix read sparse (a structure that [reduction]
+/// reduces), and the largest such file: 2 GiB of text holds about 5e7 entries.
+inline constexpr std::size_t kMaxSparseDimension = 10'000'000;
+inline constexpr std::size_t kMaxSparseFileBytes = std::size_t{2} << 30;
+
 /// Parse Matrix Market text; `source` names it in messages. Throws InputError.
 MarketMatrix parse_matrix_market(const std::string& text, const std::string& source);
 
@@ -45,5 +61,10 @@ MarketMatrix parse_matrix_market(const std::string& text, const std::string& sou
 /// kMaxMatrixFileBytes). Throws InputError "cannot read matrix file 'PATH': REASON"
 /// or a parse error.
 MarketMatrix read_matrix_market(const std::string& path);
+
+/// The same reader for a structure of up to kMaxSparseDimension dofs, its
+/// entries kept sparse (array files only up to kMaxMatrixDimension rows).
+SparseMarket parse_sparse_matrix_market(const std::string& text, const std::string& source);
+SparseMarket read_sparse_matrix_market(const std::string& path);
 
 }  // namespace hsnc

@@ -97,6 +97,27 @@ struct StructureSource {
     std::string mass_file, stiffness_file, damping_file;  ///< as written in the model file ("" when absent)
 };
 
+/// A [structure] reduced by [reduction] (reduction.h): the full model's size,
+/// the method and what it kept. The model's dofs are then the boundary dofs
+/// (full-model order) and the modal coordinates `modal_names`.
+struct ReductionSource {
+    bool present = false;
+    std::string method;                    ///< "craig-bampton"
+    std::size_t full_dofs = 0;
+    std::size_t boundary = 0;              ///< the first `boundary` dofs of the model are physical
+    std::vector<std::string> modal_names;  ///< the fixed-interface modes' coordinates
+    std::vector<double> interface_omega;   ///< their circular frequencies, rad/s
+    /// The reduced matrices, row-major over the model's dofs (C empty when none): what `hsnc reduce` writes.
+    std::vector<double> M, K, C;
+    /// Read with ModelOverrides::full_frequencies: the lowest circular
+    /// frequencies of the full and of the reduced structure (all contacts
+    /// open), at most kReportedFrequencies; `full_omega_problem` says why the
+    /// full ones are missing ("" when they are there).
+    std::vector<double> full_omega, reduced_omega;
+    std::string full_omega_problem;
+};
+inline constexpr std::size_t kReportedFrequencies = 10;
+
 struct Model {
     std::string name;
     std::string description;
@@ -120,6 +141,7 @@ struct Model {
     std::vector<Damper> dampers;  ///< [[damper]]s, then those of a non-proportional structure.damping
     std::vector<Jenkins> jenkins;
     StructureSource structure;
+    ReductionSource reduction;
     Condensation condensation;  ///< a [structure]'s massless dofs (empty when it has none)
     double alpha = 0.0;  ///< Rayleigh mass coefficient
     double beta = 0.0;   ///< Rayleigh stiffness coefficient

@@ -13,11 +13,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <optional>
 #include <unordered_map>
 #include <sstream>
 
+#include <Eigen/Eigenvalues>
 #include <toml++/toml.h>
 
 #include "error.h"
@@ -27,6 +29,7 @@
 #include "ginac_lock.h"
 #include "mat_file.h"
 #include "matrix_market.h"
+#include "reduction.h"
 #include "structure.h"
 #include "toml_guard.h"
 
@@ -89,7 +92,7 @@ std::map<std::string, Override> collect_overrides(const std::string& flag, const
 class Reader {
 public:
     Reader(std::string source, const ModelOverrides& overrides)
-        : source_(std::move(source)), t_end_override_(overrides.t_end) {
+        : source_(std::move(source)), t_end_override_(overrides.t_end), full_frequencies_(overrides.full_frequencies) {
         set_ = collect_overrides("--set", overrides.set);
         x0_ = collect_overrides("--x0", overrides.x0);
         v0_ = collect_overrides("--v0", overrides.v0);
@@ -98,7 +101,8 @@ public:
     Model read(const toml::table& root) {
         model_.source = source_;
         check_keys(root, "", {"name", "description", "parameters", "mass", "structure", "spring", "damping", "damper",
-                              "contact", "friction", "jenkins", "forcing", "load", "initial", "simulate"});
+                              "contact", "friction", "jenkins", "forcing", "load", "initial", "simulate",
+                              "reduction"});
         model_.name = required_string(root, "", "name");
         if (model_.name.empty()) fail(root.get("name"), "name", "must not be empty");
         if (const toml::node* d = root.get("description")) model_.description = string_value(*d, "description");
@@ -108,6 +112,8 @@ public:
             read_structure(root);
         else
             read_masses(root);
+        if (root.get("reduction") && !root.get("structure"))
+            fail(root.get("reduction"), "reduction", "reduces a [structure]; this model has none");
         read_springs(root);
         add_structure_springs();
         read_damping(root);
@@ -507,6 +513,180 @@ private:
         }
     }
 
+    /// A [structure] matrix that [reduction] reduces: read sparse, n x n for
+    /// the n dofs, symmetric to 1e-12 of its largest entry (used as (A + A^T)/2).
+    SparseMatrixD sparse_matrix_file(const toml::table& t, const char* key, std::string& written, std::size_t n) {
+        const std::string path = "structure." + std::string(key);
+        written = required_string(t, "structure", key);
+        if (written.empty()) fail(t.get(key), path, "must name a Matrix Market or .mat file");
+        if (written.find('\0') != std::string::npos)
+            fail(t.get(key), path, "'" + excerpt(written) + "': a path cannot hold a NUL character");
+        SparseMarket m;
+        try {
+            if (is_mat_spec(written)) {  // .mat files are read dense (at most kMaxMatrixDimension)
+                const char* letter = std::string(key) == "mass" ? "M" : std::string(key) == "stiffness" ? "K" : "C";
+                const auto [file, variable] = split_mat_spec(written, letter);
+                note_input_file(beside_model(file));
+                const MarketMatrix d = read_mat_variable(beside_model(file), variable);
+                m.rows = d.rows, m.cols = d.cols;
+                for (std::size_t i = 0; i < d.rows; ++i)
+                    for (std::size_t j = 0; j < d.cols; ++j)
+                        if (d(i, j) != 0.0) m.entries.emplace_back(static_cast<int>(i), static_cast<int>(j), d(i, j));
+            } else {
+                note_input_file(beside_model(written));
+                m = read_sparse_matrix_market(beside_model(written));
+            }
+        } catch (const InputError& e) {
+            fail(t.get(key), path, e.what());
+        }
+        if (m.rows != n || m.cols != n)
+            fail(t.get(key), path, written + ": is " + std::to_string(m.rows) + " x " + std::to_string(m.cols) +
+                                       ", the structure has " + std::to_string(n) + " dofs");
+        SparseMatrixD A(static_cast<int>(n), static_cast<int>(n));
+        A.setFromTriplets(m.entries.begin(), m.entries.end());
+        const SparseMatrixD At = A.transpose();
+        const SparseMatrixD asym = A - At;
+        double largest = 0.0, off = 0.0;
+        for (const auto& e : m.entries) largest = std::max(largest, std::fabs(e.value()));
+        for (int c = 0; c < asym.outerSize(); ++c)
+            for (SparseMatrixD::InnerIterator it(asym, c); it; ++it) off = std::max(off, std::fabs(it.value()));
+        if (off > 1e-12 * largest)
+            fail(t.get(key), path, written + ": is not symmetric (|A - A^T| up to " + show(off) + ", largest |entry| " +
+                                       show(largest) + ")");
+        return (A + At) / 2.0;
+    }
+
+    /// The dofs a [reduction] keeps physical: every dof name the model's
+    /// tables use (as a value or as a key: elements, loads, forcing, initial
+    /// values, directions) and those of reduction.boundary, in dof order.
+    std::vector<std::size_t> boundary_dofs(const toml::table& root, const std::vector<std::string>& names) {
+        std::unordered_map<std::string, std::size_t> index;
+        for (std::size_t i = 0; i < names.size(); ++i) index.emplace(names[i], i);
+        std::vector<char> named(names.size(), 0);
+        auto mark = [&](const std::string& s) {
+            if (const auto it = index.find(s); it != index.end()) named[it->second] = 1;
+        };
+        std::function<void(const toml::node&)> walk = [&](const toml::node& node) {
+            if (const auto* str = node.as_string()) mark(str->get());
+            if (const auto* tab = node.as_table())
+                for (auto&& [k, v] : *tab) mark(std::string(k.str())), walk(v);
+            if (const auto* arr = node.as_array())
+                for (const toml::node& v : *arr) walk(v);
+        };
+        for (auto&& [k, v] : root)
+            if (k.str() != "structure" && k.str() != "parameters" && k.str() != "name" && k.str() != "description")
+                walk(v);
+        std::vector<std::size_t> out;
+        for (std::size_t i = 0; i < names.size(); ++i)
+            if (named[i]) out.push_back(i);
+        return out;
+    }
+
+    /// [reduction]: the structure's matrices read sparse and reduced
+    /// (reduction.h); M, K, C and `names` become the reduced model's.
+    void reduce_structure(const toml::table& root, const toml::table& t, std::vector<std::string>& names,
+                          MarketMatrix& M, MarketMatrix& K, std::optional<MarketMatrix>& C) {
+        const toml::table* r = optional_table(root, "", "reduction");
+        check_keys(*r, "reduction", {"method", "modes", "cutoff", "boundary", "prefix"});
+        ReductionSource& red = model_.reduction;
+        red.present = true;
+        red.method = "craig-bampton";
+        if (const toml::node* m = r->get("method")) {
+            red.method = string_value(*m, "reduction.method");
+            if (red.method != "craig-bampton")
+                fail(m, "reduction.method", "'" + excerpt(red.method) + "' is not a method (expected \"craig-bampton\")");
+        }
+        ReductionSettings settings;
+        const toml::node* modes = r->get("modes");
+        const toml::node* cutoff = r->get("cutoff");
+        if ((modes != nullptr) == (cutoff != nullptr))
+            fail_at(table_line(*r, "reduction"), "reduction",
+                    "give exactly one of 'modes' (how many fixed-interface modes) and 'cutoff' (rad/s)");
+        if (modes) {
+            const auto* i = modes->as_integer();
+            if (!i || i->get() < 0) fail(modes, "reduction.modes", "expected an integer >= 0");
+            settings.modes = static_cast<std::size_t>(i->get());
+        } else {
+            settings.cutoff = number(*cutoff, "reduction.cutoff");
+            if (!std::isfinite(settings.cutoff) || !(settings.cutoff > 0.0))
+                fail(cutoff, "reduction.cutoff", "must be a finite circular frequency > 0 (rad/s), got " + show(settings.cutoff));
+        }
+        std::string prefix = "q";
+        if (const toml::node* p = r->get("prefix")) prefix = string_value(*p, "reduction.prefix");
+        if (const toml::node* b = r->get("boundary")) {
+            const toml::array* list = b->as_array();
+            if (!list) fail(b, "reduction.boundary", "expected a list of dof names");
+            for (std::size_t i = 0; i < list->size(); ++i) {
+                const std::string key = "reduction.boundary[" + std::to_string(i + 1) + "]";
+                const std::string name = string_value(*list->get(i), key);
+                if (std::find(names.begin(), names.end(), name) == names.end())
+                    fail(list->get(i), key, "'" + excerpt(name) + "' is not a dof of the structure");
+            }
+        }
+        const std::size_t n = names.size();
+        const SparseMatrixD Ms = sparse_matrix_file(t, "mass", model_.structure.mass_file, n);
+        const SparseMatrixD Ks = sparse_matrix_file(t, "stiffness", model_.structure.stiffness_file, n);
+        std::optional<SparseMatrixD> Cs;
+        if (t.get("damping")) Cs = sparse_matrix_file(t, "damping", model_.structure.damping_file, n);
+        const std::vector<std::size_t> boundary = boundary_dofs(root, names);
+        if (boundary.empty())
+            fail_at(table_line(*r, "reduction"), "reduction",
+                    "no dof of the structure is named by an element, load, forcing or initial value, nor in "
+                    "reduction.boundary: nothing would stay physical");
+        ReducedStructure out;
+        if (const std::string why = craig_bampton(Ms, Ks, Cs ? &*Cs : nullptr, boundary, settings, out); !why.empty())
+            fail_at(table_line(*r, "reduction"), "reduction", why);
+        const auto nr = static_cast<std::size_t>(out.M.rows());
+        if (nr > kMaxMatrixDimension)
+            fail(modes ? modes : cutoff, modes ? "reduction.modes" : "reduction.cutoff",
+                 "the reduced model has " + std::to_string(nr) + " dofs (" + std::to_string(boundary.size()) +
+                     " boundary, " + std::to_string(nr - boundary.size()) + " modes), more than the " +
+                     std::to_string(kMaxMatrixDimension) + " hsnc solves");
+        std::vector<std::string> kept;
+        for (const std::size_t i : boundary) kept.push_back(names[i]);
+        // The interior dofs are gone: their names no longer name anything.
+        for (std::size_t i = 0, b = 0; i < n; ++i)
+            if (b < boundary.size() && boundary[b] == i) ++b;
+            else element_names_.erase(names[i]);
+        red.modal_names.clear();
+        for (std::size_t k = 1; k + boundary.size() <= nr; ++k) {
+            const std::string q = prefix + std::to_string(k);
+            if (element_names_.count(q))
+                fail(r->get("prefix") ? r->get("prefix") : r, "reduction.prefix",
+                     "the modal coordinate '" + excerpt(q) + "' is already the name of " + element_names_.at(q) +
+                         "; choose another prefix");
+            red.modal_names.push_back(q);
+            kept.push_back(q);
+        }
+        for (const std::string& q : red.modal_names) element_names_.emplace(q, "reduction (a modal coordinate)");
+        names = kept;
+        red.full_dofs = n;
+        red.boundary = boundary.size();
+        red.interface_omega.assign(out.interface_omega.begin(), out.interface_omega.end());
+        auto dense = [nr](const Eigen::MatrixXd& A, std::vector<double>& flat) {
+            MarketMatrix m;
+            m.rows = m.cols = nr;
+            m.values.resize(nr * nr);
+            for (std::size_t i = 0; i < nr; ++i)
+                for (std::size_t j = 0; j < nr; ++j)
+                    m.values[i * nr + j] = A(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+            flat = m.values;
+            return m;
+        };
+        M = dense(out.M, red.M);
+        K = dense(out.K, red.K);
+        if (Cs) C = dense(out.C, red.C);
+        if (full_frequencies_) {  // the reduction's accuracy: its lowest frequencies against the full model's
+            const std::size_t count = std::min<std::size_t>(nr, kReportedFrequencies);
+            Eigen::VectorXd full;
+            red.full_omega_problem = lowest_frequencies(Ms, Ks, count, full);
+            red.full_omega.assign(full.begin(), full.end());
+            const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(out.K, out.M, Eigen::EigenvaluesOnly);
+            for (Eigen::Index k = 0; k < static_cast<Eigen::Index>(count); ++k)
+                red.reduced_omega.push_back(std::sqrt(std::max(0.0, es.eigenvalues()(k))));
+        }
+    }
+
     void read_structure(const toml::table& root) {
         if (const toml::node* m = root.get("mass"))
             fail(m, "mass", "[[mass]] and [structure] exclude each other (a structure's bodies are its dofs)");
@@ -518,7 +698,9 @@ private:
         const toml::array* list = dofs->as_array();
         if (!list || list->empty())
             fail(dofs, "structure.dofs", "expected a non-empty list of dof names, e.g. [\"u1\", \"u2\"]");
-        if (list->size() > kMaxMatrixDimension) fail(dofs, "structure.dofs", too_many_dofs(list->size()));
+        const bool reduced = root.get("reduction") != nullptr;
+        if (list->size() > (reduced ? kMaxSparseDimension : kMaxMatrixDimension))
+            fail(dofs, "structure.dofs", too_many_dofs(list->size()));
         std::vector<std::string> names;
         for (std::size_t i = 0; i < list->size(); ++i) {
             const std::string key = "structure.dofs[" + std::to_string(i + 1) + "]";
@@ -527,10 +709,15 @@ private:
             element_names_.emplace(name, key);
             names.push_back(name);
         }
-        MarketMatrix M = matrix_file(*t, "mass", model_.structure.mass_file);
-        MarketMatrix K = matrix_file(*t, "stiffness", model_.structure.stiffness_file);
+        MarketMatrix M, K;
         std::optional<MarketMatrix> damping;
-        if (t->get("damping")) damping = matrix_file(*t, "damping", model_.structure.damping_file);
+        if (reduced) {
+            reduce_structure(root, *t, names, M, K, damping);
+        } else {
+            M = matrix_file(*t, "mass", model_.structure.mass_file);
+            K = matrix_file(*t, "stiffness", model_.structure.stiffness_file);
+            if (t->get("damping")) damping = matrix_file(*t, "damping", model_.structure.damping_file);
+        }
         // Massless dofs (zero rows of M) condensed statically before the checks (structure.h).
         if (const std::string why =
                 condense_massless(M, K, damping ? &*damping : nullptr, names, model_.condensation);
@@ -1002,6 +1189,7 @@ private:
 
     std::string source_;
     std::optional<double> t_end_override_;
+    bool full_frequencies_ = false;  ///< ModelOverrides::full_frequencies
     std::map<std::string, Override> set_, x0_, v0_;
     std::vector<std::string> parameter_names_;     ///< all parameters, file order (implicit g first)
     std::unordered_map<std::string, double> values_;  ///< parameters evaluated so far

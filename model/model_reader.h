@@ -63,6 +63,9 @@ struct ModelOverrides {
     std::vector<std::string> x0;   ///< initial position overrides
     std::vector<std::string> v0;   ///< initial velocity overrides
     std::optional<double> t_end;   ///< --t-end: replaces [simulate].t_end, which is then not checked against t0
+    /// With [reduction]: also solve the full structure's lowest frequencies
+    /// (ReductionSource::full_omega, for `check` and `reduce`; a sparse eigensolve).
+    bool full_frequencies = false;
 };
 
 /// `overrides` with `t_end` from a --t-end flag (NaN: the flag was not given).

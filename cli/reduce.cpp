@@ -1,0 +1,126 @@
+// hsnc reduce MODEL -o DIR -- write the reduced structure of a model with
+// [reduction] (interface.md "Reduction of a large structure"): its M, K, C
+// as Matrix Market files, the dof map, the frequencies of the full and the
+// reduced structure, and a [structure] table that reads them.
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "commands.h"
+#include "error.h"
+#include "model_reader.h"
+#include "output_file.h"
+
+namespace hsnc::cli {
+namespace {
+
+std::string num(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+/// The lower triangle of a symmetric n x n row-major matrix, Matrix Market coordinate.
+std::string market(const std::vector<double>& A, std::size_t n) {
+    std::ostringstream body;
+    std::size_t nnz = 0;
+    for (std::size_t j = 0; j < n; ++j)
+        for (std::size_t i = j; i < n; ++i)
+            if (const double v = A[i * n + j]; v != 0.0) body << i + 1 << " " << j + 1 << " " << num(v) << "\n", ++nnz;
+    return "%%MatrixMarket matrix coordinate real symmetric\n% written by hsnc reduce\n" + std::to_string(n) + " " +
+           std::to_string(n) + " " + std::to_string(nnz) + "\n" + body.str();
+}
+
+std::string dof_map(const Model& model) {
+    const ReductionSource& r = model.reduction;
+    std::ostringstream out;
+    out << "index,name,kind,omega\n";
+    for (std::size_t i = 0; i < model.dof(); ++i) {
+        const bool mode = i >= r.boundary;
+        out << i + 1 << "," << model.masses[i].name << "," << (mode ? "mode" : "boundary") << ","
+            << (mode ? num(r.interface_omega[i - r.boundary]) : std::string()) << "\n";
+    }
+    return out.str();
+}
+
+std::string frequencies(const ReductionSource& r) {
+    std::ostringstream out;
+    out << "mode,omega_full,omega_reduced,relative_error\n";
+    for (std::size_t k = 0; k < r.reduced_omega.size(); ++k) {
+        const bool full = k < r.full_omega.size();
+        out << k + 1 << "," << (full ? num(r.full_omega[k]) : "") << "," << num(r.reduced_omega[k]) << ","
+            << (full && r.full_omega[k] > 0.0 ? num((r.reduced_omega[k] - r.full_omega[k]) / r.full_omega[k]) : "")
+            << "\n";
+    }
+    return out.str();
+}
+
+std::string structure_table(const Model& model) {
+    const ReductionSource& r = model.reduction;
+    std::ostringstream out;
+    out << "# hsnc reduce of model '" << model.name << "': " << r.method << ", " << r.full_dofs << " dofs -> "
+        << r.boundary << " boundary dofs + " << r.modal_names.size() << " fixed-interface modes\n"
+        << "# (paths relative to this directory)\n[structure]\ndofs = [";
+    for (std::size_t i = 0; i < model.dof(); ++i) out << (i ? ", " : "") << "\"" << model.masses[i].name << "\"";
+    out << "]\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n";
+    if (!r.C.empty()) out << "damping = \"C.mtx\"\n";
+    return out.str();
+}
+
+}  // namespace
+
+void add_reduce(CLI::App& app, int& exit_code) {
+    auto* sub = app.add_subcommand(
+        "reduce", "Write the reduced structure of a model with [reduction]: M.mtx, K.mtx (C.mtx), dofs.csv, "
+                  "frequencies.csv and structure.toml");
+    auto model_path = std::make_shared<std::string>();
+    auto out_dir = std::make_shared<std::string>();
+    sub->add_option("MODEL", *model_path, "model file (TOML) with [structure] and [reduction]")->required();
+    sub->add_option("-o,--out-dir", *out_dir, "directory for the files (created if needed)")->required();
+    sub->callback([&exit_code, model_path, out_dir] {
+        if (out_dir->empty()) throw InputError("reduce: -o '': empty output directory (write -o . for the current directory)");
+        ModelOverrides overrides;
+        overrides.full_frequencies = true;
+        const Model model = read_model(*model_path, overrides);
+        if (!model.reduction.present)
+            throw InputError("reduce: " + *model_path + " has no [reduction] table: there is nothing to reduce");
+        struct stat st {};
+        if (::stat(out_dir->c_str(), &st) != 0) {
+            if (::mkdir(out_dir->c_str(), 0777) != 0)
+                throw InputError("reduce: -o " + *out_dir + ": cannot create the directory: " + std::strerror(errno));
+        } else if (!S_ISDIR(st.st_mode)) {
+            throw InputError("reduce: -o " + *out_dir + ": exists and is not a directory");
+        }
+        const ReductionSource& r = model.reduction;
+        const std::size_t n = model.dof();
+        std::vector<std::pair<std::string, std::string>> files = {
+            {"M.mtx", market(r.M, n)}, {"K.mtx", market(r.K, n)}};
+        if (!r.C.empty()) files.emplace_back("C.mtx", market(r.C, n));
+        files.emplace_back("dofs.csv", dof_map(model));
+        files.emplace_back("frequencies.csv", frequencies(r));
+        files.emplace_back("structure.toml", structure_table(model));
+        std::vector<OutputTarget> targets;
+        for (const auto& f : files) targets.push_back(check_output("-o", *out_dir + "/" + f.first));
+        for (std::size_t i = 0; i < files.size(); ++i) {
+            OutputFile out(targets[i]);
+            out.write(files[i].second.data(), files[i].second.size());
+            out.commit();
+        }
+        std::cout << "reduced '" << model.name << "': " << r.full_dofs << " dofs -> " << r.boundary
+                  << " boundary dofs + " << r.modal_names.size() << " fixed-interface modes; wrote";
+        for (const auto& f : files) std::cout << " " << f.first;
+        std::cout << " to " << *out_dir << "\n";
+        if (!r.full_omega_problem.empty())
+            std::cerr << "hsnc reduce: the full structure's frequencies are not in frequencies.csv: "
+                      << r.full_omega_problem << "\n";
+        exit_code = 0;
+    });
+}
+
+}  // namespace hsnc::cli

@@ -1,0 +1,192 @@
+#include "reduction.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
+#include <Spectra/MatOp/SparseSymMatProd.h>
+#include <Spectra/SymGEigsShiftSolver.h>
+
+namespace hsnc {
+namespace {
+
+using Index = Eigen::Index;
+
+/// Below this many dofs an eigenproblem is solved dense (Lanczos needs
+/// room above the wanted modes, and a dense solve is quick there).
+constexpr Index kDenseEigenLimit = 400;
+
+/// Spectra's shift-and-invert operator y = (K - sigma M)^-1 x through a
+/// sparse LDL^T (Spectra's own wrapper factors with a sparse LU).
+class ShiftInvert {
+public:
+    using Scalar = double;
+    ShiftInvert(const SparseMatrixD& K, const SparseMatrixD& M) : K_(K), M_(M) {}
+    Index rows() const { return K_.rows(); }
+    Index cols() const { return K_.cols(); }
+    void set_shift(double sigma) {
+        const SparseMatrixD A = K_ - sigma * M_;
+        ldlt_.compute(A);
+        ok_ = ldlt_.info() == Eigen::Success;
+    }
+    void perform_op(const double* x, double* y) const {
+        Eigen::Map<Eigen::VectorXd>(y, rows()) = ldlt_.solve(Eigen::Map<const Eigen::VectorXd>(x, cols()));
+    }
+    bool ok() const { return ok_; }
+
+private:
+    const SparseMatrixD& K_;
+    const SparseMatrixD& M_;
+    Eigen::SimplicialLDLT<SparseMatrixD> ldlt_;
+    bool ok_ = false;
+};
+
+/// Each mode scaled to phi^T M phi = 1 with its largest |component| (the
+/// first of equals) positive, so the basis is the same on every machine.
+void normalise(const SparseMatrixD& M, Eigen::MatrixXd& modes) {
+    for (Index k = 0; k < modes.cols(); ++k) {
+        auto phi = modes.col(k);
+        Index at = 0;
+        phi.cwiseAbs().maxCoeff(&at);
+        const double norm = std::sqrt(phi.dot(M * phi));
+        phi *= (phi(at) < 0.0 ? -1.0 : 1.0) / norm;
+    }
+}
+
+/// The `count` lowest eigenpairs of K phi = lambda M phi (count < n), ascending.
+std::string lowest_modes(const SparseMatrixD& M, const SparseMatrixD& K, Index count, Eigen::VectorXd& lambda,
+                         Eigen::MatrixXd& modes) {
+    const Index n = K.rows();
+    if (n <= kDenseEigenLimit || 2 * count + 1 > n) {
+        const Eigen::MatrixXd Kd = K, Md = M;
+        const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Kd, Md);
+        if (es.info() != Eigen::Success) return "the dense generalized eigensolver failed (M not positive definite?)";
+        lambda = es.eigenvalues().head(count);
+        modes = es.eigenvectors().leftCols(count);
+    } else {
+        ShiftInvert op(K, M);
+        Spectra::SparseSymMatProd<double> Mop(M);
+        const Index ncv = std::min(n, std::max<Index>(2 * count + 1, 20));
+        Spectra::SymGEigsShiftSolver<ShiftInvert, Spectra::SparseSymMatProd<double>, Spectra::GEigsMode::ShiftInvert>
+            solver(op, Mop, count, ncv, 0.0);
+        if (!op.ok()) return "K is singular (a part moves rigidly)";
+        solver.init();
+        solver.compute(Spectra::SortRule::LargestMagn, 1000, 1e-12);
+        if (solver.info() != Spectra::CompInfo::Successful)
+            return "the Lanczos eigensolver did not converge on the " + std::to_string(count) + " lowest modes";
+        lambda = solver.eigenvalues().reverse();  // Spectra sorts 1/lambda largest first: lambda descending
+        modes = solver.eigenvectors().rowwise().reverse();
+    }
+    normalise(M, modes);
+    return "";
+}
+
+/// A's blocks over the boundary (b[i] >= 0: its boundary index) and the
+/// interior (in[i] >= 0: its interior index).
+struct Blocks {
+    SparseMatrixD BB, IB, II;
+};
+Blocks split(const SparseMatrixD& A, const std::vector<int>& b, const std::vector<int>& in, Index nb, Index ni) {
+    std::vector<Eigen::Triplet<double, int>> bb, ib, ii;
+    for (Index c = 0; c < A.outerSize(); ++c)
+        for (SparseMatrixD::InnerIterator it(A, c); it; ++it) {
+            const auto r = static_cast<std::size_t>(it.row()), col = static_cast<std::size_t>(it.col());
+            if (b[r] >= 0 && b[col] >= 0) bb.emplace_back(b[r], b[col], it.value());
+            else if (in[r] >= 0 && b[col] >= 0) ib.emplace_back(in[r], b[col], it.value());
+            else if (in[r] >= 0 && in[col] >= 0) ii.emplace_back(in[r], in[col], it.value());
+        }
+    Blocks out{SparseMatrixD(nb, nb), SparseMatrixD(ni, nb), SparseMatrixD(ni, ni)};
+    out.BB.setFromTriplets(bb.begin(), bb.end());
+    out.IB.setFromTriplets(ib.begin(), ib.end());
+    out.II.setFromTriplets(ii.begin(), ii.end());
+    return out;
+}
+
+/// T^T A T for T = [I 0; Psi Phi] from A's blocks (A symmetric), symmetrised.
+Eigen::MatrixXd project(const Blocks& A, const Eigen::MatrixXd& Psi, const Eigen::MatrixXd& Phi) {
+    const Index nb = Psi.cols(), nq = Phi.cols();
+    // A T's rows over B and I: [A_BB + A_BI Psi, A_BI Phi ; A_IB + A_II Psi, A_II Phi].
+    const Eigen::MatrixXd AIT_b = Eigen::MatrixXd(A.IB) + A.II * Psi;
+    const Eigen::MatrixXd AIT_q = A.II * Phi;
+    const Eigen::MatrixXd ABT_b = Eigen::MatrixXd(A.BB) + A.IB.transpose() * Psi;
+    const Eigen::MatrixXd ABT_q = A.IB.transpose() * Phi;
+    Eigen::MatrixXd R(nb + nq, nb + nq);
+    R.topLeftCorner(nb, nb) = ABT_b + Psi.transpose() * AIT_b;
+    R.topRightCorner(nb, nq) = ABT_q + Psi.transpose() * AIT_q;
+    R.bottomLeftCorner(nq, nb) = Phi.transpose() * AIT_b;
+    R.bottomRightCorner(nq, nq) = Phi.transpose() * AIT_q;
+    return (R + R.transpose()) / 2.0;
+}
+
+}  // namespace
+
+std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
+                          const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
+                          ReducedStructure& out) {
+    const auto n = static_cast<std::size_t>(K.rows());
+    std::vector<int> b(n, -1), in(n, -1);
+    int nb = 0, ni = 0;
+    for (const std::size_t i : boundary) b[i] = nb++;
+    for (std::size_t i = 0; i < n; ++i)
+        if (b[i] < 0) in[i] = ni++;
+    if (ni == 0) return "every dof is a boundary dof: there is nothing to reduce";
+    const Blocks Mb = split(M, b, in, nb, ni), Kb = split(K, b, in, nb, ni);
+
+    // Static constraint modes: K_II Psi = -K_IB.
+    Eigen::SimplicialLDLT<SparseMatrixD> kii(Kb.II);
+    if (kii.info() != Eigen::Success)
+        return "K_II (the interior with the boundary held) is singular: a part moves rigidly once the boundary is "
+               "held; name a dof of that part in [reduction].boundary";
+    const Eigen::MatrixXd Psi = -kii.solve(Eigen::MatrixXd(Kb.IB));
+    if (kii.info() != Eigen::Success || !Psi.allFinite()) return "the static constraint modes could not be solved";
+
+    // Fixed-interface modes: `modes` of them, or every one below the cut-off.
+    Eigen::VectorXd lambda;
+    Eigen::MatrixXd Phi;
+    if (settings.cutoff > 0.0) {
+        const double limit = settings.cutoff * settings.cutoff;
+        for (Index want = std::min<Index>(10, ni);; want = std::min<Index>(2 * want, ni)) {
+            if (std::string why = lowest_modes(Mb.II, Kb.II, want, lambda, Phi); !why.empty()) return why;
+            if (want == ni || lambda(want - 1) > limit) break;
+        }
+        const auto keep = static_cast<Index>(std::count_if(lambda.begin(), lambda.end(), [&](double l) { return l <= limit; }));
+        lambda.conservativeResize(keep);
+        Phi.conservativeResize(Eigen::NoChange, keep);
+    } else {
+        if (settings.modes > static_cast<std::size_t>(ni))
+            return "modes = " + std::to_string(settings.modes) + " is more than the " + std::to_string(ni) +
+                   " interior dofs";
+        if (settings.modes > 0)
+            if (std::string why = lowest_modes(Mb.II, Kb.II, static_cast<Index>(settings.modes), lambda, Phi); !why.empty())
+                return why;
+        if (settings.modes == 0) Phi.resize(ni, 0), lambda.resize(0);
+    }
+    if ((lambda.array() <= 0.0).any()) return "a fixed-interface mode has omega^2 <= 0 (K_II is not positive definite)";
+
+    out.boundary = boundary;
+    out.full_dofs = n;
+    out.interface_omega = lambda.array().sqrt();
+    out.M = project(Mb, Psi, Phi);
+    // K_r in its closed form: the boundary's Schur complement and Lambda, no coupling.
+    const Index nq = Phi.cols();
+    out.K = Eigen::MatrixXd::Zero(nb + nq, nb + nq);
+    const Eigen::MatrixXd S = Eigen::MatrixXd(Kb.BB) + Eigen::MatrixXd(Kb.IB.transpose() * Psi);
+    out.K.topLeftCorner(nb, nb) = (S + S.transpose()) / 2.0;
+    for (Index k = 0; k < nq; ++k) out.K(nb + k, nb + k) = lambda(k);
+    if (C) out.C = project(split(*C, b, in, nb, ni), Psi, Phi);
+    else out.C.resize(0, 0);
+    return "";
+}
+
+std::string lowest_frequencies(const SparseMatrixD& M, const SparseMatrixD& K, std::size_t count, Eigen::VectorXd& omega) {
+    const auto want = std::min<Index>(static_cast<Index>(count), K.rows() - 1);
+    Eigen::VectorXd lambda;
+    Eigen::MatrixXd modes;
+    if (want < 1) return "the model has a single dof";
+    if (std::string why = lowest_modes(M, K, want, lambda, modes); !why.empty()) return why;
+    omega = lambda.cwiseMax(0.0).cwiseSqrt();
+    return "";
+}
+
+}  // namespace hsnc

@@ -1,0 +1,64 @@
+// hsnc -- reduction of a large structure to the dofs its elements act on
+// ([reduction], interface.md "Reduction of a large structure").
+//
+// Craig-Bampton: the boundary dofs B (every dof the model's elements, loads,
+// forcing and initial values name, and those listed in [reduction].boundary)
+// stay physical; the interior I is spanned by the static constraint modes
+// Psi = -K_II^-1 K_IB and the lowest fixed-interface modes Phi
+// (K_II Phi = M_II Phi Lambda, Phi^T M_II Phi = I):
+//     x = T [x_B; q],   T = [ I  0 ; Psi  Phi ],
+//     M_r = T^T M T,  K_r = T^T K T = [ K_BB + K_BI Psi  0 ; 0  Lambda ],  C_r = T^T C T.
+// The reduced model is exact for the static response to forces on B and
+// for every motion of B alone with the interior quasi-static; its linear
+// frequencies bound the full model's from above (Rayleigh-Ritz) and reach
+// them as modes grow. Contacts, frictions and Jenkins elements act on B, so
+// every configuration of the reduced model is the Ritz projection of the
+// full model's configuration on the same basis.
+//
+// The sparse factorisation of K_II (and of K for the full model's
+// frequencies) is Eigen's simplicial LDL^T with AMD ordering; the
+// fixed-interface modes come from Spectra's shift-and-invert Lanczos (a
+// dense generalized eigensolver when the interior is small).
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCore>
+
+namespace hsnc {
+
+using SparseMatrixD = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+struct ReductionSettings {
+    std::size_t modes = 0;  ///< fixed-interface modes kept (0 when `cutoff` decides)
+    double cutoff = 0.0;    ///< keep every fixed-interface mode with omega <= cutoff (rad/s), when > 0
+};
+
+/// The reduced structure: boundary dofs (full-model order), then the modal
+/// coordinates; dense matrices in that order.
+struct ReducedStructure {
+    std::vector<std::size_t> boundary;  ///< full-model index of each boundary dof
+    Eigen::MatrixXd M, K, C;            ///< C empty when the full model has none
+    Eigen::VectorXd interface_omega;    ///< the kept fixed-interface modes' circular frequencies, rad/s
+    std::size_t full_dofs = 0;
+};
+
+/// Craig-Bampton reduction of (M, K, C) to `boundary` (sorted, distinct
+/// full-model indices) plus the fixed-interface modes `settings` asks for.
+/// Returns "" and fills `out`, or the reason it cannot (K_II singular: the
+/// interior moves rigidly once B is held; more modes than interior dofs;
+/// an eigensolver that does not converge). `C` may be null.
+std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
+                          const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
+                          ReducedStructure& out);
+
+/// The `count` lowest circular frequencies (rad/s) of K x = omega^2 M x, ascending;
+/// "" or the reason they cannot be computed (K singular with M, a solver
+/// that does not converge). Dense below a few hundred dofs, else shift-and-invert Lanczos.
+std::string lowest_frequencies(const SparseMatrixD& M, const SparseMatrixD& K, std::size_t count,
+                               Eigen::VectorXd& omega);
+
+}  // namespace hsnc

@@ -1,0 +1,272 @@
+// [reduction]: a structure read sparse and reduced by Craig-Bampton to the
+// dofs its elements name plus fixed-interface modes (model/reduction.h).
+// Checked against what does not depend on hsnc's own reduction:
+//  - the reduced frequencies bound the full model's (a dense generalized
+//    eigensolve of the test's own M, K) from above, come closer as modes
+//    grow, and equal them when every interior mode is kept;
+//  - the static tip flexibility of a cantilever, L^3 / (3 EI), which cubic
+//    beam elements reproduce exactly: Craig-Bampton keeps it exactly;
+//  - a tip stop on the reduced cantilever against the same stop on the
+//    full model (the reduction error shrinking with the modes kept) and
+//    against CVODE on the reduced model;
+//  - `hsnc reduce` writes matrices that, read back as a [structure], give
+//    the reduced model's events bit for bit;
+//  - large sparse files are read only for a reduction, and bad input is
+//    refused by name.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "cli_runner.h"
+#include "engine_runner.h"
+#include "fe_models.h"
+#include "model_reader.h"
+#include "error.h"
+#include "matrix_market.h"
+#include "reduction.h"
+#include "temp_dir.h"
+
+namespace hsnc {
+namespace {
+
+using namespace fe;
+
+constexpr int kElements = 40;  // 80 dofs; the tip deflection is w40
+
+/// The forced cantilever, its tip against a stop, with `reduction` appended.
+std::string tip_stop(const testing::TempDir& dir, const Beam& b, const std::string& file, const std::string& reduction) {
+    return structure_model(dir, file, "reduced-cantilever", b.M, b.K, b.dofs,
+                           "[damping]\nalpha = 0.5\nbeta = 1e-4\n"
+                           "[[forcing]]\nomega = 20.0\namplitude = { w40 = 4.0 }\n"
+                           "[[contact]]\nname = \"stop\"\nbetween = [\"w40\", \"ground\"]\ngap = 0.01\nk = 2e4\n"
+                           "[simulate]\nt_end = 1.5\n" +
+                               reduction);
+}
+
+Eigen::VectorXd full_omegas(const Beam& b) {
+    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(b.K, b.M, Eigen::EigenvaluesOnly);
+    return es.eigenvalues().cwiseSqrt();
+}
+
+ModelOverrides with_frequencies() {
+    ModelOverrides o;
+    o.full_frequencies = true;
+    return o;
+}
+
+TEST(Reduction, ReducedFrequenciesBoundTheFullOnesFromAboveAndReachThemWithEveryMode) {
+    testing::TempDir dir;
+    const Beam b = cantilever(kElements);
+    const Eigen::VectorXd full = full_omegas(b);
+    double previous_error = 1.0;
+    for (const int modes : {2, 5, 10, 20, 79}) {  // 79: every interior mode (the boundary is w40 alone)
+        const Model m = read_model(tip_stop(dir, b, "m.toml", "[reduction]\nmodes = " + std::to_string(modes) + "\n"),
+                                   with_frequencies());
+        ASSERT_TRUE(m.reduction.present);
+        EXPECT_EQ(m.dof(), static_cast<std::size_t>(1 + modes));
+        EXPECT_EQ(m.masses[0].name, "w40");
+        EXPECT_EQ(m.masses[1].name, "q1");
+        ASSERT_EQ(m.reduction.full_omega.size(), m.reduction.reduced_omega.size());
+        double error = 0.0;
+        for (std::size_t k = 0; k < m.reduction.reduced_omega.size(); ++k) {
+            const double exact = full(static_cast<Eigen::Index>(k));
+            EXPECT_NEAR(m.reduction.full_omega[k], exact, 1e-9 * exact) << "the sparse eigensolve, mode " << k + 1;
+            // Rayleigh-Ritz: never below the full model's frequency (to the
+            // rounding of two double eigensolves of a beam with cond(K) ~ 1e9).
+            EXPECT_GE(m.reduction.reduced_omega[k], exact * (1.0 - 1e-9)) << modes << " modes, mode " << k + 1;
+            if (k < 2) error = std::max(error, std::fabs(m.reduction.reduced_omega[k] - exact) / exact);
+        }
+        std::printf("%2d modes: lowest two frequencies within %.3g relative\n", modes, error);
+        EXPECT_LE(error, previous_error) << "more modes should not be worse";
+        previous_error = error;
+        if (modes == 79) EXPECT_LT(std::fabs(error), 1e-9) << "every mode kept: the reduction is a change of basis";
+    }
+}
+
+TEST(Reduction, TheStaticTipFlexibilityIsKeptExactly) {
+    // Cubic elements are exact for a tip load: w = P L^3 / (3 EI) = P / 300.
+    testing::TempDir dir;
+    const Beam b = cantilever(kElements);
+    for (const int modes : {0, 3}) {
+        const Model m = read_model(tip_stop(dir, b, "m.toml", "[reduction]\nmodes = " + std::to_string(modes) + "\n"));
+        const auto n = static_cast<Eigen::Index>(m.dof());
+        const Eigen::MatrixXd K = Eigen::Map<const Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(m.reduction.K.data(), n, n);
+        const double flexibility = K.inverse()(0, 0);
+        EXPECT_NEAR(flexibility, 1.0 / 300.0, 1e-12 / 300.0) << modes << " modes";
+    }
+}
+
+TEST(Reduction, ATipStopOnTheReducedCantileverFollowsTheFullModelAndCvode) {
+    testing::TempDir dir;
+    const Beam b = cantilever(kElements);
+    const Model full = read_model(tip_stop(dir, b, "full.toml", ""));
+    const testing::Outcome exact = testing::simulate(full, 1.5, 0.0, testing::Solvers::interp);
+    ASSERT_GE(exact.events.size(), 6u);
+    double previous = 1.0;
+    for (const int modes : {4, 8, 16}) {
+        const Model m = read_model(tip_stop(dir, b, "r.toml", "[reduction]\nmodes = " + std::to_string(modes) + "\n"));
+        const testing::Outcome reduced = testing::simulate(m, 1.5, 0.0, testing::Solvers::interp);
+        const double off = event_gap(reduced, exact);
+        std::printf("%2d modes: %zu events, within %.3g s of the full model's\n", modes, reduced.events.size(), off);
+        EXPECT_LT(off, previous) << modes << " modes should follow the full model closer";
+        previous = off;
+        if (modes == 16) {
+            EXPECT_LT(off, 1e-6) << "16 modes (up to " << m.reduction.interface_omega.back() << " rad/s)";
+            const testing::Outcome cvode = testing::baseline(m, 1.5, 1e-12, 1e-14, Method::cvode);
+            const double to_cvode = event_gap(reduced, cvode);
+            std::printf("the reduced model within %.3g s of CVODE on it\n", to_cvode);
+            EXPECT_LT(to_cvode, 1e-9);
+        }
+    }
+}
+
+TEST(Reduction, TheCutoffKeepsEveryFixedInterfaceModeBelowIt) {
+    testing::TempDir dir;
+    const Beam b = cantilever(kElements);
+    const Model ten = read_model(tip_stop(dir, b, "m.toml", "[reduction]\nmodes = 10\n"));
+    const std::vector<double>& w = ten.reduction.interface_omega;
+    const double cut = (w[5] + w[6]) / 2.0;  // between the 6th and 7th
+    const Model m = read_model(tip_stop(dir, b, "c.toml", "[reduction]\ncutoff = " + num(cut) + "\n"));
+    ASSERT_EQ(m.reduction.interface_omega.size(), 6u);
+    for (std::size_t k = 0; k < 6; ++k) EXPECT_DOUBLE_EQ(m.reduction.interface_omega[k], w[k]);
+}
+
+TEST(Reduction, ReduceWritesAStructureThatGivesTheSameEventsBitForBit) {
+    testing::TempDir dir;
+    const Beam b = cantilever(kElements);
+    const std::string model = tip_stop(dir, b, "m.toml", "[reduction]\nmodes = 6\n");
+    const testing::CliRun r = testing::run_hsnc("reduce " + model + " -o " + (dir / "red"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("80 dofs -> 1 boundary dofs + 6 fixed-interface modes"), std::string::npos) << r.out;
+    std::ifstream in(dir / "red/structure.toml");
+    std::stringstream table;
+    table << in.rdbuf();
+    EXPECT_NE(table.str().find("dofs = [\"w40\", \"q1\", \"q2\", \"q3\", \"q4\", \"q5\", \"q6\"]"), std::string::npos)
+        << table.str();
+    // The same model with the written structure instead of the reduction.
+    fe::write(dir / "red/again.toml",
+              "name = \"reduced-cantilever\"\n" + table.str() +
+                  "[damping]\nalpha = 0.5\nbeta = 1e-4\n[[forcing]]\nomega = 20.0\namplitude = { w40 = 4.0 }\n"
+                  "[[contact]]\nname = \"stop\"\nbetween = [\"w40\", \"ground\"]\ngap = 0.01\nk = 2e4\n"
+                  "[simulate]\nt_end = 1.5\n");
+    const std::string a = testing::events_csv(model, "--kernels interp");
+    const std::string c = testing::events_csv(dir / "red/again.toml", "--kernels interp");
+    EXPECT_GT(std::count(a.begin(), a.end(), '\n'), 5);
+    EXPECT_EQ(a, c);
+    std::ifstream f(dir / "red/frequencies.csv");
+    std::string header, first;
+    std::getline(f, header);
+    std::getline(f, first);
+    EXPECT_EQ(header, "mode,omega_full,omega_reduced,relative_error");
+    EXPECT_EQ(first.rfind("1,", 0), 0u) << first;
+    // check reports the same comparison.
+    const testing::CliRun chk = testing::run_hsnc("check " + model);
+    ASSERT_EQ(chk.exit_code, 0) << chk.err;
+    EXPECT_NE(chk.out.find("reduction: craig-bampton, 80 dofs -> 1 boundary dofs"), std::string::npos) << chk.out;
+    EXPECT_NE(chk.out.find("lowest frequencies, rad/s"), std::string::npos) << chk.out;
+}
+
+TEST(Reduction, ALargeSparseStructureIsReadOnlyToBeReduced) {
+    // A chain of 1200 springs and masses (beyond the 500 dofs hsnc solves):
+    // refused as it is, reduced to its end dof and 8 modes it runs.
+    testing::TempDir dir;
+    const int n = 1200;
+    std::ostringstream M, K, dofs;
+    M << "%%MatrixMarket matrix coordinate real symmetric\n" << n << " " << n << " " << n << "\n";
+    K << "%%MatrixMarket matrix coordinate real symmetric\n" << n << " " << n << " " << 2 * n - 1 << "\n";
+    dofs << "[";
+    for (int i = 1; i <= n; ++i) {
+        M << i << " " << i << " 0.001\n";
+        K << i << " " << i << " " << (i < n ? 2.0e4 : 1.0e4) << "\n";
+        if (i > 1) K << i << " " << i - 1 << " -1e4\n";
+        dofs << (i > 1 ? ", " : "") << "\"u" << i << "\"";
+    }
+    dofs << "]";
+    fe::write(dir / "M.mtx", M.str());
+    fe::write(dir / "K.mtx", K.str());
+    const std::string head = "name = \"long-chain\"\n[structure]\ndofs = " + dofs.str() +
+                             "\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n[load]\nu1200 = 1.0\n";
+    fe::write(dir / "plain.toml", head);
+    const testing::CliRun plain = testing::run_hsnc("check " + (dir / "plain.toml"));
+    EXPECT_EQ(plain.exit_code, 2);
+    EXPECT_NE(plain.err.find("structure.dofs"), std::string::npos) << plain.err;
+    fe::write(dir / "reduced.toml", head + "[reduction]\nmodes = 8\n");
+    const Model m = read_model(dir / "reduced.toml", with_frequencies());
+    EXPECT_EQ(m.dof(), 9u);
+    // The chain's frequencies in closed form: omega_k = 2 sqrt(k/m) sin((2k-1) pi / (2 (2n + 1))).
+    for (std::size_t k = 0; k < 3; ++k) {
+        const double exact = 2.0 * std::sqrt(1e4 / 1e-3) * std::sin((2.0 * static_cast<double>(k) + 1.0) * M_PI / (2.0 * (2 * n + 1)));
+        EXPECT_NEAR(m.reduction.full_omega[k], exact, 1e-9 * exact) << "mode " << k + 1;
+        EXPECT_GE(m.reduction.reduced_omega[k], exact * (1.0 - 1e-11));
+        EXPECT_NEAR(m.reduction.reduced_omega[k], exact, 1e-3 * exact) << "mode " << k + 1;
+    }
+}
+
+TEST(Reduction, WhatCannotBeReducedIsRefusedByName) {
+    testing::TempDir dir;
+    const Beam b = cantilever(4);
+    auto refused = [&](const std::string& reduction, const std::string& key, const std::string& words) {
+        const std::string model = structure_model(dir, "bad.toml", "bad", b.M, b.K, b.dofs,
+                                                  "[load]\nw4 = 1.0\n" + reduction);
+        const testing::CliRun r = testing::run_hsnc("check " + model);
+        EXPECT_EQ(r.exit_code, 2) << reduction;
+        EXPECT_NE(r.err.find("key '" + key + "'"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
+    };
+    refused("[reduction]\nmodes = 3\ncutoff = 10.0\n", "reduction", "exactly one of 'modes'");
+    refused("[reduction]\n", "reduction", "exactly one of 'modes'");
+    refused("[reduction]\nmodes = 9\n", "reduction", "more than the 7 interior dofs");
+    refused("[reduction]\nmodes = -1\n", "reduction.modes", "integer >= 0");
+    refused("[reduction]\ncutoff = -5.0\n", "reduction.cutoff", "> 0");
+    refused("[reduction]\nmodes = 2\nmethod = \"rubin\"\n", "reduction.method", "craig-bampton");
+    refused("[reduction]\nmodes = 2\nboundary = [\"w9\"]\n", "reduction.boundary[1]", "not a dof");
+    // w1..w3 are interior (gone); w4 is the boundary dof the load names.
+    refused("[reduction]\nmodes = 4\nprefix = \"w\"\n", "reduction.prefix", "'w4' is already the name");
+    refused("[reduction]\nmodes = 2\nbogus = 1\n", "reduction.bogus", "");
+    // No [structure] to reduce.
+    fe::write(dir / "masses.toml", "name = \"m\"\n[[mass]]\nname = \"a\"\nm = 1.0\n[reduction]\nmodes = 1\n");
+    const testing::CliRun r = testing::run_hsnc("check " + (dir / "masses.toml"));
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("reduces a [structure]"), std::string::npos) << r.err;
+    // reduce on a model without [reduction]: exit 2, nothing written.
+    const std::string plain = structure_model(dir, "plain.toml", "plain", b.M, b.K, b.dofs, "");
+    const testing::CliRun p = testing::run_hsnc("reduce " + plain + " -o " + (dir / "out"));
+    EXPECT_EQ(p.exit_code, 2);
+    EXPECT_NE(p.err.find("no [reduction]"), std::string::npos) << p.err;
+}
+
+TEST(Reduction, AFloatingInteriorIsRefusedWithTheRemedy) {
+    // Two separate chains; only the first has a named dof: the second moves
+    // rigidly once the boundary is held.
+    testing::TempDir dir;
+    Eigen::MatrixXd M = Eigen::MatrixXd::Identity(4, 4), K = Eigen::MatrixXd::Zero(4, 4);
+    K << 2, -1, 0, 0, -1, 1, 0, 0, 0, 0, 1, -1, 0, 0, -1, 1;
+    const std::string model = structure_model(dir, "f.toml", "floating", M, K, {"a", "b", "c", "d"},
+                                              "[load]\nb = 1.0\n[reduction]\nmodes = 1\n");
+    const testing::CliRun r = testing::run_hsnc("check " + model);
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("K_II"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("[reduction].boundary"), std::string::npos) << r.err;
+}
+
+TEST(Reduction, ADuplicateEntryOfALargeFileIsNamedByItsLine) {
+    std::ostringstream text;
+    text << "%%MatrixMarket matrix coordinate real general\n600 600 3\n1 1 1.0\n600 2 3.0\n1 1 2.0\n";
+    try {
+        parse_sparse_matrix_market(text.str(), "big.mtx");
+        FAIL() << "a duplicate entry was accepted";
+    } catch (const InputError& e) {
+        EXPECT_EQ(std::string(e.what()), "big.mtx:5: entry (1, 1) is given twice");
+    }
+}
+
+}  // namespace
+}  // namespace hsnc
