@@ -62,19 +62,21 @@ void print_summary(const Model& model, std::ostream& out) {
             if (!r.interface_omega.empty())
                 out << " (omega " << num(r.interface_omega.front()) << " to " << num(r.interface_omega.back()) << " rad/s)";
             out << "\n";
-            if (!r.reduced_omega.empty()) {
-                out << "  lowest frequencies, rad/s (all contacts open): full  reduced  relative error\n";
-                for (std::size_t k = 0; k < r.reduced_omega.size(); ++k) {
+            auto table = [&](const ReductionSource::Frequencies& f, const char* contacts) {
+                if (f.reduced.empty()) return;
+                out << "  lowest frequencies, rad/s, every contact " << contacts << ": full  reduced  relative error\n";
+                for (std::size_t k = 0; k < f.reduced.size(); ++k) {
                     out << "    " << k + 1 << "  ";
-                    if (k < r.full_omega.size())
-                        out << num(r.full_omega[k]) << "  " << num(r.reduced_omega[k]) << "  "
-                            << num((r.reduced_omega[k] - r.full_omega[k]) / r.full_omega[k]);
+                    if (k < f.full.size())
+                        out << num(f.full[k]) << "  " << num(f.reduced[k]) << "  " << num((f.reduced[k] - f.full[k]) / f.full[k]);
                     else
-                        out << "-  " << num(r.reduced_omega[k]) << "  -";
+                        out << "-  " << num(f.reduced[k]) << "  -";
                     out << "\n";
                 }
-                if (!r.full_omega_problem.empty()) out << "  (full structure: " << r.full_omega_problem << ")\n";
-            }
+                if (!f.problem.empty()) out << "  (full structure: " << f.problem << ")\n";
+            };
+            table(r.open, "open");
+            table(r.closed, "closed");
         }
         if (model.condensation.present()) {
             std::string list;

@@ -74,8 +74,8 @@ int main(int argc, char** argv) {
             o.full_frequencies = true;
             const Model c = read_model(model, o);
             check.push_back(seconds_since(t0));
-            for (std::size_t k = 0; k < 3 && k < c.reduction.full_omega.size(); ++k)
-                error = std::max(error, (c.reduction.reduced_omega[k] - c.reduction.full_omega[k]) / c.reduction.full_omega[k]);
+            for (std::size_t k = 0; k < 3 && k < c.reduction.open.full.size(); ++k)
+                error = std::max(error, (c.reduction.open.reduced[k] - c.reduction.open.full[k]) / c.reduction.open.full[k]);
             t0 = bench::Clock::now();
             SimulateOptions opt;
             opt.kernels = KernelChoice::interp;

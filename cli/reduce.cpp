@@ -51,13 +51,13 @@ std::string dof_map(const Model& model) {
 
 std::string frequencies(const ReductionSource& r) {
     std::ostringstream out;
-    out << "mode,omega_full,omega_reduced,relative_error\n";
-    for (std::size_t k = 0; k < r.reduced_omega.size(); ++k) {
-        const bool full = k < r.full_omega.size();
-        out << k + 1 << "," << (full ? num(r.full_omega[k]) : "") << "," << num(r.reduced_omega[k]) << ","
-            << (full && r.full_omega[k] > 0.0 ? num((r.reduced_omega[k] - r.full_omega[k]) / r.full_omega[k]) : "")
-            << "\n";
-    }
+    out << "contacts,mode,omega_full,omega_reduced,relative_error\n";
+    for (const auto& [f, contacts] : {std::pair{&r.open, "open"}, std::pair{&r.closed, "closed"}})
+        for (std::size_t k = 0; k < f->reduced.size(); ++k) {
+            const bool full = k < f->full.size();
+            out << contacts << "," << k + 1 << "," << (full ? num(f->full[k]) : "") << "," << num(f->reduced[k]) << ","
+                << (full && f->full[k] > 0.0 ? num((f->reduced[k] - f->full[k]) / f->full[k]) : "") << "\n";
+        }
     return out.str();
 }
 
@@ -116,9 +116,10 @@ void add_reduce(CLI::App& app, int& exit_code) {
                   << " boundary dofs + " << r.modal_names.size() << " fixed-interface modes; wrote";
         for (const auto& f : files) std::cout << " " << f.first;
         std::cout << " to " << *out_dir << "\n";
-        if (!r.full_omega_problem.empty())
-            std::cerr << "hsnc reduce: the full structure's frequencies are not in frequencies.csv: "
-                      << r.full_omega_problem << "\n";
+        for (const auto* f : {&r.open, &r.closed})
+            if (!f->problem.empty())
+                std::cerr << "hsnc reduce: the full structure's frequencies (every contact "
+                          << (f == &r.open ? "open" : "closed") << ") are not in frequencies.csv: " << f->problem << "\n";
         exit_code = 0;
     });
 }

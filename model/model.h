@@ -109,12 +109,17 @@ struct ReductionSource {
     std::vector<double> interface_omega;   ///< their circular frequencies, rad/s
     /// The reduced matrices, row-major over the model's dofs (C empty when none): what `hsnc reduce` writes.
     std::vector<double> M, K, C;
+    std::vector<std::size_t> boundary_index;  ///< each boundary dof's index in the full structure
     /// Read with ModelOverrides::full_frequencies: the lowest circular
-    /// frequencies of the full and of the reduced structure (all contacts
-    /// open), at most kReportedFrequencies; `full_omega_problem` says why the
-    /// full ones are missing ("" when they are there).
-    std::vector<double> full_omega, reduced_omega;
-    std::string full_omega_problem;
+    /// frequencies (at most kReportedFrequencies) of the full and of the
+    /// reduced structure, every contact open and every contact closed
+    /// (`closed` empty without contacts); `problem` says why `full` is
+    /// missing ("" when it is there).
+    struct Frequencies {
+        std::vector<double> full, reduced;
+        std::string problem;
+    };
+    Frequencies open, closed;
 };
 inline constexpr std::size_t kReportedFrequencies = 10;
 

@@ -125,6 +125,7 @@ public:
         read_load(root);
         read_initial(root);
         check_finite_rates(root);
+        if (full_M_) compare_reduction();
         read_simulate(root);
         if (t_end_override_) {
             const double t_end = *t_end_override_;
@@ -307,11 +308,14 @@ private:
     // ---- names and bodies ----
 
     /// A name for a mass or contact: valid syntax, not reserved, not taken.
-    void check_new_name(const toml::node* where, const std::string& key, const std::string& name) const {
-        if (!is_valid_name(name)) fail(where, key, "'" + excerpt(name) + "' is not a valid name ([A-Za-z_][A-Za-z0-9_]*)");
-        if (name == "ground") fail(where, key, "'ground' is reserved for the fixed ground");
+    /// `prefix` starts each message (a dof file's "FILE:LINE: ").
+    void check_new_name(const toml::node* where, const std::string& key, const std::string& name,
+                        const std::string& prefix = "") const {
+        if (!is_valid_name(name))
+            fail(where, key, prefix + "'" + excerpt(name) + "' is not a valid name ([A-Za-z_][A-Za-z0-9_]*)");
+        if (name == "ground") fail(where, key, prefix + "'ground' is reserved for the fixed ground");
         if (const auto taken = element_names_.find(name); taken != element_names_.end())
-            fail(where, key, "name '" + excerpt(name) + "' is already used by " + taken->second);
+            fail(where, key, prefix + "name '" + excerpt(name) + "' is already used by " + taken->second);
     }
 
     /// A massless dof of [structure], condensed statically.
@@ -662,6 +666,7 @@ private:
         names = kept;
         red.full_dofs = n;
         red.boundary = boundary.size();
+        red.boundary_index = boundary;
         red.interface_omega.assign(out.interface_omega.begin(), out.interface_omega.end());
         auto dense = [nr](const Eigen::MatrixXd& A, std::vector<double>& flat) {
             MarketMatrix m;
@@ -676,15 +681,80 @@ private:
         M = dense(out.M, red.M);
         K = dense(out.K, red.K);
         if (Cs) C = dense(out.C, red.C);
-        if (full_frequencies_) {  // the reduction's accuracy: its lowest frequencies against the full model's
-            const std::size_t count = std::min<std::size_t>(nr, kReportedFrequencies);
-            Eigen::VectorXd full;
-            red.full_omega_problem = lowest_frequencies(Ms, Ks, count, full);
-            red.full_omega.assign(full.begin(), full.end());
-            const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(out.K, out.M, Eigen::EigenvaluesOnly);
-            for (Eigen::Index k = 0; k < static_cast<Eigen::Index>(count); ++k)
-                red.reduced_omega.push_back(std::sqrt(std::max(0.0, es.eigenvalues()(k))));
+        if (full_frequencies_) {  // kept for the report once the contacts are read (compare_reduction)
+            full_M_ = Ms;
+            full_K_ = Ks;
+            reduced_M_ = out.M;
+            reduced_K_ = out.K;
         }
+    }
+
+    /// The reduction's accuracy (ModelOverrides::full_frequencies): the lowest
+    /// frequencies of the full and the reduced structure with every contact
+    /// open, and with every contact closed (k w w^T added on the boundary dofs
+    /// of both; left out when a contact acts on a modal coordinate).
+    void compare_reduction() {
+        ReductionSource& red = model_.reduction;
+        const std::size_t nr = model_.dof(), count = std::min<std::size_t>(nr, kReportedFrequencies);
+        auto compare = [&](const SparseMatrixD& K, const Eigen::MatrixXd& Kr, ReductionSource::Frequencies& f) {
+            Eigen::VectorXd full;
+            f.problem = lowest_frequencies(*full_M_, K, count, full);
+            f.full.assign(full.begin(), full.end());
+            const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Kr, *reduced_M_, Eigen::EigenvaluesOnly);
+            for (Eigen::Index k = 0; k < static_cast<Eigen::Index>(count); ++k)
+                f.reduced.push_back(std::sqrt(std::max(0.0, es.eigenvalues()(k))));
+        };
+        compare(*full_K_, *reduced_K_, red.open);
+        if (model_.contacts.empty()) return;
+        std::vector<Eigen::Triplet<double, int>> add;
+        Eigen::MatrixXd Kr = *reduced_K_;
+        for (const Contact& c : model_.contacts) {
+            std::vector<std::pair<int, double>> w;  // (reduced dof, weight)
+            for_each_term(c.direction(), [&](int body, double weight) { w.emplace_back(body, weight); });
+            for (const auto& [i, wi] : w) {
+                if (static_cast<std::size_t>(i) >= red.boundary) return;  // on a modal coordinate
+                for (const auto& [j, wj] : w) {
+                    Kr(i, j) += c.k * wi * wj;
+                    add.emplace_back(static_cast<int>(red.boundary_index[static_cast<std::size_t>(i)]),
+                                     static_cast<int>(red.boundary_index[static_cast<std::size_t>(j)]), c.k * wi * wj);
+                }
+            }
+        }
+        SparseMatrixD extra(full_K_->rows(), full_K_->cols());
+        extra.setFromTriplets(add.begin(), add.end());
+        compare(*full_K_ + extra, Kr, red.closed);
+    }
+
+    /// structure.dofs = "FILE": the dof names one per line, in matrix order
+    /// (blank lines and lines starting with '#' skipped; spaces around a name
+    /// ignored). Each name is checked as a list's would be, named "FILE:LINE".
+    std::vector<std::string> dof_name_file(const toml::node& node, std::size_t limit) {
+        const std::string written = string_value(node, "structure.dofs");
+        if (written.empty() || written.find('\0') != std::string::npos)
+            fail(&node, "structure.dofs", "must name a file of dof names (one per line)");
+        const std::string path = beside_model(written);
+        note_input_file(path);
+        const FileRead file = read_regular_file(path, kMaxSparseFileBytes);
+        if (file.status != FileRead::Status::ok)
+            fail(&node, "structure.dofs", "cannot read dof file '" + written + "': " + file.problem);
+        std::vector<std::string> names;
+        std::size_t line = 0, pos = 0;
+        while (pos < file.bytes.size()) {
+            const std::size_t end = std::min(file.bytes.find('\n', pos), file.bytes.size());
+            std::string name = file.bytes.substr(pos, end - pos);
+            pos = end + 1;
+            ++line;
+            const std::size_t first = name.find_first_not_of(" \t\r"), last = name.find_last_not_of(" \t\r");
+            if (first == std::string::npos || name[first] == '#') continue;
+            name = name.substr(first, last - first + 1);
+            const std::string where = written + ":" + std::to_string(line);
+            check_new_name(&node, "structure.dofs", name, where + ": ");
+            if (names.size() == limit) fail(&node, "structure.dofs", where + ": " + too_many_dofs(limit + 1));
+            element_names_.emplace(name, "structure.dofs (" + where + ")");
+            names.push_back(name);
+        }
+        if (names.empty()) fail(&node, "structure.dofs", "'" + written + "' holds no dof name");
+        return names;
     }
 
     void read_structure(const toml::table& root) {
@@ -695,19 +765,24 @@ private:
         model_.structure.present = true;
         const toml::node* dofs = t->get("dofs");
         if (!dofs) fail_at(table_line(*t, "structure"), "structure.dofs", "required key is missing");
-        const toml::array* list = dofs->as_array();
-        if (!list || list->empty())
-            fail(dofs, "structure.dofs", "expected a non-empty list of dof names, e.g. [\"u1\", \"u2\"]");
         const bool reduced = root.get("reduction") != nullptr;
-        if (list->size() > (reduced ? kMaxSparseDimension : kMaxMatrixDimension))
-            fail(dofs, "structure.dofs", too_many_dofs(list->size()));
+        const std::size_t limit = reduced ? kMaxSparseDimension : kMaxMatrixDimension;
         std::vector<std::string> names;
-        for (std::size_t i = 0; i < list->size(); ++i) {
-            const std::string key = "structure.dofs[" + std::to_string(i + 1) + "]";
-            const std::string name = string_value(*list->get(i), key);
-            check_new_name(list->get(i), key, name);
-            element_names_.emplace(name, key);
-            names.push_back(name);
+        if (dofs->as_string()) {
+            names = dof_name_file(*dofs, limit);
+        } else {
+            const toml::array* list = dofs->as_array();
+            if (!list || list->empty())
+                fail(dofs, "structure.dofs",
+                     "expected a non-empty list of dof names, e.g. [\"u1\", \"u2\"], or the name of a file of them");
+            if (list->size() > limit) fail(dofs, "structure.dofs", too_many_dofs(list->size()));
+            for (std::size_t i = 0; i < list->size(); ++i) {
+                const std::string key = "structure.dofs[" + std::to_string(i + 1) + "]";
+                const std::string name = string_value(*list->get(i), key);
+                check_new_name(list->get(i), key, name);
+                element_names_.emplace(name, key);
+                names.push_back(name);
+            }
         }
         MarketMatrix M, K;
         std::optional<MarketMatrix> damping;
@@ -1190,6 +1265,9 @@ private:
     std::string source_;
     std::optional<double> t_end_override_;
     bool full_frequencies_ = false;  ///< ModelOverrides::full_frequencies
+    /// With full_frequencies_ and [reduction]: the full and reduced M, K until compare_reduction.
+    std::optional<SparseMatrixD> full_M_, full_K_;
+    std::optional<Eigen::MatrixXd> reduced_M_, reduced_K_;
     std::map<std::string, Override> set_, x0_, v0_;
     std::vector<std::string> parameter_names_;     ///< all parameters, file order (implicit g first)
     std::unordered_map<std::string, double> values_;  ///< parameters evaluated so far

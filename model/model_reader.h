@@ -64,7 +64,7 @@ struct ModelOverrides {
     std::vector<std::string> v0;   ///< initial velocity overrides
     std::optional<double> t_end;   ///< --t-end: replaces [simulate].t_end, which is then not checked against t0
     /// With [reduction]: also solve the full structure's lowest frequencies
-    /// (ReductionSource::full_omega, for `check` and `reduce`; a sparse eigensolve).
+    /// (ReductionSource::open and closed, for `check` and `reduce`; sparse eigensolves).
     bool full_frequencies = false;
 };
 

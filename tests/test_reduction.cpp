@@ -75,15 +75,15 @@ TEST(Reduction, ReducedFrequenciesBoundTheFullOnesFromAboveAndReachThemWithEvery
         EXPECT_EQ(m.dof(), static_cast<std::size_t>(1 + modes));
         EXPECT_EQ(m.masses[0].name, "w40");
         EXPECT_EQ(m.masses[1].name, "q1");
-        ASSERT_EQ(m.reduction.full_omega.size(), m.reduction.reduced_omega.size());
+        ASSERT_EQ(m.reduction.open.full.size(), m.reduction.open.reduced.size());
         double error = 0.0;
-        for (std::size_t k = 0; k < m.reduction.reduced_omega.size(); ++k) {
+        for (std::size_t k = 0; k < m.reduction.open.reduced.size(); ++k) {
             const double exact = full(static_cast<Eigen::Index>(k));
-            EXPECT_NEAR(m.reduction.full_omega[k], exact, 1e-9 * exact) << "the sparse eigensolve, mode " << k + 1;
+            EXPECT_NEAR(m.reduction.open.full[k], exact, 1e-9 * exact) << "the sparse eigensolve, mode " << k + 1;
             // Rayleigh-Ritz: never below the full model's frequency (to the
             // rounding of two double eigensolves of a beam with cond(K) ~ 1e9).
-            EXPECT_GE(m.reduction.reduced_omega[k], exact * (1.0 - 1e-9)) << modes << " modes, mode " << k + 1;
-            if (k < 2) error = std::max(error, std::fabs(m.reduction.reduced_omega[k] - exact) / exact);
+            EXPECT_GE(m.reduction.open.reduced[k], exact * (1.0 - 1e-9)) << modes << " modes, mode " << k + 1;
+            if (k < 2) error = std::max(error, std::fabs(m.reduction.open.reduced[k] - exact) / exact);
         }
         std::printf("%2d modes: lowest two frequencies within %.3g relative\n", modes, error);
         EXPECT_LE(error, previous_error) << "more modes should not be worse";
@@ -129,6 +129,29 @@ TEST(Reduction, ATipStopOnTheReducedCantileverFollowsTheFullModelAndCvode) {
     }
 }
 
+TEST(Reduction, TheClosedContactsFrequenciesAreThoseOfTheStiffenedStructure) {
+    // Every contact closed: the stop's k on the tip added to K, in the full
+    // structure (a dense eigensolve of the test's own K + k e e^T) and the reduced one.
+    testing::TempDir dir;
+    const Beam b = cantilever(kElements);
+    const Model m = read_model(tip_stop(dir, b, "m.toml", "[reduction]\nmodes = 12\n"), with_frequencies());
+    Eigen::MatrixXd K = b.K;
+    const Eigen::Index tip = static_cast<Eigen::Index>(std::find(b.dofs.begin(), b.dofs.end(), "w40") - b.dofs.begin());
+    K(tip, tip) += 2e4;
+    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K, b.M, Eigen::EigenvaluesOnly);
+    const auto& closed = m.reduction.closed;
+    ASSERT_EQ(closed.full.size(), 10u) << closed.problem;
+    ASSERT_EQ(closed.reduced.size(), 10u);
+    for (std::size_t k = 0; k < 10; ++k) {
+        const double exact = std::sqrt(es.eigenvalues()(static_cast<Eigen::Index>(k)));
+        EXPECT_NEAR(closed.full[k], exact, 1e-9 * exact) << "mode " << k + 1;
+        EXPECT_GE(closed.reduced[k], exact * (1.0 - 1e-9)) << "mode " << k + 1;
+        EXPECT_GT(closed.full[k], m.reduction.open.full[k] * (1.0 - 1e-12)) << "a closed stop stiffens";
+    }
+    EXPECT_GT(closed.full[0], m.reduction.open.full[0] * 1.01);
+    EXPECT_LT((closed.reduced[0] - closed.full[0]) / closed.full[0], 1e-5);
+}
+
 TEST(Reduction, TheCutoffKeepsEveryFixedInterfaceModeBelowIt) {
     testing::TempDir dir;
     const Beam b = cantilever(kElements);
@@ -166,13 +189,14 @@ TEST(Reduction, ReduceWritesAStructureThatGivesTheSameEventsBitForBit) {
     std::string header, first;
     std::getline(f, header);
     std::getline(f, first);
-    EXPECT_EQ(header, "mode,omega_full,omega_reduced,relative_error");
-    EXPECT_EQ(first.rfind("1,", 0), 0u) << first;
+    EXPECT_EQ(header, "contacts,mode,omega_full,omega_reduced,relative_error");
+    EXPECT_EQ(first.rfind("open,1,", 0), 0u) << first;
     // check reports the same comparison.
     const testing::CliRun chk = testing::run_hsnc("check " + model);
     ASSERT_EQ(chk.exit_code, 0) << chk.err;
     EXPECT_NE(chk.out.find("reduction: craig-bampton, 80 dofs -> 1 boundary dofs"), std::string::npos) << chk.out;
-    EXPECT_NE(chk.out.find("lowest frequencies, rad/s"), std::string::npos) << chk.out;
+    EXPECT_NE(chk.out.find("lowest frequencies, rad/s, every contact open"), std::string::npos) << chk.out;
+    EXPECT_NE(chk.out.find("lowest frequencies, rad/s, every contact closed"), std::string::npos) << chk.out;
 }
 
 TEST(Reduction, ALargeSparseStructureIsReadOnlyToBeReduced) {
@@ -205,10 +229,25 @@ TEST(Reduction, ALargeSparseStructureIsReadOnlyToBeReduced) {
     // The chain's frequencies in closed form: omega_k = 2 sqrt(k/m) sin((2k-1) pi / (2 (2n + 1))).
     for (std::size_t k = 0; k < 3; ++k) {
         const double exact = 2.0 * std::sqrt(1e4 / 1e-3) * std::sin((2.0 * static_cast<double>(k) + 1.0) * M_PI / (2.0 * (2 * n + 1)));
-        EXPECT_NEAR(m.reduction.full_omega[k], exact, 1e-9 * exact) << "mode " << k + 1;
-        EXPECT_GE(m.reduction.reduced_omega[k], exact * (1.0 - 1e-11));
-        EXPECT_NEAR(m.reduction.reduced_omega[k], exact, 1e-3 * exact) << "mode " << k + 1;
+        EXPECT_NEAR(m.reduction.open.full[k], exact, 1e-9 * exact) << "mode " << k + 1;
+        EXPECT_GE(m.reduction.open.reduced[k], exact * (1.0 - 1e-11));
+        EXPECT_NEAR(m.reduction.open.reduced[k], exact, 1e-3 * exact) << "mode " << k + 1;
     }
+    // The same names from a file, one per line (a comment and a blank line skipped).
+    std::string names = "# the chain's dofs\n\n";
+    for (int i = 1; i <= n; ++i) names += "u" + std::to_string(i) + "\n";
+    fe::write(dir / "dofs.txt", names);
+    fe::write(dir / "file.toml", "name = \"long-chain\"\n[structure]\ndofs = \"dofs.txt\"\nmass = \"M.mtx\"\n"
+                                 "stiffness = \"K.mtx\"\n[load]\nu1200 = 1.0\n[reduction]\nmodes = 8\n");
+    const Model f = read_model(dir / "file.toml", with_frequencies());
+    EXPECT_EQ(f.reduction.M, m.reduction.M);
+    EXPECT_EQ(f.reduction.K, m.reduction.K);
+    EXPECT_EQ(f.reduction.open.full, m.reduction.open.full);
+    fe::write(dir / "dofs.txt", "u1\nu2\nnot a name\n");
+    const testing::CliRun bad = testing::run_hsnc("check " + (dir / "file.toml"));
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_NE(bad.err.find("key 'structure.dofs': dofs.txt:3: 'not a name' is not a valid name"), std::string::npos)
+        << bad.err;
 }
 
 TEST(Reduction, WhatCannotBeReducedIsRefusedByName) {
@@ -280,14 +319,14 @@ TEST(Reduction, AHex8PlateWithATipStopReducesToItsCornerAndModes) {
     const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Eigen::MatrixXd(s.K), Eigen::MatrixXd(s.M),
                                                                         Eigen::EigenvaluesOnly);
     double worst = 0.0;
-    for (std::size_t k = 0; k < m.reduction.full_omega.size(); ++k) {
+    for (std::size_t k = 0; k < m.reduction.open.full.size(); ++k) {
         const double exact = std::sqrt(es.eigenvalues()(static_cast<Eigen::Index>(k)));
-        EXPECT_NEAR(m.reduction.full_omega[k], exact, 1e-9 * exact) << "mode " << k + 1;
-        EXPECT_GE(m.reduction.reduced_omega[k], exact * (1.0 - 1e-9)) << "mode " << k + 1;
-        if (k < 3) worst = std::max(worst, (m.reduction.reduced_omega[k] - exact) / exact);
+        EXPECT_NEAR(m.reduction.open.full[k], exact, 1e-9 * exact) << "mode " << k + 1;
+        EXPECT_GE(m.reduction.open.reduced[k], exact * (1.0 - 1e-9)) << "mode " << k + 1;
+        if (k < 3) worst = std::max(worst, (m.reduction.open.reduced[k] - exact) / exact);
     }
     std::printf("the plate's lowest three frequencies (%.4g, %.4g, %.4g rad/s) reduced within %.3g relative\n",
-                m.reduction.full_omega[0], m.reduction.full_omega[1], m.reduction.full_omega[2], worst);
+                m.reduction.open.full[0], m.reduction.open.full[1], m.reduction.open.full[2], worst);
     EXPECT_LT(worst, 1e-3);
     const testing::Outcome reduced = testing::simulate(m, 0.3, 0.0, testing::Solvers::interp);
     ASSERT_GE(reduced.events.size(), 4u) << "the corner should reach the stop";
