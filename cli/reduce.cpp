@@ -3,6 +3,7 @@
 // as Matrix Market files, the dof map, the frequencies of the full and the
 // reduced structure, and a [structure] table that reads them.
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cmath>
@@ -73,6 +74,33 @@ std::string structure_table(const Model& model) {
     return out.str();
 }
 
+/// Every file of `hsnc reduce` into `dir` (an existing directory), checked
+/// before the first is written; the command's transaction commits them together.
+void write_reduction(const Model& model, const std::string& dir) {
+    const ReductionSource& r = model.reduction;
+    const std::size_t n = model.dof();
+    std::vector<std::pair<std::string, std::string>> files = {{"M.mtx", market(r.M, n)}, {"K.mtx", market(r.K, n)}};
+    if (!r.C.empty()) files.emplace_back("C.mtx", market(r.C, n));
+    files.emplace_back("dofs.csv", dof_map(model));
+    files.emplace_back("frequencies.csv", frequencies(r));
+    files.emplace_back("structure.toml", structure_table(model));
+    std::vector<OutputTarget> targets;
+    for (const auto& f : files) targets.push_back(check_output("-o", dir + "/" + f.first));
+    for (std::size_t i = 0; i < files.size(); ++i) {
+        OutputFile out(targets[i]);
+        out.write(files[i].second.data(), files[i].second.size());
+        out.commit();
+    }
+    std::cout << "reduced '" << model.name << "': " << r.full_dofs << " dofs -> " << r.boundary << " boundary dofs + "
+              << r.modal_names.size() << " fixed-interface modes; wrote";
+    for (const auto& f : files) std::cout << " " << f.first;
+    std::cout << " to " << dir << "\n";
+    for (const auto* f : {&r.open, &r.closed})
+        if (!f->problem.empty())
+            std::cerr << "hsnc reduce: the full structure's frequencies (every contact "
+                      << (f == &r.open ? "open" : "closed") << ") are not in frequencies.csv: " << f->problem << "\n";
+}
+
 }  // namespace
 
 void add_reduce(CLI::App& app, int& exit_code) {
@@ -91,35 +119,20 @@ void add_reduce(CLI::App& app, int& exit_code) {
         if (!model.reduction.present)
             throw InputError("reduce: " + *model_path + " has no [reduction] table: there is nothing to reduce");
         struct stat st {};
+        bool created = false;
         if (::stat(out_dir->c_str(), &st) != 0) {
             if (::mkdir(out_dir->c_str(), 0777) != 0)
                 throw InputError("reduce: -o " + *out_dir + ": cannot create the directory: " + std::strerror(errno));
+            created = true;
         } else if (!S_ISDIR(st.st_mode)) {
             throw InputError("reduce: -o " + *out_dir + ": exists and is not a directory");
         }
-        const ReductionSource& r = model.reduction;
-        const std::size_t n = model.dof();
-        std::vector<std::pair<std::string, std::string>> files = {
-            {"M.mtx", market(r.M, n)}, {"K.mtx", market(r.K, n)}};
-        if (!r.C.empty()) files.emplace_back("C.mtx", market(r.C, n));
-        files.emplace_back("dofs.csv", dof_map(model));
-        files.emplace_back("frequencies.csv", frequencies(r));
-        files.emplace_back("structure.toml", structure_table(model));
-        std::vector<OutputTarget> targets;
-        for (const auto& f : files) targets.push_back(check_output("-o", *out_dir + "/" + f.first));
-        for (std::size_t i = 0; i < files.size(); ++i) {
-            OutputFile out(targets[i]);
-            out.write(files[i].second.data(), files[i].second.size());
-            out.commit();
+        try {
+            write_reduction(model, *out_dir);
+        } catch (...) {
+            if (created) ::rmdir(out_dir->c_str());  // a directory this command made stays only with its files
+            throw;
         }
-        std::cout << "reduced '" << model.name << "': " << r.full_dofs << " dofs -> " << r.boundary
-                  << " boundary dofs + " << r.modal_names.size() << " fixed-interface modes; wrote";
-        for (const auto& f : files) std::cout << " " << f.first;
-        std::cout << " to " << *out_dir << "\n";
-        for (const auto* f : {&r.open, &r.closed})
-            if (!f->problem.empty())
-                std::cerr << "hsnc reduce: the full structure's frequencies (every contact "
-                          << (f == &r.open ? "open" : "closed") << ") are not in frequencies.csv: " << f->problem << "\n";
         exit_code = 0;
     });
 }

@@ -497,7 +497,12 @@ private:
     }
 
     /// A matrix file named by key `key` of [structure]; its errors name the key and the file.
-    MarketMatrix matrix_file(const toml::table& t, const char* key, std::string& written) {
+    /// structure.KEY's file, its name checked and noted as an input of the
+    /// run: read_mat(FILE, VARIABLE) reads a .mat variable, read_market(PATH)
+    /// a Matrix Market file; their errors are named by the key.
+    template <class ReadMat, class ReadMarket>
+    auto structure_matrix(const toml::table& t, const char* key, std::string& written, ReadMat read_mat,
+                          ReadMarket read_market) {
         const std::string path = "structure." + std::string(key);
         written = required_string(t, "structure", key);
         if (written.empty()) fail(t.get(key), path, "must name a Matrix Market or .mat file");
@@ -508,41 +513,35 @@ private:
                 const char* letter = std::string(key) == "mass" ? "M" : std::string(key) == "stiffness" ? "K" : "C";
                 const auto [file, variable] = split_mat_spec(written, letter);
                 note_input_file(beside_model(file));  // no output of the run may replace it
-                return read_mat_variable(beside_model(file), variable);
+                return read_mat(beside_model(file), variable);
             }
             note_input_file(beside_model(written));
-            return read_matrix_market(beside_model(written));
+            return read_market(beside_model(written));
         } catch (const InputError& e) {
             fail(t.get(key), path, e.what());
         }
+    }
+
+    MarketMatrix matrix_file(const toml::table& t, const char* key, std::string& written) {
+        return structure_matrix(t, key, written, read_mat_variable, read_matrix_market);
     }
 
     /// A [structure] matrix that [reduction] reduces: read sparse, n x n for
     /// the n dofs, symmetric to 1e-12 of its largest entry (used as (A + A^T)/2).
     SparseMatrixD sparse_matrix_file(const toml::table& t, const char* key, std::string& written, std::size_t n) {
         const std::string path = "structure." + std::string(key);
-        written = required_string(t, "structure", key);
-        if (written.empty()) fail(t.get(key), path, "must name a Matrix Market or .mat file");
-        if (written.find('\0') != std::string::npos)
-            fail(t.get(key), path, "'" + excerpt(written) + "': a path cannot hold a NUL character");
-        SparseMarket m;
-        try {
-            if (is_mat_spec(written)) {  // .mat files are read dense (at most kMaxMatrixDimension)
-                const char* letter = std::string(key) == "mass" ? "M" : std::string(key) == "stiffness" ? "K" : "C";
-                const auto [file, variable] = split_mat_spec(written, letter);
-                note_input_file(beside_model(file));
-                const MarketMatrix d = read_mat_variable(beside_model(file), variable);
-                m.rows = d.rows, m.cols = d.cols;
+        const SparseMarket m = structure_matrix(
+            t, key, written,
+            [](const std::string& file, const std::string& variable) {  // .mat files are read dense (up to 500 rows)
+                const MarketMatrix d = read_mat_variable(file, variable);
+                SparseMarket s;
+                s.rows = d.rows, s.cols = d.cols;
                 for (std::size_t i = 0; i < d.rows; ++i)
                     for (std::size_t j = 0; j < d.cols; ++j)
-                        if (d(i, j) != 0.0) m.entries.emplace_back(static_cast<int>(i), static_cast<int>(j), d(i, j));
-            } else {
-                note_input_file(beside_model(written));
-                m = read_sparse_matrix_market(beside_model(written));
-            }
-        } catch (const InputError& e) {
-            fail(t.get(key), path, e.what());
-        }
+                        if (d(i, j) != 0.0) s.entries.emplace_back(static_cast<int>(i), static_cast<int>(j), d(i, j));
+                return s;
+            },
+            read_sparse_matrix_market);
         if (m.rows != n || m.cols != n)
             fail(t.get(key), path, written + ": is " + std::to_string(m.rows) + " x " + std::to_string(m.cols) +
                                        ", the structure has " + std::to_string(n) + " dofs");

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -276,6 +277,17 @@ TEST(Reduction, WhatCannotBeReducedIsRefusedByName) {
     const testing::CliRun r = testing::run_hsnc("check " + (dir / "masses.toml"));
     EXPECT_EQ(r.exit_code, 2);
     EXPECT_NE(r.err.find("reduces a [structure]"), std::string::npos) << r.err;
+    // reduce into the model's own folder would replace its M.mtx: exit 2, the input as it was.
+    const std::string ok = structure_model(dir, "ok.toml", "ok", b.M, b.K, b.dofs, "[load]\nw4 = 1.0\n[reduction]\nmodes = 2\n");
+    std::ifstream before_file(dir / "M.mtx");
+    const std::string before((std::istreambuf_iterator<char>(before_file)), std::istreambuf_iterator<char>());
+    const testing::CliRun own = testing::run_hsnc("reduce " + ok + " -o " + dir.path());
+    EXPECT_EQ(own.exit_code, 2);
+    EXPECT_NE(own.err.find("M.mtx"), std::string::npos) << own.err;
+    std::ifstream after_file(dir / "M.mtx");
+    const std::string after((std::istreambuf_iterator<char>(after_file)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(before, after);
+    EXPECT_FALSE(std::ifstream(dir / "dofs.csv").good()) << "no file of a failed reduce";
     // reduce on a model without [reduction]: exit 2, nothing written.
     const std::string plain = structure_model(dir, "plain.toml", "plain", b.M, b.K, b.dofs, "");
     const testing::CliRun p = testing::run_hsnc("reduce " + plain + " -o " + (dir / "out"));

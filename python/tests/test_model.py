@@ -3,7 +3,7 @@
 import numpy as np
 
 import hsnc
-from conftest import model_path, run_cli
+from conftest import model_path, read_csv, run_cli
 
 TWO_MASS = """
 name = "pair"
@@ -155,3 +155,35 @@ def test_a_contact_along_a_direction_runs_from_python_as_from_the_file(tmp_path)
     path = tmp_path / "scaled.toml"
     path.write_text(scaled)
     assert "stop  along 2 right  gap = 0.1" in run_cli("check", path).stdout
+
+
+def test_a_reduced_structure_runs_from_python_as_from_the_cli(tmp_path):
+    # A fixed-free chain of 30 masses, reduced to its end (stopped) and 4
+    # fixed-interface modes: Python reads the same reduced model as the CLI
+    # and runs the same events; its lowest frequency is the chain's closed form.
+    n, m, k = 30, 0.01, 1.0e3
+    M = "".join(f"{i} {i} {m}\n" for i in range(1, n + 1))
+    K = "".join(f"{i} {i} {2 * k if i < n else k}\n" + (f"{i} {i - 1} {-k}\n" if i > 1 else "")
+                for i in range(1, n + 1))
+    (tmp_path / "M.mtx").write_text(f"%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {n}\n" + M)
+    (tmp_path / "K.mtx").write_text(f"%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {2 * n - 1}\n" + K)
+    dofs = ", ".join(f'"u{i}"' for i in range(1, n + 1))
+    path = tmp_path / "chain.toml"
+    path.write_text(f'name = "chain"\n[structure]\ndofs = [{dofs}]\nmass = "M.mtx"\nstiffness = "K.mtx"\n'
+                    '[damping]\nalpha = 0.5\n[[forcing]]\nomega = 20.0\namplitude = { u30 = 1.0 }\n'
+                    '[[contact]]\nname = "stop"\nbetween = ["u30", "ground"]\ngap = 0.002\nk = 5e3\n'
+                    '[simulate]\nt_end = 2.0\n[reduction]\nmodes = 4\n')
+    model = hsnc.Model.from_file(path)
+    assert model.masses == ["u30", "q1", "q2", "q3", "q4"]
+    result = hsnc.simulate(model)
+    assert len(result.events) > 4
+    events = tmp_path / "events.csv"
+    run_cli("simulate", path, "--kernels", "interp", "--events", events)
+    header, rows = read_csv(events)
+    assert np.array_equal(result.events.t, np.array([float(r[header.index("t")]) for r in rows]))
+    check = run_cli("check", path).stdout
+    exact = 2 * np.sqrt(k / m) * np.sin(np.pi / (2 * (2 * n + 1)))
+    line = next(l for l in check.splitlines() if l.startswith("    1  "))
+    full, reduced = float(line.split()[1]), float(line.split()[2])
+    assert abs(full - exact) < 1e-9 * exact
+    assert exact * (1 - 1e-9) <= reduced < exact * (1 + 1e-3)  # above it (Rayleigh-Ritz), 1.6e-4 off with 4 modes
