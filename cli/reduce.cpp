@@ -15,28 +15,15 @@
 
 #include "commands.h"
 #include "error.h"
+#include "matrix_market.h"
 #include "model_reader.h"
+#include "number_text.h"
 #include "output_file.h"
 
 namespace hsnc::cli {
 namespace {
 
-std::string num(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    return buf;
-}
-
-/// The lower triangle of a symmetric n x n row-major matrix, Matrix Market coordinate.
-std::string market(const std::vector<double>& A, std::size_t n) {
-    std::ostringstream body;
-    std::size_t nnz = 0;
-    for (std::size_t j = 0; j < n; ++j)
-        for (std::size_t i = j; i < n; ++i)
-            if (const double v = A[i * n + j]; v != 0.0) body << i + 1 << " " << j + 1 << " " << num(v) << "\n", ++nnz;
-    return "%%MatrixMarket matrix coordinate real symmetric\n% written by hsnc reduce\n" + std::to_string(n) + " " +
-           std::to_string(n) + " " + std::to_string(nnz) + "\n" + body.str();
-}
+constexpr const char* kWrittenBy = "written by hsnc reduce";
 
 std::string dof_map(const Model& model) {
     const ReductionSource& r = model.reduction;
@@ -45,7 +32,7 @@ std::string dof_map(const Model& model) {
     for (std::size_t i = 0; i < model.dof(); ++i) {
         const bool mode = i >= r.boundary;
         out << i + 1 << "," << model.masses[i].name << "," << (mode ? "mode" : "boundary") << ","
-            << (mode ? num(r.interface_omega[i - r.boundary]) : std::string()) << "\n";
+            << (mode ? number_text(r.interface_omega[i - r.boundary]) : std::string()) << "\n";
     }
     return out.str();
 }
@@ -56,8 +43,8 @@ std::string frequencies(const ReductionSource& r) {
     for (const auto& [f, contacts] : {std::pair{&r.open, "open"}, std::pair{&r.closed, "closed"}})
         for (std::size_t k = 0; k < f->reduced.size(); ++k) {
             const bool full = k < f->full.size();
-            out << contacts << "," << k + 1 << "," << (full ? num(f->full[k]) : "") << "," << num(f->reduced[k]) << ","
-                << (full && f->full[k] > 0.0 ? num((f->reduced[k] - f->full[k]) / f->full[k]) : "") << "\n";
+            out << contacts << "," << k + 1 << "," << (full ? number_text(f->full[k]) : "") << "," << number_text(f->reduced[k]) << ","
+                << (full && f->full[k] > 0.0 ? number_text((f->reduced[k] - f->full[k]) / f->full[k]) : "") << "\n";
         }
     return out.str();
 }
@@ -79,8 +66,9 @@ std::string structure_table(const Model& model) {
 void write_reduction(const Model& model, const std::string& dir) {
     const ReductionSource& r = model.reduction;
     const std::size_t n = model.dof();
-    std::vector<std::pair<std::string, std::string>> files = {{"M.mtx", market(r.M, n)}, {"K.mtx", market(r.K, n)}};
-    if (!r.C.empty()) files.emplace_back("C.mtx", market(r.C, n));
+    std::vector<std::pair<std::string, std::string>> files = {{"M.mtx", symmetric_market_text(r.M, n, kWrittenBy)},
+                                                                {"K.mtx", symmetric_market_text(r.K, n, kWrittenBy)}};
+    if (!r.C.empty()) files.emplace_back("C.mtx", symmetric_market_text(r.C, n, kWrittenBy));
     files.emplace_back("dofs.csv", dof_map(model));
     files.emplace_back("frequencies.csv", frequencies(r));
     files.emplace_back("structure.toml", structure_table(model));

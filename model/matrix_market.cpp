@@ -230,4 +230,15 @@ MarketMatrix read_matrix_market(const std::string& path) {
     return parse_matrix_market(file.bytes, path);
 }
 
+std::string symmetric_market_text(const std::vector<double>& row_major, std::size_t n, const std::string& comment) {
+    std::ostringstream body;
+    body.precision(17);
+    std::size_t nnz = 0;
+    for (std::size_t j = 0; j < n; ++j)
+        for (std::size_t i = j; i < n; ++i)
+            if (const double v = row_major[i * n + j]; v != 0.0) body << i + 1 << " " << j + 1 << " " << v << "\n", ++nnz;
+    return "%%MatrixMarket matrix coordinate real symmetric\n% " + comment + "\n" + std::to_string(n) + " " +
+           std::to_string(n) + " " + std::to_string(nnz) + "\n" + body.str();
+}
+
 }  // namespace hsnc

@@ -67,4 +67,10 @@ MarketMatrix read_matrix_market(const std::string& path);
 SparseMarket parse_sparse_matrix_market(const std::string& text, const std::string& source);
 SparseMarket read_sparse_matrix_market(const std::string& path);
 
+/// A symmetric n x n matrix (row-major, n*n doubles) as the text of a
+/// Matrix Market coordinate file: its nonzero lower triangle, each value in
+/// 17 significant digits (reads back as the same double), `comment` as a
+/// `%` line after the banner.
+std::string symmetric_market_text(const std::vector<double>& row_major, std::size_t n, const std::string& comment);
+
 }  // namespace hsnc
