@@ -637,7 +637,7 @@ private:
                     "no dof of the structure is named by an element, load, forcing or initial value, nor in "
                     "reduction.boundary: nothing would stay physical");
         ReducedStructure out;
-        if (const std::string why = craig_bampton(Ms, Ks, Cs ? &*Cs : nullptr, boundary, settings, out); !why.empty())
+        if (const std::string why = craig_bampton_memo(Ms, Ks, Cs ? &*Cs : nullptr, boundary, settings, out); !why.empty())
             fail_at(table_line(*r, "reduction"), "reduction", why);
         const auto nr = static_cast<std::size_t>(out.M.rows());
         if (nr > kMaxMatrixDimension)

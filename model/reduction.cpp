@@ -1,7 +1,13 @@
 #include "reduction.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <deque>
+#include <mutex>
+#include <utility>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
@@ -187,6 +193,102 @@ std::string lowest_frequencies(const SparseMatrixD& M, const SparseMatrixD& K, s
     if (std::string why = lowest_modes(M, K, want, lambda, modes); !why.empty()) return why;
     omega = lambda.cwiseMax(0.0).cwiseSqrt();
     return "";
+}
+
+namespace {
+
+// Two 64-bit lanes, each word mixed in by the splitmix64 finaliser with its
+// own offset: a 128-bit fingerprint of the reduction's inputs.
+class Fingerprint {
+public:
+    void add(std::uint64_t w) {
+        a_ = mix(a_ ^ w);
+        b_ = mix(b_ + w + 0x9E3779B97F4A7C15ull);
+    }
+    void add(double v) {
+        std::uint64_t w = 0;
+        std::memcpy(&w, &v, sizeof w);
+        add(w);
+    }
+    void add(const SparseMatrixD& A) {
+        add(static_cast<std::uint64_t>(A.rows()));
+        add(static_cast<std::uint64_t>(A.cols()));
+        add(static_cast<std::uint64_t>(A.nonZeros()));
+        for (Eigen::Index c = 0; c < A.outerSize(); ++c)
+            for (SparseMatrixD::InnerIterator it(A, c); it; ++it) {
+                add(static_cast<std::uint64_t>(it.row()) << 32 | static_cast<std::uint64_t>(it.col()));
+                add(it.value());
+            }
+    }
+    std::array<std::uint64_t, 2> value() const { return {a_, b_}; }
+
+private:
+    static std::uint64_t mix(std::uint64_t x) {
+        x ^= x >> 30;
+        x *= 0xBF58476D1CE4E5B9ull;
+        x ^= x >> 27;
+        x *= 0x94D049BB133111EBull;
+        return x ^ (x >> 31);
+    }
+    std::uint64_t a_ = 0x243F6A8885A308D3ull, b_ = 0x13198A2E03707344ull;
+};
+
+struct Memo {
+    std::mutex lock;
+    std::deque<std::pair<std::array<std::uint64_t, 2>, ReducedStructure>> kept;  // newest first
+    ReductionMemoCounts counts;
+};
+
+Memo& memo() {
+    static Memo m;
+    return m;
+}
+
+}  // namespace
+
+std::string craig_bampton_memo(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
+                               const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
+                               ReducedStructure& out) {
+    Fingerprint f;
+    f.add(M);
+    f.add(K);
+    f.add(static_cast<std::uint64_t>(C != nullptr));
+    if (C) f.add(*C);
+    f.add(static_cast<std::uint64_t>(boundary.size()));
+    for (const std::size_t b : boundary) f.add(static_cast<std::uint64_t>(b));
+    f.add(static_cast<std::uint64_t>(settings.modes));
+    f.add(settings.cutoff);
+    const std::array<std::uint64_t, 2> key = f.value();
+    Memo& m = memo();
+    {
+        const std::lock_guard<std::mutex> guard(m.lock);
+        for (const auto& [k, reduced] : m.kept)
+            if (k == key) {
+                out = reduced;
+                ++m.counts.reused;
+                return "";
+            }
+    }
+    // Computed outside the lock: two threads may both reduce the same
+    // structure once; each result is the same.
+    if (std::string why = craig_bampton(M, K, C, boundary, settings, out); !why.empty()) return why;
+    const std::lock_guard<std::mutex> guard(m.lock);
+    ++m.counts.computed;
+    m.kept.emplace_front(key, out);
+    if (m.kept.size() > kReductionMemo) m.kept.pop_back();
+    return "";
+}
+
+void reduction_memo_clear() {
+    Memo& m = memo();
+    const std::lock_guard<std::mutex> guard(m.lock);
+    m.kept.clear();
+}
+
+ReductionMemoCounts reduction_memo_counts() {
+    Memo& m = memo();
+    const std::lock_guard<std::mutex> guard(m.lock);
+    return m.counts;
 }
 
 }  // namespace hsnc

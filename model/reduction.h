@@ -55,6 +55,24 @@ std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const 
                           const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
                           ReducedStructure& out);
 
+/// craig_bampton, remembered for the process: the same matrices (every
+/// entry's bits), boundary and settings give the stored reduction without a
+/// second factorisation (a sweep reads its model again for every point; a
+/// 27,000-dof plate took 5 s to reduce). Keyed by a 128-bit hash of those
+/// inputs; the last kReductionMemo results are kept. Thread-safe.
+std::string craig_bampton_memo(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
+                               const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
+                               ReducedStructure& out);
+inline constexpr std::size_t kReductionMemo = 4;
+
+/// How often craig_bampton_memo computed a reduction and how often it reused one.
+struct ReductionMemoCounts {
+    std::size_t computed = 0, reused = 0;
+};
+ReductionMemoCounts reduction_memo_counts();
+/// Forget the remembered reductions (their memory is freed; the counts stay).
+void reduction_memo_clear();
+
 /// The `count` lowest circular frequencies (rad/s) of K x = omega^2 M x, ascending;
 /// "" or the reason they cannot be computed (K singular with M, a solver
 /// that does not converge). Dense below a few hundred dofs, else shift-and-invert Lanczos.

@@ -34,6 +34,7 @@
 #include "engine_runner.h"
 #include "fe_models.h"
 #include "hex8_solid.h"
+#include "hsnc/sweep.h"
 #include "model_reader.h"
 #include "error.h"
 #include "matrix_market.h"
@@ -204,6 +205,58 @@ TEST(Reduction, AFrictionPadAndTwoStopsOnTheReducedBeamFollowTheFullModelAndCvod
             EXPECT_LT(to_cvode, 1e-8);
         }
     }
+}
+
+TEST(Reduction, AModelReadAgainReusesItsReductionAndAChangedOneDoesNot) {
+    // K scaled by a factor no other test uses: this test's structure is new to the process.
+    testing::TempDir dir;
+    Beam b = cantilever(kElements);
+    b.K *= 1.000123;
+    const std::string reduced = "[parameters]\nw = 20.0\n[reduction]\nmodes = 5\n";
+    std::string model = structure_model(dir, "m.toml", "memo", b.M, b.K, b.dofs,
+                                        "[[forcing]]\nomega = \"w\"\namplitude = { w40 = 4.0 }\n"
+                                        "[[contact]]\nname = \"stop\"\nbetween = [\"w40\", \"ground\"]\ngap = 0.01\nk = 2e4\n" +
+                                            reduced);
+    const ReductionMemoCounts c0 = reduction_memo_counts();
+    const Model first = read_model(model);
+    const ReductionMemoCounts c1 = reduction_memo_counts();
+    EXPECT_EQ(c1.computed, c0.computed + 1);
+    const Model again = read_model(model);
+    const ReductionMemoCounts c2 = reduction_memo_counts();
+    EXPECT_EQ(c2.computed, c1.computed) << "the same files and settings: no second reduction";
+    EXPECT_EQ(c2.reused, c1.reused + 1);
+    EXPECT_EQ(again.reduction.M, first.reduction.M);
+    EXPECT_EQ(again.reduction.K, first.reduction.K);
+    EXPECT_EQ(again.reduction.interface_omega, first.reduction.interface_omega);
+
+    // A sweep reads its model once per point: one reduction for all of them.
+    SweepOptions o;
+    o.param = "w";
+    o.from = 18.0;
+    o.to = 22.0;
+    o.points = 3;
+    o.max_periods = 20;
+    o.record_periods = 2;
+    const SweepResult r = SweepPlan::from_file(model, {}, o).run();
+    EXPECT_EQ(r.points.size(), 3u);
+    const ReductionMemoCounts c3 = reduction_memo_counts();
+    EXPECT_EQ(c3.computed, c2.computed) << "the sweep's points reduce nothing again";
+    EXPECT_GE(c3.reused, c2.reused + 3);
+
+    // One entry of K changed, or another number of modes: reduced anew.
+    b.K(0, 0) *= 1.01;
+    model = structure_model(dir, "m.toml", "memo", b.M, b.K, b.dofs,
+                            "[[forcing]]\nomega = \"w\"\namplitude = { w40 = 4.0 }\n" + reduced);
+    const Model changed = read_model(model);
+    EXPECT_EQ(reduction_memo_counts().computed, c3.computed + 1);
+    EXPECT_NE(changed.reduction.K, first.reduction.K);
+    const std::string six = dir / "six.toml";
+    fe::write(six, "name = \"memo\"\n[structure]\ndofs = " + dof_list(b.dofs) +
+                       "\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n[[forcing]]\nomega = 20.0\namplitude = { w40 = 4.0 }\n"
+                       "[reduction]\nmodes = 6\n");
+    const Model six_modes = read_model(six);
+    EXPECT_EQ(six_modes.dof(), 7u);
+    EXPECT_EQ(reduction_memo_counts().computed, c3.computed + 2);
 }
 
 TEST(Reduction, TheClosedContactsFrequenciesAreThoseOfTheStiffenedStructure) {
