@@ -103,15 +103,17 @@ void response(const std::filesystem::path& dir, bool quick) {
     const int elements = 100;
     write_cantilever(dir, elements);
     std::string dofs = "[";
-    for (int k = 1; k <= elements; ++k) dofs += (k > 1 ? ", " : "") + ("\"w" + std::to_string(k) + "\", \"t" + std::to_string(k) + "\"");
+    for (int k = 1; k <= elements; ++k)
+        dofs += (k > 1 ? ", " : "") + ("\"w" + std::to_string(k) + "\", \"t" + std::to_string(k) + "\"");
     dofs += "]";
-    const std::string base = "name = \"beam-pad\"\n[structure]\ndofs = " + dofs +
-                             "\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n[damping]\nalpha = 0.0\nbeta = 1e-7\n"
-                             "[[forcing]]\nomega = 20.0\namplitude = { w100 = 2.0 }\n"
-                             "[[contact]]\nname = \"tip\"\nbetween = [\"w100\", \"ground\"]\ngap = 0.004\nk = 2000.0\n"
-                             "[[contact]]\nname = \"mid\"\nbetween = [\"ground\", \"w50\"]\ngap = 0.002\nk = 5000.0\n"
-                             "[[friction]]\nname = \"pad\"\nbetween = [\"w75\", \"ground\"]\nmu_k = 0.3\nmu_s = 0.4\nnormal = 2.0\n"
-                             "[simulate]\nt_end = 1.0\n";
+    const std::string base =
+        "name = \"beam-pad\"\n[structure]\ndofs = " + dofs +
+        "\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n[damping]\nalpha = 0.0\nbeta = 1e-7\n"
+        "[[forcing]]\nomega = 20.0\namplitude = { w100 = 2.0 }\n"
+        "[[contact]]\nname = \"tip\"\nbetween = [\"w100\", \"ground\"]\ngap = 0.004\nk = 2000.0\n"
+        "[[contact]]\nname = \"mid\"\nbetween = [\"ground\", \"w50\"]\ngap = 0.002\nk = 5000.0\n"
+        "[[friction]]\nname = \"pad\"\nbetween = [\"w75\", \"ground\"]\nmu_k = 0.3\nmu_s = 0.4\nnormal = 2.0\n"
+        "[simulate]\nt_end = 1.0\n";
     std::printf("\nresponse: 200-dof cantilever, friction pad and two stops, 1 s\n");
     std::printf("%8s %6s %8s %14s %9s %12s %12s %10s\n", "modes", "dofs", "events", "same events", "until s",
                 "worst dt s", "evals/switch", "run s");

@@ -43,7 +43,8 @@ std::string frequencies(const ReductionSource& r) {
     for (const auto& [f, contacts] : {std::pair{&r.open, "open"}, std::pair{&r.closed, "closed"}})
         for (std::size_t k = 0; k < f->reduced.size(); ++k) {
             const bool full = k < f->full.size();
-            out << contacts << "," << k + 1 << "," << (full ? number_text(f->full[k]) : "") << "," << number_text(f->reduced[k]) << ","
+            out << contacts << "," << k + 1 << "," << (full ? number_text(f->full[k]) : "") << ","
+                << number_text(f->reduced[k]) << ","
                 << (full && f->full[k] > 0.0 ? number_text((f->reduced[k] - f->full[k]) / f->full[k]) : "") << "\n";
         }
     return out.str();

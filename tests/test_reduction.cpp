@@ -138,14 +138,16 @@ TEST(Reduction, ATipStopOnTheReducedCantileverFollowsTheFullModelAndCvode) {
 /// The lightly damped cantilever with a friction pad at w30 and stops at the
 /// tip and at mid-span: every force jump of the pad (a reversal, a stick)
 /// rings through all of the mesh's modes.
-std::string pad_and_stops(const testing::TempDir& dir, const Beam& b, const std::string& file, const std::string& reduction) {
-    return structure_model(dir, file, "reduced-pad", b.M, b.K, b.dofs,
-                           "[damping]\nalpha = 0.0\nbeta = 1e-6\n"
-                           "[[forcing]]\nomega = 20.0\namplitude = { w40 = 2.0 }\n"
-                           "[[contact]]\nname = \"tip\"\nbetween = [\"w40\", \"ground\"]\ngap = 0.004\nk = 2000.0\n"
-                           "[[contact]]\nname = \"mid\"\nbetween = [\"ground\", \"w20\"]\ngap = 0.002\nk = 5000.0\n"
-                           "[[friction]]\nname = \"pad\"\nbetween = [\"w30\", \"ground\"]\nmu_k = 0.3\nmu_s = 0.4\nnormal = 2.0\n" +
-                               reduction);
+std::string pad_and_stops(const testing::TempDir& dir, const Beam& b, const std::string& file,
+                          const std::string& reduction) {
+    return structure_model(
+        dir, file, "reduced-pad", b.M, b.K, b.dofs,
+        "[damping]\nalpha = 0.0\nbeta = 1e-6\n"
+        "[[forcing]]\nomega = 20.0\namplitude = { w40 = 2.0 }\n"
+        "[[contact]]\nname = \"tip\"\nbetween = [\"w40\", \"ground\"]\ngap = 0.004\nk = 2000.0\n"
+        "[[contact]]\nname = \"mid\"\nbetween = [\"ground\", \"w20\"]\ngap = 0.002\nk = 5000.0\n"
+        "[[friction]]\nname = \"pad\"\nbetween = [\"w30\", \"ground\"]\nmu_k = 0.3\nmu_s = 0.4\nnormal = 2.0\n" +
+            reduction);
 }
 
 /// Event times of two runs of models whose dofs are numbered differently:
@@ -154,7 +156,8 @@ std::string pad_and_stops(const testing::TempDir& dir, const Beam& b, const std:
 double named_event_gap(const Model& ma, const testing::Outcome& a, const Model& mb, const testing::Outcome& b) {
     EXPECT_EQ(a.events.size(), b.events.size());
     const auto element = [](const Model& m, const testing::Recorded& e) {
-        const bool friction = e.kind == EventKind::stick || e.kind == EventKind::release || e.kind == EventKind::reversal;
+        const bool friction =
+            e.kind == EventKind::stick || e.kind == EventKind::release || e.kind == EventKind::reversal;
         const auto i = static_cast<std::size_t>(e.element);
         if (!friction) return "contact " + std::to_string(e.element);
         return i < m.masses.size() ? m.masses[i].name : "jenkins " + std::to_string(i - m.masses.size());
@@ -181,20 +184,24 @@ TEST(Reduction, AFrictionPadAndTwoStopsOnTheReducedBeamFollowTheFullModelAndCvod
     ASSERT_GE(exact.events.size(), 10u);
     std::set<EventKind> kinds;
     for (const auto& e : exact.events) kinds.insert(e.kind);
-    EXPECT_TRUE(kinds.count(EventKind::release) && kinds.count(EventKind::stick) && kinds.count(EventKind::contact_close))
+    EXPECT_TRUE(kinds.count(EventKind::release) && kinds.count(EventKind::stick) &&
+                kinds.count(EventKind::contact_close))
         << "the run should exercise the pad and the stops";
     const auto per_switch = [](const testing::Outcome& o) {
-        return static_cast<double>(o.summary.evaluations) / static_cast<double>(std::max<std::size_t>(1, o.summary.events));
+        return static_cast<double>(o.summary.evaluations) /
+               static_cast<double>(std::max<std::size_t>(1, o.summary.events));
     };
     double previous = 1.0;
     for (const int modes : {12, 24, 48, 77}) {  // 77: every interior mode
-        const Model m = read_model(pad_and_stops(dir, b, "r.toml", "[reduction]\nmodes = " + std::to_string(modes) + "\n"));
+        const Model m =
+            read_model(pad_and_stops(dir, b, "r.toml", "[reduction]\nmodes = " + std::to_string(modes) + "\n"));
         EXPECT_EQ(m.dof(), static_cast<std::size_t>(3 + modes)) << "w20, w30, w40 and the modes";
         const testing::Outcome reduced = testing::simulate(m, t_end, 0.0, testing::Solvers::interp);
         const double off = named_event_gap(m, reduced, full, exact);
-        std::printf("%2d modes: %zu events (full %zu), within %.3g s of the full model's; %.1f evaluations per switch "
-                    "(full %.1f)\n",
-                    modes, reduced.events.size(), exact.events.size(), off, per_switch(reduced), per_switch(exact));
+        std::printf(
+            "%2d modes: %zu events (full %zu), within %.3g s of the full model's; %.1f evaluations per switch "
+            "(full %.1f)\n",
+            modes, reduced.events.size(), exact.events.size(), off, per_switch(reduced), per_switch(exact));
         EXPECT_LT(off, previous) << modes << " modes should follow the full model closer";
         previous = off;
         if (modes == 77) EXPECT_LT(off, 1e-10) << "every mode kept: the reduction is a change of basis";
