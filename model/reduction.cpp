@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstring>
 #include <deque>
+#include <limits>
 #include <mutex>
 #include <utility>
 
@@ -60,16 +61,33 @@ void normalise(const SparseMatrixD& M, Eigen::MatrixXd& modes) {
     }
 }
 
-/// The `count` lowest eigenpairs of K phi = lambda M phi (count < n), ascending.
+/// The `count` lowest eigenpairs of K phi = lambda M phi (count < n), ascending;
+/// fewer when M has zero rows and fewer than `count` modes have mass.
 std::string lowest_modes(const SparseMatrixD& M, const SparseMatrixD& K, Index count, Eigen::VectorXd& lambda,
                          Eigen::MatrixXd& modes) {
     const Index n = K.rows();
     if (n <= kDenseEigenLimit || 2 * count + 1 > n) {
         const Eigen::MatrixXd Kd = K, Md = M;
-        const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Kd, Md);
-        if (es.info() != Eigen::Success) return "the dense generalized eigensolver failed (M not positive definite?)";
-        lambda = es.eigenvalues().head(count);
-        modes = es.eigenvectors().leftCols(count);
+        if ((Md.diagonal().array() > 0.0).all()) {
+            const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Kd, Md);
+            if (es.info() != Eigen::Success)
+                return "the dense generalized eigensolver failed (M not positive definite?)";
+            lambda = es.eigenvalues().head(count);
+            modes = es.eigenvectors().leftCols(count);
+        } else {
+            // Massless dofs (a zero row of M, e.g. a lumped beam's rotations):
+            // M phi = mu K phi with K positive definite, mu = 1/lambda; the
+            // massless directions have mu = 0 (an infinite frequency).
+            const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Md, Kd);
+            if (es.info() != Eigen::Success)
+                return "the dense generalized eigensolver failed (K not positive definite)";
+            // Ascending; a massless direction's mu is 0 to the solve's rounding, a few eps mu_max.
+            const Eigen::VectorXd& mu = es.eigenvalues();
+            const double massless = 64.0 * std::numeric_limits<double>::epsilon() * static_cast<double>(n) * mu(n - 1);
+            const Index have = std::min<Index>(count, (mu.array() > massless).count());  // fewer: all that have mass
+            lambda = mu.tail(have).reverse().cwiseInverse();
+            modes = es.eigenvectors().rightCols(have).rowwise().reverse();
+        }
     } else {
         ShiftInvert op(K, M);
         Spectra::SparseSymMatProd<double> Mop(M);
@@ -154,7 +172,7 @@ std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const 
         const double limit = settings.cutoff * settings.cutoff;
         for (Index want = std::min<Index>(10, ni);; want = std::min<Index>(2 * want, ni)) {
             if (std::string why = lowest_modes(Mb.II, Kb.II, want, lambda, Phi); !why.empty()) return why;
-            if (want == ni || lambda(want - 1) > limit) break;
+            if (want == ni || lambda.size() < want || lambda(want - 1) > limit) break;  // fewer: every mode with mass
         }
         const auto keep = static_cast<Index>(std::count_if(lambda.begin(), lambda.end(), [&](double l) { return l <= limit; }));
         lambda.conservativeResize(keep);
@@ -163,9 +181,13 @@ std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const 
         if (settings.modes > static_cast<std::size_t>(ni))
             return "modes = " + std::to_string(settings.modes) + " is more than the " + std::to_string(ni) +
                    " interior dofs";
-        if (settings.modes > 0)
+        if (settings.modes > 0) {
             if (std::string why = lowest_modes(Mb.II, Kb.II, static_cast<Index>(settings.modes), lambda, Phi); !why.empty())
                 return why;
+            if (lambda.size() < static_cast<Index>(settings.modes))
+                return "modes = " + std::to_string(settings.modes) + " but only " + std::to_string(lambda.size()) +
+                       " fixed-interface modes have mass (the other interior dofs are massless)";
+        }
         if (settings.modes == 0) Phi.resize(ni, 0), lambda.resize(0);
     }
     if ((lambda.array() <= 0.0).any()) return "a fixed-interface mode has omega^2 <= 0 (K_II is not positive definite)";

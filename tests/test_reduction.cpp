@@ -266,6 +266,69 @@ TEST(Reduction, AModelReadAgainReusesItsReductionAndAChangedOneDoesNot) {
     EXPECT_EQ(reduction_memo_counts().computed, c3.computed + 2);
 }
 
+TEST(Reduction, AStructureWithMasslessRotationsReducesAndKeepsTheCondensedFrequencies) {
+    // A lumped cantilever: half an element's mass on each w, none on the
+    // rotations (zero rows of M). The interior's eigenproblem is then solved
+    // as M phi = mu K phi (mu = 1/omega^2, 0 for the massless directions);
+    // the frequencies against the test's own static condensation of the
+    // rotations, and with every mode that has mass the reduced model is the
+    // full one in another basis (the same events).
+    testing::TempDir dir;
+    const int elements = 20;
+    Beam b = cantilever(elements);
+    const double h = 1.0 / elements, rhoA = 2.0;
+    b.M.setZero();
+    for (int k = 0; k < elements; ++k) b.M(2 * k, 2 * k) = rhoA * h * (k + 1 < elements ? 1.0 : 0.5);
+    const std::string sections = "[[forcing]]\nomega = 20.0\namplitude = { w20 = 2.0 }\n"
+                                 "[[contact]]\nname = \"tip\"\nbetween = [\"w20\", \"ground\"]\ngap = 0.004\nk = 2000.0\n";
+    // Condensed: K_ww - K_wt K_tt^-1 K_tw against the w masses.
+    Eigen::MatrixXd Kww(elements, elements), Kwt(elements, elements), Ktt(elements, elements);
+    for (int i = 0; i < elements; ++i)
+        for (int j = 0; j < elements; ++j) {
+            Kww(i, j) = b.K(2 * i, 2 * j);
+            Kwt(i, j) = b.K(2 * i, 2 * j + 1);
+            Ktt(i, j) = b.K(2 * i + 1, 2 * j + 1);
+        }
+    const Eigen::MatrixXd Kc = Kww - Kwt * Ktt.ldlt().solve(Kwt.transpose());
+    Eigen::MatrixXd Mw = Eigen::MatrixXd::Zero(elements, elements);
+    for (int i = 0; i < elements; ++i) Mw(i, i) = b.M(2 * i, 2 * i);
+    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Kc, Mw, Eigen::EigenvaluesOnly);
+    const Model full = read_model(structure_model(dir, "full.toml", "lumped", b.M, b.K, b.dofs, sections));
+    const testing::Outcome exact = testing::simulate(full, 1.0, 0.0, testing::Solvers::interp);
+    ASSERT_GE(exact.events.size(), 4u);
+    for (const int modes : {5, 19}) {  // 19: every interior dof with mass (w1 ... w19)
+        const Model m = read_model(
+            structure_model(dir, "r.toml", "lumped", b.M, b.K, b.dofs,
+                            sections + "[reduction]\nmodes = " + std::to_string(modes) + "\n"),
+            with_frequencies());
+        EXPECT_EQ(m.dof(), static_cast<std::size_t>(1 + modes));
+        for (std::size_t k = 0; k < 5; ++k) {
+            const double exact_omega = std::sqrt(es.eigenvalues()(static_cast<Eigen::Index>(k)));
+            EXPECT_NEAR(m.reduction.open.full[k], exact_omega, 1e-9 * exact_omega) << "mode " << k + 1;
+            EXPECT_GE(m.reduction.open.reduced[k], exact_omega * (1.0 - 1e-9)) << modes << " modes, mode " << k + 1;
+        }
+        if (modes == 19) {
+            for (std::size_t k = 0; k < 5; ++k)
+                EXPECT_NEAR(m.reduction.open.reduced[k], m.reduction.open.full[k], 1e-9 * m.reduction.open.full[k]);
+            const testing::Outcome reduced = testing::simulate(m, 1.0, 0.0, testing::Solvers::interp);
+            const double off = event_gap(reduced, exact);
+            std::printf("massless rotations, every mode with mass: %zu events within %.3g s of the full model's\n",
+                        reduced.events.size(), off);
+            EXPECT_LT(off, 1e-10);
+        }
+    }
+    // More modes than the interior has masses: refused, by name.
+    const std::string many = structure_model(dir, "many.toml", "lumped", b.M, b.K, b.dofs,
+                                             sections + "[reduction]\nmodes = 25\n");
+    const testing::CliRun r = testing::run_hsnc("check " + many);
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("modes = 25 but only 19 fixed-interface modes have mass"), std::string::npos) << r.err;
+    // A cut-off above every mode keeps all that have mass.
+    const Model all = read_model(structure_model(dir, "all.toml", "lumped", b.M, b.K, b.dofs,
+                                                 sections + "[reduction]\ncutoff = 1e9\n"));
+    EXPECT_EQ(all.dof(), 20u);
+}
+
 TEST(Reduction, TheClosedContactsFrequenciesAreThoseOfTheStiffenedStructure) {
     // Every contact closed: the stop's k on the tip added to K, in the full
     // structure (a dense eigensolve of the test's own K + k e e^T) and the reduced one.
