@@ -41,6 +41,7 @@
 #include <Eigen/Sparse>
 
 #include "bench_common.h"
+#include "fe_beam.h"
 #include "hex8_solid.h"
 #include "hsnc/simulate.h"
 #include "model_reader.h"
@@ -75,28 +76,12 @@ private:
     const Model& model_;
 };
 
-/// A clamped cantilever, 1 m, EI = 100 N m^2, 2 kg/m, consistent mass; dofs w1, t1, ..., wN, tN.
+/// The cantilever of tests/fe_beam.h (1 m, EI = 100 N m^2, 2 kg/m, consistent
+/// mass; dofs w1, t1, ..., wN, tN) as M.mtx and K.mtx in dir.
 void write_cantilever(const std::filesystem::path& dir, int elements) {
-    const double h = 1.0 / elements, EI = 100.0, rhoA = 2.0;
-    const double ke[4][4] = {{12, 6 * h, -12, 6 * h}, {6 * h, 4 * h * h, -6 * h, 2 * h * h},
-                             {-12, -6 * h, 12, -6 * h}, {6 * h, 2 * h * h, -6 * h, 4 * h * h}};
-    const double me[4][4] = {{156, 22 * h, 54, -13 * h}, {22 * h, 4 * h * h, 13 * h, -3 * h * h},
-                             {54, 13 * h, 156, -22 * h}, {-13 * h, -3 * h * h, -22 * h, 4 * h * h}};
-    const int n = 2 * elements;  // the root's two dofs clamped
-    std::vector<Eigen::Triplet<double>> M, K;
-    for (int e = 0; e < elements; ++e)
-        for (int a = 0; a < 4; ++a)
-            for (int b = 0; b < 4; ++b) {
-                const int i = 2 * e + a - 2, j = 2 * e + b - 2;
-                if (i < 0 || j < 0) continue;
-                K.emplace_back(i, j, ke[a][b] * EI / (h * h * h));
-                M.emplace_back(i, j, me[a][b] * rhoA * h / 420);
-            }
-    Eigen::SparseMatrix<double> Ms(n, n), Ks(n, n);
-    Ms.setFromTriplets(M.begin(), M.end());
-    Ks.setFromTriplets(K.begin(), K.end());
-    fe::write_market((dir / "M.mtx").string(), Ms);
-    fe::write_market((dir / "K.mtx").string(), Ks);
+    const fe::Beam b = fe::cantilever(elements);
+    fe::write_market((dir / "M.mtx").string(), b.M.sparseView());
+    fe::write_market((dir / "K.mtx").string(), b.K.sparseView());
 }
 
 void response(const std::filesystem::path& dir, bool quick) {
