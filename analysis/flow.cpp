@@ -5,14 +5,16 @@
 
 #include "aot_registry.h"
 #include "assembly.h"
+#include "engine.h"
 #include "kernel_mode.h"
 #include "lowering.h"
-#include "solver_choice.h"
 #include "number_text.h"
+#include "solver_choice.h"
 
 namespace hsnc::analysis {
 
 Flow::Flow(const Model& model, const FlowKernels& k, const char* function) : work_(model) {
+    refuse_load_steps(model, std::string(function) + "()");
     if (k.kernels == KernelChoice::aot && !has_aot_kernels(work_, &aot_registry()))
         throw OptionError(function, "kernels", "aot", "no ahead-of-time kernels for model '" + work_.name + "'");
     SimulateOptions o;

@@ -297,6 +297,7 @@ bool repeats(const State& a, const State& b, double omega, double tol) {
 }  // namespace
 
 double forcing_frequency(const Model& model, const std::string& what) {
+    refuse_load_steps(model, what);
     if (model.forcing.empty())
         throw InputError(what + ": the model has no [[forcing]]; a sweep needs one forcing frequency");
     const double omega = model.forcing[0].omega;

@@ -68,7 +68,7 @@ struct CsvReader {
 
 EventKind parse_kind(const CsvReader& r, const std::string& name) {
     for (EventKind k : {EventKind::contact_close, EventKind::contact_open, EventKind::stick, EventKind::release,
-                        EventKind::reversal})
+                        EventKind::reversal, EventKind::load_change})
         if (name == event_kind_name(k)) return k;
     r.fail("column 'kind': unknown event kind '" + name + "'");
 }
@@ -122,6 +122,10 @@ RecordedRun read_reference(const Model& model, const std::string& trajectory_csv
                 for (std::size_t k = 0; k < model.contacts.size(); ++k)
                     if (model.contacts[k].name == f[2]) e.element = static_cast<int>(k);
                 if (e.element < 0) r.fail("column 'element': '" + f[2] + "' is not a contact of the model");
+            } else if (e.kind == EventKind::load_change) {
+                for (std::size_t k = 0; k < model.load_steps.size(); ++k)
+                    if (model.load_steps[k].name == f[2]) e.element = static_cast<int>(k);
+                if (e.element < 0) r.fail("column 'element': '" + f[2] + "' is not a load step of the model");
             } else {
                 e.element = model.mass_index(f[2]);
                 if (e.element < 0) r.fail("column 'element': '" + f[2] + "' is not a mass of the model");

@@ -143,6 +143,17 @@ void print_summary(const Model& model, std::ostream& out) {
     }
     out << "forcing harmonics: " << model.forcing.size() << "\n";
     for (const Harmonic& h : model.forcing) out << "  omega = " << num(h.omega) << " rad/s  phase = " << num(h.phase) << "\n";
+    if (!model.load_steps.empty()) {  // [[load_step]]: the load from t on, the dofs it changes
+        out << "load steps: " << model.load_steps.size() << "  (the constant load from t on)\n";
+        const std::vector<double>* before = &model.load;
+        for (const LoadStep& s : model.load_steps) {
+            out << "  " << s.name << "  t = " << num(s.t);
+            for (std::size_t i = 0; i < model.dof(); ++i)
+                if (s.load[i] != (*before)[i]) out << "  " << model.masses[i].name << " = " << num(s.load[i]);
+            out << "\n";
+            before = &s.load;
+        }
+    }
     out << "damping: alpha = " << num(model.alpha) << "  beta = " << num(model.beta) << "\n";
     if (!model.proportional_damping()) {
         std::size_t from_c = 0;

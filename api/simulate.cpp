@@ -21,13 +21,14 @@
 #include "jit_solver_provider.h"
 #include "kernel_cache.h"
 #include "kernel_mode.h"
-#include "tiered_provider.h"
 #include "lowering.h"
+#include "number_text.h"
 #include "reference.h"
 #include "sample_grid.h"
 #include "solver_choice.h"
 #include "solver_provider.h"
-#include "number_text.h"
+#include "tiered_provider.h"
+#include "transitions.h"
 
 namespace hsnc {
 namespace {
@@ -238,16 +239,11 @@ OptionError::OptionError(const std::string& function, std::string option, const 
 
 void check_simulate_options(const Model& model, const SimulateOptions& options) { check_options(model, options); }
 
-SimulateSummary simulate(const Model& model, const SimulateOptions& o, Observer& observer) {
-    check_options(model, o);
-    const double t_end = end_time(model, o);
+namespace {
 
-    EngineOptions eopt;
-    eopt.t_end = t_end;
-    eopt.dt = std::isnan(o.dt) ? SampleGrid::default_dt(model.t0, t_end) : o.dt;
-    eopt.samples = o.samples;
-    eopt.max_events = o.max_events;
-
+// One run at one constant load: the reference, a baseline or the engine.
+SimulateSummary run_at_one_load(const Model& model, const SimulateOptions& o, const EngineOptions& eopt,
+                                Observer& observer) {
     SimulateSummary s;
     if (o.precision_digits > 0) {
         static_cast<RunSummary&>(s) = reference::simulate(model, o.precision_digits, eopt, observer);
@@ -260,12 +256,91 @@ SimulateSummary simulate(const Model& model, const SimulateOptions& o, Observer&
         s.solver_detail = method_name(o.method);
     } else {
         const std::unique_ptr<SolverProvider> provider = api::make_provider(model, o, &s.solver, kSimulate);
-        eopt.restart_plans = restart_plan_source(model);  // for the kernels: the interpreter keeps its own
+        EngineOptions with_plans = eopt;
+        with_plans.restart_plans = restart_plan_source(model);  // for the kernels: the interpreter keeps its own
         Engine engine(model, *provider);
-        static_cast<RunSummary&>(s) = engine.run(eopt, observer);
+        static_cast<RunSummary&>(s) = engine.run(with_plans, observer);
         s.solver_detail = provider->describe();
     }
     return s;
+}
+
+// A model with [[load_step]]s runs in pieces, one per constant load: each
+// piece is the model with that load, started from the exact state (masses,
+// velocities, sliders) where the last one ended, on the whole run's sample
+// grid; each step's instant is a load_change row between the two pieces. A
+// step at or after t_end changes nothing. The reference carries the state
+// across a step in double (rounded once there).
+SimulateSummary run_in_pieces(const Model& model, const SimulateOptions& o, const EngineOptions& whole,
+                              Observer& observer) {
+    const SampleGrid grid(model.t0, whole.t_end, whole.dt);
+    Model piece = model;
+    piece.load_steps.clear();
+    SimulateSummary total;
+    std::optional<Configuration> carried;  // the configuration a step carries into the next piece
+    for (std::size_t p = 0;; ++p) {
+        const bool last = p == model.load_steps.size() || !(model.load_steps[p].t < whole.t_end);
+        EngineOptions eopt = whole;
+        eopt.t_end = last ? whole.t_end : model.load_steps[p].t;
+        eopt.grid_t0 = model.t0;
+        eopt.grid_t_end = whole.t_end;
+        eopt.first_sample = p == 0 ? 0 : grid.first_after(piece.t0);
+        if (whole.max_events > 0) eopt.max_events = whole.max_events - total.events;
+        eopt.carried = carried;
+        const SimulateSummary s = run_at_one_load(piece, o, eopt, observer);
+        const std::size_t events = total.events, segments = total.segments, restarts = total.restarts,
+                          evaluations = total.evaluations, configurations = total.configurations;
+        total = s;
+        total.events += events, total.segments += segments, total.restarts += restarts;
+        total.evaluations += evaluations, total.configurations += configurations;
+        if (s.status == RunStatus::max_events)
+            total.message = "stopped after " + std::to_string(total.events) + " events";
+        if (last || s.status != RunStatus::ok) return total;
+        // The step: the next piece starts here, with the step's load.
+        const LoadStep& step = model.load_steps[p];
+        std::vector<double> x = s.x;
+        x.insert(x.end(), s.slider.begin(), s.slider.end());
+        observer.on_event(step.t, EventKind::load_change, static_cast<int>(p), x.data(), s.v.data());
+        ++total.events;
+        piece.load = step.load;
+        if (model.condensation.present()) piece.condensation.load = step.condensed_load;
+        // Contacts and Jenkins elements keep their state across the step; friction
+        // is decided again with the new load, and a change is a row of its own
+        // (a stuck mass the new load pulls beyond mu_s N releases here).
+        std::vector<signed char> sgn;
+        const Configuration after = entered_configuration(piece, step.t, x.data(), s.v.data(), sgn, &s.configuration);
+        for (std::size_t i = 0; i < model.dof(); ++i)
+            if (after.stuck[i] != s.configuration.stuck[i]) {
+                observer.on_event(step.t, after.stuck[i] ? EventKind::stick : EventKind::release, static_cast<int>(i),
+                                  x.data(), s.v.data());
+                ++total.events;
+            }
+        carried = after;
+        if (whole.max_events > 0 && total.events >= whole.max_events) {
+            total.status = RunStatus::max_events;
+            total.message = "stopped after " + std::to_string(total.events) + " events";
+            return total;
+        }
+        piece.t0 = step.t;
+        piece.x0 = s.x;
+        piece.v0 = s.v;
+        piece.slider0 = s.slider;
+    }
+}
+
+}  // namespace
+
+SimulateSummary simulate(const Model& model, const SimulateOptions& o, Observer& observer) {
+    check_options(model, o);
+    const double t_end = end_time(model, o);
+
+    EngineOptions eopt;
+    eopt.t_end = t_end;
+    eopt.dt = std::isnan(o.dt) ? SampleGrid::default_dt(model.t0, t_end) : o.dt;
+    eopt.samples = o.samples;
+    eopt.max_events = o.max_events;
+    if (!model.load_steps.empty()) return run_in_pieces(model, o, eopt, observer);
+    return run_at_one_load(model, o, eopt, observer);
 }
 
 SimulateSummary simulate(const Model& model, const SimulateOptions& options) {

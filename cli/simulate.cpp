@@ -95,7 +95,7 @@ private:
     double last_draw_ = 0;
     bool drawn_ = false;
     std::size_t samples_ = 0;
-    std::size_t counts_[5] = {};
+    std::size_t counts_[6] = {};  // per EventKind
 };
 
 // The library names the option (hsnc::OptionError); the command line puts
@@ -180,6 +180,8 @@ int simulate(const SimulateOptions& o) {
     for (EventKind k : {EventKind::contact_close, EventKind::contact_open, EventKind::stick, EventKind::release,
                         EventKind::reversal})
         line << " " << event_kind_name(k) << "=" << obs.count(k);
+    if (!model.load_steps.empty())  // [[load_step]]: the load changes, in the same form (absent otherwise)
+        line << " " << event_kind_name(EventKind::load_change) << "=" << obs.count(EventKind::load_change);
     for (std::size_t i = 0; i < model.dof(); ++i) line << " x_" << model.masses[i].name << "=" << number_text(sum.x[i]);
     for (std::size_t i = 0; i < model.dof(); ++i) line << " v_" << model.masses[i].name << "=" << number_text(sum.v[i]);
     std::cout << line.str() << std::endl;

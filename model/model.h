@@ -60,6 +60,18 @@ struct Harmonic {
     std::vector<double> amplitude;  ///< one entry per mass
 };
 
+/// A change of the constant load at an instant (`[[load_step]]`,
+/// interface.md): from `t` on, Model::load is `load` and the condensed dofs'
+/// load (Condensation::load) is `condensed_load`. A run crosses it as an
+/// event of its own kind (`load_change`) and goes on from that exact state
+/// with the new constant forces (api/simulate.cpp runs the pieces).
+struct LoadStep {
+    std::string name;                    ///< `name`, or "load_step<N>" (N from 1, file order)
+    double t = 0.0;                      ///< the instant (after t0; steps in increasing t)
+    std::vector<double> load;            ///< every mass's constant force from t on
+    std::vector<double> condensed_load;  ///< per condensed dof (empty when none is condensed)
+};
+
 /// The massless dofs of a [structure] (zero rows of M: rotations without
 /// rotary inertia), condensed statically (Guyan): they are not among the
 /// masses, and follow them as x_c = R x (interface.md, "Massless dofs").
@@ -152,6 +164,7 @@ struct Model {
     double beta = 0.0;   ///< Rayleigh stiffness coefficient
     std::vector<Harmonic> forcing;
     std::vector<double> load;  ///< constant force per mass
+    std::vector<LoadStep> load_steps;  ///< changes of `load` in time, in increasing t (none: constant)
 
     double t0 = 0.0;
     std::vector<double> x0;  ///< initial positions, one per mass
@@ -198,6 +211,15 @@ struct Model {
         for (const Contact& c : contacts)
             if (c.c != 0.0) return false;  // a contact's own damping (contact.h)
         return true;
+    }
+
+    /// The constant load on the condensed dofs at t: Condensation::load, or
+    /// that of the last [[load_step]] at or before t (the load from t on).
+    const std::vector<double>& condensed_load_at(double t) const {
+        const std::vector<double>* f = &condensation.load;
+        for (const LoadStep& s : load_steps)
+            if (s.t <= t) f = &s.condensed_load;
+        return *f;
     }
 
     /// Index of the mass called `name`, or -1.

@@ -100,9 +100,9 @@ public:
 
     Model read(const toml::table& root) {
         model_.source = source_;
-        check_keys(root, "", {"name", "description", "parameters", "mass", "structure", "spring", "damping", "damper",
-                              "contact", "friction", "jenkins", "forcing", "load", "initial", "simulate",
-                              "reduction"});
+        check_keys(root, "",
+                   {"name", "description", "parameters", "mass", "structure", "spring", "damping", "damper", "contact",
+                    "friction", "jenkins", "forcing", "load", "load_step", "initial", "simulate", "reduction"});
         model_.name = required_string(root, "", "name");
         if (model_.name.empty()) fail(root.get("name"), "name", "must not be empty");
         if (const toml::node* d = root.get("description")) model_.description = string_value(*d, "description");
@@ -124,6 +124,7 @@ public:
         read_forcing(root);
         read_load(root);
         read_initial(root);
+        read_load_steps(root);
         check_finite_rates(root);
         if (full_M_) compare_reduction();
         read_simulate(root);
@@ -1089,6 +1090,48 @@ private:
         }
     }
 
+    /// [[load_step]]: from `t` on, the named dofs' constant loads are the
+    /// given values (the others keep theirs); each step's whole load vector is
+    /// kept, the condensed dofs' folded in as [load]'s are.
+    void read_load_steps(const toml::table& root) {
+        const auto tables = table_array(root, "load_step");
+        std::vector<double> raw(model_.dof(), 0.0), raw_condensed;  // the load before folding, as given
+        if (const toml::node* load = root.get("load")) raw = per_mass(*load, "load", &raw_condensed);
+        raw_condensed.resize(model_.condensation.condensed(), 0.0);
+        for (std::size_t i = 0; i < tables.size(); ++i) {
+            const toml::table& t = *tables[i];
+            const std::string path = "load_step[" + std::to_string(i + 1) + "]";
+            check_keys(t, path, {"name", "t", "load"});
+            LoadStep step;
+            step.name = element_name(t, path, "load_step", i);
+            element_names_.emplace(step.name, path);
+            step.t = required_number(t, path, "t");
+            if (!(step.t > model_.t0))
+                fail(t.get("t"), path + ".t", "must be after t0 = " + show(model_.t0) + ", got " + show(step.t));
+            if (i > 0 && !(step.t > model_.load_steps.back().t))
+                fail(t.get("t"), path + ".t",
+                     "must be after the previous step's t = " + show(model_.load_steps.back().t) + ", got " +
+                         show(step.t) + " (steps come in increasing t)");
+            const toml::node* load = t.get("load");
+            if (!load) fail_at(table_line(t, path), path + ".load", "required key is missing");
+            std::vector<double> on_condensed;
+            const std::vector<double> values = per_mass(*load, path + ".load", &on_condensed);
+            for (auto&& [k, v] : *load->as_table()) {  // the named dofs take their new values
+                const std::string name(k.str());
+                if (const int m = model_.mass_index(name); m >= 0)
+                    raw[static_cast<std::size_t>(m)] = values[static_cast<std::size_t>(m)];
+                else {
+                    const auto r = static_cast<std::size_t>(condensed_row(name));
+                    raw_condensed[r] = on_condensed[r];
+                }
+            }
+            step.load = raw;
+            fold_condensed(raw_condensed, step.load);
+            if (model_.condensation.present()) step.condensed_load = raw_condensed;
+            model_.load_steps.push_back(std::move(step));
+        }
+    }
+
     void read_initial(const toml::table& root) {
         model_.x0.assign(model_.dof(), 0.0);
         model_.v0.assign(model_.dof(), 0.0);
@@ -1221,6 +1264,10 @@ private:
             // Forces over the mass: the load, each harmonic's amplitude, the friction force.
             std::vector<Term> forces;
             forces.push_back({model_.load[i], "load." + mass.name, line_of_key(root, "load", mass.name.c_str()), "the load"});
+            for (std::size_t s = 0; s < model_.load_steps.size(); ++s)
+                forces.push_back({model_.load_steps[s].load[i],
+                                  "load_step[" + std::to_string(s + 1) + "].load." + mass.name,
+                                  line_of(root, "load_step", s, "load"), "the load"});
             for (std::size_t h = 0; h < model_.forcing.size(); ++h)
                 forces.push_back({model_.forcing[h].amplitude[i],
                                   "forcing[" + std::to_string(h + 1) + "].amplitude." + mass.name, 0, "the amplitude"});

@@ -1,9 +1,10 @@
 #include "csv_writer.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <vector>
 #include <cstring>
+#include <vector>
 
 #include "error.h"
 
@@ -60,10 +61,11 @@ void state_numbers(const Model& model, CsvFile& file, double t, const double* x,
     const Condensation& c = model.condensation;
     if (c.present()) {  // x_c = R x + K_cc^-1 f_c(t) and v_c = R v + K_cc^-1 f_c'(t), rows in the order of the condensed dofs
         const std::size_t nc = c.condensed();
-        const bool loaded = c.loaded();
+        const std::vector<double>& load = model.condensed_load_at(t);  // [[load_step]]: the load from t on
+        const bool loaded = c.loaded() || std::any_of(load.begin(), load.end(), [](double l) { return l != 0.0; });
         std::vector<double> f(nc, 0.0), df(nc, 0.0);  // the forces on the condensed dofs and their rates
         if (loaded) {
-            for (std::size_t r = 0; r < nc; ++r) f[r] = c.load.empty() ? 0.0 : c.load[r];
+            for (std::size_t r = 0; r < nc; ++r) f[r] = load.empty() ? 0.0 : load[r];
             for (std::size_t h = 0; h < c.amplitude.size(); ++h) {
                 const Harmonic& hm = model.forcing[h];
                 const double s = std::sin(hm.omega * t + hm.phase), co = std::cos(hm.omega * t + hm.phase);
@@ -124,8 +126,7 @@ void CsvObserver::on_event(double t, EventKind kind, int element, const double* 
     if (!events_) return;
     events_->number(t);
     events_->text(event_kind_name(kind));
-    const bool contact = kind == EventKind::contact_close || kind == EventKind::contact_open;
-    events_->text(contact ? model_.contacts[element].name.c_str() : model_.friction_event_name(element).c_str());
+    events_->text(event_element_name(model_, kind, element).c_str());
     state_numbers(model_, *events_, t, x, v);
     events_->end_row();
 }

@@ -165,12 +165,6 @@ ModelOverrides overrides(const py::dict& set, const py::dict& x0, const py::dict
     return o;
 }
 
-std::string element_name(const Model& model, EventKind kind, int element) {
-    const bool contact = kind == EventKind::contact_close || kind == EventKind::contact_open;
-    if (contact) return element >= 0 && element < static_cast<int>(model.contacts.size()) ? model.contacts[element].name : "?";
-    return element >= 0 && element < static_cast<int>(model.state_size()) ? model.friction_event_name(element) : std::string("?");
-}
-
 py::dict run(const Model& model, double t_end, double dt, const std::string& method, const std::string& kernels,
              const std::string& precision, std::size_t max_events, double h, double rtol, double atol,
              const std::string& cache_dir, bool use_cache, std::uint64_t tier_evaluations) {
@@ -204,10 +198,11 @@ py::dict run(const Model& model, double t_end, double dt, const std::string& met
     for (std::size_t i = 0; i < ne; ++i) {
         const auto kind = static_cast<EventKind>(c.ekind_[i]);
         kinds.append(event_kind_name(kind));
-        elements.append(element_name(model, kind, c.eelement_[i]));
+        elements.append(event_element_name(model, kind, c.eelement_[i]));
     }
     py::dict counts;
     for (EventKind k : kKinds) counts[event_kind_name(k)] = 0;
+    if (!model.load_steps.empty()) counts[event_kind_name(EventKind::load_change)] = 0;
     for (int k : c.ekind_) {
         const char* name = event_kind_name(static_cast<EventKind>(k));
         counts[name] = counts[name].cast<std::size_t>() + 1;

@@ -27,12 +27,13 @@
 #include "elements/friction.h"
 #include "elements/jenkins.h"
 #include "elements/motion.h"
-#include "switch_derivative.h"
+#include "engine.h"
 #include "error.h"
 #include "mp_segment.h"
-#include "sample_grid.h"
-#include "transition_rules.h"
 #include "number_text.h"
+#include "sample_grid.h"
+#include "switch_derivative.h"
+#include "transition_rules.h"
 
 namespace hsnc::reference {
 namespace {
@@ -370,11 +371,15 @@ bool apply_switches(const Model& model, const MpModel& mp, const cl_F& t, const 
 
 // The configuration entered at (t, x, v) (interface.md "At t0 ..."), by the shared rules.
 Configuration entered_configuration(const Model& model, const MpModel& mp, const cl_F& t, const std::vector<cl_F>& x,
-                                    const std::vector<cl_F>& v, std::vector<signed char>& sgn) {
-    Configuration cfg = Configuration::all_open(model);
+                                    const std::vector<cl_F>& v, std::vector<signed char>& sgn,
+                                    const Configuration* carried) {
+    Configuration cfg = carried ? *carried : Configuration::all_open(model);
     std::vector<cl_F> v_copy = v;  // nothing stops at t0
     MpPhysics p(model, mp, t, x, v_copy, nullptr, sgn);
-    rules::entered_configuration(p, cfg, sgn);
+    if (carried)
+        rules::carried_configuration(p, cfg, sgn);  // across a change of load (EngineOptions::carried)
+    else
+        rules::entered_configuration(p, cfg, sgn);
     return cfg;
 }
 
@@ -613,13 +618,13 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
     cl_F t = mp.t0;
     const cl_F t_end = mp.F(options.t_end);
     std::vector<signed char> sgn;
-    Configuration cfg = entered_configuration(model, mp, t, x, v, sgn);
+    Configuration cfg = entered_configuration(model, mp, t, x, v, sgn, options.carried ? &*options.carried : nullptr);
 
     std::map<Configuration, std::unique_ptr<MpSegment>> segments;
     MpGuard guard(options, mp.t0);
 
-    const SampleGrid grid(model.t0, options.t_end, options.dt);  // as the double engine: in double
-    std::size_t k_next = 0;
+    const SampleGrid grid = sample_grid(options, model.t0);  // as the double engine: in double
+    std::size_t k_next = options.first_sample;
     bool samples_done = !options.samples;
 
     auto finish = [&](RunStatus status, const std::string& message) {
@@ -806,6 +811,7 @@ RunSummary simulate(const Model& model, int digits, const EngineOptions& options
     if (digits < kMinDigits || digits > kMaxDigits)
         throw InputError("reference::simulate(): digits " + std::to_string(digits) + " outside " +
                          std::to_string(kMinDigits) + ".." + std::to_string(kMaxDigits));
+    refuse_load_steps(model, "reference::simulate()");
     return simulate_precise(model, digits, options, observer).summary;
 }
 

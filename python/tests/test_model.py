@@ -142,6 +142,27 @@ def test_friction_between_two_bodies_runs_as_on_the_command_line(tmp_path):
     assert [float(row.split(",")[0]) for row in rows] == list(r.events.t)
 
 
+def test_a_load_step_runs_from_python_as_from_the_cli(tmp_path):
+    """[[load_step]]: the push on `right` switched off at t = 1; Python gives
+    the CLI's rows, the step's among them, and counts it."""
+    stepped = TWO_MASS.replace("[initial]", "[load]\nright = 0.5\n[[load_step]]\nname = \"off\"\nt = 1.0\n"
+                               "load = { right = 0.0 }\n[initial]")
+    r = hsnc.simulate(hsnc.Model.from_string(stepped))
+    assert list(r.events.kind).count("load_change") == 1
+    k = list(r.events.kind).index("load_change")
+    assert r.events.t[k] == 1.0 and r.events.element[k] == "off"
+    assert r.summary["counts"]["load_change"] == 1
+    assert "load_change" not in hsnc.simulate(hsnc.Model.from_string(TWO_MASS)).summary["counts"]
+    path = tmp_path / "stepped.toml"
+    path.write_text(stepped)
+    cli = tmp_path / "events.csv"
+    out = run_cli("simulate", path, "--events", cli).stdout
+    assert " load_change=1" in out
+    rows = cli.read_text().splitlines()[1:]
+    assert [float(row.split(",")[0]) for row in rows] == list(r.events.t)
+    assert [row.split(",")[1] for row in rows] == list(r.events.kind)
+
+
 def test_a_contact_along_a_direction_runs_from_python_as_from_the_file(tmp_path):
     # direction = { right = 2 } with gap and k scaled (u = 2 x, 2 gap, k / 4)
     # is the stop between right and ground: the same force, the same events.

@@ -18,8 +18,9 @@
 #include <Eigen/Cholesky>
 
 #include "assembly.h"
-#include "held_mass.h"
+#include "engine.h"
 #include "error.h"
+#include "held_mass.h"
 #include "sample_grid.h"
 #include "switch_guard.h"
 #include "transitions.h"
@@ -203,13 +204,13 @@ struct Sampler {
     const Model& model;
     const EngineOptions& opt;
     Observer& obs;
-    std::size_t k = 0;
+    std::size_t k;
     bool done;
     SampleGrid grid;
     Sliders& sl;
     const Configuration& cfg;  // the run's current configuration (the sliders' state)
     Sampler(const Model& m, const EngineOptions& o, Observer& ob, Sliders& s, const Configuration& c)
-        : model(m), opt(o), obs(ob), done(!o.samples), grid(m.t0, o.t_end, o.dt), sl(s), cfg(c) {}
+        : model(m), opt(o), obs(ob), k(o.first_sample), done(!o.samples), grid(sample_grid(o, m.t0)), sl(s), cfg(c) {}
     template <class Interpolant>  // at(t, x, v): Hermite here, CVODE's own interpolant below
     void emit(double from, double to, bool last, const Interpolant& H) {
         std::vector<double> x(model.dof()), v(model.dof());
@@ -278,8 +279,9 @@ RunSummary run_ab4(const Model& model, const IntegratorOptions& io, const Engine
     double t = model.t0;
     std::vector<signed char> dir;
     Sliders sl(model);
-    Configuration cfg = entered_configuration(model, t, sl.with(Configuration::all_open(model), x.data()), v.data(),
-                                              dir);  // stuck only where v = 0
+    Configuration cfg =
+        entered_configuration(model, t, sl.with(eo.carried.value_or(Configuration::all_open(model)), x.data()),
+                              v.data(), dir, eo.carried ? &*eo.carried : nullptr);  // stuck only where v = 0
     RunSummary sum;
     Sampler sampler(model, eo, obs, sl, cfg);
     SwitchGuard guard(eo, model.t0);  // chattering and Zeno, as the engine (switch_guard.h)
@@ -428,8 +430,9 @@ RunSummary run_rk45(const Model& model, const IntegratorOptions& io, const Engin
     double t = model.t0;
     std::vector<signed char> dir;
     Sliders sl(model);
-    Configuration cfg = entered_configuration(model, t, sl.with(Configuration::all_open(model), x.data()), v.data(),
-                                              dir);  // stuck only where v = 0
+    Configuration cfg =
+        entered_configuration(model, t, sl.with(eo.carried.value_or(Configuration::all_open(model)), x.data()),
+                              v.data(), dir, eo.carried ? &*eo.carried : nullptr);  // stuck only where v = 0
     RunSummary sum;
     Sampler sampler(model, eo, obs, sl, cfg);
     SwitchGuard guard(eo, model.t0);  // chattering and Zeno, as the engine (switch_guard.h)
@@ -690,8 +693,8 @@ RunSummary run_cvode(const Model& model, const IntegratorOptions& io, const Engi
     double t = model.t0;
     Sliders sl(model);
     CvodeProblem p{model, sl, {}, {}, {}, n, {}};
-    p.cfg = entered_configuration(model, t, sl.with(Configuration::all_open(model), x.data()), v.data(),
-                                  p.dir);  // stuck only where v = 0
+    p.cfg = entered_configuration(model, t, sl.with(eo.carried.value_or(Configuration::all_open(model)), x.data()),
+                                  v.data(), p.dir, eo.carried ? &*eo.carried : nullptr);  // stuck only where v = 0
     Configuration& cfg = p.cfg;
     RunSummary sum;
     Sampler sampler(model, eo, obs, sl, cfg);
@@ -836,6 +839,7 @@ void validate(Method method, const IntegratorOptions& o, double t0, double t_end
 RunSummary integrate(const Model& model, Method method, const IntegratorOptions& options,
                      const EngineOptions& engine_options, Observer& observer) {
     validate(method, options, model.t0, engine_options.t_end);
+    refuse_load_steps(model, "hsnc::integrate()");
     if (method == Method::ab4)  // ab4 has its own stick rules, for masses against the ground
         require_no_stick_elements(model, "hsnc::integrate()");
     if (method == Method::ab4) return run_ab4(model, options, engine_options, observer);

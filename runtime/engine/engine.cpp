@@ -11,13 +11,14 @@
 #include <type_traits>
 
 #include "assembly.h"
+#include "error.h"
+#include "number_text.h"
 #include "restart.h"
 #include "sample_grid.h"
 #include "switch_guard.h"
 #include "tie_series.h"
 #include "transition_rules.h"
 #include "transitions.h"
-#include "number_text.h"
 
 namespace hsnc {
 namespace {
@@ -685,7 +686,15 @@ void advance_time(double& t, double& t_lo, double tau) {
 
 Engine::Engine(const Model& model, SolverProvider& provider) : model_(model), provider_(provider) {}
 
+void refuse_load_steps(const Model& model, const std::string& who) {
+    if (model.load_steps.empty()) return;
+    throw InputError(who + ": " + model.source +
+                     ": [[load_step]] (the load changes at t = " + number_text(model.load_steps.front().t) +
+                     "): only simulate runs a load that changes in time; this needs a constant load");
+}
+
 RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
+    refuse_load_steps(model_, "hsnc::Engine::run()");
     const std::size_t n = model_.dof();
     RunSummary sum;
     // The state: positions of the masses, then of the Jenkins sliders, and the masses' velocities.
@@ -708,7 +717,8 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     double t_lo = 0.0;
     const double t_end = options.t_end;
     std::vector<signed char> sgn;
-    Configuration cfg = entered_configuration(model_, t, x.data(), v.data(), sgn);  // stuck only where v = 0
+    Configuration cfg = entered_configuration(model_, t, x.data(), v.data(), sgn,  // stuck only where v = 0
+                                              options.carried ? &*options.carried : nullptr);
 
     // Per-segment working arrays, sized once for the largest switch list.
     const std::size_t max_switches = model_.max_switches();
@@ -719,9 +729,10 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     std::set<Configuration> visited;
     SwitchGuard guard(options, model_.t0);  // chattering and Zeno
 
-    // Trajectory samples at t0 + k*dt (never accumulated), and t_end (sample_grid.h).
-    const SampleGrid grid(model_.t0, t_end, options.dt);
-    std::size_t k_next = 0;
+    // Trajectory samples at t0 + k*dt (never accumulated), and t_end (sample_grid.h),
+    // or a longer run's grid (EngineOptions::grid_t0).
+    const SampleGrid grid = sample_grid(options, model_.t0);
+    std::size_t k_next = options.first_sample;
     bool samples_done = !options.samples;
 
     auto finish = [&](RunStatus status, const std::string& message) {

@@ -38,11 +38,17 @@ public:
     Engine(const Model&& model, SolverProvider& provider) = delete;
 
     /// Run from the model's initial state (x0, v0 at t0) to options.t_end.
+    /// A model with [[load_step]]s is refused (refuse_load_steps): its pieces run one by one.
     RunSummary run(const EngineOptions& options, Observer& observer);
 
 private:
     const Model& model_;
     SolverProvider& provider_;
 };
+
+/// InputError when the model has [[load_step]]s (Model::load_steps): `who`
+/// (an engine, a baseline, an analysis) runs one constant load, and only
+/// hsnc::simulate runs a model whose load changes in time, piece by piece.
+void refuse_load_steps(const Model& model, const std::string& who);
 
 }  // namespace hsnc

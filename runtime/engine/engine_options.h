@@ -2,9 +2,11 @@
 // baselines and the reference, which take the same options).
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <optional>
 
 #include "segment_solver.h"  // kScheduleFrom, RestartPlan
 
@@ -14,6 +16,19 @@ struct EngineOptions {
     double t_end = 0.0;
     double dt = 0.0;                   ///< sample spacing; 0: samples only at t0 and t_end
     bool samples = true;               ///< call on_sample at all
+    /// The grid of a longer run this one is a piece of (api/simulate.cpp runs
+    /// a model with [[load_step]]s in pieces, one per load): samples at
+    /// grid_t0 + k dt from k = first_sample on, up to this run's t_end; the
+    /// grid's own end grid_t_end only where the run reaches it. NaN (the
+    /// default): the run's own grid, from t0 to t_end.
+    double grid_t0 = NAN, grid_t_end = NAN;
+    std::size_t first_sample = 0;
+    /// The configuration the previous piece ended in, where a piece starts at
+    /// a change of load: contacts and Jenkins elements keep their state there
+    /// and friction is decided again (rules::carried_configuration). Empty
+    /// (the default): the configuration is entered from the initial state
+    /// (interface.md "At t0").
+    std::optional<Configuration> carried;
     std::size_t max_events = 0;        ///< 0: unlimited
     /// Zeno: zeno_events switches within zeno_span * max(1, t - t0) seconds
     /// (relative to the time the run has covered; plus the time's resolution,

@@ -2,11 +2,21 @@
 // the baselines and the reference report them and the events CSV names them.
 #pragma once
 
+#include <string>
+
+#include "model.h"
+
 namespace hsnc {
 
-enum class EventKind { contact_close, contact_open, stick, release, reversal };
+/// load_change is not a switch: a [[load_step]]'s instant, where a run goes on
+/// with the new constant load (api/simulate.cpp); its element is the step's index.
+enum class EventKind { contact_close, contact_open, stick, release, reversal, load_change };
 
 /// The `kind` column of the events CSV.
 const char* event_kind_name(EventKind kind);
+
+/// The `element` column of the events CSV: the contact's name, the friction's
+/// (Model::friction_event_name) or the load step's; "?" for an index out of range.
+std::string event_element_name(const Model& model, EventKind kind, int element);
 
 }  // namespace hsnc

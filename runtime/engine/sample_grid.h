@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstddef>
 
+#include "engine_options.h"
+
 namespace hsnc {
 
 class SampleGrid {
@@ -36,6 +38,17 @@ public:
         }
         return k + 1.0;
     }
+    /// The first sample after t (time(k) > t): where the piece of a run that
+    /// starts at t takes up the grid (api/simulate.cpp, [[load_step]]).
+    std::size_t first_after(double t) const {
+        double k = std::floor((t - t0_) / dt_);
+        if (!(k > 0.0)) k = 0.0;
+        if (k > 9e15) k = 9e15;
+        auto kk = static_cast<std::size_t>(k);
+        while (kk > 0 && time(kk - 1) > t) --kk;
+        while (!(time(kk) > t) && !last(kk)) ++kk;
+        return kk;
+    }
     /// The spacing without --dt: the run in kDefaultIntervals intervals.
     static constexpr int kDefaultIntervals = 1000;
     static double default_dt(double t0, double t_end) { return (t_end - t0) / kDefaultIntervals; }
@@ -47,5 +60,11 @@ public:
 private:
     double t0_, t_end_, dt_;
 };
+
+/// The sample grid of a run from t0: its own, or the longer run's it is a
+/// piece of (EngineOptions::grid_t0, grid_t_end).
+inline SampleGrid sample_grid(const EngineOptions& o, double t0) {
+    return std::isnan(o.grid_t0) ? SampleGrid(t0, o.t_end, o.dt) : SampleGrid(o.grid_t0, o.grid_t_end, o.dt);
+}
 
 }  // namespace hsnc

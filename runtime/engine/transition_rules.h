@@ -214,6 +214,25 @@ bool apply_switches(P& p, Configuration& cfg, std::vector<signed char>& sgn, con
     return false;
 }
 
+/// The friction decisions of a configuration entered from rest or carried:
+/// a friction mass (or pair) with v_i != 0 slides along v_i; one at rest
+/// sticks or slides by the stick rule, with the forces of `cfg` as it stands.
+template <class P>
+void decide_entered_friction(P& p, Configuration& cfg, std::vector<signed char>& sgn) {
+    for (int i = 0; i < p.dof(); ++i) {
+        if (!p.has_friction(i)) continue;
+        const int v = p.velocity_sign(i);
+        if (v != 0) {
+            cfg.stuck[i] = 0;
+            sgn[i] = static_cast<signed char>(v);
+        } else {
+            const signed char dir = stick_rule(p, cfg, sgn, i);
+            cfg.stuck[i] = dir == 0;
+            sgn[i] = dir;
+        }
+    }
+}
+
 /// The configuration the motion enters at t0 (interface.md "At t0"): a contact
 /// by the sign of G, then of G'; one with G = G' = 0 is provisionally closed (at
 /// rest on the boundary) and decided by tied_contact_state once the friction is
@@ -223,29 +242,14 @@ bool apply_switches(P& p, Configuration& cfg, std::vector<signed char>& sgn, con
 /// again after any change, at most 4 rounds. `cfg` comes in all open.
 template <class P>
 void entered_configuration(P& p, Configuration& cfg, std::vector<signed char>& sgn) {
-    const int n = p.dof();
-    sgn.assign(static_cast<std::size_t>(n), 0);
+    sgn.assign(static_cast<std::size_t>(p.dof()), 0);
     std::vector<int> ties;
     for (std::size_t c = 0; c < p.contacts(); ++c) {
         const int s = first_nonzero_sign(p, p.gap_now(static_cast<int>(c)), 0);  // G, then G'
         cfg.closed[c] = s >= 0;
         if (s == 0) ties.push_back(static_cast<int>(c));
     }
-    auto decide_friction = [&] {
-        for (int i = 0; i < n; ++i) {
-            if (!p.has_friction(i)) continue;
-            const int v = p.velocity_sign(i);
-            if (v != 0) {
-                cfg.stuck[i] = 0;
-                sgn[i] = static_cast<signed char>(v);
-            } else {
-                const signed char dir = stick_rule(p, cfg, sgn, i);
-                cfg.stuck[i] = dir == 0;
-                sgn[i] = dir;
-            }
-        }
-    };
-    decide_friction();
+    decide_entered_friction(p, cfg, sgn);
     for (int round = 0; round < 4 && !ties.empty(); ++round) {
         p.prepare_ties(cfg, sgn);
         bool changed = false;
@@ -257,8 +261,19 @@ void entered_configuration(P& p, Configuration& cfg, std::vector<signed char>& s
             }
         }
         if (!changed) break;
-        decide_friction();
+        decide_entered_friction(p, cfg, sgn);
     }
+}
+
+/// The configuration a run carries across a change of its constant load (a
+/// [[load_step]]): the state is continuous there, so every contact and every
+/// Jenkins element keeps its state (`cfg` comes in as the run left it); only
+/// friction is decided again, by the forces of the new load (a stuck mass the
+/// new load pulls beyond mu_s N slides at once).
+template <class P>
+void carried_configuration(P& p, Configuration& cfg, std::vector<signed char>& sgn) {
+    sgn.assign(static_cast<std::size_t>(p.dof()), 0);
+    decide_entered_friction(p, cfg, sgn);
 }
 
 /// Whether an armed sliding velocity, h = side*v within its rounding level eps

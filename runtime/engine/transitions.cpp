@@ -137,11 +137,14 @@ bool apply_switches(const Model& model, double t, const double* x, double* v, co
 }
 
 Configuration entered_configuration(const Model& model, double t, const double* x, const double* v,
-                                    std::vector<signed char>& sgn) {
-    Configuration cfg = Configuration::all_open(model);
+                                    std::vector<signed char>& sgn, const Configuration* carried) {
+    Configuration cfg = carried ? *carried : Configuration::all_open(model);
     // Nothing stops at t0: v is only read.
     DoublePhysics p(model, t, x, const_cast<double*>(v), nullptr, sgn);
-    rules::entered_configuration(p, cfg, sgn);
+    if (carried)
+        rules::carried_configuration(p, cfg, sgn);
+    else
+        rules::entered_configuration(p, cfg, sgn);
     return cfg;
 }
 

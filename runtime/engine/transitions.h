@@ -34,8 +34,10 @@ bool apply_switches(const Model& model, double t, const double* x, double* v, co
 /// The configuration the motion enters at (t, x, v) (interface.md: "At t0 ...").
 /// Contacts by G, a tie G = 0 by the first non-zero of G', G'', G''', ...
 /// (closed if G is increasing; all zero counts as closed at t0, x[a]-x[b] >= gap);
-/// friction masses with v_i = 0 stuck or sliding by A_i.
+/// friction masses with v_i = 0 stuck or sliding by A_i. With `carried` (the
+/// configuration a run reached where its load changes: EngineOptions::carried),
+/// its contacts and Jenkins elements are kept and friction is decided again.
 Configuration entered_configuration(const Model& model, double t, const double* x, const double* v,
-                                    std::vector<signed char>& sgn);
+                                    std::vector<signed char>& sgn, const Configuration* carried = nullptr);
 
 }  // namespace hsnc
