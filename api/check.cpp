@@ -143,6 +143,14 @@ void print_summary(const Model& model, std::ostream& out) {
     }
     out << "forcing harmonics: " << model.forcing.size() << "\n";
     for (const Harmonic& h : model.forcing) out << "  omega = " << num(h.omega) << " rad/s  phase = " << num(h.phase) << "\n";
+    for (const BaseMotion& b : model.base) {  // [[base]]: the ground's motion and the harmonic it makes
+        static const char* given[] = {"x_g", "x_g'", "x_g''"};
+        out << "  base motion: " << given[static_cast<int>(b.given)] << " = " << num(b.amplitude) << " sin("
+            << num(b.omega) << " t + " << num(b.phase) << ") along";
+        for (std::size_t i = 0; i < model.dof(); ++i)
+            if (b.direction[i] != 0.0) out << " " << num(b.direction[i]) << " " << model.masses[i].name;
+        out << "  (effective force -M r x_g'': harmonic " << b.harmonic + 1 << "; coordinates relative to the base)\n";
+    }
     if (!model.load_steps.empty()) {  // [[load_step]]: the load from t on, the dofs it changes
         out << "load steps: " << model.load_steps.size() << "  (the constant load from t on)\n";
         const std::vector<double>* before = &model.load;

@@ -35,6 +35,14 @@ std::vector<std::string> kept_parameters(const Model& model, const std::string& 
         if (c.direction().weighted())
             throw InputError(flag + ": contact '" + c.name + "' acts along a direction (direction = {...}), which sweep "
                                     "kernels do not take yet (generate without --params derives its kernels)");
+    if (!model.base.empty())  // its effective force -M r x_g'' depends on m and omega: no field of its own
+        throw InputError(flag +
+                         ": the model has a base motion ([[base]]), which sweep kernels do not take yet "
+                         "(generate without --params derives its kernels)");
+    if (!model.load_steps.empty())
+        throw InputError(flag +
+                         ": the model has load steps ([[load_step]]), which sweep kernels do not take "
+                         "(generate without --params derives the kernels of its first load)");
     if (model.coupled_mass())
         throw InputError(flag + ": the model has a coupled (non-diagonal) mass matrix, which sweep kernels do not "
                                 "take yet (generate without --params derives its kernels)");

@@ -60,6 +60,19 @@ struct Harmonic {
     std::vector<double> amplitude;  ///< one entry per mass
 };
 
+/// A harmonic motion of the ground (`[[base]]`, interface.md): x_g(t) moves
+/// the dofs along `direction` (the influence vector r), and the model is
+/// written relative to it, x = x_abs - r x_g, so the base acts as the
+/// effective force -M r x_g''(t): the reader adds it to Model::forcing as a
+/// Harmonic (index `harmonic`). Every element is attached to the moving base.
+struct BaseMotion {
+    enum class Given { displacement, velocity, acceleration };
+    Given given = Given::acceleration;  ///< what `amplitude` and `phase` describe: x_g, x_g' or x_g''
+    double omega = 0.0, amplitude = 0.0, phase = 0.0;
+    std::vector<double> direction;  ///< r, one entry per mass
+    std::size_t harmonic = 0;       ///< its effective force in Model::forcing
+};
+
 /// A change of the constant load at an instant (`[[load_step]]`,
 /// interface.md): from `t` on, Model::load is `load` and the condensed dofs'
 /// load (Condensation::load) is `condensed_load`. A run crosses it as an
@@ -163,6 +176,7 @@ struct Model {
     double alpha = 0.0;  ///< Rayleigh mass coefficient
     double beta = 0.0;   ///< Rayleigh stiffness coefficient
     std::vector<Harmonic> forcing;
+    std::vector<BaseMotion> base;  ///< [[base]]: each also a harmonic of `forcing` (its effective force)
     std::vector<double> load;  ///< constant force per mass
     std::vector<LoadStep> load_steps;  ///< changes of `load` in time, in increasing t (none: constant)
 

@@ -102,7 +102,7 @@ public:
         model_.source = source_;
         check_keys(root, "",
                    {"name", "description", "parameters", "mass", "structure", "spring", "damping", "damper", "contact",
-                    "friction", "jenkins", "forcing", "load", "load_step", "initial", "simulate", "reduction"});
+                    "friction", "jenkins", "forcing", "base", "load", "load_step", "initial", "simulate", "reduction"});
         model_.name = required_string(root, "", "name");
         if (model_.name.empty()) fail(root.get("name"), "name", "must not be empty");
         if (const toml::node* d = root.get("description")) model_.description = string_value(*d, "description");
@@ -122,6 +122,7 @@ public:
         read_frictions(root);
         read_jenkins(root);
         read_forcing(root);
+        read_base(root);
         read_load(root);
         read_initial(root);
         read_load_steps(root);
@@ -1079,6 +1080,68 @@ private:
             fold_condensed(on_condensed, h.amplitude);
             if (model_.condensation.present()) model_.condensation.amplitude.push_back(on_condensed);
             model_.forcing.push_back(h);
+        }
+    }
+
+    /// [[base]]: a harmonic ground motion, x_g, x_g' or x_g'' = amplitude *
+    /// sin(omega t + phase) along `direction` (default: every mass, 1; a
+    /// [structure] names its own); its effective force -M r x_g'' is one more
+    /// harmonic of the forcing (the model is relative to the base).
+    void read_base(const toml::table& root) {
+        const auto tables = table_array(root, "base");
+        for (std::size_t i = 0; i < tables.size(); ++i) {
+            const toml::table& t = *tables[i];
+            const std::string path = "base[" + std::to_string(i + 1) + "]";
+            check_keys(t, path, {"motion", "omega", "amplitude", "phase", "direction"});
+            BaseMotion b;
+            const std::string given = required_string(t, path, "motion");
+            if (given == "displacement")
+                b.given = BaseMotion::Given::displacement;
+            else if (given == "velocity")
+                b.given = BaseMotion::Given::velocity;
+            else if (given == "acceleration")
+                b.given = BaseMotion::Given::acceleration;
+            else
+                fail(t.get("motion"), path + ".motion",
+                     "'" + excerpt(given) +
+                         "' is not a motion (expected \"displacement\", \"velocity\" or "
+                         "\"acceleration\": what amplitude and phase describe)");
+            b.omega = required_number(t, path, "omega");
+            if (!(b.omega > 0.0)) fail(t.get("omega"), path + ".omega", "must be > 0, got " + show(b.omega));
+            b.amplitude = required_number(t, path, "amplitude");
+            b.phase = optional_number(t, path, "phase").value_or(0.0);
+            b.direction.assign(model_.dof(), 0.0);
+            if (const toml::node* d = t.get("direction")) {
+                for (const Weight& w : direction(*d, path + ".direction"))
+                    b.direction[static_cast<std::size_t>(w.body)] = w.w;
+            } else if (model_.structure.present) {
+                fail_at(table_line(t, path), path + ".direction",
+                        "required for a [structure]: the dofs the base motion moves and by how much (the influence "
+                        "vector, e.g. { u1 = 1.0, u2 = 1.0 }: rotations 0)");
+            } else {
+                b.direction.assign(model_.dof(), 1.0);  // every mass translates with the base
+            }
+            // x_g'' = s sin(omega t + phase'): the effective force -M r s sin(omega t + phase').
+            Harmonic h;
+            h.omega = b.omega;
+            h.phase = b.phase;
+            double s = b.amplitude;
+            if (b.given == BaseMotion::Given::displacement) s = -b.amplitude * b.omega * b.omega;
+            if (b.given == BaseMotion::Given::velocity) s = b.amplitude * b.omega, h.phase = b.phase + M_PI / 2;
+            h.amplitude.assign(model_.dof(), 0.0);
+            for (std::size_t r = 0; r < model_.dof(); ++r) {
+                double mr = 0.0;
+                for (std::size_t c = 0; c < model_.dof(); ++c) mr += model_.mass_entry(r, c) * b.direction[c];
+                h.amplitude[r] = -mr * s;
+                if (!std::isfinite(h.amplitude[r]))
+                    fail(t.get("amplitude"), path + ".amplitude",
+                         "the effective force -M r x_g'' on " + model_.masses[r].name + " is beyond the double range");
+            }
+            b.harmonic = model_.forcing.size();
+            if (model_.condensation.present())  // massless dofs: no inertia, no effective force
+                model_.condensation.amplitude.emplace_back(model_.condensation.condensed(), 0.0);
+            model_.forcing.push_back(std::move(h));
+            model_.base.push_back(std::move(b));
         }
     }
 
