@@ -57,15 +57,29 @@ const char* periodic_status_name(PeriodicStatus status) {
     return "?";
 }
 
-double forcing_period(const Model& model) {
-    double omega = 0.0;
-    for (const Harmonic& h : model.forcing) {
-        if (h.omega == 0.0) continue;
-        const double w = std::fabs(h.omega);
-        if (omega != 0.0 && w != omega) return NAN;
-        omega = w;
+double forcing_fundamental(const Model& model) {
+    std::vector<double> w;
+    for (const Harmonic& h : model.forcing)
+        if (h.omega != 0.0) w.push_back(std::fabs(h.omega));
+    if (w.empty()) return NAN;
+    const double lowest = *std::min_element(w.begin(), w.end());
+    if (std::all_of(w.begin(), w.end(), [&](double x) { return x == lowest; }))
+        return lowest;  // one frequency, exactly
+    // The lowest is q omega0 for the smallest q that makes every other a whole multiple of omega0 = lowest/q.
+    for (int q = 1; q <= kMaxHarmonicOrder; ++q) {
+        const double omega0 = lowest / q;
+        const bool whole = std::all_of(w.begin(), w.end(), [&](double x) {
+            const double n = std::round(x / omega0);
+            return n >= 1 && n <= kMaxHarmonicOrder && std::fabs(x - n * omega0) <= 1e-12 * x;
+        });
+        if (whole) return omega0;
     }
-    return omega == 0.0 ? NAN : 2 * M_PI / omega;
+    return NAN;
+}
+
+double forcing_period(const Model& model) {
+    const double omega0 = forcing_fundamental(model);
+    return std::isnan(omega0) ? NAN : 2 * M_PI / omega0;
 }
 
 PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* orbit) {
@@ -76,7 +90,8 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
             bool forced = false;
             for (const Harmonic& h : model.forcing) forced = forced || h.omega != 0.0;
             throw OptionError(kPeriodic, "period", "NaN",
-                              forced ? "the forcing has harmonics of different frequencies: give the period"
+                              forced ? "the forcing's frequencies are not commensurate (no common period with "
+                                       "harmonic orders up to 1000, to 1e-12): give the period"
                                      : "the model has no harmonic forcing: give the period");
         }
     }

@@ -11,8 +11,9 @@
 #include "engine.h"
 #include "error.h"
 #include "generic_solver.h"
-#include "modal.h"
+#include "hsnc/periodic.h"
 #include "kernel_mode.h"
+#include "modal.h"
 #include "number_text.h"
 
 namespace hsnc::sweep_detail {
@@ -300,11 +301,16 @@ double forcing_frequency(const Model& model, const std::string& what) {
     refuse_load_steps(model, what);
     if (model.forcing.empty())
         throw InputError(what + ": the model has no [[forcing]]; a sweep needs one forcing frequency");
-    const double omega = model.forcing[0].omega;
-    for (const Harmonic& h : model.forcing)
-        if (h.omega != omega)
-            throw InputError(what + ": the forcing has more than one frequency (" + number_text(omega) + " and " +
-                             number_text(h.omega) + " rad/s); a sweep needs one");
+    // Several commensurate frequencies (engine orders): their fundamental, the common period's.
+    const double omega = forcing_fundamental(model);
+    if (std::isnan(omega)) {
+        const double a = model.forcing[0].omega;
+        double b = a;
+        for (const Harmonic& h : model.forcing) b = h.omega != a ? h.omega : b;
+        throw InputError(what + ": the forcing's frequencies (" + number_text(a) + " and " + number_text(b) +
+                         " rad/s) are not commensurate (no common period with harmonic orders up to 1000); a sweep "
+                         "needs a common period");
+    }
     return omega;
 }
 

@@ -123,8 +123,17 @@ struct PeriodicResult {
 /// options that do not fit the model, RunError when a run fails outright.
 PeriodicResult periodic(const Model& model, const PeriodicOptions& options, Observer* orbit = nullptr);
 
-/// 2*pi/omega when every harmonic of the model with omega != 0 has the same
-/// |omega|; NaN when there is no such harmonic or several frequencies.
+/// The forcing's fundamental angular frequency: the largest omega0 of which
+/// every harmonic's |omega| (omega != 0) is a whole multiple n omega0, n <=
+/// kMaxHarmonicOrder, to 1e-12 relative (|omega| itself for one frequency;
+/// the base of engine orders 2 omega, 3 omega; omega/2 for 2 omega and 3 omega).
+/// NaN when there is no harmonic forcing or the frequencies are not so
+/// commensurate (quasi-periodic forcing).
+double forcing_fundamental(const Model& model);
+inline constexpr int kMaxHarmonicOrder = 1000;
+
+/// 2*pi/forcing_fundamental(model): the forcing's common period; NaN when
+/// there is no harmonic forcing or its frequencies are not commensurate.
 double forcing_period(const Model& model);
 
 }  // namespace hsnc
