@@ -16,6 +16,7 @@ failure while running RunError (a RuntimeError), with the library's message.
 """
 
 import collections.abc
+import hashlib
 import math
 import operator
 import os
@@ -227,6 +228,36 @@ class Model:
 
     def __repr__(self):
         return repr(self._native)
+
+    def __reduce__(self):
+        """Pickled as it was read (the file's path, or the text, and the
+        overrides): unpickling reads it again, so the workers of a pool get
+        the same model. A file model carries the SHA-256 of its file's bytes,
+        and a file that changed since is refused where it is unpickled
+        (matrix files a [structure] names are read again as they are)."""
+        kind, what, source, overrides = self._read
+        if kind == "file":
+            what = os.path.abspath(what)  # a worker may run elsewhere
+        digest = _file_digest(what) if kind == "file" else None
+        return (_unpickle_model, (kind, what, source, overrides, digest))
+
+
+def _file_digest(path):
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
+
+
+def _unpickle_model(kind, what, source, overrides, digest):
+    s, x, v = (dict(o) for o in overrides)
+    if kind == "text":
+        return Model.from_string(what, source=source, set=s, x0=x, v0=v)
+    try:
+        now = _file_digest(what)
+    except OSError as e:
+        raise InputError("hsnc.Model (unpickled): %s: cannot read the model file: %s" % (what, e.strerror)) from None
+    if now != digest:
+        raise InputError("hsnc.Model (unpickled): %s: the file changed since the model was pickled" % what)
+    return Model.from_file(what, set=s, x0=x, v0=v)
 
 
 class Result:
