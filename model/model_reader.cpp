@@ -1093,6 +1093,12 @@ private:
             const toml::table& t = *tables[i];
             const std::string path = "base[" + std::to_string(i + 1) + "]";
             check_keys(t, path, {"motion", "omega", "amplitude", "phase", "direction"});
+            // -M r x_g'' of a reduced model needs r over the interior dofs the reduction removed
+            // (a rigid translation is not T r_reduced): refused rather than a wrong force.
+            if (model_.reduction.present)
+                fail_at(table_line(t, path), path,
+                        "a reduced structure ([reduction]) takes no base motion yet: its effective force needs the "
+                        "influence vector over the interior dofs the reduction removes");
             BaseMotion b;
             const std::string given = required_string(t, path, "motion");
             if (given == "displacement")

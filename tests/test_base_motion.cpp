@@ -221,6 +221,21 @@ TEST(BaseMotion, BadBaseMotionsAreRefusedByKey) {
         EXPECT_NE(std::string(e.what()).find("key 'base[1].direction': required for a [structure]"), std::string::npos)
             << e.what();
     }
+    // A reduced structure: the interior's share of M r is gone with the interior.
+    const fe::Beam long_bar = fe::clamped_bar(8);
+    const std::string reduced = fe::structure_model(
+        dir, "reduced.toml", "bar", long_bar.M, long_bar.K, long_bar.dofs,
+        "[reduction]\nmodes = 2\n[[base]]\nmotion = \"acceleration\"\nomega = 1.0\namplitude = 1.0\n"
+        "direction = { u8 = 1.0 }\n");
+    try {
+        read_model(reduced);
+        ADD_FAILURE() << "a base motion on a reduced structure was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(
+            std::string(e.what()).find("key 'base[1]': a reduced structure ([reduction]) takes no base motion yet"),
+            std::string::npos)
+            << e.what();
+    }
 }
 
 }  // namespace
