@@ -1155,6 +1155,7 @@ private:
         model_.load.assign(model_.dof(), 0.0);
         if (const toml::node* load = root.get("load")) {
             model_.load = per_mass(*load, "load", &model_.condensation.load);
+            given_load_ = model_.load;  // before the fold: [[load_step]]s change it entry by entry
             fold_condensed(model_.condensation.load, model_.load);
         }
     }
@@ -1164,8 +1165,9 @@ private:
     /// kept, the condensed dofs' folded in as [load]'s are.
     void read_load_steps(const toml::table& root) {
         const auto tables = table_array(root, "load_step");
-        std::vector<double> raw(model_.dof(), 0.0), raw_condensed;  // the load before folding, as given
-        if (const toml::node* load = root.get("load")) raw = per_mass(*load, "load", &raw_condensed);
+        // The load before folding, as given ([load], read once by read_load).
+        std::vector<double> raw = given_load_, raw_condensed = model_.condensation.load;
+        raw.resize(model_.dof(), 0.0);
         raw_condensed.resize(model_.condensation.condensed(), 0.0);
         for (std::size_t i = 0; i < tables.size(); ++i) {
             const toml::table& t = *tables[i];
@@ -1388,6 +1390,7 @@ private:
     std::unordered_map<std::string, double> values_;  ///< parameters evaluated so far
     bool pi_is_constant_ = true;                   ///< no parameter is named pi
     std::string parameter_text_;                   ///< the text of the expression number() read last for a parameter
+    std::vector<double> given_load_;               ///< [load] per mass as given, before the condensed dofs' fold
     std::map<std::string, std::string> element_names_;  ///< mass/dof/contact/friction name -> who took it
     std::vector<Spring> structure_springs_;             ///< the springs of [structure]'s K
     std::optional<std::pair<double, double>> structure_damping_;  ///< (alpha, beta) of structure.damping
