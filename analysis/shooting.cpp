@@ -56,6 +56,7 @@ PeriodMapValue evaluate_period_map(Flow& flow, double ts, double te, const Eigen
     for (std::size_t i = 0; i < n; ++i)
         m.Py(static_cast<Eigen::Index>(i)) = s.x[i], m.Py(static_cast<Eigen::Index>(n + i)) = s.v[i];
     for (std::size_t j = 0; j < nj; ++j) m.Py(static_cast<Eigen::Index>(2 * n + j)) = s.slider[j];
+    m.end = s.configuration;
     m.M = jac.jacobian();
     m.grazing = jac.grazing();
     m.singular = jac.singular();

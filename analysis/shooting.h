@@ -28,6 +28,7 @@ struct PeriodMapValue {
     std::size_t events = 0;      ///< switch events over the period
     std::size_t grazing = 0;     ///< grazing switches (near-zero normal velocity; tangent.h)
     std::size_t singular = 0;    ///< switches where the derivative does not exist
+    Configuration end;           ///< the configuration P(y) is in (its vector field: hsnc::modes)
 };
 
 /// P(y) and dP/dy over [ts, te] with the flow's model.

@@ -11,5 +11,6 @@
 #include "lyapunov.h"
 #include "model.h"
 #include "model_reader.h"
+#include "modes.h"
 #include "periodic.h"
 #include "simulate.h"

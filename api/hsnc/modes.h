@@ -1,0 +1,137 @@
+// hsnc -- nonlinear normal modes of a conservative piecewise-linear model:
+// the backbone of a linear mode continued in amplitude (interface.md,
+// `hsnc modes`), without the command line.
+//
+//     const hsnc::Model model = hsnc::read_model("examples/modes/bilinear.toml");
+//     hsnc::ModesOptions options;
+//     options.mode = 1;
+//     options.to = 0.05;  // amplitude of the mode's largest dof, from its equilibrium
+//     const hsnc::ModesResult backbone = hsnc::modes(model, options);
+//     for (const hsnc::ModePoint& p : backbone.points) ... p.amplitude, p.omega, p.energy
+//
+// A point of the backbone is a periodic orbit of the free, undamped model
+// (the harmonic forcing and base motion left out, the constant load kept) on
+// which the amplitude dof k turns at x_k = x_eq,k + A (v_k = 0 there, the
+// phase condition). Its period T and the rest of its state y = (x, v) at that
+// instant are found by Newton shooting on P(y) = y, P the exact motion over
+// T: the unknowns are y without x_k and v_k, and T; the 2n residuals' 2n - 1
+// unknowns are solved in the least-squares sense (energy conservation makes
+// one residual redundant), with the exact monodromy matrix dP/dy (segment
+// transition matrices and saltation matrices, analysis/tangent.h) and
+// dP/dT = f(P(y)), the vector field at the end. The backbone starts at the
+// linear limit (the mode shape, T = 2 pi/omega) and is continued in amplitude
+// through the points asked for, each from a secant prediction of the last
+// two; a step that does not converge is halved (up to max_halvings times), so
+// a search that cannot follow the branch stops with the points found so far
+// and says where, never a point of another branch reached by a jump.
+#pragma once
+
+#include <complex>
+#include <cstddef>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "engine.h"
+#include "model.h"
+#include "simulate.h"
+
+namespace hsnc {
+
+/// Where a backbone is (ModesOptions::progress).
+struct ModesProgress {
+    std::size_t point = 0, points = 0;                            ///< points found, points asked for
+    double amplitude = std::numeric_limits<double>::quiet_NaN();  ///< the amplitude being solved
+    int iterations = 0;                                           ///< Newton steps at it so far
+    double residual = std::numeric_limits<double>::quiet_NaN();
+    std::size_t runs = 0;  ///< period-map runs so far
+};
+
+struct ModesOptions {
+    /// The linear mode to continue: K = 1 the lowest natural frequency of the
+    /// configuration at the static equilibrium.
+    int mode = 1;
+    /// The dof whose amplitude parameterises the backbone; "": the dof with
+    /// the largest entry of the mode shape (mass-normalised).
+    std::string dof;
+    /// Amplitudes of that dof from its equilibrium position at its turning
+    /// point, both of one sign (a negative one: the turning point on the
+    /// negative side, which differs from the positive one where stops are
+    /// not symmetric). `to` is required; `from` NaN: to/points.
+    double from = std::numeric_limits<double>::quiet_NaN();
+    double to = std::numeric_limits<double>::quiet_NaN();
+    /// Points of the backbone, evenly spaced in amplitude from `from` to `to`
+    /// (1: `to` alone).
+    int points = 50;
+    /// Converged when |P(y) - y| (positions and velocities each relative to
+    /// their largest entry) is at most this.
+    double tolerance = 1e-11;
+    /// Newton iterations at most per point (and per halved step).
+    int max_iterations = 30;
+    /// How often a step between two points may be halved before the
+    /// continuation gives up.
+    int max_halvings = 12;
+    /// Where the segment solvers come from, as for hsnc::simulate.
+    KernelChoice kernels = KernelChoice::automatic;
+    std::string cache_dir;
+    bool use_cache = true;
+    /// Called now and then (after every segment of every run, and between
+    /// Newton steps); return false to stop: the result is then
+    /// ModesStatus::stopped with the points found so far. May be empty.
+    std::function<bool(const ModesProgress&)> progress;
+};
+
+/// A multiplier of a conservative orbit off the unit circle by more than this
+/// makes it unstable (the multipliers of a conservative orbit lie on the
+/// circle or in pairs mu, 1/mu; a double one, as the family's pair at +1, is
+/// computed to about the square root of the rounding).
+inline constexpr double kConservativeMultiplier = 1e-6;
+
+/// One periodic orbit of the backbone.
+struct ModePoint {
+    double amplitude = 0.0;  ///< x_k - x_eq,k at the turning point (k: ModesResult::dof)
+    double period = 0.0;     ///< T, s
+    double omega = 0.0;      ///< 2 pi / T, rad/s
+    /// Energy above the static equilibrium: kinetic plus potential (springs,
+    /// closed contacts, minus the work of the constant load), exact on the
+    /// piecewise-quadratic potential.
+    double energy = 0.0;
+    std::vector<double> x, v;  ///< the state at the turning point (v[dof] = 0)
+    /// Floquet multipliers, 2 per mass, largest |mu| first; two of them are
+    /// the family's pair at +1 (the phase and the energy directions).
+    std::vector<std::complex<double>> multipliers;
+    /// The largest |mu| but the family's pair (1 when there is no other).
+    double max_multiplier = 1.0;
+    bool stable = false;      ///< max_multiplier <= 1 + kConservativeMultiplier
+    std::size_t events = 0;   ///< switch events over one period
+    std::size_t grazing = 0;  ///< grazing switches over one period (periodic.h PeriodicResult::grazing)
+    int iterations = 0;       ///< Newton steps taken at this point
+    double residual = 0.0;
+};
+
+/// ok: every point found; not_converged: the continuation stopped (message
+/// says at which amplitude and why); stopped: the progress callback said so.
+enum class ModesStatus { ok, not_converged, stopped };
+const char* modes_status_name(ModesStatus status);
+
+struct ModesResult {
+    ModesStatus status = ModesStatus::not_converged;
+    std::string message;
+    int mode = 1;
+    std::size_t dof = 0;              ///< the amplitude dof (Model::masses index)
+    double linear_omega = 0.0;        ///< the linear mode's circular frequency, rad/s
+    std::vector<double> shape;        ///< its shape, mass-normalised, shape[dof] > 0
+    std::vector<double> equilibrium;  ///< the static equilibrium x_eq
+    std::string configuration;        ///< the equilibrium's configuration (Configuration::spec)
+    std::vector<ModePoint> points;    ///< in the order of the amplitudes asked for
+};
+
+/// The backbone (see the file comment). Throws InputError for a model that
+/// is not conservative (friction, Jenkins elements, dampers, Rayleigh or
+/// contact damping, load steps: named) or has no static equilibrium with
+/// positive stiffness (a free body), OptionError for options that do not fit,
+/// RunError when a run fails outright.
+ModesResult modes(const Model& model, const ModesOptions& options);
+
+}  // namespace hsnc

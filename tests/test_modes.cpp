@@ -1,0 +1,277 @@
+// Nonlinear normal modes of conservative piecewise-linear models (hsnc::modes,
+// `hsnc modes`, interface.md): the backbone of a linear mode continued in
+// amplitude by exact shooting with the period as an unknown.
+//
+// The truths: the bilinear oscillator's period and energy in closed form
+// (two arcs of two harmonic motions joined at the gap), a 2-dof chain with
+// symmetric stops against an independent quarter-period shooting on the
+// 30-digit reference engine (finite differences, no monodromy), and the
+// linear range against the linear modes and their Floquet multipliers.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <complex>
+#include <string>
+#include <vector>
+
+#include "cli_runner.h"
+#include "engine_runner.h"
+#include "error.h"
+#include "hsnc/modes.h"
+#include "hsnc/simulate.h"
+#include "model.h"
+#include "model_reader.h"
+#include "temp_dir.h"
+
+namespace hsnc {
+namespace {
+
+// m x'' = -k1 x, and -k2 (x - d) more while x >= d.
+const char* kBilinear = R"(name = "bilinear-gap"
+[parameters]
+k1 = 4.0
+k2 = 12.0
+d = 0.1
+[[mass]]
+name = "m"
+m = 1.0
+[[spring]]
+between = ["m", "ground"]
+k = "k1"
+[[contact]]
+name = "stop"
+between = ["m", "ground"]
+gap = "d"
+k = "k2"
+)";
+
+// The period of the orbit turning at x = A > d (v = 0): beyond the gap a
+// harmonic motion of omega2 about c = k2 d/(k1 + k2) from A to d, below it one
+// of omega1 about 0 through d with the speed it arrives with.
+double bilinear_period(double A_, double k1_, double k2_, double d_) {
+    using R = long double;  // the closed form's own rounding well below the tolerance
+    const R A = A_, k1 = k1_, k2 = k2_, d = d_, pi = 3.141592653589793238462643383279502884L;
+    const R w1 = std::sqrt(k1), w2 = std::sqrt(k1 + k2);
+    if (A <= d) return static_cast<double>(2 * pi / w1);
+    const R c = k2 * d / (k1 + k2);
+    const R t2 = std::acos((d - c) / (A - c)) / w2;  // from A to d
+    const R vd = (A - c) * w2 * std::sin(w2 * t2);
+    const R C = std::hypot(d, vd / w1);  // the amplitude below the gap
+    return static_cast<double>(2 * t2 + (2 * pi - 2 * std::acos(d / C)) / w1);
+}
+
+TEST(Modes, BilinearBackboneMatchesItsClosedForm) {
+    const Model model = parse_model(kBilinear, "bilinear-gap.toml");
+    ModesOptions o;
+    o.from = 0.03;
+    o.to = 0.6;
+    o.points = 12;
+    const ModesResult r = modes(model, o);
+    ASSERT_EQ(r.status, ModesStatus::ok) << r.message;
+    EXPECT_EQ(r.dof, 0u);
+    EXPECT_DOUBLE_EQ(r.linear_omega, 2.0);
+    ASSERT_EQ(r.points.size(), 12u);
+    for (const ModePoint& p : r.points) {
+        const double T = bilinear_period(p.amplitude, 4, 12, 0.1);
+        EXPECT_NEAR(p.period, T, 1e-12 * T) << "A = " << p.amplitude;
+        EXPECT_NEAR(p.omega, 2 * M_PI / T, 1e-12 * p.omega);
+        const double pen = std::max(0.0, p.amplitude - 0.1);
+        const double E = 0.5 * 4 * p.amplitude * p.amplitude + 0.5 * 12 * pen * pen;
+        EXPECT_NEAR(p.energy, E, 1e-12 * E);
+        EXPECT_EQ(p.x[0], p.amplitude);
+        EXPECT_EQ(p.v[0], 0.0);
+        EXPECT_EQ(p.events, p.amplitude > 0.1 ? 2u : 0u);  // closes and opens once a period
+        EXPECT_EQ(p.multipliers.size(), 2u);
+        EXPECT_EQ(p.max_multiplier, 1.0);  // only the family's pair: neutrally stable
+        EXPECT_TRUE(p.stable);
+        EXPECT_LE(p.residual, o.tolerance);
+    }
+    // Toward the bilinear limit pi/omega1 + pi/omega2 as the gap becomes small against A.
+    o.from = 10.0;
+    o.to = 100.0;
+    o.points = 2;
+    const ModesResult far = modes(model, o);
+    ASSERT_EQ(far.status, ModesStatus::ok) << far.message;
+    const double limit = M_PI / 2 + M_PI / 4;
+    EXPECT_NEAR(far.points.back().period, bilinear_period(100.0, 4, 12, 0.1), 1e-12 * limit);
+    EXPECT_NEAR(far.points.back().period, limit, 2e-3 * limit);  // O(d/A)
+}
+
+// The turning point on the free side: |A| below the gap on the other side
+// too (the motion there is symmetric), and beyond it the stop is reached.
+TEST(Modes, NegativeAmplitudesTurnOnTheFreeSide) {
+    const Model model = parse_model(kBilinear, "bilinear-gap.toml");
+    ModesOptions o;
+    o.from = -0.05;
+    o.to = -0.3;
+    o.points = 6;
+    o.tolerance = 1e-13;
+    const ModesResult r = modes(model, o);
+    ASSERT_EQ(r.status, ModesStatus::ok) << r.message;
+    for (const ModePoint& p : r.points) {
+        const double C = -p.amplitude;  // the same harmonic arc reaches +C on the other side
+        if (C < 0.1) {
+            EXPECT_NEAR(p.period, M_PI, 1e-12 * M_PI);
+            continue;
+        }
+        // Reaching the gap with v = w1 sqrt(C^2 - d^2); beyond it the turning point A solves
+        // k1 A^2 + k2 (A - d)^2 = k1 C^2 (energy): the same orbit as the positive A's.
+        const long double a = 4 + 12, b = -2 * 12 * 0.1L, c = 12 * 0.01L - 4.0L * C * C;
+        const auto A = static_cast<double>((-b + std::sqrt(b * b - 4 * a * c)) / (2 * a));
+        EXPECT_NEAR(p.period, bilinear_period(A, 4, 12, 0.1), 1e-12 * p.period) << "A = " << p.amplitude;
+    }
+}
+
+// m1 = m2 = 1, springs 1 (ground-m1, m1-m2, m2-ground): omega 1 and sqrt(3),
+// mode 2 = (1, -1); stops k_c on m1 at x1 = d and x1 = -d.
+const char* kChain = R"(name = "chain-stops"
+[parameters]
+d = 0.1
+kc = 10.0
+[[mass]]
+name = "m1"
+m = 1.0
+[[mass]]
+name = "m2"
+m = 1.0
+[[spring]]
+between = ["m1", "ground"]
+k = 1.0
+[[spring]]
+between = ["m1", "m2"]
+k = 1.0
+[[spring]]
+between = ["m2", "ground"]
+k = 1.0
+[[contact]]
+name = "right"
+between = ["m1", "ground"]
+gap = "d"
+k = "kc"
+[[contact]]
+name = "left"
+between = ["ground", "m1"]
+gap = "d"
+k = "kc"
+)";
+
+// The symmetric mode (odd in x, reversible in t) passes x = 0 on every dof at
+// a quarter period: find x2(0) and tau = T/4 with x(tau) = 0 from x = (A,
+// x2), v = 0, by Newton with finite differences on the 30-digit reference.
+struct Quarter {
+    double x2, T;
+};
+Quarter quarter_period_shooting(const Model& base, double A, double x2, double tau) {
+    auto end = [&](double x2_, double tau_) {
+        Model m = base;
+        m.x0 = {A, x2_};
+        m.v0 = {0.0, 0.0};
+        SimulateOptions o;
+        o.t_end = tau_;
+        o.samples = false;
+        o.precision_digits = 30;
+        testing::Recorder none(2);
+        const SimulateSummary s = simulate(m, o, none);
+        EXPECT_EQ(s.status, RunStatus::ok) << s.message;
+        return std::array<double, 2>{s.x[0], s.x[1]};
+    };
+    for (int it = 0; it < 30; ++it) {
+        const auto r = end(x2, tau);
+        if (std::hypot(r[0], r[1]) < 1e-15 * A) break;
+        const double h1 = 1e-7 * A, h2 = 1e-7 * tau;
+        const auto a = end(x2 + h1, tau), b = end(x2, tau + h2);
+        const double j11 = (a[0] - r[0]) / h1, j21 = (a[1] - r[1]) / h1;
+        const double j12 = (b[0] - r[0]) / h2, j22 = (b[1] - r[1]) / h2;
+        const double det = j11 * j22 - j12 * j21;
+        x2 -= (j22 * r[0] - j12 * r[1]) / det;
+        tau -= (-j21 * r[0] + j11 * r[1]) / det;
+    }
+    return {x2, 4 * tau};
+}
+
+TEST(Modes, ChainWithStopsMatchesQuarterPeriodShootingOnTheReference) {
+    const Model model = parse_model(kChain, "chain-stops.toml");
+    ModesOptions o;
+    o.mode = 2;
+    o.dof = "m1";
+    o.from = 0.06;
+    o.to = 0.41;
+    o.points = 8;  // 0.06, 0.11, ...: none at the gap, where the orbit grazes the stops
+    o.tolerance = 1e-13;
+    const ModesResult r = modes(model, o);
+    ASSERT_EQ(r.status, ModesStatus::ok) << r.message;
+    EXPECT_NEAR(r.linear_omega, std::sqrt(3.0), 1e-15);
+    EXPECT_NEAR(r.shape[1] / r.shape[0], -1.0, 1e-14);
+    for (const ModePoint& p : r.points) {
+        if (p.amplitude < 0.1) {  // below the stops: the linear mode, and mode 1's multipliers
+            EXPECT_NEAR(p.period, 2 * M_PI / std::sqrt(3.0), 1e-13);
+            EXPECT_NEAR(p.x[1], -p.amplitude, 1e-13 * p.amplitude);
+            EXPECT_NEAR(p.energy, 0.5 * 3 * 2 * p.amplitude * p.amplitude, 1e-13 * p.energy);
+            const double theta = 2 * M_PI / std::sqrt(3.0);  // omega1 T
+            int found = 0;
+            for (const auto& mu : p.multipliers)
+                found +=
+                    std::abs(mu - std::polar(1.0, theta)) < 1e-10 || std::abs(mu - std::polar(1.0, -theta)) < 1e-10;
+            EXPECT_EQ(found, 2);
+            EXPECT_TRUE(p.stable);
+            continue;
+        }
+        const Quarter q = quarter_period_shooting(model, p.amplitude, p.x[1], p.period / 4);
+        EXPECT_NEAR(p.period, q.T, 1e-10 * q.T) << "A = " << p.amplitude;
+        EXPECT_NEAR(p.x[1] / p.amplitude, q.x2 / p.amplitude, 1e-10) << "A = " << p.amplitude;
+        EXPECT_LT(p.period, 2 * M_PI / std::sqrt(3.0));  // the stops stiffen the mode
+        EXPECT_EQ(p.events, 4u);
+    }
+}
+
+TEST(Modes, RefusesWhatIsNotConservativeByName) {
+    auto refused = [](const std::string& extra, const std::string& word) {
+        const Model model = parse_model(std::string(kBilinear) + extra, "m.toml");
+        ModesOptions o;
+        o.to = 0.2;
+        try {
+            modes(model, o);
+            ADD_FAILURE() << "accepted: " << extra;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+        }
+    };
+    refused("[damping]\nbeta = 0.01\n", "[damping]");
+    refused("[[damper]]\nbetween = [\"m\", \"ground\"]\nc = 0.1\n", "[[damper]]");
+    refused("[[jenkins]]\nname = \"j\"\nbetween = [\"m\", \"ground\"]\nk = 1.0\nslip_force = 0.1\n", "Jenkins");
+    // A free body: no equilibrium to start from.
+    const Model free = parse_model("name = \"free\"\n[[mass]]\nname = \"m\"\nm = 1.0\n", "free.toml");
+    ModesOptions o;
+    o.to = 0.1;
+    EXPECT_THROW(modes(free, o), InputError);
+}
+
+TEST(Modes, RefusesOptionsThatDoNotFit) {
+    const Model model = parse_model(kChain, "chain-stops.toml");
+    auto option = [&](const ModesOptions& o) {
+        try {
+            modes(model, o);
+        } catch (const OptionError& e) {
+            return e.option();
+        }
+        return std::string("accepted");
+    };
+    ModesOptions o;
+    EXPECT_EQ(option(o), "to");  // required
+    o.to = 0.2;
+    o.mode = 3;
+    EXPECT_EQ(option(o), "mode");
+    o.mode = 1;
+    o.dof = "m3";
+    EXPECT_EQ(option(o), "dof");
+    o.dof = "";
+    o.from = -0.1;
+    EXPECT_EQ(option(o), "from");
+    o.from = NAN;
+    o.points = 0;
+    EXPECT_EQ(option(o), "points");
+}
+
+}  // namespace
+}  // namespace hsnc
