@@ -19,6 +19,8 @@ namespace hsnc {
 namespace {
 
 constexpr const char* kModes = "hsnc::modes";
+// The most a step may turn another mode's rotation, rad (see follow()).
+constexpr double kMaxTurn = 0.5;
 
 // A nonlinear mode here is a family of periodic orbits of a conservative
 // model: anything that takes energy out is refused by name.
@@ -136,6 +138,71 @@ Equilibrium equilibrium(const Model& model, Field& field) {
     throw InputError(where + "no static equilibrium found: the contacts' states at rest do not settle");
 }
 
+// The multipliers but the family's pair at +1 (the two nearest to it).
+std::vector<std::complex<double>> nontrivial(std::vector<std::complex<double>> mu) {
+    for (int drop = 0; drop < 2 && !mu.empty(); ++drop)
+        mu.erase(std::min_element(mu.begin(), mu.end(),
+                                  [](const auto& a, const auto& b) { return std::abs(a - 1.0) < std::abs(b - 1.0); }));
+    return mu;
+}
+
+// Each pair of the other modes, e^{+-i phi} on the circle or mu, 1/mu off it,
+// as one angle phi in [0, pi] (a real pair: 0 or pi); empty unless `pairs`
+// angles come out (a rounding that splits a real pair into a complex one).
+std::vector<double> pair_angles(const std::vector<std::complex<double>>& rest, std::size_t pairs) {
+    std::vector<double> phi;
+    std::size_t positive = 0, negative = 0;
+    for (const auto& mu : rest) {
+        if (std::fabs(mu.imag()) > 1e-12 * std::abs(mu)) {
+            if (mu.imag() > 0) phi.push_back(std::arg(mu));
+        } else {
+            ++(mu.real() > 0 ? positive : negative);
+        }
+    }
+    if (positive % 2 || negative % 2) return {};
+    phi.insert(phi.end(), positive / 2, 0.0);
+    phi.insert(phi.end(), negative / 2, M_PI);
+    if (phi.size() != pairs) return {};
+    return phi;
+}
+
+// The rotations Theta_j (unwrapped: omega_j T at the linear limit) carried to
+// the new angles: each angle goes to the pair whose nearest branch 2 pi m +-
+// phi is nearest to its last Theta (greedily, nearest first).
+std::vector<double> follow(const std::vector<double>& last, const std::vector<double>& phi) {
+    struct Option {
+        double distance, theta;
+        std::size_t pair, angle;
+    };
+    std::vector<Option> options;
+    for (std::size_t j = 0; j < last.size(); ++j)
+        for (std::size_t a = 0; a < phi.size(); ++a)
+            for (const double sign : {1.0, -1.0}) {
+                const double m = std::round((last[j] - sign * phi[a]) / (2 * M_PI));
+                const double theta = 2 * M_PI * m + sign * phi[a];
+                options.push_back({std::fabs(theta - last[j]), theta, j, a});
+            }
+    std::sort(options.begin(), options.end(), [](const Option& x, const Option& y) { return x.distance < y.distance; });
+    std::vector<double> next = last;
+    std::vector<char> pair_done(last.size(), 0), angle_done(phi.size(), 0);
+    for (const Option& o : options)
+        if (!pair_done[o.pair] && !angle_done[o.angle]) {
+            next[o.pair] = o.theta;
+            pair_done[o.pair] = angle_done[o.angle] = 1;
+        }
+    return next;
+}
+
+// The multiples m pi a rotation passed from `from` to `to` (reaching one counts, leaving it does not).
+std::vector<long> passed(double from, double to) {
+    std::vector<long> m;
+    if (to > from)
+        for (double k = std::floor(from / M_PI) + 1; k * M_PI <= to; ++k) m.push_back(static_cast<long>(k));
+    else if (to < from)
+        for (double k = std::ceil(from / M_PI) - 1; k * M_PI >= to; --k) m.push_back(static_cast<long>(k));
+    return m;
+}
+
 }  // namespace
 
 const char* modes_status_name(ModesStatus status) {
@@ -150,8 +217,9 @@ const char* modes_status_name(ModesStatus status) {
     return "?";
 }
 
-ModesResult modes(const Model& model, const ModesOptions& o) {
-    refuse_nonconservative(model);
+namespace {
+
+void check_options(const Model& model, const ModesOptions& o) {
     const std::size_t n = model.dof();
     if (o.mode < 1 || static_cast<std::size_t>(o.mode) > n)
         throw OptionError(kModes, "mode", std::to_string(o.mode),
@@ -166,16 +234,10 @@ ModesResult modes(const Model& model, const ModesOptions& o) {
     if (o.max_iterations < 1)
         throw OptionError(kModes, "max_iterations", std::to_string(o.max_iterations), "must be >= 1");
     if (o.max_halvings < 0) throw OptionError(kModes, "max_halvings", std::to_string(o.max_halvings), "must be >= 0");
+}
 
-    const Model work = free_model(model);
-    Field field(work);
-    const Equilibrium eq = equilibrium(work, field);
-    const auto N = static_cast<Eigen::Index>(2 * n);
-    const auto nn = static_cast<Eigen::Index>(n);
-    ModesResult r;
-    r.mode = o.mode;
-    const Eigen::Index mode = o.mode - 1;
-    Eigen::VectorXd shape = eq.shapes.col(mode);
+// The amplitude dof: named, or the mode shape's largest entry; the shape turned so that it is positive there.
+Eigen::Index amplitude_dof(const Model& model, const ModesOptions& o, Eigen::VectorXd& shape) {
     Eigen::Index k = 0;
     if (o.dof.empty()) {
         shape.cwiseAbs().maxCoeff(&k);
@@ -188,31 +250,60 @@ ModesResult modes(const Model& model, const ModesOptions& o) {
                               "mode " + std::to_string(o.mode) + " does not move it (a node of the mode shape)");
     }
     if (shape(k) < 0) shape = -shape;
-    r.dof = static_cast<std::size_t>(k);
-    r.linear_omega = std::sqrt(eq.omega2(mode));
-    r.shape.assign(shape.data(), shape.data() + nn);
-    r.equilibrium.assign(eq.x.data(), eq.x.data() + nn);
-    r.configuration = eq.cfg.spec(work);
+    return k;
+}
 
-    std::vector<double> targets;
-    for (int p = 0; p < o.points; ++p)
-        targets.push_back(o.points == 1 ? o.to : from + (o.to - from) * p / (o.points - 1));
+// An orbit of the backbone: its amplitude, period and state at the turning point.
+struct Orbit {
+    double A = 0.0, T = 0.0;
+    Eigen::VectorXd y;
+};
 
-    analysis::Flow flow(work, {o.kernels, o.cache_dir, o.use_cache}, kModes);
-    ModesProgress progress;
-    progress.points = targets.size();
-    if (o.progress) flow.set_progress([&](double) { return o.progress(progress); });
-    const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(N, N);
-    // The unknowns: y without x_k and v_k, then T.
-    std::vector<Eigen::Index> unknown;
-    for (Eigen::Index j = 0; j < N; ++j)
-        if (j != k && j != nn + k) unknown.push_back(j);
-    const auto U = static_cast<Eigen::Index>(unknown.size()) + 1;
+// The continuation of one backbone (api/hsnc/modes.h): the shooting at one
+// amplitude (correct), the secant prediction, and the points.
+class Backbone {
+public:
+    Backbone(const Model& work, const ModesOptions& o, ModesResult& r)
+        : work_(work),
+          o_(o),
+          r_(r),
+          field_(work),
+          eq_(equilibrium(work, field_)),
+          n_(static_cast<Eigen::Index>(work.dof())),
+          flow_(work, {o.kernels, o.cache_dir, o.use_cache}, kModes) {
+        const Eigen::Index mode = o.mode - 1;
+        shape_ = eq_.shapes.col(mode);
+        k_ = amplitude_dof(work, o, shape_);
+        r.mode = o.mode;
+        r.dof = static_cast<std::size_t>(k_);
+        r.linear_omega = std::sqrt(eq_.omega2(mode));
+        r.shape.assign(shape_.data(), shape_.data() + n_);
+        r.equilibrium.assign(eq_.x.data(), eq_.x.data() + n_);
+        r.configuration = eq_.cfg.spec(work);
+        // The unknowns: y without x_k and v_k, then T.
+        for (Eigen::Index j = 0; j < 2 * n_; ++j)
+            if (j != k_ && j != n_ + k_) unknown_.push_back(j);
+        // The linear limit: amplitude 0 at the equilibrium, period 2 pi/omega; the other modes'
+        // rotations Theta_j = omega_j T (j != mode) there.
+        history_.push_back({0.0, 2 * M_PI / r.linear_omega, Eigen::VectorXd::Zero(2 * n_)});
+        history_.back().y.head(n_) = eq_.x;
+        for (Eigen::Index j = 0; j < n_; ++j)
+            if (j != mode) {
+                r.others.push_back(static_cast<int>(j) + 1);
+                rotation_.push_back(2 * M_PI * std::sqrt(eq_.omega2(j)) / r.linear_omega);
+            }
+        if (o.progress) flow_.set_progress([this](double) { return o_.progress(progress_); });
+    }
 
-    struct Orbit {
-        double A = 0.0, T = 0.0;
-        Eigen::VectorXd y;
-    };
+    // Every point asked for, in order, until the continuation stops (ModesResult::status says how).
+    void run(const std::vector<double>& targets) {
+        progress_.points = targets.size();
+        for (const double target : targets)
+            if (!reach(target)) return;
+        r_.status = ModesStatus::ok;
+    }
+
+private:
     struct Corrected {
         bool ok = false;
         std::string why;
@@ -220,55 +311,184 @@ ModesResult modes(const Model& model, const ModesOptions& o) {
         analysis::PeriodMapValue pm;
         int iterations = 0;
     };
-    // |P(y) - y|: positions relative to the orbit's largest excursion from
-    // the equilibrium, velocities to that times 2 pi/T (a turning point has
-    // no velocity scale of its own).
-    auto evaluate = [&](const Eigen::VectorXd& y, double T) {
-        ++progress.runs;
-        analysis::PeriodMapValue pm = analysis::evaluate_period_map(flow, 0.0, T, y);
+
+    // From the last orbit to the amplitude `target`, in steps of the spacing over 2^level:
+    // halved on a failure, doubled back after a success, never below the spacing over
+    // 2^max_halvings. Adds the point; false (with the status set) when it cannot.
+    bool reach(double target) {
+        double step = target - history_.back().A;
+        int level = 0;
+        while (history_.back().A != target) {
+            const double A =
+                std::fabs(target - history_.back().A) <= std::fabs(step) ? target : history_.back().A + step;
+            const Orbit guess = predict(A);
+            Corrected c = correct(guess);
+            if (flow_.stopped()) return stop();
+            check_jump(c, guess);
+            if (!c.ok) {
+                if (++level > o_.max_halvings) {
+                    r_.status = ModesStatus::not_converged;
+                    r_.message = "the backbone cannot be followed beyond amplitude " + number_text(history_.back().A) +
+                                 " toward " + number_text(target) + " (" + std::to_string(o_.max_halvings) +
+                                 " halvings of the step): " + c.why;
+                    return false;
+                }
+                step /= 2;
+                continue;
+            }
+            // The other modes' rotations, followed by continuity: a step that turns one by more
+            // than kMaxTurn is halved (while it may be), so that no pass through +1 or -1 is missed.
+            const std::vector<std::complex<double>> mu = analysis::floquet_multipliers(c.pm.M);
+            const std::vector<double> phi = pair_angles(nontrivial(mu), rotation_.size());
+            const std::vector<double> turned = phi.empty() ? rotation_ : follow(rotation_, phi);
+            double turn = 0.0;
+            for (std::size_t j = 0; j < rotation_.size(); ++j)
+                turn = std::max(turn, std::fabs(turned[j] - rotation_[j]));
+            if (turn > kMaxTurn && level < o_.max_halvings) {
+                ++level;
+                step /= 2;
+                continue;
+            }
+            for (std::size_t j = 0; j < rotation_.size(); ++j)
+                for (const long m : passed(rotation_[j], turned[j]))
+                    pending_.push_back("mode" + std::to_string(r_.others[j]) + " " +
+                                       (m % 2 == 0 ? std::to_string(m / 2) + ":1" : std::to_string(m) + ":2"));
+            rotation_ = turned;
+            history_.push_back(c.orbit);
+            if (level > 0) --level, step *= 2;  // grow back toward the spacing
+            if (A == target) add_point(c, mu);
+        }
+        return true;
+    }
+
+    bool stop() {
+        r_.status = ModesStatus::stopped;
+        r_.message = "stopped by the progress callback";
+        return false;
+    }
+
+    // Newton converges to the orbit nearest the prediction, which a long step can leave for
+    // another family (across an internal-resonance tongue): a correction longer than the step
+    // itself is not trusted, and the step is halved as for a failure. Near a branch that bends
+    // sharply (a contact just reached) the correction falls faster than the step.
+    void check_jump(Corrected& c, const Orbit& guess) const {
+        if (!c.ok) return;
+        const double correction = distance(c.orbit, guess), stride = distance(guess, history_.back());
+        if (correction > stride) {
+            c.ok = false;
+            c.why = "the correction (" + number_text(correction) + ") exceeds the step (" + number_text(stride) +
+                    "): the branch turns back or leaves for another family here";
+        }
+    }
+
+    void add_point(const Corrected& c, const std::vector<std::complex<double>>& mu) {
+        ModePoint p;
+        p.amplitude = c.orbit.A;
+        p.period = c.orbit.T;
+        p.omega = 2 * M_PI / c.orbit.T;
+        p.energy = energy(c.orbit.y);
+        p.x.assign(c.orbit.y.data(), c.orbit.y.data() + n_);
+        p.v.assign(c.orbit.y.data() + n_, c.orbit.y.data() + 2 * n_);
+        p.multipliers = mu;
+        const std::vector<std::complex<double>> rest = nontrivial(mu);
+        p.max_multiplier = rest.empty() ? 1.0 : 0.0;
+        for (const auto& m : rest) p.max_multiplier = std::max(p.max_multiplier, std::abs(m));
+        p.stable = p.max_multiplier <= 1 + kConservativeMultiplier;
+        for (const double theta : rotation_) p.ratios.push_back(theta / (2 * M_PI));
+        p.resonances = std::move(pending_);
+        pending_.clear();
+        p.events = c.pm.events;
+        p.grazing = c.pm.grazing;
+        p.iterations = c.iterations;
+        p.residual = c.pm.residual;
+        r_.points.push_back(std::move(p));
+        progress_.point = r_.points.size();
+    }
+
+    // The secant through the last two orbits; from the linear limit, the mode shape.
+    Orbit predict(double A) const {
+        Orbit g;
+        g.A = A;
+        const Orbit& b = history_.back();
+        if (history_.size() == 1) {
+            g.T = b.T;
+            g.y = b.y;
+            g.y.head(n_) += (A / shape_(k_)) * shape_;
+        } else {
+            const Orbit& a = history_[history_.size() - 2];
+            const double s = (A - b.A) / (b.A - a.A);
+            g.T = b.T + s * (b.T - a.T);
+            g.y = b.y + s * (b.y - a.y);
+        }
+        return g;
+    }
+
+    // Scaled distance of two orbits: positions against the amplitude of the first, velocities
+    // against that times its 2 pi/T, periods against T.
+    double distance(const Orbit& a, const Orbit& b) const {
+        const double sx = std::fabs(a.A), sv = sx * 2 * M_PI / a.T;
+        const Eigen::VectorXd d = a.y - b.y;
+        return std::max(
+            {d.head(n_).cwiseAbs().maxCoeff() / sx, d.tail(n_).cwiseAbs().maxCoeff() / sv, std::fabs(a.T - b.T) / a.T});
+    }
+
+    double energy(const Eigen::VectorXd& y) {
+        const Eigen::VectorXd v = y.segment(n_, n_);
+        return 0.5 * v.dot(field_.M() * v) + potential(work_, field_, y.head(n_)) - potential(work_, field_, eq_.x);
+    }
+
+    // P_T(y) and |P(y) - y|: positions relative to the orbit's largest excursion from the
+    // equilibrium, velocities to that times 2 pi/T (a turning point has no velocity scale of its own).
+    analysis::PeriodMapValue evaluate(const Eigen::VectorXd& y, double T) {
+        ++progress_.runs;
+        analysis::PeriodMapValue pm = analysis::evaluate_period_map(flow_, 0.0, T, y);
         if (pm.ok) {
-            const double sx = (y.head(nn) - eq.x).cwiseAbs().maxCoeff(), sv = sx * 2 * M_PI / T;
+            const double sx = (y.head(n_) - eq_.x).cwiseAbs().maxCoeff(), sv = sx * 2 * M_PI / T;
             const Eigen::VectorXd d = pm.Py - y;
-            pm.residual = std::max(d.head(nn).cwiseAbs().maxCoeff() / sx, d.tail(nn).cwiseAbs().maxCoeff() / sv);
+            pm.residual = std::max(d.head(n_).cwiseAbs().maxCoeff() / sx, d.tail(n_).cwiseAbs().maxCoeff() / sv);
             if (!std::isfinite(pm.residual)) pm.residual = INFINITY;
         }
         return pm;
-    };
-    // Newton on P_T(y) - y = 0 at amplitude A from the guess `g`.
-    auto correct = [&](const Orbit& g) {
+    }
+
+    // Why Newton cannot go on from `pm` ("" when it can).
+    std::string stuck(const analysis::PeriodMapValue& pm, int it) const {
+        if (!pm.ok) return pm.message;
+        if (it >= o_.max_iterations)
+            return "no convergence in " + std::to_string(o_.max_iterations) + " Newton iterations (residual " +
+                   number_text(pm.residual) + ")";
+        if (pm.singular || !pm.M.allFinite())
+            return "the period map has no derivative here (a grazing switch with zero normal velocity)";
+        return "";
+    }
+
+    // Newton on P_T(y) - y = 0 at the guess's amplitude: the 2n residuals in the unknowns and T,
+    // least squares, each step halved until the residual falls.
+    Corrected correct(const Orbit& g) {
         Corrected c;
         c.orbit = g;
         Eigen::VectorXd& y = c.orbit.y;
         double& T = c.orbit.T;
-        y(k) = eq.x(k) + g.A;
-        y(nn + k) = 0.0;
-        progress.amplitude = g.A;
+        y(k_) = eq_.x(k_) + g.A;
+        y(n_ + k_) = 0.0;
+        progress_.amplitude = g.A;
         c.pm = evaluate(y, T);
+        const auto U = static_cast<Eigen::Index>(unknown_.size());
+        const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(2 * n_, 2 * n_);
         for (int it = 0;; ++it) {
-            progress.iterations = it;
-            progress.residual = c.pm.residual;
-            if (flow.stopped()) return c;
-            if (!c.pm.ok) {
-                c.why = c.pm.message;
-                return c;
-            }
-            if (c.pm.residual <= o.tolerance) {
+            progress_.iterations = it;
+            progress_.residual = c.pm.residual;
+            if (flow_.stopped()) return c;
+            if (c.pm.ok && c.pm.residual <= o_.tolerance) {
                 c.ok = true;
                 c.iterations = it;
                 return c;
             }
-            if (it >= o.max_iterations) {
-                c.why = "no convergence in " + std::to_string(o.max_iterations) + " Newton iterations (residual " +
-                        number_text(c.pm.residual) + ")";
-                return c;
-            }
-            if (c.pm.singular || !c.pm.M.allFinite()) {
-                c.why = "the period map has no derivative here (a grazing switch with zero normal velocity)";
-                return c;
-            }
-            Eigen::MatrixXd J(N, U);
-            for (Eigen::Index u = 0; u + 1 < U; ++u) J.col(u) = (c.pm.M - I).col(unknown[static_cast<std::size_t>(u)]);
-            J.col(U - 1) = field(c.pm.end, c.pm.Py);
+            c.why = stuck(c.pm, it);
+            if (!c.why.empty()) return c;
+            Eigen::MatrixXd J(2 * n_, U + 1);
+            for (Eigen::Index u = 0; u < U; ++u) J.col(u) = (c.pm.M - I).col(unknown_[static_cast<std::size_t>(u)]);
+            J.col(U) = field_(c.pm.end, c.pm.Py);  // dP/dT
             const Eigen::VectorXd step = J.colPivHouseholderQr().solve(-(c.pm.Py - y));
             if (!step.allFinite()) {
                 c.why = "the Newton step is not finite";
@@ -278,11 +498,11 @@ ModesResult modes(const Model& model, const ModesOptions& o) {
             double lambda = 1.0;
             for (int halving = 0; halving <= 10 && !accepted; ++halving, lambda *= 0.5) {
                 Eigen::VectorXd ty = y;
-                for (Eigen::Index u = 0; u + 1 < U; ++u) ty(unknown[static_cast<std::size_t>(u)]) += lambda * step(u);
-                const double tT = T + lambda * step(U - 1);
+                for (Eigen::Index u = 0; u < U; ++u) ty(unknown_[static_cast<std::size_t>(u)]) += lambda * step(u);
+                const double tT = T + lambda * step(U);
                 if (!(tT > 0)) continue;
                 analysis::PeriodMapValue next = evaluate(ty, tT);
-                if (flow.stopped()) return c;
+                if (flow_.stopped()) return c;
                 if (next.ok && next.residual < c.pm.residual) {
                     y = ty;
                     T = tT;
@@ -295,91 +515,37 @@ ModesResult modes(const Model& model, const ModesOptions& o) {
                 return c;
             }
         }
-    };
-    auto energy = [&](const Eigen::VectorXd& y) {
-        const Eigen::VectorXd v = y.segment(nn, nn);
-        return 0.5 * v.dot(field.M() * v) + potential(work, field, y.head(nn)) - potential(work, field, eq.x);
-    };
-
-    // The linear limit: amplitude 0 at the equilibrium, period 2 pi/omega.
-    std::vector<Orbit> history{{0.0, 2 * M_PI / r.linear_omega, Eigen::VectorXd::Zero(N)}};
-    history.back().y.head(nn) = eq.x;
-    auto predict = [&](double A) {
-        Orbit g;
-        g.A = A;
-        const Orbit& b = history.back();
-        if (history.size() == 1) {
-            g.T = b.T;
-            g.y = b.y;
-            g.y.head(nn) += (A / shape(k)) * shape;
-        } else {
-            const Orbit& a = history[history.size() - 2];
-            const double s = (A - b.A) / (b.A - a.A);
-            g.T = b.T + s * (b.T - a.T);
-            g.y = b.y + s * (b.y - a.y);
-        }
-        return g;
-    };
-    auto stopped = [&]() {
-        r.status = ModesStatus::stopped;
-        r.message = "stopped by the progress callback";
-        return r;
-    };
-    for (const double target : targets) {
-        double step = target - history.back().A;
-        int halvings = 0;
-        while (history.back().A != target) {
-            const double A = std::fabs(target - history.back().A) <= std::fabs(step) ? target : history.back().A + step;
-            const Orbit guess = predict(A);
-            Corrected c = correct(guess);
-            if (flow.stopped()) return stopped();
-            // A point whose period moved by more than a fifth from the last is not trusted to lie on
-            // this branch (a jump onto another family): the step is halved as for a failure.
-            if (c.ok && std::fabs(c.orbit.T - history.back().T) > 0.2 * history.back().T) {
-                c.ok = false;
-                c.why = "the period jumps from " + number_text(history.back().T) + " to " + number_text(c.orbit.T) +
-                        " s in one step";
-            }
-            if (!c.ok) {
-                if (++halvings > o.max_halvings) {
-                    r.status = ModesStatus::not_converged;
-                    r.message = "the backbone cannot be followed beyond amplitude " + number_text(history.back().A) +
-                                " toward " + number_text(target) + " (" + std::to_string(o.max_halvings) +
-                                " halvings of the step): " + c.why;
-                    return r;
-                }
-                step /= 2;
-                continue;
-            }
-            history.push_back(c.orbit);
-            step *= 2;  // grow back toward the next target
-            if (A != target) continue;
-            ModePoint p;
-            p.amplitude = target;
-            p.period = c.orbit.T;
-            p.omega = 2 * M_PI / c.orbit.T;
-            p.energy = energy(c.orbit.y);
-            p.x.assign(c.orbit.y.data(), c.orbit.y.data() + nn);
-            p.v.assign(c.orbit.y.data() + nn, c.orbit.y.data() + N);
-            p.multipliers = analysis::floquet_multipliers(c.pm.M);
-            // The family's pair at +1: the two multipliers nearest to it.
-            std::vector<std::complex<double>> rest = p.multipliers;
-            for (int drop = 0; drop < 2 && !rest.empty(); ++drop)
-                rest.erase(std::min_element(rest.begin(), rest.end(), [](const auto& a, const auto& b) {
-                    return std::abs(a - 1.0) < std::abs(b - 1.0);
-                }));
-            p.max_multiplier = rest.empty() ? 1.0 : 0.0;
-            for (const auto& mu : rest) p.max_multiplier = std::max(p.max_multiplier, std::abs(mu));
-            p.stable = p.max_multiplier <= 1 + kConservativeMultiplier;
-            p.events = c.pm.events;
-            p.grazing = c.pm.grazing;
-            p.iterations = c.iterations;
-            p.residual = c.pm.residual;
-            r.points.push_back(std::move(p));
-            progress.point = r.points.size();
-        }
     }
-    r.status = ModesStatus::ok;
+
+    const Model& work_;
+    const ModesOptions& o_;
+    ModesResult& r_;
+    Field field_;
+    Equilibrium eq_;
+    Eigen::Index n_;
+    analysis::Flow flow_;
+    Eigen::VectorXd shape_;
+    Eigen::Index k_ = 0;
+    std::vector<Eigen::Index> unknown_;
+    std::vector<Orbit> history_;
+    std::vector<double> rotation_;
+    std::vector<std::string> pending_;  // resonances passed since the last point
+    ModesProgress progress_;
+};
+
+}  // namespace
+
+ModesResult modes(const Model& model, const ModesOptions& o) {
+    refuse_nonconservative(model);
+    check_options(model, o);
+    const Model work = free_model(model);
+    const double from = std::isnan(o.from) ? o.to / o.points : o.from;
+    std::vector<double> targets;
+    for (int p = 0; p < o.points; ++p)
+        targets.push_back(o.points == 1 ? o.to : from + (o.to - from) * p / (o.points - 1));
+    ModesResult r;
+    Backbone backbone(work, o, r);
+    backbone.run(targets);
     return r;
 }
 

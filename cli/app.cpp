@@ -36,6 +36,7 @@ int run(int argc, const char* const* argv) {
     add_sweep(app, exit_code);
     add_periodic(app, exit_code);
     add_lyapunov(app, exit_code);
+    add_modes(app, exit_code);
     add_reduce(app, exit_code);
     // Per command: no output may replace a file the command reads, and its
     // outputs are kept all or none (a failure leaves the files they would

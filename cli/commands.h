@@ -16,6 +16,7 @@ void add_tradeoff(CLI::App& app, int& exit_code);
 void add_sweep(CLI::App& app, int& exit_code);  ///< sweep and sweep-merge (cli/sweep.cpp)
 void add_periodic(CLI::App& app, int& exit_code);
 void add_lyapunov(CLI::App& app, int& exit_code);
+void add_modes(CLI::App& app, int& exit_code);
 void add_reduce(CLI::App& app, int& exit_code);
 
 /// A CLI11 check that a number flag is finite: "nan" and "inf" are refused

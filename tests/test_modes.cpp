@@ -9,6 +9,7 @@
 // linear range against the linear modes and their Floquet multipliers.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <complex>
@@ -27,24 +28,11 @@
 namespace hsnc {
 namespace {
 
-// m x'' = -k1 x, and -k2 (x - d) more while x >= d.
-const char* kBilinear = R"(name = "bilinear-gap"
-[parameters]
-k1 = 4.0
-k2 = 12.0
-d = 0.1
-[[mass]]
-name = "m"
-m = 1.0
-[[spring]]
-between = ["m", "ground"]
-k = "k1"
-[[contact]]
-name = "stop"
-between = ["m", "ground"]
-gap = "d"
-k = "k2"
-)";
+// m x'' = -k1 x, and -k2 (x - d) more while x >= d: k1 = 4, k2 = 12, d = 0.1, m = 1.
+const std::string kBilinearFile = std::string(HSNC_SOURCE_DIR) + "/examples/modes/bilinear-gap.toml";
+Model bilinear() {
+    return read_model(kBilinearFile);
+}
 
 // The period of the orbit turning at x = A > d (v = 0): beyond the gap a
 // harmonic motion of omega2 about c = k2 d/(k1 + k2) from A to d, below it one
@@ -62,7 +50,7 @@ double bilinear_period(double A_, double k1_, double k2_, double d_) {
 }
 
 TEST(Modes, BilinearBackboneMatchesItsClosedForm) {
-    const Model model = parse_model(kBilinear, "bilinear-gap.toml");
+    const Model model = bilinear();
     ModesOptions o;
     o.from = 0.03;
     o.to = 0.6;
@@ -101,7 +89,7 @@ TEST(Modes, BilinearBackboneMatchesItsClosedForm) {
 // The turning point on the free side: |A| below the gap on the other side
 // too (the motion there is symmetric), and beyond it the stop is reached.
 TEST(Modes, NegativeAmplitudesTurnOnTheFreeSide) {
-    const Model model = parse_model(kBilinear, "bilinear-gap.toml");
+    const Model model = bilinear();
     ModesOptions o;
     o.from = -0.05;
     o.to = -0.3;
@@ -124,37 +112,10 @@ TEST(Modes, NegativeAmplitudesTurnOnTheFreeSide) {
 }
 
 // m1 = m2 = 1, springs 1 (ground-m1, m1-m2, m2-ground): omega 1 and sqrt(3),
-// mode 2 = (1, -1); stops k_c on m1 at x1 = d and x1 = -d.
-const char* kChain = R"(name = "chain-stops"
-[parameters]
-d = 0.1
-kc = 10.0
-[[mass]]
-name = "m1"
-m = 1.0
-[[mass]]
-name = "m2"
-m = 1.0
-[[spring]]
-between = ["m1", "ground"]
-k = 1.0
-[[spring]]
-between = ["m1", "m2"]
-k = 1.0
-[[spring]]
-between = ["m2", "ground"]
-k = 1.0
-[[contact]]
-name = "right"
-between = ["m1", "ground"]
-gap = "d"
-k = "kc"
-[[contact]]
-name = "left"
-between = ["ground", "m1"]
-gap = "d"
-k = "kc"
-)";
+// mode 2 = (1, -1); stops k_c = 10 on m1 at x1 = d and x1 = -d, d = 0.1.
+Model chain() {
+    return read_model(std::string(HSNC_SOURCE_DIR) + "/examples/modes/chain-stops.toml");
+}
 
 // The symmetric mode (odd in x, reversible in t) passes x = 0 on every dof at
 // a quarter period: find x2(0) and tau = T/4 with x(tau) = 0 from x = (A,
@@ -163,12 +124,12 @@ struct Quarter {
     double x2, T;
 };
 Quarter quarter_period_shooting(const Model& base, double A, double x2, double tau) {
-    auto end = [&](double x2_, double tau_) {
+    auto end = [&](double x2_trial, double tau_trial) {
         Model m = base;
-        m.x0 = {A, x2_};
+        m.x0 = {A, x2_trial};
         m.v0 = {0.0, 0.0};
         SimulateOptions o;
-        o.t_end = tau_;
+        o.t_end = tau_trial;
         o.samples = false;
         o.precision_digits = 30;
         testing::Recorder none(2);
@@ -191,7 +152,7 @@ Quarter quarter_period_shooting(const Model& base, double A, double x2, double t
 }
 
 TEST(Modes, ChainWithStopsMatchesQuarterPeriodShootingOnTheReference) {
-    const Model model = parse_model(kChain, "chain-stops.toml");
+    const Model model = chain();
     ModesOptions o;
     o.mode = 2;
     o.dof = "m1";
@@ -225,9 +186,108 @@ TEST(Modes, ChainWithStopsMatchesQuarterPeriodShootingOnTheReference) {
     }
 }
 
+// Mode 1 of the chain stiffens past the ratio omega2/omega = 2: its multiplier
+// pair of mode 2 reaches +1 and leaves the circle (a 2:1 internal resonance),
+// the orbit is unstable while the pair is real, and the branch goes on beyond.
+TEST(Modes, InternalResonanceIsMarkedAndTheBranchFollowedWithoutAJump) {
+    const Model model = chain();
+    ModesOptions o;
+    o.mode = 1;
+    o.dof = "m1";
+    o.from = 0.06;
+    o.to = 0.51;
+    o.points = 10;  // 0.06, 0.11, ..., 0.51: a coarse grid across the tongue
+    o.tolerance = 1e-13;
+    const ModesResult r = modes(model, o);
+    ASSERT_EQ(r.status, ModesStatus::ok) << r.message;
+    ASSERT_EQ(r.others, std::vector<int>{2});
+    EXPECT_NEAR(r.points.front().ratios[0], std::sqrt(3.0), 1e-12);  // omega2/omega1 below the stops
+    int marked = 0;
+    bool passed = false;
+    for (const ModePoint& p : r.points) {
+        const double ratio = p.ratios.at(0);
+        for (const std::string& s : p.resonances) {
+            EXPECT_EQ(s, "mode2 2:1") << "A = " << p.amplitude;
+            ++marked;
+            passed = true;
+        }
+        if (!passed) EXPECT_LT(ratio, 2.0) << "A = " << p.amplitude;
+        if (std::fabs(ratio - 2.0) < 1e-9) {  // in the tongue: a real pair mu, 1/mu
+            EXPECT_FALSE(p.stable) << "A = " << p.amplitude;
+            EXPECT_GT(p.max_multiplier, 1.01);
+            EXPECT_NEAR(p.multipliers.front().imag(), 0.0, 1e-9);
+            EXPECT_GT(p.multipliers.front().real(), 1.0);
+        } else {
+            EXPECT_TRUE(p.stable) << "A = " << p.amplitude;
+            // The ratio is the pair's angle: e^{+-i 2 pi ratio} among the multipliers.
+            int found = 0;
+            for (const auto& mu : p.multipliers)
+                found += std::abs(mu - std::polar(1.0, 2 * M_PI * ratio)) < 1e-8 ||
+                         std::abs(mu - std::polar(1.0, -2 * M_PI * ratio)) < 1e-8;
+            EXPECT_EQ(found, 2) << "A = " << p.amplitude;
+        }
+    }
+    EXPECT_EQ(marked, 1);
+    EXPECT_GT(r.points.back().ratios[0], 2.0);  // out of the tongue again, beyond it
+    EXPECT_TRUE(r.points.back().stable);
+
+    // The same branch on a grid five times finer: the same orbits where the grids meet.
+    ModesOptions fine = o;
+    fine.points = 46;
+    const ModesResult f = modes(model, fine);
+    ASSERT_EQ(f.status, ModesStatus::ok) << f.message;
+    for (std::size_t i = 0; i < r.points.size(); ++i) {
+        const ModePoint& a = r.points[i];
+        const ModePoint& b = f.points[5 * i];
+        ASSERT_NEAR(a.amplitude, b.amplitude, 1e-15);
+        EXPECT_NEAR(a.period, b.period, 1e-11 * a.period) << "A = " << a.amplitude;
+        EXPECT_NEAR(a.x[1], b.x[1], 1e-11 * std::fabs(a.x[1])) << "A = " << a.amplitude;
+    }
+    // In the tongue, the unstable orbit against the quarter-period shooting on the reference.
+    const ModePoint& in = r.points[3];  // A = 0.21
+    ASSERT_FALSE(in.stable);
+    const Quarter q = quarter_period_shooting(model, in.amplitude, in.x[1], in.period / 4);
+    EXPECT_NEAR(in.period, q.T, 1e-10 * q.T);
+    EXPECT_NEAR(in.x[1], q.x2, 1e-10 * std::fabs(q.x2));
+}
+
+TEST(Modes, CommandWritesTheBackboneAndRefusesByFlag) {
+    testing::TempDir dir;
+    const std::string model = "'" + std::string(HSNC_SOURCE_DIR) + "/examples/modes/chain-stops.toml'";
+    const testing::CliRun ok = testing::run_hsnc("modes " + model +
+                                                 " --mode 1 --dof m1 --from 0.06 --to 0.51 "
+                                                 "--points 10 --out '" +
+                                                 dir / "b.csv" + "' --multipliers '" + dir / "mu.csv" + "' --quiet");
+    ASSERT_EQ(ok.exit_code, 0) << ok.err;
+    EXPECT_EQ(ok.out.rfind("status=ok mode=1 dof=m1 linear_omega=", 0), 0u) << ok.out;
+    EXPECT_NE(ok.out.find(" points=10 "), std::string::npos) << ok.out;
+    EXPECT_NE(ok.out.find(" unstable="), std::string::npos) << ok.out;
+    const std::string csv = testing::slurp(dir / "b.csv");
+    EXPECT_EQ(csv.substr(0, csv.find('\n')),
+              "amplitude,omega,omega_ratio,period,energy,x_m1,x_m2,v_m1,v_m2,ratio_mode2,resonance,max_multiplier,"
+              "stable,events,grazing,iterations,residual");
+    EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 11);
+    EXPECT_NE(csv.find(",mode2 2:1,"), std::string::npos);
+    const std::string mu = testing::slurp(dir / "mu.csv");
+    EXPECT_EQ(mu.substr(0, mu.find('\n')), "amplitude,index,re,im,abs");
+    EXPECT_EQ(std::count(mu.begin(), mu.end(), '\n'), 1 + 10 * 4);
+
+    auto refused = [&](const std::string& flags, const std::string& word) {
+        const testing::CliRun r = testing::run_hsnc("modes " + model + " " + flags);
+        EXPECT_EQ(r.exit_code, 2) << flags << ": " << r.err;
+        EXPECT_NE(r.err.find(word), std::string::npos) << r.err;
+        EXPECT_EQ(r.out, "");
+    };
+    refused("--points 5", "--to");
+    refused("--to 0.2 --mode 3", "--mode");
+    refused("--to 0.2 --dof m7", "--dof");
+    refused("--to 0.2 --x0 m1=0.1", "--x0");
+    refused("--to nan", "--to");
+}
+
 TEST(Modes, RefusesWhatIsNotConservativeByName) {
     auto refused = [](const std::string& extra, const std::string& word) {
-        const Model model = parse_model(std::string(kBilinear) + extra, "m.toml");
+        const Model model = parse_model(testing::slurp(kBilinearFile) + extra, "m.toml");
         ModesOptions o;
         o.to = 0.2;
         try {
@@ -248,7 +308,7 @@ TEST(Modes, RefusesWhatIsNotConservativeByName) {
 }
 
 TEST(Modes, RefusesOptionsThatDoNotFit) {
-    const Model model = parse_model(kChain, "chain-stops.toml");
+    const Model model = chain();
     auto option = [&](const ModesOptions& o) {
         try {
             modes(model, o);

@@ -104,6 +104,17 @@ struct ModePoint {
     /// The largest |mu| but the family's pair (1 when there is no other).
     double max_multiplier = 1.0;
     bool stable = false;      ///< max_multiplier <= 1 + kConservativeMultiplier
+    /// Per other linear mode j (ModesResult::others): Theta_j / (2 pi), its
+    /// pair's rotation over one period e^{+-i Theta_j} followed continuously
+    /// from the linear limit, where it is omega_j / omega: the other mode's
+    /// frequency in units of the backbone's.
+    std::vector<double> ratios;
+    /// The internal resonances passed since the last point (or from the
+    /// linear limit): "mode<j> <p>:1" where ratio j passed the whole number
+    /// p (its multiplier passed +1: the backbone's p-th harmonic meets mode
+    /// j, a branch of another family), "mode<j> <p>:2" where it passed p/2,
+    /// p odd (-1: a period-doubled family). Empty: none.
+    std::vector<std::string> resonances;
     std::size_t events = 0;   ///< switch events over one period
     std::size_t grazing = 0;  ///< grazing switches over one period (periodic.h PeriodicResult::grazing)
     int iterations = 0;       ///< Newton steps taken at this point
@@ -124,6 +135,7 @@ struct ModesResult {
     std::vector<double> shape;        ///< its shape, mass-normalised, shape[dof] > 0
     std::vector<double> equilibrium;  ///< the static equilibrium x_eq
     std::string configuration;        ///< the equilibrium's configuration (Configuration::spec)
+    std::vector<int> others;          ///< the other linear modes (numbers from 1), ModePoint::ratios order
     std::vector<ModePoint> points;    ///< in the order of the amplitudes asked for
 };
 

@@ -1,0 +1,222 @@
+// `hsnc modes MODEL --to A [options]` (docs/interface.md, "hsnc modes"): the
+// backbone of a linear mode of a conservative model continued in amplitude by
+// exact shooting (hsnc::modes, api/hsnc/modes.h): a CSV row per point, the
+// multipliers of every point, a plot of frequency against amplitude.
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <vector>
+
+#include "analysis_flags.h"
+#include "commands.h"
+#include "csv_writer.h"
+#include "error.h"
+#include "hsnc/modes.h"
+#include "model_reader.h"
+#include "number_text.h"
+#include "output_file.h"
+#include "plot.h"
+
+namespace hsnc::cli {
+namespace {
+
+struct ModesFlags {
+    AnalysisFlags common;  // MODEL, --set, --kernels, --cache-dir, --no-cache, --quiet (--x0, --v0 refused)
+    int mode = 1, points = 50, max_iterations = 30;
+    std::string dof, out, multipliers, plot;
+    double from = NAN, to = NAN, tolerance = 1e-11;
+};
+
+std::string short_number(double x) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", x);
+    return text;
+}
+
+// The backbone: omega / omega_linear against the amplitude, unstable points
+// apart, the linear frequency marked.
+void draw_backbone(const OutputTarget& target, const ModesResult& r, const Model& model) {
+    std::ostringstream script;
+    script.precision(17);
+    const std::string dof = gnuplot_plain(model.masses[r.dof].name);
+    script << "set terminal pngcairo size 800,560 font ',11'\n"
+           << "set title \"" << gnuplot_plain(model.name) << ": backbone of linear mode " << r.mode
+           << " (omega_lin = " << short_number(r.linear_omega) << " rad/s)\" noenhanced\n"
+           << "set grid\nset key top left\n"
+           << "set xlabel 'frequency omega / omega_lin' noenhanced\n"
+           << "set offsets graph 0.05, graph 0.05, graph 0.05, graph 0.02\n"
+           << "set ylabel 'amplitude of " << dof << " (from equilibrium)' noenhanced\n"
+           << "set arrow from 1, graph 0 to 1, graph 1 nohead dt 2 lc rgb '#888888'\n"
+           << "$stable << EOD\n";
+    // The internal resonances passed, labelled at the point that follows them.
+    std::ostringstream labels;
+    labels.precision(17);
+    for (const ModePoint& p : r.points) {
+        std::string text;
+        for (const std::string& s : p.resonances) text += (text.empty() ? "" : ", ") + s;
+        if (!text.empty())
+            labels << "set label \"" << gnuplot_plain(text) << "\" at " << p.omega / r.linear_omega << ","
+                   << p.amplitude << " offset 1,-0.6 font ',9' tc rgb '#7030a0' noenhanced\n";
+    }
+    for (const ModePoint& p : r.points)
+        if (p.stable) script << p.omega / r.linear_omega << " " << p.amplitude << "\n";
+    script << "EOD\n$unstable << EOD\n";
+    bool unstable = false;
+    for (const ModePoint& p : r.points)
+        if (!p.stable) script << p.omega / r.linear_omega << " " << p.amplitude << "\n", unstable = true;
+    script << "EOD\n$all << EOD\n";
+    for (const ModePoint& p : r.points) script << p.omega / r.linear_omega << " " << p.amplitude << "\n";
+    script << "EOD\n"
+           << labels.str() << "plot $all using 1:2 with lines lw 1.5 lc rgb '#0060c0' notitle, "
+           << "$stable using 1:2 with points pt 7 ps 0.9 lc rgb '#0060c0' title 'stable'";
+    if (unstable) script << ", $unstable using 1:2 with points pt 6 ps 1.2 lw 2 lc rgb '#c00000' title 'unstable'";
+    script << "\n";
+    render_png(script.str(), target);
+}
+
+void write_backbone(const OutputTarget& target, const ModesResult& r, const Model& model) {
+    CsvFile file(target);
+    std::string header = "amplitude,omega,omega_ratio,period,energy";
+    for (const Mass& m : model.masses) header += ",x_" + m.name;
+    for (const Mass& m : model.masses) header += ",v_" + m.name;
+    for (int j : r.others) header += ",ratio_mode" + std::to_string(j);
+    header += ",resonance,max_multiplier,stable,events,grazing,iterations,residual";
+    file.text(header.c_str());
+    file.end_row();
+    for (const ModePoint& p : r.points) {
+        file.number(p.amplitude);
+        file.number(p.omega);
+        file.number(p.omega / r.linear_omega);
+        file.number(p.period);
+        file.number(p.energy);
+        for (double x : p.x) file.number(x);
+        for (double v : p.v) file.number(v);
+        for (double q : p.ratios) file.number(q);
+        std::string passed;
+        for (const std::string& s : p.resonances) passed += (passed.empty() ? "" : ";") + s;
+        file.text(passed.c_str());
+        file.number(p.max_multiplier);
+        file.text(p.stable ? "true" : "false");
+        file.number(static_cast<double>(p.events));
+        file.number(static_cast<double>(p.grazing));
+        file.number(static_cast<double>(p.iterations));
+        file.number(p.residual);
+        file.end_row();
+    }
+    file.commit();
+}
+
+void write_multipliers(const OutputTarget& target, const ModesResult& r) {
+    CsvFile file(target);
+    file.text("amplitude,index,re,im,abs");
+    file.end_row();
+    for (const ModePoint& p : r.points)
+        for (std::size_t i = 0; i < p.multipliers.size(); ++i) {
+            file.number(p.amplitude);
+            file.number(static_cast<double>(i + 1));
+            file.number(p.multipliers[i].real());
+            file.number(p.multipliers[i].imag());
+            file.number(std::abs(p.multipliers[i]));
+            file.end_row();
+        }
+    file.commit();
+}
+
+int modes_command(const ModesFlags& f) {
+    if (!f.common.overrides.x0.empty() || !f.common.overrides.v0.empty())
+        throw InputError(std::string(f.common.overrides.x0.empty() ? "--v0" : "--x0") +
+                         ": hsnc modes starts from the linear mode at the static equilibrium, not from an initial "
+                         "state");
+    const Model model = read_model(f.common.model, f.common.overrides);
+    ModesOptions o;
+    o.mode = f.mode;
+    o.dof = f.dof;
+    o.from = f.from;
+    o.to = f.to;
+    o.points = f.points;
+    o.tolerance = f.tolerance;
+    o.max_iterations = f.max_iterations;
+    const AnalysisKernels kern = analysis_kernels(f.common);
+    o.kernels = kern.kernels;
+    o.cache_dir = kern.cache_dir;
+    o.use_cache = kern.use_cache;
+    // Every output path checked before anything runs (exit code 2, nothing written).
+    AnalysisOutputs outputs;
+    const OutputTarget* out = outputs.add("--out", f.out);
+    const OutputTarget* mult = outputs.add("--multipliers", f.multipliers);
+    const OutputTarget* plot = outputs.add("--plot", f.plot, true);
+    outputs.check();
+
+    ProgressLine progress(!f.common.quiet);
+    o.progress = [&](const ModesProgress& p) {
+        if (!progress.due()) return true;
+        char text[240];
+        std::snprintf(text, sizeof text,
+                      "hsnc modes: %zu of %zu points, amplitude %.6g, %d Newton iterations, residual %.3g, %zu period "
+                      "runs, %.0f s",
+                      p.point, p.points, p.amplitude, p.iterations, p.residual, p.runs, progress.seconds());
+        progress.show(text);
+        return true;
+    };
+    ModesResult r;
+    try {
+        r = hsnc::modes(model, o);
+    } catch (const OptionError& e) {
+        throw option_flag_error(e, {{"mode", "--mode"},
+                                    {"dof", "--dof"},
+                                    {"from", "--from"},
+                                    {"to", "--to"},
+                                    {"points", "--points"},
+                                    {"tolerance", "--tol"},
+                                    {"max_iterations", "--max-iterations"}});
+    }
+    progress.clear();
+    // The points found are written whatever the status: each is a converged orbit.
+    if (out) write_backbone(*out, r, model);
+    if (mult) write_multipliers(*mult, r);
+    if (plot && !r.points.empty()) draw_backbone(*plot, r, model);
+    const bool ok = r.status == ModesStatus::ok;
+    std::ostringstream line;
+    line << "status=" << modes_status_name(r.status) << " mode=" << r.mode << " dof=" << model.masses[r.dof].name
+         << " linear_omega=" << number_text(r.linear_omega) << " points=" << r.points.size();
+    if (!r.points.empty()) {
+        const ModePoint& last = r.points.back();
+        line << " amplitude=" << number_text(last.amplitude) << " omega=" << number_text(last.omega)
+             << " energy=" << number_text(last.energy);
+    }
+    std::size_t unstable = 0;
+    for (const ModePoint& p : r.points) unstable += !p.stable;
+    line << " unstable=" << unstable;
+    std::cout << line.str() << std::endl;
+    if (!ok) std::fprintf(stderr, "hsnc: modes: %s\n", r.message.c_str());
+    return ok ? 0 : 1;
+}
+
+}  // namespace
+
+void add_modes(CLI::App& app, int& exit_code) {
+    auto f = std::make_shared<ModesFlags>();
+    auto* sub = app.add_subcommand(
+        "modes", "nonlinear normal modes: the backbone of a linear mode of a conservative model, exactly");
+    add_analysis_flags(sub, f->common);
+    sub->add_option("--mode", f->mode, "the linear mode to continue, 1 = lowest at the static equilibrium (default 1)");
+    sub->add_option("--dof", f->dof,
+                    "the dof whose amplitude parameterises the backbone (default: the mode's largest)");
+    sub->add_option("--from", f->from, "first amplitude, from the dof's equilibrium position (default TO/POINTS)")
+        ->check(finite_number());
+    sub->add_option("--to", f->to, "last amplitude (required; negative: the turning point on the negative side)")
+        ->check(finite_number());
+    sub->add_option("--points", f->points, "points evenly spaced in amplitude from --from to --to (default 50)");
+    sub->add_option("--out", f->out, "backbone CSV, a row per point (docs/interface.md)");
+    sub->add_option("--multipliers", f->multipliers, "Floquet multipliers CSV: amplitude,index,re,im,abs");
+    sub->add_option("--plot", f->plot, "draw the backbone (frequency against amplitude) into this PNG (gnuplot)");
+    sub->add_option("--tol", f->tolerance, "converged when |P(y) - y| is at most this (relative; default 1e-11)")
+        ->check(finite_number());
+    sub->add_option("--max-iterations", f->max_iterations, "Newton iterations at most per point (default 30)");
+    sub->callback([f, &exit_code] { exit_code = modes_command(*f); });
+}
+
+}  // namespace hsnc::cli
