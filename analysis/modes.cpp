@@ -229,7 +229,7 @@ void check_options(const Model& model, const ModesOptions& o) {
     if (o.points < 1) throw OptionError(kModes, "points", std::to_string(o.points), "must be >= 1");
     const double from = std::isnan(o.from) ? o.to / o.points : o.from;
     if (!std::isfinite(from) || from == 0.0 || (from > 0) != (o.to > 0))
-        throw OptionError(kModes, "from", number_text(from), "must be finite, not 0, and of the sign of `to`");
+        throw OptionError(kModes, "from", number_text(from), "must be finite, not 0, and of the last amplitude's sign");
     analysis::check_number(kModes, "tolerance", o.tolerance, true);
     if (o.max_iterations < 1)
         throw OptionError(kModes, "max_iterations", std::to_string(o.max_iterations), "must be >= 1");

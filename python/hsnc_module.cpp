@@ -31,6 +31,7 @@
 #include "file_read.h"
 #include "hsnc/generate.h"
 #include "hsnc/lyapunov.h"
+#include "hsnc/modes.h"
 #include "hsnc/periodic.h"
 #include "hsnc/simulate.h"
 #include "model_reader.h"
@@ -320,6 +321,85 @@ py::dict periodic(const Model& model, double period, int harmonic, double transi
     return d;
 }
 
+// hsnc.modes: the backbone as a dict of NumPy arrays (a row per point) and
+// the linear mode's numbers. The library's option names become the Python
+// arguments' (from, to: start, stop).
+py::dict modes(const Model& model, int mode, const std::string& dof, double start, double stop, int points,
+               double tolerance, int max_iterations, const std::string& kernels) {
+    ModesOptions o;
+    o.mode = mode;
+    o.dof = dof;
+    o.from = start;
+    o.to = stop;
+    o.points = points;
+    o.tolerance = tolerance;
+    o.max_iterations = max_iterations;
+    o.kernels = kernel_choice(kernels);
+    SignalCheck signals;
+    o.progress = [&signals](const ModesProgress&) { return signals(); };
+    ModesResult r;
+    try {
+        py::gil_scoped_release nogil;
+        r = hsnc::modes(model, o);
+    } catch (const OptionError& e) {
+        const std::string name = e.option() == "from"        ? "start"
+                                 : e.option() == "to"        ? "stop"
+                                 : e.option() == "tolerance" ? "tol"
+                                                             : e.option();
+        throw InputError("hsnc.modes(): " + name + ": " + e.reason());
+    }
+    if (signals.interrupted()) throw py::error_already_set();  // the handler's exception (KeyboardInterrupt)
+    const std::size_t n = model.dof(), rows = r.points.size(), others = r.others.size();
+    py::dict d;
+    d["status"] = modes_status_name(r.status);
+    d["message"] = r.message;
+    d["mode"] = r.mode;
+    d["dof"] = model.masses[r.dof].name;
+    d["linear_omega"] = r.linear_omega;
+    d["shape"] = vector(r.shape);
+    d["equilibrium"] = vector(r.equilibrium);
+    d["configuration"] = r.configuration;
+    d["others"] = r.others;
+    auto column = [&](auto field) {
+        std::vector<double> c;
+        for (const ModePoint& p : r.points) c.push_back(static_cast<double>(field(p)));
+        return vector(c);
+    };
+    d["amplitude"] = column([](const ModePoint& p) { return p.amplitude; });
+    d["omega"] = column([](const ModePoint& p) { return p.omega; });
+    d["period"] = column([](const ModePoint& p) { return p.period; });
+    d["energy"] = column([](const ModePoint& p) { return p.energy; });
+    d["max_multiplier"] = column([](const ModePoint& p) { return p.max_multiplier; });
+    d["residual"] = column([](const ModePoint& p) { return p.residual; });
+    std::vector<double> x, v, ratios;
+    py::array_t<std::complex<double>> mu({rows, 2 * n});
+    py::array_t<bool> stable(rows);
+    py::array_t<long> events(rows), grazing(rows), iterations(rows);
+    py::list resonances;
+    for (std::size_t i = 0; i < rows; ++i) {
+        const ModePoint& p = r.points[i];
+        x.insert(x.end(), p.x.begin(), p.x.end());
+        v.insert(v.end(), p.v.begin(), p.v.end());
+        ratios.insert(ratios.end(), p.ratios.begin(), p.ratios.end());
+        std::copy(p.multipliers.begin(), p.multipliers.end(), mu.mutable_data() + i * 2 * n);
+        stable.mutable_data()[i] = p.stable;
+        events.mutable_data()[i] = static_cast<long>(p.events);
+        grazing.mutable_data()[i] = static_cast<long>(p.grazing);
+        iterations.mutable_data()[i] = p.iterations;
+        resonances.append(py::cast(p.resonances));
+    }
+    d["x"] = matrix(x, rows, n);
+    d["v"] = matrix(v, rows, n);
+    d["ratios"] = matrix(ratios, rows, others);
+    d["resonances"] = resonances;
+    d["multipliers"] = mu;
+    d["stable"] = stable;
+    d["events"] = events;
+    d["grazing"] = grazing;
+    d["iterations"] = iterations;
+    return d;
+}
+
 // hsnc.lyapunov: the spectrum and its convergence rows.
 py::dict lyapunov(const Model& model, double t_end, double transient, double row_interval, const std::string& kernels) {
     LyapunovOptions o;
@@ -454,6 +534,8 @@ PYBIND11_MODULE(_hsnc, m) {
     hp::bind_sweep(m);
     m.def("_periodic", &hp::periodic, py::arg("model"), py::arg("period"), py::arg("harmonic"), py::arg("transient"),
           py::arg("tolerance"), py::arg("max_iterations"), py::arg("dt"), py::arg("kernels"));
+    m.def("_modes", &hp::modes, py::arg("model"), py::arg("mode"), py::arg("dof"), py::arg("start"), py::arg("stop"),
+          py::arg("points"), py::arg("tolerance"), py::arg("max_iterations"), py::arg("kernels"));
     m.def("_lyapunov", &hp::lyapunov, py::arg("model"), py::arg("t_end"), py::arg("transient"),
           py::arg("row_interval"), py::arg("kernels"));
 

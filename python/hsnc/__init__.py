@@ -27,7 +27,7 @@ import numpy as np
 from . import _hsnc
 from ._hsnc import InputError, RunError
 
-__all__ = ["InputError", "Model", "Result", "RunError", "generate", "lyapunov", "periodic", "simulate", "sweep"]
+__all__ = ["InputError", "Model", "Result", "RunError", "generate", "lyapunov", "modes", "periodic", "simulate", "sweep"]
 
 
 # Argument checks. Every argument is checked here for what the native part
@@ -460,6 +460,35 @@ def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_itera
         _output_guard(f, "dt", dt, _hsnc._sample_count(0.0, span, dt), 1 + 2 * model.dof, allow_large_output,
                       "period")
     return _hsnc._periodic(model._native, period, harmonic, transient, tol, max_iterations, dt, kernels)
+
+
+def modes(model, stop, start=None, points=50, mode=1, dof=None, tol=1e-11, max_iterations=30, kernels="auto"):
+    """The backbone of linear mode `mode` of a conservative model (as `hsnc
+    modes --to STOP --from START`, docs/interface.md "hsnc modes"): its
+    periodic orbits continued in amplitude from the linear limit, each found
+    by exact shooting with the period as an unknown. The amplitude is that of
+    `dof` (a name; None: the mode shape's largest entry) from its equilibrium
+    at its turning point; `points` amplitudes from start (None: stop/points)
+    to stop. Returns a dict: status ("ok", "not_converged"), message, mode,
+    dof, linear_omega, shape and equilibrium (arrays), configuration (at
+    rest), others (the other modes' numbers), and a row per point found:
+    amplitude, omega, period, energy, max_multiplier, residual (arrays), x, v
+    (rows x n: the state at the turning point), ratios (rows x len(others):
+    each other mode's frequency over the backbone's, from its multipliers),
+    resonances (a list per row of the internal resonances passed, e.g.
+    "mode2 2:1"), multipliers (rows x 2n complex), stable, events, grazing,
+    iterations. Ctrl-C (SIGINT) stops it promptly with KeyboardInterrupt."""
+    f = "hsnc.modes"
+    model = _model(f, model)
+    stop = _real(f, "stop", stop)
+    start = _real(f, "start", start, math.nan)
+    points = _int(f, "points", points, 1, _INT_MAX)
+    mode = _int(f, "mode", mode, 1, _INT_MAX)
+    dof = "" if dof is None else _text(f, "dof", dof)
+    tol = _real(f, "tol", tol, 1e-11, "a finite number > 0")
+    max_iterations = _int(f, "max_iterations", max_iterations, 1, _INT_MAX)
+    kernels = _text(f, "kernels", kernels, _KERNELS)
+    return _hsnc._modes(model._native, mode, dof, start, stop, points, tol, max_iterations, kernels)
 
 
 def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=None, v0=None,

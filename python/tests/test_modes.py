@@ -1,0 +1,74 @@
+"""hsnc.modes returns what `hsnc modes` writes (the same doubles), as NumPy
+arrays; the bilinear oscillator's backbone against its closed form; bad
+input raises InputError naming the Python argument."""
+
+import math
+
+import numpy as np
+import pytest
+
+import hsnc
+from conftest import SOURCE_DIR, read_csv
+
+
+def example(name):
+    return str(SOURCE_DIR / "examples" / "modes" / name)
+
+
+def bilinear_period(A, k1=4.0, k2=12.0, d=0.1):
+    """Two harmonic arcs joined at the gap: omega2 about c beyond it, omega1 about 0 below."""
+    w1, w2 = math.sqrt(k1), math.sqrt(k1 + k2)
+    if A <= d:
+        return 2 * math.pi / w1
+    c = k2 * d / (k1 + k2)
+    t2 = math.acos((d - c) / (A - c)) / w2
+    C = math.hypot(d, (A - c) * w2 * math.sin(w2 * t2) / w1)
+    return 2 * t2 + (2 * math.pi - 2 * math.acos(d / C)) / w1
+
+
+def test_bilinear_backbone_against_its_closed_form():
+    r = hsnc.modes(hsnc.Model.from_file(example("bilinear-gap.toml")), 0.6, start=0.03, points=12)
+    assert r["status"] == "ok" and r["dof"] == "m" and r["linear_omega"] == 2.0
+    closed = np.array([bilinear_period(a) for a in r["amplitude"]])
+    assert np.allclose(r["period"], closed, rtol=1e-11, atol=0)
+    assert np.allclose(r["omega"], 2 * math.pi / closed, rtol=1e-11, atol=0)
+    assert r["stable"].all() and r["x"].shape == (12, 1) and r["ratios"].shape == (12, 0)
+
+
+def test_matches_the_command_line(cli, tmp_path):
+    path = example("chain-stops.toml")
+    r = hsnc.modes(hsnc.Model.from_file(path), 0.51, start=0.06, points=10, mode=1, dof="m1")
+    out = tmp_path / "b.csv"
+    p = cli("modes", path, "--mode", 1, "--dof", "m1", "--from", 0.06, "--to", 0.51, "--points", 10, "--out", out,
+            "--quiet")
+    assert p.stdout.startswith("status=ok mode=1 dof=m1 ")
+    header, rows = read_csv(out)
+    col = {name: i for i, name in enumerate(header)}
+    assert r["others"] == [2] and len(rows) == 10
+    for i, row in enumerate(rows):
+        assert float(row[col["omega"]]) == r["omega"][i]
+        assert float(row[col["energy"]]) == r["energy"][i]
+        assert float(row[col["x_m2"]]) == r["x"][i, 1]
+        assert float(row[col["ratio_mode2"]]) == r["ratios"][i, 0]
+        assert row[col["resonance"]] == ";".join(r["resonances"][i])
+        assert (row[col["stable"]] == "true") == bool(r["stable"][i])
+    assert sum(len(x) for x in r["resonances"]) == 1 and "mode2 2:1" in sum(r["resonances"], [])
+    assert r["multipliers"].shape == (10, 4) and r["multipliers"].dtype == complex
+
+
+@pytest.mark.parametrize("kwargs, word", [
+    (dict(stop=0.5, start=-0.1), "start"),
+    (dict(stop=0.5, dof="zz"), "dof"),
+    (dict(stop=0.5, mode=3), "mode"),
+    (dict(stop=float("nan")), "stop"),
+    (dict(stop=0.5, points=0), "points"),
+])
+def test_refuses_by_argument(kwargs, word):
+    with pytest.raises(hsnc.InputError, match=word):
+        hsnc.modes(hsnc.Model.from_file(example("chain-stops.toml")), **kwargs)
+
+
+def test_refuses_a_damped_model():
+    text = open(example("bilinear-gap.toml")).read() + "\n[damping]\nbeta = 0.01\n"
+    with pytest.raises(hsnc.InputError, match=r"\[damping\]"):
+        hsnc.modes(hsnc.Model.from_string(text), 0.2)
