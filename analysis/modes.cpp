@@ -21,6 +21,8 @@ namespace {
 constexpr const char* kModes = "hsnc::modes";
 // The most a step may turn another mode's rotation, rad (see follow()).
 constexpr double kMaxTurn = 0.5;
+// The longest correction a step may need, against the step (see check_jump()).
+constexpr double kMaxCorrection = 0.3;
 
 // A nonlinear mode here is a family of periodic orbits of a conservative
 // model: anything that takes energy out is refused by name.
@@ -229,11 +231,15 @@ void check_options(const Model& model, const ModesOptions& o) {
     if (o.points < 1) throw OptionError(kModes, "points", std::to_string(o.points), "must be >= 1");
     const double from = std::isnan(o.from) ? o.to / o.points : o.from;
     if (!std::isfinite(from) || from == 0.0 || (from > 0) != (o.to > 0))
-        throw OptionError(kModes, "from", number_text(from), "must be finite, not 0, and of the last amplitude's sign");
+        throw OptionError(kModes, "from", number_text(from),
+                          "must be finite, not 0, and of the same sign as the last point");
+    if (o.parameter == ModesParameter::energy && !(o.to > 0))
+        throw OptionError(kModes, "to", number_text(o.to), "an energy must be > 0");
     analysis::check_number(kModes, "tolerance", o.tolerance, true);
     if (o.max_iterations < 1)
         throw OptionError(kModes, "max_iterations", std::to_string(o.max_iterations), "must be >= 1");
-    if (o.max_halvings < 0) throw OptionError(kModes, "max_halvings", std::to_string(o.max_halvings), "must be >= 0");
+    if (!(o.min_step > 0 && o.min_step < 1))
+        throw OptionError(kModes, "min_step", number_text(o.min_step), "must be > 0 and < 1");
 }
 
 // The amplitude dof: named, or the mode shape's largest entry; the shape turned so that it is positive there.
@@ -253,9 +259,11 @@ Eigen::Index amplitude_dof(const Model& model, const ModesOptions& o, Eigen::Vec
     return k;
 }
 
-// An orbit of the backbone: its amplitude, period and state at the turning point.
+// An orbit of the backbone: its continuation parameter (the amplitude, or the
+// square root of the energy: both grow as the mode's coordinate), period and
+// state at the turning point.
 struct Orbit {
-    double A = 0.0, T = 0.0;
+    double s = 0.0, T = 0.0;
     Eigen::VectorXd y;
 };
 
@@ -280,9 +288,21 @@ public:
         r.shape.assign(shape_.data(), shape_.data() + n_);
         r.equilibrium.assign(eq_.x.data(), eq_.x.data() + n_);
         r.configuration = eq_.cfg.spec(work);
-        // The unknowns: y without x_k and v_k, then T.
+        // The unknowns: y without v_k (the phase) and, continued in amplitude, without x_k; then T.
+        energy_ = o.parameter == ModesParameter::energy;
         for (Eigen::Index j = 0; j < 2 * n_; ++j)
-            if (j != k_ && j != n_ + k_) unknown_.push_back(j);
+            if (j != n_ + k_ && (energy_ || j != k_)) unknown_.push_back(j);
+        const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n_);
+        for (std::size_t c = 0; c < work.contacts.size(); ++c) {
+            Eigen::VectorXd w(n_);
+            const double g0 = gap(work, static_cast<int>(c), zero.data());
+            for (Eigen::Index i = 0; i < n_; ++i) {
+                Eigen::VectorXd e = zero;
+                e(i) = 1.0;
+                w(i) = gap(work, static_cast<int>(c), e.data()) - g0;
+            }
+            contact_direction_.push_back(w);
+        }
         // The linear limit: amplitude 0 at the equilibrium, period 2 pi/omega; the other modes'
         // rotations Theta_j = omega_j T (j != mode) there.
         history_.push_back({0.0, 2 * M_PI / r.linear_omega, Eigen::VectorXd::Zero(2 * n_)});
@@ -312,53 +332,72 @@ private:
         int iterations = 0;
     };
 
-    // From the last orbit to the amplitude `target`, in steps of the spacing over 2^level:
-    // halved on a failure, doubled back after a success, never below the spacing over
-    // 2^max_halvings. Adds the point; false (with the status set) when it cannot.
+    // From the last orbit to `target`: steps of the points' spacing, halved on a failure (down
+    // to min_step of the parameter's value) and doubled back after a success. At that floor a
+    // step that still fails may meet a branch point or a kink of the branch (where another
+    // family crosses, or the orbit's switches change): longer steps from the last orbit leap
+    // over it. Adds the point; false (with the status set) when none of this gets there.
     bool reach(double target) {
-        double step = target - history_.back().A;
-        int level = 0;
-        while (history_.back().A != target) {
-            const double A =
-                std::fabs(target - history_.back().A) <= std::fabs(step) ? target : history_.back().A + step;
-            const Orbit guess = predict(A);
-            Corrected c = correct(guess);
+        target_ = target;
+        const double spacing = target - history_.back().s;
+        const double floor = o_.min_step * std::max(std::fabs(history_.back().s), std::fabs(target));
+        double step = spacing;
+        while (history_.back().s != target) {
+            const double last = history_.back().s, rest = target - last;
+            const double at = std::fabs(rest) <= std::fabs(step) ? target : last + step;
+            const bool may_halve = std::fabs(step) / 2 >= floor;
+            std::string why = advance(at, may_halve);
             if (flow_.stopped()) return stop();
-            check_jump(c, guess);
-            if (!c.ok) {
-                if (++level > o_.max_halvings) {
-                    r_.status = ModesStatus::not_converged;
-                    r_.message = "the backbone cannot be followed beyond amplitude " + number_text(history_.back().A) +
-                                 " toward " + number_text(target) + " (" + std::to_string(o_.max_halvings) +
-                                 " halvings of the step): " + c.why;
-                    return false;
-                }
+            if (why.empty()) {
+                step = std::fabs(2 * step) < std::fabs(spacing) ? 2 * step : spacing;
+                continue;
+            }
+            if (may_halve) {
                 step /= 2;
                 continue;
             }
-            // The other modes' rotations, followed by continuity: a step that turns one by more
-            // than kMaxTurn is halved (while it may be), so that no pass through +1 or -1 is missed.
-            const std::vector<std::complex<double>> mu = analysis::floquet_multipliers(c.pm.M);
-            const std::vector<double> phi = pair_angles(nontrivial(mu), rotation_.size());
-            const std::vector<double> turned = phi.empty() ? rotation_ : follow(rotation_, phi);
-            double turn = 0.0;
-            for (std::size_t j = 0; j < rotation_.size(); ++j)
-                turn = std::max(turn, std::fabs(turned[j] - rotation_[j]));
-            if (turn > kMaxTurn && level < o_.max_halvings) {
-                ++level;
-                step /= 2;
-                continue;
+            bool leapt = false;
+            for (double leap = 2 * step; !leapt; leap *= 2) {
+                const double to = std::fabs(leap) >= std::fabs(rest) ? target : last + leap;
+                leapt = advance(to, false).empty();
+                if (flow_.stopped()) return stop();
+                if (to == target) break;
+                step = leap;
             }
-            for (std::size_t j = 0; j < rotation_.size(); ++j)
-                for (const long m : passed(rotation_[j], turned[j]))
-                    pending_.push_back("mode" + std::to_string(r_.others[j]) + " " +
-                                       (m % 2 == 0 ? std::to_string(m / 2) + ":1" : std::to_string(m) + ":2"));
-            rotation_ = turned;
-            history_.push_back(c.orbit);
-            if (level > 0) --level, step *= 2;  // grow back toward the spacing
-            if (A == target) add_point(c, mu);
+            if (!leapt) {
+                r_.status = ModesStatus::not_converged;
+                r_.message = "the backbone cannot be followed beyond " + parameter(last) + " toward " +
+                             parameter(target) + " (steps down to " + number_text(o_.min_step) +
+                             " of it, and longer ones beyond): " + why;
+                return false;
+            }
         }
         return true;
+    }
+
+    // One step to `at`: the orbit there, unless Newton fails, the correction is too long
+    // (check_jump) or, when `strict`, another mode's pair turns by more than kMaxTurn (so that no
+    // pass through +1 or -1 is missed). Returns why not ("" when the orbit is taken).
+    std::string advance(double at, bool strict) {
+        const Orbit guess = predict(at);
+        Corrected c = correct(guess);
+        if (flow_.stopped()) return "stopped";
+        check_jump(c, guess);
+        if (!c.ok) return c.why;
+        const std::vector<std::complex<double>> mu = analysis::floquet_multipliers(c.pm.M);
+        const std::vector<double> phi = pair_angles(nontrivial(mu), rotation_.size());
+        const std::vector<double> turned = phi.empty() ? rotation_ : follow(rotation_, phi);
+        double turn = 0.0;
+        for (std::size_t j = 0; j < rotation_.size(); ++j) turn = std::max(turn, std::fabs(turned[j] - rotation_[j]));
+        if (strict && turn > kMaxTurn) return "another mode's multipliers turn by " + number_text(turn) + " rad";
+        for (std::size_t j = 0; j < rotation_.size(); ++j)
+            for (const long m : passed(rotation_[j], turned[j]))
+                pending_.push_back("mode" + std::to_string(r_.others[j]) + " " +
+                                   (m % 2 == 0 ? std::to_string(m / 2) + ":1" : std::to_string(m) + ":2"));
+        rotation_ = turned;
+        history_.push_back(c.orbit);
+        if (at == target_) add_point(c, mu);
+        return "";
     }
 
     bool stop() {
@@ -374,7 +413,7 @@ private:
     void check_jump(Corrected& c, const Orbit& guess) const {
         if (!c.ok) return;
         const double correction = distance(c.orbit, guess), stride = distance(guess, history_.back());
-        if (correction > stride) {
+        if (correction > kMaxCorrection * stride) {
             c.ok = false;
             c.why = "the correction (" + number_text(correction) + ") exceeds the step (" + number_text(stride) +
                     "): the branch turns back or leaves for another family here";
@@ -383,7 +422,7 @@ private:
 
     void add_point(const Corrected& c, const std::vector<std::complex<double>>& mu) {
         ModePoint p;
-        p.amplitude = c.orbit.A;
+        p.amplitude = c.orbit.y(k_) - eq_.x(k_);
         p.period = c.orbit.T;
         p.omega = 2 * M_PI / c.orbit.T;
         p.energy = energy(c.orbit.y);
@@ -405,31 +444,38 @@ private:
         progress_.point = r_.points.size();
     }
 
-    // The secant through the last two orbits; from the linear limit, the mode shape.
-    Orbit predict(double A) const {
+    // The secant through the last two orbits; from the linear limit, the mode shape
+    // (an amplitude s of dof k; an energy s^2 in the mode coordinate sqrt(2) s / omega).
+    Orbit predict(double at) const {
         Orbit g;
-        g.A = A;
+        g.s = at;
         const Orbit& b = history_.back();
         if (history_.size() == 1) {
             g.T = b.T;
             g.y = b.y;
-            g.y.head(n_) += (A / shape_(k_)) * shape_;
+            const double q = energy_ ? std::sqrt(2.0) * at / r_.linear_omega : at / shape_(k_);
+            g.y.head(n_) += q * shape_;
         } else {
             const Orbit& a = history_[history_.size() - 2];
-            const double s = (A - b.A) / (b.A - a.A);
-            g.T = b.T + s * (b.T - a.T);
-            g.y = b.y + s * (b.y - a.y);
+            const double f = (at - b.s) / (b.s - a.s);
+            g.T = b.T + f * (b.T - a.T);
+            g.y = b.y + f * (b.y - a.y);
         }
         return g;
     }
 
-    // Scaled distance of two orbits: positions against the amplitude of the first, velocities
-    // against that times its 2 pi/T, periods against T.
+    // Scaled distance of two orbits: positions against the first's amplitude (of dof k),
+    // velocities against that times its 2 pi/T, periods against T.
     double distance(const Orbit& a, const Orbit& b) const {
-        const double sx = std::fabs(a.A), sv = sx * 2 * M_PI / a.T;
+        const double sx = std::fabs(a.y(k_) - eq_.x(k_)), sv = sx * 2 * M_PI / a.T;
         const Eigen::VectorXd d = a.y - b.y;
         return std::max(
             {d.head(n_).cwiseAbs().maxCoeff() / sx, d.tail(n_).cwiseAbs().maxCoeff() / sv, std::fabs(a.T - b.T) / a.T});
+    }
+
+    // The continuation parameter as the user gave it.
+    std::string parameter(double s) const {
+        return energy_ ? "energy " + number_text(s * s) : "amplitude " + number_text(s);
     }
 
     double energy(const Eigen::VectorXd& y) {
@@ -438,14 +484,16 @@ private:
     }
 
     // P_T(y) and |P(y) - y|: positions relative to the orbit's largest excursion from the
-    // equilibrium, velocities to that times 2 pi/T (a turning point has no velocity scale of its own).
-    analysis::PeriodMapValue evaluate(const Eigen::VectorXd& y, double T) {
+    // equilibrium, velocities to that times 2 pi/T (a turning point has no velocity scale of its
+    // own); for the energy s^2, also |E(y) - s^2| / s^2.
+    analysis::PeriodMapValue evaluate(const Eigen::VectorXd& y, double T, double s) {
         ++progress_.runs;
         analysis::PeriodMapValue pm = analysis::evaluate_period_map(flow_, 0.0, T, y);
         if (pm.ok) {
             const double sx = (y.head(n_) - eq_.x).cwiseAbs().maxCoeff(), sv = sx * 2 * M_PI / T;
             const Eigen::VectorXd d = pm.Py - y;
             pm.residual = std::max(d.head(n_).cwiseAbs().maxCoeff() / sx, d.tail(n_).cwiseAbs().maxCoeff() / sv);
+            if (energy_) pm.residual = std::max(pm.residual, std::fabs(energy(y) - s * s) / (s * s));
             if (!std::isfinite(pm.residual)) pm.residual = INFINITY;
         }
         return pm;
@@ -462,19 +510,18 @@ private:
         return "";
     }
 
-    // Newton on P_T(y) - y = 0 at the guess's amplitude: the 2n residuals in the unknowns and T,
-    // least squares, each step halved until the residual falls.
+    // Newton on P_T(y) - y = 0 at the guess's amplitude (x_k fixed) or energy (E(y) = s^2, one
+    // more residual): the residuals in the unknowns and T, least squares, each step halved
+    // until the residual falls.
     Corrected correct(const Orbit& g) {
         Corrected c;
         c.orbit = g;
         Eigen::VectorXd& y = c.orbit.y;
         double& T = c.orbit.T;
-        y(k_) = eq_.x(k_) + g.A;
+        if (!energy_) y(k_) = eq_.x(k_) + g.s;
         y(n_ + k_) = 0.0;
-        progress_.amplitude = g.A;
-        c.pm = evaluate(y, T);
-        const auto U = static_cast<Eigen::Index>(unknown_.size());
-        const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(2 * n_, 2 * n_);
+        progress_.amplitude = energy_ ? g.s * g.s : g.s;
+        c.pm = evaluate(y, T, g.s);
         for (int it = 0;; ++it) {
             progress_.iterations = it;
             progress_.residual = c.pm.residual;
@@ -486,14 +533,12 @@ private:
             }
             c.why = stuck(c.pm, it);
             if (!c.why.empty()) return c;
-            Eigen::MatrixXd J(2 * n_, U + 1);
-            for (Eigen::Index u = 0; u < U; ++u) J.col(u) = (c.pm.M - I).col(unknown_[static_cast<std::size_t>(u)]);
-            J.col(U) = field_(c.pm.end, c.pm.Py);  // dP/dT
-            const Eigen::VectorXd step = J.colPivHouseholderQr().solve(-(c.pm.Py - y));
+            const Eigen::VectorXd step = newton_step(c.pm, y, g.s);
             if (!step.allFinite()) {
                 c.why = "the Newton step is not finite";
                 return c;
             }
+            const auto U = static_cast<Eigen::Index>(unknown_.size());
             bool accepted = false;
             double lambda = 1.0;
             for (int halving = 0; halving <= 10 && !accepted; ++halving, lambda *= 0.5) {
@@ -501,7 +546,7 @@ private:
                 for (Eigen::Index u = 0; u < U; ++u) ty(unknown_[static_cast<std::size_t>(u)]) += lambda * step(u);
                 const double tT = T + lambda * step(U);
                 if (!(tT > 0)) continue;
-                analysis::PeriodMapValue next = evaluate(ty, tT);
+                analysis::PeriodMapValue next = evaluate(ty, tT, g.s);
                 if (flow_.stopped()) return c;
                 if (next.ok && next.residual < c.pm.residual) {
                     y = ty;
@@ -517,6 +562,43 @@ private:
         }
     }
 
+    // The least-squares step in the unknowns and T: (M - I) on the unknowns' columns, dP/dT =
+    // f(P(y)); for the energy, the row grad E weighted to a length (dE/E = 2 dA/A).
+    Eigen::VectorXd newton_step(const analysis::PeriodMapValue& pm, const Eigen::VectorXd& y, double s) {
+        const auto U = static_cast<Eigen::Index>(unknown_.size());
+        const Eigen::Index rows = 2 * n_ + (energy_ ? 1 : 0);
+        Eigen::MatrixXd J = Eigen::MatrixXd::Zero(rows, U + 1);
+        Eigen::VectorXd rhs(rows);
+        for (Eigen::Index u = 0; u < U; ++u) {
+            const Eigen::Index j = unknown_[static_cast<std::size_t>(u)];
+            J.block(0, u, 2 * n_, 1) = pm.M.col(j);
+            J(j, u) -= 1.0;
+        }
+        J.block(0, U, 2 * n_, 1) = field_(pm.end, pm.Py);
+        rhs.head(2 * n_) = -(pm.Py - y);
+        if (energy_) {
+            const double w = (y.head(n_) - eq_.x).cwiseAbs().maxCoeff() / (2 * s * s);
+            const Eigen::VectorXd grad = energy_gradient(y);
+            for (Eigen::Index u = 0; u < U; ++u) J(2 * n_, u) = w * grad(unknown_[static_cast<std::size_t>(u)]);
+            rhs(2 * n_) = -w * (energy(y) - s * s);
+        }
+        return J.colPivHouseholderQr().solve(rhs);
+    }
+
+    // dE/dy: (K_open x - f_open + sum over closed contacts of k G w, M v).
+    Eigen::VectorXd energy_gradient(const Eigen::VectorXd& y) {
+        const Configuration open = Configuration::all_open(work_);
+        const Eigen::VectorXd x = y.head(n_);
+        Eigen::VectorXd grad(2 * n_);
+        grad.head(n_) = field_.K(open) * x - field_.f(open);
+        for (std::size_t c = 0; c < work_.contacts.size(); ++c) {
+            const double G = gap(work_, static_cast<int>(c), x.data());
+            if (G > 0) grad.head(n_) += work_.contacts[c].k * G * contact_direction_[c];
+        }
+        grad.tail(n_) = field_.M() * y.tail(n_);
+        return grad;
+    }
+
     const Model& work_;
     const ModesOptions& o_;
     ModesResult& r_;
@@ -526,10 +608,13 @@ private:
     analysis::Flow flow_;
     Eigen::VectorXd shape_;
     Eigen::Index k_ = 0;
+    bool energy_ = false;                             // continued in energy (Orbit::s = sqrt(E)), else in amplitude
+    std::vector<Eigen::VectorXd> contact_direction_;  // w of each contact: G = w^T x - gap
     std::vector<Eigen::Index> unknown_;
     std::vector<Orbit> history_;
     std::vector<double> rotation_;
     std::vector<std::string> pending_;  // resonances passed since the last point
+    double target_ = NAN;               // the point reach() is after
     ModesProgress progress_;
 };
 
@@ -540,9 +625,13 @@ ModesResult modes(const Model& model, const ModesOptions& o) {
     check_options(model, o);
     const Model work = free_model(model);
     const double from = std::isnan(o.from) ? o.to / o.points : o.from;
+    // The continuation runs in the amplitude, or in sqrt(E) (as the amplitude grows).
     std::vector<double> targets;
-    for (int p = 0; p < o.points; ++p)
-        targets.push_back(o.points == 1 ? o.to : from + (o.to - from) * p / (o.points - 1));
+    for (int p = 0; p < o.points; ++p) {
+        const double f = o.points == 1 ? 1.0 : static_cast<double>(p) / (o.points - 1);
+        const double value = o.geometric ? from * std::pow(o.to / from, f) : from + (o.to - from) * f;
+        targets.push_back(o.parameter == ModesParameter::energy ? std::sqrt(value) : value);
+    }
     ModesResult r;
     Backbone backbone(work, o, r);
     backbone.run(targets);

@@ -28,6 +28,7 @@ struct ModesFlags {
     int mode = 1, points = 50, max_iterations = 30;
     std::string dof, out, multipliers, plot;
     double from = NAN, to = NAN, tolerance = 1e-11;
+    bool energy = false, geometric = false;
 };
 
 std::string short_number(double x) {
@@ -36,41 +37,57 @@ std::string short_number(double x) {
     return text;
 }
 
-// The backbone: omega / omega_linear against the amplitude, unstable points
-// apart, the linear frequency marked.
-void draw_backbone(const OutputTarget& target, const ModesResult& r, const Model& model) {
+// The backbone, unstable points apart and the resonances passed labelled: the
+// amplitude against omega / omega_lin (the linear frequency dashed), or for an
+// energy backbone omega / omega_lin against the energy (a frequency-energy
+// plot, the energy logarithmic when the points span more than a decade).
+void draw_backbone(const OutputTarget& target, const ModesResult& r, const Model& model, bool energy) {
+    auto xy = [&](const ModePoint& p) {
+        std::ostringstream at;
+        at.precision(17);
+        if (energy)
+            at << p.energy << " " << p.omega / r.linear_omega;
+        else
+            at << p.omega / r.linear_omega << " " << p.amplitude;
+        return at.str();
+    };
     std::ostringstream script;
-    script.precision(17);
     const std::string dof = gnuplot_plain(model.masses[r.dof].name);
     script << "set terminal pngcairo size 800,560 font ',11'\n"
            << "set title \"" << gnuplot_plain(model.name) << ": backbone of linear mode " << r.mode
            << " (omega_lin = " << short_number(r.linear_omega) << " rad/s)\" noenhanced\n"
            << "set grid\nset key top left\n"
-           << "set xlabel 'frequency omega / omega_lin' noenhanced\n"
-           << "set offsets graph 0.05, graph 0.05, graph 0.05, graph 0.02\n"
-           << "set ylabel 'amplitude of " << dof << " (from equilibrium)' noenhanced\n"
-           << "set arrow from 1, graph 0 to 1, graph 1 nohead dt 2 lc rgb '#888888'\n"
-           << "$stable << EOD\n";
-    // The internal resonances passed, labelled at the point that follows them.
-    std::ostringstream labels;
-    labels.precision(17);
+           << "set offsets graph 0.05, graph 0.05, graph 0.05, graph 0.02\n";
+    if (energy) {
+        const double lo = r.points.front().energy, hi = r.points.back().energy;
+        if (std::max(lo, hi) > 10 * std::min(lo, hi))
+            script << "set logscale x\nset offsets 0, 0, graph 0.05, graph 0.05\n";
+        script << "set xlabel 'energy above equilibrium (J)'\n"
+               << "set ylabel 'frequency omega / omega_lin' noenhanced\n"
+               << "set arrow from graph 0, first 1 to graph 1, first 1 nohead dt 2 lc rgb '#888888'\n";
+    } else {
+        script << "set xlabel 'frequency omega / omega_lin' noenhanced\n"
+               << "set ylabel 'amplitude of " << dof << " (from equilibrium)' noenhanced\n"
+               << "set arrow from 1, graph 0 to 1, graph 1 nohead dt 2 lc rgb '#888888'\n";
+    }
     for (const ModePoint& p : r.points) {
         std::string text;
         for (const std::string& s : p.resonances) text += (text.empty() ? "" : ", ") + s;
         if (!text.empty())
-            labels << "set label \"" << gnuplot_plain(text) << "\" at " << p.omega / r.linear_omega << ","
-                   << p.amplitude << " offset 1,-0.6 font ',9' tc rgb '#7030a0' noenhanced\n";
+            script << "set label \"" << gnuplot_plain(text) << "\" at " << xy(p).replace(xy(p).find(' '), 1, ",")
+                   << " offset 1,-0.6 font ',9' tc rgb '#7030a0' noenhanced\n";
     }
+    script << "$stable << EOD\n";
     for (const ModePoint& p : r.points)
-        if (p.stable) script << p.omega / r.linear_omega << " " << p.amplitude << "\n";
+        if (p.stable) script << xy(p) << "\n";
     script << "EOD\n$unstable << EOD\n";
     bool unstable = false;
     for (const ModePoint& p : r.points)
-        if (!p.stable) script << p.omega / r.linear_omega << " " << p.amplitude << "\n", unstable = true;
+        if (!p.stable) script << xy(p) << "\n", unstable = true;
     script << "EOD\n$all << EOD\n";
-    for (const ModePoint& p : r.points) script << p.omega / r.linear_omega << " " << p.amplitude << "\n";
+    for (const ModePoint& p : r.points) script << xy(p) << "\n";
     script << "EOD\n"
-           << labels.str() << "plot $all using 1:2 with lines lw 1.5 lc rgb '#0060c0' notitle, "
+           << "plot $all using 1:2 with lines lw 1.5 lc rgb '#0060c0' notitle, "
            << "$stable using 1:2 with points pt 7 ps 0.9 lc rgb '#0060c0' title 'stable'";
     if (unstable) script << ", $unstable using 1:2 with points pt 6 ps 1.2 lw 2 lc rgb '#c00000' title 'unstable'";
     script << "\n";
@@ -137,6 +154,8 @@ int modes_command(const ModesFlags& f) {
     o.from = f.from;
     o.to = f.to;
     o.points = f.points;
+    o.parameter = f.energy ? ModesParameter::energy : ModesParameter::amplitude;
+    o.geometric = f.geometric;
     o.tolerance = f.tolerance;
     o.max_iterations = f.max_iterations;
     const AnalysisKernels kern = analysis_kernels(f.common);
@@ -177,7 +196,7 @@ int modes_command(const ModesFlags& f) {
     // The points found are written whatever the status: each is a converged orbit.
     if (out) write_backbone(*out, r, model);
     if (mult) write_multipliers(*mult, r);
-    if (plot && !r.points.empty()) draw_backbone(*plot, r, model);
+    if (plot && !r.points.empty()) draw_backbone(*plot, r, model, f.energy);
     const bool ok = r.status == ModesStatus::ok;
     std::ostringstream line;
     line << "status=" << modes_status_name(r.status) << " mode=" << r.mode << " dof=" << model.masses[r.dof].name
@@ -209,7 +228,11 @@ void add_modes(CLI::App& app, int& exit_code) {
         ->check(finite_number());
     sub->add_option("--to", f->to, "last amplitude (required; negative: the turning point on the negative side)")
         ->check(finite_number());
-    sub->add_option("--points", f->points, "points evenly spaced in amplitude from --from to --to (default 50)");
+    sub->add_option("--points", f->points, "points evenly spaced from --from to --to (default 50)");
+    sub->add_flag("--energy", f->energy,
+                  "--from and --to are energies above the equilibrium (J), not amplitudes: a frequency-energy "
+                  "backbone");
+    sub->add_flag("--geometric", f->geometric, "space the points in equal ratios (a backbone over decades)");
     sub->add_option("--out", f->out, "backbone CSV, a row per point (docs/interface.md)");
     sub->add_option("--multipliers", f->multipliers, "Floquet multipliers CSV: amplitude,index,re,im,abs");
     sub->add_option("--plot", f->plot, "draw the backbone (frequency against amplitude) into this PNG (gnuplot)");

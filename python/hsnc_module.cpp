@@ -324,9 +324,11 @@ py::dict periodic(const Model& model, double period, int harmonic, double transi
 // hsnc.modes: the backbone as a dict of NumPy arrays (a row per point) and
 // the linear mode's numbers. The library's option names become the Python
 // arguments' (from, to: start, stop).
-py::dict modes(const Model& model, int mode, const std::string& dof, double start, double stop, int points,
-               double tolerance, int max_iterations, const std::string& kernels) {
+py::dict modes(const Model& model, int mode, const std::string& dof, double start, double stop, int points, bool energy,
+               bool geometric, double tolerance, int max_iterations, const std::string& kernels) {
     ModesOptions o;
+    o.parameter = energy ? ModesParameter::energy : ModesParameter::amplitude;
+    o.geometric = geometric;
     o.mode = mode;
     o.dof = dof;
     o.from = start;
@@ -535,7 +537,8 @@ PYBIND11_MODULE(_hsnc, m) {
     m.def("_periodic", &hp::periodic, py::arg("model"), py::arg("period"), py::arg("harmonic"), py::arg("transient"),
           py::arg("tolerance"), py::arg("max_iterations"), py::arg("dt"), py::arg("kernels"));
     m.def("_modes", &hp::modes, py::arg("model"), py::arg("mode"), py::arg("dof"), py::arg("start"), py::arg("stop"),
-          py::arg("points"), py::arg("tolerance"), py::arg("max_iterations"), py::arg("kernels"));
+          py::arg("points"), py::arg("energy"), py::arg("geometric"), py::arg("tolerance"), py::arg("max_iterations"),
+          py::arg("kernels"));
     m.def("_lyapunov", &hp::lyapunov, py::arg("model"), py::arg("t_end"), py::arg("transient"),
           py::arg("row_interval"), py::arg("kernels"));
 

@@ -251,6 +251,95 @@ TEST(Modes, InternalResonanceIsMarkedAndTheBranchFollowedWithoutAJump) {
     EXPECT_NEAR(in.x[1], q.x2, 1e-10 * std::fabs(q.x2));
 }
 
+// Continued in energy (a frequency-energy backbone): the bilinear oscillator
+// turns at the A with 1/2 k1 A^2 + 1/2 k2 (A - d)^2 = E, its period the closed
+// form there; the chain's mode 1 through its tongue gives the orbits the
+// amplitude continuation gives at those energies.
+TEST(Modes, EnergyBackbonesMatchTheClosedFormAndTheAmplitudeBackbone) {
+    ModesOptions o;
+    o.parameter = ModesParameter::energy;
+    o.from = 1e-3;
+    o.to = 100.0;
+    o.points = 11;
+    o.geometric = true;
+    o.tolerance = 1e-13;
+    const ModesResult r = modes(bilinear(), o);
+    ASSERT_EQ(r.status, ModesStatus::ok) << r.message;
+    for (std::size_t i = 0; i < r.points.size(); ++i) {
+        const ModePoint& p = r.points[i];
+        const double E = 1e-3 * std::pow(1e5, static_cast<double>(i) / 10);
+        EXPECT_NEAR(p.energy, E, 1e-12 * E);
+        // The turning point of that energy: below the gap sqrt(2E/k1), beyond it the quadratic's root.
+        double A = std::sqrt(2 * E / 4);
+        if (A > 0.1) A = (2 * 12 * 0.1 + std::sqrt(4 * 144 * 0.01 - 4 * 16 * (12 * 0.01 - 2 * E))) / (2 * 16);
+        EXPECT_NEAR(p.amplitude, A, 1e-12 * A) << "E = " << E;
+        const double T = bilinear_period(p.amplitude, 4, 12, 0.1);
+        EXPECT_NEAR(p.period, T, 1e-12 * T) << "E = " << E;
+        EXPECT_EQ(p.v[0], 0.0);
+    }
+
+    ModesOptions a;
+    a.mode = 1;
+    a.dof = "m1";
+    a.from = 0.06;
+    a.to = 0.51;
+    a.points = 10;
+    a.tolerance = 1e-13;
+    const ModesResult by_amplitude = modes(chain(), a);
+    ASSERT_EQ(by_amplitude.status, ModesStatus::ok) << by_amplitude.message;
+    ModesOptions e = a;
+    e.parameter = ModesParameter::energy;
+    e.from = by_amplitude.points.front().energy;
+    e.to = by_amplitude.points.back().energy;
+    e.points = 2;
+    const ModesResult by_energy = modes(chain(), e);
+    ASSERT_EQ(by_energy.status, ModesStatus::ok) << by_energy.message;
+    for (std::size_t i : {std::size_t{0}, std::size_t{1}}) {
+        const ModePoint& p = by_energy.points[i];
+        const ModePoint& q = i == 0 ? by_amplitude.points.front() : by_amplitude.points.back();
+        EXPECT_NEAR(p.amplitude, q.amplitude, 1e-11 * q.amplitude);
+        EXPECT_NEAR(p.period, q.period, 1e-11 * q.period);
+        EXPECT_NEAR(p.x[1], q.x[1], 1e-11 * std::fabs(q.x[1]));
+    }
+    EXPECT_EQ(by_energy.points.back().resonances, std::vector<std::string>{"mode2 2:1"});
+}
+
+// Whatever the grid, the continuation follows one branch to one end: the
+// chain's mode 1 crosses its 2:1 tongue and a branch point where the pair
+// returns to the circle (where grids of 13 and 23 points jumped or stopped before
+// steps could leap), mode 2 its grazing onset in energy.
+TEST(Modes, EveryGridReachesTheSameEndOfTheBranch) {
+    auto last = [](ModesOptions o, int points) {
+        o.points = points;
+        const ModesResult r = modes(chain(), o);
+        EXPECT_EQ(r.status, ModesStatus::ok) << points << " points: " << r.message;
+        return r.points.empty() ? ModePoint{} : r.points.back();
+    };
+    ModesOptions a;
+    a.mode = 1;
+    a.dof = "m1";
+    a.from = 0.03;
+    a.to = 2.0;
+    const ModePoint end = last(a, 61);
+    for (int points : {3, 4, 6, 13, 23}) {
+        const ModePoint p = last(a, points);
+        EXPECT_NEAR(p.period, end.period, 1e-10 * end.period) << points << " points";
+        EXPECT_NEAR(p.x[1], end.x[1], 1e-10 * std::fabs(end.x[1])) << points << " points";
+    }
+    ModesOptions e;
+    e.mode = 2;
+    e.dof = "m1";
+    e.parameter = ModesParameter::energy;
+    e.from = 1e-4;
+    e.to = 100.0;
+    const ModePoint top = last(e, 33);
+    for (int points : {3, 6, 9}) {
+        const ModePoint p = last(e, points);
+        EXPECT_NEAR(p.period, top.period, 1e-10 * top.period) << points << " points";
+        EXPECT_NEAR(p.amplitude, top.amplitude, 1e-10 * top.amplitude) << points << " points";
+    }
+}
+
 TEST(Modes, CommandWritesTheBackboneAndRefusesByFlag) {
     testing::TempDir dir;
     const std::string model = "'" + std::string(HSNC_SOURCE_DIR) + "/examples/modes/chain-stops.toml'";

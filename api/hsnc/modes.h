@@ -20,10 +20,14 @@
 // transition matrices and saltation matrices, analysis/tangent.h) and
 // dP/dT = f(P(y)), the vector field at the end. The backbone starts at the
 // linear limit (the mode shape, T = 2 pi/omega) and is continued in amplitude
-// through the points asked for, each from a secant prediction of the last
-// two; a step that does not converge is halved (up to max_halvings times), so
-// a search that cannot follow the branch stops with the points found so far
-// and says where, never a point of another branch reached by a jump.
+// (or in energy) through the points asked for, each from a secant prediction
+// of the last two. A step is refused when Newton fails, when its correction
+// is longer than 0.3 of the step (a jump onto another family), or when it
+// turns another mode's multiplier pair by more than 0.5 rad (a pass through
+// +1 or -1 missed); it is then halved, down to min_step of the parameter,
+// and at that floor longer steps leap over the trouble (a branch point, a
+// kink). A search that still cannot follow the branch stops with the points
+// found so far and says where.
 #pragma once
 
 #include <complex>
@@ -48,6 +52,12 @@ struct ModesProgress {
     std::size_t runs = 0;  ///< period-map runs so far
 };
 
+/// What parameterises the backbone (ModesOptions::from, to).
+enum class ModesParameter {
+    amplitude,  ///< the amplitude dof's excursion from equilibrium at its turning point
+    energy      ///< the energy above the equilibrium (J; the turning point of the amplitude dof on its positive side)
+};
+
 struct ModesOptions {
     /// The linear mode to continue: K = 1 the lowest natural frequency of the
     /// configuration at the static equilibrium.
@@ -61,17 +71,21 @@ struct ModesOptions {
     /// not symmetric). `to` is required; `from` NaN: to/points.
     double from = std::numeric_limits<double>::quiet_NaN();
     double to = std::numeric_limits<double>::quiet_NaN();
-    /// Points of the backbone, evenly spaced in amplitude from `from` to `to`
-    /// (1: `to` alone).
+    /// Whether `from` and `to` are amplitudes or energies (both > 0).
+    ModesParameter parameter = ModesParameter::amplitude;
+    /// Points of the backbone, evenly spaced from `from` to `to` (1: `to`
+    /// alone); with `geometric`, in equal ratios (a frequency-energy plot
+    /// over decades).
     int points = 50;
+    bool geometric = false;
     /// Converged when |P(y) - y| (positions and velocities each relative to
     /// their largest entry) is at most this.
     double tolerance = 1e-11;
     /// Newton iterations at most per point (and per halved step).
     int max_iterations = 30;
-    /// How often a step between two points may be halved before the
-    /// continuation gives up.
-    int max_halvings = 12;
+    /// The shortest step, relative to the parameter's value: a step that
+    /// fails is halved down to it, then longer steps leap over the trouble.
+    double min_step = 1e-6;
     /// Where the segment solvers come from, as for hsnc::simulate.
     KernelChoice kernels = KernelChoice::automatic;
     std::string cache_dir;

@@ -462,14 +462,17 @@ def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_itera
     return _hsnc._periodic(model._native, period, harmonic, transient, tol, max_iterations, dt, kernels)
 
 
-def modes(model, stop, start=None, points=50, mode=1, dof=None, tol=1e-11, max_iterations=30, kernels="auto"):
+def modes(model, stop, start=None, points=50, mode=1, dof=None, parameter="amplitude", geometric=False, tol=1e-11,
+          max_iterations=30, kernels="auto"):
     """The backbone of linear mode `mode` of a conservative model (as `hsnc
     modes --to STOP --from START`, docs/interface.md "hsnc modes"): its
     periodic orbits continued in amplitude from the linear limit, each found
     by exact shooting with the period as an unknown. The amplitude is that of
     `dof` (a name; None: the mode shape's largest entry) from its equilibrium
     at its turning point; `points` amplitudes from start (None: stop/points)
-    to stop. Returns a dict: status ("ok", "not_converged"), message, mode,
+    to stop, or energies above the equilibrium with parameter="energy"
+    (a frequency-energy backbone); geometric=True spaces them in equal
+    ratios. Returns a dict: status ("ok", "not_converged"), message, mode,
     dof, linear_omega, shape and equilibrium (arrays), configuration (at
     rest), others (the other modes' numbers), and a row per point found:
     amplitude, omega, period, energy, max_multiplier, residual (arrays), x, v
@@ -485,10 +488,14 @@ def modes(model, stop, start=None, points=50, mode=1, dof=None, tol=1e-11, max_i
     points = _int(f, "points", points, 1, _INT_MAX)
     mode = _int(f, "mode", mode, 1, _INT_MAX)
     dof = "" if dof is None else _text(f, "dof", dof)
+    if parameter not in ("amplitude", "energy"):
+        _refuse(f, "parameter", parameter, "'amplitude' or 'energy'")
+    geometric = _bool(f, "geometric", geometric)
     tol = _real(f, "tol", tol, 1e-11, "a finite number > 0")
     max_iterations = _int(f, "max_iterations", max_iterations, 1, _INT_MAX)
     kernels = _text(f, "kernels", kernels, _KERNELS)
-    return _hsnc._modes(model._native, mode, dof, start, stop, points, tol, max_iterations, kernels)
+    return _hsnc._modes(model._native, mode, dof, start, stop, points, parameter == "energy", geometric, tol,
+                        max_iterations, kernels)
 
 
 def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=None, v0=None,

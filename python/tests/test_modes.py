@@ -72,3 +72,14 @@ def test_refuses_a_damped_model():
     text = open(example("bilinear-gap.toml")).read() + "\n[damping]\nbeta = 0.01\n"
     with pytest.raises(hsnc.InputError, match=r"\[damping\]"):
         hsnc.modes(hsnc.Model.from_string(text), 0.2)
+
+
+def test_energy_backbone_in_equal_ratios():
+    r = hsnc.modes(hsnc.Model.from_file(example("bilinear-gap.toml")), 100.0, start=1e-3, points=6,
+                   parameter="energy", geometric=True)
+    assert r["status"] == "ok"
+    assert np.allclose(r["energy"], 1e-3 * 10.0 ** np.arange(6), rtol=1e-12, atol=0)
+    closed = np.array([bilinear_period(a) for a in r["amplitude"]])
+    assert np.allclose(r["period"], closed, rtol=1e-11, atol=0)
+    with pytest.raises(hsnc.InputError, match="parameter"):
+        hsnc.modes(hsnc.Model.from_file(example("bilinear-gap.toml")), 1.0, parameter="power")
