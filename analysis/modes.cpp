@@ -23,6 +23,8 @@ constexpr const char* kModes = "hsnc::modes";
 constexpr double kMaxTurn = 0.5;
 // The longest correction a step may need, against the step (see check_jump()).
 constexpr double kMaxCorrection = 0.3;
+// Samples of one period that bracket the turning points of the peaks.
+constexpr double kPeakSamples = 256;
 
 // A nonlinear mode here is a family of periodic orbits of a conservative
 // model: anything that takes energy out is refused by name.
@@ -428,6 +430,7 @@ private:
         p.energy = energy(c.orbit.y);
         p.x.assign(c.orbit.y.data(), c.orbit.y.data() + n_);
         p.v.assign(c.orbit.y.data() + n_, c.orbit.y.data() + 2 * n_);
+        p.peaks = peaks(c.orbit);
         p.multipliers = mu;
         const std::vector<std::complex<double>> rest = nontrivial(mu);
         p.max_multiplier = rest.empty() ? 1.0 : 0.0;
@@ -442,6 +445,62 @@ private:
         p.residual = c.pm.residual;
         r_.points.push_back(std::move(p));
         progress_.point = r_.points.size();
+    }
+
+    // Each dof's largest excursion from equilibrium over the orbit: the samples of one period
+    // (kPeakSamples) bracket every turning point (v_i changes sign), each found by the secant
+    // method (Illinois) on v_i(t) with the exact state from the sample before it.
+    std::vector<double> peaks(const Orbit& o) {
+        struct Sampler : Observer {
+            std::vector<double> t, x, v;
+            void on_sample(double ts, const double* xs, const double* vs) override {
+                t.push_back(ts);
+                x.insert(x.end(), xs, xs + n);
+                v.insert(v.end(), vs, vs + n);
+            }
+            void on_event(double, EventKind, int, const double*, const double*) override {}
+            std::size_t n = 0;
+        } samples;
+        const auto n = static_cast<std::size_t>(n_);
+        samples.n = n;
+        const RunSummary run = flow_.run(0.0, o.y.data(), o.y.data() + n_, o.T, samples, true, o.T / kPeakSamples);
+        std::vector<double> peak(n, 0.0);
+        if (run.status != RunStatus::ok) return std::vector<double>(n, NAN);
+        analysis::NullObserver none;
+        auto state_at = [&](std::size_t s, double t, std::size_t i, double& x) {
+            const RunSummary r = flow_.run(samples.t[s], &samples.x[s * n], &samples.v[s * n], t, none, false, 0.0);
+            x = r.x[i];
+            return r.v[i];
+        };
+        for (std::size_t i = 0; i < n; ++i) {
+            const double eq = eq_.x(static_cast<Eigen::Index>(i));
+            for (std::size_t s = 0; s < samples.t.size(); ++s) {
+                peak[i] = std::max(peak[i], std::fabs(samples.x[s * n + i] - eq));
+                if (s + 1 == samples.t.size()) break;
+                double ta = samples.t[s], tb = samples.t[s + 1];
+                double va = samples.v[s * n + i], vb = samples.v[(s + 1) * n + i];
+                if (!(va * vb < 0)) continue;
+                double x = NAN, last = ta;
+                for (int it = 0, side = 0; it < 60; ++it) {
+                    double t = (ta * vb - tb * va) / (vb - va);
+                    if (!(t > ta && t < tb)) t = 0.5 * (ta + tb);
+                    const double vt = state_at(s, t, i, x);
+                    if (vt == 0.0 || std::fabs(t - last) <= 1e-15 * o.T) break;
+                    last = t;
+                    if ((vt < 0) == (va < 0)) {
+                        ta = t, va = vt;
+                        if (side == -1) vb /= 2;  // Illinois: the stale end's value halved
+                        side = -1;
+                    } else {
+                        tb = t, vb = vt;
+                        if (side == 1) va /= 2;
+                        side = 1;
+                    }
+                }
+                if (!std::isnan(x)) peak[i] = std::max(peak[i], std::fabs(x - eq));
+            }
+        }
+        return peak;
     }
 
     // The secant through the last two orbits; from the linear limit, the mode shape

@@ -99,6 +99,7 @@ void write_backbone(const OutputTarget& target, const ModesResult& r, const Mode
     std::string header = "amplitude,omega,omega_ratio,period,energy";
     for (const Mass& m : model.masses) header += ",x_" + m.name;
     for (const Mass& m : model.masses) header += ",v_" + m.name;
+    for (const Mass& m : model.masses) header += ",peak_" + m.name;
     for (int j : r.others) header += ",ratio_mode" + std::to_string(j);
     header += ",resonance,max_multiplier,stable,events,grazing,iterations,residual";
     file.text(header.c_str());
@@ -111,6 +112,7 @@ void write_backbone(const OutputTarget& target, const ModesResult& r, const Mode
         file.number(p.energy);
         for (double x : p.x) file.number(x);
         for (double v : p.v) file.number(v);
+        for (double a : p.peaks) file.number(a);
         for (double q : p.ratios) file.number(q);
         std::string passed;
         for (const std::string& s : p.resonances) passed += (passed.empty() ? "" : ";") + s;

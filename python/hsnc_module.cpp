@@ -373,7 +373,7 @@ py::dict modes(const Model& model, int mode, const std::string& dof, double star
     d["energy"] = column([](const ModePoint& p) { return p.energy; });
     d["max_multiplier"] = column([](const ModePoint& p) { return p.max_multiplier; });
     d["residual"] = column([](const ModePoint& p) { return p.residual; });
-    std::vector<double> x, v, ratios;
+    std::vector<double> x, v, peaks, ratios;
     py::array_t<std::complex<double>> mu({rows, 2 * n});
     py::array_t<bool> stable(rows);
     py::array_t<long> events(rows), grazing(rows), iterations(rows);
@@ -382,6 +382,7 @@ py::dict modes(const Model& model, int mode, const std::string& dof, double star
         const ModePoint& p = r.points[i];
         x.insert(x.end(), p.x.begin(), p.x.end());
         v.insert(v.end(), p.v.begin(), p.v.end());
+        peaks.insert(peaks.end(), p.peaks.begin(), p.peaks.end());
         ratios.insert(ratios.end(), p.ratios.begin(), p.ratios.end());
         std::copy(p.multipliers.begin(), p.multipliers.end(), mu.mutable_data() + i * 2 * n);
         stable.mutable_data()[i] = p.stable;
@@ -392,6 +393,7 @@ py::dict modes(const Model& model, int mode, const std::string& dof, double star
     }
     d["x"] = matrix(x, rows, n);
     d["v"] = matrix(v, rows, n);
+    d["peak"] = matrix(peaks, rows, n);
     d["ratios"] = matrix(ratios, rows, others);
     d["resonances"] = resonances;
     d["multipliers"] = mu;

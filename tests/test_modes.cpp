@@ -69,6 +69,9 @@ TEST(Modes, BilinearBackboneMatchesItsClosedForm) {
         EXPECT_NEAR(p.energy, E, 1e-12 * E);
         EXPECT_EQ(p.x[0], p.amplitude);
         EXPECT_EQ(p.v[0], 0.0);
+        // The amplitude is on the free side beyond the gap: k1 C^2 = k1 A^2 + k2 (A - d)^2.
+        const double C = std::sqrt(p.amplitude * p.amplitude + 3 * pen * pen);
+        EXPECT_NEAR(p.peaks[0], C, 1e-13 * C) << "A = " << p.amplitude;
         EXPECT_EQ(p.events, p.amplitude > 0.1 ? 2u : 0u);  // closes and opens once a period
         EXPECT_EQ(p.multipliers.size(), 2u);
         EXPECT_EQ(p.max_multiplier, 1.0);  // only the family's pair: neutrally stable
@@ -182,6 +185,9 @@ TEST(Modes, ChainWithStopsMatchesQuarterPeriodShootingOnTheReference) {
         EXPECT_NEAR(p.period, q.T, 1e-10 * q.T) << "A = " << p.amplitude;
         EXPECT_NEAR(p.x[1] / p.amplitude, q.x2 / p.amplitude, 1e-10) << "A = " << p.amplitude;
         EXPECT_LT(p.period, 2 * M_PI / std::sqrt(3.0));  // the stops stiffen the mode
+        // A synchronous mode: every dof turns with m1, so its peaks are the turning point's.
+        EXPECT_NEAR(p.peaks[0], p.amplitude, 1e-13 * p.amplitude);
+        EXPECT_NEAR(p.peaks[1], std::fabs(p.x[1]), 1e-13 * std::fabs(p.x[1]));
         EXPECT_EQ(p.events, 4u);
     }
 }
@@ -353,7 +359,8 @@ TEST(Modes, CommandWritesTheBackboneAndRefusesByFlag) {
     EXPECT_NE(ok.out.find(" unstable="), std::string::npos) << ok.out;
     const std::string csv = testing::slurp(dir / "b.csv");
     EXPECT_EQ(csv.substr(0, csv.find('\n')),
-              "amplitude,omega,omega_ratio,period,energy,x_m1,x_m2,v_m1,v_m2,ratio_mode2,resonance,max_multiplier,"
+              "amplitude,omega,omega_ratio,period,energy,x_m1,x_m2,v_m1,v_m2,peak_m1,peak_m2,ratio_mode2,resonance,"
+              "max_multiplier,"
               "stable,events,grazing,iterations,residual");
     EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 11);
     EXPECT_NE(csv.find(",mode2 2:1,"), std::string::npos);

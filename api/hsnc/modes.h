@@ -112,6 +112,9 @@ struct ModePoint {
     /// piecewise-quadratic potential.
     double energy = 0.0;
     std::vector<double> x, v;  ///< the state at the turning point (v[dof] = 0)
+    /// Every dof's largest |x_i - x_eq,i| over the orbit (its amplitude; on
+    /// either side, at a turning point v_i = 0 found to rounding).
+    std::vector<double> peaks;
     /// Floquet multipliers, 2 per mass, largest |mu| first; two of them are
     /// the family's pair at +1 (the phase and the energy directions).
     std::vector<std::complex<double>> multipliers;

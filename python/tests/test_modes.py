@@ -33,6 +33,8 @@ def test_bilinear_backbone_against_its_closed_form():
     assert np.allclose(r["period"], closed, rtol=1e-11, atol=0)
     assert np.allclose(r["omega"], 2 * math.pi / closed, rtol=1e-11, atol=0)
     assert r["stable"].all() and r["x"].shape == (12, 1) and r["ratios"].shape == (12, 0)
+    pen = np.maximum(r["amplitude"] - 0.1, 0.0)  # beyond the gap the peak is on the free side
+    assert np.allclose(r["peak"][:, 0], np.sqrt(r["amplitude"] ** 2 + 3 * pen ** 2), rtol=1e-12, atol=0)
 
 
 def test_matches_the_command_line(cli, tmp_path):
@@ -49,6 +51,7 @@ def test_matches_the_command_line(cli, tmp_path):
         assert float(row[col["omega"]]) == r["omega"][i]
         assert float(row[col["energy"]]) == r["energy"][i]
         assert float(row[col["x_m2"]]) == r["x"][i, 1]
+        assert float(row[col["peak_m2"]]) == r["peak"][i, 1]
         assert float(row[col["ratio_mode2"]]) == r["ratios"][i, 0]
         assert row[col["resonance"]] == ";".join(r["resonances"][i])
         assert (row[col["stable"]] == "true") == bool(r["stable"][i])
