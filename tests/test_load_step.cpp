@@ -8,15 +8,18 @@
 // the same models; and the refusals (bad steps, analyses that need a constant load).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "cli_runner.h"
 #include "engine_runner.h"
 #include "error.h"
+#include "fe_models.h"
 #include "hsnc/simulate.h"
 #include "model.h"
 #include "model_reader.h"
@@ -470,6 +473,53 @@ load = { b = 0.0 }
         EXPECT_NEAR(r.events[3].t, ts, tol) << how;
         EXPECT_NEAR(r.summary.x[0], xs, tol) << how;
     }
+}
+
+// A step of the load on a massless (condensed) dof: u (m = 1) and a massless
+// r, K = [3 -1; -1 2]. Condensed, k_eff = 3 - 1/2 = 2.5 and r's load f_r acts
+// on u as f_r / 2; r follows as x_r = (f_r + x_u) / 2. From rest with f_r = 1,
+// then 3 from t = 1: x_u = 0.2 (1 - cos w t), then about 0.6 from the step's
+// state, w = sqrt(2.5); the CSV's recovered x_r takes the new load at once.
+TEST(LoadStep, AStepOnAMasslessDofMovesItsRecoveredResponseAndTheMassesByTheCondensedLoad) {
+    testing::TempDir dir;
+    Eigen::MatrixXd M(2, 2), K(2, 2);
+    M << 1, 0, 0, 0;
+    K << 3, -1, -1, 2;
+    const std::string model =
+        fe::structure_model(dir, "massless.toml", "massless-step", M, K, {"u", "r"},
+                            "[load]\nr = 1.0\n[[load_step]]\nt = 1.0\nload = { r = 3.0 }\n[simulate]\nt_end = 3.0\n");
+    const testing::CliRun run =
+        testing::run_hsnc("simulate '" + model + "' --dt 0.125 --out '" + dir / "x.csv" + "' --quiet");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const std::string csv = testing::slurp(dir / "x.csv");
+    std::istringstream in(csv);
+    std::string header;
+    std::getline(in, header);
+    ASSERT_EQ(header.rfind("t,x_u,", 0), 0u) << header;
+    const auto names = [&] {
+        std::vector<std::string> v;
+        std::istringstream h(header);
+        for (std::string c; std::getline(h, c, ',');) v.push_back(c);
+        return v;
+    }();
+    const auto col = [&](const std::string& name) {
+        return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
+    };
+    ASSERT_LT(col("x_r"), names.size()) << header;
+    const double w = std::sqrt(2.5), x1 = 0.2 * (1 - std::cos(w)), v1 = 0.2 * w * std::sin(w);
+    int rows = 0;
+    for (std::string line; std::getline(in, line); ++rows) {
+        std::vector<double> cells;
+        std::istringstream l(line);
+        for (std::string c; std::getline(l, c, ',');) cells.push_back(std::stod(c));
+        const double t = cells[0];
+        const double xu = t < 1.0 ? 0.2 * (1 - std::cos(w * t))
+                                  : 0.6 + (x1 - 0.6) * std::cos(w * (t - 1)) + v1 / w * std::sin(w * (t - 1));
+        const double fr = t < 1.0 ? 1.0 : 3.0;
+        EXPECT_NEAR(cells[col("x_u")], xu, 1e-13) << "t = " << t;
+        EXPECT_NEAR(cells[col("x_r")], (fr + xu) / 2, 1e-13) << "t = " << t;
+    }
+    EXPECT_EQ(rows, 25);
 }
 
 TEST(LoadStep, BadStepsAreRefusedByKeyAndLine) {
