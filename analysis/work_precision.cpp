@@ -67,8 +67,7 @@ struct CsvReader {
 };
 
 EventKind parse_kind(const CsvReader& r, const std::string& name) {
-    for (EventKind k : {EventKind::contact_close, EventKind::contact_open, EventKind::stick, EventKind::release,
-                        EventKind::reversal, EventKind::load_change})
+    for (EventKind k : kEventKinds)
         if (name == event_kind_name(k)) return k;
     r.fail("column 'kind': unknown event kind '" + name + "'");
 }

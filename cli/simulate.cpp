@@ -177,9 +177,7 @@ int simulate(const SimulateOptions& o) {
     std::ostringstream line;
     line << "status=" << run_status_name(sum.status) << " method=" << o.method << " t=" << number_text(sum.t)
          << " events=" << sum.events;
-    for (EventKind k : {EventKind::contact_close, EventKind::contact_open, EventKind::stick, EventKind::release,
-                        EventKind::reversal})
-        line << " " << event_kind_name(k) << "=" << obs.count(k);
+    for (EventKind k : kSwitchEventKinds) line << " " << event_kind_name(k) << "=" << obs.count(k);
     if (!model.load_steps.empty())  // [[load_step]]: the load changes, in the same form (absent otherwise)
         line << " " << event_kind_name(EventKind::load_change) << "=" << obs.count(EventKind::load_change);
     for (std::size_t i = 0; i < model.dof(); ++i) line << " x_" << model.masses[i].name << "=" << number_text(sum.x[i]);

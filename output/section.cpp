@@ -11,8 +11,6 @@
 namespace hsnc {
 namespace {
 
-constexpr EventKind kKinds[] = {EventKind::contact_close, EventKind::contact_open, EventKind::stick,
-                                EventKind::release, EventKind::reversal};
 constexpr std::size_t kMaxPanels = 8;
 
 bool is_contact_kind(EventKind k) { return k == EventKind::contact_close || k == EventKind::contact_open; }
@@ -39,7 +37,7 @@ SectionSpec parse_section(const Model& model, const std::string& text, const std
     const std::size_t colon = text.find(':');
     const std::string kind = text.substr(0, colon);
     bool found = false;
-    for (EventKind k : kKinds)
+    for (EventKind k : kSwitchEventKinds)
         if (kind == event_kind_name(k)) s.kind = k, found = true;
     if (!found)
         throw InputError(flag + " '" + text + "': expected KIND[:NAME] with KIND one of contact_close, contact_open, "

@@ -44,9 +44,6 @@ namespace hsnc::python {
 void bind_sweep(py::module_& m);  // sweep_binding.cpp
 namespace {
 
-constexpr EventKind kKinds[] = {EventKind::contact_close, EventKind::contact_open, EventKind::stick,
-                                EventKind::release, EventKind::reversal};
-
 // Collects a run; checks for signals with the GIL taken briefly.
 class Collector : public Observer {
 public:
@@ -202,7 +199,7 @@ py::dict run(const Model& model, double t_end, double dt, const std::string& met
         elements.append(event_element_name(model, kind, c.eelement_[i]));
     }
     py::dict counts;
-    for (EventKind k : kKinds) counts[event_kind_name(k)] = 0;
+    for (EventKind k : kSwitchEventKinds) counts[event_kind_name(k)] = 0;
     if (!model.load_steps.empty()) counts[event_kind_name(EventKind::load_change)] = 0;
     for (int k : c.ekind_) {
         const char* name = event_kind_name(static_cast<EventKind>(k));

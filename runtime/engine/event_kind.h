@@ -12,6 +12,13 @@ namespace hsnc {
 /// with the new constant load (api/simulate.cpp); its element is the step's index.
 enum class EventKind { contact_close, contact_open, stick, release, reversal, load_change };
 
+/// The switch kinds, in the order the summary line and the Python counts list them.
+inline constexpr EventKind kSwitchEventKinds[] = {EventKind::contact_close, EventKind::contact_open, EventKind::stick,
+                                                  EventKind::release, EventKind::reversal};
+/// Every kind: the switches, then load_change.
+inline constexpr EventKind kEventKinds[] = {EventKind::contact_close, EventKind::contact_open, EventKind::stick,
+                                            EventKind::release,       EventKind::reversal,     EventKind::load_change};
+
 /// The `kind` column of the events CSV.
 const char* event_kind_name(EventKind kind);
 
