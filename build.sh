@@ -20,6 +20,7 @@ packages=(
   gnuplot-nox fonts-dejavu-core   # plots (pngcairo needs a font)
   python3-dev pybind11-dev python3-numpy  # the Python module (import hsnc)
   python3-pytest python3-matplotlib       # its tests, examples/scenario2.py
+  python3-dask                   # the test of hsnc.sweep_map on a Dask bag
   libopenmpi-dev openmpi-bin     # hsnc sweep over MPI ranks (mpirun -np K hsnc sweep ...)
 )
 missing=()

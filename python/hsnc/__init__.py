@@ -27,7 +27,8 @@ import numpy as np
 from . import _hsnc
 from ._hsnc import InputError, RunError
 
-__all__ = ["InputError", "Model", "Result", "RunError", "generate", "lyapunov", "modes", "periodic", "simulate", "sweep"]
+__all__ = ["InputError", "Model", "Result", "RunError", "generate", "lyapunov", "modes", "periodic", "simulate", "sweep",
+           "sweep_map"]
 
 
 # Argument checks. Every argument is checked here for what the native part
@@ -423,6 +424,48 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     return _hsnc._sweep(kind, what, source, _override_texts(s), _override_texts(x0), _override_texts(v0),
                         param, start, stop, points, direction, max_periods, record_periods, restart_each, param2,
                         values2, threads, method, rtol, atol, continuation, max_steps)
+
+
+def _sweep_point(task):
+    """One point of sweep_map, where the map runs it (a process of a pool,
+    a Dask worker): the built-in sweep of that single value."""
+    model, param, value, options = task
+    return sweep(model, param, value, value, 1, restart_each=True, **options)
+
+
+def sweep_map(model, param, start, stop, points, map=map, max_periods=500, record_periods=16, method="hsnc",
+              rtol=1e-10, atol=1e-12):
+    """hsnc.sweep(model, param, start, stop, points, restart_each=True) with
+    its points run by `map` (any map(function, iterable) that keeps the order:
+    the built-in map, multiprocessing.Pool.map, an Executor's map, a Dask
+    bag's): each point from the model's initial state, so the points are
+    independent and the result is the built-in sweep's, the same doubles
+    (docs/interface.md). The model and the points' results are pickled to
+    where the map runs them."""
+    f = "hsnc.sweep_map"
+    model = _model(f, model)
+    param = _text(f, "param", param, "a parameter's name (str)")
+    start = _real(f, "start", start)
+    stop = _real(f, "stop", stop)
+    points = _int(f, "points", points, 1, _SIZE_MAX)
+    if not callable(map):
+        _refuse(f, "map", map, "a callable map(function, iterable)")
+    options = dict(max_periods=_int(f, "max_periods", max_periods, 1, _SIZE_MAX),
+                   record_periods=_int(f, "record_periods", record_periods, 1, _SIZE_MAX),
+                   method=_text(f, "method", method, _METHODS), rtol=_positive(f, "rtol", rtol),
+                   atol=_positive(f, "atol", atol))
+    # The built-in sweep's values (analysis/sweep.cpp), the same double operations.
+    values = [start if j == 0 else stop if j + 1 == points else start + (stop - start) * float(j) / float(points - 1)
+              for j in range(points)]
+    parts = list(map(_sweep_point, [(model, param, v, options) for v in values]))
+    if len(parts) != points:
+        raise RunError("%s(): the map returned %d results for %d points" % (f, len(parts), points))
+    joined = {key: parts[0][key] for key in ("param", "param2", "masses")}
+    for key in ("value", "value2", "direction", "settled", "periods", "multiple", "xmax", "xrms", "a1"):
+        joined[key] = np.concatenate([p[key] for p in parts])
+    joined["diagram"] = {key: np.concatenate([p["diagram"][key] for p in parts]) for key in parts[0]["diagram"]}
+    joined["failure"] = [text for p in parts for text in p["failure"]]
+    return joined
 
 
 def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_iterations=50, dt=None,
