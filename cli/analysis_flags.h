@@ -45,6 +45,15 @@ struct AnalysisKernels {
 };
 /// InputError naming --kernels when its value is not a kernel kind.
 AnalysisKernels analysis_kernels(const AnalysisFlags& flags);
+/// The same into an analysis's options (PeriodicOptions, LyapunovOptions,
+/// ModesOptions: each has kernels, cache_dir and use_cache).
+template <class Options>
+void set_kernels(const AnalysisFlags& flags, Options& o) {
+    const AnalysisKernels k = analysis_kernels(flags);
+    o.kernels = k.kernels;
+    o.cache_dir = k.cache_dir;
+    o.use_cache = k.use_cache;
+}
 
 /// The library names its option (OptionError::option()), the command line
 /// names the flag: "FLAG: reason" for an option listed in `flags` (pairs of

@@ -60,10 +60,7 @@ int lyapunov_command(const LyapunovFlags& f) {
     o.t_end = f.t_end;
     o.transient = f.transient;
     o.row_interval = f.row;
-    const AnalysisKernels kern = analysis_kernels(f.common);
-    o.kernels = kern.kernels;
-    o.cache_dir = kern.cache_dir;
-    o.use_cache = kern.use_cache;
+    set_kernels(f.common, o);
     SectionSpec spec;
     const bool section = section_requested(model, f.section, f.section_out, f.section_plot, &spec);
     // Every output path checked before anything runs (exit code 2, nothing written).

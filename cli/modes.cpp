@@ -160,10 +160,7 @@ int modes_command(const ModesFlags& f) {
     o.geometric = f.geometric;
     o.tolerance = f.tolerance;
     o.max_iterations = f.max_iterations;
-    const AnalysisKernels kern = analysis_kernels(f.common);
-    o.kernels = kern.kernels;
-    o.cache_dir = kern.cache_dir;
-    o.use_cache = kern.use_cache;
+    set_kernels(f.common, o);
     // Every output path checked before anything runs (exit code 2, nothing written).
     AnalysisOutputs outputs;
     const OutputTarget* out = outputs.add("--out", f.out);

@@ -82,10 +82,7 @@ int periodic_command(const PeriodicFlags& f) {
     o.tolerance = f.tolerance;
     o.max_iterations = f.max_iterations;
     o.dt = f.dt;
-    const AnalysisKernels kern = analysis_kernels(f.common);
-    o.kernels = kern.kernels;
-    o.cache_dir = kern.cache_dir;
-    o.use_cache = kern.use_cache;
+    set_kernels(f.common, o);
     // Every output path checked before anything runs (exit code 2, nothing written).
     AnalysisOutputs outputs;
     const OutputTarget* out = outputs.add("--out", f.out);
