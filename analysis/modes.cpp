@@ -40,7 +40,8 @@ void refuse_nonconservative(const Model& model) {
     if (!model.jenkins.empty()) refuse("Jenkins element " + model.jenkins.front().name);
     if (!model.dampers.empty())
         refuse(model.dampers.front().from_structure ? "[structure] damping (a damping matrix)" : "[[damper]]");
-    if (model.alpha != 0.0 || model.beta != 0.0) refuse("[damping] (Rayleigh alpha, beta)");
+    if (model.alpha != 0.0 || model.beta != 0.0)
+        refuse("[damping] (Rayleigh alpha, beta, or a [structure]'s proportional damping)");
     for (const Contact& c : model.contacts)
         if (c.c != 0.0) refuse("contact " + c.name + " has damping c");
     if (!model.load_steps.empty()) refuse("[[load_step]] " + model.load_steps.front().name);
