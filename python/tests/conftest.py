@@ -18,6 +18,39 @@ SOURCE_DIR = pathlib.Path(os.environ.get("HSNC_SOURCE_DIR", pathlib.Path(__file_
 BINARY = pathlib.Path(os.environ.get("HSNC_BINARY", SOURCE_DIR / "build" / "hsnc"))
 
 
+# Two masses, a contact and friction: the model of test_model.py and test_pickle.py.
+TWO_MASS = """
+name = "pair"
+description = "two masses, a contact and friction"
+[parameters]
+k = 4
+kc = "3 * k"
+[[mass]]
+name = "left"
+m = 1
+[[mass]]
+name = "right"
+m = 2
+mu_k = 0.1
+mu_s = 0.2
+[[spring]]
+between = ["left", "ground"]
+k = "k"
+[[spring]]
+between = ["left", "right"]
+k = "k"
+[[contact]]
+name = "stop"
+between = ["right", "ground"]
+gap = 0.05
+k = "kc"
+[initial]
+x = { left = 2.0 }
+[simulate]
+t_end = 4
+"""
+
+
 def model_path(name):
     return str(SOURCE_DIR / "models" / name)
 

@@ -3,38 +3,8 @@
 import numpy as np
 
 import hsnc
-from conftest import model_path, read_csv, run_cli
+from conftest import TWO_MASS, model_path, read_csv, run_cli
 
-TWO_MASS = """
-name = "pair"
-description = "two masses, a contact and friction"
-[parameters]
-k = 4
-kc = "3 * k"
-[[mass]]
-name = "left"
-m = 1
-[[mass]]
-name = "right"
-m = 2
-mu_k = 0.1
-mu_s = 0.2
-[[spring]]
-between = ["left", "ground"]
-k = "k"
-[[spring]]
-between = ["left", "right"]
-k = "k"
-[[contact]]
-name = "stop"
-between = ["right", "ground"]
-gap = 0.05
-k = "kc"
-[initial]
-x = { left = 2.0 }
-[simulate]
-t_end = 4
-"""
 
 
 def test_model_from_string_names_and_parameters():

@@ -8,35 +8,7 @@ import numpy as np
 import pytest
 
 import hsnc
-from conftest import model_path
-
-PAIR = """
-name = "pair"
-[parameters]
-k = 4
-[[mass]]
-name = "left"
-m = 1
-[[mass]]
-name = "right"
-m = 2
-mu_k = 0.1
-[[spring]]
-between = ["left", "ground"]
-k = "k"
-[[spring]]
-between = ["left", "right"]
-k = "k"
-[[contact]]
-name = "stop"
-between = ["right", "ground"]
-gap = 0.05
-k = 12
-[initial]
-x = { left = 2.0 }
-[simulate]
-t_end = 4
-"""
+from conftest import TWO_MASS, model_path
 
 
 def same_run(a, b):
@@ -50,7 +22,7 @@ def run(model):
 
 
 def test_a_model_from_text_comes_back_with_its_overrides():
-    m = hsnc.Model.from_string(PAIR, source="pair.toml", set={"k": 5.5}, x0={"right": 0.01})
+    m = hsnc.Model.from_string(TWO_MASS, source="pair.toml", set={"k": 5.5}, x0={"right": 0.01})
     back = pickle.loads(pickle.dumps(m))
     assert back.parameters["k"] == 5.5 and back.x0[1] == 0.01 and back.source == "pair.toml"
     same_run(run(m), run(back))
@@ -58,11 +30,11 @@ def test_a_model_from_text_comes_back_with_its_overrides():
 
 def test_a_model_from_a_file_comes_back_and_refuses_a_changed_file(tmp_path):
     path = tmp_path / "pair.toml"
-    path.write_text(PAIR)
+    path.write_text(TWO_MASS)
     m = hsnc.Model.from_file(str(path), set={"k": 3})
     data = pickle.dumps(m)
     same_run(run(m), run(pickle.loads(data)))
-    path.write_text(PAIR.replace("gap = 0.05", "gap = 0.06"))
+    path.write_text(TWO_MASS.replace("gap = 0.05", "gap = 0.06"))
     with pytest.raises(hsnc.InputError, match="the file changed since the model was pickled"):
         pickle.loads(data)
 
@@ -75,7 +47,7 @@ def test_a_result_pickles():
 
 
 def test_two_worker_processes_give_the_bits_of_the_run_in_process():
-    models = [hsnc.Model.from_string(PAIR, set={"k": k}) for k in (3.0, 4.0, 5.0)]
+    models = [hsnc.Model.from_string(TWO_MASS, set={"k": k}) for k in (3.0, 4.0, 5.0)]
     here = [run(m) for m in models]
     with concurrent.futures.ProcessPoolExecutor(max_workers=2, mp_context=multiprocessing.get_context("spawn")) as pool:
         there = list(pool.map(run, models))
