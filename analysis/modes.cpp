@@ -224,7 +224,8 @@ const char* modes_status_name(ModesStatus status) {
 
 namespace {
 
-void check_options(const Model& model, const ModesOptions& o) {
+// Checks the options; returns the first point's value (`from`, or to/points when not given).
+double check_options(const Model& model, const ModesOptions& o) {
     const std::size_t n = model.dof();
     if (o.mode < 1 || static_cast<std::size_t>(o.mode) > n)
         throw OptionError(kModes, "mode", std::to_string(o.mode),
@@ -243,6 +244,7 @@ void check_options(const Model& model, const ModesOptions& o) {
         throw OptionError(kModes, "max_iterations", std::to_string(o.max_iterations), "must be >= 1");
     if (!(o.min_step > 0 && o.min_step < 1))
         throw OptionError(kModes, "min_step", number_text(o.min_step), "must be > 0 and < 1");
+    return from;
 }
 
 // The amplitude dof: named, or the mode shape's largest entry; the shape turned so that it is positive there.
@@ -291,6 +293,7 @@ public:
         r.shape.assign(shape_.data(), shape_.data() + n_);
         r.equilibrium.assign(eq_.x.data(), eq_.x.data() + n_);
         r.configuration = eq_.cfg.spec(work);
+        rest_potential_ = potential(work, field_, eq_.x);
         // The unknowns: y without v_k (the phase) and, continued in amplitude, without x_k; then T.
         energy_ = o.parameter == ModesParameter::energy;
         for (Eigen::Index j = 0; j < 2 * n_; ++j)
@@ -388,7 +391,8 @@ private:
         check_jump(c, guess);
         if (!c.ok) return c.why;
         const std::vector<std::complex<double>> mu = analysis::floquet_multipliers(c.pm.M);
-        const std::vector<double> phi = pair_angles(nontrivial(mu), rotation_.size());
+        const std::vector<std::complex<double>> rest = nontrivial(mu);
+        const std::vector<double> phi = pair_angles(rest, rotation_.size());
         const std::vector<double> turned = phi.empty() ? rotation_ : follow(rotation_, phi);
         double turn = 0.0;
         for (std::size_t j = 0; j < rotation_.size(); ++j) turn = std::max(turn, std::fabs(turned[j] - rotation_[j]));
@@ -399,7 +403,7 @@ private:
                                    (m % 2 == 0 ? std::to_string(m / 2) + ":1" : std::to_string(m) + ":2"));
         rotation_ = turned;
         history_.push_back(c.orbit);
-        if (at == target_) add_point(c, mu);
+        if (at == target_) add_point(c, mu, rest);
         return "";
     }
 
@@ -423,7 +427,9 @@ private:
         }
     }
 
-    void add_point(const Corrected& c, const std::vector<std::complex<double>>& mu) {
+    // `rest`: the multipliers `mu` but the family's pair at +1 (nontrivial()).
+    void add_point(const Corrected& c, const std::vector<std::complex<double>>& mu,
+                   const std::vector<std::complex<double>>& rest) {
         ModePoint p;
         p.amplitude = c.orbit.y(k_) - eq_.x(k_);
         p.period = c.orbit.T;
@@ -433,7 +439,6 @@ private:
         p.v.assign(c.orbit.y.data() + n_, c.orbit.y.data() + 2 * n_);
         p.peaks = peaks(c.orbit);
         p.multipliers = mu;
-        const std::vector<std::complex<double>> rest = nontrivial(mu);
         p.max_multiplier = rest.empty() ? 1.0 : 0.0;
         for (const auto& m : rest) p.max_multiplier = std::max(p.max_multiplier, std::abs(m));
         p.stable = p.max_multiplier <= 1 + kConservativeMultiplier;
@@ -540,7 +545,7 @@ private:
 
     double energy(const Eigen::VectorXd& y) {
         const Eigen::VectorXd v = y.segment(n_, n_);
-        return 0.5 * v.dot(field_.M() * v) + potential(work_, field_, y.head(n_)) - potential(work_, field_, eq_.x);
+        return 0.5 * v.dot(field_.M() * v) + potential(work_, field_, y.head(n_)) - rest_potential_;
     }
 
     // P_T(y) and |P(y) - y|: positions relative to the orbit's largest excursion from the
@@ -668,6 +673,7 @@ private:
     analysis::Flow flow_;
     Eigen::VectorXd shape_;
     Eigen::Index k_ = 0;
+    double rest_potential_ = 0.0;                     // the potential at the equilibrium (energies are above it)
     bool energy_ = false;                             // continued in energy (Orbit::s = sqrt(E)), else in amplitude
     std::vector<Eigen::VectorXd> contact_direction_;  // w of each contact: G = w^T x - gap
     std::vector<Eigen::Index> unknown_;
@@ -682,9 +688,8 @@ private:
 
 ModesResult modes(const Model& model, const ModesOptions& o) {
     refuse_nonconservative(model);
-    check_options(model, o);
+    const double from = check_options(model, o);
     const Model work = free_model(model);
-    const double from = std::isnan(o.from) ? o.to / o.points : o.from;
     // The continuation runs in the amplitude, or in sqrt(E) (as the amplitude grows).
     std::vector<double> targets;
     for (int p = 0; p < o.points; ++p) {
