@@ -207,6 +207,7 @@ namespace api {
 
 std::unique_ptr<SolverProvider> make_provider(const Model& model, const SimulateOptions& o, SolverKind* kind,
                                               const char* function) {
+    if (o.kernels != KernelChoice::eigen) refuse_negative_damping(model, o.kernels);
     if (o.kernels == KernelChoice::tiered) {
         if (kind) *kind = SolverKind::tiered;
         return make_tiered_provider(model, o, function);

@@ -6,6 +6,7 @@
 #include <type_traits>
 
 #include "assembly.h"
+#include "error.h"
 #include "switch_values.h"
 #include "kernel_abi.h"  // hsnc_phi2: phi_2(x) = (e^x - 1 - x)/x^2, defined once
 
@@ -16,6 +17,8 @@ using cplx = std::complex<double>;
 constexpr double kTwoPi = 6.283185307179586;             // 2*pi rounded to double
 constexpr double kTwoPiLo = 2.4492935982947064e-16;      // 2*pi - kTwoPi
 constexpr double kPi = 3.141592653589793;
+// Negative damping: the bounds hold over kGrowthHorizon / |c_min| (see max_step_).
+constexpr double kGrowthHorizon = 0.5;
 // A harmonic of mode j uses the transient-coupled form when
 // sqrt(D) < kCoupled*lambda, D = (lambda - Omega^2)^2 + (c Omega)^2: the
 // standard particular solution then has amplitude > 10x the static response and
@@ -179,6 +182,11 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
         const double w = omega_(j), s = sigma_(j);
         if (lam == 0.0) {
             regime_[j] = Regime::rigid;
+        } else if (s < 0.0 && -s >= w) {
+            throw RunError("GenericSolver(): configuration " + cfg.spec(model) + ": mode " + std::to_string(j + 1) +
+                           " has negative damping c = " + std::to_string(c_(j)) +
+                           " at or beyond critical (|c| >= 2 omega): a growing motion without oscillation is not "
+                           "supported");
         } else if (s < w) {
             regime_[j] = Regime::underdamped;
             omega_d_(j) = std::sqrt((w - s) * (w + s));  // no cancellation near xi = 1
@@ -234,6 +242,13 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     // hold over one forcing period.
     max_step_ = std::isinf(min_coupled_omega) ? std::numeric_limits<double>::infinity()
                                               : kTwoPi / min_coupled_omega;
+    // Negative damping: a mode's energy E grows at most as e^{2 |c| s} (dE/dt = -c u'^2), so
+    // over a step of kGrowthHorizon / |c| its sqrt(2E) grows at most by e^{kGrowthHorizon}.
+    const double c_min = c_.size() > 0 ? c_.minCoeff() : 0.0;
+    if (c_min < 0.0) {
+        max_step_ = std::min(max_step_, kGrowthHorizon / -c_min);
+        growth_ = std::exp(kGrowthHorizon);
+    }
 
     switch_rows(model);
     absW_ = W_.cwiseAbs();
@@ -421,11 +436,12 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
             qdd = -c * ud - lam * u;
             mag = std::abs(p / lam) + std::abs(EC * u0) + std::abs(ES * v0);
             dmag = std::abs(EC * ud0) + std::abs(ES * a0);
-            // Homogeneous bound: E = (u'^2 + lambda u^2)/2 never grows (dE/dt = -c u'^2),
-            // |u''| <= (c + omega) sqrt(2E), |u'''| <= (c (c + omega) + omega^2) sqrt(2E).
-            const double e2 = std::sqrt(ud * ud + lam * u * u);
-            b2 = (c + w) * e2;
-            b3 = (c * (c + w) + lam) * e2;
+            // Homogeneous bound: E = (u'^2 + lambda u^2)/2 never grows (dE/dt = -c u'^2; with
+            // c < 0, by at most growth_ over max_step_), |u''| <= (|c| + omega) sqrt(2E),
+            // |u'''| <= (|c| (|c| + omega) + omega^2) sqrt(2E).
+            const double e2 = std::sqrt(ud * ud + lam * u * u) * growth_, ac = std::abs(c);
+            b2 = (ac + w) * e2;
+            b3 = (ac * (ac + w) + lam) * e2;
             if (regime_[j] == Regime::overdamped && gamma_(j) >= 0.5 * sig) {
                 // Well separated real roots: u = U1 e^{r1 s} + U2 e^{r2 s}, each term decays.
                 const double r1 = r1_(j), r2 = r2_(j), den = -2.0 * gamma_(j);
@@ -478,8 +494,8 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
             const double grow = s_end * phi1(-sig * s_end);
             const double ep = std::min(grow, 2.0 / std::abs(zp)), em = std::min(grow, 2.0 / std::abs(zm));
             const double Y0 = std::abs(Pj) * (ep + em) / (2.0 * wd), Y1 = w * Y0;
-            const double Y2 = std::abs(Pj) + c * Y1 + lam * Y0;
-            const double Y3 = std::abs(Pj) * W + c * Y2 + lam * Y1;
+            const double Y2 = std::abs(Pj) + std::abs(c) * Y1 + lam * Y0;
+            const double Y3 = std::abs(Pj) * W + std::abs(c) * Y2 + lam * Y1;
             b2 += Y2;
             b3 += Y3;
         }
@@ -523,7 +539,8 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
     write_sliders(t_, cfg_, slider_, out);
 
     // Switch functions (segment.h), their rates, scales (sum of |terms|) and bounds.
-    const double rigid_decay = std::exp(-alpha_ * tau);
+    // (e^{-alpha s} is largest at the horizon's end when alpha < 0.)
+    const double rigid_decay = std::exp(-alpha_ * (alpha_ < 0.0 ? tau + max_step_ : tau));
     for (std::size_t f = 0; f < switches_.size(); ++f) {
         const SwitchFunction& sf = switches_[f];
         double g, dg, scale;

@@ -16,6 +16,11 @@
 // "transient-coupled" form (the zero-state response of the harmonic, exact and
 // stable through resonance, secular at exact undamped resonance).
 //
+// Negative modal damping (c < 0, e.g. the -xi M term of hsnc modes' extended
+// periodic motion) is taken up to critical (|c| < 2 omega): the bounds then
+// hold over a finite step only (max_step()), over which the energy grows by a
+// known factor.
+//
 // No allocation in setup() or eval(): all storage is sized in the constructor.
 // eval() writes to mutable scratch, so one solver must not be evaluated from two
 // threads at once.
@@ -76,6 +81,10 @@ private:
     int nh_ = 0;  // harmonics with omega != 0
     double alpha_ = 0.0;
     double max_step_ = 0.0;
+    // Negative modal damping (hsnc modes' extended periodic motion): a mode's
+    // energy may grow by e^{2 |c| s}, so the bounds hold over max_step_ =
+    // kGrowthHorizon / |c_min| and grow by e^{kGrowthHorizon}. 1 when c >= 0.
+    double growth_ = 1.0;
 
     ConfigurationTerms t_;  // masses, friction, K(cfg), C(cfg), constant force, contacts, harmonics
     std::vector<int> coord_;  // free coordinate of each mass (its partner's for a rider), -1: ground, stuck

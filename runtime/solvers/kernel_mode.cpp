@@ -113,6 +113,14 @@ std::string DerivationFallbackProvider::describe() const {
     return text;
 }
 
+void refuse_negative_damping(const Model& model, KernelChoice mode) {
+    if (model.alpha < 0.0 || model.beta < 0.0)
+        throw InputError(std::string("--kernels ") + kernel_choice_name(mode) + ": negative Rayleigh damping (alpha = " +
+                         std::to_string(model.alpha) + ", beta = " + std::to_string(model.beta) +
+                         ", as hsnc modes' extended periodic motion adds) is run by the Eigen solver only "
+                         "(--kernels eigen): the kernels' switch bounds assume damping >= 0");
+}
+
 bool has_aot_kernels(const Model& model, const AotRegistry* registry) {
     const std::uint64_t hash = model_hash(model);
     return registry && std::any_of(registry->kernels, registry->kernels + registry->count, [&](const hsnc_kernel* k) {
@@ -128,6 +136,7 @@ std::unique_ptr<SolverProvider> make_solver_provider(const Model& model, KernelC
                                (mode == KernelChoice::jit ? " is built with JitSolverProvider"
                                                           : " is built with TieredSolverProvider"));
     if (mode == KernelChoice::eigen) return std::make_unique<GenericSolverProvider>(model);
+    refuse_negative_damping(model, mode);
     auto interpreted = [&] {
         return std::make_unique<DerivationFallbackProvider>(model,
                                                             std::make_unique<InterpretedSolverProvider>(std::move(lower)));

@@ -116,6 +116,11 @@ private:
 /// Whether `registry` (may be null) holds ahead-of-time kernels of `model` as it is.
 bool has_aot_kernels(const Model& model, const AotRegistry* registry);
 
+/// InputError for negative Rayleigh damping (alpha or beta < 0) under any
+/// `mode` but eigen: only GenericSolver bounds a growing mode's energy
+/// (generic_solver.h); the emitted kernels' bounds assume damping >= 0.
+void refuse_negative_damping(const Model& model, KernelChoice mode);
+
 /// The provider for `mode` (not jit or tiered, std::logic_error: those need
 /// the generator, see JitSolverProvider and TieredSolverProvider); `registry`
 /// (may be null) lists the AOT kernels linked in. Modes generic and interp interpret the programs `lower` gives
