@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
+#include <utility>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -25,26 +27,47 @@ constexpr double kMaxTurn = 0.5;
 constexpr double kMaxCorrection = 0.3;
 // Samples of one period that bracket the turning points of the peaks.
 constexpr double kPeakSamples = 256;
+// A damped branch's first orbit beyond the slip onset: at kAnchor times the onset amplitude, or
+// 1.5 times that and so on up to kMaxAnchor (Backbone::reach()).
+constexpr double kAnchor = 2.0, kMaxAnchor = 64.0;
+// The relative step of the finite differences in T and xi of a damped mode's Newton matrix.
+constexpr double kDifference = 1e-7;
 
-// A nonlinear mode here is a family of periodic orbits of a conservative
-// model: anything that takes energy out is refused by name.
-void refuse_nonconservative(const Model& model) {
+// A nonlinear mode here is a family of periodic orbits of a conservative model, or of
+// the EPMC system of one with Jenkins elements or Rayleigh damping (the file comment of
+// hsnc/modes.h): what neither takes is refused by name.
+void refuse_unsupported(const Model& model) {
     const std::string where = std::string(kModes) + "(): " + (model.source.empty() ? model.name : model.source) + ": ";
     auto refuse = [&](const std::string& what) {
         throw InputError(where + what +
-                         ": backbones are built for conservative models (springs, masses and undamped contacts); "
-                         "friction, Jenkins elements and damping are not supported by hsnc modes yet");
+                         ": hsnc modes takes springs, masses, contacts, Jenkins elements and Rayleigh damping; "
+                         "friction on masses, dampers, contact damping and load steps are not supported yet");
     };
     for (const Mass& m : model.masses)
         if (m.has_friction) refuse("mass " + m.name + " has friction (mu_k)");
-    if (!model.jenkins.empty()) refuse("Jenkins element " + model.jenkins.front().name);
     if (!model.dampers.empty())
         refuse(model.dampers.front().from_structure ? "[structure] damping (a damping matrix)" : "[[damper]]");
-    if (model.alpha != 0.0 || model.beta != 0.0)
-        refuse("[damping] (Rayleigh alpha, beta, or a [structure]'s proportional damping)");
     for (const Contact& c : model.contacts)
         if (c.c != 0.0) refuse("contact " + c.name + " has damping c");
     if (!model.load_steps.empty()) refuse("[[load_step]] " + model.load_steps.front().name);
+}
+
+// Damped modes (EPMC): Jenkins elements or Rayleigh damping.
+bool damped_model(const Model& model) { return !model.jenkins.empty() || model.alpha != 0.0 || model.beta != 0.0; }
+
+// The model without its Jenkins elements: its equilibrium is the one with every Jenkins spring unstretched.
+Model without_jenkins(const Model& model) {
+    Model bare = model;
+    bare.jenkins.clear();
+    bare.slider0.clear();
+    return bare;
+}
+
+// u = w^T x along an element's direction.
+double along_x(const Direction& d, const Eigen::VectorXd& x) {
+    double u = 0.0;
+    for_each_term(d, [&](int i, double w) { u += w * x(i); });
+    return u;
 }
 
 // The free model: the harmonic forcing and the base motion left out.
@@ -143,9 +166,10 @@ Equilibrium equilibrium(const Model& model, Field& field) {
     throw InputError(where + "no static equilibrium found: the contacts' states at rest do not settle");
 }
 
-// The multipliers but the family's pair at +1 (the two nearest to it).
-std::vector<std::complex<double>> nontrivial(std::vector<std::complex<double>> mu) {
-    for (int drop = 0; drop < 2 && !mu.empty(); ++drop)
+// The multipliers but the family's `family` at +1 (the ones nearest to it): the pair of a
+// conservative family (phase and energy), the phase of a damped one.
+std::vector<std::complex<double>> nontrivial(std::vector<std::complex<double>> mu, int family) {
+    for (int drop = 0; drop < family && !mu.empty(); ++drop)
         mu.erase(std::min_element(mu.begin(), mu.end(),
                                   [](const auto& a, const auto& b) { return std::abs(a - 1.0) < std::abs(b - 1.0); }));
     return mu;
@@ -239,6 +263,14 @@ double check_options(const Model& model, const ModesOptions& o) {
                           "must be finite, not 0, and of the same sign as the last point");
     if (o.parameter == ModesParameter::energy && !(o.to > 0))
         throw OptionError(kModes, "to", number_text(o.to), "an energy must be > 0");
+    if (damped_model(model) && !(o.to > 0))
+        throw OptionError(kModes, "to", number_text(o.to),
+                          "a damped mode's amplitude is where the amplitude dof turns after passing its equilibrium "
+                          "upward: must be > 0");
+    if (o.parameter == ModesParameter::energy && damped_model(model))
+        throw OptionError(kModes, "parameter", "energy",
+                          "a damped mode (Jenkins elements or Rayleigh damping) is continued in amplitude only: its "
+                          "energy is not constant over the period");
     analysis::check_number(kModes, "tolerance", o.tolerance, true);
     if (o.max_iterations < 1)
         throw OptionError(kModes, "max_iterations", std::to_string(o.max_iterations), "must be >= 1");
@@ -265,12 +297,33 @@ Eigen::Index amplitude_dof(const Model& model, const ModesOptions& o, Eigen::Vec
 }
 
 // An orbit of the backbone: its continuation parameter (the amplitude, or the
-// square root of the energy: both grow as the mode's coordinate), period and
-// state at the turning point.
+// square root of the energy: both grow as the mode's coordinate), period, state
+// on the section (x, v, then the Jenkins sliders) and, of a damped mode, the
+// EPMC coefficient xi. The section of a conservative backbone is the amplitude
+// dof's turning point (v_k = 0, x_k = x_eq,k + A); of a damped one its passage
+// through the equilibrium upward (x_k = x_eq,k, v_k > 0), the amplitude being
+// where it turns next: at a turning point a Jenkins element may stick (always,
+// on one dof), an event at the section's instant where the map has no
+// derivative.
 struct Orbit {
-    double s = 0.0, T = 0.0;
+    double s = 0.0, T = 0.0, xi = 0.0;
     Eigen::VectorXd y;
 };
+
+// The linear modes at the equilibrium: of the model itself, or, with Jenkins
+// elements, of the configuration with all of them stuck (eq: the model without them).
+void stuck_modes(const Model& work, Field& field, Equilibrium& eq) {
+    if (work.jenkins.empty()) return;
+    Configuration cfg = Configuration::all_open(work);
+    cfg.closed = eq.cfg.closed;
+    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> ges(stiffness_matrix(work, cfg), field.M());
+    if (ges.info() != Eigen::Success)
+        throw RunError(std::string(kModes) + "(): the eigenproblem (K, M) of configuration " + cfg.spec(work) +
+                       " failed");
+    eq.omega2 = ges.eigenvalues();
+    eq.shapes = ges.eigenvectors();
+    eq.cfg = cfg;
+}
 
 // The continuation of one backbone (api/hsnc/modes.h): the shooting at one
 // amplitude (correct), the secant prediction, and the points.
@@ -278,26 +331,34 @@ class Backbone {
 public:
     Backbone(const Model& work, const ModesOptions& o, ModesResult& r)
         : work_(work),
+          bare_(without_jenkins(work)),
           o_(o),
           r_(r),
-          field_(work),
-          eq_(equilibrium(work, field_)),
+          field_(bare_),
+          eq_(equilibrium(bare_, field_)),
           n_(static_cast<Eigen::Index>(work.dof())),
-          flow_(work, {o.kernels, o.cache_dir, o.use_cache}, kModes) {
+          nj_(static_cast<Eigen::Index>(work.jenkins.size())),
+          damped_(damped_model(work)) {
+        stuck_modes(work, field_, eq_);
         const Eigen::Index mode = o.mode - 1;
         shape_ = eq_.shapes.col(mode);
         k_ = amplitude_dof(work, o, shape_);
         r.mode = o.mode;
         r.dof = static_cast<std::size_t>(k_);
+        r.damped = damped_;
         r.linear_omega = std::sqrt(eq_.omega2(mode));
+        // The linear limit's modal damping c = alpha + beta omega^2: EPMC's xi there.
+        const double xi0 = work.alpha + work.beta * eq_.omega2(mode);
+        r.linear_damping_ratio = xi0 / (2 * r.linear_omega);
         r.shape.assign(shape_.data(), shape_.data() + n_);
         r.equilibrium.assign(eq_.x.data(), eq_.x.data() + n_);
         r.configuration = eq_.cfg.spec(work);
-        rest_potential_ = potential(work, field_, eq_.x);
-        // The unknowns: y without v_k (the phase) and, continued in amplitude, without x_k; then T.
+        rest_potential_ = potential(bare_, field_, eq_.x);
+        // The unknowns: y without v_k (the phase) and, continued in amplitude, without x_k; then T
+        // (and xi of a damped mode).
         energy_ = o.parameter == ModesParameter::energy;
-        for (Eigen::Index j = 0; j < 2 * n_; ++j)
-            if (j != n_ + k_ && (energy_ || j != k_)) unknown_.push_back(j);
+        for (Eigen::Index j = 0; j < 2 * n_ + nj_; ++j)
+            if (damped_ ? j != k_ : j != n_ + k_ && (energy_ || j != k_)) unknown_.push_back(j);
         const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n_);
         for (std::size_t c = 0; c < work.contacts.size(); ++c) {
             Eigen::VectorXd w(n_);
@@ -309,16 +370,27 @@ public:
             }
             contact_direction_.push_back(w);
         }
-        // The linear limit: amplitude 0 at the equilibrium, period 2 pi/omega; the other modes'
-        // rotations Theta_j = omega_j T (j != mode) there.
-        history_.push_back({0.0, 2 * M_PI / r.linear_omega, Eigen::VectorXd::Zero(2 * n_)});
+        // The linear limit: amplitude 0 at the equilibrium (the sliders where their springs are
+        // unstretched), period 2 pi/omega; the other modes' rotations Theta_j = omega_j T (j !=
+        // mode) there, followed on a conservative backbone only.
+        history_.push_back({0.0, 2 * M_PI / r.linear_omega, xi0, Eigen::VectorXd::Zero(2 * n_ + nj_)});
         history_.back().y.head(n_) = eq_.x;
-        for (Eigen::Index j = 0; j < n_; ++j)
+        for (Eigen::Index j = 0; j < nj_; ++j)
+            history_.back().y(2 * n_ + j) = along_x(work.jenkins[static_cast<std::size_t>(j)].direction(), eq_.x);
+        const Eigen::VectorXd s0 = history_.back().y.tail(nj_);
+        r.sliders.assign(s0.data(), s0.data() + nj_);
+        for (Eigen::Index j = 0; j < n_ && !damped_; ++j)
             if (j != mode) {
                 r.others.push_back(static_cast<int>(j) + 1);
                 rotation_.push_back(2 * M_PI * std::sqrt(eq_.omega2(j)) / r.linear_omega);
             }
-        if (o.progress) flow_.set_progress([this](double) { return o_.progress(progress_); });
+        xi_scale_ = r.linear_omega;
+        // Where the linear (all stuck) mode first makes a Jenkins element slip: |k (u - s0)| =
+        // F_s with u - s0 = A (w . shape) / shape_k.
+        for (const Jenkins& e : work.jenkins) {
+            const double wu = std::fabs(along_x(e.direction(), shape_)) / shape_(k_);
+            if (wu > 0) slip_onset_ = std::min(slip_onset_, e.slip_force / (e.k * wu));
+        }
     }
 
     // Every point asked for, in order, until the continuation stops (ModesResult::status says how).
@@ -330,13 +402,44 @@ public:
     }
 
 private:
+    // A damped orbit's turning point after the section: its time, x_k there, and d x_k / dy
+    // (the flow map's row k to that time: x_k is stationary in t there, so the time's own
+    // change does not enter).
+    struct Turn {
+        double t = NAN, x = NAN;
+        Eigen::RowVectorXd row;
+    };
     struct Corrected {
         bool ok = false;
         std::string why;
         Orbit orbit;
         analysis::PeriodMapValue pm;
+        Turn turn;
         int iterations = 0;
     };
+
+    // The flow of the model with xi: the model itself on a conservative backbone; of a damped
+    // mode its EPMC system, alpha - xi, on the Eigen solver (negative damping). The last few
+    // are kept (Newton alternates between xi and xi + its difference step).
+    analysis::Flow& flow(double xi) {
+        for (auto& f : flows_)
+            if (f.first == xi) return *f.second;
+        Model m = work_;
+        analysis::FlowKernels kernels{o_.kernels, o_.cache_dir, o_.use_cache};
+        if (damped_) {
+            m.alpha = work_.alpha - xi;
+            kernels.kernels = KernelChoice::eigen;
+        }
+        if (flows_.size() >= 3) flows_.erase(flows_.begin());
+        flows_.emplace_back(xi, std::make_unique<analysis::Flow>(m, kernels, kModes));
+        analysis::Flow& f = *flows_.back().second;
+        if (o_.progress)
+            f.set_progress([this](double) {
+                if (!o_.progress(progress_)) stopped_ = true;
+                return !stopped_;
+            });
+        return f;
+    }
 
     // From the last orbit to `target`: steps of the points' spacing, halved on a failure (down
     // to min_step of the parameter's value) and doubled back after a success. At that floor a
@@ -345,6 +448,22 @@ private:
     // over it. Adds the point; false (with the status set) when none of this gets there.
     bool reach(double target) {
         target_ = target;
+        if (stuck_below(history_.back().s) && !stuck_below(target)) {
+            // Below the slip onset the orbits are the linear mode's; there the branch has a kink
+            // (xi and T leave their linear values in proportion to A - onset), and just beyond it
+            // every release is nearly grazing (the joint barely exceeds F_s before it reverses),
+            // where Newton's region is tiny; far beyond it the linear guess is poor. So the first
+            // orbit beyond is found at twice the onset (or 1.5 times that, and so on), from the
+            // linear guess, and the amplitudes asked for are reached from there, backward or
+            // forward along the branch.
+            if (history_.back().s < slip_onset_) history_.push_back(linear_orbit(slip_onset_));
+            for (double anchor = kAnchor * slip_onset_; anchor <= kMaxAnchor * slip_onset_;
+                 anchor *= 1.5) {
+                const bool found = advance(anchor, false).empty();
+                if (stopped_) return stop();
+                if (found) break;
+            }
+        }
         const double spacing = target - history_.back().s;
         const double floor = o_.min_step * std::max(std::fabs(history_.back().s), std::fabs(target));
         double step = spacing;
@@ -353,7 +472,7 @@ private:
             const double at = std::fabs(rest) <= std::fabs(step) ? target : last + step;
             const bool may_halve = std::fabs(step) / 2 >= floor;
             std::string why = advance(at, may_halve);
-            if (flow_.stopped()) return stop();
+            if (stopped_) return stop();
             if (why.empty()) {
                 step = std::fabs(2 * step) < std::fabs(spacing) ? 2 * step : spacing;
                 continue;
@@ -366,7 +485,7 @@ private:
             for (double leap = 2 * step; !leapt; leap *= 2) {
                 const double to = std::fabs(leap) >= std::fabs(rest) ? target : last + leap;
                 leapt = advance(to, false).empty();
-                if (flow_.stopped()) return stop();
+                if (stopped_) return stop();
                 if (to == target) break;
                 step = leap;
             }
@@ -387,11 +506,13 @@ private:
     std::string advance(double at, bool strict) {
         const Orbit guess = predict(at);
         Corrected c = correct(guess);
-        if (flow_.stopped()) return "stopped";
-        check_jump(c, guess);
+        if (stopped_) return "stopped";
+        // A damped branch has a kink wherever an element's stick pattern changes (nothing else
+        // crosses it: no families): at the floor the steps that leap over it are not checked.
+        if (strict || !damped_) check_jump(c, guess);
         if (!c.ok) return c.why;
         const std::vector<std::complex<double>> mu = analysis::floquet_multipliers(c.pm.M);
-        const std::vector<std::complex<double>> rest = nontrivial(mu);
+        const std::vector<std::complex<double>> rest = nontrivial(mu, damped_ ? 1 : 2);
         const std::vector<double> phi = pair_angles(rest, rotation_.size());
         const std::vector<double> turned = phi.empty() ? rotation_ : follow(rotation_, phi);
         double turn = 0.0;
@@ -418,7 +539,9 @@ private:
     // itself is not trusted, and the step is halved as for a failure. Near a branch that bends
     // sharply (a contact just reached) the correction falls faster than the step.
     void check_jump(Corrected& c, const Orbit& guess) const {
-        if (!c.ok) return;
+        // The first steps beyond the slip onset are predicted across its kink.
+        const std::size_t h = history_.size();
+        if (!c.ok || stuck_below(history_[h - 1].s) || stuck_below(history_[h > 1 ? h - 2 : 0].s)) return;
         const double correction = distance(c.orbit, guess), stride = distance(guess, history_.back());
         if (correction > kMaxCorrection * stride) {
             c.ok = false;
@@ -427,16 +550,21 @@ private:
         }
     }
 
-    // `rest`: the multipliers `mu` but the family's pair at +1 (nontrivial()).
+    // `rest`: the multipliers `mu` but the family's ones at +1 (nontrivial()).
     void add_point(const Corrected& c, const std::vector<std::complex<double>>& mu,
                    const std::vector<std::complex<double>>& rest) {
         ModePoint p;
-        p.amplitude = c.orbit.y(k_) - eq_.x(k_);
+        Eigen::VectorXd at = c.orbit.y;  // the state at the turning point
+        if (damped_) at = state_of(run_to(c.orbit.y, c.orbit.xi, c.turn.t));
+        p.amplitude = at(k_) - eq_.x(k_);
         p.period = c.orbit.T;
         p.omega = 2 * M_PI / c.orbit.T;
-        p.energy = energy(c.orbit.y);
-        p.x.assign(c.orbit.y.data(), c.orbit.y.data() + n_);
-        p.v.assign(c.orbit.y.data() + n_, c.orbit.y.data() + 2 * n_);
+        p.xi = c.orbit.xi;
+        p.damping_ratio = c.orbit.xi / (2 * p.omega);
+        p.energy = energy(at);
+        p.x.assign(at.data(), at.data() + n_);
+        p.v.assign(at.data() + n_, at.data() + 2 * n_);
+        p.sliders.assign(at.data() + 2 * n_, at.data() + 2 * n_ + nj_);
         p.peaks = peaks(c.orbit);
         p.multipliers = mu;
         p.max_multiplier = rest.empty() ? 1.0 : 0.0;
@@ -461,27 +589,31 @@ private:
             std::vector<double> t, x, v;
             void on_sample(double ts, const double* xs, const double* vs) override {
                 t.push_back(ts);
-                x.insert(x.end(), xs, xs + n);
+                x.insert(x.end(), xs, xs + nx);
                 v.insert(v.end(), vs, vs + n);
             }
             void on_event(double, EventKind, int, const double*, const double*) override {}
-            std::size_t n = 0;
+            std::size_t n = 0, nx = 0;
         } samples;
-        const auto n = static_cast<std::size_t>(n_);
+        const auto n = static_cast<std::size_t>(n_), nx = n + static_cast<std::size_t>(nj_);
         samples.n = n;
-        const RunSummary run = flow_.run(0.0, o.y.data(), o.y.data() + n_, o.T, samples, true, o.T / kPeakSamples);
+        samples.nx = nx;
+        analysis::Flow& f = flow(o.xi);
+        const double* s0 = nj_ ? o.y.data() + 2 * n_ : nullptr;
+        const RunSummary run = f.run(0.0, o.y.data(), o.y.data() + n_, o.T, samples, true, o.T / kPeakSamples, s0);
         std::vector<double> peak(n, 0.0);
         if (run.status != RunStatus::ok) return std::vector<double>(n, NAN);
         analysis::NullObserver none;
         auto state_at = [&](std::size_t s, double t, std::size_t i, double& x) {
-            const RunSummary r = flow_.run(samples.t[s], &samples.x[s * n], &samples.v[s * n], t, none, false, 0.0);
+            const double* xs = &samples.x[s * nx];
+            const RunSummary r = f.run(samples.t[s], xs, &samples.v[s * n], t, none, false, 0.0, nj_ ? xs + n : nullptr);
             x = r.x[i];
             return r.v[i];
         };
         for (std::size_t i = 0; i < n; ++i) {
             const double eq = eq_.x(static_cast<Eigen::Index>(i));
             for (std::size_t s = 0; s < samples.t.size(); ++s) {
-                peak[i] = std::max(peak[i], std::fabs(samples.x[s * n + i] - eq));
+                peak[i] = std::max(peak[i], std::fabs(samples.x[s * nx + i] - eq));
                 if (s + 1 == samples.t.size()) break;
                 double ta = samples.t[s], tb = samples.t[s + 1];
                 double va = samples.v[s * n + i], vb = samples.v[(s + 1) * n + i];
@@ -512,30 +644,62 @@ private:
     // The secant through the last two orbits; from the linear limit, the mode shape
     // (an amplitude s of dof k; an energy s^2 in the mode coordinate sqrt(2) s / omega).
     Orbit predict(double at) const {
+        if (stuck_below(history_.back().s)) return linear_orbit(at);
         Orbit g;
         g.s = at;
         const Orbit& b = history_.back();
         if (history_.size() == 1) {
             g.T = b.T;
+            g.xi = b.xi;
             g.y = b.y;
             const double q = energy_ ? std::sqrt(2.0) * at / r_.linear_omega : at / shape_(k_);
-            g.y.head(n_) += q * shape_;
+            if (damped_)  // passing the equilibrium upward
+                g.y.segment(n_, n_) += r_.linear_omega * q * shape_;
+            else
+                g.y.head(n_) += q * shape_;
         } else {
             const Orbit& a = history_[history_.size() - 2];
             const double f = (at - b.s) / (b.s - a.s);
             g.T = b.T + f * (b.T - a.T);
+            g.xi = b.xi + f * (b.xi - a.xi);
             g.y = b.y + f * (b.y - a.y);
         }
         return g;
     }
 
-    // Scaled distance of two orbits: positions against the first's amplitude (of dof k),
-    // velocities against that times its 2 pi/T, periods against T.
+    // Whether amplitude s is at or below the slip onset (the linear, all-stuck part of a damped
+    // branch with Jenkins elements).
+    bool stuck_below(double s) const { return std::isfinite(slip_onset_) && s <= slip_onset_ * (1 + 1e-9); }
+
+    // A damped mode's guess from the linear limit: the stuck mode passing its equilibrium upward
+    // with amplitude `at`; each Jenkins element whose stretch amplitude a = at |w . shape| /
+    // shape_k exceeds F_s/k_t as on the slipping orbit there: stuck since its last reversal
+    // (stretch -F_s/k_t then) over a travel a, or slipping, stretched +F_s/k_t (in its direction
+    // of motion). The linear mode's own sliders (centred) would make each release a near-grazing
+    // one, where the map's derivative is of no use to Newton.
+    Orbit linear_orbit(double at) const {
+        Orbit g = history_.front();
+        g.s = at;
+        const double q = at / shape_(k_);
+        g.y.segment(n_, n_) += r_.linear_omega * q * shape_;
+        for (Eigen::Index j = 0; j < nj_; ++j) {
+            const Jenkins& e = work_.jenkins[static_cast<std::size_t>(j)];
+            const double wu = along_x(e.direction(), shape_) * q, a = std::fabs(wu), held = e.slip_force / e.k;
+            if (a > held) g.y(2 * n_ + j) -= std::copysign(std::min(a - held, held), wu);
+        }
+        return g;
+    }
+
+    // Scaled distance of two orbits: positions (and sliders) against the first's amplitude
+    // (of dof k), velocities against that times its 2 pi/T, periods against T, xi against the
+    // linear frequency.
     double distance(const Orbit& a, const Orbit& b) const {
-        const double sx = std::fabs(a.y(k_) - eq_.x(k_)), sv = sx * 2 * M_PI / a.T;
+        const double sx = damped_ ? std::fabs(a.s) : std::fabs(a.y(k_) - eq_.x(k_)), sv = sx * 2 * M_PI / a.T;
         const Eigen::VectorXd d = a.y - b.y;
-        return std::max(
-            {d.head(n_).cwiseAbs().maxCoeff() / sx, d.tail(n_).cwiseAbs().maxCoeff() / sv, std::fabs(a.T - b.T) / a.T});
+        double x = d.head(n_).cwiseAbs().maxCoeff();
+        if (nj_) x = std::max(x, d.tail(nj_).cwiseAbs().maxCoeff());
+        return std::max({x / sx, d.segment(n_, n_).cwiseAbs().maxCoeff() / sv, std::fabs(a.T - b.T) / a.T,
+                         std::fabs(a.xi - b.xi) / xi_scale_});
     }
 
     // The continuation parameter as the user gave it.
@@ -543,22 +707,49 @@ private:
         return energy_ ? "energy " + number_text(s * s) : "amplitude " + number_text(s);
     }
 
+    // Kinetic plus potential energy above the equilibrium: springs, closed contacts, the
+    // constant load, and the Jenkins springs' 1/2 k (u - s)^2.
     double energy(const Eigen::VectorXd& y) {
-        const Eigen::VectorXd v = y.segment(n_, n_);
-        return 0.5 * v.dot(field_.M() * v) + potential(work_, field_, y.head(n_)) - rest_potential_;
+        const Eigen::VectorXd x = y.head(n_), v = y.segment(n_, n_);
+        double E = 0.5 * v.dot(field_.M() * v) + potential(bare_, field_, x) - rest_potential_;
+        for (Eigen::Index j = 0; j < nj_; ++j) {
+            const Jenkins& e = work_.jenkins[static_cast<std::size_t>(j)];
+            const double stretch = along_x(e.direction(), x) - y(2 * n_ + j);
+            E += 0.5 * e.k * stretch * stretch;
+        }
+        return E;
     }
 
-    // P_T(y) and |P(y) - y|: positions relative to the orbit's largest excursion from the
-    // equilibrium, velocities to that times 2 pi/T (a turning point has no velocity scale of its
-    // own); for the energy s^2, also |E(y) - s^2| / s^2.
-    analysis::PeriodMapValue evaluate(const Eigen::VectorXd& y, double T, double s) {
+    // P_T(y) and |P(y) - y|: positions and sliders relative to the orbit's largest excursion
+    // from the equilibrium, velocities to that times 2 pi/T (a turning point has no velocity
+    // scale of its own); for the energy s^2, also |E(y) - s^2| / s^2.
+    // A damped orbit: also its turning point (`turn`), and |x_k there - x_eq,k - A| / A.
+    analysis::PeriodMapValue evaluate(const Eigen::VectorXd& y, double T, double xi, double s, Turn& turn) {
         ++progress_.runs;
-        analysis::PeriodMapValue pm = analysis::evaluate_period_map(flow_, 0.0, T, y);
+        analysis::PeriodMapValue pm;
+        try {  // a Newton trial may take xi beyond what the solver takes (critical negative damping)
+            pm = analysis::evaluate_period_map(flow(xi), 0.0, T, y);
+            if (pm.ok && damped_) turn = turning_point(y, T, xi);
+        } catch (const RunError& e) {
+            pm.ok = false;
+            pm.message = e.what();
+        }
+        if (pm.ok && damped_) {
+            if (std::isnan(turn.x)) {
+                pm.ok = false;
+                pm.message = "the amplitude dof does not turn within the period";
+            }
+        }
         if (pm.ok) {
-            const double sx = (y.head(n_) - eq_.x).cwiseAbs().maxCoeff(), sv = sx * 2 * M_PI / T;
+            double sx = (y.head(n_) - eq_.x).cwiseAbs().maxCoeff();
+            if (damped_) sx = std::max(sx, std::fabs(s));
+            const double sv = sx * 2 * M_PI / T;
             const Eigen::VectorXd d = pm.Py - y;
-            pm.residual = std::max(d.head(n_).cwiseAbs().maxCoeff() / sx, d.tail(n_).cwiseAbs().maxCoeff() / sv);
+            double dx = d.head(n_).cwiseAbs().maxCoeff();
+            if (nj_) dx = std::max(dx, d.tail(nj_).cwiseAbs().maxCoeff());
+            pm.residual = std::max(dx / sx, d.segment(n_, n_).cwiseAbs().maxCoeff() / sv);
             if (energy_) pm.residual = std::max(pm.residual, std::fabs(energy(y) - s * s) / (s * s));
+            if (damped_) pm.residual = std::max(pm.residual, std::fabs(turn.x - eq_.x(k_) - s) / std::fabs(s));
             if (!std::isfinite(pm.residual)) pm.residual = INFINITY;
         }
         return pm;
@@ -576,21 +767,27 @@ private:
     }
 
     // Newton on P_T(y) - y = 0 at the guess's amplitude (x_k fixed) or energy (E(y) = s^2, one
-    // more residual): the residuals in the unknowns and T, least squares, each step halved
-    // until the residual falls.
+    // more residual): the residuals in the unknowns, T and (damped) xi, least squares (the
+    // minimum-norm step: a family of orbits leaves directions free), each step halved until
+    // the residual falls.
     Corrected correct(const Orbit& g) {
         Corrected c;
         c.orbit = g;
         Eigen::VectorXd& y = c.orbit.y;
         double& T = c.orbit.T;
-        if (!energy_) y(k_) = eq_.x(k_) + g.s;
-        y(n_ + k_) = 0.0;
+        double& xi = c.orbit.xi;
+        if (damped_) {
+            y(k_) = eq_.x(k_);
+        } else {
+            if (!energy_) y(k_) = eq_.x(k_) + g.s;
+            y(n_ + k_) = 0.0;
+        }
         progress_.amplitude = energy_ ? g.s * g.s : g.s;
-        c.pm = evaluate(y, T, g.s);
+        c.pm = evaluate(y, T, xi, g.s, c.turn);
         for (int it = 0;; ++it) {
             progress_.iterations = it;
             progress_.residual = c.pm.residual;
-            if (flow_.stopped()) return c;
+            if (stopped_) return c;
             if (c.pm.ok && c.pm.residual <= o_.tolerance) {
                 c.ok = true;
                 c.iterations = it;
@@ -598,7 +795,8 @@ private:
             }
             c.why = stuck(c.pm, it);
             if (!c.why.empty()) return c;
-            const Eigen::VectorXd step = newton_step(c.pm, y, g.s);
+            const Eigen::VectorXd step = newton_step(c, g.s);
+            if (stopped_) return c;
             if (!step.allFinite()) {
                 c.why = "the Newton step is not finite";
                 return c;
@@ -609,14 +807,17 @@ private:
             for (int halving = 0; halving <= 10 && !accepted; ++halving, lambda *= 0.5) {
                 Eigen::VectorXd ty = y;
                 for (Eigen::Index u = 0; u < U; ++u) ty(unknown_[static_cast<std::size_t>(u)]) += lambda * step(u);
-                const double tT = T + lambda * step(U);
+                const double tT = T + lambda * step(U), txi = damped_ ? xi + lambda * step(U + 1) : xi;
                 if (!(tT > 0)) continue;
-                analysis::PeriodMapValue next = evaluate(ty, tT, g.s);
-                if (flow_.stopped()) return c;
+                Turn turn;
+                analysis::PeriodMapValue next = evaluate(ty, tT, txi, g.s, turn);
+                if (stopped_) return c;
                 if (next.ok && next.residual < c.pm.residual) {
                     y = ty;
                     T = tT;
+                    xi = txi;
                     c.pm = std::move(next);
+                    c.turn = std::move(turn);
                     accepted = true;
                 }
             }
@@ -627,53 +828,184 @@ private:
         }
     }
 
-    // The least-squares step in the unknowns and T: (M - I) on the unknowns' columns, dP/dT =
-    // f(P(y)); for the energy, the row grad E weighted to a length (dE/E = 2 dA/A).
-    Eigen::VectorXd newton_step(const analysis::PeriodMapValue& pm, const Eigen::VectorXd& y, double s) {
+    // The least-squares step in the unknowns, T and (damped) xi: (M - I) on the unknowns'
+    // columns; dP/dT = f(P(y)) (conservative: the vector field; damped: a difference over a
+    // short run on from P(y)); dP/dxi a forward difference of the period map; for the energy,
+    // the row grad E weighted to a length (dE/E = 2 dA/A).
+    // A damped mode's amplitude row: d x_k(turning point) / d(unknowns, T, xi), weighted as a
+    // position relative to the amplitude.
+    Eigen::VectorXd newton_step(const Corrected& c, double s) {
+        const analysis::PeriodMapValue& pm = c.pm;
+        const Orbit& o = c.orbit;
+        const Eigen::VectorXd& y = o.y;
         const auto U = static_cast<Eigen::Index>(unknown_.size());
-        const Eigen::Index rows = 2 * n_ + (energy_ ? 1 : 0);
-        Eigen::MatrixXd J = Eigen::MatrixXd::Zero(rows, U + 1);
+        const Eigen::Index N = 2 * n_ + nj_, rows = N + (energy_ || damped_ ? 1 : 0), cols = U + (damped_ ? 2 : 1);
+        Eigen::MatrixXd J = Eigen::MatrixXd::Zero(rows, cols);
         Eigen::VectorXd rhs(rows);
         for (Eigen::Index u = 0; u < U; ++u) {
             const Eigen::Index j = unknown_[static_cast<std::size_t>(u)];
-            J.block(0, u, 2 * n_, 1) = pm.M.col(j);
+            J.block(0, u, N, 1) = pm.M.col(j);
             J(j, u) -= 1.0;
         }
-        J.block(0, U, 2 * n_, 1) = field_(pm.end, pm.Py);
-        rhs.head(2 * n_) = -(pm.Py - y);
+        if (damped_) {
+            J.block(0, U, N, 1) = time_derivative(pm, o);
+            J.block(0, U + 1, N, 1) = xi_derivative(pm, o);
+            for (Eigen::Index u = 0; u < U; ++u) J(N, u) = c.turn.row(unknown_[static_cast<std::size_t>(u)]);
+            const double d = kDifference * xi_scale_;
+            J(N, U + 1) = (state_of(run_to(y, o.xi + d, c.turn.t))(k_) - c.turn.x) / d;
+            rhs(N) = -(c.turn.x - eq_.x(k_) - s);
+        } else {
+            J.block(0, U, N, 1) = field_(pm.end, pm.Py);
+        }
+        rhs.head(N) = -(pm.Py - y);
         if (energy_) {
             const double w = (y.head(n_) - eq_.x).cwiseAbs().maxCoeff() / (2 * s * s);
             const Eigen::VectorXd grad = energy_gradient(y);
-            for (Eigen::Index u = 0; u < U; ++u) J(2 * n_, u) = w * grad(unknown_[static_cast<std::size_t>(u)]);
-            rhs(2 * n_) = -w * (energy(y) - s * s);
+            for (Eigen::Index u = 0; u < U; ++u) J(N, u) = w * grad(unknown_[static_cast<std::size_t>(u)]);
+            rhs(N) = -w * (energy(y) - s * s);
         }
-        return J.colPivHouseholderQr().solve(rhs);
+        if (!damped_) return J.colPivHouseholderQr().solve(rhs);
+        // Rows and columns in the residual's own units (positions and sliders against the
+        // amplitude, velocities against it times 2 pi/T, T against itself, xi against omega_lin):
+        // the minimum-norm step of a nearly singular system (near a slip onset the sliders are
+        // barely determined) is then the one the residual measures.
+        const double sx = std::fabs(s), sv = sx * 2 * M_PI / o.T;
+        Eigen::VectorXd row_scale(rows), col_scale(cols);
+        for (Eigen::Index i = 0; i < rows; ++i) row_scale(i) = i >= n_ && i < 2 * n_ ? 1 / sv : 1 / sx;
+        for (Eigen::Index u = 0; u < U; ++u) {
+            const Eigen::Index j = unknown_[static_cast<std::size_t>(u)];
+            col_scale(u) = j >= n_ && j < 2 * n_ ? sv : sx;
+        }
+        col_scale(U) = o.T;
+        col_scale(U + 1) = xi_scale_;
+        const Eigen::MatrixXd scaled = row_scale.asDiagonal() * J * col_scale.asDiagonal();
+        const Eigen::VectorXd z = scaled.completeOrthogonalDecomposition().solve(row_scale.asDiagonal() * rhs);
+        return col_scale.asDiagonal() * z;
     }
 
-    // dE/dy: (K_open x - f_open + sum over closed contacts of k G w, M v).
+    // The run from the section state y to t with xi (NaN state when it fails).
+    RunSummary run_to(const Eigen::VectorXd& y, double xi, double t) {
+        analysis::NullObserver none;
+        try {
+            return flow(xi).run(0.0, y.data(), y.data() + n_, t, none, false, 0.0, nj_ ? y.data() + 2 * n_ : nullptr);
+        } catch (const RunError& e) {
+            RunSummary failed;
+            failed.status = RunStatus::failure;
+            failed.message = e.what();
+            return failed;
+        }
+    }
+
+    // The amplitude dof's first turning point after the section (v_k from + to -): bracketed by
+    // kPeakSamples samples of the period, then the secant method (Illinois) on v_k(t); x_k there
+    // and the flow map's row k to it. NaN when v_k does not turn.
+    Turn turning_point(const Eigen::VectorXd& y, double T, double xi) {
+        struct Sampler : Observer {
+            std::vector<double> t, v;
+            void on_sample(double ts, const double*, const double* vs) override {
+                t.push_back(ts);
+                v.push_back(vs[k]);
+            }
+            void on_event(double, EventKind, int, const double*, const double*) override {}
+            Eigen::Index k = 0;
+        } samples;
+        samples.k = k_;
+        Turn turn;
+        analysis::Flow& f = flow(xi);
+        const RunSummary run = f.run(0.0, y.data(), y.data() + n_, T, samples, true, T / kPeakSamples,
+                                     nj_ ? y.data() + 2 * n_ : nullptr);
+        if (run.status != RunStatus::ok) return turn;
+        std::size_t s = 0;
+        while (s + 1 < samples.t.size() && !(samples.v[s] > 0 && samples.v[s + 1] <= 0)) ++s;
+        if (s + 1 >= samples.t.size()) return turn;
+        double ta = samples.t[s], tb = samples.t[s + 1], va = samples.v[s], vb = samples.v[s + 1];
+        double t = tb;
+        for (int it = 0, side = 0; it < 60 && vb != 0.0; ++it) {
+            const double last = t;
+            t = (ta * vb - tb * va) / (vb - va);
+            if (!(t > ta && t < tb)) t = 0.5 * (ta + tb);
+            const double vt = state_of(run_to(y, xi, t))(n_ + k_);
+            if (vt == 0.0 || std::fabs(t - last) <= 1e-15 * T || std::isnan(vt)) break;
+            if (vt > 0) {
+                ta = t, va = vt;
+                if (side == -1) vb /= 2;  // Illinois: the stale end's value halved
+                side = -1;
+            } else {
+                tb = t, vb = vt;
+                if (side == 1) va /= 2;
+                side = 1;
+            }
+        }
+        const analysis::PeriodMapValue to = analysis::evaluate_period_map(f, 0.0, t, y);
+        if (to.Py.size() != y.size() || !to.Py.allFinite() || !to.M.allFinite()) return turn;
+        turn.t = t;
+        turn.x = to.Py(k_);
+        turn.row = to.M.row(k_);
+        return turn;
+    }
+
+    // The state's rate at the period's end: (P_{T+h}(y) - P_T(y)) / h, by a run of h = 1e-7 T
+    // on from P(y) (a column of Newton's matrix: its error of order h only slows Newton).
+    Eigen::VectorXd time_derivative(const analysis::PeriodMapValue& pm, const Orbit& o) {
+        const double h = kDifference * o.T;
+        analysis::NullObserver none;
+        const Eigen::VectorXd& P = pm.Py;
+        const RunSummary r = flow(o.xi).run(o.T, P.data(), P.data() + n_, o.T + h, none, false, 0.0,
+                                            nj_ ? P.data() + 2 * n_ : nullptr);
+        return (state_of(r) - P) / h;
+    }
+
+    // dP/dxi: the period map at xi + d (d = 1e-7 of the linear frequency) against P.
+    Eigen::VectorXd xi_derivative(const analysis::PeriodMapValue& pm, const Orbit& o) {
+        const double d = kDifference * xi_scale_;
+        return (state_of(run_to(o.y, o.xi + d, o.T)) - pm.Py) / d;
+    }
+
+    // (x, v, sliders) of a run's end; NaN when it did not end well (the step is then not finite).
+    Eigen::VectorXd state_of(const RunSummary& r) const {
+        Eigen::VectorXd z(2 * n_ + nj_);
+        if (r.status != RunStatus::ok) return z.setConstant(NAN);
+        for (Eigen::Index i = 0; i < n_; ++i) z(i) = r.x[static_cast<std::size_t>(i)], z(n_ + i) = r.v[static_cast<std::size_t>(i)];
+        for (Eigen::Index j = 0; j < nj_; ++j) z(2 * n_ + j) = r.slider[static_cast<std::size_t>(j)];
+        return z;
+    }
+
+    // dE/dy: (K_open x - f_open + sum over closed contacts of k G w + over Jenkins k (u - s) w,
+    // M v, -k (u - s) per slider).
     Eigen::VectorXd energy_gradient(const Eigen::VectorXd& y) {
-        const Configuration open = Configuration::all_open(work_);
+        const Configuration open = Configuration::all_open(bare_);
         const Eigen::VectorXd x = y.head(n_);
-        Eigen::VectorXd grad(2 * n_);
+        Eigen::VectorXd grad(2 * n_ + nj_);
         grad.head(n_) = field_.K(open) * x - field_.f(open);
         for (std::size_t c = 0; c < work_.contacts.size(); ++c) {
             const double G = gap(work_, static_cast<int>(c), x.data());
             if (G > 0) grad.head(n_) += work_.contacts[c].k * G * contact_direction_[c];
         }
-        grad.tail(n_) = field_.M() * y.tail(n_);
+        grad.segment(n_, n_) = field_.M() * y.segment(n_, n_);
+        for (Eigen::Index j = 0; j < nj_; ++j) {
+            const Jenkins& e = work_.jenkins[static_cast<std::size_t>(j)];
+            const double force = e.k * (along_x(e.direction(), x) - y(2 * n_ + j));
+            for_each_term(e.direction(), [&](int i, double w) { grad(i) += force * w; });
+            grad(2 * n_ + j) = -force;
+        }
         return grad;
     }
 
     const Model& work_;
+    const Model bare_;  // work_ without its Jenkins elements (the equilibrium, the potential)
     const ModesOptions& o_;
     ModesResult& r_;
     Field field_;
     Equilibrium eq_;
-    Eigen::Index n_;
-    analysis::Flow flow_;
+    Eigen::Index n_, nj_;
+    bool damped_ = false;  // EPMC: xi is an unknown, the runs on the Eigen solver
+    std::vector<std::pair<double, std::unique_ptr<analysis::Flow>>> flows_;  // by xi (flow())
+    bool stopped_ = false;                                                    // the progress callback said so
     Eigen::VectorXd shape_;
     Eigen::Index k_ = 0;
     double rest_potential_ = 0.0;                     // the potential at the equilibrium (energies are above it)
+    double xi_scale_ = 1.0;                           // xi's scale: the linear frequency
+    double slip_onset_ = INFINITY;                    // the amplitude where the linear mode first slips (damped)
     bool energy_ = false;                             // continued in energy (Orbit::s = sqrt(E)), else in amplitude
     std::vector<Eigen::VectorXd> contact_direction_;  // w of each contact: G = w^T x - gap
     std::vector<Eigen::Index> unknown_;
@@ -687,7 +1019,7 @@ private:
 }  // namespace
 
 ModesResult modes(const Model& model, const ModesOptions& o) {
-    refuse_nonconservative(model);
+    refuse_unsupported(model);
     const double from = check_options(model, o);
     const Model work = free_model(model);
     // The continuation runs in the amplitude, or in sqrt(E) (as the amplitude grows).

@@ -1,7 +1,8 @@
 // `hsnc modes MODEL --to A [options]` (docs/interface.md, "hsnc modes"): the
-// backbone of a linear mode of a conservative model continued in amplitude by
-// exact shooting (hsnc::modes, api/hsnc/modes.h): a CSV row per point, the
-// multipliers of every point, a plot of frequency against amplitude.
+// backbone of a linear mode continued in amplitude by exact shooting
+// (hsnc::modes, api/hsnc/modes.h; a damped mode by the extended periodic motion
+// concept): a CSV row per point, the multipliers of every point, a plot of
+// frequency (and damping) against amplitude.
 #include <cmath>
 #include <complex>
 #include <cstdio>
@@ -41,6 +42,33 @@ std::string short_number(double x) {
 // amplitude against omega / omega_lin (the linear frequency dashed), or for an
 // energy backbone omega / omega_lin against the energy (a frequency-energy
 // plot, the energy logarithmic when the points span more than a decade).
+void draw_backbone(const OutputTarget& target, const ModesResult& r, const Model& model, bool energy);
+
+// A damped mode: frequency and damping ratio against the amplitude, side by side, the linear
+// values dashed.
+void draw_damped(const OutputTarget& target, const ModesResult& r, const Model& model) {
+    std::ostringstream script;
+    script.precision(17);
+    const std::string dof = gnuplot_plain(model.masses[r.dof].name);
+    script << "set terminal pngcairo size 1100,480 font ',11'\n"
+           << "set multiplot layout 1,2 title \"" << gnuplot_plain(model.name) << ": damped mode " << r.mode
+           << " (extended periodic motion; omega_lin = " << short_number(r.linear_omega) << " rad/s)\" noenhanced\n"
+           << "set grid\nset xlabel 'amplitude of " << dof << " (from equilibrium)' noenhanced\n"
+           << "set offsets 0, 0, graph 0.05, graph 0.05\n$b << EOD\n";
+    for (const ModePoint& p : r.points)
+        script << p.amplitude << " " << p.omega / r.linear_omega << " " << p.damping_ratio << "\n";
+    script << "EOD\n"
+           << "set ylabel 'frequency omega / omega_lin' noenhanced\n"
+           << "set arrow 1 from graph 0, first 1 to graph 1, first 1 nohead dt 2 lc rgb '#888888'\n"
+           << "plot $b using 1:2 with linespoints pt 7 ps 0.7 lw 1.5 lc rgb '#0060c0' notitle\n"
+           << "unset arrow 1\nset ylabel 'damping ratio xi / (2 omega)' noenhanced\n"
+           << "set arrow 2 from graph 0, first " << r.linear_damping_ratio << " to graph 1, first "
+           << r.linear_damping_ratio << " nohead dt 2 lc rgb '#888888'\n"
+           << "plot $b using 1:3 with linespoints pt 7 ps 0.7 lw 1.5 lc rgb '#c05000' notitle\n"
+           << "unset multiplot\n";
+    render_png(script.str(), target);
+}
+
 void draw_backbone(const OutputTarget& target, const ModesResult& r, const Model& model, bool energy) {
     auto xy = [&](const ModePoint& p) {
         std::ostringstream at;
@@ -96,9 +124,12 @@ void draw_backbone(const OutputTarget& target, const ModesResult& r, const Model
 
 void write_backbone(const OutputTarget& target, const ModesResult& r, const Model& model) {
     CsvFile file(target);
-    std::string header = "amplitude,omega,omega_ratio,period,energy";
+    std::string header = "amplitude,omega,omega_ratio";
+    if (r.damped) header += ",damping_ratio,xi";
+    header += ",period,energy";
     for (const Mass& m : model.masses) header += ",x_" + m.name;
     for (const Mass& m : model.masses) header += ",v_" + m.name;
+    for (const Jenkins& j : model.jenkins) header += ",s_" + j.name;
     for (const Mass& m : model.masses) header += ",peak_" + m.name;
     for (int j : r.others) header += ",ratio_mode" + std::to_string(j);
     header += ",resonance,max_multiplier,stable,events,grazing,iterations,residual";
@@ -108,10 +139,15 @@ void write_backbone(const OutputTarget& target, const ModesResult& r, const Mode
         file.number(p.amplitude);
         file.number(p.omega);
         file.number(p.omega / r.linear_omega);
+        if (r.damped) {
+            file.number(p.damping_ratio);
+            file.number(p.xi);
+        }
         file.number(p.period);
         file.number(p.energy);
         for (double x : p.x) file.number(x);
         for (double v : p.v) file.number(v);
+        for (double s : p.sliders) file.number(s);
         for (double a : p.peaks) file.number(a);
         for (double q : p.ratios) file.number(q);
         std::string passed;
@@ -187,6 +223,7 @@ int modes_command(const ModesFlags& f) {
                                     {"dof", "--dof"},
                                     {"from", "--from"},
                                     {"to", "--to"},
+                                    {"parameter", "--energy"},
                                     {"points", "--points"},
                                     {"tolerance", "--tol"},
                                     {"max_iterations", "--max-iterations"}});
@@ -195,7 +232,12 @@ int modes_command(const ModesFlags& f) {
     // The points found are written whatever the status: each is a converged orbit.
     if (out) write_backbone(*out, r, model);
     if (mult) write_multipliers(*mult, r);
-    if (plot && !r.points.empty()) draw_backbone(*plot, r, model, f.energy);
+    if (plot && !r.points.empty()) {
+        if (r.damped)
+            draw_damped(*plot, r, model);
+        else
+            draw_backbone(*plot, r, model, f.energy);
+    }
     const bool ok = r.status == ModesStatus::ok;
     std::ostringstream line;
     line << "status=" << modes_status_name(r.status) << " mode=" << r.mode << " dof=" << model.masses[r.dof].name
@@ -204,10 +246,11 @@ int modes_command(const ModesFlags& f) {
         const ModePoint& last = r.points.back();
         line << " amplitude=" << number_text(last.amplitude) << " omega=" << number_text(last.omega)
              << " energy=" << number_text(last.energy);
+        if (r.damped) line << " damping_ratio=" << number_text(last.damping_ratio);
     }
     std::size_t unstable = 0;
     for (const ModePoint& p : r.points) unstable += !p.stable;
-    line << " unstable=" << unstable;
+    if (!r.damped) line << " unstable=" << unstable;  // a damped mode's multipliers are the EPMC system's
     std::cout << line.str() << std::endl;
     if (!ok) std::fprintf(stderr, "hsnc: modes: %s\n", r.message.c_str());
     return ok ? 0 : 1;

@@ -348,9 +348,11 @@ py::dict modes(const Model& model, int mode, const std::string& dof, double star
         throw InputError("hsnc.modes(): " + name + ": " + e.reason());
     }
     if (signals.interrupted()) throw py::error_already_set();  // the handler's exception (KeyboardInterrupt)
-    const std::size_t n = model.dof(), rows = r.points.size(), others = r.others.size();
+    const std::size_t n = model.dof(), nj = model.jenkins.size(), rows = r.points.size(), others = r.others.size();
     py::dict d;
     d["status"] = modes_status_name(r.status);
+    d["damped"] = r.damped;
+    d["linear_damping_ratio"] = r.linear_damping_ratio;
     d["message"] = r.message;
     d["mode"] = r.mode;
     d["dof"] = model.masses[r.dof].name;
@@ -368,10 +370,12 @@ py::dict modes(const Model& model, int mode, const std::string& dof, double star
     d["omega"] = column([](const ModePoint& p) { return p.omega; });
     d["period"] = column([](const ModePoint& p) { return p.period; });
     d["energy"] = column([](const ModePoint& p) { return p.energy; });
+    d["xi"] = column([](const ModePoint& p) { return p.xi; });
+    d["damping_ratio"] = column([](const ModePoint& p) { return p.damping_ratio; });
     d["max_multiplier"] = column([](const ModePoint& p) { return p.max_multiplier; });
     d["residual"] = column([](const ModePoint& p) { return p.residual; });
-    std::vector<double> x, v, peaks, ratios;
-    py::array_t<std::complex<double>> mu({rows, 2 * n});
+    std::vector<double> x, v, sliders, peaks, ratios;
+    py::array_t<std::complex<double>> mu({rows, 2 * n + nj});
     py::array_t<bool> stable(rows);
     py::array_t<long> events(rows), grazing(rows), iterations(rows);
     py::list resonances;
@@ -379,9 +383,10 @@ py::dict modes(const Model& model, int mode, const std::string& dof, double star
         const ModePoint& p = r.points[i];
         x.insert(x.end(), p.x.begin(), p.x.end());
         v.insert(v.end(), p.v.begin(), p.v.end());
+        sliders.insert(sliders.end(), p.sliders.begin(), p.sliders.end());
         peaks.insert(peaks.end(), p.peaks.begin(), p.peaks.end());
         ratios.insert(ratios.end(), p.ratios.begin(), p.ratios.end());
-        std::copy(p.multipliers.begin(), p.multipliers.end(), mu.mutable_data() + i * 2 * n);
+        std::copy(p.multipliers.begin(), p.multipliers.end(), mu.mutable_data() + i * (2 * n + nj));
         stable.mutable_data()[i] = p.stable;
         events.mutable_data()[i] = static_cast<long>(p.events);
         grazing.mutable_data()[i] = static_cast<long>(p.grazing);
@@ -390,6 +395,7 @@ py::dict modes(const Model& model, int mode, const std::string& dof, double star
     }
     d["x"] = matrix(x, rows, n);
     d["v"] = matrix(v, rows, n);
+    d["sliders"] = matrix(sliders, rows, nj);
     d["peak"] = matrix(peaks, rows, n);
     d["ratios"] = matrix(ratios, rows, others);
     d["resonances"] = resonances;

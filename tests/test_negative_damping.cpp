@@ -148,6 +148,18 @@ TEST(NegativeDamping, EveryOtherSolverRefusesItByName) {
             EXPECT_NE(std::string(e.what()).find("--kernels eigen"), std::string::npos) << e.what();
         }
     }
+    // With dampers the state-space modes' bounds assume decay: the Eigen solver refuses too.
+    Model damped = parse_model("name = \"d\"\n[[mass]]\nname = \"m\"\nm = 1.0\n[[spring]]\nbetween = [\"m\", "
+                               "\"ground\"]\nk = 1.0\n[[damper]]\nbetween = [\"m\", \"ground\"]\nc = 0.1\n"
+                               "[initial]\nx = { m = 0.1 }\n[simulate]\nt_end = 1.0\n",
+                               "d.toml");
+    damped.alpha = -0.1;
+    try {
+        run(damped, KernelChoice::eigen);
+        ADD_FAILURE() << "negative damping with a damper ran";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("non-proportional"), std::string::npos) << e.what();
+    }
     // Beyond critical (|c| >= 2 omega) the motion does not oscillate: refused, not mis-bounded.
     try {
         run(oscillator(0.01, 0.05, -2.5, 10.0), KernelChoice::eigen);

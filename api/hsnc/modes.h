@@ -28,6 +28,21 @@
 // and at that floor longer steps leap over the trouble (a branch point, a
 // kink). A search that still cannot follow the branch stops with the points
 // found so far and says where.
+//
+// Damped modes. A model with Jenkins elements or Rayleigh damping has no free
+// periodic orbits: its modes are computed by the extended periodic motion
+// concept (EPMC, Krack 2015): a mass-proportional term -xi M v is added, and
+// xi is one more unknown, the one that makes the damped motion periodic; the
+// orbit is still found exactly (the closed-form segments and the exact
+// monodromy), and xi / (2 omega) is the mode's equivalent damping ratio at that
+// amplitude (ModePoint::damping_ratio; with mass-proportional damping alone
+// xi = alpha on any backbone, the ratio alpha / (2 omega)). The
+// linear limit is the configuration with every Jenkins element stuck; the
+// equilibrium is the one with every Jenkins spring unstretched. Runs with
+// negative damping use the Eigen solver (ModesOptions::kernels is then
+// ignored: runtime/solvers/generic_solver.h bounds a growing mode's energy),
+// and dP/dT and dP/dxi come from finite differences (one short run and one
+// period run per Newton step; the orbit itself stays exact).
 #pragma once
 
 #include <complex>
@@ -112,11 +127,19 @@ struct ModePoint {
     /// piecewise-quadratic potential.
     double energy = 0.0;
     std::vector<double> x, v;  ///< the state at the turning point (v[dof] = 0)
+    std::vector<double> sliders;  ///< the Jenkins sliders' positions there (Model::jenkins order)
+    /// Damped modes (ModesResult::damped): the negative mass-proportional
+    /// damping coefficient that makes the motion periodic, 1/s, and the
+    /// equivalent damping ratio xi / (2 omega). 0 on a conservative backbone.
+    double xi = 0.0;
+    double damping_ratio = 0.0;
     /// Every dof's largest |x_i - x_eq,i| over the orbit (its amplitude; on
     /// either side, at a turning point v_i = 0 found to rounding).
     std::vector<double> peaks;
-    /// Floquet multipliers, 2 per mass, largest |mu| first; two of them are
-    /// the family's pair at +1 (the phase and the energy directions).
+    /// Floquet multipliers, 2 per mass (and one per Jenkins slider), largest
+    /// |mu| first; two of them are the family's pair at +1 (the phase and the
+    /// energy directions); of a damped mode, one (the phase), and they are
+    /// those of the EPMC system (with the -xi M term), not of the physical one.
     std::vector<std::complex<double>> multipliers;
     /// The largest |mu| but the family's pair (1 when there is no other).
     double max_multiplier = 1.0;
@@ -125,7 +148,7 @@ struct ModePoint {
     /// pair's rotation over one period e^{+-i Theta_j} followed continuously
     /// from the linear limit, where it is omega_j / omega: the other mode's
     /// frequency in units of the backbone's.
-    std::vector<double> ratios;
+    std::vector<double> ratios;  ///< empty for a damped mode (no rotations are followed)
     /// The internal resonances passed since the last point (or from the
     /// linear limit): "mode<j> <p>:1" where ratio j passed the whole number
     /// p (its multiplier passed +1: the backbone's p-th harmonic meets mode
@@ -148,17 +171,20 @@ struct ModesResult {
     std::string message;
     int mode = 1;
     std::size_t dof = 0;              ///< the amplitude dof (Model::masses index)
-    double linear_omega = 0.0;        ///< the linear mode's circular frequency, rad/s
+    bool damped = false;              ///< computed by EPMC (the file comment): Jenkins elements or Rayleigh damping
+    double linear_omega = 0.0;        ///< the linear mode's circular frequency, rad/s (Jenkins elements stuck)
+    double linear_damping_ratio = 0.0;  ///< its damping ratio (alpha + beta omega^2) / (2 omega)
     std::vector<double> shape;        ///< its shape, mass-normalised, shape[dof] > 0
     std::vector<double> equilibrium;  ///< the static equilibrium x_eq
     std::string configuration;        ///< the equilibrium's configuration (Configuration::spec)
-    std::vector<int> others;          ///< the other linear modes (numbers from 1), ModePoint::ratios order
+    std::vector<double> sliders;      ///< the Jenkins sliders' positions at the equilibrium (springs unstretched)
+    std::vector<int> others;          ///< the other linear modes (numbers from 1), ModePoint::ratios order; empty when damped
     std::vector<ModePoint> points;    ///< in the order of the amplitudes asked for
 };
 
-/// The backbone (see the file comment). Throws InputError for a model that
-/// is not conservative (friction, Jenkins elements, dampers, Rayleigh or
-/// contact damping, load steps: named) or has no static equilibrium with
+/// The backbone (see the file comment). Throws InputError for a model with
+/// elements it does not take (friction on masses, dampers or a damping matrix,
+/// contact damping, load steps: named) or without a static equilibrium of
 /// positive stiffness (a free body), OptionError for options that do not fit,
 /// RunError when a run fails outright.
 ModesResult modes(const Model& model, const ModesOptions& options);

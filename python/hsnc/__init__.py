@@ -507,8 +507,8 @@ def periodic(model, period=None, harmonic=1, transient=0.0, tol=1e-10, max_itera
 
 def modes(model, stop, start=None, points=50, mode=1, dof=None, parameter="amplitude", geometric=False, tol=1e-11,
           max_iterations=30, kernels="auto"):
-    """The backbone of linear mode `mode` of a conservative model (as `hsnc
-    modes --to STOP --from START`, docs/interface.md "hsnc modes"): its
+    """The backbone of linear mode `mode` (as `hsnc modes --to STOP --from
+    START`, docs/interface.md "hsnc modes"): its
     periodic orbits continued in amplitude from the linear limit, each found
     by exact shooting with the period as an unknown. The amplitude is that of
     `dof` (a name; None: the mode shape's largest entry) from its equilibrium
@@ -522,8 +522,12 @@ def modes(model, stop, start=None, points=50, mode=1, dof=None, parameter="ampli
     (rows x n: the state at the turning point), ratios (rows x len(others):
     each other mode's frequency over the backbone's, from its multipliers),
     resonances (a list per row of the internal resonances passed, e.g.
-    "mode2 2:1"), multipliers (rows x 2n complex), stable, events, grazing,
-    iterations. Ctrl-C (SIGINT) stops it promptly with KeyboardInterrupt."""
+    "mode2 2:1"), multipliers (rows x (2n + Jenkins elements) complex),
+    stable, events, grazing, iterations. A model with Jenkins elements or
+    Rayleigh damping gives a damped mode (damped True; the extended periodic
+    motion concept, amplitudes > 0 only): xi and damping_ratio (arrays),
+    sliders (rows x Jenkins elements), linear_damping_ratio. Ctrl-C (SIGINT)
+    stops it promptly with KeyboardInterrupt."""
     f = "hsnc.modes"
     model = _model(f, model)
     stop = _real(f, "stop", stop)

@@ -71,9 +71,9 @@ def test_refuses_by_argument(kwargs, word):
         hsnc.modes(hsnc.Model.from_file(example("chain-stops.toml")), **kwargs)
 
 
-def test_refuses_a_damped_model():
-    text = open(example("bilinear-gap.toml")).read() + "\n[damping]\nbeta = 0.01\n"
-    with pytest.raises(hsnc.InputError, match=r"\[damping\]"):
+def test_refuses_a_damper():
+    text = open(example("bilinear-gap.toml")).read() + '\n[[damper]]\nbetween = ["m", "ground"]\nc = 0.1\n'
+    with pytest.raises(hsnc.InputError, match=r"\[\[damper\]\]"):
         hsnc.modes(hsnc.Model.from_string(text), 0.2)
 
 
@@ -86,3 +86,26 @@ def test_energy_backbone_in_equal_ratios():
     assert np.allclose(r["period"], closed, rtol=1e-11, atol=0)
     with pytest.raises(hsnc.InputError, match="parameter"):
         hsnc.modes(hsnc.Model.from_file(example("bilinear-gap.toml")), 1.0, parameter="power")
+
+
+def test_damped_mode_of_a_jenkins_joint_matches_the_command_line(cli, tmp_path):
+    path = example("jenkins-joint.toml")
+    r = hsnc.modes(hsnc.Model.from_file(path), 1.0, start=0.05, points=8)
+    assert r["status"] == "ok" and r["damped"] and r["linear_damping_ratio"] == 0.0
+    assert r["sliders"].shape == (8, 1) and r["multipliers"].shape == (8, 3)
+    out = tmp_path / "m.csv"
+    p = cli("modes", path, "--from", 0.05, "--to", 1.0, "--points", 8, "--out", out, "--quiet")
+    assert p.stdout.startswith("status=ok mode=1 dof=m ") and "damping_ratio=" in p.stdout
+    header, rows = read_csv(out)
+    col = {name: i for i, name in enumerate(header)}
+    for name in ("amplitude", "omega", "damping_ratio", "xi", "period", "energy"):
+        assert [float(row[col[name]]) for row in rows] == list(r[name]), name
+    assert [float(row[col["s_joint"]]) for row in rows] == list(r["sliders"][:, 0])
+    # Stuck below F_s/k_t = 0.1: the linear mode, undamped; beyond, the frequency falls toward
+    # the free 1 rad/s and the joint damps.
+    stuck = r["amplitude"] < 0.1
+    assert np.all(r["omega"][stuck] == 2.0) and np.all(r["xi"][stuck] == 0.0)
+    assert np.all(np.diff(r["omega"][~stuck]) < 0) and np.all(r["omega"] > 1.0)
+    assert np.all(r["damping_ratio"][~stuck] > 0)
+    with pytest.raises(hsnc.InputError, match="energy"):
+        hsnc.modes(hsnc.Model.from_file(path), 1.0, parameter="energy")

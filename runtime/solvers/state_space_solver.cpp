@@ -161,10 +161,6 @@ Eigen::MatrixXd StateSpaceSolver::rigid_basis(const Model& model, const Configur
 
 StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     : cfg_(cfg), switches_(switch_functions(model, cfg)) {
-    // Its bounds take every eigenvalue's real part <= 0 (|E(s)| <= s, the header).
-    if (model.alpha < 0.0 || model.beta < 0.0)
-        throw InputError("StateSpaceSolver(): negative Rayleigh damping with dampers (non-proportional damping) is "
-                         "not supported: only the modal Eigen solver bounds a growing motion");
     n_ = static_cast<int>(model.dof());
     ns_ = static_cast<int>(switches_.size());
     for (int i = 0; i < n_; ++i) (cfg.stuck[static_cast<std::size_t>(i)] ? stuck_ : free_).push_back(i);
