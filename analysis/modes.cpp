@@ -232,6 +232,31 @@ std::vector<long> passed(double from, double to) {
     return m;
 }
 
+// The zero of v(t) between ta and tb (va, vb of opposite signs, or vb = 0) by the secant method
+// (Illinois: the stale end's value halved), to 1e-15 T; a NaN v(t) stops it. Returns the last
+// instant it evaluated v at.
+template <class V>
+double velocity_zero(double ta, double va, double tb, double vb, double T, V&& v) {
+    double t = ta;
+    for (int it = 0, side = 0; it < 60; ++it) {
+        const double last = t;
+        t = (ta * vb - tb * va) / (vb - va);
+        if (!(t > ta && t < tb)) t = 0.5 * (ta + tb);
+        const double vt = v(t);
+        if (vt == 0.0 || std::fabs(t - last) <= 1e-15 * T || std::isnan(vt)) break;
+        if ((vt < 0) == (va < 0)) {
+            ta = t, va = vt;
+            if (side == -1) vb /= 2;
+            side = -1;
+        } else {
+            tb = t, vb = vt;
+            if (side == 1) va /= 2;
+            side = 1;
+        }
+    }
+    return t;
+}
+
 }  // namespace
 
 const char* modes_status_name(ModesStatus status) {
@@ -618,23 +643,8 @@ private:
                 double ta = samples.t[s], tb = samples.t[s + 1];
                 double va = samples.v[s * n + i], vb = samples.v[(s + 1) * n + i];
                 if (!(va * vb < 0)) continue;
-                double x = NAN, last = ta;
-                for (int it = 0, side = 0; it < 60; ++it) {
-                    double t = (ta * vb - tb * va) / (vb - va);
-                    if (!(t > ta && t < tb)) t = 0.5 * (ta + tb);
-                    const double vt = state_at(s, t, i, x);
-                    if (vt == 0.0 || std::fabs(t - last) <= 1e-15 * o.T) break;
-                    last = t;
-                    if ((vt < 0) == (va < 0)) {
-                        ta = t, va = vt;
-                        if (side == -1) vb /= 2;  // Illinois: the stale end's value halved
-                        side = -1;
-                    } else {
-                        tb = t, vb = vt;
-                        if (side == 1) va /= 2;
-                        side = 1;
-                    }
-                }
+                double x = NAN;  // at the last instant velocity_zero() evaluates
+                velocity_zero(ta, va, tb, vb, o.T, [&](double t) { return state_at(s, t, i, x); });
                 if (!std::isnan(x)) peak[i] = std::max(peak[i], std::fabs(x - eq));
             }
         }
@@ -901,15 +911,20 @@ private:
     // and the flow map's row k to it. NaN when v_k does not turn.
     Turn turning_point(const Eigen::VectorXd& y, double T, double xi) {
         struct Sampler : Observer {
-            std::vector<double> t, v;
-            void on_sample(double ts, const double*, const double* vs) override {
+            std::vector<double> t, v, states;  // states: x (with the sliders), then v, per sample
+            void on_sample(double ts, const double* xs, const double* vs) override {
                 t.push_back(ts);
                 v.push_back(vs[k]);
+                states.insert(states.end(), xs, xs + nx);
+                states.insert(states.end(), vs, vs + n);
             }
             void on_event(double, EventKind, int, const double*, const double*) override {}
             Eigen::Index k = 0;
+            std::size_t n = 0, nx = 0;
         } samples;
         samples.k = k_;
+        samples.n = static_cast<std::size_t>(n_);
+        samples.nx = static_cast<std::size_t>(n_ + nj_);
         Turn turn;
         analysis::Flow& f = flow(xi);
         const RunSummary run = f.run(0.0, y.data(), y.data() + n_, T, samples, true, T / kPeakSamples,
@@ -918,24 +933,14 @@ private:
         std::size_t s = 0;
         while (s + 1 < samples.t.size() && !(samples.v[s] > 0 && samples.v[s + 1] <= 0)) ++s;
         if (s + 1 >= samples.t.size()) return turn;
-        double ta = samples.t[s], tb = samples.t[s + 1], va = samples.v[s], vb = samples.v[s + 1];
-        double t = tb;
-        for (int it = 0, side = 0; it < 60 && vb != 0.0; ++it) {
-            const double last = t;
-            t = (ta * vb - tb * va) / (vb - va);
-            if (!(t > ta && t < tb)) t = 0.5 * (ta + tb);
-            const double vt = state_of(run_to(y, xi, t))(n_ + k_);
-            if (vt == 0.0 || std::fabs(t - last) <= 1e-15 * T || std::isnan(vt)) break;
-            if (vt > 0) {
-                ta = t, va = vt;
-                if (side == -1) vb /= 2;  // Illinois: the stale end's value halved
-                side = -1;
-            } else {
-                tb = t, vb = vt;
-                if (side == 1) va /= 2;
-                side = 1;
-            }
-        }
+        // v_k(t) by a run from the sample before the bracket (exact from any state).
+        const double t0 = samples.t[s], *xs = &samples.states[s * (samples.nx + samples.n)];
+        analysis::NullObserver none;
+        auto v_at = [&](double to) {
+            const RunSummary r = f.run(t0, xs, xs + samples.nx, to, none, false, 0.0, nj_ ? xs + n_ : nullptr);
+            return r.status == RunStatus::ok ? r.v[static_cast<std::size_t>(k_)] : NAN;
+        };
+        const double t = velocity_zero(t0, samples.v[s], samples.t[s + 1], samples.v[s + 1], T, v_at);
         const analysis::PeriodMapValue to = analysis::evaluate_period_map(f, 0.0, t, y);
         if (to.Py.size() != y.size() || !to.Py.allFinite() || !to.M.allFinite()) return turn;
         turn.t = t;
