@@ -13,6 +13,7 @@
 
 #include "assembly.h"
 #include "configuration.h"
+#include "elements/motion.h"
 #include "flow.h"
 #include "number_text.h"
 #include "shooting.h"
@@ -63,11 +64,10 @@ Model without_jenkins(const Model& model) {
     return bare;
 }
 
-// u = w^T x along an element's direction.
+// u = w^T x along an element's direction (direction.h's along() over the positions x).
 double along_x(const Direction& d, const Eigen::VectorXd& x) {
-    double u = 0.0;
-    for_each_term(d, [&](int i, double w) { u += w * x(i); });
-    return u;
+    const double* rows[] = {x.data()};
+    return along(d, double_motion(rows), 0);
 }
 
 // The free model: the harmonic forcing and the base motion left out.
