@@ -510,8 +510,8 @@ TEST(Modes, BeamWithAJenkinsJointSoftensFromStuckTowardFreeAndDamps) {
     // A clamped-free Euler-Bernoulli beam from matrices (4 elements, consistent mass, 8 dofs)
     // held at mid-span (w2) by a Jenkins joint to the ground: the damped first mode from
     // sticking through macroslip. Limits: the stuck beam (K + k_t e e^T) at small amplitudes,
-    // the free beam (K) as the amplitude grows; between them the frequency falls. (On 6
-    // elements some grids stall near the slip onset: see the note.)
+    // the free beam (K) as the amplitude grows; between them the frequency falls. (4 elements:
+    // 6 take 2-3 times as long, slow Newton steps near the slip onset; docs/interface.md.)
     const fe::Beam beam = fe::cantilever(4);
     const double kt = 2000.0, Fs = 10.0;
     testing::TempDir dir;
