@@ -11,6 +11,14 @@
 #include "model_hash.h"
 
 namespace hsnc {
+namespace {
+
+// Negative Rayleigh damping (hsnc modes' EPMC model copies; a model file cannot give it).
+bool negative_damping(const Model& model) {
+    return model.alpha < 0.0 || model.beta < 0.0;
+}
+
+}  // namespace
 
 SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
     auto it = cache_.find(cfg);
@@ -26,7 +34,7 @@ SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
         s = std::move(g);
     } else {
         // StateSpaceSolver's bounds take every eigenvalue's real part <= 0 (|E(s)| <= s, its header).
-        if (model_.alpha < 0.0 || model_.beta < 0.0)
+        if (negative_damping(model_))
             throw InputError("Eigen solver: negative Rayleigh damping with dampers (non-proportional damping) is not "
                              "supported: only the modal solver bounds a growing motion");
         try {
@@ -118,7 +126,7 @@ std::string DerivationFallbackProvider::describe() const {
 }
 
 void refuse_negative_damping(const Model& model, KernelChoice mode) {
-    if (model.alpha < 0.0 || model.beta < 0.0)
+    if (negative_damping(model))
         throw InputError(std::string("--kernels ") + kernel_choice_name(mode) + ": negative Rayleigh damping (alpha = " +
                          std::to_string(model.alpha) + ", beta = " + std::to_string(model.beta) +
                          ", as hsnc modes' extended periodic motion adds) is run by the Eigen solver only "
