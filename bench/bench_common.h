@@ -87,7 +87,7 @@ inline double cpu_seconds() {
 /// n/2+1, and 3n/4 to ground (each at least mass 1; one left out where it
 /// would repeat another or leave the chain), beta = 0.002, forced at both
 /// ends at 9 rad/s, the middle mass started at 1 m/s. friction_chain(16) is the
-/// 16-mass chain of the figures in the README.
+/// 16-mass chain of the figures in docs/results.md.
 inline std::string friction_chain(int n) {
     auto m = [](int i) { return "m" + std::to_string(i); };
     const int q1 = std::max(1, n / 4), q2 = std::max(1, n / 2), q3 = std::max(1, 3 * n / 4);

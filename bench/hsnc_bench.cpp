@@ -26,7 +26,7 @@
 // the median CPU time of the child (user + system, from wait4), and their
 // ratio to CVODE's in-process time on the same run measured above; the same
 // with --t-end 0.001 (start-up, command line, model file, exit) and with the
-// README's trajectory and event files. The wall time includes fork/exec and
+// docs' trajectory and event files. The wall time includes fork/exec and
 // the kernel's process set-up; the CPU time is what the process itself costs
 // when other work competes for the two cores.
 #include <spawn.h>

@@ -1,5 +1,5 @@
 // Accuracy measurement of the high-precision reference (not a test; see
-// bench/reference_check.sh and README "High-precision reference"):
+// bench/reference_check.sh and docs/guide/reference.md):
 //   hsnc_reference_check MODEL T_END N
 // runs MODEL to T_END with the reference at N and 2N digits and with the
 // double hsnc engine (ahead-of-time kernels when the model has them), and

@@ -1,6 +1,6 @@
 #!/bin/sh
 # Accuracy of the high-precision reference and of the double engine against it
-# (README "High-precision reference"): scenario 2 to 300 s at 50 and 100 digits,
+# (docs/guide/reference.md): scenario 2 to 300 s at 50 and 100 digits,
 # scenario 1 to 10 s at 20 and 40 digits (the first 1000 switches and more).
 # Prints event-count agreement, the largest relative event-time difference, the
 # end-state difference, and the double engine's event-time error against the

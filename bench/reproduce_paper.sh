@@ -116,7 +116,7 @@ p4=$(parting "$csv/s2_ab4_1e-4.csv" "$csv/s2_hsnc.csv" 1e-2)
 p6=$(parting "$csv/s2_ab4_1e-6.csv" "$csv/s2_hsnc.csv" 1e-2)
 say "hsnc summary: $(cat "$csv/s2_hsnc_summary.txt")"
 say "where they part, first time max(|x1_hsnc - x1_ab4|, |x2_hsnc - x2_ab4|) > 1e-2 (s): h=1e-4: $p4, h=1e-6: $p6"
-# The true trajectory: the reference engine at 50 digits (README "High-precision
+# The true trajectory: the reference engine at 50 digits (docs/guide/reference.md "High-precision
 # reference"; it agrees with 100 digits to ~1e-45 over these 300 s). Which run
 # stays closer to it, and for how long?
 timed t6ref "$hsnc" simulate "$s2" --t-end 300 --dt 0.01 --quiet --precision mp:50 --out "$csv/s2_ref.csv"

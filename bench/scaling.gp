@@ -1,4 +1,4 @@
-# The scaling plot of README "How it scales": time per switch against the
+# The scaling plot of docs/results.md "How it scales": time per switch against the
 # number of masses, hsnc's Eigen solver, generic (the interpreter) and CVODE, from
 # build/hsnc_scaling_bench --csv scaling.csv.
 #   gnuplot -e "in='scaling.csv'; out='docs/scaling.png'" bench/scaling.gp

@@ -1,7 +1,7 @@
 // libFuzzer target: the model reader (model/model_reader.h) on arbitrary
 // bytes taken as the text of a model file. A model that is not valid must be
 // an InputError with a message; anything else (a crash, a sanitizer report,
-// another exception, a hang) is a defect. README "Fuzzing and sanitizers".
+// another exception, a hang) is a defect. docs/development.md.
 #include <cstddef>
 #include <cstdint>
 #include <string>

@@ -2,7 +2,7 @@
 // on arbitrary bytes taken as an object file, as a cache entry's payload would
 // be. It must map the object or refuse it with a reason; a crash, a sanitizer
 // report or a write outside its own pages is a defect. Nothing it maps is
-// executed. README "Fuzzing and sanitizers".
+// executed. docs/development.md.
 #include <cstddef>
 #include <cstdint>
 #include <memory>

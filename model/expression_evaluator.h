@@ -30,7 +30,7 @@
 
 namespace hsnc {
 
-/// Limits of a model expression (documented in README, "Model expressions").
+/// Limits of a model expression (documented in docs/guide/models.md, "Model expressions").
 inline constexpr int kMaxExpressionDepth = 200;
 inline constexpr int kMaxDecimalExponent = 1000;
 inline constexpr double kMaxExactBits = 100000;

@@ -20,7 +20,7 @@
 //  - `pi` is the constant Pi as well (GiNaC's parser knows only `Pi`), unless
 //    the file names a parameter pi, which then keeps that name; expressions
 //    are recorded with Pi. What an expression may contain and cost is in
-//    expression_evaluator.h (and README, "Model expressions").
+//    expression_evaluator.h (and docs/guide/models.md, "Model expressions").
 //  - A subnormal value (0 < |v| < 2.2e-308) is refused: the derivation's
 //    numbers (CLN) have none.
 //  - `g` is a parameter. When [parameters] does not define it, it is an

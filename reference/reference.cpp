@@ -1,7 +1,7 @@
 // The reference engine: runtime/engine/engine.cpp's switch search written again on
 // cl_F (see reference.h), with the contract's decision rules at a switch
 // (runtime/engine/transition_rules.h, shared with the double engine) evaluated in its
-// own arithmetic. The search is the same guaranteed one (README "How switches
+// own arithmetic. The search is the same guaranteed one (docs/architecture.md "How switches
 // are found"): each switch function is watched on the side its configuration
 // fixes, every step is bounded by the smallest positive root of
 // h + h' s - B s^2/2 (B >= |g''| from the segment), so no sign change is

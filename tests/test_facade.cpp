@@ -297,10 +297,10 @@ TEST(Facade, NoEndTimeIsAnOptionError) {
     }
 }
 
-// The README's Library section shows examples/simulate_model.cpp as it is.
-TEST(Facade, ReadmeShowsTheExampleConsumer) {
-    const std::string readme = testing::slurp(std::string(HSNC_SOURCE_DIR) + "/README.md");
-    const auto section = readme.find("\n## Library\n");
+// The library guide shows examples/simulate_model.cpp as it is.
+TEST(Facade, LibraryGuideShowsTheExampleConsumer) {
+    const std::string readme = testing::slurp(std::string(HSNC_SOURCE_DIR) + "/docs/guide/library.md");
+    const auto section = readme.find("\n## The C++ library\n");
     ASSERT_NE(section, std::string::npos);
     const auto start = readme.find("```cpp\n", section);
     ASSERT_NE(start, std::string::npos);

@@ -2,7 +2,7 @@
 // step from switch to switch with the closed-form segment solutions, find every
 // switch, and apply it by the physics of interface.md section 2.
 //
-// Switch detection (guaranteed, see README "How switches are found"):
+// Switch detection (guaranteed, see docs/architecture.md "How switches are found"):
 // every switch function g_f is watched on its "safe side" h_f = side_f*g_f > 0,
 // where side_f follows from the configuration (a closed contact watches G > 0,
 // an open one -G > 0, a sliding mass sgn*v > 0, a stuck mass mu_s*N -+ A > 0),

@@ -26,7 +26,7 @@ constexpr double kGrowthHorizon = 0.5;
 // form loses at most a factor 10 in relative accuracy.
 // This band is the generic solver's own on purpose, not kResonanceBand
 // (generator/derivation.h) of the kernels and the interpreter: the generic
-// solver is their independent oracle (README "One program, printed and
+// solver is their independent oracle (docs/architecture.md "One program, printed and
 // interpreted"), so it decides with another criterion (damped modes too,
 // about 5% in frequency for an undamped one) and another resonance-stable form
 // (the Duhamel integral), and agreement across both bands is what the tests see.
