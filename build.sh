@@ -21,6 +21,7 @@ packages=(
   python3-dev pybind11-dev python3-numpy  # the Python module (import hsnc)
   python3-pytest python3-matplotlib       # its tests, examples/scenario2.py
   python3-dask                   # the test of hsnc.sweep_map on a Dask bag
+  python3-nbconvert python3-ipykernel python3-nbformat python3-scipy  # the notebooks, run as tests (SciPy: their oracles)
   libopenmpi-dev openmpi-bin     # hsnc sweep over MPI ranks (mpirun -np K hsnc sweep ...)
 )
 missing=()
