@@ -15,6 +15,7 @@ packages=(
   libcli11-dev                   # command line parsing
   libsundials-dev                # the CVODE baseline (--method cvode)
   libmatio-dev                   # [structure] matrices from MATLAB .mat files
+  libhdf5-dev                    # --h5 result files
   llvm-14-dev libclang-cpp14-dev libclang-14-dev  # compiling kernels in-process
   libgtest-dev                   # tests
   gnuplot-nox fonts-dejavu-core   # plots (pngcairo needs a font)
@@ -22,6 +23,7 @@ packages=(
   python3-pytest python3-matplotlib       # its tests, examples/scenario2.py
   python3-dask                   # the test of hsnc.sweep_map on a Dask bag
   python3-nbconvert python3-ipykernel python3-nbformat python3-scipy  # the notebooks, run as tests (SciPy: their oracles)
+  python3-h5py                   # hsnc.to_h5 and the tests that read --h5 files
   libopenmpi-dev openmpi-bin     # hsnc sweep over MPI ranks (mpirun -np K hsnc sweep ...)
 )
 missing=()

@@ -7,6 +7,7 @@
 
 #include "commands.h"
 #include "plot.h"
+#include "plugin_module.h"
 #include "simulate_outputs.h"
 
 namespace hsnc::cli {
@@ -63,6 +64,55 @@ const OutputTarget* AnalysisOutputs::add(const char* flag, const std::string& pa
     targets_.push_back(std::make_unique<OutputTarget>(check_output(flag, path)));
     png_ = png_ || png;
     return targets_.back().get();
+}
+
+const OutputTarget* AnalysisOutputs::add_h5(const std::string& path) {
+    if (path.empty()) return nullptr;
+    targets_.push_back(std::make_unique<OutputTarget>(check_h5(path)));
+    return targets_.back().get();
+}
+
+H5Open h5_module() {
+#ifdef HSNC_H5_MODULE
+    static H5Open open = nullptr;
+    if (!open) {
+        std::string problem;
+        open = reinterpret_cast<H5Open>(api::plugin_module_symbol(api::plugin_module_path(HSNC_H5_MODULE),
+                                                                  "hsnc_h5_open", api::SymbolScope::kLocal, problem));
+        if (!open) throw RunError("--h5: cannot load the HDF5 module: " + problem);
+    }
+    return open;
+#else
+    throw InputError(
+        "--h5: this hsnc was built without HDF5 (configure with -DHSNC_WITH_HDF5=ON, Debian's libhdf5-dev)");
+#endif
+}
+
+OutputTarget check_h5(const std::string& path) {
+    OutputTarget target = check_h5_output(path);
+    h5_module();  // loaded before anything runs: a missing module is said at once
+    return target;
+}
+
+std::unique_ptr<H5Archive> open_h5(const OutputTarget* target, const Model& model, const ModelOverrides& overrides) {
+    if (!target) return nullptr;
+    auto archive = std::make_unique<H5Archive>(*target, h5_module());
+    write_h5_provenance(*archive, model.name, model.source, overrides_given(overrides));
+    return archive;
+}
+
+std::vector<std::string> overrides_given(const ModelOverrides& overrides) {
+    std::vector<std::string> given;
+    for (const auto& s : overrides.set) given.push_back("--set " + s);
+    for (const auto& s : overrides.x0) given.push_back("--x0 " + s);
+    for (const auto& s : overrides.v0) given.push_back("--v0 " + s);
+    return given;
+}
+
+void add_h5_flag(CLI::App* sub, std::string& path, const std::string& tables) {
+    sub->add_option("--h5", path,
+                    "HDF5 file of the results (" + tables +
+                        ": one dataset per CSV column) with the model text, overrides, hsnc version and command");
 }
 
 void AnalysisOutputs::check() const {

@@ -16,6 +16,7 @@
 #include <CLI/CLI.hpp>
 
 #include "error.h"
+#include "h5_archive.h"
 #include "hsnc/simulate.h"
 #include "model_reader.h"
 #include "output_file.h"
@@ -60,6 +61,22 @@ void set_kernels(const AnalysisFlags& flags, Options& o) {
 /// option and flag; "kernels" is --kernels without being listed), else e.what().
 InputError option_flag_error(const OptionError& e, std::initializer_list<std::pair<const char*, const char*>> flags);
 
+/// The --h5 archive of a command (null without `target`), its provenance
+/// written: the model file's text and name, `overrides` as given, the command line.
+std::unique_ptr<H5Archive> open_h5(const OutputTarget* target, const Model& model, const ModelOverrides& overrides);
+
+/// The entry point of libhsnc_h5.so (loaded the first time; RunError when it
+/// cannot be, InputError when hsnc was built without HDF5).
+H5Open h5_module();
+/// check_h5_output(path), and the module loaded: everything --h5 needs, before the run.
+OutputTarget check_h5(const std::string& path);
+
+/// The overrides as given on the command line ("--set F=2"), for --h5 files.
+std::vector<std::string> overrides_given(const ModelOverrides& overrides);
+
+/// Registers --h5 FILE on `sub`; `tables` says what the file holds (its help).
+void add_h5_flag(CLI::App* sub, std::string& path, const std::string& tables);
+
 /// The output paths of one command, each checked when added (check_output:
 /// InputError, nothing written), then all together by check().
 class AnalysisOutputs {
@@ -67,6 +84,8 @@ public:
     /// The target of `path` for `flag`; null when `path` is empty. `png`:
     /// drawn by gnuplot (check() then requires it).
     const OutputTarget* add(const char* flag, const std::string& path, bool png = false);
+    /// --h5 FILE (h5_archive.h: a regular file or a new name); null when `path` is empty.
+    const OutputTarget* add_h5(const std::string& path);
     /// No two of them one file; gnuplot on PATH when a PNG is asked for.
     void check() const;
 

@@ -4,6 +4,7 @@
 
 #include "commands.h"
 #include "error.h"
+#include "h5_archive.h"
 #include "input_files.h"
 #include "output_file.h"
 
@@ -21,6 +22,7 @@ CLI::Validator finite_number() {
 }
 
 int run(int argc, const char* const* argv) {
+    set_command_line(argc, argv);  // recorded in --h5 files
     CLI::App app{
         "hsnc: exact response of piecewise-linear mechanical systems with intermittent\n"
         "contacts and Coulomb friction (hybrid symbolic-numeric method)."};

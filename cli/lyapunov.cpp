@@ -27,7 +27,7 @@ struct LyapunovFlags {
     AnalysisFlags common;  // MODEL, --set, --x0, --v0, --kernels, --cache-dir, --no-cache, --quiet
     double t_end = NAN, transient = 0.0, row = NAN;
     bool allow_large_output = false;
-    std::string out, plot;
+    std::string out, plot, h5;
     std::string section, section_out, section_plot;
 };
 
@@ -62,19 +62,20 @@ int lyapunov_command(const LyapunovFlags& f) {
     o.row_interval = f.row;
     set_kernels(f.common, o);
     SectionSpec spec;
-    const bool section = section_requested(model, f.section, f.section_out, f.section_plot, &spec);
+    const bool section = section_requested(model, f.section, f.section_out, f.section_plot, &spec, !f.h5.empty());
     // Every output path checked before anything runs (exit code 2, nothing written).
     AnalysisOutputs outputs;
     const OutputTarget* out = outputs.add("--out", f.out);
     const OutputTarget* plot = outputs.add("--plot", f.plot, true);
     const OutputTarget* section_out = outputs.add("--section-out", f.section_out);
     const OutputTarget* section_plot = outputs.add("--section-plot", f.section_plot, true);
+    const OutputTarget* h5 = outputs.add_h5(f.h5);
     outputs.check();
 
     const std::size_t n2 = 2 * model.dof() + model.jenkins.size();  // and one per Jenkins slider
     // The rows are written (--out) and kept for the plot (--plot): the output
     // guard of `hsnc simulate`, before the run.
-    if (out || plot) {
+    if (out || plot || h5) {
         const double row = lyapunov_row_interval(model, o);
         if (row > 0 && std::isfinite(f.t_end) && f.t_end > 0)
             check_output_size(std::isnan(f.row) ? "--t-end " + number_text(f.t_end) + " (a row every " +
@@ -83,17 +84,18 @@ int lyapunov_command(const LyapunovFlags& f) {
                               out ? "the convergence --out" : "the convergence rows of --plot", std::floor(f.t_end / row) + 1,
                               n2 + 1, f.allow_large_output);
     }
+    const std::unique_ptr<H5Archive> archive = open_h5(h5, model, f.common.overrides);
     std::unique_ptr<CsvFile> csv;
     std::vector<double> rows;  // for the plot: t, lambda_1..lambda_2n per row
     std::function<void(double, const std::vector<double>&)> on_row;
-    if (out) {
-        csv = std::make_unique<CsvFile>(*out);
+    if (out || archive) {
+        csv = std::make_unique<CsvFile>(out, archive ? &archive->table("lyapunov/convergence") : nullptr);
         std::string header = "t";
         for (std::size_t k = 1; k <= n2; ++k) header += ",lambda_" + std::to_string(k);
         csv->text(header.c_str());
         csv->end_row();
     }
-    if (out || plot)
+    if (csv || plot)
         on_row = [&](double t, const std::vector<double>& ex) {
             if (csv) {
                 csv->number(t);
@@ -108,7 +110,8 @@ int lyapunov_command(const LyapunovFlags& f) {
     // The section over the measurement (from t0 + transient on).
     std::unique_ptr<CsvFile> section_file;
     std::unique_ptr<SectionRecorder> recorder;
-    if (section_out) section_file = std::make_unique<CsvFile>(*section_out);
+    if (section_out || (archive && section))
+        section_file = std::make_unique<CsvFile>(section_out, archive ? &archive->table("lyapunov/section") : nullptr);
     if (section)
         recorder = std::make_unique<SectionRecorder>(model, spec, section_file.get(), section_plot != nullptr,
                                                      model.t0 + f.transient);
@@ -138,6 +141,17 @@ int lyapunov_command(const LyapunovFlags& f) {
     if (section_file) section_file->commit();
     if (plot) draw_convergence(*plot, model, rows, n2 + 1, r);
     if (section_plot) recorder->draw(*section_plot);
+    if (archive) {
+        CsvFile exponents(nullptr, &archive->table("lyapunov/exponents"));
+        exponents.text("index,lambda");
+        exponents.end_row();
+        for (std::size_t k = 0; k < r.exponents.size(); ++k) {
+            exponents.number(static_cast<double>(k + 1));
+            exponents.number(r.exponents[k]);
+            exponents.end_row();
+        }
+        archive->commit();
+    }
 
     std::ostringstream line;
     line << "status=ok t=" << number_text(r.t);
@@ -179,6 +193,7 @@ void add_lyapunov(CLI::App& app, int& exit_code) {
     sub->add_flag("--allow-large-output", f->allow_large_output,
                   "write --out (and keep for --plot) more than 1e7 rows or about 1 GB (refused otherwise)");
     add_section_flags(sub, f->section, f->section_out, f->section_plot, " over the measurement");
+    add_h5_flag(sub, f->h5, "lyapunov/convergence as --out, lyapunov/exponents, lyapunov/section as --section-out");
     sub->callback([f, &exit_code] { exit_code = lyapunov_command(*f); });
 }
 

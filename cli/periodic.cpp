@@ -29,7 +29,7 @@ struct PeriodicFlags {
     double period = NAN, transient = 0.0, dt = NAN, tolerance = 1e-10;
     int harmonic = 1, max_iterations = 50;
     bool allow_large_output = false;
-    std::string multipliers, out, plot;
+    std::string multipliers, out, plot, h5;
 };
 
 // The multipliers in the complex plane with the unit circle (gnuplot).
@@ -73,6 +73,28 @@ void draw_multipliers(const OutputTarget& target, const PeriodicResult& r, const
     render_png(script.str(), target);
 }
 
+// The stdout line's numbers as a one-row table of the --h5 file.
+void write_summary(TableSink& table, const Model& model, const PeriodicResult& r) {
+    CsvFile t(nullptr, &table);
+    std::string header = "period,iterations,residual";
+    for (const auto& m : model.masses) header += ",x_" + m.name;
+    for (const auto& m : model.masses) header += ",v_" + m.name;
+    for (const auto& j : model.jenkins) header += ",s_" + j.name;
+    t.text((header + ",stable,max_multiplier,events,grazing").c_str());
+    t.end_row();
+    t.number(r.period);
+    t.number(r.iterations);
+    t.number(r.residual);
+    for (std::size_t i = 0; i < model.dof(); ++i) t.number(r.x[i]);
+    for (std::size_t i = 0; i < model.dof(); ++i) t.number(r.v[i]);
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) t.number(r.s[j]);
+    t.text(r.stable ? "true" : "false");
+    t.number(r.max_multiplier);
+    t.number(static_cast<double>(r.events));
+    t.number(static_cast<double>(r.grazing));
+    t.end_row();
+}
+
 int periodic_command(const PeriodicFlags& f) {
     const Model model = read_model(f.common.model, f.common.overrides);
     PeriodicOptions o;
@@ -88,9 +110,10 @@ int periodic_command(const PeriodicFlags& f) {
     const OutputTarget* out = outputs.add("--out", f.out);
     const OutputTarget* mult = outputs.add("--multipliers", f.multipliers);
     const OutputTarget* plot = outputs.add("--plot", f.plot, true);
+    const OutputTarget* h5 = outputs.add_h5(f.h5);
     outputs.check();
     // One period of the orbit sampled every --dt: the output guard of `hsnc simulate`, before the run.
-    if (out) {
+    if (out || h5) {
         const double period = (std::isnan(f.period) ? forcing_period(model) : f.period) * f.harmonic;
         const double dt = std::isnan(f.dt) ? period / 1000 : f.dt;
         if (period > 0 && std::isfinite(period) && dt > 0)
@@ -99,10 +122,11 @@ int periodic_command(const PeriodicFlags& f) {
                               f.allow_large_output);
     }
 
+    const std::unique_ptr<H5Archive> archive = open_h5(h5, model, f.common.overrides);
     std::unique_ptr<CsvFile> traj;
     std::unique_ptr<CsvObserver> csv;
-    if (out) {
-        traj = std::make_unique<CsvFile>(*out);
+    if (out || archive) {
+        traj = std::make_unique<CsvFile>(out, archive ? &archive->table("periodic/orbit") : nullptr);
         csv = std::make_unique<CsvObserver>(model, traj.get(), nullptr);
     }
     // Progress on stderr: the stage, the Newton iterations and residual, the time reached.
@@ -138,8 +162,8 @@ int periodic_command(const PeriodicFlags& f) {
     const bool ok = r.status == PeriodicStatus::ok;
     if (ok) {
         if (traj) traj->commit();
-        if (mult) {
-            CsvFile file(*mult);
+        if (mult || archive) {
+            CsvFile file(mult, archive ? &archive->table("periodic/multipliers") : nullptr);
             file.text("index,re,im,abs");
             file.end_row();
             for (std::size_t i = 0; i < r.multipliers.size(); ++i) {
@@ -152,6 +176,10 @@ int periodic_command(const PeriodicFlags& f) {
             file.commit();
         }
         if (plot) draw_multipliers(*plot, r, model);
+        if (archive) {
+            write_summary(archive->table("periodic/summary"), model, r);
+            archive->commit();
+        }
     }
     std::ostringstream line;
     line << "status=" << periodic_status_name(r.status) << " period=" << number_text(r.period)
@@ -201,6 +229,7 @@ void add_periodic(CLI::App& app, int& exit_code) {
     sub->add_flag("--allow-large-output", f->allow_large_output,
                   "write an --out of more than 1e7 rows or about 1 GB (refused otherwise)");
     sub->add_option("--plot", f->plot, "draw the multipliers and the unit circle into this PNG (gnuplot)");
+    add_h5_flag(sub, f->h5, "periodic/orbit as --out, periodic/multipliers, periodic/summary; only when converged");
     sub->add_option("--tol", f->tolerance,
                     "converged when |P(y) - y| is at most this, relative to the largest position and velocity "
                     "(default 1e-10)")

@@ -160,8 +160,15 @@ int simulate(const SimulateOptions& o) {
     // Default sampling: 1000 intervals over the run (as the library does).
     const double dt = std::isnan(o.dt) ? SampleGrid::default_dt(model.t0, t_end) : o.dt;
     // Every output path checked before anything is written or run.
-    SimulateOutputs outputs(model, o.outputs, t_end, dt);
-    outputs.open();
+    std::unique_ptr<OutputTarget> h5;
+    if (!o.outputs.h5.empty()) h5 = std::make_unique<OutputTarget>(check_h5(o.outputs.h5));
+    SimulateOutputs outputs(model, o.outputs, t_end, dt, h5.get());
+    const std::unique_ptr<H5Archive> archive = open_h5(h5.get(), model, o.overrides);
+    SimulateMirror mirror;
+    if (archive)
+        mirror = {&archive->table("simulate/trajectory"), &archive->table("simulate/events"),
+                  &archive->table("simulate/section")};
+    outputs.open(mirror);
     RunObserver obs(outputs, model.t0, t_end, !o.quiet && ::isatty(2), !o.quiet);
 
     run.samples = outputs.samples();
@@ -172,6 +179,24 @@ int simulate(const SimulateOptions& o) {
     if (sum.status != RunStatus::ok && sum.status != RunStatus::max_events)
         throw RunError(std::string("simulate: ") + run_status_name(sum.status) + ": " + sum.message);
     outputs.commit();
+    if (archive) {  // the summary line's numbers as a one-row table
+        CsvFile s(nullptr, &archive->table("simulate/summary"));
+        std::string header = "status,method,t,events";
+        for (EventKind k : kSwitchEventKinds) header += std::string(",") + event_kind_name(k);
+        for (std::size_t i = 0; i < model.dof(); ++i) header += ",x_" + model.masses[i].name;
+        for (std::size_t i = 0; i < model.dof(); ++i) header += ",v_" + model.masses[i].name;
+        s.text(header.c_str());
+        s.end_row();
+        s.text(run_status_name(sum.status));
+        s.text(o.method.c_str());
+        s.number(sum.t);
+        s.number(static_cast<double>(sum.events));
+        for (EventKind k : kSwitchEventKinds) s.number(static_cast<double>(obs.count(k)));
+        for (std::size_t i = 0; i < model.dof(); ++i) s.number(sum.x[i]);
+        for (std::size_t i = 0; i < model.dof(); ++i) s.number(sum.v[i]);
+        s.end_row();
+        archive->commit();
+    }
 
     // The summary line (stdout): status, switch events, end state.
     std::ostringstream line;
@@ -218,6 +243,8 @@ void add_simulate(CLI::App& app, int& exit_code) {
                     "draw x(t) of every mass into this PNG (gnuplot): the whole run with the switch events as "
                     "ticks, and a zoom (last 5 forcing periods, else the first 10%) with the events marked");
     add_section_flags(sub, o->outputs.section, o->outputs.section_out, o->outputs.section_plot);
+    add_h5_flag(sub, o->outputs.h5,
+                "simulate/trajectory as --out, simulate/events as --events, simulate/section, simulate/summary");
     sub->add_flag("--allow-large-output", o->outputs.allow_large_output,
                   "write a trajectory of more than 1e7 rows or about 1 GB (refused without it)");
     sub->add_option("--method", o->method,

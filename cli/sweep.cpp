@@ -17,13 +17,14 @@
 #include <memory>
 #include <sstream>
 
+#include "analysis_flags.h"
 #include "commands.h"
 #include "csv_writer.h"
 #include "error.h"
 #include "file_read.h"
-#include "input_files.h"
 #include "hsnc/simulate.h"
 #include "hsnc/sweep.h"
+#include "input_files.h"
 #include "model_reader.h"
 #include "output_file.h"
 #include "plot.h"
@@ -46,7 +47,7 @@ struct SweepFlags {
     std::string param2, values2;
     unsigned threads = 1;
     std::string part, part_out;
-    std::string out, diagram, plot;
+    std::string out, diagram, plot, h5;
     std::string method = "hsnc";
     double h = NAN, rtol = 1e-10, atol = 1e-12;
     bool quiet = false;
@@ -64,7 +65,7 @@ std::size_t count_flag(const char* flag, long long value, long long least) {
 
 struct MergeFlags {
     std::vector<std::string> parts;
-    std::string out, diagram, plot;
+    std::string out, diagram, plot, h5;
 };
 
 // The flag of each SweepOptions field, for the library's OptionError.
@@ -166,8 +167,7 @@ std::string interrupted_note(std::size_t done, std::size_t total) {
 
 // Writes the response curve and the diagram CSVs (interface.md section 6);
 // `note`: a last comment line ("" for none).
-void write_curve(const SweepResult& r, const OutputTarget& target, const std::string& note) {
-    CsvFile f(target);
+void write_curve(const SweepResult& r, CsvFile& f, const std::string& note) {
     f.text(sweep_curve_header(r).c_str());
     f.end_row();
     const bool has2 = !r.param2.empty();
@@ -194,11 +194,9 @@ void write_curve(const SweepResult& r, const OutputTarget& target, const std::st
         f.text(note.c_str());
         f.end_row();
     }
-    f.commit();
 }
 
-void write_diagram(const SweepResult& r, const OutputTarget& target, const std::string& note) {
-    CsvFile f(target);
+void write_diagram(const SweepResult& r, CsvFile& f, const std::string& note) {
     f.text(sweep_diagram_header(r).c_str());
     f.end_row();
     const std::size_t n = r.masses.size();
@@ -217,24 +215,40 @@ void write_diagram(const SweepResult& r, const OutputTarget& target, const std::
         f.text(note.c_str());
         f.end_row();
     }
-    f.commit();
 }
 
-// The outputs of a whole sweep (--out, --diagram, --plot), checked before anything runs.
+// The outputs of a whole sweep (--out, --diagram, --plot, --h5), checked before anything runs.
 struct Outputs {
-    std::unique_ptr<OutputTarget> out, diagram, plot;
-    Outputs(const std::string& o, const std::string& d, const std::string& p) {
+    std::unique_ptr<OutputTarget> out, diagram, plot, h5;
+    std::string model_path;  // for --h5: the model file and its overrides as given
+    std::vector<std::string> overrides;
+    Outputs(const std::string& o, const std::string& d, const std::string& p, const std::string& h = "") {
         std::vector<const OutputTarget*> all;
         if (!o.empty()) all.push_back((out = std::make_unique<OutputTarget>(check_output("--out", o))).get());
         if (!d.empty()) all.push_back((diagram = std::make_unique<OutputTarget>(check_output("--diagram", d))).get());
         if (!p.empty()) all.push_back((plot = std::make_unique<OutputTarget>(check_output("--plot", p))).get());
+        if (!h.empty()) all.push_back((h5 = std::make_unique<OutputTarget>(check_h5(h))).get());
         check_distinct(all);
         if (plot) require_gnuplot();
     }
     void write(const SweepResult& r, const std::string& title, const std::string& note = "") const {
-        if (out) write_curve(r, *out, note);
-        if (diagram) write_diagram(r, *diagram, note);
+        std::unique_ptr<H5Archive> archive;
+        if (h5) {
+            archive = std::make_unique<H5Archive>(*h5, h5_module());
+            write_h5_provenance(*archive, r.model, model_path, overrides);
+        }
+        if (out || archive) {
+            CsvFile f(out.get(), archive ? &archive->table("sweep/curve") : nullptr);
+            write_curve(r, f, note);
+            f.commit();
+        }
+        if (diagram || archive) {
+            CsvFile f(diagram.get(), archive ? &archive->table("sweep/diagram") : nullptr);
+            write_diagram(r, f, note);
+            f.commit();
+        }
         if (plot) draw_sweep_plot(r, note.empty() ? title : title + " (interrupted)", *plot);
+        if (archive) archive->commit();
     }
 };
 
@@ -369,10 +383,10 @@ int sweep(const SweepFlags& f) {
         if (!f.part.empty()) {
             std::tie(part, parts) = parse_part(f.part);
             if (f.part_out.empty()) throw InputError("--part " + f.part + ": needs --part-out FILE (the part file)");
-            if (!f.out.empty() || !f.diagram.empty() || !f.plot.empty())
+            if (!f.out.empty() || !f.diagram.empty() || !f.plot.empty() || !f.h5.empty())
                 throw InputError("--part " + f.part +
-                                 ": writes only the part file (--part-out); --out, --diagram and --plot come from "
-                                 "hsnc sweep-merge");
+                                 ": writes only the part file (--part-out); --out, --diagram, --plot and --h5 come "
+                                 "from hsnc sweep-merge");
         } else if (!f.part_out.empty()) {
             throw InputError("--part-out: only with --part I/N");
         }
@@ -433,8 +447,11 @@ int sweep(const SweepFlags& f) {
             try {
                 if (!f.part.empty())
                     part_target = std::make_unique<OutputTarget>(check_output("--part-out", f.part_out));
-                else
-                    outputs = std::make_unique<Outputs>(f.out, f.diagram, f.plot);
+                else {
+                    outputs = std::make_unique<Outputs>(f.out, f.diagram, f.plot, f.h5);
+                    outputs->model_path = f.model;
+                    outputs->overrides = overrides_given(f.overrides);
+                }
             } catch (const InputError& e) {
                 go = 2;
                 refusal = e.what();
@@ -551,7 +568,7 @@ int sweep(const SweepFlags& f) {
 
 int merge(const MergeFlags& f) {
     for (const std::string& path : f.parts) note_input_file(path);  // no output may replace a part
-    Outputs outputs(f.out, f.diagram, f.plot);
+    Outputs outputs(f.out, f.diagram, f.plot, f.h5);                // --h5: the model's text is not in the parts
     std::vector<std::string> texts;
     for (const std::string& path : f.parts) {
         const FileRead file = read_regular_file(path, std::size_t{1} << 34);
@@ -590,6 +607,7 @@ void add_sweep(CLI::App& app, int& exit_code) {
     sub->add_option("--out", f->out, "response curve CSV");
     sub->add_option("--diagram", f->diagram, "bifurcation diagram CSV (the stroboscopic samples of every point)");
     sub->add_option("--plot", f->plot, "draw the response curve and the diagram into this PNG (gnuplot)");
+    add_h5_flag(sub, f->h5, "sweep/curve as --out, sweep/diagram as --diagram");
     sub->add_flag("--restart-each", f->restart_each,
                   "start every point from the model's initial state (no continuation; points run in parallel)");
     sub->add_option("--param2", f->param2, "a second parameter: one sweep per value of --values2")
@@ -623,6 +641,7 @@ void add_sweep(CLI::App& app, int& exit_code) {
     merge_cmd->add_option("--out", m->out, "response curve CSV");
     merge_cmd->add_option("--diagram", m->diagram, "bifurcation diagram CSV");
     merge_cmd->add_option("--plot", m->plot, "the figure (PNG, gnuplot)");
+    add_h5_flag(merge_cmd, m->h5, "sweep/curve, sweep/diagram");
     merge_cmd->callback([m, &exit_code] { exit_code = merge(*m); });
 }
 

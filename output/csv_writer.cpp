@@ -12,25 +12,34 @@ namespace hsnc {
 
 CsvFile::CsvFile(const std::string& path) : CsvFile(check_output("", path)) {}
 
-CsvFile::CsvFile(const OutputTarget& target) : file_(target) {}
+CsvFile::CsvFile(const OutputTarget& target) : file_(std::make_unique<OutputFile>(target)) {}
+
+CsvFile::CsvFile(const OutputTarget* target, TableSink* mirror)
+    : file_(target ? std::make_unique<OutputFile>(*target) : nullptr), mirror_(mirror) {}
 
 void CsvFile::text(const char* s) {
-    if (!first_in_row_) file_.put(',');
-    file_.write(s, std::strlen(s));
+    if (mirror_) mirror_->text(s);
+    if (!file_) return;
+    if (!first_in_row_) file_->put(',');
+    file_->write(s, std::strlen(s));
     first_in_row_ = false;
 }
 
 void CsvFile::number(double value) {
+    if (mirror_) mirror_->number(value);
+    if (!file_) return;
     char buf[40];
     // 17 significant digits always round-trip a double (max_digits10).
     const auto res = std::to_chars(buf, buf + sizeof buf, value, std::chars_format::general, 17);
-    if (!first_in_row_) file_.put(',');
-    file_.write(buf, static_cast<std::size_t>(res.ptr - buf));
+    if (!first_in_row_) file_->put(',');
+    file_->write(buf, static_cast<std::size_t>(res.ptr - buf));
     first_in_row_ = false;
 }
 
 void CsvFile::end_row() {
-    file_.put('\n');
+    if (mirror_) mirror_->end_row();
+    if (!file_) return;
+    file_->put('\n');
     first_in_row_ = true;
 }
 

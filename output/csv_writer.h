@@ -6,6 +6,7 @@
 // stops the run (RunError naming the file).
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -15,12 +16,26 @@
 
 namespace hsnc {
 
+/// Where the cells of a table go besides (or instead of) a CSV file: the
+/// first row is the header (text cells holding comma-separated column names),
+/// then one row per end_row() (h5_archive.h: a table of an HDF5 file).
+class TableSink {
+public:
+    virtual ~TableSink() = default;
+    virtual void text(const char* s) = 0;
+    virtual void number(double value) = 0;
+    virtual void end_row() = 0;
+};
+
 class CsvFile {
 public:
     /// Checks `path` (check_output, InputError) and opens it.
     explicit CsvFile(const std::string& path);
     /// Opens a target checked before the run.
     explicit CsvFile(const OutputTarget& target);
+    /// The same table into `mirror` too (may be null); without a target (null)
+    /// into the mirror alone.
+    CsvFile(const OutputTarget* target, TableSink* mirror);
     CsvFile(const CsvFile&) = delete;
     CsvFile& operator=(const CsvFile&) = delete;
 
@@ -28,11 +43,15 @@ public:
     void number(double value);  ///< 17 significant digits, shortest exact form
     void end_row();
     /// Flush, close and rename into place. Throws RunError on I/O failure.
-    void commit() { file_.commit(); }
-    const OutputFile& file() const { return file_; }
+    void commit() {
+        if (file_) file_->commit();
+    }
+    /// The CSV file (only when it was given a target).
+    const OutputFile& file() const { return *file_; }
 
 private:
-    OutputFile file_;  // removes its temporary file unless committed
+    std::unique_ptr<OutputFile> file_;  // removes its temporary file unless committed
+    TableSink* mirror_ = nullptr;
     bool first_in_row_ = true;
 };
 

@@ -79,14 +79,14 @@ SectionSpec parse_section(const Model& model, const std::string& text, const std
     return s;
 }
 
-bool section_requested(const Model& model, const std::string& section, const std::string& out,
-                       const std::string& plot, SectionSpec* spec) {
+bool section_requested(const Model& model, const std::string& section, const std::string& out, const std::string& plot,
+                       SectionSpec* spec, bool archive) {
     if (section.empty() && out.empty() && plot.empty()) return false;
     if (section.empty())
         throw InputError(std::string(out.empty() ? "--section-plot" : "--section-out") +
                          ": needs --section KIND[:NAME] (the switch kind the section is taken at)");
-    if (out.empty() && plot.empty())
-        throw InputError("--section '" + section + "': needs --section-out CSV or --section-plot PNG");
+    if (out.empty() && plot.empty() && !archive)
+        throw InputError("--section '" + section + "': needs --section-out CSV, --section-plot PNG or --h5 FILE");
     *spec = parse_section(model, section, "--section");
     return true;
 }

@@ -35,9 +35,10 @@ SectionSpec parse_section(const Model& model, const std::string& text, const std
 
 /// Checks --section, --section-out and --section-plot together: InputError
 /// when an output comes without --section, or --section without an output,
-/// or the spec does not parse. Returns false when no section is asked for.
-bool section_requested(const Model& model, const std::string& section, const std::string& out,
-                       const std::string& plot, SectionSpec* spec);
+/// or the spec does not parse (`archive`: an --h5 file takes the section as
+/// an output). Returns false when no section is asked for.
+bool section_requested(const Model& model, const std::string& section, const std::string& out, const std::string& plot,
+                       SectionSpec* spec, bool archive = false);
 
 /// Records the section: rows to `csv` (may be null; the header is written
 /// here) and, when `keep` is set, in memory for the plot (at most

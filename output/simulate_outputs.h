@@ -26,10 +26,21 @@ struct OutputRequest {
     bool allow_large_output = false;
     /// --section KIND[:NAME] with --section-out CSV and/or --section-plot PNG (section.h).
     std::string section, section_out, section_plot;
+    /// --h5 FILE (h5_archive.h; checked and written by the command line).
+    std::string h5;
 };
 
 /// Rows of the trajectory CSV sampled every dt from t0 to t_end (without the header).
 double trajectory_rows(double t0, double t_end, double dt);
+
+/// Where the tables of `hsnc simulate` go besides their CSV files (an --h5
+/// file; null for none): the trajectory, the events and the section, each
+/// written even without its CSV.
+struct SimulateMirror {
+    TableSink* trajectory = nullptr;
+    TableSink* events = nullptr;
+    TableSink* section = nullptr;
+};
 
 class SimulateOutputs : public Observer {
 public:
@@ -37,10 +48,14 @@ public:
     /// and the size of the trajectory; throws InputError (RunError when
     /// gnuplot is missing). Opens nothing: call open() once every other
     /// check has passed.
-    SimulateOutputs(const Model& model, const OutputRequest& request, double t_end, double dt);
-    void open();
-    /// Whether the run must report samples (a trajectory or a plot).
-    bool samples() const { return out_ || plot_; }
+    /// `archive`: the --h5 target (checked by the caller), one more output
+    /// that must be distinct from the others and holds the trajectory too.
+    SimulateOutputs(const Model& model, const OutputRequest& request, double t_end, double dt,
+                    const OutputTarget* archive = nullptr);
+    /// `mirror`: where the tables go besides their CSV files (SimulateMirror).
+    void open(const SimulateMirror& mirror = SimulateMirror());
+    /// Whether the run must report samples (a trajectory, an archive or a plot).
+    bool samples() const { return out_ || archive_ || plot_; }
     /// The spacing the run samples at: dt with a trajectory (--out); for the
     /// plot alone at least (t_end - t0) / kLargeOutputRows (the figure keeps
     /// 2000 buckets: a tiny --dt must not make a run of endless samples).
@@ -57,8 +72,10 @@ public:
 private:
     const Model& model_;
     double t_end_, dt_;
+    const OutputTarget* archive_;
     std::unique_ptr<OutputTarget> out_, events_, plot_, section_out_, section_plot_;
     SectionSpec section_spec_;
+    bool section_asked_ = false;  // --section given
     std::unique_ptr<CsvFile> traj_file_, events_file_, section_file_;
     std::unique_ptr<SectionRecorder> section_;
     std::unique_ptr<CsvObserver> csv_;

@@ -450,6 +450,7 @@ PYBIND11_MODULE(_hsnc, m) {
     using namespace hsnc;
     namespace hp = hsnc::python;
     m.doc() = "hsnc: exact response of piecewise-linear systems with contacts and Coulomb friction (native part)";
+    m.attr("__version__") = HSNC_PYTHON_VERSION;
 
     // Python subclasses of ValueError / RuntimeError, so callers may catch either.
     static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);

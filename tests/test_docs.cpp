@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <regex>
@@ -24,7 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kSource = HSNC_SOURCE_DIR;
+const std::string source_dir = HSNC_SOURCE_DIR;
 
 struct Block {
     int line = 0;  // of the opening fence
@@ -34,9 +35,9 @@ struct Block {
 /// README.md, CONTRIBUTING.md and every Markdown file under docs/, relative to the checkout.
 std::vector<std::string> doc_files() {
     std::vector<std::string> files = {"README.md", "CONTRIBUTING.md"};
-    for (const auto& entry : fs::recursive_directory_iterator(kSource + "/docs"))
+    for (const auto& entry : fs::recursive_directory_iterator(source_dir + "/docs"))
         if (entry.is_regular_file() && entry.path().extension() == ".md")
-            files.push_back(fs::relative(entry.path(), kSource).string());
+            files.push_back(fs::relative(entry.path(), source_dir).string());
     std::sort(files.begin() + 2, files.end());
     return files;
 }
@@ -51,7 +52,7 @@ std::vector<std::string> lines_of(const std::string& text) {
 /// The fenced blocks of a Markdown file, in order; the prose between them is dropped.
 std::vector<Block> blocks_of(const std::string& rel) {
     std::vector<Block> blocks;
-    const auto lines = lines_of(testing::slurp(kSource + "/" + rel));
+    const auto lines = lines_of(testing::slurp(source_dir + "/" + rel));
     for (std::size_t i = 0; i < lines.size(); ++i) {
         if (lines[i].rfind("```", 0) != 0) continue;
         Block b{static_cast<int>(i + 1), lines[i].substr(3), ""};
@@ -65,7 +66,7 @@ std::vector<Block> blocks_of(const std::string& rel) {
 std::string prose_of(const std::string& rel) {
     std::string prose;
     bool fenced = false;
-    for (const auto& line : lines_of(testing::slurp(kSource + "/" + rel))) {
+    for (const auto& line : lines_of(testing::slurp(source_dir + "/" + rel))) {
         if (line.rfind("```", 0) == 0)
             fenced = !fenced;
         else if (!fenced)
@@ -108,13 +109,13 @@ TEST(Docs, EveryRelativeLinkResolves) {
     int checked = 0;
     for (const auto& rel : doc_files()) {
         const std::string prose = prose_of(rel);
-        const fs::path dir = fs::path(kSource + "/" + rel).parent_path();
+        const fs::path dir = fs::path(source_dir + "/" + rel).parent_path();
         for (std::sregex_iterator it(prose.begin(), prose.end(), link), e; it != e; ++it) {
             const std::string target = (*it)[1];
             if (target.find("://") != std::string::npos || target.rfind("mailto:", 0) == 0) continue;
             const auto hash = target.find('#');
             const std::string file = target.substr(0, hash);
-            const fs::path resolved = file.empty() ? fs::path(kSource + "/" + rel) : dir / file;
+            const fs::path resolved = file.empty() ? fs::path(source_dir + "/" + rel) : dir / file;
             ++checked;
             ASSERT_TRUE(fs::exists(resolved)) << rel << ": link to a missing file: " << target;
             if (hash == std::string::npos || resolved.extension() != ".md") continue;
@@ -136,7 +137,8 @@ struct DocCommand {
     std::string expected;
 };
 
-void PrintTo(const DocCommand& c, std::ostream* os) {
+void PrintTo(const DocCommand& c,
+             std::ostream* os) {  // NOLINT(readability-identifier-naming): gtest looks it up by name
     *os << c.file << ":" << c.line;
 }
 
@@ -180,7 +182,8 @@ std::vector<DocCommand> doc_commands() {
 struct Scratch {
     testing::TempDir dir;
     Scratch() {
-        for (const char* name : {"models", "examples"}) fs::create_directory_symlink(kSource + "/" + name, dir / name);
+        for (const char* name : {"models", "examples"})
+            fs::create_directory_symlink(source_dir + "/" + name, dir / name);
         fs::create_directory_symlink(fs::path(HSNC_BINARY).parent_path(), dir / "build");
         fs::create_directory(dir / "docs");
     }
@@ -274,7 +277,7 @@ TEST(Docs, PythonBlocksOfEachFileRunAsOneScript) {
 // The tour's model is examples/hardening-stop.toml as it is, less its header comment.
 TEST(Docs, ReadmeTourShowsTheExampleModel) {
     std::string file;
-    for (const auto& line : lines_of(testing::slurp(kSource + "/examples/hardening-stop.toml")))
+    for (const auto& line : lines_of(testing::slurp(source_dir + "/examples/hardening-stop.toml")))
         if (line.rfind("#", 0) != 0) file += line + "\n";
     bool shown = false;
     for (const auto& b : blocks_of("README.md")) shown = shown || (b.lang == "toml" && b.text == file);

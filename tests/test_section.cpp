@@ -230,7 +230,7 @@ TEST(SimulateCli, SectionBadFlagsExitTwoWithNothingWritten) {
     const std::string s2 = "'" + model_path("seed-scenario-2.toml") + "' --t-end 1 ";
     const std::vector<Case> cases = {
         {"simulate " + s2 + "--section-out '" + out + "'", "--section-out: needs --section"},
-        {"simulate " + s2 + "--section contact_close", "needs --section-out CSV or --section-plot PNG"},
+        {"simulate " + s2 + "--section contact_close", "needs --section-out CSV, --section-plot PNG or --h5 FILE"},
         {"simulate " + s2 + "--section closing --section-out '" + out + "'", "--section 'closing': expected KIND"},
         {"simulate " + s2 + "--section contact_close:nope --section-out '" + out + "'", "no contact named 'nope'"},
         {"simulate " + s2 + "--section stick:nope --section-out '" + out + "'", "no mass with friction named 'nope'"},

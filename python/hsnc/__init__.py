@@ -576,5 +576,148 @@ def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=
     return _hsnc._lyapunov(model._native, t_end, transient, row_interval, kernels)
 
 
+# ---- to_h5: a result with what made it, in the layout of the command line's --h5 ----
+
+__version__ = _hsnc.__version__
+
+
+def _h5_table(group, columns):
+    """One dataset per column (name, values): float64, or UTF-8 strings for words; the CSV header as `columns`."""
+    import h5py
+    for name, values in columns:
+        values = list(values) if not isinstance(values, np.ndarray) else values
+        if len(values) and isinstance(values[0], str):
+            group.create_dataset(name, data=np.array(values, dtype=h5py.string_dtype("utf-8")))
+        else:
+            group.create_dataset(name, data=np.asarray(values, dtype=np.float64).reshape(-1))
+    group.attrs["columns"] = ",".join(name for name, _ in columns)
+
+
+def _h5_state(names, x, v, jenkins=(), s=None):
+    columns = [("x_" + m, x[:, i]) for i, m in enumerate(names)] + [("v_" + m, v[:, i]) for i, m in enumerate(names)]
+    if s is not None:
+        columns += [("s_" + j, s[:, k]) for k, j in enumerate(jenkins)]
+    return columns
+
+
+def _h5_words(flags):
+    return ["true" if b else "false" for b in flags]
+
+
+def _h5_simulate(root, r):
+    jenkins = r.jenkins if r.jenkins else ()
+    s = r.s if jenkins else None
+    _h5_table(root.create_group("simulate/trajectory"), [("t", r.t)] + _h5_state(r.masses, r.x, r.v, jenkins, s))
+    e = r.events
+    _h5_table(root.create_group("simulate/events"),
+              [("t", e["t"]), ("kind", list(e["kind"])), ("element", list(e["element"]))] +
+              _h5_state(r.masses, e["x"].reshape(len(e), -1), e["v"].reshape(len(e), -1), jenkins,
+                        e["s"].reshape(len(e), -1) if jenkins else None))
+    summary = r.summary
+    counts = [(k, [summary["counts"].get(k, 0)]) for k in
+              ("contact_close", "contact_open", "stick", "release", "reversal")]
+    _h5_table(root.create_group("simulate/summary"),
+              [("status", [summary["status"]]), ("method", [summary.get("method", "hsnc")]), ("t", [summary["t"]]),
+               ("events", [summary["events"]])] + counts +
+              [("x_" + m, [summary["x"][m]]) for m in r.masses] + [("v_" + m, [summary["v"][m]]) for m in r.masses])
+
+
+def _h5_sweep(root, r):
+    masses, param, param2 = r["masses"], r["param"], r["param2"]
+    xmax, xrms, a1 = np.asarray(r["xmax"]), np.asarray(r["xrms"]), np.asarray(r["a1"])
+    columns = [(param, r["value"]), ("direction", list(r["direction"])), ("settled", _h5_words(r["settled"])),
+               ("periods", r["periods"]), ("multiple", r["multiple"])]
+    for i, m in enumerate(masses):
+        columns += [("xmax_" + m, xmax[:, i]), ("xrms_" + m, xrms[:, i]), ("a1_" + m, a1[:, i])]
+    if param2:
+        columns.append((param2, r["value2"]))
+    if "stable" in r:
+        stable = ["" if fail else w for fail, w in zip(r["failure"], _h5_words(r["stable"]))]
+        columns += [("stable", stable), ("max_multiplier", r["max_multiplier"]), ("bifurcation", list(r["bifurcation"]))]
+    _h5_table(root.create_group("sweep/curve"), columns)
+    d = r["diagram"]
+    columns = [(param, d["value"]), ("direction", list(d["direction"])), ("t", d["t"])] + \
+        _h5_state(masses, np.asarray(d["x"]).reshape(len(d["t"]), -1), np.asarray(d["v"]).reshape(len(d["t"]), -1))
+    if param2:
+        columns.append((param2, d["value2"]))
+    _h5_table(root.create_group("sweep/diagram"), columns)
+
+
+def _h5_periodic(root, r, masses, jenkins):
+    orbit = r["orbit"]
+    s = orbit.get("s") if jenkins else None
+    _h5_table(root.create_group("periodic/orbit"),
+              [("t", orbit["t"])] + _h5_state(masses, orbit["x"], orbit["v"], jenkins, s))
+    mu = np.asarray(r["multipliers"])
+    _h5_table(root.create_group("periodic/multipliers"),
+              [("index", np.arange(1, len(mu) + 1)), ("re", mu.real), ("im", mu.imag), ("abs", np.abs(mu))])
+    columns = [("period", [r["period"]]), ("iterations", [r["iterations"]]), ("residual", [r["residual"]])]
+    columns += [("x_" + m, [r["x"][i]]) for i, m in enumerate(masses)]
+    columns += [("v_" + m, [r["v"][i]]) for i, m in enumerate(masses)]
+    columns += [("s_" + j, [r["s"][k]]) for k, j in enumerate(jenkins)]
+    columns += [("stable", _h5_words([r["stable"]])), ("max_multiplier", [r["max_multiplier"]]),
+                ("events", [r["events"]]), ("grazing", [r["grazing"]])]
+    _h5_table(root.create_group("periodic/summary"), columns)
+
+
+def _h5_lyapunov(root, r):
+    rows = np.asarray(r["rows"])
+    _h5_table(root.create_group("lyapunov/convergence"),
+              [("t", r["rows_t"])] + [("lambda_%d" % (k + 1), rows[:, k]) for k in range(rows.shape[1])])
+    exponents = np.asarray(r["exponents"])
+    _h5_table(root.create_group("lyapunov/exponents"),
+              [("index", np.arange(1, len(exponents) + 1)), ("lambda", exponents)])
+
+
+def to_h5(result, path, model):
+    """Write `result` (of hsnc.simulate, sweep, periodic or lyapunov, run on
+    `model`) to the HDF5 file `path`, as the command's `--h5 FILE` does
+    (docs/interface.md, "HDF5 output"): one dataset per CSV column under
+    simulate/, sweep/, periodic/ or lyapunov/, the model's text, path and
+    overrides under model/, and the format, hsnc version, command and
+    model name as attributes. Needs h5py (Debian's python3-h5py). The file
+    is written under a temporary name and renamed into place."""
+    import h5py
+    f = "hsnc.to_h5"
+    model = _model(f, model)
+    path = _path(f, "path", path)
+    kind, what, source, (s, x0, v0) = model._read
+    if isinstance(result, Result):
+        write = lambda root: _h5_simulate(root, result)
+    elif isinstance(result, dict) and "diagram" in result:
+        write = lambda root: _h5_sweep(root, result)
+    elif isinstance(result, dict) and "monodromy" in result:
+        if result.get("status") != "ok":
+            raise InputError("%s(): result: a periodic orbit that did not converge (status %r)" % (f, result.get("status")))
+        write = lambda root: _h5_periodic(root, result, list(model.masses), list(model.jenkins))
+    elif isinstance(result, dict) and "rows_t" in result:
+        write = lambda root: _h5_lyapunov(root, result)
+    else:
+        _refuse(f, "result", result, "a result of hsnc.simulate, sweep, periodic or lyapunov")
+    if kind == "file":
+        with open(what, "rb") as m:
+            text, where = m.read().decode("utf-8", "replace"), what
+    else:
+        text, where = what, source
+    overrides = ["--set " + t for t in _override_texts(s)] + ["--x0 " + t for t in _override_texts(x0)] + \
+        ["--v0 " + t for t in _override_texts(v0)]
+    tmp = "%s.tmp.%d" % (path, os.getpid())
+    try:
+        with h5py.File(tmp, "w") as root:
+            root.attrs["format"] = "hsnc-h5 1"
+            root.attrs["hsnc_version"] = __version__
+            root.attrs["command"] = "python: hsnc.to_h5"
+            root.attrs["model_name"] = model.name
+            string = h5py.string_dtype("utf-8")
+            root.create_dataset("model/text", data=text, dtype=string)
+            root.create_dataset("model/path", data=where, dtype=string)
+            root.create_dataset("model/overrides", data=np.array(overrides, dtype=string))
+            write(root)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
 # Named as users see them: hsnc.InputError, not hsnc._hsnc.InputError.
 InputError.__module__ = RunError.__module__ = Result.__module__ = Model.__module__ = __name__
