@@ -47,7 +47,7 @@ struct SweepFlags {
     std::string param2, values2;
     unsigned threads = 1;
     std::string part, part_out;
-    std::string out, diagram, plot, h5;
+    std::string out, diagram, plot, h5, plot_dofs;
     std::string method = "hsnc";
     double h = NAN, rtol = 1e-10, atol = 1e-12;
     bool quiet = false;
@@ -65,7 +65,7 @@ std::size_t count_flag(const char* flag, long long value, long long least) {
 
 struct MergeFlags {
     std::vector<std::string> parts;
-    std::string out, diagram, plot, h5;
+    std::string out, diagram, plot, h5, plot_dofs;
 };
 
 // The flag of each SweepOptions field, for the library's OptionError.
@@ -222,6 +222,8 @@ struct Outputs {
     std::unique_ptr<OutputTarget> out, diagram, plot, h5;
     std::string model_path;  // for --h5: the model file and its overrides as given
     std::vector<std::string> overrides;
+    std::string plot_dofs;           // --plot-dofs
+    std::vector<std::size_t> named;  // the dofs the model's elements and loads name (plot.h named_dofs)
     Outputs(const std::string& o, const std::string& d, const std::string& p, const std::string& h = "") {
         std::vector<const OutputTarget*> all;
         if (!o.empty()) all.push_back((out = std::make_unique<OutputTarget>(check_output("--out", o))).get());
@@ -247,7 +249,9 @@ struct Outputs {
             write_diagram(r, f, note);
             f.commit();
         }
-        if (plot) draw_sweep_plot(r, note.empty() ? title : title + " (interrupted)", *plot);
+        if (plot)
+            draw_sweep_plot(r, note.empty() ? title : title + " (interrupted)", *plot,
+                            hsnc::plot_dofs(r.masses, plot_dofs, named));
         if (archive) archive->commit();
     }
 };
@@ -451,6 +455,11 @@ int sweep(const SweepFlags& f) {
                     outputs = std::make_unique<Outputs>(f.out, f.diagram, f.plot, f.h5);
                     outputs->model_path = f.model;
                     outputs->overrides = overrides_given(f.overrides);
+                    outputs->plot_dofs = f.plot_dofs;
+                    outputs->named = named_dofs(plan.model());
+                    std::vector<std::string> names;
+                    for (const Mass& m : plan.model().masses) names.push_back(m.name);
+                    hsnc::plot_dofs(names, f.plot_dofs, outputs->named);  // --plot-dofs checked before the run
                 }
             } catch (const InputError& e) {
                 go = 2;
@@ -569,6 +578,7 @@ int sweep(const SweepFlags& f) {
 int merge(const MergeFlags& f) {
     for (const std::string& path : f.parts) note_input_file(path);  // no output may replace a part
     Outputs outputs(f.out, f.diagram, f.plot, f.h5);                // --h5: the model's text is not in the parts
+    outputs.plot_dofs = f.plot_dofs;
     std::vector<std::string> texts;
     for (const std::string& path : f.parts) {
         const FileRead file = read_regular_file(path, std::size_t{1} << 34);
@@ -608,6 +618,10 @@ void add_sweep(CLI::App& app, int& exit_code) {
     sub->add_option("--diagram", f->diagram, "bifurcation diagram CSV (the stroboscopic samples of every point)");
     sub->add_option("--plot", f->plot, "draw the response curve and the diagram into this PNG (gnuplot)");
     add_h5_flag(sub, f->h5, "sweep/curve as --out, sweep/diagram as --diagram");
+    sub->add_option("--plot-dofs", f->plot_dofs,
+                    "the dofs --plot draws, comma separated, at most 8 (default: every dof of a model of at most 8, "
+                    "else the first 8 that elements, friction, forcing or loads act on)")
+        ->needs(sub->get_option("--plot"));
     sub->add_flag("--restart-each", f->restart_each,
                   "start every point from the model's initial state (no continuation; points run in parallel)");
     sub->add_option("--param2", f->param2, "a second parameter: one sweep per value of --values2")
@@ -642,6 +656,10 @@ void add_sweep(CLI::App& app, int& exit_code) {
     merge_cmd->add_option("--diagram", m->diagram, "bifurcation diagram CSV");
     merge_cmd->add_option("--plot", m->plot, "the figure (PNG, gnuplot)");
     add_h5_flag(merge_cmd, m->h5, "sweep/curve, sweep/diagram");
+    merge_cmd
+        ->add_option("--plot-dofs", m->plot_dofs,
+                     "the dofs --plot draws, comma separated, at most 8 (default: the first 8)")
+        ->needs(merge_cmd->get_option("--plot"));
     merge_cmd->callback([m, &exit_code] { exit_code = merge(*m); });
 }
 

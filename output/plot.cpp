@@ -20,6 +20,76 @@
 extern char** environ;
 
 namespace hsnc {
+
+std::vector<std::size_t> named_dofs(const Model& model) {
+    std::vector<char> named(model.dof(), 0);
+    auto mark = [&](int body) {
+        if (body >= 0 && static_cast<std::size_t>(body) < named.size()) named[static_cast<std::size_t>(body)] = 1;
+    };
+    auto direction = [&](const Direction& d) {
+        if (d.weighted())
+            for (int k = 0; k < d.count; ++k) mark(d.terms[k].body);
+        else
+            mark(d.a), mark(d.b);
+    };
+    for (const Contact& c : model.contacts) direction(c.direction());
+    for (const FrictionElement& f : model.frictions) mark(f.a), mark(f.b);
+    for (const Jenkins& j : model.jenkins) direction(j.direction());
+    for (const Damper& d : model.dampers)
+        if (!d.from_structure) direction(d.direction());
+    for (std::size_t i = 0; i < model.dof(); ++i) {
+        bool loaded = model.masses[i].has_friction || (i < model.load.size() && model.load[i] != 0.0);
+        for (const Harmonic& h : model.forcing) loaded = loaded || (i < h.amplitude.size() && h.amplitude[i] != 0.0);
+        for (const LoadStep& s : model.load_steps) loaded = loaded || (i < s.load.size() && s.load[i] != 0.0);
+        if (loaded) named[i] = 1;
+    }
+    std::vector<std::size_t> dofs;
+    for (std::size_t i = 0; i < named.size(); ++i)
+        if (named[i]) dofs.push_back(i);
+    return dofs;
+}
+
+std::vector<std::size_t> plot_dofs(const std::vector<std::string>& names, const std::string& list,
+                                   const std::vector<std::size_t>& named, const std::string& flag) {
+    std::vector<std::size_t> dofs;
+    if (list.empty()) {
+        const bool all = names.size() <= kMaxPlotDofs || named.empty();
+        for (std::size_t k = 0; k < (all ? names.size() : named.size()) && dofs.size() < kMaxPlotDofs; ++k)
+            dofs.push_back(all ? k : named[k]);
+        return dofs;
+    }
+    std::size_t start = 0;
+    while (start <= list.size()) {
+        const std::size_t comma = std::min(list.find(',', start), list.size());
+        const std::string name = list.substr(start, comma - start);
+        const auto it = std::find(names.begin(), names.end(), name);
+        if (it == names.end())
+            throw InputError(flag + " '" + list + "': '" + name + "' is not a dof of the model" +
+                             (names.empty() ? ""
+                                            : " (its dofs: " + names.front() +
+                                                  (names.size() > 1 ? ", ..., " + names.back() : "") + ")"));
+        const auto index = static_cast<std::size_t>(it - names.begin());
+        if (std::find(dofs.begin(), dofs.end(), index) != dofs.end())
+            throw InputError(flag + " '" + list + "': '" + name + "' is named twice");
+        dofs.push_back(index);
+        start = comma + 1;
+    }
+    if (dofs.size() > kMaxPlotDofs)
+        throw InputError(flag + " '" + list + "': " + std::to_string(dofs.size()) + " dofs; a figure draws at most " +
+                         std::to_string(kMaxPlotDofs) + " (each its colour and legend entry)");
+    return dofs;
+}
+
+std::string dof_unit(const std::string& name) {
+    for (const char* prefix : {"theta", "rot", "phi", "psi", "th", "t"}) {
+        const std::size_t n = std::char_traits<char>::length(prefix);
+        if (name.compare(0, n, prefix) != 0) continue;
+        const std::string rest = name.substr(n);
+        const std::size_t digits = rest.find_first_not_of("0123456789_");
+        if (digits == std::string::npos) return "rad";
+    }
+    return "m";
+}
 namespace {
 
 constexpr std::size_t kBuckets = 2000;     // envelope resolution: about one bucket per pixel column

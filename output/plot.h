@@ -12,6 +12,7 @@
 // their index, with a colour box naming masses on it.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,26 @@
 #include "output_file.h"
 
 namespace hsnc {
+
+/// At most this many dofs on a figure that gives each a colour and a legend entry.
+inline constexpr std::size_t kMaxPlotDofs = 8;
+
+/// The dofs the model's elements act on (contacts, friction, Jenkins elements,
+/// discrete dampers), that carry friction, forcing or a load, in model order
+/// (indices of Model::masses): what a figure of a large structure draws by default.
+std::vector<std::size_t> named_dofs(const Model& model);
+
+/// The dofs a figure draws. `list` (--plot-dofs: names, comma-separated) when
+/// given: each must be one of `names` (InputError naming `flag` otherwise),
+/// at most kMaxPlotDofs. Else every dof when there are at most kMaxPlotDofs,
+/// or the first kMaxPlotDofs of `named` (of the dofs when `named` is empty).
+std::vector<std::size_t> plot_dofs(const std::vector<std::string>& names, const std::string& list,
+                                   const std::vector<std::size_t>& named, const std::string& flag = "--plot-dofs");
+
+/// The unit of a dof's position by its name: "rad" for a rotation (a name
+/// that is t, th, theta, rot, phi or psi followed by digits, `_` or the end:
+/// t3, theta_2, rot), else "m".
+std::string dof_unit(const std::string& name);
 
 /// Throws RunError when gnuplot is not on PATH (called before a run).
 void require_gnuplot();

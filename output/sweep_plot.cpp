@@ -31,9 +31,16 @@ std::string quoted(const std::string& s) {
 
 }  // namespace
 
-std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
-    const std::size_t n = r.masses.size();
-    const std::size_t panels = std::min(n, kDiagramPanels);
+std::string sweep_plot_script(const SweepResult& r, const std::string& title, const std::vector<std::size_t>& dofs) {
+    const std::size_t n = r.masses.size(), shown = dofs.size();
+    const std::size_t panels = std::min(shown, kDiagramPanels);
+    // Units by dof kind (plot.h dof_unit): one axis label when they agree, else each legend entry says its own.
+    std::string unit;
+    for (std::size_t i : dofs) unit = unit.empty() || unit == dof_unit(r.masses[i]) ? dof_unit(r.masses[i]) : "mixed";
+    if (unit.empty()) unit = "m";
+    auto label = [&](std::size_t i) {
+        return unit == "mixed" ? r.masses[i] + " [" + dof_unit(r.masses[i]) + "]" : r.masses[i];
+    };
     const bool has2 = !r.param2.empty();
     const int height = 520 + 330 * static_cast<int>(panels);
     std::string s = "set terminal pngcairo size 1300," + std::to_string(height) + " noenhanced font ',11'\n";
@@ -115,7 +122,7 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
             has_dir[d] = has_dir[d] || !p.strobe_t.empty();
             for (std::size_t row = 0; row < p.strobe_t.size(); ++row) {
                 s += num(p.value);
-                for (std::size_t i = 0; i < panels; ++i) s += " " + num(p.strobe_x[row * n + i]);
+                for (std::size_t k = 0; k < panels; ++k) s += " " + num(p.strobe_x[row * n + dofs[k]]);
                 s += "\n";
             }
         }
@@ -132,15 +139,16 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
                                                     std::string(any_unsettled ? " (ringed: not settled or failed)" : "")) +
          "\n";
     s += "set tmargin at screen " + num(top) + "\nset bmargin at screen " + num(split + 60.0 / height) + "\n";
-    s += "set xlabel " + quoted(r.param) + "\nset ylabel 'xmax [m]'\n";
+    s += "set xlabel " + quoted(r.param) + "\nset ylabel " +
+         quoted(unit == "mixed" ? "xmax [m; rad for rotations]" : "xmax [" + unit + "]") + "\n";
     std::string plot;
     for (std::size_t b = 0; b < branches.size(); ++b)
-        for (std::size_t i = 0; i < n; ++i) {
-            const std::size_t colour = (b * n + i) % 8;
-            std::string name = r.masses[i];
+        for (std::size_t k = 0; k < shown; ++k) {
+            const std::size_t i = dofs[k], colour = (b * shown + k) % 8;
+            std::string name = label(i);
             if (branches[b].size() && branches[b][0]->direction == SweepDirection::down) name += " (from " + r.param + " = " + num(branches[b][0]->value) + ")";
             if (has2 && branches[b].size()) name += " (" + r.param2 + " = " + num(branches[b][0]->value2) + ")";
-            const bool titled = b * n + i < 8;
+            const bool titled = b * shown + k < 8;
             plot += (plot.empty() ? "" : ", ") + std::string("$stable") + std::to_string(b) + " using 1:" +
                     std::to_string(i + 2) + " with lines lw 2 dt 1 lc rgb '" + kColours[colour] + "' " +
                     (titled ? "title " + quoted(name + " stable") : "notitle");
@@ -152,25 +160,26 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
     const char* const kMarkNames[3] = {"fold", "period doubling", "Neimark-Sacker"};
     for (int k = 0; k < 3; ++k)
         if (has_bifurcation[k])
-            for (std::size_t i = 0; i < n; ++i)
-                plot += ", $bif" + std::to_string(k) + " using 1:" + std::to_string(i + 2) + " with points " +
-                        kMarks[k] + " lc rgb 'black' " + (i == 0 ? "title " + quoted(kMarkNames[k]) : "notitle");
+            for (std::size_t j = 0; j < shown; ++j)
+                plot += ", $bif" + std::to_string(k) + " using 1:" + std::to_string(dofs[j] + 2) + " with points " +
+                        kMarks[k] + " lc rgb 'black' " + (j == 0 ? "title " + quoted(kMarkNames[k]) : "notitle");
     for (std::size_t g = 0; g < keys.size() && !r.continuation; ++g) {
         const bool down = keys[g].second == SweepDirection::down;
-        for (std::size_t i = 0; i < n; ++i) {
-            // One colour per mass (and value of param2); a single curve's down sweep in the next colour.
-            const std::size_t colour = ((has2 ? g / 2 * n + i : i) + (n == 1 && down ? 1 : 0)) % 8;
-            std::string name = r.masses[i] + (down ? " down" : " up");
+        for (std::size_t k = 0; k < shown; ++k) {
+            // One colour per dof (and value of param2); a single curve's down sweep in the next colour.
+            const std::size_t i = dofs[k], colour = ((has2 ? g / 2 * shown + k : k) + (shown == 1 && down ? 1 : 0)) % 8;
+            std::string name = label(i) + (down ? " down" : " up");
             if (has2) name += " (" + r.param2 + " = " + num(keys[g].first) + ")";
-            plot += (plot.empty() ? "" : ", ") + std::string("$curve") + std::to_string(g) + " using 1:" +
-                    std::to_string(i + 2) + " with linespoints lw 1.5 " + (down ? "dt 2 pt 6" : "dt 1 pt 7") +
-                    " ps 0.7 lc rgb '" + kColours[colour] + "' " + (i < 8 && g < 8 ? "title " + quoted(name) : "notitle");
+            plot += (plot.empty() ? "" : ", ") + std::string("$curve") + std::to_string(g) +
+                    " using 1:" + std::to_string(i + 2) + " with linespoints lw 1.5 " +
+                    (down ? "dt 2 pt 6" : "dt 1 pt 7") + " ps 0.7 lc rgb '" + kColours[colour] + "' " +
+                    (k < 8 && g < 8 ? "title " + quoted(name) : "notitle");
         }
     }
     if (any_unsettled)
-        for (std::size_t i = 0; i < n; ++i)
-            plot += ", $unsettled using 1:" + std::to_string(i + 2) + " with points pt 6 ps 2.2 lw 1.5 lc rgb 'black' " +
-                    (i == 0 ? "title 'not settled'" : "notitle");
+        for (std::size_t k = 0; k < shown; ++k)
+            plot += ", $unsettled using 1:" + std::to_string(dofs[k] + 2) +
+                    " with points pt 6 ps 2.2 lw 1.5 lc rgb 'black' " + (k == 0 ? "title 'not settled'" : "notitle");
     if (plot.empty()) plot = "NaN notitle";
     s += "plot " + plot + "\n";
 
@@ -178,13 +187,14 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
     const double panel = (split - 20.0 / height) / static_cast<double>(std::max<std::size_t>(panels, 1));
     for (std::size_t i = 0; i < panels; ++i) {
         const double hi = split - static_cast<double>(i) * panel, lo = hi - panel;
-        s += "set title " + quoted(r.continuation ? "x_" + r.masses[i] + " of each orbit at t0 (colour: the way the parameter moved)"
-                                                  : "bifurcation diagram: x_" + r.masses[i] +
-                                                        " at the end of every recorded forcing period") +
+        const std::string& dof = r.masses[dofs[i]];
+        s += "set title " +
+             quoted(r.continuation ? "x_" + dof + " of each orbit at t0 (colour: the way the parameter moved)"
+                                   : "bifurcation diagram: x_" + dof + " at the end of every recorded forcing period") +
              "\n";
         s += "set tmargin at screen " + num(hi - 45.0 / height) + "\nset bmargin at screen " + num(lo + 50.0 / height) +
              "\n";
-        s += "set ylabel " + quoted("x_" + r.masses[i] + " [m]") + "\n";
+        s += "set ylabel " + quoted("x_" + dof + " [" + dof_unit(dof) + "]") + "\n";
         std::string dots;
         if (has_dir[0])
             dots = "$diagramup using 1:" + std::to_string(i + 2) + " with points pt 7 ps 0.35 lc rgb '#1f4fb4' title 'up'";
@@ -198,8 +208,9 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title) {
     return s;
 }
 
-void draw_sweep_plot(const SweepResult& r, const std::string& title, const OutputTarget& png) {
-    const std::string bytes = run_gnuplot(sweep_plot_script(r, title));
+void draw_sweep_plot(const SweepResult& r, const std::string& title, const OutputTarget& png,
+                     const std::vector<std::size_t>& dofs) {
+    const std::string bytes = run_gnuplot(sweep_plot_script(r, title, dofs));
     OutputFile file(png);
     file.write(bytes.data(), bytes.size());
     file.commit();

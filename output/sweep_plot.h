@@ -3,20 +3,26 @@
 // filled points, the down sweep dashed with open points, points that did not
 // settle ringed in black; under it the bifurcation diagram (the stroboscopic
 // x of a mass against the parameter, every recorded period a dot; up and
-// down in two colours), one panel for each of the first three masses.
+// down in two colours), one panel for each of the first three dofs drawn.
+// The dofs drawn are chosen by plot.h plot_dofs (--plot-dofs), at most 8,
+// each its colour; axes say m or rad by dof kind (plot.h dof_unit).
 #pragma once
 
+#include <cstddef>
 #include <string>
+#include <vector>
 
 #include "hsnc/sweep.h"
 #include "output_file.h"
 
 namespace hsnc {
 
-/// The gnuplot script (terminal pngcairo, the image on stdout).
-std::string sweep_plot_script(const SweepResult& r, const std::string& title);
+/// The gnuplot script (terminal pngcairo, the image on stdout) of the dofs
+/// `dofs` (indices of r.masses, at most kMaxPlotDofs: plot.h plot_dofs).
+std::string sweep_plot_script(const SweepResult& r, const std::string& title, const std::vector<std::size_t>& dofs);
 
 /// Draw it into `png` (RunError when gnuplot fails).
-void draw_sweep_plot(const SweepResult& r, const std::string& title, const OutputTarget& png);
+void draw_sweep_plot(const SweepResult& r, const std::string& title, const OutputTarget& png,
+                     const std::vector<std::size_t>& dofs);
 
 }  // namespace hsnc
