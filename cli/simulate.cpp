@@ -243,6 +243,10 @@ void add_simulate(CLI::App& app, int& exit_code) {
                     "draw x(t) of every mass into this PNG (gnuplot): the whole run with the switch events as "
                     "ticks, and a zoom (last 5 forcing periods, else the first 10%) with the events marked");
     add_section_flags(sub, o->outputs.section, o->outputs.section_out, o->outputs.section_plot);
+    sub->add_option("--plot-dofs", o->outputs.plot_dofs,
+                    "the dofs --plot draws, comma separated, at most 8 (default: every dof, more than 8 along a colour "
+                    "scale)")
+        ->needs(sub->get_option("--plot"));
     add_h5_flag(sub, o->outputs.h5,
                 "simulate/trajectory as --out, simulate/events as --events, simulate/section, simulate/summary");
     sub->add_flag("--allow-large-output", o->outputs.allow_large_output,

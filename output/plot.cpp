@@ -14,6 +14,7 @@
 #include <cstring>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 #include "error.h"
 
@@ -279,8 +280,12 @@ void PlotRecorder::Series::add(double t, const double* x, std::size_t n) {
     }
 }
 
-PlotRecorder::PlotRecorder(const Model& model, double t0, double t_end, double dt) : model_(model) {
-    const std::size_t n = model.dof();
+PlotRecorder::PlotRecorder(const Model& model, double t0, double t_end, double dt, std::vector<std::size_t> dofs)
+    : model_(model), dofs_(std::move(dofs)) {
+    if (dofs_.empty())
+        for (std::size_t i = 0; i < model.dof(); ++i) dofs_.push_back(i);
+    drawn_.resize(dofs_.size());
+    const std::size_t n = dofs_.size();
     auto setup = [&](Series& s, double a, double b) {
         s.a = a;
         s.b = b;
@@ -316,8 +321,9 @@ PlotRecorder::PlotRecorder(const Model& model, double t0, double t_end, double d
 }
 
 void PlotRecorder::on_sample(double t, const double* x, const double*) {
-    whole_.add(t, x, model_.dof());
-    zoom_.add(t, x, model_.dof());
+    for (std::size_t k = 0; k < dofs_.size(); ++k) drawn_[k] = x[dofs_[k]];
+    whole_.add(t, drawn_.data(), drawn_.size());
+    zoom_.add(t, drawn_.data(), drawn_.size());
 }
 
 void PlotRecorder::on_event(double t, EventKind kind, int element, const double* x, const double*) {
@@ -333,12 +339,23 @@ void PlotRecorder::on_event(double t, EventKind kind, int element, const double*
             if (body == kGround) body = i;
         });
     }
-    marks_.push_back({t, kind, body >= 0 ? x[body] : 0.0});
+    // On the curve of its mass when that is drawn; else a tick in the strip only.
+    const bool drawn =
+        body >= 0 && std::find(dofs_.begin(), dofs_.end(), static_cast<std::size_t>(body)) != dofs_.end();
+    marks_.push_back({t, kind, body < 0 ? 0.0 : drawn ? x[body] : std::numeric_limits<double>::quiet_NaN()});
 }
 
 std::string PlotRecorder::script() const {
-    const std::size_t n = model_.dof();
+    const std::size_t n = dofs_.size();
     const bool distinct = n <= static_cast<std::size_t>(kDistinctMasses);
+    auto name = [&](std::size_t i) -> const std::string& { return model_.masses[dofs_[i]].name; };
+    // The y axis in the unit of the dofs drawn; when they mix, each legend entry says its own.
+    std::string unit;
+    for (std::size_t i = 0; i < n; ++i) unit = unit.empty() || unit == dof_unit(name(i)) ? dof_unit(name(i)) : "mixed";
+    const std::string ylabel =
+        "set ylabel " +
+        quoted(unit == "mixed" ? "x [m; rad for rotations]" : "x [" + (unit.empty() ? std::string("m") : unit) + "]") +
+        "\n";
     Range whole_range, zoom_range;
     std::string s = "set terminal pngcairo size 1400,1000 noenhanced font ',11'\nset encoding utf8\n";
     s += datablock("$whole", whole_, n, whole_range);
@@ -361,9 +378,11 @@ std::string PlotRecorder::script() const {
     // event strip under it sharing its time axis, the zoom at the bottom;
     // margins fixed so that the time axes line up and the legends fit.
     const double strip_top = 0.5 + (rows ? 0.015 + 0.024 * rows : 0.0);
-    s += "set multiplot title " +
-         quoted(model_.name + ": positions of the " + std::to_string(n) + (n == 1 ? " mass" : " masses")) + "\n";
-    s += "set lmargin at screen 0.1\nset rmargin at screen 0.84\nset grid\nset ylabel 'x [m]'\n";
+    const std::string what = n == model_.dof()
+                                 ? "the " + std::to_string(n) + (n == 1 ? " mass" : " masses")
+                                 : std::to_string(n) + " of the " + std::to_string(model_.dof()) + " dofs";
+    s += "set multiplot title " + quoted(model_.name + ": positions of " + what) + "\n";
+    s += "set lmargin at screen 0.1\nset rmargin at screen 0.84\nset grid\n" + ylabel;
     s += "set key outside right top\n";
     if (!distinct) {
         // A colour scale by mass index: neighbours along a chain get neighbouring colours.
@@ -373,8 +392,8 @@ std::string PlotRecorder::script() const {
         // Every step-th mass and the last (its neighbour below dropped when they would crowd).
         for (std::size_t i = 0; i < n; i += step)
             if (i == 0 || i + 1 == n || n - 1 - i >= step / 2)
-                s += (i ? ", " : "") + quoted(model_.masses[i].name) + " " + std::to_string(i + 1);
-        if ((n - 1) % step) s += ", " + quoted(model_.masses[n - 1].name) + " " + std::to_string(n);
+                s += (i ? ", " : "") + quoted(name(i)) + " " + std::to_string(i + 1);
+        if ((n - 1) % step) s += ", " + quoted(name(n - 1)) + " " + std::to_string(n);
         s += ")\nset colorbox user origin screen 0.87, screen 0.53 size screen 0.015, screen 0.37\n";
     }
     auto curves = [&](const char* block) {
@@ -382,7 +401,8 @@ std::string PlotRecorder::script() const {
         for (std::size_t i = 0; i < n; ++i) {
             c += (i ? ", " : "") + std::string(block) + " using 1:" + std::to_string(i + 2) + " with lines lw 1.2 ";
             if (distinct)
-                c += "lc rgb '" + std::string(kMassColours[i]) + "' title " + quoted(model_.masses[i].name);
+                c += "lc rgb '" + std::string(kMassColours[i]) + "' title " +
+                     quoted(unit == "mixed" ? name(i) + " [" + dof_unit(name(i)) + "]" : name(i));
             else
                 c += "lc palette cb " + std::to_string(i + 1) + " notitle";
         }
@@ -419,7 +439,7 @@ std::string PlotRecorder::script() const {
         if (unmarked_) s += "set label 1 " + quoted("first " + std::to_string(kMaxMarks) + " events") +
                             " at graph 1, graph 1 right offset 0,0.8\n";
         s += "plot " + plots + "\n";
-        s += "set ytics auto\nset grid ytics\nset ylabel 'x [m]'\nunset label 1\n";
+        s += "set ytics auto\nset grid ytics\n" + ylabel + "unset label 1\n";
     }
 
     // Bottom: the zoom window; each event marked on the curve of its mass.

@@ -7,9 +7,10 @@
 // periods, else the first 10% of the run), and the switch events. The figure:
 // top panel, the whole run with the events as ticks below the curves, one row
 // per kind; bottom panel, the zoom window with each event marked on its
-// curve. Axes in metres and seconds. Up to 8 masses get distinct colours and
-// a legend; more (up to any number) are coloured along a colour scale by
-// their index, with a colour box naming masses on it.
+// curve. Axes in seconds and metres, or rad for rotations (dof_unit). Every
+// dof, or those of --plot-dofs; up to 8 get distinct colours and a legend;
+// more (up to any number) are coloured along a colour scale by their index,
+// with a colour box naming dofs on it.
 #pragma once
 
 #include <cstddef>
@@ -56,8 +57,9 @@ void render_png(const std::string& script, const OutputTarget& png);
 
 class PlotRecorder : public Observer {
 public:
-    /// Samples come every `dt` from t0 to t_end.
-    PlotRecorder(const Model& model, double t0, double t_end, double dt);
+    /// Samples come every `dt` from t0 to t_end. `dofs`: the dofs drawn
+    /// (indices of Model::masses, plot_dofs); empty: every dof.
+    PlotRecorder(const Model& model, double t0, double t_end, double dt, std::vector<std::size_t> dofs = {});
     void on_sample(double t, const double* x, const double* v) override;
     void on_event(double t, EventKind kind, int element, const double* x, const double* v) override;
 
@@ -87,6 +89,8 @@ private:
         double y;
     };
     const Model& model_;
+    std::vector<std::size_t> dofs_;  // drawn, in their order
+    std::vector<double> drawn_;      // one sample's x of the dofs drawn
     Series whole_, zoom_;
     std::string zoom_title_;
     std::vector<Mark> marks_;

@@ -57,6 +57,11 @@ SimulateOutputs::SimulateOutputs(const Model& model, const OutputRequest& r, dou
                              "--dt or a shorter --t-end, or --allow-large-output to write it anyway");
     }
     if (plot_ || section_plot_) require_gnuplot();
+    if (!r.plot_dofs.empty()) {
+        std::vector<std::string> names;
+        for (const Mass& m : model.masses) names.push_back(m.name);
+        plot_dofs_ = plot_dofs(names, r.plot_dofs, {});
+    }
 }
 
 double SimulateOutputs::sample_dt() const {
@@ -69,7 +74,7 @@ void SimulateOutputs::open(const SimulateMirror& mirror) {
     if (out_ || mirror.trajectory) traj_file_ = std::make_unique<CsvFile>(out_.get(), mirror.trajectory);
     if (events_ || mirror.events) events_file_ = std::make_unique<CsvFile>(events_.get(), mirror.events);
     csv_ = std::make_unique<CsvObserver>(model_, traj_file_.get(), events_file_.get());
-    if (plot_) recorder_ = std::make_unique<PlotRecorder>(model_, model_.t0, t_end_, sample_dt());
+    if (plot_) recorder_ = std::make_unique<PlotRecorder>(model_, model_.t0, t_end_, sample_dt(), plot_dofs_);
     if (section_out_ || (mirror.section && section_asked_))
         section_file_ = std::make_unique<CsvFile>(section_out_.get(), mirror.section);
     if (section_file_ || section_plot_)

@@ -28,6 +28,8 @@ struct OutputRequest {
     std::string section, section_out, section_plot;
     /// --h5 FILE (h5_archive.h; checked and written by the command line).
     std::string h5;
+    /// --plot-dofs NAME,...: the dofs --plot draws (plot.h plot_dofs); empty: every dof.
+    std::string plot_dofs;
 };
 
 /// Rows of the trajectory CSV sampled every dt from t0 to t_end (without the header).
@@ -73,6 +75,7 @@ private:
     const Model& model_;
     double t_end_, dt_;
     const OutputTarget* archive_;
+    std::vector<std::size_t> plot_dofs_;  // empty: every dof
     std::unique_ptr<OutputTarget> out_, events_, plot_, section_out_, section_plot_;
     SectionSpec section_spec_;
     bool section_asked_ = false;  // --section given

@@ -137,8 +137,9 @@ struct DocCommand {
     std::string expected;
 };
 
-void PrintTo(const DocCommand& c,
-             std::ostream* os) {  // NOLINT(readability-identifier-naming): gtest looks it up by name
+// gtest looks the printer up by this name.
+// NOLINTNEXTLINE(readability-identifier-naming)
+void PrintTo(const DocCommand& c, std::ostream* os) {
     *os << c.file << ":" << c.line;
 }
 

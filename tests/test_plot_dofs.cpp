@@ -86,6 +86,38 @@ TEST(PlotDofs, TheSweepFigureDrawsTheChosenDofs) {
     EXPECT_NE(rotations.find("'t1 up'"), std::string::npos);
 }
 
+// The simulate figure: every dof by default (a colour scale beyond 8), the
+// dofs of --plot-dofs when given, and their units.
+TEST(PlotDofs, TheSimulateFigureDrawsTheChosenDofs) {
+    const Model chain = read_model(kChain40);
+    PlotRecorder all(chain, 0.0, 1.0, 0.1);
+    PlotRecorder some(chain, 0.0, 1.0, 0.1, {39, 19});
+    const std::vector<double> x = [] {
+        std::vector<double> v(40);
+        for (std::size_t i = 0; i < v.size(); ++i) v[i] = 0.001 * static_cast<double>(i + 1);
+        return v;
+    }();
+    for (PlotRecorder* r : {&all, &some})
+        for (int k = 0; k <= 10; ++k) r->on_sample(0.1 * k, x.data(), x.data());
+    const std::string a = all.script(), s = some.script();
+    EXPECT_NE(a.find("lc palette cb 40 notitle"), std::string::npos);
+    EXPECT_NE(a.find("positions of the 40 masses"), std::string::npos);
+    EXPECT_NE(s.find("positions of 2 of the 40 dofs"), std::string::npos);
+    EXPECT_NE(s.find("title 'm40'"), std::string::npos);
+    EXPECT_NE(s.find("title 'm20'"), std::string::npos);
+    EXPECT_EQ(s.find("palette"), std::string::npos);
+    EXPECT_EQ(s.find("using 1:4 "), std::string::npos);  // two columns of data only
+    EXPECT_NE(s.find("\n0 0.04 0.02\n"), std::string::npos) << "m40 then m20 in each row";
+    EXPECT_NE(s.find("set ylabel 'x [m]'"), std::string::npos);
+    // A beam's deflection and rotation: each legend entry says its unit.
+    const Model beam = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/fe-cantilever/fe-cantilever.toml");
+    PlotRecorder tip(beam, 0.0, 1.0, 0.1, {14, 15});
+    const std::string b = tip.script();
+    EXPECT_NE(b.find("title 'w8 [m]'"), std::string::npos);
+    EXPECT_NE(b.find("title 't8 [rad]'"), std::string::npos);
+    EXPECT_NE(b.find("set ylabel 'x [m; rad for rotations]'"), std::string::npos);
+}
+
 TEST(PlotDofs, SweepPlotDofsFlag) {
     const testing::TempDir dir;
     const std::string args = "sweep '" + kChain40 + "' --param omega --from 0.3 --to 0.4 --points 2 --max-periods 20 ";
@@ -99,6 +131,14 @@ TEST(PlotDofs, SweepPlotDofsFlag) {
     r = testing::run_hsnc(args + "--plot '" + dir / "b.png" + "' --plot-dofs m1,m40 --quiet");
     EXPECT_EQ(r.exit_code, 0) << r.err;
     EXPECT_GT(std::filesystem::file_size(dir / "b.png"), 10000u);
+    const std::string sim = "simulate '" + kChain40 + "' --t-end 5 --quiet --plot '" + dir / "c.png" + "' ";
+    r = testing::run_hsnc(sim + "--plot-dofs m20,m0");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("--plot-dofs 'm20,m0': 'm0' is not a dof of the model"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "c.png"));
+    r = testing::run_hsnc(sim + "--plot-dofs m20,m40");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_GT(std::filesystem::file_size(dir / "c.png"), 10000u);
 }
 
 }  // namespace
