@@ -24,17 +24,11 @@ namespace hsnc {
 
 std::vector<std::size_t> named_dofs(const Model& model) {
     std::vector<char> named(model.dof(), 0);
-    auto mark = [&](int body) {
-        if (body >= 0 && static_cast<std::size_t>(body) < named.size()) named[static_cast<std::size_t>(body)] = 1;
-    };
-    auto direction = [&](const Direction& d) {
-        if (d.weighted())
-            for (int k = 0; k < d.count; ++k) mark(d.terms[k].body);
-        else
-            mark(d.a), mark(d.b);
+    auto direction = [&](const Direction& d) {  // the bodies of an element's w (direction.h)
+        for_each_term(d, [&](int body, double) { named[static_cast<std::size_t>(body)] = 1; });
     };
     for (const Contact& c : model.contacts) direction(c.direction());
-    for (const FrictionElement& f : model.frictions) mark(f.a), mark(f.b);
+    for (const FrictionElement& f : model.frictions) direction(Direction{f.a, f.b});
     for (const Jenkins& j : model.jenkins) direction(j.direction());
     for (const Damper& d : model.dampers)
         if (!d.from_structure) direction(d.direction());
@@ -79,6 +73,12 @@ std::vector<std::size_t> plot_dofs(const std::vector<std::string>& names, const 
         throw InputError(flag + " '" + list + "': " + std::to_string(dofs.size()) + " dofs; a figure draws at most " +
                          std::to_string(kMaxPlotDofs) + " (each its colour and legend entry)");
     return dofs;
+}
+
+std::string common_unit(const std::vector<std::string>& names) {
+    std::string unit;
+    for (const std::string& n : names) unit = unit.empty() || unit == dof_unit(n) ? dof_unit(n) : "mixed";
+    return unit.empty() ? "m" : unit;
 }
 
 std::string dof_unit(const std::string& name) {
@@ -350,12 +350,11 @@ std::string PlotRecorder::script() const {
     const bool distinct = n <= static_cast<std::size_t>(kDistinctMasses);
     auto name = [&](std::size_t i) -> const std::string& { return model_.masses[dofs_[i]].name; };
     // The y axis in the unit of the dofs drawn; when they mix, each legend entry says its own.
-    std::string unit;
-    for (std::size_t i = 0; i < n; ++i) unit = unit.empty() || unit == dof_unit(name(i)) ? dof_unit(name(i)) : "mixed";
+    std::vector<std::string> names;
+    for (std::size_t i = 0; i < n; ++i) names.push_back(name(i));
+    const std::string unit = common_unit(names);
     const std::string ylabel =
-        "set ylabel " +
-        quoted(unit == "mixed" ? "x [m; rad for rotations]" : "x [" + (unit.empty() ? std::string("m") : unit) + "]") +
-        "\n";
+        "set ylabel " + quoted(unit == "mixed" ? "x [m; rad for rotations]" : "x [" + unit + "]") + "\n";
     Range whole_range, zoom_range;
     std::string s = "set terminal pngcairo size 1400,1000 noenhanced font ',11'\nset encoding utf8\n";
     s += datablock("$whole", whole_, n, whole_range);

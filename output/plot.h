@@ -43,6 +43,10 @@ std::vector<std::size_t> plot_dofs(const std::vector<std::string>& names, const 
 /// t3, theta_2, rot), else "m".
 std::string dof_unit(const std::string& name);
 
+/// The unit of a figure's axis drawing `names`: their dof_unit when they
+/// agree ("m" for none), else "mixed" (each legend entry then says its own).
+std::string common_unit(const std::vector<std::string>& names);
+
 /// Throws RunError when gnuplot is not on PATH (called before a run).
 void require_gnuplot();
 

@@ -35,9 +35,9 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title, co
     const std::size_t n = r.masses.size(), shown = dofs.size();
     const std::size_t panels = std::min(shown, kDiagramPanels);
     // Units by dof kind (plot.h dof_unit): one axis label when they agree, else each legend entry says its own.
-    std::string unit;
-    for (std::size_t i : dofs) unit = unit.empty() || unit == dof_unit(r.masses[i]) ? dof_unit(r.masses[i]) : "mixed";
-    if (unit.empty()) unit = "m";
+    std::vector<std::string> names;
+    for (std::size_t i : dofs) names.push_back(r.masses[i]);
+    const std::string unit = common_unit(names);
     auto label = [&](std::size_t i) {
         return unit == "mixed" ? r.masses[i] + " [" + dof_unit(r.masses[i]) + "]" : r.masses[i];
     };
