@@ -24,6 +24,11 @@ constexpr double kPi = 3.14159265358979323846;
 // close to the tolerance already (run_point).
 constexpr double kGhostFactor = 1e3;
 
+// The recorded window's metrics resolve every term of the motion larger than
+// this share of its size (SegmentSolver::resolving_rate): a term left out
+// changes a metric by about its size, so they hold to about this, relative.
+constexpr double kRecordTolerance = 1e-12;
+
 // 6-point Gauss-Legendre on [-1, 1].
 constexpr double kGaussNode[6] = {-0.93246951420315202781, -0.66120938646626451366, -0.23861918608319690863,
                                   0.23861918608319690863,  0.66120938646626451366,  0.93246951420315202781};
@@ -86,12 +91,12 @@ public:
         s.setup(t_, t_lo_, x0_.data(), v0_.data(), sgn_.data());
         solver_ = &s;
         const double offset = (t_ - t_window_) + t_lo_;  // segment start in window time
-        const std::size_t pieces = static_cast<std::size_t>(std::max(1.0, std::ceil(length / h_)));
         eval(0.0);
         for (std::size_t i = 0; i < n_; ++i) acc_.extreme(i, x_[i]);
-        for (std::size_t p = 0; p < pieces; ++p) {
-            const double a = length * static_cast<double>(p) / static_cast<double>(pieces);
-            const double b = p + 1 == pieces ? length : length * static_cast<double>(p + 1) / static_cast<double>(pieces);
+        double b = 0.0;
+        while (b < length) {
+            const double a = b;
+            b = next_piece(a, length);
             va_ = v_;  // x_, v_, a_ hold the state at a
             // Gauss-Legendre nodes of [a, b].
             const double mid = 0.5 * (a + b), half = 0.5 * (b - a);
@@ -123,6 +128,17 @@ public:
     }
 
 private:
+    // The end of the piece that starts at a: equal pieces of the stretch
+    // [a, length] no longer than the grid step 2 pi/(16 rate) of the terms
+    // still present at a (SegmentSolver::resolving_rate; rates only fall as
+    // the damped terms decay), or than h_ when the solver cannot say.
+    double next_piece(double a, double length) const {
+        const double rate = solver_->resolving_rate(a, kRecordTolerance);
+        const double h = rate < 0 ? h_ : 2 * kPi / (16 * std::max(rate, omega_));
+        const double pieces = std::max(1.0, std::ceil((length - a) / h));
+        return pieces == 1.0 ? length : a + (length - a) / pieces;
+    }
+
     void eval(double tau) {
         const SegmentEval out{x_.data(), v_.data(), a_.data(), g_.data(), dg_.data(), b_.data(), sc_.data()};
         solver_->eval(tau, out);

@@ -9,21 +9,24 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <memory>
 #include <random>
 #include <vector>
 
 #include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
 
 #include "assembly.h"
 #include "configuration.h"
-#include "generic_solver.h"
-#include "segment_solver.h"
 #include "engine_runner.h"
-#include "model_reader.h"
+#include "fe_models.h"
+#include "generic_solver.h"
 #include "kernel_mode.h"
+#include "model_reader.h"
+#include "segment_solver.h"
 
 namespace hsnc {
 namespace {
@@ -736,6 +739,75 @@ TEST(GenericSolverProvider, BoundedCacheEvictsLeastRecentlyUsedAndRebuilds) {
     EXPECT_EQ(few.built(), built) << "c0 was not evicted";
     few.solver(c1);
     EXPECT_EQ(few.built(), built + 1) << "c1 was evicted and is rebuilt";
+}
+
+// resolving_rate (segment_solver.h): the fastest rate among the terms of a
+// segment still larger than tol of their dof's motion. A 20-element
+// consistent-mass cantilever (40 dofs, omega_max 1.7e5 rad/s) released from
+// the static deflection of a tip load carries every mode. Damped (Rayleigh,
+// the top modes overdamped), the stiff terms count at first and drop out as
+// they decay: the rate falls, never rises, to a mode that is still ringing;
+// undamped, the top mode counts at every tau. Released from mode 1's shape,
+// only mode 1 (and the rounding of the others, below tol) moves.
+TEST(GenericSolver, ResolvingRateFollowsTheTermsThatStillMove) {
+    const fe::Beam beam = fe::cantilever(20);
+    const Eigen::Index n = beam.K.rows();
+    Eigen::VectorXd load = Eigen::VectorXd::Zero(n);
+    load(beam.tip) = 1.0;
+    const Eigen::VectorXd deflection = beam.K.ldlt().solve(load);
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(beam.K, beam.M);
+    const double omega_max = std::sqrt(eig.eigenvalues()(n - 1)), omega_1 = std::sqrt(eig.eigenvalues()(0));
+    const Eigen::VectorXd shape1 = 0.01 * eig.eigenvectors().col(0) / eig.eigenvectors().col(0).cwiseAbs().maxCoeff();
+    testing::TempDir dir;
+    auto released = [&](const std::string& damping, const Eigen::VectorXd& x0) {
+        const Model m = read_model(fe::structure_model(dir, "beam.toml", "beam", beam.M, beam.K, beam.dofs, damping));
+        auto solver = std::make_unique<GenericSolver>(m, Configuration::all_open(m));
+        const std::vector<double> x(x0.data(), x0.data() + n), v(static_cast<std::size_t>(n), 0.0);
+        const std::vector<signed char> sgn(static_cast<std::size_t>(n), 0);
+        solver->setup(0.0, x.data(), v.data(), sgn.data());
+        return solver;
+    };
+    const double tol = 1e-12;
+
+    const auto damped = released("[damping]\nalpha = 0.2\nbeta = 2e-5\n", deflection);
+    // The top mode is overdamped: its fast root -(sigma + gamma) > omega_max sets the rate at first.
+    const double zeta_max = 0.5 * (0.2 / omega_max + 2e-5 * omega_max);
+    ASSERT_GT(zeta_max, 1.0);
+    EXPECT_NEAR(damped->resolving_rate(0.0, tol), omega_max * (zeta_max + std::sqrt(zeta_max * zeta_max - 1)),
+                1e-9 * omega_max * 2 * zeta_max);
+    // Falling, never rising; a mode of sigma_j = (alpha + beta omega_j^2)/2 no
+    // longer counts once e^{-sigma_j tau} < tol (a term is at most its dof's
+    // size), so by 0.02 s nothing above 0.1 omega_max is left; and with no
+    // forcing, nothing at all once mode 1 (sigma_1 = 0.1 /s) has decayed.
+    // (From 2 ms on: the overdamped roots, whose decay is their rate, are gone by then.)
+    double last = damped->resolving_rate(0.0, tol);
+    for (double tau : {1e-5, 1e-4, 2e-3, 1e-2, 0.02, 0.1, 1.0, 10.0}) {
+        const double rate = damped->resolving_rate(tau, tol);
+        EXPECT_LE(rate, last) << tau;
+        if (tau >= 2e-3) EXPECT_LT(0.5 * (0.2 + 2e-5 * rate * rate) * tau, std::log(1 / tol)) << tau << ": " << rate;
+        last = rate;
+    }
+    EXPECT_LT(damped->resolving_rate(0.02, tol), 0.1 * omega_max);
+    EXPECT_GT(damped->resolving_rate(10.0, tol), omega_1);  // the modes of sigma_j * 10 s < ln(1/tol) ring on
+    EXPECT_LT(damped->resolving_rate(10.0, tol), std::sqrt((2 * std::log(1 / tol) / 10.0 - 0.2) / 2e-5));
+    EXPECT_EQ(damped->resolving_rate(1e3, tol), 0.0);
+    // A looser tolerance lets terms go sooner, never later.
+    EXPECT_LE(damped->resolving_rate(1e-3, 1e-6), damped->resolving_rate(1e-3, tol));
+
+    const auto undamped = released("", deflection);
+    for (double tau : {0.0, 1.0, 1e3})
+        EXPECT_NEAR(undamped->resolving_rate(tau, tol), omega_max, 1e-9 * omega_max) << tau;
+
+    // Mode 1 alone (the others at the rounding of the modal projection, ~1e-12
+    // of the root dofs' small motion); with mode 10 at 1e-6 of it, mode 10
+    // counts at a tolerance below its share and not above.
+    const auto mode1 = released("", shape1);
+    EXPECT_NEAR(mode1->resolving_rate(0.0, 1e-9), omega_1, 1e-9 * omega_1);
+    const Eigen::VectorXd mode10 = eig.eigenvectors().col(9) / eig.eigenvectors().col(9).cwiseAbs().maxCoeff();
+    const auto mixed = released("", shape1 + 1e-8 * mode10);
+    const double omega_10 = std::sqrt(eig.eigenvalues()(9));
+    EXPECT_NEAR(mixed->resolving_rate(0.0, 1e-9), omega_10, 1e-9 * omega_10);
+    EXPECT_NEAR(mixed->resolving_rate(0.0, 1e-4), omega_1, 1e-9 * omega_1);
 }
 
 }  // namespace

@@ -9,16 +9,21 @@
 
 #include <algorithm>
 #include <chrono>
-#include <csignal>
-#include <thread>
 #include <cmath>
+#include <complex>
+#include <csignal>
 #include <cstdlib>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include <Eigen/Dense>
+
 #include "cli_runner.h"
+#include "fe_models.h"
 #include "hsnc/simulate.h"
 #include "hsnc/sweep.h"
+#include "model_reader.h"
 
 namespace hsnc {
 namespace {
@@ -202,6 +207,120 @@ TEST(SweepClosedForm, HardeningContactOscillatorBranches) {
     }
     EXPECT_EQ(inside, 3u);
     EXPECT_GE(outside, 18u);
+}
+
+// A 20-element consistent-mass cantilever (40 dofs, omega_max = 1.7e5 rad/s,
+// the top modes overdamped) forced at its tip: the recorder grids a segment
+// at the terms that still move (SegmentSolver::resolving_rate), not at
+// omega_max. Linear, its steady response is X = (K - omega^2 M + i omega C)^-1 F:
+// xmax = a1 = |X_i|, xrms = |X_i|/sqrt(2) at every dof, rotations and
+// deflections alike, to 1e-8.
+TEST(SweepClosedForm, StiffBeamResponseAtEveryDof) {
+    const fe::Beam beam = fe::cantilever(20);
+    testing::TempDir dir;
+    const std::string path = fe::structure_model(dir, "beam.toml", "beam", beam.M, beam.K, beam.dofs,
+                                                 "[parameters]\nomega = 15.0\n[damping]\nalpha = 2.5\nbeta = 2e-5\n"
+                                                 "[[forcing]]\nomega = \"omega\"\namplitude = { w20 = 5.0 }\n");
+    SweepOptions o;
+    o.param = "omega";
+    o.from = 15;
+    o.to = 60;
+    o.points = 2;
+    o.max_periods = 2000;
+    o.record_periods = 4;
+    const SweepResult r = SweepPlan(slurp(path), path, {}, o).run();
+    ASSERT_EQ(r.points.size(), 2u);
+    const Eigen::Index n = beam.K.rows();
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(n);
+    f(beam.tip) = 5.0;
+    for (const SweepPoint& p : r.points) {
+        SCOPED_TRACE("omega = " + std::to_string(p.value));
+        EXPECT_TRUE(p.settled);
+        EXPECT_EQ(p.multiple, 1);
+        const double w = p.value;
+        const Eigen::MatrixXcd D = (beam.K - w * w * beam.M).cast<std::complex<double>>() +
+                                   std::complex<double>(0, w) * (2.5 * beam.M + 2e-5 * beam.K);
+        const Eigen::VectorXcd X = D.partialPivLu().solve(f.cast<std::complex<double>>());
+        for (Eigen::Index i = 0; i < n; ++i) {
+            const auto k = static_cast<std::size_t>(i);
+            const double a = std::abs(X(i));
+            EXPECT_NEAR(p.xmax[k] / a, 1.0, 1e-8) << beam.dofs[k];
+            EXPECT_NEAR(p.a1[k] / a, 1.0, 1e-8) << beam.dofs[k];
+            EXPECT_NEAR(p.xrms[k] / (a / std::sqrt(2.0)), 1.0, 1e-8) << beam.dofs[k];
+        }
+    }
+}
+
+// The same beam with a stop under its tip (two impacts a period, each
+// exciting the stiff modes, which the damping then takes away): the
+// recorded metrics against the steady orbit sampled densely by the engine
+// (20000 samples a period: Simpson's integrals, the largest sample) at
+// every dof, to 1e-6 (the dense sampling's own error).
+TEST(SweepClosedForm, StiffBeamWithAStopAgainstADenseRun) {
+    const fe::Beam beam = fe::cantilever(20);
+    testing::TempDir dir;
+    const std::string path =
+        fe::structure_model(dir, "beam.toml", "beam", beam.M, beam.K, beam.dofs,
+                            "[parameters]\nomega = 15.0\n[damping]\nalpha = 0.2\nbeta = 2e-5\n"
+                            "[[contact]]\nbetween = [\"w20\", \"ground\"]\ngap = 0.004\nk = 2000.0\n"
+                            "[[forcing]]\nomega = \"omega\"\namplitude = { w20 = 5.0 }\n");
+    SweepOptions o;
+    o.param = "omega";
+    o.from = o.to = 15;
+    o.points = 1;
+    o.max_periods = 2000;
+    o.record_periods = 1;
+    const SweepResult r = SweepPlan(slurp(path), path, {}, o).run();
+    ASSERT_EQ(r.points.size(), 1u);
+    const SweepPoint& p = r.points[0];
+    ASSERT_TRUE(p.settled);
+    ASSERT_EQ(p.multiple, 1);
+
+    // The steady orbit: the model's run to the window's start, then one period sampled densely.
+    Model m = read_model(path);
+    const double T = 2 * kPi / 15.0;
+    SimulateOptions so;
+    so.t_end = m.t0 + static_cast<double>(p.periods) * T;
+    so.samples = false;
+    const SimulateSummary settle = simulate(m, so);
+    ASSERT_EQ(settle.status, RunStatus::ok) << settle.message;
+    m.x0 = settle.x;
+    m.v0 = settle.v;
+    m.t0 = so.t_end;
+    constexpr int kN = 20000;
+    struct Dense : Observer {
+        std::size_t n = 0, events = 0;
+        std::vector<std::vector<double>> x;
+        void on_sample(double, const double* xs, const double*) override {
+            x.emplace_back(xs, xs + static_cast<std::ptrdiff_t>(n));
+        }
+        void on_event(double, EventKind, int, const double*, const double*) override { ++events; }
+    } dense;
+    dense.n = m.dof();
+    so.t_end = m.t0 + T;
+    so.dt = T / kN;
+    so.samples = true;
+    const SimulateSummary window = simulate(m, so, dense);
+    ASSERT_EQ(window.status, RunStatus::ok) << window.message;
+    ASSERT_EQ(dense.x.size(), static_cast<std::size_t>(kN) + 1);
+    EXPECT_EQ(dense.events, 4u) << "two closes and two opens a period";
+    for (std::size_t i = 0; i < m.dof(); ++i) {
+        double xmax = 0, sxx = 0, sxc = 0, sxs = 0;
+        for (int k = 0; k <= kN; ++k) {
+            const double x = dense.x[static_cast<std::size_t>(k)][i], wk = (k == 0 || k == kN) ? 1 : (k % 2 ? 4 : 2);
+            const double th = 2 * kPi * k / kN;
+            xmax = std::max(xmax, std::abs(x));
+            sxx += wk * x * x;
+            sxc += wk * x * std::cos(th);
+            sxs += wk * x * std::sin(th);
+        }
+        const double h = T / kN / 3;  // Simpson
+        const double rms = std::sqrt(h * sxx / T), a1 = std::hypot(2 * h * sxc / T, 2 * h * sxs / T);
+        SCOPED_TRACE(beam.dofs[i]);
+        EXPECT_NEAR(p.xmax[i] / xmax, 1.0, 1e-6);
+        EXPECT_NEAR(p.xrms[i] / rms, 1.0, 1e-6);
+        EXPECT_NEAR(p.a1[i] / a1, 1.0, 1e-6);
+    }
 }
 
 // The same plan on 1 and 2 threads, with tasks of every kind (directions,

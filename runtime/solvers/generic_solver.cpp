@@ -158,6 +158,7 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
 
     // Modes: M_F-normalised Phi, modal damping c = alpha + beta*lambda, regime.
     phi_ = modal_.phi;
+    phi_max_ = phi_.cwiseAbs().colwise().maxCoeff().transpose();
     phi_t_m_.resize(nf_, nf_);
     if (model.coupled_mass()) {
         phi_t_m_ = modal_.phi_t_m();
@@ -280,9 +281,11 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     e_omega_tau_ = Eigen::VectorXcd::Zero(nh_);
     q_ = qd_ = qdd_ = qmag_ = qdmag_ = b2_ = b3_ = Eigen::VectorXd::Zero(nf_);
     xmag_ = vmag_ = Eigen::VectorXd::Zero(n_);
+    lifetimes_.reserve(2 * static_cast<std::size_t>(nf_));  // resolving_rate: two terms per mode at most
 }
 
 void GenericSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    lifetimes_valid_ = false;
     for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
     segment_force(t_, cfg_, x0, fseg_, slider_);
     release_force(t_, fseg_, sgn, frel_);
@@ -555,6 +558,94 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
         out.scale[f] = scale;
         out.bound[f] = B;
     }
+}
+
+// Each mode's homogeneous motion is a sum of terms A e^{-s tau} times a
+// bounded oscillation at a rate r: underdamped, A = hypot(u0, (u0' + sigma
+// u0)/omega_d), s = sigma, r = omega; critically and overdamped, the terms of
+// the two real roots (near-critical ones bounded together, tau e^{r1 tau} <=
+// 2/(e |r1|) e^{r1 tau/2}); a damped rigid mode's e^{-c tau}. The forcing's
+// particular parts never decay and count at their frequencies whatever their
+// size (so does a mode in the transient-coupled form, near its harmonic).
+// Dof r's size S_r bounds its motion (its start position, its static offset
+// and every term's |phi_rj| A); the term counts in dof r until |phi_rj| A
+// e^{-s tau} <= tol S_r, so a dof of small motion (or in other units: a
+// rotation beside a deflection) is resolved to tol of its own size. The
+// instant each term stops counting is worked out once per segment.
+void GenericSolver::term_lifetimes(double tol) const {
+    lifetimes_.clear();
+    lifetimes_tol_ = tol;
+    forced_rate_ = 0.0;
+    for (int h = 0; h < nh_; ++h) forced_rate_ = std::max(forced_rate_, t_.h_omega(h));
+    struct Term {
+        double size, decay, rate;
+    };
+    auto homogeneous = [&](int j, auto&& put) {
+        const double u0 = u0_(j), ud0 = ud0_(j), sig = sigma_(j);
+        switch (regime_[static_cast<std::size_t>(j)]) {
+            case Regime::rigid:
+                // q = u0 + u0' tau phi1(-c tau) + p tau^2 phi2(-c tau): e^{-c tau} (u0'/c - p/c^2) besides a
+                // polynomial.
+                if (c_(j) > 0) put(Term{std::abs(ud0 / c_(j) - p_(j) / (c_(j) * c_(j))), c_(j), c_(j)});
+                break;
+            case Regime::underdamped:
+                put(Term{std::hypot(u0, (ud0 + sig * u0) / omega_d_(j)), sig, omega_(j)});
+                break;
+            case Regime::overdamped:
+                if (gamma_(j) >= 0.5 * sig) {  // u = U1 e^{r1 tau} + U2 e^{r2 tau}
+                    const double r1 = r1_(j), r2 = r2_(j), den = -2.0 * gamma_(j);
+                    put(Term{std::abs((r2 * u0 - ud0) / den), -r1, -r1});
+                    put(Term{std::abs((ud0 - r1 * u0) / den), -r2, -r2});
+                    break;
+                }
+                [[fallthrough]];
+            case Regime::critical: {  // |u| <= (|u0| + |u0' + sigma u0| tau) e^{-(sigma - gamma) tau}
+                const double slow = sig - gamma_(j);
+                put(Term{std::abs(u0) + 2.0 * std::abs(ud0 + sig * u0) / (std::exp(1.0) * slow), 0.5 * slow,
+                         sig + gamma_(j)});
+                break;
+            }
+        }
+    };
+    // Each mode's size (m) and each dof's (xmag_ as scratch).
+    for (int j = 0; j < nf_; ++j) {
+        double m = regime_[static_cast<std::size_t>(j)] == Regime::rigid ? 0.0 : std::abs(p_(j) / lambda_(j));
+        homogeneous(j, [&](const Term& term) { m += term.size; });
+        for (int h = 0; h < nh_; ++h) {
+            if (!coupled_(j, h))
+                m += std::hypot(pa_(j, h), pb_(j, h));
+            else if (P_(j, h) != 0)
+                forced_rate_ = std::max(forced_rate_, omega_(j));
+        }
+        qmag_(j) = m;
+    }
+    for (int r = 0; r < nf_; ++r) {
+        double size = std::abs(x_fix_(modal_.free[static_cast<std::size_t>(r)]));
+        for (int j = 0; j < nf_; ++j) size += std::abs(phi_(r, j)) * qmag_(j);
+        xmag_(r) = size;
+    }
+    for (int j = 0; j < nf_; ++j) {
+        double share = 0.0;  // max_r |phi_rj| / S_r
+        for (int r = 0; r < nf_; ++r)
+            if (xmag_(r) > 0) share = std::max(share, std::abs(phi_(r, j)) / xmag_(r));
+        homogeneous(j, [&](const Term& term) {
+            if (term.rate <= forced_rate_) return;
+            const double ratio = share * term.size / tol;  // e^{s tau_end} = ratio
+            if (!(ratio > 1)) return;
+            const double until =
+                term.decay > 0 ? std::log(ratio) / term.decay : std::numeric_limits<double>::infinity();
+            lifetimes_.push_back({until, term.rate});
+        });
+    }
+    lifetimes_valid_ = true;
+}
+
+double GenericSolver::resolving_rate(double tau, double tol) const {
+    if (!lifetimes_valid_ || tol != lifetimes_tol_) term_lifetimes(tol);
+    double rate = forced_rate_;
+    for (const auto& [until, r] : lifetimes_)
+        if (until > tau) rate = std::max(rate, r);
+    return rate;
 }
 
 std::size_t GenericSolver::memory_bytes() const {

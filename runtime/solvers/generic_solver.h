@@ -58,6 +58,7 @@ public:
     void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override;
     void eval(double tau, const SegmentEval& out) const override;
     double max_step() const override { return max_step_; }
+    double resolving_rate(double tau, double tol) const override;
 
     /// Estimated heap memory of this solver (its matrices and vectors), bytes.
     std::size_t memory_bytes() const;
@@ -89,6 +90,7 @@ private:
     ConfigurationTerms t_;  // masses, friction, K(cfg), C(cfg), constant force, contacts, harmonics
     std::vector<int> coord_;  // free coordinate of each mass (its partner's for a rider), -1: ground, stuck
     Eigen::MatrixXd phi_;          // nf x nf, rows in the order of modal_.free
+    Eigen::VectorXd phi_max_;      // max_r |phi_(r, j)|: the largest share of mode j in a dof
     Eigen::MatrixXd phi_t_m_;      // Phi^T M_F (modal initial conditions)
     std::vector<Regime> regime_;
     Eigen::VectorXd lambda_, omega_, c_, sigma_, omega_d_, gamma_, r1_, r2_;
@@ -119,6 +121,15 @@ private:
     // --- eval scratch ---
     mutable Eigen::VectorXd sn_, cs_, q_, qd_, qdd_, qmag_, qdmag_, b2_, b3_, xmag_, vmag_;
     mutable Eigen::VectorXcd e_omega_tau_;
+
+    // resolving_rate: until when each decaying term of the segment is resolved, and at what rate.
+    struct Lifetime {
+        double until, rate;
+    };
+    void term_lifetimes(double tol) const;
+    mutable std::vector<Lifetime> lifetimes_;
+    mutable double lifetimes_tol_ = 0.0, forced_rate_ = 0.0;
+    mutable bool lifetimes_valid_ = false;
 };
 
 }  // namespace hsnc

@@ -110,6 +110,16 @@ public:
     /// interpreter's, from its program), else null: the engine then asks
     /// EngineOptions::restart_plans.
     virtual const RestartPlan* restart_plan() const { return nullptr; }
+
+    /// The fastest rate (rad/s) of the terms of the motion that, from tau on,
+    /// are still larger than tol times the size of the whole motion (after
+    /// setup): a time grid of step 2 pi/(16 rate) from tau resolves the
+    /// motion to about tol of its size. A mode excited to 1e-9 of the motion
+    /// and damped away counts until it has decayed below tol, so a stiff,
+    /// damped tail does not set the grid of a whole segment (the sweep's
+    /// recorder, analysis/sweep_point.cpp). Negative: not known (the default);
+    /// the caller then grids at the highest natural frequency.
+    virtual double resolving_rate(double /*tau*/, double /*tol*/) const { return -1.0; }
 };
 
 }  // namespace hsnc
