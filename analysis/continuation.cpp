@@ -13,6 +13,7 @@
 #include "error.h"
 #include "flow.h"
 #include "hsnc/periodic.h"
+#include "number_text.h"
 #include "shooting.h"
 #include "sweep_point.h"
 
@@ -26,14 +27,6 @@ constexpr double kMinTurnCosine = 0.8;   // tangents of consecutive points at mo
 constexpr double kSmallestStep = 1e-6;   // of the largest
 constexpr double kDifferenceStep = 1e-6; // of |to - from|: the central difference of dP/dp
 constexpr double kLargestStateStep = 0.1;
-
-std::string short_num(double v) {
-    for (int digits = 1;; ++digits) {
-        char text[40];
-        std::snprintf(text, sizeof text, "%.*g", digits, v);
-        if (std::strtod(text, nullptr) == v || digits >= 17) return text;
-    }
-}
 
 // The period map at parameter values, a few flows kept (the corrector and
 // the central difference come back to the same values).
@@ -72,7 +65,7 @@ private:
         if (cache_.size() >= 6) cache_.clear();
         auto at = std::make_unique<At>();
         at->model = branch_.model_at(p);
-        at->period = 2 * M_PI / forcing_frequency(at->model, branch_.param + " = " + short_num(p));
+        at->period = 2 * M_PI / forcing_frequency(at->model, branch_.param + " = " + shortest_text(p));
         // The Eigen solver, as the sweep's own points (sweep_point.cpp): every
         // parameter value is a new model whose configurations are all entered
         // anew, where its analysis in double is the cheapest entry, and
@@ -142,7 +135,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
     // kLargestStateStep of the largest orbit so far in any state component;
     // within that, halved on failure, grown after quick corrections.
     const double spacing = 1.0 / static_cast<double>(o.points - 1), h_min = spacing * kSmallestStep;
-    auto name = [&](double p) { return b.param + " = " + short_num(p) + b.where; };
+    auto name = [&](double p) { return b.param + " = " + shortest_text(p) + b.where; };
     std::vector<SweepPoint> out;
     PeriodMaps maps(b);
     auto clock = Clock::now();
@@ -327,7 +320,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
                 break;
             }
             if (it >= 2 && v.residual >= last) {
-                fail = "the Newton residual stops falling at " + short_num(v.residual);
+                fail = "the Newton residual stops falling at " + shortest_text(v.residual);
                 break;
             }
             last = v.residual;
@@ -357,7 +350,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
                 h = std::max(h_min, 0.5 * h);
                 continue;
             }
-            stop = "sweep --continuation: shooting fails beyond " + name(p) + " (step " + short_num(h) +
+            stop = "sweep --continuation: shooting fails beyond " + name(p) + " (step " + shortest_text(h) +
                    ", the smallest): " + fail;
             break;
         }
@@ -423,7 +416,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
     }
     if (stop.empty() && !finished && out.size() >= budget)
         stop = "sweep --continuation: the step budget (" + std::to_string(budget) + " points) ran out at " + name(p) +
-               " before the branch reached " + short_num(b.end);
+               " before the branch reached " + shortest_text(b.end);
     if (!stop.empty() && out.empty()) return failed_row(stop);
     if (!stop.empty()) out.back().stop = stop;
     return out;

@@ -13,12 +13,13 @@
 #include <utility>
 
 #include "assembly.h"
-#include "file_read.h"
-#include "input_files.h"
-#include "hsnc/simulate.h"
-#include "model_hash.h"
-#include "sweep_detail.h"
 #include "continuation.h"
+#include "file_read.h"
+#include "hsnc/simulate.h"
+#include "input_files.h"
+#include "model_hash.h"
+#include "number_text.h"
+#include "sweep_detail.h"
 #include "sweep_point.h"
 
 namespace hsnc {
@@ -30,15 +31,6 @@ std::string num(double v) {
     char text[40];
     std::snprintf(text, sizeof text, "%.17g", v);
     return text;
-}
-
-// The shortest text that reads back as v (for messages and overrides).
-std::string short_num(double v) {
-    for (int digits = 1;; ++digits) {
-        char text[40];
-        std::snprintf(text, sizeof text, "%.*g", digits, v);
-        if (std::strtod(text, nullptr) == v || digits >= 17) return text;
-    }
 }
 
 std::string override_name(const std::string& raw) { return raw.substr(0, raw.find('=')); }
@@ -98,8 +90,8 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     if (o.param.empty()) throw OptionError(kPlan, "param", "''", "required: the parameter to sweep");
     if (!has_parameter(model_, o.param))
         throw OptionError(kPlan, "param", o.param, "no parameter named '" + o.param + "' in " + source);
-    if (!std::isfinite(o.from)) throw OptionError(kPlan, "from", short_num(o.from), "must be a finite number");
-    if (!std::isfinite(o.to)) throw OptionError(kPlan, "to", short_num(o.to), "must be a finite number");
+    if (!std::isfinite(o.from)) throw OptionError(kPlan, "from", shortest_text(o.from), "must be a finite number");
+    if (!std::isfinite(o.to)) throw OptionError(kPlan, "to", shortest_text(o.to), "must be a finite number");
     if (o.points < 1) throw OptionError(kPlan, "points", std::to_string(o.points), "must be >= 1");
     if (o.points > 100'000'000) throw OptionError(kPlan, "points", std::to_string(o.points), "must be <= 1e8");
     if (o.max_periods < 1) throw OptionError(kPlan, "max_periods", std::to_string(o.max_periods), "must be >= 1");
@@ -115,10 +107,10 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
             throw OptionError(kPlan, "param2", o.param2, "no parameter named '" + o.param2 + "' in " + source);
         if (o.values2.empty()) throw OptionError(kPlan, "values2", "''", "required with param2: its values");
     } else if (!o.values2.empty()) {
-        throw OptionError(kPlan, "values2", short_num(o.values2[0]), "given without param2");
+        throw OptionError(kPlan, "values2", shortest_text(o.values2[0]), "given without param2");
     }
     for (double v : o.values2)
-        if (!std::isfinite(v)) throw OptionError(kPlan, "values2", short_num(v), "must be finite numbers");
+        if (!std::isfinite(v)) throw OptionError(kPlan, "values2", shortest_text(v), "must be finite numbers");
     for (const std::string& raw : overrides.set) {
         const std::string name = override_name(raw);
         if (name == o.param || (!o.param2.empty() && name == o.param2))
@@ -139,7 +131,7 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
             throw OptionError(kPlan, "method", method_name(o.method), "continuation needs the exact method hsnc (shooting)");
         if (o.points < 2) throw OptionError(kPlan, "points", std::to_string(o.points), "must be >= 2 with continuation");
         if (o.from == o.to)
-            throw OptionError(kPlan, "to", short_num(o.to), "must differ from from with continuation");
+            throw OptionError(kPlan, "to", shortest_text(o.to), "must differ from from with continuation");
         if (o.max_steps > 100'000'000)
             throw OptionError(kPlan, "max_steps", std::to_string(o.max_steps), "must be <= 1e8");
     } else if (o.max_steps != 0) {
@@ -171,10 +163,10 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
         for (std::size_t j = 0; j < N; ++j) {
             ModelOverrides ov = overrides;
             ov.set.push_back(o.param + "=" + num(values_[j]));
-            std::string at = o.param + " = " + short_num(values_[j]);
+            std::string at = o.param + " = " + shortest_text(values_[j]);
             if (!o.param2.empty()) {
                 ov.set.push_back(o.param2 + "=" + num(o.values2[l]));
-                at += ", " + o.param2 + " = " + short_num(o.values2[l]);
+                at += ", " + o.param2 + " = " + shortest_text(o.values2[l]);
             }
             Model m;
             try {
@@ -274,7 +266,7 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const 
         return task.direction == SweepDirection::up ? position : N - 1 - position;
     };
     std::string where;
-    if (has2) where += ", " + options_.param2 + " = " + short_num(v2);
+    if (has2) where += ", " + options_.param2 + " = " + shortest_text(v2);
     where += std::string(" (") + sweep_direction_name(task.direction) + ")";
     sweep_detail::check_cancel(options_);
 
@@ -325,7 +317,7 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const 
             state.v = m.v0;
             state.slider = m.slider0;
         }
-        const std::string what = options_.param + " = " + short_num(values_[j]) + where;
+        const std::string what = options_.param + " = " + shortest_text(values_[j]) + where;
         const auto t0 = std::chrono::steady_clock::now();
         const sweep_detail::State before = state;
         SweepPoint p;

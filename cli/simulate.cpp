@@ -102,11 +102,7 @@ private:
 // back the flag and the text the user gave for it.
 std::string flag_value(double v) {
     if (std::isnan(v)) return "";
-    for (int digits = 1;; ++digits) {  // the shortest text that reads back as v
-        char text[32];
-        std::snprintf(text, sizeof text, "%.*g", digits, v);
-        if (std::strtod(text, nullptr) == v || digits >= 17) return text;
-    }
+    return shortest_text(v);
 }
 InputError flagged(const OptionError& e, const SimulateOptions& o, bool quoted = false) {
     struct Flag {

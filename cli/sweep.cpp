@@ -26,6 +26,7 @@
 #include "hsnc/sweep.h"
 #include "input_files.h"
 #include "model_reader.h"
+#include "number_text.h"
 #include "output_file.h"
 #include "plot.h"
 #include "sweep_distributed.h"
@@ -299,14 +300,6 @@ std::string summary_line(const SweepResult& r, bool interrupted = false) {
     return s.str();
 }
 
-std::string short_num(double v) {
-    for (int digits = 1;; ++digits) {
-        char text[40];
-        std::snprintf(text, sizeof text, "%.*g", digits, v);
-        if (std::strtod(text, nullptr) == v || digits >= 17) return text;
-    }
-}
-
 // Rank 0's line for the whole MPI run: points done on every rank (its own
 // and what the others sent), the time per point over all ranks, an estimate.
 struct OverallProgress {
@@ -409,8 +402,8 @@ int sweep(const SweepFlags& f) {
                     if (rank != 0) world->send_progress(1);
                     else overall->own_point(*world);
                 }
-                std::string at = param + " = " + short_num(p.value);
-                if (!param2.empty()) at += ", " + param2 + " = " + short_num(p.value2);
+                std::string at = param + " = " + shortest_text(p.value);
+                if (!param2.empty()) at += ", " + param2 + " = " + shortest_text(p.value2);
                 if (!p.failure.empty()) {
                     std::fprintf(stderr, "%spoint %zu %s %s failed: %s\n", prefix.c_str(), p.done, at.c_str(),
                                  sweep_direction_name(p.direction), p.failure.c_str());

@@ -415,6 +415,18 @@ TEST(CoupledMass, ThePeriodMapsExactJacobianMatchesCentralDifferences) {
     EXPECT_LT(off, 1e-6);
 }
 
+TEST(CoupledMass, TheFortyDofExampleIsTheTestedCantilever) {
+    // examples/beam-40 (../fe-cantilever/make_matrices.py 20) is cantilever(20): the README's response curve
+    // and the sweep tests of the stiff beam (test_sweep.cpp) run one structure.
+    const Model model = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/beam-40/beam-40.toml");
+    const Beam b = cantilever(20);
+    ASSERT_EQ(static_cast<Eigen::Index>(model.dof()), b.M.rows());
+    for (std::size_t i = 0; i < model.dof(); ++i) EXPECT_EQ(model.masses[i].name, b.dofs[i]);
+    const Eigen::MatrixXd M = mass_matrix(model), K = stiffness_matrix(model, Configuration::all_open(model));
+    EXPECT_LT((M - b.M).cwiseAbs().maxCoeff(), 1e-15 * b.M.cwiseAbs().maxCoeff());
+    EXPECT_LT((K - b.K).cwiseAbs().maxCoeff(), 1e-12 * b.K.cwiseAbs().maxCoeff());
+}
+
 TEST(CoupledMass, TheFiniteElementExampleIsTheTestedCantilever) {
     // examples/fe-cantilever (matrices from its make_matrices.py) is the beam these tests assemble.
     const Model model = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/fe-cantilever/fe-cantilever.toml");

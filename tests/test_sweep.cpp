@@ -455,6 +455,11 @@ TEST(SweepCli, ProgressLinePerPoint) {
     EXPECT_NE(r.err.find("hsnc sweep: point 1/3 omega = 1 up:"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("hsnc sweep: point 3/3 omega = 1.2 up:"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find(" s/point, about "), std::string::npos) << r.err;
+    // Values as a person writes them: 20, not the shortest %g "2e+01".
+    const auto tens = run_hsnc("sweep '" + model + "' --param omega --from 10 --to 20 --points 2 --max-periods 5");
+    ASSERT_EQ(tens.exit_code, 0) << tens.err;
+    EXPECT_NE(tens.err.find("hsnc sweep: point 1/2 omega = 10 up:"), std::string::npos) << tens.err;
+    EXPECT_NE(tens.err.find("hsnc sweep: point 2/2 omega = 20 up:"), std::string::npos) << tens.err;
     const auto q = run_hsnc("sweep '" + model + "' --param omega --from 1.0 --to 1.2 --points 3 --max-periods 50 --quiet");
     EXPECT_EQ(q.err, "");
 }

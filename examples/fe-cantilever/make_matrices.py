@@ -2,15 +2,23 @@
 """Writes M.mtx and K.mtx of the consistent-mass cantilever (fe-cantilever.toml).
 
 A cantilever of length L = 1 m, bending stiffness EI = 100 N m^2 and mass
-2 kg/m in 8 Euler-Bernoulli elements, each with its cubic (Hermite) stiffness
-and consistent mass matrix; two dofs per node, the deflection w and the
-rotation t (w1, t1, ..., w8, t8; node 8 at the tip), the root clamped. M is
-coupled (consistent mass), K banded. Deterministic: run it again and the files
-are byte-identical.
+2 kg/m in N Euler-Bernoulli elements (8 unless given), each with its cubic
+(Hermite) stiffness and consistent mass matrix; two dofs per node, the
+deflection w and the rotation t (w1, t1, ..., wN, tN; node N at the tip), the
+root clamped. M is coupled (consistent mass), K banded. Deterministic: run it
+again and the files are byte-identical.
+
+    make_matrices.py [N [DIR]]   (into DIR, default the current directory;
+                                  examples/beam-40: make_matrices.py 20 ../beam-40)
 """
+import os
+import sys
+
 import numpy as np
 
-L, EI, rho, N = 1.0, 100.0, 2.0, 8
+L, EI, rho = 1.0, 100.0, 2.0
+N = int(sys.argv[1]) if len(sys.argv) > 1 else 8
+out = sys.argv[2] if len(sys.argv) > 2 else "."
 h = L / N
 ke = EI / h**3 * np.array([[12, 6 * h, -12, 6 * h], [6 * h, 4 * h * h, -6 * h, 2 * h * h],
                            [-12, -6 * h, 12, -6 * h], [6 * h, 2 * h * h, -6 * h, 4 * h * h]])
@@ -28,7 +36,7 @@ K, M = K[2:, 2:], M[2:, 2:]  # the clamped root: w0 = t0 = 0
 
 def write(name, A, comment):
     size = A.shape[0]
-    with open(name, "w") as f:
+    with open(os.path.join(out, name), "w") as f:
         f.write("%%MatrixMarket matrix coordinate real symmetric\n")
         f.write("% " + comment + "\n")
         entries = [(i, j, A[i, j]) for j in range(size) for i in range(j, size) if A[i, j] != 0.0]
