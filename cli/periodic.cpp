@@ -73,26 +73,26 @@ void draw_multipliers(const OutputTarget& target, const PeriodicResult& r, const
     render_png(script.str(), target);
 }
 
-// The stdout line's numbers as a one-row table of the --h5 file.
-void write_summary(TableSink& table, const Model& model, const PeriodicResult& r) {
-    CsvFile t(nullptr, &table);
-    std::string header = "period,iterations,residual";
-    for (const auto& m : model.masses) header += ",x_" + m.name;
-    for (const auto& m : model.masses) header += ",v_" + m.name;
-    for (const auto& j : model.jenkins) header += ",s_" + j.name;
-    t.text((header + ",stable,max_multiplier,events,grazing").c_str());
-    t.end_row();
-    t.number(r.period);
-    t.number(r.iterations);
-    t.number(r.residual);
-    for (std::size_t i = 0; i < model.dof(); ++i) t.number(r.x[i]);
-    for (std::size_t i = 0; i < model.dof(); ++i) t.number(r.v[i]);
-    for (std::size_t j = 0; j < model.jenkins.size(); ++j) t.number(r.s[j]);
-    t.text(r.stable ? "true" : "false");
-    t.number(r.max_multiplier);
-    t.number(static_cast<double>(r.events));
-    t.number(static_cast<double>(r.grazing));
-    t.end_row();
+// The orbit's summary: the line on stdout and, with --h5, the table
+// periodic/summary (written only when the orbit converged). The line's
+// stable and max_multiplier say false and nan when it did not.
+SummaryRow summary(const Model& model, const PeriodicResult& r, bool ok) {
+    SummaryRow row;
+    row.word("status", periodic_status_name(r.status), SummaryRow::Where::line);
+    row.number("period", r.period);
+    row.number("iterations", static_cast<double>(r.iterations));
+    row.number("residual", r.residual);
+    for (std::size_t i = 0; i < model.dof(); ++i) row.number("x_" + model.masses[i].name, r.x[i]);
+    for (std::size_t i = 0; i < model.dof(); ++i) row.number("v_" + model.masses[i].name, r.v[i]);
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j)  // the sliders are state too (docs/interface.md)
+        row.number("s_" + model.jenkins[j].name, r.s[j]);
+    row.word("stable", ok && r.stable ? "true" : "false");
+    row.number("max_multiplier", ok ? r.max_multiplier : std::nan(""));
+    row.number("events", static_cast<double>(r.events), SummaryRow::Where::table);
+    row.number("grazing", static_cast<double>(r.grazing));
+    if (ok && r.neutral)  // a family's multipliers at +1 (docs/interface.md)
+        row.number("neutral", static_cast<double>(r.neutral), SummaryRow::Where::line);
+    return row;
 }
 
 int periodic_command(const PeriodicFlags& f) {
@@ -177,21 +177,11 @@ int periodic_command(const PeriodicFlags& f) {
         }
         if (plot) draw_multipliers(*plot, r, model);
         if (archive) {
-            write_summary(archive->table("periodic/summary"), model, r);
+            summary(model, r, true).write(archive->table("periodic/summary"));
             archive->commit();
         }
     }
-    std::ostringstream line;
-    line << "status=" << periodic_status_name(r.status) << " period=" << number_text(r.period)
-         << " iterations=" << r.iterations << " residual=" << number_text(r.residual);
-    for (std::size_t i = 0; i < model.dof(); ++i) line << " x_" << model.masses[i].name << "=" << number_text(r.x[i]);
-    for (std::size_t i = 0; i < model.dof(); ++i) line << " v_" << model.masses[i].name << "=" << number_text(r.v[i]);
-    for (std::size_t j = 0; j < model.jenkins.size(); ++j)  // the sliders are state too (docs/interface.md)
-        line << " s_" << model.jenkins[j].name << "=" << number_text(r.s[j]);
-    line << " stable=" << (ok && r.stable ? "true" : "false")
-         << " max_multiplier=" << (ok ? number_text(r.max_multiplier) : "nan") << " grazing=" << r.grazing;
-    if (ok && r.neutral) line << " neutral=" << r.neutral;  // a family's multipliers at +1 (docs/interface.md)
-    std::cout << line.str() << std::endl;
+    std::cout << summary(model, r, ok).line() << std::endl;
     if (r.grazing)
         std::fprintf(stderr,
                      "hsnc: warning: the orbit grazes: %zu switch instants a period where a contact closes or opens "

@@ -175,35 +175,22 @@ int simulate(const SimulateOptions& o) {
     if (sum.status != RunStatus::ok && sum.status != RunStatus::max_events)
         throw RunError(std::string("simulate: ") + run_status_name(sum.status) + ": " + sum.message);
     outputs.commit();
-    if (archive) {  // the summary line's numbers as a one-row table
-        CsvFile s(nullptr, &archive->table("simulate/summary"));
-        std::string header = "status,method,t,events";
-        for (EventKind k : kSwitchEventKinds) header += std::string(",") + event_kind_name(k);
-        for (std::size_t i = 0; i < model.dof(); ++i) header += ",x_" + model.masses[i].name;
-        for (std::size_t i = 0; i < model.dof(); ++i) header += ",v_" + model.masses[i].name;
-        s.text(header.c_str());
-        s.end_row();
-        s.text(run_status_name(sum.status));
-        s.text(o.method.c_str());
-        s.number(sum.t);
-        s.number(static_cast<double>(sum.events));
-        for (EventKind k : kSwitchEventKinds) s.number(static_cast<double>(obs.count(k)));
-        for (std::size_t i = 0; i < model.dof(); ++i) s.number(sum.x[i]);
-        for (std::size_t i = 0; i < model.dof(); ++i) s.number(sum.v[i]);
-        s.end_row();
+    // The summary: the line on stdout and, with --h5, the table simulate/summary.
+    SummaryRow summary;
+    summary.word("status", run_status_name(sum.status));
+    summary.word("method", o.method);
+    summary.number("t", sum.t);
+    summary.number("events", static_cast<double>(sum.events));
+    for (EventKind k : kSwitchEventKinds) summary.number(event_kind_name(k), static_cast<double>(obs.count(k)));
+    if (!model.load_steps.empty())  // [[load_step]]: the load changes, in the same form (absent otherwise)
+        summary.number(event_kind_name(EventKind::load_change), static_cast<double>(obs.count(EventKind::load_change)));
+    for (std::size_t i = 0; i < model.dof(); ++i) summary.number("x_" + model.masses[i].name, sum.x[i]);
+    for (std::size_t i = 0; i < model.dof(); ++i) summary.number("v_" + model.masses[i].name, sum.v[i]);
+    if (archive) {
+        summary.write(archive->table("simulate/summary"));
         archive->commit();
     }
-
-    // The summary line (stdout): status, switch events, end state.
-    std::ostringstream line;
-    line << "status=" << run_status_name(sum.status) << " method=" << o.method << " t=" << number_text(sum.t)
-         << " events=" << sum.events;
-    for (EventKind k : kSwitchEventKinds) line << " " << event_kind_name(k) << "=" << obs.count(k);
-    if (!model.load_steps.empty())  // [[load_step]]: the load changes, in the same form (absent otherwise)
-        line << " " << event_kind_name(EventKind::load_change) << "=" << obs.count(EventKind::load_change);
-    for (std::size_t i = 0; i < model.dof(); ++i) line << " x_" << model.masses[i].name << "=" << number_text(sum.x[i]);
-    for (std::size_t i = 0; i < model.dof(); ++i) line << " v_" << model.masses[i].name << "=" << number_text(sum.v[i]);
-    std::cout << line.str() << std::endl;
+    std::cout << summary.line() << std::endl;
     if (!o.quiet) {
         const std::string carried =
             sum.restarts ? " (" + std::to_string(sum.restarts) + " carried over a switch)" : std::string();

@@ -450,9 +450,7 @@ int sweep(const SweepFlags& f) {
                     outputs->overrides = overrides_given(f.overrides);
                     outputs->plot_dofs = f.plot_dofs;
                     outputs->named = named_dofs(plan.model());
-                    std::vector<std::string> names;
-                    for (const Mass& m : plan.model().masses) names.push_back(m.name);
-                    hsnc::plot_dofs(names, f.plot_dofs, outputs->named);  // --plot-dofs checked before the run
+                    hsnc::plot_dofs(plan.model(), f.plot_dofs, outputs->named);  // --plot-dofs checked before the run
                 }
             } catch (const InputError& e) {
                 go = 2;

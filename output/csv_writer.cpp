@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "error.h"
+#include "number_text.h"
 
 namespace hsnc {
 
@@ -106,6 +107,39 @@ void state_numbers(const Model& model, CsvFile& file, double t, const double* x,
         for (std::size_t i = 0; i < n; ++i) file.number(v[i]);
     }
     for (std::size_t j = 0; j < model.jenkins.size(); ++j) file.number(x[n + j]);
+}
+
+void SummaryRow::word(const std::string& name, const std::string& value, Where where) {
+    fields_.push_back({name, value, 0.0, true, where});
+}
+
+void SummaryRow::number(const std::string& name, double value, Where where) {
+    fields_.push_back({name, "", value, false, where});
+}
+
+std::string SummaryRow::line() const {
+    std::string s;
+    for (const Field& f : fields_)
+        if (f.where != Where::table)
+            s += (s.empty() ? "" : " ") + f.name + "=" + (f.is_word ? f.word : number_text(f.number));
+    return s;
+}
+
+void SummaryRow::write(TableSink& table) const {
+    CsvFile t(nullptr, &table);
+    std::string header;
+    for (const Field& f : fields_)
+        if (f.where != Where::line) header += (header.empty() ? "" : ",") + f.name;
+    t.text(header.c_str());
+    t.end_row();
+    for (const Field& f : fields_) {
+        if (f.where == Where::line) continue;
+        if (f.is_word)
+            t.text(f.word.c_str());
+        else
+            t.number(f.number);
+    }
+    t.end_row();
 }
 
 std::string trajectory_header(const Model& model) { return "t" + state_columns(model); }

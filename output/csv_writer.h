@@ -55,6 +55,30 @@ private:
     bool first_in_row_ = true;
 };
 
+/// A command's result as named values, kept once for both of its forms: the
+/// `name=value ...` summary line on stdout (numbers as number_text: integers
+/// without a point) and, with --h5, a one-row table of the same columns
+/// (h5_archive.h). A value may belong to one form only (`Where`).
+class SummaryRow {
+public:
+    enum class Where : unsigned char { both, line, table };
+    void word(const std::string& name, const std::string& value, Where where = Where::both);
+    void number(const std::string& name, double value, Where where = Where::both);
+    /// "name=value name=value ...".
+    std::string line() const;
+    /// The header row, then the one row of values.
+    void write(TableSink& table) const;
+
+private:
+    struct Field {
+        std::string name, word;
+        double number;
+        bool is_word;
+        Where where;
+    };
+    std::vector<Field> fields_;
+};
+
 /// Header "t,x_<mass>...,v_<mass>..." (and for events "t,kind,element,...").
 std::string trajectory_header(const Model& model);
 std::string events_header(const Model& model);

@@ -75,6 +75,14 @@ std::vector<std::size_t> plot_dofs(const std::vector<std::string>& names, const 
     return dofs;
 }
 
+std::vector<std::size_t> plot_dofs(const Model& model, const std::string& list, const std::vector<std::size_t>& named,
+                                   const std::string& flag) {
+    std::vector<std::string> names;
+    names.reserve(model.masses.size());
+    for (const Mass& m : model.masses) names.push_back(m.name);
+    return plot_dofs(names, list, named, flag);
+}
+
 std::string common_unit(const std::vector<std::string>& names) {
     std::string unit;
     for (const std::string& n : names) unit = unit.empty() || unit == dof_unit(n) ? dof_unit(n) : "mixed";

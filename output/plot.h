@@ -37,6 +37,9 @@ std::vector<std::size_t> named_dofs(const Model& model);
 /// or the first kMaxPlotDofs of `named` (of the dofs when `named` is empty).
 std::vector<std::size_t> plot_dofs(const std::vector<std::string>& names, const std::string& list,
                                    const std::vector<std::size_t>& named, const std::string& flag = "--plot-dofs");
+/// The same with the model's dof names.
+std::vector<std::size_t> plot_dofs(const Model& model, const std::string& list, const std::vector<std::size_t>& named,
+                                   const std::string& flag = "--plot-dofs");
 
 /// The unit of a dof's position by its name: "rad" for a rotation (a name
 /// that is t, th, theta, rot, phi or psi followed by digits, `_` or the end:

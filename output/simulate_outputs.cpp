@@ -57,11 +57,7 @@ SimulateOutputs::SimulateOutputs(const Model& model, const OutputRequest& r, dou
                              "--dt or a shorter --t-end, or --allow-large-output to write it anyway");
     }
     if (plot_ || section_plot_) require_gnuplot();
-    if (!r.plot_dofs.empty()) {
-        std::vector<std::string> names;
-        for (const Mass& m : model.masses) names.push_back(m.name);
-        plot_dofs_ = plot_dofs(names, r.plot_dofs, {});
-    }
+    if (!r.plot_dofs.empty()) plot_dofs_ = plot_dofs(model, r.plot_dofs, {});
 }
 
 double SimulateOutputs::sample_dt() const {

@@ -614,8 +614,10 @@ def _h5_simulate(root, r):
               _h5_state(r.masses, e["x"].reshape(len(e), -1), e["v"].reshape(len(e), -1), jenkins,
                         e["s"].reshape(len(e), -1) if jenkins else None))
     summary = r.summary
-    counts = [(k, [summary["counts"].get(k, 0)]) for k in
-              ("contact_close", "contact_open", "stick", "release", "reversal")]
+    kinds = ("contact_close", "contact_open", "stick", "release", "reversal")
+    if "load_change" in summary["counts"]:  # a model with load steps, as the command's summary line
+        kinds += ("load_change",)
+    counts = [(k, [summary["counts"].get(k, 0)]) for k in kinds]
     _h5_table(root.create_group("simulate/summary"),
               [("status", [summary["status"]]), ("method", [summary.get("method", "hsnc")]), ("t", [summary["t"]]),
                ("events", [summary["events"]])] + counts +

@@ -121,3 +121,34 @@ def test_h5_refuses_a_pipe_and_leaves_no_file_when_a_run_fails(tmp_path):
     assert not list(tmp_path.iterdir())
     with pytest.raises(hsnc.InputError):
         hsnc.to_h5({"status": "ok"}, tmp_path / "x.h5", hsnc.Model.from_file(SCENARIO2))
+
+
+def test_the_summary_tables_are_the_summary_lines(tmp_path):
+    """simulate/summary and periodic/summary hold the stdout line's keys and values (periodic's
+    `status` is the line's alone, its `events` the table's), a load step's count included; and
+    hsnc.to_h5 writes the same simulate/summary."""
+    load_step = str(SOURCE_DIR / "examples" / "load_step" / "sdnd106.toml")
+    runs = [(("simulate", load_step, "--t-end", "2"), "simulate/summary", {"status", "method"}),
+            (("simulate", HARDENING, "--t-end", "20"), "simulate/summary", {"status", "method"}),
+            (("periodic", HARDENING, "--set", "omega=1.3", "--x0", "m=1.5", "--transient", "300"),
+             "periodic/summary", {"stable"})]
+    for k, (args, group, words) in enumerate(runs):
+        h5 = tmp_path / ("run%d.h5" % k)
+        line = run_cli(*args, "--h5", h5, "--quiet").stdout.split()
+        values = dict(item.split("=", 1) for item in line)
+        with h5py.File(h5, "r") as f:
+            columns = f[group].attrs["columns"].split(",")
+            expected = [key for key in values if not (group == "periodic/summary" and key == "status")]
+            assert [c for c in columns if c != "events" or group == "simulate/summary"] == expected, args
+            for key in expected:
+                cell = f[group][key][0]
+                if key in words:
+                    assert cell.decode() == values[key], key
+                else:
+                    assert cell == float(values[key]), key
+    with h5py.File(tmp_path / "run0.h5", "r") as f:
+        assert "load_change" in f["simulate/summary"].attrs["columns"].split(",")
+    model = hsnc.Model.from_file(load_step)
+    hsnc.to_h5(hsnc.simulate(model, t_end=2), tmp_path / "py.h5", model)
+    with h5py.File(tmp_path / "run0.h5", "r") as a, h5py.File(tmp_path / "py.h5", "r") as b:
+        assert_same_datasets(a, b, "simulate/summary")
