@@ -251,22 +251,14 @@ TEST(SweepClosedForm, StiffBeamResponseAtEveryDof) {
     }
 }
 
-// The same beam with a stop under its tip (two impacts a period, each
-// exciting the stiff modes, which the damping then takes away): the
-// recorded metrics against the steady orbit sampled densely by the engine
-// (20000 samples a period: Simpson's integrals, the largest sample) at
-// every dof, to 1e-6 (the dense sampling's own error).
-TEST(SweepClosedForm, StiffBeamWithAStopAgainstADenseRun) {
-    const fe::Beam beam = fe::cantilever(20);
-    testing::TempDir dir;
-    const std::string path =
-        fe::structure_model(dir, "beam.toml", "beam", beam.M, beam.K, beam.dofs,
-                            "[parameters]\nomega = 15.0\n[damping]\nalpha = 0.2\nbeta = 2e-5\n"
-                            "[[contact]]\nbetween = [\"w20\", \"ground\"]\ngap = 0.004\nk = 2000.0\n"
-                            "[[forcing]]\nomega = \"omega\"\namplitude = { w20 = 5.0 }\n");
+// One sweep point at omega recording one period, against the steady orbit
+// sampled densely by the engine (20000 samples a period: Simpson's
+// integrals, the largest sample) at every dof, to 1e-6 (the dense
+// sampling's own error); `events` switch events a period.
+void expect_recorded_metrics_of_a_dense_run(const std::string& path, double omega, std::size_t events) {
     SweepOptions o;
     o.param = "omega";
-    o.from = o.to = 15;
+    o.from = o.to = omega;
     o.points = 1;
     o.max_periods = 2000;
     o.record_periods = 1;
@@ -278,7 +270,7 @@ TEST(SweepClosedForm, StiffBeamWithAStopAgainstADenseRun) {
 
     // The steady orbit: the model's run to the window's start, then one period sampled densely.
     Model m = read_model(path);
-    const double T = 2 * kPi / 15.0;
+    const double T = 2 * kPi / omega;
     SimulateOptions so;
     so.t_end = m.t0 + static_cast<double>(p.periods) * T;
     so.samples = false;
@@ -303,7 +295,7 @@ TEST(SweepClosedForm, StiffBeamWithAStopAgainstADenseRun) {
     const SimulateSummary window = simulate(m, so, dense);
     ASSERT_EQ(window.status, RunStatus::ok) << window.message;
     ASSERT_EQ(dense.x.size(), static_cast<std::size_t>(kN) + 1);
-    EXPECT_EQ(dense.events, 4u) << "two closes and two opens a period";
+    EXPECT_EQ(dense.events, events) << "switch events a period";
     for (std::size_t i = 0; i < m.dof(); ++i) {
         double xmax = 0, sxx = 0, sxc = 0, sxs = 0;
         for (int k = 0; k <= kN; ++k) {
@@ -316,11 +308,40 @@ TEST(SweepClosedForm, StiffBeamWithAStopAgainstADenseRun) {
         }
         const double h = T / kN / 3;  // Simpson
         const double rms = std::sqrt(h * sxx / T), a1 = std::hypot(2 * h * sxc / T, 2 * h * sxs / T);
-        SCOPED_TRACE(beam.dofs[i]);
+        SCOPED_TRACE(m.masses[i].name);
         EXPECT_NEAR(p.xmax[i] / xmax, 1.0, 1e-6);
         EXPECT_NEAR(p.xrms[i] / rms, 1.0, 1e-6);
         EXPECT_NEAR(p.a1[i] / a1, 1.0, 1e-6);
     }
+}
+
+// The same beam with a stop under its tip (two impacts a period, each
+// exciting the stiff modes, which the damping then takes away).
+TEST(SweepClosedForm, StiffBeamWithAStopAgainstADenseRun) {
+    const fe::Beam beam = fe::cantilever(20);
+    testing::TempDir dir;
+    const std::string path =
+        fe::structure_model(dir, "beam.toml", "beam", beam.M, beam.K, beam.dofs,
+                            "[parameters]\nomega = 15.0\n[damping]\nalpha = 0.2\nbeta = 2e-5\n"
+                            "[[contact]]\nbetween = [\"w20\", \"ground\"]\ngap = 0.004\nk = 2000.0\n"
+                            "[[forcing]]\nomega = \"omega\"\namplitude = { w20 = 5.0 }\n");
+    expect_recorded_metrics_of_a_dense_run(path, 15.0, 4);
+}
+
+// A chain with a discrete damper (non-proportional damping: the state-space
+// solver's segments and its resolving_rate) across a stiffer spring, and a stop.
+TEST(SweepClosedForm, AChainWithADamperAndAStopAgainstADenseRun) {
+    std::string text = "name = \"damped-chain\"\n[parameters]\nomega = 3.0\n";
+    for (int i = 1; i <= 6; ++i) text += "[[mass]]\nname = \"m" + std::to_string(i) + "\"\nm = 1.0\n";
+    for (int i = 0; i < 6; ++i)
+        text += "[[spring]]\nbetween = [\"" + (i == 0 ? std::string("ground") : "m" + std::to_string(i)) + "\", \"m" +
+                std::to_string(i + 1) + "\"]\nk = " + (i == 5 ? "400.0" : "100.0") + "\n";
+    text +=
+        "[damping]\nalpha = 0.1\n[[damper]]\nbetween = [\"m5\", \"m6\"]\nc = 2.0\n"
+        "[[contact]]\nbetween = [\"m6\", \"ground\"]\ngap = 0.05\nk = 500.0\n"
+        "[[forcing]]\nomega = \"omega\"\namplitude = { m6 = 10.0 }\n";
+    const std::string path = write_temp("damped-chain.toml", text);
+    expect_recorded_metrics_of_a_dense_run(path, 3.0, 2);
 }
 
 // The same plan on 1 and 2 threads, with tasks of every kind (directions,

@@ -285,7 +285,7 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
 }
 
 void GenericSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
-    lifetimes_valid_ = false;
+    lifetimes_.invalidate();
     for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
     segment_force(t_, cfg_, x0, fseg_, slider_);
     release_force(t_, fseg_, sgn, frel_);
@@ -573,10 +573,9 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
 // rotation beside a deflection) is resolved to tol of its own size. The
 // instant each term stops counting is worked out once per segment.
 void GenericSolver::term_lifetimes(double tol) const {
-    lifetimes_.clear();
-    lifetimes_tol_ = tol;
-    forced_rate_ = 0.0;
-    for (int h = 0; h < nh_; ++h) forced_rate_ = std::max(forced_rate_, t_.h_omega(h));
+    double forced = 0.0;
+    for (int h = 0; h < nh_; ++h) forced = std::max(forced, t_.h_omega(h));
+    lifetimes_.start(forced, tol);
     struct Term {
         double size, decay, rate;
     };
@@ -615,7 +614,7 @@ void GenericSolver::term_lifetimes(double tol) const {
             if (!coupled_(j, h))
                 m += std::hypot(pa_(j, h), pb_(j, h));
             else if (P_(j, h) != 0)
-                forced_rate_ = std::max(forced_rate_, omega_(j));
+                lifetimes_.raise_forced(omega_(j));
         }
         qmag_(j) = m;
     }
@@ -628,24 +627,13 @@ void GenericSolver::term_lifetimes(double tol) const {
         double share = 0.0;  // max_r |phi_rj| / S_r
         for (int r = 0; r < nf_; ++r)
             if (xmag_(r) > 0) share = std::max(share, std::abs(phi_(r, j)) / xmag_(r));
-        homogeneous(j, [&](const Term& term) {
-            if (term.rate <= forced_rate_) return;
-            const double ratio = share * term.size / tol;  // e^{s tau_end} = ratio
-            if (!(ratio > 1)) return;
-            const double until =
-                term.decay > 0 ? std::log(ratio) / term.decay : std::numeric_limits<double>::infinity();
-            lifetimes_.push_back({until, term.rate});
-        });
+        homogeneous(j, [&](const Term& term) { lifetimes_.add(term.rate, term.decay, share * term.size); });
     }
-    lifetimes_valid_ = true;
 }
 
 double GenericSolver::resolving_rate(double tau, double tol) const {
-    if (!lifetimes_valid_ || tol != lifetimes_tol_) term_lifetimes(tol);
-    double rate = forced_rate_;
-    for (const auto& [until, r] : lifetimes_)
-        if (until > tau) rate = std::max(rate, r);
-    return rate;
+    if (!lifetimes_.valid(tol)) term_lifetimes(tol);
+    return lifetimes_.rate_at(tau);
 }
 
 std::size_t GenericSolver::memory_bytes() const {

@@ -36,6 +36,7 @@
 #include "model.h"
 #include "segment_solver.h"
 #include "switch_values.h"
+#include "term_lifetimes.h"
 
 namespace hsnc {
 
@@ -122,14 +123,9 @@ private:
     mutable Eigen::VectorXd sn_, cs_, q_, qd_, qdd_, qmag_, qdmag_, b2_, b3_, xmag_, vmag_;
     mutable Eigen::VectorXcd e_omega_tau_;
 
-    // resolving_rate: until when each decaying term of the segment is resolved, and at what rate.
-    struct Lifetime {
-        double until, rate;
-    };
+    // resolving_rate: until when each decaying term of the segment counts, and at what rate.
     void term_lifetimes(double tol) const;
-    mutable std::vector<Lifetime> lifetimes_;
-    mutable double lifetimes_tol_ = 0.0, forced_rate_ = 0.0;
-    mutable bool lifetimes_valid_ = false;
+    mutable TermLifetimes lifetimes_;
 };
 
 }  // namespace hsnc

@@ -375,6 +375,7 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
 }
 
 void StateSpaceSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
+    lifetimes_.invalidate();
     const int m = 2 * ne_;
     const double s = scale_s_;
     for (int i = 0; i < n_; ++i) x_fix_(i) = x0[i];
@@ -618,6 +619,53 @@ std::vector<std::complex<double>> StateSpaceSolver::damped_modes() const {
         return std::abs(a) != std::abs(b) ? std::abs(a) < std::abs(b) : a.imag() > b.imag();
     });
     return modes;
+}
+
+// Mode k's coordinate is eta_k = C_k e^{lambda_k tau} plus the forced parts
+// (beta0 E(lambda, 0) and the harmonics' E(lambda, +-i Omega)), C_k = eta0_k
+// minus the forced parts' e^{lambda tau} coefficients: a term of rate
+// |lambda_k| that decays as e^{Re lambda_k tau}. Its share of the state's
+// position rows (y's first half: the coordinates e, mass-normalised for a
+// coupled M) is |V_rk| |C_k| over row r's size (the static offset and every
+// mode's whole magnitude). A mode near a forcing frequency (near_) counts
+// throughout, as the forcing does.
+void StateSpaceSolver::term_lifetimes(double tol) const {
+    double forced = 0.0;
+    for (int h = 0; h < nh_; ++h) forced = std::max(forced, t_.h_omega(h));
+    lifetimes_.start(forced, tol);
+    const int nr = static_cast<int>(rep_.size());
+    for (int c = 0; c < nr; ++c) {  // |C_k| into eta_mag_, the mode's whole magnitude into b2_ (eval scratch)
+        const int k = rep_[static_cast<std::size_t>(c)];
+        cplx C = eta0_(k);
+        double whole = mod_eta0_(k);
+        if (beta0_(k) != cplx(0.0)) {
+            C -= beta0_(k) * inv_d_(k, 0);
+            whole += mod(beta0_(k) * inv_d_(k, 0));
+        }
+        for (int h = 0; h < nh_; ++h) {
+            const cplx bh = beta_h_(k, h);
+            if (bh == cplx(0.0)) continue;
+            if (near_(k, 2 * h) || near_(k, 2 * h + 1)) lifetimes_.raise_forced(std::abs(lambda_(k)));
+            const cplx ch = bh * cplx(0.0, -0.5);
+            C -= ch * (e_theta_(h) * inv_d_(k, 1 + 2 * h) - std::conj(e_theta_(h)) * inv_d_(k, 2 + 2 * h));
+            whole += mod(ch) * (mod(inv_d_(k, 1 + 2 * h)) + mod(inv_d_(k, 2 + 2 * h)));
+        }
+        eta_mag_(c) = mod(C);
+        b2_(c) = whole + mod(C);
+    }
+    for (int r = 0; r < ne_; ++r) ymag_(r) = std::abs(ys_(r)) + absV_.row(r).dot(b2_);  // each row's size S_r
+    for (int c = 0; c < nr; ++c) {
+        const int k = rep_[static_cast<std::size_t>(c)];
+        double share = 0.0;  // max_r |V_rk| / S_r over the position rows
+        for (int r = 0; r < ne_; ++r)
+            if (ymag_(r) > 0) share = std::max(share, absV_(r, c) / ymag_(r));
+        lifetimes_.add(std::abs(lambda_(k)), -lambda_(k).real(), share * eta_mag_(c));
+    }
+}
+
+double StateSpaceSolver::resolving_rate(double tau, double tol) const {
+    if (!lifetimes_.valid(tol)) term_lifetimes(tol);
+    return lifetimes_.rate_at(tau);
 }
 
 std::size_t StateSpaceSolver::memory_bytes() const {

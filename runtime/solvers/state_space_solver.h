@@ -64,6 +64,7 @@
 #include "model.h"
 #include "segment_solver.h"
 #include "switch_values.h"
+#include "term_lifetimes.h"
 
 namespace hsnc {
 
@@ -93,6 +94,7 @@ public:
     void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override;
     void eval(double tau, const SegmentEval& out) const override;
     double max_step() const override { return max_step_; }
+    double resolving_rate(double tau, double tol) const override;
 
     /// Estimated heap memory of this solver, bytes.
     std::size_t memory_bytes() const;
@@ -171,6 +173,10 @@ private:
     mutable Eigen::VectorXcd eta_, e_omega_, deta_;
     mutable Eigen::VectorXd dy_, af_;
     mutable Eigen::VectorXd eta_mag_, b2_, y_, ymag_, xmag_, vmag_, sn_, cs_, xf_, vf_, xfm_, vfm_, B_;
+
+    // resolving_rate: until when each decaying mode of the segment counts, and at what rate.
+    void term_lifetimes(double tol) const;
+    mutable TermLifetimes lifetimes_;
 };
 
 }  // namespace hsnc
