@@ -136,7 +136,10 @@ private:
         const double rate = solver_->resolving_rate(a, kRecordTolerance);
         const double h = rate < 0 ? h_ : 2 * kPi / (16 * std::max(rate, omega_));
         const double pieces = std::max(1.0, std::ceil((length - a) / h));
-        return pieces == 1.0 ? length : a + (length - a) / pieces;
+        const double b = a + (length - a) / pieces;
+        // A piece below the time's rounding (a rate beyond what the instant can
+        // resolve) ends the walk rather than stalling it.
+        return pieces == 1.0 || !(b > a) ? length : b;
     }
 
     void eval(double tau) {
@@ -382,7 +385,8 @@ void record(const Model& point_model, State& state, const SweepOptions& o, const
     const double omega = forcing_frequency(m, what);
     const double period = 2 * kPi / omega;
     const double t0 = m.t0;
-    // The grid of the recorded window: 1/16 of the shortest period present.
+    // The baselines' grid (and the recorder's where a solver cannot say, SegmentRecorder::next_piece):
+    // 1/16 of the shortest period present.
     const double ratio = std::max(1.0, highest_natural_frequency(m) / omega);
     const auto per_period = static_cast<std::size_t>(16 * std::ceil(ratio));
     const double h = period / static_cast<double>(per_period);

@@ -58,52 +58,45 @@ def table(title, rows, quantities):
                                              for q, name in enumerate(quantities))))
 
 
-def compare_gap():
-    model = hsnc.Model.from_file(os.path.join(SOURCE, "examples", "modes", "bilinear-gap.toml"))
-    k1, k2, d = 4.0, 12.0, 0.1
+def compare(title, example, amplitudes, quantities, damped, first_guess, solve, errors_of):
+    """HB of the mode of examples/modes/EXAMPLE at each amplitude, H growing, against hsnc's backbone."""
+    model = hsnc.Model.from_file(os.path.join(SOURCE, "examples", "modes", example))
     backbone = hsnc.modes(model, 1.0, points=20)
     rows = []
-    for A in (0.2, 0.5, 1.0):
+    for A in amplitudes:
         i = int(np.argmin(np.abs(backbone["amplitude"] - A)))
         assert abs(backbone["amplitude"][i] - A) < 1e-12
-        exact = (backbone["omega"][i],)
-        u, H_old, errors = np.array([0.0, A, 2.0]), 1, []
+        exact = tuple(backbone[q][i] for q in quantities)
+        u, H_old, errors = first_guess(A, exact), 1, []
         for H in HARMONICS:
-            u = hb_gap(A, H, k1, k2, d, grow(u, H_old, H, False))
+            u = solve(A, H, grow(u, H_old, H, damped))
             H_old = H
             if u is None:
                 errors.append((H, None))
                 break
-            errors.append((H, (abs(u[H + 1] / exact[0] - 1),)))
-        first = (first_within([(H, e and e[0]) for H, e in errors]),)
+            errors.append((H, errors_of(u, H, exact)))
+        first = tuple(first_within([(H, e and e[q]) for H, e in errors]) for q in range(len(quantities)))
         rows.append((A, exact, errors, first))
-    table("bilinear gap (examples/modes/bilinear-gap.toml): backbone frequency", rows, ("omega",))
+    table("%s (examples/modes/%s)" % (title, example), rows, quantities)
     return rows
+
+
+def compare_gap():
+    return compare("bilinear gap: backbone frequency", "bilinear-gap.toml", (0.2, 0.5, 1.0), ("omega",), False,
+                   lambda A, exact: np.array([0.0, A, 2.0]),
+                   lambda A, H, start: hb_gap(A, H, 4.0, 12.0, 0.1, start),
+                   lambda u, H, exact: (abs(u[H + 1] / exact[0] - 1),))
 
 
 def compare_jenkins():
-    model = hsnc.Model.from_file(os.path.join(SOURCE, "examples", "modes", "jenkins-joint.toml"))
-    k, kt, fs = 1.0, 3.0, 0.3
-    backbone = hsnc.modes(model, 1.0, points=20)
-    rows = []
-    for A in (0.15, 0.3, 1.0):
-        i = int(np.argmin(np.abs(backbone["amplitude"] - A)))
-        assert abs(backbone["amplitude"][i] - A) < 1e-12
-        exact = (backbone["omega"][i], backbone["damping_ratio"][i])
-        u = np.array([0.0, A, 0.0, exact[0], 2 * exact[0] * exact[1]])  # H = 1 from hsnc's values, to be safe
-        H_old, errors = 1, []
-        for H in HARMONICS:
-            u = hb_jenkins(A, H, k, kt, fs, grow(u, H_old, H, True))
-            H_old = H
-            if u is None:
-                errors.append((H, None))
-                break
-            w, xi = u[2 * H + 1], u[2 * H + 2]
-            errors.append((H, (abs(w / exact[0] - 1), abs(xi / (2 * w) / exact[1] - 1))))
-        first = tuple(first_within([(H, e and e[q]) for H, e in errors]) for q in range(2))
-        rows.append((A, exact, errors, first))
-    table("Jenkins joint (examples/modes/jenkins-joint.toml): damped mode", rows, ("omega", "damping_ratio"))
-    return rows
+    def errors_of(u, H, exact):
+        w, xi = u[2 * H + 1], u[2 * H + 2]
+        return abs(w / exact[0] - 1), abs(xi / (2 * w) / exact[1] - 1)
+
+    # H = 1 starts from hsnc's frequency and damping: the first HB solve then needs no search.
+    return compare("Jenkins joint: damped mode", "jenkins-joint.toml", (0.15, 0.3, 1.0), ("omega", "damping_ratio"),
+                   True, lambda A, exact: np.array([0.0, A, 0.0, exact[0], 2 * exact[0] * exact[1]]),
+                   lambda A, H, start: hb_jenkins(A, H, 1.0, 3.0, 0.3, start), errors_of)
 
 
 def main():
