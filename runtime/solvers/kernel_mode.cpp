@@ -33,10 +33,6 @@ SegmentSolver& GenericSolverProvider::solver(const Configuration& cfg) {
         bytes = g->memory_bytes();
         s = std::move(g);
     } else {
-        // StateSpaceSolver's bounds take every eigenvalue's real part <= 0 (|E(s)| <= s, its header).
-        if (negative_damping(model_))
-            throw InputError("Eigen solver: negative Rayleigh damping with dampers (non-proportional damping) is not "
-                             "supported: only the modal solver bounds a growing motion");
         try {
             auto g = std::make_unique<StateSpaceSolver>(model_, cfg);
             bytes = g->memory_bytes();

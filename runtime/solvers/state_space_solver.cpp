@@ -25,6 +25,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kPi = 3.141592653589793;
 /// |mu - lambda| < kNear |mu|: a harmonic near a mode's resonance (bounds use one forcing period).
 constexpr double kNear = 0.1;
+/// Negative damping: the bounds hold over kGrowthHorizon / (largest Re lambda) (the header).
+constexpr double kGrowthHorizon = 0.5;
 
 cplx expc(cplx w) { return std::exp(w.real()) * cplx(std::cos(w.imag()), std::sin(w.imag())); }
 
@@ -41,10 +43,12 @@ cplx duhamel(cplx d, cplx inv_d, double tau, cplx el, cplx em) {
 }
 
 /// A bound on |E''(s)| for s in [tau, s_end] (state_space_solver.h), given
-/// |lambda|, |mu|, |mu - lambda|, |lambda + mu| and |e^{lambda tau}| (|e^{mu tau}| = 1).
-double duhamel_bound(double l, double m, double dm, double sum, double ael, double s_end) {
-    const double first = dm > 0.0 ? (m * m + l * l * ael) / dm : kInf;
-    const double second = l == 0.0 ? m : l * l * s_end + sum;
+/// |lambda|, |mu|, |mu - lambda|, |lambda + mu|, the largest |e^{lambda s}| there
+/// (`ahead`) and over [0, s_end] (`reach`; both |e^{lambda tau}| and 1 for a decaying
+/// mode), |e^{mu s}| = 1.
+double duhamel_bound(double l, double m, double dm, double sum, double ahead, double reach, double s_end) {
+    const double first = dm > 0.0 ? (m * m + l * l * ahead) / dm : kInf;
+    const double second = l == 0.0 ? m : l * l * s_end * reach + sum;
     return std::min(first, second);
 }
 
@@ -159,6 +163,37 @@ Eigen::MatrixXd StateSpaceSolver::rigid_basis(const Model& model, const Configur
     return MF;
 }
 
+void StateSpaceSolver::decompose(const Eigen::MatrixXd& A, bool may_grow, const std::string& where) {
+    const auto m = A.rows();
+    growth_ = 0.0;
+    if (m == 0) return;
+    const Eigen::EigenSolver<Eigen::MatrixXd> es(A);
+    if (es.info() != Eigen::Success) throw RunError(where + "the eigen-solver of the state matrix did not converge");
+    lambda_ = es.eigenvalues();
+    V_ = es.eigenvectors();
+    const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(V_);
+    Vinv_ = lu.inverse();
+    condition_ = V_.cwiseAbs().colwise().sum().maxCoeff() * Vinv_.cwiseAbs().colwise().sum().maxCoeff();
+    if (!(condition_ <= kMaxCondition)) {
+        char text[32];
+        std::snprintf(text, sizeof text, "%.2g", condition_);
+        throw DefectiveModes(where + "its state-space modes are nearly defective (eigenvector condition " + text +
+                             " > 200: critically damped motion)");
+    }
+    const double anorm = A.cwiseAbs().rowwise().sum().maxCoeff();
+    for (Eigen::Index k = 0; k < m; ++k) {
+        // Passive damping (C >= 0): Re lambda <= 0. Rounding may put an undamped pair a few ulps
+        // to the right; it is put on the axis. Negative damping (hsnc modes' EPMC) grows.
+        const double re = lambda_(k).real();
+        if (re > 1e-12 * anorm) {
+            if (!may_grow) throw RunError(where + "an eigenvalue of the state matrix has Re > 0");
+            growth_ = std::max(growth_, re);
+        } else if (re > 0.0) {
+            lambda_(k) = cplx(0.0, lambda_(k).imag());
+        }
+    }
+}
+
 StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
     : cfg_(cfg), switches_(switch_functions(model, cfg)) {
     n_ = static_cast<int>(model.dof());
@@ -197,32 +232,8 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
             A(ne_ + r, ne_ + q) = -MC(r, q);
         }
     }
-    auto what = [&](const std::string& why) {
-        return "StateSpaceSolver(): configuration '" + cfg.spec(model) + "' of model '" + model.name + "': " + why;
-    };
-    auto refuse = [&](const std::string& why) { throw RunError(what(why)); };
-    if (m > 0) {
-        const Eigen::EigenSolver<Eigen::MatrixXd> es(A);
-        if (es.info() != Eigen::Success) refuse("the eigen-solver of the state matrix did not converge");
-        lambda_ = es.eigenvalues();
-        V_ = es.eigenvectors();
-        const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(V_);
-        Vinv_ = lu.inverse();
-        condition_ = V_.cwiseAbs().colwise().sum().maxCoeff() * Vinv_.cwiseAbs().colwise().sum().maxCoeff();
-        if (!(condition_ <= kMaxCondition)) {
-            char text[32];
-            std::snprintf(text, sizeof text, "%.2g", condition_);
-            throw DefectiveModes(what(std::string("its state-space modes are nearly defective (eigenvector condition ") +
-                                      text + " > 200: critically damped motion)"));
-        }
-        const double anorm = A.cwiseAbs().rowwise().sum().maxCoeff();
-        for (int k = 0; k < m; ++k) {
-            // Passive damping (C >= 0): Re lambda <= 0. Rounding may put an undamped
-            // pair a few ulps to the right; it is put on the axis.
-            if (lambda_(k).real() > 1e-12 * anorm) refuse("an eigenvalue of the state matrix has Re > 0");
-            if (lambda_(k).real() > 0.0) lambda_(k) = cplx(0.0, lambda_(k).imag());
-        }
-    }
+    decompose(A, model.alpha < 0.0 || model.beta < 0.0,
+              "StateSpaceSolver(): configuration '" + cfg.spec(model) + "' of model '" + model.name + "': ");
 
     Eigen::MatrixXd bh = Eigen::MatrixXd::Zero(m, nh_);
     if (ne_ > 0)
@@ -259,6 +270,8 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
                     max_step_ = std::min(max_step_, 2 * kPi / t_.h_omega(h));
                 }
             }
+
+    if (growth_ > 0.0) max_step_ = std::min(max_step_, kGrowthHorizon / growth_);
 
     // Per mode and forcing term (mu = 0, +i Omega_h, -i Omega_h): 1/(mu - lambda) and the moduli the bounds use.
     const int nmu = 1 + 2 * nh_;
@@ -494,13 +507,16 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
         const int k = rep_[static_cast<std::size_t>(c)];
         const cplx lam = lambda_(k), el = expc(lam * tau);
         const double ael = std::exp(lam.real() * tau), l = mod_lambda_(k);
+        // A growing mode (negative damping) is largest at the horizon's end.
+        const double grow = lam.real() > 0.0 ? std::exp(lam.real() * max_step_) : 1.0, ahead = ael * grow;
+        const double reach = lam.real() > 0.0 ? ahead : 1.0;
         cplx eta = el * eta0_(k);
-        double mag = ael * mod_eta0_(k), b2 = l * l * mag;
+        double mag = ael * mod_eta0_(k), b2 = l * l * mag * grow;
         if (beta0_(k) != cplx(0.0)) {
             const cplx E = duhamel(-lam, inv_d_(k, 0), tau, el, 1.0);
             eta += beta0_(k) * E;
             mag += mod(beta0_(k) * E);
-            b2 += mod_beta0_(k) * duhamel_bound(l, 0.0, mod_d_(k, 0), mod_sum_(k, 0), ael, s_end);
+            b2 += mod_beta0_(k) * duhamel_bound(l, 0.0, mod_d_(k, 0), mod_sum_(k, 0), ahead, reach, s_end);
         }
         for (int h = 0; h < nh_; ++h) {
             const cplx bh = beta_h_(k, h);
@@ -516,8 +532,8 @@ void StateSpaceSolver::eval(double tau, const SegmentEval& out) const {
             mag += cm * (mod(Ep) + mod(Em));
             // The near-resonant form needs a finite horizon (max_step); a far one never does.
             const double sp = near_(k, 2 * h) ? s_end : kInf, sm = near_(k, 2 * h + 1) ? s_end : kInf;
-            b2 += cm * (duhamel_bound(l, W, mod_d_(k, up), mod_sum_(k, up), ael, sp) +
-                        duhamel_bound(l, W, mod_d_(k, um), mod_sum_(k, um), ael, sm));
+            b2 += cm * (duhamel_bound(l, W, mod_d_(k, up), mod_sum_(k, up), ahead, reach, sp) +
+                        duhamel_bound(l, W, mod_d_(k, um), mod_sum_(k, um), ahead, reach, sm));
         }
         eta_(c) = eta;
         deta_(c) = lam * eta;

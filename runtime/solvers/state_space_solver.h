@@ -37,7 +37,12 @@
 //                     |lambda|^2 (tau + max_step) + |lambda + mu|)
 // (E'' = lambda^2 E + (lambda + mu) e^{mu s} and |E(s)| <= s); max_step is one
 // forcing period where some |mu - lambda| < 0.1 |mu| (near resonance, where the
-// first form is loose or infinite), else infinite.
+// first form is loose or infinite), else infinite. Negative damping (only hsnc
+// modes' EPMC system, -xi M, builds such a model: a file cannot) makes modes
+// with Re lambda > 0 grow: max_step is then at most 0.5 / max Re lambda, and a
+// growing mode's |e^{lambda s}| is taken at the step's end, e^{Re lambda
+// max_step} |e^{lambda tau}| (at most e^{0.5} times its value at tau), and
+// |E(s)| <= s e^{Re lambda s} in the second form.
 //
 // A free translation that no damping resists (a floating component's r with
 // C r = 0) would make A defective (a double zero eigenvalue): it is taken out
@@ -48,8 +53,8 @@
 // Refused (RunError naming the configuration): a V whose condition number
 // exceeds kMaxCondition (A nearly defective: critically damped motion; then
 // DefectiveModes, and the providers take the configuration with the matrix
-// exponential, exponential_solver.h), or an eigenvalue with a positive real
-// part beyond rounding.
+// exponential, exponential_solver.h), or, unless the model's Rayleigh damping is
+// negative, an eigenvalue with a positive real part beyond rounding.
 #pragma once
 
 #include <complex>
@@ -118,6 +123,11 @@ private:
     double scale_s_ = 1.0;  // s of y = [x; v/s]
     double max_step_ = 0.0;
     double condition_ = 0.0;
+    double growth_ = 0.0;  // the largest Re lambda > 0 (negative damping), else 0
+
+    /// lambda_, V_, Vinv_, condition_ and growth_ of the state matrix A; throws as the file
+    /// comment says (`where` begins the message), a growing mode only unless `may_grow`.
+    void decompose(const Eigen::MatrixXd& A, bool may_grow, const std::string& where);
 
     ConfigurationTerms t_;  // masses, friction, K(cfg), C(cfg), constant force, contacts, harmonics
 
