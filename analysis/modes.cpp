@@ -35,26 +35,84 @@ constexpr double kAnchor = 2.0, kMaxAnchor = 64.0;
 constexpr double kDifference = 1e-7;
 
 // A nonlinear mode here is a family of periodic orbits of a conservative model, or of
-// the EPMC system of one with Jenkins elements or Rayleigh damping (the file comment of
+// the EPMC system of one with Jenkins elements or viscous damping (the file comment of
 // hsnc/modes.h): what neither takes is refused by name.
 void refuse_unsupported(const Model& model) {
     const std::string where = std::string(kModes) + "(): " + (model.source.empty() ? model.name : model.source) + ": ";
     auto refuse = [&](const std::string& what) {
         throw InputError(where + what +
-                         ": hsnc modes takes springs, masses, contacts, Jenkins elements and Rayleigh damping; "
-                         "friction on masses, dampers, contact damping and load steps are not supported yet");
+                         ": hsnc modes takes springs, masses, contacts, Jenkins elements and viscous damping "
+                         "(Rayleigh, dampers, a damping matrix, contact damping); friction on masses and load steps "
+                         "are not supported yet");
     };
     for (const Mass& m : model.masses)
         if (m.has_friction) refuse("mass " + m.name + " has friction (mu_k)");
-    if (!model.dampers.empty())
-        refuse(model.dampers.front().from_structure ? "[structure] damping (a damping matrix)" : "[[damper]]");
-    for (const Contact& c : model.contacts)
-        if (c.c != 0.0) refuse("contact " + c.name + " has damping c");
     if (!model.load_steps.empty()) refuse("[[load_step]] " + model.load_steps.front().name);
 }
 
-// Damped modes (EPMC): Jenkins elements or Rayleigh damping.
-bool damped_model(const Model& model) { return !model.jenkins.empty() || model.alpha != 0.0 || model.beta != 0.0; }
+// Damped modes (EPMC): Jenkins elements or viscous damping of any kind.
+bool damped_model(const Model& model) {
+    return !model.jenkins.empty() || model.alpha != 0.0 || model.beta != 0.0 || !model.proportional_damping();
+}
+
+// The linear limit of a damped mode whose C is not Rayleigh's (dampers, a damping matrix):
+// the xi that puts the mode's eigenvalue of (M, C - xi M, K) on the imaginary axis, the
+// frequency omega there (lambda = i omega) and its complex position shape. From the undamped
+// mode (omega0, `shape` mass-normalised) by the secant method on Re lambda(xi), whose
+// derivative is 1/2 to first order (exactly 1/2 with Rayleigh damping, where xi = phi^T C phi);
+// the state scaled as the state-space solver's, y = [x; v/s].
+struct DampedLinearMode {
+    double xi = 0.0, omega = 0.0;
+    Eigen::VectorXcd shape;
+};
+DampedLinearMode damped_linear_mode(const Eigen::MatrixXd& M, const Eigen::MatrixXd& K, const Eigen::MatrixXd& C,
+                                    const Eigen::VectorXd& shape, double omega0, const std::string& cfg) {
+    const Eigen::Index n = M.rows();
+    const Eigen::LLT<Eigen::MatrixXd> llt(M);
+    const Eigen::MatrixXd MK = llt.solve(K), MC = llt.solve(C);
+    const double s = std::sqrt(MK.diagonal().maxCoeff());
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+    A.topRightCorner(n, n) = s * Eigen::MatrixXd::Identity(n, n);
+    A.bottomLeftCorner(n, n) = -MK / s;
+    A.bottomRightCorner(n, n) = -MC;
+    DampedLinearMode d;
+    std::complex<double> near(0.0, omega0);
+    auto re_lambda = [&](double xi) {  // the eigenvalue nearest the last one, Im > 0
+        Eigen::MatrixXd Ax = A;
+        Ax.bottomRightCorner(n, n).diagonal().array() += xi;
+        const Eigen::EigenSolver<Eigen::MatrixXd> es(Ax);
+        if (es.info() != Eigen::Success)
+            throw RunError(std::string(kModes) + "(): the state matrix of configuration " + cfg +
+                           " has no eigenvalues");
+        Eigen::Index best = -1;
+        for (Eigen::Index k = 0; k < 2 * n; ++k)
+            if (es.eigenvalues()(k).imag() > 0 &&
+                (best < 0 || std::abs(es.eigenvalues()(k) - near) < std::abs(es.eigenvalues()(best) - near)))
+                best = k;
+        if (best < 0)
+            throw RunError(std::string(kModes) + "(): the damped mode of configuration " + cfg + " does not oscillate");
+        near = es.eigenvalues()(best);
+        d.omega = near.imag();
+        d.shape = es.eigenvectors().col(best).head(n);
+        return near.real();
+    };
+    double x0 = shape.dot(C * shape), r0 = re_lambda(x0);
+    double x1 = x0 - 2 * r0, r1 = r0;
+    for (int it = 0; it < 60 && r0 != 0.0; ++it) {
+        r1 = re_lambda(x1);
+        if (std::fabs(r1) <= 1e-15 * s || r1 == r0) break;
+        const double next = x1 - r1 * (x1 - x0) / (r1 - r0);
+        x0 = x1;
+        r0 = r1;
+        x1 = next;
+    }
+    if (r0 == 0.0) x1 = x0;
+    if (!(std::fabs(r1) <= 1e-12 * s))
+        throw RunError(std::string(kModes) + "(): the linear limit of the damped mode (configuration " + cfg +
+                       ") was not found: Re lambda " + number_text(r1) + " at xi " + number_text(x1));
+    d.xi = x1;
+    return d;
+}
 
 // The model without its Jenkins elements: its equilibrium is the one with every Jenkins spring unstretched.
 Model without_jenkins(const Model& model) {
@@ -372,8 +430,22 @@ public:
         r.dof = static_cast<std::size_t>(k_);
         r.damped = damped_;
         r.linear_omega = std::sqrt(eq_.omega2(mode));
-        // The linear limit's modal damping c = alpha + beta omega^2: EPMC's xi there.
-        const double xi0 = work.alpha + work.beta * eq_.omega2(mode);
+        // The linear limit's modal damping c = alpha + beta omega^2: EPMC's xi there. With
+        // dampers, the xi and omega where the damped mode's eigenvalue is i omega, and the
+        // mode's complex shape (phase lags between the dofs), scaled to shape_k at dof k.
+        double xi0 = work.alpha + work.beta * eq_.omega2(mode);
+        shape_re_ = shape_;
+        shape_im_ = Eigen::VectorXd::Zero(n_);
+        if (!work.proportional_damping()) {
+            const DampedLinearMode d =
+                damped_linear_mode(field_.M(), stiffness_matrix(work, eq_.cfg), damping_matrix(work, eq_.cfg), shape_,
+                                   r.linear_omega, eq_.cfg.spec(work));
+            xi0 = d.xi;
+            r.linear_omega = d.omega;
+            const Eigen::VectorXcd phi = d.shape * (shape_(k_) / d.shape(k_));
+            shape_re_ = phi.real();
+            shape_im_ = phi.imag();
+        }
         r.linear_damping_ratio = xi0 / (2 * r.linear_omega);
         r.shape.assign(shape_.data(), shape_.data() + n_);
         r.equilibrium.assign(eq_.x.data(), eq_.x.data() + n_);
@@ -411,9 +483,11 @@ public:
             }
         xi_scale_ = r.linear_omega;
         // Where the linear (all stuck) mode first makes a Jenkins element slip: |k (u - s0)| =
-        // F_s with u - s0 = A (w . shape) / shape_k.
+        // F_s with u - s0 = A |w . shape| / shape_k (the complex shape's modulus with dampers).
         for (const Jenkins& e : work.jenkins) {
-            const double wu = std::fabs(along_x(e.direction(), shape_)) / shape_(k_);
+            const double wu =
+                std::abs(std::complex<double>(along_x(e.direction(), shape_re_), along_x(e.direction(), shape_im_))) /
+                shape_(k_);
             if (wu > 0) slip_onset_ = std::min(slip_onset_, e.slip_force / (e.k * wu));
         }
     }
@@ -663,10 +737,12 @@ private:
             g.xi = b.xi;
             g.y = b.y;
             const double q = energy_ ? std::sqrt(2.0) * at / r_.linear_omega : at / shape_(k_);
-            if (damped_)  // passing the equilibrium upward
-                g.y.segment(n_, n_) += r_.linear_omega * q * shape_;
-            else
+            if (damped_) {  // passing the equilibrium upward: x = q Re(-i phi e^{i omega t})
+                g.y.head(n_) += q * shape_im_;
+                g.y.segment(n_, n_) += r_.linear_omega * q * shape_re_;
+            } else {
                 g.y.head(n_) += q * shape_;
+            }
         } else {
             const Orbit& a = history_[history_.size() - 2];
             const double f = (at - b.s) / (b.s - a.s);
@@ -691,10 +767,12 @@ private:
         Orbit g = history_.front();
         g.s = at;
         const double q = at / shape_(k_);
-        g.y.segment(n_, n_) += r_.linear_omega * q * shape_;
+        g.y.head(n_) += q * shape_im_;
+        g.y.segment(n_, n_) += r_.linear_omega * q * shape_re_;
         for (Eigen::Index j = 0; j < nj_; ++j) {
             const Jenkins& e = work_.jenkins[static_cast<std::size_t>(j)];
-            const double wu = along_x(e.direction(), shape_) * q, a = std::fabs(wu), held = e.slip_force / e.k;
+            const double wu = along_x(e.direction(), shape_re_) * q, held = e.slip_force / e.k;
+            const double a = std::abs(std::complex<double>(wu, along_x(e.direction(), shape_im_) * q));
             if (a > held) g.y(2 * n_ + j) -= std::copysign(std::min(a - held, held), wu);
         }
         return g;
@@ -1007,6 +1085,7 @@ private:
     std::vector<std::pair<double, std::unique_ptr<analysis::Flow>>> flows_;  // by xi (flow())
     bool stopped_ = false;                                                    // the progress callback said so
     Eigen::VectorXd shape_;
+    Eigen::VectorXd shape_re_, shape_im_;  // a damped mode's linear shape (complex with dampers; shape_ and 0 else)
     Eigen::Index k_ = 0;
     double rest_potential_ = 0.0;                     // the potential at the equilibrium (energies are above it)
     double xi_scale_ = 1.0;                           // xi's scale: the linear frequency

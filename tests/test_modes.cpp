@@ -397,7 +397,7 @@ TEST(Modes, RefusesWhatItDoesNotTakeByName) {
             EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
         }
     };
-    refused("[[damper]]\nbetween = [\"m\", \"ground\"]\nc = 0.1\n", "[[damper]]");
+    refused("[load]\nm = 0.1\n[[load_step]]\nname = \"off\"\nt = 1.0\nload = { m = 0.0 }\n", "[[load_step]] off");
     refused("[[mass]]\nname = \"f\"\nm = 1.0\nmu_k = 0.1\n[[spring]]\nbetween = [\"f\", \"m\"]\nk = 1.0\n",
             "friction");
     // A free body: no equilibrium to start from.
@@ -568,6 +568,191 @@ TEST(Modes, RayleighDampingAloneGivesTheConservativeBackboneAndTheLinearRatio) {
         EXPECT_NEAR(p.period, bilinear_period(p.amplitude, 4, 12, 0.1), 1e-10 * p.period) << p.amplitude;
         EXPECT_NEAR(p.damping_ratio, 0.2 / (2 * p.omega), 1e-10);
     }
+}
+
+TEST(Modes, AJenkinsJointWithADamperAddsTheDampersRateToXi) {
+    // m = 1 with a damper c: on one dof the EPMC system's net damping is c - xi, so its orbits
+    // are the undamped joint's with xi larger by exactly c (the joint's closed form plus c). The
+    // damper puts the runs on the state-space solver (a model with dampers is not Rayleigh).
+    const double c = 0.04;
+    const Model model = parse_model(
+        "name = \"jenkins-damper\"\n[[mass]]\nname = \"m\"\nm = 1.0\n[[spring]]\nbetween = [\"m\", \"ground\"]\n"
+        "k = 1.0\n[[jenkins]]\nname = \"joint\"\nbetween = [\"m\", \"ground\"]\nk = 3.0\nslip_force = 0.3\n"
+        "[[damper]]\nbetween = [\"m\", \"ground\"]\nc = 0.04\n",
+        "jenkins-damper.toml");
+    ModesOptions o;
+    o.from = 0.05;
+    o.to = 1.0;
+    o.points = 8;
+    const ModesResult r = modes(model, o);
+    ASSERT_EQ(r.status, ModesStatus::ok) << r.message;
+    EXPECT_TRUE(r.damped);
+    EXPECT_NEAR(r.linear_omega, 2.0, 1e-14);
+    EXPECT_NEAR(r.linear_damping_ratio, c / 4, 1e-15);
+    ASSERT_EQ(r.points.size(), 8u);
+    EXPECT_NEAR(r.points.front().omega, 2.0, 1e-12) << "below the slip onset: the stuck oscillator";
+    EXPECT_NEAR(r.points.front().xi, c, 1e-12);
+    for (std::size_t i = 1; i < r.points.size(); ++i) {
+        const ModePoint& p = r.points[i];
+        const JenkinsOrbit e = jenkins_epmc(p.amplitude);
+        EXPECT_NEAR(p.period, static_cast<double>(e.T), 1e-11 * p.period) << p.amplitude;
+        EXPECT_NEAR(p.xi, static_cast<double>(e.xi) + c, 1e-10) << p.amplitude;
+    }
+}
+
+// Two masses (m1 = 1, m2 = 2; k 1 to the ground, 20 between), a damper c = 0.3 from the first
+// to the ground (non-proportional), a stop of stiffness 5 at x2 = 0.1 (kContactDamping adds a
+// dashpot 0.5 to it while closed). The first mode (0.57 rad/s) stiffens toward 1.35 with the
+// stop closed, below a third of the second (5.5): no 3:1 internal resonance on the way.
+const char* kContactDamping = "c = 0.5\n";
+const char* kDampedChain =
+    "name = \"damped-chain\"\n[[mass]]\nname = \"a\"\nm = 1.0\n[[mass]]\nname = \"b\"\nm = 2.0\n"
+    "[[spring]]\nbetween = [\"a\", \"ground\"]\nk = 1.0\n"
+    "[[spring]]\nbetween = [\"a\", \"b\"]\nk = 20.0\n"
+    "[[damper]]\nbetween = [\"a\", \"ground\"]\nc = 0.3\n"
+    "[[contact]]\nname = \"stop\"\nbetween = [\"b\", \"ground\"]\ngap = 0.1\nk = 5.0\n";
+
+// The EPMC system of kDampedChain (C - xi M) from (x, v) over t, by classical RK4 in long double
+// (n steps), the stop's closing and opening located within a step by bisection on the step
+// length: an integrator of its own, sharing nothing with hsnc.
+std::array<long double, 4> damped_chain_rk4(std::array<long double, 4> y, long double xi, long double t, int n,
+                                            long double contact_c = 0) {
+    using R = long double;
+    auto f = [&](const std::array<R, 4>& z, bool closed) {
+        const R x1 = z[0], x2 = z[1], v1 = z[2], v2 = z[3];
+        const R stop = closed ? 5 * (x2 - R(0.1)) + contact_c * v2 : R(0);
+        return std::array<R, 4>{v1, v2, (-x1 - 20 * (x1 - x2) - (R(0.3) - xi) * v1),
+                                (-20 * (x2 - x1) + 2 * xi * v2 - stop) / 2};
+    };
+    auto step = [&](const std::array<R, 4>& z, R h, bool closed) {
+        auto add = [](std::array<R, 4> a, const std::array<R, 4>& b, R s) {
+            for (int i = 0; i < 4; ++i) a[i] += s * b[i];
+            return a;
+        };
+        const auto k1 = f(z, closed), k2 = f(add(z, k1, h / 2), closed), k3 = f(add(z, k2, h / 2), closed),
+                   k4 = f(add(z, k3, h), closed);
+        std::array<R, 4> out = z;
+        for (int i = 0; i < 4; ++i) out[i] += h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
+        return out;
+    };
+    const R h = t / n;
+    bool closed = y[1] > R(0.1);
+    for (int i = 0; i < n; ++i) {
+        std::array<R, 4> next = step(y, h, closed);
+        if ((next[1] > R(0.1)) != closed) {  // the stop switches within this step: where, by bisection
+            R lo = 0, hi = h;
+            for (int b = 0; b < 80; ++b) {
+                const R mid = (lo + hi) / 2;
+                ((step(y, mid, closed)[1] > R(0.1)) == closed ? lo : hi) = mid;
+            }
+            const std::array<R, 4> at = step(y, hi, closed);
+            next = step(at, h - hi, !closed);
+            closed = !closed;
+        }
+        y = next;
+    }
+    return y;
+}
+
+TEST(Modes, ANonProportionalDamperGivesTheClosedFormLinearLimitAndExactOrbitsBeyondTheStop) {
+    // Linear limit: det(K - w^2 M + i w (C - xi M)) = 0, whose imaginary part gives xi = c a22 /
+    // (m1 a22 + m2 a11) (a = K - w^2 M) and whose real part a11 a22 - a12^2 + w^2 xi m2 (c - xi
+    // m1) = 0 the frequency (bisection); the dofs' amplitude ratio |x2/x1| = |a12 / (a22 - i w xi
+    // m2)|. Below the stop the backbone is that linear mode; beyond it each orbit (shooting to
+    // 1e-13), run from its turning point for one period by the RK4 above, comes back to it (1e-12
+    // of the amplitude: measured 1.2e-13), its frequency rising
+    // toward the mode with the stop held closed.
+    using R = long double;
+    const R c = 0.3L, m1 = 1, m2 = 2;
+    auto parts = [&](R w) {
+        const R a11 = 21 - w * w * m1, a22 = 20 - w * w * m2, a12 = -20;
+        const R xi = c * a22 / (m1 * a22 + m2 * a11);
+        return std::array<R, 4>{a11 * a22 - a12 * a12 + w * w * xi * m2 * (c - xi * m1), xi, a12, a22};
+    };
+    R lo = 0.45L, hi = 0.7L;  // about the undamped first mode, 0.577
+    const bool sign_lo = parts(lo)[0] > 0;
+    for (int i = 0; i < 200; ++i) ((parts((lo + hi) / 2)[0] > 0) == sign_lo ? lo : hi) = (lo + hi) / 2;
+    const R w = (lo + hi) / 2;
+    const std::array<R, 4> at = parts(w);
+    const R xi = at[1];
+    const R ratio = std::abs(at[2]) / std::abs(std::complex<R>(at[3], -w * xi * m2));
+
+    const Model model = parse_model(kDampedChain, "damped-chain.toml");
+    ModesOptions o;
+    o.dof = "b";
+    o.from = 0.02;
+    o.to = 0.5;
+    o.points = 12;
+    o.tolerance = 1e-13;
+    const ModesResult r = modes(model, o);
+    ASSERT_EQ(r.status, ModesStatus::ok) << r.message;
+    EXPECT_TRUE(r.damped);
+    EXPECT_NEAR(r.linear_omega, static_cast<double>(w), 1e-12);
+    EXPECT_NEAR(r.linear_damping_ratio, static_cast<double>(xi / (2 * w)), 1e-12);
+    ASSERT_EQ(r.points.size(), 12u);
+    Eigen::Matrix2d M, K;
+    M << 1, 0, 0, 2;
+    K << 21, -20, -20, 25;
+    const double w_closed = std::sqrt(Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix2d>(K, M).eigenvalues()(0));
+    double worst = 0.0, last = static_cast<double>(w);
+    int beyond = 0;
+    for (const ModePoint& p : r.points) {
+        if (p.amplitude <= 0.1 + 1e-9) {  // up to the stop (grazing at 0.1)
+            EXPECT_NEAR(p.omega, static_cast<double>(w), 1e-11) << p.amplitude;
+            EXPECT_NEAR(p.xi, static_cast<double>(xi), 1e-11) << p.amplitude;
+            EXPECT_NEAR(p.peaks[0] / p.peaks[1], static_cast<double>(1 / ratio), 1e-9) << p.amplitude;
+            continue;
+        }
+        ++beyond;
+        EXPECT_NEAR(p.v[1], 0.0, 1e-12 * p.amplitude) << "the turning point of the amplitude dof";
+        const std::array<R, 4> y0{p.x[0], p.x[1], p.v[0], p.v[1]};
+        const std::array<R, 4> y1 = damped_chain_rk4(y0, p.xi, p.period, 40000);
+        for (int i = 0; i < 4; ++i)
+            worst = std::max(worst, static_cast<double>(std::fabs(y1[i] - y0[i])) / p.amplitude);
+        EXPECT_GT(p.omega, last) << "the stop stiffens the mode";
+        EXPECT_LT(p.omega, w_closed) << "below the mode with the stop held closed";
+        last = p.omega;
+    }
+    EXPECT_GE(beyond, 9);
+    EXPECT_LT(worst, 1e-12) << "an orbit that the independent integrator does not close";
+    std::printf("[ info ] damped chain: linear omega %.12g, xi %.12g; orbits beyond the stop close to %.2g\n",
+                static_cast<double>(w), static_cast<double>(xi), worst);
+}
+
+TEST(Modes, ContactDampingTakesMoreOutOnlyWhileTheStopIsClosed) {
+    // kDampedChain with a dashpot in the stop: the same linear limit, a larger xi beyond the stop,
+    // and orbits the RK4 closes as before.
+    const Model plain = parse_model(kDampedChain, "damped-chain.toml");
+    const Model model = parse_model(std::string(kDampedChain) + kContactDamping, "contact-damping.toml");
+    ModesOptions o;
+    o.dof = "b";
+    o.from = 0.02;
+    o.to = 0.5;
+    o.points = 12;
+    o.tolerance = 1e-13;
+    const ModesResult r = modes(model, o), r0 = modes(plain, o);
+    ASSERT_EQ(r.status, ModesStatus::ok) << r.message;
+    ASSERT_EQ(r0.status, ModesStatus::ok) << r0.message;
+    EXPECT_EQ(r.linear_omega, r0.linear_omega);
+    EXPECT_EQ(r.linear_damping_ratio, r0.linear_damping_ratio);
+    ASSERT_EQ(r.points.size(), 12u);
+    ASSERT_EQ(r0.points.size(), 12u);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < r.points.size(); ++i) {
+        const ModePoint& p = r.points[i];
+        if (p.amplitude <= 0.1 + 1e-9) {
+            EXPECT_NEAR(p.xi, r0.points[i].xi, 1e-12) << "open: no contact damping";
+            continue;
+        }
+        EXPECT_GT(p.xi, r0.points[i].xi + 1e-3) << p.amplitude;
+        using R = long double;
+        const std::array<R, 4> y0{p.x[0], p.x[1], p.v[0], p.v[1]};
+        const std::array<R, 4> y1 = damped_chain_rk4(y0, p.xi, p.period, 40000, 0.5L);
+        for (int k = 0; k < 4; ++k)
+            worst = std::max(worst, static_cast<double>(std::fabs(y1[k] - y0[k])) / p.amplitude);
+    }
+    EXPECT_LT(worst, 1e-12);
+    std::printf("[ info ] damped chain with contact damping: orbits close to %.2g\n", worst);
 }
 
 TEST(Modes, DampedModesRefuseEnergyAndNegativeAmplitudes) {

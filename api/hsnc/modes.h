@@ -29,7 +29,8 @@
 // kink). A search that still cannot follow the branch stops with the points
 // found so far and says where.
 //
-// Damped modes. A model with Jenkins elements or Rayleigh damping has no free
+// Damped modes. A model with Jenkins elements or viscous damping (Rayleigh,
+// dampers, a damping matrix, contact damping) has no free
 // periodic orbits: its modes are computed by the extended periodic motion
 // concept (EPMC, Krack 2015): a mass-proportional term -xi M v is added, and
 // xi is one more unknown, the one that makes the damped motion periodic; the
@@ -37,10 +38,13 @@
 // monodromy), and xi / (2 omega) is the mode's equivalent damping ratio at that
 // amplitude (ModePoint::damping_ratio; with mass-proportional damping alone
 // xi = alpha on any backbone, the ratio alpha / (2 omega)). The
-// linear limit is the configuration with every Jenkins element stuck; the
+// linear limit is the configuration with every Jenkins element stuck (with
+// dampers, its xi puts the mode's eigenvalue of (M, C - xi M, K) on the
+// imaginary axis, i linear_omega); the
 // equilibrium is the one with every Jenkins spring unstretched. Runs with
 // negative damping use the Eigen solver (ModesOptions::kernels is then
-// ignored: runtime/solvers/generic_solver.h bounds a growing mode's energy),
+// ignored: runtime/solvers/generic_solver.h and state_space_solver.h bound a
+// growing mode),
 // and dP/dT and dP/dxi come from finite differences (one short run and one
 // period run per Newton step; the orbit itself stays exact).
 #pragma once
@@ -171,10 +175,12 @@ struct ModesResult {
     std::string message;
     int mode = 1;
     std::size_t dof = 0;              ///< the amplitude dof (Model::masses index)
-    bool damped = false;              ///< computed by EPMC (the file comment): Jenkins elements or Rayleigh damping
-    double linear_omega = 0.0;        ///< the linear mode's circular frequency, rad/s (Jenkins elements stuck)
-    double linear_damping_ratio = 0.0;  ///< its damping ratio (alpha + beta omega^2) / (2 omega)
-    std::vector<double> shape;        ///< its shape, mass-normalised, shape[dof] > 0
+    bool damped = false;              ///< computed by EPMC (the file comment): Jenkins elements or viscous damping
+    /// The linear mode's circular frequency, rad/s (Jenkins elements stuck; with dampers the
+    /// damped mode's, where its eigenvalue with C - xi M is i omega)
+    double linear_omega = 0.0;
+    double linear_damping_ratio = 0.0;  ///< its xi / (2 omega): (alpha + beta omega^2) / (2 omega) when Rayleigh
+    std::vector<double> shape;          ///< its undamped shape, mass-normalised, shape[dof] > 0
     std::vector<double> equilibrium;  ///< the static equilibrium x_eq
     std::string configuration;        ///< the equilibrium's configuration (Configuration::spec)
     std::vector<double> sliders;      ///< the Jenkins sliders' positions at the equilibrium (springs unstretched)

@@ -71,9 +71,22 @@ def test_refuses_by_argument(kwargs, word):
         hsnc.modes(hsnc.Model.from_file(example("chain-stops.toml")), **kwargs)
 
 
-def test_refuses_a_damper():
+def test_a_damper_makes_the_mode_damped_with_xi_its_rate():
+    """On one dof the EPMC term -xi m v cancels a damper c exactly: xi = c/m at every
+    amplitude, and the orbits are the conservative closed form's."""
     text = open(example("bilinear-gap.toml")).read() + '\n[[damper]]\nbetween = ["m", "ground"]\nc = 0.1\n'
-    with pytest.raises(hsnc.InputError, match=r"\[\[damper\]\]"):
+    r = hsnc.modes(hsnc.Model.from_string(text), 0.6, start=0.03, points=8)
+    assert r["status"] == "ok" and r["damped"]
+    assert r["linear_damping_ratio"] == pytest.approx(0.1 / (2 * 2.0), rel=1e-14)
+    assert np.allclose(r["xi"], 0.1, rtol=1e-10, atol=0)
+    closed = np.array([bilinear_period(a) for a in r["amplitude"]])
+    assert np.allclose(r["period"], closed, rtol=1e-10, atol=0)
+
+
+def test_refuses_friction_on_a_mass():
+    text = open(example("bilinear-gap.toml")).read() + '\n[[mass]]\nname = "f"\nm = 1.0\nmu_k = 0.1\n' \
+        '[[spring]]\nbetween = ["f", "m"]\nk = 1.0\n'
+    with pytest.raises(hsnc.InputError, match="friction"):
         hsnc.modes(hsnc.Model.from_string(text), 0.2)
 
 
