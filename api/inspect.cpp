@@ -348,12 +348,13 @@ void inspect_state_space(const Model& model, const Configuration& cfg, Format fm
                    "} = " + Printer::format_number(xi) + " \\]");
     }
     if (solver)
-        p.line("eigenvector condition ||V|| ||V^-1|| = " + Printer::format_number(solver->condition()) +
+        p.line("eigenvector condition ||W|| ||W^-1|| (energy-scaled) = " + Printer::format_number(solver->condition()) +
                    (solver->rigid_translations() > 0
                         ? "; " + std::to_string(solver->rigid_translations()) +
                               " free translation(s) that no damping resists taken out of the state (q'' = r^T f / m)"
                         : std::string()),
-               "Eigenvector condition $\\|V\\| \\|V^{-1}\\| = " + Printer::format_number(solver->condition()) + "$.");
+               "Eigenvector condition (energy-scaled) $\\|W\\| \\|W^{-1}\\| = " +
+                   Printer::format_number(solver->condition()) + "$.");
     p.heading("Switch functions (runtime/segment.h order)", "Switch functions");
     const std::vector<SwitchFunction> sw = switch_functions(model, cfg);
     for (std::size_t f = 0; f < sw.size(); ++f) {

@@ -163,24 +163,53 @@ Eigen::MatrixXd StateSpaceSolver::rigid_basis(const Model& model, const Configur
     return MF;
 }
 
-void StateSpaceSolver::decompose(const Eigen::MatrixXd& A, bool may_grow, const std::string& where) {
+void StateSpaceSolver::decompose(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Me, const Eigen::MatrixXd& Ke,
+                                 bool may_grow, const std::string& where) {
     const auto m = A.rows();
     growth_ = 0.0;
     if (m == 0) return;
-    const Eigen::EigenSolver<Eigen::MatrixXd> es(A);
+    // The energy scaling z = B y, B = diag(L^T / s, R^T) (Ke = L L^T, Me = R R^T): B A B^-1 =
+    // [0, L^T R^-T; -R^-1 L, -R^-1 Ce R^-T] is skew-symmetric but for the damping, so its
+    // eigenvectors are orthogonal for undamped modes and lose conditioning only as modes near
+    // critical damping, not with the spread of the frequencies (y's single s leaves a mode of
+    // omega_k a velocity half omega_k / s of its position half: a condition ~ omega_max /
+    // omega_1, 3e3 on a 16-dof cantilever). Ke singular (a translation a damper alone holds):
+    // y itself.
+    Eigen::MatrixXd B = Eigen::MatrixXd::Identity(m, m), Binv = B;
+    const Eigen::LLT<Eigen::MatrixXd> lk(Ke), lm(Me);
+    if (lk.info() == Eigen::Success && lm.info() == Eigen::Success) {
+        const Eigen::VectorXd d = lk.matrixL().toDenseMatrix().diagonal();
+        if (d.minCoeff() > 1e-7 * d.maxCoeff()) {  // a regular Ke, not one regular by rounding only
+            const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(ne_, ne_);
+            B.topLeftCorner(ne_, ne_) = lk.matrixU().toDenseMatrix() / scale_s_;
+            B.bottomRightCorner(ne_, ne_) = lm.matrixU().toDenseMatrix();
+            Binv.topLeftCorner(ne_, ne_) = scale_s_ * lk.matrixU().solve(I);
+            Binv.bottomRightCorner(ne_, ne_) = lm.matrixU().solve(I);
+        }
+    }
+    const Eigen::MatrixXd Ab = B * A * Binv;
+    const Eigen::EigenSolver<Eigen::MatrixXd> es(Ab);
     if (es.info() != Eigen::Success) throw RunError(where + "the eigen-solver of the state matrix did not converge");
     lambda_ = es.eigenvalues();
-    V_ = es.eigenvectors();
-    const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(V_);
-    Vinv_ = lu.inverse();
-    condition_ = V_.cwiseAbs().colwise().sum().maxCoeff() * Vinv_.cwiseAbs().colwise().sum().maxCoeff();
+    const Eigen::MatrixXcd& W = es.eigenvectors();
+    const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(W);
+    const Eigen::MatrixXcd Winv = lu.inverse();
+    condition_ = W.cwiseAbs().colwise().sum().maxCoeff() * Winv.cwiseAbs().colwise().sum().maxCoeff();
+    // V = B^-1 W and V^-1 = W^-1 B, real and imaginary parts apart so that a conjugate pair's
+    // columns (rows) stay exactly conjugate.
+    V_.resize(m, m);
+    V_.real() = Binv * W.real();
+    V_.imag() = Binv * W.imag();
+    Vinv_.resize(m, m);
+    Vinv_.real() = Winv.real() * B;
+    Vinv_.imag() = Winv.imag() * B;
     if (!(condition_ <= kMaxCondition)) {
         char text[32];
         std::snprintf(text, sizeof text, "%.2g", condition_);
         throw DefectiveModes(where + "its state-space modes are nearly defective (eigenvector condition " + text +
                              " > 200: critically damped motion)");
     }
-    const double anorm = A.cwiseAbs().rowwise().sum().maxCoeff();
+    const double anorm = Ab.cwiseAbs().rowwise().sum().maxCoeff();
     for (Eigen::Index k = 0; k < m; ++k) {
         // Passive damping (C >= 0): Re lambda <= 0. Rounding may put an undamped pair a few ulps
         // to the right; it is put on the axis. Negative damping (hsnc modes' EPMC) grows.
@@ -232,7 +261,7 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
             A(ne_ + r, ne_ + q) = -MC(r, q);
         }
     }
-    decompose(A, model.alpha < 0.0 || model.beta < 0.0,
+    decompose(A, Me, Ke, model.alpha < 0.0 || model.beta < 0.0,
               "StateSpaceSolver(): configuration '" + cfg.spec(model) + "' of model '" + model.name + "': ");
 
     Eigen::MatrixXd bh = Eigen::MatrixXd::Zero(m, nh_);

@@ -50,6 +50,12 @@
 // with q_j'' = r_j^T f(t) / m_j in closed form (R^T K = R^T C = 0), and the
 // state above is written for e (mass T^T M T, stiffness T^T K T, ...).
 //
+// A is decomposed in the energy scaling z = B y, B = diag(L^T/s, R^T) (K_e = L
+// L^T, M_e = R R^T, when K_e is regular), where undamped modes are orthogonal:
+// V = B^-1 W from B A B^-1's eigenvectors W, and the condition below is W's.
+// (In y itself a mode's velocity half is omega_k/s of its position half, and
+// V's condition grows as omega_max/omega_1: 3e3 on a 16-dof cantilever.)
+//
 // Refused (RunError naming the configuration): a V whose condition number
 // exceeds kMaxCondition (A nearly defective: critically damped motion; then
 // DefectiveModes, and the providers take the configuration with the matrix
@@ -82,8 +88,9 @@ public:
 
 class StateSpaceSolver final : public SegmentSolver {
 public:
-    /// Largest accepted condition number ||V||_1 ||V^-1||_1 of the eigenvector
-    /// matrix. Near critical damping the modal form loses accuracy much faster
+    /// Largest accepted condition number ||W||_1 ||W^-1||_1 of the energy-scaled
+    /// eigenvector matrix (the file comment; for one dof B = sqrt(m) I, so W's
+    /// condition is V's). Near critical damping the modal form loses accuracy much faster
     /// than log10 of it (a 1-DOF oscillator against the matrix exponential,
     /// tests/test_dampers.cpp: condition 141 -> 1e-16, 447 -> 8.5e-14, 4.5e4
     /// -> 1.7e-9 of a 0.03 m motion, underdamped side); beyond this bound the
@@ -108,7 +115,7 @@ public:
     /// The damped modes for a reader: one eigenvalue of each conjugate pair (Im > 0)
     /// and every real one, by |lambda| ascending.
     std::vector<std::complex<double>> damped_modes() const;
-    /// ||V||_1 ||V^-1||_1 of this configuration.
+    /// ||W||_1 ||W^-1||_1 of this configuration (W the energy-scaled eigenvectors).
     double condition() const { return condition_; }
     /// Free translations taken out of the state (no damping resists them).
     std::size_t rigid_translations() const { return rigid_.size(); }
@@ -125,9 +132,11 @@ private:
     double condition_ = 0.0;
     double growth_ = 0.0;  // the largest Re lambda > 0 (negative damping), else 0
 
-    /// lambda_, V_, Vinv_, condition_ and growth_ of the state matrix A; throws as the file
-    /// comment says (`where` begins the message), a growing mode only unless `may_grow`.
-    void decompose(const Eigen::MatrixXd& A, bool may_grow, const std::string& where);
+    /// lambda_, V_, Vinv_, condition_ and growth_ of the state matrix A (of e's mass Me and
+    /// stiffness Ke); throws as the file comment says (`where` begins the message), a growing
+    /// mode only unless `may_grow`.
+    void decompose(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Me, const Eigen::MatrixXd& Ke, bool may_grow,
+                   const std::string& where);
 
     ConfigurationTerms t_;  // masses, friction, K(cfg), C(cfg), constant force, contacts, harmonics
 
