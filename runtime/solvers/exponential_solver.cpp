@@ -33,10 +33,34 @@ ExponentialSolver::ExponentialSolver(const Model& model, const Configuration& cf
     x_fix_ = fseg_ = Eigen::VectorXd::Zero(n_);
     slider_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(t_.jenkins.size()));
     theta_ = sn_ = cs_ = Eigen::VectorXd::Zero(nh_);
-    z_ = zmag_ = Eigen::VectorXd::Zero(m_);
+    z_ = zb_ = zbmag_ = zmag_ = Eigen::VectorXd::Zero(m_);
     xmag_ = vmag_ = Eigen::VectorXd::Zero(n_);
     if (model.coupled_mass())  // a coupled M_F: the rows of the state matrix are M_F^-1 times the forces
         minv_ = mass_matrix(model, free_).llt().solve(Eigen::MatrixXd::Identity(nf_, nf_));
+    balance(model);
+}
+
+void ExponentialSolver::balance(const Model& model) {
+    if (nf_ == 0) return;
+    Eigen::MatrixXd KF(nf_, nf_), MF = Eigen::MatrixXd::Zero(nf_, nf_);
+    for (int r = 0; r < nf_; ++r)
+        for (int q = 0; q < nf_; ++q) KF(r, q) = t_.K(free_[r], free_[q]);
+    if (model.coupled_mass())
+        MF = mass_matrix(model, free_);
+    else
+        for (int r = 0; r < nf_; ++r) MF(r, r) = t_.mass(free_[r]);
+    const Eigen::LLT<Eigen::MatrixXd> lk(KF), lm(MF);
+    if (lk.info() != Eigen::Success || lm.info() != Eigen::Success) return;
+    const Eigen::VectorXd d = lk.matrixL().toDenseMatrix().diagonal();
+    if (!(d.minCoeff() > 1e-7 * d.maxCoeff())) return;  // K_FF regular by rounding only
+    D_ = Eigen::MatrixXd::Identity(m_, m_);
+    Dinv_ = D_;
+    const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(nf_, nf_);
+    D_.topLeftCorner(nf_, nf_) = lk.matrixU().toDenseMatrix();
+    D_.block(nf_, nf_, nf_, nf_) = lm.matrixU().toDenseMatrix();
+    Dinv_.topLeftCorner(nf_, nf_) = lk.matrixU().solve(I);
+    Dinv_.block(nf_, nf_, nf_, nf_) = lm.matrixU().solve(I);
+    absDinv_ = Dinv_.cwiseAbs();
 }
 
 void ExponentialSolver::setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) {
@@ -89,8 +113,16 @@ void ExponentialSolver::setup(double t0, double t0_lo, const double* x0, const d
         z0_(sine(h)) = std::sin(theta_(h));
         z0_(sine(h) + 1) = std::cos(theta_(h));
     }
-    absz0_ = z0_.cwiseAbs();
-    const double norm = Z_.cwiseAbs().rowwise().sum().maxCoeff();
+    // The exponential's generator, energy-scaled where balance() found D: Zb = D Z D^-1.
+    if (D_.size() > 0) {
+        Zb_ = D_ * Z_ * Dinv_;
+        zb0_ = D_ * z0_;
+    } else {
+        Zb_ = Z_;
+        zb0_ = z0_;
+    }
+    absz0_ = zb0_.cwiseAbs();
+    const double norm = Zb_.cwiseAbs().rowwise().sum().maxCoeff();
     max_step_ = norm > 0.0 ? 1.0 / norm : std::numeric_limits<double>::infinity();
 
     // Each switch function's linear part L_f over z: g(e_k) - g(0), the affine
@@ -123,13 +155,22 @@ void ExponentialSolver::setup(double t0, double t0_lo, const double* x0, const d
         values(Eigen::VectorXd::Unit(m_, k), gk);
         L.col(k) = gk - g0;
     }
-    bound_row_ = (L * Z_ * Z_).cwiseAbs().rowwise().sum() * (kE * 1.01);
+    // g = L z + g0 = L D^-1 zb: g'' = L D^-1 Zb^2 zb.
+    bound_row_ =
+        ((D_.size() > 0 ? Eigen::MatrixXd(L * Dinv_) : L) * Zb_ * Zb_).cwiseAbs().rowwise().sum() * (kE * 1.01);
 }
 
 void ExponentialSolver::eval(double tau, const SegmentEval& out) const {
-    E_ = (Z_ * tau).exp();
-    z_.noalias() = E_ * z0_;
+    E_ = (Zb_ * tau).exp();
+    zb_.noalias() = E_ * zb0_;
     zmag_.noalias() = E_.cwiseAbs() * absz0_;
+    if (D_.size() > 0) {  // back from the energy scaling: z = D^-1 zb, |z| <= |D^-1| |zb|
+        z_.noalias() = Dinv_ * zb_;
+        zbmag_ = zmag_;
+        zmag_.noalias() = absDinv_ * zbmag_;
+    } else {
+        z_ = zb_;
+    }
     write_at_rest(x_fix_, out, xmag_, vmag_);
     for (int h = 0; h < nh_; ++h) {
         const double ph = t_.h_omega(h) * tau + theta_(h);
@@ -156,7 +197,7 @@ void ExponentialSolver::eval(double tau, const SegmentEval& out) const {
     // columns of 1 are 0): its norm bounds g'' and the bound decays with the
     // motion (with the 1 in it, a creep into equilibrium took steps ever shorter
     // against a fixed bound: the search did not converge).
-    const double zmax = (free_offset_ && nh_ == 0 ? z_.head(2 * nf_) : z_).cwiseAbs().maxCoeff();
+    const double zmax = (free_offset_ && nh_ == 0 ? zb_.head(2 * nf_) : zb_).cwiseAbs().maxCoeff();
     for (int f = 0; f < ns_; ++f) {
         double g, dg, scale;
         switch_value(switches_[static_cast<std::size_t>(f)], t_, t_.coupled() ? frel_ : fseg_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
