@@ -139,6 +139,91 @@ std::vector<DD> upper_solve(const std::vector<std::vector<DD>>& L, std::vector<D
     return b;
 }
 
+/// The lower Cholesky factor of a symmetric A, or none where A is not positive
+/// definite or is regular by rounding only (a diagonal of the factor below 1e-7
+/// of its largest).
+std::vector<std::vector<DD>> cholesky(const std::vector<std::vector<DD>>& A) {
+    const std::size_t n = A.size();
+    std::vector<std::vector<DD>> L(n, std::vector<DD>(n));
+    double lo = INFINITY, hi = 0.0;
+    for (std::size_t r = 0; r < n; ++r)
+        for (std::size_t c = 0; c <= r; ++c) {
+            DD sum = A[r][c];
+            for (std::size_t k = 0; k < c; ++k) sum -= L[r][k] * L[c][k];
+            if (r != c) {
+                L[r][c] = sum / L[c][c];
+                continue;
+            }
+            if (!(sum > DD(0.0))) return {};
+            L[r][r] = sqrt(sum);
+            lo = std::min(lo, L[r][r].to_double());
+            hi = std::max(hi, L[r][r].to_double());
+        }
+    if (!(lo > 1e-7 * hi)) return {};
+    return L;
+}
+
+/// The state matrix in the energy scaling (state_space_solver.h): with K = Uk^T Uk and
+/// M = Um^T Um (Lk, Lm their lower factors, U = L^T), zb = (Uk x, Um v) obeys zb' = S zb,
+/// S = [0, G; -G^T, -Um^-T C Um^-1], G = Uk Um^-1: skew-symmetric but for the damping, so that
+/// the eigenvectors' condition measures closeness to critical damping, not the spread of the
+/// natural frequencies (in (x, v/s) a finite-element structure's read as defective). False
+/// (nothing set) where K is singular.
+bool energy_scaled(const std::vector<std::vector<DD>>& K, const std::vector<std::vector<DD>>& C,
+                   const std::vector<std::vector<DD>>& M, std::vector<std::vector<DD>>& Lk,
+                   std::vector<std::vector<DD>>& Lm, std::vector<std::vector<DD>>& S) {
+    const std::size_t nf = K.size();
+    Lk = cholesky(K);
+    Lm = cholesky(M);
+    if (nf == 0 || Lk.empty() || Lm.empty()) return false;
+    std::vector<std::vector<DD>> Uminv(nf);  // columns of Um^-1 = Lm^-T
+    for (std::size_t c = 0; c < nf; ++c) {
+        std::vector<DD> e(nf);
+        e[c] = DD(1.0);
+        Uminv[c] = upper_solve(Lm, std::move(e));
+    }
+    S.assign(2 * nf, std::vector<DD>(2 * nf));
+    for (std::size_t r = 0; r < nf; ++r)
+        for (std::size_t c = 0; c < nf; ++c) {
+            DD g(0.0), cb(0.0);
+            for (std::size_t k = r; k < nf; ++k) g += Lk[k][r] * Uminv[c][k];  // (Uk Um^-1)[r][c]
+            for (std::size_t a = 0; a < nf; ++a)
+                for (std::size_t b = 0; b < nf; ++b) cb += Uminv[r][a] * C[a][b] * Uminv[c][b];
+            S[r][nf + c] = g;
+            S[nf + c][r] = -g;
+            S[nf + r][nf + c] = -cb;
+        }
+    return true;
+}
+
+/// Eigenvectors and the inverse's rows of energy_scaled()'s S back to z = (x, v): psi =
+/// (Uk^-1 psi_x, Um^-1 psi_v), l = (l_x Uk, l_v Um).
+void energy_unscaled(const std::vector<std::vector<DD>>& Lk, const std::vector<std::vector<DD>>& Lm,
+                     DdComplexEigen& eig) {
+    const std::size_t nf = Lk.size();
+    auto part = [&](const std::vector<DDComplex>& z, std::size_t at, bool im) {
+        std::vector<DD> p(nf);
+        for (std::size_t i = 0; i < nf; ++i) p[i] = im ? z[at + i].im : z[at + i].re;
+        return p;
+    };
+    for (std::size_t k = 0; k < eig.vectors.size(); ++k) {
+        std::vector<DDComplex>& v = eig.vectors[k];
+        std::vector<DDComplex>& l = eig.inverse[k];
+        for (std::size_t half = 0; half < 2; ++half) {
+            const auto& L = half == 0 ? Lk : Lm;
+            const std::size_t at = half * nf;
+            const std::vector<DD> re = upper_solve(L, part(v, at, false)), im = upper_solve(L, part(v, at, true));
+            const std::vector<DD> lre = part(l, at, false), lim = part(l, at, true);
+            for (std::size_t c = 0; c < nf; ++c) {
+                v[at + c] = DDComplex(re[c], im[c]);
+                DD a(0.0), b(0.0);  // (l U)_c = sum_{r <= c} l_r L[c][r]
+                for (std::size_t r = 0; r <= c; ++r) a += lre[r] * L[c][r], b += lim[r] * L[c][r];
+                l[at + c] = DDComplex(a, b);
+            }
+        }
+    }
+}
+
 /// The pseudo-modes, static inverse and harmonic particular parts of a
 /// configuration with dampers (StateSpaceData, derivation.h), in DD.
 void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& group, const std::vector<DD>& mass) {
@@ -166,20 +251,27 @@ void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& grou
             for (std::size_t r = 0; r < nf; ++r) MK[r][c] = k[r], MC[r][c] = cc[r];
         }
     }
-    // Balanced as the state-space solver balances it: y = (x, v / s), s the power of 2
-    // nearest the largest sqrt(K_rr / m_r) (else C_rr / m_r), so that the eigenvectors'
-    // condition measures the modes, not the units (unbalanced, a 16-mass chain's
-    // configurations went from condition ~10 to above 200).
+    // Balanced as the state-space solver balances it: in the energy scaling where K_FF is
+    // regular (energy_scaled()), else y = (x, v / s), s the power of 2 nearest the largest
+    // sqrt(K_rr / m_r) (else C_rr / m_r), so that the eigenvectors' condition measures the
+    // modes, not the units (unbalanced, a 16-mass chain's configurations went from condition
+    // ~10 to above 200).
     double w2 = 0.0, rate = 0.0;
     for (std::size_t r = 0; r < nf; ++r) {
         w2 = std::max(w2, (K[r][r] / mass[r]).to_double());
         rate = std::max(rate, (C[r][r] / mass[r]).to_double());
     }
     const double s_double = w2 > 0.0 ? std::sqrt(w2) : rate > 0.0 ? rate : 1.0;
-    const DD s_scale(std::ldexp(1.0, static_cast<int>(std::lround(std::log2(s_double)))));  // exact
-    std::vector<std::vector<DD>> S(ns, std::vector<DD>(ns));
+    // Where K_FF is regular, the energy scaling instead (energy_scaled()), s = 1.
+    std::vector<std::vector<DD>> S(ns, std::vector<DD>(ns)), Lk, Lm, Mfull = Mff;
+    if (!coupled) {
+        Mfull.assign(nf, std::vector<DD>(nf));
+        for (std::size_t r = 0; r < nf; ++r) Mfull[r][r] = mass[r];
+    }
+    const bool scaled = energy_scaled(K, C, Mfull, Lk, Lm, S);
+    const DD s_scale(scaled ? 1.0 : std::ldexp(1.0, static_cast<int>(std::lround(std::log2(s_double)))));  // exact
     double norm = 0.0;
-    for (std::size_t r = 0; r < nf; ++r) {
+    for (std::size_t r = 0; r < nf && !scaled; ++r) {
         S[r][nf + r] = s_scale;
         for (std::size_t c = 0; c < nf; ++c) {
             if (coupled) {
@@ -199,6 +291,7 @@ void derive_state_space(Derivation& d, const std::vector<std::vector<int>>& grou
     } catch (const RunError& e) {
         throw NotDerivable(where + e.what());
     }
+    if (scaled) energy_unscaled(Lk, Lm, eig);
     StateSpaceData& st = d.state;
     for (std::size_t k = 0; k < ns; ++k) {  // back to z = (x, v): Psi_v = s Psi_y,v, L_v = L_y,v / s
         st.values.push_back(eig.values[k]);
