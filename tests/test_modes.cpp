@@ -408,11 +408,12 @@ TEST(Modes, RefusesWhatItDoesNotTakeByName) {
 }
 
 // m = 1 on k = 1, a Jenkins element k_t = 3, F_s = 0.3 to the ground: stuck omega = 2, free omega = 1,
-// slip from the amplitude F_s / k_t = 0.1 on.
-Model jenkins_oscillator() {
+// slip from the amplitude F_s / k_t = 0.1 on; `extra` TOML appended.
+Model jenkins_oscillator(const std::string& extra = "") {
     return parse_model(
         "name = \"jenkins-1dof\"\n[[mass]]\nname = \"m\"\nm = 1.0\n[[spring]]\nbetween = [\"m\", \"ground\"]\n"
-        "k = 1.0\n[[jenkins]]\nname = \"joint\"\nbetween = [\"m\", \"ground\"]\nk = 3.0\nslip_force = 0.3\n",
+        "k = 1.0\n[[jenkins]]\nname = \"joint\"\nbetween = [\"m\", \"ground\"]\nk = 3.0\nslip_force = 0.3\n" +
+            extra,
         "jenkins-1dof.toml");
 }
 
@@ -575,11 +576,7 @@ TEST(Modes, AJenkinsJointWithADamperAddsTheDampersRateToXi) {
     // are the undamped joint's with xi larger by exactly c (the joint's closed form plus c). The
     // damper puts the runs on the state-space solver (a model with dampers is not Rayleigh).
     const double c = 0.04;
-    const Model model = parse_model(
-        "name = \"jenkins-damper\"\n[[mass]]\nname = \"m\"\nm = 1.0\n[[spring]]\nbetween = [\"m\", \"ground\"]\n"
-        "k = 1.0\n[[jenkins]]\nname = \"joint\"\nbetween = [\"m\", \"ground\"]\nk = 3.0\nslip_force = 0.3\n"
-        "[[damper]]\nbetween = [\"m\", \"ground\"]\nc = 0.04\n",
-        "jenkins-damper.toml");
+    const Model model = jenkins_oscillator("[[damper]]\nbetween = [\"m\", \"ground\"]\nc = 0.04\n");
     ModesOptions o;
     o.from = 0.05;
     o.to = 1.0;
