@@ -182,13 +182,16 @@ bool energy_scaled(const std::vector<std::vector<DD>>& K, const std::vector<std:
         e[c] = DD(1.0);
         Uminv[c] = upper_solve(Lm, std::move(e));
     }
+    std::vector<std::vector<DD>> CU(nf, std::vector<DD>(nf));  // C Um^-1, by columns
+    for (std::size_t c = 0; c < nf; ++c)
+        for (std::size_t a = 0; a < nf; ++a)
+            for (std::size_t b = 0; b <= c; ++b) CU[c][a] += C[a][b] * Uminv[c][b];  // Um^-1 is upper
     S.assign(2 * nf, std::vector<DD>(2 * nf));
     for (std::size_t r = 0; r < nf; ++r)
         for (std::size_t c = 0; c < nf; ++c) {
             DD g(0.0), cb(0.0);
             for (std::size_t k = r; k < nf; ++k) g += Lk[k][r] * Uminv[c][k];  // (Uk Um^-1)[r][c]
-            for (std::size_t a = 0; a < nf; ++a)
-                for (std::size_t b = 0; b < nf; ++b) cb += Uminv[r][a] * C[a][b] * Uminv[c][b];
+            for (std::size_t a = 0; a <= r; ++a) cb += Uminv[r][a] * CU[c][a];  // (Um^-T C Um^-1)[r][c]
             S[r][nf + c] = g;
             S[nf + c][r] = -g;
             S[nf + r][nf + c] = -cb;
