@@ -41,18 +41,21 @@ void refuse_unsupported(const Model& model) {
     const std::string where = std::string(kModes) + "(): " + (model.source.empty() ? model.name : model.source) + ": ";
     auto refuse = [&](const std::string& what) {
         throw InputError(where + what +
-                         ": hsnc modes takes springs, masses, contacts, Jenkins elements and viscous damping "
-                         "(Rayleigh, dampers, a damping matrix, contact damping); friction on masses and load steps "
-                         "are not supported yet");
+                         ": hsnc modes takes springs, masses, contacts, Jenkins elements, friction against the ground "
+                         "and viscous damping (Rayleigh, dampers, a damping matrix, contact damping); friction "
+                         "between two bodies and load steps are not supported yet");
     };
     for (const Mass& m : model.masses)
-        if (m.has_friction) refuse("mass " + m.name + " has friction (mu_k)");
+        if (m.has_friction && m.partner != kGround) refuse("mass " + m.name + " has friction against another body");
     if (!model.load_steps.empty()) refuse("[[load_step]] " + model.load_steps.front().name);
 }
 
-// Damped modes (EPMC): Jenkins elements or viscous damping of any kind.
+// Damped modes (EPMC): Jenkins elements, friction or viscous damping of any kind.
 bool damped_model(const Model& model) {
-    return !model.jenkins.empty() || model.alpha != 0.0 || model.beta != 0.0 || !model.proportional_damping();
+    const bool friction =
+        std::any_of(model.masses.begin(), model.masses.end(), [](const Mass& m) { return m.has_friction; });
+    return friction || !model.jenkins.empty() || model.alpha != 0.0 || model.beta != 0.0 ||
+           !model.proportional_damping();
 }
 
 // The linear limit of a damped mode whose C is not Rayleigh's (dampers, a damping matrix):
@@ -393,18 +396,46 @@ struct Orbit {
     Eigen::VectorXd y;
 };
 
+// The dofs that move in the linear limit: all but the masses with friction (held there).
+std::vector<Eigen::Index> moving_dofs(const Model& model) {
+    std::vector<Eigen::Index> free;
+    for (std::size_t i = 0; i < model.masses.size(); ++i)
+        if (!model.masses[i].has_friction) free.push_back(static_cast<Eigen::Index>(i));
+    return free;
+}
+
+// A's rows and columns `at`.
+Eigen::MatrixXd sub(const Eigen::MatrixXd& A, const std::vector<Eigen::Index>& at) {
+    Eigen::MatrixXd S(at.size(), at.size());
+    for (std::size_t r = 0; r < at.size(); ++r)
+        for (std::size_t c = 0; c < at.size(); ++c)
+            S(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = A(at[r], at[c]);
+    return S;
+}
+
 // The linear modes at the equilibrium: of the model itself, or, with Jenkins
-// elements, of the configuration with all of them stuck (eq: the model without them).
+// elements or friction, of the configuration with all of them stuck (eq: the model
+// without the Jenkins elements), a stuck mass held still (its rows of the shapes 0).
 void stuck_modes(const Model& work, Field& field, Equilibrium& eq) {
-    if (work.jenkins.empty()) return;
+    const std::vector<Eigen::Index> free = moving_dofs(work);
+    const auto n = static_cast<Eigen::Index>(work.dof());
+    if (work.jenkins.empty() && free.size() == work.dof()) return;
+    if (free.empty())
+        throw InputError(std::string(kModes) + "(): " + (work.source.empty() ? work.name : work.source) +
+                         ": every mass has friction: nothing moves while they stick (no linear mode to start from)");
     Configuration cfg = Configuration::all_open(work);
     cfg.closed = eq.cfg.closed;
-    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> ges(stiffness_matrix(work, cfg), field.M());
+    for (Eigen::Index i = 0; i < n; ++i)
+        if (work.masses[static_cast<std::size_t>(i)].has_friction) cfg.stuck[static_cast<std::size_t>(i)] = true;
+    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> ges(sub(stiffness_matrix(work, cfg), free),
+                                                                        sub(field.M(), free));
     if (ges.info() != Eigen::Success)
         throw RunError(std::string(kModes) + "(): the eigenproblem (K, M) of configuration " + cfg.spec(work) +
                        " failed");
     eq.omega2 = ges.eigenvalues();
-    eq.shapes = ges.eigenvectors();
+    eq.shapes = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(free.size()));
+    for (std::size_t r = 0; r < free.size(); ++r)
+        eq.shapes.row(free[r]) = ges.eigenvectors().row(static_cast<Eigen::Index>(r));
     eq.cfg = cfg;
 }
 
@@ -424,6 +455,10 @@ public:
           damped_(damped_model(work)) {
         stuck_modes(work, field_, eq_);
         const Eigen::Index mode = o.mode - 1;
+        if (mode >= eq_.omega2.size())
+            throw OptionError(kModes, "mode", std::to_string(o.mode),
+                              "must be 1 to " + std::to_string(eq_.omega2.size()) +
+                                  " (the dofs that move while every friction mass sticks)");
         shape_ = eq_.shapes.col(mode);
         k_ = amplitude_dof(work, o, shape_);
         r.mode = o.mode;
@@ -436,13 +471,18 @@ public:
         double xi0 = work.alpha + work.beta * eq_.omega2(mode);
         shape_re_ = shape_;
         shape_im_ = Eigen::VectorXd::Zero(n_);
-        if (!work.proportional_damping()) {
-            const DampedLinearMode d =
-                damped_linear_mode(field_.M(), stiffness_matrix(work, eq_.cfg), damping_matrix(work, eq_.cfg), shape_,
-                                   r.linear_omega, eq_.cfg.spec(work));
+        if (!work.proportional_damping()) {  // over the dofs that move (friction masses held)
+            const std::vector<Eigen::Index> free = moving_dofs(work);
+            Eigen::VectorXd moving(free.size());
+            for (std::size_t i = 0; i < free.size(); ++i) moving(static_cast<Eigen::Index>(i)) = shape_(free[i]);
+            const DampedLinearMode d = damped_linear_mode(
+                sub(field_.M(), free), sub(stiffness_matrix(work, eq_.cfg), free),
+                sub(damping_matrix(work, eq_.cfg), free), moving, r.linear_omega, eq_.cfg.spec(work));
             xi0 = d.xi;
             r.linear_omega = d.omega;
-            const Eigen::VectorXcd phi = d.shape * (shape_(k_) / d.shape(k_));
+            Eigen::VectorXcd phi = Eigen::VectorXcd::Zero(n_);
+            for (std::size_t i = 0; i < free.size(); ++i) phi(free[i]) = d.shape(static_cast<Eigen::Index>(i));
+            phi *= shape_(k_) / phi(k_);
             shape_re_ = phi.real();
             shape_im_ = phi.imag();
         }
@@ -489,6 +529,17 @@ public:
                 std::abs(std::complex<double>(along_x(e.direction(), shape_re_), along_x(e.direction(), shape_im_))) /
                 shape_(k_);
             if (wu > 0) slip_onset_ = std::min(slip_onset_, e.slip_force / (e.k * wu));
+        }
+        // And where it first makes a held mass i slip: the force holding it, q (omega^2 (M phi)_i -
+        // (K phi)_i) in the mode's coordinate q = A / shape_k (the damping force left out: a
+        // starting point only), reaches mu_s N_i.
+        const Eigen::VectorXd hold =
+            eq_.omega2(mode) * (field_.M() * shape_) - stiffness_matrix(work, eq_.cfg) * shape_;
+        for (Eigen::Index i = 0; i < n_; ++i) {
+            const Mass& m = work.masses[static_cast<std::size_t>(i)];
+            if (m.has_friction && std::fabs(hold(i)) > 0)
+                slip_onset_ = std::min(slip_onset_, m.mu_s * work.normal_force(static_cast<std::size_t>(i)) *
+                                                        shape_(k_) / std::fabs(hold(i)));
         }
     }
 

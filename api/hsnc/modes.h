@@ -29,8 +29,9 @@
 // kink). A search that still cannot follow the branch stops with the points
 // found so far and says where.
 //
-// Damped modes. A model with Jenkins elements or viscous damping (Rayleigh,
-// dampers, a damping matrix, contact damping) has no free
+// Damped modes. A model with Jenkins elements, friction against the ground
+// or viscous damping (Rayleigh, dampers, a damping matrix, contact damping)
+// has no free
 // periodic orbits: its modes are computed by the extended periodic motion
 // concept (EPMC, Krack 2015): a mass-proportional term -xi M v is added, and
 // xi is one more unknown, the one that makes the damped motion periodic; the
@@ -38,7 +39,8 @@
 // monodromy), and xi / (2 omega) is the mode's equivalent damping ratio at that
 // amplitude (ModePoint::damping_ratio; with mass-proportional damping alone
 // xi = alpha on any backbone, the ratio alpha / (2 omega)). The
-// linear limit is the configuration with every Jenkins element stuck (with
+// linear limit is the configuration with every Jenkins element and friction
+// mass stuck (with
 // dampers, its xi puts the mode's eigenvalue of (M, C - xi M, K) on the
 // imaginary axis, i linear_omega); the
 // equilibrium is the one with every Jenkins spring unstretched. Runs with
@@ -175,7 +177,7 @@ struct ModesResult {
     std::string message;
     int mode = 1;
     std::size_t dof = 0;              ///< the amplitude dof (Model::masses index)
-    bool damped = false;              ///< computed by EPMC (the file comment): Jenkins elements or viscous damping
+    bool damped = false;  ///< computed by EPMC (the file comment): Jenkins elements, friction or viscous damping
     /// The linear mode's circular frequency, rad/s (Jenkins elements stuck; with dampers the
     /// damped mode's, where its eigenvalue with C - xi M is i omega)
     double linear_omega = 0.0;

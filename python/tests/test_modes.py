@@ -83,10 +83,10 @@ def test_a_damper_makes_the_mode_damped_with_xi_its_rate():
     assert np.allclose(r["period"], closed, rtol=1e-10, atol=0)
 
 
-def test_refuses_friction_on_a_mass():
-    text = open(example("bilinear-gap.toml")).read() + '\n[[mass]]\nname = "f"\nm = 1.0\nmu_k = 0.1\n' \
-        '[[spring]]\nbetween = ["f", "m"]\nk = 1.0\n'
-    with pytest.raises(hsnc.InputError, match="friction"):
+def test_refuses_friction_between_two_bodies():
+    text = open(example("bilinear-gap.toml")).read() + '\n[[mass]]\nname = "f"\nm = 1.0\n' \
+        '[[spring]]\nbetween = ["f", "m"]\nk = 1.0\n[[friction]]\nbetween = ["f", "m"]\nmu_k = 0.1\nnormal = 1.0\n'
+    with pytest.raises(hsnc.InputError, match="friction against another body"):
         hsnc.modes(hsnc.Model.from_string(text), 0.2)
 
 
