@@ -41,12 +41,10 @@ void refuse_unsupported(const Model& model) {
     const std::string where = std::string(kModes) + "(): " + (model.source.empty() ? model.name : model.source) + ": ";
     auto refuse = [&](const std::string& what) {
         throw InputError(where + what +
-                         ": hsnc modes takes springs, masses, contacts, Jenkins elements, friction against the ground "
-                         "and viscous damping (Rayleigh, dampers, a damping matrix, contact damping); friction "
-                         "between two bodies and load steps are not supported yet");
+                         ": hsnc modes takes springs, masses, contacts, Jenkins elements, friction and viscous "
+                         "damping (Rayleigh, dampers, a damping matrix, contact damping); load steps are not "
+                         "supported yet");
     };
-    for (const Mass& m : model.masses)
-        if (m.has_friction && m.partner != kGround) refuse("mass " + m.name + " has friction against another body");
     if (!model.load_steps.empty()) refuse("[[load_step]] " + model.load_steps.front().name);
 }
 
@@ -396,46 +394,48 @@ struct Orbit {
     Eigen::VectorXd y;
 };
 
-// The dofs that move in the linear limit: all but the masses with friction (held there).
-std::vector<Eigen::Index> moving_dofs(const Model& model) {
-    std::vector<Eigen::Index> free;
-    for (std::size_t i = 0; i < model.masses.size(); ++i)
-        if (!model.masses[i].has_friction) free.push_back(static_cast<Eigen::Index>(i));
-    return free;
-}
-
-// A's rows and columns `at`.
-Eigen::MatrixXd sub(const Eigen::MatrixXd& A, const std::vector<Eigen::Index>& at) {
-    Eigen::MatrixXd S(at.size(), at.size());
-    for (std::size_t r = 0; r < at.size(); ++r)
-        for (std::size_t c = 0; c < at.size(); ++c)
-            S(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = A(at[r], at[c]);
-    return S;
+// The linear limit's coordinates, x = T q: one q per mass without friction; a mass with
+// friction against the ground is held (its row of T 0), one with friction against another body
+// moves with that body (its row that body's).
+Eigen::MatrixXd held_basis(const Model& model) {
+    const std::size_t n = model.dof();
+    std::vector<Eigen::Index> col(n, -1);
+    Eigen::Index nq = 0;
+    for (std::size_t i = 0; i < n; ++i)
+        if (!model.masses[i].has_friction) col[i] = nq++;
+    Eigen::MatrixXd T = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), nq);
+    for (std::size_t i = 0; i < n; ++i) {
+        const int partner = model.masses[i].partner;
+        if (col[i] >= 0)
+            T(static_cast<Eigen::Index>(i), col[i]) = 1.0;
+        else if (partner != kGround)
+            T(static_cast<Eigen::Index>(i), col[static_cast<std::size_t>(partner)]) = 1.0;
+    }
+    return T;
 }
 
 // The linear modes at the equilibrium: of the model itself, or, with Jenkins
 // elements or friction, of the configuration with all of them stuck (eq: the model
-// without the Jenkins elements), a stuck mass held still (its rows of the shapes 0).
+// without the Jenkins elements), a mass stuck to the ground held still (its rows of the
+// shapes 0), one stuck to another body moving with it (held_basis()).
 void stuck_modes(const Model& work, Field& field, Equilibrium& eq) {
-    const std::vector<Eigen::Index> free = moving_dofs(work);
+    const Eigen::MatrixXd T = held_basis(work);
     const auto n = static_cast<Eigen::Index>(work.dof());
-    if (work.jenkins.empty() && free.size() == work.dof()) return;
-    if (free.empty())
+    if (work.jenkins.empty() && T.cols() == n) return;
+    if (T.cols() == 0)
         throw InputError(std::string(kModes) + "(): " + (work.source.empty() ? work.name : work.source) +
                          ": every mass has friction: nothing moves while they stick (no linear mode to start from)");
     Configuration cfg = Configuration::all_open(work);
     cfg.closed = eq.cfg.closed;
     for (Eigen::Index i = 0; i < n; ++i)
         if (work.masses[static_cast<std::size_t>(i)].has_friction) cfg.stuck[static_cast<std::size_t>(i)] = true;
-    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> ges(sub(stiffness_matrix(work, cfg), free),
-                                                                        sub(field.M(), free));
+    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> ges(T.transpose() * stiffness_matrix(work, cfg) * T,
+                                                                        T.transpose() * field.M() * T);
     if (ges.info() != Eigen::Success)
         throw RunError(std::string(kModes) + "(): the eigenproblem (K, M) of configuration " + cfg.spec(work) +
                        " failed");
     eq.omega2 = ges.eigenvalues();
-    eq.shapes = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(free.size()));
-    for (std::size_t r = 0; r < free.size(); ++r)
-        eq.shapes.row(free[r]) = ges.eigenvectors().row(static_cast<Eigen::Index>(r));
+    eq.shapes = T * ges.eigenvectors();
     eq.cfg = cfg;
 }
 
@@ -471,17 +471,16 @@ public:
         double xi0 = work.alpha + work.beta * eq_.omega2(mode);
         shape_re_ = shape_;
         shape_im_ = Eigen::VectorXd::Zero(n_);
-        if (!work.proportional_damping()) {  // over the dofs that move (friction masses held)
-            const std::vector<Eigen::Index> free = moving_dofs(work);
-            Eigen::VectorXd moving(free.size());
-            for (std::size_t i = 0; i < free.size(); ++i) moving(static_cast<Eigen::Index>(i)) = shape_(free[i]);
+        if (!work.proportional_damping()) {  // in the held coordinates q (x = T q: friction masses stuck)
+            const Eigen::MatrixXd T = held_basis(work);
+            const Eigen::VectorXd q = T.transpose() * field_.M() * shape_;  // shape_ = T phi, phi M-normalised
             const DampedLinearMode d = damped_linear_mode(
-                sub(field_.M(), free), sub(stiffness_matrix(work, eq_.cfg), free),
-                sub(damping_matrix(work, eq_.cfg), free), moving, r.linear_omega, eq_.cfg.spec(work));
+                T.transpose() * field_.M() * T, T.transpose() * stiffness_matrix(work, eq_.cfg) * T,
+                T.transpose() * damping_matrix(work, eq_.cfg) * T, (T.transpose() * field_.M() * T).ldlt().solve(q),
+                r.linear_omega, eq_.cfg.spec(work));
             xi0 = d.xi;
             r.linear_omega = d.omega;
-            Eigen::VectorXcd phi = Eigen::VectorXcd::Zero(n_);
-            for (std::size_t i = 0; i < free.size(); ++i) phi(free[i]) = d.shape(static_cast<Eigen::Index>(i));
+            Eigen::VectorXcd phi = T.cast<std::complex<double>>() * d.shape;
             phi *= shape_(k_) / phi(k_);
             shape_re_ = phi.real();
             shape_im_ = phi.imag();

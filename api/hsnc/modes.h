@@ -29,8 +29,8 @@
 // kink). A search that still cannot follow the branch stops with the points
 // found so far and says where.
 //
-// Damped modes. A model with Jenkins elements, friction against the ground
-// or viscous damping (Rayleigh, dampers, a damping matrix, contact damping)
+// Damped modes. A model with Jenkins elements, Coulomb friction or viscous
+// damping (Rayleigh, dampers, a damping matrix, contact damping)
 // has no free
 // periodic orbits: its modes are computed by the extended periodic motion
 // concept (EPMC, Krack 2015): a mass-proportional term -xi M v is added, and

@@ -83,11 +83,16 @@ def test_a_damper_makes_the_mode_damped_with_xi_its_rate():
     assert np.allclose(r["period"], closed, rtol=1e-10, atol=0)
 
 
-def test_refuses_friction_between_two_bodies():
-    text = open(example("bilinear-gap.toml")).read() + '\n[[mass]]\nname = "f"\nm = 1.0\n' \
-        '[[spring]]\nbetween = ["f", "m"]\nk = 1.0\n[[friction]]\nbetween = ["f", "m"]\nmu_k = 0.1\nnormal = 1.0\n'
-    with pytest.raises(hsnc.InputError, match="friction against another body"):
-        hsnc.modes(hsnc.Model.from_string(text), 0.2)
+def test_friction_between_two_bodies_starts_from_them_moving_as_one():
+    """Stuck, f rides on m: the linear limit of masses 1 + 0.05 on springs 1 + 3."""
+    text = ('name = "pair"\n[[mass]]\nname = "m"\nm = 1.0\n[[mass]]\nname = "f"\nm = 0.05\n'
+            '[[spring]]\nbetween = ["m", "ground"]\nk = 1.0\n[[spring]]\nbetween = ["f", "ground"]\nk = 3.0\n'
+            '[[friction]]\nbetween = ["f", "m"]\nmu_k = 0.5\nnormal = 0.6\n')
+    r = hsnc.modes(hsnc.Model.from_string(text), 0.5, start=0.05, points=3)
+    assert r["status"] == "ok" and r["damped"]
+    assert r["linear_omega"] == pytest.approx(math.sqrt(4 / 1.05), rel=1e-14)
+    assert r["omega"][0] == pytest.approx(math.sqrt(4 / 1.05), rel=1e-12)
+    assert np.all(r["xi"][1:] > 0)
 
 
 def test_energy_backbone_in_equal_ratios():
