@@ -3,6 +3,7 @@
 // (hsnc::modes, api/hsnc/modes.h; a damped mode by the extended periodic motion
 // concept): a CSV row per point, the multipliers of every point, a plot of
 // frequency (and damping) against amplitude.
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <cstdio>
@@ -27,7 +28,7 @@ namespace {
 struct ModesFlags {
     AnalysisFlags common;  // MODEL, --set, --kernels, --cache-dir, --no-cache, --quiet (--x0, --v0 refused)
     int mode = 1, points = 50, max_iterations = 30;
-    std::string dof, out, multipliers, plot;
+    std::string dof, out, multipliers, plot, record_dofs;
     double from = NAN, to = NAN, tolerance = 1e-11;
     bool energy = false, geometric = false;
 };
@@ -122,15 +123,38 @@ void draw_backbone(const OutputTarget& target, const ModesResult& r, const Model
     render_png(script.str(), target);
 }
 
-void write_backbone(const OutputTarget& target, const ModesResult& r, const Model& model) {
+// The dofs whose x_, v_ and peak_ columns the backbone CSV has: --record-dofs (names,
+// comma-separated, each once, in that order), else every dof.
+std::vector<std::size_t> record_dofs(const Model& model, const std::string& list) {
+    std::vector<std::size_t> dofs;
+    if (list.empty()) {
+        for (std::size_t i = 0; i < model.dof(); ++i) dofs.push_back(i);
+        return dofs;
+    }
+    std::stringstream in(list);
+    std::string name;
+    while (std::getline(in, name, ',')) {
+        const auto first = name.find_first_not_of(' '), last = name.find_last_not_of(' ');
+        name = first == std::string::npos ? "" : name.substr(first, last - first + 1);
+        const int i = model.mass_index(name);
+        if (i < 0) throw InputError("--record-dofs: '" + name + "' is no dof of model '" + model.name + "'");
+        if (std::find(dofs.begin(), dofs.end(), static_cast<std::size_t>(i)) != dofs.end())
+            throw InputError("--record-dofs: '" + name + "' is named twice");
+        dofs.push_back(static_cast<std::size_t>(i));
+    }
+    return dofs;
+}
+
+void write_backbone(const OutputTarget& target, const ModesResult& r, const Model& model,
+                    const std::vector<std::size_t>& dofs) {
     CsvFile file(target);
     std::string header = "amplitude,omega,omega_ratio";
     if (r.damped) header += ",damping_ratio,xi";
     header += ",period,energy";
-    for (const Mass& m : model.masses) header += ",x_" + m.name;
-    for (const Mass& m : model.masses) header += ",v_" + m.name;
+    for (std::size_t i : dofs) header += ",x_" + model.masses[i].name;
+    for (std::size_t i : dofs) header += ",v_" + model.masses[i].name;
     for (const Jenkins& j : model.jenkins) header += ",s_" + j.name;
-    for (const Mass& m : model.masses) header += ",peak_" + m.name;
+    for (std::size_t i : dofs) header += ",peak_" + model.masses[i].name;
     for (int j : r.others) header += ",ratio_mode" + std::to_string(j);
     header += ",resonance,max_multiplier,stable,events,grazing,iterations,residual";
     file.text(header.c_str());
@@ -145,10 +169,10 @@ void write_backbone(const OutputTarget& target, const ModesResult& r, const Mode
         }
         file.number(p.period);
         file.number(p.energy);
-        for (double x : p.x) file.number(x);
-        for (double v : p.v) file.number(v);
+        for (std::size_t i : dofs) file.number(p.x[i]);
+        for (std::size_t i : dofs) file.number(p.v[i]);
         for (double s : p.sliders) file.number(s);
-        for (double a : p.peaks) file.number(a);
+        for (std::size_t i : dofs) file.number(p.peaks[i]);
         for (double q : p.ratios) file.number(q);
         std::string passed;
         for (const std::string& s : p.resonances) passed += (passed.empty() ? "" : ";") + s;
@@ -197,7 +221,8 @@ int modes_command(const ModesFlags& f) {
     o.tolerance = f.tolerance;
     o.max_iterations = f.max_iterations;
     set_kernels(f.common, o);
-    // Every output path checked before anything runs (exit code 2, nothing written).
+    // Every output path and the recorded dofs checked before anything runs (exit code 2, nothing written).
+    const std::vector<std::size_t> recorded = record_dofs(model, f.record_dofs);
     AnalysisOutputs outputs;
     const OutputTarget* out = outputs.add("--out", f.out);
     const OutputTarget* mult = outputs.add("--multipliers", f.multipliers);
@@ -230,7 +255,7 @@ int modes_command(const ModesFlags& f) {
     }
     progress.clear();
     // The points found are written whatever the status: each is a converged orbit.
-    if (out) write_backbone(*out, r, model);
+    if (out) write_backbone(*out, r, model, recorded);
     if (mult) write_multipliers(*mult, r);
     if (plot && !r.points.empty()) {
         if (r.damped)
@@ -261,7 +286,9 @@ int modes_command(const ModesFlags& f) {
 void add_modes(CLI::App& app, int& exit_code) {
     auto f = std::make_shared<ModesFlags>();
     auto* sub = app.add_subcommand(
-        "modes", "nonlinear normal modes: the backbone of a linear mode of a conservative model, exactly");
+        "modes",
+        "nonlinear normal modes, exactly: the backbone of a linear mode (conservative), or its frequency and damping "
+        "against amplitude (damped: extended periodic motion)");
     add_analysis_flags(sub, f->common);
     sub->add_option("--mode", f->mode, "the linear mode to continue, 1 = lowest at the static equilibrium (default 1)");
     sub->add_option("--dof", f->dof,
@@ -276,6 +303,8 @@ void add_modes(CLI::App& app, int& exit_code) {
                   "backbone");
     sub->add_flag("--geometric", f->geometric, "space the points in equal ratios (a backbone over decades)");
     sub->add_option("--out", f->out, "backbone CSV, a row per point (docs/interface.md)");
+    sub->add_option("--record-dofs", f->record_dofs,
+                    "the dofs whose state and peak the backbone CSV has, NAME,NAME,... in that order (default all)");
     sub->add_option("--multipliers", f->multipliers, "Floquet multipliers CSV: amplitude,index,re,im,abs");
     sub->add_option("--plot", f->plot, "draw the backbone (frequency against amplitude) into this PNG (gnuplot)");
     sub->add_option("--tol", f->tolerance, "converged when |P(y) - y| is at most this (relative; default 1e-11)")

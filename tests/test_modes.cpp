@@ -15,6 +15,8 @@
 #include <complex>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -384,6 +386,32 @@ TEST(Modes, CommandWritesTheBackboneAndRefusesByFlag) {
     refused("--to 0.2 --dof m7", "--dof");
     refused("--to 0.2 --x0 m1=0.1", "--x0");
     refused("--to nan", "--to");
+    refused("--to 0.2 --record-dofs m2,m9 --out '" + dir / "r.csv" + "'", "--record-dofs: 'm9'");
+    refused("--to 0.2 --record-dofs m2,m2 --out '" + dir / "r.csv" + "'", "named twice");
+    EXPECT_FALSE(std::ifstream(dir / "r.csv").good()) << "nothing written";
+
+    // --record-dofs: the state and peak columns of those dofs only, in that order, the same numbers.
+    const testing::CliRun some = testing::run_hsnc("modes " + model +
+                                                   " --mode 1 --dof m1 --from 0.06 --to 0.51 --points 10 "
+                                                   "--record-dofs m2 --quiet --out '" +
+                                                   dir / "m2.csv" + "'");
+    ASSERT_EQ(some.exit_code, 0) << some.err;
+    const std::string part = testing::slurp(dir / "m2.csv");
+    EXPECT_EQ(part.substr(0, part.find('\n')),
+              "amplitude,omega,omega_ratio,period,energy,x_m2,v_m2,peak_m2,ratio_mode2,resonance,max_multiplier,"
+              "stable,events,grazing,iterations,residual");
+    auto field = [](const std::string& text, std::size_t row, std::size_t col) {
+        std::istringstream in(text);
+        std::string line, cell;
+        for (std::size_t r = 0; r <= row; ++r) std::getline(in, line);
+        std::istringstream cells(line);
+        for (std::size_t c = 0; c <= col; ++c) std::getline(cells, cell, ',');
+        return cell;
+    };
+    for (std::size_t row = 1; row <= 10; ++row) {
+        EXPECT_EQ(field(part, row, 5), field(csv, row, 6)) << "x_m2, row " << row;
+        EXPECT_EQ(field(part, row, 7), field(csv, row, 10)) << "peak_m2, row " << row;
+    }
 }
 
 TEST(Modes, RefusesWhatItDoesNotTakeByName) {
