@@ -636,6 +636,48 @@ TEST(Modes, AJenkinsJointWithADamperAddsTheDampersRateToXi) {
     }
 }
 
+// The independent integrator of the damped-mode tests below: classical RK4 in long double over
+// t (n steps) of a 2-dof system whose vector field `field(z, mode)` depends on a discrete mode (a
+// contact closed or open; stuck or sliding), which switches where `keep(z, mode)` falls below 0
+// (located within a step by bisection on the step's length); `next(z, mode)` gives the mode
+// after, and may fix z there (a stuck relative velocity to 0).
+using State = std::array<long double, 4>;
+template <class Field, class Keep, class Next>
+State switched_rk4(State y, int mode, long double t, int n, Field field, Keep keep, Next next) {
+    using R = long double;
+    auto step = [&](const State& z, R h, int md) {
+        auto add = [](State a, const State& b, R s) {
+            for (int i = 0; i < 4; ++i) a[i] += s * b[i];
+            return a;
+        };
+        const State k1 = field(z, md), k2 = field(add(z, k1, h / 2), md), k3 = field(add(z, k2, h / 2), md),
+                    k4 = field(add(z, k3, h), md);
+        State out = z;
+        for (int i = 0; i < 4; ++i) out[i] += h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
+        return out;
+    };
+    const R h = t / n;
+    R left = t;
+    while (left > t * 1e-18L) {
+        const R dt = std::min(h, left);
+        const State ahead = step(y, dt, mode);
+        if (!(keep(ahead, mode) < 0)) {
+            y = ahead;
+            left -= dt;
+            continue;
+        }
+        R lo = 0, hi = dt;
+        for (int b = 0; b < 90; ++b) {
+            const R mid = (lo + hi) / 2;
+            (keep(step(y, mid, mode), mode) < 0 ? hi : lo) = mid;
+        }
+        y = step(y, hi, mode);
+        mode = next(y, mode);
+        left -= hi;
+    }
+    return y;
+}
+
 // Two masses (m1 = 1, m2 = 2; k 1 to the ground, 20 between), a damper c = 0.3 from the first
 // to the ground (non-proportional), a stop of stiffness 5 at x2 = 0.1 (kContactDamping adds a
 // dashpot 0.5 to it while closed). The first mode (0.57 rad/s) stiffens toward 1.35 with the
@@ -651,43 +693,16 @@ const char* kDampedChain =
 // The EPMC system of kDampedChain (C - xi M) from (x, v) over t, by classical RK4 in long double
 // (n steps), the stop's closing and opening located within a step by bisection on the step
 // length: an integrator of its own, sharing nothing with hsnc.
-std::array<long double, 4> damped_chain_rk4(std::array<long double, 4> y, long double xi, long double t, int n,
-                                            long double contact_c = 0) {
+State damped_chain_rk4(State y, long double xi, long double t, int n, long double contact_c = 0) {
     using R = long double;
-    auto f = [&](const std::array<R, 4>& z, bool closed) {
+    auto field = [&](const State& z, int closed) {
         const R x1 = z[0], x2 = z[1], v1 = z[2], v2 = z[3];
         const R stop = closed ? 5 * (x2 - R(0.1)) + contact_c * v2 : R(0);
-        return std::array<R, 4>{v1, v2, (-x1 - 20 * (x1 - x2) - (R(0.3) - xi) * v1),
-                                (-20 * (x2 - x1) + 2 * xi * v2 - stop) / 2};
+        return State{v1, v2, (-x1 - 20 * (x1 - x2) - (R(0.3) - xi) * v1), (-20 * (x2 - x1) + 2 * xi * v2 - stop) / 2};
     };
-    auto step = [&](const std::array<R, 4>& z, R h, bool closed) {
-        auto add = [](std::array<R, 4> a, const std::array<R, 4>& b, R s) {
-            for (int i = 0; i < 4; ++i) a[i] += s * b[i];
-            return a;
-        };
-        const auto k1 = f(z, closed), k2 = f(add(z, k1, h / 2), closed), k3 = f(add(z, k2, h / 2), closed),
-                   k4 = f(add(z, k3, h), closed);
-        std::array<R, 4> out = z;
-        for (int i = 0; i < 4; ++i) out[i] += h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
-        return out;
-    };
-    const R h = t / n;
-    bool closed = y[1] > R(0.1);
-    for (int i = 0; i < n; ++i) {
-        std::array<R, 4> next = step(y, h, closed);
-        if ((next[1] > R(0.1)) != closed) {  // the stop switches within this step: where, by bisection
-            R lo = 0, hi = h;
-            for (int b = 0; b < 80; ++b) {
-                const R mid = (lo + hi) / 2;
-                ((step(y, mid, closed)[1] > R(0.1)) == closed ? lo : hi) = mid;
-            }
-            const std::array<R, 4> at = step(y, hi, closed);
-            next = step(at, h - hi, !closed);
-            closed = !closed;
-        }
-        y = next;
-    }
-    return y;
+    auto keep = [](const State& z, int closed) { return closed ? z[1] - R(0.1) : R(0.1) - z[1]; };
+    auto next = [](State&, int closed) { return 1 - closed; };
+    return switched_rk4(y, y[1] > R(0.1) ? 1 : 0, t, n, field, keep, next);
 }
 
 TEST(Modes, ANonProportionalDamperGivesTheClosedFormLinearLimitAndExactOrbitsBeyondTheStop) {
@@ -696,7 +711,7 @@ TEST(Modes, ANonProportionalDamperGivesTheClosedFormLinearLimitAndExactOrbitsBey
     // m1) = 0 the frequency (bisection); the dofs' amplitude ratio |x2/x1| = |a12 / (a22 - i w xi
     // m2)|. Below the stop the backbone is that linear mode; beyond it each orbit (shooting to
     // 1e-13), run from its turning point for one period by the RK4 above, comes back to it (1e-12
-    // of the amplitude: measured 1.2e-13), its frequency rising
+    // of the amplitude: measured 1.1e-13), its frequency rising
     // toward the mode with the stop held closed.
     using R = long double;
     const R c = 0.3L, m1 = 1, m2 = 2;
@@ -803,57 +818,22 @@ const char* kFrictionMass =
 // with its own stick-slip rules: sliding, m2 a2 = k_t (x1 - x2) + xi m2 v2 - F sign(v2); where v2
 // passes 0 it sticks if |k_t (x1 - x2)| <= F, else slides back; stuck (v2 = 0) until |k_t (x1 -
 // x2)| reaches F. Switches located within a step by bisection on the step length.
-std::array<long double, 4> friction_mass_rk4(std::array<long double, 4> y, long double xi, long double t, int n) {
+State friction_mass_rk4(State y, long double xi, long double t, int n) {
     using R = long double;
     const R m2 = 0.05L, F = 0.61162079510703364L * m2 * 9.81L, kt = 3;
-    auto hold = [&](const std::array<R, 4>& z) { return kt * (z[0] - z[1]); };
-    int mode = 0;  // 0 stuck, +-1 sliding in that direction
-    auto decide = [&](const std::array<R, 4>& z) {
-        if (z[3] != 0) return z[3] > 0 ? 1 : -1;
-        return std::fabs(hold(z)) <= F ? 0 : (hold(z) > 0 ? 1 : -1);
-    };
-    auto f = [&](const std::array<R, 4>& z, int md) {
+    auto hold = [&](const State& z) { return kt * (z[0] - z[1]); };  // the spring's force on f
+    auto field = [&](const State& z, int md) {                       // md: 0 stuck, +-1 sliding that way
         const R a1 = -z[0] - kt * (z[0] - z[1]) + xi * z[2];
         const R a2 = md == 0 ? R(0) : (hold(z) + xi * m2 * z[3] - F * md) / m2;
-        return std::array<R, 4>{z[2], md == 0 ? R(0) : z[3], a1, a2};
+        return State{z[2], md == 0 ? R(0) : z[3], a1, a2};
     };
-    auto step = [&](const std::array<R, 4>& z, R h, int md) {
-        auto add = [](std::array<R, 4> a, const std::array<R, 4>& b, R s) {
-            for (int i = 0; i < 4; ++i) a[i] += s * b[i];
-            return a;
-        };
-        const auto k1 = f(z, md), k2 = f(add(z, k1, h / 2), md), k3 = f(add(z, k2, h / 2), md),
-                   k4 = f(add(z, k3, h), md);
-        std::array<R, 4> out = z;
-        for (int i = 0; i < 4; ++i) out[i] += h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
-        return out;
+    auto keep = [&](const State& z, int md) { return md == 0 ? F - std::fabs(hold(z)) : z[3] * md; };
+    auto next = [&](State& z, int md) {
+        if (md != 0) z[3] = 0;
+        return std::fabs(hold(z)) <= F && md != 0 ? 0 : (hold(z) > 0 ? 1 : -1);
     };
-    // The switch function of the mode: v2 (sliding) or |hold| - F (stuck).
-    auto sw = [&](const std::array<R, 4>& z, int md) { return md == 0 ? std::fabs(hold(z)) - F : z[3] * md; };
-    mode = decide(y);
-    const R h = t / n;
-    R left = t;
-    while (left > t * 1e-18L) {
-        const R dt = std::min(h, left);
-        std::array<R, 4> next = step(y, dt, mode);
-        if ((mode == 0 && sw(next, 0) > 0) || (mode != 0 && sw(next, mode) < 0)) {
-            R lo = 0, hi = dt;
-            for (int b = 0; b < 90; ++b) {
-                const R mid = (lo + hi) / 2;
-                const R g = sw(step(y, mid, mode), mode);
-                ((mode == 0 ? g <= 0 : g >= 0) ? lo : hi) = mid;
-            }
-            y = step(y, hi, mode);
-            if (mode != 0) y[3] = 0;
-            const R H = hold(y);
-            mode = std::fabs(H) <= F && mode != 0 ? 0 : (H > 0 ? 1 : -1);
-            left -= hi;
-            continue;
-        }
-        y = next;
-        left -= dt;
-    }
-    return y;
+    const int start = y[3] != 0 ? (y[3] > 0 ? 1 : -1) : std::fabs(hold(y)) <= F ? 0 : (hold(y) > 0 ? 1 : -1);
+    return switched_rk4(y, start, t, n, field, keep, next);
 }
 
 TEST(Modes, AFrictionMassGivesADampedModeThatAnIndependentStickSlipIntegratorCloses) {
@@ -915,65 +895,32 @@ const char* kFrictionPair =
 // The EPMC system of kFrictionPair by RK4 in long double with its own stick-slip rules on the
 // relative velocity w = v_f - v_m: sliding, -F sign(w) on f and +F sign(w) on m; stuck, both at
 // the common acceleration while the friction that takes, m_f a - (f's other forces), is at most F.
-std::array<long double, 4> friction_pair_rk4(std::array<long double, 4> y, long double xi, long double t, int n) {
+State friction_pair_rk4(State y, long double xi, long double t, int n) {
     using R = long double;
     const R mm = 1, mf = 0.05L, F = 0.3L;
-    auto forces = [&](const std::array<R, 4>& z) {  // on m and on f, friction apart
+    auto forces = [&](const State& z) {  // on m and on f, friction apart
         return std::array<R, 2>{-z[0] + xi * mm * z[2], -3 * z[1] + xi * mf * z[3]};
     };
-    auto need = [&](const std::array<R, 4>& z) {  // the friction on f that keeps it with m
+    auto need = [&](const State& z) {  // the friction on f that keeps it with m
         const auto fo = forces(z);
         return mf * (fo[0] + fo[1]) / (mm + mf) - fo[1];
     };
-    auto decide = [&](const std::array<R, 4>& z) {
-        const R w = z[3] - z[2];
-        if (w != 0) return w > 0 ? 1 : -1;
-        return std::fabs(need(z)) <= F ? 0 : (need(z) > 0 ? -1 : 1);
-    };
-    auto f = [&](const std::array<R, 4>& z, int md) {
+    auto field = [&](const State& z, int md) {  // md: 0 stuck, +-1 the sign of w = v_f - v_m
         const auto fo = forces(z);
         if (md == 0) {
             const R a = (fo[0] + fo[1]) / (mm + mf);
-            return std::array<R, 4>{z[2], z[3], a, a};
+            return State{z[2], z[3], a, a};
         }
-        return std::array<R, 4>{z[2], z[3], (fo[0] + F * md) / mm, (fo[1] - F * md) / mf};
+        return State{z[2], z[3], (fo[0] + F * md) / mm, (fo[1] - F * md) / mf};
     };
-    auto step = [&](const std::array<R, 4>& z, R h, int md) {
-        auto add = [](std::array<R, 4> a, const std::array<R, 4>& b, R s) {
-            for (int i = 0; i < 4; ++i) a[i] += s * b[i];
-            return a;
-        };
-        const auto k1 = f(z, md), k2 = f(add(z, k1, h / 2), md), k3 = f(add(z, k2, h / 2), md),
-                   k4 = f(add(z, k3, h), md);
-        std::array<R, 4> out = z;
-        for (int i = 0; i < 4; ++i) out[i] += h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
-        return out;
+    auto keep = [&](const State& z, int md) { return md == 0 ? F - std::fabs(need(z)) : (z[3] - z[2]) * md; };
+    auto next = [&](State& z, int md) {
+        if (md != 0) z[3] = z[2];
+        return std::fabs(need(z)) <= F && md != 0 ? 0 : (need(z) > 0 ? -1 : 1);
     };
-    auto sw = [&](const std::array<R, 4>& z, int md) { return md == 0 ? std::fabs(need(z)) - F : (z[3] - z[2]) * md; };
-    int mode = decide(y);
-    const R h = t / n;
-    R left = t;
-    while (left > t * 1e-18L) {
-        const R dt = std::min(h, left);
-        const std::array<R, 4> next = step(y, dt, mode);
-        if ((mode == 0 && sw(next, 0) > 0) || (mode != 0 && sw(next, mode) < 0)) {
-            R lo = 0, hi = dt;
-            for (int b = 0; b < 90; ++b) {
-                const R mid = (lo + hi) / 2;
-                const R g = sw(step(y, mid, mode), mode);
-                ((mode == 0 ? g <= 0 : g >= 0) ? lo : hi) = mid;
-            }
-            y = step(y, hi, mode);
-            if (mode != 0) y[3] = y[2];
-            const R H = need(y);
-            mode = std::fabs(H) <= F && mode != 0 ? 0 : (H > 0 ? -1 : 1);
-            left -= hi;
-            continue;
-        }
-        y = next;
-        left -= dt;
-    }
-    return y;
+    const R w = y[3] - y[2];
+    const int start = w != 0 ? (w > 0 ? 1 : -1) : std::fabs(need(y)) <= F ? 0 : (need(y) > 0 ? -1 : 1);
+    return switched_rk4(y, start, t, n, field, keep, next);
 }
 
 TEST(Modes, FrictionBetweenTwoBodiesGivesADampedModeThatAnIndependentIntegratorCloses) {
