@@ -678,6 +678,17 @@ State switched_rk4(State y, int mode, long double t, int n, Field field, Keep ke
     return y;
 }
 
+// How far `rk4` (a 2-dof EPMC system's independent integrator: state, xi, t, steps) leaves the
+// orbit of point p after its period, against its amplitude: 0 for an exact periodic orbit.
+template <class Rk4>
+double closure(const ModePoint& p, Rk4 rk4) {
+    const State y0{p.x[0], p.x[1], p.v[0], p.v[1]};
+    const State y1 = rk4(y0, p.xi, p.period, 40000);
+    double worst = 0.0;
+    for (int i = 0; i < 4; ++i) worst = std::max(worst, static_cast<double>(std::fabs(y1[i] - y0[i])) / p.amplitude);
+    return worst;
+}
+
 // Two masses (m1 = 1, m2 = 2; k 1 to the ground, 20 between), a damper c = 0.3 from the first
 // to the ground (non-proportional), a stop of stiffness 5 at x2 = 0.1 (kContactDamping adds a
 // dashpot 0.5 to it while closed). The first mode (0.57 rad/s) stiffens toward 1.35 with the
@@ -756,10 +767,9 @@ TEST(Modes, ANonProportionalDamperGivesTheClosedFormLinearLimitAndExactOrbitsBey
         }
         ++beyond;
         EXPECT_NEAR(p.v[1], 0.0, 1e-12 * p.amplitude) << "the turning point of the amplitude dof";
-        const std::array<R, 4> y0{p.x[0], p.x[1], p.v[0], p.v[1]};
-        const std::array<R, 4> y1 = damped_chain_rk4(y0, p.xi, p.period, 40000);
-        for (int i = 0; i < 4; ++i)
-            worst = std::max(worst, static_cast<double>(std::fabs(y1[i] - y0[i])) / p.amplitude);
+        worst = std::max(worst, closure(p, [](const State& y, long double xi, long double t, int n) {
+                             return damped_chain_rk4(y, xi, t, n);
+                         }));
         EXPECT_GT(p.omega, last) << "the stop stiffens the mode";
         EXPECT_LT(p.omega, w_closed) << "below the mode with the stop held closed";
         last = p.omega;
@@ -796,11 +806,9 @@ TEST(Modes, ContactDampingTakesMoreOutOnlyWhileTheStopIsClosed) {
             continue;
         }
         EXPECT_GT(p.xi, r0.points[i].xi + 1e-3) << p.amplitude;
-        using R = long double;
-        const std::array<R, 4> y0{p.x[0], p.x[1], p.v[0], p.v[1]};
-        const std::array<R, 4> y1 = damped_chain_rk4(y0, p.xi, p.period, 40000, 0.5L);
-        for (int k = 0; k < 4; ++k)
-            worst = std::max(worst, static_cast<double>(std::fabs(y1[k] - y0[k])) / p.amplitude);
+        worst = std::max(worst, closure(p, [](const State& y, long double xi, long double t, int n) {
+                             return damped_chain_rk4(y, xi, t, n, 0.5L);
+                         }));
     }
     EXPECT_LT(worst, 1e-12);
     std::printf("[ info ] damped chain with contact damping: orbits close to %.2g\n", worst);
@@ -856,11 +864,7 @@ TEST(Modes, AFrictionMassGivesADampedModeThatAnIndependentStickSlipIntegratorClo
     double worst = 0.0;
     for (std::size_t i = 1; i < r.points.size(); ++i) {
         const ModePoint& p = r.points[i];
-        using R = long double;
-        const std::array<R, 4> y0{p.x[0], p.x[1], p.v[0], p.v[1]};
-        const std::array<R, 4> y1 = friction_mass_rk4(y0, p.xi, p.period, 40000);
-        for (int k = 0; k < 4; ++k)
-            worst = std::max(worst, static_cast<double>(std::fabs(y1[k] - y0[k])) / p.amplitude);
+        worst = std::max(worst, closure(p, friction_mass_rk4));
         EXPECT_GT(p.damping_ratio, 0.0) << p.amplitude;
         EXPECT_LT(p.omega, 2.0) << p.amplitude;
     }
@@ -941,11 +945,7 @@ TEST(Modes, FrictionBetweenTwoBodiesGivesADampedModeThatAnIndependentIntegratorC
     double worst = 0.0;
     for (std::size_t i = 1; i < r.points.size(); ++i) {
         const ModePoint& p = r.points[i];
-        using R = long double;
-        const std::array<R, 4> y0{p.x[0], p.x[1], p.v[0], p.v[1]};
-        const std::array<R, 4> y1 = friction_pair_rk4(y0, p.xi, p.period, 40000);
-        for (int k = 0; k < 4; ++k)
-            worst = std::max(worst, static_cast<double>(std::fabs(y1[k] - y0[k])) / p.amplitude);
+        worst = std::max(worst, closure(p, friction_pair_rk4));
         EXPECT_GT(p.xi, 0.0) << p.amplitude;
     }
     std::printf("[ info ] friction between two bodies: orbits close to %.2g under an independent RK4\n", worst);
