@@ -471,13 +471,13 @@ public:
         double xi0 = work.alpha + work.beta * eq_.omega2(mode);
         shape_re_ = shape_;
         shape_im_ = Eigen::VectorXd::Zero(n_);
+        const Eigen::MatrixXd K = stiffness_matrix(work, eq_.cfg);
         if (!work.proportional_damping()) {  // in the held coordinates q (x = T q: friction masses stuck)
-            const Eigen::MatrixXd T = held_basis(work);
+            const Eigen::MatrixXd T = held_basis(work), MT = T.transpose() * field_.M() * T;
             const Eigen::VectorXd q = T.transpose() * field_.M() * shape_;  // shape_ = T phi, phi M-normalised
-            const DampedLinearMode d = damped_linear_mode(
-                T.transpose() * field_.M() * T, T.transpose() * stiffness_matrix(work, eq_.cfg) * T,
-                T.transpose() * damping_matrix(work, eq_.cfg) * T, (T.transpose() * field_.M() * T).ldlt().solve(q),
-                r.linear_omega, eq_.cfg.spec(work));
+            const DampedLinearMode d =
+                damped_linear_mode(MT, T.transpose() * K * T, T.transpose() * damping_matrix(work, eq_.cfg) * T,
+                                   MT.ldlt().solve(q), r.linear_omega, eq_.cfg.spec(work));
             xi0 = d.xi;
             r.linear_omega = d.omega;
             Eigen::VectorXcd phi = T.cast<std::complex<double>>() * d.shape;
@@ -532,8 +532,7 @@ public:
         // And where it first makes a held mass i slip: the force holding it, q (omega^2 (M phi)_i -
         // (K phi)_i) in the mode's coordinate q = A / shape_k (the damping force left out: a
         // starting point only), reaches mu_s N_i.
-        const Eigen::VectorXd hold =
-            eq_.omega2(mode) * (field_.M() * shape_) - stiffness_matrix(work, eq_.cfg) * shape_;
+        const Eigen::VectorXd hold = eq_.omega2(mode) * (field_.M() * shape_) - K * shape_;
         for (Eigen::Index i = 0; i < n_; ++i) {
             const Mass& m = work.masses[static_cast<std::size_t>(i)];
             if (m.has_friction && std::fabs(hold(i)) > 0)

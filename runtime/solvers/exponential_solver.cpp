@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "assembly.h"
+#include "energy_scaling.h"
 #include "kernel_abi.h"  // hsnc_phase
 
 namespace hsnc {
@@ -49,17 +50,14 @@ void ExponentialSolver::balance(const Model& model) {
         MF = mass_matrix(model, free_);
     else
         for (int r = 0; r < nf_; ++r) MF(r, r) = t_.mass(free_[r]);
-    const Eigen::LLT<Eigen::MatrixXd> lk(KF), lm(MF);
-    if (lk.info() != Eigen::Success || lm.info() != Eigen::Success) return;
-    const Eigen::VectorXd d = lk.matrixL().toDenseMatrix().diagonal();
-    if (!(d.minCoeff() > 1e-7 * d.maxCoeff())) return;  // K_FF regular by rounding only
+    EnergyScaling u;
+    if (!energy_scaling(KF, MF, u)) return;
     D_ = Eigen::MatrixXd::Identity(m_, m_);
     Dinv_ = D_;
-    const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(nf_, nf_);
-    D_.topLeftCorner(nf_, nf_) = lk.matrixU().toDenseMatrix();
-    D_.block(nf_, nf_, nf_, nf_) = lm.matrixU().toDenseMatrix();
-    Dinv_.topLeftCorner(nf_, nf_) = lk.matrixU().solve(I);
-    Dinv_.block(nf_, nf_, nf_, nf_) = lm.matrixU().solve(I);
+    D_.topLeftCorner(nf_, nf_) = u.UK;
+    D_.block(nf_, nf_, nf_, nf_) = u.UM;
+    Dinv_.topLeftCorner(nf_, nf_) = u.UK_inv;
+    Dinv_.block(nf_, nf_, nf_, nf_) = u.UM_inv;
     absDinv_ = Dinv_.cwiseAbs();
 }
 
@@ -163,13 +161,13 @@ void ExponentialSolver::setup(double t0, double t0_lo, const double* x0, const d
 void ExponentialSolver::eval(double tau, const SegmentEval& out) const {
     E_ = (Zb_ * tau).exp();
     zb_.noalias() = E_ * zb0_;
-    zmag_.noalias() = E_.cwiseAbs() * absz0_;
+    zbmag_.noalias() = E_.cwiseAbs() * absz0_;
     if (D_.size() > 0) {  // back from the energy scaling: z = D^-1 zb, |z| <= |D^-1| |zb|
         z_.noalias() = Dinv_ * zb_;
-        zbmag_ = zmag_;
         zmag_.noalias() = absDinv_ * zbmag_;
     } else {
         z_ = zb_;
+        zmag_ = zbmag_;
     }
     write_at_rest(x_fix_, out, xmag_, vmag_);
     for (int h = 0; h < nh_; ++h) {

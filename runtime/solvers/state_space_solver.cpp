@@ -12,10 +12,11 @@
 #include <string>
 
 #include "assembly.h"
-#include "switch_values.h"
+#include "energy_scaling.h"
 #include "error.h"
 #include "free_components.h"
 #include "kernel_abi.h"  // hsnc_phase: Omega (t0 + t0_lo) + phase, reduced as every solver does
+#include "switch_values.h"
 
 namespace hsnc {
 namespace {
@@ -176,16 +177,12 @@ void StateSpaceSolver::decompose(const Eigen::MatrixXd& A, const Eigen::MatrixXd
     // omega_1, 3e3 on a 16-dof cantilever). Ke singular (a translation a damper alone holds):
     // y itself.
     Eigen::MatrixXd B = Eigen::MatrixXd::Identity(m, m), Binv = B;
-    const Eigen::LLT<Eigen::MatrixXd> lk(Ke), lm(Me);
-    if (lk.info() == Eigen::Success && lm.info() == Eigen::Success) {
-        const Eigen::VectorXd d = lk.matrixL().toDenseMatrix().diagonal();
-        if (d.minCoeff() > 1e-7 * d.maxCoeff()) {  // a regular Ke, not one regular by rounding only
-            const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(ne_, ne_);
-            B.topLeftCorner(ne_, ne_) = lk.matrixU().toDenseMatrix() / scale_s_;
-            B.bottomRightCorner(ne_, ne_) = lm.matrixU().toDenseMatrix();
-            Binv.topLeftCorner(ne_, ne_) = scale_s_ * lk.matrixU().solve(I);
-            Binv.bottomRightCorner(ne_, ne_) = lm.matrixU().solve(I);
-        }
+    EnergyScaling u;
+    if (energy_scaling(Ke, Me, u)) {
+        B.topLeftCorner(ne_, ne_) = u.UK / scale_s_;
+        B.bottomRightCorner(ne_, ne_) = u.UM;
+        Binv.topLeftCorner(ne_, ne_) = scale_s_ * u.UK_inv;
+        Binv.bottomRightCorner(ne_, ne_) = u.UM_inv;
     }
     const Eigen::MatrixXd Ab = B * A * Binv;
     const Eigen::EigenSolver<Eigen::MatrixXd> es(Ab);
