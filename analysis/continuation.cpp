@@ -173,10 +173,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         p.direction = sense > 0 ? SweepDirection::up : SweepDirection::down;
         p.failure = reason;
         p.branch_start = true;
-        const double nan = std::nan("");
-        p.xmax.assign(n, nan);
-        p.xrms.assign(n, nan);
-        p.a1.assign(n, nan);
+        sweep_detail::mark_failed(p, n, o.harmonics);
         out.push_back(p);
         done(out.back(), seconds());
         return out;

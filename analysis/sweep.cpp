@@ -117,6 +117,9 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
             throw OptionError(kPlan, name == o.param ? "param" : "param2", name,
                               "also set by an override ('" + raw + "'): a swept parameter takes the sweep's values");
     }
+    if (o.harmonics > kSweepMaxHarmonics)
+        throw OptionError(kPlan, "harmonics", std::to_string(o.harmonics),
+                          "must be <= " + std::to_string(kSweepMaxHarmonics));
     if (o.method == Method::cvode && !HSNC_WITH_CVODE)
         throw OptionError(kPlan, "method", "cvode", "not available: this build has no SUNDIALS CVODE");
     try {
@@ -213,6 +216,7 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     if (o.values2.empty()) fp << "-";
     fp << " diagram=" << (o.diagram ? 1 : 0) << " method=" << method_name(o.method);
     if (o.continuation) fp << " continuation=1 max_steps=" << o.max_steps;
+    if (o.harmonics) fp << " harmonics=" << o.harmonics;
     if (o.method != Method::hsnc)
         fp << " h=" << num(o.integrator.h) << " rtol=" << num(o.integrator.rtol) << " atol=" << num(o.integrator.atol);
     fingerprint_ = fp.str();
@@ -327,10 +331,7 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const 
             // The point gives a row that says so; the next starts where this one did.
             p = SweepPoint();
             p.failure = e.what();
-            const double nan = std::nan("");
-            p.xmax.assign(m.dof(), nan);
-            p.xrms.assign(m.dof(), nan);
-            p.a1.assign(m.dof(), nan);
+            sweep_detail::mark_failed(p, m.dof(), options_.harmonics);
             state = before;
         }
         p.value = values_[j];
@@ -392,6 +393,7 @@ SweepResult SweepPlan::result_header() const {
     r.param = options_.param;
     r.param2 = options_.param2;
     r.continuation = options_.continuation;
+    r.harmonics = options_.harmonics;
     for (const Mass& m : model_.masses) r.masses.push_back(m.name);
     return r;
 }
@@ -416,6 +418,11 @@ std::string sweep_curve_header(const SweepResult& r) {
     for (const std::string& m : r.masses) h += ",xmax_" + m + ",xrms_" + m + ",a1_" + m;
     if (!r.param2.empty()) h += "," + r.param2;
     if (r.continuation) h += ",stable,max_multiplier,bifurcation";
+    for (const std::string& m : r.masses)
+        for (std::size_t k = 1; k <= r.harmonics; ++k) {
+            const std::string ks = std::to_string(k);
+            h += ",amp" + ks + "_" + m + ",phase" + ks + "_" + m;
+        }
     return h;
 }
 
@@ -496,6 +503,8 @@ std::string write_tasks(const std::vector<std::size_t>& which, const std::vector
                  (p.settled ? "1" : "0") + " " + std::to_string(p.periods) + " " + std::to_string(p.multiple) + " " +
                  std::to_string(rows);
             for (std::size_t i = 0; i < n; ++i) s += " " + num(p.xmax[i]) + " " + num(p.xrms[i]) + " " + num(p.a1[i]);
+            s += " " + std::to_string(p.amp.size());
+            for (std::size_t j = 0; j < p.amp.size(); ++j) s += " " + num(p.amp[j]) + " " + num(p.phase[j]);
             for (std::size_t r = 0; r < rows; ++r) {
                 s += " " + num(p.strobe_t[r]);
                 for (std::size_t i = 0; i < n; ++i) s += " " + num(p.strobe_x[r * n + i]);
@@ -578,6 +587,11 @@ void read_tasks(const std::vector<std::string>& lines, std::size_t first, std::s
                 p.xrms.push_back(r.number());
                 p.a1.push_back(r.number());
             }
+            const std::size_t harmonics = r.count(n * kSweepMaxHarmonics);
+            for (std::size_t j = 0; j < harmonics; ++j) {
+                p.amp.push_back(r.number());
+                p.phase.push_back(r.number());
+            }
             for (std::size_t row = 0; row < rows; ++row) {
                 p.strobe_t.push_back(r.number());
                 for (std::size_t m = 0; m < n; ++m) p.strobe_x.push_back(r.number());
@@ -605,7 +619,7 @@ void read_tasks(const std::vector<std::string>& lines, std::size_t first, std::s
 // ---- part files ----
 
 namespace {
-constexpr const char* kPartMagic = "hsnc-sweep-part 2";
+constexpr const char* kPartMagic = "hsnc-sweep-part 3";  // 3: every point carries its harmonics
 }
 
 std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_t count,
@@ -619,6 +633,7 @@ std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_
     s += "param " + names.param + "\n";
     s += "param2 " + (names.param2.empty() ? std::string("-") : names.param2) + "\n";
     s += "continuation " + std::string(names.continuation ? "1" : "0") + "\n";
+    s += "harmonics " + std::to_string(names.harmonics) + "\n";
     s += "masses";
     for (const std::string& m : names.masses) s += " " + m;
     s += "\n";
@@ -659,7 +674,14 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
         const std::string model = field(4, "model"), param = field(5, "param"), param2 = field(6, "param2");
         const std::string cont = field(7, "continuation");
         if (cont != "0" && cont != "1") throw InputError(where + ":8: expected 'continuation 0|1'");
-        std::istringstream ms(field(8, "masses"));
+        std::size_t harmonics = 0;
+        {
+            std::istringstream hs(field(8, "harmonics"));
+            if (!(hs >> harmonics) || harmonics > kSweepMaxHarmonics)
+                throw InputError(where +
+                                 ":9: expected 'harmonics K' with 0 <= K <= " + std::to_string(kSweepMaxHarmonics));
+        }
+        std::istringstream ms(field(9, "masses"));
         std::vector<std::string> masses;
         for (std::string m; ms >> m;) masses.push_back(m);
         if (f == 0) {
@@ -671,6 +693,7 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
             r.param = param;
             r.param2 = param2 == "-" ? "" : param2;
             r.continuation = cont == "1";
+            r.harmonics = harmonics;
             r.masses = masses;
         } else if (fp != fingerprint || n != count || t != tasks) {
             throw InputError(where + ": a part of another sweep than " + names[0] + " (" +
@@ -681,14 +704,14 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
         seen[i - 1] = 1;
         // A part stopped by SIGINT ends with its '# interrupted ...' line: its
         // tasks lack points, and a merge would be a sweep with holes.
-        for (std::size_t k = 9; k < lines.size(); ++k)
+        for (std::size_t k = 10; k < lines.size(); ++k)
             if (lines[k].compare(0, 13, "# interrupted") == 0)
                 throw InputError(where + ":" + std::to_string(k + 1) + ": part " + std::to_string(i) + "/" +
                                  std::to_string(n) + " was interrupted ('" + lines[k].substr(2) +
                                  "'): run it again (hsnc sweep --part " + std::to_string(i) + "/" + std::to_string(n) +
                                  ") before merging");
         std::map<std::size_t, std::vector<SweepPoint>> mine;
-        sweep_detail::read_tasks(lines, 9, masses.size(), where, mine);
+        sweep_detail::read_tasks(lines, 10, masses.size(), where, mine);
         for (auto& [index, pts] : mine) {
             if (index >= tasks || index % count != i - 1)
                 throw InputError(where + ": task " + std::to_string(index) + " does not belong to part " +

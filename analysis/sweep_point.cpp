@@ -41,13 +41,52 @@ public:
     void on_event(double, EventKind, int, const double*, const double*) override {}
 };
 
-// What the recorded window accumulates, per mass.
+// What the recorded window accumulates, per mass: with K harmonics also the
+// integrals of x cos(k theta), x sin(k theta) for k = 2..K (k = 1: sxc, sxs).
 struct Accumulator {
-    explicit Accumulator(std::size_t n) : xmax(n, 0.0), sxx(n, 0.0), sxc(n, 0.0), sxs(n, 0.0) {}
+    Accumulator(std::size_t n, std::size_t harmonics)
+        : xmax(n, 0.0),
+          sxx(n, 0.0),
+          sxc(n, 0.0),
+          sxs(n, 0.0),
+          K(harmonics),
+          hc(harmonics > 1 ? n * (harmonics - 1) : 0, 0.0),
+          hs(hc.size(), 0.0),
+          ck(K + 1),
+          sk(K + 1) {}
     std::vector<double> xmax, sxx, sxc, sxs;
-    double length = 0;  // of the window covered so far
+    std::size_t K;
+    std::vector<double> hc, hs;  // [i * (K - 1) + k - 2]
+    double length = 0;           // of the window covered so far
 
     void extreme(std::size_t i, double x) { xmax[i] = std::max(xmax[i], std::fabs(x)); }
+
+    // Adds w x(theta) to the integrals (x: one value per mass).
+    void add(double w, double theta, const double* x) {
+        const double c = std::cos(theta), sn = std::sin(theta);
+        for (std::size_t i = 0; i < sxx.size(); ++i) {
+            sxx[i] += w * x[i] * x[i];
+            sxc[i] += w * x[i] * c;
+            sxs[i] += w * x[i] * sn;
+        }
+        if (K < 2) return;
+        // cos, sin of k theta by the angle-addition recurrence (rounding grows
+        // as k eps: 1e-13 at k = 1000).
+        ck[1] = c;
+        sk[1] = sn;
+        for (std::size_t k = 2; k <= K; ++k) {
+            ck[k] = ck[k - 1] * c - sk[k - 1] * sn;
+            sk[k] = sk[k - 1] * c + ck[k - 1] * sn;
+        }
+        for (std::size_t i = 0; i < sxx.size(); ++i)
+            for (std::size_t k = 2; k <= K; ++k) {
+                hc[i * (K - 1) + k - 2] += w * x[i] * ck[k];
+                hs[i * (K - 1) + k - 2] += w * x[i] * sk[k];
+            }
+    }
+
+private:
+    std::vector<double> ck, sk;
 };
 
 // The exact metrics of the recorded window: every segment the engine starts
@@ -103,14 +142,8 @@ public:
             for (int q = 0; q < 6; ++q) {
                 const double tau = mid + half * kGaussNode[q];
                 eval(tau);
-                const double w = half * kGaussWeight[q], theta = omega_ * (offset + tau);
-                const double c = std::cos(theta), sn = std::sin(theta);
-                for (std::size_t i = 0; i < n_; ++i) {
-                    acc_.sxx[i] += w * x_[i] * x_[i];
-                    acc_.sxc[i] += w * x_[i] * c;
-                    acc_.sxs[i] += w * x_[i] * sn;
-                    acc_.extreme(i, x_[i]);
-                }
+                acc_.add(half * kGaussWeight[q], omega_ * (offset + tau), x_.data());
+                for (std::size_t i = 0; i < n_; ++i) acc_.extreme(i, x_[i]);
             }
             // A zero of v_i inside: x_i has an extremum there.
             eval(b);
@@ -134,7 +167,8 @@ private:
     // the damped terms decay), or than h_ when the solver cannot say.
     double next_piece(double a, double length) const {
         const double rate = solver_->resolving_rate(a, kRecordTolerance);
-        const double h = rate < 0 ? h_ : 2 * kPi / (16 * std::max(rate, omega_));
+        const double top = omega_ * static_cast<double>(std::max<std::size_t>(1, acc_.K));  // the highest harmonic
+        const double h = rate < 0 ? h_ : 2 * kPi / (16 * std::max(rate, top));
         const double pieces = std::max(1.0, std::ceil((length - a) / h));
         const double b = a + (length - a) / pieces;
         // A piece below the time's rounding (a rate beyond what the instant can
@@ -255,12 +289,8 @@ public:
     void on_sample(double t, const double* x, const double* v) override {
         const double s = t - t_window_, theta = omega_ * s;
         const double w = count_ == 0 ? 0.5 * h_ : h_;  // trapezoid; the last sample's half is taken back in close()
-        for (std::size_t i = 0; i < n_; ++i) {
-            acc_.extreme(i, x[i]);
-            acc_.sxx[i] += w * x[i] * x[i];
-            acc_.sxc[i] += w * x[i] * std::cos(theta);
-            acc_.sxs[i] += w * x[i] * std::sin(theta);
-        }
+        for (std::size_t i = 0; i < n_; ++i) acc_.extreme(i, x[i]);
+        acc_.add(w, theta, x);
         if (keep_ && count_ > 0 && count_ % per_period_ == 0) {
             point_.strobe_t.push_back(t);
             point_.strobe_x.insert(point_.strobe_x.end(), x, x + n_);
@@ -272,13 +302,7 @@ public:
     }
     void on_event(double, EventKind, int, const double*, const double*) override {}
     void close() {
-        const double theta = omega_ * (last_t_ - t_window_);
-        for (std::size_t i = 0; i < n_; ++i) {
-            const double x = last_x_[i], w = 0.5 * h_;
-            acc_.sxx[i] -= w * x * x;
-            acc_.sxc[i] -= w * x * std::cos(theta);
-            acc_.sxs[i] -= w * x * std::sin(theta);
-        }
+        acc_.add(-0.5 * h_, omega_ * (last_t_ - t_window_), last_x_.data());
         acc_.length = last_t_ - t_window_;
     }
 
@@ -293,6 +317,13 @@ private:
     std::vector<double> last_x_;
     double last_t_ = 0;
 };
+
+// An angle in (-pi, pi].
+double harmonic_phase(double angle) {
+    double a = std::remainder(angle, 2 * kPi);
+    if (a <= -kPi) a += 2 * kPi;
+    return a;
+}
 
 // The norm of a state: max(|x_i|, |v_i|/omega) (v/omega is a length too).
 double magnitude(const State& a, double omega) {
@@ -376,6 +407,15 @@ void check_cancel(const SweepOptions& o) {
     if (o.cancel && o.cancel->load(std::memory_order_relaxed)) throw SweepCancelled();
 }
 
+void mark_failed(SweepPoint& p, std::size_t masses, std::size_t harmonics) {
+    const double nan = std::nan("");
+    p.xmax.assign(masses, nan);
+    p.xrms.assign(masses, nan);
+    p.a1.assign(masses, nan);
+    p.amp.assign(masses * harmonics, nan);
+    p.phase.assign(masses * harmonics, nan);
+}
+
 bool stop_requested(const SweepOptions& o) { return o.stop && o.stop->load(std::memory_order_relaxed); }
 
 void record(const Model& point_model, State& state, const SweepOptions& o, const std::string& what, std::size_t k,
@@ -387,12 +427,13 @@ void record(const Model& point_model, State& state, const SweepOptions& o, const
     const double t0 = m.t0;
     // The baselines' grid (and the recorder's where a solver cannot say, SegmentRecorder::next_piece):
     // 1/16 of the shortest period present.
-    const double ratio = std::max(1.0, highest_natural_frequency(m) / omega);
+    const double ratio = std::max({1.0, highest_natural_frequency(m) / omega, static_cast<double>(o.harmonics)});
     const auto per_period = static_cast<std::size_t>(16 * std::ceil(ratio));
     const double h = period / static_cast<double>(per_period);
     const double tr = t0 + static_cast<double>(k) * period;
     const double te = t0 + static_cast<double>(k + periods) * period;
-    Accumulator acc(n);
+    const std::size_t K = o.harmonics;
+    Accumulator acc(n, K);
     if (o.method == Method::hsnc) {
         std::unique_ptr<SolverProvider> own;
         if (!provider) provider = (own = std::make_unique<GenericSolverProvider>(m)).get();
@@ -413,6 +454,19 @@ void record(const Model& point_model, State& state, const SweepOptions& o, const
         pt.xrms[i] = std::sqrt(acc.sxx[i] / acc.length);
         pt.a1[i] = std::hypot(2 * acc.sxc[i] / acc.length, 2 * acc.sxs[i] / acc.length);
     }
+    pt.amp.resize(n * K);
+    pt.phase.resize(n * K);
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t k = 1; k <= K; ++k) {
+            const double c = k == 1 ? acc.sxc[i] : acc.hc[i * (K - 1) + k - 2];
+            const double s = k == 1 ? acc.sxs[i] : acc.hs[i * (K - 1) + k - 2];
+            const double A = 2 * c / acc.length, B = 2 * s / acc.length;
+            pt.amp[i * K + k - 1] = std::hypot(A, B);
+            // x = A cos(k theta) + B sin(k theta) = amp sin(k theta + atan2(A, B)), theta = omega (t - t_r);
+            // omega t_r = omega t0 + 2 pi (whole periods): the phase against sin(k omega t), the
+            // forcing's own form (a linear oscillator's phase is arg H).
+            pt.phase[i * K + k - 1] = harmonic_phase(std::atan2(A, B) - static_cast<double>(k) * omega * t0);
+        }
 }
 
 SweepPoint run_point(const Model& point_model, State& state, const SweepOptions& o, const std::string& what) {

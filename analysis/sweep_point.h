@@ -30,6 +30,9 @@ SweepPoint run_point(const Model& model, State& state, const SweepOptions& optio
 void record(const Model& model, State& state, const SweepOptions& options, const std::string& what, std::size_t k,
             std::size_t periods, SweepPoint& pt, SolverProvider* provider = nullptr);
 
+/// Fills a failed point's metrics (xmax, xrms, a1, amp, phase) with NaN.
+void mark_failed(SweepPoint& point, std::size_t masses, std::size_t harmonics);
+
 /// SweepCancelled when options.cancel is set.
 void check_cancel(const SweepOptions& options);
 

@@ -54,6 +54,7 @@ struct SweepFlags {
     bool quiet = false;
     bool continuation = false;
     long long max_steps = 0;
+    long long harmonics = 0;
 };
 
 // A count flag's value, refused below `least` naming the flag.
@@ -71,11 +72,19 @@ struct MergeFlags {
 
 // The flag of each SweepOptions field, for the library's OptionError.
 InputError flagged(const OptionError& e) {
-    static const std::pair<const char*, const char*> flags[] = {
-        {"param", "--param"},           {"from", "--from"},       {"to", "--to"},
-        {"points", "--points"},         {"direction", "--direction"}, {"max_periods", "--max-periods"},
-        {"record_periods", "--record-periods"}, {"param2", "--param2"}, {"values2", "--values2"},
-        {"method", "--method"}, {"restart_each", "--restart-each"}, {"max_steps", "--max-steps"}};
+    static const std::pair<const char*, const char*> flags[] = {{"param", "--param"},
+                                                                {"from", "--from"},
+                                                                {"to", "--to"},
+                                                                {"points", "--points"},
+                                                                {"direction", "--direction"},
+                                                                {"max_periods", "--max-periods"},
+                                                                {"record_periods", "--record-periods"},
+                                                                {"param2", "--param2"},
+                                                                {"values2", "--values2"},
+                                                                {"method", "--method"},
+                                                                {"restart_each", "--restart-each"},
+                                                                {"max_steps", "--max-steps"},
+                                                                {"harmonics", "--harmonics"}};
     for (const auto& f : flags)
         if (e.option() == f.first) return InputError(std::string(f.second) + ": " + e.reason());
     return InputError(e.what());
@@ -188,6 +197,10 @@ void write_curve(const SweepResult& r, CsvFile& f, const std::string& note) {
             f.text(p.failure.empty() ? (p.stable ? "true" : "false") : "");
             f.number(p.max_multiplier);
             f.text(p.bifurcation.c_str());
+        }
+        for (std::size_t j = 0; j < p.amp.size(); ++j) {
+            f.number(p.amp[j]);
+            f.number(p.phase[j]);
         }
         f.end_row();
     }
@@ -355,6 +368,7 @@ SweepOptions sweep_options(const SweepFlags& f) {
     o.threads = f.threads;
     o.continuation = f.continuation;
     o.max_steps = count_flag("--max-steps", f.max_steps, 0);
+    o.harmonics = count_flag("--harmonics", f.harmonics, 0);
     o.integrator.h = f.h;
     o.integrator.rtol = f.rtol;
     o.integrator.atol = f.atol;
@@ -637,6 +651,10 @@ void add_sweep(CLI::App& app, int& exit_code) {
                   "stable,max_multiplier,bifurcation); the branch starts at --from (--to for --direction down)");
     sub->add_option("--max-steps", f->max_steps,
                     "--continuation: points at most per branch (default 20 x --points)");
+    sub->add_option("--harmonics", f->harmonics,
+                    "amplitude and phase of the first K harmonics of every mass over the recorded periods "
+                    "(columns amp<k>_<mass>,phase<k>_<mass> at the end; x = mean + sum of amp sin(k omega t + phase), "
+                    "phase in rad)");
     sub->add_flag("--quiet", f->quiet, "no progress lines on stderr (failures are still said)");
     sub->callback([f, &exit_code] { exit_code = sweep(*f); });
 

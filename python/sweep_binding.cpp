@@ -33,10 +33,11 @@ py::array_t<double> matrix(const std::vector<double>& data, std::size_t rows, st
 
 py::dict sweep(const std::string& kind, const std::string& what, const std::string& source,
                const std::vector<std::string>& set, const std::vector<std::string>& x0,
-               const std::vector<std::string>& v0, const std::string& param, double from, double to,
-               std::size_t points, const std::string& direction, std::size_t max_periods, std::size_t record_periods,
-               bool restart_each, const std::string& param2, const std::vector<double>& values2, unsigned threads,
-               const std::string& method, double rtol, double atol, bool continuation, std::size_t max_steps) {
+               const std::vector<std::string>& v0, const std::string& param, double from, double to, std::size_t points,
+               const std::string& direction, std::size_t max_periods, std::size_t record_periods, bool restart_each,
+               const std::string& param2, const std::vector<double>& values2, unsigned threads,
+               const std::string& method, double rtol, double atol, bool continuation, std::size_t max_steps,
+               std::size_t harmonics) {
     SweepOptions o;
     o.param = param;
     o.from = from;
@@ -54,6 +55,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
     o.integrator.atol = atol;
     o.continuation = continuation;
     o.max_steps = max_steps;
+    o.harmonics = harmonics;
     std::atomic<bool> cancel{false};
     o.cancel = &cancel;
     const ModelOverrides ov{set, x0, v0, {}};
@@ -112,7 +114,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
     py::array_t<bool> stable(np);
     py::array_t<double> max_multiplier(np);
     py::list bifurcation, failure, stop;
-    std::vector<double> xmax, xrms, a1;
+    std::vector<double> xmax, xrms, a1, amp, phase;
     py::list dirs;
     std::vector<double> dv, dv2, dt, dx, dvel;
     py::list ddirs;
@@ -132,6 +134,8 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
         xmax.insert(xmax.end(), p.xmax.begin(), p.xmax.end());
         xrms.insert(xrms.end(), p.xrms.begin(), p.xrms.end());
         a1.insert(a1.end(), p.a1.begin(), p.a1.end());
+        amp.insert(amp.end(), p.amp.begin(), p.amp.end());
+        phase.insert(phase.end(), p.phase.begin(), p.phase.end());
         for (std::size_t k = 0; k < p.strobe_t.size(); ++k) {
             dv.push_back(p.value);
             dv2.push_back(p.value2);
@@ -161,6 +165,14 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
     d["xmax"] = matrix(xmax, np, n);
     d["xrms"] = matrix(xrms, np, n);
     d["a1"] = matrix(a1, np, n);
+    if (r.harmonics) {
+        const std::size_t K = r.harmonics;
+        py::array_t<double> a({np, n, K}), ph({np, n, K});
+        std::copy(amp.begin(), amp.end(), a.mutable_data());
+        std::copy(phase.begin(), phase.end(), ph.mutable_data());
+        d["amp"] = a;
+        d["phase"] = ph;
+    }
     d["diagram"] = diagram;
     d["failure"] = failure;
     if (r.continuation) {
@@ -179,7 +191,7 @@ void bind_sweep(py::module_& m) {
           py::arg("v0"), py::arg("param"), py::arg("from_"), py::arg("to"), py::arg("points"), py::arg("direction"),
           py::arg("max_periods"), py::arg("record_periods"), py::arg("restart_each"), py::arg("param2"),
           py::arg("values2"), py::arg("threads"), py::arg("method"), py::arg("rtol"), py::arg("atol"),
-          py::arg("continuation") = false, py::arg("max_steps") = 0);
+          py::arg("continuation") = false, py::arg("max_steps") = 0, py::arg("harmonics") = 0);
 }
 
 }  // namespace hsnc::python

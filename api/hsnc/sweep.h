@@ -34,7 +34,12 @@
 //            every contact closed) and refined to rounding (Newton on v_i
 //            with a_i, in a bisection bracket);
 //   xrms_i = sqrt(1/(R*T) * integral x_i^2 dt);
-//   a1_i   = sqrt(A^2 + B^2), A, B = 2/(R*T) * integral x_i cos, sin(omega (t - t_r)) dt,
+//   a1_i   = sqrt(A^2 + B^2), A, B = 2/(R*T) * integral x_i cos, sin(omega (t - t_r)) dt;
+//   with `harmonics` = K > 0, for k = 1..K: amp_ik = sqrt(A_k^2 + B_k^2) and
+//   phase_ik = atan2(A_k, B_k) - k omega t0 in (-pi, pi], A_k, B_k as A, B with
+//   k omega, so that x_i(t) = mean + sum_k amp_ik sin(k omega t + phase_ik) + ...
+//   over the window, t the model's time, sin as the forcing's (amp_i1 is a1_i;
+//   a linear oscillator's phase_i1 is arg H(omega));
 // the integrals by 6-point Gauss-Legendre on the same grid inside each
 // segment (the segments are smooth: the quadrature error is below 1e-20
 // relative). A point whose run stops (chattering, Zeno, a solver failure)
@@ -107,6 +112,8 @@ const char* sweep_direction_name(SweepDirection direction);
 /// Steady-state detection (interface.md section 6).
 inline constexpr double kSweepSettleTolerance = 1e-9;
 inline constexpr int kSweepMaxMultiple = 8;
+/// SweepOptions::harmonics at most.
+inline constexpr std::size_t kSweepMaxHarmonics = 1000;
 
 /// One point done (SweepOptions::progress).
 struct SweepProgress {
@@ -151,6 +158,9 @@ struct SweepOptions {
     unsigned threads = 1;
     /// Keep the stroboscopic samples of the recorded periods (the diagram).
     bool diagram = true;
+    /// Amplitude and phase of the first `harmonics` harmonics of every mass
+    /// over the recorded window (0: none; at most kSweepMaxHarmonics).
+    std::size_t harmonics = 0;
     /// hsnc (exact); a numerical baseline for comparisons (see the file comment).
     Method method = Method::hsnc;
     IntegratorOptions integrator;
@@ -180,6 +190,9 @@ struct SweepPoint {
     std::size_t periods = 0;  ///< periods run before recording
     int multiple = 0;         ///< p; 0 when not settled
     std::vector<double> xmax, xrms, a1;  ///< one per mass (NaN when the point failed)
+    /// With SweepOptions::harmonics = K: amplitude and phase (rad) of harmonic k
+    /// (1..K) of mass i at [i * K + k - 1] (NaN when the point failed).
+    std::vector<double> amp, phase;
     std::string failure;  ///< why the point's run stopped ("" when it did not; see the file comment)
     /// Continuation only: the orbit's stability and largest |multiplier|, the
     /// bifurcations crossed since the previous point of the branch ("" or
@@ -199,6 +212,7 @@ struct SweepResult {
     std::string model;                ///< the model's name
     std::string param, param2;        ///< param2 empty without one
     bool continuation = false;        ///< the curve has the columns stable,max_multiplier,bifurcation
+    std::size_t harmonics = 0;        ///< the curve has amp<k>_<mass>,phase<k>_<mass> at its end, k = 1..harmonics
     std::vector<std::string> masses;  ///< names, model order
     std::vector<SweepPoint> points;   ///< in output order (task order, points in run order)
 };
@@ -280,7 +294,8 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
 
 /// The response-curve and diagram CSV headers of interface.md section 6
 /// (with param2: its name as one more column at the end; with continuation:
-/// then stable,max_multiplier,bifurcation).
+/// then stable,max_multiplier,bifurcation; with harmonics: then
+/// amp<k>_<mass>,phase<k>_<mass> for every mass and k = 1..harmonics).
 std::string sweep_curve_header(const SweepResult& r);
 std::string sweep_diagram_header(const SweepResult& r);
 

@@ -366,7 +366,7 @@ def _override_texts(d):
 
 def sweep(model, param, start, stop, points, direction="up", max_periods=500, record_periods=16,
           restart_each=False, param2=None, values2=None, threads=1, method="hsnc", rtol=1e-10, atol=1e-12,
-          continuation=False, max_steps=0):
+          continuation=False, max_steps=0, harmonics=0):
     """The response curve and bifurcation diagram of `model` (a Model) over
     the parameter `param`, as `hsnc sweep --param PARAM --from START --to
     STOP --points POINTS` (interface.md section 6): `points` values from
@@ -385,6 +385,12 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     (x, v: rows x masses), one row per recorded period of every point;
     "failure" (str per point, "" unless its run stopped: then settled is
     False and xmax, xrms, a1 are NaN; the sweep goes on).
+
+    harmonics=K > 0 (as `--harmonics K`): also "amp" and "phase" (points x
+    masses x K): amplitude and phase (rad, in (-pi, pi]) of harmonics 1..K
+    over the recorded periods, x_i(t) = mean + sum_k amp[., i, k-1]
+    sin(k omega t + phase[., i, k-1]) + ..., omega the forcing frequency (a
+    linear oscillator's phase is arg H(omega)).
 
     continuation=True (as `--continuation`): the periodic orbit followed
     over the parameter by pseudo-arclength continuation with exact shooting,
@@ -421,9 +427,10 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     atol = _positive(f, "atol", atol)
     continuation = _bool(f, "continuation", continuation)
     max_steps = _int(f, "max_steps", max_steps, 0, _SIZE_MAX, "an integer >= 0 (0: 20 * points; at most 2**64 - 1)")
+    harmonics = _int(f, "harmonics", harmonics, 0, 1000, "an integer from 0 to 1000")
     return _hsnc._sweep(kind, what, source, _override_texts(s), _override_texts(x0), _override_texts(v0),
                         param, start, stop, points, direction, max_periods, record_periods, restart_each, param2,
-                        values2, threads, method, rtol, atol, continuation, max_steps)
+                        values2, threads, method, rtol, atol, continuation, max_steps, harmonics)
 
 
 def _sweep_point(task):
@@ -434,7 +441,7 @@ def _sweep_point(task):
 
 
 def sweep_map(model, param, start, stop, points, map=map, max_periods=500, record_periods=16, method="hsnc",
-              rtol=1e-10, atol=1e-12):
+              rtol=1e-10, atol=1e-12, harmonics=0):
     """hsnc.sweep(model, param, start, stop, points, restart_each=True) with
     its points run by `map` (any map(function, iterable) that keeps the order:
     the built-in map, multiprocessing.Pool.map, an Executor's map, a Dask
@@ -453,7 +460,8 @@ def sweep_map(model, param, start, stop, points, map=map, max_periods=500, recor
     options = dict(max_periods=_int(f, "max_periods", max_periods, 1, _SIZE_MAX),
                    record_periods=_int(f, "record_periods", record_periods, 1, _SIZE_MAX),
                    method=_text(f, "method", method, _METHODS), rtol=_positive(f, "rtol", rtol),
-                   atol=_positive(f, "atol", atol))
+                   atol=_positive(f, "atol", atol),
+                   harmonics=_int(f, "harmonics", harmonics, 0, 1000, "an integer from 0 to 1000"))
     # The built-in sweep's values (analysis/sweep.cpp), the same double operations.
     values = [start if j == 0 else stop if j + 1 == points else start + (stop - start) * float(j) / float(points - 1)
               for j in range(points)]
@@ -461,7 +469,8 @@ def sweep_map(model, param, start, stop, points, map=map, max_periods=500, recor
     if len(parts) != points:
         raise RunError("%s(): the map returned %d results for %d points" % (f, len(parts), points))
     joined = {key: parts[0][key] for key in ("param", "param2", "masses")}
-    for key in ("value", "value2", "direction", "settled", "periods", "multiple", "xmax", "xrms", "a1"):
+    for key in ("value", "value2", "direction", "settled", "periods", "multiple", "xmax", "xrms", "a1") + \
+            (("amp", "phase") if options["harmonics"] else ()):
         joined[key] = np.concatenate([p[key] for p in parts])
     joined["diagram"] = {key: np.concatenate([p["diagram"][key] for p in parts]) for key in parts[0]["diagram"]}
     joined["failure"] = [text for p in parts for text in p["failure"]]
@@ -636,6 +645,11 @@ def _h5_sweep(root, r):
     if "stable" in r:
         stable = ["" if fail else w for fail, w in zip(r["failure"], _h5_words(r["stable"]))]
         columns += [("stable", stable), ("max_multiplier", r["max_multiplier"]), ("bifurcation", list(r["bifurcation"]))]
+    if "amp" in r:
+        amp, phase = np.asarray(r["amp"]), np.asarray(r["phase"])
+        for i, m in enumerate(masses):
+            for k in range(amp.shape[2]):
+                columns += [("amp%d_%s" % (k + 1, m), amp[:, i, k]), ("phase%d_%s" % (k + 1, m), phase[:, i, k])]
     _h5_table(root.create_group("sweep/curve"), columns)
     d = r["diagram"]
     columns = [(param, d["value"]), ("direction", list(d["direction"])), ("t", d["t"])] + \

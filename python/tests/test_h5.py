@@ -95,9 +95,9 @@ def test_to_h5_writes_what_the_command_line_writes(tmp_path):
             p / "cli-p.h5", "--quiet")
     hsnc.to_h5(hsnc.periodic(model, transient=300), p / "py-p.h5", model)
     base = hsnc.Model.from_file(HARDENING)
-    run_cli("sweep", HARDENING, "--param", "omega", "--from", "0.6", "--to", "2", "--points", "9", "--h5",
-            p / "cli-s.h5", "--quiet")
-    hsnc.to_h5(hsnc.sweep(base, "omega", 0.6, 2.0, 9), p / "py-s.h5", base)
+    run_cli("sweep", HARDENING, "--param", "omega", "--from", "0.6", "--to", "2", "--points", "9", "--harmonics",
+            "2", "--h5", p / "cli-s.h5", "--quiet")
+    hsnc.to_h5(hsnc.sweep(base, "omega", 0.6, 2.0, 9, harmonics=2), p / "py-s.h5", base)
     scenario = hsnc.Model.from_file(SCENARIO2)
     run_cli("lyapunov", SCENARIO2, "--t-end", "30", "--h5", p / "cli-l.h5", "--quiet")
     hsnc.to_h5(hsnc.lyapunov(scenario, t_end=30), p / "py-l.h5", scenario)

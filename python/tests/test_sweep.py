@@ -79,3 +79,31 @@ def test_bad_input_raises_input_error():
         hsnc.sweep(model, "omega", 1, -1, 3)
     with pytest.raises(ValueError):
         hsnc.sweep(model, "omega", 1, 2, 0)
+
+
+def test_harmonics_amplitude_and_phase_against_h_and_the_command_line(tmp_path):
+    """harmonics=K: amp and phase (points x masses x K); a linear
+    oscillator's first harmonic is |H| and arg H (x = sum amp sin(k w t +
+    phase)), the others vanish; the CLI's columns are the same numbers."""
+    path = tmp_path / "linear.toml"
+    path.write_text(LINEAR)
+    model = hsnc.Model.from_file(path)
+    r = hsnc.sweep(model, "omega", 0.6, 1.4, 3, max_periods=2000, record_periods=4, harmonics=2)
+    assert r["amp"].shape == (3, 1, 2) and r["phase"].shape == (3, 1, 2)
+    w = r["value"]
+    H = 1 / (1 - w**2 + 0.1j * w)
+    np.testing.assert_allclose(r["amp"][:, 0, 0], np.abs(H), rtol=1e-8)
+    np.testing.assert_allclose(r["phase"][:, 0, 0], np.angle(H), atol=1e-8)
+    assert (r["amp"][:, 0, 0] == r["a1"][:, 0]).all()
+    assert (r["amp"][:, 0, 1] < 1e-8 * r["amp"][:, 0, 0]).all()
+    assert "amp" not in hsnc.sweep(model, "omega", 0.6, 1.4, 2, max_periods=50)
+    out = tmp_path / "curve.csv"
+    run_cli("sweep", path, "--param", "omega", "--from", 0.6, "--to", 1.4, "--points", 3, "--max-periods", 2000,
+            "--record-periods", 4, "--harmonics", 2, "--quiet", "--out", out)
+    header, rows = read_csv(out)
+    assert header[-4:] == ["amp1_m", "phase1_m", "amp2_m", "phase2_m"]
+    for i, row in enumerate(rows):
+        assert [float(c) for c in row[-4:]] == [r["amp"][i, 0, 0], r["phase"][i, 0, 0], r["amp"][i, 0, 1],
+                                                r["phase"][i, 0, 1]]
+    with pytest.raises(hsnc.InputError, match="harmonics"):
+        hsnc.sweep(model, "omega", 0.6, 1.4, 3, harmonics=-1)

@@ -13,7 +13,7 @@ from conftest import SOURCE_DIR
 
 DAMPER = str(SOURCE_DIR / "examples" / "jenkins" / "friction_damper.toml")
 ARGS = ("omega", 8.0, 12.0, 7)
-OPTIONS = dict(max_periods=60, record_periods=4)
+OPTIONS = dict(max_periods=60, record_periods=4, harmonics=3)
 
 
 def builtin():
@@ -22,7 +22,7 @@ def builtin():
 
 def same(a, b):
     assert a["param"] == b["param"] and a["param2"] == b["param2"] and a["masses"] == b["masses"]
-    for key in ("value", "value2", "direction", "settled", "periods", "multiple", "xmax", "xrms", "a1"):
+    for key in ("value", "value2", "direction", "settled", "periods", "multiple", "xmax", "xrms", "a1", "amp", "phase"):
         assert np.array_equal(a[key], b[key], equal_nan=key not in ("direction",)), key
     for key in a["diagram"]:
         assert np.array_equal(a["diagram"][key], b["diagram"][key], equal_nan=key != "direction"), key
