@@ -107,6 +107,164 @@ TestFunctions test_functions(const std::vector<std::complex<double>>& mu) {
     return f;
 }
 
+// The unit tangent of the branch (the null vector of the N x (N + 1)
+// Jacobian J), turned the way of `previous`.
+Eigen::VectorXd tangent(const Eigen::MatrixXd& J, const Eigen::VectorXd& previous) {
+    const Eigen::Index N = J.rows();
+    Eigen::MatrixXd A(N + 1, N + 1);
+    A.topRows(N) = J;
+    A.row(N) = previous.transpose();
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(N + 1);
+    e(N) = 1;
+    Eigen::VectorXd t = A.fullPivLu().solve(e);
+    t.normalize();
+    if (t.dot(previous) < 0) t = -t;
+    return t;
+}
+
+// An orbit of a branch: the parameter, the state y = (x, v, s) at t0, its multipliers.
+struct OrbitAt {
+    double p = 0;
+    Eigen::VectorXd y;
+    std::vector<std::complex<double>> mu;
+    std::size_t neutral = 0;
+};
+
+// The columns of a branch point from its orbit: the direction the parameter
+// moved from `previous` (null: the branch's first point, its direction),
+// settled, multiple 1, stability, and the bifurcations crossed since
+// `previous`, with `also` ("grazing", or "") joined last.
+void branch_point(SweepPoint& pt, const OrbitAt& at, const OrbitAt* previous, const Branch& b, double sense,
+                  std::size_t periods, const std::string& also) {
+    pt.value = at.p;
+    pt.value2 = b.value2;
+    pt.direction = previous == nullptr   ? (sense > 0 ? SweepDirection::up : SweepDirection::down)
+                   : at.p >= previous->p ? SweepDirection::up
+                                         : SweepDirection::down;
+    pt.settled = true;
+    pt.multiple = 1;
+    pt.branch_start = previous == nullptr;
+    pt.periods = periods;
+    pt.max_multiplier = at.mu.empty() ? 0.0 : std::abs(at.mu.front());
+    pt.stable = analysis::orbit_stable(at.mu, at.neutral);  // hsnc/periodic.h
+    if (previous) pt.bifurcation = bifurcations_between(previous->mu, at.mu);
+    if (!also.empty()) pt.bifurcation += (pt.bifurcation.empty() ? "" : "+") + also;
+}
+
+// Grazing between two orbits of a branch, a (the previous point) and b: a
+// contact's largest (or smallest) gap function over the orbit, G = u - gap,
+// changes sign (the orbit starts or stops closing, or opening, it), and its
+// parameter is located to rounding as a point of the branch: Illinois
+// iterations on that extreme, each an orbit shot (to 1e-13) from the chord's
+// state at the trial parameter and recorded over one period (the extreme from
+// the exact segments, refined to rounding). Returns the grazing points, in
+// the order of the branch; empty when none, or when a fold lies between (the
+// parameter is then no coordinate of the chord).
+class GrazingLocator {
+public:
+    GrazingLocator(const Branch& b, const SweepOptions& o, PeriodMaps& maps) : b_(b), o_(o), maps_(maps) {}
+
+    std::vector<std::pair<SweepPoint, OrbitAt>> between(const SweepPoint& pa, const OrbitAt& a, const SweepPoint& pb,
+                                                        const OrbitAt& b) {
+        std::vector<std::pair<SweepPoint, OrbitAt>> found;
+        if (a.p == b.p || !bifurcations_between(a.mu, b.mu).empty()) return found;
+        for (std::size_t c = 0; c < pa.gap_max.size() && c < pb.gap_max.size(); ++c)
+            for (const bool largest : {true, false}) {
+                const double fa = largest ? pa.gap_max[c] : pa.gap_min[c], fb = largest ? pb.gap_max[c] : pb.gap_min[c];
+                if (!changes_sign(fa, fb)) continue;
+                try {
+                    found.push_back(locate(a, b, c, largest, fa, fb));
+                } catch (const RunError&) {
+                    // Not located (an orbit not found near the grazing): the
+                    // branch goes on; the crossing is not named.
+                }
+            }
+        std::sort(found.begin(), found.end(), [&](const auto& x, const auto& y) {
+            return std::fabs(x.second.p - a.p) < std::fabs(y.second.p - a.p);
+        });
+        return found;
+    }
+
+    // Whether a contact's largest or smallest G changes sign from pa to pb.
+    static bool crossed(const SweepPoint& pa, const SweepPoint& pb) {
+        for (std::size_t c = 0; c < pa.gap_max.size() && c < pb.gap_max.size(); ++c)
+            if (changes_sign(pa.gap_max[c], pb.gap_max[c]) || changes_sign(pa.gap_min[c], pb.gap_min[c])) return true;
+        return false;
+    }
+
+private:
+    static bool changes_sign(double fa, double fb) {
+        return std::isfinite(fa) && std::isfinite(fb) && (fa < 0) != (fb < 0);
+    }
+
+    // The orbit at p (from the chord's state there) recorded over one period.
+    std::pair<SweepPoint, OrbitAt> shoot(const OrbitAt& a, const OrbitAt& b, double p) {
+        const double s = (p - a.p) / (b.p - a.p);
+        const Eigen::VectorXd guess = a.y + s * (b.y - a.y);
+        const Model& model = maps_.model(p);
+        const std::size_t n = model.dof();
+        Model m = model;
+        m.x0.assign(guess.data(), guess.data() + n);
+        m.v0.assign(guess.data() + n, guess.data() + 2 * n);
+        m.slider0.assign(guess.data() + 2 * n, guess.data() + guess.size());
+        PeriodicOptions po;
+        po.kernels = KernelChoice::eigen;
+        po.tolerance = 1e-13;
+        PeriodicResult r = periodic(m, po);
+        if (r.status != PeriodicStatus::ok) {  // rounding may hold the residual above 1e-13
+            po.tolerance = kTolerance;
+            r = periodic(m, po);
+        }
+        if (r.status != PeriodicStatus::ok) throw RunError(r.message);
+        OrbitAt at;
+        at.p = p;
+        at.y = guess;
+        for (std::size_t i = 0; i < n; ++i) at.y(static_cast<Eigen::Index>(i)) = r.x[i];
+        for (std::size_t i = 0; i < n; ++i) at.y(static_cast<Eigen::Index>(n + i)) = r.v[i];
+        for (std::size_t j = 0; j < r.s.size(); ++j) at.y(static_cast<Eigen::Index>(2 * n + j)) = r.s[j];
+        at.mu = r.multipliers;
+        at.neutral = r.neutral;
+        State state{r.x, r.v, r.s};
+        SweepPoint pt;
+        record(model, state, o_, b_.param + " = " + shortest_text(p) + b_.where, 0, 1, pt);
+        return {std::move(pt), std::move(at)};
+    }
+
+    std::pair<SweepPoint, OrbitAt> locate(const OrbitAt& a, const OrbitAt& b, std::size_t c, bool largest, double fa,
+                                          double fb) {
+        double pa = a.p, pb = b.p;
+        std::pair<SweepPoint, OrbitAt> best;
+        double fbest = INFINITY;
+        int side = 0;  // Illinois: the end kept twice in a row has its value halved
+        for (int it = 0; it < 100; ++it) {
+            double p = (pa * fb - pb * fa) / (fb - fa);
+            if (!(p > std::min(pa, pb) && p < std::max(pa, pb))) p = 0.5 * (pa + pb);
+            auto at = shoot(a, b, p);
+            const double f = largest ? at.first.gap_max[c] : at.first.gap_min[c];
+            if (std::fabs(f) < fbest) fbest = std::fabs(f), best = at;
+            if (f == 0) break;
+            if ((f < 0) == (fa < 0)) {
+                pa = p, fa = f;
+                if (side == -1) fb *= 0.5;
+                side = -1;
+            } else {
+                pb = p, fb = f;
+                if (side == 1) fa *= 0.5;
+                side = 1;
+            }
+            // The bracket at the parameter's rounding.
+            if (std::fabs(pb - pa) <=
+                4 * std::numeric_limits<double>::epsilon() * std::max(std::fabs(pa), std::fabs(pb)))
+                break;
+        }
+        return best;
+    }
+
+    const Branch& b_;
+    const SweepOptions& o_;
+    PeriodMaps& maps_;
+};
+
 }  // namespace
 
 std::string bifurcations_between(const std::vector<std::complex<double>>& a,
@@ -207,18 +365,6 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         }
         return Eigen::VectorXd((a.Py - c.Py) / (2 * d));
     };
-    // The unit tangent of the branch, turned the way of `previous`.
-    auto tangent = [&](const Eigen::MatrixXd& J, const Eigen::VectorXd& previous) {
-        Eigen::MatrixXd A(N + 1, N + 1);
-        A.topRows(N) = J;
-        A.row(N) = previous.transpose();
-        Eigen::VectorXd e = Eigen::VectorXd::Zero(N + 1);
-        e(N) = 1;
-        Eigen::VectorXd t = A.fullPivLu().solve(e);
-        t.normalize();
-        if (t.dot(previous) < 0) t = -t;
-        return t;
-    };
 
     Eigen::VectorXd y(N);
     for (std::size_t i = 0; i < n; ++i) y(static_cast<Eigen::Index>(i)) = orbit.x[i], y(static_cast<Eigen::Index>(n + i)) = orbit.v[i];
@@ -230,27 +376,28 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
     std::vector<std::complex<double>> mu = orbit.multipliers;
     std::size_t neutral = orbit.neutral;  // of mu: a family's multipliers at +1 (hsnc/periodic.h)
 
-    // A point of the branch: the orbit at (p, y) with multipliers mu, one period recorded.
-    auto emit = [&](const Model& model, double previous_p, const std::vector<std::complex<double>>* previous_mu,
-                    std::size_t periods) {
+    // A point of the branch: the orbit at (p, y) with multipliers mu, one
+    // period recorded; before it the grazing points since the last one.
+    GrazingLocator grazing(b, o, maps);
+    OrbitAt last;
+    auto emit = [&](const Model& model, bool first_point, std::size_t periods) {
         SweepPoint pt;
-        State s;
-        s.x.assign(y.data(), y.data() + n);
-        s.v.assign(y.data() + n, y.data() + 2 * n);
-        s.slider.assign(y.data() + 2 * n, y.data() + N);
+        State s{{y.data(), y.data() + n}, {y.data() + n, y.data() + 2 * n}, {y.data() + 2 * n, y.data() + N}};
         record(model, s, o, name(p), 0, 1, pt);
-        pt.value = p;
-        pt.value2 = b.value2;
-        pt.direction = previous_mu == nullptr ? (sense > 0 ? SweepDirection::up : SweepDirection::down)
-                       : p >= previous_p     ? SweepDirection::up
-                                             : SweepDirection::down;
-        pt.settled = true;
-        pt.multiple = 1;
-        pt.branch_start = previous_mu == nullptr;
-        pt.periods = periods;
-        pt.max_multiplier = mu.empty() ? 0.0 : std::abs(mu.front());
-        pt.stable = analysis::orbit_stable(mu, neutral);  // hsnc/periodic.h
-        if (previous_mu) pt.bifurcation = bifurcations_between(*previous_mu, mu);
+        const OrbitAt here{p, y, mu, neutral};
+        std::string also;  // a grazing crossed but not located (a fold between)
+        if (!first_point) {
+            auto found = grazing.between(out.back(), last, pt, here);
+            if (found.empty() && GrazingLocator::crossed(out.back(), pt)) also = "grazing";
+            for (auto& [g, at] : found) {
+                branch_point(g, at, &last, b, sense, 0, "grazing");
+                out.push_back(std::move(g));
+                done(out.back(), seconds());
+                last = at;
+            }
+        }
+        branch_point(pt, here, first_point ? nullptr : &last, b, sense, periods, also);
+        last = here;
         out.push_back(std::move(pt));
         done(out.back(), seconds());
     };
@@ -264,7 +411,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         t = tangent(jacobian(M, Pp), start_direction);
     }
     try {
-        emit(first, p, nullptr, transient);
+        emit(first, true, transient);
     } catch (const RunError& e) {
         stop = e.what();
     }
@@ -351,8 +498,6 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
                    ", the smallest): " + fail;
             break;
         }
-        const double previous_p = p;
-        const std::vector<std::complex<double>> previous_mu = mu;
         if (pk < lo || pk > hi) {
             // The branch leaves [from, to]: its last point exactly on the
             // bound, by shooting at that value from the state interpolated there.
@@ -380,7 +525,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
                 for (std::size_t j = 0; j < nj; ++j) y(static_cast<Eigen::Index>(2 * n + j)) = end.s[j];
                 mu = end.multipliers;
                 neutral = end.neutral;
-                emit(maps.model(bound), previous_p, &previous_mu, maps.runs - runs_before + end.iterations + 1);
+                emit(maps.model(bound), false, maps.runs - runs_before + end.iterations + 1);
             } catch (const InputError& e) {
                 stop = "sweep --continuation: shooting fails at " + name(bound) + ": " + e.what();
             } catch (const RunError& e) {
@@ -402,7 +547,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         mu = analysis::floquet_multipliers(M);
         neutral = analysis::family_multipliers(M, mu);
         try {
-            emit(maps.model(p), previous_p, &previous_mu, maps.runs - runs_before);
+            emit(maps.model(p), false, maps.runs - runs_before);
         } catch (const RunError& e) {
             stop = e.what();
             break;

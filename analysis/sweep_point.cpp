@@ -5,9 +5,11 @@
 #include <map>
 #include <memory>
 #include <sstream>
+#include <utility>
 
 #include <Eigen/Eigenvalues>
 
+#include "assembly.h"
 #include "engine.h"
 #include "error.h"
 #include "generic_solver.h"
@@ -58,8 +60,14 @@ struct Accumulator {
     std::size_t K;
     std::vector<double> hc, hs;  // [i * (K - 1) + k - 2]
     double length = 0;           // of the window covered so far
+    // Every contact's gap function G = u - gap: its largest and smallest value.
+    std::vector<double> gmax, gmin;
 
     void extreme(std::size_t i, double x) { xmax[i] = std::max(xmax[i], std::fabs(x)); }
+    void gap_extreme(std::size_t c, double g) {
+        gmax[c] = std::max(gmax[c], g);
+        gmin[c] = std::min(gmin[c], g);
+    }
 
     // Adds w x(theta) to the integrals (x: one value per mass).
     void add(double w, double theta, const double* x) {
@@ -96,7 +104,13 @@ private:
 class SegmentRecorder {
 public:
     SegmentRecorder(const Model& model, double omega, double t_window, double h, Accumulator& acc)
-        : provider_(model), n_(model.dof()), nx_(model.state_size()), omega_(omega), t_window_(t_window), h_(h),
+        : provider_(model),
+          model_(model),
+          n_(model.dof()),
+          nx_(model.state_size()),
+          omega_(omega),
+          t_window_(t_window),
+          h_(h),
           acc_(acc) {
         const std::size_t ns = model.max_switches();
         x_.resize(nx_);
@@ -132,6 +146,7 @@ public:
         const double offset = (t_ - t_window_) + t_lo_;  // segment start in window time
         eval(0.0);
         for (std::size_t i = 0; i < n_; ++i) acc_.extreme(i, x_[i]);
+        gap_extremes();
         double b = 0.0;
         while (b < length) {
             const double a = b;
@@ -151,11 +166,25 @@ public:
             bool searched = false;
             for (std::size_t i = 0; i < n_; ++i)
                 if ((va_[i] < 0 && vb_[i] > 0) || (va_[i] > 0 && vb_[i] < 0)) {
-                    acc_.extreme(i, extremum(i, a, b, va_[i]));
+                    extremum([&] { return std::pair(v_[i], a_[i]); }, a, b, va_[i]);
+                    acc_.extreme(i, x_[i]);
                     searched = true;
                 }
+            // A zero of G' inside: G has an extremum there.
+            for (std::size_t c = 0; c < model_.contacts.size(); ++c) {
+                const int ci = static_cast<int>(c);
+                const double ra = gap_rate(model_, ci, va_.data()), rb = gap_rate(model_, ci, vb_.data());
+                if ((ra < 0 && rb > 0) || (ra > 0 && rb < 0)) {
+                    extremum(
+                        [&] { return std::pair(gap_rate(model_, ci, v_.data()), gap_rate(model_, ci, a_.data())); }, a,
+                        b, ra);
+                    acc_.gap_extreme(c, gap(model_, ci, x_.data()));
+                    searched = true;
+                }
+            }
             if (searched) eval(b);  // the state at b for the next piece
             for (std::size_t i = 0; i < n_; ++i) acc_.extreme(i, x_[i]);
+            gap_extremes();
         }
         acc_.length += length;
     }
@@ -181,16 +210,24 @@ private:
         solver_->eval(tau, out);
     }
 
-    // x_i where v_i = 0 in (a, b) (v_i(a) = va, v_i(b) of the other sign):
-    // Newton on v_i with a_i, kept inside a bisection bracket. x_i is
-    // stationary there, so the error of the root enters x_i squared.
-    double extremum(std::size_t i, double a, double b, double va) {
+    void gap_extremes() {
+        for (std::size_t c = 0; c < model_.contacts.size(); ++c)
+            acc_.gap_extreme(c, gap(model_, static_cast<int>(c), x_.data()));
+    }
+
+    // Leaves in x_, v_, a_ the state where a coordinate's rate is zero in
+    // (a, b) (its rate at a is va, at b of the other sign); `rate()` gives the
+    // rate and its derivative from the state evaluated last. Newton, kept
+    // inside a bisection bracket. The coordinate is stationary there, so the
+    // error of the root enters it squared.
+    template <class Rate>
+    void extremum(Rate rate, double a, double b, double va) {
         double lo = a, hi = b;
-        const bool rising = va < 0;  // v_i goes from - to +
+        const bool rising = va < 0;  // the rate goes from - to +
         double tau = 0.5 * (a + b);
         for (int it = 0; it < 100; ++it) {
             eval(tau);
-            const double vi = v_[i], ai = a_[i];
+            const auto [vi, ai] = rate();
             if (vi == 0) break;
             if ((vi < 0) == rising) lo = tau;
             else hi = tau;
@@ -203,10 +240,10 @@ private:
             }
             tau = next;
         }
-        return x_[i];
     }
 
     GenericSolverProvider provider_;
+    const Model& model_;
     std::size_t n_, nx_;
     double omega_, t_window_, h_;
     Accumulator& acc_;
@@ -282,14 +319,22 @@ private:
 // samples, trapezoidal integrals), and the stroboscopic samples.
 class GridObserver : public Observer {
 public:
-    GridObserver(Accumulator& acc, SweepPoint& point, std::size_t n, double omega, double t_window, double h,
-                 std::size_t per_period, bool keep)
-        : acc_(acc), point_(point), n_(n), omega_(omega), t_window_(t_window), h_(h), per_period_(per_period),
+    GridObserver(const Model& model, Accumulator& acc, SweepPoint& point, std::size_t n, double omega, double t_window,
+                 double h, std::size_t per_period, bool keep)
+        : model_(model),
+          acc_(acc),
+          point_(point),
+          n_(n),
+          omega_(omega),
+          t_window_(t_window),
+          h_(h),
+          per_period_(per_period),
           keep_(keep) {}
     void on_sample(double t, const double* x, const double* v) override {
         const double s = t - t_window_, theta = omega_ * s;
         const double w = count_ == 0 ? 0.5 * h_ : h_;  // trapezoid; the last sample's half is taken back in close()
         for (std::size_t i = 0; i < n_; ++i) acc_.extreme(i, x[i]);
+        for (std::size_t c = 0; c < acc_.gmax.size(); ++c) acc_.gap_extreme(c, gap(model_, static_cast<int>(c), x));
         acc_.add(w, theta, x);
         if (keep_ && count_ > 0 && count_ % per_period_ == 0) {
             point_.strobe_t.push_back(t);
@@ -307,6 +352,7 @@ public:
     }
 
 private:
+    const Model& model_;
     Accumulator& acc_;
     SweepPoint& point_;
     std::size_t n_;
@@ -434,6 +480,8 @@ void record(const Model& point_model, State& state, const SweepOptions& o, const
     const double te = t0 + static_cast<double>(k + periods) * period;
     const std::size_t K = o.harmonics;
     Accumulator acc(n, K);
+    acc.gmax.assign(m.contacts.size(), -INFINITY);
+    acc.gmin.assign(m.contacts.size(), INFINITY);
     if (o.method == Method::hsnc) {
         std::unique_ptr<SolverProvider> own;
         if (!provider) provider = (own = std::make_unique<GenericSolverProvider>(m)).get();
@@ -443,7 +491,7 @@ void record(const Model& point_model, State& state, const SweepOptions& o, const
         advance(m, state, o, what, tr, te, period, true, strobe, &recording);
         rec.finish(te, 0.0);
     } else {
-        GridObserver grid(acc, pt, n, omega, tr, h, per_period, o.diagram);
+        GridObserver grid(m, acc, pt, n, omega, tr, h, per_period, o.diagram);
         advance(m, state, o, what, tr, te, h, true, grid, nullptr);
         grid.close();
     }
@@ -454,6 +502,8 @@ void record(const Model& point_model, State& state, const SweepOptions& o, const
         pt.xrms[i] = std::sqrt(acc.sxx[i] / acc.length);
         pt.a1[i] = std::hypot(2 * acc.sxc[i] / acc.length, 2 * acc.sxs[i] / acc.length);
     }
+    pt.gap_max = acc.gmax;
+    pt.gap_min = acc.gmin;
     pt.amp.resize(n * K);
     pt.phase.resize(n * K);
     for (std::size_t i = 0; i < n; ++i)

@@ -191,10 +191,15 @@ TEST(ContinuationClosedForm, HardeningOscillatorPassesTwoFolds) {
         const SweepPoint& p = c.points[k];
         EXPECT_EQ(p.failure, "");
         EXPECT_EQ(p.stop, "");
-        EXPECT_TRUE(p.bifurcation == "" || p.bifurcation == "fold") << p.bifurcation;
-        if (p.bifurcation == "fold") folds.push_back(k);
+        // The lower branch's fold is where it leaves the stop: a grazing
+        // crossed with it (GrazingOfALinearOscillatorIsLocatedToRounding).
+        EXPECT_TRUE(p.bifurcation == "" || p.bifurcation == "fold" || p.bifurcation == "grazing" ||
+                    p.bifurcation == "fold+grazing")
+            << p.bifurcation;
+        const bool fold = p.bifurcation.rfind("fold", 0) == 0;
+        if (fold) folds.push_back(k);
         // Stable exactly outside the two folds.
-        if (k > 0) EXPECT_EQ(p.stable != c.points[k - 1].stable, p.bifurcation == "fold") << "point " << k;
+        if (k > 0) EXPECT_EQ(p.stable != c.points[k - 1].stable, fold) << "point " << k;
     }
     ASSERT_EQ(folds.size(), 2u);
     for (std::size_t f : folds) {
@@ -248,6 +253,59 @@ TEST(ContinuationClosedForm, HardeningOscillatorPassesTwoFolds) {
     EXPECT_GE(checked, 3u);
     std::printf("hardening: %zu points, folds at omega = %.6f and %.6f, %zu middle points between the sweeps\n",
                 c.points.size(), upper_fold, lower_fold, checked);
+}
+
+// Grazing located as a point of the branch: the hardening oscillator's
+// lower branch is linear until its amplitude F |H(omega)| reaches the stop's
+// gap, at (1 - w^2)^2 + (0.04 w)^2 = (F / gap)^2 (w = 0.896236122676936057...
+// for F = 0.1, gap 0.5); the row says "grazing", its xmax is the gap, and it
+// lies between its neighbours. A preloaded contact (gap -0.1: closed at rest,
+// x_e = k_c gap / (1 + k_c)) lifts off where x_e - F |H_c| = gap, H_c the
+// closed oscillator's (stiffness 1 + k_c): the smallest G crossing zero.
+TEST(ContinuationClosedForm, GrazingOfALinearOscillatorIsLocatedToRounding) {
+    struct Case {
+        std::string model;
+        double from, to, omega, xmax;
+        bool lift_off;
+        ModelOverrides start;
+    };
+    auto root = [](double k, double zeta2, double ratio, bool lower) {
+        // (k - s)^2 + zeta2^2 s = ratio^2 in s = w^2.
+        const double b = 2 * k - zeta2 * zeta2, c = k * k - ratio * ratio;
+        const double s = lower ? (b - std::sqrt(b * b - 4 * c)) / 2 : (b + std::sqrt(b * b - 4 * c)) / 2;
+        return std::sqrt(s);
+    };
+    std::string preloaded = kHardening;
+    preloaded.replace(preloaded.find("gap = 0.5"), 9, "gap = -0.1");
+    preloaded.replace(preloaded.find("F = 0.1"), 7, "F = 0.05");
+    const double xe = 10 * -0.1 / 11;
+    // The preloaded one starts at rest at x_e, on the closed branch (from x = 0
+    // the transient settles on a lifted-off orbit at low omega).
+    const Case cases[] = {{kHardening, 0.8, 2.0, root(1.0, 0.04, 0.1 / 0.5, true), 0.5, false, {}},
+                          {preloaded, 0.5, 2.6, root(11.0, 0.04, 0.05 / (xe + 0.1), true), 0.1, true,
+                           ModelOverrides{{}, {"m=" + std::to_string(xe)}, {}, {}}}};
+    for (const Case& k : cases) {
+        SCOPED_TRACE(k.lift_off ? "lift-off" : "closing");
+        const SweepResult r =
+            SweepPlan(k.model, "hardening.toml", k.start, continuation("omega", k.from, k.to, 25)).run();
+        std::vector<std::size_t> grazing;
+        for (std::size_t i = 0; i < r.points.size(); ++i)
+            if (r.points[i].bifurcation == "grazing") grazing.push_back(i);
+        ASSERT_EQ(grazing.size(), 1u);
+        const std::size_t g = grazing[0];
+        ASSERT_GT(g, 0u);
+        ASSERT_LT(g + 1, r.points.size());
+        const SweepPoint& p = r.points[g];
+        EXPECT_NEAR(p.value, k.omega, 1e-14 * k.omega);
+        EXPECT_NEAR(p.xmax[0], k.xmax, 1e-13);
+        ASSERT_EQ(p.gap_max.size(), 1u);
+        EXPECT_NEAR(k.lift_off ? p.gap_min[0] : p.gap_max[0], 0.0, 1e-14);
+        EXPECT_LT(r.points[g - 1].value, p.value);
+        EXPECT_GT(r.points[g + 1].value, p.value);
+        EXPECT_TRUE(p.stable);
+        EXPECT_EQ(p.periods, 0u);
+        std::printf("grazing at omega = %.17g, closed form %.17g\n", p.value, k.omega);
+    }
 }
 
 // The same continuation on 1 and 2 threads (both directions: two branches): bit-equal.
@@ -323,7 +381,7 @@ TEST(ContinuationCli, CurveColumnsPlotAndBudget) {
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_EQ(r.err, "");
     EXPECT_EQ(r.out.substr(0, 10), "status=ok ");
-    EXPECT_NE(r.out.find(" bifurcations=2 stopped=0"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(" bifurcations=3 stopped=0"), std::string::npos) << r.out;  // two folds, a grazing
     const std::string curve = slurp(out);
     EXPECT_EQ(curve.substr(0, curve.find('\n')),
               "omega,direction,settled,periods,multiple,xmax_m,xrms_m,a1_m,stable,max_multiplier,bifurcation");

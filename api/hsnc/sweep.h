@@ -73,7 +73,12 @@
 // crosses +1: det(M - I) changes sign), period_doubling (one crosses -1:
 // det(M + I) changes sign), neimark_sacker (a complex pair crosses the unit
 // circle: the product over pairs of (mu_i mu_j - 1) changes sign and the
-// count of non-real multipliers outside the circle changes). `direction` is
+// count of non-real multipliers outside the circle changes), grazing (a
+// contact's largest or smallest gap function over the orbit changes sign:
+// SweepPoint::gap_max, gap_min; the grazing orbit is located to rounding by
+// Illinois iterations on that extreme and written as a point of its own,
+// with periods 0, unless a fold lies in the same step: then the next point
+// says fold+grazing). `direction` is
 // the way the parameter moved from the previous point (the task's direction
 // for the first), settled is true, multiple 1, `periods` the period-map
 // runs the point took, and xmax, xrms, a1 and the diagram come from one
@@ -193,10 +198,15 @@ struct SweepPoint {
     /// With SweepOptions::harmonics = K: amplitude and phase (rad) of harmonic k
     /// (1..K) of mass i at [i * K + k - 1] (NaN when the point failed).
     std::vector<double> amp, phase;
+    /// Each contact's gap function G = u - gap (closed while G >= 0): its
+    /// largest and smallest value over the recorded window (empty when the
+    /// point failed). A sign change of either between two points of a branch is
+    /// a grazing (the orbit starts or stops closing, or opening, the contact).
+    std::vector<double> gap_max, gap_min;
     std::string failure;  ///< why the point's run stopped ("" when it did not; see the file comment)
     /// Continuation only: the orbit's stability and largest |multiplier|, the
     /// bifurcations crossed since the previous point of the branch ("" or
-    /// fold, period_doubling, neimark_sacker; several joined by '+'), and why
+    /// fold, period_doubling, neimark_sacker, grazing; several joined by '+'), and why
     /// the branch stopped after this point ("" when it did not stop early).
     bool stable = false;
     double max_multiplier = std::numeric_limits<double>::quiet_NaN();
