@@ -84,6 +84,21 @@ struct TestFunctions {
     int complex_outside = 0;  // non-real multipliers with |mu| > 1
 };
 
+// mu with its `neutral` multipliers closest to +1 (a family's) put just
+// inside the unit circle, at 1 - 1e-9.
+std::vector<std::complex<double>> neutral_inside(std::vector<std::complex<double>> mu, std::size_t neutral) {
+    std::vector<char> done(mu.size(), 0);
+    for (std::size_t k = 0; k < neutral; ++k) {
+        std::size_t best = mu.size();
+        for (std::size_t i = 0; i < mu.size(); ++i)
+            if (!done[i] && (best == mu.size() || std::abs(mu[i] - 1.0) < std::abs(mu[best] - 1.0))) best = i;
+        if (best == mu.size()) break;
+        mu[best] = 1.0 - 1e-9;
+        done[best] = 1;
+    }
+    return mu;
+}
+
 TestFunctions test_functions(const std::vector<std::complex<double>>& mu) {
     TestFunctions f;
     // Eigen gives real eigenvalues (1 x 1 blocks of the real Schur form) an
@@ -147,7 +162,7 @@ void branch_point(SweepPoint& pt, const OrbitAt& at, const OrbitAt* previous, co
     pt.periods = periods;
     pt.max_multiplier = at.mu.empty() ? 0.0 : std::abs(at.mu.front());
     pt.stable = analysis::orbit_stable(at.mu, at.neutral);  // hsnc/periodic.h
-    if (previous) pt.bifurcation = bifurcations_between(previous->mu, at.mu);
+    if (previous) pt.bifurcation = bifurcations_between(previous->mu, at.mu, previous->neutral, at.neutral);
     if (!also.empty()) pt.bifurcation += (pt.bifurcation.empty() ? "" : "+") + also;
 }
 
@@ -167,7 +182,7 @@ public:
     std::vector<std::pair<SweepPoint, OrbitAt>> between(const SweepPoint& pa, const OrbitAt& a, const SweepPoint& pb,
                                                         const OrbitAt& b) {
         std::vector<std::pair<SweepPoint, OrbitAt>> found;
-        if (a.p == b.p || !bifurcations_between(a.mu, b.mu).empty()) return found;
+        if (a.p == b.p || !bifurcations_between(a.mu, b.mu, a.neutral, b.neutral).empty()) return found;
         for (std::size_t c = 0; c < pa.gap_max.size() && c < pb.gap_max.size(); ++c)
             for (const bool largest : {true, false}) {
                 const double fa = largest ? pa.gap_max[c] : pa.gap_min[c], fb = largest ? pb.gap_max[c] : pb.gap_min[c];
@@ -265,11 +280,27 @@ private:
     PeriodMaps& maps_;
 };
 
+// The non-smooth transitions between the points a and b of a branch, from
+// what their orbits do (SweepPoint::sticks, slips, closings, gap_max,
+// gap_min): "stick_onset" when an element sticks somewhere on one orbit and
+// nowhere on the other, "slip_onset" the same for slipping, "grazing" when a
+// contact's extreme gap changes sign or its closings per period change (unless
+// `located`: the grazing is a row of its own), joined by '+'.
+std::string transitions_between(const SweepPoint& a, const SweepPoint& b, bool located) {
+    std::string out;
+    auto add = [&](const char* name) { out += (out.empty() ? "" : "+") + std::string(name); };
+    if (a.sticks != b.sticks) add("stick_onset");
+    if (a.slips != b.slips) add("slip_onset");
+    if (!located && (a.closings != b.closings || GrazingLocator::crossed(a, b))) add("grazing");
+    return out;
+}
+
 }  // namespace
 
-std::string bifurcations_between(const std::vector<std::complex<double>>& a,
-                                 const std::vector<std::complex<double>>& b) {
-    const TestFunctions fa = test_functions(a), fb = test_functions(b);
+std::string bifurcations_between(const std::vector<std::complex<double>>& a, const std::vector<std::complex<double>>& b,
+                                 std::size_t neutral_a, std::size_t neutral_b) {
+    const TestFunctions fa = test_functions(neutral_inside(a, neutral_a)),
+                        fb = test_functions(neutral_inside(b, neutral_b));
     std::string out;
     auto add = [&](const char* name) { out += (out.empty() ? "" : "+") + std::string(name); };
     if (fa.det_minus != fb.det_minus) add("fold");
@@ -385,10 +416,10 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         State s{{y.data(), y.data() + n}, {y.data() + n, y.data() + 2 * n}, {y.data() + 2 * n, y.data() + N}};
         record(model, s, o, name(p), 0, 1, pt);
         const OrbitAt here{p, y, mu, neutral};
-        std::string also;  // a grazing crossed but not located (a fold between)
+        std::string also;  // the non-smooth transitions crossed (a grazing not located among them)
         if (!first_point) {
             auto found = grazing.between(out.back(), last, pt, here);
-            if (found.empty() && GrazingLocator::crossed(out.back(), pt)) also = "grazing";
+            also = transitions_between(out.back(), pt, !found.empty());
             for (auto& [g, at] : found) {
                 branch_point(g, at, &last, b, sense, 0, "grazing");
                 out.push_back(std::move(g));

@@ -35,7 +35,11 @@ std::vector<SweepPoint> run_continuation(const Branch& branch, const SweepOption
 
 /// The bifurcations (fold, period_doubling, neimark_sacker, joined by '+')
 /// crossed between orbits with multipliers `a` and `b` ("" for none).
-std::string bifurcations_between(const std::vector<std::complex<double>>& a,
-                                 const std::vector<std::complex<double>>& b);
+/// `neutral_a`, `neutral_b`: each orbit's multipliers at +1 of a family of
+/// orbits (stuck sliders or masses, hsnc/periodic.h): that many multipliers
+/// closest to +1 count as just inside the unit circle (a family's +1 wobbles
+/// about 1 by rounding: no fold; a multiplier leaving a family's +1 outward is one).
+std::string bifurcations_between(const std::vector<std::complex<double>>& a, const std::vector<std::complex<double>>& b,
+                                 std::size_t neutral_a = 0, std::size_t neutral_b = 0);
 
 }  // namespace hsnc::sweep_detail

@@ -62,6 +62,27 @@ struct Accumulator {
     double length = 0;           // of the window covered so far
     // Every contact's gap function G = u - gap: its largest and smallest value.
     std::vector<double> gmax, gmin;
+    // The configurations the window passes through (SweepPoint::closings,
+    // sticks, slips), counted over its segments of positive length.
+    std::vector<std::size_t> closings;
+    std::vector<char> sticks, slips;
+    bool first_closed_known = false;
+    std::vector<char> first_closed, last_closed;
+
+    void configuration(const Configuration& cfg) {
+        if (!first_closed_known) first_closed.assign(cfg.closed.begin(), cfg.closed.end()), first_closed_known = true;
+        for (std::size_t c = 0; c < cfg.closed.size(); ++c) {
+            if (cfg.closed[c] && !(c < last_closed.size() && last_closed[c])) ++closings[c];
+        }
+        last_closed.assign(cfg.closed.begin(), cfg.closed.end());
+        for (std::size_t i = 0; i < cfg.stuck.size(); ++i) (cfg.stuck[i] ? sticks : slips)[i] = 1;
+        for (std::size_t j = 0; j < cfg.slip.size(); ++j) (cfg.slip[j] == 0 ? sticks : slips)[cfg.stuck.size() + j] = 1;
+    }
+    // The closings of a periodic window: a contact closed at both its ends closes once less.
+    void close_window() {
+        for (std::size_t c = 0; c < closings.size() && c < first_closed.size() && c < last_closed.size(); ++c)
+            if (first_closed[c] && last_closed[c] && closings[c] > 0) --closings[c];
+    }
 
     void extreme(std::size_t i, double x) { xmax[i] = std::max(xmax[i], std::fabs(x)); }
     void gap_extreme(std::size_t c, double g) {
@@ -140,6 +161,7 @@ public:
         pending_ = false;
         const double length = (t_end - t_) + (t_end_lo - t_lo_);
         if (!(length > 0)) return;
+        acc_.configuration(cfg_);
         SegmentSolver& s = provider_.solver(cfg_);
         s.setup(t_, t_lo_, x0_.data(), v0_.data(), sgn_.data());
         solver_ = &s;
@@ -482,6 +504,9 @@ void record(const Model& point_model, State& state, const SweepOptions& o, const
     Accumulator acc(n, K);
     acc.gmax.assign(m.contacts.size(), -INFINITY);
     acc.gmin.assign(m.contacts.size(), INFINITY);
+    acc.closings.assign(m.contacts.size(), 0);
+    acc.sticks.assign(n + m.jenkins.size(), 0);
+    acc.slips.assign(n + m.jenkins.size(), 0);
     if (o.method == Method::hsnc) {
         std::unique_ptr<SolverProvider> own;
         if (!provider) provider = (own = std::make_unique<GenericSolverProvider>(m)).get();
@@ -490,6 +515,10 @@ void record(const Model& point_model, State& state, const SweepOptions& o, const
         StrobeObserver strobe(pt, n, tr, o.diagram);
         advance(m, state, o, what, tr, te, period, true, strobe, &recording);
         rec.finish(te, 0.0);
+        acc.close_window();
+        pt.closings = acc.closings;
+        pt.sticks = acc.sticks;
+        pt.slips = acc.slips;
     } else {
         GridObserver grid(m, acc, pt, n, omega, tr, h, per_period, o.diagram);
         advance(m, state, o, what, tr, te, h, true, grid, nullptr);

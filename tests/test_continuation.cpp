@@ -16,8 +16,11 @@
 
 #include "cli_runner.h"
 #include "continuation.h"
+#include "hsnc/periodic.h"
+#include "hsnc/simulate.h"
 #include "hsnc/sweep.h"
 #include "model_reader.h"
+#include "number_text.h"
 
 namespace hsnc {
 namespace {
@@ -308,6 +311,101 @@ TEST(ContinuationClosedForm, GrazingOfALinearOscillatorIsLocatedToRounding) {
     }
 }
 
+// Through stick-slip transitions: the bundled friction damper (a Jenkins
+// element at the platform) is stuck all period at low and high omega and
+// slips near the resonance; the branch passes both transitions, each row
+// saying what its orbit does (SweepPoint::sticks, slips: the Jenkins element
+// slips only between the two `slip_onset` rows), the family of stuck orbits
+// (the slider may sit anywhere: a multiplier at +1 that rounding puts on
+// either side of 1) gives no fold, and the slipping orbits are those
+// `hsnc periodic` finds at the same omega (a unique orbit: 1e-8).
+TEST(ContinuationClosedForm, FrictionDamperThroughStickAndSlipOnset) {
+    const std::string path = std::string(HSNC_SOURCE_DIR) + "/examples/jenkins/friction_damper.toml";
+    const SweepResult r = SweepPlan::from_file(path, {}, continuation("omega", 6.0, 20.0, 15)).run();
+    ASSERT_FALSE(r.points.empty());
+    EXPECT_EQ(r.points.back().value, 20.0);
+    std::vector<std::size_t> onsets;
+    const std::size_t j = r.masses.size();  // the Jenkins element's flag, after the masses'
+    for (std::size_t k = 0; k < r.points.size(); ++k) {
+        const SweepPoint& p = r.points[k];
+        EXPECT_EQ(p.stop, "");
+        EXPECT_TRUE(p.bifurcation == "" || p.bifurcation == "slip_onset") << p.bifurcation << " at " << p.value;
+        if (p.bifurcation == "slip_onset") onsets.push_back(k);
+        ASSERT_EQ(p.slips.size(), j + 1);
+        EXPECT_EQ(p.sticks[j], 1);  // stuck all period, or at every turn while slipping
+    }
+    ASSERT_EQ(onsets.size(), 2u);
+    EXPECT_GT(r.points[onsets[0]].value, 7.0);
+    EXPECT_LT(r.points[onsets[1]].value, 11.0);
+    std::size_t compared = 0;
+    for (std::size_t k = 0; k < r.points.size(); ++k) {
+        const SweepPoint& p = r.points[k];
+        const bool slipping = k >= onsets[0] && k < onsets[1];
+        EXPECT_EQ(p.slips[j], slipping ? 1 : 0) << "omega = " << p.value;
+        if (!slipping || k % 4 != 0) continue;
+        // hsnc periodic at this omega, from the steady state of a long run.
+        PeriodicOptions po;
+        po.kernels = KernelChoice::eigen;
+        po.transient = 300 * 2 * kPi / p.value;
+        const PeriodicResult orbit =
+            periodic(read_model(path, ModelOverrides{{"omega=" + shortest_text(p.value)}, {}, {}, {}}), po);
+        ASSERT_EQ(orbit.status, PeriodicStatus::ok) << orbit.message;
+        EXPECT_FALSE(orbit.stable && orbit.neutral > 0);  // slipping: no family
+        // The orbit's state at t0 against the row's diagram state (one period after t0, the same on an orbit).
+        for (std::size_t i = 0; i < j; ++i) {
+            EXPECT_NEAR(orbit.x[i], p.strobe_x[i], 1e-8) << "omega = " << p.value << ", mass " << i;
+            EXPECT_NEAR(orbit.v[i], p.strobe_v[i], 1e-7) << "omega = " << p.value << ", mass " << i;
+        }
+        ++compared;
+    }
+    EXPECT_GE(compared, 3u);
+}
+
+// Stick onset: Den Hartog's friction oscillator (beta = 0.5) stops in every
+// half period at low r and moves without stopping above about 0.62; the
+// continuation from r = 0.4 up says `stick_onset` at the first row beyond,
+// its rows' sticks flags agree, and so does an independent long run (the
+// engine's own stick events in its last 20 periods) on either side.
+TEST(ContinuationClosedForm, DenHartogStickOnset) {
+    const SweepResult r = SweepPlan(kDenHartog, "den-hartog.toml", ModelOverrides{{"beta=0.5"}, {}, {}, {}},
+                                    continuation("r", 0.4, 0.9, 11))
+                              .run();
+    std::vector<std::size_t> onset;
+    for (std::size_t k = 0; k < r.points.size(); ++k)
+        if (!r.points[k].bifurcation.empty()) {
+            EXPECT_EQ(r.points[k].bifurcation, "stick_onset");
+            onset.push_back(k);
+        }
+    ASSERT_EQ(onset.size(), 1u);
+    const std::size_t g = onset[0];
+    ASSERT_GT(g, 0u);
+    for (std::size_t k = 0; k < r.points.size(); ++k) EXPECT_EQ(r.points[k].sticks[0], k < g ? 1 : 0) << k;
+    class Sticks : public Observer {
+    public:
+        explicit Sticks(double from) : from_(from) {}
+        void on_sample(double, const double*, const double*) override {}
+        void on_event(double t, EventKind kind, int, const double*, const double*) override {
+            count += t > from_ && kind == EventKind::stick;
+        }
+        std::size_t count = 0;
+
+    private:
+        double from_;
+    };
+    for (const std::size_t k : {g - 1, g}) {
+        const double rr = r.points[k].value, T = 2 * kPi / rr;
+        Model m = parse_model(kDenHartog, "den-hartog.toml",
+                              ModelOverrides{{"beta=0.5", "r=" + shortest_text(rr)}, {}, {}, {}});
+        SimulateOptions so;
+        so.t_end = 400 * T;
+        Sticks sticks(380 * T);
+        ASSERT_EQ(simulate(m, so, sticks).status, RunStatus::ok);
+        EXPECT_EQ(sticks.count > 0, k < g) << "r = " << rr << ": " << sticks.count << " stops";
+    }
+    std::printf("Den Hartog, beta 0.5: stops end between r = %.6f and %.6f\n", r.points[g - 1].value,
+                r.points[g].value);
+}
+
 // The same continuation on 1 and 2 threads (both directions: two branches): bit-equal.
 TEST(Continuation, ThreadsGiveTheSameBits) {
     SweepOptions o = continuation("omega", 0.8, 2.0, 13);
@@ -369,6 +467,12 @@ TEST(Continuation, Bifurcations) {
     EXPECT_EQ(sweep_detail::bifurcations_between({C(1.5, 0.1), C(1.5, -0.1)}, {C(1.6, 0), C(1.4, 0)}), "");
     EXPECT_EQ(sweep_detail::bifurcations_between({C(0.5, 0.1), C(0.5, -0.1)}, {C(0.6, 0), C(0.4, 0)}), "");
     EXPECT_EQ(sweep_detail::bifurcations_between({C(0.9, 0)}, {C(0.95, 0)}), "");
+    // A family's multiplier at +1 that rounding puts on either side: no fold
+    // (it counts as inside); one that leaves the family's +1 outward: a fold.
+    EXPECT_EQ(sweep_detail::bifurcations_between({C(1 + 1e-13, 0), C(0.5, 0)}, {C(1 - 1e-13, 0), C(0.5, 0)}), "fold");
+    EXPECT_EQ(sweep_detail::bifurcations_between({C(1 + 1e-13, 0), C(0.5, 0)}, {C(1 - 1e-13, 0), C(0.5, 0)}, 1, 1), "");
+    EXPECT_EQ(sweep_detail::bifurcations_between({C(1 + 1e-13, 0), C(0.5, 0)}, {C(0.97, 0), C(0.5, 0)}, 1, 0), "");
+    EXPECT_EQ(sweep_detail::bifurcations_between({C(1 - 1e-13, 0), C(0.5, 0)}, {C(1.2, 0), C(0.5, 0)}, 1, 0), "fold");
 }
 
 // ---- the command line ----

@@ -203,10 +203,21 @@ struct SweepPoint {
     /// point failed). A sign change of either between two points of a branch is
     /// a grazing (the orbit starts or stops closing, or opening, the contact).
     std::vector<double> gap_max, gap_min;
+    /// What the motion does over the recorded window (method hsnc; empty with a
+    /// baseline or when the point failed): per contact, how often it closes
+    /// (a contact closed at both ends of the window counted as one closing, as
+    /// on a periodic orbit); per mass then per Jenkins element, whether it is
+    /// stuck (sticks) and whether it moves or slips (slips) at some instant
+    /// (a mass without friction always moves). A change of these between two
+    /// points of a branch is a non-smooth transition (continuation:
+    /// stick_onset, slip_onset, grazing).
+    std::vector<std::size_t> closings;
+    std::vector<char> sticks, slips;
     std::string failure;  ///< why the point's run stopped ("" when it did not; see the file comment)
     /// Continuation only: the orbit's stability and largest |multiplier|, the
     /// bifurcations crossed since the previous point of the branch ("" or
-    /// fold, period_doubling, neimark_sacker, grazing; several joined by '+'), and why
+    /// fold, period_doubling, neimark_sacker, grazing, stick_onset, slip_onset;
+    /// several joined by '+'), and why
     /// the branch stopped after this point ("" when it did not stop early).
     bool stable = false;
     double max_multiplier = std::numeric_limits<double>::quiet_NaN();

@@ -398,7 +398,8 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     parameter leaves [start, stop] or after max_steps points per branch (0:
     20 * points); then also "stable" (bool), "max_multiplier" (largest
     |Floquet multiplier|), "bifurcation" (str: "", "fold", "period_doubling",
-    "neimark_sacker", "grazing", crossed since the previous point, several
+    "neimark_sacker", "grazing", "stick_onset", "slip_onset", crossed since
+    the previous point, several
     joined by "+"; a grazing orbit located to rounding is a point of its
     own) and "stop" (str: why
     the branch stopped early after this point, "" when it did not).
