@@ -9,7 +9,12 @@
 #include <memory>
 
 #include <Eigen/LU>
+#include <Eigen/QR>
+#include <Eigen/SVD>
 
+#include "assembly.h"
+#include "configuration.h"
+#include "elements/motion.h"
 #include "error.h"
 #include "flow.h"
 #include "hsnc/periodic.h"
@@ -122,19 +127,158 @@ TestFunctions test_functions(const std::vector<std::complex<double>>& mu) {
     return f;
 }
 
+// The directions of a family of orbits at a point of the branch (stuck
+// Jenkins sliders or stuck masses, whose positions any orbit may shift: the
+// `neutral` multipliers at +1 of the monodromy M, hsnc/periodic.h), as rows
+// over the scaled unknowns u = (y, p) / D: the null vectors of M - I,
+// v / D, with 0 for p. The tangent has no component along them: the
+// branch does not walk along a family (centre_stuck_family puts each point
+// on the family's centred member).
+Eigen::MatrixXd family_rows(const Eigen::MatrixXd& M, std::size_t neutral, const Eigen::VectorXd& D) {
+    const Eigen::Index N = M.rows(), k = static_cast<Eigen::Index>(neutral);
+    Eigen::MatrixXd F = Eigen::MatrixXd::Zero(k, N + 1);
+    if (k == 0) return F;
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(M - Eigen::MatrixXd::Identity(N, N), Eigen::ComputeFullV);
+    for (Eigen::Index j = 0; j < k; ++j)
+        F.row(j).head(N) = svd.matrixV().col(N - 1 - j).cwiseQuotient(D.head(N)).normalized().transpose();
+    return F;
+}
+
+// family_rows at the orbit whose monodromy is M.
+Eigen::MatrixXd family_at(const Eigen::MatrixXd& M, const Eigen::VectorXd& D) {
+    return family_rows(M, analysis::family_multipliers(M, analysis::floquet_multipliers(M)), D);
+}
+
+// The solution x of A x = b with F x = 0 (F: family rows): A alone (square)
+// by LU without a family, else the stacked (consistent) system by a complete
+// orthogonal decomposition.
+Eigen::VectorXd solve_with_family(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::MatrixXd& F) {
+    if (F.rows() == 0) return A.fullPivLu().solve(b);
+    Eigen::MatrixXd S(A.rows() + F.rows(), A.cols());
+    S << A, F;
+    Eigen::VectorXd r = Eigen::VectorXd::Zero(S.rows());
+    r.head(b.size()) = b;
+    return S.completeOrthogonalDecomposition().solve(r);
+}
+
 // The unit tangent of the branch (the null vector of the N x (N + 1)
-// Jacobian J), turned the way of `previous`.
-Eigen::VectorXd tangent(const Eigen::MatrixXd& J, const Eigen::VectorXd& previous) {
+// Jacobian J with no component along the family rows F), turned the way of
+// `previous`.
+Eigen::VectorXd tangent(const Eigen::MatrixXd& J, const Eigen::VectorXd& previous, const Eigen::MatrixXd& F) {
     const Eigen::Index N = J.rows();
     Eigen::MatrixXd A(N + 1, N + 1);
     A.topRows(N) = J;
     A.row(N) = previous.transpose();
     Eigen::VectorXd e = Eigen::VectorXd::Zero(N + 1);
     e(N) = 1;
-    Eigen::VectorXd t = A.fullPivLu().solve(e);
+    Eigen::VectorXd t = solve_with_family(A, e, F);
     t.normalize();
     if (t.dot(previous) < 0) t = -t;
     return t;
+}
+
+// A branch point whose orbit holds every Jenkins element stuck all period,
+// every contact in one state and no mass stuck: its family of orbits (each
+// slider may sit anywhere, s_j + d_j, the masses shifted by the static
+// response dx = K^-1 sum_j k_j w_j d_j) is replaced by its centred member,
+// each element's stretch e_j = u_j - s_j symmetric in its slip band
+// (max e_j + min e_j = 0): the member a slow sweep drifts to (each slip
+// pushes the slider towards it) and where the slipping branch begins. Exact
+// (a static shift of a linear orbit); `pt` is recorded again. False, with y
+// and pt unchanged, when it does not apply or the point is centred already.
+bool centre_stuck_family(const Model& model, const SweepOptions& o, const std::string& what, Eigen::VectorXd& y,
+                         SweepPoint& pt) {
+    const std::size_t n = model.dof(), nj = model.jenkins.size();
+    if (nj == 0 || pt.sticks.size() != n + nj || pt.stretch_max.size() != nj) return false;
+    for (std::size_t i = 0; i < n; ++i)
+        if (pt.sticks[i]) return false;
+    Configuration cfg = Configuration::all_open(model);
+    for (std::size_t c = 0; c < model.contacts.size(); ++c) {
+        if ((pt.gap_max[c] >= 0) != (pt.gap_min[c] >= 0)) return false;
+        cfg.closed[c] = pt.gap_min[c] >= 0;
+    }
+    const auto J = static_cast<Eigen::Index>(nj), N = static_cast<Eigen::Index>(n);
+    Eigen::VectorXd centre(J);
+    double size = 0;
+    for (std::size_t j = 0; j < nj; ++j) {
+        if (!pt.sticks[n + j] || pt.slips[n + j]) return false;
+        centre(static_cast<Eigen::Index>(j)) = 0.5 * (pt.stretch_max[j] + pt.stretch_min[j]);
+        size = std::max({size, std::fabs(pt.stretch_max[j]), std::fabs(pt.stretch_min[j])});
+    }
+    if (centre.cwiseAbs().maxCoeff() <= 1e-15 * size) return false;
+    const Eigen::FullPivLU<Eigen::MatrixXd> K(stiffness_matrix(model, cfg));
+    if (!K.isInvertible()) return false;
+    // W: the directions w_j as columns; G d = the stretches' change, W^T dx - d.
+    Eigen::MatrixXd W(N, J);
+    for (Eigen::Index i = 0; i < N; ++i) {
+        Eigen::VectorXd unit = Eigen::VectorXd::Unit(N, i);
+        const double* rows[] = {unit.data()};
+        for (Eigen::Index j = 0; j < J; ++j)
+            W(i, j) = along(model.jenkins[static_cast<std::size_t>(j)].direction(), double_motion(rows), 0);
+    }
+    Eigen::MatrixXd Wk = W;
+    for (Eigen::Index j = 0; j < J; ++j) Wk.col(j) *= model.jenkins[static_cast<std::size_t>(j)].k;
+    const Eigen::MatrixXd S = K.solve(Wk);  // dx per unit slider shift
+    const Eigen::MatrixXd G = W.transpose() * S - Eigen::MatrixXd::Identity(J, J);
+    const Eigen::VectorXd d = G.fullPivLu().solve(-centre);
+    if (!d.allFinite()) return false;
+    y.head(N) += S * d;
+    y.segment(2 * N, J) += d;
+    State s{{y.data(), y.data() + n}, {y.data() + n, y.data() + 2 * n}, {y.data() + 2 * n, y.data() + 2 * n + nj}};
+    pt = SweepPoint();
+    record(model, s, o, what, 0, 1, pt);
+    return true;
+}
+
+// The state y = (x, v, s) of an orbit hsnc::periodic found.
+Eigen::VectorXd orbit_state(const PeriodicResult& r) {
+    const std::size_t n = r.x.size();
+    Eigen::VectorXd y(static_cast<Eigen::Index>(2 * n + r.s.size()));
+    for (std::size_t i = 0; i < n; ++i)
+        y(static_cast<Eigen::Index>(i)) = r.x[i], y(static_cast<Eigen::Index>(n + i)) = r.v[i];
+    for (std::size_t j = 0; j < r.s.size(); ++j) y(static_cast<Eigen::Index>(2 * n + j)) = r.s[j];
+    return y;
+}
+
+// Beyond a non-smooth transition where the corrector fails at the smallest
+// step (at a Jenkins element's slip onset the orbit touches the slip force:
+// the period map's derivative jumps there and Newton stalls): the orbit a
+// little further on, dp in the direction the parameter moves (`direction`: the
+// tangent's parameter component), by a sweep point's transient from the last
+// orbit, then shooting. It reaches stable orbits only. True with (pk, yk, v)
+// as a converged corrector leaves them.
+bool jump_over(const Branch& b, const SweepOptions& o, PeriodMaps& maps, double p, const Eigen::VectorXd& y,
+               double direction, double dp, double& pk, Eigen::VectorXd& yk, analysis::PeriodMapValue& v) {
+    const double lo = std::min(b.start, b.end), hi = std::max(b.start, b.end);
+    const double target = std::clamp(direction >= 0 ? p + dp : p - dp, lo, hi);
+    if (target == p) return false;
+    try {
+        Model m = maps.model(target);
+        const std::size_t n = m.dof();
+        const auto N = static_cast<std::size_t>(y.size());
+        State s{{y.data(), y.data() + n}, {y.data() + n, y.data() + 2 * n}, {y.data() + 2 * n, y.data() + N}};
+        const std::string what = b.param + " = " + shortest_text(target) + b.where;
+        run_point(m, s, o, what);
+        m.x0 = s.x;
+        m.v0 = s.v;
+        m.slider0 = s.slider;
+        PeriodicOptions po;
+        po.kernels = KernelChoice::eigen;
+        po.tolerance = kTolerance;
+        const PeriodicResult r = periodic(m, po);
+        if (r.status != PeriodicStatus::ok) return false;
+        const Eigen::VectorXd orbit = orbit_state(r);
+        const analysis::PeriodMapValue at = maps.eval(target, orbit);
+        if (!at.ok || at.singular || !(at.residual <= kTolerance)) return false;
+        pk = target;
+        yk = orbit;
+        v = at;
+        return true;
+    } catch (const InputError&) {
+        return false;
+    } catch (const RunError&) {
+        return false;
+    }
 }
 
 // An orbit of a branch: the parameter, the state y = (x, v, s) at t0, its multipliers.
@@ -233,10 +377,7 @@ private:
         if (r.status != PeriodicStatus::ok) throw RunError(r.message);
         OrbitAt at;
         at.p = p;
-        at.y = guess;
-        for (std::size_t i = 0; i < n; ++i) at.y(static_cast<Eigen::Index>(i)) = r.x[i];
-        for (std::size_t i = 0; i < n; ++i) at.y(static_cast<Eigen::Index>(n + i)) = r.v[i];
-        for (std::size_t j = 0; j < r.s.size(); ++j) at.y(static_cast<Eigen::Index>(2 * n + j)) = r.s[j];
+        at.y = orbit_state(r);
         at.mu = r.multipliers;
         at.neutral = r.neutral;
         State state{r.x, r.v, r.s};
@@ -397,9 +538,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         return Eigen::VectorXd((a.Py - c.Py) / (2 * d));
     };
 
-    Eigen::VectorXd y(N);
-    for (std::size_t i = 0; i < n; ++i) y(static_cast<Eigen::Index>(i)) = orbit.x[i], y(static_cast<Eigen::Index>(n + i)) = orbit.v[i];
-    for (std::size_t j = 0; j < nj; ++j) y(static_cast<Eigen::Index>(2 * n + j)) = orbit.s[j];
+    Eigen::VectorXd y = orbit_state(orbit);
     double p = b.start;
     Eigen::MatrixXd M(N, N);
     for (Eigen::Index i = 0; i < N; ++i)
@@ -415,6 +554,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         SweepPoint pt;
         State s{{y.data(), y.data() + n}, {y.data() + n, y.data() + 2 * n}, {y.data() + 2 * n, y.data() + N}};
         record(model, s, o, name(p), 0, 1, pt);
+        if (neutral > 0) centre_stuck_family(model, o, name(p), y, pt);  // y moves with it
         const OrbitAt here{p, y, mu, neutral};
         std::string also;  // the non-smooth transitions crossed (a grazing not located among them)
         if (!first_point) {
@@ -439,7 +579,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
     if (stop.empty()) {
         Eigen::VectorXd start_direction = Eigen::VectorXd::Zero(N + 1);
         start_direction(N) = sense;
-        t = tangent(jacobian(M, Pp), start_direction);
+        t = tangent(jacobian(M, Pp), start_direction, family_rows(M, neutral, D));
     }
     try {
         emit(first, true, transient);
@@ -466,7 +606,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         // chord) and of the tangent at the new point.
         std::string fail;
         const double p_predicted = predicted(N) * D(N);
-        const Eigen::VectorXd Pn = parameter_derivative(p_predicted, predicted.head(N).cwiseProduct(D.head(N)), fail);
+        Eigen::VectorXd Pn = parameter_derivative(p_predicted, predicted.head(N).cwiseProduct(D.head(N)), fail);
         Eigen::VectorXd uk = predicted;
         analysis::PeriodMapValue v;
         bool converged = false;
@@ -505,16 +645,19 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
             Eigen::VectorXd r(N + 1);
             r.head(N) = (v.Py - yk).cwiseQuotient(D.head(N));
             r(N) = t.dot(uk - predicted);
-            const Eigen::VectorXd du = A.fullPivLu().solve(-r);
+            const Eigen::VectorXd du = solve_with_family(A, -r, family_at(v.M, D));  // no step along a family
             if (!du.allFinite()) {
                 fail = "the Newton step is not finite";
                 break;
             }
             uk += du;
         }
+        if (!converged && h <= h_min &&
+            (converged = jump_over(b, o, maps, p, y, t(N), 0.02 * spacing * span, pk, yk, v)))
+            Pn = parameter_derivative(pk, yk, fail);  // dP/dp beyond the transition, for the tangent there
         Eigen::VectorXd tn;
         if (converged && pk >= lo && pk <= hi) {
-            tn = tangent(jacobian(v.M, Pn), t);
+            tn = tangent(jacobian(v.M, Pn), t, family_at(v.M, D));
             if (tn.dot(t) < kMinTurnCosine && h > h_min) {
                 h = std::max(h_min, 0.5 * h);
                 continue;
@@ -551,9 +694,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
                     break;
                 }
                 p = bound;
-                for (std::size_t i = 0; i < n; ++i)
-                    y(static_cast<Eigen::Index>(i)) = end.x[i], y(static_cast<Eigen::Index>(n + i)) = end.v[i];
-                for (std::size_t j = 0; j < nj; ++j) y(static_cast<Eigen::Index>(2 * n + j)) = end.s[j];
+                y = orbit_state(end);
                 mu = end.multipliers;
                 neutral = end.neutral;
                 emit(maps.model(bound), false, maps.runs - runs_before + end.iterations + 1);

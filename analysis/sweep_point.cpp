@@ -192,15 +192,12 @@ public:
                     acc_.extreme(i, x_[i]);
                     searched = true;
                 }
-            // A zero of G' inside: G has an extremum there.
-            for (std::size_t c = 0; c < model_.contacts.size(); ++c) {
-                const int ci = static_cast<int>(c);
-                const double ra = gap_rate(model_, ci, va_.data()), rb = gap_rate(model_, ci, vb_.data());
+            // A zero of a contact's G' or a Jenkins element's stretch rate inside: an extremum there.
+            for (std::size_t c = 0; c < acc_.gmax.size(); ++c) {
+                const double ra = rate(c, va_.data()), rb = rate(c, vb_.data());
                 if ((ra < 0 && rb > 0) || (ra > 0 && rb < 0)) {
-                    extremum(
-                        [&] { return std::pair(gap_rate(model_, ci, v_.data()), gap_rate(model_, ci, a_.data())); }, a,
-                        b, ra);
-                    acc_.gap_extreme(c, gap(model_, ci, x_.data()));
+                    extremum([&] { return std::pair(rate(c, v_.data()), rate(c, a_.data())); }, a, b, ra);
+                    acc_.gap_extreme(c, coordinate(c));
                     searched = true;
                 }
             }
@@ -232,9 +229,26 @@ private:
         solver_->eval(tau, out);
     }
 
+    // The coordinates whose extremes the window keeps: every contact's gap
+    // function G, then every Jenkins element's stretch e = u - s (constant,
+    // +-F_s/k, while it slips; its rate u' while stuck).
+    double coordinate(std::size_t c) const {
+        const std::size_t nc = model_.contacts.size();
+        if (c < nc) return gap(model_, static_cast<int>(c), x_.data());
+        const Jenkins& e = model_.jenkins[c - nc];
+        const double* rows[] = {x_.data()};
+        return along(e.direction(), double_motion(rows), 0) - x_[n_ + c - nc];
+    }
+    // Its rate from the velocities `v` (or its second derivative from the accelerations).
+    double rate(std::size_t c, const double* v) const {
+        const std::size_t nc = model_.contacts.size();
+        if (c < nc) return gap_rate(model_, static_cast<int>(c), v);
+        if (cfg_.slip[c - nc] != 0) return 0.0;
+        const double* rows[] = {nullptr, v};
+        return along(model_.jenkins[c - nc].direction(), double_motion(rows), 1);
+    }
     void gap_extremes() {
-        for (std::size_t c = 0; c < model_.contacts.size(); ++c)
-            acc_.gap_extreme(c, gap(model_, static_cast<int>(c), x_.data()));
+        for (std::size_t c = 0; c < acc_.gmax.size(); ++c) acc_.gap_extreme(c, coordinate(c));
     }
 
     // Leaves in x_, v_, a_ the state where a coordinate's rate is zero in
@@ -356,7 +370,8 @@ public:
         const double s = t - t_window_, theta = omega_ * s;
         const double w = count_ == 0 ? 0.5 * h_ : h_;  // trapezoid; the last sample's half is taken back in close()
         for (std::size_t i = 0; i < n_; ++i) acc_.extreme(i, x[i]);
-        for (std::size_t c = 0; c < acc_.gmax.size(); ++c) acc_.gap_extreme(c, gap(model_, static_cast<int>(c), x));
+        for (std::size_t c = 0; c < model_.contacts.size(); ++c)
+            acc_.gap_extreme(c, gap(model_, static_cast<int>(c), x));
         acc_.add(w, theta, x);
         if (keep_ && count_ > 0 && count_ % per_period_ == 0) {
             point_.strobe_t.push_back(t);
@@ -502,8 +517,8 @@ void record(const Model& point_model, State& state, const SweepOptions& o, const
     const double te = t0 + static_cast<double>(k + periods) * period;
     const std::size_t K = o.harmonics;
     Accumulator acc(n, K);
-    acc.gmax.assign(m.contacts.size(), -INFINITY);
-    acc.gmin.assign(m.contacts.size(), INFINITY);
+    acc.gmax.assign(m.contacts.size() + m.jenkins.size(), -INFINITY);
+    acc.gmin.assign(m.contacts.size() + m.jenkins.size(), INFINITY);
     acc.closings.assign(m.contacts.size(), 0);
     acc.sticks.assign(n + m.jenkins.size(), 0);
     acc.slips.assign(n + m.jenkins.size(), 0);
@@ -531,8 +546,11 @@ void record(const Model& point_model, State& state, const SweepOptions& o, const
         pt.xrms[i] = std::sqrt(acc.sxx[i] / acc.length);
         pt.a1[i] = std::hypot(2 * acc.sxc[i] / acc.length, 2 * acc.sxs[i] / acc.length);
     }
-    pt.gap_max = acc.gmax;
-    pt.gap_min = acc.gmin;
+    const auto contacts = static_cast<std::ptrdiff_t>(m.contacts.size());
+    pt.gap_max.assign(acc.gmax.begin(), acc.gmax.begin() + contacts);
+    pt.gap_min.assign(acc.gmin.begin(), acc.gmin.begin() + contacts);
+    pt.stretch_max.assign(acc.gmax.begin() + contacts, acc.gmax.end());
+    pt.stretch_min.assign(acc.gmin.begin() + contacts, acc.gmin.end());
     pt.amp.resize(n * K);
     pt.phase.resize(n * K);
     for (std::size_t i = 0; i < n; ++i)

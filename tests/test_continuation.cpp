@@ -406,6 +406,93 @@ TEST(ContinuationClosedForm, DenHartogStickOnset) {
                 r.points[g].value);
 }
 
+// m x'' + 0.05 x' + x + (Jenkins: k_t = 1, F_s = 0.1) = 0.1 sin(omega t).
+const char* const kJenkinsOscillator = R"(
+name = "jenkins-1dof"
+[parameters]
+omega = 1.0
+[[mass]]
+name = "m"
+m = 1.0
+[[spring]]
+between = ["ground", "m"]
+k = 1.0
+[[jenkins]]
+name = "joint"
+between = ["m", "ground"]
+k = 1.0
+slip_force = 0.1
+[damping]
+alpha = 0.05
+[[forcing]]
+omega = "omega"
+amplitude = { m = 0.1 }
+)";
+
+// The issue's two cases, continued to the end through stick and slip onset:
+// a 1-dof oscillator with a Jenkins element (the continuation stopped at the
+// first slip onset: "the Newton residual stops falling") and the bundled
+// under-platform damper (it walked along the family of stuck orbits, the
+// sliders' positions, at one omega until its step budget ran out). While the
+// element is stuck all period the orbits form a family (the slider anywhere);
+// the branch takes its centred member, the stretch symmetric in the slip
+// band, which for the 1-dof oscillator is the linear closed form F |H| of
+// the stuck system (stiffness 2) about x = 0; the slipping orbits are
+// `hsnc periodic`'s at the same omega.
+TEST(ContinuationClosedForm, JenkinsOscillatorAndUnderPlatformDamperCompleteThroughSlipOnset) {
+    const SweepResult r = SweepPlan(kJenkinsOscillator, "jenkins.toml", {}, continuation("omega", 0.5, 3.0, 26)).run();
+    ASSERT_FALSE(r.points.empty());
+    EXPECT_EQ(r.points.back().value, 3.0);
+    std::vector<std::size_t> onsets;
+    for (std::size_t k = 0; k < r.points.size(); ++k) {
+        EXPECT_EQ(r.points[k].stop, "");
+        EXPECT_TRUE(r.points[k].bifurcation == "" || r.points[k].bifurcation == "slip_onset")
+            << r.points[k].bifurcation;
+        if (r.points[k].bifurcation == "slip_onset") onsets.push_back(k);
+    }
+    ASSERT_EQ(onsets.size(), 2u);
+    std::size_t stuck = 0, compared = 0;
+    for (std::size_t k = 0; k < r.points.size(); ++k) {
+        const SweepPoint& p = r.points[k];
+        const double w = p.value;
+        SCOPED_TRACE("omega = " + std::to_string(w));
+        if (k < onsets[0] || k >= onsets[1]) {
+            ASSERT_EQ(p.slips[1], 0);
+            const double A = 0.1 / std::abs(std::complex<double>(2 - w * w, 0.05 * w));
+            EXPECT_NEAR(p.xmax[0], A, 1e-10);
+            EXPECT_NEAR(p.stretch_max[0], -p.stretch_min[0], 1e-12);
+            ++stuck;
+            continue;
+        }
+        ASSERT_EQ(p.slips[1], 1);
+        if (k % 8 != 0) continue;
+        PeriodicOptions po;
+        po.kernels = KernelChoice::eigen;
+        po.transient = 300 * 2 * kPi / w;
+        const PeriodicResult orbit = periodic(
+            parse_model(kJenkinsOscillator, "jenkins.toml", ModelOverrides{{"omega=" + shortest_text(w)}, {}, {}, {}}),
+            po);
+        ASSERT_EQ(orbit.status, PeriodicStatus::ok) << orbit.message;
+        EXPECT_NEAR(orbit.x[0], p.strobe_x[0], 1e-8);
+        EXPECT_NEAR(orbit.v[0], p.strobe_v[0], 1e-8);
+        ++compared;
+    }
+    EXPECT_GE(stuck, 10u);
+    EXPECT_GE(compared, 3u);
+
+    const std::string path = std::string(HSNC_SOURCE_DIR) + "/examples/jenkins/under_platform_damper.toml";
+    const SweepResult u = SweepPlan::from_file(path, {}, continuation("omega", 6.0, 14.0, 17)).run();
+    ASSERT_FALSE(u.points.empty());
+    EXPECT_EQ(u.points.back().value, 14.0);
+    EXPECT_EQ(u.points.back().stop, "");
+    std::size_t slip_onsets = 0;
+    for (const SweepPoint& p : u.points) {
+        EXPECT_TRUE(p.bifurcation == "" || p.bifurcation == "slip_onset") << p.bifurcation << " at " << p.value;
+        slip_onsets += p.bifurcation == "slip_onset";
+    }
+    EXPECT_EQ(slip_onsets, 2u);
+}
+
 // The same continuation on 1 and 2 threads (both directions: two branches): bit-equal.
 TEST(Continuation, ThreadsGiveTheSameBits) {
     SweepOptions o = continuation("omega", 0.8, 2.0, 13);

@@ -203,6 +203,9 @@ struct SweepPoint {
     /// point failed). A sign change of either between two points of a branch is
     /// a grazing (the orbit starts or stops closing, or opening, the contact).
     std::vector<double> gap_max, gap_min;
+    /// Each Jenkins element's stretch e = u - s (slips at |k e| = F_s): its
+    /// largest and smallest value over the window (method hsnc).
+    std::vector<double> stretch_max, stretch_min;
     /// What the motion does over the recorded window (method hsnc; empty with a
     /// baseline or when the point failed): per contact, how often it closes
     /// (a contact closed at both ends of the window counted as one closing, as
