@@ -80,9 +80,10 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title, co
             }
             s += "EOD\n";
         }
-    const char* const kBifurcations[4] = {"fold", "period_doubling", "neimark_sacker", "grazing"};
-    bool has_bifurcation[4] = {false, false, false, false};
-    for (int k = 0; k < 4; ++k) {
+    const char* const kBifurcations[6] = {"fold",    "period_doubling", "neimark_sacker",
+                                          "grazing", "stick_onset",     "slip_onset"};
+    bool has_bifurcation[6] = {false, false, false, false, false, false};
+    for (int k = 0; k < 6; ++k) {
         s += "$bif" + std::to_string(k) + " << EOD\n";
         for (const SweepPoint& p : r.points)
             if (r.continuation && ("+" + p.bifurcation + "+").find("+" + std::string(kBifurcations[k]) + "+") !=
@@ -156,9 +157,11 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title, co
                     " with lines lw 2 dt 2 lc rgb '" + kColours[colour] + "' " +
                     (titled ? "title " + quoted(name + " unstable") : "notitle");
         }
-    const char* const kMarks[4] = {"pt 9 ps 1.6", "pt 5 ps 1.3", "pt 13 ps 1.6", "pt 6 ps 1.8"};
-    const char* const kMarkNames[4] = {"fold", "period doubling", "Neimark-Sacker", "grazing"};
-    for (int k = 0; k < 4; ++k)
+    const char* const kMarks[6] = {"pt 9 ps 1.6", "pt 5 ps 1.3", "pt 13 ps 1.6",
+                                   "pt 6 ps 1.8", "pt 4 ps 1.6", "pt 12 ps 1.8"};
+    const char* const kMarkNames[6] = {"fold",    "period doubling", "Neimark-Sacker",
+                                       "grazing", "stick onset",     "slip onset"};
+    for (int k = 0; k < 6; ++k)
         if (has_bifurcation[k])
             for (std::size_t j = 0; j < shown; ++j)
                 plot += ", $bif" + std::to_string(k) + " using 1:" + std::to_string(dofs[j] + 2) + " with points " +
