@@ -177,6 +177,24 @@ Eigen::VectorXd tangent(const Eigen::MatrixXd& J, const Eigen::VectorXd& previou
     return t;
 }
 
+// The state y = (x, v, s) as the sweep carries it (n masses).
+State state_of(const Eigen::VectorXd& y, std::size_t n) {
+    const double* d = y.data();
+    return State{{d, d + n}, {d + n, d + 2 * n}, {d + 2 * n, d + y.size()}};
+}
+
+// hsnc::periodic's orbit of `model` from `start` (on the Eigen solver, as
+// every point of a sweep), to the residual `tolerance`.
+PeriodicResult shoot_orbit(Model model, const State& start, double tolerance) {
+    model.x0 = start.x;
+    model.v0 = start.v;
+    model.slider0 = start.slider;
+    PeriodicOptions po;
+    po.kernels = KernelChoice::eigen;
+    po.tolerance = tolerance;
+    return periodic(model, po);
+}
+
 // A branch point whose orbit holds every Jenkins element stuck all period,
 // every contact in one state and no mass stuck: its family of orbits (each
 // slider may sit anywhere, s_j + d_j, the masses shifted by the static
@@ -224,7 +242,7 @@ bool centre_stuck_family(const Model& model, const SweepOptions& o, const std::s
     if (!d.allFinite()) return false;
     y.head(N) += S * d;
     y.segment(2 * N, J) += d;
-    State s{{y.data(), y.data() + n}, {y.data() + n, y.data() + 2 * n}, {y.data() + 2 * n, y.data() + 2 * n + nj}};
+    State s = state_of(y, n);
     pt = SweepPoint();
     record(model, s, o, what, 0, 1, pt);
     return true;
@@ -253,19 +271,10 @@ bool jump_over(const Branch& b, const SweepOptions& o, PeriodMaps& maps, double 
     const double target = std::clamp(direction >= 0 ? p + dp : p - dp, lo, hi);
     if (target == p) return false;
     try {
-        Model m = maps.model(target);
-        const std::size_t n = m.dof();
-        const auto N = static_cast<std::size_t>(y.size());
-        State s{{y.data(), y.data() + n}, {y.data() + n, y.data() + 2 * n}, {y.data() + 2 * n, y.data() + N}};
-        const std::string what = b.param + " = " + shortest_text(target) + b.where;
-        run_point(m, s, o, what);
-        m.x0 = s.x;
-        m.v0 = s.v;
-        m.slider0 = s.slider;
-        PeriodicOptions po;
-        po.kernels = KernelChoice::eigen;
-        po.tolerance = kTolerance;
-        const PeriodicResult r = periodic(m, po);
+        const Model& m = maps.model(target);
+        State s = state_of(y, m.dof());
+        run_point(m, s, o, b.param + " = " + shortest_text(target) + b.where);
+        const PeriodicResult r = shoot_orbit(m, s, kTolerance);
         if (r.status != PeriodicStatus::ok) return false;
         const Eigen::VectorXd orbit = orbit_state(r);
         const analysis::PeriodMapValue at = maps.eval(target, orbit);
@@ -361,19 +370,9 @@ private:
         const double s = (p - a.p) / (b.p - a.p);
         const Eigen::VectorXd guess = a.y + s * (b.y - a.y);
         const Model& model = maps_.model(p);
-        const std::size_t n = model.dof();
-        Model m = model;
-        m.x0.assign(guess.data(), guess.data() + n);
-        m.v0.assign(guess.data() + n, guess.data() + 2 * n);
-        m.slider0.assign(guess.data() + 2 * n, guess.data() + guess.size());
-        PeriodicOptions po;
-        po.kernels = KernelChoice::eigen;
-        po.tolerance = 1e-13;
-        PeriodicResult r = periodic(m, po);
-        if (r.status != PeriodicStatus::ok) {  // rounding may hold the residual above 1e-13
-            po.tolerance = kTolerance;
-            r = periodic(m, po);
-        }
+        const State start = state_of(guess, model.dof());
+        PeriodicResult r = shoot_orbit(model, start, 1e-13);
+        if (r.status != PeriodicStatus::ok) r = shoot_orbit(model, start, kTolerance);  // rounding may hold it above
         if (r.status != PeriodicStatus::ok) throw RunError(r.message);
         OrbitAt at;
         at.p = p;
@@ -483,14 +482,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
     std::size_t transient = 0;
     try {
         transient = run_point(first, state, o, name(b.start)).periods;
-        Model m = first;
-        m.x0 = state.x;
-        m.v0 = state.v;
-        m.slider0 = state.slider;
-        PeriodicOptions po;
-        po.kernels = KernelChoice::eigen;
-        po.tolerance = kTolerance;
-        orbit = periodic(m, po);
+        orbit = shoot_orbit(first, state, kTolerance);
         if (orbit.status != PeriodicStatus::ok)
             why = "no periodic orbit of the forcing's period found from the steady state there: " + orbit.message;
     } catch (const RunError& e) {
@@ -552,7 +544,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
     OrbitAt last;
     auto emit = [&](const Model& model, bool first_point, std::size_t periods) {
         SweepPoint pt;
-        State s{{y.data(), y.data() + n}, {y.data() + n, y.data() + 2 * n}, {y.data() + 2 * n, y.data() + N}};
+        State s = state_of(y, n);
         record(model, s, o, name(p), 0, 1, pt);
         if (neutral > 0) centre_stuck_family(model, o, name(p), y, pt);  // y moves with it
         const OrbitAt here{p, y, mu, neutral};
@@ -681,14 +673,7 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
             const double s = (bound - p) / (pk - p);
             const Eigen::VectorXd guess = y + s * (yk - y);
             try {
-                Model m = maps.model(bound);
-                m.x0.assign(guess.data(), guess.data() + n);
-                m.v0.assign(guess.data() + n, guess.data() + 2 * n);
-                m.slider0.assign(guess.data() + 2 * n, guess.data() + N);
-                PeriodicOptions po;
-                po.kernels = KernelChoice::eigen;
-                po.tolerance = kTolerance;
-                const PeriodicResult end = periodic(m, po);
+                const PeriodicResult end = shoot_orbit(maps.model(bound), state_of(guess, n), kTolerance);
                 if (end.status != PeriodicStatus::ok) {
                     stop = "sweep --continuation: shooting fails at " + name(bound) + ": " + end.message;
                     break;
