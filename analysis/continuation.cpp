@@ -343,8 +343,10 @@ public:
                 try {
                     found.push_back(locate(a, b, c, largest, fa, fb));
                 } catch (const RunError&) {
-                    // Not located (an orbit not found near the grazing): the
-                    // branch goes on; the crossing is not named.
+                    // Not located (no orbit found near the grazing): the branch
+                    // goes on and its next row names the crossing (transitions_between).
+                } catch (const InputError&) {
+                    // The model is not valid at a trial value: the same.
                 }
             }
         std::sort(found.begin(), found.end(), [&](const auto& x, const auto& y) {
