@@ -60,7 +60,8 @@ struct Accumulator {
     std::size_t K;
     std::vector<double> hc, hs;  // [i * (K - 1) + k - 2]
     double length = 0;           // of the window covered so far
-    // Every contact's gap function G = u - gap: its largest and smallest value.
+    // The largest and smallest value of every contact's gap function G = u -
+    // gap, then of every Jenkins element's stretch (SegmentRecorder::coordinate).
     std::vector<double> gmax, gmin;
     // The configurations the window passes through (SweepPoint::closings,
     // sticks, slips), counted over its segments of positive length.
