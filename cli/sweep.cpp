@@ -645,10 +645,12 @@ void add_sweep(CLI::App& app, int& exit_code) {
         ->check(finite_number());
     sub->add_option("--atol", f->atol, "absolute tolerance of --method rk45/cvode (default 1e-12)")
         ->check(finite_number());
-    sub->add_flag("--continuation", f->continuation,
-                  "follow the periodic orbit over the parameter by pseudo-arclength continuation (exact shooting), "
-                  "through folds, with each point's stability and the bifurcations crossed (extra columns "
-                  "stable,max_multiplier,bifurcation); the branch starts at --from (--to for --direction down)");
+    sub->add_flag(
+        "--continuation", f->continuation,
+        "follow the periodic orbit over the parameter by pseudo-arclength continuation (exact shooting), "
+        "through folds, with each point's stability and the bifurcations and transitions crossed (fold, "
+        "period_doubling, neimark_sacker, grazing located as a row of its own, stick_onset, slip_onset; extra columns "
+        "stable,max_multiplier,bifurcation); the branch starts at --from (--to for --direction down)");
     sub->add_option("--max-steps", f->max_steps,
                     "--continuation: points at most per branch (default 20 x --points)");
     sub->add_option("--harmonics", f->harmonics,
