@@ -640,9 +640,11 @@ TEST(SweepCli, MpiRanksGiveTheSameBytes) {
     if (!HSNC_WITH_MPI) GTEST_SKIP() << "built without MPI";
     ASSERT_EQ(std::system("command -v mpirun >/dev/null 2>&1"), 0) << "mpirun not on PATH (Debian package openmpi-bin)";
     const std::string model = write_temp("hardening.toml", kHardening);
-    const std::string mode = "--restart-each --param2 F --values2 0.1,0.12";
+    // With harmonics: the ranks send them with the points (write_tasks).
+    const std::string mode = "--restart-each --param2 F --values2 0.1,0.12 --harmonics 3";
     const std::string a = temp_path("a.csv"), ad = temp_path("ad.csv");
     ASSERT_EQ(run_hsnc(sweep_args(model, mode + " --out '" + a + "' --diagram '" + ad + "'")).exit_code, 0);
+    ASSERT_NE(slurp(a).find(",amp3_m,phase3_m\n"), std::string::npos) << slurp(a).substr(0, 300);
     for (int ranks : {1, 2}) {
         SCOPED_TRACE(std::to_string(ranks) + " ranks");
         const std::string b = temp_path("b.csv"), bd = temp_path("bd.csv"), log = temp_path("mpi.log");
