@@ -44,16 +44,23 @@ public:
 };
 
 // What the recorded window accumulates, per mass: with K harmonics also the
-// integrals of x cos(k theta), x sin(k theta) for k = 2..K (k = 1: sxc, sxs).
+// integrals of x cos(k theta), x sin(k theta) for k = 2..K (k = 1: sxc, sxs);
+// with `extremes` (a continuation's points: its transitions) the extremes of
+// every contact's gap and Jenkins element's stretch.
 struct Accumulator {
-    Accumulator(std::size_t n, std::size_t harmonics)
-        : xmax(n, 0.0),
-          sxx(n, 0.0),
-          sxc(n, 0.0),
-          sxs(n, 0.0),
+    Accumulator(const Model& m, std::size_t harmonics, bool extremes)
+        : xmax(m.dof(), 0.0),
+          sxx(m.dof(), 0.0),
+          sxc(m.dof(), 0.0),
+          sxs(m.dof(), 0.0),
           K(harmonics),
-          hc(harmonics > 1 ? n * (harmonics - 1) : 0, 0.0),
+          hc(harmonics > 1 ? m.dof() * (harmonics - 1) : 0, 0.0),
           hs(hc.size(), 0.0),
+          gmax(extremes ? m.contacts.size() + m.jenkins.size() : 0, -INFINITY),
+          gmin(gmax.size(), INFINITY),
+          closings(m.contacts.size(), 0),
+          sticks(m.dof() + m.jenkins.size(), 0),
+          slips(sticks.size(), 0),
           ck(K + 1),
           sk(K + 1) {}
     std::vector<double> xmax, sxx, sxc, sxs;
@@ -61,17 +68,17 @@ struct Accumulator {
     std::vector<double> hc, hs;  // [i * (K - 1) + k - 2]
     double length = 0;           // of the window covered so far
     // The largest and smallest value of every contact's gap function G = u -
-    // gap, then of every Jenkins element's stretch (SegmentRecorder::coordinate).
+    // gap, then of every Jenkins element's stretch (SegmentRecorder::coordinate;
+    // empty without `extremes`).
     std::vector<double> gmax, gmin;
     // The configurations the window passes through (SweepPoint::closings,
     // sticks, slips), counted over its segments of positive length.
     std::vector<std::size_t> closings;
     std::vector<char> sticks, slips;
-    bool first_closed_known = false;
-    std::vector<char> first_closed, last_closed;
+    std::vector<char> first_closed, last_closed;  // of the window's first and last segments
 
     void configuration(const Configuration& cfg) {
-        if (!first_closed_known) first_closed.assign(cfg.closed.begin(), cfg.closed.end()), first_closed_known = true;
+        if (first_closed.empty()) first_closed.assign(cfg.closed.begin(), cfg.closed.end());
         for (std::size_t c = 0; c < cfg.closed.size(); ++c) {
             if (cfg.closed[c] && !(c < last_closed.size() && last_closed[c])) ++closings[c];
         }
@@ -371,7 +378,7 @@ public:
         const double s = t - t_window_, theta = omega_ * s;
         const double w = count_ == 0 ? 0.5 * h_ : h_;  // trapezoid; the last sample's half is taken back in close()
         for (std::size_t i = 0; i < n_; ++i) acc_.extreme(i, x[i]);
-        for (std::size_t c = 0; c < model_.contacts.size(); ++c)
+        for (std::size_t c = 0; c < std::min(acc_.gmax.size(), model_.contacts.size()); ++c)
             acc_.gap_extreme(c, gap(model_, static_cast<int>(c), x));
         acc_.add(w, theta, x);
         if (keep_ && count_ > 0 && count_ % per_period_ == 0) {
@@ -517,12 +524,7 @@ void record(const Model& point_model, State& state, const SweepOptions& o, const
     const double tr = t0 + static_cast<double>(k) * period;
     const double te = t0 + static_cast<double>(k + periods) * period;
     const std::size_t K = o.harmonics;
-    Accumulator acc(n, K);
-    acc.gmax.assign(m.contacts.size() + m.jenkins.size(), -INFINITY);
-    acc.gmin.assign(m.contacts.size() + m.jenkins.size(), INFINITY);
-    acc.closings.assign(m.contacts.size(), 0);
-    acc.sticks.assign(n + m.jenkins.size(), 0);
-    acc.slips.assign(n + m.jenkins.size(), 0);
+    Accumulator acc(m, K, o.continuation);
     if (o.method == Method::hsnc) {
         std::unique_ptr<SolverProvider> own;
         if (!provider) provider = (own = std::make_unique<GenericSolverProvider>(m)).get();
@@ -547,11 +549,13 @@ void record(const Model& point_model, State& state, const SweepOptions& o, const
         pt.xrms[i] = std::sqrt(acc.sxx[i] / acc.length);
         pt.a1[i] = std::hypot(2 * acc.sxc[i] / acc.length, 2 * acc.sxs[i] / acc.length);
     }
-    const auto contacts = static_cast<std::ptrdiff_t>(m.contacts.size());
-    pt.gap_max.assign(acc.gmax.begin(), acc.gmax.begin() + contacts);
-    pt.gap_min.assign(acc.gmin.begin(), acc.gmin.begin() + contacts);
-    pt.stretch_max.assign(acc.gmax.begin() + contacts, acc.gmax.end());
-    pt.stretch_min.assign(acc.gmin.begin() + contacts, acc.gmin.end());
+    if (!acc.gmax.empty()) {
+        const auto contacts = static_cast<std::ptrdiff_t>(m.contacts.size());
+        pt.gap_max.assign(acc.gmax.begin(), acc.gmax.begin() + contacts);
+        pt.gap_min.assign(acc.gmin.begin(), acc.gmin.begin() + contacts);
+        pt.stretch_max.assign(acc.gmax.begin() + contacts, acc.gmax.end());
+        pt.stretch_min.assign(acc.gmin.begin() + contacts, acc.gmin.end());
+    }
     pt.amp.resize(n * K);
     pt.phase.resize(n * K);
     for (std::size_t i = 0; i < n; ++i)

@@ -200,11 +200,12 @@ struct SweepPoint {
     std::vector<double> amp, phase;
     /// Each contact's gap function G = u - gap (closed while G >= 0): its
     /// largest and smallest value over the recorded window (empty when the
-    /// point failed). A sign change of either between two points of a branch is
+    /// point failed, and outside a continuation, which alone needs them). A
+    /// sign change of either between two points of a branch is
     /// a grazing (the orbit starts or stops closing, or opening, the contact).
     std::vector<double> gap_max, gap_min;
     /// Each Jenkins element's stretch e = u - s (slips at |k e| = F_s): its
-    /// largest and smallest value over the window (method hsnc).
+    /// largest and smallest value over the window (a continuation's points only).
     std::vector<double> stretch_max, stretch_min;
     /// What the motion does over the recorded window (method hsnc; empty with a
     /// baseline or when the point failed): per contact, how often it closes
