@@ -7,7 +7,10 @@
 #include <cstdlib>
 #include <map>
 #include <memory>
+#include <optional>
+#include <sstream>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -37,7 +40,8 @@ constexpr double kLargestStateStep = 0.1;
 // the central difference come back to the same values).
 class PeriodMaps {
 public:
-    explicit PeriodMaps(const Branch& b) : branch_(b) {}
+    // The map over `multiple` forcing periods.
+    PeriodMaps(const Branch& b, int multiple) : branch_(b), multiple_(multiple) {}
 
     // P(y) and dP/dy at p; not ok (with the reason) when the model is invalid at p.
     analysis::PeriodMapValue eval(double p, const Eigen::VectorXd& y) {
@@ -50,7 +54,7 @@ public:
             v.message = std::string("the model is not valid there: ") + e.what();
             return v;
         }
-        return analysis::evaluate_period_map(*at->flow, at->model.t0, at->model.t0 + at->period, y);
+        return analysis::evaluate_period_map(*at->flow, at->model.t0, at->model.t0 + multiple_ * at->period, y);
     }
 
     // The model at p (InputError when invalid there).
@@ -79,6 +83,7 @@ private:
         return *(cache_[p] = std::move(at));
     }
     const Branch& branch_;
+    int multiple_;
     std::map<double, std::unique_ptr<At>> cache_;
 };
 
@@ -184,14 +189,15 @@ State state_of(const Eigen::VectorXd& y, std::size_t n) {
 }
 
 // hsnc::periodic's orbit of `model` from `start` (on the Eigen solver, as
-// every point of a sweep), to the residual `tolerance`.
-PeriodicResult shoot_orbit(Model model, const State& start, double tolerance) {
+// every point of a sweep), to the residual `tolerance`, of `multiple` forcing periods.
+PeriodicResult shoot_orbit(Model model, const State& start, double tolerance, int multiple) {
     model.x0 = start.x;
     model.v0 = start.v;
     model.slider0 = start.slider;
     PeriodicOptions po;
     po.kernels = KernelChoice::eigen;
     po.tolerance = tolerance;
+    po.harmonic = multiple;
     return periodic(model, po);
 }
 
@@ -202,10 +208,11 @@ PeriodicResult shoot_orbit(Model model, const State& start, double tolerance) {
 // each element's stretch e_j = u_j - s_j symmetric in its slip band
 // (max e_j + min e_j = 0): the member a slow sweep drifts to (each slip
 // pushes the slider towards it) and where the slipping branch begins. Exact
-// (a static shift of a linear orbit); `pt` is recorded again. False, with y
-// and pt unchanged, when it does not apply or the point is centred already.
-bool centre_stuck_family(const Model& model, const SweepOptions& o, const std::string& what, Eigen::VectorXd& y,
-                         SweepPoint& pt) {
+// (a static shift of a linear orbit); `pt` is recorded again (`periods`
+// forcing periods). False, with y and pt unchanged, when it does not apply or
+// the point is centred already.
+bool centre_stuck_family(const Model& model, const SweepOptions& o, const std::string& what, std::size_t periods,
+                         Eigen::VectorXd& y, SweepPoint& pt) {
     const std::size_t n = model.dof(), nj = model.jenkins.size();
     if (nj == 0 || pt.sticks.size() != n + nj || pt.stretch_max.size() != nj) return false;
     for (std::size_t i = 0; i < n; ++i)
@@ -244,7 +251,7 @@ bool centre_stuck_family(const Model& model, const SweepOptions& o, const std::s
     y.segment(2 * N, J) += d;
     State s = state_of(y, n);
     pt = SweepPoint();
-    record(model, s, o, what, 0, 1, pt);
+    record(model, s, o, what, 0, periods, pt);
     return true;
 }
 
@@ -258,15 +265,25 @@ Eigen::VectorXd orbit_state(const PeriodicResult& r) {
     return y;
 }
 
+// The monodromy of an orbit hsnc::periodic found.
+Eigen::MatrixXd monodromy_of(const PeriodicResult& r) {
+    const auto N = static_cast<Eigen::Index>(r.x.size() * 2 + r.s.size());
+    Eigen::MatrixXd M(N, N);
+    for (Eigen::Index i = 0; i < N; ++i)
+        for (Eigen::Index j = 0; j < N; ++j) M(i, j) = r.monodromy[static_cast<std::size_t>(i * N + j)];
+    return M;
+}
+
 // Beyond a non-smooth transition where the corrector fails at the smallest
 // step (at a Jenkins element's slip onset the orbit touches the slip force:
 // the period map's derivative jumps there and Newton stalls): the orbit a
 // little further on, dp in the direction the parameter moves (`direction`: the
 // tangent's parameter component), by a sweep point's transient from the last
-// orbit, then shooting. It reaches stable orbits only. True with (pk, yk, v)
-// as a converged corrector leaves them.
-bool jump_over(const Branch& b, const SweepOptions& o, PeriodMaps& maps, double p, const Eigen::VectorXd& y,
-               double direction, double dp, double& pk, Eigen::VectorXd& yk, analysis::PeriodMapValue& v) {
+// orbit, then shooting (an orbit of `multiple` periods). It reaches stable
+// orbits only. True with (pk, yk, v) as a converged corrector leaves them.
+bool jump_over(const Branch& b, const SweepOptions& o, PeriodMaps& maps, int multiple, double p,
+               const Eigen::VectorXd& y, double direction, double dp, double& pk, Eigen::VectorXd& yk,
+               analysis::PeriodMapValue& v) {
     const double lo = std::min(b.start, b.end), hi = std::max(b.start, b.end);
     const double target = std::clamp(direction >= 0 ? p + dp : p - dp, lo, hi);
     if (target == p) return false;
@@ -274,7 +291,7 @@ bool jump_over(const Branch& b, const SweepOptions& o, PeriodMaps& maps, double 
         const Model& m = maps.model(target);
         State s = state_of(y, m.dof());
         run_point(m, s, o, b.param + " = " + shortest_text(target) + b.where);
-        const PeriodicResult r = shoot_orbit(m, s, kTolerance);
+        const PeriodicResult r = shoot_orbit(m, s, kTolerance, multiple);
         if (r.status != PeriodicStatus::ok) return false;
         const Eigen::VectorXd orbit = orbit_state(r);
         const analysis::PeriodMapValue at = maps.eval(target, orbit);
@@ -290,27 +307,45 @@ bool jump_over(const Branch& b, const SweepOptions& o, PeriodMaps& maps, double 
     }
 }
 
-// An orbit of a branch: the parameter, the state y = (x, v, s) at t0, its multipliers.
+// An orbit of a branch: the parameter, the state y = (x, v, s) at t0, the
+// monodromy M over the branch's multiple of the forcing period, its
+// multipliers and how many of them belong to a family.
 struct OrbitAt {
     double p = 0;
     Eigen::VectorXd y;
+    Eigen::MatrixXd M;
     std::vector<std::complex<double>> mu;
     std::size_t neutral = 0;
 };
 
+// Whether `labels` ('+'-joined) holds `name`; `labels` with it (last), without it.
+bool has_label(const std::string& labels, const std::string& name) {
+    return ("+" + labels + "+").find("+" + name + "+") != std::string::npos;
+}
+std::string with_label(const std::string& labels, const std::string& name) {
+    return has_label(labels, name) ? labels : labels + (labels.empty() ? "" : "+") + name;
+}
+std::string without_label(const std::string& labels, const std::string& name) {
+    std::string out, item;
+    std::istringstream in(labels);
+    while (std::getline(in, item, '+'))
+        if (item != name) out += (out.empty() ? "" : "+") + item;
+    return out;
+}
+
 // The columns of a branch point from its orbit: the direction the parameter
 // moved from `previous` (null: the branch's first point, its direction),
-// settled, multiple 1, stability, and the bifurcations crossed since
+// settled, the multiple, stability, and the bifurcations crossed since
 // `previous`, with `also` ("grazing", or "") joined last.
 void branch_point(SweepPoint& pt, const OrbitAt& at, const OrbitAt* previous, const Branch& b, double sense,
-                  std::size_t periods, const std::string& also) {
+                  int multiple, std::size_t periods, const std::string& also) {
     pt.value = at.p;
     pt.value2 = b.value2;
     pt.direction = previous == nullptr   ? (sense > 0 ? SweepDirection::up : SweepDirection::down)
                    : at.p >= previous->p ? SweepDirection::up
                                          : SweepDirection::down;
     pt.settled = true;
-    pt.multiple = 1;
+    pt.multiple = multiple;
     pt.branch_start = previous == nullptr;
     pt.periods = periods;
     pt.max_multiplier = at.mu.empty() ? 0.0 : std::abs(at.mu.front());
@@ -319,20 +354,23 @@ void branch_point(SweepPoint& pt, const OrbitAt& at, const OrbitAt* previous, co
     if (!also.empty()) pt.bifurcation += (pt.bifurcation.empty() ? "" : "+") + also;
 }
 
-// Grazing between two orbits of a branch, a (the previous point) and b: a
-// contact's largest (or smallest) gap function over the orbit, G = u - gap,
-// changes sign (the orbit starts or stops closing, or opening, it), and its
-// parameter is located to rounding as a point of the branch: Illinois
-// iterations on that extreme, each an orbit shot (to 1e-13) from the chord's
-// state at the trial parameter and recorded over one period (the extreme from
-// the exact segments, refined to rounding). Returns the grazing points, in
-// the order of the branch; empty when none, or when a fold lies between (the
-// parameter is then no coordinate of the chord).
-class GrazingLocator {
+// Points located between two orbits of a branch, a (the previous point) and
+// b, each an orbit shot (to 1e-13) from the chord's state at a trial
+// parameter and recorded over its period (the branch's `multiple` of the
+// forcing period):
+// - grazing: a contact's largest (or smallest) gap function over the orbit,
+//   G = u - gap, changes sign (the orbit starts or stops closing, or opening,
+//   it): Illinois iterations on that extreme (from the exact segments,
+//   refined to rounding). None when a bifurcation lies between (at a fold the
+//   parameter is no coordinate of the chord).
+// - a period doubling: det(M + I) changes sign: Illinois iterations on it,
+//   to the parameter's rounding.
+class Locator {
 public:
-    GrazingLocator(const Branch& b, const SweepOptions& o, PeriodMaps& maps) : b_(b), o_(o), maps_(maps) {}
+    Locator(const Branch& b, const SweepOptions& o, PeriodMaps& maps, int multiple)
+        : b_(b), o_(o), maps_(maps), multiple_(multiple) {}
 
-    std::vector<std::pair<SweepPoint, OrbitAt>> between(const SweepPoint& pa, const OrbitAt& a, const SweepPoint& pb,
+    std::vector<std::pair<SweepPoint, OrbitAt>> grazing(const SweepPoint& pa, const OrbitAt& a, const SweepPoint& pb,
                                                         const OrbitAt& b) {
         std::vector<std::pair<SweepPoint, OrbitAt>> found;
         if (a.p == b.p || !bifurcations_between(a.mu, b.mu, a.neutral, b.neutral).empty()) return found;
@@ -341,7 +379,9 @@ public:
                 const double fa = largest ? pa.gap_max[c] : pa.gap_min[c], fb = largest ? pb.gap_max[c] : pb.gap_min[c];
                 if (!changes_sign(fa, fb)) continue;
                 try {
-                    found.push_back(locate(a, b, c, largest, fa, fb));
+                    found.push_back(illinois(a, b, fa, fb, false, [&](const std::pair<SweepPoint, OrbitAt>& at) {
+                        return largest ? at.first.gap_max[c] : at.first.gap_min[c];
+                    }));
                 } catch (const RunError&) {
                     // Not located (no orbit found near the grazing): the branch
                     // goes on and its next row names the crossing (transitions_between).
@@ -355,6 +395,23 @@ public:
         return found;
     }
 
+    // The period doubling between a and b: the orbit at the end of the final
+    // bracket on b's side (its multiplier just beyond -1 as b's is, so the
+    // crossing lies between a and it). Empty when det(M + I) keeps its sign or
+    // an orbit on the way is not found.
+    std::optional<std::pair<SweepPoint, OrbitAt>> period_doubling(const OrbitAt& a, const OrbitAt& b) {
+        const double fa = flip_test(a.M), fb = flip_test(b.M);
+        if (a.p == b.p || !((fa < 0) != (fb < 0))) return std::nullopt;
+        try {
+            return illinois(a, b, fa, fb, true,
+                            [](const std::pair<SweepPoint, OrbitAt>& at) { return flip_test(at.second.M); });
+        } catch (const RunError&) {
+            return std::nullopt;
+        } catch (const InputError&) {
+            return std::nullopt;
+        }
+    }
+
     // Whether a contact's largest or smallest G changes sign from pa to pb.
     static bool crossed(const SweepPoint& pa, const SweepPoint& pb) {
         for (std::size_t c = 0; c < pa.gap_max.size() && c < pb.gap_max.size(); ++c)
@@ -362,45 +419,60 @@ public:
         return false;
     }
 
+    // det(M + I): changes sign where a real multiplier crosses -1.
+    static double flip_test(const Eigen::MatrixXd& M) {
+        return (M + Eigen::MatrixXd::Identity(M.rows(), M.cols())).fullPivLu().determinant();
+    }
+
 private:
     static bool changes_sign(double fa, double fb) {
         return std::isfinite(fa) && std::isfinite(fb) && (fa < 0) != (fb < 0);
     }
 
-    // The orbit at p (from the chord's state there) recorded over one period.
+    // The orbit at p (from the chord's state there) recorded over its period.
     std::pair<SweepPoint, OrbitAt> shoot(const OrbitAt& a, const OrbitAt& b, double p) {
         const double s = (p - a.p) / (b.p - a.p);
         const Eigen::VectorXd guess = a.y + s * (b.y - a.y);
         const Model& model = maps_.model(p);
         const State start = state_of(guess, model.dof());
-        PeriodicResult r = shoot_orbit(model, start, 1e-13);
-        if (r.status != PeriodicStatus::ok) r = shoot_orbit(model, start, kTolerance);  // rounding may hold it above
+        PeriodicResult r = shoot_orbit(model, start, 1e-13, multiple_);
+        if (r.status != PeriodicStatus::ok)
+            r = shoot_orbit(model, start, kTolerance, multiple_);  // rounding may hold it above
         if (r.status != PeriodicStatus::ok) throw RunError(r.message);
         OrbitAt at;
         at.p = p;
         at.y = orbit_state(r);
+        at.M = monodromy_of(r);
         at.mu = r.multipliers;
         at.neutral = r.neutral;
         State state{r.x, r.v, r.s};
         SweepPoint pt;
-        record(model, state, o_, b_.param + " = " + shortest_text(p) + b_.where, 0, 1, pt);
+        record(model, state, o_, b_.param + " = " + shortest_text(p) + b_.where, 0, static_cast<std::size_t>(multiple_),
+               pt);
         return {std::move(pt), std::move(at)};
     }
 
-    std::pair<SweepPoint, OrbitAt> locate(const OrbitAt& a, const OrbitAt& b, std::size_t c, bool largest, double fa,
-                                          double fb) {
+    // Illinois iterations on f between a and b (values fa, fb of opposite
+    // signs) down to the parameter's rounding: the orbit of smallest |f|, or
+    // (`beyond`) the last one on b's side.
+    template <class F>
+    std::pair<SweepPoint, OrbitAt> illinois(const OrbitAt& a, const OrbitAt& b, double fa, double fb, bool beyond,
+                                            F f_of) {
+        const bool a_negative = fa < 0;
         double pa = a.p, pb = b.p;
         std::pair<SweepPoint, OrbitAt> best;
+        bool have = false;
         double fbest = INFINITY;
-        int side = 0;  // Illinois: the end kept twice in a row has its value halved
+        int side = 0;  // the end kept twice in a row has its value halved
         for (int it = 0; it < 100; ++it) {
             double p = (pa * fb - pb * fa) / (fb - fa);
             if (!(p > std::min(pa, pb) && p < std::max(pa, pb))) p = 0.5 * (pa + pb);
             auto at = shoot(a, b, p);
-            const double f = largest ? at.first.gap_max[c] : at.first.gap_min[c];
-            if (std::fabs(f) < fbest) fbest = std::fabs(f), best = at;
+            const double f = f_of(at);
+            const bool on_a = f != 0 && (f < 0) == a_negative;
+            if (beyond ? !on_a : std::fabs(f) < fbest) fbest = std::fabs(f), best = at, have = true;
             if (f == 0) break;
-            if ((f < 0) == (fa < 0)) {
+            if (on_a) {
                 pa = p, fa = f;
                 if (side == -1) fb *= 0.5;
                 side = -1;
@@ -409,17 +481,18 @@ private:
                 if (side == 1) fa *= 0.5;
                 side = 1;
             }
-            // The bracket at the parameter's rounding.
             if (std::fabs(pb - pa) <=
                 4 * std::numeric_limits<double>::epsilon() * std::max(std::fabs(pa), std::fabs(pb)))
                 break;
         }
+        if (!have) throw RunError("no orbit found on the far side of the crossing");
         return best;
     }
 
     const Branch& b_;
     const SweepOptions& o_;
     PeriodMaps& maps_;
+    int multiple_;
 };
 
 // The non-smooth transitions between the points a and b of a branch, from
@@ -433,225 +506,389 @@ std::string transitions_between(const SweepPoint& a, const SweepPoint& b, bool l
     auto add = [&](const char* name) { out += (out.empty() ? "" : "+") + std::string(name); };
     if (a.sticks != b.sticks) add("stick_onset");
     if (a.slips != b.slips) add("slip_onset");
-    if (!located && (a.closings != b.closings || GrazingLocator::crossed(a, b))) add("grazing");
+    if (!located && (a.closings != b.closings || Locator::crossed(a, b))) add("grazing");
     return out;
 }
 
-}  // namespace
+// A switched branch's watch for its other end, where it goes through its
+// parent branch (at a period doubling of that): there the orbit's shift over
+// half its period, P_half(y) - y, turns round (the branch is a parabola
+// through the parent; beyond it the same orbits come again, each shifted by
+// half the period).
+class ParentCrossing {
+public:
+    ParentCrossing(const Branch& b, int multiple) : half_(b, multiple / 2) {}
 
-std::string bifurcations_between(const std::vector<std::complex<double>>& a, const std::vector<std::complex<double>>& b,
-                                 std::size_t neutral_a, std::size_t neutral_b) {
-    const TestFunctions fa = test_functions(neutral_inside(a, neutral_a)),
-                        fb = test_functions(neutral_inside(b, neutral_b));
-    std::string out;
-    auto add = [&](const char* name) { out += (out.empty() ? "" : "+") + std::string(name); };
-    if (fa.det_minus != fb.det_minus) add("fold");
-    if (fa.det_plus != fb.det_plus) add("period_doubling");
-    if (fa.bialternate != fb.bialternate && fa.complex_outside != fb.complex_outside) add("neimark_sacker");
-    return out;
-}
+    // Whether the branch went through its parent since the last call.
+    bool through(double p, const Eigen::VectorXd& y, const Eigen::VectorXd& D) {
+        const analysis::PeriodMapValue v = half_.eval(p, y);
+        Eigen::VectorXd shift;
+        if (v.ok) shift = (v.Py - y).cwiseQuotient(D.head(y.size()));
+        const bool crossed = shift.size() > 0 && last_.size() > 0 && shift.dot(last_) < 0;
+        last_ = shift;
+        return crossed;
+    }
 
-std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
-                                         const std::function<void(const SweepPoint&, double)>& done, bool* cut) {
+private:
+    PeriodMaps half_;
+    Eigen::VectorXd last_;  // the shift at the last point, scaled
+};
+
+// Where a branch begins: its first orbit, the scales D of its unknowns
+// u = (y, p) / D and its unit tangent there (over u), its multiple of the
+// forcing period, the period-map runs the orbit took, and for a branch
+// switched onto at a period doubling of `parent` (the branch's index in the
+// output), the critical multiplier's eigenvector.
+struct BranchStart {
+    OrbitAt at;
+    Eigen::VectorXd D, t;
+    int multiple = 1;
+    std::size_t periods = 0;
+    std::size_t parent = 0;
+    bool switched = false;
+    bool skip = false;  // not to be followed (a branch already followed from its other end)
+    std::string stop;   // why the branch cannot go on from its first point ("" when it can)
+};
+
+// Follows the branches of a continuation: the primary branch and, with
+// SweepOptions::branch_switch, those born at its period doublings (each
+// followed from the located point along the critical eigenvector, on the map
+// over twice the period), depth first, in the order they were found.
+class Continuation {
+public:
+    Continuation(const Branch& b, const SweepOptions& o, const std::function<void(const SweepPoint&, double)>& done,
+                 bool* cut)
+        : b_(b),
+          o_(o),
+          done_(done),
+          cut_(cut),
+          n_(b.start_model->dof()),
+          N_(static_cast<Eigen::Index>(2 * n_ + b.start_model->jenkins.size())) {}
+
+    std::vector<SweepPoint> run();
+
+private:
     using Clock = std::chrono::steady_clock;
-    const Model& first = *b.start_model;
-    const std::size_t n = first.dof(), nj = first.jenkins.size();
-    const Eigen::Index N = static_cast<Eigen::Index>(2 * n + nj);  // y = (x, v, s): the sliders are state too
-    // y's lengths (positions and sliders) and velocities.
-    auto is_velocity_row = [&](Eigen::Index i) { return i >= static_cast<Eigen::Index>(n) && i < static_cast<Eigen::Index>(2 * n); };
-    const double lo = std::min(b.start, b.end), hi = std::max(b.start, b.end), span = hi - lo;
-    const double sense = b.end > b.start ? 1.0 : -1.0;
-    const std::size_t budget = o.max_steps ? o.max_steps : 20 * o.points;
-    // Steps: at most 1/(points - 1) of [from, to] in the parameter and
-    // kLargestStateStep of the largest orbit so far in any state component;
-    // within that, halved on failure, grown after quick corrections.
-    const double spacing = 1.0 / static_cast<double>(o.points - 1), h_min = spacing * kSmallestStep;
-    auto name = [&](double p) { return b.param + " = " + shortest_text(p) + b.where; };
-    std::vector<SweepPoint> out;
-    PeriodMaps maps(b);
-    auto clock = Clock::now();
-    auto seconds = [&] {
-        const auto now = Clock::now();
-        const double s = std::chrono::duration<double>(now - clock).count();
-        clock = now;
-        return s;
-    };
 
+    std::string name(double p) const { return b_.param + " = " + shortest_text(p) + b_.where; }
+    double seconds() {
+        const auto now = Clock::now();
+        const double s = std::chrono::duration<double>(now - clock_).count();
+        clock_ = now;
+        return s;
+    }
+    void push(SweepPoint pt) {
+        out_.push_back(std::move(pt));
+        done_(out_.back(), seconds());
+    }
+    bool is_velocity_row(Eigen::Index i) const {
+        return i >= static_cast<Eigen::Index>(n_) && i < static_cast<Eigen::Index>(2 * n_);
+    }
+    // The scaled Jacobian [dP/dy - I, dP/dp] of the residual over u = (y, p) / D.
+    Eigen::MatrixXd jacobian(const Eigen::MatrixXd& M, const Eigen::VectorXd& Pp, const Eigen::VectorXd& D) const {
+        Eigen::MatrixXd J(N_, N_ + 1);
+        for (Eigen::Index i = 0; i < N_; ++i) {
+            for (Eigen::Index j = 0; j < N_; ++j) J(i, j) = (M(i, j) - (i == j ? 1.0 : 0.0)) * D(j) / D(i);
+            J(i, N_) = Pp(i) * D(N_) / D(i);
+        }
+        return J;
+    }
+    // dP/dp at (p, y), a central difference.
+    Eigen::VectorXd parameter_derivative(PeriodMaps& maps, double p, const Eigen::VectorXd& y,
+                                         std::string& problem) const {
+        const double d = kDifferenceStep * std::fabs(b_.end - b_.start);
+        const analysis::PeriodMapValue a = maps.eval(p + d, y), c = maps.eval(p - d, y);
+        if (!a.ok || !c.ok) {
+            problem = "dP/d" + b_.param + ": " + (a.ok ? c.message : a.message);
+            return {};
+        }
+        return (a.Py - c.Py) / (2 * d);
+    }
+
+    std::vector<SweepPoint> failed_row(const std::string& reason);
+    // A corrector's outcome: converged (else why not in `fail`) at (p, y)
+    // with the map's value there, dP/dp of the Newton matrix, iterations taken.
+    struct Corrected {
+        bool converged = false;
+        std::string fail;
+        double p = 0;
+        Eigen::VectorXd y, Pp;
+        analysis::PeriodMapValue v;
+        int iterations = 0;
+    };
+    Corrected correct(PeriodMaps& maps, const Eigen::VectorXd& predicted, const Eigen::VectorXd& t,
+                      const Eigen::VectorXd& D) const;
+    void follow(const BranchStart& start, std::vector<BranchStart>* siblings);
+    BranchStart switched_start(const OrbitAt& at, const Eigen::VectorXd& D, const Eigen::VectorXd& t_parent,
+                               int multiple, std::size_t parent) const;
+
+    const Branch& b_;
+    const SweepOptions& o_;
+    const std::function<void(const SweepPoint&, double)>& done_;
+    bool* cut_;
+    std::size_t n_;
+    Eigen::Index N_;  // y = (x, v, s): the sliders are state too
+    Clock::time_point clock_ = Clock::now();
+    std::vector<SweepPoint> out_;
+    std::size_t branches_ = 0;  // branches begun
+    bool stopped_ = false;      // a graceful stop (SweepOptions::stop)
+};
+
+std::vector<SweepPoint> Continuation::failed_row(const std::string& reason) {
+    SweepPoint p;
+    p.value = b_.start;
+    p.value2 = b_.value2;
+    p.direction = b_.end > b_.start ? SweepDirection::up : SweepDirection::down;
+    p.failure = reason;
+    p.branch_start = true;
+    mark_failed(p, n_, o_.harmonics);
+    push(p);
+    return out_;
+}
+
+// The start of the branch of twice `multiple` periods born at the period
+// doubling `at` of a branch with scales D and tangent t_parent: the orbit
+// itself (a fixed point of the doubled map too, whose monodromy is M^2), and
+// the tangent along the eigenvector of M's multiplier closest to -1 (the
+// doubled map's second null direction there), without its component along
+// the parent's tangent (so the corrector's hyperplane does not meet the
+// parent branch near the point).
+BranchStart Continuation::switched_start(const OrbitAt& at, const Eigen::VectorXd& D, const Eigen::VectorXd& t_parent,
+                                         int multiple, std::size_t parent) const {
+    BranchStart s;
+    s.multiple = 2 * multiple;
+    s.parent = parent;
+    s.switched = true;
+    s.D = D;
+    s.at = at;
+    s.at.M = at.M * at.M;
+    s.at.mu = analysis::floquet_multipliers(s.at.M);
+    // The flip multiplier, squared to ~+1, counts as a family's for the
+    // bifurcation test of the first step (the new branch leaves it inward or
+    // outward: no fold) and for stability (the point is critical: not stable).
+    s.at.neutral = at.neutral + 1;
+    const Eigen::EigenSolver<Eigen::MatrixXd> es(at.M);
+    Eigen::Index k = 0;
+    for (Eigen::Index i = 1; i < es.eigenvalues().size(); ++i)
+        if (std::abs(es.eigenvalues()(i) + 1.0) < std::abs(es.eigenvalues()(k) + 1.0)) k = i;
+    Eigen::VectorXd t = Eigen::VectorXd::Zero(N_ + 1);
+    t.head(N_) = es.eigenvectors().col(k).real().cwiseQuotient(D.head(N_));
+    t.normalize();
+    t -= t.dot(t_parent) * t_parent;
+    s.t = t.normalized();
+    return s;
+}
+
+std::vector<SweepPoint> Continuation::run() {
+    const Model& first = *b_.start_model;
     // ---- the first orbit: a sweep point's transient, then shooting ----
     State state{first.x0, first.v0, first.slider0};
     PeriodicResult orbit;
     std::string why;
     std::size_t transient = 0;
     try {
-        transient = run_point(first, state, o, name(b.start)).periods;
-        orbit = shoot_orbit(first, state, kTolerance);
+        transient = run_point(first, state, o_, name(b_.start)).periods;
+        orbit = shoot_orbit(first, state, kTolerance, 1);
         if (orbit.status != PeriodicStatus::ok)
             why = "no periodic orbit of the forcing's period found from the steady state there: " + orbit.message;
     } catch (const RunError& e) {
         why = e.what();
     }
-    auto failed_row = [&](const std::string& reason) {
-        SweepPoint p;
-        p.value = b.start;
-        p.value2 = b.value2;
-        p.direction = sense > 0 ? SweepDirection::up : SweepDirection::down;
-        p.failure = reason;
-        p.branch_start = true;
-        sweep_detail::mark_failed(p, n, o.harmonics);
-        out.push_back(p);
-        done(out.back(), seconds());
-        return out;
-    };
-    if (!why.empty()) return failed_row("sweep --continuation at " + name(b.start) + ": " + why);
+    if (!why.empty()) return failed_row("sweep --continuation at " + name(b_.start) + ": " + why);
 
+    BranchStart s;
+    s.periods = transient;
     // Scales: the first orbit's largest |x| and |v|, and |to - from|.
-    Eigen::VectorXd D(N + 1);
+    s.D.resize(N_ + 1);
     double sx = 0, sv = 0;
-    for (std::size_t i = 0; i < n; ++i) sx = std::max(sx, std::fabs(orbit.x[i])), sv = std::max(sv, std::fabs(orbit.v[i]));
-    for (double s : orbit.s) sx = std::max(sx, std::fabs(s));
-    for (Eigen::Index i = 0; i < N; ++i) D(i) = !is_velocity_row(i) ? (sx > 0 ? sx : 1) : (sv > 0 ? sv : 1);
-    D(N) = span;
+    for (std::size_t i = 0; i < n_; ++i)
+        sx = std::max(sx, std::fabs(orbit.x[i])), sv = std::max(sv, std::fabs(orbit.v[i]));
+    for (double v : orbit.s) sx = std::max(sx, std::fabs(v));
+    for (Eigen::Index i = 0; i < N_; ++i) s.D(i) = !is_velocity_row(i) ? (sx > 0 ? sx : 1) : (sv > 0 ? sv : 1);
+    s.D(N_) = std::fabs(b_.end - b_.start);
+    s.at = OrbitAt{b_.start, orbit_state(orbit), monodromy_of(orbit), orbit.multipliers, orbit.neutral};
+    // The tangent the way of the task's direction.
+    PeriodMaps maps(b_, 1);
+    const Eigen::VectorXd Pp = parameter_derivative(maps, s.at.p, s.at.y, s.stop);
+    if (s.stop.empty()) {
+        Eigen::VectorXd start_direction = Eigen::VectorXd::Zero(N_ + 1);
+        start_direction(N_) = b_.end > b_.start ? 1.0 : -1.0;
+        s.t = tangent(jacobian(s.at.M, Pp, s.D), start_direction, family_rows(s.at.M, s.at.neutral, s.D));
+    }
+    follow(s, nullptr);
+    return out_;
+}
 
-    // The scaled Jacobian [dP/dy - I, dP/dp] of the residual over u = (y, p) / D.
-    auto jacobian = [&](const Eigen::MatrixXd& M, const Eigen::VectorXd& Pp) {
-        Eigen::MatrixXd J(N, N + 1);
-        for (Eigen::Index i = 0; i < N; ++i) {
-            for (Eigen::Index j = 0; j < N; ++j) J(i, j) = (M(i, j) - (i == j ? 1.0 : 0.0)) * D(j) / D(i);
-            J(i, N) = Pp(i) * D(N) / D(i);
+// The Newton corrector from the predicted point u (scaled) on the
+// hyperplane through it normal to the tangent t: P(y; p) = y to kTolerance,
+// with dP/dp fixed at the prediction (a chord).
+Continuation::Corrected Continuation::correct(PeriodMaps& maps, const Eigen::VectorXd& predicted,
+                                              const Eigen::VectorXd& t, const Eigen::VectorXd& D) const {
+    Corrected c;
+    c.Pp = parameter_derivative(maps, predicted(N_) * D(N_), predicted.head(N_).cwiseProduct(D.head(N_)), c.fail);
+    Eigen::VectorXd uk = predicted;
+    double previous_residual = INFINITY;
+    for (; c.Pp.size() > 0; ++c.iterations) {
+        c.p = uk(N_) * D(N_);
+        c.y = uk.head(N_).cwiseProduct(D.head(N_));
+        c.v = maps.eval(c.p, c.y);
+        const analysis::PeriodMapValue& v = c.v;
+        if (!v.ok) {
+            c.fail = v.message;
+            break;
         }
-        return J;
-    };
-    // dP/dp at (p, y), a central difference.
-    auto parameter_derivative = [&](double p, const Eigen::VectorXd& y, std::string& problem) {
-        const double d = kDifferenceStep * span;
-        const analysis::PeriodMapValue a = maps.eval(p + d, y), c = maps.eval(p - d, y);
-        if (!a.ok || !c.ok) {
-            problem = "dP/d" + b.param + ": " + (a.ok ? c.message : a.message);
-            return Eigen::VectorXd();
+        if (v.singular || !v.M.allFinite()) {
+            c.fail = "the period map has no derivative there (a grazing switch with zero normal velocity)";
+            break;
         }
-        return Eigen::VectorXd((a.Py - c.Py) / (2 * d));
-    };
+        if (v.residual <= kTolerance) {
+            c.converged = true;
+            break;
+        }
+        if (c.iterations >= kMaxIterations) {
+            c.fail = "no convergence in " + std::to_string(kMaxIterations) + " Newton iterations";
+            break;
+        }
+        if (c.iterations >= 2 && v.residual >= previous_residual) {
+            c.fail = "the Newton residual stops falling at " + shortest_text(v.residual);
+            break;
+        }
+        previous_residual = v.residual;
+        Eigen::MatrixXd A(N_ + 1, N_ + 1);
+        A.topRows(N_) = jacobian(v.M, c.Pp, D);
+        A.row(N_) = t.transpose();
+        Eigen::VectorXd r(N_ + 1);
+        r.head(N_) = (v.Py - c.y).cwiseQuotient(D.head(N_));
+        r(N_) = t.dot(uk - predicted);
+        const Eigen::VectorXd du = solve_with_family(A, -r, family_at(v.M, D));  // no step along a family
+        if (!du.allFinite()) {
+            c.fail = "the Newton step is not finite";
+            break;
+        }
+        uk += du;
+    }
+    return c;
+}
 
-    Eigen::VectorXd y = orbit_state(orbit);
-    double p = b.start;
-    Eigen::MatrixXd M(N, N);
-    for (Eigen::Index i = 0; i < N; ++i)
-        for (Eigen::Index j = 0; j < N; ++j) M(i, j) = orbit.monodromy[static_cast<std::size_t>(i * N + j)];
-    std::vector<std::complex<double>> mu = orbit.multipliers;
-    std::size_t neutral = orbit.neutral;  // of mu: a family's multipliers at +1 (hsnc/periodic.h)
+// Follows one branch from `start` to its end, then the branches born on it.
+// `siblings`: the branches born on its parent (a switched branch that ends on
+// the parent marks the one starting where it ends: the same branch).
+void Continuation::follow(const BranchStart& start, std::vector<BranchStart>* siblings) {
+    const int multiple = start.multiple;
+    const std::size_t index = branches_++;
+    const double lo = std::min(b_.start, b_.end), hi = std::max(b_.start, b_.end);
+    const double sense = b_.end > b_.start ? 1.0 : -1.0;
+    const std::size_t budget = o_.max_steps ? o_.max_steps : 20 * o_.points;
+    // Steps: at most 1/(points - 1) of [from, to] in the parameter and
+    // kLargestStateStep of the largest orbit so far in any state component;
+    // within that, halved on failure, grown after quick corrections.
+    const double spacing = 1.0 / static_cast<double>(o_.points - 1), h_min = spacing * kSmallestStep;
+    const double span = hi - lo;
+    const std::size_t first_row = out_.size();
+    PeriodMaps maps(b_, multiple);
+    Locator locate(b_, o_, maps, multiple);
+    const bool can_switch = multiple < (1 << o_.branch_switch);
+    std::vector<BranchStart> doublings;  // born on this branch
+    std::unique_ptr<ParentCrossing> parent = start.switched ? std::make_unique<ParentCrossing>(b_, multiple) : nullptr;
+
+    Eigen::VectorXd D = start.D, y = start.at.y, t = start.t;
+    double p = start.at.p;
+    Eigen::MatrixXd M = start.at.M;
+    std::vector<std::complex<double>> mu = start.at.mu;
+    std::size_t neutral = start.at.neutral;
 
     // A point of the branch: the orbit at (p, y) with multipliers mu, one
-    // period recorded; before it the grazing points since the last one.
-    GrazingLocator grazing(b, o, maps);
+    // period recorded; before it the grazing and period-doubling points since
+    // the last one. False when the branch ends there (a switched branch back
+    // on its parent: its orbit repeats after half its period).
     OrbitAt last;
+    std::size_t emitted = 0;
     auto emit = [&](const Model& model, bool first_point, std::size_t periods) {
         SweepPoint pt;
-        State s = state_of(y, n);
-        record(model, s, o, name(p), 0, 1, pt);
-        if (neutral > 0) centre_stuck_family(model, o, name(p), y, pt);  // y moves with it
-        const OrbitAt here{p, y, mu, neutral};
+        State s = state_of(y, n_);
+        record(model, s, o_, name(p), 0, static_cast<std::size_t>(multiple), pt);
+        if (!start.switched && neutral > 0)
+            centre_stuck_family(model, o_, name(p), static_cast<std::size_t>(multiple), y, pt);  // y moves with it
+        const OrbitAt here{p, y, M, mu, neutral};
         std::string also;  // the non-smooth transitions crossed (a grazing not located among them)
+        bool doubling = false;
         if (!first_point) {
-            auto found = grazing.between(out.back(), last, pt, here);
-            also = transitions_between(out.back(), pt, !found.empty());
+            std::vector<std::pair<SweepPoint, OrbitAt>> found = locate.grazing(out_.back(), last, pt, here);
+            also = transitions_between(out_.back(), pt, !found.empty());
+            if (can_switch &&
+                has_label(bifurcations_between(last.mu, here.mu, last.neutral, here.neutral), "period_doubling"))
+                if (auto pd = locate.period_doubling(last, here)) {
+                    branch_point(pd->first, pd->second, &last, b_, sense, multiple, 0, "");
+                    pd->first.bifurcation = with_label(pd->first.bifurcation, "period_doubling");
+                    doublings.push_back(switched_start(pd->second, D, t, multiple, index));
+                    found.push_back(std::move(*pd));
+                    doubling = true;
+                }
             for (auto& [g, at] : found) {
-                branch_point(g, at, &last, b, sense, 0, "grazing");
-                out.push_back(std::move(g));
-                done(out.back(), seconds());
+                if (!doubling) branch_point(g, at, &last, b_, sense, multiple, 0, "grazing");
+                g.branch = index;
+                push(std::move(g));
                 last = at;
             }
         }
-        branch_point(pt, here, first_point ? nullptr : &last, b, sense, periods, also);
+        branch_point(pt, here, first_point ? nullptr : &last, b_, sense, multiple, periods, also);
+        if (doubling) pt.bifurcation = without_label(pt.bifurcation, "period_doubling");
+        if (first_point && start.switched) pt.stable = false;  // the doubling itself: critical
+        if (emitted++ == 1 && start.switched)                  // the first step off the doubling: no fold
+            pt.bifurcation = without_label(pt.bifurcation, "fold");
+        pt.branch = index;
+        bool go_on = true;
+        if (parent && !first_point && parent->through(p, y, D)) {
+            // The branch ends at its other end; a doubling of the parent
+            // found in that step is that end, not to be followed again.
+            pt.bifurcation = with_label(without_label(pt.bifurcation, "fold"), "period_doubling");
+            go_on = false;
+            const double a = std::min(last.p, p), z = std::max(last.p, p), slack = 1e-9 * span;
+            for (BranchStart& other : *siblings)
+                if (other.multiple == multiple && other.at.p >= a - slack && other.at.p <= z + slack) other.skip = true;
+        }
         last = here;
-        out.push_back(std::move(pt));
-        done(out.back(), seconds());
+        push(std::move(pt));
+        return go_on;
     };
 
-    std::string stop;
-    const Eigen::VectorXd Pp = parameter_derivative(p, y, stop);
-    Eigen::VectorXd t;
-    if (stop.empty()) {
-        Eigen::VectorXd start_direction = Eigen::VectorXd::Zero(N + 1);
-        start_direction(N) = sense;
-        t = tangent(jacobian(M, Pp), start_direction, family_rows(M, neutral, D));
-    }
+    std::string stop = start.stop;
     try {
-        emit(first, true, transient);
+        emit(start.switched ? maps.model(p) : *b_.start_model, true, start.periods);
     } catch (const RunError& e) {
         stop = e.what();
     }
     double h = 1.0;
     std::size_t runs_before = maps.runs;
     bool finished = false;
-    while (stop.empty() && out.size() < budget) {
-        check_cancel(o);
-        if (stop_requested(o)) {  // a graceful stop: the points so far are the branch's result
-            if (cut) *cut = true;
-            return out;
+    while (stop.empty() && out_.size() - first_row < budget) {
+        check_cancel(o_);
+        if (stop_requested(o_)) {  // a graceful stop: the points so far are the branch's result
+            if (cut_) *cut_ = true;
+            stopped_ = true;
+            return;
         }
-        Eigen::VectorXd u(N + 1);
-        u.head(N) = y.cwiseQuotient(D.head(N));
-        u(N) = p / D(N);
-        const double cap = std::min(spacing / std::max(std::fabs(t(N)), 1e-300),
-                                    kLargestStateStep / std::max(t.head(N).cwiseAbs().maxCoeff(), 1e-300));
+        Eigen::VectorXd u(N_ + 1);
+        u.head(N_) = y.cwiseQuotient(D.head(N_));
+        u(N_) = p / D(N_);
+        const double cap = std::min(spacing / std::max(std::fabs(t(N_)), 1e-300),
+                                    kLargestStateStep / std::max(t.head(N_).cwiseAbs().maxCoeff(), 1e-300));
         h = std::max(h_min, std::min(h, cap));
         const Eigen::VectorXd predicted = u + h * t;
-        // dP/dp at the predicted point: the column of the Newton matrix (a
-        // chord) and of the tangent at the new point.
         std::string fail;
-        const double p_predicted = predicted(N) * D(N);
-        Eigen::VectorXd Pn = parameter_derivative(p_predicted, predicted.head(N).cwiseProduct(D.head(N)), fail);
-        Eigen::VectorXd uk = predicted;
-        analysis::PeriodMapValue v;
-        bool converged = false;
-        int it = 0;
-        double last = INFINITY;
-        Eigen::VectorXd yk(N);
-        double pk = 0;
-        for (; Pn.size() > 0; ++it) {
-            pk = uk(N) * D(N);
-            yk = uk.head(N).cwiseProduct(D.head(N));
-            v = maps.eval(pk, yk);
-            if (!v.ok) {
-                fail = v.message;
-                break;
-            }
-            if (v.singular || !v.M.allFinite()) {
-                fail = "the period map has no derivative there (a grazing switch with zero normal velocity)";
-                break;
-            }
-            if (v.residual <= kTolerance) {
-                converged = true;
-                break;
-            }
-            if (it >= kMaxIterations) {
-                fail = "no convergence in " + std::to_string(kMaxIterations) + " Newton iterations";
-                break;
-            }
-            if (it >= 2 && v.residual >= last) {
-                fail = "the Newton residual stops falling at " + shortest_text(v.residual);
-                break;
-            }
-            last = v.residual;
-            Eigen::MatrixXd A(N + 1, N + 1);
-            A.topRows(N) = jacobian(v.M, Pn);
-            A.row(N) = t.transpose();
-            Eigen::VectorXd r(N + 1);
-            r.head(N) = (v.Py - yk).cwiseQuotient(D.head(N));
-            r(N) = t.dot(uk - predicted);
-            const Eigen::VectorXd du = solve_with_family(A, -r, family_at(v.M, D));  // no step along a family
-            if (!du.allFinite()) {
-                fail = "the Newton step is not finite";
-                break;
-            }
-            uk += du;
-        }
+        Corrected c = correct(maps, predicted, t, D);
+        bool converged = c.converged;
+        fail = c.fail;
+        double pk = c.p;
+        Eigen::VectorXd yk = c.y, Pn = c.Pp;
+        analysis::PeriodMapValue v = std::move(c.v);
+        const int it = c.iterations;
         if (!converged && h <= h_min &&
-            (converged = jump_over(b, o, maps, p, y, t(N), 0.02 * spacing * span, pk, yk, v)))
-            Pn = parameter_derivative(pk, yk, fail);  // dP/dp beyond the transition, for the tangent there
+            (converged = jump_over(b_, o_, maps, multiple, p, y, t(N_), 0.02 * spacing * span, pk, yk, v)))
+            Pn = parameter_derivative(maps, pk, yk, fail);  // dP/dp beyond the transition, for the tangent there
         Eigen::VectorXd tn;
         if (converged && pk >= lo && pk <= hi) {
-            tn = tangent(jacobian(v.M, Pn), t, family_at(v.M, D));
+            tn = tangent(jacobian(v.M, Pn, D), t, family_at(v.M, D));
             if (tn.dot(t) < kMinTurnCosine && h > h_min) {
                 h = std::max(h_min, 0.5 * h);
                 continue;
@@ -675,16 +912,17 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
             const double s = (bound - p) / (pk - p);
             const Eigen::VectorXd guess = y + s * (yk - y);
             try {
-                const PeriodicResult end = shoot_orbit(maps.model(bound), state_of(guess, n), kTolerance);
+                const PeriodicResult end = shoot_orbit(maps.model(bound), state_of(guess, n_), kTolerance, multiple);
                 if (end.status != PeriodicStatus::ok) {
                     stop = "sweep --continuation: shooting fails at " + name(bound) + ": " + end.message;
                     break;
                 }
                 p = bound;
                 y = orbit_state(end);
+                M = monodromy_of(end);
                 mu = end.multipliers;
                 neutral = end.neutral;
-                emit(maps.model(bound), false, maps.runs - runs_before + end.iterations + 1);
+                emit(maps.model(bound), false, maps.runs - runs_before + static_cast<std::size_t>(end.iterations) + 1);
             } catch (const InputError& e) {
                 stop = "sweep --continuation: shooting fails at " + name(bound) + ": " + e.what();
             } catch (const RunError& e) {
@@ -700,13 +938,17 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         // to the amplitude), the tangent expressed in the new scales.
         const Eigen::VectorXd D_old = D;
         double mx = 0, mv = 0;
-        for (Eigen::Index i = 0; i < N; ++i) (is_velocity_row(i) ? mv : mx) = std::max(is_velocity_row(i) ? mv : mx, std::fabs(y(i)));
-        for (Eigen::Index i = 0; i < N; ++i) D(i) = std::max(D(i), is_velocity_row(i) ? mv : mx);
+        for (Eigen::Index i = 0; i < N_; ++i)
+            (is_velocity_row(i) ? mv : mx) = std::max(is_velocity_row(i) ? mv : mx, std::fabs(y(i)));
+        for (Eigen::Index i = 0; i < N_; ++i) D(i) = std::max(D(i), is_velocity_row(i) ? mv : mx);
         t = t.cwiseProduct(D_old).cwiseQuotient(D).normalized();
         mu = analysis::floquet_multipliers(M);
         neutral = analysis::family_multipliers(M, mu);
         try {
-            emit(maps.model(p), false, maps.runs - runs_before);
+            if (!emit(maps.model(p), false, maps.runs - runs_before)) {
+                finished = true;
+                break;
+            }
         } catch (const RunError& e) {
             stop = e.what();
             break;
@@ -715,12 +957,36 @@ std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
         if (it <= 3) h = 1.5 * h;
         else if (it >= 7) h = std::max(h_min, 0.5 * h);
     }
-    if (stop.empty() && !finished && out.size() >= budget)
+    if (stop.empty() && !finished && out_.size() - first_row >= budget)
         stop = "sweep --continuation: the step budget (" + std::to_string(budget) + " points) ran out at " + name(p) +
-               " before the branch reached " + shortest_text(b.end);
-    if (!stop.empty() && out.empty()) return failed_row(stop);
-    if (!stop.empty()) out.back().stop = stop;
+               " before the branch reached " + shortest_text(b_.end);
+    if (!stop.empty() && out_.size() == first_row && !start.switched) {
+        failed_row(stop);
+        return;
+    }
+    if (!stop.empty() && out_.size() > first_row) out_.back().stop = stop;
+    // The branches born here, each followed to its end before the next.
+    for (std::size_t i = 0; i < doublings.size() && !stopped_; ++i)
+        if (!doublings[i].skip) follow(doublings[i], &doublings);
+}
+
+}  // namespace
+
+std::string bifurcations_between(const std::vector<std::complex<double>>& a, const std::vector<std::complex<double>>& b,
+                                 std::size_t neutral_a, std::size_t neutral_b) {
+    const TestFunctions fa = test_functions(neutral_inside(a, neutral_a)),
+                        fb = test_functions(neutral_inside(b, neutral_b));
+    std::string out;
+    auto add = [&](const char* name) { out += (out.empty() ? "" : "+") + std::string(name); };
+    if (fa.det_minus != fb.det_minus) add("fold");
+    if (fa.det_plus != fb.det_plus) add("period_doubling");
+    if (fa.bialternate != fb.bialternate && fa.complex_outside != fb.complex_outside) add("neimark_sacker");
     return out;
+}
+
+std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
+                                         const std::function<void(const SweepPoint&, double)>& done, bool* cut) {
+    return Continuation(b, o, done, cut).run();
 }
 
 }  // namespace hsnc::sweep_detail

@@ -137,8 +137,13 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
             throw OptionError(kPlan, "to", shortest_text(o.to), "must differ from from with continuation");
         if (o.max_steps > 100'000'000)
             throw OptionError(kPlan, "max_steps", std::to_string(o.max_steps), "must be <= 1e8");
+        if (o.branch_switch < 0 || o.branch_switch > kSweepMaxBranchSwitch)
+            throw OptionError(kPlan, "branch_switch", std::to_string(o.branch_switch),
+                              "must be 0 .. " + std::to_string(kSweepMaxBranchSwitch) + " (doublings followed)");
     } else if (o.max_steps != 0) {
         throw OptionError(kPlan, "max_steps", std::to_string(o.max_steps), "only with continuation");
+    } else if (o.branch_switch != 0) {
+        throw OptionError(kPlan, "branch_switch", std::to_string(o.branch_switch), "only with continuation");
     }
     // Jenkins elements and stuck pairs: the points carry the sliders
     // (State::slider) on hsnc, rk45 and cvode, and so does a continuation's
@@ -216,6 +221,7 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     if (o.values2.empty()) fp << "-";
     fp << " diagram=" << (o.diagram ? 1 : 0) << " method=" << method_name(o.method);
     if (o.continuation) fp << " continuation=1 max_steps=" << o.max_steps;
+    if (o.branch_switch) fp << " branch_switch=" << o.branch_switch;
     if (o.harmonics) fp << " harmonics=" << o.harmonics;
     if (o.method != Method::hsnc)
         fp << " h=" << num(o.integrator.h) << " rtol=" << num(o.integrator.rtol) << " atol=" << num(o.integrator.atol);
@@ -394,6 +400,7 @@ SweepResult SweepPlan::result_header() const {
     r.param2 = options_.param2;
     r.continuation = options_.continuation;
     r.harmonics = options_.harmonics;
+    r.branch_switch = options_.branch_switch;
     for (const Mass& m : model_.masses) r.masses.push_back(m.name);
     return r;
 }
@@ -418,6 +425,7 @@ std::string sweep_curve_header(const SweepResult& r) {
     for (const std::string& m : r.masses) h += ",xmax_" + m + ",xrms_" + m + ",a1_" + m;
     if (!r.param2.empty()) h += "," + r.param2;
     if (r.continuation) h += ",stable,max_multiplier,bifurcation";
+    if (r.branch_switch) h += ",branch";
     for (const std::string& m : r.masses)
         for (std::size_t k = 1; k <= r.harmonics; ++k) {
             const std::string ks = std::to_string(k);
@@ -510,8 +518,9 @@ std::string write_tasks(const std::vector<std::size_t>& which, const std::vector
                 for (std::size_t i = 0; i < n; ++i) s += " " + num(p.strobe_x[r * n + i]);
                 for (std::size_t i = 0; i < n; ++i) s += " " + num(p.strobe_v[r * n + i]);
             }
-            s += " " + std::string(p.branch_start ? "1" : "0") + " " + (p.stable ? "1" : "0") + " " + num(p.max_multiplier) + " " + word(p.bifurcation) +
-                 " " + word(p.failure) + " " + word(p.stop) + "\n";
+            s += " " + std::string(p.branch_start ? "1" : "0") + " " + (p.stable ? "1" : "0") + " " +
+                 num(p.max_multiplier) + " " + word(p.bifurcation) + " " + word(p.failure) + " " + word(p.stop) + " " +
+                 std::to_string(p.branch) + "\n";
         }
     }
     return s;
@@ -608,6 +617,7 @@ void read_tasks(const std::vector<std::string>& lines, std::size_t first, std::s
                 const std::string w = r.word();
                 if (!unword(w, *text)) r.fail("'" + w + "' is not an escaped text");
             }
+            p.branch = r.count(std::size_t{1} << 40);
             r.end();
             pts.push_back(std::move(p));
         }
@@ -619,7 +629,7 @@ void read_tasks(const std::vector<std::string>& lines, std::size_t first, std::s
 // ---- part files ----
 
 namespace {
-constexpr const char* kPartMagic = "hsnc-sweep-part 3";  // 3: every point carries its harmonics
+constexpr const char* kPartMagic = "hsnc-sweep-part 4";  // 4: the branch switching depth, every point its branch
 }
 
 std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_t count,
@@ -634,6 +644,7 @@ std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_
     s += "param2 " + (names.param2.empty() ? std::string("-") : names.param2) + "\n";
     s += "continuation " + std::string(names.continuation ? "1" : "0") + "\n";
     s += "harmonics " + std::to_string(names.harmonics) + "\n";
+    s += "branch_switch " + std::to_string(names.branch_switch) + "\n";
     s += "masses";
     for (const std::string& m : names.masses) s += " " + m;
     s += "\n";
@@ -681,7 +692,14 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
                 throw InputError(where +
                                  ":9: expected 'harmonics K' with 0 <= K <= " + std::to_string(kSweepMaxHarmonics));
         }
-        std::istringstream ms(field(9, "masses"));
+        int branch_switch = 0;
+        {
+            std::istringstream bs(field(9, "branch_switch"));
+            if (!(bs >> branch_switch) || branch_switch < 0 || branch_switch > kSweepMaxBranchSwitch)
+                throw InputError(
+                    where + ":10: expected 'branch_switch D' with 0 <= D <= " + std::to_string(kSweepMaxBranchSwitch));
+        }
+        std::istringstream ms(field(10, "masses"));
         std::vector<std::string> masses;
         for (std::string m; ms >> m;) masses.push_back(m);
         if (f == 0) {
@@ -694,6 +712,7 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
             r.param2 = param2 == "-" ? "" : param2;
             r.continuation = cont == "1";
             r.harmonics = harmonics;
+            r.branch_switch = branch_switch;
             r.masses = masses;
         } else if (fp != fingerprint || n != count || t != tasks) {
             throw InputError(where + ": a part of another sweep than " + names[0] + " (" +
@@ -704,14 +723,14 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
         seen[i - 1] = 1;
         // A part stopped by SIGINT ends with its '# interrupted ...' line: its
         // tasks lack points, and a merge would be a sweep with holes.
-        for (std::size_t k = 10; k < lines.size(); ++k)
+        for (std::size_t k = 11; k < lines.size(); ++k)
             if (lines[k].compare(0, 13, "# interrupted") == 0)
                 throw InputError(where + ":" + std::to_string(k + 1) + ": part " + std::to_string(i) + "/" +
                                  std::to_string(n) + " was interrupted ('" + lines[k].substr(2) +
                                  "'): run it again (hsnc sweep --part " + std::to_string(i) + "/" + std::to_string(n) +
                                  ") before merging");
         std::map<std::size_t, std::vector<SweepPoint>> mine;
-        sweep_detail::read_tasks(lines, 10, masses.size(), where, mine);
+        sweep_detail::read_tasks(lines, 11, masses.size(), where, mine);
         for (auto& [index, pts] : mine) {
             if (index >= tasks || index % count != i - 1)
                 throw InputError(where + ": task " + std::to_string(index) + " does not belong to part " +

@@ -54,6 +54,7 @@ struct SweepFlags {
     bool quiet = false;
     bool continuation = false;
     long long max_steps = 0;
+    long long branch_switch = 0;
     long long harmonics = 0;
 };
 
@@ -84,6 +85,7 @@ InputError flagged(const OptionError& e) {
                                                                 {"method", "--method"},
                                                                 {"restart_each", "--restart-each"},
                                                                 {"max_steps", "--max-steps"},
+                                                                {"branch_switch", "--branch-switch"},
                                                                 {"harmonics", "--harmonics"}};
     for (const auto& f : flags)
         if (e.option() == f.first) return InputError(std::string(f.second) + ": " + e.reason());
@@ -198,6 +200,7 @@ void write_curve(const SweepResult& r, CsvFile& f, const std::string& note) {
             f.number(p.max_multiplier);
             f.text(p.bifurcation.c_str());
         }
+        if (r.branch_switch) f.text(std::to_string(p.branch).c_str());
         for (std::size_t j = 0; j < p.amp.size(); ++j) {
             f.number(p.amp[j]);
             f.number(p.phase[j]);
@@ -368,6 +371,10 @@ SweepOptions sweep_options(const SweepFlags& f) {
     o.threads = f.threads;
     o.continuation = f.continuation;
     o.max_steps = count_flag("--max-steps", f.max_steps, 0);
+    if (f.branch_switch < 0 || f.branch_switch > kSweepMaxBranchSwitch)
+        throw InputError("--branch-switch: must be 0 .. " + std::to_string(kSweepMaxBranchSwitch) +
+                         " (period doublings followed), not " + std::to_string(f.branch_switch));
+    o.branch_switch = static_cast<int>(f.branch_switch);
     o.harmonics = count_flag("--harmonics", f.harmonics, 0);
     o.integrator.h = f.h;
     o.integrator.rtol = f.rtol;
@@ -653,6 +660,10 @@ void add_sweep(CLI::App& app, int& exit_code) {
         "stable,max_multiplier,bifurcation); the branch starts at --from (--to for --direction down)");
     sub->add_option("--max-steps", f->max_steps,
                     "--continuation: points at most per branch (default 20 x --points)");
+    sub->add_option("--branch-switch", f->branch_switch,
+                    "--continuation: locate every period doubling to rounding (a row of its own) and follow the "
+                    "branch of twice the period born there, and theirs, up to D doublings (1..6); extra column branch "
+                    "(0 the primary, then 1, 2, ... in the order they are followed)");
     sub->add_option("--harmonics", f->harmonics,
                     "amplitude and phase of the first K harmonics of every mass over the recorded periods "
                     "(columns amp<k>_<mass>,phase<k>_<mass> at the end; x = mean + sum of amp sin(k omega t + phase), "

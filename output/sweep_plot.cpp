@@ -149,6 +149,8 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title, co
             std::string name = label(i);
             if (branches[b].size() && branches[b][0]->direction == SweepDirection::down) name += " (from " + r.param + " = " + num(branches[b][0]->value) + ")";
             if (has2 && branches[b].size()) name += " (" + r.param2 + " = " + num(branches[b][0]->value2) + ")";
+            if (branches[b].size() && branches[b][0]->multiple > 1)
+                name += " (period " + std::to_string(branches[b][0]->multiple) + " T)";
             const bool titled = b * shown + k < 8;
             plot += (plot.empty() ? "" : ", ") + std::string("$stable") + std::to_string(b) + " using 1:" +
                     std::to_string(i + 2) + " with lines lw 2 dt 1 lc rgb '" + kColours[colour] + "' " +

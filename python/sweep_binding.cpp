@@ -37,7 +37,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
                const std::string& direction, std::size_t max_periods, std::size_t record_periods, bool restart_each,
                const std::string& param2, const std::vector<double>& values2, unsigned threads,
                const std::string& method, double rtol, double atol, bool continuation, std::size_t max_steps,
-               std::size_t harmonics) {
+               std::size_t harmonics, int branch_switch) {
     SweepOptions o;
     o.param = param;
     o.from = from;
@@ -56,6 +56,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
     o.continuation = continuation;
     o.max_steps = max_steps;
     o.harmonics = harmonics;
+    o.branch_switch = branch_switch;
     std::atomic<bool> cancel{false};
     o.cancel = &cancel;
     const ModelOverrides ov{set, x0, v0, {}};
@@ -110,7 +111,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
     const std::size_t np = r.points.size(), n = r.masses.size();
     py::array_t<double> value(np), value2(np);
     py::array_t<bool> settled(np);
-    py::array_t<long long> periods(np), multiple(np);
+    py::array_t<long long> periods(np), multiple(np), branch(np);
     py::array_t<bool> stable(np);
     py::array_t<double> max_multiplier(np);
     py::list bifurcation, failure, stop;
@@ -125,6 +126,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
         settled.mutable_at(i) = p.settled;
         periods.mutable_at(i) = static_cast<long long>(p.periods);
         multiple.mutable_at(i) = p.multiple;
+        branch.mutable_at(i) = static_cast<long long>(p.branch);
         stable.mutable_at(i) = p.stable;
         max_multiplier.mutable_at(i) = p.max_multiplier;
         bifurcation.append(p.bifurcation);
@@ -181,6 +183,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
         d["bifurcation"] = bifurcation;
         d["stop"] = stop;
     }
+    if (r.branch_switch) d["branch"] = branch;
     return d;
 }
 
@@ -191,7 +194,8 @@ void bind_sweep(py::module_& m) {
           py::arg("v0"), py::arg("param"), py::arg("from_"), py::arg("to"), py::arg("points"), py::arg("direction"),
           py::arg("max_periods"), py::arg("record_periods"), py::arg("restart_each"), py::arg("param2"),
           py::arg("values2"), py::arg("threads"), py::arg("method"), py::arg("rtol"), py::arg("atol"),
-          py::arg("continuation") = false, py::arg("max_steps") = 0, py::arg("harmonics") = 0);
+          py::arg("continuation") = false, py::arg("max_steps") = 0, py::arg("harmonics") = 0,
+          py::arg("branch_switch") = 0);
 }
 
 }  // namespace hsnc::python

@@ -117,6 +117,8 @@ const char* sweep_direction_name(SweepDirection direction);
 /// Steady-state detection (interface.md section 6).
 inline constexpr double kSweepSettleTolerance = 1e-9;
 inline constexpr int kSweepMaxMultiple = 8;
+/// SweepOptions::branch_switch at most (orbits of up to 64 forcing periods).
+inline constexpr int kSweepMaxBranchSwitch = 6;
 /// SweepOptions::harmonics at most.
 inline constexpr std::size_t kSweepMaxHarmonics = 1000;
 
@@ -175,6 +177,10 @@ struct SweepOptions {
     bool continuation = false;
     /// Continuation: points at most per branch; 0: 20 * points.
     std::size_t max_steps = 0;
+    /// Continuation: follow the branches born at period doublings (each
+    /// located to rounding), and theirs, up to this many doublings (the
+    /// branch of 2^branch_switch periods; 0: none, at most kSweepMaxBranchSwitch).
+    int branch_switch = 0;
     /// When set (from any thread), runs stop soon (between two forcing
     /// periods or two continuation steps) with SweepCancelled.
     const std::atomic<bool>* cancel = nullptr;
@@ -228,6 +234,9 @@ struct SweepPoint {
     std::string bifurcation;
     std::string stop;
     bool branch_start = false;  ///< continuation: the first point of a branch
+    /// Continuation: the branch's index in the output (0 the primary; with
+    /// SweepOptions::branch_switch, 1, 2, ... those switched onto, in order).
+    std::size_t branch = 0;
     /// The diagram: the state at the end of every recorded period (record_periods rows).
     std::vector<double> strobe_t;
     std::vector<double> strobe_x, strobe_v;  ///< row-major, record_periods x n_mass
@@ -238,6 +247,7 @@ struct SweepResult {
     std::string param, param2;        ///< param2 empty without one
     bool continuation = false;        ///< the curve has the columns stable,max_multiplier,bifurcation
     std::size_t harmonics = 0;        ///< the curve has amp<k>_<mass>,phase<k>_<mass> at its end, k = 1..harmonics
+    int branch_switch = 0;            ///< the curve has the column branch (after bifurcation)
     std::vector<std::string> masses;  ///< names, model order
     std::vector<SweepPoint> points;   ///< in output order (task order, points in run order)
 };
@@ -319,7 +329,8 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
 
 /// The response-curve and diagram CSV headers of interface.md section 6
 /// (with param2: its name as one more column at the end; with continuation:
-/// then stable,max_multiplier,bifurcation; with harmonics: then
+/// then stable,max_multiplier,bifurcation; with branch switching: then
+/// branch; with harmonics: then
 /// amp<k>_<mass>,phase<k>_<mass> for every mass and k = 1..harmonics).
 std::string sweep_curve_header(const SweepResult& r);
 std::string sweep_diagram_header(const SweepResult& r);

@@ -366,7 +366,7 @@ def _override_texts(d):
 
 def sweep(model, param, start, stop, points, direction="up", max_periods=500, record_periods=16,
           restart_each=False, param2=None, values2=None, threads=1, method="hsnc", rtol=1e-10, atol=1e-12,
-          continuation=False, max_steps=0, harmonics=0):
+          continuation=False, max_steps=0, harmonics=0, branch_switch=0):
     """The response curve and bifurcation diagram of `model` (a Model) over
     the parameter `param`, as `hsnc sweep --param PARAM --from START --to
     STOP --points POINTS` (interface.md section 6): `points` values from
@@ -403,6 +403,12 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     joined by "+"; a grazing orbit located to rounding is a point of its
     own) and "stop" (str: why
     the branch stopped early after this point, "" when it did not).
+    branch_switch=D > 0 (as `--branch-switch D`): every period doubling is
+    located to rounding (a point of its own) and the branch of twice the
+    period born there followed too, and theirs, up to D doublings; then also
+    "branch" (int per point: 0 the primary branch, 1, 2, ... the switched
+    ones in the order followed; "multiple" is each branch's period in
+    forcing periods).
 
     Ctrl-C (SIGINT) stops the run within a forcing period or a continuation
     step and raises KeyboardInterrupt."""
@@ -431,9 +437,11 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     continuation = _bool(f, "continuation", continuation)
     max_steps = _int(f, "max_steps", max_steps, 0, _SIZE_MAX, "an integer >= 0 (0: 20 * points; at most 2**64 - 1)")
     harmonics = _int(f, "harmonics", harmonics, 0, 1000, "an integer from 0 to 1000")
+    branch_switch = _int(f, "branch_switch", branch_switch, 0, 6, "an integer from 0 to 6 (period doublings followed)")
     return _hsnc._sweep(kind, what, source, _override_texts(s), _override_texts(x0), _override_texts(v0),
                         param, start, stop, points, direction, max_periods, record_periods, restart_each, param2,
-                        values2, threads, method, rtol, atol, continuation, max_steps, harmonics)
+                        values2, threads, method, rtol, atol, continuation, max_steps, harmonics,
+                        branch_switch)
 
 
 def _sweep_point(task):
@@ -648,6 +656,8 @@ def _h5_sweep(root, r):
     if "stable" in r:
         stable = ["" if fail else w for fail, w in zip(r["failure"], _h5_words(r["stable"]))]
         columns += [("stable", stable), ("max_multiplier", r["max_multiplier"]), ("bifurcation", list(r["bifurcation"]))]
+    if "branch" in r:
+        columns.append(("branch", r["branch"]))
     if "amp" in r:
         amp, phase = np.asarray(r["amp"]), np.asarray(r["phase"])
         for i, m in enumerate(masses):

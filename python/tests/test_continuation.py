@@ -44,6 +44,58 @@ def test_continuation_through_two_folds_same_as_the_command_line(tmp_path):
         assert row[10] == r["bifurcation"][i]
 
 
+CASCADE = textwrap.dedent('''
+    name = "bilinear-cascade"
+    [parameters]
+    omega = 2.4
+    [[mass]]
+    name = "m"
+    m = 1.0
+    [[spring]]
+    between = ["ground", "m"]
+    k = 1.0
+    [damping]
+    alpha = 0.1
+    [[contact]]
+    between = ["m", "ground"]
+    gap = 0.0
+    k = 50.0
+    [[forcing]]
+    omega = "omega"
+    amplitude = { m = 1.0 }
+''')
+
+
+def test_branch_switching_follows_the_period_two_branch_as_the_command_line(tmp_path):
+    # A bilinear oscillator's period-1 orbit doubles at omega = 2.4964: with
+    # branch_switch=1 the period-2 branch born there is followed too (its
+    # own doubling at 2.6119 is marked, not followed).
+    path = tmp_path / "cascade.toml"
+    path.write_text(CASCADE)
+    r = hsnc.sweep(hsnc.Model.from_file(str(path)), "omega", 2.4, 2.66, 14, continuation=True, branch_switch=1)
+    branch, multiple = np.asarray(r["branch"]), np.asarray(r["multiple"])
+    assert sorted(set(branch.tolist())) == [0, 1]
+    assert (multiple == np.where(branch == 0, 1, 2)).all()
+    doublings = [i for i, b in enumerate(r["bifurcation"]) if b == "period_doubling"]
+    assert len(doublings) == 2 and branch[doublings[0]] == 0 and branch[doublings[1]] == 1
+    first = int(np.argmax(branch == 1))
+    assert r["value"][first] == r["value"][doublings[0]] and abs(r["value"][first] - 2.4964) < 1e-4
+    out = tmp_path / "c.csv"
+    run_cli("sweep", path, "--param", "omega", "--from", 2.4, "--to", 2.66, "--points", 14, "--continuation",
+            "--branch-switch", 1, "--quiet", "--out", out)
+    header, rows = read_csv(out)
+    assert header[-4:] == ["stable", "max_multiplier", "bifurcation", "branch"]
+    assert [int(row[-1]) for row in rows] == branch.tolist()
+    assert [float(row[0]) for row in rows] == list(r["value"])
+    for bad in (7, -1, 1.5):
+        try:
+            hsnc.sweep(hsnc.Model.from_file(str(path)), "omega", 2.4, 2.66, 14, continuation=True, branch_switch=bad)
+        except (ValueError, TypeError) as e:
+            assert "branch_switch" in str(e)
+        else:
+            raise AssertionError("branch_switch=%r accepted" % (bad,))
+
+
 def test_a_failing_point_is_a_row_and_the_sweep_goes_on():
     # k = 1e300 at p = 2 only: that point's run fails at once.
     text = textwrap.dedent('''
