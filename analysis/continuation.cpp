@@ -166,41 +166,6 @@ Eigen::VectorXd solve_with_family(const Eigen::MatrixXd& A, const Eigen::VectorX
     return S.completeOrthogonalDecomposition().solve(r);
 }
 
-// The unit tangent of the branch (the null vector of the N x (N + 1)
-// Jacobian J with no component along the family rows F), turned the way of
-// `previous`.
-Eigen::VectorXd tangent(const Eigen::MatrixXd& J, const Eigen::VectorXd& previous, const Eigen::MatrixXd& F) {
-    const Eigen::Index N = J.rows();
-    Eigen::MatrixXd A(N + 1, N + 1);
-    A.topRows(N) = J;
-    A.row(N) = previous.transpose();
-    Eigen::VectorXd e = Eigen::VectorXd::Zero(N + 1);
-    e(N) = 1;
-    Eigen::VectorXd t = solve_with_family(A, e, F);
-    t.normalize();
-    if (t.dot(previous) < 0) t = -t;
-    return t;
-}
-
-// The state y = (x, v, s) as the sweep carries it (n masses).
-State state_of(const Eigen::VectorXd& y, std::size_t n) {
-    const double* d = y.data();
-    return State{{d, d + n}, {d + n, d + 2 * n}, {d + 2 * n, d + y.size()}};
-}
-
-// hsnc::periodic's orbit of `model` from `start` (on the Eigen solver, as
-// every point of a sweep), to the residual `tolerance`, of `multiple` forcing periods.
-PeriodicResult shoot_orbit(Model model, const State& start, double tolerance, int multiple) {
-    model.x0 = start.x;
-    model.v0 = start.v;
-    model.slider0 = start.slider;
-    PeriodicOptions po;
-    po.kernels = KernelChoice::eigen;
-    po.tolerance = tolerance;
-    po.harmonic = multiple;
-    return periodic(model, po);
-}
-
 // A branch point whose orbit holds every Jenkins element stuck all period,
 // every contact in one state and no mass stuck: its family of orbits (each
 // slider may sit anywhere, s_j + d_j, the masses shifted by the static
@@ -253,25 +218,6 @@ bool centre_stuck_family(const Model& model, const SweepOptions& o, const std::s
     pt = SweepPoint();
     record(model, s, o, what, 0, periods, pt);
     return true;
-}
-
-// The state y = (x, v, s) of an orbit hsnc::periodic found.
-Eigen::VectorXd orbit_state(const PeriodicResult& r) {
-    const std::size_t n = r.x.size();
-    Eigen::VectorXd y(static_cast<Eigen::Index>(2 * n + r.s.size()));
-    for (std::size_t i = 0; i < n; ++i)
-        y(static_cast<Eigen::Index>(i)) = r.x[i], y(static_cast<Eigen::Index>(n + i)) = r.v[i];
-    for (std::size_t j = 0; j < r.s.size(); ++j) y(static_cast<Eigen::Index>(2 * n + j)) = r.s[j];
-    return y;
-}
-
-// The monodromy of an orbit hsnc::periodic found.
-Eigen::MatrixXd monodromy_of(const PeriodicResult& r) {
-    const auto N = static_cast<Eigen::Index>(r.x.size() * 2 + r.s.size());
-    Eigen::MatrixXd M(N, N);
-    for (Eigen::Index i = 0; i < N; ++i)
-        for (Eigen::Index j = 0; j < N; ++j) M(i, j) = r.monodromy[static_cast<std::size_t>(i * N + j)];
-    return M;
 }
 
 // Beyond a non-smooth transition where the corrector fails at the smallest
@@ -987,6 +933,60 @@ std::string bifurcations_between(const std::vector<std::complex<double>>& a, con
 std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
                                          const std::function<void(const SweepPoint&, double)>& done, bool* cut) {
     return Continuation(b, o, done, cut).run();
+}
+
+// The unit tangent of the branch (the null vector of the N x (N + 1)
+// Jacobian J with no component along the family rows F), turned the way of
+// `previous`.
+Eigen::VectorXd tangent(const Eigen::MatrixXd& J, const Eigen::VectorXd& previous, const Eigen::MatrixXd& F) {
+    const Eigen::Index N = J.rows();
+    Eigen::MatrixXd A(N + 1, N + 1);
+    A.topRows(N) = J;
+    A.row(N) = previous.transpose();
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(N + 1);
+    e(N) = 1;
+    Eigen::VectorXd t = solve_with_family(A, e, F);
+    t.normalize();
+    if (t.dot(previous) < 0) t = -t;
+    return t;
+}
+
+// The state y = (x, v, s) as the sweep carries it (n masses).
+State state_of(const Eigen::VectorXd& y, std::size_t n) {
+    const double* d = y.data();
+    return State{{d, d + n}, {d + n, d + 2 * n}, {d + 2 * n, d + y.size()}};
+}
+
+// hsnc::periodic's orbit of `model` from `start` (on the Eigen solver, as
+// every point of a sweep), to the residual `tolerance`, of `multiple` forcing periods.
+PeriodicResult shoot_orbit(Model model, const State& start, double tolerance, int multiple) {
+    model.x0 = start.x;
+    model.v0 = start.v;
+    model.slider0 = start.slider;
+    PeriodicOptions po;
+    po.kernels = KernelChoice::eigen;
+    po.tolerance = tolerance;
+    po.harmonic = multiple;
+    return periodic(model, po);
+}
+
+// The state y = (x, v, s) of an orbit hsnc::periodic found.
+Eigen::VectorXd orbit_state(const PeriodicResult& r) {
+    const std::size_t n = r.x.size();
+    Eigen::VectorXd y(static_cast<Eigen::Index>(2 * n + r.s.size()));
+    for (std::size_t i = 0; i < n; ++i)
+        y(static_cast<Eigen::Index>(i)) = r.x[i], y(static_cast<Eigen::Index>(n + i)) = r.v[i];
+    for (std::size_t j = 0; j < r.s.size(); ++j) y(static_cast<Eigen::Index>(2 * n + j)) = r.s[j];
+    return y;
+}
+
+// The monodromy of an orbit hsnc::periodic found.
+Eigen::MatrixXd monodromy_of(const PeriodicResult& r) {
+    const auto N = static_cast<Eigen::Index>(r.x.size() * 2 + r.s.size());
+    Eigen::MatrixXd M(N, N);
+    for (Eigen::Index i = 0; i < N; ++i)
+        for (Eigen::Index j = 0; j < N; ++j) M(i, j) = r.monodromy[static_cast<std::size_t>(i * N + j)];
+    return M;
 }
 
 }  // namespace hsnc::sweep_detail

@@ -8,8 +8,12 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
+#include "hsnc/periodic.h"
 #include "hsnc/sweep.h"
 #include "model.h"
+#include "sweep_point.h"
 
 namespace hsnc::sweep_detail {
 
@@ -41,5 +45,20 @@ std::vector<SweepPoint> run_continuation(const Branch& branch, const SweepOption
 /// about 1 by rounding: no fold; a multiplier leaving a family's +1 outward is one).
 std::string bifurcations_between(const std::vector<std::complex<double>>& a, const std::vector<std::complex<double>>& b,
                                  std::size_t neutral_a = 0, std::size_t neutral_b = 0);
+
+// ---- the pieces a branch and a curve of special points share ----
+
+/// The state y = (x, v, s) as the sweep carries it (n masses).
+State state_of(const Eigen::VectorXd& y, std::size_t n);
+/// The state y = (x, v, s) of an orbit hsnc::periodic found.
+Eigen::VectorXd orbit_state(const PeriodicResult& r);
+/// Its monodromy matrix.
+Eigen::MatrixXd monodromy_of(const PeriodicResult& r);
+/// hsnc::periodic's orbit of `model` from `start` (on the Eigen solver, as
+/// every point of a sweep), to the residual `tolerance`, of `multiple` forcing periods.
+PeriodicResult shoot_orbit(Model model, const State& start, double tolerance, int multiple);
+/// The unit null vector of the m x (m + 1) Jacobian J with no component along
+/// the rows of F, turned the way of `previous`.
+Eigen::VectorXd tangent(const Eigen::MatrixXd& J, const Eigen::VectorXd& previous, const Eigen::MatrixXd& F);
 
 }  // namespace hsnc::sweep_detail

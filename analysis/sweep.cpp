@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "assembly.h"
+#include "codim_curve.h"
 #include "continuation.h"
 #include "file_read.h"
 #include "hsnc/simulate.h"
@@ -137,6 +138,20 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
             throw OptionError(kPlan, "to", shortest_text(o.to), "must differ from from with continuation");
         if (o.max_steps > 100'000'000)
             throw OptionError(kPlan, "max_steps", std::to_string(o.max_steps), "must be <= 1e8");
+        if (!o.track.empty()) {
+            if (o.track != "fold" && o.track != "period_doubling" && o.track != "neimark_sacker" &&
+                o.track != "grazing")
+                throw OptionError(kPlan, "track", o.track, "must be fold, period_doubling, neimark_sacker or grazing");
+            if (o.param2.empty()) throw OptionError(kPlan, "track", o.track, "needs param2: the second parameter");
+            if (o.values2.size() != 2 || o.values2[0] == o.values2[1])
+                throw OptionError(kPlan, "values2", o.values2.empty() ? "''" : shortest_text(o.values2[0]),
+                                  "with track: two different values, where the curve starts and towards where it goes");
+            if (o.branch_switch != 0)
+                throw OptionError(kPlan, "branch_switch", std::to_string(o.branch_switch), "does not go with track");
+            if (!model_.jenkins.empty())
+                throw OptionError(kPlan, "track", o.track,
+                                  "the model has Jenkins elements, which track does not take, for now");
+        }
         if (o.branch_switch < 0 || o.branch_switch > kSweepMaxBranchSwitch)
             throw OptionError(kPlan, "branch_switch", std::to_string(o.branch_switch),
                               "must be 0 .. " + std::to_string(kSweepMaxBranchSwitch) + " (doublings followed)");
@@ -144,6 +159,8 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
         throw OptionError(kPlan, "max_steps", std::to_string(o.max_steps), "only with continuation");
     } else if (o.branch_switch != 0) {
         throw OptionError(kPlan, "branch_switch", std::to_string(o.branch_switch), "only with continuation");
+    } else if (!o.track.empty()) {
+        throw OptionError(kPlan, "track", o.track, "only with continuation");
     }
     // Jenkins elements and stuck pairs: the points carry the sliders
     // (State::slider) on hsnc, rk45 and cvode, and so does a continuation's
@@ -165,7 +182,8 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
 
     // Every point's model, read now: a value at which the model is invalid is
     // bad input, found before anything runs.
-    const std::size_t lines = std::max<std::size_t>(1, o.values2.size());
+    // (A curve of --track: one line, at its first value.)
+    const std::size_t lines = o.track.empty() ? std::max<std::size_t>(1, o.values2.size()) : 1;
     models_.reserve(lines * N);
     for (std::size_t l = 0; l < lines; ++l)
         for (std::size_t j = 0; j < N; ++j) {
@@ -222,6 +240,7 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     fp << " diagram=" << (o.diagram ? 1 : 0) << " method=" << method_name(o.method);
     if (o.continuation) fp << " continuation=1 max_steps=" << o.max_steps;
     if (o.branch_switch) fp << " branch_switch=" << o.branch_switch;
+    if (!o.track.empty()) fp << " track=" << o.track;
     if (o.harmonics) fp << " harmonics=" << o.harmonics;
     if (o.method != Method::hsnc)
         fp << " h=" << num(o.integrator.h) << " rtol=" << num(o.integrator.rtol) << " atol=" << num(o.integrator.atol);
@@ -299,8 +318,28 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const 
         };
         branch.value2 = v2;
         bool cut = false;
-        std::vector<SweepPoint> out = sweep_detail::run_continuation(
-            branch, options_, [&](const SweepPoint& p, double seconds) { report(c, options_, p, seconds); }, &cut);
+        const auto done = [&](const SweepPoint& p, double seconds) { report(c, options_, p, seconds); };
+        std::vector<SweepPoint> out;
+        if (options_.track.empty()) {
+            out = sweep_detail::run_continuation(branch, options_, done, &cut);
+        } else {
+            sweep_detail::CurveSpec curve;
+            curve.kind = options_.track;
+            curve.param = options_.param;
+            curve.param2 = options_.param2;
+            curve.start2 = options_.values2[0];
+            curve.end2 = options_.values2[1];
+            curve.model_at = [this](double p, double q) {
+                ModelOverrides ov = overrides_;
+                ov.set.push_back(options_.param + "=" + num(p));
+                ov.set.push_back(options_.param2 + "=" + num(q));
+                Model m = parse_model(text_, source_, ov);
+                m.parameter_expressions.clear();
+                m.field_expressions.clear();
+                return m;
+            };
+            out = sweep_detail::run_curve(branch, curve, options_, done, &cut);
+        }
         if (cut) c.cut = true;
         return out;
     }
@@ -401,6 +440,7 @@ SweepResult SweepPlan::result_header() const {
     r.continuation = options_.continuation;
     r.harmonics = options_.harmonics;
     r.branch_switch = options_.branch_switch;
+    r.track = options_.track;
     for (const Mass& m : model_.masses) r.masses.push_back(m.name);
     return r;
 }
@@ -644,7 +684,8 @@ std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_
     s += "param2 " + (names.param2.empty() ? std::string("-") : names.param2) + "\n";
     s += "continuation " + std::string(names.continuation ? "1" : "0") + "\n";
     s += "harmonics " + std::to_string(names.harmonics) + "\n";
-    s += "branch_switch " + std::to_string(names.branch_switch) + "\n";
+    s +=
+        "branch_switch " + std::to_string(names.branch_switch) + " " + (names.track.empty() ? "-" : names.track) + "\n";
     s += "masses";
     for (const std::string& m : names.masses) s += " " + m;
     s += "\n";
@@ -693,11 +734,13 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
                                  ":9: expected 'harmonics K' with 0 <= K <= " + std::to_string(kSweepMaxHarmonics));
         }
         int branch_switch = 0;
+        std::string track;
         {
             std::istringstream bs(field(9, "branch_switch"));
-            if (!(bs >> branch_switch) || branch_switch < 0 || branch_switch > kSweepMaxBranchSwitch)
-                throw InputError(
-                    where + ":10: expected 'branch_switch D' with 0 <= D <= " + std::to_string(kSweepMaxBranchSwitch));
+            if (!(bs >> branch_switch >> track) || branch_switch < 0 || branch_switch > kSweepMaxBranchSwitch)
+                throw InputError(where + ":10: expected 'branch_switch D TRACK' with 0 <= D <= " +
+                                 std::to_string(kSweepMaxBranchSwitch));
+            if (track == "-") track.clear();
         }
         std::istringstream ms(field(10, "masses"));
         std::vector<std::string> masses;
@@ -713,6 +756,7 @@ SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::
             r.continuation = cont == "1";
             r.harmonics = harmonics;
             r.branch_switch = branch_switch;
+            r.track = track;
             r.masses = masses;
         } else if (fp != fingerprint || n != count || t != tasks) {
             throw InputError(where + ": a part of another sweep than " + names[0] + " (" +

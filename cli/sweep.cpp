@@ -55,6 +55,7 @@ struct SweepFlags {
     bool continuation = false;
     long long max_steps = 0;
     long long branch_switch = 0;
+    std::string track;
     long long harmonics = 0;
 };
 
@@ -86,6 +87,7 @@ InputError flagged(const OptionError& e) {
                                                                 {"restart_each", "--restart-each"},
                                                                 {"max_steps", "--max-steps"},
                                                                 {"branch_switch", "--branch-switch"},
+                                                                {"track", "--track"},
                                                                 {"harmonics", "--harmonics"}};
     for (const auto& f : flags)
         if (e.option() == f.first) return InputError(std::string(f.second) + ": " + e.reason());
@@ -375,6 +377,7 @@ SweepOptions sweep_options(const SweepFlags& f) {
         throw InputError("--branch-switch: must be 0 .. " + std::to_string(kSweepMaxBranchSwitch) +
                          " (period doublings followed), not " + std::to_string(f.branch_switch));
     o.branch_switch = static_cast<int>(f.branch_switch);
+    o.track = f.track;
     o.harmonics = count_flag("--harmonics", f.harmonics, 0);
     o.integrator.h = f.h;
     o.integrator.rtol = f.rtol;
@@ -664,6 +667,10 @@ void add_sweep(CLI::App& app, int& exit_code) {
                     "--continuation: locate every period doubling to rounding (a row of its own) and follow the "
                     "branch of twice the period born there, and theirs, up to D doublings (1..6); extra column branch "
                     "(0 the primary, then 1, 2, ... in the order they are followed)");
+    sub->add_option("--track", f->track,
+                    "--continuation: follow the branch's first fold, period_doubling, neimark_sacker or grazing "
+                    "point over two parameters, --param and --param2, from --values2 A,B's A towards B (the "
+                    "curve's rows: both parameters, the orbit there)");
     sub->add_option("--harmonics", f->harmonics,
                     "amplitude and phase of the first K harmonics of every mass over the recorded periods "
                     "(columns amp<k>_<mass>,phase<k>_<mass> at the end; x = mean + sum of amp sin(k omega t + phase), "

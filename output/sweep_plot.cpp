@@ -29,9 +29,55 @@ std::string quoted(const std::string& s) {
     return q + "'";
 }
 
+// A curve of --track: the second parameter over the first (one line per
+// task), and below the largest |x| of the orbits along it.
+std::string curve_plot_script(const SweepResult& r, const std::string& title, const std::vector<std::size_t>& dofs) {
+    std::string s = "set terminal pngcairo size 1100,900 noenhanced font ',11'\nset encoding utf8\n";
+    std::vector<std::vector<const SweepPoint*>> tasks;
+    for (const SweepPoint& p : r.points) {
+        if (p.branch_start || tasks.empty()) tasks.emplace_back();
+        if (p.failure.empty()) tasks.back().push_back(&p);
+    }
+    for (std::size_t t = 0; t < tasks.size(); ++t) {
+        s += "$curve" + std::to_string(t) + " << EOD\n";
+        for (const SweepPoint* p : tasks[t]) {
+            s += num(p->value) + " " + num(p->value2);
+            for (std::size_t i : dofs) s += " " + num(p->xmax[i]);
+            s += "\n";
+        }
+        s += "EOD\n";
+    }
+    s += "set multiplot title " + quoted(title) + "\nset grid\nset key inside left top\n";
+    s += "set lmargin at screen 0.1\nset rmargin at screen 0.95\n";
+    s += "set title " + quoted(r.track + " curve in the (" + r.param + ", " + r.param2 + ") plane") + "\n";
+    s += "set tmargin at screen 0.9\nset bmargin at screen 0.5\n";
+    s += "set xlabel " + quoted(r.param) + "\nset ylabel " + quoted(r.param2) + "\n";
+    std::string plot;
+    for (std::size_t t = 0; t < tasks.size(); ++t) {
+        std::string name = r.track;
+        if (!tasks[t].empty())
+            name += " from " + r.param + " = " + num(tasks[t][0]->value) + ", " + r.param2 + " = " +
+                    num(tasks[t][0]->value2);
+        plot += (plot.empty() ? "" : ", ") + std::string("$curve") + std::to_string(t) +
+                " using 1:2 with linespoints lw 2 pt 7 ps 0.5 lc rgb '" + kColours[t % 8] + "' title " + quoted(name);
+    }
+    s += "plot " + (plot.empty() ? std::string("NaN notitle") : plot) + "\n";
+    s += "set title " + quoted("largest |x| over a period of the orbit along the curve") + "\n";
+    s += "set tmargin at screen 0.4\nset bmargin at screen 0.07\nset ylabel 'xmax'\n";
+    plot.clear();
+    for (std::size_t t = 0; t < tasks.size(); ++t)
+        for (std::size_t k = 0; k < dofs.size(); ++k)
+            plot += (plot.empty() ? "" : ", ") + std::string("$curve") + std::to_string(t) +
+                    " using 1:" + std::to_string(k + 3) + " with lines lw 2 lc rgb '" +
+                    kColours[(t * dofs.size() + k) % 8] + "' title " + quoted(r.masses[dofs[k]]);
+    s += "plot " + (plot.empty() ? std::string("NaN notitle") : plot) + "\nunset multiplot\n";
+    return s;
+}
+
 }  // namespace
 
 std::string sweep_plot_script(const SweepResult& r, const std::string& title, const std::vector<std::size_t>& dofs) {
+    if (!r.track.empty()) return curve_plot_script(r, title, dofs);
     const std::size_t n = r.masses.size(), shown = dofs.size();
     const std::size_t panels = std::min(shown, kDiagramPanels);
     // Units by dof kind (plot.h dof_unit): one axis label when they agree, else each legend entry says its own.

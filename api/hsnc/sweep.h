@@ -181,6 +181,11 @@ struct SweepOptions {
     /// located to rounding), and theirs, up to this many doublings (the
     /// branch of 2^branch_switch periods; 0: none, at most kSweepMaxBranchSwitch).
     int branch_switch = 0;
+    /// Continuation: follow, instead of the branch, its first point of this
+    /// kind ("fold", "period_doubling", "neimark_sacker", "grazing") over two
+    /// parameters, param and param2, from param2 = values2[0] towards
+    /// values2[1] ("": a branch, as without).
+    std::string track;
     /// When set (from any thread), runs stop soon (between two forcing
     /// periods or two continuation steps) with SweepCancelled.
     const std::atomic<bool>* cancel = nullptr;
@@ -248,6 +253,7 @@ struct SweepResult {
     bool continuation = false;        ///< the curve has the columns stable,max_multiplier,bifurcation
     std::size_t harmonics = 0;        ///< the curve has amp<k>_<mass>,phase<k>_<mass> at its end, k = 1..harmonics
     int branch_switch = 0;            ///< the curve has the column branch (after bifurcation)
+    std::string track;                ///< a curve of points of this kind over (param, param2) ("" for none)
     std::vector<std::string> masses;  ///< names, model order
     std::vector<SweepPoint> points;   ///< in output order (task order, points in run order)
 };

@@ -366,7 +366,7 @@ def _override_texts(d):
 
 def sweep(model, param, start, stop, points, direction="up", max_periods=500, record_periods=16,
           restart_each=False, param2=None, values2=None, threads=1, method="hsnc", rtol=1e-10, atol=1e-12,
-          continuation=False, max_steps=0, harmonics=0, branch_switch=0):
+          continuation=False, max_steps=0, harmonics=0, branch_switch=0, track=None):
     """The response curve and bifurcation diagram of `model` (a Model) over
     the parameter `param`, as `hsnc sweep --param PARAM --from START --to
     STOP --points POINTS` (interface.md section 6): `points` values from
@@ -409,6 +409,11 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     "branch" (int per point: 0 the primary branch, 1, 2, ... the switched
     ones in the order followed; "multiple" is each branch's period in
     forcing periods).
+    track="fold", "period_doubling", "neimark_sacker" or "grazing" (as
+    `--track`, with param2 and values2=[q0, q1]): instead of the branch, its
+    first point of that kind followed over (param, param2) from param2 = q0
+    towards q1; each point of the result is a point of that curve ("value",
+    "value2": both parameters; the orbit there).
 
     Ctrl-C (SIGINT) stops the run within a forcing period or a continuation
     step and raises KeyboardInterrupt."""
@@ -438,10 +443,12 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     max_steps = _int(f, "max_steps", max_steps, 0, _SIZE_MAX, "an integer >= 0 (0: 20 * points; at most 2**64 - 1)")
     harmonics = _int(f, "harmonics", harmonics, 0, 1000, "an integer from 0 to 1000")
     branch_switch = _int(f, "branch_switch", branch_switch, 0, 6, "an integer from 0 to 6 (period doublings followed)")
+    track = "" if track is None else _text(f, "track", track,
+                                           "None or a str: 'fold', 'period_doubling', 'neimark_sacker' or 'grazing'")
     return _hsnc._sweep(kind, what, source, _override_texts(s), _override_texts(x0), _override_texts(v0),
                         param, start, stop, points, direction, max_periods, record_periods, restart_each, param2,
                         values2, threads, method, rtol, atol, continuation, max_steps, harmonics,
-                        branch_switch)
+                        branch_switch, track)
 
 
 def _sweep_point(task):

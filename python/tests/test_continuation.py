@@ -96,6 +96,24 @@ def test_branch_switching_follows_the_period_two_branch_as_the_command_line(tmp_
             raise AssertionError("branch_switch=%r accepted" % (bad,))
 
 
+def test_a_grazing_curve_over_two_parameters_is_the_closed_form():
+    # The hardening stop's lower branch reaches the stop where F |H(omega)| = 0.5.
+    model = hsnc.Model.from_file(HARDENING)
+    r = hsnc.sweep(model, "omega", 0.6, 2.0, 29, continuation=True, track="grazing", param2="F", values2=[0.1, 0.05])
+    w, F = np.asarray(r["value"]), np.asarray(r["value2"])
+    assert len(w) >= 10 and F[0] == 0.1 and F[-1] < 0.055
+    H = np.abs(1 / (1 - w ** 2 + 0.04j * w))
+    assert np.abs(F * H - 0.5).max() < 1e-10
+    assert all(b == "grazing" for b in r["bifurcation"])
+    for bad in ({"track": "cusp"}, {"track": 3}):
+        try:
+            hsnc.sweep(model, "omega", 0.6, 2.0, 29, continuation=True, param2="F", values2=[0.1, 0.05], **bad)
+        except (ValueError, TypeError) as e:
+            assert "track" in str(e)
+        else:
+            raise AssertionError("%r accepted" % (bad,))
+
+
 def test_a_failing_point_is_a_row_and_the_sweep_goes_on():
     # k = 1e300 at p = 2 only: that point's run fails at once.
     text = textwrap.dedent('''
