@@ -6,8 +6,33 @@
 
 #include <cmath>
 #include <complex>
+#include <cstdio>
+#include <string>
 
 namespace hsnc::testing {
+
+// The same oscillator as an hsnc model: its parameters omega, c, kc, F at
+// these values.
+inline std::string bilinear_model(double omega, double c, double kc, double F) {
+    char values[160];
+    std::snprintf(values, sizeof values, "omega = %.17g\nc = %.17g\nkc = %.17g\nF = %.17g\n", omega, c, kc, F);
+    return std::string("name = \"bilinear\"\n[parameters]\n") + values + R"([[mass]]
+name = "m"
+m = 1.0
+[[spring]]
+between = ["ground", "m"]
+k = 1.0
+[damping]
+alpha = "c"
+[[contact]]
+between = ["m", "ground"]
+gap = 0.0
+k = "kc"
+[[forcing]]
+omega = "omega"
+amplitude = { m = "F" }
+)";
+}
 
 // The bilinear oscillator in closed form: in each region x'' + c x' + K x =
 // F sin(w t) has x = xp + e^{-c s/2} (A cos(wd s) + B sin(wd s)), s = t - ts,

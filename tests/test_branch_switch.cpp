@@ -38,29 +38,7 @@ using testing::write_temp;
 constexpr double kPi = 3.14159265358979323846;
 
 // x'' + 0.1 x' + x + 50 max(x, 0) = sin(omega t).
-const char* const kCascade = R"(
-name = "bilinear-cascade"
-[parameters]
-omega = 2.4
-c = 0.1
-kc = 50.0
-F = 1.0
-[[mass]]
-name = "m"
-m = 1.0
-[[spring]]
-between = ["ground", "m"]
-k = 1.0
-[damping]
-alpha = "c"
-[[contact]]
-between = ["m", "ground"]
-gap = 0.0
-k = "kc"
-[[forcing]]
-omega = "omega"
-amplitude = { m = "F" }
-)";
+const std::string kCascade = testing::bilinear_model(2.4, 0.1, 50.0, 1.0);
 
 SweepOptions cascade_options(int depth) {
     SweepOptions o;

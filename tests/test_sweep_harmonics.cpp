@@ -52,29 +52,7 @@ t0 = "t0"
 
 // x'' + c x' + k(x) x = F sin(omega t): k = 1 for x < 0, 1 + kc for x > 0
 // (a stop at the equilibrium).
-const char* const kBilinear = R"(
-name = "bilinear"
-[parameters]
-omega = 1.0
-c = 0.1
-kc = 3.0
-F = 0.3
-[[mass]]
-name = "m"
-m = 1.0
-[[spring]]
-between = ["ground", "m"]
-k = 1.0
-[damping]
-alpha = "c"
-[[contact]]
-between = ["m", "ground"]
-gap = 0.0
-k = "kc"
-[[forcing]]
-omega = "omega"
-amplitude = { m = "F" }
-)";
+const std::string kBilinear = testing::bilinear_model(1.0, 0.1, 3.0, 0.3);
 
 SweepOptions one_point(double omega, std::size_t harmonics) {
     SweepOptions o;

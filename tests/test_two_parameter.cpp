@@ -45,6 +45,17 @@ SweepOptions curve_options(const std::string& kind, const std::string& param2, d
     return o;
 }
 
+// The one-parameter branch of a curve's options `o` (its track, second
+// parameter and values dropped) with the second parameter at `value`.
+SweepResult branch_at(const std::string& text, const std::string& param2, double value, SweepOptions o) {
+    o.track.clear();
+    o.param2.clear();
+    o.values2.clear();
+    char set[64];
+    std::snprintf(set, sizeof set, "=%.17g", value);
+    return SweepPlan(text, "model.toml", ModelOverrides{{param2 + set}, {}, {}, {}}, o).run();
+}
+
 // The hardening stop's first fold over (omega, F), F from 0.1 to 0.3: at
 // three of its F, the one-parameter branch from the upper branch turns there
 // (no point beyond it, one within 1e-4), and hsnc periodic's shooting from
@@ -139,13 +150,8 @@ TEST(TwoParameter, PeriodDoublingCurveAgainstLocatedDoublings) {
         const SweepPoint& c = curve.points[k];
         SCOPED_TRACE("c = " + std::to_string(c.value2));
         SweepOptions b = o;
-        b.track.clear();
-        b.param2.clear();
-        b.values2.clear();
         b.branch_switch = 1;
-        char set[64];
-        std::snprintf(set, sizeof set, "c=%.17g", c.value2);
-        const SweepResult branch = SweepPlan(text, "cascade.toml", ModelOverrides{{set}, {}, {}, {}}, b).run();
+        const SweepResult branch = branch_at(text, "c", c.value2, b);
         const auto pd = std::find_if(branch.points.begin(), branch.points.end(),
                                      [](const SweepPoint& p) { return p.bifurcation == "period_doubling"; });
         ASSERT_NE(pd, branch.points.end());
@@ -174,13 +180,10 @@ TEST(TwoParameter, NeimarkSackerCurveOfScenarioTwo) {
         const SweepPoint& c = curve.points[k];
         SCOPED_TRACE("F1 = " + std::to_string(c.value2));
         SweepOptions b = o;
-        b.track.clear();
-        b.param2.clear();
-        b.values2.clear();
         b.points = 41;  // steps short enough to part the crossing from the period doubling after it
+        const SweepResult branch = branch_at(text, "F1", c.value2, b);
         char set[64];
         std::snprintf(set, sizeof set, "F1=%.17g", c.value2);
-        const SweepResult branch = SweepPlan(text, "seed-scenario-2.toml", ModelOverrides{{set}, {}, {}, {}}, b).run();
         const auto ns = std::find_if(branch.points.begin(), branch.points.end(),
                                      [](const SweepPoint& p) { return p.bifurcation == "neimark_sacker"; });
         ASSERT_NE(ns, branch.points.end());
