@@ -48,6 +48,37 @@ bool has_parameter(const Model& m, const std::string& name) {
     return false;
 }
 
+// A swept name that is an initial state coordinate, "x0.DOF" or "v0.DOF"
+// (basins of attraction): the dof's index, or npos.
+std::size_t state_dof(const Model& m, const std::string& name) {
+    if (name.size() < 4 || (name.compare(0, 3, "x0.") != 0 && name.compare(0, 3, "v0.") != 0)) return std::string::npos;
+    for (std::size_t i = 0; i < m.masses.size(); ++i)
+        if (m.masses[i].name == name.substr(3)) return i;
+    return std::string::npos;
+}
+
+// `name` = v in `ov`: a parameter's --set, or an initial position's or velocity's.
+void set_swept(ModelOverrides& ov, const std::string& name, double v) {
+    if (name.compare(0, 3, "x0.") == 0)
+        ov.x0.push_back(name.substr(3) + "=" + num(v));
+    else if (name.compare(0, 3, "v0.") == 0)
+        ov.v0.push_back(name.substr(3) + "=" + num(v));
+    else
+        ov.set.push_back(name + "=" + num(v));
+}
+
+// The value of a swept name in `m`.
+double swept_value(const Model& m, const std::string& name) {
+    const std::size_t i = state_dof(m, name);
+    if (i == std::string::npos) return parameter_value(m, name);
+    return name[0] == 'x' ? m.x0[i] : m.v0[i];
+}
+
+// Whether `m` has the swept name (a parameter or an initial state coordinate).
+bool has_swept(const Model& m, const std::string& name) {
+    return has_parameter(m, name) || state_dof(m, name) != std::string::npos;
+}
+
 // Shared by the threads of one run: progress and the first failure.
 struct Context {
     std::mutex mutex;
@@ -89,8 +120,9 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     // The model as given (parameters at the file's values): names, checks.
     model_ = parse_model(text, source, overrides);
     if (o.param.empty()) throw OptionError(kPlan, "param", "''", "required: the parameter to sweep");
-    if (!has_parameter(model_, o.param))
-        throw OptionError(kPlan, "param", o.param, "no parameter named '" + o.param + "' in " + source);
+    if (!has_swept(model_, o.param))
+        throw OptionError(kPlan, "param", o.param,
+                          "no parameter named '" + o.param + "' in " + source + " (nor x0.DOF or v0.DOF of a dof)");
     if (!std::isfinite(o.from)) throw OptionError(kPlan, "from", shortest_text(o.from), "must be a finite number");
     if (!std::isfinite(o.to)) throw OptionError(kPlan, "to", shortest_text(o.to), "must be a finite number");
     if (o.points < 1) throw OptionError(kPlan, "points", std::to_string(o.points), "must be >= 1");
@@ -104,8 +136,10 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     if (!o.param2.empty()) {
         if (o.param2 == o.param)
             throw OptionError(kPlan, "param2", o.param2, "is the swept parameter itself");
-        if (!has_parameter(model_, o.param2))
-            throw OptionError(kPlan, "param2", o.param2, "no parameter named '" + o.param2 + "' in " + source);
+        if (!has_swept(model_, o.param2))
+            throw OptionError(
+                kPlan, "param2", o.param2,
+                "no parameter named '" + o.param2 + "' in " + source + " (nor x0.DOF or v0.DOF of a dof)");
         if (o.values2.empty()) throw OptionError(kPlan, "values2", "''", "required with param2: its values");
     } else if (!o.values2.empty()) {
         throw OptionError(kPlan, "values2", shortest_text(o.values2[0]), "given without param2");
@@ -118,6 +152,16 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
             throw OptionError(kPlan, name == o.param ? "param" : "param2", name,
                               "also set by an override ('" + raw + "'): a swept parameter takes the sweep's values");
     }
+    for (const std::string* name : {&o.param, &o.param2})
+        if (state_dof(model_, *name) != std::string::npos) {
+            const char* which = name == &o.param ? "param" : "param2";
+            if (o.continuation)
+                throw OptionError(kPlan, which, *name, "an initial state coordinate does not go with continuation");
+            if (!o.restart_each)
+                throw OptionError(kPlan, which, *name,
+                                  "an initial state coordinate is swept with restart_each only (every point from its "
+                                  "own initial state)");
+        }
     if (o.harmonics > kSweepMaxHarmonics)
         throw OptionError(kPlan, "harmonics", std::to_string(o.harmonics),
                           "must be <= " + std::to_string(kSweepMaxHarmonics));
@@ -188,10 +232,10 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     for (std::size_t l = 0; l < lines; ++l)
         for (std::size_t j = 0; j < N; ++j) {
             ModelOverrides ov = overrides;
-            ov.set.push_back(o.param + "=" + num(values_[j]));
+            set_swept(ov, o.param, values_[j]);
             std::string at = o.param + " = " + shortest_text(values_[j]);
             if (!o.param2.empty()) {
-                ov.set.push_back(o.param2 + "=" + num(o.values2[l]));
+                set_swept(ov, o.param2, o.values2[l]);
                 at += ", " + o.param2 + " = " + shortest_text(o.values2[l]);
             }
             Model m;
@@ -202,7 +246,7 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
             }
             // The override's text reads back as the value (17 digits), so the
             // CSV's column is the value the point ran with.
-            if (parameter_value(m, o.param) != values_[j])
+            if (swept_value(m, o.param) != values_[j])
                 throw InputError("sweep at " + at + ": the value does not read back exactly");
             sweep_detail::forcing_frequency(m, "sweep at " + at);
             m.parameter_expressions.clear();
@@ -472,6 +516,52 @@ std::string sweep_curve_header(const SweepResult& r) {
             h += ",amp" + ks + "_" + m + ",phase" + ks + "_" + m;
         }
     return h;
+}
+
+Attractors classify_attractors(const SweepResult& r, double tolerance) {
+    const std::size_t n = r.masses.size();
+    Attractors out;
+    // Each settled point's canonical state: of its first `multiple` recorded
+    // states (the orbit's), the one of least x of the first mass.
+    std::vector<std::size_t> canonical(r.points.size(), 0);
+    double sx = 0, sv = 0;
+    for (std::size_t k = 0; k < r.points.size(); ++k) {
+        const SweepPoint& p = r.points[k];
+        if (!p.settled || p.multiple < 1 || p.strobe_t.empty()) continue;
+        const std::size_t rows = std::min<std::size_t>(static_cast<std::size_t>(p.multiple), p.strobe_t.size());
+        for (std::size_t row = 1; row < rows; ++row)
+            if (p.strobe_x[row * n] < p.strobe_x[canonical[k] * n]) canonical[k] = row;
+        for (std::size_t i = 0; i < n; ++i) {
+            sx = std::max(sx, std::fabs(p.strobe_x[canonical[k] * n + i]));
+            sv = std::max(sv, std::fabs(p.strobe_v[canonical[k] * n + i]));
+        }
+    }
+    const double tx = tolerance * (sx > 0 ? sx : 1), tv = tolerance * (sv > 0 ? sv : 1);
+    for (std::size_t k = 0; k < r.points.size(); ++k) {
+        const SweepPoint& p = r.points[k];
+        if (!p.failure.empty()) {
+            out.of_point.push_back(-1);
+            continue;
+        }
+        if (!p.settled || p.multiple < 1 || p.strobe_t.empty()) {
+            out.of_point.push_back(0);
+            continue;
+        }
+        const double* x = &p.strobe_x[canonical[k] * n];
+        const double* v = &p.strobe_v[canonical[k] * n];
+        std::size_t a = 0;
+        for (; a < out.list.size(); ++a) {
+            const Attractor& at = out.list[a];
+            bool same = at.multiple == p.multiple;
+            for (std::size_t i = 0; same && i < n; ++i)
+                same = std::fabs(at.x[i] - x[i]) <= tx && std::fabs(at.v[i] - v[i]) <= tv;
+            if (same) break;
+        }
+        if (a == out.list.size()) out.list.push_back(Attractor{p.multiple, {x, x + n}, {v, v + n}, 0});
+        ++out.list[a].points;
+        out.of_point.push_back(static_cast<int>(a + 1));
+    }
+    return out;
 }
 
 std::string sweep_diagram_header(const SweepResult& r) {

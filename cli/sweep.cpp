@@ -48,7 +48,7 @@ struct SweepFlags {
     std::string param2, values2;
     unsigned threads = 1;
     std::string part, part_out;
-    std::string out, diagram, plot, h5, plot_dofs;
+    std::string out, diagram, plot, h5, plot_dofs, attractors;
     std::string method = "hsnc";
     double h = NAN, rtol = 1e-10, atol = 1e-12;
     bool quiet = false;
@@ -69,7 +69,7 @@ std::size_t count_flag(const char* flag, long long value, long long least) {
 
 struct MergeFlags {
     std::vector<std::string> parts;
-    std::string out, diagram, plot, h5, plot_dofs;
+    std::string out, diagram, plot, h5, plot_dofs, attractors;
 };
 
 // The flag of each SweepOptions field, for the library's OptionError.
@@ -112,6 +112,25 @@ std::pair<std::size_t, std::size_t> parse_part(const std::string& text) {
 
 std::vector<double> parse_values(const std::string& text) {
     std::vector<double> out;
+    // A:B:M: M values from A to B, equally spaced (as --from, --to, --points).
+    if (text.find(',') == std::string::npos && std::count(text.begin(), text.end(), ':') == 2) {
+        const std::size_t c1 = text.find(':'), c2 = text.find(':', c1 + 1);
+        char* end1 = nullptr;
+        char* end2 = nullptr;
+        char* end3 = nullptr;
+        const std::string a = text.substr(0, c1), b = text.substr(c1 + 1, c2 - c1 - 1), m = text.substr(c2 + 1);
+        const double from = std::strtod(a.c_str(), &end1), to = std::strtod(b.c_str(), &end2);
+        const long long count = std::strtoll(m.c_str(), &end3, 10);
+        if (a.empty() || b.empty() || m.empty() || *end1 != '\0' || *end2 != '\0' || *end3 != '\0' ||
+            !std::isfinite(from) || !std::isfinite(to) || count < 1 || count > 100'000'000)
+            throw InputError("--values2 '" + text + "': expected A:B:M (M values from A to B, 1 <= M <= 1e8)");
+        for (long long j = 0; j < count; ++j)
+            out.push_back(j == 0 ? from
+                          : j + 1 == count
+                              ? to
+                              : from + (to - from) * static_cast<double>(j) / static_cast<double>(count - 1));
+        return out;
+    }
     std::size_t a = 0;
     while (true) {
         const std::size_t b = text.find(',', a);
@@ -181,11 +200,23 @@ std::string interrupted_note(std::size_t done, std::size_t total) {
 
 // Writes the response curve and the diagram CSVs (interface.md section 6);
 // `note`: a last comment line ("" for none).
-void write_curve(const SweepResult& r, CsvFile& f, const std::string& note) {
-    f.text(sweep_curve_header(r).c_str());
+// Whether a swept name is an initial state coordinate, and whether a sweep
+// is over two of them: basins of attraction.
+bool is_state(const std::string& name) {
+    return name.compare(0, 3, "x0.") == 0 || name.compare(0, 3, "v0.") == 0;
+}
+bool is_basins(const SweepResult& r) {
+    return is_state(r.param) && is_state(r.param2);
+}
+constexpr const char* kAttractorsNeedBasins =
+    "--attractors: only for basins of attraction (--param and --param2 initial state coordinates x0.DOF, v0.DOF)";
+
+void write_curve(const SweepResult& r, CsvFile& f, const std::string& note, const Attractors* basins = nullptr) {
+    f.text((sweep_curve_header(r) + (basins ? ",attractor" : "")).c_str());
     f.end_row();
     const bool has2 = !r.param2.empty();
-    for (const SweepPoint& p : r.points) {
+    for (std::size_t k = 0; k < r.points.size(); ++k) {
+        const SweepPoint& p = r.points[k];
         f.number(p.value);
         f.text(sweep_direction_name(p.direction));
         f.text(p.settled ? "true" : "false");
@@ -207,6 +238,7 @@ void write_curve(const SweepResult& r, CsvFile& f, const std::string& note) {
             f.number(p.amp[j]);
             f.number(p.phase[j]);
         }
+        if (basins) f.text(std::to_string(basins->of_point[k]).c_str());
         f.end_row();
     }
     if (!note.empty()) {
@@ -236,15 +268,49 @@ void write_diagram(const SweepResult& r, CsvFile& f, const std::string& note) {
     }
 }
 
-// The outputs of a whole sweep (--out, --diagram, --plot, --h5), checked before anything runs.
+// The attractors of a basin study, one row each (0: the points not
+// settled, -1: those failed, when there are any).
+void write_attractors(const SweepResult& r, const Attractors& a, CsvFile& f) {
+    std::string header = "attractor,multiple,points,fraction";
+    for (const std::string& m : r.masses) header += ",x_" + m;
+    for (const std::string& m : r.masses) header += ",v_" + m;
+    f.text(header.c_str());
+    f.end_row();
+    const auto total = static_cast<double>(std::max<std::size_t>(1, r.points.size()));
+    for (std::size_t k = 0; k < a.list.size(); ++k) {
+        const Attractor& at = a.list[k];
+        f.text(std::to_string(k + 1).c_str());
+        f.text(std::to_string(at.multiple).c_str());
+        f.text(std::to_string(at.points).c_str());
+        f.number(static_cast<double>(at.points) / total);
+        for (double x : at.x) f.number(x);
+        for (double v : at.v) f.number(v);
+        f.end_row();
+    }
+    for (const int id : {0, -1}) {
+        const auto count = static_cast<std::size_t>(std::count(a.of_point.begin(), a.of_point.end(), id));
+        if (count == 0) continue;
+        f.text(std::to_string(id).c_str());
+        f.text("0");
+        f.text(std::to_string(count).c_str());
+        f.number(static_cast<double>(count) / total);
+        for (std::size_t i = 0; i < 2 * r.masses.size(); ++i) f.text("");
+        f.end_row();
+    }
+}
+
+// The outputs of a whole sweep (--out, --diagram, --plot, --h5, --attractors), checked before anything runs.
 struct Outputs {
-    std::unique_ptr<OutputTarget> out, diagram, plot, h5;
+    std::unique_ptr<OutputTarget> out, diagram, plot, h5, attractors;
     std::string model_path;  // for --h5: the model file and its overrides as given
     std::vector<std::string> overrides;
     std::string plot_dofs;           // --plot-dofs
     std::vector<std::size_t> named;  // the dofs the model's elements and loads name (plot.h named_dofs)
-    Outputs(const std::string& o, const std::string& d, const std::string& p, const std::string& h = "") {
+    Outputs(const std::string& o, const std::string& d, const std::string& p, const std::string& h = "",
+            const std::string& a = "") {
         std::vector<const OutputTarget*> all;
+        if (!a.empty())
+            all.push_back((attractors = std::make_unique<OutputTarget>(check_output("--attractors", a))).get());
         if (!o.empty()) all.push_back((out = std::make_unique<OutputTarget>(check_output("--out", o))).get());
         if (!d.empty()) all.push_back((diagram = std::make_unique<OutputTarget>(check_output("--diagram", d))).get());
         if (!p.empty()) all.push_back((plot = std::make_unique<OutputTarget>(check_output("--plot", p))).get());
@@ -258,9 +324,17 @@ struct Outputs {
             archive = std::make_unique<H5Archive>(*h5, h5_module());
             write_h5_provenance(*archive, r.model, model_path, overrides);
         }
+        const bool basins = is_basins(r);
+        if (attractors && !basins) throw InputError(kAttractorsNeedBasins);
+        const Attractors found = basins ? classify_attractors(r) : Attractors();
         if (out || archive) {
             CsvFile f(out.get(), archive ? &archive->table("sweep/curve") : nullptr);
-            write_curve(r, f, note);
+            write_curve(r, f, note, basins ? &found : nullptr);
+            f.commit();
+        }
+        if (attractors) {
+            CsvFile f(attractors.get(), nullptr);
+            write_attractors(r, found, f);
             f.commit();
         }
         if (diagram || archive) {
@@ -268,7 +342,9 @@ struct Outputs {
             write_diagram(r, f, note);
             f.commit();
         }
-        if (plot)
+        if (plot && basins)
+            draw_basin_plot(r, found, note.empty() ? title : title + " (interrupted)", *plot);
+        else if (plot)
             draw_sweep_plot(r, note.empty() ? title : title + " (interrupted)", *plot,
                             hsnc::plot_dofs(r.masses, plot_dofs, named));
         if (archive) archive->commit();
@@ -315,6 +391,7 @@ std::string summary_line(const SweepResult& r, bool interrupted = false) {
     if (r.continuation)
         s << " stable=" << stable << " unstable=" << r.points.size() - stable - problems.failed
           << " bifurcations=" << bifurcations << " stopped=" << problems.stopped;
+    if (is_basins(r)) s << " attractors=" << classify_attractors(r).list.size();
     return s.str();
 }
 
@@ -378,6 +455,7 @@ SweepOptions sweep_options(const SweepFlags& f) {
                          " (period doublings followed), not " + std::to_string(f.branch_switch));
     o.branch_switch = static_cast<int>(f.branch_switch);
     o.track = f.track;
+    if (!f.attractors.empty() && !(is_state(f.param) && is_state(f.param2))) throw InputError(kAttractorsNeedBasins);
     o.harmonics = count_flag("--harmonics", f.harmonics, 0);
     o.integrator.h = f.h;
     o.integrator.rtol = f.rtol;
@@ -469,7 +547,7 @@ int sweep(const SweepFlags& f) {
                 if (!f.part.empty())
                     part_target = std::make_unique<OutputTarget>(check_output("--part-out", f.part_out));
                 else {
-                    outputs = std::make_unique<Outputs>(f.out, f.diagram, f.plot, f.h5);
+                    outputs = std::make_unique<Outputs>(f.out, f.diagram, f.plot, f.h5, f.attractors);
                     outputs->model_path = f.model;
                     outputs->overrides = overrides_given(f.overrides);
                     outputs->plot_dofs = f.plot_dofs;
@@ -592,7 +670,7 @@ int sweep(const SweepFlags& f) {
 
 int merge(const MergeFlags& f) {
     for (const std::string& path : f.parts) note_input_file(path);  // no output may replace a part
-    Outputs outputs(f.out, f.diagram, f.plot, f.h5);                // --h5: the model's text is not in the parts
+    Outputs outputs(f.out, f.diagram, f.plot, f.h5, f.attractors);  // --h5: the model's text is not in the parts
     outputs.plot_dofs = f.plot_dofs;
     std::vector<std::string> texts;
     for (const std::string& path : f.parts) {
@@ -631,6 +709,11 @@ void add_sweep(CLI::App& app, int& exit_code) {
     sub->add_option("--v0", f->overrides.v0, "override an initial velocity, NAME=VALUE (repeatable)");
     sub->add_option("--out", f->out, "response curve CSV");
     sub->add_option("--diagram", f->diagram, "bifurcation diagram CSV (the stroboscopic samples of every point)");
+    sub->add_option("--attractors", f->attractors,
+                    "basins of attraction (--param and --param2 initial state coordinates x0.DOF or v0.DOF, with "
+                    "--restart-each): the attractors CSV, one row per periodic attractor (its period and canonical "
+                    "state, the fraction of points that reach it); the curve CSV gains the column attractor and "
+                    "--plot draws the basins");
     sub->add_option("--plot", f->plot, "draw the response curve and the diagram into this PNG (gnuplot)");
     add_h5_flag(sub, f->h5, "sweep/curve as --out, sweep/diagram as --diagram");
     sub->add_option("--plot-dofs", f->plot_dofs,
@@ -640,7 +723,8 @@ void add_sweep(CLI::App& app, int& exit_code) {
     sub->add_flag("--restart-each", f->restart_each,
                   "start every point from the model's initial state (no continuation; points run in parallel)");
     sub->add_option("--param2", f->param2, "a second parameter: one sweep per value of --values2")
-        ->needs(sub->add_option("--values2", f->values2, "values of --param2, comma separated (a,b,c)"));
+        ->needs(sub->add_option("--values2", f->values2,
+                                "values of --param2, comma separated (a,b,c), or A:B:M (M values from A to B)"));
     sub->add_option("--threads", f->threads,
                     "threads for independent sweeps and points (default 1; 0: every core); output identical for any");
     sub->add_option("--part", f->part,
@@ -683,6 +767,7 @@ void add_sweep(CLI::App& app, int& exit_code) {
     merge_cmd->add_option("PARTS", m->parts, "the part files (every part of one sweep, in any order)")->required();
     merge_cmd->add_option("--out", m->out, "response curve CSV");
     merge_cmd->add_option("--diagram", m->diagram, "bifurcation diagram CSV");
+    merge_cmd->add_option("--attractors", m->attractors, "basins: the attractors CSV (as hsnc sweep --attractors)");
     merge_cmd->add_option("--plot", m->plot, "the figure (PNG, gnuplot)");
     add_h5_flag(merge_cmd, m->h5, "sweep/curve, sweep/diagram");
     merge_cmd

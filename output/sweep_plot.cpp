@@ -259,6 +259,57 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title, co
     return s;
 }
 
+std::string basin_plot_script(const SweepResult& r, const Attractors& a, const std::string& title) {
+    const std::size_t K = a.list.size();
+    std::string s = "set terminal pngcairo size 1100,850 noenhanced font ',11'\nset encoding utf8\n";
+    s += "$basin << EOD\n";
+    for (std::size_t k = 0; k < r.points.size(); ++k) {
+        if (k > 0 && r.points[k].value2 != r.points[k - 1].value2) s += "\n";  // a scan line per value of param2
+        s += num(r.points[k].value) + " " + num(r.points[k].value2) + " " + std::to_string(a.of_point[k]) + "\n";
+    }
+    s += "EOD\n";
+    // The palette: -1 black, 0 grey, attractor k its colour, each over [k - 0.5, k + 0.5].
+    s += "set palette defined (-1.5 'black', -0.5 'black', -0.5 '#bbbbbb', 0.5 '#bbbbbb'";
+    for (std::size_t k = 1; k <= K; ++k) {
+        const std::string c = std::string("'") + kColours[(k - 1) % 8] + "'";
+        s += ", " + num(static_cast<double>(k) - 0.5) + " " + c + ", " + num(static_cast<double>(k) + 0.5) + " " + c;
+    }
+    s += ")\nset cbrange [-1.5:" + num(static_cast<double>(K) + 0.5) + "]\nunset colorbox\n";
+    s += "set title " + quoted(title + ": basins of attraction (the attractor each initial state reaches)") + "\n";
+    s += "set xlabel " + quoted(r.param) + "\nset ylabel " + quoted(r.param2) + "\n";
+    s += "set key outside right top\nset rmargin at screen 0.62\nset autoscale xfix\nset autoscale yfix\n";
+    std::string plot = "$basin using 1:2:3 with image notitle";
+    const auto total = static_cast<double>(std::max<std::size_t>(1, r.points.size()));
+    auto short_num = [](double v, int digits) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+        return std::string(buf);
+    };
+    for (std::size_t k = 0; k < K; ++k) {
+        const Attractor& at = a.list[k];
+        std::string name = std::to_string(k + 1) + ": period " + std::to_string(at.multiple) + " T, x_" + r.masses[0] +
+                           " = " + short_num(at.x[0], 5) + " (" +
+                           short_num(100 * static_cast<double>(at.points) / total, 3) + "%)";
+        plot += ", NaN with boxes fs solid 1.0 lc rgb '" + std::string(kColours[k % 8]) + "' title " + quoted(name);
+    }
+    for (const int id : {0, -1}) {
+        const auto count = static_cast<std::size_t>(std::count(a.of_point.begin(), a.of_point.end(), id));
+        if (count == 0) continue;
+        plot += std::string(", NaN with boxes fs solid 1.0 lc rgb '") + (id == 0 ? "#bbbbbb" : "black") + "' title " +
+                quoted(std::string(id == 0 ? "not settled" : "failed") + " (" +
+                       short_num(100 * static_cast<double>(count) / total, 3) + "%)");
+    }
+    s += "plot " + plot + "\n";
+    return s;
+}
+
+void draw_basin_plot(const SweepResult& r, const Attractors& a, const std::string& title, const OutputTarget& png) {
+    const std::string bytes = run_gnuplot(basin_plot_script(r, a, title));
+    OutputFile file(png);
+    file.write(bytes.data(), bytes.size());
+    file.commit();
+}
+
 void draw_sweep_plot(const SweepResult& r, const std::string& title, const OutputTarget& png,
                      const std::vector<std::size_t>& dofs) {
     const std::string bytes = run_gnuplot(sweep_plot_script(r, title, dofs));

@@ -25,4 +25,10 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title, co
 void draw_sweep_plot(const SweepResult& r, const std::string& title, const OutputTarget& png,
                      const std::vector<std::size_t>& dofs);
 
+/// The basins of attraction of a sweep over two initial state coordinates:
+/// each point coloured by the attractor it reached (grey: not settled,
+/// black: failed), a legend entry per attractor.
+std::string basin_plot_script(const SweepResult& r, const Attractors& a, const std::string& title);
+void draw_basin_plot(const SweepResult& r, const Attractors& a, const std::string& title, const OutputTarget& png);
+
 }  // namespace hsnc

@@ -185,6 +185,26 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
         d["stop"] = stop;
     }
     if (r.branch_switch) d["branch"] = branch;
+    // Basins of attraction: both swept names initial state coordinates.
+    auto state = [](const std::string& name) {
+        return name.compare(0, 3, "x0.") == 0 || name.compare(0, 3, "v0.") == 0;
+    };
+    if (state(r.param) && state(r.param2)) {
+        const Attractors a = classify_attractors(r);
+        py::array_t<int> ids(np);
+        for (std::size_t i = 0; i < np; ++i) ids.mutable_at(i) = a.of_point[i];
+        py::list list;
+        for (const Attractor& at : a.list) {
+            py::dict e;
+            e["multiple"] = at.multiple;
+            e["points"] = at.points;
+            e["x"] = py::array_t<double>(at.x.size(), at.x.data());
+            e["v"] = py::array_t<double>(at.v.size(), at.v.data());
+            list.append(e);
+        }
+        d["attractor"] = ids;
+        d["attractors"] = list;
+    }
     return d;
 }
 

@@ -333,6 +333,30 @@ std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_
 /// is damaged.
 SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::vector<std::string>& names);
 
+/// An attractor the points of a sweep settled on: a periodic orbit of
+/// `multiple` forcing periods, named by its canonical state (of its
+/// `multiple` states at the ends of the recorded periods, the one of least
+/// x of the first mass), and how many points reached it.
+struct Attractor {
+    int multiple = 0;
+    std::vector<double> x, v;  ///< the canonical state, one per mass
+    std::size_t points = 0;
+};
+
+/// The attractors of a sweep's points, for basins of attraction (param and
+/// param2 initial state coordinates x0.DOF, v0.DOF, with restart_each):
+/// settled points with the same multiple whose canonical states agree to
+/// `tolerance` of the largest |x| and |v| of all of them reached one
+/// attractor. Numbered 1, 2, ... in the order of the first point that
+/// reached each (so the same for any split of the run); `of_point`: each
+/// point's number, 0 for a point not settled in max_periods (a chaotic or
+/// quasi-periodic motion, or a slow transient), -1 for a failed one.
+struct Attractors {
+    std::vector<Attractor> list;
+    std::vector<int> of_point;
+};
+Attractors classify_attractors(const SweepResult& result, double tolerance = 1e-6);
+
 /// The response-curve and diagram CSV headers of interface.md section 6
 /// (with param2: its name as one more column at the end; with continuation:
 /// then stable,max_multiplier,bifurcation; with branch switching: then

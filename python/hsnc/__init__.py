@@ -409,6 +409,11 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     "branch" (int per point: 0 the primary branch, 1, 2, ... the switched
     ones in the order followed; "multiple" is each branch's period in
     forcing periods).
+    Basins of attraction: param and param2 initial state coordinates
+    ("x0.DOF" or "v0.DOF", with restart_each=True): then also "attractor"
+    (int per point: 1, 2, ... the attractor it reached, numbered in the
+    order first reached; 0 not settled; -1 failed) and "attractors" (a list
+    of dicts: "multiple", "points", "x", "v": the canonical state).
     track="fold", "period_doubling", "neimark_sacker" or "grazing" (as
     `--track`, with param2 and values2=[q0, q1]): instead of the branch, its
     first point of that kind followed over (param, param2) from param2 = q0

@@ -114,6 +114,19 @@ def test_a_grazing_curve_over_two_parameters_is_the_closed_form():
             raise AssertionError("%r accepted" % (bad,))
 
 
+def test_basins_of_the_bistable_oscillator_as_the_command_line(tmp_path):
+    model = hsnc.Model.from_file(HARDENING, set={"omega": 1.3})
+    values = list(np.linspace(-3, 3, 9))
+    r = hsnc.sweep(model, "x0.m", -3, 3, 9, param2="v0.m", values2=values, restart_each=True, max_periods=3000)
+    assert len(r["attractors"]) == 2 and set(np.asarray(r["attractor"]).tolist()) == {1, 2}
+    out = tmp_path / "b.csv"
+    run_cli("sweep", HARDENING, "--set", "omega=1.3", "--param", "x0.m", "--from", -3, "--to", 3, "--points", 9,
+            "--param2", "v0.m", "--values2=-3:3:9", "--restart-each", "--max-periods", 3000, "--quiet", "--out", out)
+    header, rows = read_csv(out)
+    assert header[-1] == "attractor"
+    assert [int(row[-1]) for row in rows] == np.asarray(r["attractor"]).tolist()
+
+
 def test_a_failing_point_is_a_row_and_the_sweep_goes_on():
     # k = 1e300 at p = 2 only: that point's run fails at once.
     text = textwrap.dedent('''
