@@ -239,14 +239,7 @@ std::vector<SweepPoint> run_curve(const Branch& b, const CurveSpec& c, const Swe
     const auto N = static_cast<Eigen::Index>(2 * n);
     std::vector<SweepPoint> out;
     auto failed = [&](const std::string& reason) {
-        SweepPoint p;
-        p.value = b.start;
-        p.value2 = c.start2;
-        p.direction = b.end > b.start ? SweepDirection::up : SweepDirection::down;
-        p.failure = reason;
-        p.branch_start = true;
-        mark_failed(p, n, o.harmonics);
-        out.push_back(p);
+        out.push_back(failed_start(b, c.start2, reason, n, o.harmonics));
         done(out.back(), seconds());
         return out;
     };

@@ -581,14 +581,7 @@ private:
 };
 
 std::vector<SweepPoint> Continuation::failed_row(const std::string& reason) {
-    SweepPoint p;
-    p.value = b_.start;
-    p.value2 = b_.value2;
-    p.direction = b_.end > b_.start ? SweepDirection::up : SweepDirection::down;
-    p.failure = reason;
-    p.branch_start = true;
-    mark_failed(p, n_, o_.harmonics);
-    push(p);
+    push(failed_start(b_, b_.value2, reason, n_, o_.harmonics));
     return out_;
 }
 
@@ -933,6 +926,18 @@ std::string bifurcations_between(const std::vector<std::complex<double>>& a, con
 std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
                                          const std::function<void(const SweepPoint&, double)>& done, bool* cut) {
     return Continuation(b, o, done, cut).run();
+}
+
+SweepPoint failed_start(const Branch& b, double value2, const std::string& reason, std::size_t masses,
+                        std::size_t harmonics) {
+    SweepPoint p;
+    p.value = b.start;
+    p.value2 = value2;
+    p.direction = b.end > b.start ? SweepDirection::up : SweepDirection::down;
+    p.failure = reason;
+    p.branch_start = true;
+    mark_failed(p, masses, harmonics);
+    return p;
 }
 
 // The unit tangent of the branch (the null vector of the N x (N + 1)

@@ -48,6 +48,10 @@ std::string bifurcations_between(const std::vector<std::complex<double>>& a, con
 
 // ---- the pieces a branch and a curve of special points share ----
 
+/// A branch's one row when it cannot begin: a failed point at its start
+/// (second parameter `value2`) saying why.
+SweepPoint failed_start(const Branch& b, double value2, const std::string& reason, std::size_t masses,
+                        std::size_t harmonics);
 /// The state y = (x, v, s) as the sweep carries it (n masses).
 State state_of(const Eigen::VectorXd& y, std::size_t n);
 /// The state y = (x, v, s) of an orbit hsnc::periodic found.

@@ -9,7 +9,6 @@
 
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <string>
 
 #include "cli_runner.h"
@@ -25,11 +24,6 @@ using testing::slurp;
 using testing::temp_path;
 
 const std::string kHardening = std::string(HSNC_SOURCE_DIR) + "/examples/hardening-stop.toml";
-
-std::string read(const std::string& path) {
-    std::ifstream in(path);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 SweepOptions grid(std::size_t points) {
     SweepOptions o;
@@ -47,7 +41,7 @@ SweepOptions grid(std::size_t points) {
 }
 
 TEST(Basins, BistableHardeningOscillatorAttractorsAndFractions) {
-    const std::string text = read(kHardening);
+    const std::string text = slurp(kHardening);
     const ModelOverrides at13{{"omega=1.3"}, {}, {}, {}};
     const Attractors coarse = classify_attractors(SweepPlan(text, "hardening-stop.toml", at13, grid(21)).run());
     const SweepResult fine_run = SweepPlan(text, "hardening-stop.toml", at13, grid(41)).run();

@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -26,11 +25,6 @@ using testing::slurp;
 using testing::temp_path;
 
 const std::string kHardening = std::string(HSNC_SOURCE_DIR) + "/examples/hardening-stop.toml";
-
-std::string read(const std::string& path) {
-    std::ifstream in(path);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 SweepOptions curve_options(const std::string& kind, const std::string& param2, double from2, double to2) {
     SweepOptions o;
@@ -62,7 +56,7 @@ SweepResult branch_at(const std::string& text, const std::string& param2, double
 // the branch finds an orbit near the curve's with a multiplier near +1 at
 // 1e-6 below its omega and none near at 1e-6 above.
 TEST(TwoParameter, FoldCurveOfTheHardeningStopAgainstTurningPointsOfBranches) {
-    const std::string text = read(kHardening);
+    const std::string text = slurp(kHardening);
     const SweepResult curve = SweepPlan(text, "hardening-stop.toml", {}, curve_options("fold", "F", 0.1, 0.3)).run();
     ASSERT_GE(curve.points.size(), 20u);
     EXPECT_EQ(curve.points.front().value2, 0.1);
@@ -120,7 +114,7 @@ TEST(TwoParameter, FoldCurveOfTheHardeningStopAgainstTurningPointsOfBranches) {
 // grazing curve of the hardening stop's lower branch, F from 0.1 down.
 TEST(TwoParameter, GrazingCurveIsTheLinearOscillatorsClosedForm) {
     const SweepResult curve =
-        SweepPlan(read(kHardening), "hardening-stop.toml", {}, curve_options("grazing", "F", 0.1, 0.05)).run();
+        SweepPlan(slurp(kHardening), "hardening-stop.toml", {}, curve_options("grazing", "F", 0.1, 0.05)).run();
     ASSERT_GE(curve.points.size(), 10u);
     EXPECT_LT(curve.points.back().value2, 0.055);
     for (const SweepPoint& p : curve.points) {
@@ -136,7 +130,7 @@ TEST(TwoParameter, GrazingCurveIsTheLinearOscillatorsClosedForm) {
 // (omega, damping c): at two of its c, where --branch-switch (Illinois on
 // det(M + I) along the one-parameter branch) locates it.
 TEST(TwoParameter, PeriodDoublingCurveAgainstLocatedDoublings) {
-    std::string text = read(std::string(HSNC_SOURCE_DIR) + "/examples/bilinear-cascade.toml");
+    std::string text = slurp(std::string(HSNC_SOURCE_DIR) + "/examples/bilinear-cascade.toml");
     text.replace(text.find("alpha = 0.1"), 11, "alpha = \"c\"");
     text.replace(text.find("F = 1.0\n"), 8, "F = 1.0\nc = 0.1\n");
     SweepOptions o = curve_options("period_doubling", "c", 0.1, 0.2);
@@ -164,7 +158,7 @@ TEST(TwoParameter, PeriodDoublingCurveAgainstLocatedDoublings) {
 // over (omega, F1) has the pair on the circle, and at two of its F1 the
 // one-parameter branch marks the crossing in the step that holds it.
 TEST(TwoParameter, NeimarkSackerCurveOfScenarioTwo) {
-    const std::string text = read(std::string(HSNC_SOURCE_DIR) + "/models/seed-scenario-2.toml");
+    const std::string text = slurp(std::string(HSNC_SOURCE_DIR) + "/models/seed-scenario-2.toml");
     SweepOptions o = curve_options("neimark_sacker", "F1", 225, 180);
     o.from = 10;
     o.to = 14;
