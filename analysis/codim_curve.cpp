@@ -8,8 +8,6 @@
 #include <chrono>
 #include <cmath>
 #include <complex>
-#include <map>
-#include <memory>
 #include <utility>
 
 #include <Eigen/LU>
@@ -23,7 +21,6 @@
 namespace hsnc::sweep_detail {
 namespace {
 
-constexpr const char* kFunction = "hsnc sweep --track";
 constexpr double kTolerance = 1e-10;      // the residual of an accepted orbit (as hsnc::periodic's default)
 constexpr double kStepTolerance = 1e-10;  // of the scaled Newton step, for the test function's root
 constexpr int kMaxIterations = 10;
@@ -40,50 +37,6 @@ Kind kind_of(const std::string& name) {
     return Kind::grazing;
 }
 
-// The period map at (p, q), the models and their flows kept for a few pairs.
-class Maps {
-public:
-    explicit Maps(const CurveSpec& c) : c_(c) {}
-
-    const Model& model(double p, double q) { return at(p, q).model; }
-
-    analysis::PeriodMapValue eval(double p, double q, const Eigen::VectorXd& y) {
-        ++runs;
-        At* a = nullptr;
-        try {
-            a = &at(p, q);
-        } catch (const InputError& e) {
-            analysis::PeriodMapValue v;
-            v.message = std::string("the model is not valid there: ") + e.what();
-            return v;
-        }
-        return analysis::evaluate_period_map(*a->flow, a->model.t0, a->model.t0 + a->period, y);
-    }
-
-    std::size_t runs = 0;
-
-private:
-    struct At {
-        Model model;
-        double period = 0;
-        std::unique_ptr<analysis::Flow> flow;
-    };
-    At& at(double p, double q) {
-        const auto key = std::make_pair(p, q);
-        auto it = cache_.find(key);
-        if (it != cache_.end()) return *it->second;
-        if (cache_.size() >= 16) cache_.clear();
-        auto a = std::make_unique<At>();
-        a->model = c_.model_at(p, q);
-        a->period = 2 * M_PI / forcing_frequency(a->model, c_.param + " = " + shortest_text(p));
-        a->flow =
-            std::make_unique<analysis::Flow>(a->model, analysis::FlowKernels{KernelChoice::eigen, "", true}, kFunction);
-        return *(cache_[key] = std::move(a));
-    }
-    const CurveSpec& c_;
-    std::map<std::pair<double, double>, std::unique_ptr<At>> cache_;
-};
-
 // The defining system of the curve at u = (y, p, q): the orbit's residual
 // P(y) - y and the test function g (fold: det(M - I); period doubling:
 // det(M + I); Neimark-Sacker: the product over pairs i < j of
@@ -92,7 +45,7 @@ private:
 class System {
 public:
     System(const CurveSpec& c, const SweepOptions& o, Kind kind, std::size_t contact, bool largest)
-        : c_(c), o_(o), kind_(kind), contact_(contact), largest_(largest), maps_(c) {}
+        : c_(c), o_(o), kind_(kind), contact_(contact), largest_(largest), maps_(c.model_at, c.param, 1) {}
 
     struct Value {
         bool ok = false;
@@ -219,7 +172,7 @@ private:
     Kind kind_;
     std::size_t contact_;
     bool largest_;
-    Maps maps_;
+    PeriodMaps maps_;
 };
 
 }  // namespace
@@ -252,7 +205,7 @@ std::vector<SweepPoint> run_curve(const Branch& b, const CurveSpec& c, const Swe
     const std::vector<SweepPoint> branch = run_continuation(b, one, [](const SweepPoint&, double) {});
     const SweepPoint* found = nullptr;
     for (const SweepPoint& p : branch)
-        if (("+" + p.bifurcation + "+").find("+" + c.kind + "+") != std::string::npos && p.failure.empty()) {
+        if (has_label(p.bifurcation, c.kind) && p.failure.empty()) {
             found = &p;
             break;
         }

@@ -36,57 +36,6 @@ constexpr double kSmallestStep = 1e-6;   // of the largest
 constexpr double kDifferenceStep = 1e-6; // of |to - from|: the central difference of dP/dp
 constexpr double kLargestStateStep = 0.1;
 
-// The period map at parameter values, a few flows kept (the corrector and
-// the central difference come back to the same values).
-class PeriodMaps {
-public:
-    // The map over `multiple` forcing periods.
-    PeriodMaps(const Branch& b, int multiple) : branch_(b), multiple_(multiple) {}
-
-    // P(y) and dP/dy at p; not ok (with the reason) when the model is invalid at p.
-    analysis::PeriodMapValue eval(double p, const Eigen::VectorXd& y) {
-        ++runs;
-        At* at = nullptr;
-        try {
-            at = &flow_at(p);
-        } catch (const InputError& e) {
-            analysis::PeriodMapValue v;
-            v.message = std::string("the model is not valid there: ") + e.what();
-            return v;
-        }
-        return analysis::evaluate_period_map(*at->flow, at->model.t0, at->model.t0 + multiple_ * at->period, y);
-    }
-
-    // The model at p (InputError when invalid there).
-    const Model& model(double p) { return flow_at(p).model; }
-
-    std::size_t runs = 0;  // period-map runs so far
-
-private:
-    struct At {
-        Model model;
-        double period = 0;
-        std::unique_ptr<analysis::Flow> flow;
-    };
-    At& flow_at(double p) {
-        auto it = cache_.find(p);
-        if (it != cache_.end()) return *it->second;
-        if (cache_.size() >= 6) cache_.clear();
-        auto at = std::make_unique<At>();
-        at->model = branch_.model_at(p);
-        at->period = 2 * M_PI / forcing_frequency(at->model, branch_.param + " = " + shortest_text(p));
-        // The Eigen solver, as the sweep's own points (sweep_point.cpp): every
-        // parameter value is a new model whose configurations are all entered
-        // anew, where its analysis in double is the cheapest entry, and
-        // threads never wait for each other (the derivation holds the GiNaC lock).
-        at->flow = std::make_unique<analysis::Flow>(at->model, analysis::FlowKernels{KernelChoice::eigen, "", true}, kFunction);
-        return *(cache_[p] = std::move(at));
-    }
-    const Branch& branch_;
-    int multiple_;
-    std::map<double, std::unique_ptr<At>> cache_;
-};
-
 struct TestFunctions {
     int det_minus = 1;    // sign of det(M - I)
     int det_plus = 1;     // sign of det(M + I)
@@ -264,10 +213,7 @@ struct OrbitAt {
     std::size_t neutral = 0;
 };
 
-// Whether `labels` ('+'-joined) holds `name`; `labels` with it (last), without it.
-bool has_label(const std::string& labels, const std::string& name) {
-    return ("+" + labels + "+").find("+" + name + "+") != std::string::npos;
-}
+// `labels` ('+'-joined) with `name` (last), without it.
 std::string with_label(const std::string& labels, const std::string& name) {
     return has_label(labels, name) ? labels : labels + (labels.empty() ? "" : "+") + name;
 }
@@ -493,7 +439,6 @@ struct BranchStart {
     std::size_t parent = 0;
     bool switched = false;
     bool skip = false;  // not to be followed (a branch already followed from its other end)
-    std::string stop;   // why the branch cannot go on from its first point ("" when it can)
 };
 
 // Follows the branches of a continuation: the primary branch and, with
@@ -552,6 +497,15 @@ private:
     }
 
     std::vector<SweepPoint> failed_row(const std::string& reason);
+    // The primary branch's first tangent: the way of the task's direction
+    // (empty, with the reason in `stop`, when dP/dp cannot be had).
+    Eigen::VectorXd first_tangent(PeriodMaps& maps, const BranchStart& s, std::string& stop) const {
+        const Eigen::VectorXd Pp = parameter_derivative(maps, s.at.p, s.at.y, stop);
+        if (!stop.empty()) return {};
+        Eigen::VectorXd direction = Eigen::VectorXd::Zero(N_ + 1);
+        direction(N_) = b_.end > b_.start ? 1.0 : -1.0;
+        return tangent(jacobian(s.at.M, Pp, s.D), direction, family_rows(s.at.M, s.at.neutral, s.D));
+    }
     // A corrector's outcome: converged (else why not in `fail`) at (p, y)
     // with the map's value there, dP/dp of the Newton matrix, iterations taken.
     struct Corrected {
@@ -646,14 +600,6 @@ std::vector<SweepPoint> Continuation::run() {
     for (Eigen::Index i = 0; i < N_; ++i) s.D(i) = !is_velocity_row(i) ? (sx > 0 ? sx : 1) : (sv > 0 ? sv : 1);
     s.D(N_) = std::fabs(b_.end - b_.start);
     s.at = OrbitAt{b_.start, orbit_state(orbit), monodromy_of(orbit), orbit.multipliers, orbit.neutral};
-    // The tangent the way of the task's direction.
-    PeriodMaps maps(b_, 1);
-    const Eigen::VectorXd Pp = parameter_derivative(maps, s.at.p, s.at.y, s.stop);
-    if (s.stop.empty()) {
-        Eigen::VectorXd start_direction = Eigen::VectorXd::Zero(N_ + 1);
-        start_direction(N_) = b_.end > b_.start ? 1.0 : -1.0;
-        s.t = tangent(jacobian(s.at.M, Pp, s.D), start_direction, family_rows(s.at.M, s.at.neutral, s.D));
-    }
     follow(s, nullptr);
     return out_;
 }
@@ -791,7 +737,8 @@ void Continuation::follow(const BranchStart& start, std::vector<BranchStart>* si
         return go_on;
     };
 
-    std::string stop = start.stop;
+    std::string stop;
+    if (t.size() == 0) t = first_tangent(maps, start, stop);  // the primary branch
     try {
         emit(start.switched ? maps.model(p) : *b_.start_model, true, start.periods);
     } catch (const RunError& e) {
@@ -926,6 +873,46 @@ std::string bifurcations_between(const std::vector<std::complex<double>>& a, con
 std::vector<SweepPoint> run_continuation(const Branch& b, const SweepOptions& o,
                                          const std::function<void(const SweepPoint&, double)>& done, bool* cut) {
     return Continuation(b, o, done, cut).run();
+}
+
+PeriodMaps::PeriodMaps(std::function<Model(double, double)> model_at, std::string param, int multiple)
+    : model_at_(std::move(model_at)), param_(std::move(param)), multiple_(multiple) {}
+
+PeriodMaps::PeriodMaps(const Branch& b, int multiple)
+    : PeriodMaps([&b](double p, double) { return b.model_at(p); }, b.param, multiple) {}
+
+analysis::PeriodMapValue PeriodMaps::eval(double p, double q, const Eigen::VectorXd& y) {
+    ++runs;
+    At* at = nullptr;
+    try {
+        at = &flow_at(p, q);
+    } catch (const InputError& e) {
+        analysis::PeriodMapValue v;
+        v.message = std::string("the model is not valid there: ") + e.what();
+        return v;
+    }
+    return analysis::evaluate_period_map(*at->flow, at->model.t0, at->model.t0 + multiple_ * at->period, y);
+}
+
+PeriodMaps::At& PeriodMaps::flow_at(double p, double q) {
+    const auto key = std::make_pair(p, q);
+    auto it = cache_.find(key);
+    if (it != cache_.end()) return *it->second;
+    if (cache_.size() >= 6) cache_.clear();
+    auto at = std::make_unique<At>();
+    at->model = model_at_(p, q);
+    at->period = 2 * M_PI / forcing_frequency(at->model, param_ + " = " + shortest_text(p));
+    // The Eigen solver, as the sweep's own points (sweep_point.cpp): every
+    // parameter value is a new model whose configurations are all entered
+    // anew, where its analysis in double is the cheapest entry, and
+    // threads never wait for each other (the derivation holds the GiNaC lock).
+    at->flow =
+        std::make_unique<analysis::Flow>(at->model, analysis::FlowKernels{KernelChoice::eigen, "", true}, kFunction);
+    return *(cache_[key] = std::move(at));
+}
+
+bool has_label(const std::string& labels, const std::string& name) {
+    return ("+" + labels + "+").find("+" + name + "+") != std::string::npos;
 }
 
 SweepPoint failed_start(const Branch& b, double value2, const std::string& reason, std::size_t masses,

@@ -8,11 +8,17 @@
 #include <string>
 #include <vector>
 
+#include <map>
+#include <memory>
+#include <utility>
+
 #include <Eigen/Core>
 
+#include "flow.h"
 #include "hsnc/periodic.h"
 #include "hsnc/sweep.h"
 #include "model.h"
+#include "shooting.h"
 #include "sweep_point.h"
 
 namespace hsnc::sweep_detail {
@@ -47,6 +53,42 @@ std::string bifurcations_between(const std::vector<std::complex<double>>& a, con
                                  std::size_t neutral_a = 0, std::size_t neutral_b = 0);
 
 // ---- the pieces a branch and a curve of special points share ----
+
+/// The period map over `multiple` forcing periods at parameter values (p,
+/// and q: a curve's second parameter), the models and flows of a few values
+/// kept (a corrector and its central differences come back to the same values).
+class PeriodMaps {
+public:
+    /// `model_at(p, q)`: the model there (InputError when it is not valid);
+    /// `param` names p in messages.
+    PeriodMaps(std::function<Model(double, double)> model_at, std::string param, int multiple);
+    /// A branch's (q unused).
+    PeriodMaps(const Branch& b, int multiple);
+
+    /// P(y) and dP/dy at (p, q); not ok (with the reason) when the model is invalid there.
+    analysis::PeriodMapValue eval(double p, double q, const Eigen::VectorXd& y);
+    analysis::PeriodMapValue eval(double p, const Eigen::VectorXd& y) { return eval(p, 0.0, y); }
+    /// The model at (p, q) (InputError when invalid there).
+    const Model& model(double p, double q) { return flow_at(p, q).model; }
+    const Model& model(double p) { return model(p, 0.0); }
+
+    std::size_t runs = 0;  ///< period-map runs so far
+
+private:
+    struct At {
+        Model model;
+        double period = 0;
+        std::unique_ptr<analysis::Flow> flow;
+    };
+    At& flow_at(double p, double q);
+    std::function<Model(double, double)> model_at_;
+    std::string param_;
+    int multiple_;
+    std::map<std::pair<double, double>, std::unique_ptr<At>> cache_;
+};
+
+/// Whether `labels` (SweepPoint::bifurcation: '+'-joined) holds `name`.
+bool has_label(const std::string& labels, const std::string& name);
 
 /// A branch's one row when it cannot begin: a failed point at its start
 /// (second parameter `value2`) saying why.

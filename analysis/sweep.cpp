@@ -48,10 +48,10 @@ bool has_parameter(const Model& m, const std::string& name) {
     return false;
 }
 
-// A swept name that is an initial state coordinate, "x0.DOF" or "v0.DOF"
-// (basins of attraction): the dof's index, or npos.
+// A swept name that is an initial state coordinate (is_state_coordinate) of
+// a dof of `m`: the dof's index, or npos.
 std::size_t state_dof(const Model& m, const std::string& name) {
-    if (name.size() < 4 || (name.compare(0, 3, "x0.") != 0 && name.compare(0, 3, "v0.") != 0)) return std::string::npos;
+    if (!is_state_coordinate(name)) return std::string::npos;
     for (std::size_t i = 0; i < m.masses.size(); ++i)
         if (m.masses[i].name == name.substr(3)) return i;
     return std::string::npos;
@@ -218,11 +218,7 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
 
     // The values, from .. to.
     const std::size_t N = o.points;
-    values_.resize(N);
-    for (std::size_t j = 0; j < N; ++j)
-        values_[j] = j == 0       ? o.from
-                     : j + 1 == N ? o.to
-                                  : o.from + (o.to - o.from) * static_cast<double>(j) / static_cast<double>(N - 1);
+    values_ = sweep_values(o.from, o.to, N);
 
     // Every point's model, read now: a value at which the model is invalid is
     // bad input, found before anything runs.
@@ -351,15 +347,7 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const 
         branch.start = up ? options_.from : options_.to;
         branch.end = up ? options_.to : options_.from;
         branch.start_model = &point_model(task.line, up ? 0 : N - 1);
-        branch.model_at = [this, v2, has2](double p) {
-            ModelOverrides ov = overrides_;
-            ov.set.push_back(options_.param + "=" + num(p));
-            if (has2) ov.set.push_back(options_.param2 + "=" + num(v2));
-            Model m = parse_model(text_, source_, ov);
-            m.parameter_expressions.clear();
-            m.field_expressions.clear();
-            return m;
-        };
+        branch.model_at = [this, v2, has2](double p) { return model_at(p, has2 ? &v2 : nullptr); };
         branch.value2 = v2;
         bool cut = false;
         const auto done = [&](const SweepPoint& p, double seconds) { report(c, options_, p, seconds); };
@@ -373,15 +361,7 @@ std::vector<SweepPoint> SweepPlan::run_task(std::size_t i, void* context) const 
             curve.param2 = options_.param2;
             curve.start2 = options_.values2[0];
             curve.end2 = options_.values2[1];
-            curve.model_at = [this](double p, double q) {
-                ModelOverrides ov = overrides_;
-                ov.set.push_back(options_.param + "=" + num(p));
-                ov.set.push_back(options_.param2 + "=" + num(q));
-                Model m = parse_model(text_, source_, ov);
-                m.parameter_expressions.clear();
-                m.field_expressions.clear();
-                return m;
-            };
+            curve.model_at = [this](double p, double q) { return model_at(p, &q); };
             out = sweep_detail::run_curve(branch, curve, options_, done, &cut);
         }
         if (cut) c.cut = true;
@@ -476,6 +456,16 @@ std::vector<std::vector<SweepPoint>> SweepPlan::run_tasks(const std::vector<std:
     return results;
 }
 
+Model SweepPlan::model_at(double p, const double* q) const {
+    ModelOverrides ov = overrides_;
+    set_swept(ov, options_.param, p);
+    if (q) set_swept(ov, options_.param2, *q);
+    Model m = parse_model(text_, source_, ov);
+    m.parameter_expressions.clear();
+    m.field_expressions.clear();
+    return m;
+}
+
 SweepResult SweepPlan::result_header() const {
     SweepResult r;
     r.model = model_.name;
@@ -516,6 +506,23 @@ std::string sweep_curve_header(const SweepResult& r) {
             h += ",amp" + ks + "_" + m + ",phase" + ks + "_" + m;
         }
     return h;
+}
+
+std::vector<double> sweep_values(double from, double to, std::size_t points) {
+    std::vector<double> v(points);
+    for (std::size_t j = 0; j < points; ++j)
+        v[j] = j == 0            ? from
+               : j + 1 == points ? to
+                                 : from + (to - from) * static_cast<double>(j) / static_cast<double>(points - 1);
+    return v;
+}
+
+bool is_state_coordinate(const std::string& name) {
+    return name.size() > 3 && (name.compare(0, 3, "x0.") == 0 || name.compare(0, 3, "v0.") == 0);
+}
+
+bool is_basins(const SweepResult& r) {
+    return is_state_coordinate(r.param) && is_state_coordinate(r.param2);
 }
 
 Attractors classify_attractors(const SweepResult& r, double tolerance) {

@@ -124,12 +124,7 @@ std::vector<double> parse_values(const std::string& text) {
         if (a.empty() || b.empty() || m.empty() || *end1 != '\0' || *end2 != '\0' || *end3 != '\0' ||
             !std::isfinite(from) || !std::isfinite(to) || count < 1 || count > 100'000'000)
             throw InputError("--values2 '" + text + "': expected A:B:M (M values from A to B, 1 <= M <= 1e8)");
-        for (long long j = 0; j < count; ++j)
-            out.push_back(j == 0 ? from
-                          : j + 1 == count
-                              ? to
-                              : from + (to - from) * static_cast<double>(j) / static_cast<double>(count - 1));
-        return out;
+        return sweep_values(from, to, static_cast<std::size_t>(count));
     }
     std::size_t a = 0;
     while (true) {
@@ -200,14 +195,6 @@ std::string interrupted_note(std::size_t done, std::size_t total) {
 
 // Writes the response curve and the diagram CSVs (interface.md section 6);
 // `note`: a last comment line ("" for none).
-// Whether a swept name is an initial state coordinate, and whether a sweep
-// is over two of them: basins of attraction.
-bool is_state(const std::string& name) {
-    return name.compare(0, 3, "x0.") == 0 || name.compare(0, 3, "v0.") == 0;
-}
-bool is_basins(const SweepResult& r) {
-    return is_state(r.param) && is_state(r.param2);
-}
 constexpr const char* kAttractorsNeedBasins =
     "--attractors: only for basins of attraction (--param and --param2 initial state coordinates x0.DOF, v0.DOF)";
 
@@ -455,7 +442,8 @@ SweepOptions sweep_options(const SweepFlags& f) {
                          " (period doublings followed), not " + std::to_string(f.branch_switch));
     o.branch_switch = static_cast<int>(f.branch_switch);
     o.track = f.track;
-    if (!f.attractors.empty() && !(is_state(f.param) && is_state(f.param2))) throw InputError(kAttractorsNeedBasins);
+    if (!f.attractors.empty() && !(is_state_coordinate(f.param) && is_state_coordinate(f.param2)))
+        throw InputError(kAttractorsNeedBasins);
     o.harmonics = count_flag("--harmonics", f.harmonics, 0);
     o.integrator.h = f.h;
     o.integrator.rtol = f.rtol;

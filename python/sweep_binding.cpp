@@ -186,10 +186,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
     }
     if (r.branch_switch) d["branch"] = branch;
     // Basins of attraction: both swept names initial state coordinates.
-    auto state = [](const std::string& name) {
-        return name.compare(0, 3, "x0.") == 0 || name.compare(0, 3, "v0.") == 0;
-    };
-    if (state(r.param) && state(r.param2)) {
+    if (is_basins(r)) {
         const Attractors a = classify_attractors(r);
         py::array_t<int> ids(np);
         for (std::size_t i = 0; i < np; ++i) ids.mutable_at(i) = a.of_point[i];

@@ -307,6 +307,9 @@ private:
         std::size_t first, count;  ///< points [first, first + count) of the direction's order
     };
     const Model& point_model(std::size_t line, std::size_t value_index) const;
+    /// The model with param at p and, when given, param2 at *q, its
+    /// expressions dropped (a continuation reads it at every value it reaches).
+    Model model_at(double p, const double* q) const;
     std::vector<SweepPoint> run_task(std::size_t i, void* context) const;
 
     SweepOptions options_;
@@ -332,6 +335,16 @@ std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_
 /// of one sweep, a part is missing or given twice, was interrupted, or a file
 /// is damaged.
 SweepResult merge_sweep_parts(const std::vector<std::string>& texts, const std::vector<std::string>& names);
+
+/// `points` values from `from` to `to`, equally spaced, the ends exact
+/// (just `from` when points is 1): a sweep's values, and --values2 A:B:M's.
+std::vector<double> sweep_values(double from, double to, std::size_t points);
+
+/// Whether a swept name is an initial state coordinate, x0.DOF or v0.DOF
+/// (SweepOptions::param, param2), and whether a sweep is over two of them:
+/// basins of attraction.
+bool is_state_coordinate(const std::string& name);
+bool is_basins(const SweepResult& result);
 
 /// An attractor the points of a sweep settled on: a periodic orbit of
 /// `multiple` forcing periods, named by its canonical state (of its
