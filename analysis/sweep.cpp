@@ -7,7 +7,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <thread>
 #include <utility>
@@ -165,6 +167,11 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     if (o.harmonics > kSweepMaxHarmonics)
         throw OptionError(kPlan, "harmonics", std::to_string(o.harmonics),
                           "must be <= " + std::to_string(kSweepMaxHarmonics));
+    if (!(o.escape >= 0) || !std::isfinite(o.escape))
+        throw OptionError(kPlan, "escape", shortest_text(o.escape), "must be finite and >= 0 (0: no bound)");
+    if (o.escape > 0 && o.continuation)
+        throw OptionError(kPlan, "escape", shortest_text(o.escape),
+                          "does not go with continuation (a branch of periodic orbits escapes nowhere)");
     if (o.method == Method::cvode && !HSNC_WITH_CVODE)
         throw OptionError(kPlan, "method", "cvode", "not available: this build has no SUNDIALS CVODE");
     try {
@@ -282,6 +289,7 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     if (o.branch_switch) fp << " branch_switch=" << o.branch_switch;
     if (!o.track.empty()) fp << " track=" << o.track;
     if (o.harmonics) fp << " harmonics=" << o.harmonics;
+    if (o.escape > 0) fp << " escape=" << num(o.escape);
     if (o.method != Method::hsnc)
         fp << " h=" << num(o.integrator.h) << " rtol=" << num(o.integrator.rtol) << " atol=" << num(o.integrator.atol);
     fingerprint_ = fp.str();
@@ -525,17 +533,96 @@ bool is_basins(const SweepResult& r) {
     return is_state_coordinate(r.param) && is_state_coordinate(r.param2);
 }
 
-Attractors classify_attractors(const SweepResult& r, double tolerance) {
+namespace {
+
+// The grid on which the recorded states of the points that did not settle
+// are compared: each coordinate (x then v of every mass) over its range
+// among all recorded states of the sweep, in kSetCells cells.
+constexpr double kSetCells = 20;
+// A point whose last kSetLast recorded states all lie in cells of settled
+// points' orbits is a slow transient towards one of them, not a set.
+constexpr std::size_t kSetLast = 4;
+
+class StateGrid {
+public:
+    StateGrid(const SweepResult& r) : n_(r.masses.size()), lo_(2 * n_, 0), width_(2 * n_, 1) {
+        std::vector<double> hi(2 * n_, 0);
+        bool first = true;
+        for (const SweepPoint& p : r.points) {
+            if (!p.failure.empty()) continue;
+            for (std::size_t row = 0; row < p.strobe_t.size(); ++row)
+                for (std::size_t c = 0; c < 2 * n_; ++c) {
+                    const double y = coordinate(p, row, c);
+                    lo_[c] = first ? y : std::min(lo_[c], y);
+                    hi[c] = first ? y : std::max(hi[c], y);
+                    first = first && c + 1 < 2 * n_;
+                }
+        }
+        for (std::size_t c = 0; c < 2 * n_; ++c)
+            if (hi[c] > lo_[c]) width_[c] = (hi[c] - lo_[c]) / kSetCells;
+    }
+    std::vector<long> cell(const SweepPoint& p, std::size_t row) const {
+        std::vector<long> key(2 * n_);
+        for (std::size_t c = 0; c < 2 * n_; ++c)
+            key[c] = std::clamp(static_cast<long>(std::floor((coordinate(p, row, c) - lo_[c]) / width_[c])), 0L,
+                                static_cast<long>(kSetCells) - 1);
+        return key;
+    }
+
+private:
+    double coordinate(const SweepPoint& p, std::size_t row, std::size_t c) const {
+        return c < n_ ? p.strobe_x[row * n_ + c] : p.strobe_v[row * n_ + c - n_];
+    }
+    std::size_t n_;
+    std::vector<double> lo_, width_;
+};
+
+// How closely the recorded states of a point that did not settle must
+// repeat (of their largest |x|, |v|) to be a periodic orbit the sweep's
+// settling test missed: a subharmonic beyond kSweepMaxMultiple, or a slow
+// transient (a multiplier near the unit circle) towards an orbit.
+constexpr double kRepeatTolerance = 1e-4;
+
+// The least p (up to half the recorded periods) with which a point's
+// recorded states repeat to kRepeatTolerance; 0: none.
+int recorded_period(const SweepPoint& p, std::size_t n) {
+    const std::size_t rows = p.strobe_t.size();
+    double mx = 0, mv = 0;
+    for (std::size_t j = 0; j < rows * n; ++j) {
+        mx = std::max(mx, std::fabs(p.strobe_x[j]));
+        mv = std::max(mv, std::fabs(p.strobe_v[j]));
+    }
+    for (std::size_t q = 1; 2 * q <= rows; ++q) {
+        bool repeats = true;
+        for (std::size_t j = 0; j + q * n < rows * n && repeats; ++j)
+            repeats = std::fabs(p.strobe_x[j + q * n] - p.strobe_x[j]) <= kRepeatTolerance * mx &&
+                      std::fabs(p.strobe_v[j + q * n] - p.strobe_v[j]) <= kRepeatTolerance * mv;
+        if (repeats) return static_cast<int>(q);
+    }
+    return 0;
+}
+
+// The periodic attractors the points reached, `of` each point's index in
+// `orbits` (-1: none). Settled points name them (canonical states agreeing
+// to `tolerance`); then a point that did not settle but whose recorded
+// states repeat (recorded_period) reaches the one of its period whose
+// canonical state agrees to kRepeatTolerance, or names a new one.
+void periodic_orbits(const SweepResult& r, double tolerance, std::vector<Attractor>& orbits, std::vector<long>& of) {
     const std::size_t n = r.masses.size();
-    Attractors out;
-    // Each settled point's canonical state: of its first `multiple` recorded
+    std::vector<int> period(r.points.size(), 0);
+    for (std::size_t k = 0; k < r.points.size(); ++k) {
+        const SweepPoint& p = r.points[k];
+        if (p.failure.empty() && !p.escaped && !p.strobe_t.empty())
+            period[k] = p.settled ? p.multiple : recorded_period(p, n);
+    }
+    // Each periodic point's canonical state: of its first `period` recorded
     // states (the orbit's), the one of least x of the first mass.
     std::vector<std::size_t> canonical(r.points.size(), 0);
     double sx = 0, sv = 0;
     for (std::size_t k = 0; k < r.points.size(); ++k) {
         const SweepPoint& p = r.points[k];
-        if (!p.settled || p.multiple < 1 || p.strobe_t.empty()) continue;
-        const std::size_t rows = std::min<std::size_t>(static_cast<std::size_t>(p.multiple), p.strobe_t.size());
+        if (period[k] < 1) continue;
+        const std::size_t rows = std::min<std::size_t>(static_cast<std::size_t>(period[k]), p.strobe_t.size());
         for (std::size_t row = 1; row < rows; ++row)
             if (p.strobe_x[row * n] < p.strobe_x[canonical[k] * n]) canonical[k] = row;
         for (std::size_t i = 0; i < n; ++i) {
@@ -543,30 +630,115 @@ Attractors classify_attractors(const SweepResult& r, double tolerance) {
             sv = std::max(sv, std::fabs(p.strobe_v[canonical[k] * n + i]));
         }
     }
-    const double tx = tolerance * (sx > 0 ? sx : 1), tv = tolerance * (sv > 0 ? sv : 1);
-    for (std::size_t k = 0; k < r.points.size(); ++k) {
+    if (sx == 0) sx = 1;
+    if (sv == 0) sv = 1;
+    // Settled points first, in output order; then the others by period (an
+    // orbit of period d before a slower transient that repeats only over 2d).
+    std::vector<std::size_t> order;
+    for (std::size_t k = 0; k < r.points.size(); ++k)
+        if (period[k] > 0 && r.points[k].settled) order.push_back(k);
+    const std::size_t settled_points = order.size();
+    for (std::size_t k = 0; k < r.points.size(); ++k)
+        if (period[k] > 0 && !r.points[k].settled) order.push_back(k);
+    std::stable_sort(order.begin() + static_cast<std::ptrdiff_t>(settled_points), order.end(),
+                     [&](std::size_t a, std::size_t b) { return period[a] < period[b]; });
+    of.assign(r.points.size(), -1);
+    for (std::size_t o = 0; o < order.size(); ++o) {
+        const std::size_t k = order[o];
         const SweepPoint& p = r.points[k];
-        if (!p.failure.empty()) {
-            out.of_point.push_back(-1);
-            continue;
-        }
-        if (!p.settled || p.multiple < 1 || p.strobe_t.empty()) {
-            out.of_point.push_back(0);
-            continue;
-        }
+        const bool settled = o < settled_points;
+        const double tol = settled ? tolerance : std::max(tolerance, kRepeatTolerance);
         const double* x = &p.strobe_x[canonical[k] * n];
         const double* v = &p.strobe_v[canonical[k] * n];
         std::size_t a = 0;
-        for (; a < out.list.size(); ++a) {
-            const Attractor& at = out.list[a];
-            bool same = at.multiple == p.multiple;
+        for (; a < orbits.size(); ++a) {
+            bool same = settled ? orbits[a].multiple == period[k] : period[k] % orbits[a].multiple == 0;
             for (std::size_t i = 0; same && i < n; ++i)
-                same = std::fabs(at.x[i] - x[i]) <= tx && std::fabs(at.v[i] - v[i]) <= tv;
+                same = std::fabs(orbits[a].x[i] - x[i]) <= tol * sx && std::fabs(orbits[a].v[i] - v[i]) <= tol * sv;
             if (same) break;
         }
-        if (a == out.list.size()) out.list.push_back(Attractor{p.multiple, {x, x + n}, {v, v + n}, 0});
-        ++out.list[a].points;
-        out.of_point.push_back(static_cast<int>(a + 1));
+        if (a == orbits.size()) orbits.push_back(Attractor{period[k], {x, x + n}, {v, v + n}, 0});
+        of[k] = static_cast<long>(a);
+    }
+}
+
+// The sets the points that did not settle reach: points whose recorded
+// states share a cell of the grid are one set (transitively); `of` each
+// point's set, by the first of its points (-1: none).
+std::vector<long> nonperiodic_sets(const SweepResult& r, const std::vector<long>& orbit_of) {
+    const StateGrid grid(r);
+    std::set<std::vector<long>> orbit_cells;
+    for (std::size_t k = 0; k < r.points.size(); ++k)
+        if (orbit_of[k] >= 0)
+            for (std::size_t row = 0; row < r.points[k].strobe_t.size(); ++row)
+                orbit_cells.insert(grid.cell(r.points[k], row));
+    std::vector<long> parent(r.points.size(), -1);
+    auto root = [&](long k) {
+        while (parent[static_cast<std::size_t>(k)] != k) k = parent[static_cast<std::size_t>(k)];
+        return k;
+    };
+    std::map<std::vector<long>, long> owner;
+    for (std::size_t k = 0; k < r.points.size(); ++k) {
+        const SweepPoint& p = r.points[k];
+        const std::size_t rows = p.strobe_t.size();
+        if (!p.failure.empty() || orbit_of[k] >= 0 || p.escaped || rows == 0) continue;
+        bool transient = true;
+        for (std::size_t row = rows - std::min(rows, kSetLast); row < rows && transient; ++row)
+            transient = orbit_cells.count(grid.cell(p, row)) > 0;
+        if (transient) continue;
+        parent[k] = static_cast<long>(k);
+        for (std::size_t row = 0; row < rows; ++row) {
+            const auto [it, fresh] = owner.emplace(grid.cell(p, row), static_cast<long>(k));
+            if (fresh) continue;
+            const long a = root(it->second), b = root(static_cast<long>(k));
+            parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);  // the first point is the root
+        }
+    }
+    for (std::size_t k = 0; k < r.points.size(); ++k)
+        if (parent[k] >= 0) parent[k] = root(static_cast<long>(k));
+    return parent;
+}
+
+}  // namespace
+
+Attractors classify_attractors(const SweepResult& r, double tolerance) {
+    const std::size_t n = r.masses.size();
+    std::vector<Attractor> orbits;
+    std::vector<long> orbit_of;
+    periodic_orbits(r, tolerance, orbits, orbit_of);
+    const std::vector<long> set_of = nonperiodic_sets(r, orbit_of);
+    // A set's state: of its points' recorded states, the one of least x of the first mass.
+    std::map<long, Attractor> sets;
+    for (std::size_t k = 0; k < r.points.size(); ++k) {
+        if (set_of[k] < 0) continue;
+        const SweepPoint& p = r.points[k];
+        Attractor& s = sets[set_of[k]];
+        for (std::size_t row = 0; row < p.strobe_t.size(); ++row)
+            if (s.x.empty() || p.strobe_x[row * n] < s.x[0]) {
+                s.x.assign(p.strobe_x.begin() + static_cast<std::ptrdiff_t>(row * n),
+                           p.strobe_x.begin() + static_cast<std::ptrdiff_t>((row + 1) * n));
+                s.v.assign(p.strobe_v.begin() + static_cast<std::ptrdiff_t>(row * n),
+                           p.strobe_v.begin() + static_cast<std::ptrdiff_t>((row + 1) * n));
+            }
+    }
+    // Numbered in the order of the first point (in output order) that reached each.
+    Attractors out;
+    std::map<long, int> number;  // orbit index k >= 0, set by first point -(k + 1)
+    for (std::size_t k = 0; k < r.points.size(); ++k) {
+        const SweepPoint& p = r.points[k];
+        int id = 0;
+        if (!p.failure.empty())
+            id = -1;
+        else if (p.escaped)
+            id = -2;
+        else if (orbit_of[k] >= 0 || set_of[k] >= 0) {
+            const long key = orbit_of[k] >= 0 ? orbit_of[k] : -(set_of[k] + 1);
+            auto [it, fresh] = number.emplace(key, static_cast<int>(out.list.size() + 1));
+            if (fresh) out.list.push_back(orbit_of[k] >= 0 ? orbits[static_cast<std::size_t>(key)] : sets[set_of[k]]);
+            id = it->second;
+            ++out.list[static_cast<std::size_t>(id - 1)].points;
+        }
+        out.of_point.push_back(id);
     }
     return out;
 }
@@ -645,8 +817,10 @@ std::string write_tasks(const std::vector<std::size_t>& which, const std::vector
         for (const SweepPoint& p : points[k]) {
             const std::size_t rows = p.strobe_t.size();
             s += num(p.value) + " " + num(p.value2) + " " + sweep_direction_name(p.direction) + " " +
-                 (p.settled ? "1" : "0") + " " + std::to_string(p.periods) + " " + std::to_string(p.multiple) + " " +
-                 std::to_string(rows);
+                 (p.escaped   ? "e"
+                  : p.settled ? "1"
+                              : "0") +
+                 " " + std::to_string(p.periods) + " " + std::to_string(p.multiple) + " " + std::to_string(rows);
             for (std::size_t i = 0; i < n; ++i) s += " " + num(p.xmax[i]) + " " + num(p.xrms[i]) + " " + num(p.a1[i]);
             s += " " + std::to_string(p.amp.size());
             for (std::size_t j = 0; j < p.amp.size(); ++j) s += " " + num(p.amp[j]) + " " + num(p.phase[j]);
@@ -723,8 +897,9 @@ void read_tasks(const std::vector<std::string>& lines, std::size_t first, std::s
             if (d != "up" && d != "down") r.fail("direction '" + d + "'");
             p.direction = d == "up" ? SweepDirection::up : SweepDirection::down;
             const std::string s = r.word();
-            if (s != "0" && s != "1") r.fail("settled '" + s + "'");
+            if (s != "0" && s != "1" && s != "e") r.fail("settled '" + s + "'");
             p.settled = s == "1";
+            p.escaped = s == "e";
             p.periods = r.count(std::size_t{1} << 40);
             p.multiple = static_cast<int>(r.count(kSweepMaxMultiple));
             const std::size_t rows = r.count(1'000'000'000);
@@ -766,7 +941,8 @@ void read_tasks(const std::vector<std::string>& lines, std::size_t first, std::s
 // ---- part files ----
 
 namespace {
-constexpr const char* kPartMagic = "hsnc-sweep-part 4";  // 4: the branch switching depth, every point its branch
+// 4: the branch switching depth, every point its branch; 5: a point's settled word 'e' (escaped)
+constexpr const char* kPartMagic = "hsnc-sweep-part 5";
 }
 
 std::string sweep_part_text(const SweepPlan& plan, std::size_t index, std::size_t count,

@@ -594,6 +594,11 @@ SweepPoint run_point(const Model& point_model, State& state, const SweepOptions&
         check_cancel(o);
         advance(m, state, o, what, ta, tb, 0.0, false, none, provider.get());
         ++k;
+        if (o.escape > 0 &&
+            std::any_of(state.x.begin(), state.x.end(), [&](double x) { return !(std::fabs(x) <= o.escape); })) {
+            pt.escaped = true;
+            break;
+        }
         history.push_back(state);
         if (history.size() > keep) history.erase(history.begin());
         const std::size_t last = history.size() - 1;
@@ -619,7 +624,7 @@ SweepPoint run_point(const Model& point_model, State& state, const SweepOptions&
         pt.multiple = found;
         break;
     }
-    if (pending) {  // max_periods reached while a divisor was still converging
+    if (pending && !pt.escaped) {  // max_periods reached while a divisor was still converging
         pt.settled = true;
         pt.multiple = pending;
     }

@@ -57,6 +57,7 @@ struct SweepFlags {
     long long branch_switch = 0;
     std::string track;
     long long harmonics = 0;
+    double escape = 0;
 };
 
 // A count flag's value, refused below `least` naming the flag.
@@ -88,7 +89,8 @@ InputError flagged(const OptionError& e) {
                                                                 {"max_steps", "--max-steps"},
                                                                 {"branch_switch", "--branch-switch"},
                                                                 {"track", "--track"},
-                                                                {"harmonics", "--harmonics"}};
+                                                                {"harmonics", "--harmonics"},
+                                                                {"escape", "--escape"}};
     for (const auto& f : flags)
         if (e.option() == f.first) return InputError(std::string(f.second) + ": " + e.reason());
     return InputError(e.what());
@@ -256,7 +258,7 @@ void write_diagram(const SweepResult& r, CsvFile& f, const std::string& note) {
 }
 
 // The attractors of a basin study, one row each (0: the points not
-// settled, -1: those failed, when there are any).
+// settled, -1: those failed, -2: those escaped, when there are any).
 void write_attractors(const SweepResult& r, const Attractors& a, CsvFile& f) {
     std::string header = "attractor,multiple,points,fraction";
     for (const std::string& m : r.masses) header += ",x_" + m;
@@ -274,7 +276,7 @@ void write_attractors(const SweepResult& r, const Attractors& a, CsvFile& f) {
         for (double v : at.v) f.number(v);
         f.end_row();
     }
-    for (const int id : {0, -1}) {
+    for (const int id : {0, -1, -2}) {
         const auto count = static_cast<std::size_t>(std::count(a.of_point.begin(), a.of_point.end(), id));
         if (count == 0) continue;
         f.text(std::to_string(id).c_str());
@@ -362,9 +364,10 @@ struct Problems {
 };
 
 std::string summary_line(const SweepResult& r, bool interrupted = false) {
-    std::size_t settled = 0, up = 0, stable = 0, bifurcations = 0;
+    std::size_t settled = 0, up = 0, stable = 0, bifurcations = 0, escaped = 0;
     for (const SweepPoint& p : r.points) {
         settled += p.settled;
+        escaped += p.escaped;
         up += p.direction == SweepDirection::up;
         stable += p.stable;
         bifurcations += !p.bifurcation.empty();
@@ -378,6 +381,7 @@ std::string summary_line(const SweepResult& r, bool interrupted = false) {
     if (r.continuation)
         s << " stable=" << stable << " unstable=" << r.points.size() - stable - problems.failed
           << " bifurcations=" << bifurcations << " stopped=" << problems.stopped;
+    if (escaped) s << " escaped=" << escaped;
     if (is_basins(r)) s << " attractors=" << classify_attractors(r).list.size();
     return s.str();
 }
@@ -445,6 +449,7 @@ SweepOptions sweep_options(const SweepFlags& f) {
     if (!f.attractors.empty() && !(is_state_coordinate(f.param) && is_state_coordinate(f.param2)))
         throw InputError(kAttractorsNeedBasins);
     o.harmonics = count_flag("--harmonics", f.harmonics, 0);
+    o.escape = f.escape;
     o.integrator.h = f.h;
     o.integrator.rtol = f.rtol;
     o.integrator.atol = f.atol;
@@ -699,7 +704,8 @@ void add_sweep(CLI::App& app, int& exit_code) {
     sub->add_option("--diagram", f->diagram, "bifurcation diagram CSV (the stroboscopic samples of every point)");
     sub->add_option("--attractors", f->attractors,
                     "basins of attraction (--param and --param2 initial state coordinates x0.DOF or v0.DOF, with "
-                    "--restart-each): the attractors CSV, one row per periodic attractor (its period and canonical "
+                    "--restart-each): the attractors CSV, one row per attractor (its period, 0 for a set that is not "
+                    "periodic, and canonical "
                     "state, the fraction of points that reach it); the curve CSV gains the column attractor and "
                     "--plot draws the basins");
     sub->add_option("--plot", f->plot, "draw the response curve and the diagram into this PNG (gnuplot)");
@@ -743,6 +749,9 @@ void add_sweep(CLI::App& app, int& exit_code) {
                     "--continuation: follow the branch's first fold, period_doubling, neimark_sacker or grazing "
                     "point over two parameters, --param and --param2, from --values2 A,B's A towards B (the "
                     "curve's rows: both parameters, the orbit there)");
+    sub->add_option("--escape", f->escape,
+                    "a bound R: a point whose displacement of some dof exceeds R in magnitude at the end of a "
+                    "forcing period stops there, escaped (basins: attractor -2; not with --continuation)");
     sub->add_option("--harmonics", f->harmonics,
                     "amplitude and phase of the first K harmonics of every mass over the recorded periods "
                     "(columns amp<k>_<mass>,phase<k>_<mass> at the end; x = mean + sum of amp sin(k omega t + phase), "

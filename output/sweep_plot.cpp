@@ -259,6 +259,10 @@ std::string sweep_plot_script(const SweepResult& r, const std::string& title, co
     return s;
 }
 
+namespace {
+constexpr const char* kEscapedColour = "#8c510a";  // the basin picture's points that escaped
+}
+
 std::string basin_plot_script(const SweepResult& r, const Attractors& a, const std::string& title) {
     const std::size_t K = a.list.size();
     std::string s = "set terminal pngcairo size 1100,850 noenhanced font ',11'\nset encoding utf8\n";
@@ -268,13 +272,15 @@ std::string basin_plot_script(const SweepResult& r, const Attractors& a, const s
         s += num(r.points[k].value) + " " + num(r.points[k].value2) + " " + std::to_string(a.of_point[k]) + "\n";
     }
     s += "EOD\n";
-    // The palette: -1 black, 0 grey, attractor k its colour, each over [k - 0.5, k + 0.5].
-    s += "set palette defined (-1.5 'black', -0.5 'black', -0.5 '#bbbbbb', 0.5 '#bbbbbb'";
+    // The palette: -2 brown (escaped), -1 black (failed), 0 grey (not settled), attractor k its
+    // colour, each over [k - 0.5, k + 0.5].
+    s += "set palette defined (-2.5 '" + std::string(kEscapedColour) + "', -1.5 '" + kEscapedColour +
+         "', -1.5 'black', -0.5 'black', -0.5 '#bbbbbb', 0.5 '#bbbbbb'";
     for (std::size_t k = 1; k <= K; ++k) {
         const std::string c = std::string("'") + kColours[(k - 1) % 8] + "'";
         s += ", " + num(static_cast<double>(k) - 0.5) + " " + c + ", " + num(static_cast<double>(k) + 0.5) + " " + c;
     }
-    s += ")\nset cbrange [-1.5:" + num(static_cast<double>(K) + 0.5) + "]\nunset colorbox\n";
+    s += ")\nset cbrange [-2.5:" + num(static_cast<double>(K) + 0.5) + "]\nunset colorbox\n";
     s += "set title " + quoted(title + ": basins of attraction (the attractor each initial state reaches)") + "\n";
     s += "set xlabel " + quoted(r.param) + "\nset ylabel " + quoted(r.param2) + "\n";
     s += "set key outside right top\nset rmargin at screen 0.62\nset autoscale xfix\nset autoscale yfix\n";
@@ -287,17 +293,25 @@ std::string basin_plot_script(const SweepResult& r, const Attractors& a, const s
     };
     for (std::size_t k = 0; k < K; ++k) {
         const Attractor& at = a.list[k];
-        std::string name = std::to_string(k + 1) + ": period " + std::to_string(at.multiple) + " T, x_" + r.masses[0] +
-                           " = " + short_num(at.x[0], 5) + " (" +
+        const std::string what = at.multiple > 0
+                                     ? "period " + std::to_string(at.multiple) + " T, x_" + r.masses[0] + " = "
+                                     : "not periodic (a set), x_" + r.masses[0] + " from ";
+        std::string name = std::to_string(k + 1) + ": " + what + short_num(at.x[0], 5) + " (" +
                            short_num(100 * static_cast<double>(at.points) / total, 3) + "%)";
         plot += ", NaN with boxes fs solid 1.0 lc rgb '" + std::string(kColours[k % 8]) + "' title " + quoted(name);
     }
-    for (const int id : {0, -1}) {
+    for (const int id : {0, -1, -2}) {
         const auto count = static_cast<std::size_t>(std::count(a.of_point.begin(), a.of_point.end(), id));
         if (count == 0) continue;
-        plot += std::string(", NaN with boxes fs solid 1.0 lc rgb '") + (id == 0 ? "#bbbbbb" : "black") + "' title " +
-                quoted(std::string(id == 0 ? "not settled" : "failed") + " (" +
-                       short_num(100 * static_cast<double>(count) / total, 3) + "%)");
+        plot += std::string(", NaN with boxes fs solid 1.0 lc rgb '") +
+                (id == 0    ? "#bbbbbb"
+                 : id == -1 ? "black"
+                            : kEscapedColour) +
+                "' title " +
+                quoted(std::string(id == 0    ? "not settled"
+                                   : id == -1 ? "failed"
+                                              : "escaped") +
+                       " (" + short_num(100 * static_cast<double>(count) / total, 3) + "%)");
     }
     s += "plot " + plot + "\n";
     return s;

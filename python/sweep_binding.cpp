@@ -37,7 +37,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
                const std::string& direction, std::size_t max_periods, std::size_t record_periods, bool restart_each,
                const std::string& param2, const std::vector<double>& values2, unsigned threads,
                const std::string& method, double rtol, double atol, bool continuation, std::size_t max_steps,
-               std::size_t harmonics, int branch_switch, const std::string& track) {
+               std::size_t harmonics, int branch_switch, const std::string& track, double escape) {
     SweepOptions o;
     o.param = param;
     o.from = from;
@@ -58,6 +58,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
     o.harmonics = harmonics;
     o.branch_switch = branch_switch;
     o.track = track;
+    o.escape = escape;
     std::atomic<bool> cancel{false};
     o.cancel = &cancel;
     const ModelOverrides ov{set, x0, v0, {}};
@@ -111,7 +112,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
     if (error) std::rethrow_exception(error);
     const std::size_t np = r.points.size(), n = r.masses.size();
     py::array_t<double> value(np), value2(np);
-    py::array_t<bool> settled(np);
+    py::array_t<bool> settled(np), escaped(np);
     py::array_t<long long> periods(np), multiple(np), branch(np);
     py::array_t<bool> stable(np);
     py::array_t<double> max_multiplier(np);
@@ -125,6 +126,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
         value.mutable_at(i) = p.value;
         value2.mutable_at(i) = p.value2;
         settled.mutable_at(i) = p.settled;
+        escaped.mutable_at(i) = p.escaped;
         periods.mutable_at(i) = static_cast<long long>(p.periods);
         multiple.mutable_at(i) = p.multiple;
         branch.mutable_at(i) = static_cast<long long>(p.branch);
@@ -163,6 +165,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
     d["value2"] = value2;
     d["direction"] = py::array(dirs);
     d["settled"] = settled;
+    d["escaped"] = escaped;
     d["periods"] = periods;
     d["multiple"] = multiple;
     d["xmax"] = matrix(xmax, np, n);
@@ -213,7 +216,7 @@ void bind_sweep(py::module_& m) {
           py::arg("max_periods"), py::arg("record_periods"), py::arg("restart_each"), py::arg("param2"),
           py::arg("values2"), py::arg("threads"), py::arg("method"), py::arg("rtol"), py::arg("atol"),
           py::arg("continuation") = false, py::arg("max_steps") = 0, py::arg("harmonics") = 0,
-          py::arg("branch_switch") = 0, py::arg("track") = "");
+          py::arg("branch_switch") = 0, py::arg("track") = "", py::arg("escape") = 0.0);
 }
 
 }  // namespace hsnc::python

@@ -568,7 +568,7 @@ TEST(SweepCli, SigintOnAPartKeepsTheFinishedPointsAndMergeRefusesThem) {
     const std::size_t done = std::stoul(line.substr(at + 8));
     EXPECT_GE(done, 2u);
     EXPECT_LT(done, 1000u);
-    ASSERT_EQ(text.rfind("hsnc-sweep-part 4\n", 0), 0u) << text.substr(0, 200);
+    ASSERT_EQ(text.rfind("hsnc-sweep-part 5\n", 0), 0u) << text.substr(0, 200);
     const std::string note = "# interrupted (SIGINT) after " + std::to_string(done) + " of ";
     const std::size_t last = text.rfind('\n', text.size() - 2) + 1;
     EXPECT_EQ(text.substr(last, note.size()), note) << text.substr(last);

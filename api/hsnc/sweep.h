@@ -168,6 +168,10 @@ struct SweepOptions {
     /// Amplitude and phase of the first `harmonics` harmonics of every mass
     /// over the recorded window (0: none; at most kSweepMaxHarmonics).
     std::size_t harmonics = 0;
+    /// > 0: a point whose displacement of some dof exceeds this in magnitude
+    /// at the end of a forcing period stops there, escaped (its recorded
+    /// periods follow from there); 0: no bound. Not with continuation.
+    double escape = 0;
     /// hsnc (exact); a numerical baseline for comparisons (see the file comment).
     Method method = Method::hsnc;
     IntegratorOptions integrator;
@@ -203,6 +207,7 @@ struct SweepPoint {
     double value2 = std::numeric_limits<double>::quiet_NaN();  ///< the second parameter (NaN without)
     SweepDirection direction = SweepDirection::up;             ///< up or down
     bool settled = false;
+    bool escaped = false;     ///< left SweepOptions::escape's bound (not settled)
     std::size_t periods = 0;  ///< periods run before recording
     int multiple = 0;         ///< p; 0 when not settled
     std::vector<double> xmax, xrms, a1;  ///< one per mass (NaN when the point failed)
@@ -346,10 +351,12 @@ std::vector<double> sweep_values(double from, double to, std::size_t points);
 bool is_state_coordinate(const std::string& name);
 bool is_basins(const SweepResult& result);
 
-/// An attractor the points of a sweep settled on: a periodic orbit of
+/// An attractor the points of a sweep reached: a periodic orbit of
 /// `multiple` forcing periods, named by its canonical state (of its
 /// `multiple` states at the ends of the recorded periods, the one of least
-/// x of the first mass), and how many points reached it.
+/// x of the first mass), or (`multiple` 0) a set the points that did not
+/// settle share (chaotic, quasi-periodic), named by the recorded state of
+/// least x of the first mass; and how many points reached it.
 struct Attractor {
     int multiple = 0;
     std::vector<double> x, v;  ///< the canonical state, one per mass
@@ -357,13 +364,17 @@ struct Attractor {
 };
 
 /// The attractors of a sweep's points, for basins of attraction (param and
-/// param2 initial state coordinates x0.DOF, v0.DOF, with restart_each):
-/// settled points with the same multiple whose canonical states agree to
+/// param2 initial state coordinates x0.DOF, v0.DOF, with restart_each).
+/// Settled points with the same multiple whose canonical states agree to
 /// `tolerance` of the largest |x| and |v| of all of them reached one
-/// attractor. Numbered 1, 2, ... in the order of the first point that
-/// reached each (so the same for any split of the run); `of_point`: each
-/// point's number, 0 for a point not settled in max_periods (a chaotic or
-/// quasi-periodic motion, or a slow transient), -1 for a failed one.
+/// periodic attractor. Points that did not settle whose recorded states
+/// share a cell of a grid over the recorded states (each coordinate's range
+/// in 20 cells) reached one set (transitively), unless the last 4 recorded
+/// states of a point lie in cells of periodic attractors' states (a slow
+/// transient: not settled). Numbered 1, 2, ... in the order of the first
+/// point that reached each (so the same for any split of the run);
+/// `of_point`: each point's number, 0 for a point not settled and in no
+/// set, -1 for a failed one, -2 for one that escaped (SweepOptions::escape).
 struct Attractors {
     std::vector<Attractor> list;
     std::vector<int> of_point;

@@ -366,7 +366,7 @@ def _override_texts(d):
 
 def sweep(model, param, start, stop, points, direction="up", max_periods=500, record_periods=16,
           restart_each=False, param2=None, values2=None, threads=1, method="hsnc", rtol=1e-10, atol=1e-12,
-          continuation=False, max_steps=0, harmonics=0, branch_switch=0, track=None):
+          continuation=False, max_steps=0, harmonics=0, branch_switch=0, track=None, escape=0):
     """The response curve and bifurcation diagram of `model` (a Model) over
     the parameter `param`, as `hsnc sweep --param PARAM --from START --to
     STOP --points POINTS` (interface.md section 6): `points` values from
@@ -384,7 +384,10 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     "diagram": a dict with "value", "value2", "direction", "t", "x", "v"
     (x, v: rows x masses), one row per recorded period of every point;
     "failure" (str per point, "" unless its run stopped: then settled is
-    False and xmax, xrms, a1 are NaN; the sweep goes on).
+    False and xmax, xrms, a1 are NaN; the sweep goes on); "escaped" (bool
+    per point: with escape=R > 0, as `--escape R`, a point whose
+    displacement of some dof exceeds R at the end of a forcing period stops
+    there, escaped and not settled; its recorded periods follow from there).
 
     harmonics=K > 0 (as `--harmonics K`): also "amp" and "phase" (points x
     masses x K): amplitude and phase (rad, in (-pi, pi]) of harmonics 1..K
@@ -412,8 +415,11 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     Basins of attraction: param and param2 initial state coordinates
     ("x0.DOF" or "v0.DOF", with restart_each=True): then also "attractor"
     (int per point: 1, 2, ... the attractor it reached, numbered in the
-    order first reached; 0 not settled; -1 failed) and "attractors" (a list
-    of dicts: "multiple", "points", "x", "v": the canonical state).
+    order first reached; 0 not settled and in no set; -1 failed; -2
+    escaped) and "attractors" (a list of dicts: "multiple", "points", "x",
+    "v": the canonical state; "multiple" 0 for a set that is not periodic,
+    a chaotic or quasi-periodic attractor, shared by points that did not
+    settle, as the CLI's --attractors).
     track="fold", "period_doubling", "neimark_sacker" or "grazing" (as
     `--track`, with param2 and values2=[q0, q1]): instead of the branch, its
     first point of that kind followed over (param, param2) from param2 = q0
@@ -450,10 +456,13 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     branch_switch = _int(f, "branch_switch", branch_switch, 0, 6, "an integer from 0 to 6 (period doublings followed)")
     track = "" if track is None else _text(f, "track", track,
                                            "None or a str: 'fold', 'period_doubling', 'neimark_sacker' or 'grazing'")
+    escape = _real(f, "escape", escape, allowed="a finite number >= 0 (0: no bound)")
+    if escape < 0:
+        _refuse(f, "escape", escape, "a finite number >= 0 (0: no bound)")
     return _hsnc._sweep(kind, what, source, _override_texts(s), _override_texts(x0), _override_texts(v0),
                         param, start, stop, points, direction, max_periods, record_periods, restart_each, param2,
                         values2, threads, method, rtol, atol, continuation, max_steps, harmonics,
-                        branch_switch, track)
+                        branch_switch, track, escape)
 
 
 def _sweep_point(task):

@@ -127,6 +127,39 @@ def test_basins_of_the_bistable_oscillator_as_the_command_line(tmp_path):
     assert [int(row[-1]) for row in rows] == np.asarray(r["attractor"]).tolist()
 
 
+def test_basins_chaotic_set_and_escape():
+    # The bilinear cascade at 2.7 rad/s: every initial state in one chaotic set (multiple 0).
+    model = hsnc.Model.from_string(CASCADE, set={"omega": 2.7})
+    r = hsnc.sweep(model, "x0.m", -3, 3, 5, param2="v0.m", values2=[-1, 1], restart_each=True, max_periods=300,
+                   record_periods=64)
+    assert [a["multiple"] for a in r["attractors"]] == [0]
+    assert np.asarray(r["attractor"]).tolist() == [1] * 10
+    assert not np.asarray(r["escaped"]).any()
+    # An undamped resonance escapes |x| > 30 after 10 periods from rest (x(2 pi k) = -pi k).
+    resonance = hsnc.Model.from_string(textwrap.dedent('''
+        name = "resonance"
+        [[mass]]
+        name = "m"
+        m = 1.0
+        [[spring]]
+        between = ["ground", "m"]
+        k = 1.0
+        [[forcing]]
+        omega = 1.0
+        amplitude = { m = 1.0 }
+        '''))
+    e = hsnc.sweep(resonance, "x0.m", 0, 0, 1, param2="v0.m", values2=[0], restart_each=True, escape=30)
+    assert np.asarray(e["escaped"]).tolist() == [True] and int(e["periods"][0]) == 10
+    assert np.asarray(e["attractor"]).tolist() == [-2] and e["attractors"] == []
+    for bad in (-1, float("nan"), "30"):
+        try:
+            hsnc.sweep(resonance, "x0.m", 0, 0, 1, param2="v0.m", values2=[0], restart_each=True, escape=bad)
+        except (ValueError, TypeError) as err:
+            assert "escape" in str(err)
+        else:
+            raise AssertionError("escape=%r accepted" % (bad,))
+
+
 def test_a_failing_point_is_a_row_and_the_sweep_goes_on():
     # k = 1e300 at p = 2 only: that point's run fails at once.
     text = textwrap.dedent('''
