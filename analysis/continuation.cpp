@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -253,8 +254,12 @@ void branch_point(SweepPoint& pt, const OrbitAt& at, const OrbitAt* previous, co
 // - grazing: a contact's largest (or smallest) gap function over the orbit,
 //   G = u - gap, changes sign (the orbit starts or stops closing, or opening,
 //   it): Illinois iterations on that extreme (from the exact segments,
-//   refined to rounding). None when a bifurcation lies between (at a fold the
-//   parameter is no coordinate of the chord).
+//   refined to rounding). When a fold lies between too (the branch turns
+//   where the orbit starts or stops touching: at a fold the parameter is no
+//   coordinate of the branch), the trial orbits are corrected on the
+//   hyperplanes normal to the chord instead (`on_chord`: the continuation's
+//   corrector), Illinois on the fraction of the chord. None when another
+//   bifurcation lies between.
 // - a period doubling: det(M + I) changes sign: Illinois iterations on it,
 //   to the parameter's rounding.
 class Locator {
@@ -262,18 +267,33 @@ public:
     Locator(const Branch& b, const SweepOptions& o, PeriodMaps& maps, int multiple)
         : b_(b), o_(o), maps_(maps), multiple_(multiple) {}
 
+    /// The corrector along a chord: the orbit (p, y) on the hyperplane through
+    /// the scaled predicted point normal to t, none when it does not converge.
+    using OnChord = std::function<std::optional<std::pair<double, Eigen::VectorXd>>(const Eigen::VectorXd& predicted,
+                                                                                    const Eigen::VectorXd& t)>;
+
     std::vector<std::pair<SweepPoint, OrbitAt>> grazing(const SweepPoint& pa, const OrbitAt& a, const SweepPoint& pb,
-                                                        const OrbitAt& b) {
+                                                        const OrbitAt& b, const Eigen::VectorXd& D,
+                                                        const OnChord& on_chord) {
         std::vector<std::pair<SweepPoint, OrbitAt>> found;
-        if (a.p == b.p || !bifurcations_between(a.mu, b.mu, a.neutral, b.neutral).empty()) return found;
+        const std::string between = bifurcations_between(a.mu, b.mu, a.neutral, b.neutral);
+        const bool chord = between == "fold";
+        if (a.p == b.p || !(between.empty() || chord)) return found;
         for (std::size_t c = 0; c < pa.gap_max.size() && c < pb.gap_max.size(); ++c)
             for (const bool largest : {true, false}) {
                 const double fa = largest ? pa.gap_max[c] : pa.gap_min[c], fb = largest ? pb.gap_max[c] : pb.gap_min[c];
                 if (!changes_sign(fa, fb)) continue;
+                auto g = [&](const std::pair<SweepPoint, OrbitAt>& at) {
+                    return largest ? at.first.gap_max[c] : at.first.gap_min[c];
+                };
                 try {
-                    found.push_back(illinois(a, b, fa, fb, false, [&](const std::pair<SweepPoint, OrbitAt>& at) {
-                        return largest ? at.first.gap_max[c] : at.first.gap_min[c];
-                    }));
+                    if (chord)
+                        found.push_back(illinois(
+                            0.0, 1.0, fa, fb, false, [&](double s) { return along_chord(a, b, D, s, on_chord); }, g,
+                            [](double x, double z) { return std::fabs(z - x) <= 4 * kEpsilon; }));
+                    else
+                        found.push_back(illinois(
+                            a.p, b.p, fa, fb, false, [&](double p) { return shoot(a, b, p); }, g, rounded));
                 } catch (const RunError&) {
                     // Not located (no orbit found near the grazing): the branch
                     // goes on and its next row names the crossing (transitions_between).
@@ -295,8 +315,9 @@ public:
         const double fa = flip_test(a.M), fb = flip_test(b.M);
         if (a.p == b.p || !((fa < 0) != (fb < 0))) return std::nullopt;
         try {
-            return illinois(a, b, fa, fb, true,
-                            [](const std::pair<SweepPoint, OrbitAt>& at) { return flip_test(at.second.M); });
+            return illinois(
+                a.p, b.p, fa, fb, true, [&](double p) { return shoot(a, b, p); },
+                [](const std::pair<SweepPoint, OrbitAt>& at) { return flip_test(at.second.M); }, rounded);
         } catch (const RunError&) {
             return std::nullopt;
         } catch (const InputError&) {
@@ -317,6 +338,12 @@ public:
     }
 
 private:
+    static constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
+    // Whether a parameter's bracket [x, z] is down to its rounding.
+    static bool rounded(double x, double z) {
+        return std::fabs(z - x) <= 4 * kEpsilon * std::max(std::fabs(x), std::fabs(z));
+    }
+
     static bool changes_sign(double fa, double fb) {
         return std::isfinite(fa) && std::isfinite(fb) && (fa < 0) != (fb < 0);
     }
@@ -324,7 +351,24 @@ private:
     // The orbit at p (from the chord's state there) recorded over its period.
     std::pair<SweepPoint, OrbitAt> shoot(const OrbitAt& a, const OrbitAt& b, double p) {
         const double s = (p - a.p) / (b.p - a.p);
-        const Eigen::VectorXd guess = a.y + s * (b.y - a.y);
+        return orbit_at(p, a.y + s * (b.y - a.y));
+    }
+
+    // The orbit on the hyperplane normal to the chord from a to b at the
+    // fraction s of it (scaled by D), recorded over its period.
+    std::pair<SweepPoint, OrbitAt> along_chord(const OrbitAt& a, const OrbitAt& b, const Eigen::VectorXd& D, double s,
+                                               const OnChord& on_chord) {
+        const Eigen::Index N = a.y.size();
+        Eigen::VectorXd ua(N + 1), ub(N + 1);
+        ua << a.y.cwiseQuotient(D.head(N)), a.p / D(N);
+        ub << b.y.cwiseQuotient(D.head(N)), b.p / D(N);
+        const auto orbit = on_chord(ua + s * (ub - ua), (ub - ua).normalized());
+        if (!orbit) throw RunError("no orbit found on the chord");
+        return orbit_at(orbit->first, orbit->second);
+    }
+
+    // The orbit at p from `guess`, recorded over its period.
+    std::pair<SweepPoint, OrbitAt> orbit_at(double p, const Eigen::VectorXd& guess) {
         const Model& model = maps_.model(p);
         const State start = state_of(guess, model.dof());
         PeriodicResult r = shoot_orbit(model, start, 1e-13, multiple_);
@@ -344,14 +388,14 @@ private:
         return {std::move(pt), std::move(at)};
     }
 
-    // Illinois iterations on f between a and b (values fa, fb of opposite
-    // signs) down to the parameter's rounding: the orbit of smallest |f|, or
-    // (`beyond`) the last one on b's side.
-    template <class F>
-    std::pair<SweepPoint, OrbitAt> illinois(const OrbitAt& a, const OrbitAt& b, double fa, double fb, bool beyond,
-                                            F f_of) {
+    // Illinois iterations on f over a coordinate from pa to pb (values fa, fb
+    // of opposite signs; `trial` the orbit at a value) until `close` says the
+    // bracket is down to rounding: the orbit of smallest |f|, or (`beyond`)
+    // the last one on b's side.
+    template <class Trial, class F, class Close>
+    std::pair<SweepPoint, OrbitAt> illinois(double pa, double pb, double fa, double fb, bool beyond, Trial trial,
+                                            F f_of, Close close) {
         const bool a_negative = fa < 0;
-        double pa = a.p, pb = b.p;
         std::pair<SweepPoint, OrbitAt> best;
         bool have = false;
         double fbest = INFINITY;
@@ -359,7 +403,7 @@ private:
         for (int it = 0; it < 100; ++it) {
             double p = (pa * fb - pb * fa) / (fb - fa);
             if (!(p > std::min(pa, pb) && p < std::max(pa, pb))) p = 0.5 * (pa + pb);
-            auto at = shoot(a, b, p);
+            auto at = trial(p);
             const double f = f_of(at);
             const bool on_a = f != 0 && (f < 0) == a_negative;
             if (beyond ? !on_a : std::fabs(f) < fbest) fbest = std::fabs(f), best = at, have = true;
@@ -373,9 +417,7 @@ private:
                 if (side == 1) fa *= 0.5;
                 side = 1;
             }
-            if (std::fabs(pb - pa) <=
-                4 * std::numeric_limits<double>::epsilon() * std::max(std::fabs(pa), std::fabs(pb)))
-                break;
+            if (close(pa, pb)) break;
         }
         if (!have) throw RunError("no orbit found on the far side of the crossing");
         return best;
@@ -698,7 +740,11 @@ void Continuation::follow(const BranchStart& start, std::vector<BranchStart>* si
         std::string also;  // the non-smooth transitions crossed (a grazing not located among them)
         bool doubling = false;
         if (!first_point) {
-            std::vector<std::pair<SweepPoint, OrbitAt>> found = locate.grazing(out_.back(), last, pt, here);
+            std::vector<std::pair<SweepPoint, OrbitAt>> found = locate.grazing(
+                out_.back(), last, pt, here, D, [&](const Eigen::VectorXd& u, const Eigen::VectorXd& tc) {
+                    const Corrected c = correct(maps, u, tc, D);
+                    return c.converged ? std::optional(std::pair(c.p, c.y)) : std::nullopt;
+                });
             also = transitions_between(out_.back(), pt, !found.empty());
             if (can_switch &&
                 has_label(bifurcations_between(last.mu, here.mu, last.neutral, here.neutral), "period_doubling"))

@@ -311,6 +311,46 @@ TEST(ContinuationClosedForm, GrazingOfALinearOscillatorIsLocatedToRounding) {
     }
 }
 
+// The hardening oscillator's lower fold is where its branch leaves the
+// stop: the unstable middle branch turns (at 1.0932185 rad/s, a multiplier
+// through +1, still touching) and leaves the stop 1.6e-5 rad/s higher at
+// the orbit that just touches it, whose amplitude is the linear one,
+// F |H| = gap, on the upper root. The step that crosses the fold and the
+// grazing together locates the grazing along the chord (the parameter is
+// no coordinate of the branch at a fold): a row of its own, fold+grazing
+// (the fold crossed since the row before), at the closed-form frequency to
+// rounding; the next row says no fold.
+TEST(ContinuationClosedForm, FoldAtAGrazingIsLocatedToRounding) {
+    // (1 - s)^2 + 0.04^2 s = (0.1 / 0.5)^2 in s = omega^2, the upper root.
+    const double b = 2 - 0.04 * 0.04, c = 1 - 0.2 * 0.2;
+    const double omega = std::sqrt((b + std::sqrt(b * b - 4 * c)) / 2);
+    for (const std::size_t points : {25u, 29u}) {
+        SCOPED_TRACE(points);
+        const SweepResult r =
+            SweepPlan(kHardening, "hardening.toml", {}, continuation("omega", 0.6, 2.0, points)).run();
+        std::vector<std::size_t> rows;
+        for (std::size_t i = 0; i < r.points.size(); ++i)
+            if (r.points[i].bifurcation == "fold+grazing") rows.push_back(i);
+        ASSERT_EQ(rows.size(), 1u);
+        const std::size_t g = rows[0];
+        ASSERT_GT(g, 0u);
+        ASSERT_LT(g + 1, r.points.size());
+        const SweepPoint& p = r.points[g];
+        EXPECT_NEAR(p.value, omega, 1e-14 * omega);
+        EXPECT_NEAR(p.xmax[0], 0.5, 1e-13);
+        ASSERT_EQ(p.gap_max.size(), 1u);
+        EXPECT_NEAR(p.gap_max[0], 0.0, 1e-14);
+        EXPECT_EQ(p.periods, 0u);
+        EXPECT_TRUE(p.stable);
+        EXPECT_FALSE(r.points[g - 1].stable);       // the middle branch
+        EXPECT_GT(r.points[g - 1].value, p.value);  // the parameter turned since the row before
+        EXPECT_GT(r.points[g + 1].value, p.value);
+        EXPECT_EQ(r.points[g + 1].bifurcation.find("fold"), std::string::npos) << r.points[g + 1].bifurcation;
+        EXPECT_LT(r.points[g + 1].xmax[0], 0.5);  // the lower branch, off the stop
+        std::printf("fold at grazing: omega = %.17g, closed form %.17g\n", p.value, omega);
+    }
+}
+
 // Through stick-slip transitions: the bundled friction damper (a Jenkins
 // element at the platform) is stuck all period at low and high omega and
 // slips near the resonance; the branch passes both transitions, each row
