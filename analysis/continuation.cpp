@@ -156,8 +156,13 @@ bool centre_stuck_family(const Model& model, const SweepOptions& o, const std::s
         for (Eigen::Index j = 0; j < J; ++j)
             W(i, j) = along(model.jenkins[static_cast<std::size_t>(j)].direction(), double_motion(rows), 0);
     }
+    // A stuck element is a link with the slider as rest length (jenkins::forces):
+    // a unit slider shift loads the masses with its spring's force k along w.
     Eigen::MatrixXd Wk = W;
-    for (Eigen::Index j = 0; j < J; ++j) Wk.col(j) *= model.jenkins[static_cast<std::size_t>(j)].k;
+    for (Eigen::Index j = 0; j < J; ++j) {
+        const Jenkins& e = model.jenkins[static_cast<std::size_t>(j)];
+        Wk.col(j) *= jenkins::spring_force(e.k, 1.0);
+    }
     const Eigen::MatrixXd S = K.solve(Wk);  // dx per unit slider shift
     const Eigen::MatrixXd G = W.transpose() * S - Eigen::MatrixXd::Identity(J, J);
     const Eigen::VectorXd d = G.fullPivLu().solve(-centre);
@@ -264,8 +269,9 @@ void branch_point(SweepPoint& pt, const OrbitAt& at, const OrbitAt* previous, co
 //   to the parameter's rounding.
 class Locator {
 public:
-    Locator(const Branch& b, const SweepOptions& o, PeriodMaps& maps, int multiple)
-        : b_(b), o_(o), maps_(maps), multiple_(multiple) {}
+    /// `centre`: a located orbit of a family of stuck orbits is its centred member.
+    Locator(const Branch& b, const SweepOptions& o, PeriodMaps& maps, int multiple, bool centre)
+        : b_(b), o_(o), maps_(maps), multiple_(multiple), centre_(centre) {}
 
     /// The corrector along a chord: the orbit (p, y) on the hyperplane through
     /// the scaled predicted point normal to t, none when it does not converge.
@@ -318,6 +324,58 @@ public:
             return illinois(
                 a.p, b.p, fa, fb, true, [&](double p) { return shoot(a, b, p); },
                 [](const std::pair<SweepPoint, OrbitAt>& at) { return flip_test(at.second.M); }, rounded);
+        } catch (const RunError&) {
+            return std::nullopt;
+        } catch (const InputError&) {
+            return std::nullopt;
+        }
+    }
+
+    /// The grazings and the first stick or slip onset between a and b, in
+    /// the order the branch meets them; each grazing's row says "grazing"
+    /// in `bifurcation` (the rest is for the caller to fill in).
+    std::vector<std::pair<SweepPoint, OrbitAt>> transitions(const SweepPoint& pa, const OrbitAt& a,
+                                                            const SweepPoint& pb, const OrbitAt& b,
+                                                            const Eigen::VectorXd& D, const OnChord& on_chord) {
+        std::vector<std::pair<SweepPoint, OrbitAt>> found = grazing(pa, a, pb, b, D, on_chord);
+        for (auto& g : found) g.first.bifurcation = "grazing";
+        if (auto on = onset(pa, a, pb, b)) {
+            if (centre_ && on->second.neutral > 0)  // a family of stuck orbits: its centred member
+                centre_stuck_family(maps_.model(on->second.p), o_,
+                                    b_.param + " = " + shortest_text(on->second.p) + b_.where,
+                                    static_cast<std::size_t>(multiple_), on->second.y, on->first);
+            found.push_back(std::move(*on));
+            std::sort(found.begin(), found.end(), [&](const auto& x, const auto& y) {
+                return std::fabs(x.second.p - a.p) < std::fabs(y.second.p - a.p);
+            });
+        }
+        return found;
+    }
+
+    // The first stick or slip onset between a and b (an element's or mass's
+    // SweepPoint::sticks or slips differ): bisection on whether an orbit
+    // still does what a's does, down to the parameter's rounding; the orbit
+    // at the end of the last bracket on b's side (just beyond the onset).
+    // Empty when none differs, a bifurcation lies between, or an orbit on
+    // the way is not found.
+    std::optional<std::pair<SweepPoint, OrbitAt>> onset(const SweepPoint& pa, const OrbitAt& a, const SweepPoint& pb,
+                                                        const OrbitAt& b) {
+        if (a.p == b.p || (pa.sticks == pb.sticks && pa.slips == pb.slips) ||
+            !bifurcations_between(a.mu, b.mu, a.neutral, b.neutral).empty())
+            return std::nullopt;
+        try {
+            double lo = a.p, hi = b.p;  // lo does what a does, hi not
+            std::optional<std::pair<SweepPoint, OrbitAt>> beyond;
+            while (!rounded(lo, hi)) {
+                const double p = 0.5 * (lo + hi);
+                if (p == lo || p == hi) break;
+                auto at = shoot(a, b, p);
+                if (at.first.sticks == pa.sticks && at.first.slips == pa.slips)
+                    lo = p;
+                else
+                    hi = p, beyond = std::move(at);
+            }
+            return beyond;
         } catch (const RunError&) {
             return std::nullopt;
         } catch (const InputError&) {
@@ -427,6 +485,7 @@ private:
     const SweepOptions& o_;
     PeriodMaps& maps_;
     int multiple_;
+    bool centre_;
 };
 
 // The non-smooth transitions between the points a and b of a branch, from
@@ -443,6 +502,38 @@ std::string transitions_between(const SweepPoint& a, const SweepPoint& b, bool l
     if (!located && (a.closings != b.closings || Locator::crossed(a, b))) add("grazing");
     return out;
 }
+
+// A branch started at an orbit of several periods (start_periods) that
+// reaches an orbit of fewer (a divisor d: P_d(y) = y), as a step across a
+// fold can, is no branch of that period any more: check() says so
+// (RunError), and the branch stops there.
+class ShorterPeriod {
+public:
+    ShorterPeriod(const Branch& b, int multiple) : multiple_(multiple) {
+        for (int d = 1; d < multiple; ++d)
+            if (multiple % d == 0) maps_.emplace_back(d, std::make_unique<PeriodMaps>(b, d));
+    }
+
+    void check(double p, const Eigen::VectorXd& y, const Eigen::VectorXd& D, const std::string& where) {
+        for (auto& [d, maps] : maps_) {
+            const analysis::PeriodMapValue v = maps->eval(p, y);
+            if (!v.ok || (v.Py - y).cwiseQuotient(D.head(y.size())).cwiseAbs().maxCoeff() > kShorterPeriodTolerance)
+                continue;
+            const std::string ds = std::to_string(d);
+            throw RunError("sweep --continuation at " + where + ": the orbit repeats after " + ds + " forcing period" +
+                           (d > 1 ? "s" : "") + ", not only after " + std::to_string(multiple_) +
+                           ": the branch reached an orbit of " + ds +
+                           " (a fold crossed with too large a step, or a start on an orbit of " + ds +
+                           "); more --points, or --start-periods " + ds);
+        }
+    }
+
+private:
+    // How closely (scaled) the orbit must repeat after fewer periods.
+    static constexpr double kShorterPeriodTolerance = 1e-6;
+    int multiple_;
+    std::vector<std::pair<int, std::unique_ptr<PeriodMaps>>> maps_;
+};
 
 // A switched branch's watch for its other end, where it goes through its
 // parent branch (at a period doubling of that): there the orbit's shift over
@@ -561,6 +652,8 @@ private:
     Corrected correct(PeriodMaps& maps, const Eigen::VectorXd& predicted, const Eigen::VectorXd& t,
                       const Eigen::VectorXd& D) const;
     void follow(const BranchStart& start, std::vector<BranchStart>* siblings);
+    std::string push_located(std::vector<std::pair<SweepPoint, OrbitAt>>& found, bool doubling, bool grazing_located,
+                             OrbitAt& last, const SweepPoint& pt, std::size_t index, double sense, int multiple);
     BranchStart switched_start(const OrbitAt& at, const Eigen::VectorXd& D, const Eigen::VectorXd& t_parent,
                                int multiple, std::size_t parent) const;
 
@@ -616,22 +709,30 @@ BranchStart Continuation::switched_start(const OrbitAt& at, const Eigen::VectorX
 
 std::vector<SweepPoint> Continuation::run() {
     const Model& first = *b_.start_model;
-    // ---- the first orbit: a sweep point's transient, then shooting ----
+    // ---- the first orbit: a sweep point's transient, then shooting (or
+    // shooting from the initial state over start_periods) ----
     State state{first.x0, first.v0, first.slider0};
     PeriodicResult orbit;
     std::string why;
     std::size_t transient = 0;
+    const int multiple = o_.start_periods > 0 ? static_cast<int>(o_.start_periods) : 1;
     try {
-        transient = run_point(first, state, o_, name(b_.start)).periods;
-        orbit = shoot_orbit(first, state, kTolerance, 1);
+        if (o_.start_periods == 0) transient = run_point(first, state, o_, name(b_.start)).periods;
+        orbit = shoot_orbit(first, state, kTolerance, multiple);
         if (orbit.status != PeriodicStatus::ok)
-            why = "no periodic orbit of the forcing's period found from the steady state there: " + orbit.message;
+            why =
+                (o_.start_periods == 0 ? std::string("no periodic orbit of the forcing's period found from the steady "
+                                                     "state there: ")
+                                       : "no periodic orbit of " + std::to_string(multiple) +
+                                             " forcing periods found from the initial state: ") +
+                orbit.message;
     } catch (const RunError& e) {
         why = e.what();
     }
     if (!why.empty()) return failed_row("sweep --continuation at " + name(b_.start) + ": " + why);
 
     BranchStart s;
+    s.multiple = multiple;
     s.periods = transient;
     // Scales: the first orbit's largest |x| and |v|, and |to - from|.
     s.D.resize(N_ + 1);
@@ -697,6 +798,29 @@ Continuation::Corrected Continuation::correct(PeriodMaps& maps, const Eigen::Vec
     return c;
 }
 
+// Writes the rows located between the branch's last row (its orbit `last`)
+// and the point `pt` to come: grazings, a stick or slip onset, or (with
+// `doubling`) the period doubling alone, whose columns are already filled
+// in; `last` becomes the last of them. Returns the transitions crossed since
+// it, for pt's row.
+std::string Continuation::push_located(std::vector<std::pair<SweepPoint, OrbitAt>>& found, bool doubling,
+                                       bool grazing_located, OrbitAt& last, const SweepPoint& pt, std::size_t index,
+                                       double sense, int multiple) {
+    SweepPoint before = out_.back();  // the row before each located one
+    for (auto& [g, at] : found) {
+        if (!doubling) {
+            std::string crossed = transitions_between(before, g, grazing_located);
+            if (g.bifurcation == "grazing") crossed += (crossed.empty() ? "" : "+") + std::string("grazing");
+            branch_point(g, at, &last, b_, sense, multiple, 0, crossed);
+        }
+        g.branch = index;
+        before = g;
+        push(std::move(g));
+        last = at;
+    }
+    return transitions_between(before, pt, grazing_located);
+}
+
 // Follows one branch from `start` to its end, then the branches born on it.
 // `siblings`: the branches born on its parent (a switched branch that ends on
 // the parent marks the one starting where it ends: the same branch).
@@ -713,7 +837,7 @@ void Continuation::follow(const BranchStart& start, std::vector<BranchStart>* si
     const double span = hi - lo;
     const std::size_t first_row = out_.size();
     PeriodMaps maps(b_, multiple);
-    Locator locate(b_, o_, maps, multiple);
+    Locator locate(b_, o_, maps, multiple, !start.switched);
     const bool can_switch = multiple < (1 << o_.branch_switch);
     std::vector<BranchStart> doublings;  // born on this branch
     std::unique_ptr<ParentCrossing> parent = start.switched ? std::make_unique<ParentCrossing>(b_, multiple) : nullptr;
@@ -728,24 +852,28 @@ void Continuation::follow(const BranchStart& start, std::vector<BranchStart>* si
     // period recorded; before it the grazing and period-doubling points since
     // the last one. False when the branch ends there (a switched branch back
     // on its parent: its orbit repeats after half its period).
+    ShorterPeriod shorter(b_, start.switched ? 1 : multiple);  // a switched branch has its parent's watch
+
     OrbitAt last;
     std::size_t emitted = 0;
     auto emit = [&](const Model& model, bool first_point, std::size_t periods) {
+        shorter.check(p, y, D, name(p));
         SweepPoint pt;
         State s = state_of(y, n_);
         record(model, s, o_, name(p), 0, static_cast<std::size_t>(multiple), pt);
         if (!start.switched && neutral > 0)
             centre_stuck_family(model, o_, name(p), static_cast<std::size_t>(multiple), y, pt);  // y moves with it
         const OrbitAt here{p, y, M, mu, neutral};
-        std::string also;  // the non-smooth transitions crossed (a grazing not located among them)
+        std::string also;  // the non-smooth transitions crossed since the row before (a located grazing not among them)
         bool doubling = false;
         if (!first_point) {
-            std::vector<std::pair<SweepPoint, OrbitAt>> found = locate.grazing(
+            std::vector<std::pair<SweepPoint, OrbitAt>> found = locate.transitions(
                 out_.back(), last, pt, here, D, [&](const Eigen::VectorXd& u, const Eigen::VectorXd& tc) {
                     const Corrected c = correct(maps, u, tc, D);
                     return c.converged ? std::optional(std::pair(c.p, c.y)) : std::nullopt;
                 });
-            also = transitions_between(out_.back(), pt, !found.empty());
+            const bool grazing_located =
+                std::any_of(found.begin(), found.end(), [](const auto& g) { return g.first.bifurcation == "grazing"; });
             if (can_switch &&
                 has_label(bifurcations_between(last.mu, here.mu, last.neutral, here.neutral), "period_doubling"))
                 if (auto pd = locate.period_doubling(last, here)) {
@@ -755,12 +883,7 @@ void Continuation::follow(const BranchStart& start, std::vector<BranchStart>* si
                     found.push_back(std::move(*pd));
                     doubling = true;
                 }
-            for (auto& [g, at] : found) {
-                if (!doubling) branch_point(g, at, &last, b_, sense, multiple, 0, "grazing");
-                g.branch = index;
-                push(std::move(g));
-                last = at;
-            }
+            also = push_located(found, doubling, grazing_located, last, pt, index, sense, multiple);
         }
         branch_point(pt, here, first_point ? nullptr : &last, b_, sense, multiple, periods, also);
         if (doubling) pt.bifurcation = without_label(pt.bifurcation, "period_doubling");

@@ -187,7 +187,7 @@ double potential(const Model& model, Field& field, const Eigen::VectorXd& x) {
     double V = 0.5 * x.dot(field.K(open) * x) - field.f(open).dot(x);
     for (std::size_t c = 0; c < model.contacts.size(); ++c) {
         const double G = gap(model, static_cast<int>(c), x.data());
-        if (G > 0) V += 0.5 * model.contacts[c].k * G * G;
+        V += contact::energy(model.contacts[c].k, G);
     }
     return V;
 }
@@ -527,7 +527,7 @@ public:
             const double wu =
                 std::abs(std::complex<double>(along_x(e.direction(), shape_re_), along_x(e.direction(), shape_im_))) /
                 shape_(k_);
-            if (wu > 0) slip_onset_ = std::min(slip_onset_, e.slip_force / (e.k * wu));
+            if (wu > 0) slip_onset_ = std::min(slip_onset_, jenkins::held_stretch(1, e.k, e.slip_force) / wu);
         }
         // And where it first makes a held mass i slip: the force holding it, q (omega^2 (M phi)_i -
         // (K phi)_i) in the mode's coordinate q = A / shape_k (the damping force left out: a
@@ -820,7 +820,7 @@ private:
         g.y.segment(n_, n_) += r_.linear_omega * q * shape_re_;
         for (Eigen::Index j = 0; j < nj_; ++j) {
             const Jenkins& e = work_.jenkins[static_cast<std::size_t>(j)];
-            const double wu = along_x(e.direction(), shape_re_) * q, held = e.slip_force / e.k;
+            const double wu = along_x(e.direction(), shape_re_) * q, held = jenkins::held_stretch(1, e.k, e.slip_force);
             const double a = std::abs(std::complex<double>(wu, along_x(e.direction(), shape_im_) * q));
             if (a > held) g.y(2 * n_ + j) -= std::copysign(std::min(a - held, held), wu);
         }
@@ -851,8 +851,7 @@ private:
         double E = 0.5 * v.dot(field_.M() * v) + potential(bare_, field_, x) - rest_potential_;
         for (Eigen::Index j = 0; j < nj_; ++j) {
             const Jenkins& e = work_.jenkins[static_cast<std::size_t>(j)];
-            const double stretch = along_x(e.direction(), x) - y(2 * n_ + j);
-            E += 0.5 * e.k * stretch * stretch;
+            E += jenkins::energy(e.k, along_x(e.direction(), x) - y(2 * n_ + j));
         }
         return E;
     }
@@ -1111,12 +1110,12 @@ private:
         grad.head(n_) = field_.K(open) * x - field_.f(open);
         for (std::size_t c = 0; c < work_.contacts.size(); ++c) {
             const double G = gap(work_, static_cast<int>(c), x.data());
-            if (G > 0) grad.head(n_) += work_.contacts[c].k * G * contact_direction_[c];
+            grad.head(n_) += contact::spring_force(work_.contacts[c].k, G) * contact_direction_[c];
         }
         grad.segment(n_, n_) = field_.M() * y.segment(n_, n_);
         for (Eigen::Index j = 0; j < nj_; ++j) {
             const Jenkins& e = work_.jenkins[static_cast<std::size_t>(j)];
-            const double force = e.k * (along_x(e.direction(), x) - y(2 * n_ + j));
+            const double force = jenkins::spring_force(e.k, along_x(e.direction(), x) - y(2 * n_ + j));
             for_each_term(e.direction(), [&](int i, double w) { grad(i) += force * w; });
             grad(2 * n_ + j) = -force;
         }

@@ -179,6 +179,8 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     } catch (const InputError& e) {
         throw OptionError(kPlan, "method", method_name(o.method), e.what());
     }
+    if (o.start_periods > 0 && !o.continuation)
+        throw OptionError(kPlan, "start_periods", std::to_string(o.start_periods), "only with continuation");
     if (o.continuation) {
         if (o.restart_each)
             throw OptionError(kPlan, "restart_each", "true", "does not go with continuation (a branch is followed point to point)");
@@ -189,6 +191,12 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
             throw OptionError(kPlan, "to", shortest_text(o.to), "must differ from from with continuation");
         if (o.max_steps > 100'000'000)
             throw OptionError(kPlan, "max_steps", std::to_string(o.max_steps), "must be <= 1e8");
+        if (o.start_periods > kSweepMaxStartPeriods)
+            throw OptionError(kPlan, "start_periods", std::to_string(o.start_periods),
+                              "must be <= " + std::to_string(kSweepMaxStartPeriods));
+        if (o.start_periods > 1 && !o.track.empty())
+            throw OptionError(kPlan, "start_periods", std::to_string(o.start_periods),
+                              "track follows orbits of one forcing period, for now");
         if (!o.track.empty()) {
             if (o.track != "fold" && o.track != "period_doubling" && o.track != "neimark_sacker" &&
                 o.track != "grazing")
@@ -287,6 +295,7 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     fp << " diagram=" << (o.diagram ? 1 : 0) << " method=" << method_name(o.method);
     if (o.continuation) fp << " continuation=1 max_steps=" << o.max_steps;
     if (o.branch_switch) fp << " branch_switch=" << o.branch_switch;
+    if (o.start_periods) fp << " start_periods=" << o.start_periods;
     if (!o.track.empty()) fp << " track=" << o.track;
     if (o.harmonics) fp << " harmonics=" << o.harmonics;
     if (o.escape > 0) fp << " escape=" << num(o.escape);

@@ -243,17 +243,16 @@ private:
     double coordinate(std::size_t c) const {
         const std::size_t nc = model_.contacts.size();
         if (c < nc) return gap(model_, static_cast<int>(c), x_.data());
-        const Jenkins& e = model_.jenkins[c - nc];
         const double* rows[] = {x_.data()};
-        return along(e.direction(), double_motion(rows), 0) - x_[n_ + c - nc];
+        return jenkins::stretch(model_.jenkins[c - nc].direction(), x_[n_ + c - nc], double_motion(rows), 0);
     }
     // Its rate from the velocities `v` (or its second derivative from the accelerations).
     double rate(std::size_t c, const double* v) const {
         const std::size_t nc = model_.contacts.size();
         if (c < nc) return gap_rate(model_, static_cast<int>(c), v);
-        if (cfg_.slip[c - nc] != 0) return 0.0;
+        if (cfg_.slip[c - nc] != 0) return 0.0;  // held at slip F_s / k
         const double* rows[] = {nullptr, v};
-        return along(model_.jenkins[c - nc].direction(), double_motion(rows), 1);
+        return jenkins::stretch(model_.jenkins[c - nc].direction(), 0.0, double_motion(rows), 1);
     }
     void gap_extremes() {
         for (std::size_t c = 0; c < acc_.gmax.size(); ++c) acc_.gap_extreme(c, coordinate(c));

@@ -55,6 +55,7 @@ struct SweepFlags {
     bool continuation = false;
     long long max_steps = 0;
     long long branch_switch = 0;
+    long long start_periods = 0;
     std::string track;
     long long harmonics = 0;
     double escape = 0;
@@ -88,6 +89,7 @@ InputError flagged(const OptionError& e) {
                                                                 {"restart_each", "--restart-each"},
                                                                 {"max_steps", "--max-steps"},
                                                                 {"branch_switch", "--branch-switch"},
+                                                                {"start_periods", "--start-periods"},
                                                                 {"track", "--track"},
                                                                 {"harmonics", "--harmonics"},
                                                                 {"escape", "--escape"}};
@@ -445,6 +447,7 @@ SweepOptions sweep_options(const SweepFlags& f) {
         throw InputError("--branch-switch: must be 0 .. " + std::to_string(kSweepMaxBranchSwitch) +
                          " (period doublings followed), not " + std::to_string(f.branch_switch));
     o.branch_switch = static_cast<int>(f.branch_switch);
+    o.start_periods = count_flag("--start-periods", f.start_periods, 0);
     o.track = f.track;
     if (!f.attractors.empty() && !(is_state_coordinate(f.param) && is_state_coordinate(f.param2)))
         throw InputError(kAttractorsNeedBasins);
@@ -752,6 +755,10 @@ void add_sweep(CLI::App& app, int& exit_code) {
     sub->add_option("--escape", f->escape,
                     "a bound R: a point whose displacement of some dof exceeds R in magnitude at the end of a "
                     "forcing period stops there, escaped (basins: attractor -2; not with --continuation)");
+    sub->add_option("--start-periods", f->start_periods,
+                    "--continuation: start the branch at the orbit of K forcing periods shot from the model's initial "
+                    "state (--x0, --v0) at --from, with no transient: a row of an earlier run (its state at t0 from "
+                    "--diagram, its multiple; stable or not)");
     sub->add_option("--harmonics", f->harmonics,
                     "amplitude and phase of the first K harmonics of every mass over the recorded periods "
                     "(columns amp<k>_<mass>,phase<k>_<mass> at the end; x = mean + sum of amp sin(k omega t + phase), "

@@ -37,7 +37,8 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
                const std::string& direction, std::size_t max_periods, std::size_t record_periods, bool restart_each,
                const std::string& param2, const std::vector<double>& values2, unsigned threads,
                const std::string& method, double rtol, double atol, bool continuation, std::size_t max_steps,
-               std::size_t harmonics, int branch_switch, const std::string& track, double escape) {
+               std::size_t harmonics, int branch_switch, const std::string& track, double escape,
+               std::size_t start_periods) {
     SweepOptions o;
     o.param = param;
     o.from = from;
@@ -59,6 +60,7 @@ py::dict sweep(const std::string& kind, const std::string& what, const std::stri
     o.branch_switch = branch_switch;
     o.track = track;
     o.escape = escape;
+    o.start_periods = start_periods;
     std::atomic<bool> cancel{false};
     o.cancel = &cancel;
     const ModelOverrides ov{set, x0, v0, {}};
@@ -216,7 +218,7 @@ void bind_sweep(py::module_& m) {
           py::arg("max_periods"), py::arg("record_periods"), py::arg("restart_each"), py::arg("param2"),
           py::arg("values2"), py::arg("threads"), py::arg("method"), py::arg("rtol"), py::arg("atol"),
           py::arg("continuation") = false, py::arg("max_steps") = 0, py::arg("harmonics") = 0,
-          py::arg("branch_switch") = 0, py::arg("track") = "", py::arg("escape") = 0.0);
+          py::arg("branch_switch") = 0, py::arg("track") = "", py::arg("escape") = 0.0, py::arg("start_periods") = 0);
 }
 
 }  // namespace hsnc::python

@@ -25,6 +25,7 @@
 #include "hsnc/periodic.h"
 #include "hsnc/sweep.h"
 #include "model_reader.h"
+#include "number_text.h"
 
 namespace hsnc {
 namespace {
@@ -204,6 +205,51 @@ TEST(BranchSwitch, CascadeOfABilinearOscillatorAgainstItsClosedForm) {
     }
 }
 
+// Continuing from a row of an earlier run (--start-periods K): the
+// period-2 branch's row at about 2.55 rad/s, its state at t0 given as the
+// initial state and K = 2, starts a branch of period 2 there with no
+// transient: the same orbit (1e-10), followed up to 2.63 through the
+// period-2 orbit's own doubling, which it locates where the switched branch
+// did (1e-10); its orbits are closed-form period-2 orbits.
+TEST(BranchSwitch, ContinuesFromARowOfAnEarlierRun) {
+    const SweepResult r = SweepPlan(kCascade, "cascade.toml", {}, cascade_options(1)).run();
+    const auto rows = branch_rows(r, 1);
+    ASSERT_GE(rows.size(), 5u);
+    const SweepPoint* row = nullptr;
+    for (const SweepPoint* p : rows)
+        if (row == nullptr && p->value > 2.55) row = p;
+    ASSERT_NE(row, nullptr);
+    const double pd2 = doubling_row(branch_rows(SweepPlan(kCascade, "cascade.toml", {}, cascade_options(2)).run(), 1))
+                           ->value;       // the period-2 orbit's doubling, located by the switched branch
+    SweepOptions o = cascade_options(2);  // the period-2 branch's doubling located, the period-4 one followed
+    o.from = row->value;
+    o.to = 2.63;
+    o.start_periods = 2;
+    const ModelOverrides from_row{
+        {}, {"m=" + shortest_text(row->strobe_x.back())}, {"m=" + shortest_text(row->strobe_v.back())}, {}};
+    const SweepResult c = SweepPlan(kCascade, "cascade.toml", from_row, o).run();
+    const auto again = branch_rows(c, 0);
+    ASSERT_GE(again.size(), 5u);
+    const SweepPoint& first = *again.front();
+    EXPECT_EQ(first.value, row->value);
+    EXPECT_EQ(first.multiple, 2);
+    EXPECT_EQ(first.periods, 0u);  // no transient
+    EXPECT_NEAR(first.strobe_x.back(), row->strobe_x.back(), 1e-10);
+    EXPECT_NEAR(first.strobe_v.back(), row->strobe_v.back(), 1e-10);
+    EXPECT_NEAR(first.max_multiplier, row->max_multiplier, 1e-8);
+    for (const SweepPoint* p : again) EXPECT_EQ(p->multiple, 2);
+    const SweepPoint* pd = doubling_row(again);
+    ASSERT_NE(pd, nullptr);
+    EXPECT_NEAR(pd->value, pd2, 1e-10 * pd2);
+    const SweepPoint* mid = again[again.size() / 2];
+    const Bilinear bl{mid->value, 0.1, 50.0, 1.0};
+    const Eigen::Vector2d y(mid->strobe_x.back(), mid->strobe_v.back());
+    const ClosedFormOrbit orbit = closed_form_orbit(bl, y + Eigen::Vector2d(1e-3, -1e-3), 2);
+    ASSERT_LT(orbit.residual, 1e-11);
+    EXPECT_NEAR(orbit.y(0), y(0), 1e-10);
+    EXPECT_GT((closed_form_map(bl, y, 1) - y).norm(), 1e-3);  // not of period 1
+}
+
 // The command line: the branch column after bifurcation, the library's
 // numbers, the plot, parts merged to the same bytes, and bad values refused.
 TEST(BranchSwitchCli, ColumnPartsPlotAndRefusals) {
@@ -259,6 +305,53 @@ TEST(BranchSwitchCli, ColumnPartsPlotAndRefusals) {
         EXPECT_NE(b.err.find("--branch-switch"), std::string::npos) << b.err;
         EXPECT_FALSE(testing::file_exists(out));
     }
+    // --start-periods: refused without --continuation, with --track, beyond 1024.
+    for (const std::string& bad :
+         {std::string("--start-periods 2"), std::string("--continuation --start-periods 1025"),
+          std::string("--continuation --start-periods -1"),
+          std::string("--continuation --start-periods 2 --track fold --param2 F --values2 1,2")}) {
+        const std::string out = temp_path("bad.csv");
+        const auto b = run_hsnc("sweep '" + model + "' --param omega --from 2.4 --to 2.66 --points 14 " + bad +
+                                " --quiet --out '" + out + "'");
+        EXPECT_EQ(b.exit_code, 2) << bad << "\n" << b.err;
+        EXPECT_NE(b.err.find("--start-periods"), std::string::npos) << b.err;
+        EXPECT_FALSE(testing::file_exists(out));
+    }
+}
+
+// --start-periods K on an orbit that repeats after fewer periods is no
+// branch of K: at 2.64 rad/s the cascade's period-4 orbit given with K = 12
+// is a failed row naming the period 4, and the period-12 orbit born at a
+// fold at 2.63921 rad/s, continued down in steps too large to turn there,
+// stops where the step lands on the period-4 orbit (exit 1, the reason
+// said) instead of calling it an orbit of 12.
+TEST(BranchSwitchCli, StartPeriodsStopsOnAnOrbitOfFewer) {
+    const std::string model = std::string(HSNC_SOURCE_DIR) + "/examples/bilinear-cascade.toml";
+    const std::string args = "sweep '" + model + "' --param omega --from 2.64 --to 2.62 --points 5 --continuation " +
+                             "--start-periods 12 --quiet ";
+    const std::string out = temp_path("start12.csv");
+    const auto four = run_hsnc(args + "--x0 m=-0.70427984734482485 --v0 m=-0.84108335151402402 --out '" + out + "'");
+    EXPECT_EQ(four.exit_code, 1) << four.err;
+    EXPECT_NE(four.err.find("the orbit repeats after 4 forcing periods, not only after 12"), std::string::npos)
+        << four.err;
+    const std::string rows = slurp(out);
+    EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 2) << rows;  // the header and the failed row
+
+    const auto jump = run_hsnc(args + "--x0 m=-0.70917013206284707 --v0 m=-0.83619986957490522 --out '" + out + "'");
+    EXPECT_EQ(jump.exit_code, 1) << jump.err;
+    EXPECT_NE(jump.err.find("the orbit repeats after 4 forcing periods"), std::string::npos) << jump.err;
+    const std::string kept = slurp(out);
+    EXPECT_NE(kept.find("\n2.6400000000000001,down,true,0,12,"), std::string::npos) << kept;
+    for (std::size_t at = kept.find('\n'); at + 1 < kept.size(); at = kept.find('\n', at + 1))
+        EXPECT_EQ(kept.compare(at + 1, 18, "2.6400000000000001"), 0) << kept;  // only the start: no row of period 4
+    // With steps that follow it, the period-12 branch turns at its fold (a row saying so), all of period 12.
+    const auto fine = run_hsnc("sweep '" + model + "' --param omega --from 2.64 --to 2.63 --points 41 --continuation " +
+                               "--start-periods 12 --quiet --x0 m=-0.70917013206284707 --v0 m=-0.83619986957490522 " +
+                               "--out '" + out + "'");
+    EXPECT_EQ(fine.exit_code, 0) << fine.err;
+    const std::string followed = slurp(out);
+    EXPECT_NE(followed.find(",fold\n"), std::string::npos) << followed;
+    EXPECT_EQ(followed.find(",4,"), std::string::npos);
 }
 
 }  // namespace

@@ -401,11 +401,15 @@ TEST(ContinuationClosedForm, FrictionDamperThroughStickAndSlipOnset) {
     EXPECT_GE(compared, 3u);
 }
 
-// Stick onset: Den Hartog's friction oscillator (beta = 0.5) stops in every
-// half period at low r and moves without stopping above about 0.62; the
-// continuation from r = 0.4 up says `stick_onset` at the first row beyond,
-// its rows' sticks flags agree, and so does an independent long run (the
-// engine's own stick events in its last 20 periods) on either side.
+// Stick onset: Den Hartog's friction oscillator x'' + x + beta sgn(x') =
+// sin(r t) (beta = 0.5) stops in every half period at low r and moves
+// without stopping above r*, where the non-stop orbit's force at its
+// reversal, A + sin(r t0), equals beta: from the half-wave symmetric orbit
+// in closed form, beta^2 (1 - r^2)^2 (tan^2(pi / 2r) / r^2 + 1 / r^4) = 1,
+// r* = 0.58497494298499... The continuation from r = 0.4 up locates it (a
+// row of its own, `stick_onset`, to 1e-12), its rows' sticks flags agree,
+// and so does an independent long run (the engine's own stick events in
+// its last 20 periods) at the rows either side.
 TEST(ContinuationClosedForm, DenHartogStickOnset) {
     const SweepResult r = SweepPlan(kDenHartog, "den-hartog.toml", ModelOverrides{{"beta=0.5"}, {}, {}, {}},
                                     continuation("r", 0.4, 0.9, 11))
@@ -419,7 +423,17 @@ TEST(ContinuationClosedForm, DenHartogStickOnset) {
     ASSERT_EQ(onset.size(), 1u);
     const std::size_t g = onset[0];
     ASSERT_GT(g, 0u);
+    ASSERT_LT(g + 1, r.points.size());
     for (std::size_t k = 0; k < r.points.size(); ++k) EXPECT_EQ(r.points[k].sticks[0], k < g ? 1 : 0) << k;
+    const double beta = 0.5;
+    auto boundary = [&](double x) {
+        const double t = std::tan(kPi / (2 * x));
+        return beta * beta * (1 - x * x) * (1 - x * x) * (t * t / (x * x) + 1 / (x * x * x * x)) - 1;
+    };
+    double lo = 0.55, hi = 0.6;  // boundary > 0 below r*, < 0 above
+    for (int i = 0; i < 200 && hi - lo > 0; ++i) (boundary(0.5 * (lo + hi)) > 0 ? lo : hi) = 0.5 * (lo + hi);
+    EXPECT_NEAR(r.points[g].value, lo, 1e-12 * lo);
+    EXPECT_EQ(r.points[g].periods, 0u);
     class Sticks : public Observer {
     public:
         explicit Sticks(double from) : from_(from) {}
@@ -432,7 +446,7 @@ TEST(ContinuationClosedForm, DenHartogStickOnset) {
     private:
         double from_;
     };
-    for (const std::size_t k : {g - 1, g}) {
+    for (const std::size_t k : {g - 1, g + 1}) {
         const double rr = r.points[k].value, T = 2 * kPi / rr;
         Model m = parse_model(kDenHartog, "den-hartog.toml",
                               ModelOverrides{{"beta=0.5", "r=" + shortest_text(rr)}, {}, {}, {}});
@@ -442,8 +456,7 @@ TEST(ContinuationClosedForm, DenHartogStickOnset) {
         ASSERT_EQ(simulate(m, so, sticks).status, RunStatus::ok);
         EXPECT_EQ(sticks.count > 0, k < g) << "r = " << rr << ": " << sticks.count << " stops";
     }
-    std::printf("Den Hartog, beta 0.5: stops end between r = %.6f and %.6f\n", r.points[g - 1].value,
-                r.points[g].value);
+    std::printf("Den Hartog, beta 0.5: stops end at r = %.17g, closed form %.17g\n", r.points[g].value, lo);
 }
 
 // m x'' + 0.05 x' + x + (Jenkins: k_t = 1, F_s = 0.1) = 0.1 sin(omega t).
@@ -478,7 +491,8 @@ amplitude = { m = 0.1 }
 // the branch takes its centred member, the stretch symmetric in the slip
 // band, which for the 1-dof oscillator is the linear closed form F |H| of
 // the stuck system (stiffness 2) about x = 0; the slipping orbits are
-// `hsnc periodic`'s at the same omega.
+// `hsnc periodic`'s at the same omega; each slip onset is located where that
+// closed form's stretch reaches the slip band.
 TEST(ContinuationClosedForm, JenkinsOscillatorAndUnderPlatformDamperCompleteThroughSlipOnset) {
     const SweepResult r = SweepPlan(kJenkinsOscillator, "jenkins.toml", {}, continuation("omega", 0.5, 3.0, 26)).run();
     ASSERT_FALSE(r.points.empty());
@@ -491,6 +505,16 @@ TEST(ContinuationClosedForm, JenkinsOscillatorAndUnderPlatformDamperCompleteThro
         if (r.points[k].bifurcation == "slip_onset") onsets.push_back(k);
     }
     ASSERT_EQ(onsets.size(), 2u);
+    // Located to rounding where the stuck system's stretch amplitude reaches
+    // the slip band, k_t F |H_stuck| = F_s: |2 - w^2 + 0.05 i w| = 1, a
+    // quadratic in w^2.
+    const double b = 4 - 0.05 * 0.05, d = std::sqrt(b * b - 4 * 3);
+    const double roots[2] = {std::sqrt((b - d) / 2), std::sqrt((b + d) / 2)};
+    for (std::size_t i = 0; i < 2; ++i) {
+        EXPECT_NEAR(r.points[onsets[i]].value, roots[i], 1e-12 * roots[i]);
+        EXPECT_EQ(r.points[onsets[i]].periods, 0u);
+        std::printf("Jenkins slip onset at omega = %.17g, closed form %.17g\n", r.points[onsets[i]].value, roots[i]);
+    }
     std::size_t stuck = 0, compared = 0;
     for (std::size_t k = 0; k < r.points.size(); ++k) {
         const SweepPoint& p = r.points[k];

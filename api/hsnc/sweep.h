@@ -117,6 +117,8 @@ const char* sweep_direction_name(SweepDirection direction);
 /// Steady-state detection (interface.md section 6).
 inline constexpr double kSweepSettleTolerance = 1e-9;
 inline constexpr int kSweepMaxMultiple = 8;
+/// The largest SweepOptions::start_periods.
+inline constexpr std::size_t kSweepMaxStartPeriods = 1024;
 /// SweepOptions::branch_switch at most (orbits of up to 64 forcing periods).
 inline constexpr int kSweepMaxBranchSwitch = 6;
 /// SweepOptions::harmonics at most.
@@ -181,6 +183,12 @@ struct SweepOptions {
     bool continuation = false;
     /// Continuation: points at most per branch; 0: 20 * points.
     std::size_t max_steps = 0;
+    /// Continuation: > 0: the branch starts at the orbit of this many forcing
+    /// periods shot from the model's initial state at `from` (`to` for
+    /// direction down), with no transient: a point of an earlier run (its
+    /// state at t0, its multiple), stable or not; 0: a sweep point's
+    /// transient from the initial state, then the orbit of one period.
+    std::size_t start_periods = 0;
     /// Continuation: follow the branches born at period doublings (each
     /// located to rounding), and theirs, up to this many doublings (the
     /// branch of 2^branch_switch periods; 0: none, at most kSweepMaxBranchSwitch).

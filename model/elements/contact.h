@@ -57,6 +57,18 @@ auto gap_magnitude(const Direction& d, const T& gap, const M& m, int k) {
 /// Closed, a contact is a link of stiffness k, damping beta k (Rayleigh)
 /// plus its own c, and rest length gap (its preload +k gap on a); open,
 /// nothing.
+/// The spring's force magnitude at gap function G, k G while closed (G > 0),
+/// 0 open (its force on body a is minus this along w), and its energy
+/// 1/2 k G^2 (0 open).
+template <class T>
+T spring_force(const T& k, const T& G) {
+    return G > 0 ? k * G : T(0);
+}
+template <class T>
+T energy(const T& k, const T& G) {
+    return G > 0 ? T(0.5) * k * G * G : T(0);
+}
+
 template <class T, class V>
 void forces(bool closed, const Direction& d, const T& k, const T& gap, const T& beta, const T& c, V&& visit) {
     if (closed) visit.link(d, k, beta * k + c, gap);

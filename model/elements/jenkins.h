@@ -58,6 +58,24 @@ auto slip_velocity_magnitude(const Direction& d, const M& m, int k) {
     return along_magnitude(d, m, k + 1);
 }
 
+/// d^k/dt^k of the stretch e = u - s while stuck (the slider s at rest).
+template <class M, class T>
+auto stretch(const Direction& d, const T& s, const M& m, int order) {
+    auto u = along(d, m, order);
+    return order == 0 ? u - s : u;
+}
+
+/// The spring's force magnitude k e at stretch e (its force on body a is
+/// minus this along w, the slider's is plus), and its energy 1/2 k e^2.
+template <class T>
+T spring_force(const T& k, const T& e) {
+    return k * e;
+}
+template <class T>
+T energy(const T& k, const T& e) {
+    return T(0.5) * k * e * e;
+}
+
 /// The stretch held while slipping with sign `slip`: slip F_s / k.
 template <class T>
 T held_stretch(int slip, const T& k, const T& slip_force) {

@@ -366,7 +366,8 @@ def _override_texts(d):
 
 def sweep(model, param, start, stop, points, direction="up", max_periods=500, record_periods=16,
           restart_each=False, param2=None, values2=None, threads=1, method="hsnc", rtol=1e-10, atol=1e-12,
-          continuation=False, max_steps=0, harmonics=0, branch_switch=0, track=None, escape=0):
+          continuation=False, max_steps=0, harmonics=0, branch_switch=0, track=None, escape=0,
+          start_periods=0):
     """The response curve and bifurcation diagram of `model` (a Model) over
     the parameter `param`, as `hsnc sweep --param PARAM --from START --to
     STOP --points POINTS` (interface.md section 6): `points` values from
@@ -412,6 +413,10 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     "branch" (int per point: 0 the primary branch, 1, 2, ... the switched
     ones in the order followed; "multiple" is each branch's period in
     forcing periods).
+    start_periods=K > 0 (as `--start-periods K`, with continuation): the
+    branch starts at the orbit of K forcing periods shot from the model's
+    initial state at start, with no transient (a point of an earlier run:
+    its state at t0 as the model's x0, v0; stable or not).
     Basins of attraction: param and param2 initial state coordinates
     ("x0.DOF" or "v0.DOF", with restart_each=True): then also "attractor"
     (int per point: 1, 2, ... the attractor it reached, numbered in the
@@ -456,13 +461,14 @@ def sweep(model, param, start, stop, points, direction="up", max_periods=500, re
     branch_switch = _int(f, "branch_switch", branch_switch, 0, 6, "an integer from 0 to 6 (period doublings followed)")
     track = "" if track is None else _text(f, "track", track,
                                            "None or a str: 'fold', 'period_doubling', 'neimark_sacker' or 'grazing'")
+    start_periods = _int(f, "start_periods", start_periods, 0, 1024, "an integer from 0 to 1024")
     escape = _real(f, "escape", escape, allowed="a finite number >= 0 (0: no bound)")
     if escape < 0:
         _refuse(f, "escape", escape, "a finite number >= 0 (0: no bound)")
     return _hsnc._sweep(kind, what, source, _override_texts(s), _override_texts(x0), _override_texts(v0),
                         param, start, stop, points, direction, max_periods, record_periods, restart_each, param2,
                         values2, threads, method, rtol, atol, continuation, max_steps, harmonics,
-                        branch_switch, track, escape)
+                        branch_switch, track, escape, start_periods)
 
 
 def _sweep_point(task):

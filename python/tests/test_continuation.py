@@ -160,6 +160,31 @@ def test_basins_chaotic_set_and_escape():
             raise AssertionError("escape=%r accepted" % (bad,))
 
 
+def test_continuation_from_a_row_of_an_earlier_run():
+    # The period-2 branch born at the cascade's first doubling, then a branch
+    # started from one of its rows (state at t0, multiple 2) with no transient.
+    model = hsnc.Model.from_string(CASCADE)
+    r = hsnc.sweep(model, "omega", 2.4, 2.66, 14, continuation=True, branch_switch=1)
+    branch = np.asarray(r["branch"])
+    rows = [i for i in range(len(branch)) if branch[i] == 1 and r["value"][i] > 2.55]
+    assert rows
+    i = rows[0]
+    first = sum(int(m) for m in r["multiple"][:i])
+    x, v = r["diagram"]["x"][first + 1, 0], r["diagram"]["v"][first + 1, 0]
+    again = hsnc.sweep(hsnc.Model.from_string(CASCADE, x0={"m": x}, v0={"m": v}), "omega", r["value"][i], 2.6, 5,
+                       continuation=True, start_periods=2)
+    assert again["value"][0] == r["value"][i] and int(again["multiple"][0]) == 2 and int(again["periods"][0]) == 0
+    assert abs(again["diagram"]["x"][1, 0] - x) < 1e-10 and abs(again["diagram"]["v"][1, 0] - v) < 1e-10
+    assert set(np.asarray(again["multiple"]).tolist()) == {2}
+    for bad in (-1, 1025, 2.5):
+        try:
+            hsnc.sweep(model, "omega", 2.4, 2.66, 14, continuation=True, start_periods=bad)
+        except (ValueError, TypeError) as e:
+            assert "start_periods" in str(e)
+        else:
+            raise AssertionError("start_periods=%r accepted" % (bad,))
+
+
 def test_a_failing_point_is_a_row_and_the_sweep_goes_on():
     # k = 1e300 at p = 2 only: that point's run fails at once.
     text = textwrap.dedent('''
