@@ -17,6 +17,17 @@ from conftest import SOURCE_DIR, read_csv, run_cli
 HARDENING = str(SOURCE_DIR / "examples" / "hardening-stop.toml")
 
 
+def assert_refused(call, name, bads):
+    """call(bad) raises ValueError or TypeError naming `name`, for every bad value."""
+    for bad in bads:
+        try:
+            call(bad)
+        except (ValueError, TypeError) as e:
+            assert name in str(e), e
+        else:
+            raise AssertionError("%s=%r accepted" % (name, bad))
+
+
 def test_continuation_through_two_folds_same_as_the_command_line(tmp_path):
     model = hsnc.Model.from_file(HARDENING)
     r = hsnc.sweep(model, "omega", 0.8, 2.0, 25, continuation=True)
@@ -87,13 +98,9 @@ def test_branch_switching_follows_the_period_two_branch_as_the_command_line(tmp_
     assert header[-4:] == ["stable", "max_multiplier", "bifurcation", "branch"]
     assert [int(row[-1]) for row in rows] == branch.tolist()
     assert [float(row[0]) for row in rows] == list(r["value"])
-    for bad in (7, -1, 1.5):
-        try:
-            hsnc.sweep(hsnc.Model.from_file(str(path)), "omega", 2.4, 2.66, 14, continuation=True, branch_switch=bad)
-        except (ValueError, TypeError) as e:
-            assert "branch_switch" in str(e)
-        else:
-            raise AssertionError("branch_switch=%r accepted" % (bad,))
+    model = hsnc.Model.from_file(str(path))
+    assert_refused(lambda bad: hsnc.sweep(model, "omega", 2.4, 2.66, 14, continuation=True, branch_switch=bad),
+                   "branch_switch", (7, -1, 1.5))
 
 
 def test_a_grazing_curve_over_two_parameters_is_the_closed_form():
@@ -105,13 +112,8 @@ def test_a_grazing_curve_over_two_parameters_is_the_closed_form():
     H = np.abs(1 / (1 - w ** 2 + 0.04j * w))
     assert np.abs(F * H - 0.5).max() < 1e-10
     assert all(b == "grazing" for b in r["bifurcation"])
-    for bad in ({"track": "cusp"}, {"track": 3}):
-        try:
-            hsnc.sweep(model, "omega", 0.6, 2.0, 29, continuation=True, param2="F", values2=[0.1, 0.05], **bad)
-        except (ValueError, TypeError) as e:
-            assert "track" in str(e)
-        else:
-            raise AssertionError("%r accepted" % (bad,))
+    assert_refused(lambda bad: hsnc.sweep(model, "omega", 0.6, 2.0, 29, continuation=True, param2="F",
+                                          values2=[0.1, 0.05], track=bad), "track", ("cusp", 3))
 
 
 def test_basins_of_the_bistable_oscillator_as_the_command_line(tmp_path):
@@ -151,13 +153,8 @@ def test_basins_chaotic_set_and_escape():
     e = hsnc.sweep(resonance, "x0.m", 0, 0, 1, param2="v0.m", values2=[0], restart_each=True, escape=30)
     assert np.asarray(e["escaped"]).tolist() == [True] and int(e["periods"][0]) == 10
     assert np.asarray(e["attractor"]).tolist() == [-2] and e["attractors"] == []
-    for bad in (-1, float("nan"), "30"):
-        try:
-            hsnc.sweep(resonance, "x0.m", 0, 0, 1, param2="v0.m", values2=[0], restart_each=True, escape=bad)
-        except (ValueError, TypeError) as err:
-            assert "escape" in str(err)
-        else:
-            raise AssertionError("escape=%r accepted" % (bad,))
+    assert_refused(lambda bad: hsnc.sweep(resonance, "x0.m", 0, 0, 1, param2="v0.m", values2=[0], restart_each=True,
+                                          escape=bad), "escape", (-1, float("nan"), "30"))
 
 
 def test_continuation_from_a_row_of_an_earlier_run():
@@ -176,13 +173,8 @@ def test_continuation_from_a_row_of_an_earlier_run():
     assert again["value"][0] == r["value"][i] and int(again["multiple"][0]) == 2 and int(again["periods"][0]) == 0
     assert abs(again["diagram"]["x"][1, 0] - x) < 1e-10 and abs(again["diagram"]["v"][1, 0] - v) < 1e-10
     assert set(np.asarray(again["multiple"]).tolist()) == {2}
-    for bad in (-1, 1025, 2.5):
-        try:
-            hsnc.sweep(model, "omega", 2.4, 2.66, 14, continuation=True, start_periods=bad)
-        except (ValueError, TypeError) as e:
-            assert "start_periods" in str(e)
-        else:
-            raise AssertionError("start_periods=%r accepted" % (bad,))
+    assert_refused(lambda bad: hsnc.sweep(model, "omega", 2.4, 2.66, 14, continuation=True, start_periods=bad),
+                   "start_periods", (-1, 1025, 2.5))
 
 
 def test_a_failing_point_is_a_row_and_the_sweep_goes_on():
