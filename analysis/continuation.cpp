@@ -267,6 +267,8 @@ void branch_point(SweepPoint& pt, const OrbitAt& at, const OrbitAt* previous, co
 //   bifurcation lies between.
 // - a period doubling: det(M + I) changes sign: Illinois iterations on it,
 //   to the parameter's rounding.
+// - a stick or slip onset (what sticks or slips differs): bisection on it,
+//   to the parameter's rounding.
 class Locator {
 public:
     /// `centre`: a located orbit of a family of stuck orbits is its centred member.

@@ -507,7 +507,7 @@ def sweep_map(model, param, start, stop, points, map=map, max_periods=500, recor
     if len(parts) != points:
         raise RunError("%s(): the map returned %d results for %d points" % (f, len(parts), points))
     joined = {key: parts[0][key] for key in ("param", "param2", "masses")}
-    for key in ("value", "value2", "direction", "settled", "periods", "multiple", "xmax", "xrms", "a1") + \
+    for key in ("value", "value2", "direction", "settled", "escaped", "periods", "multiple", "xmax", "xrms", "a1") + \
             (("amp", "phase") if options["harmonics"] else ()):
         joined[key] = np.concatenate([p[key] for p in parts])
     joined["diagram"] = {key: np.concatenate([p["diagram"][key] for p in parts]) for key in parts[0]["diagram"]}

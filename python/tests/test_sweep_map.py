@@ -22,7 +22,8 @@ def builtin():
 
 def same(a, b):
     assert a["param"] == b["param"] and a["param2"] == b["param2"] and a["masses"] == b["masses"]
-    for key in ("value", "value2", "direction", "settled", "periods", "multiple", "xmax", "xrms", "a1", "amp", "phase"):
+    for key in ("value", "value2", "direction", "settled", "escaped", "periods", "multiple", "xmax", "xrms", "a1", "amp",
+                "phase"):
         assert np.array_equal(a[key], b[key], equal_nan=key not in ("direction",)), key
     for key in a["diagram"]:
         assert np.array_equal(a["diagram"][key], b["diagram"][key], equal_nan=key != "direction"), key
