@@ -269,6 +269,11 @@ void branch_point(SweepPoint& pt, const OrbitAt& at, const OrbitAt* previous, co
 //   to the parameter's rounding.
 // - a stick or slip onset (what sticks or slips differs): bisection on it,
 //   to the parameter's rounding.
+// A point of branch `b` at p in messages: "omega = 1.2 (up)".
+std::string point_name(const Branch& b, double p) {
+    return b.param + " = " + shortest_text(p) + b.where;
+}
+
 class Locator {
 public:
     /// `centre`: a located orbit of a family of stuck orbits is its centred member.
@@ -343,8 +348,7 @@ public:
         for (auto& g : found) g.first.bifurcation = "grazing";
         if (auto on = onset(pa, a, pb, b)) {
             if (centre_ && on->second.neutral > 0)  // a family of stuck orbits: its centred member
-                centre_stuck_family(maps_.model(on->second.p), o_,
-                                    b_.param + " = " + shortest_text(on->second.p) + b_.where,
+                centre_stuck_family(maps_.model(on->second.p), o_, point_name(b_, on->second.p),
                                     static_cast<std::size_t>(multiple_), on->second.y, on->first);
             found.push_back(std::move(*on));
             std::sort(found.begin(), found.end(), [&](const auto& x, const auto& y) {
@@ -443,8 +447,7 @@ private:
         at.neutral = r.neutral;
         State state{r.x, r.v, r.s};
         SweepPoint pt;
-        record(model, state, o_, b_.param + " = " + shortest_text(p) + b_.where, 0, static_cast<std::size_t>(multiple_),
-               pt);
+        record(model, state, o_, point_name(b_, p), 0, static_cast<std::size_t>(multiple_), pt);
         return {std::move(pt), std::move(at)};
     }
 
@@ -596,7 +599,7 @@ public:
 private:
     using Clock = std::chrono::steady_clock;
 
-    std::string name(double p) const { return b_.param + " = " + shortest_text(p) + b_.where; }
+    std::string name(double p) const { return point_name(b_, p); }
     double seconds() {
         const auto now = Clock::now();
         const double s = std::chrono::duration<double>(now - clock_).count();

@@ -554,17 +554,14 @@ constexpr std::size_t kSetLast = 4;
 
 class StateGrid {
 public:
-    StateGrid(const SweepResult& r) : n_(r.masses.size()), lo_(2 * n_, 0), width_(2 * n_, 1) {
-        std::vector<double> hi(2 * n_, 0);
-        bool first = true;
+    StateGrid(const SweepResult& r) : n_(r.masses.size()), lo_(2 * n_, INFINITY), width_(2 * n_, 1) {
+        std::vector<double> hi(2 * n_, -INFINITY);
         for (const SweepPoint& p : r.points) {
             if (!p.failure.empty()) continue;
             for (std::size_t row = 0; row < p.strobe_t.size(); ++row)
                 for (std::size_t c = 0; c < 2 * n_; ++c) {
-                    const double y = coordinate(p, row, c);
-                    lo_[c] = first ? y : std::min(lo_[c], y);
-                    hi[c] = first ? y : std::max(hi[c], y);
-                    first = first && c + 1 < 2 * n_;
+                    lo_[c] = std::min(lo_[c], coordinate(p, row, c));
+                    hi[c] = std::max(hi[c], coordinate(p, row, c));
                 }
         }
         for (std::size_t c = 0; c < 2 * n_; ++c)

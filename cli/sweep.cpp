@@ -309,7 +309,8 @@ struct Outputs {
         check_distinct(all);
         if (plot) require_gnuplot();
     }
-    void write(const SweepResult& r, const std::string& title, const std::string& note = "") const {
+    // Writes the outputs; returns the attractors of a basin study (empty otherwise), for the summary.
+    Attractors write(const SweepResult& r, const std::string& title, const std::string& note = "") const {
         std::unique_ptr<H5Archive> archive;
         if (h5) {
             archive = std::make_unique<H5Archive>(*h5, h5_module());
@@ -339,6 +340,7 @@ struct Outputs {
             draw_sweep_plot(r, note.empty() ? title : title + " (interrupted)", *plot,
                             hsnc::plot_dofs(r.masses, plot_dofs, named));
         if (archive) archive->commit();
+        return found;
     }
 };
 
@@ -365,7 +367,8 @@ struct Problems {
     }
 };
 
-std::string summary_line(const SweepResult& r, bool interrupted = false) {
+// `found`: the attractors Outputs::write classified (a basin study's count).
+std::string summary_line(const SweepResult& r, const Attractors& found, bool interrupted = false) {
     std::size_t settled = 0, up = 0, stable = 0, bifurcations = 0, escaped = 0;
     for (const SweepPoint& p : r.points) {
         settled += p.settled;
@@ -384,7 +387,7 @@ std::string summary_line(const SweepResult& r, bool interrupted = false) {
         s << " stable=" << stable << " unstable=" << r.points.size() - stable - problems.failed
           << " bifurcations=" << bifurcations << " stopped=" << problems.stopped;
     if (escaped) s << " escaped=" << escaped;
-    if (is_basins(r)) s << " attractors=" << classify_attractors(r).list.size();
+    if (is_basins(r)) s << " attractors=" << found.list.size();
     return s.str();
 }
 
@@ -626,10 +629,10 @@ int sweep(const SweepFlags& f) {
                         for (SweepPoint& p : t) r.points.push_back(std::move(p));
                     const std::string note =
                         interrupted ? interrupted_note(r.points.size(), overall->total) : std::string();
-                    outputs->write(r, r.model + ": sweep over " + r.param, note);
+                    const Attractors found = outputs->write(r, r.model + ": sweep over " + r.param, note);
                     // Failed points are rows of the outputs: they stay when the command exits 1.
                     commit_outputs();
-                    std::cout << summary_line(r, interrupted) << "\n";
+                    std::cout << summary_line(r, found, interrupted) << "\n";
                     const Problems problems(r);
                     for (const SweepPoint& p : r.points)
                         if (!p.stop.empty()) std::fprintf(stderr, "hsnc sweep: %s\n", p.stop.c_str());
@@ -675,9 +678,9 @@ int merge(const MergeFlags& f) {
         texts.push_back(file.bytes);
     }
     const SweepResult r = merge_sweep_parts(texts, f.parts);
-    outputs.write(r, r.model + ": sweep over " + r.param);
+    const Attractors found = outputs.write(r, r.model + ": sweep over " + r.param);
     commit_outputs();  // failed points are rows of the outputs: they stay when the command exits 1
-    std::cout << summary_line(r) << "\n";
+    std::cout << summary_line(r, found) << "\n";
     const Problems problems(r);
     if (problems.any()) throw RunError(problems.message());
     return 0;
