@@ -91,7 +91,9 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
             for (const Harmonic& h : model.forcing) forced = forced || h.omega != 0.0;
             throw OptionError(kPeriodic, "period", "NaN",
                               forced ? "the forcing's frequencies are not commensurate (no common period with "
-                                       "harmonic orders up to 1000, to 1e-12): give the period"
+                                       "harmonic orders up to 1000, to 1e-12): give the period (a quasi-periodic "
+                                       "response: hsnc simulate --section period:OMEGA gives its section and "
+                                       "rotation number)"
                                      : "the model has no harmonic forcing: give the period");
         }
     }

@@ -449,7 +449,8 @@ double forcing_frequency(const Model& model, const std::string& what) {
         for (const Harmonic& h : model.forcing) b = h.omega != a ? h.omega : b;
         throw InputError(what + ": the forcing's frequencies (" + number_text(a) + " and " + number_text(b) +
                          " rad/s) are not commensurate (no common period with harmonic orders up to 1000); a sweep "
-                         "needs a common period");
+                         "needs a common period (a quasi-periodic response: hsnc simulate --section period:OMEGA "
+                         "gives its section and rotation number)");
     }
     return omega;
 }

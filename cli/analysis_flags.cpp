@@ -30,11 +30,15 @@ void add_analysis_flags(CLI::App* sub, AnalysisFlags& f) {
 }
 
 void add_section_flags(CLI::App* sub, std::string& section, std::string& out, std::string& plot,
-                       const std::string& what) {
+                       const std::string& what, bool stroboscopic) {
     sub->add_option("--section", section,
                     "Poincare section at a switch kind" + what +
                         ": KIND[:NAME], KIND contact_close, contact_open, stick, release or reversal, NAME the "
-                        "contact or mass (default: any); needs --section-out or --section-plot");
+                        "contact or mass (default: any)" +
+                        (stroboscopic ? "; or period[:OMEGA], the state every 2 pi/OMEGA s (default OMEGA: the "
+                                        "forcing's frequency) with its rotation number in the summary"
+                                      : "") +
+                        "; needs --section-out or --section-plot");
     sub->add_option("--section-out", out,
                     "the section's CSV: t,x_<mass>...,v_<mass>..., the state at each instant of such an event");
     sub->add_option("--section-plot", plot, "draw the section (v against x, one panel per mass) into this PNG (gnuplot)");

@@ -34,9 +34,10 @@ struct AnalysisFlags {
 void add_analysis_flags(CLI::App* sub, AnalysisFlags& flags);
 
 /// Registers --section KIND[:NAME], --section-out CSV and --section-plot PNG
-/// (output/section.h); `what` ends the --section help ("" or " of the measurement").
+/// (output/section.h); `what` ends the --section help ("" or " of the measurement");
+/// `stroboscopic`: the help names period[:OMEGA] too (hsnc simulate).
 void add_section_flags(CLI::App* sub, std::string& section, std::string& out, std::string& plot,
-                       const std::string& what = "");
+                       const std::string& what = "", bool stroboscopic = false);
 
 /// --kernels, --cache-dir, --no-cache as the library takes them.
 struct AnalysisKernels {

@@ -14,12 +14,14 @@
 #include "csv_writer.h"
 #include "engine.h"
 #include "error.h"
+#include "hsnc/periodic.h"
 #include "hsnc/simulate.h"
 #include "kernel_cache.h"
 #include "model_reader.h"
-#include "sample_grid.h"
-#include "simulate_outputs.h"
 #include "number_text.h"
+#include "sample_grid.h"
+#include "section.h"
+#include "simulate_outputs.h"
 
 namespace hsnc::cli {
 namespace {
@@ -127,6 +129,27 @@ InputError flagged(const OptionError& e, const SimulateOptions& o, bool quoted =
     return InputError(e.what());
 }
 
+// --section period: the rotation number of the section (hsnc::rotation_number)
+// in each dof's (x, v) plane; the summary takes the dof whose estimate has
+// the smallest error (its two halves agree best), stderr lists them all.
+void add_rotation(const Model& model, const SectionRecorder& section, SummaryRow& summary, bool quiet) {
+    const std::size_t n = model.dof(), width = 1 + 2 * n, points = section.rows().size() / width;
+    RotationNumber best;
+    std::string each;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double* row = section.rows().data();
+        const RotationNumber r = rotation_number(row + 1 + i, row + 1 + n + i, points, width);
+        if (!std::isnan(r.value) && (std::isnan(best.value) || r.error < best.error)) best = r;
+        each += (each.empty() ? "" : ", ") + model.masses[i].name + " " +
+                (std::isnan(r.value) ? std::string("-") : shortest_text(r.value) + " (" + shortest_text(r.error) + ")");
+    }
+    summary.number("rotation", best.value);
+    summary.number("rotation_error", best.error);
+    if (!quiet)
+        std::fprintf(stderr, "hsnc: rotation number over %zu section points (error), per dof: %s\n", points,
+                     each.c_str());
+}
+
 int simulate(const SimulateOptions& o) {
     const Model model = read_model(o.model, with_t_end(o.overrides, o.t_end));
     hsnc::SimulateOptions run;
@@ -159,6 +182,14 @@ int simulate(const SimulateOptions& o) {
     std::unique_ptr<OutputTarget> h5;
     if (!o.outputs.h5.empty()) h5 = std::make_unique<OutputTarget>(check_h5(o.outputs.h5));
     SimulateOutputs outputs(model, o.outputs, t_end, dt, h5.get());
+    if (outputs.stroboscopic() && !std::isnan(o.dt)) {
+        const double period = outputs.section_period(), m = std::round(period / o.dt);
+        if (!(m >= 1.0) || !(std::fabs(period / o.dt - m) <= 1e-9 * m))
+            throw InputError("--dt " + shortest_text(o.dt) + ": --section " + o.outputs.section +
+                             " takes the state every " + shortest_text(period) +
+                             " s: give a --dt that divides it (that period over a whole number), " +
+                             "or leave --dt out");
+    }
     const std::unique_ptr<H5Archive> archive = open_h5(h5.get(), model, o.overrides);
     SimulateMirror mirror;
     if (archive)
@@ -186,6 +217,7 @@ int simulate(const SimulateOptions& o) {
         summary.number(event_kind_name(EventKind::load_change), static_cast<double>(obs.count(EventKind::load_change)));
     for (std::size_t i = 0; i < model.dof(); ++i) summary.number("x_" + model.masses[i].name, sum.x[i]);
     for (std::size_t i = 0; i < model.dof(); ++i) summary.number("v_" + model.masses[i].name, sum.v[i]);
+    if (outputs.stroboscopic()) add_rotation(model, *outputs.section(), summary, o.quiet);
     if (archive) {
         summary.write(archive->table("simulate/summary"));
         archive->commit();
@@ -225,7 +257,7 @@ void add_simulate(CLI::App& app, int& exit_code) {
     sub->add_option("--plot", o->outputs.plot,
                     "draw x(t) of every mass into this PNG (gnuplot): the whole run with the switch events as "
                     "ticks, and a zoom (last 5 forcing periods, else the first 10%) with the events marked");
-    add_section_flags(sub, o->outputs.section, o->outputs.section_out, o->outputs.section_plot);
+    add_section_flags(sub, o->outputs.section, o->outputs.section_out, o->outputs.section_plot, "", true);
     sub->add_option("--plot-dofs", o->outputs.plot_dofs,
                     "the dofs --plot draws, comma separated, at most 8 (default: every dof, more than 8 along a colour "
                     "scale)")

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 
 #include "error.h"
@@ -29,19 +30,56 @@ std::string num(double v) {
     return buf;
 }
 
+// The OMEGA of --section period[:OMEGA]: the text given (a number > 0), else
+// the forcing's one frequency.
+double stroboscopic_omega(const Model& model, const std::string& text, const std::string& given,
+                          const std::string& flag) {
+    if (!given.empty()) {
+        char* end = nullptr;
+        const double omega = std::strtod(given.c_str(), &end);
+        if (end == given.c_str() || *end != '\0' || !std::isfinite(omega) || !(omega > 0))
+            throw InputError(flag + " '" + text + "': OMEGA must be a finite number > 0 (rad/s)");
+        if (!std::isfinite(2 * M_PI / omega))
+            throw InputError(flag + " '" + text + "': OMEGA is too small (its period is beyond the double range)");
+        return omega;
+    }
+    std::vector<double> omegas;
+    for (const Harmonic& h : model.forcing)
+        if (h.omega != 0.0 && std::find(omegas.begin(), omegas.end(), std::fabs(h.omega)) == omegas.end())
+            omegas.push_back(std::fabs(h.omega));
+    if (omegas.size() == 1) return omegas[0];
+    std::string list;
+    for (double w : omegas) list += (list.empty() ? "" : ", ") + num(w);
+    throw InputError(flag + " '" + text + "': give period:OMEGA, the frequency whose period the section is taken at " +
+                     (omegas.empty()
+                          ? std::string("(model '") + model.name + "' has no harmonic forcing)"
+                          : "(the forcing has " + std::to_string(omegas.size()) + " frequencies: " + list + ")"));
+}
+
 }  // namespace
 
-SectionSpec parse_section(const Model& model, const std::string& text, const std::string& flag) {
+SectionSpec parse_section(const Model& model, const std::string& text, const std::string& flag, bool stroboscopic) {
     SectionSpec s;
     s.text = text;
     const std::size_t colon = text.find(':');
     const std::string kind = text.substr(0, colon);
+    if (kind == "period") {
+        if (!stroboscopic)
+            throw InputError(flag + " '" + text +
+                             "': a stroboscopic section is taken by hsnc simulate --section "
+                             "period[:OMEGA]; here KIND is a switch kind");
+        s.period =
+            2 * M_PI / stroboscopic_omega(model, text, colon == std::string::npos ? "" : text.substr(colon + 1), flag);
+        return s;
+    }
     bool found = false;
     for (EventKind k : kSwitchEventKinds)
         if (kind == event_kind_name(k)) s.kind = k, found = true;
     if (!found)
-        throw InputError(flag + " '" + text + "': expected KIND[:NAME] with KIND one of contact_close, contact_open, "
-                         "stick, release, reversal");
+        throw InputError(flag + " '" + text +
+                         "': expected KIND[:NAME] with KIND one of contact_close, contact_open, "
+                         "stick, release, reversal" +
+                         (stroboscopic ? std::string(", or period[:OMEGA]") : std::string()));
     if (colon == std::string::npos) {
         if (is_contact_kind(s.kind) ? model.contacts.empty()
                                     : model.jenkins.empty() && std::none_of(model.masses.begin(), model.masses.end(),
@@ -80,14 +118,15 @@ SectionSpec parse_section(const Model& model, const std::string& text, const std
 }
 
 bool section_requested(const Model& model, const std::string& section, const std::string& out, const std::string& plot,
-                       SectionSpec* spec, bool archive) {
+                       SectionSpec* spec, bool archive, bool stroboscopic) {
     if (section.empty() && out.empty() && plot.empty()) return false;
     if (section.empty())
         throw InputError(std::string(out.empty() ? "--section-plot" : "--section-out") +
-                         ": needs --section KIND[:NAME] (the switch kind the section is taken at)");
+                         ": needs --section KIND[:NAME] (the switch kind the section is taken at)" +
+                         (stroboscopic ? std::string(" or --section period[:OMEGA]") : std::string()));
     if (out.empty() && plot.empty() && !archive)
         throw InputError("--section '" + section + "': needs --section-out CSV, --section-plot PNG or --h5 FILE");
-    *spec = parse_section(model, section, "--section");
+    *spec = parse_section(model, section, "--section", stroboscopic);
     return true;
 }
 
@@ -100,7 +139,19 @@ SectionRecorder::SectionRecorder(const Model& model, SectionSpec spec, CsvFile* 
 }
 
 void SectionRecorder::on_event(double t, EventKind kind, int element, const double* x, const double* v) {
-    if (kind != spec_.kind || (spec_.element >= 0 && element != spec_.element) || t < from_) return;
+    if (!std::isnan(spec_.period) || kind != spec_.kind || (spec_.element >= 0 && element != spec_.element) ||
+        t < from_)
+        return;
+    record(t, x, v);
+}
+
+void SectionRecorder::on_sample(double t, const double* x, const double* v) {
+    if (std::isnan(spec_.period) || t < from_) return;
+    const double periods = (t - model_.t0) / spec_.period;
+    if (std::fabs(periods - std::round(periods)) <= 1e-9) record(t, x, v);
+}
+
+void SectionRecorder::record(double t, const double* x, const double* v) {
     if (t == last_t_) return;  // one row per instant
     last_t_ = t;
     ++points_;
@@ -110,7 +161,7 @@ void SectionRecorder::on_event(double t, EventKind kind, int element, const doub
         state_numbers(model_, *csv_, t, x, v);
         csv_->end_row();
     }
-    if (keep_ && points_ <= kMaxSectionPlotPoints) {
+    if ((keep_ || !std::isnan(spec_.period)) && points_ <= kMaxSectionPlotPoints) {
         rows_.push_back(t);
         rows_.insert(rows_.end(), x, x + n);
         rows_.insert(rows_.end(), v, v + n);

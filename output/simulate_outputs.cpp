@@ -37,7 +37,7 @@ SimulateOutputs::SimulateOutputs(const Model& model, const OutputRequest& r, dou
         all.push_back((events_ = std::make_unique<OutputTarget>(check_output("--events", r.events))).get());
     if (!r.plot.empty()) all.push_back((plot_ = std::make_unique<OutputTarget>(check_output("--plot", r.plot))).get());
     section_asked_ =
-        section_requested(model, r.section, r.section_out, r.section_plot, &section_spec_, archive != nullptr);
+        section_requested(model, r.section, r.section_out, r.section_plot, &section_spec_, archive != nullptr, true);
     if (section_asked_) {
         if (!r.section_out.empty())
             all.push_back((section_out_ = std::make_unique<OutputTarget>(check_output("--section-out", r.section_out))).get());
@@ -48,7 +48,7 @@ SimulateOutputs::SimulateOutputs(const Model& model, const OutputRequest& r, dou
     check_distinct(all);
     if ((out_ || archive_) && !r.allow_large_output) {
         // Every number is printed with 17 significant digits: about 22 bytes with its comma.
-        const double rows = trajectory_rows(model.t0, t_end, dt);
+        const double rows = trajectory_rows(model.t0, t_end, sample_dt());
         const double bytes = rows * static_cast<double>(1 + 2 * model.dof()) * 22;
         if (rows > static_cast<double>(kLargeOutputRows) || bytes > kLargeOutputBytes)
             throw InputError("--dt " + short_number(dt) + ": the trajectory " + (out_ ? "--out" : "of --h5") +
@@ -61,9 +61,19 @@ SimulateOutputs::SimulateOutputs(const Model& model, const OutputRequest& r, dou
 }
 
 double SimulateOutputs::sample_dt() const {
-    if (out_ || archive_ || !plot_) return dt_;
-    const double coarsest = (t_end_ - model_.t0) / static_cast<double>(kLargeOutputRows);
-    return dt_ < coarsest ? coarsest : dt_;
+    double dt = dt_;
+    if (!out_ && !archive_ && plot_) {
+        const double coarsest = (t_end_ - model_.t0) / static_cast<double>(kLargeOutputRows);
+        dt = dt_ < coarsest ? coarsest : dt_;
+    }
+    if (stroboscopic()) {
+        // The widest spacing up to dt that puts a sample at every t0 + k period:
+        // period / m, m whole (dt itself when it is one already, to 1e-9).
+        const double period = section_spec_.period;
+        const double m = std::fmax(1.0, std::ceil(period / dt - 1e-9));
+        dt = period / m;
+    }
+    return dt;
 }
 
 void SimulateOutputs::open(const SimulateMirror& mirror) {
@@ -80,6 +90,7 @@ void SimulateOutputs::open(const SimulateMirror& mirror) {
 void SimulateOutputs::on_sample(double t, const double* x, const double* v) {
     csv_->on_sample(t, x, v);
     if (recorder_) recorder_->on_sample(t, x, v);
+    if (section_) section_->on_sample(t, x, v);
 }
 
 void SimulateOutputs::on_event(double t, EventKind kind, int element, const double* x, const double* v) {

@@ -3,6 +3,7 @@
 // while it runs (stopping at the first write error), committed after it.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -56,12 +57,19 @@ public:
                     const OutputTarget* archive = nullptr);
     /// `mirror`: where the tables go besides their CSV files (SimulateMirror).
     void open(const SimulateMirror& mirror = SimulateMirror());
-    /// Whether the run must report samples (a trajectory, an archive or a plot).
-    bool samples() const { return out_ || archive_ || plot_; }
+    /// Whether the run must report samples (a trajectory, an archive, a plot or a stroboscopic section).
+    bool samples() const { return out_ || archive_ || plot_ || stroboscopic(); }
     /// The spacing the run samples at: dt with a trajectory (--out); for the
     /// plot alone at least (t_end - t0) / kLargeOutputRows (the figure keeps
-    /// 2000 buckets: a tiny --dt must not make a run of endless samples).
+    /// 2000 buckets: a tiny --dt must not make a run of endless samples);
+    /// with `--section period` the widest period/m (m whole) up to that.
     double sample_dt() const;
+    /// `--section period[:OMEGA]` is asked for.
+    bool stroboscopic() const { return section_asked_ && !std::isnan(section_spec_.period); }
+    /// Its period 2 pi/OMEGA (NaN for a switch kind's section).
+    double section_period() const { return section_spec_.period; }
+    /// The section's points when there is one (section.h), else null.
+    const SectionRecorder* section() const { return section_.get(); }
 
     void on_sample(double t, const double* x, const double* v) override;
     void on_event(double t, EventKind kind, int element, const double* x, const double* v) override;

@@ -556,6 +556,11 @@ PYBIND11_MODULE(_hsnc, m) {
     m.attr("_MAX_MODEL_BYTES") = kMaxModelFileBytes;
     m.def("_sample_count", [](double t0, double t_end, double dt) { return SampleGrid(t0, t_end, dt).count(); });
     m.def("_forcing_period", &forcing_period);
+    m.def("_rotation_number", [](const py::array_t<double, py::array::c_style | py::array::forcecast>& x,
+                                 const py::array_t<double, py::array::c_style | py::array::forcecast>& v) {
+        const RotationNumber r = rotation_number(x.data(), v.data(), static_cast<std::size_t>(x.size()));
+        return py::make_tuple(r.value, r.error);
+    });
     // hsnc::lyapunov's default row_interval: the period of the slowest forcing harmonic, else 1 s.
     m.def("_default_row_interval", [](const Model& mo) { return lyapunov_row_interval(mo, LyapunovOptions{}); });
 }

@@ -18,6 +18,7 @@
 // with the last state and residual, never a wrong orbit.
 #pragma once
 
+#include <cmath>
 #include <complex>
 #include <cstddef>
 #include <functional>
@@ -135,5 +136,23 @@ inline constexpr int kMaxHarmonicOrder = 1000;
 /// 2*pi/forcing_fundamental(model): the forcing's common period; NaN when
 /// there is no harmonic forcing or its frequencies are not commensurate.
 double forcing_period(const Model& model);
+
+/// The rotation number of a stroboscopic Poincare section (the states at
+/// t0 + k T of one dof, k = 0..n-1; interface.md, `--section period`): the
+/// mean turn per period of the points about their centroid, clockwise in
+/// the (x, v) plane as phase-plane motion runs, in [0, 1). On an invariant
+/// circle (a quasi-periodic response) it is the torus's second frequency
+/// over the section's, omega_2 / omega_1 modulo 1; on a periodic orbit of p
+/// points it is q/p. Computed as a weighted Birkhoff average (weights
+/// exp(-1/(s(1-s))) over the run, s in (0, 1): Das, Sander and Yorke 2017),
+/// which converges faster than any power of n on a smooth invariant circle
+/// where the plain mean converges as 1/n.
+struct RotationNumber {
+    double value = NAN;  ///< NaN: fewer than 8 points, or x or v the same in every point
+    /// |the first half's average - the second half's|: at rounding level on an invariant
+    /// circle, about 1/sqrt(n) on a chaotic set.
+    double error = NAN;
+};
+RotationNumber rotation_number(const double* x, const double* v, std::size_t n, std::size_t stride = 1);
 
 }  // namespace hsnc

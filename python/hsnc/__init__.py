@@ -27,8 +27,8 @@ import numpy as np
 from . import _hsnc
 from ._hsnc import InputError, RunError
 
-__all__ = ["InputError", "Model", "Result", "RunError", "generate", "lyapunov", "modes", "periodic", "simulate", "sweep",
-           "sweep_map"]
+__all__ = ["InputError", "Model", "Result", "RunError", "generate", "lyapunov", "modes", "periodic", "rotation_number",
+           "simulate", "sweep", "sweep_map"]
 
 
 # Argument checks. Every argument is checked here for what the native part
@@ -621,6 +621,32 @@ def lyapunov(model, t_end, transient=0.0, row_interval=None, kernels="auto", x0=
         _output_guard(f, "row_interval", row, _hsnc._sample_count(0.0, t_end, row),
                       1 + 2 * model.dof + len(model.jenkins), allow_large_output, "t_end")
     return _hsnc._lyapunov(model._native, t_end, transient, row_interval, kernels)
+
+
+def rotation_number(x, v):
+    """The rotation number of a stroboscopic Poincare section (as `hsnc
+    simulate --section period` gives it): x and v, one dof's states at
+    t0 + k T (for example simulate(model, dt=T)'s x[:, i] and v[:, i]). The
+    mean turn per period about the points' centroid, clockwise in the (x, v)
+    plane, in [0, 1), as a weighted Birkhoff average: omega_2/omega_1 modulo
+    1 on an invariant circle (a quasi-periodic response), q/p on a periodic
+    orbit of p points. Returns (value, error), error the difference between
+    the two halves' averages (rounding level on an invariant circle, about
+    1/sqrt(n) on a chaotic set); (nan, nan) for fewer than 8 points or a
+    section whose x or v does not move."""
+    f = "hsnc.rotation_number"
+    arrays = []
+    for name, a in (("x", x), ("v", v)):
+        try:
+            a = np.asarray(a, dtype=float)
+        except (TypeError, ValueError):
+            _refuse(f, name, a, "a 1-D sequence of finite numbers")
+        if a.ndim != 1 or not np.all(np.isfinite(a)):
+            _refuse(f, name, x if name == "x" else v, "a 1-D sequence of finite numbers")
+        arrays.append(a)
+    if arrays[0].size != arrays[1].size:
+        raise InputError(f"{f}(): x and v must have the same length (got {arrays[0].size} and {arrays[1].size})")
+    return _hsnc._rotation_number(arrays[0], arrays[1])
 
 
 # ---- to_h5: a result with what made it, in the layout of the command line's --h5 ----

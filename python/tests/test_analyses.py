@@ -93,3 +93,40 @@ def test_bad_input_raises_input_error():
         hsnc.lyapunov(model, t_end=-1)
     with pytest.raises(hsnc.InputError, match="t_end"):
         hsnc.lyapunov(model, t_end="soon")
+
+
+TWO_TONE = """name = "two_tone"
+[[mass]]
+name = "m"
+m = 1.0
+[[spring]]
+between = ["m", "ground"]
+k = 1.0
+[damping]
+alpha = 1.0
+[[forcing]]
+omega = 1.0
+amplitude = { m = 1.0 }
+[[forcing]]
+omega = 1.4142135623730951
+amplitude = { m = 0.5 }
+"""
+
+
+def test_rotation_number_of_a_stroboscopic_section_matches_the_command_line(cli, tmp_path):
+    # Under 1 and sqrt(2) rad/s the section at 2 pi turns by sqrt(2) - 1 of a turn per period.
+    path = tmp_path / "two_tone.toml"
+    path.write_text(TWO_TONE)
+    T = 2 * math.pi
+    r = hsnc.simulate(hsnc.Model.from_file(path), t_end=1273 * T, dt=T)
+    value, error = hsnc.rotation_number(r.x[:, 0], r.v[:, 0])
+    assert abs(value - (math.sqrt(2) - 1)) < 1e-13 and error < 1e-11
+    line = fields(cli("simulate", path, "--t-end", repr(1273 * T), "--section", "period:1", "--section-out",
+                      tmp_path / "s.csv", "--quiet").stdout.strip())
+    assert float(line["rotation"]) == value and float(line["rotation_error"]) == error
+    assert all(math.isnan(z) for z in hsnc.rotation_number([1.0] * 10, np.arange(10.0)))  # x does not move
+    for bad in ([[1.0, 2.0]], [1.0, math.nan], "x"):
+        with pytest.raises(hsnc.InputError, match=r"hsnc.rotation_number\(\): x = .*: expected a 1-D sequence"):
+            hsnc.rotation_number(bad, [1.0, 2.0])
+    with pytest.raises(hsnc.InputError, match="x and v must have the same length"):
+        hsnc.rotation_number([1.0, 2.0], [1.0])

@@ -1,0 +1,58 @@
+// hsnc -- the rotation number of a stroboscopic section (api/hsnc/periodic.h
+// rotation_number; interface.md, `--section period`).
+#include <cmath>
+
+#include "hsnc/periodic.h"
+
+namespace hsnc {
+namespace {
+
+// The weighted Birkhoff average of the turns of points [lo, hi) - each
+// step's angle about (cx, cv), clockwise, in [0, 2 pi) - in turns.
+double weighted_turns(const double* x, const double* v, std::size_t stride, std::size_t lo, std::size_t hi, double cx,
+                      double cv, double sx, double sv) {
+    const auto angle = [&](std::size_t k) { return std::atan2(-(v[k * stride] - cv) / sv, (x[k * stride] - cx) / sx); };
+    const double steps = static_cast<double>(hi - lo - 1);
+    double sum = 0.0, weights = 0.0, before = angle(lo);
+    for (std::size_t k = lo + 1; k < hi; ++k) {
+        const double now = angle(k);
+        double turn = now - before;
+        if (turn < 0.0) turn += 2 * M_PI;
+        if (turn >= 2 * M_PI) turn -= 2 * M_PI;
+        before = now;
+        const double s = static_cast<double>(k - lo) / (steps + 1.0);  // in (0, 1)
+        const double w = std::exp(-1.0 / (s * (1.0 - s)));
+        sum += w * turn;
+        weights += w;
+    }
+    return sum / weights / (2 * M_PI);
+}
+
+}  // namespace
+
+RotationNumber rotation_number(const double* x, const double* v, std::size_t n, std::size_t stride) {
+    RotationNumber r;
+    if (n < 8 || stride == 0) return r;
+    // About the centroid, each coordinate in units of its own spread (any point
+    // inside the curve gives the same rotation number; the scaling keeps the
+    // angles well conditioned whatever x's and v's units).
+    double cx = 0.0, cv = 0.0;
+    for (std::size_t k = 0; k < n; ++k) cx += x[k * stride], cv += v[k * stride];
+    cx /= static_cast<double>(n), cv /= static_cast<double>(n);
+    double sx = 0.0, sv = 0.0, ax = 0.0, av = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+        sx = std::fmax(sx, std::fabs(x[k * stride] - cx)), sv = std::fmax(sv, std::fabs(v[k * stride] - cv));
+        ax = std::fmax(ax, std::fabs(x[k * stride])), av = std::fmax(av, std::fabs(v[k * stride]));
+    }
+    // x or v the same in every point but for rounding: a fixed point of the
+    // section (a periodic orbit of its period), or a dof the motion leaves still.
+    if (!(sx > 1e-10 * ax) || !(sv > 1e-10 * av) || !std::isfinite(sx + sv)) return r;
+    r.value = weighted_turns(x, v, stride, 0, n, cx, cv, sx, sv);
+    const double first = weighted_turns(x, v, stride, 0, n / 2, cx, cv, sx, sv);
+    const double second = weighted_turns(x, v, stride, n / 2, n, cx, cv, sx, sv);
+    r.error = std::fabs(first - second);
+    if (r.value >= 1.0) r.value -= 1.0;
+    return r;
+}
+
+}  // namespace hsnc
