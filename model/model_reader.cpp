@@ -578,13 +578,53 @@ private:
             if (const auto* arr = node.as_array())
                 for (const toml::node& v : *arr) walk(v);
         };
-        for (auto&& [k, v] : root)
+        for (auto&& [k, v] : root) {
+            if (k.str() == "base" && v.is_array()) {  // a base motion's direction acts through M on every dof
+                for (const toml::node& b : *v.as_array())
+                    if (const auto* tab = b.as_table())
+                        for (auto&& [bk, bv] : *tab)
+                            if (bk.str() != "direction") walk(bv);
+                continue;
+            }
             if (k.str() != "structure" && k.str() != "parameters" && k.str() != "name" && k.str() != "description")
                 walk(v);
+        }
         std::vector<std::size_t> out;
         for (std::size_t i = 0; i < names.size(); ++i)
             if (named[i]) out.push_back(i);
         return out;
+    }
+
+    /// M r of each [[base]] over the full structure (a column each; r from
+    /// its `direction`, which may name any dof of the structure, the interior
+    /// included: a rigid translation moves every dof). Read before the
+    /// reduction removes the interior; a missing `direction` is left for
+    /// read_base to refuse.
+    Eigen::MatrixXd base_influence(const toml::table& root, const std::vector<std::string>& names,
+                                   const SparseMatrixD& M) {
+        const auto tables = table_array(root, "base");
+        std::unordered_map<std::string, std::size_t> index;
+        for (std::size_t i = 0; i < names.size(); ++i) index.emplace(names[i], i);
+        Eigen::MatrixXd R =
+            Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(names.size()), static_cast<Eigen::Index>(tables.size()));
+        for (std::size_t j = 0; j < tables.size(); ++j) {
+            const std::string key = "base[" + std::to_string(j + 1) + "].direction";
+            const toml::node* d = tables[j]->get("direction");
+            if (!d) continue;
+            const toml::table* table = d->as_table();
+            if (!table || table->empty())
+                fail(d, key, "expected a table of dof names and weights, e.g. { u1 = 1.0, u2 = 1.0 }");
+            for (auto&& [k, v] : *table) {
+                const std::string name(k.str()), at = join(key, name);
+                const auto it = index.find(name);
+                if (it == index.end())
+                    fail_at(k.source().begin.line, at, "'" + excerpt(name) + "' is not a dof of the structure");
+                const double w = number(v, at);
+                if (w == 0.0) fail(&v, at, "a weight of 0 (leave the dof out)");
+                R(static_cast<Eigen::Index>(it->second), static_cast<Eigen::Index>(j)) = w;
+            }
+        }
+        return M * R;
     }
 
     /// [reduction]: the structure's matrices read sparse and reduced
@@ -638,9 +678,13 @@ private:
             fail_at(table_line(*r, "reduction"), "reduction",
                     "no dof of the structure is named by an element, load, forcing or initial value, nor in "
                     "reduction.boundary: nothing would stay physical");
+        const Eigen::MatrixXd base_forces = base_influence(root, names, Ms);
         ReducedStructure out;
-        if (const std::string why = craig_bampton_memo(Ms, Ks, Cs ? &*Cs : nullptr, boundary, settings, out); !why.empty())
+        if (const std::string why =
+                craig_bampton_memo(Ms, Ks, Cs ? &*Cs : nullptr, boundary, settings, out, &base_forces);
+            !why.empty())
             fail_at(table_line(*r, "reduction"), "reduction", why);
+        reduced_base_forces_ = out.forces;
         const auto nr = static_cast<std::size_t>(out.M.rows());
         if (nr > kMaxMatrixDimension)
             fail(modes ? modes : cutoff, modes ? "reduction.modes" : "reduction.cutoff",
@@ -1093,12 +1137,13 @@ private:
             const toml::table& t = *tables[i];
             const std::string path = "base[" + std::to_string(i + 1) + "]";
             check_keys(t, path, {"motion", "omega", "amplitude", "phase", "direction"});
-            // -M r x_g'' of a reduced model needs r over the interior dofs the reduction removed
-            // (a rigid translation is not T r_reduced): refused rather than a wrong force.
-            if (model_.reduction.present)
+            // A reduced structure's -T^T M r x_g'' comes from r over the full structure
+            // (base_influence); where massless dofs are condensed after the reduction its
+            // rows would need that fold too: refused rather than a wrong force.
+            const bool reduced = model_.reduction.present;
+            if (reduced && model_.condensation.present())
                 fail_at(table_line(t, path), path,
-                        "a reduced structure ([reduction]) takes no base motion yet: its effective force needs the "
-                        "influence vector over the interior dofs the reduction removes");
+                        "a reduced structure whose massless dofs are condensed takes no base motion yet");
             BaseMotion b;
             const std::string given = required_string(t, path, "motion");
             if (given == "displacement")
@@ -1117,7 +1162,13 @@ private:
             b.amplitude = required_number(t, path, "amplitude");
             b.phase = optional_number(t, path, "phase").value_or(0.0);
             b.direction.assign(model_.dof(), 0.0);
-            if (const toml::node* d = t.get("direction")) {
+            if (const toml::node* d = t.get("direction"); d && reduced) {
+                // Read by base_influence over the full structure; the boundary dofs' weights kept for `check`.
+                for (auto&& [k, v] : *d->as_table())
+                    if (const int i = model_.mass_index(std::string(k.str())); i >= 0)
+                        b.direction[static_cast<std::size_t>(i)] =
+                            number(v, join(path + ".direction", std::string(k.str())));
+            } else if (d) {
                 for (const Weight& w : direction(*d, path + ".direction"))
                     b.direction[static_cast<std::size_t>(w.body)] = w.w;
             } else if (model_.structure.present) {
@@ -1137,7 +1188,10 @@ private:
             h.amplitude.assign(model_.dof(), 0.0);
             for (std::size_t r = 0; r < model_.dof(); ++r) {
                 double mr = 0.0;
-                for (std::size_t c = 0; c < model_.dof(); ++c) mr += model_.mass_entry(r, c) * b.direction[c];
+                if (reduced)  // T^T M r, projected by the reduction
+                    mr = reduced_base_forces_(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(i));
+                else
+                    for (std::size_t c = 0; c < model_.dof(); ++c) mr += model_.mass_entry(r, c) * b.direction[c];
                 h.amplitude[r] = -mr * s;
                 if (!std::isfinite(h.amplitude[r]))
                     fail(t.get("amplitude"), path + ".amplitude",
@@ -1385,6 +1439,7 @@ private:
     /// With full_frequencies_ and [reduction]: the full and reduced M, K until compare_reduction.
     std::optional<SparseMatrixD> full_M_, full_K_;
     std::optional<Eigen::MatrixXd> reduced_M_, reduced_K_;
+    Eigen::MatrixXd reduced_base_forces_;  ///< [reduction]: T^T M r of each [[base]] (base_influence), a column each
     std::map<std::string, Override> set_, x0_, v0_;
     std::vector<std::string> parameter_names_;     ///< all parameters, file order (implicit g first)
     std::unordered_map<std::string, double> values_;  ///< parameters evaluated so far

@@ -147,7 +147,7 @@ Eigen::MatrixXd project(const Blocks& A, const Eigen::MatrixXd& Psi, const Eigen
 
 std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
                           const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
-                          ReducedStructure& out) {
+                          ReducedStructure& out, const Eigen::MatrixXd* forces) {
     const auto n = static_cast<std::size_t>(K.rows());
     std::vector<int> b(n, -1), in(n, -1);
     int nb = 0, ni = 0;
@@ -204,6 +204,16 @@ std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const 
     for (Index k = 0; k < nq; ++k) out.K(nb + k, nb + k) = lambda(k);
     if (C) out.C = project(split(*C, b, in, nb, ni), Psi, Phi);
     else out.C.resize(0, 0);
+    // T^T F = [F_B + Psi^T F_I; Phi^T F_I].
+    const Index nf = forces ? forces->cols() : 0;
+    Eigen::MatrixXd FB(nb, nf), FI(ni, nf);
+    for (std::size_t i = 0; i < n && nf > 0; ++i)
+        (b[i] >= 0 ? FB.row(b[i]) : FI.row(in[i])) = forces->row(static_cast<Index>(i));
+    out.forces.resize(nb + nq, nf);
+    if (nf > 0) {
+        out.forces.topRows(nb) = FB + Psi.transpose() * FI;
+        out.forces.bottomRows(nq) = Phi.transpose() * FI;
+    }
     return "";
 }
 
@@ -270,7 +280,7 @@ Memo& memo() {
 
 std::string craig_bampton_memo(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
                                const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
-                               ReducedStructure& out) {
+                               ReducedStructure& out, const Eigen::MatrixXd* forces) {
     Fingerprint f;
     f.add(M);
     f.add(K);
@@ -280,6 +290,9 @@ std::string craig_bampton_memo(const SparseMatrixD& M, const SparseMatrixD& K, c
     for (const std::size_t b : boundary) f.add(static_cast<std::uint64_t>(b));
     f.add(static_cast<std::uint64_t>(settings.modes));
     f.add(settings.cutoff);
+    f.add(static_cast<std::uint64_t>(forces ? forces->cols() : 0));
+    for (Eigen::Index j = 0; forces && j < forces->cols(); ++j)
+        for (Eigen::Index i = 0; i < forces->rows(); ++i) f.add((*forces)(i, j));
     const std::array<std::uint64_t, 2> key = f.value();
     Memo& m = memo();
     {
@@ -293,7 +306,7 @@ std::string craig_bampton_memo(const SparseMatrixD& M, const SparseMatrixD& K, c
     }
     // Computed outside the lock: two threads may both reduce the same
     // structure once; each result is the same.
-    if (std::string why = craig_bampton(M, K, C, boundary, settings, out); !why.empty()) return why;
+    if (std::string why = craig_bampton(M, K, C, boundary, settings, out, forces); !why.empty()) return why;
     const std::lock_guard<std::mutex> guard(m.lock);
     ++m.counts.computed;
     m.kept.emplace_front(key, out);

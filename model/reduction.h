@@ -44,16 +44,20 @@ struct ReducedStructure {
     Eigen::MatrixXd M, K, C;            ///< C empty when the full model has none
     Eigen::VectorXd interface_omega;    ///< the kept fixed-interface modes' circular frequencies, rad/s
     std::size_t full_dofs = 0;
+    /// T^T F of the full-model forces F given to the reduction (one column
+    /// each: a base motion's M r), in the reduced dofs' order; 0 columns when none.
+    Eigen::MatrixXd forces;
 };
 
 /// Craig-Bampton reduction of (M, K, C) to `boundary` (sorted, distinct
 /// full-model indices) plus the fixed-interface modes `settings` asks for.
 /// Returns "" and fills `out`, or the reason it cannot (K_II singular: the
 /// interior moves rigidly once B is held; more modes than interior dofs;
-/// an eigensolver that does not converge). `C` may be null.
+/// an eigensolver that does not converge). `C` may be null; `forces`
+/// (full dofs x k, may be null) are projected into out.forces.
 std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
                           const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
-                          ReducedStructure& out);
+                          ReducedStructure& out, const Eigen::MatrixXd* forces = nullptr);
 
 /// craig_bampton, remembered for the process: the same matrices (every
 /// entry's bits), boundary and settings give the stored reduction without a
@@ -62,7 +66,7 @@ std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const 
 /// inputs; the last kReductionMemo results are kept. Thread-safe.
 std::string craig_bampton_memo(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
                                const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
-                               ReducedStructure& out);
+                               ReducedStructure& out, const Eigen::MatrixXd* forces = nullptr);
 inline constexpr std::size_t kReductionMemo = 4;
 
 /// How often craig_bampton_memo computed a reduction and how often it reused one.
