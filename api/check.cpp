@@ -77,6 +77,11 @@ void print_summary(const Model& model, std::ostream& out) {
             };
             table(r.open, "open");
             table(r.closed, "closed");
+            if (!r.response.empty())
+                out << "  response at the boundary dofs, the structure alone (elements left out): full vs reduced, "
+                       "relative error\n";
+            for (const ReductionSource::Response& e : r.response)
+                out << "    " << e.what << ": " << (e.problem.empty() ? num(e.error) : "- (" + e.problem + ")") << "\n";
         }
         if (model.condensation.present()) {
             std::string list;

@@ -145,6 +145,18 @@ struct ReductionSource {
         std::string problem;
     };
     Frequencies open, closed;
+    /// Read with ModelOverrides::full_frequencies: the steady response of the
+    /// structure alone (its M, K, C; the elements left out) to the constant
+    /// load and to each forcing harmonic, full against reduced, as the
+    /// largest difference over the boundary dofs relative to the largest
+    /// full amplitude there; `what` names the load ("load", "forcing 2 at
+    /// 20 rad/s"), error NaN with `problem` saying why it was not computed.
+    struct Response {
+        std::string what;
+        double error = 0.0;
+        std::string problem;
+    };
+    std::vector<Response> response;
 };
 inline constexpr std::size_t kReportedFrequencies = 10;
 

@@ -11,13 +11,14 @@
 #include <cerrno>
 #include <cfloat>
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <cstring>
 #include <functional>
 #include <map>
 #include <optional>
-#include <unordered_map>
 #include <sstream>
+#include <unordered_map>
 
 #include <Eigen/Eigenvalues>
 #include <toml++/toml.h>
@@ -127,7 +128,7 @@ public:
         read_initial(root);
         read_load_steps(root);
         check_finite_rates(root);
-        if (full_M_) compare_reduction();
+        if (full_M_) compare_reduction(), compare_responses();
         read_simulate(root);
         if (t_end_override_) {
             const double t_end = *t_end_override_;
@@ -731,6 +732,8 @@ private:
             full_K_ = Ks;
             reduced_M_ = out.M;
             reduced_K_ = out.K;
+            if (Cs) full_C_ = *Cs, reduced_C_ = out.C;
+            full_base_forces_ = base_forces;
         }
     }
 
@@ -768,6 +771,87 @@ private:
         SparseMatrixD extra(full_K_->rows(), full_K_->cols());
         extra.setFromTriplets(add.begin(), add.end());
         compare(*full_K_ + extra, Kr, red.closed);
+    }
+
+    /// The reduction's response error (ReductionSource::response): the
+    /// structure's steady response to the load (static) and to each forcing
+    /// harmonic, (K - w^2 M + i w C) X = F, full (sparse LU) against reduced
+    /// (dense LU), at the boundary dofs. C: the structure's own, else
+    /// Rayleigh's alpha M + beta K. The full F: the load and harmonics on
+    /// the boundary dofs where they act, a base motion's -M r s.
+    void compare_responses() {
+        using Complex = std::complex<double>;
+        ReductionSource& red = model_.reduction;
+        const auto n = static_cast<Eigen::Index>(red.full_dofs), nr = static_cast<Eigen::Index>(model_.dof());
+        const auto nb = static_cast<Eigen::Index>(red.boundary);
+        if (nr != reduced_M_->rows()) {  // massless dofs condensed after the reduction: the dofs differ
+            red.response.push_back({"every load", NAN, "massless dofs are condensed"});
+            return;
+        }
+        const SparseMatrixD C = full_C_ ? *full_C_ : SparseMatrixD(model_.alpha * *full_M_ + model_.beta * *full_K_);
+        const Eigen::MatrixXd Cr =
+            reduced_C_ ? *reduced_C_ : Eigen::MatrixXd(model_.alpha * *reduced_M_ + model_.beta * *reduced_K_);
+        // One load: the reduced F on the reduced dofs, the full one (null: it acts on a modal coordinate).
+        auto compare = [&](const std::string& what, double w, const Eigen::VectorXd& Fr, const Eigen::VectorXd* F) {
+            ReductionSource::Response r{what, NAN, ""};
+            if (!F) {
+                r.problem = "it acts on a modal coordinate";
+                red.response.push_back(r);
+                return;
+            }
+            Eigen::VectorXcd X;
+            r.problem = harmonic_response(*full_M_, *full_K_, C, w, *F, X);
+            const Eigen::MatrixXcd Ar =
+                (*reduced_K_ - w * w * *reduced_M_).cast<Complex>() + Complex(0, w) * Cr.cast<Complex>();
+            const Eigen::FullPivLU<Eigen::MatrixXcd> lur(Ar);
+            if (r.problem.empty() && !lur.isInvertible())
+                r.problem = w == 0.0 ? "K is singular (a rigid-body motion)" : "the structure resonates there";
+            if (!r.problem.empty()) {
+                red.response.push_back(r);
+                return;
+            }
+            const Eigen::VectorXcd Xr = lur.solve(Fr.cast<Complex>());
+            double diff = 0.0, size = 0.0;
+            for (Eigen::Index i = 0; i < nb; ++i) {
+                const Complex full = X(static_cast<Eigen::Index>(red.boundary_index[static_cast<std::size_t>(i)]));
+                diff = std::max(diff, std::abs(Xr(i) - full));
+                size = std::max(size, std::abs(full));
+            }
+            r.error = size > 0.0 ? diff / size : diff;
+            red.response.push_back(r);
+        };
+        // A load on the reduced dofs as the full structure feels it (null when it names a modal coordinate).
+        auto full_force = [&](const std::vector<double>& f, Eigen::VectorXd& F) {
+            F = Eigen::VectorXd::Zero(n);
+            for (Eigen::Index i = 0; i < nr; ++i)
+                if (f[static_cast<std::size_t>(i)] != 0.0) {
+                    if (i >= nb) return false;
+                    F(static_cast<Eigen::Index>(red.boundary_index[static_cast<std::size_t>(i)])) =
+                        f[static_cast<std::size_t>(i)];
+                }
+            return true;
+        };
+        Eigen::VectorXd F;
+        if (std::any_of(model_.load.begin(), model_.load.end(), [](double v) { return v != 0.0; })) {
+            const bool on_boundary = full_force(model_.load, F);
+            compare("load (static)", 0.0, Eigen::Map<const Eigen::VectorXd>(model_.load.data(), nr),
+                    on_boundary ? &F : nullptr);
+        }
+        for (std::size_t h = 0; h < model_.forcing.size(); ++h) {
+            const Harmonic& hm = model_.forcing[h];
+            bool on_boundary = false;
+            const auto base = std::find_if(model_.base.begin(), model_.base.end(),
+                                           [&](const BaseMotion& b) { return b.harmonic == h; });
+            if (base != model_.base.end()) {
+                const auto j = static_cast<std::size_t>(base - model_.base.begin());
+                F = -base_scale_[j] * full_base_forces_.col(static_cast<Eigen::Index>(j));
+                on_boundary = true;
+            } else {
+                on_boundary = full_force(hm.amplitude, F);
+            }
+            compare("forcing " + std::to_string(h + 1) + " at " + show(hm.omega) + " rad/s", hm.omega,
+                    Eigen::Map<const Eigen::VectorXd>(hm.amplitude.data(), nr), on_boundary ? &F : nullptr);
+        }
     }
 
     /// structure.dofs = "FILE": the dof names one per line, in matrix order
@@ -1185,6 +1269,7 @@ private:
             double s = b.amplitude;
             if (b.given == BaseMotion::Given::displacement) s = -b.amplitude * b.omega * b.omega;
             if (b.given == BaseMotion::Given::velocity) s = b.amplitude * b.omega, h.phase = b.phase + M_PI / 2;
+            base_scale_.push_back(s);
             h.amplitude.assign(model_.dof(), 0.0);
             for (std::size_t r = 0; r < model_.dof(); ++r) {
                 double mr = 0.0;
@@ -1439,6 +1524,10 @@ private:
     /// With full_frequencies_ and [reduction]: the full and reduced M, K until compare_reduction.
     std::optional<SparseMatrixD> full_M_, full_K_;
     std::optional<Eigen::MatrixXd> reduced_M_, reduced_K_;
+    std::optional<SparseMatrixD> full_C_;
+    std::optional<Eigen::MatrixXd> reduced_C_;
+    Eigen::MatrixXd full_base_forces_;     ///< with full_frequencies_: M r of each [[base]] over the full structure
+    std::vector<double> base_scale_;       ///< each [[base]]'s x_g'' amplitude s (its harmonic is -M r s)
     Eigen::MatrixXd reduced_base_forces_;  ///< [reduction]: T^T M r of each [[base]] (base_influence), a column each
     std::map<std::string, Override> set_, x0_, v0_;
     std::vector<std::string> parameter_names_;     ///< all parameters, file order (implicit g first)

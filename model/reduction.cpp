@@ -1,5 +1,7 @@
 #include "reduction.h"
 
+#include <complex>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -10,10 +12,11 @@
 #include <mutex>
 #include <utility>
 
-#include <Eigen/Eigenvalues>
-#include <Eigen/SparseCholesky>
 #include <Spectra/MatOp/SparseSymMatProd.h>
 #include <Spectra/SymGEigsShiftSolver.h>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseLU>
 
 namespace hsnc {
 namespace {
@@ -214,6 +217,21 @@ std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const 
         out.forces.topRows(nb) = FB + Psi.transpose() * FI;
         out.forces.bottomRows(nq) = Phi.transpose() * FI;
     }
+    return "";
+}
+
+std::string harmonic_response(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD& C, double w,
+                              const Eigen::VectorXd& F, Eigen::VectorXcd& X) {
+    using Complex = std::complex<double>;
+    if (K.rows() > static_cast<Index>(kMaxResponseDofs))
+        return "not computed above " + std::to_string(kMaxResponseDofs) + " dofs";
+    const SparseMatrixD re = K - w * w * M;
+    const Eigen::SparseMatrix<Complex> A = re.cast<Complex>() + Complex(0, w) * C.cast<Complex>();
+    Eigen::SparseLU<Eigen::SparseMatrix<Complex>> lu;
+    lu.compute(A);
+    if (lu.info() == Eigen::Success) X = lu.solve(F.cast<Complex>());
+    if (lu.info() != Eigen::Success || X.size() != K.rows() || !X.allFinite())
+        return w == 0.0 ? "K is singular (a rigid-body motion)" : "the structure resonates there";
     return "";
 }
 
