@@ -188,34 +188,14 @@ TEST(QuasiPeriodic, ACycleGivesItsFractionAndChaosItsError) {
     EXPECT_GT(summary_value(r.out, "rotation_error"), 1e-4);
 }
 
-// A stop and a spring, heavily damped, under omega and sqrt(2) omega: a
-// torus of the forcing's two phases (tests/test_engine_orders.cpp's model
-// with an incommensurate second order).
-const char* kStopTwoTone = R"(name = "stop_two_tone"
-[[mass]]
-name = "m"
-m = 1.0
-[[spring]]
-between = ["ground", "m"]
-k = 100.0
-[[contact]]
-name = "stop"
-between = ["m", "ground"]
-gap = 0.02
-k = 900.0
-[damping]
-alpha = 3.0
-[[forcing]]
-omega = 9.0
-amplitude = { m = 3.0 }
-[[forcing]]
-omega = 12.727922061357855
-phase = 0.4
-amplitude = { m = 2.0 }
-)";
+// A stop and a spring, heavily damped, under 9 and 9 sqrt(2) rad/s: a torus
+// of the forcing's two phases (the bundled example; tests/test_engine_orders.cpp's
+// model with an incommensurate second order).
+const std::string kStopTwoTone = std::string(HSNC_SOURCE_DIR) + "/examples/two-tone-stop.toml";
 
 TEST(QuasiPeriodic, AStopUnderTwoFrequenciesAgainstCvode) {
-    const std::string model = write_temp("stop_two_tone.toml", kStopTwoTone), section = temp_path("stop_section.csv");
+    const std::string& model = kStopTwoTone;
+    const std::string section = temp_path("stop_section.csv");
     double values[2];
     for (int k = 0; k < 2; ++k) {
         const auto r = run_hsnc("simulate '" + model + "' --t-end 2800 --section period:9 --section-out '" + section +
