@@ -1,28 +1,22 @@
 // hsnc -- the rotation number of a stroboscopic section (api/hsnc/periodic.h
 // rotation_number; interface.md, `--section period`).
 #include <cmath>
+#include <vector>
 
 #include "hsnc/periodic.h"
 
 namespace hsnc {
 namespace {
 
-// The weighted Birkhoff average of the turns of points [lo, hi) - each
-// step's angle about (cx, cv), clockwise, in [0, 2 pi) - in turns.
-double weighted_turns(const double* x, const double* v, std::size_t stride, std::size_t lo, std::size_t hi, double cx,
-                      double cv, double sx, double sv) {
-    const auto angle = [&](std::size_t k) { return std::atan2(-(v[k * stride] - cv) / sv, (x[k * stride] - cx) / sx); };
-    const double steps = static_cast<double>(hi - lo - 1);
-    double sum = 0.0, weights = 0.0, before = angle(lo);
-    for (std::size_t k = lo + 1; k < hi; ++k) {
-        const double now = angle(k);
-        double turn = now - before;
-        if (turn < 0.0) turn += 2 * M_PI;
-        if (turn >= 2 * M_PI) turn -= 2 * M_PI;
-        before = now;
-        const double s = static_cast<double>(k - lo) / (steps + 1.0);  // in (0, 1)
+// The weighted Birkhoff average, in turns, of turns[lo, hi): each the
+// step's angle about the centre, clockwise, in [0, 2 pi).
+double weighted_turns(const std::vector<double>& turns, std::size_t lo, std::size_t hi) {
+    const double steps = static_cast<double>(hi - lo);
+    double sum = 0.0, weights = 0.0;
+    for (std::size_t k = lo; k < hi; ++k) {
+        const double s = static_cast<double>(k - lo + 1) / (steps + 1.0);  // in (0, 1)
         const double w = std::exp(-1.0 / (s * (1.0 - s)));
-        sum += w * turn;
+        sum += w * turns[k];
         weights += w;
     }
     return sum / weights / (2 * M_PI);
@@ -47,9 +41,22 @@ RotationNumber rotation_number(const double* x, const double* v, std::size_t n, 
     // x or v the same in every point but for rounding: a fixed point of the
     // section (a periodic orbit of its period), or a dof the motion leaves still.
     if (!(sx > 1e-10 * ax) || !(sv > 1e-10 * av) || !std::isfinite(sx + sv)) return r;
-    r.value = weighted_turns(x, v, stride, 0, n, cx, cv, sx, sv);
-    const double first = weighted_turns(x, v, stride, 0, n / 2, cx, cv, sx, sv);
-    const double second = weighted_turns(x, v, stride, n / 2, n, cx, cv, sx, sv);
+    // turns[k]: the step from point k to point k + 1.
+    const auto angle = [&](std::size_t k) { return std::atan2(-(v[k * stride] - cv) / sv, (x[k * stride] - cx) / sx); };
+    std::vector<double> turns(n - 1);
+    double before = angle(0);
+    for (std::size_t k = 0; k + 1 < n; ++k) {
+        const double now = angle(k + 1);
+        double turn = now - before;
+        if (turn < 0.0) turn += 2 * M_PI;
+        if (turn >= 2 * M_PI) turn -= 2 * M_PI;
+        turns[k] = turn;
+        before = now;
+    }
+    r.value = weighted_turns(turns, 0, n - 1);
+    // The halves: points [0, n/2) and [n/2, n).
+    const double first = weighted_turns(turns, 0, n / 2 - 1);
+    const double second = weighted_turns(turns, n / 2, n - 1);
     r.error = std::fabs(first - second);
     if (r.value >= 1.0) r.value -= 1.0;
     return r;

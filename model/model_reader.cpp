@@ -596,9 +596,10 @@ private:
         return out;
     }
 
-    /// M r of each [[base]] over the full structure (a column each; r from
-    /// its `direction`, which may name any dof of the structure, the interior
-    /// included: a rigid translation moves every dof). Read before the
+    /// M r of each [[base]] over the full structure (a column each; r, kept
+    /// in base_r_, from its `direction`, which may name any dof of the
+    /// structure, the interior included: a rigid translation moves every
+    /// dof). Read before the
     /// reduction removes the interior; a missing `direction` is left for
     /// read_base to refuse.
     Eigen::MatrixXd base_influence(const toml::table& root, const std::vector<std::string>& names,
@@ -625,6 +626,7 @@ private:
                 R(static_cast<Eigen::Index>(it->second), static_cast<Eigen::Index>(j)) = w;
             }
         }
+        base_r_ = R;
         return M * R;
     }
 
@@ -1247,11 +1249,10 @@ private:
             b.phase = optional_number(t, path, "phase").value_or(0.0);
             b.direction.assign(model_.dof(), 0.0);
             if (const toml::node* d = t.get("direction"); d && reduced) {
-                // Read by base_influence over the full structure; the boundary dofs' weights kept for `check`.
-                for (auto&& [k, v] : *d->as_table())
-                    if (const int i = model_.mass_index(std::string(k.str())); i >= 0)
-                        b.direction[static_cast<std::size_t>(i)] =
-                            number(v, join(path + ".direction", std::string(k.str())));
+                // Read by base_influence over the full structure: the boundary dofs' weights, for `check`.
+                for (std::size_t r = 0; r < model_.reduction.boundary; ++r)
+                    b.direction[r] = base_r_(static_cast<Eigen::Index>(model_.reduction.boundary_index[r]),
+                                             static_cast<Eigen::Index>(i));
             } else if (d) {
                 for (const Weight& w : direction(*d, path + ".direction"))
                     b.direction[static_cast<std::size_t>(w.body)] = w.w;
@@ -1528,6 +1529,7 @@ private:
     std::optional<Eigen::MatrixXd> reduced_C_;
     Eigen::MatrixXd full_base_forces_;     ///< with full_frequencies_: M r of each [[base]] over the full structure
     std::vector<double> base_scale_;       ///< each [[base]]'s x_g'' amplitude s (its harmonic is -M r s)
+    Eigen::MatrixXd base_r_;               ///< [reduction]: r of each [[base]] over the full structure (base_influence)
     Eigen::MatrixXd reduced_base_forces_;  ///< [reduction]: T^T M r of each [[base]] (base_influence), a column each
     std::map<std::string, Override> set_, x0_, v0_;
     std::vector<std::string> parameter_names_;     ///< all parameters, file order (implicit g first)
