@@ -46,6 +46,7 @@ void refuse_unsupported(const Model& model) {
                          "supported yet");
     };
     if (!model.load_steps.empty()) refuse("[[load_step]] " + model.load_steps.front().name);
+    refuse_impacts(model, std::string(kModes) + "()");
 }
 
 // Damped modes (EPMC): Jenkins elements, friction or viscous damping of any kind.

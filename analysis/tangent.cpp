@@ -329,6 +329,49 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
     return true;
 }
 
+// An impact at rigid stop c (contact.h impact) at (t, x), v+ the velocities
+// after it: y+ = g(y-) = (x, R v-), R = I - (1 + e) M^-1 w w^T / (w^T M^-1 w),
+// where G = w^T x - gap reaches 0; the saltation matrix of a state jump,
+//     S = Dg + (f+ - Dg f-) h_y^T / (h_y^T f-),  h_y = (w, 0),  h_y^T f- = G'-,
+// with f- = (v-, a-), f+ = (v+, a+) the vector fields on either side. Only a
+// lone impact that changes no configuration (no friction set moving) is
+// taken; false otherwise, and for a grazing impact (G'- = 0).
+bool salt_impact(const Model& model, const Configuration& A, const signed char* sgnA, const Configuration& B,
+                 const signed char* sgnB, int c, double t, const double* x, const double* v_after, Eigen::MatrixXd& Y) {
+    if (A != B) return false;
+    const int n = static_cast<int>(model.dof());
+    const Contact& k = model.contacts[static_cast<std::size_t>(c)];
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(n), Mw(n);
+    for_each_term(k.direction(), [&](int i, double wi) { w(i) += wi; });
+    if (model.coupled_mass())
+        HeldMass(model, std::vector<char>(static_cast<std::size_t>(n), 0)).accelerations(w.data(), Mw.data());
+    else
+        for (int i = 0; i < n; ++i) Mw(i) = w(i) / model.masses[static_cast<std::size_t>(i)].m;
+    const double wMw = w.dot(Mw), e = k.restitution;
+    const Eigen::Map<const Eigen::VectorXd> vp(v_after, n);
+    const double rate = -w.dot(vp) / e;  // G' before the impact
+    if (!(std::fabs(rate) > 0.0) || !std::isfinite(rate)) return false;
+    const Eigen::VectorXd vm = vp + ((1 + e) * rate / wMw) * Mw;
+    const Eigen::MatrixXd R = Eigen::MatrixXd::Identity(n, n) - ((1 + e) / wMw) * Mw * w.transpose();
+    const std::vector<double> am = accelerations(model, A, sgnA, t, x, vm.data()),
+                              ap = accelerations(model, B, sgnB, t, x, v_after);
+    const Eigen::VectorXd jump_a =
+        Eigen::Map<const Eigen::VectorXd>(ap.data(), n) - R * Eigen::Map<const Eigen::VectorXd>(am.data(), n);
+    const Eigen::RowVectorXd W = (w.transpose() * Y.topRows(n)) / rate;  // h_y^T Y / G'-
+    const Eigen::MatrixXd top = Y.topRows(n) + (vp - vm) * W;
+    const Eigen::MatrixXd bottom = R * Y.bottomRows(n) + jump_a * W;
+    Y.topRows(n) = top;
+    Y.bottomRows(n) = bottom;
+    return true;
+}
+
+// Whether the instant's switches include an impact (a rigid stop's gap).
+const SwitchFunction* impact_of(const Model& model, const std::vector<SwitchFunction>& sw) {
+    for (const SwitchFunction& f : sw)
+        if (f.kind == SwitchKind::gap && model.contacts[static_cast<std::size_t>(f.element)].rigid()) return &f;
+    return nullptr;
+}
+
 // The same switch on the full state of a model with stick elements
 // (stick_tangent.h): u = f+ - f- of the whole vector field.
 bool salt_step_stick(const Model& model, const Configuration& A, const signed char* sgnA, const Configuration& B,
@@ -352,6 +395,14 @@ bool salt_step_stick(const Model& model, const Configuration& A, const signed ch
 bool Tangent::apply_saltation(const SwitchRecord& r, Eigen::MatrixXd& Y) {
     const std::vector<SwitchFunction>& sw = *r.switched;
     const int n = static_cast<int>(model_.dof());
+    if (const SwitchFunction* f = impact_of(model_, sw)) {  // a lone impact, else singular
+        if (stick_ || sw.size() > 1) return false;
+        Eigen::MatrixXd Z = Y;
+        if (!salt_impact(model_, *r.before, r.sgn_before, *r.after, r.sgn_after, f->element, r.t, r.x, r.v, Z))
+            return false;
+        Y = std::move(Z);
+        return true;
+    }
     if (sw.size() <= 1) {
         const ConfigData& d = data(*r.before);
         Eigen::MatrixXd Z = Y;

@@ -72,7 +72,9 @@ EventKind parse_kind(const CsvReader& r, const std::string& name) {
     r.fail("column 'kind': unknown event kind '" + name + "'");
 }
 
-bool is_contact(EventKind k) { return k == EventKind::contact_close || k == EventKind::contact_open; }
+bool is_contact(EventKind k) {
+    return k == EventKind::contact_close || k == EventKind::contact_open || k == EventKind::impact;
+}
 
 // Rows of one instant may come in any order (interface.md section 2): sort them by (kind, element).
 std::vector<EventRecord> canonical(std::vector<EventRecord> events) {

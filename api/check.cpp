@@ -120,7 +120,11 @@ void print_summary(const Model& model, std::ostream& out) {
             out << "  along";
             for (const Weight& w : c.weights) out << " " << num(w.w) << " " << body_name(model, w.body);
         }
-        out << "  gap = " << num(c.gap) << "  k = " << num(c.k);
+        out << "  gap = " << num(c.gap);
+        if (c.rigid())
+            out << "  rigid stop, restitution e = " << num(c.restitution);
+        else
+            out << "  k = " << num(c.k);
         if (c.c != 0.0) out << "  c = " << num(c.c) << " (while closed)";
         out << "\n";
     }

@@ -33,8 +33,8 @@ void add_section_flags(CLI::App* sub, std::string& section, std::string& out, st
                        const std::string& what, bool stroboscopic) {
     sub->add_option("--section", section,
                     "Poincare section at a switch kind" + what +
-                        ": KIND[:NAME], KIND contact_close, contact_open, stick, release or reversal, NAME the "
-                        "contact or mass (default: any)" +
+                        ": KIND[:NAME], KIND contact_close, contact_open, stick, release or reversal (or impact, "
+                        "at a rigid stop), NAME the contact or mass (default: any)" +
                         (stroboscopic ? "; or period[:OMEGA], the state every 2 pi/OMEGA s (default OMEGA: the "
                                         "forcing's frequency) with its rotation number in the summary"
                                       : "") +

@@ -97,7 +97,7 @@ private:
     double last_draw_ = 0;
     bool drawn_ = false;
     std::size_t samples_ = 0;
-    std::size_t counts_[6] = {};  // per EventKind
+    std::size_t counts_[std::size(kEventKinds)] = {};  // per EventKind
 };
 
 // The library names the option (hsnc::OptionError); the command line puts
@@ -215,6 +215,8 @@ int simulate(const SimulateOptions& o) {
     for (EventKind k : kSwitchEventKinds) summary.number(event_kind_name(k), static_cast<double>(obs.count(k)));
     if (!model.load_steps.empty())  // [[load_step]]: the load changes, in the same form (absent otherwise)
         summary.number(event_kind_name(EventKind::load_change), static_cast<double>(obs.count(EventKind::load_change)));
+    if (model.has_impacts())  // rigid stops with restitution (absent otherwise)
+        summary.number(event_kind_name(EventKind::impact), static_cast<double>(obs.count(EventKind::impact)));
     for (std::size_t i = 0; i < model.dof(); ++i) summary.number("x_" + model.masses[i].name, sum.x[i]);
     for (std::size_t i = 0; i < model.dof(); ++i) summary.number("v_" + model.masses[i].name, sum.v[i]);
     if (outputs.stroboscopic()) add_rotation(model, *outputs.section(), summary, o.quiet);

@@ -239,6 +239,11 @@ struct Model {
         return true;
     }
 
+    /// Whether a contact is a rigid stop with restitution (its events are impacts).
+    bool has_impacts() const {
+        return std::any_of(contacts.begin(), contacts.end(), [](const Contact& c) { return c.rigid(); });
+    }
+
     /// The constant load on the condensed dofs at t: Condensation::load, or
     /// that of the last [[load_step]] at or before t (the load from t on).
     const std::vector<double>& condensed_load_at(double t) const {

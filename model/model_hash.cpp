@@ -25,6 +25,7 @@ std::string model_canonical_text(const Model& model) {
         t += "contact " + c.name + " " + std::to_string(c.a) + " " + std::to_string(c.b) + " " +
              num(c.gap) + " " + num(c.k);
         if (c.c != 0.0) t += " c=" + num(c.c);                                                 // only when given
+        if (c.rigid()) t += " e=" + num(c.restitution);                                        // only when given
         for (const Weight& w : c.weights) t += " " + std::to_string(w.body) + ":" + num(w.w);  // only when given
         t += "\n";
     }

@@ -126,6 +126,7 @@ public:
         read_base(root);
         read_load(root);
         read_initial(root);
+        check_rigid_stops(root);
         read_load_steps(root);
         check_finite_rates(root);
         if (full_M_) compare_reduction(), compare_responses();
@@ -1171,7 +1172,7 @@ private:
         for (std::size_t i = 0; i < tables.size(); ++i) {
             const toml::table& t = *tables[i];
             const std::string path = "contact[" + std::to_string(i + 1) + "]";
-            check_keys(t, path, {"name", "between", "direction", "gap", "k", "c"});
+            check_keys(t, path, {"name", "between", "direction", "gap", "k", "c", "restitution"});
             Contact contact;
             contact.name = element_name(t, path, "contact", i);
             if (const toml::node* dir = t.get("direction")) {
@@ -1182,6 +1183,21 @@ private:
                 std::tie(contact.a, contact.b) = between(t, path);
             }
             contact.gap = required_number(t, path, "gap");
+            if (const std::optional<double> e = optional_number(t, path, "restitution")) {  // a rigid stop (contact.h)
+                if (!(*e > 0.0 && *e <= 1.0))
+                    fail(t.get("restitution"), path + ".restitution",
+                         "the coefficient of restitution must be in (0, 1], got " + show(*e) +
+                             " (e = 0, a stop that keeps what hits it, is not modelled)");
+                for (const char* key : {"k", "c"})
+                    if (t.get(key))
+                        fail(t.get(key), path + "." + key,
+                             "a contact with 'restitution' is a rigid stop (impacts); give either 'restitution' or "
+                             "the spring 'k' (and its damping 'c'), not both");
+                contact.restitution = *e;
+                element_names_.emplace(contact.name, path);
+                model_.contacts.push_back(contact);
+                continue;
+            }
             contact.k = required_number(t, path, "k");
             if (!(contact.k > 0.0)) fail(t.get("k"), path + ".k", "contact stiffness must be > 0, got " + show(contact.k));
             contact.c = optional_number(t, path, "c").value_or(0.0);
@@ -1354,6 +1370,35 @@ private:
         }
         apply_state_overrides(x0_, model_.x0, "initial.x");
         apply_state_overrides(v0_, model_.v0, "initial.v");
+    }
+
+    /// A rigid stop (restitution) must not start penetrated, and Jenkins
+    /// elements do not take impacts yet (a slider's slip would have to be
+    /// decided again at the velocity jump).
+    void check_rigid_stops(const toml::table& root) {
+        for (std::size_t c = 0; c < model_.contacts.size(); ++c) {
+            const Contact& ct = model_.contacts[c];
+            if (!ct.rigid()) continue;
+            const std::string path = "contact[" + std::to_string(c + 1) + "]";
+            const std::size_t at = line_of(root, "contact", c, "restitution");
+            if (!model_.jenkins.empty())
+                fail_at(at, path + ".restitution",
+                        "rigid stops (restitution) do not yet take Jenkins elements in the same model ('" +
+                            model_.jenkins.front().name + "')");
+            double u = 0.0, rate = 0.0;
+            for_each_term(ct.direction(), [&](int i, double w) {
+                u += w * model_.x0[static_cast<std::size_t>(i)];
+                rate += w * model_.v0[static_cast<std::size_t>(i)];
+            });
+            if (u - ct.gap > 0.0)
+                fail_at(at, path + ".restitution",
+                        "the rigid stop '" + ct.name + "' starts penetrated: u - gap = " + show(u - ct.gap, 17) +
+                            " > 0 at t0 (initial.x)");
+            if (u - ct.gap == 0.0 && rate > 0.0)
+                fail_at(at, path + ".restitution",
+                        "the motion starts on the rigid stop '" + ct.name + "' moving into it (u' = " + show(rate, 17) +
+                            " > 0 at t0): start it just before the impact, or after it (initial.v)");
+        }
     }
 
     void apply_state_overrides(const std::map<std::string, Override>& overrides, std::vector<double>& state,

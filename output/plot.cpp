@@ -340,7 +340,7 @@ void PlotRecorder::on_event(double t, EventKind kind, int element, const double*
         return;
     }
     int body = element;  // the mass whose curve carries the mark
-    if (kind == EventKind::contact_close || kind == EventKind::contact_open) {
+    if (kind == EventKind::contact_close || kind == EventKind::contact_open || kind == EventKind::impact) {
         const Contact& c = model_.contacts[static_cast<std::size_t>(element)];
         body = kGround;  // the first body it acts on
         for_each_term(c.direction(), [&](int i, double) {

@@ -14,7 +14,9 @@ namespace {
 
 constexpr std::size_t kMaxPanels = 8;
 
-bool is_contact_kind(EventKind k) { return k == EventKind::contact_close || k == EventKind::contact_open; }
+bool is_contact_kind(EventKind k) {
+    return k == EventKind::contact_close || k == EventKind::contact_open || k == EventKind::impact;
+}
 
 // Text inside a gnuplot string: quotes, backslashes, backquotes and control characters left out.
 std::string plain(const std::string& s) {
@@ -75,10 +77,13 @@ SectionSpec parse_section(const Model& model, const std::string& text, const std
     bool found = false;
     for (EventKind k : kSwitchEventKinds)
         if (kind == event_kind_name(k)) s.kind = k, found = true;
+    if (model.has_impacts() && kind == event_kind_name(EventKind::impact))  // the impact map of a rigid stop
+        s.kind = EventKind::impact, found = true;
     if (!found)
         throw InputError(flag + " '" + text +
                          "': expected KIND[:NAME] with KIND one of contact_close, contact_open, "
                          "stick, release, reversal" +
+                         std::string(model.has_impacts() ? ", impact" : "") +
                          (stroboscopic ? std::string(", or period[:OMEGA]") : std::string()));
     if (colon == std::string::npos) {
         if (is_contact_kind(s.kind) ? model.contacts.empty()

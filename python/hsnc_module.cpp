@@ -201,6 +201,7 @@ py::dict run(const Model& model, double t_end, double dt, const std::string& met
     py::dict counts;
     for (EventKind k : kSwitchEventKinds) counts[event_kind_name(k)] = 0;
     if (!model.load_steps.empty()) counts[event_kind_name(EventKind::load_change)] = 0;
+    if (model.has_impacts()) counts[event_kind_name(EventKind::impact)] = 0;
     for (int k : c.ekind_) {
         const char* name = event_kind_name(static_cast<EventKind>(k));
         counts[name] = counts[name].cast<std::size_t>() + 1;

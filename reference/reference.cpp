@@ -34,6 +34,7 @@
 #include "sample_grid.h"
 #include "switch_derivative.h"
 #include "transition_rules.h"
+#include "transitions.h"
 
 namespace hsnc::reference {
 namespace {
@@ -316,6 +317,27 @@ public:
         return {{contact::gap_value(w, k.gap, m, 0), contact::gap_value(w, k.gap, m, 1)},
                 {contact::gap_magnitude(w, k.gap, m, 0), contact::gap_magnitude(w, k.gap, m, 1)}};
     }
+    bool rigid(int c) const { return model_.contacts[static_cast<std::size_t>(c)].rigid(); }
+    // Newton's law at rigid stop c (contact.h impact) at this precision: M^-1 w
+    // from the exact inverse of a coupled M (held_inverse with nothing held).
+    void impact(int c) {
+        const Contact& k = model_.contacts[static_cast<std::size_t>(c)];
+        const auto n = static_cast<std::size_t>(mp.n);
+        std::vector<cl_F> w(n, mp.zero), Mw(n, mp.zero);
+        for_each_term(k.direction(), [&](int i, double wi) {
+            w[static_cast<std::size_t>(i)] = w[static_cast<std::size_t>(i)] + mp.F(wi);
+        });
+        if (mp.coupled()) {
+            const auto inverse = mp.held_inverse(std::vector<char>(n, 0));
+            for (std::size_t r = 0; r < n; ++r)
+                for (std::size_t q = 0; q < n; ++q) Mw[r] = Mw[r] + inverse[r][q] * w[q];
+        } else {
+            for (std::size_t i = 0; i < n; ++i) Mw[i] = w[i] / mp.m[i];
+        }
+        cl_F wMw = mp.zero;
+        for (std::size_t i = 0; i < n; ++i) wMw = wMw + w[i] * Mw[i];
+        contact::impact(mp.F(k.restitution), gap_now(c).d[1], wMw, Mw, v_.data(), mp.one);
+    }
     void prepare_ties(const Configuration& cfg, const std::vector<signed char>& sgn) {
         cfg_ = cfg;
         sgn_ = sgn;
@@ -364,8 +386,10 @@ bool apply_switches(const Model& model, const MpModel& mp, const cl_F& t, const 
                     std::vector<cl_F>& v, const std::vector<cl_F>& a, Configuration& cfg, std::vector<signed char>& sgn,
                     const std::vector<SwitchFunction>& switched, std::vector<Transition>& out, std::string& why) {
     MpPhysics p(model, mp, t, x, v, &a, sgn);
-    if (rules::apply_switches(p, cfg, sgn, switched, out)) return true;
-    why = "friction decisions at t = " + time_text(t) + " do not settle";
+    int resting = -1;
+    if (rules::apply_switches(p, cfg, sgn, switched, out, &resting)) return true;
+    why = resting >= 0 ? resting_message(model, resting, time_text(t))
+                       : "friction decisions at t = " + time_text(t) + " do not settle";
     return false;
 }
 

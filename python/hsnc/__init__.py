@@ -690,6 +690,8 @@ def _h5_simulate(root, r):
     kinds = ("contact_close", "contact_open", "stick", "release", "reversal")
     if "load_change" in summary["counts"]:  # a model with load steps, as the command's summary line
         kinds += ("load_change",)
+    if "impact" in summary["counts"]:  # a model with rigid stops (restitution)
+        kinds += ("impact",)
     counts = [(k, [summary["counts"].get(k, 0)]) for k in kinds]
     _h5_table(root.create_group("simulate/summary"),
               [("status", [summary["status"]]), ("method", [summary.get("method", "hsnc")]), ("t", [summary["t"]]),

@@ -1,5 +1,7 @@
 """Models from files and strings: names, parameters, overrides; generate()."""
 
+import math
+
 import numpy as np
 
 import hsnc
@@ -110,6 +112,44 @@ def test_friction_between_two_bodies_runs_as_on_the_command_line(tmp_path):
     run_cli("simulate", path, "--t-end", "5", "--events", cli)
     rows = cli.read_text().splitlines()[1:]
     assert [float(row.split(",")[0]) for row in rows] == list(r.events.t)
+
+
+BOUNCING = """name = "bouncing"
+[[mass]]
+name = "m"
+m = 2.0
+[[spring]]
+between = ["m", "ground"]
+k = 8.0
+[[contact]]
+name = "stop"
+between = ["m", "ground"]
+gap = 0.5
+restitution = 0.8
+[initial]
+v = { m = 3.0 }
+[simulate]
+t_end = 4.0
+"""
+
+
+def test_impacts_on_a_rigid_stop_run_from_python_as_from_the_cli(tmp_path):
+    """restitution = e: the impacts of a spring-mass thrown at its stop, each
+    leaving at -e times its speed in; Python gives the CLI's rows and counts."""
+    r = hsnc.simulate(hsnc.Model.from_string(BOUNCING))
+    assert set(r.events.kind) == {"impact"} and set(r.events.element) == {"stop"}
+    w, d, speed = 2.0, 0.5, (9.0 - 4.0 * 0.25) ** 0.5
+    assert abs(r.events.t[0] - math.asin(w * d / 3.0) / w) < 1e-14
+    assert abs(r.events.v[0, 0] + 0.8 * speed) < 1e-14
+    assert abs(r.events.v[1, 0] + 0.8 * 0.8 * speed) < 1e-13
+    assert r.summary["counts"]["impact"] == len(r.events)
+    assert "impact" not in hsnc.simulate(hsnc.Model.from_string(TWO_MASS)).summary["counts"]
+    path = tmp_path / "bouncing.toml"
+    path.write_text(BOUNCING)
+    cli = tmp_path / "events.csv"
+    out = run_cli("simulate", path, "--events", cli).stdout
+    assert " impact=%d" % len(r.events) in out
+    assert [float(row.split(",")[0]) for row in cli.read_text().splitlines()[1:]] == list(r.events.t)
 
 
 def test_a_load_step_runs_from_python_as_from_the_cli(tmp_path):

@@ -693,6 +693,14 @@ void refuse_load_steps(const Model& model, const std::string& who) {
                      "): only simulate runs a load that changes in time; this needs a constant load");
 }
 
+void refuse_impacts(const Model& model, const std::string& who) {
+    for (const Contact& c : model.contacts)
+        if (c.rigid())
+            throw InputError(who + ": " + model.source + ": contact '" + c.name +
+                             "' is a rigid stop (restitution): it does not take impacts yet; simulate, periodic, "
+                             "lyapunov and sweep (without continuation) do");
+}
+
 RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
     refuse_load_steps(model_, "hsnc::Engine::run()");
     const std::size_t n = model_.dof();
@@ -834,7 +842,9 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         if (!apply_switches(model_, t, x.data(), v.data(), buf.a.data(), cfg, sgn, found.switched, transitions, why,
                             &elements))
             return finish(RunStatus::chattering, why);
-        restarts.carried = cfg == current_cfg;
+        restarts.carried = cfg == current_cfg &&  // an impact's velocity jump is no restart's
+                           std::none_of(transitions.begin(), transitions.end(),
+                                        [](const Transition& tr) { return tr.kind == EventKind::impact; });
         restarts.carried_tau = found.tau;
         if (records) {
             SwitchRecord rec;

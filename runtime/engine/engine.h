@@ -51,4 +51,8 @@ private:
 /// hsnc::simulate runs a model whose load changes in time, piece by piece.
 void refuse_load_steps(const Model& model, const std::string& who);
 
+/// InputError when a contact is a rigid stop with restitution (Contact::rigid):
+/// `who` (nonlinear modes, continuation) does not take impacts yet.
+void refuse_impacts(const Model& model, const std::string& who);
+
 }  // namespace hsnc

@@ -11,6 +11,8 @@ const char* event_kind_name(EventKind kind) {
         case EventKind::reversal: return "reversal";
         case EventKind::load_change:
             return "load_change";
+        case EventKind::impact:
+            return "impact";
     }
     return "?";
 }
@@ -20,6 +22,7 @@ std::string event_element_name(const Model& model, EventKind kind, int element) 
     switch (kind) {
         case EventKind::contact_close:
         case EventKind::contact_open:
+        case EventKind::impact:
             return element >= 0 && e < model.contacts.size() ? model.contacts[e].name : "?";
         case EventKind::load_change:
             return element >= 0 && e < model.load_steps.size() ? model.load_steps[e].name : "?";

@@ -31,6 +31,8 @@
 //   bool slips_on(const Configuration&, int j) const;  // a slipping element whose relative velocity
 //                                                      // touched 0 while its relative acceleration (from
 //                                                      // just before) keeps the slip's sign: no stick
+//   bool rigid(int c) const;                           // contact c is a rigid stop (restitution)
+//   void impact(int c);                                // its velocity jump at G_c = 0 (contact.h impact)
 // where Series<T> holds derivatives d[k] with the magnitudes mag[k] of their
 // terms (their rounding level). A tie is decided by the first non-zero
 // derivative of any order: the rules ask for the series up to tie_order(),
@@ -120,6 +122,58 @@ bool tied(const P& p, const Series<T>& G) {
     return p.negligible(G.d[0], G.mag[0]) && p.negligible(G.d[1], G.mag[1]);
 }
 
+/// The impacts among `switched` (rigid stops the search found reached):
+/// each one's velocity jump, an `impact` event, then every friction's state
+/// by the new velocities: a held one set moving releases along its velocity,
+/// a sliding one reverses with it or, stopped exactly, is decided by the
+/// stick rule (`deciding`). True when one is a touch (G' = 0 to rounding)
+/// or its rebound is too low for G to resolve while the forces press on:
+/// the motion rests on the stop (`*resting`).
+template <class P>
+bool impacts(P& p, Configuration& cfg, std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
+             std::vector<Transition>& out, std::vector<char>& deciding, int* resting) {
+    bool any = false;
+    for (const SwitchFunction& f : switched) {
+        if (f.kind != SwitchKind::gap || !p.rigid(f.element)) continue;
+        const auto G = p.gap_now(f.element);
+        if (tied(p, G) || p.sign(G.d[1]) <= 0) {  // no speed into the stop left: resting on it
+            if (resting) *resting = f.element;
+            return true;
+        }
+        p.impact(f.element);
+        // A rebound too low for G to resolve, (G')^2 / (2 G'') within G's
+        // rounding while the forces press on, is the motion at rest on the
+        // stop (the end of a Zeno sequence: the next impacts would be found
+        // at rounding-level penetrations, at no speed, without end).
+        p.prepare_ties(cfg, sgn);
+        const auto after = p.tied_gap_series(f.element, 2);
+        if (p.sign(after.d[2]) > 0 && p.negligible(after.d[1] * after.d[1] / (after.d[2] + after.d[2]), G.mag[0])) {
+            if (resting) *resting = f.element;
+            return true;
+        }
+        out.push_back({EventKind::impact, f.element});
+        any = true;
+    }
+    if (!any) return false;
+    for (int i = 0; i < p.dof(); ++i) {
+        if (!p.has_friction(i)) continue;
+        const auto u = static_cast<std::size_t>(i);
+        const int v = p.velocity_sign(i);
+        if (cfg.stuck[u]) {
+            if (v == 0) continue;
+            cfg.stuck[u] = 0;
+            sgn[u] = static_cast<signed char>(v);
+            out.push_back({EventKind::release, i});
+        } else if (v == 0) {
+            deciding[u] = 1;
+        } else if (v != sgn[u]) {
+            sgn[u] = static_cast<signed char>(v);
+            out.push_back({EventKind::reversal, i});
+        }
+    }
+    return false;
+}
+
 /// Applies the switch functions that reached zero at this instant (interface.md
 /// section 2): a stop sets v_i = 0 exactly; every contact change first (a
 /// switched contact that is only tied is decided in the last step); then the
@@ -131,16 +185,23 @@ bool tied(const P& p, const Series<T>& G) {
 /// the state the resulting forces give them, and the friction is decided again
 /// if one changed. Updates cfg, sgn (the friction direction of sliding masses),
 /// appends the events to `out`; false when the decisions do not settle
-/// (chattering).
+/// (chattering), or when the motion comes to rest on a rigid stop (a touch,
+/// G = G' = 0, whose forces press on: `*resting` is then the stop's index).
+/// A rigid stop the search found reached is an impact: the velocities jump
+/// (P::impact) before any friction is decided, so a friction held still
+/// that the jump sets moving slides, and one sliding reverses or stops by
+/// its new velocity (finite friction forces give no impulse).
 template <class P>
-bool apply_switches(P& p, Configuration& cfg, std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
-                    std::vector<Transition>& out) {
+bool apply_switches(P& p, Configuration& cfg, std::vector<signed char>& sgn,
+                    const std::vector<SwitchFunction>& switched, std::vector<Transition>& out, int* resting = nullptr) {
     const int n = p.dof();
     for (const SwitchFunction& f : switched)
         if (f.kind == SwitchKind::velocity) p.stop(f.element);
     std::vector<char> is_tied(p.contacts(), 0);
+    std::vector<char> deciding(static_cast<std::size_t>(n), 0);
+    if (impacts(p, cfg, sgn, switched, out, deciding, resting)) return false;
     for (const SwitchFunction& f : switched) {
-        if (f.kind != SwitchKind::gap) continue;
+        if (f.kind != SwitchKind::gap || p.rigid(f.element)) continue;
         if (tied(p, p.gap_now(f.element))) {
             is_tied[static_cast<std::size_t>(f.element)] = 1;
             continue;
@@ -158,7 +219,6 @@ bool apply_switches(P& p, Configuration& cfg, std::vector<signed char>& sgn, con
             out.push_back({EventKind::stick, n + f.element});
         }
     }
-    std::vector<char> deciding(static_cast<std::size_t>(n), 0);
     for (const SwitchFunction& f : switched) {
         const int i = f.element;
         if (f.kind == SwitchKind::velocity) {
@@ -204,6 +264,11 @@ bool apply_switches(P& p, Configuration& cfg, std::vector<signed char>& sgn, con
             if (!is_tied[c] && std::find(switched.begin(), switched.end(), gf) != switched.end()) continue;
             if (!is_tied[c] && !tied(p, p.gap_now(static_cast<int>(c)))) continue;
             const int state = tied_contact_state(p, p.tied_gap_series(static_cast<int>(c), p.tie_order()));
+            if (p.rigid(static_cast<int>(c))) {  // never closed: pressing on at G = G' = 0 is resting on it
+                if (state != 1) continue;
+                if (resting) *resting = static_cast<int>(c);
+                return false;
+            }
             if (state < 0 || state == cfg.closed[c]) continue;
             cfg.closed[c] = static_cast<char>(state);
             out.push_back({state ? EventKind::contact_close : EventKind::contact_open, static_cast<int>(c)});
@@ -234,7 +299,7 @@ void decide_entered_friction(P& p, Configuration& cfg, std::vector<signed char>&
 }
 
 /// The configuration the motion enters at t0 (interface.md "At t0"): a contact
-/// by the sign of G, then of G'; one with G = G' = 0 is provisionally closed (at
+/// by the sign of G, then of G' (a rigid stop stays open); one with G = G' = 0 is provisionally closed (at
 /// rest on the boundary) and decided by tied_contact_state once the friction is
 /// decided. A friction mass with v_i != 0 slides along v_i; one at rest sticks
 /// or slides by the stick rule. A tied contact carries no force (G = G' = 0), so
@@ -245,6 +310,7 @@ void entered_configuration(P& p, Configuration& cfg, std::vector<signed char>& s
     sgn.assign(static_cast<std::size_t>(p.dof()), 0);
     std::vector<int> ties;
     for (std::size_t c = 0; c < p.contacts(); ++c) {
+        if (p.rigid(static_cast<int>(c))) continue;  // a rigid stop is never closed (the reader checks G <= 0)
         const int s = first_nonzero_sign(p, p.gap_now(static_cast<int>(c)), 0);  // G, then G'
         cfg.closed[c] = s >= 0;
         if (s == 0) ties.push_back(static_cast<int>(c));

@@ -10,6 +10,7 @@
 #include "elements/jenkins.h"
 #include "elements/motion.h"
 #include "held_mass.h"
+#include "number_text.h"
 #include "tie_series.h"
 
 namespace hsnc {
@@ -98,6 +99,22 @@ public:
         const double mag = jenkins::slip_velocity_magnitude(e.direction(), m, 1);
         return !negligible(w_rate, mag) && sign(w_rate) == cfg.slip[static_cast<std::size_t>(j)];
     }
+    bool rigid(int c) const { return model_.contacts[static_cast<std::size_t>(c)].rigid(); }
+    // Newton's law at rigid stop c (contact.h impact): M^-1 w by M's own
+    // factors (a coupled M: Cholesky, held_mass.h with nothing held).
+    void impact(int c) {
+        const Contact& k = model_.contacts[static_cast<std::size_t>(c)];
+        const auto n = static_cast<std::size_t>(n_);
+        std::vector<double> w(n, 0.0), Mw(n, 0.0);
+        for_each_term(k.direction(), [&](int i, double wi) { w[static_cast<std::size_t>(i)] += wi; });
+        if (model_.coupled_mass())
+            HeldMass(model_, std::vector<char>(n, 0)).accelerations(w.data(), Mw.data());
+        else
+            for (std::size_t i = 0; i < n; ++i) Mw[i] = w[i] / model_.masses[i].m;
+        double wMw = 0.0;
+        for (std::size_t i = 0; i < n; ++i) wMw += w[i] * Mw[i];
+        contact::impact(k.restitution, gap_now(c).d[1], wMw, Mw, v_, 1.0);
+    }
     void prepare_ties(const Configuration& cfg, const std::vector<signed char>& sgn) {
         cfg_ = cfg;
         sgn_ = sgn;
@@ -127,12 +144,21 @@ private:
 
 }  // namespace
 
+std::string resting_message(const Model& model, int contact, const std::string& t) {
+    return "the motion comes to rest on the rigid stop '" + model.contacts[static_cast<std::size_t>(contact)].name +
+           "' at t = " + t +
+           " (it reaches the stop with no speed left and is pressed on): a resting contact on a rigid stop is not "
+           "modelled; give the stop a stiffness k instead of restitution";
+}
+
 bool apply_switches(const Model& model, double t, const double* x, double* v, const double* a, Configuration& cfg,
                     std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
                     std::vector<Transition>& out, std::string& why, const ElementIndex* elements) {
     DoublePhysics p(model, t, x, v, a, sgn, elements);
-    if (rules::apply_switches(p, cfg, sgn, switched, out)) return true;
-    why = "friction decisions at t = " + std::to_string(t) + " do not settle";
+    int resting = -1;
+    if (rules::apply_switches(p, cfg, sgn, switched, out, &resting)) return true;
+    why = resting >= 0 ? resting_message(model, resting, number_text(t))
+                       : "friction decisions at t = " + std::to_string(t) + " do not settle";
     return false;
 }
 

@@ -19,17 +19,20 @@
 
 namespace hsnc {
 
-
 /// Apply the switch functions that reached zero at instant t with state
 /// (x, v) and accelerations a just before it (may be null: taken as 0; used
 /// only to break a tie |A_i| = mu_s*N_i): update cfg and sgn (friction direction of sliding masses); a mass
 /// that stops gets v_i = 0 exactly. Appends the resulting events to `out`.
 /// Returns false (and says why) when the decisions at this instant do not
-/// settle (chattering). `elements` (the model's, may be null) makes each force
-/// on a mass visit that mass's elements alone: the same bits, faster.
+/// settle (chattering) or the motion comes to rest on a rigid stop (resting_message). `elements` (the model's, may be
+/// null) makes each force on a mass visit that mass's elements alone: the same bits, faster.
 bool apply_switches(const Model& model, double t, const double* x, double* v, const double* a, Configuration& cfg,
                     std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
                     std::vector<Transition>& out, std::string& why, const ElementIndex* elements = nullptr);
+
+/// Why a run stops where its motion comes to rest on rigid stop `contact` at
+/// time `t` (its text): the message of the double engine, the baselines and the reference.
+std::string resting_message(const Model& model, int contact, const std::string& t);
 
 /// The configuration the motion enters at (t, x, v) (interface.md: "At t0 ...").
 /// Contacts by G, a tie G = 0 by the first non-zero of G', G'', G''', ...
