@@ -2,6 +2,8 @@
 // and sample, in the order the run reports them.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cstddef>
 #include <functional>
@@ -48,6 +50,24 @@ public:
     void on_event(double, EventKind k, int e, const double*, const double*) override { seq.emplace_back(k, e); }
     std::vector<std::pair<EventKind, int>> seq;
 };
+
+/// The end state (x, v, then the Jenkins sliders) of the engine's run of m on
+/// the Eigen solver from its initial state (sliders: slider0) to t_end, and
+/// its events' kinds.
+inline std::vector<double> end_state(const Model& m, double t_end, EventSequence& kinds) {
+    GenericSolverProvider provider(m);
+    Engine engine(m, provider);
+    EngineOptions opt;
+    opt.t_end = t_end;
+    opt.samples = false;
+    const RunSummary s = engine.run(opt, kinds);
+    EXPECT_EQ(s.status, RunStatus::ok) << s.message;
+    std::vector<double> y = s.x;
+    y.resize(m.dof());
+    y.insert(y.end(), s.v.begin(), s.v.end());
+    y.insert(y.end(), s.slider.begin(), s.slider.end());
+    return y;
+}
 
 struct Outcome {
     RunSummary summary;

@@ -64,6 +64,13 @@ SimulateOptions kind(const std::string& how) {
     return o;
 }
 
+// The impact oscillator of the examples, at omega (rad/s).
+Model impact_oscillator(double omega) {
+    Model m = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/impact-oscillator.toml");
+    m.forcing[0].omega = omega;
+    return m;
+}
+
 // A mass m on a spring k (at rest at x = 0), a rigid stop at x = d, thrown
 // from x = 0 at speed V > omega d.
 constexpr double kM = 2.0, kK = 8.0, kD = 0.5, kV = 3.0, kE = 0.8;
@@ -259,30 +266,11 @@ TEST(Restitution, AConsistentMassBarHitsAWallWithItsImpulseAtTheWallsDofOnly) {
 }
 
 // A forced impact oscillator (the classic: a harmonically driven mass-spring
-// with a rigid stop beside its equilibrium): the programs, the Eigen solver,
+// with a rigid stop beside its equilibrium, at 2.3 rad/s): the programs, the Eigen solver,
 // the reference at 30 digits and CVODE give the same impacts.
 TEST(Restitution, AForcedImpactOscillatorAgreesWithTheReferenceAndCvode) {
-    const Model model = parse_model(R"(name = "impact-oscillator"
-[[mass]]
-name = "m"
-m = 1.0
-[[spring]]
-between = ["m", "ground"]
-k = 1.0
-[damping]
-alpha = 0.05
-[[contact]]
-name = "stop"
-between = ["m", "ground"]
-gap = 0.2
-restitution = 0.8
-[[forcing]]
-omega = 2.3
-amplitude = { m = 1.0 }
-[simulate]
-t_end = 40.0
-)",
-                                    "impact-oscillator.toml");
+    Model model = impact_oscillator(2.3);  // examples/impact-oscillator.toml
+    model.t_end = 40.0;
     const testing::Outcome ref = run(model, kind("mp:30"));
     ASSERT_EQ(ref.summary.status, RunStatus::ok) << ref.summary.message;
     ASSERT_GT(ref.events.size(), 10u);
@@ -373,27 +361,6 @@ v = { m = 3.0 }
     EXPECT_NE(modes.err.find("rigid stop (restitution)"), std::string::npos) << modes.err;
 }
 
-// The impact oscillator of the examples, at omega (rad/s).
-Model impact_oscillator(double omega) {
-    Model m = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/impact-oscillator.toml");
-    m.forcing[0].omega = omega;
-    return m;
-}
-
-// The end state (x, v) of the engine's run from (x0, v0), and its events' kinds.
-std::vector<double> end_state(const Model& m, double t_end, testing::EventSequence& kinds) {
-    GenericSolverProvider provider(m);
-    Engine engine(m, provider);
-    EngineOptions opt;
-    opt.t_end = t_end;
-    opt.samples = false;
-    const RunSummary s = engine.run(opt, kinds);
-    EXPECT_EQ(s.status, RunStatus::ok) << s.message;
-    std::vector<double> y(s.x.begin(), s.x.begin() + static_cast<long>(m.dof()));
-    y.insert(y.end(), s.v.begin(), s.v.end());
-    return y;
-}
-
 // The tangent across impacts (the saltation matrix of a velocity jump,
 // analysis/tangent.cpp salt_impact) against central differences of the run.
 TEST(Restitution, TheRunsJacobianAcrossImpactsMatchesFiniteDifferences) {
@@ -419,7 +386,7 @@ TEST(Restitution, TheRunsJacobianAcrossImpactsMatchesFiniteDifferences) {
             (j == 0 ? p.x0 : p.v0)[0] += h;
             (j == 0 ? q.x0 : q.v0)[0] -= h;
             testing::EventSequence kp, kq;
-            const std::vector<double> a = end_state(p, t_end, kp), b = end_state(q, t_end, kq);
+            const std::vector<double> a = testing::end_state(p, t_end, kp), b = testing::end_state(q, t_end, kq);
             ASSERT_EQ(kp.seq, kinds.seq);
             ASSERT_EQ(kq.seq, kinds.seq);
             double scale = 1.0;

@@ -28,21 +28,7 @@ namespace {
 
 using Kinds = testing::EventSequence;
 
-// The end state (x, v, s) of a run of m from its initial state (sliders: slider0).
-std::vector<double> end_state(const Model& m, double t_end, Kinds& kinds) {
-    GenericSolverProvider provider(m);
-    Engine engine(m, provider);
-    EngineOptions opt;
-    opt.t_end = t_end;
-    opt.samples = false;
-    const RunSummary s = engine.run(opt, kinds);
-    EXPECT_EQ(s.status, RunStatus::ok) << s.message;
-    std::vector<double> y = s.x;
-    y.resize(m.dof());
-    y.insert(y.end(), s.v.begin(), s.v.end());
-    y.insert(y.end(), s.slider.begin(), s.slider.end());
-    return y;
-}
+using testing::end_state;
 
 // J against (y(z0 + h e_j) - y(z0 - h e_j)) / 2h, every column whose two runs
 // meet the same switches as the base run; returns the columns compared.
