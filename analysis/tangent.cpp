@@ -340,14 +340,9 @@ bool salt_impact(const Model& model, const Configuration& A, const signed char* 
                  const signed char* sgnB, int c, double t, const double* x, const double* v_after, Eigen::MatrixXd& Y) {
     if (A != B) return false;
     const int n = static_cast<int>(model.dof());
-    const Contact& k = model.contacts[static_cast<std::size_t>(c)];
-    Eigen::VectorXd w = Eigen::VectorXd::Zero(n), Mw(n);
-    for_each_term(k.direction(), [&](int i, double wi) { w(i) += wi; });
-    if (model.coupled_mass())
-        HeldMass(model, std::vector<char>(static_cast<std::size_t>(n), 0)).accelerations(w.data(), Mw.data());
-    else
-        for (int i = 0; i < n; ++i) Mw(i) = w(i) / model.masses[static_cast<std::size_t>(i)].m;
-    const double wMw = w.dot(Mw), e = k.restitution;
+    std::vector<double> wv, Mwv;
+    const double wMw = impact_direction(model, c, wv, Mwv), e = model.contacts[static_cast<std::size_t>(c)].restitution;
+    const Eigen::Map<const Eigen::VectorXd> w(wv.data(), n), Mw(Mwv.data(), n);
     const Eigen::Map<const Eigen::VectorXd> vp(v_after, n);
     const double rate = -w.dot(vp) / e;  // G' before the impact
     if (!(std::fabs(rate) > 0.0) || !std::isfinite(rate)) return false;

@@ -1,6 +1,7 @@
 #include "held_mass.h"
 
 #include "assembly.h"
+#include "elements/direction.h"
 #include "error.h"
 
 namespace hsnc {
@@ -76,6 +77,21 @@ void held_driving_force(const Model& model, const Configuration& cfg, const sign
     for (std::size_t k = 0; k < n; ++k) df[k] = force_rate_on_mass(model, hold, static_cast<int>(k), t, v, a.data());
     hm.accelerations(df.data(), j.data());
     rate = hm.held_force(i, df.data(), j.data());
+}
+
+double impact_direction(const Model& model, int c, std::vector<double>& w, std::vector<double>& Mw) {
+    const std::size_t n = model.dof();
+    w.assign(n, 0.0);
+    Mw.assign(n, 0.0);
+    for_each_term(model.contacts[static_cast<std::size_t>(c)].direction(),
+                  [&](int i, double wi) { w[static_cast<std::size_t>(i)] += wi; });
+    if (model.coupled_mass())
+        HeldMass(model, std::vector<char>(n, 0)).accelerations(w.data(), Mw.data());
+    else
+        for (std::size_t i = 0; i < n; ++i) Mw[i] = w[i] / model.masses[i].m;
+    double wMw = 0.0;
+    for (std::size_t i = 0; i < n; ++i) wMw += w[i] * Mw[i];
+    return wMw;
 }
 
 }  // namespace hsnc

@@ -63,4 +63,9 @@ void held_forces(const Model& model, const Configuration& cfg, const std::vector
 void held_driving_force(const Model& model, const Configuration& cfg, const signed char* sgn, int i, double t,
                         const double* x, const double* v, double& D, double& rate);
 
+/// The direction w of contact c over every dof (w), M^-1 w (Mw) by M's own
+/// factors (a coupled M: Cholesky with nothing held), and w^T M^-1 w returned:
+/// what Newton's law at a rigid stop needs (elements/contact.h impact).
+double impact_direction(const Model& model, int c, std::vector<double>& w, std::vector<double>& Mw);
+
 }  // namespace hsnc

@@ -100,20 +100,11 @@ public:
         return !negligible(w_rate, mag) && sign(w_rate) == cfg.slip[static_cast<std::size_t>(j)];
     }
     bool rigid(int c) const { return model_.contacts[static_cast<std::size_t>(c)].rigid(); }
-    // Newton's law at rigid stop c (contact.h impact): M^-1 w by M's own
-    // factors (a coupled M: Cholesky, held_mass.h with nothing held).
+    // Newton's law at rigid stop c (contact.h impact), M^-1 w from held_mass.h.
     void impact(int c) {
-        const Contact& k = model_.contacts[static_cast<std::size_t>(c)];
-        const auto n = static_cast<std::size_t>(n_);
-        std::vector<double> w(n, 0.0), Mw(n, 0.0);
-        for_each_term(k.direction(), [&](int i, double wi) { w[static_cast<std::size_t>(i)] += wi; });
-        if (model_.coupled_mass())
-            HeldMass(model_, std::vector<char>(n, 0)).accelerations(w.data(), Mw.data());
-        else
-            for (std::size_t i = 0; i < n; ++i) Mw[i] = w[i] / model_.masses[i].m;
-        double wMw = 0.0;
-        for (std::size_t i = 0; i < n; ++i) wMw += w[i] * Mw[i];
-        contact::impact(k.restitution, gap_now(c).d[1], wMw, Mw, v_, 1.0);
+        std::vector<double> w, Mw;
+        const double wMw = impact_direction(model_, c, w, Mw);
+        contact::impact(model_.contacts[static_cast<std::size_t>(c)].restitution, gap_now(c).d[1], wMw, Mw, v_, 1.0);
     }
     void prepare_ties(const Configuration& cfg, const std::vector<signed char>& sgn) {
         cfg_ = cfg;
