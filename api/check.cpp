@@ -58,7 +58,7 @@ void print_summary(const Model& model, std::ostream& out) {
         if (model.reduction.present) {
             const ReductionSource& r = model.reduction;
             out << "reduction: " << r.method << ", " << r.full_dofs << " dofs -> " << r.boundary
-                << " boundary dofs (those the model names) + " << r.modal_names.size() << " fixed-interface modes";
+                << " boundary dofs (those the model names) + " << r.modal_names.size() << " " << r.modes_kind();
             if (!r.interface_omega.empty())
                 out << " (omega " << num(r.interface_omega.front()) << " to " << num(r.interface_omega.back()) << " rad/s)";
             out << "\n";

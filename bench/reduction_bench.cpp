@@ -9,7 +9,7 @@
 //            K_II factored, 20 fixed-interface modes, the reduced M, K, C):
 //            what every simulate of the model pays;
 //   again    read_model once more in the same process: the files read
-//            again, the reduction remembered (craig_bampton_memo), what each
+//            again, the reduction remembered (reduce_memo), what each
 //            point of a sweep pays;
 //   check    the same plus the full structure's 10 lowest frequencies (what
 //            `hsnc check` and `hsnc reduce` add);

@@ -54,7 +54,7 @@ std::string structure_table(const Model& model) {
     const ReductionSource& r = model.reduction;
     std::ostringstream out;
     out << "# hsnc reduce of model '" << model.name << "': " << r.method << ", " << r.full_dofs << " dofs -> "
-        << r.boundary << " boundary dofs + " << r.modal_names.size() << " fixed-interface modes\n"
+        << r.boundary << " boundary dofs + " << r.modal_names.size() << " " << r.modes_kind() << "\n"
         << "# (paths relative to this directory)\n[structure]\ndofs = [";
     for (std::size_t i = 0; i < model.dof(); ++i) out << (i ? ", " : "") << "\"" << model.masses[i].name << "\"";
     out << "]\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n";
@@ -81,7 +81,7 @@ void write_reduction(const Model& model, const std::string& dir) {
         out.commit();
     }
     std::cout << "reduced '" << model.name << "': " << r.full_dofs << " dofs -> " << r.boundary << " boundary dofs + "
-              << r.modal_names.size() << " fixed-interface modes; wrote";
+              << r.modal_names.size() << " " << r.modes_kind() << "; wrote";
     for (const auto& f : files) std::cout << " " << f.first;
     std::cout << " to " << dir << "\n";
     for (const auto* f : {&r.open, &r.closed})

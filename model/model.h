@@ -127,10 +127,12 @@ struct StructureSource {
 /// (full-model order) and the modal coordinates `modal_names`.
 struct ReductionSource {
     bool present = false;
-    std::string method;                    ///< "craig-bampton"
+    std::string method;  ///< "craig-bampton" or "rubin"
+    /// What the modal coordinates are, as messages name them.
+    const char* modes_kind() const { return method == "rubin" ? "free-interface modes" : "fixed-interface modes"; }
     std::size_t full_dofs = 0;
     std::size_t boundary = 0;              ///< the first `boundary` dofs of the model are physical
-    std::vector<std::string> modal_names;  ///< the fixed-interface modes' coordinates
+    std::vector<std::string> modal_names;  ///< the kept modes' coordinates
     std::vector<double> interface_omega;   ///< their circular frequencies, rad/s
     /// The reduced matrices, row-major over the model's dofs (C empty when none): what `hsnc reduce` writes.
     std::vector<double> M, K, C;

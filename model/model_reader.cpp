@@ -642,15 +642,17 @@ private:
         red.method = "craig-bampton";
         if (const toml::node* m = r->get("method")) {
             red.method = string_value(*m, "reduction.method");
-            if (red.method != "craig-bampton")
-                fail(m, "reduction.method", "'" + excerpt(red.method) + "' is not a method (expected \"craig-bampton\")");
+            if (red.method != "craig-bampton" && red.method != "rubin")
+                fail(m, "reduction.method",
+                     "'" + excerpt(red.method) + "' is not a method (expected \"craig-bampton\" or \"rubin\")");
         }
         ReductionSettings settings;
+        if (red.method == "rubin") settings.method = ReductionMethod::rubin;
         const toml::node* modes = r->get("modes");
         const toml::node* cutoff = r->get("cutoff");
         if ((modes != nullptr) == (cutoff != nullptr))
             fail_at(table_line(*r, "reduction"), "reduction",
-                    "give exactly one of 'modes' (how many fixed-interface modes) and 'cutoff' (rad/s)");
+                    "give exactly one of 'modes' (how many modes to keep) and 'cutoff' (rad/s)");
         if (modes) {
             const auto* i = modes->as_integer();
             if (!i || i->get() < 0) fail(modes, "reduction.modes", "expected an integer >= 0");
@@ -684,8 +686,7 @@ private:
                     "reduction.boundary: nothing would stay physical");
         const Eigen::MatrixXd base_forces = base_influence(root, names, Ms);
         ReducedStructure out;
-        if (const std::string why =
-                craig_bampton_memo(Ms, Ks, Cs ? &*Cs : nullptr, boundary, settings, out, &base_forces);
+        if (const std::string why = reduce_memo(Ms, Ks, Cs ? &*Cs : nullptr, boundary, settings, out, &base_forces);
             !why.empty())
             fail_at(table_line(*r, "reduction"), "reduction", why);
         reduced_base_forces_ = out.forces;

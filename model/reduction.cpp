@@ -146,6 +146,42 @@ Eigen::MatrixXd project(const Blocks& A, const Eigen::MatrixXd& Psi, const Eigen
     return (R + R.transpose()) / 2.0;
 }
 
+/// The modes a reduction keeps of K phi = lambda M phi: settings.modes of
+/// them (at most `limit`), or every one with omega <= settings.cutoff;
+/// `kind` ("fixed-interface", "free-interface") names them in messages.
+std::string kept_modes(const SparseMatrixD& M, const SparseMatrixD& K, const ReductionSettings& settings, Index limit,
+                       const std::string& kind, Eigen::VectorXd& lambda, Eigen::MatrixXd& Phi) {
+    const Index n = K.rows();
+    if (settings.cutoff > 0.0) {
+        const double cut = settings.cutoff * settings.cutoff;
+        for (Index want = std::min<Index>(10, limit);; want = std::min<Index>(2 * want, limit)) {
+            if (std::string why = lowest_modes(M, K, want, lambda, Phi); !why.empty()) return why;
+            if (want == limit || lambda.size() < want || lambda(want - 1) > cut) break;  // fewer: every mode with mass
+        }
+        const auto keep =
+            static_cast<Index>(std::count_if(lambda.begin(), lambda.end(), [&](double l) { return l <= cut; }));
+        lambda.conservativeResize(keep);
+        Phi.conservativeResize(Eigen::NoChange, keep);
+    } else {
+        if (settings.modes > static_cast<std::size_t>(limit))
+            return "modes = " + std::to_string(settings.modes) + " is more than the " + std::to_string(limit) +
+                   " interior dofs";
+        if (settings.modes > 0) {
+            if (std::string why = lowest_modes(M, K, static_cast<Index>(settings.modes), lambda, Phi); !why.empty())
+                return why;
+            if (lambda.size() < static_cast<Index>(settings.modes))
+                return "modes = " + std::to_string(settings.modes) + " but only " + std::to_string(lambda.size()) +
+                       " " + kind + " modes have mass (the other " + (kind == "fixed-interface" ? "interior " : "") +
+                       "dofs are massless)";
+        }
+        if (settings.modes == 0) Phi.resize(n, 0), lambda.resize(0);
+    }
+    if ((lambda.array() <= 0.0).any())
+        return "a " + kind + " mode has omega^2 <= 0 (" + (kind == "fixed-interface" ? "K_II" : "K") +
+               " is not positive definite)";
+    return "";
+}
+
 }  // namespace
 
 std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
@@ -171,29 +207,8 @@ std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const 
     // Fixed-interface modes: `modes` of them, or every one below the cut-off.
     Eigen::VectorXd lambda;
     Eigen::MatrixXd Phi;
-    if (settings.cutoff > 0.0) {
-        const double limit = settings.cutoff * settings.cutoff;
-        for (Index want = std::min<Index>(10, ni);; want = std::min<Index>(2 * want, ni)) {
-            if (std::string why = lowest_modes(Mb.II, Kb.II, want, lambda, Phi); !why.empty()) return why;
-            if (want == ni || lambda.size() < want || lambda(want - 1) > limit) break;  // fewer: every mode with mass
-        }
-        const auto keep = static_cast<Index>(std::count_if(lambda.begin(), lambda.end(), [&](double l) { return l <= limit; }));
-        lambda.conservativeResize(keep);
-        Phi.conservativeResize(Eigen::NoChange, keep);
-    } else {
-        if (settings.modes > static_cast<std::size_t>(ni))
-            return "modes = " + std::to_string(settings.modes) + " is more than the " + std::to_string(ni) +
-                   " interior dofs";
-        if (settings.modes > 0) {
-            if (std::string why = lowest_modes(Mb.II, Kb.II, static_cast<Index>(settings.modes), lambda, Phi); !why.empty())
-                return why;
-            if (lambda.size() < static_cast<Index>(settings.modes))
-                return "modes = " + std::to_string(settings.modes) + " but only " + std::to_string(lambda.size()) +
-                       " fixed-interface modes have mass (the other interior dofs are massless)";
-        }
-        if (settings.modes == 0) Phi.resize(ni, 0), lambda.resize(0);
-    }
-    if ((lambda.array() <= 0.0).any()) return "a fixed-interface mode has omega^2 <= 0 (K_II is not positive definite)";
+    if (std::string why = kept_modes(Mb.II, Kb.II, settings, ni, "fixed-interface", lambda, Phi); !why.empty())
+        return why;
 
     out.boundary = boundary;
     out.full_dofs = n;
@@ -217,6 +232,79 @@ std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const 
         out.forces.topRows(nb) = FB + Psi.transpose() * FI;
         out.forces.bottomRows(nq) = Phi.transpose() * FI;
     }
+    return "";
+}
+
+std::string rubin(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
+                  const std::vector<std::size_t>& boundary, const ReductionSettings& settings, ReducedStructure& out,
+                  const Eigen::MatrixXd* forces) {
+    const auto n = static_cast<Index>(K.rows());
+    const auto nb = static_cast<Index>(boundary.size());
+    if (nb == n) return "every dof is a boundary dof: there is nothing to reduce";
+    Eigen::SimplicialLDLT<SparseMatrixD> k(K);
+    if (k.info() != Eigen::Success)
+        return "K is singular (the structure moves rigidly with nothing held): Rubin's method needs a supported "
+               "structure; use method = \"craig-bampton\"";
+
+    // Free-interface modes of the whole structure.
+    Eigen::VectorXd lambda;
+    Eigen::MatrixXd Phi;
+    if (std::string why = kept_modes(M, K, settings, n - nb, "free-interface", lambda, Phi); !why.empty()) return why;
+    const Index nq = Phi.cols();
+    Eigen::MatrixXd PhiB(nb, nq);
+    for (Index j = 0; j < nb; ++j) PhiB.row(j) = Phi.row(static_cast<Index>(boundary[static_cast<std::size_t>(j)]));
+
+    // Residual flexibility of the boundary: G = K^-1 E_B - Phi Lambda^-1 Phi_B^T.
+    Eigen::MatrixXd EB = Eigen::MatrixXd::Zero(n, nb);
+    for (Index j = 0; j < nb; ++j) EB(static_cast<Index>(boundary[static_cast<std::size_t>(j)]), j) = 1.0;
+    const Eigen::MatrixXd F = k.solve(EB);  // the full static flexibility's columns on B
+    if (k.info() != Eigen::Success || !F.allFinite())
+        return "the static flexibility of the boundary could not be solved";
+    const Eigen::MatrixXd G = F - Phi * lambda.cwiseInverse().asDiagonal() * PhiB.transpose();
+    Eigen::MatrixXd GBB(nb, nb), FBB(nb, nb);
+    for (Index j = 0; j < nb; ++j) {
+        GBB.row(j) = G.row(static_cast<Index>(boundary[static_cast<std::size_t>(j)]));
+        FBB.row(j) = F.row(static_cast<Index>(boundary[static_cast<std::size_t>(j)]));
+    }
+    GBB = (GBB + GBB.transpose()) / 2.0;
+    // G_BB is what the dropped modes leave of F_BB: when the kept modes
+    // carry nearly all of it, G_BB is lost in the subtraction's rounding.
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gs(GBB, Eigen::EigenvaluesOnly);
+    const double floor = 1e-9 * FBB.diagonal().cwiseAbs().maxCoeff();
+    if (gs.info() != Eigen::Success || !(gs.eigenvalues()(0) > floor))
+        return "the residual flexibility of the boundary is singular or lost in rounding with " + std::to_string(nq) +
+               " free-interface modes kept (the dropped modes no longer reach every boundary dof): keep fewer modes";
+
+    // T = [Psi  Phi - Psi Phi_B], Psi = G G_BB^-1; its rows on B exactly [I 0].
+    const Eigen::MatrixXd Psi = GBB.llt().solve(G.transpose()).transpose();
+    Eigen::MatrixXd T(n, nb + nq);
+    T.leftCols(nb) = Psi;
+    T.rightCols(nq) = Phi - Psi * PhiB;
+    for (Index j = 0; j < nb; ++j) {
+        const auto i = static_cast<Index>(boundary[static_cast<std::size_t>(j)]);
+        T.row(i).setZero();
+        T(i, j) = 1.0;
+    }
+    if (!T.allFinite()) return "the residual attachment modes could not be solved";
+    auto project = [&T](const SparseMatrixD& A) {
+        const Eigen::MatrixXd R = T.transpose() * (A * T);
+        return Eigen::MatrixXd((R + R.transpose()) / 2.0);
+    };
+    out.boundary = boundary;
+    out.full_dofs = static_cast<std::size_t>(n);
+    out.interface_omega = lambda.array().sqrt();
+    out.M = project(M);
+    // T^T K T, not its closed form [G_BB^-1, -G_BB^-1 Phi_B; ., Lambda +
+    // Phi_B^T G_BB^-1 Phi_B] (which assumes G^T M Phi = 0 exactly): the
+    // projection on the computed T keeps M_r and K_r one Ritz pair (events
+    // of the 40-element cantilever's tip stop with 16 modes: 1.8e-11 s from
+    // the full model's, against 4.6e-10 s with the closed form).
+    out.K = project(K);
+    if (C)
+        out.C = project(*C);
+    else
+        out.C.resize(0, 0);
+    out.forces = forces ? Eigen::MatrixXd(T.transpose() * *forces) : Eigen::MatrixXd(nb + nq, 0);
     return "";
 }
 
@@ -296,9 +384,9 @@ Memo& memo() {
 
 }  // namespace
 
-std::string craig_bampton_memo(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
-                               const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
-                               ReducedStructure& out, const Eigen::MatrixXd* forces) {
+std::string reduce_memo(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
+                        const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
+                        ReducedStructure& out, const Eigen::MatrixXd* forces) {
     Fingerprint f;
     f.add(M);
     f.add(K);
@@ -306,6 +394,7 @@ std::string craig_bampton_memo(const SparseMatrixD& M, const SparseMatrixD& K, c
     if (C) f.add(*C);
     f.add(static_cast<std::uint64_t>(boundary.size()));
     for (const std::size_t b : boundary) f.add(static_cast<std::uint64_t>(b));
+    f.add(static_cast<std::uint64_t>(settings.method));
     f.add(static_cast<std::uint64_t>(settings.modes));
     f.add(settings.cutoff);
     f.add(static_cast<std::uint64_t>(forces ? forces->cols() : 0));
@@ -324,7 +413,10 @@ std::string craig_bampton_memo(const SparseMatrixD& M, const SparseMatrixD& K, c
     }
     // Computed outside the lock: two threads may both reduce the same
     // structure once; each result is the same.
-    if (std::string why = craig_bampton(M, K, C, boundary, settings, out, forces); !why.empty()) return why;
+    const std::string why = settings.method == ReductionMethod::rubin
+                                ? rubin(M, K, C, boundary, settings, out, forces)
+                                : craig_bampton(M, K, C, boundary, settings, out, forces);
+    if (!why.empty()) return why;
     const std::lock_guard<std::mutex> guard(m.lock);
     ++m.counts.computed;
     m.kept.emplace_front(key, out);

@@ -15,10 +15,22 @@
 // every configuration of the reduced model is the Ritz projection of the
 // full model's configuration on the same basis.
 //
-// The sparse factorisation of K_II (and of K for the full model's
+// Rubin (MacNeal-Rubin, free interface with residual flexibility, the
+// boundary dofs kept physical): the lowest free-interface modes Phi of the
+// whole structure (K Phi = M Phi Lambda) and the residual flexibility of the
+// boundary, G = K^-1 E_B - Phi Lambda^-1 Phi_B^T (what the dropped modes
+// give statically to a force on B), with Psi = G G_BB^-1 (Psi_B = I):
+//     x = T [x_B; q],   T = [ Psi  Phi - Psi Phi_B ]   (T's rows on B: [I 0]).
+// It is exact for the static response to forces on B (span T = span [Phi,
+// G]); its frequencies bound the full model's from above. It needs K
+// nonsingular (a supported structure) and G_BB nonsingular (fewer modes
+// than n - |B|).
+//
+// The sparse factorisation of K_II or K (and of K for the full model's
 // frequencies) is Eigen's simplicial LDL^T with AMD ordering; the
-// fixed-interface modes come from Spectra's shift-and-invert Lanczos (a
-// dense generalized eigensolver when the interior is small).
+// fixed-interface and free-interface modes come from Spectra's
+// shift-and-invert Lanczos (a dense generalized eigensolver when the
+// problem is small).
 #pragma once
 
 #include <cstddef>
@@ -32,9 +44,12 @@ namespace hsnc {
 
 using SparseMatrixD = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
+enum class ReductionMethod { craig_bampton, rubin };
+
 struct ReductionSettings {
-    std::size_t modes = 0;  ///< fixed-interface modes kept (0 when `cutoff` decides)
-    double cutoff = 0.0;    ///< keep every fixed-interface mode with omega <= cutoff (rad/s), when > 0
+    ReductionMethod method = ReductionMethod::craig_bampton;
+    std::size_t modes = 0;  ///< modes kept (fixed-interface, or free-interface for Rubin; 0 when `cutoff` decides)
+    double cutoff = 0.0;    ///< keep every such mode with omega <= cutoff (rad/s), when > 0
 };
 
 /// The reduced structure: boundary dofs (full-model order), then the modal
@@ -42,7 +57,7 @@ struct ReductionSettings {
 struct ReducedStructure {
     std::vector<std::size_t> boundary;  ///< full-model index of each boundary dof
     Eigen::MatrixXd M, K, C;            ///< C empty when the full model has none
-    Eigen::VectorXd interface_omega;    ///< the kept fixed-interface modes' circular frequencies, rad/s
+    Eigen::VectorXd interface_omega;    ///< the kept (fixed- or free-)interface modes' circular frequencies, rad/s
     std::size_t full_dofs = 0;
     /// T^T F of the full-model forces F given to the reduction (one column
     /// each: a base motion's M r), in the reduced dofs' order; 0 columns when none.
@@ -59,17 +74,25 @@ std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const 
                           const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
                           ReducedStructure& out, const Eigen::MatrixXd* forces = nullptr);
 
-/// craig_bampton, remembered for the process: the same matrices (every
+/// Rubin's free-interface reduction of (M, K, C) (above), with the same
+/// arguments and results as craig_bampton; refused when K is singular (the
+/// structure moves rigidly: use craig_bampton) or the boundary's residual
+/// flexibility is (too many modes for the dofs left).
+std::string rubin(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
+                  const std::vector<std::size_t>& boundary, const ReductionSettings& settings, ReducedStructure& out,
+                  const Eigen::MatrixXd* forces = nullptr);
+
+/// craig_bampton or rubin as settings.method says, remembered for the process: the same matrices (every
 /// entry's bits), boundary and settings give the stored reduction without a
 /// second factorisation (a sweep reads its model again for every point; a
 /// 27,000-dof plate took 5 s to reduce). Keyed by a 128-bit hash of those
 /// inputs; the last kReductionMemo results are kept. Thread-safe.
-std::string craig_bampton_memo(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
-                               const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
-                               ReducedStructure& out, const Eigen::MatrixXd* forces = nullptr);
+std::string reduce_memo(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMatrixD* C,
+                        const std::vector<std::size_t>& boundary, const ReductionSettings& settings,
+                        ReducedStructure& out, const Eigen::MatrixXd* forces = nullptr);
 inline constexpr std::size_t kReductionMemo = 4;
 
-/// How often craig_bampton_memo computed a reduction and how often it reused one.
+/// How often reduce_memo computed a reduction and how often it reused one.
 struct ReductionMemoCounts {
     std::size_t computed = 0, reused = 0;
 };

@@ -1,5 +1,6 @@
 // [reduction]: a structure read sparse and reduced by Craig-Bampton to the
-// dofs its elements name plus fixed-interface modes (model/reduction.h).
+// dofs its elements name plus fixed-interface modes, or by Rubin's method
+// to them plus free-interface modes (model/reduction.h).
 // Checked against what does not depend on hsnc's own reduction:
 //  - the reduced frequencies bound the full model's (a dense generalized
 //    eigensolve of the test's own M, K) from above, come closer as modes
@@ -520,7 +521,7 @@ TEST(Reduction, WhatCannotBeReducedIsRefusedByName) {
     refused("[reduction]\nmodes = 9\n", "reduction", "more than the 7 interior dofs");
     refused("[reduction]\nmodes = -1\n", "reduction.modes", "integer >= 0");
     refused("[reduction]\ncutoff = -5.0\n", "reduction.cutoff", "> 0");
-    refused("[reduction]\nmodes = 2\nmethod = \"rubin\"\n", "reduction.method", "craig-bampton");
+    refused("[reduction]\nmodes = 2\nmethod = \"guyan\"\n", "reduction.method", "\"craig-bampton\" or \"rubin\"");
     refused("[reduction]\nmodes = 2\nboundary = [\"w9\"]\n", "reduction.boundary[1]", "not a dof");
     // w1..w3 are interior (gone); w4 is the boundary dof the load names.
     refused("[reduction]\nmodes = 4\nprefix = \"w\"\n", "reduction.prefix", "'w4' is already the name");
@@ -618,6 +619,130 @@ TEST(Reduction, ADuplicateEntryOfALargeFileIsNamedByItsLine) {
     } catch (const InputError& e) {
         EXPECT_EQ(std::string(e.what()), "big.mtx:5: entry (1, 1) is given twice");
     }
+}
+
+// Rubin's free-interface reduction (method = "rubin"). The cantilever's
+// tip is its only boundary dof, so its free-interface modes are the full
+// beam's own: the reduced model must have them exactly (they lie in its
+// basis), bound the others from above, and keep the static tip
+// flexibility L^3 / (3 EI) exactly (the residual flexibility).
+std::string rubin_reduction(int modes) {
+    return "[reduction]\nmethod = \"rubin\"\nmodes = " + std::to_string(modes) + "\n";
+}
+
+TEST(Rubin, TheKeptFreeModesAreTheFullBeamsOwnAndTheRestBoundItFromAbove) {
+    testing::TempDir dir;
+    const Beam b = cantilever(kElements);
+    const Eigen::VectorXd full = full_omegas(b);
+    for (const int modes : {2, 5, 9}) {
+        const Model m = read_model(tip_stop(dir, b, "m.toml", rubin_reduction(modes)), with_frequencies());
+        ASSERT_EQ(m.dof(), static_cast<std::size_t>(1 + modes));
+        EXPECT_EQ(m.masses[0].name, "w40");
+        EXPECT_EQ(m.masses[1].name, "q1");
+        EXPECT_EQ(m.reduction.method, "rubin");
+        ASSERT_EQ(m.reduction.interface_omega.size(), static_cast<std::size_t>(modes));
+        for (int k = 0; k < modes; ++k)
+            EXPECT_NEAR(m.reduction.interface_omega[static_cast<std::size_t>(k)], full(k), 1e-9 * full(k)) << k;
+        const std::vector<double>& reduced = m.reduction.open.reduced;
+        ASSERT_GE(reduced.size(), static_cast<std::size_t>(modes + 1));
+        for (std::size_t k = 0; k < reduced.size(); ++k) {
+            const double exact = full(static_cast<Eigen::Index>(k));
+            if (k < static_cast<std::size_t>(modes))
+                EXPECT_NEAR(reduced[k], exact, 1e-9 * exact) << modes << " modes: mode " << k + 1 << " is kept";
+            else
+                EXPECT_GE(reduced[k], exact * (1.0 - 1e-9)) << modes << " modes, mode " << k + 1;
+        }
+        // The first mode not kept: the residual flexibility's (upper) estimate of it.
+        std::printf("%d free-interface modes: mode %d within %.3g relative\n", modes, modes + 1,
+                    (reduced[static_cast<std::size_t>(modes)] - full(modes)) / full(modes));
+    }
+}
+
+TEST(Rubin, TheStaticTipFlexibilityIsKeptAndTheResponseErrorShrinks) {
+    testing::TempDir dir;
+    const Beam b = cantilever(kElements);
+    for (const int modes : {0, 3}) {  // 0: the residual flexibility alone (static condensation to the tip)
+        const Model m = read_model(tip_stop(dir, b, "m.toml", rubin_reduction(modes)));
+        const auto n = static_cast<Eigen::Index>(m.dof());
+        const Eigen::MatrixXd K =
+            Eigen::Map<const Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(m.reduction.K.data(), n, n);
+        // Rubin's K_r carries the flexibility F_BB = (K^-1)_BB as the sparse
+        // LDL^T solves it, cond(K) ~ 1e9 (Craig-Bampton's Schur complement
+        // avoids that solve: 1e-12): 6e-11 measured.
+        EXPECT_NEAR(K.inverse()(0, 0), 1.0 / 300.0, 2e-10 / 300.0) << modes << " modes";
+    }
+    // Forced at the tip, at 20 rad/s (below the first mode, 35 rad/s): the
+    // kept modes are exact and the residual flexibility carries the rest, so
+    // two free-interface modes already give the response to the rounding of
+    // the two LU solves (~5e-10), where two fixed-interface modes miss it by
+    // 1.4e-4 (README's table).
+    const auto response_error = [&](const std::string& reduction) {
+        const Model m = read_model(tip_stop(dir, b, "m.toml", reduction + "[load]\nw40 = 0.3\n"), with_frequencies());
+        EXPECT_EQ(m.reduction.response.size(), 2u);
+        if (m.reduction.response.size() != 2u) return 1.0;
+        EXPECT_LT(m.reduction.response[0].error, 1e-9) << reduction << ": the static response is kept";
+        return m.reduction.response[1].error;
+    };
+    const double craig_bampton = response_error("[reduction]\nmodes = 2\n");
+    for (const int modes : {2, 5, 20}) {
+        const double error = response_error(rubin_reduction(modes));
+        std::printf("%2d free-interface modes: tip response error %.3g at 20 rad/s (2 fixed-interface: %.3g)\n", modes,
+                    error, craig_bampton);
+        EXPECT_LT(error, 5e-9) << modes << " modes";
+        EXPECT_LT(error, 1e-4 * craig_bampton) << modes << " modes";
+    }
+    const auto r = testing::run_hsnc("check '" + tip_stop(dir, b, "m.toml", rubin_reduction(5)) + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(
+        r.out.find("reduction: rubin, 80 dofs -> 1 boundary dofs (those the model names) + 5 free-interface modes"),
+        std::string::npos)
+        << r.out;
+    const auto reduce = testing::run_hsnc("reduce '" + (dir / "m.toml") + "' -o '" + (dir / "out") + "'");
+    ASSERT_EQ(reduce.exit_code, 0) << reduce.err;
+    EXPECT_NE(reduce.out.find("80 dofs -> 1 boundary dofs + 5 free-interface modes"), std::string::npos) << reduce.out;
+    EXPECT_NE(testing::slurp(dir / "out" / "structure.toml").find(": rubin, 80 dofs"), std::string::npos);
+}
+
+TEST(Rubin, ATipStopOnTheRubinReducedCantileverFollowsTheFullModelAndCvode) {
+    testing::TempDir dir;
+    const Beam b = cantilever(kElements);
+    const Model full = read_model(tip_stop(dir, b, "full.toml", ""));
+    const testing::Outcome exact = testing::simulate(full, 1.5, 0.0, testing::Solvers::interp);
+    ASSERT_GE(exact.events.size(), 6u);
+    double previous = 1.0;
+    for (const int modes : {4, 8, 16}) {
+        const Model m = read_model(tip_stop(dir, b, "r.toml", rubin_reduction(modes)));
+        const testing::Outcome reduced = testing::simulate(m, 1.5, 0.0, testing::Solvers::interp);
+        const double off = event_gap(reduced, exact);
+        std::printf("%2d free-interface modes: %zu events, within %.3g s of the full model's\n", modes,
+                    reduced.events.size(), off);
+        EXPECT_LT(off, previous) << modes << " modes should follow the full model closer";
+        previous = off;
+        if (modes == 16) {
+            EXPECT_LT(off, 1e-6);
+            const testing::Outcome cvode = testing::baseline(m, 1.5, 1e-12, 1e-14, Method::cvode);
+            EXPECT_LT(event_gap(reduced, cvode), 1e-9);
+        }
+    }
+}
+
+TEST(Rubin, WhatRubinCannotReduceIsRefusedByName) {
+    testing::TempDir dir;
+    auto refused = [&](const Eigen::MatrixXd& M, const Eigen::MatrixXd& K, const std::vector<std::string>& dofs,
+                       const std::string& reduction, const std::string& words) {
+        const std::string model =
+            structure_model(dir, "bad.toml", "bad", M, K, dofs, "[load]\n" + dofs.back() + " = 1.0\n" + reduction);
+        const testing::CliRun r = testing::run_hsnc("check " + model);
+        EXPECT_EQ(r.exit_code, 2) << reduction;
+        EXPECT_NE(r.err.find("key 'reduction'"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
+    };
+    // A free chain: K singular.
+    Eigen::MatrixXd M = Eigen::MatrixXd::Identity(4, 4), K(4, 4);
+    K << 1, -1, 0, 0, -1, 2, -1, 0, 0, -1, 2, -1, 0, 0, -1, 1;
+    refused(M, K, {"a", "b", "c", "d"}, rubin_reduction(1), "Rubin's method needs a supported structure");
+    const Beam b = cantilever(4);
+    refused(b.M, b.K, b.dofs, rubin_reduction(8), "more than the 7 interior dofs");
 }
 
 }  // namespace
