@@ -735,6 +735,11 @@ TEST(Rubin, WhatRubinCannotReduceIsRefusedByName) {
     refused(M, K, {"a", "b", "c", "d"}, rubin_reduction(1), "Rubin's method needs a supported structure");
     const Beam b = cantilever(4);
     refused(b.M, b.K, b.dofs, rubin_reduction(8), "more than the 7 interior dofs");
+    // Three springs to ground: the lowest mode is the boundary dof a alone,
+    // so keeping it leaves a no residual flexibility (G_BB = 0 exactly).
+    const Eigen::MatrixXd I3 = Eigen::MatrixXd::Identity(3, 3);
+    const Eigen::MatrixXd K3 = Eigen::Vector3d(2.0, 3.0, 1.0).asDiagonal();  // b, c, a
+    refused(I3, K3, {"b", "c", "a"}, rubin_reduction(1), "residual flexibility of the boundary is singular");
 }
 
 }  // namespace
