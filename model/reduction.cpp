@@ -251,21 +251,18 @@ std::string rubin(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMa
     Eigen::MatrixXd Phi;
     if (std::string why = kept_modes(M, K, settings, n - nb, "free-interface", lambda, Phi); !why.empty()) return why;
     const Index nq = Phi.cols();
-    Eigen::MatrixXd PhiB(nb, nq);
-    for (Index j = 0; j < nb; ++j) PhiB.row(j) = Phi.row(static_cast<Index>(boundary[static_cast<std::size_t>(j)]));
+    const std::vector<Index> on_b(boundary.begin(), boundary.end());  // B's rows
+    const Eigen::MatrixXd PhiB = Phi(on_b, Eigen::all);
 
     // Residual flexibility of the boundary: G = K^-1 E_B - Phi Lambda^-1 Phi_B^T.
     Eigen::MatrixXd EB = Eigen::MatrixXd::Zero(n, nb);
-    for (Index j = 0; j < nb; ++j) EB(static_cast<Index>(boundary[static_cast<std::size_t>(j)]), j) = 1.0;
+    for (Index j = 0; j < nb; ++j) EB(on_b[static_cast<std::size_t>(j)], j) = 1.0;
     const Eigen::MatrixXd F = k.solve(EB);  // the full static flexibility's columns on B
     if (k.info() != Eigen::Success || !F.allFinite())
         return "the static flexibility of the boundary could not be solved";
     const Eigen::MatrixXd G = F - Phi * lambda.cwiseInverse().asDiagonal() * PhiB.transpose();
-    Eigen::MatrixXd GBB(nb, nb), FBB(nb, nb);
-    for (Index j = 0; j < nb; ++j) {
-        GBB.row(j) = G.row(static_cast<Index>(boundary[static_cast<std::size_t>(j)]));
-        FBB.row(j) = F.row(static_cast<Index>(boundary[static_cast<std::size_t>(j)]));
-    }
+    const Eigen::MatrixXd FBB = F(on_b, Eigen::all);
+    Eigen::MatrixXd GBB = G(on_b, Eigen::all);
     GBB = (GBB + GBB.transpose()) / 2.0;
     // G_BB is what the dropped modes leave of F_BB: when the kept modes
     // carry nearly all of it, G_BB is lost in the subtraction's rounding.
@@ -280,11 +277,7 @@ std::string rubin(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMa
     Eigen::MatrixXd T(n, nb + nq);
     T.leftCols(nb) = Psi;
     T.rightCols(nq) = Phi - Psi * PhiB;
-    for (Index j = 0; j < nb; ++j) {
-        const auto i = static_cast<Index>(boundary[static_cast<std::size_t>(j)]);
-        T.row(i).setZero();
-        T(i, j) = 1.0;
-    }
+    T(on_b, Eigen::all) = Eigen::MatrixXd::Identity(nb, nb + nq);
     if (!T.allFinite()) return "the residual attachment modes could not be solved";
     auto project = [&T](const SparseMatrixD& A) {
         const Eigen::MatrixXd R = T.transpose() * (A * T);
