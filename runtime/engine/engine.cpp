@@ -32,22 +32,31 @@ constexpr double kScheduleAhead = 1.0;
 // Rounding level of a switch function whose summed terms have magnitude `scale`.
 double noise_of(double scale) { return 16 * kEps * scale; }
 
-// Largest s >= 0 such that h + hd*s - B*s^2/2 > 0 for every smaller s: no
-// function with h(0) = h > 0, h'(0) = hd and |h''| <= B can reach zero
-// before it. Written without cancellation in both signs of hd.
-double safe_step(double h, double hd, double B) {
-    if (!(B > 0)) return hd >= 0 ? kInf : h / -hd;
-    const double root = std::sqrt(hd * hd + 2 * B * h);
-    return hd >= 0 ? (hd + root) / B : 2 * h / (root - hd);
-}
-
 // Working storage for one segment's evaluations (sized for the largest switch list).
 // x holds the Jenkins sliders after the masses (nx = Model::state_size()).
 struct Buffers {
     std::vector<double> x, v, a, g, dg, bound, scale;
+    std::vector<double> slow, slow_dg, fast, slow_bound;  // the split bound (segment_solver.h)
     Buffers(std::size_t nx, std::size_t n, std::size_t nsw)
-        : x(nx), v(n), a(n), g(nsw), dg(nsw), bound(nsw), scale(nsw) {}
-    SegmentEval view() { return {x.data(), v.data(), a.data(), g.data(), dg.data(), bound.data(), scale.data()}; }
+        : x(nx),
+          v(n),
+          a(n),
+          g(nsw),
+          dg(nsw),
+          bound(nsw),
+          scale(nsw),
+          slow(nsw),
+          slow_dg(nsw),
+          fast(nsw),
+          slow_bound(nsw) {}
+    SegmentEval view() {
+        return {x.data(),     v.data(),    a.data(),       g.data(),    dg.data(),        bound.data(),
+                scale.data(), slow.data(), slow_dg.data(), fast.data(), slow_bound.data()};
+    }
+    // Function f's split bound from another evaluation.
+    void take_split(const Buffers& o, std::size_t f) {
+        slow[f] = o.slow[f], slow_dg[f] = o.slow_dg[f], fast[f] = o.fast[f], slow_bound[f] = o.slow_bound[f];
+    }
 };
 
 // Side on which switch function f is watched in the current configuration:
@@ -172,6 +181,7 @@ public:
         seg_ = s;
         nsw_ = s.switches->size();
         out_ = buf.view();
+        split_ = solver().splits_bound();
         for (std::size_t f = 0; f < nsw_; ++f) {
             side_[f] = side_of((*s.switches)[f], *s.cfg, *s.sgn);
             floor_[f] = inherited_[slot((*s.switches)[f])];
@@ -229,6 +239,7 @@ private:
         for (std::uint32_t f : due_) {
             buf.g[f] = probe_.g[f], buf.dg[f] = probe_.dg[f], buf.bound[f] = probe_.bound[f];
             buf.scale[f] = probe_.scale[f];
+            if (split_) buf.take_split(probe_, f);
             before_[f] = at_[f];
             at_[f] = tau;
         }
@@ -260,6 +271,7 @@ private:
     SearchSegment seg_;
     std::size_t nsw_ = 0;
     SegmentEval out_{};
+    bool split_ = false;  // the solver writes the split bound
     Buffers probe_;  // a search evaluation: its due functions go to buf
     SegmentEval probe_view_;
     std::vector<double> side_, floor_, root_, clear_until_;
@@ -303,6 +315,10 @@ void SwitchSearch::start() {
         }
         solver().eval_start(0.0, start_due_.data(), start_due_.size(), probe_view_);
         for (std::size_t f = 0; f < nsw_; ++f) buf.bound[f] = probe_.bound[f];
+        // The split is the new segment's own at 0 for every function (a bound
+        // of its g, whatever the rounding of the event's values kept in buf).
+        if (split_)
+            for (std::size_t f = 0; f < nsw_; ++f) buf.take_split(probe_, f);
         for (std::uint32_t f : start_due_)
             buf.g[f] = probe_.g[f], buf.dg[f] = probe_.dg[f], buf.scale[f] = probe_.scale[f];
         all_at<scheduled>(0.0);
@@ -489,7 +505,12 @@ double SwitchSearch::own_step(std::size_t f, double tau) const {
     // Contacts and releases switch only when certainly negative (level
     // -2*noise); armed velocities stop at zero.
     const double level = stop ? 0.0 : -2 * noise<scheduled>(f);
-    return safe_step(h - level, hd, buf.bound[f]);
+    const double step = safe_step(h - level, hd, buf.bound[f]);
+    if (!split_) return step;
+    // The split bound: the slow part's curvature, the fast modes' amplitude.
+    const double hs = side_[f] * buf.slow[f] - buf.fast[f] - level;
+    if (!(hs > 0)) return step;
+    return std::max(step, safe_step(hs, side_[f] * buf.slow_dg[f], buf.slow_bound[f]));
 }
 
 // A sliding velocity whose Newton step s = h / -h' lands on its zero to half

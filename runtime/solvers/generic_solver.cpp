@@ -31,6 +31,9 @@ constexpr double kGrowthHorizon = 0.5;
 // about 5% in frequency for an undamped one) and another resonance-stable form
 // (the Duhamel integral), and agreement across both bands is what the tests see.
 constexpr double kCoupled = 0.1;
+// The stiff tail (the split bound's modes) starts this many times above the
+// lowest flexible mode or the forcing, whichever is faster.
+constexpr double kStiffFrom = 32.0;
 
 // phi_1(x) = (e^x - 1)/x, phi_1(0) = 1 (accurate for every x: expm1).
 double phi1(double x) { return x == 0.0 ? 1.0 : std::expm1(x) / x; }
@@ -251,6 +254,30 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
         growth_ = std::exp(kGrowthHorizon);
     }
 
+    // The stiff tail: modes far above the motion's own rates (the lowest
+    // flexible mode, the forcing), whose free oscillation the split bound
+    // (segment_solver.h) may take by its amplitude; eval() chooses per
+    // function how many of the fastest. Rigid modes and modes in a coupled
+    // (resonant) pair never are. A configuration without such a tail is
+    // searched on the curvature bound alone, at the same instants as the
+    // programs (which do not split yet).
+    double omega_slow = 0.0;
+    for (int h = 0; h < nh_; ++h) omega_slow = std::max(omega_slow, t_.h_omega(h));
+    double omega_first = std::numeric_limits<double>::infinity();
+    for (int j = 0; j < nf_; ++j)
+        if (regime_[j] != Regime::rigid) omega_first = std::min(omega_first, omega_(j));
+    if (std::isfinite(omega_first)) omega_slow = std::max(omega_slow, omega_first);
+    fast_.assign(static_cast<std::size_t>(nf_), 0);
+    for (int j = 0; j < nf_; ++j) {
+        bool coupled = false;
+        for (int h = 0; h < nh_; ++h) coupled = coupled || coupled_(j, h);
+        fast_[j] = regime_[j] != Regime::rigid && !coupled && omega_(j) > kStiffFrom * omega_slow;
+        any_fast_ = any_fast_ || fast_[j];
+    }
+    by_omega_.resize(static_cast<std::size_t>(nf_));
+    for (int j = 0; j < nf_; ++j) by_omega_[static_cast<std::size_t>(j)] = j;
+    std::stable_sort(by_omega_.begin(), by_omega_.end(), [&](int i, int j) { return omega_(i) < omega_(j); });
+
     switch_rows(model);
     absW_ = W_.cwiseAbs();
     absZ_ = Z_.cwiseAbs();
@@ -280,6 +307,7 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     sn_ = cs_ = Eigen::VectorXd::Zero(nh_);
     e_omega_tau_ = Eigen::VectorXcd::Zero(nh_);
     q_ = qd_ = qdd_ = qmag_ = qdmag_ = b2_ = b3_ = Eigen::VectorXd::Zero(nf_);
+    fu_ = fud_ = fudd_ = famp_ = fdamp_ = below_ = Eigen::VectorXd::Zero(nf_);
     xmag_ = vmag_ = Eigen::VectorXd::Zero(n_);
     lifetimes_.reserve(2 * static_cast<std::size_t>(nf_));  // resolving_rate: two terms per mode at most
 }
@@ -381,6 +409,49 @@ void GenericSolver::setup(double t0, double t0_lo, const double* x0, const doubl
     }
 }
 
+// The split bound of function f (segment_solver.h): the free oscillation
+// r = W u + Z u' of the fastest modes apart, bounded by its amplitude
+// (|u| <= sqrt(2E/lambda), |u'| <= sqrt(2E)), the rest by its curvature. How
+// many of the fastest modes is chosen per function and instant: the cut that
+// gives the longest safe step on g's present side (the engine takes its own
+// step from whichever is written, so the choice never weakens the bound).
+// The slow curvature at each cut is summed forwards (the modes below it in
+// order, the ineligible ones above it), never by subtraction from B.
+void GenericSolver::split_bound(int f, double g, double dg, double rigid_decay, const SegmentEval& out) const {
+    const auto F = static_cast<Eigen::Index>(f);
+    const double side = g >= 0.0 ? 1.0 : -1.0;
+    double base = bound_sin_(F) + std::abs(rho_(F)) * rigid_decay;
+    for (int k = 0; k < nf_; ++k) {  // below[k]: the curvature bound of the modes below the k-th by omega
+        below_(k) = base;
+        const int j = by_omega_[static_cast<std::size_t>(k)];
+        base += absW_(F, j) * b2_(j) + absZ_(F, j) * b3_(j);
+    }
+    double r = 0.0, rd = 0.0, amp = 0.0, kept = 0.0;  // kept: ineligible modes above the cut
+    double best = -1.0;
+    out.slow[f] = g, out.slow_dg[f] = dg, out.fast[f] = 0.0, out.slow_bound[f] = base;
+    for (int k = nf_ - 1; k >= 0; --k) {
+        const int j = by_omega_[static_cast<std::size_t>(k)];
+        const double aw = absW_(F, j), az = absZ_(F, j);
+        if (!fast_[j]) {
+            kept += aw * b2_(j) + az * b3_(j);
+            continue;
+        }
+        if (aw == 0.0 && az == 0.0) continue;  // f does not see it
+        const double w = W_(F, j), z = Z_(F, j);
+        r += w * fu_(j) + z * fud_(j);
+        rd += w * fud_(j) + z * fudd_(j);
+        amp += aw * famp_(j) + az * fdamp_(j);
+        const double h = side * (g - r) - amp;
+        if (!(h > 0.0)) continue;
+        const double Bs = below_(k) + kept;
+        const double step = safe_step(h, side * (dg - rd), Bs);
+        if (step > best) {
+            best = step;
+            out.slow[f] = g - r, out.slow_dg[f] = dg - rd, out.fast[f] = amp, out.slow_bound[f] = Bs;
+        }
+    }
+}
+
 void GenericSolver::eval(double tau, const SegmentEval& out) const {
     // Harmonics at tau, and the bound horizon of coupled terms.
     for (int h = 0; h < nh_; ++h) {
@@ -445,6 +516,13 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
             const double e2 = std::sqrt(ud * ud + lam * u * u) * growth_, ac = std::abs(c);
             b2 = (ac + w) * e2;
             b3 = (ac * (ac + w) + lam) * e2;
+            if (fast_[j]) {  // for the split bound: |u| <= sqrt(2E/lambda), |u'| <= sqrt(2E) over the horizon
+                fu_(j) = u;
+                fud_(j) = ud;
+                fudd_(j) = -c * ud - lam * u;
+                famp_(j) = e2 / w;
+                fdamp_(j) = e2;
+            }
             if (regime_[j] == Regime::overdamped && gamma_(j) >= 0.5 * sig) {
                 // Well separated real roots: u = U1 e^{r1 s} + U2 e^{r2 s}, each term decays.
                 const double r1 = r1_(j), r2 = r2_(j), den = -2.0 * gamma_(j);
@@ -557,6 +635,7 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
         out.dg[f] = dg;
         out.scale[f] = scale;
         out.bound[f] = B;
+        if (out.fast && any_fast_) split_bound(f, g, dg, rigid_decay, out);
     }
 }
 

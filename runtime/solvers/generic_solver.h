@@ -59,6 +59,7 @@ public:
     void setup(double t0, double t0_lo, const double* x0, const double* v0, const signed char* sgn) override;
     void eval(double tau, const SegmentEval& out) const override;
     double max_step() const override { return max_step_; }
+    bool splits_bound() const override { return any_fast_; }
     double resolving_rate(double tau, double tol) const override;
 
     /// Estimated heap memory of this solver (its matrices and vectors), bytes.
@@ -119,8 +120,17 @@ private:
     Eigen::VectorXd force_, p_, q0_, qd0_, u0_, ud0_;
     Eigen::VectorXd rho_;          // rigid-mode part of g_f'' at tau = 0 (times exp(-alpha tau))
 
+    // The fast modes (SegmentEval's split bound): free oscillations bounded by
+    // their amplitude, not their curvature (the constructor says which).
+    std::vector<char> fast_;
+    bool any_fast_ = false;
+    std::vector<int> by_omega_;  // the modes by increasing omega
+    void split_bound(int f, double g, double dg, double rigid_decay, const SegmentEval& out) const;
+
     // --- eval scratch ---
     mutable Eigen::VectorXd sn_, cs_, q_, qd_, qdd_, qmag_, qdmag_, b2_, b3_, xmag_, vmag_;
+    // A fast mode's free oscillation u, u', u'' and the bound of |u| and |u'| over the horizon.
+    mutable Eigen::VectorXd fu_, fud_, fudd_, famp_, fdamp_, below_;
     mutable Eigen::VectorXcd e_omega_tau_;
 
     // resolving_rate: until when each decaying term of the segment counts, and at what rate.

@@ -10,8 +10,10 @@
 // Eigen-based solver.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "configuration.h"
@@ -33,7 +35,27 @@ struct SegmentEval {
     double* bound;  ///< B_f >= |g_f''(s)| for every s in [tau, tau + max_step()]
     double* scale;  ///< magnitude of the terms summed into g_f (sum of |terms|):
                     ///  g_f is known to about 1e-16*scale_f, no better
+    /// The split bound, written only by a solver whose splits_bound() is true
+    /// (n_switch doubles each, or null): g_f = s_f + r_f, where r_f is the
+    /// free oscillation of the configuration's fast modes and s_f the rest.
+    /// Then |r_f(s)| <= fast_f and |s_f''(s)| <= slow_bound_f for every s in
+    /// [tau, tau + max_step()], so that g_f(tau + s) >= slow_f + slow_dg_f s
+    /// - slow_bound_f s^2/2 - fast_f: a safe step that a stiff mode of tiny
+    /// amplitude does not shorten (its |r''| ~ omega^2 |r| would in `bound`).
+    double* slow = nullptr;        ///< s_f(tau) = g_f - r_f
+    double* slow_dg = nullptr;     ///< s_f'(tau)
+    double* fast = nullptr;        ///< bound of |r_f| over the horizon
+    double* slow_bound = nullptr;  ///< bound of |s_f''| over the horizon
 };
+
+/// Largest s >= 0 such that h + hd*s - B*s^2/2 > 0 for every smaller s: no
+/// function with h(0) = h > 0, h'(0) = hd and |h''| <= B can reach zero
+/// before it. Written without cancellation in both signs of hd.
+inline double safe_step(double h, double hd, double B) {
+    if (!(B > 0)) return hd >= 0 ? std::numeric_limits<double>::infinity() : h / -hd;
+    const double root = std::sqrt(hd * hd + 2 * B * h);
+    return hd >= 0 ? (hd + root) / B : 2 * h / (root - hd);
+}
 
 /// A switch search over a configuration with at least this many switch
 /// functions evaluates each function on its own schedule (engine.cpp,
@@ -97,6 +119,12 @@ public:
     /// The longest step over which `bound` is valid: +infinity unless the
     /// segment has secular (resonant, growing) terms.
     virtual double max_step() const = 0;
+
+    /// Whether eval, eval_switches and eval_start write the split bound
+    /// (SegmentEval::slow, slow_dg, fast, slow_bound) of every function (the
+    /// new segment's own, also where eval_start leaves g to the event's),
+    /// eval_some that of the listed ones.
+    virtual bool splits_bound() const { return false; }
 
     /// The coefficient block setup writes and eval reads (kernels/program.h:
     /// its layout is the same, bit for bit, for every solver of a program),

@@ -50,6 +50,7 @@ public:
         inner->eval_start(tau, which, count, out);
     }
     double max_step() const override { return inner->max_step(); }
+    bool splits_bound() const override { return inner->splits_bound(); }
     double* coefficient_block() override { return inner->coefficient_block(); }
     const RestartPlan* restart_plan() const override { return inner->restart_plan(); }
 };
