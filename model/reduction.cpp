@@ -27,28 +27,40 @@ using Index = Eigen::Index;
 /// room above the wanted modes, and a dense solve is quick there).
 constexpr Index kDenseEigenLimit = 400;
 
+/// A sparse LDL^T of K (or of K_II), factored once per reduction.
+using Factor = Eigen::SimplicialLDLT<SparseMatrixD>;
+
 /// Spectra's shift-and-invert operator y = (K - sigma M)^-1 x through a
-/// sparse LDL^T (Spectra's own wrapper factors with a sparse LU).
+/// sparse LDL^T (Spectra's own wrapper factors with a sparse LU). At
+/// sigma = 0 it takes the reduction's own factor of K when given one, so K
+/// is factored once however many eigensolves read it.
 class ShiftInvert {
 public:
     using Scalar = double;
-    ShiftInvert(const SparseMatrixD& K, const SparseMatrixD& M) : K_(K), M_(M) {}
+    ShiftInvert(const SparseMatrixD& K, const SparseMatrixD& M, const Factor* k) : K_(K), M_(M), k_(k) {}
     Index rows() const { return K_.rows(); }
     Index cols() const { return K_.cols(); }
     void set_shift(double sigma) {
-        const SparseMatrixD A = K_ - sigma * M_;
-        ldlt_.compute(A);
-        ok_ = ldlt_.info() == Eigen::Success;
+        if (sigma == 0.0 && k_) {
+            active_ = k_;
+        } else {
+            const SparseMatrixD A = K_ - sigma * M_;
+            ldlt_.compute(A);
+            active_ = &ldlt_;
+        }
+        ok_ = active_->info() == Eigen::Success;
     }
     void perform_op(const double* x, double* y) const {
-        Eigen::Map<Eigen::VectorXd>(y, rows()) = ldlt_.solve(Eigen::Map<const Eigen::VectorXd>(x, cols()));
+        Eigen::Map<Eigen::VectorXd>(y, rows()) = active_->solve(Eigen::Map<const Eigen::VectorXd>(x, cols()));
     }
     bool ok() const { return ok_; }
 
 private:
     const SparseMatrixD& K_;
     const SparseMatrixD& M_;
-    Eigen::SimplicialLDLT<SparseMatrixD> ldlt_;
+    const Factor* k_;
+    Factor ldlt_;
+    const Factor* active_ = &ldlt_;
     bool ok_ = false;
 };
 
@@ -65,9 +77,10 @@ void normalise(const SparseMatrixD& M, Eigen::MatrixXd& modes) {
 }
 
 /// The `count` lowest eigenpairs of K phi = lambda M phi (count < n), ascending;
-/// fewer when M has zero rows and fewer than `count` modes have mass.
+/// fewer when M has zero rows and fewer than `count` modes have mass. `k`:
+/// K's factor when the caller has one (the sparse path then factors nothing).
 std::string lowest_modes(const SparseMatrixD& M, const SparseMatrixD& K, Index count, Eigen::VectorXd& lambda,
-                         Eigen::MatrixXd& modes) {
+                         Eigen::MatrixXd& modes, const Factor* k) {
     const Index n = K.rows();
     if (n <= kDenseEigenLimit || 2 * count + 1 > n) {
         const Eigen::MatrixXd Kd = K, Md = M;
@@ -92,7 +105,7 @@ std::string lowest_modes(const SparseMatrixD& M, const SparseMatrixD& K, Index c
             modes = es.eigenvectors().rightCols(have).rowwise().reverse();
         }
     } else {
-        ShiftInvert op(K, M);
+        ShiftInvert op(K, M, k);
         Spectra::SparseSymMatProd<double> Mop(M);
         const Index ncv = std::min(n, std::max<Index>(2 * count + 1, 20));
         Spectra::SymGEigsShiftSolver<ShiftInvert, Spectra::SparseSymMatProd<double>, Spectra::GEigsMode::ShiftInvert>
@@ -148,14 +161,15 @@ Eigen::MatrixXd project(const Blocks& A, const Eigen::MatrixXd& Psi, const Eigen
 
 /// The modes a reduction keeps of K phi = lambda M phi: settings.modes of
 /// them (at most `limit`), or every one with omega <= settings.cutoff;
-/// `kind` ("fixed-interface", "free-interface") names them in messages.
+/// `kind` ("fixed-interface", "free-interface") names them in messages; `k`
+/// is K's factor (every eigensolve, each doubling of a cut-off's, reads it).
 std::string kept_modes(const SparseMatrixD& M, const SparseMatrixD& K, const ReductionSettings& settings, Index limit,
-                       const std::string& kind, Eigen::VectorXd& lambda, Eigen::MatrixXd& Phi) {
+                       const std::string& kind, const Factor& k, Eigen::VectorXd& lambda, Eigen::MatrixXd& Phi) {
     const Index n = K.rows();
     if (settings.cutoff > 0.0) {
         const double cut = settings.cutoff * settings.cutoff;
         for (Index want = std::min<Index>(10, limit);; want = std::min<Index>(2 * want, limit)) {
-            if (std::string why = lowest_modes(M, K, want, lambda, Phi); !why.empty()) return why;
+            if (std::string why = lowest_modes(M, K, want, lambda, Phi, &k); !why.empty()) return why;
             if (want == limit || lambda.size() < want || lambda(want - 1) > cut) break;  // fewer: every mode with mass
         }
         const auto keep =
@@ -167,7 +181,7 @@ std::string kept_modes(const SparseMatrixD& M, const SparseMatrixD& K, const Red
             return "modes = " + std::to_string(settings.modes) + " is more than the " + std::to_string(limit) +
                    " interior dofs";
         if (settings.modes > 0) {
-            if (std::string why = lowest_modes(M, K, static_cast<Index>(settings.modes), lambda, Phi); !why.empty())
+            if (std::string why = lowest_modes(M, K, static_cast<Index>(settings.modes), lambda, Phi, &k); !why.empty())
                 return why;
             if (lambda.size() < static_cast<Index>(settings.modes))
                 return "modes = " + std::to_string(settings.modes) + " but only " + std::to_string(lambda.size()) +
@@ -197,7 +211,7 @@ std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const 
     const Blocks Mb = split(M, b, in, nb, ni), Kb = split(K, b, in, nb, ni);
 
     // Static constraint modes: K_II Psi = -K_IB.
-    Eigen::SimplicialLDLT<SparseMatrixD> kii(Kb.II);
+    const Factor kii(Kb.II);
     if (kii.info() != Eigen::Success)
         return "K_II (the interior with the boundary held) is singular: a part moves rigidly once the boundary is "
                "held; name a dof of that part in [reduction].boundary";
@@ -207,7 +221,7 @@ std::string craig_bampton(const SparseMatrixD& M, const SparseMatrixD& K, const 
     // Fixed-interface modes: `modes` of them, or every one below the cut-off.
     Eigen::VectorXd lambda;
     Eigen::MatrixXd Phi;
-    if (std::string why = kept_modes(Mb.II, Kb.II, settings, ni, "fixed-interface", lambda, Phi); !why.empty())
+    if (std::string why = kept_modes(Mb.II, Kb.II, settings, ni, "fixed-interface", kii, lambda, Phi); !why.empty())
         return why;
 
     out.boundary = boundary;
@@ -241,7 +255,7 @@ std::string rubin(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMa
     const auto n = static_cast<Index>(K.rows());
     const auto nb = static_cast<Index>(boundary.size());
     if (nb == n) return "every dof is a boundary dof: there is nothing to reduce";
-    Eigen::SimplicialLDLT<SparseMatrixD> k(K);
+    const Factor k(K);
     if (k.info() != Eigen::Success)
         return "K is singular (the structure moves rigidly with nothing held): Rubin's method needs a supported "
                "structure; use method = \"craig-bampton\"";
@@ -249,7 +263,8 @@ std::string rubin(const SparseMatrixD& M, const SparseMatrixD& K, const SparseMa
     // Free-interface modes of the whole structure.
     Eigen::VectorXd lambda;
     Eigen::MatrixXd Phi;
-    if (std::string why = kept_modes(M, K, settings, n - nb, "free-interface", lambda, Phi); !why.empty()) return why;
+    if (std::string why = kept_modes(M, K, settings, n - nb, "free-interface", k, lambda, Phi); !why.empty())
+        return why;
     const Index nq = Phi.cols();
     const std::vector<Index> on_b(boundary.begin(), boundary.end());  // B's rows
     const Eigen::MatrixXd PhiB = Phi(on_b, Eigen::all);
@@ -321,7 +336,7 @@ std::string lowest_frequencies(const SparseMatrixD& M, const SparseMatrixD& K, s
     Eigen::VectorXd lambda;
     Eigen::MatrixXd modes;
     if (want < 1) return "the model has a single dof";
-    if (std::string why = lowest_modes(M, K, want, lambda, modes); !why.empty()) return why;
+    if (std::string why = lowest_modes(M, K, want, lambda, modes, nullptr); !why.empty()) return why;
     omega = lambda.cwiseMax(0.0).cwiseSqrt();
     return "";
 }
