@@ -128,6 +128,12 @@ TEST(SplitBound, MissesNoContactThatTheFastOscillationAloneMakes) {
             EXPECT_EQ(split.events.size(), 0U) << "the ringing cannot reach the stop";
         // The split's steps are the longer ones.
         EXPECT_LT(split.summary.evaluations, plain.summary.evaluations);
+        // Searched on a schedule per function (engine.cpp: each function's
+        // split taken with its own values), the same events.
+        GenericSolverProvider generic(m);
+        const testing::Outcome scheduled = testing::run_engine(m, generic, 1.0, 0.0, 1);
+        ASSERT_EQ(scheduled.summary.status, RunStatus::ok) << scheduled.summary.message;
+        EXPECT_LE(fe::event_gap(scheduled, plain), 1e-11);
     }
 }
 

@@ -723,6 +723,7 @@ std::size_t GenericSolver::memory_bytes() const {
     b += d(t_.K) + d(t_.C) + d(phi_) + d(phi_t_m_) + d(modal_.phi) + d(W_) + d(Z_) + d(absW_) + d(absZ_) + d(D_);
     b += d(P_) + d(pa_) + d(pb_) + d(zp_) + d(zm_) + d(t_.h_amp) + d(coupled_);
     b += 24 * static_cast<std::size_t>(n_ + nf_ + static_cast<int>(switches_.size()) + nh_) * sizeof(double);
+    b += static_cast<std::size_t>(nf_) * (6 * sizeof(double) + sizeof(int) + sizeof(char));  // the split bound's
     return b;
 }
 
