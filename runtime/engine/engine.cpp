@@ -53,6 +53,12 @@ struct Buffers {
         return {x.data(),     v.data(),    a.data(),       g.data(),    dg.data(),        bound.data(),
                 scale.data(), slow.data(), slow_dg.data(), fast.data(), slow_bound.data()};
     }
+    // A view for the state alone (dense output): no split bound asked for.
+    SegmentEval state_view() {
+        SegmentEval e = view();
+        e.slow = e.slow_dg = e.fast = e.slow_bound = nullptr;
+        return e;
+    }
     // Function f's split bound from another evaluation.
     void take_split(const Buffers& o, std::size_t f) {
         slow[f] = o.slow[f], slow_dg[f] = o.slow_dg[f], fast[f] = o.fast[f], slow_bound[f] = o.slow_bound[f];
@@ -827,7 +833,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
                     observer.on_sample(tk, x.data(), v.data());
                 } else {
                     // dense output: not a search evaluation, and buf keeps the event state
-                    S.eval(std::max(0.0, (tk - t) - t_lo), dense.view());
+                    S.eval(std::max(0.0, (tk - t) - t_lo), dense.state_view());
                     observer.on_sample(tk, dense.x.data(), dense.v.data());
                 }
                 if (grid.last(k_next)) {
