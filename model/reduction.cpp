@@ -41,26 +41,22 @@ public:
     Index rows() const { return K_.rows(); }
     Index cols() const { return K_.cols(); }
     void set_shift(double sigma) {
-        if (sigma == 0.0 && k_) {
-            active_ = k_;
-        } else {
-            const SparseMatrixD A = K_ - sigma * M_;
-            ldlt_.compute(A);
-            active_ = &ldlt_;
-        }
-        ok_ = active_->info() == Eigen::Success;
+        own_ = sigma != 0.0 || !k_;
+        if (own_) ldlt_.compute(SparseMatrixD(K_ - sigma * M_));
+        ok_ = factor().info() == Eigen::Success;
     }
     void perform_op(const double* x, double* y) const {
-        Eigen::Map<Eigen::VectorXd>(y, rows()) = active_->solve(Eigen::Map<const Eigen::VectorXd>(x, cols()));
+        Eigen::Map<Eigen::VectorXd>(y, rows()) = factor().solve(Eigen::Map<const Eigen::VectorXd>(x, cols()));
     }
     bool ok() const { return ok_; }
 
 private:
     const SparseMatrixD& K_;
     const SparseMatrixD& M_;
+    const Factor& factor() const { return own_ ? ldlt_ : *k_; }
     const Factor* k_;
     Factor ldlt_;
-    const Factor* active_ = &ldlt_;
+    bool own_ = true;  // ldlt_ (K - sigma M), else the caller's factor of K
     bool ok_ = false;
 };
 
