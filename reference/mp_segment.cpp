@@ -867,6 +867,7 @@ void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::ve
                       const std::vector<signed char>& sgn) {
     const MpModel& mp = mp_;
     x_fix_ = x0;
+    v_start_ = v0;
     for (int h = 0; h < nh_; ++h) theta_[h] = mp.h_omega[h] * t0 + mp.h_phase[h];
     // The stuck sliders' preload k s (+ on a, - on b), s = x0[n + j].
     fseg_ = f_const_;
@@ -1013,6 +1014,15 @@ void MpSegment::eval(const cl_F& tau, MpEval& out) const {
         xm[q] = xm[p] + cln::abs(offset_[r]);
         vm[q] = vm[p];
     }
+    // At the start the state is the one carried in, not its modal reconstruction (which
+    // differs by the rounding of the modal transformation, times its condition): a switch
+    // function that the last event left at zero (a Jenkins element's stretch at the slip
+    // force, set from these positions) starts at zero here to its own rounding.
+    if (cln::zerop(tau))
+        for (int i = 0; i < n_; ++i) {
+            out.x[i] = x_fix_[i];
+            out.v[i] = cfg_.stuck[i] && mp.partner[i] == kGround ? Z0 : v_start_[i];
+        }
     sliders_and_switches(out, xm, vm, hcs, [&](std::size_t f) {
         if (damped_) {
             cl_F B = weight2_[f] * cln::sqrt(mp.two * energy);

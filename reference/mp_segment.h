@@ -224,6 +224,7 @@ private:
     cl_F max_step_;
     // setup
     std::vector<cl_F> x_fix_, theta_, p_, u0_, ud0_;
+    std::vector<cl_F> v_start_;  // setup: the start velocities (eval(0) returns the start state itself)
     std::vector<cl_F> fseg_;  // f_const_ plus the stuck sliders' preload k s
     std::vector<cl_F> fric_;  // the segment's kinetic friction on every dof (setup)
     /// A coupled M: P_i of every stuck dof i (MpModel::held_row), else empty.
