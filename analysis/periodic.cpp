@@ -131,11 +131,9 @@ PeriodicResult periodic(const Model& model, const PeriodicOptions& o, Observer* 
     // y = (x, v, s), the Jenkins sliders last (at rest, unstretched, or slider0).
     Eigen::VectorXd y(N);
     for (std::size_t i = 0; i < n; ++i) y(static_cast<Eigen::Index>(i)) = model.x0[i], y(static_cast<Eigen::Index>(n + i)) = model.v0[i];
-    for (std::size_t j = 0; j < nj; ++j) {
-        const Jenkins& e = model.jenkins[j];
-        auto pos = [&](int b) { return b == kGround ? 0.0 : model.x0[static_cast<std::size_t>(b)]; };
-        y(static_cast<Eigen::Index>(2 * n + j)) = model.slider0.empty() ? pos(e.a) - pos(e.b) : model.slider0[j];
-    }
+    for (std::size_t j = 0; j < nj; ++j)
+        y(static_cast<Eigen::Index>(2 * n + j)) =
+            model.slider0.empty() ? jenkins::unstretched_slider(model.jenkins[j], model.x0.data()) : model.slider0[j];
     double ts = model.t0;
     if (o.transient > 0) {
         const double k = std::ceil(o.transient / P * (1 - 1e-12));

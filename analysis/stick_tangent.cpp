@@ -38,8 +38,9 @@ Eigen::RowVectorXd force_gradient(const Model& model, const Configuration& cfg, 
     for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
         if (cfg.slip[j] != 0) continue;
         const Jenkins& e = model.jenkins[j];
-        if (e.a == i) g(L.s(j)) += e.k;
-        if (e.b == i) g(L.s(j)) -= e.k;
+        for_each_term(e.direction(), [&](int b, double w) {
+            if (b == i) g(L.s(j)) += e.k * w;
+        });
     }
     return g;
 }
@@ -78,9 +79,7 @@ Eigen::MatrixXd stick_generator(const Model& model, const Configuration& cfg) {
     }
     for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
         if (cfg.slip[j] == 0) continue;  // stuck: s' = 0
-        const Jenkins& e = model.jenkins[j];
-        if (e.a != kGround) A(L.s(j), L.v(e.a)) += 1.0;
-        if (e.b != kGround) A(L.s(j), L.v(e.b)) -= 1.0;
+        for_each_term(model.jenkins[j].direction(), [&](int b, double w) { A(L.s(j), L.v(b)) += w; });
     }
     return A;
 }
@@ -107,10 +106,8 @@ Eigen::MatrixXd stick_projection(const Model& model, const Configuration& cfg) {
     }
     for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
         if (cfg.slip[j] == 0) continue;
-        const Jenkins& e = model.jenkins[j];
         P.row(L.s(j)).setZero();
-        if (e.a != kGround) P(L.s(j), L.x(e.a)) = 1.0;
-        if (e.b != kGround) P(L.s(j), L.x(e.b)) = -1.0;
+        for_each_term(model.jenkins[j].direction(), [&](int b, double w) { P(L.s(j), L.x(b)) = w; });
     }
     return P;
 }
@@ -151,8 +148,8 @@ Eigen::VectorXd stick_field(const Model& model, const Configuration& cfg, const 
     }
     for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
         if (cfg.slip[j] == 0) continue;
-        const Jenkins& e = model.jenkins[j];
-        f(L.s(j)) = (e.a == kGround ? 0.0 : v[e.a]) - (e.b == kGround ? 0.0 : v[e.b]);
+        const double* rows[] = {v};
+        f(L.s(j)) = along(model.jenkins[j].direction(), double_motion(rows), 0);
     }
     return f;
 }
@@ -206,15 +203,13 @@ void stick_gradient(const Model& model, const Configuration& cfg, const SwitchFu
         case SwitchKind::slip_neg: {  // +-k (x_a - x_b - s) - F_s
             const Jenkins& el = model.jenkins[static_cast<std::size_t>(e)];
             const double sk = f.kind == SwitchKind::slip_pos ? el.k : -el.k;
-            add(0, el.a, sk);
-            add(0, el.b, -sk);
+            for_each_term(el.direction(), [&](int b, double w) { add(0, b, sk * w); });
             hz(L.s(static_cast<std::size_t>(e))) = -sk;
             return;
         }
         case SwitchKind::slip_velocity: {
-            const Jenkins& el = model.jenkins[static_cast<std::size_t>(e)];
-            add(L.n, el.a, 1.0);
-            add(L.n, el.b, -1.0);
+            for_each_term(model.jenkins[static_cast<std::size_t>(e)].direction(),
+                          [&](int b, double w) { add(L.n, b, w); });
             return;
         }
     }

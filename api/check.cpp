@@ -145,10 +145,17 @@ void print_summary(const Model& model, std::ostream& out) {
     if (!model.jenkins.empty()) {
         out << "Jenkins elements: " << model.jenkins.size()
             << "  (spring in series with a slider; stuck at t0, unstretched)\n";
-        for (const Jenkins& j : model.jenkins)
-            out << "  " << j.name << "  between " << body_name(model, j.a) << " and " << body_name(model, j.b)
-                << "  k = " << num(j.k) << "  slip_force = " << num(j.slip_force)
-                << "  (slips at a stretch of " << num(j.slip_force / j.k) << ")\n";
+        for (const Jenkins& j : model.jenkins) {
+            out << "  " << j.name;
+            if (j.weights.empty())
+                out << "  between " << body_name(model, j.a) << " and " << body_name(model, j.b);
+            else {
+                out << "  along";
+                for (const Weight& w : j.weights) out << " " << num(w.w) << " " << body_name(model, w.body);
+            }
+            out << "  k = " << num(j.k) << "  slip_force = " << num(j.slip_force) << "  (slips at a stretch of "
+                << num(j.slip_force / j.k) << ")\n";
+        }
     }
     out << "forcing harmonics: " << model.forcing.size() << "\n";
     for (const Harmonic& h : model.forcing) out << "  omega = " << num(h.omega) << " rad/s  phase = " << num(h.phase) << "\n";

@@ -377,7 +377,10 @@ void inspect_state_space(const Model& model, const Configuration& cfg, Format fm
             case SwitchKind::slip_velocity: {
                 const Jenkins& j = model.jenkins[static_cast<std::size_t>(sf.element)];
                 auto body = [&](int b) { return b == kGround ? std::string("0") : "x_" + model.masses[static_cast<std::size_t>(b)].name; };
-                const std::string stretch = body(j.a) + " - " + body(j.b) + " - s_" + j.name;
+                std::string u = j.weights.empty() ? body(j.a) + " - " + body(j.b) : "";
+                for (const Weight& t : j.weights)
+                    u += (u.empty() ? "" : " + ") + Printer::format_number(t.w) + " " + body(t.body);
+                const std::string stretch = u + " - s_" + j.name;
                 what = sf.kind == SwitchKind::slip_velocity
                            ? "relative velocity of " + j.name + " (slipping)"
                            : std::string(sf.kind == SwitchKind::slip_pos ? "" : "-") + Printer::format_number(j.k) + " (" +

@@ -202,13 +202,19 @@ std::uint32_t constant(Program& p, double v, const std::string& name = "") {
     return static_cast<std::uint32_t>(p.constants.size() - 1);
 }
 
-/// The preload k_j s_j of every Jenkins element stuck in cfg on mass i, as
-/// fn(coefficient of s_j, j): +k_j where i is its a, -k_j where i is its b.
+/// The preload k_j s_j w_i of every Jenkins element stuck in cfg on mass i,
+/// as fn(coefficient of s_j, j): +k_j where i is its a, -k_j where i is its
+/// b, k_j w_i along a general direction.
 template <class Fn>
 void for_each_slider_preload(const Model& model, const Configuration& cfg, int i, Fn&& fn) {
     for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
         if (cfg.slip[j] != 0) continue;
         const Jenkins& e = model.jenkins[j];
+        if (!e.weights.empty()) {
+            for (const Weight& t : e.weights)
+                if (t.body == i) fn(e.k * t.w, j);
+            continue;
+        }
         if (e.a == i) fn(e.k, j);
         if (e.b == i) fn(-e.k, j);
     }
@@ -276,32 +282,41 @@ void combine(const std::vector<std::pair<int, DD>>& terms, const std::vector<std
     }
 }
 
+// u = w^T x (or its rate, letter "v") as a comment: "x[a] - x[b]", or
+// "+ w_1 x[b_1] + ..." along a general direction.
+std::string along_text(const Model& model, const Direction& d, const char* letter = "x") {
+    const std::string x = letter;
+    if (!d.weighted()) return x + "[" + body_name(model, d.a) + "] - " + x + "[" + body_name(model, d.b) + "]";
+    std::string s;
+    for (int i = 0; i < d.count; ++i)
+        s += std::string(i == 0 ? "" : " ") + "+ " + format_double(d.terms[i].w) + " " + x + "[" +
+             body_name(model, d.terms[i].body) + "]";
+    return s;
+}
+
 // G of a contact as the comment of its switch function: "x[a] - x[b] - gap",
 // or "+ w_1 x[b_1] + ... - gap" along a general direction.
 std::string gap_text(const Model& model, const Contact& ct) {
-    if (ct.weights.empty())
-        return "x[" + body_name(model, ct.a) + "] - x[" + body_name(model, ct.b) + "] - " + format_double(ct.gap);
-    std::string s;
-    for (const Weight& t : ct.weights) s += "+ " + format_double(t.w) + " x[" + body_name(model, t.body) + "] ";
-    return s + "- " + format_double(ct.gap);
+    return along_text(model, ct.direction()) + " - " + format_double(ct.gap);
 }
 
-// The modal rows of a contact's G = w^T x - gap: alpha_j = sum_i w_i V_ij over
-// the modes that move one of its bodies, and the harmonic parts
-// sum_i w_i X_hi (lower's V, harmonic_x, each_mode_of).
+// The modal rows of an element's u = w^T x (a contact's G = u - gap):
+// alpha_j = sum_i w_i V_ij over the modes that move one of its bodies, and the
+// harmonic parts sum_i w_i X_hi (lower's V, harmonic_x, each_mode_of).
 template <class Vf, class Hx, class Each>
-void gap_rows(const Contact& ct, const Vf& V, const Hx& harmonic_x, const Each& each_mode_of, std::vector<DD>& al,
-              std::vector<DD>& Gs, std::vector<DD>& Gc) {
-    if (ct.weights.empty()) {  // x[a] - x[b]
-        each_mode_of({ct.a, ct.b}, [&](std::size_t j) { al[j] = V(ct.a, j) - V(ct.b, j); });
+void along_rows(const Direction& d, const Vf& V, const Hx& harmonic_x, const Each& each_mode_of, std::vector<DD>& al,
+                std::vector<DD>& Gs, std::vector<DD>& Gc) {
+    if (!d.weighted()) {  // x[a] - x[b]
+        each_mode_of({d.a, d.b}, [&](std::size_t j) { al[j] = V(d.a, j) - V(d.b, j); });
         for (std::size_t h = 0; h < Gs.size(); ++h) {
-            Gs[h] = harmonic_x(h, ct.a, true) - harmonic_x(h, ct.b, true);
-            Gc[h] = harmonic_x(h, ct.a, false) - harmonic_x(h, ct.b, false);
+            Gs[h] = harmonic_x(h, d.a, true) - harmonic_x(h, d.b, true);
+            Gc[h] = harmonic_x(h, d.a, false) - harmonic_x(h, d.b, false);
         }
         return;
     }
     std::vector<char> seen(al.size(), 0);
-    for (const Weight& t : ct.weights) {
+    for (int i = 0; i < d.count; ++i) {
+        const Weight& t = d.terms[i];
         each_mode_of({t.body}, [&](std::size_t j) { seen[j] = 1; });
         for (std::size_t h = 0; h < Gs.size(); ++h) {
             Gs[h] = Gs[h] + DD(t.w) * harmonic_x(h, t.body, true);
@@ -310,7 +325,63 @@ void gap_rows(const Contact& ct, const Vf& V, const Hx& harmonic_x, const Each& 
     }
     for (std::size_t j = 0; j < al.size(); ++j)
         if (seen[j])
-            for (const Weight& t : ct.weights) al[j] = al[j] + DD(t.w) * V(t.body, j);
+            for (int i = 0; i < d.count; ++i) al[j] = al[j] + DD(d.terms[i].w) * V(d.terms[i].body, j);
+}
+
+bool is_slip(SwitchKind k) {
+    return k == SwitchKind::slip_pos || k == SwitchKind::slip_neg || k == SwitchKind::slip_velocity;
+}
+
+// What a Jenkins element's switch function is, as its comment.
+std::string jenkins_comment(const Model& model, const SwitchFunction& sf) {
+    const Jenkins& el = model.jenkins[static_cast<std::size_t>(sf.element)];
+    if (sf.kind == SwitchKind::slip_velocity)  // u' = v[a] - v[b] (w^T v) of a slipping element
+        return "relative velocity of " + el.name + " (slipping) = " + along_text(model, el.direction(), "v");
+    // +-k (u - s) - F_s: the stretch force of a stuck element against F_s.
+    return std::string(sf.kind == SwitchKind::slip_pos ? "" : "-") + "k e - F_s of stuck " + el.name +
+           ", e = " + along_text(model, el.direction()) + " - s";
+}
+
+// The modal rows of a Jenkins element's switch function (lower's V,
+// harmonic_x, each_mode_of): stuck, +-k (u - s) - F_s on q (alpha = +-k u's
+// rows); slipping, u' on q' (beta = u's rows, the harmonic parts
+// differentiated).
+template <class Vf, class Hx, class Each>
+void jenkins_rows(const Model& model, const Derivation& d, const SwitchFunction& sf, const Vf& V, const Hx& harmonic_x,
+                  const Each& each_mode_of, std::vector<DD>& al, std::vector<DD>& be, std::vector<DD>& Gs,
+                  std::vector<DD>& Gc) {
+    const Jenkins& el = model.jenkins[static_cast<std::size_t>(sf.element)];
+    const std::size_t nm = al.size(), nh = Gs.size();
+    if (sf.kind != SwitchKind::slip_velocity) {
+        const DD ks(sf.kind == SwitchKind::slip_pos ? el.k : -el.k);
+        if (el.weights.empty()) {
+            for (std::size_t jm = 0; jm < nm; ++jm) al[jm] = ks * (V(el.a, jm) - V(el.b, jm));
+            for (std::size_t h = 0; h < nh; ++h) {
+                Gs[h] = ks * (harmonic_x(h, el.a, true) - harmonic_x(h, el.b, true));
+                Gc[h] = ks * (harmonic_x(h, el.a, false) - harmonic_x(h, el.b, false));
+            }
+            return;
+        }
+        along_rows(el.direction(), V, harmonic_x, each_mode_of, al, Gs, Gc);  // k times u's rows
+        for (DD& r : al) r = ks * r;
+        for (std::size_t h = 0; h < nh; ++h) Gs[h] = ks * Gs[h], Gc[h] = ks * Gc[h];
+        return;
+    }
+    std::vector<DD> us(nh), uc(nh);
+    if (el.weights.empty()) {
+        for (std::size_t jm = 0; jm < nm; ++jm) be[jm] = V(el.a, jm) - V(el.b, jm);
+        for (std::size_t h = 0; h < nh; ++h) {
+            us[h] = harmonic_x(h, el.a, true) - harmonic_x(h, el.b, true);
+            uc[h] = harmonic_x(h, el.a, false) - harmonic_x(h, el.b, false);
+        }
+    } else {
+        along_rows(el.direction(), V, harmonic_x, each_mode_of, be, us, uc);
+    }
+    for (std::size_t h = 0; h < nh; ++h) {
+        const DD W = d.harmonics[h].omega;
+        Gs[h] = -W * uc[h];
+        Gc[h] = W * us[h];
+    }
 }
 
 }  // namespace
@@ -952,7 +1023,7 @@ Program lower(const Derivation& d, ProgramNames names) {
         if (sf.kind == SwitchKind::gap) {
             const Contact& ct = model.contacts[sf.element];
             if (named) comment += "g_" + F + ": gap of contact " + ct.name + " = " + gap_text(model, ct);
-            gap_rows(ct, V, harmonic_x, each_mode_of, al, Gs, Gc);
+            along_rows(ct.direction(), V, harmonic_x, each_mode_of, al, Gs, Gc);
         } else if (sf.kind == SwitchKind::velocity && model.masses[static_cast<std::size_t>(sf.element)].partner == kGround) {
             const int i = sf.element;
             if (named) comment += "g_" + F + ": velocity of " + model.masses[i].name + " (sliding)";
@@ -972,30 +1043,9 @@ Program lower(const Derivation& d, ProgramNames names) {
                 Gs[h] = -W * (harmonic_x(h, i, false) - harmonic_x(h, p, false));
                 Gc[h] = W * (harmonic_x(h, i, true) - harmonic_x(h, p, true));
             }
-        } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
-            // +-k (x[a] - x[b] - s) - F_s: the stretch force of a stuck element against F_s.
-            const std::size_t j = static_cast<std::size_t>(sf.element);
-            const Jenkins& el = model.jenkins[j];
-            const double sk = sf.kind == SwitchKind::slip_pos ? el.k : -el.k;
-            if (named) comment += "g_" + F + ": " + (sk > 0 ? "" : "-") + "k e - F_s of stuck " + el.name + ", e = x[" +
-                       body_name(model, el.a) + "] - x[" + body_name(model, el.b) + "] - s";
-            const DD ks(sk);
-            for (std::size_t jm = 0; jm < nm; ++jm) al[jm] = ks * (V(el.a, jm) - V(el.b, jm));
-            for (std::size_t h = 0; h < nh; ++h) {
-                Gs[h] = ks * (harmonic_x(h, el.a, true) - harmonic_x(h, el.b, true));
-                Gc[h] = ks * (harmonic_x(h, el.a, false) - harmonic_x(h, el.b, false));
-            }
-        } else if (sf.kind == SwitchKind::slip_velocity) {
-            // w = v[a] - v[b] of a slipping element.
-            const Jenkins& el = model.jenkins[static_cast<std::size_t>(sf.element)];
-            if (named) comment += "g_" + F + ": relative velocity of " + el.name + " (slipping) = v[" + body_name(model, el.a) +
-                       "] - v[" + body_name(model, el.b) + "]";
-            for (std::size_t jm = 0; jm < nm; ++jm) be[jm] = V(el.a, jm) - V(el.b, jm);
-            for (std::size_t h = 0; h < nh; ++h) {
-                const DD W = d.harmonics[h].omega;
-                Gs[h] = -W * (harmonic_x(h, el.a, false) - harmonic_x(h, el.b, false));
-                Gc[h] = W * (harmonic_x(h, el.a, true) - harmonic_x(h, el.b, true));
-            }
+        } else if (is_slip(sf.kind)) {
+            if (named) comment += "g_" + F + ": " + jenkins_comment(model, sf);
+            jenkins_rows(model, d, sf, V, harmonic_x, each_mode_of, al, be, Gs, Gc);
         } else {
             const int i = sf.element;
             const bool pos = sf.kind == SwitchKind::release_pos;

@@ -126,11 +126,18 @@ Eigen::VectorXd constant_force(const Model& model, const Configuration& cfg) {
 }
 
 void add_slider_preload(const Model& model, const Configuration& cfg, const double* slider, Eigen::VectorXd& f) {
-    for (std::size_t j = 0; j < model.jenkins.size(); ++j)
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
+        if (model.jenkins[j].direction().weighted()) {  // k s w: a constant force of the pair links (direction.h)
+            if (cfg.slip[j] == 0)
+                constant_of(
+                    model, cfg, ElementKind::jenkins, j, [&](int a, int, double fa) { f(a) += fa; }, slider);
+            continue;
+        }
         link_of(model, cfg, ElementKind::jenkins, j, [&](int a, int b, double k, double, double length) {
             if (a != kGround) f(a) += k * length;
             if (b != kGround) f(b) -= k * length;
         }, slider);
+    }
 }
 
 double slider_position(const Model& model, const Configuration& cfg, std::size_t j, const double* x) {
@@ -217,7 +224,7 @@ double force_on_mass(const Model& model, const Configuration& cfg, int i, double
     };
     if (!elements) {
         for_each_link(model, cfg, add, x + model.dof());
-        for_each_constant(model, cfg, slipping);
+        for_each_constant(model, cfg, slipping, x + model.dof());
         return f;
     }
     // The same links in the same order (for_each_link's, then for_each_constant's), mass i's alone.
@@ -227,7 +234,7 @@ double force_on_mass(const Model& model, const Configuration& cfg, int i, double
         const ElementKind kind = ElementIndex::kind(*e);
         const std::size_t j = ElementIndex::index(*e);
         if (kind == ElementKind::jenkins || (kind == ElementKind::contact && model.contacts[j].direction().weighted()))
-            constant_of(model, cfg, kind, j, slipping);
+            constant_of(model, cfg, kind, j, slipping, x + model.dof());
     }
     return f;
 }

@@ -57,7 +57,8 @@ FreeComponents free_components(const Model& model, const Configuration& cfg) {
         if (cfg.closed[c] && !model.contacts[c].direction().weighted())
             link(model.contacts[c].a, model.contacts[c].b, model.contacts[c].k);
     for (std::size_t j = 0; j < model.jenkins.size(); ++j)  // a stuck Jenkins element is a spring
-        if (cfg.slip[j] == 0) link(model.jenkins[j].a, model.jenkins[j].b, model.jenkins[j].k);
+        if (cfg.slip[j] == 0 && !model.jenkins[j].direction().weighted())
+            link(model.jenkins[j].a, model.jenkins[j].b, model.jenkins[j].k);
 
     fc.component.assign(static_cast<std::size_t>(nf), -1);
     std::vector<int> id_of_root(static_cast<std::size_t>(nf), -1);
@@ -74,16 +75,22 @@ FreeComponents free_components(const Model& model, const Configuration& cfg) {
     // A contact along a general direction is no edge: w w^T may hold a combination of a
     // floating part's rigid motions and leave others, which its bodies do not say. Closed
     // on a floating part, its rigid-body modes are not decided by the structure: refused.
-    for (std::size_t c = 0; c < model.contacts.size(); ++c) {
-        if (!cfg.closed[c] || !model.contacts[c].direction().weighted()) continue;
-        for_each_term(model.contacts[c].direction(), [&](int body, double) {
+    // The same holds for a stuck Jenkins element along a direction (its spring k w w^T).
+    auto refuse_floating = [&](const Direction& d, const std::string& what) {
+        for_each_term(d, [&](int body, double) {
             const int sb = slot[static_cast<std::size_t>(body)];
             if (sb >= 0 && fc.floating[static_cast<std::size_t>(fc.component[sb])])
-                throw InputError("model '" + model.name + "': contact '" + model.contacts[c].name +
-                                 "' acts along a direction on '" + model.masses[static_cast<std::size_t>(body)].name +
+                throw InputError("model '" + model.name + "': " + what + " acts along a direction on '" +
+                                 model.masses[static_cast<std::size_t>(body)].name +
                                  "', which floats (no spring to the ground); a direction needs an anchored structure");
         });
-    }
+    };
+    for (std::size_t c = 0; c < model.contacts.size(); ++c)
+        if (cfg.closed[c] && model.contacts[c].direction().weighted())
+            refuse_floating(model.contacts[c].direction(), "contact '" + model.contacts[c].name + "'");
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j)
+        if (cfg.slip[j] == 0 && model.jenkins[j].direction().weighted())
+            refuse_floating(model.jenkins[j].direction(), "Jenkins element '" + model.jenkins[j].name + "'");
     return fc;
 }
 

@@ -48,9 +48,12 @@ std::string model_canonical_text(const Model& model) {
             for (std::size_t j = i + 1; j < n; ++j) t += " " + num(model.mass_entry(i, j));
         t += "\n";
     }
-    for (const Jenkins& j : model.jenkins)
+    for (const Jenkins& j : model.jenkins) {
         t += "jenkins " + j.name + " " + std::to_string(j.a) + " " + std::to_string(j.b) + " " + num(j.k) + " " +
-             num(j.slip_force) + "\n";
+             num(j.slip_force);
+        for (const Weight& w : j.weights) t += " " + std::to_string(w.body) + ":" + num(w.w);  // only when given
+        t += "\n";
+    }
     t += "load";
     for (double l : model.load) t += " " + num(l);
     t += "\n";

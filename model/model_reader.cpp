@@ -1011,10 +1011,15 @@ private:
         for (std::size_t i = 0; i < tables.size(); ++i) {
             const toml::table& t = *tables[i];
             const std::string path = "jenkins[" + std::to_string(i + 1) + "]";
-            check_keys(t, path, {"name", "between", "k", "slip_force"});
+            check_keys(t, path, {"name", "between", "direction", "k", "slip_force"});
             Jenkins j;
             j.name = element_name(t, path, "jenkins", i);
-            std::tie(j.a, j.b) = between(t, path);
+            if (const toml::node* dir = t.get("direction")) {
+                if (t.get("between")) fail(dir, path + ".direction", "give either 'between' or 'direction', not both");
+                j.weights = direction(*dir, path + ".direction");
+            } else {
+                std::tie(j.a, j.b) = between(t, path);
+            }
             j.k = required_number(t, path, "k");
             if (!(j.k > 0.0)) fail(t.get("k"), path + ".k", "stiffness must be > 0, got " + show(j.k));
             j.slip_force = required_number(t, path, "slip_force");
@@ -1476,10 +1481,23 @@ private:
                          line_of(root, "contact", c, "c"), "contact '" + ct.name + "'"});
             });
         }
-        for (std::size_t j = 0; j < model_.jenkins.size(); ++j)
-            add(stiffness, model_.jenkins[j].a, model_.jenkins[j].b,
-                {model_.jenkins[j].k, "jenkins[" + std::to_string(j + 1) + "].k", line_of(root, "jenkins", j, "k"),
-                 "Jenkins element '" + model_.jenkins[j].name + "'"});
+        for (std::size_t j = 0; j < model_.jenkins.size(); ++j) {
+            // k w w^T, as a contact's: row i's sum |k w_i| sum_j |w_j| (1 and 1 between two bodies)
+            const Jenkins& je = model_.jenkins[j];
+            const Term entry{je.k, "jenkins[" + std::to_string(j + 1) + "].k", line_of(root, "jenkins", j, "k"),
+                             "Jenkins element '" + je.name + "'"};
+            if (je.weights.empty()) {
+                add(stiffness, je.a, je.b, entry);
+                continue;
+            }
+            double norm1 = 0.0;
+            for (const Weight& w : je.weights) norm1 += std::fabs(w.w);
+            for (const Weight& w : je.weights) {
+                Term e = entry;
+                e.value = je.k * std::fabs(w.w) * norm1;
+                stiffness[static_cast<std::size_t>(w.body)].push_back(e);
+            }
+        }
         for (std::size_t d = 0; d < model_.dampers.size(); ++d) {
             const Damper& dp = model_.dampers[d];
             if (dp.from_structure)

@@ -256,7 +256,7 @@ MpModel::MpModel(const Model& model, int digits)
     }
     for (const Spring& s : model.springs) springs.push_back({s.a, s.b, F(s.k), zero, zero});
     for (const Contact& c : model.contacts) contacts.push_back({c.a, c.b, F(c.k), F(c.gap), F(c.c), c.weights});
-    for (const Jenkins& e : model.jenkins) jenkins.push_back({e.a, e.b, F(e.k), F(e.slip_force), zero});
+    for (const Jenkins& e : model.jenkins) jenkins.push_back({e.a, e.b, F(e.k), F(e.slip_force), zero, e.weights});
     for (const Damper& d : model.dampers) dampers.push_back({d.a, d.b, F(d.c), zero, zero});
     for (const Mass& ms : model.masses) partner.push_back(ms.partner);
     f_const.assign(static_cast<std::size_t>(n), zero);
@@ -280,9 +280,12 @@ MpModel::MpModel(const Model& model, int digits)
         x0.push_back(F(model.x0[i]));
         v0.push_back(F(model.v0[i]));
     }
+    auto along_x0 = [&](const Link& e) {  // u = w^T x0
+        const cl_F* rows[] = {x0.data()};
+        return along(e.direction(), RowsMotion<cl_F, decltype(rows)>(rows, nullptr, zero), 0);
+    };
     for (std::size_t j = 0; j < model.jenkins.size(); ++j)  // the sliders after the masses: unstretched, or slider0
-        x0.push_back(model.slider0.empty() ? body(x0, model.jenkins[j].a) - body(x0, model.jenkins[j].b)
-                                           : F(model.slider0[j]));
+        x0.push_back(model.slider0.empty() ? along_x0(jenkins[j]) : F(model.slider0[j]));
 }
 
 cl_F MpModel::against_partner(int i, const cl_F& ai, const cl_F& ap) const {
@@ -509,13 +512,17 @@ void MpSegment::switch_rows() {
                 Z_[f][j] = p == kGround ? phi_[slot_[sf.element]][j] : phi_[slot_[sf.element]][j] - phi_[slot_[p]][j];
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg ||
                    sf.kind == SwitchKind::slip_velocity) {
-            // +-k (x_a - x_b - s) - F_s (the slider fixed) on q; w = v_a - v_b on q'.
+            // +-k (u - s) - F_s (the slider fixed) on q; u' on q' (u = x_a - x_b, or w^T x).
             const auto& e = mp.jenkins[static_cast<std::size_t>(sf.element)];
             const cl_F c = sf.kind == SwitchKind::slip_neg ? -e.k : sf.kind == SwitchKind::slip_pos ? e.k : mp.one;
             for (int j = 0; j < nf_; ++j) {
                 cl_F w = Z0;
-                if (e.a != kGround && slot_[e.a] >= 0) w = w + phi_[slot_[e.a]][j];
-                if (e.b != kGround && slot_[e.b] >= 0) w = w - phi_[slot_[e.b]][j];
+                if (e.weights.empty()) {
+                    if (e.a != kGround && slot_[e.a] >= 0) w = w + phi_[slot_[e.a]][j];
+                    if (e.b != kGround && slot_[e.b] >= 0) w = w - phi_[slot_[e.b]][j];
+                }
+                for (const Weight& t : e.weights)
+                    if (slot_[t.body] >= 0) w = w + mp.F(t.w) * phi_[slot_[t.body]][j];
                 (sf.kind == SwitchKind::slip_velocity ? Z_ : W_)[f][j] = c * w;
             }
         } else {
@@ -784,12 +791,18 @@ void MpSegment::init_damped(const Model& model) {
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
             const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
             const cl_F k = sf.kind == SwitchKind::slip_pos ? el.k : -el.k;
-            on(Lx_[f], el.a, k);
-            on(Lx_[f], el.b, -k);
+            if (el.weights.empty()) {
+                on(Lx_[f], el.a, k);
+                on(Lx_[f], el.b, -k);
+            }
+            for (const Weight& t : el.weights) on(Lx_[f], t.body, k * mp.F(t.w));
         } else if (sf.kind == SwitchKind::slip_velocity) {
             const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
-            on(Lv_[f], el.a, mp.one);
-            on(Lv_[f], el.b, -mp.one);
+            if (el.weights.empty()) {
+                on(Lv_[f], el.a, mp.one);
+                on(Lv_[f], el.b, -mp.one);
+            }
+            for (const Weight& t : el.weights) on(Lv_[f], t.body, mp.F(t.w));
         } else {  // +-A_e, A = -K x - C v + ... + F sin
             const cl_F sg = sf.kind == SwitchKind::release_pos ? mp.one : -mp.one;
             for (std::size_t r = 0; r < nf; ++r) {
@@ -869,7 +882,7 @@ void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::ve
     x_fix_ = x0;
     v_start_ = v0;
     for (int h = 0; h < nh_; ++h) theta_[h] = mp.h_omega[h] * t0 + mp.h_phase[h];
-    // The stuck sliders' preload k s (+ on a, - on b), s = x0[n + j].
+    // The stuck sliders' preload k s (+ on a, - on b; k s w_i along a direction), s = x0[n + j].
     fseg_ = f_const_;
     slider_.assign(mp.jenkins.size(), mp.zero);
     for (std::size_t j = 0; j < mp.jenkins.size(); ++j) {
@@ -877,8 +890,11 @@ void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::ve
         const MpModel::Link& e = mp.jenkins[j];
         slider_[j] = x0[static_cast<std::size_t>(n_) + j];
         const cl_F p = e.k * slider_[j];
-        if (e.a != kGround) fseg_[e.a] = fseg_[e.a] + p;
-        if (e.b != kGround) fseg_[e.b] = fseg_[e.b] - p;
+        if (e.weights.empty()) {
+            if (e.a != kGround) fseg_[e.a] = fseg_[e.a] + p;
+            if (e.b != kGround) fseg_[e.b] = fseg_[e.b] - p;
+        }
+        for (const Weight& t : e.weights) fseg_[t.body] = fseg_[t.body] + mp.F(t.w) * p;
     }
     // Constant force on each coordinate, summed over its masses (T^T (f - K e)):
     // loads, preloads, the masses held still as supports (-K_FS x_S), the riders'
@@ -1159,7 +1175,7 @@ void MpSegment::sliders_and_switches(MpEval& out, const std::vector<cl_F>& xm, c
             s = slider_[j];
         } else {  // the stretch held at slip F_s / k
             const cl_F held = jenkins::held_stretch(cfg_.slip[j], e.k, e.gap);
-            s = along(Direction{e.a, e.b}, motion, 0) - held;
+            s = along(e.direction(), motion, 0) - held;
         }
     }
 

@@ -248,7 +248,7 @@ void MpModel::each_force(const Configuration& cfg, S&& slider, V&& bodies) const
                         visit);
     for (std::size_t j = 0; j < jenkins.size(); ++j) {
         const Link& e = jenkins[j];
-        jenkins::forces(cfg.slip[j], Direction{e.a, e.b}, e.k, e.gap, cl_F(slider(j)), beta, visit);
+        jenkins::forces(cfg.slip[j], e.direction(), e.k, e.gap, cl_F(slider(j)), beta, visit);
     }
     for (const Link& d : dampers) damper::forces(Direction{d.a, d.b}, d.k, visit);
 }
@@ -274,7 +274,7 @@ struct MpElements {
     }
     JenkinsView jenkins(int e) const {
         const MpModel::Link& l = mp.jenkins[static_cast<std::size_t>(e)];
-        return {{l.a, l.b}, l.k, l.gap, slider(e)};
+        return {l.direction(), l.k, l.gap, slider(e)};
     }
     Direction friction(int e) const { return {e, mp.partner[static_cast<std::size_t>(e)]}; }
 };

@@ -269,8 +269,10 @@ public:
     bool slips_on(const Configuration& cfg, int j) const {
         if (!a_) return false;
         const MpModel::Link& e = mp.jenkins[static_cast<std::size_t>(j)];
-        const cl_F w_rate = mp.body(*a_, e.a) - mp.body(*a_, e.b);
-        const cl_F mag = cln::abs(mp.body(*a_, e.a)) + cln::abs(mp.body(*a_, e.b));
+        const cl_F* rows[] = {a_->data()};
+        const RowsMotion<cl_F, decltype(rows)> m(rows, nullptr, mp.zero);  // magnitudes |a|
+        const cl_F w_rate = along(e.direction(), m, 0);
+        const cl_F mag = along_magnitude(e.direction(), m, 0);
         return !negligible(w_rate, mag) && sign(w_rate) == cfg.slip[static_cast<std::size_t>(j)];
     }
     int dof() const { return mp.n; }

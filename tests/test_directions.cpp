@@ -3,7 +3,9 @@
 // opening of the crack's outer fibre, a weighted difference of the two
 // rotations at the crack) against CVODE and the 30- and 60-digit reference;
 // a scaled direction against the same contact written with `between`; and
-// the input and back ends that refuse it by name.
+// the input and back ends that refuse it by name. The same for a Jenkins
+// element along a direction: a friction joint on the crack's relative
+// rotation, and a scaled direction against the element between two bodies.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -208,6 +210,148 @@ TEST(JenkinsOnACoupledMass, TheReferenceSticksOnceWhereTheRelativeRotationTurns)
                 eigen_off);
     EXPECT_LT(self, 1e-20);
     EXPECT_LT(eigen_off, 1e-11);
+}
+
+// A frictional joint across the crack: a Jenkins element on the relative
+// rotation tR - tL (a spring k_j in series with a slider that slips at the
+// moment slip_force), in parallel with the open crack's spring.
+const char* kJoint =
+    "[[jenkins]]\nname = \"joint\"\ndirection = { tL = -1.0, tR = 1.0 }\nk = 3000.0\n"
+    "slip_force = 0.6\n";
+
+TEST(JenkinsDirection, AFrictionJointOnARelativeRotationGivesTheEventsOfCvodeAndTheReference) {
+    testing::TempDir dir;
+    const Model model = read_model(breathing_crack(dir, kJoint));
+    ASSERT_TRUE(model.jenkins[0].direction().weighted());
+    const testing::Outcome eigen = testing::simulate(model, 2.0);
+    ASSERT_GE(eigen.events.size(), 8u);
+    const testing::Outcome programs = testing::simulate(model, 2.0, 0.0, testing::Solvers::interp);
+    const testing::Outcome cvode = testing::baseline(model, 2.0, 1e-12, 1e-14, Method::cvode);
+    const std::vector<testing::Recorded> r30 = reference_events(model, 30, 2.0), r60 = reference_events(model, 60, 2.0);
+    const double eigen_off = event_gap(eigen.events, r30), to_cvode = event_gap(programs, cvode),
+                 to_reference = event_gap(programs.events, r30), self = event_gap(r30, r60);
+    std::printf(
+        "%zu events: programs within %.3g s of the reference, %.3g s of CVODE; the Eigen solver %.3g s of the "
+        "reference; 30 against 60 digits %.3g s\n",
+        programs.events.size(), to_reference, to_cvode, eigen_off, self);
+    EXPECT_LT(eigen_off, 1e-11);
+    EXPECT_LT(to_cvode, 1e-9);
+    EXPECT_LT(to_reference, 1e-11);
+    EXPECT_LT(self, 1e-20);
+}
+
+TEST(JenkinsDirection, AScaledDirectionIsTheElementBetweenTwoBodies) {
+    // u = 2 w4 with k / 4 and F_s / 2 is w4 - ground with k and F_s: stuck,
+    // the force on w4 is 2 (k/4) (2 w4 - s') = k (w4 - s'/2); it slips where
+    // (k/4) |2 w4 - s'| = F_s / 2, i.e. k |w4 - s'/2| = F_s, and then pushes
+    // with 2 F_s / 2 = F_s: the same motion, the same instants.
+    testing::TempDir a, b;
+    const Model between = read_model(breathing_crack(
+        a, "[[jenkins]]\nname = \"j\"\nbetween = [\"w4\", \"ground\"]\nk = 2000.0\nslip_force = 2.0\n"));
+    const Model scaled = read_model(
+        breathing_crack(b, "[[jenkins]]\nname = \"j\"\ndirection = { w4 = 2.0 }\nk = 500.0\nslip_force = 1.0\n"));
+    for (testing::Solvers s : {testing::Solvers::generic, testing::Solvers::interp}) {
+        const testing::Outcome x = testing::simulate(between, 2.0, 0.0, s), y = testing::simulate(scaled, 2.0, 0.0, s);
+        ASSERT_GE(x.events.size(), 6u);
+        const double gap = event_gap(x, y);
+        std::printf("%s: %zu events, %.3g s apart\n", testing::solvers_name(s), x.events.size(), gap);
+        EXPECT_LT(gap, 1e-12);
+    }
+}
+
+TEST(JenkinsDirection, AStuckJointStampsKWwTAndItsSlidersPreload) {
+    // Stuck, the joint adds k w w^T to K and k s w to the constant force
+    // (assembly.h, the pair links of direction.h); slipping, the force
+    // -slip F_s w and nothing to K.
+    testing::TempDir dir;
+    const Model model = read_model(breathing_crack(dir, kJoint));
+    Configuration stuck = Configuration::all_open(model), slipping = stuck;
+    slipping.slip[0] = 1;
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(9);
+    w(3) = -1.0, w(4) = 1.0;
+    const Eigen::MatrixXd dK = stiffness_matrix(model, stuck) - stiffness_matrix(model, slipping);
+    EXPECT_LT((dK - 3000.0 * w * w.transpose()).norm(), 1e-12 * 3000.0);
+    std::vector<double> state(model.state_size(), 0.0);
+    state[model.dof()] = 0.01;  // the slider
+    Eigen::VectorXd f_stuck = Eigen::VectorXd::Zero(9), f_slip = Eigen::VectorXd::Zero(9);
+    constant_of(
+        model, stuck, ElementKind::jenkins, 0,
+        [&](int i, int j, double f) {
+            if (i != kGround) f_stuck(i) += f;
+            if (j != kGround) f_stuck(j) -= f;
+        },
+        state.data() + model.dof());
+    constant_of(
+        model, slipping, ElementKind::jenkins, 0,
+        [&](int i, int j, double f) {
+            if (i != kGround) f_slip(i) += f;
+            if (j != kGround) f_slip(j) -= f;
+        },
+        state.data() + model.dof());
+    EXPECT_LT((f_stuck - 3000.0 * 0.01 * w).norm(), 1e-15 * 30.0);
+    EXPECT_LT((f_slip + 0.6 * w).norm(), 1e-15);
+}
+
+TEST(JenkinsDirection, JitAndInterpreterWriteTheSameBytes) {
+    testing::TempDir dir;
+    const std::string path = "'" + breathing_crack(dir, kJoint) + "'";
+    const std::string interp = testing::events_csv(path, "--t-end 0.5 --kernels interp");
+    EXPECT_GE(std::count(interp.begin(), interp.end(), '\n'), 3);
+    EXPECT_EQ(interp, testing::events_csv(path, "--t-end 0.5 --no-cache --kernels jit"));
+}
+
+TEST(JenkinsDirection, ThePeriodMapsExactJacobianMatchesCentralDifferences) {
+    // The joint's stick and slip switches along w, saltation at each, over
+    // one forcing period from rest.
+    testing::TempDir dir;
+    const Model model = read_model(breathing_crack(dir, kJoint));
+    analysis::FlowKernels kernels;
+    kernels.kernels = KernelChoice::eigen;
+    analysis::Flow flow(model, kernels, "test");
+    std::size_t events = 0;
+    const double off = off_central_differences(flow, 2 * M_PI / 20.0, Eigen::VectorXd::Zero(19), events);
+    std::printf("%zu events a period, |J - central differences| / |J| = %.3g\n", events, off);
+    EXPECT_GE(events, 2u);
+    EXPECT_LT(off, 1e-6);
+}
+
+TEST(JenkinsDirection, InputAndFloatingPartsAreRefused) {
+    testing::TempDir dir;
+    struct Case {
+        std::string element, says;
+    };
+    const std::vector<Case> cases = {
+        {"direction = { tL = -1.0, tR = 1.0 }\nbetween = [\"w4\", \"ground\"]", "not both"},
+        {"direction = { tL = 0.0, tR = 1.0 }", "'jenkins[1].direction.tL': a weight of 0"},
+        {"direction = { tX = 1.0 }", "'jenkins[1].direction.tX': unknown dof 'tX'"},
+    };
+    for (const Case& c : cases) {
+        const std::string path =
+            breathing_crack(dir, "[[jenkins]]\nname = \"joint\"\n" + c.element + "\nk = 3000.0\nslip_force = 0.6\n");
+        const testing::CliRun r = testing::run_hsnc("check '" + path + "'");
+        EXPECT_EQ(r.exit_code, 2) << c.element;
+        EXPECT_NE(r.err.find(c.says), std::string::npos) << c.element << " -> " << r.err;
+    }
+    // Stuck at t0, k (x1 + x2)^2 on a pair with no spring to the ground: refused as a contact's.
+    write(dir / "float.toml",
+          "name = \"floating\"\n[[mass]]\nname = \"m1\"\nm = 1.0\n[[mass]]\nname = \"m2\"\nm = 1.0\n"
+          "[[spring]]\nbetween = [\"m1\", \"m2\"]\nk = 10.0\n"
+          "[[jenkins]]\nname = \"j\"\ndirection = { m1 = 1.0, m2 = 1.0 }\nk = 100.0\n"
+          "slip_force = 1.0\n[initial]\nv = { m1 = 1.0, m2 = 1.0 }\n");
+    const std::string out = dir / "trajectory.csv";
+    const testing::CliRun r =
+        testing::run_hsnc("simulate '" + (dir / "float.toml") + "' --t-end 1 --out '" + out + "'");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("Jenkins element 'j' acts along a direction on 'm1', which floats"), std::string::npos)
+        << r.err;
+    EXPECT_FALSE(std::ifstream(out).good());
+}
+
+TEST(JenkinsDirection, CheckSaysWhatTheElementActsAlong) {
+    testing::TempDir dir;
+    const testing::CliRun r = testing::run_hsnc("check '" + breathing_crack(dir, kJoint) + "'");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("joint  along -1 tL 1 tR  k = 3000"), std::string::npos) << r.out;
 }
 
 }  // namespace

@@ -15,8 +15,10 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "direction.h"
+#include "motion.h"
 
 namespace hsnc {
 
@@ -26,11 +28,23 @@ struct Jenkins {
     int b = kGround;
     double k = 0.0;           ///< > 0
     double slip_force = 0.0;  ///< F_s > 0
+    /// A general direction (`direction = { dof = w, ... }`): u = sum w_i x_i;
+    /// empty for `between = [a, b]`, u = x[a] - x[b].
+    std::vector<Weight> weights;
 
-    Direction direction() const { return {a, b}; }
+    Direction direction() const {
+        return {a, b, weights.empty() ? nullptr : weights.data(), static_cast<int>(weights.size())};
+    }
 };
 
 namespace jenkins {
+
+/// The slider position that leaves the spring unstretched at positions x
+/// (one per mass): s = u = w^T x.
+inline double unstretched_slider(const Jenkins& j, const double* x) {
+    const double* rows[] = {x};
+    return along(j.direction(), double_motion(rows), 0);
+}
 
 /// d^k/dt^k of sigma k e - F_s (sigma = +1 slip_pos, -1 slip_neg) while stuck:
 /// sigma k (u^(k) - [k = 0] s) - [k = 0] F_s.

@@ -45,9 +45,7 @@ struct Sliders {
         if (m.slider0.size() == m.jenkins.size()) {
             s = m.slider0;
         } else {
-            for (const Jenkins& j : m.jenkins)
-                s.push_back((j.a == kGround ? 0.0 : m.x0[static_cast<std::size_t>(j.a)]) -
-                            (j.b == kGround ? 0.0 : m.x0[static_cast<std::size_t>(j.b)]));
+            for (const Jenkins& j : m.jenkins) s.push_back(jenkins::unstretched_slider(j, m.x0.data()));
         }
     }
     // The masses' x followed by the sliders in cfg (x itself without Jenkins elements).
@@ -121,7 +119,6 @@ void watched_values(const Model& model, const Configuration& cfg, const std::vec
                     const double* x_masses, const double* v, const std::vector<SwitchFunction>& sw, double* h,
                     Sliders& sl) {
     const double* x = sl.with(cfg, x_masses);
-    auto body = [](const double* y, int b) { return b == kGround ? 0.0 : y[b]; };
     for (std::size_t k = 0; k < sw.size(); ++k) {
         const SwitchFunction& s = sw[k];
         switch (s.kind) {
@@ -136,15 +133,18 @@ void watched_values(const Model& model, const Configuration& cfg, const std::vec
                 break;
             }
             case SwitchKind::slip_pos:
-            case SwitchKind::slip_neg: {  // F_s -+ k (x_a - x_b - s)
+            case SwitchKind::slip_neg: {  // F_s -+ k (u - s)
                 const Jenkins& j = model.jenkins[static_cast<std::size_t>(s.element)];
-                const double e = body(x, j.a) - body(x, j.b) - x[model.dof() + static_cast<std::size_t>(s.element)];
+                const double* rows[] = {x};
+                const double e =
+                    along(j.direction(), double_motion(rows), 0) - x[model.dof() + static_cast<std::size_t>(s.element)];
                 h[k] = j.slip_force - (s.kind == SwitchKind::slip_pos ? j.k * e : -j.k * e);
                 break;
             }
-            case SwitchKind::slip_velocity: {  // slip * w
+            case SwitchKind::slip_velocity: {  // slip * u'
                 const Jenkins& j = model.jenkins[static_cast<std::size_t>(s.element)];
-                h[k] = cfg.slip[static_cast<std::size_t>(s.element)] * (body(v, j.a) - body(v, j.b));
+                const double* rows[] = {v};
+                h[k] = cfg.slip[static_cast<std::size_t>(s.element)] * along(j.direction(), double_motion(rows), 0);
                 break;
             }
             default: {

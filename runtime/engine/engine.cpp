@@ -92,8 +92,8 @@ double fastest_rate(const Model& model, const Configuration& cfg) {
     for (const Spring& s : model.springs) add(s.a, s.b, s.k);
     for (std::size_t c = 0; c < model.contacts.size(); ++c)  // as pair links when along a general direction
         link_of(model, cfg, ElementKind::contact, c, [&](int a, int b, double k, double, double) { add(a, b, k); });
-    for (std::size_t j = 0; j < model.jenkins.size(); ++j)
-        if (cfg.slip[j] == 0) add(model.jenkins[j].a, model.jenkins[j].b, model.jenkins[j].k);
+    for (std::size_t j = 0; j < model.jenkins.size(); ++j)  // stuck, a link (pair links along a direction)
+        link_of(model, cfg, ElementKind::jenkins, j, [&](int a, int b, double k, double, double) { add(a, b, k); });
     // A coupled M: lambda_max(K_F, M_F) <= lambda_max(K_F) / lambda_min(M) (interlacing), and
     // lambda_max(K_F) <= max_i 2 stiff_i (Gershgorin), so m_i becomes M's smallest eigenvalue.
     auto mass_of = [&](std::size_t i) { return model.coupled_mass() ? model.mass_floor : model.masses[i].m; };
@@ -672,15 +672,13 @@ private:
 };
 
 // The state at t0: the masses' positions, then the Jenkins sliders' (the
-// model's, else at rest, unstretched: s = x[a] - x[b]).
+// model's, else at rest, unstretched: s = u = w^T x).
 std::vector<double> initial_positions(const Model& model) {
     std::vector<double> x = model.x0;
     if (model.slider0.size() == model.jenkins.size())
         x.insert(x.end(), model.slider0.begin(), model.slider0.end());
     else
-        for (const Jenkins& j : model.jenkins)
-            x.push_back((j.a == kGround ? 0.0 : x[static_cast<std::size_t>(j.a)]) -
-                        (j.b == kGround ? 0.0 : x[static_cast<std::size_t>(j.b)]));
+        for (const Jenkins& j : model.jenkins) x.push_back(jenkins::unstretched_slider(j, model.x0.data()));
     return x;
 }
 

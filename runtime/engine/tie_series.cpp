@@ -51,11 +51,14 @@ void force_derivative(const Model& model, const Configuration& cfg, int i, doubl
         magnitude += fm;
     }, s.slider.data());
     if (k == 0)
-        for_each_constant(model, cfg, [&](int a, int b, double fa) {
-            if (a != i && b != i) return;
-            value += a == i ? fa : -fa;
-            magnitude += std::fabs(fa);
-        });
+        for_each_constant(
+            model, cfg,
+            [&](int a, int b, double fa) {
+                if (a != i && b != i) return;
+                value += a == i ? fa : -fa;
+                magnitude += std::fabs(fa);
+            },
+            s.slider.data());
     for (const Harmonic& h : model.forcing) {
         const double amp = h.amplitude[ii];
         if (amp == 0.0) continue;
@@ -228,9 +231,12 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
             if (a == b || (a != i && b != i)) return;
             m += std::fabs(kk) * (at(x, a) + at(x, b)) + std::fabs(cc) * (at(v, a) + at(v, b)) + std::fabs(kk * gap);
         }, x + model.dof());
-        for_each_constant(model, cfg, [&](int a, int b, double fa) {
-            if (a == i || b == i) m += std::fabs(fa);
-        });
+        for_each_constant(
+            model, cfg,
+            [&](int a, int b, double fa) {
+                if (a == i || b == i) m += std::fabs(fa);
+            },
+            x + model.dof());
         for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii]);
         for (std::size_t q = 0; q < model.dof(); ++q)  // its friction, and that of a mass it is the partner of
             if (model.masses[q].has_friction && (q == ii || model.masses[q].partner == i))
@@ -251,9 +257,11 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
                             ? model.masses[static_cast<std::size_t>(e)].partner
                             : kGround;
     if (f.kind == SwitchKind::velocity) return accel_magnitude(e) + accel_magnitude(partner);
-    if (f.kind == SwitchKind::slip_velocity) {
-        const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
-        return accel_magnitude(J.a) + accel_magnitude(J.b);
+    if (f.kind == SwitchKind::slip_velocity) {  // |w|^T |x''|
+        double m = 0.0;
+        for_each_term(model.jenkins[static_cast<std::size_t>(e)].direction(),
+                      [&](int b, double w) { m += std::fabs(w) * accel_magnitude(b); });
+        return m;
     }
     // A_i' = -(K v)_i - (C x'')_i + sum_h F_hi Omega_h cos(...); D_i' against a partner.
     auto force_rate_magnitude = [&](int i) {
@@ -340,26 +348,23 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
         if (!free_mass(b)) return 0.0;
         return r / std::sqrt(model.coupled_mass() ? model.mass_floor : model.masses[static_cast<std::size_t>(b)].m);
     };
-    const int e = f.element;
-    if (f.kind == SwitchKind::gap) {
-        const double r = R(k - 1);  // G^(k) = w^T x^(k)
-        const Direction d = model.contacts[static_cast<std::size_t>(e)].direction();
+    // |u^(k)| <= |w|^T of the bodies' bounds, u = w^T x.
+    auto along_bound = [&](const Direction& d, double r) {
         double B = 0.0;
         for_each_term(d, [&](int b, double w) { B += std::fabs(w) * per_mass(b, r); });
         return d.weighted() ? B * (1 + 64 * kEps) : B;  // |w_i| products rounded
-    }
+    };
+    const int e = f.element;
+    if (f.kind == SwitchKind::gap)  // G^(k) = w^T x^(k)
+        return along_bound(model.contacts[static_cast<std::size_t>(e)].direction(), R(k - 1));
     if (f.kind == SwitchKind::velocity)  // w^(k) = x_e^(k+1) - x_partner^(k+1)
         return per_mass(e, R(k)) + per_mass(model.masses[static_cast<std::size_t>(e)].partner, R(k));
-    if (f.kind == SwitchKind::slip_pos || f.kind == SwitchKind::slip_neg) {
+    if (f.kind == SwitchKind::slip_pos || f.kind == SwitchKind::slip_neg) {  // k u^(k)
         const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
-        const double r = R(k - 1);  // k (x_a^(k) - x_b^(k))
-        return J.k * (per_mass(J.a, r) + per_mass(J.b, r)) * (1 + 64 * kEps);
+        return J.k * along_bound(J.direction(), R(k - 1)) * (1 + 64 * kEps);
     }
-    if (f.kind == SwitchKind::slip_velocity) {
-        const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
-        const double r = R(k);
-        return per_mass(J.a, r) + per_mass(J.b, r);
-    }
+    if (f.kind == SwitchKind::slip_velocity)  // u^(k+1)
+        return along_bound(model.jenkins[static_cast<std::size_t>(e)].direction(), R(k));
     // A_i^(k) = -(K x^(k))_i - (C x^(k+1))_i + sum_h F_hi Omega_h^k sin(...): the neighbours' terms.
     const double rk1 = R(k - 1), rk = R(k);
     auto force_bound = [&](int i) {

@@ -68,27 +68,30 @@ void GenericSolver::switch_rows(const Model& model) {
         if (b != kGround && slot[b] >= 0) w -= phi_(slot[b], j);
         return w;
     };
+    // Row j of u = w^T x along a direction (x[a] - x[b] between two bodies).
+    auto along_row = [&](const Direction& d, int j) {
+        if (!d.weighted()) return difference(d.a, d.b, j);
+        double u = 0.0;
+        for_each_term(d, [&](int b, double w) {
+            if (slot[b] >= 0) u += w * phi_(slot[b], j);
+        });
+        return u;
+    };
     for (int f = 0; f < ns; ++f) {
         const SwitchFunction& sf = switches_[f];
         if (sf.kind == SwitchKind::gap) {
             const Direction d = model.contacts[sf.element].direction();
-            if (!d.weighted())
-                for (int j = 0; j < nf_; ++j) W_(f, j) = difference(d.a, d.b, j);
-            else  // w^T x over the modes
-                for_each_term(d, [&](int b, double w) {
-                    if (slot[b] >= 0)
-                        for (int j = 0; j < nf_; ++j) W_(f, j) += w * phi_(slot[b], j);
-                });
+            for (int j = 0; j < nf_; ++j) W_(f, j) = along_row(d, j);
         } else if (sf.kind == SwitchKind::velocity) {  // w = v_i - v_partner
             for (int j = 0; j < nf_; ++j)
                 Z_(f, j) = difference(sf.element, t_.partner[static_cast<std::size_t>(sf.element)], j);
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
             const Jenkins& J = model.jenkins[static_cast<std::size_t>(sf.element)];
             const double sg = sf.kind == SwitchKind::slip_pos ? J.k : -J.k;
-            for (int j = 0; j < nf_; ++j) W_(f, j) = sg * difference(J.a, J.b, j);
+            for (int j = 0; j < nf_; ++j) W_(f, j) = sg * along_row(J.direction(), j);
         } else if (sf.kind == SwitchKind::slip_velocity) {
             const Jenkins& J = model.jenkins[static_cast<std::size_t>(sf.element)];
-            for (int j = 0; j < nf_; ++j) Z_(f, j) = difference(J.a, J.b, j);
+            for (int j = 0; j < nf_; ++j) Z_(f, j) = along_row(J.direction(), j);
         } else {
             // +-A_i: A_i = -(K x)_i - (C v)_i + f_i + F_i(t); against a partner p,
             // +-D_i = +-(m_p A_i - m_i A_p)/(m_i + m_p) (assembly.h driving_force).

@@ -336,9 +336,10 @@ StateSpaceSolver::StateSpaceSolver(const Model& model, const Configuration& cfg)
             for_each_term(t_.contacts[ee].direction(), [&](int b, double w) { difference(b, kGround, 0, w); });
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
             const Jenkins& j = t_.jenkins[ee];
-            difference(j.a, j.b, 0, sf.kind == SwitchKind::slip_pos ? j.k : -j.k);
+            const double ks = sf.kind == SwitchKind::slip_pos ? j.k : -j.k;
+            for_each_term(j.direction(), [&](int b, double w) { difference(b, kGround, 0, ks * w); });
         } else if (sf.kind == SwitchKind::slip_velocity) {
-            difference(t_.jenkins[ee].a, t_.jenkins[ee].b, nf_, 1.0);
+            for_each_term(t_.jenkins[ee].direction(), [&](int b, double w) { difference(b, kGround, nf_, w); });
         } else if (sf.kind == SwitchKind::velocity) {
             L(f, nf_ + slot[static_cast<std::size_t>(e)]) = 1.0;
         } else {

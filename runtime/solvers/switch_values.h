@@ -59,7 +59,7 @@ struct ConfigurationTerms {
 ConfigurationTerms configuration_terms(const Model& model, const Configuration& cfg);
 
 /// The segment's constant force: f = f_const plus the preload k_j s_j of
-/// every Jenkins element stuck in cfg, s_j = x0[n + j] (kept in slider).
+/// every Jenkins element stuck in cfg along its w, s_j = x0[n + j] (kept in slider).
 inline void segment_force(const ConfigurationTerms& in, const Configuration& cfg, const double* x0, Eigen::VectorXd& f,
                           Eigen::VectorXd& slider) {
     f = in.f_const;
@@ -70,8 +70,7 @@ inline void segment_force(const ConfigurationTerms& in, const Configuration& cfg
         slider(jj) = x0[n + j];
         const Jenkins& e = in.jenkins[j];
         const double p = e.k * slider(jj);
-        if (e.a != kGround) f(e.a) += p;
-        if (e.b != kGround) f(e.b) -= p;
+        for_each_term(e.direction(), [&](int i, double w) { f(i) += w * p; });
     }
 }
 
@@ -100,7 +99,7 @@ inline double free_mass_force(const ConfigurationTerms& in, const Eigen::VectorX
 }
 
 /// out.x[n + j]: the slider of every Jenkins element, fixed while stuck,
-/// x[a] - x[b] - slip*F_s/k while slipping (after the masses' x are written).
+/// u - slip*F_s/k while slipping (after the masses' x are written).
 inline void write_sliders(const ConfigurationTerms& in, const Configuration& cfg, const Eigen::VectorXd& slider,
                           const SegmentEval& out) {
     const std::size_t n = static_cast<std::size_t>(in.mass.size());
