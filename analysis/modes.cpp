@@ -51,8 +51,7 @@ void refuse_unsupported(const Model& model) {
 
 // Damped modes (EPMC): Jenkins elements, friction or viscous damping of any kind.
 bool damped_model(const Model& model) {
-    const bool friction =
-        std::any_of(model.masses.begin(), model.masses.end(), [](const Mass& m) { return m.has_friction; });
+    const bool friction = model.any_friction();
     return friction || !model.jenkins.empty() || model.alpha != 0.0 || model.beta != 0.0 ||
            !model.proportional_damping();
 }
@@ -403,10 +402,10 @@ Eigen::MatrixXd held_basis(const Model& model) {
     std::vector<Eigen::Index> col(n, -1);
     Eigen::Index nq = 0;
     for (std::size_t i = 0; i < n; ++i)
-        if (!model.masses[i].has_friction) col[i] = nq++;
+        if (!model.has_friction(i)) col[i] = nq++;
     Eigen::MatrixXd T = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), nq);
     for (std::size_t i = 0; i < n; ++i) {
-        const int partner = model.masses[i].partner;
+        const int partner = model.friction_slot(i).partner;
         if (col[i] >= 0)
             T(static_cast<Eigen::Index>(i), col[i]) = 1.0;
         else if (partner != kGround)
@@ -429,7 +428,7 @@ void stuck_modes(const Model& work, Field& field, Equilibrium& eq) {
     Configuration cfg = Configuration::all_open(work);
     cfg.closed = eq.cfg.closed;
     for (Eigen::Index i = 0; i < n; ++i)
-        if (work.masses[static_cast<std::size_t>(i)].has_friction) cfg.stuck[static_cast<std::size_t>(i)] = true;
+        if (work.has_friction(static_cast<std::size_t>(i))) cfg.stuck[static_cast<std::size_t>(i)] = true;
     const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> ges(T.transpose() * stiffness_matrix(work, cfg) * T,
                                                                         T.transpose() * field.M() * T);
     if (ges.info() != Eigen::Success)
@@ -535,9 +534,9 @@ public:
         // starting point only), reaches mu_s N_i.
         const Eigen::VectorXd hold = eq_.omega2(mode) * (field_.M() * shape_) - K * shape_;
         for (Eigen::Index i = 0; i < n_; ++i) {
-            const Mass& m = work.masses[static_cast<std::size_t>(i)];
-            if (m.has_friction && std::fabs(hold(i)) > 0)
-                slip_onset_ = std::min(slip_onset_, m.mu_s * work.normal_force(static_cast<std::size_t>(i)) *
+            const FrictionSlot& f = work.friction_slot(static_cast<std::size_t>(i));
+            if (f.active && std::fabs(hold(i)) > 0)
+                slip_onset_ = std::min(slip_onset_, f.mu_s * work.normal_force(static_cast<std::size_t>(i)) *
                                                         shape_(k_) / std::fabs(hold(i)));
         }
     }

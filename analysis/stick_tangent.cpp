@@ -25,7 +25,7 @@ Layout layout(const Model& model) {
 // or none (-1) when held against the ground.
 int body_of(const Model& model, const Configuration& cfg, std::size_t i) {
     if (fixed_in(model, cfg, i)) return -1;
-    return rides_partner(model, cfg, i) ? model.masses[i].partner : static_cast<int>(i);
+    return rides_partner(model, cfg, i) ? model.friction_slot(i).partner : static_cast<int>(i);
 }
 
 // d A_i / dz: -K_i. on x, -C_i. on v, +-k on the sliders of the stuck Jenkins elements at i.
@@ -131,14 +131,14 @@ Eigen::VectorXd stick_field(const Model& model, const Configuration& cfg, const 
         const int b = body_of(model, cfg, i);
         if (b < 0) continue;
         double F = force_on_mass(model, cfg, static_cast<int>(i), t, x, v);
-        const Mass& ms = model.masses[i];
-        if (ms.has_friction && !cfg.stuck[i] && sgn[i] != 0) {  // kinetic friction, and its reaction on the partner
-            const double fk = ms.mu_k * model.normal_force(i) * sgn[i];
+        const FrictionSlot& fs = model.friction_slot(i);
+        if (fs.active && !cfg.stuck[i] && sgn[i] != 0) {  // kinetic friction, and its reaction on the partner
+            const double fk = fs.mu_k * model.normal_force(i) * sgn[i];
             F -= fk;
-            if (ms.partner != kGround) force[static_cast<std::size_t>(ms.partner)] += fk;
+            if (fs.partner != kGround) force[static_cast<std::size_t>(fs.partner)] += fk;
         }
         force[static_cast<std::size_t>(b)] += F;
-        mass[static_cast<std::size_t>(b)] += ms.m;
+        mass[static_cast<std::size_t>(b)] += model.masses[i].m;
     }
     for (std::size_t i = 0; i < model.dof() && !model.coupled_mass(); ++i) {
         const int ii = static_cast<int>(i), b = body_of(model, cfg, i);
@@ -170,14 +170,14 @@ void stick_gradient(const Model& model, const Configuration& cfg, const SwitchFu
         }
         case SwitchKind::velocity:  // w = v_e - v_partner
             add(L.n, e, 1.0);
-            add(L.n, model.masses[static_cast<std::size_t>(e)].partner, -1.0);
+            add(L.n, model.friction_slot(static_cast<std::size_t>(e)).partner, -1.0);
             return;
         case SwitchKind::release_pos:
         case SwitchKind::release_neg: {
             const double sg = f.kind == SwitchKind::release_pos ? 1.0 : -1.0;
             const Eigen::MatrixXd K = stiffness_matrix(model, cfg), C = damping_matrix(model, cfg);
             const Eigen::VectorXd rate = forcing_rate(model, t);
-            const int p = model.masses[static_cast<std::size_t>(e)].partner;
+            const int p = model.friction_slot(static_cast<std::size_t>(e)).partner;
             if (model.coupled_mass()) {  // D_e = P_e . f (held_mass.h)
                 const Eigen::VectorXd P = HeldMass(model, cfg.stuck).release_row(e);
                 for (Eigen::Index q = 0; q < L.n; ++q) {

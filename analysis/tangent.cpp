@@ -213,7 +213,7 @@ namespace {
 double acceleration(const Model& model, const Configuration& cfg, const signed char* sgn, int i, double t,
                     const double* x, const double* v) {
     if (cfg.stuck[i]) return 0.0;
-    const double fr = model.masses[i].has_friction ? model.masses[i].mu_k * model.normal_force(i) : 0.0;
+    const double fr = model.has_friction(i) ? model.friction_slot(i).mu_k * model.normal_force(i) : 0.0;
     return (force_on_mass(model, cfg, i, t, x, v) - fr * sgn[i]) / model.masses[i].m;
 }
 
@@ -260,7 +260,7 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
     }
     std::vector<char> stick(static_cast<std::size_t>(n), 0);
     for (int i = 0; i < n; ++i) {
-        const double fr = model.masses[i].has_friction ? model.masses[i].mu_k * model.normal_force(i) : 0.0;
+        const double fr = model.has_friction(i) ? model.friction_slot(i).mu_k * model.normal_force(i) : 0.0;
         if (A.stuck[i] && B.stuck[i]) continue;
         if (A.stuck[i]) {
             u(i) = acceleration(model, B, sgnB, i, t, x, v);
@@ -274,8 +274,8 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
     if (model.coupled_mass()) {  // the held motion (held_mass.h): the jump of the forces over M_FF, or a_B - a_A
         if (A.stuck == B.stuck) {
             for (int i = 0; i < n; ++i)
-                if (!A.stuck[i] && model.masses[i].has_friction)
-                    dA[i] -= model.masses[i].mu_k * model.normal_force(i) * (sgnB[i] - sgnA[i]);
+                if (!A.stuck[i] && model.has_friction(i))
+                    dA[i] -= model.friction_slot(i).mu_k * model.normal_force(i) * (sgnB[i] - sgnA[i]);
             HeldMass(model, A.stuck).accelerations(dA.data(), u.data());
         } else {
             const std::vector<double> aB = accelerations(model, B, sgnB, t, x, v);

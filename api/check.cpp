@@ -130,11 +130,13 @@ void print_summary(const Model& model, std::ostream& out) {
     }
 
     std::size_t with_friction = 0;
-    for (const Mass& m : model.masses) with_friction += m.has_friction && m.friction < 0 ? 1 : 0;
+    auto own = [&](std::size_t i) { return model.has_friction(i) && model.friction_slot(i).element < 0; };
+    for (std::size_t i = 0; i < model.dof(); ++i) with_friction += own(i) ? 1 : 0;
     out << "friction masses: " << with_friction << "  (normal force m*g, g = " << num(model.g) << ")\n";
-    for (const Mass& m : model.masses)
-        if (m.has_friction && m.friction < 0)
-            out << "  " << m.name << "  mu_k = " << num(m.mu_k) << "  mu_s = " << num(m.mu_s) << "\n";
+    for (std::size_t i = 0; i < model.dof(); ++i)
+        if (own(i))
+            out << "  " << model.masses[i].name << "  mu_k = " << num(model.friction_slot(i).mu_k)
+                << "  mu_s = " << num(model.friction_slot(i).mu_s) << "\n";
     if (!model.frictions.empty()) {
         out << "friction elements: " << model.frictions.size() << "\n";
         for (const FrictionElement& f : model.frictions)

@@ -124,7 +124,7 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
     std::string riders;  // stuck to their friction partner: they move with it
     for (int q : d.riders)
         riders += (riders.empty() ? "" : ", ") + model.masses[static_cast<std::size_t>(q)].name + " on " +
-                  model.masses[static_cast<std::size_t>(model.masses[static_cast<std::size_t>(q)].partner)].name;
+                  model.masses[static_cast<std::size_t>(model.friction_slot(static_cast<std::size_t>(q)).partner)].name;
     if (fmt == Format::latex) {
         out << "% hsnc inspect: model " << model.name << " (hash " << hash << "), configuration "
             << cfg.spec(model) << "\n";
@@ -149,7 +149,7 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
         const std::string& nm = model.masses[i].name;
         in.x0.push_back(GiNaC::symbol("x0_" + nm, "x_{0," + latex_name(nm) + "}"));
         in.v0.push_back(GiNaC::symbol("v0_" + nm, "v_{0," + latex_name(nm) + "}"));
-        const bool sliding_friction = model.masses[i].has_friction && !cfg.stuck[i];
+        const bool sliding_friction = model.has_friction(i) && !cfg.stuck[i];
         in.sgn.push_back(sliding_friction ? ex(GiNaC::symbol("sgn_" + nm, "s_{" + latex_name(nm) + "}")) : ex(0));
     }
     for (const Jenkins& e : model.jenkins)  // sliders after the masses
@@ -161,7 +161,7 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
         // A rider's rows and columns fold into its partner's coordinate (T^T K T, T^T C T).
         GiNaC::matrix K = d.K, C = d.C;
         for (int q : d.riders) {
-            const int pq = model.masses[static_cast<std::size_t>(q)].partner;
+            const int pq = model.friction_slot(static_cast<std::size_t>(q)).partner;
             for (std::size_t k = 0; k < n; ++k) {
                 K(pq, k) = K(pq, k) + K(q, k);
                 C(pq, k) = C(pq, k) + C(q, k);
@@ -247,9 +247,10 @@ void inspect(const Model& model, const Configuration& cfg, Format fmt, std::ostr
             case SwitchKind::velocity: what = "velocity of " + model.masses[sf.element].name; break;
             case SwitchKind::release_pos:
             case SwitchKind::release_neg: {
-                const Mass& ms = model.masses[static_cast<std::size_t>(sf.element)];
-                const std::string force = ms.partner == kGround ? "A" : "D";  // D: against its partner
-                what = (sf.kind == SwitchKind::release_pos ? "" : "-") + force + " - mu_s N of " + ms.name;
+                const auto i = static_cast<std::size_t>(sf.element);
+                const std::string force =
+                    model.friction_slot(i).partner == kGround ? "A" : "D";  // D: against its partner
+                what = (sf.kind == SwitchKind::release_pos ? "" : "-") + force + " - mu_s N of " + model.masses[i].name;
                 break;
             }
             case SwitchKind::slip_pos: what = "k e - F_s of " + model.jenkins[static_cast<std::size_t>(sf.element)].name; break;

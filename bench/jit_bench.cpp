@@ -150,7 +150,7 @@ int main(int argc, char** argv) {
             std::vector<signed char> sgn(n, 0);
             for (std::size_t i = 0; i < n; ++i) {
                 if (cfg.stuck[i]) v0[i] = 0;
-                if (c.model.masses[i].has_friction && !cfg.stuck[i]) sgn[i] = 1;
+                if (c.model.has_friction(i) && !cfg.stuck[i]) sgn[i] = 1;
             }
             // Mid-run, so that the forcing phases are as large as the engine sees them.
             s.setup(0.5 * (c.model.t0 + c.visit_end), x0.data(), v0.data(), sgn.data());

@@ -136,7 +136,7 @@ int main(int argc, char** argv) {
             std::vector<signed char> sgn(n, 0);
             for (std::size_t i = 0; i < n; ++i) {
                 if (cfg.stuck[i]) v0[i] = 0;
-                if (c.model.masses[i].has_friction && !cfg.stuck[i]) sgn[i] = 1;
+                if (c.model.has_friction(i) && !cfg.stuck[i]) sgn[i] = 1;
             }
             const double t_mid = 0.5 * (c.model.t0 + c.t_end);  // mid-run, so that the forcing phases are as large as the engine sees them
             std::vector<std::vector<double>> t(solvers.size());

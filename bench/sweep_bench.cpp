@@ -49,7 +49,7 @@ Costs segment_costs(SegmentSolver& s, const Model& m, const Configuration& cfg) 
     std::vector<signed char> sgn(n, 0);
     for (std::size_t i = 0; i < n; ++i) {
         if (cfg.stuck[i]) v0[i] = 0.0;
-        if (m.masses[i].has_friction && !cfg.stuck[i]) sgn[i] = v0[i] < 0 ? -1 : 1;
+        if (m.has_friction(i) && !cfg.stuck[i]) sgn[i] = v0[i] < 0 ? -1 : 1;
     }
     std::vector<double> x(n), v(n), a(n), g(ns), dg(ns), b(ns), sc(ns);
     const SegmentEval out{x.data(), v.data(), a.data(), g.data(), dg.data(), b.data(), sc.data()};

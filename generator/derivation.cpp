@@ -41,8 +41,8 @@ numeric exact(double v) { return numeric(cln::rational(cln::cl_DF(v))); }
 numeric exact(const DD& v) { return exact(v.hi()) + exact(v.lo()); }
 
 numeric exact_normal(const Model& model, std::size_t i) {
-    const Mass& m = model.masses[i];
-    return m.normal > 0.0 ? exact(m.normal) : exact(m.m) * exact(model.g);
+    const double n = model.friction_slot(i).normal;
+    return n > 0.0 ? exact(n) : exact(model.masses[i].m) * exact(model.g);
 }
 
 DD to_dd(const numeric& v) {
@@ -59,7 +59,7 @@ bool Derivation::rides(int mass) const { return std::find(riders.begin(), riders
 
 int Derivation::coordinate(int mass) const {
     if (mass == kGround) return -1;
-    return rides(mass) ? free_index(model->masses[static_cast<std::size_t>(mass)].partner) : free_index(mass);
+    return rides(mass) ? free_index(model->friction_slot(static_cast<std::size_t>(mass)).partner) : free_index(mass);
 }
 
 namespace {
@@ -423,9 +423,10 @@ ex segment_force(const Derivation& d, const SegmentInputs& in, int i) {
     const Model& model = *d.model;
     ex f = d.f_const[i] - d.mu_k_n[i] * in.sgn[i] + slider_preload(d, in, i);
     for (std::size_t q = 0; q < model.dof(); ++q)  // a sliding friction pair: the opposite force on the partner
-        if (model.masses[q].partner == i) f += d.mu_k_n[q] * in.sgn[q];
+        if (model.friction_slot(q).partner == i) f += d.mu_k_n[q] * in.sgn[q];
     for (int s : d.stuck_dofs) f -= d.K(i, s) * in.x0[s];
-    for (int r : d.riders) f -= d.K(i, r) * (in.x0[r] - in.x0[model.masses[static_cast<std::size_t>(r)].partner]);
+    for (int r : d.riders)
+        f -= d.K(i, r) * (in.x0[r] - in.x0[model.friction_slot(static_cast<std::size_t>(r)).partner]);
     return f;
 }
 
@@ -433,7 +434,7 @@ ex coordinate_force(const Derivation& d, const SegmentInputs& in, std::size_t r)
     const int p = d.free_dofs[r];
     ex f = segment_force(d, in, p);
     for (int q : d.riders)
-        if (d.model->masses[static_cast<std::size_t>(q)].partner == p) f += segment_force(d, in, q);
+        if (d.model->friction_slot(static_cast<std::size_t>(q)).partner == p) f += segment_force(d, in, q);
     return f;
 }
 
@@ -462,7 +463,9 @@ std::vector<std::vector<int>> coordinates(const Model& model, const Configuratio
                            ": a friction between two dofs of a coupled (non-diagonal) mass matrix");
     std::vector<std::vector<int>> group(d.free_dofs.size());
     for (std::size_t r = 0; r < d.free_dofs.size(); ++r) group[r].push_back(d.free_dofs[r]);
-    for (int q : d.riders) group[static_cast<std::size_t>(free_index[model.masses[static_cast<std::size_t>(q)].partner])].push_back(q);
+    for (int q : d.riders)
+        group[static_cast<std::size_t>(free_index[model.friction_slot(static_cast<std::size_t>(q)).partner])].push_back(
+            q);
     return group;
 }
 
@@ -593,11 +596,11 @@ void friction_limits(const Model& model, DerivationCache& mu) {
     mu.mu_k_n_double.assign(n, 0.0);
     mu.mu_s_n.assign(n, 0.0);
     for (std::size_t i = 0; i < n; ++i) {
-        if (!model.masses[i].has_friction) continue;
+        if (!model.has_friction(i)) continue;
         const numeric N = exact_normal(model, i);
-        mu.mu_k_n[i] = exact(model.masses[i].mu_k) * N;
+        mu.mu_k_n[i] = exact(model.friction_slot(i).mu_k) * N;
         mu.mu_k_n_double[i] = mu.mu_k_n[i].to_double();
-        mu.mu_s_n[i] = (exact(model.masses[i].mu_s) * N).to_double();
+        mu.mu_s_n[i] = (exact(model.friction_slot(i).mu_s) * N).to_double();
     }
 }
 
@@ -703,7 +706,7 @@ Derivation derive(const Model& model, const Configuration& cfg, EigenMethod meth
     for (std::size_t i = 0; i < n; ++i) {
         d.f_const[i] = exact(f0(i));
         d.f_const_double[i] = f0(i) + 0.0;  // what the exact value of f0(i) rounds to (-0 is 0 there)
-        if (model.masses[i].has_friction && !cfg.stuck[i])
+        if (model.has_friction(i) && !cfg.stuck[i])
             d.mu_k_n[i] = mu.mu_k_n[i], d.mu_k_n_double[i] = mu.mu_k_n_double[i];
     }
     add_static_forcing(model, d);
@@ -1002,7 +1005,7 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
         for (std::size_t j = 0; j < out.u.size(); ++j) out.x[d.free_dofs[r]] += lf(d.modes[j].v[r]) * out.u[j];
     }
     for (int q : d.riders) {  // at its segment-start offset from its partner
-        const int p = model.masses[static_cast<std::size_t>(q)].partner;
+        const int p = model.friction_slot(static_cast<std::size_t>(q)).partner;
         out.x[q] = out.x[p] + (in.x0[q] - in.x0[p]);
     }
     for (std::size_t i = 0; i < n; ++i) {
@@ -1039,14 +1042,15 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
                 return A;
             };
             ex A = force(i);
-            if (const int p = model.masses[static_cast<std::size_t>(i)].partner; p != kGround) {
+            if (const int p = model.friction_slot(static_cast<std::size_t>(i)).partner; p != kGround) {
                 const numeric mi = exact(model.masses[static_cast<std::size_t>(i)].m), mp = exact(model.masses[static_cast<std::size_t>(p)].m);
                 A = (mp * A - mi * force(p)) / (mi + mp);
             }
             if (model.coupled_mass())
                 for (int r : d.free_dofs)
                     A -= exact(model.mass_entry(static_cast<std::size_t>(i), static_cast<std::size_t>(r))) * out.a[r];
-            const numeric mu_s_n = exact(model.masses[i].mu_s) * exact_normal(model, static_cast<std::size_t>(i));
+            const numeric mu_s_n =
+                exact(model.friction_slot(i).mu_s) * exact_normal(model, static_cast<std::size_t>(i));
             g = friction::release_value(sf.kind == SwitchKind::release_pos ? 1 : -1, A, ex(mu_s_n), 0);
         }
         out.g.push_back(g);

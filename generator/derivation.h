@@ -117,7 +117,7 @@ struct Derivation {
     Configuration cfg;
     std::vector<int> free_dofs;   ///< mass indices of the free masses, in order: one coordinate each
     std::vector<int> stuck_dofs;  ///< mass indices of the masses stuck against the ground (held at x0)
-    /// Masses stuck to their friction partner (model.h Mass::partner): each
+    /// Masses stuck to their friction partner (elements/friction.h FrictionSlot::partner): each
     /// moves with its partner's coordinate at the offset x0[i] - x0[partner]
     /// it had at the segment start (x = T q + e), so the modes are those of
     /// T^T M T, T^T K T: a coordinate's mass and stiffness gather its riders'.
@@ -235,7 +235,7 @@ struct ExactWeight<GiNaC::ex> {
 };
 
 /// Mass i's normal force exactly: its element's `normal` as given, else the
-/// exact product m*g of the two doubles (model.h Mass::normal).
+/// exact product m*g of the two doubles (FrictionSlot::normal in elements/friction.h).
 GiNaC::numeric exact_normal(const Model& model, std::size_t i);
 DD to_dd(const GiNaC::numeric& v);
 

@@ -359,8 +359,9 @@ void emit_provenance(CodeWriter& c, const Derivation& d, const std::string& what
     c.line(0, "// stuck masses:  " + (st.empty() ? std::string("none") : CodeWriter::join(st)));
     std::vector<std::string> rd;  // stuck to their friction partner (none in a model without pairs)
     for (int q : d.riders)
-        rd.push_back(model.masses[static_cast<std::size_t>(q)].name + " on " +
-                     model.masses[static_cast<std::size_t>(model.masses[static_cast<std::size_t>(q)].partner)].name);
+        rd.push_back(
+            model.masses[static_cast<std::size_t>(q)].name + " on " +
+            model.masses[static_cast<std::size_t>(model.friction_slot(static_cast<std::size_t>(q)).partner)].name);
     if (!rd.empty()) c.line(0, "// riders:        " + CodeWriter::join(rd));
 }
 

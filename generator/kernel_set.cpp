@@ -45,7 +45,7 @@ public:
 /// log2 of the number of configurations, rounded up (a Jenkins element has 3 states: 2 bits).
 std::size_t switch_bits(const Model& model) {
     std::size_t bits = model.contacts.size() + 2 * model.jenkins.size();
-    for (const Mass& m : model.masses) bits += m.has_friction ? 1 : 0;
+    for (const FrictionSlot& f : model.friction_slots) bits += f.active ? 1 : 0;
     return bits;
 }
 
@@ -90,7 +90,7 @@ std::vector<Configuration> configurations_to_generate(const Model& model, std::s
         add_neighbour(next);
     }
     for (std::size_t i = 0; i < initial.stuck.size(); ++i) {
-        if (!model.masses[i].has_friction) continue;
+        if (!model.has_friction(i)) continue;
         Configuration next = initial;
         next.stuck[i] = !next.stuck[i];
         add_neighbour(next);

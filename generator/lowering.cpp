@@ -431,7 +431,7 @@ Program lower(const Derivation& d, ProgramNames names) {
     const std::vector<double>&f_const = d.f_const_double, &mu_k_n = d.mu_k_n_double;
     std::vector<int> free_of(n, -1), coord_of(n, -1);  // coord_of: a rider moves with its partner's coordinate
     for (std::size_t r = 0; r < nf; ++r) free_of[d.free_dofs[r]] = coord_of[d.free_dofs[r]] = static_cast<int>(r);
-    auto partner_of = [&](int q) { return model.masses[static_cast<std::size_t>(q)].partner; };
+    auto partner_of = [&](int q) { return model.friction_slot(static_cast<std::size_t>(q)).partner; };
     for (int q : d.riders) coord_of[q] = free_of[partner_of(q)];
 
     // ---- constants: per mode (ModeConstant layout), per harmonic (Omega, phase) ----
@@ -1024,7 +1024,8 @@ Program lower(const Derivation& d, ProgramNames names) {
             const Contact& ct = model.contacts[sf.element];
             if (named) comment += "g_" + F + ": gap of contact " + ct.name + " = " + gap_text(model, ct);
             along_rows(ct.direction(), V, harmonic_x, each_mode_of, al, Gs, Gc);
-        } else if (sf.kind == SwitchKind::velocity && model.masses[static_cast<std::size_t>(sf.element)].partner == kGround) {
+        } else if (sf.kind == SwitchKind::velocity &&
+                   model.friction_slot(static_cast<std::size_t>(sf.element)).partner == kGround) {
             const int i = sf.element;
             if (named) comment += "g_" + F + ": velocity of " + model.masses[i].name + " (sliding)";
             const int r = free_of[i];
@@ -1050,10 +1051,11 @@ Program lower(const Derivation& d, ProgramNames names) {
             const int i = sf.element;
             const bool pos = sf.kind == SwitchKind::release_pos;
             const Mass& ms = model.masses[i];
+            const int partner = model.friction_slot(static_cast<std::size_t>(i)).partner;
             const double mu_s_n = d.mu_s_n[static_cast<std::size_t>(i)];
             const int sigma = pos ? 1 : -1;
             const LinValue limit = LinValue::constant(mu_s_n);
-            if (ms.partner == kGround && d.held.empty()) {  // lumped: D_i = A_i
+            if (partner == kGround && d.held.empty()) {  // lumped: D_i = A_i
                 if (named) comment += std::string("g_") + F + ": " + (pos ? "A" : "-A") + " - mu_s N of stuck " + ms.name +
                            ", A = -K x - C v + f + sum_h F_h sin (force but friction)";
                 Lin A, dA;
@@ -1081,8 +1083,8 @@ Program lower(const Derivation& d, ProgramNames names) {
                 // forces with their kinetic friction.
                 std::vector<std::pair<int, DD>> terms;
                 std::string prefix = "A_pair_";
-                if (ms.partner != kGround) {
-                    const int p = ms.partner;
+                if (partner != kGround) {
+                    const int p = partner;
                     const Mass& mp = model.masses[static_cast<std::size_t>(p)];
                     if (named) comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of " + ms.name + " stuck to " +
                                mp.name + ", D = (m_p A_i - m_i A_p)/(m_i + m_p)";
@@ -1204,8 +1206,8 @@ RestartPlan restart_plan(const Derivation& d, const Program& p) {
     // (F_k_) that a reversal changes and the plan does not: such a configuration sets up.
     if (d.state_space || !d.riders.empty() || !model.jenkins.empty() || !d.held.empty() || nf == 0 || nm == 0)
         return plan;
-    for (const Mass& mass : model.masses)
-        if (mass.partner != kGround) return plan;
+    for (const FrictionSlot& f : model.friction_slots)
+        if (f.partner != kGround) return plan;
     for (const Mode& m : d.modes)
         if (m.regime == Regime::rigid || m.regime == Regime::rigid_damped) return plan;
     for (const HarmonicData& h : d.harmonics)

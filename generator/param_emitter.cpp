@@ -217,18 +217,19 @@ void emit_mass_fields(CodeWriter& k, const Model& model, Fields& fields, std::ve
     };
     for (std::size_t i = 0; i < model.dof(); ++i) {
         const Mass& ms = model.masses[i];
+        const FrictionSlot& fs = model.friction_slot(i);
         const std::string p = "mass[" + idx(i) + "]", I = std::to_string(i);
-        const std::string mu_k = fields.field(p + ".mu_k", ms.mu_k);
+        const std::string mu_k = fields.field(p + ".mu_k", fs.mu_k);
         const std::string mu_k_var = fields.variable(p + ".mu_k") ? mu_k : "";
         k.line(1, "const double m_" + I + " = " + fields.field(p + ".m", ms.m) + ";  // " + ms.name);
         check(fields.variable(p + ".m"), "m_" + I + " > 0.0");
-        if (ms.has_friction) {
+        if (fs.active) {
             k.line(1, "const double mu_k_" + I + " = " + mu_k + ";");
-            k.line(1, "const double mu_s_" + I + " = " + fields.field(p + ".mu_s", ms.mu_s, mu_k_var) + ";");
+            k.line(1, "const double mu_s_" + I + " = " + fields.field(p + ".mu_s", fs.mu_s, mu_k_var) + ";");
             check(fields.variable(p + ".mu_k"), "mu_k_" + I + " >= 0.0");
             check(fields.variable(p + ".mu_k") || fields.variable(p + ".mu_s"), "mu_s_" + I + " >= mu_k_" + I);
-            if (ms.normal > 0.0) {  // an element's normal force as given (model.h Mass::normal)
-                k.line(1, "const double N_" + I + " = " + fields.field(p + ".normal", ms.normal) + ";");
+            if (fs.normal > 0.0) {  // an element's normal force as given (FrictionSlot::normal)
+                k.line(1, "const double N_" + I + " = " + fields.field(p + ".normal", fs.normal) + ";");
                 check(fields.variable(p + ".normal"), "N_" + I + " > 0.0");
             }
         }
@@ -403,11 +404,12 @@ std::string emit_sweep_kernel(const Derivation& d, const std::vector<std::string
     k.line(1, "// Constant forces: loads, the preload +-k d of each closed contact; friction forces.");
     for (std::size_t i = 0; i < n; ++i) {
         const Mass& ms = model.masses[i];
+        const FrictionSlot& fs = model.friction_slot(i);
         const std::string I = std::to_string(i);
         k.line(1, "st.f_const[" + I + "] = " + fields.field("load." + ms.name, model.load[i]) + ";");
-        const std::string N = ms.normal > 0.0 ? "N_" + I : "m_" + I + "*g";
-        k.line(1, "st.mu_k_n[" + I + "] = " + (ms.has_friction && !d.cfg.stuck[i] ? "mu_k_" + I + "*" + N : "0.0") + ";");
-        k.line(1, "st.mu_s_n[" + I + "] = " + (ms.has_friction ? "mu_s_" + I + "*" + N : "0.0") + ";");
+        const std::string N = fs.normal > 0.0 ? "N_" + I : "m_" + I + "*g";
+        k.line(1, "st.mu_k_n[" + I + "] = " + (fs.active && !d.cfg.stuck[i] ? "mu_k_" + I + "*" + N : "0.0") + ";");
+        k.line(1, "st.mu_s_n[" + I + "] = " + (fs.active ? "mu_s_" + I + "*" + N : "0.0") + ";");
     }
     for (std::size_t cc = 0; cc < nc; ++cc) {
         const Contact& ct = model.contacts[cc];

@@ -9,7 +9,7 @@ namespace {
 Model oscillator(const std::string& name, double m, double k, double alpha, double beta) {
     Model md;
     md.name = name;
-    md.masses = {{"m1", m, false, 0.0, 0.0}};
+    md.masses = {{"m1", m}};
     md.springs = {{kGround, 0, k}};
     md.alpha = alpha;
     md.beta = beta;
@@ -44,12 +44,13 @@ Model random_chain(const std::string& name, std::uint64_t seed, int n, double be
     Model md;
     md.name = name;
     for (int i = 0; i < n; ++i) {
-        Mass m{"m" + std::to_string(i + 1), r.uniform(0.5, 3.0), i % 2 == 0, 0.0, 0.0};
-        if (m.has_friction) {
-            m.mu_k = r.uniform(0.1, 0.5);
-            m.mu_s = m.mu_k * r.uniform(1.0, 1.5);
+        md.masses.push_back({"m" + std::to_string(i + 1), r.uniform(0.5, 3.0)});
+        if (i % 2 == 0) {
+            FrictionSlot& f = md.set_friction(static_cast<std::size_t>(i));
+            f.active = true;
+            f.mu_k = r.uniform(0.1, 0.5);
+            f.mu_s = f.mu_k * r.uniform(1.0, 1.5);
         }
-        md.masses.push_back(m);
     }
     md.springs.push_back({kGround, 0, r.uniform(1.0, 50.0)});
     for (int i = 0; i + 1 < n; ++i) md.springs.push_back({i, i + 1, r.uniform(1.0, 50.0)});
@@ -78,7 +79,8 @@ std::vector<Model> sample_models() {
     {
         Model md;
         md.name = "paper_fig4";
-        md.masses = {{"m1", 1.0, true, 0.6, 0.75}, {"m2", 2.0, true, 0.6, 0.75}};
+        md.masses = {{"m1", 1.0}, {"m2", 2.0}};
+        md.friction_slots = {{true, 0.6, 0.75}, {true, 0.6, 0.75}};
         md.springs = {{kGround, 0, 5.0}, {0, 1, 10.0}, {1, kGround, 40.0}};
         md.contacts = {{"contact1", 0, 1, 0.2, 100.0}};
         md.beta = 0.1;
@@ -105,7 +107,8 @@ std::vector<Model> sample_models() {
     for (double alpha : {0.0, 0.3}) {
         Model md;
         md.name = alpha == 0.0 ? "float_pair" : "float_pair_damped";
-        md.masses = {{"m1", 1.5, true, 0.2, 0.3}, {"m2", 0.5, false, 0.0, 0.0}};
+        md.masses = {{"m1", 1.5}, {"m2", 0.5}};
+        md.friction_slots = {{true, 0.2, 0.3}, {false, 0.0, 0.0}};
         md.springs = {{0, 1, 8.0}};
         md.contacts = {{"stop", 1, kGround, 0.5, 50.0}};
         md.alpha = alpha;
@@ -123,7 +126,8 @@ std::vector<Model> sample_models() {
     {
         Model md;
         md.name = "jenkins_chain";
-        md.masses = {{"m1", 1.2, true, 0.2, 0.3}, {"m2", 0.7, false, 0.0, 0.0}};
+        md.masses = {{"m1", 1.2}, {"m2", 0.7}};
+        md.friction_slots = {{true, 0.2, 0.3}, {false, 0.0, 0.0}};
         md.springs = {{kGround, 0, 6.0}, {0, 1, 3.0}};
         md.jenkins = {{"j1", 0, 1, 12.0, 0.8}, {"j2", 1, kGround, 20.0, 1.5}};
         md.alpha = 0.1;
@@ -138,7 +142,7 @@ std::vector<Model> sample_models() {
     {
         Model md;
         md.name = "jenkins_free_pair";
-        md.masses = {{"m1", 1.0, false, 0.0, 0.0}, {"m2", 3.0, false, 0.0, 0.0}};
+        md.masses = {{"m1", 1.0}, {"m2", 3.0}};
         md.jenkins = {{"j1", 0, 1, 9.0, 0.6}};
         md.forcing = {{1.7, 0.0, {1.0, 0.0}}};
         md.load = {0.0, 0.3};
@@ -146,13 +150,14 @@ std::vector<Model> sample_models() {
         md.v0 = {0.5, 0.0};
         s.push_back(md);
     }
-    // Friction between two bodies (Mass::partner): m2 rides m1 while stuck (one
+    // Friction between two bodies (FrictionSlot::partner): m2 rides m1 while stuck (one
     // coordinate, the pair's mass and stiffness gathered), slides on it otherwise;
     // grounded with a stop, and floating (rigid-body modes of the pair).
     {
         Model md;
         md.name = "friction_pair";
-        md.masses = {{"m1", 2.0, false, 0.0, 0.0}, {"m2", 0.6, true, 0.25, 0.4, -1, 0}};
+        md.masses = {{"m1", 2.0}, {"m2", 0.6}};
+        md.friction_slots = {{false, 0.0, 0.0}, {true, 0.25, 0.4, -1, 0}};
         md.springs = {{kGround, 0, 30.0}, {1, kGround, 4.0}};
         md.contacts = {{"stop", 0, kGround, 0.15, 300.0}};
         md.alpha = 0.2;
@@ -167,7 +172,8 @@ std::vector<Model> sample_models() {
     {
         Model md;
         md.name = "friction_pair_floating";
-        md.masses = {{"m1", 1.0, false, 0.0, 0.0}, {"m2", 0.5, true, 0.3, 0.45, -1, 0}, {"m3", 0.8, false, 0.0, 0.0}};
+        md.masses = {{"m1", 1.0}, {"m2", 0.5}, {"m3", 0.8}};
+        md.friction_slots = {{false, 0.0, 0.0}, {true, 0.3, 0.45, -1, 0}, {false, 0.0, 0.0}};
         md.springs = {{1, 2, 6.0}};
         md.alpha = 0.0;
         md.beta = 0.01;
@@ -184,7 +190,8 @@ std::vector<Model> sample_models() {
     {
         Model md;
         md.name = "dashpot_pair";
-        md.masses = {{"m1", 1.0, true, 0.2, 0.3}, {"m2", 0.8, false, 0.0, 0.0}};
+        md.masses = {{"m1", 1.0}, {"m2", 0.8}};
+        md.friction_slots = {{true, 0.2, 0.3}, {false, 0.0, 0.0}};
         md.springs = {{kGround, 0, 20.0}, {0, 1, 8.0}};
         md.dampers = {{1, kGround, 6.0}, {0, 1, 0.5}};
         md.contacts = {{"stop", 1, kGround, 0.1, 60.0}};
@@ -208,7 +215,7 @@ std::vector<Model> sample_models() {
 std::vector<Configuration> all_configurations(const Model& model) {
     std::vector<int> friction;
     for (std::size_t i = 0; i < model.dof(); ++i)
-        if (model.masses[i].has_friction) friction.push_back(static_cast<int>(i));
+        if (model.has_friction(i)) friction.push_back(static_cast<int>(i));
     const std::size_t nc = model.contacts.size(), bits = nc + friction.size(), nj = model.jenkins.size();
     std::uint64_t states = 1;  // of the Jenkins elements: stuck, slipping + or -
     for (std::size_t j = 0; j < nj; ++j) states *= 3;

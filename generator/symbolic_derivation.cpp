@@ -178,8 +178,11 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
     }
     const ex alpha = b.field("damping.alpha", 0), beta = b.field("damping.beta", 0);
     const ex g = b.parameter("g");
-    for (std::size_t i = 0; i < n; ++i)  // an element's normal force as given, else the weight m g (model.h Mass::normal)
-        normal[i] = model.masses[i].normal > 0.0 ? b.field("mass[" + idx(i) + "].normal", model.masses[i].normal) : m[i] * g;
+    for (std::size_t i = 0; i < n;
+         ++i)  // an element's normal force as given, else the weight m g (FrictionSlot::normal in elements/friction.h)
+        normal[i] = model.friction_slot(i).normal > 0.0
+                        ? b.field("mass[" + idx(i) + "].normal", model.friction_slot(i).normal)
+                        : m[i] * g;
 
     // Reduced system of the free masses.
     d.M = GiNaC::matrix(nf, nf);
@@ -196,7 +199,7 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
         }
         d.f[r] = f[i];
         for (int s : d.stuck_dofs) d.f[r] -= K(i, s) * d.x0[s];
-        if (model.masses[i].has_friction) d.f[r] -= mu_k[i] * normal[i] * d.sgn[i];
+        if (model.has_friction(i)) d.f[r] -= mu_k[i] * normal[i] * d.sgn[i];
     }
     std::vector<std::vector<ex>> amplitude_all;  // per harmonic, all masses
     for (std::size_t h = 0; h < model.forcing.size(); ++h) {

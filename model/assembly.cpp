@@ -33,7 +33,7 @@ void require_proportional_damping(const Model& model, const std::string& who) {
 
 std::string friction_pairs(const Model& model) {
     for (std::size_t i = 0; i < model.dof(); ++i)
-        if (model.masses[i].has_friction && model.masses[i].partner != kGround)
+        if (model.has_friction(i) && model.friction_slot(i).partner != kGround)
             return "friction between two bodies ([[friction]] '" + model.friction_name(i) + "')";
     return "";
 }
@@ -249,7 +249,7 @@ namespace {
 // with A_p = of(p): the force on i in the frame of the pair moving as one body.
 template <class Of>
 double on_partner(const Model& model, int i, double Ai, Of&& of) {
-    const int p = model.masses[static_cast<std::size_t>(i)].partner;
+    const int p = model.friction_slot(static_cast<std::size_t>(i)).partner;
     if (p == kGround) return Ai;
     return against_partner(model.masses[static_cast<std::size_t>(i)].m, model.masses[static_cast<std::size_t>(p)].m, Ai,
                            of(p));

@@ -217,11 +217,11 @@ double force_rate_on_mass(const Model& model, const Configuration& cfg, int i, d
 
 /// Mass i is held still in cfg: stuck against the ground.
 inline bool fixed_in(const Model& model, const Configuration& cfg, std::size_t i) {
-    return cfg.stuck[i] && model.masses[i].partner == kGround;
+    return cfg.stuck[i] && model.friction_slot(i).partner == kGround;
 }
 /// Mass i moves with its friction partner in cfg (a stuck pair: one body).
 inline bool rides_partner(const Model& model, const Configuration& cfg, std::size_t i) {
-    return cfg.stuck[i] && model.masses[i].partner != kGround;
+    return cfg.stuck[i] && model.friction_slot(i).partner != kGround;
 }
 
 /// A quantity of mass i (mass mi) in the frame of its pair with p (mass mp)

@@ -59,10 +59,10 @@ Configuration Configuration::parse(const Model& model, const std::string& spec) 
             } else {
                 int i = model.mass_index(name);
                 for (std::size_t m = 0; i < 0 && m < model.masses.size(); ++m)
-                    if (model.masses[m].friction >= 0 && model.friction_name(m) == name) i = static_cast<int>(m);
+                    if (model.friction_slot(m).element >= 0 && model.friction_name(m) == name) i = static_cast<int>(m);
                 if (i < 0)
                     throw InputError("--config: stuck=" + name + ": no mass or friction element named '" + name + "'");
-                if (!model.masses[i].has_friction)
+                if (!model.has_friction(i))
                     throw InputError("--config: stuck=" + name + ": mass '" + name +
                                      "' has no friction (no mu_k) and cannot stick");
                 if (cfg.stuck[i]) twice(part, name);

@@ -32,8 +32,8 @@ FreeComponents free_components(const Model& model, const Configuration& cfg) {
         }
     // A mass stuck to its friction partner moves with it: its links are the partner's.
     for (int i = 0; i < n; ++i)
-        if (cfg.stuck[i] && model.masses[static_cast<std::size_t>(i)].partner != kGround)
-            slot[i] = slot[model.masses[static_cast<std::size_t>(i)].partner];
+        if (cfg.stuck[i] && model.friction_slot(static_cast<std::size_t>(i)).partner != kGround)
+            slot[i] = slot[model.friction_slot(static_cast<std::size_t>(i)).partner];
     const int nf = static_cast<int>(fc.free.size());
     std::vector<int> parent(static_cast<std::size_t>(nf));  // union-find over the free masses
     std::iota(parent.begin(), parent.end(), 0);

@@ -7,9 +7,9 @@
 // the springs and closed contacts of stiffness k > 0 between two free masses.
 // A component with no k > 0 spring or closed contact to the ground or to a
 // stuck mass floats (a mass stuck to its friction partner, model.h
-// Mass::partner, is part of the partner's body, not an anchor): it has exactly one rigid-body mode (lambda = 0 exactly,
-// shape sqrt(m) on its masses). Decided from the structure, never from a
-// small eigenvalue, which stiffness or mass ratios beyond 1e10 would give.
+// FrictionSlot::partner, is part of the partner's body, not an anchor): it has exactly one rigid-body mode (lambda = 0
+// exactly, shape sqrt(m) on its masses). Decided from the structure, never from a small eigenvalue, which stiffness or
+// mass ratios beyond 1e10 would give.
 #pragma once
 
 #include <vector>

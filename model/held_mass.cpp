@@ -52,8 +52,8 @@ Eigen::MatrixXd HeldMass::inverse() const {
 
 void kinetic_friction(const Model& model, const std::vector<char>& held, const signed char* sgn, double* fr) {
     for (std::size_t k = 0; k < model.dof(); ++k)
-        fr[k] = !held[k] && model.masses[k].has_friction
-                    ? -model.masses[k].mu_k * model.normal_force(k) * static_cast<double>(sgn[k])
+        fr[k] = !held[k] && model.has_friction(k)
+                    ? -model.friction_slot(k).mu_k * model.normal_force(k) * static_cast<double>(sgn[k])
                     : 0.0;
 }
 

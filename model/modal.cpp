@@ -100,7 +100,9 @@ ModalDecomposition modal_analysis(const Model& model, const Configuration& cfg) 
     const Eigen::VectorXd mfull = mass_vector(model);
     std::vector<int> coordinate(static_cast<std::size_t>(n), -1);
     for (int s = 0; s < nf; ++s) coordinate[static_cast<std::size_t>(md.free[s])] = s;
-    for (int i : md.riders) coordinate[static_cast<std::size_t>(i)] = coordinate[static_cast<std::size_t>(model.masses[static_cast<std::size_t>(i)].partner)];
+    for (int i : md.riders)
+        coordinate[static_cast<std::size_t>(i)] =
+            coordinate[static_cast<std::size_t>(model.friction_slot(static_cast<std::size_t>(i)).partner)];
     Eigen::MatrixXd Kf = Eigen::MatrixXd::Zero(nf, nf);
     md.mass = Eigen::VectorXd::Zero(nf);
     for (int i = 0; i < n; ++i) {

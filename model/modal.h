@@ -29,7 +29,7 @@ namespace hsnc {
 struct ModalDecomposition {
     std::vector<int> free;       ///< F: indices of the free masses, in model order
     std::vector<int> stuck;      ///< S: indices of the masses stuck to the ground, in model order
-    /// Masses stuck to their friction partner (model.h Mass::partner), which
+    /// Masses stuck to their friction partner (elements/friction.h FrictionSlot::partner), which
     /// move with it: the partner's coordinate stands for both, with their
     /// summed mass and stiffness rows (x_rider = x_partner + a constant).
     std::vector<int> riders;

@@ -33,24 +33,7 @@ namespace hsnc {
 
 struct Mass {
     std::string name;
-    double m = 1.0;             ///< mass value, > 0
-    bool has_friction = false;  ///< true exactly when the file gave mu_k
-    double mu_k = 0.0;          ///< kinetic friction coefficient, >= 0
-    double mu_s = 0.0;          ///< static coefficient, >= mu_k
-    /// Index into Model::frictions of the [[friction]] element that this
-    /// mass's friction stands for (its mu_k, mu_s are the element's), or -1
-    /// (its own mu_k, normal force m*g).
-    int friction = -1;
-    /// The body this mass's friction acts against: kGround, or the other mass
-    /// of a [[friction]] element between two bodies (friction on the relative
-    /// velocity v[i] - v[partner]; stuck, the two move as one body). Such a
-    /// partner has no friction of its own and is the partner of no other mass.
-    int partner = kGround;
-    /// The normal force N of an element that gives one (`normal`), used as
-    /// given: g does not enter its friction. 0 for the weight m*g (a mass's own
-    /// friction, an element without `normal`), which the exact stages form as
-    /// the product m*g (Model::normal_force).
-    double normal = 0.0;
+    double m = 1.0;  ///< mass value, > 0 (its friction, if any: Model::friction_slot)
 };
 
 /// One forcing harmonic: force on mass i is amplitude[i]*sin(omega*t + phase).
@@ -182,6 +165,11 @@ struct Model {
     std::vector<Spring> springs;
     std::vector<Contact> contacts;
     std::vector<FrictionElement> frictions;
+    /// Coulomb friction by slot (elements/friction.h FrictionSlot): slot i is
+    /// mass i's friction (its own mu_k, or the [[friction]] element acting on
+    /// it). It may be shorter than `masses`: a mass past its end has none.
+    /// Read it through friction_slot(i); write it through set_friction(i).
+    std::vector<FrictionSlot> friction_slots;
     std::vector<Damper> dampers;  ///< [[damper]]s, then those of a non-proportional structure.damping
     std::vector<Jenkins> jenkins;
     StructureSource structure;
@@ -273,12 +261,33 @@ struct Model {
             if (jenkins[j].name == name) return static_cast<int>(j);
         return -1;
     }
+    /// Mass i's friction slot (inactive when it has no friction).
+    const FrictionSlot& friction_slot(std::size_t i) const {
+        static const FrictionSlot none;
+        return i < friction_slots.size() ? friction_slots[i] : none;
+    }
+    /// Mass i's friction slot, to be written (the slots grow to reach it).
+    FrictionSlot& set_friction(std::size_t i) {
+        if (friction_slots.size() <= i) friction_slots.resize(i + 1);
+        return friction_slots[i];
+    }
+    /// Whether mass i has friction.
+    bool has_friction(std::size_t i) const { return friction_slot(i).active; }
+    /// Whether any mass has friction.
+    bool any_friction() const {
+        return std::any_of(friction_slots.begin(), friction_slots.end(),
+                           [](const FrictionSlot& f) { return f.active; });
+    }
     /// Normal force of mass i's friction: its element's `normal` as given, else m*g.
-    double normal_force(std::size_t i) const { return masses[i].normal > 0.0 ? masses[i].normal : masses[i].m * g; }
+    double normal_force(std::size_t i) const {
+        const double n = friction_slot(i).normal;
+        return n > 0.0 ? n : masses[i].m * g;
+    }
     /// The name that stands for mass i's friction in event rows and
     /// configuration specs: its [[friction]] element's name, else its own.
     const std::string& friction_name(std::size_t i) const {
-        return masses[i].friction >= 0 ? frictions[static_cast<std::size_t>(masses[i].friction)].name : masses[i].name;
+        const int e = friction_slot(i).element;
+        return e >= 0 ? frictions[static_cast<std::size_t>(e)].name : masses[i].name;
     }
     /// The element named in an event row of a friction kind (stick, release,
     /// reversal): element < dof() is a mass's friction, dof() + j Jenkins element j.

@@ -16,9 +16,12 @@ std::string num(double v) {
 
 std::string model_canonical_text(const Model& model) {
     std::string t = "hsnc-model-v1\nname " + model.name + "\ng " + num(model.g) + "\n";
-    for (const Mass& m : model.masses)
-        t += "mass " + m.name + " " + num(m.m) + " " + (m.has_friction ? "friction " : "nofriction ") +
-             num(m.mu_k) + " " + num(m.mu_s) + "\n";
+    for (std::size_t i = 0; i < model.dof(); ++i) {
+        const Mass& m = model.masses[i];
+        const FrictionSlot& f = model.friction_slot(i);
+        t += "mass " + m.name + " " + num(m.m) + " " + (f.active ? "friction " : "nofriction ") + num(f.mu_k) + " " +
+             num(f.mu_s) + "\n";
+    }
     for (const Spring& s : model.springs)
         t += "spring " + std::to_string(s.a) + " " + std::to_string(s.b) + " " + num(s.k) + "\n";
     for (const Contact& c : model.contacts) {

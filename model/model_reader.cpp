@@ -1043,11 +1043,11 @@ private:
             const int body = f.a == kGround ? f.b : f.a;
             Mass& mass = model_.masses[static_cast<std::size_t>(body)];
             // Between two bodies a and b: a carries the friction, on w = v[a] - v[b],
-            // with b as its partner (model.h Mass::partner). For now each body takes
+            // with b as its partner (elements/friction.h FrictionSlot::partner). For now each body takes
             // part in one friction at most, so a stuck pair is two bodies moving as one.
             auto partner_of = [&](int m) {
                 for (std::size_t q = 0; q < model_.masses.size(); ++q)
-                    if (model_.masses[q].partner == m) return static_cast<int>(q);
+                    if (model_.friction_slot(q).partner == m) return static_cast<int>(q);
                 return -1;
             };
             if (const int q = partner_of(body); q >= 0)
@@ -1056,7 +1056,7 @@ private:
                          "'; one friction per " + body_word() + " is supported, for now");
             if (two_bodies) {
                 const Mass& other = model_.masses[static_cast<std::size_t>(f.b)];
-                if (other.has_friction || partner_of(f.b) >= 0)
+                if (model_.has_friction(static_cast<std::size_t>(f.b)) || partner_of(f.b) >= 0)
                     fail(t.get("between"), path + ".between",
                          "'" + other.name + "' already has friction; friction between two bodies needs the second one "
                          "free of any other friction, for now");
@@ -1085,19 +1085,21 @@ private:
                         "required key is missing (between two bodies the normal force is not a weight m*g: give it)");
             f.normal = normal.value_or(mass.m * model_.g);
             if (!(f.normal > 0.0)) fail(t.get("normal"), path + ".normal", "normal force must be > 0, got " + show(f.normal));
-            if (mass.has_friction)
+            FrictionSlot& slot = model_.set_friction(static_cast<std::size_t>(body));
+            if (slot.active)
                 fail(t.get("between"), path + ".between",
                      "'" + mass.name + "' already has friction (" +
-                         (mass.friction >= 0 ? "element '" + model_.frictions[static_cast<std::size_t>(mass.friction)].name + "'"
-                                             : std::string("its own mu_k")) +
+                         (slot.element >= 0
+                              ? "element '" + model_.frictions[static_cast<std::size_t>(slot.element)].name + "'"
+                              : std::string("its own mu_k")) +
                          "); one friction to ground per " + body_word() + " is supported");
             // The element acts as the mass's friction, with its own coefficients and normal force (model.h).
-            mass.has_friction = true;
-            mass.mu_k = f.mu_k;
-            mass.mu_s = f.mu_s;
-            mass.normal = normal ? f.normal : 0.0;
-            mass.friction = static_cast<int>(model_.frictions.size());
-            mass.partner = two_bodies ? f.b : kGround;
+            slot.active = true;
+            slot.mu_k = f.mu_k;
+            slot.mu_s = f.mu_s;
+            slot.normal = normal ? f.normal : 0.0;
+            slot.element = static_cast<int>(model_.frictions.size());
+            slot.partner = two_bodies ? f.b : kGround;
             auto text = [&](const std::string& key) {
                 const auto it = model_.field_expressions.find(key);
                 return it == model_.field_expressions.end() ? std::string() : it->second;
@@ -1130,12 +1132,13 @@ private:
                 fail(t.get("mu_s"), path + ".mu_s", "mu_s given without mu_k (a mass has friction exactly when it has mu_k)");
             if (mu_k) {
                 if (*mu_k < 0.0) fail(t.get("mu_k"), path + ".mu_k", "must be >= 0, got " + show(*mu_k));
-                mass.has_friction = true;
-                mass.mu_k = *mu_k;
-                mass.mu_s = mu_s.value_or(*mu_k);
-                if (mass.mu_s < mass.mu_k)
+                FrictionSlot& slot = model_.set_friction(i);
+                slot.active = true;
+                slot.mu_k = *mu_k;
+                slot.mu_s = mu_s.value_or(*mu_k);
+                if (slot.mu_s < slot.mu_k)
                     fail(t.get("mu_s"), path + ".mu_s",
-                         "static coefficient must be >= mu_k = " + show(mass.mu_k) + ", got " + show(mass.mu_s));
+                         "static coefficient must be >= mu_k = " + show(slot.mu_k) + ", got " + show(slot.mu_s));
             }
             element_names_.emplace(mass.name, path);
             model_.masses.push_back(mass);
@@ -1546,12 +1549,11 @@ private:
             for (std::size_t h = 0; h < model_.forcing.size(); ++h)
                 forces.push_back({model_.forcing[h].amplitude[i],
                                   "forcing[" + std::to_string(h + 1) + "].amplitude." + mass.name, 0, "the amplitude"});
-            if (mass.has_friction) {
-                const double friction = mass.mu_s * model_.normal_force(i);  // the largest friction force
-                const std::string key = mass.friction >= 0
-                                            ? "friction[" + std::to_string(mass.friction + 1) + "].normal"
-                                            : "mass[" + std::to_string(i + 1) + "].mu_s";
-                if (!std::isfinite(friction) || (mass.normal == 0.0 && !std::isfinite(mass.mu_s * model_.g)))
+            if (const FrictionSlot& slot = model_.friction_slot(i); slot.active) {
+                const double friction = slot.mu_s * model_.normal_force(i);  // the largest friction force
+                const std::string key = slot.element >= 0 ? "friction[" + std::to_string(slot.element + 1) + "].normal"
+                                                          : "mass[" + std::to_string(i + 1) + "].mu_s";
+                if (!std::isfinite(friction) || (slot.normal == 0.0 && !std::isfinite(slot.mu_s * model_.g)))
                     fail_at(0, key, "the friction force mu_s*N on " + on + " is beyond the double range");
                 forces.push_back({friction, key, 0, "the friction force"});
             }

@@ -39,7 +39,7 @@
 //    space of masses and contacts; its files are read relative to the model
 //    file's folder; messages say "dof" where they say "mass" for [[mass]].
 //  - [[friction]] between a body and the ground is that body's friction with
-//    N = normal (model.h, Mass::friction); its names share the same name
+//    N = normal (elements/friction.h, FrictionSlot); its names share the same name
 //    space (default "friction<N>"). Friction between two bodies and
 //    [[jenkins]] are refused as not yet supported.
 //  - [[damper]] c = 0 adds no damper (the model stays proportional: every

@@ -48,7 +48,7 @@ public:
         const Jenkins& j = model_.jenkins[static_cast<std::size_t>(e)];
         return {j.direction(), convert_(j.k), convert_(j.slip_force), slider_(e)};
     }
-    Direction friction(int e) const { return {e, model_.masses[static_cast<std::size_t>(e)].partner}; }
+    Direction friction(int e) const { return {e, model_.friction_slot(static_cast<std::size_t>(e)).partner}; }
 
 private:
     const Model& model_;

@@ -7,7 +7,7 @@ std::vector<SwitchFunction> switch_functions(const Model& model, const Configura
     for (std::size_t c = 0; c < model.contacts.size(); ++c)
         out.push_back({SwitchKind::gap, static_cast<int>(c)});
     for (std::size_t i = 0; i < model.masses.size(); ++i) {
-        if (!model.masses[i].has_friction) continue;
+        if (!model.has_friction(i)) continue;
         const int e = static_cast<int>(i);
         if (cfg.stuck[i]) {
             out.push_back({SwitchKind::release_pos, e});

@@ -33,7 +33,7 @@ std::vector<std::size_t> named_dofs(const Model& model) {
     for (const Damper& d : model.dampers)
         if (!d.from_structure) direction(d.direction());
     for (std::size_t i = 0; i < model.dof(); ++i) {
-        bool loaded = model.masses[i].has_friction || (i < model.load.size() && model.load[i] != 0.0);
+        bool loaded = model.has_friction(i) || (i < model.load.size() && model.load[i] != 0.0);
         for (const Harmonic& h : model.forcing) loaded = loaded || (i < h.amplitude.size() && h.amplitude[i] != 0.0);
         for (const LoadStep& s : model.load_steps) loaded = loaded || (i < s.load.size() && s.load[i] != 0.0);
         if (loaded) named[i] = 1;

@@ -86,9 +86,7 @@ SectionSpec parse_section(const Model& model, const std::string& text, const std
                          std::string(model.has_impacts() ? ", impact" : "") +
                          (stroboscopic ? std::string(", or period[:OMEGA]") : std::string()));
     if (colon == std::string::npos) {
-        if (is_contact_kind(s.kind) ? model.contacts.empty()
-                                    : model.jenkins.empty() && std::none_of(model.masses.begin(), model.masses.end(),
-                                                                            [](const Mass& m) { return m.has_friction; }))
+        if (is_contact_kind(s.kind) ? model.contacts.empty() : model.jenkins.empty() && !model.any_friction())
             throw InputError(flag + " '" + text + "': model '" + model.name + "' has no " +
                              (is_contact_kind(s.kind) ? "contact" : "mass with friction") + ": no such event can happen");
         return s;
@@ -107,13 +105,13 @@ SectionSpec parse_section(const Model& model, const std::string& text, const std
         // A friction mass by its own name or its [[friction]] element's, or a
         // Jenkins element (element dof() + j, as in the event rows).
         for (std::size_t i = 0; i < model.masses.size(); ++i)
-            if (model.masses[i].has_friction && (model.masses[i].name == name || model.friction_name(i) == name))
+            if (model.has_friction(i) && (model.masses[i].name == name || model.friction_name(i) == name))
                 s.element = static_cast<int>(i);
         if (const int j = model.jenkins_index(name); j >= 0) s.element = static_cast<int>(model.dof()) + j;
         if (s.element < 0) {
             std::string names;
             for (std::size_t i = 0; i < model.masses.size(); ++i)
-                if (model.masses[i].has_friction) names += (names.empty() ? "" : ", ") + model.friction_name(i);
+                if (model.has_friction(i)) names += (names.empty() ? "" : ", ") + model.friction_name(i);
             for (const Jenkins& j : model.jenkins) names += (names.empty() ? "" : ", ") + j.name;
             throw InputError(flag + " '" + text + "': no mass with friction named '" + name + "' in model '" +
                              model.name + "'" + (names.empty() ? " (it has none)" : " (friction masses and elements: " + names + ")"));

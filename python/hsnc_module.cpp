@@ -510,8 +510,8 @@ PYBIND11_MODULE(_hsnc, m) {
         .def_property_readonly("friction_masses",
                                [](const Model& mo) {
                                    std::vector<std::string> names;
-                                   for (const Mass& ms : mo.masses)
-                                       if (ms.has_friction) names.push_back(ms.name);
+                                   for (std::size_t i = 0; i < mo.dof(); ++i)
+                                       if (mo.has_friction(i)) names.push_back(mo.masses[i].name);
                                    return names;
                                })
         .def_property_readonly("parameters",

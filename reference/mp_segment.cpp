@@ -243,11 +243,14 @@ MpModel::MpModel(const Model& model, int digits)
     g = F(model.g);
     alpha = F(model.alpha);
     beta = F(model.beta);
-    for (const Mass& ms : model.masses) {
+    for (std::size_t i = 0; i < model.dof(); ++i) {
+        const Mass& ms = model.masses[i];
+        const FrictionSlot& fs = model.friction_slot(i);
         m.push_back(F(ms.m));
-        normal.push_back(ms.normal > 0.0 ? F(ms.normal) : F(ms.m) * g);  // an element's N as given, else m_i g here
-        mu_k.push_back(F(ms.mu_k));
-        mu_s.push_back(F(ms.mu_s));
+        normal.push_back(fs.normal > 0.0 ? F(fs.normal) : F(ms.m) * g);  // an element's N as given, else m_i g here
+        mu_k.push_back(F(fs.mu_k));
+        mu_s.push_back(F(fs.mu_s));
+        partner.push_back(fs.partner);
     }
     if (model.coupled_mass()) {
         M.assign(static_cast<std::size_t>(n), std::vector<cl_F>(static_cast<std::size_t>(n), zero));
@@ -258,7 +261,6 @@ MpModel::MpModel(const Model& model, int digits)
     for (const Contact& c : model.contacts) contacts.push_back({c.a, c.b, F(c.k), F(c.gap), F(c.c), c.weights});
     for (const Jenkins& e : model.jenkins) jenkins.push_back({e.a, e.b, F(e.k), F(e.slip_force), zero, e.weights});
     for (const Damper& d : model.dampers) dampers.push_back({d.a, d.b, F(d.c), zero, zero});
-    for (const Mass& ms : model.masses) partner.push_back(ms.partner);
     f_const.assign(static_cast<std::size_t>(n), zero);
     for (int i = 0; i < n; ++i)
         if (static_cast<std::size_t>(i) < model.load.size()) f_const[i] = F(model.load[i]);

@@ -91,7 +91,7 @@ struct MpModel {
     std::vector<Link> jenkins;
     /// Dampers (model.h Damper): the coefficient c in `k`; force -c (v[a] - v[b]) on a.
     std::vector<Link> dampers;
-    /// Each mass's friction partner (model.h Mass::partner; kGround: the ground).
+    /// Each mass's friction partner (elements/friction.h FrictionSlot::partner; kGround: the ground).
     std::vector<int> partner;
     /// Held against the ground (stuck, its partner the ground), or moving with its
     /// partner (stuck to a partner body), in cfg.

@@ -277,7 +277,7 @@ public:
     }
     int dof() const { return mp.n; }
     std::size_t contacts() const { return mp.contacts.size(); }
-    bool has_friction(int i) const { return model_.masses[i].has_friction; }
+    bool has_friction(int i) const { return model_.has_friction(i); }
     // A friction acts on w = v_i - v_partner (the partner may be the ground).
     int velocity_sign(int i) const { return sign(v_[static_cast<std::size_t>(i)] - mp.body(v_, mp.partner[i])); }
     void stop(int i) { v_[static_cast<std::size_t>(i)] = mp.body(v_, mp.partner[i]); }

@@ -30,12 +30,13 @@ inline Drawn draw(unsigned seed, int n) {
     Model& m = d.model;
     m.name = "random_" + std::to_string(seed);
     for (int i = 0; i < n; ++i) {
-        Mass ms{"m" + std::to_string(i + 1), uni(rng, 0.3, 3.0), uni(rng, 0, 1) < 0.5, 0.0, 0.0};
-        if (ms.has_friction) {
-            ms.mu_k = uni(rng, 0.0, 0.4);
-            ms.mu_s = ms.mu_k + uni(rng, 0.0, 0.3);
+        m.masses.push_back({"m" + std::to_string(i + 1), uni(rng, 0.3, 3.0)});
+        if (uni(rng, 0, 1) < 0.5) {
+            FrictionSlot& f = m.set_friction(static_cast<std::size_t>(i));
+            f.active = true;
+            f.mu_k = uni(rng, 0.0, 0.4);
+            f.mu_s = f.mu_k + uni(rng, 0.0, 0.3);
         }
-        m.masses.push_back(ms);
     }
     if (uni(rng, 0, 1) < 0.5) m.springs.push_back({kGround, 0, uni(rng, 1.0, 80.0)});
     for (int i = 0; i + 1 < n; ++i) m.springs.push_back({i, i + 1, uni(rng, 1.0, 80.0)});
@@ -62,7 +63,7 @@ inline Drawn draw(unsigned seed, int n) {
     for (std::size_t c = 0; c < m.contacts.size(); ++c) d.cfg.closed[c] = uni(rng, 0, 1) < 0.5;
     d.sgn.assign(static_cast<std::size_t>(n), 0);
     for (int i = 0; i < n; ++i) {
-        if (!m.masses[i].has_friction) continue;
+        if (!m.has_friction(i)) continue;
         if (uni(rng, 0, 1) < 0.4) {
             d.cfg.stuck[i] = 1;
             m.v0[i] = 0.0;

@@ -26,11 +26,11 @@ inline Start start_of(const Model& m, const Configuration& cfg, unsigned seed) {
         s.v0[i] += 0.1 * u(rng);
     }
     for (std::size_t i = 0; i < m.dof(); ++i) {  // friction against the ground or a partner (which has none)
-        const int p = m.masses[i].partner;
+        const int p = m.friction_slot(i).partner;
         const double vp = p == kGround ? 0.0 : s.v0[static_cast<std::size_t>(p)];
         if (cfg.stuck[i]) {
             s.v0[i] = vp;
-        } else if (m.masses[i].has_friction) {
+        } else if (m.has_friction(i)) {
             s.sgn[i] = s.v0[i] < vp ? -1 : 1;
         }
     }

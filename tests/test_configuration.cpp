@@ -12,7 +12,8 @@ namespace {
 Model two_mass() {
     Model m;
     m.name = "two";
-    m.masses = {{"m1", 1.0, true, 0.6, 0.75}, {"m2", 2.0, true, 0.6, 0.75}};
+    m.masses = {{"m1", 1.0}, {"m2", 2.0}};
+    m.friction_slots = {{true, 0.6, 0.75}, {true, 0.6, 0.75}};
     m.springs = {{kGround, 0, 5.0}, {0, 1, 10.0}, {1, kGround, 40.0}};
     m.contacts = {{"c1", 0, 1, 0.2, 100.0}};
     m.load = {0.0, 1.0};
@@ -63,7 +64,8 @@ TEST(Assembly, ClosedContactAddsStiffnessAndPreload) {
 // elements stuck and slipping), grounded and between masses.
 TEST(Assembly, ForceFromAMassOwnElementsIsTheForceFromAll) {
     Model m = two_mass();
-    m.masses.push_back({"m3", 0.5, true, 0.3, 0.4});
+    m.masses.push_back({"m3", 0.5});
+    m.set_friction(m.masses.size() - 1) = {true, 0.3, 0.4};
     m.springs.push_back({1, 2, 7.0});
     m.contacts.push_back({"c2", 2, kGround, -0.1, 300.0});
     m.dampers = {{0, 2, 0.3}, {2, kGround, 0.05}};

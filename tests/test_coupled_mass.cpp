@@ -374,7 +374,7 @@ TEST(CoupledMass, TheDerivationsRigidBodyModeOfACoupledMIsTheTranslation) {
 TEST(CoupledMass, ADiagonalMassThroughTheCoupledPathGivesTheLumpedEvents) {
     Model lumped = read_model(testing::model_path("bilinear-1dof.toml"));
     // Two masses: a chain of the bilinear oscillator's mass with a second one.
-    lumped.masses.push_back({"m2", 0.7, false, 0.0, 0.0});
+    lumped.masses.push_back({"m2", 0.7});
     lumped.springs.push_back({});
     lumped.springs.back().a = 0;
     lumped.springs.back().b = 1;

@@ -49,7 +49,7 @@ using testing::Recorder;
 Model dashpot_1dof(double m, double k, double c, double x0, double v0, double load) {
     Model md;
     md.name = "dashpot-1dof";
-    md.masses.push_back({"m1", m, false, 0.0, 0.0});
+    md.masses.push_back({"m1", m});
     md.springs.push_back({kGround, 0, k});
     md.dampers.push_back({0, kGround, c});
     md.load = {load};
@@ -387,9 +387,9 @@ TEST(DamperCvode, RandomModelsAgreeWithCvode) {
 // what the Eigen solver's provider must say it took.
 void creep_slides_on(double c, const char* solver, bool programs) {
     Model md = dashpot_1dof(1.0, 400.0, c, 0.1, 0.3, 0.0);
-    md.masses[0].has_friction = true;
-    md.masses[0].mu_k = 0.1;
-    md.masses[0].mu_s = 0.2;
+    md.set_friction(0).active = true;
+    md.set_friction(0).mu_k = 0.1;
+    md.set_friction(0).mu_s = 0.2;
     const double t_end = 5.0;
     Recorder ref_rec(md.dof(), md.state_size());
     EngineOptions opt;

@@ -50,11 +50,11 @@ struct Start {
 Start start_of(const Model& m, const Configuration& cfg) {
     Start s{m.t0 + 0.37, m.x0, m.v0, std::vector<signed char>(m.dof(), 0)};
     for (std::size_t i = 0; i < m.dof(); ++i) {
-        const int p = m.masses[i].partner;  // friction against the ground or a partner (no friction of its own)
+        const int p = m.friction_slot(i).partner;  // friction against the ground or a partner (no friction of its own)
         const double vp = p == kGround ? 0.0 : s.v0[static_cast<std::size_t>(p)];
         if (cfg.stuck[i]) {
             s.v0[i] = vp;
-        } else if (m.masses[i].has_friction) {
+        } else if (m.has_friction(i)) {
             s.sgn[i] = s.v0[i] < vp ? -1 : 1;
         }
     }
@@ -236,10 +236,10 @@ TEST(Kernel, SatisfiesTheEquationOfMotion) {
                 // Kinetic friction: -mu_k N sgn on a sliding mass, the opposite on its partner.
                 Eigen::VectorXd friction = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(m.dof()));
                 for (std::size_t i = 0; i < m.dof(); ++i)
-                    if (m.masses[i].has_friction && !cfg.stuck[i]) {
-                        const double fk = m.masses[i].mu_k * m.normal_force(i) * st.sgn[i];
+                    if (m.has_friction(i) && !cfg.stuck[i]) {
+                        const double fk = m.friction_slot(i).mu_k * m.normal_force(i) * st.sgn[i];
                         friction(static_cast<Eigen::Index>(i)) += fk;
-                        if (m.masses[i].partner != kGround) friction(m.masses[i].partner) -= fk;
+                        if (m.friction_slot(i).partner != kGround) friction(m.friction_slot(i).partner) -= fk;
                     }
                 Eigen::VectorXd res(static_cast<Eigen::Index>(m.dof())), size(res.size());
                 for (std::size_t i = 0; i < m.dof(); ++i) {
@@ -255,7 +255,7 @@ TEST(Kernel, SatisfiesTheEquationOfMotion) {
                         EXPECT_EQ(o.v[i], 0.0);
                         continue;
                     }
-                    const int p = m.masses[i].partner;
+                    const int p = m.friction_slot(i).partner;
                     if (rides_partner(m, cfg, i)) {  // moves with its partner; the pair's equation below
                         EXPECT_NEAR(o.x[i] - o.x[p], st.x0[i] - st.x0[p], 1e-15 * (1 + std::fabs(o.x[i])));
                         EXPECT_EQ(o.v[i], o.v[p]);
@@ -264,7 +264,8 @@ TEST(Kernel, SatisfiesTheEquationOfMotion) {
                     }
                     double r = res(i), sz = size(i);  // with its riders: the stuck pair is one body
                     for (std::size_t q = 0; q < m.dof(); ++q)
-                        if (rides_partner(m, cfg, q) && m.masses[q].partner == static_cast<int>(i)) r += res(q), sz += size(q);
+                        if (rides_partner(m, cfg, q) && m.friction_slot(q).partner == static_cast<int>(i))
+                            r += res(q), sz += size(q);
                     EXPECT_NEAR(r, 0.0, 1e-12 * sz) << m.name << " " << cfg.key() << " tau=" << t << " mass " << i;
                 }
             }

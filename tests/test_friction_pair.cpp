@@ -104,7 +104,7 @@ TEST(FrictionPairClosedForm, BlockOnBlockReleasesAtMuSNAndSlides) {
             const double xb2 = bottom(tau2), xt2 = top(tau2), v2 = top_v(tau2);
 
             const Model md = parse_model(block_on_block(mb, mt, k, mu_k, mu_s, v0), "block.toml");
-            ASSERT_EQ(md.masses[1].partner, 0);
+            ASSERT_EQ(md.friction_slot(1).partner, 0);
             const double t_end = t2 + (sticks ? 0.05 : 1e-3);
             const Outcome r = testing::simulate(md, t_end, 0.002, solvers);
             ASSERT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
@@ -351,9 +351,9 @@ TEST(FrictionPairReader, KeysAndRefusals) {
               "pair.toml:8: key 'friction[1].normal': required key is missing (between two bodies the normal force is "
               "not a weight m*g: give it)");
     const Model md = parse_model(two + element + "normal = 5\n", "pair.toml");
-    EXPECT_EQ(md.masses[0].partner, 1);
-    EXPECT_TRUE(md.masses[0].has_friction);
-    EXPECT_FALSE(md.masses[1].has_friction);
+    EXPECT_EQ(md.friction_slot(0).partner, 1);
+    EXPECT_TRUE(md.has_friction(0));
+    EXPECT_FALSE(md.has_friction(1));
     // One friction per body, for now: the partner may have none of its own, and takes part in no other.
     const std::string b_friction = "name = \"p\"\n[[mass]]\nname = \"a\"\nm = 1\n[[mass]]\nname = \"b\"\nm = 2\nmu_k = 0.1\n";
     EXPECT_NE(input_error(b_friction + element + "normal = 5\n").find("'b' already has friction"), std::string::npos);

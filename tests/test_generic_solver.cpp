@@ -69,7 +69,8 @@ struct Physics {
         Eigen::VectorXd r = -K * x - C * v + f + forcing(model, t);
         for (std::size_t i = 0; i < model.dof(); ++i) {
             if (cfg.stuck[i]) r(i) = 0.0;
-            else if (model.masses[i].has_friction) r(i) -= model.masses[i].mu_k * model.normal_force(i) * sgn[i];
+            else if (model.has_friction(i))
+                r(i) -= model.friction_slot(i).mu_k * model.normal_force(i) * sgn[i];
         }
         return r;
     }
@@ -80,7 +81,7 @@ struct Physics {
             for (std::size_t i = 0; i < model.dof(); ++i)
                 r(i) += std::abs(h.amplitude[i] * std::sin(h.omega * t + h.phase));
         for (std::size_t i = 0; i < model.dof(); ++i)
-            if (model.masses[i].has_friction) r(i) += model.masses[i].mu_k * model.normal_force(i);
+            if (model.has_friction(i)) r(i) += model.friction_slot(i).mu_k * model.normal_force(i);
         return r;
     }
 
@@ -128,13 +129,13 @@ Case random_case(unsigned seed) {
     const int n = 1 + static_cast<int>(seed % 8);
     m.name = "random";
     for (int i = 0; i < n; ++i) {
-        Mass ms{"m" + std::to_string(i), uni(rng, 0.5, 2.0), false, 0.0, 0.0};
+        m.masses.push_back({"m" + std::to_string(i), uni(rng, 0.5, 2.0)});
         if (uni(rng, 0, 1) < 0.5) {
-            ms.has_friction = true;
-            ms.mu_k = uni(rng, 0.0, 0.5);
-            ms.mu_s = ms.mu_k + uni(rng, 0.0, 0.3);
+            FrictionSlot& f = m.set_friction(static_cast<std::size_t>(i));
+            f.active = true;
+            f.mu_k = uni(rng, 0.0, 0.5);
+            f.mu_s = f.mu_k + uni(rng, 0.0, 0.3);
         }
-        m.masses.push_back(ms);
     }
     auto k_or_zero = [&] { return uni(rng, 0, 1) < 0.2 ? 0.0 : uni(rng, 1.0, 50.0); };
     for (int i = 0; i < n; ++i) {
@@ -173,7 +174,7 @@ Case random_case(unsigned seed) {
     for (std::size_t c = 0; c < m.contacts.size(); ++c) cs.cfg.closed[c] = uni(rng, 0, 1) < 0.5;
     cs.sgn.assign(n, 0);
     for (int i = 0; i < n; ++i) {
-        if (!m.masses[i].has_friction) continue;
+        if (!m.has_friction(i)) continue;
         if (uni(rng, 0, 1) < 0.4) {
             cs.cfg.stuck[i] = 1;
             m.v0[i] = 0.0;
@@ -257,7 +258,7 @@ double check_consistency(const GenericSolver& s, const Model& m, const Physics& 
         } else {
             const Eigen::VectorXd A = -ph.K * x - ph.C * v + ph.f + forcing(m, t0 + tau);
             const double sg = sf.kind == SwitchKind::release_pos ? 1.0 : -1.0;
-            expect = sg * A(sf.element) - m.masses[sf.element].mu_s * m.normal_force(sf.element);
+            expect = sg * A(sf.element) - m.friction_slot(sf.element).mu_s * m.normal_force(sf.element);
         }
         EXPECT_NEAR(o.g[f], expect, 1e-13 * o.scale[f]) << what << " g[" << f << "]";
     }
@@ -402,7 +403,8 @@ Model sdof(double m, double k, double alpha, double P, double W, double phase, d
            double v0) {
     Model md;
     md.name = "sdof";
-    md.masses = {{"m1", m, true, 0.0, 0.1}};
+    md.masses = {{"m1", m}};
+    md.friction_slots = {{true, 0.0, 0.1}};
     md.springs = {{kGround, 0, k}};
     md.contacts = {{"c1", 0, kGround, 50.0, 10.0}};
     md.alpha = alpha;
@@ -547,7 +549,8 @@ TEST(GenericSolver, FreeMassWithFriction) {
     for (double alpha : {0.0, 1e-12, 0.7}) {
         Model md;
         md.name = "slider";
-        md.masses = {{"m1", 2.0, true, 0.3, 0.4}};
+        md.masses = {{"m1", 2.0}};
+        md.friction_slots = {{true, 0.3, 0.4}};
         md.alpha = alpha;
         md.load = {0.0};
         md.x0 = {0.5};
@@ -588,7 +591,7 @@ TEST(GenericSolver, TwoMassesWithoutGround) {
     // phi = 1/sqrt(M)) and one elastic mode lambda = k (1/m1 + 1/m2).
     Model md;
     md.name = "pair";
-    md.masses = {{"m1", 1.0, false, 0, 0}, {"m2", 3.0, false, 0, 0}};
+    md.masses = {{"m1", 1.0}, {"m2", 3.0}};
     md.springs = {{0, 1, 12.0}};
     md.beta = 0.05;
     md.load = {0.6, 0.0};
@@ -621,7 +624,8 @@ TEST(GenericSolver, StuckMassCouplingIsAConstantForce) {
     // constant force -K[F,S] x_S = (k12 x2, k23 x2) (paper Eq. 7).
     Model md;
     md.name = "chain";
-    md.masses = {{"m1", 1.0, false, 0, 0}, {"m2", 2.0, true, 0.2, 0.3}, {"m3", 0.5, false, 0, 0}};
+    md.masses = {{"m1", 1.0}, {"m2", 2.0}, {"m3", 0.5}};
+    md.friction_slots = {{false, 0, 0}, {true, 0.2, 0.3}, {false, 0, 0}};
     const double k1 = 10, k12 = 20, k23 = 5;
     md.springs = {{kGround, 0, k1}, {0, 1, k12}, {1, 2, k23}};
     md.alpha = 3.0;
@@ -663,7 +667,7 @@ TEST(GenericSolver, LargeT0OnlyShiftsThePhase) {
     auto make = [&](double phase) {
         Model md;
         md.name = "t0";
-        md.masses = {{"m1", 1.0, false, 0, 0}, {"m2", 2.0, false, 0, 0}};
+        md.masses = {{"m1", 1.0}, {"m2", 2.0}};
         md.springs = {{kGround, 0, 4.0}, {0, 1, 3.0}};
         md.alpha = 0.05;
         md.forcing = {{W, phase, {1.0, -0.5}}};

@@ -185,7 +185,8 @@ TEST(InspectSymbolic, ResponseSolvesTheEquationsOfMotion) {
                 }
             for (int i = 0; i < 2; ++i) {
                 if (cfg.stuck[i]) continue;
-                const double m = model.masses[i].m, friction = model.masses[i].mu_k * model.normal_force(i) * sgn[i];
+                const double m = model.masses[i].m,
+                             friction = model.friction_slot(i).mu_k * model.normal_force(i) * sgn[i];
                 const double A = hsnc::force_on_mass(model, cfg, i, tt, x, v);
                 EXPECT_NEAR(m * a[i], A - friction, 1e-9 * 22500) << config << " t=" << tt << " mass " << i;
             }

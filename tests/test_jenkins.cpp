@@ -50,7 +50,7 @@ Outcome run(const Model& model, double t_end, double dt = 0.0) { return testing:
 Model mass_with_jenkins(double m, double K, double k, double Fs, double x0, double v0) {
     Model md;
     md.name = "jenkins-1dof";
-    md.masses.push_back({"m1", m, false, 0.0, 0.0});
+    md.masses.push_back({"m1", m});
     if (K > 0) md.springs.push_back({0, kGround, K});
     md.jenkins.push_back({"j1", 0, kGround, k, Fs});
     md.load = {0.0};
@@ -124,8 +124,8 @@ TEST(JenkinsClosedForm, BetweenTwoFloatingMasses) {
     const double t1 = std::asin(Fs * W / (k * w0)) / W, w1 = w0 * std::cos(W * t1), t2 = t1 + mu * w1 / Fs;
     Model md;
     md.name = "jenkins-pair";
-    md.masses.push_back({"a", m1, false, 0.0, 0.0});
-    md.masses.push_back({"b", m2, false, 0.0, 0.0});
+    md.masses.push_back({"a", m1});
+    md.masses.push_back({"b", m2});
     md.jenkins.push_back({"joint", 0, 1, k, Fs});
     md.load = {0.0, 0.0};
     md.x0 = {0.0, 0.0};

@@ -173,12 +173,13 @@ Drawn draw(unsigned seed, bool tie) {
     const double mu_k = pick(rng, {0.0, 0.5 * mu_s, mu_s});
     const double k1 = pick(rng, {1.0, 2.0, 4.0, 16.0});
     for (int i = 0; i < n; ++i) {
-        Mass ms{"m" + std::to_string(i + 1), pick(rng, {0.5, 1.0, 2.0}), i == 0 || uni(rng, 0, 1) < 0.5, 0.0, 0.0};
-        if (ms.has_friction) {
-            ms.mu_k = i == 0 ? mu_k : 0.125;
-            ms.mu_s = i == 0 ? mu_s : 0.25;
+        m.masses.push_back({"m" + std::to_string(i + 1), pick(rng, {0.5, 1.0, 2.0})});
+        if (i == 0 || uni(rng, 0, 1) < 0.5) {
+            FrictionSlot& f = m.set_friction(static_cast<std::size_t>(i));
+            f.active = true;
+            f.mu_k = i == 0 ? mu_k : 0.125;
+            f.mu_s = i == 0 ? mu_s : 0.25;
         }
-        m.masses.push_back(ms);
     }
     m.springs.push_back({kGround, 0, k1});
     if (n == 2) m.springs.push_back({0, 1, pick(rng, {1.0, 4.0})});
@@ -267,7 +268,7 @@ void expect_start_within_rounding(const Model& m, const Configuration& cfg, cons
             }
             for (const Harmonic& h : m.forcing)
                 A += h.amplitude[i] * std::sin(static_cast<long double>(h.omega) * m.t0 + h.phase);
-            const long double limit = static_cast<long double>(m.masses[i].mu_s) * m.masses[i].m * m.g;
+            const long double limit = static_cast<long double>(m.friction_slot(i).mu_s) * m.masses[i].m * m.g;
             exact = (sf.kind == SwitchKind::release_pos ? A : -A) - limit;
         }
         const double level = 16 * kEps * (scale[f] + std::fabs(dg[f]) * std::fabs(m.t0));
@@ -293,9 +294,9 @@ TEST(KernelAgreement, SwitchFunctionsAtTheStartAreWithinTheirStatedRounding) {
             for (std::size_t c = 0; c < nc; ++c) cfg.closed[c] = (bits >> c) & 1u;
             for (std::size_t i = 0; i < n; ++i) {
                 const bool stuck = (bits >> (nc + i)) & 1u;
-                if (stuck && (!m.masses[i].has_friction || m.v0[i] != 0.0)) ok = false;
+                if (stuck && (!m.has_friction(i) || m.v0[i] != 0.0)) ok = false;
                 cfg.stuck[i] = stuck;
-                if (!stuck && m.masses[i].has_friction)
+                if (!stuck && m.has_friction(i))
                     sgn[i] = m.v0[i] != 0.0 ? (m.v0[i] > 0 ? 1 : -1) : (uni(rng, 0, 1) < 0.5 ? 1 : -1);
             }
             if (!ok) continue;

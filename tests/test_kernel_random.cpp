@@ -70,7 +70,7 @@ TEST_P(RandomKernel, SatisfiesTheEquationOfMotionAndAgreesWithTheGenericSolver) 
                     continue;
                 }
                 const double friction =
-                    m.masses[i].has_friction ? m.masses[i].mu_k * m.normal_force(i) * d.sgn[i] : 0.0;
+                    m.has_friction(i) ? m.friction_slot(i).mu_k * m.normal_force(i) * d.sgn[i] : 0.0;
                 const double lhs = M(i) * a(i) + C.row(i).dot(v) + K.row(i).dot(x);
                 const double rhs = f0(i) + F(i) - friction;
                 const double size = std::fabs(M(i) * a(i)) + C.row(i).cwiseAbs().dot(v.cwiseAbs()) +

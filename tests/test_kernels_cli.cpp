@@ -123,9 +123,11 @@ std::string number(double v) {
 std::string toml(const Model& m) {
     auto body = [&](int b) { return b == kGround ? std::string("ground") : m.masses[b].name; };
     std::string t = "name = \"" + m.name + "\"\n";
-    for (const Mass& ms : m.masses) {
+    for (std::size_t i = 0; i < m.dof(); ++i) {
+        const Mass& ms = m.masses[i];
+        const FrictionSlot& f = m.friction_slot(i);
         t += "[[mass]]\nname = \"" + ms.name + "\"\nm = " + number(ms.m) + "\n";
-        if (ms.has_friction) t += "mu_k = " + number(ms.mu_k) + "\nmu_s = " + number(ms.mu_s) + "\n";
+        if (f.active) t += "mu_k = " + number(f.mu_k) + "\nmu_s = " + number(f.mu_s) + "\n";
     }
     for (const Spring& s : m.springs)
         t += "[[spring]]\nbetween = [\"" + body(s.a) + "\", \"" + body(s.b) + "\"]\nk = " + number(s.k) + "\n";

@@ -146,12 +146,12 @@ t_end = 10.0
     ASSERT_EQ(m.dof(), 2u);
     EXPECT_EQ(m.masses[0].name, "m1");
     EXPECT_DOUBLE_EQ(m.masses[0].m, 1.0);
-    EXPECT_TRUE(m.masses[0].has_friction);
-    EXPECT_DOUBLE_EQ(m.masses[0].mu_k, 0.6);
-    EXPECT_DOUBLE_EQ(m.masses[0].mu_s, 0.75);
+    EXPECT_TRUE(m.has_friction(0));
+    EXPECT_DOUBLE_EQ(m.friction_slot(0).mu_k, 0.6);
+    EXPECT_DOUBLE_EQ(m.friction_slot(0).mu_s, 0.75);
     EXPECT_EQ(m.masses[1].name, "m2");
     EXPECT_DOUBLE_EQ(m.masses[1].m, 2.0);
-    EXPECT_FALSE(m.masses[1].has_friction);
+    EXPECT_FALSE(m.has_friction(1));
 
     ASSERT_EQ(m.springs.size(), 2u);
     EXPECT_EQ(m.springs[0].a, kGround);
@@ -374,12 +374,12 @@ name = "c"
 m = 1
 )toml",
                                 "t.toml");
-    EXPECT_TRUE(m.masses[0].has_friction);
-    EXPECT_DOUBLE_EQ(m.masses[0].mu_s, 0.3);  // mu_s defaults to mu_k
-    EXPECT_TRUE(m.masses[1].has_friction);    // mu_k = 0: slides freely, can still stick
-    EXPECT_DOUBLE_EQ(m.masses[1].mu_k, 0.0);
-    EXPECT_DOUBLE_EQ(m.masses[1].mu_s, 0.2);
-    EXPECT_FALSE(m.masses[2].has_friction);
+    EXPECT_TRUE(m.has_friction(0));
+    EXPECT_DOUBLE_EQ(m.friction_slot(0).mu_s, 0.3);  // mu_s defaults to mu_k
+    EXPECT_TRUE(m.has_friction(1));                  // mu_k = 0: slides freely, can still stick
+    EXPECT_DOUBLE_EQ(m.friction_slot(1).mu_k, 0.0);
+    EXPECT_DOUBLE_EQ(m.friction_slot(1).mu_s, 0.2);
+    EXPECT_FALSE(m.has_friction(2));
 }
 
 TEST(ModelReader, MassMayShareItsNameWithAParameter) {
@@ -474,10 +474,10 @@ void expect_seed_scenario(const Model& m, double beta, double F1, double F2, dou
     EXPECT_EQ(m.masses[1].name, "m2");
     EXPECT_DOUBLE_EQ(m.masses[0].m, 1.0);
     EXPECT_DOUBLE_EQ(m.masses[1].m, 2.0);
-    for (const Mass& mass : m.masses) {
-        EXPECT_TRUE(mass.has_friction);
-        EXPECT_DOUBLE_EQ(mass.mu_k, 0.6);
-        EXPECT_DOUBLE_EQ(mass.mu_s, 0.75);
+    for (std::size_t i = 0; i < m.dof(); ++i) {
+        EXPECT_TRUE(m.has_friction(i));
+        EXPECT_DOUBLE_EQ(m.friction_slot(i).mu_k, 0.6);
+        EXPECT_DOUBLE_EQ(m.friction_slot(i).mu_s, 0.75);
     }
     ASSERT_EQ(m.springs.size(), 3u);  // Fig. 4: ground-m1 (k1), m1-m2 (k2), m2-ground (k3)
     EXPECT_EQ(m.springs[0].a, kGround);

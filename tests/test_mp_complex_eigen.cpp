@@ -52,7 +52,7 @@ std::vector<std::vector<cl_R>> state_matrix(const Model& md) {
 Model chain(const std::vector<double>& dampers) {
     Model md;
     md.name = "chain";
-    for (int i = 0; i < 3; ++i) md.masses.push_back({"m" + std::to_string(i + 1), 1.0 + 0.5 * i, false, 0.0, 0.0});
+    for (int i = 0; i < 3; ++i) md.masses.push_back({"m" + std::to_string(i + 1), 1.0 + 0.5 * i});
     md.springs = {{kGround, 0, 40.0}, {0, 1, 25.0}, {1, 2, 30.0}, {2, kGround, 10.0}};
     for (std::size_t d = 0; d < dampers.size(); ++d)
         if (dampers[d] > 0) md.dampers.push_back({static_cast<int>(d), static_cast<int>(d + 1) % 3, dampers[d]});
@@ -112,7 +112,7 @@ TEST(MpComplexEigen, OneDofRootsAgainstTheQuadraticFormula) {
     for (double c : {0.4, 3.0, 30.0}) {
         Model md;
         md.name = "one";
-        md.masses = {{"m1", 2.0, false, 0.0, 0.0}};
+        md.masses = {{"m1", 2.0}};
         md.springs = {{kGround, 0, 50.0}};
         md.dampers = {{0, kGround, c}};
         md.load = {0.0};
@@ -179,7 +179,7 @@ TEST(MpComplexEigen, DoubleDoubleAgreesWith40Digits) {
 TEST(MpComplexEigen, CriticalDampingIsRefused) {
     Model md;
     md.name = "critical";
-    md.masses = {{"m1", 2.0, false, 0.0, 0.0}};
+    md.masses = {{"m1", 2.0}};
     md.springs = {{kGround, 0, 50.0}};
     md.dampers = {{0, kGround, 20.0}};  // c = 2 sqrt(k m)
     md.load = {0.0};

@@ -34,7 +34,8 @@ Model den_hartog(double r, double beta) {
     Model m;
     m.name = "den_hartog";
     m.g = 1.0;
-    m.masses.push_back({"m1", 1.0, true, beta, beta});
+    m.masses.push_back({"m1", 1.0});
+    m.set_friction(m.masses.size() - 1) = {true, beta, beta};
     m.springs.push_back({kGround, 0, 1.0});
     m.forcing.push_back({r, 0.0, {1.0}});
     m.load = {0.0};
@@ -108,7 +109,7 @@ TEST(DenHartog, AmplitudeAndMultipliers) {
 Model linear_chain(double alpha, double beta) {
     Model m;
     m.name = "linear";
-    m.masses = {{"m1", 1.0, false, 0, 0}, {"m2", 2.0, false, 0, 0}};
+    m.masses = {{"m1", 1.0}, {"m2", 2.0}};
     m.springs = {{kGround, 0, 4.0}, {0, 1, 3.0}, {1, kGround, 1.0}};
     m.alpha = alpha;
     m.beta = beta;
@@ -236,7 +237,7 @@ TEST(NeutralMultipliers, AFullyStuckOrbitIsStableWithOneNeutralMultiplier) {
 Model gap_oscillator(double amplitude, double alpha) {
     Model m;
     m.name = "gaps";
-    m.masses = {{"m1", 1.0, false, 0, 0}, {"m2", 1.5, false, 0, 0}};
+    m.masses = {{"m1", 1.0}, {"m2", 1.5}};
     m.springs = {{kGround, 0, 10.0}, {0, 1, 5.0}};
     m.contacts = {{"stop", 1, kGround, 0.05, 400.0}, {"wall", kGround, 0, 0.08, 300.0}, {"pair", 0, 1, 0.03, 150.0}};
     m.alpha = alpha;

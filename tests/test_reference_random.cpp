@@ -83,10 +83,10 @@ std::string disagreement(const Rows& e, const Rows& r) {
 Model drawn(unsigned seed) {
     testing::Drawn d = testing::draw(seed, 1 + static_cast<int>(seed % 3));
     Model& m = d.model;
-    if (!m.masses[0].has_friction) {
-        m.masses[0].has_friction = true;
-        m.masses[0].mu_k = 0.2;
-        m.masses[0].mu_s = 0.3;
+    if (!m.has_friction(0)) {
+        m.set_friction(0).active = true;
+        m.set_friction(0).mu_k = 0.2;
+        m.set_friction(0).mu_s = 0.3;
     }
     return m;
 }

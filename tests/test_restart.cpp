@@ -173,7 +173,7 @@ TEST(RestartEngine, SixteenCoulombOscillatorsReverseOnTheirClosedForms) {
     for (const testing::Recorded& e : r.events) {
         ASSERT_EQ(e.kind, EventKind::reversal) << "at t = " << e.t;
         const int i = e.element;
-        const double k = 100.0 + 10.0 * (i + 1), w = std::sqrt(k), d = m.masses[i].mu_k * 9.81 / k;
+        const double k = 100.0 + 10.0 * (i + 1), w = std::sqrt(k), d = m.friction_slot(i).mu_k * 9.81 / k;
         const int h = ++half[i];
         const double t = h * M_PI / w, x = (h % 2 ? -1.0 : 1.0) * (0.5 - 2 * h * d);
         worst_t = std::max(worst_t, std::fabs(e.t - t) / t);

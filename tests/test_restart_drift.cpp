@@ -106,8 +106,7 @@ struct Case {
 
 std::vector<signed char> signs(const Model& m, const Configuration& cfg, const std::vector<double>& v) {
     std::vector<signed char> s;
-    for (std::size_t i = 0; i < m.dof(); ++i)
-        s.push_back(!m.masses[i].has_friction || cfg.stuck[i] ? 0 : (v[i] < 0 ? -1 : 1));
+    for (std::size_t i = 0; i < m.dof(); ++i) s.push_back(!m.has_friction(i) || cfg.stuck[i] ? 0 : (v[i] < 0 ? -1 : 1));
     return s;
 }
 

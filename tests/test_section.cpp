@@ -118,7 +118,8 @@ Model den_hartog(double r, double beta) {
     Model m;
     m.name = "den_hartog";
     m.g = 1.0;
-    m.masses.push_back({"m1", 1.0, true, beta, beta});
+    m.masses.push_back({"m1", 1.0});
+    m.set_friction(m.masses.size() - 1) = {true, beta, beta};
     m.springs.push_back({kGround, 0, 1.0});
     m.forcing.push_back({r, 0.0, {1.0}});
     m.load = {0.0};

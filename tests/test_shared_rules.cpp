@@ -78,7 +78,7 @@ TEST(SampleGrid, CountIsTheNumberOfSamplesTheLoopWrites) {
 Model masses(int n) {
     Model m;
     m.name = "components";
-    for (int i = 0; i < n; ++i) m.masses.push_back({"m" + std::to_string(i + 1), 1.0 + i, false, 0.0, 0.0});
+    for (int i = 0; i < n; ++i) m.masses.push_back({"m" + std::to_string(i + 1), 1.0 + i});
     m.load.assign(static_cast<std::size_t>(n), 0.0);
     m.x0 = m.v0 = m.load;
     return m;

@@ -174,7 +174,8 @@ Model decay(bool both_friction) {
     Model m;
     m.name = "decay";
     m.g = 9.81;
-    m.masses = {{"m1", 1.0, true, 0.3, 0.4}, {"m2", 2.0, both_friction, 0.2, 0.25}};
+    m.masses = {{"m1", 1.0}, {"m2", 2.0}};
+    m.friction_slots = {{true, 0.3, 0.4}, {both_friction, 0.2, 0.25}};
     m.springs = {{kGround, 0, 10.0}, {0, 1, both_friction ? 5.0 : 0.2}, {1, kGround, 8.0}};
     m.load = {0.0, 0.0};
     m.x0 = {0.3, -0.2};
@@ -230,7 +231,8 @@ TEST(TangentRank, StickPhaseDropsTheMonodromysRank) {
     Model m;
     m.name = "den_hartog_stick";
     m.g = 1.0;
-    m.masses.push_back({"m1", 1.0, true, 0.5, 0.5});
+    m.masses.push_back({"m1", 1.0});
+    m.set_friction(m.masses.size() - 1) = {true, 0.5, 0.5};
     m.springs.push_back({kGround, 0, 1.0});
     m.forcing.push_back({0.5, 0.0, {1.0}});
     m.load = {0.0};
@@ -276,7 +278,7 @@ double linear_amplitude() {
 Model grazing_model(double eps) {
     Model m;
     m.name = "graze";
-    m.masses = {{"m1", 1.0, false, 0, 0}};
+    m.masses = {{"m1", 1.0}};
     m.springs = {{kGround, 0, 1.0}};
     m.contacts = {{"stop", 0, kGround, linear_amplitude() * (1 - eps), 50.0}};
     m.alpha = kAlpha;

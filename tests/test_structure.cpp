@@ -114,9 +114,11 @@ std::string as_structure(const Model& lumped, const Folder& dir) {
           << body(lumped, c.b) << "\"]\ngap = " << num(c.gap) << "\nk = " << num(c.k) << "\n";
     for (std::size_t i = 0; i < lumped.dof(); ++i) {
         const Mass& m = lumped.masses[i];
-        if (!m.has_friction) continue;
-        t << "[[friction]]\nname = \"f_" << m.name << "\"\nbetween = [\"" << m.name << "\", \"ground\"]\nmu_k = "
-          << num(m.mu_k) << "\nmu_s = " << num(m.mu_s) << "\nnormal = " << num(m.m * lumped.g) << "\n";
+        const FrictionSlot& f = lumped.friction_slot(i);
+        if (!f.active) continue;
+        t << "[[friction]]\nname = \"f_" << m.name << "\"\nbetween = [\"" << m.name
+          << "\", \"ground\"]\nmu_k = " << num(f.mu_k) << "\nmu_s = " << num(f.mu_s)
+          << "\nnormal = " << num(m.m * lumped.g) << "\n";
     }
     for (const Harmonic& h : lumped.forcing) {
         t << "[[forcing]]\nomega = " << num(h.omega) << "\nphase = " << num(h.phase) << "\namplitude = {";
@@ -405,8 +407,8 @@ v = { m1 = -5.0, m2 = -2.0 }
 )";
     const Model elements = parse_model(text, "elements.toml");
     ASSERT_EQ(elements.frictions.size(), 2u);
-    EXPECT_EQ(elements.masses[0].mu_k, own.masses[0].mu_k);
-    EXPECT_EQ(elements.masses[1].mu_s, own.masses[1].mu_s);
+    EXPECT_EQ(elements.friction_slot(0).mu_k, own.friction_slot(0).mu_k);
+    EXPECT_EQ(elements.friction_slot(1).mu_s, own.friction_slot(1).mu_s);
     const testing::Outcome a = testing::simulate(own, 30.0), b = testing::simulate(elements, 30.0);
     ASSERT_GT(a.events.size(), 20u);
     ASSERT_EQ(a.events.size(), b.events.size());
@@ -436,11 +438,11 @@ mu_s = 0.3
 normal = "2*3*g"
 )", "n.toml");
     EXPECT_EQ(m.frictions[0].name, "friction1");
-    EXPECT_NEAR(m.masses[0].mu_k * m.normal_force(0), 0.2 * 6 * 9.81, 1e-14);
-    EXPECT_NEAR(m.masses[0].mu_s * m.normal_force(0), 0.3 * 6 * 9.81, 1e-14);
+    EXPECT_NEAR(m.friction_slot(0).mu_k * m.normal_force(0), 0.2 * 6 * 9.81, 1e-14);
+    EXPECT_NEAR(m.friction_slot(0).mu_s * m.normal_force(0), 0.3 * 6 * 9.81, 1e-14);
 }
 
-// A [[friction]] element's `normal` is used as given (model.h Mass::normal),
+// A [[friction]] element's `normal` is used as given (FrictionSlot::normal in elements/friction.h),
 // never carried through m*g: the same model under any g gives the same bits,
 // on the Eigen solver and on the programs (interpreter, exact GiNaC
 // products), and the reference at 30 digits the same events.
@@ -478,7 +480,7 @@ v = { m1 = 0.1, m2 = 0.0 }
 )", "pad.toml");
     };
     const Model base = model("9.81");
-    EXPECT_EQ(base.masses[0].mu_s, 0.2) << "the element's coefficients, not equivalent ones";
+    EXPECT_EQ(base.friction_slot(0).mu_s, 0.2) << "the element's coefficients, not equivalent ones";
     EXPECT_EQ(base.normal_force(0), 20.0);
     for (testing::Solvers solvers : {testing::Solvers::generic, testing::Solvers::interp}) {
         const testing::Outcome a = testing::simulate(base, 6.0, 0.0, solvers);

@@ -64,7 +64,7 @@ Start start_of(const Model& model, const Configuration& cfg) {
     s.v0 = model.v0;
     for (std::size_t i = 0; i < model.dof(); ++i) {
         if (cfg.stuck[i]) s.v0[i] = 0.0;
-        s.sgn.push_back(!model.masses[i].has_friction || cfg.stuck[i] ? 0 : (s.v0[i] < 0 ? -1 : 1));
+        s.sgn.push_back(!model.has_friction(i) || cfg.stuck[i] ? 0 : (s.v0[i] < 0 ? -1 : 1));
     }
     return s;
 }

@@ -157,7 +157,7 @@ public:
 TEST(TangentReference, SimultaneousSwitches) {
     Model m;
     m.name = "twin_stops";
-    m.masses = {{"m1", 1.0, false, 0, 0}, {"m2", 1.0, false, 0, 0}};
+    m.masses = {{"m1", 1.0}, {"m2", 1.0}};
     m.springs = {{kGround, 0, 10.0}, {0, 1, 3.0}, {1, kGround, 10.0}};
     m.contacts = {{"c1", 0, kGround, 0.1, 40.0}, {"c2", 1, kGround, 0.1, 40.0}};
     m.alpha = 0.1;

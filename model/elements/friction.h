@@ -1,7 +1,7 @@
 // hsnc -- Coulomb friction (interface.md sections 2 and 5): on a mass
 // against the ground, or a [[friction]] element against another body, along
 // the relative velocity u' of its direction (direction.h; today w = e_i -
-// e_partner, Mass::partner in model.h).
+// e_partner, FrictionSlot::partner below).
 //
 //   sliding:  the force -mu_k N sgn(u') along w; switch velocity u'
 //   stuck:    u' = 0 held; it releases when the force D it must hold (A_i
@@ -22,7 +22,7 @@ namespace hsnc {
 
 /// A [[friction]] element (interface.md section 5): Coulomb friction on the
 /// relative velocity v[a] - v[b] with a constant normal force. It acts through
-/// the equivalent coefficients of Mass (model.h Mass::friction).
+/// the friction slot of its body (FrictionSlot::element names it).
 struct FrictionElement {
     std::string name;
     int a = kGround;
@@ -30,6 +30,28 @@ struct FrictionElement {
     double mu_k = 0.0;
     double mu_s = 0.0;
     double normal = 0.0;  ///< N > 0
+};
+
+/// The Coulomb friction of a model's slot (model.h Model::friction_slots):
+/// slot i is mass i's, on the relative velocity v[i] - v[partner].
+struct FrictionSlot {
+    bool active = false;  ///< true exactly when the file gave the mass mu_k or a [[friction]] element acts on it
+    double mu_k = 0.0;    ///< kinetic friction coefficient, >= 0
+    double mu_s = 0.0;    ///< static coefficient, >= mu_k
+    /// Index into Model::frictions of the [[friction]] element this slot
+    /// stands for (its mu_k, mu_s are the element's), or -1 (the mass's own
+    /// mu_k, normal force m*g).
+    int element = -1;
+    /// The body the friction acts against: kGround, or the other mass of a
+    /// [[friction]] element between two bodies (friction on the relative
+    /// velocity v[i] - v[partner]; stuck, the two move as one body). Such a
+    /// partner has no friction of its own and is the partner of no other mass.
+    int partner = kGround;
+    /// The normal force N of an element that gives one (`normal`), used as
+    /// given: g does not enter its friction. 0 for the weight m*g (a mass's own
+    /// friction, an element without `normal`), which the exact stages form as
+    /// the product m*g (Model::normal_force).
+    double normal = 0.0;
 };
 
 namespace friction {

@@ -78,22 +78,23 @@ void accelerations(const Model& model, const Configuration& cfg, const std::vect
             a[i] = 0.0;
             continue;
         }
-        const Mass& m = model.masses[i];
+        const FrictionSlot& fr = model.friction_slot(i);
         double f = force_on_mass(model, cfg, static_cast<int>(i), t, x, v);
-        if (m.has_friction) f -= m.mu_k * model.normal_force(i) * dir[i];
+        if (fr.active) f -= fr.mu_k * model.normal_force(i) * dir[i];
         a[i] = f;  // divided by the mass below
     }
     for (std::size_t i = 0; i < n; ++i) {
         const Mass& m = model.masses[i];
-        if (m.partner == kGround || !m.has_friction) continue;
-        const auto p = static_cast<std::size_t>(m.partner);
+        const FrictionSlot& f = model.friction_slot(i);
+        if (f.partner == kGround || !f.active) continue;
+        const auto p = static_cast<std::size_t>(f.partner);
         if (cfg.stuck[i]) {
             a[p] += force_on_mass(model, cfg, static_cast<int>(i), t, x, v);
             a[p] /= m.m + model.masses[p].m;
             a[i] = a[p] * m.m;  // both divided by their own masses below
             a[p] *= model.masses[p].m;
         } else {
-            a[p] += m.mu_k * model.normal_force(i) * dir[i];
+            a[p] += f.mu_k * model.normal_force(i) * dir[i];
         }
     }
     if (model.coupled_mass()) {  // a_F = M_FF^-1 f_F, the stuck dofs held (friction only against the ground there)
@@ -110,7 +111,8 @@ void accelerations(const Model& model, const Configuration& cfg, const std::vect
 void hold_stuck(const Model& model, const Configuration& cfg, std::vector<double>& v) {
     for (std::size_t i = 0; i < model.dof(); ++i)
         if (fixed_in(model, cfg, i)) v[i] = 0.0;
-        else if (cfg.stuck[i]) v[i] = v[static_cast<std::size_t>(model.masses[i].partner)];
+        else if (cfg.stuck[i])
+            v[i] = v[static_cast<std::size_t>(model.friction_slot(i).partner)];
 }
 
 // Switch functions with their watched side (as in the engine): each is > 0
@@ -128,7 +130,7 @@ void watched_values(const Model& model, const Configuration& cfg, const std::vec
                 break;
             }
             case SwitchKind::velocity: {  // w = v_i - v_partner
-                const int p = model.masses[static_cast<std::size_t>(s.element)].partner;
+                const int p = model.friction_slot(static_cast<std::size_t>(s.element)).partner;
                 h[k] = dir[s.element] * (v[s.element] - (p == kGround ? 0.0 : v[p]));
                 break;
             }
@@ -157,7 +159,7 @@ void watched_values(const Model& model, const Configuration& cfg, const std::vec
                 } else {
                     A = driving_force(model, cfg, s.element, t, x, v);
                 }
-                const double lim = model.masses[s.element].mu_s * model.normal_force(s.element);
+                const double lim = model.friction_slot(s.element).mu_s * model.normal_force(s.element);
                 h[k] = s.kind == SwitchKind::release_pos ? lim - A : lim + A;
             }
         }
@@ -355,10 +357,10 @@ RunSummary run_ab4(const Model& model, const IntegratorOptions& io, const Engine
             }
         }
         for (std::size_t i = 0; i < n; ++i) {
-            const Mass& m = model.masses[i];
-            if (!m.has_friction) continue;
+            const FrictionSlot& f = model.friction_slot(i);
+            if (!f.active) continue;
             const double A = force_on_mass(model, cfg, static_cast<int>(i), t1, xn.data(), vn.data());
-            const double limit = m.mu_s * model.normal_force(i);
+            const double limit = f.mu_s * model.normal_force(i);
             const int ii = static_cast<int>(i);
             if (cfg.stuck[i]) {
                 if (std::fabs(A) > limit) {

@@ -622,7 +622,8 @@ public:
           // Dampers, Jenkins elements and friction pairs never have a plan
           // (restart_plan(), generator/lowering.h): no derivation is asked for one.
           plain_(model.proportional_damping() && model.jenkins.empty() &&
-                 std::none_of(model.masses.begin(), model.masses.end(), [](const Mass& m) { return m.partner != kGround; })) {}
+                 std::none_of(model.friction_slots.begin(), model.friction_slots.end(),
+                              [](const FrictionSlot& f) { return f.partner != kGround; })) {}
 
     /// A new configuration, with `free_masses` (an upper bound on its modes).
     void enter(std::size_t free_masses) {
@@ -854,7 +855,8 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         v = buf.v;
         for (std::size_t i = 0; i < n; ++i)
             if (fixed_in(model_, cfg, i)) v[i] = 0.0;
-            else if (rides_partner(model_, cfg, i)) v[i] = v[static_cast<std::size_t>(model_.masses[i].partner)];
+            else if (rides_partner(model_, cfg, i))
+                v[i] = v[static_cast<std::size_t>(model_.friction_slot(i).partner)];
         if (!found.any) {
             t = t_end;
             break;

@@ -90,7 +90,7 @@ void driving_derivative(const Model& model, const Configuration& cfg, int i, dou
         return;
     }
     force_derivative(model, cfg, i, t, t_lo, s, k, value, magnitude);
-    const int p = model.masses[static_cast<std::size_t>(i)].partner;
+    const int p = model.friction_slot(static_cast<std::size_t>(i)).partner;
     if (p == kGround) return;
     double Ap, mp_mag;
     force_derivative(model, cfg, p, t, t_lo, s, k, Ap, mp_mag);
@@ -116,7 +116,8 @@ MotionSeries motion_series(const Model& model, const Configuration& cfg, const s
     // (rider[p] = that mass), on which their friction is internal.
     std::vector<int> rider(n, -1);
     for (std::size_t i = 0; i < n; ++i)
-        if (rides_partner(model, cfg, i)) rider[static_cast<std::size_t>(model.masses[i].partner)] = static_cast<int>(i);
+        if (rides_partner(model, cfg, i))
+            rider[static_cast<std::size_t>(model.friction_slot(i).partner)] = static_cast<int>(i);
     for (std::size_t i = 0; i < n; ++i) {
         s.x[0][i] = x[i];
         s.mag[0][i] = std::fabs(x[i]);
@@ -158,9 +159,9 @@ MotionSeries motion_series(const Model& model, const Configuration& cfg, const s
             }
             if (k == 0)  // kinetic friction of a sliding mass, and its reaction on the partner
                 for (std::size_t q = 0; q < n; ++q) {
-                    const Mass& mq = model.masses[q];
-                    if (!mq.has_friction || sgn[q] == 0 || (q != i && mq.partner != static_cast<int>(i))) continue;
-                    const double fr = mq.mu_k * model.normal_force(q);
+                    const FrictionSlot& fq = model.friction_slot(q);
+                    if (!fq.active || sgn[q] == 0 || (q != i && fq.partner != static_cast<int>(i))) continue;
+                    const double fr = fq.mu_k * model.normal_force(q);
                     A += q == i ? -fr * sgn[q] : fr * sgn[q];
                     m += fr;
                 }
@@ -193,7 +194,7 @@ void switch_series(const Model& model, const Configuration& cfg, const SwitchFun
         }
         double A, Am;
         driving_derivative(model, cfg, e, t, t_lo, series, kk, A, Am);
-        const double limit = model.masses[ee].mu_s * model.normal_force(ee);
+        const double limit = model.friction_slot(ee).mu_s * model.normal_force(ee);
         d[k] = friction::release_value(f.kind == SwitchKind::release_pos ? 1 : -1, A, limit, kk);
         mag[k] = friction::release_magnitude(Am, limit, kk);
     }
@@ -239,8 +240,8 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
             x + model.dof());
         for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii]);
         for (std::size_t q = 0; q < model.dof(); ++q)  // its friction, and that of a mass it is the partner of
-            if (model.masses[q].has_friction && (q == ii || model.masses[q].partner == i))
-                m += model.masses[q].mu_k * model.normal_force(q);
+            if (model.has_friction(q) && (q == ii || model.friction_slot(q).partner == i))
+                m += model.friction_slot(q).mu_k * model.normal_force(q);
         return m;
     };
     auto accel_magnitude = [&](int i) {
@@ -252,10 +253,10 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
         for (std::size_t j = 0; j < model.dof(); ++j) sum += force_magnitude(static_cast<int>(j));
         return sum / model.mass_floor;
     };
-    const int partner = f.kind == SwitchKind::velocity || f.kind == SwitchKind::release_pos ||
-                                f.kind == SwitchKind::release_neg
-                            ? model.masses[static_cast<std::size_t>(e)].partner
-                            : kGround;
+    const int partner =
+        f.kind == SwitchKind::velocity || f.kind == SwitchKind::release_pos || f.kind == SwitchKind::release_neg
+            ? model.friction_slot(static_cast<std::size_t>(e)).partner
+            : kGround;
     if (f.kind == SwitchKind::velocity) return accel_magnitude(e) + accel_magnitude(partner);
     if (f.kind == SwitchKind::slip_velocity) {  // |w|^T |x''|
         double m = 0.0;
@@ -358,7 +359,7 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
     if (f.kind == SwitchKind::gap)  // G^(k) = w^T x^(k)
         return along_bound(model.contacts[static_cast<std::size_t>(e)].direction(), R(k - 1));
     if (f.kind == SwitchKind::velocity)  // w^(k) = x_e^(k+1) - x_partner^(k+1)
-        return per_mass(e, R(k)) + per_mass(model.masses[static_cast<std::size_t>(e)].partner, R(k));
+        return per_mass(e, R(k)) + per_mass(model.friction_slot(static_cast<std::size_t>(e)).partner, R(k));
     if (f.kind == SwitchKind::slip_pos || f.kind == SwitchKind::slip_neg) {  // k u^(k)
         const Jenkins& J = model.jenkins[static_cast<std::size_t>(e)];
         return J.k * along_bound(J.direction(), R(k - 1)) * (1 + 64 * kEps);
@@ -389,7 +390,7 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
             if (P(q) != 0.0) B += std::fabs(P(q)) * force_bound(static_cast<int>(q));
         return B * (1 + 64 * kEps);
     }
-    const int p = model.masses[static_cast<std::size_t>(e)].partner;
+    const int p = model.friction_slot(static_cast<std::size_t>(e)).partner;
     if (p == kGround) return force_bound(e) * (1 + 64 * kEps);
     const double mi = model.masses[static_cast<std::size_t>(e)].m, mp = model.masses[static_cast<std::size_t>(p)].m;
     return against_partner_magnitude(mi, mp, force_bound(e), force_bound(p)) * (1 + 64 * kEps);

@@ -37,9 +37,9 @@ public:
     double abs(double y) const { return std::fabs(y); }
     int dof() const { return n_; }
     std::size_t contacts() const { return model_.contacts.size(); }
-    bool has_friction(int i) const { return model_.masses[i].has_friction; }
+    bool has_friction(int i) const { return model_.has_friction(i); }
     // A friction acts on w = v_i - v_partner (the partner may be the ground).
-    int partner(int i) const { return model_.masses[static_cast<std::size_t>(i)].partner; }
+    int partner(int i) const { return model_.friction_slot(static_cast<std::size_t>(i)).partner; }
     int velocity_sign(int i) const {
         const double* rows[] = {x_, v_};
         return sign(friction::velocity_value(Direction{i, partner(i)}, double_motion(rows), 0));
@@ -53,7 +53,7 @@ public:
         }
         return driving_force(model_, cfg, i, t_, x_, v_, elements_);
     }
-    double static_limit(int i) const { return model_.masses[i].mu_s * model_.normal_force(i); }
+    double static_limit(int i) const { return model_.friction_slot(i).mu_s * model_.normal_force(i); }
     double held_rate(const Configuration& cfg, int i) const {
         if (model_.coupled_mass()) {  // the held motion's own accelerations (held_mass.h)
             double D, rate;

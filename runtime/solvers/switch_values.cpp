@@ -17,12 +17,12 @@ ConfigurationTerms configuration_terms(const Model& model, const Configuration& 
     t.mu_s.resize(n);
     t.friction.resize(static_cast<std::size_t>(n));
     for (Eigen::Index i = 0; i < n; ++i) {
-        const Mass& m = model.masses[static_cast<std::size_t>(i)];
+        const FrictionSlot& f = model.friction_slot(static_cast<std::size_t>(i));
         t.normal(i) = model.normal_force(static_cast<std::size_t>(i));
-        t.mu_k(i) = m.mu_k;
-        t.mu_s(i) = m.mu_s;
-        t.friction[static_cast<std::size_t>(i)] = m.has_friction ? 1 : 0;
-        t.partner.push_back(m.partner);
+        t.mu_k(i) = f.mu_k;
+        t.mu_s(i) = f.mu_s;
+        t.friction[static_cast<std::size_t>(i)] = f.active ? 1 : 0;
+        t.partner.push_back(f.partner);
     }
     t.K = stiffness_matrix(model, cfg);
     t.C = damping_matrix(model, cfg);

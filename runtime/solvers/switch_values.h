@@ -42,7 +42,7 @@ namespace hsnc {
 struct ConfigurationTerms {
     Eigen::VectorXd mass, normal, mu_k, mu_s;
     std::vector<char> friction;
-    std::vector<int> partner;  ///< per mass: what its friction acts against (model.h Mass::partner)
+    std::vector<int> partner;  ///< per mass: what its friction acts against (elements/friction.h FrictionSlot::partner)
     Eigen::MatrixXd K, C;
     Eigen::VectorXd f_const;
     std::vector<Contact> contacts;
