@@ -278,6 +278,7 @@ public:
     int dof() const { return mp.n; }
     std::size_t contacts() const { return mp.contacts.size(); }
     bool has_friction(int i) const { return model_.has_friction(i); }
+    bool coupled() const { return mp.coupled(); }
     // A friction acts on w = v_i - v_partner (the partner may be the ground).
     int velocity_sign(int i) const { return sign(v_[static_cast<std::size_t>(i)] - mp.body(v_, mp.partner[i])); }
     void stop(int i) { v_[static_cast<std::size_t>(i)] = mp.body(v_, mp.partner[i]); }

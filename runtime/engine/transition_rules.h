@@ -14,6 +14,8 @@
 //   bool negligible(const T& value, const T& magnitude) const;  // zero to its rounding
 //   T abs(const T&) const;
 //   int dof() const; std::size_t contacts() const; bool has_friction(int i) const;
+//   bool coupled() const;                              // a held force depends on the other frictions'
+//                                                      // states (a coupled M): decided together
 //   int velocity_sign(int i) const;                    // of v_i; 0 when v_i = 0 exactly
 //   void stop(int i);                                  // v_i = 0 exactly (a stop)
 //   T force(const Configuration&, int i) const;        // A_i: every force on mass i but friction
@@ -44,6 +46,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <numeric>
 #include <vector>
 
 #include "configuration.h"
@@ -103,6 +106,73 @@ signed char stick_rule(const P& p, const Configuration& cfg, const std::vector<s
         return static_cast<signed char>(first_nonzero_sign(p, series, 1));
     // |A_i| - mu_s N_i has the derivatives dir * A_i^(k): none non-zero, it stays at the limit.
     return first_nonzero_sign(p, series, 1) == dir ? dir : 0;
+}
+
+/// The most frictions decided together by enumeration (3^k assignments of
+/// stuck, sliding + and sliding -); more at one instant are decided in turn.
+inline constexpr std::size_t kMaxDecidedTogether = 8;
+
+/// Whether every friction of `among` is in the state the stick rule gives it
+/// with the others as assigned (cfg.stuck, sgn): a stuck one's held force
+/// within mu_s N, a sliding one's beyond it and in its direction.
+template <class P>
+bool consistent(const P& p, const Configuration& cfg, const std::vector<signed char>& sgn,
+                const std::vector<int>& among) {
+    for (int j : among) {
+        const auto u = static_cast<std::size_t>(j);
+        const signed char dir = stick_rule(p, cfg, sgn, j);
+        if (cfg.stuck[u] ? dir != 0 : dir != sgn[u]) return false;
+    }
+    return true;
+}
+
+/// The frictions of `among` (at rest or stuck at one instant) decided
+/// together, where the force that holds one depends on how the others move
+/// (P::coupled(): a coupled M; interface.md "Coupled mass matrices"): the
+/// assignment in which every one obeys the stick rule with the others as
+/// assigned (consistent()), and of several the one with the most stuck, then
+/// the one whose stuck frictions come first in model order, then sliding + before -.
+/// Sets cfg.stuck and sgn over `among`; false (both left as they came) when no
+/// assignment is consistent. `sgn` must be the vector P reads the sliding
+/// directions from (the engine's live one): each trial is written into it.
+template <class P>
+bool decide_together(const P& p, Configuration& cfg, std::vector<signed char>& sgn, const std::vector<int>& among) {
+    const std::size_t k = among.size();
+    std::vector<unsigned> stuck_sets(std::size_t{1} << k);
+    std::iota(stuck_sets.begin(), stuck_sets.end(), 0u);
+    auto count = [](unsigned m) {
+        int c = 0;
+        for (; m; m &= m - 1) ++c;
+        return c;
+    };
+    auto first_in_order =
+        [k](unsigned m) {  // bit j of m (friction among[j]) as bit k-1-j: the first friction weighs most
+            unsigned r = 0;
+            for (std::size_t j = 0; j < k; ++j)
+                if (m >> j & 1u) r |= 1u << (k - 1 - j);
+            return r;
+        };
+    std::stable_sort(stuck_sets.begin(), stuck_sets.end(), [&](unsigned a, unsigned b) {
+        return count(a) != count(b) ? count(a) > count(b) : first_in_order(a) > first_in_order(b);
+    });
+    const Configuration cfg_in = cfg;
+    const std::vector<signed char> sgn_in = sgn;
+    for (unsigned stuck : stuck_sets) {
+        const std::size_t sliding = k - static_cast<std::size_t>(count(stuck));
+        for (unsigned dirs = 0; dirs < (1u << sliding); ++dirs) {
+            std::size_t r = 0;
+            for (std::size_t j = 0; j < k; ++j) {
+                const auto u = static_cast<std::size_t>(among[j]);
+                const bool held = (stuck >> j & 1u) != 0;
+                cfg.stuck[u] = held ? 1 : 0;
+                sgn[u] = held ? 0 : (dirs >> r++ & 1u) ? -1 : 1;
+            }
+            if (consistent(p, cfg, sgn, among)) return true;
+        }
+    }
+    cfg = cfg_in;
+    sgn = sgn_in;
+    return false;
 }
 
 /// The state a contact enters from G, G', ... at an instant where it is tied
@@ -231,7 +301,32 @@ bool apply_switches(P& p, Configuration& cfg, std::vector<signed char>& sgn,
     }
     for (int round = 0; round < 2 * n + 4; ++round) {
         bool changed = false;
-        for (int i = 0; i < n; ++i) {
+        std::vector<int> among;  // a coupled M's frictions at rest or stuck: decided together
+        for (int i = 0; i < n && p.coupled(); ++i)
+            if (p.has_friction(i) && (deciding[i] || cfg.stuck[static_cast<std::size_t>(i)])) among.push_back(i);
+        const bool together = among.size() >= 2 && among.size() <= kMaxDecidedTogether;
+        if (together) {
+            const Configuration before = cfg;
+            const std::vector<signed char> sgn_before = sgn;
+            if (!decide_together(p, cfg, sgn, among)) return false;  // no consistent assignment: they do not settle
+            for (int i : among) {  // the events, in the order of the decisions in turn below
+                const auto u = static_cast<std::size_t>(i);
+                if (!deciding[u]) continue;
+                deciding[u] = 0;
+                changed = true;
+                if (cfg.stuck[u])
+                    out.push_back({EventKind::stick, i});
+                else if (sgn[u] != sgn_before[u])
+                    out.push_back({EventKind::reversal, i});
+            }
+            for (int i : among) {
+                const auto u = static_cast<std::size_t>(i);
+                if (!before.stuck[u] || cfg.stuck[u]) continue;
+                out.push_back({EventKind::release, i});
+                changed = true;
+            }
+        }
+        for (int i = 0; i < n && !together; ++i) {  // in turn: each with the others as they stand
             if (!deciding[i]) continue;
             deciding[i] = 0;
             const signed char dir = stick_rule(p, cfg, sgn, i);
@@ -245,7 +340,7 @@ bool apply_switches(P& p, Configuration& cfg, std::vector<signed char>& sgn,
             }
             changed = true;
         }
-        for (int i = 0; i < n; ++i) {
+        for (int i = 0; i < n && !together; ++i) {
             if (!cfg.stuck[i]) continue;
             const signed char dir = stick_rule(p, cfg, sgn, i);
             if (dir == 0) continue;
@@ -284,7 +379,16 @@ bool apply_switches(P& p, Configuration& cfg, std::vector<signed char>& sgn,
 /// sticks or slides by the stick rule, with the forces of `cfg` as it stands.
 template <class P>
 void decide_entered_friction(P& p, Configuration& cfg, std::vector<signed char>& sgn) {
-    for (int i = 0; i < p.dof(); ++i) {
+    std::vector<int> at_rest;  // a coupled M's frictions at rest: decided together
+    for (int i = 0; i < p.dof() && p.coupled(); ++i) {
+        if (!p.has_friction(i)) continue;
+        const int v = p.velocity_sign(i);
+        cfg.stuck[static_cast<std::size_t>(i)] = 0;
+        sgn[static_cast<std::size_t>(i)] = static_cast<signed char>(v);
+        if (v == 0) at_rest.push_back(i);
+    }
+    if (at_rest.size() >= 2 && at_rest.size() <= kMaxDecidedTogether && decide_together(p, cfg, sgn, at_rest)) return;
+    for (int i = 0; i < p.dof(); ++i) {  // in turn (none consistent together: as they stand)
         if (!p.has_friction(i)) continue;
         const int v = p.velocity_sign(i);
         if (v != 0) {

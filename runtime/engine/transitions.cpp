@@ -38,6 +38,7 @@ public:
     int dof() const { return n_; }
     std::size_t contacts() const { return model_.contacts.size(); }
     bool has_friction(int i) const { return model_.has_friction(i); }
+    bool coupled() const { return model_.coupled_mass(); }
     // A friction acts on w = v_i - v_partner (the partner may be the ground).
     int partner(int i) const { return model_.friction_slot(static_cast<std::size_t>(i)).partner; }
     int velocity_sign(int i) const {
