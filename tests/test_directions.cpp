@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -20,8 +21,10 @@
 #include "assembly.h"
 #include "cli_runner.h"
 #include "engine_runner.h"
-#include "flow.h"
 #include "fe_models.h"
+#include "flow.h"
+#include "hsnc/lyapunov.h"
+#include "hsnc/periodic.h"
 #include "model_reader.h"
 #include "shooting.h"
 #include "temp_dir.h"
@@ -259,6 +262,68 @@ TEST(JenkinsDirection, AScaledDirectionIsTheElementBetweenTwoBodies) {
     const Model scaled = read_model(
         breathing_crack(b, "[[jenkins]]\nname = \"j\"\ndirection = { w4 = 2.0 }\nk = 500.0\nslip_force = 1.0\n"));
     expect_the_same_instants(between, scaled);
+}
+
+TEST(JenkinsDirection, OrbitsAndExponentsOfAScaledDirectionAreThoseOfTheElementBetweenTwoBodies) {
+    // The two writings of one element as above: the same periodic orbit (its
+    // slider at twice the position on u = 2 w4), the same Floquet multipliers
+    // and the same Lyapunov exponents (a linear change of the slider's scale
+    // changes neither), on the Eigen solver and the programs.
+    testing::TempDir a, b;
+    const Model between = read_model(breathing_crack(
+        a, "[[jenkins]]\nname = \"j\"\nbetween = [\"w4\", \"ground\"]\nk = 2000.0\nslip_force = 2.0\n"));
+    const Model scaled = read_model(
+        breathing_crack(b, "[[jenkins]]\nname = \"j\"\ndirection = { w4 = 2.0 }\nk = 500.0\nslip_force = 1.0\n"));
+    for (KernelChoice kernels : {KernelChoice::eigen, KernelChoice::generic}) {
+        PeriodicOptions o;
+        o.kernels = kernels;
+        o.transient = 4.0;
+        const PeriodicResult p = periodic(between, o), q = periodic(scaled, o);
+        ASSERT_EQ(p.status, PeriodicStatus::ok) << p.message;
+        ASSERT_EQ(q.status, PeriodicStatus::ok) << q.message;
+        EXPECT_GE(p.events, 2u) << "the joint should stick and slip on the orbit";
+        EXPECT_EQ(p.events, q.events);
+        double dx = 0.0;
+        for (std::size_t i = 0; i < p.x.size(); ++i)
+            dx = std::max({dx, std::fabs(p.x[i] - q.x[i]), std::fabs(p.v[i] - q.v[i]) / 20.0});
+        ASSERT_EQ(p.multipliers.size(), q.multipliers.size());
+        auto by_size = [](std::vector<std::complex<double>> mu) {
+            std::sort(mu.begin(), mu.end(), [](auto x, auto y) {
+                return std::abs(x) != std::abs(y) ? std::abs(x) > std::abs(y) : x.imag() > y.imag();
+            });
+            return mu;
+        };
+        const auto mp = by_size(p.multipliers), mq = by_size(q.multipliers);
+        double dmu = 0.0;
+        for (std::size_t k = 0; k < mp.size(); ++k) dmu = std::max(dmu, std::abs(mp[k] - mq[k]));
+        // Lyapunov exponents over a finite time T depend on the scale of the
+        // state (here the slider's: 2) by O(ln 2 / T); they converge as T
+        // grows. Over T and 4 T the differences must shrink about fourfold.
+        double dl[2] = {0.0, 0.0}, largest = 0.0;
+        for (int r = 0; r < 2 && kernels == KernelChoice::generic; ++r) {  // the analysis is the same on either
+            LyapunovOptions lo;
+            lo.kernels = kernels;
+            lo.t_end = r == 0 ? 5.0 : 20.0;
+            const LyapunovResult lp = lyapunov(between, lo), lq = lyapunov(scaled, lo);
+            ASSERT_EQ(lp.status, RunStatus::ok) << lp.message;
+            ASSERT_EQ(lq.status, RunStatus::ok) << lq.message;
+            ASSERT_EQ(lp.exponents.size(), lq.exponents.size());
+            for (std::size_t k = 0; k < lp.exponents.size(); ++k)
+                dl[r] = std::max(dl[r], std::fabs(lp.exponents[k] - lq.exponents[k]));
+            largest = lp.exponents[0];
+        }
+        std::printf(
+            "%s: orbit with %zu events, states %.3g apart, sliders %.9g and %.9g, multipliers %.3g apart "
+            "(largest %.6f)\n",
+            kernels == KernelChoice::eigen ? "eigen" : "programs", p.events, dx, p.s[0], q.s[0], dmu, p.max_multiplier);
+        EXPECT_LT(dx, 1e-9);
+        EXPECT_NEAR(q.s[0], 2.0 * p.s[0], 1e-9);
+        EXPECT_LT(dmu, 1e-8);
+        if (kernels == KernelChoice::eigen) continue;
+        std::printf("exponents %.3g apart over 5 s, %.3g over 20 s (largest %.6f /s)\n", dl[0], dl[1], largest);
+        EXPECT_LT(dl[0], 2 * std::log(2.0) / 5.0);
+        EXPECT_LT(dl[1], 0.4 * dl[0]);
+    }
 }
 
 TEST(JenkinsDirection, AStuckJointStampsKWwTAndItsSlidersPreload) {
