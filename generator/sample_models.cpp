@@ -5,6 +5,18 @@
 namespace hsnc {
 namespace {
 
+// A contact and a Jenkins element between two bodies, by their fields' names.
+Contact make_contact(const std::string& name, int a, int b, double gap, double k) {
+    Contact c;
+    c.name = name, c.a = a, c.b = b, c.gap = gap, c.k = k;
+    return c;
+}
+Jenkins make_jenkins(const std::string& name, int a, int b, double k, double slip_force) {
+    Jenkins e;
+    e.name = name, e.a = a, e.b = b, e.k = k, e.slip_force = slip_force;
+    return e;
+}
+
 // One mass on a spring to ground: omega = sqrt(k/m), c = alpha + beta k/m.
 Model oscillator(const std::string& name, double m, double k, double alpha, double beta) {
     Model md;
@@ -55,8 +67,10 @@ Model random_chain(const std::string& name, std::uint64_t seed, int n, double be
     md.springs.push_back({kGround, 0, r.uniform(1.0, 50.0)});
     for (int i = 0; i + 1 < n; ++i) md.springs.push_back({i, i + 1, r.uniform(1.0, 50.0)});
     if (grounded_end) md.springs.push_back({n - 1, kGround, r.uniform(1.0, 50.0)});
-    for (int i = 0; i + 1 < n; ++i)
-        md.contacts.push_back({"c" + std::to_string(i + 1), i, i + 1, r.uniform(-0.1, 0.2), r.uniform(20.0, 200.0)});
+    for (int i = 0; i + 1 < n; ++i) {
+        const double gap = r.uniform(-0.1, 0.2), k = r.uniform(20.0, 200.0);  // in this order (the bundled kernels)
+        md.contacts.push_back(make_contact("c" + std::to_string(i + 1), i, i + 1, gap, k));
+    }
     md.alpha = r.uniform(0.0, 0.2);
     md.beta = r.uniform(0.0, beta_hi);
     Harmonic h{r.uniform(1.0, 20.0), r.uniform(0.0, 3.0), {}};
@@ -82,7 +96,7 @@ std::vector<Model> sample_models() {
         md.masses = {{"m1", 1.0}, {"m2", 2.0}};
         md.friction_slots = {{true, 0.6, 0.75}, {true, 0.6, 0.75}};
         md.springs = {{kGround, 0, 5.0}, {0, 1, 10.0}, {1, kGround, 40.0}};
-        md.contacts = {{"contact1", 0, 1, 0.2, 100.0}};
+        md.contacts = {make_contact("contact1", 0, 1, 0.2, 100.0)};
         md.beta = 0.1;
         md.forcing = {{175.5151, 0.0, {22500.0, -15000.0}}};
         md.load = {0.0, 0.0};
@@ -110,7 +124,7 @@ std::vector<Model> sample_models() {
         md.masses = {{"m1", 1.5}, {"m2", 0.5}};
         md.friction_slots = {{true, 0.2, 0.3}, {false, 0.0, 0.0}};
         md.springs = {{0, 1, 8.0}};
-        md.contacts = {{"stop", 1, kGround, 0.5, 50.0}};
+        md.contacts = {make_contact("stop", 1, kGround, 0.5, 50.0)};
         md.alpha = alpha;
         md.beta = 0.01;
         md.forcing = {{1.3, 0.2, {0.0, 0.8}}};
@@ -129,7 +143,7 @@ std::vector<Model> sample_models() {
         md.masses = {{"m1", 1.2}, {"m2", 0.7}};
         md.friction_slots = {{true, 0.2, 0.3}, {false, 0.0, 0.0}};
         md.springs = {{kGround, 0, 6.0}, {0, 1, 3.0}};
-        md.jenkins = {{"j1", 0, 1, 12.0, 0.8}, {"j2", 1, kGround, 20.0, 1.5}};
+        md.jenkins = {make_jenkins("j1", 0, 1, 12.0, 0.8), make_jenkins("j2", 1, kGround, 20.0, 1.5)};
         md.alpha = 0.1;
         md.beta = 0.02;
         md.forcing = {{2.3, 0.5, {0.4, 1.1}}};
@@ -143,7 +157,7 @@ std::vector<Model> sample_models() {
         Model md;
         md.name = "jenkins_free_pair";
         md.masses = {{"m1", 1.0}, {"m2", 3.0}};
-        md.jenkins = {{"j1", 0, 1, 9.0, 0.6}};
+        md.jenkins = {make_jenkins("j1", 0, 1, 9.0, 0.6)};
         md.forcing = {{1.7, 0.0, {1.0, 0.0}}};
         md.load = {0.0, 0.3};
         md.x0 = {0.1, 0.0};
@@ -159,7 +173,7 @@ std::vector<Model> sample_models() {
         md.masses = {{"m1", 2.0}, {"m2", 0.6}};
         md.friction_slots = {{false, 0.0, 0.0}, {true, 0.25, 0.4, -1, 0}};
         md.springs = {{kGround, 0, 30.0}, {1, kGround, 4.0}};
-        md.contacts = {{"stop", 0, kGround, 0.15, 300.0}};
+        md.contacts = {make_contact("stop", 0, kGround, 0.15, 300.0)};
         md.alpha = 0.2;
         md.beta = 0.005;
         md.forcing = {{4.1, 0.3, {5.0, -1.2}}};
@@ -194,7 +208,7 @@ std::vector<Model> sample_models() {
         md.friction_slots = {{true, 0.2, 0.3}, {false, 0.0, 0.0}};
         md.springs = {{kGround, 0, 20.0}, {0, 1, 8.0}};
         md.dampers = {{1, kGround, 6.0}, {0, 1, 0.5}};
-        md.contacts = {{"stop", 1, kGround, 0.1, 60.0}};
+        md.contacts = {make_contact("stop", 1, kGround, 0.1, 60.0)};
         md.alpha = 0.05;
         md.beta = 0.002;
         md.forcing = {{2.5, 0.3, {1.0, 0.0}}};

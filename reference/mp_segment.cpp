@@ -257,10 +257,10 @@ MpModel::MpModel(const Model& model, int digits)
         for (std::size_t i = 0; i < model.dof(); ++i)
             for (std::size_t j = 0; j < model.dof(); ++j) M[i][j] = F(model.mass_entry(i, j));
     }
-    for (const Spring& s : model.springs) springs.push_back({s.a, s.b, F(s.k), zero, zero});
+    for (const Spring& s : model.springs) springs.push_back({s.a, s.b, F(s.k), zero, zero, {}});
     for (const Contact& c : model.contacts) contacts.push_back({c.a, c.b, F(c.k), F(c.gap), F(c.c), c.weights});
     for (const Jenkins& e : model.jenkins) jenkins.push_back({e.a, e.b, F(e.k), F(e.slip_force), zero, e.weights});
-    for (const Damper& d : model.dampers) dampers.push_back({d.a, d.b, F(d.c), zero, zero});
+    for (const Damper& d : model.dampers) dampers.push_back({d.a, d.b, F(d.c), zero, zero, {}});
     f_const.assign(static_cast<std::size_t>(n), zero);
     for (int i = 0; i < n; ++i)
         if (static_cast<std::size_t>(i) < model.load.size()) f_const[i] = F(model.load[i]);
