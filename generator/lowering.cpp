@@ -1024,8 +1024,7 @@ Program lower(const Derivation& d, ProgramNames names) {
             const Contact& ct = model.contacts[sf.element];
             if (named) comment += "g_" + F + ": gap of contact " + ct.name + " = " + gap_text(model, ct);
             along_rows(ct.direction(), V, harmonic_x, each_mode_of, al, Gs, Gc);
-        } else if (sf.kind == SwitchKind::velocity &&
-                   model.friction_slot(static_cast<std::size_t>(sf.element)).partner == kGround) {
+        } else if (sf.kind == SwitchKind::velocity && partner_of(sf.element) == kGround) {
             const int i = sf.element;
             if (named) comment += "g_" + F + ": velocity of " + model.masses[i].name + " (sliding)";
             const int r = free_of[i];
@@ -1051,11 +1050,10 @@ Program lower(const Derivation& d, ProgramNames names) {
             const int i = sf.element;
             const bool pos = sf.kind == SwitchKind::release_pos;
             const Mass& ms = model.masses[i];
-            const int partner = model.friction_slot(static_cast<std::size_t>(i)).partner;
             const double mu_s_n = d.mu_s_n[static_cast<std::size_t>(i)];
             const int sigma = pos ? 1 : -1;
             const LinValue limit = LinValue::constant(mu_s_n);
-            if (partner == kGround && d.held.empty()) {  // lumped: D_i = A_i
+            if (partner_of(i) == kGround && d.held.empty()) {  // lumped: D_i = A_i
                 if (named) comment += std::string("g_") + F + ": " + (pos ? "A" : "-A") + " - mu_s N of stuck " + ms.name +
                            ", A = -K x - C v + f + sum_h F_h sin (force but friction)";
                 Lin A, dA;
@@ -1083,8 +1081,8 @@ Program lower(const Derivation& d, ProgramNames names) {
                 // forces with their kinetic friction.
                 std::vector<std::pair<int, DD>> terms;
                 std::string prefix = "A_pair_";
-                if (partner != kGround) {
-                    const int p = partner;
+                if (partner_of(i) != kGround) {
+                    const int p = partner_of(i);
                     const Mass& mp = model.masses[static_cast<std::size_t>(p)];
                     if (named) comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of " + ms.name + " stuck to " +
                                mp.name + ", D = (m_p A_i - m_i A_p)/(m_i + m_p)";

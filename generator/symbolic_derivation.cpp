@@ -176,13 +176,11 @@ bool derive_symbolic(const Model& model, const Configuration& cfg, SymbolicDeriv
             f[i] += k * gap[c] * exact(wi);
         });
     }
-    const ex alpha = b.field("damping.alpha", 0), beta = b.field("damping.beta", 0);
-    const ex g = b.parameter("g");
-    for (std::size_t i = 0; i < n;
-         ++i)  // an element's normal force as given, else the weight m g (FrictionSlot::normal in elements/friction.h)
-        normal[i] = model.friction_slot(i).normal > 0.0
-                        ? b.field("mass[" + idx(i) + "].normal", model.friction_slot(i).normal)
-                        : m[i] * g;
+    const ex alpha = b.field("damping.alpha", 0), beta = b.field("damping.beta", 0), g = b.parameter("g");
+    for (std::size_t i = 0; i < n; ++i) {  // an element's normal force as given, else the weight m g (FrictionSlot)
+        const double given = model.friction_slot(i).normal;
+        normal[i] = given > 0.0 ? b.field("mass[" + idx(i) + "].normal", given) : m[i] * g;
+    }
 
     // Reduced system of the free masses.
     d.M = GiNaC::matrix(nf, nf);
