@@ -251,29 +251,30 @@ TEST(JenkinsDirection, AFrictionJointOnARelativeRotationGivesTheEventsOfCvodeAnd
     expect_events_of_cvode_and_the_reference(model);
 }
 
+// One Jenkins element written twice: between w4 and the ground (k, F_s),
+// and along u = 2 w4 (k / 4, F_s / 2).
+const char* kJointBetween = "[[jenkins]]\nname = \"j\"\nbetween = [\"w4\", \"ground\"]\nk = 2000.0\nslip_force = 2.0\n";
+const char* kJointScaled = "[[jenkins]]\nname = \"j\"\ndirection = { w4 = 2.0 }\nk = 500.0\nslip_force = 1.0\n";
+
 TEST(JenkinsDirection, AScaledDirectionIsTheElementBetweenTwoBodies) {
     // u = 2 w4 with k / 4 and F_s / 2 is w4 - ground with k and F_s: stuck,
     // the force on w4 is 2 (k/4) (2 w4 - s') = k (w4 - s'/2); it slips where
     // (k/4) |2 w4 - s'| = F_s / 2, i.e. k |w4 - s'/2| = F_s, and then pushes
     // with 2 F_s / 2 = F_s: the same motion, the same instants.
     testing::TempDir a, b;
-    const Model between = read_model(breathing_crack(
-        a, "[[jenkins]]\nname = \"j\"\nbetween = [\"w4\", \"ground\"]\nk = 2000.0\nslip_force = 2.0\n"));
-    const Model scaled = read_model(
-        breathing_crack(b, "[[jenkins]]\nname = \"j\"\ndirection = { w4 = 2.0 }\nk = 500.0\nslip_force = 1.0\n"));
+    const Model between = read_model(breathing_crack(a, kJointBetween)),
+                scaled = read_model(breathing_crack(b, kJointScaled));
     expect_the_same_instants(between, scaled);
 }
 
 TEST(JenkinsDirection, OrbitsAndExponentsOfAScaledDirectionAreThoseOfTheElementBetweenTwoBodies) {
-    // The two writings of one element as above: the same periodic orbit (its
-    // slider at twice the position on u = 2 w4), the same Floquet multipliers
-    // and the same Lyapunov exponents (a linear change of the slider's scale
-    // changes neither), on the Eigen solver and the programs.
+    // The two writings of one element: the same periodic orbit (its slider at
+    // twice the position on u = 2 w4) and the same Floquet multipliers, on the
+    // Eigen solver and the programs; Lyapunov exponents that converge to each
+    // other (a finite time's depend on the slider's scale, below).
     testing::TempDir a, b;
-    const Model between = read_model(breathing_crack(
-        a, "[[jenkins]]\nname = \"j\"\nbetween = [\"w4\", \"ground\"]\nk = 2000.0\nslip_force = 2.0\n"));
-    const Model scaled = read_model(
-        breathing_crack(b, "[[jenkins]]\nname = \"j\"\ndirection = { w4 = 2.0 }\nk = 500.0\nslip_force = 1.0\n"));
+    const Model between = read_model(breathing_crack(a, kJointBetween)),
+                scaled = read_model(breathing_crack(b, kJointScaled));
     for (KernelChoice kernels : {KernelChoice::eigen, KernelChoice::generic}) {
         PeriodicOptions o;
         o.kernels = kernels;
