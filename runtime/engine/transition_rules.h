@@ -145,13 +145,13 @@ bool decide_together(const P& p, Configuration& cfg, std::vector<signed char>& s
         for (; m; m &= m - 1) ++c;
         return c;
     };
-    auto first_in_order =
-        [k](unsigned m) {  // bit j of m (friction among[j]) as bit k-1-j: the first friction weighs most
-            unsigned r = 0;
-            for (std::size_t j = 0; j < k; ++j)
-                if (m >> j & 1u) r |= 1u << (k - 1 - j);
-            return r;
-        };
+    // Bit j of a set (friction among[j]) as bit k-1-j: the first friction weighs most.
+    auto first_in_order = [k](unsigned m) {
+        unsigned r = 0;
+        for (std::size_t j = 0; j < k; ++j)
+            if (m >> j & 1u) r |= 1u << (k - 1 - j);
+        return r;
+    };
     std::stable_sort(stuck_sets.begin(), stuck_sets.end(), [&](unsigned a, unsigned b) {
         return count(a) != count(b) ? count(a) > count(b) : first_in_order(a) > first_in_order(b);
     });
