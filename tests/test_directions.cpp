@@ -24,6 +24,7 @@
 #include "fe_models.h"
 #include "flow.h"
 #include "hsnc/lyapunov.h"
+#include "hsnc/modes.h"
 #include "hsnc/periodic.h"
 #include "model_reader.h"
 #include "shooting.h"
@@ -325,6 +326,41 @@ TEST(JenkinsDirection, OrbitsAndExponentsOfAScaledDirectionAreThoseOfTheElementB
         EXPECT_LT(dl[0], 2 * std::log(2.0) / 5.0);
         EXPECT_LT(dl[1], 0.4 * dl[0]);
     }
+}
+
+TEST(JenkinsDirection, TheDampedModeOfAScaledDirectionIsThatOfTheElementBetweenTwoBodies) {
+    // The first damped mode (EPMC) of the cracked cantilever with the joint on
+    // w4, written both ways: through stick (below 1e-3 at w4 the joint holds)
+    // into slip, the same frequency and damping ratio at every amplitude.
+    testing::TempDir a, b;
+    const Model between = read_model(breathing_crack(a, kJointBetween)),
+                scaled = read_model(breathing_crack(b, kJointScaled));
+    ModesOptions o;
+    o.dof = "w4";
+    o.from = 5e-4;
+    o.to = 2e-3;
+    o.points = 4;
+    o.kernels = KernelChoice::generic;
+    const ModesResult p = modes(between, o), q = modes(scaled, o);
+    ASSERT_EQ(p.status, ModesStatus::ok) << p.message;
+    ASSERT_EQ(q.status, ModesStatus::ok) << q.message;
+    ASSERT_EQ(p.points.size(), q.points.size());
+    ASSERT_EQ(p.points.size(), 4u);
+    double d_omega = 0.0, d_zeta = 0.0;
+    for (std::size_t k = 0; k < p.points.size(); ++k) {
+        EXPECT_NEAR(p.points[k].amplitude, q.points[k].amplitude, 1e-15);
+        d_omega = std::max(d_omega, std::fabs(p.points[k].omega - q.points[k].omega) / p.points[k].omega);
+        d_zeta = std::max(d_zeta, std::fabs(p.points[k].damping_ratio - q.points[k].damping_ratio));
+    }
+    const ModePoint &first = p.points.front(), &last = p.points.back();
+    std::printf(
+        "%zu points: omega %.6f -> %.6f rad/s, damping ratio %.5f -> %.5f; the two writings %.3g (omega, "
+        "relative) and %.3g (ratio) apart\n",
+        p.points.size(), first.omega, last.omega, first.damping_ratio, last.damping_ratio, d_omega, d_zeta);
+    EXPECT_LT(last.omega, first.omega) << "slip in the joint should soften the mode";
+    EXPECT_GT(last.damping_ratio, first.damping_ratio) << "and damp it";
+    EXPECT_LT(d_omega, 1e-9);
+    EXPECT_LT(d_zeta, 1e-9);
 }
 
 TEST(JenkinsDirection, AStuckJointStampsKWwTAndItsSlidersPreload) {

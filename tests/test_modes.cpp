@@ -591,6 +591,35 @@ TEST(Modes, BeamWithAJenkinsJointSoftensFromStuckTowardFreeAndDamps) {
     EXPECT_GT(last.damping_ratio, 0.0);
 }
 
+TEST(Modes, AJenkinsJointWithStiffnessProportionalDampingHasTheLinearRatioBelowTheSlip) {
+    // beta K with EPMC's alpha - xi < 0: the Eigen solver's bound of a rigid-body
+    // mode's terms, e^{-alpha s} at the horizon's end, was e^{+inf} times a zero
+    // weight (no rigid mode: NaN), and every run failed at t = 0 ("non-finite
+    // switch function"). Stuck (A <= F_s / k_t = 0.1) the mode is linear, omega = 2
+    // and xi = beta omega^2 = 0.04; slipping it softens and damps more.
+    Model model = jenkins_oscillator();
+    model.beta = 0.01;
+    ModesOptions o;
+    o.from = 0.05;
+    o.to = 0.3;
+    o.points = 6;
+    const ModesResult r = modes(model, o);
+    ASSERT_EQ(r.status, ModesStatus::ok) << r.message;
+    ASSERT_EQ(r.points.size(), 6u);
+    for (const ModePoint& p : r.points) {
+        if (p.amplitude <= 0.1 + 1e-12) {
+            EXPECT_NEAR(p.omega, 2.0, 1e-12) << p.amplitude;
+            EXPECT_NEAR(p.xi, 0.04, 1e-12) << p.amplitude;
+            EXPECT_NEAR(p.damping_ratio, 0.01, 1e-12) << p.amplitude;
+        } else {
+            EXPECT_LT(p.omega, 2.0) << p.amplitude;
+            EXPECT_GT(p.damping_ratio, 0.01) << p.amplitude;
+        }
+    }
+    std::printf("[ info ] Jenkins joint with beta K: omega %.6f, ratio %.6f at A = %.2f\n", r.points.back().omega,
+                r.points.back().damping_ratio, r.points.back().amplitude);
+}
+
 TEST(Modes, RayleighDampingAloneGivesTheConservativeBackboneAndTheLinearRatio) {
     // alpha M only: EPMC's xi cancels it exactly, so the orbit is the conservative one (the
     // bilinear closed form) and the damping ratio alpha / (2 omega) at every amplitude.

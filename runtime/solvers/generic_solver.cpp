@@ -256,6 +256,9 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
         max_step_ = std::min(max_step_, kGrowthHorizon / -c_min);
         growth_ = std::exp(kGrowthHorizon);
     }
+    // A rigid-body mode's terms grow as e^{-alpha s} with alpha < 0 (EPMC's
+    // alpha - xi): their bound at the horizon's end needs a finite horizon.
+    if (alpha_ < 0.0) max_step_ = std::min(max_step_, kGrowthHorizon / -alpha_);
 
     // The stiff tail: modes far above the motion's own rates (the lowest
     // flexible mode, the forcing), whose free oscillation the split bound
@@ -631,7 +634,8 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
         switch_value(sf, t_, t_.coupled() ? frel_ : fseg_, out, xmag_, vmag_, sn_, cs_, g, dg, scale);
         // |g''(s)| for s in [tau, tau + max_step]: standard sinusoids, rigid modes
         // (exact, decaying as e^{-alpha s}), homogeneous and coupled modal bounds.
-        double B = bound_sin_(static_cast<Eigen::Index>(f)) + std::abs(rho_(static_cast<Eigen::Index>(f))) * rigid_decay;
+        const double rho = std::abs(rho_(static_cast<Eigen::Index>(f)));  // 0 without rigid-body modes
+        double B = bound_sin_(static_cast<Eigen::Index>(f)) + (rho == 0.0 ? 0.0 : rho * rigid_decay);
         for (int j = 0; j < nf_; ++j)
             B += absW_(static_cast<Eigen::Index>(f), j) * b2_(j) + absZ_(static_cast<Eigen::Index>(f), j) * b3_(j);
         out.g[f] = g;
