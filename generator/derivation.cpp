@@ -408,13 +408,9 @@ ex slider_preload(const Derivation& d, const SegmentInputs& in, int i) {
         if (d.cfg.slip[j] != 0) continue;
         const Jenkins& e = model.jenkins[j];
         const ex p = exact(e.k) * in.x0[model.dof() + j];
-        if (!e.weights.empty()) {  // k s w_i along a general direction
-            for (const Weight& t : e.weights)
-                if (t.body == i) f += exact(t.w) * p;
-            continue;
-        }
-        if (e.a == i) f += p;
-        if (e.b == i) f -= p;
+        for_each_term(e.direction(), [&](int body, double w) {  // k s w_i (+-k s between two bodies)
+            if (body == i) f += exact(w) * p;
+        });
     }
     return f;
 }

@@ -210,13 +210,9 @@ void for_each_slider_preload(const Model& model, const Configuration& cfg, int i
     for (std::size_t j = 0; j < model.jenkins.size(); ++j) {
         if (cfg.slip[j] != 0) continue;
         const Jenkins& e = model.jenkins[j];
-        if (!e.weights.empty()) {
-            for (const Weight& t : e.weights)
-                if (t.body == i) fn(e.k * t.w, j);
-            continue;
-        }
-        if (e.a == i) fn(e.k, j);
-        if (e.b == i) fn(-e.k, j);
+        for_each_term(e.direction(), [&](int body, double w) {
+            if (body == i) fn(e.k * w, j);
+        });
     }
 }
 

@@ -500,12 +500,9 @@ void MpSegment::switch_rows() {
             const auto& ct = mp.contacts[sf.element];
             for (int j = 0; j < nf_; ++j) {
                 cl_F w = Z0;
-                if (ct.weights.empty()) {
-                    if (ct.a != kGround && slot_[ct.a] >= 0) w = w + phi_[slot_[ct.a]][j];
-                    if (ct.b != kGround && slot_[ct.b] >= 0) w = w - phi_[slot_[ct.b]][j];
-                }
-                for (const Weight& t : ct.weights)
-                    if (slot_[t.body] >= 0) w = w + mp.F(t.w) * phi_[slot_[t.body]][j];
+                for_each_term(ct.direction(), [&](int body, double wi) {
+                    if (slot_[body] >= 0) w = w + mp.F(wi) * phi_[slot_[body]][j];
+                });
                 W_[f][j] = w;
             }
         } else if (sf.kind == SwitchKind::velocity) {
@@ -519,12 +516,9 @@ void MpSegment::switch_rows() {
             const cl_F c = sf.kind == SwitchKind::slip_neg ? -e.k : sf.kind == SwitchKind::slip_pos ? e.k : mp.one;
             for (int j = 0; j < nf_; ++j) {
                 cl_F w = Z0;
-                if (e.weights.empty()) {
-                    if (e.a != kGround && slot_[e.a] >= 0) w = w + phi_[slot_[e.a]][j];
-                    if (e.b != kGround && slot_[e.b] >= 0) w = w - phi_[slot_[e.b]][j];
-                }
-                for (const Weight& t : e.weights)
-                    if (slot_[t.body] >= 0) w = w + mp.F(t.w) * phi_[slot_[t.body]][j];
+                for_each_term(e.direction(), [&](int body, double wi) {
+                    if (slot_[body] >= 0) w = w + mp.F(wi) * phi_[slot_[body]][j];
+                });
                 (sf.kind == SwitchKind::slip_velocity ? Z_ : W_)[f][j] = c * w;
             }
         } else {
@@ -783,28 +777,16 @@ void MpSegment::init_damped(const Model& model) {
         const SwitchFunction& sf = switches_[f];
         const int e = sf.element;
         if (sf.kind == SwitchKind::gap) {
-            if (mp.contacts[e].weights.empty()) {
-                on(Lx_[f], mp.contacts[e].a, mp.one);
-                on(Lx_[f], mp.contacts[e].b, -mp.one);
-            }
-            for (const Weight& t : mp.contacts[e].weights) on(Lx_[f], t.body, mp.F(t.w));
+            for_each_term(mp.contacts[e].direction(), [&](int body, double w) { on(Lx_[f], body, mp.F(w)); });
         } else if (sf.kind == SwitchKind::velocity) {
             on(Lv_[f], e, mp.one);
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg) {
             const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
             const cl_F k = sf.kind == SwitchKind::slip_pos ? el.k : -el.k;
-            if (el.weights.empty()) {
-                on(Lx_[f], el.a, k);
-                on(Lx_[f], el.b, -k);
-            }
-            for (const Weight& t : el.weights) on(Lx_[f], t.body, k * mp.F(t.w));
+            for_each_term(el.direction(), [&](int body, double w) { on(Lx_[f], body, k * mp.F(w)); });
         } else if (sf.kind == SwitchKind::slip_velocity) {
             const MpModel::Link& el = mp.jenkins[static_cast<std::size_t>(e)];
-            if (el.weights.empty()) {
-                on(Lv_[f], el.a, mp.one);
-                on(Lv_[f], el.b, -mp.one);
-            }
-            for (const Weight& t : el.weights) on(Lv_[f], t.body, mp.F(t.w));
+            for_each_term(el.direction(), [&](int body, double w) { on(Lv_[f], body, mp.F(w)); });
         } else {  // +-A_e, A = -K x - C v + ... + F sin
             const cl_F sg = sf.kind == SwitchKind::release_pos ? mp.one : -mp.one;
             for (std::size_t r = 0; r < nf; ++r) {
@@ -892,11 +874,7 @@ void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::ve
         const MpModel::Link& e = mp.jenkins[j];
         slider_[j] = x0[static_cast<std::size_t>(n_) + j];
         const cl_F p = e.k * slider_[j];
-        if (e.weights.empty()) {
-            if (e.a != kGround) fseg_[e.a] = fseg_[e.a] + p;
-            if (e.b != kGround) fseg_[e.b] = fseg_[e.b] - p;
-        }
-        for (const Weight& t : e.weights) fseg_[t.body] = fseg_[t.body] + mp.F(t.w) * p;
+        for_each_term(e.direction(), [&](int body, double w) { fseg_[body] = fseg_[body] + mp.F(w) * p; });
     }
     // Constant force on each coordinate, summed over its masses (T^T (f - K e)):
     // loads, preloads, the masses held still as supports (-K_FS x_S), the riders'
