@@ -44,6 +44,16 @@ std::string num(double value) {
     return out.str();
 }
 
+// What an element acts on: "  between a and b", or "  along w1 dof1 w2 dof2 ...".
+void acts_along(const Model& model, int a, int b, const std::vector<Weight>& weights, std::ostream& out) {
+    if (weights.empty()) {
+        out << "  between " << body_name(model, a) << " and " << body_name(model, b);
+        return;
+    }
+    out << "  along";
+    for (const Weight& w : weights) out << " " << num(w.w) << " " << body_name(model, w.body);
+}
+
 void print_summary(const Model& model, std::ostream& out) {
     out << "model: " << model.name << "\n";
     out << "source: " << model.source << "\n";
@@ -115,11 +125,7 @@ void print_summary(const Model& model, std::ostream& out) {
     out << "contacts: " << model.contacts.size() << "\n";
     for (const Contact& c : model.contacts) {
         out << "  " << c.name;
-        if (c.weights.empty()) out << "  between " << body_name(model, c.a) << " and " << body_name(model, c.b);
-        else {
-            out << "  along";
-            for (const Weight& w : c.weights) out << " " << num(w.w) << " " << body_name(model, w.body);
-        }
+        acts_along(model, c.a, c.b, c.weights, out);
         out << "  gap = " << num(c.gap);
         if (c.rigid())
             out << "  rigid stop, restitution e = " << num(c.restitution);
@@ -149,12 +155,7 @@ void print_summary(const Model& model, std::ostream& out) {
             << "  (spring in series with a slider; stuck at t0, unstretched)\n";
         for (const Jenkins& j : model.jenkins) {
             out << "  " << j.name;
-            if (j.weights.empty())
-                out << "  between " << body_name(model, j.a) << " and " << body_name(model, j.b);
-            else {
-                out << "  along";
-                for (const Weight& w : j.weights) out << " " << num(w.w) << " " << body_name(model, w.body);
-            }
+            acts_along(model, j.a, j.b, j.weights, out);
             out << "  k = " << num(j.k) << "  slip_force = " << num(j.slip_force) << "  (slips at a stretch of "
                 << num(j.slip_force / j.k) << ")\n";
         }
