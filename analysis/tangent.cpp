@@ -360,6 +360,36 @@ bool salt_impact(const Model& model, const Configuration& A, const signed char* 
     return true;
 }
 
+// The same jump on the full state z = (x, v, s) of a model with stick
+// elements (stick_tangent.h): Dg = diag(I, R, I) (the sliders, like the
+// positions, are continuous), f-+ the full vector fields (a slider's rate is
+// u' while it slips). The impact may change the Jenkins elements' states
+// only (one the jump turned against its slip sticks: its decision is that of
+// the new velocity's sign, not of the perturbation); a friction it sets
+// moving, or any other change, is not taken.
+bool salt_impact_stick(const Model& model, const Configuration& A, const signed char* sgnA, const Configuration& B,
+                       const signed char* sgnB, int c, double t, const double* x, const double* v_after,
+                       Eigen::MatrixXd& Y) {
+    if (A.stuck != B.stuck || A.closed != B.closed) return false;
+    const int n = static_cast<int>(model.dof());
+    std::vector<double> wv, Mwv;
+    const double wMw = impact_direction(model, c, wv, Mwv), e = model.contacts[static_cast<std::size_t>(c)].restitution;
+    const Eigen::Map<const Eigen::VectorXd> w(wv.data(), n), Mw(Mwv.data(), n);
+    const Eigen::Map<const Eigen::VectorXd> vp(v_after, n);
+    const double rate = -w.dot(vp) / e;  // G' before the impact
+    if (!(std::fabs(rate) > 0.0) || !std::isfinite(rate)) return false;
+    const Eigen::VectorXd vm = vp + ((1 + e) * rate / wMw) * Mw;
+    const Eigen::MatrixXd R = Eigen::MatrixXd::Identity(n, n) - ((1 + e) / wMw) * Mw * w.transpose();
+    const Eigen::VectorXd fm = stick_field(model, A, sgnA, t, x, vm.data()),
+                          fp = stick_field(model, B, sgnB, t, x, v_after);
+    Eigen::VectorXd jump = fp - fm;  // f+ - Dg f-
+    jump.segment(n, n) = fp.segment(n, n) - R * fm.segment(n, n);
+    const Eigen::RowVectorXd W = (w.transpose() * Y.topRows(n)) / rate;  // h_y^T Y / G'-
+    Y.middleRows(n, n) = R * Y.middleRows(n, n);
+    Y.noalias() += jump * W;
+    return true;
+}
+
 // Whether the instant's switches include an impact (a rigid stop's gap).
 const SwitchFunction* impact_of(const Model& model, const std::vector<SwitchFunction>& sw) {
     for (const SwitchFunction& f : sw)
@@ -391,9 +421,11 @@ bool Tangent::apply_saltation(const SwitchRecord& r, Eigen::MatrixXd& Y) {
     const std::vector<SwitchFunction>& sw = *r.switched;
     const int n = static_cast<int>(model_.dof());
     if (const SwitchFunction* f = impact_of(model_, sw)) {  // a lone impact, else singular
-        if (stick_ || sw.size() > 1) return false;
+        if (sw.size() > 1) return false;
         Eigen::MatrixXd Z = Y;
-        if (!salt_impact(model_, *r.before, r.sgn_before, *r.after, r.sgn_after, f->element, r.t, r.x, r.v, Z))
+        if (stick_ ? !salt_impact_stick(model_, *r.before, r.sgn_before, *r.after, r.sgn_after, f->element, r.t, r.x,
+                                        r.v, Z)
+                   : !salt_impact(model_, *r.before, r.sgn_before, *r.after, r.sgn_after, f->element, r.t, r.x, r.v, Z))
             return false;
         Y = std::move(Z);
         return true;

@@ -1381,19 +1381,14 @@ private:
         apply_state_overrides(v0_, model_.v0, "initial.v");
     }
 
-    /// A rigid stop (restitution) must not start penetrated, and Jenkins
-    /// elements do not take impacts yet (a slider's slip would have to be
-    /// decided again at the velocity jump).
+    /// A rigid stop (restitution) must not start penetrated, nor on the stop
+    /// moving into it.
     void check_rigid_stops(const toml::table& root) {
         for (std::size_t c = 0; c < model_.contacts.size(); ++c) {
             const Contact& ct = model_.contacts[c];
             if (!ct.rigid()) continue;
             const std::string path = "contact[" + std::to_string(c + 1) + "]";
             const std::size_t at = line_of(root, "contact", c, "restitution");
-            if (!model_.jenkins.empty())
-                fail_at(at, path + ".restitution",
-                        "rigid stops (restitution) do not yet take Jenkins elements in the same model ('" +
-                            model_.jenkins.front().name + "')");
             double u = 0.0, rate = 0.0;
             for_each_term(ct.direction(), [&](int i, double w) {
                 u += w * model_.x0[static_cast<std::size_t>(i)];

@@ -320,6 +320,13 @@ public:
         return {{contact::gap_value(w, k.gap, m, 0), contact::gap_value(w, k.gap, m, 1)},
                 {contact::gap_magnitude(w, k.gap, m, 0), contact::gap_magnitude(w, k.gap, m, 1)}};
     }
+    int slip_velocity_sign(int j) const {
+        const MpModel::Link& e = mp.jenkins[static_cast<std::size_t>(j)];
+        const cl_F* rows[] = {v_.data()};
+        const RowsMotion<cl_F, decltype(rows)> m(rows, nullptr, mp.zero);  // magnitudes |v|
+        const cl_F rate = along(e.direction(), m, 0);
+        return negligible(rate, along_magnitude(e.direction(), m, 0)) ? 0 : sign(rate);
+    }
     bool rigid(int c) const { return model_.contacts[static_cast<std::size_t>(c)].rigid(); }
     // Newton's law at rigid stop c (contact.h impact) at this precision: M^-1 w
     // from the exact inverse of a coupled M (held_inverse with nothing held).

@@ -33,6 +33,7 @@
 //   bool slips_on(const Configuration&, int j) const;  // a slipping element whose relative velocity
 //                                                      // touched 0 while its relative acceleration (from
 //                                                      // just before) keeps the slip's sign: no stick
+//   int slip_velocity_sign(int j) const;               // of Jenkins element j's u' now; 0 when zero to rounding
 //   bool rigid(int c) const;                           // contact c is a rigid stop (restitution)
 //   void impact(int c);                                // its velocity jump at G_c = 0 (contact.h impact)
 // where Series<T> holds derivatives d[k] with the magnitudes mag[k] of their
@@ -196,7 +197,8 @@ bool tied(const P& p, const Series<T>& G) {
 /// each one's velocity jump, an `impact` event, then every friction's state
 /// by the new velocities: a held one set moving releases along its velocity,
 /// a sliding one reverses with it or, stopped exactly, is decided by the
-/// stick rule (`deciding`). True when one is a touch (G' = 0 to rounding)
+/// stick rule (`deciding`); a slipping Jenkins element sticks where the jump
+/// turned its relative velocity against the slip (a `stick` event). True when one is a touch (G' = 0 to rounding)
 /// or its rebound is too low for G to resolve while the forces press on:
 /// the motion rests on the stop (`*resting`).
 template <class P>
@@ -240,6 +242,18 @@ bool impacts(P& p, Configuration& cfg, std::vector<signed char>& sgn, const std:
             sgn[u] = static_cast<signed char>(v);
             out.push_back({EventKind::reversal, i});
         }
+    }
+    // A slipping Jenkins element whose relative velocity the jump turned
+    // against its slip sticks (its force starts to fall from slip_force); one
+    // the jump left at rest to rounding is decided as at a slip_velocity
+    // switch (P::slips_on). A stuck one stays stuck: its stretch is continuous.
+    for (std::size_t j = 0; j < p.jenkins(); ++j) {
+        const int sigma = cfg.slip[j];
+        if (sigma == 0) continue;
+        const int v = p.slip_velocity_sign(static_cast<int>(j));
+        if (v == sigma || (v == 0 && p.slips_on(cfg, static_cast<int>(j)))) continue;
+        cfg.slip[j] = 0;
+        out.push_back({EventKind::stick, p.dof() + static_cast<int>(j)});
     }
     return false;
 }

@@ -100,6 +100,13 @@ public:
         const double mag = jenkins::slip_velocity_magnitude(e.direction(), m, 1);
         return !negligible(w_rate, mag) && sign(w_rate) == cfg.slip[static_cast<std::size_t>(j)];
     }
+    int slip_velocity_sign(int j) const {
+        const Jenkins& e = model_.jenkins[static_cast<std::size_t>(j)];
+        const double* rows[] = {x_, v_};
+        const auto m = double_motion(rows);  // magnitudes |x|, |v|
+        const double rate = jenkins::slip_velocity_value(e.direction(), m, 0);
+        return negligible(rate, jenkins::slip_velocity_magnitude(e.direction(), m, 0)) ? 0 : sign(rate);
+    }
     bool rigid(int c) const { return model_.contacts[static_cast<std::size_t>(c)].rigid(); }
     // Newton's law at rigid stop c (contact.h impact), M^-1 w from held_mass.h.
     void impact(int c) {
