@@ -183,9 +183,6 @@ SweepPlan::SweepPlan(const std::string& text, const std::string& source, const M
     if (o.start_periods > 0 && !o.continuation)
         throw OptionError(kPlan, "start_periods", std::to_string(o.start_periods), "only with continuation");
     if (o.continuation) {
-        // Impacts: the shooting's tangent takes them (tests/test_restitution.cpp), but branches
-        // through grazing impacts and chattering are not validated yet.
-        refuse_impacts(model_, "sweep --continuation");
         if (o.restart_each)
             throw OptionError(kPlan, "restart_each", "true", "does not go with continuation (a branch is followed point to point)");
         if (o.method != Method::hsnc)

@@ -338,24 +338,40 @@ private:
     std::map<Configuration, std::unique_ptr<RecordingSolver>> wrappers_;
 };
 
-// The state at the end of every recorded period (samples every T).
+// The state at the end of every recorded period (samples every T), and the
+// slowest impact on each rigid stop (the speed G'- into it, from the state
+// after the jump: G'+ = -e G'-; +infinity where the window has none).
 class StrobeObserver : public Observer {
 public:
-    StrobeObserver(SweepPoint& point, std::size_t n, double t_first, bool keep)
-        : point_(point), n_(n), t_first_(t_first), keep_(keep) {}
+    StrobeObserver(const Model& model, SweepPoint& point, std::size_t n, double t_first, bool keep)
+        : model_(model),
+          point_(point),
+          n_(n),
+          t_first_(t_first),
+          keep_(keep),
+          slowest_impact(model.contacts.size(), INFINITY) {}
     void on_sample(double t, const double* x, const double* v) override {
         if (!keep_ || t == t_first_) return;  // the window's start is the last transient period's end
         point_.strobe_t.push_back(t);
         point_.strobe_x.insert(point_.strobe_x.end(), x, x + n_);
         point_.strobe_v.insert(point_.strobe_v.end(), v, v + n_);
     }
-    void on_event(double, EventKind, int, const double*, const double*) override {}
+    void on_event(double, EventKind kind, int element, const double*, const double* v) override {
+        if (kind != EventKind::impact) return;
+        const auto c = static_cast<std::size_t>(element);
+        const double speed = -gap_rate(model_, element, v) / model_.contacts[c].restitution;
+        slowest_impact[c] = std::min(slowest_impact[c], speed);
+    }
 
 private:
+    const Model& model_;
     SweepPoint& point_;
     std::size_t n_;
     double t_first_;
     bool keep_;
+
+public:
+    std::vector<double> slowest_impact;
 };
 
 // A baseline's recorded window from its samples every h (max of the
@@ -530,10 +546,17 @@ void record(const Model& point_model, State& state, const SweepOptions& o, const
         if (!provider) provider = (own = std::make_unique<GenericSolverProvider>(m)).get();
         SegmentRecorder rec(m, omega, tr, h, acc);
         RecordingProvider recording(*provider, rec);
-        StrobeObserver strobe(pt, n, tr, o.diagram);
+        StrobeObserver strobe(m, pt, n, tr, o.diagram);
         advance(m, state, o, what, tr, te, period, true, strobe, &recording);
         rec.finish(te, 0.0);
         acc.close_window();
+        // An orbit that hits a rigid stop has G = 0 at each impact, its largest
+        // G no sign of how near it is to grazing: the slowest impact's speed
+        // stands for it (positive; it falls to 0 as the orbit grazes, where
+        // the orbit that misses the stop has its largest G rise to 0).
+        for (std::size_t c = 0; c < m.contacts.size() && !acc.gmax.empty(); ++c)
+            if (m.contacts[c].rigid() && std::isfinite(strobe.slowest_impact[c]))
+                acc.gmax[c] = strobe.slowest_impact[c];
         pt.closings = acc.closings;
         pt.sticks = acc.sticks;
         pt.slips = acc.slips;

@@ -28,6 +28,7 @@
 #include "hsnc/lyapunov.h"
 #include "hsnc/periodic.h"
 #include "hsnc/simulate.h"
+#include "hsnc/sweep.h"
 #include "kernel_mode.h"
 #include "model.h"
 #include "model_reader.h"
@@ -497,9 +498,95 @@ TEST(Restitution, ASweepPointRecordsThePeriodicOrbitsAmplitude) {
     EXPECT_NEAR(xmax, largest, 1e-6);
     EXPECT_GT(xmax, 0.5);
     const testing::CliRun cont =
-        testing::run_hsnc("sweep '" + model + "' --param omega --from 1.1 --to 1.2 --points 3 --continuation");
-    EXPECT_EQ(cont.exit_code, 2) << cont.err;
-    EXPECT_NE(cont.err.find("rigid stop (restitution)"), std::string::npos) << cont.err;
+        testing::run_hsnc("sweep '" + model + "' --param omega --from 1.2 --to 1.4 --points 3 --continuation");
+    EXPECT_EQ(cont.exit_code, 0) << cont.err;
+    EXPECT_NE(cont.out.find("status=ok"), std::string::npos) << cont.out;
+}
+
+// Continuation through impacts. The impacting period-1 branch of the impact
+// oscillator from 1.0 to 2.0 rad/s: every stable row is the orbit `periodic`
+// finds from rest (its largest multiplier, 1e-9); the branch loses and
+// regains stability through two period doublings, located (a multiplier at
+// -1, 1e-9) and switched onto (period-2 branches; subcritical: unstable, on
+// the stable side), and shooting from rest finds the period-1 orbit stable
+// just before the first one and unstable just past it. No
+// row says grazing (an impacting orbit's largest G is 0 at every impact:
+// the slowest impact's speed stands for it, so rounding cannot fake a sign
+// change). From 3.0 down, the branch that misses the stop is the linear
+// response F |H(omega)| (1e-12) until it grazes the stop at omega_g,
+// F |H(omega_g)| = gap in closed form; there the impacting orbit's
+// multipliers grow without bound (the impact map's square-root singularity)
+// and the branch stops, within 1e-5 of omega_g, saying so.
+TEST(Restitution, ContinuationFollowsImpactingOrbitsAndStopsAtTheirGrazing) {
+    const std::string text = testing::slurp(std::string(HSNC_SOURCE_DIR) + "/examples/impact-oscillator.toml");
+    auto follow = [&](double from, double to, std::size_t points, int branch_switch) {
+        SweepOptions o;
+        o.param = "omega";
+        o.from = from;
+        o.to = to;
+        o.points = points;
+        o.continuation = true;
+        o.branch_switch = branch_switch;
+        o.max_periods = 3000;
+        return SweepPlan(text, "impact-oscillator.toml", {}, o).run();
+    };
+    auto from_rest = [](double omega, double periods) {
+        PeriodicOptions po;
+        po.transient = 300.0;
+        po.period = periods * 2 * M_PI / omega;
+        return periodic(impact_oscillator(omega), po);
+    };
+    const SweepResult up = follow(1.0, 2.0, 11, 1);
+    ASSERT_GT(up.points.size(), 20u);
+    std::vector<double> doublings;
+    std::size_t checked = 0, period_two = 0;
+    for (const SweepPoint& p : up.points) {
+        ASSERT_EQ(p.failure, "") << p.value;
+        EXPECT_EQ(p.bifurcation.find("grazing"), std::string::npos) << p.value << ": " << p.bifurcation;
+        if (p.branch != 0) {
+            period_two += p.multiple == 2 ? 1 : 0;
+            continue;
+        }
+        if (p.bifurcation == "period_doubling" && p.periods == 0) {  // a located row
+            EXPECT_NEAR(p.max_multiplier, 1.0, 1e-9) << p.value;
+            doublings.push_back(p.value);
+        }
+        if (!p.stable || p.periods == 0) continue;
+        const PeriodicResult o = from_rest(p.value, 1);
+        ASSERT_EQ(o.status, PeriodicStatus::ok) << p.value << ": " << o.message;
+        EXPECT_NEAR(o.max_multiplier, p.max_multiplier, 1e-9) << p.value;
+        ++checked;
+    }
+    EXPECT_GT(checked, 20u);
+    EXPECT_GT(period_two, 5u);
+    ASSERT_EQ(doublings.size(), 2u);
+    // Shooting from rest on either side of the first doubling: stable just
+    // before it, unstable just past it (the same orbit, one impact a period).
+    const PeriodicResult before = from_rest(doublings[0] - 2e-3, 1), past = from_rest(doublings[0] + 2e-3, 1);
+    ASSERT_EQ(before.status, PeriodicStatus::ok) << before.message;
+    ASSERT_EQ(past.status, PeriodicStatus::ok) << past.message;
+    EXPECT_TRUE(before.stable);
+    EXPECT_FALSE(past.stable);
+    EXPECT_EQ(past.events, 1u);
+
+    const SweepResult down = follow(3.0, 2.3, 8, 0);
+    const double zeta2 = 0.05, gap = 0.2;  // alpha = 2 zeta on m = k = 1, F = 1
+    auto response = [&](double w) { return 1.0 / std::sqrt((1 - w * w) * (1 - w * w) + zeta2 * zeta2 * w * w); };
+    // (1 - s)^2 + zeta2^2 s = 1/gap^2 in s = w^2, the upper root.
+    const double b = 2 - zeta2 * zeta2, c = 1 - 1 / (gap * gap);
+    const double omega_g = std::sqrt((b + std::sqrt(b * b - 4 * c)) / 2);
+    ASSERT_GT(down.points.size(), 5u);
+    for (const SweepPoint& p : down.points) {
+        ASSERT_EQ(p.failure, "") << p.value;
+        EXPECT_GT(p.value, omega_g);
+        EXPECT_NEAR(p.xmax[0], response(p.value), 1e-12) << p.value;
+        EXPECT_LT(p.gap_max[0], 0.0) << p.value;
+        EXPECT_TRUE(p.stable) << p.value;
+    }
+    EXPECT_LT(down.points.back().value, omega_g + 1e-5);
+    EXPECT_NE(down.points.back().stop, "");  // the branch says why it stopped
+    std::printf("grazing at omega_g = %.17g (closed form); the branch stops at %.17g\n", omega_g,
+                down.points.back().value);
 }
 
 TEST(Restitution, TheReaderRefusesWhatARigidStopCannotBe) {

@@ -227,6 +227,9 @@ struct SweepPoint {
     /// point failed, and outside a continuation, which alone needs them). A
     /// sign change of either between two points of a branch is
     /// a grazing (the orbit starts or stops closing, or opening, the contact).
+    /// A rigid stop (restitution) that the orbit hits has G = 0 at every
+    /// impact: its gap_max is then the slowest impact's speed G'- > 0, which
+    /// falls to 0 as the orbit comes to graze the stop.
     std::vector<double> gap_max, gap_min;
     /// Each Jenkins element's stretch e = u - s (slips at |k e| = F_s): its
     /// largest and smallest value over the window (a continuation's points only).

@@ -724,7 +724,7 @@ void refuse_impacts(const Model& model, const std::string& who) {
         if (c.rigid())
             throw InputError(who + ": " + model.source + ": contact '" + c.name +
                              "' is a rigid stop (restitution): it does not take impacts yet; simulate, periodic, "
-                             "lyapunov and sweep (without continuation) do");
+                             "lyapunov and sweep do");
 }
 
 RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
