@@ -493,8 +493,11 @@ amplitude = { m = 0.1 }
 // the stuck system (stiffness 2) about x = 0; the slipping orbits are
 // `hsnc periodic`'s at the same omega; each slip onset is located where that
 // closed form's stretch reaches the slip band.
-TEST(ContinuationClosedForm, JenkinsOscillatorAndUnderPlatformDamperCompleteThroughSlipOnset) {
-    const SweepResult r = SweepPlan(kJenkinsOscillator, "jenkins.toml", {}, continuation("omega", 0.5, 3.0, 26)).run();
+// The 1-dof oscillator's branch (model `text`, its joint along u = w x):
+// the slip onsets where the closed form puts them, the stuck rows the linear
+// response, the slipping rows the orbits `periodic` finds.
+void jenkins_oscillator_through_slip_onset(const std::string& text, double w_joint) {
+    const SweepResult r = SweepPlan(text, "jenkins.toml", {}, continuation("omega", 0.5, 3.0, 26)).run();
     ASSERT_FALSE(r.points.empty());
     EXPECT_EQ(r.points.back().value, 3.0);
     std::vector<std::size_t> onsets;
@@ -525,6 +528,7 @@ TEST(ContinuationClosedForm, JenkinsOscillatorAndUnderPlatformDamperCompleteThro
             const double A = 0.1 / std::abs(std::complex<double>(2 - w * w, 0.05 * w));
             EXPECT_NEAR(p.xmax[0], A, 1e-10);
             EXPECT_NEAR(p.stretch_max[0], -p.stretch_min[0], 1e-12);
+            EXPECT_NEAR(p.stretch_max[0], w_joint * A, 1e-10);  // the stretch of u = w x about the centred slider
             ++stuck;
             continue;
         }
@@ -533,9 +537,8 @@ TEST(ContinuationClosedForm, JenkinsOscillatorAndUnderPlatformDamperCompleteThro
         PeriodicOptions po;
         po.kernels = KernelChoice::eigen;
         po.transient = 300 * 2 * kPi / w;
-        const PeriodicResult orbit = periodic(
-            parse_model(kJenkinsOscillator, "jenkins.toml", ModelOverrides{{"omega=" + shortest_text(w)}, {}, {}, {}}),
-            po);
+        const PeriodicResult orbit =
+            periodic(parse_model(text, "jenkins.toml", ModelOverrides{{"omega=" + shortest_text(w)}, {}, {}, {}}), po);
         ASSERT_EQ(orbit.status, PeriodicStatus::ok) << orbit.message;
         EXPECT_NEAR(orbit.x[0], p.strobe_x[0], 1e-8);
         EXPECT_NEAR(orbit.v[0], p.strobe_v[0], 1e-8);
@@ -543,6 +546,19 @@ TEST(ContinuationClosedForm, JenkinsOscillatorAndUnderPlatformDamperCompleteThro
     }
     EXPECT_GE(stuck, 10u);
     EXPECT_GE(compared, 3u);
+}
+
+TEST(ContinuationClosedForm, JenkinsOscillatorAndUnderPlatformDamperCompleteThroughSlipOnset) {
+    // The joint written between the mass and the ground, and along the
+    // scaled direction u = 2 x with k/4 and slip_force/2 (the same element,
+    // interface.md "Jenkins elements along a direction"): the same closed forms.
+    std::string scaled = kJenkinsOscillator;
+    scaled.replace(scaled.find("between = [\"m\", \"ground\"]\nk = 1.0\nslip_force = 0.1"), 50,
+                   "direction = { m = 2.0 }\nk = 0.25\nslip_force = 0.05");
+    for (const std::string& text : {std::string(kJenkinsOscillator), scaled}) {
+        SCOPED_TRACE(text == scaled ? "along u = 2 x" : "between m and ground");
+        jenkins_oscillator_through_slip_onset(text, text == scaled ? 2.0 : 1.0);
+    }
 
     const std::string path = std::string(HSNC_SOURCE_DIR) + "/examples/jenkins/under_platform_damper.toml";
     const SweepResult u = SweepPlan::from_file(path, {}, continuation("omega", 6.0, 14.0, 17)).run();
