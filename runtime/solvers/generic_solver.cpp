@@ -34,6 +34,13 @@ constexpr double kCoupled = 0.1;
 // The stiff tail (the split bound's modes) starts this many times above the
 // lowest flexible mode or the forcing, whichever is faster.
 constexpr double kStiffFrom = 32.0;
+// The split bound is scanned for a function only where the stiff tail holds
+// more than this share of its curvature bound B: no cut lowers the slow part's
+// bound below B - B_fast, so below this share the split buys little for its
+// scan (an overdamped tail, as beam-40's, decays within a few of its periods
+// and then holds next to nothing). The function's step is then the whole
+// bound's, as the programs take it; either is safe.
+constexpr double kSplitWorth = 0.05;
 
 // phi_1(x) = (e^x - 1)/x, phi_1(0) = 1 (accurate for every x: expm1).
 double phi1(double x) { return x == 0.0 ? 1.0 : std::expm1(x) / x; }
@@ -636,13 +643,24 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
         // (exact, decaying as e^{-alpha s}), homogeneous and coupled modal bounds.
         const double rho = std::abs(rho_(static_cast<Eigen::Index>(f)));  // 0 without rigid-body modes
         double B = bound_sin_(static_cast<Eigen::Index>(f)) + (rho == 0.0 ? 0.0 : rho * rigid_decay);
-        for (int j = 0; j < nf_; ++j)
-            B += absW_(static_cast<Eigen::Index>(f), j) * b2_(j) + absZ_(static_cast<Eigen::Index>(f), j) * b3_(j);
+        const bool split = out.fast && any_fast_;
+        double B_fast = 0.0;  // the stiff tail's share of B
+        for (int j = 0; j < nf_; ++j) {
+            const double term =
+                absW_(static_cast<Eigen::Index>(f), j) * b2_(j) + absZ_(static_cast<Eigen::Index>(f), j) * b3_(j);
+            B += term;
+            if (split && fast_[j]) B_fast += term;
+        }
         out.g[f] = g;
         out.dg[f] = dg;
         out.scale[f] = scale;
         out.bound[f] = B;
-        if (out.fast && any_fast_) split_bound(f, g, dg, rigid_decay, out);
+        if (!split) continue;
+        if (B_fast > kSplitWorth * B) {
+            split_bound(f, g, dg, rigid_decay, out);
+        } else {  // no cut can lengthen the step by more than about kSplitWorth / 2: the whole bound
+            out.slow[f] = g, out.slow_dg[f] = dg, out.fast[f] = 0.0, out.slow_bound[f] = B;
+        }
     }
 }
 
