@@ -333,28 +333,44 @@ bool salt_step(const Model& model, const Eigen::MatrixXd& KA, const Eigen::Matri
 // after it: y+ = g(y-) = (x, R v-), R = I - (1 + e) M^-1 w w^T / (w^T M^-1 w),
 // where G = w^T x - gap reaches 0; the saltation matrix of a state jump,
 //     S = Dg + (f+ - Dg f-) h_y^T / (h_y^T f-),  h_y = (w, 0),  h_y^T f- = G'-,
-// with f- = (v-, a-), f+ = (v+, a+) the vector fields on either side. Only a
-// lone impact that changes no configuration (no friction set moving) is
-// taken; false otherwise, and for a grazing impact (G'- = 0).
-bool salt_impact(const Model& model, const Configuration& A, const signed char* sgnA, const Configuration& B,
-                 const signed char* sgnB, int c, double t, const double* x, const double* v_after, Eigen::MatrixXd& Y) {
-    if (A != B) return false;
+// with f- = (v-, a-), f+ = (v+, a+) the vector fields on either side.
+struct ImpactJump {
+    Eigen::VectorXd w, vm;  // the stop's direction, the velocities before the jump
+    Eigen::MatrixXd R;      // v+ = R v-
+    double rate = 0.0;      // G'- = h_y^T f-
+};
+
+// The jump at stop c from the velocities after it; false for a grazing
+// impact (G'- = 0: the period map has no derivative there).
+bool impact_jump(const Model& model, int c, const double* v_after, ImpactJump& j) {
     const int n = static_cast<int>(model.dof());
     std::vector<double> wv, Mwv;
     const double wMw = impact_direction(model, c, wv, Mwv), e = model.contacts[static_cast<std::size_t>(c)].restitution;
-    const Eigen::Map<const Eigen::VectorXd> w(wv.data(), n), Mw(Mwv.data(), n);
+    j.w = Eigen::Map<const Eigen::VectorXd>(wv.data(), n);
+    const Eigen::Map<const Eigen::VectorXd> Mw(Mwv.data(), n), vp(v_after, n);
+    j.rate = -j.w.dot(vp) / e;  // G' before the impact
+    if (!(std::fabs(j.rate) > 0.0) || !std::isfinite(j.rate)) return false;
+    j.vm = vp + ((1 + e) * j.rate / wMw) * Mw;
+    j.R = Eigen::MatrixXd::Identity(n, n) - ((1 + e) / wMw) * Mw * j.w.transpose();
+    return true;
+}
+
+// The saltation of an impact on the state (x, v). Only a lone impact that
+// changes no configuration (no friction set moving) is taken; false
+// otherwise, and for a grazing impact.
+bool salt_impact(const Model& model, const Configuration& A, const signed char* sgnA, const Configuration& B,
+                 const signed char* sgnB, int c, double t, const double* x, const double* v_after, Eigen::MatrixXd& Y) {
+    ImpactJump j;
+    if (A != B || !impact_jump(model, c, v_after, j)) return false;
+    const int n = static_cast<int>(model.dof());
     const Eigen::Map<const Eigen::VectorXd> vp(v_after, n);
-    const double rate = -w.dot(vp) / e;  // G' before the impact
-    if (!(std::fabs(rate) > 0.0) || !std::isfinite(rate)) return false;
-    const Eigen::VectorXd vm = vp + ((1 + e) * rate / wMw) * Mw;
-    const Eigen::MatrixXd R = Eigen::MatrixXd::Identity(n, n) - ((1 + e) / wMw) * Mw * w.transpose();
-    const std::vector<double> am = accelerations(model, A, sgnA, t, x, vm.data()),
+    const std::vector<double> am = accelerations(model, A, sgnA, t, x, j.vm.data()),
                               ap = accelerations(model, B, sgnB, t, x, v_after);
     const Eigen::VectorXd jump_a =
-        Eigen::Map<const Eigen::VectorXd>(ap.data(), n) - R * Eigen::Map<const Eigen::VectorXd>(am.data(), n);
-    const Eigen::RowVectorXd W = (w.transpose() * Y.topRows(n)) / rate;  // h_y^T Y / G'-
-    const Eigen::MatrixXd top = Y.topRows(n) + (vp - vm) * W;
-    const Eigen::MatrixXd bottom = R * Y.bottomRows(n) + jump_a * W;
+        Eigen::Map<const Eigen::VectorXd>(ap.data(), n) - j.R * Eigen::Map<const Eigen::VectorXd>(am.data(), n);
+    const Eigen::RowVectorXd W = (j.w.transpose() * Y.topRows(n)) / j.rate;  // h_y^T Y / G'-
+    const Eigen::MatrixXd top = Y.topRows(n) + (vp - j.vm) * W;
+    const Eigen::MatrixXd bottom = j.R * Y.bottomRows(n) + jump_a * W;
     Y.topRows(n) = top;
     Y.bottomRows(n) = bottom;
     return true;
@@ -370,22 +386,15 @@ bool salt_impact(const Model& model, const Configuration& A, const signed char* 
 bool salt_impact_stick(const Model& model, const Configuration& A, const signed char* sgnA, const Configuration& B,
                        const signed char* sgnB, int c, double t, const double* x, const double* v_after,
                        Eigen::MatrixXd& Y) {
-    if (A.stuck != B.stuck || A.closed != B.closed) return false;
+    ImpactJump j;
+    if (A.stuck != B.stuck || A.closed != B.closed || !impact_jump(model, c, v_after, j)) return false;
     const int n = static_cast<int>(model.dof());
-    std::vector<double> wv, Mwv;
-    const double wMw = impact_direction(model, c, wv, Mwv), e = model.contacts[static_cast<std::size_t>(c)].restitution;
-    const Eigen::Map<const Eigen::VectorXd> w(wv.data(), n), Mw(Mwv.data(), n);
-    const Eigen::Map<const Eigen::VectorXd> vp(v_after, n);
-    const double rate = -w.dot(vp) / e;  // G' before the impact
-    if (!(std::fabs(rate) > 0.0) || !std::isfinite(rate)) return false;
-    const Eigen::VectorXd vm = vp + ((1 + e) * rate / wMw) * Mw;
-    const Eigen::MatrixXd R = Eigen::MatrixXd::Identity(n, n) - ((1 + e) / wMw) * Mw * w.transpose();
-    const Eigen::VectorXd fm = stick_field(model, A, sgnA, t, x, vm.data()),
+    const Eigen::VectorXd fm = stick_field(model, A, sgnA, t, x, j.vm.data()),
                           fp = stick_field(model, B, sgnB, t, x, v_after);
     Eigen::VectorXd jump = fp - fm;  // f+ - Dg f-
-    jump.segment(n, n) = fp.segment(n, n) - R * fm.segment(n, n);
-    const Eigen::RowVectorXd W = (w.transpose() * Y.topRows(n)) / rate;  // h_y^T Y / G'-
-    Y.middleRows(n, n) = R * Y.middleRows(n, n);
+    jump.segment(n, n) = fp.segment(n, n) - j.R * fm.segment(n, n);
+    const Eigen::RowVectorXd W = (j.w.transpose() * Y.topRows(n)) / j.rate;  // h_y^T Y / G'-
+    Y.middleRows(n, n) = j.R * Y.middleRows(n, n);
     Y.noalias() += jump * W;
     return true;
 }

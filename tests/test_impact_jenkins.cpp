@@ -20,6 +20,7 @@
 
 #include "engine.h"
 #include "engine_runner.h"
+#include "facade_runner.h"
 #include "generic_solver.h"
 #include "hsnc/periodic.h"
 #include "hsnc/simulate.h"
@@ -31,26 +32,8 @@
 namespace hsnc {
 namespace {
 
-testing::Outcome run(const Model& model, SimulateOptions o) {
-    testing::Recorder rec(model.dof(), model.state_size());
-    o.dt = NAN;
-    o.samples = false;
-    testing::Outcome out;
-    out.summary = simulate(model, o, rec);
-    out.events = rec.events;
-    return out;
-}
-
-SimulateOptions kind(const std::string& how) {
-    SimulateOptions o;
-    if (how == "mp:30")
-        o.precision_digits = 30;
-    else if (how == "cvode")
-        o.method = Method::cvode, o.integrator.rtol = 1e-12, o.integrator.atol = 1e-14;
-    else
-        o.kernels = kernel_choice_from_name(how);
-    return o;
-}
+using testing::options_for;
+using testing::run_simulate;
 
 // A mass m on a Jenkins joint (k, slip force F) to the ground, a rigid stop
 // at x = d, thrown from rest position at speed V.
@@ -112,7 +95,7 @@ TEST(ImpactJenkins, AJointThrownIntoAWallSticksAtTheImpactAsTheClosedFormSays) {
     const int joint = 1;  // events name Jenkins element j as dof() + j
     for (const char* how : {"generic", "interp", "eigen", "mp:30", "cvode"}) {
         if (how == std::string("cvode") && !HSNC_WITH_CVODE) continue;
-        const testing::Outcome r = run(model, kind(how));
+        const testing::Outcome r = run_simulate(model, options_for(how));
         ASSERT_EQ(r.summary.status, RunStatus::ok) << how << ": " << r.summary.message;
         ASSERT_EQ(r.events.size(), 4u) << how;
         const double tol = how == std::string("cvode") ? 1e-9 : 1e-13;
@@ -245,9 +228,9 @@ TEST(ImpactJenkins, APeriodicOrbitWithAJointAndAStopHasTheMultipliersOfItsPeriod
         p.x0 = {x};
         p.v0 = {v};
         p.slider0 = {s};
-        SimulateOptions so = kind(how);
+        SimulateOptions so = options_for(how);
         so.t_end = o.t + T;
-        const testing::Outcome r = run(p, so);
+        const testing::Outcome r = run_simulate(p, so);
         EXPECT_EQ(r.summary.status, RunStatus::ok) << how << ": " << r.summary.message;
         return std::vector<double>{r.summary.x[0], r.summary.v[0], r.summary.slider[0]};
     };

@@ -24,6 +24,7 @@
 #include "cli_runner.h"
 #include "engine_runner.h"
 #include "error.h"
+#include "facade_runner.h"
 #include "fe_models.h"
 #include "hsnc/lyapunov.h"
 #include "hsnc/periodic.h"
@@ -44,26 +45,8 @@ using fe::market;
 using fe::table;
 using fe::write;
 
-testing::Outcome run(const Model& model, SimulateOptions o) {
-    testing::Recorder rec(model.dof(), model.state_size());
-    o.dt = NAN;
-    o.samples = false;
-    testing::Outcome out;
-    out.summary = simulate(model, o, rec);
-    out.events = rec.events;
-    return out;
-}
-
-SimulateOptions kind(const std::string& how) {
-    SimulateOptions o;
-    if (how == "mp:30")
-        o.precision_digits = 30;
-    else if (how == "cvode")
-        o.method = Method::cvode, o.integrator.rtol = 1e-12, o.integrator.atol = 1e-14;
-    else
-        o.kernels = kernel_choice_from_name(how);
-    return o;
-}
+using testing::options_for;
+using testing::run_simulate;
 
 // The impact oscillator of the examples, at omega (rad/s).
 Model impact_oscillator(double omega) {
@@ -115,7 +98,7 @@ TEST(Restitution, ASpringMassBouncesOnItsStopAsTheClosedFormSays) {
     const Model model = bouncing(t.back() + 0.5 * M_PI / w);  // past the 12th impact, before the 13th
     for (const char* how : {"generic", "interp", "eigen", "mp:30", "cvode"}) {
         if (how == std::string("cvode") && !HSNC_WITH_CVODE) continue;
-        const testing::Outcome r = run(model, kind(how));
+        const testing::Outcome r = run_simulate(model, options_for(how));
         ASSERT_EQ(r.summary.status, RunStatus::ok) << how << ": " << r.summary.message;
         ASSERT_EQ(r.events.size(), t.size()) << how;
         const double tol = how == std::string("cvode") ? 1e-9 : 1e-13;
@@ -158,7 +141,7 @@ t_end = 3.0
     const double va = (m1 - e * m2) / (m1 + m2), vb = m1 * (1 + e) / (m1 + m2);
     for (const char* how : {"generic", "interp", "eigen", "mp:30", "cvode"}) {
         if (how == std::string("cvode") && !HSNC_WITH_CVODE) continue;
-        const testing::Outcome r = run(model, kind(how));
+        const testing::Outcome r = run_simulate(model, options_for(how));
         ASSERT_EQ(r.summary.status, RunStatus::ok) << how << ": " << r.summary.message;
         ASSERT_EQ(r.events.size(), 1u) << how;
         EXPECT_NEAR(r.events[0].t, 1.0, how == std::string("cvode") ? 1e-9 : 1e-14) << how;
@@ -203,7 +186,7 @@ t_end = 1.0
     const double ts = 0.25 + vb / (mu * g);  // the block stops
     for (const char* how : {"generic", "interp", "eigen", "mp:30", "cvode"}) {
         if (how == std::string("cvode") && !HSNC_WITH_CVODE) continue;
-        const testing::Outcome r = run(model, kind(how));
+        const testing::Outcome r = run_simulate(model, options_for(how));
         ASSERT_EQ(r.summary.status, RunStatus::ok) << how << ": " << r.summary.message;
         ASSERT_GE(r.events.size(), 3u) << how;
         EXPECT_EQ(r.events[0].kind, EventKind::impact) << how;
@@ -241,9 +224,9 @@ TEST(Restitution, AConsistentMassBarHitsAWallWithItsImpulseAtTheWallsDofOnly) {
     const Model model = read_model(dir / "bar.toml");
     ASSERT_TRUE(model.coupled_mass());
     // The first impact: the engine's against the reference's at 30 digits.
-    SimulateOptions first = kind("generic"), first_ref = kind("mp:30");
+    SimulateOptions first = options_for("generic"), first_ref = options_for("mp:30");
     first.max_events = first_ref.max_events = 1;
-    const testing::Outcome r = run(model, first), ref = run(model, first_ref);
+    const testing::Outcome r = run_simulate(model, first), ref = run_simulate(model, first_ref);
     ASSERT_EQ(r.summary.status, RunStatus::max_events) << r.summary.message;
     ASSERT_EQ(ref.summary.status, RunStatus::max_events) << ref.summary.message;
     ASSERT_EQ(r.events.size(), 1u);
@@ -255,7 +238,7 @@ TEST(Restitution, AConsistentMassBarHitsAWallWithItsImpulseAtTheWallsDofOnly) {
     SimulateOptions before;
     before.kernels = KernelChoice::generic;
     before.t_end = r.events[0].t;  // up to the first impact: the state before it
-    const testing::Outcome a = run(model, before);
+    const testing::Outcome a = run_simulate(model, before);
     ASSERT_EQ(a.events.size(), 0u);
     Eigen::VectorXd dv(n);
     for (int i = 0; i < n; ++i)
@@ -272,12 +255,12 @@ TEST(Restitution, AConsistentMassBarHitsAWallWithItsImpulseAtTheWallsDofOnly) {
 TEST(Restitution, AForcedImpactOscillatorAgreesWithTheReferenceAndCvode) {
     Model model = impact_oscillator(2.3);  // examples/impact-oscillator.toml
     model.t_end = 40.0;
-    const testing::Outcome ref = run(model, kind("mp:30"));
+    const testing::Outcome ref = run_simulate(model, options_for("mp:30"));
     ASSERT_EQ(ref.summary.status, RunStatus::ok) << ref.summary.message;
     ASSERT_GT(ref.events.size(), 10u);
     for (const char* how : {"generic", "interp", "eigen", "cvode"}) {
         if (how == std::string("cvode") && !HSNC_WITH_CVODE) continue;
-        const testing::Outcome r = run(model, kind(how));
+        const testing::Outcome r = run_simulate(model, options_for(how));
         ASSERT_EQ(r.summary.status, RunStatus::ok) << how << ": " << r.summary.message;
         ASSERT_EQ(r.events.size(), ref.events.size()) << how;
         const double tol = how == std::string("cvode") ? 1e-8 : 1e-11;
@@ -317,7 +300,7 @@ t_end = 5.0
     const double g = 9.81, v1 = std::sqrt(2 * g * 0.1), e = 0.5, t_star = v1 / g + 2 * e * v1 / (g * (1 - e));
     for (const char* how : {"generic", "eigen", "mp:30", "cvode"}) {
         if (how == std::string("cvode") && !HSNC_WITH_CVODE) continue;
-        const testing::Outcome o = run(read_model(dir / "rest.toml"), kind(how));
+        const testing::Outcome o = run_simulate(read_model(dir / "rest.toml"), options_for(how));
         EXPECT_EQ(o.summary.status, RunStatus::chattering) << how;
         EXPECT_NE(o.summary.message.find("comes to rest on the rigid stop 'floor'"), std::string::npos) << how;
         EXPECT_NEAR(o.summary.t, t_star, how == std::string("mp:30") ? 1e-15 : 1e-5) << how;
@@ -419,9 +402,9 @@ TEST(Restitution, APeriodicImpactingOrbitAndItsMultipliersAgreeWithCvode) {
         s.t0 = o.t;
         s.x0 = {x};
         s.v0 = {v};
-        SimulateOptions cv = kind("cvode");
+        SimulateOptions cv = options_for("cvode");
         cv.t_end = o.t + T;
-        const testing::Outcome r = run(s, cv);
+        const testing::Outcome r = run_simulate(s, cv);
         EXPECT_EQ(r.summary.status, RunStatus::ok) << r.summary.message;
         return std::vector<double>{r.summary.x[0], r.summary.v[0]};
     };
