@@ -371,7 +371,7 @@ private:
     bool keep_;
 
 public:
-    std::vector<double> slowest_impact;
+    std::vector<double> slowest_impact;  ///< per contact (read after the run)
 };
 
 // A baseline's recorded window from its samples every h (max of the

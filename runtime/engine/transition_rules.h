@@ -198,9 +198,10 @@ bool tied(const P& p, const Series<T>& G) {
 /// by the new velocities: a held one set moving releases along its velocity,
 /// a sliding one reverses with it or, stopped exactly, is decided by the
 /// stick rule (`deciding`); a slipping Jenkins element sticks where the jump
-/// turned its relative velocity against the slip (a `stick` event). True when one is a touch (G' = 0 to rounding)
-/// or its rebound is too low for G to resolve while the forces press on:
-/// the motion rests on the stop (`*resting`).
+/// turned its relative velocity against the slip (a `stick` event). True
+/// when one is a touch (G' = 0 to rounding) or its rebound is too low for G
+/// to resolve while the forces press on: the motion rests on the stop
+/// (`*resting`).
 template <class P>
 bool impacts(P& p, Configuration& cfg, std::vector<signed char>& sgn, const std::vector<SwitchFunction>& switched,
              std::vector<Transition>& out, std::vector<char>& deciding, int* resting) {
