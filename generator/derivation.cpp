@@ -1038,7 +1038,10 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
                 return A;
             };
             ex A = force(i);
-            if (const int p = model.friction_slot(static_cast<std::size_t>(i)).partner; p != kGround) {
+            if (model.friction_slot(static_cast<std::size_t>(i)).partner != kGround && model.shared_partner()) {
+                // riding a partner that carries several: D = A_i - m_i a_i (model/held_mass.h)
+                A -= exact(model.masses[static_cast<std::size_t>(i)].m) * out.a[i];
+            } else if (const int p = model.friction_slot(static_cast<std::size_t>(i)).partner; p != kGround) {
                 const numeric mi = exact(model.masses[static_cast<std::size_t>(i)].m), mp = exact(model.masses[static_cast<std::size_t>(p)].m);
                 A = (mp * A - mi * force(p)) / (mi + mp);
             }

@@ -707,6 +707,18 @@ Program lower(const Derivation& d, ProgramNames names) {
         for (int i : d.free_dofs)
             if (mu_k_n[i] != 0.0)
                 kinetic_slot[static_cast<std::size_t>(i)] = slot_lin("F_k_", static_cast<std::size_t>(i), Lin().add(-mu_k_n[i], sgn(i)));
+    // A shared partner (Model::shared_partner) with a stuck rider: the reaction
+    // mu_k N sgn of each rider sliding on it, which the riders' held forces read.
+    std::vector<std::uint32_t> reaction_slot(n, kNoRegister);
+    if (model.shared_partner())
+        for (int i : d.free_dofs) {
+            Lin l;
+            bool any = false;
+            for (std::size_t q = 0; q < n; ++q)
+                if (partner_of(static_cast<int>(q)) == i && mu_k_n[q] != 0.0)
+                    l.add(mu_k_n[q], sgn(static_cast<int>(q))), any = true;
+            if (any) reaction_slot[static_cast<std::size_t>(i)] = slot_lin("F_r_", static_cast<std::size_t>(i), l);
+        }
     p.n_coef = static_cast<int>(p.coef_names.size());
 
     // ================= eval =================
@@ -1077,7 +1089,24 @@ Program lower(const Derivation& d, ProgramNames names) {
                 // forces with their kinetic friction.
                 std::vector<std::pair<int, DD>> terms;
                 std::string prefix = "A_pair_";
-                if (partner_of(i) != kGround) {
+                if (partner_of(i) != kGround && model.shared_partner()) {
+                    // Riding a partner that carries several: D = A_i - m_i a_p, the partner's body
+                    // the partner and its stuck riders, a_p their forces over their mass (held_mass.h).
+                    const int p = partner_of(i);
+                    if (named)
+                        comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of " + ms.name +
+                                   " stuck to " + model.masses[static_cast<std::size_t>(p)].name +
+                                   ", D = A_i - m_i (sum of the body's A)/(its mass)";
+                    std::vector<int> body{p};
+                    DD mc(model.masses[static_cast<std::size_t>(p)].m);
+                    for (int q : d.riders)
+                        if (partner_of(q) == p)
+                            body.push_back(q), mc = mc + DD(model.masses[static_cast<std::size_t>(q)].m);
+                    const DD share = DD(ms.m) / mc;
+                    for (int b : body) terms.emplace_back(b, b == i ? DD(1.0) - share : -share);
+                    std::stable_partition(terms.begin(), terms.end(), [&](const auto& t) { return t.first == i; });
+                    prefix = "A_ride_";
+                } else if (partner_of(i) != kGround) {
                     const int p = partner_of(i);
                     const Mass& mp = model.masses[static_cast<std::size_t>(p)];
                     if (named) comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of " + ms.name + " stuck to " +
@@ -1103,6 +1132,12 @@ Program lower(const Derivation& d, ProgramNames names) {
                     if (kinetic_slot[static_cast<std::size_t>(b)] != kNoRegister) {  // a sliding free dof of a coupled M
                         A.add(1.0, C(kinetic_slot[static_cast<std::size_t>(b)]));
                         const_mag += mu_k_n[b];
+                    }
+                    if (reaction_slot[static_cast<std::size_t>(b)] !=
+                        kNoRegister) {  // riders sliding on a shared partner
+                        A.add(1.0, C(reaction_slot[static_cast<std::size_t>(b)]));
+                        for (std::size_t q = 0; q < n; ++q)
+                            if (partner_of(static_cast<int>(q)) == b) const_mag += mu_k_n[q];
                     }
                     mag.add(const_mag, ONE);
                     if (const auto it = pair_reg.find(b); it != pair_reg.end()) {

@@ -10,34 +10,82 @@ void HeldMass::hold(const Model& model, const std::vector<char>& held) {
     if (model_ == &model && held == held_) return;
     model_ = &model;
     held_ = held;
+    const std::size_t n = held.size();
     free_.clear();
-    for (std::size_t i = 0; i < held.size(); ++i)
+    for (std::size_t i = 0; i < n; ++i)
         if (!held[i]) free_.push_back(static_cast<int>(i));
-    llt_.compute(mass_matrix(model, free_));
-    if (llt_.info() != Eigen::Success) throw RunError("HeldMass: M_FF is not positive definite");
+    column_.assign(n, -1);
+    for (std::size_t r = 0; r < free_.size(); ++r) column_[static_cast<std::size_t>(free_[r])] = static_cast<int>(r);
+    bool riders = false;
+    for (std::size_t i = 0; i < n; ++i) {  // a rider moves with the body its chain of stuck partners ends on
+        if (!held[i]) continue;
+        int p = model.friction_slot(i).partner;
+        while (p != kGround && held[static_cast<std::size_t>(p)])
+            p = model.friction_slot(static_cast<std::size_t>(p)).partner;
+        if (p != kGround) column_[i] = column_[static_cast<std::size_t>(p)], riders = true;
+    }
+    if (!riders) {
+        llt_.compute(mass_matrix(model, free_));
+    } else {  // T^T M T: the rows and columns of a free coordinate's dofs summed
+        const auto nf = static_cast<Eigen::Index>(free_.size());
+        Eigen::MatrixXd Mq = Eigen::MatrixXd::Zero(nf, nf);
+        for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t j = 0; j < n; ++j)
+                if (column_[i] >= 0 && column_[j] >= 0) Mq(column_[i], column_[j]) += model.mass_entry(i, j);
+        llt_.compute(Mq);
+    }
+    if (llt_.info() != Eigen::Success) throw RunError("HeldMass: T^T M T is not positive definite");
     rhs_.resize(static_cast<Eigen::Index>(free_.size()));
+}
+
+std::vector<int> HeldMass::carried_by(int i) const {
+    std::vector<int> S{i};
+    for (std::size_t k = 0; k < held_.size(); ++k) {
+        if (!held_[k] || static_cast<int>(k) == i) continue;
+        for (int p = model_->friction_slot(k).partner; p != kGround;
+             p = model_->friction_slot(static_cast<std::size_t>(p)).partner) {
+            if (p == i) S.push_back(static_cast<int>(k));
+            if (p == i || !held_[static_cast<std::size_t>(p)]) break;
+        }
+    }
+    return S;
 }
 
 void HeldMass::accelerations(const double* f, double* a) const {
     for (std::size_t r = 0; r < free_.size(); ++r) rhs_(static_cast<Eigen::Index>(r)) = f[free_[r]];
+    for (std::size_t k = 0; k < held_.size(); ++k)  // a rider's forces act on its partner's coordinate
+        if (held_[k] && column_[k] >= 0) rhs_(column_[k]) += f[k];
     const Eigen::VectorXd aF = llt_.solve(rhs_);
-    for (std::size_t i = 0; i < held_.size(); ++i) a[i] = 0.0;
-    for (std::size_t r = 0; r < free_.size(); ++r) a[free_[r]] = aF(static_cast<Eigen::Index>(r));
+    for (std::size_t i = 0; i < held_.size(); ++i) a[i] = column_[i] >= 0 ? aF(column_[i]) : 0.0;
 }
 
 double HeldMass::held_force(int i, const double* f, const double* a) const {
-    return f[i] - mass_times(*model_, static_cast<std::size_t>(i), a);
+    double D = 0.0;
+    bool first = true;
+    for (int k : carried_by(i)) {
+        const double dk = f[k] - mass_times(*model_, static_cast<std::size_t>(k), a);
+        D = first ? dk : D + dk;
+        first = false;
+    }
+    return D;
 }
 
 Eigen::VectorXd HeldMass::release_row(int i) const {
+    // P_i = s - T (T^T M T)^-1 T^T M s, s the indicator of the dofs i carries.
     const auto n = static_cast<Eigen::Index>(held_.size());
-    Eigen::VectorXd MFi(static_cast<Eigen::Index>(free_.size()));
-    for (std::size_t r = 0; r < free_.size(); ++r)
-        MFi(static_cast<Eigen::Index>(r)) = model_->mass_entry(static_cast<std::size_t>(free_[r]), static_cast<std::size_t>(i));
-    const Eigen::VectorXd w = llt_.solve(MFi);  // M_FF^-1 M_Fi
+    const std::vector<int> S = carried_by(i);
+    Eigen::VectorXd MFi = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(free_.size()));
+    for (Eigen::Index k = 0; k < n; ++k) {
+        if (column_[static_cast<std::size_t>(k)] < 0) continue;
+        for (int s : S)
+            MFi(column_[static_cast<std::size_t>(k)]) +=
+                model_->mass_entry(static_cast<std::size_t>(k), static_cast<std::size_t>(s));
+    }
+    const Eigen::VectorXd w = llt_.solve(MFi);  // (T^T M T)^-1 T^T M s
     Eigen::VectorXd P = Eigen::VectorXd::Zero(n);
-    P(i) = 1.0;
-    for (std::size_t r = 0; r < free_.size(); ++r) P(free_[r]) = -w(static_cast<Eigen::Index>(r));
+    for (Eigen::Index k = 0; k < n; ++k)
+        if (column_[static_cast<std::size_t>(k)] >= 0) P(k) = -w(column_[static_cast<std::size_t>(k)]);
+    for (int s : S) P(s) += 1.0;
     return P;
 }
 
@@ -45,8 +93,10 @@ Eigen::MatrixXd HeldMass::inverse() const {
     const auto n = static_cast<Eigen::Index>(held_.size()), nf = static_cast<Eigen::Index>(free_.size());
     const Eigen::MatrixXd inv = llt_.solve(Eigen::MatrixXd::Identity(nf, nf));
     Eigen::MatrixXd out = Eigen::MatrixXd::Zero(n, n);
-    for (Eigen::Index r = 0; r < nf; ++r)
-        for (Eigen::Index c = 0; c < nf; ++c) out(free_[static_cast<std::size_t>(r)], free_[static_cast<std::size_t>(c)]) = inv(r, c);
+    for (Eigen::Index r = 0; r < n; ++r)
+        for (Eigen::Index c = 0; c < n; ++c)
+            if (column_[static_cast<std::size_t>(r)] >= 0 && column_[static_cast<std::size_t>(c)] >= 0)
+                out(r, c) = inv(column_[static_cast<std::size_t>(r)], column_[static_cast<std::size_t>(c)]);
     return out;
 }
 
@@ -55,6 +105,10 @@ void kinetic_friction(const Model& model, const std::vector<char>& held, const s
         fr[k] = !held[k] && model.has_friction(k)
                     ? -model.friction_slot(k).mu_k * model.normal_force(k) * static_cast<double>(sgn[k])
                     : 0.0;
+    for (std::size_t k = 0; k < model.dof(); ++k) {  // the reaction on the partner of a friction between two bodies
+        const int p = model.friction_slot(k).partner;
+        if (!held[k] && model.has_friction(k) && p != kGround) fr[p] -= fr[k];
+    }
 }
 
 void held_forces(const Model& model, const Configuration& cfg, const std::vector<char>& held, const signed char* sgn,

@@ -229,6 +229,20 @@ struct Model {
         return true;
     }
 
+    /// Whether a body is the partner of two or more frictions (several
+    /// riders on one body: an under-platform damper, blades on a disk).
+    bool shared_partner() const {
+        std::vector<int> riders(masses.size(), 0);
+        for (const FrictionSlot& f : friction_slots)
+            if (f.active && f.partner != kGround && ++riders[static_cast<std::size_t>(f.partner)] > 1) return true;
+        return false;
+    }
+    /// Whether the force a stuck friction must hold depends on the other
+    /// frictions' states: a coupled M, or a shared partner. Such frictions
+    /// are decided together, and every back end reads their held forces as
+    /// P_i . f (held_mass.h).
+    bool coupled_friction() const { return coupled_mass() || shared_partner(); }
+
     /// Whether a contact is a rigid stop with restitution (its events are impacts).
     bool has_impacts() const {
         return std::any_of(contacts.begin(), contacts.end(), [](const Contact& c) { return c.rigid(); });

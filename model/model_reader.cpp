@@ -1032,19 +1032,31 @@ private:
 
     void read_frictions(const toml::table& root) {
         const auto tables = table_array(root, "friction");
+        // A body between two bodies in several frictions is their partner (it carries them all):
+        // written [damper, blade] twice, the blades ride the damper.
+        std::vector<int> shared(model_.masses.size(), 0);
+        for (std::size_t i = 0; i < tables.size(); ++i) {
+            const std::string path = "friction[" + std::to_string(i + 1) + "]";
+            check_keys(*tables[i], path, {"name", "between", "mu_k", "mu_s", "normal"});
+            const auto [a, b] = between(*tables[i], path);
+            if (a != kGround && b != kGround)
+                ++shared[static_cast<std::size_t>(a)], ++shared[static_cast<std::size_t>(b)];
+        }
         for (std::size_t i = 0; i < tables.size(); ++i) {
             const toml::table& t = *tables[i];
             const std::string path = "friction[" + std::to_string(i + 1) + "]";
-            check_keys(t, path, {"name", "between", "mu_k", "mu_s", "normal"});
             FrictionElement f;
             f.name = element_name(t, path, "friction", i);
             std::tie(f.a, f.b) = between(t, path);
+            if (f.a != kGround && f.b != kGround && shared[static_cast<std::size_t>(f.a)] > 1 &&
+                shared[static_cast<std::size_t>(f.b)] == 1)
+                std::swap(f.a, f.b);  // the same friction, on v[b] - v[a]: b rides a
             const bool two_bodies = f.a != kGround && f.b != kGround;
             const int body = f.a == kGround ? f.b : f.a;
             Mass& mass = model_.masses[static_cast<std::size_t>(body)];
             // Between two bodies a and b: a carries the friction, on w = v[a] - v[b],
-            // with b as its partner (elements/friction.h FrictionSlot::partner). For now each body takes
-            // part in one friction at most, so a stuck pair is two bodies moving as one.
+            // with b as its partner (elements/friction.h FrictionSlot::partner). A partner may carry
+            // several riders; for now a rider is no partner and a partner has no friction of its own.
             auto partner_of = [&](int m) {
                 for (std::size_t q = 0; q < model_.masses.size(); ++q)
                     if (model_.friction_slot(q).partner == m) return static_cast<int>(q);
@@ -1056,10 +1068,11 @@ private:
                          "'; one friction per " + body_word() + " is supported, for now");
             if (two_bodies) {
                 const Mass& other = model_.masses[static_cast<std::size_t>(f.b)];
-                if (model_.has_friction(static_cast<std::size_t>(f.b)) || partner_of(f.b) >= 0)
+                if (model_.has_friction(static_cast<std::size_t>(f.b)))
                     fail(t.get("between"), path + ".between",
-                         "'" + other.name + "' already has friction; friction between two bodies needs the second one "
-                         "free of any other friction, for now");
+                         "'" + other.name +
+                             "' already has friction; friction between two bodies needs the second one "
+                             "free of friction of its own (it may carry several), for now");
                 if (!model_.proportional_damping())
                     fail(t.get("between"), path + ".between",
                          "friction between two bodies with non-proportional damping ([[damper]] or a contact's c) is "

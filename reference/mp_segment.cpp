@@ -252,6 +252,7 @@ MpModel::MpModel(const Model& model, int digits)
         mu_s.push_back(F(fs.mu_s));
         partner.push_back(fs.partner);
     }
+    shared = model.shared_partner();
     if (model.coupled_mass()) {
         M.assign(static_cast<std::size_t>(n), std::vector<cl_F>(static_cast<std::size_t>(n), zero));
         for (std::size_t i = 0; i < model.dof(); ++i)
@@ -304,35 +305,79 @@ cl_F MpModel::mass(int i, int j) const {
     return i == j ? m[static_cast<std::size_t>(i)] : zero;
 }
 cl_F MpModel::mass_times(int i, const std::vector<cl_F>& y) const {
+    if (!coupled()) return m[static_cast<std::size_t>(i)] * y[static_cast<std::size_t>(i)];
     cl_F s = zero;
     for (int j = 0; j < n; ++j) s = s + M[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] * y[static_cast<std::size_t>(j)];
     return s;
 }
 
+namespace {
+
+// Per dof: its free coordinate (a rider its partner's, held_mass.h), -1 when held.
+std::vector<int> held_columns(const MpModel& mp, const std::vector<char>& held, std::vector<int>& free) {
+    std::vector<int> column(static_cast<std::size_t>(mp.n), -1);
+    for (int i = 0; i < mp.n; ++i)
+        if (!held[static_cast<std::size_t>(i)])
+            column[static_cast<std::size_t>(i)] = static_cast<int>(free.size()), free.push_back(i);
+    for (int i = 0; i < mp.n; ++i) {
+        if (!held[static_cast<std::size_t>(i)]) continue;
+        int p = mp.partner[static_cast<std::size_t>(i)];
+        while (p != kGround && held[static_cast<std::size_t>(p)]) p = mp.partner[static_cast<std::size_t>(p)];
+        if (p != kGround) column[static_cast<std::size_t>(i)] = column[static_cast<std::size_t>(p)];
+    }
+    return column;
+}
+
+}  // namespace
+
 std::vector<std::vector<cl_F>> MpModel::held_inverse(const std::vector<char>& held) const {
     std::vector<int> free;
-    for (int i = 0; i < n; ++i)
-        if (!held[static_cast<std::size_t>(i)]) free.push_back(i);
+    const std::vector<int> column = held_columns(*this, held, free);
     const std::size_t nf = free.size();
     Matrix MF(nf, std::vector<cl_F>(nf, zero));
-    for (std::size_t r = 0; r < nf; ++r)
-        for (std::size_t s = 0; s < nf; ++s) MF[r][s] = M[free[r]][free[s]];
-    const Matrix W = lower_inverse(*this, cholesky(*this, MF));  // M_FF^-1 = W^T W
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+            if (column[static_cast<std::size_t>(i)] >= 0 && column[static_cast<std::size_t>(j)] >= 0) {
+                cl_F& e = MF[static_cast<std::size_t>(column[static_cast<std::size_t>(i)])]
+                            [static_cast<std::size_t>(column[static_cast<std::size_t>(j)])];
+                e = e + mass(i, j);
+            }
+    const Matrix W = lower_inverse(*this, cholesky(*this, MF));  // (T^T M T)^-1 = W^T W
     std::vector<std::vector<cl_F>> inv(static_cast<std::size_t>(n), std::vector<cl_F>(static_cast<std::size_t>(n), zero));
-    for (std::size_t r = 0; r < nf; ++r)
-        for (std::size_t s = 0; s < nf; ++s) {
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            const int r = column[static_cast<std::size_t>(i)], c = column[static_cast<std::size_t>(j)];
+            if (r < 0 || c < 0) continue;
             cl_F sum = zero;
-            for (std::size_t k = std::max(r, s); k < nf; ++k) sum = sum + W[k][r] * W[k][s];
-            inv[free[r]][free[s]] = sum;
+            for (std::size_t k = static_cast<std::size_t>(std::max(r, c)); k < nf; ++k)
+                sum = sum + W[k][static_cast<std::size_t>(r)] * W[k][static_cast<std::size_t>(c)];
+            inv[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] = sum;
         }
     return inv;
 }
 
-std::vector<cl_F> MpModel::held_row(const std::vector<std::vector<cl_F>>& inverse, int i) const {
+std::vector<cl_F> MpModel::held_row(const std::vector<std::vector<cl_F>>& inverse, const std::vector<char>& held,
+                                    int i) const {
+    // P = s - T (T^T M T)^-1 T^T M s, s the indicator of the dofs stuck friction i carries (held_mass.h).
+    std::vector<char> carried(static_cast<std::size_t>(n), 0);
+    carried[static_cast<std::size_t>(i)] = 1;
+    for (int k = 0; k < n; ++k) {
+        if (!held[static_cast<std::size_t>(k)] || k == i) continue;
+        for (int p = partner[static_cast<std::size_t>(k)]; p != kGround; p = partner[static_cast<std::size_t>(p)]) {
+            if (p == i) carried[static_cast<std::size_t>(k)] = 1;
+            if (p == i || !held[static_cast<std::size_t>(p)]) break;
+        }
+    }
+    std::vector<cl_F> Ms(static_cast<std::size_t>(n), zero);  // M s
+    for (int r = 0; r < n; ++r)
+        for (int k = 0; k < n; ++k)
+            if (carried[static_cast<std::size_t>(k)])
+                Ms[static_cast<std::size_t>(r)] = Ms[static_cast<std::size_t>(r)] + mass(r, k);
     std::vector<cl_F> P(static_cast<std::size_t>(n), zero);
     for (int q = 0; q < n; ++q) {
-        cl_F s = q == i ? one : zero;
-        for (int r = 0; r < n; ++r) s = s - M[static_cast<std::size_t>(i)][static_cast<std::size_t>(r)] * inverse[r][q];
+        cl_F s = carried[static_cast<std::size_t>(q)] ? one : zero;
+        for (int r = 0; r < n; ++r)
+            s = s - Ms[static_cast<std::size_t>(r)] * inverse[static_cast<std::size_t>(r)][static_cast<std::size_t>(q)];
         P[static_cast<std::size_t>(q)] = s;
     }
     return P;
@@ -342,6 +387,9 @@ std::vector<cl_F> MpModel::kinetic(const std::vector<char>& held, const std::vec
     std::vector<cl_F> fr(static_cast<std::size_t>(n), zero);
     for (std::size_t i = 0; i < fr.size(); ++i)
         if (!held[i] && sgn[i] != 0) fr[i] = sgn[i] > 0 ? -(mu_k[i] * normal[i]) : mu_k[i] * normal[i];
+    for (std::size_t i = 0; i < fr.size(); ++i)  // the reaction on the partner of a friction between two bodies
+        if (!held[i] && sgn[i] != 0 && partner[i] != kGround)
+            fr[static_cast<std::size_t>(partner[i])] = fr[static_cast<std::size_t>(partner[i])] - fr[i];
     return fr;
 }
 
@@ -534,12 +582,13 @@ void MpSegment::switch_rows() {
                     cz = cz + C_[b][k] * phi_[slot_[k]][j];
                 }
             };
-            if (mp.coupled()) {  // D_i = P_i . A (MpModel::held_row)
+            if (mp.coupled_friction()) {  // D_i = P_i . A (MpModel::held_row)
                 if (release_rows_.empty()) {
                     const auto inverse = mp.held_inverse(cfg_.stuck);
                     release_rows_.assign(static_cast<std::size_t>(n_), {});
                     for (int s = 0; s < n_; ++s)
-                        if (cfg_.stuck[static_cast<std::size_t>(s)]) release_rows_[static_cast<std::size_t>(s)] = mp.held_row(inverse, s);
+                        if (cfg_.stuck[static_cast<std::size_t>(s)])
+                            release_rows_[static_cast<std::size_t>(s)] = mp.held_row(inverse, cfg_.stuck, s);
                 }
                 const std::vector<cl_F>& P = release_rows_[static_cast<std::size_t>(i)];
                 for (int j = 0; j < nf_; ++j) {
@@ -1190,7 +1239,7 @@ void MpSegment::sliders_and_switches(MpEval& out, const std::vector<cl_F>& xm, c
                 }
             };
             cl_F A, dA, m;
-            if (mp.coupled()) {  // D_e = P_e . (A + kinetic friction) (MpModel::held_row)
+            if (mp.coupled_friction()) {  // D_e = P_e . (A + kinetic friction) (MpModel::held_row)
                 const std::vector<cl_F>& P = release_rows_[static_cast<std::size_t>(e)];
                 A = dA = m = Z0;
                 for (int q = 0; q < n_; ++q) {
@@ -1204,7 +1253,7 @@ void MpSegment::sliders_and_switches(MpEval& out, const std::vector<cl_F>& xm, c
             } else {
                 force(e, A, dA, m);
             }
-            if (const int p = mp.partner[e]; !mp.coupled() && p != kGround) {
+            if (const int p = mp.partner[e]; !mp.coupled_friction() && p != kGround) {
                 cl_F Ap, dAp, mpart;
                 force(p, Ap, dAp, mpart);
                 A = mp.against_partner(e, A, Ap);

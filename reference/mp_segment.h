@@ -62,17 +62,23 @@ struct MpModel {
     /// A coupled M whole (Model::coupled_mass()); empty for a lumped model (M = diag(m)).
     std::vector<std::vector<cl_F>> M;
     bool coupled() const { return !M.empty(); }
+    /// A body carries several riders (Model::shared_partner).
+    bool shared = false;
+    /// Whether held forces are P_i . f (Model::coupled_friction): a coupled M or a shared partner.
+    bool coupled_friction() const { return coupled() || shared; }
     /// M_ij, lumped or coupled.
     cl_F mass(int i, int j) const;
-    /// (M y)_i of a coupled M.
+    /// (M y)_i, lumped or coupled.
     cl_F mass_times(int i, const std::vector<cl_F>& y) const;
-    /// A coupled M with the dofs `held` still (model/held_mass.h, at this
-    /// precision): M_FF^-1 spread over every dof (zero on the held ones).
+    /// The structure with the frictions `held` stuck (model/held_mass.h, at
+    /// this precision): T (T^T M T)^-1 T^T over every dof (zero on the held ones).
     std::vector<std::vector<cl_F>> held_inverse(const std::vector<char>& held) const;
-    /// P_i of held_mass.h from that inverse: the force a held dof i's friction
-    /// must hold is D_i = P_i . f (f every force, kinetic friction included).
-    std::vector<cl_F> held_row(const std::vector<std::vector<cl_F>>& inverse, int i) const;
-    /// The kinetic friction -mu_k N sgn on every dof not held, 0 on the held ones.
+    /// P_i of held_mass.h from that inverse: the force a stuck friction i must
+    /// hold is D_i = P_i . f (f every force, kinetic friction included).
+    std::vector<cl_F> held_row(const std::vector<std::vector<cl_F>>& inverse, const std::vector<char>& held,
+                               int i) const;
+    /// The kinetic friction -mu_k N sgn on every dof not held (and its
+    /// reaction on a partner), 0 on the held ones.
     std::vector<cl_F> kinetic(const std::vector<char>& held, const std::vector<signed char>& sgn) const;
     struct Link {
         int a, b;

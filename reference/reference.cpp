@@ -142,7 +142,7 @@ Taylor taylor(const MpModel& mp, const Configuration& cfg, const std::vector<sig
             T.xm[1][i] = cln::abs(v[i]);
         }
     }
-    if (mp.coupled()) {  // x^(k+2) = M_FF^-1 (A^(k) + [k = 0] friction), the stuck dofs held (held_mass.h)
+    if (mp.coupled_friction()) {  // x^(k+2) = T (T^T M T)^-1 T^T (A^(k) + [k = 0] friction) (held_mass.h)
         const auto inverse = mp.held_inverse(cfg.stuck);
         T.friction = mp.kinetic(cfg.stuck, sgn);
         std::vector<cl_F> A(static_cast<std::size_t>(n)), m(static_cast<std::size_t>(n));
@@ -217,8 +217,8 @@ void force_series(const MpModel& mp, const Configuration& cfg, int i, const cl_F
 // its partner p, (m_p A_i - m_i A_p)/(m_i + m_p).
 void driving_series(const MpModel& mp, const Configuration& cfg, int i, const cl_F& t, const Taylor& T,
                     std::vector<cl_F>& d, std::vector<cl_F>& m) {
-    if (mp.coupled()) {  // D_i^(k) = P_i . (A^(k) + [k = 0] friction), i held (MpModel::held_row)
-        const std::vector<cl_F> P = mp.held_row(mp.held_inverse(cfg.stuck), i);
+    if (mp.coupled_friction()) {  // D_i^(k) = P_i . (A^(k) + [k = 0] friction), i held (MpModel::held_row)
+        const std::vector<cl_F> P = mp.held_row(mp.held_inverse(cfg.stuck), cfg.stuck, i);
         d.assign(T.x.size() - 1, mp.zero);
         m.assign(T.x.size() - 1, mp.zero);
         for (int q = 0; q < mp.n; ++q) {
@@ -278,19 +278,19 @@ public:
     int dof() const { return mp.n; }
     std::size_t contacts() const { return mp.contacts.size(); }
     bool has_friction(int i) const { return model_.has_friction(i); }
-    bool coupled() const { return mp.coupled(); }
+    bool coupled() const { return mp.coupled_friction(); }
     // A friction acts on w = v_i - v_partner (the partner may be the ground).
     int velocity_sign(int i) const { return sign(v_[static_cast<std::size_t>(i)] - mp.body(v_, mp.partner[i])); }
     void stop(int i) { v_[static_cast<std::size_t>(i)] = mp.body(v_, mp.partner[i]); }
     cl_F force(const Configuration& cfg, int i) const {
-        if (mp.coupled()) return held_force(cfg, i, false);
+        if (mp.coupled_friction()) return held_force(cfg, i, false);
         const cl_F A = mp.force_on_mass(cfg, i, t_, x_, v_);
         const int p = mp.partner[i];
         return p == kGround ? A : mp.against_partner(i, A, mp.force_on_mass(cfg, p, t_, x_, v_));
     }
     cl_F static_limit(int i) const { return mp.mu_s[i] * mp.normal[i]; }
     cl_F held_rate(const Configuration& cfg, int i) const {
-        if (mp.coupled()) return held_force(cfg, i, true);
+        if (mp.coupled_friction()) return held_force(cfg, i, true);
         std::vector<cl_F> held = a_ ? *a_ : std::vector<cl_F>(v_.size(), mp.zero);
         const int p = mp.partner[i];
         if (p == kGround) {
@@ -367,7 +367,7 @@ private:
         Configuration hold = cfg;
         hold.stuck[static_cast<std::size_t>(i)] = 1;
         const auto inverse = mp.held_inverse(hold.stuck);
-        const std::vector<cl_F> P = mp.held_row(inverse, i), fr = mp.kinetic(hold.stuck, live_sgn_);
+        const std::vector<cl_F> P = mp.held_row(inverse, hold.stuck, i), fr = mp.kinetic(hold.stuck, live_sgn_);
         const std::size_t n = static_cast<std::size_t>(mp.n);
         std::vector<cl_F> f(n, mp.zero);
         for (std::size_t q = 0; q < n; ++q) f[q] = mp.force_on_mass(hold, static_cast<int>(q), t_, x_, v_) + fr[q];

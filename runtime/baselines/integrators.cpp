@@ -36,12 +36,14 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 struct Sliders {
     const Model& model;
     std::vector<double> s, buf;
-    /// A coupled M (Model::coupled_mass()) factored for the dofs stuck in the
-    /// current configuration (held_mass.h), again only when they change.
+    /// T^T M T (Model::coupled_friction(): a coupled M, or a shared partner)
+    /// factored for the frictions stuck in the current configuration
+    /// (held_mass.h), again only when they change.
     HeldMass held;
     std::vector<double> held_f, held_a;
     explicit Sliders(const Model& m) : model(m), buf(m.state_size()) {
-        if (m.coupled_mass()) held.hold(m, std::vector<char>(m.dof(), 0)), held_f.resize(m.dof()), held_a.resize(m.dof());
+        if (m.coupled_friction())
+            held.hold(m, std::vector<char>(m.dof(), 0)), held_f.resize(m.dof()), held_a.resize(m.dof());
         if (m.slider0.size() == m.jenkins.size()) {
             s = m.slider0;
         } else {
@@ -73,6 +75,12 @@ void accelerations(const Model& model, const Configuration& cfg, const std::vect
                    const double* x_masses, const double* v, double* a, Sliders& sl) {
     const std::size_t n = model.dof();
     const double* x = sl.with(cfg, x_masses);
+    if (model.shared_partner()) {  // several riders on a body: T (T^T M T)^-1 T^T f (held_mass.h)
+        sl.held.hold(model, cfg.stuck);
+        held_forces(model, cfg, cfg.stuck, dir.data(), t, x, v, a);
+        sl.held.accelerations(a, a);
+        return;
+    }
     for (std::size_t i = 0; i < n; ++i) {
         if (cfg.stuck[i]) {
             a[i] = 0.0;
@@ -151,7 +159,7 @@ void watched_values(const Model& model, const Configuration& cfg, const std::vec
             }
             default: {
                 double A;
-                if (model.coupled_mass()) {  // the held force D_i = f_i - (M a)_i (held_mass.h)
+                if (model.coupled_friction()) {  // the held force D_i = P_i . f (held_mass.h)
                     sl.held.hold(model, cfg.stuck);
                     held_forces(model, cfg, cfg.stuck, dir.data(), t, x, v, sl.held_f.data());
                     sl.held.accelerations(sl.held_f.data(), sl.held_a.data());

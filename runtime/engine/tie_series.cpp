@@ -76,7 +76,7 @@ void force_derivative(const Model& model, const Configuration& cfg, int i, doubl
 // (m_p A_i^(k) - m_i A_p^(k))/(m_i + m_p).
 void driving_derivative(const Model& model, const Configuration& cfg, int i, double t, double t_lo,
                         const MotionSeries& s, int k, double& value, double& magnitude) {
-    if (model.coupled_mass()) {  // D_i^(k) = P_i . (A^(k) + [k = 0] kinetic friction), i held (held_mass.h)
+    if (model.coupled_friction()) {  // D_i^(k) = P_i . (A^(k) + [k = 0] kinetic friction), i held (held_mass.h)
         const Eigen::VectorXd P = HeldMass(model, cfg.stuck).release_row(i);
         value = magnitude = 0.0;
         for (Eigen::Index q = 0; q < P.size(); ++q) {
@@ -126,8 +126,8 @@ MotionSeries motion_series(const Model& model, const Configuration& cfg, const s
             s.mag[1][i] = std::fabs(v[i]);
         }
     }
-    if (model.coupled_mass()) {  // x_F^(k+2) = M_FF^-1 (A_F^(k) + [k = 0] friction), |M_FF^-1| on the magnitudes
-        const HeldMass held(model, cfg.stuck);  // only ground friction on a coupled M (model_reader)
+    if (model.coupled_friction()) {  // x^(k+2) = T (T^T M T)^-1 T^T (A^(k) + [k = 0] friction), |.| on the magnitudes
+        const HeldMass held(model, cfg.stuck);  // riders only on a shared partner of a lumped M (model_reader)
         const Eigen::MatrixXd inv_abs = held.inverse().cwiseAbs();
         s.friction.assign(n, 0.0);
         kinetic_friction(model, cfg.stuck, sgn, s.friction.data());
@@ -280,7 +280,7 @@ double rate_magnitude(const Model& model, const Configuration& cfg, const Switch
         for (const Harmonic& h : model.forcing) m += std::fabs(h.amplitude[ii] * h.omega);
         return m;
     };
-    if (model.coupled_mass()) {  // D_i' = P_i . A' (held_mass.h)
+    if (model.coupled_friction()) {  // D_i' = P_i . A' (held_mass.h)
         const Eigen::VectorXd P = HeldMass(model, cfg.stuck).release_row(e);
         double m = 0.0;
         for (Eigen::Index q = 0; q < P.size(); ++q)
@@ -383,7 +383,7 @@ double derivative_bound(const Model& model, const Configuration& cfg, const Swit
         for (const Harmonic& h : model.forcing) B += std::fabs(h.amplitude[static_cast<std::size_t>(i)]) * std::pow(std::fabs(h.omega), k);
         return B;
     };
-    if (model.coupled_mass()) {  // D_i^(k) = P_i . A^(k) (held_mass.h)
+    if (model.coupled_friction()) {  // D_i^(k) = P_i . A^(k) (held_mass.h)
         const Eigen::VectorXd P = HeldMass(model, cfg.stuck).release_row(e);
         double B = 0.0;
         for (Eigen::Index q = 0; q < P.size(); ++q)

@@ -38,7 +38,7 @@ public:
     int dof() const { return n_; }
     std::size_t contacts() const { return model_.contacts.size(); }
     bool has_friction(int i) const { return model_.has_friction(i); }
-    bool coupled() const { return model_.coupled_mass(); }
+    bool coupled() const { return model_.coupled_friction(); }
     // A friction acts on w = v_i - v_partner (the partner may be the ground).
     int partner(int i) const { return model_.friction_slot(static_cast<std::size_t>(i)).partner; }
     int velocity_sign(int i) const {
@@ -47,7 +47,7 @@ public:
     }
     void stop(int i) { v_[i] = body(v_, partner(i)); }
     double force(const Configuration& cfg, int i) const {
-        if (model_.coupled_mass()) {  // with i held, the rest of M moving (held_mass.h)
+        if (model_.coupled_friction()) {  // with i held, the rest moving (held_mass.h)
             double D, rate;
             held_driving_force(model_, cfg, live_sgn_.data(), i, t_, x_, v_, D, rate);
             return D;
@@ -56,7 +56,7 @@ public:
     }
     double static_limit(int i) const { return model_.friction_slot(i).mu_s * model_.normal_force(i); }
     double held_rate(const Configuration& cfg, int i) const {
-        if (model_.coupled_mass()) {  // the held motion's own accelerations (held_mass.h)
+        if (model_.coupled_friction()) {  // the held motion's own accelerations (held_mass.h)
             double D, rate;
             held_driving_force(model_, cfg, live_sgn_.data(), i, t_, x_, v_, D, rate);
             return rate;

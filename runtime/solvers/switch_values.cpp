@@ -29,7 +29,7 @@ ConfigurationTerms configuration_terms(const Model& model, const Configuration& 
     t.f_const = constant_force(model, cfg);
     t.contacts = model.contacts;
     t.jenkins = model.jenkins;
-    if (model.coupled_mass()) {  // every stuck dof's P_i (held_mass.h)
+    if (model.coupled_friction()) {  // every stuck dof's P_i (held_mass.h)
         const HeldMass held(model, cfg.stuck);
         t.release_row.assign(static_cast<std::size_t>(n), -1);
         t.release = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(std::count(cfg.stuck.begin(), cfg.stuck.end(), 1)), n);

@@ -49,8 +49,8 @@ struct ConfigurationTerms {
     Eigen::VectorXd h_omega, h_phase;
     Eigen::MatrixXd h_amp;  ///< n x nh
     std::vector<Jenkins> jenkins;
-    /// Coupled M: row release_row[i] of `release` is P_i of a stuck dof i
-    /// (held_mass.h), D_i = P_i . (A + kinetic friction); empty for a lumped M.
+    /// Model::coupled_friction(): row release_row[i] of `release` is P_i of a
+    /// stuck dof i (held_mass.h), D_i = P_i . (A + kinetic friction); empty otherwise.
     Eigen::MatrixXd release;
     std::vector<int> release_row;
     bool coupled() const { return release_row.size() > 0; }
@@ -74,15 +74,20 @@ inline void segment_force(const ConfigurationTerms& in, const Configuration& cfg
     }
 }
 
-/// The forces a coupled M's held force D_i = P_i . f sums (held_mass.h): the
-/// segment's constant force f plus the kinetic friction of every sliding dof;
-/// f itself for a lumped M (its release functions read A_i, no friction).
+/// The forces a held force D_i = P_i . f sums (held_mass.h;
+/// Model::coupled_friction()): the segment's constant force f plus the
+/// kinetic friction of every sliding dof and its reaction on a partner; f
+/// itself otherwise (the release functions read A_i, no friction).
 inline const Eigen::VectorXd& release_force(const ConfigurationTerms& in, const Eigen::VectorXd& f,
                                             const signed char* sgn, Eigen::VectorXd& scratch) {
     if (!in.coupled()) return f;
     scratch = f;
     for (Eigen::Index i = 0; i < f.size(); ++i)
         if (in.friction[static_cast<std::size_t>(i)]) scratch(i) -= in.mu_k(i) * in.normal(i) * static_cast<double>(sgn[i]);
+    for (Eigen::Index i = 0; i < f.size(); ++i)  // a sliding rider's reaction on its partner
+        if (const int p = in.partner[static_cast<std::size_t>(i)];
+            in.friction[static_cast<std::size_t>(i)] && p != kGround)
+            scratch(p) += in.mu_k(i) * in.normal(i) * static_cast<double>(sgn[i]);
     return scratch;
 }
 
@@ -208,15 +213,15 @@ inline void switch_value(const SwitchFunction& sf, const ConfigurationTerms& in,
         }
     } else {
         force(e, A, dA, mag);
-    }
-    if (const int p = in.partner[static_cast<std::size_t>(e)]; p != kGround) {
-        // Against a partner: D = (m_p A_e - m_e A_p)/(m_e + m_p) (assembly.h driving_force).
-        double Ap, dAp, mp_mag;
-        force(p, Ap, dAp, mp_mag);
-        const double me = in.mass(e), mp = in.mass(p);
-        A = against_partner(me, mp, A, Ap);
-        dA = against_partner(me, mp, dA, dAp);
-        mag = against_partner_magnitude(me, mp, mag, mp_mag);
+        if (const int p = in.partner[static_cast<std::size_t>(e)]; p != kGround) {
+            // Against a partner: D = (m_p A_e - m_e A_p)/(m_e + m_p) (assembly.h driving_force).
+            double Ap, dAp, mp_mag;
+            force(p, Ap, dAp, mp_mag);
+            const double me = in.mass(e), mp = in.mass(p);
+            A = against_partner(me, mp, A, Ap);
+            dA = against_partner(me, mp, dA, dAp);
+            mag = against_partner_magnitude(me, mp, mag, mp_mag);
+        }
     }
     const int sigma = sf.kind == SwitchKind::release_pos ? 1 : -1;
     const double mu_n = in.mu_s(e) * in.normal(e);
