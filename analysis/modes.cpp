@@ -46,6 +46,9 @@ void refuse_unsupported(const Model& model) {
                          "supported yet");
     };
     if (!model.load_steps.empty()) refuse("[[load_step]] " + model.load_steps.front().name);
+    if (model.shared_partner())  // the stick flows take one rider per partner, none a partner (analysis/tangent.cpp)
+        throw InputError(where +
+                         "a body takes part in several frictions between bodies, which hsnc modes does not take yet");
     refuse_impacts(model, std::string(kModes) + "()");
 }
 

@@ -53,6 +53,10 @@ struct Tangent::ConfigData {
 Tangent::Tangent(const Model& model) : model_(model), stick_(!stick_elements(model).empty()) {
     // The stick flows take one rider per partner (stick_tangent.h): several wait for their saltations.
     if (!model.shared_partner()) return;
+    if (model.friction_chain())
+        throw InputError("model '" + model.name +
+                         "': a body with friction carries another's (a chain of frictions), which periodic orbits, "
+                         "Lyapunov exponents, continuation and modes do not take yet (simulate and sweep do)");
     std::vector<std::string> riders(model.dof());
     for (std::size_t i = 0; i < model.dof(); ++i)
         if (const int p = model.friction_slot(i).partner; p != kGround && model.has_friction(i)) {

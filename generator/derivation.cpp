@@ -457,11 +457,15 @@ std::vector<std::vector<int>> coordinates(const Model& model, const Configuratio
     if (model.coupled_mass() && !d.riders.empty())
         throw NotDerivable("derivation::derive(): configuration " + cfg.spec(model) +
                            ": a friction between two dofs of a coupled (non-diagonal) mass matrix");
+    // A chain of frictions with one stuck: its held forces are the general P_i f (model/held_mass.h),
+    // which the programs do not write yet; the Eigen solver takes the configuration in every kind.
+    if (model.friction_chain() && std::any_of(cfg.stuck.begin(), cfg.stuck.end(), [](char s) { return s != 0; }))
+        throw NotDerivable("derivation::derive(): configuration " + cfg.spec(model) +
+                           ": a chain of frictions (a partner with a friction of its own) with a friction stuck");
     std::vector<std::vector<int>> group(d.free_dofs.size());
     for (std::size_t r = 0; r < d.free_dofs.size(); ++r) group[r].push_back(d.free_dofs[r]);
     for (int q : d.riders)
-        group[static_cast<std::size_t>(free_index[model.friction_slot(static_cast<std::size_t>(q)).partner])].push_back(
-            q);
+        group[static_cast<std::size_t>(free_index[carrier(model, cfg, static_cast<std::size_t>(q))])].push_back(q);
     return group;
 }
 

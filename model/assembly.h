@@ -215,13 +215,24 @@ double force_on_mass(const Model& model, const Configuration& cfg, int i, double
 double force_rate_on_mass(const Model& model, const Configuration& cfg, int i, double t, const double* v,
                           const double* a);
 
-/// Mass i is held still in cfg: stuck against the ground.
-inline bool fixed_in(const Model& model, const Configuration& cfg, std::size_t i) {
-    return cfg.stuck[i] && model.friction_slot(i).partner == kGround;
+/// The body mass i moves with in cfg: i itself while its friction is not
+/// stuck; else, following the partners of stuck frictions, the first body
+/// whose friction is not stuck (i rides it), or kGround when that chain ends
+/// at the ground (i is held still). Without chains of frictions (a partner
+/// with a friction of its own) that is i's partner.
+inline int carrier(const Model& model, const Configuration& cfg, std::size_t i) {
+    int b = static_cast<int>(i);
+    while (b != kGround && cfg.stuck[static_cast<std::size_t>(b)])
+        b = model.friction_slot(static_cast<std::size_t>(b)).partner;
+    return b;
 }
-/// Mass i moves with its friction partner in cfg (a stuck pair: one body).
+/// Mass i is held still in cfg: stuck against the ground, or on a body held still.
+inline bool fixed_in(const Model& model, const Configuration& cfg, std::size_t i) {
+    return cfg.stuck[i] && carrier(model, cfg, i) == kGround;
+}
+/// Mass i moves with another body in cfg (a stuck pair: one body; carrier()).
 inline bool rides_partner(const Model& model, const Configuration& cfg, std::size_t i) {
-    return cfg.stuck[i] && model.friction_slot(i).partner != kGround;
+    return cfg.stuck[i] && carrier(model, cfg, i) != kGround;
 }
 
 /// A quantity of mass i (mass mi) in the frame of its pair with p (mass mp)

@@ -2,6 +2,7 @@
 
 #include <numeric>
 
+#include "assembly.h"
 #include "error.h"
 
 namespace hsnc {
@@ -32,8 +33,8 @@ FreeComponents free_components(const Model& model, const Configuration& cfg) {
         }
     // A mass stuck to its friction partner moves with it: its links are the partner's.
     for (int i = 0; i < n; ++i)
-        if (cfg.stuck[i] && model.friction_slot(static_cast<std::size_t>(i)).partner != kGround)
-            slot[i] = slot[model.friction_slot(static_cast<std::size_t>(i)).partner];
+        if (const int c = carrier(model, cfg, static_cast<std::size_t>(i)); cfg.stuck[i] && c != kGround)
+            slot[i] = slot[c];
     const int nf = static_cast<int>(fc.free.size());
     std::vector<int> parent(static_cast<std::size_t>(nf));  // union-find over the free masses
     std::iota(parent.begin(), parent.end(), 0);

@@ -16,8 +16,8 @@
 // configuration. On a lumped M with each partner carrying one rider the
 // back ends write D_i in closed form instead (assembly.h driving_force:
 // A_i, or against_partner); where a held force depends on the other
-// frictions' states (Model::coupled_friction(): a coupled M, or a body
-// carrying several riders) every back end reads D_i from here: the Eigen
+// frictions' states (Model::coupled_friction(): a coupled M, a body
+// carrying several riders, or a chain) every back end reads D_i from here: the Eigen
 // solvers, the engine's decisions and tie series, rk45 and CVODE, the
 // reference (its own arithmetic), it sticks while |D_i| <= mu_s N_i.
 #pragma once

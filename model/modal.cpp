@@ -102,7 +102,7 @@ ModalDecomposition modal_analysis(const Model& model, const Configuration& cfg) 
     for (int s = 0; s < nf; ++s) coordinate[static_cast<std::size_t>(md.free[s])] = s;
     for (int i : md.riders)
         coordinate[static_cast<std::size_t>(i)] =
-            coordinate[static_cast<std::size_t>(model.friction_slot(static_cast<std::size_t>(i)).partner)];
+            coordinate[static_cast<std::size_t>(carrier(model, cfg, static_cast<std::size_t>(i)))];
     Eigen::MatrixXd Kf = Eigen::MatrixXd::Zero(nf, nf);
     md.mass = Eigen::VectorXd::Zero(nf);
     for (int i = 0; i < n; ++i) {

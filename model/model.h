@@ -230,12 +230,24 @@ struct Model {
     }
 
     /// Whether a body is the partner of two or more frictions (several
-    /// riders on one body: an under-platform damper, blades on a disk).
+    /// riders on one body: an under-platform damper, blades on a disk), or
+    /// a partner has a friction of its own (a chain: a block on a block on
+    /// the ground): a body taking part in several frictions.
     bool shared_partner() const {
         std::vector<int> riders(masses.size(), 0);
         for (const FrictionSlot& f : friction_slots)
-            if (f.active && f.partner != kGround && ++riders[static_cast<std::size_t>(f.partner)] > 1) return true;
+            if (f.active && f.partner != kGround &&
+                (++riders[static_cast<std::size_t>(f.partner)] > 1 ||
+                 friction_slot(static_cast<std::size_t>(f.partner)).active))
+                return true;
         return false;
+    }
+    /// Whether a partner has a friction of its own (a chain of frictions:
+    /// a block on a block on the ground).
+    bool friction_chain() const {
+        return std::any_of(friction_slots.begin(), friction_slots.end(), [&](const FrictionSlot& f) {
+            return f.active && f.partner != kGround && friction_slot(static_cast<std::size_t>(f.partner)).active;
+        });
     }
     /// Whether the force a stuck friction must hold depends on the other
     /// frictions' states: a coupled M, or a shared partner. Such frictions

@@ -1030,49 +1030,105 @@ private:
         }
     }
 
-    void read_frictions(const toml::table& root) {
-        const auto tables = table_array(root, "friction");
-        // A body between two bodies in several frictions is their partner (it carries them all):
-        // written [damper, blade] twice, the blades ride the damper.
-        std::vector<int> shared(model_.masses.size(), 0);
+    /// Each [[friction]]'s (carrier, partner): the frictions between two bodies
+    /// form a forest over the bodies, each body carrying at most one (its
+    /// friction toward the root of its tree: the ground when a body of the
+    /// tree has a friction against it, else the body in the most frictions,
+    /// most often written second, first in model order). So a lone friction
+    /// [a, b] is a's against b (as written), a damper between two blades is
+    /// the partner of both, and a block on a block on the ground rides the
+    /// lower one. A friction closing a loop (two roots, or a cycle) is refused
+    /// by key; one against the ground is (body, kGround).
+    std::vector<std::pair<int, int>> orient_frictions(const std::vector<const toml::table*>& tables) const {
+        const std::size_t n = model_.masses.size();
+        std::vector<std::pair<int, int>> out(tables.size());
+        std::vector<std::vector<std::pair<int, std::size_t>>> edges(n);  // per body: (other body, friction)
+        std::vector<char> grounded(n, 0);
+        for (std::size_t i = 0; i < n; ++i) grounded[i] = model_.has_friction(i) ? 1 : 0;  // a mass's own mu_k
         for (std::size_t i = 0; i < tables.size(); ++i) {
             const std::string path = "friction[" + std::to_string(i + 1) + "]";
             check_keys(*tables[i], path, {"name", "between", "mu_k", "mu_s", "normal"});
-            const auto [a, b] = between(*tables[i], path);
-            if (a != kGround && b != kGround)
-                ++shared[static_cast<std::size_t>(a)], ++shared[static_cast<std::size_t>(b)];
+            out[i] = between(*tables[i], path);
+            const auto [a, b] = out[i];
+            if (a == kGround || b == kGround) {
+                const int body = a == kGround ? b : a;
+                out[i] = {body, kGround};
+                grounded[static_cast<std::size_t>(body)] = 1;
+                continue;
+            }
+            edges[static_cast<std::size_t>(a)].push_back({b, i});
+            edges[static_cast<std::size_t>(b)].push_back({a, i});
         }
+        std::vector<int> tree(n, -1);  // the tree each body is in, by its first body
+        std::vector<char> oriented(tables.size(), 0);
+        for (std::size_t start = 0; start < n; ++start) {
+            if (tree[start] >= 0 || edges[start].empty()) continue;
+            std::vector<int> members{static_cast<int>(start)};
+            tree[start] = static_cast<int>(start);
+            for (std::size_t k = 0; k < members.size(); ++k)
+                for (const auto& [o, e] : edges[static_cast<std::size_t>(members[k])])
+                    if (tree[static_cast<std::size_t>(o)] < 0)
+                        tree[static_cast<std::size_t>(o)] = static_cast<int>(start), members.push_back(o);
+            int root = -1;
+            for (int m : members)
+                if (grounded[static_cast<std::size_t>(m)]) root = m;
+            // Else the body in the most frictions; of several, the one most often written second
+            // (between = [rider, partner]: a lone friction keeps a as its carrier); then model order.
+            auto rank = [&](int m) {
+                int second = 0;
+                for (const auto& [o, e] : edges[static_cast<std::size_t>(m)]) second += out[e].second == m ? 1 : -1;
+                return std::make_pair(edges[static_cast<std::size_t>(m)].size(), second);
+            };
+            if (root < 0)
+                for (int m : members)
+                    if (root < 0 || rank(m) > rank(root)) root = m;
+            // From the root outwards: each body carries the friction it was reached by.
+            std::vector<char> seen(n, 0);
+            std::vector<int> queue{root};
+            seen[static_cast<std::size_t>(root)] = 1;
+            for (std::size_t k = 0; k < queue.size(); ++k) {
+                const int p = queue[k];
+                for (const auto& [o, e] : edges[static_cast<std::size_t>(p)]) {
+                    if (oriented[e]) continue;
+                    oriented[e] = 1;
+                    const std::string path = "friction[" + std::to_string(e + 1) + "]";
+                    const toml::node* where = tables[e]->get("between");
+                    if (seen[static_cast<std::size_t>(o)])
+                        fail(where, path + ".between",
+                             "closes a loop of frictions between bodies (through '" +
+                                 model_.masses[static_cast<std::size_t>(o)].name +
+                                 "'): the forces a loop of stuck frictions holds are not determined; not supported");
+                    if (grounded[static_cast<std::size_t>(o)])
+                        fail(
+                            where, path + ".between",
+                            "'" + model_.masses[static_cast<std::size_t>(o)].name + "' and '" +
+                                model_.masses[static_cast<std::size_t>(root)].name +
+                                "' both have friction against the ground and are joined by frictions between bodies: a "
+                                "loop through the ground, whose stuck forces are not determined; not supported");
+                    seen[static_cast<std::size_t>(o)] = 1;
+                    out[e] = {o, p};  // o rides p
+                    queue.push_back(o);
+                }
+            }
+        }
+        return out;
+    }
+
+    void read_frictions(const toml::table& root) {
+        const auto tables = table_array(root, "friction");
+        const std::vector<std::pair<int, int>> carried = orient_frictions(tables);
         for (std::size_t i = 0; i < tables.size(); ++i) {
             const toml::table& t = *tables[i];
             const std::string path = "friction[" + std::to_string(i + 1) + "]";
             FrictionElement f;
             f.name = element_name(t, path, "friction", i);
-            std::tie(f.a, f.b) = between(t, path);
-            if (f.a != kGround && f.b != kGround && shared[static_cast<std::size_t>(f.a)] > 1 &&
-                shared[static_cast<std::size_t>(f.b)] == 1)
-                std::swap(f.a, f.b);  // the same friction, on v[b] - v[a]: b rides a
+            std::tie(f.a, f.b) = carried[i];
             const bool two_bodies = f.a != kGround && f.b != kGround;
             const int body = f.a == kGround ? f.b : f.a;
             Mass& mass = model_.masses[static_cast<std::size_t>(body)];
             // Between two bodies a and b: a carries the friction, on w = v[a] - v[b],
-            // with b as its partner (elements/friction.h FrictionSlot::partner). A partner may carry
-            // several riders; for now a rider is no partner and a partner has no friction of its own.
-            auto partner_of = [&](int m) {
-                for (std::size_t q = 0; q < model_.masses.size(); ++q)
-                    if (model_.friction_slot(q).partner == m) return static_cast<int>(q);
-                return -1;
-            };
-            if (const int q = partner_of(body); q >= 0)
-                fail(t.get("between"), path + ".between",
-                     "'" + mass.name + "' already takes part in the friction of '" + model_.friction_name(static_cast<std::size_t>(q)) +
-                         "'; one friction per " + body_word() + " is supported, for now");
+            // with b as its partner (elements/friction.h FrictionSlot::partner; orient_frictions).
             if (two_bodies) {
-                const Mass& other = model_.masses[static_cast<std::size_t>(f.b)];
-                if (model_.has_friction(static_cast<std::size_t>(f.b)))
-                    fail(t.get("between"), path + ".between",
-                         "'" + other.name +
-                             "' already has friction; friction between two bodies needs the second one "
-                             "free of friction of its own (it may carry several), for now");
                 if (!model_.proportional_damping())
                     fail(t.get("between"), path + ".between",
                          "friction between two bodies with non-proportional damping ([[damper]] or a contact's c) is "

@@ -554,9 +554,10 @@ void MpSegment::switch_rows() {
                 W_[f][j] = w;
             }
         } else if (sf.kind == SwitchKind::velocity) {
-            const int p = mp.partner[sf.element];  // w = v_e - v_partner
+            const int p = mp.partner[sf.element];  // w = v_e - v_partner (a partner held still: v_partner = 0)
             for (int j = 0; j < nf_; ++j)
-                Z_[f][j] = p == kGround ? phi_[slot_[sf.element]][j] : phi_[slot_[sf.element]][j] - phi_[slot_[p]][j];
+                Z_[f][j] = p == kGround || slot_[p] < 0 ? phi_[slot_[sf.element]][j]
+                                                        : phi_[slot_[sf.element]][j] - phi_[slot_[p]][j];
         } else if (sf.kind == SwitchKind::slip_pos || sf.kind == SwitchKind::slip_neg ||
                    sf.kind == SwitchKind::slip_velocity) {
             // +-k (u - s) - F_s (the slider fixed) on q; u' on q' (u = x_a - x_b, or w^T x).
@@ -658,7 +659,7 @@ MpSegment::MpSegment(const Model& model, const MpModel& mp, const Configuration&
     for (int i = 0; i < n_; ++i)
         if (mp.rides(cfg, i)) {
             riders_.push_back(i);
-            slot_[i] = slot_[mp.partner[i]];
+            slot_[i] = slot_[mp.carrier(cfg, i)];
             mass_[slot_[i]] = mass_[slot_[i]] + mp.m[i];
         }
     std::vector<std::vector<cl_F>> Kf(nf_, std::vector<cl_F>(nf_, Z0));
@@ -929,7 +930,7 @@ void MpSegment::setup(const cl_F& t0, const std::vector<cl_F>& x0, const std::ve
     // loads, preloads, the masses held still as supports (-K_FS x_S), the riders'
     // offsets (-K e), kinetic friction -mu_k N sgn and its reaction on a partner.
     offset_.clear();
-    for (int q : riders_) offset_.push_back(x0[q] - x0[mp.partner[q]]);
+    for (int q : riders_) offset_.push_back(x0[q] - x0[mp.carrier(cfg_, q)]);
     std::vector<cl_F>& fric = fric_;
     fric.assign(static_cast<std::size_t>(n_), mp.zero);
     for (int i = 0; i < n_; ++i) {
@@ -1052,7 +1053,7 @@ void MpSegment::eval(const cl_F& tau, MpEval& out) const {
     else
         eval_modal(tau, hcs, out, xm, vm, b2, b3);
     for (std::size_t r = 0; r < riders_.size(); ++r) {  // with their partner, at their offset
-        const int q = riders_[r], p = mp.partner[q];
+        const int q = riders_[r], p = mp.carrier(cfg_, q);
         out.x[q] = out.x[p] + offset_[r];
         out.v[q] = out.v[p];
         out.a[q] = out.a[p];
@@ -1066,7 +1067,7 @@ void MpSegment::eval(const cl_F& tau, MpEval& out) const {
     if (cln::zerop(tau))
         for (int i = 0; i < n_; ++i) {
             out.x[i] = x_fix_[i];
-            out.v[i] = cfg_.stuck[i] && mp.partner[i] == kGround ? Z0 : v_start_[i];
+            out.v[i] = mp.fixed(cfg_, i) ? Z0 : v_start_[i];
         }
     sliders_and_switches(out, xm, vm, hcs, [&](std::size_t f) {
         if (damped_) {

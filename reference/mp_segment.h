@@ -101,8 +101,14 @@ struct MpModel {
     std::vector<int> partner;
     /// Held against the ground (stuck, its partner the ground), or moving with its
     /// partner (stuck to a partner body), in cfg.
-    bool fixed(const Configuration& cfg, int i) const { return cfg.stuck[i] && partner[i] == kGround; }
-    bool rides(const Configuration& cfg, int i) const { return cfg.stuck[i] && partner[i] != kGround; }
+    bool fixed(const Configuration& cfg, int i) const { return cfg.stuck[i] && carrier(cfg, i) == kGround; }
+    bool rides(const Configuration& cfg, int i) const { return cfg.stuck[i] && carrier(cfg, i) != kGround; }
+    /// The body mass i moves with (model/assembly.h carrier()): i, the first
+    /// body up its chain of stuck partners whose friction is not stuck, or kGround.
+    int carrier(const Configuration& cfg, int i) const {
+        while (i != kGround && cfg.stuck[static_cast<std::size_t>(i)]) i = partner[static_cast<std::size_t>(i)];
+        return i;
+    }
     /// (m_p a_i - m_i a_p)/(m_i + m_p): what holds mass i to its partner p (assembly.h against_partner),
     /// and the magnitude of its terms.
     cl_F against_partner(int i, const cl_F& ai, const cl_F& ap) const;

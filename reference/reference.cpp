@@ -805,7 +805,7 @@ PreciseRun simulate_precise(const Model& model, int digits, const EngineOptions&
         x = buf.x;
         v = buf.v;
         for (std::size_t i = 0; i < n; ++i)
-            if (cfg.stuck[i]) v[i] = mp.body(v, mp.partner[i]);  // still, or with its partner
+            if (cfg.stuck[i]) v[i] = mp.body(v, mp.carrier(cfg, static_cast<int>(i)));  // still, or with its carrier
         if (!found) {
             t = t_end;
             break;

@@ -354,11 +354,23 @@ TEST(FrictionPairReader, KeysAndRefusals) {
     EXPECT_EQ(md.friction_slot(0).partner, 1);
     EXPECT_TRUE(md.has_friction(0));
     EXPECT_FALSE(md.has_friction(1));
-    // One friction per body, for now: the partner may have none of its own, and takes part in no other.
+    // A partner may have a friction of its own (a chain, tests/test_shared_partner.cpp); a body
+    // with one against the ground is the partner, whichever way `between` is written.
     const std::string b_friction = "name = \"p\"\n[[mass]]\nname = \"a\"\nm = 1\n[[mass]]\nname = \"b\"\nm = 2\nmu_k = 0.1\n";
-    EXPECT_NE(input_error(b_friction + element + "normal = 5\n").find("'b' already has friction"), std::string::npos);
-    EXPECT_NE(input_error(two + element + "normal = 5\n[[friction]]\nbetween = [\"b\", \"ground\"]\nmu_k = 0.2\n")
-                  .find("'b' already takes part in the friction of 'friction1'"),
+    for (const std::string& text :
+         {b_friction + element + "normal = 5\n",
+          two + element + "normal = 5\n[[friction]]\nbetween = [\"b\", \"ground\"]\nmu_k = 0.2\n",
+          two + "[[friction]]\nbetween = [\"b\", \"a\"]\nmu_k = 0.3\nnormal = 5\n[[friction]]\nbetween = [\"b\", "
+                "\"ground\"]\nmu_k = 0.2\n"}) {
+        const Model chain = parse_model(text, "pair.toml");
+        EXPECT_EQ(chain.friction_slot(0).partner, 1);
+        EXPECT_EQ(chain.friction_slot(1).partner, kGround);
+        EXPECT_TRUE(chain.friction_chain());
+    }
+    // Two frictions against the ground on one body are still one too many.
+    EXPECT_NE(input_error(two + "[[friction]]\nbetween = [\"a\", \"ground\"]\nmu_k = 0.3\n[[friction]]\nbetween = "
+                                "[\"a\", \"ground\"]\nmu_k = 0.2\n")
+                  .find("'a' already has friction"),
               std::string::npos);
     EXPECT_NE(input_error(two + "[[damper]]\nbetween = [\"a\", \"b\"]\nc = 1\n" + element + "normal = 5\n")
                   .find("non-proportional damping"),

@@ -1,5 +1,6 @@
 // Several frictions on one body (issue 36, "any number of frictions per
-// body"): a partner carrying two riders, the smallest under-platform damper.
+// body"): a partner carrying two riders, the smallest under-platform damper,
+// and a chain (a block on a block on the ground; below).
 // A partner p (m_p = 2, a spring k = 100 to the ground, forced F sin(w t))
 // carries two riders r1 (m 1) and r2 (m 0.5), each held by Coulomb friction
 // against it (mu_s N = 0.3 and 0.5, mu_k N = 0.2 and 0.4). From rest all
@@ -150,19 +151,23 @@ TEST(SharedPartner, TheReaderLetsAPartnerCarrySeveralFrictionsWrittenEitherWay) 
     const Model abc = parse_model(masses(3) + friction("a", "b") + friction("b", "c"), "abc.toml");
     EXPECT_EQ(abc.friction_slot(0).partner, 1);
     EXPECT_EQ(abc.friction_slot(2).partner, 1);
-    // a - b - c - d: b would ride c while a rides b (a chain), still refused by key.
-    try {
-        parse_model(masses(4) + friction("a", "b") + friction("b", "c") + friction("c", "d"), "chain.toml");
-        ADD_FAILURE() << "a chain of frictions was accepted";
-    } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("friction[2].between"), std::string::npos) << e.what();
-    }
-    // A partner with a friction of its own (a stack on the ground), still refused by key.
-    try {
-        parse_model(masses(2) + friction("a", "b") + friction("b", "ground"), "stack.toml");
-        ADD_FAILURE() << "a partner with its own friction was accepted";
-    } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("friction[2].between"), std::string::npos) << e.what();
+    // a - b - c - d: a tree rooted at b (the first of the two in two frictions): a and c ride b, d rides c.
+    const Model abcd =
+        parse_model(masses(4) + friction("a", "b") + friction("b", "c") + friction("c", "d"), "abcd.toml");
+    EXPECT_EQ(abcd.friction_slot(0).partner, 1);
+    EXPECT_EQ(abcd.friction_slot(2).partner, 1);
+    EXPECT_EQ(abcd.friction_slot(3).partner, 2);
+    EXPECT_FALSE(abcd.has_friction(1));
+    // A loop: a - b, b - c and c - a, or two bodies with ground friction joined by one.
+    for (const std::string& loop :
+         {masses(3) + friction("a", "b") + friction("b", "c") + friction("c", "a"),
+          masses(2) + friction("a", "ground") + friction("b", "ground") + friction("a", "b")}) {
+        try {
+            parse_model(loop, "loop.toml");
+            ADD_FAILURE() << "a loop of frictions was accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("loop"), std::string::npos) << e.what();
+        }
     }
 }
 
@@ -201,6 +206,90 @@ TEST(SharedPartner, TwoRidersReleaseAtTheClosedFormsInstantsOnEveryBackEnd) {
             continue;
         }
         EXPECT_LT(fe::event_gap(programs, first), 1e-13) << "the same events whichever way `between` is written";
+    }
+}
+
+// A chain: a block b (1 kg) on a block a (2 kg) on the ground, a on a spring
+// k = 100, forced F sin(w t) (F = 10, w = 3), a constant load L = 0.5 on b;
+// mu_s N = 6 and mu_k N = 5 between a and the ground, 1 and 0.8 between b
+// and a. From rest both hold: the ground friction holds the whole stack,
+// D_a = F sin(w t) + L (b's load included: without it a would release
+// 2e-2 s later), and a releases at the first |D_a| = 6. Then the stack
+// slides as one body of 3 kg under k, the forcing, L and -mu_k N s, and b,
+// riding a, holds D_b = L - m_b x''(t): it releases at the first |D_b| = 1,
+// before the stack stops.
+constexpr double kMa = 2.0, kMb = 1.0, kKa = 100.0, kFa = 10.0, kWa = 3.0, kL = 0.5;
+constexpr double kMuSaN = 6.0, kMuKaN = 5.0, kMuSbN = 1.0, kMuKbN = 0.8;
+
+std::string stack_model(bool upper_first) {
+    const std::string top =
+        "[[friction]]\nname = \"top\"\nbetween = " + std::string(upper_first ? "[\"b\", \"a\"]" : "[\"a\", \"b\"]") +
+        "\nmu_s = " + fe::num(kMuSbN) + "\nmu_k = " + fe::num(kMuKbN) + "\nnormal = 1.0\n";
+    const std::string bottom =
+        "[[friction]]\nname = \"bottom\"\nbetween = [\"a\", \"ground\"]\nmu_s = " + fe::num(kMuSaN) +
+        "\nmu_k = " + fe::num(kMuKaN) + "\nnormal = 1.0\n";
+    return "name = \"stack\"\n[[mass]]\nname = \"a\"\nm = " + fe::num(kMa) +
+           "\n[[mass]]\nname = \"b\"\nm = " + fe::num(kMb) +
+           "\n[[spring]]\nbetween = [\"a\", \"ground\"]\nk = " + fe::num(kKa) + "\n" +
+           (upper_first ? top + bottom : bottom + top) + "[[forcing]]\nomega = " + fe::num(kWa) +
+           "\namplitude = { a = " + fe::num(kFa) + " }\n[load]\nb = " + fe::num(kL) + "\n";
+}
+
+TEST(FrictionChain, ABlockOnABlockOnTheGroundReleasesAtTheClosedFormsInstants) {
+    const Real t1 =
+        first_root([](Real t) { return std::fabs(kFa * std::sin(kWa * t) + kL) - kMuSaN; }, 1e-9L, 2, 1e-4L);
+    const Real t1_alone =
+        first_root([](Real t) { return std::fabs(kFa * std::sin(kWa * t)) - kMuSaN; }, 1e-9L, 2, 1e-4L);
+    EXPECT_GT(t1_alone - t1, 1e-2L) << "b's load must count in the ground friction's held force";
+    const Real s = kFa * std::sin(kWa * t1) + kL > 0 ? 1 : -1, m = kMa + kMb, W = std::sqrt(Real(kKa) / m);
+    const Real c = kL - kMuKaN * s, Ap = kFa / (kKa - m * kWa * kWa);
+    const Real C = -(Ap * std::sin(kWa * t1) + c / kKa), S = -Ap * kWa * std::cos(kWa * t1) / W;
+    auto x = [&](Real t) {
+        return Ap * std::sin(kWa * t) + c / kKa + C * std::cos(W * (t - t1)) + S * std::sin(W * (t - t1));
+    };
+    auto v = [&](Real t) {
+        return Ap * kWa * std::cos(kWa * t) - C * W * std::sin(W * (t - t1)) + S * W * std::cos(W * (t - t1));
+    };
+    auto a = [&](Real t) { return (-kKa * x(t) + kFa * std::sin(kWa * t) + c) / m; };
+    const Real t2 = first_root([&](Real t) { return std::fabs(kL - kMb * a(t)) - kMuSbN; }, t1, 3, 1e-4L);
+    const Real stop = first_root(v, t1 + 1e-6L, 3, 1e-4L);
+    std::printf("a releases at %.17Lg (without b's load %.17Lg), b at %.17Lg, the stack would stop at %.17Lg\n", t1,
+                t1_alone, t2, stop);
+    ASSERT_LT(t2, stop);
+    const double t_end = 3.0;
+    testing::Outcome first;
+    for (bool upper_first : {true, false}) {
+        const Model mdl = parse_model(stack_model(upper_first), "stack.toml");
+        EXPECT_TRUE(mdl.friction_chain());
+        EXPECT_EQ(mdl.friction_slot(1).partner, 0) << "b rides a, whichever way `between` is written";
+        const testing::Outcome programs = testing::simulate(mdl, t_end, 0.0, testing::Solvers::interp),
+                               eigen = testing::simulate(mdl, t_end, 0.0, testing::Solvers::generic);
+        ASSERT_GE(programs.events.size(), 3u);
+        EXPECT_EQ(programs.events[0].kind, EventKind::release);
+        EXPECT_EQ(programs.events[0].element, 0);
+        EXPECT_NEAR(programs.events[0].t, static_cast<double>(t1), 1e-12);
+        EXPECT_EQ(programs.events[1].kind, EventKind::release);
+        EXPECT_EQ(programs.events[1].element, 1);
+        EXPECT_NEAR(programs.events[1].t, static_cast<double>(t2), 1e-12);
+        const std::vector<testing::Recorded> r30 = fe::reference_events(mdl, 30, t_end),
+                                             r60 = fe::reference_events(mdl, 60, t_end);
+        const testing::Outcome cvode = testing::baseline(mdl, t_end, 1e-12, 1e-14, Method::cvode);
+        const double to_eigen = fe::event_gap(programs, eigen), to_ref = fe::event_gap(programs.events, r30),
+                     digits = fe::event_gap(r30, r60), to_cvode = fe::event_gap(programs, cvode);
+        std::printf(
+            "%zu events; first two %.3g s and %.3g s from the closed form; the programs within %.3g s of the "
+            "Eigen solver, %.3g s of the reference, 30 against 60 digits %.3g s, CVODE %.3g s\n",
+            programs.events.size(), std::fabs(programs.events[0].t - static_cast<double>(t1)),
+            std::fabs(programs.events[1].t - static_cast<double>(t2)), to_eigen, to_ref, digits, to_cvode);
+        EXPECT_LT(to_eigen, 1e-12);
+        EXPECT_LT(to_ref, 1e-12);
+        EXPECT_LT(digits, 1e-20);
+        EXPECT_LT(to_cvode, 1e-8);
+        if (first.events.empty()) {
+            first = programs;
+            continue;
+        }
+        EXPECT_LT(fe::event_gap(programs, first), 1e-13);
     }
 }
 

@@ -755,9 +755,21 @@ TEST(FrictionInput, EveryKeyChecked) {
                    {"key 'friction[1].mu_k': must be >= 0"});
     expect_message(with_matrices("[[friction]]\nbetween = [\"u1\", \"ground\"]\nnormal = 1\n"),
                    {"key 'friction[1].mu_k': required key is missing"});
-    // Between two dofs (tests/test_friction_pair.cpp): the second may have no friction of its own.
-    expect_message(with_matrices(f + "normal = 1\n[[friction]]\nbetween = [\"u2\", \"u1\"]\nmu_k = 0.1\nnormal = 1\n"),
-                   {"key 'friction[2].between': 'u1' already has friction; friction between two bodies needs"});
+    // Between two dofs (tests/test_friction_pair.cpp, test_shared_partner.cpp): u2 rides u1, which has
+    // friction against the ground (a chain); a loop through the ground is refused.
+    {
+        Folder dir;
+        dir.write("M.mtx", kM2);
+        dir.write("K.mtx", kK2);
+        const Model m = read_model(dir.write(
+            "s.toml", kHead + f + "normal = 1\n[[friction]]\nbetween = [\"u2\", \"u1\"]\nmu_k = 0.1\nnormal = 1\n"));
+        EXPECT_EQ(m.friction_slot(1).partner, 0);
+        EXPECT_EQ(m.friction_slot(0).partner, kGround);
+    }
+    expect_message(
+        with_matrices(f + "normal = 1\n[[friction]]\nbetween = [\"u2\", \"ground\"]\nmu_k = 0.1\nnormal = 1\n" +
+                      "[[friction]]\nbetween = [\"u2\", \"u1\"]\nmu_k = 0.1\nnormal = 1\n"),
+        {"key 'friction[3].between': 'u1' and 'u2' both have friction against the ground"});
     expect_message(with_matrices(f + "normal = 1\n[[friction]]\nbetween = [\"ground\", \"u1\"]\nmu_k = 0.1\nnormal = 1\n"),
                    {"key 'friction[2].between': 'u1' already has friction (element 'f')"});
     expect_message(with_matrices(f + "normal = 1\nmu = 2\n"), {"key 'friction[1].mu': unknown key"});

@@ -44,9 +44,10 @@ struct FrictionSlot {
     int element = -1;
     /// The body the friction acts against: kGround, or the other mass of a
     /// [[friction]] element between two bodies (friction on the relative
-    /// velocity v[i] - v[partner]; stuck, i rides the partner). Such a partner
-    /// has no friction of its own; it may carry several riders
-    /// (Model::shared_partner: their held forces then come from held_mass.h).
+    /// velocity v[i] - v[partner]; stuck, i rides the partner). A partner may
+    /// carry several riders and have a friction of its own: the partners form
+    /// a forest (model_reader orients it; Model::shared_partner, whose held
+    /// forces come from held_mass.h).
     int partner = kGround;
     /// The normal force N of an element that gives one (`normal`), used as
     /// given: g does not enter its friction. 0 for the weight m*g (a mass's own

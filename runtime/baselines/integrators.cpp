@@ -120,7 +120,7 @@ void hold_stuck(const Model& model, const Configuration& cfg, std::vector<double
     for (std::size_t i = 0; i < model.dof(); ++i)
         if (fixed_in(model, cfg, i)) v[i] = 0.0;
         else if (cfg.stuck[i])
-            v[i] = v[static_cast<std::size_t>(model.friction_slot(i).partner)];
+            v[i] = v[static_cast<std::size_t>(carrier(model, cfg, i))];
 }
 
 // Switch functions with their watched side (as in the engine): each is > 0

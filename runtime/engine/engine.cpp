@@ -856,7 +856,7 @@ RunSummary Engine::run(const EngineOptions& options, Observer& observer) {
         for (std::size_t i = 0; i < n; ++i)
             if (fixed_in(model_, cfg, i)) v[i] = 0.0;
             else if (rides_partner(model_, cfg, i))
-                v[i] = v[static_cast<std::size_t>(model_.friction_slot(i).partner)];
+                v[i] = v[static_cast<std::size_t>(carrier(model_, cfg, i))];
         if (!found.any) {
             t = t_end;
             break;

@@ -167,7 +167,11 @@ GenericSolver::GenericSolver(const Model& model, const Configuration& cfg)
     // for a mass stuck to it (modal.h riders); -1 for the ground and stuck masses.
     coord_.assign(static_cast<std::size_t>(n_), -1);
     for (int r = 0; r < nf_; ++r) coord_[static_cast<std::size_t>(modal_.free[r])] = r;
-    for (int q : modal_.riders) coord_[static_cast<std::size_t>(q)] = coord_[static_cast<std::size_t>(t_.partner[static_cast<std::size_t>(q)])];
+    carrier_.resize(static_cast<std::size_t>(n_));
+    for (int i = 0; i < n_; ++i)
+        carrier_[static_cast<std::size_t>(i)] = carrier(model, cfg, static_cast<std::size_t>(i));
+    for (int q : modal_.riders)
+        coord_[static_cast<std::size_t>(q)] = coord_[static_cast<std::size_t>(carrier_[static_cast<std::size_t>(q)])];
 
     // Modes: M_F-normalised Phi, modal damping c = alpha + beta*lambda, regime.
     phi_ = modal_.phi;
@@ -343,7 +347,7 @@ void GenericSolver::setup(double t0, double t0_lo, const double* x0, const doubl
     // its offset x_q - x_partner is a constant of the segment: x = T q + d,
     // f_F = T^T (f - K d). A sliding pair's friction pushes the partner back.
     for (int q : modal_.riders) {
-        const double offset = x0[q] - x0[t_.partner[static_cast<std::size_t>(q)]];
+        const double offset = x0[q] - x0[carrier_[static_cast<std::size_t>(q)]];
         rider_offset_(q) = offset;
         double f = fseg_(q);
         for (int s : modal_.stuck) f -= t_.K(q, s) * x0[s];
@@ -355,7 +359,8 @@ void GenericSolver::setup(double t0, double t0_lo, const double* x0, const doubl
                 force_(coord_[static_cast<std::size_t>(i)]) -= t_.K(i, q) * rider_offset_(q);
     for (int i = 0; i < n_; ++i) {
         const int p = t_.partner[static_cast<std::size_t>(i)];
-        if (p != kGround && t_.friction[static_cast<std::size_t>(i)] && sgn[i] != 0)
+        if (p != kGround && t_.friction[static_cast<std::size_t>(i)] && sgn[i] != 0 &&
+            coord_[static_cast<std::size_t>(p)] >= 0)
             force_(coord_[static_cast<std::size_t>(p)]) += t_.mu_k(i) * t_.normal(i) * static_cast<double>(sgn[i]);
     }
     // Modal initial conditions q0 = Phi^T M_F x0 (and qd0 from v0), refined
@@ -622,7 +627,7 @@ void GenericSolver::eval(double tau, const SegmentEval& out) const {
         vmag_(i) = vm;
     }
     for (int q : modal_.riders) {  // moving with the partner, at the segment's offset
-        const int p = t_.partner[static_cast<std::size_t>(q)];
+        const int p = carrier_[static_cast<std::size_t>(q)];
         out.x[q] = out.x[p] + rider_offset_(q);
         out.v[q] = out.v[p];
         out.a[q] = out.a[p];

@@ -90,7 +90,8 @@ private:
     double growth_ = 1.0;
 
     ConfigurationTerms t_;  // masses, friction, K(cfg), C(cfg), constant force, contacts, harmonics
-    std::vector<int> coord_;  // free coordinate of each mass (its partner's for a rider), -1: ground, stuck
+    std::vector<int> coord_;       // free coordinate of each mass (its carrier's for a rider), -1: ground, stuck
+    std::vector<int> carrier_;     // the body each mass moves with (model/assembly.h carrier())
     Eigen::MatrixXd phi_;          // nf x nf, rows in the order of modal_.free
     Eigen::VectorXd phi_max_;      // max_r |phi_(r, j)|: the largest share of mode j in a dof
     Eigen::MatrixXd phi_t_m_;      // Phi^T M_F (modal initial conditions)
