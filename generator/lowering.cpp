@@ -269,6 +269,42 @@ std::vector<std::pair<int, DD>> held_terms(const Derivation& d, int i) {
     return terms;
 }
 
+/// The held force of stuck rider i as terms over dofs, i first: against its
+/// partner p, D = (m_p A_i - m_i A_p)/(m_i + m_p), the force that holds the
+/// pair together (assembly.h driving_force); of a partner carrying several
+/// (Model::shared_partner), D_i = A_i - m_i a_b, a_b the forces of p and its
+/// stuck riders over their mass (model/held_mass.h).
+std::vector<std::pair<int, DD>> partner_terms(const Model& model, const Derivation& d, int i) {
+    const int p = model.friction_slot(static_cast<std::size_t>(i)).partner;
+    const DD mi(model.masses[static_cast<std::size_t>(i)].m), mpn(model.masses[static_cast<std::size_t>(p)].m);
+    if (!model.shared_partner()) return {{i, mpn / (mi + mpn)}, {p, -mi / (mi + mpn)}};
+    std::vector<int> body{p};
+    DD mc = mpn;
+    for (int q : d.riders)
+        if (model.friction_slot(static_cast<std::size_t>(q)).partner == p)
+            body.push_back(q), mc = mc + DD(model.masses[static_cast<std::size_t>(q)].m);
+    const DD share = mi / mc;
+    std::vector<std::pair<int, DD>> terms{{i, DD(1.0) - share}};
+    for (int b : body)
+        if (b != i) terms.emplace_back(b, -share);
+    return terms;
+}
+
+/// The kinetic friction a held force reads on free dof i (model/held_mass.h
+/// kinetic_friction): -mu_k N sgn_i of its own and +mu_k N sgn_q of each
+/// friction q against it; `magnitude` the sum of their mu_k N.
+template <class Sgn>
+Lin kinetic_lin(const Model& model, const std::vector<double>& mu_k_n, int i, const Sgn& sgn, double& magnitude) {
+    Lin l;
+    magnitude = 0.0;
+    if (mu_k_n[static_cast<std::size_t>(i)] != 0.0)
+        l.add(-mu_k_n[static_cast<std::size_t>(i)], sgn(i)), magnitude += mu_k_n[static_cast<std::size_t>(i)];
+    for (std::size_t q = 0; q < model.dof(); ++q)
+        if (model.friction_slot(q).partner == i && mu_k_n[q] != 0.0)
+            l.add(mu_k_n[q], sgn(static_cast<int>(q))), magnitude += mu_k_n[q];
+    return l;
+}
+
 /// out[j] = sum_k c_k of[k][j] for the combination `terms` (c_k its
 /// coefficients), summed in their order.
 void combine(const std::vector<std::pair<int, DD>>& terms, const std::vector<std::vector<DD>>& of, std::vector<DD>& out) {
@@ -700,25 +736,13 @@ Program lower(const Derivation& d, ProgramNames names) {
         if (d.cfg.slip[j] == 0)
             s_stuck_slot[j] = slot("s_stuck_", j, x0(static_cast<int>(n + j)), "",
                                    named ? "the slider of " + model.jenkins[j].name + " (stuck)" : "");
-    // A coupled M with a stuck friction: the kinetic friction -mu_k N sgn of each
-    // sliding free dof, which the held forces read (Derivation::held).
+    // Each sliding free dof's kinetic friction that held forces read (kinetic_lin), its size in kinetic_mag.
     std::vector<std::uint32_t> kinetic_slot(n, kNoRegister);
-    if (!d.held.empty())
-        for (int i : d.free_dofs)
-            if (mu_k_n[i] != 0.0)
-                kinetic_slot[static_cast<std::size_t>(i)] = slot_lin("F_k_", static_cast<std::size_t>(i), Lin().add(-mu_k_n[i], sgn(i)));
-    // A shared partner (Model::shared_partner) with a stuck rider: the reaction
-    // mu_k N sgn of each rider sliding on it, which the riders' held forces read.
-    std::vector<std::uint32_t> reaction_slot(n, kNoRegister);
-    if (model.shared_partner())
-        for (int i : d.free_dofs) {
-            Lin l;
-            bool any = false;
-            for (std::size_t q = 0; q < n; ++q)
-                if (partner_of(static_cast<int>(q)) == i && mu_k_n[q] != 0.0)
-                    l.add(mu_k_n[q], sgn(static_cast<int>(q))), any = true;
-            if (any) reaction_slot[static_cast<std::size_t>(i)] = slot_lin("F_r_", static_cast<std::size_t>(i), l);
-        }
+    std::vector<double> kinetic_mag(n, 0.0);
+    for (int i : d.free_dofs)
+        if (const Lin l = kinetic_lin(model, mu_k_n, i, sgn, kinetic_mag[static_cast<std::size_t>(i)]);
+            (!d.held.empty() || model.shared_partner()) && kinetic_mag[static_cast<std::size_t>(i)] != 0.0)
+            kinetic_slot[static_cast<std::size_t>(i)] = slot_lin("F_k_", static_cast<std::size_t>(i), l);
     p.n_coef = static_cast<int>(p.coef_names.size());
 
     // ================= eval =================
@@ -1089,30 +1113,13 @@ Program lower(const Derivation& d, ProgramNames names) {
                 // forces with their kinetic friction.
                 std::vector<std::pair<int, DD>> terms;
                 std::string prefix = "A_pair_";
-                if (partner_of(i) != kGround && model.shared_partner()) {
-                    // Riding a partner that carries several: D = A_i - m_i a_p, the partner's body
-                    // the partner and its stuck riders, a_p their forces over their mass (held_mass.h).
-                    const int p = partner_of(i);
+                if (partner_of(i) != kGround) {
                     if (named)
                         comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of " + ms.name +
-                                   " stuck to " + model.masses[static_cast<std::size_t>(p)].name +
-                                   ", D = A_i - m_i (sum of the body's A)/(its mass)";
-                    std::vector<int> body{p};
-                    DD mc(model.masses[static_cast<std::size_t>(p)].m);
-                    for (int q : d.riders)
-                        if (partner_of(q) == p)
-                            body.push_back(q), mc = mc + DD(model.masses[static_cast<std::size_t>(q)].m);
-                    const DD share = DD(ms.m) / mc;
-                    for (int b : body) terms.emplace_back(b, b == i ? DD(1.0) - share : -share);
-                    std::stable_partition(terms.begin(), terms.end(), [&](const auto& t) { return t.first == i; });
-                    prefix = "A_ride_";
-                } else if (partner_of(i) != kGround) {
-                    const int p = partner_of(i);
-                    const Mass& mp = model.masses[static_cast<std::size_t>(p)];
-                    if (named) comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of " + ms.name + " stuck to " +
-                               mp.name + ", D = (m_p A_i - m_i A_p)/(m_i + m_p)";
-                    const DD mi(ms.m), mpn(mp.m);
-                    terms = {{i, mpn / (mi + mpn)}, {p, -mi / (mi + mpn)}};
+                                   " stuck to " + model.masses[static_cast<std::size_t>(partner_of(i))].name +
+                                   (model.shared_partner() ? ", D = A_i - m_i a_partner"
+                                                           : ", D = (m_p A_i - m_i A_p)/(m_i + m_p)");
+                    terms = partner_terms(model, d, i);
                 } else {
                     if (named) comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of stuck " + ms.name +
                                ", D = A_i - M_iF M_FF^-1 A_F (coupled M), A = -K x - C v + f + sum_h F_h sin - mu_k N sgn";
@@ -1129,15 +1136,9 @@ Program lower(const Derivation& d, ProgramNames names) {
                     al_b[k].assign(nm, 0), be_b[k].assign(nm, 0);
                     Gs_b[k].assign(nh, 0), Gc_b[k].assign(nh, 0);
                     force_terms(b, A, dA, mag, const_mag, al_b[k], be_b[k], Gs_b[k], Gc_b[k]);
-                    if (kinetic_slot[static_cast<std::size_t>(b)] != kNoRegister) {  // a sliding free dof of a coupled M
+                    if (kinetic_slot[static_cast<std::size_t>(b)] != kNoRegister) {  // a sliding free dof's friction
                         A.add(1.0, C(kinetic_slot[static_cast<std::size_t>(b)]));
-                        const_mag += mu_k_n[b];
-                    }
-                    if (reaction_slot[static_cast<std::size_t>(b)] !=
-                        kNoRegister) {  // riders sliding on a shared partner
-                        A.add(1.0, C(reaction_slot[static_cast<std::size_t>(b)]));
-                        for (std::size_t q = 0; q < n; ++q)
-                            if (partner_of(static_cast<int>(q)) == b) const_mag += mu_k_n[q];
+                        const_mag += kinetic_mag[static_cast<std::size_t>(b)];
                     }
                     mag.add(const_mag, ONE);
                     if (const auto it = pair_reg.find(b); it != pair_reg.end()) {
