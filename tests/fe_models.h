@@ -122,6 +122,20 @@ inline double event_gap(const std::vector<testing::Recorded>& a, const std::vect
     return event_gap(x, y);
 }
 
+/// How far the programs' events lie from the Eigen solver's, the reference's
+/// at 30 digits and CVODE's (rtol 1e-12), and the reference at 30 from 60 digits.
+struct BackEndGaps {
+    double eigen, reference, digits, cvode;
+};
+inline BackEndGaps back_end_gaps(const Model& model, const testing::Outcome& programs, double t_end) {
+    const testing::Outcome eigen = testing::simulate(model, t_end, 0.0, testing::Solvers::generic);
+    const std::vector<testing::Recorded> r30 = reference_events(model, 30, t_end),
+                                         r60 = reference_events(model, 60, t_end);
+    const testing::Outcome cvode = testing::baseline(model, t_end, 1e-12, 1e-14, Method::cvode);
+    return {event_gap(programs, eigen), event_gap(programs.events, r30), event_gap(r30, r60),
+            event_gap(programs, cvode)};
+}
+
 /// The period map's exact Jacobian at y over [0, T] against central
 /// differences (steps h max(1, |y_j|)): |J - J_fd| / |J_fd|, each perturbed
 /// run with the events of the exact one (a failure otherwise); `events`

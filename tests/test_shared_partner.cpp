@@ -177,8 +177,7 @@ TEST(SharedPartner, TwoRidersReleaseAtTheClosedFormsInstantsOnEveryBackEnd) {
     testing::Outcome first;
     for (bool swap : {false, true}) {
         const Model m = parse_model(damper_model(swap), "shared.toml");
-        const testing::Outcome programs = testing::simulate(m, t_end, 0.0, testing::Solvers::interp),
-                               eigen = testing::simulate(m, t_end, 0.0, testing::Solvers::generic);
+        const testing::Outcome programs = testing::simulate(m, t_end, 0.0, testing::Solvers::interp);
         ASSERT_GE(programs.events.size(), 4u);
         EXPECT_EQ(programs.events[0].kind, EventKind::release);
         EXPECT_EQ(programs.events[0].element, 1);  // r1
@@ -186,21 +185,18 @@ TEST(SharedPartner, TwoRidersReleaseAtTheClosedFormsInstantsOnEveryBackEnd) {
         EXPECT_EQ(programs.events[1].kind, EventKind::release);
         EXPECT_EQ(programs.events[1].element, 2);  // r2
         EXPECT_NEAR(programs.events[1].t, static_cast<double>(c.t2), 1e-12);
-        const std::vector<testing::Recorded> r30 = fe::reference_events(m, 30, t_end),
-                                             r60 = fe::reference_events(m, 60, t_end);
-        const testing::Outcome cvode = testing::baseline(m, t_end, 1e-12, 1e-14, Method::cvode);
-        const double to_eigen = fe::event_gap(programs, eigen), to_ref = fe::event_gap(programs.events, r30),
-                     digits = fe::event_gap(r30, r60), to_cvode = fe::event_gap(programs, cvode);
+        const fe::BackEndGaps gap = fe::back_end_gaps(m, programs, t_end);
         std::printf(
             "%s: %zu events; first two %.3g s and %.3g s from the closed form; the programs within %.3g s of "
             "the Eigen solver, %.3g s of the reference, 30 against 60 digits %.3g s, CVODE %.3g s\n",
             swap ? "written [p, rider]" : "written [rider, p]", programs.events.size(),
             std::fabs(programs.events[0].t - static_cast<double>(c.t1)),
-            std::fabs(programs.events[1].t - static_cast<double>(c.t2)), to_eigen, to_ref, digits, to_cvode);
-        EXPECT_LT(to_eigen, 1e-12);
-        EXPECT_LT(to_ref, 1e-12);
-        EXPECT_LT(digits, 1e-20);
-        EXPECT_LT(to_cvode, 1e-8);
+            std::fabs(programs.events[1].t - static_cast<double>(c.t2)), gap.eigen, gap.reference, gap.digits,
+            gap.cvode);
+        EXPECT_LT(gap.eigen, 1e-12);
+        EXPECT_LT(gap.reference, 1e-12);
+        EXPECT_LT(gap.digits, 1e-20);
+        EXPECT_LT(gap.cvode, 1e-8);
         if (first.events.empty()) {
             first = programs;
             continue;
@@ -262,8 +258,7 @@ TEST(FrictionChain, ABlockOnABlockOnTheGroundReleasesAtTheClosedFormsInstants) {
         const Model mdl = parse_model(stack_model(upper_first), "stack.toml");
         EXPECT_TRUE(mdl.friction_chain());
         EXPECT_EQ(mdl.friction_slot(1).partner, 0) << "b rides a, whichever way `between` is written";
-        const testing::Outcome programs = testing::simulate(mdl, t_end, 0.0, testing::Solvers::interp),
-                               eigen = testing::simulate(mdl, t_end, 0.0, testing::Solvers::generic);
+        const testing::Outcome programs = testing::simulate(mdl, t_end, 0.0, testing::Solvers::interp);
         ASSERT_GE(programs.events.size(), 3u);
         EXPECT_EQ(programs.events[0].kind, EventKind::release);
         EXPECT_EQ(programs.events[0].element, 0);
@@ -271,20 +266,16 @@ TEST(FrictionChain, ABlockOnABlockOnTheGroundReleasesAtTheClosedFormsInstants) {
         EXPECT_EQ(programs.events[1].kind, EventKind::release);
         EXPECT_EQ(programs.events[1].element, 1);
         EXPECT_NEAR(programs.events[1].t, static_cast<double>(t2), 1e-12);
-        const std::vector<testing::Recorded> r30 = fe::reference_events(mdl, 30, t_end),
-                                             r60 = fe::reference_events(mdl, 60, t_end);
-        const testing::Outcome cvode = testing::baseline(mdl, t_end, 1e-12, 1e-14, Method::cvode);
-        const double to_eigen = fe::event_gap(programs, eigen), to_ref = fe::event_gap(programs.events, r30),
-                     digits = fe::event_gap(r30, r60), to_cvode = fe::event_gap(programs, cvode);
+        const fe::BackEndGaps gap = fe::back_end_gaps(mdl, programs, t_end);
         std::printf(
             "%zu events; first two %.3g s and %.3g s from the closed form; the programs within %.3g s of the "
             "Eigen solver, %.3g s of the reference, 30 against 60 digits %.3g s, CVODE %.3g s\n",
             programs.events.size(), std::fabs(programs.events[0].t - static_cast<double>(t1)),
-            std::fabs(programs.events[1].t - static_cast<double>(t2)), to_eigen, to_ref, digits, to_cvode);
-        EXPECT_LT(to_eigen, 1e-12);
-        EXPECT_LT(to_ref, 1e-12);
-        EXPECT_LT(digits, 1e-20);
-        EXPECT_LT(to_cvode, 1e-8);
+            std::fabs(programs.events[1].t - static_cast<double>(t2)), gap.eigen, gap.reference, gap.digits, gap.cvode);
+        EXPECT_LT(gap.eigen, 1e-12);
+        EXPECT_LT(gap.reference, 1e-12);
+        EXPECT_LT(gap.digits, 1e-20);
+        EXPECT_LT(gap.cvode, 1e-8);
         if (first.events.empty()) {
             first = programs;
             continue;
