@@ -46,9 +46,6 @@ void refuse_unsupported(const Model& model) {
                          "supported yet");
     };
     if (!model.load_steps.empty()) refuse("[[load_step]] " + model.load_steps.front().name);
-    if (model.shared_partner())  // the stick flows take one rider per partner, none a partner (analysis/tangent.cpp)
-        throw InputError(where +
-                         "a body takes part in several frictions between bodies, which hsnc modes does not take yet");
     refuse_impacts(model, std::string(kModes) + "()");
 }
 
@@ -399,7 +396,7 @@ struct Orbit {
 
 // The linear limit's coordinates, x = T q: one q per mass without friction; a mass with
 // friction against the ground is held (its row of T 0), one with friction against another body
-// moves with that body (its row that body's).
+// moves with that body (its row that body's; up a chain, the first without friction).
 Eigen::MatrixXd held_basis(const Model& model) {
     const std::size_t n = model.dof();
     std::vector<Eigen::Index> col(n, -1);
@@ -408,11 +405,10 @@ Eigen::MatrixXd held_basis(const Model& model) {
         if (!model.has_friction(i)) col[i] = nq++;
     Eigen::MatrixXd T = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), nq);
     for (std::size_t i = 0; i < n; ++i) {
-        const int partner = model.friction_slot(i).partner;
-        if (col[i] >= 0)
-            T(static_cast<Eigen::Index>(i), col[i]) = 1.0;
-        else if (partner != kGround)
-            T(static_cast<Eigen::Index>(i), col[static_cast<std::size_t>(partner)]) = 1.0;
+        int body = static_cast<int>(i);  // up the chain to the first body without friction (assembly.h carrier())
+        while (body != kGround && col[static_cast<std::size_t>(body)] < 0)
+            body = model.friction_slot(static_cast<std::size_t>(body)).partner;
+        if (body != kGround) T(static_cast<Eigen::Index>(i), col[static_cast<std::size_t>(body)]) = 1.0;
     }
     return T;
 }

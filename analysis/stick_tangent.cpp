@@ -21,11 +21,11 @@ Layout layout(const Model& model) {
     return {static_cast<Eigen::Index>(model.dof()), static_cast<Eigen::Index>(model.jenkins.size())};
 }
 
-// The body mass i moves as: itself, its partner when stuck to it (a rider),
-// or none (-1) when held against the ground.
+// The body mass i moves as: itself, its carrier when stuck to a partner (a
+// rider, up a chain: assembly.h carrier()), or none (-1) when held still.
 int body_of(const Model& model, const Configuration& cfg, std::size_t i) {
     if (fixed_in(model, cfg, i)) return -1;
-    return rides_partner(model, cfg, i) ? model.friction_slot(i).partner : static_cast<int>(i);
+    return carrier(model, cfg, i);
 }
 
 // d A_i / dz: -K_i. on x, -C_i. on v, +-k on the sliders of the stuck Jenkins elements at i.
@@ -127,17 +127,21 @@ Eigen::VectorXd stick_field(const Model& model, const Configuration& cfg, const 
             f(L.v(static_cast<int>(i))) = a[i];
         }
     }
+    // Each dof's force (kinetic friction, and its reaction on the partner), then each body's sum.
+    std::vector<double> on_dof(model.dof(), 0.0);
+    for (std::size_t i = 0; i < model.dof() && !model.coupled_mass(); ++i) {
+        on_dof[i] += force_on_mass(model, cfg, static_cast<int>(i), t, x, v);
+        const FrictionSlot& fs = model.friction_slot(i);
+        if (fs.active && !cfg.stuck[i] && sgn[i] != 0) {
+            const double fk = fs.mu_k * model.normal_force(i) * sgn[i];
+            on_dof[i] -= fk;
+            if (fs.partner != kGround) on_dof[static_cast<std::size_t>(fs.partner)] += fk;
+        }
+    }
     for (std::size_t i = 0; i < model.dof() && !model.coupled_mass(); ++i) {
         const int b = body_of(model, cfg, i);
         if (b < 0) continue;
-        double F = force_on_mass(model, cfg, static_cast<int>(i), t, x, v);
-        const FrictionSlot& fs = model.friction_slot(i);
-        if (fs.active && !cfg.stuck[i] && sgn[i] != 0) {  // kinetic friction, and its reaction on the partner
-            const double fk = fs.mu_k * model.normal_force(i) * sgn[i];
-            F -= fk;
-            if (fs.partner != kGround) force[static_cast<std::size_t>(fs.partner)] += fk;
-        }
-        force[static_cast<std::size_t>(b)] += F;
+        force[static_cast<std::size_t>(b)] += on_dof[i];
         mass[static_cast<std::size_t>(b)] += model.masses[i].m;
     }
     for (std::size_t i = 0; i < model.dof() && !model.coupled_mass(); ++i) {
@@ -178,7 +182,7 @@ void stick_gradient(const Model& model, const Configuration& cfg, const SwitchFu
             const Eigen::MatrixXd K = stiffness_matrix(model, cfg), C = damping_matrix(model, cfg);
             const Eigen::VectorXd rate = forcing_rate(model, t);
             const int p = model.friction_slot(static_cast<std::size_t>(e)).partner;
-            if (model.coupled_mass()) {  // D_e = P_e . f (held_mass.h)
+            if (model.coupled_friction()) {  // D_e = P_e . f (held_mass.h: a coupled M, or several frictions on a body)
                 const Eigen::VectorXd P = HeldMass(model, cfg.stuck).release_row(e);
                 for (Eigen::Index q = 0; q < L.n; ++q) {
                     if (P(q) == 0.0) continue;

@@ -8,12 +8,14 @@
 // integration) after the projection P(cfg) onto the states the configuration
 // allows:
 //   a mass stuck against the ground   dv = 0 (it stops again at once; tangent.h)
-//   a stuck pair (a rider and its     dv of both = their momentum-weighted mean
-//     partner, one body)                (friction is internal: the pair's momentum stays)
+//   a body and what rides on it (its  dv of each = their momentum-weighted mean
+//     stuck riders, up every chain)     (friction is internal: the body's momentum stays)
 //   a slipping Jenkins element        ds = dx_a - dx_b (its stretch is held)
 // A: x' = v; v' = M^-1 (-K x - C v + k s on a stuck element's ends) per body,
-// a stuck pair's rows the pair's (summed forces over summed mass); s' = 0
-// while stuck, v_a - v_b while slipping.
+// a body's rows its members' (summed forces over summed mass); s' = 0 while
+// stuck, v_a - v_b while slipping. A release function's gradient is that of
+// D_i: the pair's closed form, or P_i . f (model/held_mass.h) where several
+// frictions meet on a body (Model::coupled_friction()).
 // At a switch the saltation matrix S = I + (f+ - f-) h_z^T / (h_z f- + h_t)
 // uses the full vector fields f-+ before and after (field()) and the switch
 // function's gradient (gradient()).

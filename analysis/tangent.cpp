@@ -50,26 +50,7 @@ struct Tangent::ConfigData {
     Eigen::MatrixXd stick_A, stick_P;
 };
 
-Tangent::Tangent(const Model& model) : model_(model), stick_(!stick_elements(model).empty()) {
-    // The stick flows take one rider per partner (stick_tangent.h): several wait for their saltations.
-    if (!model.shared_partner()) return;
-    if (model.friction_chain())
-        throw InputError("model '" + model.name +
-                         "': a body with friction carries another's (a chain of frictions), which periodic orbits, "
-                         "Lyapunov exponents, continuation and modes do not take yet (simulate and sweep do)");
-    std::vector<std::string> riders(model.dof());
-    for (std::size_t i = 0; i < model.dof(); ++i)
-        if (const int p = model.friction_slot(i).partner; p != kGround && model.has_friction(i)) {
-            std::string& r = riders[static_cast<std::size_t>(p)];
-            if (!r.empty())
-                throw InputError("model '" + model.name + "': '" + model.masses[static_cast<std::size_t>(p)].name +
-                                 "' carries several frictions ([[friction]] '" + r + "' and '" +
-                                 model.friction_name(i) +
-                                 "'), which periodic orbits, Lyapunov exponents, continuation and modes do not take "
-                                 "yet (simulate and sweep do)");
-            r = model.friction_name(i);
-        }
-}
+Tangent::Tangent(const Model& model) : model_(model), stick_(!stick_elements(model).empty()) {}
 Tangent::~Tangent() = default;
 Tangent::Tangent(Tangent&&) noexcept = default;
 

@@ -14,8 +14,12 @@
 // from these closed forms, apart from the engine; a held force that left out
 // the other rider's mass (the pairwise rule, (m_p A_i - m_i A_p)/(m_i + m_p))
 // or the sliding rider's reaction would move them by 1e-2 s and 1e-2 s.
+// The tangent (periodic orbits, Lyapunov exponents, continuation, modes) is
+// checked on both: Jacobians across every rider's switches against central
+// differences, and a forced damper's periodic orbit against CVODE.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -25,6 +29,7 @@
 #include "error.h"
 #include "fe_models.h"
 #include "hsnc/periodic.h"
+#include "jacobian_check.h"
 #include "model_reader.h"
 
 namespace hsnc {
@@ -37,7 +42,7 @@ constexpr double kMuS1N = 0.3, kMuK1N = 0.2, kMuS2N = 0.5, kMuK2N = 0.4;
 
 /// The model; `swap` writes each friction as [partner, rider] (the reader
 /// then makes the partner carry both: the same physics).
-std::string damper_model(bool swap) {
+std::string damper_model(bool swap, double amplitude = kF) {
     auto friction = [&](const char* name, const char* rider, double mu_s, double mu_k) {
         const std::string between =
             swap ? std::string("[\"p\", \"") + rider + "\"]" : std::string("[\"") + rider + "\", \"p\"]";
@@ -48,7 +53,7 @@ std::string damper_model(bool swap) {
            "\n[[mass]]\nname = \"r1\"\nm = " + fe::num(kM1) + "\n[[mass]]\nname = \"r2\"\nm = " + fe::num(kM2) +
            "\n[[spring]]\nbetween = [\"p\", \"ground\"]\nk = " + fe::num(kK) + "\n" +
            friction("f1", "r1", kMuS1N, kMuK1N) + friction("f2", "r2", kMuS2N, kMuK2N) +
-           "[[forcing]]\nomega = " + fe::num(kW) + "\namplitude = { p = " + fe::num(kF) + " }\n";
+           "[[forcing]]\nomega = " + fe::num(kW) + "\namplitude = { p = " + fe::num(amplitude) + " }\n";
 }
 
 /// The first t in (a, b] where f changes sign, to the last bit of Real
@@ -284,16 +289,64 @@ TEST(FrictionChain, ABlockOnABlockOnTheGroundReleasesAtTheClosedFormsInstants) {
     }
 }
 
-TEST(SharedPartner, PeriodicOrbitsRefuseItByName) {
-    const Model m = parse_model(damper_model(false), "shared.toml");
-    try {
-        PeriodicOptions opt;
-        opt.kernels = KernelChoice::generic;
-        const PeriodicResult r = periodic(m, opt);
-        ADD_FAILURE() << "status " << static_cast<int>(r.status) << ": " << r.message;
-    } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("'p' carries several frictions"), std::string::npos) << e.what();
+// The tangent where several frictions meet on a body (analysis/stick_tangent.h:
+// a body's rows over everything riding it, the release gradients P_i . df):
+// the Jacobian of runs across sticks and releases of every friction against
+// central differences of the engine, the riders started sliding (a velocity
+// perturbation of a stuck body at t0 is a slip of its own, not differentiable).
+TEST(SharedPartner, TheJacobianAcrossBothRidersSwitchesMatchesCentralDifferences) {
+    Model m = parse_model(damper_model(false), "shared.toml");
+    m.v0[1] = 0.3, m.v0[2] = -0.2;
+    EXPECT_EQ(testing::expect_jacobian_matches(m, 3.0, 1e-6, 2e-6, 6), 6);
+    // r2 (on a spring of its own) stays stuck on p, so r1 releases (three times) from the body p + r2: its
+    // release gradient takes r2's force too, not p's alone (the velocity columns of p and r2
+    // slip at t0: not differentiable)
+    m = parse_model(damper_model(false) + "[[spring]]\nbetween = [\"r2\", \"ground\"]\nk = 5.0\n", "shared.toml");
+    m.v0[1] = 0.3;
+    EXPECT_EQ(testing::expect_jacobian_matches(m, 2.2, 1e-6, 2e-6, 6), 4);
+}
+
+TEST(FrictionChain, TheJacobianAcrossBothBlocksSwitchesMatchesCentralDifferences) {
+    Model m = parse_model(stack_model(false), "stack.toml");
+    m.v0[0] = -0.1, m.v0[1] = 0.2;
+    EXPECT_EQ(testing::expect_jacobian_matches(m, 3.0, 1e-6, 2e-6, 6), 4);
+}
+
+// The forced damper's periodic orbit: a fixed point of the period map that
+// CVODE computes on its own, and the monodromy matrix (what its Floquet
+// multipliers come from) against central differences of that map.
+TEST(SharedPartner, ThePeriodicOrbitAndItsMonodromyHoldIndependently) {
+    const Model m = parse_model(damper_model(false, 2 * kF), "shared.toml");
+    PeriodicOptions opt;
+    opt.kernels = KernelChoice::generic;
+    opt.transient = 20.0;
+    const PeriodicResult r = periodic(m, opt);
+    ASSERT_EQ(r.status, PeriodicStatus::ok) << r.message;
+    EXPECT_EQ(r.grazing, 0u);
+    EXPECT_EQ(r.events, 6u) << "f1 reverses twice, f2 sticks and releases twice a period";
+    Model at = m;
+    at.t0 = r.t, at.x0 = r.x, at.v0 = r.v;
+    const testing::Outcome cvode = testing::baseline(at, r.t + r.period, 1e-12, 1e-14, Method::cvode);
+    double off = 0.0, scale = 0.0;
+    for (std::size_t i = 0; i < m.dof(); ++i) {
+        off = std::max({off, std::fabs(cvode.summary.x[i] - r.x[i]), std::fabs(cvode.summary.v[i] - r.v[i])});
+        scale = std::max({scale, std::fabs(r.x[i]), std::fabs(r.v[i])});
     }
+    analysis::FlowKernels kernels;
+    kernels.kernels = KernelChoice::generic;
+    analysis::Flow flow(at, kernels, "test");
+    Eigen::VectorXd y(static_cast<Eigen::Index>(2 * m.dof()));
+    for (std::size_t i = 0; i < m.dof(); ++i)
+        y(static_cast<Eigen::Index>(i)) = r.x[i], y(static_cast<Eigen::Index>(m.dof() + i)) = r.v[i];
+    std::size_t events = 0;
+    const double jac = fe::off_central_differences(flow, r.period, y, events);
+    std::printf(
+        "orbit: %zu events a period, max |mu| %.6g, CVODE's period map returns it within %.3g (scale %.3g), "
+        "|J - central differences| / |J| = %.3g\n",
+        r.events, r.max_multiplier, off, scale, jac);
+    EXPECT_LT(off, 1e-8 * scale);
+    EXPECT_LT(jac, 1e-6);
+    EXPECT_TRUE(r.stable);
 }
 
 }  // namespace
