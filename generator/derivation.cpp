@@ -59,7 +59,7 @@ bool Derivation::rides(int mass) const { return std::find(riders.begin(), riders
 
 int Derivation::coordinate(int mass) const {
     if (mass == kGround) return -1;
-    return rides(mass) ? free_index(model->friction_slot(static_cast<std::size_t>(mass)).partner) : free_index(mass);
+    return rides(mass) ? free_index(carrier(*model, cfg, static_cast<std::size_t>(mass))) : free_index(mass);
 }
 
 namespace {
@@ -421,8 +421,8 @@ ex segment_force(const Derivation& d, const SegmentInputs& in, int i) {
     for (std::size_t q = 0; q < model.dof(); ++q)  // a sliding friction pair: the opposite force on the partner
         if (model.friction_slot(q).partner == i) f += d.mu_k_n[q] * in.sgn[q];
     for (int s : d.stuck_dofs) f -= d.K(i, s) * in.x0[s];
-    for (int r : d.riders)
-        f -= d.K(i, r) * (in.x0[r] - in.x0[model.friction_slot(static_cast<std::size_t>(r)).partner]);
+    for (int r : d.riders)  // at its offset from the body it rides (a chain's: the first not stuck)
+        f -= d.K(i, r) * (in.x0[r] - in.x0[carrier(model, d.cfg, static_cast<std::size_t>(r))]);
     return f;
 }
 
@@ -430,7 +430,7 @@ ex coordinate_force(const Derivation& d, const SegmentInputs& in, std::size_t r)
     const int p = d.free_dofs[r];
     ex f = segment_force(d, in, p);
     for (int q : d.riders)
-        if (d.model->friction_slot(static_cast<std::size_t>(q)).partner == p) f += segment_force(d, in, q);
+        if (carrier(*d.model, d.cfg, static_cast<std::size_t>(q)) == p) f += segment_force(d, in, q);
     return f;
 }
 
@@ -457,11 +457,6 @@ std::vector<std::vector<int>> coordinates(const Model& model, const Configuratio
     if (model.coupled_mass() && !d.riders.empty())
         throw NotDerivable("derivation::derive(): configuration " + cfg.spec(model) +
                            ": a friction between two dofs of a coupled (non-diagonal) mass matrix");
-    // A chain of frictions with one stuck: its held forces are the general P_i f (model/held_mass.h),
-    // which the programs do not write yet; the Eigen solver takes the configuration in every kind.
-    if (model.friction_chain() && std::any_of(cfg.stuck.begin(), cfg.stuck.end(), [](char s) { return s != 0; }))
-        throw NotDerivable("derivation::derive(): configuration " + cfg.spec(model) +
-                           ": a chain of frictions (a partner with a friction of its own) with a friction stuck");
     std::vector<std::vector<int>> group(d.free_dofs.size());
     for (std::size_t r = 0; r < d.free_dofs.size(); ++r) group[r].push_back(d.free_dofs[r]);
     for (int q : d.riders)
@@ -1004,8 +999,8 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
         if (d.state_space) out.x[d.free_dofs[r]] = xf[r];
         for (std::size_t j = 0; j < out.u.size(); ++j) out.x[d.free_dofs[r]] += lf(d.modes[j].v[r]) * out.u[j];
     }
-    for (int q : d.riders) {  // at its segment-start offset from its partner
-        const int p = model.friction_slot(static_cast<std::size_t>(q)).partner;
+    for (int q : d.riders) {  // at its segment-start offset from the body it rides
+        const int p = carrier(model, d.cfg, static_cast<std::size_t>(q));
         out.x[q] = out.x[p] + (in.x0[q] - in.x0[p]);
     }
     for (std::size_t i = 0; i < n; ++i) {
@@ -1042,7 +1037,17 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
                 return A;
             };
             ex A = force(i);
-            if (model.friction_slot(static_cast<std::size_t>(i)).partner != kGround && model.shared_partner()) {
+            if (model.friction_chain()) {
+                // D_i = sum over S_i of f_k - m_k a_k (model/held_mass.h): f_k with the reactions of
+                // the frictions sliding on k, a_k the body's acceleration (0 when held)
+                A = 0;
+                for (int k : carried(model, d.cfg.stuck, i)) {
+                    A += force(k) -
+                         exact(model.masses[static_cast<std::size_t>(k)].m) * out.a[static_cast<std::size_t>(k)];
+                    for (std::size_t q = 0; q < n; ++q)
+                        if (model.friction_slot(q).partner == k && !d.cfg.stuck[q]) A += d.mu_k_n[q] * in.sgn[q];
+                }
+            } else if (model.friction_slot(static_cast<std::size_t>(i)).partner != kGround && model.shared_partner()) {
                 // riding a partner that carries several: D = A_i - m_i a_i (model/held_mass.h)
                 A -= exact(model.masses[static_cast<std::size_t>(i)].m) * out.a[i];
             } else if (const int p = model.friction_slot(static_cast<std::size_t>(i)).partner; p != kGround) {

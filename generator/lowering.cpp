@@ -12,12 +12,13 @@
 #include <utility>
 #include <vector>
 
+#include "assembly.h"
 #include "double_literal.h"
 #include "elements/contact.h"
 #include "elements/friction.h"
 #include "elements/jenkins.h"
-#include "switch_derivative.h"
 #include "ginac_lock.h"  // format_double, for comments
+#include "switch_derivative.h"
 
 namespace hsnc {
 
@@ -271,23 +272,54 @@ std::vector<std::pair<int, DD>> held_terms(const Derivation& d, int i) {
 
 /// The held force of stuck rider i as terms over dofs, i first: against its
 /// partner p, D = (m_p A_i - m_i A_p)/(m_i + m_p), the force that holds the
-/// pair together (assembly.h driving_force); of a partner carrying several
-/// (Model::shared_partner), D_i = A_i - m_i a_b, a_b the forces of p and its
-/// stuck riders over their mass (model/held_mass.h).
+/// pair together (assembly.h driving_force); where a body takes part in
+/// several frictions (Model::shared_partner), D_i = sum over S_i of A_k -
+/// (M_S / M_b) sum over the body b it rides of A_k (model/held_mass.h: S_i the
+/// dofs i carries, assembly.h carried(); b carrier(i), none when held still).
 std::vector<std::pair<int, DD>> partner_terms(const Model& model, const Derivation& d, int i) {
     const int p = model.friction_slot(static_cast<std::size_t>(i)).partner;
-    const DD mi(model.masses[static_cast<std::size_t>(i)].m), mpn(model.masses[static_cast<std::size_t>(p)].m);
-    if (!model.shared_partner()) return {{i, mpn / (mi + mpn)}, {p, -mi / (mi + mpn)}};
-    std::vector<int> body{p};
-    DD mc = mpn;
-    for (int q : d.riders)
-        if (model.friction_slot(static_cast<std::size_t>(q)).partner == p)
-            body.push_back(q), mc = mc + DD(model.masses[static_cast<std::size_t>(q)].m);
-    const DD share = mi / mc;
+    const DD mi(model.masses[static_cast<std::size_t>(i)].m);
+    if (!model.shared_partner()) {
+        const DD mpn(model.masses[static_cast<std::size_t>(p)].m);
+        return {{i, mpn / (mi + mpn)}, {p, -mi / (mi + mpn)}};
+    }
+    const std::vector<int> S = carried(model, d.cfg.stuck, i);
+    const int b = carrier(model, d.cfg, static_cast<std::size_t>(i));
+    std::vector<int> body;  // b first, then every dof riding it, in dof order
+    if (b != kGround) {
+        body.push_back(b);
+        for (std::size_t k = 0; k < model.dof(); ++k)
+            if (static_cast<int>(k) != b && d.cfg.stuck[k] && carrier(model, d.cfg, k) == b)
+                body.push_back(static_cast<int>(k));
+    }
+    DD ms = mi, mc(0.0);
+    for (std::size_t k = 1; k < S.size(); ++k) ms = ms + DD(model.masses[static_cast<std::size_t>(S[k])].m);
+    for (std::size_t k = 0; k < body.size(); ++k)
+        mc = k == 0 ? DD(model.masses[static_cast<std::size_t>(body[k])].m)
+                    : mc + DD(model.masses[static_cast<std::size_t>(body[k])].m);
+    const DD share = body.empty() ? DD(0.0) : ms / mc;
+    auto in_S = [&](int k) { return std::find(S.begin(), S.end(), k) != S.end(); };
     std::vector<std::pair<int, DD>> terms{{i, DD(1.0) - share}};
-    for (int b : body)
-        if (b != i) terms.emplace_back(b, -share);
+    for (std::size_t k = 1; k < S.size(); ++k) terms.emplace_back(S[k], DD(1.0) - share);
+    for (int k : body)
+        if (!in_S(k)) terms.emplace_back(k, -share);
     return terms;
+}
+
+/// The comment of stuck friction i's release function g_F in a named program:
+/// the held force as partner_terms or (on a coupled M) held_terms writes it.
+std::string held_comment(const Model& model, int i, bool pos, const std::string& F, bool coupled) {
+    const std::string head = "g_" + F + ": " + (pos ? "D" : "-D") + " - mu_s N of ";
+    const std::string& name = model.masses[static_cast<std::size_t>(i)].name;
+    if (coupled)
+        return head + "stuck " + name +
+               ", D = A_i - M_iF M_FF^-1 A_F (coupled M), A = -K x - C v + f + sum_h F_h sin - mu_k N sgn";
+    const int p = model.friction_slot(static_cast<std::size_t>(i)).partner;
+    return head + name + " stuck to " +
+           (p == kGround ? std::string("the ground") : model.masses[static_cast<std::size_t>(p)].name) +
+           (model.friction_chain()   ? ", D = sum over S_i of A_k - (M_S / M_b) sum over its body of A_k"
+            : model.shared_partner() ? ", D = A_i - m_i a_partner"
+                                     : ", D = (m_p A_i - m_i A_p)/(m_i + m_p)");
 }
 
 /// The kinetic friction a held force reads on free dof i (model/held_mass.h
@@ -461,10 +493,12 @@ Program lower(const Derivation& d, ProgramNames names) {
         }
     // The exact constant forces, rounded once each by derive() (Derivation::f_const_double).
     const std::vector<double>&f_const = d.f_const_double, &mu_k_n = d.mu_k_n_double;
-    std::vector<int> free_of(n, -1), coord_of(n, -1);  // coord_of: a rider moves with its partner's coordinate
+    std::vector<int> free_of(n, -1), coord_of(n, -1);  // coord_of: a rider moves with its carrier's coordinate
     for (std::size_t r = 0; r < nf; ++r) free_of[d.free_dofs[r]] = coord_of[d.free_dofs[r]] = static_cast<int>(r);
     auto partner_of = [&](int q) { return model.friction_slot(static_cast<std::size_t>(q)).partner; };
-    for (int q : d.riders) coord_of[q] = free_of[partner_of(q)];
+    // The body a rider moves with: its partner, or up a chain the first body not stuck (assembly.h carrier()).
+    auto carrier_of = [&](int q) { return carrier(model, d.cfg, static_cast<std::size_t>(q)); };
+    for (int q : d.riders) coord_of[q] = free_of[carrier_of(q)];
 
     // ---- constants: per mode (ModeConstant layout), per harmonic (Omega, phase) ----
     const std::vector<std::uint32_t> mode_k = mode_constants(p, d, named);
@@ -525,8 +559,10 @@ Program lower(const Derivation& d, ProgramNames names) {
     std::map<int, std::uint32_t> offset;
     for (int q : d.riders) {
         offset[q] = s.temp("e_" + model.masses[static_cast<std::size_t>(q)].name);
-        s.annotate(s.lin(offset[q], Lin().add(1.0, x0(q)).add(-1.0, x0(partner_of(q)))),
-             q == d.riders.front() ? "Riders (stuck to their friction partner) keep their offset e = x0 - x0_partner." : "");
+        s.annotate(s.lin(offset[q], Lin().add(1.0, x0(q)).add(-1.0, x0(carrier_of(q)))),
+                   q == d.riders.front()
+                       ? "Riders (stuck to their friction partner) keep their offset e = x0 - x0_partner."
+                       : "");
         e_slot[q] = slot("e_", static_cast<std::size_t>(q), offset[q], "",
                          named ? model.masses[static_cast<std::size_t>(q)].name + " rides its partner" : "");
     }
@@ -739,10 +775,14 @@ Program lower(const Derivation& d, ProgramNames names) {
     // Each sliding free dof's kinetic friction that held forces read (kinetic_lin), its size in kinetic_mag.
     std::vector<std::uint32_t> kinetic_slot(n, kNoRegister);
     std::vector<double> kinetic_mag(n, 0.0);
-    for (int i : d.free_dofs)
-        if (const Lin l = kinetic_lin(model, mu_k_n, i, sgn, kinetic_mag[static_cast<std::size_t>(i)]);
-            (!d.held.empty() || model.shared_partner()) && kinetic_mag[static_cast<std::size_t>(i)] != 0.0)
-            kinetic_slot[static_cast<std::size_t>(i)] = slot_lin("F_k_", static_cast<std::size_t>(i), l);
+    // In a chain of frictions a stuck dof's held force reads the reactions of the frictions sliding on it too.
+    for (std::size_t ii = 0; ii < n; ++ii) {
+        const int i = static_cast<int>(ii);
+        if (free_of[ii] < 0 && !model.friction_chain()) continue;
+        if (const Lin l = kinetic_lin(model, mu_k_n, i, sgn, kinetic_mag[ii]);
+            (!d.held.empty() || model.shared_partner()) && kinetic_mag[ii] != 0.0)
+            kinetic_slot[ii] = slot_lin("F_k_", ii, l);
+    }
     p.n_coef = static_cast<int>(p.coef_names.size());
 
     // ================= eval =================
@@ -898,7 +938,7 @@ Program lower(const Derivation& d, ProgramNames names) {
 
     // Riders: their partner's motion at their offset.
     for (int q : d.riders) {
-        const int p = partner_of(q);
+        const int p = carrier_of(q);
         const std::uint32_t eq = C(e_slot.at(q));
         e.annotate(e.lin(X(q), Lin().add(1.0, X(p)).add(1.0, eq)), q == d.riders.front() ? "Riders: x = x_partner + e." : "",
              model.masses[static_cast<std::size_t>(q)].name + " (rides " + model.masses[static_cast<std::size_t>(p)].name + ")");
@@ -1085,7 +1125,7 @@ Program lower(const Derivation& d, ProgramNames names) {
             const double mu_s_n = d.mu_s_n[static_cast<std::size_t>(i)];
             const int sigma = pos ? 1 : -1;
             const LinValue limit = LinValue::constant(mu_s_n);
-            if (partner_of(i) == kGround && d.held.empty()) {  // lumped: D_i = A_i
+            if (partner_of(i) == kGround && d.held.empty() && !model.friction_chain()) {  // lumped: D_i = A_i
                 if (named) comment += std::string("g_") + F + ": " + (pos ? "A" : "-A") + " - mu_s N of stuck " + ms.name +
                            ", A = -K x - C v + f + sum_h F_h sin (force but friction)";
                 Lin A, dA;
@@ -1106,26 +1146,11 @@ Program lower(const Derivation& d, ProgramNames names) {
                 g = friction::release_value(sigma, LinValue(1.0, af), limit, 0).lin();
                 dg = friction::release_value(sigma, LinValue(1.0, daf), limit, 1).lin();
             } else {
-                // The force that holds i, D = sum_k c_k A_k over bodies k. Stuck to its partner p:
-                // D = (m_p A_i - m_i A_p)/(m_i + m_p), the force that holds the pair together
-                // (assembly.h driving_force). On a coupled M: D = A_i - c^T A_F with
-                // c = M_FF^-1 M_Fi (Derivation::held, model/held_mass.h), A_F the free dofs'
-                // forces with their kinetic friction.
-                std::vector<std::pair<int, DD>> terms;
-                std::string prefix = "A_pair_";
-                if (partner_of(i) != kGround) {
-                    if (named)
-                        comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of " + ms.name +
-                                   " stuck to " + model.masses[static_cast<std::size_t>(partner_of(i))].name +
-                                   (model.shared_partner() ? ", D = A_i - m_i a_partner"
-                                                           : ", D = (m_p A_i - m_i A_p)/(m_i + m_p)");
-                    terms = partner_terms(model, d, i);
-                } else {
-                    if (named) comment += std::string("g_") + F + ": " + (pos ? "D" : "-D") + " - mu_s N of stuck " + ms.name +
-                               ", D = A_i - M_iF M_FF^-1 A_F (coupled M), A = -K x - C v + f + sum_h F_h sin - mu_k N sgn";
-                    prefix = "A_held_";
-                    terms = held_terms(d, i);
-                }
+                // The force that holds i, D = sum_k c_k A_k over bodies k (partner_terms, held_terms).
+                const bool pair = partner_of(i) != kGround || model.friction_chain();
+                if (named) comment += held_comment(model, i, pos, F, !pair);
+                const std::vector<std::pair<int, DD>> terms = pair ? partner_terms(model, d, i) : held_terms(d, i);
+                const std::string prefix = pair ? "A_pair_" : "A_held_";
                 const std::size_t nt = terms.size();
                 std::vector<std::array<std::uint32_t, 3>> reg(nt);  // A, A', the magnitude of A's terms, per body
                 std::vector<std::vector<DD>> al_b(nt), be_b(nt), Gs_b(nt), Gc_b(nt);

@@ -234,6 +234,22 @@ inline bool fixed_in(const Model& model, const Configuration& cfg, std::size_t i
 inline bool rides_partner(const Model& model, const Configuration& cfg, std::size_t i) {
     return cfg.stuck[i] && carrier(model, cfg, i) != kGround;
 }
+/// S_i, the dofs the stuck friction of dof i carries: i, then in dof order
+/// every dof stuck on it, directly or up a chain of stuck frictions (the
+/// force that friction holds is theirs less their mass times the body's
+/// acceleration: model/held_mass.h).
+inline std::vector<int> carried(const Model& model, const std::vector<char>& stuck, int i) {
+    std::vector<int> S{i};
+    for (std::size_t k = 0; k < stuck.size(); ++k) {
+        if (!stuck[k] || static_cast<int>(k) == i) continue;
+        for (int p = model.friction_slot(k).partner; p != kGround;
+             p = model.friction_slot(static_cast<std::size_t>(p)).partner) {
+            if (p == i) S.push_back(static_cast<int>(k));
+            if (p == i || !stuck[static_cast<std::size_t>(p)]) break;
+        }
+    }
+    return S;
+}
 
 /// A quantity of mass i (mass mi) in the frame of its pair with p (mass mp)
 /// moving as one body, (m_p a_i - m_i a_p)/(m_i + m_p): the force that keeps

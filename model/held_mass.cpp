@@ -38,19 +38,6 @@ void HeldMass::hold(const Model& model, const std::vector<char>& held) {
     rhs_.resize(static_cast<Eigen::Index>(free_.size()));
 }
 
-std::vector<int> HeldMass::carried_by(int i) const {
-    std::vector<int> S{i};
-    for (std::size_t k = 0; k < held_.size(); ++k) {
-        if (!held_[k] || static_cast<int>(k) == i) continue;
-        for (int p = model_->friction_slot(k).partner; p != kGround;
-             p = model_->friction_slot(static_cast<std::size_t>(p)).partner) {
-            if (p == i) S.push_back(static_cast<int>(k));
-            if (p == i || !held_[static_cast<std::size_t>(p)]) break;
-        }
-    }
-    return S;
-}
-
 void HeldMass::accelerations(const double* f, double* a) const {
     for (std::size_t r = 0; r < free_.size(); ++r) rhs_(static_cast<Eigen::Index>(r)) = f[free_[r]];
     for (std::size_t k = 0; k < held_.size(); ++k)  // a rider's forces act on its partner's coordinate
@@ -62,7 +49,7 @@ void HeldMass::accelerations(const double* f, double* a) const {
 double HeldMass::held_force(int i, const double* f, const double* a) const {
     double D = 0.0;
     bool first = true;
-    for (int k : carried_by(i)) {
+    for (int k : carried(*model_, held_, i)) {
         const double dk = f[k] - mass_times(*model_, static_cast<std::size_t>(k), a);
         D = first ? dk : D + dk;
         first = false;
@@ -73,7 +60,7 @@ double HeldMass::held_force(int i, const double* f, const double* a) const {
 Eigen::VectorXd HeldMass::release_row(int i) const {
     // P_i = s - T (T^T M T)^-1 T^T M s, s the indicator of the dofs i carries.
     const auto n = static_cast<Eigen::Index>(held_.size());
-    const std::vector<int> S = carried_by(i);
+    const std::vector<int> S = carried(*model_, held_, i);
     Eigen::VectorXd MFi = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(free_.size()));
     for (Eigen::Index k = 0; k < n; ++k) {
         if (column_[static_cast<std::size_t>(k)] < 0) continue;

@@ -57,8 +57,6 @@ private:
     std::vector<char> held_;
     std::vector<int> free_;
     std::vector<int> column_;  ///< per dof: its free coordinate (a rider its partner's), -1 when held
-    /// The dofs a stuck friction carries: S_i of the file comment (rider lists per dof).
-    std::vector<int> carried_by(int i) const;
     Eigen::LLT<Eigen::MatrixXd> llt_;
     mutable Eigen::VectorXd rhs_;
 };

@@ -289,6 +289,36 @@ TEST(FrictionChain, ABlockOnABlockOnTheGroundReleasesAtTheClosedFormsInstants) {
     }
 }
 
+// A tower (examples/friction/friction_tower.toml: feet on the floor, a box on
+// the table, a lid on the box, a cup on the table): every friction releases
+// and sticks, each configuration on the programs (they write the held force
+// of a chain, sum over S_i of A_k - (M_S / M_b) sum over its body of A_k),
+// against the Eigen solver, the reference at 30 and 60 digits and CVODE.
+TEST(FrictionChain, ATowerOfFrictionsRunsOnTheProgramsAgainstEveryBackEnd) {
+    const Model m = read_model(std::string(HSNC_SOURCE_DIR) + "/examples/friction/friction_tower.toml");
+    const double t_end = 10.0;
+    const testing::Outcome programs = testing::simulate(m, t_end, 0.0, testing::Solvers::interp);
+    std::vector<int> released(m.dof(), 0), stuck(m.dof(), 0);
+    for (const auto& e : programs.events) {
+        if (e.kind == EventKind::release) ++released[static_cast<std::size_t>(e.element)];
+        if (e.kind == EventKind::stick) ++stuck[static_cast<std::size_t>(e.element)];
+    }
+    for (std::size_t i = 0; i < m.dof(); ++i) {
+        EXPECT_GT(released[i], 0) << m.friction_name(i);
+        EXPECT_GT(stuck[i], 0) << m.friction_name(i);
+    }
+    const fe::BackEndGaps gap = fe::back_end_gaps(m, programs, t_end);
+    std::printf(
+        "tower: %zu events; the programs within %.3g s of the Eigen solver, %.3g s of the reference, "
+        "30 against 60 digits %.3g s, CVODE %.3g s\n",
+        programs.events.size(), gap.eigen, gap.reference, gap.digits, gap.cvode);
+    EXPECT_GE(programs.events.size(), 80u);
+    EXPECT_LT(gap.eigen, 1e-12);
+    EXPECT_LT(gap.reference, 1e-12);
+    EXPECT_LT(gap.digits, 1e-20);
+    EXPECT_LT(gap.cvode, 1e-8);
+}
+
 // The tangent where several frictions meet on a body (analysis/stick_tangent.h:
 // a body's rows over everything riding it, the release gradients P_i . df):
 // the Jacobian of runs across sticks and releases of every friction against
