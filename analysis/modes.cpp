@@ -404,12 +404,11 @@ Eigen::MatrixXd held_basis(const Model& model) {
     for (std::size_t i = 0; i < n; ++i)
         if (!model.has_friction(i)) col[i] = nq++;
     Eigen::MatrixXd T = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), nq);
-    for (std::size_t i = 0; i < n; ++i) {
-        int body = static_cast<int>(i);  // up the chain to the first body without friction (assembly.h carrier())
-        while (body != kGround && col[static_cast<std::size_t>(body)] < 0)
-            body = model.friction_slot(static_cast<std::size_t>(body)).partner;
-        if (body != kGround) T(static_cast<Eigen::Index>(i), col[static_cast<std::size_t>(body)]) = 1.0;
-    }
+    Configuration all_stuck = Configuration::all_open(model);
+    for (std::size_t i = 0; i < n; ++i) all_stuck.stuck[i] = model.has_friction(i);
+    for (std::size_t i = 0; i < n; ++i)  // up the chain to the first body without friction
+        if (const int body = carrier(model, all_stuck, i); body != kGround)
+            T(static_cast<Eigen::Index>(i), col[static_cast<std::size_t>(body)]) = 1.0;
     return T;
 }
 

@@ -24,7 +24,6 @@ Layout layout(const Model& model) {
 // The body mass i moves as: itself, its carrier when stuck to a partner (a
 // rider, up a chain: assembly.h carrier()), or none (-1) when held still.
 int body_of(const Model& model, const Configuration& cfg, std::size_t i) {
-    if (fixed_in(model, cfg, i)) return -1;
     return carrier(model, cfg, i);
 }
 

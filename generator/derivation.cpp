@@ -1037,9 +1037,10 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
                 return A;
             };
             ex A = force(i);
-            if (model.friction_chain()) {
+            if (model.shared_partner()) {
                 // D_i = sum over S_i of f_k - m_k a_k (model/held_mass.h): f_k with the reactions of
-                // the frictions sliding on k, a_k the body's acceleration (0 when held)
+                // the frictions sliding on k, a_k the body's acceleration (0 when held); a rider of a
+                // partner carrying several: S_i = {i}, D = A_i - m_i a_i
                 A = 0;
                 for (int k : carried(model, d.cfg.stuck, i)) {
                     A += force(k) -
@@ -1047,9 +1048,6 @@ SymbolicSegment symbolic_segment(const Derivation& d, const SegmentInputs& in, c
                     for (std::size_t q = 0; q < n; ++q)
                         if (model.friction_slot(q).partner == k && !d.cfg.stuck[q]) A += d.mu_k_n[q] * in.sgn[q];
                 }
-            } else if (model.friction_slot(static_cast<std::size_t>(i)).partner != kGround && model.shared_partner()) {
-                // riding a partner that carries several: D = A_i - m_i a_i (model/held_mass.h)
-                A -= exact(model.masses[static_cast<std::size_t>(i)].m) * out.a[i];
             } else if (const int p = model.friction_slot(static_cast<std::size_t>(i)).partner; p != kGround) {
                 const numeric mi = exact(model.masses[static_cast<std::size_t>(i)].m), mp = exact(model.masses[static_cast<std::size_t>(p)].m);
                 A = (mp * A - mi * force(p)) / (mi + mp);

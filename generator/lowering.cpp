@@ -292,11 +292,9 @@ std::vector<std::pair<int, DD>> partner_terms(const Model& model, const Derivati
             if (static_cast<int>(k) != b && d.cfg.stuck[k] && carrier(model, d.cfg, k) == b)
                 body.push_back(static_cast<int>(k));
     }
-    DD ms = mi, mc(0.0);
+    DD ms = mi, mc(0.0);  // 0 + m is m exactly: the same sums as from the first term
     for (std::size_t k = 1; k < S.size(); ++k) ms = ms + DD(model.masses[static_cast<std::size_t>(S[k])].m);
-    for (std::size_t k = 0; k < body.size(); ++k)
-        mc = k == 0 ? DD(model.masses[static_cast<std::size_t>(body[k])].m)
-                    : mc + DD(model.masses[static_cast<std::size_t>(body[k])].m);
+    for (int k : body) mc = mc + DD(model.masses[static_cast<std::size_t>(k)].m);
     const DD share = body.empty() ? DD(0.0) : ms / mc;
     auto in_S = [&](int k) { return std::find(S.begin(), S.end(), k) != S.end(); };
     std::vector<std::pair<int, DD>> terms{{i, DD(1.0) - share}};
